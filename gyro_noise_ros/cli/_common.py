@@ -1,0 +1,55 @@
+"""
+Shared plumbing of the command-line tools: one clear line and a documented exit code on error.
+
+Exit codes (documented in the README):
+
+====  ==========================================================================
+0     success
+1     unexpected internal error (a bug: please report the message)
+2     bad command line or parameter value (argparse uses 2 as well)
+3     a recording cannot be read (missing, corrupt, no or ambiguous topic, wrong type)
+4     the data cannot be analysed (NaN/Inf, too short, constant)
+5     the Portenta link cannot be used
+130   interrupted (Ctrl-C)
+====  ==========================================================================
+"""
+
+import sys
+
+from ..errors import GyroNoiseError
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+def run_cli(prog, body, argv):
+    """
+    Run ``body(argv)`` and turn deliberate errors into one line on stderr and an exit code.
+
+    Parameters
+    ----------
+    prog : str
+        Program name used as the message prefix.
+    body : callable
+        ``body(argv) -> int``; may raise :class:`GyroNoiseError`.
+    argv : list of str or None
+        Arguments without the program name; ``None`` means ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The process exit code.
+    """
+    try:
+        return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
+    except GyroNoiseError as err:
+        print(f'{prog}: error: {err}', file=sys.stderr)
+        return err.exit_code
+    except KeyboardInterrupt:
+        print(f'{prog}: interrupted', file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError as err:
+        print(f'{prog}: error: out of memory ({err})', file=sys.stderr)
+        return EXIT_INTERNAL

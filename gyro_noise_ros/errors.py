@@ -1,0 +1,41 @@
+"""
+Error hierarchy shared by the core, the link, the bag I/O and the command-line tools.
+
+Every error the package raises on purpose derives from :class:`GyroNoiseError`; the command-line
+tools turn each class into one clear line and a documented exit code (see ``cli/_common.py``).
+Messages name the offending argument and its value.
+"""
+
+
+class GyroNoiseError(Exception):
+    """Base class of every deliberate error in gyro_noise_ros."""
+
+    exit_code = 1
+
+
+class ParameterError(GyroNoiseError, ValueError):
+    """An option or argument has a value outside its documented range."""
+
+    exit_code = 2
+
+
+class UnstableModelError(ParameterError):
+    """Simulation parameters describe an unstable (non-stationary) noise model."""
+
+
+class InputDataError(GyroNoiseError, ValueError):
+    """Samples cannot be analysed: NaN/Inf, too short, constant, or otherwise unusable."""
+
+    exit_code = 4
+
+
+class BagError(GyroNoiseError):
+    """A recording cannot be read: missing, corrupt, no/ambiguous topic, wrong message type."""
+
+    exit_code = 3
+
+
+class LinkError(GyroNoiseError):
+    """The Portenta link cannot be used: bad port, no acknowledgement, bad configuration."""
+
+    exit_code = 5

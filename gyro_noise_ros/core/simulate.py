@@ -1,0 +1,206 @@
+"""
+Seeded forward models of gyroscope noise (paper 000 eqs. 2, 10, 11).
+
+The fractional-order noise of eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]`` with the truncated GL
+difference of eqs. (3)-(5), is run forward as
+
+    v[k+1] = f v[k] + w[k] - sum_{j=1}^{min(k+1, L)} c_j(alpha) v[k+1-j],   w ~ N(0, sigma_w^2),
+
+starting from rest (zero history, which is exactly the truncation L(k) = min(k, L)). With measurement
+noise (eqs. 10-11) the state is x and the output is ``v = x + nu``, ``nu ~ N(0, sigma_nu^2)``; a constant
+bias is added last. Generation streams in blocks with O(L) state, so a 12 h record at 6.66 kHz
+(187,159,392 samples) needs no more memory than its output (or none, block by block).
+
+Stability. The recursion is a linear filter ``w -> v`` with denominator
+``A(z) = 1 + (c_1 - f) z^-1 + sum_{j=2}^{L} c_j z^-j``; it is stable (the output stationary) iff all L
+roots of ``z^L A(z)`` lie strictly inside the unit circle. :func:`check_stability` decides this with the
+argument principle on a dense unit-circle grid and refuses marginal cases. Two necessary conditions make
+the region easy to picture: ``A(1) = S_L(alpha) - f > 0`` with ``S_L = sum_{j<=L} c_j`` (tiny for
+alpha near 1, exactly 0 at alpha = 1: hence ``f < 0`` is required there; f = 0 at alpha = 1 is a random
+walk), and ``A(-1) = sum_j |c_j| + f > 0`` (roughly ``f > -2^alpha``).
+"""
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from ..errors import ParameterError, UnstableModelError
+from ._kernels import _fractional_recursion
+from .fractional import DEFAULT_MEMORY, gl_coefficients
+
+#: Samples generated per kernel call when streaming (bounds temporary memory).
+BLOCK = 1 << 20
+
+
+@dataclass(frozen=True)
+class StabilityReport:
+    """
+    Outcome of :func:`check_stability`.
+
+    Attributes
+    ----------
+    stable : bool
+        True when every pole of the recursion lies strictly inside the unit circle.
+    a_at_one, a_at_minus_one : float
+        A(1) and A(-1); both must be positive for stability.
+    min_abs_on_circle : float
+        Smallest |A(e^{i w})| on the grid, relative to its largest (0 means a pole on the circle).
+    winding : int
+        Winding number of A(e^{i w}) around 0 (0 for a stable recursion).
+    """
+
+    stable: bool
+    a_at_one: float
+    a_at_minus_one: float
+    min_abs_on_circle: float
+    winding: int
+
+
+@lru_cache(maxsize=256)
+def check_stability(alpha, f, memory=DEFAULT_MEMORY):
+    """
+    Decide whether the recursion of eq. (2) with these parameters is stable.
+
+    Parameters
+    ----------
+    alpha : float
+        Order (dimensionless).
+    f : float
+        Noise parameter of eq. (2) (dimensionless).
+    memory : int
+        L of eq. (5).
+
+    Returns
+    -------
+    StabilityReport
+    """
+    c = gl_coefficients(alpha, memory)
+    a = c.copy()
+    a[1] -= f
+    # 2^17 points resolve the phase of a degree-1000 polynomial unless a root is within ~1e-4 of
+    # the circle, which the relative-minimum test below treats as marginal anyway.
+    size = 1 << 17
+    values = np.fft.fft(a, size)
+    mag = np.abs(values)
+    rel_min = float(mag.min() / mag.max())
+    phase = np.unwrap(np.angle(np.append(values, values[0])))
+    winding = int(np.round((phase[-1] - phase[0]) / (2 * np.pi)))
+    a1 = float(a.sum())
+    am1 = float((a * (-1.0) ** np.arange(a.size)).sum())
+    stable = winding == 0 and rel_min > 1e-6 and a1 > 0 and am1 > 0
+    return StabilityReport(stable, a1, am1, rel_min, winding)
+
+
+def require_stable(alpha, f, memory=DEFAULT_MEMORY):
+    """
+    Raise UnstableModelError unless (alpha, f, L) gives a stable recursion.
+
+    Parameters
+    ----------
+    alpha, f : float
+        Model parameters of eq. (2).
+    memory : int
+        L of eq. (5).
+    """
+    report = check_stability(float(alpha), float(f), int(memory))
+    if not report.stable:
+        raise UnstableModelError(
+            f'fractional noise model alpha={alpha}, f={f}, L={memory} is unstable or marginal '
+            f'(A(1)={report.a_at_one:.3g} must be > 0, A(-1)={report.a_at_minus_one:.3g} must be > 0, '
+            f'winding number {report.winding} must be 0): its output would not be stationary; '
+            f'choose f < {report.a_at_one + f:.4g}')
+    return report
+
+
+class FractionalNoise:
+    """
+    Stateful, streaming generator of the fractional-order noise of eq. (2) (optionally eqs. 10-11).
+
+    Parameters
+    ----------
+    alpha : float
+        Order of the GL difference (dimensionless).
+    f : float
+        Noise parameter of eq. (2) (dimensionless).
+    sigma_w : float
+        Standard deviation of the source noise w (output unit, e.g. rad/s).
+    rng : numpy.random.Generator, keyword-only
+        Source of randomness.
+    memory : int, keyword-only
+        L (default 1000).
+    sigma_nu : float, keyword-only
+        Standard deviation of the white measurement noise of eq. (11) (output unit; 0 = none).
+    bias : float, keyword-only
+        Constant added to every output sample (output unit).
+    """
+
+    def __init__(self, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0, bias=0.0):
+        if not isinstance(rng, np.random.Generator):
+            raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
+        for name, value in (('sigma_w', sigma_w), ('sigma_nu', sigma_nu)):
+            if not np.isfinite(value) or value < 0:
+                raise ParameterError(f'{name} must be finite and >= 0, got {value}')
+        if not np.isfinite(bias):
+            raise ParameterError(f'bias must be finite, got {bias}')
+        self.alpha, self.f = float(alpha), float(f)
+        self.memory = int(memory)
+        require_stable(self.alpha, self.f, self.memory)
+        self.sigma_w, self.sigma_nu, self.bias = float(sigma_w), float(sigma_nu), float(bias)
+        self.rng = rng
+        self._c_rev = np.ascontiguousarray(gl_coefficients(self.alpha, self.memory)[:0:-1])
+        self._history = np.zeros(self.memory)
+        self.samples_generated = 0
+
+    def generate(self, n):
+        """
+        Return the next ``n`` output samples (state carries over between calls).
+
+        Parameters
+        ----------
+        n : int
+            Number of samples (>= 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64 samples in the unit of ``sigma_w``.
+        """
+        n = int(n)
+        if n < 0:
+            raise ParameterError(f'n must be >= 0, got {n}')
+        out = np.empty(n)
+        for start in range(0, n, BLOCK):
+            stop = min(n, start + BLOCK)
+            w = self.rng.standard_normal(stop - start) * self.sigma_w
+            self._history = _fractional_recursion(w, self._history, self._c_rev, self.f, out[start:stop])
+        if self.sigma_nu > 0:
+            for start in range(0, n, BLOCK):
+                stop = min(n, start + BLOCK)
+                out[start:stop] += self.rng.standard_normal(stop - start) * self.sigma_nu
+        if self.bias:
+            out += self.bias
+        self.samples_generated += n
+        return out
+
+
+def simulate_fractional_noise(n, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0, bias=0.0):
+    """
+    Return ``n`` samples of the fractional-order noise of eq. (2) (with eqs. 10-11 and a bias).
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    alpha, f, sigma_w : float
+        Order, noise parameter, source-noise standard deviation (output unit).
+    rng : numpy.random.Generator, keyword-only
+    memory, sigma_nu, bias : keyword-only
+        See :class:`FractionalNoise`.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    return FractionalNoise(alpha, f, sigma_w, rng=rng, memory=memory, sigma_nu=sigma_nu,
+                           bias=bias).generate(n)

@@ -61,17 +61,22 @@ _ACCEL_COLS = slice(25, 28)
 _CDR_LE = b'\x00\x01\x00\x00'
 _STORAGES = ('sqlite3', 'mcap')
 
-_TYPESTORE = None
+_TYPESTORES = {}
 
 
-def _typestore():
-    """Return the ROS 2 Jazzy typestore of rosbags, built once (it costs ~50 ms)."""
-    global _TYPESTORE  # noqa: PLW0603 - lazily built module singleton
-    if _TYPESTORE is None:
+def _typestore(ros1=False):
+    """
+    Return rosbags' typestore, built once per flavour (it costs ~50 ms).
+
+    ROS 1 messages need the Noetic definitions: their ``std_msgs/Header`` starts with ``uint32 seq``,
+    which the ROS 2 definitions lack.
+    """
+    key = 'ros1' if ros1 else 'ros2'
+    if key not in _TYPESTORES:
         from rosbags.typesys import Stores, get_typestore
 
-        _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
-    return _TYPESTORE
+        _TYPESTORES[key] = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_JAZZY)
+    return _TYPESTORES[key]
 
 
 @dataclass(frozen=True)
@@ -232,7 +237,7 @@ def _bulk_decode(raws, tail_f8, ros1):
 
 def _slow_decode(raw, msgtype, ros1):
     """Decode one message with rosbags; raise BagError if rosbags cannot."""
-    store = _typestore()
+    store = _typestore(ros1)
     try:
         if ros1:
             return store.deserialize_ros1(raw, msgtype)
@@ -570,7 +575,7 @@ class _OpenBag:
             raise
         except Exception as err:  # noqa: BLE001 - rosbags/apsw/zstd raise many types on corrupt files
             raise BagError(
-                f'bag {str(self.path)!r} cannot be opened as {self.storage}: {_describe(err)}'
+                f'bag {str(self.path)!r} cannot be opened as {self.storage} (corrupt or truncated?): {_describe(err)}'
             ) from err
 
     @staticmethod
@@ -841,16 +846,21 @@ class ImuBagReader:
         Raises
         ------
         BagError
-            The bag turns out corrupt or truncated, or a message cannot be decoded.
+            The topic has no messages (raised at the end, nothing was yielded), the bag turns out
+            corrupt or truncated, or a message cannot be decoded.
         """
         if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
             raise ParameterError(f'batch_size must be a positive integer, got {batch_size!r}')
         bag = self._open_bag()
         stream = bag.messages(self.topic)
+        delivered = 0
         while True:
             chunk = list(itertools.islice(stream, int(batch_size)))
             if not chunk:
+                if delivered == 0 and self.undecodable_count == 0:
+                    raise BagError(f'bag {str(self.path)!r} has no messages on topic {self.topic!r}')
                 return
+            delivered += len(chunk)
             log_ns, raws = zip(*chunk)
             del chunk
             try:

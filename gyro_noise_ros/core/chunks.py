@@ -50,6 +50,7 @@ class Chunker:
             raise ParameterError(f'chunk size must be an integer >= 2, got {size!r}')
         self.size = size_i
         self._parts = []
+        self._shape = None
         self._buffered = 0
         self.samples_in = 0
         self.chunks_out = 0
@@ -70,9 +71,10 @@ class Chunker:
         samples = np.asarray(samples, dtype=np.float64)
         if samples.ndim not in (1, 2):
             raise InputDataError(f'samples must be 1-D or 2-D, got shape {samples.shape}')
-        if self._parts and samples.shape[1:] != self._parts[0].shape[1:]:
-            raise InputDataError(
-                f'sample shape changed from {self._parts[0].shape[1:]} to {samples.shape[1:]}')
+        if self._shape is None:
+            self._shape = samples.shape[1:]
+        elif samples.shape[1:] != self._shape:
+            raise InputDataError(f'sample shape changed from {self._shape} to {samples.shape[1:]}')
         self.samples_in += samples.shape[0]
         out = []
         if samples.shape[0] == 0:

@@ -1,0 +1,801 @@
+"""
+Streaming analysis engine shared by the analyzer node and the offline tool (issue 4; paper 000 sec. 3.2-3.5).
+
+One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional temperature)``
+and cuts every selected axis into fixed-length chunks (10,000 samples by default, as in the paper). The work
+is split in three steps so that the caller decides where the heavy part runs:
+
+1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order counting,
+   chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete chunk and axis.
+2. :func:`analyze_chunk` (heavy, pure, picklable): fractional-order identification by both methods
+   (:class:`.fractional.OrderIdentifier`); safe in a worker thread or process.
+3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence statistics
+   (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
+
+Stamps and gaps. The nominal sample period is ``1 / rate_hz``; when ``rate_hz`` is None it is the median
+step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). A step larger than
+``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples. A step <= 0 is an
+out-of-order (or repeated) stamp: counted, never reordered, never a gap. The ``gap_policy`` decides what a
+gap does to the chunk it falls in:
+
+* ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
+* ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
+  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every analysed
+  chunk is gap-free.
+* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the sequence
+  statistics.
+
+NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status ``'nan'``
+(per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left out of the
+statistics. The incomplete tail at the end is counted (``tail_samples``), never silently dropped.
+
+Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every finite
+sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform sampling, so heavy
+loss biases it; the loss is reported beside it).
+"""
+
+from collections import deque
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
+
+import numpy as np
+
+from ..errors import InputDataError, ParameterError
+from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
+from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
+
+#: Axis names in column order of the gyro array.
+AXES = ('x', 'y', 'z')
+#: Valid gap policies (see module doc).
+GAP_POLICIES = ('flag', 'split', 'drop')
+#: Stamps used to estimate the sample rate when it is not configured.
+RATE_ESTIMATE_SAMPLES = 101
+#: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the caller,
+#: or failing identification (e.g. a constant chunk).
+STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
+
+_NS = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class EngineConfig:
+    """
+    Options of the streaming engine (every default is the paper's where it has one).
+
+    Attributes
+    ----------
+    chunk_size : int
+        Samples per chunk (paper: 10,000).
+    axes : tuple of str
+        Axes to analyse, any of 'x', 'y', 'z'.
+    alphas : numpy.ndarray or None
+        Order grid; None = 0.00:2.00:0.01.
+    memory : int
+        L of the truncated GL difference (paper: 1000).
+    demean : bool
+        Remove the chunk mean before identification.
+    max_lag : int or None
+        Largest lag of J (eq. 13); None = all lags.
+    rate_hz : float or None
+        Nominal sample rate (Hz); None = estimated from the stamps.
+    gap_factor : float
+        A stamp step above ``gap_factor`` nominal periods is a gap (issue: 1.5).
+    gap_policy : {'flag', 'split', 'drop'}
+        What a gap does to its chunk (module doc).
+    allan : bool
+        Keep an incremental Allan deviation of the whole run.
+    history_chunks : int
+        Chunks kept per axis for the sequence statistics; 0 = all (a live node may bound it).
+    """
+
+    chunk_size: int = DEFAULT_CHUNK_SIZE
+    axes: tuple = AXES
+    alphas: np.ndarray = None
+    memory: int = DEFAULT_MEMORY
+    demean: bool = True
+    max_lag: int = None
+    rate_hz: float = None
+    gap_factor: float = 1.5
+    gap_policy: str = 'flag'
+    allan: bool = True
+    history_chunks: int = 0
+
+    def __post_init__(self):
+        axes = tuple(self.axes) if not isinstance(self.axes, str) else (self.axes,)
+        if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
+            raise ParameterError(f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
+        object.__setattr__(self, 'axes', axes)
+        if self.gap_policy not in GAP_POLICIES:
+            raise ParameterError(f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
+        if not (np.isfinite(self.gap_factor) and self.gap_factor > 1.0):
+            raise ParameterError(f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
+        if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ParameterError(f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
+        if int(self.history_chunks) < 0:
+            raise ParameterError(f'history_chunks must be >= 0, got {self.history_chunks!r}')
+        alphas = default_grid() if self.alphas is None else np.asarray(self.alphas, dtype=np.float64).ravel()
+        alphas.setflags(write=False)
+        object.__setattr__(self, 'alphas', alphas)
+        # Build once to validate chunk_size / memory / max_lag / grid together with the core's messages.
+        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory), bool(self.demean),
+                       self.max_lag)
+
+    def identifier_key(self):
+        """Return the hashable arguments of :func:`identifier_for` for this configuration."""
+        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory), bool(self.demean),
+                None if self.max_lag is None else int(self.max_lag))
+
+    def as_dict(self):
+        """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
+        a = self.alphas
+        return {
+            'chunk_size': int(self.chunk_size), 'axes': list(self.axes),
+            'order_grid': {'start': float(a[0]), 'stop': float(a[-1]),
+                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0, 'count': int(a.size)},
+            'memory': int(self.memory), 'demean': bool(self.demean), 'max_lag': self.max_lag,
+            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor), 'gap_policy': self.gap_policy,
+            'allan': bool(self.allan), 'history_chunks': int(self.history_chunks)}
+
+
+@lru_cache(maxsize=8)
+def identifier_for(chunk_size, alphas, memory, demean, max_lag):
+    """
+    Return a cached :class:`.fractional.OrderIdentifier` (its set-up transforms every grid filter once).
+
+    Parameters
+    ----------
+    chunk_size : int
+        Samples per chunk.
+    alphas : tuple of float
+        Order grid.
+    memory : int
+        L.
+    demean : bool
+        Remove the chunk mean.
+    max_lag : int or None
+        Largest lag of J.
+
+    Returns
+    -------
+    OrderIdentifier
+    """
+    return OrderIdentifier(chunk_size, alphas=np.asarray(alphas), memory=memory, demean=demean,
+                           max_lag=max_lag)
+
+
+@dataclass(frozen=True)
+class ChunkJob:
+    """
+    One complete chunk of one axis, ready for :func:`analyze_chunk` (small, picklable).
+
+    Attributes
+    ----------
+    axis : str
+        'x', 'y' or 'z'.
+    chunk : int
+        Index of the chunk in the run (shared by the axes; counts every completed chunk).
+    samples : numpy.ndarray
+        ``chunk_size`` angular rates (rad/s).
+    stamp_start_ns : int
+        Stamp of the first sample (ns).
+    t_start_s, t_mid_s : float
+        Time of the first sample and the midpoint of first and last sample, from the first sample of the
+        run (s).
+    samples_lost, gaps : int
+        Samples lost in gaps between this chunk's samples, and the number of such gaps.
+    nan_samples : int
+        NaN/Inf samples of this axis in the chunk.
+    temperature_c : float
+        Mean of the finite temperatures of the chunk (degC), NaN if none.
+    status : str
+        'ok', 'dropped' (gap under the 'drop' policy) or 'nan'.
+    bias_rad_s, variance_rad2_s2 : float
+        Chunk mean (rad/s) and variance, ddof = 1 ((rad/s)^2); NaN for a 'nan' chunk.
+    identifier_key : tuple
+        Arguments of :func:`identifier_for`.
+    """
+
+    axis: str
+    chunk: int
+    samples: np.ndarray = field(repr=False, compare=False)
+    stamp_start_ns: int
+    t_start_s: float
+    t_mid_s: float
+    samples_lost: int
+    gaps: int
+    nan_samples: int
+    temperature_c: float
+    status: str
+    bias_rad_s: float
+    variance_rad2_s2: float
+    identifier_key: tuple = field(repr=False)
+
+
+@dataclass(frozen=True)
+class ChunkResult:
+    """
+    Per-chunk results of one axis (identical from the node and the offline tool for the same data).
+
+    Attributes
+    ----------
+    axis, chunk, stamp_start_ns, t_start_s, t_mid_s, samples_lost, gaps, nan_samples, temperature_c
+        As in :class:`ChunkJob`.
+    samples : int
+        Samples in the chunk.
+    bias_rad_s : float
+        Chunk mean (rad/s), paper sec. 3.3.
+    variance_rad2_s2 : float
+        Chunk variance, ddof = 1 ((rad/s)^2), paper sec. 3.4.
+    alpha_var, f_var : float
+        Order and f of the variance method (paper eqs. 6-9, sec. 3.5).
+    var_min : float
+        Minimum source-noise variance ((rad/s)^2).
+    alpha_corr, f_corr : float
+        Order and f of the correlation method (eqs. 13-14).
+    j_min : float
+        Minimum of J ((rad/s)^2).
+    tie_var, tie_corr : bool
+        The minimum was an exact tie between grid orders (the largest is reported; see fractional.py).
+    status : str
+        One of :data:`STATUSES`.
+    message : str
+        Why the status is not 'ok' (empty otherwise).
+    var_curve, j_curve : numpy.ndarray or None
+        var(w)(alpha) and J(alpha) over the grid when curves were requested (not compared).
+    """
+
+    axis: str
+    chunk: int
+    t_start_s: float
+    t_mid_s: float
+    stamp_start_ns: int
+    samples: int
+    samples_lost: int
+    gaps: int
+    nan_samples: int
+    bias_rad_s: float
+    variance_rad2_s2: float
+    alpha_var: float
+    f_var: float
+    var_min: float
+    alpha_corr: float
+    f_corr: float
+    j_min: float
+    tie_var: bool
+    tie_corr: bool
+    temperature_c: float
+    status: str
+    message: str = ''
+    var_curve: np.ndarray = field(default=None, repr=False, compare=False)
+    j_curve: np.ndarray = field(default=None, repr=False, compare=False)
+
+
+_NAN = float('nan')
+
+
+def analyze_chunk(job, identifier=None, *, curves=False):
+    """
+    Identify the fractional order of one chunk by both methods (the heavy, pure step).
+
+    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a chunk
+    that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or 'failed'.
+
+    Parameters
+    ----------
+    job : ChunkJob
+        From :meth:`NoiseEngine.ingest`.
+    identifier : OrderIdentifier, optional
+        Reused identifier; by default a per-process cached one built from ``job.identifier_key``.
+    curves : bool, keyword-only
+        Keep the var(alpha) and J(alpha) curves in the result.
+
+    Returns
+    -------
+    ChunkResult
+    """
+    base = dict(axis=job.axis, chunk=job.chunk, t_start_s=job.t_start_s, t_mid_s=job.t_mid_s,
+                stamp_start_ns=job.stamp_start_ns, samples=int(job.samples.shape[0]),
+                samples_lost=job.samples_lost, gaps=job.gaps, nan_samples=job.nan_samples,
+                bias_rad_s=job.bias_rad_s, variance_rad2_s2=job.variance_rad2_s2,
+                temperature_c=job.temperature_c)
+    empty = dict(alpha_var=_NAN, f_var=_NAN, var_min=_NAN, alpha_corr=_NAN, f_corr=_NAN, j_min=_NAN,
+                 tie_var=False, tie_corr=False)
+    if job.status == 'nan':
+        return ChunkResult(**base, **empty, status='nan',
+                           message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
+    if job.status == 'dropped':
+        return ChunkResult(**base, **empty, status='dropped',
+                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost (gap policy drop)')
+    if identifier is None:
+        identifier = identifier_for(*job.identifier_key)
+    try:
+        ident = identifier(job.samples, curves=curves)
+    except InputDataError as err:
+        return ChunkResult(**base, **empty, status='failed', message=str(err))
+    return ChunkResult(
+        **base, alpha_var=ident.alpha_var, f_var=ident.f_var, var_min=ident.var_min,
+        alpha_corr=ident.alpha_corr, f_corr=ident.f_corr, j_min=ident.j_min,
+        tie_var=len(ident.tied_alphas_var) > 1, tie_corr=len(ident.tied_alphas_corr) > 1,
+        status='ok', var_curve=ident.var_curve, j_curve=ident.j_curve)
+
+
+@dataclass(frozen=True)
+class StreamCounts:
+    """
+    Counters of the input stream, shared by all axes (stamps are common).
+
+    Attributes
+    ----------
+    samples : int
+        Samples ingested (including the tail and samples still held for rate estimation).
+    samples_lost : int
+        Samples missing according to the stamps (sum over gaps of ``round(step / period) - 1``).
+    gaps : int
+        Stamp steps above ``gap_factor`` nominal periods.
+    out_of_order : int
+        Stamps not later than their predecessor (step <= 0).
+    chunks : int
+        Complete chunks cut so far (per axis).
+    tail_samples : int
+        Samples after the last complete chunk (not analysed).
+    discarded_samples, discarded_partials : int
+        Samples and partial chunks thrown away by the 'split' policy.
+    rate_hz : float
+        Nominal sample rate in use (Hz), NaN while still unknown.
+    duration_s : float
+        Last minus first stamp (s).
+    """
+
+    samples: int
+    samples_lost: int
+    gaps: int
+    out_of_order: int
+    chunks: int
+    tail_samples: int
+    discarded_samples: int
+    discarded_partials: int
+    rate_hz: float
+    duration_s: float
+
+
+@dataclass(frozen=True)
+class AxisSummary:
+    """
+    Everything known about one axis of the run: paper Tables 3-6, Allan deviation, counts.
+
+    Attributes
+    ----------
+    axis : str
+    sequence : SequenceSummary
+        Tables 3-6 over the 'ok' chunks (rad/s units inside).
+    stream : StreamCounts
+    nan_samples : int
+        NaN/Inf samples on this axis.
+    chunks_ok, chunks_nan, chunks_dropped, chunks_failed, chunks_skipped : int
+        Chunks by status.
+    temperature_mean_c : float
+        Mean of the chunk temperatures (degC), NaN if none.
+    allan : object or None
+        The Allan deviation result of :mod:`.allan` (None if unavailable or off).
+    noise_terms : object or None
+        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable).
+    """
+
+    axis: str
+    sequence: SequenceSummary
+    stream: StreamCounts
+    nan_samples: int
+    chunks_ok: int
+    chunks_nan: int
+    chunks_dropped: int
+    chunks_failed: int
+    chunks_skipped: int
+    temperature_mean_c: float
+    allan: object = None
+    noise_terms: object = None
+
+    @property
+    def offset_drift_deg_s_per_h(self):
+        """Signed offset drift (Table 3) in (deg/s)/h."""
+        return rad_s2_to_deg_s_per_h(self.sequence.drift.slope)
+
+
+def rad_s2_to_deg_s_per_h(value):
+    """
+    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3, see chunks.py).
+
+    Parameters
+    ----------
+    value : float
+        Drift in rad/s per s.
+
+    Returns
+    -------
+    float
+        Drift in deg/s per hour.
+    """
+    return float(np.degrees(value) * 3600.0)
+
+
+class _AxisState:
+    """Per-axis sequence statistics (bounded by ``history_chunks`` when > 0)."""
+
+    def __init__(self, history):
+        maxlen = history or None
+        self.rows = deque(maxlen=maxlen)  # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        self.nan_samples = 0
+        self.by_status = dict.fromkeys(STATUSES, 0)
+        self.last = None
+
+
+class NoiseEngine:
+    """
+    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge (module doc).
+
+    Parameters
+    ----------
+    config : EngineConfig
+        Options.
+    reference : optional, keyword-only
+        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the offline
+        tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all axes, or a dict
+        ``{axis: ReferenceStats}``.
+    thresholds : HealthThresholds, optional, keyword-only
+        Verdict thresholds (default :class:`.health.HealthThresholds()`).
+    """
+
+    def __init__(self, config=None, *, reference=None, thresholds=None):
+        from . import health as _health
+
+        self.config = config if config is not None else EngineConfig()
+        self.thresholds = thresholds if thresholds is not None else _health.HealthThresholds()
+        self.reference = _health.reference_per_axis(reference, self.config.axes)
+        self._cols = [AXES.index(a) for a in self.config.axes]
+        self._key = self.config.identifier_key()
+        self._period_ns = None if self.config.rate_hz is None else _NS / float(self.config.rate_hz)
+        self._pending = []  # batches held until the rate is known
+        self._first_ns = None
+        self._last_ns = None
+        self._chunk_index = 0
+        self._reset_buffer()
+        self._samples = 0
+        self._lost = 0
+        self._gaps = 0
+        self._out_of_order = 0
+        self._discarded = 0
+        self._discarded_partials = 0
+        self._axis = {a: _AxisState(int(self.config.history_chunks)) for a in self.config.axes}
+        self._allan = None
+        self._allan_error = None
+
+    # ---- ingestion -------------------------------------------------------------------------------
+
+    def _reset_buffer(self):
+        self._buf = []  # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        self._buffered = 0
+
+    def ingest(self, stamp_ns, gyro, temperature_c=None):
+        """
+        Add a batch of samples; return the jobs of the chunks it completes.
+
+        Parameters
+        ----------
+        stamp_ns : array_like of int, shape (n,)
+            Sample stamps (ns), in delivery order.
+        gyro : array_like, shape (n, 3)
+            Angular rate x, y, z (rad/s). NaN/Inf are counted, not fatal.
+        temperature_c : float or array_like of shape (n,), optional
+            Sensor temperature (degC) per sample or one value for the batch.
+
+        Returns
+        -------
+        list of ChunkJob
+            One per completed chunk and configured axis, in chunk then axis order.
+        """
+        stamps = np.asarray(stamp_ns)
+        if stamps.dtype.kind not in 'iu':
+            raise InputDataError(f'stamp_ns must be integer nanoseconds, got dtype {stamps.dtype}')
+        stamps = stamps.astype(np.int64).reshape(-1)
+        g = np.asarray(gyro, dtype=np.float64)
+        if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] != stamps.shape[0]:
+            raise InputDataError(f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
+        n = stamps.shape[0]
+        if temperature_c is None:
+            temp = np.full(n, np.nan)
+        else:
+            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64), (n,)).astype(np.float64)
+        if n == 0:
+            return []
+        self._samples += n
+        g = np.ascontiguousarray(g[:, self._cols])
+        if self._period_ns is None:
+            self._pending.append((stamps, g, temp))
+            held = sum(p[0].shape[0] for p in self._pending)
+            if held < RATE_ESTIMATE_SAMPLES:
+                return []
+            return self._release_pending()
+        return self._process(stamps, g, temp)
+
+    def _release_pending(self):
+        stamps = np.concatenate([p[0] for p in self._pending])
+        g = np.concatenate([p[1] for p in self._pending])
+        temp = np.concatenate([p[2] for p in self._pending])
+        self._pending = []
+        steps = np.diff(stamps[:RATE_ESTIMATE_SAMPLES])
+        steps = steps[steps > 0]
+        if steps.size == 0:
+            raise InputDataError(f'cannot estimate the sample rate: the first {stamps.shape[0]} stamps '
+                                 'never increase; set the rate explicitly')
+        self._period_ns = float(np.median(steps))
+        return self._process(stamps, g, temp)
+
+    def _process(self, stamps, g, temp):
+        first = self._first_ns is None
+        if first:
+            self._first_ns = int(stamps[0])
+        prev = int(stamps[0]) if first else self._last_ns
+        steps = np.diff(stamps, prepend=np.int64(prev))
+        self._last_ns = int(stamps[-1])
+        self._out_of_order += int(np.count_nonzero(steps[1:] <= 0 if first else steps <= 0))
+        gap = steps > self.config.gap_factor * self._period_ns
+        lost = np.zeros(stamps.shape[0], dtype=np.int64)
+        if gap.any():
+            lost[gap] = np.maximum(np.rint(steps[gap] / self._period_ns).astype(np.int64) - 1, 0)
+            self._gaps += int(gap.sum())
+            self._lost += int(lost.sum())
+        self._feed_allan(g)
+        rel = stamps - self._first_ns
+        jobs = []
+        if self.config.gap_policy == 'split' and gap.any():
+            bounds = [0, *np.flatnonzero(gap).tolist(), stamps.shape[0]]
+            for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+                if i > 0:
+                    self._discard_partial()
+                    lost_a = lost[a:b].copy()
+                    lost_a[0] = 0  # the gap lies before the new chunk, not inside it
+                else:
+                    lost_a = lost[a:b]
+                jobs += self._push(rel[a:b], lost_a, temp[a:b], g[a:b])
+            return jobs
+        return self._push(rel, lost, temp, g)
+
+    def _discard_partial(self):
+        if self._buffered:
+            self._discarded += self._buffered
+            self._discarded_partials += 1
+        self._reset_buffer()
+
+    def _push(self, rel, lost, temp, g):
+        if rel.shape[0] == 0:
+            return []
+        if self._buffered == 0 and lost.shape[0]:
+            # A gap before the first sample of a chunk is not inside it.
+            lost = lost.copy()
+            lost[0] = 0
+        self._buf.append((rel, lost, temp, g))
+        self._buffered += rel.shape[0]
+        size = int(self.config.chunk_size)
+        if self._buffered < size:
+            return []
+        rel = np.concatenate([b[0] for b in self._buf])
+        lost = np.concatenate([b[1] for b in self._buf])
+        temp = np.concatenate([b[2] for b in self._buf])
+        g = np.concatenate([b[3] for b in self._buf])
+        whole = (rel.shape[0] // size) * size
+        jobs = []
+        for start in range(0, whole, size):
+            sl = slice(start, start + size)
+            chunk_lost = lost[sl].copy()
+            chunk_lost[0] = 0
+            jobs += self._make_jobs(rel[sl], chunk_lost, temp[sl], g[sl])
+        self._reset_buffer()
+        if whole < rel.shape[0]:
+            self._buf.append((rel[whole:].copy(), lost[whole:].copy(), temp[whole:].copy(), g[whole:].copy()))
+            self._buffered = rel.shape[0] - whole
+        return jobs
+
+    def _make_jobs(self, rel, lost, temp, g):
+        index = self._chunk_index
+        self._chunk_index += 1
+        samples_lost = int(lost.sum())
+        gaps = int(np.count_nonzero(lost))
+        finite_t = temp[np.isfinite(temp)]
+        temperature = float(finite_t.mean()) if finite_t.size else _NAN
+        t_start = rel[0] / 1e9
+        t_mid = (rel[0] + rel[-1]) / 2e9
+        dropped = gaps > 0 and self.config.gap_policy == 'drop'
+        jobs = []
+        for k, axis in enumerate(self.config.axes):
+            col = np.ascontiguousarray(g[:, k])
+            finite = np.isfinite(col)
+            nan = int(col.shape[0] - np.count_nonzero(finite))
+            self._axis[axis].nan_samples += nan
+            if nan:
+                status, bias, var = 'nan', _NAN, _NAN
+            else:
+                status = 'dropped' if dropped else 'ok'
+                bias = float(col.mean())
+                var = float(col.var(ddof=1))
+            jobs.append(ChunkJob(
+                axis=axis, chunk=index, samples=col, stamp_start_ns=int(rel[0]) + self._first_ns,
+                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost, gaps=gaps,
+                nan_samples=nan, temperature_c=temperature, status=status, bias_rad_s=bias,
+                variance_rad2_s2=var, identifier_key=self._key))
+        return jobs
+
+    def flush(self):
+        """
+        Finish ingestion: release samples held for rate estimation (the tail stays counted, unanalysed).
+
+        Returns
+        -------
+        list of ChunkJob
+            Jobs completed by the released samples.
+        """
+        if self._pending:
+            held = sum(p[0].shape[0] for p in self._pending)
+            if held >= 2:
+                return self._release_pending()
+        return []
+
+    # ---- Allan -------------------------------------------------------------------------------------
+
+    def _feed_allan(self, g):
+        if not self.config.allan or self._allan_error is not None:
+            return
+        if self._allan is None:
+            try:
+                from . import allan as _allan_mod
+                acc = getattr(_allan_mod, 'AllanAccumulator')
+                rate = _NS / self._period_ns
+                self._allan = {a: acc(rate) for a in self.config.axes}
+            except (ImportError, AttributeError, TypeError) as err:
+                self._allan_error = f'Allan deviation unavailable: {err}'
+                return
+        for k, axis in enumerate(self.config.axes):
+            col = g[:, k]
+            finite = np.isfinite(col)
+            self._allan[axis].update(col if finite.all() else col[finite])
+
+    def _allan_result(self, axis):
+        if self._allan is None:
+            return None, None
+        try:
+            from . import allan as _allan_mod
+            result = self._allan[axis].result()
+            fit = getattr(_allan_mod, 'fit_noise_terms', None)
+            terms = fit(result) if fit is not None else None
+        except (InputDataError, ParameterError, ValueError):
+            return None, None
+        return result, terms
+
+    # ---- analysis and bookkeeping --------------------------------------------------------------------
+
+    @staticmethod
+    def analyze(job, *, curves=False):
+        """
+        Identify one chunk; see :func:`analyze_chunk` (pure, safe in a worker thread or process).
+
+        Parameters
+        ----------
+        job : ChunkJob
+        curves : bool, keyword-only
+
+        Returns
+        -------
+        ChunkResult
+        """
+        return analyze_chunk(job, curves=curves)
+
+    def record(self, result):
+        """
+        Add a chunk result to its axis' sequence statistics (only 'ok' chunks enter Tables 3-6).
+
+        Parameters
+        ----------
+        result : ChunkResult
+        """
+        state = self._axis.get(result.axis)
+        if state is None:
+            raise ParameterError(f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
+        state.by_status[result.status] = state.by_status.get(result.status, 0) + 1
+        state.last = result
+        if result.status == 'ok':
+            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2, result.alpha_var,
+                               result.alpha_corr, result.tie_var, result.tie_corr, result.temperature_c))
+
+    def skip(self, job, reason=''):
+        """
+        Count a chunk the caller did not analyse (e.g. the node fell behind); shown in diagnostics.
+
+        Parameters
+        ----------
+        job : ChunkJob
+        reason : str
+            Why (kept in the returned result's message).
+
+        Returns
+        -------
+        ChunkResult
+            A 'skipped' result (already recorded).
+        """
+        result = replace(analyze_chunk(replace(job, status='dropped')), status='skipped',
+                         message=str(reason) or 'skipped')
+        self.record(result)
+        return result
+
+    def counts(self):
+        """
+        Return the stream counters.
+
+        Returns
+        -------
+        StreamCounts
+        """
+        held = sum(p[0].shape[0] for p in self._pending)
+        return StreamCounts(
+            samples=self._samples, samples_lost=self._lost, gaps=self._gaps, out_of_order=self._out_of_order,
+            chunks=self._chunk_index, tail_samples=self._buffered + held,
+            discarded_samples=self._discarded, discarded_partials=self._discarded_partials,
+            rate_hz=_NS / self._period_ns if self._period_ns else _NAN,
+            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0)
+
+    def summary(self, *, allan=True):
+        """
+        Summarise every axis (paper Tables 3-6, Allan deviation, counts).
+
+        Parameters
+        ----------
+        allan : bool, keyword-only
+            Compute the Allan deviation and noise terms (the costly part; a live node may ask rarely).
+
+        Returns
+        -------
+        dict
+            ``{axis: AxisSummary}`` in configured axis order.
+        """
+        counts = self.counts()
+        out = {}
+        for axis, state in self._axis.items():
+            rows = np.array([r for r in state.rows], dtype=np.float64).reshape(-1, 8)
+            seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
+                                     tail_samples=counts.tail_samples, ties_var=int(rows[:, 5].sum()),
+                                     ties_corr=int(rows[:, 6].sum()))
+            temps = rows[:, 7][np.isfinite(rows[:, 7])]
+            result, terms = self._allan_result(axis) if allan else (None, None)
+            out[axis] = AxisSummary(
+                axis=axis, sequence=seq, stream=counts, nan_samples=state.nan_samples,
+                chunks_ok=state.by_status['ok'], chunks_nan=state.by_status['nan'],
+                chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
+                chunks_skipped=state.by_status['skipped'],
+                temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
+                allan=result, noise_terms=terms)
+        return out
+
+    def health(self, *, seconds_since_data=None, summaries=None):
+        """
+        Judge every axis against the reference and the thresholds (see :mod:`.health`).
+
+        Parameters
+        ----------
+        seconds_since_data : float, optional, keyword-only
+            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict is STALE.
+        summaries : dict, optional, keyword-only
+            Reuse :meth:`summary` output (avoids recomputing it).
+
+        Returns
+        -------
+        dict
+            ``{axis: HealthVerdict}``.
+        """
+        from .health import evaluate_health
+
+        summaries = summaries if summaries is not None else self.summary(allan=False)
+        return {axis: evaluate_health(s, reference=self.reference.get(axis), thresholds=self.thresholds,
+                                      seconds_since_data=seconds_since_data)
+                for axis, s in summaries.items()}
+
+    @property
+    def allan_status(self):
+        """Why the Allan deviation is unavailable (empty string when it is available or off)."""
+        return self._allan_error or ''

@@ -1,0 +1,92 @@
+"""
+Every node's ``config/<node>.yaml`` against the node's parameter table (``PARAMETERS``).
+
+Nodes are discovered, so a node module added later (analyzer, recorder) is covered as soon as it
+defines ``NODE_NAME`` and ``PARAMETERS`` (see ``gyro_noise_ros/nodes/_ros_common.py``).
+"""
+
+import importlib
+import pkgutil
+import re
+from pathlib import Path
+
+import pytest
+from rclpy.parameter import parameter_dict_from_yaml_file, parameter_value_to_python
+
+import gyro_noise_ros.nodes as nodes_pkg
+from gyro_noise_ros.nodes._ros_common import ParamSpec
+
+pytestmark = pytest.mark.ros
+
+CONFIG_DIR = Path(__file__).resolve().parents[1] / 'config'
+
+
+def _node_modules():
+    found = []
+    for info in pkgutil.iter_modules(nodes_pkg.__path__):
+        if info.name.startswith('_'):
+            continue
+        module = importlib.import_module(f'{nodes_pkg.__name__}.{info.name}')
+        if hasattr(module, 'PARAMETERS'):
+            found.append(module)
+    return found
+
+
+NODE_MODULES = _node_modules()
+
+
+def _ids(modules):
+    return [m.NODE_NAME for m in modules]
+
+
+def test_driver_is_discovered():
+    # Guards the discovery itself: an empty list would make every parametrised test vanish.
+    assert 'lsm6dso32_driver' in _ids(NODE_MODULES)
+
+
+def test_every_config_file_belongs_to_a_node():
+    names = set(_ids(NODE_MODULES))
+    orphans = [p.name for p in CONFIG_DIR.glob('*.yaml') if p.stem not in names]
+    assert not orphans, f'config files without a node module defining NODE_NAME/PARAMETERS: {orphans}'
+
+
+@pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
+def test_table_is_well_formed(module):
+    table = module.PARAMETERS
+    names = [spec.name for spec in table]
+    assert len(names) == len(set(names)), 'duplicate parameter names'
+    for spec in table:
+        assert isinstance(spec, ParamSpec)
+        assert re.fullmatch(r'[a-z][a-z0-9_]*', spec.name), spec.name
+        assert spec.description.strip(), f'{spec.name} has no description'
+        assert (spec.min_value is None) == (spec.max_value is None), f'{spec.name}: give both bounds'
+        spec.check(spec.default)  # the default itself must satisfy its range and choices
+        spec.descriptor()  # builds (type known, range of the right kind)
+
+
+@pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
+def test_yaml_lists_every_parameter_with_its_default(module):
+    path = CONFIG_DIR / f'{module.NODE_NAME}.yaml'
+    assert path.is_file(), f'missing {path}'
+    params = parameter_dict_from_yaml_file(str(path), target_nodes=[module.NODE_NAME])
+    values = {name: parameter_value_to_python(p.value) for name, p in params.items()}
+    table = {spec.name: spec for spec in module.PARAMETERS}
+    assert set(values) == set(table), (f'only in YAML: {sorted(set(values) - set(table))}; '
+                                       f'only in the table: {sorted(set(table) - set(values))}')
+    for name, spec in table.items():
+        # Exact type: a YAML "1" for a double parameter would be refused by rclpy at start.
+        assert type(values[name]) is type(spec.default), (name, values[name], spec.default)
+        assert values[name] == spec.default, (name, values[name], spec.default)
+
+
+@pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
+def test_yaml_comment_gives_unit_and_read_only(module):
+    text = (CONFIG_DIR / f'{module.NODE_NAME}.yaml').read_text()
+    for spec in module.PARAMETERS:
+        lines = [ln for ln in text.splitlines() if re.match(rf'\s+{spec.name}:', ln)]
+        assert len(lines) == 1, f'{spec.name}: expected one line, found {len(lines)}'
+        assert '#' in lines[0], f'{spec.name}: no comment'
+        comment = lines[0].split('#', 1)[1].strip()
+        unit = spec.unit or '-'
+        assert comment.startswith(f'[{unit}]'), f'{spec.name}: comment must start with [{unit}]'
+        assert ('read_only' in comment) == spec.read_only, f'{spec.name}: read_only marker mismatch'

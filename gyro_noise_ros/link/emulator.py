@@ -1,0 +1,521 @@
+"""
+Pure model of the Portenta H7 + LSM6DSO32 board: samples with ground truth, configuration commands, faults.
+
+No I/O and no threads: ``cli/emulator.py`` serves this model on a pseudo-terminal or TCP and writes SD logs.
+
+Signal model of one gyro axis at sample k (time ``t_k``, seconds since power-on)::
+
+    rate_k = bias + v_k + helium(t_k) + temp_sens * (T(t_k) - T(0)) + vib_amp * sin(2 pi vib_hz t_k + phase)
+    raw_k  = clip(round(rate_k / LSB(gyro_fs)), -32768, 32767)
+
+``v_k`` is the fractional-order noise of paper 000 eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]``, run by
+:class:`gyro_noise_ros.core.simulate.FractionalNoise` (truncated GL difference, eqs. 3-5, L = 1000), one
+independent generator per axis. The default noise level is the paper's own measurement (Table 4,
+reference sequence: noise variance 0.0034 (deg/s)^2, i.e. a standard deviation of 0.058 deg/s), which
+is the LSM6DSO-family rate noise density of 3.8 mdps/sqrt(Hz) over a ~235 Hz noise bandwidth; ``sigma_w``
+is set so the stationary output has that standard deviation. The default order is the paper's
+variance-method estimate, alpha = 1.4 (Table 5); the paper gives no f, we take f = -1.2 (stable, and
+nearly white like the measured noise). The default bias is the paper's initial offset, ~0.8 deg/s
+(section 4: "the offset increased from a value of 0.775 to 4.242").
+
+The helium effect is a delayed first-order rise of the bias, ``A (1 - exp(-(t - delay)/tau))`` for
+``t > delay`` (paper 000 Fig. 3: the offset starts to rise after ~1.5 h of exposure). Temperature moves
+linearly at ``temp_drift_c_per_h`` and leaks into the bias with ``temp_sensitivity_dps_per_c``.
+
+Determinism: every random stream (one per gyro axis, accelerometer, temperature) is a child of the
+``rng`` given, consumed one draw per sample, so sample k is the same whatever the batch sizes, the
+pacing, the connection state or the fault injection (which uses its own generator).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from ..core.fractional import DEFAULT_MEMORY, gl_coefficients
+from ..core.simulate import FractionalNoise, require_stable
+from ..errors import ParameterError
+from . import lsm6dso32 as lsm
+from .protocol import (ACK_OK, FLAG_SAMPLE_LOST, NAK_BAD_ACCEL_FS, NAK_BAD_GYRO_FS, NAK_BAD_ODR,
+                       SAMPLE_DTYPE, Ack, Decoder, encode_ack)
+
+DEG = np.pi / 180.0
+#: Paper 000 Table 4, reference sequence: mean noise variance 0.003414 (deg/s)^2.
+PAPER_NOISE_STD_DPS = float(np.sqrt(0.003414))
+DEFAULT_ALPHA = 1.4
+DEFAULT_F = -1.2
+DEFAULT_BIAS_DPS = (0.775, -0.35, 0.25)
+#: Accelerometer noise density (ug/sqrt(Hz)), LSM6DSO family typical in high-performance mode.
+ACCEL_NOISE_DENSITY_UG_RTHZ = 70.0
+
+
+def stationary_gain(alpha, f, memory=DEFAULT_MEMORY):
+    """
+    Return the output standard deviation of eq. (2) per unit source-noise standard deviation.
+
+    Parameters
+    ----------
+    alpha, f : float
+        Order and noise parameter of paper 000 eq. (2).
+    memory : int
+        L of eq. (5).
+
+    Returns
+    -------
+    float
+        sqrt(sum_k h_k^2) with h the impulse response of w -> v.
+    """
+    require_stable(alpha, f, memory)
+    a = gl_coefficients(alpha, memory).copy()
+    a[1] -= f
+    impulse = np.zeros(1 << 15)
+    impulse[0] = 1.0
+    h = scipy.signal.lfilter([1.0], a, impulse)
+    return float(np.sqrt(np.sum(h * h)))
+
+
+@dataclass(frozen=True)
+class HeliumTransient:
+    """
+    Delayed first-order rise of the gyro bias (helium-like).
+
+    Attributes
+    ----------
+    amplitude_dps : float or tuple of 3 floats
+        Final bias change (deg/s), per axis or common.
+    delay_s : float
+        Time before the rise starts (s).
+    tau_s : float
+        Time constant of the rise (s).
+    """
+
+    amplitude_dps: object = 3.5
+    delay_s: float = 5400.0
+    tau_s: float = 7200.0
+
+
+@dataclass(frozen=True)
+class Vibration:
+    """
+    Sinusoidal vibration seen by the gyro (and optionally the accelerometer).
+
+    Attributes
+    ----------
+    frequency_hz : float
+        Vibration frequency (Hz).
+    amplitude_dps : float or tuple of 3 floats
+        Rate amplitude (deg/s).
+    accel_amplitude_g : float or tuple of 3 floats
+        Specific-force amplitude (g).
+    phase_rad : float
+        Phase at t = 0 (rad).
+    """
+
+    frequency_hz: float = 50.0
+    amplitude_dps: object = 1.0
+    accel_amplitude_g: object = 0.0
+    phase_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class Truth:
+    """
+    What the emulated sensor saw, before quantisation, for a batch of samples.
+
+    Attributes
+    ----------
+    seq : numpy.ndarray
+        uint32 sequence numbers (as sent).
+    time_s : numpy.ndarray
+        True time since power-on (s).
+    gyro_rad_s : numpy.ndarray
+        (n, 3) true angular rate (rad/s).
+    accel_m_s2 : numpy.ndarray
+        (n, 3) true specific force (m/s^2).
+    temperature_c : numpy.ndarray
+        (n,) true die temperature (degC).
+    gyro_fs_dps, accel_fs_g : int
+        Full scales the batch was quantised with.
+    """
+
+    seq: np.ndarray
+    time_s: np.ndarray
+    gyro_rad_s: np.ndarray
+    accel_m_s2: np.ndarray
+    temperature_c: np.ndarray
+    gyro_fs_dps: int
+    accel_fs_g: int
+
+
+def _vec3(name, value):
+    arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,)).copy()
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f'{name} must be finite, got {value!r}')
+    return arr
+
+
+class BoardModel:
+    """
+    The emulated board: sample generation at the configured ODR and full scales, command handling.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator, keyword-only
+        Parent of all random streams of the model.
+    odr_hz : float, keyword-only
+        Power-on output data rate (Hz), one of ``lsm6dso32.ODRS_HZ``.
+    gyro_fs_dps, accel_fs_g : int, keyword-only
+        Power-on full scales (deg/s, g).
+    alpha, f : float, keyword-only
+        Fractional noise model of paper 000 eq. (2).
+    noise_std_dps : float, keyword-only
+        Stationary standard deviation of the gyro noise (deg/s); ignored when ``sigma_w_dps`` is given.
+    sigma_w_dps : float, optional, keyword-only
+        Source-noise standard deviation of eq. (2) (deg/s).
+    memory : int, keyword-only
+        L of eq. (5).
+    bias_dps : float or 3 floats, keyword-only
+        Constant gyro bias (deg/s).
+    accel_g : 3 floats, keyword-only
+        Static specific force (g); (0, 0, 1) is the board lying flat (REP-103: +1 g up).
+    accel_noise_ug_rthz : float, keyword-only
+        Accelerometer white-noise density (ug/sqrt(Hz)) over ODR/2.
+    temperature_c : float, keyword-only
+        Die temperature at power-on (degC).
+    temp_drift_c_per_h : float, keyword-only
+        Linear temperature change (degC/h).
+    temp_sensitivity_dps_per_c : float or 3 floats, keyword-only
+        Gyro bias change per degC away from the power-on temperature (deg/s/degC).
+    helium : HeliumTransient, optional, keyword-only
+    vibration : Vibration, optional, keyword-only
+    clock_ppm : float, keyword-only
+        Board clock error (ppm): device microseconds run fast by this much against true time.
+    seq0 : int, keyword-only
+        Sequence number of the first sample (uint32; wrap tests start near 2**32).
+    t0_us : int, keyword-only
+        Device time of power-on (us, uint32).
+    noise : sequence of 3 objects with ``generate(n)``, optional, keyword-only
+        Replaces the fractional generators (output in rad/s).
+    """
+
+    def __init__(self, *, rng, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, alpha=DEFAULT_ALPHA, f=DEFAULT_F,
+                 noise_std_dps=PAPER_NOISE_STD_DPS, sigma_w_dps=None, memory=DEFAULT_MEMORY,
+                 bias_dps=DEFAULT_BIAS_DPS, accel_g=(0.0, 0.0, 1.0), accel_noise_ug_rthz=ACCEL_NOISE_DENSITY_UG_RTHZ,
+                 temperature_c=25.0, temp_drift_c_per_h=0.0, temp_sensitivity_dps_per_c=0.0, helium=None,
+                 vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None):
+        if not isinstance(rng, np.random.Generator):
+            raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
+        self.odr_hz = lsm.check_odr(odr_hz)
+        self.gyro_fs_dps = lsm.check_gyro_fs(gyro_fs_dps)
+        self.accel_fs_g = lsm.check_accel_fs(accel_fs_g)
+        streams = rng.spawn(5)
+        self._accel_rng, self._temp_rng = streams[3], streams[4]
+        if noise is None:
+            if sigma_w_dps is None:
+                if not (np.isfinite(noise_std_dps) and noise_std_dps >= 0):
+                    raise ParameterError(f'noise_std_dps must be finite and >= 0, got {noise_std_dps}')
+                sigma_w_dps = noise_std_dps / stationary_gain(alpha, f, memory)
+            self.sigma_w_rad_s = float(sigma_w_dps) * DEG
+            noise = [FractionalNoise(alpha, f, self.sigma_w_rad_s, rng=streams[i], memory=memory)
+                     for i in range(3)]
+        elif len(noise) != 3:
+            raise ParameterError(f'noise must hold 3 generators, got {len(noise)}')
+        self._noise = list(noise)
+        self.bias_rad_s = _vec3('bias_dps', bias_dps) * DEG
+        self.accel_m_s2 = _vec3('accel_g', accel_g) * lsm.STANDARD_GRAVITY
+        if not (np.isfinite(accel_noise_ug_rthz) and accel_noise_ug_rthz >= 0):
+            raise ParameterError(f'accel_noise_ug_rthz must be finite and >= 0, got {accel_noise_ug_rthz}')
+        self.accel_noise_ug_rthz = float(accel_noise_ug_rthz)
+        self.temperature0_c = float(temperature_c)
+        self.temp_drift_c_per_s = float(temp_drift_c_per_h) / 3600.0
+        self.temp_sens_rad_s_per_c = _vec3('temp_sensitivity_dps_per_c', temp_sensitivity_dps_per_c) * DEG
+        self.helium = helium
+        self.vibration = vibration
+        if helium is not None and not (helium.tau_s > 0 and helium.delay_s >= 0):
+            raise ParameterError(f'helium needs tau_s > 0 and delay_s >= 0, got {helium}')
+        if vibration is not None and not vibration.frequency_hz >= 0:
+            raise ParameterError(f'vibration frequency_hz must be >= 0, got {vibration.frequency_hz}')
+        if not (np.isfinite(clock_ppm) and abs(clock_ppm) < 1e5):
+            raise ParameterError(f'clock_ppm must be finite and |clock_ppm| < 1e5, got {clock_ppm}')
+        self.clock_ppm = float(clock_ppm)
+        self.seq = int(seq0) % (1 << 32)
+        self.t0_us = int(t0_us) % (1 << 32)
+        self.samples_generated = 0
+        self._seg_start_s = 0.0    # true time of the first sample since the last ODR change
+        self._seg_index = 0        # samples since the last ODR change
+        self._decoder = Decoder()
+        self.last_truth = None
+        self.config_changes = []   # (samples_generated at the change, Ack)
+
+    @property
+    def time_s(self):
+        """float: true time of the next sample (s since power-on)."""
+        return self._seg_start_s + self._seg_index / self.odr_hz
+
+    def configure(self, *, command_id, odr_hz, gyro_fs_dps, accel_fs_g):
+        """
+        Apply a configuration as the firmware would, or refuse it.
+
+        Parameters
+        ----------
+        command_id : int
+        odr_hz : float
+            Requested ODR (Hz).
+        gyro_fs_dps, accel_fs_g : int
+            Requested full scales (deg/s, g).
+
+        Returns
+        -------
+        Ack
+            ok with the new configuration, or a NAK naming the bad value (configuration unchanged).
+        """
+        checks = ((NAK_BAD_ODR, lsm.check_odr, odr_hz), (NAK_BAD_GYRO_FS, lsm.check_gyro_fs, gyro_fs_dps),
+                  (NAK_BAD_ACCEL_FS, lsm.check_accel_fs, accel_fs_g))
+        values = []
+        for code, check, value in checks:
+            try:
+                values.append(check(value))
+            except ParameterError as err:
+                return Ack(command_id=command_id, ok=False, odr_hz=self.odr_hz, gyro_fs_dps=self.gyro_fs_dps,
+                           accel_fs_g=self.accel_fs_g, message=str(err)[:64], status=code)
+        odr, gyro_fs, accel_fs = values
+        if odr != self.odr_hz:
+            self._seg_start_s = self.time_s
+            self._seg_index = 0
+        self.odr_hz, self.gyro_fs_dps, self.accel_fs_g = odr, gyro_fs, accel_fs
+        ack = Ack(command_id=command_id, ok=True, odr_hz=odr, gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs,
+                  message='', status=ACK_OK)
+        self.config_changes.append((self.samples_generated, ack))
+        return ack
+
+    def handle_bytes(self, data):
+        """
+        Feed bytes received from the host; answer every CONFIGURE command.
+
+        Parameters
+        ----------
+        data : bytes
+
+        Returns
+        -------
+        bytes
+            Encoded ACK/NAK frames (empty when no complete command arrived).
+        """
+        result = self._decoder.feed(data)
+        out = []
+        for cmd in result.commands:
+            out.append(encode_ack(self.configure(command_id=cmd.command_id, odr_hz=cmd.odr_hz,
+                                                 gyro_fs_dps=cmd.gyro_fs_dps, accel_fs_g=cmd.accel_fs_g)))
+        return b''.join(out)
+
+    @property
+    def command_stats(self):
+        """LinkStats: counters of the board's command decoder."""
+        return self._decoder.stats
+
+    def next_samples(self, n):
+        """
+        Produce the next ``n`` samples; their ground truth is left in :attr:`last_truth`.
+
+        Parameters
+        ----------
+        n : int
+            Number of samples (>= 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            :data:`~gyro_noise_ros.link.protocol.SAMPLE_DTYPE` records, flags 0.
+        """
+        n = int(n)
+        if n < 0:
+            raise ParameterError(f'n must be >= 0, got {n}')
+        idx = self._seg_index + np.arange(n, dtype=np.float64)
+        t = self._seg_start_s + idx / self.odr_hz
+        gyro = np.column_stack([gen.generate(n) for gen in self._noise]) + self.bias_rad_s
+        temp = self.temperature0_c + self.temp_drift_c_per_s * t
+        gyro += np.outer(temp - self.temperature0_c, self.temp_sens_rad_s_per_c)
+        accel = np.broadcast_to(self.accel_m_s2, (n, 3)).copy()
+        accel_std = self.accel_noise_ug_rthz * 1e-6 * lsm.STANDARD_GRAVITY * np.sqrt(self.odr_hz / 2.0)
+        accel += self._accel_rng.standard_normal((n, 3)) * accel_std
+        if self.helium is not None:
+            h = self.helium
+            rise = np.where(t > h.delay_s, -np.expm1(-(np.maximum(t - h.delay_s, 0.0)) / h.tau_s), 0.0)
+            gyro += np.outer(rise, _vec3('helium amplitude_dps', h.amplitude_dps) * DEG)
+        if self.vibration is not None:
+            v = self.vibration
+            s = np.sin(2.0 * np.pi * v.frequency_hz * t + v.phase_rad)
+            gyro += np.outer(s, _vec3('vibration amplitude_dps', v.amplitude_dps) * DEG)
+            accel += np.outer(s, _vec3('vibration accel_amplitude_g', v.accel_amplitude_g) * lsm.STANDARD_GRAVITY)
+        out = np.zeros(n, dtype=SAMPLE_DTYPE)
+        out['seq'] = (self.seq + np.arange(n, dtype=np.uint64)) % (1 << 32)
+        device_us = np.floor(t * 1e6 * (1.0 + self.clock_ppm * 1e-6)).astype(np.int64)
+        out['t_us'] = (self.t0_us + device_us) % (1 << 32)
+        out['gyro'] = lsm.quantise(gyro, lsm.gyro_sensitivity_rad_s_per_lsb(self.gyro_fs_dps))
+        out['accel'] = lsm.quantise(accel, lsm.accel_sensitivity_m_s2_per_lsb(self.accel_fs_g))
+        out['temp'] = lsm.quantise(temp - lsm.TEMPERATURE_OFFSET_C, 1.0 / lsm.TEMPERATURE_LSB_PER_C)
+        self.last_truth = Truth(seq=out['seq'].copy(), time_s=t, gyro_rad_s=gyro, accel_m_s2=accel,
+                                temperature_c=temp, gyro_fs_dps=self.gyro_fs_dps, accel_fs_g=self.accel_fs_g)
+        self.seq = (self.seq + n) % (1 << 32)
+        self._seg_index += n
+        self.samples_generated += n
+        return out
+
+
+@dataclass(frozen=True)
+class FaultCounts:
+    """
+    What a :class:`FaultInjector` did (the exact numbers a decoder must report).
+
+    Attributes
+    ----------
+    dropped_flagged : int
+        Samples dropped with the next kept sample flagged FLAG_SAMPLE_LOST.
+    dropped_unflagged : int
+        Samples dropped silently (only the counter gap shows them).
+    bytes_corrupted : int
+        Bytes XOR-ed with a random non-zero value.
+    visible_lost : int
+        Dropped samples followed by a kept sample and preceded by one (what a decoder of the kept
+        samples reports as ``samples_lost``).
+    visible_flagged_lost : int
+        Of those, the ones in runs before a flagged sample (the decoder's ``samples_flagged_lost``).
+    """
+
+    dropped_flagged: int = 0
+    dropped_unflagged: int = 0
+    bytes_corrupted: int = 0
+    visible_lost: int = 0
+    visible_flagged_lost: int = 0
+
+
+class FaultInjector:
+    """
+    Board-side sample loss and transport corruption, seeded, independent of the sample streams.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    drop_flagged_rate : float, keyword-only
+        Probability that a sample is dropped by the "board" that knows it (flags the next sample).
+    drop_unflagged_rate : float, keyword-only
+        Probability that a sample vanishes unnoticed by the board.
+    corrupt_rate : float, keyword-only
+        Probability that a transmitted byte is corrupted.
+
+    Notes
+    -----
+    A dropped run is flagged when any sample in it was a flagged drop, so the flagged count is the sum
+    of the gaps before flagged samples, which is what the decoder reports as ``samples_flagged_lost``.
+    Drops at the very end of a stream (no later sample) are counted but invisible to a decoder.
+    """
+
+    def __init__(self, rng, *, drop_flagged_rate=0.0, drop_unflagged_rate=0.0, corrupt_rate=0.0):
+        for name, value in (('drop_flagged_rate', drop_flagged_rate), ('drop_unflagged_rate', drop_unflagged_rate),
+                            ('corrupt_rate', corrupt_rate)):
+            if not 0.0 <= value < 1.0:
+                raise ParameterError(f'{name} must be in [0, 1), got {value}')
+        if drop_flagged_rate + drop_unflagged_rate >= 1.0:
+            raise ParameterError('drop_flagged_rate + drop_unflagged_rate must be < 1, got '
+                                 f'{drop_flagged_rate + drop_unflagged_rate}')
+        self.rng = rng
+        self.drop_flagged_rate = float(drop_flagged_rate)
+        self.drop_unflagged_rate = float(drop_unflagged_rate)
+        self.corrupt_rate = float(corrupt_rate)
+        self._pending_flag = False
+        self._pending_run = 0
+        self._c = dict.fromkeys(FaultCounts.__dataclass_fields__, 0)
+        self._seen_kept = False
+
+    @property
+    def counts(self):
+        """FaultCounts: what has been injected so far."""
+        return FaultCounts(**self._c)
+
+    def note_lost(self, n, *, flagged=True):
+        """
+        Record ``n`` samples lost outside the injector (e.g. transmit buffer full); flag the next sample.
+
+        The samples must be consecutive with the ones given to :meth:`drop` (they are counted in the
+        ``visible_*`` counts once a later sample is kept).
+
+        Parameters
+        ----------
+        n : int
+        flagged : bool, keyword-only
+        """
+        if n > 0:
+            self._pending_flag = self._pending_flag or flagged
+            self._pending_run += n
+
+    def drop(self, samples):
+        """
+        Drop samples at the configured rates and flag the sample after each flagged loss.
+
+        Parameters
+        ----------
+        samples : numpy.ndarray
+            SAMPLE_DTYPE records (not modified).
+
+        Returns
+        -------
+        numpy.ndarray
+            The kept samples (a copy).
+        """
+        n = samples.size
+        if n == 0:
+            return samples.copy()
+        if (self.drop_flagged_rate == 0 and self.drop_unflagged_rate == 0 and not self._pending_flag
+                and not self._pending_run):
+            self._seen_kept = True
+            return samples.copy()
+        u = self.rng.random(n)
+        flagged = u < self.drop_flagged_rate
+        unflagged = (u >= self.drop_flagged_rate) & (u < self.drop_flagged_rate + self.drop_unflagged_rate)
+        self._c['dropped_flagged'] += int(flagged.sum())
+        self._c['dropped_unflagged'] += int(unflagged.sum())
+        kept = samples[~(flagged | unflagged)].copy()
+        # for every kept sample: was any sample in the dropped run just before it a flagged drop?
+        pending = self._pending_flag
+        kept_pos = np.flatnonzero(~(flagged | unflagged))
+        if kept_pos.size:
+            fl_cum = np.concatenate(([0], np.cumsum(flagged)))
+            prev_kept = np.concatenate(([-1], kept_pos[:-1]))
+            run_has_flag = (fl_cum[kept_pos] - fl_cum[prev_kept + 1]) > 0
+            run_has_flag[0] = run_has_flag[0] or pending
+            kept['flags'][run_has_flag] |= FLAG_SAMPLE_LOST
+            runs = kept_pos - prev_kept - 1
+            runs[0] += self._pending_run
+            if not self._seen_kept:
+                runs[0] = 0
+            self._seen_kept = True
+            self._c['visible_lost'] += int(runs.sum())
+            self._c['visible_flagged_lost'] += int(runs[run_has_flag].sum())
+            tail = slice(kept_pos[-1] + 1, n)
+            self._pending_flag = bool(flagged[tail].any())
+            self._pending_run = int((flagged | unflagged)[tail].sum())
+        else:
+            self._pending_flag = pending or bool(flagged.any())
+            self._pending_run += n
+        return kept
+
+    def corrupt(self, data):
+        """
+        Corrupt bytes at the configured rate.
+
+        Parameters
+        ----------
+        data : bytes
+
+        Returns
+        -------
+        bytes
+        """
+        if self.corrupt_rate == 0 or not data:
+            return data
+        arr = np.frombuffer(data, dtype=np.uint8).copy()
+        hit = np.flatnonzero(self.rng.random(arr.size) < self.corrupt_rate)
+        if hit.size:
+            arr[hit] ^= self.rng.integers(1, 256, hit.size, dtype=np.uint8)
+            self._c['bytes_corrupted'] += int(hit.size)
+        return arr.tobytes()

@@ -1,0 +1,434 @@
+"""
+gyro_noise_analyze: characterise gyro noise in rosbags (paper 000 Tables 3-6, Figs. 2-10), ROS-free.
+
+Usage::
+
+    gyro_noise_analyze BAG [BAG ...] [--topic T] [--axis x|y|z|all] [--chunk-size N]
+        [--order-grid START:STOP:STEP] [--memory L] [--jobs N] [--reference SUMMARY] [--label NAME ...]
+        --out DIR
+
+Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags through :mod:`gyro_noise_ros.bag`, streams them in batches
+(constant memory apart from one small row per chunk), runs :class:`gyro_noise_ros.core.engine.NoiseEngine`
+with the chunk identification spread over ``--jobs`` worker processes (at most ``2 x jobs`` chunks in
+flight), and writes chunks.csv, summary.json, summary.md, allan.csv, imu.yaml, curves.npz and PNG figures
+into DIR. Formats and exit codes: ``docs/offline_tool.md``.
+"""
+
+import argparse
+import collections
+import datetime
+import math
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__, report
+from ..bag import ImuBagReader, find_imu_topic
+from ..core.engine import AXES, GAP_POLICIES, EngineConfig, NoiseEngine, analyze_chunk
+from ..core.fractional import DEFAULT_MEMORY, parse_grid
+from ..core.health import HealthThresholds, reference_per_axis
+from ..errors import InputDataError, ParameterError
+from ._common import run_cli
+
+PROG = 'gyro_noise_analyze'
+
+#: Messages decoded per batch (bounds the decode memory: ~0.4 KB per message).
+DEFAULT_BATCH = 65536
+#: Chunks per bag and axis whose var(alpha), J(alpha) curves are kept for the heat maps.
+DEFAULT_CURVES = 200
+
+
+def build_parser():
+    """
+    Return the argument parser of gyro_noise_analyze.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    p = argparse.ArgumentParser(
+        prog=PROG, description='Characterise MEMS gyro noise in rosbags: per-chunk bias, variance and '
+        'fractional order (variance and correlation methods), Allan deviation, health verdicts.')
+    p.add_argument('bags', nargs='+', metavar='BAG',
+                   help='rosbag2 directory, .db3 or .mcap file, or ROS 1 .bag file (order kept in tables)')
+    p.add_argument('--out', required=True, metavar='DIR', help='output directory (created if missing)')
+    p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
+    p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (default: found automatically)')
+    p.add_argument('--axis', default='all', choices=[*AXES, 'all'], help='axis to analyse (default: all)')
+    p.add_argument('--chunk-size', type=int, default=10000, metavar='N', help='samples per chunk (10000)')
+    p.add_argument('--order-grid', default='0:2:0.01', metavar='START:STOP:STEP',
+                   help='order grid, both ends included (0:2:0.01)')
+    p.add_argument('--memory', type=int, default=DEFAULT_MEMORY, metavar='L',
+                   help='memory L of the truncated GL difference (1000)')
+    p.add_argument('--max-lag', type=int, default=None, metavar='M', help='largest lag in J (default: all)')
+    p.add_argument('--no-demean', action='store_true', help='do not remove the chunk mean before identification')
+    p.add_argument('--rate-hz', type=float, default=None, help='nominal sample rate (default: from the stamps)')
+    p.add_argument('--gap-factor', type=float, default=1.5,
+                   help='a stamp step above this many nominal periods is a gap (1.5)')
+    p.add_argument('--gap-policy', default='flag', choices=GAP_POLICIES,
+                   help='flag: keep chunks with gaps and count; split: restart the chunk after a gap; '
+                        'drop: leave chunks with gaps out of the statistics (default: flag)')
+    p.add_argument('--jobs', type=int, default=None, metavar='N',
+                   help='worker processes for the identification (default: all cores; 1 = in-process)')
+    p.add_argument('--reference', metavar='SUMMARY',
+                   help='summary.json of a reference recording: adds health verdicts per bag and axis')
+    p.add_argument('--label', nargs='+', metavar='NAME', help='one label per bag for tables and figures')
+    p.add_argument('--curves', type=int, default=DEFAULT_CURVES, metavar='N',
+                   help=f'chunks per bag and axis whose var/J curves are kept for heat maps ({DEFAULT_CURVES}; 0 = none)')
+    p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
+    p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
+    p.add_argument('--batch-size', type=int, default=DEFAULT_BATCH, metavar='N',
+                   help=f'messages decoded per batch ({DEFAULT_BATCH})')
+    p.add_argument('--quiet', action='store_true', help='print only errors')
+    p.add_argument('--version', action='version', version=f'%(prog)s {__version__}')
+    return p
+
+
+class _Progress:
+    """Plain-text progress on stderr, only when stderr is a terminal."""
+
+    def __init__(self, enabled):
+        self.enabled = enabled and sys.stderr.isatty()
+        self._last = 0.0
+
+    def update(self, label, done, total, chunks, started, *, final=False):
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if not final and now - self._last < 0.5:
+            return
+        self._last = now
+        rate = done / max(now - started, 1e-9)
+        pct = f'{100.0 * done / total:5.1f}%' if total else '  ?  '
+        sys.stderr.write(f'\r{label}: {pct} {done}/{total} messages, {chunks} chunks, {rate:,.0f} samples/s   ')
+        if final:
+            sys.stderr.write('\n')
+        sys.stderr.flush()
+
+
+def _labels(paths, labels):
+    if labels is None:
+        names = [Path(p).name[:-len(Path(p).suffix)] if Path(p).suffix in ('.bag', '.mcap', '.db3')
+                 else Path(p).name for p in paths]
+    else:
+        if len(labels) != len(paths):
+            raise ParameterError(f'--label needs one name per bag: {len(paths)} bag(s), {len(labels)} label(s)')
+        names = list(labels)
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise ParameterError(f'bag labels must be unique, got duplicates {dup}; use --label')
+    return names
+
+
+def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None, jobs=1,
+                 reference=None, thresholds=None, figures=True, curves=DEFAULT_CURVES, batch_size=DEFAULT_BATCH,
+                 progress=False, command=None):
+    """
+    Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
+
+    Parameters
+    ----------
+    paths : list of str or os.PathLike
+        Bags, in table order.
+    out_dir : str or os.PathLike, keyword-only
+        Output directory (created).
+    labels : list of str, optional
+        One unique label per bag (default: bag names).
+    topic, temperature_topic : str, optional
+        Topics (default: found per bag).
+    config : EngineConfig, optional
+        Engine options.
+    jobs : int
+        Worker processes (1: analyse in this process).
+    reference : str or os.PathLike, optional
+        summary.json of a reference recording (health verdicts).
+    thresholds : HealthThresholds, optional
+    figures : bool
+        Write PNG figures.
+    curves : int
+        Chunks per bag and axis whose curves are kept.
+    batch_size : int
+        Messages per decoded batch.
+    progress : bool
+        Show progress on a terminal.
+    command : list of str, optional
+        Command line recorded in summary.json.
+
+    Returns
+    -------
+    dict
+        The summary.json document plus ``'_timing'`` (seconds: total, decode, analysis wait) and
+        ``'_files'`` (written paths).
+    """
+    config = config if config is not None else EngineConfig()
+    jobs = int(jobs)
+    if jobs < 1:
+        raise ParameterError(f'--jobs must be >= 1, got {jobs}')
+    if curves < 0:
+        raise ParameterError(f'--curves must be >= 0, got {curves}')
+    names = _labels([str(p) for p in paths], labels)
+    thresholds = thresholds if thresholds is not None else HealthThresholds()
+    ref = reference_per_axis(str(reference), config.axes) if reference is not None else {}
+    # Fail fast on any unreadable bag or unresolvable topic before hours of work on the others.
+    topics = [find_imu_topic(p, topic) for p in paths]
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ParameterError(f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
+
+    started = time.perf_counter()
+    timing = {'decode_s': 0.0, 'wait_s': 0.0}
+    pool = ProcessPoolExecutor(max_workers=jobs) if jobs > 1 else None
+    csv_writer = report.ChunkCsvWriter(out / 'chunks.csv')
+    bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
+    try:
+        for path, label, imu_topic in zip(paths, names, topics):
+            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
+                               csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
+                               _Progress(progress), timing)
+            bag_docs.append(doc)
+    finally:
+        csv_writer.close()
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
+               for b in bag_docs for a in b['axes'].values()):
+        counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
+        raise InputDataError(f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
+                             'lower --chunk-size (>= memory + 2)')
+
+    doc = {
+        'tool': PROG, 'version': __version__,
+        'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ'),
+        'command': list(command) if command is not None else None,
+        'options': {**config.as_dict(), 'jobs': jobs, 'topic': topic, 'temperature_topic': temperature_topic,
+                    'reference': str(reference) if reference is not None else None,
+                    'thresholds': {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
+                    if ref else None,
+                    'curves': curves, 'batch_size': batch_size},
+        'bags': bag_docs,
+    }
+    files = [out / 'chunks.csv']
+    report.write_json(out / 'summary.json', doc)
+    (out / 'summary.md').write_text(report.summary_markdown(doc))
+    files += [out / 'summary.json', out / 'summary.md']
+    files += _write_allan_outputs(out, doc, allan_store, figures)
+    if curve_store:
+        arrays = {'alphas': config.alphas}
+        for (label, axis), rows in curve_store.items():
+            arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows], dtype=np.int64)
+            arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
+            arrays[f'{label}/{axis}/j'] = np.array([r[2] for r in rows])
+        np.savez_compressed(out / 'curves.npz', **arrays)
+        files.append(out / 'curves.npz')
+    if figures:
+        files += _write_figures(out, config, per_chunk, curve_store)
+    doc['_timing'] = {'total_s': time.perf_counter() - started, **timing}
+    doc['_files'] = [str(f) for f in files]
+    return doc
+
+
+def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, csv_writer,
+                 per_chunk, curve_store, allan_store, curves, batch_size, progress, timing):
+    engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
+    with ImuBagReader(path, topic=imu_topic, temperature_topic=temperature_topic) as reader:
+        temps = reader.read_temperature()
+        if temps is not None and temps[0].size:
+            order = np.argsort(temps[0], kind='stable')
+            t_stamp, t_value = temps[0][order].astype(np.float64), temps[1][order]
+        else:
+            t_stamp = t_value = None
+        est_chunks = max(1, reader.message_count // config.chunk_size)
+        stride = max(1, math.ceil(est_chunks / curves)) if curves else 0
+        kept = collections.Counter()
+        inflight = collections.deque()
+        max_inflight = 2 * jobs
+        rows = {a: [] for a in config.axes}
+        done = 0
+        t0 = time.monotonic()
+        frame_id = None
+
+        def want_curves(job):
+            return bool(stride) and job.chunk % stride == 0 and kept[job.axis] < curves
+
+        def finish(result):
+            engine.record(result)
+            csv_writer.write(label, result)
+            rows[result.axis].append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2))
+            if result.var_curve is not None:
+                curve_store.setdefault((label, result.axis), []).append(
+                    (result.chunk, result.var_curve, result.j_curve))
+
+        def submit(jobs_list):
+            for job in jobs_list:
+                keep = want_curves(job)
+                if keep:
+                    kept[job.axis] += 1
+                if pool is None:
+                    finish(analyze_chunk(job, curves=keep))
+                    continue
+                inflight.append(pool.submit(analyze_chunk, job, curves=keep))
+                while len(inflight) > max_inflight:
+                    w0 = time.perf_counter()
+                    result = inflight.popleft().result()
+                    timing['wait_s'] += time.perf_counter() - w0
+                    finish(result)
+
+        batches = reader.iter_batches(batch_size)
+        while True:
+            d0 = time.perf_counter()
+            batch = next(batches, None)
+            timing['decode_s'] += time.perf_counter() - d0
+            if batch is None:
+                break
+            frame_id = frame_id or batch.frame_id
+            temp = None
+            if t_stamp is not None:
+                # Temperature is published slower than the IMU: linear interpolation at the IMU stamps,
+                # held constant before the first and after the last temperature message.
+                temp = np.interp(batch.stamp_ns.astype(np.float64), t_stamp, t_value)
+            submit(engine.ingest(batch.stamp_ns, batch.gyro, temp))
+            done += len(batch)
+            progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
+        submit(engine.flush())
+        while inflight:
+            w0 = time.perf_counter()
+            result = inflight.popleft().result()
+            timing['wait_s'] += time.perf_counter() - w0
+            finish(result)
+        progress.update(label, done, reader.message_count, engine.counts().chunks, t0, final=True)
+        storage, undecodable = reader.storage, reader.undecodable_count
+        temperature_topic_used = reader.temperature_topic
+
+    summaries = engine.summary(allan=config.allan)
+    verdicts = engine.health(summaries=summaries) if ref else {}
+    counts = engine.counts()
+    for axis, s in summaries.items():
+        per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
+        if s.allan is not None:
+            allan_store[(label, axis)] = (s.allan, s.noise_terms)
+    return {
+        'label': label, 'path': str(path), 'topic': imu_topic, 'storage': storage, 'frame_id': frame_id,
+        'temperature_topic': temperature_topic_used, 'messages': done, 'undecodable_messages': undecodable,
+        'rate_hz': report._json_num(counts.rate_hz), 'duration_s': counts.duration_s,
+        'samples': counts.samples, 'samples_lost': counts.samples_lost, 'gaps': counts.gaps,
+        'out_of_order_stamps': counts.out_of_order, 'chunks_cut': counts.chunks,
+        'tail_samples': counts.tail_samples, 'discarded_samples': counts.discarded_samples,
+        'discarded_partials': counts.discarded_partials,
+        'allan_status': engine.allan_status,
+        'axes': {axis: report.axis_summary_dict(s, verdict=verdicts.get(axis)) for axis, s in summaries.items()},
+    }
+
+
+def _write_allan_outputs(out, doc, allan_store, figures):
+    """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
+    entries, fig_series = [], {}
+    for (label, axis), (result, terms) in allan_store.items():
+        tau, adev, lo, hi, n = report.allan_curve(result)
+        entries.append((label, axis, tau, adev, lo, hi, n))
+        fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi, report.allan_fit_lines(terms, tau)))
+    report.write_allan_csv(out / 'allan.csv', entries)
+    files = [out / 'allan.csv']
+    first = doc['bags'][0]
+    density, walk = report.allan_kalibr(
+        [allan_store[(first['label'], a)][1] for a in first['axes'] if (first['label'], a) in allan_store])
+    report.write_imu_yaml(
+        out / 'imu.yaml', rostopic=first['topic'], update_rate_hz=first['rate_hz'] or float('nan'),
+        gyroscope_noise_density=density, gyroscope_random_walk=walk,
+        source=f"from bag {first['label']} ({first['path']}), largest over axes {', '.join(first['axes'])}")
+    files.append(out / 'imu.yaml')
+    if figures and fig_series:
+        report.plot_allan(out / 'allan.png', fig_series)
+        files.append(out / 'allan.png')
+    return files
+
+
+def _safe(name):
+    return ''.join(c if c.isalnum() or c in '-_.' else '_' for c in name)
+
+
+def _write_figures(out, config, per_chunk, curve_store):
+    files = []
+    bias = {a: [(label, r[:, 0], r[:, 1]) for label, r in v] for a, v in per_chunk.items()}
+    var = {a: [(label, r[:, 0], r[:, 2]) for label, r in v] for a, v in per_chunk.items()}
+    report.plot_per_chunk(out / 'bias.png', bias, quantity='bias')
+    report.plot_per_chunk(out / 'variance.png', var, quantity='variance')
+    files += [out / 'bias.png', out / 'variance.png']
+    for (label, axis), rows in curve_store.items():
+        path = out / f'curves_{_safe(label)}_{axis}.png'
+        report.plot_curves(path, config.alphas, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                           np.array([r[2] for r in rows]),
+                           title=f'{label}, axis {axis}: var(alpha) and J(alpha) over chunks')
+        files.append(path)
+    return files
+
+
+def _body(argv):
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
+        return err.code if isinstance(err.code, int) else 2
+    alphas = parse_grid(args.order_grid)
+    axes = AXES if args.axis == 'all' else (args.axis,)
+    if args.batch_size < 1:
+        raise ParameterError(f'--batch-size must be >= 1, got {args.batch_size}')
+    config = EngineConfig(chunk_size=args.chunk_size, axes=axes, alphas=alphas, memory=args.memory,
+                          demean=not args.no_demean, max_lag=args.max_lag, rate_hz=args.rate_hz,
+                          gap_factor=args.gap_factor, gap_policy=args.gap_policy, allan=not args.no_allan)
+    jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+    doc = analyze_bags(args.bags, out_dir=args.out, labels=args.label, topic=args.topic,
+                       temperature_topic=args.temperature_topic, config=config, jobs=jobs,
+                       reference=args.reference, figures=not args.no_figures, curves=args.curves,
+                       batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv])
+    if not args.quiet:
+        _print_summary(doc)
+    return 0
+
+
+def _print_summary(doc):
+    for b in doc['bags']:
+        print(f"{b['label']}: {b['samples']} samples on {b['topic']} ({b['storage']}), "
+              f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.1f} Hz, {b['samples_lost']} lost in "
+              f"{b['gaps']} gap(s), {b['out_of_order_stamps']} out-of-order stamp(s), "
+              f"{b['tail_samples']} tail sample(s) not analysed")
+        for axis, a in b['axes'].items():
+            line = (f"  {axis}: {a['chunks']} chunks, drift {report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
+                    f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} (deg/s)^2, "
+                    f"order var {report._fmt(a['alpha_var_mean'], '.3f')}, "
+                    f"corr {report._fmt(a['alpha_corr_mean'], '.3f')}")
+            if a['nan_samples']:
+                line += f", {a['nan_samples']} NaN sample(s)"
+            if 'health' in a:
+                line += f" -> {a['health']['level']}: {a['health']['message']}"
+            print(line)
+    t = doc['_timing']
+    print(f"time {t['total_s']:.1f} s (decode {t['decode_s']:.1f} s)")
+    out = Path(doc['_files'][0]).parent
+    print(f'wrote {len(doc["_files"])} files to {out}: ' + ', '.join(Path(f).name for f in doc['_files']))
+
+
+def main(argv=None):
+    """
+    Run gyro_noise_analyze.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default: sys.argv[1:]).
+
+    Returns
+    -------
+    int
+        Exit code (docs/offline_tool.md).
+    """
+    return run_cli(PROG, _body, argv)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,512 @@
+"""
+Report writers of the offline tool, ROS-free: CSV, JSON, Markdown, Kalibr-style YAML and PNG figures.
+
+Units: the engine works in SI (rad/s); every number written here is converted at this edge and its unit
+is in the column or key name (``bias_deg_s``, ``variance_deg2_s2``, ``offset_drift_deg_s_per_h``). File
+formats are documented in ``docs/offline_tool.md``. Figures use matplotlib's Agg backend (no display).
+"""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .core.engine import rad_s2_to_deg_s_per_h
+
+_DEG = 180.0 / math.pi
+_DEG2 = _DEG ** 2
+
+#: Columns of chunks.csv, in order.
+CHUNK_COLUMNS = (
+    'bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns', 'samples', 'samples_lost',
+    'gaps', 'nan_samples', 'bias_deg_s', 'variance_deg2_s2', 'alpha_var', 'f_var', 'var_min_deg2_s2',
+    'alpha_corr', 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'temperature_c', 'message')
+
+#: Columns of allan.csv, in order.
+ALLAN_COLUMNS = ('bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n')
+
+
+def _num(value):
+    """Format a float losslessly (repr), NaN as 'nan'."""
+    value = float(value)
+    return repr(value) if math.isfinite(value) else 'nan'
+
+
+def _json_num(value):
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+class ChunkCsvWriter:
+    """
+    Stream ``chunks.csv``: one row per bag, axis and chunk, written as results arrive.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file (overwritten).
+    """
+
+    def __init__(self, path):
+        self._fh = open(path, 'w', newline='')  # noqa: SIM115 - closed in close()
+        self._csv = csv.writer(self._fh)
+        self._csv.writerow(CHUNK_COLUMNS)
+        self.rows = 0
+
+    def write(self, bag, result):
+        """
+        Append one :class:`.core.engine.ChunkResult` of bag ``bag``.
+
+        Parameters
+        ----------
+        bag : str
+            Bag label.
+        result : ChunkResult
+        """
+        r = result
+        self._csv.writerow((
+            bag, r.axis, r.chunk, r.status, _num(r.t_start_s), _num(r.t_mid_s), r.stamp_start_ns, r.samples,
+            r.samples_lost, r.gaps, r.nan_samples, _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
+            _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2), _num(r.alpha_corr), _num(r.f_corr),
+            _num(r.j_min * _DEG2), int(r.tie_var), int(r.tie_corr), _num(r.temperature_c), r.message))
+        self.rows += 1
+
+    def close(self):
+        """Close the file."""
+        self._fh.close()
+
+
+def axis_summary_dict(summary, *, verdict=None):
+    """
+    Turn an :class:`.core.engine.AxisSummary` into the per-axis entry of summary.json.
+
+    Parameters
+    ----------
+    summary : AxisSummary
+    verdict : HealthVerdict, optional, keyword-only
+        Added under ``health`` when given.
+
+    Returns
+    -------
+    dict
+        Keys carry their units (module doc); NaN becomes null.
+    """
+    seq = summary.sequence
+    d = seq.drift
+    out = {
+        'chunks': seq.chunks,
+        'chunks_nan': summary.chunks_nan, 'chunks_dropped': summary.chunks_dropped,
+        'chunks_failed': summary.chunks_failed, 'chunks_skipped': summary.chunks_skipped,
+        'nan_samples': summary.nan_samples, 'tail_samples': seq.tail_samples,
+        'bias_mean_deg_s': _json_num(seq.bias_mean * _DEG),
+        'offset_drift_deg_s_per_h': _json_num(rad_s2_to_deg_s_per_h(d.slope)),
+        'offset_drift_abs_deg_s_per_h': _json_num(abs(rad_s2_to_deg_s_per_h(d.slope))),
+        'offset_drift_stderr_deg_s_per_h': _json_num(rad_s2_to_deg_s_per_h(d.stderr)),
+        'offset_drift_span_s': _json_num(d.span_s),
+        'offset_drift_rad_s2': _json_num(d.slope),
+        'offset_drift_stderr_rad_s2': _json_num(d.stderr),
+        'mean_variance_deg2_s2': _json_num(seq.mean_variance * _DEG2),
+        'variance_of_variances_deg4_s4': _json_num(seq.variance_of_variances * _DEG2 ** 2),
+        'mean_variance_rad2_s2': _json_num(seq.mean_variance),
+        'variance_of_variances_rad4_s4': _json_num(seq.variance_of_variances),
+        'alpha_var_mean': _json_num(seq.alpha_var_mean),
+        'alpha_var_variance': _json_num(seq.alpha_var_variance),
+        'alpha_corr_mean': _json_num(seq.alpha_corr_mean),
+        'alpha_corr_variance': _json_num(seq.alpha_corr_variance),
+        'ties_var': seq.ties_var, 'ties_corr': seq.ties_corr,
+        'temperature_mean_c': _json_num(summary.temperature_mean_c),
+        'allan': allan_terms_dict(summary.noise_terms),
+    }
+    if verdict is not None:
+        out['health'] = {'level': verdict.level, 'message': verdict.message,
+                         'items': [{'key': k, 'value': v, 'level': lv} for k, v, lv in verdict.items]}
+    return out
+
+
+def allan_terms_dict(terms):
+    """
+    Return the fitted Allan noise terms as a JSON dict (SI values, units in the keys), or None.
+
+    Parameters
+    ----------
+    terms : object or None
+        The noise-term fit of :mod:`.core.allan`; either a mapping or a dataclass-like object whose
+        public float attributes are named with their unit.
+
+    Returns
+    -------
+    dict or None
+    """
+    if terms is None:
+        return None
+    if hasattr(terms, 'as_dict'):
+        raw = terms.as_dict()
+    elif isinstance(terms, dict):
+        raw = terms
+    else:
+        raw = {k: getattr(terms, k) for k in dir(terms) if not k.startswith('_')}
+    out = {}
+    for key, value in raw.items():
+        if callable(value):
+            continue
+        if isinstance(value, (bool, int, float, np.floating, np.integer)):
+            out[key] = _json_num(value) if isinstance(value, (float, np.floating)) else int(value)
+        elif isinstance(value, str):
+            out[key] = value
+        elif isinstance(value, dict):
+            out[key] = {k: (_json_num(v) if isinstance(v, (float, int, np.floating)) else v)
+                        for k, v in value.items()}
+    return out
+
+
+def write_json(path, doc):
+    """
+    Write ``doc`` as indented JSON (NaN must already be None).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    doc : dict
+    """
+    Path(path).write_text(json.dumps(doc, indent=2, allow_nan=False) + '\n')
+
+
+def _fmt(value, spec):
+    if value is None:
+        return 'n/a'
+    return format(value, spec)
+
+
+def summary_markdown(doc):
+    """
+    Render the paper's Tables 3-6 (per axis, bags in the given order) and the counts as Markdown.
+
+    Parameters
+    ----------
+    doc : dict
+        The summary.json document.
+
+    Returns
+    -------
+    str
+    """
+    bags = doc['bags']
+    axes = []
+    for b in bags:
+        for a in b['axes']:
+            if a not in axes:
+                axes.append(a)
+    opts = doc['options']
+    lines = [
+        '# gyro_noise_analyze summary', '',
+        f"Tool {doc['tool']} {doc['version']}; chunk size {opts['chunk_size']} samples; order grid "
+        f"{opts['order_grid']['start']:g}:{opts['order_grid']['stop']:g}:{opts['order_grid']['step']:g}; "
+        f"memory L = {opts['memory']}; gap policy {opts['gap_policy']}. Tables follow paper 000 "
+        '(Sierociuk et al., Sensors 2025): offset drift = least-squares slope of the chunk bias over time '
+        '(Table 3); variances over chunks with ddof = 1.', '']
+    for axis in axes:
+        rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
+        lines += [f'## Axis {axis}', '',
+                  '### Table 3: offset drift', '',
+                  '| Sequence | Offset drift ((deg/s)/h) | Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
+                  '|---|---:|---:|---:|---:|']
+        for label, a in rows:
+            lines.append(f"| {label} | {_fmt(a['offset_drift_abs_deg_s_per_h'], '.6f')} | "
+                         f"{_fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
+                         f"{_fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
+        lines += ['', '### Table 4: noise variance', '',
+                  '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance ((deg/s)^4) |',
+                  '|---|---:|---:|']
+        for label, a in rows:
+            lines.append(f"| {label} | {_fmt(a['mean_variance_deg2_s2'], '.6g')} | "
+                         f"{_fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
+        for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
+            lines += ['', f'### Table {num}: order, {method} method', '',
+                      '| Sequence | Estimated order | Variance of estimated order | Ties |', '|---|---:|---:|---:|']
+            tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
+            for label, a in rows:
+                lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | {_fmt(a[key + '_variance'], '.6f')} | "
+                             f'{a[tie]} |')
+        if any(a.get('allan') for _, a in rows):
+            keys = []
+            for _, a in rows:
+                for k, v in (a.get('allan') or {}).items():
+                    if k not in keys and not isinstance(v, (dict, str)):
+                        keys.append(k)
+            lines += ['', '### Allan deviation noise terms (SI, unit in the name)', '',
+                      '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
+            for label, a in rows:
+                terms = a.get('allan') or {}
+                lines.append(f'| {label} | ' + ' | '.join(_fmt(terms.get(k), '.4g') for k in keys) + ' |')
+        if any('health' in a for _, a in rows):
+            lines += ['', '### Health verdict against the reference', '',
+                      '| Sequence | Level | Message |', '|---|---|---|']
+            for label, a in rows:
+                h = a.get('health')
+                if h:
+                    lines.append(f"| {label} | {h['level']} | {h['message']} |")
+        lines.append('')
+    lines += ['## Input counts', '',
+              '| Sequence | Topic | Rate (Hz) | Duration (s) | Samples | Lost | Gaps | Out-of-order stamps | '
+              'NaN samples | Tail samples |', '|---|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+    for b in bags:
+        nan = sum(a['nan_samples'] for a in b['axes'].values())
+        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.2f')} | "
+                     f"{_fmt(b['duration_s'], '.1f')} | {b['samples']} | {b['samples_lost']} | {b['gaps']} | "
+                     f"{b['out_of_order_stamps']} | {nan} | {b['tail_samples']} |")
+    lines.append('')
+    return '\n'.join(lines)
+
+
+def write_allan_csv(path, entries):
+    """
+    Write allan.csv.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    entries : iterable of (bag, axis, tau_s, adev_rad_s, ci_low_rad_s, ci_high_rad_s, n)
+        Arrays per (bag, axis); the deviation and its confidence interval in rad/s.
+    """
+    with open(path, 'w', newline='') as fh:
+        w = csv.writer(fh)
+        w.writerow(ALLAN_COLUMNS)
+        for bag, axis, tau, adev, lo, hi, n in entries:
+            for i in range(len(tau)):
+                w.writerow((bag, axis, _num(tau[i]), _num(adev[i] * _DEG), _num(lo[i] * _DEG),
+                            _num(hi[i] * _DEG), int(n[i])))
+
+
+def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, gyroscope_random_walk,
+                   accelerometer_noise_density=None, accelerometer_random_walk=None, source=''):
+    """
+    Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    rostopic : str
+        IMU topic.
+    update_rate_hz : float
+        Sample rate (Hz).
+    gyroscope_noise_density : float
+        Rate white noise density (rad/s/sqrt(Hz)); None or NaN writes null.
+    gyroscope_random_walk : float
+        Rate random walk (rad/s^2/sqrt(Hz)).
+    accelerometer_noise_density, accelerometer_random_walk : float, optional
+        (m/s^2/sqrt(Hz)) and (m/s^3/sqrt(Hz)).
+    source : str
+        Comment line saying which bag and axes the numbers come from.
+    """
+    def val(v):
+        return 'null' if v is None or not math.isfinite(float(v)) else repr(float(v))
+
+    lines = ['# Kalibr-style IMU noise parameters written by gyro_noise_analyze (continuous-time, SI).']
+    if source:
+        lines.append(f'# {source}')
+    lines += [f'rostopic: {rostopic}', f'update_rate: {val(update_rate_hz)}  # Hz',
+              f'gyroscope_noise_density: {val(gyroscope_noise_density)}  # rad/s/sqrt(Hz)',
+              f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)']
+    if accelerometer_noise_density is not None or accelerometer_random_walk is not None:
+        lines += [f'accelerometer_noise_density: {val(accelerometer_noise_density)}  # m/s^2/sqrt(Hz)',
+                  f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)']
+    Path(path).write_text('\n'.join(lines) + '\n')
+
+
+# ---- figures ---------------------------------------------------------------------------------------------
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use('Agg', force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_per_chunk(path, series, *, quantity):
+    """
+    Plot bias or variance per chunk over time, one panel per axis, bags overlaid (paper Figs. 2-5).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    series : dict
+        ``{axis: [(label, t_mid_s array, value array in rad/s or (rad/s)^2), ...]}``.
+    quantity : {'bias', 'variance'}, keyword-only
+    """
+    plt = _pyplot()
+    axes = list(series)
+    fig, panels = plt.subplots(len(axes), 1, figsize=(9, 2.6 * len(axes) + 0.6), squeeze=False, sharex=True)
+    scale, unit = (_DEG, 'deg/s') if quantity == 'bias' else (_DEG2, '(deg/s)$^2$')
+    for ax_name, panel in zip(axes, panels[:, 0]):
+        for label, t, v in series[ax_name]:
+            panel.plot(np.asarray(t) / 3600.0, np.asarray(v) * scale, '.', ms=2, label=label)
+        panel.set_ylabel(f'{quantity} {ax_name} ({unit})')
+        panel.grid(alpha=0.3)
+    panels[-1, 0].set_xlabel('time from the first sample (h)')
+    handles, labels = panels[0, 0].get_legend_handles_labels()
+    if labels:
+        panels[0, 0].legend(fontsize=7, markerscale=4, ncol=min(5, len(labels)))
+    fig.suptitle(f'Chunk {quantity} per chunk')
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
+    """
+    Plot var(alpha) and J(alpha) stacked over chunks as heat maps (paper Figs. 6-9).
+
+    Each chunk's curve is shown as log10(curve / its minimum), so the colour reads "how much worse than the
+    best order of that chunk" and the minimum line is visible whatever the chunk's noise level; the chosen
+    orders are overlaid as dots.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    alphas : numpy.ndarray
+        Order grid.
+    chunks : numpy.ndarray
+        Chunk indices of the rows.
+    var_curves, j_curves : numpy.ndarray
+        ``(len(chunks), len(alphas))`` curves.
+    title : str
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(1, 2, figsize=(11, 4.2), squeeze=False)
+    for panel, curves, name in ((panels[0, 0], var_curves, 'var(w)'), (panels[0, 1], j_curves, 'J')):
+        curves = np.asarray(curves, dtype=np.float64)
+        low = np.nanmin(curves, axis=1, keepdims=True)
+        rel = np.log10(curves / low)
+        extent = (alphas[0], alphas[-1], chunks[-1] + 0.5, chunks[0] - 0.5) if len(chunks) else None
+        im = panel.imshow(rel, aspect='auto', extent=extent, cmap='viridis', interpolation='nearest')
+        best = alphas[np.nanargmin(curves, axis=1)]
+        panel.plot(best, chunks, 'r.', ms=3, label='minimum')
+        panel.set_xlabel('order alpha')
+        panel.set_ylabel('chunk')
+        panel.set_title(f'log10({name}(alpha) / min)')
+        fig.colorbar(im, ax=panel)
+    panels[0, 0].legend(fontsize=7, loc='lower right')
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_allan(path, series):
+    """
+    Overlay the Allan deviation of every bag with confidence bands and fitted terms (paper Fig. 10).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    series : dict
+        ``{axis: [(label, tau_s, adev, ci_low, ci_high, fit_lines), ...]}`` in rad/s; ``fit_lines`` is a
+        list of ``(name, tau_s, adev)`` model curves (may be empty).
+    """
+    plt = _pyplot()
+    axes = list(series)
+    fig, panels = plt.subplots(1, len(axes), figsize=(5.5 * len(axes), 4.6), squeeze=False)
+    for ax_name, panel in zip(axes, panels[0]):
+        for label, tau, adev, lo, hi, fits in series[ax_name]:
+            line, = panel.loglog(tau, np.asarray(adev) * _DEG, lw=1.3, label=label)
+            panel.fill_between(tau, np.asarray(lo) * _DEG, np.asarray(hi) * _DEG, color=line.get_color(),
+                               alpha=0.15, lw=0)
+            for name, ftau, fadev in fits:
+                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8, color=line.get_color())
+        panel.set_xlabel('tau (s)')
+        panel.set_ylabel(f'Allan deviation {ax_name} (deg/s)')
+        panel.grid(True, which='both', alpha=0.3)
+        panel.legend(fontsize=7)
+    fig.suptitle('Allan deviation (bands: confidence interval; dashed: fitted noise terms)')
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# ---- Allan adapters (duck-typed on core.allan's AllanResult and noise-term fit) -------------------------
+
+def allan_curve(result):
+    """
+    Return (tau_s, adev, ci_low, ci_high, n) arrays of an Allan result (rad/s), NaN-free rows only.
+
+    Parameters
+    ----------
+    result : core.allan.AllanResult
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+    """
+    tau = np.asarray(result.tau_s, dtype=np.float64)
+    adev = np.asarray(result.adev, dtype=np.float64)
+    lo = np.asarray(getattr(result, 'ci_low', np.full_like(adev, np.nan)), dtype=np.float64)
+    hi = np.asarray(getattr(result, 'ci_high', np.full_like(adev, np.nan)), dtype=np.float64)
+    n = np.asarray(getattr(result, 'n_terms', np.zeros(adev.shape, np.int64)), dtype=np.int64)
+    ok = np.isfinite(adev) & np.isfinite(tau)
+    return tau[ok], adev[ok], lo[ok], hi[ok], n[ok]
+
+
+def allan_fit_lines(terms, tau):
+    """
+    Return ``[(name, tau_s, adev_rad_s)]`` model curves of the fitted noise terms, for the Allan figure.
+
+    Parameters
+    ----------
+    terms : object or None
+        Noise-term fit of :mod:`.core.allan` (anything with a ``model_adev(tau)`` or ``adev(tau)``
+        method, or ``term_adev(name, tau)``); None gives no lines.
+    tau : numpy.ndarray
+        Averaging times (s).
+
+    Returns
+    -------
+    list
+    """
+    if terms is None or len(tau) == 0:
+        return []
+    for name in ('model_adev', 'adev'):
+        fn = getattr(terms, name, None)
+        if callable(fn):
+            try:
+                return [('fit', tau, np.asarray(fn(tau), dtype=np.float64))]
+            except (TypeError, ValueError):
+                return []
+    return []
+
+
+def allan_kalibr(terms_list):
+    """
+    Return (gyroscope_noise_density, gyroscope_random_walk) for imu.yaml: the largest over the axes.
+
+    Parameters
+    ----------
+    terms_list : list
+        Noise-term fits of the analysed axes (None entries ignored). Each provides ``kalibr()`` returning a
+        mapping, or attributes/keys ``noise_density`` / ``random_walk`` (SI).
+
+    Returns
+    -------
+    tuple of float
+        NaN where no axis provides the value.
+    """
+    density, walk = [], []
+    for terms in terms_list:
+        if terms is None:
+            continue
+        k = terms.kalibr() if callable(getattr(terms, 'kalibr', None)) else getattr(terms, 'kalibr', terms)
+        get = (k.get if isinstance(k, dict) else lambda name, default=None, _k=k: getattr(_k, name, default))
+        for out, names in ((density, ('gyroscope_noise_density', 'noise_density')),
+                           (walk, ('gyroscope_random_walk', 'random_walk'))):
+            for name in names:
+                v = get(name, None)
+                if v is not None and math.isfinite(float(v)):
+                    out.append(float(v))
+                    break
+    return (max(density) if density else float('nan'), max(walk) if walk else float('nan'))

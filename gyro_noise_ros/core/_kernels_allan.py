@@ -1,0 +1,310 @@
+"""
+numba kernels of the Allan-deviation estimator (private).
+
+Called only through :mod:`gyro_noise_ros.core.allan`, which validates shapes, dtypes and values.
+Plain-numpy twins live in ``test/_allan_reference.py``.
+
+Bit-exactness contract: the batch estimator and the incremental accumulator must give identical
+floating-point results for the same data, whatever the batch boundaries. So every sum below is
+sequential in a fixed index order, with a fixed lane structure (term ``t`` goes to lane ``t % 4``)
+and a fixed fold point (every :data:`FOLD_TERMS` terms the four lanes are added and folded into a
+Neumaier-compensated total). The batch kernel and the per-term accumulator kernel implement the
+same arithmetic, operation for operation; ``fastmath`` stays off (``JIT_OPTIONS``) so LLVM neither
+re-associates nor contracts into FMAs.
+"""
+
+import numba
+import numpy as np
+
+from gyro_noise_ros.core._kernels import JIT_OPTIONS
+
+#: Terms per fold of the four partial sums into the compensated total. A power of two and a
+#: multiple of 4, so a 4-term group never straddles a fold point.
+FOLD_TERMS = 4096
+_FOLD_MASK = FOLD_TERMS - 1
+
+#: Positions of the phase array processed for every tau before moving on (cache blocking: the
+#: x[i], x[i+m], x[i+2m] streams of all short taus stay in L2 while a block is processed).
+BLOCK = 8192
+
+#: Columns of the per-tau noise-identification sums (see :func:`_acf_push`).
+N_ACF = 22
+# column indices of the lag-1 ACF running sums
+_N = 0          # number of m-averages z_j
+_SZ = 1         # sum z_j
+_SJZ = 2        # sum j z_j
+_SZZ = 3        # sum z_j^2
+_SZZ1 = 4       # sum z_j z_{j+1}
+_Z0 = 5         # first z
+_ZL = 6         # last z
+_SW = 7         # first differences w_j = z_{j+1} - z_j: sum, sum of squares, lag-1 products
+_SWW = 8
+_SWW1 = 9
+_W0 = 10
+_WL = 11
+_SV = 12        # second differences v_j = w_{j+1} - w_j
+_SVV = 13
+_SVV1 = 14
+_V0 = 15
+_VL = 16
+_NW = 17        # number of w
+_NV = 18        # number of v
+
+
+@numba.njit(**JIT_OPTIONS)
+def _integrate(y, offset, state, out):  # pragma: no cover - compiled
+    """
+    Neumaier-compensated running sum of ``y - offset`` into ``out`` (len(y)).
+
+    ``state`` = [s, c] carries the running sum and its compensation between calls, so
+    integrating in pieces gives the same bits as integrating at once.
+    out[k] = s_k + c_k, the prefix sum rounded once (error <= 1 ulp of |x|, independent of k).
+    """
+    s = state[0]
+    c = state[1]
+    for k in range(y.shape[0]):
+        v = y[k] - offset
+        t = s + v
+        if abs(s) >= abs(v):
+            c += (s - t) + v
+        else:
+            c += (v - t) + s
+        s = t
+        out[k] = s + c
+    state[0] = s
+    state[1] = c
+
+
+@numba.njit(**JIT_OPTIONS)
+def _fold(lanes, tot, j):  # pragma: no cover - compiled
+    """Add the four lanes of tau ``j`` into its compensated total and clear them."""
+    b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
+    s = tot[j, 0]
+    t = s + b
+    if abs(s) >= abs(b):
+        tot[j, 1] += (s - t) + b
+    else:
+        tot[j, 1] += (b - t) + s
+    tot[j, 0] = t
+    lanes[j, 0] = 0.0
+    lanes[j, 1] = 0.0
+    lanes[j, 2] = 0.0
+    lanes[j, 3] = 0.0
+
+
+@numba.njit(**JIT_OPTIONS)
+def _finish(lanes, tot, j):  # pragma: no cover - compiled
+    """Current sum of squares of tau ``j`` (lanes folded into a copy of the total)."""
+    b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
+    s = tot[j, 0]
+    c = tot[j, 1]
+    t = s + b
+    if abs(s) >= abs(b):
+        c += (s - t) + b
+    else:
+        c += (b - t) + s
+    return t + c
+
+
+@numba.njit(**JIT_OPTIONS)
+def _add_term(lanes, tot, counts, j, d):  # pragma: no cover - compiled
+    """Add one second difference ``d`` to tau ``j`` (same arithmetic as the batch loop)."""
+    t = counts[j]
+    lanes[j, t & 3] += d * d
+    t += 1
+    counts[j] = t
+    if (t & _FOLD_MASK) == 0:
+        _fold(lanes, tot, j)
+
+
+@numba.njit(**JIT_OPTIONS)
+def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover - compiled
+    """
+    Sums of squared second differences of the phase ``x`` for every tau.
+
+    Term t of tau j is d = (x[i + 2m] - 2 x[i + m]) + x[i] with i = t * strides[j],
+    t = 0 .. n_terms[j] - 1 (paper 001 eq. 7 without the 1/(2 tau^2 n) factor).
+    ``lanes`` (n_tau x 4), ``tot`` (n_tau x 2) and ``counts`` (n_tau) are zero on entry and hold
+    the accumulator state on return; :func:`_finish` gives the sums.
+    """
+    n_tau = ms.shape[0]
+    last_pos = 0
+    for j in range(n_tau):
+        p = (n_terms[j] - 1) * strides[j] + 1
+        if p > last_pos:
+            last_pos = p
+    for b in range(0, last_pos, BLOCK):
+        e = b + BLOCK
+        for j in range(n_tau):
+            m = ms[j]
+            s = strides[j]
+            nt = n_terms[j]
+            t = (b + s - 1) // s
+            t1 = (e + s - 1) // s
+            if t1 > nt:
+                t1 = nt
+            if t >= t1:
+                continue
+            l0 = lanes[j, 0]
+            l1 = lanes[j, 1]
+            l2 = lanes[j, 2]
+            l3 = lanes[j, 3]
+            while t < t1:
+                if (t & 3) == 0 and t + 4 <= t1:
+                    i = t * s
+                    d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    i += s
+                    d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    i += s
+                    d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    i += s
+                    d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    l0 += d0 * d0
+                    l1 += d1 * d1
+                    l2 += d2 * d2
+                    l3 += d3 * d3
+                    t += 4
+                else:
+                    i = t * s
+                    d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    k = t & 3
+                    if k == 0:
+                        l0 += d * d
+                    elif k == 1:
+                        l1 += d * d
+                    elif k == 2:
+                        l2 += d * d
+                    else:
+                        l3 += d * d
+                    t += 1
+                if (t & _FOLD_MASK) == 0:
+                    lanes[j, 0] = l0
+                    lanes[j, 1] = l1
+                    lanes[j, 2] = l2
+                    lanes[j, 3] = l3
+                    _fold(lanes, tot, j)
+                    l0 = 0.0
+                    l1 = 0.0
+                    l2 = 0.0
+                    l3 = 0.0
+            lanes[j, 0] = l0
+            lanes[j, 1] = l1
+            lanes[j, 2] = l2
+            lanes[j, 3] = l3
+            counts[j] = t
+
+
+@numba.njit(**JIT_OPTIONS)
+def _acf_push(acf, j, z):  # pragma: no cover - compiled
+    """
+    Append the m-average ``z`` to the lag-1 ACF running sums of tau ``j``.
+
+    Keeps, for z and its first (w) and second (v) differences, the sums needed by the
+    lag-1 autocorrelation noise identification (Riley & Greenhall 2004) without storing the series.
+    """
+    n = acf[j, _N]
+    jj = n
+    if n == 0.0:
+        acf[j, _Z0] = z
+    else:
+        zp = acf[j, _ZL]
+        acf[j, _SZZ1] += zp * z
+        w = z - zp
+        nw = acf[j, _NW]
+        if nw == 0.0:
+            acf[j, _W0] = w
+        else:
+            wp = acf[j, _WL]
+            acf[j, _SWW1] += wp * w
+            v = w - wp
+            nv = acf[j, _NV]
+            if nv == 0.0:
+                acf[j, _V0] = v
+            else:
+                acf[j, _SVV1] += acf[j, _VL] * v
+            acf[j, _SV] += v
+            acf[j, _SVV] += v * v
+            acf[j, _VL] = v
+            acf[j, _NV] = nv + 1.0
+        acf[j, _SW] += w
+        acf[j, _SWW] += w * w
+        acf[j, _WL] = w
+        acf[j, _NW] = nw + 1.0
+    acf[j, _SZ] += z
+    acf[j, _SJZ] += jj * z
+    acf[j, _SZZ] += z * z
+    acf[j, _ZL] = z
+    acf[j, _N] = n + 1.0
+
+
+@numba.njit(**JIT_OPTIONS)
+def _acf_sums(x, ms, acf):  # pragma: no cover - compiled
+    """Feed every m-average z_j = (x[(j+1)m] - x[jm]) / m of the phase ``x`` to :func:`_acf_push`."""
+    n_x = x.shape[0]
+    for j in range(ms.shape[0]):
+        m = ms[j]
+        n_avg = (n_x - 1) // m
+        for q in range(n_avg):
+            z = (x[(q + 1) * m] - x[q * m]) / m
+            _acf_push(acf, j, z)
+
+
+@numba.njit(**JIT_OPTIONS)
+def _accumulate(y, offset, integ, k0, ring, ring_len, level_of, n_levels_active, n_levels,
+                ms, lanes, tot, counts, acf):  # pragma: no cover - compiled
+    """
+    Incremental twin of ``_integrate`` + ``_avar_sums`` + ``_acf_sums`` for the accumulator.
+
+    ``k0`` is the number of phase points already seen (x_0 = 0 counts as the first one).
+    Level ``L`` of ``ring`` keeps x_k for k a multiple of 2**L, the last ``ring_len`` of them, at
+    row position (k >> L) % ring_len. Taus of level L (``level_of[j] == L``) use only those x, so
+    their terms start at i = 0 and advance in steps of 2**L (stride 1 for level 0: exact fully
+    overlapping). ``ring_len`` = 2 * half + 1 where ``half`` is the largest m / 2**L of the taus of
+    level L. Level L + 1 is seeded from level L when level L is half full. Returns the new ``k0`` and the
+    number of active levels.
+    """
+    n_tau = ms.shape[0]
+    half = (ring_len - 1) // 2
+    s = integ[0]
+    c = integ[1]
+    k = k0
+    for q in range(y.shape[0]):
+        v = y[q] - offset
+        t = s + v
+        if abs(s) >= abs(v):
+            c += (s - t) + v
+        else:
+            c += (v - t) + s
+        s = t
+        xk = s + c
+        k += 1
+        for lev in range(n_levels_active):
+            stride = 1 << lev
+            if (k & (stride - 1)) != 0:
+                break
+            ring[lev, (k >> lev) % ring_len] = xk
+            # Seed the next level when this one holds x_0 .. x_{half * stride} (half full, nothing
+            # overwritten yet): the first tau of the next level has m > half * stride, so its first
+            # m-average (at k = m) and first term (at k = 2m) come later.
+            if (lev + 1 == n_levels_active and n_levels_active < n_levels
+                    and (k >> lev) == half):
+                for p in range(0, half + 1, 2):
+                    ring[lev + 1, p >> 1] = ring[lev, p]
+                n_levels_active += 1
+        for j in range(n_tau):
+            lev = level_of[j]
+            stride = 1 << lev
+            if lev >= n_levels_active or (k & (stride - 1)) != 0:
+                continue
+            m = ms[j]
+            if k >= 2 * m:
+                x0 = ring[lev, ((k - 2 * m) >> lev) % ring_len]
+                x1 = ring[lev, ((k - m) >> lev) % ring_len]
+                d = (xk - 2.0 * x1) + x0
+                _add_term(lanes, tot, counts, j, d)
+            if k % m == 0:
+                xm = ring[lev, ((k - m) >> lev) % ring_len]
+                _acf_push(acf, j, (xk - xm) / m)
+    integ[0] = s
+    integ[1] = c
+    return k, n_levels_active

@@ -50,7 +50,6 @@ setup(
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
-            'gyro_noise_simulate = gyro_noise_ros.cli.simulate:main',
         ],
     },
 )

@@ -230,7 +230,7 @@ class OrderIdentifier:
     """
 
     def __init__(self, chunk_size, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, max_lag=None,
-                 block=16):
+                 block=8):
         self.memory = _check_memory(memory)
         self.alphas = default_grid() if alphas is None else np.asarray(alphas, dtype=np.float64).ravel()
         if self.alphas.size == 0:

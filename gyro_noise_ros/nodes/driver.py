@@ -286,7 +286,7 @@ class Lsm6dso32Driver(Node):
         self._connections = 0
         self._streaming_since = None
         self._last_sample_monotonic = None
-        self._diag_prev = None
+        self._diag_prev = {'time': time.monotonic(), 'published': 0, 'lost': 0, 'crc': 0, 'restarts': 0}
 
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader', daemon=True)
@@ -536,8 +536,7 @@ class Lsm6dso32Driver(Node):
         now = time.monotonic()
         p = self._params
         link = s['link']
-        prev = self._diag_prev or {'time': now, 'published': s['published'], 'lost': s['lost'],
-                                   'crc': link.get('crc_errors', 0), 'restarts': s['restarts']}
+        prev = self._diag_prev
         self._diag_prev = {'time': now, 'published': s['published'], 'lost': s['lost'],
                            'crc': link.get('crc_errors', 0), 'restarts': s['restarts']}
         since = prev['time'] if s['streaming_since'] is None else max(prev['time'], s['streaming_since'])

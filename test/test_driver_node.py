@@ -1,0 +1,397 @@
+"""
+In-process tests of ``lsm6dso32_driver``: parameters, message content, publish-once, link lifecycle.
+
+The node runs for real (rclpy, Fast DDS) in its own rclpy context. Known samples reach it either
+through ``publish_samples`` (what the reader thread calls for each decoded batch) or from a fake
+board: a TCP server thread in this process speaking the link protocol through ``socket://`` URLs.
+Expected SI values are computed here from the datasheet sensitivities, not with ``link.lsm6dso32``.
+"""
+
+import math
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+# A private DDS domain for this test session (STYLE.md): set before any rclpy.init.
+os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import rclpy  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+
+from gyro_noise_ros.errors import ParameterError  # noqa: E402
+from gyro_noise_ros.link import protocol as P  # noqa: E402
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
+from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver, SequenceTracker  # noqa: E402
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
+
+# Datasheet sensitivities (LSM6DSO32 DS13146, table 3): mdps/LSB and mg/LSB.
+GYRO_MDPS = {125: 4.375, 250: 8.75, 500: 17.5, 1000: 35.0, 2000: 70.0}
+ACCEL_MG = {4: 0.122, 8: 0.244, 16: 0.488, 32: 0.976}
+G0 = 9.80665
+
+
+def gyro_lsb(fs_dps):
+    return GYRO_MDPS[fs_dps] * 1e-3 * math.pi / 180.0
+
+
+def accel_lsb(fs_g):
+    return ACCEL_MG[fs_g] * 1e-3 * G0
+
+
+@pytest.fixture
+def context():
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    try:
+        yield ctx
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
+def closed_port_url():
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        port = s.getsockname()[1]
+    return f'socket://127.0.0.1:{port}'
+
+
+class Harness:
+    """A driver and a subscriber node on one context, spun by one executor in this thread."""
+
+    def __init__(self, context, **overrides):
+        overrides.setdefault('port', closed_port_url())
+        overrides.setdefault('reconnect_period_s', 60.0)
+        self.driver = Lsm6dso32Driver(context=context, parameter_overrides=[
+            Parameter(name, value=value) for name, value in overrides.items()])
+        self.sub_node = rclpy.create_node('test_listener', context=context)
+        self.imu, self.temps, self.diags = [], [], []
+        qos = sensor_data_qos(10000)
+        self.sub_node.create_subscription(Imu, 'imu/data_raw', self.imu.append, qos)
+        self.sub_node.create_subscription(Temperature, 'imu/temperature', self.temps.append, qos)
+        self.sub_node.create_subscription(DiagnosticArray, '/diagnostics', self.diags.append, 10)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.driver)
+        self.executor.add_node(self.sub_node)
+        self.spin_until(lambda: self.driver._imu_pub.get_subscription_count() >= 1
+                        and self.driver._temp_pub.get_subscription_count() >= 1, 10.0)
+
+    def spin_until(self, condition, timeout_s):
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            assert time.monotonic() < deadline, 'timed out'
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def close(self):
+        self.executor.shutdown()
+        self.driver.destroy_node()
+        self.sub_node.destroy_node()
+
+
+@pytest.fixture
+def harness(context):
+    made = []
+
+    def make(**overrides):
+        made.append(Harness(context, **overrides))
+        return made[-1]
+
+    try:
+        yield make
+    finally:
+        for h in made:
+            h.close()
+
+
+def make_samples(seq, *, gyro=None, accel=None, temp=None, period_us=150):
+    seq = np.asarray(seq, np.int64)
+    s = np.zeros(seq.size, P.SAMPLE_DTYPE)
+    s['seq'] = (seq % 2**32).astype(np.uint32)
+    s['t_us'] = ((seq * period_us) % 2**32).astype(np.uint32)
+    # Default payload: gyro x carries the sequence number so a subscriber can tell which sample it got.
+    s['gyro'] = np.stack([seq % 30000, -(seq % 1000), np.full(seq.size, 7)], axis=1) if gyro is None else gyro
+    s['accel'] = np.array([0, 0, 1024]) if accel is None else accel
+    s['temp'] = 512 if temp is None else temp
+    return s
+
+
+def stamp_ns(msg):
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+# --------------------------------------------------------------------------- parameters
+
+
+@pytest.mark.parametrize('name, value, fragment', [
+    ('odr_hz', 1000.0, "'odr_hz'"),                     # not a datasheet rate
+    ('gyro_full_scale_dps', 300, "'gyro_full_scale_dps'"),
+    ('accel_full_scale_g', 2, "'accel_full_scale_g'"),
+    ('reconnect_period_s', -1.0, "'reconnect_period_s'"),  # below the range
+    ('reconnect_period_s', 1, 'floating-point'),          # integer given for a double
+    ('temperature_decimation', 0, "'temperature_decimation'"),
+    ('port', '', "'port'"),
+    ('port', 'nosuchscheme://x', "'port'"),
+    ('loss_warn_ratio', 0.5, "'loss_warn_ratio'"),      # above loss_error_ratio (0.01)
+])
+def test_bad_parameters_are_refused(context, name, value, fragment):
+    with pytest.raises(ParameterError) as info:
+        Lsm6dso32Driver(context=context, parameter_overrides=[Parameter(name, value=value)])
+    assert fragment in str(info.value)
+    assert '\n' not in str(info.value)
+
+
+def test_main_with_bad_parameter_prints_one_line_and_exits_2():
+    proc = subprocess.run(
+        [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p', 'odr_hz:=1000.0'],
+        capture_output=True, text=True, timeout=60, env=dict(os.environ))
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('lsm6dso32_driver: error:'), proc.stderr
+    assert 'odr_hz' in lines[0] and 'Traceback' not in proc.stderr
+
+
+def test_runtime_parameter_changes(harness):
+    h = harness()
+    node = h.driver
+    ok = node.set_parameters([Parameter('frame_id', value='gyro_frame')])[0]
+    assert ok.successful
+    assert node._message_fields['frame_id'] == 'gyro_frame'
+    assert not node.set_parameters([Parameter('odr_hz', value=833.0)])[0].successful  # read_only
+    assert not node.set_parameters([Parameter('temperature_decimation', value=0)])[0].successful
+    assert node.get_parameter('temperature_decimation').value == 128
+
+
+# --------------------------------------------------------------------------- sequence tracker
+
+
+def test_tracker_counts_gaps_across_wrap():
+    t = SequenceTracker(restart_window=100)
+    d = t.accept(np.array([2**32 - 3, 2**32 - 2], np.uint32))
+    assert d.keep.all() and d.lost == 0 and d.stop == 2
+    # ... 2**32-1 and 0 missing, then 1, 2, gap of 3..4, then 5
+    d = t.accept(np.array([1, 2, 5], np.uint32))
+    assert d.keep.all() and d.lost == 2 + 2 and t.last == 5
+
+
+def test_tracker_drops_resent_samples_and_splits_at_restart():
+    t = SequenceTracker(restart_window=100)
+    t.accept(np.arange(1000, 1010, dtype=np.uint32))
+    d = t.accept(np.array([1005, 1006, 1009, 1010, 1012, 1011], np.uint32))
+    assert d.keep.tolist() == [False, False, False, True, True, False]
+    assert d.duplicates == 4 and d.lost == 1 and d.stop == 6
+    # A fall-back of 100 or more is a board restart: decide the prefix, stop at the restart.
+    d = t.accept(np.array([1013, 3, 4], np.uint32))
+    assert d.stop == 1 and d.keep.tolist() == [True] and d.lost == 0
+
+
+# --------------------------------------------------------------------------- message content
+
+
+@pytest.mark.parametrize('gyro_fs, accel_fs', [(2000, 32), (125, 4)])
+def test_messages_for_known_samples(harness, gyro_fs, accel_fs):
+    h = harness(temperature_decimation=4, frame_id='my_imu',
+                angular_velocity_variance_rad2_s2=2.5e-6, linear_acceleration_variance_m2_s4=4e-4,
+                temperature_variance_c2=0.01)
+    n = 40
+    seq = np.arange(1000, 1000 + n)
+    rng = np.random.default_rng(3)
+    gyro = rng.integers(-32768, 32768, (n, 3)).astype(np.int16)
+    gyro[0] = (-32768, 32767, 0)  # the extremes
+    accel = rng.integers(-32768, 32768, (n, 3)).astype(np.int16)
+    temp = rng.integers(-32768, 32768, n).astype(np.int16)
+    samples = make_samples(seq, gyro=gyro, accel=accel, temp=temp)
+    host_ns = h.driver.get_clock().now().nanoseconds
+    # The scaling comes from the acknowledged configuration, not from the parameters.
+    count = h.driver.publish_samples(samples, host_ns, LinkConfig(6667.0, gyro_fs, accel_fs))
+    assert count == n
+    h.spin_until(lambda: len(h.imu) == n and len(h.temps) == n // 4, 10.0)
+
+    stamps = np.array([stamp_ns(m) for m in h.imu])
+    assert np.all(np.diff(stamps) > 0)
+    # Stamps are device time mapped onto the node clock; they never lie after the receive time.
+    assert stamps[-1] <= host_ns
+    # 150 us device spacing is kept (slope 1 until the estimator has fitted a drift).
+    np.testing.assert_array_equal(np.diff(stamps), 150_000)
+    cov_g = [2.5e-6, 0, 0, 0, 2.5e-6, 0, 0, 0, 2.5e-6]
+    cov_a = [4e-4, 0, 0, 0, 4e-4, 0, 0, 0, 4e-4]
+    for i, m in enumerate(h.imu):
+        assert m.header.frame_id == 'my_imu'
+        av = [m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+        la = [m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
+        # One float64 multiplication each side: equal to the last bit or so.
+        np.testing.assert_allclose(av, gyro[i] * gyro_lsb(gyro_fs), rtol=1e-15, atol=0)
+        np.testing.assert_allclose(la, accel[i] * accel_lsb(accel_fs), rtol=1e-15, atol=0)
+        assert m.orientation_covariance[0] == -1.0
+        assert list(m.angular_velocity_covariance) == cov_g
+        assert list(m.linear_acceleration_covariance) == cov_a
+        assert (m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w) == (0, 0, 0, 1)
+    # Temperature for seq % 4 == 0 only, with the same stamp as the sample's Imu message.
+    picked = np.flatnonzero(seq % 4 == 0)
+    assert [stamp_ns(t) for t in h.temps] == stamps[picked].tolist()
+    np.testing.assert_allclose([t.temperature for t in h.temps], 25.0 + temp[picked] / 256.0, rtol=1e-15)
+    assert all(t.variance == 0.01 and t.header.frame_id == 'my_imu' for t in h.temps)
+
+
+def test_publish_once_and_loss_count(harness):
+    h = harness()
+    cfg = LinkConfig(6667.0, 2000, 32)
+    now = h.driver.get_clock().now().nanoseconds
+    assert h.driver.publish_samples(make_samples(np.arange(0, 10)), now, cfg) == 10
+    assert h.driver.publish_samples(make_samples(np.arange(5, 15)), now + 10**6, cfg) == 5  # 5..9 again
+    assert h.driver.publish_samples(make_samples(np.arange(20, 25)), now + 2 * 10**6, cfg) == 5  # 15..19 lost
+    h.spin_until(lambda: len(h.imu) == 20, 10.0)
+    got = [round(m.angular_velocity.x / gyro_lsb(2000)) for m in h.imu]
+    assert got == list(range(15)) + list(range(20, 25))
+    snap = h.driver.link_snapshot()
+    assert (snap['published'], snap['duplicates'], snap['lost']) == (20, 5, 5)
+
+
+# --------------------------------------------------------------------------- link lifecycle
+
+
+class FakeBoard:
+    """TCP server thread; ``script(conn, decoder)`` runs once per accepted connection."""
+
+    def __init__(self, scripts):
+        self.server = socket.socket()
+        self.server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.server.bind(('127.0.0.1', 0))
+        self.server.listen(4)
+        self.server.settimeout(30.0)
+        self.url = f'socket://127.0.0.1:{self.server.getsockname()[1]}'
+        self.scripts = list(scripts)
+        self.commands = []
+        self.errors = []
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self):
+        try:
+            for script in self.scripts:
+                conn, _ = self.server.accept()
+                with conn:
+                    conn.settimeout(10.0)
+                    script(self, conn)
+        except Exception as err:  # noqa: BLE001 - reported by the test through self.errors
+            self.errors.append(repr(err))
+        finally:
+            self.done.set()
+
+    def read_command(self, conn):
+        decoder = P.Decoder()
+        while True:
+            data = conn.recv(4096)
+            assert data, 'driver closed the connection before configuring'
+            result = decoder.feed(data)
+            if result.commands:
+                self.commands.append(result.commands[0])
+                return result.commands[0]
+
+    @staticmethod
+    def ack(cmd, ok=True, message=''):
+        return P.encode_ack(P.Ack(cmd.command_id, ok, cmd.odr_hz, cmd.gyro_fs_dps, cmd.accel_fs_g,
+                                  message, 0 if ok else P.NAK_BAD_ODR))
+
+    def close(self):
+        self.server.close()
+
+
+def _corrupt(frame):
+    bad = bytearray(frame)
+    bad[P.HEADER_SIZE + 3] ^= 0x10  # a payload byte: the CRC no longer matches
+    return bytes(bad)
+
+
+def test_session_with_faults_and_reconnection(harness):
+    def first(board, conn):
+        cmd = board.read_command(conn)
+        # Samples sent before the acknowledgement may have the old scaling: never published.
+        conn.sendall(P.encode_samples(make_samples(np.arange(0, 5))) + board.ack(cmd)
+                     + P.encode_samples(make_samples(np.arange(5, 105))))
+        conn.sendall(_corrupt(P.encode_samples(make_samples(np.arange(105, 115)))))
+        conn.sendall(P.encode_samples(make_samples(np.arange(115, 205))))
+        time.sleep(0.3)  # then the cable is pulled
+
+    def second(board, conn):
+        cmd = board.read_command(conn)
+        # After the replug the board re-sends its last 10 samples, then continues after a gap.
+        conn.sendall(board.ack(cmd) + P.encode_samples(make_samples(np.arange(195, 205)))
+                     + P.encode_samples(make_samples(np.arange(210, 300))))
+        time.sleep(3.0)
+
+    board = FakeBoard([first, second])
+    try:
+        h = harness(port=board.url, reconnect_period_s=0.1)
+        h.spin_until(lambda: len(h.imu) >= 280, 20.0)
+        h.spin_until(lambda: h.driver.link_snapshot()['connections'] == 2, 5.0)
+        got = [round(m.angular_velocity.x / gyro_lsb(2000)) for m in h.imu]
+        assert got == list(range(5, 105)) + list(range(115, 205)) + list(range(210, 300))
+        assert np.all(np.diff([stamp_ns(m) for m in h.imu]) > 0)
+        snap = h.driver.link_snapshot()
+        assert snap['published'] == 280
+        assert snap['lost'] == 10 + 5  # the corrupt frame's samples and the gap after the replug
+        assert snap['duplicates'] == 10
+        assert snap['link']['crc_errors'] >= 1
+        assert 'disconnected' in snap['last_error']
+        assert [c.command_id for c in board.commands] == [1, 2]
+        assert board.commands[0].odr_hz == 6667.0 and board.commands[0].gyro_fs_dps == 2000
+        assert board.commands[0].accel_fs_g == 32
+
+        status = h.driver.link_status()
+        values = {kv.key: kv.value for kv in status.values}
+        assert status.name == 'lsm6dso32_driver: link'
+        assert status.hardware_id == f'lsm6dso32@{board.url}'
+        assert values['Connection'] == 'streaming'
+        assert values['Samples lost'] == '15' and values['Samples published'] == '280'
+        assert values['Duplicates dropped'] == '10' and int(values['CRC errors']) >= 1
+        assert values['Connections'] == '2'
+        assert status.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
+        assert board.errors == []
+    finally:
+        board.close()
+
+
+def test_no_ack_then_nak_are_reported(harness):
+    def silent(board, conn):
+        board.read_command(conn)
+        time.sleep(1.0)
+
+    def refuse(board, conn):
+        cmd = board.read_command(conn)
+        conn.sendall(board.ack(cmd, ok=False, message='odr not supported'))
+        time.sleep(1.0)
+
+    board = FakeBoard([silent, refuse])
+    try:
+        h = harness(port=board.url, ack_timeout_s=0.3, reconnect_period_s=0.1)
+        h.spin_until(lambda: 'no acknowledgement' in h.driver.link_snapshot()['last_error'], 10.0)
+        h.spin_until(lambda: 'odr not supported' in h.driver.link_snapshot()['last_error'], 10.0)
+        assert 'refused' in h.driver.link_snapshot()['last_error']
+        status = h.driver.link_status()
+        assert status.level == DiagnosticStatus.ERROR
+        assert h.driver.link_snapshot()['published'] == 0
+    finally:
+        board.close()
+
+
+def test_diagnostics_topic_when_port_absent(harness):
+    h = harness(diagnostics_period_s=0.2, reconnect_period_s=0.2)
+    h.spin_until(lambda: any(a.status and 'cannot open' in a.status[0].message for a in h.diags), 10.0)
+    status = [a for a in h.diags if 'cannot open' in a.status[0].message][-1].status[0]
+    assert status.name == 'lsm6dso32_driver: link'
+    assert status.level == DiagnosticStatus.ERROR
+    assert status.message.startswith('Link down: cannot open socket://127.0.0.1:')
+    values = {kv.key: kv.value for kv in status.values}
+    for key in ('Sample rate (Hz)', 'Samples lost', 'CRC errors', 'Resyncs', 'Bytes discarded',
+                'Connection', 'Last error'):
+        assert isinstance(values[key], str) and values[key], key
+    assert values['Connection'] == 'disconnected'

@@ -519,3 +519,56 @@ class FaultInjector:
             arr[hit] ^= self.rng.integers(1, 256, hit.size, dtype=np.uint8)
             self._c['bytes_corrupted'] += int(hit.size)
         return arr.tobytes()
+
+
+#: Ground-truth record written by ``portenta_emulator --truth-out`` (little-endian, packed, 64 bytes).
+TRUTH_DTYPE = np.dtype([
+    ('seq', '<u4'),
+    ('gyro_fs_dps', '<u2'),
+    ('accel_fs_g', '<u1'),
+    ('reserved', '<u1'),
+    ('time_s', '<f8'),
+    ('gyro_rad_s', '<f8', (3,)),
+    ('accel_m_s2', '<f8', (3,)),
+])
+
+
+def truth_records(truth):
+    """
+    Pack a :class:`Truth` into TRUTH_DTYPE records (temperature is exact in the raw word and left out).
+
+    Parameters
+    ----------
+    truth : Truth
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    rec = np.zeros(truth.seq.size, dtype=TRUTH_DTYPE)
+    rec['seq'] = truth.seq
+    rec['gyro_fs_dps'] = truth.gyro_fs_dps
+    rec['accel_fs_g'] = truth.accel_fs_g
+    rec['time_s'] = truth.time_s
+    rec['gyro_rad_s'] = truth.gyro_rad_s
+    rec['accel_m_s2'] = truth.accel_m_s2
+    return rec
+
+
+def read_truth(path):
+    """
+    Read a ``--truth-out`` file (complete records only, so it can be read while the emulator runs).
+
+    Parameters
+    ----------
+    path : str
+
+    Returns
+    -------
+    numpy.ndarray
+        TRUTH_DTYPE records, one per generated sample (sent or not), in order.
+    """
+    with open(path, 'rb') as fh:
+        data = fh.read()
+    usable = len(data) - len(data) % TRUTH_DTYPE.itemsize
+    return np.frombuffer(data[:usable], dtype=TRUTH_DTYPE).copy()

@@ -1,0 +1,577 @@
+"""
+portenta_emulator: the Portenta H7 + LSM6DSO32 board, emulated, speaking the wire protocol.
+
+Serves ``docs/portenta_link.md`` on a pseudo-terminal (default; prints the device path) or on a loopback
+TCP port (``--tcp 127.0.0.1:0``; prints the pyserial URL ``socket://127.0.0.1:PORT``), one line on stdout,
+flushed. It answers CONFIGURE commands with ACK/NAK, streams SAMPLES frames paced in real time at the
+ODR (``--speed`` times faster), and keeps sampling while no host is connected (samples the host could
+not receive show up as a counter gap flagged FLAG_SAMPLE_LOST on the next sample sent, like the real
+board whose USB buffer is full). With ``--write-sd DIR`` it writes SD log files as fast as it can instead.
+
+Examples::
+
+    portenta_emulator --link /tmp/ttyPORTENTA            # pty, stable symlink, real time, forever
+    portenta_emulator --tcp 127.0.0.1:0 --speed 4 --seed 3 --corrupt-rate 1e-5 --disconnect-every-s 10
+    portenta_emulator --write-sd logs/ --duration-s 60 --sd-file-bytes 1000000 --helium-delay-s 10
+
+Exit status 0 on SIGINT/SIGTERM or at the end of ``--samples``/``--duration-s``.
+"""
+
+import argparse
+import dataclasses
+import json
+import os
+import pty
+import select
+import signal
+import socket
+import sys
+import termios
+import time
+import tty
+
+import numpy as np
+
+from ..errors import LinkError, ParameterError
+from ..link import lsm6dso32 as lsm
+from ..link.emulator import (DEFAULT_ALPHA, DEFAULT_BIAS_DPS, DEFAULT_F, PAPER_NOISE_STD_DPS, TRUTH_DTYPE,
+                             BoardModel, FaultInjector, HeliumTransient, Vibration, truth_records)
+from ..link.protocol import MAX_SAMPLES_PER_FRAME, encode_samples
+from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
+from ._common import run_cli
+
+PROG = 'portenta_emulator'
+#: Bytes the emulated board buffers for a slow host before it drops samples (USB CDC + firmware ring).
+TX_BUFFER_BYTES = 64 * 1024
+
+
+def _float_list(text):
+    try:
+        values = [float(v) for v in text.split(',')]
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'expected a number or three comma-separated numbers, got {text!r}') from err
+    if len(values) not in (1, 3):
+        raise argparse.ArgumentTypeError(f'expected 1 or 3 values, got {text!r}')
+    return values[0] if len(values) == 1 else tuple(values)
+
+
+def build_parser():
+    """
+    Return the argument parser of portenta_emulator.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    out = p.add_argument_group('output (default: a pseudo-terminal)')
+    out.add_argument('--tcp', metavar='HOST:PORT', help='serve on a loopback TCP port instead (port 0: any)')
+    out.add_argument('--link', metavar='PATH', help='pty only: keep a symlink PATH -> the pty (survives replug)')
+    out.add_argument('--write-sd', metavar='DIR', help='write SD log files into DIR instead of serving')
+    out.add_argument('--sd-file-bytes', type=int, default=FAT32_MAX_FILE_BYTES, help='SD file size limit (bytes)')
+    out.add_argument('--sequence-id', type=int, default=1, help='SD sequence id')
+    out.add_argument('--rtc-unix-s', type=int, default=0, help='SD header RTC time at power-on (0 = unset)')
+    out.add_argument('--truth-out', metavar='FILE', help='append the ground truth of every sample (TRUTH_DTYPE)')
+    out.add_argument('--stats-out', metavar='FILE', help='write the fault/traffic counters as JSON at exit')
+    run = p.add_argument_group('run')
+    run.add_argument('--seed', type=int, default=0, help='seed of the sample streams (faults use seed+1)')
+    run.add_argument('--speed', type=float, default=1.0, help='pace at this multiple of real time')
+    run.add_argument('--samples', type=int, help='stop after this many samples')
+    run.add_argument('--duration-s', type=float, help='stop after this much board time (s)')
+    run.add_argument('--batch', type=int, default=16, help='samples per frame (FIFO watermark)')
+    cfg = p.add_argument_group('power-on configuration')
+    cfg.add_argument('--odr-hz', type=float, default=6667.0, help=f'one of {lsm.ODRS_HZ}')
+    cfg.add_argument('--gyro-fs-dps', type=int, default=2000, help=f'one of {lsm.GYRO_FULL_SCALES_DPS}')
+    cfg.add_argument('--accel-fs-g', type=int, default=4, help=f'one of {lsm.ACCEL_FULL_SCALES_G}')
+    cfg.add_argument('--seq0', type=int, default=0, help='first sequence number (wrap tests)')
+    cfg.add_argument('--t0-us', type=int, default=0, help='device time at power-on (us, wrap tests)')
+    cfg.add_argument('--clock-ppm', type=float, default=0.0, help='board clock error (ppm)')
+    noise = p.add_argument_group('sensor model')
+    noise.add_argument('--alpha', type=float, default=DEFAULT_ALPHA, help='fractional order (paper 000 eq. 2)')
+    noise.add_argument('--f', type=float, default=DEFAULT_F, help='noise parameter f (paper 000 eq. 2)')
+    noise.add_argument('--noise-std-dps', type=float, default=PAPER_NOISE_STD_DPS,
+                       help='stationary gyro noise standard deviation (deg/s)')
+    noise.add_argument('--bias-dps', type=_float_list, default=DEFAULT_BIAS_DPS, help='gyro bias x,y,z (deg/s)')
+    noise.add_argument('--temp-c', type=float, default=25.0, help='die temperature at power-on (degC)')
+    noise.add_argument('--temp-drift-c-per-h', type=float, default=0.0, help='temperature ramp (degC/h)')
+    noise.add_argument('--temp-sensitivity-dps-per-c', type=_float_list, default=0.0,
+                       help='gyro bias change per degC (deg/s/degC)')
+    noise.add_argument('--helium-amplitude-dps', type=_float_list, default=0.0,
+                       help='helium-like bias rise, final value (deg/s); 0 = off')
+    noise.add_argument('--helium-delay-s', type=float, default=5400.0, help='delay before the rise (s)')
+    noise.add_argument('--helium-tau-s', type=float, default=7200.0, help='time constant of the rise (s)')
+    noise.add_argument('--vibration-hz', type=float, default=0.0, help='sinusoidal vibration frequency (Hz)')
+    noise.add_argument('--vibration-dps', type=_float_list, default=0.0, help='vibration rate amplitude (deg/s)')
+    noise.add_argument('--vibration-g', type=_float_list, default=0.0, help='vibration accel amplitude (g)')
+    fault = p.add_argument_group('fault injection')
+    fault.add_argument('--corrupt-rate', type=float, default=0.0, help='probability per byte sent/written')
+    fault.add_argument('--drop-flagged-rate', type=float, default=0.0,
+                       help='probability per sample of a board-side drop that the board flags')
+    fault.add_argument('--drop-unflagged-rate', type=float, default=0.0,
+                       help='probability per sample of a silent drop (only the counter shows it)')
+    fault.add_argument('--disconnect-after', type=int, help='unplug once after this many samples sent')
+    fault.add_argument('--disconnect-every-s', type=float, help='unplug after every this many seconds connected')
+    fault.add_argument('--unplug-s', type=float, default=1.0, help='how long an unplug lasts (s)')
+    return p
+
+
+def board_from_args(args):
+    """
+    Build the BoardModel that ``portenta_emulator`` with these arguments runs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace or list of str
+        Parsed arguments, or a command line (without the program name).
+
+    Returns
+    -------
+    BoardModel
+        Same seed and options give the same samples, sample for sample.
+    """
+    if not isinstance(args, argparse.Namespace):
+        args = build_parser().parse_args(list(args))
+    helium = None
+    if np.any(np.asarray(args.helium_amplitude_dps) != 0):
+        helium = HeliumTransient(amplitude_dps=args.helium_amplitude_dps, delay_s=args.helium_delay_s,
+                                 tau_s=args.helium_tau_s)
+    vibration = None
+    if args.vibration_hz > 0:
+        vibration = Vibration(frequency_hz=args.vibration_hz, amplitude_dps=args.vibration_dps,
+                              accel_amplitude_g=args.vibration_g)
+    return BoardModel(rng=np.random.default_rng(args.seed), odr_hz=args.odr_hz, gyro_fs_dps=args.gyro_fs_dps,
+                      accel_fs_g=args.accel_fs_g, alpha=args.alpha, f=args.f, noise_std_dps=args.noise_std_dps,
+                      bias_dps=args.bias_dps, temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
+                      temp_sensitivity_dps_per_c=args.temp_sensitivity_dps_per_c, helium=helium,
+                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0, t0_us=args.t0_us)
+
+
+def _check_args(args):
+    if args.speed <= 0 or not np.isfinite(args.speed):
+        raise ParameterError(f'--speed must be > 0, got {args.speed}')
+    if not 1 <= args.batch <= MAX_SAMPLES_PER_FRAME:
+        raise ParameterError(f'--batch must be in 1..{MAX_SAMPLES_PER_FRAME}, got {args.batch}')
+    if args.samples is not None and args.samples < 0:
+        raise ParameterError(f'--samples must be >= 0, got {args.samples}')
+    if args.duration_s is not None and not args.duration_s >= 0:
+        raise ParameterError(f'--duration-s must be >= 0, got {args.duration_s}')
+    if args.write_sd and args.samples is None and args.duration_s is None:
+        raise ParameterError('--write-sd needs --samples or --duration-s')
+    if args.unplug_s < 0:
+        raise ParameterError(f'--unplug-s must be >= 0, got {args.unplug_s}')
+    if args.disconnect_every_s is not None and not args.disconnect_every_s > 0:
+        raise ParameterError(f'--disconnect-every-s must be > 0, got {args.disconnect_every_s}')
+    if args.tcp and args.write_sd:
+        raise ParameterError('--tcp and --write-sd exclude each other')
+    if args.link and (args.tcp or args.write_sd):
+        raise ParameterError('--link applies to the pseudo-terminal only')
+
+
+class _Stopper:
+    def __init__(self):
+        self.stop = False
+
+    def __call__(self, signum, frame):
+        self.stop = True
+
+
+class _PtyPort:
+    """A pseudo-terminal 'USB port'; unplug closes it, replug creates a new one (and moves the symlink)."""
+
+    def __init__(self, link=None):
+        self.link = link
+        self.fd = None
+        self.path = None
+        self._poll = None
+        self.plug()
+
+    def plug(self):
+        master, slave = pty.openpty()
+        # raw: no echo, no line discipline, 8 bit clean, before any client can open it
+        tty.setraw(slave)
+        self.path = os.ttyname(slave)
+        os.close(slave)
+        os.set_blocking(master, False)
+        self.fd = master
+        self._poll = select.poll()
+        self._poll.register(master, select.POLLIN | select.POLLOUT)
+        if self.link:
+            tmp = f'{self.link}.tmp{os.getpid()}'
+            if os.path.lexists(tmp):
+                os.unlink(tmp)
+            os.symlink(self.path, tmp)
+            os.replace(tmp, self.link)
+
+    def unplug(self):
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+        if self.link and os.path.lexists(self.link):
+            os.unlink(self.link)
+
+    @property
+    def name(self):
+        return self.link or self.path
+
+    def connected(self):
+        if self.fd is None:
+            return False
+        events = self._poll.poll(0)
+        return not any(ev & select.POLLHUP for _, ev in events)
+
+    def read(self):
+        try:
+            return os.read(self.fd, 4096)
+        except (BlockingIOError, InterruptedError):
+            return b''
+        except OSError:
+            return b''  # EIO: no client
+
+    def write(self, data):
+        try:
+            return os.write(self.fd, data)
+        except (BlockingIOError, InterruptedError):
+            return 0
+        except OSError:
+            return -1
+
+    def drop_client(self):
+        """A pty cannot refuse a client; a disconnect is an unplug."""
+
+    def discard_pending(self):
+        """Forget bytes the departed client did not read, so the next one starts clean."""
+        if self.fd is not None:
+            try:
+                termios.tcflush(self.fd, termios.TCIOFLUSH)
+            except OSError:
+                pass
+
+    def close(self):
+        self.unplug()
+
+
+class _TcpPort:
+    """A loopback TCP 'port' serving one client at a time; unplug drops the client and refuses others."""
+
+    def __init__(self, spec):
+        host, _, port = spec.rpartition(':')
+        try:
+            port = int(port)
+        except ValueError as err:
+            raise ParameterError(f'--tcp must be HOST:PORT, got {spec!r}') from err
+        host = host or '127.0.0.1'
+        self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            self.listener.bind((host, port))
+        except OSError as err:
+            self.listener.close()
+            raise LinkError(f'cannot listen on --tcp {spec!r}: {err}') from err
+        self.listener.listen(4)
+        self.listener.setblocking(False)
+        self.client = None
+        self.plugged = True
+        self.name = f'socket://{host}:{self.listener.getsockname()[1]}'
+
+    @property
+    def fd(self):
+        return self.client.fileno() if self.client is not None else None
+
+    def plug(self):
+        self.plugged = True
+
+    def unplug(self):
+        self.drop_client()
+        self.plugged = False
+
+    def drop_client(self):
+        if self.client is not None:
+            try:
+                self.client.close()
+            except OSError:
+                pass
+            self.client = None
+
+    def discard_pending(self):
+        """Nothing to do: a TCP connection's buffers go with it."""
+
+    def poll_accept(self):
+        try:
+            conn, _ = self.listener.accept()
+        except (BlockingIOError, InterruptedError):
+            return False
+        except OSError:
+            return False
+        if not self.plugged or self.client is not None:
+            conn.close()
+            return False
+        conn.setblocking(False)
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.client = conn
+        return True
+
+    def connected(self):
+        return self.client is not None
+
+    def read(self):
+        if self.client is None:
+            return b''
+        try:
+            data = self.client.recv(4096)
+        except (BlockingIOError, InterruptedError):
+            return b''
+        except OSError:
+            self.drop_client()
+            return b''
+        if not data:
+            self.drop_client()  # orderly close by the host
+        return data
+
+    def write(self, data):
+        if self.client is None:
+            return -1
+        try:
+            return self.client.send(data)
+        except (BlockingIOError, InterruptedError):
+            return 0
+        except OSError:
+            self.drop_client()
+            return -1
+
+    def close(self):
+        self.drop_client()
+        self.listener.close()
+
+
+class _Counters:
+    def __init__(self):
+        self.samples_generated = 0
+        self.samples_sent = 0
+        self.samples_unsent = 0   # generated while no host was connected or the TX buffer was full
+        self.frames_sent = 0
+        self.connections = 0
+        self.disconnects = 0
+        self.commands = 0
+
+
+def _write_stats(args, counters, faults, board, extra=None):
+    data = dict(vars(counters))
+    data.update(dataclasses.asdict(faults.counts))
+    data['seq_next'] = board.seq
+    data['odr_hz'] = board.odr_hz
+    data['gyro_fs_dps'] = board.gyro_fs_dps
+    data['accel_fs_g'] = board.accel_fs_g
+    if extra:
+        data.update(extra)
+    line = json.dumps(data, sort_keys=True)
+    if args.stats_out:
+        tmp = args.stats_out + '.tmp'
+        with open(tmp, 'w', encoding='utf-8') as fh:
+            fh.write(line + '\n')
+        os.replace(tmp, args.stats_out)
+    return line
+
+
+def _total_samples(args, board):
+    limits = []
+    if args.samples is not None:
+        limits.append(args.samples)
+    if args.duration_s is not None:
+        limits.append(int(round(args.duration_s * board.odr_hz)))
+    return min(limits) if limits else None
+
+
+def _run_sd(args, board, faults, truth_fh, counters):
+    total = _total_samples(args, board)
+    os.makedirs(args.write_sd, exist_ok=True)
+    corrupt = faults.corrupt if args.corrupt_rate > 0 else None
+    with SdLogWriter(args.write_sd, sequence_id=args.sequence_id, odr_hz=board.odr_hz,
+                     gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g, max_file_bytes=args.sd_file_bytes,
+                     batch=args.batch, rtc_unix_s=args.rtc_unix_s, corrupt=corrupt) as writer:
+        chunk = args.batch * max(1, 65536 // args.batch)
+        while counters.samples_generated < total:
+            n = min(chunk, total - counters.samples_generated)
+            samples = board.next_samples(n)
+            counters.samples_generated += n
+            if truth_fh is not None:
+                truth_fh.write(truth_records(board.last_truth).tobytes())
+            kept = faults.drop(samples)
+            writer.write_samples(kept)
+            counters.samples_sent += kept.size
+    for path in writer.paths:
+        print(path, flush=True)
+    return 0
+
+
+def _serve(args, board, faults, truth_fh, counters, stopper):
+    port = _TcpPort(args.tcp) if args.tcp else _PtyPort(args.link)
+    print(port.name, flush=True)
+    total = _total_samples(args, board)
+    outbuf = bytearray()
+    t_start = time.monotonic()
+    seg_t0, seg_n0 = t_start, 0          # pacing segment (restarts at an ODR change)
+    paced_odr = board.odr_hz
+    period = 1.0 / (board.odr_hz * args.speed)
+    was_connected = False
+    connected_since = None
+    sent_this_connection = 0
+    disconnect_after = args.disconnect_after
+    unplugged_until = None
+    try:
+        while not stopper.stop:
+            now = time.monotonic()
+            if unplugged_until is not None and now >= unplugged_until:
+                port.plug()
+                unplugged_until = None
+            if isinstance(port, _TcpPort) and unplugged_until is None and port.client is None:
+                port.poll_accept()
+            connected = unplugged_until is None and port.connected()
+            if connected and not was_connected:
+                counters.connections += 1
+                connected_since = now
+                sent_this_connection = 0
+                outbuf.clear()
+            if was_connected and not connected:
+                counters.disconnects += 1
+                outbuf.clear()
+                port.discard_pending()
+            was_connected = connected
+            # host -> board
+            if connected:
+                data = port.read()
+                connected = port.connected()
+                if data:
+                    reply = board.handle_bytes(data)
+                    counters.commands = board.command_stats.commands
+                    if reply:
+                        outbuf += reply  # acks are never dropped
+                        if board.odr_hz != paced_odr:
+                            paced_odr = board.odr_hz
+                            seg_t0, seg_n0 = now, counters.samples_generated
+                            period = 1.0 / (board.odr_hz * args.speed)
+            # sampling
+            due = seg_n0 + int((now - seg_t0) / period)
+            if total is not None:
+                due = min(due, total)
+            n = due - counters.samples_generated
+            if n > 0:
+                samples = board.next_samples(n)
+                counters.samples_generated += n
+                if truth_fh is not None:
+                    truth_fh.write(truth_records(board.last_truth).tobytes())
+                    truth_fh.flush()
+                if connected:
+                    kept = faults.drop(samples)
+                    frames = encode_samples_batched(kept, args.batch)
+                    if len(outbuf) + len(frames) <= TX_BUFFER_BYTES:
+                        outbuf += faults.corrupt(frames)
+                        counters.samples_sent += kept.size
+                        sent_this_connection += kept.size
+                        counters.frames_sent += -(-kept.size // args.batch)
+                    else:
+                        faults.note_lost(kept.size)
+                        counters.samples_unsent += kept.size
+                else:
+                    faults.note_lost(n)
+                    counters.samples_unsent += n
+            # board -> host
+            if connected and outbuf:
+                written = port.write(bytes(outbuf[:65536]))
+                if written > 0:
+                    del outbuf[:written]
+            # scripted disconnects
+            if connected:
+                unplug = False
+                if disconnect_after is not None and sent_this_connection >= disconnect_after:
+                    unplug, disconnect_after = True, None
+                if args.disconnect_every_s and now - connected_since >= args.disconnect_every_s:
+                    unplug = True
+                if unplug:
+                    port.unplug()
+                    unplugged_until = now + args.unplug_s
+                    counters.disconnects += 1
+                    was_connected = False
+                    outbuf.clear()
+            if total is not None and counters.samples_generated >= total and not outbuf:
+                break
+            # sleep until the next frame is due or the host speaks
+            wait = max(0.001, min(0.02, seg_t0 + (counters.samples_generated - seg_n0 + args.batch) * period
+                                  - time.monotonic()))
+            rlist = [port.fd] if (connected and port.fd is not None) else []
+            if isinstance(port, _TcpPort) and port.client is None:
+                rlist.append(port.listener)
+            wlist = [port.fd] if (connected and outbuf and port.fd is not None) else []
+            try:
+                select.select(rlist, wlist, [], wait)
+            except (OSError, ValueError):
+                time.sleep(wait)
+    finally:
+        port.close()
+    return 0
+
+
+def encode_samples_batched(samples, batch):
+    """
+    Encode samples as consecutive SAMPLES frames of at most ``batch`` samples.
+
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        SAMPLE_DTYPE records.
+    batch : int
+        Samples per frame.
+
+    Returns
+    -------
+    bytes
+    """
+    return b''.join(encode_samples(samples[i:i + batch]) for i in range(0, samples.size, batch))
+
+
+def _body(argv):
+    args = build_parser().parse_args(argv)
+    _check_args(args)
+    board = board_from_args(args)
+    faults = FaultInjector(np.random.default_rng(args.seed + 1), drop_flagged_rate=args.drop_flagged_rate,
+                           drop_unflagged_rate=args.drop_unflagged_rate, corrupt_rate=args.corrupt_rate)
+    counters = _Counters()
+    stopper = _Stopper()
+    old = {sig: signal.signal(sig, stopper) for sig in (signal.SIGINT, signal.SIGTERM)}
+    truth_fh = open(args.truth_out, 'ab') if args.truth_out else None
+    try:
+        if args.write_sd:
+            code = _run_sd(args, board, faults, truth_fh, counters)
+        else:
+            code = _serve(args, board, faults, truth_fh, counters, stopper)
+    finally:
+        if truth_fh is not None:
+            truth_fh.close()
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        line = _write_stats(args, counters, faults, board)
+        print(f'{PROG}: {line}', file=sys.stderr, flush=True)
+    return code
+
+
+def main(argv=None):
+    """
+    Run portenta_emulator.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status.
+    """
+    return run_cli(PROG, _body, argv)
+
+
+__all__ = ['main', 'build_parser', 'board_from_args', 'encode_samples_batched', 'TRUTH_DTYPE']
+
+if __name__ == '__main__':
+    sys.exit(main())

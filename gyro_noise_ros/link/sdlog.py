@@ -1,0 +1,397 @@
+"""
+SD-card log files of the Portenta board: writer and constant-memory streaming reader.
+
+A log file is the wire stream itself (``docs/portenta_link.md``): it starts with a LOG_HEADER frame
+(sequence id, file index, configuration at file open, first seq, device time, RTC time) followed by
+SAMPLES frames, and an ACK frame wherever the configuration changed. One acquisition sequence (one
+power-on recording) is split across files named ``S<sss>F<fff>.GNL`` (8.3 names for FAT32, ``sss`` =
+sequence id modulo 1000, ``fff`` = file index), each below the FAT32 limit of 4 GiB - 1 bytes; a file
+ends at a frame boundary and the next one continues the same sequence counter and device clock.
+
+The reader orders files by (sequence id, file index) from their headers (by name when a header is
+unreadable), feeds them through one :class:`~gyro_noise_ros.link.protocol.Decoder` (so counter gaps
+across file boundaries are counted), flushes it at the end of every file (a frame cut by the end of
+a file is discarded, not glued to the next file), and reports every corrupt region by file and offset.
+"""
+
+import os
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputDataError, ParameterError
+from .protocol import (MAX_FRAME_SIZE, MAX_SAMPLES_PER_FRAME, Decoder, LinkStats, LogHeader, encode_ack,
+                       encode_log_header, encode_samples)
+
+#: FAT32 file-size limit (bytes); the paper's board stopped a sequence there (~12 h at 6.66 kHz).
+FAT32_MAX_FILE_BYTES = (1 << 32) - 1
+FILE_NAME_FORMAT = 'S{sequence:03d}F{index:03d}.GNL'
+FILE_NAME_RE = re.compile(r'^S(\d{3})F(\d{3})\.GNL$', re.IGNORECASE)
+#: Corrupt regions kept in a report (the total count is always exact).
+MAX_REPORTED_REGIONS = 1000
+
+
+def log_file_name(sequence_id, file_index):
+    """
+    Return the 8.3 file name of one log file.
+
+    Parameters
+    ----------
+    sequence_id : int
+    file_index : int
+        0 .. 999.
+
+    Returns
+    -------
+    str
+    """
+    if not 0 <= int(file_index) <= 999:
+        raise ParameterError(f'file_index must be in 0..999 for an 8.3 name, got {file_index}')
+    return FILE_NAME_FORMAT.format(sequence=int(sequence_id) % 1000, index=int(file_index))
+
+
+class SdLogWriter:
+    """
+    Write one acquisition sequence as SD log files, as the board firmware does.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        Existing directory.
+    sequence_id : int, keyword-only
+    odr_hz : float, keyword-only
+        Configuration at power-on (Hz).
+    gyro_fs_dps, accel_fs_g : int, keyword-only
+        Full scales at power-on (deg/s, g).
+    max_file_bytes : int, keyword-only
+        Roll over to the next file before a frame would make a file larger than this.
+    batch : int, keyword-only
+        Samples per SAMPLES frame.
+    rtc_unix_s : int, keyword-only
+        RTC time at power-on (UNIX s, 0 = not set); each header gets it advanced by the device time.
+    corrupt : callable, optional, keyword-only
+        ``bytes -> bytes`` applied to everything written (fault injection).
+    """
+
+    def __init__(self, directory, *, sequence_id, odr_hz, gyro_fs_dps, accel_fs_g,
+                 max_file_bytes=FAT32_MAX_FILE_BYTES, batch=16, rtc_unix_s=0, corrupt=None):
+        self.directory = os.fspath(directory)
+        if not os.path.isdir(self.directory):
+            raise ParameterError(f'directory must exist, got {self.directory!r}')
+        if not 1 <= int(batch) <= MAX_SAMPLES_PER_FRAME:
+            raise ParameterError(f'batch must be in 1..{MAX_SAMPLES_PER_FRAME}, got {batch}')
+        if int(max_file_bytes) < 2 * MAX_FRAME_SIZE:
+            raise ParameterError(f'max_file_bytes must be >= {2 * MAX_FRAME_SIZE}, got {max_file_bytes}')
+        self.sequence_id = int(sequence_id)
+        self.config = (float(odr_hz), int(gyro_fs_dps), int(accel_fs_g))
+        self.max_file_bytes = int(max_file_bytes)
+        self.batch = int(batch)
+        self.rtc_unix_s = int(rtc_unix_s)
+        self._t_origin_us = None
+        self._corrupt = corrupt
+        self._file = None
+        self._size = 0
+        self.paths = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _open_next(self, first_seq, t_us):
+        if self._file is not None:
+            self._file.close()
+        index = len(self.paths)
+        path = os.path.join(self.directory, log_file_name(self.sequence_id, index))
+        self._file = open(path, 'wb')
+        self.paths.append(path)
+        self._size = 0
+        if self._t_origin_us is None:
+            self._t_origin_us = t_us
+        rtc = 0
+        if self.rtc_unix_s:
+            rtc = self.rtc_unix_s + ((t_us - self._t_origin_us) % (1 << 32)) // 1_000_000
+        odr, gfs, afs = self.config
+        self._write(encode_log_header(LogHeader(sequence_id=self.sequence_id, file_index=index, odr_hz=odr,
+                                                gyro_fs_dps=gfs, accel_fs_g=afs, first_seq=first_seq,
+                                                t_us=t_us, rtc_unix_s=rtc)))
+
+    def _write(self, data):
+        if self._corrupt is not None:
+            data = self._corrupt(data)
+        self._file.write(data)
+        self._size += len(data)
+
+    def _frame_out(self, frame, first_seq, t_us):
+        if self._file is None or self._size + len(frame) > self.max_file_bytes:
+            self._open_next(first_seq, t_us)
+        self._write(frame)
+
+    def write_samples(self, samples):
+        """
+        Append samples (SAMPLES frames of ``batch`` samples).
+
+        Parameters
+        ----------
+        samples : numpy.ndarray
+            SAMPLE_DTYPE records.
+        """
+        for start in range(0, samples.size, self.batch):
+            part = samples[start:start + self.batch]
+            self._frame_out(encode_samples(part), int(part['seq'][0]), int(part['t_us'][0]))
+
+    def write_ack(self, ack, *, next_seq=0, t_us=0):
+        """
+        Record a configuration change (an ACK frame) before the samples that follow it.
+
+        Parameters
+        ----------
+        ack : Ack
+        next_seq, t_us : int, keyword-only
+            Used for the header if this opens a new file.
+        """
+        if ack.ok:
+            self.config = (float(ack.odr_hz), int(ack.gyro_fs_dps), int(ack.accel_fs_g))
+        self._frame_out(encode_ack(ack), int(next_seq), int(t_us))
+
+    def close(self):
+        """Close the current file."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+@dataclass(frozen=True)
+class LogBlock:
+    """
+    Consecutive samples of one file under one configuration.
+
+    Attributes
+    ----------
+    path : str
+    samples : numpy.ndarray
+        SAMPLE_DTYPE records.
+    lost_before : numpy.ndarray
+        int64 per sample (counter gaps, across files).
+    odr_hz : float or None
+    gyro_fs_dps, accel_fs_g : int or None
+        Configuration in force (None when neither a header nor an ack has said it yet).
+    """
+
+    path: str
+    samples: np.ndarray
+    lost_before: np.ndarray
+    odr_hz: object
+    gyro_fs_dps: object
+    accel_fs_g: object
+
+
+@dataclass(frozen=True)
+class CorruptRegion:
+    """
+    Bytes of a file that were not part of any valid frame.
+
+    Attributes
+    ----------
+    path : str
+    offset : int
+        Byte offset in the file.
+    length : int
+    """
+
+    path: str
+    offset: int
+    length: int
+
+
+@dataclass(frozen=True)
+class LogFileInfo:
+    """
+    One input file.
+
+    Attributes
+    ----------
+    path : str
+    size_bytes : int
+    header : LogHeader or None
+        None when the file's first frame is not a readable LOG_HEADER.
+    """
+
+    path: str
+    size_bytes: int
+    header: object
+
+
+@dataclass(frozen=True)
+class LogReport:
+    """
+    Summary of a read.
+
+    Attributes
+    ----------
+    files : tuple of LogFileInfo
+        In reading order.
+    stats : LinkStats
+        Decoder counters over all files.
+    corrupt_regions : tuple of CorruptRegion
+        The first MAX_REPORTED_REGIONS regions.
+    corrupt_region_count : int
+        All regions.
+    missing_file_indices : tuple of int
+        Gaps in the file indices of the headers.
+    sequence_id : int or None
+    samples_without_config : int
+        Samples read before any header or ack gave the configuration.
+    """
+
+    files: tuple
+    stats: LinkStats
+    corrupt_regions: tuple
+    corrupt_region_count: int
+    missing_file_indices: tuple
+    sequence_id: object
+    samples_without_config: int = 0
+    warnings: tuple = field(default=())
+
+
+def read_header(path):
+    """
+    Return the LOG_HEADER of a log file, or None when its start is unreadable.
+
+    Parameters
+    ----------
+    path : str
+
+    Returns
+    -------
+    LogHeader or None
+    """
+    with open(path, 'rb') as fh:
+        head = fh.read(2 * MAX_FRAME_SIZE)
+    dec = Decoder()
+    res = dec.feed(head)
+    # the header must be the very first frame: nothing discarded at offset 0, no sample before it
+    if res.headers and res.header_positions[0] == 0 and not (res.discarded and res.discarded[0][0] == 0):
+        return res.headers[0]
+    return None
+
+
+def _name_key(path):
+    m = FILE_NAME_RE.match(os.path.basename(path))
+    return (int(m.group(1)), int(m.group(2))) if m else None
+
+
+class SdLogReader:
+    """
+    Stream samples out of the log files of one sequence in constant memory.
+
+    Parameters
+    ----------
+    paths : sequence of str
+        Log files, in any order.
+    chunk_bytes : int, keyword-only
+        Read size (bytes).
+
+    Notes
+    -----
+    Iterate to get :class:`LogBlock` objects; :attr:`report` is complete when the iteration ends.
+    Raises InputDataError before reading when the headers name different sequences or a file is missing.
+    """
+
+    def __init__(self, paths, *, chunk_bytes=1 << 20):
+        paths = [os.fspath(p) for p in paths]
+        if not paths:
+            raise ParameterError('paths must name at least one log file')
+        if int(chunk_bytes) < 1:
+            raise ParameterError(f'chunk_bytes must be >= 1, got {chunk_bytes}')
+        self.chunk_bytes = int(chunk_bytes)
+        infos = []
+        for path in paths:
+            try:
+                size = os.path.getsize(path)
+                header = read_header(path)
+            except OSError as err:
+                raise InputDataError(f'cannot read log file {path!r}: {err}') from err
+            infos.append(LogFileInfo(path=path, size_bytes=size, header=header))
+        seqs = {i.header.sequence_id for i in infos if i.header is not None}
+        if len(seqs) > 1:
+            raise InputDataError(f'log files belong to different sequences {sorted(seqs)}; import one sequence '
+                                 'at a time')
+        self.sequence_id = seqs.pop() if seqs else None
+
+        def key(item):
+            pos, info = item
+            if info.header is not None:
+                return (0, info.header.file_index, pos)
+            named = _name_key(info.path)
+            return (0, named[1], pos) if named else (1, pos, pos)
+
+        self.files = tuple(info for _, info in sorted(enumerate(infos), key=key))
+        indices = sorted(i.header.file_index for i in self.files if i.header is not None)
+        missing = []
+        if indices:
+            missing = sorted(set(range(indices[0], indices[-1] + 1)) - set(indices))
+        self.missing_file_indices = tuple(missing)
+        self._report = None
+        self._warnings = []
+
+    @property
+    def report(self):
+        """LogReport or None: the summary once the iteration has finished."""
+        return self._report
+
+    def __iter__(self):
+        dec = Decoder()
+        config = (None, None, None)
+        regions = []
+        region_count = 0
+        no_config = 0
+        file_starts = []
+        for info in self.files:
+            start = dec.stats.bytes_total
+            file_starts.append(start)
+            try:
+                fh = open(info.path, 'rb')
+            except OSError as err:
+                raise InputDataError(f'cannot read log file {info.path!r}: {err}') from err
+            with fh:
+                while True:
+                    data = fh.read(self.chunk_bytes)
+                    res = dec.feed(data) if data else dec.flush()
+                    for off, length in res.discarded:
+                        region_count += 1
+                        if len(regions) < MAX_REPORTED_REGIONS:
+                            regions.append(CorruptRegion(info.path, off - start, length))
+                    blocks, config = self._split(info.path, res, config)
+                    for block in blocks:
+                        if block.gyro_fs_dps is None:
+                            no_config += block.samples.size
+                        yield block
+                    if not data:
+                        break
+        self._report = LogReport(files=self.files, stats=dec.stats, corrupt_regions=tuple(regions),
+                                 corrupt_region_count=region_count,
+                                 missing_file_indices=self.missing_file_indices, sequence_id=self.sequence_id,
+                                 samples_without_config=no_config, warnings=tuple(self._warnings))
+
+    @staticmethod
+    def _split(path, res, config):
+        """Cut a DecodeResult at configuration changes; return (blocks, configuration after them)."""
+        events = []
+        for pos, head in zip(res.header_positions, res.headers):
+            events.append((pos, (head.odr_hz, head.gyro_fs_dps, head.accel_fs_g)))
+        for pos, ack in zip(res.ack_positions, res.acks):
+            if ack.ok:
+                events.append((pos, (ack.odr_hz, ack.gyro_fs_dps, ack.accel_fs_g)))
+        events.sort(key=lambda e: e[0])
+        blocks = []
+        start = 0
+        for pos, new_config in events + [(res.samples.size, None)]:
+            if pos > start:
+                blocks.append(LogBlock(path, res.samples[start:pos], res.lost_before[start:pos], *config))
+                start = pos
+            if new_config is not None:
+                config = new_config
+        return blocks, config

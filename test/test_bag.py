@@ -14,7 +14,7 @@ from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from gyro_noise_ros import bag as bagmod
+from gyro_noise_ros.bag import codec, storage
 from gyro_noise_ros.bag import (
     IMU_MSGTYPE,
     TEMPERATURE_MSGTYPE,
@@ -149,6 +149,11 @@ def test_encode_rejects_bad_input():
 # Bulk decoder against rosbags' per-message deserialiser
 
 
+def bulk_ok(raws, ros1):
+    """Which messages the bulk path accepts (the rest go to rosbags)."""
+    return codec.decode_spans(*codec.join_raws(raws), codec.IMU_TAIL_F8, codec.IMU_FIELDS, ros1)[0]
+
+
 def slow_reference(raws, ros1=False):
     store = ROS1 if ros1 else ROS2
     msgs = [store.deserialize_ros1(r, IMU_MSGTYPE) if ros1 else store.deserialize_cdr(r, IMU_MSGTYPE)
@@ -179,7 +184,7 @@ def mixed_raws(rng, n, *, ros1=False):
 def test_bulk_decode_equals_rosbags_on_mixed_lengths_and_endianness(ros1):
     raws = mixed_raws(np.random.default_rng(2), 300, ros1=ros1)
     assert len({len(r) for r in raws}) > 2  # several groups really exercised
-    ok, _, _ = bagmod._bulk_decode(raws, 37, ros1)
+    ok = bulk_ok(raws, ros1)
     assert ok.all()  # every well-formed message takes the bulk path, none the fallback
     batch = decode_imu(raws, ros1=ros1)
     stamps, gyro, accel, frame = slow_reference(raws, ros1)
@@ -210,7 +215,7 @@ def corruptions():
 def test_bulk_decoder_refuses_what_rosbags_refuses():
     good, bad = corruptions()
     for name, raw in bad.items():
-        ok, _, _ = bagmod._bulk_decode([good, raw, good], 37, False)
+        ok = bulk_ok([good, raw, good], False)
         assert ok.tolist() == [True, False, True], name
         with pytest.raises(Exception):  # noqa: B017, PT011 - rosbags' own verdict, any error type
             ROS2.deserialize_cdr(raw, IMU_MSGTYPE)
@@ -237,8 +242,8 @@ def test_undecodable_message_raises_or_is_skipped():
     raws[3] = raws[3][:50]  # truncated: neither decoder can read it
     with pytest.raises(BagError, match='cannot be decoded'):
         decode_imu(raws)
-    batch, skipped = bagmod._decode_imu(raws, None, False, True)
-    assert skipped == 1 and len(batch) == 9
+    batch = decode_imu(raws, skip_undecodable=True)
+    assert len(batch) == 9
     stamps, gyro, _, _ = slow_reference(raws[:3] + raws[4:])
     np.testing.assert_array_equal(batch.stamp_ns, stamps)
     assert_same_floats(batch.gyro, gyro)
@@ -495,3 +500,84 @@ def test_parameter_errors(tmp_path):
         for bad in (0, -3, 2.5, True):
             with pytest.raises(ParameterError, match='batch_size'):
                 next(reader.iter_batches(bad))
+
+
+# -------------------------------------------------------------------------------------------------
+# Block readers against rosbags' own message iterator
+
+
+def reference_mcap_records(chunk):
+    """Plain struct walk over an MCAP chunk: the twin of storage.mcap_message_records."""
+    import struct
+
+    out, pos = [], 0
+    while pos < len(chunk):
+        op, length = struct.unpack_from('<BQ', chunk, pos)
+        if op == 0x05:
+            cid, _, log = struct.unpack_from('<HIQ', chunk, pos + 9)
+            out.append((pos + 31, length - 22, cid, log))
+        pos += 9 + length
+    return [np.array(col, np.int64) for col in zip(*out)]
+
+
+def mcap_record(cid, log, payload):
+    import struct
+
+    body = struct.pack('<HIQQ', cid, 0, log, log) + payload
+    return struct.pack('<BQ', 0x05, len(body)) + body
+
+
+def test_mcap_record_scan_matches_struct_walk():
+    uniform = b''.join(mcap_record(1, 10 * i, bytes([i]) * 40) for i in range(50))
+    mixed = b''.join(mcap_record(1 + i % 3, 5 * i, bytes(i % 7 + 1)) for i in range(50))
+    mixed += b'\x06' + (3).to_bytes(8, 'little') + b'abc'  # a non-message record is stepped over
+    for chunk in (uniform, mixed):
+        got = storage.mcap_message_records(chunk)
+        for a, b in zip(got, reference_mcap_records(chunk)):
+            np.testing.assert_array_equal(a, b)
+    with pytest.raises(BagError, match='beyond the chunk'):
+        storage.mcap_message_records(mixed[:-2])
+
+
+def source_stream(path, topic, fast):
+    src = storage.BagSource(path, fast=fast)
+    try:
+        logs, raws = [], []
+        for buf, starts, lengths, log_ns in src.blocks(topic, block=1000):
+            logs.append(log_ns)
+            raws += [buf[s:s + n].tobytes() for s, n in zip(starts, lengths)]
+        return np.concatenate(logs), raws
+    finally:
+        src.close()
+
+
+@pytest.mark.parametrize('storage_kind', ['sqlite3', 'mcap'])
+@pytest.mark.parametrize('pattern', ['increasing', 'backwards_chunks', 'interleaved', 'ties'])
+def test_block_readers_yield_rosbags_order(tmp_path, storage_kind, pattern):
+    # 12,000 Imu messages (several 1 MiB MCAP chunks) interleaved with temperature, with log times
+    # increasing, decreasing chunk by chunk, shuffled (chunks overlap in time: rosbags' merge
+    # must be used) or tied in groups of 10.
+    rng = np.random.default_rng(11)
+    n = 12_000
+    stamps, gyro, accel = sample_data(rng, n, with_nan=False)
+    base = 10**18 + np.arange(n, dtype=np.int64) * 150_000
+    log = {'increasing': base,
+           'backwards_chunks': base[::-1].copy() // 4000 * 4000 + base % 4000,
+           'interleaved': base + rng.integers(0, 10**9, n),
+           'ties': base // 10 // 150_000 * 150_000}[pattern]
+    path = tmp_path / 'bag'
+    with ImuBagWriter(path, storage=storage_kind) as writer:
+        for i in range(0, n, 500):
+            writer.write_imu(stamps[i:i + 500], gyro[i:i + 500], accel[i:i + 500], log_ns=log[i:i + 500])
+            writer.write_temperature(stamps[i], 25.0 + i, log_ns=log[i])
+    for topic in ('/imu/data_raw', '/imu/temperature'):
+        fast_log, fast_raws = source_stream(path, topic, True)
+        slow_log, slow_raws = source_stream(path, topic, False)
+        np.testing.assert_array_equal(fast_log, slow_log)
+        assert fast_raws == slow_raws
+    with ImuBagReader(path) as reader:
+        s, lg, g, _ = concat(list(reader.iter_batches(4096)))
+    order = np.argsort(log, kind='stable')
+    np.testing.assert_array_equal(lg, log[order])
+    np.testing.assert_array_equal(s, stamps[order])
+    assert_same_floats(g, gyro[order])

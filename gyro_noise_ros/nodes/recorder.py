@@ -1,0 +1,318 @@
+"""
+ROS 2 node ``gyro_noise_record``: record ``imu/data_raw`` and ``imu/temperature`` into a rosbag2.
+
+``ros2 bag`` is not installable from PyPI, so this small recorder writes rosbag2 (sqlite3 or MCAP)
+through :class:`gyro_noise_ros.bag.ImuBagWriter` (the rosbags library). With a full ROS install,
+``ros2 bag record /imu/data_raw /imu/temperature`` does the same job and the bags are
+interchangeable.
+
+Loss-free at 6.66 kHz: the subscriptions are ``raw=True`` (serialised CDR, no Python message
+objects) and belong to a callback group the executor never runs (:class:`PolledGroup`), so the
+executor does not wake once per message; a 10 ms timer drains them with ``take_message`` into
+lists and decodes and writes each batch in bulk. The QoS history (``queue_depth`` messages) holds
+far more than 10 ms of data, so nothing is overwritten between drains.
+
+Messages received and written are counted; DDS publication sequence numbers reveal messages the
+transport dropped before they reached this node, counted as ``dropped``. On SIGINT or SIGTERM the
+queues are drained once more and the bag is closed cleanly (its ``metadata.yaml`` written), then
+one summary line is printed.
+"""
+
+import sys
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+from rclpy.callback_groups import CallbackGroup
+from rclpy.node import Node
+from sensor_msgs.msg import Imu, Temperature
+
+from ..bag import ImuBagWriter, decode_imu, decode_temperature
+from ..errors import BagError
+from ._ros_common import ParamSpec, declare_parameter_table, run_node, sensor_data_qos
+
+NODE_NAME = 'gyro_noise_record'
+
+#: Parameter table (``config/gyro_noise_record.yaml`` lists every row).
+PARAMETERS = (
+    ParamSpec('output', '', 'Bag directory to create (must not exist); empty: '
+              'gyro_noise_<UTC date>_<time> in the working directory', read_only=True),
+    ParamSpec('storage', 'sqlite3', 'rosbag2 storage plugin', read_only=True,
+              choices=('sqlite3', 'mcap')),
+    ParamSpec('record_temperature', True, 'Also record imu/temperature', read_only=True),
+    ParamSpec('queue_depth', 5000, 'QoS history depth of the subscriptions', unit='messages',
+              read_only=True, min_value=10, max_value=1000000),
+    ParamSpec('drain_period_s', 0.01, 'Period of the loop that takes queued messages and writes them',
+              unit='s', read_only=True, min_value=0.001, max_value=0.5),
+    ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)', unit='s',
+              read_only=True, min_value=0.0, max_value=3600.0),
+)
+
+# Imu CDR: the covariances are float64 16..24 and 28..36 of the 37-float tail that ends the message
+# (see gyro_noise_ros/bag.py for the layout).
+_IMU_TAIL_BYTES = 37 * 8
+
+
+class PolledGroup(CallbackGroup):
+    """
+    A callback group whose entities the executor never waits on nor runs.
+
+    The node takes the messages of such a subscription itself (``sub.handle.take_message``) from a
+    timer, so a 6.66 kHz topic costs one executor wake-up per drain period instead of one per
+    message.
+    """
+
+    def can_execute(self, entity):
+        return False
+
+    def beginning_execution(self, entity):
+        return False
+
+    def ending_execution(self, entity):
+        pass
+
+
+def take_all(sub, msg_type):
+    """
+    Take every message queued on a raw subscription.
+
+    Parameters
+    ----------
+    sub : rclpy.subscription.Subscription
+        Created with ``raw=True``.
+    msg_type : type
+        Its message class.
+
+    Returns
+    -------
+    raws : list of bytes
+        Serialised messages, oldest first.
+    received_ns : list of int
+        Receive time of each (``MessageInfo['received_timestamp']``, system clock, ns).
+    sequence : list of int
+        DDS publication sequence number of each (0 if the middleware does not give one).
+    """
+    raws, received, sequence = [], [], []
+    handle = sub.handle
+    with handle:
+        take = handle.take_message
+        while True:
+            item = take(msg_type, True)
+            if item is None:
+                break
+            raw, info = item
+            raws.append(raw)
+            received.append(info.get('received_timestamp') or 0)
+            sequence.append(info.get('publication_sequence_number') or 0)
+    return raws, received, sequence
+
+
+class SequenceGapCounter:
+    """
+    Count messages missing from a stream of DDS publication sequence numbers.
+
+    A sequence number that does not increase starts a new run (a restarted publisher); a
+    sequence number of 0 means the middleware gave none and is ignored.
+    """
+
+    def __init__(self):
+        self.last = None
+        self.missing = 0
+
+    def update(self, sequence):
+        """Add the sequence numbers of one batch (in arrival order); return the new misses."""
+        seq = np.asarray(sequence, dtype=np.int64)
+        seq = seq[seq > 0]
+        if seq.size == 0:
+            return 0
+        if self.last is not None:
+            seq = np.concatenate(([self.last], seq))
+        step = np.diff(seq)
+        new = int(step[step > 1].sum() - np.count_nonzero(step > 1))
+        self.last = int(seq[-1])
+        self.missing += new
+        return new
+
+
+def imu_covariances(raws):
+    """
+    Return the angular-velocity and linear-acceleration covariances of raw CDR Imu messages.
+
+    Parameters
+    ----------
+    raws : list of bytes
+        Serialised ``sensor_msgs/Imu`` (ROS 2 CDR, either endianness).
+
+    Returns
+    -------
+    angular_velocity_covariance, linear_acceleration_covariance : numpy.ndarray, shape (n, 9)
+        Row-major, in (rad/s)^2 and (m/s^2)^2.
+    """
+    n = len(raws)
+    tails = np.empty((n, 37))
+    lengths = {len(r) for r in raws}
+    if len(lengths) == 1 and all(r[1] == 1 for r in raws):
+        size = lengths.pop()
+        rows = np.frombuffer(b''.join(raws), np.uint8).reshape(n, size)
+        tails[:] = np.ascontiguousarray(rows[:, size - _IMU_TAIL_BYTES:]).view('<f8')
+    else:
+        for i, raw in enumerate(raws):
+            tails[i] = np.frombuffer(raw[-_IMU_TAIL_BYTES:], '<f8' if raw[1] == 1 else '>f8')
+    return tails[:, 16:25], tails[:, 28:37]
+
+
+def default_bag_name(now=None):
+    """Return ``gyro_noise_<YYYYmmdd>_<HHMMSS>`` for the current UTC time (or ``now``)."""
+    now = now or datetime.now(timezone.utc)
+    return now.strftime('gyro_noise_%Y%m%d_%H%M%S')
+
+
+class RecorderNode(Node):
+    """
+    Record the IMU stream into a rosbag2 (see the module docstring).
+
+    Parameters
+    ----------
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (e.g. ``parameter_overrides`` in tests).
+
+    Raises
+    ------
+    ParameterError
+        A parameter is invalid.
+    BagError
+        The bag cannot be created (for example the output path exists).
+    """
+
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        params = declare_parameter_table(self, PARAMETERS)
+        self.output = params['output'] or default_bag_name()
+        self.storage = params['storage']
+        self.received_imu = 0
+        self.received_temperature = 0
+        self.written_imu = 0
+        self.written_temperature = 0
+        self._imu_gaps = SequenceGapCounter()
+        self._temperature_gaps = SequenceGapCounter()
+        self._writer = None
+        self._pending_temperature = []
+        self._closed = False
+        if Path(self.output).exists():
+            raise BagError(f"parameter 'output' = {self.output!r}: the path exists; "
+                           'choose a new bag directory')
+        group = PolledGroup()
+        qos = sensor_data_qos(params['queue_depth'])
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', _never_called, qos, raw=True,
+                                                 callback_group=group)
+        self._temperature_sub = None
+        if params['record_temperature']:
+            self._temperature_sub = self.create_subscription(
+                Temperature, 'imu/temperature', _never_called, qos, raw=True, callback_group=group)
+        self.create_timer(params['drain_period_s'], self.drain)
+        if params['report_period_s'] > 0:
+            self.create_timer(params['report_period_s'], self._report)
+        self.get_logger().info(f'recording {self._imu_sub.topic_name}'
+                               + (f' and {self._temperature_sub.topic_name}'
+                                  if self._temperature_sub else '')
+                               + f' into {self.output} ({self.storage})')
+
+    @property
+    def dropped(self):
+        """Messages the transport dropped before this node (gaps in publication sequence numbers)."""
+        return self._imu_gaps.missing + self._temperature_gaps.missing
+
+    def _open(self, frame_id):
+        # The bag is created on the first Imu batch so it carries the sensor's frame_id.
+        self._writer = ImuBagWriter(
+            self.output, storage=self.storage, imu_topic=self._imu_sub.topic_name,
+            temperature_topic=(self._temperature_sub.topic_name if self._temperature_sub else None),
+            frame_id=frame_id or 'imu_link')
+
+    def drain(self):
+        """Take every queued message and write it (called by the timer and at shutdown)."""
+        if self._closed:
+            return
+        raws, received, sequence = take_all(self._imu_sub, Imu)
+        if raws:
+            self.received_imu += len(raws)
+            self._imu_gaps.update(sequence)
+            batch = decode_imu(raws, log_ns=_log_times(received, None))
+            if self._writer is None:
+                self._open(batch.frame_id)
+            av_cov, la_cov = imu_covariances(raws)
+            self._writer.write_imu(batch.stamp_ns, batch.gyro, batch.accel,
+                                   angular_velocity_covariance=av_cov,
+                                   linear_acceleration_covariance=la_cov, log_ns=batch.log_ns)
+            self.written_imu += len(raws)
+        if self._temperature_sub is not None:
+            raws, received, sequence = take_all(self._temperature_sub, Temperature)
+            if raws:
+                self.received_temperature += len(raws)
+                self._temperature_gaps.update(sequence)
+                stamp_ns, temperature_c = decode_temperature(raws)
+                self._pending_temperature.append((stamp_ns, temperature_c,
+                                                  _log_times(received, stamp_ns)))
+            if self._writer is not None and self._pending_temperature:
+                for stamp_ns, temperature_c, log_ns in self._pending_temperature:
+                    self._writer.write_temperature(stamp_ns, temperature_c, log_ns=log_ns)
+                    self.written_temperature += len(stamp_ns)
+                self._pending_temperature = []
+
+    def _report(self):
+        self.get_logger().info(f'{self.written_imu} Imu, {self.written_temperature} Temperature '
+                               f'written; {self.dropped} dropped in transport')
+
+    def close(self):
+        """Drain once more, close the bag and return the summary line (idempotent)."""
+        if not self._closed:
+            try:
+                self.drain()
+            finally:
+                self._closed = True
+                if self._writer is not None:
+                    self._writer.close()
+        where = self.output if self._writer is not None else f'{self.output} (not created: no Imu received)'
+        return (f'{NODE_NAME}: received {self.received_imu} Imu and {self.received_temperature} '
+                f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} to '
+                f'{where}; {self.dropped} dropped in transport')
+
+    def destroy_node(self):
+        summary = self.close()
+        print(summary, file=sys.stderr, flush=True)
+        return super().destroy_node()
+
+
+def _never_called(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
+    raise AssertionError('polled subscriptions are drained by the node, not by the executor')
+
+
+def _log_times(received, fallback_ns):
+    """Receive times as int64 ns; the header stamps (``fallback_ns``) where the RMW gave none."""
+    log = np.asarray(received, dtype=np.int64)
+    if fallback_ns is not None and np.any(log == 0):
+        log = np.where(log == 0, fallback_ns, log)
+    elif fallback_ns is None and np.any(log == 0):
+        return None
+    return log
+
+
+def main(args=None):
+    """
+    Run the recorder until Ctrl-C or SIGTERM.
+
+    Parameters
+    ----------
+    args : list of str or None
+        Command line (``--ros-args -p output:=my_bag -p storage:=mcap``); None: ``sys.argv``.
+
+    Returns
+    -------
+    int
+        0, or 2 for a bad parameter, 3 when the bag cannot be created.
+    """
+    return run_node(RecorderNode, args, prog=NODE_NAME)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -35,7 +35,7 @@ loss biases it; the loss is reported beside it).
 """
 
 from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
 
 import numpy as np
@@ -211,10 +211,20 @@ class ChunkJob:
     identifier_key: tuple = field(repr=False)
 
 
-@dataclass(frozen=True)
+def _same(a, b):
+    """Equality that treats NaN as equal to NaN (results carry NaN for 'not identified')."""
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (a != a and b != b)
+    return a == b
+
+
+@dataclass(frozen=True, eq=False)
 class ChunkResult:
     """
     Per-chunk results of one axis (identical from the node and the offline tool for the same data).
+
+    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b`` is the
+    "same numbers" test between two runs.
 
     Attributes
     ----------
@@ -268,6 +278,15 @@ class ChunkResult:
     message: str = ''
     var_curve: np.ndarray = field(default=None, repr=False, compare=False)
     j_curve: np.ndarray = field(default=None, repr=False, compare=False)
+
+    def __eq__(self, other):
+        """Field-wise equality of the compared fields, NaN equal to NaN (curves are not compared)."""
+        if not isinstance(other, ChunkResult):
+            return NotImplemented
+        return all(_same(getattr(self, f.name), getattr(other, f.name))
+                   for f in fields(self) if f.compare)
+
+    __hash__ = None
 
 
 _NAN = float('nan')

@@ -128,7 +128,7 @@ def test_stale_and_worst_item_message():
     v = evaluate_health(s)
     assert v.level == 'STALE' and 'No complete chunk' in v.message and LEVEL_BYTE[v.level] == 3
     v = evaluate_health(summary(drift_dph=1.0), seconds_since_data=6.0)
-    assert v.level == 'STALE' and 'no data for 6.0 s' in v.message
+    assert v.level == 'STALE' and v.message == 'No data for 6.0 s.'
     assert evaluate_health(summary(), seconds_since_data=4.0).level == 'OK'
     v = evaluate_health(summary(drift_dph=0.03, out_of_order=3))
     assert v.level == 'WARN' and v.message.startswith('Offset drift')  # first of the worst items

@@ -1,0 +1,361 @@
+"""
+gyro_noise_import: convert the SD-card log files of one Portenta sequence into a rosbag2.
+
+Reads the files in (sequence, file index) order from their headers, streams them through the link
+decoder in constant memory, scales to SI with the configuration in force (file headers and ACK frames,
+or ``--gyro-fs-dps``/``--accel-fs-g`` which override both), and writes ``sensor_msgs/Imu`` (every
+sample) and ``sensor_msgs/Temperature`` (decimated to ``--temperature-rate-hz``) with
+:class:`gyro_noise_ros.bag.ImuBagWriter`. Corrupt regions are skipped and reported, never fatal.
+
+Time stamps come from the device clock (the 32-bit microsecond counter, unwrapped), anchored by
+``--start-time``:
+
+* ``auto`` (default): ``rtc`` when a header carries an RTC time, else ``zero``;
+* ``rtc``: the header's RTC time ``rtc_unix_s`` is the host time of the header's device time ``t_us``;
+* ``zero``: the first sample is stamped 0 s;
+* a number: UNIX time (s) of the first sample.
+
+Bag time (the storage's receive time) equals the header stamp.
+
+Example::
+
+    gyro_noise_import /media/sd/S001F*.GNL --out seq1_bag --storage mcap
+"""
+
+import argparse
+import os
+import shutil
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputDataError, ParameterError
+from ..link import lsm6dso32 as lsm
+from ..link.clock import Unwrapper
+from ..link.sdlog import SdLogReader
+from ._common import run_cli
+
+PROG = 'gyro_noise_import'
+#: LSM6DSO32 temperature sensor output data rate (datasheet: 52 Hz).
+TEMPERATURE_ODR_HZ = 52.0
+
+
+@dataclass(frozen=True)
+class ImportReport:
+    """
+    Outcome of :func:`import_logs`.
+
+    Attributes
+    ----------
+    bag : str
+    storage : str
+    files : tuple of sdlog.LogFileInfo
+    samples_written : int
+        Imu messages.
+    temperature_written : int
+        Temperature messages.
+    samples_lost : int
+        Counter gaps (including across files).
+    samples_flagged_lost : int
+        Part of the losses the board flagged.
+    crc_errors, resyncs, bytes_discarded, frames_truncated : int
+        Decoder counters.
+    corrupt_regions : tuple of sdlog.CorruptRegion
+    corrupt_region_count : int
+    missing_file_indices : tuple of int
+    sequence_id : int or None
+    first_stamp_ns, last_stamp_ns : int or None
+    time_jumps : int
+        Places where device time did not increase (stamps kept as the device said).
+    configurations : tuple of (int, int, float)
+        Distinct (gyro_fs_dps, accel_fs_g, odr_hz) used for scaling, in order of appearance.
+    epoch : str
+        How stamps were anchored.
+    """
+
+    bag: str
+    storage: str
+    files: tuple
+    samples_written: int
+    temperature_written: int
+    samples_lost: int
+    samples_flagged_lost: int
+    crc_errors: int
+    resyncs: int
+    bytes_discarded: int
+    frames_truncated: int
+    corrupt_regions: tuple
+    corrupt_region_count: int
+    missing_file_indices: tuple
+    sequence_id: object
+    first_stamp_ns: object
+    last_stamp_ns: object
+    time_jumps: int
+    configurations: tuple
+    epoch: str
+
+
+def _topic(name):
+    name = str(name)
+    if not name or any(c.isspace() for c in name):
+        raise ParameterError(f'topic must be a non-empty name without spaces, got {name!r}')
+    return name if name.startswith('/') else '/' + name
+
+
+def _anchor(start_time, reader):
+    """Return (epoch description, function(first_t_us_unwrapped, headers) -> offset) pieces."""
+    heads = [f.header for f in reader.files if f.header is not None]
+    rtc_head = next((h for h in heads if h.rtc_unix_s), None)
+    mode = start_time
+    if mode == 'auto':
+        mode = 'rtc' if rtc_head is not None else 'zero'
+    if mode == 'rtc':
+        if rtc_head is None:
+            raise ParameterError("--start-time rtc: no log header carries an RTC time (rtc_unix_s = 0)")
+        return 'rtc', rtc_head
+    if mode == 'zero':
+        return 'zero', None
+    try:
+        value = float(mode)
+    except ValueError as err:
+        raise ParameterError(f"--start-time must be auto, rtc, zero or UNIX seconds, got {start_time!r}") from err
+    if not np.isfinite(value) or value < 0:
+        raise ParameterError(f'--start-time must be >= 0 UNIX seconds, got {start_time!r}')
+    return f'unix:{value!r}', value
+
+
+def import_logs(paths, out, *, storage='sqlite3', topic='imu/data_raw', temperature_topic='imu/temperature',
+                frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
+                temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
+                linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20):
+    """
+    Convert SD log files of one sequence to a rosbag2.
+
+    Parameters
+    ----------
+    paths : sequence of str
+        Log files (any order).
+    out : str
+        Bag directory to create (must not exist).
+    storage : {'sqlite3', 'mcap'}, keyword-only
+    topic, temperature_topic : str, keyword-only
+        Topic names (a leading '/' is added).
+    frame_id : str, keyword-only
+    gyro_fs_dps, accel_fs_g : int, optional, keyword-only
+        Force the scaling (deg/s, g), ignoring headers and acks.
+    start_time : str, keyword-only
+        'auto', 'rtc', 'zero' or UNIX seconds of the first sample (see the module docstring).
+    temperature_rate_hz : float, keyword-only
+        Temperature messages per second of data (Hz); 0 writes none.
+    angular_velocity_variance : float, keyword-only
+        Diagonal of the Imu angular velocity covariance ((rad/s)^2; 0 = unknown).
+    linear_acceleration_variance : float, keyword-only
+        Diagonal of the linear acceleration covariance ((m/s^2)^2; 0 = unknown).
+    temperature_variance : float, keyword-only
+        Temperature variance (degC^2; 0 = unknown).
+    chunk_bytes : int, keyword-only
+        Read size (bytes).
+
+    Returns
+    -------
+    ImportReport
+    """
+    from ..bag import ImuBagWriter
+
+    if gyro_fs_dps is not None:
+        gyro_fs_dps = lsm.check_gyro_fs(gyro_fs_dps)
+    if accel_fs_g is not None:
+        accel_fs_g = lsm.check_accel_fs(accel_fs_g)
+    for name, value in (('angular_velocity_variance', angular_velocity_variance),
+                        ('linear_acceleration_variance', linear_acceleration_variance),
+                        ('temperature_variance', temperature_variance), ('temperature_rate_hz', temperature_rate_hz)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ParameterError(f'{name} must be finite and >= 0, got {value}')
+    imu_topic = _topic(topic)
+    temp_topic = _topic(temperature_topic) if temperature_rate_hz > 0 else None
+    out = os.fspath(out)
+    if os.path.exists(out):
+        raise ParameterError(f'--out {out!r} exists; choose a new bag directory')
+    reader = SdLogReader(paths, chunk_bytes=chunk_bytes)
+    heads = [f.header for f in reader.files if f.header is not None]
+    if not heads and (gyro_fs_dps is None or accel_fs_g is None):
+        raise InputDataError('no readable log header in the files: give --gyro-fs-dps and --accel-fs-g')
+    epoch, anchor = _anchor(start_time, reader)
+    # until a header or an ack says otherwise, the first readable header's configuration holds (the
+    # device cannot change it without writing an ACK frame)
+    assumed = (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads else (None, None, None)
+    av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
+    la_cov = np.diag([linear_acceleration_variance] * 3).reshape(9)
+    unwrap = Unwrapper()
+    offset_ns = None
+    first = last = None
+    jumps = 0
+    prev_t = None
+    temp_acc = 0.0
+    configs = []
+    written = temp_written = 0
+    with ImuBagWriter(out, storage=storage, imu_topic=imu_topic, temperature_topic=temp_topic,
+                      frame_id=frame_id) as writer:
+        for block in reader:
+            if block.samples.size == 0:
+                continue
+            odr = block.odr_hz if block.odr_hz is not None else assumed[0]
+            gfs = gyro_fs_dps if gyro_fs_dps is not None else (block.gyro_fs_dps or assumed[1])
+            afs = accel_fs_g if accel_fs_g is not None else (block.accel_fs_g or assumed[2])
+            if (gfs, afs, odr) not in configs:
+                configs.append((gfs, afs, odr))
+            t = unwrap.unwrap(block.samples['t_us'])
+            if offset_ns is None:
+                if epoch == 'rtc':
+                    # rtc_unix_s is the host time of the header's t_us; unwrap that t_us next to ours
+                    d = (int(anchor.t_us) - int(block.samples['t_us'][0])) % (1 << 32)
+                    if d >= 1 << 31:
+                        d -= 1 << 32
+                    offset_ns = anchor.rtc_unix_s * 1_000_000_000 - (int(t[0]) + d) * 1000
+                elif epoch == 'zero':
+                    offset_ns = -int(t[0]) * 1000
+                else:
+                    offset_ns = int(round(anchor * 1e9)) - int(t[0]) * 1000
+            stamps = t * 1000 + offset_ns
+            steps = np.diff(t, prepend=t[0] if prev_t is None else prev_t)
+            if prev_t is None:
+                steps[0] = 1
+            jumps += int(np.count_nonzero(steps <= 0))
+            prev_t = int(t[-1])
+            si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
+            writer.write_imu(stamps, si.gyro_rad_s, si.accel_m_s2, angular_velocity_covariance=av_cov,
+                             linear_acceleration_covariance=la_cov)
+            written += block.samples.size
+            if temp_topic is not None and odr:
+                # a running phase keeps the decimation even across blocks and ODR changes
+                phase = temp_acc + np.arange(1, block.samples.size + 1) * (temperature_rate_hz / odr)
+                pick = np.flatnonzero(np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
+                temp_acc = float(phase[-1]) % 1.0
+                if pick.size:
+                    writer.write_temperature(stamps[pick], si.temperature_c[pick], variance=temperature_variance)
+                    temp_written += pick.size
+            if first is None:
+                first = int(stamps[0])
+            last = int(stamps[-1])
+    rep = reader.report
+    if written == 0:
+        shutil.rmtree(out, ignore_errors=True)
+        raise InputDataError(f'no valid samples in {len(reader.files)} log file(s) '
+                             f'({rep.stats.bytes_discarded} bytes discarded)')
+    st = rep.stats
+    return ImportReport(bag=out, storage=storage, files=rep.files, samples_written=written,
+                        temperature_written=temp_written, samples_lost=st.samples_lost,
+                        samples_flagged_lost=st.samples_flagged_lost, crc_errors=st.crc_errors, resyncs=st.resyncs,
+                        bytes_discarded=st.bytes_discarded, frames_truncated=st.frames_truncated,
+                        corrupt_regions=rep.corrupt_regions, corrupt_region_count=rep.corrupt_region_count,
+                        missing_file_indices=rep.missing_file_indices, sequence_id=rep.sequence_id,
+                        first_stamp_ns=first, last_stamp_ns=last, time_jumps=jumps, configurations=tuple(configs),
+                        epoch=epoch)
+
+
+def format_report(rep, *, max_regions=20):
+    """
+    Return the human-readable import report.
+
+    Parameters
+    ----------
+    rep : ImportReport
+    max_regions : int, keyword-only
+        Corrupt regions listed (all are counted).
+
+    Returns
+    -------
+    str
+    """
+    lines = [f'{PROG}: sequence {rep.sequence_id}, {len(rep.files)} file(s) -> {rep.bag} ({rep.storage})']
+    for info in rep.files:
+        head = info.header
+        desc = (f'file {head.file_index}, first seq {head.first_seq}' if head is not None else 'header unreadable')
+        lines.append(f'  {os.path.basename(info.path)}  {info.size_bytes} bytes  {desc}')
+    total = rep.samples_written + rep.samples_lost
+    pct = 100.0 * rep.samples_lost / total if total else 0.0
+    span = (rep.last_stamp_ns - rep.first_stamp_ns) / 1e9
+    lines += [
+        f'samples written        {rep.samples_written}',
+        f'samples lost           {rep.samples_lost} ({pct:.4f} %; {rep.samples_flagged_lost} flagged by the board)',
+        f'temperature messages   {rep.temperature_written}',
+        f'CRC errors             {rep.crc_errors}',
+        f'resyncs                {rep.resyncs}',
+        f'bytes discarded        {rep.bytes_discarded}',
+        f'truncated frames       {rep.frames_truncated}',
+        f'time jumps             {rep.time_jumps}',
+        f'missing files          {", ".join(map(str, rep.missing_file_indices)) or "none"}',
+        f'stamps                 {rep.first_stamp_ns / 1e9:.6f} s .. {rep.last_stamp_ns / 1e9:.6f} s '
+        f'({span:.3f} s, epoch {rep.epoch})',
+        'scaling                ' + '; '.join(f'gyro +/-{g} dps, accel +/-{a} g, ODR {o} Hz'
+                                              for g, a, o in rep.configurations),
+        f'corrupt regions        {rep.corrupt_region_count}',
+    ]
+    for region in rep.corrupt_regions[:max_regions]:
+        lines.append(f'  {os.path.basename(region.path)} @ {region.offset} (+{region.length} bytes)')
+    if rep.corrupt_region_count > max_regions:
+        lines.append(f'  ... {rep.corrupt_region_count - max_regions} more')
+    return '\n'.join(lines)
+
+
+def build_parser():
+    """
+    Return the argument parser of gyro_noise_import.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument('logs', nargs='+', metavar='LOG', help='SD log files of one sequence')
+    p.add_argument('--out', required=True, help='bag directory to create')
+    p.add_argument('--storage', choices=('sqlite3', 'mcap'), default='sqlite3')
+    p.add_argument('--topic', default='imu/data_raw', help='Imu topic')
+    p.add_argument('--temperature-topic', default='imu/temperature', help='Temperature topic')
+    p.add_argument('--frame-id', default='imu_link')
+    p.add_argument('--gyro-fs-dps', type=int, help='force the gyro full scale (deg/s)')
+    p.add_argument('--accel-fs-g', type=int, help='force the accelerometer full scale (g)')
+    p.add_argument('--start-time', default='auto', help='auto, rtc, zero, or UNIX seconds of the first sample')
+    p.add_argument('--temperature-rate-hz', type=float, default=TEMPERATURE_ODR_HZ,
+                   help='Temperature messages per second (0: none)')
+    p.add_argument('--angular-velocity-variance', type=float, default=0.0, help='(rad/s)^2, 0 = unknown')
+    p.add_argument('--linear-acceleration-variance', type=float, default=0.0, help='(m/s^2)^2, 0 = unknown')
+    p.add_argument('--temperature-variance', type=float, default=0.0, help='degC^2, 0 = unknown')
+    p.add_argument('--chunk-bytes', type=int, default=1 << 20, help='read size (bytes)')
+    return p
+
+
+def _body(argv):
+    args = build_parser().parse_args(argv)
+    rep = import_logs(args.logs, args.out, storage=args.storage, topic=args.topic,
+                      temperature_topic=args.temperature_topic, frame_id=args.frame_id, gyro_fs_dps=args.gyro_fs_dps,
+                      accel_fs_g=args.accel_fs_g, start_time=args.start_time,
+                      temperature_rate_hz=args.temperature_rate_hz,
+                      angular_velocity_variance=args.angular_velocity_variance,
+                      linear_acceleration_variance=args.linear_acceleration_variance,
+                      temperature_variance=args.temperature_variance, chunk_bytes=args.chunk_bytes)
+    print(format_report(rep), flush=True)
+    return 0
+
+
+def main(argv=None):
+    """
+    Run gyro_noise_import.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name.
+
+    Returns
+    -------
+    int
+        Exit status (0 also when corrupt regions were skipped).
+    """
+    return run_cli(PROG, _body, argv)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

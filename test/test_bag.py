@@ -356,6 +356,8 @@ def test_writer_round_trip_and_rosbags_reads_it(tmp_path, storage):
                          log_ns=int(stamps[999]) + 11)  # single message, scalar stamp
         writer.write_temperature(stamps[::100], np.linspace(20, 30, 10), variance=0.01)
     assert (writer.imu_count, writer.temperature_count) == (1000, 10)
+    assert list_topics(path) == [TopicInfo('/imu/data_raw', IMU_MSGTYPE, 1000),
+                                 TopicInfo('/imu/temperature', TEMPERATURE_MSGTYPE, 10)]
     with ImuBagReader(path) as reader:
         s, lg, g, a = concat(list(reader.iter_batches()))
         assert reader.iter_batches().__next__().frame_id == 'board'
@@ -581,3 +583,45 @@ def test_block_readers_yield_rosbags_order(tmp_path, storage_kind, pattern):
     np.testing.assert_array_equal(lg, log[order])
     np.testing.assert_array_equal(s, stamps[order])
     assert_same_floats(g, gyro[order])
+
+
+def test_flush_leaves_a_readable_db3_behind(tmp_path):
+    import shutil
+
+    stamps, gyro, accel = sample_data(np.random.default_rng(12), 100)
+    writer = ImuBagWriter(tmp_path / 'live', storage='sqlite3')
+    try:
+        writer.write_imu(stamps[:60], gyro[:60], accel[:60])
+        writer.flush()
+        writer.write_imu(stamps[60:], gyro[60:], accel[60:])  # not flushed: lost in a crash
+        (db3,) = (tmp_path / 'live').glob('*.db3')
+        shutil.copy(db3, tmp_path / 'crashed.db3')  # what a killed recorder leaves on disk
+    finally:
+        writer.close()
+    with ImuBagReader(tmp_path / 'crashed.db3') as reader:
+        np.testing.assert_array_equal(concat(list(reader.iter_batches()))[0], stamps[:60])
+
+
+def test_db3_with_hot_journal_is_refused_with_advice(tmp_path):
+    import sqlite3
+    import subprocess
+    import sys
+
+    stamps, gyro, accel = sample_data(np.random.default_rng(13), 10)
+    with ImuBagWriter(tmp_path / 'b', storage='sqlite3') as writer:
+        writer.write_imu(stamps, gyro, accel)
+    (db3,) = (tmp_path / 'b').glob('*.db3')
+    # Simulate a writer killed mid-transaction: a child process modifies the file and dies
+    # without committing, leaving its rollback journal behind.
+    code = ('import os, sqlite3; c = sqlite3.connect(%r); c.execute("PRAGMA cache_size=1");'
+            'c.execute("BEGIN"); c.executemany("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?, ?)",'
+            ' ((i, bytes(4000)) for i in range(2000))); os._exit(0)') % str(db3)
+    subprocess.run([sys.executable, '-c', code], check=True, timeout=60)
+    assert db3.with_name(db3.name + '-journal').exists()
+    with pytest.raises(BagError, match='unfinished transaction') as info:
+        ImuBagReader(db3)
+    advice = str(info.value).split('back first: ')[1]
+    subprocess.run(advice, shell=True, check=True, timeout=60)  # the advice given really works
+    with ImuBagReader(db3) as reader:
+        np.testing.assert_array_equal(concat(list(reader.iter_batches()))[0], stamps)
+    assert sqlite3.connect(db3).execute('SELECT count(*) FROM messages').fetchone() == (10,)

@@ -607,6 +607,25 @@ class ImuBagWriter:
         self._write(self._temperature_conn, logs, blobs)
         self.temperature_count += len(blobs)
 
+    def flush(self):
+        """
+        Make what was written so far survive a crash of this process (sqlite3 storage).
+
+        rosbags keeps one sqlite3 transaction open until :meth:`close`; committing it lets a killed
+        recorder leave a ``.db3`` that :class:`ImuBagReader` reads directly (``metadata.yaml`` is
+        written by :meth:`close` only). MCAP files get their index only at :meth:`close`, so this is a
+        no-op for them. Costs one fsync-free commit; call it every few seconds, not per message.
+        """
+        writer = self._writer
+        if writer is None:
+            raise BagError(f'bag {str(self.path)!r} is closed')
+        conn = getattr(writer.storage, 'conn', None)
+        if self.storage == 'sqlite3' and conn is not None:
+            try:
+                conn.commit()
+            except Exception as err:  # noqa: BLE001
+                raise BagError(f'bag {str(self.path)!r}: commit failed: {describe(err)}') from err
+
     def close(self):
         """Finish the bag: write its index and ``metadata.yaml`` (idempotent)."""
         writer, self._writer = self._writer, None

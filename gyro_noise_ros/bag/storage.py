@@ -76,6 +76,13 @@ def _resolve(path):
     if kind is None:
         raise BagError(f'file {str(path)!r} is not a bag (expected a rosbag2 directory, a .db3 or .mcap '
                        'file, or a ROS 1 .bag file)')
+    journal = path.with_name(path.name + '-journal')
+    if kind == 'sqlite3' and journal.exists() and journal.stat().st_size > 0:
+        # A writer died mid-transaction; rosbags opens the file immutable and would ignore the
+        # rollback journal, reading half-written pages.
+        raise BagError(f'sqlite3 file {str(path)!r} has an unfinished transaction ({journal.name}); roll it '
+                       f'back first: python3 -c "import sqlite3; sqlite3.connect({str(path)!r}).execute('
+                       "'PRAGMA integrity_check').fetchall()\"")
     if _SUFFIX.get(path.suffix) != kind:
         raise BagError(f'file {str(path)!r} holds {kind} data but its suffix is {path.suffix!r}; '
                        f'rename it to end in {dict(zip(_SUFFIX.values(), _SUFFIX))[kind]}')

@@ -339,7 +339,13 @@ class NoiseAnalyzerNode(Node):
             raws, _, _ = take_all(self._temperature_sub, Temperature)
             if raws:
                 stamp_ns, temperature_c = decode_temperature(raws)
-                self._temperature = (stamp_ns, temperature_c)
+                if self._temperature is not None:
+                    # Keep the previous latest message so samples between the two batches are
+                    # interpolated, as the offline tool does over the whole bag.
+                    stamp_ns = np.concatenate((self._temperature[0][-1:], stamp_ns))
+                    temperature_c = np.concatenate((self._temperature[1][-1:], temperature_c))
+                order = np.argsort(stamp_ns, kind='stable')
+                self._temperature = (stamp_ns[order], temperature_c[order])
         raws, _, sequence = take_all(self._imu_sub, Imu)
         if raws:
             self._ingest(raws, sequence)
@@ -373,8 +379,8 @@ class NoiseAnalyzerNode(Node):
         t_stamp, t_value = self._temperature
         if t_stamp.size == 1:
             return float(t_value[0])
-        # Linear between the latest temperature messages, held constant outside them: the sensor's
-        # temperature moves over minutes, its messages arrive every few ms.
+        # Linear between temperature messages, held constant after the latest (the offline tool,
+        # which sees the whole bag, interpolates towards the next one there instead).
         return np.interp(stamp_ns.astype(np.float64), t_stamp.astype(np.float64), t_value)
 
     def _collect(self):
@@ -472,7 +478,7 @@ class NoiseAnalyzerNode(Node):
                     ('Last chunk samples lost', str(last.samples_lost)),
                     ('Temperature (degC)', _fmt(last.temperature_c, 4)),
                 ]
-            values += self._allan_keys.get(axis, [])
+            values += self._allan_keys.get(axis) or allan_values(None)
             values += [
                 ('Samples received', str(counts.samples)),
                 ('Sample rate (Hz)', _fmt(counts.rate_hz, 6)),
@@ -504,34 +510,44 @@ class NoiseAnalyzerNode(Node):
 
 def allan_values(summary):
     """
-    Diagnostic key/values of an axis' Allan deviation (ADEV at 1 s, noise terms when fitted).
+    Diagnostic key/values of an axis' Allan deviation: ADEV at 1 s, its minimum, fitted noise terms.
 
     Parameters
     ----------
-    summary : AxisSummary
-        With ``allan`` (and possibly ``noise_terms``) filled in.
+    summary : AxisSummary or None
+        With ``allan`` (and possibly ``noise_terms``) filled in; None or no Allan result gives
+        ``'n/a'`` values (the keys stay, so dashboards see a stable set).
 
     Returns
     -------
     list of (str, str)
     """
-    result = summary.allan
-    if result is None:
-        return []
-    tau = np.asarray(getattr(result, 'tau_s', ()), dtype=np.float64)
-    adev = np.asarray(getattr(result, 'adev', ()), dtype=np.float64)
-    out = []
-    if tau.size:
-        # ADEV at exactly 1 s only if a computed tau brackets it; interpolate in log-log (ADEV is a
-        # power law between neighbouring octaves).
-        if tau[0] <= 1.0 <= tau[-1] and tau.size > 1:
-            value = float(np.exp(np.interp(0.0, np.log(tau), np.log(adev))))
-            out.append(('ADEV at 1 s (deg/s)', _fmt(value * _DEG)))
-        i = int(np.nanargmin(adev)) if np.isfinite(adev).any() else None
-        if i is not None:
-            out.append(('ADEV minimum (deg/s)', _fmt(adev[i] * _DEG)))
-            out.append(('ADEV minimum at tau (s)', _fmt(tau[i])))
-    return out
+    out = {'ADEV at 1 s (deg/s)': 'n/a', 'ADEV minimum (deg/s)': 'n/a', 'ADEV minimum at tau (s)': 'n/a',
+           'Angle random walk (deg/sqrt(h))': 'n/a', 'Bias instability (deg/h)': 'n/a'}
+    result = None if summary is None else summary.allan
+    if result is not None:
+        tau = np.asarray(result.tau_s, dtype=np.float64)
+        adev = np.asarray(result.adev, dtype=np.float64)
+        good = np.isfinite(adev) & (adev > 0)
+        tau, adev = tau[good], adev[good]
+        # Octave taus rarely hit 1 s exactly: interpolate in log-log (ADEV is a power law between
+        # neighbouring octaves); no extrapolation, so 'n/a' until the run is 4 s long (tau <= N/4).
+        if tau.size > 1 and tau[0] <= 1.0 <= tau[-1]:
+            out['ADEV at 1 s (deg/s)'] = _fmt(float(np.exp(np.interp(0.0, np.log(tau), np.log(adev))))
+                                              * _DEG)
+        if tau.size:
+            i = int(np.argmin(adev))
+            out['ADEV minimum (deg/s)'] = _fmt(adev[i] * _DEG)
+            out['ADEV minimum at tau (s)'] = _fmt(tau[i])
+    terms = None if summary is None else summary.noise_terms
+    if terms is not None:
+        try:
+            customary = terms.customary()
+            out['Angle random walk (deg/sqrt(h))'] = _fmt(customary.angle_random_walk_deg_per_sqrt_h)
+            out['Bias instability (deg/h)'] = _fmt(customary.bias_instability_deg_per_h)
+        except (AttributeError, TypeError, ValueError):
+            pass
+    return list(out.items())
 
 
 def _never_called(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it

@@ -1,0 +1,139 @@
+"""
+``gyro_noise_record`` as a real process: loss-free at 6.66 kHz, clean close on SIGINT and SIGTERM.
+
+The replayer of ``test/test_analyzer_e2e.py`` publishes seeded samples in real time; the recorder writes
+them; after the signal the bag is read back with :class:`gyro_noise_ros.bag.ImuBagReader` and compared
+with what was published: the same count (nothing lost, nothing twice), the same stamps and values.
+"""
+
+import random
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gyro_noise_ros.bag import ImuBagReader, list_topics
+from gyro_noise_ros.nodes.recorder import SequenceGapCounter, default_bag_name, imu_covariances
+from test_analyzer_e2e import RATE_HZ, ros_env, start_replayer
+
+pytestmark = pytest.mark.ros
+
+
+def _expected(samples, seed, sigma=0.004):
+    # Mirrors the replayer's generator (test_analyzer_e2e._publish_main) for the default options.
+    rng = np.random.default_rng(seed)
+    index = np.arange(samples, dtype=np.int64)
+    stamps = 1_700_000_000_000_000_000 + np.rint(index * (1e9 / RATE_HZ)).astype(np.int64)
+    return stamps, rng.standard_normal((samples, 3)) * sigma
+
+
+def _record(tmp_path, samples, seed, sig, storage):
+    domain = random.randint(100, 200)
+    out = tmp_path / f'bag_{storage}'
+    rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                            '-p', f'output:={out}', '-p', f'storage:={storage}'],
+                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # The replayer waits for the recorder's Imu subscription, publishes in real time at 6.66 kHz
+    # and lingers 1 s, so the recorder has taken everything before the signal.
+    rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1)
+    try:
+        rep_out, rep_err = rep.communicate(timeout=120)
+        assert rep.returncode == 0, rep_err
+        rec.send_signal(sig)
+        rec_out, rec_err = rec.communicate(timeout=30)
+    finally:
+        for p in (rep, rec):
+            if p.poll() is None:
+                p.kill()
+                p.communicate()
+    return out, rec.returncode, rec_err
+
+
+@pytest.mark.timeout(180)
+@pytest.mark.parametrize('sig, storage', [(signal.SIGINT, 'sqlite3'), (signal.SIGTERM, 'mcap')],
+                         ids=['sigint-sqlite3', 'sigterm-mcap'])
+def test_records_every_message_at_6660_hz(tmp_path, sig, storage):
+    samples = 20000  # 3 s at 6.66 kHz
+    out, rc, err = _record(tmp_path, samples, seed=7, sig=sig, storage=storage)
+    assert rc == 0, err
+    summary = [line for line in err.splitlines() if line.startswith('gyro_noise_record: received')]
+    assert summary, err
+    assert f'received {samples} Imu' in summary[0] and f'wrote {samples} and' in summary[0], summary[0]
+    assert '0 dropped' in summary[0]
+
+    topics = {t.name: t for t in list_topics(out)}
+    assert topics['/imu/data_raw'].count == samples
+    # One temperature message per 128 samples (replayer default), recorded too.
+    assert topics['/imu/temperature'].count == len(range(0, samples, 128))
+    stamps, gyro = _expected(samples, seed=7)
+    with ImuBagReader(out) as reader:
+        batches = list(reader.iter_batches(100000))
+        temps = reader.read_temperature()
+    got_stamps = np.concatenate([b.stamp_ns for b in batches])
+    got_gyro = np.concatenate([b.gyro for b in batches])
+    np.testing.assert_array_equal(got_stamps, stamps)
+    np.testing.assert_array_equal(got_gyro, gyro)
+    assert batches[0].frame_id == 'imu_link'
+    np.testing.assert_array_equal(temps[1], 25.0 + 0.001 * np.arange(0, samples, 128))
+
+
+def test_refuses_an_existing_output(tmp_path):
+    env = ros_env(random.randint(100, 200))
+    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                           '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 3
+    lines = done.stderr.strip().splitlines()
+    assert lines[-1].startswith('gyro_noise_record: error:') and 'exists' in lines[-1], done.stderr
+    assert 'Traceback' not in done.stderr
+
+
+def test_refuses_an_unknown_storage(tmp_path):
+    env = ros_env(random.randint(100, 200))
+    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                           '-p', f'output:={tmp_path / "b"}', '-p', 'storage:=zip'],
+                          env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert "parameter 'storage'" in done.stderr and 'Traceback' not in done.stderr
+
+
+def test_sequence_gap_counter():
+    c = SequenceGapCounter()
+    assert c.update([1, 2, 3]) == 0
+    assert c.update([5, 6]) == 1          # 4 missing
+    assert c.update([0, 0]) == 0          # no sequence numbers from the RMW: ignored
+    assert c.update([10, 11, 15]) == 6    # 7, 8, 9 and 12, 13, 14
+    assert c.update([1, 2]) == 0          # restarted publisher: a new run
+    assert c.missing == 7
+
+
+def test_imu_covariances_read_back_what_was_encoded():
+    from gyro_noise_ros.bag import encode_imu_cdr
+
+    rng = np.random.default_rng(0)
+    av = rng.random((4, 9))
+    la = rng.random((4, 9))
+    raws = encode_imu_cdr(np.arange(4), rng.random((4, 3)), rng.random((4, 3)), frame_id='f',
+                          angular_velocity_covariance=av, linear_acceleration_covariance=la)
+    got_av, got_la = imu_covariances(raws)
+    np.testing.assert_array_equal(got_av, av)
+    np.testing.assert_array_equal(got_la, la)
+    # Mixed lengths (two frame_ids) take the per-message path.
+    raws2 = raws[:2] + encode_imu_cdr(np.arange(2), rng.random((2, 3)), rng.random((2, 3)),
+                                      frame_id='longer_frame', angular_velocity_covariance=av[2:],
+                                      linear_acceleration_covariance=la[2:])
+    got_av, got_la = imu_covariances(raws2)
+    np.testing.assert_array_equal(got_av, av)
+    np.testing.assert_array_equal(got_la, la)
+
+
+def test_default_bag_name():
+    from datetime import datetime, timezone
+
+    assert default_bag_name(datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)) == 'gyro_noise_20260102_030405'
+
+
+if __name__ == '__main__':
+    sys.exit(pytest.main([__file__, *sys.argv[1:]]))
+

@@ -1,0 +1,195 @@
+"""
+Property-based fuzzing of the link decoder (hypothesis): whatever the bytes, feed() never raises; every
+valid frame is recovered; counters are exact against what was injected.
+
+The expected counters come from a plain-Python twin of the counter rules (gap = (seq - prev) mod 2**32
+- 1, backward jumps and duplicates excluded), not from the decoder.
+"""
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from gyro_noise_ros.link import protocol as p
+
+SETTINGS = dict(deadline=None, max_examples=150, database=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def expected_counts(seqs, flags):
+    """Twin of the decoder's counter rules over the delivered sample sequence."""
+    lost = flagged = 0
+    prev = None
+    for seq, flag in zip(seqs, flags):
+        if prev is not None:
+            gap = (seq - prev) % 2 ** 32
+            if 0 < gap < 2 ** 31:
+                lost += gap - 1
+                if flag & p.FLAG_SAMPLE_LOST:
+                    flagged += gap - 1
+        prev = seq
+    return lost, flagged
+
+
+@st.composite
+def frame_streams(draw, max_frames=8):
+    """A list of (frame bytes, samples) with increasing seq (random gaps) starting anywhere, maybe wrapping."""
+    start = draw(st.one_of(st.integers(0, 2 ** 32 - 1), st.integers(2 ** 32 - 300, 2 ** 32 - 1)))
+    nframes = draw(st.integers(1, max_frames))
+    frames = []
+    seq = start
+    for _ in range(nframes):
+        if draw(st.integers(0, 5)) == 0:
+            ack = p.Ack(command_id=draw(st.integers(0, 2 ** 32 - 1)), ok=draw(st.booleans()), odr_hz=6667.0,
+                        gyro_fs_dps=2000, accel_fs_g=4, message=draw(st.text('abc xyz', max_size=10)),
+                        status=draw(st.integers(0, 255)))
+            frames.append((p.encode_ack(ack), None))
+            continue
+        n = draw(st.integers(1, 6))
+        s = np.zeros(n, p.SAMPLE_DTYPE)
+        seqs = []
+        for _ in range(n):
+            seqs.append(seq % 2 ** 32)
+            seq += 1 + draw(st.sampled_from([0, 0, 0, 1, 7]))
+        s['seq'] = seqs
+        s['t_us'] = draw(st.integers(0, 2 ** 32 - 1))
+        # payload bytes from hypothesis: may contain A5 5A and other header look-alikes
+        s['gyro'] = np.array(draw(st.lists(st.integers(-32768, 32767), min_size=3 * n, max_size=3 * n))).reshape(n, 3)
+        s['flags'] = draw(st.lists(st.sampled_from([0, 0, p.FLAG_SAMPLE_LOST, p.FLAG_FIFO_OVERRUN, 3]),
+                                   min_size=n, max_size=n))
+        frames.append((p.encode_samples(s), s))
+    return frames
+
+
+def decode_all(chunks):
+    dec = p.Decoder()
+    results = [dec.feed(c) for c in chunks]
+    results.append(dec.flush())
+    samples = np.concatenate([r.samples for r in results])
+    acks = [a for r in results for a in r.acks]
+    return dec, samples, acks
+
+
+def all_samples(frames):
+    parts = [s for _, s in frames if s is not None]
+    return np.concatenate(parts) if parts else np.zeros(0, p.SAMPLE_DTYPE)
+
+
+@settings(**SETTINGS)
+@given(st.binary(max_size=3000))
+def test_random_bytes_never_raise_and_bytes_add_up(data):
+    dec = p.Decoder()
+    res = dec.feed(data)
+    fin = dec.flush()
+    stats = dec.stats
+    assert stats.bytes_total == len(data)
+    # every byte is either in a valid frame or discarded; random bytes make no valid frame
+    assert stats.frames_ok == 0 and stats.bytes_discarded == len(data)
+    assert res.samples.size == fin.samples.size == 0
+    assert stats.resyncs == (1 if data else 0)
+
+
+@settings(**SETTINGS)
+@given(frame_streams(), st.data())
+def test_split_into_random_pieces_recovers_everything(frames, data):
+    stream = b''.join(f for f, _ in frames)
+    cuts = sorted(data.draw(st.lists(st.integers(0, len(stream)), max_size=12)))
+    pieces = [stream[a:b] for a, b in zip([0] + cuts, cuts + [len(stream)])]
+    dec, samples, acks = decode_all(pieces)
+    expected = all_samples(frames)
+    assert np.array_equal(samples, expected)
+    assert len(acks) == sum(1 for _, s in frames if s is None)
+    st_ = dec.stats
+    lost, flagged = expected_counts(expected['seq'].tolist(), expected['flags'].tolist())
+    assert (st_.samples_lost, st_.samples_flagged_lost) == (lost, flagged)
+    assert (st_.frames_ok, st_.crc_errors, st_.bytes_discarded, st_.resyncs) == (len(frames), 0, 0, 0)
+
+
+@settings(**SETTINGS)
+@given(frame_streams(), st.data())
+def test_garbage_between_frames_is_discarded_exactly(frames, data):
+    pieces, garbage_total, segments = [], 0, 0
+    for frame, _ in frames:
+        junk = data.draw(st.binary(max_size=60))
+        pieces += [junk, frame]
+        garbage_total += len(junk)
+        segments += bool(junk)
+    tail = data.draw(st.binary(max_size=60))
+    pieces.append(tail)
+    garbage_total += len(tail)
+    segments += bool(tail)
+    dec, samples, _ = decode_all([b''.join(pieces)])
+    assert np.array_equal(samples, all_samples(frames))
+    assert dec.stats.bytes_discarded == garbage_total
+    assert dec.stats.resyncs == segments
+    assert dec.stats.frames_ok == len(frames)
+
+
+@settings(**SETTINGS)
+@given(frame_streams(), st.data())
+def test_garbage_without_sync_byte_gives_no_crc_error(frames, data):
+    no_sync = st.binary(max_size=40).map(lambda b: b.replace(b'\xa5', b'\x00'))
+    stream = b''.join(data.draw(no_sync) + f for f, _ in frames)
+    dec, samples, _ = decode_all([stream])
+    assert np.array_equal(samples, all_samples(frames))
+    assert dec.stats.crc_errors == 0
+
+
+@settings(deadline=None, max_examples=40, database=None)
+@given(frame_streams(max_frames=4))
+def test_truncation_at_every_byte(frames):
+    stream = b''.join(f for f, _ in frames)
+    ends = np.cumsum([len(f) for f, _ in frames])
+    for cut in range(len(stream) + 1):
+        complete = int(np.searchsorted(ends, cut, side='right'))
+        dec, samples, _ = decode_all([stream[:cut]])
+        assert np.array_equal(samples, all_samples(frames[:complete]))
+        kept = int(ends[complete - 1]) if complete else 0
+        assert dec.stats.bytes_discarded == cut - kept
+        # a cut frame of two bytes or more starts with a valid sync and header prefix: counted as truncated
+        if cut - kept >= 2:
+            assert dec.stats.frames_truncated >= 1
+        else:
+            assert dec.stats.frames_truncated == 0
+
+
+@settings(**SETTINGS)
+@given(frame_streams(max_frames=6), st.data())
+def test_single_bit_flip_loses_exactly_that_frame(frames, data):
+    victim = data.draw(st.integers(0, len(frames) - 1))
+    frame = bytearray(frames[victim][0])
+    bit = data.draw(st.integers(0, 8 * len(frame) - 1))
+    frame[bit // 8] ^= 1 << (bit % 8)
+    stream = b''.join(bytes(frame) if i == victim else f for i, (f, _) in enumerate(frames))
+    dec, samples, _ = decode_all([stream[i:i + 37] for i in range(0, len(stream), 37)])
+    survivors = [(f, s) for i, (f, s) in enumerate(frames) if i != victim]
+    expected = all_samples(survivors)
+    assert np.array_equal(samples, expected)
+    stats = dec.stats
+    assert stats.bytes_discarded == len(frame)
+    assert stats.resyncs == 1
+    assert stats.frames_ok == len(frames) - 1
+    lost, flagged = expected_counts(expected['seq'].tolist(), expected['flags'].tolist())
+    assert (stats.samples_lost, stats.samples_flagged_lost) == (lost, flagged)
+
+
+@settings(**SETTINGS)
+@given(st.integers(2 ** 32 - 2000, 2 ** 32 - 1), st.lists(st.booleans(), min_size=50, max_size=400),
+       st.lists(st.booleans(), min_size=50, max_size=400))
+def test_counter_wrap_with_injected_drops_is_counted_exactly(start, keep_mask, flag_mask):
+    n = len(keep_mask)
+    seqs = (start + np.arange(n, dtype=np.uint64)) % 2 ** 32
+    keep = np.array(keep_mask)
+    keep[0] = keep[-1] = True  # losses are visible only between two delivered samples
+    s = np.zeros(n, p.SAMPLE_DTYPE)
+    s['seq'] = seqs
+    flags = np.zeros(n, np.uint8)
+    fm = np.resize(np.array(flag_mask), n)
+    flags[fm] = p.FLAG_SAMPLE_LOST
+    s['flags'] = flags
+    sent = s[keep]
+    dec, samples, _ = decode_all([p.encode_samples(sent[i:i + 16]) for i in range(0, sent.size, 16)])
+    assert np.array_equal(samples, sent)
+    assert dec.stats.samples_lost == int(n - keep.sum())
+    lost, flagged = expected_counts(sent['seq'].tolist(), sent['flags'].tolist())
+    assert dec.stats.samples_flagged_lost == flagged
+    assert lost == dec.stats.samples_lost

@@ -81,6 +81,8 @@ def build_parser():
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps ({DEFAULT_CURVES}; 0 = none)')
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
+    p.add_argument('--allan-taus', default='octave', choices=('octave', 'dense'),
+                   help='Allan averaging times: octave (1, 2, 4, ... samples) or dense (~10 per decade)')
     p.add_argument('--batch-size', type=int, default=DEFAULT_BATCH, metavar='N',
                    help=f'messages decoded per batch ({DEFAULT_BATCH})')
     p.add_argument('--quiet', action='store_true', help='print only errors')
@@ -380,7 +382,8 @@ def _body(argv):
         raise ParameterError(f'--batch-size must be >= 1, got {args.batch_size}')
     config = EngineConfig(chunk_size=args.chunk_size, axes=axes, alphas=alphas, memory=args.memory,
                           demean=not args.no_demean, max_lag=args.max_lag, rate_hz=args.rate_hz,
-                          gap_factor=args.gap_factor, gap_policy=args.gap_policy, allan=not args.no_allan)
+                          gap_factor=args.gap_factor, gap_policy=args.gap_policy, allan=not args.no_allan,
+                          allan_taus=args.allan_taus)
     jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
     doc = analyze_bags(args.bags, out_dir=args.out, labels=args.label, topic=args.topic,
                        temperature_topic=args.temperature_topic, config=config, jobs=jobs,

@@ -13,9 +13,11 @@ is split in three steps so that the caller decides where the heavy part runs:
    (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
 
 Stamps and gaps. The nominal sample period is ``1 / rate_hz``; when ``rate_hz`` is None it is the median
-step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). A step larger than
-``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples. A step <= 0 is an
-out-of-order (or repeated) stamp: counted, never reordered, never a gap. The ``gap_policy`` decides what a
+step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). Steps are taken
+from the latest stamp seen so far. A step larger than ``gap_factor`` nominal periods is a gap that lost
+``round(step / period) - 1`` samples. A step <= 0 is an out-of-order (or repeated) stamp: counted, never
+reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap
+(the hole is seen before the late sample arrives; the engine does not look back to fill it). The ``gap_policy`` decides what a
 gap does to the chunk it falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
@@ -84,6 +86,8 @@ class EngineConfig:
         What a gap does to its chunk (module doc).
     allan : bool
         Keep an incremental Allan deviation of the whole run.
+    allan_taus : {'octave', 'dense'}
+        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per decade).
     history_chunks : int
         Chunks kept per axis for the sequence statistics; 0 = all (a live node may bound it).
     """
@@ -98,6 +102,7 @@ class EngineConfig:
     gap_factor: float = 1.5
     gap_policy: str = 'flag'
     allan: bool = True
+    allan_taus: str = 'octave'
     history_chunks: int = 0
 
     def __post_init__(self):
@@ -111,6 +116,8 @@ class EngineConfig:
             raise ParameterError(f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
         if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ParameterError(f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
+        if self.allan_taus not in ('octave', 'dense'):
+            raise ParameterError(f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
         if int(self.history_chunks) < 0:
             raise ParameterError(f'history_chunks must be >= 0, got {self.history_chunks!r}')
         alphas = default_grid() if self.alphas is None else np.asarray(self.alphas, dtype=np.float64).ravel()
@@ -134,7 +141,8 @@ class EngineConfig:
                            'step': float(a[1] - a[0]) if a.size > 1 else 0.0, 'count': int(a.size)},
             'memory': int(self.memory), 'demean': bool(self.demean), 'max_lag': self.max_lag,
             'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor), 'gap_policy': self.gap_policy,
-            'allan': bool(self.allan), 'history_chunks': int(self.history_chunks)}
+            'allan': bool(self.allan), 'allan_taus': self.allan_taus,
+            'history_chunks': int(self.history_chunks)}
 
 
 @lru_cache(maxsize=8)
@@ -475,6 +483,7 @@ class NoiseEngine:
         self._pending = []  # batches held until the rate is known
         self._first_ns = None
         self._last_ns = None
+        self._max_ns = None
         self._chunk_index = 0
         self._reset_buffer()
         self._samples = 0
@@ -552,8 +561,12 @@ class NoiseEngine:
         first = self._first_ns is None
         if first:
             self._first_ns = int(stamps[0])
-        prev = int(stamps[0]) if first else self._last_ns
-        steps = np.diff(stamps, prepend=np.int64(prev))
+            self._max_ns = int(stamps[0])
+        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order count
+        # and does not also make the next step look like a gap.
+        run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
+        steps = stamps - run_max[:-1]
+        self._max_ns = int(run_max[-1])
         self._last_ns = int(stamps[-1])
         self._out_of_order += int(np.count_nonzero(steps[1:] <= 0 if first else steps <= 0))
         gap = steps > self.config.gap_factor * self._period_ns
@@ -667,7 +680,7 @@ class NoiseEngine:
                 from . import allan as _allan_mod
                 acc = getattr(_allan_mod, 'AllanAccumulator')
                 rate = _NS / self._period_ns
-                self._allan = {a: acc(rate) for a in self.config.axes}
+                self._allan = {a: acc(rate, taus=self.config.allan_taus) for a in self.config.axes}
             except (ImportError, AttributeError, TypeError) as err:
                 self._allan_error = f'Allan deviation unavailable: {err}'
                 return

@@ -1,0 +1,276 @@
+"""Tests of gyro_noise_analyze: tiny rosbags written with rosbags itself, every output file, every exit code."""
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+import yaml
+from rosbags.rosbag1 import Writer as Ros1Writer
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+
+from gyro_noise_ros.cli.analyze import main
+from gyro_noise_ros.core.engine import EngineConfig, NoiseEngine, analyze_chunk
+from gyro_noise_ros.core.fractional import make_grid
+from gyro_noise_ros.core.simulate import simulate_fractional_noise
+
+ROS2 = get_typestore(Stores.ROS2_JAZZY)
+ROS1 = get_typestore(Stores.ROS1_NOETIC)
+IMU = 'sensor_msgs/msg/Imu'
+TEMP = 'sensor_msgs/msg/Temperature'
+SIZE, MEMORY, GRID = 600, 50, '0:2:0.1'
+FAST = ['--chunk-size', str(SIZE), '--memory', str(MEMORY), '--order-grid', GRID, '--quiet']
+PERIOD_NS = 150_150
+T0 = 1_700_000_000 * 10**9
+DEG = 180.0 / math.pi
+
+
+def sim(n, seed=0, drift_rad_s2=0.0):
+    rng = np.random.default_rng(seed)
+    gyro = np.stack([simulate_fractional_noise(n, 1.4, -0.3, 1e-3, rng=rng, memory=MEMORY) for _ in range(3)], 1)
+    stamps = T0 + np.arange(n, dtype=np.int64) * PERIOD_NS
+    gyro += drift_rad_s2 * ((stamps - T0) / 1e9)[:, None]
+    accel = np.tile([0.0, 0.0, 9.81], (n, 1))
+    return stamps, gyro, accel
+
+
+def imu_msg(store, stamp, gyro, accel, seq=None):
+    t = store.types
+    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp) % 10**9)
+    header = (t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
+              else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
+    v3 = t['geometry_msgs/msg/Vector3']
+    return t[IMU](header=header, orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
+                  orientation_covariance=np.array([-1.0] + [0.0] * 8),
+                  angular_velocity=v3(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
+                  angular_velocity_covariance=np.zeros(9),
+                  linear_acceleration=v3(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
+                  linear_acceleration_covariance=np.zeros(9))
+
+
+def temp_msg(store, stamp, value, seq=None):
+    t = store.types
+    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp) % 10**9)
+    header = (t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
+              else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
+    return t[TEMP](header=header, temperature=float(value), variance=0.0)
+
+
+def write_ros2(path, stamps, gyro, accel, *, storage='sqlite3', topics=('/imu/data_raw',), temperature=None):
+    plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
+    with Writer(path, version=9, storage_plugin=plugin) as writer:
+        conns = [writer.add_connection(t, IMU, typestore=ROS2) for t in topics]
+        tconn = writer.add_connection('/imu/temperature', TEMP, typestore=ROS2) if temperature is not None else None
+        for i in range(len(stamps)):
+            raw = ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i]), IMU)
+            # Receive times always increase (readers deliver in receive-time order); header stamps may not.
+            for c in conns:
+                writer.write(c, T0 + i * PERIOD_NS, raw)
+            if tconn is not None and i % 100 == 0:
+                writer.write(tconn, int(stamps[i]), ROS2.serialize_cdr(temp_msg(ROS2, stamps[i], temperature[i]), TEMP))
+    return path
+
+
+def write_ros1(path, stamps, gyro, accel):
+    with Ros1Writer(path) as writer:
+        conn = writer.add_connection('/imu/data_raw', IMU, typestore=ROS1)
+        for i in range(len(stamps)):
+            writer.write(conn, int(stamps[i]),
+                         ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU))
+    return path
+
+
+def read_csv(path):
+    with open(path, newline='') as fh:
+        return list(csv.DictReader(fh))
+
+
+def engine_results(stamps, gyro, temperature=None, **kw):
+    """The engine run directly on the arrays: what the tool must reproduce from the bag."""
+    cfg = EngineConfig(chunk_size=SIZE, memory=MEMORY, alphas=make_grid(0, 2, 0.1), allan=False, **kw)
+    engine = NoiseEngine(cfg)
+    jobs = engine.ingest(stamps, gyro, temperature) + engine.flush()
+    return [analyze_chunk(j) for j in jobs]
+
+
+@pytest.fixture(scope='module')
+def sqlite_bag(tmp_path_factory):
+    n = 3 * SIZE + 77
+    stamps, gyro, accel = sim(n, seed=1)
+    temperature = 22.0 + 0.001 * np.arange(n)
+    path = write_ros2(tmp_path_factory.mktemp('bags') / 'seq_ref', stamps, gyro, accel, temperature=temperature)
+    return path, stamps, gyro, temperature
+
+
+def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
+    path, stamps, gyro, temperature = sqlite_bag
+    out = tmp_path / 'out'
+    assert main([str(path), '--out', str(out), '--jobs', '1', *FAST[:-1]]) == 0
+    printed = capsys.readouterr().out
+    assert 'seq_ref: 1877 samples' in printed and 'wrote' in printed
+
+    rows = read_csv(out / 'chunks.csv')
+    for col in ('bag', 'axis', 'chunk', 't_start_s', 'samples', 'samples_lost', 'alpha_var', 'f_var', 'alpha_corr',
+                'f_corr', 'bias_deg_s', 'variance_deg2_s2', 'tie_var', 'tie_corr', 'var_min_deg2_s2',
+                'j_min_deg2_s2', 'temperature_c'):
+        assert col in rows[0]
+    assert len(rows) == 3 * 3
+    # The tool interpolates the 1-in-100 temperature messages; the engine gets the same interpolation here.
+    t_idx = np.arange(0, len(stamps), 100)
+    interp = np.interp(stamps.astype(float), stamps[t_idx].astype(float), temperature[t_idx])
+    direct = {(r.chunk, r.axis): r for r in engine_results(stamps, gyro, interp)}
+    for row in rows:
+        r = direct[(int(row['chunk']), row['axis'])]
+        assert row['bag'] == 'seq_ref' and row['status'] == 'ok'
+        # CSV floats are written with repr: the exact same numbers come back.
+        assert float(row['bias_deg_s']) == r.bias_rad_s * DEG
+        assert float(row['variance_deg2_s2']) == r.variance_rad2_s2 * DEG ** 2
+        assert (float(row['alpha_var']), float(row['f_var'])) == (r.alpha_var, r.f_var)
+        assert (float(row['alpha_corr']), float(row['f_corr'])) == (r.alpha_corr, r.f_corr)
+        assert float(row['temperature_c']) == r.temperature_c
+        assert int(row['samples']) == SIZE and float(row['t_start_s']) == r.t_start_s
+
+    doc = json.loads((out / 'summary.json').read_text())
+    assert doc['tool'] == 'gyro_noise_analyze' and doc['options']['chunk_size'] == SIZE
+    (bag,) = doc['bags']
+    assert (bag['label'], bag['topic'], bag['storage']) == ('seq_ref', '/imu/data_raw', 'sqlite3')
+    assert (bag['samples'], bag['samples_lost'], bag['out_of_order_stamps'], bag['tail_samples']) == (1877, 0, 0, 77)
+    assert bag['rate_hz'] == pytest.approx(1e9 / PERIOD_NS)
+    z = bag['axes']['z']
+    zs = [r for r in direct.values() if r.axis == 'z']
+    assert z['chunks'] == 3 and z['nan_samples'] == 0
+    assert z['alpha_var_mean'] == pytest.approx(np.mean([r.alpha_var for r in zs]), rel=1e-12)
+    assert z['mean_variance_deg2_s2'] == pytest.approx(np.mean([r.variance_rad2_s2 for r in zs]) * DEG ** 2,
+                                                       rel=1e-12)
+    for key in ('offset_drift_deg_s_per_h', 'offset_drift_stderr_deg_s_per_h', 'variance_of_variances_deg4_s4',
+                'alpha_var_variance', 'alpha_corr_mean', 'alpha_corr_variance', 'temperature_mean_c', 'allan'):
+        assert key in z
+    assert z['allan']['angle_random_walk_rad_per_sqrt_s'] > 0
+
+    md = (out / 'summary.md').read_text()
+    for title in ('Table 3: offset drift', 'Table 4: noise variance', 'Table 5: order, variance method',
+                  'Table 6: order, correlation method', '(deg/s)/h', '(deg/s)^2', '| seq_ref |'):
+        assert title in md
+
+    allan = read_csv(out / 'allan.csv')
+    assert set(allan[0]) == {'bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n'}
+    z_rows = [r for r in allan if r['axis'] == 'z']
+    assert float(z_rows[0]['tau_s']) == pytest.approx(PERIOD_NS / 1e9)
+    assert all(float(r['ci_low_deg_s']) <= float(r['adev_deg_s']) <= float(r['ci_high_deg_s']) for r in z_rows)
+
+    imu = yaml.safe_load((out / 'imu.yaml').read_text())
+    assert imu['rostopic'] == '/imu/data_raw' and imu['update_rate'] == pytest.approx(1e9 / PERIOD_NS)
+    assert imu['gyroscope_noise_density'] == max(bag['axes'][a]['allan']['angle_random_walk_rad_per_sqrt_s']
+                                                 for a in 'xyz')
+    assert 'gyroscope_random_walk' in imu
+
+    curves = np.load(out / 'curves.npz')
+    assert curves['seq_ref/z/var'].shape == (3, 21) and list(curves['seq_ref/z/chunk']) == [0, 1, 2]
+    for png in ('bias.png', 'variance.png', 'allan.png', 'curves_seq_ref_x.png', 'curves_seq_ref_z.png'):
+        assert (out / png).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path):
+    sq, stamps, gyro, _ = sqlite_bag
+    mc = write_ros2(tmp_path / 'mc', stamps, gyro, np.zeros_like(gyro), storage='mcap')
+    r1 = write_ros1(tmp_path / 'old.bag', stamps, gyro, np.zeros_like(gyro))
+    out = tmp_path / 'out'
+    assert main([str(r1), str(mc), str(sq), '--label', 'ROS1', 'MCAP', 'SQL', '--jobs', '2', '--axis', 'y',
+                 '--no-figures', '--out', str(out), *FAST]) == 0
+    rows = read_csv(out / 'chunks.csv')
+    assert [r['bag'] for r in rows] == ['ROS1'] * 3 + ['MCAP'] * 3 + ['SQL'] * 3
+    assert {r['axis'] for r in rows} == {'y'}
+    # Same samples in three containers, analysed in worker processes: identical numbers.
+    cols = ('bias_deg_s', 'variance_deg2_s2', 'alpha_var', 'f_var', 'alpha_corr', 'f_corr', 'j_min_deg2_s2')
+    for k in range(3):
+        assert [rows[k][c] for c in cols] == [rows[3 + k][c] for c in cols] == [rows[6 + k][c] for c in cols]
+    doc = json.loads((out / 'summary.json').read_text())
+    assert [b['storage'] for b in doc['bags']] == ['ros1', 'mcap', 'sqlite3']
+    md = (out / 'summary.md').read_text()
+    assert md.index('| ROS1 |') < md.index('| MCAP |') < md.index('| SQL |')
+    assert not list(out.glob('*.png'))
+
+
+def test_reference_adds_health_verdicts(tmp_path):
+    n = 8 * SIZE
+    stamps, gyro, accel = sim(n, seed=3)
+    ref = write_ros2(tmp_path / 'ref', stamps, gyro, accel)
+    # A strong bias ramp on every axis: 2 (deg/s) per second, far above the chunk-mean noise.
+    stamps2, gyro2, accel2 = sim(n, seed=4, drift_rad_s2=math.radians(2.0))
+    h1 = write_ros2(tmp_path / 'h1', stamps2, gyro2, accel2, storage='mcap')
+    assert main([str(ref), '--out', str(tmp_path / 'r'), '--jobs', '1', '--no-figures', *FAST]) == 0
+    out = tmp_path / 'o'
+    assert main([str(ref), str(h1), '--reference', str(tmp_path / 'r' / 'summary.json'), '--jobs', '1',
+                 '--no-figures', '--out', str(out), *FAST]) == 0
+    doc = json.loads((out / 'summary.json').read_text())
+    ref_z, h1_z = doc['bags'][0]['axes']['z'], doc['bags'][1]['axes']['z']
+    # The reference judged against itself is within every tolerance; the ramp is far beyond 15x.
+    assert ref_z['health']['level'] == 'OK'
+    assert h1_z['health']['level'] == 'ERROR' and 'reference' in h1_z['health']['message']
+    assert doc['options']['thresholds']['drift_ratio_warn'] == 5.0
+    assert '### Health verdict against the reference' in (out / 'summary.md').read_text()
+
+
+def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path):
+    stamps, gyro, accel = sim(3 * SIZE + 20, seed=5)
+    gyro[SIZE + 3, 0] = np.nan
+    stamps = np.delete(stamps, np.arange(2 * SIZE + 10, 2 * SIZE + 15))  # 5 samples lost
+    gyro, accel = np.delete(gyro, np.arange(2 * SIZE + 10, 2 * SIZE + 15), 0), accel[:len(stamps)]
+    stamps[50], stamps[51] = stamps[51], stamps[50]
+    bag = write_ros2(tmp_path / 'bad', stamps, gyro, accel)
+    out = tmp_path / 'o'
+    assert main([str(bag), '--out', str(out), '--gap-policy', 'drop', '--jobs', '1', '--no-figures', *FAST]) == 0
+    doc = json.loads((out / 'summary.json').read_text())
+    b = doc['bags'][0]
+    # The swap is one out-of-order stamp and a one-sample hole seen before the late sample (engine doc).
+    assert (b['samples_lost'], b['gaps'], b['out_of_order_stamps']) == (5 + 1, 1 + 1, 1)
+    assert b['axes']['x']['nan_samples'] == 1 and b['axes']['x']['chunks_nan'] == 1
+    # Chunk 0 holds the swap's hole and chunk 2 the 5-sample gap: both dropped; chunk 1 stays.
+    assert b['axes']['y']['chunks_dropped'] == 2 and b['axes']['y']['chunks'] == 1
+    statuses = {(r['axis'], r['chunk']): r['status'] for r in read_csv(out / 'chunks.csv')}
+    assert statuses[('x', '1')] == 'nan' and statuses[('y', '1')] == 'ok'
+    assert statuses[('y', '0')] == statuses[('y', '2')] == 'dropped'
+
+
+@pytest.fixture(scope='module')
+def odd_bags(tmp_path_factory):
+    d = tmp_path_factory.mktemp('odd')
+    stamps, gyro, accel = sim(200, seed=6)
+    write_ros2(d / 'two', stamps, gyro, accel, topics=('/a/imu', '/b/imu'))
+    write_ros2(d / 'short', stamps, gyro, accel, temperature=np.full(200, 20.0))
+    with Writer(d / 'empty', version=9) as writer:
+        writer.add_connection('/imu/data_raw', IMU, typestore=ROS2)
+    stamps, gyro, accel = sim(3000, seed=7)
+    write_ros2(d / 'cut', stamps, gyro, accel, storage='mcap')
+    (mcap,) = (d / 'cut').glob('*.mcap')
+    mcap.write_bytes(mcap.read_bytes()[:mcap.stat().st_size // 2])
+    (d / 'notabag.txt').write_text('hello')
+    return d
+
+
+@pytest.mark.parametrize('args, code, text', [
+    (['missing'], 3, 'does not exist'),
+    (['notabag.txt'], 3, 'not a bag'),
+    (['two'], 3, 'choose one with --topic'),
+    (['two', '--topic', '/c/imu'], 3, "topic '/c/imu' is not in bag"),
+    (['short', '--topic', '/imu/temperature'], 3, 'not sensor_msgs/msg/Imu'),
+    (['empty'], 3, 'no messages'),
+    (['cut'], 3, 'corrupt or truncated'),
+    (['short'], 4, 'no complete chunk'),
+    (['short', '--order-grid', '0:2'], 2, 'START:STOP:STEP'),
+    (['short', '--chunk-size', '40'], 2, 'chunk_size'),
+    (['short', 'two', '--label', 'only-one'], 2, 'one name per bag'),
+    (['short', '--reference', 'nothing.json'], 2, 'cannot be read'),
+    (['short', '--jobs', '0'], 2, '--jobs'),
+    (['short', '--axis', 'w'], 2, 'invalid choice'),
+])
+def test_bad_input_gives_one_line_and_documented_exit_code(odd_bags, tmp_path, capsys, args, code, text):
+    argv = [str(odd_bags / args[0]) if not args[0].startswith('-') else args[0], *args[1:]]
+    argv = [str(odd_bags / a) if a in ('two', 'nothing.json') and i > 0 else a for i, a in enumerate(argv)]
+    assert main([*FAST, *argv, '--out', str(tmp_path / 'o')]) == code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert text in err[-1]
+    if code != 2 or 'invalid choice' not in text:
+        assert len(err) == 1 and err[0].startswith('gyro_noise_analyze: error: ')

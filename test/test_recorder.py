@@ -79,6 +79,30 @@ def test_records_every_message_at_6660_hz(tmp_path, sig, storage):
     np.testing.assert_array_equal(temps[1], 25.0 + 0.001 * np.arange(0, samples, 128))
 
 
+@pytest.mark.timeout(120)
+def test_killed_recorder_leaves_a_readable_db3(tmp_path):
+    domain = random.randint(100, 200)
+    out = tmp_path / 'killed'
+    rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                            '-p', f'output:={out}', '-p', 'flush_period_s:=0.2'],
+                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    rep = start_replayer(domain, '--samples', 10000, '--seed', 3, '--linger-s', 1.5)
+    try:
+        rep.communicate(timeout=120)
+        rec.kill()  # SIGKILL: no drain, no close, no metadata.yaml
+        rec.communicate(timeout=30)
+    finally:
+        for p in (rep, rec):
+            if p.poll() is None:
+                p.kill()
+                p.communicate()
+    assert not (out / 'metadata.yaml').exists()
+    with ImuBagReader(out / 'killed.db3') as reader:
+        n = sum(len(b) for b in reader.iter_batches(100000))
+    # The replayer lingers 1.5 s after the last message, several flush periods of 0.2 s: all committed.
+    assert n == 10000
+
+
 def test_refuses_an_existing_output(tmp_path):
     env = ros_env(random.randint(100, 200))
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',

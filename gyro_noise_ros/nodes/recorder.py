@@ -15,7 +15,8 @@ far more than 10 ms of data, so nothing is overwritten between drains.
 Messages received and written are counted; DDS publication sequence numbers reveal messages the
 transport dropped before they reached this node, counted as ``dropped``. On SIGINT or SIGTERM the
 queues are drained once more and the bag is closed cleanly (its ``metadata.yaml`` written), then
-one summary line is printed.
+one summary line is printed. With sqlite3 storage the bag is also committed every
+``flush_period_s``, so even a killed recorder (SIGKILL, power loss) leaves a readable ``.db3``.
 """
 
 import sys
@@ -44,6 +45,9 @@ PARAMETERS = (
               read_only=True, min_value=10, max_value=1000000),
     ParamSpec('drain_period_s', 0.01, 'Period of the loop that takes queued messages and writes them',
               unit='s', read_only=True, min_value=0.001, max_value=0.5),
+    ParamSpec('flush_period_s', 2.0, 'Period of the sqlite3 commit that lets a killed recorder leave '
+              'a readable .db3 (0: only at close)', unit='s', read_only=True, min_value=0.0,
+              max_value=3600.0),
     ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)', unit='s',
               read_only=True, min_value=0.0, max_value=3600.0),
 )
@@ -210,6 +214,8 @@ class RecorderNode(Node):
             self._temperature_sub = self.create_subscription(
                 Temperature, 'imu/temperature', _never_called, qos, raw=True, callback_group=group)
         self.create_timer(params['drain_period_s'], self.drain)
+        if params['flush_period_s'] > 0:
+            self.create_timer(params['flush_period_s'], self._flush)
         if params['report_period_s'] > 0:
             self.create_timer(params['report_period_s'], self._report)
         self.get_logger().info(f'recording {self._imu_sub.topic_name}'
@@ -258,6 +264,10 @@ class RecorderNode(Node):
                     self._writer.write_temperature(stamp_ns, temperature_c, log_ns=log_ns)
                     self.written_temperature += len(stamp_ns)
                 self._pending_temperature = []
+
+    def _flush(self):
+        if self._writer is not None and not self._closed:
+            self._writer.flush()
 
     def _report(self):
         self.get_logger().info(f'{self.written_imu} Imu, {self.written_temperature} Temperature '

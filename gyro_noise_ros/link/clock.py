@@ -262,14 +262,18 @@ class DeviceClock:
         block = int((d_us - self._first_d) // self._block_us)
         if self._cur_block is None:
             self._cur_block = block
+        closed = False
         if block != self._cur_block:
             if self._cur_min is not None:
                 self._blocks.append(self._cur_min)
+                closed = True
             self._cur_block = block
             self._cur_min = None
         if self._cur_min is None or y < self._cur_min[1]:
             self._cur_min = (d_us, y)
-        self._fit()
+        # the line changes only when a block closes, except while the open block is all there is
+        if closed or len(self._blocks) < 2 or self._a is None:
+            self._fit()
 
     def _fit(self):
         pts = list(self._blocks)

@@ -1,0 +1,119 @@
+"""
+Device-clock unwrapping and the device-to-host time estimator on an emulated clock with drift and jitter.
+
+The emulated link: samples at 6667 Hz of device time, 16 per batch (417 batches/s), the device clock off
+by ``ppm`` against the host, each batch received ``latency + Exp(mean 2 ms)`` after its newest sample.
+The error of a stamp is ``stamp - (true host time of the sample + latency)`` (the constant latency is
+not observable and is documented as such).
+"""
+
+import numpy as np
+import pytest
+
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.link.clock import DeviceClock, Unwrapper
+
+ODR = 6667.0
+BATCH = 16
+LATENCY_NS = 150_000
+H0 = 1_763_000_000_000_000_000  # a 2025 UNIX time in ns: the float64 trap is real at this size
+
+
+def emulate(clock, *, seconds, ppm, rng, t0_us=0, jitter_mean_ns=2e6, start_index=0, host_offset_ns=0):
+    """Run the clock over an emulated link; return (stamps, errors) in ns."""
+    nbatch = int(seconds * ODR / BATCH)
+    stamps, errors = [], []
+    for b in range(nbatch):
+        k = start_index + b * BATCH + np.arange(BATCH)
+        dev_us = np.floor(k * 1e6 / ODR)           # device microseconds since its t0
+        t_us = ((t0_us + dev_us.astype(np.int64)) % 2 ** 32).astype(np.uint32)
+        # device clock runs fast by ppm: true host time = device time / (1 + ppm)
+        true_ns = H0 + host_offset_ns + dev_us * 1000.0 / (1.0 + ppm * 1e-6)
+        recv = int(true_ns[-1] + LATENCY_NS + rng.exponential(jitter_mean_ns))
+        st = clock.update(t_us, recv)
+        stamps.append(st)
+        errors.append(st - true_ns - LATENCY_NS)
+    return np.concatenate(stamps), np.concatenate(errors)
+
+
+def test_unwrapper_across_wrap_and_backward_jump():
+    u = Unwrapper()
+    out = u.unwrap(np.array([2 ** 32 - 2, 2 ** 32 - 1, 0, 5], dtype=np.uint32))
+    assert out.tolist() == [2 ** 32 - 2, 2 ** 32 - 1, 2 ** 32, 2 ** 32 + 5]
+    out = u.unwrap(np.array([7, 3], dtype=np.uint32))
+    assert out.tolist() == [2 ** 32 + 7, 2 ** 32 + 3]  # backward jump shows as a decrease
+
+
+def test_unwrapper_hint_selects_whole_wraps():
+    u = Unwrapper()
+    u.unwrap(np.array([100], dtype=np.uint32))
+    # 3 wraps and 50 counts later: without a hint this is indistinguishable from +50
+    out = u.unwrap(np.array([150], dtype=np.uint32), hint=3 * 2 ** 32 + 49.7)
+    assert out.tolist() == [100 + 3 * 2 ** 32 + 50]
+
+
+@pytest.mark.parametrize('ppm, t0_us', [(50.0, 2 ** 32 - 20_000_000), (-50.0, 0)])
+def test_estimator_error_well_below_jitter(ppm, t0_us):
+    rng = np.random.default_rng(11)
+    clock = DeviceClock(nominal_rate_hz=ODR)
+    stamps, err = emulate(clock, seconds=90, ppm=ppm, rng=rng, t0_us=t0_us)
+    assert np.all(np.diff(stamps) > 0)
+    settled = err[int(5 * ODR):]  # after 5 s (5 closed blocks)
+    # Jitter is Exp(2 ms). Block minima of ~417 draws sit ~5 us above the latency and their least-
+    # squares line over 60 blocks has an offset error of a few us; allow 100 us for the worst sample
+    # (20x below the 2 ms mean jitter, 1.5 % of a sample period) and 25 us for the mean.
+    assert np.max(np.abs(settled)) < 100_000
+    assert abs(np.mean(settled)) < 25_000
+    # the drift estimate: the device runs fast by ppm, so host/device rate is 1/(1+ppm) - 1 ~ -ppm
+    assert clock.state.drift_ppm == pytest.approx(-ppm, abs=1.0)
+    # the first second: slope not yet known, stamps late by at most the earliest batch's delay (~ms)
+    assert np.max(np.abs(err[:int(ODR)])) < 20e6
+
+
+def test_stamps_never_after_receive_time():
+    rng = np.random.default_rng(2)
+    clock = DeviceClock()
+    for b in range(2000):
+        t = ((np.arange(BATCH) + b * BATCH) * 150).astype(np.uint32)
+        recv = H0 + int(t[-1]) * 1000 + int(rng.exponential(1e6))
+        st = clock.update(t, recv)
+        assert st[-1] <= recv
+
+
+def test_board_restart_resets_estimator_and_stays_monotonic():
+    rng = np.random.default_rng(3)
+    clock = DeviceClock(nominal_rate_hz=ODR)
+    s1, _ = emulate(clock, seconds=10, ppm=20.0, rng=rng, t0_us=500_000_000)
+    # the board restarts 2 s later: device time starts again at 0, host time continues
+    s2, e2 = emulate(clock, seconds=20, ppm=20.0, rng=rng, t0_us=0, host_offset_ns=12_000_000_000)
+    assert clock.state.resets == 1
+    stamps = np.concatenate((s1, s2))
+    assert np.all(np.diff(stamps) > 0)
+    assert np.max(np.abs(e2[int(5 * ODR):])) < 100_000
+
+
+def test_long_unplug_across_counter_wraps_is_bridged():
+    rng = np.random.default_rng(4)
+    clock = DeviceClock(nominal_rate_hz=ODR)
+    emulate(clock, seconds=20, ppm=30.0, rng=rng)
+    # unplugged for 2.5 hours (more than two wraps of the us counter); the board kept its clock
+    gap_samples = int(2.5 * 3600 * ODR) // BATCH * BATCH
+    start = int(20 * ODR) // BATCH * BATCH + gap_samples
+    _, err = emulate(clock, seconds=5, ppm=30.0, rng=rng, start_index=start)
+    assert clock.state.resets == 0
+    # A wrong number of wraps would be off by 71.6 min per wrap. What remains is the slope error of a
+    # fit over 20 blocks (~5 us noise each: ~0.2 ppm, 1.8 ms over 9000 s at one sigma): allow 10 ms
+    # just after the gap, and 1 ms once 5 s of new blocks anchor the line on both sides of the gap.
+    assert np.max(np.abs(err)) < 10_000_000
+    assert np.max(np.abs(err[-int(ODR):])) < 1_000_000
+
+
+def test_reset_keeps_monotonic_floor_and_bad_parameters_raise():
+    clock = DeviceClock()
+    a = clock.update(np.array([1000, 2000], dtype=np.uint32), H0)
+    clock.reset()
+    b = clock.update(np.array([1000, 2000], dtype=np.uint32), H0 - 10_000_000)
+    assert b[0] > a[-1]
+    for kwargs in ({'nominal_rate_hz': 0}, {'block_s': -1}, {'window_blocks': 1}, {'reset_threshold_s': 0}):
+        with pytest.raises(ParameterError):
+            DeviceClock(**kwargs)

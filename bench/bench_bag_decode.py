@@ -8,7 +8,8 @@ side by side in this process on the same bytes:
    ``typestore.deserialize_cdr`` per message vs :func:`gyro_noise_ros.bag.decode_imu` in batches;
 2. end to end: open the bag and produce the arrays, by rosbags ``Reader.messages`` +
    ``deserialize_cdr`` per message vs :class:`gyro_noise_ros.bag.ImuBagReader.iter_batches`;
-3. writing: :class:`ImuBagWriter` (bulk encoding) vs rosbags ``serialize_cdr`` + ``Writer.write``.
+3. the same for a ROS 1 ``.bag`` (rosbags' ROS 1 iterator in both; ``deserialize_ros1`` vs bulk);
+4. writing: :class:`ImuBagWriter` (bulk encoding) vs rosbags ``serialize_cdr`` + ``Writer.write``.
 
 Run: ``.venv/bin/python bench/bench_bag_decode.py [--messages 1000000]``
 """
@@ -21,12 +22,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rosbags.rosbag1 import Reader as Ros1Reader
+from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from gyro_noise_ros.bag import IMU_MSGTYPE, ImuBagReader, ImuBagWriter, decode_imu
 
 TS = get_typestore(Stores.ROS2_JAZZY)
+TS1 = get_typestore(Stores.ROS1_NOETIC)
 
 
 def slow_arrays(pairs):
@@ -44,6 +48,37 @@ def slow_arrays(pairs):
         gyro[i] = (av.x, av.y, av.z)
         accel[i] = (la.x, la.y, la.z)
     return stamp, log, gyro, accel
+
+
+def ros1_raws(stamps, gyro, accel):
+    """ROS 1 sensor_msgs/Imu bytes (seq, stamp, 'imu_link', 37 float64), built with numpy."""
+    n = stamps.shape[0]
+    head = 16 + 8
+    rows = np.zeros((n, head + 296), np.uint8)
+    rows[:, 0:4] = np.arange(n, dtype='<u4').view(np.uint8).reshape(n, 4)
+    rows[:, 4:8] = (stamps // 1_000_000_000).astype('<u4').view(np.uint8).reshape(n, 4)
+    rows[:, 8:12] = (stamps % 1_000_000_000).astype('<u4').view(np.uint8).reshape(n, 4)
+    rows[:, 12:16] = np.frombuffer(np.array(8, '<u4').tobytes(), np.uint8)
+    rows[:, 16:24] = np.frombuffer(b'imu_link', np.uint8)
+    tail = np.zeros((n, 37))
+    tail[:, 3] = 1.0
+    tail[:, 4] = -1.0
+    tail[:, 13:16] = gyro
+    tail[:, 25:28] = accel
+    rows[:, head:] = tail.astype('<f8').view(np.uint8)
+    blob = rows.tobytes()
+    size = rows.shape[1]
+    return [blob[i:i + size] for i in range(0, n * size, size)]
+
+
+def slow_read_ros1(path):
+    gyros = []
+    with Ros1Reader(path) as reader:
+        for _, _, raw in reader.messages():
+            msg = TS1.deserialize_ros1(raw, IMU_MSGTYPE)
+            av = msg.angular_velocity
+            gyros.append((av.x, av.y, av.z))
+    return np.array(gyros)
 
 
 def slow_read(path):
@@ -97,6 +132,8 @@ def main(argv=None):
     parser.add_argument('--messages', type=int, default=1_000_000, help='Imu messages per bag')
     parser.add_argument('--write-messages', type=int, default=200_000,
                         help='messages for the (slow) writing comparison')
+    parser.add_argument('--ros1-messages', type=int, default=200_000,
+                        help='messages for the ROS 1 comparison (rosbags keeps its index in memory)')
     args = parser.parse_args(argv)
     n = args.messages
     rng = np.random.default_rng(0)
@@ -135,6 +172,17 @@ def main(argv=None):
             t_fast, fast = timed(fast_read, path)
             assert np.array_equal(slow, fast), f'{storage}: bulk and rosbags disagree'
             row(f'read + decode, {storage}', n, t_slow, t_fast)
+
+        m = min(args.ros1_messages, n)
+        ros1_path = Path(tmp, 'rec.bag')
+        with Ros1Writer(ros1_path) as writer:
+            conn = writer.add_connection('/imu/data_raw', IMU_MSGTYPE, typestore=TS1)
+            for t, raw in zip(stamps[:m].tolist(), ros1_raws(stamps[:m], gyro[:m], accel[:m])):
+                writer.write(conn, t, raw)
+        t_slow, slow = timed(slow_read_ros1, ros1_path)
+        t_fast, fast = timed(fast_read, ros1_path)
+        assert np.array_equal(slow, fast) and np.array_equal(fast, gyro[:m]), 'ros1: decoders disagree'
+        row(f'read + decode, ros1 ({m:,})', m, t_slow, t_fast)
 
         m = min(args.write_messages, n)
         for storage, plugin in (('sqlite3', StoragePlugin.SQLITE3), ('mcap', StoragePlugin.MCAP)):

@@ -41,8 +41,9 @@ from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
 from ._common import run_cli
 
 PROG = 'portenta_emulator'
-#: Bytes the emulated board buffers for a slow host before it drops samples (USB CDC + firmware ring).
-TX_BUFFER_BYTES = 64 * 1024
+#: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in SDRAM):
+#: 1 MiB is ~6 s of data at 6.66 kHz, so a loaded test machine does not lose samples.
+TX_BUFFER_BYTES = 1 << 20
 
 
 def _float_list(text):
@@ -80,6 +81,8 @@ def build_parser():
     run.add_argument('--samples', type=int, help='stop after this many samples')
     run.add_argument('--duration-s', type=float, help='stop after this much board time (s)')
     run.add_argument('--batch', type=int, default=16, help='samples per frame (FIFO watermark)')
+    run.add_argument('--tx-buffer-bytes', type=int, default=TX_BUFFER_BYTES,
+                     help='board transmit buffer; samples that do not fit are dropped and flagged')
     cfg = p.add_argument_group('power-on configuration')
     cfg.add_argument('--odr-hz', type=float, default=6667.0, help=f'one of {lsm.ODRS_HZ}')
     cfg.add_argument('--gyro-fs-dps', type=int, default=2000, help=f'one of {lsm.GYRO_FULL_SCALES_DPS}')
@@ -158,6 +161,8 @@ def _check_args(args):
         raise ParameterError(f'--duration-s must be >= 0, got {args.duration_s}')
     if args.write_sd and args.samples is None and args.duration_s is None:
         raise ParameterError('--write-sd needs --samples or --duration-s')
+    if args.tx_buffer_bytes < 4096:
+        raise ParameterError(f'--tx-buffer-bytes must be >= 4096, got {args.tx_buffer_bytes}')
     if args.unplug_s < 0:
         raise ParameterError(f'--unplug-s must be >= 0, got {args.unplug_s}')
     if args.disconnect_every_s is not None and not args.disconnect_every_s > 0:
@@ -405,6 +410,9 @@ def _run_sd(args, board, faults, truth_fh, counters):
 
 
 def _serve(args, board, faults, truth_fh, counters, stopper):
+    # warm the numba kernels up before the pacing clock starts: a JIT stall would come out as a burst
+    cli_warm = board_from_args(args)
+    cli_warm.next_samples(args.batch)
     port = _TcpPort(args.tcp) if args.tcp else _PtyPort(args.link)
     print(port.name, flush=True)
     total = _total_samples(args, board)
@@ -463,15 +471,17 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
                     truth_fh.flush()
                 if connected:
                     kept = faults.drop(samples)
-                    frames = encode_samples_batched(kept, args.batch)
-                    if len(outbuf) + len(frames) <= TX_BUFFER_BYTES:
-                        outbuf += faults.corrupt(frames)
-                        counters.samples_sent += kept.size
-                        sent_this_connection += kept.size
-                        counters.frames_sent += -(-kept.size // args.batch)
-                    else:
-                        faults.note_lost(kept.size)
-                        counters.samples_unsent += kept.size
+                    for start in range(0, kept.size, args.batch):
+                        frame = encode_samples(kept[start:start + args.batch])
+                        if len(outbuf) + len(frame) > args.tx_buffer_bytes:
+                            # buffer full: this frame and the rest of the batch are lost, the next is flagged
+                            faults.note_lost(kept.size - start)
+                            counters.samples_unsent += kept.size - start
+                            break
+                        outbuf += faults.corrupt(frame)
+                        counters.samples_sent += min(args.batch, kept.size - start)
+                        sent_this_connection += min(args.batch, kept.size - start)
+                        counters.frames_sent += 1
                 else:
                     faults.note_lost(n)
                     counters.samples_unsent += n

@@ -30,7 +30,6 @@ pacing, the connection state or the fault injection (which uses its own generato
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from ..core.fractional import DEFAULT_MEMORY, gl_coefficients
 from ..core.simulate import FractionalNoise, require_stable
@@ -63,15 +62,18 @@ def stationary_gain(alpha, f, memory=DEFAULT_MEMORY):
     Returns
     -------
     float
-        sqrt(sum_k h_k^2) with h the impulse response of w -> v.
+        sqrt(sum_k h_k^2) with h the impulse response of w -> v, by Parseval:
+        sum h^2 = mean over a dense unit-circle grid of 1 / |A(e^{i w})|^2,
+        A(z) = 1 + (c_1 - f) z^-1 + sum_{j>=2} c_j z^-j (exact up to aliasing of h beyond the grid size).
     """
     require_stable(alpha, f, memory)
     a = gl_coefficients(alpha, memory).copy()
     a[1] -= f
-    impulse = np.zeros(1 << 15)
-    impulse[0] = 1.0
-    h = scipy.signal.lfilter([1.0], a, impulse)
-    return float(np.sqrt(np.sum(h * h)))
+    spectrum = np.fft.rfft(a, 1 << 17)
+    inv = 1.0 / (spectrum.real ** 2 + spectrum.imag ** 2)
+    # rfft holds bins 0..M/2: interior bins count twice in the full-circle mean
+    total = inv[0] + inv[-1] + 2.0 * inv[1:-1].sum()
+    return float(np.sqrt(total / (1 << 17)))
 
 
 @dataclass(frozen=True)

@@ -330,7 +330,8 @@ def test_session_with_faults_and_reconnection(harness):
 
     board = FakeBoard([first, second])
     try:
-        h = harness(port=board.url, reconnect_period_s=0.1)
+        # No diagnostics timer during the test: link_status() below must see the whole session.
+        h = harness(port=board.url, reconnect_period_s=0.1, diagnostics_period_s=3600.0)
         h.spin_until(lambda: len(h.imu) >= 280, 20.0)
         h.spin_until(lambda: h.driver.link_snapshot()['connections'] == 2, 5.0)
         got = [round(m.angular_velocity.x / gyro_lsb(2000)) for m in h.imu]
@@ -372,7 +373,8 @@ def test_no_ack_then_nak_are_reported(harness):
 
     board = FakeBoard([silent, refuse])
     try:
-        h = harness(port=board.url, ack_timeout_s=0.3, reconnect_period_s=0.1)
+        # 1 s between attempts keeps each error visible long enough to be seen.
+        h = harness(port=board.url, ack_timeout_s=0.3, reconnect_period_s=1.0)
         h.spin_until(lambda: 'no acknowledgement' in h.driver.link_snapshot()['last_error'], 10.0)
         h.spin_until(lambda: 'odr not supported' in h.driver.link_snapshot()['last_error'], 10.0)
         assert 'refused' in h.driver.link_snapshot()['last_error']

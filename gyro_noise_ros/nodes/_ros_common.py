@@ -27,6 +27,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
                                 SetParametersResult)
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy_impl
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..errors import GyroNoiseError, ParameterError
@@ -36,6 +37,8 @@ OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN
 ERROR = DiagnosticStatus.ERROR
 STALE = DiagnosticStatus.STALE
+
+_RCLError = _rclpy_impl.RCLError
 
 _LEVEL_RANK = {OK: 0, WARN: 1, ERROR: 2, STALE: 3}
 
@@ -334,9 +337,14 @@ def run_node(node_factory, args=None, *, prog):
     Returns
     -------
     int
-        Exit code: 0, or the error class's code (2 for bad parameters).
+        Exit code: 0, or the error class's code (2 for bad parameters or malformed ROS arguments).
     """
-    rclpy.init(args=args)
+    try:
+        rclpy.init(args=args)
+    except _RCLError as err:
+        # A malformed --ros-args (e.g. "-p name:=" with no value) fails here, before any node exists.
+        print(f'{prog}: error: bad ROS arguments: {str(err).split(", at ")[0]}', file=sys.stderr)
+        return ParameterError.exit_code
     node = None
     try:
         node = node_factory()

@@ -1,0 +1,99 @@
+#!/usr/bin/env python3
+"""
+Full-tool throughput of gyro_noise_analyze on a multi-million-sample bag: --jobs 1 vs --jobs 2.
+
+Writes one simulated bag (the paper's model, 3 axes, 6660 Hz) into a temporary directory, then runs
+the whole tool (decode, chunking, identification of every chunk by both methods on the full grid, Allan
+deviation, report files without figures) with ``--jobs 1`` and ``--jobs 2`` on the same bag, side by side
+in this process, and prints samples per second, the ratio, and the share of the time spent decoding
+(bag reading + bulk ``sensor_msgs/Imu`` decode, timed inside the tool); plus a decode-only pass as the
+baseline of that share.
+
+Usage::
+
+    .venv/bin/python bench/bench_analyze.py [--samples 2000000] [--storage sqlite3] [--axis all]
+"""
+
+import argparse
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.cli.analyze import analyze_bags
+from gyro_noise_ros.core.engine import AXES, EngineConfig
+from gyro_noise_ros.core.simulate import FractionalNoise
+
+RATE_HZ = 6660.0
+
+
+def write_bag(path, n, storage, seed):
+    rng = np.random.default_rng(seed)
+    noises = [FractionalNoise(1.4, -1.0, 1e-3, rng=rng) for _ in range(3)]
+    stamps = 1_760_000_000 * 10**9 + np.round(np.arange(n) * (1e9 / RATE_HZ)).astype(np.int64)
+    block = 500_000
+    with ImuBagWriter(path, storage=storage) as writer:
+        for i in range(0, n, block):
+            m = min(block, n - i)
+            gyro = np.stack([nz.generate(m) for nz in noises], axis=1)
+            writer.write_imu(stamps[i:i + m], gyro, np.tile([0.0, 0.0, 9.80665], (m, 1)))
+
+
+def decode_only(path):
+    t = time.perf_counter()
+    n = 0
+    with ImuBagReader(path) as reader:
+        for batch in reader.iter_batches(65536):
+            n += len(batch)
+    return n, time.perf_counter() - t
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    p.add_argument('--samples', type=int, default=2_000_000)
+    p.add_argument('--storage', default='sqlite3', choices=('sqlite3', 'mcap'))
+    p.add_argument('--axis', default='all', choices=[*AXES, 'all'])
+    p.add_argument('--seed', type=int, default=1)
+    p.add_argument('--workdir', type=Path, default=None, help='where the bag goes (default: a temp dir)')
+    args = p.parse_args(argv)
+    print('command:', ' '.join([os.path.basename(sys.executable), *sys.argv]))
+    print(f'cores: {os.cpu_count()} (shared machine; timings are noisy)')
+    tmp = Path(tempfile.mkdtemp(prefix='bench_analyze_', dir=args.workdir))
+    try:
+        bag = tmp / 'bag'
+        t = time.perf_counter()
+        write_bag(bag, args.samples, args.storage, args.seed)
+        print(f'wrote {args.samples:,} samples ({args.storage}, {sum(f.stat().st_size for f in bag.iterdir()) / 1e6:.0f} MB) '
+              f'in {time.perf_counter() - t:.1f} s')
+        n, dt = decode_only(bag)
+        print(f'decode only (ImuBagReader.iter_batches): {n / dt:,.0f} samples/s ({dt:.1f} s)')
+        axes = AXES if args.axis == 'all' else (args.axis,)
+        # Warm the numba caches (Allan kernels) so neither run pays the load.
+        analyze_bags([bag], out_dir=tmp / 'warm', config=EngineConfig(axes=axes), jobs=1, figures=False,
+                     curves=0)
+        rows = []
+        for jobs in (1, 2):
+            doc = analyze_bags([bag], out_dir=tmp / f'out{jobs}', config=EngineConfig(axes=axes), jobs=jobs,
+                               figures=False, curves=0)
+            tm = doc['_timing']
+            rows.append((jobs, tm['total_s'], tm['decode_s']))
+            chunks = sum(a['chunks'] for a in doc['bags'][0]['axes'].values())
+            print(f'--jobs {jobs}: {tm["total_s"]:.1f} s, {args.samples / tm["total_s"]:,.0f} samples/s, '
+                  f'{chunks} chunk identifications ({len(axes)} axes), decode {tm["decode_s"]:.1f} s '
+                  f'({100 * tm["decode_s"] / tm["total_s"]:.0f} %)')
+        (_, t1, _), (_, t2, _) = rows
+        print(f'speed-up --jobs 2 / --jobs 1: {t1 / t2:.2f}x')
+        print(f'equivalent: a 12 h 6.66 kHz sequence (187,159,392 samples, {len(axes)} axes) in '
+              f'{187_159_392 / (args.samples / t2) / 60:.0f} min at --jobs 2')
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

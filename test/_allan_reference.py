@@ -15,7 +15,7 @@ def phase_longdouble(y, offset):
 
 
 def avar_from_phase(x, m, stride=1):
-    """Twin of ``_avar_sums`` + normalisation: mean of (x[i+2m] - 2x[i+m] + x[i])^2 / (2 m^2), i = 0, stride, ..."""
+    """Twin of ``_avar_sums``: mean of (x[i+2m] - 2x[i+m] + x[i])^2 / (2 m^2), i = 0, stride, ..."""
     d = x[2 * m:] - 2.0 * x[m:-m] + x[:-2 * m]
     d = d[::stride]
     return float(np.sum(d * d) / (2.0 * m * m * d.size)), d.size

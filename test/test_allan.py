@@ -498,7 +498,8 @@ def test_fit_recovers_simulated_arw_and_rrw():
     rng = np.random.default_rng(21)
     fs, n_arw, k_rrw = 100.0, 1e-3, 2e-5
     n = 2 ** 21
-    y = n_arw * math.sqrt(fs) * rng.standard_normal(n) + np.cumsum(k_rrw / math.sqrt(fs) * rng.standard_normal(n))
+    y = (n_arw * math.sqrt(fs) * rng.standard_normal(n)
+         + np.cumsum(k_rrw / math.sqrt(fs) * rng.standard_normal(n)))
     res = allan_deviation(y, fs)
     fit = fit_noise_terms(res, terms=('angle_random_walk', 'rate_random_walk'), weighting='edf')
     # N is set by the short taus (EDF ~1e5-1e6: <1 % scatter); K only by the last few octaves
@@ -517,7 +518,8 @@ def test_bias_instability_from_minimum():
     assert bi.bias_instability_rad_per_s > 2e-5
     assert bi.adev_min_rad_per_s == pytest.approx(res.adev.min())
     assert not bi.at_longest_tau
-    assert bi.bias_instability_deg_per_h == pytest.approx(bi.bias_instability_rad_per_s * 180 / math.pi * 3600)
+    deg_per_h = bi.bias_instability_rad_per_s * 180 / math.pi * 3600
+    assert bi.bias_instability_deg_per_h == pytest.approx(deg_per_h)
     flat = _synthetic_result(tau, 0.0, 0.0, 2e-5, 0.0, 0.0)
     assert bias_instability_from_minimum(flat).bias_instability_rad_per_s == pytest.approx(2e-5, rel=1e-9)
 

@@ -150,21 +150,48 @@ def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover
             l2 = lanes[j, 2]
             l3 = lanes[j, 3]
             while t < t1:
-                if (t & 3) == 0 and t + 4 <= t1:
+                # one segment = up to the next fold point, so the 4-term loop needs no fold test
+                seg = (t // FOLD_TERMS + 1) * FOLD_TERMS
+                if seg > t1:
+                    seg = t1
+                while t < seg and (t & 3) != 0:
                     i = t * s
-                    d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    i += s
-                    d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    i += s
-                    d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    i += s
-                    d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    l0 += d0 * d0
-                    l1 += d1 * d1
-                    l2 += d2 * d2
-                    l3 += d3 * d3
-                    t += 4
+                    d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    k = t & 3
+                    if k == 1:
+                        l1 += d * d
+                    elif k == 2:
+                        l2 += d * d
+                    else:
+                        l3 += d * d
+                    t += 1
+                if s == 1:
+                    while t + 4 <= seg:
+                        d0 = (x[t + 2 * m] - 2.0 * x[t + m]) + x[t]
+                        d1 = (x[t + 1 + 2 * m] - 2.0 * x[t + 1 + m]) + x[t + 1]
+                        d2 = (x[t + 2 + 2 * m] - 2.0 * x[t + 2 + m]) + x[t + 2]
+                        d3 = (x[t + 3 + 2 * m] - 2.0 * x[t + 3 + m]) + x[t + 3]
+                        l0 += d0 * d0
+                        l1 += d1 * d1
+                        l2 += d2 * d2
+                        l3 += d3 * d3
+                        t += 4
                 else:
+                    while t + 4 <= seg:
+                        i = t * s
+                        d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                        i += s
+                        d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                        i += s
+                        d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                        i += s
+                        d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                        l0 += d0 * d0
+                        l1 += d1 * d1
+                        l2 += d2 * d2
+                        l3 += d3 * d3
+                        t += 4
+                while t < seg:
                     i = t * s
                     d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
                     k = t & 3

@@ -23,8 +23,10 @@ Confidence intervals: the dominant power-law noise at each tau is identified by 
 autocorrelation method (Riley & Greenhall 2004, the method of Stable32) when at least 30 m-averages
 exist, by the B1 ratio (Barnes) when 4 to 29 exist, and otherwise copied from the nearest shorter tau;
 the equivalent degrees of freedom follow Greenhall & Riley (PTTI 2003, "Uncertainty of stability
-variances based on finite differences", eqs. 7-13 and Tables 2-3); the bounds are chi-squared
-(SP 1065 eq. 45). ``noise_alpha`` is the exponent of the rate PSD S_y(f) ~ f^alpha:
+variances based on finite differences", eqs. 7-13 and Tables 2-3) with point-sampled phase for
+alpha <= 0 (exact for sampled rate data; ``edf_greenhall(..., stable32=True)`` gives Stable32's
+averaged-phase variant); the bounds are chi-squared (SP 1065 eq. 45).
+``noise_alpha`` is the exponent of the rate PSD S_y(f) ~ f^alpha:
 2 white PM (angle quantization), 1 flicker PM, 0 white FM (angle random walk),
 -1 flicker FM (bias instability), -2 random-walk FM (rate random walk), <= -3 drift (rate ramp).
 
@@ -371,10 +373,12 @@ def _assemble(ms, strides, n_terms, sums, acf, n, rate, conf):
     lo, hi = confidence_bounds(avar, edf, conf)
     adev = np.sqrt(avar)
     names = tuple(NOISE_TYPE_NAMES[int(max(-3, min(2, a)))] for a in alpha)
-    return AllanResult(tau_s=ms / rate, m=ms.copy(), adev=adev, avar=avar, n_terms=n_terms.copy(),
-                       stride=strides.copy(), edf=edf, ci_low=np.sqrt(lo), ci_high=np.sqrt(hi),
-                       noise_alpha=alpha, noise_type=names, confidence=conf, rate_hz=rate,
-                       n_samples=int(n))
+    fields = dict(tau_s=ms / rate, m=ms.copy(), adev=adev, avar=avar, n_terms=n_terms.copy(),
+                  stride=strides.copy(), edf=edf, ci_low=np.sqrt(lo), ci_high=np.sqrt(hi),
+                  noise_alpha=alpha)
+    for arr in fields.values():
+        arr.flags.writeable = False   # the dataclass is frozen; so are its arrays
+    return AllanResult(**fields, noise_type=names, confidence=conf, rate_hz=rate, n_samples=int(n))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -307,6 +307,7 @@ def test_reader_on_big_endian_and_bare_storage_file(tmp_path):
     (mcap,) = (tmp_path / 'bag').glob('*.mcap')
     for path in (mcap, tmp_path / 'bag' / 'metadata.yaml'):
         with ImuBagReader(path, topic='imu/data_raw') as reader:
+            assert reader.duration_s == pytest.approx((stamps[-1] - stamps[0]) / 1e9, abs=1e-9)
             s, _, g, a = concat(list(reader.iter_batches()))
             assert reader.read_temperature() is None
         np.testing.assert_array_equal(s, stamps)
@@ -333,6 +334,7 @@ def test_reader_on_ros1_bag(tmp_path):
     assert find_imu_topic(path) == '/imu/data_raw'
     with ImuBagReader(path) as reader:
         assert reader.storage == 'ros1' and reader.message_count == 300
+        assert reader.duration_s == pytest.approx((stamps[-1] - stamps[0]) / 1e9, abs=1e-9)
         s, lg, g, a = concat(list(reader.iter_batches(100)))
         ts, tc = reader.read_temperature()
     np.testing.assert_array_equal(s, stamps)

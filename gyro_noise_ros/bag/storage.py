@@ -208,8 +208,8 @@ class BagSource:
             duration = int(self.reader.duration)
         except Exception:  # noqa: BLE001 - an empty bag has no meaningful duration
             return 0.0
-        if not self.ros1 and duration > 0:
-            duration -= 1  # rosbags reports a rosbag2 duration as last - first + 1 ns
+        if duration > 0:
+            duration -= 1  # rosbags reports the end time as last message + 1 ns, in every format
         return max(duration, 0) / 1e9
 
     def blocks(self, topic, block=BLOCK):

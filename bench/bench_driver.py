@@ -1,0 +1,165 @@
+"""
+CPU share of one core used by ``lsm6dso32_driver`` at the real link rate (6667 Hz, target <= 30 %).
+
+Three runs against ``portenta_emulator`` streaming in real time on TCP loopback, each measured from
+``/proc/<pid>/stat`` (utime + stime) over the same window after a warm-up:
+
+1. baseline: a decode-only reader (pyserial + ``link.protocol.Decoder``, the same 5 ms reads as the
+   driver, no ROS) — the cost of the link itself in Python;
+2. the driver with no subscriber;
+3. the driver with one subscriber (this process, draining a raw subscription every 5 ms).
+
+Printed side by side with the emulator's own CPU in each run, the messages/s the subscriber received,
+and the command line that produced the numbers. Run: ``.venv/bin/python bench/bench_driver.py``.
+"""
+
+import argparse
+import os
+import shlex
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+TICK = os.sysconf('SC_CLK_TCK')
+ODR = 6667.0
+
+_READER = r'''
+import sys, time, serial
+from gyro_noise_ros.link.protocol import Decoder
+ser = serial.serial_for_url(sys.argv[1], timeout=0.005)
+dec = Decoder()
+n = 0
+try:
+    while True:
+        data = ser.read(1 << 16)
+        if data:
+            n += len(dec.feed(data).samples)
+except KeyboardInterrupt:
+    pass
+'''
+
+
+def cpu_seconds(pid):
+    """utime + stime of a process, in seconds (fields 14 and 15 of /proc/<pid>/stat)."""
+    with open(f'/proc/{pid}/stat') as fh:
+        fields = fh.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def start_emulator(port):
+    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp', f'127.0.0.1:{port}',
+                             '--seed', '1', '--accel-fs-g', '32'],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    proc.stdout.readline()  # the URL: listening from now on
+    return proc
+
+
+def stop(proc):
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
+
+
+class Subscriber:
+    """Raw subscription drained with take_message: the cheapest Python consumer (ROS_ON_PIP.md)."""
+
+    def __init__(self):
+        import rclpy
+        from sensor_msgs.msg import Imu
+
+        from gyro_noise_ros.nodes._ros_common import sensor_data_qos
+        self.rclpy, self.imu_type = rclpy, Imu
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node('bench_listener', context=self.context)
+        self.sub = self.node.create_subscription(Imu, 'imu/data_raw', lambda m: None, sensor_data_qos(20000),
+                                                 raw=True)
+        self.count = 0
+
+    def drain(self):
+        with self.sub.handle:
+            while self.sub.handle.take_message(self.imu_type, True) is not None:
+                self.count += 1
+
+    def close(self):
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.context)
+
+
+def measure(kind, args, subscriber=None):
+    """Start emulator + consumer, warm up, measure CPU over the window; return a result row."""
+    port = free_port()
+    url = f'socket://127.0.0.1:{port}'
+    emu = start_emulator(port)
+    if kind == 'reader':
+        consumer = subprocess.Popen([sys.executable, '-c', _READER, url])
+    else:
+        consumer = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
+                                     '-p', f'port:={url}', '-p', 'reconnect_period_s:=0.2'],
+                                    stderr=subprocess.DEVNULL, env=dict(os.environ))
+    try:
+        def wait(seconds):
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                if subscriber is not None:
+                    subscriber.drain()
+                time.sleep(0.005)
+
+        wait(args.warmup)
+        c0, e0, t0 = cpu_seconds(consumer.pid), cpu_seconds(emu.pid), time.monotonic()
+        n0 = subscriber.count if subscriber else 0
+        wait(args.seconds)
+        c1, e1, t1 = cpu_seconds(consumer.pid), cpu_seconds(emu.pid), time.monotonic()
+        n1 = subscriber.count if subscriber else 0
+        assert consumer.poll() is None, f'{kind} exited early'
+    finally:
+        stop(consumer)
+        stop(emu)
+    wall = t1 - t0
+    return {'consumer': 100 * (c1 - c0) / wall, 'emulator': 100 * (e1 - e0) / wall,
+            'rate': (n1 - n0) / wall if subscriber else None}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--seconds', type=float, default=10.0, help='measurement window (s)')
+    parser.add_argument('--warmup', type=float, default=4.0, help='wait after start before measuring (s)')
+    args = parser.parse_args(argv)
+    os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
+
+    rows = [('decode-only reader (baseline, no ROS)', measure('reader', args)),
+            ('lsm6dso32_driver, no subscriber', measure('driver', args))]
+    sub = Subscriber()
+    try:
+        rows.append(('lsm6dso32_driver, 1 raw subscriber', measure('driver', args, sub)))
+    finally:
+        sub.close()
+
+    base = rows[0][1]['consumer']
+    print(f'command: {shlex.join([sys.executable] + sys.argv)}')
+    print(f'emulator: real time, {ODR:g} Hz, TCP loopback; window {args.seconds:g} s after {args.warmup:g} s; '
+          f'{os.cpu_count()} cores (shared machine: expect noise)')
+    print(f'{"consumer":40s} {"CPU % of a core":>16s} {"x baseline":>11s} {"emulator CPU %":>15s} '
+          f'{"received msg/s":>15s}')
+    for name, r in rows:
+        rate = '-' if r['rate'] is None else f'{r["rate"]:.0f}'
+        print(f'{name:40s} {r["consumer"]:16.1f} {r["consumer"] / base:11.2f} {r["emulator"]:15.1f} {rate:>15s}')
+    worst = max(r['consumer'] for name, r in rows[1:])
+    print(f'driver CPU share at {ODR:g} Hz: {worst:.1f} % of one core (target <= 30 %)')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -184,3 +184,22 @@ def test_cli_prints_report_and_refuses_bad_input(sd_logs, tmp_path, capsys):
                           '--accel-fs-g', '4']) == 4  # no samples at all
     assert not (tmp_path / 'b3').exists()
     assert importer.main([*files, '--out', str(tmp_path / 'b4'), '--gyro-fs-dps', '300']) == 2
+
+
+@pytest.mark.slow
+def test_import_memory_does_not_grow_with_log_size(tmp_path):
+    import tracemalloc
+
+    peaks = {}
+    for n in (5_000, 10_000, 80_000):
+        logs = tmp_path / f'logs{n}'
+        assert emu_cli.main(['--write-sd', str(logs), '--samples', str(n), '--sd-file-bytes', '300000']) == 0
+        files = sorted(str(logs / f) for f in os.listdir(logs))
+        tracemalloc.start()
+        importer.import_logs(files, tmp_path / f'bag{n}', chunk_bytes=1 << 16)
+        peaks[n] = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    # 8x the data (0.5 MB more of samples as numpy arrays alone) must not raise the Python-heap peak
+    # by more than a chunk's worth of decoded data and bookkeeping: allow 25 % (the first, smaller
+    # run only warms caches and imports up)
+    assert peaks[80_000] < 1.25 * peaks[10_000], peaks

@@ -68,8 +68,8 @@ def main(argv=None):
         bag = tmp / 'bag'
         t = time.perf_counter()
         write_bag(bag, args.samples, args.storage, args.seed)
-        print(f'wrote {args.samples:,} samples ({args.storage}, {sum(f.stat().st_size for f in bag.iterdir()) / 1e6:.0f} MB) '
-              f'in {time.perf_counter() - t:.1f} s')
+        size_mb = sum(f.stat().st_size for f in bag.iterdir()) / 1e6
+        print(f'wrote {args.samples:,} samples ({args.storage}, {size_mb:.0f} MB) in {time.perf_counter() - t:.1f} s')
         n, dt = decode_only(bag)
         print(f'decode only (ImuBagReader.iter_batches): {n / dt:,.0f} samples/s ({dt:.1f} s)')
         axes = AXES if args.axis == 'all' else (args.axis,)

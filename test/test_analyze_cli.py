@@ -25,6 +25,7 @@ FAST = ['--chunk-size', str(SIZE), '--memory', str(MEMORY), '--order-grid', GRID
 PERIOD_NS = 150_150
 T0 = 1_700_000_000 * 10**9
 DEG = 180.0 / math.pi
+ACCEL_SIGMA = 0.01  # m/s^2, white
 
 
 def sim(n, seed=0, drift_rad_s2=0.0):
@@ -32,7 +33,7 @@ def sim(n, seed=0, drift_rad_s2=0.0):
     gyro = np.stack([simulate_fractional_noise(n, 1.4, -0.3, 1e-3, rng=rng, memory=MEMORY) for _ in range(3)], 1)
     stamps = T0 + np.arange(n, dtype=np.int64) * PERIOD_NS
     gyro += drift_rad_s2 * ((stamps - T0) / 1e9)[:, None]
-    accel = np.tile([0.0, 0.0, 9.81], (n, 1))
+    accel = np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0.0, ACCEL_SIGMA, (n, 3))
     return stamps, gyro, accel
 
 
@@ -165,6 +166,12 @@ def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
     assert imu['gyroscope_noise_density'] == max(bag['axes'][a]['allan']['angle_random_walk_rad_per_sqrt_s']
                                                  for a in 'xyz')
     assert 'gyroscope_random_walk' in imu
+    # White accelerometer noise: ADEV = sigma / sqrt(tau fs), so the noise density is sigma / sqrt(fs).
+    # The 5-term fit on 1877 samples is dominated by the short taus (thousands of averages each); the
+    # largest of three axes is reported, so allow 15 %.
+    assert imu['accelerometer_noise_density'] == pytest.approx(ACCEL_SIGMA * math.sqrt(PERIOD_NS / 1e9), rel=0.15)
+    assert 'accelerometer_random_walk' in imu
+    assert set(bag['accelerometer_allan']) == {'x', 'y', 'z'}
 
     curves = np.load(out / 'curves.npz')
     assert curves['seq_ref/z/var'].shape == (3, 21) and list(curves['seq_ref/z/chunk']) == [0, 1, 2]
@@ -211,6 +218,12 @@ def test_reference_adds_health_verdicts(tmp_path):
     assert h1_z['health']['level'] == 'ERROR' and 'reference' in h1_z['health']['message']
     assert doc['options']['thresholds']['drift_ratio_warn'] == 5.0
     assert '### Health verdict against the reference' in (out / 'summary.md').read_text()
+    # A two-bag summary as reference needs the bag named.
+    assert main([str(h1), '--reference', str(out / 'summary.json'), '--out', str(tmp_path / 'x'), *FAST]) == 2
+    assert main([str(h1), '--reference', str(out / 'summary.json'), '--reference-bag', 'h1', '--jobs', '1',
+                 '--no-figures', '--out', str(tmp_path / 'x'), *FAST]) == 0
+    again = json.loads((tmp_path / 'x' / 'summary.json').read_text())['bags'][0]['axes']['z']['health']
+    assert again['level'] == 'OK'  # h1 judged against itself
 
 
 def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path):

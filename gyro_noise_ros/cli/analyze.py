@@ -76,9 +76,12 @@ def build_parser():
                    help='worker processes for the identification (default: all cores; 1 = in-process)')
     p.add_argument('--reference', metavar='SUMMARY',
                    help='summary.json of a reference recording: adds health verdicts per bag and axis')
+    p.add_argument('--reference-bag', metavar='LABEL',
+                   help='bag label inside a --reference summary that holds several bags')
     p.add_argument('--label', nargs='+', metavar='NAME', help='one label per bag for tables and figures')
     p.add_argument('--curves', type=int, default=DEFAULT_CURVES, metavar='N',
-                   help=f'chunks per bag and axis whose var/J curves are kept for heat maps ({DEFAULT_CURVES}; 0 = none)')
+                   help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
+                        f'({DEFAULT_CURVES}; 0 = none)')
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
     p.add_argument('--allan-taus', default='octave', choices=('octave', 'dense'),
@@ -127,8 +130,8 @@ def _labels(paths, labels):
 
 
 def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None, jobs=1,
-                 reference=None, thresholds=None, figures=True, curves=DEFAULT_CURVES, batch_size=DEFAULT_BATCH,
-                 progress=False, command=None):
+                 reference=None, reference_bag=None, thresholds=None, figures=True, curves=DEFAULT_CURVES,
+                 batch_size=DEFAULT_BATCH, progress=False, command=None):
     """
     Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
 
@@ -148,6 +151,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         Worker processes (1: analyse in this process).
     reference : str or os.PathLike, optional
         summary.json of a reference recording (health verdicts).
+    reference_bag : str, optional
+        Bag label inside ``reference`` when it holds several bags.
     thresholds : HealthThresholds, optional
     figures : bool
         Write PNG figures.
@@ -174,7 +179,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         raise ParameterError(f'--curves must be >= 0, got {curves}')
     names = _labels([str(p) for p in paths], labels)
     thresholds = thresholds if thresholds is not None else HealthThresholds()
-    ref = reference_per_axis(str(reference), config.axes) if reference is not None else {}
+    ref = reference_per_axis(str(reference), config.axes, bag=reference_bag) if reference is not None else {}
     # Fail fast on any unreadable bag or unresolvable topic before hours of work on the others.
     topics = [find_imu_topic(p, topic) for p in paths]
     out = Path(out_dir)
@@ -211,6 +216,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         'command': list(command) if command is not None else None,
         'options': {**config.as_dict(), 'jobs': jobs, 'topic': topic, 'temperature_topic': temperature_topic,
                     'reference': str(reference) if reference is not None else None,
+                    'reference_bag': reference_bag,
                     'thresholds': {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
                     if ref else None,
                     'curves': curves, 'batch_size': batch_size},
@@ -282,6 +288,7 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
                     timing['wait_s'] += time.perf_counter() - w0
                     finish(result)
 
+        accel = _AccelAllan(config.allan and config.allan_taus)
         batches = reader.iter_batches(batch_size)
         while True:
             d0 = time.perf_counter()
@@ -296,6 +303,7 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
                 # held constant before the first and after the last temperature message.
                 temp = np.interp(batch.stamp_ns.astype(np.float64), t_stamp, t_value)
             submit(engine.ingest(batch.stamp_ns, batch.gyro, temp))
+            accel.update(batch.accel, engine.counts().rate_hz)
             done += len(batch)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
         submit(engine.flush())
@@ -308,6 +316,8 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         storage, undecodable = reader.storage, reader.undecodable_count
         temperature_topic_used = reader.temperature_topic
 
+    accel.update(None, engine.counts().rate_hz)
+    accel_terms = accel.terms()
     summaries = engine.summary(allan=config.allan)
     verdicts = engine.health(summaries=summaries) if ref else {}
     counts = engine.counts()
@@ -324,8 +334,64 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         'tail_samples': counts.tail_samples, 'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
         'allan_status': engine.allan_status,
+        'accelerometer_allan': {a: report.allan_terms_dict(t) for a, t in accel_terms.items()},
         'axes': {axis: report.axis_summary_dict(s, verdict=verdicts.get(axis)) for axis, s in summaries.items()},
     }
+
+
+class _AccelAllan:
+    """
+    Allan deviation of the accelerometer axes, for the accelerometer_* keys of imu.yaml.
+
+    The IEEE 952 model is fitted to the specific-force rate in m/s^2 exactly as to the angular rate: the
+    fitted "angle random walk" is then the velocity random walk (m/s/sqrt(s) = m/s^2/sqrt(Hz), Kalibr's
+    accelerometer_noise_density) and the "rate random walk" the acceleration random walk (m/s^3/sqrt(Hz),
+    accelerometer_random_walk). Samples wait until the engine knows the sample rate.
+    """
+
+    def __init__(self, taus):
+        self.taus = taus or None
+        self.acc = None
+        self.pending = []
+
+    def update(self, accel, rate_hz):
+        if self.taus is None:
+            return
+        if accel is not None:
+            self.pending.append(np.asarray(accel, dtype=np.float64))
+        if not math.isfinite(rate_hz) or not self.pending:
+            return
+        from ..core.allan import AllanAccumulator
+
+        if self.acc is None:
+            self.acc = [AllanAccumulator(rate_hz, taus=self.taus) for _ in AXES]
+        for block in self.pending:
+            for k, acc in enumerate(self.acc):
+                col = block[:, k]
+                acc.update(col[np.isfinite(col)])
+        self.pending = []
+
+    def terms(self):
+        if self.acc is None:
+            return {}
+        from ..core.allan import fit_noise_terms
+
+        out = {}
+        for axis, acc in zip(AXES, self.acc):
+            try:
+                t = fit_noise_terms(acc.result())
+            except (InputDataError, ParameterError, ValueError):
+                out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to fit
+                continue
+            out[axis] = {
+                'quantization_m_s': t.quantization_rad,
+                'velocity_random_walk_m_s2_per_sqrt_hz': t.angle_random_walk_rad_per_sqrt_s,
+                'bias_instability_m_s2': t.bias_instability_rad_per_s,
+                'acceleration_random_walk_m_s3_per_sqrt_hz': t.rate_random_walk_rad_per_s_sqrt_s,
+                'ramp_m_s3': t.rate_ramp_rad_per_s2,
+                'tau_min_s': t.tau_min_s, 'tau_max_s': t.tau_max_s,
+                'rms_relative_residual': t.rms_relative_residual}
+        return out
 
 
 def _write_allan_outputs(out, doc, allan_store, figures):
@@ -340,9 +406,15 @@ def _write_allan_outputs(out, doc, allan_store, figures):
     first = doc['bags'][0]
     density, walk = report.allan_kalibr(
         [allan_store[(first['label'], a)][1] for a in first['axes'] if (first['label'], a) in allan_store])
+    acc_terms = [t for t in first.get('accelerometer_allan', {}).values() if t]
+    acc_density = max((t['velocity_random_walk_m_s2_per_sqrt_hz'] for t in acc_terms
+                       if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None), default=None)
+    acc_walk = max((t['acceleration_random_walk_m_s3_per_sqrt_hz'] for t in acc_terms
+                    if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None), default=None)
     report.write_imu_yaml(
         out / 'imu.yaml', rostopic=first['topic'], update_rate_hz=first['rate_hz'] or float('nan'),
         gyroscope_noise_density=density, gyroscope_random_walk=walk,
+        accelerometer_noise_density=acc_density, accelerometer_random_walk=acc_walk,
         source=f"from bag {first['label']} ({first['path']}), largest over axes {', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
     if figures and fig_series:
@@ -387,7 +459,8 @@ def _body(argv):
     jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
     doc = analyze_bags(args.bags, out_dir=args.out, labels=args.label, topic=args.topic,
                        temperature_topic=args.temperature_topic, config=config, jobs=jobs,
-                       reference=args.reference, figures=not args.no_figures, curves=args.curves,
+                       reference=args.reference, reference_bag=args.reference_bag,
+                       figures=not args.no_figures, curves=args.curves,
                        batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv])
     if not args.quiet:
         _print_summary(doc)

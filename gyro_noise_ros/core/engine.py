@@ -17,8 +17,8 @@ step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back un
 from the latest stamp seen so far. A step larger than ``gap_factor`` nominal periods is a gap that lost
 ``round(step / period) - 1`` samples. A step <= 0 is an out-of-order (or repeated) stamp: counted, never
 reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap
-(the hole is seen before the late sample arrives; the engine does not look back to fill it). The ``gap_policy`` decides what a
-gap does to the chunk it falls in:
+(the hole is seen before the late sample arrives; the engine does not look back to fill it).
+The ``gap_policy`` decides what a gap does to the chunk it falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
 * ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and

@@ -354,7 +354,7 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
         raise ParameterError(f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 
 
-def reference_per_axis(reference, axes):
+def reference_per_axis(reference, axes, *, bag=None):
     """
     Normalise the ``reference`` argument of the engine to ``{axis: ReferenceStats}``.
 
@@ -363,6 +363,8 @@ def reference_per_axis(reference, axes):
     reference : None, str, os.PathLike, ReferenceStats or dict
         A summary.json path (loaded per axis; its single bag), one ReferenceStats for all axes, or a dict.
     axes : tuple of str
+    bag : str, optional, keyword-only
+        Bag label or path inside a summary.json holding several bags.
 
     Returns
     -------
@@ -382,7 +384,7 @@ def reference_per_axis(reference, axes):
         out = {}
         for a in axes:
             try:
-                out[a] = load_reference(reference, axis=a)
+                out[a] = load_reference(reference, bag=bag, axis=a)
             except ParameterError as err:
                 if 'is not in reference summary' not in str(err) or 'axis' not in str(err):
                     raise

@@ -137,6 +137,7 @@ def stamp_ns(msg):
     ('reconnect_period_s', -1.0, "'reconnect_period_s'"),  # below the range
     ('reconnect_period_s', 1, 'floating-point'),          # integer given for a double
     ('temperature_decimation', 0, "'temperature_decimation'"),
+    ('frame_id', 'imu link', "'frame_id'"),           # no spaces in a TF frame id
     ('port', '', "'port'"),
     ('port', 'nosuchscheme://x', "'port'"),
     ('loss_warn_ratio', 0.5, "'loss_warn_ratio'"),      # above loss_error_ratio (0.01)
@@ -166,6 +167,7 @@ def test_runtime_parameter_changes(harness):
     assert node._message_fields['frame_id'] == 'gyro_frame'
     assert not node.set_parameters([Parameter('odr_hz', value=833.0)])[0].successful  # read_only
     assert not node.set_parameters([Parameter('temperature_decimation', value=0)])[0].successful
+    assert not node.set_parameters([Parameter('frame_id', value='')])[0].successful
     assert node.get_parameter('temperature_decimation').value == 128
 
 
@@ -376,8 +378,10 @@ def test_session_with_faults_and_reconnection(harness):
     def first(board, conn):
         cmd = board.read_command(conn)
         # Samples sent before the acknowledgement may have the old scaling: never published.
+        early = make_samples(np.arange(5, 105))
+        early['flags'][45] = P.FLAG_FIFO_OVERRUN  # the sensor lost samples the board never saw
         conn.sendall(P.encode_samples(make_samples(np.arange(0, 5))) + board.ack(cmd)
-                     + P.encode_samples(make_samples(np.arange(5, 105))))
+                     + P.encode_samples(early))
         conn.sendall(_corrupt(P.encode_samples(make_samples(np.arange(105, 115)))))
         conn.sendall(P.encode_samples(make_samples(np.arange(115, 205))))
         time.sleep(0.3)  # then the cable is pulled
@@ -416,6 +420,7 @@ def test_session_with_faults_and_reconnection(harness):
         assert values['Samples lost'] == '15' and values['Samples published'] == '280'
         assert values['Duplicates dropped'] == '10' and int(values['CRC errors']) >= 1
         assert values['Connections'] == '2'
+        assert values['Sensor FIFO overruns'] == '1'
         assert status.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
         assert board.errors == []
     finally:

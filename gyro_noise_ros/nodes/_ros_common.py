@@ -18,6 +18,7 @@ What diagnostic_updater would give (it is not installable from PyPI) is written 
 """
 
 import math
+import re
 import sys
 from dataclasses import dataclass
 
@@ -80,6 +81,8 @@ class ParamSpec:
     choices : tuple
         Allowed values when the set is discrete (the descriptor cannot say so; checked by
         :func:`declare_parameter_table` and the set-parameters callback it installs).
+    pattern : str
+        Regular expression a string value must match in full (e.g. a frame id); ``''``: any.
     """
 
     name: str
@@ -90,6 +93,7 @@ class ParamSpec:
     min_value: object = None
     max_value: object = None
     choices: tuple = ()
+    pattern: str = ''
 
     @property
     def ros_type(self):
@@ -110,6 +114,8 @@ class ParamSpec:
                                    read_only=self.read_only)
         if self.choices:
             desc.additional_constraints = 'one of ' + ', '.join(str(c) for c in self.choices)
+        elif self.pattern:
+            desc.additional_constraints = f'matches {self.pattern}'
         if self.min_value is not None:
             if self.ros_type == ParameterType.PARAMETER_INTEGER:
                 desc.integer_range = [IntegerRange(from_value=int(self.min_value),
@@ -134,6 +140,8 @@ class ParamSpec:
         ParameterError
             Naming the parameter, the bad value and what is allowed.
         """
+        if self.pattern and not re.fullmatch(self.pattern, value):
+            raise ParameterError(f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
         if self.choices and value not in self.choices:
             raise ParameterError(f"parameter '{self.name}' = {value!r} is not one of "
                                  + ', '.join(repr(c) for c in self.choices))

@@ -33,7 +33,7 @@ reason and retries every ``reconnect_period_s`` until the port is back; the node
 import sys
 import threading
 import time
-from dataclasses import dataclass, fields, is_dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import serial
@@ -61,7 +61,8 @@ PARAMETERS = (
     ParamSpec('baud_rate', 2_000_000,
               'UART baud rate; ignored by USB CDC ports; a real UART needs about 2 MBd at 6.66 kHz',
               unit='Bd', read_only=True, min_value=9600, max_value=12_000_000),
-    ParamSpec('frame_id', 'imu_link', 'header.frame_id of the published messages'),
+    ParamSpec('frame_id', 'imu_link', 'header.frame_id of the published messages',
+              pattern=r'[A-Za-z0-9_./-]+'),
     ParamSpec('odr_hz', _DEFAULT_ODR, 'Output data rate requested from the board',
               unit='Hz', read_only=True, choices=tuple(lsm6dso32.ODRS_HZ)),
     ParamSpec('gyro_full_scale_dps', 2000, 'Gyroscope full scale requested from the board',
@@ -222,11 +223,7 @@ class LinkConfig:
 
 
 def _stats_dict(stats):
-    if stats is None:
-        return {}
-    if is_dataclass(stats):
-        return {f.name: getattr(stats, f.name) for f in fields(stats)}
-    return dict(stats._asdict())
+    return {f.name: getattr(stats, f.name) for f in fields(stats)}
 
 
 def _diag_cov(variance):
@@ -292,7 +289,8 @@ class Lsm6dso32Driver(Node):
         self._connections = 0
         self._streaming_since = None
         self._last_sample_monotonic = None
-        self._diag_prev = {'time': time.monotonic(), 'published': 0, 'lost': 0, 'crc': 0, 'restarts': 0}
+        self._diag_prev = {'time': time.monotonic(), 'published': 0, 'lost': 0, 'crc': 0, 'restarts': 0,
+                           'overruns': 0}
 
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader', daemon=True)
@@ -531,8 +529,9 @@ class Lsm6dso32Driver(Node):
 
         - ERROR: the port is not streaming (the message names the last error); no sample for a
           whole diagnostics period; lost fraction in the period above ``loss_error_ratio``.
-        - WARN: lost fraction above ``loss_warn_ratio``; CRC errors in the period; measured rate off
-          the acknowledged ODR by more than ``rate_tolerance_ratio``; a board counter restart.
+        - WARN: lost fraction above ``loss_warn_ratio``; CRC errors or sensor FIFO overruns in the
+          period; measured rate off the acknowledged ODR by more than ``rate_tolerance_ratio``; a
+          board counter restart.
 
         Returns
         -------
@@ -544,7 +543,8 @@ class Lsm6dso32Driver(Node):
         link = s['link']
         prev = self._diag_prev
         self._diag_prev = {'time': now, 'published': s['published'], 'lost': s['lost'],
-                           'crc': link.get('crc_errors', 0), 'restarts': s['restarts']}
+                           'crc': link.get('crc_errors', 0), 'restarts': s['restarts'],
+                           'overruns': link.get('fifo_overruns', 0)}
         since = prev['time'] if s['streaming_since'] is None else max(prev['time'], s['streaming_since'])
         window = now - since
         d_pub = s['published'] - prev['published']
@@ -571,6 +571,11 @@ class Lsm6dso32Driver(Node):
                     checks.append((WARN, text))
             if d_crc > 0:
                 checks.append((WARN, f'{d_crc} CRC errors in the last {window:.1f} s.'))
+            d_overruns = link.get('fifo_overruns', 0) - prev['overruns']
+            if d_overruns > 0:
+                # Samples the sensor dropped before the board read them: not in the counter.
+                checks.append((WARN, f'The sensor FIFO overran {d_overruns} times in the last '
+                                     f'{window:.1f} s.'))
             # Rate is judged on a full window only: a partial first window after connecting
             # undercounts by the connection latency.
             if (config is not None and window >= 0.5 * p['diagnostics_period_s']
@@ -601,6 +606,8 @@ class Lsm6dso32Driver(Node):
             ('Resyncs', link.get('resyncs', 0)),
             ('Bytes discarded', link.get('bytes_discarded', 0)),
             ('Frames ok', link.get('frames_ok', 0)),
+            ('Sensor FIFO overruns', link.get('fifo_overruns', 0)),
+            ('Clock drift (ppm)', f'{self._device_clock.state.drift_ppm:.1f}'),
             ('Connections', s['connections']),
             ('Counter restarts', s['restarts']),
             ('Temperature messages', s['temperatures']),

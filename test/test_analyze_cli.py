@@ -3,6 +3,7 @@
 import csv
 import json
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -287,3 +288,16 @@ def test_bad_input_gives_one_line_and_documented_exit_code(odd_bags, tmp_path, c
     assert text in err[-1]
     if code != 2 or 'invalid choice' not in text:
         assert len(err) == 1 and err[0].startswith('gyro_noise_analyze: error: ')
+
+
+def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
+    path = sqlite_bag[0]
+    args = [str(path), '--axis', 'x', '--no-figures', '--no-allan', '--jobs', '1', *FAST[:-1]]
+    assert main([*args, '--out', str(tmp_path / 'a')]) == 0
+    assert capsys.readouterr().err == ''  # stderr is not a terminal under pytest
+    monkeypatch.setattr(sys.stderr, 'isatty', lambda: True)
+    assert main([*args, '--out', str(tmp_path / 'b')]) == 0
+    err = capsys.readouterr().err
+    assert '\rseq_ref: 100.0% 1877/1877 messages, 3 chunks' in err and err.endswith('\n')
+    assert main([*args, '--quiet', '--out', str(tmp_path / 'c')]) == 0
+    assert capsys.readouterr().err == ''

@@ -136,6 +136,38 @@ def test_fault_injector_counts_match_decoder_exactly():
     assert st.samples_ok + c.dropped_flagged + c.dropped_unflagged + 4 * 16 == 200 * 16
 
 
+def test_fifo_overruns_flagged_carried_over_drops_and_invisible_to_seq():
+    board = quiet_board(odr_hz=6667)
+    faults = FaultInjector(np.random.default_rng(8), drop_flagged_rate=0.05, drop_unflagged_rate=0.05,
+                           fifo_overrun_rate=0.002)
+    dec = p.Decoder()
+    generated, delivered = [], []
+    for _ in range(300):
+        k = faults.overrun(32)
+        board.sensor_overrun(k)
+        s = board.next_samples(32 - k)
+        generated.append(s)
+        res = dec.feed(p.encode_samples(faults.drop(s)))
+        delivered.append(res.samples)
+    gen, got = np.concatenate(generated), np.concatenate(delivered)
+    assert faults.counts.fifo_overruns > 5
+    assert board.samples_overrun == faults.counts.fifo_overrun_samples
+    # seq has no gaps for sensor-side losses: generated seq is contiguous
+    assert np.array_equal(gen['seq'], np.arange(gen.size))
+    # twin: a delivered sample carries the flag iff an overrun sample was generated since the last delivery
+    kept = np.isin(gen['seq'], got['seq'])
+    expected, carry = 0, False
+    for flag, k in zip(gen['flags'].tolist(), kept.tolist()):
+        carry = carry or bool(flag & p.FLAG_FIFO_OVERRUN)
+        if k:
+            expected += carry
+            carry = False
+    assert dec.stats.fifo_overruns == expected > 0
+    # the time stamp shows the sensor-side loss: (k + 1) periods between the two samples read
+    i = int(np.flatnonzero(gen['flags'] & p.FLAG_FIFO_OVERRUN)[0])
+    assert gen['t_us'][i] - gen['t_us'][i - 1] > 1.5 * 1e6 / 6667
+
+
 # --- the program -----------------------------------------------------------------------------------
 
 def start(args, tmp_path):

@@ -113,6 +113,9 @@ def build_parser():
                        help='probability per sample of a board-side drop that the board flags')
     fault.add_argument('--drop-unflagged-rate', type=float, default=0.0,
                        help='probability per sample of a silent drop (only the counter shows it)')
+    fault.add_argument('--fifo-overrun-rate', type=float, default=0.0,
+                       help='probability per sample slot of a sensor FIFO overrun (1-32 samples lost in the '
+                            'sensor, invisible to seq, next sample flagged FIFO_OVERRUN; at most one per frame)')
     fault.add_argument('--disconnect-after', type=int, help='unplug once after this many samples sent')
     fault.add_argument('--disconnect-every-s', type=float, help='unplug after every this many seconds connected')
     fault.add_argument('--unplug-s', type=float, default=1.0, help='how long an unplug lasts (s)')
@@ -161,6 +164,8 @@ def _check_args(args):
         raise ParameterError(f'--duration-s must be >= 0, got {args.duration_s}')
     if args.write_sd and args.samples is None and args.duration_s is None:
         raise ParameterError('--write-sd needs --samples or --duration-s')
+    if not 0 <= args.fifo_overrun_rate < 1:
+        raise ParameterError(f'--fifo-overrun-rate must be in [0, 1), got {args.fifo_overrun_rate}')
     if args.tx_buffer_bytes < 4096:
         raise ParameterError(f'--tx-buffer-bytes must be >= 4096, got {args.tx_buffer_bytes}')
     if args.unplug_s < 0:
@@ -394,9 +399,14 @@ def _run_sd(args, board, faults, truth_fh, counters):
     with SdLogWriter(args.write_sd, sequence_id=args.sequence_id, odr_hz=board.odr_hz,
                      gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g, max_file_bytes=args.sd_file_bytes,
                      batch=args.batch, rtc_unix_s=args.rtc_unix_s, corrupt=corrupt) as writer:
-        chunk = args.batch * max(1, 65536 // args.batch)
+        # overruns are drawn at most once per chunk: go frame by frame when they are injected
+        chunk = args.batch if args.fifo_overrun_rate > 0 else args.batch * max(1, 65536 // args.batch)
         while counters.samples_generated < total:
             n = min(chunk, total - counters.samples_generated)
+            lost_in_sensor = faults.overrun(n)
+            board.sensor_overrun(lost_in_sensor)
+            counters.samples_generated += lost_in_sensor
+            n -= lost_in_sensor
             samples = board.next_samples(n)
             counters.samples_generated += n
             if truth_fh is not None:
@@ -464,6 +474,10 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
                 due = min(due, total)
             n = due - counters.samples_generated
             if n > 0:
+                lost_in_sensor = faults.overrun(n)
+                board.sensor_overrun(lost_in_sensor)
+                counters.samples_generated += lost_in_sensor
+                n -= lost_in_sensor
                 samples = board.next_samples(n)
                 counters.samples_generated += n
                 if truth_fh is not None:
@@ -475,7 +489,8 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
                         frame = encode_samples(kept[start:start + args.batch])
                         if len(outbuf) + len(frame) > args.tx_buffer_bytes:
                             # buffer full: this frame and the rest of the batch are lost, the next is flagged
-                            faults.note_lost(kept.size - start)
+                            faults.note_lost(kept.size - start,
+                                             carry_flags=int(np.bitwise_or.reduce(kept['flags'][start:])))
                             counters.samples_unsent += kept.size - start
                             break
                         outbuf += faults.corrupt(frame)
@@ -483,7 +498,7 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
                         sent_this_connection += min(args.batch, kept.size - start)
                         counters.frames_sent += 1
                 else:
-                    faults.note_lost(n)
+                    faults.note_lost(n, carry_flags=int(np.bitwise_or.reduce(samples['flags'])))
                     counters.samples_unsent += n
             # board -> host
             if connected and outbuf:
@@ -544,7 +559,8 @@ def _body(argv):
     _check_args(args)
     board = board_from_args(args)
     faults = FaultInjector(np.random.default_rng(args.seed + 1), drop_flagged_rate=args.drop_flagged_rate,
-                           drop_unflagged_rate=args.drop_unflagged_rate, corrupt_rate=args.corrupt_rate)
+                           drop_unflagged_rate=args.drop_unflagged_rate, corrupt_rate=args.corrupt_rate,
+                           fifo_overrun_rate=args.fifo_overrun_rate)
     counters = _Counters()
     stopper = _Stopper()
     old = {sig: signal.signal(sig, stopper) for sig in (signal.SIGINT, signal.SIGTERM)}

@@ -35,7 +35,7 @@ from ..core.fractional import DEFAULT_MEMORY, gl_coefficients
 from ..core.simulate import FractionalNoise, require_stable
 from ..errors import ParameterError
 from . import lsm6dso32 as lsm
-from .protocol import (ACK_OK, FLAG_SAMPLE_LOST, NAK_BAD_ACCEL_FS, NAK_BAD_GYRO_FS, NAK_BAD_ODR,
+from .protocol import (ACK_OK, FLAG_FIFO_OVERRUN, FLAG_SAMPLE_LOST, NAK_BAD_ACCEL_FS, NAK_BAD_GYRO_FS, NAK_BAD_ODR,
                        SAMPLE_DTYPE, Ack, Decoder, encode_ack)
 
 DEG = np.pi / 180.0
@@ -248,6 +248,8 @@ class BoardModel:
         self._decoder = Decoder()
         self.last_truth = None
         self.config_changes = []   # (samples_generated at the change, Ack)
+        self.samples_overrun = 0
+        self._fifo_overrun = False
 
     @property
     def time_s(self):
@@ -315,6 +317,28 @@ class BoardModel:
         """LinkStats: counters of the board's command decoder."""
         return self._decoder.stats
 
+    def sensor_overrun(self, k):
+        """
+        Let the sensor FIFO overrun: ``k`` samples are produced but never read by the board.
+
+        Time and the noise processes advance by ``k`` samples, ``seq`` does not (the board never saw
+        them), and the next sample read carries FLAG_FIFO_OVERRUN. No truth is recorded for them.
+
+        Parameters
+        ----------
+        k : int
+            Samples lost inside the sensor (>= 0).
+        """
+        k = int(k)
+        if k <= 0:
+            return
+        for gen in self._noise:
+            gen.generate(k)
+        self._accel_rng.standard_normal((k, 3))
+        self._seg_index += k
+        self.samples_overrun += k
+        self._fifo_overrun = True
+
     def next_samples(self, n):
         """
         Produce the next ``n`` samples; their ground truth is left in :attr:`last_truth`.
@@ -356,6 +380,9 @@ class BoardModel:
         out['gyro'] = lsm.quantise(gyro, lsm.gyro_sensitivity_rad_s_per_lsb(self.gyro_fs_dps))
         out['accel'] = lsm.quantise(accel, lsm.accel_sensitivity_m_s2_per_lsb(self.accel_fs_g))
         out['temp'] = lsm.quantise(temp - lsm.TEMPERATURE_OFFSET_C, 1.0 / lsm.TEMPERATURE_LSB_PER_C)
+        if self._fifo_overrun and n:
+            out['flags'][0] |= FLAG_FIFO_OVERRUN
+            self._fifo_overrun = False
         self.last_truth = Truth(seq=out['seq'].copy(), time_s=t, gyro_rad_s=gyro, accel_m_s2=accel,
                                 temperature_c=temp, gyro_fs_dps=self.gyro_fs_dps, accel_fs_g=self.accel_fs_g)
         self.seq = (self.seq + n) % (1 << 32)
@@ -382,6 +409,10 @@ class FaultCounts:
         samples reports as ``samples_lost``).
     visible_flagged_lost : int
         Of those, the ones in runs before a flagged sample (the decoder's ``samples_flagged_lost``).
+    fifo_overruns : int
+        Sensor FIFO overrun events injected (:meth:`FaultInjector.overrun`).
+    fifo_overrun_samples : int
+        Samples lost inside the sensor by them (invisible to ``seq``).
     """
 
     dropped_flagged: int = 0
@@ -389,6 +420,8 @@ class FaultCounts:
     bytes_corrupted: int = 0
     visible_lost: int = 0
     visible_flagged_lost: int = 0
+    fifo_overruns: int = 0
+    fifo_overrun_samples: int = 0
 
 
 class FaultInjector:
@@ -404,17 +437,21 @@ class FaultInjector:
         Probability that a sample vanishes unnoticed by the board.
     corrupt_rate : float, keyword-only
         Probability that a transmitted byte is corrupted.
+    fifo_overrun_rate : float, keyword-only
+        Probability per sample slot that the sensor FIFO overruns (see :meth:`overrun`).
 
     Notes
     -----
     A dropped run is flagged when any sample in it was a flagged drop, so the flagged count is the sum
     of the gaps before flagged samples, which is what the decoder reports as ``samples_flagged_lost``.
-    Drops at the very end of a stream (no later sample) are counted but invisible to a decoder.
+    Drops at the very end of a stream (no later sample) are counted but invisible to a decoder. The
+    flags of dropped samples (FIFO_OVERRUN) are OR-ed into the next sample kept, as the firmware must.
     """
 
-    def __init__(self, rng, *, drop_flagged_rate=0.0, drop_unflagged_rate=0.0, corrupt_rate=0.0):
+    def __init__(self, rng, *, drop_flagged_rate=0.0, drop_unflagged_rate=0.0, corrupt_rate=0.0,
+                 fifo_overrun_rate=0.0):
         for name, value in (('drop_flagged_rate', drop_flagged_rate), ('drop_unflagged_rate', drop_unflagged_rate),
-                            ('corrupt_rate', corrupt_rate)):
+                            ('corrupt_rate', corrupt_rate), ('fifo_overrun_rate', fifo_overrun_rate)):
             if not 0.0 <= value < 1.0:
                 raise ParameterError(f'{name} must be in [0, 1), got {value}')
         if drop_flagged_rate + drop_unflagged_rate >= 1.0:
@@ -424,6 +461,8 @@ class FaultInjector:
         self.drop_flagged_rate = float(drop_flagged_rate)
         self.drop_unflagged_rate = float(drop_unflagged_rate)
         self.corrupt_rate = float(corrupt_rate)
+        self.fifo_overrun_rate = float(fifo_overrun_rate)
+        self._pending_carry = 0   # flags of dropped samples still to be OR-ed into the next kept one
         self._pending_flag = False
         self._pending_run = 0
         self._c = dict.fromkeys(FaultCounts.__dataclass_fields__, 0)
@@ -434,7 +473,31 @@ class FaultInjector:
         """FaultCounts: what has been injected so far."""
         return FaultCounts(**self._c)
 
-    def note_lost(self, n, *, flagged=True):
+    def overrun(self, n):
+        """
+        Decide whether the sensor FIFO overruns before the next ``n`` sample slots.
+
+        Parameters
+        ----------
+        n : int
+            Sample slots about to be read.
+
+        Returns
+        -------
+        int
+            Samples (0 .. n-1, at most 32) the sensor loses first; give them to
+            :meth:`BoardModel.sensor_overrun` and read only the rest.
+        """
+        if self.fifo_overrun_rate == 0 or n < 2:
+            return 0
+        if self.rng.random() >= 1.0 - (1.0 - self.fifo_overrun_rate) ** n:
+            return 0
+        k = int(min(n - 1, self.rng.integers(1, 33)))
+        self._c['fifo_overruns'] += 1
+        self._c['fifo_overrun_samples'] += k
+        return k
+
+    def note_lost(self, n, *, flagged=True, carry_flags=0):
         """
         Record ``n`` samples lost outside the injector (e.g. transmit buffer full); flag the next sample.
 
@@ -445,10 +508,13 @@ class FaultInjector:
         ----------
         n : int
         flagged : bool, keyword-only
+        carry_flags : int, keyword-only
+            OR of the lost samples' flags, carried into the next sample kept.
         """
         if n > 0:
             self._pending_flag = self._pending_flag or flagged
             self._pending_run += n
+            self._pending_carry |= int(carry_flags) & FLAG_FIFO_OVERRUN
 
     def drop(self, samples):
         """
@@ -468,7 +534,7 @@ class FaultInjector:
         if n == 0:
             return samples.copy()
         if (self.drop_flagged_rate == 0 and self.drop_unflagged_rate == 0 and not self._pending_flag
-                and not self._pending_run):
+                and not self._pending_run and not self._pending_carry):
             self._seen_kept = True
             return samples.copy()
         u = self.rng.random(n)
@@ -486,6 +552,11 @@ class FaultInjector:
             run_has_flag = (fl_cum[kept_pos] - fl_cum[prev_kept + 1]) > 0
             run_has_flag[0] = run_has_flag[0] or pending
             kept['flags'][run_has_flag] |= FLAG_SAMPLE_LOST
+            dropped_overrun = ((samples['flags'] & FLAG_FIFO_OVERRUN) != 0) & (flagged | unflagged)
+            ov_cum = np.concatenate(([0], np.cumsum(dropped_overrun)))
+            carry = (ov_cum[kept_pos] - ov_cum[prev_kept + 1]) > 0
+            carry[0] = carry[0] or bool(self._pending_carry)
+            kept['flags'][carry] |= FLAG_FIFO_OVERRUN
             runs = kept_pos - prev_kept - 1
             runs[0] += self._pending_run
             if not self._seen_kept:
@@ -496,9 +567,12 @@ class FaultInjector:
             tail = slice(kept_pos[-1] + 1, n)
             self._pending_flag = bool(flagged[tail].any())
             self._pending_run = int((flagged | unflagged)[tail].sum())
+            self._pending_carry = FLAG_FIFO_OVERRUN if dropped_overrun[tail].any() else 0
         else:
             self._pending_flag = pending or bool(flagged.any())
             self._pending_run += n
+            if np.any(samples['flags'] & FLAG_FIFO_OVERRUN):
+                self._pending_carry = FLAG_FIFO_OVERRUN
         return kept
 
     def corrupt(self, data):

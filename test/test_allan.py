@@ -583,7 +583,7 @@ def test_accumulator_strided_levels_and_memory():
     levels = int(np.floor(np.log2(y.size / half))) + 2   # level L is seeded at N = half * 2**(L-1)
     ring_bytes = levels * (2 * half + 1) * 8
     n_tau = 41   # octave taus tracked up to 2**40
-    assert acc.nbytes <= ring_bytes + n_tau * 8 * (4 + 2 + 1 + kern.N_ACF + 3)
+    assert acc.nbytes <= ring_bytes + n_tau * 8 * (4 + 2 + 1 + kern.N_ACF + 6)
 
 
 def test_accumulator_dense_rounds_to_stride():

@@ -929,7 +929,7 @@ class AllanAccumulator:
       fraction of a percent of the fully overlapping one). m is rounded to a multiple of s
       (relative change <= 1 / max_exact_m); ``AllanResult.stride`` reports s.
     * Memory: (2 max_exact_m + 1) float64 per level, levels created as the record grows
-      (about log2(N / max_exact_m) + 1), plus O(1) per tau. Nothing grows with N otherwise.
+      (at most floor(log2(N / max_exact_m)) + 2), plus O(1) per tau. Nothing else grows with N.
 
     Parameters
     ----------
@@ -981,6 +981,10 @@ class AllanAccumulator:
         self._levels = levels[first]
         self._strides = (2 ** self._levels).astype(np.int64)
         self._n_levels_taus = int(self._levels.max()) + 1
+        self._level_end = np.searchsorted(self._levels, np.arange(self._n_levels_taus),
+                                          side='right').astype(np.int64)
+        self._level_pos = np.zeros(self._n_levels_taus, dtype=np.int64)
+        self._next_push = self._ms.copy()
         self._ring_len = 2 * self._half + 1
         self._ring = np.zeros((1, self._ring_len))
         self._n_active = 1
@@ -1007,7 +1011,8 @@ class AllanAccumulator:
     def nbytes(self):
         """Bytes held by the accumulator's arrays (phase history + per-tau state)."""
         return int(self._ring.nbytes + self._lanes.nbytes + self._tot.nbytes + self._counts.nbytes
-                   + self._acf.nbytes + self._ms.nbytes * 3)
+                   + self._acf.nbytes + self._ms.nbytes * 4 + self._level_end.nbytes
+                   + self._level_pos.nbytes)
 
     def update(self, rate):
         """
@@ -1036,9 +1041,9 @@ class AllanAccumulator:
             grown[:self._ring.shape[0]] = self._ring
             self._ring = grown
         self._k, self._n_active = _k._accumulate(
-            arr, self._offset, self._integ, self._k, self._ring, self._ring_len, self._levels,
-            self._n_active, self._ring.shape[0], self._ms, self._lanes, self._tot, self._counts,
-            self._acf)
+            arr, self._offset, self._integ, self._k, self._ring, self._level_pos, self._n_active,
+            self._ms, self._levels, self._level_end, self._next_push, self._lanes, self._tot,
+            self._counts, self._acf)
 
     def result(self):
         """

@@ -225,3 +225,12 @@ def test_odr_matching_accepts_datasheet_labels():
 
 def test_quantise_rounds_and_saturates():
     assert lsm.quantise([0.49, 0.51, -0.5, 1e9, -1e9], 1.0).tolist() == [0, 1, 0, 32767, -32768]
+
+
+def test_feed_accepts_any_bytes_like_and_refuses_other_types():
+    frame = p.encode_samples(_samples([1]))
+    for kind in (bytes, bytearray, memoryview):
+        assert p.Decoder().feed(kind(frame)).samples.size == 1
+    assert p.Decoder().feed(None).samples.size == 0
+    with pytest.raises(ParameterError, match='bytes-like'):
+        p.Decoder().feed('A5 5A')

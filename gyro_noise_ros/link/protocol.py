@@ -491,7 +491,14 @@ class Decoder:
         Returns
         -------
         DecodeResult
+
+        Raises
+        ------
+        ParameterError
+            Only when ``data`` is not bytes-like at all (a programming error, not bad input bytes).
         """
+        if data is not None and not isinstance(data, (bytes, bytearray, memoryview)):
+            raise ParameterError(f'data must be bytes-like, got {type(data).__name__}')
         try:
             if data:
                 mv = memoryview(data).cast('B')
@@ -509,14 +516,14 @@ class Decoder:
             res = _Collector()
             n = len(self._buf)
             if n:
-                self._discard_to(0, n, res)
+                self._discard_to(0, n)
                 del self._buf[:]
                 self._base += n
             self._close_region(res, self._base)
             return res.result(self)
         return self._run(final=truncate)
 
-    def _discard_to(self, pos, new_pos, res):
+    def _discard_to(self, pos, new_pos):
         if self._disc_start is None:
             self._disc_start = self._base + pos
         self._c['bytes_discarded'] += new_pos - pos
@@ -542,7 +549,7 @@ class Decoder:
             while True:
                 if n - pos < 2:
                     if final and pos < n:
-                        self._discard_to(pos, n, res)
+                        self._discard_to(pos, n)
                         pos = n
                     break
                 if buf[pos] != 0xA5 or buf[pos + 1] != 0x5A:
@@ -550,13 +557,13 @@ class Decoder:
                     if nxt < 0:
                         # keep a trailing A5: it may be the first half of the next sync marker
                         nxt = n - 1 if (buf[n - 1] == 0xA5 and not final) else n
-                    self._discard_to(pos, nxt, res)
+                    self._discard_to(pos, nxt)
                     pos = nxt
                     continue
                 if n - pos < HEADER_SIZE:
                     if final:
                         c['frames_truncated'] += 1
-                        self._discard_to(pos, pos + 1, res)
+                        self._discard_to(pos, pos + 1)
                         pos += 1
                         continue
                     break
@@ -564,20 +571,20 @@ class Decoder:
                 rule = rules.get(ftype)
                 if (version != PROTOCOL_VERSION or rule is None or length < rule[0] or length > rule[1]
                         or length % rule[2]):
-                    self._discard_to(pos, pos + 1, res)
+                    self._discard_to(pos, pos + 1)
                     pos += 1
                     continue
                 end = pos + HEADER_SIZE + length
                 if end + CRC_SIZE > n:
                     if final:
                         c['frames_truncated'] += 1
-                        self._discard_to(pos, pos + 1, res)
+                        self._discard_to(pos, pos + 1)
                         pos += 1
                         continue
                     break
                 if zlib.crc32(mv[pos:end]) != crc_unpack(buf, end)[0]:
                     c['crc_errors'] += 1
-                    self._discard_to(pos, pos + 1, res)
+                    self._discard_to(pos, pos + 1)
                     pos += 1
                     continue
                 # a valid frame: any discarded region ends here

@@ -10,6 +10,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 _PROBE = r'''
 import importlib, json, pkgutil, sys
 import gyro_noise_ros
@@ -32,23 +34,27 @@ print(json.dumps(report))
 '''
 
 
-def _probe(*extra):
-    proc = subprocess.run([sys.executable, '-c', _PROBE, *extra], capture_output=True, text=True,
+_CONTROL = 'gyro_noise_ros.nodes.driver'
+
+
+@pytest.fixture(scope='module')
+def report():
+    # One subprocess for both tests: the package's modules, then the positive control last.
+    proc = subprocess.run([sys.executable, '-c', _PROBE, _CONTROL], capture_output=True, text=True,
                           timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def test_non_node_modules_do_not_import_ros():
-    report = _probe()
+def test_non_node_modules_do_not_import_ros(report):
     # Guards the discovery: the link layer must be among the modules checked.
     assert 'gyro_noise_ros.link.protocol' in report['modules']
-    assert not any(m.startswith('gyro_noise_ros.nodes') for m in report['modules'])
-    assert report['culprits'] == {}, f'ROS imported by: {report["culprits"]}'
+    assert not any(m.startswith('gyro_noise_ros.nodes') for m in report['modules'][:-1])
+    culprits = {m: v for m, v in report['culprits'].items() if m != _CONTROL}
+    assert culprits == {}, f'ROS imported by: {culprits}'
 
 
-def test_probe_detects_a_ros_import():
-    # Positive control: the same probe must name a module that does import rclpy.
-    report = _probe('gyro_noise_ros.nodes.driver')
-    assert list(report['culprits']) == ['gyro_noise_ros.nodes.driver']
-    assert 'rclpy' in report['culprits']['gyro_noise_ros.nodes.driver']
+def test_probe_detects_a_ros_import(report):
+    # Positive control: the same probe names a module that does import rclpy.
+    assert list(report['culprits']) == [_CONTROL]
+    assert 'rclpy' in report['culprits'][_CONTROL]

@@ -98,6 +98,18 @@ class _Group:
         return _Group(self.buf, self.starts[idx], self.size)
 
 
+def _ascii(group, first, stop):
+    """
+    Messages whose bytes ``[first, stop)`` (frame_id and its padding) are all ASCII.
+
+    rosbags refuses a frame_id that is not valid UTF-8; non-ASCII names are rare enough to leave
+    every such message to rosbags, so both decoders accept and refuse the same messages.
+    """
+    if stop <= first:
+        return np.ones(group.starts.shape[0], bool)
+    return (group.cols(first, stop - first) < 0x80).all(axis=1)
+
+
 def _decode_group(group, tail_f8, fields, ros1):
     """
     Decode one length group.
@@ -119,7 +131,7 @@ def _decode_group(group, tail_f8, fields, ros1):
     if ros1:
         if off < 16:
             return ok, stamp_ns, values
-        ok = 16 + group.u32(12, '<') == off
+        ok = (16 + group.u32(12, '<') == off) & _ascii(group, 16, off)
         if ok.all():
             sub, idx = group, slice(None)
         else:
@@ -144,7 +156,7 @@ def _decode_group(group, tail_f8, fields, ros1):
         # The string must end with its NUL exactly where its length says; anything else is a
         # different layout or corruption, which rosbags will judge.
         nul_at = group.starts + np.where(good, 15 + length, 0)
-        good &= group.buf[nul_at] == 0
+        good &= (group.buf[nul_at] == 0) & _ascii(group, 16, off)
         if good.all():
             sub, idx = group, slice(None)
         else:

@@ -1,5 +1,9 @@
 """
-End to end with real processes: ``portenta_emulator`` (TCP loopback) -> ``lsm6dso32_driver`` -> this test.
+End to end with real processes: ``portenta_emulator`` -> ``lsm6dso32_driver`` -> this test.
+
+The emulator serves TCP loopback (``socket://`` URLs) or a pseudo-terminal (a device path, like the
+real board's ``/dev/ttyACM0``); faults are injected by the emulator (corrupted bytes, dropped samples
+flagged and not, unplug) or by killing it and starting another board on the same port.
 
 Ground truth: the emulator's samples are a pure function of its command line
 (``cli.emulator.board_from_args``: every random stream is consumed one draw per sample, whatever the
@@ -67,11 +71,12 @@ class Processes:
         self.tmp_path = tmp_path
         self.procs = []
 
-    def emulator(self, *args, tcp='127.0.0.1:0', name='emu'):
+    def emulator(self, *args, tcp='127.0.0.1:0', link=None, name='emu'):
         stats = self.tmp_path / f'{name}_stats.json'
+        where = ['--tcp', tcp] if tcp else ['--link', link]
         proc = subprocess.Popen(
-            [sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp', tcp, '--stats-out', str(stats),
-             *args], stdout=subprocess.PIPE, stderr=open(self.tmp_path / f'{name}.log', 'w'), text=True)
+            [sys.executable, '-m', 'gyro_noise_ros.cli.emulator', *where, '--stats-out', str(stats), *args],
+            stdout=subprocess.PIPE, stderr=open(self.tmp_path / f'{name}.log', 'w'), text=True)
         self.procs.append(proc)
         return proc, _readline(proc, 60.0), stats
 
@@ -351,3 +356,33 @@ def test_board_restart_on_the_same_port(procs, listener):
     assert final['Counter restarts'] == '1'
     assert int(final['Connections']) >= 2
     assert int(final['Samples published']) == len(imu) + _dds_drops(listener.dds_seq)
+
+
+def test_pseudo_terminal_unplug_and_replug(procs, listener, tmp_path):
+    # The real board is a serial device: the same path through a pty, whose unplug removes the
+    # device and whose replug creates a new one behind the same symlink (like a udev rule).
+    link = tmp_path / 'ttyPORTENTA'
+    emu_args = ['--seed', '31', *SIGNAL]
+    driver = procs.driver(str(link))
+    listener.wait_for_publisher(60.0)
+    emu, name, stats_path = procs.emulator(*emu_args, '--disconnect-after', '8000', '--unplug-s', '0.5',
+                                           tcp=None, link=str(link))
+    assert name == str(link)
+    listener.run(lambda: len(listener.raw['imu']) > 8000 + 1.5 * ODR, 90.0)
+    assert procs.stop(emu, signal.SIGTERM) == 0
+    listener.run(lambda: listener.values(listener.statuses[-1])['Connection'] != 'streaming', 20.0)
+    assert procs.stop(driver) == 0
+    final = listener.values(listener.statuses[-1])
+    stats = json.loads(stats_path.read_text())
+
+    imu = decode_imu(listener.raw['imu'])
+    dds_lost = _dds_drops(listener.dds_seq)
+    _, truth, _ = _truth(emu_args, stats['samples_generated'])
+    got = np.concatenate([_on_quantum_grid(imu.gyro, GYRO_LSB), _on_quantum_grid(imu.accel, ACCEL_LSB)], axis=1)
+    seq = _match_subsequence(got, truth)
+    assert np.all(seq >= 0) and np.all(np.diff(seq) > 0) and np.all(np.diff(imu.stamp_ns) > 0)
+    assert int(np.max(np.diff(seq))) - 1 >= 0.4 * ODR  # the unplug
+    assert int(final['Connections']) >= 2
+    assert int(final['Samples lost']) == int(seq[-1] - seq[0] + 1 - len(imu) - dds_lost)
+    assert final['CRC errors'] == '0'
+    assert {s.hardware_id for s in listener.statuses} == {f'lsm6dso32@{link}'}

@@ -558,31 +558,39 @@ def test_accumulator_default_offset_agrees_to_rounding():
     assert acc.offset_rad_per_s == pytest.approx(1.5, abs=0.5)
 
 
-def test_accumulator_strided_levels_and_memory():
-    # max_exact_m = 16 forces the strided levels early: taus above 16 use every s-th phase point
+@pytest.mark.parametrize('half,taus', [(16, 'octave'), (5, 'octave'), (6, 'dense'),
+                                       (7, [3, 9, 50, 333, 1000, 20_000])])
+def test_accumulator_strided_levels_and_memory(half, taus):
+    # a small max_exact_m forces the strided levels early: taus above it use every s-th phase point
     rng = np.random.default_rng(24)
     y = rng.standard_normal(2 ** 17)
-    half = 16
-    acc = AllanAccumulator(1.0, max_exact_m=half, offset_rad_per_s=0.0)
+    acc = AllanAccumulator(1.0, taus=taus, max_exact_m=half, offset_rad_per_s=0.0)
     _feed(acc, y, rng, 7000)
     res = acc.result()
-    batch = allan_deviation(y, 1.0, offset_rad_per_s=0.0)
-    np.testing.assert_array_equal(res.m, batch.m)
+    batch = allan_deviation(y, 1.0, taus=res.m, offset_rad_per_s=0.0)
     exact = res.m <= half
     np.testing.assert_array_equal(res.avar[exact], batch.avar[exact])
-    np.testing.assert_array_equal(res.stride, np.maximum(1, res.m // half))
+    # same m-averages, same running sums: the noise type is the batch's at every tau
+    np.testing.assert_array_equal(res.noise_alpha, batch.noise_alpha)
+    if taus == 'octave':   # no rounding: level ceil(log2(m / half))
+        level = np.where(exact, 0, np.ceil(np.log2(res.m / half) - 1e-12)).astype(int)
+        np.testing.assert_array_equal(res.stride, 2 ** level)
+    np.testing.assert_array_equal(res.stride[exact], 1)
+    assert np.all(res.m % res.stride == 0) and np.all(res.m // res.stride <= half)
+    assert np.all(2 * (res.m // res.stride)[~exact] >= half)
     x = np.concatenate(([0.0], np.cumsum(y)))
     for j in np.flatnonzero(~exact):
         avar, n = ref.avar_from_phase(x, int(res.m[j]), int(res.stride[j]))
         assert res.n_terms[j] == n
         assert res.avar[j] == pytest.approx(avar, rel=1e-10)
-    # the strided estimator estimates the same AVAR: within a few standard errors of the batch
+    # the strided estimator estimates the same AVAR: within 4 standard errors of the batch
     rel = np.abs(res.avar[~exact] / batch.avar[~exact] - 1)
     assert np.all(rel < 4 * np.sqrt(2 / res.edf[~exact]))
-    # memory: one ring of 2*half+1 phase points per level, ~log2(N/half) levels
-    levels = int(np.floor(np.log2(y.size / half))) + 2   # level L is seeded at N = half * 2**(L-1)
+    # memory: one ring of 2*half+1 phase points per level (level L is seeded at N = half * 2**(L-1)),
+    # plus a fixed amount per tracked tau
+    levels = int(np.floor(np.log2(y.size / half))) + 2
     ring_bytes = levels * (2 * half + 1) * 8
-    n_tau = 41   # octave taus tracked up to 2**40
+    n_tau = acc._ms.size
     assert acc.nbytes <= ring_bytes + n_tau * 8 * (4 + 2 + 1 + kern.N_ACF + 6)
 
 

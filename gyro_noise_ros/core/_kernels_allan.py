@@ -326,6 +326,10 @@ def _accumulate(y, offset, integ, k0, ring, level_pos, n_levels_active, ms, leve
                     ring[lev + 1, pp >> 1] = ring[lev, pp]
                 level_pos[lev + 1] = half >> 1
                 n_levels_active += 1
+                if ((k >> lev) & 1) == 0:
+                    # x_k is also the newest point of the new row (half even): a tau of that
+                    # level with m == k has its first m-average now
+                    top = lev + 1
         if top < 0:
             continue
         for j in range(level_end[top]):

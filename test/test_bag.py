@@ -681,3 +681,34 @@ def test_fuzz_bulk_decoder_agrees_with_rosbags(case):
         np.testing.assert_array_equal(batch.stamp_ns, [e[0] for e in expected])
         assert_same_floats(batch.gyro, np.array([e[1] for e in expected], float).reshape(-1, 3))
         assert_same_floats(batch.accel, np.array([e[2] for e in expected], float).reshape(-1, 3))
+
+
+@pytest.mark.parametrize('storage_kind', ['sqlite3', 'mcap'])
+def test_damaged_bag_files_raise_only_bag_error(tmp_path, storage_kind):
+    # Random byte damage anywhere in the storage file: reading either works or raises BagError,
+    # never another exception (seeded; 25 damaged copies per storage).
+    rng = np.random.default_rng(14)
+    stamps, gyro, accel = sample_data(rng, 3000, with_nan=False)
+    src = tmp_path / 'src'
+    with ImuBagWriter(src, storage=storage_kind) as writer:
+        writer.write_imu(stamps, gyro, accel)
+        writer.write_temperature(stamps[::300], np.full(10, 25.0))
+    (storage_file,) = [p for p in src.iterdir() if p.suffix in ('.db3', '.mcap')]
+    original = storage_file.read_bytes()
+    outcomes = set()
+    for k in range(25):
+        data = bytearray(original)
+        for pos in rng.integers(0, len(data), int(rng.integers(1, 40))):
+            data[pos] = int(rng.integers(0, 256))
+        damaged = tmp_path / f'd{k}{storage_file.suffix}'
+        damaged.write_bytes(bytes(data))
+        try:
+            with ImuBagReader(damaged, skip_undecodable=bool(k % 2)) as reader:
+                for _ in reader.iter_batches(1000):
+                    pass
+                reader.read_temperature()
+            outcomes.add('read')
+        except BagError:
+            outcomes.add('BagError')
+    # The damage must really be exercised: some copies are refused (headers, indexes, CRCs hit).
+    assert 'BagError' in outcomes

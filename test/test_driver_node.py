@@ -67,22 +67,23 @@ def closed_port_url():
 class Harness:
     """A driver and a subscriber node on one context, spun by one executor in this thread."""
 
-    def __init__(self, context, **overrides):
+    def __init__(self, context, listen=True, **overrides):
         overrides.setdefault('port', closed_port_url())
         overrides.setdefault('reconnect_period_s', 60.0)
         self.driver = Lsm6dso32Driver(context=context, parameter_overrides=[
             Parameter(name, value=value) for name, value in overrides.items()])
         self.sub_node = rclpy.create_node('test_listener', context=context)
         self.imu, self.temps, self.diags = [], [], []
-        qos = sensor_data_qos(10000)
-        self.sub_node.create_subscription(Imu, 'imu/data_raw', self.imu.append, qos)
-        self.sub_node.create_subscription(Temperature, 'imu/temperature', self.temps.append, qos)
-        self.sub_node.create_subscription(DiagnosticArray, '/diagnostics', self.diags.append, 10)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.driver)
         self.executor.add_node(self.sub_node)
-        self.spin_until(lambda: self.driver._imu_pub.get_subscription_count() >= 1
-                        and self.driver._temp_pub.get_subscription_count() >= 1, 10.0)
+        if listen:
+            qos = sensor_data_qos(10000)
+            self.sub_node.create_subscription(Imu, 'imu/data_raw', self.imu.append, qos)
+            self.sub_node.create_subscription(Temperature, 'imu/temperature', self.temps.append, qos)
+            self.sub_node.create_subscription(DiagnosticArray, '/diagnostics', self.diags.append, 10)
+            self.spin_until(lambda: self.driver._imu_pub.get_subscription_count() >= 1
+                            and self.driver._temp_pub.get_subscription_count() >= 1, 10.0)
 
     def spin_until(self, condition, timeout_s):
         deadline = time.monotonic() + timeout_s
@@ -463,3 +464,38 @@ def test_diagnostics_topic_when_port_absent(harness):
                 'Connection', 'Last error'):
         assert isinstance(values[key], str) and values[key], key
     assert values['Connection'] == 'disconnected'
+
+
+@pytest.mark.parametrize('speed, level', [(1.0, DiagnosticStatus.OK), (0.5, DiagnosticStatus.WARN)])
+def test_rate_check_against_the_acknowledged_odr(harness, speed, level):
+    # The board acknowledges 6667 Hz and streams at speed x 6667 Hz (paced on absolute time, so
+    # the count in a window is exact to a frame): on rate -> OK, half rate -> WARN naming the rate.
+    def stream(board, conn):
+        cmd = board.read_command(conn)
+        conn.sendall(board.ack(cmd))
+        t0, sent = time.monotonic(), 0
+        while time.monotonic() - t0 < 4.0:
+            due = int((time.monotonic() - t0) * 6667.0 * speed) // 16 * 16
+            if due > sent:
+                conn.sendall(P.encode_samples(make_samples(np.arange(sent, due))))
+                sent = due
+            time.sleep(0.002)
+
+    board = FakeBoard([stream])
+    try:
+        # No subscriber: this process also runs the board, and deserialising 6667 messages/s in
+        # Python would starve the driver's thread of the GIL.
+        h = harness(port=board.url, diagnostics_period_s=3600.0, listen=False)
+        h.spin_until(lambda: h.driver.link_snapshot()['published'] > 1000, 10.0)
+        h.driver.link_status()  # starts a full window
+        t = time.monotonic()
+        h.spin_until(lambda: time.monotonic() - t > 1.5, 5.0)
+        status = h.driver.link_status()
+        assert status.level == level, status.message
+        rate = float({kv.key: kv.value for kv in status.values}['Sample rate (Hz)'])
+        # Window edges cut frames of 16 samples: 2 frames in 1.5 s is 21 Hz.
+        assert abs(rate - 6667.0 * speed) < 0.02 * 6667.0 * speed + 25.0
+        if level == DiagnosticStatus.WARN:
+            assert status.message.startswith('Sample rate')
+    finally:
+        board.close()

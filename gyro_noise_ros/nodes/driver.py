@@ -26,8 +26,8 @@ published samples, within a connection or across an unplug, is counted in ``Samp
 that falls back by more than one second of samples is a board restart: the node starts a new epoch
 (clock estimator reset, stamps still monotonic) instead of waiting for the old count.
 
-Unplug. Any read/write error or ``data_timeout_s`` of silence closes the port, reports ERROR with the
-reason and retries every ``reconnect_period_s`` until the port is back; the node never exits for it.
+Unplug. Any read/write error or ``data_timeout_s`` of silence (at least three full frames at low
+rates) closes the port, reports ERROR with the reason and retries every ``reconnect_period_s`` until the port is back; the node never exits for it.
 """
 
 import sys
@@ -44,7 +44,7 @@ from ..bag import encode_imu_cdr, encode_temperature_cdr
 from ..errors import LinkError, ParameterError
 from ..link import lsm6dso32
 from ..link.clock import DeviceClock
-from ..link.protocol import Decoder, encode_configure
+from ..link.protocol import MAX_SAMPLES_PER_FRAME, Decoder, encode_configure
 from ._ros_common import (ERROR, WARN, ParamSpec, declare_parameter_table, diagnostic_array,
                           diagnostic_status, diagnostics_publisher, run_node, sensor_data_qos, worst)
 
@@ -222,6 +222,11 @@ class LinkConfig:
     accel_fs_g: int
 
 
+def _frame_interval_s(config):
+    """Longest normal silence of a link: three full frames (the firmware may batch up to 128)."""
+    return 3.0 * MAX_SAMPLES_PER_FRAME / config.odr_hz
+
+
 def _stats_dict(stats):
     return {f.name: getattr(stats, f.name) for f in fields(stats)}
 
@@ -290,7 +295,7 @@ class Lsm6dso32Driver(Node):
         self._streaming_since = None
         self._last_sample_monotonic = None
         self._diag_prev = {'time': time.monotonic(), 'published': 0, 'lost': 0, 'crc': 0, 'restarts': 0,
-                           'overruns': 0}
+                           'overruns': 0, 'frames': 0, 'samples_ok': 0}
 
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader', daemon=True)
@@ -395,12 +400,13 @@ class Lsm6dso32Driver(Node):
         if len(after):
             self.publish_samples(after, host_ns, config)
         last_data = now
+        silence_s = max(p['data_timeout_s'], _frame_interval_s(config))
         while not self._stop.is_set():
             data = ser.read(_READ_SIZE)
             now = time.monotonic()
             if not data:
-                if now - last_data > p['data_timeout_s']:
-                    raise LinkError(f'no data for {p["data_timeout_s"]} s')
+                if now - last_data > silence_s:
+                    raise LinkError(f'no data for {silence_s:g} s')
                 continue
             last_data = now
             host_ns = self.get_clock().now().nanoseconds
@@ -528,10 +534,11 @@ class Lsm6dso32Driver(Node):
         Levels (explicit thresholds from the parameters):
 
         - ERROR: the port is not streaming (the message names the last error); no sample for a
-          whole diagnostics period; lost fraction in the period above ``loss_error_ratio``.
+          diagnostics period (and at least three full frames); lost fraction in the period above
+          ``loss_error_ratio``.
         - WARN: lost fraction above ``loss_warn_ratio``; CRC errors or sensor FIFO overruns in the
-          period; measured rate off the acknowledged ODR by more than ``rate_tolerance_ratio``; a
-          board counter restart.
+          period; samples produced (published + lost) off the acknowledged ODR by more than
+          ``rate_tolerance_ratio`` plus two frames; a board counter restart.
 
         Returns
         -------
@@ -544,7 +551,8 @@ class Lsm6dso32Driver(Node):
         prev = self._diag_prev
         self._diag_prev = {'time': now, 'published': s['published'], 'lost': s['lost'],
                            'crc': link.get('crc_errors', 0), 'restarts': s['restarts'],
-                           'overruns': link.get('fifo_overruns', 0)}
+                           'overruns': link.get('fifo_overruns', 0), 'frames': link.get('frames_ok', 0),
+                           'samples_ok': link.get('samples_ok', 0)}
         since = prev['time'] if s['streaming_since'] is None else max(prev['time'], s['streaming_since'])
         window = now - since
         d_pub = s['published'] - prev['published']
@@ -560,7 +568,7 @@ class Lsm6dso32Driver(Node):
             checks.append((ERROR, f'Link {s["state"]}, not streaming yet (last error: {s["last_error"]}).'))
         else:
             silent = now - (s['last_sample_monotonic'] or now)
-            if silent >= p['diagnostics_period_s']:
+            if config is not None and silent >= max(p['diagnostics_period_s'], _frame_interval_s(config)):
                 checks.append((ERROR, f'No samples for {silent:.1f} s.'))
             if d_pub + d_lost > 0:
                 ratio = d_lost / (d_pub + d_lost)
@@ -576,12 +584,15 @@ class Lsm6dso32Driver(Node):
                 # Samples the sensor dropped before the board read them: not in the counter.
                 checks.append((WARN, f'The sensor FIFO overran {d_overruns} times in the last '
                                      f'{window:.1f} s.'))
-            # Rate is judged on a full window only: a partial first window after connecting
-            # undercounts by the connection latency.
-            if (config is not None and window >= 0.5 * p['diagnostics_period_s']
-                    and abs(rate / config.odr_hz - 1.0) > p['rate_tolerance_ratio']):
-                checks.append((WARN, f'Sample rate {rate:.1f} Hz differs from the configured '
-                                     f'{config.odr_hz:g} Hz.'))
+            # The rate check counts lost samples as produced (losses have their own check) and
+            # allows two frames of slack: a window's count is quantised by whole frames.
+            d_frames = link.get('frames_ok', 0) - prev['frames']
+            per_frame = (link.get('samples_ok', 0) - prev['samples_ok']) / d_frames if d_frames else 1.0
+            expected = config.odr_hz * window if config is not None else 0.0
+            if (expected > 0 and abs(d_pub + d_lost - expected)
+                    > p['rate_tolerance_ratio'] * expected + 2.0 * per_frame):
+                checks.append((WARN, f'Sample rate {(d_pub + d_lost) / window:.1f} Hz differs from the '
+                                     f'configured {config.odr_hz:g} Hz.'))
             if s['restarts'] > prev['restarts']:
                 checks.append((WARN, 'The board restarted its sample counter.'))
         ok_message = (f'Streaming at {rate:.0f} Hz, no loss.' if s['state'] == 'streaming'

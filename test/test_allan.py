@@ -8,12 +8,15 @@ the R ``avar`` package's MO-AVAR of the ADIS16405 run imu1.
 """
 
 import csv
+import functools
 import gzip
 import math
 import os
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import _allan_reference as ref
 from gyro_noise_ros.core import _kernels_allan as kern
@@ -434,6 +437,20 @@ def test_errors():
         allan_deviation(y, 1.0, offset_rad_per_s=float('inf'))
 
 
+def test_constant_input_and_column_views():
+    res = allan_deviation(np.full(1000, 0.25), 10.0)
+    np.testing.assert_array_equal(res.adev, 0.0)
+    np.testing.assert_array_equal(res.ci_high, 0.0)
+    rng = np.random.default_rng(26)
+    xyz = rng.standard_normal((30_000, 3))
+    col = allan_deviation(xyz[:, 1], 10.0)              # strided view, not copied
+    np.testing.assert_array_equal(col.avar, allan_deviation(xyz[:, 1].copy(), 10.0).avar)
+    with pytest.raises(ValueError):
+        col.avar[0] = 1.0                                # results are read-only
+    with pytest.raises(AttributeError):
+        col.rate_hz = 1.0                                # and frozen
+
+
 def test_float32_input_is_accepted():
     rng = np.random.default_rng(20)
     y32 = rng.standard_normal(10_000).astype(np.float32)
@@ -547,6 +564,29 @@ def test_accumulator_bit_identical_to_batch(taus):
     for field in ('avar', 'adev', 'n_terms', 'stride', 'noise_alpha', 'edf', 'ci_low', 'ci_high', 'tau_s'):
         np.testing.assert_array_equal(getattr(res, field), getattr(batch, field), err_msg=field)
     assert res.n_samples == batch.n_samples == y.size
+
+
+@settings(max_examples=25, deadline=None)
+@given(cuts=st.lists(st.integers(min_value=0, max_value=6000), max_size=12))
+def test_accumulator_any_split_is_bit_identical(cuts):
+    # any partition of the stream into batches (empty ones included) gives the same bits
+    y, whole = _split_reference()
+    edges = [0] + sorted(cuts) + [y.size]
+    acc = AllanAccumulator(200.0, taus='dense', max_exact_m=64, offset_rad_per_s=0.0)
+    for a, b in zip(edges[:-1], edges[1:]):
+        acc.update(y[a:b])
+    res = acc.result()
+    np.testing.assert_array_equal(res.avar, whole.avar)
+    np.testing.assert_array_equal(res.noise_alpha, whole.noise_alpha)
+    np.testing.assert_array_equal(res.n_terms, whole.n_terms)
+
+
+@functools.lru_cache(maxsize=1)
+def _split_reference():
+    y = np.random.default_rng(27).standard_normal(6000) * 0.3 + 1.0
+    acc = AllanAccumulator(200.0, taus='dense', max_exact_m=64, offset_rad_per_s=0.0)
+    acc.update(y)
+    return y, acc.result()
 
 
 def test_accumulator_default_offset_agrees_to_rounding():

@@ -235,7 +235,8 @@ def _as_samples(data, name):
         if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
             raise InputDataError(f'{name} must be real numbers, got dtype {arr.dtype}')
         arr = arr.astype(np.float64)
-    return np.ascontiguousarray(arr)
+    # strided views (e.g. one column of an (N, 3) array) go to the kernels as they are: no copy
+    return arr
 
 
 def _non_finite_error(arr, name):

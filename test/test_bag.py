@@ -444,6 +444,10 @@ def test_missing_and_non_bag_paths(tmp_path):
     text.write_text('hello, not a database\n')
     with pytest.raises(BagError, match='is not a bag'):
         list_topics(text)
+    (tmp_path / 'bad_meta').mkdir()
+    (tmp_path / 'bad_meta' / 'metadata.yaml').write_text('rosbag2_bagfile_information: [unclosed\n')
+    with pytest.raises(BagError, match='cannot be opened as rosbag2'):
+        list_topics(tmp_path / 'bad_meta')
     (tmp_path / 'empty_dir').mkdir()
     with pytest.raises(BagError, match='is not a rosbag2 bag'):
         ImuBagReader(tmp_path / 'empty_dir')
@@ -712,3 +716,25 @@ def test_damaged_bag_files_raise_only_bag_error(tmp_path, storage_kind):
             outcomes.add('BagError')
     # The damage must really be exercised: some copies are refused (headers, indexes, CRCs hit).
     assert 'BagError' in outcomes
+
+
+@pytest.mark.parametrize(('storage_kind', 'mode'), [('sqlite3', 'FILE'), ('sqlite3', 'MESSAGE'),
+                                                    ('mcap', 'FILE'), ('mcap', 'MESSAGE'), ('mcap', 'STORAGE')])
+def test_compressed_bags(tmp_path, storage_kind, mode):
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode
+
+    rng = np.random.default_rng(15)
+    stamps, gyro, accel = sample_data(rng, 4000)
+    path = tmp_path / 'z'
+    writer = Writer(path, version=9, storage_plugin=PLUGINS[storage_kind])
+    writer.set_compression(CompressionMode[mode], CompressionFormat.ZSTD)
+    with writer:
+        conn = writer.add_connection('/imu', IMU_MSGTYPE, typestore=ROS2)
+        for i in range(4000):
+            writer.write(conn, int(stamps[i]), ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i]),
+                                                                  IMU_MSGTYPE))
+    with ImuBagReader(path) as reader:
+        s, _, g, a = concat(list(reader.iter_batches(1500)))
+    np.testing.assert_array_equal(s, stamps)
+    assert_same_floats(g, gyro)
+    assert_same_floats(a, accel)

@@ -53,18 +53,26 @@ def describe(err):
     return text.splitlines()[0]
 
 
+def _metadata_storage(meta):
+    """``storage_identifier`` of a rosbag2 ``metadata.yaml`` ('rosbag2' if it cannot be read)."""
+    import yaml
+
+    try:
+        info = yaml.safe_load(meta.read_text())['rosbag2_bagfile_information']
+        kind = str(info['storage_identifier'])
+    except Exception:  # noqa: BLE001 - rosbags reports what is wrong with the file when opening it
+        return 'rosbag2'
+    return kind if kind in STORAGES else 'rosbag2'
+
+
 def _resolve(path):
     """Return (path to hand to rosbags, storage kind) or raise BagError."""
     if path.is_dir():
         files = sorted(path.glob('*.db3')) + sorted(path.glob('*.mcap'))
         if (path / 'metadata.yaml').exists():
-            if not files:
-                raise BagError(f'bag directory {str(path)!r} has metadata.yaml but no .db3 or .mcap file')
-            kinds = {_sniff(f) for f in files}
-            kind = kinds.pop() if len(kinds) == 1 else None
-            if kind not in STORAGES:
-                raise BagError(f'bag directory {str(path)!r} holds files that are not all sqlite3 or all MCAP')
-            return path, kind
+            # rosbags validates the metadata and its files (which may be zstd-compressed); only
+            # the storage kind is needed here.
+            return path, _metadata_storage(path / 'metadata.yaml')
         if len(files) == 1:
             # A recording whose writer died before writing metadata.yaml: read the storage file.
             return _resolve(files[0])

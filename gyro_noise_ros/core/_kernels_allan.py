@@ -14,7 +14,6 @@ re-associates nor contracts into FMAs.
 """
 
 import numba
-import numpy as np
 
 from gyro_noise_ros.core._kernels import JIT_OPTIONS
 
@@ -30,7 +29,7 @@ _FOLD_MASK = FOLD_TERMS - 1
 BLOCK = 32768
 
 #: Columns of the per-tau noise-identification sums (see :func:`_acf_push`).
-N_ACF = 22
+N_ACF = 19
 # column indices of the lag-1 ACF running sums
 _N = 0          # number of m-averages z_j
 _SZ = 1         # sum z_j

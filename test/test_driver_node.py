@@ -466,7 +466,8 @@ def test_diagnostics_topic_when_port_absent(harness):
     assert values['Connection'] == 'disconnected'
 
 
-@pytest.mark.parametrize('speed, level', [(1.0, DiagnosticStatus.OK), (0.5, DiagnosticStatus.WARN)])
+@pytest.mark.parametrize('speed, level', [(1.0, DiagnosticStatus.OK), (0.5, DiagnosticStatus.WARN)],
+                         ids=['on_rate', 'half_rate'])
 def test_rate_check_against_the_acknowledged_odr(harness, speed, level):
     # The board acknowledges 6667 Hz and streams at speed x 6667 Hz (paced on absolute time, so
     # the count in a window is exact to a frame): on rate -> OK, half rate -> WARN naming the rate.

@@ -193,3 +193,28 @@ def test_counter_wrap_with_injected_drops_is_counted_exactly(start, keep_mask, f
     lost, flagged = expected_counts(sent['seq'].tolist(), sent['flags'].tolist())
     assert dec.stats.samples_flagged_lost == flagged
     assert lost == dec.stats.samples_lost
+
+
+@settings(**SETTINGS)
+@given(st.integers(1, 40), st.integers(4, 30), st.data())
+def test_runs_of_equal_frames_with_one_flip_and_an_ack(per_frame, nframes, data):
+    """Long runs of same-size frames (the decoder's bulk path) broken by a bit flip and an ACK."""
+    start = data.draw(st.integers(0, 2 ** 32 - 1))
+    s = np.zeros(per_frame * nframes, p.SAMPLE_DTYPE)
+    s['seq'] = (start + np.arange(s.size, dtype=np.uint64)) % 2 ** 32
+    s['gyro'] = data.draw(st.integers(-32768, 32767))
+    frames = [(p.encode_samples(s[i:i + per_frame]), s[i:i + per_frame]) for i in range(0, s.size, per_frame)]
+    ack_at = data.draw(st.integers(0, nframes))
+    frames.insert(ack_at, (p.encode_ack(p.Ack(1, True, 6667.0, 2000, 4)), None))
+    victim = data.draw(st.integers(0, len(frames) - 1))
+    frame = bytearray(frames[victim][0])
+    bit = data.draw(st.integers(0, 8 * len(frame) - 1))
+    frame[bit // 8] ^= 1 << (bit % 8)
+    stream = b''.join(bytes(frame) if i == victim else f for i, (f, _) in enumerate(frames))
+    piece = data.draw(st.sampled_from([7, 100, 4096, len(stream)]))
+    dec, samples, acks = decode_all([stream[i:i + piece] for i in range(0, len(stream), piece)])
+    survivors = [(f, x) for i, (f, x) in enumerate(frames) if i != victim]
+    assert np.array_equal(samples, all_samples(survivors))
+    assert len(acks) == (0 if frames[victim][1] is None else 1)
+    assert dec.stats.bytes_discarded == len(frame) and dec.stats.resyncs == 1
+    assert dec.stats.frames_ok == len(frames) - 1

@@ -85,6 +85,7 @@ _LENGTH_RULES = {
     FRAME_LOG_HEADER: (_LOG_HEADER.size, _LOG_HEADER.size, 1),
 }
 MAX_FRAME_SIZE = FRAME_OVERHEAD + max(rule[1] for rule in _LENGTH_RULES.values())
+_BULK_MAX_FRAME = FRAME_OVERHEAD + 32 * SAMPLE_SIZE
 
 
 def _mhz(odr_hz):
@@ -595,6 +596,15 @@ class Decoder:
                 if ftype == FRAME_SAMPLES:
                     res.payloads.append(bytes(mv[payload_start:end]))
                     res.nsamples += length // SAMPLE_SIZE
+                    pos = end + CRC_SIZE
+                    size = FRAME_OVERHEAD + length
+                    # bulk path for small frames only: there the per-frame Python work dominates (2-5x
+                    # faster at 1-16 samples per frame); for large frames the CRC does and it gains nothing
+                    if size <= _BULK_MAX_FRAME and n - pos >= 4 * size:
+                        good = self._same_size_run(mv, pos, n, size, res)
+                        c['frames_ok'] += good
+                        pos += good * size
+                    continue
                 elif ftype == FRAME_ACK:
                     res.acks.append(_decode_ack(mv[payload_start:end]))
                     res.ack_positions.append(res.nsamples)
@@ -612,6 +622,34 @@ class Decoder:
             del buf[:pos]
             self._base += pos
         return res.result(self)
+
+    @staticmethod
+    def _same_size_run(mv, pos, n, size, res):
+        """
+        Accept, in bulk, the valid SAMPLES frames at ``pos`` with the header of the frame just accepted.
+
+        In a synchronised stream every frame of one batch size has the same 6 header bytes, so the
+        header check runs on a (frames, size) byte matrix and only the CRC stays per frame. Stops at
+        the first frame that differs or fails its CRC (the byte-wise path then deals with it).
+        Returns the number of frames accepted.
+        """
+        m = (n - pos) // size
+        block = np.frombuffer(mv, np.uint8, count=m * size, offset=pos).reshape(m, size)
+        head = np.frombuffer(mv, np.uint8, count=HEADER_SIZE, offset=pos - size)
+        same = (block[:, :HEADER_SIZE] == head).all(axis=1)
+        k = m if same.all() else int(same.argmin())
+        if k == 0:
+            return 0
+        stored = block[:k, size - CRC_SIZE:].copy().view('<u4').ravel()
+        body = size - CRC_SIZE
+        calc = np.fromiter((zlib.crc32(mv[q:q + body]) for q in range(pos, pos + k * size, size)),
+                           dtype=np.uint32, count=k)
+        ok = calc == stored
+        good = k if ok.all() else int(ok.argmin())
+        if good:
+            res.payloads.append(block[:good, HEADER_SIZE:body].tobytes())
+            res.nsamples += good * ((size - FRAME_OVERHEAD) // SAMPLE_SIZE)
+        return good
 
     def _account_samples(self, samples, ack_positions, header_positions):
         """Counter bookkeeping over the decoded samples; returns (kept samples, lost_before, positions)."""

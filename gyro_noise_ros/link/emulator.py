@@ -24,7 +24,9 @@ linearly at ``temp_drift_c_per_h`` and leaks into the bias with ``temp_sensitivi
 
 Determinism: every random stream (one per gyro axis, accelerometer, temperature) is a child of the
 ``rng`` given, consumed one draw per sample, so sample k is the same whatever the batch sizes, the
-pacing, the connection state or the fault injection (which uses its own generator).
+pacing, the connection state or the fault injection (which uses its own generator). Sensor FIFO
+overruns (:meth:`BoardModel.sensor_overrun`) consume sample slots without a ``seq``, so with them the
+truth must be matched by ``seq`` (``--truth-out``), not by position.
 """
 
 from dataclasses import dataclass

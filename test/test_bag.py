@@ -549,6 +549,55 @@ def test_mcap_record_scan_matches_struct_walk():
         storage.mcap_message_records(mixed[:-2])
 
 
+def ros1_record(fields, data):
+    import struct
+
+    head = b''.join(struct.pack('<I', len(f)) + f for f in fields)
+    return struct.pack('<I', len(head)) + head + struct.pack('<I', len(data)) + data
+
+
+def reference_ros1_records(chunk):
+    """Plain struct walk over a ROS 1 chunk: the twin of storage.ros1_message_records."""
+    import struct
+
+    out, pos = [], 0
+    while pos < len(chunk):
+        (hlen,) = struct.unpack_from('<I', chunk, pos)
+        head = chunk[pos + 4:pos + 4 + hlen]
+        fields, p = {}, 0
+        while p < hlen:
+            (flen,) = struct.unpack_from('<I', head, p)
+            name, _, value = head[p + 4:p + 4 + flen].partition(b'=')
+            fields[name] = value
+            p += 4 + flen
+        (dlen,) = struct.unpack_from('<I', chunk, pos + 4 + hlen)
+        if fields[b'op'] == b'\x02':
+            sec, nsec = struct.unpack('<II', fields[b'time'])
+            out.append((pos + 8 + hlen, dlen, struct.unpack('<I', fields[b'conn'])[0], sec * 10**9 + nsec))
+        pos += 8 + hlen + dlen
+    return [np.array(col, np.int64) for col in zip(*out)]
+
+
+def test_ros1_record_scan_matches_struct_walk():
+    import struct
+
+    def msg(conn, t, data, order=('op', 'conn', 'time')):
+        parts = {'op': b'op=\x02', 'conn': b'conn=' + struct.pack('<I', conn),
+                 'time': b'time=' + struct.pack('<II', t // 10**9, t % 10**9)}
+        return ros1_record([parts[k] for k in order], data)
+
+    connection = ros1_record([b'op=\x07', b'conn=' + struct.pack('<I', 0), b'topic=/imu'], b'type=x')
+    uniform = connection + b''.join(msg(0, 10**9 * i + 7, bytes([i]) * 30) for i in range(40))
+    mixed = b''.join(msg(i % 3, 5 * i, bytes(i % 5 + 1), ('time', 'op', 'conn') if i % 4 else ('op', 'conn', 'time'))
+                     for i in range(40)) + connection
+    for chunk in (uniform, mixed):
+        got = storage.ros1_message_records(chunk)
+        for a, b in zip(got, reference_ros1_records(chunk)):
+            np.testing.assert_array_equal(a, b)
+    with pytest.raises(BagError, match='beyond the chunk'):
+        storage.ros1_message_records(mixed[:-3])
+
+
 def source_stream(path, topic, fast):
     src = storage.BagSource(path, fast=fast)
     try:
@@ -738,3 +787,40 @@ def test_compressed_bags(tmp_path, storage_kind, mode):
     np.testing.assert_array_equal(s, stamps)
     assert_same_floats(g, gyro)
     assert_same_floats(a, accel)
+
+
+@pytest.mark.parametrize('pattern', ['increasing', 'backwards_chunks', 'interleaved', 'ties'])
+def test_ros1_block_reader_yields_rosbags_order(tmp_path, pattern):
+    rng = np.random.default_rng(16)
+    n = 6000
+    stamps, gyro, accel = sample_data(rng, n, with_nan=False)
+    base = 10**18 + np.arange(n, dtype=np.int64) * 150_000
+    log = {'increasing': base,
+           'backwards_chunks': base[::-1].copy(),
+           'interleaved': base + rng.integers(0, 10**9, n),
+           'ties': base // 10 // 150_000 * 150_000}[pattern]
+    path = tmp_path / 'r.bag'
+    t = ROS1.types
+    with Ros1Writer(path) as writer:
+        writer.chunk_threshold = 256 * 1024  # several chunks
+        conn = writer.add_connection('/imu/data_raw', IMU_MSGTYPE, typestore=ROS1)
+        tconn = writer.add_connection('/imu/temperature', TEMPERATURE_MSGTYPE, typestore=ROS1)
+        for i in range(n):
+            writer.write(conn, int(log[i]),
+                         ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU_MSGTYPE))
+            if i % 700 == 0:
+                header = t['std_msgs/msg/Header'](seq=i, stamp=t['builtin_interfaces/msg/Time'](sec=1, nanosec=i),
+                                                  frame_id='imu_link')
+                writer.write(tconn, int(log[i]), ROS1.serialize_ros1(
+                    t[TEMPERATURE_MSGTYPE](header=header, temperature=20.0 + i, variance=0.0), TEMPERATURE_MSGTYPE))
+    for topic in ('/imu/data_raw', '/imu/temperature'):
+        fast_log, fast_raws = source_stream(path, topic, True)
+        slow_log, slow_raws = source_stream(path, topic, False)
+        np.testing.assert_array_equal(fast_log, slow_log)
+        assert fast_raws == slow_raws
+    with ImuBagReader(path) as reader:
+        s, lg, g, _ = concat(list(reader.iter_batches(4096)))
+    order = np.argsort(log, kind='stable')
+    np.testing.assert_array_equal(lg, log[order])
+    np.testing.assert_array_equal(s, stamps[order])
+    assert_same_floats(g, gyro[order])

@@ -155,6 +155,110 @@ def mcap_message_records(chunk):
             np.array(log_ns, np.uint64).astype(np.int64))
 
 
+def _ros1_header(chunk, start, stop):
+    """Fields of a ROS 1 record header as {name: (value offset, value bytes)}."""
+    fields = {}
+    pos = start
+    while pos < stop:
+        if pos + 4 > stop:
+            raise BagError(f'ROS 1 record header at byte {start} is cut off')
+        flen = int.from_bytes(chunk[pos:pos + 4], 'little')
+        field = chunk[pos + 4:pos + 4 + flen]
+        if pos + 4 + flen > stop or b'=' not in field:
+            raise BagError(f'ROS 1 record header at byte {start} holds a malformed field')
+        name, _, value = field.partition(b'=')
+        fields[name] = (pos + 4 + len(name) + 1, value)
+        pos += 4 + flen
+    return fields
+
+
+def ros1_message_records(chunk):
+    """
+    Locate the message data records (op 0x02) of one decompressed ROS 1 chunk.
+
+    A record is ``uint32 header length, header fields (uint32 length, name=value), uint32 data
+    length, data``; a message record's header carries ``op``, ``conn`` (uint32) and ``time``
+    (uint32 sec, uint32 nsec).
+
+    Parameters
+    ----------
+    chunk : bytes
+        The chunk's records.
+
+    Returns
+    -------
+    starts, lengths, conn, time_ns : numpy.ndarray of int64, shape (n,)
+        Data offset and length, connection id and time of each message, in chunk order.
+
+    Raises
+    ------
+    BagError
+        A record runs past the end of the chunk or its header is malformed.
+    """
+    size = len(chunk)
+    starts, lengths, conns, times = [], [], [], []
+    tail = None
+    pos = 0
+    tries = 3  # the layout check costs a pass over the rest of the chunk: bounded per chunk
+    while pos < size:
+        if pos + 4 > size:
+            raise BagError(f'ROS 1 record at byte {pos} is cut off')
+        hlen = int.from_bytes(chunk[pos:pos + 4], 'little')
+        hend = pos + 4 + hlen
+        if hend + 4 > size:
+            raise BagError(f'ROS 1 record at byte {pos} claims a header beyond the chunk')
+        dlen = int.from_bytes(chunk[hend:hend + 4], 'little')
+        dend = hend + 4 + dlen
+        if dend > size:
+            raise BagError(f'ROS 1 record at byte {pos} claims data beyond the chunk')
+        fields = _ros1_header(chunk, pos + 4, hend)
+        if fields.get(b'op', (0, b''))[1] != b'\x02':
+            pos = dend
+            continue
+        conn, time = fields.get(b'conn'), fields.get(b'time')
+        if conn is None or time is None or len(conn[1]) != 4 or len(time[1]) != 8:
+            raise BagError(f'ROS 1 message record at byte {pos} lacks a valid conn or time field')
+        stride = dend - pos
+        rest = size - pos
+        if tries and rest % stride == 0 and rest // stride > 1:
+            tries -= 1
+            tail = _ros1_uniform_tail(chunk, pos, stride, hend + 4 - pos, conn[0] - pos, time[0] - pos)
+            if tail is not None:
+                break
+        starts.append(hend + 4)
+        lengths.append(dlen)
+        conns.append(int.from_bytes(conn[1], 'little'))
+        times.append(int.from_bytes(time[1][:4], 'little') * 1_000_000_000 + int.from_bytes(time[1][4:], 'little'))
+        pos = dend
+    out = tuple(np.array(col, np.int64) for col in (starts, lengths, conns, times))
+    if tail is not None:
+        out = tuple(np.concatenate(pair) for pair in zip(out, tail))
+    return out
+
+
+def _ros1_uniform_tail(chunk, pos, stride, head, c_at, t_at):
+    """
+    Columns of the records from ``pos`` to the chunk's end if they all share one layout, else None.
+
+    The rest of a chunk is often one topic's fixed-size messages: believed only if every record's
+    header bytes equal the first one's apart from the conn and time values.
+    """
+    rest = len(chunk) - pos
+    rec = np.frombuffer(chunk, np.uint8, offset=pos).reshape(rest // stride, stride)
+    mask = np.ones(head, bool)
+    mask[c_at:c_at + 4] = False
+    mask[t_at:t_at + 8] = False
+    heads = rec[:, :head]
+    if not (heads[:, mask] == heads[0, mask]).all():
+        return None
+    n = rec.shape[0]
+    starts = pos + head + np.arange(n, dtype=np.int64) * stride
+    lengths = np.full(n, stride - head, np.int64)
+    conns = np.ascontiguousarray(rec[:, c_at:c_at + 4]).view('<u4')[:, 0].astype(np.int64)
+    tt = np.ascontiguousarray(rec[:, t_at:t_at + 8]).view('<u4').astype(np.int64)
+    return starts, lengths, conns, tt[:, 0] * 1_000_000_000 + tt[:, 1]
+
+
 class BagSource:
     """
     A rosbags reader opened on any supported path, its storage kind and a block-wise message stream.
@@ -253,9 +357,13 @@ class BagSource:
         return [inner]
 
     def _blocks(self, topic, block):
+        conns = [c for c in self.connections if c.topic == topic]
+        if self.ros1 and self.fast:
+            yield from self._ros1_blocks(conns, block)
+            return
         storages = None if (self.ros1 or not self.fast) else self._storages()
         if storages is None:
-            yield from self._generic_blocks(self.reader, [c for c in self.connections if c.topic == topic], block)
+            yield from self._generic_blocks(self.reader, conns, block)
             return
         for storage in storages:
             conns = [c for c in storage.connections if c.topic == topic]
@@ -324,6 +432,38 @@ class BagSource:
                 for i in range(0, sel.size, block):
                     part = sel[i:i + block]
                     yield buf, starts[part], lengths[part], log_ns[part]
+
+    def _ros1_blocks(self, conns, block):
+        reader = self.reader
+        ids = np.array(sorted({c.id for c in conns}), np.int64)
+        infos = sorted((c for c in reader.chunk_infos if any(c.connection_counts.get(int(i), 0) for i in ids)),
+                       key=lambda c: (c.start_time, c.pos))
+        # rosbags orders by (time, chunk position, offset) and reports end_time as last + 1 ns.
+        ordered = all(b.start_time >= a.end_time or (b.start_time == a.end_time - 1 and b.pos > a.pos)
+                      for a, b in itertools.pairwise(infos))
+        if not ordered:
+            yield from self._generic_blocks(reader, conns, block)
+            return
+        with open(self.reader.path, 'rb') as fh:
+            for info in infos:
+                chunk = reader.chunks[info.pos]
+                fh.seek(chunk.datapos)
+                data = fh.read(chunk.datasize)
+                if len(data) != chunk.datasize:
+                    raise BagError(f'ROS 1 chunk at byte {info.pos} is cut off')
+                raw = chunk.decompressor(data)
+                del data
+                starts, lengths, conn, time_ns = ros1_message_records(raw)
+                sel = np.flatnonzero(np.isin(conn, ids))
+                indexed = sum(info.connection_counts.get(int(i), 0) for i in ids)
+                if sel.size != indexed:
+                    raise BagError(f'ROS 1 chunk at byte {info.pos} holds {sel.size} messages of the topic '
+                                   f'but its index lists {indexed}')
+                sel = sel[np.argsort(time_ns[sel], kind='stable')]
+                buf = np.frombuffer(raw, np.uint8)
+                for i in range(0, sel.size, block):
+                    part = sel[i:i + block]
+                    yield buf, starts[part], lengths[part], time_ns[part]
 
     def close(self):
         """Close the reader (idempotent; never raises)."""

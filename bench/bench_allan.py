@@ -11,12 +11,13 @@ Side by side on the same white-noise data (numpy, seeded):
 * the plain-numpy baseline: ``x = cumsum(y - mean)``, then per tau
   ``d = x[2m:] - 2 x[m:-m] + x[:-2m]; avar = d @ d / (2 m^2 len(d))``.
 
-Prints the wall time of each, their ratio, the peak of numpy allocations during each call
+Prints the wall and CPU time of each (the machine may be shared: CPU time is the steadier), their ratios, the peak of numpy allocations during each call
 (tracemalloc; the input itself excluded), the process max RSS, and the largest relative ADEV
 difference between the two. ``--accumulator`` also times AllanAccumulator fed in 1 s batches.
 """
 
 import argparse
+import os
 import resource
 import shlex
 import sys
@@ -47,11 +48,13 @@ def _measure(fn, *args):
     tracemalloc.start()
     tracemalloc.reset_peak()
     t0 = time.perf_counter()
+    c0 = time.process_time()
     out = fn(*args)
+    cpu = time.process_time() - c0
     dt = time.perf_counter() - t0
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    return out, dt, peak
+    return out, (dt, cpu), peak
 
 
 def _maxrss_mib():
@@ -83,20 +86,23 @@ def main(argv=None):
           f'{octave_factors(args.samples).size} octave taus')
     rss0 = _maxrss_mib()
 
-    res, t_fast, peak_fast = _measure(lambda v: allan_deviation(v, args.rate_hz), y)
+    res, (t_fast, c_fast), peak_fast = _measure(lambda v: allan_deviation(v, args.rate_hz), y)
     rss1 = _maxrss_mib()
-    print(f'allan_deviation : {t_fast:8.2f} s   peak numpy alloc {peak_fast / 2**20:8,.0f} MiB '
+    print(f'allan_deviation : {t_fast:8.2f} s wall {c_fast:8.2f} s cpu   '
+          f'peak numpy alloc {peak_fast / 2**20:8,.0f} MiB '
           f'({peak_fast / y.nbytes:.2f} x input)   maxrss {rss1:,.0f} MiB (+{rss1 - rss0:,.0f})')
 
     if not args.no_baseline:
-        (ms, avar_np), t_np, peak_np = _measure(numpy_baseline, y)
+        (ms, avar_np), (t_np, c_np), peak_np = _measure(numpy_baseline, y)
         rss2 = _maxrss_mib()
-        print(f'numpy baseline  : {t_np:8.2f} s   peak numpy alloc {peak_np / 2**20:8,.0f} MiB '
+        print(f'numpy baseline  : {t_np:8.2f} s wall {c_np:8.2f} s cpu   '
+              f'peak numpy alloc {peak_np / 2**20:8,.0f} MiB '
               f'({peak_np / y.nbytes:.2f} x input)   maxrss {rss2:,.0f} MiB')
         assert np.array_equal(ms, res.m)
         diff = np.max(np.abs(np.sqrt(avar_np) / res.adev - 1))
-        print(f'ratio numpy / allan_deviation time: {t_np / t_fast:.2f}x; '
+        print(f'ratio numpy / allan_deviation: wall {t_np / t_fast:.2f}x, cpu {c_np / c_fast:.2f}x; '
               f'memory {peak_np / max(peak_fast, 1):.2f}x; max |ADEV rel diff| {diff:.2e}')
+        print(f'load average (1, 5, 15 min) at the end: {os.getloadavg()}')
 
     if args.accumulator:
         batch = int(round(args.rate_hz))

@@ -581,32 +581,92 @@ def format_status(status):
     return f'{level:<5} {status.name}: {numbers} | {status.message}'
 
 
-class DiagnosticsEcho(Node):
-    """Print the ``/diagnostics`` statuses whose name contains ``name_filter`` (``--echo`` mode)."""
+def format_array(statuses):
+    """
+    One line for all axes of one analyzer (the ``--compact`` form ``make demo`` prints).
 
-    def __init__(self, name_filter, *, only_changes=False):
+    Parameters
+    ----------
+    statuses : list of diagnostic_msgs.msg.DiagnosticStatus
+        The axis statuses of one node from one ``DiagnosticArray``.
+
+    Returns
+    -------
+    str
+        ``'<worst level> chunk <n> | x OK bias .. drift .. a ../.. | ... | lost N: <axis>: <message>'``.
+    """
+    levels = [status.level[0] if isinstance(status.level, bytes) else status.level for status in statuses]
+    worst_i = max(range(len(statuses)), key=lambda i: (levels[i], -i))
+    parts = []
+    chunk = lost = '?'
+    for status, level in zip(statuses, levels):
+        v = {kv.key: kv.value for kv in status.values}
+        axis = status.name.rsplit(' ', 1)[-1]
+        chunk = v.get('Last chunk', '-').split(' ')[0]
+        lost = v.get('Samples lost', '?').split(' ')[0]
+        parts.append(f"{axis} {_LEVEL_NAMES.get(level, '?')} bias {v.get('Bias (deg/s)', '-')} "
+                     f"drift {v.get('Offset drift ((deg/s)/h)', '-')} "
+                     f"a {v.get('Last chunk fractional order, variance method', '-')}/"
+                     f"{v.get('Last chunk fractional order, correlation method', '-')}")
+    worst = statuses[worst_i]
+    head = f'{_LEVEL_NAMES.get(levels[worst_i], "?"):<5} chunk {chunk:>4}'
+    tail = f'lost {lost}'
+    if levels[worst_i]:
+        tail += f' -- axis {worst.name.rsplit(" ", 1)[-1]}: {worst.message}'
+    return ' | '.join([head, *parts, tail])
+
+
+class DiagnosticsEcho(Node):
+    """
+    Print the ``/diagnostics`` statuses whose name contains ``name_filter`` (``--echo`` mode).
+
+    One line per status, or with ``compact`` one line per node and array (all axes); with
+    ``only_changes`` a status (or node) is printed again only when its level or chunk count changed.
+    """
+
+    def __init__(self, name_filter, *, only_changes=False, compact=False):
         super().__init__('noise_analyzer_echo')
         self._filter = name_filter
         self._only_changes = only_changes
+        self._compact = compact
         self._last = {}
         self.create_subscription(DiagnosticArray, '/diagnostics', self._on_array, 100)
 
+    def _changed(self, key, state):
+        if self._only_changes and self._last.get(key) == state:
+            return False
+        self._last[key] = state
+        return True
+
+    @staticmethod
+    def _state(status):
+        values = {kv.key: kv.value for kv in status.values}
+        return (status.level, values.get('Chunks analysed'), values.get('Chunks skipped'))
+
     def _on_array(self, msg):
-        for status in msg.status:
-            if self._filter not in status.name:
-                continue
-            values = {kv.key: kv.value for kv in status.values}
-            key = (status.level, values.get('Chunks analysed'), values.get('Chunks skipped'))
-            if self._only_changes and self._last.get(status.name) == key:
-                continue
-            self._last[status.name] = key
-            print(format_status(status), flush=True)
+        mine = [s for s in msg.status if self._filter in s.name]
+        if not self._compact:
+            for status in mine:
+                if self._changed(status.name, self._state(status)):
+                    print(format_status(status), flush=True)
+            return
+        by_node = {}
+        for status in mine:
+            by_node.setdefault(status.name.split(': ', 1)[0], []).append(status)
+        for node_name, statuses in by_node.items():
+            # A new line when every axis has finished the next chunk, or when a level changed; not
+            # for the periodic repeats nor for one axis finishing ahead of the others.
+            states = [self._state(s) for s in statuses]
+            done = min(int(a or 0) + int(str(b or '0').split(' ')[0]) for _, a, b in states)
+            if self._changed(node_name, (tuple(lvl for lvl, _, _ in states), done)):
+                print(format_array(statuses), flush=True)
 
 
 def echo_main(args):
-    """Run the ``--echo`` monitor until Ctrl-C (``--filter TEXT``, ``--changes``)."""
+    """Run the ``--echo`` monitor until Ctrl-C (``--filter TEXT``, ``--changes``, ``--compact``)."""
     name_filter = ': axis '
-    only_changes = '--changes' in args
+    compact = '--compact' in args
+    only_changes = '--changes' in args or compact
     if '--filter' in args:
         i = args.index('--filter')
         if i + 1 >= len(args):
@@ -616,7 +676,7 @@ def echo_main(args):
     rclpy.init(args=args)
     node = None
     try:
-        node = DiagnosticsEcho(name_filter, only_changes=only_changes)
+        node = DiagnosticsEcho(name_filter, only_changes=only_changes, compact=compact)
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -1,0 +1,93 @@
+"""
+``make demo`` in its short mode: the whole chain runs, the drift is detected, the report is written, and
+every subprocess is gone afterwards, also after a Ctrl-C in the middle.
+"""
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.ros
+
+
+def _domain():
+    # Not the domain of this test process (other ROS tests set one), so only the demo's children match.
+    mine = os.environ.get('ROS_DOMAIN_ID')
+    return random.choice([d for d in range(100, 201) if str(d) != mine])
+
+
+def _our_processes(domain_id):
+    """PIDs of live processes whose environment has our private ROS_DOMAIN_ID."""
+    needle = f'ROS_DOMAIN_ID={domain_id}'.encode() + b'\x00'
+    found = []
+    for proc in Path('/proc').iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            env = (proc / 'environ').read_bytes()
+            state = (proc / 'stat').read_text().split(') ', 1)[1][0]
+        except OSError:
+            continue
+        if needle in env + b'\x00' and state != 'Z':
+            found.append(int(proc.name))
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
+    domain = _domain()
+    out = tmp_path / 'demo'
+    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out', str(out),
+                           '--domain-id', str(domain)], capture_output=True, text=True, timeout=560)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert 'story checked' in done.stdout
+    assert any(line.strip().split('] ', 1)[-1].startswith('WARN') for line in done.stdout.splitlines())
+    report = out / 'report'
+    for name in ('summary.md', 'summary.json', 'chunks.csv', 'allan.csv', 'imu.yaml', 'bias.png',
+                 'allan.png'):
+        assert (report / name).is_file(), name
+        assert str(report / name) in done.stdout  # the demo ends by saying where they are
+    assert (out / 'recording' / 'metadata.yaml').is_file()
+    assert _our_processes(domain) == []
+
+
+@pytest.mark.timeout(240)
+def test_ctrl_c_stops_every_process(tmp_path):
+    domain = _domain()
+    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
+                             str(tmp_path / 'demo'), '--domain-id', str(domain)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        # Interrupt once the nodes are being started (children exist).
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and len(_our_processes(domain)) < 4:
+            time.sleep(0.2)
+        assert len(_our_processes(domain)) >= 4
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130, err
+    assert 'interrupted' in err and 'Traceback' not in err
+    deadline = time.monotonic() + 10
+    while _our_processes(domain) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert _our_processes(domain) == []
+
+
+def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):
+    (tmp_path / 'precious.txt').write_text('keep me')
+    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--out', str(tmp_path)],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1
+    assert done.stderr.strip().startswith('gyro_noise_demo: error:') and 'not a previous demo' in done.stderr
+    assert (tmp_path / 'precious.txt').read_text() == 'keep me'

@@ -412,7 +412,7 @@ def plot_allan(path, series):
     """
     plt = _pyplot()
     axes = list(series)
-    fig, panels = plt.subplots(1, len(axes), figsize=(5.5 * len(axes), 4.6), squeeze=False)
+    fig, panels = plt.subplots(1, len(axes), figsize=(max(7.0, 5.5 * len(axes)), 4.8), squeeze=False)
     for ax_name, panel in zip(axes, panels[0]):
         for label, tau, adev, lo, hi, fits in series[ax_name]:
             line, = panel.loglog(tau, np.asarray(adev) * _DEG, lw=1.3, label=label)
@@ -424,7 +424,7 @@ def plot_allan(path, series):
         panel.set_ylabel(f'Allan deviation {ax_name} (deg/s)')
         panel.grid(True, which='both', alpha=0.3)
         panel.legend(fontsize=7)
-    fig.suptitle('Allan deviation (bands: confidence interval; dashed: fitted noise terms)')
+    fig.suptitle('Allan deviation (bands: confidence interval; dashed: fitted noise terms)', fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

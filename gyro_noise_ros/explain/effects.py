@@ -1,0 +1,527 @@
+"""
+Catalogue of effects the discrepancy workflow can add to the baseline: one fitter and one simulation term each.
+
+Every effect has a ``name`` (the key written to explain.json), ``fit(ctx) -> dict | None`` (parameters in SI
+with the unit in the name, or None when the data show nothing of it) and a way to enter the simulation:
+
+* additive terms (``term``) are zero-mean over the record (the constant stays in the baseline bias);
+  deterministic ones are the same in every member, stochastic ones are drawn per member from the member's
+  own generator;
+* ``quantization`` rounds the member's values onto the fitted lattice (applied last);
+* ``sample_loss`` and ``stamp_jitter`` change the member's stamps only.
+
+Time inside a term is the nominal sample time ``k / rate_hz``.
+
+=========================  ==========================================================================
+effect                     parameters (SI) and model
+=========================  ==========================================================================
+quantization               ``step_rad_s``, ``offset_rad_s``: v -> offset + step * round((v - offset) / step)
+sinusoid                   ``amplitude_rad_s``, ``frequency_hz``, ``phase_rad``: A sin(2 pi f t + phi)
+bias_drift                 ``slope_rad_s2``: R (t - T/2), the rate ramp (Allan: R tau / sqrt 2)
+bias_transient             ``amplitude_rad_s``, ``delay_s``, ``time_constant_s``: A (1 - exp(-(t - t0) / tc))
+                           for t >= t0, else 0 (a delayed first-order rise, or decay for A < 0)
+rate_random_walk           ``k_rad_s_per_sqrt_s``: K, a random walk of the bias, PSD (K / 2 pi)^2 / f^2,
+                           Allan variance K^2 tau / 3 (IEEE 952 two-sided PSDs, paper 001 Fig. 1, eq. 8)
+bias_instability           ``b_rad_s``: B, flicker bias, PSD B^2 / (2 pi f) between 1 / T and fs / 2
+                           (Allan floor 0.664 B)
+gauss_markov               ``sigma_rad_s``, ``correlation_time_s``: first-order Markov bias, stationary sd
+                           sigma, b[k+1] = phi b[k] + sqrt(1 - phi^2) sigma n[k], phi = exp(-1 / (fs tc))
+temperature_sensitivity    ``coefficient_rad_s_per_degc``, ``rate_coefficient_rad_s_per_degc_per_s``: bias
+                           = kT (T - mean T) + kdT dT/dt (paper 002 eq. 7: T and its rate as inputs)
+sample_loss                ``gap_rate_per_s``, ``mean_lost_samples``, ``max_lost_samples``: Poisson gap events,
+                           lost counts resampled from the measured gaps
+stamp_jitter               ``jitter_rms_s``, ``short_interval_fraction``: stamps built from the measured
+                           intervals resampled (bursty host-side stamps; an extra effect)
+=========================  ==========================================================================
+
+Detection. A fitter reports an effect only when its statistic on the data exceeds the same statistic on the
+current model's ensemble members (the null): above the worst member and above the members' mean + 5 sd
+(:func:`null_exceeded`); the workflow then keeps the candidate only if
+it shrinks the gap.
+"""
+
+import numpy as np
+import scipy.signal
+
+from .signatures import chunk_series, temperature_rate
+
+
+#: Standard deviations above the members' mean statistic a detection must lie (and above the worst
+#: member). The statistics are non-negative, often chi-square-like with an atom at 0, so the log-normal
+#: rule of the bands does not apply; for a chi-square with 1 dof, mean + 5 sd = 8.1 has a tail of 0.4 %.
+NULL_K = 5.0
+
+
+def null_exceeded(stat, null):
+    """
+    Return True when ``stat`` exceeds the members' values ``null`` (module doc).
+
+    Parameters
+    ----------
+    stat : float
+        Statistic of the measurement (>= 0).
+    null : numpy.ndarray
+        The same statistic on each ensemble member (>= 0).
+
+    Returns
+    -------
+    bool
+    """
+    null = np.asarray(null, dtype=np.float64)
+    limit = max(float(null.max()), float(null.mean() + NULL_K * null.std(ddof=1)))
+    return bool(stat > limit)
+
+
+class Context:
+    """
+    What fitters see: the measurement, the residual after accepted deterministic terms, the layout and the
+    current model's ensemble signatures.
+
+    Attributes
+    ----------
+    meas : Measurement
+    residual : numpy.ndarray
+        Measurement minus the accepted deterministic terms (rad/s).
+    layout : Layout
+    meas_sig : dict
+        Signatures of the measurement.
+    member_sig : list of dict
+        Signatures of each member of the current model.
+    accepted : dict
+        name -> params of the effects already in the model.
+    """
+
+    def __init__(self, meas, residual, layout, meas_sig, member_sig, accepted):
+        self.meas = meas
+        self.residual = residual
+        self.layout = layout
+        self.meas_sig = meas_sig
+        self.member_sig = member_sig
+        self.accepted = accepted
+
+    @property
+    def t_nominal(self):
+        """Nominal sample times k / rate_hz (s)."""
+        return np.arange(self.meas.n) / self.meas.rate_hz
+
+    def members(self, name):
+        """Member values of signature ``name``, shape (N, points)."""
+        return np.array([s[name] for s in self.member_sig])
+
+
+class Effect:
+    """Base class: name, number of parameters, kind ('additive', 'stochastic', 'quantization', 'stamps')."""
+
+    name = ''
+    n_params = 1
+    kind = 'additive'
+
+    def fit(self, ctx):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def term(self, params, n, rate_hz, rng, ctx):  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+def _zero_mean(x):
+    return x - x.mean()
+
+
+# --------------------------------------------------------------------------------------------------
+# value lattice
+
+
+class Quantization(Effect):
+    """Output rounded to a lattice (LSB); fitted from the values themselves (see signatures.find_lattice)."""
+
+    name = 'quantization'
+    n_params = 2
+    kind = 'quantization'
+
+    def fit(self, ctx):
+        if ctx.layout.lattice is None:
+            return None
+        step, offset = ctx.layout.lattice
+        return {'step_rad_s': step, 'offset_rad_s': offset}
+
+    @staticmethod
+    def apply(params, x):
+        """Round ``x`` onto the lattice."""
+        step, offset = params['step_rad_s'], params['offset_rad_s']
+        return offset + step * np.round((x - offset) / step)
+
+
+# --------------------------------------------------------------------------------------------------
+# deterministic additive terms
+
+
+class Sinusoid(Effect):
+    """A sine at one frequency, found as the strongest line of the periodogram over its local background."""
+
+    name = 'sinusoid'
+    n_params = 3
+
+    @staticmethod
+    def _line_ratio(x, rate_hz):
+        spec = np.abs(np.fft.rfft(x - x.mean())) ** 2
+        # local background: median of blocks of 64 bins (a line occupies 1-3 bins), interpolated
+        block = 64
+        nb = spec.shape[0] // block
+        med = np.median(spec[:nb * block].reshape(nb, block), axis=1) / np.log(2.0)
+        centres = (np.arange(nb) + 0.5) * block
+        background = np.interp(np.arange(spec.shape[0]), centres, med)
+        ratio = spec / np.maximum(background, 1e-300)
+        # at least 10 cycles per record: slower 'lines' are the bias effects' business
+        ratio[:10] = 0.0
+        return spec, ratio
+
+    def fit(self, ctx):
+        x = ctx.residual
+        rate_hz = ctx.meas.rate_hz
+        n = x.shape[0]
+        spec, ratio = self._line_ratio(x, rate_hz)
+        k = int(np.argmax(ratio))
+        # exponential (chi-square 2 dof) periodogram ordinates: P(ratio > r) = exp(-r); ask for a
+        # false-alarm probability of 1e-3 over all bins
+        if ratio[k] < np.log(ratio.shape[0]) + np.log(1e3) or k + 1 >= spec.shape[0]:
+            return None
+        lp = np.log(spec[k - 1:k + 2])
+        den = lp[0] - 2 * lp[1] + lp[2]
+        delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
+        freq = (k + float(np.clip(delta, -0.5, 0.5))) * rate_hz / n
+        t = ctx.t_nominal
+        design = np.column_stack((np.sin(2 * np.pi * freq * t), np.cos(2 * np.pi * freq * t)))
+        (a, b), *_ = np.linalg.lstsq(design, x - x.mean(), rcond=None)
+        return {'amplitude_rad_s': float(np.hypot(a, b)), 'frequency_hz': float(freq),
+                'phase_rad': float(np.arctan2(b, a))}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        t = np.arange(n) / rate_hz
+        return _zero_mean(params['amplitude_rad_s']
+                          * np.sin(2 * np.pi * params['frequency_hz'] * t + params['phase_rad']))
+
+
+def _centred_fit_stat(basis, y):
+    """RSS reductions of one-regressor fits: basis (R, K) and y (..., K) -> (..., R), plus amplitudes."""
+    bc = basis - basis.mean(axis=1, keepdims=True)
+    yc = y - y.mean(axis=-1, keepdims=True)
+    norm = np.einsum('rk,rk->r', bc, bc)
+    proj = yc @ bc.T
+    return proj ** 2 / norm, proj / norm
+
+
+class BiasDrift(Effect):
+    """Linear ramp of the bias, fitted to the chunk-bias series by least squares."""
+
+    name = 'bias_drift'
+    n_params = 1
+
+    def fit(self, ctx):
+        t = ctx.layout.chunk_t_s
+        basis = t[None, :]
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        stat, amp = _centred_fit_stat(basis, y)
+        null, _ = _centred_fit_stat(basis, ctx.members('chunk_bias'))
+        if not null_exceeded(float(stat[0]), null[:, 0]):
+            return None
+        return {'slope_rad_s2': float(amp[0])}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        t = np.arange(n) / rate_hz
+        return _zero_mean(params['slope_rad_s2'] * t)
+
+
+class BiasTransient(Effect):
+    """Delayed first-order rise or decay of the bias, grid search over delay and time constant."""
+
+    name = 'bias_transient'
+    n_params = 3
+
+    @staticmethod
+    def shape(t, delay, tc):
+        """Unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
+        return np.where(t >= delay, -np.expm1(-np.maximum(t - delay, 0.0) / tc), 0.0)
+
+    def _grid(self, t, duration):
+        delays = np.linspace(0.0, 0.8, 17) * duration
+        tcs = np.geomspace(duration / 300.0, duration, 20)
+        pairs = [(d, c) for d in delays for c in tcs]
+        return pairs, np.array([self.shape(t, d, c) for d, c in pairs])
+
+    def fit(self, ctx):
+        t = ctx.layout.chunk_t_s
+        duration = ctx.meas.n / ctx.meas.rate_hz
+        pairs, basis = self._grid(t, duration)
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        stat, amp = _centred_fit_stat(basis, y)
+        null, _ = _centred_fit_stat(basis, ctx.members('chunk_bias'))
+        best = int(np.argmax(stat))
+        if not null_exceeded(float(stat[best]), null.max(axis=1)):
+            return None
+        # a transient must beat a straight line clearly, else the ramp (fewer parameters) is the answer
+        ramp_stat, _ = _centred_fit_stat(t[None, :], y)
+        delay, tc = pairs[best]
+        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay), 'time_constant_s': float(tc),
+                '_ramp_ratio': float(stat[best] / max(ramp_stat[0], 1e-300))}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        t = np.arange(n) / rate_hz
+        return _zero_mean(params['amplitude_rad_s']
+                          * self.shape(t, params['delay_s'], params['time_constant_s']))
+
+
+class TemperatureSensitivity(Effect):
+    """Bias proportional to temperature and to its rate (paper 002), least squares on the chunk series."""
+
+    name = 'temperature_sensitivity'
+    n_params = 2
+
+    def _regressors(self, ctx):
+        return temperature_rate(ctx.meas.temperature_c, ctx.meas.rate_hz, ctx.layout.chunk)
+
+    def fit(self, ctx):
+        if ctx.meas.temperature_c is None:
+            return None
+        t_mean, t_rate = self._regressors(ctx)
+        design = np.column_stack((np.ones_like(t_mean), t_mean - t_mean.mean(), t_rate))
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        members = ctx.members('chunk_bias')
+
+        def reduction(values):
+            coef, *_ = np.linalg.lstsq(design, values.T, rcond=None)
+            fitted = design @ coef
+            yc = values.T - values.T.mean(axis=0)
+            return (yc ** 2).sum(axis=0) - ((values.T - fitted) ** 2).sum(axis=0), coef
+
+        stat, coef = reduction(y[None, :])
+        null, _ = reduction(members)
+        if not null_exceeded(float(stat[0]), null):
+            return None
+        return {'coefficient_rad_s_per_degc': float(coef[1, 0]),
+                'rate_coefficient_rad_s_per_degc_per_s': float(coef[2, 0])}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        temp = ctx.meas.temperature_c
+        chunk = ctx.layout.chunk
+        t_mean, t_rate = temperature_rate(temp, rate_hz, chunk)
+        t = np.arange(n) / rate_hz
+        rate = np.interp(t, ctx.layout.chunk_t_s, t_rate)
+        return _zero_mean(params['coefficient_rad_s_per_degc'] * (temp - temp.mean())
+                          + params['rate_coefficient_rad_s_per_degc_per_s'] * rate)
+
+
+# --------------------------------------------------------------------------------------------------
+# stochastic additive terms, fitted on the Allan variance in excess of the current model
+
+
+def allan_template_from_psd(psd, tau_s, rate_hz, duration_s):
+    """
+    Allan variance of a process with PSD ``psd(f)`` (paper 001 eq. 8), integrated numerically.
+
+    sigma^2(tau) = 4 int S(f) sin^4(pi f tau) / (pi f tau)^2 df over 1 / T .. fs / 2.
+
+    Parameters
+    ----------
+    psd : callable
+        f (Hz) -> PSD ((rad/s)^2 / Hz), the two-sided density of the IEEE 952 convention.
+    tau_s : numpy.ndarray
+        Cluster times (s).
+    rate_hz, duration_s : float
+        Sample rate (Hz) and record length (s): the integration limits.
+
+    Returns
+    -------
+    numpy.ndarray
+        Allan variance ((rad/s)^2).
+    """
+    freq = np.geomspace(1.0 / duration_s, rate_hz / 2.0, 6000)
+    x = np.pi * np.outer(tau_s, freq)
+    integrand = psd(freq)[None, :] * np.sin(x) ** 4 / x ** 2
+    return 4.0 * np.trapezoid(integrand, freq, axis=1)
+
+
+def gm_allan(sigma, tc, tau):
+    """Closed-form Allan variance of a first-order Gauss-Markov process (stationary sd sigma, time tc)."""
+    x = tau / tc
+    return 2.0 * sigma ** 2 * tc / tau * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x)) / (2.0 * x))
+
+
+class _AllanFitted(Effect):
+    """Common part: weighted least squares of a template to the excess Allan variance, null from members."""
+
+    kind = 'stochastic'
+
+    def templates(self, ctx):  # pragma: no cover - interface
+        """Return (list of extra-params dicts, array (R, taus) of unit-amplitude templates)."""
+        raise NotImplementedError
+
+    def fit(self, ctx):
+        avar_m = ctx.meas_sig['allan'] ** 2
+        members = ctx.members('allan') ** 2
+        mean = members.mean(axis=0)
+        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very closely
+        sd = np.maximum(members.std(axis=0, ddof=1), 0.05 * mean)
+        extras, templ = self.templates(ctx)
+        w = 1.0 / sd ** 2
+
+        def best(excess):
+            num = (templ * w) @ excess.T
+            den = (templ ** 2 * w).sum(axis=1)
+            amp = np.maximum(num, 0.0) / den[:, None]
+            stat = amp ** 2 * den[:, None]
+            return stat, amp
+
+        stat, amp = best((avar_m - mean)[None, :])
+        # leave-one-out null: each member against the mean of the others
+        count = members.shape[0]
+        loo = members - (members.sum(axis=0)[None, :] - members) / (count - 1)
+        null, _ = best(loo)
+        r = int(np.argmax(stat[:, 0]))
+        if not null_exceeded(float(stat[r, 0]), null.max(axis=0)):
+            return None
+        return self.params(float(amp[r, 0]), extras[r])
+
+
+class RateRandomWalk(_AllanFitted):
+    """Random walk of the bias (Allan variance K^2 tau / 3)."""
+
+    name = 'rate_random_walk'
+    n_params = 1
+
+    def templates(self, ctx):
+        return [{}], (ctx.layout.tau_s / 3.0)[None, :]
+
+    def params(self, amp, extra):
+        return {'k_rad_s_per_sqrt_s': float(np.sqrt(amp))}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        steps = rng.standard_normal(n) * params['k_rad_s_per_sqrt_s'] / np.sqrt(rate_hz)
+        return _zero_mean(np.cumsum(steps))
+
+
+def flicker_noise(n, rate_hz, b_rad_s, rng):
+    """Flicker bias with PSD B^2 / (2 pi f) (IEEE 952 convention) from 1 / T to fs / 2, by spectral shaping."""
+    spec = np.fft.rfft(rng.standard_normal(n))
+    freq = np.fft.rfftfreq(n, 1.0 / rate_hz)
+    gain = np.zeros_like(freq)
+    # IEEE 952 PSDs are two-sided densities (paper 001 eq. 8 integrates them over f >= 0 with the
+    # factor 4); white unit-variance samples have two-sided density 1 / fs
+    gain[1:] = np.sqrt(b_rad_s ** 2 / (2 * np.pi * freq[1:]) * rate_hz)
+    return np.fft.irfft(spec * gain, n)
+
+
+class BiasInstability(_AllanFitted):
+    """Flicker (1/f) bias: the Allan floor of the bias instability B."""
+
+    name = 'bias_instability'
+    n_params = 1
+
+    def templates(self, ctx):
+        duration = ctx.meas.n / ctx.meas.rate_hz
+        t = allan_template_from_psd(lambda f: 1.0 / (2 * np.pi * f), ctx.layout.tau_s, ctx.meas.rate_hz,
+                                    duration)
+        return [{}], t[None, :]
+
+    def params(self, amp, extra):
+        return {'b_rad_s': float(np.sqrt(amp))}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        return _zero_mean(flicker_noise(n, rate_hz, params['b_rad_s'], rng))
+
+
+class GaussMarkov(_AllanFitted):
+    """First-order Gauss-Markov bias; correlation time on a log grid, variance by least squares."""
+
+    name = 'gauss_markov'
+    n_params = 2
+
+    def templates(self, ctx):
+        duration = ctx.meas.n / ctx.meas.rate_hz
+        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 3.0, 30)
+        tau = ctx.layout.tau_s
+        return [{'correlation_time_s': float(c)} for c in tcs], np.array([gm_allan(1.0, c, tau) for c in tcs])
+
+    def params(self, amp, extra):
+        return {'sigma_rad_s': float(np.sqrt(amp)), **extra}
+
+    def term(self, params, n, rate_hz, rng, ctx):
+        phi = np.exp(-1.0 / (rate_hz * params['correlation_time_s']))
+        sigma = params['sigma_rad_s']
+        drive = rng.standard_normal(n) * sigma * np.sqrt(1.0 - phi * phi)
+        drive[0] = rng.standard_normal() * sigma
+        return _zero_mean(scipy.signal.lfilter([1.0], [1.0, -phi], drive))
+
+
+# --------------------------------------------------------------------------------------------------
+# stamps
+
+
+def _intervals(ctx):
+    return np.diff(ctx.meas.t_s) * ctx.meas.rate_hz
+
+
+def jittery(intervals):
+    """True when more than 1 % of the stamp intervals are shorter than half a period (bursty delivery)."""
+    return bool(np.mean(intervals < 0.5) > 0.01)
+
+
+class SampleLoss(Effect):
+    """Gaps in otherwise regular stamps: Poisson gap events, lost counts resampled from the measured gaps."""
+
+    name = 'sample_loss'
+    n_params = 2
+    kind = 'stamps'
+
+    def fit(self, ctx):
+        d = _intervals(ctx)
+        if jittery(d):
+            return None
+        gaps = d[d > 1.5]
+        if gaps.size == 0:
+            return None
+        lost = np.round(gaps) - 1
+        return {'gap_rate_per_s': float(gaps.size / (ctx.meas.n / ctx.meas.rate_hz)),
+                'mean_lost_samples': float(lost.mean()), 'max_lost_samples': int(lost.max()),
+                '_lost': lost}
+
+    def stamps(self, params, n, rate_hz, rng, ctx):
+        """Ideal stamps with gaps inserted (s)."""
+        events = rng.poisson(params['gap_rate_per_s'] * n / rate_hz)
+        extra = np.zeros(n)
+        if events:
+            where = rng.integers(1, n, size=events)
+            np.add.at(extra, where, rng.choice(params['_lost'], size=events))
+        return (np.arange(n) + np.cumsum(extra)) / rate_hz
+
+
+class StampJitter(Effect):
+    """Bursty or jittered stamps (host-side receive times): intervals resampled from the measurement."""
+
+    name = 'stamp_jitter'
+    n_params = 2
+    kind = 'stamps'
+
+    def fit(self, ctx):
+        d = _intervals(ctx)
+        if not jittery(d):
+            return None
+        k = np.arange(ctx.meas.n)
+        line = np.polyval(np.polyfit(k, ctx.meas.t_s, 1), k)
+        return {'jitter_rms_s': float(np.sqrt(np.mean((ctx.meas.t_s - line) ** 2))),
+                'short_interval_fraction': float(np.mean(d < 0.5)), '_intervals': d}
+
+    def stamps(self, params, n, rate_hz, rng, ctx):
+        """Stamps from resampled measured intervals (s)."""
+        d = rng.choice(params['_intervals'], size=n - 1)
+        return np.concatenate(([0.0], np.cumsum(d))) / rate_hz
+
+
+#: The catalogue in the order candidates are listed in reports.
+CATALOGUE = (Quantization(), Sinusoid(), BiasDrift(), BiasTransient(), RateRandomWalk(), BiasInstability(),
+             GaussMarkov(), TemperatureSensitivity(), SampleLoss(), StampJitter())
+NAMES = tuple(e.name for e in CATALOGUE)
+
+
+def public_params(params):
+    """Parameters without the private (underscore) entries, for explain.json."""
+    return {k: v for k, v in params.items() if not k.startswith('_')}

@@ -1,0 +1,276 @@
+"""
+Inputs of the discrepancy workflow: one gyro axis with stamps, optionally the sensor temperature.
+
+Two sources are read, both into a :class:`Measurement` (SI units):
+
+* a rosbag2 directory / ``.db3`` / ``.mcap`` or a ROS 1 ``.bag`` with ``sensor_msgs/Imu`` (and optionally
+  ``sensor_msgs/Temperature``), through :class:`gyro_noise_ros.bag.ImuBagReader`; the temperature is
+  interpolated linearly onto the Imu stamps;
+* a CSV file with a header line. Documented columns (any order, extra columns ignored):
+
+  ============================================  ===========================================================
+  ``time_s`` (or ``t_s``)                        sample time in s (optional when ``rate_hz`` is given)
+  ``gyro_x_rad_s``, ``gyro_y_rad_s``,            angular rate in rad/s; ``gyro_x_dps`` ... (deg/s) are
+  ``gyro_z_rad_s``                               accepted instead and converted (only the chosen axis is needed)
+  ``temperature_c`` (or ``temp_c``)              sensor temperature in degC (optional)
+  ============================================  ===========================================================
+
+Stamps: the nominal rate is ``rate_hz`` if given, else ``(n - 1) / (t_last - t_first)`` (the mean rate,
+which stays right for bursty host-side stamps where the median interval does not).
+"""
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import BagError, InputDataError, ParameterError
+
+#: Fewest samples the workflow accepts: 16 chunks of 1024 samples (the signatures need a few chunks and
+#: the order identification needs chunks longer than its memory).
+MIN_SAMPLES = 16384
+
+AXES = ('x', 'y', 'z')
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """
+    One gyro axis ready for the discrepancy workflow.
+
+    Attributes
+    ----------
+    rate : numpy.ndarray
+        Angular rate, rad/s, shape (n,).
+    t_s : numpy.ndarray
+        Sample times in s from the first sample, shape (n,).
+    rate_hz : float
+        Nominal sample rate (Hz).
+    temperature_c : numpy.ndarray or None
+        Temperature at each sample (degC), or None.
+    axis : str
+        'x', 'y' or 'z'.
+    source : str
+        Where the data came from (for the report).
+    """
+
+    rate: np.ndarray
+    t_s: np.ndarray
+    rate_hz: float
+    temperature_c: np.ndarray = None
+    axis: str = 'z'
+    source: str = ''
+
+    @property
+    def n(self):
+        """Number of samples."""
+        return int(self.rate.shape[0])
+
+    @property
+    def duration_s(self):
+        """Nominal duration n / rate_hz (s)."""
+        return self.n / self.rate_hz
+
+
+def _check_axis(axis):
+    if axis not in AXES:
+        raise ParameterError(f"axis must be 'x', 'y' or 'z', got {axis!r}")
+    return AXES.index(axis)
+
+
+def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='z', source='',
+                     require_temperature=False):
+    """
+    Validate arrays and build a :class:`Measurement`.
+
+    Parameters
+    ----------
+    rate : array_like
+        Angular rate of one axis (rad/s).
+    t_s : array_like, keyword-only
+        Sample times (s); None means uniform at ``rate_hz``.
+    rate_hz : float, keyword-only
+        Nominal rate (Hz); None means the mean rate of ``t_s``.
+    temperature_c : array_like, keyword-only
+        Temperature per sample (degC) or None.
+    axis, source : str, keyword-only
+        Labels.
+    require_temperature : bool, keyword-only
+        Raise InputDataError when no temperature is given.
+
+    Returns
+    -------
+    Measurement
+    """
+    _check_axis(axis)
+    rate = np.asarray(rate, dtype=np.float64).ravel()
+    n = rate.shape[0]
+    bad = ~np.isfinite(rate)
+    if bad.any():
+        raise InputDataError(f'angular rate ({axis} axis) has {int(bad.sum())} NaN/Inf sample(s), first at '
+                             f'index {int(np.argmax(bad))}; remove or repair them first')
+    if n < MIN_SAMPLES:
+        raise InputDataError(f'too short to analyse: {n} samples, need at least {MIN_SAMPLES}')
+    if np.ptp(rate) == 0.0:
+        raise InputDataError(f'angular rate ({axis} axis) is constant ({rate[0]!r}): nothing to analyse')
+    if t_s is None:
+        if rate_hz is None:
+            raise ParameterError('rate_hz is required when no sample times are given')
+        t = np.arange(n) / float(rate_hz)
+    else:
+        t = np.asarray(t_s, dtype=np.float64).ravel()
+        if t.shape[0] != n:
+            raise InputDataError(f'{t.shape[0]} sample times for {n} samples')
+        if not np.all(np.isfinite(t)):
+            raise InputDataError(f'sample times have {int((~np.isfinite(t)).sum())} NaN/Inf value(s)')
+        if np.any(np.diff(t) < 0):
+            raise InputDataError(f'sample times go backwards {int((np.diff(t) < 0).sum())} time(s); '
+                                 'sort the recording or give --rate-hz and no time column')
+        t = t - t[0]
+        if t[-1] <= 0:
+            raise InputDataError('all sample times are equal: give --rate-hz')
+    if rate_hz is None:
+        rate_hz = (n - 1) / t[-1]
+    rate_hz = float(rate_hz)
+    if not np.isfinite(rate_hz) or rate_hz <= 0:
+        raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz}')
+    temp = None
+    if temperature_c is not None:
+        temp = np.asarray(temperature_c, dtype=np.float64).ravel()
+        if temp.shape[0] != n:
+            raise InputDataError(f'{temp.shape[0]} temperature values for {n} samples')
+        bad = ~np.isfinite(temp)
+        if bad.any():
+            raise InputDataError(f'temperature has {int(bad.sum())} NaN/Inf value(s), first at index '
+                                 f'{int(np.argmax(bad))}')
+    if require_temperature and temp is None:
+        raise InputDataError(f'temperature was asked for but {source or "the input"} has none')
+    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis, source=source)
+
+
+def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
+    """
+    Read a CSV with the documented columns (module doc) into a :class:`Measurement`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        CSV file with a header line.
+    axis : {'x', 'y', 'z'}, keyword-only
+    rate_hz : float, keyword-only
+        Nominal rate (Hz); required when there is no time column, else overrides the mean rate.
+    require_temperature : bool, keyword-only
+        Raise InputDataError if there is no temperature column.
+
+    Returns
+    -------
+    Measurement
+    """
+    _check_axis(axis)
+    path = Path(path)
+    try:
+        with path.open(newline='') as fh:
+            header = next(csv.reader(fh), None)
+    except OSError as err:
+        raise InputDataError(f'cannot read CSV {str(path)!r}: {err.strerror or err}') from err
+    if not header:
+        raise InputDataError(f'CSV {str(path)!r} is empty (a header line is required)')
+    names = [h.strip().lower() for h in header]
+
+    def col(*choices):
+        for c in choices:
+            if c in names:
+                return names.index(c)
+        return None
+
+    i_t = col('time_s', 't_s')
+    i_rad = col(f'gyro_{axis}_rad_s')
+    i_dps = col(f'gyro_{axis}_dps')
+    i_temp = col('temperature_c', 'temp_c')
+    if i_rad is None and i_dps is None:
+        raise InputDataError(f'CSV {str(path)!r} has no column gyro_{axis}_rad_s (or gyro_{axis}_dps); '
+                             f'columns: {", ".join(names)}')
+    if i_t is None and rate_hz is None:
+        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
+    try:
+        data = np.loadtxt(path, delimiter=',', skiprows=1, ndmin=2, dtype=np.float64)
+    except ValueError as err:
+        raise InputDataError(f'CSV {str(path)!r} has a non-numeric value: {err}') from err
+    if data.shape[0] == 0:
+        raise InputDataError(f'too short to analyse: CSV {str(path)!r} has no data rows')
+    rate = data[:, i_rad] if i_rad is not None else np.deg2rad(data[:, i_dps])
+    return make_measurement(
+        rate, t_s=None if i_t is None else data[:, i_t], rate_hz=rate_hz,
+        temperature_c=None if i_temp is None else data[:, i_temp], axis=axis, source=str(path),
+        require_temperature=require_temperature)
+
+
+def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
+             require_temperature=False):
+    """
+    Read one gyro axis (and temperature) of a bag into a :class:`Measurement`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        rosbag2 directory/file or ROS 1 bag.
+    topic, temperature_topic : str, keyword-only
+        Imu and Temperature topics (auto-detected when None, see ImuBagReader). Naming a temperature
+        topic means temperature is required.
+    axis : {'x', 'y', 'z'}, keyword-only
+    rate_hz : float, keyword-only
+        Nominal rate (Hz); None means the mean rate of the header stamps.
+    require_temperature : bool, keyword-only
+
+    Returns
+    -------
+    Measurement
+    """
+    from ..bag import ImuBagReader
+
+    index = _check_axis(axis)
+    require_temperature = require_temperature or temperature_topic is not None
+    stamps, rates = [], []
+    with ImuBagReader(path, topic=topic, temperature_topic=temperature_topic) as reader:
+        for batch in reader.iter_batches():
+            stamps.append(batch.stamp_ns)
+            rates.append(batch.gyro[:, index])
+        temperature = reader.read_temperature()
+        imu_topic = reader.topic
+    stamp_ns = np.concatenate(stamps)
+    t_s = (stamp_ns - stamp_ns[0]).astype(np.float64) * 1e-9
+    temp = None
+    if temperature is not None and temperature[0].size:
+        ts = (temperature[0] - stamp_ns[0]).astype(np.float64) * 1e-9
+        order = np.argsort(ts, kind='stable')
+        temp = np.interp(t_s, ts[order], temperature[1][order])
+    elif require_temperature:
+        raise InputDataError(f'temperature was asked for but bag {str(path)!r} has no temperature messages')
+    return make_measurement(np.concatenate(rates), t_s=t_s, rate_hz=rate_hz, temperature_c=temp, axis=axis,
+                            source=f'{path} ({imu_topic})', require_temperature=require_temperature)
+
+
+def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
+               require_temperature=False):
+    """
+    Read a bag or a CSV (chosen by the path) into a :class:`Measurement`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``*.csv`` is read as CSV; anything else as a bag.
+    topic, temperature_topic, axis, rate_hz, require_temperature : keyword-only
+        See :func:`load_bag` and :func:`load_csv`.
+
+    Returns
+    -------
+    Measurement
+    """
+    path = Path(path)
+    if not path.exists():
+        raise BagError(f'input {str(path)!r} does not exist')
+    if path.suffix.lower() == '.csv':
+        return load_csv(path, axis=axis, rate_hz=rate_hz, require_temperature=require_temperature)
+    return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis, rate_hz=rate_hz,
+                    require_temperature=require_temperature)

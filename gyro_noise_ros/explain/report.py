@@ -1,0 +1,213 @@
+"""
+Outputs of the discrepancy workflow: explain.json, report.md and PNG figures (see docs/discrepancy.md).
+
+Figures show each signature in its natural units: the measurement (black) against the ensemble band
+``mu +/- T_s sd`` of the model before a step (grey) and after it (blue), transformed back from the
+comparison domain of :mod:`.signatures`.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ParameterError
+from . import signatures as sig
+from .effects import public_params
+
+DEG = 180.0 / np.pi
+_LOG_X = {'allan', 'psd', 'psd_peak'}
+_LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
+_TITLES = {'allan': 'Allan deviation (deg/s)', 'psd': 'PSD ((rad/s)^2/Hz)', 'psd_peak': 'band peak / band mean',
+           'chunk_bias': 'chunk bias (deg/s)', 'chunk_variance': 'chunk variance ((rad/s)^2)',
+           'histogram': 'value histogram (counts)', 'stamps': 'stamp intervals (counts)',
+           'temperature': 'corr(bias, T), corr(bias, dT/dt)'}
+
+
+def _untransform(name, values):
+    kind = sig.TRANSFORM[name]
+    if kind == 'log10':
+        return 10.0 ** values
+    if kind == 'sqrt':
+        return np.maximum(values, 0.0) ** 2
+    return values
+
+
+def _scale(name):
+    return DEG if name in ('allan', 'chunk_bias') else 1.0
+
+
+def _plot_one(ax, layout, name, comparisons, labels, colours):
+    _, unit, xs = sig.points(layout, name)
+    scale = _scale(name)
+    if name == 'histogram' and layout.lattice is not None:
+        xs = np.arange(xs.size)
+        unit = 'bin (value bins, then lattice phase)'
+    first = None
+    for comp, label, colour in zip(comparisons, labels, colours):
+        if comp is None:
+            continue
+        lo = _untransform(name, comp.mu - comp.threshold * comp.sd) * scale
+        hi = _untransform(name, comp.mu + comp.threshold * comp.sd) * scale
+        ax.fill_between(xs, lo, hi, color=colour, alpha=0.35, lw=0, label=f'{label} band')
+        first = comp
+    y = _untransform(name, first.y) * scale
+    out = np.zeros(xs.size, dtype=bool) if comparisons[-1] is None else comparisons[-1].outside
+    ax.plot(xs, y, 'k.-', ms=3, lw=0.8, label='measurement')
+    if out.any():
+        ax.plot(xs[out], y[out], 'o', mfc='none', mec='red', ms=6, label='outside')
+    if name in _LOG_X:
+        ax.set_xscale('log')
+    if name in _LOG_Y:
+        ax.set_yscale('log')
+    ax.set_title(_TITLES[name], fontsize=8)
+    ax.set_xlabel(unit, fontsize=7)
+    ax.tick_params(labelsize=6)
+
+
+def plot_signatures(path, layout, names, comparisons, labels, colours, title):
+    """
+    Write one PNG with a panel per signature.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    layout : Layout
+    names : list of str
+        Signatures to draw.
+    comparisons : list of dict
+        One dict (name -> Comparison) per band to draw; the last one marks the outside points.
+    labels, colours : list of str
+    title : str
+    """
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    cols = min(4, len(names))
+    rows = int(np.ceil(len(names) / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.5 * rows), squeeze=False)
+    for ax, name in zip(axes.ravel(), names):
+        _plot_one(ax, layout, name, [c.get(name) if c else None for c in comparisons], labels, colours)
+    for ax in axes.ravel()[len(names):]:
+        ax.axis('off')
+    axes.ravel()[0].legend(fontsize=6, loc='best')
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=72)
+    plt.close(fig)
+
+
+def _fmt_params(params):
+    return ', '.join(f'{k} = {v:.4g}' if isinstance(v, float) else f'{k} = {v}'
+                     for k, v in public_params(params).items())
+
+
+def verdict(result):
+    """One-paragraph verdict printed by the command line tool."""
+    if not result.steps and not result.unexplained:
+        return (f'consistent with the baseline model (fractional noise alpha={result.baseline.alpha:.2f}): '
+                f'gap {result.gap_final:.3f}, nothing named')
+    named = ', '.join(s.effect for s in result.steps) or 'nothing'
+    text = f'added {named}; gap {result.gap_initial:.3f} -> {result.gap_final:.3f}'
+    if result.unexplained:
+        text += '; UNEXPLAINED: ' + ('; '.join(result.where_final[:3]) or 'outside the band')
+    else:
+        text += '; the measurement is inside the ensemble band'
+    return text
+
+
+def write_outputs(result, out_dir):
+    """
+    Write explain.json, report.md and the figures to ``out_dir``.
+
+    Parameters
+    ----------
+    result : ExplainResult
+    out_dir : str or os.PathLike
+
+    Returns
+    -------
+    pathlib.Path
+        The directory.
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ParameterError(f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
+    data = result.to_dict()
+    (out / 'explain.json').write_text(json.dumps(data, indent=2, default=_json_default) + '\n')
+    layout = result.layout
+    names = list(result.comparisons_initial)
+    figures = []
+    plot_signatures(out / 'overview.png', layout, names,
+                    [result.comparisons_initial, result.comparisons_final if result.steps else None],
+                    ['baseline', 'final model'], ['0.6', 'tab:blue'],
+                    f'measurement vs ensemble: baseline (grey), final model (blue); gap '
+                    f'{result.gap_initial:.3f} -> {result.gap_final:.3f}')
+    figures.append('overview.png')
+    for i, step in enumerate(result.steps, 1):
+        changed = [n for n in names if step.before[n].g > 1 or step.after[n].g > 1] or names[:4]
+        name = f'step{i}_{step.effect}.png'
+        plot_signatures(out / name, layout, changed[:4], [step.before, step.after], ['before', 'after'],
+                        ['0.6', 'tab:blue'], f'step {i}: + {step.effect} (gap {step.gap_before:.3f} -> '
+                        f'{step.gap_after:.3f})')
+        figures.append(name)
+    (out / 'report.md').write_text(_markdown(result))
+    return out
+
+
+def _json_default(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f'not JSON serialisable: {type(value).__name__}')
+
+
+def _markdown(result):
+    meas, base = result.measurement, result.baseline
+    lines = [
+        '# Discrepancy report', '',
+        f'Input: `{meas.source}`, axis {meas.axis}, {meas.n} samples at {meas.rate_hz:.6g} Hz '
+        f'({meas.duration_s:.1f} s){", with temperature" if meas.temperature_c is not None else ""}.',
+        f'Ensemble: {result.ensemble} members, seed {result.seed}. Run time {result.seconds["total"]:.1f} s.', '',
+        f'**Verdict:** {verdict(result)}', '',
+        '## Baseline model (paper 000 eqs. 2, 10, 11)', '',
+        '| parameter | value |', '|---|---|',
+        f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * DEG:.5g} deg/s) |',
+        f'| order alpha (variance method) | {base.alpha:.3f} |',
+        f'| f | {base.f:.5g} |',
+        f'| sigma_w | {base.sigma_w_rad_s:.4g} rad/s |',
+        f'| sigma_nu (white measurement noise) | {base.sigma_nu_rad_s:.4g} rad/s |',
+        f'| memory L (fit / simulation) | {base.memory_fit} / {base.memory_sim} |',
+        f'| chunks identified (size) | {base.chunks_identified} ({base.chunk_size}) |',
+        f'| PSD misfit above fs/100 (rms dex) | {base.psd_misfit:.3f} |', '',
+        f'Initial gap G = {result.gap_initial:.3f} (definition: docs/discrepancy.md; 0 = inside every band).', '',
+    ]
+    if result.where_final or result.steps:
+        first = result.steps[0].where if result.steps else result.where_final
+        lines += ['Where the baseline leaves the band:', ''] + [f'- {w}' for w in first] + ['']
+    lines += ['![overview](overview.png)', '']
+    for i, step in enumerate(result.steps, 1):
+        lines += [f'## Step {i}: {step.effect}', '',
+                  f'Parameters: {_fmt_params(step.params)}.', '',
+                  f'Gap {step.gap_before:.3f} -> {step.gap_after:.3f}. Candidates tried (gap after): '
+                  + ', '.join(f'{k} {v:.3f}' for k, v in step.candidates.items()) + '.', '']
+        if step.where_after:
+            lines += ['Still outside after this step:', ''] + [f'- {w}' for w in step.where_after] + ['']
+        lines += [f'![step {i}](step{i}_{step.effect}.png)', '']
+    lines += ['## Result', '']
+    if result.unexplained:
+        lines += ['**Unexplained**: no catalogue effect brings the measurement inside the band. Still outside:', '']
+        lines += [f'- {w}' for w in result.where_final] + ['']
+        if result.tried_last:
+            lines += ['Rejected candidates of the last round (gap after): '
+                      + ', '.join(f'{k} {v:.3f}' for k, v in result.tried_last.items()) + '.', '']
+    else:
+        lines += [f'Inside the ensemble band (gap {result.gap_final:.3f} <= 0.1, the tolerance).', '']
+    lines += ['| signature | g (worst point / band edge) | band half-width (z) |', '|---|---|---|']
+    for name, comp in result.comparisons_final.items():
+        lines.append(f'| {name} | {comp.g:.3f} | {comp.threshold:.2f} |')
+    return '\n'.join(lines) + '\n'

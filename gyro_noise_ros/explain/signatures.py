@@ -1,0 +1,497 @@
+"""
+Signatures that compare a measurement with a simulated ensemble, the band and the scalar gap.
+
+Each signature is a vector of points on an axis fixed by the measurement (the :class:`Layout`), so the
+measurement and every ensemble member are evaluated at the same points. Each exposes different effects:
+
+=================  =========================================  ======================  ==========================
+name               points                                     compared as             exposes
+=================  =========================================  ======================  ==========================
+``allan``          overlapping Allan deviation at tau =       log10                   RRW, flicker, Gauss-Markov,
+                   m / rate_hz, m = 1, sqrt 2, 2, ... n/10                            ramp, sinusoid
+                   (paper 001 eq. 7)
+``psd``            Welch PSD, Hann, 50 % overlap, averaged    log10                   sinusoid, colour, GM
+                   in 40 log-spaced frequency bands
+``psd_peak``       largest Welch bin of each band over the    log10                   spectral lines
+                   band mean
+``chunk_bias``     mean of each of ~100 equal chunks          linear (rad/s)          ramp, transient, steps
+``chunk_variance`` variance of each chunk                     log10                   non-stationary noise
+``histogram``      value histogram, 32 bins over mean +/-     sqrt(count) (variance   quantisation, non-Gauss
+                   4 sd; plus 10 lattice-phase bins when the  stabilising for
+                   values sit on a lattice                    Poisson counts)
+``stamps``         counts of stamp intervals dt / period in   sqrt(count)             sample loss, jitter
+                   [0, .5), [.5, 1.5), [1.5, 2.5), [2.5, 5.5),
+                   [5.5, 20.5), [20.5, inf)
+``temperature``    correlation of the chunk bias with chunk   linear                  temperature sensitivity
+                   temperature and with its rate dT/dt
+=================  =========================================  ======================  ==========================
+
+Band and gap (the definitions the report and the tests use)
+----------------------------------------------------------
+For signature s with points i, let Y[j, i] be the transformed values of the N members and y[i] the
+measurement's. With mu_i, sd_i the ensemble mean and standard deviation (``sd_i`` floored, see
+:data:`SD_FLOOR`: a model tolerance of 0.01 dex for log quantities, half a count for sqrt counts),
+``z_i = (y_i - mu_i) / sd_i`` and ``D_s = max_i |z_i|``. The same statistic for each member against the
+other N - 1 (leave-one-out) gives ``D_s,j``; the band half-width in z units is
+``T_s = max(3, max_j D_s,j, exp(mean(ln D_s,j) + 3 sd(ln D_s,j)))`` (a log-normal extrapolation of the
+members' own worst deviations to about the 99.9th percentile, never below the worst member nor 3). The
+measurement is **inside the band** of s iff ``g_s = D_s / T_s <= 1``; the **band** drawn in the figures is
+``mu_i +/- T_s sd_i``.
+
+The scalar gap is ``G = sum_s ln(max(g_s, 1))``: zero iff the measurement is inside every band, and each
+signature adds the log of how many band half-widths its worst point lies out. It is comparable between
+models because every model is judged by its own ensemble, with the same layout and the same rule.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+#: Transform and sd floor per signature (see module doc).
+TRANSFORM = {'allan': 'log10', 'psd': 'log10', 'psd_peak': 'log10', 'chunk_bias': 'linear', 'chunk_variance': 'log10',
+             'histogram': 'sqrt', 'stamps': 'sqrt', 'temperature': 'linear'}
+SD_FLOOR = {'allan': 0.01, 'psd': 0.01, 'psd_peak': 0.01, 'chunk_bias': 0.0, 'chunk_variance': 0.01, 'histogram': 0.5,
+            'stamps': 0.5, 'temperature': 0.01}
+#: Number of log-standard-deviations of the members' worst deviations that sets the band edge.
+BAND_K = 3.0
+#: Smallest band half-width in z units: with few or identical members (ideal stamps) the members' own
+#: deviations say nothing, and a 3-sigma point-wise band is the conventional floor.
+MIN_THRESHOLD = 3.0
+STAMP_EDGES = np.array([0.0, 0.5, 1.5, 2.5, 5.5, 20.5, np.inf])
+N_CHUNKS = 100
+N_BANDS = 40
+N_HIST = 32
+N_PHASE = 10
+
+
+@dataclass(frozen=True)
+class Layout:
+    """
+    Points at which every signature is evaluated, fixed by the measurement.
+
+    Attributes
+    ----------
+    rate_hz : float
+        Nominal rate (Hz).
+    n : int
+        Samples.
+    m : numpy.ndarray
+        Allan cluster sizes (samples); tau = m / rate_hz.
+    nperseg : int
+        Welch segment length.
+    band_edges : numpy.ndarray
+        Frequency band edges (Hz) of the PSD signature.
+    chunk : int
+        Chunk length of the bias / variance / temperature signatures.
+    hist_edges : numpy.ndarray
+        Value histogram edges (rad/s).
+    lattice : tuple or None
+        (step_rad_s, offset_rad_s) of the measurement's value lattice, when it has one.
+    temperature : bool
+        Whether the temperature signature is evaluated.
+    """
+
+    rate_hz: float
+    n: int
+    m: np.ndarray
+    nperseg: int
+    band_edges: np.ndarray
+    chunk: int
+    hist_edges: np.ndarray
+    lattice: tuple = None
+    temperature: bool = False
+
+    @property
+    def tau_s(self):
+        """Allan cluster times (s)."""
+        return self.m / self.rate_hz
+
+    @property
+    def chunk_t_s(self):
+        """Mid-times of the chunks (s, nominal)."""
+        k = self.n // self.chunk
+        return (np.arange(k) + 0.5) * self.chunk / self.rate_hz
+
+    @property
+    def band_centers_hz(self):
+        """Geometric centres of the PSD bands (Hz)."""
+        return np.sqrt(self.band_edges[:-1] * self.band_edges[1:])
+
+
+def find_lattice(x):
+    """
+    Find the value lattice of quantised samples, ``x = offset + k * step`` with integer k.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Samples (rad/s).
+
+    Returns
+    -------
+    tuple or None
+        ``(step, offset)`` in rad/s, or None when fewer than 99 % of the samples lie within 2 % of a
+        step of one lattice, or the values are not on a few levels (more than n / 4 distinct values).
+    """
+    sd = float(np.std(x))
+    # rounding far below any realistic LSB keeps text-file round-off from splitting one level in two
+    eps = 1e-7 * sd
+    levels = np.unique(np.round(x / eps)) * eps
+    if levels.size < 3 or levels.size > x.size // 4:
+        return None
+    d = np.diff(levels)
+    d = d[d > 1e-4 * sd]
+    if d.size == 0:
+        return None
+    q0 = float(d.min())
+    k = np.round(d / q0)
+    step = float(np.sum(d * k) / np.sum(k * k))
+    # circular mean: levels a hair below a lattice point must not average with those a hair above it
+    offset = float(np.angle(np.mean(np.exp(2j * np.pi * levels / step))) / (2 * np.pi) * step)
+    phase = np.mod(x - offset + 0.5 * step, step) / step - 0.5
+    if np.mean(np.abs(phase) < 0.02) < 0.99:
+        return None
+    offset = float(np.mod(offset, step))
+    return step, offset
+
+
+def make_layout(x, rate_hz, *, temperature=False):
+    """
+    Fix the signature points from the measurement.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Measured angular rate (rad/s).
+    rate_hz : float
+        Nominal rate (Hz).
+    temperature : bool, keyword-only
+        Include the temperature signature.
+
+    Returns
+    -------
+    Layout
+    """
+    n = x.shape[0]
+    m_max = n // 10
+    count = int(np.floor(2 * np.log2(m_max))) + 1
+    m = np.unique(np.round(2.0 ** (np.arange(count) / 2)).astype(np.int64))
+    nperseg = int(min(4096, 2 ** int(np.floor(np.log2(n // 16)))))
+    f_lo = 2.0 * rate_hz / nperseg
+    band_edges = np.geomspace(f_lo, rate_hz / 2, N_BANDS + 1)
+    chunk = max(64, n // N_CHUNKS)
+    mu, sd = float(np.mean(x)), float(np.std(x))
+    hist_edges = np.linspace(mu - 4 * sd, mu + 4 * sd, N_HIST + 1)
+    return Layout(rate_hz=float(rate_hz), n=n, m=m, nperseg=nperseg, band_edges=band_edges, chunk=chunk,
+                  hist_edges=hist_edges, lattice=find_lattice(x), temperature=bool(temperature))
+
+
+def allan_deviation_octaves(x, rate_hz, m):
+    """
+    Return the overlapping Allan deviation at cluster sizes ``m`` (paper 001 eq. 7).
+
+    The overlapping sum is taken with a stride of max(1, m // 8, n // 2^20) samples: for m > 8 the
+    terms it skips are almost fully correlated with their neighbours, and for short tau more than 2^20
+    terms estimate the deviation to 0.1 %, far inside the 0.01 dex tolerance of the band; the cost per
+    tau drops from O(n) to O(min(8 n / m, 2^20)).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Angular rate (rad/s).
+    rate_hz : float
+        Sample rate (Hz).
+    m : numpy.ndarray
+        Cluster sizes (samples).
+
+    Returns
+    -------
+    numpy.ndarray
+        Allan deviation (rad/s) per m.
+    """
+    theta = np.concatenate(([0.0], np.cumsum(x - x.mean())))
+    n = x.shape[0]
+    out = np.empty(m.shape[0])
+    for i, mi in enumerate(m):
+        mi = int(mi)
+        stride = max(1, mi // 8, n >> 20)
+        count = (n - 2 * mi) // stride + 1
+        # strided views, no index arrays: the terms theta[i + 2m] - 2 theta[i + m] + theta[i]
+        d = (theta[2 * mi:2 * mi + count * stride:stride] - 2.0 * theta[mi:mi + count * stride:stride]
+             + theta[:count * stride:stride])
+        out[i] = np.sqrt(np.dot(d, d) / count / (2.0 * mi * mi))
+    return out
+
+
+def welch(x, rate_hz, nperseg):
+    """
+    Welch PSD estimate: Hann window, 50 % overlap, mean removed once, one-sided density.
+
+    Equal to ``scipy.signal.welch(x - mean(x), fs, 'hann', nperseg, detrend=False)`` (checked in the
+    tests) without its per-segment bookkeeping, which dominated the ensemble run time.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Samples (rad/s).
+    rate_hz : float
+        Sample rate (Hz).
+    nperseg : int
+        Segment length (even).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Frequencies (Hz) and PSD ((rad/s)^2 / Hz).
+    """
+    window = scipy.signal.get_window('hann', nperseg)
+    segs = np.lib.stride_tricks.sliding_window_view(x - x.mean(), nperseg)[::nperseg // 2]
+    spec = np.fft.rfft(segs * window, axis=1)
+    pxx = np.mean(spec.real ** 2 + spec.imag ** 2, axis=0) / (rate_hz * (window @ window))
+    pxx[1:-1] *= 2.0
+    return np.fft.rfftfreq(nperseg, 1.0 / rate_hz), pxx
+
+
+def chunk_series(values, chunk):
+    """Return per-chunk means and variances (ddof 1) of the complete chunks of ``values``."""
+    k = values.shape[0] // chunk
+    blocks = values[:k * chunk].reshape(k, chunk)
+    return blocks.mean(axis=1), blocks.var(axis=1, ddof=1)
+
+
+def temperature_rate(temperature_c, rate_hz, chunk):
+    """
+    Return chunk-mean temperature (degC) and its rate dT/dt (degC/s) per chunk.
+
+    The rate is the central difference of the chunk means, which averages the sensor's LSB steps out.
+    """
+    t_mean, _ = chunk_series(temperature_c, chunk)
+    dt = chunk / rate_hz
+    rate = np.gradient(t_mean, dt) if t_mean.size > 1 else np.zeros_like(t_mean)
+    return t_mean, rate
+
+
+def compute(layout, x, t_s, temperature_c=None):
+    """
+    Evaluate every signature of one series on the layout (untransformed values).
+
+    Parameters
+    ----------
+    layout : Layout
+    x : numpy.ndarray
+        Angular rate (rad/s), ``layout.n`` samples.
+    t_s : numpy.ndarray or None
+        Sample times (s); None means ideal stamps k / rate_hz.
+    temperature_c : numpy.ndarray or None
+        Temperature per sample (degC), needed when ``layout.temperature``.
+
+    Returns
+    -------
+    dict
+        name -> 1-D numpy.ndarray.
+    """
+    out = {}
+    out['allan'] = allan_deviation_octaves(x, layout.rate_hz, layout.m)
+    freq, pxx = welch(x, layout.rate_hz, layout.nperseg)
+    band = np.digitize(freq, layout.band_edges) - 1
+    ok = (band >= 0) & (band < N_BANDS)
+    sums = np.bincount(band[ok], weights=pxx[ok], minlength=N_BANDS)
+    counts = np.bincount(band[ok], minlength=N_BANDS)
+    out['psd'] = sums / np.maximum(counts, 1)
+    peak = np.zeros(N_BANDS)
+    np.maximum.at(peak, band[ok], pxx[ok])
+    out['psd_peak'] = peak / np.maximum(out['psd'], 1e-300)
+    bias, var = chunk_series(x, layout.chunk)
+    out['chunk_bias'] = bias
+    out['chunk_variance'] = var
+    hist = _uniform_counts(x, layout.hist_edges[0], layout.hist_edges[-1], N_HIST)
+    if layout.lattice is not None:
+        step, offset = layout.lattice
+        # lattice points land at phase 0.05, the middle of the first bin, far from any bin edge
+        phase = np.mod(x - offset + 0.05 * step, step) / step
+        hist = np.concatenate((hist, _uniform_counts(phase, 0.0, 1.0, N_PHASE)))
+    out['histogram'] = hist
+    if t_s is None:
+        out['stamps'] = np.zeros(STAMP_EDGES.size - 1)
+        out['stamps'][1] = layout.n - 1
+    else:
+        out['stamps'] = np.histogram(np.diff(t_s) * layout.rate_hz, bins=STAMP_EDGES)[0].astype(np.float64)
+    if layout.temperature:
+        t_mean, t_rate = temperature_rate(temperature_c, layout.rate_hz, layout.chunk)
+        out['temperature'] = np.array([_corr(bias, t_mean), _corr(bias, t_rate)])
+    return out
+
+
+def _uniform_counts(x, lo, hi, bins):
+    """np.histogram(x, bins, range=(lo, hi)) counts (values outside dropped, hi inclusive), via bincount."""
+    scaled = (x - lo) * (bins / (hi - lo))
+    inside = (scaled >= 0) & (x <= hi)
+    idx = np.minimum(scaled[inside].astype(np.int64), bins - 1)
+    return np.bincount(idx, minlength=bins).astype(np.float64)
+
+
+def _corr(a, b):
+    a = a - a.mean()
+    b = b - b.mean()
+    den = np.sqrt((a @ a) * (b @ b))
+    return float(a @ b / den) if den > 0 else 0.0
+
+
+def transform(name, values):
+    """Apply the comparison transform of signature ``name`` (module doc)."""
+    kind = TRANSFORM[name]
+    if kind == 'log10':
+        return np.log10(np.maximum(values, 1e-300))
+    if kind == 'sqrt':
+        return np.sqrt(np.maximum(values, 0.0))
+    return np.asarray(values, dtype=np.float64)
+
+
+def points(layout, name):
+    """
+    Return the x-axis of signature ``name`` (label and values) for plots and the ``where`` text.
+
+    Returns
+    -------
+    tuple
+        (label, unit, numpy.ndarray)
+    """
+    if name == 'allan':
+        return 'tau', 's', layout.tau_s
+    if name in ('psd', 'psd_peak'):
+        return 'frequency', 'Hz', layout.band_centers_hz
+    if name in ('chunk_bias', 'chunk_variance'):
+        return 'time', 's', layout.chunk_t_s
+    if name == 'histogram':
+        centres = 0.5 * (layout.hist_edges[:-1] + layout.hist_edges[1:])
+        if layout.lattice is not None:
+            centres = np.concatenate((centres, np.arange(N_PHASE) / N_PHASE))
+        return 'value', 'rad/s (then lattice phase)', centres
+    if name == 'stamps':
+        return 'interval / period', '', 0.5 * (STAMP_EDGES[:-1] + np.minimum(STAMP_EDGES[1:], 40.0))
+    return 'correlation with', '(T, dT/dt)', np.array([0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """
+    Measurement against ensemble on one signature (definitions in the module doc).
+
+    Attributes
+    ----------
+    name : str
+    y : numpy.ndarray
+        Transformed measurement values.
+    mu, sd : numpy.ndarray
+        Ensemble mean and (floored) sd of the transformed member values.
+    z : numpy.ndarray
+        Measurement z per point.
+    threshold : float
+        T_s, the band half-width in z units.
+    g : float
+        D_s / T_s (> 1: outside the band).
+    outside : numpy.ndarray of bool
+        Points where |z| > T_s.
+    """
+
+    name: str
+    y: np.ndarray
+    mu: np.ndarray
+    sd: np.ndarray
+    z: np.ndarray
+    threshold: float
+    g: float
+    outside: np.ndarray
+
+    @property
+    def gap(self):
+        """This signature's share of the scalar gap, ln(max(g, 1))."""
+        return float(np.log(max(self.g, 1.0)))
+
+
+def compare(name, measured, members):
+    """
+    Compare one signature of the measurement with the ensemble (module doc).
+
+    Parameters
+    ----------
+    name : str
+    measured : numpy.ndarray
+        Untransformed measurement values.
+    members : numpy.ndarray
+        Untransformed member values, shape (N, points).
+
+    Returns
+    -------
+    Comparison
+    """
+    y = transform(name, measured)
+    yy = transform(name, np.asarray(members))
+    count = yy.shape[0]
+    floor = SD_FLOOR[name]
+    mu = yy.mean(axis=0)
+    sd = np.maximum(yy.std(axis=0, ddof=1), floor)
+    # leave-one-out mean and sd of the other N - 1 members, in closed form
+    s1 = yy.sum(axis=0)
+    s2 = (yy * yy).sum(axis=0)
+    mu_l = (s1[None, :] - yy) / (count - 1)
+    var_l = (s2[None, :] - yy * yy - (count - 1) * mu_l * mu_l) / (count - 2)
+    sd_l = np.maximum(np.sqrt(np.maximum(var_l, 0.0)), floor)
+    tiny = 1e-12 * (np.abs(mu) + 1e-300)
+    sd = np.maximum(sd, tiny)
+    sd_l = np.maximum(sd_l, tiny[None, :])
+    d_members = np.max(np.abs(yy - mu_l) / sd_l, axis=1)
+    z = (y - mu) / sd
+    log_d = np.log(np.maximum(d_members, 1e-6))
+    threshold = float(max(MIN_THRESHOLD, d_members.max(), np.exp(log_d.mean() + BAND_K * log_d.std(ddof=1))))
+    d = float(np.max(np.abs(z)))
+    return Comparison(name=name, y=y, mu=mu, sd=sd, z=z, threshold=threshold, g=d / threshold,
+                      outside=np.abs(z) > threshold)
+
+
+def total_gap(comparisons):
+    """Return the scalar gap G = sum_s ln(max(g_s, 1)) (module doc)."""
+    return float(sum(c.gap for c in comparisons.values()))
+
+
+def mean_square_z(comparisons):
+    """
+    Return sum_s mean_i (z_i / T_s)^2: how well a model fits inside its bands.
+
+    The gap is 0 for every model whose bands contain the measurement; this secondary score still tells
+    such models apart (the workflow uses it only among candidates with tied gaps).
+    """
+    return float(sum(np.mean((c.z / c.threshold) ** 2) for c in comparisons.values()))
+
+
+def describe_where(layout, comparison):
+    """
+    Return a short text naming where the measurement leaves the band of one signature.
+
+    Parameters
+    ----------
+    layout : Layout
+    comparison : Comparison
+
+    Returns
+    -------
+    str
+        Empty if inside the band.
+    """
+    if not comparison.outside.any():
+        return ''
+    name = comparison.name
+    label, unit, xs = points(layout, name)
+    idx = np.flatnonzero(comparison.outside)
+    side = 'above' if comparison.z[idx].mean() > 0 else 'below'
+    if name == 'temperature':
+        which = ['T', 'dT/dt']
+        return f'correlation of chunk bias with {", ".join(which[i] for i in idx)} outside the band'
+    if name == 'stamps':
+        labels = ['<0.5', '0.5-1.5', '1.5-2.5', '2.5-5.5', '5.5-20.5', '>20.5']
+        return f'stamp intervals (periods) {", ".join(labels[i] for i in idx)} counts {side} the band'
+    if name == 'histogram' and layout.lattice is not None and idx.max() >= N_HIST:
+        return f'values sit on a lattice of {layout.lattice[0]:.4g} rad/s that the model does not produce'
+    lo, hi = xs[idx.min()], xs[idx.max()]
+    return f'{name} {side} the band for {label} {lo:.4g}..{hi:.4g} {unit} ({idx.size} of {xs.size} points)'

@@ -1,0 +1,309 @@
+"""
+The discrepancy workflow: fit the baseline, simulate an ensemble, find where the measurement leaves the
+band, name the missing effect, add it, show the gap shrink (see docs/discrepancy.md).
+
+Loop (at most ``max_steps`` times):
+
+1. compare the measurement with the current model's ensemble on every signature (:mod:`.signatures`);
+   stop if the gap G is 0 (inside every band);
+2. every catalogue effect not yet in the model runs its fitter on the data (:mod:`.effects`); each one
+   that reports parameters is added to the model on trial, the ensemble re-simulated (same member seeds:
+   common random numbers, so the trials differ only by the effect) and the gap recomputed;
+3. the candidate with the smallest gap wins; among candidates within :data:`TIE_GAP` of it (typically
+   several models that all bring the measurement inside the bands) the one with the smallest
+   :func:`~.signatures.mean_square_z` plus :data:`PARAM_PENALTY` per parameter (so a ramp beats a
+   three-parameter transient that mimics it equally well); it is accepted when it
+   shrinks the gap by at least :data:`INSIDE_GAP`, else the loop stops and the record is
+   "unexplained" at the places still outside the band.
+
+Ensemble. ``ensemble`` members (default 16) of the baseline are generated once, each with its own seeded
+generator (``numpy.random.default_rng([seed, member, 0])``); an accepted additive effect is added into the
+members in place (its stochastic draws use ``default_rng([seed, member, 1 + catalogue index])``), the
+lattice and stamp effects are applied when a member is evaluated. Memory: ``ensemble`` float64 copies of
+the record (16 x 3.6e6 samples = 460 MB for 1 h at 1 kHz).
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ParameterError
+from . import signatures as sig
+from .baseline import fit_baseline
+from .effects import CATALOGUE, Context, Quantization, public_params
+
+#: Candidates whose gap is within this of the best one count as tied; among them the smallest
+#: mean_square_z + PARAM_PENALTY * (number of parameters) wins.
+TIE_GAP = 0.05
+PARAM_PENALTY = 0.1
+#: The measurement counts as inside the band when G <= INSIDE_GAP (its worst points lie at most ~10 %
+#: of a band half-width beyond the edge on one signature), and an effect must shrink G by at least this
+#: much to be accepted: smaller changes are within the run-to-run scatter of the band edges.
+INSIDE_GAP = 0.1
+
+
+@dataclass(frozen=True)
+class Step:
+    """
+    One accepted effect.
+
+    Attributes
+    ----------
+    effect : str
+    params : dict
+        Fitted parameters (SI; names in :mod:`.effects`).
+    gap_before, gap_after : float
+        Scalar gap G before and after adding the effect.
+    where : list of str
+        Where the measurement left the band before the step.
+    where_after : list of str
+        Where it still leaves the band after it.
+    candidates : dict
+        Every candidate tried in this step -> its gap (the chosen one included).
+    before, after : dict
+        Signature comparisons before and after (for figures; not serialised).
+    """
+
+    effect: str
+    params: dict
+    gap_before: float
+    gap_after: float
+    where: list
+    where_after: list
+    candidates: dict
+    before: dict = field(repr=False, default=None)
+    after: dict = field(repr=False, default=None)
+
+
+@dataclass(frozen=True)
+class ExplainResult:
+    """
+    Outcome of :func:`explain`.
+
+    Attributes
+    ----------
+    measurement : Measurement
+    layout : Layout
+    baseline : BaselineModel
+    steps : list of Step
+    gap_initial, gap_final : float
+    unexplained : bool
+        True when the gap is still above :data:`INSIDE_GAP` after the last step.
+    where_final : list of str
+    comparisons_initial, comparisons_final : dict
+        Signature comparisons of the baseline and of the final model.
+    tried_last : dict
+        Candidates of the final, rejected round (name -> gap), empty if none was tried.
+    ensemble : int
+    seed : int
+    seconds : dict
+        Wall time of the phases (s).
+    """
+
+    measurement: object
+    layout: object
+    baseline: object
+    steps: list
+    gap_initial: float
+    gap_final: float
+    unexplained: bool
+    where_final: list
+    comparisons_initial: dict
+    comparisons_final: dict
+    tried_last: dict
+    ensemble: int
+    seed: int
+    seconds: dict
+
+    @property
+    def named(self):
+        """Names of the accepted effects, in order."""
+        return [s.effect for s in self.steps]
+
+    def to_dict(self):
+        """The explain.json layout (see docs/discrepancy.md)."""
+        meas = self.measurement
+        return {
+            'input': {'source': meas.source, 'axis': meas.axis, 'samples': meas.n,
+                      'rate_hz': meas.rate_hz, 'duration_s': meas.duration_s,
+                      'temperature': meas.temperature_c is not None},
+            'ensemble': self.ensemble,
+            'seed': self.seed,
+            'baseline': self.baseline.to_dict(),
+            'steps': [{'effect': s.effect, 'params': public_params(s.params),
+                       'gap_before': s.gap_before, 'gap_after': s.gap_after, 'where': s.where,
+                       'where_after': s.where_after, 'candidates': s.candidates} for s in self.steps],
+            'gap_initial': self.gap_initial,
+            'gap_final': self.gap_final,
+            'unexplained': self.unexplained,
+            'where_final': self.where_final,
+            'rejected_candidates': self.tried_last,
+            'signatures_final': {name: {'g': c.g, 'threshold_z': c.threshold}
+                                 for name, c in self.comparisons_final.items()},
+            'seconds': self.seconds,
+        }
+
+
+class _Model:
+    """The ensemble of the current model: members with the accepted additive terms already added."""
+
+    def __init__(self, meas, layout, baseline, ensemble, seed):
+        self.meas, self.layout, self.seed = meas, layout, seed
+        self.members = [baseline.generator(np.random.default_rng([seed, j, 0])).generate(meas.n)
+                        for j in range(ensemble)]
+        self.quantization = None
+        self.stamp_effect = None
+        self.accepted = {}
+
+    def rng(self, member, effect):
+        return np.random.default_rng([self.seed, member, 1 + CATALOGUE.index(effect)])
+
+    def _series(self, j, trial, ctx):
+        meas = self.meas
+        x = self.members[j]
+        quant, stamp_effect = self.quantization, self.stamp_effect
+        if trial is not None:
+            effect, params, det = trial
+            if effect.kind == 'additive':
+                x = x + det
+            elif effect.kind == 'stochastic':
+                x = x + effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
+            elif effect.kind == 'quantization':
+                quant = params
+            else:
+                stamp_effect = (effect, params)
+        if quant is not None:
+            x = Quantization.apply(quant, x)
+        if stamp_effect is None:
+            t = None
+        else:
+            effect, params = stamp_effect
+            t = effect.stamps(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
+        return x, t
+
+    def signatures(self, trial=None, ctx=None):
+        out = []
+        for j in range(len(self.members)):
+            x, t = self._series(j, trial, ctx)
+            out.append(sig.compute(self.layout, x, t, self.meas.temperature_c))
+        return out
+
+    def accept(self, effect, params, det, ctx):
+        meas = self.meas
+        if effect.kind == 'additive':
+            for x in self.members:
+                x += det
+        elif effect.kind == 'stochastic':
+            for j, x in enumerate(self.members):
+                x += effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
+        elif effect.kind == 'quantization':
+            self.quantization = params
+        else:
+            self.stamp_effect = (effect, params)
+        self.accepted[effect.name] = params
+
+
+def compare_all(layout, meas_sig, member_sig):
+    """Compare every signature; returns name -> Comparison."""
+    return {name: sig.compare(name, meas_sig[name], np.array([s[name] for s in member_sig]))
+            for name in meas_sig}
+
+
+def where_outside(layout, comparisons):
+    """Texts naming where the measurement leaves each band, worst signature first."""
+    worst = sorted(comparisons.values(), key=lambda c: -c.g)
+    return [sig.describe_where(layout, c) for c in worst if c.outside.any()]
+
+
+def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None):
+    """
+    Run the discrepancy workflow on one measured axis (module doc).
+
+    Parameters
+    ----------
+    meas : Measurement
+        See :mod:`.inputs`.
+    seed : int, keyword-only
+        Seed of the ensemble (results are reproducible for a given seed).
+    ensemble : int, keyword-only
+        Members per ensemble (>= 4).
+    max_steps : int, keyword-only
+        Most effects to add (>= 0).
+    effects : sequence of Effect, keyword-only
+        Candidates (default: the whole catalogue).
+    progress : callable, optional
+        Called with one-line status texts.
+
+    Returns
+    -------
+    ExplainResult
+    """
+    ensemble, max_steps, seed = int(ensemble), int(max_steps), int(seed)
+    if ensemble < 4:
+        raise ParameterError(f'ensemble must be >= 4 members, got {ensemble}')
+    if max_steps < 0:
+        raise ParameterError(f'max_steps must be >= 0, got {max_steps}')
+    if seed < 0:
+        raise ParameterError(f'seed must be >= 0, got {seed}')
+    say = progress or (lambda text: None)
+    seconds = {}
+    t0 = time.perf_counter()
+    layout = sig.make_layout(meas.rate, meas.rate_hz, temperature=meas.temperature_c is not None)
+    meas_sig = sig.compute(layout, meas.rate, meas.t_s, meas.temperature_c)
+    baseline = fit_baseline(meas.rate, meas.rate_hz)
+    seconds['fit_baseline'] = time.perf_counter() - t0
+    say(f'baseline: alpha={baseline.alpha:.2f} f={baseline.f:.3f} sigma_w={baseline.sigma_w_rad_s:.3g} rad/s '
+        f'sigma_nu={baseline.sigma_nu_rad_s:.3g} rad/s (L_sim={baseline.memory_sim})')
+    t1 = time.perf_counter()
+    model = _Model(meas, layout, baseline, ensemble, seed)
+    seconds['simulate_baseline'] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    member_sig = model.signatures()
+    comparisons = compare_all(layout, meas_sig, member_sig)
+    gap = sig.total_gap(comparisons)
+    initial, gap_initial = comparisons, gap
+    residual = meas.rate.copy()
+    steps = []
+    tried_last = {}
+    say(f'gap {gap:.3f}')
+    while gap > INSIDE_GAP and len(steps) < max_steps:
+        ctx = Context(meas, residual, layout, meas_sig, member_sig, model.accepted)
+        trials = []
+        for effect in effects:
+            if effect.name in model.accepted:
+                continue
+            params = effect.fit(ctx)
+            if params is None:
+                continue
+            det = effect.term(params, meas.n, meas.rate_hz, None, ctx) if effect.kind == 'additive' else None
+            trial_sig = model.signatures((effect, params, det), ctx)
+            trial_cmp = compare_all(layout, meas_sig, trial_sig)
+            trial_gap = sig.total_gap(trial_cmp)
+            say(f'  candidate {effect.name}: gap {trial_gap:.3f}')
+            trials.append((trial_gap, effect, params, det, trial_sig, trial_cmp))
+        tried = {t[1].name: t[0] for t in trials}
+        if not trials:
+            tried_last = {}
+            break
+        best_gap = min(t[0] for t in trials)
+        tied = [t for t in trials if t[0] <= best_gap + TIE_GAP]
+        choice = min(tied, key=lambda t: sig.mean_square_z(t[5]) + PARAM_PENALTY * t[1].n_params)
+        trial_gap, effect, params, det, trial_sig, trial_cmp = choice
+        if trial_gap > gap - INSIDE_GAP:
+            tried_last = tried
+            break
+        model.accept(effect, params, det, ctx)
+        if det is not None:
+            residual = residual - det
+        steps.append(Step(effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
+                          where=where_outside(layout, comparisons), where_after=where_outside(layout, trial_cmp),
+                          candidates=tried, before=comparisons, after=trial_cmp))
+        say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
+        member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap
+    seconds['iterate'] = time.perf_counter() - t2
+    seconds['total'] = time.perf_counter() - t0
+    return ExplainResult(measurement=meas, layout=layout, baseline=baseline, steps=steps, gap_initial=gap_initial,
+                         gap_final=gap, unexplained=gap > INSIDE_GAP, where_final=where_outside(layout, comparisons),
+                         comparisons_initial=initial, comparisons_final=comparisons, tried_last=tried_last,
+                         ensemble=ensemble, seed=seed, seconds=seconds)

@@ -346,7 +346,7 @@ class ImuBagReader:
         return self._source
 
     def _decoded_blocks(self, source):
-        """Yield decoded blocks (stamp, log, gyro, accel, frame-id getter)."""
+        """Yield decoded blocks: (stamp, log, gyro, accel, (buf, starts, lengths) for frame ids)."""
         for buf, starts, lengths, log_ns in source.blocks(self.topic):
             try:
                 keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, source.ros1,

@@ -1,12 +1,12 @@
 """
 Opening bags of every supported format and streaming one topic's raw messages in blocks.
 
-rosbags does the parsing of metadata, indexes and connections. The message stream of the two
-rosbag2 storages is read here in blocks instead of one Python tuple per message: sqlite3 through
-the storage's own database connection, MCAP by decompressing each indexed chunk and locating its
-message records with numpy. The order is the one rosbags' ``Reader.messages`` yields (receive time,
-ties in recording order); where that order cannot be guaranteed cheaply (MCAP chunks overlapping in
-time, no chunk index, per-message compression) and for ROS 1 bags, rosbags' own iterator is used.
+rosbags does the parsing of metadata, indexes and connections. The message stream is read here in
+blocks instead of one Python tuple per message: sqlite3 through the storage's own database
+connection, MCAP and ROS 1 by decompressing each indexed chunk and locating its message records
+with numpy. The order is the one rosbags' ``Reader.messages`` yields (receive time, ties in
+recording order); where that order cannot be guaranteed cheaply (chunks overlapping in time, an
+MCAP file without chunk index, per-message compression), rosbags' own iterator is used.
 """
 
 from __future__ import annotations

@@ -12,7 +12,10 @@ are ``raw=True`` (serialised CDR) and sit in a callback group the executor never
 (:class:`~gyro_noise_ros.nodes.recorder.PolledGroup`); a timer takes every queued message each
 ``drain_period_s`` with ``take_message`` and decodes the batch in bulk with numpy
 (:func:`gyro_noise_ros.bag.decode_imu`, the decoder of the offline tool). The QoS history
-(``queue_depth`` messages) holds far more than one drain period, so nothing is overwritten.
+(``queue_depth`` = 20,000 messages, 3 s at 6.66 kHz, 0.75 s at 4x) holds far more than one drain
+period, so nothing is overwritten even when the executor thread waits for the GIL or the CPU on a
+busy machine (measured: 5,000 lost messages at 4x under load, 20,000 did not; see
+``bench/bench_analyzer_node.py``).
 
 Analysis. :meth:`NoiseEngine.ingest` (cheap) runs in the executor thread; each complete chunk becomes
 a job in a bounded queue (``analysis_queue_chunks`` chunks of all axes) served by one worker thread
@@ -145,7 +148,7 @@ PARAMETERS = (
               read_only=True, min_value=0.05, max_value=3600.0),
     ParamSpec('allan_period_s', 10.0, 'Period of the Allan deviation update in the diagnostics',
               unit='s', read_only=True, min_value=0.1, max_value=86400.0),
-    ParamSpec('queue_depth', 5000, 'QoS history depth of the subscriptions', unit='messages',
+    ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('drain_period_s', 0.01, 'Period of the loop taking queued messages', unit='s',
               read_only=True, min_value=0.001, max_value=0.5),
@@ -321,6 +324,9 @@ class NoiseAnalyzerNode(Node):
     # ---- worker -----------------------------------------------------------------------------------
 
     def _work(self):
+        # The OS thread id lets a profiler (bench/bench_analyzer_node.py) split the node's CPU time
+        # between ingestion (executor thread) and analysis (this thread).
+        self.get_logger().info(f'analysis worker started (native thread id {threading.get_native_id()})')
         while not self._stop.is_set():
             try:
                 job = self._jobs.get(timeout=0.2)

@@ -824,3 +824,12 @@ def test_ros1_block_reader_yields_rosbags_order(tmp_path, pattern):
     np.testing.assert_array_equal(lg, log[order])
     np.testing.assert_array_equal(s, stamps[order])
     assert_same_floats(g, gyro[order])
+
+
+def test_fsync_switches_sqlite_synchronous(tmp_path):
+    # Commits without fsync are what keeps a 6.66 kHz recorder's periodic flush cheap; with
+    # fsync=True every commit waits for the disk (sqlite's default, synchronous=FULL=2).
+    for fsync, expected in ((False, 0), (True, 2)):
+        with ImuBagWriter(tmp_path / f'f{fsync}', fsync=fsync) as writer:
+            assert writer._writer.storage.conn.execute('PRAGMA synchronous').fetchone() == (expected,)
+            writer.write_imu([1], np.zeros(3), np.zeros(3))

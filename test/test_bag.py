@@ -833,3 +833,53 @@ def test_fsync_switches_sqlite_synchronous(tmp_path):
         with ImuBagWriter(tmp_path / f'f{fsync}', fsync=fsync) as writer:
             assert writer._writer.storage.conn.execute('PRAGMA synchronous').fetchone() == (expected,)
             writer.write_imu([1], np.zeros(3), np.zeros(3))
+
+
+@st.composite
+def damaged_temperatures(draw):
+    ros1 = draw(st.booleans())
+    store = ROS1 if ros1 else ROS2
+    t = store.types
+    raws = []
+    for _ in range(draw(st.integers(1, 8))):
+        stamp = draw(st.integers(0, 2**31 - 1))
+        fields = {'stamp': t['builtin_interfaces/msg/Time'](sec=stamp, nanosec=draw(st.integers(0, 10**9 - 1))),
+                  'frame_id': draw(st.text(alphabet='ab_\u00e9', max_size=12))}
+        if ros1:
+            fields['seq'] = draw(st.integers(0, 2**32 - 1))
+        msg = t[TEMPERATURE_MSGTYPE](header=t['std_msgs/msg/Header'](**fields),
+                                     temperature=draw(st.floats()), variance=draw(st.floats()))
+        raw = bytearray(store.serialize_ros1(msg, TEMPERATURE_MSGTYPE) if ros1 else
+                        store.serialize_cdr(msg, TEMPERATURE_MSGTYPE, little_endian=draw(st.booleans())))
+        damage = draw(st.sampled_from(['none', 'flip', 'cut', 'extend']))
+        if damage == 'flip':
+            raw[draw(st.integers(0, len(raw) - 1))] ^= 1 << draw(st.integers(0, 7))
+        elif damage == 'cut':
+            raw = raw[:draw(st.integers(0, len(raw) - 1))]
+        elif damage == 'extend':
+            raw += bytes(draw(st.integers(1, 9)))
+        raws.append(bytes(raw))
+    return ros1, raws
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(damaged_temperatures())
+def test_fuzz_temperature_decoder_agrees_with_rosbags(case):
+    ros1, raws = case
+    store = ROS1 if ros1 else ROS2
+    expected, refused = [], False
+    for raw in raws:
+        try:
+            msg = (store.deserialize_ros1(raw, TEMPERATURE_MSGTYPE) if ros1 else
+                   store.deserialize_cdr(raw, TEMPERATURE_MSGTYPE))
+        except Exception:  # noqa: BLE001 - any refusal by rosbags
+            refused = True
+            continue
+        expected.append((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, msg.temperature))
+    if refused:
+        with pytest.raises(BagError, match='cannot be decoded'):
+            decode_temperature(raws, ros1=ros1)
+        return
+    stamps, temps = decode_temperature(raws, ros1=ros1)
+    np.testing.assert_array_equal(stamps, [e[0] for e in expected])
+    assert_same_floats(temps, np.array([e[1] for e in expected], float))

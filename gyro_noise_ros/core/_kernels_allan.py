@@ -166,32 +166,20 @@ def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover
                     else:
                         l3 += d * d
                     t += 1
-                if s == 1:
-                    while t + 4 <= seg:
-                        d0 = (x[t + 2 * m] - 2.0 * x[t + m]) + x[t]
-                        d1 = (x[t + 1 + 2 * m] - 2.0 * x[t + 1 + m]) + x[t + 1]
-                        d2 = (x[t + 2 + 2 * m] - 2.0 * x[t + 2 + m]) + x[t + 2]
-                        d3 = (x[t + 3 + 2 * m] - 2.0 * x[t + 3 + m]) + x[t + 3]
-                        l0 += d0 * d0
-                        l1 += d1 * d1
-                        l2 += d2 * d2
-                        l3 += d3 * d3
-                        t += 4
-                else:
-                    while t + 4 <= seg:
-                        i = t * s
-                        d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                        i += s
-                        d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                        i += s
-                        d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                        i += s
-                        d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                        l0 += d0 * d0
-                        l1 += d1 * d1
-                        l2 += d2 * d2
-                        l3 += d3 * d3
-                        t += 4
+                while t + 4 <= seg:
+                    i = t * s
+                    d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    i += s
+                    d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    i += s
+                    d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    i += s
+                    d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+                    l0 += d0 * d0
+                    l1 += d1 * d1
+                    l2 += d2 * d2
+                    l3 += d3 * d3
+                    t += 4
                 while t < seg:
                     i = t * s
                     d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]

@@ -353,6 +353,19 @@ def test_edf_closed_form_white_fm_nonoverlapping():
     assert edf_greenhall(0, 40, 4001, stride=40, stable32=True) == edf_greenhall(0, 40, 4001, stride=40)
 
 
+def test_edf_white_pm_shortcut_equals_full_basic_sum():
+    # for white PM only lags that are whole multiples of tau correlate, so the short sum must equal
+    # the full eq. 10 sum wherever the latter is cheap enough to evaluate
+    from gyro_noise_ros.core import allan as allan_mod
+    for m, n_phase in ((8, 33), (8, 40), (16, 60), (5, 21)):
+        big_l = 2 * m + 1
+        big_m = 1 + (n_phase - big_l)
+        jj = min(big_m, 3 * m)
+        full = allan_mod._basic_sum(jj, big_m, m, m, 2)
+        short = allan_mod._basic_sum(jj, big_m, m, m, 2, only_multiples=True)
+        assert short == pytest.approx(full, rel=1e-12)
+
+
 def test_edf_overlapping_exceeds_nonoverlapping():
     for alpha in (2, 1, 0, -1, -2):
         for m in (1, 8, 64, 1024):

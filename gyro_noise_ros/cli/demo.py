@@ -339,8 +339,8 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-def _wait_line(lines, procs, timeout_s):
-    deadline = time.monotonic() + timeout_s
+def _next_line(lines, procs, deadline):
+    """The monitor's next line, or None at the deadline; raise if a process or the monitor died."""
     while time.monotonic() < deadline:
         procs.check()
         try:
@@ -350,22 +350,25 @@ def _wait_line(lines, procs, timeout_s):
         if line is None:
             raise DemoError('the diagnostics monitor stopped')
         return line
-    raise DemoError(f'no diagnostics from noise_analyzer after {timeout_s:.0f} s (DDS discovery?); logs in '
-                    f'{procs.log_dir}')
+    return None
+
+
+def _wait_line(lines, procs, timeout_s):
+    line = _next_line(lines, procs, time.monotonic() + timeout_s)
+    if line is None:
+        raise DemoError(f'no diagnostics from noise_analyzer after {timeout_s:.0f} s (DDS discovery?); '
+                        f'logs in {procs.log_dir}')
+    return line
 
 
 def _live(lines, procs, story, speed, t_stream):
     """Print the monitor's lines until the live part is over; return (elapsed_s, line) pairs."""
     seen = []
     end = t_stream + story.live_s / speed
-    while time.monotonic() < end:
-        procs.check()
-        try:
-            line = lines.get(timeout=0.2)
-        except queue.Empty:
-            continue
+    while True:
+        line = _next_line(lines, procs, end)
         if line is None:
-            raise DemoError('the diagnostics monitor stopped')
+            break
         elapsed = (time.monotonic() - t_stream) * speed
         phase = 'quiet' if elapsed < story.quiet_s else 'rise '
         print(f'  [{elapsed:6.1f} s {phase}] {line}', flush=True)

@@ -49,10 +49,8 @@ from collections import deque
 from dataclasses import fields, replace
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, Temperature
@@ -64,7 +62,7 @@ from ..core.health import HealthThresholds
 from ..errors import GyroNoiseError, ParameterError
 from ._ros_common import (ParamSpec, declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, run_node, sensor_data_qos)
-from .recorder import PolledGroup, SequenceGapCounter, take_all
+from .recorder import PolledGroup, SequenceGapCounter, unused_callback, take_all
 
 NODE_NAME = 'noise_analyzer'
 
@@ -302,12 +300,12 @@ class NoiseAnalyzerNode(Node):
 
         group = PolledGroup()
         qos = sensor_data_qos(p['queue_depth'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', _never_called, qos, raw=True,
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos, raw=True,
                                                  callback_group=group)
         self._temperature_sub = None
         if p['use_temperature']:
             self._temperature_sub = self.create_subscription(
-                Temperature, 'imu/temperature', _never_called, qos, raw=True, callback_group=group)
+                Temperature, 'imu/temperature', unused_callback, qos, raw=True, callback_group=group)
         self._diag_pub = diagnostics_publisher(self)
         topic_qos = QoSProfile(depth=100)
         self._chunk_pubs = {name: self.create_publisher(Vector3Stamped, '~/' + name, topic_qos)
@@ -556,10 +554,6 @@ def allan_values(summary):
     return list(out.items())
 
 
-def _never_called(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
-    raise AssertionError('polled subscriptions are drained by the node, not by the executor')
-
-
 # ---- the --echo monitor -------------------------------------------------------------------------------
 
 _LEVEL_NAMES = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
@@ -679,18 +673,8 @@ def echo_main(args):
             print(f'{NODE_NAME}: error: --filter needs a value', file=sys.stderr)
             return 2
         name_filter = args[i + 1]
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = DiagnosticsEcho(name_filter, only_changes=only_changes, compact=compact)
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(lambda: DiagnosticsEcho(name_filter, only_changes=only_changes, compact=compact), args,
+                    prog=f'{NODE_NAME} --echo')
 
 
 def main(args=None):

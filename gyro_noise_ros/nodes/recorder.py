@@ -208,12 +208,12 @@ class RecorderNode(Node):
                            'choose a new bag directory')
         group = PolledGroup()
         qos = sensor_data_qos(params['queue_depth'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', _never_called, qos, raw=True,
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos, raw=True,
                                                  callback_group=group)
         self._temperature_sub = None
         if params['record_temperature']:
             self._temperature_sub = self.create_subscription(
-                Temperature, 'imu/temperature', _never_called, qos, raw=True, callback_group=group)
+                Temperature, 'imu/temperature', unused_callback, qos, raw=True, callback_group=group)
         self.create_timer(params['drain_period_s'], self.drain)
         if params['flush_period_s'] > 0:
             self.create_timer(params['flush_period_s'], self._flush)
@@ -294,7 +294,8 @@ class RecorderNode(Node):
         return super().destroy_node()
 
 
-def _never_called(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
+def unused_callback(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
+    """The callback rclpy requires of a polled subscription; never called (see PolledGroup)."""
     raise AssertionError('polled subscriptions are drained by the node, not by the executor')
 
 

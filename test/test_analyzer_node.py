@@ -235,6 +235,30 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
         assert 'skipped' in status.message
 
 
+@pytest.mark.timeout(120)
+def test_unusable_stamps_give_error_not_a_crash(context):
+    # Every stamp equal: the sample rate cannot be estimated, so the engine rejects the batches.
+    from gyro_noise_ros.bag import encode_imu_cdr
+
+    node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**SMALL))
+    n = 600
+    messages = [('/imu/data_raw', raw) for raw in
+                encode_imu_cdr(np.full(n, 10 ** 18), np.zeros((n, 3)), np.zeros((n, 3)))]
+    executor = None
+    try:
+        executor, _ = _replay(context, node, messages, block=300)
+        diag = node.diagnostics()
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        node.destroy_node()
+    for status in diag.status:
+        values = {kv.key: kv.value for kv in status.values}
+        assert status.level == b'\x02', (status.level, status.message)
+        assert status.message.startswith('Samples rejected: ') and 'sample rate' in status.message
+        assert int(values['Batches rejected']) >= 1
+
+
 def test_bad_parameters_are_refused_in_process(context):
     for bad, words in (({'axes': 'x,w'}, "'axes'"), ({'chunk_size': 100}, 'chunk_size'),
                        ({'reference_summary': '/nonexistent/summary.json'}, 'cannot be read'),

@@ -285,7 +285,9 @@ class NoiseAnalyzerNode(Node):
         self._transport = SequenceGapCounter()
         self._last_data = None
         self._temperature = None  # (stamp_ns array, degC array) of the latest temperatures
-        self._ingest_error = ''
+        self._ingest_error = ''  # why the latest rejected batch was rejected
+        self._rejected_batches = 0
+        self._last_batch_rejected = False
         self._last = {}  # axis -> latest ChunkResult
         self._chunks = {}  # chunk index -> {axis: ChunkResult} until all axes are in
         self.results = deque(maxlen=10_000)  # recent ChunkResults in completion order (tests, tools)
@@ -369,8 +371,11 @@ class NoiseAnalyzerNode(Node):
             jobs = self.engine.ingest(batch.stamp_ns, batch.gyro, self._temperature_at(batch.stamp_ns))
         except GyroNoiseError as err:
             self._ingest_error = str(err)
+            self._rejected_batches += 1
+            self._last_batch_rejected = True
             self.get_logger().error(f'samples rejected: {err}', throttle_duration_sec=5.0)
             return
+        self._last_batch_rejected = False
         for job in jobs:
             try:
                 self._jobs.put_nowait(job)
@@ -494,9 +499,13 @@ class NoiseAnalyzerNode(Node):
                 ('Mean temperature (degC)', _fmt(s.temperature_mean_c, 4)),
             ]
             level, message = verdict.level, verdict.message
-            if self._ingest_error:
-                values.append(('Last ingestion error', self._ingest_error))
-                if level != 'STALE':
+            if self._rejected_batches:
+                values.append(('Batches rejected', str(self._rejected_batches)))
+                values.append(('Last rejection', self._ingest_error))
+                # ERROR while data arrives but is rejected (rather than STALE for 'no chunk yet');
+                # once batches are accepted again only the count stays.
+                silent = since is not None and since > self.thresholds.stale_after_s
+                if self._last_batch_rejected and not silent:
                     level, message = 'ERROR', f'Samples rejected: {self._ingest_error}.'
             statuses.append(diagnostic_status(f'{self.get_name()}: axis {axis}', hardware_id,
                                               _level_byte(level), message, values))

@@ -117,7 +117,9 @@ class SequenceGapCounter:
     Count messages missing from a stream of DDS publication sequence numbers.
 
     A sequence number that does not increase starts a new run (a restarted publisher); a
-    sequence number of 0 means the middleware gave none and is ignored.
+    sequence number of 0 means the middleware gave none and is ignored. The count assumes one
+    publisher per topic (``MessageInfo`` does not name the writer): with several, their numbers
+    interleave and the count is meaningless (the stamps-based ``Samples lost`` stays right).
     """
 
     def __init__(self):

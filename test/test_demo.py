@@ -91,3 +91,16 @@ def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):
     assert done.returncode == 1
     assert done.stderr.strip().startswith('gyro_noise_demo: error:') and 'not a previous demo' in done.stderr
     assert (tmp_path / 'precious.txt').read_text() == 'keep me'
+
+
+def test_a_failing_component_is_named_with_its_log(tmp_path):
+    from gyro_noise_ros.cli.demo import DemoError, Processes
+
+    procs = Processes(dict(os.environ, ROS_DOMAIN_ID=str(_domain())), tmp_path)
+    procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', '--ros-args', '-p', 'storage:=zip'])
+    try:
+        with pytest.raises(DemoError, match=r"gyro_noise_record exited with code 2; log .*gyro_noise_record.log: "
+                           r".*parameter 'storage'"):
+            procs.wait_for_log('gyro_noise_record', r'recording ', 60, 'start-up')
+    finally:
+        procs.stop_all([])

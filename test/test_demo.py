@@ -8,6 +8,7 @@ import random
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -59,19 +60,24 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
 
 
 @pytest.mark.timeout(240)
-def test_ctrl_c_stops_every_process(tmp_path):
+def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path):
     domain = _domain()
-    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
-                             str(tmp_path / 'demo'), '--domain-id', str(domain)],
+    out = tmp_path / 'demo'
+    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out', str(out),
+                             '--domain-id', str(domain)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines = []
+    reader = threading.Thread(target=lambda: lines.extend(iter(proc.stdout.readline, '')), daemon=True)
+    reader.start()
     try:
-        # Interrupt once the nodes are being started (children exist).
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline and len(_our_processes(domain)) < 4:
+        # Interrupt in the live part: every process runs and the bag is being written.
+        deadline = time.monotonic() + 150
+        while time.monotonic() < deadline and not any('] ' in ln and ' chunk ' in ln for ln in lines):
+            assert proc.poll() is None, ''.join(lines) + proc.stderr.read()
             time.sleep(0.2)
-        assert len(_our_processes(domain)) >= 4
+        assert len(_our_processes(domain)) == 5, ''.join(lines)
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -82,6 +88,8 @@ def test_ctrl_c_stops_every_process(tmp_path):
     while _our_processes(domain) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert _our_processes(domain) == []
+    # The recorder was stopped with SIGINT, so the bag was closed properly.
+    assert (out / 'recording' / 'metadata.yaml').is_file()
 
 
 def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):

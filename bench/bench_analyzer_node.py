@@ -139,12 +139,14 @@ def _analyzer_received(domain, timeout_s=5.0):
     return got
 
 
-def _run(kind, rate_hz, seconds, depth):
+def _run(kind, rate_hz, seconds, depth, analyzer_params=()):
     domain = random.randint(100, 200)
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
     here = os.path.abspath(__file__)
     if kind == 'analyzer':
         cmd = [sys.executable, '-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args', '-p', f'queue_depth:={depth}']
+        for param in analyzer_params:
+            cmd += ['-p', param]
     else:
         cmd = [sys.executable, here, 'subscribe', kind, str(depth)]
     log = tempfile.NamedTemporaryFile('w+', suffix='.log', delete=False)
@@ -195,6 +197,10 @@ def main(argv=None):
     parser.add_argument('--seconds', type=float, default=10.0, help='publishing time per run (s)')
     parser.add_argument('--queue-depth', type=int, default=5000,
                         help='QoS history depth of every subscriber (the analyzer: queue_depth)')
+    parser.add_argument('-p', '--param', action='append', default=[], metavar='NAME:=VALUE',
+                        help='extra noise_analyzer parameter (repeatable), e.g. -p drain_period_s:=0.02')
+    parser.add_argument('--kinds', default='callback,null,analyzer',
+                        help='subscribers to measure, among callback, null, analyzer')
     parser.add_argument('--rates', default=f'{RATE_HZ:g},{4 * RATE_HZ:g}', help='comma-separated rates (Hz)')
     args = parser.parse_args(argv)
     rates = [float(r) for r in args.rates.split(',')]
@@ -202,8 +208,8 @@ def main(argv=None):
     print(f'{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start')
     rows = []
     for rate in rates:
-        for kind in ('callback', 'null', 'analyzer'):
-            rows.append(_run(kind, rate, args.seconds, args.queue_depth))
+        for kind in args.kinds.split(','):
+            rows.append(_run(kind, rate, args.seconds, args.queue_depth, args.param))
             r = rows[-1]
             print(f'  measured {kind:<9} at {rate:7.0f} Hz: {r["received"]}/{r["published"]} messages, '
                   f'{100 * r["cpu"]:.1f} % of a core', flush=True)
@@ -211,13 +217,13 @@ def main(argv=None):
     print(f'{"rate (Hz)":>9} | {"subscriber":<22} | {"received/published":>19} | {"CPU total":>9} | '
           f'{"ingestion":>9} | {"analysis":>8} | vs null')
     for r in rows:
-        null = next(x for x in rows if x['rate'] == r['rate'] and x['kind'] == 'null')
+        null = next((x for x in rows if x['rate'] == r['rate'] and x['kind'] == 'null'), None)
         ingest = r['cpu'] - r['worker']
         name = {'callback': 'callback per message', 'null': 'null raw drain (floor)',
                 'analyzer': 'noise_analyzer'}[r['kind']]
         analysis = f'{100 * r["worker"]:7.1f}%' if r['kind'] == 'analyzer' else f'{"-":>8}'
         print(f'{r["rate"]:9.0f} | {name:<22} | {r["received"]:>9}/{r["published"]:<9} | {100 * r["cpu"]:8.1f}% | '
-              f'{100 * ingest:8.1f}% | {analysis} | x{ingest / null["cpu"]:.2f}')
+              f'{100 * ingest:8.1f}% | {analysis} | ' + (f'x{ingest / null["cpu"]:.2f}' if null else '-'))
         if r['kind'] == 'analyzer':
             print(f'{"":9} | {"":22}   samples lost {r.get("lost")}, chunks analysed {r.get("analysed")}, '
                   f'skipped {r.get("skipped")}')

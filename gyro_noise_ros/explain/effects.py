@@ -43,7 +43,7 @@ it shrinks the gap.
 import numpy as np
 import scipy.signal
 
-from .signatures import chunk_series, temperature_rate
+from .signatures import chunk_series, compare, temperature_rate
 
 
 #: Standard deviations above the members' mean statistic a detection must lie (and above the worst
@@ -189,6 +189,17 @@ class Sinusoid(Effect):
         den = lp[0] - 2 * lp[1] + lp[2]
         delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
         freq = (k + float(np.clip(delta, -0.5, 0.5))) * rate_hz / n
+        # the line must also be where the measurement leaves the psd or psd_peak band: a steep background
+        # (random walk, flicker) fools the local-median test at low frequency, but the ensemble of the
+        # current model has the same steep background
+        edges = ctx.layout.band_edges
+        band = int(np.searchsorted(edges, freq)) - 1
+        if 0 <= band < edges.size - 1:
+            # narrow low bands hold one Welch bin, where a line raises the band mean, not the peak ratio
+            outside = [abs(c.z[band]) > c.threshold for c in
+                       (compare(name, ctx.meas_sig[name], ctx.members(name)) for name in ('psd', 'psd_peak'))]
+            if not any(outside):
+                return None
         t = ctx.t_nominal
         design = np.column_stack((np.sin(2 * np.pi * freq * t), np.cos(2 * np.pi * freq * t)))
         (a, b), *_ = np.linalg.lstsq(design, x - x.mean(), rcond=None)
@@ -377,9 +388,13 @@ class _AllanFitted(Effect):
         loo = members - (members.sum(axis=0)[None, :] - members) / (count - 1)
         null, _ = best(loo)
         r = int(np.argmax(stat[:, 0]))
-        if not null_exceeded(float(stat[r, 0]), null.max(axis=0)):
+        if not null_exceeded(float(stat[r, 0]), null.max(axis=0)) or not self.resolved(r, len(extras)):
             return None
         return self.params(float(amp[r, 0]), extras[r])
+
+    def resolved(self, index, count):
+        """Whether the best template (of ``count``) is one the record can tell from its neighbours."""
+        return True
 
 
 class RateRandomWalk(_AllanFitted):
@@ -430,19 +445,25 @@ class BiasInstability(_AllanFitted):
 
 
 class GaussMarkov(_AllanFitted):
-    """First-order Gauss-Markov bias; correlation time on a log grid, variance by least squares."""
+    """First-order Gauss-Markov bias; correlation time on a log grid (3 / fs .. T / 10), variance by LS."""
 
     name = 'gauss_markov'
     n_params = 2
 
     def templates(self, ctx):
         duration = ctx.meas.n / ctx.meas.rate_hz
-        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 3.0, 30)
+        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, 30)
         tau = ctx.layout.tau_s
         return [{'correlation_time_s': float(c)} for c in tcs], np.array([gm_allan(1.0, c, tau) for c in tcs])
 
     def params(self, amp, extra):
         return {'sigma_rad_s': float(np.sqrt(amp)), **extra}
+
+    def resolved(self, index, count):
+        # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the Allan
+        # peak at 1.89 tc is not inside the tau range: a random walk or flicker bias looks the same there,
+        # and those one-parameter effects are the answer
+        return index < count - 2
 
     def term(self, params, n, rate_hz, rng, ctx):
         phi = np.exp(-1.0 / (rate_hz * params['correlation_time_s']))

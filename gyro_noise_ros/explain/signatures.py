@@ -11,7 +11,7 @@ name               points                                     compared as       
                    m / rate_hz, m = 1, sqrt 2, 2, ... n/10                            ramp, sinusoid
                    (paper 001 eq. 7)
 ``psd``            Welch PSD, Hann, 50 % overlap, averaged    log10                   sinusoid, colour, GM
-                   in 40 log-spaced frequency bands
+                   in up to 40 log-spaced frequency bands
 ``psd_peak``       largest Welch bin of each band over the    log10                   spectral lines
                    band mean
 ``chunk_bias``     mean of each of ~100 equal chunks          linear (rad/s)          ramp, transient, steps
@@ -81,7 +81,7 @@ class Layout:
     nperseg : int
         Welch segment length.
     band_edges : numpy.ndarray
-        Frequency band edges (Hz) of the PSD signature.
+        Frequency band edges (Hz) of the PSD signatures (each band holds at least one Welch bin).
     chunk : int
         Chunk length of the bias / variance / temperature signatures.
     hist_edges : numpy.ndarray
@@ -178,8 +178,9 @@ def make_layout(x, rate_hz, *, temperature=False):
     count = int(np.floor(2 * np.log2(m_max))) + 1
     m = np.unique(np.round(2.0 ** (np.arange(count) / 2)).astype(np.int64))
     nperseg = int(min(4096, 2 ** int(np.floor(np.log2(n // 16)))))
-    f_lo = 2.0 * rate_hz / nperseg
-    band_edges = np.geomspace(f_lo, rate_hz / 2, N_BANDS + 1)
+    # band edges half-way between Welch bins, log-spaced from bin 2 up, so no band is empty
+    k_edges = np.unique(np.round(np.geomspace(2, nperseg // 2, N_BANDS + 1)))
+    band_edges = (k_edges - 0.5) * rate_hz / nperseg
     chunk = max(64, n // N_CHUNKS)
     mu, sd = float(np.mean(x)), float(np.std(x))
     hist_edges = np.linspace(mu - 4 * sd, mu + 4 * sd, N_HIST + 1)
@@ -294,12 +295,13 @@ def compute(layout, x, t_s, temperature_c=None):
     out = {}
     out['allan'] = allan_deviation_octaves(x, layout.rate_hz, layout.m)
     freq, pxx = welch(x, layout.rate_hz, layout.nperseg)
+    bands = layout.band_edges.size - 1
     band = np.digitize(freq, layout.band_edges) - 1
-    ok = (band >= 0) & (band < N_BANDS)
-    sums = np.bincount(band[ok], weights=pxx[ok], minlength=N_BANDS)
-    counts = np.bincount(band[ok], minlength=N_BANDS)
+    ok = (band >= 0) & (band < bands)
+    sums = np.bincount(band[ok], weights=pxx[ok], minlength=bands)
+    counts = np.bincount(band[ok], minlength=bands)
     out['psd'] = sums / np.maximum(counts, 1)
-    peak = np.zeros(N_BANDS)
+    peak = np.zeros(bands)
     np.maximum.at(peak, band[ok], pxx[ok])
     out['psd_peak'] = peak / np.maximum(out['psd'], 1e-300)
     bias, var = chunk_series(x, layout.chunk)
@@ -367,7 +369,7 @@ def points(layout, name):
         centres = 0.5 * (layout.hist_edges[:-1] + layout.hist_edges[1:])
         if layout.lattice is not None:
             centres = np.concatenate((centres, np.arange(N_PHASE) / N_PHASE))
-        return 'value', 'rad/s (then lattice phase)', centres
+        return 'value', 'rad/s (then lattice phase)' if layout.lattice is not None else 'rad/s', centres
     if name == 'stamps':
         return 'interval / period', '', 0.5 * (STAMP_EDGES[:-1] + np.minimum(STAMP_EDGES[1:], 40.0))
     return 'correlation with', '(T, dT/dt)', np.array([0.0, 1.0])
@@ -455,14 +457,16 @@ def total_gap(comparisons):
     return float(sum(c.gap for c in comparisons.values()))
 
 
-def mean_square_z(comparisons):
+def mean_log_score(comparisons):
     """
-    Return sum_s mean_i (z_i / T_s)^2: how well a model fits inside its bands.
+    Return sum_s mean_i (z_i^2 / 2 + ln sd_i): a Gaussian negative log-likelihood per point.
 
     The gap is 0 for every model whose bands contain the measurement; this secondary score still tells
-    such models apart (the workflow uses it only among candidates with tied gaps).
+    such models apart (the workflow uses it only among candidates with tied gaps). Unlike the z alone it
+    is a proper score: a model cannot win by widening its band (the ln sd term), only by putting its
+    ensemble where the measurement is.
     """
-    return float(sum(np.mean((c.z / c.threshold) ** 2) for c in comparisons.values()))
+    return float(sum(np.mean(0.5 * c.z ** 2 + np.log(c.sd)) for c in comparisons.values()))
 
 
 def describe_where(layout, comparison):

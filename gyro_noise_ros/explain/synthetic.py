@@ -19,16 +19,22 @@ the white-noise slope ``N / sqrt(tau)``:
 =========================  =================================================================================
 quantization               step ~ U[0.1, 0.6] sigma (ADIS16405: 0.14 sigma, LSM6DSO32 +/-2000 dps: ~0.6 sigma),
                            offset ~ U[0, step)
-sinusoid                   amplitude ~ U[0.1, 0.4] sigma, frequency log-uniform in [0.01, 0.4] fs,
+sinusoid                   amplitude ~ U[0.15, 0.5] sigma, frequency log-uniform in [0.01, 0.4] fs,
                            phase ~ U[0, 2 pi)
-bias_drift                 total change R T ~ +/-U[8, 20] s_c
-bias_transient             amplitude ~ +/-U[10, 25] s_c, delay ~ U[0.1, 0.4] T, time constant ~ U[0.04, 0.15] T
+bias_drift                 total change R T ~ +/-U[15, 30] s_c
+bias_transient             amplitude ~ +/-U[15, 30] s_c, delay ~ U[0.1, 0.4] T, time constant ~ U[0.04, 0.15] T
 rate_random_walk           K = sqrt(3) N / tc, tc ~ log-U[T / 300, T / 60]
-bias_instability           B = N / (0.664 sqrt(tc)), tc ~ log-U[T / 300, T / 60]
-gauss_markov               correlation time ~ log-U[T / 200, T / 40], sigma such that its Allan deviation at
-                           2 tc is U[3, 5] times the white noise's
-temperature_sensitivity    T(t) = 25 + dT (1 - exp(-t / tT)) degC, dT ~ U[3, 8] degC, tT ~ U[0.15, 0.4] T;
-                           kT = +/-U[10, 25] s_c / dT; kdT = 0 or (half the draws) +/-U[0.5, 1] kT tT
+bias_instability           B = N / (0.664 sqrt(tc)), tc ~ log-U[T / 1000, T / 200] (a flat Allan floor needs
+                           a decade or more of tau above the white-noise slope)
+gauss_markov               correlation time ~ log-U[T / 100, T / 30], sigma such that its Allan deviation at
+                           2 tc is U[3, 5] times the white noise's (a much shorter correlation time is
+                           the baseline's own dynamics: paper 000 eq. 1 is a first-order Gauss-Markov
+                           process, and the fitted (alpha ~ 1, f) absorbs it)
+temperature_sensitivity    T(t) = 25 + dT (1 - exp(-t / tT)) + c sin(2 pi t / P + phi) degC (warm-up plus
+                           HVAC-like cycling; a pure exponential warm-up would be a bias_transient by
+                           construction), dT ~ U[3, 8] degC, tT ~ U[0.15, 0.4] T, c ~ U[0.3, 1] dT,
+                           P ~ U[1/6, 1/2] T;
+                           kT = +/-U[20, 40] s_c / dT; kdT = 0 or (half the draws) +/-U[0.5, 1] kT tT
                            (MEMS zero-rate drift: 0.005-0.05 deg/s/degC)
 sample_loss                U[5, 30] gap events per record, geometric(p = 0.5, mean 2) samples lost each (<= 20)
 =========================  =================================================================================
@@ -91,33 +97,34 @@ def draw_effect(name, rng, *, sigma, rate_hz, n):
         step = rng.uniform(0.1, 0.6) * sigma
         return {'step_rad_s': step, 'offset_rad_s': rng.uniform(0, step)}
     if name == 'sinusoid':
-        return {'amplitude_rad_s': rng.uniform(0.1, 0.4) * sigma,
+        return {'amplitude_rad_s': rng.uniform(0.15, 0.5) * sigma,
                 'frequency_hz': float(np.exp(rng.uniform(np.log(0.01), np.log(0.4)))) * rate_hz,
                 'phase_rad': rng.uniform(0, 2 * np.pi)}
     if name == 'bias_drift':
-        return {'slope_rad_s2': _sign(rng) * rng.uniform(8, 20) * s_c / duration}
+        return {'slope_rad_s2': _sign(rng) * rng.uniform(15, 30) * s_c / duration}
     if name == 'bias_transient':
-        return {'amplitude_rad_s': _sign(rng) * rng.uniform(10, 25) * s_c,
+        return {'amplitude_rad_s': _sign(rng) * rng.uniform(15, 30) * s_c,
                 'delay_s': rng.uniform(0.1, 0.4) * duration,
                 'time_constant_s': rng.uniform(0.04, 0.15) * duration}
     if name == 'rate_random_walk':
         tc = float(np.exp(rng.uniform(np.log(duration / 300), np.log(duration / 60))))
         return {'k_rad_s_per_sqrt_s': np.sqrt(3.0) * white / tc}
     if name == 'bias_instability':
-        tc = float(np.exp(rng.uniform(np.log(duration / 300), np.log(duration / 60))))
+        tc = float(np.exp(rng.uniform(np.log(duration / 1000), np.log(duration / 200))))
         return {'b_rad_s': white / (0.664 * np.sqrt(tc))}
     if name == 'gauss_markov':
-        corr = float(np.exp(rng.uniform(np.log(duration / 200), np.log(duration / 40))))
+        corr = float(np.exp(rng.uniform(np.log(duration / 100), np.log(duration / 30))))
         ratio = rng.uniform(3, 5)
         unit = np.sqrt(gm_allan(1.0, corr, 2 * corr))
         return {'sigma_rad_s': ratio * white / np.sqrt(2 * corr) / unit, 'correlation_time_s': corr}
     if name == 'temperature_sensitivity':
         d_temp = rng.uniform(3, 8)
         t_temp = rng.uniform(0.15, 0.4) * duration
-        k_t = _sign(rng) * rng.uniform(10, 25) * s_c / d_temp
+        k_t = _sign(rng) * rng.uniform(20, 40) * s_c / d_temp
         k_dt = 0.0 if rng.random() < 0.5 else _sign(rng) * rng.uniform(0.5, 1.0) * k_t * t_temp
         return {'coefficient_rad_s_per_degc': k_t, 'rate_coefficient_rad_s_per_degc_per_s': k_dt,
-                '_delta_degc': d_temp, '_time_constant_s': t_temp}
+                '_delta_degc': d_temp, '_time_constant_s': t_temp, '_cycle_degc': rng.uniform(0.3, 1.0) * d_temp,
+                '_cycle_s': rng.uniform(1 / 6, 1 / 2) * duration, '_cycle_phase': rng.uniform(0, 2 * np.pi)}
     if name == 'sample_loss':
         events = int(rng.integers(5, 31))
         return {'events': events, 'lost': np.minimum(rng.geometric(0.5, size=events), 20)}
@@ -174,8 +181,11 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
             drive[0] = rng.standard_normal() * p['sigma_rad_s']
             x = x + scipy.signal.lfilter([1.0], [1.0, -phi], drive)
         elif name == 'temperature_sensitivity':
-            temperature = 25.0 + p['_delta_degc'] * -np.expm1(-t / p['_time_constant_s'])
-            rate = p['_delta_degc'] / p['_time_constant_s'] * np.exp(-t / p['_time_constant_s'])
+            omega = 2 * np.pi / p['_cycle_s']
+            temperature = (25.0 + p['_delta_degc'] * -np.expm1(-t / p['_time_constant_s'])
+                           + p['_cycle_degc'] * np.sin(omega * t + p['_cycle_phase']))
+            rate = (p['_delta_degc'] / p['_time_constant_s'] * np.exp(-t / p['_time_constant_s'])
+                    + p['_cycle_degc'] * omega * np.cos(omega * t + p['_cycle_phase']))
             x = x + p['coefficient_rad_s_per_degc'] * temperature \
                 + p['rate_coefficient_rad_s_per_degc_per_s'] * rate
             # a 0.01 degC sensor LSB and a little read noise

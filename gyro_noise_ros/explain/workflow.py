@@ -11,10 +11,15 @@ Loop (at most ``max_steps`` times):
    common random numbers, so the trials differ only by the effect) and the gap recomputed;
 3. the candidate with the smallest gap wins; among candidates within :data:`TIE_GAP` of it (typically
    several models that all bring the measurement inside the bands) the one with the smallest
-   :func:`~.signatures.mean_square_z` plus :data:`PARAM_PENALTY` per parameter (so a ramp beats a
+   :func:`~.signatures.mean_log_score` plus :data:`PARAM_PENALTY` per parameter (so a ramp beats a
    three-parameter transient that mimics it equally well); it is accepted when it
    shrinks the gap by at least :data:`INSIDE_GAP`, else the loop stops and the record is
-   "unexplained" at the places still outside the band.
+   "unexplained" at the places still outside the band;
+4. after a deterministic additive effect (sinusoid, ramp, transient, temperature) is accepted, the
+   baseline is refitted to the residual (measurement minus the accepted deterministic terms): a strong
+   line or ramp distorts the first identification. If the refit differs materially the members are
+   regenerated (same seeds) and, unless that widens the gap, the refitted baseline is kept and the
+   step's gap_after is the gap with it (memory: the previous members are held until decided).
 
 Ensemble. ``ensemble`` members (default 16) of the baseline are generated once, each with its own seeded
 generator (``numpy.random.default_rng([seed, member, 0])``); an accepted additive effect is added into the
@@ -34,9 +39,9 @@ from .baseline import fit_baseline
 from .effects import CATALOGUE, Context, Quantization, public_params
 
 #: Candidates whose gap is within this of the best one count as tied; among them the smallest
-#: mean_square_z + PARAM_PENALTY * (number of parameters) wins.
+#: mean_log_score + PARAM_PENALTY * (number of parameters) wins.
 TIE_GAP = 0.05
-PARAM_PENALTY = 0.1
+PARAM_PENALTY = 0.25
 #: The measurement counts as inside the band when G <= INSIDE_GAP (its worst points lie at most ~10 %
 #: of a band half-width beyond the edge on one signature), and an effect must shrink G by at least this
 #: much to be accepted: smaller changes are within the run-to-run scatter of the band edges.
@@ -86,6 +91,9 @@ class ExplainResult:
     measurement : Measurement
     layout : Layout
     baseline : BaselineModel
+        The baseline fitted to the measurement.
+    final_baseline : BaselineModel
+        The baseline of the final model: refitted to the residual after deterministic effects.
     steps : list of Step
     gap_initial, gap_final : float
     unexplained : bool
@@ -104,6 +112,7 @@ class ExplainResult:
     measurement: object
     layout: object
     baseline: object
+    final_baseline: object
     steps: list
     gap_initial: float
     gap_final: float
@@ -131,6 +140,7 @@ class ExplainResult:
             'ensemble': self.ensemble,
             'seed': self.seed,
             'baseline': self.baseline.to_dict(),
+            'baseline_final': self.final_baseline.to_dict(),
             'steps': [{'effect': s.effect, 'params': public_params(s.params),
                        'gap_before': s.gap_before, 'gap_after': s.gap_after, 'where': s.where,
                        'where_after': s.where_after, 'candidates': s.candidates} for s in self.steps],
@@ -155,6 +165,7 @@ class _Model:
         self.quantization = None
         self.stamp_effect = None
         self.accepted = {}
+        self.stochastic = []
 
     def rng(self, member, effect):
         return np.random.default_rng([self.seed, member, 1 + CATALOGUE.index(effect)])
@@ -189,12 +200,23 @@ class _Model:
             out.append(sig.compute(self.layout, x, t, self.meas.temperature_c))
         return out
 
+    def rebase(self, baseline, det_sum, ctx):
+        """Regenerate the members from a refitted baseline, keeping the accepted additive terms."""
+        meas = self.meas
+        for j in range(len(self.members)):
+            x = baseline.generator(np.random.default_rng([self.seed, j, 0])).generate(meas.n)
+            x += det_sum
+            for effect, params in self.stochastic:
+                x += effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
+            self.members[j] = x
+
     def accept(self, effect, params, det, ctx):
         meas = self.meas
         if effect.kind == 'additive':
             for x in self.members:
                 x += det
         elif effect.kind == 'stochastic':
+            self.stochastic.append((effect, params))
             for j, x in enumerate(self.members):
                 x += effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
         elif effect.kind == 'quantization':
@@ -202,6 +224,14 @@ class _Model:
         else:
             self.stamp_effect = (effect, params)
         self.accepted[effect.name] = params
+
+
+def _changed(new, old):
+    """True when a refitted baseline differs materially (order, f, or a level by more than 2 %)."""
+    level = np.hypot(new.sigma_w_rad_s, new.sigma_nu_rad_s) / max(np.hypot(old.sigma_w_rad_s, old.sigma_nu_rad_s),
+                                                                   1e-300)
+    return (new.alpha != old.alpha or abs(new.f - old.f) > 1e-3 or abs(level - 1) > 0.02
+            or new.memory_sim != old.memory_sim)
 
 
 def compare_all(layout, meas_sig, member_sig):
@@ -251,7 +281,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     t0 = time.perf_counter()
     layout = sig.make_layout(meas.rate, meas.rate_hz, temperature=meas.temperature_c is not None)
     meas_sig = sig.compute(layout, meas.rate, meas.t_s, meas.temperature_c)
-    baseline = fit_baseline(meas.rate, meas.rate_hz)
+    baseline = first_baseline = fit_baseline(meas.rate, meas.rate_hz)
     seconds['fit_baseline'] = time.perf_counter() - t0
     say(f'baseline: alpha={baseline.alpha:.2f} f={baseline.f:.3f} sigma_w={baseline.sigma_w_rad_s:.3g} rad/s '
         f'sigma_nu={baseline.sigma_nu_rad_s:.3g} rad/s (L_sim={baseline.memory_sim})')
@@ -288,7 +318,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
             break
         best_gap = min(t[0] for t in trials)
         tied = [t for t in trials if t[0] <= best_gap + TIE_GAP]
-        choice = min(tied, key=lambda t: sig.mean_square_z(t[5]) + PARAM_PENALTY * t[1].n_params)
+        choice = min(tied, key=lambda t: sig.mean_log_score(t[5]) + PARAM_PENALTY * t[1].n_params)
         trial_gap, effect, params, det, trial_sig, trial_cmp = choice
         if trial_gap > gap - INSIDE_GAP:
             tried_last = tried
@@ -296,6 +326,21 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         model.accept(effect, params, det, ctx)
         if det is not None:
             residual = residual - det
+            refit = fit_baseline(residual, meas.rate_hz)
+            if _changed(refit, baseline):
+                # the deterministic term distorted the first fit (a strong line or ramp shifts the
+                # identified order): refit the baseline on the residual and regenerate the members;
+                # kept only if it does not widen the gap
+                previous = (baseline, list(model.members))
+                model.rebase(refit, meas.rate - residual, ctx)
+                refit_sig = model.signatures(None, ctx)
+                refit_cmp = compare_all(layout, meas_sig, refit_sig)
+                refit_gap = sig.total_gap(refit_cmp)
+                if refit_gap <= trial_gap:
+                    baseline, trial_sig, trial_cmp, trial_gap = refit, refit_sig, refit_cmp, refit_gap
+                    say(f'  baseline refitted on the residual: alpha={baseline.alpha:.2f} f={baseline.f:.3f}')
+                else:
+                    model.members = previous[1]
         steps.append(Step(effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
                           where=where_outside(layout, comparisons), where_after=where_outside(layout, trial_cmp),
                           candidates=tried, before=comparisons, after=trial_cmp))
@@ -303,7 +348,8 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap
     seconds['iterate'] = time.perf_counter() - t2
     seconds['total'] = time.perf_counter() - t0
-    return ExplainResult(measurement=meas, layout=layout, baseline=baseline, steps=steps, gap_initial=gap_initial,
+    return ExplainResult(measurement=meas, layout=layout, baseline=first_baseline, final_baseline=baseline,
+                         steps=steps, gap_initial=gap_initial,
                          gap_final=gap, unexplained=gap > INSIDE_GAP, where_final=where_outside(layout, comparisons),
                          comparisons_initial=initial, comparisons_final=comparisons, tried_last=tried_last,
                          ensemble=ensemble, seed=seed, seconds=seconds)

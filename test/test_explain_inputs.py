@@ -1,0 +1,136 @@
+"""Inputs (CSV, bags), bad-input errors and the gyro_noise_explain command line."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gyro_noise_ros.bag import ImuBagWriter
+from gyro_noise_ros.cli.explain import main
+from gyro_noise_ros.errors import InputDataError, ParameterError
+from gyro_noise_ros.explain.inputs import MIN_SAMPLES, load_csv, load_input, make_measurement
+from gyro_noise_ros.explain.synthetic import make_record
+from gyro_noise_ros.explain.effects import NAMES
+
+
+def _write_csv(path, t, rate, *, temperature=None, unit='rad_s'):
+    cols = ['time_s', f'gyro_x_{unit}', f'gyro_y_{unit}', f'gyro_z_{unit}']
+    data = [t, rate * 0.5, rate * 0.25, rate]
+    if temperature is not None:
+        cols.append('temperature_c')
+        data.append(temperature)
+    np.savetxt(path, np.column_stack(data), delimiter=',', header=','.join(cols), comments='', fmt='%.12g')
+
+
+def _record(n=MIN_SAMPLES + 100, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.arange(n) / 200.0, rng.standard_normal(n) * 1e-3 + 0.01
+
+
+def test_csv_columns_and_units(tmp_path):
+    t, rate = _record()
+    path = tmp_path / 'a.csv'
+    _write_csv(path, t, rate, temperature=np.full(t.size, 25.0))
+    meas = load_csv(path, axis='z')
+    np.testing.assert_allclose(meas.rate, rate, rtol=1e-11)
+    assert meas.rate_hz == pytest.approx(200.0, rel=1e-9)
+    assert meas.temperature_c is not None and meas.axis == 'z'
+    # deg/s columns are converted to rad/s
+    path2 = tmp_path / 'b.csv'
+    _write_csv(path2, t, np.rad2deg(rate), unit='dps')
+    np.testing.assert_allclose(load_csv(path2, axis='z').rate, rate, rtol=1e-10)
+    assert load_csv(path2, axis='x').rate[0] == pytest.approx(rate[0] * 0.5, rel=1e-10)
+
+
+def test_csv_without_time_needs_rate(tmp_path):
+    _, rate = _record()
+    path = tmp_path / 'c.csv'
+    np.savetxt(path, rate[:, None], delimiter=',', header='gyro_z_rad_s', comments='')
+    with pytest.raises(ParameterError, match='rate-hz'):
+        load_csv(path)
+    assert load_csv(path, rate_hz=100.0).rate_hz == 100.0
+
+
+def test_bad_input_errors(tmp_path):
+    t, rate = _record()
+    bad = rate.copy()
+    bad[123] = np.nan
+    with pytest.raises(InputDataError, match='NaN.*index 123'):
+        make_measurement(bad, t_s=t)
+    with pytest.raises(InputDataError, match='too short'):
+        make_measurement(rate[:1000], t_s=t[:1000])
+    with pytest.raises(InputDataError, match='temperature was asked for'):
+        make_measurement(rate, t_s=t, require_temperature=True)
+    with pytest.raises(InputDataError, match='constant'):
+        make_measurement(np.ones(MIN_SAMPLES), rate_hz=100.0)
+    with pytest.raises(ParameterError, match='axis'):
+        make_measurement(rate, t_s=t, axis='w')
+
+
+def test_bag_with_temperature(tmp_path):
+    t, rate = _record()
+    stamp_ns = (1_700_000_000 * 10 ** 9 + np.round(t * 1e9)).astype(np.int64)
+    gyro = np.column_stack((rate * 0, rate * 0, rate))
+    bag = tmp_path / 'bag'
+    with ImuBagWriter(bag) as writer:
+        writer.write_imu(stamp_ns, gyro, np.tile([0.0, 0.0, 9.81], (t.size, 1)))
+        writer.write_temperature(stamp_ns[::200], 25.0 + t[::200] * 0.01)
+    meas = load_input(bag, axis='z', require_temperature=True)
+    np.testing.assert_array_equal(meas.rate, rate)
+    assert meas.rate_hz == pytest.approx(200.0, rel=1e-6)
+    # linear interpolation of a linear temperature ramp onto the Imu stamps is exact inside the span
+    inner = t <= t[::200][-1]
+    np.testing.assert_allclose(meas.temperature_c[inner], 25.0 + t[inner] * 0.01, rtol=1e-9)
+    bag2 = tmp_path / 'bag2'
+    with ImuBagWriter(bag2) as writer:
+        writer.write_imu(stamp_ns, gyro, np.tile([0.0, 0.0, 9.81], (t.size, 1)))
+    with pytest.raises(InputDataError, match='temperature was asked for'):
+        load_input(bag2, require_temperature=True)
+
+
+def test_cli_bad_input_exit_codes(tmp_path, capsys):
+    t, rate = _record()
+    short = tmp_path / 'short.csv'
+    _write_csv(short, t[:500], rate[:500])
+    assert main([str(short), '--out', str(tmp_path / 'o1')]) == InputDataError.exit_code
+    assert 'too short' in capsys.readouterr().err
+    nan = tmp_path / 'nan.csv'
+    bad = rate.copy()
+    bad[7] = np.nan
+    _write_csv(nan, t, bad)
+    assert main([str(nan), '--out', str(tmp_path / 'o2')]) == InputDataError.exit_code
+    assert 'NaN' in capsys.readouterr().err
+    ok = tmp_path / 'ok.csv'
+    _write_csv(ok, t, rate)
+    assert main([str(ok), '--out', str(tmp_path / 'o3'), '--require-temperature']) == InputDataError.exit_code
+    assert 'temperature was asked for' in capsys.readouterr().err
+    assert main([str(tmp_path / 'missing.bag'), '--out', str(tmp_path / 'o4')]) == 3
+    assert main([str(ok), '--out', str(tmp_path / 'o5'), '--ensemble', '2']) == ParameterError.exit_code
+
+
+def test_cli_end_to_end(tmp_path, capsys):
+    meas, _ = make_record(('quantization',), np.random.default_rng([0, 7]), n=MIN_SAMPLES)
+    path = tmp_path / 'q.csv'
+    _write_csv(path, meas.t_s, meas.rate)
+    out = tmp_path / 'out'
+    assert main([str(path), '--out', str(out), '--ensemble', '6', '--seed', '3', '--quiet']) == 0
+    assert 'quantization' in capsys.readouterr().out
+    data = json.loads((out / 'explain.json').read_text())
+    assert {'baseline', 'steps', 'gap_initial', 'gap_final', 'unexplained'} <= set(data)
+    step = data['steps'][0]
+    assert step['effect'] == 'quantization' and step['effect'] in NAMES
+    assert set(step) >= {'effect', 'params', 'gap_before', 'gap_after', 'where'}
+    assert step['gap_after'] < step['gap_before']
+    assert step['params']['step_rad_s'] > 0
+    report = (out / 'report.md').read_text()
+    assert 'Step 1: quantization' in report
+    assert (out / 'overview.png').stat().st_size > 1000
+    assert (out / 'step1_quantization.png').stat().st_size > 1000
+
+
+def test_module_runs_as_script():
+    proc = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.explain', '--help'],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and '--temperature-topic' in proc.stdout

@@ -6,11 +6,12 @@ millisecond; one subscriber process at a time receives them, measured from ``/pr
 over the publishing window:
 
 1. ``callback`` baseline: a plain rclpy subscription with a Python callback per message (the naive node);
-2. ``null`` baseline: the analyzer's ingestion floor, a polled ``raw=True`` subscription drained with
-   ``take_message`` every 10 ms that only counts;
+2. ``null`` baseline: the ingestion floor, a polled ``raw=True`` subscription drained with
+   ``take_message`` every 10 ms (the pattern measured in ``../shared/ROS_ON_PIP.md``) that only counts;
 3. the real ``noise_analyzer`` (default parameters: chunks of 10,000, full 0:2:0.01 grid, both methods,
    Allan deviation), its CPU split into the analysis worker thread (``/proc/<pid>/task/<tid>``) and the
-   rest (ingestion: take, bulk decode, gap detection, chunking, diagnostics).
+   rest (ingestion: take every ``drain_period_s`` = 20 ms, bulk decode, gap detection, chunking,
+   diagnostics; DDS receive threads are counted here, as in the baselines).
 
 Received counts come from the subscriber (its exit line; the analyzer's ``Samples received`` on
 ``/diagnostics``, read here). Targets (issue 4): ingestion <= 25 % of one core at 6.66 kHz; no loss at 4x.

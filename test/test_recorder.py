@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from gyro_noise_ros.bag import ImuBagReader, list_topics
-from gyro_noise_ros.nodes.recorder import SequenceGapCounter, default_bag_name, imu_covariances
+from gyro_noise_ros.nodes.recorder import (SequenceGapCounter, default_bag_name, imu_covariances,
+                                           temperature_variances)
 from test_analyzer_e2e import RATE_HZ, ros_env, start_replayer
 
 pytestmark = pytest.mark.ros
@@ -150,6 +151,13 @@ def test_imu_covariances_read_back_what_was_encoded():
     got_av, got_la = imu_covariances(raws2)
     np.testing.assert_array_equal(got_av, av)
     np.testing.assert_array_equal(got_la, la)
+
+
+def test_temperature_variances_read_back_what_was_encoded():
+    from gyro_noise_ros.bag import encode_temperature_cdr
+
+    raws = encode_temperature_cdr(np.arange(3), [20.0, 21.0, 22.0], frame_id='imu', variance=[0.5, 0.25, 0.0])
+    np.testing.assert_array_equal(temperature_variances(raws), [0.5, 0.25, 0.0])
 
 
 def test_default_bag_name():

@@ -30,6 +30,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import Imu, Temperature
 
 from ..bag import ImuBagWriter, decode_imu, decode_temperature
+from ..bag.codec import frame_id_of
 from ..errors import BagError
 from ._ros_common import ParamSpec, declare_parameter_table, run_node, sensor_data_qos
 
@@ -168,6 +169,15 @@ def imu_covariances(raws):
     return tails[:, 16:25], tails[:, 28:37]
 
 
+def temperature_variances(raws):
+    """
+    Return the ``variance`` field (degC^2) of raw CDR ``sensor_msgs/Temperature`` messages.
+
+    It is the last float64 of the message (``temperature``, ``variance`` follow the header).
+    """
+    return np.array([np.frombuffer(raw[-8:], '<f8' if raw[1] == 1 else '>f8')[0] for raw in raws])
+
+
 def default_bag_name(now=None):
     """Return ``gyro_noise_<YYYYmmdd>_<HHMMSS>`` for the current UTC time (or ``now``)."""
     now = now or datetime.now(timezone.utc)
@@ -203,7 +213,6 @@ class RecorderNode(Node):
         self._imu_gaps = SequenceGapCounter()
         self._temperature_gaps = SequenceGapCounter()
         self._writer = None
-        self._pending_temperature = []
         self._closed = False
         if Path(self.output).exists():
             raise BagError(f"parameter 'output' = {self.output!r}: the path exists; "
@@ -232,7 +241,6 @@ class RecorderNode(Node):
         return self._imu_gaps.missing + self._temperature_gaps.missing
 
     def _open(self, frame_id):
-        # The bag is created on the first Imu batch so it carries the sensor's frame_id.
         self._writer = ImuBagWriter(
             self.output, storage=self.storage, imu_topic=self._imu_sub.topic_name,
             temperature_topic=(self._temperature_sub.topic_name if self._temperature_sub else None),
@@ -243,30 +251,27 @@ class RecorderNode(Node):
         if self._closed:
             return
         raws, received, sequence = take_all(self._imu_sub, Imu)
+        t_raws, t_received, t_sequence = ([], [], []) if self._temperature_sub is None else \
+            take_all(self._temperature_sub, Temperature)
+        if self._writer is None and (raws or t_raws):
+            # The bag is created on the first message so it carries the sensor's frame_id.
+            self._open(frame_id_of((raws or t_raws)[0], False))
         if raws:
             self.received_imu += len(raws)
             self._imu_gaps.update(sequence)
             batch = decode_imu(raws, log_ns=_log_times(received, None))
-            if self._writer is None:
-                self._open(batch.frame_id)
             av_cov, la_cov = imu_covariances(raws)
             self._writer.write_imu(batch.stamp_ns, batch.gyro, batch.accel,
                                    angular_velocity_covariance=av_cov,
                                    linear_acceleration_covariance=la_cov, log_ns=batch.log_ns)
             self.written_imu += len(raws)
-        if self._temperature_sub is not None:
-            raws, received, sequence = take_all(self._temperature_sub, Temperature)
-            if raws:
-                self.received_temperature += len(raws)
-                self._temperature_gaps.update(sequence)
-                stamp_ns, temperature_c = decode_temperature(raws)
-                self._pending_temperature.append((stamp_ns, temperature_c,
-                                                  _log_times(received, stamp_ns)))
-            if self._writer is not None and self._pending_temperature:
-                for stamp_ns, temperature_c, log_ns in self._pending_temperature:
-                    self._writer.write_temperature(stamp_ns, temperature_c, log_ns=log_ns)
-                    self.written_temperature += len(stamp_ns)
-                self._pending_temperature = []
+        if t_raws:
+            self.received_temperature += len(t_raws)
+            self._temperature_gaps.update(t_sequence)
+            stamp_ns, temperature_c = decode_temperature(t_raws)
+            self._writer.write_temperature(stamp_ns, temperature_c, variance=temperature_variances(t_raws),
+                                           log_ns=_log_times(t_received, stamp_ns))
+            self.written_temperature += len(t_raws)
 
     def _flush(self):
         if self._writer is not None and not self._closed:
@@ -285,7 +290,7 @@ class RecorderNode(Node):
                 self._closed = True
                 if self._writer is not None:
                     self._writer.close()
-        where = self.output if self._writer is not None else f'{self.output} (not created: no Imu received)'
+        where = self.output if self._writer is not None else f'{self.output} (not created: nothing received)'
         return (f'{NODE_NAME}: received {self.received_imu} Imu and {self.received_temperature} '
                 f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} to '
                 f'{where}; {self.dropped} dropped in transport')

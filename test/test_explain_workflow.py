@@ -5,8 +5,9 @@ Records come from :mod:`gyro_noise_ros.explain.synthetic`: the baseline and the 
 drawn at random from the ranges documented there; the test asserts that the first named effect is the
 hidden one, that every step shrinks the gap and that the final model puts the measurement inside the
 band (G <= INSIDE_GAP). The default run uses one seeded record per case (20,000 samples at 100 Hz,
-150,000 for bias_instability, 8 members); the slow sweep runs 6 seeds per case on 60,000-sample records and requires at least 5 of 6
-(the rates over 20 seeds are in docs/discrepancy.md, with the command).
+150,000 for bias_instability, 8 members); the slow sweep runs 6 seeds per case and requires at least 4
+of 6 (the rates over 10 seeds and the false-alarm rate over 40 are in docs/discrepancy.md, with the
+commands).
 """
 
 import numpy as np
@@ -79,20 +80,22 @@ def test_same_seed_same_result():
 @pytest.mark.parametrize('case', [(e,) for e in EFFECTS] + [('quantization', 'sinusoid'),
                                                           ('bias_transient', 'gauss_markov')])
 def test_sweep_hidden_effects(case):
+    n = max(LENGTH.get(e, FAST['n']) for e in case)
     ok = 0
-    for seed in range(10, 16):
-        result, _ = _run(case, seed, n=60000, ensemble=16)
+    for seed in range(100, 106):
+        result, _ = _run(case, seed, n=n, ensemble=FAST['ensemble'])
         ok += bool(result.named and result.named[0] in case and set(case) <= set(result.named)
                    and not result.unexplained)
-    # 5 of 6: the confusions that remain (docs/discrepancy.md) are a few % per effect
-    assert ok >= 5, f'{case}: {ok} of 6'
+    # docs/discrepancy.md gives the measured rates over 10 seeds (70-100 % per effect at these lengths);
+    # 4 of 6 is a floor that fails only if the workflow gets materially worse
+    assert ok >= 4, f'{case}: {ok} of 6'
 
 
 @pytest.mark.slow
 def test_sweep_false_alarms():
     named = 0
-    for seed in range(20, 40):
-        result, _ = _run((), seed, n=60000, ensemble=16)
+    for seed in range(100, 120):
+        result, _ = _run((), seed, **FAST)
         named += bool(result.named)
-    # the measured rate is stated in docs/discrepancy.md; at most 2 of 20 here (a 10 % ceiling)
-    assert named <= 2
+    # 0 of 40 measured (docs/discrepancy.md); at most 1 of 20 here
+    assert named <= 1

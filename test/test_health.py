@@ -3,6 +3,8 @@
 import json
 import math
 
+import numpy as np
+
 import pytest
 
 from gyro_noise_ros.core.chunks import DriftEstimate, SequenceSummary
@@ -173,3 +175,26 @@ def test_load_reference(tmp_path):
     broken = write_summary(tmp_path / 'u.json', [{'label': 'a', 'axes': {'z': {'chunks': 1}}}])
     with pytest.raises(ParameterError, match='missing or bad field'):
         load_reference(broken)
+
+
+def test_drift_significance_uses_student_t_quantile():
+    from gyro_noise_ros.core.health import drift_t_threshold
+    # closed forms: df = 1 is a Cauchy distribution, |t| > tan(pi/2 (1 - p)); large df tends to the normal
+    p = math.erfc(3.0 / math.sqrt(2.0))
+    assert drift_t_threshold(3.0, 3) == pytest.approx(math.tan(math.pi / 2 * (1 - p)), rel=1e-9)
+    assert drift_t_threshold(3.0, 100_000) == pytest.approx(3.0, rel=1e-3)
+    assert drift_t_threshold(3.0, 2) == math.inf
+
+
+def test_no_drift_false_alarm_on_white_noise_with_few_chunks():
+    """Monte Carlo of the significance rule alone: white chunk biases, 4 chunks, 3-sigma level."""
+    from gyro_noise_ros.core.chunks import offset_drift
+    from gyro_noise_ros.core.health import drift_t_threshold
+    rng = np.random.default_rng(0)
+    t = np.arange(4) * 1.5
+    fires = 0
+    for _ in range(20000):
+        d = offset_drift(t, rng.standard_normal(4))
+        fires += abs(d.slope) / d.stderr > drift_t_threshold(3.0, 4)
+    # the level is p = 0.0027: 54 expected of 20,000 (sd ~7); a plain 3-sigma test fires ~1900 times
+    assert fires < 100

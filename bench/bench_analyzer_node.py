@@ -82,7 +82,7 @@ def _subscribe(mode, depth):
     from sensor_msgs.msg import Imu
 
     from gyro_noise_ros.nodes._ros_common import sensor_data_qos
-    from gyro_noise_ros.nodes.recorder import PolledGroup, take_all
+    from gyro_noise_ros.nodes._ros_common import PolledGroup, take_all
 
     rclpy.init()
     node = rclpy.create_node(f'bench_{mode}')

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from gyro_noise_ros.bag import ImuBagReader, list_topics
-from gyro_noise_ros.nodes.recorder import (SequenceGapCounter, default_bag_name, imu_covariances,
-                                           temperature_variances)
+from gyro_noise_ros.nodes._ros_common import SequenceGapCounter
+from gyro_noise_ros.nodes.recorder import default_bag_name, imu_covariances, temperature_variances
 from test_analyzer_e2e import RATE_HZ, ros_env, start_replayer
 
 pytestmark = pytest.mark.ros

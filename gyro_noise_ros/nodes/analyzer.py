@@ -60,9 +60,10 @@ from ..core.engine import AXES, GAP_POLICIES, EngineConfig, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, make_grid
 from ..core.health import HealthThresholds
 from ..errors import GyroNoiseError, ParameterError
-from ._ros_common import (ParamSpec, declare_parameter_table, diagnostic_array, diagnostic_status,
-                          diagnostics_publisher, run_node, sensor_data_qos)
-from .recorder import PolledGroup, SequenceGapCounter, unused_callback, take_all
+from ._ros_common import (ParamSpec, PolledGroup, SequenceGapCounter, declare_parameter_table, diagnostic_array,
+                          diagnostic_status, diagnostics_publisher, run_node, sensor_data_qos, take_all,
+                          unused_callback)
+
 
 NODE_NAME = 'noise_analyzer'
 

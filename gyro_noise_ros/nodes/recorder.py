@@ -25,14 +25,14 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
-from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from sensor_msgs.msg import Imu, Temperature
 
 from ..bag import ImuBagWriter, decode_imu, decode_temperature
 from ..bag.codec import frame_id_of
 from ..errors import BagError
-from ._ros_common import ParamSpec, declare_parameter_table, run_node, sensor_data_qos
+from ._ros_common import (ParamSpec, PolledGroup, SequenceGapCounter, declare_parameter_table, run_node,
+                          sensor_data_qos, take_all, unused_callback)
 
 NODE_NAME = 'gyro_noise_record'
 
@@ -55,91 +55,8 @@ PARAMETERS = (
 )
 
 # Imu CDR: the covariances are float64 16..24 and 28..36 of the 37-float tail that ends the message
-# (see gyro_noise_ros/bag.py for the layout).
+# (see gyro_noise_ros/bag/codec.py for the layout).
 _IMU_TAIL_BYTES = 37 * 8
-
-
-class PolledGroup(CallbackGroup):
-    """
-    A callback group whose entities the executor never waits on nor runs.
-
-    The node takes the messages of such a subscription itself (``sub.handle.take_message``) from a
-    timer, so a 6.66 kHz topic costs one executor wake-up per drain period instead of one per
-    message.
-    """
-
-    def can_execute(self, entity):
-        return False
-
-    def beginning_execution(self, entity):
-        return False
-
-    def ending_execution(self, entity):
-        pass
-
-
-def take_all(sub, msg_type):
-    """
-    Take every message queued on a raw subscription.
-
-    Parameters
-    ----------
-    sub : rclpy.subscription.Subscription
-        Created with ``raw=True``.
-    msg_type : type
-        Its message class.
-
-    Returns
-    -------
-    raws : list of bytes
-        Serialised messages, oldest first.
-    received_ns : list of int
-        Receive time of each (``MessageInfo['received_timestamp']``, system clock, ns).
-    sequence : list of int
-        DDS publication sequence number of each (0 if the middleware does not give one).
-    """
-    raws, received, sequence = [], [], []
-    handle = sub.handle
-    with handle:
-        take = handle.take_message
-        while True:
-            item = take(msg_type, True)
-            if item is None:
-                break
-            raw, info = item
-            raws.append(raw)
-            received.append(info.get('received_timestamp') or 0)
-            sequence.append(info.get('publication_sequence_number') or 0)
-    return raws, received, sequence
-
-
-class SequenceGapCounter:
-    """
-    Count messages missing from a stream of DDS publication sequence numbers.
-
-    A sequence number that does not increase starts a new run (a restarted publisher); a
-    sequence number of 0 means the middleware gave none and is ignored. The count assumes one
-    publisher per topic (``MessageInfo`` does not name the writer): with several, their numbers
-    interleave and the count is meaningless (the stamps-based ``Samples lost`` stays right).
-    """
-
-    def __init__(self):
-        self.last = None
-        self.missing = 0
-
-    def update(self, sequence):
-        """Add the sequence numbers of one batch (in arrival order); return the new misses."""
-        seq = np.asarray(sequence, dtype=np.int64)
-        seq = seq[seq > 0]
-        if seq.size == 0:
-            return 0
-        if self.last is not None:
-            seq = np.concatenate(([self.last], seq))
-        step = np.diff(seq)
-        new = int(step[step > 1].sum() - np.count_nonzero(step > 1))
-        self.last = int(seq[-1])
-        self.missing += new
-        return new
 
 
 def imu_covariances(raws):
@@ -299,11 +216,6 @@ class RecorderNode(Node):
         summary = self.close()
         print(summary, file=sys.stderr, flush=True)
         return super().destroy_node()
-
-
-def unused_callback(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
-    """The callback rclpy requires of a polled subscription; never called (see PolledGroup)."""
-    raise AssertionError('polled subscriptions are drained by the node, not by the executor')
 
 
 def _log_times(received, fallback_ns):

@@ -78,7 +78,7 @@ def test_same_seed_same_result():
 
 @pytest.mark.slow
 @pytest.mark.parametrize('case', [(e,) for e in EFFECTS] + [('quantization', 'sinusoid'),
-                                                          ('bias_transient', 'gauss_markov')])
+                                                          ('sample_loss', 'bias_transient')])
 def test_sweep_hidden_effects(case):
     n = max(LENGTH.get(e, FAST['n']) for e in case)
     ok = 0

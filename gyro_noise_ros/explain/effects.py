@@ -269,11 +269,8 @@ class BiasTransient(Effect):
         best = int(np.argmax(stat))
         if not null_exceeded(float(stat[best]), null.max(axis=1)):
             return None
-        # a transient must beat a straight line clearly, else the ramp (fewer parameters) is the answer
-        ramp_stat, _ = _centred_fit_stat(t[None, :], y)
         delay, tc = pairs[best]
-        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay), 'time_constant_s': float(tc),
-                '_ramp_ratio': float(stat[best] / max(ramp_stat[0], 1e-300))}
+        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay), 'time_constant_s': float(tc)}
 
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz

@@ -134,3 +134,18 @@ def test_module_runs_as_script():
     proc = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.explain', '--help'],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0 and '--temperature-topic' in proc.stdout
+
+
+def test_cli_bag_without_asked_temperature(tmp_path, capsys):
+    t, rate = _record()
+    stamp_ns = (10 ** 9 + np.round(t * 1e9)).astype(np.int64)
+    bag = tmp_path / 'bag'
+    with ImuBagWriter(bag) as writer:
+        writer.write_imu(stamp_ns, np.column_stack((rate, rate, rate)), np.tile([0.0, 0.0, 9.81], (t.size, 1)))
+    code = main([str(bag), '--temperature-topic', '/imu/temperature', '--out', str(tmp_path / 'o')])
+    err = capsys.readouterr().err
+    # the named topic does not exist: the bag reader refuses it (3, a recording problem) in one line
+    assert code == 3 and 'temperature' in err and err.count('\n') == 1
+    code = main([str(bag), '--require-temperature', '--out', str(tmp_path / 'o')])
+    assert code == InputDataError.exit_code
+    assert 'temperature was asked for' in capsys.readouterr().err

@@ -290,15 +290,21 @@ class OrderIdentifier:
         var_curve = np.empty(k)
         j_curve = np.empty(k)
         f_curve = np.empty(k)
+        # w is written into a zero-padded buffer so the correlation FFT needs no padding copy
+        padded = np.zeros((self.block, self._corr_size))
         for start in range(0, k, self.block):
             stop = min(k, start + self.block)
+            rows = stop - start
             diff = scipy.fft.irfft(self._coeff_hat[start:stop] * v_hat, size, axis=1)
             d = diff[:, 1:n + 1]
             f = (d @ w_reg) / ww
-            w = d - f[:, None] * w_reg
+            w = padded[:rows, :n]
+            np.multiply(f[:, None], w_reg, out=w)
+            np.subtract(d, w, out=w)
             var_curve[start:stop] = w.var(axis=1)
-            spec = scipy.fft.rfft(w, self._corr_size, axis=1)
-            r = scipy.fft.irfft(spec.real ** 2 + spec.imag ** 2, self._corr_size, axis=1)
+            spec = scipy.fft.rfft(padded[:rows], axis=1)
+            power = np.multiply(spec, spec.conj(), out=spec)
+            r = scipy.fft.irfft(power, self._corr_size, axis=1)
             j_curve[start:stop] = np.abs(r[:, :self.max_lag + 1]).sum(axis=1) / n
             f_curve[start:stop] = f
         return var_curve, j_curve, f_curve

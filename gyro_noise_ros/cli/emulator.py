@@ -402,15 +402,8 @@ def _run_sd(args, board, faults, truth_fh, counters):
         # overruns are drawn at most once per chunk: go frame by frame when they are injected
         chunk = args.batch if args.fifo_overrun_rate > 0 else args.batch * max(1, 65536 // args.batch)
         while counters.samples_generated < total:
-            n = min(chunk, total - counters.samples_generated)
-            lost_in_sensor = faults.overrun(n)
-            board.sensor_overrun(lost_in_sensor)
-            counters.samples_generated += lost_in_sensor
-            n -= lost_in_sensor
-            samples = board.next_samples(n)
-            counters.samples_generated += n
-            if truth_fh is not None:
-                truth_fh.write(truth_records(board.last_truth).tobytes())
+            samples = _produce(board, faults, counters, min(chunk, total - counters.samples_generated),
+                               truth_fh)
             kept = faults.drop(samples)
             writer.write_samples(kept)
             counters.samples_sent += kept.size
@@ -474,15 +467,7 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
                 due = min(due, total)
             n = due - counters.samples_generated
             if n > 0:
-                lost_in_sensor = faults.overrun(n)
-                board.sensor_overrun(lost_in_sensor)
-                counters.samples_generated += lost_in_sensor
-                n -= lost_in_sensor
-                samples = board.next_samples(n)
-                counters.samples_generated += n
-                if truth_fh is not None:
-                    truth_fh.write(truth_records(board.last_truth).tobytes())
-                    truth_fh.flush()
+                samples = _produce(board, faults, counters, n, truth_fh)
                 if connected:
                     kept = faults.drop(samples)
                     for start in range(0, kept.size, args.batch):
@@ -578,6 +563,40 @@ def _body(argv):
         line = _write_stats(args, counters, faults, board)
         print(f'{PROG}: {line}', file=sys.stderr, flush=True)
     return code
+
+
+def _produce(board, faults, counters, n, truth_fh):
+    """
+    Let the sensor lose its injected FIFO overrun out of ``n`` samples, produce the rest, log truth.
+
+    Parameters
+    ----------
+    board : BoardModel
+        The board.
+    faults : object
+        The fault injector (``overrun(n)`` draws the samples lost inside the sensor).
+    counters : object
+        Traffic counters; ``samples_generated`` counts produced and overrun samples.
+    n : int
+        Samples due.
+    truth_fh : file or None
+        Ground-truth log (flushed, so a reader sees whole records).
+
+    Returns
+    -------
+    numpy.ndarray
+        The produced samples (``n`` minus the overrun).
+    """
+    lost_in_sensor = faults.overrun(n)
+    board.sensor_overrun(lost_in_sensor)
+    counters.samples_generated += lost_in_sensor
+    n -= lost_in_sensor
+    samples = board.next_samples(n)
+    counters.samples_generated += n
+    if truth_fh is not None:
+        truth_fh.write(truth_records(board.last_truth).tobytes())
+        truth_fh.flush()
+    return samples
 
 
 def main(argv=None):

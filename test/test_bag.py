@@ -36,7 +36,9 @@ from gyro_noise_ros.errors import BagError, ParameterError
 ROS2 = get_typestore(Stores.ROS2_JAZZY)
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
 PLUGINS = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP}
-MPU6050_CSV = Path('/work/shared/data/real/mpu6050_static_sunsided/mpu6050_static_10min.csv')
+# read from ../shared beside the repository (as CI lays it out), never copied into the package
+MPU6050_CSV = (Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'real' / 'mpu6050_static_sunsided'
+               / 'mpu6050_static_10min.csv')
 
 
 def imu_msg(store, stamp_ns, gyro, accel, frame_id='imu_link', *, seq=0, av_cov=None, la_cov=None,

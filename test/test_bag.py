@@ -612,6 +612,21 @@ def source_stream(path, topic, fast):
         src.close()
 
 
+def assert_block_reader_matches_rosbags(path, log, stamps, gyro):
+    """The block reader yields rosbags' raw stream per topic, and ImuBagReader the log-time order."""
+    for topic in ('/imu/data_raw', '/imu/temperature'):
+        fast_log, fast_raws = source_stream(path, topic, True)
+        slow_log, slow_raws = source_stream(path, topic, False)
+        np.testing.assert_array_equal(fast_log, slow_log)
+        assert fast_raws == slow_raws
+    with ImuBagReader(path) as reader:
+        s, lg, g, _ = concat(list(reader.iter_batches(4096)))
+    order = np.argsort(log, kind='stable')
+    np.testing.assert_array_equal(lg, log[order])
+    np.testing.assert_array_equal(s, stamps[order])
+    assert_same_floats(g, gyro[order])
+
+
 @pytest.mark.parametrize('storage_kind', ['sqlite3', 'mcap'])
 @pytest.mark.parametrize('pattern', ['increasing', 'backwards_chunks', 'interleaved', 'ties'])
 def test_block_readers_yield_rosbags_order(tmp_path, storage_kind, pattern):
@@ -631,17 +646,7 @@ def test_block_readers_yield_rosbags_order(tmp_path, storage_kind, pattern):
         for i in range(0, n, 500):
             writer.write_imu(stamps[i:i + 500], gyro[i:i + 500], accel[i:i + 500], log_ns=log[i:i + 500])
             writer.write_temperature(stamps[i], 25.0 + i, log_ns=log[i])
-    for topic in ('/imu/data_raw', '/imu/temperature'):
-        fast_log, fast_raws = source_stream(path, topic, True)
-        slow_log, slow_raws = source_stream(path, topic, False)
-        np.testing.assert_array_equal(fast_log, slow_log)
-        assert fast_raws == slow_raws
-    with ImuBagReader(path) as reader:
-        s, lg, g, _ = concat(list(reader.iter_batches(4096)))
-    order = np.argsort(log, kind='stable')
-    np.testing.assert_array_equal(lg, log[order])
-    np.testing.assert_array_equal(s, stamps[order])
-    assert_same_floats(g, gyro[order])
+    assert_block_reader_matches_rosbags(path, log, stamps, gyro)
 
 
 def test_flush_leaves_a_readable_db3_behind(tmp_path):
@@ -815,17 +820,7 @@ def test_ros1_block_reader_yields_rosbags_order(tmp_path, pattern):
                                                   frame_id='imu_link')
                 writer.write(tconn, int(log[i]), ROS1.serialize_ros1(
                     t[TEMPERATURE_MSGTYPE](header=header, temperature=20.0 + i, variance=0.0), TEMPERATURE_MSGTYPE))
-    for topic in ('/imu/data_raw', '/imu/temperature'):
-        fast_log, fast_raws = source_stream(path, topic, True)
-        slow_log, slow_raws = source_stream(path, topic, False)
-        np.testing.assert_array_equal(fast_log, slow_log)
-        assert fast_raws == slow_raws
-    with ImuBagReader(path) as reader:
-        s, lg, g, _ = concat(list(reader.iter_batches(4096)))
-    order = np.argsort(log, kind='stable')
-    np.testing.assert_array_equal(lg, log[order])
-    np.testing.assert_array_equal(s, stamps[order])
-    assert_same_floats(g, gyro[order])
+    assert_block_reader_matches_rosbags(path, log, stamps, gyro)
 
 
 def test_fsync_switches_sqlite_synchronous(tmp_path):

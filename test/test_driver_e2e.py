@@ -229,6 +229,27 @@ def _dds_drops(dds_seq):
     return dropped
 
 
+def _stop_and_match_truth(procs, listener, emu, driver, stats_path, emu_args):
+    """
+    Stop emulator then driver, and match every received sample to the emulator's regenerated truth.
+
+    Asserts each message equals a truth sample to the quantum, in order, none twice, stamps increasing.
+    Returns the final diagnostics values, the decoded messages, their truth indices and the DDS drops.
+    """
+    assert procs.stop(emu, signal.SIGTERM) == 0
+    listener.run(lambda: listener.values(listener.statuses[-1])['Connection'] != 'streaming', 20.0)
+    assert procs.stop(driver) == 0
+    final = listener.values(listener.statuses[-1])
+    stats = json.loads(stats_path.read_text())
+    imu = decode_imu(listener.raw['imu'])
+    dds_lost = _dds_drops(listener.dds_seq)
+    _, truth, _ = _truth(emu_args, stats['samples_generated'])
+    got = np.concatenate([_on_quantum_grid(imu.gyro, GYRO_LSB), _on_quantum_grid(imu.accel, ACCEL_LSB)], axis=1)
+    seq = _match_subsequence(got, truth)
+    assert np.all(seq >= 0) and np.all(np.diff(seq) > 0) and np.all(np.diff(imu.stamp_ns) > 0)
+    return final, imu, seq, dds_lost
+
+
 def test_emulator_to_driver_with_faults_and_unplug(procs, listener):
     faults = ['--corrupt-rate', '1e-5', '--drop-flagged-rate', '1e-3', '--drop-unflagged-rate', '1e-3',
               '--disconnect-after', '12000', '--unplug-s', '0.6']
@@ -371,18 +392,7 @@ def test_pseudo_terminal_unplug_and_replug(procs, listener, tmp_path):
                                            tcp=None, link=str(link))
     assert name == str(link)
     listener.run(lambda: len(listener.raw['imu']) > 8000 + 1.5 * ODR, 90.0)
-    assert procs.stop(emu, signal.SIGTERM) == 0
-    listener.run(lambda: listener.values(listener.statuses[-1])['Connection'] != 'streaming', 20.0)
-    assert procs.stop(driver) == 0
-    final = listener.values(listener.statuses[-1])
-    stats = json.loads(stats_path.read_text())
-
-    imu = decode_imu(listener.raw['imu'])
-    dds_lost = _dds_drops(listener.dds_seq)
-    _, truth, _ = _truth(emu_args, stats['samples_generated'])
-    got = np.concatenate([_on_quantum_grid(imu.gyro, GYRO_LSB), _on_quantum_grid(imu.accel, ACCEL_LSB)], axis=1)
-    seq = _match_subsequence(got, truth)
-    assert np.all(seq >= 0) and np.all(np.diff(seq) > 0) and np.all(np.diff(imu.stamp_ns) > 0)
+    final, imu, seq, dds_lost = _stop_and_match_truth(procs, listener, emu, driver, stats_path, emu_args)
     assert int(np.max(np.diff(seq))) - 1 >= 0.4 * ODR  # the unplug
     assert int(final['Connections']) >= 2
     assert int(final['Samples lost']) == int(seq[-1] - seq[0] + 1 - len(imu) - dds_lost)
@@ -401,18 +411,7 @@ def test_accelerated_emulator(procs, listener):
     listener.wait_for_publisher(60.0)
     emu, _, stats_path = procs.emulator(*emu_args, '--speed', '4', tcp=f'127.0.0.1:{port}')
     listener.run(lambda: len(listener.raw['imu']) > 4.0 * 4 * 1667.0, 90.0)
-    assert procs.stop(emu, signal.SIGTERM) == 0
-    listener.run(lambda: listener.values(listener.statuses[-1])['Connection'] != 'streaming', 20.0)
-    assert procs.stop(driver) == 0
-    final = listener.values(listener.statuses[-1])
-    stats = json.loads(stats_path.read_text())
-
-    imu = decode_imu(listener.raw['imu'])
-    dds_lost = _dds_drops(listener.dds_seq)
-    _, truth, _ = _truth(emu_args, stats['samples_generated'])
-    got = np.concatenate([_on_quantum_grid(imu.gyro, GYRO_LSB), _on_quantum_grid(imu.accel, ACCEL_LSB)], axis=1)
-    seq = _match_subsequence(got, truth)
-    assert np.all(seq >= 0) and np.all(np.diff(seq) > 0) and np.all(np.diff(imu.stamp_ns) > 0)
+    final, imu, seq, dds_lost = _stop_and_match_truth(procs, listener, emu, driver, stats_path, emu_args)
     assert int(final['Samples lost']) == int(seq[-1] - seq[0] + 1 - len(imu) - dds_lost)
     rates = [float(listener.values(s)['Sample rate (Hz)']) for s in listener.statuses
              if listener.values(s)['Connection'] == 'streaming']

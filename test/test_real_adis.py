@@ -6,19 +6,19 @@ on the Z axis both methods give the same order chunk after chunk and run after r
 from a previous run: the tolerances are statements of consistency.
 """
 
-import os
 
 import numpy as np
 import pytest
 
+from _realdata import real_data
+
 from gyro_noise_ros.core.chunks import Chunker
 from gyro_noise_ros.core.fractional import OrderIdentifier
 
-DATA = os.path.join(os.path.dirname(__file__), '..', '..', 'shared', 'data', 'real', 'adis16405_static')
 
 
 def _orders(run, axis, chunks=8):
-    path = os.path.join(DATA, f'adis_16405_imu{run}.npz')
+    path = real_data('adis16405_static', f'adis_16405_imu{run}.npz')
     gyro = np.load(path)['gyro_dps'][:chunks * 10000, axis]
     ident = OrderIdentifier(10000)
     res = [ident(np.deg2rad(c)) for c in Chunker(10000).push(gyro)]

@@ -1,0 +1,22 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Temperature-drift compensation and denoising of gyro output (paper 002, Cao et al. 2021).
+
+The paper's parallel model (VMD with MOPSO-chosen parameters, sample-entropy classification of
+the modes, TFPF on the mixed part, a BAS-trained Elman network on the drift part) and the
+baselines practitioners use share one protocol (ThermalMethod in run.py), so the command-line
+tool, the report and the live compensation node treat them alike. No ROS is imported here.
+"""

@@ -79,3 +79,64 @@ class ThermalMethod(Protocol):
 
     def to_dict(self) -> dict:
         """Return every fitted parameter as a JSON-serialisable dict."""
+
+
+#: Default trailing window of the temperature-rate estimate (s).
+DEFAULT_RATE_WINDOW_S = 10.0
+
+
+def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S):
+    """
+    Estimate the temperature rate causally: least-squares slope over a trailing window.
+
+    The rate at sample k uses only samples with ``t_s[k] - window_s <= t <= t_s[k]``, so the
+    same number is available live (the compensation node keeps that much temperature history)
+    and offline. A slope fitted over many samples rather than a first difference keeps the
+    temperature sensor's noise and LSB steps out of dT; the price is a delay of about
+    ``window_s / 2``. Where the window holds fewer than two distinct stamps the rate is 0.
+
+    Parameters
+    ----------
+    t_s : array_like
+        Sample times (n,), seconds, non-decreasing.
+    temperature_c : array_like
+        Temperature (n,), degC.
+    window_s : float, keyword-only
+        Length of the trailing window, seconds (> 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        dT/dt (n,), degC/s.
+
+    """
+    t = np.asarray(t_s, dtype=float)
+    temp = np.asarray(temperature_c, dtype=float)
+    if t.ndim != 1 or temp.shape != t.shape:
+        raise ValueError(f't_s and temperature_c must be 1-D of one length, got {t.shape} '
+                         f'and {temp.shape}')
+    if not window_s > 0:
+        raise ValueError(f'window_s must be > 0, got {window_s!r}')
+    if t.size == 0:
+        return np.zeros(0)
+    # Centre the time axis on the run's start so the running sums keep their precision.
+    tc = t - t[0]
+    zero = np.zeros(1)
+    s_t = np.concatenate([zero, np.cumsum(tc)])
+    s_tt = np.concatenate([zero, np.cumsum(tc * tc)])
+    s_y = np.concatenate([zero, np.cumsum(temp)])
+    s_ty = np.concatenate([zero, np.cumsum(tc * temp)])
+    end = np.arange(1, t.size + 1)
+    start = np.searchsorted(t, t - window_s, side='left')
+    n = end - start
+    sum_t = s_t[end] - s_t[start]
+    sum_tt = s_tt[end] - s_tt[start]
+    sum_y = s_y[end] - s_y[start]
+    sum_ty = s_ty[end] - s_ty[start]
+    denom = n * sum_tt - sum_t * sum_t
+    rate = np.zeros(t.size)
+    # denom > 0 exactly when the window holds two distinct stamps; a relative floor guards
+    # against cancellation when the stamps are nearly equal.
+    ok = denom > 1e-12 * np.maximum(n * sum_tt, 1e-300)
+    rate[ok] = (n[ok] * sum_ty[ok] - sum_t[ok] * sum_y[ok]) / denom[ok]
+    return rate

@@ -14,10 +14,9 @@
 
 """Causal temperature-rate estimate against a slow per-sample polyfit twin."""
 
+from gyro_noise_ros.thermal.run import temperature_rate_c_s
 import numpy as np
 import pytest
-
-from gyro_noise_ros.thermal.run import temperature_rate_c_s
 
 
 def _slow_rate(t, temp, window_s):

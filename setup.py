@@ -59,6 +59,7 @@ setup(
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
             'gyro_noise_calibrate = gyro_noise_ros.cli.calibrate:main',
+            'gyro_noise_reliability = gyro_noise_ros.cli.reliability:main',
         ],
     },
 )

@@ -39,3 +39,13 @@ def write_bag(path, t, accel, gyro, *, topic='/imu/data_raw'):
     with ImuBagWriter(path, imu_topic=topic, temperature_topic=None) as w:
         w.write_imu(stamps, gyro, accel)
     return path
+
+
+def static_record(*, errors, rate_hz=10.0, duration_s=20000.0, seed=0, accel_noise=0.02,
+                  gyro_noise=2e-3):
+    """Return (t, accel, gyro) of a static record (+z up) through the scenario model."""
+    from gyro_noise_ros.calibration.emulate import Static
+    rng = np.random.default_rng(seed)
+    sc = Scenario(Static(), errors, rate_hz, rng)
+    return simulate(sc, int(duration_s * rate_hz), rate_hz, rng=rng,
+                    accel_noise_m_s2=accel_noise, gyro_noise_rad_s=gyro_noise)

@@ -25,7 +25,7 @@ Sensor model, for the accelerometer and likewise the gyro (the calibration's own
 ``true`` is the specific force (REP-103: +g on the axis pointing up) and the angular rate in the
 sensor frame. ``u`` is the slow bias variation that sets the Allan-deviation floor: a flicker-like
 part (a sum of first-order Gauss-Markov processes with time constants spread evenly in log over
-``FLICKER_TAU_S``, amplitude set so that the one-sided PSD is B^2 / (2 pi f) in between, i.e. an
+``FLICKER_TAU_S``, amplitude set so that the two-sided PSD is B^2 / (2 pi f) in between, i.e. an
 Allan plateau of 0.664 B, IEEE 952 bias instability B) plus a random walk of K per sqrt(s).
 
 Motions (what the sensor goes through, world frame ENU with z up, Earth rate at a latitude):
@@ -212,8 +212,9 @@ def flicker_components(bias_instability, rate_hz, tau_s=FLICKER_TAU_S,
 
     A Gauss-Markov process of variance s^2 and time constant T has the one-sided PSD
     4 s^2 T / (1 + (2 pi f T)^2); summed over T spaced by d = ln(10) / per_decade in ln T it
-    approaches s^2 / (d f), which equals the IEEE 952 flicker PSD B^2 / (2 pi f) for
-    s = B sqrt(d / (2 pi)).
+    approaches s^2 / (d f). IEEE 952's flicker PSD B^2 / (2 pi f) is two-sided (its Allan
+    relation, paper 001 eq. 8, carries the factor 4), i.e. B^2 / (pi f) one-sided, so
+    s = B sqrt(d / pi); the Allan plateau is then sqrt(2 ln 2 / pi) B = 0.664 B.
 
     Parameters
     ----------
@@ -236,7 +237,7 @@ def flicker_components(bias_instability, rate_hz, tau_s=FLICKER_TAU_S,
     n = max(1, int(np.ceil(np.log10(tau_s[1] / lo) * per_decade)) + 1)
     taus = lo * 10.0 ** (np.arange(n) / per_decade)
     d = np.log(10.0) / per_decade
-    s = bias_instability * np.sqrt(d / (2.0 * np.pi))
+    s = bias_instability * np.sqrt(d / np.pi)
     phi = np.exp(-1.0 / (taus * rate_hz))
     return phi, s * np.sqrt(1.0 - phi ** 2)
 

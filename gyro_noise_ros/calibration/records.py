@@ -60,7 +60,7 @@ def rate_from_stamps(stamp_ns, source=''):
     return 1e9 / float(np.median(d))
 
 
-def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH):
+def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH, t0_ns=None):
     """
     Yield the recording as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
 
@@ -74,29 +74,31 @@ def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH):
         Nominal rate (Hz); from the stamps when None.
     batch : int, keyword-only
         Messages per batch.
+    t0_ns : int, optional, keyword-only
+        Stamp (ns) that becomes t = 0; the first sample's when None.
 
     Yields
     ------
     tuple
-        Rate (Hz, fixed by the first batch), stamps (s, relative to the first sample), (n, 3)
+        Rate (Hz, fixed by the first batch), stamps (s, relative to ``t0_ns``), (n, 3)
         specific force (m/s^2), (n, 3) angular rate (rad/s).
 
     """
     if rate_hz is not None and not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz!r}')
-    t0 = None
+    t0 = t0_ns
     rate = rate_hz
     with ImuBagReader(path, topic=topic) as reader:
         for b in reader.iter_batches(batch):
             if t0 is None:
                 t0 = int(b.stamp_ns[0])
-                if rate is None:
-                    rate = rate_from_stamps(b.stamp_ns, str(path))
+            if rate is None:
+                rate = rate_from_stamps(b.stamp_ns, str(path))
             t = (b.stamp_ns.astype(np.int64) - t0) * 1e-9
             yield float(rate), t, np.asarray(b.accel, np.float64), np.asarray(b.gyro, np.float64)
 
 
-def read_imu(path, *, topic=None, rate_hz=None):
+def read_imu(path, *, topic=None, rate_hz=None, t0_ns=None):
     """
     Read a whole recording into memory (for records of a few million samples).
 
@@ -108,6 +110,8 @@ def read_imu(path, *, topic=None, rate_hz=None):
         ``sensor_msgs/Imu`` topic.
     rate_hz : float, optional, keyword-only
         Nominal rate (Hz).
+    t0_ns : int, optional, keyword-only
+        Stamp (ns) that becomes t = 0; the first sample's when None.
 
     Returns
     -------
@@ -115,7 +119,7 @@ def read_imu(path, *, topic=None, rate_hz=None):
         ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` as in :func:`iter_imu`.
 
     """
-    parts = list(iter_imu(path, topic=topic, rate_hz=rate_hz))
+    parts = list(iter_imu(path, topic=topic, rate_hz=rate_hz, t0_ns=t0_ns))
     rate = parts[0][0]
     return (rate, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts]),
             np.concatenate([p[3] for p in parts]))

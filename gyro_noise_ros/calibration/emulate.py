@@ -348,7 +348,9 @@ def _earth_and_gravity(rot, rate_body, g, lat):
     lat = np.radians(lat)
     earth = EARTH_RATE_RAD_S * np.array([0.0, np.cos(lat), np.sin(lat)])
     inv = rot.inv()
-    return rate_body + inv.apply(earth), inv.apply(np.array([0.0, 0.0, g]))
+    shape = np.shape(rate_body)
+    return (rate_body + inv.apply(earth),
+            np.broadcast_to(inv.apply(np.array([0.0, 0.0, g])), shape).copy())
 
 
 @dataclass(frozen=True)
@@ -629,6 +631,19 @@ class Scenario:
         gyro = rate @ e.gyro_matrix.T + e.gyro_bias_rad_s + self._gyro_u.generate(t.size)
         accel = force @ e.accel_matrix.T + e.accel_bias_m_s2 + self._accel_u.generate(t.size)
         return gyro, accel
+
+    def skip(self, n):
+        """
+        Advance the bias-variation streams by ``n`` samples (samples lost inside the sensor).
+
+        Parameters
+        ----------
+        n : int
+            Samples.
+
+        """
+        self._accel_u.generate(int(n))
+        self._gyro_u.generate(int(n))
 
     def apply(self, t_s, gyro_rad_s, accel_m_s2):
         """

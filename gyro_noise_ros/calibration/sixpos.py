@@ -117,6 +117,11 @@ class SixPositionResult:
         (3, 3) cross-axis terms, zero diagonal, and their standard uncertainties.
     gyro_bias_rad_s, gyro_bias_sigma_rad_s : numpy.ndarray
         (3,) gyro bias and its standard uncertainty (rad/s).
+    accel_residual_m_s2 : float
+        Scatter of the dwell means about the fitted model: sqrt(RSS / 6) over the 18 equations
+        and 12 unknowns (m/s^2). It holds the dwell-to-dwell wander (flicker, random walk,
+        handling) that the within-dwell spread cannot see; the accelerometer uncertainties use
+        the larger of the two per dwell.
 
     """
 
@@ -129,6 +134,7 @@ class SixPositionResult:
     accel_misalignment_sigma: np.ndarray
     gyro_bias_rad_s: np.ndarray
     gyro_bias_sigma_rad_s: np.ndarray
+    accel_residual_m_s2: float = float('nan')
 
     @property
     def accel_matrix(self):
@@ -167,7 +173,8 @@ def six_position(accel_means_m_s2, gravity_m_s2, *, accel_sems_m_s2=None, gyro_m
     gravity_m_s2 : float
         Local gravity (m/s^2).
     accel_sems_m_s2 : mapping or array_like, optional, keyword-only
-        Standard errors of those means (m/s^2); uncertainties are NaN without them.
+        Standard errors of those means from the spread inside each dwell (m/s^2), raised to the
+        dwell-to-dwell scatter of the model residuals; uncertainties are NaN without them.
     gyro_means_rad_s, gyro_sems_rad_s : mapping or array_like, optional, keyword-only
         Gyro dwell means and their standard errors (rad/s); gyro outputs NaN without them.
 
@@ -198,6 +205,13 @@ def six_position(accel_means_m_s2, gravity_m_s2, *, accel_sems_m_s2=None, gyro_m
     w = table(gyro_means_rad_s, 'gyro_means_rad_s')
     w_se = table(gyro_sems_rad_s, 'gyro_sems_rad_s')
     plus, minus = a[0::2], a[1::2]            # row i: dwell +i / -i
+    # least squares of all 18 equations: A[:, i] = (l(+i) - l(-i)) / 2g, b = mean of the six;
+    # 6 residual degrees of freedom measure how far the dwell means scatter about the model
+    cols = ((plus - minus) / (2.0 * g)).T
+    nominal = np.repeat(np.eye(3), 2, axis=0) * np.tile([g, -g], 3)[:, None]
+    resid = a - nominal @ cols.T - a.mean(axis=0)
+    scatter = float(np.sqrt(np.sum(resid ** 2) / 6.0))
+    a_se = np.where(np.isfinite(a_se), np.maximum(a_se, scatter), a_se)
     sp, sm = a_se[0::2], a_se[1::2]
     diff_se = np.sqrt(sp ** 2 + sm ** 2)      # row i, column j: se of l_j(+i) - l_j(-i)
     idx = np.arange(3)
@@ -212,7 +226,8 @@ def six_position(accel_means_m_s2, gravity_m_s2, *, accel_sems_m_s2=None, gyro_m
     np.fill_diagonal(mis_se, 0.0)
     gyro = (w[0::2][idx, idx] + w[1::2][idx, idx]) / 2.0
     gyro_se = np.sqrt(w_se[0::2][idx, idx] ** 2 + w_se[1::2][idx, idx] ** 2) / 2.0
-    return SixPositionResult(g, bias, bias_se, scale, scale_se, mis, mis_se, gyro, gyro_se)
+    return SixPositionResult(g, bias, bias_se, scale, scale_se, mis, mis_se, gyro, gyro_se,
+                             scatter)
 
 
 def uniformity(values):

@@ -229,6 +229,7 @@ def calibrate(paths, *, gravity_m_s2, topic=None, settings=DetectorSettings(), r
             'scale_factor_sigma': res.accel_scale_factor_sigma.tolist(),
             'misalignment': res.accel_misalignment.tolist(),
             'misalignment_sigma': res.accel_misalignment_sigma.tolist(),
+            'dwell_scatter_m_s2': res.accel_residual_m_s2,
         },
         'gyro': {
             'bias_rad_s': res.gyro_bias_rad_s.tolist(),
@@ -334,7 +335,8 @@ def markdown(doc):
     """
     out = ['# Six-position calibration (paper 001 Table 6 layout)', '',
            f'Gravity used: {doc["gravity_m_s2"]:.5f} m/s^2. mg = 9.80665e-3 m/s^2. '
-           'Uncertainties: one standard error from the spread of the 1 s window means.', '',
+           'Uncertainties: one standard error, from the spread of the 1 s window means or the '
+           'dwell-to-dwell scatter about the model, whichever is larger.', '',
            '| parameter | value | std. uncertainty |', '|---|---|---|']
     for name, value, sig in table6_rows(doc):
         unit = 'mg' if name.startswith('b') else '%'

@@ -136,3 +136,19 @@ def test_real_repeat_runs_are_physiological():
     assert all(iv.closed for iv in ivs)
     for other in ivs[1:]:
         assert compare(ivs[0], other).verdict == 'physiological'
+
+
+def test_low_edf_tail_cannot_hold_sigma_min():
+    tau = _grid(10, hi=1e3)
+    sig = np.maximum.reduce([0.1 / np.sqrt(tau), np.full_like(tau, 0.01), 1e-3 * np.sqrt(tau)])
+    sig[-1] = 0.004                      # a last tau with 1-2 degrees of freedom dips far down
+    edf = np.where(np.arange(tau.size) < tau.size - 1, 50.0, 1.5)
+    plain = bias_instability_interval(tau, sig)
+    assert plain.sigma_min == 0.004 and plain.tau_min_s == tau[-1]
+    robust = bias_instability_interval(tau, sig, edf=edf)
+    assert robust.sigma_min == 0.01
+    assert robust.lo_s == pytest.approx(25.0, rel=1e-12)     # (0.1 / 0.02)^2, as without the dip
+    # with the dip at the end the upper crossing is still found where the curve rises
+    assert robust.hi_s == pytest.approx(400.0, rel=1e-12)
+    none = bias_instability_interval(tau, sig, edf=np.zeros_like(tau))
+    assert 'degrees of freedom' in none.reason

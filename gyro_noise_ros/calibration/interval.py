@@ -39,6 +39,10 @@ DEFAULT_C = 2.0
 DEFAULT_TOLERANCE = 0.5
 #: Fewer taus than this cannot show a minimum with two flanks.
 MIN_TAUS = 5
+#: sigma_min is taken among taus whose Allan variance has at least this many equivalent degrees
+#: of freedom (68 % interval of ADEV about +/-23 %): the last taus of a record (EDF ~ 1-3) can dip
+#: far below the true floor and would move the whole interval.
+DEFAULT_MIN_EDF = 10.0
 
 
 @dataclass(frozen=True)
@@ -91,7 +95,7 @@ def _cross(t0, s0, t1, s1, level):
     return math.exp(math.log(t0) + frac * (math.log(t1) - math.log(t0)))
 
 
-def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C):
+def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF):
     """
     Return the tau interval where the Allan deviation stays below ``c * sigma_min``.
 
@@ -104,6 +108,12 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C):
         Allan deviation at those taus; non-finite and non-positive values are ignored.
     c : float, keyword-only
         Level factor (> 1; paper 001: 2).
+    edf : array_like, optional, keyword-only
+        Equivalent degrees of freedom of each tau (``AllanResult.edf``); with it, sigma_min is
+        the minimum over the taus with ``edf >= min_edf`` (the crossings are still searched over
+        all taus). Without it, over all taus (the paper's plain reading).
+    min_edf : float, keyword-only
+        Least EDF of a tau that may hold sigma_min.
 
     Returns
     -------
@@ -119,14 +129,23 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C):
         raise ParameterError(f'tau_s and adev must be 1-D of one length, got {tau.shape}, '
                              f'{sig.shape}')
     keep = np.isfinite(tau) & np.isfinite(sig) & (sig > 0) & (tau > 0)
-    tau, sig = tau[keep], sig[keep]
+    trusted = np.ones(tau.shape, dtype=bool)
+    if edf is not None:
+        edf = np.asarray(edf, dtype=np.float64)
+        if edf.shape != tau.shape:
+            raise ParameterError(f'edf must match tau_s, got {edf.shape} and {tau.shape}')
+        trusted = np.nan_to_num(edf, nan=0.0) >= float(min_edf)
+    tau, sig, trusted = tau[keep], sig[keep], trusted[keep]
     nan = float('nan')
     if tau.size < MIN_TAUS:
         return Interval(None, None, nan, nan, nan, c,
                         f'record too short: {tau.size} usable taus (need {MIN_TAUS})')
     if np.any(np.diff(tau) <= 0):
         raise ParameterError('tau_s must be strictly increasing')
-    i = int(np.argmin(sig))
+    if not np.any(trusted):
+        return Interval(None, None, nan, nan, nan, c,
+                        f'record too short: no tau with at least {min_edf:g} degrees of freedom')
+    i = int(np.flatnonzero(trusted)[np.argmin(sig[trusted])])
     smin = float(sig[i])
     level = c * smin
     lo = hi = None

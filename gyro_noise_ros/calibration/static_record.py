@@ -33,7 +33,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .interval import bias_instability_interval, DEFAULT_C, undetermined
+from .interval import bias_instability_interval, DEFAULT_C, DEFAULT_MIN_EDF, undetermined
 from .static import classify, DetectorSettings, find_dwells, WindowAccumulator
 from ..core.allan import AllanAccumulator, fit_noise_terms
 from ..errors import GyroNoiseError
@@ -119,12 +119,16 @@ class StaticRecord:
         Static-window thresholds.
     source : str, keyword-only
         Record name for messages.
+    min_edf : float, keyword-only
+        Least EDF of a tau that may hold sigma_min.
 
     """
 
-    def __init__(self, rate_hz, *, c=DEFAULT_C, settings=DetectorSettings(), source=''):
+    def __init__(self, rate_hz, *, c=DEFAULT_C, settings=DetectorSettings(), source='',
+                 min_edf=DEFAULT_MIN_EDF):
         self.rate_hz = float(rate_hz)
         self.c = c
+        self.min_edf = min_edf
         self.settings = settings
         self.source = source
         self._acc = [AllanAccumulator(self.rate_hz, taus='dense') for _ in CHANNELS]
@@ -229,6 +233,7 @@ class StaticRecord:
                 out[ch] = ChannelResult(ch, allan, undetermined('constant signal (all-zero '
                                                                 'Allan deviation)', self.c))
                 continue
-            iv = bias_instability_interval(allan.tau_s, allan.adev, c=self.c)
+            iv = bias_instability_interval(allan.tau_s, allan.adev, c=self.c, edf=allan.edf,
+                                           min_edf=self.min_edf)
             out[ch] = ChannelResult(ch, allan, iv, _fit(allan))
         return out, check

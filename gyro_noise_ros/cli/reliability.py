@@ -45,7 +45,7 @@ from . import calibrate as cal
 from ._common import run_cli
 from .. import __version__
 from ..calibration import records
-from ..calibration.interval import compare, DEFAULT_C, DEFAULT_TOLERANCE
+from ..calibration.interval import compare, DEFAULT_C, DEFAULT_MIN_EDF, DEFAULT_TOLERANCE
 from ..calibration.static_record import CHANNELS, StaticRecord, unit_of
 from ..errors import InputDataError, ParameterError
 
@@ -77,6 +77,9 @@ def build_parser():
                    help='level factor: interval where ADEV < c * sigma_min (paper: 2)')
     p.add_argument('--tolerance', type=float, default=DEFAULT_TOLERANCE,
                    help='largest relative change of the interval width still physiological')
+    p.add_argument('--min-edf', type=float, default=DEFAULT_MIN_EDF,
+                   help='sigma_min only among taus with at least this many degrees of freedom '
+                        '(0: all taus, the plain reading of the paper)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic)')
     g = p.add_mutually_exclusive_group()
@@ -90,7 +93,8 @@ def build_parser():
     return p
 
 
-def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None):
+def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None,
+                   min_edf=DEFAULT_MIN_EDF):
     """
     Stream a static record through :class:`StaticRecord`.
 
@@ -106,6 +110,8 @@ def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None
         Level factor.
     settings : DetectorSettings, optional, keyword-only
         Static-window thresholds.
+    min_edf : float, keyword-only
+        Least EDF of a tau that may hold sigma_min.
 
     Returns
     -------
@@ -117,7 +123,7 @@ def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None
     for rate, t, accel, gyro in records.iter_imu(path, topic=topic, rate_hz=rate_hz):
         if rec is None:
             kw = {} if settings is None else {'settings': settings}
-            rec = StaticRecord(rate, c=c, source=str(path), **kw)
+            rec = StaticRecord(rate, c=c, source=str(path), min_edf=min_edf, **kw)
         rec.update(t, accel, gyro)
     results, check = rec.finish()
     doc = {'source': str(path), 'rate_hz': rec.rate_hz, 'samples': rec.samples,
@@ -349,6 +355,8 @@ def _body(argv):
                              '--before-static, --after-calibration, --after-static')
     if not (math.isfinite(args.c) and args.c > 1):
         raise ParameterError(f'--c must be > 1, got {args.c}')
+    if not (math.isfinite(args.min_edf) and args.min_edf >= 0):
+        raise ParameterError(f'--min-edf must be >= 0, got {args.min_edf}')
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
         raise ParameterError(f'--tolerance must be >= 0, got {args.tolerance}')
     if args.height != 0.0 and args.latitude is None:
@@ -371,8 +379,8 @@ def _body(argv):
         bag = getattr(args, f'{side}_static')
         if bag:
             try:
-                statics[side], docs[side] = analyze_static(bag, topic=args.topic,
-                                                           rate_hz=args.rate_hz, c=args.c)
+                statics[side], docs[side] = analyze_static(
+                    bag, topic=args.topic, rate_hz=args.rate_hz, c=args.c, min_edf=args.min_edf)
             except InputDataError as err:
                 errors[f'{side}_static'] = str(err)
                 print(f'{PROG}: warning: {side} static record: {err}', file=sys.stderr)
@@ -383,7 +391,7 @@ def _body(argv):
                                      statics.get('after', {}).get(ch), args.tolerance)
                  for ch in CHANNELS}
     doc = {
-        'c': args.c, 'tolerance': args.tolerance,
+        'c': args.c, 'tolerance': args.tolerance, 'min_edf': args.min_edf,
         'sources': {p: given.get(p) for p in PARTS},
         'bias_instability_interval': intervals,
         'summary': _summary(intervals),

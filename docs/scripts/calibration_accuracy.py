@@ -29,10 +29,12 @@ import numpy as np
 from gyro_noise_ros.calibration.emulate import (MG, PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT,
                                                 Scenario, SensorErrors, simulate, SixPosition)
 from gyro_noise_ros.calibration.sixpos import six_position
-from gyro_noise_ros.calibration.static import (find_dwells, ORIENTATIONS, select_six,
-                                               WindowAccumulator)
+from gyro_noise_ros.calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS,
+                                               select_six, WindowAccumulator)
 
 RATE = 100.0
+#: 10 s dwells keep 8 s after trimming one 1 s window at each end
+SETTINGS = DetectorSettings(min_static_s=5.0)
 
 
 def run(noise_mg, dwell_s, seeds, errors):
@@ -46,7 +48,7 @@ def run(noise_mg, dwell_s, seeds, errors):
                            gyro_noise_rad_s=1e-3)
         acc = WindowAccumulator(RATE)
         acc.update(t, a, g)
-        ch = select_six([find_dwells(acc.result())])
+        ch = select_six([find_dwells(acc.result(), SETTINGS)], SETTINGS)
         dw = [ch[o] for o in ORIENTATIONS]
         r = six_position([d.accel_mean_m_s2 for d in dw], 9.80665,
                          accel_sems_m_s2=[d.accel_sem_m_s2 for d in dw])

@@ -13,10 +13,10 @@
 # limitations under the License.
 
 """
-Accuracy of the six-position calibration against noise level and dwell length (docs/reliability.md).
+Accuracy of the six-position calibration against noise level and dwell length.
 
-For each white-noise level and dwell length, simulate seeded six-position records carrying the
-paper 001 Table 6 "before" values (100 Hz, 5 s rotations), run the static-dwell detector and the
+See docs/reliability.md. For each white-noise level and dwell length, simulate seeded
+six-position records carrying the paper 001 Table 6 "before" values (100 Hz, 5 s rotations), run the static-dwell detector and the
 estimator, and print the RMS error of the biases (mg) and scale factors (%) beside the mean
 reported standard uncertainty. A last block adds the emulator's default bias variation (flicker +
 random walk) to show what wander does. Run: ``python docs/scripts/calibration_accuracy.py``.
@@ -24,13 +24,12 @@ random walk) to show what wander does. Run: ``python docs/scripts/calibration_ac
 
 import sys
 
-import numpy as np
-
 from gyro_noise_ros.calibration.emulate import (MG, PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT,
                                                 Scenario, SensorErrors, simulate, SixPosition)
 from gyro_noise_ros.calibration.sixpos import six_position
 from gyro_noise_ros.calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS,
                                                select_six, WindowAccumulator)
+import numpy as np
 
 RATE = 100.0
 #: 10 s dwells keep 8 s after trimming one 1 s window at each end

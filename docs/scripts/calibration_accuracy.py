@@ -16,10 +16,11 @@
 Accuracy of the six-position calibration against noise level and dwell length.
 
 See docs/reliability.md. For each white-noise level and dwell length, simulate seeded
-six-position records carrying the paper 001 Table 6 "before" values (100 Hz, 5 s rotations), run the static-dwell detector and the
-estimator, and print the RMS error of the biases (mg) and scale factors (%) beside the mean
-reported standard uncertainty. A last block adds the emulator's default bias variation (flicker +
-random walk) to show what wander does. Run: ``python docs/scripts/calibration_accuracy.py``.
+six-position records carrying the paper 001 Table 6 "before" values (100 Hz, 5 s rotations), run
+the static-dwell detector and the estimator, and print the RMS error of the biases (mg) and scale
+factors (%) beside the mean reported standard uncertainty. A last block adds the emulator's
+default bias variation (flicker + random walk) to show what wander does. Run:
+``python docs/scripts/calibration_accuracy.py [SEEDS]``.
 """
 
 import sys

@@ -210,7 +210,7 @@ def scenario_length_s(scenario):
     return None
 
 
-def write_bag(args, board, truth_fh=None):
+def write_bag(args, board, truth_fh=None, counters=None):
     """
     Write the board's samples straight into a rosbag2 (``--write-bag``).
 
@@ -222,6 +222,9 @@ def write_bag(args, board, truth_fh=None):
         The board (with its scenario, if any).
     truth_fh : file, optional
         Ground-truth log (TRUTH_DTYPE records).
+    counters : object, optional
+        The emulator's traffic counters (``samples_generated``, ``samples_sent``), for its
+        closing statistics line.
 
     Returns
     -------
@@ -267,5 +270,8 @@ def write_bag(args, board, truth_fh=None):
             if truth_fh is not None:
                 truth_fh.write(truth_records(truth).tobytes())
             done += n
+            if counters is not None:
+                counters.samples_generated += n
+                counters.samples_sent += n
     print(args.write_bag, flush=True)
     return 0

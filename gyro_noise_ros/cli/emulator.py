@@ -558,7 +558,7 @@ def _body(argv):
     truth_fh = open(args.truth_out, 'ab') if args.truth_out else None
     try:
         if args.write_bag:
-            code = write_bag(args, board, truth_fh)
+            code = write_bag(args, board, truth_fh, counters)
         elif args.write_sd:
             code = _run_sd(args, board, faults, truth_fh, counters)
         else:

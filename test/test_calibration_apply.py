@@ -15,7 +15,7 @@
 """
 calibration.apply against a slow per-sample twin (np.linalg.solve of the model, sample by sample).
 
-The twin writes the model the way the CALIB helper's file documents it, measured = (I + diag(S) + M)
+The twin writes the model as the calibration file documents it, measured = (I + diag(S) + M)
 @ true + b, and solves it sample by sample; the vectorised path must agree to rounding.
 """
 

@@ -456,7 +456,7 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
 
 def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):
     """
-    Re-serialise ROS 2 CDR ``sensor_msgs/Imu`` messages with new angular velocity and acceleration.
+    Re-serialise CDR ``sensor_msgs/Imu`` messages with a new angular velocity and acceleration.
 
     Everything else (encapsulation and byte order, header stamp and frame_id, orientation, the
     covariances) stays byte for byte as received, so the result equals rosbags'
@@ -507,7 +507,8 @@ def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):
     for i in np.flatnonzero(~ok):
         raw = result[i]
         msg = slow_decode(raw, IMU_MSGTYPE, False)
-    Re-serialise CDR ``sensor_msgs/Imu`` messages with a new angular velocity and acceleration.
+        av = msg.angular_velocity
+        av.x, av.y, av.z = map(float, gyro[i])
         la = msg.linear_acceleration
         la.x, la.y, la.z = map(float, accel[i])
         result[i] = bytes(typestore().serialize_cdr(msg, IMU_MSGTYPE,

@@ -482,6 +482,7 @@ def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):
     ------
     BagError
         A message neither decoder can read.
+
     """
     n = starts.shape[0]
     gyro = _vector3(gyro_rad_s, n, 'gyro_rad_s')

@@ -118,7 +118,8 @@ PARAMETERS = (
 def calibration_from(p):
     """Build the calibration from the parameter values: the file, or the parameters (not both)."""
     if not p['calibration_file']:
-        values = {key: list(p[key]) for key in KEYS}
+        values = {key: p[key] if key == 'calibration_gravity_m_s2' else list(p[key])
+                  for key in KEYS}
         return calibration_from_parameters(values, source='parameter'), 'parameters'
     changed = [key for key in _CAL_DOC if any(list(p[key]))]
     if changed:
@@ -148,6 +149,7 @@ class ImuCompensatorNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameter_table(self, PARAMETERS)
         self._p = p
+        self._status_name = f'{self.get_name()}: compensation'
         self.calibration, self._cal_source = calibration_from(p)
         margin = None if p['temperature_margin_c'] < 0 else p['temperature_margin_c']
         if thermal_model is None and p['thermal_model_file']:
@@ -278,7 +280,7 @@ class ImuCompensatorNode(Node):
         level, message = worst(checks, 'Compensating.')
         hardware_id = self._p['hardware_id'] or self._frame_id or 'unknown'
         return diagnostic_array(self.get_clock().now().to_msg(), [diagnostic_status(
-            f'{self.get_name()}: compensation', hardware_id, level, message, values)])
+            self._status_name, hardware_id, level, message, values)])
 
     def publish_diagnostics(self):
         """Publish :meth:`diagnostics` on ``/diagnostics``."""

@@ -140,3 +140,10 @@ def test_model_without_range_is_refused():
     model.temperature_range_c = None
     with pytest.raises(ParameterError, match='no training temperature range'):
         check_live_model(model)
+
+
+def test_model_with_wrong_output_shape_is_refused_at_start():
+    model = LinearThermal()
+    model.drift_rad_s = lambda temperature_c, dtemp_c_s: np.zeros((len(temperature_c), 1))
+    with pytest.raises(ParameterError, match=r'finite \(n, 3\) offsets'):
+        check_live_model(model)

@@ -122,6 +122,12 @@ def check_live_model(method, *, margin_c=None):
         margin_c = _model_value(method, 'range_margin_c')
         margin_c = DEFAULT_RANGE_MARGIN_C if margin_c is None else margin_c
     margin_c = float(margin_c)
+    # One evaluation at the middle of the range: the wrong shape or a NaN fails at start-up, not
+    # in the middle of a stream.
+    probe = np.asarray(method.drift_rad_s(np.array([(lo + hi) / 2]), np.zeros(1)))
+    if probe.shape != (1, 3) or not np.isfinite(probe).all():
+        raise ParameterError(f"thermal model '{name}': drift_rad_s(T, dT) must return finite "
+                             f'(n, 3) offsets, got {probe.shape} {probe.tolist()}')
     if not (math.isfinite(margin_c) and margin_c >= 0):
         raise ParameterError(f"thermal model '{name}': range margin must be >= 0 degC, got "
                              f'{margin_c!r}')

@@ -26,12 +26,12 @@ the ramp causes, the second sees it gone.
 import json
 import math
 import os
+from pathlib import Path
 import random
 import select
 import socket
 import subprocess
 import sys
-from pathlib import Path
 import time
 
 import pytest

@@ -37,7 +37,8 @@ class LinearThermal:
         self.t_ref = float(t_ref)
         self.offset = np.asarray(offset, dtype=float)
         self.rate_gain = np.asarray(rate_gain, dtype=float)
-        self.temperature_range_c = tuple(temperature_range_c)
+        self.temperature_range_c = (None if temperature_range_c is None
+                                    else tuple(temperature_range_c))
         if range_margin_c is not None:
             self.range_margin_c = range_margin_c
 

@@ -274,3 +274,26 @@ def test_params_file_is_the_calibration_file(context, tmp_path):
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=ctx)
+
+
+def test_model_file_through_the_registry(context, monkeypatch):
+    # The thermal registry (gyro_noise_ros.thermal.methods.load_model) returns the fitted method
+    # with its training record; a stand-in of that shape is enough to test the node's side.
+    import types
+
+    loaded = types.SimpleNamespace(
+        method=LinearThermal(temperature_range_c=None),
+        training=types.SimpleNamespace(temperature_min_c=15.0, temperature_max_c=35.0))
+    module = types.ModuleType('gyro_noise_ros.thermal.methods')
+    module.DEFAULT_RANGE_MARGIN_C = 5.0
+    module.load_model = lambda path: loaded
+    monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.methods', module)
+    node = compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
+        thermal_model_file='model.json'))
+    values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    assert values['Thermal model range (degC)'] == '15 to 35, margin 5'
+    node.destroy_node()
+    loaded.method = LinearThermal(name='parallel')
+    with pytest.raises(ParameterError, match='offline only'):
+        compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
+            thermal_model_file='model.json'))

@@ -19,10 +19,13 @@ Per temperature message the rate from the whole history so far, the model evalua
 of the offsets onto the gyro stamps.
 """
 
+import sys
+import types
+
 from _thermal_linear import LinearThermal
 from gyro_noise_ros.errors import ParameterError
-from gyro_noise_ros.thermal.live import (check_live_model, LiveDriftEvaluator, RANGE_MARGIN,
-                                         RANGE_OK, RANGE_OUTSIDE)
+from gyro_noise_ros.thermal.live import (check_live_model, LiveDriftEvaluator, load_live_model,
+                                         RANGE_MARGIN, RANGE_OK, RANGE_OUTSIDE)
 from gyro_noise_ros.thermal.run import temperature_rate_c_s, ThermalMethod
 import numpy as np
 import pytest
@@ -147,3 +150,30 @@ def test_model_with_wrong_output_shape_is_refused_at_start():
     model.drift_rad_s = lambda temperature_c, dtemp_c_s: np.zeros((len(temperature_c), 1))
     with pytest.raises(ParameterError, match=r'finite \(n, 3\) offsets'):
         check_live_model(model)
+
+
+class _Training:
+    temperature_min_c, temperature_max_c = 10.0, 40.0
+
+
+class _Loaded:
+    """The registry's ThermalModel shape: the fitted method and what it was trained on."""
+
+    def __init__(self, method):
+        self.method, self.training = method, _Training()
+
+
+def _fake_registry(monkeypatch, method):
+    module = types.ModuleType('gyro_noise_ros.thermal.methods')
+    module.DEFAULT_RANGE_MARGIN_C = 3.0
+    module.load_model = lambda path: _Loaded(method)
+    monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.methods', module)
+
+
+def test_model_file_range_comes_from_the_training_record(monkeypatch):
+    method = LinearThermal(temperature_range_c=None)
+    _fake_registry(monkeypatch, method)
+    got, range_c, margin = load_live_model('model.json')
+    assert got is method and range_c == (10.0, 40.0) and margin == 3.0
+    ev = LiveDriftEvaluator(got, range_c=range_c, margin_c=margin)
+    assert (ev.range_lo_c, ev.range_hi_c, ev.margin_c) == (10.0, 40.0, 3.0)

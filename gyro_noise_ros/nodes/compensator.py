@@ -156,11 +156,13 @@ class ImuCompensatorNode(Node):
         self._status_name = f'{self.get_name()}: compensation'
         self.calibration, self._cal_source = calibration_from(p)
         margin = None if p['temperature_margin_c'] < 0 else p['temperature_margin_c']
+        range_c = None
         if thermal_model is None and p['thermal_model_file']:
-            thermal_model = load_live_model(p['thermal_model_file'], margin_c=margin)
+            thermal_model, range_c, file_margin = load_live_model(p['thermal_model_file'])
+            margin = file_margin if margin is None else margin
         self.thermal = None if thermal_model is None else LiveDriftEvaluator(
-            thermal_model, rate_window_s=p['temperature_rate_window_s'], margin_c=margin,
-            beyond=p['out_of_range_action'])
+            thermal_model, range_c=range_c, rate_window_s=p['temperature_rate_window_s'],
+            margin_c=margin, beyond=p['out_of_range_action'])
         self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'uncorrected',
                                      'temperatures'), 0)
         self._transport = SequenceGapCounter()

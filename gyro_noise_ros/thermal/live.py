@@ -75,15 +75,17 @@ def _model_value(method, key):
     return value
 
 
-def check_live_model(method, *, margin_c=None):
+def check_live_model(method, *, range_c=None, margin_c=None):
     """
     Check that a thermal model can run live and return its trusted temperature span.
 
     Parameters
     ----------
     method : ThermalMethod
-        The model; needs ``name``, ``causal``, ``drift_rad_s`` and a training range
-        (``temperature_range_c`` as attribute or ``to_dict()`` key).
+        The model; needs ``name``, ``causal``, ``drift_rad_s`` and a training range.
+    range_c : (float, float) or None, keyword-only
+        Training temperature range (degC); None: the method's ``temperature_range_c`` attribute
+        or ``to_dict()`` key.
     margin_c : float or None, keyword-only
         Margin (degC) beyond the range; None: the model's ``range_margin_c`` or
         :data:`DEFAULT_RANGE_MARGIN_C`.
@@ -109,7 +111,7 @@ def check_live_model(method, *, margin_c=None):
     if not callable(getattr(method, 'drift_rad_s', None)):
         raise ParameterError(f"thermal model '{name}' has no drift_rad_s(T, dT): it cannot run "
                              'live')
-    span = _model_value(method, 'temperature_range_c')
+    span = _model_value(method, 'temperature_range_c') if range_c is None else range_c
     try:
         lo, hi = (float(v) for v in span)
     except (TypeError, ValueError):
@@ -134,41 +136,46 @@ def check_live_model(method, *, margin_c=None):
     return lo, hi, margin_c
 
 
-def load_live_model(path, *, margin_c=None):
+def load_live_model(path):
     """
-    Load a ``model.json`` with the thermal registry and check it can run live.
+    Load a ``model.json`` with the thermal registry (``thermal.methods.load_model``).
+
+    The registry returns the fitted method with what it was trained on (``training``:
+    ``temperature_min_c``, ``temperature_max_c``) and the package's range margin
+    (``methods.DEFAULT_RANGE_MARGIN_C``); a bare method carrying its own range is accepted too.
 
     Parameters
     ----------
     path : str
         ``model.json`` written by ``gyro_noise_thermal fit``.
-    margin_c : float or None, keyword-only
-        See :func:`check_live_model`.
 
     Returns
     -------
-    ThermalMethod
+    method : ThermalMethod
+    range_c : (float, float) or None
+        Training temperature range (degC); None when the method carries its own.
+    margin_c : float or None
+        The registry's default margin (degC); None: :data:`DEFAULT_RANGE_MARGIN_C`.
 
     Raises
     ------
-    ParameterError
-        Registry missing, unreadable file, non-causal model.
+    GyroNoiseError
+        The registry's errors (unreadable file, unknown method), or ParameterError when this
+        build has no registry. Causality is checked by :func:`check_live_model`.
 
     """
     try:
-        from .methods import load_model
+        from . import methods
     except ImportError as err:
         raise ParameterError(f'thermal model {path}: this build has no thermal model registry '
                              f'(gyro_noise_ros.thermal.methods: {err})') from err
-    try:
-        method = load_model(path)
-    except ParameterError:
-        raise
-    except Exception as err:  # noqa: BLE001 - any failure to read the file is one clear line
-        raise ParameterError(f'thermal model {path}: cannot be loaded ({type(err).__name__}: '
-                             f'{err})') from err
-    check_live_model(method, margin_c=margin_c)
-    return method
+    loaded = methods.load_model(path)
+    training = getattr(loaded, 'training', None)
+    method = getattr(loaded, 'method', loaded)
+    range_c = None
+    if training is not None:
+        range_c = (training.temperature_min_c, training.temperature_max_c)
+    return method, range_c, getattr(methods, 'DEFAULT_RANGE_MARGIN_C', None)
 
 
 class LiveDriftEvaluator:
@@ -179,6 +186,8 @@ class LiveDriftEvaluator:
     ----------
     method : ThermalMethod
         Causal model (checked with :func:`check_live_model`).
+    range_c : (float, float) or None, keyword-only
+        Training temperature range (degC); None: the method's own.
     rate_window_s : float, keyword-only
         Trailing window of :func:`temperature_rate_c_s` (s); use the one the model was fitted with.
     margin_c : float or None, keyword-only
@@ -188,9 +197,9 @@ class LiveDriftEvaluator:
 
     """
 
-    def __init__(self, method, *, rate_window_s=DEFAULT_RATE_WINDOW_S, margin_c=None,
-                 beyond='hold'):
-        lo, hi, margin = check_live_model(method, margin_c=margin_c)
+    def __init__(self, method, *, range_c=None, rate_window_s=DEFAULT_RATE_WINDOW_S,
+                 margin_c=None, beyond='hold'):
+        lo, hi, margin = check_live_model(method, range_c=range_c, margin_c=margin_c)
         self.range_lo_c, self.range_hi_c, self.margin_c = lo, hi, margin
         if beyond not in BEYOND_ACTIONS:
             raise ParameterError(f'beyond must be one of {BEYOND_ACTIONS}, got {beyond!r}')

@@ -88,9 +88,9 @@ PARAMETERS = (
               unit='m/s^2', read_only=True, min_value=9.7, max_value=9.9),
     ParamSpec('thermal_model_file', '', 'model.json of gyro_noise_thermal fit (a causal method); '
               'empty: no thermal compensation', read_only=True),
-    ParamSpec('temperature_rate_window_s', DEFAULT_RATE_WINDOW_S, 'Trailing window of the '
-              'temperature rate dT; the one the model was fitted with', unit='s', read_only=True,
-              min_value=0.01, max_value=3600.0),
+    ParamSpec('temperature_rate_window_s', 0.0, 'Trailing window of the temperature rate dT '
+              f"(0: the model's own, else {DEFAULT_RATE_WINDOW_S:g} s)", unit='s',
+              read_only=True, min_value=0.0, max_value=3600.0),
     ParamSpec('temperature_margin_c', -1.0, 'Trusted margin beyond the trained temperature range '
               "(-1: the model's own, else 5 degC)", unit='degC', read_only=True, min_value=-1.0,
               max_value=200.0),
@@ -161,7 +161,7 @@ class ImuCompensatorNode(Node):
             thermal_model, range_c, file_margin = load_live_model(p['thermal_model_file'])
             margin = file_margin if margin is None else margin
         self.thermal = None if thermal_model is None else LiveDriftEvaluator(
-            thermal_model, range_c=range_c, rate_window_s=p['temperature_rate_window_s'],
+            thermal_model, range_c=range_c, rate_window_s=p['temperature_rate_window_s'] or None,
             margin_c=margin, beyond=p['out_of_range_action'])
         self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'uncorrected',
                                      'temperatures'), 0)

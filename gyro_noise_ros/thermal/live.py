@@ -188,8 +188,10 @@ class LiveDriftEvaluator:
         Causal model (checked with :func:`check_live_model`).
     range_c : (float, float) or None, keyword-only
         Training temperature range (degC); None: the method's own.
-    rate_window_s : float, keyword-only
-        Trailing window of :func:`temperature_rate_c_s` (s); use the one the model was fitted with.
+    rate_window_s : float or None, keyword-only
+        Trailing window of :func:`temperature_rate_c_s` (s); None: the model's own
+        ``rate_window_s`` (the window it was fitted with), else
+        :data:`~gyro_noise_ros.thermal.run.DEFAULT_RATE_WINDOW_S`.
     margin_c : float or None, keyword-only
         Range margin (degC); None: the model's.
     beyond : str, keyword-only
@@ -197,12 +199,14 @@ class LiveDriftEvaluator:
 
     """
 
-    def __init__(self, method, *, range_c=None, rate_window_s=DEFAULT_RATE_WINDOW_S,
-                 margin_c=None, beyond='hold'):
+    def __init__(self, method, *, range_c=None, rate_window_s=None, margin_c=None,
+                 beyond='hold'):
         lo, hi, margin = check_live_model(method, range_c=range_c, margin_c=margin_c)
         self.range_lo_c, self.range_hi_c, self.margin_c = lo, hi, margin
         if beyond not in BEYOND_ACTIONS:
             raise ParameterError(f'beyond must be one of {BEYOND_ACTIONS}, got {beyond!r}')
+        if rate_window_s is None:
+            rate_window_s = _model_value(method, 'rate_window_s') or DEFAULT_RATE_WINDOW_S
         if not rate_window_s > 0:
             raise ParameterError(f'rate_window_s must be > 0, got {rate_window_s!r}')
         self.method = method

@@ -297,3 +297,21 @@ def test_model_file_through_the_registry(context, monkeypatch):
     with pytest.raises(ParameterError, match='offline only'):
         compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
             thermal_model_file='model.json'))
+
+
+@pytest.mark.timeout(60)
+def test_corrupt_temperature_is_counted_not_fatal(context):
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=LinearThermal(
+        temperature_range_c=(0.0, 50.0)))
+    _, _, _, raws = _imu_stream(400, seed=6)
+    io = _Harness(context, node)
+    try:
+        good = encode_temperature_cdr([T0_NS], [25.0], frame_id='imu_test')[0]
+        io.play(raws, temperatures=[b'\x00\x01\x00\x00' + b'\xff' * 8, good])
+        assert _spin_until(io.executor, lambda: node.counts['temperatures'] >= 2, 10)
+        values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    finally:
+        io.close()
+    assert len(io.out) == 400
+    assert values['Temperature messages'] == '2'
+    assert int(values['Temperature messages rejected']) >= 1

@@ -43,7 +43,7 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
 from ..bag import decode_temperature
 from ..bag.codec import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
 from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
-from ..errors import ParameterError
+from ..errors import BagError, ParameterError
 from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live_model, RANGE_MARGIN,
                             RANGE_NAMES, RANGE_OUTSIDE)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S
@@ -191,8 +191,14 @@ class ImuCompensatorNode(Node):
         """Take queued temperatures and Imu messages, compensate them, publish."""
         raws, _, _ = take_all(self._temp_sub, Temperature)
         if raws and self.thermal is not None:
-            stamp_ns, temperature_c = decode_temperature(raws)
             self.counts['temperatures'] += len(raws)
+            try:
+                stamp_ns, temperature_c = decode_temperature(raws)
+            except BagError as err:  # a corrupt message: drop the batch, count it, go on
+                self.thermal.rejected += len(raws)
+                self.get_logger().error(f'temperature batch dropped: {err}',
+                                        throttle_duration_sec=5.0)
+                stamp_ns, temperature_c = (), ()
             if self.thermal.add_temperature(stamp_ns, temperature_c):
                 self._last_temp = time.monotonic()
         raws, _, sequence = take_all(self._imu_sub, Imu)

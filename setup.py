@@ -24,6 +24,9 @@ setup(
         'pyserial>=3.5',
         'matplotlib>=3.7',
         'PyYAML>=6',
+        # thermal baselines (paper 002 comparisons): wavelet-threshold denoising and EMD
+        'PyWavelets>=1.1',
+        'EMD-signal>=1.5',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install
@@ -54,6 +57,7 @@ setup(
             'lsm6dso32_driver = gyro_noise_ros.nodes.driver:main',
             'noise_analyzer = gyro_noise_ros.nodes.analyzer:main',
             'gyro_noise_record = gyro_noise_ros.nodes.recorder:main',
+            'imu_compensator = gyro_noise_ros.nodes.compensator:main',
             'portenta_emulator = gyro_noise_ros.cli.emulator:main',
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',

@@ -364,6 +364,14 @@ def _covariance(values, n, name):
 
 def _encode_cdr(sec, nsec, frame_id, tail):
     """Serialise n messages (header + float64 tail) as little-endian CDR; one bytes object each."""
+    rows = _encode_rows(sec, nsec, frame_id, tail)
+    size = rows.shape[1]
+    blob = rows.tobytes()
+    return [blob[i:i + size] for i in range(0, len(blob), size)]
+
+
+def _encode_rows(sec, nsec, frame_id, tail):
+    """Serialise n messages (header + float64 tail) as little-endian CDR; one uint8 row each."""
     if not isinstance(frame_id, str) or '\x00' in frame_id:
         raise ParameterError(f'frame_id must be a str without NUL, got {frame_id!r}')
     name = frame_id.encode('utf-8')
@@ -377,8 +385,7 @@ def _encode_cdr(sec, nsec, frame_id, tail):
     rows[:, 12:16] = np.frombuffer(np.array(len(name) + 1, '<u4').tobytes(), np.uint8)
     rows[:, 16:16 + len(name)] = np.frombuffer(name, np.uint8)
     rows[:, head:] = np.ascontiguousarray(tail, dtype='<f8').view(np.uint8).reshape(n, 8 * k)
-    blob = rows.tobytes()
-    return [blob[i:i + size] for i in range(0, n * size, size)]
+    return rows
 
 
 def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
@@ -408,6 +415,35 @@ def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
     list of bytes
         One serialised message per stamp.
     """
+    return _encode_cdr(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
+                                   linear_acceleration_covariance))
+
+
+def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
+                    angular_velocity_covariance=None, linear_acceleration_covariance=None):
+    """
+    Serialise ``sensor_msgs/Imu`` messages to little-endian CDR, one row of a byte matrix each.
+
+    Same bytes as :func:`encode_imu_cdr` (``rows[i].tobytes() == encode_imu_cdr(...)[i]``), without
+    one Python object per message: for bulk writers.
+
+    Parameters
+    ----------
+    stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance, linear_acceleration_covariance
+        As in :func:`encode_imu_cdr`.
+
+    Returns
+    -------
+    numpy.ndarray of uint8, shape (n, message size)
+        C-contiguous; every message of one frame_id has the same size.
+    """
+    return _encode_rows(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
+                                    linear_acceleration_covariance))
+
+
+def _imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
+               linear_acceleration_covariance):
+    """Return (sec, nsec, frame_id, tail) of Imu messages."""
     _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
     n = sec.shape[0]
     tail = np.zeros((n, IMU_TAIL_F8))
@@ -417,7 +453,7 @@ def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
     tail[:, 16:25] = _covariance(angular_velocity_covariance, n, 'angular_velocity_covariance')
     tail[:, 25:28] = _vector3(accel_m_s2, n, 'accel_m_s2')
     tail[:, 28:37] = _covariance(linear_acceleration_covariance, n, 'linear_acceleration_covariance')
-    return _encode_cdr(sec, nsec, frame_id, tail)
+    return sec, nsec, frame_id, tail
 
 
 def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', variance=0.0):
@@ -440,6 +476,28 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
     list of bytes
         One serialised message per stamp.
     """
+    return _encode_cdr(*_temperature_parts(stamp_ns, temperature_c, frame_id, variance))
+
+
+def encode_temperature_rows(stamp_ns, temperature_c, *, frame_id='imu_link', variance=0.0):
+    """
+    Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR, one row of a byte matrix each.
+
+    Parameters
+    ----------
+    stamp_ns, temperature_c, frame_id, variance
+        As in :func:`encode_temperature_cdr`.
+
+    Returns
+    -------
+    numpy.ndarray of uint8, shape (n, message size)
+        ``rows[i].tobytes() == encode_temperature_cdr(...)[i]``.
+    """
+    return _encode_rows(*_temperature_parts(stamp_ns, temperature_c, frame_id, variance))
+
+
+def _temperature_parts(stamp_ns, temperature_c, frame_id, variance):
+    """Return (sec, nsec, frame_id, tail) of Temperature messages."""
     _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
     n = sec.shape[0]
     temps = np.asarray(temperature_c, dtype=np.float64).reshape(-1)
@@ -451,7 +509,7 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
         tail[:, 1] = np.broadcast_to(np.asarray(variance, dtype=np.float64), (n,))
     except ValueError as err:
         raise ParameterError(f'variance must be a float or have {n} values, got {np.shape(variance)}') from err
-    return _encode_cdr(sec, nsec, frame_id, tail)
+    return sec, nsec, frame_id, tail
 
 
 def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):

@@ -128,7 +128,8 @@ def _anchor(start_time, reader):
 def import_logs(paths, out, *, storage='sqlite3', topic='imu/data_raw', temperature_topic='imu/temperature',
                 frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
                 temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
-                linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20):
+                linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20,
+                bulk=True):
     """
     Convert SD log files of one sequence to a rosbag2.
 
@@ -156,12 +157,17 @@ def import_logs(paths, out, *, storage='sqlite3', topic='imu/data_raw', temperat
         Temperature variance (degC^2; 0 = unknown).
     chunk_bytes : int, keyword-only
         Read size (bytes).
+    bulk : bool, keyword-only
+        Write with :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter` (same bag, byte for byte, many
+        times faster); False keeps the per-message :class:`gyro_noise_ros.bag.ImuBagWriter` path
+        (the baseline of ``bench/bench_import.py``).
 
     Returns
     -------
     ImportReport
     """
     from ..bag import ImuBagWriter
+    from ..bag.bulk import BulkImuBagWriter
 
     if gyro_fs_dps is not None:
         gyro_fs_dps = lsm.check_gyro_fs(gyro_fs_dps)
@@ -195,7 +201,8 @@ def import_logs(paths, out, *, storage='sqlite3', topic='imu/data_raw', temperat
     temp_acc = 0.0
     configs = []
     written = temp_written = 0
-    with ImuBagWriter(out, storage=storage, imu_topic=imu_topic, temperature_topic=temp_topic,
+    writer_class = BulkImuBagWriter if bulk else ImuBagWriter
+    with writer_class(out, storage=storage, imu_topic=imu_topic, temperature_topic=temp_topic,
                       frame_id=frame_id) as writer:
         for block in reader:
             if block.samples.size == 0:

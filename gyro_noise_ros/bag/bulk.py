@@ -1,0 +1,298 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Bulk rosbag2 writing for recordings converted offline (the SD-log importer).
+
+:class:`ImuBagWriter` hands every message to rosbags as one Python ``bytes`` object, and its sqlite3
+fast path still costs one ``executemany`` row (several microseconds) per message.
+:class:`BulkImuBagWriter` writes the same bytes in blocks instead:
+
+* sqlite3: one ``INSERT ... SELECT`` per block of :data:`SQL_BLOCK` messages; the block's CDR
+  messages travel as one blob (every message of a topic has the same size) cut by ``substr`` and its
+  bag times as one JSON array read by ``json_each``, so sqlite does the per-row work in C. Same
+  schema, same rows in the same order, same ``metadata.yaml`` (rosbags' writer still creates and
+  closes the bag).
+* MCAP: the block's message records (opcode, length, channel, sequence 0, log and publish time,
+  CDR) are laid out in one numpy byte matrix and appended to rosbags' pending chunk, which is closed
+  at exactly the message where rosbags would close it (past :data:`MCAP_CHUNK_BYTES`); the chunk's
+  message index is written from numpy too. The file is byte-identical to rosbags' own.
+
+See ``docs/scale.md``.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+import io
+import struct
+
+import numpy as np
+
+from . import ImuBagWriter
+from .codec import (
+    encode_imu_rows,
+    encode_temperature_rows,
+    IMU_TAIL_F8,
+    split_stamps,
+    TEMPERATURE_MSGTYPE,
+    typestore,
+)
+from .storage import describe
+from ..errors import BagError
+
+#: Messages per ``INSERT ... SELECT`` statement (blocks of a few MB; measured best near 10k).
+SQL_BLOCK = 8192
+#: rosbags closes an MCAP chunk after the message that takes it past this size (bytes).
+MCAP_CHUNK_BYTES = 1 << 20
+_MCAP_MESSAGE_HEAD = 1 + 8 + 2 + 4 + 8 + 8
+
+
+class BulkImuBagWriter(ImuBagWriter):
+    """
+    :class:`ImuBagWriter` that writes blocks of messages at once (same bag, byte for byte).
+
+    Parameters and attributes are those of :class:`ImuBagWriter`. On a rosbags version whose sqlite3
+    writer layout is not the one recognised here, or with MCAP storage, messages take the
+    per-message path of :class:`ImuBagWriter`.
+    """
+
+    def _bulk_cursor(self, conn):
+        """Return the sqlite3 cursor if the rosbags layout allows the block insert, else None."""
+        writer = self._writer
+        if writer is None:
+            raise BagError(f'bag {str(self.path)!r} is closed')
+        storage = writer.storage
+        if (type(storage).__name__ == 'Sqlite3Writer' and hasattr(storage, 'cursor')
+                and conn.id in getattr(writer, 'counts', {}) and hasattr(writer, 'min_timestamp')):
+            return storage.cursor
+        return None
+
+    def _mcap_storage(self, conn):
+        """Return rosbags' McapWriter if its layout allows the block write, else None."""
+        writer = self._writer
+        if writer is None:
+            raise BagError(f'bag {str(self.path)!r} is closed')
+        storage = writer.storage
+        chunk = getattr(storage, 'chunk', None)
+        if (type(storage).__name__ != 'McapWriter' or getattr(storage, 'compression', None) != ''
+                or not all(hasattr(chunk, name) for name in ('bio', 'msgs', 'message_start_time'))
+                or conn.id not in getattr(storage, 'channel_stats', {})
+                or conn.id not in getattr(writer, 'counts', {})
+                or getattr(writer, 'compression_mode', None) is None
+                or writer.compression_mode.name != 'NONE'):
+            return None
+        if getattr(storage, '_gyro_noise_bulk', False) is False:
+            storage.close_chunk = _McapChunkCloser(storage)
+            storage._gyro_noise_bulk = True
+        return storage
+
+    def _write_mcap_rows(self, conn, log_ns, rows):
+        storage = self._writer.storage
+        n, size = rows.shape
+        rec = _MCAP_MESSAGE_HEAD + size
+        records = np.empty((n, rec), np.uint8)
+        records[:, 0] = 0x05
+        records[:, 1:9] = np.array([rec - 9], '<u8').view(np.uint8)
+        records[:, 9:11] = np.array([conn.id], '<u2').view(np.uint8)
+        records[:, 11:15] = 0
+        times = np.ascontiguousarray(log_ns, dtype='<u8')
+        records[:, 15:23] = times.view(np.uint8).reshape(n, 8)
+        records[:, 23:31] = records[:, 15:23]
+        records[:, 31:] = rows
+        flat = memoryview(records).cast('B')
+        done = 0
+        try:
+            while done < n:
+                chunk = storage.chunk
+                pos = chunk.bio.tell()
+                # rosbags closes the chunk after the first message that ends past the limit
+                take = min(n - done, max(0, (MCAP_CHUNK_BYTES - pos) // rec) + 1)
+                part = times[done:done + take]
+                chunk.bio.write(flat[done * rec:(done + take) * rec])
+                index = np.empty((take, 2), '<u8')
+                index[:, 0] = part
+                index[:, 1] = pos + rec * np.arange(take, dtype=np.uint64)
+                chunk.msgs[conn.id].append(index)
+                chunk.message_start_time = min(chunk.message_start_time, int(part.min()))
+                chunk.message_end_time = max(chunk.message_end_time, int(part.max()))
+                done += take
+                if chunk.bio.tell() > MCAP_CHUNK_BYTES:
+                    storage.close_chunk()
+        except Exception as err:  # noqa: BLE001 - disk full
+            raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
+        first, last = int(times.min()), int(times.max())
+        storage.message_start_time = min(storage.message_start_time, first)
+        storage.message_end_time = max(storage.message_end_time, last)
+        storage.channel_stats[conn.id] += n
+        writer = self._writer
+        writer.counts[conn.id] += n
+        writer.min_timestamp = min(writer.min_timestamp, first)
+        writer.max_timestamp = max(writer.max_timestamp, last)
+
+    def _write_rows(self, conn, log_ns, rows):
+        if rows.shape[0] == 0:
+            return
+        if self._mcap_storage(conn) is not None:
+            self._write_mcap_rows(conn, log_ns, rows)
+            return
+        cursor = self._bulk_cursor(conn)
+        if cursor is None:
+            blob = rows.tobytes()
+            size = rows.shape[1]
+            self._write(conn, log_ns, [blob[i:i + size] for i in range(0, len(blob), size)])
+            return
+        writer = self._writer
+        size = int(rows.shape[1])
+        sql = (f'INSERT INTO messages (topic_id, timestamp, data) SELECT {int(conn.id)}, value, '
+               f'substr(?1, key * {size} + 1, {size}) FROM json_each(?2)')
+        flat = memoryview(np.ascontiguousarray(rows)).cast('B')
+        times = log_ns.tolist()
+        try:
+            for start in range(0, rows.shape[0], SQL_BLOCK):
+                part = times[start:start + SQL_BLOCK]
+                cursor.execute(sql, (flat[start * size:(start + len(part)) * size],
+                                     '[' + ','.join(map(str, part)) + ']'))
+        except Exception as err:  # noqa: BLE001 - disk full, sqlite errors
+            raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
+        writer.counts[conn.id] += rows.shape[0]
+        writer.min_timestamp = min(writer.min_timestamp, int(log_ns.min()))
+        writer.max_timestamp = max(writer.max_timestamp, int(log_ns.max()))
+
+    def write_imu(self, stamp_ns, gyro_rad_s, accel_m_s2, *, angular_velocity_covariance=None,
+                  linear_acceleration_covariance=None, log_ns=None, topic=None):
+        """
+        Append Imu messages (see :meth:`ImuBagWriter.write_imu`).
+
+        Parameters
+        ----------
+        stamp_ns, gyro_rad_s, accel_m_s2, angular_velocity_covariance, linear_acceleration_covariance
+            As in :meth:`ImuBagWriter.write_imu`.
+        log_ns, topic
+            As in :meth:`ImuBagWriter.write_imu`.
+        """
+        stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
+        rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id, angular_velocity_covariance,
+                         linear_acceleration_covariance)
+        conn = self._imu_conn
+        if topic is not None and topic != self.imu_topic:
+            conn = self._extra_imu(topic)
+        self._write_rows(conn, self._log_times(stamps, log_ns), rows)
+        if conn is self._imu_conn:
+            self.imu_count += rows.shape[0]
+
+    def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
+        """
+        Append Temperature messages (see :meth:`ImuBagWriter.write_temperature`).
+
+        Parameters
+        ----------
+        stamp_ns, temperature_c, variance, log_ns
+            As in :meth:`ImuBagWriter.write_temperature`.
+        """
+        if self.temperature_topic is None or self._writer is None:
+            super().write_temperature(stamp_ns, temperature_c, variance=variance, log_ns=log_ns)
+            return
+        stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
+        rows = encode_temperature_rows(stamps, temperature_c, frame_id=self.frame_id, variance=variance)
+        logs = self._log_times(stamps, log_ns)
+        if self._temperature_conn is None:
+            try:
+                self._temperature_conn = self._writer.add_connection(
+                    self.temperature_topic, TEMPERATURE_MSGTYPE, typestore=typestore())
+            except Exception as err:  # noqa: BLE001 - rosbags WriterError
+                raise BagError(f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
+                               f'{describe(err)}') from err
+        self._write_rows(self._temperature_conn, logs, rows)
+        self.temperature_count += rows.shape[0]
+
+
+def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
+    """
+    Return :func:`encode_imu_rows` of the messages, faster when the covariances are shared.
+
+    The first message is encoded in full; it is copied to every row, and only the stamps and the
+    two vectors are written per message (same bytes: they are the only fields that differ).
+    """
+    n = stamps.shape[0]
+    gyro = np.asarray(gyro_rad_s, dtype=np.float64)
+    accel = np.asarray(accel_m_s2, dtype=np.float64)
+    shared = all(c is None or np.shape(c) in ((9,), (3, 3)) for c in (av_cov, la_cov))
+    if n < 2 or not shared or gyro.shape != (n, 3) or accel.shape != (n, 3):
+        return encode_imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id=frame_id,
+                               angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
+    first = encode_imu_rows(stamps[:1], gyro[:1], accel[:1], frame_id=frame_id,
+                            angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
+    size = first.shape[1]
+    head = size - 8 * IMU_TAIL_F8
+    _, sec, nsec = split_stamps(stamps, 'stamp_ns')
+    rows = np.empty((n, size), np.uint8)
+    rows[:] = first[0]
+    rows[:, 4:8] = sec.astype('<i4').view(np.uint8).reshape(n, 4)
+    rows[:, 8:12] = nsec.astype('<u4').view(np.uint8).reshape(n, 4)
+    rows[:, head + 13 * 8:head + 16 * 8] = np.ascontiguousarray(gyro, '<f8').view(np.uint8)
+    rows[:, head + 25 * 8:head + 28 * 8] = np.ascontiguousarray(accel, '<f8').view(np.uint8)
+    return rows
+
+
+class _McapChunkCloser:
+    """
+    rosbags' ``McapWriter.close_chunk`` with the message index written from numpy.
+
+    Same bytes as rosbags' loop (per channel: (log time, offset) pairs, in write order); the
+    pending chunk's index lists hold (k, 2) uint64 arrays from the block writer or (time, offset)
+    tuples from rosbags' own ``write``.
+    """
+
+    def __init__(self, storage):
+        self.storage = storage
+
+    def __call__(self):
+        """Close the pending chunk: chunk record, message indexes, chunk index entry."""
+        from rosbags.rosbag2.storage_mcap import PendingChunk
+
+        storage = self.storage
+        chunk = storage.chunk
+        head = struct.pack('<QQQI', chunk.message_start_time, chunk.message_end_time, chunk.bio.tell(), 0)
+        compressed = storage.compressor(chunk.bio.getvalue())
+        body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
+        chunk_start = storage.bio.tell()
+        storage.bio.write(b'\x06' + struct.pack('<Q', len(body) + len(compressed)))
+        storage.bio.write(body)
+        storage.bio.write(compressed)
+        chunk_end = storage.bio.tell()
+        offsets = []
+        for cid, entries in chunk.msgs.items():
+            offsets.append((cid, storage.bio.tell()))
+            pairs = np.concatenate([np.asarray(e, dtype='<u8').reshape(-1, 2) for e in entries]) \
+                if entries else np.zeros((0, 2), '<u8')
+            data = pairs.astype('<u8').tobytes()
+            payload = struct.pack('<HI', cid, len(data)) + data
+            storage.bio.write(b'\x07' + struct.pack('<Q', len(payload)))
+            storage.bio.write(payload)
+        rec = io.BytesIO()
+        rec.write(struct.pack('<QQQQI', chunk.message_start_time, chunk.message_end_time, chunk_start,
+                              chunk_end - chunk_start, len(offsets) * 10))
+        for cid, offset in offsets:
+            rec.write(struct.pack('<HQ', cid, offset))
+        rec.write(struct.pack('<Q', storage.bio.tell() - chunk_end))
+        rec.write(_mcap_string(storage.compression))
+        rec.write(struct.pack('<QQ', len(compressed), chunk.bio.tell()))
+        storage.chunks.append(rec)
+        storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
+
+
+def _mcap_string(text):
+    data = text.encode()
+    return struct.pack('<I', len(data)) + data

@@ -15,19 +15,19 @@
 """
 Bulk rosbag2 writing for recordings converted offline (the SD-log importer).
 
-:class:`ImuBagWriter` hands every message to rosbags as one Python ``bytes`` object, and its sqlite3
-fast path still costs one ``executemany`` row (several microseconds) per message.
+:class:`ImuBagWriter` hands every message to rosbags as one Python ``bytes`` object, and its
+sqlite3 fast path still costs one ``executemany`` row (several microseconds) per message.
 :class:`BulkImuBagWriter` writes the same bytes in blocks instead:
 
 * sqlite3: one ``INSERT ... SELECT`` per block of :data:`SQL_BLOCK` messages; the block's CDR
-  messages travel as one blob (every message of a topic has the same size) cut by ``substr`` and its
-  bag times as one JSON array read by ``json_each``, so sqlite does the per-row work in C. Same
-  schema, same rows in the same order, same ``metadata.yaml`` (rosbags' writer still creates and
-  closes the bag).
+  messages travel as one blob (every message of a topic has the same size) cut by ``substr``
+  and its bag times as one JSON array read by ``json_each``, so sqlite does the per-row work
+  in C. Same schema, same rows in the same order, same ``metadata.yaml`` (rosbags' writer still
+  creates and closes the bag).
 * MCAP: the block's message records (opcode, length, channel, sequence 0, log and publish time,
-  CDR) are laid out in one numpy byte matrix and appended to rosbags' pending chunk, which is closed
-  at exactly the message where rosbags would close it (past :data:`MCAP_CHUNK_BYTES`); the chunk's
-  message index is written from numpy too. The file is byte-identical to rosbags' own.
+  CDR) are laid out in one numpy byte matrix and appended to rosbags' pending chunk, which is
+  closed at exactly the message where rosbags would close it (past :data:`MCAP_CHUNK_BYTES`);
+  the chunk's message index is written from numpy too. The file is byte-identical to rosbags' own.
 
 See ``docs/scale.md``.
 """
@@ -63,8 +63,8 @@ class BulkImuBagWriter(ImuBagWriter):
     """
     :class:`ImuBagWriter` that writes blocks of messages at once (same bag, byte for byte).
 
-    Parameters and attributes are those of :class:`ImuBagWriter`. On a rosbags version whose sqlite3
-    writer layout is not the one recognised here, or with MCAP storage, messages take the
+    Parameters and attributes are those of :class:`ImuBagWriter`. On a rosbags version whose
+    sqlite3 writer layout is not the one recognised here, or with MCAP storage, messages take the
     per-message path of :class:`ImuBagWriter`.
     """
 
@@ -177,14 +177,17 @@ class BulkImuBagWriter(ImuBagWriter):
 
         Parameters
         ----------
-        stamp_ns, gyro_rad_s, accel_m_s2, angular_velocity_covariance, linear_acceleration_covariance
+        stamp_ns, gyro_rad_s, accel_m_s2 : array_like
             As in :meth:`ImuBagWriter.write_imu`.
-        log_ns, topic
+        angular_velocity_covariance, linear_acceleration_covariance : array_like, optional
             As in :meth:`ImuBagWriter.write_imu`.
+        log_ns, topic : optional
+            As in :meth:`ImuBagWriter.write_imu`.
+
         """
         stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
-        rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id, angular_velocity_covariance,
-                         linear_acceleration_covariance)
+        rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id,
+                         angular_velocity_covariance, linear_acceleration_covariance)
         conn = self._imu_conn
         if topic is not None and topic != self.imu_topic:
             conn = self._extra_imu(topic)
@@ -200,12 +203,14 @@ class BulkImuBagWriter(ImuBagWriter):
         ----------
         stamp_ns, temperature_c, variance, log_ns
             As in :meth:`ImuBagWriter.write_temperature`.
+
         """
         if self.temperature_topic is None or self._writer is None:
             super().write_temperature(stamp_ns, temperature_c, variance=variance, log_ns=log_ns)
             return
         stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
-        rows = encode_temperature_rows(stamps, temperature_c, frame_id=self.frame_id, variance=variance)
+        rows = encode_temperature_rows(stamps, temperature_c, frame_id=self.frame_id,
+                                       variance=variance)
         logs = self._log_times(stamps, log_ns)
         if self._temperature_conn is None:
             try:
@@ -231,9 +236,11 @@ def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
     shared = all(c is None or np.shape(c) in ((9,), (3, 3)) for c in (av_cov, la_cov))
     if n < 2 or not shared or gyro.shape != (n, 3) or accel.shape != (n, 3):
         return encode_imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id=frame_id,
-                               angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
+                               angular_velocity_covariance=av_cov,
+                               linear_acceleration_covariance=la_cov)
     first = encode_imu_rows(stamps[:1], gyro[:1], accel[:1], frame_id=frame_id,
-                            angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
+                            angular_velocity_covariance=av_cov,
+                            linear_acceleration_covariance=la_cov)
     size = first.shape[1]
     head = size - 8 * IMU_TAIL_F8
     _, sec, nsec = split_stamps(stamps, 'stamp_ns')
@@ -264,7 +271,8 @@ class _McapChunkCloser:
 
         storage = self.storage
         chunk = storage.chunk
-        head = struct.pack('<QQQI', chunk.message_start_time, chunk.message_end_time, chunk.bio.tell(), 0)
+        head = struct.pack('<QQQI', chunk.message_start_time, chunk.message_end_time,
+                           chunk.bio.tell(), 0)
         compressed = storage.compressor(chunk.bio.getvalue())
         body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
         chunk_start = storage.bio.tell()
@@ -282,8 +290,8 @@ class _McapChunkCloser:
             storage.bio.write(b'\x07' + struct.pack('<Q', len(payload)))
             storage.bio.write(payload)
         rec = io.BytesIO()
-        rec.write(struct.pack('<QQQQI', chunk.message_start_time, chunk.message_end_time, chunk_start,
-                              chunk_end - chunk_start, len(offsets) * 10))
+        rec.write(struct.pack('<QQQQI', chunk.message_start_time, chunk.message_end_time,
+                              chunk_start, chunk_end - chunk_start, len(offsets) * 10))
         for cid, offset in offsets:
             rec.write(struct.pack('<HQ', cid, offset))
         rec.write(struct.pack('<Q', storage.bio.tell() - chunk_end))

@@ -25,7 +25,7 @@ decoding and scaling included):
 * ``new``: ``bulk=True`` (:class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter`).
 
 Each for sqlite3 and MCAP storage; every path's bag is checked to hold the same message bytes.
-Peak RSS: each (path, log size) imports in a fresh process; ``ru_maxrss`` of that process.
+Peak RSS: each (path, log size) imports in a fresh process; ``VmHWM`` of that process.
 
 Run: ``.venv/bin/python bench/bench_import.py [--samples 400000]
 [--rss-samples 100000,400000,1600000]``
@@ -95,17 +95,19 @@ def gyro_of(bag):
         return np.concatenate([b.gyro for b in reader.iter_batches()])
 
 
+HWM = ("\nprint(next(int(line.split()[1]) for line in open('/proc/self/status') "
+       "if line.startswith('VmHWM:')))")
+
+
 def peak_rss_mb(files, out, storage, bulk):
     """Import in a fresh process; return its peak RSS in MB."""
     code = ('import sys; from gyro_noise_ros.cli import importer; '
             'importer.import_logs(sys.argv[3:], sys.argv[1], storage=sys.argv[2], '
-            f'bulk={bulk!r})')
-    proc = subprocess.Popen([sys.executable, '-c', code, out, storage, *files])
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    if proc.returncode:
-        raise SystemExit(f'import subprocess failed ({proc.returncode})')
-    return usage.ru_maxrss / 1024.0
+            f'bulk={bulk!r})' + HWM)
+    # VmHWM of the child's own image (ru_maxrss would include the forking parent's peak)
+    res = subprocess.run([sys.executable, '-c', code, out, storage, *files], check=True,
+                         capture_output=True, text=True)
+    return int(res.stdout.split()[-1]) / 1024.0
 
 
 def main(argv=None):

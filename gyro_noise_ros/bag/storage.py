@@ -286,7 +286,9 @@ class BagSource:
         self.reader = None
         try:
             if self.ros1:
-                from rosbags.rosbag1 import Reader
+                # rosbags' reader keeps an index entry per message (about 150 B each); the block
+                # reader needs only the chunk list
+                Reader = _lean_ros1_reader_class() if fast else _full_ros1_reader_class()
             else:
                 from rosbags.rosbag2 import Reader
             reader = Reader(target)
@@ -442,7 +444,13 @@ class BagSource:
         ordered = all(b.start_time >= a.end_time or (b.start_time == a.end_time - 1 and b.pos > a.pos)
                       for a, b in itertools.pairwise(infos))
         if not ordered:
-            yield from self._generic_blocks(reader, conns, block)
+            # chunks overlap in time: only rosbags' per-message index gives its merge order
+            full = self._full_ros1_reader()
+            try:
+                yield from self._generic_blocks(full, [c for c in full.connections if c.topic in
+                                                       {k.topic for k in conns}], block)
+            finally:
+                full.close()
             return
         with open(self.reader.path, 'rb') as fh:
             for info in infos:
@@ -465,6 +473,14 @@ class BagSource:
                     part = sel[i:i + block]
                     yield buf, starts[part], lengths[part], time_ns[part]
 
+    def _full_ros1_reader(self):
+        """Open rosbags' indexing ROS 1 reader, or raise BagError if its index would not fit."""
+        count = sum(sum(c.connection_counts.values()) for c in self.reader.chunk_infos)
+        check_ros1_index_fits(self.path, count)
+        reader = _full_ros1_reader_class()(self.reader.path)
+        reader.open()
+        return reader
+
     def close(self):
         """Close the reader (idempotent; never raises)."""
         reader, self.reader = self.reader, None
@@ -473,3 +489,102 @@ class BagSource:
                 reader.close()
             except Exception:  # noqa: BLE001, S110 - closing a half-broken reader must not mask the cause
                 pass
+
+
+#: Memory rosbags' ROS 1 reader holds per indexed message (B): an ``IndexData`` named tuple in a
+#: sorted list, measured with ``bench/bench_ros1_memory.py`` (about 150 B; rounded up).
+ROS1_INDEX_BYTES_PER_MESSAGE = 160
+
+
+def available_memory_bytes():
+    """
+    Memory the system can give without swapping (``MemAvailable`` of ``/proc/meminfo``).
+
+    Returns
+    -------
+    int or None
+        Bytes, or None where it cannot be read.
+
+    """
+    try:
+        with open('/proc/meminfo') as fh:
+            for line in fh:
+                if line.startswith('MemAvailable:'):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def check_ros1_index_fits(path, messages, *, available=None):
+    """
+    Raise BagError if rosbags' per-message index of a ROS 1 bag would not fit in memory.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag (for the message).
+    messages : int
+        Messages in the bag (all topics).
+    available : int, optional
+        Bytes available; :func:`available_memory_bytes` if None.
+
+    Raises
+    ------
+    BagError
+        The index (``ROS1_INDEX_BYTES_PER_MESSAGE`` per message) would take more than half of
+        the available memory.
+
+    """
+    if available is None:
+        available = available_memory_bytes()
+    need = int(messages) * ROS1_INDEX_BYTES_PER_MESSAGE
+    if available is not None and need > available // 2:
+        raise BagError(f'ROS 1 bag {str(path)!r} has chunks that overlap in time, so reading '
+                       f'it in order needs an index of {messages} messages ({need / 1e9:.1f} GB) '
+                       f'but only {available / 1e9:.1f} GB of memory is available; reorder '
+                       'it with "rosbag filter" or convert it with "rosbags-convert" on a '
+                       'larger machine')
+
+
+def _full_ros1_reader_class():
+    from rosbags.rosbag1 import Reader
+
+    return Reader
+
+
+def _lean_ros1_reader_class():
+    """Return rosbags' ROS 1 Reader class without the per-message index (chunk list, counts)."""
+    from rosbags.rosbag1 import Reader
+
+    class LeanRos1Reader(Reader):
+        """
+        Open a ROS 1 bag reading its connections, chunk infos and chunk headers only.
+
+        The index data records after each chunk (one entry per message) are skipped, so memory
+        does not grow with the bag; ``messages()`` is therefore unavailable (empty), and message
+        counts come from the chunk infos.
+        """
+
+        def read_index_data(self, pos, indexes):
+            """Skip one index data record (fixed 47-byte header, then 12 bytes per message)."""
+            head = self.bio.read(55)
+            if len(head) != 55 or int.from_bytes(head[0:4], 'little') != 47:
+                raise BagError(f'ROS 1 index data record after chunk at byte {pos} is malformed')
+            self.bio.seek(int.from_bytes(head[51:55], 'little'), 1)
+
+        def open(self):
+            """Open the bag; connection message counts from the chunk infos."""
+            super().open()
+            counts = {}
+            for info in self.chunk_infos:
+                for cid, k in info.connection_counts.items():
+                    counts[cid] = counts.get(cid, 0) + k
+            self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in self.connections]
+            self.indexes = {}
+
+        def messages(self, *args, **kwargs):
+            """Refuse: the lean reader has no per-message index."""
+            raise BagError('the lean ROS 1 reader streams chunks only (no per-message index)')
+
+    return LeanRos1Reader

@@ -48,11 +48,11 @@ import numpy as np
 
 
 def make_logs(directory, n, seed=0):
-    """Write ``n`` samples at 6.66 kHz (random raw values) as 64 MB SD log files; return paths."""
+    """Write ``n`` samples at 6.66 kHz (random values, 16 per frame) in 64 MB log files; return paths."""
     os.makedirs(directory, exist_ok=True)
     rng = np.random.default_rng(seed)
     with SdLogWriter(directory, sequence_id=1, odr_hz=6667.0, gyro_fs_dps=500, accel_fs_g=8,
-                     max_file_bytes=64 << 20, batch=64, rtc_unix_s=1_700_000_000) as writer:
+                     max_file_bytes=64 << 20, rtc_unix_s=1_700_000_000) as writer:
         for start in range(0, n, 1 << 18):
             k = min(1 << 18, n - start)
             s = np.zeros(k, p.SAMPLE_DTYPE)

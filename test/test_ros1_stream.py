@@ -94,7 +94,7 @@ def test_overlapping_chunks_use_the_index_or_refuse(tmp_path, monkeypatch):
     ref_raws, ref_log, _ = read_all(path, fast=False)
     assert raws == ref_raws and np.array_equal(log, ref_log)
     assert np.array_equal(log, np.sort(stamps))
-    # 2000 messages * 160 B = 320 kB of index against 100 kB available: refused, one line
+    # 2000 messages * 180 B = 360 kB of index against 100 kB available: refused, one line
     monkeypatch.setattr(storage, 'available_memory_bytes', lambda: 100_000)
     with ImuBagReader(path) as reader:
         with pytest.raises(BagError, match='overlap in time.*2000 messages') as err:
@@ -103,9 +103,10 @@ def test_overlapping_chunks_use_the_index_or_refuse(tmp_path, monkeypatch):
 
 
 def test_check_ros1_index_fits_rule():
-    storage.check_ros1_index_fits('x.bag', 1000, available=2 * 1000 * 160)
+    per = storage.ROS1_INDEX_BYTES_PER_MESSAGE
+    storage.check_ros1_index_fits('x.bag', 1000, available=2 * 1000 * per)  # exactly half: fits
     with pytest.raises(BagError, match='x.bag'):
-        storage.check_ros1_index_fits('x.bag', 1001, available=2 * 1000 * 160)
+        storage.check_ros1_index_fits('x.bag', 1001, available=2 * 1000 * per)
 
 
 @pytest.mark.slow

@@ -264,7 +264,7 @@ class ImuBagReader:
     Stream ``sensor_msgs/Imu`` (and optionally ``sensor_msgs/Temperature``) out of one bag.
 
     Memory stays constant in the bag size: messages are read and decoded a block at a time
-    (rosbags' ROS 1 reader is the exception: it keeps an index entry per message in memory).
+    (ROS 1 included: only the chunk list is read; see ``docs/scale.md``).
 
     Parameters
     ----------

@@ -492,8 +492,8 @@ class BagSource:
 
 
 #: Memory rosbags' ROS 1 reader holds per indexed message (B): an ``IndexData`` named tuple in a
-#: sorted list, measured with ``bench/bench_ros1_memory.py`` (about 150 B; rounded up).
-ROS1_INDEX_BYTES_PER_MESSAGE = 160
+#: sorted list; ``bench/bench_ros1_memory.py`` measured 177 B per message (rounded up).
+ROS1_INDEX_BYTES_PER_MESSAGE = 180
 
 
 def available_memory_bytes():

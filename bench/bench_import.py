@@ -48,7 +48,7 @@ import numpy as np
 
 
 def make_logs(directory, n, seed=0):
-    """Write ``n`` samples at 6.66 kHz (random values, 16 per frame) in 64 MB logs; return paths."""
+    """Write ``n`` samples at 6.66 kHz (random, 16 per frame) in 64 MB logs; return paths."""
     os.makedirs(directory, exist_ok=True)
     rng = np.random.default_rng(seed)
     with SdLogWriter(directory, sequence_id=1, odr_hz=6667.0, gyro_fs_dps=500, accel_fs_g=8,

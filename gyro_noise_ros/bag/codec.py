@@ -415,8 +415,8 @@ def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
     list of bytes
         One serialised message per stamp.
     """
-    return _encode_cdr(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
-                                   linear_acceleration_covariance))
+    return _encode_cdr(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id,
+                                   angular_velocity_covariance, linear_acceleration_covariance))
 
 
 def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
@@ -429,7 +429,9 @@ def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
 
     Parameters
     ----------
-    stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance, linear_acceleration_covariance
+    stamp_ns, gyro_rad_s, accel_m_s2, frame_id : array_like, str
+        As in :func:`encode_imu_cdr`.
+    angular_velocity_covariance, linear_acceleration_covariance : array_like, optional
         As in :func:`encode_imu_cdr`.
 
     Returns
@@ -437,8 +439,8 @@ def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
     numpy.ndarray of uint8, shape (n, message size)
         C-contiguous; every message of one frame_id has the same size.
     """
-    return _encode_rows(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
-                                    linear_acceleration_covariance))
+    return _encode_rows(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id,
+                                    angular_velocity_covariance, linear_acceleration_covariance))
 
 
 def _imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
@@ -481,7 +483,7 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
 
 def encode_temperature_rows(stamp_ns, temperature_c, *, frame_id='imu_link', variance=0.0):
     """
-    Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR, one row of a byte matrix each.
+    Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR, one byte-matrix row each.
 
     Parameters
     ----------

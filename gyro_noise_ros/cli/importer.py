@@ -125,7 +125,8 @@ def _anchor(start_time, reader):
     return f'unix:{value!r}', value
 
 
-def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw', temperature_topic='imu/temperature',
+def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
+                temperature_topic='imu/temperature',
                 frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
                 temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
                 linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20,

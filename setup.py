@@ -24,6 +24,8 @@ setup(
         'pyserial>=3.5',
         'matplotlib>=3.7',
         'PyYAML>=6',
+        # PX4 ULog input of gyro_noise_analyze / gyro_noise_explain (bag/tabular.py).
+        'pyulog>=1.0',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install

@@ -28,6 +28,7 @@ import numpy as np
 
 from .. import __version__, report
 from ..bag import ImuBagReader, find_imu_topic
+from ..bag.tabular import is_table, TableImuReader
 from ..core.engine import AXES, GAP_POLICIES, EngineConfig, NoiseEngine, analyze_chunk
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
@@ -181,7 +182,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     thresholds = thresholds if thresholds is not None else HealthThresholds()
     ref = reference_per_axis(str(reference), config.axes, bag=reference_bag) if reference is not None else {}
     # Fail fast on any unreadable bag or unresolvable topic before hours of work on the others.
-    topics = [find_imu_topic(p, topic) for p in paths]
+    topics = [_open(p, topic, temperature_topic, config.rate_hz).topic if is_table(p)
+              else find_imu_topic(p, topic) for p in paths]
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -209,6 +211,13 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
         raise InputDataError(f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
                              'lower --chunk-size (>= memory + 2)')
+    for b in bag_docs:
+        if not any(a['chunks'] for a in b['axes'].values()):
+            # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
+            why = '; '.join(f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf, {a['chunks_dropped']} dropped "
+                            f"for loss, {a['chunks_failed']} not identifiable (constant?)"
+                            for axis, a in b['axes'].items())
+            raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
 
     doc = {
         'tool': PROG, 'version': __version__,
@@ -242,10 +251,34 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     return doc
 
 
+def _open(path, topic, temperature_topic, rate_hz):
+    if is_table(path):
+        return TableImuReader(path, topic=topic, temperature_topic=temperature_topic, rate_hz=rate_hz)
+    return ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
+
+
+def _stamps_unusable(stamps):
+    steps = np.diff(stamps)
+    return steps.size > 0 and np.count_nonzero(steps <= 0) > 0.1 * steps.size
+
+
+def warn(text):
+    """
+    Print one warning line on stderr.
+
+    Parameters
+    ----------
+    text : str
+    """
+    print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
+
+
 def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, csv_writer,
                  per_chunk, curve_store, allan_store, curves, batch_size, progress, timing):
     engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
-    with ImuBagReader(path, topic=imu_topic, temperature_topic=temperature_topic) as reader:
+    warnings = []
+    time_source = 'header'
+    with _open(path, imu_topic, temperature_topic, config.rate_hz) as reader:
         temps = reader.read_temperature()
         if temps is not None and temps[0].size:
             order = np.argsort(temps[0], kind='stable')
@@ -297,12 +330,23 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
             if batch is None:
                 break
             frame_id = frame_id or batch.frame_id
+            stamps = batch.stamp_ns
+            if done == 0 and _stamps_unusable(stamps):
+                if _stamps_unusable(batch.log_ns) or time_source == 'log':
+                    raise InputDataError(f'{label}: neither the header stamps nor the log times increase: '
+                                         'no time base')
+                time_source = 'log'
+                warnings.append('header stamps are not increasing (shuffled?): the recorder\'s log time is '
+                                'used as the time base')
+                warn(f'{label}: {warnings[-1]}')
+            if time_source == 'log':
+                stamps = batch.log_ns
             temp = None
             if t_stamp is not None:
                 # Temperature is published slower than the IMU: linear interpolation at the IMU stamps,
                 # held constant before the first and after the last temperature message.
-                temp = np.interp(batch.stamp_ns.astype(np.float64), t_stamp, t_value)
-            submit(engine.ingest(batch.stamp_ns, batch.gyro, temp))
+                temp = np.interp(stamps.astype(np.float64), t_stamp, t_value)
+            submit(engine.ingest(stamps, batch.gyro, temp))
             accel.update(batch.accel, engine.counts().rate_hz)
             done += len(batch)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
@@ -316,11 +360,15 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         storage, undecodable = reader.storage, reader.undecodable_count
         temperature_topic_used = reader.temperature_topic
 
-    accel.update(None, engine.counts().rate_hz)
-    accel_terms = accel.terms()
+    counts = engine.counts()
+    accel.update(None, counts.rate_hz)
+    accel_terms = accel.terms(counts.rate_hz)
     summaries = engine.summary(allan=config.allan)
     verdicts = engine.health(summaries=summaries) if ref else {}
-    counts = engine.counts()
+    tb = counts.timebase
+    for text in (tb.warnings if tb is not None else ()):
+        warnings.append(text)
+        warn(f'{label}: {text}')
     for axis, s in summaries.items():
         per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
         if s.allan is not None:
@@ -328,7 +376,11 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
     return {
         'label': label, 'path': str(path), 'topic': imu_topic, 'storage': storage, 'frame_id': frame_id,
         'temperature_topic': temperature_topic_used, 'messages': done, 'undecodable_messages': undecodable,
-        'rate_hz': report._json_num(counts.rate_hz), 'duration_s': counts.duration_s,
+        'rate_hz': report._json_num(counts.rate_hz), 'rate_method': counts.rate_method,
+        'time_source': time_source, 'stamps_bursty': counts.bursty,
+        'stamp_jitter_s': report._json_num(counts.jitter_s),
+        'timebase': tb.as_dict() if tb is not None else None, 'warnings': warnings,
+        'duration_s': counts.duration_s,
         'samples': counts.samples, 'samples_lost': counts.samples_lost, 'gaps': counts.gaps,
         'out_of_order_stamps': counts.out_of_order, 'chunks_cut': counts.chunks,
         'tail_samples': counts.tail_samples, 'discarded_samples': counts.discarded_samples,
@@ -371,15 +423,16 @@ class _AccelAllan:
                 acc.update(col[np.isfinite(col)])
         self.pending = []
 
-    def terms(self):
+    def terms(self, rate_hz):
         if self.acc is None:
             return {}
         from ..core.allan import fit_noise_terms
+        from ..core.timebase import rescale_allan
 
         out = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                t = fit_noise_terms(acc.result())
+                t = fit_noise_terms(rescale_allan(acc.result(), rate_hz))
             except (InputDataError, ParameterError, ValueError):
                 out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to fit
                 continue
@@ -470,7 +523,9 @@ def _body(argv):
 def _print_summary(doc):
     for b in doc['bags']:
         print(f"{b['label']}: {b['samples']} samples on {b['topic']} ({b['storage']}), "
-              f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.1f} Hz, {b['samples_lost']} lost in "
+              f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.6g} Hz ({b['rate_method']}"
+              f"{', bursty stamps' if b['stamps_bursty'] else ''}, stamp jitter "
+              f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
               f"{b['gaps']} gap(s), {b['out_of_order_stamps']} out-of-order stamp(s), "
               f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():

@@ -496,12 +496,48 @@ def _write_figures(out, config, per_chunk, curve_store):
     return files
 
 
+def parse_order_grid(text):
+    """
+    Parse ``--order-grid START:STOP:STEP`` and refuse degenerate or out-of-domain grids.
+
+    Parameters
+    ----------
+    text : str
+        ``START:STOP:STEP``; both ends are included, so STOP - START must be a whole number of
+        steps, with at least one step.
+
+    Returns
+    -------
+    numpy.ndarray
+        The grid.
+
+    Raises
+    ------
+    ParameterError
+        Negative orders or orders above 2 (the model's domain, paper 000: 0 <= alpha <= 2),
+        fewer than 2 points (STOP <= START or STEP > STOP - START), STOP not on the grid.
+    """
+    alphas = parse_grid(text)
+    start, stop, step = (float(v) for v in str(text).split(':'))
+    if start < 0.0 or stop > 2.0:
+        raise ParameterError(f'--order-grid {text}: orders must lie in 0..2 (the fractional-noise '
+                             f'model of the paper), got {start:g}..{stop:g}')
+    if stop <= start or step > stop - start:
+        raise ParameterError(f'--order-grid {text}: needs at least two points (STOP > START and '
+                             'STEP <= STOP - START)')
+    steps = (stop - start) / step
+    if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
+        raise ParameterError(f'--order-grid {text}: STOP - START is not a whole number of steps, '
+                             'so STOP would not be on the grid (both ends are included)')
+    return alphas
+
+
 def _body(argv):
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
         return err.code if isinstance(err.code, int) else 2
-    alphas = parse_grid(args.order_grid)
+    alphas = parse_order_grid(args.order_grid)
     axes = AXES if args.axis == 'all' else (args.axis,)
     if args.batch_size < 1:
         raise ParameterError(f'--batch-size must be >= 1, got {args.batch_size}')

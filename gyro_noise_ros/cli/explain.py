@@ -23,8 +23,8 @@ PROG = 'gyro_noise_explain'
 def build_parser():
     """Return the argument parser."""
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0].strip())
-    p.add_argument('input', metavar='INPUT', help='rosbag2 / ROS 1 bag, or CSV (time_s, gyro_*_rad_s, '
-                   'optional temperature_c)')
+    p.add_argument('input', metavar='INPUT', help='rosbag2 / ROS 1 bag, PX4 ULog (.ulg), or CSV (time_s, '
+                   'gyro_*_rad_s, optional temperature_c)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the only one)')
     p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (naming it makes temperature '
                    'required)')
@@ -41,12 +41,32 @@ def build_parser():
     return p
 
 
+def _check_options(args):
+    """Refuse bad options before the (possibly long) load of the input."""
+    from pathlib import Path
+
+    from ..errors import ParameterError
+
+    if args.ensemble < 4:
+        raise ParameterError(f'--ensemble must be >= 4 members, got {args.ensemble}')
+    if args.max_steps < 0:
+        raise ParameterError(f'--max-steps must be >= 0, got {args.max_steps}')
+    if args.seed < 0:
+        raise ParameterError(f'--seed must be >= 0, got {args.seed}')
+    if args.rate_hz is not None and not (args.rate_hz > 0 and args.rate_hz < float('inf')):
+        raise ParameterError(f'--rate-hz must be a positive number, got {args.rate_hz}')
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f'--out {str(out)!r} exists and is not a directory')
+
+
 def _body(argv):
     from ..explain.inputs import load_input
     from ..explain.report import verdict, write_outputs
     from ..explain.workflow import explain
 
     args = build_parser().parse_args(argv)
+    _check_options(args)
     meas = load_input(args.input, topic=args.topic, temperature_topic=args.temperature_topic, axis=args.axis,
                       rate_hz=args.rate_hz, require_temperature=args.require_temperature)
     progress = None if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))

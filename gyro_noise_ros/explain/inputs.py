@@ -15,8 +15,12 @@ Two sources are read, both into a :class:`Measurement` (SI units):
   ``temperature_c`` (or ``temp_c``)              sensor temperature in degC (optional)
   ============================================  ===========================================================
 
-Stamps: the nominal rate is ``rate_hz`` if given, else ``(n - 1) / (t_last - t_first)`` (the mean rate,
-which stays right for bursty host-side stamps where the median interval does not).
+* a PX4 ULog ``.ulg`` (``sensor_combined`` or ``sensor_gyro``), through
+  :class:`gyro_noise_ros.bag.tabular.TableImuReader`.
+
+Stamps: the nominal rate is ``rate_hz`` if given, else the :mod:`gyro_noise_ros.core.timebase` estimate
+(the same estimator as ``gyro_noise_analyze``: step mean for device clocks, block median for bursty
+host stamps); the estimate, its method and its warnings are kept in ``Measurement.timebase``.
 """
 
 import csv
@@ -53,6 +57,8 @@ class Measurement:
         'x', 'y' or 'z'.
     source : str
         Where the data came from (for the report).
+    timebase : core.timebase.RateEstimate or None
+        How the rate was obtained from the stamps (None without stamps).
     """
 
     rate: np.ndarray
@@ -61,6 +67,7 @@ class Measurement:
     temperature_c: np.ndarray = None
     axis: str = 'z'
     source: str = ''
+    timebase: object = None
 
     @property
     def n(self):
@@ -130,8 +137,12 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
         t = t - t[0]
         if t[-1] <= 0:
             raise InputDataError('all sample times are equal: give --rate-hz')
-    if rate_hz is None:
-        rate_hz = (n - 1) / t[-1]
+    timebase = None
+    if t_s is not None:
+        from ..core.timebase import estimate_rate
+
+        timebase = estimate_rate(t, unit='s', rate_hz=rate_hz)
+        rate_hz = timebase.rate_hz
     rate_hz = float(rate_hz)
     if not np.isfinite(rate_hz) or rate_hz <= 0:
         raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz}')
@@ -146,7 +157,8 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
                                  f'{int(np.argmax(bad))}')
     if require_temperature and temp is None:
         raise InputDataError(f'temperature was asked for but {source or "the input"} has none')
-    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis, source=source)
+    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis, source=source,
+                       timebase=timebase)
 
 
 def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
@@ -228,11 +240,16 @@ def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None
     Measurement
     """
     from ..bag import ImuBagReader
+    from ..bag.tabular import TableImuReader
 
     index = _check_axis(axis)
     require_temperature = require_temperature or temperature_topic is not None
     stamps, rates = [], []
-    with ImuBagReader(path, topic=topic, temperature_topic=temperature_topic) as reader:
+    if Path(path).suffix.lower() == '.ulg':
+        reader = TableImuReader(path, topic=topic, temperature_topic=temperature_topic)
+    else:
+        reader = ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
+    with reader:
         for batch in reader.iter_batches():
             stamps.append(batch.stamp_ns)
             rates.append(batch.gyro[:, index])
@@ -272,5 +289,6 @@ def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=No
         raise BagError(f'input {str(path)!r} does not exist')
     if path.suffix.lower() == '.csv':
         return load_csv(path, axis=axis, rate_hz=rate_hz, require_temperature=require_temperature)
+    # .ulg is read by bag.tabular.TableImuReader inside load_bag.
     return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis, rate_hz=rate_hz,
                     require_temperature=require_temperature)

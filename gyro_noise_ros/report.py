@@ -118,6 +118,8 @@ def axis_summary_dict(summary, *, verdict=None):
         'ties_var': seq.ties_var, 'ties_corr': seq.ties_corr,
         'temperature_mean_c': _json_num(summary.temperature_mean_c),
         'allan': allan_terms_dict(summary.noise_terms),
+        'allan_datasheet': (summary.datasheet.as_dict()
+                            if getattr(summary, 'datasheet', None) is not None else None),
     }
     if verdict is not None:
         out['health'] = {'level': verdict.level, 'message': verdict.message,
@@ -280,7 +282,8 @@ def write_allan_csv(path, entries):
 
 
 def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, gyroscope_random_walk,
-                   accelerometer_noise_density=None, accelerometer_random_walk=None, source=''):
+                   accelerometer_noise_density=None, accelerometer_random_walk=None, source='',
+                   gyroscope_random_walk_note='', accelerometer_random_walk_note=''):
     """
     Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units).
 
@@ -299,6 +302,8 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, g
         (m/s^2/sqrt(Hz)) and (m/s^3/sqrt(Hz)).
     source : str
         Comment line saying which bag and axes the numbers come from.
+    gyroscope_random_walk_note, accelerometer_random_walk_note : str
+        Comment after the value (e.g. that it is a bound, not a fit).
     """
     def val(v):
         return 'null' if v is None or not math.isfinite(float(v)) else repr(float(v))
@@ -308,10 +313,12 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, g
         lines.append(f'# {source}')
     lines += [f'rostopic: {rostopic}', f'update_rate: {val(update_rate_hz)}  # Hz',
               f'gyroscope_noise_density: {val(gyroscope_noise_density)}  # rad/s/sqrt(Hz)',
-              f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)']
+              f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)'
+              + (f'; {gyroscope_random_walk_note}' if gyroscope_random_walk_note else '')]
     if accelerometer_noise_density is not None or accelerometer_random_walk is not None:
         lines += [f'accelerometer_noise_density: {val(accelerometer_noise_density)}  # m/s^2/sqrt(Hz)',
-                  f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)']
+                  f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)'
+                  + (f'; {accelerometer_random_walk_note}' if accelerometer_random_walk_note else '')]
     Path(path).write_text('\n'.join(lines) + '\n')
 
 

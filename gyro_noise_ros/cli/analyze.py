@@ -426,13 +426,14 @@ class _AccelAllan:
     def terms(self, rate_hz):
         if self.acc is None:
             return {}
-        from ..core.allan import fit_noise_terms
+        from ..core.allan_readout import fit_noise_terms_band_limited, random_walk_bound
         from ..core.timebase import rescale_allan
 
         out = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                t = fit_noise_terms(rescale_allan(acc.result(), rate_hz))
+                result = rescale_allan(acc.result(), rate_hz)
+                t = fit_noise_terms_band_limited(result)
             except (InputDataError, ParameterError, ValueError):
                 out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to fit
                 continue
@@ -443,7 +444,8 @@ class _AccelAllan:
                 'acceleration_random_walk_m_s3_per_sqrt_hz': t.rate_random_walk_rad_per_s_sqrt_s,
                 'ramp_m_s3': t.rate_ramp_rad_per_s2,
                 'tau_min_s': t.tau_min_s, 'tau_max_s': t.tau_max_s,
-                'rms_relative_residual': t.rms_relative_residual}
+                'rms_relative_residual': t.rms_relative_residual,
+                'acceleration_random_walk_bound_m_s3_per_sqrt_hz': random_walk_bound(result)}
         return out
 
 
@@ -464,10 +466,29 @@ def _write_allan_outputs(out, doc, allan_store, figures):
                        if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None), default=None)
     acc_walk = max((t['acceleration_random_walk_m_s3_per_sqrt_hz'] for t in acc_terms
                     if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None), default=None)
+    from ..core.allan_readout import random_walk_bound
+
+    walk_note = acc_walk_note = ''
+    if not (walk and math.isfinite(walk)):
+        bounds = [random_walk_bound(allan_store[(first['label'], a)][0]) for a in first['axes']
+                  if (first['label'], a) in allan_store]
+        bounds = [b for b in bounds if math.isfinite(b)]
+        if bounds:
+            walk = max(bounds)
+            walk_note = ('upper bound: the record does not resolve a rate random walk; K <= upper '
+                         'ADEV bound at the longest tau * sqrt(3 / tau) (docs/offline_tool.md)')
+    if acc_terms and not (acc_walk and math.isfinite(acc_walk)):
+        bounds = [t['acceleration_random_walk_bound_m_s3_per_sqrt_hz'] for t in acc_terms
+                  if t.get('acceleration_random_walk_bound_m_s3_per_sqrt_hz') is not None]
+        bounds = [b for b in bounds if math.isfinite(b)]
+        if bounds:
+            acc_walk = max(bounds)
+            acc_walk_note = 'upper bound, not resolved by the record (as for the gyroscope)'
     report.write_imu_yaml(
         out / 'imu.yaml', rostopic=first['topic'], update_rate_hz=first['rate_hz'] or float('nan'),
         gyroscope_noise_density=density, gyroscope_random_walk=walk,
         accelerometer_noise_density=acc_density, accelerometer_random_walk=acc_walk,
+        gyroscope_random_walk_note=walk_note, accelerometer_random_walk_note=acc_walk_note,
         source=f"from bag {first['label']} ({first['path']}), largest over axes {', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
     if figures and fig_series:

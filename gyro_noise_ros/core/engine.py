@@ -54,6 +54,7 @@ import numpy as np
 from ..errors import InputDataError, ParameterError
 from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
 from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
+from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
 from .timebase import rescale_allan, TimebaseTracker
 
 #: Axis names in column order of the gyro array.
@@ -429,7 +430,10 @@ class AxisSummary:
     allan : object or None
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
     noise_terms : object or None
-        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable).
+        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
+        band-limited short taus left out (:mod:`.allan_readout`).
+    datasheet : allan_readout.DatasheetTerms or None
+        Bias stability (first ADEV minimum), ARW at 1 s, fit quality.
     """
 
     axis: str
@@ -444,6 +448,7 @@ class AxisSummary:
     temperature_mean_c: float
     allan: object = None
     noise_terms: object = None
+    datasheet: object = None
 
     @property
     def offset_drift_deg_s_per_h(self):
@@ -760,12 +765,10 @@ class NoiseEngine:
         if self._allan is None:
             return None, None
         try:
-            from . import allan as _allan_mod
             result = self._allan[axis].result()
             if self.config.rate_hz is None:
                 result = rescale_allan(result, self.counts().rate_hz)
-            fit = getattr(_allan_mod, 'fit_noise_terms', None)
-            terms = fit(result) if fit is not None else None
+            terms = fit_noise_terms_band_limited(result)
         except (InputDataError, ParameterError, ValueError):
             return None, None
         return result, terms
@@ -892,13 +895,19 @@ class NoiseEngine:
                                      ties_corr=int(rows[:, 6].sum()))
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
+            sheet = None
+            if terms is not None:
+                try:
+                    sheet = datasheet_terms(result, terms)
+                except (InputDataError, ParameterError):
+                    sheet = None
             out[axis] = AxisSummary(
                 axis=axis, sequence=seq, stream=counts, nan_samples=state.nan_samples,
                 chunks_ok=state.by_status['ok'], chunks_nan=state.by_status['nan'],
                 chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
                 chunks_skipped=state.by_status['skipped'],
                 temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
-                allan=result, noise_terms=terms)
+                allan=result, noise_terms=terms, datasheet=sheet)
         return out
 
     def health(self, *, seconds_since_data=None, summaries=None):

@@ -87,7 +87,7 @@ def test_both_tools_read_px4_ulog(tmp_path):
     # SOURCE.md: 17,070 sensor_combined samples; the rate is the firmware's mean integration rate.
     assert meas.n == 17070 and meas.rate_hz == pytest.approx(248.56, rel=1e-3)
     rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
-                       '--no-allan', '--chunk-size', '5000'])
+                       '--no-allan', '--chunk-size', '5000', '--static', 'off'])
     assert rc == 0
     bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
     assert bag['storage'] == 'ulog' and bag['samples'] == 17070
@@ -136,3 +136,56 @@ def test_import_recovers_the_scales_from_the_ack_after_a_corrupt_header(tmp_path
 
     # The same scale (500 deg/s) as with the intact header: identical angular rates.
     np.testing.assert_array_equal(gyro_of(bag), gyro_of(clean_bag))
+
+
+def test_px4_motion_is_skipped_and_said(tmp_path, capsys):
+    path = real_data(*ULOG)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--chunk-size', '5000'])
+    assert rc == 0
+    err = capsys.readouterr().err
+    assert 'in motion' in err and 'left out' in err
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    # SOURCE.md (independent, 1 s rolling std of |w| < 0.005 rad/s): static from row 1700,
+    # t = 6.87 s, to the end; a 1 s window grid puts the start within a second of it.
+    a, b = bag['left_out']['static_segment_s']
+    assert 6.0 <= a <= 7.9 and b >= 68.3
+    assert abs(bag['left_out']['motion'] - 1700) < 250  # ~1 s of 248 Hz samples
+    assert bag['samples'] + bag['left_out']['motion'] == 17070
+    # Off: everything is analysed, handling included (variance ~1e5x the static one).
+    rc = analyze.main([str(path), '--out', str(tmp_path / 'all'), '--jobs', '1', '--no-figures',
+                       '--quiet', '--no-allan', '--chunk-size', '5000', '--static', 'off'])
+    assert rc == 0
+    whole = json.loads((tmp_path / 'all' / 'summary.json').read_text())['bags'][0]
+    assert whole['samples'] == 17070
+    moving, still = (d['axes']['x']['mean_variance_deg2_s2'] for d in (whole, bag))
+    assert moving > 100 * still
+
+
+def test_xio_static_segments_match_the_source_notes(tmp_path):
+    path = real_data('xio_fusion_sensor_data', 'sensor_data.csv')
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--chunk-size', '1000', '--memory', '100'])
+    assert rc == 0
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    # SOURCE.md: static at t = 0.5-12.5 s and 117.2-134.8 s, the hand motion in between.
+    a, b = bag['left_out']['static_segment_s']
+    assert 116.0 <= a <= 119.0 and b >= 134.0
+    segs = bag['left_out']['static_segments_s']
+    assert any(s[0] <= 1.0 and 11.0 <= s[1] <= 14.0 for s in segs)
+
+
+def test_start_end_window_on_mpu6050(tmp_path, capsys):
+    path = real_data(*MPU)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--start', '100', '--end', '400', '--chunk-size', '5000'])
+    assert rc == 0
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    left = bag['left_out']
+    # 300 s at the true mean rate 99.32 Hz; 1 % for the bursty stamps at the window edges.
+    assert bag['samples'] == pytest.approx(300 * 99.32, rel=0.01)
+    assert bag['samples'] + left['before_start'] + left['after_end'] + left['motion'] == 65067
+    assert left['motion'] == 0  # a static recording
+    assert 'before --start' in capsys.readouterr().err
+    bad = ['--start', '5', '--end', '2']
+    assert analyze.main([str(path), '--out', str(tmp_path / 'x'), *bad]) == 2

@@ -73,6 +73,13 @@ def build_parser():
     p.add_argument('--gap-policy', default='flag', choices=GAP_POLICIES,
                    help='flag: keep chunks with gaps and count; split: restart the chunk after a gap; '
                         'drop: leave chunks with gaps out of the statistics (default: flag)')
+    p.add_argument('--start', type=float, default=None, metavar='S',
+                   help='analyse from S seconds after the first sample of each bag')
+    p.add_argument('--end', type=float, default=None, metavar='S',
+                   help='analyse up to S seconds after the first sample of each bag')
+    p.add_argument('--static', default='auto', choices=('auto', 'off'),
+                   help='auto: find the longest static segment and skip motion, saying so (default); '
+                        'off: analyse everything')
     p.add_argument('--jobs', type=int, default=None, metavar='N',
                    help='worker processes for the identification (default: all cores; 1 = in-process)')
     p.add_argument('--reference', metavar='SUMMARY',
@@ -132,7 +139,8 @@ def _labels(paths, labels):
 
 def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None, jobs=1,
                  reference=None, reference_bag=None, thresholds=None, figures=True, curves=DEFAULT_CURVES,
-                 batch_size=DEFAULT_BATCH, progress=False, command=None):
+                 batch_size=DEFAULT_BATCH, progress=False, command=None, start_s=None, end_s=None,
+                 static='auto'):
     """
     Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
 
@@ -165,6 +173,10 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         Show progress on a terminal.
     command : list of str, optional
         Command line recorded in summary.json.
+    start_s, end_s : float, optional
+        Analyse only samples from ``start_s`` to ``end_s`` seconds after each bag's first sample.
+    static : {'auto', 'off'}
+        'auto': find the longest static segment (core/segments.py) and skip motion, saying so.
 
     Returns
     -------
@@ -173,6 +185,14 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         ``'_files'`` (written paths).
     """
     config = config if config is not None else EngineConfig()
+    if static not in ('auto', 'off'):
+        raise ParameterError(f"--static must be 'auto' or 'off', got {static!r}")
+    for name, value in (('--start', start_s), ('--end', end_s)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise ParameterError(f'{name} must be a number of seconds >= 0, got {value}')
+    if start_s is not None and end_s is not None and end_s <= start_s:
+        raise ParameterError(f'--end ({end_s:g} s) must be after --start ({start_s:g} s)')
+    select = (start_s, end_s, static)
     jobs = int(jobs)
     if jobs < 1:
         raise ParameterError(f'--jobs must be >= 1, got {jobs}')
@@ -197,7 +217,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
     try:
         for path, label, imu_topic in zip(paths, names, topics):
-            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
+            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, select,
                                csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
                                _Progress(progress), timing)
             bag_docs.append(doc)
@@ -257,6 +277,47 @@ def _open(path, topic, temperature_topic, rate_hz):
     return ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
 
 
+def _select(stamps, first_ns, start_s, end_s, segment, left):
+    """Return the mask of samples inside --start/--end and the static segment; count the rest."""
+    rel = stamps - first_ns
+    keep = np.ones(stamps.shape[0], dtype=bool)
+    if start_s is not None:
+        before = rel < int(round(start_s * 1e9))
+        left['before_start'] += int(before.sum())
+        keep &= ~before
+    if end_s is not None:
+        after = rel > int(round(end_s * 1e9))
+        left['after_end'] += int((after & keep).sum())
+        keep &= ~after
+    if segment is not None and not segment.static_throughout:
+        moving = (stamps < segment.start_ns) | (stamps >= segment.end_ns)
+        left['motion'] += int((moving & keep).sum())
+        keep &= ~moving
+    return keep
+
+
+def _static_prepass(path, topic, temperature_topic, rate_hz, batch_size, start_s, end_s):
+    """Read stamps and rates once to find the longest static segment (core/segments.py)."""
+    from ..core.segments import WindowStats
+
+    stats = WindowStats()
+    first = None
+    log_time = False
+    with _open(path, topic, temperature_topic, rate_hz) as reader:
+        for batch in reader.iter_batches(batch_size):
+            stamps = batch.stamp_ns
+            if first is None and _stamps_unusable(stamps) and not _stamps_unusable(batch.log_ns):
+                log_time = True
+            if log_time:
+                stamps = batch.log_ns
+            if first is None:
+                first = int(stamps[0])
+            keep = _select(stamps, first, start_s, end_s, None,
+                           {'before_start': 0, 'after_end': 0, 'motion': 0})
+            stats.update(stamps[keep], batch.gyro[keep])
+    return stats.segment()
+
+
 def _stamps_unusable(stamps):
     steps = np.diff(stamps)
     return steps.size > 0 and np.count_nonzero(steps <= 0) > 0.1 * steps.size
@@ -273,11 +334,19 @@ def warn(text):
     print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
 
 
-def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, csv_writer,
+def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, select,
+                 csv_writer,
                  per_chunk, curve_store, allan_store, curves, batch_size, progress, timing):
     engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
     warnings = []
     time_source = 'header'
+    start_s, end_s, static = select
+    segment = None
+    if static == 'auto':
+        segment = _static_prepass(path, imu_topic, temperature_topic, config.rate_hz, batch_size,
+                                  start_s, end_s)
+    left = {'before_start': 0, 'after_end': 0, 'motion': 0}
+    first_ns = None
     with _open(path, imu_topic, temperature_topic, config.rate_hz) as reader:
         temps = reader.read_temperature()
         if temps is not None and temps[0].size:
@@ -341,14 +410,22 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
                 warn(f'{label}: {warnings[-1]}')
             if time_source == 'log':
                 stamps = batch.log_ns
+            if first_ns is None:
+                first_ns = int(stamps[0])
+            keep = _select(stamps, first_ns, start_s, end_s, segment, left)
+            done += len(batch)
+            if not keep.any():
+                continue
+            gyro_b, accel_b = batch.gyro, batch.accel
+            if not keep.all():
+                stamps, gyro_b, accel_b = stamps[keep], gyro_b[keep], accel_b[keep]
             temp = None
             if t_stamp is not None:
                 # Temperature is published slower than the IMU: linear interpolation at the IMU stamps,
                 # held constant before the first and after the last temperature message.
                 temp = np.interp(stamps.astype(np.float64), t_stamp, t_value)
-            submit(engine.ingest(stamps, batch.gyro, temp))
-            accel.update(batch.accel, engine.counts().rate_hz)
-            done += len(batch)
+            submit(engine.ingest(stamps, gyro_b, temp))
+            accel.update(accel_b, engine.counts().rate_hz)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
         submit(engine.flush())
         while inflight:
@@ -369,6 +446,32 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
     for text in (tb.warnings if tb is not None else ()):
         warnings.append(text)
         warn(f'{label}: {text}')
+    left_out = dict(left)
+    if segment is not None and not segment.static_throughout and first_ns is not None:
+        left_out['static_segment_s'] = [(segment.start_ns - first_ns) / 1e9,
+                                        (segment.end_ns - first_ns) / 1e9]
+        left_out['static_segments_s'] = [[(a - first_ns) / 1e9, (b - first_ns) / 1e9]
+                                         for a, b in segment.segments]
+    if counts.chunks and counts.tail_samples > 0.1 * counts.samples:
+        size = config.chunk_size
+        better = counts.samples // (counts.chunks + 1) if counts.chunks else counts.samples
+        hint = (f'; --chunk-size {better} would cut {counts.chunks + 1} chunks'
+                if better >= config.memory + 2 else '')
+        text = (f'{counts.tail_samples} of {counts.samples} samples '
+                f'({100.0 * counts.tail_samples / counts.samples:.0f} %) after the last complete chunk of '
+                f'{size} are not in the chunk tables (they are in the Allan deviation){hint}')
+        warnings.append(text)
+        warn(f'{label}: {text}')
+    if any(left.values()):
+        parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
+        parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
+        if left['motion']:
+            a, b = left_out['static_segment_s']
+            parts.append(f'{left["motion"]} in motion (analysing the longest static segment, '
+                         f't = {a:.1f}-{b:.1f} s after the first sample)')
+        text = f'{sum(left.values())} of {done} samples left out: ' + ', '.join(parts)
+        warnings.append(text)
+        warn(f'{label}: {text}')
     for axis, s in summaries.items():
         per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
         if s.allan is not None:
@@ -380,6 +483,7 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         'time_source': time_source, 'stamps_bursty': counts.bursty,
         'stamp_jitter_s': report._json_num(counts.jitter_s),
         'timebase': tb.as_dict() if tb is not None else None, 'warnings': warnings,
+        'left_out': left_out, 'window_s': [start_s, end_s], 'static_detection': static,
         'duration_s': counts.duration_s,
         'samples': counts.samples, 'samples_lost': counts.samples_lost, 'gaps': counts.gaps,
         'out_of_order_stamps': counts.out_of_order, 'chunks_cut': counts.chunks,
@@ -571,7 +675,8 @@ def _body(argv):
                        temperature_topic=args.temperature_topic, config=config, jobs=jobs,
                        reference=args.reference, reference_bag=args.reference_bag,
                        figures=not args.no_figures, curves=args.curves,
-                       batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv])
+                       batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv],
+                       start_s=args.start, end_s=args.end, static=args.static)
     if not args.quiet:
         _print_summary(doc)
     return 0

@@ -189,3 +189,25 @@ def test_start_end_window_on_mpu6050(tmp_path, capsys):
     assert 'before --start' in capsys.readouterr().err
     bad = ['--start', '5', '--end', '2']
     assert analyze.main([str(path), '--out', str(tmp_path / 'x'), *bad]) == 2
+
+
+@pytest.mark.slow
+def test_explain_runs_all_axes_in_one_report_on_a_minute_at_250_hz(tmp_path, capsys):
+    # A minute of the real PX4 log at rest (the handling before is skipped automatically):
+    # 15,246 samples, under the old 16,384-sample floor.
+    path = real_data(*ULOG)
+    out = tmp_path / 'ex'
+    rc = explain.main([str(path), '--out', str(out), '--ensemble', '4', '--max-steps', '1',
+                       '--quiet'])
+    assert rc == 0
+    err = capsys.readouterr().err
+    assert 'in motion' in err
+    index = json.loads((out / 'explain.json').read_text())
+    assert set(index['axes']) == {'x', 'y', 'z'}
+    report = (out / 'report.md').read_text()
+    assert all(f'axis {a}:' in report for a in 'xyz')
+    assert '(axis_z/overview.png)' in report and (out / 'axis_z' / 'overview.png').is_file()
+    data = json.loads((out / 'axis_z' / 'explain.json').read_text())
+    # The static segment only: 248.56 Hz (firmware integration rate) over ~61 s.
+    assert data['input']['rate_hz'] == pytest.approx(248.56, rel=1e-3)
+    assert 14_000 < data['input']['samples'] < 15_600

@@ -99,12 +99,13 @@ class WindowStats:
         ----------
         stamp_ns : array_like of int
             Stamps (ns).
-        gyro : array_like, shape (n, 3)
-            Angular rate (rad/s); non-finite samples are ignored.
+        gyro : array_like, shape (n, axes)
+            Angular rate (rad/s), one column per axis; non-finite samples are ignored.
 
         """
         s = np.asarray(stamp_ns, dtype=np.int64)
         g = np.asarray(gyro, dtype=np.float64)
+        g = g.reshape(g.shape[0], -1)
         if s.size == 0:
             return
         if self._t0 is None:
@@ -114,7 +115,7 @@ class WindowStats:
         idx = (s - self._t0) // self._w
         for k in np.unique(idx):
             sel = idx == k
-            row = self._rows.setdefault(int(k), [0, np.zeros(3), np.zeros(3)])
+            row = self._rows.setdefault(int(k), [0, np.zeros(g.shape[1]), np.zeros(g.shape[1])])
             row[0] += int(sel.sum())
             row[1] += g[sel].sum(axis=0)
             row[2] += (g[sel] ** 2).sum(axis=0)

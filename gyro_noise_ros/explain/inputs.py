@@ -31,9 +31,10 @@ import numpy as np
 
 from ..errors import BagError, InputDataError, ParameterError
 
-#: Fewest samples the workflow accepts: 16 chunks of 1024 samples (the signatures need a few chunks and
-#: the order identification needs chunks longer than its memory).
-MIN_SAMPLES = 16384
+#: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks and
+#: the order identification needs chunks longer than its memory; the layout scales with the record, so
+#: a minute at 250 Hz, 15,000 samples, is enough).
+MIN_SAMPLES = 8192
 
 AXES = ('x', 'y', 'z')
 
@@ -292,3 +293,76 @@ def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=No
     # .ulg is read by bag.tabular.TableImuReader inside load_bag.
     return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis, rate_hz=rate_hz,
                     require_temperature=require_temperature)
+
+
+def select(meas, *, start_s=None, end_s=None, static='auto'):
+    """
+    Keep the part of a measurement to analyse: a time window, then its longest static segment.
+
+    Parameters
+    ----------
+    meas : Measurement
+    start_s, end_s : float, optional, keyword-only
+        Window in seconds after the first sample.
+    static : {'auto', 'off'}, keyword-only
+        'auto': keep the longest static segment (:mod:`gyro_noise_ros.core.segments`).
+
+    Returns
+    -------
+    tuple
+        ``(Measurement, left_out)`` with ``left_out`` a dict of sample counts ('before_start',
+        'after_end', 'motion') and, when motion was cut, 'static_segment_s'.
+    """
+    from ..core.segments import WindowStats
+
+    t = meas.t_s
+    keep = np.ones(meas.n, dtype=bool)
+    left = {'before_start': 0, 'after_end': 0, 'motion': 0}
+    if start_s is not None:
+        left['before_start'] = int((t < start_s).sum())
+        keep &= t >= start_s
+    if end_s is not None:
+        left['after_end'] = int((keep & (t > end_s)).sum())
+        keep &= t <= end_s
+    if static == 'auto':
+        stamps = np.rint(t * 1e9).astype(np.int64)
+        stats = WindowStats()
+        stats.update(stamps[keep], meas.rate[keep, None])
+        seg = stats.segment()
+        if seg is not None and not seg.static_throughout:
+            moving = keep & ((stamps < seg.start_ns) | (stamps >= seg.end_ns))
+            left['motion'] = int(moving.sum())
+            keep &= ~moving
+            left['static_segment_s'] = [seg.start_ns / 1e9, seg.end_ns / 1e9]
+    if keep.all():
+        return meas, left
+    temp = None if meas.temperature_c is None else meas.temperature_c[keep]
+    fixed = meas.timebase is not None and meas.timebase.method == 'configured'
+    out = make_measurement(meas.rate[keep], t_s=t[keep], rate_hz=meas.rate_hz if fixed else None,
+                           temperature_c=temp, axis=meas.axis, source=meas.source)
+    return out, left
+
+
+def available_axes(path):
+    """
+    Return the gyro axes an input holds (a CSV may carry only some; bags and ULogs carry all three).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Input file or bag.
+
+    Returns
+    -------
+    tuple of str
+    """
+    path = Path(path)
+    if path.suffix.lower() != '.csv' or not path.is_file():
+        return AXES
+    try:
+        with path.open(newline='') as fh:
+            header = [h.strip().lower() for h in next(csv.reader(fh), [])]
+    except OSError:
+        return AXES
+    found = tuple(a for a in AXES if f'gyro_{a}_rad_s' in header or f'gyro_{a}_dps' in header)
+    return found or AXES

@@ -115,6 +115,10 @@ def axis_summary_dict(summary, *, verdict=None):
         'alpha_var_variance': _json_num(seq.alpha_var_variance),
         'alpha_corr_mean': _json_num(seq.alpha_corr_mean),
         'alpha_corr_variance': _json_num(seq.alpha_corr_variance),
+        'alpha_var_multimodal': bool(getattr(seq, 'alpha_var_modes', ())),
+        'alpha_var_modes': [{'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_var_modes', ())],
+        'alpha_corr_multimodal': bool(getattr(seq, 'alpha_corr_modes', ())),
+        'alpha_corr_modes': [{'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_corr_modes', ())],
         'ties_var': seq.ties_var, 'ties_corr': seq.ties_corr,
         'temperature_mean_c': _json_num(summary.temperature_mean_c),
         'allan': allan_terms_dict(summary.noise_terms),
@@ -181,9 +185,61 @@ def _fmt(value, spec):
     return format(value, spec)
 
 
+def _modes_text(modes):
+    return ', '.join(f"{m['order']:.3f} ({m['chunks']} chunks)" for m in modes)
+
+
+def _plain_summary(b, axis, a):
+    """One plain-language paragraph for one bag and axis (issue 11: people first, tables after)."""
+    rate = b.get('rate_hz')
+    parts = [f"**{b['label']}, axis {axis}:** {b['samples']} samples over "
+             f"{_fmt(b['duration_s'], '.1f')} s at {_fmt(rate, '.4g')} Hz "
+             f"(rate from {b.get('rate_method') or 'the stamps'}"
+             + (', bursty stamps' if b.get('stamps_bursty') else '') + ')']
+    lost = b['samples_lost']
+    parts.append(f'{lost} sample(s) lost' if lost else 'no sample lost')
+    left = sum(v for k, v in (b.get('left_out') or {}).items() if isinstance(v, int))
+    if left:
+        parts.append(f'{left} sample(s) left out (window or motion)')
+    sheet = a.get('allan_datasheet') or {}
+    if sheet.get('arw_deg_per_sqrt_h') is not None:
+        parts.append(f"angle random walk {sheet['arw_deg_per_sqrt_h']:.3g} deg/sqrt(h) "
+                     f"({sheet['arw_ci_low_deg_per_sqrt_h']:.3g}-{sheet['arw_ci_high_deg_per_sqrt_h']:.3g})")
+    if sheet.get('bias_stability_deg_h') is not None:
+        bound = ' (upper bound: the curve never turned up)' if sheet.get('bias_stability_at_longest_tau') \
+            else ''
+        parts.append(f"bias stability {sheet['bias_stability_deg_h']:.3g} deg/h "
+                     f"({sheet['bias_stability_deg_s']:.3g} deg/s) at tau = "
+                     f"{sheet['bias_stability_tau_s']:.3g} s{bound}")
+    if sheet.get('fit_quality') == 'poor':
+        parts.append('the IEEE 952 fit misses the Allan curve (see the Allan table)')
+    drift, se = a.get('offset_drift_deg_s_per_h'), a.get('offset_drift_stderr_deg_s_per_h')
+    if drift is not None:
+        from .core.health import drift_t_threshold
+
+        sig = abs(drift) / se if se else float('nan')
+        word = ('significant' if sig > drift_t_threshold(3.0, a['chunks']) else 'not significant')
+        parts.append(f'offset drift {drift:+.3g} +/- {_fmt(se, ".2g")} (deg/s)/h ({word} at 3 sigma '
+                     f'with {a["chunks"]} chunks: {_fmt(sig, ".2g")} standard errors)')
+    for key, name in (('alpha_var', 'variance method'), ('alpha_corr', 'correlation method')):
+        if a.get(key + '_multimodal'):
+            parts.append(f'order ({name}) in separate modes: {_modes_text(a[key + "_modes"])}')
+        elif a.get(key + '_mean') is not None:
+            parts.append(f"order ({name}) {a[key + '_mean']:.3f}")
+    if 'health' in a:
+        parts.append(f"health {a['health']['level']}: {a['health']['message']}")
+    return '; '.join(parts) + '.'
+
+
+_CUSTOMARY = (('quantization_deg', 'Q (deg)'), ('angle_random_walk_deg_per_sqrt_h', 'N (deg/sqrt(h))'),
+              ('bias_instability_deg_per_h', 'B (deg/h)'),
+              ('rate_random_walk_deg_per_h_sqrt_h', 'K (deg/h/sqrt(h))'),
+              ('rate_ramp_deg_per_h2', 'R (deg/h^2)'))
+
+
 def summary_markdown(doc):
     """
-    Render the paper's Tables 3-6 (per axis, bags in the given order) and the counts as Markdown.
+    Render a plain-language summary, the paper's Tables 3-6 and the counts as Markdown.
 
     Parameters
     ----------
@@ -201,43 +257,75 @@ def summary_markdown(doc):
             if a not in axes:
                 axes.append(a)
     opts = doc['options']
-    lines = [
-        '# gyro_noise_analyze summary', '',
+    lines = ['# gyro_noise_analyze summary', '', '## In short', '']
+    for b in bags:
+        for axis, a in b['axes'].items():
+            lines += [_plain_summary(b, axis, a), '']
+        for text in b.get('warnings') or ():
+            lines += [f"* warning ({b['label']}): {text}"]
+        if b.get('warnings'):
+            lines.append('')
+    lines += [
+        '## Method', '',
         f"Tool {doc['tool']} {doc['version']}; chunk size {opts['chunk_size']} samples; order grid "
         f"{opts['order_grid']['start']:g}:{opts['order_grid']['stop']:g}:{opts['order_grid']['step']:g}; "
         f"memory L = {opts['memory']}; gap policy {opts['gap_policy']}. Tables follow paper 000 "
         '(Sierociuk et al., Sensors 2025): offset drift = least-squares slope of the chunk bias over time '
-        '(Table 3); variances over chunks with ddof = 1.', '']
+        '(Table 3, standard error valid for correlated chunk biases); variances over chunks with '
+        'ddof = 1. Confidence intervals are 68.3 % (1 sigma).', '']
     for axis in axes:
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
         lines += [f'## Axis {axis}', '',
-                  '### Table 3: offset drift', '',
+                  '### Paper 000 Table 3: offset drift', '',
                   '| Sequence | Offset drift ((deg/s)/h) | Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
                   '|---|---:|---:|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['offset_drift_abs_deg_s_per_h'], '.6f')} | "
                          f"{_fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
                          f"{_fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
-        lines += ['', '### Table 4: noise variance', '',
+        lines += ['', '### Paper 000 Table 4: noise variance', '',
                   '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance ((deg/s)^4) |',
                   '|---|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['mean_variance_deg2_s2'], '.6g')} | "
                          f"{_fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
         for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
-            lines += ['', f'### Table {num}: order, {method} method', '',
+            lines += ['', f'### Paper 000 Table {num}: order, {method} method', '',
                       '| Sequence | Estimated order | Variance of estimated order | Ties |', '|---|---:|---:|---:|']
             tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
             for label, a in rows:
-                lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | {_fmt(a[key + '_variance'], '.6f')} | "
-                             f'{a[tie]} |')
+                if a.get(key + '_multimodal'):
+                    # A mean between separate basins is where no chunk is: give the modes instead.
+                    lines.append(f"| {label} | modes: {_modes_text(a[key + '_modes'])} | "
+                                 f"{_fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
+                else:
+                    lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | "
+                                 f"{_fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
         if any(a.get('allan') for _, a in rows):
+            lines += ['', '### Allan deviation: datasheet numbers and IEEE 952 fit (customary units)', '',
+                      '| Sequence | ARW at 1 s (deg/sqrt(h)) | Bias stability (deg/h) | at tau (s) | '
+                      + ' | '.join(name for _, name in _CUSTOMARY) + ' | Fit | Short taus excluded below (s) |',
+                      '|---|' + '---:|' * (3 + len(_CUSTOMARY)) + '---|---:|']
+            for label, a in rows:
+                t = a.get('allan') or {}
+                d = a.get('allan_datasheet') or {}
+                arw = (f"{_fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} ({_fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
+                       f"-{_fmt(d.get('arw_ci_high_deg_per_sqrt_h'), '.3g')})")
+                bs = (f"{_fmt(d.get('bias_stability_deg_h'), '.4g')} ({_fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
+                      f"-{_fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
+                fit = d.get('fit_quality', '')
+                if fit:
+                    fit += f" (max error {100 * (d.get('fit_max_relative_error') or 0):.0f} %)"
+                lines.append(f"| {label} | {arw} | {bs} | {_fmt(d.get('bias_stability_tau_s'), '.4g')} | "
+                             + ' | '.join(_fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
+                             + f" | {fit} | {_fmt(d.get('band_limited_below_s'), '.3g')} |")
             keys = []
             for _, a in rows:
                 for k, v in (a.get('allan') or {}).items():
-                    if k not in keys and not isinstance(v, (dict, str)):
+                    if (k not in keys and not isinstance(v, (dict, str))
+                            and not any(k == c for c, _ in _CUSTOMARY)):
                         keys.append(k)
-            lines += ['', '### Allan deviation noise terms (SI, unit in the name)', '',
+            lines += ['', '### Allan deviation: IEEE 952 fit (SI, unit in the name)', '',
                       '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
             for label, a in rows:
                 terms = a.get('allan') or {}
@@ -251,11 +339,14 @@ def summary_markdown(doc):
                     lines.append(f"| {label} | {h['level']} | {h['message']} |")
         lines.append('')
     lines += ['## Input counts', '',
-              '| Sequence | Topic | Rate (Hz) | Duration (s) | Samples | Lost | Gaps | Out-of-order stamps | '
-              'NaN samples | Tail samples |', '|---|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+              '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | Samples | Lost | '
+              'Gaps | Out-of-order stamps | NaN samples | Tail samples |',
+              '|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|']
     for b in bags:
         nan = sum(a['nan_samples'] for a in b['axes'].values())
-        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.2f')} | "
+        jitter = b.get('stamp_jitter_s')
+        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.6g')} | {b.get('rate_method', '')} | "
+                     f"{_fmt(None if jitter is None else 1e3 * jitter, '.3g')} | "
                      f"{_fmt(b['duration_s'], '.1f')} | {b['samples']} | {b['samples_lost']} | {b['gaps']} | "
                      f"{b['out_of_order_stamps']} | {nan} | {b['tail_samples']} |")
     lines.append('')

@@ -211,3 +211,24 @@ def test_explain_runs_all_axes_in_one_report_on_a_minute_at_250_hz(tmp_path, cap
     # The static segment only: 248.56 Hz (firmware integration rate) over ~61 s.
     assert data['input']['rate_hz'] == pytest.approx(248.56, rel=1e-3)
     assert 14_000 < data['input']['samples'] < 15_600
+
+
+def test_mpu6050_two_mode_orders_and_a_summary_for_people(tmp_path):
+    path = real_data(*MPU)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--axis', 'x'])
+    assert rc == 0
+    a = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]['axes']['x']
+    # Independent: split the chunk orders of chunks.csv at 0.5 (the model's 0/1 alias).
+    import csv
+    with open(tmp_path / 'chunks.csv', newline='') as fh:
+        orders = np.array([float(r['alpha_var']) for r in csv.DictReader(fh) if r['axis'] == 'x'])
+    low, high = orders[orders < 0.5], orders[orders >= 0.5]
+    assert low.size >= 2 and high.size >= 2  # the issue: three chunks at 0.02, three at 1.02
+    assert a['alpha_var_multimodal']
+    modes = [(m['order'], m['chunks']) for m in a['alpha_var_modes']]
+    assert modes == [(pytest.approx(low.mean()), low.size), (pytest.approx(high.mean()), high.size)]
+    md = (tmp_path / 'summary.md').read_text()
+    assert md.index('## In short') < md.index('Paper 000 Table 3')
+    assert 'separate modes' in md and 'modes: ' in md
+    assert 'deg/sqrt(h)' in md and '(SI, unit in the name)' in md and '68.3 %' in md

@@ -227,7 +227,8 @@ def test_mpu6050_two_mode_orders_and_a_summary_for_people(tmp_path):
     assert low.size >= 2 and high.size >= 2  # the issue: three chunks at 0.02, three at 1.02
     assert a['alpha_var_multimodal']
     modes = [(m['order'], m['chunks']) for m in a['alpha_var_modes']]
-    assert modes == [(pytest.approx(low.mean()), low.size), (pytest.approx(high.mean()), high.size)]
+    assert modes == [(pytest.approx(low.mean()), low.size),
+                     (pytest.approx(high.mean()), high.size)]
     md = (tmp_path / 'summary.md').read_text()
     assert md.index('## In short') < md.index('Paper 000 Table 3')
     assert 'separate modes' in md and 'modes: ' in md

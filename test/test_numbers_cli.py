@@ -233,3 +233,13 @@ def test_mpu6050_two_mode_orders_and_a_summary_for_people(tmp_path):
     assert md.index('## In short') < md.index('Paper 000 Table 3')
     assert 'separate modes' in md and 'modes: ' in md
     assert 'deg/sqrt(h)' in md and '(SI, unit in the name)' in md and '68.3 %' in md
+
+
+def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path, capsys):
+    path = real_data(*MPU)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures',
+                       '--no-allan', '--axis', 'z', '--batch-size', '5000'])
+    assert rc == 0
+    lines = [x for x in capsys.readouterr().err.splitlines() if '% ' in x and 'messages' in x]
+    # 65,067 messages in batches of 5,000: one line per 10 % crossed, the last at 100 %.
+    assert 9 <= len(lines) <= 11 and lines[-1].split(': ')[1].startswith('100%')

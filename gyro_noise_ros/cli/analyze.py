@@ -102,20 +102,34 @@ def build_parser():
 
 
 class _Progress:
-    """Plain-text progress on stderr, only when stderr is a terminal."""
+    """
+    Progress on stderr: a refreshed line on a terminal, else one plain line per 10 % (logs, CI).
+    """
 
     def __init__(self, enabled):
-        self.enabled = enabled and sys.stderr.isatty()
+        self.enabled = bool(enabled)
+        self.tty = self.enabled and sys.stderr.isatty()
         self._last = 0.0
+        self._decile = 0
 
     def update(self, label, done, total, chunks, started, *, final=False):
         if not self.enabled:
             return
         now = time.monotonic()
+        rate = done / max(now - started, 1e-9)
+        if not self.tty:
+            decile = int(10 * done / total) if total else 0
+            if decile <= self._decile and not (final and self._decile < 10):
+                return
+            self._decile = 10 if final else decile
+            pct = 100 if final else 10 * decile
+            sys.stderr.write(f'{label}: {pct}% {done}/{total} messages, {chunks} chunks, '
+                             f'{rate:,.0f} samples/s\n')
+            sys.stderr.flush()
+            return
         if not final and now - self._last < 0.5:
             return
         self._last = now
-        rate = done / max(now - started, 1e-9)
         pct = f'{100.0 * done / total:5.1f}%' if total else '  ?  '
         sys.stderr.write(f'\r{label}: {pct} {done}/{total} messages, {chunks} chunks, {rate:,.0f} samples/s   ')
         if final:

@@ -428,6 +428,11 @@ def plot_per_chunk(path, series, *, quantity):
     """
     Plot bias or variance per chunk over time, one panel per axis, bags overlaid (paper Figs. 2-5).
 
+    Markers are visible (not single pixels); on the bias figure each bag's least-squares drift line
+    (the Table 3 slope) is drawn and named in the legend. A bag with fewer than 2 chunks is not
+    plotted (a single point shows nothing over time) and the title says so; when no bag has 2
+    chunks no figure is written.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -435,24 +440,53 @@ def plot_per_chunk(path, series, *, quantity):
     series : dict
         ``{axis: [(label, t_mid_s array, value array in rad/s or (rad/s)^2), ...]}``.
     quantity : {'bias', 'variance'}, keyword-only
+        Which quantity the values are.
+
+    Returns
+    -------
+    bool
+        True when the figure was written.
+
     """
-    plt = _pyplot()
+    def finite(t, v):
+        t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
+        ok = np.isfinite(t) & np.isfinite(v)
+        return t[ok], v[ok]
+
     axes = list(series)
-    fig, panels = plt.subplots(len(axes), 1, figsize=(9, 2.6 * len(axes) + 0.6), squeeze=False, sharex=True)
+    if not any(finite(t, v)[0].size >= 2 for a in axes for _, t, v in series[a]):
+        return False
+    plt = _pyplot()
+    fig, panels = plt.subplots(len(axes), 1, figsize=(10, 2.8 * len(axes) + 0.8), squeeze=False,
+                               sharex=True)
     scale, unit = (_DEG, 'deg/s') if quantity == 'bias' else (_DEG2, '(deg/s)$^2$')
+    skipped = set()
     for ax_name, panel in zip(axes, panels[:, 0]):
         for label, t, v in series[ax_name]:
-            panel.plot(np.asarray(t) / 3600.0, np.asarray(v) * scale, '.', ms=2, label=label)
+            t, v = finite(t, v)
+            if t.size < 2:
+                skipped.add(label)
+                continue
+            hours = t / 3600.0
+            line, = panel.plot(hours, v * scale, 'o-', ms=4, lw=0.6, label=label)
+            if quantity == 'bias':
+                slope, icpt = np.polyfit(t, v, 1)
+                panel.plot(hours, (icpt + slope * t) * scale, '--', lw=1.2, color=line.get_color(),
+                           label=f'{label}: drift {slope * _DEG * 3600.0:+.3g} (deg/s)/h')
         panel.set_ylabel(f'{quantity} {ax_name} ({unit})')
         panel.grid(alpha=0.3)
+        if panel.get_legend_handles_labels()[1]:
+            panel.legend(fontsize=7, ncol=2)
     panels[-1, 0].set_xlabel('time from the first sample (h)')
-    handles, labels = panels[0, 0].get_legend_handles_labels()
-    if labels:
-        panels[0, 0].legend(fontsize=7, markerscale=4, ncol=min(5, len(labels)))
-    fig.suptitle(f'Chunk {quantity} per chunk')
+    title = f'Chunk {quantity} per chunk (markers: chunks'
+    title += '; dashed: least-squares drift, Table 3)' if quantity == 'bias' else ')'
+    if skipped:
+        title += f"\nnot plotted (fewer than 2 chunks): {', '.join(sorted(skipped))}"
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+    return True
 
 
 def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
@@ -496,7 +530,7 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
     plt.close(fig)
 
 
-def plot_allan(path, series):
+def plot_allan(path, series, *, confidence=0.683):
     """
     Overlay the Allan deviation of every bag with confidence bands and fitted terms (paper Fig. 10).
 
@@ -507,22 +541,26 @@ def plot_allan(path, series):
     series : dict
         ``{axis: [(label, tau_s, adev, ci_low, ci_high, fit_lines), ...]}`` in rad/s; ``fit_lines`` is a
         list of ``(name, tau_s, adev)`` model curves (may be empty).
+    confidence : float, keyword-only
+        Two-sided confidence of the bands (named in the legend).
     """
     plt = _pyplot()
     axes = list(series)
     fig, panels = plt.subplots(1, len(axes), figsize=(max(7.0, 5.5 * len(axes)), 4.8), squeeze=False)
     for ax_name, panel in zip(axes, panels[0]):
         for label, tau, adev, lo, hi, fits in series[ax_name]:
-            line, = panel.loglog(tau, np.asarray(adev) * _DEG, lw=1.3, label=label)
+            line, = panel.loglog(tau, np.asarray(adev) * _DEG, 'o-', ms=3, lw=1.3, label=label)
             panel.fill_between(tau, np.asarray(lo) * _DEG, np.asarray(hi) * _DEG, color=line.get_color(),
-                               alpha=0.15, lw=0)
-            for name, ftau, fadev in fits:
-                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8, color=line.get_color())
+                               alpha=0.15, lw=0, label=f'{label}: {100 * confidence:.1f} % interval')
+            for k, (name, ftau, fadev) in enumerate(fits):
+                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8, color=line.get_color(),
+                             label=f'{label}: IEEE 952 fit' if k == 0 else None)
         panel.set_xlabel('tau (s)')
         panel.set_ylabel(f'Allan deviation {ax_name} (deg/s)')
         panel.grid(True, which='both', alpha=0.3)
         panel.legend(fontsize=7)
-    fig.suptitle('Allan deviation (bands: confidence interval; dashed: fitted noise terms)', fontsize=10)
+    fig.suptitle(f'Allan deviation (markers: measured; bands: {100 * confidence:.1f} % confidence '
+                 'interval; dashed: fitted IEEE 952 noise terms)', fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -569,6 +607,13 @@ def allan_fit_lines(terms, tau):
     """
     if terms is None or len(tau) == 0:
         return []
+    lo, hi = getattr(terms, 'tau_min_s', None), getattr(terms, 'tau_max_s', None)
+    if lo is not None and hi is not None:
+        tau = np.asarray(tau, dtype=np.float64)
+        # only where it was fitted: band-limited short taus are left out of the fit
+        tau = tau[(tau >= lo * (1 - 1e-9)) & (tau <= hi * (1 + 1e-9))]
+        if tau.size == 0:
+            return []
     for name in ('model_adev', 'adev'):
         fn = getattr(terms, name, None)
         if callable(fn):

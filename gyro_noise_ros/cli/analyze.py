@@ -623,9 +623,9 @@ def _write_figures(out, config, per_chunk, curve_store):
     files = []
     bias = {a: [(label, r[:, 0], r[:, 1]) for label, r in v] for a, v in per_chunk.items()}
     var = {a: [(label, r[:, 0], r[:, 2]) for label, r in v] for a, v in per_chunk.items()}
-    report.plot_per_chunk(out / 'bias.png', bias, quantity='bias')
-    report.plot_per_chunk(out / 'variance.png', var, quantity='variance')
-    files += [out / 'bias.png', out / 'variance.png']
+    for name, data, quantity in (('bias.png', bias, 'bias'), ('variance.png', var, 'variance')):
+        if report.plot_per_chunk(out / name, data, quantity=quantity):
+            files.append(out / name)
     for (label, axis), rows in curve_store.items():
         path = out / f'curves_{_safe(label)}_{axis}.png'
         report.plot_curves(path, config.alphas, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),

@@ -207,6 +207,9 @@ def test_explain_runs_all_axes_in_one_report_on_a_minute_at_250_hz(tmp_path, cap
     report = (out / 'report.md').read_text()
     assert all(f'axis {a}:' in report for a in 'xyz')
     assert '(axis_z/overview.png)' in report and (out / 'axis_z' / 'overview.png').is_file()
+    from matplotlib.image import imread
+    # 8 signature panels must be readable: at least 1600 px wide (issue 11).
+    assert imread(out / 'axis_z' / 'overview.png').shape[1] >= 1600
     data = json.loads((out / 'axis_z' / 'explain.json').read_text())
     # The static segment only: 248.56 Hz (firmware integration rate) over ~61 s.
     assert data['input']['rate_hz'] == pytest.approx(248.56, rel=1e-3)
@@ -243,3 +246,15 @@ def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path, capsys):
     lines = [x for x in capsys.readouterr().err.splitlines() if '% ' in x and 'messages' in x]
     # 65,067 messages in batches of 5,000: one line per 10 % crossed, the last at 100 %.
     assert 9 <= len(lines) <= 11 and lines[-1].split(': ')[1].startswith('100%')
+
+
+def test_quantisation_offset_is_reduced_modulo_the_step():
+    from gyro_noise_ros.explain.signatures import find_lattice
+
+    rng = np.random.default_rng(2)
+    step = np.deg2rad(0.05)  # the ADIS16405 LSB
+    x = (0.9 + 40 + np.round(rng.normal(0, 5, 20_000))) * step  # offset 0.9 step off the grid
+    found_step, offset = find_lattice(x)
+    assert found_step == pytest.approx(step, rel=1e-6)
+    # Same lattice, reported in [-step/2, step/2): -0.1 step, not 40.9 or 0.9 steps.
+    assert offset == pytest.approx(-0.1 * step, abs=1e-6 * step)

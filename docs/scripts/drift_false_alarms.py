@@ -19,8 +19,9 @@ Usage: python docs/scripts/drift_false_alarms.py [--data DIR]
 None of the six static runs drifts. Each run (100 chunks of 10,000 samples, 100 Hz) is judged by
 ``core.health.evaluate_health`` against every other run as reference, per axis (90 cases),
 three ways: the old rule (OLS standard error, ratio only), the new error with the reference
-error ignored, and the new rule (both errors). Prints the counts of the 'Offset drift / reference' item levels, and
-the spread of the slopes across runs beside the mean OLS and new standard errors.
+error ignored, and the new rule (both errors). Prints the counts of the levels of the item
+'Offset drift / reference', and the spread of the slopes across runs beside the mean OLS and new
+standard errors.
 """
 
 import argparse

@@ -52,10 +52,12 @@ def build_parser():
     argparse.ArgumentParser
     """
     p = argparse.ArgumentParser(
-        prog=PROG, description='Characterise MEMS gyro noise in rosbags: per-chunk bias, variance and '
+        prog=PROG, description='Characterise MEMS gyro noise in rosbags, CSV tables and PX4 ULogs: '
+        'per-chunk bias, variance and '
         'fractional order (variance and correlation methods), Allan deviation, health verdicts.')
     p.add_argument('bags', nargs='+', metavar='BAG',
-                   help='rosbag2 directory, .db3 or .mcap file, or ROS 1 .bag file (order kept in tables)')
+                   help='rosbag2 directory, .db3 or .mcap file, ROS 1 .bag file, CSV table or PX4 .ulg '
+                        '(order kept in tables)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created if missing)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
     p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (default: found automatically)')

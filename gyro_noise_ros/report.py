@@ -218,9 +218,13 @@ def _plain_summary(b, axis, a):
         from .core.health import drift_t_threshold
 
         sig = abs(drift) / se if se else float('nan')
-        word = ('significant' if sig > drift_t_threshold(3.0, a['chunks']) else 'not significant')
-        parts.append(f'offset drift {drift:+.3g} +/- {_fmt(se, ".2g")} (deg/s)/h ({word} at 3 sigma '
-                     f'with {a["chunks"]} chunks: {_fmt(sig, ".2g")} standard errors)')
+        need = drift_t_threshold(3.0, a['chunks'])
+        word = ('significant' if sig > need else 'not significant')
+        # With few chunks the Student-t quantile is far above 3: say what was needed, or
+        # "5.9 standard errors, not significant" reads as a contradiction.
+        parts.append(f'offset drift {drift:+.3g} +/- {_fmt(se, ".2g")} (deg/s)/h ({word} at the '
+                     f'3-sigma level: {_fmt(sig, ".2g")} standard errors, {_fmt(need, ".2g")} '
+                     f'needed with {a["chunks"]} chunks)')
     for key, name in (('alpha_var', 'variance method'), ('alpha_corr', 'correlation method')):
         if a.get(key + '_multimodal'):
             parts.append(f'order ({name}) in separate modes: {_modes_text(a[key + "_modes"])}')
@@ -277,10 +281,14 @@ def summary_markdown(doc):
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
         lines += [f'## Axis {axis}', '',
                   '### Paper 000 Table 3: offset drift', '',
-                  '| Sequence | Offset drift ((deg/s)/h) | Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
-                  '|---|---:|---:|---:|---:|']
+                  # The paper tabulates magnitudes; the sign is kept beside them so a
+                  # reader never has to guess which way the bias moved.
+                  '| Sequence | Offset drift, magnitude ((deg/s)/h) | Signed slope ((deg/s)/h) '
+                  '| Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
+                  '|---|---:|---:|---:|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['offset_drift_abs_deg_s_per_h'], '.6f')} | "
+                         f"{_fmt(a['offset_drift_deg_s_per_h'], '+.6f')} | "
                          f"{_fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
                          f"{_fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
         lines += ['', '### Paper 000 Table 4: noise variance', '',

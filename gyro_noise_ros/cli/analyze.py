@@ -698,6 +698,13 @@ def _body(argv):
     return 0
 
 
+def _order_text(axis_doc, key):
+    # A mean over two separate basins (the model's 0/1 alias) is a number no chunk is near.
+    if axis_doc.get(key + '_multimodal'):
+        return 'modes ' + report._modes_text(axis_doc[key + '_modes'])
+    return report._fmt(axis_doc[key + '_mean'], '.3f')
+
+
 def _print_summary(doc):
     for b in doc['bags']:
         print(f"{b['label']}: {b['samples']} samples on {b['topic']} ({b['storage']}), "
@@ -709,8 +716,7 @@ def _print_summary(doc):
         for axis, a in b['axes'].items():
             line = (f"  {axis}: {a['chunks']} chunks, drift {report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
                     f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} (deg/s)^2, "
-                    f"order var {report._fmt(a['alpha_var_mean'], '.3f')}, "
-                    f"corr {report._fmt(a['alpha_corr_mean'], '.3f')}")
+                    f"order var {_order_text(a, 'alpha_var')}, corr {_order_text(a, 'alpha_corr')}")
             if a['nan_samples']:
                 line += f", {a['nan_samples']} NaN sample(s)"
             if 'health' in a:

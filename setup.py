@@ -57,6 +57,7 @@ setup(
             'portenta_emulator = gyro_noise_ros.cli.emulator:main',
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
+            'gyro_noise_monitor = gyro_noise_ros.nodes.monitor:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
         ],
     },

@@ -30,6 +30,7 @@ from gyro_noise_ros.cli import analyze as analyze_cli  # noqa: E402
 from gyro_noise_ros.core.engine import NoiseEngine  # noqa: E402
 from gyro_noise_ros.core.simulate import simulate_fractional_noise  # noqa: E402
 from gyro_noise_ros.errors import ParameterError  # noqa: E402
+from gyro_noise_ros.core.live import CHUNK_TOPICS  # noqa: E402
 from gyro_noise_ros.nodes import analyzer  # noqa: E402
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
 
@@ -120,7 +121,7 @@ def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path):
     # Two gaps (5 and 1 samples) so samples_lost and gaps are compared too.
     kept = _make_bag(bag, n, seed=11, gaps=((3000, 5), (7400, 1)))
     node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**SMALL))
-    received = {name: [] for name in analyzer.CHUNK_TOPICS}
+    received = {name: [] for name in CHUNK_TOPICS}
     listener = rclpy.create_node('test_chunk_listener', context=context)
     for name in received:
         listener.create_subscription(Vector3Stamped, f'/noise_analyzer/{name}',
@@ -176,7 +177,7 @@ def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path):
 
     # The per-chunk topics carry the same numbers, x/y/z = axes, stamped with the chunk start.
     by_key = {(r.chunk, r.axis): r for r in node_results}
-    for name, (field, _) in analyzer.CHUNK_TOPICS.items():
+    for name, (field, _) in CHUNK_TOPICS.items():
         for chunk, msg in enumerate(received[name]):
             assert msg.header.frame_id == 'imu_bag'
             stamp = msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec
@@ -276,27 +277,3 @@ def test_bad_parameter_exits_2_with_one_line():
     lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
     assert lines[-1].startswith('noise_analyzer: error:') and "'gap_policy'" in lines[-1], done.stderr
     assert 'Traceback' not in done.stderr
-
-
-def test_parse_axes():
-    assert analyzer.parse_axes('x,y,z') == ('x', 'y', 'z')
-    assert analyzer.parse_axes('z') == ('z',)
-    assert analyzer.parse_axes('xz') == ('x', 'z')
-    for bad in ('', 'x,x', 'q', 'x;y'):
-        with pytest.raises(ParameterError):
-            analyzer.parse_axes(bad)
-
-
-def test_allan_values_keep_their_keys():
-    keys = [k for k, _ in analyzer.allan_values(None)]
-    assert keys[0] == 'ADEV at 1 s (deg/s)' and all('(' in k for k in keys)
-    assert {v for _, v in analyzer.allan_values(None)} == {'n/a'}
-
-
-def test_format_status():
-    from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-
-    status = DiagnosticStatus(level=DiagnosticStatus.WARN, name='noise_analyzer: axis z', message='Drift.',
-                              values=[KeyValue(key='Bias (deg/s)', value='0.5'),
-                                      KeyValue(key='Chunks analysed', value='7')])
-    assert analyzer.format_status(status) == 'WARN  noise_analyzer: axis z: bias=0.5 chunks=7 | Drift.'

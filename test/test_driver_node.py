@@ -29,7 +29,7 @@ from sensor_msgs.msg import Imu, Temperature  # noqa: E402
 from gyro_noise_ros.errors import ParameterError  # noqa: E402
 from gyro_noise_ros.link import protocol as P  # noqa: E402
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
-from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver, SequenceTracker  # noqa: E402
+from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -173,90 +173,6 @@ def test_runtime_parameter_changes(harness):
 
 
 # --------------------------------------------------------------------------- sequence tracker
-
-
-def test_tracker_counts_gaps_across_wrap():
-    t = SequenceTracker(restart_window=100)
-    d = t.accept(np.array([2**32 - 3, 2**32 - 2], np.uint32))
-    assert d.keep.all() and d.lost == 0 and d.stop == 2
-    # ... 2**32-1 and 0 missing, then 1, 2, gap of 3..4, then 5
-    d = t.accept(np.array([1, 2, 5], np.uint32))
-    assert d.keep.all() and d.lost == 2 + 2 and t.last == 5
-
-
-def test_tracker_consecutive_batch_across_wrap():
-    t = SequenceTracker(restart_window=100)
-    t.accept(np.array([2**32 - 5], np.uint32))
-    d = t.accept(np.array([2**32 - 2, 2**32 - 1, 0, 1], np.uint32))
-    assert d.keep.all() and d.lost == 2 and t.last == 1
-
-
-def _reference_tracker(batches, window):
-    """Per-sample twin of SequenceTracker: (label per sample, total lost)."""
-    last, labels, lost = None, [], 0
-    for s in (int(v) for batch in batches for v in batch):
-        if last is None:
-            labels.append('keep')
-            last = s
-            continue
-        d = (s - last) % 2**32
-        d = d - 2**32 if d >= 2**31 else d
-        if d > 0:
-            labels.append('keep')
-            lost += d - 1
-            last = s
-        elif d > -window:
-            labels.append('dup')
-        else:
-            labels.append('restart')
-            last = s
-    return labels, lost
-
-
-def test_tracker_matches_its_per_sample_twin():
-    rng = np.random.default_rng(7)
-    for _ in range(300):
-        # Runs of consecutive counters near the wrap, joined by a step of +1, a gap, a re-send
-        # (back by 0..39, or 99: within the window of 100) or a restart (back by 100 or 200..4999).
-        seq, s = [], int(rng.integers(2**32 - 300, 2**32))
-        for _ in range(int(rng.integers(1, 8))):
-            step = [1, int(rng.integers(2, 50)), -int(rng.integers(0, 40)), -99, -100,
-                    -int(rng.integers(200, 5000))]
-            s = (s + step[int(rng.integers(len(step)))]) % 2**32
-            run = int(rng.integers(1, 30))
-            seq += [(s + k) % 2**32 for k in range(run)]
-            s = (s + run - 1) % 2**32
-        cuts = np.sort(rng.choice(np.arange(1, len(seq)), size=min(3, len(seq) - 1), replace=False))
-        batches = np.split(np.array(seq, np.uint32), cuts)
-
-        tracker, labels, lost, restart_next = SequenceTracker(restart_window=100), [], 0, False
-        for batch in batches:
-            while len(batch):
-                d = tracker.accept(batch)
-                part = ['keep' if k else 'dup' for k in d.keep]
-                if restart_next and part:
-                    part[0], restart_next = 'restart', False
-                labels += part
-                lost += d.lost
-                batch = batch[d.stop:]
-                if len(batch):  # what the driver does at a restart
-                    tracker.reset()
-                    restart_next = True
-        assert (labels, lost) == _reference_tracker(batches, 100), seq
-
-
-def test_tracker_drops_resent_samples_and_splits_at_restart():
-    t = SequenceTracker(restart_window=100)
-    t.accept(np.arange(1000, 1010, dtype=np.uint32))
-    d = t.accept(np.array([1005, 1006, 1009, 1010, 1012, 1011], np.uint32))
-    assert d.keep.tolist() == [False, False, False, True, True, False]
-    assert d.duplicates == 4 and d.lost == 1 and d.stop == 6
-    # A fall-back of 100 or more is a board restart: decide the prefix, stop at the restart.
-    d = t.accept(np.array([1013, 3, 4], np.uint32))
-    assert d.stop == 1 and d.keep.tolist() == [True] and d.lost == 0
-
-
-# --------------------------------------------------------------------------- message content
 
 
 @pytest.mark.parametrize('gyro_fs, accel_fs', [(2000, 32), (125, 4)])

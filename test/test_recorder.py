@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 from gyro_noise_ros.bag import ImuBagReader, list_topics
-from gyro_noise_ros.nodes._ros_common import SequenceGapCounter
-from gyro_noise_ros.nodes.recorder import default_bag_name, imu_covariances, temperature_variances
+from gyro_noise_ros.nodes.recorder import default_bag_name
 from test_analyzer_e2e import RATE_HZ, ros_env, start_replayer
 
 pytestmark = pytest.mark.ros
@@ -121,43 +120,6 @@ def test_refuses_an_unknown_storage(tmp_path):
                           env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert "parameter 'storage'" in done.stderr and 'Traceback' not in done.stderr
-
-
-def test_sequence_gap_counter():
-    c = SequenceGapCounter()
-    assert c.update([1, 2, 3]) == 0
-    assert c.update([5, 6]) == 1          # 4 missing
-    assert c.update([0, 0]) == 0          # no sequence numbers from the RMW: ignored
-    assert c.update([10, 11, 15]) == 6    # 7, 8, 9 and 12, 13, 14
-    assert c.update([1, 2]) == 0          # restarted publisher: a new run
-    assert c.missing == 7
-
-
-def test_imu_covariances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_imu_cdr
-
-    rng = np.random.default_rng(0)
-    av = rng.random((4, 9))
-    la = rng.random((4, 9))
-    raws = encode_imu_cdr(np.arange(4), rng.random((4, 3)), rng.random((4, 3)), frame_id='f',
-                          angular_velocity_covariance=av, linear_acceleration_covariance=la)
-    got_av, got_la = imu_covariances(raws)
-    np.testing.assert_array_equal(got_av, av)
-    np.testing.assert_array_equal(got_la, la)
-    # Mixed lengths (two frame_ids) take the per-message path.
-    raws2 = raws[:2] + encode_imu_cdr(np.arange(2), rng.random((2, 3)), rng.random((2, 3)),
-                                      frame_id='longer_frame', angular_velocity_covariance=av[2:],
-                                      linear_acceleration_covariance=la[2:])
-    got_av, got_la = imu_covariances(raws2)
-    np.testing.assert_array_equal(got_av, av)
-    np.testing.assert_array_equal(got_la, la)
-
-
-def test_temperature_variances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_temperature_cdr
-
-    raws = encode_temperature_cdr(np.arange(3), [20.0, 21.0, 22.0], frame_id='imu', variance=[0.5, 0.25, 0.0])
-    np.testing.assert_array_equal(temperature_variances(raws), [0.5, 0.25, 0.0])
 
 
 def test_default_bag_name():

@@ -252,6 +252,56 @@ def frame_id_of(raw, ros1):
     return raw[16:16 + length - 1].decode('utf-8', 'replace')
 
 
+def imu_covariances(raws):
+    """
+    Return the angular-velocity and linear-acceleration covariances of raw ROS 2 CDR Imu messages.
+
+    The covariances are float64 16..24 and 28..36 of the 37-float tail that ends the message (see
+    the layout in the module doc), whatever the frame_id length.
+
+    Parameters
+    ----------
+    raws : list of bytes
+        Serialised ``sensor_msgs/Imu`` (ROS 2 CDR, either endianness).
+
+    Returns
+    -------
+    angular_velocity_covariance, linear_acceleration_covariance : numpy.ndarray, shape (n, 9)
+        Row-major, in (rad/s)^2 and (m/s^2)^2.
+    """
+    n = len(raws)
+    tail_bytes = IMU_TAIL_F8 * 8
+    tails = np.empty((n, IMU_TAIL_F8))
+    lengths = {len(r) for r in raws}
+    if len(lengths) == 1 and all(r[1] == 1 for r in raws):
+        size = lengths.pop()
+        rows = np.frombuffer(b''.join(raws), np.uint8).reshape(n, size)
+        tails[:] = np.ascontiguousarray(rows[:, size - tail_bytes:]).view('<f8')
+    else:
+        for i, raw in enumerate(raws):
+            tails[i] = np.frombuffer(raw[-tail_bytes:], '<f8' if raw[1] == 1 else '>f8')
+    return tails[:, 16:25], tails[:, 28:37]
+
+
+def temperature_variances(raws):
+    """
+    Return the ``variance`` field of raw ROS 2 CDR ``sensor_msgs/Temperature`` messages.
+
+    It is the last float64 of the message (``temperature``, ``variance`` follow the header).
+
+    Parameters
+    ----------
+    raws : list of bytes
+        Serialised ``sensor_msgs/Temperature`` (ROS 2 CDR, either endianness).
+
+    Returns
+    -------
+    numpy.ndarray
+        Variances in degC^2.
+    """
+    return np.array([np.frombuffer(raw[-8:], '<f8' if raw[1] == 1 else '>f8')[0] for raw in raws])
+
+
 def _stamp_of(msg):
     return int(msg.header.stamp.sec) * _NS_PER_S + int(msg.header.stamp.nanosec)
 

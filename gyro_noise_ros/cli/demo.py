@@ -5,7 +5,7 @@
 ``ROS_DOMAIN_ID``:
 
 1. ``noise_analyzer`` (live analysis, diagnostics), ``gyro_noise_record`` (the bag), the diagnostics
-   monitor (``noise_analyzer --echo``) and ``lsm6dso32_driver`` (which retries its port until the board
+   monitor (``gyro_noise_monitor``) and ``lsm6dso32_driver`` (which retries its port until the board
    is there);
 2. ``portenta_emulator`` on a loopback TCP port, seeded, with a scripted helium-like bias transient: a
    quiet phase, then a first-order rise of the bias of every axis;
@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import GyroNoiseError
+from ..monitor_lines import parse_axis_parts
 from ._common import run_cli
 
 PROG = 'gyro_noise_demo'
@@ -273,7 +274,7 @@ def _body(argv):
              'chunk_size': story.chunk_size})])
         procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', *_ros_args(
             {'output': str(recording), 'storage': args.storage})])
-        echo = procs.start('monitor', ['gyro_noise_ros.nodes.analyzer', '--echo', '--compact'],
+        echo = procs.start('monitor', ['gyro_noise_ros.nodes.monitor', '--compact'],
                            capture_stdout=True)
         lines = queue.Queue()
         threading.Thread(target=_reader, args=(echo.stdout, lines), daemon=True).start()
@@ -376,16 +377,6 @@ def _live(lines, procs, story, speed, t_stream):
     return seen
 
 
-_AXIS_PART = re.compile(r'\b([xyz]) (OK|WARN|ERROR|STALE) bias \S+ drift (\S+)')
-
-
-def _float(text):
-    try:
-        return float(text)
-    except ValueError:
-        return float('nan')
-
-
 def _check_story(seen, story):
     """After the rise began, some axis must be WARN or ERROR with its drift above the WARN limit."""
     chunk_lines = [(t, ln) for t, ln in seen if ' chunk ' in ln]
@@ -394,8 +385,8 @@ def _check_story(seen, story):
     rise = [ln for t, ln in chunk_lines if t >= story.quiet_s]
     quiet = [ln for t, ln in chunk_lines if t < story.quiet_s]
     limit = DEMO_ANALYZER_PARAMS['drift_abs_warn_deg_s_per_h']
-    warned = [ln for ln in rise if any(level in ('WARN', 'ERROR') and _float(drift) > limit
-                                       for _, level, drift in _AXIS_PART.findall(ln))]
+    warned = [ln for ln in rise if any(level in ('WARN', 'ERROR') and drift > limit
+                                       for _, level, drift in parse_axis_parts(ln))]
     if not warned:
         raise DemoError('the drift was not detected: no axis turned WARN with its drift above the limit '
                         'after the bias rose '

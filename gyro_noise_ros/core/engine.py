@@ -831,3 +831,27 @@ class NoiseEngine:
     def allan_status(self):
         """Why the Allan deviation is unavailable (empty string when it is available or off)."""
         return self._allan_error or ''
+
+
+def warm_up(config):
+    """
+    Run the analysis path once on synthetic data so the first real chunk does not stall.
+
+    Builds (and caches, see :func:`identifier_for`) the order identifier of ``config``, plans its
+    FFTs, and compiles or loads the numba kernels of the Allan accumulator. A live node calls it
+    at start-up (STYLE.md: warm numba kernels before the first chunk).
+
+    Parameters
+    ----------
+    config : EngineConfig
+        The configuration the real data will be analysed with.
+    """
+    rng = np.random.default_rng(0)
+    n = int(config.chunk_size) + 1
+    rate_hz = config.rate_hz or 1000.0
+    engine = NoiseEngine(replace(config, rate_hz=rate_hz))
+    stamps = np.arange(n, dtype=np.int64) * int(_NS / rate_hz)
+    jobs = engine.ingest(stamps, rng.standard_normal((n, 3)) * 1e-3)
+    for job in jobs[:1]:
+        engine.record(engine.analyze(job))
+    engine.summary(allan=config.allan)

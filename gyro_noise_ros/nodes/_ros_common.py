@@ -17,20 +17,18 @@ What diagnostic_updater would give (it is not installable from PyPI) is written 
 :func:`worst` picks the level and the one-sentence message from explicit checks.
 """
 
+from dataclasses import dataclass, fields, MISSING
 import math
 import re
 import sys
-from dataclasses import dataclass
 
-import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+import rclpy
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType,
                                 SetParametersResult)
 from rclpy.callback_groups import CallbackGroup
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy_impl
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..errors import GyroNoiseError, ParameterError
@@ -40,8 +38,6 @@ OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN
 ERROR = DiagnosticStatus.ERROR
 STALE = DiagnosticStatus.STALE
-
-_RCLError = _rclpy_impl.RCLError
 
 _LEVEL_RANK = {OK: 0, WARN: 1, ERROR: 2, STALE: 3}
 
@@ -85,6 +81,7 @@ class ParamSpec:
         :func:`declare_parameter_table` and the set-parameters callback it installs).
     pattern : str
         Regular expression a string value must match in full (e.g. a frame id); ``''``: any.
+
     """
 
     name: str
@@ -99,7 +96,7 @@ class ParamSpec:
 
     @property
     def ros_type(self):
-        """The ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
+        """Return the ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
         return _PYTHON_TO_ROS_TYPE[type(self.default)]
 
     def descriptor(self):
@@ -110,6 +107,7 @@ class ParamSpec:
         -------
         rcl_interfaces.msg.ParameterDescriptor
             Description with the unit, read_only flag, range and a text form of the choices.
+
         """
         text = self.description + (f' [{self.unit}]' if self.unit else '')
         desc = ParameterDescriptor(name=self.name, type=self.ros_type, description=text,
@@ -141,9 +139,11 @@ class ParamSpec:
         ------
         ParameterError
             Naming the parameter, the bad value and what is allowed.
+
         """
         if self.pattern and not re.fullmatch(self.pattern, value):
-            raise ParameterError(f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
+            raise ParameterError(
+                f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
         if self.choices and value not in self.choices:
             raise ParameterError(f"parameter '{self.name}' = {value!r} is not one of "
                                  + ', '.join(repr(c) for c in self.choices))
@@ -182,6 +182,7 @@ def declare_parameter_table(node, table, *, on_change=None):
     ------
     ParameterError
         An override has the wrong type, is out of range, or is not one of the choices.
+
     """
     by_name = {spec.name: spec for spec in table}
     values = {}
@@ -224,10 +225,12 @@ def _explain_parameter_exception(spec, err):
 
 def sensor_data_qos(depth):
     """
-    Sensor-data QoS (best effort, volatile, keep last) with a chosen depth.
+    Return the sensor-data QoS (best effort, volatile, keep last) with a chosen depth.
 
-    rclpy's ``qos_profile_sensor_data`` keeps only 5 messages; a 6.66 kHz stream published in bursts
-    needs a deeper history so a subscriber that wakes every few milliseconds loses nothing.
+    What consumers subscribe with (REP-2003): a best-effort subscription matches both reliable
+    and best-effort publishers. rclpy's ``qos_profile_sensor_data`` keeps only 5 messages; a
+    6.66 kHz stream arriving in bursts needs a deeper history so a subscriber that wakes every few
+    milliseconds loses nothing.
 
     Parameters
     ----------
@@ -237,10 +240,70 @@ def sensor_data_qos(depth):
     Returns
     -------
     rclpy.qos.QoSProfile
+
     """
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
                       reliability=ReliabilityPolicy.BEST_EFFORT,
                       durability=DurabilityPolicy.VOLATILE)
+
+
+def driver_qos(depth):
+    """
+    Return the QoS a driver publishes with (REP-2003): reliable, volatile, keep last ``depth``.
+
+    A reliable publisher serves every subscriber, the default-QoS (reliable) ones such as RViz or a
+    user's node as well as best-effort sensor-data ones; a best-effort publisher silently starves
+    every reliable subscriber.
+
+    Parameters
+    ----------
+    depth : int
+        History depth in messages (deep enough for the bursts of a 6.66 kHz stream).
+
+    Returns
+    -------
+    rclpy.qos.QoSProfile
+
+    """
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+def specs_from_dataclass(cls, *, read_only, float_range=(0.0, 1.0e9), int_range=(0, 1_000_000)):
+    """
+    Return one :class:`ParamSpec` per field of a frozen dataclass of limits, from its metadata.
+
+    The dataclass is the single source of each parameter's name, default, description and unit
+    (``field(metadata={'description': ..., 'unit': ..., 'min': ..., 'max': ...})``), so the node's
+    table, its YAML file and the docs cannot drift apart.
+
+    Parameters
+    ----------
+    cls : type
+        A dataclass whose fields have defaults and a ``description`` in their metadata.
+    read_only : bool
+        Whether the parameters are read-only.
+    float_range, int_range : (number, number)
+        Range of a field whose metadata gives none.
+
+    Returns
+    -------
+    tuple of ParamSpec
+
+    """
+    rows = []
+    for f in fields(cls):
+        if f.default is MISSING:
+            raise TypeError(f'{cls.__name__}.{f.name} has no default')
+        meta = f.metadata
+        lo, hi = float_range if isinstance(f.default, float) else int_range
+        default = f.default if isinstance(f.default, float) else int(f.default)
+        rows.append(ParamSpec(f.name, default, meta.get('description', f.name),
+                              unit=meta.get('unit', ''), read_only=read_only,
+                              min_value=type(default)(meta.get('min', lo)),
+                              max_value=type(default)(meta.get('max', hi))))
+    return tuple(rows)
 
 
 def diagnostics_publisher(node):
@@ -250,11 +313,13 @@ def diagnostics_publisher(node):
     Parameters
     ----------
     node : rclpy.node.Node
+        The publishing node.
 
     Returns
     -------
     rclpy.publisher.Publisher
         Publisher of ``diagnostic_msgs/DiagnosticArray``.
+
     """
     return node.create_publisher(DiagnosticArray, '/diagnostics', 10)
 
@@ -274,6 +339,7 @@ def worst(checks, ok_message):
     -------
     (bytes, str)
         Level and message for :func:`diagnostic_status`.
+
     """
     level, message = OK, ok_message
     for check_level, check_message in checks:
@@ -303,6 +369,7 @@ def diagnostic_status(name, hardware_id, level, message, values):
     Returns
     -------
     diagnostic_msgs.msg.DiagnosticStatus
+
     """
     return DiagnosticStatus(level=level, name=name, message=message, hardware_id=hardware_id,
                             values=[KeyValue(key=k, value=v if isinstance(v, str) else str(v))
@@ -318,10 +385,12 @@ def diagnostic_array(stamp, statuses):
     stamp : builtin_interfaces.msg.Time
         Usually ``node.get_clock().now().to_msg()``.
     statuses : sequence of DiagnosticStatus
+        The statuses, in order.
 
     Returns
     -------
     diagnostic_msgs.msg.DiagnosticArray
+
     """
     msg = DiagnosticArray(status=list(statuses))
     msg.header.stamp = stamp
@@ -330,7 +399,7 @@ def diagnostic_array(stamp, statuses):
 
 def run_node(node_factory, args=None, *, prog):
     """
-    The Jazzy ``main()`` pattern, with deliberate start-up errors as one line and an exit code.
+    Run a node with the Jazzy ``main()`` pattern; start-up errors give one line and an exit code.
 
     ``rclpy.init(args=args)``; build the node; ``rclpy.spin`` until Ctrl-C or an external shutdown;
     always ``destroy_node()`` and ``rclpy.try_shutdown()``.
@@ -348,12 +417,18 @@ def run_node(node_factory, args=None, *, prog):
     -------
     int
         Exit code: 0, or the error class's code (2 for bad parameters or malformed ROS arguments).
+
     """
     try:
         rclpy.init(args=args)
-    except _RCLError as err:
-        # A malformed --ros-args (e.g. "-p name:=" with no value) fails here, before any node exists.
-        print(f'{prog}: error: bad ROS arguments: {str(err).split(", at ")[0]}', file=sys.stderr)
+    except RuntimeError as err:
+        # A malformed or unknown --ros-args (e.g. "-p name:=" with no value, "--bogus") fails here,
+        # before any node exists. rclpy raises RCLInvalidROSArgsError or UnknownROSArgsError, which
+        # it exposes only in its private _rclpy_pybind11 module; both derive from RuntimeError,
+        # so the public base class is caught and the class name says which.
+        kind = type(err).__name__
+        what = 'unknown ROS arguments' if kind == 'UnknownROSArgsError' else 'bad ROS arguments'
+        print(f'{prog}: error: {what}: {str(err).split(", at ")[0]}', file=sys.stderr)
         return ParameterError.exit_code
     node = None
     try:
@@ -412,6 +487,7 @@ def take_all(sub, msg_type):
         Receive time of each (``MessageInfo['received_timestamp']``, system clock, ns).
     sequence : list of int
         DDS publication sequence number of each (0 if the middleware does not give one).
+
     """
     raws, received, sequence = [], [], []
     handle = sub.handle
@@ -428,35 +504,6 @@ def take_all(sub, msg_type):
     return raws, received, sequence
 
 
-class SequenceGapCounter:
-    """
-    Count messages missing from a stream of DDS publication sequence numbers.
-
-    A sequence number that does not increase starts a new run (a restarted publisher); a
-    sequence number of 0 means the middleware gave none and is ignored. The count assumes one
-    publisher per topic (``MessageInfo`` does not name the writer): with several, their numbers
-    interleave and the count is meaningless (the stamps-based ``Samples lost`` stays right).
-    """
-
-    def __init__(self):
-        self.last = None
-        self.missing = 0
-
-    def update(self, sequence):
-        """Add the sequence numbers of one batch (in arrival order); return the new misses."""
-        seq = np.asarray(sequence, dtype=np.int64)
-        seq = seq[seq > 0]
-        if seq.size == 0:
-            return 0
-        if self.last is not None:
-            seq = np.concatenate(([self.last], seq))
-        step = np.diff(seq)
-        new = int(step[step > 1].sum() - np.count_nonzero(step > 1))
-        self.last = int(seq[-1])
-        self.missing += new
-        return new
-
-
 def unused_callback(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
-    """The callback rclpy requires of a polled subscription; never called (see PolledGroup)."""
+    """Refuse to run: the callback rclpy requires of a polled subscription (see PolledGroup)."""
     raise AssertionError('polled subscriptions are drained by the node, not by the executor')

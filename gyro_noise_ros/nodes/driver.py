@@ -44,9 +44,13 @@ from ..bag import encode_imu_cdr, encode_temperature_cdr
 from ..errors import LinkError, ParameterError
 from ..link import lsm6dso32
 from ..link.clock import DeviceClock
-from ..link.protocol import MAX_SAMPLES_PER_FRAME, Decoder, encode_configure
-from ._ros_common import (ERROR, WARN, ParamSpec, declare_parameter_table, diagnostic_array,
-                          diagnostic_status, diagnostics_publisher, run_node, sensor_data_qos, worst)
+from ..link.health import judge_link, LinkThresholds, LinkWindow
+from ..link.protocol import Decoder, encode_configure, MAX_SAMPLES_PER_FRAME
+from ..link.sequence import SequenceTracker
+from ..core.health import LEVEL_BYTE
+from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
+                          diagnostics_publisher, ParamSpec, run_node, sensor_data_qos,
+                          specs_from_dataclass)
 
 NODE_NAME = 'lsm6dso32_driver'
 
@@ -98,119 +102,11 @@ PARAMETERS = (
               unit='s', min_value=0.01, max_value=3600.0),
     ParamSpec('diagnostics_period_s', 1.0, 'Period of the link status on /diagnostics',
               unit='s', read_only=True, min_value=0.05, max_value=3600.0),
-    ParamSpec('rate_tolerance_ratio', 0.02,
-              'WARN when the measured sample rate differs from the configured ODR by more than this',
-              min_value=0.0, max_value=1.0),
-    ParamSpec('loss_warn_ratio', 0.0,
-              'WARN when the fraction of samples lost in one diagnostics period exceeds this',
-              min_value=0.0, max_value=1.0),
-    ParamSpec('loss_error_ratio', 0.01,
-              'ERROR when the fraction of samples lost in one diagnostics period exceeds this',
-              min_value=0.0, max_value=1.0),
+    *specs_from_dataclass(LinkThresholds, read_only=False),
 )
 
 _READ_SIZE = 1 << 16
-_UINT32 = 1 << 32
-
-
-def _wrapped_delta(a, b):
-    """Signed distance ``a - b`` of wrapping uint32 counters, in [-2**31, 2**31)."""
-    return ((np.asarray(a, np.int64) - np.asarray(b, np.int64) + (1 << 31)) % _UINT32) - (1 << 31)
-
-
-@dataclass(frozen=True)
-class Accepted:
-    """
-    What :meth:`SequenceTracker.accept` decided for a batch.
-
-    Attributes
-    ----------
-    keep : numpy.ndarray of bool
-        Samples of the accepted prefix to publish (counter ahead of everything published before).
-    stop : int
-        Length of the prefix decided; ``stop < len(batch)`` means a board restart at ``stop``.
-    lost : int
-        Counter gaps between the previous published sample and the kept ones.
-    duplicates : int
-        Samples dropped because their counter was already published.
-    """
-
-    keep: np.ndarray
-    stop: int
-    lost: int
-    duplicates: int
-
-
-class SequenceTracker:
-    """
-    Publish-once filter and loss counter over the board's wrapping uint32 sample counter.
-
-    Parameters
-    ----------
-    restart_window : int
-        A counter that falls back by at least this many samples is a board restart (new epoch),
-        a smaller fall-back is a re-sent duplicate.
-    """
-
-    def __init__(self, restart_window):
-        self.restart_window = int(restart_window)
-        self.last = None
-
-    def reset(self):
-        """Forget the last published counter (new epoch: the next sample is accepted as is)."""
-        self.last = None
-
-    def accept(self, seq):
-        """
-        Decide which samples of a batch to publish.
-
-        Parameters
-        ----------
-        seq : numpy.ndarray of uint32
-            Sample counters in arrival order.
-
-        Returns
-        -------
-        Accepted
-            The decision for ``seq[:stop]``; the caller resets its epoch and calls again with
-            ``seq[stop:]`` when ``stop < len(seq)``.
-        """
-        n = len(seq)
-        if n == 0:
-            return Accepted(np.zeros(0, bool), 0, 0, 0)
-        first, last = int(seq[0]), int(seq[-1])
-        # With no published sample yet the first one is accepted as is (its step counts as 1).
-        step0 = 1 if self.last is None else int(_wrapped_delta(first, self.last))
-        # uint32 differences wrap like the counter, so 1 means "next sample" across 2**32 too.
-        if step0 > 0 and (n == 1 or (last - first) % _UINT32 == n - 1
-                          and np.all(np.diff(np.asarray(seq, np.uint32)) == 1)):
-            # The common case, one call per read: consecutive after a gap of step0 - 1.
-            self.last = last
-            return Accepted(np.ones(n, bool), n, step0 - 1, 0)
-        seq64 = np.asarray(seq, np.int64)
-        steps = _wrapped_delta(seq64[1:], seq64[:-1])
-        if step0 > 0 and np.all(steps > 0):
-            # Strictly increasing with gaps inside the batch.
-            self.last = last
-            return Accepted(np.ones(n, bool), n, step0 - 1 + int(np.sum(steps - 1)), 0)
-        keep = np.zeros(n, bool)
-        lost = duplicates = 0
-        for i in range(n):
-            s = int(seq64[i])
-            if self.last is None:
-                keep[i] = True
-                self.last = s
-                continue
-            d = int(_wrapped_delta(s, self.last))
-            if d > 0:
-                keep[i] = True
-                lost += d - 1
-                self.last = s
-            elif d > -self.restart_window:
-                duplicates += 1
-            else:
-                return Accepted(keep[:i], i, lost, duplicates)
-        return Accepted(keep, n, lost, duplicates)
+_THRESHOLD_NAMES = tuple(f.name for f in fields(LinkThresholds))
 
 
 @dataclass(frozen=True)
@@ -225,6 +121,14 @@ class LinkConfig:
 def _frame_interval_s(config):
     """Longest normal silence of a link: three full frames (the firmware may batch up to 128)."""
     return 3.0 * MAX_SAMPLES_PER_FRAME / config.odr_hz
+
+
+def _diag_counters(now, snapshot):
+    link = snapshot['link']
+    out = {k: link.get(k, 0) for k in ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')}
+    out.update(time=now, published=snapshot['published'], lost=snapshot['lost'],
+               restarts=snapshot['restarts'])
+    return out
 
 
 def _stats_dict(stats):
@@ -250,6 +154,7 @@ class Lsm6dso32Driver(Node):
     ------
     ParameterError
         A parameter override is of the wrong type, out of range, or the port is not a usable name.
+
     """
 
     def __init__(self, node_name=NODE_NAME, **kwargs):
@@ -263,9 +168,7 @@ class Lsm6dso32Driver(Node):
             serial.serial_for_url(port, do_not_open=True)
         except (ValueError, serial.SerialException) as err:
             raise ParameterError(f"parameter 'port' = {port!r} is not usable: {err}") from err
-        if p['loss_warn_ratio'] > p['loss_error_ratio']:
-            raise ParameterError(f"parameter 'loss_warn_ratio' = {p['loss_warn_ratio']} exceeds "
-                                 f"'loss_error_ratio' = {p['loss_error_ratio']}")
+        self._thresholds = LinkThresholds(**{k: p[k] for k in _THRESHOLD_NAMES})
         self._port = port
         self._hardware_id = f'lsm6dso32@{port}'
         self._status_name = f'{self.get_name()}: link'
@@ -294,8 +197,7 @@ class Lsm6dso32Driver(Node):
         self._connections = 0
         self._streaming_since = None
         self._last_sample_monotonic = None
-        self._diag_prev = {'time': time.monotonic(), 'published': 0, 'lost': 0, 'crc': 0, 'restarts': 0,
-                           'overruns': 0, 'frames': 0, 'samples_ok': 0}
+        self._diag_prev = _diag_counters(time.monotonic(), self.link_snapshot())
 
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader', daemon=True)
@@ -317,6 +219,10 @@ class Lsm6dso32Driver(Node):
         self._params = {**self._params, **changed}
         # One attribute swap: the reader thread sees either the old or the new set, never a mix.
         self._message_fields = self._make_message_fields(self._params)
+        try:
+            self._thresholds = LinkThresholds(**{k: self._params[k] for k in _THRESHOLD_NAMES})
+        except ParameterError as err:
+            self.get_logger().error(f'link thresholds unchanged: {err}')
 
     # ------------------------------------------------------------------ reader thread
 
@@ -456,6 +362,7 @@ class Lsm6dso32Driver(Node):
         -------
         int
             Number of ``imu/data_raw`` messages published.
+
         """
         published = 0
         while len(samples):
@@ -512,6 +419,7 @@ class Lsm6dso32Driver(Node):
             ``state``, ``last_error``, ``config``, ``published``, ``temperatures``, ``lost``,
             ``duplicates``, ``restarts``, ``connections``, ``streaming_since``,
             ``last_sample_monotonic`` and the decoder's counters summed over all connections.
+
         """
         with self._lock:
             link = dict(self._link_stats)
@@ -531,73 +439,33 @@ class Lsm6dso32Driver(Node):
         """
         Build the ``'<node>: link'`` status from the counters since the previous call.
 
-        Levels (explicit thresholds from the parameters):
-
-        - ERROR: the port is not streaming (the message names the last error); no sample for a
-          diagnostics period (and at least three full frames); lost fraction in the period above
-          ``loss_error_ratio``.
-        - WARN: lost fraction above ``loss_warn_ratio``; CRC errors or sensor FIFO overruns in the
-          period; samples produced (published + lost) off the acknowledged ODR by more than
-          ``rate_tolerance_ratio`` plus two frames; a board counter restart.
+        The level comes from :func:`gyro_noise_ros.link.health.judge_link` (its module doc lists
+        the checks) with the limits of the parameters.
 
         Returns
         -------
         diagnostic_msgs.msg.DiagnosticStatus
+
         """
         s = self.link_snapshot()
         now = time.monotonic()
-        p = self._params
         link = s['link']
-        prev = self._diag_prev
-        self._diag_prev = {'time': now, 'published': s['published'], 'lost': s['lost'],
-                           'crc': link.get('crc_errors', 0), 'restarts': s['restarts'],
-                           'overruns': link.get('fifo_overruns', 0), 'frames': link.get('frames_ok', 0),
-                           'samples_ok': link.get('samples_ok', 0)}
-        since = prev['time'] if s['streaming_since'] is None else max(prev['time'], s['streaming_since'])
-        window = now - since
-        d_pub = s['published'] - prev['published']
-        d_lost = s['lost'] - prev['lost']
-        d_crc = link.get('crc_errors', 0) - prev['crc']
-        rate = d_pub / window if window > 0 else float('nan')
+        prev, self._diag_prev = self._diag_prev, _diag_counters(now, s)
+        since = prev['time'] if s['streaming_since'] is None else max(prev['time'],
+                                                                      s['streaming_since'])
+        cur = self._diag_prev
         config = s['config']
-
-        checks = []
-        if s['state'] == 'disconnected':
-            checks.append((ERROR, f'Link down: {s["last_error"]}.'))
-        elif s['state'] != 'streaming':
-            checks.append((ERROR, f'Link {s["state"]}, not streaming yet (last error: {s["last_error"]}).'))
-        else:
-            silent = now - (s['last_sample_monotonic'] or now)
-            if config is not None and silent >= max(p['diagnostics_period_s'], _frame_interval_s(config)):
-                checks.append((ERROR, f'No samples for {silent:.1f} s.'))
-            if d_pub + d_lost > 0:
-                ratio = d_lost / (d_pub + d_lost)
-                text = f'{d_lost} samples lost in the last {window:.1f} s ({100 * ratio:.3g} %).'
-                if ratio > p['loss_error_ratio']:
-                    checks.append((ERROR, text))
-                elif ratio > p['loss_warn_ratio']:
-                    checks.append((WARN, text))
-            if d_crc > 0:
-                checks.append((WARN, f'{d_crc} CRC errors in the last {window:.1f} s.'))
-            d_overruns = link.get('fifo_overruns', 0) - prev['overruns']
-            if d_overruns > 0:
-                # Samples the sensor dropped before the board read them: not in the counter.
-                checks.append((WARN, f'The sensor FIFO overran {d_overruns} times in the last '
-                                     f'{window:.1f} s.'))
-            # The rate check counts lost samples as produced (losses have their own check) and
-            # allows two frames of slack: a window's count is quantised by whole frames.
-            d_frames = link.get('frames_ok', 0) - prev['frames']
-            per_frame = (link.get('samples_ok', 0) - prev['samples_ok']) / d_frames if d_frames else 1.0
-            expected = config.odr_hz * window if config is not None else 0.0
-            if (expected > 0 and abs(d_pub + d_lost - expected)
-                    > p['rate_tolerance_ratio'] * expected + 2.0 * per_frame):
-                checks.append((WARN, f'Sample rate {(d_pub + d_lost) / window:.1f} Hz differs from the '
-                                     f'configured {config.odr_hz:g} Hz.'))
-            if s['restarts'] > prev['restarts']:
-                checks.append((WARN, 'The board restarted its sample counter.'))
-        ok_message = (f'Streaming at {rate:.0f} Hz, no loss.' if s['state'] == 'streaming'
-                      else 'Link idle.')
-        level, message = worst(checks, ok_message)
+        silence = (max(self._params['diagnostics_period_s'], _frame_interval_s(config))
+                   if config is not None else float('inf'))
+        window = LinkWindow(
+            state=s['state'], last_error=s['last_error'], window_s=now - since,
+            **{k: cur[k] - prev[k] for k in ('published', 'lost', 'crc_errors', 'fifo_overruns',
+                                             'frames_ok', 'samples_ok')},
+            restarted=cur['restarts'] > prev['restarts'],
+            odr_hz=None if config is None else config.odr_hz,
+            seconds_since_sample=now - (s['last_sample_monotonic'] or now),
+            silence_limit_s=silence)
+        verdict = judge_link(window, self._thresholds)
 
         def fmt(x, spec='g'):
             return '-' if x is None else format(x, spec)
@@ -608,11 +476,12 @@ class Lsm6dso32Driver(Node):
             ('Configured rate (Hz)', fmt(config and config.odr_hz)),
             ('Gyro full scale (deg/s)', fmt(config and config.gyro_fs_dps)),
             ('Accel full scale (g)', fmt(config and config.accel_fs_g)),
-            ('Sample rate (Hz)', f'{rate:.1f}' if s['state'] == 'streaming' else '0.0'),
+            ('Sample rate (Hz)', f'{window.rate_hz:.1f}' if s['state'] == 'streaming' else '0.0'),
             ('Samples published', s['published']),
             ('Samples lost', s['lost']),
             ('Samples flagged lost by the board', link.get('samples_flagged_lost', 0)),
-            ('Duplicates dropped', s['duplicates']),
+            # Equal consecutive counters are removed by the decoder, older ones by the tracker.
+            ('Duplicates dropped', s['duplicates'] + link.get('duplicates', 0)),
             ('CRC errors', link.get('crc_errors', 0)),
             ('Resyncs', link.get('resyncs', 0)),
             ('Bytes discarded', link.get('bytes_discarded', 0)),
@@ -624,7 +493,8 @@ class Lsm6dso32Driver(Node):
             ('Temperature messages', s['temperatures']),
             ('Last error', s['last_error']),
         ]
-        return diagnostic_status(self._status_name, self._hardware_id, level, message, values)
+        return diagnostic_status(self._status_name, self._hardware_id,
+                                 bytes([LEVEL_BYTE[verdict.level]]), verdict.message, values)
 
     # ------------------------------------------------------------------ shutdown
 
@@ -644,6 +514,7 @@ def main(args=None):
     -------
     int
         0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter.
+
     """
     return run_node(Lsm6dso32Driver, args, prog=NODE_NAME)
 

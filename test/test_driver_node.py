@@ -332,7 +332,8 @@ def test_session_with_faults_and_reconnection(harness):
         status = h.driver.link_status()
         values = {kv.key: kv.value for kv in status.values}
         assert status.name == 'lsm6dso32_driver: link'
-        assert status.hardware_id == f'lsm6dso32@{board.url}'
+        # Sensor and board identity, never the port path (a socket URL has no USB serial number).
+        assert status.hardware_id == 'lsm6dso32/portenta_h7/imu_link'
         assert values['Connection'] == 'streaming'
         assert values['Samples lost'] == '15' and values['Samples published'] == '280'
         assert values['Duplicates dropped'] == '10' and int(values['CRC errors']) >= 1

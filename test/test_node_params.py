@@ -11,7 +11,9 @@ import re
 from pathlib import Path
 
 import pytest
-from rclpy.parameter import parameter_dict_from_yaml_file, parameter_value_to_python
+import rclpy
+from rclpy.parameter import Parameter, parameter_dict_from_yaml_file, parameter_value_to_python
+import yaml
 
 import gyro_noise_ros.nodes as nodes_pkg
 from gyro_noise_ros.nodes._ros_common import ParamSpec
@@ -68,7 +70,7 @@ def test_table_is_well_formed(module):
 def test_yaml_lists_every_parameter_with_its_default(module):
     path = CONFIG_DIR / f'{module.NODE_NAME}.yaml'
     assert path.is_file(), f'missing {path}'
-    params = parameter_dict_from_yaml_file(str(path), target_nodes=[module.NODE_NAME])
+    params = parameter_dict_from_yaml_file(str(path), target_nodes=['/**'])
     values = {name: parameter_value_to_python(p.value) for name, p in params.items()}
     table = {spec.name: spec for spec in module.PARAMETERS}
     assert set(values) == set(table), (f'only in YAML: {sorted(set(values) - set(table))}; '
@@ -90,3 +92,47 @@ def test_yaml_comment_gives_unit_and_read_only(module):
         unit = spec.unit or '-'
         assert comment.startswith(f'[{unit}]'), f'{spec.name}: comment must start with [{unit}]'
         assert ('read_only' in comment) == spec.read_only, f'{spec.name}: read_only marker mismatch'
+
+
+@pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
+def test_yaml_is_keyed_for_any_namespace(module):
+    # Keyed by the bare node name, a file is silently ignored under -r __ns:=/robot1 (issue 10).
+    doc = yaml.safe_load((CONFIG_DIR / f'{module.NODE_NAME}.yaml').read_text())
+    assert list(doc) == ['/**'], f'top-level keys {list(doc)}: key the file /** so it applies '
+    'under any namespace'
+
+
+# (node class, parameter changed in a copy of the shipped file, value, extra overrides)
+_NAMESPACED = {
+    'gyro_noise_record': ('queue_depth', 12345),
+    'lsm6dso32_driver': ('qos_depth', 1234),
+}
+
+
+@pytest.mark.parametrize('name', sorted(_NAMESPACED))
+def test_shipped_file_applies_under_a_namespace(name, tmp_path):
+    module = next(m for m in NODE_MODULES if m.NODE_NAME == name)
+    param, value = _NAMESPACED[name]
+    text = (CONFIG_DIR / f'{name}.yaml').read_text()
+    changed = re.sub(rf'(\n\s+{param}: )\S+', rf'\g<1>{value}', text)
+    assert changed != text
+    path = tmp_path / f'{name}.yaml'
+    path.write_text(changed)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, args=['prog', '--ros-args', '-r', '__ns:=/robot1',
+                                  '--params-file', str(path)])
+    node = None
+    try:
+        overrides = [Parameter('output', value=str(tmp_path / 'bag'))] if name.endswith('record') \
+            else [Parameter('autostart', value=False)]
+        node_class = next(v for v in vars(module).values()
+                          if isinstance(v, type) and v.__module__ == module.__name__
+                          and hasattr(v, 'get_parameter'))
+        node = node_class(context=ctx, parameter_overrides=overrides)
+        assert node.get_namespace() == '/robot1'
+        assert node.get_parameter(param).value == value
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown(context=ctx)
+

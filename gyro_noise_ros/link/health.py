@@ -19,6 +19,7 @@ their differences into a :class:`LinkWindow` and :func:`judge_link` picks the le
 explicit limits in :class:`LinkThresholds` (run on the timer), the shape of
 :class:`gyro_noise_ros.core.health.HealthVerdict`:
 
+- OK without checks: the node is ``unconfigured`` or ``inactive`` (lifecycle states).
 - ERROR: the port is not streaming (the message names the last error); no sample for
   ``silence_limit_s``; lost fraction in the window above ``loss_error_ratio``.
 - WARN: lost fraction above ``loss_warn_ratio``; CRC errors or sensor FIFO overruns in the window;
@@ -31,6 +32,9 @@ from dataclasses import dataclass, field, fields
 from ..errors import ParameterError
 
 _RANK = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
+# Lifecycle states in which not streaming is what was asked for (a manager drives the node).
+_IDLE = {'unconfigured': 'Unconfigured (lifecycle): the port is closed.',
+         'inactive': 'Inactive (lifecycle): the link is up, samples are not published.'}
 
 
 def _limit(default, description, unit=''):
@@ -78,7 +82,8 @@ class LinkWindow:
     Attributes
     ----------
     state : str
-        ``'streaming'``, ``'connecting'``, ``'configuring'``, ``'disconnected'``, ``'inactive'``...
+        ``'streaming'``, ``'connecting'``, ``'configuring'``, ``'disconnected'``, ``'inactive'``,
+        ``'unconfigured'``.
     last_error : str
         Why the link last failed (``'none'``).
     window_s : float
@@ -156,6 +161,8 @@ def judge_link(window, thresholds=None):
     th = thresholds if thresholds is not None else LinkThresholds()
     w = window
     checks = []
+    if w.state in _IDLE:
+        return LinkVerdict('OK', _IDLE[w.state], ())
     if w.state == 'disconnected':
         checks.append(('ERROR', f'Link down: {w.last_error}.'))
     elif w.state != 'streaming':

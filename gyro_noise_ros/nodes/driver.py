@@ -1,56 +1,70 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 """
 ROS 2 driver of the LSM6DSO32 read by an Arduino Portenta H7: ``lsm6dso32_driver``.
 
-Opens the board's serial port (a device path or any pyserial URL, e.g. ``socket://127.0.0.1:PORT``
-for the emulator), configures output data rate and full scales, waits for the board's
-acknowledgement, and from then on publishes every sample:
+A managed (lifecycle) node. *configure* starts the link: the board's serial port (a device path
+or a pyserial URL such as ``socket://127.0.0.1:PORT`` for the emulator) is opened and the board
+configured (CONFIGURE, then its ACK; ``link.session``), retried every ``reconnect_period_s`` until
+it succeeds; *activate* publishes the samples; *deactivate* stops publishing (the link stays up,
+samples are counted and dropped); *cleanup* and *shutdown* close the port. ``autostart`` (default
+true) walks the node to active at start, so ``lsm6dso32_driver --ros-args -p port:=...`` streams
+at once. Topics (REP-145, reliable keep-last ``qos_depth`` so every subscriber receives them,
+REP-2003):
 
-- ``imu/data_raw`` (``sensor_msgs/Imu``, one message per sample, REP-145: rad/s, m/s^2, orientation
-  unknown so ``orientation_covariance[0] = -1``, diagonal covariances from parameters, sensor-data QoS);
-- ``imu/temperature`` (``sensor_msgs/Temperature``, degC, one of every ``temperature_decimation``
-  samples, chosen by sequence counter so the choice survives reconnections);
-- ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): status ``'<node name>: link'``.
+- ``imu/data_raw`` (``sensor_msgs/Imu``, one message per sample: rad/s, m/s^2, orientation
+  unknown so ``orientation_covariance[0] = -1``, diagonal covariances from parameters);
+- ``imu/temperature`` (``sensor_msgs/Temperature``, degC, for samples whose counter is a multiple
+  of ``temperature_decimation``, so the choice survives reconnections);
+- ``/diagnostics``: status ``'<node name>: link'`` (keys in ``docs/diagnostics.md``).
 
-Threads. One reader thread owns the port: it reads, decodes (``link.protocol.Decoder``), maps device
-time to the node clock (``link.clock.DeviceClock``: stamps are monotonic and free of USB receive
-jitter), scales to SI (``link.lsm6dso32.to_si``), serialises the messages in bulk with numpy
-(``bag.encode_imu_cdr``) and publishes the serialised bytes itself; rclpy publishers are thread-safe,
-and publishing where the data is decoded avoids a queue between threads (nothing unbounded: if
-publishing falls behind, reads wait and the board's own buffer overflows, which the board flags).
-The executor only runs the diagnostics timer, so nothing ever blocks it.
-
-Losses and duplicates. The board numbers samples with a wrapping uint32 counter. The node publishes
-a sample only if its counter is ahead of the last published one (modulo 2**32), so nothing is ever
-published twice, also when a reconnected board re-sends buffered samples; every counter gap between
-published samples, within a connection or across an unplug, is counted in ``Samples lost``. A counter
-that falls back by more than one second of samples is a board restart: the node starts a new epoch
-(clock estimator reset, stamps still monotonic) instead of waiting for the old count.
-
-Unplug. Any read/write error or ``data_timeout_s`` of silence (at least three full frames at low
-rates) closes the port, reports ERROR with the reason and retries every ``reconnect_period_s`` until the port is back; the node never exits for it.
+One reader thread owns the port: it reads, decodes (``link.protocol.Decoder``), maps device time to
+the node clock (``link.clock.DeviceClock``), scales to SI, serialises in bulk
+(``bag.encode_imu_cdr``) and publishes the bytes itself (rclpy publishers are thread-safe), so no
+queue sits between threads and the executor only runs the diagnostics timer and the lifecycle
+services. A sample is published only if its wrapping uint32 counter is ahead of the last published
+one (``link.sequence.SequenceTracker``): nothing twice, every gap counted in ``Samples lost``; a
+counter falling back by more than one second of samples is a board restart (new epoch). Any
+read/write error or ``data_timeout_s`` of silence closes the port, reports ERROR and retries; the
+node never exits for it.
 """
 
+from dataclasses import fields
 import sys
 import threading
 import time
-from dataclasses import dataclass, fields
 
 import numpy as np
-import serial
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from sensor_msgs.msg import Imu, Temperature
+import serial
 
+from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
+                          diagnostics_publisher, driver_qos, ParamSpec, run_node,
+                          specs_from_dataclass)
 from ..bag import encode_imu_cdr, encode_temperature_cdr
+from ..core.health import LEVEL_BYTE
 from ..errors import LinkError, ParameterError
 from ..link import lsm6dso32
 from ..link.clock import DeviceClock
 from ..link.health import judge_link, LinkThresholds, LinkWindow
-from ..link.protocol import Decoder, encode_configure, MAX_SAMPLES_PER_FRAME
+from ..link.port import hardware_id_for, validate_port
+from ..link.protocol import Decoder
 from ..link.sequence import SequenceTracker
-from ..core.health import LEVEL_BYTE
-from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
-                          diagnostics_publisher, ParamSpec, run_node, sensor_data_qos,
-                          specs_from_dataclass)
+from ..link.session import frame_interval_s, handshake, LinkConfig
+
+__all__ = ['LinkConfig', 'Lsm6dso32Driver', 'main', 'NODE_NAME', 'PARAMETERS']
 
 NODE_NAME = 'lsm6dso32_driver'
 
@@ -62,11 +76,16 @@ PARAMETERS = (
     ParamSpec('port', '/dev/ttyACM0',
               'Serial device of the board or a pyserial URL such as socket://127.0.0.1:PORT',
               read_only=True),
-    ParamSpec('baud_rate', 2_000_000,
-              'UART baud rate; ignored by USB CDC ports; a real UART needs about 2 MBd at 6.66 kHz',
-              unit='Bd', read_only=True, min_value=9600, max_value=12_000_000),
+    ParamSpec('baud_rate', 2_000_000, 'UART baud rate; ignored by USB CDC ports; a real UART '
+              'needs about 2 MBd at 6.66 kHz', unit='Bd', read_only=True, min_value=9600,
+              max_value=12_000_000),
     ParamSpec('frame_id', 'imu_link', 'header.frame_id of the published messages',
               pattern=r'[A-Za-z0-9_./-]+'),
+    ParamSpec('hardware_id', '', 'hardware_id of the diagnostics (empty: lsm6dso32/portenta_h7/ '
+              'and the USB serial number of the board, or the frame_id without one)',
+              read_only=True),
+    ParamSpec('autostart', True, 'Walk the lifecycle to active at start (false: a lifecycle '
+              'manager or launch file drives configure and activate)', read_only=True),
     ParamSpec('odr_hz', _DEFAULT_ODR, 'Output data rate requested from the board',
               unit='Hz', read_only=True, choices=tuple(lsm6dso32.ODRS_HZ)),
     ParamSpec('gyro_full_scale_dps', 2000, 'Gyroscope full scale requested from the board',
@@ -89,8 +108,8 @@ PARAMETERS = (
     ParamSpec('temperature_decimation', 128,
               'Publish imu/temperature for samples whose sequence number is a multiple of this',
               unit='samples', min_value=1, max_value=1_000_000),
-    ParamSpec('qos_depth', 5000, 'History depth of imu/data_raw and imu/temperature (sensor-data QoS)',
-              unit='messages', read_only=True, min_value=1, max_value=1_000_000),
+    ParamSpec('qos_depth', 5000, 'History depth of imu/data_raw and imu/temperature (reliable, '
+              'keep last)', unit='messages', read_only=True, min_value=1, max_value=1_000_000),
     ParamSpec('read_period_s', 0.01,
               'Longest wait of one port read; batches samples and bounds the publishing latency',
               unit='s', read_only=True, min_value=0.0005, max_value=0.5),
@@ -107,25 +126,13 @@ PARAMETERS = (
 
 _READ_SIZE = 1 << 16
 _THRESHOLD_NAMES = tuple(f.name for f in fields(LinkThresholds))
-
-
-@dataclass(frozen=True)
-class LinkConfig:
-    """Configuration the board acknowledged: rate in Hz, full scales in deg/s and g."""
-
-    odr_hz: float
-    gyro_fs_dps: int
-    accel_fs_g: int
-
-
-def _frame_interval_s(config):
-    """Longest normal silence of a link: three full frames (the firmware may batch up to 128)."""
-    return 3.0 * MAX_SAMPLES_PER_FRAME / config.odr_hz
+_COUNTERS = ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')
+_OK = TransitionCallbackReturn.SUCCESS
 
 
 def _diag_counters(now, snapshot):
     link = snapshot['link']
-    out = {k: link.get(k, 0) for k in ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')}
+    out = {k: link.get(k, 0) for k in _COUNTERS}
     out.update(time=now, published=snapshot['published'], lost=snapshot['lost'],
                restarts=snapshot['restarts'])
     return out
@@ -139,7 +146,7 @@ def _diag_cov(variance):
     return np.diag([variance] * 3).reshape(9)
 
 
-class Lsm6dso32Driver(Node):
+class Lsm6dso32Driver(LifecycleNode):
     """
     The ``lsm6dso32_driver`` node (see the module docstring).
 
@@ -148,12 +155,12 @@ class Lsm6dso32Driver(Node):
     node_name : str
         Node name (default :data:`NODE_NAME`).
     **kwargs
-        Passed to ``rclpy.node.Node`` (e.g. ``parameter_overrides``, ``context``).
+        Passed to ``rclpy.lifecycle.LifecycleNode`` (``parameter_overrides``, ``context``).
 
     Raises
     ------
     ParameterError
-        A parameter override is of the wrong type, out of range, or the port is not a usable name.
+        A parameter override is of the wrong type, out of range, or the port is not usable.
 
     """
 
@@ -161,50 +168,39 @@ class Lsm6dso32Driver(Node):
         super().__init__(node_name, **kwargs)
         p = declare_parameter_table(self, PARAMETERS, on_change=self._on_parameters_changed)
         self._params = p
-        port = p['port'].strip()
-        if not port:
-            raise ParameterError("parameter 'port' is empty: give a device path or a pyserial URL")
-        try:
-            serial.serial_for_url(port, do_not_open=True)
-        except (ValueError, serial.SerialException) as err:
-            raise ParameterError(f"parameter 'port' = {port!r} is not usable: {err}") from err
+        self._port = validate_port(p['port'])
         self._thresholds = LinkThresholds(**{k: p[k] for k in _THRESHOLD_NAMES})
-        self._port = port
-        self._hardware_id = f'lsm6dso32@{port}'
+        self._hardware_id = p['hardware_id'] or hardware_id_for(self._port, p['frame_id'])
         self._status_name = f'{self.get_name()}: link'
         self._message_fields = self._make_message_fields(p)
-
-        qos = sensor_data_qos(p['qos_depth'])
+        qos = driver_qos(p['qos_depth'])
         self._imu_pub = self.create_publisher(Imu, 'imu/data_raw', qos)
         self._temp_pub = self.create_publisher(Temperature, 'imu/temperature', qos)
         self._diag_pub = diagnostics_publisher(self)
-
         self._device_clock = DeviceClock(nominal_rate_hz=float(p['odr_hz']))
         self._tracker = SequenceTracker(restart_window=max(1, int(round(p['odr_hz']))))
-
-        # Everything below is written by the reader thread and read by the diagnostics timer.
+        # One decoder for the node's life: reset_stream() at each connection drops a partial
+        # frame but keeps the counters, so diagnostics add up over unplugs.
+        self._decoder = Decoder()
+        # Written by the reader thread and the lifecycle callbacks, read by the diagnostics timer.
         self._lock = threading.Lock()
-        self._state = 'connecting'
+        self._lifecycle = 'unconfigured'
+        self._state = 'unconfigured'
         self._last_error = 'none'
         self._last_logged_error = None
         self._config = None
         self._link_stats = {}
-        self._published = 0
-        self._temperatures = 0
-        self._lost = 0
-        self._duplicates = 0
-        self._restarts = 0
-        self._connections = 0
+        self._counts = dict.fromkeys(('published', 'temperatures', 'lost', 'duplicates',
+                                      'restarts', 'connections', 'discarded'), 0)
         self._streaming_since = None
         self._last_sample_monotonic = None
         self._diag_prev = _diag_counters(time.monotonic(), self.link_snapshot())
-
         self._stop = threading.Event()
-        self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader', daemon=True)
-        self._reader.start()
-        self._diag_timer = self.create_timer(p['diagnostics_period_s'], self._publish_diagnostics)
-
-    # ------------------------------------------------------------------ parameters
+        self._reader = None
+        self.create_timer(p['diagnostics_period_s'], self._publish_diagnostics)
+        if p['autostart']:
+            self.trigger_configure()
+            self.trigger_activate()
 
     def _make_message_fields(self, p):
         return {
@@ -224,12 +220,58 @@ class Lsm6dso32Driver(Node):
         except ParameterError as err:
             self.get_logger().error(f'link thresholds unchanged: {err}')
 
+    # ------------------------------------------------------------------ lifecycle
+
+    def on_configure(self, state):
+        """Start the reader thread: open the port and configure the board (retried)."""
+        self._stop = threading.Event()
+        self._set_lifecycle('inactive')
+        self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader',
+                                        daemon=True)
+        self._reader.start()
+        return _OK
+
+    def on_activate(self, state):
+        """Publish the samples from now on."""
+        self._set_lifecycle('active')
+        return _OK
+
+    def on_deactivate(self, state):
+        """Stop publishing; the link stays up and its samples are counted and dropped."""
+        self._set_lifecycle('inactive')
+        return _OK
+
+    def on_cleanup(self, state):
+        """Stop the reader thread, which closes the port."""
+        self._stop_reader()
+        self._set_lifecycle('unconfigured')
+        return _OK
+
+    def on_shutdown(self, state):
+        """Close the port, from any state."""
+        return self.on_cleanup(state)
+
+    def on_error(self, state):
+        """Close the port after a failed transition."""
+        return self.on_cleanup(state)
+
+    def _set_lifecycle(self, name):
+        with self._lock:
+            self._lifecycle = name
+            if name == 'active' and self._state == 'streaming':
+                self._streaming_since = time.monotonic()
+            if name == 'unconfigured':
+                self._state = 'unconfigured'
+
+    def _stop_reader(self):
+        self._stop.set()
+        if self._reader is not None and self._reader.is_alive():
+            self._reader.join(timeout=5.0)
+        self._reader = None
+
     # ------------------------------------------------------------------ reader thread
 
     def _reader_loop(self):
-        # One decoder for the node's life: reset_stream() at each connection drops a partial frame
-        # but keeps the counters, so diagnostics add up over unplugs.
-        decoder = Decoder()
         while not self._stop.is_set():
             self._set_state('connecting')
             try:
@@ -240,9 +282,9 @@ class Lsm6dso32Driver(Node):
                 self._link_failed(f'cannot open {self._port}: {err}')
                 self._stop.wait(self._params['reconnect_period_s'])
                 continue
-            decoder.reset_stream()
+            self._decoder.reset_stream()
             try:
-                self._run_session(ser, decoder)
+                self._run_session(ser)
             except (serial.SerialException, OSError, LinkError) as err:
                 self._link_failed(str(err) or type(err).__name__)
             except Exception as err:  # noqa: BLE001 - the reader must outlive any single failure
@@ -253,47 +295,27 @@ class Lsm6dso32Driver(Node):
             finally:
                 try:
                     ser.close()
-                except Exception:  # noqa: BLE001 - closing a vanished port may fail; it is gone anyway
+                except Exception:  # noqa: BLE001 - a vanished port may fail to close; it is gone
                     pass
                 with self._lock:
-                    self._link_stats = _stats_dict(decoder.stats)
+                    self._link_stats = _stats_dict(self._decoder.stats)
             if not self._stop.is_set():
                 self._stop.wait(self._params['reconnect_period_s'])
-        self._set_state('stopped')
 
-    def _run_session(self, ser, decoder):
-        """Configure the board on an open port, then publish until the link fails or the node stops."""
+    def _run_session(self, ser):
+        """Configure the board on an open port, then read until the link fails or stops."""
         self._set_state('configuring')
         with self._lock:
-            self._connections += 1
-            command_id = self._connections
+            self._counts['connections'] += 1
+            command_id = self._counts['connections']
         p = self._params
-        ser.write(encode_configure(command_id=command_id, odr_hz=p['odr_hz'],
-                                   gyro_fs_dps=p['gyro_full_scale_dps'],
-                                   accel_fs_g=p['accel_full_scale_g']))
-        deadline = time.monotonic() + p['ack_timeout_s']
-        ack = None
-        while ack is None:
-            if self._stop.is_set():
-                return
-            if time.monotonic() > deadline:
-                raise LinkError(f'no acknowledgement of the configuration within {p["ack_timeout_s"]} s')
-            data = ser.read(_READ_SIZE)
-            if not data:
-                continue
-            host_ns = self.get_clock().now().nanoseconds
-            result = decoder.feed(data)
-            for ack_index, candidate in enumerate(result.acks):
-                if candidate.command_id == command_id:
-                    ack = candidate
-                    # Samples before the acknowledgement may carry the previous configuration's
-                    # scaling: they are dropped, and the counter gap counts them as lost.
-                    after = result.samples[result.ack_positions[ack_index]:]
-                    break
-        if not ack.ok:
-            raise LinkError(f'the board refused odr {p["odr_hz"]} Hz, gyro {p["gyro_full_scale_dps"]} '
-                            f'dps, accel {p["accel_full_scale_g"]} g: {ack.message}')
-        config = LinkConfig(float(ack.odr_hz), int(ack.gyro_fs_dps), int(ack.accel_fs_g))
+        done = handshake(ser, self._decoder, command_id=command_id, odr_hz=p['odr_hz'],
+                         gyro_fs_dps=p['gyro_full_scale_dps'], accel_fs_g=p['accel_full_scale_g'],
+                         ack_timeout_s=p['ack_timeout_s'], stop=self._stop,
+                         now_ns=lambda: self.get_clock().now().nanoseconds)
+        if done is None:
+            return
+        config, after, host_ns = done
         now = time.monotonic()
         with self._lock:
             self._config = config
@@ -304,9 +326,9 @@ class Lsm6dso32Driver(Node):
         self.get_logger().info(f'streaming from {self._port}: {config.odr_hz:g} Hz, '
                                f'+/-{config.gyro_fs_dps} dps, +/-{config.accel_fs_g} g')
         if len(after):
-            self.publish_samples(after, host_ns, config)
+            self._handle(after, host_ns, config)
         last_data = now
-        silence_s = max(p['data_timeout_s'], _frame_interval_s(config))
+        silence_s = max(p['data_timeout_s'], frame_interval_s(config))
         while not self._stop.is_set():
             data = ser.read(_READ_SIZE)
             now = time.monotonic()
@@ -316,13 +338,26 @@ class Lsm6dso32Driver(Node):
                 continue
             last_data = now
             host_ns = self.get_clock().now().nanoseconds
-            result = decoder.feed(data)
+            result = self._decoder.feed(data)
             if len(result.samples):
-                self.publish_samples(result.samples, host_ns, config)
+                self._handle(result.samples, host_ns, config)
             with self._lock:
-                self._link_stats = _stats_dict(decoder.stats)
+                self._link_stats = _stats_dict(self._decoder.stats)
                 if len(result.samples):
                     self._last_sample_monotonic = now
+
+    def _handle(self, samples, host_ns, config):
+        if self._lifecycle == 'active':
+            self.publish_samples(samples, host_ns, config)
+            return
+        # Inactive: the counters advance so that activation does not count a gap as loss.
+        while len(samples):
+            decision = self._tracker.accept(samples['seq'])
+            with self._lock:
+                self._counts['discarded'] += int(np.count_nonzero(decision.keep))
+            samples = samples[decision.stop:]
+            if len(samples):
+                self._tracker.reset()
 
     def _set_state(self, state):
         with self._lock:
@@ -345,9 +380,10 @@ class Lsm6dso32Driver(Node):
 
     def publish_samples(self, samples, host_receive_ns, config):
         """
-        Publish decoded samples: drop already published counters, stamp, scale, serialise, publish.
+        Publish decoded samples: drop already published counters, stamp, scale, serialise.
 
-        Called by the reader thread for every decoded batch; tests call it with known samples.
+        Called by the reader thread for every decoded batch while active; tests call it with
+        known samples.
 
         Parameters
         ----------
@@ -370,15 +406,15 @@ class Lsm6dso32Driver(Node):
             part = samples[:decision.stop][decision.keep]
             published += self._publish_part(part, host_receive_ns, config)
             with self._lock:
-                self._lost += decision.lost
-                self._duplicates += decision.duplicates
+                self._counts['lost'] += decision.lost
+                self._counts['duplicates'] += decision.duplicates
             samples = samples[decision.stop:]
             if len(samples):
                 # The counter fell back by more than the restart window: a new board epoch.
                 self._tracker.reset()
                 self._device_clock.reset()
                 with self._lock:
-                    self._restarts += 1
+                    self._counts['restarts'] += 1
                 self.get_logger().warning(f'sample counter restarted at {int(samples["seq"][0])}')
         return published
 
@@ -403,33 +439,31 @@ class Lsm6dso32Driver(Node):
                                                frame_id=f['frame_id'], variance=f['temp_var']):
                 publish(blob)
         with self._lock:
-            self._published += n
-            self._temperatures += n_temp
+            self._counts['published'] += n
+            self._counts['temperatures'] += n_temp
         return n
 
     # ------------------------------------------------------------------ diagnostics
 
     def link_snapshot(self):
         """
-        Copy of the link counters (for diagnostics and tests).
+        Copy the link counters (for diagnostics and tests).
 
         Returns
         -------
         dict
-            ``state``, ``last_error``, ``config``, ``published``, ``temperatures``, ``lost``,
-            ``duplicates``, ``restarts``, ``connections``, ``streaming_since``,
-            ``last_sample_monotonic`` and the decoder's counters summed over all connections.
+            ``state`` (of the link), ``lifecycle``, ``last_error``, ``config``, the counters
+            (``published``, ``temperatures``, ``lost``, ``duplicates``, ``restarts``,
+            ``connections``, ``discarded``), ``streaming_since``, ``last_sample_monotonic`` and
+            ``link``, the decoder's counters summed over all connections.
 
         """
         with self._lock:
-            link = dict(self._link_stats)
-            return {
-                'state': self._state, 'last_error': self._last_error, 'config': self._config,
-                'published': self._published, 'temperatures': self._temperatures,
-                'lost': self._lost, 'duplicates': self._duplicates, 'restarts': self._restarts,
-                'connections': self._connections, 'streaming_since': self._streaming_since,
-                'last_sample_monotonic': self._last_sample_monotonic, 'link': link,
-            }
+            return {'state': self._state, 'lifecycle': self._lifecycle,
+                    'last_error': self._last_error, 'config': self._config, **self._counts,
+                    'streaming_since': self._streaming_since,
+                    'last_sample_monotonic': self._last_sample_monotonic,
+                    'link': dict(self._link_stats)}
 
     def _publish_diagnostics(self):
         self._diag_pub.publish(diagnostic_array(self.get_clock().now().to_msg(),
@@ -439,8 +473,8 @@ class Lsm6dso32Driver(Node):
         """
         Build the ``'<node>: link'`` status from the counters since the previous call.
 
-        The level comes from :func:`gyro_noise_ros.link.health.judge_link` (its module doc lists
-        the checks) with the limits of the parameters.
+        The level is :func:`gyro_noise_ros.link.health.judge_link` of the window with the
+        thresholds of the parameters; the keys are listed in ``docs/diagnostics.md``.
 
         Returns
         -------
@@ -450,38 +484,40 @@ class Lsm6dso32Driver(Node):
         s = self.link_snapshot()
         now = time.monotonic()
         link = s['link']
-        prev, self._diag_prev = self._diag_prev, _diag_counters(now, s)
+        prev, cur = self._diag_prev, _diag_counters(now, s)
+        self._diag_prev = cur
         since = prev['time'] if s['streaming_since'] is None else max(prev['time'],
                                                                       s['streaming_since'])
-        cur = self._diag_prev
         config = s['config']
-        silence = (max(self._params['diagnostics_period_s'], _frame_interval_s(config))
-                   if config is not None else float('inf'))
+        state = s['state']
+        if s['lifecycle'] != 'active' and state in ('streaming', 'unconfigured'):
+            state = 'inactive' if state == 'streaming' else state
         window = LinkWindow(
-            state=s['state'], last_error=s['last_error'], window_s=now - since,
-            **{k: cur[k] - prev[k] for k in ('published', 'lost', 'crc_errors', 'fifo_overruns',
-                                             'frames_ok', 'samples_ok')},
+            state=state, last_error=s['last_error'], window_s=now - since,
             restarted=cur['restarts'] > prev['restarts'],
             odr_hz=None if config is None else config.odr_hz,
             seconds_since_sample=now - (s['last_sample_monotonic'] or now),
-            silence_limit_s=silence)
+            silence_limit_s=(max(self._params['diagnostics_period_s'], frame_interval_s(config))
+                             if config is not None else float('inf')),
+            **{k: cur[k] - prev[k] for k in ('published', 'lost', *_COUNTERS)})
         verdict = judge_link(window, self._thresholds)
 
-        def fmt(x, spec='g'):
-            return '-' if x is None else format(x, spec)
+        def fmt(x):
+            return '-' if x is None else format(x, 'g')
 
         values = [
-            ('Connection', s['state']),
+            ('Connection', state),
             ('Port', self._port),
             ('Configured rate (Hz)', fmt(config and config.odr_hz)),
             ('Gyro full scale (deg/s)', fmt(config and config.gyro_fs_dps)),
             ('Accel full scale (g)', fmt(config and config.accel_fs_g)),
-            ('Sample rate (Hz)', f'{window.rate_hz:.1f}' if s['state'] == 'streaming' else '0.0'),
+            ('Sample rate (Hz)', f'{window.rate_hz:.1f}' if state == 'streaming' else '0.0'),
             ('Samples published', s['published']),
             ('Samples lost', s['lost']),
             ('Samples flagged lost by the board', link.get('samples_flagged_lost', 0)),
             # Equal consecutive counters are removed by the decoder, older ones by the tracker.
             ('Duplicates dropped', s['duplicates'] + link.get('duplicates', 0)),
+            ('Samples dropped while inactive', s['discarded']),
             ('CRC errors', link.get('crc_errors', 0)),
             ('Resyncs', link.get('resyncs', 0)),
             ('Bytes discarded', link.get('bytes_discarded', 0)),
@@ -496,24 +532,26 @@ class Lsm6dso32Driver(Node):
         return diagnostic_status(self._status_name, self._hardware_id,
                                  bytes([LEVEL_BYTE[verdict.level]]), verdict.message, values)
 
-    # ------------------------------------------------------------------ shutdown
-
     def destroy_node(self):
         """Stop and join the reader thread (it closes the port), then destroy the node."""
-        self._stop.set()
-        if self._reader.is_alive():
-            self._reader.join(timeout=5.0)
+        self._stop_reader()
         return super().destroy_node()
 
 
 def main(args=None):
     """
-    Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p`` / ``--params-file``.
+    Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p``/``--params-file``.
+
+    Parameters
+    ----------
+    args : list of str or None
+        Command line (None: ``sys.argv``).
 
     Returns
     -------
     int
-        0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter.
+        0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter or an
+        unknown ROS argument.
 
     """
     return run_node(Lsm6dso32Driver, args, prog=NODE_NAME)

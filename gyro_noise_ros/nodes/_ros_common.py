@@ -27,6 +27,7 @@ import rclpy
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType,
                                 SetParametersResult)
 from rclpy.callback_groups import CallbackGroup
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -304,6 +305,32 @@ def specs_from_dataclass(cls, *, read_only, float_range=(0.0, 1.0e9), int_range=
                               min_value=type(default)(meta.get('min', lo)),
                               max_value=type(default)(meta.get('max', hi))))
     return tuple(rows)
+
+
+def wall_timer(node, period_s, callback):
+    """
+    Create a timer on the steady (wall) clock, whatever ``use_sim_time`` says.
+
+    Draining subscriptions and periodic diagnostics must keep their cadence when ``/clock`` is
+    late, paused or absent (``ros2 bag play --clock`` under ``use_sim_time:=true``): on the ROS
+    clock such a timer stops, the subscription queues overflow and the analyzer reports samples
+    lost that were never lost. Stamps still come from the node clock.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node owning the timer.
+    period_s : float
+        Period (s of wall time).
+    callback : callable
+        Called without arguments.
+
+    Returns
+    -------
+    rclpy.timer.Timer
+
+    """
+    return node.create_timer(period_s, callback, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
 def diagnostics_publisher(node):

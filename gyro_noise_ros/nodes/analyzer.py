@@ -55,7 +55,7 @@ from sensor_msgs.msg import Imu, Temperature
 from ..bag import decode_imu, decode_temperature
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
-                          specs_from_dataclass, take_all, unused_callback)
+                          specs_from_dataclass, take_all, unused_callback, wall_timer)
 from ..core.engine import AXES, GAP_POLICIES, NoiseEngine, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import HealthThresholds, LEVEL_BYTE
@@ -190,8 +190,8 @@ class NoiseAnalyzerNode(Node):
         topic_qos = QoSProfile(depth=100)
         self._chunk_pubs = {name: self.create_publisher(Vector3Stamped, '~/' + name, topic_qos)
                             for name in (*CHUNK_TOPICS, 'offset_drift')}
-        self.create_timer(p['drain_period_s'], self.drain)
-        self.create_timer(p['diagnostics_period_s'], self.publish_diagnostics)
+        wall_timer(self, p['drain_period_s'], self.drain)
+        wall_timer(self, p['diagnostics_period_s'], self.publish_diagnostics)
         self.get_logger().info(
             f'analysing {self._imu_sub.topic_name} axes {",".join(self.config.axes)}, chunks of '
             f'{self.config.chunk_size} samples, orders {self.config.alphas[0]:g}:'

@@ -52,7 +52,7 @@ import serial
 
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, driver_qos, ParamSpec, run_node,
-                          specs_from_dataclass)
+                          specs_from_dataclass, wall_timer)
 from ..bag import encode_imu_cdr, encode_temperature_cdr
 from ..core.health import LEVEL_BYTE
 from ..errors import LinkError, ParameterError
@@ -197,7 +197,7 @@ class Lsm6dso32Driver(LifecycleNode):
         self._diag_prev = _diag_counters(time.monotonic(), self.link_snapshot())
         self._stop = threading.Event()
         self._reader = None
-        self.create_timer(p['diagnostics_period_s'], self._publish_diagnostics)
+        wall_timer(self, p['diagnostics_period_s'], self._publish_diagnostics)
         if p['autostart']:
             self.trigger_configure()
             self.trigger_activate()

@@ -29,7 +29,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import Imu, Temperature
 
 from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_node,
-                          sensor_data_qos, take_all, unused_callback)
+                          sensor_data_qos, take_all, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
 from ..bag.codec import frame_id_of, imu_covariances, temperature_variances
 from ..errors import BagError
@@ -104,11 +104,11 @@ class RecorderNode(Node):
         if params['record_temperature']:
             self._temperature_sub = self.create_subscription(
                 Temperature, 'imu/temperature', unused_callback, qos, raw=True, callback_group=group)
-        self.create_timer(params['drain_period_s'], self.drain)
+        wall_timer(self, params['drain_period_s'], self.drain)
         if params['flush_period_s'] > 0:
-            self.create_timer(params['flush_period_s'], self._flush)
+            wall_timer(self, params['flush_period_s'], self._flush)
         if params['report_period_s'] > 0:
-            self.create_timer(params['report_period_s'], self._report)
+            wall_timer(self, params['report_period_s'], self._report)
         self.get_logger().info(f'recording {self._imu_sub.topic_name}'
                                + (f' and {self._temperature_sub.topic_name}'
                                   if self._temperature_sub else '')

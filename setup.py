@@ -13,17 +13,22 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE]),
         ('share/' + PACKAGE, ['package.xml']),
         ('share/' + PACKAGE + '/config', glob('config/*.yaml')),
+        ('share/' + PACKAGE + '/launch', glob('launch/*.launch.py')),
     ],
     python_requires='>=3.10',
+    # No version floors on what a ROS distribution provides from its OS packages (colcon users get
+    # numpy, scipy, numba, pyserial, matplotlib and PyYAML from apt, rosdep keys in package.xml):
+    # a floor above the distro's version makes setuptools-generated console scripts refuse to
+    # start. rosbags is pip-only (rosdep key python3-rosbags-pip).
     install_requires=[
         'setuptools',
-        'numpy>=1.26',
-        'scipy>=1.11',
-        'numba>=0.59',
+        'numpy',
+        'scipy',
+        'numba',
         'rosbags>=0.10',
-        'pyserial>=3.5',
-        'matplotlib>=3.7',
-        'PyYAML>=6',
+        'pyserial',
+        'matplotlib',
+        'PyYAML',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install
@@ -45,7 +50,7 @@ setup(
     },
     zip_safe=True,
     maintainer='gyro_noise_ros developers',
-    maintainer_email='gyro-noise-ros@example.invalid',
+    maintainer_email='gyro-noise-ros@users.noreply.github.com',
     description='Noise characterisation of MEMS gyroscopes (LSM6DSO32) live and from rosbags: '
                 'fractional-order identification, Allan deviation, diagnostics.',
     license='Apache-2.0',

@@ -24,20 +24,18 @@ import sys
 import threading
 import time
 
-import numpy as np
-import pytest
-import rclpy
-from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile
-from sensor_msgs.msg import Imu
-from lifecycle_msgs.msg import Transition
-from lifecycle_msgs.srv import ChangeState, GetState
-
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.link import protocol as P
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos
 from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver
-from test_driver_node import context, FakeBoard, harness, Harness, make_samples  # noqa: F401
+from lifecycle_msgs.msg import Transition
+from lifecycle_msgs.srv import ChangeState, GetState
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import Imu
+from test_driver_node import context, FakeBoard, Harness, harness, make_samples  # noqa: F401
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 

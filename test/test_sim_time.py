@@ -27,6 +27,8 @@ import time
 os.environ.setdefault('ROS_DOMAIN_ID', str(100 + (os.getpid() + 37) % 100))
 
 from builtin_interfaces.msg import Time  # noqa: E402
+from gyro_noise_ros.bag import encode_imu_cdr  # noqa: E402
+from gyro_noise_ros.nodes.analyzer import NoiseAnalyzerNode  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import rclpy  # noqa: E402
@@ -35,9 +37,6 @@ from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import QoSProfile  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
-
-from gyro_noise_ros.bag import encode_imu_cdr  # noqa: E402
-from gyro_noise_ros.nodes.analyzer import NoiseAnalyzerNode  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 

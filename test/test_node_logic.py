@@ -24,9 +24,12 @@ from gyro_noise_ros.bag.codec import imu_covariances, temperature_variances
 from gyro_noise_ros.core.health import HealthThresholds
 from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
 from gyro_noise_ros.core.live import parse_axes, TemperatureTrack
-from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.errors import LinkError, ParameterError
+from gyro_noise_ros.link import protocol as P
 from gyro_noise_ros.link.health import judge_link, LinkThresholds, LinkWindow
+from gyro_noise_ros.link.port import hardware_id_for, validate_port
 from gyro_noise_ros.link.sequence import SequenceGapCounter, SequenceTracker
+from gyro_noise_ros.link.session import handshake, LinkConfig, ODR_TOLERANCE_RATIO
 from gyro_noise_ros.monitor_lines import format_array, format_status, parse_axis_parts
 import numpy as np
 import pytest
@@ -263,3 +266,71 @@ def test_temperature_track_interpolates_and_holds():
     assert track.at(np.array([0, 500])) == 20.0
     track.add(np.array([300]), np.array([22.0]))
     np.testing.assert_allclose(track.at(np.array([100, 200, 300, 400])), [20.0, 21.0, 22.0, 22.0])
+
+
+class _Port:
+    """A serial port stand-in: records writes, returns scripted reads."""
+
+    def __init__(self, reads):
+        self.reads, self.written = list(reads), b''
+
+    def write(self, data):
+        self.written += data
+
+    def read(self, size):
+        return self.reads.pop(0) if self.reads else b''
+
+
+def _ack_for(odr_hz, gyro=2000, accel=32, ok=True, command_id=1):
+    return P.encode_ack(P.Ack(command_id, ok, odr_hz, gyro, accel, '', 0 if ok else P.NAK_BAD_ODR))
+
+
+def _handshake(reads, odr_hz=6667.0, timeout=0.2):
+    return handshake(_Port(reads), P.Decoder(), command_id=1, odr_hz=odr_hz, gyro_fs_dps=2000,
+                     accel_fs_g=32, ack_timeout_s=timeout)
+
+
+def test_handshake_sends_configure_and_takes_the_samples_after_the_ack():
+    samples = np.zeros(3, P.SAMPLE_DTYPE)
+    samples['seq'] = [7, 8, 9]
+    before = np.zeros(2, P.SAMPLE_DTYPE)
+    port = _Port([P.encode_samples(before) + _ack_for(6667.0) + P.encode_samples(samples)])
+    config, after, _ = handshake(port, P.Decoder(), command_id=1, odr_hz=6667.0,
+                                 gyro_fs_dps=2000, accel_fs_g=32, ack_timeout_s=1.0)
+    assert config == LinkConfig(6667.0, 2000, 32)
+    assert after['seq'].tolist() == [7, 8, 9]
+    assert P.Decoder().feed(port.written).commands[0].odr_hz == 6667.0
+
+
+def test_handshake_accepts_the_odr_within_the_tolerance_and_refuses_beyond():
+    # The board accepts requests within 0.5 % of a datasheet rate and reports its own in the ACK.
+    assert _handshake([_ack_for(6667.0 * (1 + 0.9 * ODR_TOLERANCE_RATIO))])[0].odr_hz > 6667.0
+    with pytest.raises(LinkError, match='acknowledged odr'):
+        _handshake([_ack_for(6667.0 * (1 + 1.1 * ODR_TOLERANCE_RATIO))])
+    with pytest.raises(LinkError, match='acknowledged'):
+        _handshake([_ack_for(6667.0, gyro=250)])
+
+
+def test_handshake_nak_and_silence_are_link_errors():
+    with pytest.raises(LinkError, match='refused'):
+        _handshake([_ack_for(6667.0, ok=False)])
+    with pytest.raises(LinkError, match='no acknowledgement'):
+        _handshake([], timeout=0.05)
+
+
+@pytest.mark.parametrize('port', ['', '  ', 'socket://127.0.0.1', 'socket://:5760',
+                                  'socket://localhost:notaport', 'nosuchscheme://x'])
+def test_unusable_ports_are_refused(port):
+    with pytest.raises(ParameterError, match="'port'"):
+        validate_port(port)
+
+
+def test_usable_ports_pass():
+    assert validate_port(' socket://127.0.0.1:5760 ') == 'socket://127.0.0.1:5760'
+    assert validate_port('/dev/ttyACM0') == '/dev/ttyACM0'
+
+
+def test_hardware_id_is_not_the_port_path():
+    # No USB device behind a URL: the frame id names the sensor, the same for any port.
+    ids = {hardware_id_for(p, 'imu_link') for p in ('socket://127.0.0.1:1', 'socket://h:2')}
+    assert ids == {'lsm6dso32/portenta_h7/imu_link'}

@@ -27,6 +27,10 @@ from ..errors import LinkError
 
 _READ_SIZE = 1 << 16
 
+#: Largest relative difference between the requested ODR and the one the ACK reports in force that
+#: the host accepts: the board's own acceptance window for a request (docs/portenta_link.md).
+ODR_TOLERANCE_RATIO = 0.005
+
 
 @dataclass(frozen=True)
 class LinkConfig:
@@ -100,7 +104,9 @@ def handshake(ser, decoder, *, command_id, odr_hz, gyro_fs_dps, accel_fs_g, ack_
     Raises
     ------
     LinkError
-        No ACK within ``ack_timeout_s``, or a NAK (the message names the refused settings).
+        No ACK within ``ack_timeout_s``; a NAK (the message names the refused settings); an ACK
+        whose configuration in force differs from the request (ODR by more than
+        :data:`ODR_TOLERANCE_RATIO`, or another full scale).
 
     """
     ser.write(encode_configure(command_id=command_id, odr_hz=odr_hz, gyro_fs_dps=gyro_fs_dps,
@@ -123,4 +129,9 @@ def handshake(ser, decoder, *, command_id, odr_hz, gyro_fs_dps, accel_fs_g, ack_
                 raise LinkError(f'the board refused odr {odr_hz} Hz, gyro {gyro_fs_dps} dps, '
                                 f'accel {accel_fs_g} g: {ack.message}')
             config = LinkConfig(float(ack.odr_hz), int(ack.gyro_fs_dps), int(ack.accel_fs_g))
+            if (abs(config.odr_hz - odr_hz) > ODR_TOLERANCE_RATIO * odr_hz
+                    or (config.gyro_fs_dps, config.accel_fs_g) != (gyro_fs_dps, accel_fs_g)):
+                raise LinkError(f'the board acknowledged odr {config.odr_hz:g} Hz, gyro '
+                                f'{config.gyro_fs_dps} dps, accel {config.accel_fs_g} g for a '
+                                f'request of {odr_hz:g} Hz, {gyro_fs_dps} dps, {accel_fs_g} g')
             return config, result.samples[result.ack_positions[ack_index]:], host_ns

@@ -237,8 +237,9 @@ class NoiseAnalyzerNode(Node):
         self.messages_undecodable += len(raws) - len(batch)
         if not len(batch):
             return
-        if not self._frame_id:
-            self._frame_id = batch.frame_id
+        # The diagnostics' hardware_id follows the frame of the data (a remapped or replaced
+        # sensor shows under its new frame at once).
+        self._frame_id = batch.frame_id or self._frame_id
         try:
             jobs = self.engine.ingest(batch.stamp_ns, batch.gyro,
                                       self._temperature.at(batch.stamp_ns))

@@ -230,8 +230,8 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
         axis = status.name[-1]
         n_skipped = sum(r.axis == axis for r in skipped)
         assert values['Chunks skipped'] == f'{n_skipped} of {chunks}'
-        # More than half of the chunks skipped is above the default ERROR fraction (0.5); between 0.1
-        # and 0.5 WARN.
+        # More than half of the chunks skipped is above the default ERROR fraction (0.5); between
+        # 0.1 and 0.5 WARN.
         assert status.level == (b'\x02' if n_skipped > chunks / 2 else b'\x01')
         assert 'skipped' in status.message
 

@@ -117,7 +117,8 @@ def make_samples(seq, *, gyro=None, accel=None, temp=None, period_us=150):
     s = np.zeros(seq.size, P.SAMPLE_DTYPE)
     s['seq'] = (seq % 2**32).astype(np.uint32)
     s['t_us'] = ((seq * period_us) % 2**32).astype(np.uint32)
-    # Default payload: gyro x carries the sequence number so a subscriber can tell which sample it got.
+    # Default payload: gyro x carries the sequence number so a subscriber can tell which sample it
+    # got.
     s['gyro'] = np.stack([seq % 30000, -(seq % 1000), np.full(seq.size, 7)], axis=1) if gyro is None else gyro
     s['accel'] = np.array([0, 0, 1024]) if accel is None else accel
     s['temp'] = 512 if temp is None else temp

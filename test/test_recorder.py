@@ -99,7 +99,8 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
     assert not (out / 'metadata.yaml').exists()
     with ImuBagReader(out / 'killed.db3') as reader:
         n = sum(len(b) for b in reader.iter_batches(100000))
-    # The replayer lingers 1.5 s after the last message, several flush periods of 0.2 s: all committed.
+    # The replayer lingers 1.5 s after the last message, several flush periods of 0.2 s: all
+    # committed.
     assert n == 10000
 
 

@@ -123,7 +123,8 @@ class EngineConfig:
         alphas = default_grid() if self.alphas is None else np.asarray(self.alphas, dtype=np.float64).ravel()
         alphas.setflags(write=False)
         object.__setattr__(self, 'alphas', alphas)
-        # Build once to validate chunk_size / memory / max_lag / grid together with the core's messages.
+        # Build once to validate chunk_size / memory / max_lag / grid together with the core's
+        # messages.
         identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory), bool(self.demean),
                        self.max_lag)
 
@@ -496,7 +497,8 @@ class NoiseEngine:
         self._allan = None
         self._allan_error = None
 
-    # ---- ingestion -------------------------------------------------------------------------------
+    # ---- ingestion
+    # -------------------------------------------------------------------------------
 
     def _reset_buffer(self):
         self._buf = []  # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
@@ -562,8 +564,8 @@ class NoiseEngine:
         if first:
             self._first_ns = int(stamps[0])
             self._max_ns = int(stamps[0])
-        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order count
-        # and does not also make the next step look like a gap.
+        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order
+        # count and does not also make the next step look like a gap.
         run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
         steps = stamps - run_max[:-1]
         self._max_ns = int(run_max[-1])
@@ -670,7 +672,8 @@ class NoiseEngine:
                 return self._release_pending()
         return []
 
-    # ---- Allan -------------------------------------------------------------------------------------
+    # ---- Allan
+    # -------------------------------------------------------------------------------------
 
     def _feed_allan(self, g):
         if not self.config.allan or self._allan_error is not None:
@@ -701,7 +704,8 @@ class NoiseEngine:
             return None, None
         return result, terms
 
-    # ---- analysis and bookkeeping --------------------------------------------------------------------
+    # ---- analysis and bookkeeping
+    # --------------------------------------------------------------------
 
     @staticmethod
     def analyze(job, *, curves=False):

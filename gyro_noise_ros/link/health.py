@@ -29,6 +29,7 @@ explicit limits in :class:`LinkThresholds` (run on the timer), the shape of
 
 from dataclasses import dataclass, field, fields
 
+from .session import frame_interval_s
 from ..errors import ParameterError
 
 _RANK = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
@@ -202,3 +203,113 @@ def judge_link(window, thresholds=None):
         if _RANK[check_level] > _RANK[level]:
             level, message = check_level, check_message
     return LinkVerdict(level, message, tuple(checks))
+
+
+#: Cumulative counters differenced over a window (node counters, then decoder counters).
+_NODE_COUNTERS = ('published', 'lost', 'restarts')
+_LINK_COUNTERS = ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')
+
+
+def counters(snapshot):
+    """
+    Return the cumulative counters a window is the difference of.
+
+    Parameters
+    ----------
+    snapshot : dict
+        The driver's ``link_snapshot()`` (node counters and ``link``, the decoder's counters).
+
+    Returns
+    -------
+    dict of str to int
+
+    """
+    link = snapshot['link']
+    return {**{k: snapshot[k] for k in _NODE_COUNTERS}, **{k: link.get(k, 0)
+                                                           for k in _LINK_COUNTERS}}
+
+
+def window_between(prev, snapshot, *, now, since, period_s):
+    """
+    Build the :class:`LinkWindow` from one diagnostics report to the next.
+
+    Parameters
+    ----------
+    prev : dict
+        :func:`counters` at the previous report.
+    snapshot : dict
+        The driver's ``link_snapshot()`` now, with ``state`` as it should be reported.
+    now : float
+        ``time.monotonic()`` now (s).
+    since : float
+        Start of the window (``time.monotonic()``, s): the later of the previous report, the
+        stream start and the activation.
+    period_s : float
+        Diagnostics period (s); no sample for a period (and three full frames) is an ERROR.
+
+    Returns
+    -------
+    LinkWindow
+
+    """
+    cur = counters(snapshot)
+    config = snapshot['config']
+    return LinkWindow(
+        state=snapshot['state'], last_error=snapshot['last_error'], window_s=now - since,
+        restarted=cur['restarts'] > prev['restarts'],
+        odr_hz=None if config is None else config.odr_hz,
+        seconds_since_sample=now - (snapshot['last_sample_monotonic'] or now),
+        silence_limit_s=(max(period_s, frame_interval_s(config)) if config is not None
+                         else float('inf')),
+        **{k: cur[k] - prev[k] for k in ('published', 'lost', *_LINK_COUNTERS)})
+
+
+def link_items(snapshot, window, *, port, drift_ppm):
+    """
+    Return the key/values of the ``'<node>: link'`` status (``docs/diagnostics.md``).
+
+    Parameters
+    ----------
+    snapshot : dict
+        The driver's ``link_snapshot()``, with ``state`` as it should be reported.
+    window : LinkWindow
+        The window of this report (for the sample rate).
+    port : str
+        The port parameter.
+    drift_ppm : float
+        Board clock rate against the host clock (ppm).
+
+    Returns
+    -------
+    list of (str, object)
+
+    """
+    s, link, config = snapshot, snapshot['link'], snapshot['config']
+
+    def fmt(x):
+        return '-' if x is None else format(x, 'g')
+
+    return [
+        ('Connection', s['state']),
+        ('Port', port),
+        ('Configured rate (Hz)', fmt(config and config.odr_hz)),
+        ('Gyro full scale (deg/s)', fmt(config and config.gyro_fs_dps)),
+        ('Accel full scale (g)', fmt(config and config.accel_fs_g)),
+        ('Sample rate (Hz)', f'{window.rate_hz:.1f}' if s['state'] == 'streaming' else '0.0'),
+        ('Samples published', s['published']),
+        ('Samples lost', s['lost']),
+        ('Samples flagged lost by the board', link.get('samples_flagged_lost', 0)),
+        # Equal consecutive counters are removed by the decoder, older ones by the tracker.
+        ('Duplicates dropped', s['duplicates'] + link.get('duplicates', 0)),
+        ('Samples dropped while inactive', s['discarded']),
+        ('CRC errors', link.get('crc_errors', 0)),
+        ('Resyncs', link.get('resyncs', 0)),
+        ('Bytes discarded', link.get('bytes_discarded', 0)),
+        ('Frames ok', link.get('frames_ok', 0)),
+        ('Sensor FIFO overruns', link.get('fifo_overruns', 0)),
+        ('Clock drift (ppm)', f'{drift_ppm:.1f}'),
+        ('Connections', s['connections']),
+        ('Counter restarts', s['restarts']),
+        ('Temperature messages', s['temperatures']),
+        ('Last error', s['last_error']),
+    ]

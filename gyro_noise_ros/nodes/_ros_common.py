@@ -1,7 +1,8 @@
 """
 Small ROS helpers shared by the node modules (driver, analyzer, recorder).
 
-Only modules under ``gyro_noise_ros/nodes/`` may import this file: it imports rclpy and message packages.
+Only modules under ``gyro_noise_ros/nodes/`` may import this file: it imports rclpy and message
+packages.
 
 Conventions every node module follows (``test/test_node_params.py`` relies on them):
 
@@ -9,12 +10,12 @@ Conventions every node module follows (``test/test_node_params.py`` relies on th
 - ``PARAMETERS``: a tuple of :class:`ParamSpec`, the single table the node declares with
   :func:`declare_parameter_table`; the YAML file lists every entry with its default and, in the
   trailing comment, ``[unit]`` (``[-]`` when dimensionless).
-- ``main(args=None)`` calls :func:`run_node`, the Jazzy ``main()`` pattern with parameter errors turned
-  into one line on stderr and exit code 2.
+- ``main(args=None)`` calls :func:`run_node`, the Jazzy ``main()`` pattern with parameter errors
+  turned into one line on stderr and exit code 2.
 
 What diagnostic_updater would give (it is not installable from PyPI) is written here in its shape:
-:func:`diagnostic_status` builds a ``DiagnosticStatus`` named ``'<node>: <task>'`` with string values,
-:func:`worst` picks the level and the one-sentence message from explicit checks.
+:func:`diagnostic_status` builds a ``DiagnosticStatus`` named ``'<node>: <task>'`` with string
+values, :func:`worst` picks the level and the one-sentence message from explicit checks.
 """
 
 from dataclasses import dataclass, fields, MISSING
@@ -23,9 +24,9 @@ import re
 import sys
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                ParameterType, SetParametersResult)
 import rclpy
-from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType,
-                                SetParametersResult)
 from rclpy.callback_groups import CallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
@@ -335,7 +336,7 @@ def wall_timer(node, period_s, callback):
 
 def diagnostics_publisher(node):
     """
-    Create the ``/diagnostics`` publisher the way diagnostic_updater does (absolute topic, reliable).
+    Create the ``/diagnostics`` publisher as diagnostic_updater does (absolute topic, reliable).
 
     Parameters
     ----------

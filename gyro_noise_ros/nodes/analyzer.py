@@ -1,43 +1,35 @@
 """
 ROS 2 node ``noise_analyzer``: live noise characterisation of a gyro, with diagnostics.
 
-Subscribes ``imu/data_raw`` (``sensor_msgs/Imu``, sensor-data QoS) and, optionally,
-``imu/temperature`` (``sensor_msgs/Temperature``), and runs the streaming engine of
-:mod:`gyro_noise_ros.core.engine` on them: the same chunks, per-chunk numbers, sequence statistics
-(paper 000 Tables 3-6) and health verdicts as the offline tool ``gyro_noise_analyze`` gives for a
-recording of the same messages.
+Subscribes ``imu/data_raw`` (``sensor_msgs/Imu``) and, optionally, ``imu/temperature``, with
+sensor-data QoS, and runs the streaming engine (:mod:`gyro_noise_ros.core.engine`) on them: the
+same chunks, per-chunk numbers, sequence statistics (paper 000 Tables 3-6) and health verdicts as
+``gyro_noise_analyze`` gives for a recording of the same messages.
 
-Ingestion. At 6.66 kHz a Python callback per message costs about half a core, so the subscriptions
-are ``raw=True`` (serialised CDR) and sit in a callback group the executor never runs
-(:class:`~gyro_noise_ros.nodes.recorder.PolledGroup`); a timer takes every queued message each
-``drain_period_s`` with ``take_message`` and decodes the batch in bulk with numpy
-(:func:`gyro_noise_ros.bag.decode_imu`, the decoder of the offline tool). The QoS history
-(``queue_depth`` = 20,000 messages, 3 s at 6.66 kHz, 0.75 s at 4x) holds far more than one drain
-period, so nothing is overwritten even when the executor thread waits for the GIL or the CPU on a
-busy machine (measured: 5,000 lost messages at 4x under load, 20,000 did not; see
-``bench/bench_analyzer_node.py``).
+Ingestion. A Python callback per message at 6.66 kHz costs half a core, so the subscriptions are
+``raw=True`` in a callback group the executor never runs (``PolledGroup``); a wall-clock timer
+takes every queued message each ``drain_period_s`` and decodes the batch in bulk
+(:func:`gyro_noise_ros.bag.decode_imu`). The QoS history (``queue_depth`` = 20,000 messages, 3 s at
+6.66 kHz) holds far more than one drain period (``bench/bench_analyzer_node.py``). The timers run
+on the wall clock, so a paused ``/clock`` under ``use_sim_time`` cannot stall the drain.
 
-Analysis. :meth:`NoiseEngine.ingest` (cheap) runs in the executor thread; each complete chunk becomes
-a job in a bounded queue (``analysis_queue_chunks`` chunks of all axes) served by one worker thread
-running the heavy identification (both methods on the full order grid; numpy/scipy FFTs release the
-GIL). When the queue is full the chunk is skipped (:meth:`NoiseEngine.skip`) and counted in the
-diagnostics (``Chunks skipped``), so memory never grows. Results are handed back to the executor
-thread, which alone mutates the engine (record, summary, health), so no lock is needed.
+Analysis. :meth:`NoiseEngine.ingest` (cheap) runs in the executor thread; each complete chunk is a
+job in a bounded queue (``analysis_queue_chunks``) served by one worker thread (both methods on the
+full order grid; numpy FFTs release the GIL). A full queue skips the chunk
+(:meth:`NoiseEngine.skip`, counted in ``Chunks skipped``). Results come back to the executor
+thread, which alone mutates the engine.
 
-Outputs (topics relative to the node, ``~/``, so several analyzers can run side by side):
+Outputs (``docs/diagnostics.md``, ``docs/demo.md``):
 
-- ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): after every chunk and every
-  ``diagnostics_period_s``, one status per axis named ``'<node name>: axis x'`` with the health
-  verdict of :mod:`gyro_noise_ros.core.health` (level and one sentence), its items, and the last
-  chunk's numbers, all with units in the keys.
+- ``/diagnostics``: after every chunk and every ``diagnostics_period_s``, one status per axis
+  ``'<node name>: axis x'`` with the health verdict (:mod:`gyro_noise_ros.core.health`), its items
+  and the last chunk's numbers (:mod:`gyro_noise_ros.core.items`);
 - ``~/bias`` (rad/s), ``~/variance`` ((rad/s)^2), ``~/alpha_var``, ``~/alpha_corr``, ``~/f_var``,
-  ``~/f_corr`` (dimensionless), ``~/offset_drift`` (rad/s^2, the sequence's least-squares slope so far,
-  or over the last ``history_chunks`` chunks): ``geometry_msgs/Vector3Stamped`` per chunk with
-  x, y, z = axes (NaN for an axis not analysed or whose chunk was not ``ok``), stamped with the
-  chunk's first sample, ``frame_id`` of the IMU. Plot them with PlotJuggler or Foxglove.
+  ``~/f_corr`` (dimensionless), ``~/offset_drift`` (rad/s^2, the least-squares slope so far or over
+  ``history_chunks``): ``geometry_msgs/Vector3Stamped`` per chunk, x, y, z = axes (NaN for an axis
+  not analysed or not ``ok``), stamped with the chunk's first sample, ``frame_id`` of the IMU.
 
-``gyro_noise_monitor`` (:mod:`gyro_noise_ros.nodes.monitor`) prints these diagnostics as compact
-lines (what ``make demo`` shows).
+``gyro_noise_monitor`` (:mod:`gyro_noise_ros.nodes.monitor`) prints the diagnostics as lines.
 """
 
 from collections import deque
@@ -52,10 +44,10 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, Temperature
 
-from ..bag import decode_imu, decode_temperature
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           specs_from_dataclass, take_all, unused_callback, wall_timer)
+from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, NoiseEngine, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import HealthThresholds, LEVEL_BYTE
@@ -81,19 +73,23 @@ PARAMETERS = (
               min_value=-5.0, max_value=5.0),
     ParamSpec('order_grid_step', 0.01, 'Step of the fractional-order grid', read_only=True,
               min_value=1.0e-6, max_value=10.0),
-    ParamSpec('memory', DEFAULT_MEMORY, 'Memory length L of the truncated GL difference (paper: 1000)',
+    ParamSpec('memory', DEFAULT_MEMORY,
+              'Memory length L of the truncated GL difference (paper: 1000)',
               unit='samples', read_only=True, min_value=1, max_value=10_000_000),
     ParamSpec('demean', True, 'Remove the chunk mean before the order identification',
               read_only=True),
     ParamSpec('max_lag', -1, 'Largest lag M of the correlation criterion J (-1: all lags)',
               unit='samples', read_only=True, min_value=-1, max_value=10_000_000),
-    ParamSpec('rate_hz', 0.0, 'Nominal sample rate (0: the median stamp step of the first samples)',
+    ParamSpec('rate_hz', 0.0,
+              'Nominal sample rate (0: the median stamp step of the first samples)',
               unit='Hz', read_only=True, min_value=0.0, max_value=1.0e6),
     ParamSpec('gap_factor', 1.5, 'A stamp step above this many nominal periods is a gap',
               unit='periods', read_only=True, min_value=1.0001, max_value=1.0e6),
-    ParamSpec('gap_policy', 'flag', 'What a gap does to its chunk: flag (keep, count), split (restart '
-              'the chunk after it), drop (leave the chunk out)', read_only=True, choices=GAP_POLICIES),
-    ParamSpec('history_chunks', 0, 'Chunks per axis kept for the sequence statistics and the drift '
+    ParamSpec('gap_policy', 'flag', 'What a gap does to its chunk: flag (keep, count), split '
+              '(restart the chunk after it), drop (leave the chunk out)', read_only=True,
+              choices=GAP_POLICIES),
+    ParamSpec('history_chunks', 0,
+              'Chunks per axis kept for the sequence statistics and the drift '
               '(0: the whole run; e.g. 40 judges the last minute at 6.66 kHz)', unit='chunks',
               read_only=True, min_value=0, max_value=100_000_000),
     ParamSpec('allan', True, 'Keep an incremental Allan deviation of the run (ADEV keys)',
@@ -103,7 +99,8 @@ PARAMETERS = (
     *specs_from_dataclass(HealthThresholds, read_only=True),
     ParamSpec('use_temperature', True, 'Subscribe imu/temperature and report the chunk mean',
               read_only=True),
-    ParamSpec('hardware_id', '', 'hardware_id of the diagnostics (empty: the frame_id of the data)',
+    ParamSpec('hardware_id', '',
+              'hardware_id of the diagnostics (empty: the frame_id of the data)',
               read_only=True),
     ParamSpec('diagnostics_period_s', 1.0, 'Period of /diagnostics between chunks', unit='s',
               read_only=True, min_value=0.05, max_value=3600.0),
@@ -111,12 +108,14 @@ PARAMETERS = (
               unit='s', read_only=True, min_value=0.1, max_value=86400.0),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
-    # 20 ms, not 10: each executor wake-up costs a fixed few hundred microseconds in rclpy (wait-set
-    # construction) and in the per-batch numpy calls; measured ingestion at 6.66 kHz fell from 24 % to
-    # 14 % of a core (bench/bench_analyzer_node.py), and the 20,000-message history covers 3 s.
+    # 20 ms, not 10: each executor wake-up costs a fixed few hundred microseconds in rclpy
+    # (wait-set construction) and in the per-batch numpy calls; measured ingestion at 6.66 kHz fell
+    # from 24 % to 14 % of a core (bench/bench_analyzer_node.py), and the 20,000-message history
+    # covers 3 s.
     ParamSpec('drain_period_s', 0.02, 'Period of the loop taking queued messages', unit='s',
               read_only=True, min_value=0.001, max_value=0.5),
-    ParamSpec('analysis_queue_chunks', 4, 'Chunks (of all axes) waiting for analysis before new ones '
+    ParamSpec('analysis_queue_chunks', 4,
+              'Chunks (of all axes) waiting for analysis before new ones '
               'are skipped', unit='chunks', read_only=True, min_value=1, max_value=10_000),
     ParamSpec('log_chunks', False, 'Log one line per analysed chunk', read_only=True),
 )
@@ -180,12 +179,14 @@ class NoiseAnalyzerNode(Node):
 
         group = PolledGroup()
         qos = sensor_data_qos(p['queue_depth'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos, raw=True,
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                 raw=True,
                                                  callback_group=group)
         self._temperature_sub = None
         if p['use_temperature']:
             self._temperature_sub = self.create_subscription(
-                Temperature, 'imu/temperature', unused_callback, qos, raw=True, callback_group=group)
+                Temperature, 'imu/temperature', unused_callback, qos, raw=True,
+                callback_group=group)
         self._diag_pub = diagnostics_publisher(self)
         topic_qos = QoSProfile(depth=100)
         self._chunk_pubs = {name: self.create_publisher(Vector3Stamped, '~/' + name, topic_qos)
@@ -382,7 +383,8 @@ def main(args=None):
     Parameters
     ----------
     args : list of str or None
-        Command line (``--ros-args -p chunk_size:=10000 --params-file config/noise_analyzer.yaml``);
+        Command line (``--ros-args -p chunk_size:=10000 --params-file
+        config/noise_analyzer.yaml``);
         None: ``sys.argv``.
 
     Returns

@@ -48,21 +48,20 @@ import time
 import numpy as np
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from sensor_msgs.msg import Imu, Temperature
-import serial
 
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, driver_qos, ParamSpec, run_node,
                           specs_from_dataclass, wall_timer)
 from ..bag import encode_imu_cdr, encode_temperature_cdr
 from ..core.health import LEVEL_BYTE
-from ..errors import LinkError, ParameterError
+from ..errors import ParameterError
 from ..link import lsm6dso32
 from ..link.clock import DeviceClock
-from ..link.health import judge_link, LinkThresholds, LinkWindow
+from ..link.health import counters, judge_link, link_items, LinkThresholds, window_between
 from ..link.port import hardware_id_for, validate_port
-from ..link.protocol import Decoder
+from ..link.reader import LinkReader
 from ..link.sequence import SequenceTracker
-from ..link.session import frame_interval_s, handshake, LinkConfig
+from ..link.session import LinkConfig
 
 __all__ = ['LinkConfig', 'Lsm6dso32Driver', 'main', 'NODE_NAME', 'PARAMETERS']
 
@@ -124,22 +123,8 @@ PARAMETERS = (
     *specs_from_dataclass(LinkThresholds, read_only=False),
 )
 
-_READ_SIZE = 1 << 16
 _THRESHOLD_NAMES = tuple(f.name for f in fields(LinkThresholds))
-_COUNTERS = ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')
 _OK = TransitionCallbackReturn.SUCCESS
-
-
-def _diag_counters(now, snapshot):
-    link = snapshot['link']
-    out = {k: link.get(k, 0) for k in _COUNTERS}
-    out.update(time=now, published=snapshot['published'], lost=snapshot['lost'],
-               restarts=snapshot['restarts'])
-    return out
-
-
-def _stats_dict(stats):
-    return {f.name: getattr(stats, f.name) for f in fields(stats)}
 
 
 def _diag_cov(variance):
@@ -179,24 +164,16 @@ class Lsm6dso32Driver(LifecycleNode):
         self._diag_pub = diagnostics_publisher(self)
         self._device_clock = DeviceClock(nominal_rate_hz=float(p['odr_hz']))
         self._tracker = SequenceTracker(restart_window=max(1, int(round(p['odr_hz']))))
-        # One decoder for the node's life: reset_stream() at each connection drops a partial
-        # frame but keeps the counters, so diagnostics add up over unplugs.
-        self._decoder = Decoder()
+        self._reader = LinkReader(self._port, lambda: self._params, self._handle,
+                                  now_ns=lambda: self.get_clock().now().nanoseconds,
+                                  on_error=self._link_failed, on_streaming=self._link_up)
         # Written by the reader thread and the lifecycle callbacks, read by the diagnostics timer.
         self._lock = threading.Lock()
         self._lifecycle = 'unconfigured'
-        self._state = 'unconfigured'
-        self._last_error = 'none'
-        self._last_logged_error = None
-        self._config = None
-        self._link_stats = {}
+        self._activated_at = time.monotonic()
         self._counts = dict.fromkeys(('published', 'temperatures', 'lost', 'duplicates',
-                                      'restarts', 'connections', 'discarded'), 0)
-        self._streaming_since = None
-        self._last_sample_monotonic = None
-        self._diag_prev = _diag_counters(time.monotonic(), self.link_snapshot())
-        self._stop = threading.Event()
-        self._reader = None
+                                      'restarts', 'discarded'), 0)
+        self._diag_prev = (time.monotonic(), counters(self.link_snapshot()))
         wall_timer(self, p['diagnostics_period_s'], self._publish_diagnostics)
         if p['autostart']:
             self.trigger_configure()
@@ -223,11 +200,8 @@ class Lsm6dso32Driver(LifecycleNode):
     # ------------------------------------------------------------------ lifecycle
 
     def on_configure(self, state):
-        """Start the reader thread: open the port and configure the board (retried)."""
-        self._stop = threading.Event()
+        """Start the link: open the port and configure the board (retried until it works)."""
         self._set_lifecycle('inactive')
-        self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader',
-                                        daemon=True)
         self._reader.start()
         return _OK
 
@@ -243,7 +217,7 @@ class Lsm6dso32Driver(LifecycleNode):
 
     def on_cleanup(self, state):
         """Stop the reader thread, which closes the port."""
-        self._stop_reader()
+        self._reader.stop()
         self._set_lifecycle('unconfigured')
         return _OK
 
@@ -258,99 +232,25 @@ class Lsm6dso32Driver(LifecycleNode):
     def _set_lifecycle(self, name):
         with self._lock:
             self._lifecycle = name
-            if name == 'active' and self._state == 'streaming':
-                self._streaming_since = time.monotonic()
-            if name == 'unconfigured':
-                self._state = 'unconfigured'
+            if name == 'active':
+                self._activated_at = time.monotonic()
 
-    def _stop_reader(self):
-        self._stop.set()
-        if self._reader is not None and self._reader.is_alive():
-            self._reader.join(timeout=5.0)
-        self._reader = None
+    # ------------------------------------------------------------------ reader callbacks
 
-    # ------------------------------------------------------------------ reader thread
-
-    def _reader_loop(self):
-        while not self._stop.is_set():
-            self._set_state('connecting')
-            try:
-                ser = serial.serial_for_url(self._port, baudrate=self._params['baud_rate'],
-                                            timeout=self._params['read_period_s'],
-                                            write_timeout=self._params['ack_timeout_s'])
-            except (serial.SerialException, OSError, ValueError) as err:
-                self._link_failed(f'cannot open {self._port}: {err}')
-                self._stop.wait(self._params['reconnect_period_s'])
-                continue
-            self._decoder.reset_stream()
-            try:
-                self._run_session(ser)
-            except (serial.SerialException, OSError, LinkError) as err:
-                self._link_failed(str(err) or type(err).__name__)
-            except Exception as err:  # noqa: BLE001 - the reader must outlive any single failure
-                if self._stop.is_set() or not self.context.ok():
-                    break
-                self.get_logger().error(f'reader thread: {err!r}')
-                self._link_failed(f'internal error: {err!r}')
-            finally:
-                try:
-                    ser.close()
-                except Exception:  # noqa: BLE001 - a vanished port may fail to close; it is gone
-                    pass
-                with self._lock:
-                    self._link_stats = _stats_dict(self._decoder.stats)
-            if not self._stop.is_set():
-                self._stop.wait(self._params['reconnect_period_s'])
-
-    def _run_session(self, ser):
-        """Configure the board on an open port, then read until the link fails or stops."""
-        self._set_state('configuring')
-        with self._lock:
-            self._counts['connections'] += 1
-            command_id = self._counts['connections']
-        p = self._params
-        done = handshake(ser, self._decoder, command_id=command_id, odr_hz=p['odr_hz'],
-                         gyro_fs_dps=p['gyro_full_scale_dps'], accel_fs_g=p['accel_full_scale_g'],
-                         ack_timeout_s=p['ack_timeout_s'], stop=self._stop,
-                         now_ns=lambda: self.get_clock().now().nanoseconds)
-        if done is None:
-            return
-        config, after, host_ns = done
-        now = time.monotonic()
-        with self._lock:
-            self._config = config
-            self._last_logged_error = None
-            self._streaming_since = now
-            self._last_sample_monotonic = now
-            self._state = 'streaming'
+    def _link_up(self, config):
         self.get_logger().info(f'streaming from {self._port}: {config.odr_hz:g} Hz, '
                                f'+/-{config.gyro_fs_dps} dps, +/-{config.accel_fs_g} g')
-        if len(after):
-            self._handle(after, host_ns, config)
-        last_data = now
-        silence_s = max(p['data_timeout_s'], frame_interval_s(config))
-        while not self._stop.is_set():
-            data = ser.read(_READ_SIZE)
-            now = time.monotonic()
-            if not data:
-                if now - last_data > silence_s:
-                    raise LinkError(f'no data for {silence_s:g} s')
-                continue
-            last_data = now
-            host_ns = self.get_clock().now().nanoseconds
-            result = self._decoder.feed(data)
-            if len(result.samples):
-                self._handle(result.samples, host_ns, config)
-            with self._lock:
-                self._link_stats = _stats_dict(self._decoder.stats)
-                if len(result.samples):
-                    self._last_sample_monotonic = now
+
+    def _link_failed(self, reason, first):
+        if first:
+            self.get_logger().error(f'link to {self._port}: {reason}; retrying every '
+                                    f'{self._params["reconnect_period_s"]} s')
 
     def _handle(self, samples, host_ns, config):
         if self._lifecycle == 'active':
             self.publish_samples(samples, host_ns, config)
             return
-        # Inactive: the counters advance so that activation does not count a gap as loss.
+        # Inactive: the counter advances so that activation does not count a gap as loss.
         while len(samples):
             decision = self._tracker.accept(samples['seq'])
             with self._lock:
@@ -358,23 +258,6 @@ class Lsm6dso32Driver(LifecycleNode):
             samples = samples[decision.stop:]
             if len(samples):
                 self._tracker.reset()
-
-    def _set_state(self, state):
-        with self._lock:
-            self._state = state
-            if state != 'streaming':
-                self._streaming_since = None
-
-    def _link_failed(self, reason):
-        with self._lock:
-            first = self._last_logged_error != reason
-            self._last_logged_error = reason
-            self._last_error = reason
-            self._state = 'disconnected'
-            self._streaming_since = None
-        if first:
-            self.get_logger().error(f'link to {self._port}: {reason}; retrying every '
-                                    f'{self._params["reconnect_period_s"]} s')
 
     # ------------------------------------------------------------------ publishing
 
@@ -447,23 +330,21 @@ class Lsm6dso32Driver(LifecycleNode):
 
     def link_snapshot(self):
         """
-        Copy the link counters (for diagnostics and tests).
+        Copy the link's state and counters (for diagnostics and tests).
 
         Returns
         -------
         dict
-            ``state`` (of the link), ``lifecycle``, ``last_error``, ``config``, the counters
-            (``published``, ``temperatures``, ``lost``, ``duplicates``, ``restarts``,
-            ``connections``, ``discarded``), ``streaming_since``, ``last_sample_monotonic`` and
-            ``link``, the decoder's counters summed over all connections.
+            :meth:`LinkReader.snapshot` (``state``, ``last_error``, ``config``, ``connections``,
+            ``streaming_since``, ``last_sample_monotonic``, ``link``), ``lifecycle`` and the
+            node's counters ``published``, ``temperatures``, ``lost``, ``duplicates``,
+            ``restarts``, ``discarded``.
 
         """
+        link = self._reader.snapshot()
         with self._lock:
-            return {'state': self._state, 'lifecycle': self._lifecycle,
-                    'last_error': self._last_error, 'config': self._config, **self._counts,
-                    'streaming_since': self._streaming_since,
-                    'last_sample_monotonic': self._last_sample_monotonic,
-                    'link': dict(self._link_stats)}
+            return {**link, 'lifecycle': self._lifecycle, **self._counts,
+                    'activated_at': self._activated_at}
 
     def _publish_diagnostics(self):
         self._diag_pub.publish(diagnostic_array(self.get_clock().now().to_msg(),
@@ -483,58 +364,23 @@ class Lsm6dso32Driver(LifecycleNode):
         """
         s = self.link_snapshot()
         now = time.monotonic()
-        link = s['link']
-        prev, cur = self._diag_prev, _diag_counters(now, s)
-        self._diag_prev = cur
-        since = prev['time'] if s['streaming_since'] is None else max(prev['time'],
-                                                                      s['streaming_since'])
-        config = s['config']
-        state = s['state']
-        if s['lifecycle'] != 'active' and state in ('streaming', 'unconfigured'):
-            state = 'inactive' if state == 'streaming' else state
-        window = LinkWindow(
-            state=state, last_error=s['last_error'], window_s=now - since,
-            restarted=cur['restarts'] > prev['restarts'],
-            odr_hz=None if config is None else config.odr_hz,
-            seconds_since_sample=now - (s['last_sample_monotonic'] or now),
-            silence_limit_s=(max(self._params['diagnostics_period_s'], frame_interval_s(config))
-                             if config is not None else float('inf')),
-            **{k: cur[k] - prev[k] for k in ('published', 'lost', *_COUNTERS)})
+        (prev_time, prev), self._diag_prev = self._diag_prev, (now, counters(s))
+        if s['lifecycle'] == 'unconfigured':
+            s['state'] = 'unconfigured'
+        elif s['lifecycle'] == 'inactive' and s['state'] == 'streaming':
+            s['state'] = 'inactive'
+        since = max(prev_time, s['streaming_since'] or prev_time, s['activated_at'])
+        window = window_between(prev, s, now=now, since=since,
+                                period_s=self._params['diagnostics_period_s'])
         verdict = judge_link(window, self._thresholds)
-
-        def fmt(x):
-            return '-' if x is None else format(x, 'g')
-
-        values = [
-            ('Connection', state),
-            ('Port', self._port),
-            ('Configured rate (Hz)', fmt(config and config.odr_hz)),
-            ('Gyro full scale (deg/s)', fmt(config and config.gyro_fs_dps)),
-            ('Accel full scale (g)', fmt(config and config.accel_fs_g)),
-            ('Sample rate (Hz)', f'{window.rate_hz:.1f}' if state == 'streaming' else '0.0'),
-            ('Samples published', s['published']),
-            ('Samples lost', s['lost']),
-            ('Samples flagged lost by the board', link.get('samples_flagged_lost', 0)),
-            # Equal consecutive counters are removed by the decoder, older ones by the tracker.
-            ('Duplicates dropped', s['duplicates'] + link.get('duplicates', 0)),
-            ('Samples dropped while inactive', s['discarded']),
-            ('CRC errors', link.get('crc_errors', 0)),
-            ('Resyncs', link.get('resyncs', 0)),
-            ('Bytes discarded', link.get('bytes_discarded', 0)),
-            ('Frames ok', link.get('frames_ok', 0)),
-            ('Sensor FIFO overruns', link.get('fifo_overruns', 0)),
-            ('Clock drift (ppm)', f'{self._device_clock.state.drift_ppm:.1f}'),
-            ('Connections', s['connections']),
-            ('Counter restarts', s['restarts']),
-            ('Temperature messages', s['temperatures']),
-            ('Last error', s['last_error']),
-        ]
+        values = link_items(s, window, port=self._port,
+                            drift_ppm=self._device_clock.state.drift_ppm)
         return diagnostic_status(self._status_name, self._hardware_id,
                                  bytes([LEVEL_BYTE[verdict.level]]), verdict.message, values)
 
     def destroy_node(self):
         """Stop and join the reader thread (it closes the port), then destroy the node."""
-        self._stop_reader()
+        self._reader.stop()
         return super().destroy_node()
 
 

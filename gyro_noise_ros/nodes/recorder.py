@@ -46,12 +46,15 @@ PARAMETERS = (
     ParamSpec('record_temperature', True, 'Also record imu/temperature', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1000000),
-    ParamSpec('drain_period_s', 0.01, 'Period of the loop that takes queued messages and writes them',
+    ParamSpec('drain_period_s', 0.01,
+              'Period of the loop that takes queued messages and writes them',
               unit='s', read_only=True, min_value=0.001, max_value=0.5),
-    ParamSpec('flush_period_s', 2.0, 'Period of the sqlite3 commit that lets a killed recorder leave '
+    ParamSpec('flush_period_s', 2.0,
+              'Period of the sqlite3 commit that lets a killed recorder leave '
               'a readable .db3 (0: only at close)', unit='s', read_only=True, min_value=0.0,
               max_value=3600.0),
-    ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)', unit='s',
+    ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)',
+              unit='s',
               read_only=True, min_value=0.0, max_value=3600.0),
 )
 
@@ -98,12 +101,14 @@ class RecorderNode(Node):
                            'choose a new bag directory')
         group = PolledGroup()
         qos = sensor_data_qos(params['queue_depth'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos, raw=True,
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                 raw=True,
                                                  callback_group=group)
         self._temperature_sub = None
         if params['record_temperature']:
             self._temperature_sub = self.create_subscription(
-                Temperature, 'imu/temperature', unused_callback, qos, raw=True, callback_group=group)
+                Temperature, 'imu/temperature', unused_callback, qos, raw=True,
+                callback_group=group)
         wall_timer(self, params['drain_period_s'], self.drain)
         if params['flush_period_s'] > 0:
             wall_timer(self, params['flush_period_s'], self._flush)
@@ -116,7 +121,7 @@ class RecorderNode(Node):
 
     @property
     def dropped(self):
-        """Messages the transport dropped before this node (gaps in publication sequence numbers)."""
+        """int: Messages the transport dropped before this node (publication sequence gaps)."""
         return self._imu_gaps.missing + self._temperature_gaps.missing
 
     def _open(self, frame_id):
@@ -149,7 +154,8 @@ class RecorderNode(Node):
             self.received_temperature += len(t_raws)
             self._temperature_gaps.update(t_sequence)
             stamp_ns, temperature_c = decode_temperature(t_raws)
-            self._writer.write_temperature(stamp_ns, temperature_c, variance=temperature_variances(t_raws),
+            self._writer.write_temperature(stamp_ns, temperature_c,
+                                           variance=temperature_variances(t_raws),
                                            log_ns=_log_times(t_received, stamp_ns))
             self.written_temperature += len(t_raws)
 
@@ -170,9 +176,11 @@ class RecorderNode(Node):
                 self._closed = True
                 if self._writer is not None:
                     self._writer.close()
-        where = self.output if self._writer is not None else f'{self.output} (not created: nothing received)'
+        where = (self.output if self._writer is not None
+                 else f'{self.output} (not created: nothing received)')
         return (f'{NODE_NAME}: received {self.received_imu} Imu and {self.received_temperature} '
-                f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} to '
+                f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} '
+                f'to '
                 f'{where}; {self.dropped} dropped in transport')
 
     def destroy_node(self):

@@ -195,7 +195,7 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
     high_water = []
 
     def slow(job, **kw):
-        high_water.append(node._jobs.qsize())
+        high_water.append(node.live.queue_size)
         gate.wait(timeout=30)  # hold the worker until every chunk has been ingested
         return real(job, **kw)
 

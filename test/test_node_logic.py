@@ -18,12 +18,15 @@ These moved out of the node modules (issue 13); the node tests still run them en
 """
 
 from dataclasses import fields
+import time
 from types import SimpleNamespace
 
 from gyro_noise_ros.bag.codec import imu_covariances, temperature_variances
 from gyro_noise_ros.core.health import HealthThresholds
 from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
-from gyro_noise_ros.core.live import parse_axes, TemperatureTrack
+from gyro_noise_ros.core.engine import EngineConfig
+from gyro_noise_ros.core.fractional import make_grid
+from gyro_noise_ros.core.live import LiveAnalysis, parse_axes, TemperatureTrack
 from gyro_noise_ros.errors import LinkError, ParameterError
 from gyro_noise_ros.link import protocol as P
 from gyro_noise_ros.link.health import judge_link, LinkThresholds, LinkWindow
@@ -334,3 +337,31 @@ def test_hardware_id_is_not_the_port_path():
     # No USB device behind a URL: the frame id names the sensor, the same for any port.
     ids = {hardware_id_for(p, 'imu_link') for p in ('socket://127.0.0.1:1', 'socket://h:2')}
     assert ids == {'lsm6dso32/portenta_h7/imu_link'}
+
+
+def test_live_analysis_worker_finishes_chunks_and_skips_when_full():
+    config = EngineConfig(chunk_size=200, axes=('x', 'z'), alphas=make_grid(0.0, 2.0, 0.5),
+                          memory=20, rate_hz=100.0, allan=False)
+    live = LiveAnalysis(config, queue_chunks=1)
+    try:
+        rng = np.random.default_rng(1)
+        n = 1000  # 5 chunks of both axes
+        stamps = np.arange(n, dtype=np.int64) * 10_000_000
+        assert live.ingest(stamps, rng.standard_normal((n, 3))) == ''
+        # A queue of one chunk (2 jobs) cannot take 10 jobs at once: the rest are skipped.
+        results, chunks = [], []
+        deadline = time.monotonic() + 30.0
+        while len(results) < 10 and time.monotonic() < deadline:
+            r, c = live.collect()
+            results += r
+            chunks += c
+            time.sleep(0.01)
+        assert len(results) == 10 and len(chunks) == 5
+        statuses = [r.status for r in results]
+        assert statuses.count('ok') >= 2 and statuses.count('ok') < 10
+        assert all(set(c) == {'x', 'z'} for c in chunks)
+        # A batch the engine refuses (gyro of the wrong shape) is reported, not raised.
+        assert 'shape' in live.ingest(stamps[:10], np.zeros((10, 2)))
+        assert live.rejected_batches == 1 and live.last_batch_rejected
+    finally:
+        live.stop()

@@ -12,20 +12,26 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Pure pieces of the live analyzer (``noise_analyzer``): configuration from parameters, temperature.
+Pure pieces of the live analyzer (``noise_analyzer``): configuration, temperature, the worker.
 
-The node (:mod:`gyro_noise_ros.nodes.analyzer`) only adapts ROS to these and to
-:class:`~gyro_noise_ros.core.engine.NoiseEngine`; everything here runs and is tested without ROS.
+The node (:mod:`gyro_noise_ros.nodes.analyzer`) only adapts ROS to these; everything here runs
+and is tested without ROS. :class:`LiveAnalysis` is the image_pipeline pattern "pure library, thin
+node, bounded hand-off": the caller's thread ingests (cheap) and collects results, one worker
+thread runs the heavy identification from a bounded queue, and only the caller's thread mutates
+the engine.
 """
 
+from collections import deque
 from dataclasses import fields
+import queue
+import threading
 
 import numpy as np
 
-from .engine import AXES, EngineConfig
+from .engine import AXES, EngineConfig, NoiseEngine
 from .fractional import make_grid
 from .health import HealthThresholds
-from ..errors import ParameterError
+from ..errors import GyroNoiseError, ParameterError
 
 #: Numeric per-chunk topics of the analyzer: name -> (ChunkResult field, unit).
 CHUNK_TOPICS = {
@@ -173,3 +179,141 @@ class TemperatureTrack:
             return float(self.temperature_c[0])
         return np.interp(np.asarray(stamp_ns).astype(np.float64),
                          self.stamp_ns.astype(np.float64), self.temperature_c)
+
+
+class LiveAnalysis:
+    """
+    Streaming analysis with a bounded queue of chunk jobs served by one worker thread.
+
+    Parameters
+    ----------
+    config : EngineConfig
+        The analysis configuration.
+    reference : str or None, keyword-only
+        ``summary.json`` of a reference recording (see :class:`NoiseEngine`).
+    thresholds : HealthThresholds or None, keyword-only
+        Health thresholds.
+    queue_chunks : int, keyword-only
+        Chunks (of all axes) waiting for analysis before new ones are skipped.
+    on_worker_start : callable, keyword-only
+        Called in the worker thread when it starts (a profiler wants its native id).
+
+    """
+
+    def __init__(self, config, *, reference=None, thresholds=None, queue_chunks=4,
+                 on_worker_start=lambda: None):
+        self.config = config
+        self.engine = NoiseEngine(config, reference=reference, thresholds=thresholds)
+        self.temperature = TemperatureTrack()
+        self.results = deque(maxlen=10_000)  # recent ChunkResults in completion order
+        self.last = {}  # axis -> latest ChunkResult
+        self.rejected_batches = 0
+        self.last_rejection = ''
+        self.last_batch_rejected = False
+        self._chunks = {}  # chunk index -> {axis: ChunkResult} until all axes are in
+        self._jobs = queue.Queue(maxsize=int(queue_chunks) * len(config.axes))
+        self._done = queue.SimpleQueue()
+        self._finished = []
+        self._stop = threading.Event()
+        self._on_worker_start = on_worker_start
+        self._worker = threading.Thread(target=self._work, name='noise_analyzer_worker',
+                                        daemon=True)
+        self._worker.start()
+
+    @property
+    def queue_size(self):
+        """int: Chunk jobs waiting for the worker."""
+        return self._jobs.qsize()
+
+    def stop(self, timeout_s=5.0):
+        """
+        Stop and join the worker thread.
+
+        Parameters
+        ----------
+        timeout_s : float
+            Longest wait (s).
+
+        """
+        self._stop.set()
+        self._worker.join(timeout=timeout_s)
+
+    def _work(self):
+        self._on_worker_start()
+        while not self._stop.is_set():
+            try:
+                job = self._jobs.get(timeout=0.2)
+            except queue.Empty:
+                continue
+            try:
+                self._done.put((job, self.engine.analyze(job), None))
+            except Exception as err:  # noqa: BLE001 - reported as a skipped chunk, work goes on
+                self._done.put((job, None, err))
+
+    def ingest(self, stamp_ns, gyro):
+        """
+        Feed samples (caller's thread); complete chunks become jobs, or are skipped when full.
+
+        Parameters
+        ----------
+        stamp_ns : numpy.ndarray of int64
+            Sample stamps (ns).
+        gyro : numpy.ndarray, shape (n, 3)
+            Angular velocity (rad/s).
+
+        Returns
+        -------
+        str
+            Why the batch was refused (the engine's error), or ``''`` when it was accepted.
+
+        """
+        try:
+            jobs = self.engine.ingest(stamp_ns, gyro, self.temperature.at(stamp_ns))
+        except GyroNoiseError as err:
+            self.last_rejection = str(err)
+            self.rejected_batches += 1
+            self.last_batch_rejected = True
+            return self.last_rejection
+        self.last_batch_rejected = False
+        for job in jobs:
+            try:
+                self._jobs.put_nowait(job)
+            except queue.Full:
+                self._finish(self.engine.skip(job, 'analysis fell behind'))
+        return ''
+
+    def collect(self):
+        """
+        Record the worker's results (caller's thread) and return what finished.
+
+        Returns
+        -------
+        results : list of ChunkResult
+            Every result finished since the previous call (analysed, failed or skipped).
+        chunks : list of dict
+            ``{axis: ChunkResult}`` of every chunk whose axes are now all finished.
+
+        """
+        while True:
+            try:
+                job, result, err = self._done.get_nowait()
+            except queue.Empty:
+                break
+            if err is not None:
+                result = self.engine.skip(job, f'analysis failed: {err}')
+            else:
+                self.engine.record(result)
+            self._finish(result)
+        finished, self._finished = self._finished, []
+        chunks = []
+        for result in finished:
+            per_chunk = self._chunks.setdefault(result.chunk, {})
+            per_chunk[result.axis] = result
+            if len(per_chunk) == len(self.config.axes):
+                chunks.append(self._chunks.pop(result.chunk))
+        return finished, chunks
+
+    def _finish(self, result):
+        self.results.append(result)
+        self.last[result.axis] = result
+        self._finished.append(result)

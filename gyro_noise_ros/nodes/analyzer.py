@@ -32,9 +32,7 @@ Outputs (``docs/diagnostics.md``, ``docs/demo.md``):
 ``gyro_noise_monitor`` (:mod:`gyro_noise_ros.nodes.monitor`) prints the diagnostics as lines.
 """
 
-from collections import deque
 import math
-import queue
 import sys
 import threading
 import time
@@ -48,11 +46,11 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           specs_from_dataclass, take_all, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature
-from ..core.engine import AXES, GAP_POLICIES, NoiseEngine, warm_up
+from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import HealthThresholds, LEVEL_BYTE
 from ..core.items import allan_items, DEG, fmt, last_chunk_items, stream_items
-from ..core.live import CHUNK_TOPICS, engine_config_from, TemperatureTrack, thresholds_from
+from ..core.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..errors import GyroNoiseError
 from ..link.sequence import SequenceGapCounter
 
@@ -144,44 +142,37 @@ class NoiseAnalyzerNode(Node):
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameter_table(self, PARAMETERS)
+        self._params = p
         self.config = engine_config_from(p)
         self.thresholds = thresholds_from(p)
-        self.engine = NoiseEngine(self.config, reference=p['reference_summary'] or None,
-                                  thresholds=self.thresholds)
-        self._params = p
-        self._hardware_id = p['hardware_id']
-        self._frame_id = ''
         t0 = time.monotonic()
         warm_up(self.config)
         self.get_logger().info(f'analysis warmed up in {time.monotonic() - t0:.2f} s')
 
+        # The OS thread id lets a profiler (bench/bench_analyzer_node.py) split the node's CPU
+        # time between ingestion (executor thread) and analysis (the worker).
+        def worker_started():
+            self.get_logger().info(
+                f'analysis worker started (native thread id {threading.get_native_id()})')
+
+        self.live = LiveAnalysis(
+            self.config, reference=p['reference_summary'] or None, thresholds=self.thresholds,
+            queue_chunks=p['analysis_queue_chunks'], on_worker_start=worker_started)
+        self.engine = self.live.engine
+        self.results = self.live.results  # recent ChunkResults in completion order (tests)
+        self._hardware_id = p['hardware_id']
+        self._frame_id = ''
         self.messages_received = 0
         self.messages_undecodable = 0
         self._transport = SequenceGapCounter()
         self._last_data = None
-        self._temperature = TemperatureTrack()
-        self._ingest_error = ''  # why the latest rejected batch was rejected
-        self._rejected_batches = 0
-        self._last_batch_rejected = False
-        self._last = {}  # axis -> latest ChunkResult
-        self._chunks = {}  # chunk index -> {axis: ChunkResult} until all axes are in
-        # recent ChunkResults in completion order (tests, tools)
-        self.results = deque(maxlen=10_000)
         self._allan_keys = {}
         self._allan_due = 0.0
-
-        self._jobs = queue.Queue(maxsize=p['analysis_queue_chunks'] * len(self.config.axes))
-        self._done = queue.SimpleQueue()
-        self._stop = threading.Event()
-        self._worker = threading.Thread(target=self._work, name='noise_analyzer_worker',
-                                        daemon=True)
-        self._worker.start()
 
         group = PolledGroup()
         qos = sensor_data_qos(p['queue_depth'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
-                                                 raw=True,
-                                                 callback_group=group)
+                                                 raw=True, callback_group=group)
         self._temperature_sub = None
         if p['use_temperature']:
             self._temperature_sub = self.create_subscription(
@@ -200,35 +191,30 @@ class NoiseAnalyzerNode(Node):
             + ('reference ' + p['reference_summary'] if p['reference_summary'] else
                'absolute drift limits'))
 
-    # ---- worker ------------------------------------------------------------
-
-    def _work(self):
-        # The OS thread id lets a profiler (bench/bench_analyzer_node.py) split the node's CPU time
-        # between ingestion (executor thread) and analysis (this thread).
-        self.get_logger().info(
-            f'analysis worker started (native thread id {threading.get_native_id()})')
-        while not self._stop.is_set():
-            try:
-                job = self._jobs.get(timeout=0.2)
-            except queue.Empty:
-                continue
-            try:
-                self._done.put((job, self.engine.analyze(job), None))
-            except Exception as err:  # noqa: BLE001 - reported in diagnostics, the node goes on
-                self._done.put((job, None, err))
-
-    # ---- ingestion (executor thread) -----------------------------------------------------------
+    # ---- ingestion (executor thread) ---------------------------------------
 
     def drain(self):
         """Take the queued messages, feed the engine, queue the chunks, publish finished ones."""
         if self._temperature_sub is not None:
             raws, _, _ = take_all(self._temperature_sub, Temperature)
             if raws:
-                self._temperature.add(*decode_temperature(raws))
+                self.live.temperature.add(*decode_temperature(raws))
         raws, _, sequence = take_all(self._imu_sub, Imu)
         if raws:
             self._ingest(raws, sequence)
-        self._collect()
+        results, chunks = self.live.collect()
+        for result in results:
+            if result.status != 'ok' and result.message.startswith('analysis failed'):
+                self.get_logger().error(f'chunk {result.chunk} axis {result.axis}: '
+                                        f'{result.message}')
+            elif self._params['log_chunks']:
+                self.get_logger().info(
+                    f'chunk {result.chunk} axis {result.axis}: {result.status}, bias '
+                    f'{fmt(result.bias_rad_s * DEG)} deg/s, alpha {fmt(result.alpha_var)} (var) '
+                    f'{fmt(result.alpha_corr)} (corr)')
+        for per_axis in chunks:
+            self._publish_chunk(per_axis)
+            self.publish_diagnostics()
 
     def _ingest(self, raws, sequence):
         self.messages_received += len(raws)
@@ -241,50 +227,9 @@ class NoiseAnalyzerNode(Node):
         # The diagnostics' hardware_id follows the frame of the data (a remapped or replaced
         # sensor shows under its new frame at once).
         self._frame_id = batch.frame_id or self._frame_id
-        try:
-            jobs = self.engine.ingest(batch.stamp_ns, batch.gyro,
-                                      self._temperature.at(batch.stamp_ns))
-        except GyroNoiseError as err:
-            self._ingest_error = str(err)
-            self._rejected_batches += 1
-            self._last_batch_rejected = True
-            self.get_logger().error(f'samples rejected: {err}', throttle_duration_sec=5.0)
-            return
-        self._last_batch_rejected = False
-        for job in jobs:
-            try:
-                self._jobs.put_nowait(job)
-            except queue.Full:
-                self._finished(self.engine.skip(job, 'analysis fell behind'))
-
-    def _collect(self):
-        while True:
-            try:
-                job, result, err = self._done.get_nowait()
-            except queue.Empty:
-                return
-            if err is not None:
-                self.get_logger().error(
-                    f'analysis of chunk {job.chunk} axis {job.axis} failed: {err}')
-                result = self.engine.skip(job, f'analysis failed: {err}')
-            else:
-                self.engine.record(result)
-            self._finished(result)
-
-    def _finished(self, result):
-        self.results.append(result)
-        self._last[result.axis] = result
-        if self._params['log_chunks']:
-            self.get_logger().info(
-                f'chunk {result.chunk} axis {result.axis}: {result.status}, bias '
-                f'{fmt(result.bias_rad_s * DEG)} deg/s, alpha {fmt(result.alpha_var)} (var) '
-                f'{fmt(result.alpha_corr)} (corr)')
-        per_chunk = self._chunks.setdefault(result.chunk, {})
-        per_chunk[result.axis] = result
-        if len(per_chunk) == len(self.config.axes):
-            del self._chunks[result.chunk]
-            self._publish_chunk(per_chunk)
-            self.publish_diagnostics()
+        error = self.live.ingest(batch.stamp_ns, batch.gyro)
+        if error:
+            self.get_logger().error(f'samples rejected: {error}', throttle_duration_sec=5.0)
 
     # ---- outputs -----------------------------------------------------------
 
@@ -341,7 +286,7 @@ class NoiseAnalyzerNode(Node):
         statuses = []
         for axis, verdict in verdicts.items():
             s = summaries[axis]
-            last = self._last.get(axis)
+            last = self.live.last.get(axis)
             values = [(k, v) for k, v, _ in verdict.items]
             if last is not None:
                 values += last_chunk_items(last)
@@ -349,19 +294,20 @@ class NoiseAnalyzerNode(Node):
             values += stream_items(counts, chunk_size=self.config.chunk_size,
                                    mean_temperature_c=s.temperature_mean_c)
             values += [
-                ('Analysis queue (chunks)', str(self._jobs.qsize())),
+                ('Analysis queue (chunks)', str(self.live.queue_size)),
                 ('Messages dropped before the node', str(self._transport.missing)),
                 ('Messages undecodable', str(self.messages_undecodable)),
             ]
             level, message = verdict.level, verdict.message
-            if self._rejected_batches:
-                values.append(('Batches rejected', str(self._rejected_batches)))
-                values.append(('Last rejection', self._ingest_error))
+            live = self.live
+            if live.rejected_batches:
+                values.append(('Batches rejected', str(live.rejected_batches)))
+                values.append(('Last rejection', live.last_rejection))
                 # ERROR while data arrives but is rejected (rather than STALE for 'no chunk yet');
                 # once batches are accepted again only the count stays.
                 silent = since is not None and since > self.thresholds.stale_after_s
-                if self._last_batch_rejected and not silent:
-                    level, message = 'ERROR', f'Samples rejected: {self._ingest_error}.'
+                if live.last_batch_rejected and not silent:
+                    level, message = 'ERROR', f'Samples rejected: {live.last_rejection}.'
             statuses.append(diagnostic_status(f'{self.get_name()}: axis {axis}', hardware_id,
                                               _level_byte(level), message, values))
         return diagnostic_array(self.get_clock().now().to_msg(), statuses)
@@ -371,8 +317,8 @@ class NoiseAnalyzerNode(Node):
         self._diag_pub.publish(self.diagnostics())
 
     def destroy_node(self):
-        self._stop.set()
-        self._worker.join(timeout=5.0)
+        """Stop the worker thread, then destroy the node."""
+        self.live.stop()
         return super().destroy_node()
 
 

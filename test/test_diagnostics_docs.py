@@ -25,7 +25,8 @@ from gyro_noise_ros.nodes.analyzer import NoiseAnalyzerNode
 from gyro_noise_ros.nodes.driver import Lsm6dso32Driver
 import pytest
 from rclpy.parameter import Parameter
-from test_analyzer_node import _make_bag, _raw_messages, _replay, _spin_until, context  # noqa: F401
+from test_analyzer_node import (_make_bag, _raw_messages, _replay, _spin_until,  # noqa: F401
+                                context)
 from test_driver_node import closed_port_url
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(180)]

@@ -22,10 +22,10 @@ import time
 from types import SimpleNamespace
 
 from gyro_noise_ros.bag.codec import imu_covariances, temperature_variances
-from gyro_noise_ros.core.health import HealthThresholds
-from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
+from gyro_noise_ros.core.health import HealthThresholds
+from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
 from gyro_noise_ros.core.live import LiveAnalysis, parse_axes, TemperatureTrack
 from gyro_noise_ros.errors import LinkError, ParameterError
 from gyro_noise_ros.link import protocol as P
@@ -89,11 +89,8 @@ def test_tracker_matches_its_per_sample_twin():
             run = int(rng.integers(1, 30))
             seq += [(s + k) % 2**32 for k in range(run)]
             s = (s + run - 1) % 2**32
-        cuts = np.sort(
-    rng.choice(
-        np.arange(
-            1, len(seq)), size=min(
-                3, len(seq) - 1), replace=False))
+        cuts = np.sort(rng.choice(np.arange(1, len(seq)), size=min(3, len(seq) - 1),
+                                  replace=False))
         batches = np.split(np.array(seq, np.uint32), cuts)
 
         tracker, labels, lost, restart_next = SequenceTracker(restart_window=100), [], 0, False
@@ -159,10 +156,8 @@ def test_imu_covariances_read_back_what_was_encoded():
 def test_temperature_variances_read_back_what_was_encoded():
     from gyro_noise_ros.bag import encode_temperature_cdr
 
-    raws = encode_temperature_cdr(
-    np.arange(3), [
-        20.0, 21.0, 22.0], frame_id='imu', variance=[
-            0.5, 0.25, 0.0])
+    raws = encode_temperature_cdr(np.arange(3), [20.0, 21.0, 22.0], frame_id='imu',
+                                  variance=[0.5, 0.25, 0.0])
     np.testing.assert_array_equal(temperature_variances(raws), [0.5, 0.25, 0.0])
 
 

@@ -1,9 +1,10 @@
 """
 ``gyro_noise_record`` as a real process: loss-free at 6.66 kHz, clean close on SIGINT and SIGTERM.
 
-The replayer of ``test/test_analyzer_e2e.py`` publishes seeded samples in real time; the recorder writes
-them; after the signal the bag is read back with :class:`gyro_noise_ros.bag.ImuBagReader` and compared
-with what was published: the same count (nothing lost, nothing twice), the same stamps and values.
+The replayer of ``test/test_analyzer_e2e.py`` publishes seeded samples in real time; the recorder
+writes them; after the signal the bag is read back with :class:`gyro_noise_ros.bag.ImuBagReader`
+and compared with what was published: the same count (nothing lost, nothing twice), the same stamps
+and values.
 """
 
 import random
@@ -11,11 +12,10 @@ import signal
 import subprocess
 import sys
 
-import numpy as np
-import pytest
-
 from gyro_noise_ros.bag import ImuBagReader, list_topics
 from gyro_noise_ros.nodes.recorder import default_bag_name
+import numpy as np
+import pytest
 from test_analyzer_e2e import RATE_HZ, ros_env, start_replayer
 
 pytestmark = pytest.mark.ros
@@ -34,7 +34,8 @@ def _record(tmp_path, samples, seed, sig, storage):
     out = tmp_path / f'bag_{storage}'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', f'storage:={storage}'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
     # The replayer waits for the recorder's Imu subscription, publishes in real time at 6.66 kHz
     # and lingers 1 s, so the recorder has taken everything before the signal.
     rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1)
@@ -60,7 +61,8 @@ def test_records_every_message_at_6660_hz(tmp_path, sig, storage):
     assert rc == 0, err
     summary = [line for line in err.splitlines() if line.startswith('gyro_noise_record: received')]
     assert summary, err
-    assert f'received {samples} Imu' in summary[0] and f'wrote {samples} and' in summary[0], summary[0]
+    assert f'received {samples} Imu' in summary[0], summary[0]
+    assert f'wrote {samples} and' in summary[0], summary[0]
     assert '0 dropped' in summary[0]
 
     topics = {t.name: t for t in list_topics(out)}
@@ -85,7 +87,8 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
     out = tmp_path / 'killed'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', 'flush_period_s:=0.2'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
     rep = start_replayer(domain, '--samples', 10000, '--seed', 3, '--linger-s', 1.5)
     try:
         rep.communicate(timeout=120)
@@ -107,7 +110,8 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
 def test_refuses_an_existing_output(tmp_path):
     env = ros_env(random.randint(100, 200))
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
-                           '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True, timeout=60)
+                           '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True,
+                          timeout=60)
     assert done.returncode == 3
     lines = done.stderr.strip().splitlines()
     assert lines[-1].startswith('gyro_noise_record: error:') and 'exists' in lines[-1], done.stderr
@@ -126,9 +130,9 @@ def test_refuses_an_unknown_storage(tmp_path):
 def test_default_bag_name():
     from datetime import datetime, timezone
 
-    assert default_bag_name(datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)) == 'gyro_noise_20260102_030405'
+    assert default_bag_name(datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)
+                            ) == 'gyro_noise_20260102_030405'
 
 
 if __name__ == '__main__':
     sys.exit(pytest.main([__file__, *sys.argv[1:]]))
-

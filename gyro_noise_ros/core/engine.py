@@ -1,39 +1,46 @@
 """
-Streaming analysis engine shared by the analyzer node and the offline tool (issue 4; paper 000 sec. 3.2-3.5).
+Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
-One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional temperature)``
-and cuts every selected axis into fixed-length chunks (10,000 samples by default, as in the paper). The work
-is split in three steps so that the caller decides where the heavy part runs:
+Issue 4.
 
-1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order counting,
-   chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete chunk and axis.
+One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional
+temperature)`` and cuts every selected axis into fixed-length chunks (10,000 samples by default, as
+in the paper). The work is split in three steps so that the caller decides where the heavy part
+runs:
+
+1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order
+   counting, chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete
+   chunk and axis.
 2. :func:`analyze_chunk` (heavy, pure, picklable): fractional-order identification by both methods
    (:class:`.fractional.OrderIdentifier`); safe in a worker thread or process.
-3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence statistics
-   (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
+3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence
+   statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
+   :meth:`NoiseEngine.health` are computed.
 
-Stamps and gaps. The nominal sample period is ``1 / rate_hz``; when ``rate_hz`` is None it is the median
-step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). Steps are taken
-from the latest stamp seen so far. A step larger than ``gap_factor`` nominal periods is a gap that lost
-``round(step / period) - 1`` samples. A step <= 0 is an out-of-order (or repeated) stamp: counted, never
-reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap
-(the hole is seen before the late sample arrives; the engine does not look back to fill it).
-The ``gap_policy`` decides what a gap does to the chunk it falls in:
+Stamps and gaps. The nominal sample period is ``1 / rate_hz``; when ``rate_hz`` is None it is the
+median step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then).
+Steps are taken from the latest stamp seen so far. A step larger than ``gap_factor`` nominal
+periods is a gap that lost ``round(step / period) - 1`` samples. A step <= 0 is an out-of-order (or
+repeated) stamp: counted, never reordered, never a gap. So two swapped samples count as one
+out-of-order stamp *and* one one-sample gap (the hole is seen before the late sample arrives; the
+engine does not look back to fill it). The ``gap_policy`` decides what a gap does to the chunk it
+falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
 * ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
-  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every analysed
-  chunk is gap-free.
-* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the sequence
-  statistics.
+  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every
+  analysed chunk is gap-free.
+* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the
+  sequence statistics.
 
-NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status ``'nan'``
-(per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left out of the
-statistics. The incomplete tail at the end is counted (``tail_samples``), never silently dropped.
+NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status
+``'nan'`` (per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left
+out of the statistics. The incomplete tail at the end is counted (``tail_samples``), never silently
+dropped.
 
-Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every finite
-sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform sampling, so heavy
-loss biases it; the loss is reported beside it).
+Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every
+finite sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform
+sampling, so heavy loss biases it; the loss is reported beside it).
 """
 
 from collections import deque
@@ -42,9 +49,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import InputDataError, ParameterError
 from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
-from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
+from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
+from ..errors import InputDataError, ParameterError
 
 #: Axis names in column order of the gyro array.
 AXES = ('x', 'y', 'z')
@@ -52,8 +59,8 @@ AXES = ('x', 'y', 'z')
 GAP_POLICIES = ('flag', 'split', 'drop')
 #: Stamps used to estimate the sample rate when it is not configured.
 RATE_ESTIMATE_SAMPLES = 101
-#: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the caller,
-#: or failing identification (e.g. a constant chunk).
+#: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the
+#: caller, or failing identification (e.g. a constant chunk).
 STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
 _NS = 1_000_000_000
@@ -87,9 +94,11 @@ class EngineConfig:
     allan : bool
         Keep an incremental Allan deviation of the whole run.
     allan_taus : {'octave', 'dense'}
-        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per decade).
+        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per
+        decade).
     history_chunks : int
         Chunks kept per axis for the sequence statistics; 0 = all (a live node may bound it).
+
     """
 
     chunk_size: int = DEFAULT_CHUNK_SIZE
@@ -108,30 +117,36 @@ class EngineConfig:
     def __post_init__(self):
         axes = tuple(self.axes) if not isinstance(self.axes, str) else (self.axes,)
         if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
-            raise ParameterError(f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
+            raise ParameterError(
+                f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
         object.__setattr__(self, 'axes', axes)
         if self.gap_policy not in GAP_POLICIES:
-            raise ParameterError(f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
+            raise ParameterError(
+                f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
         if not (np.isfinite(self.gap_factor) and self.gap_factor > 1.0):
-            raise ParameterError(f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
+            raise ParameterError(
+                f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
         if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ParameterError(f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
+            raise ParameterError(
+                f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
         if self.allan_taus not in ('octave', 'dense'):
-            raise ParameterError(f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
+            raise ParameterError(
+                f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
         if int(self.history_chunks) < 0:
             raise ParameterError(f'history_chunks must be >= 0, got {self.history_chunks!r}')
-        alphas = default_grid() if self.alphas is None else np.asarray(self.alphas, dtype=np.float64).ravel()
+        alphas = (default_grid() if self.alphas is None
+                  else np.asarray(self.alphas, dtype=np.float64).ravel())
         alphas.setflags(write=False)
         object.__setattr__(self, 'alphas', alphas)
         # Build once to validate chunk_size / memory / max_lag / grid together with the core's
         # messages.
-        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory), bool(self.demean),
-                       self.max_lag)
+        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory),
+                       bool(self.demean), self.max_lag)
 
     def identifier_key(self):
         """Return the hashable arguments of :func:`identifier_for` for this configuration."""
-        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory), bool(self.demean),
-                None if self.max_lag is None else int(self.max_lag))
+        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory),
+                bool(self.demean), None if self.max_lag is None else int(self.max_lag))
 
     def as_dict(self):
         """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
@@ -139,9 +154,11 @@ class EngineConfig:
         return {
             'chunk_size': int(self.chunk_size), 'axes': list(self.axes),
             'order_grid': {'start': float(a[0]), 'stop': float(a[-1]),
-                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0, 'count': int(a.size)},
+                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0,
+                           'count': int(a.size)},
             'memory': int(self.memory), 'demean': bool(self.demean), 'max_lag': self.max_lag,
-            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor), 'gap_policy': self.gap_policy,
+            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor),
+            'gap_policy': self.gap_policy,
             'allan': bool(self.allan), 'allan_taus': self.allan_taus,
             'history_chunks': int(self.history_chunks)}
 
@@ -149,7 +166,9 @@ class EngineConfig:
 @lru_cache(maxsize=8)
 def identifier_for(chunk_size, alphas, memory, demean, max_lag):
     """
-    Return a cached :class:`.fractional.OrderIdentifier` (its set-up transforms every grid filter once).
+    Return a cached :class:`.fractional.OrderIdentifier`.
+
+    Its set-up transforms every grid filter once, so one per configuration is kept.
 
     Parameters
     ----------
@@ -167,6 +186,7 @@ def identifier_for(chunk_size, alphas, memory, demean, max_lag):
     Returns
     -------
     OrderIdentifier
+
     """
     return OrderIdentifier(chunk_size, alphas=np.asarray(alphas), memory=memory, demean=demean,
                            max_lag=max_lag)
@@ -188,8 +208,8 @@ class ChunkJob:
     stamp_start_ns : int
         Stamp of the first sample (ns).
     t_start_s, t_mid_s : float
-        Time of the first sample and the midpoint of first and last sample, from the first sample of the
-        run (s).
+        Time of the first sample and the midpoint of first and last sample, from the first sample
+        of the run (s).
     samples_lost, gaps : int
         Samples lost in gaps between this chunk's samples, and the number of such gaps.
     nan_samples : int
@@ -202,6 +222,7 @@ class ChunkJob:
         Chunk mean (rad/s) and variance, ddof = 1 ((rad/s)^2); NaN for a 'nan' chunk.
     identifier_key : tuple
         Arguments of :func:`identifier_for`.
+
     """
 
     axis: str
@@ -232,8 +253,8 @@ class ChunkResult:
     """
     Per-chunk results of one axis (identical from the node and the offline tool for the same data).
 
-    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b`` is the
-    "same numbers" test between two runs.
+    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b``
+    is the "same numbers" test between two runs.
 
     Attributes
     ----------
@@ -254,13 +275,15 @@ class ChunkResult:
     j_min : float
         Minimum of J ((rad/s)^2).
     tie_var, tie_corr : bool
-        The minimum was an exact tie between grid orders (the largest is reported; see fractional.py).
+        The minimum was an exact tie between grid orders (the largest is reported; see
+        fractional.py).
     status : str
         One of :data:`STATUSES`.
     message : str
         Why the status is not 'ok' (empty otherwise).
     var_curve, j_curve : numpy.ndarray or None
         var(w)(alpha) and J(alpha) over the grid when curves were requested (not compared).
+
     """
 
     axis: str
@@ -289,7 +312,7 @@ class ChunkResult:
     j_curve: np.ndarray = field(default=None, repr=False, compare=False)
 
     def __eq__(self, other):
-        """Field-wise equality of the compared fields, NaN equal to NaN (curves are not compared)."""
+        """Compare field by field, NaN equal to NaN (curves are not compared)."""
         if not isinstance(other, ChunkResult):
             return NotImplemented
         return all(_same(getattr(self, f.name), getattr(other, f.name))
@@ -305,8 +328,9 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
-    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a chunk
-    that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or 'failed'.
+    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a
+    chunk that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or
+    'failed'.
 
     Parameters
     ----------
@@ -320,20 +344,22 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     Returns
     -------
     ChunkResult
+
     """
-    base = dict(axis=job.axis, chunk=job.chunk, t_start_s=job.t_start_s, t_mid_s=job.t_mid_s,
-                stamp_start_ns=job.stamp_start_ns, samples=int(job.samples.shape[0]),
-                samples_lost=job.samples_lost, gaps=job.gaps, nan_samples=job.nan_samples,
-                bias_rad_s=job.bias_rad_s, variance_rad2_s2=job.variance_rad2_s2,
-                temperature_c=job.temperature_c)
-    empty = dict(alpha_var=_NAN, f_var=_NAN, var_min=_NAN, alpha_corr=_NAN, f_corr=_NAN, j_min=_NAN,
-                 tie_var=False, tie_corr=False)
+    base = {'axis': job.axis, 'chunk': job.chunk, 't_start_s': job.t_start_s,
+            't_mid_s': job.t_mid_s, 'stamp_start_ns': job.stamp_start_ns,
+            'samples': int(job.samples.shape[0]), 'samples_lost': job.samples_lost,
+            'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
+            'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
+    empty = {'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
+             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False}
     if job.status == 'nan':
         return ChunkResult(**base, **empty, status='nan',
                            message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
     if job.status == 'dropped':
         return ChunkResult(**base, **empty, status='dropped',
-                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost (gap policy drop)')
+                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost '
+                                   '(gap policy drop)')
     if identifier is None:
         identifier = identifier_for(*job.identifier_key)
     try:
@@ -372,6 +398,7 @@ class StreamCounts:
         Nominal sample rate in use (Hz), NaN while still unknown.
     duration_s : float
         Last minus first stamp (s).
+
     """
 
     samples: int
@@ -407,6 +434,7 @@ class AxisSummary:
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
     noise_terms : object or None
         The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable).
+
     """
 
     axis: str
@@ -430,7 +458,9 @@ class AxisSummary:
 
 def rad_s2_to_deg_s_per_h(value):
     """
-    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3, see chunks.py).
+    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
+
+    See chunks.py.
 
     Parameters
     ----------
@@ -441,6 +471,7 @@ def rad_s2_to_deg_s_per_h(value):
     -------
     float
         Drift in deg/s per hour.
+
     """
     return float(np.degrees(value) * 3600.0)
 
@@ -450,7 +481,8 @@ class _AxisState:
 
     def __init__(self, history):
         maxlen = history or None
-        self.rows = deque(maxlen=maxlen)  # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        self.rows = deque(maxlen=maxlen)
         self.nan_samples = 0
         self.by_status = dict.fromkeys(STATUSES, 0)
         self.last = None
@@ -458,18 +490,21 @@ class _AxisState:
 
 class NoiseEngine:
     """
-    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge (module doc).
+    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge.
+
+    The module doc describes the steps.
 
     Parameters
     ----------
     config : EngineConfig
         Options.
     reference : optional, keyword-only
-        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the offline
-        tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all axes, or a dict
-        ``{axis: ReferenceStats}``.
+        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the
+        offline tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all
+        axes, or a dict ``{axis: ReferenceStats}``.
     thresholds : HealthThresholds, optional, keyword-only
         Verdict thresholds (default :class:`.health.HealthThresholds()`).
+
     """
 
     def __init__(self, config=None, *, reference=None, thresholds=None):
@@ -501,7 +536,8 @@ class NoiseEngine:
     # -------------------------------------------------------------------------------
 
     def _reset_buffer(self):
-        self._buf = []  # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        self._buf = []
         self._buffered = 0
 
     def ingest(self, stamp_ns, gyro, temperature_c=None):
@@ -521,6 +557,7 @@ class NoiseEngine:
         -------
         list of ChunkJob
             One per completed chunk and configured axis, in chunk then axis order.
+
         """
         stamps = np.asarray(stamp_ns)
         if stamps.dtype.kind not in 'iu':
@@ -528,12 +565,14 @@ class NoiseEngine:
         stamps = stamps.astype(np.int64).reshape(-1)
         g = np.asarray(gyro, dtype=np.float64)
         if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] != stamps.shape[0]:
-            raise InputDataError(f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
+            raise InputDataError(
+                f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
         n = stamps.shape[0]
         if temperature_c is None:
             temp = np.full(n, np.nan)
         else:
-            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64), (n,)).astype(np.float64)
+            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64),
+                                   (n,)).astype(np.float64)
         if n == 0:
             return []
         self._samples += n
@@ -554,8 +593,8 @@ class NoiseEngine:
         steps = np.diff(stamps[:RATE_ESTIMATE_SAMPLES])
         steps = steps[steps > 0]
         if steps.size == 0:
-            raise InputDataError(f'cannot estimate the sample rate: the first {stamps.shape[0]} stamps '
-                                 'never increase; set the rate explicitly')
+            raise InputDataError(f'cannot estimate the sample rate: the first {stamps.shape[0]} '
+                                 'stamps never increase; set the rate explicitly')
         self._period_ns = float(np.median(steps))
         return self._process(stamps, g, temp)
 
@@ -624,7 +663,8 @@ class NoiseEngine:
             jobs += self._make_jobs(rel[sl], chunk_lost, temp[sl], g[sl])
         self._reset_buffer()
         if whole < rel.shape[0]:
-            self._buf.append((rel[whole:].copy(), lost[whole:].copy(), temp[whole:].copy(), g[whole:].copy()))
+            self._buf.append((rel[whole:].copy(), lost[whole:].copy(),
+                             temp[whole:].copy(), g[whole:].copy()))
             self._buffered = rel.shape[0] - whole
         return jobs
 
@@ -652,19 +692,23 @@ class NoiseEngine:
                 var = float(col.var(ddof=1))
             jobs.append(ChunkJob(
                 axis=axis, chunk=index, samples=col, stamp_start_ns=int(rel[0]) + self._first_ns,
-                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost, gaps=gaps,
+                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost,
+                gaps=gaps,
                 nan_samples=nan, temperature_c=temperature, status=status, bias_rad_s=bias,
                 variance_rad2_s2=var, identifier_key=self._key))
         return jobs
 
     def flush(self):
         """
-        Finish ingestion: release samples held for rate estimation (the tail stays counted, unanalysed).
+        Finish ingestion: release samples held for rate estimation.
+
+        The tail stays counted, unanalysed.
 
         Returns
         -------
         list of ChunkJob
             Jobs completed by the released samples.
+
         """
         if self._pending:
             held = sum(p[0].shape[0] for p in self._pending)
@@ -715,11 +759,14 @@ class NoiseEngine:
         Parameters
         ----------
         job : ChunkJob
+            The chunk to analyse.
         curves : bool, keyword-only
+            Keep the criterion curves in the result.
 
         Returns
         -------
         ChunkResult
+
         """
         return analyze_chunk(job, curves=curves)
 
@@ -730,15 +777,19 @@ class NoiseEngine:
         Parameters
         ----------
         result : ChunkResult
+            An analysed chunk of this engine.
+
         """
         state = self._axis.get(result.axis)
         if state is None:
-            raise ParameterError(f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
+            raise ParameterError(
+                f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
         state.by_status[result.status] = state.by_status.get(result.status, 0) + 1
         state.last = result
         if result.status == 'ok':
-            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2, result.alpha_var,
-                               result.alpha_corr, result.tie_var, result.tie_corr, result.temperature_c))
+            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
+                               result.alpha_var, result.alpha_corr, result.tie_var,
+                               result.tie_corr, result.temperature_c))
 
     def skip(self, job, reason=''):
         """
@@ -747,6 +798,7 @@ class NoiseEngine:
         Parameters
         ----------
         job : ChunkJob
+            The chunk not analysed.
         reason : str
             Why (kept in the returned result's message).
 
@@ -754,6 +806,7 @@ class NoiseEngine:
         -------
         ChunkResult
             A 'skipped' result (already recorded).
+
         """
         result = replace(analyze_chunk(replace(job, status='dropped')), status='skipped',
                          message=str(reason) or 'skipped')
@@ -767,14 +820,17 @@ class NoiseEngine:
         Returns
         -------
         StreamCounts
+
         """
         held = sum(p[0].shape[0] for p in self._pending)
         return StreamCounts(
-            samples=self._samples, samples_lost=self._lost, gaps=self._gaps, out_of_order=self._out_of_order,
+            samples=self._samples, samples_lost=self._lost, gaps=self._gaps,
+            out_of_order=self._out_of_order,
             chunks=self._chunk_index, tail_samples=self._buffered + held,
             discarded_samples=self._discarded, discarded_partials=self._discarded_partials,
             rate_hz=_NS / self._period_ns if self._period_ns else _NAN,
-            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0)
+            duration_s=((self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None
+                        else 0.0))
 
     def summary(self, *, allan=True):
         """
@@ -783,19 +839,22 @@ class NoiseEngine:
         Parameters
         ----------
         allan : bool, keyword-only
-            Compute the Allan deviation and noise terms (the costly part; a live node may ask rarely).
+            Compute the Allan deviation and noise terms (the costly part; a live node may ask
+            rarely).
 
         Returns
         -------
         dict
             ``{axis: AxisSummary}`` in configured axis order.
+
         """
         counts = self.counts()
         out = {}
         for axis, state in self._axis.items():
-            rows = np.array([r for r in state.rows], dtype=np.float64).reshape(-1, 8)
+            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 8)
             seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
-                                     tail_samples=counts.tail_samples, ties_var=int(rows[:, 5].sum()),
+                                     tail_samples=counts.tail_samples,
+                                     ties_var=int(rows[:, 5].sum()),
                                      ties_corr=int(rows[:, 6].sum()))
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
@@ -815,7 +874,8 @@ class NoiseEngine:
         Parameters
         ----------
         seconds_since_data : float, optional, keyword-only
-            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict is STALE.
+            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict
+            is STALE.
         summaries : dict, optional, keyword-only
             Reuse :meth:`summary` output (avoids recomputing it).
 
@@ -823,11 +883,13 @@ class NoiseEngine:
         -------
         dict
             ``{axis: HealthVerdict}``.
+
         """
         from .health import evaluate_health
 
         summaries = summaries if summaries is not None else self.summary(allan=False)
-        return {axis: evaluate_health(s, reference=self.reference.get(axis), thresholds=self.thresholds,
+        return {axis: evaluate_health(s, reference=self.reference.get(axis),
+                                      thresholds=self.thresholds,
                                       seconds_since_data=seconds_since_data)
                 for axis, s in summaries.items()}
 
@@ -849,6 +911,7 @@ def warm_up(config):
     ----------
     config : EngineConfig
         The configuration the real data will be analysed with.
+
     """
     rng = np.random.default_rng(0)
     n = int(config.chunk_size) + 1

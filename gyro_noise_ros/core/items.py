@@ -120,7 +120,8 @@ def allan_items(summary):
     if terms is not None:
         try:
             customary = terms.customary()
-            out['Angle random walk (deg/sqrt(h))'] = fmt(customary.angle_random_walk_deg_per_sqrt_h)
+            arw = customary.angle_random_walk_deg_per_sqrt_h
+            out['Angle random walk (deg/sqrt(h))'] = fmt(arw)
             out['Bias instability (deg/h)'] = fmt(customary.bias_instability_deg_per_h)
         except (AttributeError, TypeError, ValueError):
             pass

@@ -29,6 +29,9 @@ setup(
         'pyserial',
         'matplotlib',
         'PyYAML',
+        # thermal baselines (paper 002 comparisons): wavelet-threshold denoising and EMD
+        'PyWavelets>=1.1',
+        'EMD-signal>=1.5',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install
@@ -59,11 +62,15 @@ setup(
             'lsm6dso32_driver = gyro_noise_ros.nodes.driver:main',
             'noise_analyzer = gyro_noise_ros.nodes.analyzer:main',
             'gyro_noise_record = gyro_noise_ros.nodes.recorder:main',
+            'imu_compensator = gyro_noise_ros.nodes.compensator:main',
             'portenta_emulator = gyro_noise_ros.cli.emulator:main',
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
             'gyro_noise_monitor = gyro_noise_ros.nodes.monitor:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
+            'gyro_noise_calibrate = gyro_noise_ros.cli.calibrate:main',
+            'gyro_noise_reliability = gyro_noise_ros.cli.reliability:main',
+            'gyro_noise_excitation = gyro_noise_ros.cli.excitation:main',
         ],
     },
 )

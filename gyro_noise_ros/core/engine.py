@@ -1,39 +1,54 @@
 """
-Streaming analysis engine shared by the analyzer node and the offline tool (issue 4; paper 000 sec. 3.2-3.5).
+Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
-One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional temperature)``
-and cuts every selected axis into fixed-length chunks (10,000 samples by default, as in the paper). The work
-is split in three steps so that the caller decides where the heavy part runs:
+Issue 4.
 
-1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order counting,
-   chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete chunk and axis.
+One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional
+temperature)`` and cuts every selected axis into fixed-length chunks (10,000 samples by default, as
+in the paper). The work is split in three steps so that the caller decides where the heavy part
+runs:
+
+1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order
+   counting, chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete
+   chunk and axis.
 2. :func:`analyze_chunk` (heavy, pure, picklable): fractional-order identification by both methods
    (:class:`.fractional.OrderIdentifier`); safe in a worker thread or process.
-3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence statistics
-   (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
+3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence
+   statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
+   :meth:`NoiseEngine.health` are computed.
 
-Stamps and gaps. The nominal sample period is ``1 / rate_hz``; when ``rate_hz`` is None it is the median
-step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). Steps are taken
-from the latest stamp seen so far. A step larger than ``gap_factor`` nominal periods is a gap that lost
-``round(step / period) - 1`` samples. A step <= 0 is an out-of-order (or repeated) stamp: counted, never
+Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming, the
+period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the first
+:data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). At the end (:meth:`NoiseEngine.counts`,
+:meth:`NoiseEngine.summary`) the estimate over the whole run replaces it: the Allan taus are rescaled to it
+(tau = m / rate), and the counts report the method, the stamp jitter and the disagreement warnings.
+
+*Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger than
+``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples.
+*Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps shorter
+than half a period): a long step followed by a burst is jitter, not loss, so single steps are not read.
+Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate) + 1 - n`` when it
+exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the run (the timebase
+estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single step to split at). A step <= 0 is an out-of-order (or repeated) stamp: counted, never
 reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap
 (the hole is seen before the late sample arrives; the engine does not look back to fill it).
 The ``gap_policy`` decides what a gap does to the chunk it falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
 * ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
-  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every analysed
-  chunk is gap-free.
-* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the sequence
-  statistics.
+  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every
+  analysed chunk is gap-free.
+* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the
+  sequence statistics.
 
-NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status ``'nan'``
-(per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left out of the
-statistics. The incomplete tail at the end is counted (``tail_samples``), never silently dropped.
+NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status
+``'nan'`` (per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left
+out of the statistics. The incomplete tail at the end is counted (``tail_samples``), never silently
+dropped.
 
-Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every finite
-sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform sampling, so heavy
-loss biases it; the loss is reported beside it).
+Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every
+finite sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform
+sampling, so heavy loss biases it; the loss is reported beside it).
 """
 
 from collections import deque
@@ -42,21 +57,24 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import InputDataError, ParameterError
 from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
 from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
+from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
+from .timebase import rescale_allan, TimebaseTracker
+from ..errors import InputDataError, ParameterError
 
 #: Axis names in column order of the gyro array.
 AXES = ('x', 'y', 'z')
 #: Valid gap policies (see module doc).
 GAP_POLICIES = ('flag', 'split', 'drop')
-#: Stamps used to estimate the sample rate when it is not configured.
-RATE_ESTIMATE_SAMPLES = 101
+#: Stamps used to estimate the sample rate when it is not configured (16 timebase blocks).
+RATE_ESTIMATE_SAMPLES = 16 * 64 + 1
 #: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the caller,
 #: or failing identification (e.g. a constant chunk).
 STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
 _NS = 1_000_000_000
+_EARLY_CHECK = 101
 
 
 @dataclass(frozen=True)
@@ -87,9 +105,11 @@ class EngineConfig:
     allan : bool
         Keep an incremental Allan deviation of the whole run.
     allan_taus : {'octave', 'dense'}
-        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per decade).
+        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per
+        decade).
     history_chunks : int
         Chunks kept per axis for the sequence statistics; 0 = all (a live node may bound it).
+
     """
 
     chunk_size: int = DEFAULT_CHUNK_SIZE
@@ -108,29 +128,36 @@ class EngineConfig:
     def __post_init__(self):
         axes = tuple(self.axes) if not isinstance(self.axes, str) else (self.axes,)
         if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
-            raise ParameterError(f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
+            raise ParameterError(
+                f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
         object.__setattr__(self, 'axes', axes)
         if self.gap_policy not in GAP_POLICIES:
-            raise ParameterError(f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
+            raise ParameterError(
+                f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
         if not (np.isfinite(self.gap_factor) and self.gap_factor > 1.0):
-            raise ParameterError(f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
+            raise ParameterError(
+                f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
         if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ParameterError(f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
+            raise ParameterError(
+                f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
         if self.allan_taus not in ('octave', 'dense'):
-            raise ParameterError(f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
+            raise ParameterError(
+                f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
         if int(self.history_chunks) < 0:
             raise ParameterError(f'history_chunks must be >= 0, got {self.history_chunks!r}')
-        alphas = default_grid() if self.alphas is None else np.asarray(self.alphas, dtype=np.float64).ravel()
+        alphas = (default_grid() if self.alphas is None
+                  else np.asarray(self.alphas, dtype=np.float64).ravel())
         alphas.setflags(write=False)
         object.__setattr__(self, 'alphas', alphas)
-        # Build once to validate chunk_size / memory / max_lag / grid together with the core's messages.
-        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory), bool(self.demean),
-                       self.max_lag)
+        # Build once to validate chunk_size / memory / max_lag / grid together with the core's
+        # messages.
+        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory),
+                       bool(self.demean), self.max_lag)
 
     def identifier_key(self):
         """Return the hashable arguments of :func:`identifier_for` for this configuration."""
-        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory), bool(self.demean),
-                None if self.max_lag is None else int(self.max_lag))
+        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory),
+                bool(self.demean), None if self.max_lag is None else int(self.max_lag))
 
     def as_dict(self):
         """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
@@ -138,9 +165,11 @@ class EngineConfig:
         return {
             'chunk_size': int(self.chunk_size), 'axes': list(self.axes),
             'order_grid': {'start': float(a[0]), 'stop': float(a[-1]),
-                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0, 'count': int(a.size)},
+                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0,
+                           'count': int(a.size)},
             'memory': int(self.memory), 'demean': bool(self.demean), 'max_lag': self.max_lag,
-            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor), 'gap_policy': self.gap_policy,
+            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor),
+            'gap_policy': self.gap_policy,
             'allan': bool(self.allan), 'allan_taus': self.allan_taus,
             'history_chunks': int(self.history_chunks)}
 
@@ -148,7 +177,9 @@ class EngineConfig:
 @lru_cache(maxsize=8)
 def identifier_for(chunk_size, alphas, memory, demean, max_lag):
     """
-    Return a cached :class:`.fractional.OrderIdentifier` (its set-up transforms every grid filter once).
+    Return a cached :class:`.fractional.OrderIdentifier`.
+
+    Its set-up transforms every grid filter once, so one per configuration is kept.
 
     Parameters
     ----------
@@ -166,6 +197,7 @@ def identifier_for(chunk_size, alphas, memory, demean, max_lag):
     Returns
     -------
     OrderIdentifier
+
     """
     return OrderIdentifier(chunk_size, alphas=np.asarray(alphas), memory=memory, demean=demean,
                            max_lag=max_lag)
@@ -187,8 +219,8 @@ class ChunkJob:
     stamp_start_ns : int
         Stamp of the first sample (ns).
     t_start_s, t_mid_s : float
-        Time of the first sample and the midpoint of first and last sample, from the first sample of the
-        run (s).
+        Time of the first sample and the midpoint of first and last sample, from the first sample
+        of the run (s).
     samples_lost, gaps : int
         Samples lost in gaps between this chunk's samples, and the number of such gaps.
     nan_samples : int
@@ -201,6 +233,7 @@ class ChunkJob:
         Chunk mean (rad/s) and variance, ddof = 1 ((rad/s)^2); NaN for a 'nan' chunk.
     identifier_key : tuple
         Arguments of :func:`identifier_for`.
+
     """
 
     axis: str
@@ -231,8 +264,8 @@ class ChunkResult:
     """
     Per-chunk results of one axis (identical from the node and the offline tool for the same data).
 
-    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b`` is the
-    "same numbers" test between two runs.
+    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b``
+    is the "same numbers" test between two runs.
 
     Attributes
     ----------
@@ -253,13 +286,15 @@ class ChunkResult:
     j_min : float
         Minimum of J ((rad/s)^2).
     tie_var, tie_corr : bool
-        The minimum was an exact tie between grid orders (the largest is reported; see fractional.py).
+        The minimum was an exact tie between grid orders (the largest is reported; see
+        fractional.py).
     status : str
         One of :data:`STATUSES`.
     message : str
         Why the status is not 'ok' (empty otherwise).
     var_curve, j_curve : numpy.ndarray or None
         var(w)(alpha) and J(alpha) over the grid when curves were requested (not compared).
+
     """
 
     axis: str
@@ -288,7 +323,7 @@ class ChunkResult:
     j_curve: np.ndarray = field(default=None, repr=False, compare=False)
 
     def __eq__(self, other):
-        """Field-wise equality of the compared fields, NaN equal to NaN (curves are not compared)."""
+        """Compare field by field, NaN equal to NaN (curves are not compared)."""
         if not isinstance(other, ChunkResult):
             return NotImplemented
         return all(_same(getattr(self, f.name), getattr(other, f.name))
@@ -304,8 +339,9 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
-    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a chunk
-    that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or 'failed'.
+    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a
+    chunk that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or
+    'failed'.
 
     Parameters
     ----------
@@ -319,20 +355,22 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     Returns
     -------
     ChunkResult
+
     """
-    base = dict(axis=job.axis, chunk=job.chunk, t_start_s=job.t_start_s, t_mid_s=job.t_mid_s,
-                stamp_start_ns=job.stamp_start_ns, samples=int(job.samples.shape[0]),
-                samples_lost=job.samples_lost, gaps=job.gaps, nan_samples=job.nan_samples,
-                bias_rad_s=job.bias_rad_s, variance_rad2_s2=job.variance_rad2_s2,
-                temperature_c=job.temperature_c)
-    empty = dict(alpha_var=_NAN, f_var=_NAN, var_min=_NAN, alpha_corr=_NAN, f_corr=_NAN, j_min=_NAN,
-                 tie_var=False, tie_corr=False)
+    base = {'axis': job.axis, 'chunk': job.chunk, 't_start_s': job.t_start_s,
+            't_mid_s': job.t_mid_s, 'stamp_start_ns': job.stamp_start_ns,
+            'samples': int(job.samples.shape[0]), 'samples_lost': job.samples_lost,
+            'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
+            'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
+    empty = {'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
+             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False}
     if job.status == 'nan':
         return ChunkResult(**base, **empty, status='nan',
                            message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
     if job.status == 'dropped':
         return ChunkResult(**base, **empty, status='dropped',
-                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost (gap policy drop)')
+                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost '
+                                   '(gap policy drop)')
     if identifier is None:
         identifier = identifier_for(*job.identifier_key)
     try:
@@ -368,9 +406,18 @@ class StreamCounts:
     discarded_samples, discarded_partials : int
         Samples and partial chunks thrown away by the 'split' policy.
     rate_hz : float
-        Nominal sample rate in use (Hz), NaN while still unknown.
+        Sample rate (Hz): configured, else the :mod:`.timebase` estimate over everything so far; NaN
+        while still unknown.
     duration_s : float
         Last minus first stamp (s).
+    rate_method : str
+        How ``rate_hz`` was obtained (:class:`.timebase.RateEstimate` ``method``).
+    bursty : bool
+        The stamps are bursty: loss is read from the deficit against elapsed time, not from steps.
+    jitter_s : float
+        RMS stamp jitter (s, :mod:`.timebase`).
+    timebase : timebase.RateEstimate or None
+        The full estimate (estimators, irregularity, warnings).
     """
 
     samples: int
@@ -383,6 +430,10 @@ class StreamCounts:
     discarded_partials: int
     rate_hz: float
     duration_s: float
+    rate_method: str = ''
+    bursty: bool = False
+    jitter_s: float = float('nan')
+    timebase: object = None
 
 
 @dataclass(frozen=True)
@@ -405,7 +456,10 @@ class AxisSummary:
     allan : object or None
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
     noise_terms : object or None
-        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable).
+        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
+        band-limited short taus left out (:mod:`.allan_readout`).
+    datasheet : allan_readout.DatasheetTerms or None
+        Bias stability (first ADEV minimum), ARW at 1 s, fit quality.
     """
 
     axis: str
@@ -420,6 +474,7 @@ class AxisSummary:
     temperature_mean_c: float
     allan: object = None
     noise_terms: object = None
+    datasheet: object = None
 
     @property
     def offset_drift_deg_s_per_h(self):
@@ -429,7 +484,9 @@ class AxisSummary:
 
 def rad_s2_to_deg_s_per_h(value):
     """
-    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3, see chunks.py).
+    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
+
+    See chunks.py.
 
     Parameters
     ----------
@@ -440,6 +497,7 @@ def rad_s2_to_deg_s_per_h(value):
     -------
     float
         Drift in deg/s per hour.
+
     """
     return float(np.degrees(value) * 3600.0)
 
@@ -449,7 +507,8 @@ class _AxisState:
 
     def __init__(self, history):
         maxlen = history or None
-        self.rows = deque(maxlen=maxlen)  # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        self.rows = deque(maxlen=maxlen)
         self.nan_samples = 0
         self.by_status = dict.fromkeys(STATUSES, 0)
         self.last = None
@@ -457,18 +516,21 @@ class _AxisState:
 
 class NoiseEngine:
     """
-    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge (module doc).
+    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge.
+
+    The module doc describes the steps.
 
     Parameters
     ----------
     config : EngineConfig
         Options.
     reference : optional, keyword-only
-        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the offline
-        tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all axes, or a dict
-        ``{axis: ReferenceStats}``.
+        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the
+        offline tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all
+        axes, or a dict ``{axis: ReferenceStats}``.
     thresholds : HealthThresholds, optional, keyword-only
         Verdict thresholds (default :class:`.health.HealthThresholds()`).
+
     """
 
     def __init__(self, config=None, *, reference=None, thresholds=None):
@@ -481,6 +543,12 @@ class NoiseEngine:
         self._key = self.config.identifier_key()
         self._period_ns = None if self.config.rate_hz is None else _NS / float(self.config.rate_hz)
         self._pending = []  # batches held until the rate is known
+        self._timebase = TimebaseTracker()
+        self._classified = False
+        self._bursty = False
+        self._allowance = 0.0  # per-chunk deficit allowance under bursty stamps (samples)
+        self._chunk_loss_events = 0
+        self._estimate_cache = (None, None)
         self._first_ns = None
         self._last_ns = None
         self._max_ns = None
@@ -496,10 +564,12 @@ class NoiseEngine:
         self._allan = None
         self._allan_error = None
 
-    # ---- ingestion -------------------------------------------------------------------------------
+    # ---- ingestion
+    # -------------------------------------------------------------------------------
 
     def _reset_buffer(self):
-        self._buf = []  # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        self._buf = []
         self._buffered = 0
 
     def ingest(self, stamp_ns, gyro, temperature_c=None):
@@ -519,6 +589,7 @@ class NoiseEngine:
         -------
         list of ChunkJob
             One per completed chunk and configured axis, in chunk then axis order.
+
         """
         stamps = np.asarray(stamp_ns)
         if stamps.dtype.kind not in 'iu':
@@ -526,50 +597,83 @@ class NoiseEngine:
         stamps = stamps.astype(np.int64).reshape(-1)
         g = np.asarray(gyro, dtype=np.float64)
         if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] != stamps.shape[0]:
-            raise InputDataError(f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
+            raise InputDataError(
+                f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
         n = stamps.shape[0]
         if temperature_c is None:
             temp = np.full(n, np.nan)
         else:
-            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64), (n,)).astype(np.float64)
+            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64),
+                                   (n,)).astype(np.float64)
         if n == 0:
             return []
         self._samples += n
+        self._timebase.update(stamps)
         g = np.ascontiguousarray(g[:, self._cols])
-        if self._period_ns is None:
+        if not self._classified:
+            # Held even with a configured rate: the stamp pattern (regular or bursty) decides how loss
+            # is read.
             self._pending.append((stamps, g, temp))
             held = sum(p[0].shape[0] for p in self._pending)
             if held < RATE_ESTIMATE_SAMPLES:
+                if held >= _EARLY_CHECK and len(self._pending) == 1 or held - n < _EARLY_CHECK <= held:
+                    self._early_check()
                 return []
             return self._release_pending()
         return self._process(stamps, g, temp)
+
+    def _early_check(self):
+        # Refuse obviously broken stamps (all equal, shuffled) after ~100 samples instead of 1025.
+        held = np.concatenate([p[0] for p in self._pending])
+        bad = int(np.count_nonzero(np.diff(held) <= 0))
+        if bad > 0.1 * (held.shape[0] - 1):
+            self._pending = []
+            raise InputDataError(f'cannot estimate the sample rate: {bad} of the first {held.shape[0] - 1} '
+                                 'stamp steps are not increasing')
 
     def _release_pending(self):
         stamps = np.concatenate([p[0] for p in self._pending])
         g = np.concatenate([p[1] for p in self._pending])
         temp = np.concatenate([p[2] for p in self._pending])
         self._pending = []
-        steps = np.diff(stamps[:RATE_ESTIMATE_SAMPLES])
-        steps = steps[steps > 0]
-        if steps.size == 0:
-            raise InputDataError(f'cannot estimate the sample rate: the first {stamps.shape[0]} stamps '
-                                 'never increase; set the rate explicitly')
-        self._period_ns = float(np.median(steps))
+        tracker = TimebaseTracker()
+        tracker.update(stamps)
+        try:
+            est = tracker.estimate(self.config.rate_hz)
+        except InputDataError as err:
+            raise InputDataError(f'cannot estimate the sample rate: {err}') from err
+        if not est.usable:
+            raise InputDataError(f'cannot estimate the sample rate: {est.warnings[0]} (first '
+                                 f'{stamps.shape[0]} samples)')
+        self._period_ns = _NS / est.rate_hz
+        self._classified = True
+        self._set_mode(est)
         return self._process(stamps, g, temp)
+
+    def _set_mode(self, est):
+        self._bursty = bool(est.bursty)
+        if self._bursty:
+            rate = _NS / self._period_ns
+            rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(est.stamp_rate_se_hz) else 0.0
+            self._allowance = (2.0 * est.max_step_s * rate + 6.0 * est.jitter_s * rate
+                               + 3.0 * rel_se * self.config.chunk_size + 1.0)
 
     def _process(self, stamps, g, temp):
         first = self._first_ns is None
         if first:
             self._first_ns = int(stamps[0])
             self._max_ns = int(stamps[0])
-        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order count
-        # and does not also make the next step look like a gap.
+        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order
+        # count and does not also make the next step look like a gap.
         run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
         steps = stamps - run_max[:-1]
         self._max_ns = int(run_max[-1])
         self._last_ns = int(stamps[-1])
         self._out_of_order += int(np.count_nonzero(steps[1:] <= 0 if first else steps <= 0))
-        gap = steps > self.config.gap_factor * self._period_ns
+        if self._bursty:
+            gap = np.zeros(stamps.shape[0], dtype=bool)  # loss is read per chunk from the deficit
+        else:
+            gap = steps > self.config.gap_factor * self._period_ns
         lost = np.zeros(stamps.shape[0], dtype=np.int64)
         if gap.any():
             lost[gap] = np.maximum(np.rint(steps[gap] / self._period_ns).astype(np.int64) - 1, 0)
@@ -622,7 +726,8 @@ class NoiseEngine:
             jobs += self._make_jobs(rel[sl], chunk_lost, temp[sl], g[sl])
         self._reset_buffer()
         if whole < rel.shape[0]:
-            self._buf.append((rel[whole:].copy(), lost[whole:].copy(), temp[whole:].copy(), g[whole:].copy()))
+            self._buf.append((rel[whole:].copy(), lost[whole:].copy(),
+                             temp[whole:].copy(), g[whole:].copy()))
             self._buffered = rel.shape[0] - whole
         return jobs
 
@@ -631,11 +736,17 @@ class NoiseEngine:
         self._chunk_index += 1
         samples_lost = int(lost.sum())
         gaps = int(np.count_nonzero(lost))
+        if self._bursty:
+            deficit = (rel[-1] - rel[0]) / self._period_ns + 1.0 - rel.shape[0]
+            if deficit > self._allowance:
+                samples_lost, gaps = int(round(deficit)), 1
+                self._chunk_loss_events += 1
         finite_t = temp[np.isfinite(temp)]
         temperature = float(finite_t.mean()) if finite_t.size else _NAN
         t_start = rel[0] / 1e9
         t_mid = (rel[0] + rel[-1]) / 2e9
-        dropped = gaps > 0 and self.config.gap_policy == 'drop'
+        dropped = gaps > 0 and (self.config.gap_policy == 'drop'
+                                or (self._bursty and self.config.gap_policy == 'split'))
         jobs = []
         for k, axis in enumerate(self.config.axes):
             col = np.ascontiguousarray(g[:, k])
@@ -650,19 +761,23 @@ class NoiseEngine:
                 var = float(col.var(ddof=1))
             jobs.append(ChunkJob(
                 axis=axis, chunk=index, samples=col, stamp_start_ns=int(rel[0]) + self._first_ns,
-                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost, gaps=gaps,
+                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost,
+                gaps=gaps,
                 nan_samples=nan, temperature_c=temperature, status=status, bias_rad_s=bias,
                 variance_rad2_s2=var, identifier_key=self._key))
         return jobs
 
     def flush(self):
         """
-        Finish ingestion: release samples held for rate estimation (the tail stays counted, unanalysed).
+        Finish ingestion: release samples held for rate estimation.
+
+        The tail stays counted, unanalysed.
 
         Returns
         -------
         list of ChunkJob
             Jobs completed by the released samples.
+
         """
         if self._pending:
             held = sum(p[0].shape[0] for p in self._pending)
@@ -670,7 +785,8 @@ class NoiseEngine:
                 return self._release_pending()
         return []
 
-    # ---- Allan -------------------------------------------------------------------------------------
+    # ---- Allan
+    # -------------------------------------------------------------------------------------
 
     def _feed_allan(self, g):
         if not self.config.allan or self._allan_error is not None:
@@ -693,15 +809,16 @@ class NoiseEngine:
         if self._allan is None:
             return None, None
         try:
-            from . import allan as _allan_mod
             result = self._allan[axis].result()
-            fit = getattr(_allan_mod, 'fit_noise_terms', None)
-            terms = fit(result) if fit is not None else None
+            if self.config.rate_hz is None:
+                result = rescale_allan(result, self.counts().rate_hz)
+            terms = fit_noise_terms_band_limited(result)
         except (InputDataError, ParameterError, ValueError):
             return None, None
         return result, terms
 
-    # ---- analysis and bookkeeping --------------------------------------------------------------------
+    # ---- analysis and bookkeeping
+    # --------------------------------------------------------------------
 
     @staticmethod
     def analyze(job, *, curves=False):
@@ -711,11 +828,14 @@ class NoiseEngine:
         Parameters
         ----------
         job : ChunkJob
+            The chunk to analyse.
         curves : bool, keyword-only
+            Keep the criterion curves in the result.
 
         Returns
         -------
         ChunkResult
+
         """
         return analyze_chunk(job, curves=curves)
 
@@ -726,15 +846,19 @@ class NoiseEngine:
         Parameters
         ----------
         result : ChunkResult
+            An analysed chunk of this engine.
+
         """
         state = self._axis.get(result.axis)
         if state is None:
-            raise ParameterError(f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
+            raise ParameterError(
+                f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
         state.by_status[result.status] = state.by_status.get(result.status, 0) + 1
         state.last = result
         if result.status == 'ok':
-            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2, result.alpha_var,
-                               result.alpha_corr, result.tie_var, result.tie_corr, result.temperature_c))
+            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
+                               result.alpha_var, result.alpha_corr, result.tie_var,
+                               result.tie_corr, result.temperature_c))
 
     def skip(self, job, reason=''):
         """
@@ -743,6 +867,7 @@ class NoiseEngine:
         Parameters
         ----------
         job : ChunkJob
+            The chunk not analysed.
         reason : str
             Why (kept in the returned result's message).
 
@@ -750,6 +875,7 @@ class NoiseEngine:
         -------
         ChunkResult
             A 'skipped' result (already recorded).
+
         """
         result = replace(analyze_chunk(replace(job, status='dropped')), status='skipped',
                          message=str(reason) or 'skipped')
@@ -763,14 +889,43 @@ class NoiseEngine:
         Returns
         -------
         StreamCounts
+
         """
         held = sum(p[0].shape[0] for p in self._pending)
+        est = self.timebase()
+        rate = _NS / self._period_ns if self._period_ns else _NAN
+        if est is not None and self._period_ns:
+            rate = est.rate_hz
+        lost, gaps = self._lost, self._gaps
+        if self._bursty:
+            lost = est.loss_samples if est is not None else 0
+            gaps = self._chunk_loss_events
         return StreamCounts(
-            samples=self._samples, samples_lost=self._lost, gaps=self._gaps, out_of_order=self._out_of_order,
+            samples=self._samples, samples_lost=lost, gaps=gaps, out_of_order=self._out_of_order,
             chunks=self._chunk_index, tail_samples=self._buffered + held,
             discarded_samples=self._discarded, discarded_partials=self._discarded_partials,
-            rate_hz=_NS / self._period_ns if self._period_ns else _NAN,
-            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0)
+            rate_hz=rate,
+            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0,
+            rate_method=est.method if est is not None else '', bursty=self._bursty,
+            jitter_s=est.jitter_s if est is not None else _NAN, timebase=est)
+
+    def timebase(self):
+        """
+        Return the :mod:`.timebase` estimate over every stamp so far (None before 2 stamps).
+
+        Returns
+        -------
+        timebase.RateEstimate or None
+        """
+        n = self._timebase.samples
+        if self._estimate_cache[0] == n:
+            return self._estimate_cache[1]
+        try:
+            est = self._timebase.estimate(self.config.rate_hz)
+        except InputDataError:
+            est = None
+        self._estimate_cache = (n, est)
+        return est
 
     def summary(self, *, allan=True):
         """
@@ -779,29 +934,38 @@ class NoiseEngine:
         Parameters
         ----------
         allan : bool, keyword-only
-            Compute the Allan deviation and noise terms (the costly part; a live node may ask rarely).
+            Compute the Allan deviation and noise terms (the costly part; a live node may ask
+            rarely).
 
         Returns
         -------
         dict
             ``{axis: AxisSummary}`` in configured axis order.
+
         """
         counts = self.counts()
         out = {}
         for axis, state in self._axis.items():
-            rows = np.array([r for r in state.rows], dtype=np.float64).reshape(-1, 8)
+            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 8)
             seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
-                                     tail_samples=counts.tail_samples, ties_var=int(rows[:, 5].sum()),
+                                     tail_samples=counts.tail_samples,
+                                     ties_var=int(rows[:, 5].sum()),
                                      ties_corr=int(rows[:, 6].sum()))
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
+            sheet = None
+            if terms is not None:
+                try:
+                    sheet = datasheet_terms(result, terms)
+                except (InputDataError, ParameterError):
+                    sheet = None
             out[axis] = AxisSummary(
                 axis=axis, sequence=seq, stream=counts, nan_samples=state.nan_samples,
                 chunks_ok=state.by_status['ok'], chunks_nan=state.by_status['nan'],
                 chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
                 chunks_skipped=state.by_status['skipped'],
                 temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
-                allan=result, noise_terms=terms)
+                allan=result, noise_terms=terms, datasheet=sheet)
         return out
 
     def health(self, *, seconds_since_data=None, summaries=None):
@@ -811,7 +975,8 @@ class NoiseEngine:
         Parameters
         ----------
         seconds_since_data : float, optional, keyword-only
-            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict is STALE.
+            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict
+            is STALE.
         summaries : dict, optional, keyword-only
             Reuse :meth:`summary` output (avoids recomputing it).
 
@@ -819,11 +984,13 @@ class NoiseEngine:
         -------
         dict
             ``{axis: HealthVerdict}``.
+
         """
         from .health import evaluate_health
 
         summaries = summaries if summaries is not None else self.summary(allan=False)
-        return {axis: evaluate_health(s, reference=self.reference.get(axis), thresholds=self.thresholds,
+        return {axis: evaluate_health(s, reference=self.reference.get(axis),
+                                      thresholds=self.thresholds,
                                       seconds_since_data=seconds_since_data)
                 for axis, s in summaries.items()}
 
@@ -831,3 +998,28 @@ class NoiseEngine:
     def allan_status(self):
         """Why the Allan deviation is unavailable (empty string when it is available or off)."""
         return self._allan_error or ''
+
+
+def warm_up(config):
+    """
+    Run the analysis path once on synthetic data so the first real chunk does not stall.
+
+    Builds (and caches, see :func:`identifier_for`) the order identifier of ``config``, plans its
+    FFTs, and compiles or loads the numba kernels of the Allan accumulator. A live node calls it
+    at start-up (STYLE.md: warm numba kernels before the first chunk).
+
+    Parameters
+    ----------
+    config : EngineConfig
+        The configuration the real data will be analysed with.
+
+    """
+    rng = np.random.default_rng(0)
+    n = int(config.chunk_size) + 1
+    rate_hz = config.rate_hz or 1000.0
+    engine = NoiseEngine(replace(config, rate_hz=rate_hz))
+    stamps = np.arange(n, dtype=np.int64) * int(_NS / rate_hz)
+    jobs = engine.ingest(stamps, rng.standard_normal((n, 3)) * 1e-3)
+    for job in jobs[:1]:
+        engine.record(engine.analyze(job))
+    engine.summary(allan=config.allan)

@@ -36,18 +36,23 @@ item and its message is one sentence naming that item.
 
 import json
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from scipy.special import stdtrit
 
 from ..errors import InputDataError, ParameterError
+from .items import DEG as _DEG, fmt as _fmt
 
 #: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
 LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
 LEVEL_BYTE = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
 
-_DEG = 180.0 / math.pi
+
+
+def _threshold(default, description, unit=''):
+    # One source for the node's parameter table, its YAML file and the docs (field metadata).
+    return field(default=default, metadata={'description': description, 'unit': unit})
 
 
 @dataclass(frozen=True)
@@ -77,20 +82,35 @@ class HealthThresholds:
         Seconds without data after which the verdict is STALE (s).
     """
 
-    drift_ratio_warn: float = 5.0
-    drift_ratio_error: float = 15.0
-    drift_abs_warn_deg_s_per_h: float = 0.02
-    drift_abs_error_deg_s_per_h: float = 0.05
-    drift_min_sigma: float = 3.0
-    min_chunks: int = 3
-    alpha_var_tolerance: float = 0.05
-    alpha_corr_tolerance: float = 0.25
-    variance_ratio_tolerance: float = 0.5
-    lost_fraction_warn: float = 1e-4
-    lost_fraction_error: float = 1e-2
-    skipped_fraction_warn: float = 0.1
-    skipped_fraction_error: float = 0.5
-    stale_after_s: float = 5.0
+    drift_ratio_warn: float = _threshold(
+        5.0, 'WARN when |offset drift| exceeds this multiple of the reference drift', 'x')
+    drift_ratio_error: float = _threshold(
+        15.0, 'ERROR when |offset drift| exceeds this multiple of the reference drift', 'x')
+    drift_abs_warn_deg_s_per_h: float = _threshold(
+        0.02, 'WARN above this |offset drift| when there is no reference', '(deg/s)/h')
+    drift_abs_error_deg_s_per_h: float = _threshold(
+        0.05, 'ERROR above this |offset drift| when there is no reference', '(deg/s)/h')
+    drift_min_sigma: float = _threshold(
+        3.0, 'Judge the drift only when |slope| exceeds this many standard errors', 'sigma')
+    min_chunks: int = _threshold(
+        3, 'Chunks needed before drift, order and variance are judged', 'chunks')
+    alpha_var_tolerance: float = _threshold(
+        0.05, 'WARN when the mean variance-method order leaves the reference by more (ERROR at '
+        'twice)')
+    alpha_corr_tolerance: float = _threshold(
+        0.25, 'WARN when the mean correlation-method order leaves the reference by more (ERROR '
+        'at twice)')
+    variance_ratio_tolerance: float = _threshold(
+        0.5, 'WARN when mean variance / reference leaves 1 +/- this (ERROR at twice)')
+    lost_fraction_warn: float = _threshold(
+        1e-4, 'WARN above this fraction of samples lost (from stamps)')
+    lost_fraction_error: float = _threshold(
+        1e-2, 'ERROR above this fraction of samples lost (from stamps)')
+    skipped_fraction_warn: float = _threshold(
+        0.1, 'WARN above this fraction of chunks skipped (analysis behind)')
+    skipped_fraction_error: float = _threshold(
+        0.5, 'ERROR above this fraction of chunks skipped (analysis behind)')
+    stale_after_s: float = _threshold(5.0, 'STALE after this long without data', 's')
 
     def __post_init__(self):
         for f in fields(self):
@@ -128,6 +148,8 @@ class ReferenceStats:
         Chunks behind these numbers.
     source : str
         Where it came from (file, bag, axis), for messages.
+    offset_drift_stderr_rad_s2 : float
+        Standard error of the reference drift (rad/s per s); NaN when unknown (old summaries).
     """
 
     offset_drift_rad_s2: float
@@ -136,6 +158,7 @@ class ReferenceStats:
     alpha_corr_mean: float
     chunks: int = 0
     source: str = ''
+    offset_drift_stderr_rad_s2: float = float('nan')
 
 
 @dataclass(frozen=True)
@@ -233,12 +256,31 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     sigma = abs(drift.slope) / drift.stderr if drift.stderr and math.isfinite(drift.stderr) else float('nan')
     significant = judged and math.isfinite(drift.slope) and (
         not math.isfinite(sigma) or sigma > drift_t_threshold(th.drift_min_sigma, seq.chunks))
+    drift_item = len(items)
     add('Offset drift ((deg/s)/h)', _fmt(drift_dph), 'OK', '')
-    if reference is not None and math.isfinite(reference.offset_drift_rad_s2) \
-            and reference.offset_drift_rad_s2 != 0.0:
+    ref_usable = (reference is not None and math.isfinite(reference.offset_drift_rad_s2)
+                  and reference.offset_drift_rad_s2 != 0.0)
+    differs = significant
+    if ref_usable:
+        # Both drifts carry an error: a ratio to a reference drift that is itself statistically
+        # zero means nothing, and a large ratio only counts when the two drifts differ
+        # significantly (errors added in quadrature).
+        ref_se = reference.offset_drift_stderr_rad_s2
+        ref_chunks = reference.chunks or seq.chunks
+        if math.isfinite(ref_se) and ref_se > 0:
+            ref_usable = (abs(reference.offset_drift_rad_s2) / ref_se
+                          > drift_t_threshold(th.drift_min_sigma, ref_chunks))
+            se = drift.stderr if math.isfinite(drift.stderr) else 0.0
+            z = abs(drift.slope - reference.offset_drift_rad_s2) / math.hypot(se, ref_se)
+            differs = significant and z > drift_t_threshold(th.drift_min_sigma,
+                                                            min(seq.chunks, ref_chunks))
+        if not ref_usable:
+            add('Offset drift / reference', 'n/a', 'OK',
+                'the reference drift is statistically zero: no ratio')
+    if ref_usable:
         ratio = abs(drift.slope) / abs(reference.offset_drift_rad_s2)
         level = 'OK'
-        if significant:
+        if differs:
             level = ('ERROR' if ratio > th.drift_ratio_error else
                      'WARN' if ratio > th.drift_ratio_warn else 'OK')
         limit = th.drift_ratio_error if level == 'ERROR' else th.drift_ratio_warn
@@ -251,7 +293,7 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
             level = ('ERROR' if abs(drift_dph) > th.drift_abs_error_deg_s_per_h else
                      'WARN' if abs(drift_dph) > th.drift_abs_warn_deg_s_per_h else 'OK')
         limit = th.drift_abs_error_deg_s_per_h if level == 'ERROR' else th.drift_abs_warn_deg_s_per_h
-        items[-1] = ('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
+        items[drift_item] = ('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
                      f'offset drift {abs(drift_dph):.4g} (deg/s)/h is '
                      f'{"above" if level != "OK" else "within"} the limit {limit:g} (deg/s)/h')
     add('Offset drift significance (sigma)', _fmt(sigma, 3), 'OK', '')
@@ -317,12 +359,6 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     return HealthVerdict(worst, message, tuple((k, v, lvl) for k, v, lvl, _ in items))
 
 
-def _fmt(value, digits=4):
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return 'nan'
-    return f'{value:.{digits}g}'
-
-
 def load_reference(summary_json_path, *, bag=None, axis='z'):
     """
     Read one bag's and axis' reference characterisation from a ``summary.json`` of gyro_noise_analyze.
@@ -377,7 +413,8 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
             offset_drift_rad_s2=float(a['offset_drift_rad_s2']),
             mean_variance_rad2_s2=float(a['mean_variance_rad2_s2']),
             alpha_var_mean=float(a['alpha_var_mean']), alpha_corr_mean=float(a['alpha_corr_mean']),
-            chunks=int(a.get('chunks', 0)), source=f'{path}:{entry.get("label")}:{axis}')
+            chunks=int(a.get('chunks', 0)), source=f'{path}:{entry.get("label")}:{axis}',
+            offset_drift_stderr_rad_s2=float(a.get('offset_drift_stderr_rad_s2') or 'nan'))
     except (KeyError, TypeError, ValueError) as err:
         raise ParameterError(f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 

@@ -119,3 +119,27 @@ def vmd_loop(signal, k, alpha, tau=0.0, tol=1e-7, max_iter=500):
         modes.append(np.real(np.fft.ifft(np.fft.ifftshift(full)))[half:half + n])
     order = np.argsort(omega)
     return np.array(modes)[order], omega[order]
+
+
+def tfpf_peak_loop(x, n, window, band=(0.05, 0.45), grid=8192):
+    """TFPF estimate at interior sample n: eq. 26 summed term by term on a fine grid."""
+    x = np.asarray(x, dtype=float)
+    lo, hi = x.min(), x.max()
+    f_lo, f_hi = band
+    s = f_lo + (f_hi - f_lo) * (x - lo) / (hi - lo)
+    half = window // 2
+    h = np.hamming(window)
+
+    def phase(i):
+        return float(np.sum(s[:i])) + 0.5 * s[i]
+
+    best_f, best_w = 0.0, -np.inf
+    for g in range(grid):
+        f = 0.5 * g / grid
+        w = 0.0
+        for tau in range(-half, half + 1):
+            w += h[tau + half] * np.cos(2 * np.pi * (phase(n + tau) - phase(n - tau))
+                                        - 4 * np.pi * f * tau)
+        if w > best_w:
+            best_f, best_w = f, w
+    return lo + (best_f - f_lo) / (f_hi - f_lo) * (hi - lo)

@@ -143,3 +143,31 @@ def tfpf_peak_loop(x, n, window, band=(0.05, 0.45), grid=8192):
         if w > best_w:
             best_f, best_w = f, w
     return lo + (best_f - f_lo) / (f_hi - f_lo) * (hi - lo)
+
+
+def elman_forward_loop(theta, x, n1, n2):
+    """Eq. 33 with explicit matrices: unpack the weight vector, run the recurrence."""
+    theta = list(map(float, theta))
+    n_in = len(x[0])
+
+    def take(rows, cols):
+        nonlocal theta
+        block = np.array(theta[:rows * cols]).reshape(rows, cols)
+        theta = theta[rows * cols:]
+        return block
+
+    w1, w2, ai = take(n1, n1), take(n1, n_in), take(n1, 1)[:, 0]
+    w3, w4, aj = take(n2, n1), take(n2, n2), take(n2, 1)[:, 0]
+    w5, ak = take(1, n2)[0], take(1, 1)[0, 0]
+
+    def sig(v):
+        return 1.0 / (1.0 + np.exp(-v))
+
+    ic, ih = np.full(n1, 0.5), np.full(n2, 0.5)
+    out = []
+    for row in x:
+        oi = sig(w1 @ ic + w2 @ np.asarray(row, dtype=float) - ai)
+        oh = sig(w3 @ oi + w4 @ ih - aj)
+        out.append(float(w5 @ oh - ak))
+        ic, ih = oi, oh
+    return np.array(out)

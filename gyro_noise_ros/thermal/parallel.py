@@ -64,7 +64,7 @@ DEFAULT_OPTIONS = {
     'vmd_tol': 1e-7,
     'vmd_max_iter': 500,
     'full_vmd_iter': 30,
-    'apply_vmd_iter': 10,
+    'apply_vmd_iter': 3,
     'drift_max': 0.5,
     'noise_min': 1.5,
     'entropy_samples': 2000,
@@ -157,7 +157,8 @@ class ParallelModel:
             start = vmd(seg, k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
                         max_iter=int(o['vmd_max_iter']))
             dec = vmd(x, k=res.k, alpha=res.alpha, tol=o['vmd_tol'], solver='exact',
-                      center_freqs=start.center_freqs, max_iter=int(o['full_vmd_iter']))
+                      center_freqs=start.center_freqs, max_iter=int(o['full_vmd_iter']),
+                      workers=int(o['workers']))
         cls = self._classify(dec)
         drift = dec.modes[cls.mask('drift')].sum(axis=0)
         q = max(1, -(-x.size // int(o['elman_samples'])))
@@ -191,7 +192,8 @@ class ParallelModel:
             x = x_all[:, a]
             freqs = np.clip(np.asarray(ax['center_freqs_hz']) / run.rate_hz, 0.0, 0.5)
             dec = vmd(x, k=ax['k'], alpha=ax['alpha'], tol=o['vmd_tol'], solver='exact',
-                      center_freqs=freqs, max_iter=int(o['apply_vmd_iter']))
+                      center_freqs=freqs, max_iter=int(o['apply_vmd_iter']),
+                      workers=int(o['workers']))
             cls = self._classify(dec)
             mixed = dec.modes[cls.mask('mixed')].sum(axis=0)
             if cls.mask('mixed').any():

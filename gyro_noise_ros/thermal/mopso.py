@@ -57,10 +57,12 @@ PAPER_BOUNDS = ((4.0, 12.0), (1000.0, 10000.0))
 @dataclass(frozen=True)
 class VmdFitness:
     """
-    The two fitness values of a VMD of one signal; a pure, picklable callable.
+    The two fitness values of a VMD of a signal; a pure, picklable callable.
 
     Calling it with ``(k, alpha)`` decomposes ``signal`` and returns
-    ``(mean fuzzy entropy, mean normalised permutation entropy)`` of the modes.
+    ``(mean fuzzy entropy, mean normalised permutation entropy)`` of the modes. A 2-D
+    ``signal`` (w, n) holds w windows of one record: each is decomposed and the means run over
+    all their modes.
     """
 
     signal: np.ndarray
@@ -74,11 +76,12 @@ class VmdFitness:
     def __call__(self, key):
         """Return (FE, PE) for ``key = (k, alpha)``."""
         k, alpha = key
-        res = vmd(self.signal, k=int(k), alpha=float(alpha), tol=self.tol,
-                  max_iter=self.max_iter)
-        fe = np.mean([fuzzy_entropy(m, m=self.fe_m, r=self.fe_r) for m in res.modes])
+        modes = np.concatenate([
+            vmd(seg, k=int(k), alpha=float(alpha), tol=self.tol, max_iter=self.max_iter).modes
+            for seg in np.atleast_2d(self.signal)])
+        fe = np.mean([fuzzy_entropy(m, m=self.fe_m, r=self.fe_r) for m in modes])
         pe = np.mean([permutation_entropy(m, order=self.pe_order, delay=self.pe_delay)
-                      for m in res.modes])
+                      for m in modes])
         return float(fe), float(pe)
 
 

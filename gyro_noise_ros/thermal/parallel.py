@@ -18,12 +18,13 @@ The paper's parallel processing model (paper 002, section 3.5, Figure 7), per gy
 Fit on a training run:
 
 1. MOPSO (:mod:`.mopso`) chooses (K, alpha) minimising the mean fuzzy and permutation entropy
-   of the modes of a VMD. Speed: the fitness is evaluated on a representative window of
-   ``fitness_samples`` consecutive samples from the middle of the run (same sample rate, so
-   alpha and the centre frequencies mean the same as on the whole run), evaluations are cached
-   by (K, alpha), and ``workers > 1`` spreads them over processes. ``fitness_samples=None``
+   of the modes of a VMD. Speed: the fitness is evaluated on ``fitness_windows`` windows of
+   ``fitness_samples`` consecutive samples spread evenly over the run (same sample rate, so
+   alpha and the centre frequencies mean the same as on the whole run; the O(n^2) fuzzy
+   entropy costs ``windows x samples^2`` instead of ``n^2``), evaluations are cached by
+   (K, alpha), and ``workers > 1`` spreads them over processes. ``fitness_samples=None``
    evaluates on the whole run (the naive path).
-2. VMD of the whole run with (K, alpha), warm-started from the window's centre frequencies
+2. VMD of the whole run with (K, alpha), warm-started from the middle window's centre frequencies
    (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
    spectrum, so the 1.44 M-sample run stays within seconds).
 3. The modes are classified by sample entropy (:mod:`.classify`) into drift, mixed, noise.
@@ -60,7 +61,8 @@ DEFAULT_OPTIONS = {
     'w': 0.4,
     'c1': 1.5,
     'c2': 1.5,
-    'fitness_samples': 512,
+    'fitness_samples': 256,
+    'fitness_windows': 4,
     'vmd_tol': 1e-7,
     'vmd_max_iter': 500,
     'full_vmd_iter': 30,
@@ -78,12 +80,19 @@ DEFAULT_OPTIONS = {
 }
 
 
-def centre_window(x, n):
-    """Return ``n`` consecutive samples from the middle of ``x`` (all of it if shorter)."""
-    if n is None or n >= x.size:
-        return x
-    start = (x.size - n) // 2
-    return x[start:start + n]
+def fitness_windows(x, n, count):
+    """
+    Return ``count`` windows (count, n) spread evenly over ``x`` (``x`` itself if too short).
+
+    The windows' starts are equally spaced from the first to the last possible one, so the
+    first starts the record and the last ends it; ``n = None`` or ``count * n >= len(x)``
+    gives the whole record (1, len(x)).
+    """
+    if n is None or int(n) * int(count) >= x.size:
+        return x[None, :]
+    n, count = int(n), int(count)
+    starts = np.linspace(0, x.size - n, count).round().astype(int)
+    return np.stack([x[s:s + n] for s in starts])
 
 
 def block_means(x, q):
@@ -142,19 +151,18 @@ class ParallelModel:
 
     def _fit_axis(self, x, temp, rate, rate_hz, rng, pool, info):
         o = self.options
-        seg = centre_window(x, None if o['fitness_samples'] is None
-                            else int(o['fitness_samples']))
-        fitness = VmdFitness(np.ascontiguousarray(seg), tol=o['vmd_tol'],
+        segs = fitness_windows(x, o['fitness_samples'], o['fitness_windows'])
+        fitness = VmdFitness(np.ascontiguousarray(segs), tol=o['vmd_tol'],
                              max_iter=int(o['vmd_max_iter']))
         res = mopso(fitness, rng=rng, bounds=tuple(tuple(b) for b in o['bounds']),
                     n_particles=int(o['n_particles']), archive_size=int(o['archive_size']),
                     iterations=int(o['iterations']), w=o['w'], c1=o['c1'], c2=o['c2'],
                     map_fn=map if pool is None else pool.map)
-        if seg.size == x.size:
+        if segs.size == x.size:
             dec = vmd(x, k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
                       max_iter=int(o['vmd_max_iter']))
         else:
-            start = vmd(seg, k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
+            start = vmd(segs[segs.shape[0] // 2], k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
                         max_iter=int(o['vmd_max_iter']))
             dec = vmd(x, k=res.k, alpha=res.alpha, tol=o['vmd_tol'], solver='exact',
                       center_freqs=start.center_freqs, max_iter=int(o['full_vmd_iter']),

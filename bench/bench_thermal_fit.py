@@ -19,11 +19,13 @@ Small case: the naive path (MOPSO fitness on the whole run, fitness_samples=None
 ADMM VMD of the whole run) and the fast path (fitness on 4 windows of 128 samples spread over
 the run, cached, exact-solver whole-run VMD warm-started) fitted side by side with the same
 MOPSO budget and seed; prints both times, the ratio, and each model's residual rms on a
-held-out run (true rate 0) so the speed-up is seen not to cost accuracy. Full case (--full): a 4-hour run at 100 Hz (1.44 M samples x 3
-axes) fitted with the paper's full budget (40 particles x 10 iterations = 400 VMD evaluations
-per axis) and applied to another run, both timed; the naive path is extrapolated from one
-whole-run VMD (it would also need fuzzy entropies of 1.44 M-sample modes, O(n^2) each, which
-the extrapolation leaves out: a lower bound).
+held-out run (true rate 0) so the speed-up is seen not to cost accuracy.
+
+Full case (--full): a 4-hour run at 100 Hz (1.44 M samples x 3 axes) fitted with the paper's
+full budget (40 particles x 10 iterations = 400 VMD evaluations per axis) and applied to another
+run, both timed; the naive path is extrapolated from one whole-run VMD (it would also need
+fuzzy entropies of 1.44 M-sample modes, O(n^2) each, which the extrapolation leaves out: a
+lower bound).
 """
 
 import argparse

@@ -107,6 +107,21 @@ def test_deterministic():
     assert a.to_dict() == b.to_dict()
 
 
+@pytest.mark.slow
+def test_process_pool_gives_the_serial_result():
+    # Distributing the particle evaluations (workers=2) must not change anything: the
+    # fitness is pure and the pool's map keeps the order.
+    train, _ = thermal_run(8, n=2000)
+    opts = {**SMALL, 'iterations': 2, 'elman_epochs': 2}
+    serial, pooled = ParallelModel(**opts), ParallelModel(**opts, workers=2)
+    serial.fit(train, rng=np.random.default_rng(3))
+    pooled.fit(train, rng=np.random.default_rng(3))
+    a, b = serial.to_dict(), pooled.to_dict()
+    a['options'].pop('workers')
+    b['options'].pop('workers')
+    assert a == b
+
+
 def test_bad_input(fitted):
     run, _ = thermal_run(5, n=500)
     gyro = run.gyro_rad_s.copy()

@@ -151,10 +151,13 @@ class ParallelModel:
 
     def _fit_axis(self, x, temp, rate, rate_hz, rng, pool, info):
         o = self.options
+        # Independent streams: the network's start does not depend on how many draws the
+        # swarm made, so options that change the search leave the network's seed alone.
+        swarm_rng, elman_rng = rng.spawn(2)
         segs = fitness_windows(x, o['fitness_samples'], o['fitness_windows'])
         fitness = VmdFitness(np.ascontiguousarray(segs), tol=o['vmd_tol'],
                              max_iter=int(o['vmd_max_iter']))
-        res = mopso(fitness, rng=rng, bounds=tuple(tuple(b) for b in o['bounds']),
+        res = mopso(fitness, rng=swarm_rng, bounds=tuple(tuple(b) for b in o['bounds']),
                     n_particles=int(o['n_particles']), archive_size=int(o['archive_size']),
                     iterations=int(o['iterations']), w=o['w'], c1=o['c1'], c2=o['c2'],
                     map_fn=map if pool is None else pool.map)
@@ -171,7 +174,7 @@ class ParallelModel:
         drift = dec.modes[cls.mask('drift')].sum(axis=0)
         q = max(1, -(-x.size // int(o['elman_samples'])))
         elman = fit_elman(block_means(np.c_[temp, rate], q), block_means(drift, q),
-                          dt_s=q / rate_hz, rng=rng, hidden=tuple(o['elman_hidden']),
+                          dt_s=q / rate_hz, rng=elman_rng, hidden=tuple(o['elman_hidden']),
                           iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']))
         info.append(self._axis_info(dec, cls, rate_hz))
         info[-1]['mopso'] = {'evaluations': res.evaluations, 'requested': res.requested,

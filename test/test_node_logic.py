@@ -340,20 +340,22 @@ def test_live_analysis_worker_finishes_chunks_and_skips_when_full():
     live = LiveAnalysis(config, queue_chunks=1)
     try:
         rng = np.random.default_rng(1)
-        n = 1000  # 5 chunks of both axes
+        # 6 chunks of both axes; more than the engine's 1,025-sample timebase hold, which
+        # releases nothing before it is full even with the rate configured.
+        n = 1200
         stamps = np.arange(n, dtype=np.int64) * 10_000_000
         assert live.ingest(stamps, rng.standard_normal((n, 3))) == ''
-        # A queue of one chunk (2 jobs) cannot take 10 jobs at once: the rest are skipped.
+        # A queue of one chunk (2 jobs) cannot take 12 jobs at once: the rest are skipped.
         results, chunks = [], []
         deadline = time.monotonic() + 30.0
-        while len(results) < 10 and time.monotonic() < deadline:
+        while len(results) < 12 and time.monotonic() < deadline:
             r, c = live.collect()
             results += r
             chunks += c
             time.sleep(0.01)
-        assert len(results) == 10 and len(chunks) == 5
+        assert len(results) == 12 and len(chunks) == 6
         statuses = [r.status for r in results]
-        assert statuses.count('ok') >= 2 and statuses.count('ok') < 10
+        assert statuses.count('ok') >= 2 and statuses.count('ok') < 12
         assert all(set(c) == {'x', 'z'} for c in chunks)
         # A batch the engine refuses (gyro of the wrong shape) is reported, not raised.
         assert 'shape' in live.ingest(stamps[:10], np.zeros((10, 2)))

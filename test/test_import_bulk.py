@@ -119,6 +119,9 @@ def test_bulk_writer_api_matches_imu_bag_writer(tmp_path, storage):
                 writer.write_temperature(stamps[::5], 25.0 + gyro[::5, 0], variance=0.01)
                 if i == 2:
                     writer.write_imu(stamps[:10], accel[:10], gyro[:10], topic='/ref/imu')
+            if cls is BulkImuBagWriter:  # the block paths were taken, not the per-message fallback
+                fast = writer._mcap_storage if storage == 'mcap' else writer._bulk_cursor
+                assert fast(writer._imu_conn) is not None
         assert writer.imu_count == sum(c[0].shape[0] for c in calls)
         bags[cls] = bag
     assert bag_messages(bags[BulkImuBagWriter]) == bag_messages(bags[ImuBagWriter])

@@ -39,7 +39,7 @@ import tempfile
 from gyro_noise_ros.bag import IMU_MSGTYPE
 import numpy as np
 from rosbags.rosbag1 import Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
 
 HWM = ("\nprint(next(int(line.split()[1]) for line in open('/proc/self/status') "
        "if line.startswith('VmHWM:')))")

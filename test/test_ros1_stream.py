@@ -27,7 +27,7 @@ from gyro_noise_ros.errors import BagError
 import numpy as np
 import pytest
 from rosbags.rosbag1 import Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
 
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
 
@@ -37,8 +37,9 @@ def imu_raw(i, stamp_ns):
     header = t['std_msgs/msg/Header'](seq=i, stamp=t['builtin_interfaces/msg/Time'](
         sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9), frame_id='imu_link')
     vec = t['geometry_msgs/msg/Vector3']
-    msg = t[IMU_MSGTYPE](header=header, orientation=t['geometry_msgs/msg/Quaternion'](0, 0, 0, 1),
-                         orientation_covariance=np.zeros(9), angular_velocity=vec(i * 1e-3, -i, 0.5),
+    quat = t['geometry_msgs/msg/Quaternion'](0, 0, 0, 1)
+    msg = t[IMU_MSGTYPE](header=header, orientation=quat, orientation_covariance=np.zeros(9),
+                         angular_velocity=vec(i * 1e-3, -i, 0.5),
                          angular_velocity_covariance=np.zeros(9), linear_acceleration=vec(0, 0, i),
                          linear_acceleration_covariance=np.zeros(9))
     return bytes(ROS1.serialize_ros1(msg, IMU_MSGTYPE))

@@ -573,7 +573,7 @@ def _lean_ros1_reader_class():
                 raise BagError(f'ROS 1 index data record after chunk at byte {pos} is malformed')
             self.bio.seek(int.from_bytes(head[51:55], 'little'), 1)
 
-        def open(self):
+        def open(self):  # noqa: A003 - overrides rosbags Reader.open
             """Open the bag; connection message counts from the chunk infos."""
             super().open()
             counts = {}

@@ -33,7 +33,8 @@ Definitions (docs/thermal.md states the same):
   of steps) is added to every axis of the held-out run; the method processes the run with and
   without it; the difference is its response to the injected motion. Gain, phase and group delay
   come from the band-averaged cross spectrum ``H = sum(Y conj(X)) / sum(|X|^2)`` over
-  log-spaced bands (20 per decade); the -3 dB bandwidth is the first band crossing of
+  log-spaced bands (20 per decade), with the bulk delay (cross-correlation peak) taken out
+  before averaging and put back after; the -3 dB bandwidth is the first band crossing of
   ``|H| = 1/sqrt(2)`` going up in frequency (log-interpolated). The mean normalised step response
   gives the 50 % delay, the 10-90 % rise time, the overshoot, the settled gain (< 1: slow motion
   is removed) and the precursor, the largest change of the response in the last fifth of the
@@ -362,6 +363,14 @@ def frequency_response(injected, response, rate_hz, *, f_lo_hz, f_hi_hz,
     y = np.asarray(response, dtype=float)
     xf, yf = np.fft.rfft(x), np.fft.rfft(y)
     f = np.fft.rfftfreq(x.size, 1.0 / rate_hz)
+    # Averaging H over a band blurs a steep phase: a delay of d s turns by 2 pi f d across it.
+    # Take out the bulk delay (the cross-correlation peak, whole samples) first, put it back after.
+    xcorr = np.fft.irfft(yf * np.conj(xf), n=x.size)
+    lag = int(np.argmax(np.abs(xcorr)))
+    if lag > x.size // 2:
+        lag -= x.size
+    turn = np.exp(2j * np.pi * f * lag / rate_hz)
+    yf = yf * turn
     n_b = max(int(math.ceil(math.log10(f_hi_hz / f_lo_hz) * bands_per_decade)), 1)
     edges = f_lo_hz * (f_hi_hz / f_lo_hz) ** (np.arange(n_b + 1) / n_b)
     centres, h, coh = [], [], []
@@ -378,7 +387,7 @@ def frequency_response(injected, response, rate_hz, *, f_lo_hz, f_hi_hz,
         sxy = sxy_all[sel].sum()
         syy = syy_all[sel].sum()
         centres.append(math.sqrt(lo * hi))
-        h.append(sxy / sxx)
+        h.append(sxy / sxx * np.exp(-2j * np.pi * centres[-1] * lag / rate_hz))
         coh.append(float(abs(sxy) ** 2 / (sxx * syy)) if syy > 0 else 0.0)
     freq = np.array(centres)
     h = np.array(h, dtype=complex)
@@ -463,7 +472,8 @@ def step_response(response, rate_hz, edges, deltas, window):
     deltas : array_like of float
         Step heights (same unit as ``response``).
     window : int
-        Samples analysed before and after each edge (the previous edge's level is subtracted).
+        Samples analysed before and after each edge (the mean of the first fifth of the window
+        is the baseline).
 
     Returns
     -------
@@ -471,20 +481,19 @@ def step_response(response, rate_hz, edges, deltas, window):
 
     """
     y = np.asarray(response, dtype=float)
+    tail = max(window // 5, 1)
     segs = []
-    level = 0.0
     for e, d in zip(edges, deltas):
-        e = int(e)
-        seg = (y[e - window:e + window] - level) / d
-        segs.append(seg)
-        level += d
+        seg = y[int(e) - window:int(e) + window]
+        # Baseline: the response at the start of the window, not the injected level, so a method
+        # passing a fraction g of slow motion shows g on every edge.
+        segs.append((seg - seg[:tail].mean()) / d)
     r = np.mean(segs, axis=0)
     t = (np.arange(2 * window) - window) / rate_hz
     after = t >= 0
     # Causal responses still settling from the previous edge drift slowly before this one; a
     # response to this edge before it happens changes quickly right before it. Compare the last
     # fifth of the window before the edge with the sample just before that stretch.
-    tail = max(window // 5, 1)
     pre = r[window - tail:window] - r[window - tail - 1] if window > tail else np.zeros(0)
     post_t, post = t[after], r[after]
     t10 = _first_crossing(post_t, post, 0.1)

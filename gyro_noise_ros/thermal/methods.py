@@ -43,11 +43,11 @@ from .run import temperature_rate_c_s, ThermalMethod, ThermalRun
 from .. import __version__
 from ..errors import GyroNoiseError, InputDataError, ParameterError
 
-__all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_RANGE_MARGIN_C', 'MODEL_FORMAT',
-           'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
+__all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_RANGE_MARGIN_C',
+           'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
            'TemperatureRangeError', 'ThermalModel', 'TrainingInfo', 'check_temperature_range',
-           'get_method', 'load_model', 'method_class', 'method_names', 'register_method',
-           'fit_method', 'save_model', 'training_info']
+           'check_trainable', 'fit_method', 'get_method', 'load_model', 'method_class',
+           'method_names', 'register_method', 'save_model', 'training_info']
 
 #: The built-in methods: ``--method`` name -> (module, class name). Imported on first use.
 BUILTIN_METHODS = {
@@ -67,6 +67,9 @@ DEFAULT_METHOD = 'poly3'
 
 #: How far (degC) outside the trained temperature range a model may still be applied.
 DEFAULT_RANGE_MARGIN_C = 5.0
+
+#: Smallest temperature span (degC) a drift model is fitted on (``fit`` refuses less).
+DEFAULT_MIN_RANGE_C = 2.0
 
 #: ``format`` and ``format_version`` of model.json.
 MODEL_FORMAT = 'gyro_noise_ros.thermal.model'
@@ -475,3 +478,35 @@ def fit_method(name, run, *, rng, sources=None, **options):
     method = get_method(name, **options)
     method.fit(run, rng=rng)
     return ThermalModel(method=method, training=training_info(run, sources=sources))
+
+
+def check_trainable(run, *, min_range_c=DEFAULT_MIN_RANGE_C):
+    """
+    Refuse training data a temperature model cannot be fitted on.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        Training data.
+    min_range_c : float, keyword-only
+        Smallest accepted temperature span, max - min (degC).
+
+    Raises
+    ------
+    InputDataError
+        Constant temperature, a span below ``min_range_c``, or non-finite samples.
+
+    """
+    temp = np.asarray(run.temperature_c, dtype=float)
+    gyro = np.asarray(run.gyro_rad_s, dtype=float)
+    if not (np.isfinite(temp).all() and np.isfinite(gyro).all()):
+        raise InputDataError(f'training run {run.name!r} has NaN/Inf samples')
+    lo, hi = float(temp.min()), float(temp.max())
+    if hi == lo:
+        raise InputDataError(f'training run {run.name!r}: the temperature is constant at '
+                             f'{lo:.3f} degC, so there is no temperature dependence to fit')
+    if hi - lo < min_range_c:
+        raise InputDataError(f'training run {run.name!r}: the temperature spans only '
+                             f'{hi - lo:.3g} degC ({lo:.2f}..{hi:.2f}), less than the '
+                             f'{min_range_c:g} degC needed to fit a drift model '
+                             '(--min-range-c)')

@@ -104,3 +104,33 @@ class Identity:
     @classmethod
     def from_dict(cls, d):
         return cls()
+
+
+T0_NS = 1_700_000_000 * 10**9
+
+
+def write_thermal_bag(path, t_s, gyro_rad_s, temp_t_s, temperature_c, *, storage='sqlite3',
+                      imu_topic='/imu/data_raw', temperature_topic='/imu/temperature',
+                      extra_topic=None, t0_ns=T0_NS):
+    """Write a rosbag2 with Imu (and Temperature unless temperature_topic is None) messages."""
+    from gyro_noise_ros.bag import ImuBagWriter
+
+    stamps = t0_ns + np.round(np.asarray(t_s) * 1e9).astype(np.int64)
+    n = stamps.size
+    accel = np.tile([0.0, 0.0, 9.81], (n, 1)) + 0.001 * np.arange(n)[:, None]
+    with ImuBagWriter(path, storage=storage, imu_topic=imu_topic,
+                      temperature_topic=temperature_topic) as w:
+        w.write_imu(stamps, gyro_rad_s, accel, log_ns=t0_ns + np.arange(n, dtype=np.int64))
+        if temperature_topic is not None:
+            t_stamps = t0_ns + np.round(np.asarray(temp_t_s) * 1e9).astype(np.int64)
+            w.write_temperature(t_stamps, temperature_c, variance=0.01)
+        if extra_topic is not None:
+            from rosbags.typesys import get_typestore, Stores
+
+            store = get_typestore(Stores.ROS2_JAZZY)
+            conn = w._writer.add_connection(extra_topic, 'std_msgs/msg/String', typestore=store)
+            for i in range(3):
+                raw = store.serialize_cdr(store.types['std_msgs/msg/String'](data=f'note {i}'),
+                                          'std_msgs/msg/String')
+                w._writer.write(conn, t0_ns + i, raw)
+    return path, accel

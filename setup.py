@@ -58,6 +58,7 @@ setup(
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
+            'gyro_noise_thermal = gyro_noise_ros.cli.thermal:main',
         ],
     },
 )

@@ -105,7 +105,7 @@ def test_first_order_lowpass_gain_phase_delay_and_bandwidth():
     # Step of the recursion: y[k] = 1 - p^(k+1); 10-90 % rise = ln 9 / (2 pi fc) exactly,
     # interpolation between samples costs at most one sample.
     assert st.rise_time_s == pytest.approx(math.log(9.0) / (2 * math.pi * fc), abs=1.0 / rate)
-    assert st.delay_50_s == pytest.approx((math.log(0.5) / math.log(p) - 1.0) / rate,
+    assert st.delay_50_s == pytest.approx((math.log(0.5) / math.log(p) - 0.5) / rate,
                                           abs=1.0 / rate)
     assert st.precursor < 1e-9 and st.settled_gain == pytest.approx(1.0, abs=1e-6)
     v = doc['axes']['x']['verdict']
@@ -119,6 +119,7 @@ def test_identity_passes_everything():
     np.testing.assert_allclose(fr.gain, 1.0, atol=1e-9)
     np.testing.assert_allclose(fr.phase_deg, 0.0, atol=1e-6)
     assert fr.minus_3db_bound == 'above' and fr.minus_3db_hz is None
+    assert st.delay_50_s == 0.0 and st.rise_time_s == 0.0 and st.precursor < 1e-12
     ax = doc['axes']['y']
     assert ax['raw'] == ax['processed']
     assert ax['verdict']['arw_ratio'] == pytest.approx(1.0)

@@ -47,7 +47,7 @@ __all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_
            'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
            'TemperatureRangeError', 'ThermalModel', 'TrainingInfo', 'check_temperature_range',
            'check_trainable', 'fit_method', 'get_method', 'load_model', 'method_class',
-           'method_names', 'register_method', 'save_model', 'training_info']
+           'method_names', 'register_method', 'save_model', 'to_jsonable', 'training_info']
 
 #: The built-in methods: ``--method`` name -> (module, class name). Imported on first use.
 BUILTIN_METHODS = {
@@ -297,14 +297,26 @@ class ThermalModel:
     package_version: str = __version__
 
 
-def _jsonable(value):
-    """Turn numpy scalars and arrays into JSON types; non-finite floats into None."""
+def to_jsonable(value):
+    """
+    Turn numpy scalars and arrays into JSON types, non-finite floats into None (recursively).
+
+    Parameters
+    ----------
+    value : object
+        Dicts, lists, tuples, numpy arrays and scalars, str, None.
+
+    Returns
+    -------
+    object
+
+    """
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [to_jsonable(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return to_jsonable(value.tolist())
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
     if isinstance(value, (int, np.integer)):
@@ -344,7 +356,7 @@ def save_model(method, path, *, training):
         'training': training.as_dict(),
         'parameters': method.to_dict(),
     }
-    doc = _jsonable(doc)
+    doc = to_jsonable(doc)
     Path(path).write_text(json.dumps(doc, indent=1, allow_nan=False) + '\n')
     return doc
 

@@ -421,7 +421,7 @@ class StepResponse:
     Attributes
     ----------
     t_s : numpy.ndarray
-        Time from the edge (s).
+        Time from the step (s), which happens half a sample before the edge sample.
     response : numpy.ndarray
         Mean normalised response.
     delay_50_s : float
@@ -489,7 +489,8 @@ def step_response(response, rate_hz, edges, deltas, window):
         # passing a fraction g of slow motion shows g on every edge.
         segs.append((seg - seg[:tail].mean()) / d)
     r = np.mean(segs, axis=0)
-    t = (np.arange(2 * window) - window) / rate_hz
+    # The step happens between the last sample before the edge and the edge sample.
+    t = (np.arange(2 * window) - window + 0.5) / rate_hz
     after = t >= 0
     # Causal responses still settling from the previous edge drift slowly before this one; a
     # response to this edge before it happens changes quickly right before it. Compare the last

@@ -90,7 +90,7 @@ def test_first_order_lowpass_gain_phase_delay_and_bandwidth():
     rate, fc = 200.0, 5.0
     run = _run(int(200 * rate), rate)
     doc, _, curves = evaluate_method(FirstOrderLowPass(fc), run, f_lo_hz=0.5, f_hi_hz=40.0)
-    fr, st = curves['x']
+    fr, st = curves['x']['frequency'], curves['x']['step']
     h, delay, f3, p = _lp_exact(fr.frequency_hz, rate, fc)
     # A linear filter's response to the injection is exact (the noise cancels in the difference);
     # what remains is the averaging of H over each 12 %-wide band: 2 % in gain, 2 deg in phase.
@@ -115,7 +115,7 @@ def test_first_order_lowpass_gain_phase_delay_and_bandwidth():
 def test_identity_passes_everything():
     run = _run(int(150 * 100.0), 100.0)
     doc, proc, curves = evaluate_method(Identity(), run, f_lo_hz=0.5)
-    fr, st = curves['y']
+    fr, st = curves['y']['frequency'], curves['y']['step']
     np.testing.assert_allclose(fr.gain, 1.0, atol=1e-9)
     np.testing.assert_allclose(fr.phase_deg, 0.0, atol=1e-6)
     assert fr.minus_3db_bound == 'above' and fr.minus_3db_hz is None
@@ -139,7 +139,7 @@ def test_slow_lowpass_arw_gain_is_called_bandwidth_removal():
 def test_zero_phase_filter_is_caught_responding_before_the_step():
     run = _run(int(200 * 200.0), 200.0)
     doc, _, curves = evaluate_method(FirstOrderLowPass(5.0, zero_phase=True), run, f_lo_hz=0.5)
-    fr, st = curves['x']
+    fr, st = curves['x']['frequency'], curves['x']['step']
     assert st.precursor > 0.2
     np.testing.assert_allclose(fr.phase_deg, 0.0, atol=2.0)  # filtfilt: |H|^2, no phase
     v = doc['axes']['x']['verdict']

@@ -348,18 +348,18 @@ def _apply_figures(out, run, processed, method, curves):
                  report.plot_output(out / 'fig15_18_output.png', run, processed, label=name)))
     figs.append(('Drift removed, 60-s means, against time and temperature (cf. Fig. 17)',
                  report.plot_drift(out / 'fig17_drift.png', run, processed, label=name)))
-    allan = {label: {axis: report.allan_series(data[:, a], run.rate_hz)
-                     for a, axis in enumerate('xyz')}
-             for label, data in (('raw', run.gyro_rad_s), (name, processed))}
+    allan = {label: {axis: c[key] for axis, c in curves.items()}
+             for label, key in (('raw', 'allan_raw'), (name, 'allan_processed'))}
     figs.append(('Allan deviation raw and processed (cf. Fig. 19)',
                  report.plot_allan(out / 'fig19_allan.png', allan,
                                    title=f'{run.name}: Allan deviation, raw and {name}')))
     figs.append(('Response to injected motion: gain, phase, group delay',
                  report.plot_bandwidth(out / 'bandwidth.png',
-                                       {name: {a: c[0] for a, c in curves.items()}},
+                                       {name: {a: c['frequency'] for a, c in curves.items()}},
                                        title=f'{name}: response to an injected chirp')))
     figs.append(('Mean normalised step response (t < 0: before the step)',
-                 report.plot_steps(out / 'steps.png', {name: {a: c[1] for a, c in curves.items()}},
+                 report.plot_steps(out / 'steps.png',
+                                   {name: {a: c['step'] for a, c in curves.items()}},
                                    title=f'{name}: response to injected steps')))
     return figs
 
@@ -456,7 +456,7 @@ def _cmd_compare(args, argv):
                              'scored on a run it was not trained on')
     registry.check_trainable(train, min_range_c=args.min_range_c)
     out = _out_dir(args.out)
-    results, errors, curves, processed_all = {}, {}, {}, {}
+    results, errors, curves = {}, {}, {}
     for name in names:
         try:
             started = time.monotonic()
@@ -479,7 +479,7 @@ def _cmd_compare(args, argv):
             continue
         doc['fit_time_s'], doc['apply_time_s'] = fit_s, apply_s
         doc['model'] = registry.to_jsonable(model.method.to_dict())
-        results[name], curves[name], processed_all[name] = doc, cur, processed
+        results[name], curves[name] = doc, cur
         if not args.quiet:
             print(f'{name}: scored (fit {fit_s:.1f} s, apply {apply_s:.1f} s)')
     if not results:
@@ -496,7 +496,7 @@ def _cmd_compare(args, argv):
                'best_held_out': _best(results)}
     figs = []
     if not args.no_figures:
-        figs = _compare_figures(out, test, processed_all, curves)
+        figs = _compare_figures(out, test, curves)
     files = [_write_json(out / 'compare.json', summary)]
     rows = _compare_rows(results)
     files.append(_write_csv(out / 'compare.csv', rows))
@@ -580,23 +580,22 @@ def _compare_md(summary, rows, figs, out):
             + _fig_md(figs, out))
 
 
-def _compare_figures(out, test, processed_all, curves):
-    allan = {'raw': {axis: report.allan_series(test.gyro_rad_s[:, a], test.rate_hz)
-                     for a, axis in enumerate('xyz')}}
-    for name, proc in processed_all.items():
-        allan[name] = {axis: report.allan_series(proc[:, a], test.rate_hz)
-                       for a, axis in enumerate('xyz')}
+def _compare_figures(out, test, curves):
+    first = next(iter(curves.values()))
+    allan = {'raw': {axis: c['allan_raw'] for axis, c in first.items()}}
+    for name, cur in curves.items():
+        allan[name] = {axis: c['allan_processed'] for axis, c in cur.items()}
     return [
         ('Allan deviation of every method on the test run (cf. Fig. 19)',
          report.plot_allan(out / 'compare_allan.png', allan,
                            title=f'{test.name}: Allan deviation per method (held out)')),
         ('Response to injected motion, axis x',
          report.plot_bandwidth(out / 'compare_bandwidth.png',
-                               {n: {'x': c['x'][0]} for n, c in curves.items()},
+                               {n: {'x': c['x']['frequency']} for n, c in curves.items()},
                                title='gain, phase, group delay to an injected chirp (axis x)')),
         ('Mean normalised step response, axis x',
          report.plot_steps(out / 'compare_steps.png',
-                           {n: {'x': c['x'][1]} for n, c in curves.items()},
+                           {n: {'x': c['x']['step']} for n, c in curves.items()},
                            title='response to injected steps (axis x)')),
     ]
 

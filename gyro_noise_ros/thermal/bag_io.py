@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from .run import ThermalRun
-from ..bag import ImuBagReader, TEMPERATURE_MSGTYPE
-from ..bag.codec import typestore
+from ..bag import ImuBagReader, ImuBagWriter, TEMPERATURE_MSGTYPE
+from ..bag.codec import join_raws, typestore
 from ..bag.storage import BagSource, describe
 from ..errors import BagError, InputDataError, ParameterError
 
@@ -281,8 +281,6 @@ def write_compensated(bag, processed_rad_s, out_dir, *, storage=None):
         ``processed_rad_s`` does not match the bag's sample count.
 
     """
-    from rosbags.rosbag2 import StoragePlugin, Writer
-
     proc = np.asarray(processed_rad_s, dtype=np.float64)
     n = bag.stamp_ns.size
     if proc.shape != (n, 3):
@@ -291,28 +289,26 @@ def write_compensated(bag, processed_rad_s, out_dir, *, storage=None):
     in_bag_order[bag.order] = proc
     if storage is None:
         storage = bag.storage if bag.storage in ('sqlite3', 'mcap') else 'sqlite3'
-    plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
     source = BagSource(bag.path)
     store = typestore()
     counts = {}
     try:
-        try:
-            writer = Writer(Path(out_dir), version=9, storage_plugin=plugin)
-            writer.open()
-        except Exception as err:  # noqa: BLE001 - rosbags WriterError, OSError
-            raise BagError(f'bag {str(out_dir)!r} cannot be created: {describe(err)}') from err
-        try:
+        # ImuBagWriter brings the Imu connection and the bulk sqlite3 insert; the other topics'
+        # connections are added to its rosbags writer.
+        with ImuBagWriter(out_dir, storage=storage, imu_topic=bag.topic,
+                          temperature_topic=None) as writer:
             for topic, (msgtype, _) in sorted(source.topics().items()):
-                conn = _add_connection(writer, source, topic, msgtype, store)
+                if topic == bag.topic:
+                    conn = writer._imu_conn
+                else:
+                    conn = _add_connection(writer._writer, source, topic, msgtype, store)
                 counts[topic] = _copy_topic(source, writer, conn, topic, msgtype, store,
                                             in_bag_order if topic == bag.topic else None)
-            if counts.get(bag.topic) != n:
-                raise BagError(f'bag {str(bag.path)!r} changed while being copied: '
-                               f'{counts.get(bag.topic)} Imu messages, {n} expected')
-        finally:
-            writer.close()
     finally:
         source.close()
+    if counts.get(bag.topic) != n:
+        raise BagError(f'bag {str(bag.path)!r} changed while being copied: '
+                       f'{counts.get(bag.topic)} Imu messages, {n} expected')
     return counts
 
 
@@ -320,36 +316,45 @@ def _add_connection(writer, source, topic, msgtype, store):
     if msgtype is None:
         raise BagError(f'bag {str(source.path)!r}: topic {topic!r} mixes message types')
     conn = next(c for c in source.connections if c.topic == topic)
-    if source.ros1 or msgtype in store.types:
-        return writer.add_connection(topic, msgtype, typestore=store)
-    ext = conn.ext
-    return writer.add_connection(topic, msgtype, msgdef=conn.msgdef.data, rihs01=conn.digest,
-                                 serialization_format=getattr(ext, 'serialization_format', 'cdr'),
-                                 offered_qos_profiles=getattr(ext, 'offered_qos_profiles', ()))
+    try:
+        if source.ros1 or msgtype in store.types:
+            return writer.add_connection(topic, msgtype, typestore=store)
+        ext = conn.ext
+        return writer.add_connection(
+            topic, msgtype, msgdef=conn.msgdef.data, rihs01=conn.digest,
+            serialization_format=getattr(ext, 'serialization_format', 'cdr'),
+            offered_qos_profiles=getattr(ext, 'offered_qos_profiles', ()))
+    except Exception as err:  # noqa: BLE001 - rosbags WriterError on odd connections
+        raise BagError(f'cannot copy topic {topic!r} ({msgtype}): {describe(err)}') from err
 
 
 def _copy_topic(source, writer, conn, topic, msgtype, store, gyro):
     """Copy one topic's messages; patch angular_velocity from ``gyro`` (bag order) if given."""
     done = 0
     for buf, starts, lengths, log_ns in source.blocks(topic):
-        for i in range(starts.shape[0]):
-            raw = bytes(buf[starts[i]:starts[i] + lengths[i]])
-            if source.ros1:
-                if msgtype not in store.types:
-                    raise BagError(f'bag {str(source.path)!r}: ROS 1 type {msgtype} of {topic!r} '
-                                   'is unknown to the ROS 2 Jazzy type store; cannot convert it')
-                raw = bytes(store.ros1_to_cdr(raw, msgtype))
-            if gyro is not None:
-                raw = _patch_angular_velocity(raw, gyro[done])
-            writer.write(conn, int(log_ns[i]), raw)
-            done += 1
+        k = starts.shape[0]
+        if source.ros1:
+            if msgtype not in store.types:
+                raise BagError(f'bag {str(source.path)!r}: ROS 1 type {msgtype} of {topic!r} is '
+                               'unknown to the ROS 2 Jazzy type store; cannot convert it')
+            raws = [bytes(store.ros1_to_cdr(bytes(buf[s:s + m]), msgtype))
+                    for s, m in zip(starts.tolist(), lengths.tolist())]
+            buf, starts, lengths = join_raws(raws)
+        if gyro is not None:
+            buf = _patch_angular_velocity(buf, starts, lengths, gyro[done:done + k])
+        blob = buf.tobytes()
+        raws = [blob[s:s + m] for s, m in zip(starts.tolist(), lengths.tolist())]
+        writer._write(conn, log_ns, raws)
+        done += k
     return done
 
 
-def _patch_angular_velocity(raw, xyz):
-    """Return CDR ``raw`` (sensor_msgs/Imu) with angular_velocity set to ``xyz`` (rad/s)."""
-    order = '<' if raw[1] == 1 else '>'
-    at = len(raw) - _AV_FROM_END
-    patched = bytearray(raw)
-    patched[at:at + 24] = np.asarray(xyz, dtype=order + 'f8').tobytes()
-    return bytes(patched)
+def _patch_angular_velocity(buf, starts, lengths, xyz):
+    """Return a copy of ``buf`` with each CDR Imu message's angular_velocity set to ``xyz``."""
+    out = np.array(buf, dtype=np.uint8, copy=True)
+    at = (starts + lengths - _AV_FROM_END)[:, None] + np.arange(24)
+    little = out[starts + 1] == 1
+    for mask, order in ((little, '<'), (~little, '>')):
+        if mask.any():
+            out[at[mask]] = np.ascontiguousarray(xyz[mask], dtype=order + 'f8').view(np.uint8)
+    return out

@@ -148,6 +148,11 @@ def noise_metrics(rate_rad_s, rate_hz, *, drift_window_s=DRIFT_WINDOW_S):
         Fewer than 8 samples or non-finite samples.
 
     """
+    return _noise_metrics(rate_rad_s, rate_hz, drift_window_s)[0]
+
+
+def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
+    """Return (NoiseMetrics, (tau_s, adev_rad_s))."""
     x = np.asarray(rate_rad_s, dtype=np.float64)
     if x.ndim != 1 or x.size < 8:
         raise InputDataError(f'noise metrics need at least 8 samples of one axis, got shape '
@@ -177,7 +182,7 @@ def noise_metrics(rate_rad_s, rate_hz, *, drift_window_s=DRIFT_WINDOW_S):
         bias_stability_tau_s=mini.tau_s,
         bias_stability_at_longest_tau=bool(mini.at_longest_tau),
         residual_drift_deg_s=drift, drift_windows=int(k),
-        mean_deg_s=float(np.mean(x) * RAD2DEG))
+        mean_deg_s=float(np.mean(x) * RAD2DEG)), (tau, adev)
 
 
 @dataclass(frozen=True)
@@ -612,7 +617,8 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
     processed : numpy.ndarray
         The processed run (n, 3), rad/s.
     curves : dict
-        Per axis the :class:`FrequencyResponse` and :class:`StepResponse` (for figures).
+        Per axis: ``frequency`` (:class:`FrequencyResponse`), ``step`` (:class:`StepResponse`),
+        ``allan_raw`` and ``allan_processed`` ((tau_s, adev_rad_s) arrays), for figures.
 
     """
     gyro = np.asarray(run.gyro_rad_s, dtype=float)
@@ -628,10 +634,11 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
     diff = with_inj - processed
     axes, curves = {}, {}
     for a, name in enumerate('xyz'):
-        raw_m = noise_metrics(gyro[:, a], run.rate_hz)
-        proc_m = noise_metrics(processed[:, a], run.rate_hz)
+        raw_m, raw_adev = _noise_metrics(gyro[:, a], run.rate_hz, DRIFT_WINDOW_S)
+        proc_m, proc_adev = _noise_metrics(processed[:, a], run.rate_hz, DRIFT_WINDOW_S)
         fr, st = _axis_bandwidth(inj, diff[:, a], run.rate_hz)
-        curves[name] = (fr, st)
+        curves[name] = {'frequency': fr, 'step': st, 'allan_raw': raw_adev,
+                        'allan_processed': proc_adev}
         axes[name] = {
             'raw': {k: _num(v) if isinstance(v, float) else v
                     for k, v in raw_m.as_dict().items()},

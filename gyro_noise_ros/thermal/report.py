@@ -30,9 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.allan import allan_deviation, dense_factors
-
-__all__ = ['allan_series', 'method_figures', 'plot_allan', 'plot_bandwidth', 'plot_drift',
+__all__ = ['method_figures', 'plot_allan', 'plot_bandwidth', 'plot_drift',
            'plot_output', 'plot_run', 'plot_steps', 'table_markdown']
 
 DEG = 180.0 / math.pi
@@ -188,26 +186,6 @@ def plot_drift(path, run, processed, *, label):
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: drift removed by {label} (cf. paper Fig. 17)', fontsize=10)
     return _save(fig, plt, path)
-
-
-def allan_series(x_rad_s, rate_hz):
-    """
-    Allan deviation of one axis on the metrics' taus.
-
-    Parameters
-    ----------
-    x_rad_s : numpy.ndarray
-        Rate (n,), rad/s.
-    rate_hz : float
-        Sample rate (Hz).
-
-    Returns
-    -------
-    tau_s, adev_rad_s : numpy.ndarray
-
-    """
-    res = allan_deviation(x_rad_s, rate_hz, taus=dense_factors(x_rad_s.size, per_decade=20))
-    return res.tau_s, res.adev
 
 
 def plot_allan(path, curves, *, title):

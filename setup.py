@@ -24,6 +24,9 @@ setup(
         'pyserial>=3.5',
         'matplotlib>=3.7',
         'PyYAML>=6',
+        # thermal baselines (paper 002 comparisons): wavelet-threshold denoising and EMD
+        'PyWavelets>=1.1',
+        'EMD-signal>=1.5',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install

@@ -104,6 +104,13 @@ def build_parser():
                        help='helium-like bias rise, final value (deg/s); 0 = off')
     noise.add_argument('--helium-delay-s', type=float, default=5400.0, help='delay before the rise (s)')
     noise.add_argument('--helium-tau-s', type=float, default=7200.0, help='time constant of the rise (s)')
+    noise.add_argument('--thermal', choices=('off', 'oven'), default='off',
+                       help='oven: the thermal model of docs/thermal_data.md (paper 002 oven '
+                            'profile from --temp-c, die lag, bias from temperature and its '
+                            'rate, hysteresis) replaces --temp-drift-c-per-h and '
+                            '--temp-sensitivity-dps-per-c')
+    noise.add_argument('--thermal-compress', type=float, default=60.0,
+                       help='run the ~14 h oven experiment this many times faster')
     noise.add_argument('--vibration-hz', type=float, default=0.0, help='sinusoidal vibration frequency (Hz)')
     noise.add_argument('--vibration-dps', type=_float_list, default=0.0, help='vibration rate amplitude (deg/s)')
     noise.add_argument('--vibration-g', type=_float_list, default=0.0, help='vibration accel amplitude (g)')
@@ -150,7 +157,18 @@ def board_from_args(args):
                       accel_fs_g=args.accel_fs_g, alpha=args.alpha, f=args.f, noise_std_dps=args.noise_std_dps,
                       bias_dps=args.bias_dps, temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
                       temp_sensitivity_dps_per_c=args.temp_sensitivity_dps_per_c, helium=helium,
-                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0, t0_us=args.t0_us)
+                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0,
+                      t0_us=args.t0_us, thermal=_thermal_from_args(args))
+
+
+def _thermal_from_args(args):
+    """The ThermalStream of ``--thermal oven`` (bias at 25 degC left to --bias-dps), or None."""
+    if getattr(args, 'thermal', 'off') == 'off':
+        return None
+    from ..thermal.simulate import ThermalModel, ThermalStream
+
+    return ThermalStream(ThermalModel(bias_dps=0.0), compress=args.thermal_compress,
+                         room_c=args.temp_c)
 
 
 def _check_args(args):
@@ -172,6 +190,9 @@ def _check_args(args):
         raise ParameterError(f'--unplug-s must be >= 0, got {args.unplug_s}')
     if args.disconnect_every_s is not None and not args.disconnect_every_s > 0:
         raise ParameterError(f'--disconnect-every-s must be > 0, got {args.disconnect_every_s}')
+    compress = args.thermal_compress
+    if args.thermal != 'off' and not (np.isfinite(compress) and compress > 0):
+        raise ParameterError(f'--thermal-compress must be > 0, got {args.thermal_compress}')
     if args.tcp and args.write_sd:
         raise ParameterError('--tcp and --write-sd exclude each other')
     if args.link and (args.tcp or args.write_sd):

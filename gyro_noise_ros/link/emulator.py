@@ -8,6 +8,9 @@ Signal model of one gyro axis at sample k (time ``t_k``, seconds since power-on)
     rate_k = bias + v_k + helium(t_k) + temp_sens * (T(t_k) - T(0)) + vib_amp * sin(2 pi vib_hz t_k + phase)
     raw_k  = clip(round(rate_k / LSB(gyro_fs)), -32768, 32767)
 
+With ``thermal`` (``portenta_emulator --thermal oven``) the temperature and its effect on the bias
+come from :mod:`gyro_noise_ros.thermal.simulate` instead (``docs/thermal_data.md``).
+
 ``v_k`` is the fractional-order noise of paper 000 eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]``, run by
 :class:`gyro_noise_ros.core.simulate.FractionalNoise` (truncated GL difference, eqs. 3-5, L = 1000), one
 independent generator per axis. The default noise level is the paper's own measurement (Table 4,
@@ -200,13 +203,16 @@ class BoardModel:
         Device time of power-on (us, uint32).
     noise : sequence of 3 objects with ``generate(n)``, optional, keyword-only
         Replaces the fractional generators (output in rad/s).
+    thermal : gyro_noise_ros.thermal.simulate.ThermalStream, optional, keyword-only
+        Thermal model (oven, die lag, bias law, temperature sensor noise and LSB); replaces the
+        linear temperature ramp and ``temp_sensitivity_dps_per_c``; its bias adds to ``bias_dps``.
     """
 
     def __init__(self, *, rng, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, alpha=DEFAULT_ALPHA, f=DEFAULT_F,
                  noise_std_dps=PAPER_NOISE_STD_DPS, sigma_w_dps=None, memory=DEFAULT_MEMORY,
                  bias_dps=DEFAULT_BIAS_DPS, accel_g=(0.0, 0.0, 1.0), accel_noise_ug_rthz=ACCEL_NOISE_DENSITY_UG_RTHZ,
                  temperature_c=25.0, temp_drift_c_per_h=0.0, temp_sensitivity_dps_per_c=0.0, helium=None,
-                 vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None):
+                 vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None, thermal=None):
         if not isinstance(rng, np.random.Generator):
             raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
         self.odr_hz = lsm.check_odr(odr_hz)
@@ -235,6 +241,7 @@ class BoardModel:
         self.temp_sens_rad_s_per_c = _vec3('temp_sensitivity_dps_per_c', temp_sensitivity_dps_per_c) * DEG
         self.helium = helium
         self.vibration = vibration
+        self.thermal = thermal
         if helium is not None and not (helium.tau_s > 0 and helium.delay_s >= 0):
             raise ParameterError(f'helium needs tau_s > 0 and delay_s >= 0, got {helium}')
         if vibration is not None and not vibration.frequency_hz >= 0:
@@ -337,6 +344,10 @@ class BoardModel:
         for gen in self._noise:
             gen.generate(k)
         self._accel_rng.standard_normal((k, 3))
+        if self.thermal is not None:
+            # the die and the sensor move on through samples nobody read
+            self.thermal.step(self._seg_start_s + (self._seg_index + np.arange(k)) / self.odr_hz)
+            self._temp_rng.standard_normal(k)
         self._seg_index += k
         self.samples_overrun += k
         self._fifo_overrun = True
@@ -361,8 +372,14 @@ class BoardModel:
         idx = self._seg_index + np.arange(n, dtype=np.float64)
         t = self._seg_start_s + idx / self.odr_hz
         gyro = np.column_stack([gen.generate(n) for gen in self._noise]) + self.bias_rad_s
-        temp = self.temperature0_c + self.temp_drift_c_per_s * t
-        gyro += np.outer(temp - self.temperature0_c, self.temp_sens_rad_s_per_c)
+        if self.thermal is None:
+            temp = temp_read = self.temperature0_c + self.temp_drift_c_per_s * t
+            gyro += np.outer(temp - self.temperature0_c, self.temp_sens_rad_s_per_c)
+        else:
+            th = self.thermal.step(t)
+            temp = th.die_c
+            gyro += th.bias_rad_s
+            temp_read = self.thermal.measure_c(temp, self._temp_rng)
         accel = np.broadcast_to(self.accel_m_s2, (n, 3)).copy()
         accel_std = self.accel_noise_ug_rthz * 1e-6 * lsm.STANDARD_GRAVITY * np.sqrt(self.odr_hz / 2.0)
         accel += self._accel_rng.standard_normal((n, 3)) * accel_std
@@ -381,7 +398,8 @@ class BoardModel:
         out['t_us'] = (self.t0_us + device_us) % (1 << 32)
         out['gyro'] = lsm.quantise(gyro, lsm.gyro_sensitivity_rad_s_per_lsb(self.gyro_fs_dps))
         out['accel'] = lsm.quantise(accel, lsm.accel_sensitivity_m_s2_per_lsb(self.accel_fs_g))
-        out['temp'] = lsm.quantise(temp - lsm.TEMPERATURE_OFFSET_C, 1.0 / lsm.TEMPERATURE_LSB_PER_C)
+        out['temp'] = lsm.quantise(temp_read - lsm.TEMPERATURE_OFFSET_C,
+                                   1.0 / lsm.TEMPERATURE_LSB_PER_C)
         if self._fifo_overrun and n:
             out['flags'][0] |= FLAG_FIFO_OVERRUN
             self._fifo_overrun = False

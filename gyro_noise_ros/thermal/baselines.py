@@ -1,0 +1,865 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The baselines the parallel model of paper 002 is measured against, as ThermalMethods.
+
+- ``raw``: the gyro output unchanged (causal).
+- ``wtd``: wavelet-threshold denoising (Donoho-Johnstone universal threshold, soft), the
+  paper's first comparison; removes noise, keeps the drift (non-causal).
+- ``bp``: a back-propagation network (one sigmoid hidden layer) from [T, dT] to the gyro
+  offset, the paper's second comparison (causal).
+- ``emd_wtd_sabp``: EMD; the fast IMFs denoised by WTD; the slow IMFs and the residue (the
+  drift) compensated by a BP network whose weights are found by simulated annealing and then
+  refined by gradient descent, the paper's third comparison (non-causal).
+- ``poly3``: the PX4 / ArduPilot thermal calibration: per axis, a 3rd-order polynomial of the
+  gyro offset in (T - T_ref), T clipped to the calibration range (causal).
+- ``linear_tdt``: linear least squares on the monomials of T and dT up to total degree 3
+  (causal).
+
+dT is always :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` (causal trailing-window
+slope), so what is fitted offline is what the live node evaluates. Causal methods give
+``drift_rad_s(temperature_c, dtemp_c_s)`` and ``apply(run)`` is exactly
+``gyro - drift_rad_s(T, dT)``. Models that learn from temperature clip T (and dT) to the range
+seen in training: outside it they extrapolate nothing. Equations and constants:
+``docs/thermal_data.md``.
+"""
+
+import numpy as np
+
+from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from ..errors import InputDataError, ParameterError
+
+#: A temperature model needs at least this temperature span in its training run (degC).
+MIN_TEMPERATURE_SPAN_C = 1.0
+
+
+# -------------------------------------------------------------------------------------------
+# shared pieces
+
+
+def _check_run(run, *, need_temperature):
+    """Validate a ThermalRun; return (t, gyro, temperature) as float arrays."""
+    t = np.asarray(run.t_s, dtype=float)
+    gyro = np.asarray(run.gyro_rad_s, dtype=float)
+    temp = np.asarray(run.temperature_c, dtype=float)
+    if t.ndim != 1 or gyro.shape != (t.size, 3) or temp.shape != t.shape:
+        raise InputDataError(f'run {run.name!r}: t_s (n,), gyro_rad_s (n, 3) and temperature_c '
+                             f'(n,) expected, got {t.shape}, {gyro.shape}, {temp.shape}')
+    if t.size < 16:
+        raise InputDataError(f'run {run.name!r} has {t.size} samples, at least 16 needed')
+    if not (np.all(np.isfinite(gyro)) and np.all(np.isfinite(t))):
+        raise InputDataError(f'run {run.name!r}: gyro or stamps hold NaN or Inf')
+    if need_temperature:
+        if not np.all(np.isfinite(temp)):
+            raise InputDataError(f'run {run.name!r}: temperature holds NaN or Inf')
+    return t, gyro, temp
+
+
+def _check_span(temp, name):
+    span = float(np.ptp(temp))
+    if span < MIN_TEMPERATURE_SPAN_C:
+        raise InputDataError(f'run {name!r} spans {span:.3f} degC of temperature; a temperature '
+                             f'model needs at least {MIN_TEMPERATURE_SPAN_C} degC')
+
+
+def _require_fitted(method, attribute):
+    if getattr(method, attribute) is None:
+        raise ParameterError(f'method {method.name!r} is not fitted: call fit() or from_dict()')
+
+
+def _as_pair(temperature_c, dtemp_c_s):
+    temp = np.asarray(temperature_c, dtype=float).reshape(-1)
+    rate = np.broadcast_to(np.asarray(dtemp_c_s, dtype=float), temp.shape)
+    return temp, rate
+
+
+def _block_means(values, max_points):
+    """Average consecutive blocks so at most ``max_points`` rows remain (last block partial)."""
+    n = values.shape[0]
+    size = max(1, int(np.ceil(n / max_points)))
+    if size == 1:
+        return values.copy()
+    edges = np.arange(0, n, size)
+    sums = np.add.reduceat(values, edges, axis=0)
+    counts = np.diff(np.append(edges, n)).reshape((-1,) + (1,) * (values.ndim - 1))
+    return sums / counts
+
+
+def wavelet_denoise(x, *, wavelet='db4', level=6, mode='symmetric', sigma='finest'):
+    """
+    Wavelet-threshold denoising with the universal threshold and soft thresholding.
+
+    Every detail coefficient d is replaced by ``sign(d) max(|d| - lambda, 0)`` with
+    ``lambda = sigma sqrt(2 ln n)`` (Donoho & Johnstone 1994); ``sigma = median(|d_1|) / 0.6745``
+    from the finest level (``sigma='finest'``, VisuShrink) or from each level's own
+    coefficients (``sigma='level'``, for coloured noise). The approximation is kept.
+
+    Parameters
+    ----------
+    x : array_like
+        Signal (n,).
+    wavelet : str, keyword-only
+        PyWavelets wavelet name.
+    level : int, keyword-only
+        Decomposition depth (reduced to the largest the length allows).
+    mode : str, keyword-only
+        PyWavelets signal-extension mode.
+    sigma : {'finest', 'level'}, keyword-only
+        Where the noise level comes from.
+
+    Returns
+    -------
+    numpy.ndarray
+        Denoised signal (n,).
+
+    """
+    import pywt
+
+    x = np.asarray(x, dtype=float)
+    if sigma not in ('finest', 'level'):
+        raise ParameterError(f"sigma must be 'finest' or 'level', got {sigma!r}")
+    w = pywt.Wavelet(wavelet)
+    depth = max(1, min(int(level), pywt.dwt_max_level(x.size, w.dec_len)))
+    coeffs = pywt.wavedec(x, w, mode=mode, level=depth)
+    factor = np.sqrt(2.0 * np.log(x.size))
+    finest = np.median(np.abs(coeffs[-1])) / 0.6745
+    out = [coeffs[0]]
+    for d in coeffs[1:]:
+        s = finest if sigma == 'finest' else np.median(np.abs(d)) / 0.6745
+        out.append(pywt.threshold(d, s * factor, mode='soft'))
+    return pywt.waverec(out, w, mode=mode)[:x.size]
+
+
+def simulated_annealing(fun, x0, rng, *, iterations=3000, step=0.3, t0_ratio=0.1,
+                        t_end_ratio=1e-4):
+    """
+    Minimise ``fun`` by simulated annealing (Metropolis acceptance, geometric cooling).
+
+    Temperature ``T_k = T_0 r^k`` from ``T_0 = t0_ratio f(x0)`` down to ``t_end_ratio T_0``;
+    the proposal is ``x + s_k N(0, I)`` with ``s_k = step sqrt(T_k / T_0)``; a worse candidate is
+    accepted with probability ``exp(-(f_new - f) / T_k)``. The best point seen is returned.
+
+    Parameters
+    ----------
+    fun : callable
+        Objective, array (d,) -> float.
+    x0 : array_like
+        Start (d,).
+    rng : numpy.random.Generator
+        Proposal and acceptance draws.
+    iterations : int, keyword-only
+        Objective evaluations after the first.
+    step : float, keyword-only
+        Initial proposal standard deviation.
+    t0_ratio, t_end_ratio : float, keyword-only
+        Initial temperature relative to f(x0), final relative to the initial.
+
+    Returns
+    -------
+    x_best : numpy.ndarray
+    f_best : float
+
+    """
+    x = np.array(x0, dtype=float)
+    fx = float(fun(x))
+    best, f_best = x.copy(), fx
+    t0 = t0_ratio * max(abs(fx), 1e-300)
+    cool = t_end_ratio ** (1.0 / max(int(iterations), 1))
+    temp = t0
+    for _ in range(int(iterations)):
+        cand = x + step * np.sqrt(temp / t0) * rng.standard_normal(x.size)
+        fc = float(fun(cand))
+        if fc <= fx or rng.random() < np.exp(-(fc - fx) / temp):
+            x, fx = cand, fc
+            if fx < f_best:
+                best, f_best = x.copy(), fx
+        temp *= cool
+    return best, f_best
+
+
+class _Mlp:
+    """One hidden layer of logistic sigmoids (paper 002 eq. 34), linear output; flat weights."""
+
+    def __init__(self, n_in, n_hidden, n_out):
+        self.shape = (int(n_in), int(n_hidden), int(n_out))
+        self.size = n_in * n_hidden + n_hidden + n_hidden * n_out + n_out
+
+    def unpack(self, theta):
+        n_in, h, n_out = self.shape
+        i = 0
+        w1 = theta[i:i + n_in * h].reshape(n_in, h)
+        i += n_in * h
+        b1 = theta[i:i + h]
+        i += h
+        w2 = theta[i:i + h * n_out].reshape(h, n_out)
+        i += h * n_out
+        return w1, b1, w2, theta[i:i + n_out]
+
+    def init(self, rng):
+        """Xavier-uniform weights, zero biases."""
+        n_in, h, n_out = self.shape
+        theta = np.zeros(self.size)
+        w1, _, w2, _ = self.unpack(theta)
+        w1[...] = rng.uniform(-1, 1, w1.shape) * np.sqrt(6.0 / (n_in + h))
+        w2[...] = rng.uniform(-1, 1, w2.shape) * np.sqrt(6.0 / (h + n_out))
+        return theta
+
+    def forward(self, theta, x):
+        w1, b1, w2, b2 = self.unpack(theta)
+        return 1.0 / (1.0 + np.exp(-(x @ w1 + b1))) @ w2 + b2
+
+    def mse(self, theta, x, y):
+        return float(np.mean((self.forward(theta, x) - y) ** 2))
+
+    def mse_and_grad(self, theta, x, y):
+        w1, b1, w2, b2 = self.unpack(theta)
+        hid = 1.0 / (1.0 + np.exp(-(x @ w1 + b1)))
+        err = hid @ w2 + b2 - y
+        scale = 2.0 / err.size
+        g_out = err * scale
+        g_hid = (g_out @ w2.T) * hid * (1.0 - hid)
+        grad = np.concatenate([(x.T @ g_hid).ravel(), g_hid.sum(0), (hid.T @ g_out).ravel(),
+                               g_out.sum(0)])
+        return float(np.mean(err ** 2)), grad
+
+
+def train_gradient_descent(mlp, theta, x, y, *, epochs, learning_rate):
+    """
+    Back-propagation: full-batch gradient descent on the MSE with Adam steps.
+
+    Adam (Kingma & Ba 2015; beta1 0.9, beta2 0.999) rather than a fixed step, so one learning
+    rate works on every run.
+
+    Parameters
+    ----------
+    mlp : _Mlp
+        Network shape.
+    theta : numpy.ndarray
+        Start weights (flat).
+    x, y : numpy.ndarray
+        Inputs (n, n_in) and targets (n, n_out), standardised.
+    epochs : int, keyword-only
+        Gradient steps.
+    learning_rate : float, keyword-only
+        Adam step size.
+
+    Returns
+    -------
+    numpy.ndarray
+        Trained weights.
+
+    """
+    theta = theta.copy()
+    m = np.zeros_like(theta)
+    v = np.zeros_like(theta)
+    b1, b2, eps = 0.9, 0.999, 1e-8
+    for k in range(1, int(epochs) + 1):
+        _, g = mlp.mse_and_grad(theta, x, y)
+        m = b1 * m + (1 - b1) * g
+        v = b2 * v + (1 - b2) * g * g
+        theta -= learning_rate * (m / (1 - b1 ** k)) / (np.sqrt(v / (1 - b2 ** k)) + eps)
+    return theta
+
+
+class _DriftNet:
+    """A fitted network from [T, dT] to a 3-axis offset, with its scaling and input clipping."""
+
+    def __init__(self, hidden, theta, x_mean, x_std, y_mean, y_std, x_min, x_max):
+        self.mlp = _Mlp(2, hidden, 3)
+        self.hidden = int(hidden)
+        self.theta = np.asarray(theta, dtype=float)
+        self.x_mean, self.x_std = np.asarray(x_mean, float), np.asarray(x_std, float)
+        self.y_mean, self.y_std = np.asarray(y_mean, float), np.asarray(y_std, float)
+        self.x_min, self.x_max = np.asarray(x_min, float), np.asarray(x_max, float)
+
+    @classmethod
+    def standardise(cls, x, y):
+        x_std = np.where(x.std(0) > 0, x.std(0), 1.0)
+        y_std = np.where(y.std(0) > 0, y.std(0), 1.0)
+        return x.mean(0), x_std, y.mean(0), y_std
+
+    def predict(self, temperature_c, dtemp_c_s):
+        x = np.column_stack(_as_pair(temperature_c, dtemp_c_s))
+        x = (np.clip(x, self.x_min, self.x_max) - self.x_mean) / self.x_std
+        return self.mlp.forward(self.theta, x) * self.y_std + self.y_mean
+
+    def to_dict(self):
+        return {'hidden': self.hidden, 'weights': self.theta.tolist(),
+                'input_mean': self.x_mean.tolist(), 'input_std': self.x_std.tolist(),
+                'output_mean_rad_s': self.y_mean.tolist(), 'output_std_rad_s': self.y_std.tolist(),
+                'input_min': self.x_min.tolist(), 'input_max': self.x_max.tolist()}
+
+    @classmethod
+    def from_dict(cls, d):
+        return cls(d['hidden'], d['weights'], d['input_mean'], d['input_std'],
+                   d['output_mean_rad_s'], d['output_std_rad_s'], d['input_min'], d['input_max'])
+
+
+def _training_pairs(t, temp, target, *, rate_window_s, max_points):
+    """[T, dT] and target (n, 3), block-averaged to at most ``max_points`` rows."""
+    rate = temperature_rate_c_s(t, temp, window_s=rate_window_s)
+    rows = _block_means(np.column_stack([temp, rate, target]), max_points)
+    return rows[:, :2], rows[:, 2:]
+
+
+# -------------------------------------------------------------------------------------------
+# methods
+
+
+class RawMethod:
+    """
+    The gyro output unchanged: the reference every method is compared with.
+
+    Attributes
+    ----------
+    name : str
+        ``'raw'``.
+    causal : bool
+        True.
+
+    """
+
+    name = 'raw'
+    causal = True
+
+    def fit(self, run, *, rng):
+        """Learn nothing (the run is still checked)."""
+        _check_run(run, need_temperature=False)
+
+    def drift_rad_s(self, temperature_c, dtemp_c_s):
+        """Return zeros (n, 3), rad/s."""
+        temp, _ = _as_pair(temperature_c, dtemp_c_s)
+        return np.zeros((temp.size, 3))
+
+    def apply(self, run):
+        """Return a copy of the angular rate (n, 3), rad/s."""
+        return _check_run(run, need_temperature=False)[1].copy()
+
+    def to_dict(self):
+        """Return ``{'method': 'raw', 'temperature_range_c': None}``."""
+        return {'method': self.name, 'temperature_range_c': None}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild from :meth:`to_dict`."""
+        _check_method(cls, d)
+        return cls()
+
+
+def _check_method(cls, d):
+    if not isinstance(d, dict) or d.get('method') != cls.name:
+        got = d.get('method') if isinstance(d, dict) else type(d).__name__
+        raise ParameterError(f'{cls.__name__}.from_dict needs method {cls.name!r}, got {got!r}')
+
+
+class TemperaturePolynomial:
+    """
+    PX4 / ArduPilot style thermal calibration: a polynomial of the offset in (T - T_ref).
+
+    Fit (PX4 ``process_sensor_data.py``): T_min and T_max are the training run's extremes,
+    ``T_ref = (T_min + T_max) / 2``, and per axis the coefficients X0..X3 of
+    ``offset = sum_i X_i (T - T_ref)^i`` are the least-squares fit to the gyro output. Apply
+    (PX4 ``TemperatureCompensation::calc_thermal_offsets``): T is clipped to [T_min, T_max]
+    and the offset subtracted. PX4 names them ``TC_G0_X{i}_{axis}``, ``TC_G0_TREF``,
+    ``TC_G0_TMIN``, ``TC_G0_TMAX``; the offsets are in rad/s there as here.
+
+    Parameters
+    ----------
+    order : int, keyword-only
+        Polynomial order (3 in PX4 and ArduPilot).
+
+    """
+
+    name = 'poly3'
+    causal = True
+
+    def __init__(self, *, order=3):
+        if not (isinstance(order, (int, np.integer)) and 0 <= order <= 8):
+            raise ParameterError(f'order must be an integer in 0..8, got {order!r}')
+        self.order = int(order)
+        self.coef = None          # (3, order + 1), rad/s per degC^i, lowest power first
+        self.t_ref_c = self.t_min_c = self.t_max_c = None
+
+    def fit(self, run, *, rng):
+        """Least-squares fit of the polynomial per axis (``rng`` unused: deterministic)."""
+        _, gyro, temp = _check_run(run, need_temperature=True)
+        _check_span(temp, run.name)
+        self.t_min_c, self.t_max_c = float(temp.min()), float(temp.max())
+        self.t_ref_c = 0.5 * (self.t_min_c + self.t_max_c)
+        coef = np.polynomial.polynomial.polyfit(temp - self.t_ref_c, gyro, self.order)
+        self.coef = np.asarray(coef).T
+
+    def drift_rad_s(self, temperature_c, dtemp_c_s):
+        """
+        Return the offset (n, 3), rad/s, at temperatures ``temperature_c`` (degC).
+
+        ``dtemp_c_s`` is accepted for the common signature and not used.
+        """
+        _require_fitted(self, 'coef')
+        temp, _ = _as_pair(temperature_c, dtemp_c_s)
+        d = np.clip(temp, self.t_min_c, self.t_max_c) - self.t_ref_c
+        return np.polynomial.polynomial.polyval(d, self.coef.T).T.reshape(temp.size, 3)
+
+    def apply(self, run):
+        """Return ``gyro - drift_rad_s(T, dT)`` (n, 3), rad/s."""
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        return gyro - self.drift_rad_s(temp, np.zeros_like(temp))
+
+    def to_dict(self):
+        """Return the order, T_ref/T_min/T_max (degC) and the coefficients per axis (rad/s)."""
+        _require_fitted(self, 'coef')
+        return {'method': self.name, 'order': self.order, 't_ref_c': self.t_ref_c,
+                't_min_c': self.t_min_c, 't_max_c': self.t_max_c,
+                'coef_rad_s': self.coef.tolist(),
+                'temperature_range_c': [self.t_min_c, self.t_max_c]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild a fitted model from :meth:`to_dict`."""
+        _check_method(cls, d)
+        m = cls(order=int(d['order']))
+        m.t_ref_c, m.t_min_c, m.t_max_c = (float(d[k]) for k in ('t_ref_c', 't_min_c', 't_max_c'))
+        m.coef = np.asarray(d['coef_rad_s'], dtype=float).reshape(3, m.order + 1)
+        return m
+
+
+def _monomials(degree):
+    """Exponent pairs (p, q) of T^p dT^q with p + q <= degree, by total degree."""
+    return [(p, total - p) for total in range(degree + 1) for p in range(total, -1, -1)]
+
+
+class LinearTdT:
+    """
+    Linear least squares of the gyro offset on the monomials of T and dT.
+
+    ``offset_i = sum_{p+q<=degree} a_{i,pq} x^p r^q`` with ``x = (T - T_c) / T_s`` and
+    ``r = dT / R_s`` (centre and scales of the training run, for conditioning), T and dT
+    clipped to their training ranges. Degree 3 gives 10 terms: 1, x, r, x^2, x r, r^2, x^3,
+    x^2 r, x r^2, r^3. Fitted over every sample (normal equations accumulated in chunks).
+
+    Parameters
+    ----------
+    degree : int, keyword-only
+        Highest total degree (1..5).
+    rate_window_s : float, keyword-only
+        Window of :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` (s).
+
+    """
+
+    name = 'linear_tdt'
+    causal = True
+
+    def __init__(self, *, degree=3, rate_window_s=DEFAULT_RATE_WINDOW_S):
+        if not (isinstance(degree, (int, np.integer)) and 1 <= degree <= 5):
+            raise ParameterError(f'degree must be an integer in 1..5, got {degree!r}')
+        if not rate_window_s > 0:
+            raise ParameterError(f'rate_window_s must be > 0, got {rate_window_s!r}')
+        self.degree = int(degree)
+        self.rate_window_s = float(rate_window_s)
+        self.coef = None   # (3, n_terms)
+        self.centre = self.scale = self.lo = self.hi = None   # each (2,): T, dT
+
+    def _design(self, temp, rate):
+        x = (np.clip(temp, self.lo[0], self.hi[0]) - self.centre[0]) / self.scale[0]
+        r = (np.clip(rate, self.lo[1], self.hi[1]) - self.centre[1]) / self.scale[1]
+        return np.column_stack([x ** p * r ** q for p, q in _monomials(self.degree)])
+
+    def fit(self, run, *, rng):
+        """Least squares over every sample (``rng`` unused: deterministic)."""
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        _check_span(temp, run.name)
+        rate = temperature_rate_c_s(t, temp, window_s=self.rate_window_s)
+        both = np.column_stack([temp, rate])
+        self.lo, self.hi = both.min(0), both.max(0)
+        self.centre = 0.5 * (self.lo + self.hi)
+        self.scale = np.where(self.hi > self.lo, 0.5 * (self.hi - self.lo), 1.0)
+        n_terms = len(_monomials(self.degree))
+        ata = np.zeros((n_terms, n_terms))
+        aty = np.zeros((n_terms, 3))
+        for lo in range(0, t.size, 262144):
+            a = self._design(temp[lo:lo + 262144], rate[lo:lo + 262144])
+            ata += a.T @ a
+            aty += a.T @ gyro[lo:lo + 262144]
+        sol, _, rank, _ = np.linalg.lstsq(ata, aty, rcond=None)
+        if rank < n_terms:
+            raise InputDataError(f'run {run.name!r}: T and dT do not vary enough to fit '
+                                 f'{n_terms} terms (rank {rank})')
+        self.coef = sol.T
+
+    def drift_rad_s(self, temperature_c, dtemp_c_s):
+        """Return the offset (n, 3), rad/s, at temperatures (degC) and rates (degC/s)."""
+        _require_fitted(self, 'coef')
+        temp, rate = _as_pair(temperature_c, dtemp_c_s)
+        return self._design(temp, rate) @ self.coef.T
+
+    def apply(self, run):
+        """Return ``gyro - drift_rad_s(T, temperature_rate_c_s(t, T))`` (n, 3), rad/s."""
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        return gyro - self.drift_rad_s(
+            temp, temperature_rate_c_s(t, temp, window_s=self.rate_window_s))
+
+    def to_dict(self):
+        """Return the degree, window, scaling, ranges and coefficients per axis (rad/s)."""
+        _require_fitted(self, 'coef')
+        return {'method': self.name, 'degree': self.degree, 'rate_window_s': self.rate_window_s,
+                'terms': [f'x^{p} r^{q}' for p, q in _monomials(self.degree)],
+                'centre': self.centre.tolist(), 'scale': self.scale.tolist(),
+                'input_min': self.lo.tolist(), 'input_max': self.hi.tolist(),
+                'coef_rad_s': self.coef.tolist(),
+                'temperature_range_c': [float(self.lo[0]), float(self.hi[0])]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild a fitted model from :meth:`to_dict`."""
+        _check_method(cls, d)
+        m = cls(degree=int(d['degree']), rate_window_s=float(d['rate_window_s']))
+        m.centre, m.scale = np.asarray(d['centre'], float), np.asarray(d['scale'], float)
+        m.lo, m.hi = np.asarray(d['input_min'], float), np.asarray(d['input_max'], float)
+        m.coef = np.asarray(d['coef_rad_s'], dtype=float)
+        return m
+
+
+class WaveletThreshold:
+    """
+    Wavelet-threshold denoising (WTD) of each axis, the paper's first comparison.
+
+    See :func:`wavelet_denoise`. It learns nothing from the training run: the threshold comes
+    from the run being processed, as WTD is defined. It removes noise, not drift, and needs the
+    whole record (non-causal).
+
+    Parameters
+    ----------
+    wavelet : str, keyword-only
+        PyWavelets name; 'db4' by default (the paper does not say which).
+    level : int, keyword-only
+        Decomposition depth.
+    mode : str, keyword-only
+        Signal extension; 'symmetric' keeps the drift's ends free of wrap-around.
+    sigma : {'finest', 'level'}, keyword-only
+        Noise level from the finest details, or per level.
+
+    """
+
+    name = 'wtd'
+    causal = False
+
+    def __init__(self, *, wavelet='db4', level=6, mode='symmetric', sigma='finest'):
+        import pywt
+
+        if wavelet not in pywt.wavelist(kind='discrete'):
+            raise ParameterError(f'wavelet must be a discrete PyWavelets name, got {wavelet!r}')
+        if mode not in pywt.Modes.modes:
+            raise ParameterError(f'mode must be one of {pywt.Modes.modes}, got {mode!r}')
+        if not (isinstance(level, (int, np.integer)) and level >= 1):
+            raise ParameterError(f'level must be an integer >= 1, got {level!r}')
+        if sigma not in ('finest', 'level'):
+            raise ParameterError(f"sigma must be 'finest' or 'level', got {sigma!r}")
+        self.wavelet, self.level, self.mode, self.sigma = wavelet, int(level), mode, sigma
+
+    def fit(self, run, *, rng):
+        """Learn nothing (WTD is defined on the record it denoises); the run is checked."""
+        _check_run(run, need_temperature=False)
+
+    def apply(self, run):
+        """Return the denoised angular rate (n, 3), rad/s."""
+        gyro = _check_run(run, need_temperature=False)[1]
+        return np.column_stack([wavelet_denoise(gyro[:, i], wavelet=self.wavelet,
+                                                level=self.level, mode=self.mode,
+                                                sigma=self.sigma) for i in range(3)])
+
+    def to_dict(self):
+        """Return the wavelet settings."""
+        return {'method': self.name, 'wavelet': self.wavelet, 'level': self.level,
+                'mode': self.mode, 'sigma': self.sigma, 'threshold': 'universal, soft',
+                'temperature_range_c': None}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild from :meth:`to_dict`."""
+        _check_method(cls, d)
+        return cls(wavelet=d['wavelet'], level=int(d['level']), mode=d['mode'],
+                   sigma=d['sigma'])
+
+
+class BPNetwork:
+    """
+    Back-propagation network from [T, dT] to the gyro offset, the paper's second comparison.
+
+    One hidden layer of ``hidden`` logistic sigmoids and a linear output per axis, inputs and
+    outputs standardised, trained by full-batch gradient descent (Adam steps) on the MSE. The
+    training pairs are block means of the run (at most ``max_points``), which averages the
+    noise out of the target and bounds the cost. Inputs are clipped to the training range.
+
+    Parameters
+    ----------
+    hidden : int, keyword-only
+        Hidden units.
+    epochs : int, keyword-only
+        Gradient steps.
+    learning_rate : float, keyword-only
+        Adam step size (standardised units).
+    max_points : int, keyword-only
+        Training pairs after block averaging.
+    rate_window_s : float, keyword-only
+        Window of the temperature rate (s).
+
+    """
+
+    name = 'bp'
+    causal = True
+
+    def __init__(self, *, hidden=12, epochs=2000, learning_rate=0.01, max_points=2000,
+                 rate_window_s=DEFAULT_RATE_WINDOW_S):
+        _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s)
+        self.hidden, self.epochs = int(hidden), int(epochs)
+        self.learning_rate, self.max_points = float(learning_rate), int(max_points)
+        self.rate_window_s = float(rate_window_s)
+        self.net = None
+        self.train_mse = None
+
+    def fit(self, run, *, rng):
+        """Train the network on the run's block means; ``rng`` draws the initial weights."""
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        _check_span(temp, run.name)
+        x, y = _training_pairs(t, temp, gyro, rate_window_s=self.rate_window_s,
+                               max_points=self.max_points)
+        self.net, self.train_mse = _fit_net(x, y, self.hidden, rng, sa_iterations=0,
+                                            epochs=self.epochs, learning_rate=self.learning_rate)
+
+    def drift_rad_s(self, temperature_c, dtemp_c_s):
+        """Return the offset (n, 3), rad/s, at temperatures (degC) and rates (degC/s)."""
+        _require_fitted(self, 'net')
+        return self.net.predict(temperature_c, dtemp_c_s)
+
+    def apply(self, run):
+        """Return ``gyro - drift_rad_s(T, temperature_rate_c_s(t, T))`` (n, 3), rad/s."""
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        return gyro - self.drift_rad_s(
+            temp, temperature_rate_c_s(t, temp, window_s=self.rate_window_s))
+
+    def to_dict(self):
+        """Return the options, the weights, the scaling and the training MSE."""
+        _require_fitted(self, 'net')
+        return {'method': self.name, 'epochs': self.epochs, 'learning_rate': self.learning_rate,
+                'max_points': self.max_points, 'rate_window_s': self.rate_window_s,
+                'train_mse_standardised': self.train_mse, 'network': self.net.to_dict(),
+                'temperature_range_c': [float(self.net.x_min[0]), float(self.net.x_max[0])]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild a fitted model from :meth:`to_dict`."""
+        _check_method(cls, d)
+        m = cls(hidden=int(d['network']['hidden']), epochs=int(d['epochs']),
+                learning_rate=float(d['learning_rate']), max_points=int(d['max_points']),
+                rate_window_s=float(d['rate_window_s']))
+        m.net = _DriftNet.from_dict(d['network'])
+        m.train_mse = d.get('train_mse_standardised')
+        return m
+
+
+def _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s):
+    for label, value in (('hidden', hidden), ('max_points', max_points)):
+        if not (isinstance(value, (int, np.integer)) and value >= 1):
+            raise ParameterError(f'{label} must be an integer >= 1, got {value!r}')
+    if not (isinstance(epochs, (int, np.integer)) and epochs >= 0):
+        raise ParameterError(f'epochs must be an integer >= 0, got {epochs!r}')
+    if not learning_rate > 0:
+        raise ParameterError(f'learning_rate must be > 0, got {learning_rate!r}')
+    if not rate_window_s > 0:
+        raise ParameterError(f'rate_window_s must be > 0, got {rate_window_s!r}')
+
+
+def _fit_net(x, y, hidden, rng, *, sa_iterations, epochs, learning_rate):
+    """Standardise, initialise, anneal (optional), then back-propagate; return (net, mse)."""
+    x_mean, x_std, y_mean, y_std = _DriftNet.standardise(x, y)
+    xs, ys = (x - x_mean) / x_std, (y - y_mean) / y_std
+    mlp = _Mlp(2, hidden, 3)
+    theta = mlp.init(rng)
+    if sa_iterations:
+        theta, _ = simulated_annealing(lambda th: mlp.mse(th, xs, ys), theta, rng,
+                                       iterations=sa_iterations)
+    if epochs:
+        theta = train_gradient_descent(mlp, theta, xs, ys, epochs=epochs,
+                                       learning_rate=learning_rate)
+    net = _DriftNet(hidden, theta, x_mean, x_std, y_mean, y_std, x.min(0), x.max(0))
+    return net, mlp.mse(theta, xs, ys)
+
+
+def zero_crossing_hz(imf, duration_s):
+    """
+    Return the mean frequency of an oscillation from its zero crossings (Hz).
+
+    Parameters
+    ----------
+    imf : array_like
+        Signal (n,).
+    duration_s : float
+        Its length (s).
+
+    Returns
+    -------
+    float
+        ``crossings / (2 duration_s)``.
+
+    """
+    s = np.signbit(np.asarray(imf, dtype=float))
+    return float(np.count_nonzero(s[1:] != s[:-1])) / (2.0 * duration_s)
+
+
+class EmdWtdSaBp:
+    """
+    EMD + WTD + SA-BP, the paper's third (and strongest) comparison.
+
+    Each axis is decomposed by EMD (PyEMD, cubic-spline envelopes). IMFs whose zero-crossing
+    frequency (:func:`zero_crossing_hz`) exceeds ``split_hz`` are the noisy part, each denoised
+    by WTD; the other IMFs and the residue are the drift part. A BP network (as
+    :class:`BPNetwork`) learns the drift part from [T, dT]; its weights are found by simulated
+    annealing (:func:`simulated_annealing`) and refined by back-propagation. Output: the
+    denoised noisy part plus the drift part minus the predicted drift. Needs the whole record
+    (non-causal); EMD costs roughly a minute per million samples and axis.
+
+    Parameters
+    ----------
+    split_hz : float, optional, keyword-only
+        Noise/drift boundary (Hz); None: 100 / (training run length), i.e. IMFs with more than
+        about 100 oscillations over the run are noise. Stored once fitted.
+    max_imf : int, keyword-only
+        Most IMFs EMD extracts.
+    wavelet, wtd_level : keyword-only
+        WTD settings for the noisy IMFs.
+    hidden, sa_iterations, epochs, learning_rate, max_points, rate_window_s : keyword-only
+        Network, annealing and training settings.
+
+    """
+
+    name = 'emd_wtd_sabp'
+    causal = False
+
+    def __init__(self, *, split_hz=None, max_imf=10, wavelet='db4', wtd_level=6, hidden=8,
+                 sa_iterations=3000, epochs=500, learning_rate=0.01, max_points=2000,
+                 rate_window_s=DEFAULT_RATE_WINDOW_S):
+        _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s)
+        if split_hz is not None and not split_hz > 0:
+            raise ParameterError(f'split_hz must be > 0, got {split_hz!r}')
+        if not (isinstance(max_imf, (int, np.integer)) and max_imf >= 1):
+            raise ParameterError(f'max_imf must be an integer >= 1, got {max_imf!r}')
+        if not (isinstance(sa_iterations, (int, np.integer)) and sa_iterations >= 0):
+            raise ParameterError(f'sa_iterations must be an integer >= 0, got {sa_iterations!r}')
+        self.split_hz = None if split_hz is None else float(split_hz)
+        self.max_imf, self.wavelet, self.wtd_level = int(max_imf), wavelet, int(wtd_level)
+        self.hidden, self.sa_iterations, self.epochs = int(hidden), int(sa_iterations), int(epochs)
+        self.learning_rate, self.max_points = float(learning_rate), int(max_points)
+        self.rate_window_s = float(rate_window_s)
+        self.net = None
+        self.train_mse = None
+        self.imf_classes = None   # per axis: list of 'noise' / 'drift' of the training run
+
+    def decompose(self, t, gyro, split_hz):
+        """
+        Split each axis into its WTD-denoised noisy part and its drift part.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times (n,), s.
+        gyro : numpy.ndarray
+            Angular rate (n, 3), rad/s.
+        split_hz : float
+            Noise/drift boundary (Hz).
+
+        Returns
+        -------
+        denoised : numpy.ndarray
+            (n, 3) sum of the denoised noisy IMFs.
+        drift : numpy.ndarray
+            (n, 3) sum of the slow IMFs and the residue.
+        classes : list of list of str
+            Per axis, 'noise' or 'drift' for each IMF.
+
+        """
+        from PyEMD import EMD
+
+        duration = float(t[-1] - t[0]) or 1.0
+        denoised = np.zeros_like(gyro)
+        drift = np.zeros_like(gyro)
+        classes = []
+        for i in range(3):
+            emd = EMD()
+            emd.emd(gyro[:, i], t, max_imf=self.max_imf)
+            imfs, residue = emd.get_imfs_and_residue()
+            drift[:, i] = residue
+            labels = []
+            for imf in imfs:
+                if zero_crossing_hz(imf, duration) > split_hz:
+                    labels.append('noise')
+                    denoised[:, i] += wavelet_denoise(imf, wavelet=self.wavelet,
+                                                      level=self.wtd_level)
+                else:
+                    labels.append('drift')
+                    drift[:, i] += imf
+            classes.append(labels)
+        return denoised, drift, classes
+
+    def fit(self, run, *, rng):
+        """Decompose the run, then anneal and train the network on its drift part."""
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        _check_span(temp, run.name)
+        split = self.split_hz if self.split_hz is not None else 100.0 / float(t[-1] - t[0])
+        _, drift, classes = self.decompose(t, gyro, split)
+        x, y = _training_pairs(t, temp, drift, rate_window_s=self.rate_window_s,
+                               max_points=self.max_points)
+        self.net, self.train_mse = _fit_net(x, y, self.hidden, rng,
+                                            sa_iterations=self.sa_iterations,
+                                            epochs=self.epochs, learning_rate=self.learning_rate)
+        self.split_hz = split
+        self.imf_classes = classes
+
+    def apply(self, run):
+        """Return denoised noisy part + drift part - predicted drift (n, 3), rad/s."""
+        _require_fitted(self, 'net')
+        t, gyro, temp = _check_run(run, need_temperature=True)
+        denoised, drift, _ = self.decompose(t, gyro, self.split_hz)
+        rate = temperature_rate_c_s(t, temp, window_s=self.rate_window_s)
+        return denoised + drift - self.net.predict(temp, rate)
+
+    def to_dict(self):
+        """Return the options, the split, the training IMF classes and the network."""
+        _require_fitted(self, 'net')
+        return {'method': self.name, 'split_hz': self.split_hz, 'max_imf': self.max_imf,
+                'wavelet': self.wavelet, 'wtd_level': self.wtd_level,
+                'sa_iterations': self.sa_iterations, 'epochs': self.epochs,
+                'learning_rate': self.learning_rate, 'max_points': self.max_points,
+                'rate_window_s': self.rate_window_s, 'imf_classes': self.imf_classes,
+                'train_mse_standardised': self.train_mse, 'network': self.net.to_dict(),
+                'temperature_range_c': [float(self.net.x_min[0]), float(self.net.x_max[0])]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild a fitted model from :meth:`to_dict`."""
+        _check_method(cls, d)
+        m = cls(split_hz=float(d['split_hz']), max_imf=int(d['max_imf']), wavelet=d['wavelet'],
+                wtd_level=int(d['wtd_level']), hidden=int(d['network']['hidden']),
+                sa_iterations=int(d['sa_iterations']), epochs=int(d['epochs']),
+                learning_rate=float(d['learning_rate']), max_points=int(d['max_points']),
+                rate_window_s=float(d['rate_window_s']))
+        m.net = _DriftNet.from_dict(d['network'])
+        m.train_mse = d.get('train_mse_standardised')
+        m.imf_classes = d.get('imf_classes')
+        return m
+
+
+#: Every baseline, by its ``--method`` name.
+BASELINES = {cls.name: cls for cls in (RawMethod, WaveletThreshold, BPNetwork, EmdWtdSaBp,
+                                       TemperaturePolynomial, LinearTdT)}

@@ -1,0 +1,772 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Seeded thermal test data: an oven profile, a die lagging it, a gyro bias driven by both.
+
+The experiment of paper 002 (section 4.1): one hour at room temperature, a fast heat to 60 degC,
+one hour there, then down in 10 degC steps to -40 degC with one hour at every step. The oven air
+temperature ``u(t)`` is piecewise linear (:class:`OvenProfile`). The die follows it through one
+first-order thermal lag (a lumped board in oven air)::
+
+    tau dT/dt = u(t) + dT_self - T
+
+solved exactly for piecewise-linear ``u`` between samples (first-order hold), so the die rate is
+exact too: ``dT/dt = (u + dT_self - T) / tau``. The gyro bias of axis i (deg/s) is
+
+    b_i = b0 + c1 d + c2 d^2 + c3 d^3 + k tanh((T - T_k) / w_k) + g dT/dt_nat + h (z - T),
+    d = T - T_ref,
+
+a cubic plus a smooth knee (so that no low-order polynomial is exactly right), a thermal-gradient
+term proportional to the die rate, and an optional hysteresis: ``z`` is the play (backlash)
+operator of half-width r applied to T, so ``z - T`` is -r while heating, +r while cooling, and the
+bias-versus-temperature curve is a loop of height 2 h r. The temperature sensor reads
+``T + N(0, s^2)`` rounded to its LSB (1/256 degC, LSM6DSO32). The gyro adds white rate noise
+(angle random walk N) and a bias-instability-like sum of Gauss-Markov processes.
+
+Time compression ``X`` runs the whole thermal experiment X times faster: oven, lag (tau / X) and
+the gradient term (which uses the rate in uncompressed time, ``dT/dt_nat = dT/dt / X``), so the
+bias-versus-temperature trajectory is the uncompressed one, only faster; the noise is not
+compressed. Every constant is documented on :class:`ThermalModel` and in ``docs/thermal_data.md``.
+"""
+
+from dataclasses import asdict, dataclass, replace
+import json
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from .run import ThermalRun
+from ..core._kernels import JIT_OPTIONS
+from ..errors import ParameterError
+
+DEG = np.pi / 180.0
+#: LSM6DSO32 temperature output sensitivity, 256 LSB/degC (datasheet), i.e. one LSB in degC.
+TEMPERATURE_LSB_C = 1.0 / 256.0
+#: Output rate of the LSM6DSO32 temperature sensor (datasheet: 52 Hz); the driver publishes
+#: ``imu/temperature`` at about this rate.
+TEMPERATURE_RATE_HZ = 52.0
+#: Header stamp of the first sample written to a bag (2023-11-14, any fixed value would do).
+DEFAULT_START_NS = 1_700_000_000 * 1_000_000_000
+
+
+@dataclass(frozen=True)
+class OvenProfile:
+    """
+    The oven set-point of paper 002 section 4.1, piecewise linear in time.
+
+    Room hold, heat to ``peak_c``, hold, then steps of ``step_c`` down to ``low_c``, each held
+    ``hold_s``; the last hold ends the profile. The paper says "quickly heated" and gives no
+    ramp rates: 2 degC/min heating and 1 degC/min cooling are typical of a lab chamber.
+
+    Attributes
+    ----------
+    room_c : float
+        Room temperature at the start (degC).
+    peak_c : float
+        Highest set-point (degC).
+    low_c : float
+        Last set-point (degC).
+    step_c : float
+        Downward step (degC, > 0).
+    hold_s : float
+        Duration of every hold, the room hold included (s).
+    heat_rate_c_s : float
+        Ramp rate from room to peak (degC/s, > 0).
+    cool_rate_c_s : float
+        Ramp rate of every downward step (degC/s, > 0).
+
+    """
+
+    room_c: float = 25.0
+    peak_c: float = 60.0
+    low_c: float = -40.0
+    step_c: float = 10.0
+    hold_s: float = 3600.0
+    heat_rate_c_s: float = 2.0 / 60.0
+    cool_rate_c_s: float = 1.0 / 60.0
+
+    def breakpoints(self):
+        """
+        Return the corners of the profile.
+
+        Returns
+        -------
+        times_s : numpy.ndarray
+            Increasing times (s) from 0.
+        temperatures_c : numpy.ndarray
+            Oven temperature at those times (degC).
+
+        """
+        if not (self.step_c > 0 and self.hold_s > 0 and self.heat_rate_c_s > 0
+                and self.cool_rate_c_s > 0 and self.low_c < self.peak_c):
+            raise ParameterError(f'oven profile needs step, hold and rates > 0 and low < peak, '
+                                 f'got {self}')
+        times = [0.0, self.hold_s]
+        temps = [self.room_c, self.room_c]
+        levels = [self.peak_c]
+        level = self.peak_c
+        while level - self.step_c > self.low_c + 1e-9:
+            level -= self.step_c
+            levels.append(level)
+        levels.append(self.low_c)
+        for i, level in enumerate(levels):
+            rate = self.heat_rate_c_s if i == 0 else self.cool_rate_c_s
+            times.append(times[-1] + abs(level - temps[-1]) / rate)
+            temps.append(level)
+            times.append(times[-1] + self.hold_s)
+            temps.append(level)
+        return np.asarray(times), np.asarray(temps)
+
+    @property
+    def duration_s(self):
+        """float: length of the whole profile (s); 50250 s (13.96 h) with the defaults."""
+        return float(self.breakpoints()[0][-1])
+
+    def temperature_c(self, t_s):
+        """
+        Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times (s) in uncompressed profile time.
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape as ``t_s``.
+
+        """
+        times, temps = self.breakpoints()
+        return np.interp(np.asarray(t_s, dtype=float), times, temps)
+
+
+@dataclass(frozen=True)
+class ThermalModel:
+    """
+    Constants of the simulated device: die lag, bias law, temperature sensor, gyro noise.
+
+    Per-axis values are 3-tuples (x, y, z) or one number for all axes. Magnitudes follow the
+    LSM6DSO32 datasheet where it gives one (zero-rate level change about 0.01 deg/s/degC, rate
+    noise density 3.8 mdps/sqrt(Hz), temperature sensor 256 LSB/degC); the rest are plausible
+    orders of magnitude, stated as such.
+
+    Attributes
+    ----------
+    tau_die_s : float
+        Thermal time constant of the die in oven air (s). 600 s: a small PCB in a chamber.
+    self_heating_c : float
+        Die temperature above the oven air at equilibrium (degC).
+    t_ref_c : float
+        Reference temperature of the bias polynomial (degC).
+    bias_dps : float or 3-tuple
+        Bias at ``t_ref_c`` at rest (deg/s).
+    lin_dps_per_c, quad_dps_per_c2, cubic_dps_per_c3 : float or 3-tuple
+        Polynomial coefficients c1, c2, c3 in (T - t_ref_c): about +-1 deg/s over -40..60 degC.
+    knee_dps : float or 3-tuple
+        Amplitude k of the tanh knee (deg/s).
+    knee_c, knee_width_c : float
+        Centre T_k and width w_k of the knee (degC).
+    gradient_dps_per_c_s : float or 3-tuple
+        g: bias per unit die rate in uncompressed time (deg/s per degC/s); 3 gives 0.05 deg/s
+        while the die cools at 1 degC/min.
+    hysteresis_half_width_c : float
+        r of the play operator (degC); 0 switches hysteresis off.
+    hysteresis_dps_per_c : float or 3-tuple
+        h: bias per degC of (z - T) (deg/s/degC); the loop is 2 h r high.
+    temp_noise_c : float
+        Standard deviation of the temperature sensor's noise (degC).
+    temp_lsb_c : float
+        Temperature sensor resolution (degC); 0 = no rounding.
+    arw_dps_rthz : float
+        White rate noise, the Allan coefficient N (deg/s/sqrt(Hz)): sigma^2(tau) = N^2 / tau.
+    bias_instability_dps : float
+        Target flicker floor B (deg/s): the Gauss-Markov sum's Allan deviation peaks at 0.664 B.
+    bi_corr_times_s : tuple of float
+        Correlation times of the equal-variance Gauss-Markov processes making the floor (s).
+    turn_on_bias_dps : float
+        Run-to-run (turn-on) bias repeatability, standard deviation (deg/s).
+    room_spread_c : float
+        Run-to-run room temperature spread, uniform +- (degC).
+
+    """
+
+    tau_die_s: float = 600.0
+    self_heating_c: float = 2.0
+    t_ref_c: float = 25.0
+    bias_dps: object = (0.20, -0.15, 0.10)
+    lin_dps_per_c: object = (0.010, -0.008, 0.006)
+    quad_dps_per_c2: object = (1.0e-4, 6.0e-5, -8.0e-5)
+    cubic_dps_per_c3: object = (-2.0e-6, 1.5e-6, 1.0e-6)
+    knee_dps: object = (0.03, -0.02, 0.025)
+    knee_c: float = 5.0
+    knee_width_c: float = 8.0
+    gradient_dps_per_c_s: object = (3.0, -2.0, 2.5)
+    hysteresis_half_width_c: float = 1.0
+    hysteresis_dps_per_c: object = (0.004, -0.003, 0.003)
+    temp_noise_c: float = 0.02
+    temp_lsb_c: float = TEMPERATURE_LSB_C
+    arw_dps_rthz: float = 3.8e-3
+    bias_instability_dps: float = 4.0 / 3600.0
+    bi_corr_times_s: tuple = (10.0, 100.0, 1000.0)
+    turn_on_bias_dps: float = 0.005
+    room_spread_c: float = 1.0
+
+    def vec(self, name):
+        """Return per-axis attribute ``name`` as a float array (3,)."""
+        arr = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (3,)).copy()
+        if not np.all(np.isfinite(arr)):
+            raise ParameterError(f'{name} must be finite, got {getattr(self, name)!r}')
+        return arr
+
+    def check(self):
+        """Raise ParameterError naming the first bad constant."""
+        for name in ('tau_die_s', 'knee_width_c'):
+            if not getattr(self, name) > 0:
+                raise ParameterError(f'{name} must be > 0, got {getattr(self, name)!r}')
+        for name in ('hysteresis_half_width_c', 'temp_noise_c', 'temp_lsb_c', 'arw_dps_rthz',
+                     'bias_instability_dps', 'turn_on_bias_dps', 'room_spread_c'):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise ParameterError(f'{name} must be finite and >= 0, got {value!r}')
+        if not all(tc > 0 for tc in self.bi_corr_times_s):
+            raise ParameterError(f'bi_corr_times_s must be > 0, got {self.bi_corr_times_s!r}')
+
+    def bias_rad_s(self, die_c, die_rate_nat_c_s, played_c):
+        """
+        Evaluate the bias law of the module docstring.
+
+        Parameters
+        ----------
+        die_c : array_like
+            Die temperature T (n,), degC.
+        die_rate_nat_c_s : array_like
+            Die rate in uncompressed time (n,), degC/s.
+        played_c : array_like
+            Play-operator output z (n,), degC (equal to ``die_c`` without hysteresis).
+
+        Returns
+        -------
+        numpy.ndarray
+            Bias (n, 3), rad/s.
+
+        """
+        temp = np.asarray(die_c, dtype=float)[:, None]
+        d = temp - self.t_ref_c
+        rate = np.asarray(die_rate_nat_c_s, dtype=float)[:, None]
+        play = np.asarray(played_c, dtype=float)[:, None] - temp
+        b = (self.vec('bias_dps') + d * (self.vec('lin_dps_per_c') + d * (
+            self.vec('quad_dps_per_c2') + d * self.vec('cubic_dps_per_c3')))
+            + self.vec('knee_dps') * np.tanh((temp - self.knee_c) / self.knee_width_c)
+            + self.vec('gradient_dps_per_c_s') * rate
+            + self.vec('hysteresis_dps_per_c') * play)
+        return b * DEG
+
+    def gauss_markov_std_dps(self):
+        """
+        Return the standard deviation q of each Gauss-Markov process (deg/s).
+
+        Chosen so that the closed-form Allan deviation of their sum
+        (:func:`gauss_markov_allan_variance`) peaks at 0.664 B over 0.1 s .. 1e5 s.
+
+        Returns
+        -------
+        float
+
+        """
+        if self.bias_instability_dps == 0 or not self.bi_corr_times_s:
+            return 0.0
+        taus = np.logspace(-1, 5, 600)
+        unit = sum(gauss_markov_allan_variance(taus, 1.0, tc) for tc in self.bi_corr_times_s)
+        return float(0.664 * self.bias_instability_dps / np.sqrt(unit.max()))
+
+
+def gauss_markov_allan_variance(tau_s, std, corr_time_s):
+    """
+    Allan variance of a continuous first-order Gauss-Markov process (closed form).
+
+    ``sigma^2(tau) = q^2 (T/tau)^2 (2 tau/T - 3 + 4 exp(-tau/T) - exp(-2 tau/T))``, which tends
+    to the rate random walk ``(2 q^2 / T) tau / 3`` for tau << T and to white noise
+    ``2 q^2 T / tau`` for tau >> T.
+
+    Parameters
+    ----------
+    tau_s : array_like
+        Averaging times (s, > 0).
+    std : float
+        Process standard deviation q (any rate unit; the result is in its square).
+    corr_time_s : float
+        Correlation time T (s).
+
+    Returns
+    -------
+    numpy.ndarray
+
+    """
+    x = np.asarray(tau_s, dtype=float) / corr_time_s
+    bracket = 2 * x - 3 + 4 * np.exp(-x) - np.exp(-2 * x)
+    # the bracket cancels to (2/3) x^3 for small x; use the series there
+    small = x < 1e-3
+    bracket = np.where(small, (2.0 / 3.0) * x ** 3 - 0.5 * x ** 4, bracket)
+    return std ** 2 * bracket / x ** 2
+
+
+@numba.njit(**JIT_OPTIONS)
+def _lag_play(t, u, tau, r, t0, u0, y0, z0, y_out, z_out):  # pragma: no cover - compiled
+    """
+    First-order lag of a piecewise-linear input (exact), then the play operator of half-width r.
+
+    Between samples the input is linear, u(s) = u_prev + slope (s - t_prev), so
+    y(t) = u(t) - slope tau + (y_prev - u_prev + slope tau) exp(-(t - t_prev) / tau).
+    z = min(max(z_prev, y - r), y + r).
+    """
+    tp = t0
+    up = u0
+    yp = y0
+    zp = z0
+    for k in range(t.shape[0]):
+        h = t[k] - tp
+        if h > 0.0:
+            slope = (u[k] - up) / h
+            a = np.exp(-h / tau)
+            yp = a * (yp - up + slope * tau) + u[k] - slope * tau
+        zp = min(max(zp, yp - r), yp + r)
+        y_out[k] = yp
+        z_out[k] = zp
+        tp = t[k]
+        up = u[k]
+
+
+@dataclass(frozen=True)
+class ThermalSamples:
+    """
+    What :meth:`ThermalStream.step` returns for a batch of sample times.
+
+    Attributes
+    ----------
+    oven_c : numpy.ndarray
+        Oven air temperature (n,), degC.
+    die_c : numpy.ndarray
+        True die temperature (n,), degC.
+    die_rate_c_s : numpy.ndarray
+        True die rate (n,), degC per (compressed, i.e. real) second.
+    played_c : numpy.ndarray
+        Play-operator output z (n,), degC.
+    bias_rad_s : numpy.ndarray
+        Thermal bias (n, 3), rad/s.
+
+    """
+
+    oven_c: np.ndarray
+    die_c: np.ndarray
+    die_rate_c_s: np.ndarray
+    played_c: np.ndarray
+    bias_rad_s: np.ndarray
+
+
+class ThermalStream:
+    """
+    The oven, the die and the thermal bias, evaluated batch by batch with state carried over.
+
+    The same times give the same values whatever the batch sizes (the recursion runs sample by
+    sample). Used by :func:`simulate_run` (one batch) and by the Portenta emulator (many).
+
+    Parameters
+    ----------
+    model : ThermalModel, optional
+        Device constants (defaults if None).
+    profile : OvenProfile, optional
+        Oven profile (defaults if None).
+    compress : float, keyword-only
+        Time compression X (>= 1 speeds up; any value > 0 allowed).
+    room_c : float, optional, keyword-only
+        Overrides ``profile.room_c`` (run-to-run room temperature).
+
+    """
+
+    def __init__(self, model=None, profile=None, *, compress=1.0, room_c=None):
+        self.model = ThermalModel() if model is None else model
+        self.model.check()
+        profile = OvenProfile() if profile is None else profile
+        if room_c is not None:
+            profile = replace(profile, room_c=float(room_c))
+        self.profile = profile
+        self._times, self._temps = profile.breakpoints()
+        if not (np.isfinite(compress) and compress > 0):
+            raise ParameterError(f'compress must be finite and > 0, got {compress!r}')
+        self.compress = float(compress)
+        self.tau_s = self.model.tau_die_s / self.compress
+        self._state = None
+
+    @property
+    def duration_s(self):
+        """float: length of the compressed profile (s)."""
+        return float(self._times[-1]) / self.compress
+
+    def oven_c(self, t_s):
+        """Oven temperature (degC) at real times ``t_s`` (s), self-heating not included."""
+        return np.interp(np.asarray(t_s, dtype=float) * self.compress, self._times, self._temps)
+
+    def step(self, t_s):
+        """
+        Advance to the times ``t_s`` and return the thermal state there.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Real times (s), non-decreasing and not before the previous batch's last time. The
+            die starts in equilibrium with the oven at the first time given.
+
+        Returns
+        -------
+        ThermalSamples
+
+        """
+        t = np.ascontiguousarray(t_s, dtype=float).reshape(-1)
+        u = self.oven_c(t) + self.model.self_heating_c
+        y = np.empty_like(t)
+        z = np.empty_like(t)
+        if t.size:
+            if self._state is None:
+                self._state = (t[0], u[0], u[0], u[0])
+            if t[0] < self._state[0] or np.any(np.diff(t) < 0):
+                raise ParameterError('ThermalStream.step needs non-decreasing times')
+            _lag_play(t, u, self.tau_s, float(self.model.hysteresis_half_width_c), *self._state,
+                      y, z)
+            self._state = (t[-1], u[-1], y[-1], z[-1])
+        rate = (u - y) / self.tau_s
+        bias = self.model.bias_rad_s(y, rate / self.compress, z)
+        return ThermalSamples(oven_c=u - self.model.self_heating_c, die_c=y, die_rate_c_s=rate,
+                              played_c=z, bias_rad_s=bias)
+
+    def measure_c(self, die_c, rng):
+        """
+        Temperature sensor reading: die temperature plus noise, rounded to the LSB.
+
+        Parameters
+        ----------
+        die_c : array_like
+            True die temperature (n,), degC.
+        rng : numpy.random.Generator
+            Consumed one normal draw per sample.
+
+        Returns
+        -------
+        numpy.ndarray
+            Reading (n,), degC.
+
+        """
+        die = np.asarray(die_c, dtype=float)
+        reading = die + rng.standard_normal(die.shape) * self.model.temp_noise_c
+        lsb = self.model.temp_lsb_c
+        return np.round(reading / lsb) * lsb if lsb > 0 else reading
+
+
+def gyro_noise_rad_s(n, rate_hz, model, rng):
+    """
+    White rate noise plus the Gauss-Markov sum of the bias-instability floor.
+
+    White: per-sample standard deviation ``N sqrt(rate_hz)`` (so sigma^2(tau) = N^2 / tau).
+    Gauss-Markov: ``x[k+1] = phi x[k] + sqrt(1 - phi^2) q e[k]``, ``phi = exp(-1/(rate_hz T))``,
+    started from its stationary distribution (exact sampling of the continuous process).
+
+    Parameters
+    ----------
+    n : int
+        Samples.
+    rate_hz : float
+        Sample rate (Hz).
+    model : ThermalModel
+        Noise constants (``arw_dps_rthz``, ``bias_instability_dps``, ``bi_corr_times_s``).
+    rng : numpy.random.Generator
+        Random stream (children are spawned from it).
+
+    Returns
+    -------
+    numpy.ndarray
+        Noise (n, 3), rad/s.
+
+    """
+    from scipy.signal import lfilter
+
+    white_rng, gm_rng = rng.spawn(2)
+    noise = white_rng.standard_normal((n, 3)) * (model.arw_dps_rthz * np.sqrt(rate_hz))
+    q = model.gauss_markov_std_dps()
+    if q > 0 and n:
+        for corr_time, sub in zip(model.bi_corr_times_s, gm_rng.spawn(len(model.bi_corr_times_s))):
+            phi = np.exp(-1.0 / (rate_hz * corr_time))
+            e = sub.standard_normal((n, 3)) * (q * np.sqrt(1.0 - phi * phi))
+            x0 = sub.standard_normal(3) * q
+            noise += lfilter([1.0], [1.0, -phi], e, axis=0, zi=(phi * x0)[None, :])[0]
+    return noise * DEG
+
+
+@dataclass(frozen=True)
+class ThermalTruth:
+    """
+    What a simulated run really contained (the ThermalRun holds only what a sensor reports).
+
+    Attributes
+    ----------
+    oven_c, die_c, die_rate_c_s : numpy.ndarray
+        (n,) oven air (degC), die (degC) and die rate (degC/s, real time) at every sample.
+    drift_rad_s : numpy.ndarray
+        (n, 3) the thermal bias plus the turn-on bias: everything in the gyro output but noise.
+    noise_rad_s : numpy.ndarray
+        (n, 3) white plus Gauss-Markov noise.
+    temperature_index : numpy.ndarray
+        Indices of the samples at which the temperature sensor was read (Temperature messages).
+    temperature_reading_c : numpy.ndarray
+        The readings at those samples (degC).
+    room_c : float
+        Room temperature of this run (degC).
+    turn_on_bias_rad_s : numpy.ndarray
+        (3,) this run's turn-on bias, rad/s (included in ``drift_rad_s``).
+    compress : float
+        Time compression X.
+
+    """
+
+    oven_c: np.ndarray
+    die_c: np.ndarray
+    die_rate_c_s: np.ndarray
+    drift_rad_s: np.ndarray
+    noise_rad_s: np.ndarray
+    temperature_index: np.ndarray
+    temperature_reading_c: np.ndarray
+    room_c: float
+    turn_on_bias_rad_s: np.ndarray
+    compress: float
+
+
+def resolve_timing(profile, *, hours=None, compress=None):
+    """
+    Turn ``hours`` and ``compress`` into (duration_s, compress).
+
+    Neither: the whole profile in real time. ``hours`` only: the profile compressed to fill it.
+    ``compress`` only: the compressed profile's length. Both: ``hours`` long with that
+    compression (the oven holds its last set-point past the profile's end, or the run stops
+    early).
+
+    Parameters
+    ----------
+    profile : OvenProfile
+        The profile whose natural length is compressed.
+    hours : float, optional, keyword-only
+        Run length (h).
+    compress : float, optional, keyword-only
+        Time compression X (> 0).
+
+    Returns
+    -------
+    tuple of float
+
+    """
+    natural = profile.duration_s
+    if hours is not None and not (np.isfinite(hours) and hours > 0):
+        raise ParameterError(f'hours must be > 0, got {hours!r}')
+    if compress is not None and not (np.isfinite(compress) and compress > 0):
+        raise ParameterError(f'compress must be > 0, got {compress!r}')
+    if hours is None and compress is None:
+        return natural, 1.0
+    if compress is None:
+        return hours * 3600.0, natural / (hours * 3600.0)
+    if hours is None:
+        return natural / compress, float(compress)
+    return hours * 3600.0, float(compress)
+
+
+def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, profile=None,
+                 temperature_rate_hz=TEMPERATURE_RATE_HZ, name=''):
+    """
+    Simulate one static oven run: the ThermalRun a recording would give, and the truth.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator, keyword-only
+        Parent of every random stream (room temperature, turn-on bias, gyro noise, sensor noise).
+    rate_hz : float, keyword-only
+        Gyro sample rate (Hz).
+    hours, compress : float, optional, keyword-only
+        Run length and time compression (see :func:`resolve_timing`).
+    model : ThermalModel, optional, keyword-only
+        Device constants (defaults if None).
+    profile : OvenProfile, optional, keyword-only
+        Oven profile (defaults if None).
+    temperature_rate_hz : float, keyword-only
+        The temperature is read at every m-th sample, ``m = max(1, round(rate_hz / this))``
+        (the driver publishes it the same way); the run's temperature is those readings
+        linearly interpolated onto every sample, as a bag reader would do.
+    name : str, keyword-only
+        Label of the run.
+
+    Returns
+    -------
+    run : ThermalRun
+    truth : ThermalTruth
+
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
+    if not (np.isfinite(rate_hz) and rate_hz > 0):
+        raise ParameterError(f'rate_hz must be > 0, got {rate_hz!r}')
+    if not (np.isfinite(temperature_rate_hz) and temperature_rate_hz > 0):
+        raise ParameterError(f'temperature_rate_hz must be > 0, got {temperature_rate_hz!r}')
+    model = ThermalModel() if model is None else model
+    model.check()
+    profile = OvenProfile() if profile is None else profile
+    duration_s, compress = resolve_timing(profile, hours=hours, compress=compress)
+    n = int(np.floor(duration_s * rate_hz))
+    if n < 2:
+        raise ParameterError(f'run of {duration_s} s at {rate_hz} Hz has fewer than 2 samples')
+    run_rng, noise_rng, temp_rng = rng.spawn(3)
+    room_c = profile.room_c + run_rng.uniform(-1.0, 1.0) * model.room_spread_c
+    turn_on = run_rng.standard_normal(3) * model.turn_on_bias_dps * DEG
+    t = np.arange(n) / rate_hz
+    stream = ThermalStream(model, profile, compress=compress, room_c=room_c)
+    th = stream.step(t)
+    drift = th.bias_rad_s + turn_on
+    noise = gyro_noise_rad_s(n, rate_hz, model, noise_rng)
+    m = max(1, int(round(rate_hz / temperature_rate_hz)))
+    idx = np.arange(0, n, m)
+    reading = stream.measure_c(th.die_c[idx], temp_rng)
+    run = ThermalRun(t_s=t, gyro_rad_s=drift + noise,
+                     temperature_c=np.interp(t, t[idx], reading), rate_hz=float(rate_hz),
+                     name=name)
+    truth = ThermalTruth(oven_c=th.oven_c, die_c=th.die_c, die_rate_c_s=th.die_rate_c_s,
+                         drift_rad_s=drift, noise_rad_s=noise, temperature_index=idx,
+                         temperature_reading_c=reading, room_c=float(room_c),
+                         turn_on_bias_rad_s=turn_on, compress=compress)
+    return run, truth
+
+
+def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START_NS,
+                  imu_topic='/imu/data_raw', temperature_topic='/imu/temperature',
+                  frame_id='imu_link'):
+    """
+    Write a simulated run as a rosbag2: ``sensor_msgs/Imu`` and ``sensor_msgs/Temperature``.
+
+    The Imu messages carry the gyro samples and a static +1 g on z (REP-103, lying flat); the
+    Temperature messages carry the sensor readings at ``truth.temperature_index`` (variance 0,
+    unknown, as the driver publishes by default). Header stamps are ``start_ns + t_s``; bag
+    time equals the stamp.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Bag directory to create (must not exist).
+    run : ThermalRun
+        The run (gyro samples and stamps).
+    truth : ThermalTruth
+        Its truth (the temperature readings and where they were taken).
+    storage : {'sqlite3', 'mcap'}, keyword-only
+        rosbag2 storage plugin.
+    start_ns : int, keyword-only
+        Stamp of the first sample (ns).
+    imu_topic : str, keyword-only
+        Imu topic.
+    temperature_topic : str, keyword-only
+        Temperature topic.
+    frame_id : str, keyword-only
+        ``header.frame_id`` of every message.
+
+    Returns
+    -------
+    pathlib.Path
+        The bag directory.
+
+    """
+    from ..bag import ImuBagWriter
+
+    stamps = start_ns + np.round(run.t_s * 1e9).astype(np.int64)
+    accel = np.array([0.0, 0.0, 9.80665])
+    chunk = 200_000
+    with ImuBagWriter(path, storage=storage, imu_topic=imu_topic,
+                      temperature_topic=temperature_topic, frame_id=frame_id) as writer:
+        for lo in range(0, stamps.size, chunk):
+            hi = min(lo + chunk, stamps.size)
+            writer.write_imu(stamps[lo:hi], run.gyro_rad_s[lo:hi],
+                             np.broadcast_to(accel, (hi - lo, 3)))
+        t_stamps = stamps[truth.temperature_index]
+        for lo in range(0, t_stamps.size, chunk):
+            writer.write_temperature(t_stamps[lo:lo + chunk],
+                                     truth.temperature_reading_c[lo:lo + chunk],
+                                     variance=0.0)
+    return Path(path)
+
+
+def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
+                     storage='sqlite3', model=None, profile=None,
+                     temperature_rate_hz=TEMPERATURE_RATE_HZ):
+    """
+    Simulate two runs of one device (train and test) and write them as rosbag2 recordings.
+
+    Both runs share the device (``model``) and the oven profile, and differ in everything a
+    second oven run differs in: noise, room temperature, turn-on bias (seed streams 0 and 1 of
+    ``numpy.random.SeedSequence(seed)``). ``out_dir`` receives ``train/`` and ``test/`` (bags),
+    ``train_truth.npz`` and ``test_truth.npz`` (the :class:`ThermalTruth` arrays) and
+    ``simulation.json`` (every setting, so the runs can be reproduced).
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Output directory (created; ``train/`` and ``test/`` must not exist).
+    seed : int, keyword-only
+        Seed of both runs.
+    hours, compress : float, optional, keyword-only
+        See :func:`resolve_timing`.
+    rate_hz : float, keyword-only
+        Gyro sample rate (Hz).
+    storage : {'sqlite3', 'mcap'}, keyword-only
+        rosbag2 storage plugin.
+    model : ThermalModel, optional, keyword-only
+        Device constants (defaults if None).
+    profile : OvenProfile, optional, keyword-only
+        Oven profile (defaults if None).
+    temperature_rate_hz : float, keyword-only
+        Rate of the Temperature messages (see :func:`simulate_run`).
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        ``(train_bag, test_bag)``.
+
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    model = ThermalModel() if model is None else model
+    profile = OvenProfile() if profile is None else profile
+    paths = []
+    duration_s, comp = resolve_timing(profile, hours=hours, compress=compress)
+    children = np.random.SeedSequence(seed).spawn(2)
+    for label, child in zip(('train', 'test'), children):
+        run, truth = simulate_run(rng=np.random.default_rng(child), rate_hz=rate_hz, hours=hours,
+                                  compress=compress, model=model, profile=profile,
+                                  temperature_rate_hz=temperature_rate_hz,
+                                  name=f'{label} (seed {seed})')
+        paths.append(write_run_bag(out / label, run, truth, storage=storage))
+        np.savez_compressed(out / f'{label}_truth.npz', t_s=run.t_s, oven_c=truth.oven_c,
+                            die_c=truth.die_c, die_rate_c_s=truth.die_rate_c_s,
+                            drift_rad_s=truth.drift_rad_s, noise_rad_s=truth.noise_rad_s,
+                            temperature_index=truth.temperature_index,
+                            temperature_reading_c=truth.temperature_reading_c,
+                            room_c=truth.room_c, turn_on_bias_rad_s=truth.turn_on_bias_rad_s,
+                            compress=truth.compress)
+    settings = {'seed': seed, 'rate_hz': rate_hz, 'hours': hours, 'duration_s': duration_s,
+                'compress': comp, 'storage': storage, 'temperature_rate_hz': temperature_rate_hz,
+                'model': asdict(model), 'profile': asdict(profile)}
+    (out / 'simulation.json').write_text(json.dumps(settings, indent=2, default=list) + '\n')
+    return tuple(paths)

@@ -614,7 +614,8 @@ def _cmd_simulate(args, argv):
     options = {k: v for k, v in (('hours', args.hours), ('rate_hz', args.rate_hz))
                if v is not None}
     result = write_train_test(out, seed=args.seed, **options)
-    print(f'wrote train/test recordings to {out}: {result}')
+    paths = result if isinstance(result, (list, tuple)) else [result]
+    print(f'wrote {", ".join(str(p) for p in paths)}')
     return 0
 
 

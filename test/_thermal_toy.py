@@ -134,3 +134,27 @@ def write_thermal_bag(path, t_s, gyro_rad_s, temp_t_s, temperature_c, *, storage
                                           'std_msgs/msg/String')
                 w._writer.write(conn, t0_ns + i, raw)
     return path, accel
+
+
+class HardThreshold:
+    """Zero every sample with |x| <= k sigma (sigma fixed at fit); non-linear, causal."""
+
+    name = 'toy_threshold'
+    causal = True
+
+    def __init__(self, threshold_rad_s=3e-3):
+        self.threshold_rad_s = threshold_rad_s
+
+    def fit(self, run, *, rng):
+        pass
+
+    def apply(self, run):
+        g = np.asarray(run.gyro_rad_s, dtype=float)
+        return np.where(np.abs(g) > self.threshold_rad_s, g, 0.0)
+
+    def to_dict(self):
+        return {'threshold_rad_s': self.threshold_rad_s}
+
+    @classmethod
+    def from_dict(cls, d):
+        return cls(d['threshold_rad_s'])

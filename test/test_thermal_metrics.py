@@ -16,7 +16,7 @@
 
 import math
 
-from _thermal_toy import FirstOrderLowPass, Identity
+from _thermal_toy import FirstOrderLowPass, HardThreshold, Identity
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.thermal.metrics import (evaluate_method, frequency_response, make_injection,
                                             noise_metrics, step_response)
@@ -134,6 +134,26 @@ def test_slow_lowpass_arw_gain_is_called_bandwidth_removal():
     assert v['arw_from_bandwidth'] and v['measured_causal']
     assert 'removing bandwidth' in v['text']
     assert doc['axes']['z']['bandwidth']['minus_3db_bound'] == 'below'
+    # smoothed sample to sample: ADEV(tau0) ~ a sigma / sqrt(2) = 1e-3 sigma sits far below
+    # ADEV at the longest tau (~8e-3 sigma), so the "bias stability" is read at the shortest tau
+    assert doc['axes']['z']['processed']['bias_stability_at_shortest_tau']
+    assert not doc['axes']['z']['raw']['bias_stability_at_shortest_tau']
+    assert 'says nothing about the bias' in v['text']
+
+
+def test_threshold_passes_large_motion_and_removes_small_motion():
+    # White noise of 1e-3 rad/s zeroed below 3e-3 rad/s; the 1 deg/s (17 sigma) injection
+    # passes, the same injection at 1 sigma mostly does not.
+    run = _run(int(300 * 100.0), 100.0, sigma=1e-3)
+    doc, _, curves = evaluate_method(HardThreshold(3e-3), run, f_lo_hz=0.5)
+    ax = doc['axes']['x']
+    assert ax['bandwidth']['low_band_min_gain'] > 0.9
+    assert ax['bandwidth_small_signal']['low_band_min_gain'] < 0.5
+    assert doc['injection']['small_signal_amplitude_deg_s'] == pytest.approx(1e-3 * DEG,
+                                                                             rel=0.02)
+    v = ax['verdict']
+    assert v['arw_from_bandwidth'] and 'small motion goes with the noise' in v['text']
+    assert v['small_signal_low_band_min_gain'] < 0.5
 
 
 def test_zero_phase_filter_is_caught_responding_before_the_step():

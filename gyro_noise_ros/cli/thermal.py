@@ -62,6 +62,11 @@ DEFINITIONS = {
                     '(bound: measured / below / above the measured band)',
     'step_precursor': 'largest change of the step response in the last fifth of the window '
                       'before the step (> 0.05: non-causal)',
+    'bandwidth_small_signal': 'the same injection scaled to the white-noise sigma of the run '
+                              '(std of first differences / sqrt 2): what a nonlinear method '
+                              'does to motion the size of the noise',
+    'arw_from_bandwidth': 'ARW down by more than 10 % while motion at 0.1-1 Hz (large or '
+                          'noise-sized) or a held step passes with gain below 0.9',
 }
 
 
@@ -83,6 +88,8 @@ def _add_score_options(p):
     p.add_argument('--f-hi-hz', type=float, default=DEFAULT_F_HI_HZ,
                    help=f'highest frequency of the injected chirp, Hz ({DEFAULT_F_HI_HZ:g}; '
                         'capped at 0.36 x the sample rate)')
+    p.add_argument('--no-small-signal', action='store_true',
+                   help='skip the second injection at the size of the noise (saves one apply)')
     p.add_argument('--range-margin-c', type=float, default=registry.DEFAULT_RANGE_MARGIN_C,
                    help='refuse test temperatures further than this outside the trained range, '
                         f'degC ({registry.DEFAULT_RANGE_MARGIN_C:g}; inf disables)')
@@ -285,9 +292,10 @@ def _out_dir(path):
 # ---------------------------------------------------------------------------------------------
 # apply
 
-def _score(method, run, args):
+def _score(method, run, args, processed):
     return evaluate_method(method, run, amplitude_rad_s=args.amplitude_deg_s / RAD2DEG,
-                           f_lo_hz=args.f_lo_hz, f_hi_hz=args.f_hi_hz)
+                           f_lo_hz=args.f_lo_hz, f_hi_hz=args.f_hi_hz, processed=processed,
+                           small_signal=not args.no_small_signal)
 
 
 def _cmd_apply(args, argv):
@@ -304,9 +312,7 @@ def _cmd_apply(args, argv):
     started = time.monotonic()
     processed = np.asarray(model.method.apply(run), dtype=float)
     apply_s = time.monotonic() - started
-    scored, processed, curves = evaluate_method(
-        model.method, run, amplitude_rad_s=args.amplitude_deg_s / RAD2DEG, f_lo_hz=args.f_lo_hz,
-        f_hi_hz=args.f_hi_hz, processed=processed)
+    scored, processed, curves = _score(model.method, run, args, processed)
     in_sample = str(bag.path) in model.training.sources or str(Path(args.bag).resolve()) in {
         str(Path(s).resolve()) for s in model.training.sources}
     files = []
@@ -353,13 +359,16 @@ def _apply_figures(out, run, processed, method, curves):
     figs.append(('Allan deviation raw and processed (cf. Fig. 19)',
                  report.plot_allan(out / 'fig19_allan.png', allan,
                                    title=f'{run.name}: Allan deviation, raw and {name}')))
-    figs.append(('Response to injected motion: gain, phase, group delay',
-                 report.plot_bandwidth(out / 'bandwidth.png',
-                                       {name: {a: c['frequency'] for a, c in curves.items()}},
+    responses = {name: {a: c['frequency'] for a, c in curves.items()}}
+    steps = {name: {a: c['step'] for a, c in curves.items()}}
+    if 'frequency_small' in curves['x']:
+        responses[f'{name} small'] = {a: c['frequency_small'] for a, c in curves.items()}
+        steps[f'{name} small'] = {a: c['step_small'] for a, c in curves.items()}
+    figs.append(('Response to injected motion (large and noise-sized): gain, phase, group delay',
+                 report.plot_bandwidth(out / 'bandwidth.png', responses,
                                        title=f'{name}: response to an injected chirp')))
     figs.append(('Mean normalised step response (t < 0: before the step)',
-                 report.plot_steps(out / 'steps.png',
-                                   {name: {a: c['step'] for a, c in curves.items()}},
+                 report.plot_steps(out / 'steps.png', steps,
                                    title=f'{name}: response to injected steps')))
     return figs
 
@@ -371,7 +380,8 @@ def _axis_rows(axes):
         rows.append((axis, raw['arw_deg_sqrt_h'], proc['arw_deg_sqrt_h'],
                      raw['bias_stability_deg_h'], proc['bias_stability_deg_h'],
                      raw['residual_drift_deg_s'], proc['residual_drift_deg_s'],
-                     _bw_cell(bw), bw['step_delay_50_s'], v['verdict']['live_capable']))
+                     _bw_cell(bw), v['verdict']['small_signal_low_band_min_gain'],
+                     bw['step_delay_50_s'], v['verdict']['live_capable']))
     return rows
 
 
@@ -384,8 +394,9 @@ def _bw_cell(bw):
 _AXIS_HEADER = ['axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
                 'bias stability raw (deg/h)', 'bias stability processed (deg/h)',
                 'residual drift raw (deg/s)', 'residual drift processed (deg/s)',
-                '-3 dB (Hz)', 'step delay 50 % (s)', 'live-capable']
-_AXIS_SPECS = ['', '.4g', '.4g', '.4g', '.4g', '.4g', '.4g', '', '.3g', '']
+                '-3 dB (Hz)', 'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
+                'live-capable']
+_AXIS_SPECS = ['', '.4g', '.4g', '.4g', '.4g', '.4g', '.4g', '', '.3g', '.3g', '']
 
 
 def _apply_md(doc, figs, out):
@@ -407,11 +418,16 @@ def _apply_md(doc, figs, out):
             f'{"yes" if doc["causal"] else "no (offline only)"}.\n{warn}\n'
             + report.table_markdown(_AXIS_HEADER, _axis_rows(doc['axes']), _AXIS_SPECS)
             + f'\nBandwidth cost measured with a chirp {inj["f_lo_hz"]:g}..'
-              f'{inj["f_hi_hz"]:.3g} Hz '
-              f'and steps of {inj["amplitude_deg_s"]:.3g} deg/s added to the run.\n\n'
+              f'{inj["f_hi_hz"]:.3g} Hz and steps of {inj["amplitude_deg_s"]:.3g} deg/s added '
+              f'to the run{_small_text(inj)}.\n\n'
             + verdicts + '\n## Definitions\n\n'
             + ''.join(f'- `{k}`: {v}\n' for k, v in doc['definitions'].items())
             + _fig_md(figs, out))
+
+
+def _small_text(inj):
+    amp = inj.get('small_signal_amplitude_deg_s')
+    return '' if amp is None else f', and again at {amp:.3g} deg/s (the size of the noise)'
 
 
 def _print_axes(doc):
@@ -467,9 +483,7 @@ def _cmd_compare(args, argv):
             started = time.monotonic()
             processed = np.asarray(model.method.apply(test), dtype=float)
             apply_s = time.monotonic() - started
-            doc, processed, cur = evaluate_method(
-                model.method, test, amplitude_rad_s=args.amplitude_deg_s / RAD2DEG,
-                f_lo_hz=args.f_lo_hz, f_hi_hz=args.f_hi_hz, processed=processed)
+            doc, processed, cur = _score(model.method, test, args, processed)
         except Exception as err:  # noqa: BLE001 - reported in the table, see below
             # One method failing (missing module, a fit that diverges, a bug in it) must not
             # hide the others; its error is reported in compare.json and compare.md.
@@ -527,9 +541,10 @@ def _best(results):
 
 
 _COMPARE_HEADER = ['method', 'axis', 'ARW (deg/sqrt(h))', 'bias stability (deg/h)',
-                   'residual drift (deg/s)', '-3 dB (Hz)', 'step delay 50 % (s)',
-                   'settled step gain', 'live-capable', 'ARW from removed bandwidth']
-_COMPARE_SPECS = ['', '', '.4g', '.4g', '.4g', '', '.3g', '.3g', '', '']
+                   'residual drift (deg/s)', '-3 dB (Hz)', 'small-signal min gain 0.1-1 Hz',
+                   'step delay 50 % (s)', 'settled step gain', 'live-capable',
+                   'ARW from removed bandwidth']
+_COMPARE_SPECS = ['', '', '.4g', '.4g', '.4g', '', '.3g', '.3g', '.3g', '', '']
 
 
 def _compare_rows(results):
@@ -538,12 +553,13 @@ def _compare_rows(results):
     for axis, v in first['axes'].items():
         raw = v['raw']
         rows.append(('(raw input)', axis, raw['arw_deg_sqrt_h'], raw['bias_stability_deg_h'],
-                     raw['residual_drift_deg_s'], '', None, None, None, None))
+                     raw['residual_drift_deg_s'], '', None, None, None, None, None))
     for name, doc in results.items():
         for axis, v in doc['axes'].items():
             proc, bw, vd = v['processed'], v['bandwidth'], v['verdict']
             rows.append((name, axis, proc['arw_deg_sqrt_h'], proc['bias_stability_deg_h'],
-                         proc['residual_drift_deg_s'], _bw_cell(bw), bw['step_delay_50_s'],
+                         proc['residual_drift_deg_s'], _bw_cell(bw),
+                         vd['small_signal_low_band_min_gain'], bw['step_delay_50_s'],
                          bw['step_settled_gain'], vd['live_capable'], vd['arw_from_bandwidth']))
     return rows
 
@@ -552,8 +568,8 @@ def _write_csv(path, rows):
     import csv
 
     keys = ['method', 'axis', 'arw_deg_sqrt_h', 'bias_stability_deg_h', 'residual_drift_deg_s',
-            'minus_3db_hz', 'step_delay_50_s', 'step_settled_gain', 'live_capable',
-            'arw_from_bandwidth']
+            'minus_3db_hz', 'small_signal_low_band_min_gain', 'step_delay_50_s',
+            'step_settled_gain', 'live_capable', 'arw_from_bandwidth']
     with open(path, 'w', newline='') as fh:
         w = csv.writer(fh)
         w.writerow(keys)

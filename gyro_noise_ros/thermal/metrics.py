@@ -55,7 +55,7 @@ from ..errors import InputDataError, ParameterError
 __all__ = ['ARW_SLOPE_TOLERANCE', 'DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
-           'noise_metrics', 'step_response', 'verdict']
+           'noise_metrics', 'step_response', 'verdict', 'white_noise_sigma']
 
 RAD2DEG = 180.0 / math.pi
 #: Largest |measured slope + 1/2| around tau = 1 s for the ARW read-out to count as on the slope.
@@ -94,6 +94,9 @@ class NoiseMetrics:
         Its averaging time (s).
     bias_stability_at_longest_tau : bool
         The minimum is the longest tau (an upper bound only).
+    bias_stability_at_shortest_tau : bool
+        The minimum is the shortest tau (one sample): the output is smoothed at the sample scale
+        and the number says nothing about the bias.
     residual_drift_deg_s : float
         Std of the 60-s means (deg/s); NaN with fewer than two windows.
     drift_windows : int
@@ -109,6 +112,7 @@ class NoiseMetrics:
     bias_stability_deg_h: float
     bias_stability_tau_s: float
     bias_stability_at_longest_tau: bool
+    bias_stability_at_shortest_tau: bool
     residual_drift_deg_s: float
     drift_windows: int
     mean_deg_s: float
@@ -181,6 +185,7 @@ def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
         bias_stability_deg_h=mini.adev_min_rad_per_s * RAD2DEG * 3600.0,
         bias_stability_tau_s=mini.tau_s,
         bias_stability_at_longest_tau=bool(mini.at_longest_tau),
+        bias_stability_at_shortest_tau=bool(mini.tau_s <= tau[0]),
         residual_drift_deg_s=drift, drift_windows=int(k),
         mean_deg_s=float(np.mean(x) * RAD2DEG)), (tau, adev)
 
@@ -521,7 +526,23 @@ def _axis_bandwidth(injection, diff, rate_hz):
     return fr, st
 
 
-def verdict(raw, processed, fr, st, *, causal):
+def _band_text(fr):
+    if fr.frequency_hz.size == 0:
+        return 'no band measured'
+    if fr.minus_3db_bound == 'measured':
+        return f'-3 dB at {fr.minus_3db_hz:.3g} Hz'
+    return (f'-3 dB {fr.minus_3db_bound} the measured band {fr.frequency_hz[0]:.3g}..'
+            f'{fr.frequency_hz[-1]:.3g} Hz')
+
+
+def _low_gain(fr):
+    # ADEV at tau = 1 s is most sensitive to motion between ~0.1 and ~1 Hz (its transfer function
+    # peaks near 0.37 / tau); attenuation there shows up as lower "ARW".
+    band = (fr.frequency_hz >= 0.1) & (fr.frequency_hz <= 1.0)
+    return float(fr.gain[band].min()) if band.any() else math.nan
+
+
+def verdict(raw, processed, fr, st, *, causal, small=None):
     """
     Say in plain words what a method did to the noise, to the drift and to motion.
 
@@ -535,35 +556,48 @@ def verdict(raw, processed, fr, st, *, causal):
         Response to the steps.
     causal : bool
         What the method declares.
+    small : tuple of (FrequencyResponse, StepResponse, float), optional
+        The same at small amplitude, and that amplitude (rad/s).
 
     Returns
     -------
     dict
-        ``arw_ratio``, ``residual_drift_ratio``, ``arw_from_bandwidth`` (bool),
-        ``measured_causal`` (bool), ``live_capable`` (bool) and ``text`` (sentences).
+        ``arw_ratio``, ``residual_drift_ratio``, ``low_band_min_gain``,
+        ``small_signal_low_band_min_gain``, ``arw_from_bandwidth`` (bool), ``measured_causal``
+        (bool), ``live_capable`` (bool) and ``text`` (sentences).
 
     """
     arw_ratio = processed.arw_deg_sqrt_h / raw.arw_deg_sqrt_h
     drift_ratio = processed.residual_drift_deg_s / raw.residual_drift_deg_s
-    # ADEV at tau = 1 s is most sensitive to motion between ~0.1 and ~1 Hz (its transfer function
-    # peaks near 0.37 / tau); attenuation there shows up as lower "ARW".
-    band = (fr.frequency_hz >= 0.1) & (fr.frequency_hz <= 1.0)
-    low_gain = float(fr.gain[band].min()) if band.any() else math.nan
-    from_bw = bool(arw_ratio < 0.9 and (low_gain < 0.9 or st.settled_gain < 0.9))
+    low_gain = _low_gain(fr)
+    cut = [f'motion at 0.1-1 Hz passed with gain down to {low_gain:.3g}'] if low_gain < 0.9 else []
+    if st.settled_gain < 0.9:
+        cut.append(f'a held step passed with {st.settled_gain:.3g}')
+    small_gain = math.nan
+    if small is not None:
+        s_fr, s_st, s_amp = small
+        small_gain = _low_gain(s_fr)
+        if small_gain < 0.9 or s_st.settled_gain < 0.9:
+            cut.append(f'motion of {s_amp * RAD2DEG:.3g} deg/s (the size of the noise) passed '
+                       f'with gain down to {min(small_gain, s_st.settled_gain):.3g} '
+                       f'({_band_text(s_fr)}): small motion goes with the noise')
+    from_bw = bool(arw_ratio < 0.9 and cut)
     measured_causal = bool(st.precursor <= PRECURSOR_LIMIT)
     text = []
-    bw = (f'-3 dB at {fr.minus_3db_hz:.3g} Hz' if fr.minus_3db_bound == 'measured'
-          else f'-3 dB {fr.minus_3db_bound} the measured band {fr.frequency_hz[0]:.3g}..'
-               f'{fr.frequency_hz[-1]:.3g} Hz' if fr.frequency_hz.size else 'no band measured')
     if from_bw:
-        text.append(f'ARW x{arw_ratio:.3g} comes from removing bandwidth, not noise: motion at '
-                    f'0.1-1 Hz is passed with gain down to {low_gain:.3g}, a held step with '
-                    f'{st.settled_gain:.3g} ({bw}).')
+        text.append(f'ARW x{arw_ratio:.3g} comes from removing bandwidth, not noise: '
+                    f'{"; ".join(cut)} ({_band_text(fr)}).')
     elif arw_ratio < 0.9:
-        text.append(f'ARW x{arw_ratio:.3g} while motion at 0.1-1 Hz keeps gain >= {low_gain:.3g} '
-                    f'({bw}).')
+        text.append(f'ARW x{arw_ratio:.3g} while motion at 0.1-1 Hz keeps gain >= '
+                    f'{low_gain:.3g} ({_band_text(fr)}).')
     else:
-        text.append(f'ARW x{arw_ratio:.3g}: no denoising at tau = 1 s ({bw}).')
+        text.append(f'ARW x{arw_ratio:.3g}: no denoising at tau = 1 s ({_band_text(fr)}).')
+    if not processed.arw_on_slope:
+        text.append(f'The processed ADEV slope near 1 s is {processed.arw_slope:.2f}, not -1/2: '
+                    'its ARW is only ADEV(1 s).')
+    if processed.bias_stability_at_shortest_tau:
+        text.append('Its ADEV minimum is at the shortest tau: the output is smoothed sample to '
+                    'sample, and that "bias stability" says nothing about the bias.')
     text.append(f'Residual drift x{drift_ratio:.3g}.')
     if not measured_causal:
         text.append(f'Responds {st.precursor:.0%} of a step before it happens: non-causal, '
@@ -571,7 +605,8 @@ def verdict(raw, processed, fr, st, *, causal):
     elif not causal:
         text.append('Declared non-causal (offline only).')
     return {'arw_ratio': _num(arw_ratio), 'residual_drift_ratio': _num(drift_ratio),
-            'low_band_min_gain': _num(low_gain), 'arw_from_bandwidth': from_bw,
+            'low_band_min_gain': _num(low_gain),
+            'small_signal_low_band_min_gain': _num(small_gain), 'arw_from_bandwidth': from_bw,
             'measured_causal': measured_causal, 'live_capable': bool(causal and measured_causal),
             'text': ' '.join(text)}
 
@@ -591,7 +626,8 @@ def _run_with(run, gyro):
 
 
 def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
-                    f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, processed=None):
+                    f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, processed=None,
+                    small_signal=True):
     """
     Score a fitted method on a held-out run: noise, drift and bandwidth per axis.
 
@@ -608,6 +644,10 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         Band of the chirp (Hz).
     processed : numpy.ndarray, optional
         ``method.apply(run)`` if already computed.
+    small_signal : bool, keyword-only
+        Also inject the same signal scaled to the white-noise sigma of the run
+        (:func:`white_noise_sigma`) and report ``bandwidth_small_signal``: a nonlinear method
+        that passes a large motion may remove a small one (one more ``apply``).
 
     Returns
     -------
@@ -618,7 +658,8 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         The processed run (n, 3), rad/s.
     curves : dict
         Per axis: ``frequency`` (:class:`FrequencyResponse`), ``step`` (:class:`StepResponse`),
-        ``allan_raw`` and ``allan_processed`` ((tau_s, adev_rad_s) arrays), for figures.
+        ``allan_raw`` and ``allan_processed`` ((tau_s, adev_rad_s) arrays), and with
+        ``small_signal`` ``frequency_small`` and ``step_small``, for figures.
 
     """
     gyro = np.asarray(run.gyro_rad_s, dtype=float)
@@ -628,10 +669,12 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
     if processed is None:
         processed = np.asarray(method.apply(run), dtype=float)
     _check_output(method, processed, n)
-    with_inj = np.asarray(method.apply(_run_with(run, gyro + inj.signal_rad_s[:, None])),
-                          dtype=float)
-    _check_output(method, with_inj, n)
-    diff = with_inj - processed
+    diff = _response(method, run, gyro, processed, inj.signal_rad_s)
+    small_amp = small_diff = None
+    if small_signal:
+        small_amp = white_noise_sigma(gyro)
+        small_diff = _response(method, run, gyro, processed,
+                               inj.signal_rad_s * (small_amp / inj.amplitude_rad_s))
     axes, curves = {}, {}
     for a, name in enumerate('xyz'):
         raw_m, raw_adev = _noise_metrics(gyro[:, a], run.rate_hz, DRIFT_WINDOW_S)
@@ -639,26 +682,25 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         fr, st = _axis_bandwidth(inj, diff[:, a], run.rate_hz)
         curves[name] = {'frequency': fr, 'step': st, 'allan_raw': raw_adev,
                         'allan_processed': proc_adev}
-        axes[name] = {
-            'raw': {k: _num(v) if isinstance(v, float) else v
-                    for k, v in raw_m.as_dict().items()},
-            'processed': {k: _num(v) if isinstance(v, float) else v
-                          for k, v in proc_m.as_dict().items()},
-            'bandwidth': {
-                'minus_3db_hz': fr.minus_3db_hz, 'minus_3db_bound': fr.minus_3db_bound,
-                'gain_at_1hz': _num(fr.gain_at(1.0)) if fr.frequency_hz.size else None,
-                'step_delay_50_s': _num(st.delay_50_s), 'step_rise_time_s': _num(st.rise_time_s),
-                'step_overshoot': _num(st.overshoot), 'step_settled_gain': _num(st.settled_gain),
-                'step_precursor': _num(st.precursor),
-                'frequency_hz': _curve(fr.frequency_hz), 'gain': _curve(fr.gain),
-                'phase_deg': _curve(fr.phase_deg), 'group_delay_s': _curve(fr.group_delay_s),
-                'coherence': _curve(fr.coherence),
-            },
-            'verdict': verdict(raw_m, proc_m, fr, st, causal=bool(method.causal)),
-        }
+        small = None
+        axes[name] = {'raw': _metrics_dict(raw_m), 'processed': _metrics_dict(proc_m),
+                      'bandwidth': _bandwidth_dict(fr, st)}
+        if small_signal:
+            # The same injection scaled to the noise's size: nonlinear methods (thresholds,
+            # decompositions) pass a large motion and remove a small one.
+            s_fr, s_st = _axis_bandwidth(inj, small_diff[:, a] * (inj.amplitude_rad_s
+                                                                  / small_amp), run.rate_hz)
+            small = (s_fr, s_st, small_amp)
+            curves[name].update(frequency_small=s_fr, step_small=s_st)
+            axes[name]['bandwidth_small_signal'] = dict(
+                _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD2DEG)
+        axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
+                                        small=small)
     doc = {
         'method': method.name, 'causal': bool(method.causal),
         'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD2DEG,
+                      'small_signal_amplitude_deg_s': (small_amp * RAD2DEG if small_signal
+                                                       else None),
                       'f_lo_hz': inj.f_lo_hz, 'f_hi_hz': inj.f_hi_hz,
                       'chirp_start_s': inj.chirp.start / run.rate_hz,
                       'chirp_stop_s': inj.chirp.stop / run.rate_hz,
@@ -666,6 +708,56 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         'axes': axes,
     }
     return doc, processed, curves
+
+
+def _response(method, run, gyro, processed, signal):
+    out = np.asarray(method.apply(_run_with(run, gyro + signal[:, None])), dtype=float)
+    _check_output(method, out, gyro.shape[0])
+    return out - processed
+
+
+def _metrics_dict(m):
+    return {k: _num(v) if isinstance(v, float) else v for k, v in m.as_dict().items()}
+
+
+def _delay(v):
+    # a pass-through's 50 % crossing lands on the step time up to rounding (1e-18 s): snap to ns
+    return _num(round(v, 9)) if math.isfinite(v) else None
+
+
+def _bandwidth_dict(fr, st):
+    return {
+        'minus_3db_hz': fr.minus_3db_hz, 'minus_3db_bound': fr.minus_3db_bound,
+        'gain_at_1hz': _num(fr.gain_at(1.0)) if fr.frequency_hz.size else None,
+        'low_band_min_gain': _num(_low_gain(fr)),
+        'step_delay_50_s': _delay(st.delay_50_s), 'step_rise_time_s': _delay(st.rise_time_s),
+        'step_overshoot': _num(st.overshoot), 'step_settled_gain': _num(st.settled_gain),
+        'step_precursor': _num(st.precursor),
+        'frequency_hz': _curve(fr.frequency_hz), 'gain': _curve(fr.gain),
+        'phase_deg': _curve(fr.phase_deg), 'group_delay_s': _curve(fr.group_delay_s),
+        'coherence': _curve(fr.coherence),
+    }
+
+
+def white_noise_sigma(gyro_rad_s):
+    """
+    Estimate the per-sample white-noise standard deviation, median over axes.
+
+    Uses first differences, std(diff(x)) / sqrt(2), which a slow drift does not inflate.
+
+    Parameters
+    ----------
+    gyro_rad_s : numpy.ndarray
+        Rate (n, 3), rad/s.
+
+    Returns
+    -------
+    float
+        rad/s; at least 1e-9 rad/s so a noise-free input still gets a finite injection.
+
+    """
+    d = np.diff(np.asarray(gyro_rad_s, dtype=float), axis=0)
+    return max(float(np.median(np.std(d, axis=0))) / math.sqrt(2.0), 1e-9)
 
 
 def _check_output(method, out, n):

@@ -184,3 +184,15 @@ def test_simulate_calls_the_simulator_lazily(tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.simulate', fake)
     assert main(['simulate', '--seed', '3', '--out', str(tmp_path), '--hours', '0.5']) == 0
     assert calls == [(tmp_path, {'seed': 3, 'hours': 0.5})]
+
+
+def test_mode_class_figure_from_method_diagnostics(tmp_path):
+    from gyro_noise_ros.thermal.report import plot_mode_classes
+
+    info = [{'sample_entropy': [0.1, 0.9, 2.0], 'classes': ['drift', 'mixed', 'noise'],
+             'center_freqs_hz': [0.001, 0.5, 8.0]}] * 3
+    path = plot_mode_classes(tmp_path / 'f.png', info, title='t')
+    assert path.stat().st_size > 1000
+    assert plot_mode_classes(tmp_path / 'g.png', None, title='t') is None
+    assert plot_mode_classes(tmp_path / 'g.png', [{'classes': ['noise']}] * 3, title='t') is None
+    assert not (tmp_path / 'g.png').exists()

@@ -29,6 +29,7 @@ one table. Formats, metric definitions and exit codes: ``docs/thermal.md``.
 """
 
 import argparse
+import copy
 import json
 import math
 from pathlib import Path
@@ -237,6 +238,11 @@ def _cmd_fit(args, argv):
         figs.append(('Drift removed on the training data (cf. Fig. 17)',
                      report.plot_drift(out / 'training_fig17_drift.png', run, processed,
                                        label=model.method.name)))
+        fig13 = report.plot_mode_classes(
+            out / 'training_fig13_classes.png', getattr(model.method, 'fit_info', None),
+            title=f'{run.name}: sample entropy and class of each mode (training)')
+        if fig13 is not None:
+            figs.append(('Sample entropy and class of each mode (cf. Fig. 13)', fig13))
         for name, caption in report.method_figures(model.method, run, out):
             figs.append((caption, out / name))
     files.append(_write_json(out / 'training.json', doc))
@@ -312,6 +318,8 @@ def _cmd_apply(args, argv):
     started = time.monotonic()
     processed = np.asarray(model.method.apply(run), dtype=float)
     apply_s = time.monotonic() - started
+    # the scoring applies the method again to injected runs; keep this run's diagnostics
+    info = copy.deepcopy(getattr(model.method, 'last_info', None))
     scored, processed, curves = _score(model.method, run, args, processed)
     in_sample = str(bag.path) in model.training.sources or str(Path(args.bag).resolve()) in {
         str(Path(s).resolve()) for s in model.training.sources}
@@ -334,7 +342,7 @@ def _cmd_apply(args, argv):
     doc.update(scored)
     figs = []
     if not args.no_figures:
-        figs = _apply_figures(out, run, processed, model.method, curves)
+        figs = _apply_figures(out, run, processed, model.method, curves, info)
     files.append(_write_json(out / 'metrics.json', doc))
     files.append(_write_md(out / 'report.md', _apply_md(doc, figs, out)))
     files.extend(p for _, p in figs)
@@ -344,10 +352,14 @@ def _cmd_apply(args, argv):
     return 0
 
 
-def _apply_figures(out, run, processed, method, curves):
+def _apply_figures(out, run, processed, method, curves, info):
     name = method.name
     figs = [('Temperature and raw output (cf. Fig. 10)',
              report.plot_run(out / 'fig10_run.png', run))]
+    fig13 = report.plot_mode_classes(out / 'fig13_classes.png', info,
+                                     title=f'{run.name}: sample entropy and class of each mode')
+    if fig13 is not None:
+        figs.append(('Sample entropy and class of each mode (cf. Fig. 13)', fig13))
     for fname, caption in report.method_figures(method, run, out):
         figs.append((caption, out / fname))
     figs.append(('Raw and processed output (cf. Figs. 15, 18)',

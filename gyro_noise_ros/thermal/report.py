@@ -19,8 +19,10 @@ Generic figures (every method): Figure 10 (temperature and raw output against ti
 Figure 15/18 (raw and processed output), Figure 17 (the drift a method removed, 60-s means,
 against time and temperature), Figure 19 (Allan deviation raw and processed), and the cost
 figures the paper does not have (gain, phase, group delay and step response to injected motion).
-Method-specific figures (the paper's Figures 12-14 and 16: modes, their sample entropy and
-classes, the mixed part before and after TFPF, the network before and after BAS) come from the
+Figure 13 (sample entropy and class of each mode) is drawn from a method's ``fit_info`` /
+``last_info`` (per-axis dicts with ``sample_entropy``, ``classes``, ``center_freqs_hz``, as the
+parallel model keeps them). Other method-specific figures (the paper's Figures 12, 14 and 16: the
+modes, the mixed part before and after TFPF, the network before and after BAS) come from the
 method itself when it offers ``report_figures(run, out_dir) -> [(file name, caption), ...]``.
 Everything is converted to deg/s at this edge; matplotlib runs on the Agg backend.
 """
@@ -30,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ['method_figures', 'plot_allan', 'plot_bandwidth', 'plot_drift',
+__all__ = ['method_figures', 'plot_allan', 'plot_bandwidth', 'plot_drift', 'plot_mode_classes',
            'plot_output', 'plot_run', 'plot_steps', 'table_markdown']
 
 DEG = 180.0 / math.pi
@@ -293,6 +295,54 @@ def plot_steps(path, steps, *, title):
     panel.set_ylabel('response / step')
     panel.grid(True, alpha=0.3)
     panel.legend(fontsize=7, ncol=2)
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+_CLASS_COLOURS = {'drift': 'tab:red', 'mixed': 'tab:orange', 'noise': 'tab:gray'}
+
+
+def plot_mode_classes(path, info, *, title):
+    """
+    Plot each mode's sample entropy coloured by its class, per axis (paper Figure 13).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    info : list of dict
+        Per axis: ``sample_entropy`` and ``classes`` (one per mode), optionally
+        ``center_freqs_hz``, as the parallel model's ``fit_info`` / ``last_info``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path or None
+        None when ``info`` lacks those keys.
+
+    """
+    try:
+        rows = [(np.asarray(ax['sample_entropy'], dtype=float), list(ax['classes']),
+                 np.asarray(ax.get('center_freqs_hz', []), dtype=float)) for ax in info]
+    except (KeyError, TypeError, ValueError):
+        return None
+    if len(rows) != 3 or any(e.size != len(c) for e, c, _ in rows):
+        return None
+    plt = _pyplot()
+    fig, panels = plt.subplots(1, 3, figsize=(14, 4.2))
+    for a, (panel, (ent, classes, freqs)) in enumerate(zip(panels, rows)):
+        idx = np.arange(1, ent.size + 1)
+        panel.bar(idx, ent, color=[_CLASS_COLOURS.get(c, 'tab:blue') for c in classes])
+        if freqs.size == ent.size:
+            for i, f in zip(idx, freqs):
+                panel.annotate(f'{f:.3g} Hz', (i, 0), rotation=90, fontsize=6, ha='center',
+                               va='bottom', xytext=(0, 2), textcoords='offset points')
+        panel.set_xlabel('IMF')
+        panel.set_ylabel(f'sample entropy, axis {AXES[a]}')
+        panel.set_xticks(idx)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
+    panels[0].legend(handles, list(_CLASS_COLOURS), fontsize=7)
     fig.suptitle(title, fontsize=10)
     return _save(fig, plt, path)
 

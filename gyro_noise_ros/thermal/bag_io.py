@@ -124,7 +124,8 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
     Returns
     -------
     run : ThermalRun
-        ``t_s`` counts from the first Imu stamp; ``rate_hz`` is the median stamp rate.
+        ``t_s`` counts from the first Imu stamp; ``rate_hz`` is the mean rate,
+        (n - 1) / (last stamp - first stamp).
     bag : ThermalBag
 
     Raises
@@ -180,7 +181,9 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
         temperature = np.full(t_s.size, float(temp[0]))
     else:
         temperature = np.interp(t_s, t_temp, temp)
-    rate_hz = float(1.0 / np.median(np.diff(t_s)))
+    # Samples per second over the run: the methods index samples, and host-stamped recordings
+    # arrive in bursts (median step 2 ms at a 100 Hz mean rate), where a median would mislead.
+    rate_hz = float((t_s.size - 1) / t_s[-1])
     run = ThermalRun(t_s=t_s, gyro_rad_s=gyro, temperature_c=temperature, rate_hz=rate_hz,
                      name=name or _label(path))
     info = ThermalBag(path=Path(path), topic=imu_topic, temperature_topic=temp_topic,

@@ -250,13 +250,16 @@ def plot_bandwidth(path, responses, *, title):
             name = f'{label} {axis}' if len(per_axis) > 1 else label
             line, = panels[0].semilogx(fr.frequency_hz, 20 * np.log10(np.maximum(fr.gain, 1e-6)),
                                        lw=1.0, label=name)
-            panels[1].semilogx(fr.frequency_hz, fr.phase_deg, lw=1.0, color=line.get_color())
-            panels[2].semilogx(fr.frequency_hz, fr.group_delay_s * 1e3, lw=1.0,
+            # phase and delay of a response that is mostly not the input mean nothing
+            ok = np.where(fr.coherence >= 0.5, 1.0, np.nan)
+            panels[1].semilogx(fr.frequency_hz, fr.phase_deg * ok, lw=1.0,
+                               color=line.get_color())
+            panels[2].semilogx(fr.frequency_hz, fr.group_delay_s * 1e3 * ok, lw=1.0,
                                color=line.get_color())
     panels[0].axhline(-3.0, color='0.6', ls=':', lw=0.8)
     panels[0].set_ylabel('gain (dB)')
-    panels[1].set_ylabel('phase (deg)')
-    panels[2].set_ylabel('group delay (ms)')
+    panels[1].set_ylabel('phase (deg), coherence >= 0.5')
+    panels[2].set_ylabel('group delay (ms), coherence >= 0.5')
     panels[2].set_xlabel('frequency (Hz)')
     for p in panels:
         p.grid(True, which='both', alpha=0.3)
@@ -284,17 +287,22 @@ def plot_steps(path, steps, *, title):
 
     """
     plt = _pyplot()
-    fig, panel = plt.subplots(1, 1, figsize=(9, 4.5))
+    fig, panels = plt.subplots(1, 2, figsize=(12, 4.5))
+    zoom = 0.5
     for label, per_axis in steps.items():
         for axis, st in per_axis.items():
             name = f'{label} {axis}' if len(per_axis) > 1 else label
-            panel.plot(st.t_s, st.response, lw=1.0, label=name)
-    panel.axvline(0.0, color='0.6', lw=0.8, ls=':')
-    panel.axhline(1.0, color='0.6', lw=0.8, ls=':')
-    panel.set_xlabel('time from the step (s)')
-    panel.set_ylabel('response / step')
-    panel.grid(True, alpha=0.3)
-    panel.legend(fontsize=7, ncol=2)
+            line, = panels[0].plot(st.t_s, st.response, lw=1.0, label=name)
+            near = np.abs(st.t_s) <= zoom
+            panels[1].plot(st.t_s[near], st.response[near], lw=1.0, marker='.', ms=3,
+                           color=line.get_color())
+    for panel, what in zip(panels, ('whole window', f'+/-{zoom:g} s')):
+        panel.axvline(0.0, color='0.6', lw=0.8, ls=':')
+        panel.axhline(1.0, color='0.6', lw=0.8, ls=':')
+        panel.set_xlabel(f'time from the step (s), {what}')
+        panel.grid(True, alpha=0.3)
+    panels[0].set_ylabel('response / step')
+    panels[0].legend(fontsize=7, ncol=2)
     fig.suptitle(title, fontsize=10)
     return _save(fig, plt, path)
 

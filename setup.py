@@ -44,6 +44,9 @@ setup(
             'flake8', 'flake8-blind-except', 'flake8-builtins', 'flake8-class-newline',
             'flake8-comprehensions', 'flake8-deprecated', 'flake8-import-order',
             'flake8-quotes', 'pydocstyle',
+            # Independent check of thermal/entropy.py (test-only: its import pulls
+            # scikit-learn, 6 s, for two functions we implement in a few lines).
+            'antropy>=0.2',
         ],
     },
     zip_safe=True,

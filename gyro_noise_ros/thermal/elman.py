@@ -1,0 +1,260 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Elman network trained by beetle antennae search (paper 002, eqs. 28-34).
+
+The network maps the temperature field M = [T, dT] (eq. 28) to the drift S (eq. 29) with two
+sigmoid hidden layers, each fed back through a context layer holding its previous output
+(eq. 33):
+
+    OI(k) = sigmoid(W1 OI(k - 1) + W2 X(k) - a_i)
+    OH(k) = sigmoid(W3 OI(k) + W4 OH(k - 1) - a_j)
+    Y(k)  = W5 OH(k) - a_k
+
+The output layer is linear (eq. 33 writes an activation f without fixing it; a linear output
+reaches the whole normalised range). Inputs and output are scaled to [-1, 1] with the training
+ranges; the scalers are part of the model. The contexts start at 0.5 (sigmoid's midpoint). The
+recurrence runs at a fixed step ``dt_s``: the model is evaluated on a grid with the step it was
+trained on.
+
+All weights and thresholds form one vector found by beetle antennae search (eqs. 30-32): a
+random unit direction b, antennae at ``x +- d b``, a step ``x <- x - lam b sign(f(x + d b) -
+f(x - d b))`` towards the antenna with the lower mean squared error (eq. 34; eq. 32 is written
+for a maximised intensity, we minimise), and the paper's decay ``d <- 0.95 d + 0.01``,
+``lam <- 0.95 lam``. Since lam vanishes after about a hundred steps, the search runs in
+``epochs``: each restarts d and lam from their initial values at the best point so far (one
+epoch is the paper's algorithm). The best point ever seen is returned.
+"""
+
+from dataclasses import dataclass
+
+from gyro_noise_ros.errors import InputDataError, ParameterError
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def _forward(theta, x, n1, n2):  # pragma: no cover - JIT
+    """Run the Elman recurrence of eq. 33 over inputs x (n, n_in); return y (n,)."""
+    n, n_in = x.shape
+    o = 0
+    w1 = theta[o:o + n1 * n1].reshape(n1, n1)
+    o += n1 * n1
+    w2 = theta[o:o + n1 * n_in].reshape(n1, n_in)
+    o += n1 * n_in
+    ai = theta[o:o + n1]
+    o += n1
+    w3 = theta[o:o + n2 * n1].reshape(n2, n1)
+    o += n2 * n1
+    w4 = theta[o:o + n2 * n2].reshape(n2, n2)
+    o += n2 * n2
+    aj = theta[o:o + n2]
+    o += n2
+    w5 = theta[o:o + n2]
+    o += n2
+    ak = theta[o]
+    oi = np.full(n1, 0.5)
+    oh = np.full(n2, 0.5)
+    new_i = np.empty(n1)
+    new_h = np.empty(n2)
+    y = np.empty(n)
+    for k in range(n):
+        for i in range(n1):
+            s = -ai[i]
+            for j in range(n1):
+                s += w1[i, j] * oi[j]
+            for j in range(n_in):
+                s += w2[i, j] * x[k, j]
+            new_i[i] = 1.0 / (1.0 + np.exp(-s))
+        for i in range(n2):
+            s = -aj[i]
+            for j in range(n1):
+                s += w3[i, j] * new_i[j]
+            for j in range(n2):
+                s += w4[i, j] * oh[j]
+            new_h[i] = 1.0 / (1.0 + np.exp(-s))
+        out = -ak
+        for j in range(n2):
+            out += w5[j] * new_h[j]
+        y[k] = out
+        oi[:] = new_i
+        oh[:] = new_h
+    return y
+
+
+def n_weights(n_in, hidden):
+    """Return the length of the weight vector of an Elman network (eq. 33)."""
+    n1, n2 = hidden
+    return n1 * n1 + n1 * n_in + n1 + n2 * n1 + n2 * n2 + n2 + n2 + 1
+
+
+def bas_minimize(fun, x0, *, rng, iterations=100, epochs=1, d0=1.0, step0=1.0):
+    """
+    Minimise ``fun`` by beetle antennae search (eqs. 30-32, the paper's decay rules).
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(x) -> float`` to minimise.
+    x0 : array_like
+        Starting point (n,).
+    rng : numpy.random.Generator, keyword-only
+        Source of the random directions.
+    iterations : int, keyword-only
+        Steps per epoch.
+    epochs : int, keyword-only
+        Restarts of d and lam from ``d0`` and ``step0`` at the best point so far.
+    d0, step0 : float, keyword-only
+        Initial antenna length d and step lam.
+
+    Returns
+    -------
+    tuple
+        (best x, best value, history of (d, lam, value) per step).
+
+    """
+    x = np.array(x0, dtype=float)
+    best_x, best_f = x.copy(), float(fun(x))
+    history = []
+    for _ in range(int(epochs)):
+        x = best_x.copy()
+        d, lam = float(d0), float(step0)
+        for _ in range(int(iterations)):
+            b = rng.standard_normal(x.size)
+            b /= np.linalg.norm(b) + 1e-300
+            f_r = float(fun(x + d * b))
+            f_l = float(fun(x - d * b))
+            x = x - lam * b * np.sign(f_r - f_l)
+            f_x = float(fun(x))
+            for cand, val in ((x, f_x), (x + d * b, f_r), (x - d * b, f_l)):
+                if val < best_f:
+                    best_x, best_f = cand.copy(), val
+            history.append((d, lam, f_x))
+            d = 0.95 * d + 0.01
+            lam = 0.95 * lam
+    return best_x, best_f, history
+
+
+@dataclass(frozen=True)
+class ElmanModel:
+    """
+    A fitted Elman network with its input/output scalers.
+
+    Attributes
+    ----------
+    theta : numpy.ndarray
+        Weights and thresholds (eq. 33), layout of :func:`_forward`.
+    hidden : tuple
+        Sizes of the two hidden layers.
+    x_lo, x_hi : numpy.ndarray
+        Training range of each input (T in degC, dT in degC/s), mapped to [-1, 1].
+    y_lo, y_hi : float
+        Training range of the output, mapped to [-1, 1].
+    dt_s : float
+        Step of the recurrence, seconds.
+    train_mse : float
+        Final fitness (eq. 34) on the normalised training output.
+
+    """
+
+    theta: np.ndarray
+    hidden: tuple
+    x_lo: np.ndarray
+    x_hi: np.ndarray
+    y_lo: float
+    y_hi: float
+    dt_s: float
+    train_mse: float
+
+    def predict(self, inputs):
+        """Return the output (n,) for inputs (n, 2) sampled every ``dt_s`` seconds."""
+        x = np.asarray(inputs, dtype=float)
+        span = np.where(self.x_hi > self.x_lo, self.x_hi - self.x_lo, 1.0)
+        xn = 2.0 * (x - self.x_lo) / span - 1.0
+        yn = _forward(self.theta, np.ascontiguousarray(xn), self.hidden[0], self.hidden[1])
+        return self.y_lo + (yn + 1.0) * 0.5 * (self.y_hi - self.y_lo)
+
+    def to_dict(self):
+        """Return every parameter as JSON-able values."""
+        return {'theta': self.theta.tolist(), 'hidden': list(self.hidden),
+                'x_lo': self.x_lo.tolist(), 'x_hi': self.x_hi.tolist(),
+                'y_lo': self.y_lo, 'y_hi': self.y_hi, 'dt_s': self.dt_s,
+                'train_mse': self.train_mse}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild a model from :meth:`to_dict` output."""
+        return cls(theta=np.asarray(d['theta'], dtype=float), hidden=tuple(d['hidden']),
+                   x_lo=np.asarray(d['x_lo'], dtype=float),
+                   x_hi=np.asarray(d['x_hi'], dtype=float), y_lo=float(d['y_lo']),
+                   y_hi=float(d['y_hi']), dt_s=float(d['dt_s']),
+                   train_mse=float(d['train_mse']))
+
+
+def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epochs=20,
+              d0=1.0, step0=1.0, init_scale=0.5):
+    """
+    Fit an Elman network to a target series by beetle antennae search (MSE, eq. 34).
+
+    Parameters
+    ----------
+    inputs : array_like
+        (n, n_in) input sequence, e.g. columns T (degC) and dT (degC/s), on a grid of step
+        ``dt_s``.
+    target : array_like
+        (n,) output sequence (the drift part, rad/s).
+    dt_s : float, keyword-only
+        Grid step, seconds (stored; predictions must use the same step).
+    rng : numpy.random.Generator, keyword-only
+        Initial weights and search directions.
+    hidden : tuple, keyword-only
+        Sizes of the two hidden layers.
+    iterations, epochs, d0, step0 : keyword-only
+        Beetle antennae search settings (see :func:`bas_minimize`).
+    init_scale : float, keyword-only
+        Standard deviation of the random initial weights.
+
+    Returns
+    -------
+    ElmanModel
+        The network with the lowest training MSE found, and its scalers.
+
+    """
+    x = np.asarray(inputs, dtype=float)
+    y = np.asarray(target, dtype=float).reshape(-1)
+    if x.ndim != 2 or x.shape[0] != y.size or y.size < 2:
+        raise InputDataError(f'inputs (n, n_in) and target (n,) do not match: {x.shape}, '
+                             f'{y.shape}')
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise InputDataError('fit_elman: inputs or target contain NaN or Inf')
+    hidden = tuple(int(h) for h in hidden)
+    if len(hidden) != 2 or min(hidden) < 1:
+        raise ParameterError(f'hidden must be two sizes >= 1, got {hidden!r}')
+    x_lo, x_hi = x.min(axis=0), x.max(axis=0)
+    y_lo, y_hi = float(y.min()), float(y.max())
+    if y_hi == y_lo:
+        y_hi = y_lo + 1.0
+    span = np.where(x_hi > x_lo, x_hi - x_lo, 1.0)
+    xn = np.ascontiguousarray(2.0 * (x - x_lo) / span - 1.0)
+    yn = 2.0 * (y - y_lo) / (y_hi - y_lo) - 1.0
+
+    def mse(theta):
+        return float(np.mean((_forward(theta, xn, hidden[0], hidden[1]) - yn) ** 2))
+
+    theta0 = init_scale * rng.standard_normal(n_weights(x.shape[1], hidden))
+    theta, best, _ = bas_minimize(mse, theta0, rng=rng, iterations=iterations, epochs=epochs,
+                                  d0=d0, step0=step0)
+    return ElmanModel(theta=theta, hidden=hidden, x_lo=x_lo, x_hi=x_hi, y_lo=y_lo, y_hi=y_hi,
+                      dt_s=float(dt_s), train_mse=best)

@@ -1,0 +1,280 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Multi-objective particle swarm optimisation of the VMD parameters (paper 002, section 3.2).
+
+The swarm searches (K, alpha) in [4, 12] x [1000, 10000] with the paper's settings (Np = NR = 40
+particles and archive, M = 10 iterations, w = 0.4, c1 = c2 = 1.5) and minimises two fitness
+values of the decomposition: the mean fuzzy entropy and the mean normalised permutation entropy of
+its modes (the paper names the two entropies as the fitness functions without saying how the
+modes' values are combined; the mean is our reading). K is rounded to an integer and alpha to
+1 before evaluation, so evaluations are cached by that key.
+
+* Velocity and position (step C3): ``v <- chi (w v + c1 R1 (pbest - x) + c2 R2 (gbest - x))``,
+  ``x <- x + v``, clipped to the bounds (the velocity component that hit a bound is zeroed).
+* Personal best: replaced when the new fitness dominates it, or with probability 1/2 when
+  neither dominates (Coello et al. 2004).
+* Archive (the "save set"): the non-dominated points found so far. Its objective space is cut
+  into ``n_grid`` x ``n_grid`` cells spanning the archive's range; the leader gbest is drawn by
+  roulette with probability proportional to 1 / (points in its cell) (step C2); when the archive
+  exceeds NR, each cell with more than one point loses
+  ``ND = Int((|A| - NR) / |A| * Grid[k] + 0.5)`` random points (eq. 23), then, if still too many,
+  random points of the most crowded cell.
+* Budget: the initial swarm is the first of ``iterations`` evaluations of all particles, so the
+  paper's settings cost at most 40 x 10 = 400 decompositions (fewer with cache hits).
+* The pick (the paper reports one [K_best, alpha_best] without its rule): normalise both
+  objectives to [0, 1] over the final archive and take the point nearest to the ideal point
+  (0, 0); ties go to the smaller K, then the smaller alpha.
+
+Everything random comes from one ``numpy.random.Generator``; the result is a deterministic
+function of the seed. Fitness functions are plain picklable callables, evaluated through
+``map_fn`` (the built-in ``map`` by default; a process pool's ``map`` distributes them).
+"""
+
+from dataclasses import dataclass, field
+
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.thermal.entropy import fuzzy_entropy, permutation_entropy
+from gyro_noise_ros.thermal.vmd import vmd
+import numpy as np
+
+#: The paper's search box: K in [4, 12], alpha in [1000, 10000].
+PAPER_BOUNDS = ((4.0, 12.0), (1000.0, 10000.0))
+
+
+@dataclass(frozen=True)
+class VmdFitness:
+    """
+    The two fitness values of a VMD of a signal; a pure, picklable callable.
+
+    Calling it with ``(k, alpha)`` decomposes ``signal`` and returns
+    ``(mean fuzzy entropy, mean normalised permutation entropy)`` of the modes. A 2-D
+    ``signal`` (w, n) holds w windows of one record: each is decomposed and the means run over
+    all their modes.
+    """
+
+    signal: np.ndarray
+    fe_m: int = 2
+    fe_r: float = 0.2
+    pe_order: int = 4
+    pe_delay: int = 1
+    tol: float = 1e-7
+    max_iter: int = 500
+
+    def __call__(self, key):
+        """Return (FE, PE) for ``key = (k, alpha)``."""
+        k, alpha = key
+        modes = np.concatenate([
+            vmd(seg, k=int(k), alpha=float(alpha), tol=self.tol, max_iter=self.max_iter).modes
+            for seg in np.atleast_2d(self.signal)])
+        fe = np.mean([fuzzy_entropy(m, m=self.fe_m, r=self.fe_r) for m in modes])
+        pe = np.mean([permutation_entropy(m, order=self.pe_order, delay=self.pe_delay)
+                      for m in modes])
+        return float(fe), float(pe)
+
+
+@dataclass(frozen=True)
+class MopsoResult:
+    """
+    Outcome of :func:`mopso`.
+
+    Attributes
+    ----------
+    k : int
+        Chosen number of modes.
+    alpha : float
+        Chosen bandwidth penalty.
+    fitness : tuple
+        (FE, PE) of the chosen point.
+    archive_params : numpy.ndarray
+        Pareto archive (n, 2): K, alpha.
+    archive_fitness : numpy.ndarray
+        Their fitness (n, 2).
+    evaluations : int
+        Distinct (K, alpha) decomposed.
+    requested : int
+        Fitness requests (particles times iterations); the rest were cache hits.
+    history : list
+        Per iteration, the positions (Np, 2) and fitness (Np, 2) evaluated (paper Figure 11).
+
+    """
+
+    k: int
+    alpha: float
+    fitness: tuple
+    archive_params: np.ndarray
+    archive_fitness: np.ndarray
+    evaluations: int
+    requested: int
+    history: list = field(repr=False, default_factory=list)
+
+
+def dominates(a, b):
+    """Return True when fitness ``a`` Pareto-dominates ``b`` (minimisation)."""
+    a, b = np.asarray(a), np.asarray(b)
+    return bool(np.all(a <= b) and np.any(a < b))
+
+
+def _cells(fit, n_grid):
+    lo = fit.min(axis=0)
+    hi = fit.max(axis=0)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    idx = np.floor((fit - lo) / span * n_grid).astype(int)
+    idx = np.clip(idx, 0, n_grid - 1)
+    return idx[:, 0] * n_grid + idx[:, 1]
+
+
+def _non_dominated(params, fit):
+    keep = []
+    for i in range(len(fit)):
+        if not any(dominates(fit[j], fit[i]) for j in range(len(fit)) if j != i):
+            # Drop exact duplicates of a point already kept.
+            if not any(np.array_equal(params[i], params[j]) for j in keep):
+                keep.append(i)
+    return params[keep], fit[keep]
+
+
+def _truncate(params, fit, size, n_grid, gen):
+    """Shrink the archive to ``size`` by eq. 23, then from the most crowded cell."""
+    if len(fit) <= size:
+        return params, fit
+    cells = _cells(fit, n_grid)
+    n_a = len(fit)
+    drop = []
+    for c in np.unique(cells):
+        members = np.flatnonzero(cells == c)
+        if members.size > 1:
+            nd = int((n_a - size) / n_a * members.size + 0.5)
+            if nd:
+                drop.extend(gen.choice(members, size=min(nd, members.size - 1),
+                                       replace=False))
+    keep = np.setdiff1d(np.arange(n_a), drop)
+    params, fit = params[keep], fit[keep]
+    while len(fit) > size:
+        cells = _cells(fit, n_grid)
+        vals, counts = np.unique(cells, return_counts=True)
+        members = np.flatnonzero(cells == vals[np.argmax(counts)])
+        victim = gen.choice(members)
+        keep = np.arange(len(fit)) != victim
+        params, fit = params[keep], fit[keep]
+    return params, fit
+
+
+def _leader(params, fit, n_grid, gen):
+    cells = _cells(fit, n_grid)
+    _, inverse, counts = np.unique(cells, return_inverse=True, return_counts=True)
+    weight = 1.0 / counts[inverse]
+    return params[gen.choice(len(fit), p=weight / weight.sum())]
+
+
+def pick_compromise(params, fit):
+    """
+    Pick one point of a Pareto set: nearest to the ideal point after min-max normalisation.
+
+    Ties go to the smaller K, then the smaller alpha. Returns the index into ``params``.
+    """
+    fit = np.asarray(fit, dtype=float)
+    lo, hi = fit.min(axis=0), fit.max(axis=0)
+    norm = (fit - lo) / np.where(hi > lo, hi - lo, 1.0)
+    dist = np.round(np.hypot(norm[:, 0], norm[:, 1]), 12)
+    order = np.lexsort((params[:, 1], params[:, 0], dist))
+    return int(order[0])
+
+
+def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40, iterations=10,
+          w=0.4, c1=1.5, c2=1.5, chi=1.0, n_grid=7, map_fn=map):
+    """
+    Search (K, alpha) minimising two fitness values with a multi-objective particle swarm.
+
+    Parameters
+    ----------
+    fitness : callable
+        ``fitness((k, alpha)) -> (f1, f2)`` with integer k and integer-valued alpha; pure and
+        picklable to be distributed (e.g. :class:`VmdFitness`).
+    rng : numpy.random.Generator, keyword-only
+        The only source of randomness.
+    bounds : tuple, keyword-only
+        ((k_min, k_max), (alpha_min, alpha_max)).
+    n_particles, archive_size, iterations : int, keyword-only
+        Np, NR and M of the paper (40, 40, 10).
+    w, c1, c2, chi : float, keyword-only
+        Inertia weight, learning factors and contraction factor of the velocity update.
+    n_grid : int, keyword-only
+        Grid divisions per objective for the archive's density.
+    map_fn : callable, keyword-only
+        ``map``-like function used to evaluate the uncached points of one iteration in order.
+
+    Returns
+    -------
+    MopsoResult
+        The picked point, the archive, evaluation counts and the per-iteration history.
+
+    """
+    lo = np.array([b[0] for b in bounds], dtype=float)
+    hi = np.array([b[1] for b in bounds], dtype=float)
+    if lo.shape != (2,) or np.any(hi < lo):
+        raise ParameterError(f'bounds must be ((k_min, k_max), (a_min, a_max)), got {bounds!r}')
+    if lo[0] < 1 or lo[1] <= 0:
+        raise ParameterError('bounds: K must be >= 1 and alpha > 0')
+    if min(n_particles, archive_size, iterations, n_grid) < 1:
+        raise ParameterError('n_particles, archive_size, iterations and n_grid must be >= 1')
+    gen = rng
+    cache = {}
+    requested = 0
+
+    def key_of(p):
+        return int(round(p[0])), float(round(p[1]))
+
+    def evaluate(pos):
+        nonlocal requested
+        keys = [key_of(p) for p in pos]
+        requested += len(keys)
+        todo = list(dict.fromkeys(k for k in keys if k not in cache))
+        for k, f in zip(todo, map_fn(fitness, todo)):
+            cache[k] = tuple(float(v) for v in f)
+        return np.array([cache[k] for k in keys])
+
+    pos = lo + (hi - lo) * gen.random((n_particles, 2))
+    vel = np.zeros_like(pos)
+    fit = evaluate(pos)
+    history = [(pos.copy(), fit.copy())]
+    pbest, pbest_fit = pos.copy(), fit.copy()
+    arch_p, arch_f = _non_dominated(np.array([key_of(p) for p in pos], dtype=float), fit)
+    arch_p, arch_f = _truncate(arch_p, arch_f, archive_size, n_grid, gen)
+    for _ in range(iterations - 1):
+        leaders = np.array([_leader(arch_p, arch_f, n_grid, gen) for _ in range(n_particles)])
+        r1 = gen.random((n_particles, 2))
+        r2 = gen.random((n_particles, 2))
+        vel = chi * (w * vel + c1 * r1 * (pbest - pos) + c2 * r2 * (leaders - pos))
+        pos = pos + vel
+        out = (pos < lo) | (pos > hi)
+        pos = np.clip(pos, lo, hi)
+        vel[out] = 0.0
+        fit = evaluate(pos)
+        history.append((pos.copy(), fit.copy()))
+        coin = gen.random(n_particles)
+        for i in range(n_particles):
+            if dominates(fit[i], pbest_fit[i]) or (
+                    not dominates(pbest_fit[i], fit[i]) and coin[i] < 0.5):
+                pbest[i], pbest_fit[i] = pos[i], fit[i]
+        cand_p = np.vstack([arch_p, [key_of(p) for p in pos]])
+        cand_f = np.vstack([arch_f, fit])
+        arch_p, arch_f = _non_dominated(cand_p, cand_f)
+        arch_p, arch_f = _truncate(arch_p, arch_f, archive_size, n_grid, gen)
+    best = pick_compromise(arch_p, arch_f)
+    return MopsoResult(k=int(arch_p[best, 0]), alpha=float(arch_p[best, 1]),
+                       fitness=tuple(arch_f[best]), archive_params=arch_p,
+                       archive_fitness=arch_f, evaluations=len(cache), requested=requested,
+                       history=history)

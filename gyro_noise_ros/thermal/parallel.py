@@ -1,0 +1,283 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The paper's parallel processing model (paper 002, section 3.5, Figure 7), per gyro axis.
+
+Fit on a training run:
+
+1. MOPSO (:mod:`.mopso`) chooses (K, alpha) minimising the mean fuzzy and permutation entropy
+   of the modes of a VMD. Speed: the fitness is evaluated on ``fitness_windows`` windows of
+   ``fitness_samples`` consecutive samples spread evenly over the run (same sample rate, so
+   alpha and the centre frequencies mean the same as on the whole run; the O(n^2) fuzzy
+   entropy costs ``windows x samples^2`` instead of ``n^2``), evaluations are cached by
+   (K, alpha), and ``workers > 1`` spreads them over processes. ``fitness_samples=None``
+   evaluates on the whole run (the naive path).
+2. VMD of the whole run with (K, alpha), warm-started from the middle window's centre frequencies
+   (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
+   spectrum, so the 1.44 M-sample run stays within seconds).
+3. The modes are classified by sample entropy (:mod:`.classify`) into drift, mixed, noise.
+4. An Elman network trained by beetle antennae search (:mod:`.elman`) learns the drift part
+   from [T, dT] (dT from :func:`..run.temperature_rate_c_s`), on block means over
+   ``dt = ceil(n / elman_samples)`` samples (the drift is slow; the recurrence runs on that
+   grid, here and when applied).
+
+Apply to another run: VMD with the trained K, alpha, warm-started from the trained centre
+frequencies (converted through Hz if the sample rate differs; at most ``apply_vmd_iter``
+iterations), classification of the new modes, the noise modes dropped, TFPF
+(:mod:`.tfpf`) on the sum of the mixed modes, the Elman prediction (interpolated from its grid)
+subtracted from the sum of the drift modes, and the two parts added. VMD and TFPF need the whole
+record: the model is offline only (``causal = False``); the live node refuses it.
+"""
+
+from concurrent.futures import ProcessPoolExecutor
+
+from gyro_noise_ros.errors import InputDataError, ParameterError
+from gyro_noise_ros.thermal.classify import classify_modes
+from gyro_noise_ros.thermal.elman import ElmanModel, fit_elman
+from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, VmdFitness
+from gyro_noise_ros.thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from gyro_noise_ros.thermal.tfpf import tfpf
+from gyro_noise_ros.thermal.vmd import vmd
+import numpy as np
+
+#: Options of :class:`ParallelModel` and their defaults (the paper's MOPSO settings).
+DEFAULT_OPTIONS = {
+    'bounds': [list(b) for b in PAPER_BOUNDS],
+    'n_particles': 40,
+    'archive_size': 40,
+    'iterations': 10,
+    'w': 0.4,
+    'c1': 1.5,
+    'c2': 1.5,
+    'fitness_samples': 256,
+    'fitness_windows': 4,
+    'vmd_tol': 1e-7,
+    'vmd_max_iter': 500,
+    'full_vmd_iter': 30,
+    'apply_vmd_iter': 3,
+    'drift_max': 0.5,
+    'noise_min': 1.5,
+    'entropy_samples': 2000,
+    'tfpf_window': 31,
+    'elman_hidden': [6, 6],
+    'elman_iterations': 100,
+    'elman_epochs': 20,
+    'elman_samples': 2000,
+    'rate_window_s': DEFAULT_RATE_WINDOW_S,
+    'workers': 1,
+}
+
+
+def fitness_windows(x, n, count):
+    """
+    Return ``count`` windows (count, n) spread evenly over ``x`` (``x`` itself if too short).
+
+    The windows' starts are equally spaced from the first to the last possible one, so the
+    first starts the record and the last ends it; ``n = None`` or ``count * n >= len(x)``
+    gives the whole record (1, len(x)).
+    """
+    if n is None or int(n) * int(count) >= x.size:
+        return x[None, :]
+    n, count = int(n), int(count)
+    starts = np.linspace(0, x.size - n, count).round().astype(int)
+    return np.stack([x[s:s + n] for s in starts])
+
+
+def block_means(x, q):
+    """Return the means of consecutive blocks of ``q`` samples (the last block may be short)."""
+    x = np.asarray(x, dtype=float)
+    idx = np.arange(0, x.shape[0], q)
+    sums = np.add.reduceat(x, idx, axis=0)
+    counts = np.diff(np.append(idx, x.shape[0]))
+    return sums / (counts if x.ndim == 1 else counts[:, None])
+
+
+class ParallelModel:
+    """
+    MOVMD-TFPF and BAS-Elman parallel model (paper 002, Figure 7); a ``ThermalMethod``.
+
+    Keyword options are those of :data:`DEFAULT_OPTIONS` (see the module docstring and
+    docs/thermal_model.md). After :meth:`apply`, :attr:`last_info` holds per-axis diagnostics
+    (centre frequencies, classes and sample entropies of the modes: the paper's Figure 13).
+    """
+
+    name = 'parallel'
+    causal = False
+
+    def __init__(self, **options):
+        unknown = set(options) - set(DEFAULT_OPTIONS)
+        if unknown:
+            raise ParameterError(f'unknown ParallelModel options: {sorted(unknown)}')
+        self.options = {**DEFAULT_OPTIONS, **options}
+        fs = self.options['fitness_samples']
+        if fs is not None and int(fs) < 64:
+            raise ParameterError(f'fitness_samples must be >= 64 or None, got {fs!r}')
+        self.axes = None
+        self.rate_hz = None
+        self.temperature_range_c = None
+        self.fit_info = None
+        self.last_info = None
+
+    # -- fitting ---------------------------------------------------------------------------
+    def fit(self, run, *, rng):
+        """Learn K, alpha, the mode classes and the drift network per axis from one run."""
+        x_all, temp, rate = self._inputs(run)
+        o = self.options
+        axes, info = [], []
+        pool = ProcessPoolExecutor(int(o['workers'])) if int(o['workers']) > 1 else None
+        try:
+            for a in range(3):
+                axes.append(self._fit_axis(x_all[:, a], temp, rate, run.rate_hz, rng, pool,
+                                           info))
+        finally:
+            if pool is not None:
+                pool.shutdown()
+        self.axes = axes
+        self.rate_hz = float(run.rate_hz)
+        self.temperature_range_c = [float(temp.min()), float(temp.max())]
+        self.fit_info = info
+
+    def _fit_axis(self, x, temp, rate, rate_hz, rng, pool, info):
+        o = self.options
+        # Independent streams: the network's start does not depend on how many draws the
+        # swarm made, so options that change the search leave the network's seed alone.
+        swarm_rng, elman_rng = rng.spawn(2)
+        segs = fitness_windows(x, o['fitness_samples'], o['fitness_windows'])
+        fitness = VmdFitness(np.ascontiguousarray(segs), tol=o['vmd_tol'],
+                             max_iter=int(o['vmd_max_iter']))
+        res = mopso(fitness, rng=swarm_rng, bounds=tuple(tuple(b) for b in o['bounds']),
+                    n_particles=int(o['n_particles']), archive_size=int(o['archive_size']),
+                    iterations=int(o['iterations']), w=o['w'], c1=o['c1'], c2=o['c2'],
+                    map_fn=map if pool is None else pool.map)
+        if segs.size == x.size:
+            dec = vmd(x, k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
+                      max_iter=int(o['vmd_max_iter']))
+        else:
+            start = vmd(segs[segs.shape[0] // 2], k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
+                        max_iter=int(o['vmd_max_iter']))
+            dec = vmd(x, k=res.k, alpha=res.alpha, tol=o['vmd_tol'], solver='exact',
+                      center_freqs=start.center_freqs, max_iter=int(o['full_vmd_iter']),
+                      workers=int(o['workers']))
+        cls = self._classify(dec)
+        drift = dec.modes[cls.mask('drift')].sum(axis=0)
+        q = max(1, -(-x.size // int(o['elman_samples'])))
+        elman = fit_elman(block_means(np.c_[temp, rate], q), block_means(drift, q),
+                          dt_s=q / rate_hz, rng=elman_rng, hidden=tuple(o['elman_hidden']),
+                          iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']))
+        info.append(self._axis_info(dec, cls, rate_hz))
+        info[-1]['mopso'] = {'evaluations': res.evaluations, 'requested': res.requested,
+                             'archive_k': res.archive_params[:, 0].astype(int).tolist(),
+                             'archive_alpha': res.archive_params[:, 1].tolist(),
+                             'archive_fuzzy_entropy': res.archive_fitness[:, 0].tolist(),
+                             'archive_permutation_entropy': res.archive_fitness[:, 1].tolist()}
+        return {'k': res.k, 'alpha': res.alpha,
+                'fitness': {'fuzzy_entropy': res.fitness[0],
+                            'permutation_entropy': res.fitness[1]},
+                'center_freqs_hz': (dec.center_freqs * rate_hz).tolist(),
+                'classes': list(cls.classes),
+                'sample_entropy': cls.sample_entropy.tolist(),
+                'elman': elman.to_dict()}
+
+    # -- applying --------------------------------------------------------------------------
+    def apply(self, run):
+        """Return the denoised, drift-compensated angular rate (n, 3), rad/s."""
+        if self.axes is None:
+            raise ParameterError('ParallelModel.apply called before fit (or from_dict)')
+        x_all, temp, rate = self._inputs(run)
+        o = self.options
+        out = np.empty_like(x_all)
+        info = []
+        for a, ax in enumerate(self.axes):
+            x = x_all[:, a]
+            freqs = np.clip(np.asarray(ax['center_freqs_hz']) / run.rate_hz, 0.0, 0.5)
+            dec = vmd(x, k=ax['k'], alpha=ax['alpha'], tol=o['vmd_tol'], solver='exact',
+                      center_freqs=freqs, max_iter=int(o['apply_vmd_iter']),
+                      workers=int(o['workers']))
+            cls = self._classify(dec)
+            mixed = dec.modes[cls.mask('mixed')].sum(axis=0)
+            if cls.mask('mixed').any():
+                mixed = tfpf(mixed, window=int(o['tfpf_window']))
+            drift = dec.modes[cls.mask('drift')].sum(axis=0)
+            elman = ElmanModel.from_dict(ax['elman'])
+            out[:, a] = mixed + drift - self._drift_prediction(elman, run, temp, rate)
+            info.append(self._axis_info(dec, cls, run.rate_hz))
+        self.last_info = info
+        return out
+
+    def drift_prediction_rad_s(self, run):
+        """Return the Elman networks' drift (n, 3), rad/s, on a run's [T, dT]."""
+        if self.axes is None:
+            raise ParameterError('ParallelModel used before fit (or from_dict)')
+        _, temp, rate = self._inputs(run)
+        return np.column_stack([
+            self._drift_prediction(ElmanModel.from_dict(ax['elman']), run, temp, rate)
+            for ax in self.axes])
+
+    @staticmethod
+    def _drift_prediction(elman, run, temp, rate):
+        q = max(1, int(round(elman.dt_s * run.rate_hz)))
+        pred = elman.predict(block_means(np.c_[temp, rate], q))
+        centres = np.arange(pred.size) * q + 0.5 * (min(q, temp.size) - 1)
+        return np.interp(np.arange(temp.size), centres, pred)
+
+    # -- helpers ---------------------------------------------------------------------------
+    def _classify(self, dec):
+        o = self.options
+        return classify_modes(dec.modes, dec.center_freqs, drift_max=o['drift_max'],
+                              noise_min=o['noise_min'], max_samples=int(o['entropy_samples']))
+
+    @staticmethod
+    def _axis_info(dec, cls, rate_hz):
+        return {'center_freqs_hz': (dec.center_freqs * rate_hz).tolist(),
+                'center_freqs_cyc_per_sample': dec.center_freqs.tolist(),
+                'classes': list(cls.classes),
+                'sample_entropy': cls.sample_entropy.tolist(),
+                'entropy_scale': cls.scale,
+                'mode_rms_rad_s': np.sqrt(np.mean(dec.modes ** 2, axis=1)).tolist(),
+                'vmd_iterations': dec.iterations}
+
+    def _inputs(self, run):
+        x = np.asarray(run.gyro_rad_s, dtype=float)
+        temp = np.asarray(run.temperature_c, dtype=float)
+        t = np.asarray(run.t_s, dtype=float)
+        if x.ndim != 2 or x.shape[1] != 3 or x.shape[0] != temp.size or t.size != temp.size:
+            raise InputDataError(f'run arrays do not match: gyro {x.shape}, temperature '
+                                 f'{temp.shape}, t {t.shape}')
+        if x.shape[0] < 64:
+            raise InputDataError(f'the parallel model needs at least 64 samples, got {x.shape[0]}')
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(temp))):
+            raise InputDataError('the run contains NaN or Inf samples')
+        rate = temperature_rate_c_s(t, temp, window_s=self.options['rate_window_s'])
+        return x, temp, rate
+
+    # -- serialisation ---------------------------------------------------------------------
+    def to_dict(self):
+        """Return every fitted parameter as a JSON-serialisable dict."""
+        if self.axes is None:
+            raise ParameterError('ParallelModel.to_dict called before fit')
+        return {'method': 'parallel', 'causal': False, 'options': self.options,
+                'rate_hz': self.rate_hz, 'temperature_range_c': self.temperature_range_c,
+                'axes': self.axes}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Rebuild a fitted model from :meth:`to_dict` output."""
+        if d.get('method') != 'parallel':
+            raise ParameterError(f"not a parallel model: method = {d.get('method')!r}")
+        model = cls(**d.get('options', {}))
+        model.axes = d['axes']
+        model.rate_hz = d.get('rate_hz')
+        model.temperature_range_c = d.get('temperature_range_c')
+        return model

@@ -770,3 +770,51 @@ def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
                 'model': asdict(model), 'profile': asdict(profile)}
     (out / 'simulation.json').write_text(json.dumps(settings, indent=2, default=list) + '\n')
     return tuple(paths)
+
+
+def add_simulate_arguments(parser):
+    """
+    Add the options of ``gyro_noise_thermal simulate`` to an argparse parser.
+
+    ``--seed``, ``--out`` (required), ``--hours``, ``--compress``, ``--rate-hz``,
+    ``--storage``, ``--temperature-rate-hz``, ``--no-hysteresis``; pass the parsed namespace
+    to :func:`simulate_from_args`.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        Parser (or subparser) to extend.
+
+    """
+    parser.add_argument('--seed', type=int, default=0, help='seed of the train/test pair')
+    parser.add_argument('--out', required=True, help='output directory (train/, test/, truth)')
+    parser.add_argument('--hours', type=float, help='run length (h); default: the whole profile')
+    parser.add_argument('--compress', type=float,
+                        help='time compression of the oven experiment (default: fill --hours)')
+    parser.add_argument('--rate-hz', type=float, default=100.0, help='gyro sample rate (Hz)')
+    parser.add_argument('--storage', choices=('sqlite3', 'mcap'), default='sqlite3')
+    parser.add_argument('--temperature-rate-hz', type=float, default=TEMPERATURE_RATE_HZ,
+                        help='rate of the Temperature messages (Hz)')
+    parser.add_argument('--no-hysteresis', action='store_true',
+                        help='switch the bias hysteresis off')
+
+
+def simulate_from_args(args):
+    """
+    Run :func:`write_train_test` with the options of :func:`add_simulate_arguments`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        ``(train_bag, test_bag)``.
+
+    """
+    model = ThermalModel(hysteresis_half_width_c=0.0) if args.no_hysteresis else ThermalModel()
+    return write_train_test(args.out, seed=args.seed, hours=args.hours, rate_hz=args.rate_hz,
+                            compress=args.compress, storage=args.storage, model=model,
+                            temperature_rate_hz=args.temperature_rate_hz)

@@ -178,12 +178,13 @@ def test_simulate_calls_the_simulator_lazily(tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.simulate', None)
     assert main(['simulate', '--seed', '3', '--out', str(tmp_path)]) == 2
     assert 'simulator is not available' in capsys.readouterr().err
-    calls = []
-    fake = type(sys)('gyro_noise_ros.thermal.simulate')
-    fake.write_train_test = lambda out, **kw: calls.append((out, kw)) or ['train', 'test']
-    monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.simulate', fake)
-    assert main(['simulate', '--seed', '3', '--out', str(tmp_path), '--hours', '0.5']) == 0
-    assert calls == [(tmp_path, {'seed': 3, 'hours': 0.5})]
+    monkeypatch.undo()
+    argv = ['simulate', '--seed', '3', '--out', str(tmp_path / 's'), '--hours', '0.02',
+            '--rate-hz', '20']
+    assert main(argv) == 0
+    assert capsys.readouterr().out.strip() == f'wrote {tmp_path / "s" / "train"}, ' \
+        f'{tmp_path / "s" / "test"}'
+    assert json.loads((tmp_path / 's' / 'simulation.json').read_text())['seed'] == 3
 
 
 def test_mode_class_figure_from_method_diagnostics(tmp_path):

@@ -20,7 +20,8 @@ Usage::
     gyro_noise_thermal fit BAG [BAG ...] [--topic T] [--temperature-topic T] [--method M] --out DIR
     gyro_noise_thermal apply BAG --model DIR/model.json --out OUT
     gyro_noise_thermal compare TRAIN_BAG TEST_BAG --out DIR [--methods M,M,...]
-    gyro_noise_thermal simulate --seed S --out DIR [--hours H] [--rate-hz R]
+    gyro_noise_thermal simulate --seed S --out DIR [--hours H] [--rate-hz R] [--compress X]
+        [--storage sqlite3|mcap] [--temperature-rate-hz R] [--no-hysteresis]
 
 ``fit`` writes DIR/model.json and a training report (DIR/training.md, training.json, figures);
 ``apply`` writes OUT/compensated/ (rosbag2), OUT/metrics.json and OUT/report.md with figures;
@@ -154,12 +155,13 @@ def build_parser():
     c.add_argument('--quiet', action='store_true', help='print only errors')
 
     s = sub.add_parser('simulate', help='write a seeded train/test pair of thermal bags')
-    s.add_argument('--seed', type=int, required=True, help='seed')
-    s.add_argument('--out', required=True, metavar='DIR', help='output directory')
-    s.add_argument('--hours', type=float, default=None,
-                   help="simulated duration of each run, h (default: the simulator's)")
-    s.add_argument('--rate-hz', type=float, default=None,
-                   help="sample rate, Hz (default: the simulator's)")
+    try:
+        from ..thermal.simulate import add_simulate_arguments
+    except ImportError:  # the simulator is optional here; _cmd_simulate says it is missing
+        s.add_argument('--seed', type=int, default=0, help='seed')
+        s.add_argument('--out', required=True, metavar='DIR', help='output directory')
+    else:
+        add_simulate_arguments(s)
     return p
 
 
@@ -633,15 +635,13 @@ def _compare_figures(out, test, curves):
 
 def _cmd_simulate(args, argv):
     try:
-        from ..thermal.simulate import write_train_test
+        from ..thermal.simulate import simulate_from_args
     except ImportError as err:
         raise registry.MethodUnavailableError(
             f'the thermal simulator is not available (gyro_noise_ros.thermal.simulate: '
             f'{err})') from err
-    out = _out_dir(args.out)
-    options = {k: v for k, v in (('hours', args.hours), ('rate_hz', args.rate_hz))
-               if v is not None}
-    result = write_train_test(out, seed=args.seed, **options)
+    _out_dir(args.out)
+    result = simulate_from_args(args)
     paths = result if isinstance(result, (list, tuple)) else [result]
     print(f'wrote {", ".join(str(p) for p in paths)}')
     return 0

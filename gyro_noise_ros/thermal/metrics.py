@@ -722,7 +722,7 @@ def _metrics_dict(m):
 
 def _delay(v):
     # a pass-through's 50 % crossing lands on the step time up to rounding (1e-18 s): snap to ns
-    return _num(round(v, 9)) if math.isfinite(v) else None
+    return _num(round(v, 9) + 0.0) if math.isfinite(v) else None  # + 0.0: no '-0'
 
 
 def _bandwidth_dict(fr, st):

@@ -104,21 +104,22 @@ def test_apply_with_figures_and_in_sample_warning(tmp_path):
     assert not (out / 'compensated').exists()
 
 
-def test_compare_one_table_and_unavailable_methods_reported(tmp_path, capsys):
+def test_compare_one_table_and_unavailable_methods_reported(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(methods.BUILTIN_METHODS, 'ghost', ('gyro_noise_ros.thermal.ghost', 'G'))
     train, _, _ = _bag(tmp_path / 'train', 1)
     test, _, _ = _bag(tmp_path / 'test', 2)
     out = tmp_path / 'c'
     assert main(['compare', train, test, '--out', str(out), '--methods',
-                 'toy_linear,toy_lowpass,parallel', *FAST]) == 0
+                 'toy_linear,toy_lowpass,ghost', *FAST]) == 0
     doc = json.loads((out / 'compare.json').read_text())
     assert set(doc['methods']) == {'toy_linear', 'toy_lowpass'}
-    assert 'parallel' in doc['errors']
+    assert 'cannot be imported' in doc['errors']['ghost']
     assert doc['best_held_out']['method'] == 'toy_linear'
     rows = (out / 'compare.csv').read_text().splitlines()
     assert len(rows) == 1 + 3 * 3  # header, raw input and two methods, three axes each
     assert main(['compare', train, train, '--out', str(out)]) == 2
     assert 'same recording' in capsys.readouterr().err
-    assert main(['compare', train, test, '--out', str(out), '--methods', 'parallel',
+    assert main(['compare', train, test, '--out', str(out), '--methods', 'ghost',
                  *FAST]) == 4
 
 

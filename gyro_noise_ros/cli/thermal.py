@@ -82,6 +82,18 @@ def _add_bag_options(p):
                         f'({DEFAULT_MAX_GAP_S:g})')
 
 
+def _add_fit_options(p):
+    p.add_argument('--seed', type=int, default=0, help='seed of stochastic training (0)')
+    p.add_argument('--min-range-c', type=float, default=registry.DEFAULT_MIN_RANGE_C,
+                   help='smallest training temperature span, degC '
+                        f'({registry.DEFAULT_MIN_RANGE_C:g})')
+
+
+def _add_output_options(p):
+    p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
+    p.add_argument('--quiet', action='store_true', help='print only errors')
+
+
 def _add_score_options(p):
     p.add_argument('--amplitude-deg-s', type=float, default=DEFAULT_AMPLITUDE_RAD_S * RAD2DEG,
                    help='height of the injected chirp and steps, deg/s (1)')
@@ -118,13 +130,9 @@ def build_parser():
     f.add_argument('--method', default=registry.DEFAULT_METHOD,
                    help=f'method ({", ".join(registry.method_names())}; default '
                         f'{registry.DEFAULT_METHOD})')
-    f.add_argument('--seed', type=int, default=0, help='seed of stochastic training (0)')
-    f.add_argument('--min-range-c', type=float, default=registry.DEFAULT_MIN_RANGE_C,
-                   help='smallest temperature span to fit on, degC '
-                        f'({registry.DEFAULT_MIN_RANGE_C:g})')
+    _add_fit_options(f)
     _add_bag_options(f)
-    f.add_argument('--no-figures', action='store_true', help='write no PNG figures')
-    f.add_argument('--quiet', action='store_true', help='print only errors')
+    _add_output_options(f)
 
     a = sub.add_parser('apply', help='apply a model to a bag: compensated bag, metrics, report')
     a.add_argument('bag', metavar='BAG', help='recording to process (held out from training)')
@@ -135,8 +143,7 @@ def build_parser():
     a.add_argument('--no-bag', action='store_true', help='do not write OUT/compensated')
     _add_bag_options(a)
     _add_score_options(a)
-    a.add_argument('--no-figures', action='store_true', help='write no PNG figures')
-    a.add_argument('--quiet', action='store_true', help='print only errors')
+    _add_output_options(a)
 
     c = sub.add_parser('compare', help='train every method on one run, score on another')
     c.add_argument('train', metavar='TRAIN_BAG', help='training recording')
@@ -145,14 +152,10 @@ def build_parser():
     c.add_argument('--methods', default=None,
                    help='comma-separated methods (default: all known: '
                         f'{",".join(registry.method_names())})')
-    c.add_argument('--seed', type=int, default=0, help='seed of stochastic training (0)')
-    c.add_argument('--min-range-c', type=float, default=registry.DEFAULT_MIN_RANGE_C,
-                   help='smallest training temperature span, degC '
-                        f'({registry.DEFAULT_MIN_RANGE_C:g})')
+    _add_fit_options(c)
     _add_bag_options(c)
     _add_score_options(c)
-    c.add_argument('--no-figures', action='store_true', help='write no PNG figures')
-    c.add_argument('--quiet', action='store_true', help='print only errors')
+    _add_output_options(c)
 
     s = sub.add_parser('simulate', help='write a seeded train/test pair of thermal bags')
     try:

@@ -68,7 +68,7 @@ def test_table_is_well_formed(module):
 def test_yaml_lists_every_parameter_with_its_default(module):
     path = CONFIG_DIR / f'{module.NODE_NAME}.yaml'
     assert path.is_file(), f'missing {path}'
-    params = parameter_dict_from_yaml_file(str(path), target_nodes=[module.NODE_NAME])
+    params = parameter_dict_from_yaml_file(str(path), use_wildcard=True)  # /** or node name
     values = {name: parameter_value_to_python(p.value) for name, p in params.items()}
     table = {spec.name: spec for spec in module.PARAMETERS}
     assert set(values) == set(table), (f'only in YAML: {sorted(set(values) - set(table))}; '

@@ -218,7 +218,8 @@ def test_emd_wtd_sabp_end_to_end():
     m = EmdWtdSaBp(sa_iterations=500, epochs=300)
     m.fit(run, rng=np.random.default_rng(11))
     assert m.split_hz == pytest.approx(100.0 / t[-1])
-    assert all('noise' in c and 'drift' in c for c in m.imf_classes)
+    # one segment per axis here (4800 samples); both kinds of IMF in each
+    assert all(len(c) == 1 and 'noise' in c[0] and 'drift' in c[0] for c in m.imf_classes)
     out = m.apply(run)
     # the drift spans 0.4, 0.2, 0.1 rad/s; what is left is below the 0.01 rad/s noise
     assert np.all(np.std(out, 0) < 0.01)
@@ -251,3 +252,16 @@ def test_refusals(sim_pair):
         TemperaturePolynomial.from_dict({'method': 'bp'})
     with pytest.raises(ParameterError, match='order'):
         TemperaturePolynomial(order=-1)
+
+
+def test_segmented_emd_cross_fades_to_the_signal():
+    t = np.arange(1000) * 0.1
+    x = np.random.default_rng(12).standard_normal((1000, 3)) + np.sin(t / 10.0)[:, None]
+    m = EmdWtdSaBp(segment_samples=256)
+    # with every IMF called drift, the drift part is IMFs + residue of each segment, and the
+    # linear cross-fade weights sum to one: the signal comes back to rounding
+    denoised, drift, classes = m.decompose(t, x, np.inf)
+    np.testing.assert_allclose(drift, x, atol=1e-12)
+    assert not denoised.any()
+    # 256-sample segments overlapping by 32 start at 0, 224, 448, 672, 896 (the last to 1000)
+    assert all(len(c) == 5 for c in classes)

@@ -562,7 +562,7 @@ class ImuBagWriter:
         return logs
 
     def write_imu(self, stamp_ns, gyro_rad_s, accel_m_s2, *, angular_velocity_covariance=None,
-                  linear_acceleration_covariance=None, log_ns=None):
+                  linear_acceleration_covariance=None, log_ns=None, topic=None):
         """
         Append Imu messages.
 
@@ -578,13 +578,33 @@ class ImuBagWriter:
             Row-major covariances in (rad/s)^2 and (m/s^2)^2; zeros (unknown) if None.
         log_ns : int or array_like of int, optional
             Bag (receive) time in ns; the header stamps if None.
+        topic : str, optional
+            Another Imu topic of the same bag (e.g. a reference sensor), its connection created on
+            first use; ``imu_topic`` if None (only those messages count in ``imu_count``).
         """
         stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
         blobs = encode_imu_cdr(stamps, gyro_rad_s, accel_m_s2, frame_id=self.frame_id,
                                angular_velocity_covariance=angular_velocity_covariance,
                                linear_acceleration_covariance=linear_acceleration_covariance)
-        self._write(self._imu_conn, self._log_times(stamps, log_ns), blobs)
-        self.imu_count += len(blobs)
+        conn = self._imu_conn
+        if topic is not None and topic != self.imu_topic:
+            conn = self._extra_imu(topic)
+        self._write(conn, self._log_times(stamps, log_ns), blobs)
+        if conn is self._imu_conn:
+            self.imu_count += len(blobs)
+
+    def _extra_imu(self, topic):
+        extra = self.__dict__.setdefault('_extra_imu_conns', {})
+        if topic not in extra:
+            if self._writer is None:
+                raise BagError(f'bag {str(self.path)!r} is closed')
+            try:
+                extra[topic] = self._writer.add_connection(topic, IMU_MSGTYPE,
+                                                           typestore=typestore())
+            except Exception as err:  # noqa: BLE001 - rosbags WriterError
+                raise BagError(f'bag {str(self.path)!r}: cannot add topic {topic!r}: '
+                               f'{describe(err)}') from err
+        return extra[topic]
 
     def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
         """

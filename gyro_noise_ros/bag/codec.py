@@ -452,3 +452,71 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
     except ValueError as err:
         raise ParameterError(f'variance must be a float or have {n} values, got {np.shape(variance)}') from err
     return _encode_cdr(sec, nsec, frame_id, tail)
+
+
+def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):
+    """
+    Re-serialise CDR ``sensor_msgs/Imu`` messages with a new angular velocity and acceleration.
+
+    Everything else (encapsulation and byte order, header stamp and frame_id, orientation, the
+    covariances) stays byte for byte as received, so the result equals rosbags'
+    ``serialize_cdr`` of the message with the two vectors replaced. Messages the bulk decoder
+    verifies are patched in place as two 24-byte columns; any other (e.g. a non-ASCII frame_id)
+    goes through rosbags' deserialiser and serialiser in its own byte order.
+
+    Parameters
+    ----------
+    buf : numpy.ndarray of uint8
+        Buffer holding the messages (:func:`join_raws`).
+    starts, lengths : numpy.ndarray of int64, shape (n,)
+        Byte offset and length of each message in ``buf``.
+    gyro_rad_s, accel_m_s2 : array_like of float, shape (n, 3)
+        The new ``angular_velocity`` and ``linear_acceleration``.
+
+    Returns
+    -------
+    list of bytes
+        One serialised message per span.
+
+    Raises
+    ------
+    BagError
+        A message neither decoder can read.
+
+    """
+    n = starts.shape[0]
+    gyro = _vector3(gyro_rad_s, n, 'gyro_rad_s')
+    accel = _vector3(accel_m_s2, n, 'accel_m_s2')
+    if n == 0:
+        return []
+    ok, _, _ = decode_spans(buf, starts, lengths, IMU_TAIL_F8, ((13, 1),), False)
+    out = buf[int(starts[0]):int(starts[-1] + lengths[-1])].copy() if _packed(starts, lengths) \
+        else np.array(buf, copy=True)
+    base = int(starts[0]) if out.shape[0] != buf.shape[0] else 0
+    float_block = starts - base + lengths - 8 * IMU_TAIL_F8
+    little = out[np.where(ok, starts - base + 1, 0)] == 1
+    cols = np.arange(24)
+    for order, sel in (('<', ok & little), ('>', ok & ~little)):
+        idx = np.flatnonzero(sel)
+        if idx.size == 0:
+            continue
+        for (first, _), values in zip(IMU_FIELDS, (gyro, accel)):
+            pos = float_block[idx, None] + 8 * first + cols
+            out[pos] = np.ascontiguousarray(values[idx], dtype=order + 'f8').view(np.uint8)
+    blob = out.tobytes()
+    result = [blob[s:s + length] for s, length in zip((starts - base).tolist(), lengths.tolist())]
+    for i in np.flatnonzero(~ok):
+        raw = result[i]
+        msg = slow_decode(raw, IMU_MSGTYPE, False)
+        av = msg.angular_velocity
+        av.x, av.y, av.z = map(float, gyro[i])
+        la = msg.linear_acceleration
+        la.x, la.y, la.z = map(float, accel[i])
+        result[i] = bytes(typestore().serialize_cdr(msg, IMU_MSGTYPE,
+                                                    little_endian=len(raw) > 1 and raw[1] == 1))
+    return result
+
+
+def _packed(starts, lengths):
+    """Tell whether the spans are back to back in order (a joined list)."""
+    return starts.shape[0] < 2 or bool((starts[1:] == starts[:-1] + lengths[:-1]).all())

@@ -39,6 +39,7 @@ from ..link.emulator import (DEFAULT_ALPHA, DEFAULT_BIAS_DPS, DEFAULT_F, PAPER_N
 from ..link.protocol import MAX_SAMPLES_PER_FRAME, encode_samples
 from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
 from ._common import run_cli
+from ._scenario import add_scenario_arguments, scenario_from_args, write_bag
 
 PROG = 'portenta_emulator'
 #: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in SDRAM):
@@ -126,6 +127,7 @@ def build_parser():
     fault.add_argument('--disconnect-after', type=int, help='unplug once after this many samples sent')
     fault.add_argument('--disconnect-every-s', type=float, help='unplug after every this many seconds connected')
     fault.add_argument('--unplug-s', type=float, default=1.0, help='how long an unplug lasts (s)')
+    add_scenario_arguments(p)
     return p
 
 
@@ -153,12 +155,15 @@ def board_from_args(args):
     if args.vibration_hz > 0:
         vibration = Vibration(frequency_hz=args.vibration_hz, amplitude_dps=args.vibration_dps,
                               accel_amplitude_g=args.vibration_g)
+    scenario = scenario_from_args(args)
+    # with a scenario the specific force comes from its motion (gravity follows the attitude)
+    extra = {} if scenario is None else {'scenario': scenario, 'accel_g': (0.0, 0.0, 0.0)}
     return BoardModel(rng=np.random.default_rng(args.seed), odr_hz=args.odr_hz, gyro_fs_dps=args.gyro_fs_dps,
                       accel_fs_g=args.accel_fs_g, alpha=args.alpha, f=args.f, noise_std_dps=args.noise_std_dps,
                       bias_dps=args.bias_dps, temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
                       temp_sensitivity_dps_per_c=args.temp_sensitivity_dps_per_c, helium=helium,
-                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0,
-                      t0_us=args.t0_us, thermal=_thermal_from_args(args))
+                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0, t0_us=args.t0_us,
+                      thermal=_thermal_from_args(args), **extra)
 
 
 def _thermal_from_args(args):
@@ -572,7 +577,9 @@ def _body(argv):
     old = {sig: signal.signal(sig, stopper) for sig in (signal.SIGINT, signal.SIGTERM)}
     truth_fh = open(args.truth_out, 'ab') if args.truth_out else None
     try:
-        if args.write_sd:
+        if args.write_bag:
+            code = write_bag(args, board, truth_fh, counters)
+        elif args.write_sd:
             code = _run_sd(args, board, faults, truth_fh, counters)
         else:
             code = _serve(args, board, faults, truth_fh, counters, stopper)

@@ -206,13 +206,17 @@ class BoardModel:
     thermal : gyro_noise_ros.thermal.simulate.ThermalStream, optional, keyword-only
         Thermal model (oven, die lag, bias law, temperature sensor noise and LSB); replaces the
         linear temperature ramp and ``temp_sensitivity_dps_per_c``; its bias adds to ``bias_dps``.
+    scenario : object with ``apply(t_s, gyro, accel)`` and ``skip(n)``, optional, keyword-only
+        Reliability-procedure scenario (:class:`gyro_noise_ros.calibration.emulate.Scenario`):
+        adds motion seen through sensor errors to the samples before quantisation.
     """
 
     def __init__(self, *, rng, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, alpha=DEFAULT_ALPHA, f=DEFAULT_F,
                  noise_std_dps=PAPER_NOISE_STD_DPS, sigma_w_dps=None, memory=DEFAULT_MEMORY,
                  bias_dps=DEFAULT_BIAS_DPS, accel_g=(0.0, 0.0, 1.0), accel_noise_ug_rthz=ACCEL_NOISE_DENSITY_UG_RTHZ,
                  temperature_c=25.0, temp_drift_c_per_h=0.0, temp_sensitivity_dps_per_c=0.0, helium=None,
-                 vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None, thermal=None):
+                 vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None, scenario=None,
+                 thermal=None):
         if not isinstance(rng, np.random.Generator):
             raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
         self.odr_hz = lsm.check_odr(odr_hz)
@@ -259,6 +263,7 @@ class BoardModel:
         self.config_changes = []   # (samples_generated at the change, Ack)
         self.samples_overrun = 0
         self._fifo_overrun = False
+        self.scenario = scenario
 
     @property
     def time_s(self):
@@ -348,6 +353,8 @@ class BoardModel:
             # the die and the sensor move on through samples nobody read
             self.thermal.step(self._seg_start_s + (self._seg_index + np.arange(k)) / self.odr_hz)
             self._temp_rng.standard_normal(k)
+        if self.scenario is not None:
+            self.scenario.skip(k)
         self._seg_index += k
         self.samples_overrun += k
         self._fifo_overrun = True
@@ -392,6 +399,8 @@ class BoardModel:
             s = np.sin(2.0 * np.pi * v.frequency_hz * t + v.phase_rad)
             gyro += np.outer(s, _vec3('vibration amplitude_dps', v.amplitude_dps) * DEG)
             accel += np.outer(s, _vec3('vibration accel_amplitude_g', v.accel_amplitude_g) * lsm.STANDARD_GRAVITY)
+        if self.scenario is not None:
+            gyro, accel = self.scenario.apply(t, gyro, accel)
         out = np.zeros(n, dtype=SAMPLE_DTYPE)
         out['seq'] = (self.seq + np.arange(n, dtype=np.uint64)) % (1 << 32)
         device_us = np.floor(t * 1e6 * (1.0 + self.clock_ppm * 1e-6)).astype(np.int64)

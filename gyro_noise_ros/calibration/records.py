@@ -1,0 +1,125 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Read the recordings of the reliability procedure: IMU batches in SI with stamps in seconds.
+
+Streams :class:`gyro_noise_ros.bag.ImuBagReader` (constant memory). The sample rate is the median
+stamp interval of the first batch (a record with no two distinct stamps cannot be analysed), or a
+nominal rate when given.
+"""
+
+import numpy as np
+
+from ..bag import ImuBagReader
+from ..errors import InputDataError, ParameterError
+
+#: Messages decoded per batch (~0.4 KB each).
+BATCH = 65536
+
+
+def rate_from_stamps(stamp_ns, source=''):
+    """
+    Return the sample rate implied by the median stamp interval.
+
+    Parameters
+    ----------
+    stamp_ns : array_like
+        Stamps (ns).
+    source : str
+        Recording name for the message.
+
+    Returns
+    -------
+    float
+        Rate (Hz).
+
+    Raises
+    ------
+    InputDataError
+        Fewer than two samples or no positive interval.
+
+    """
+    st = np.asarray(stamp_ns, dtype=np.int64)
+    d = np.diff(st)
+    d = d[d > 0]
+    if d.size == 0:
+        raise InputDataError(f'recording {source!r}: fewer than two distinct stamps, so no '
+                             f'sample rate')
+    return 1e9 / float(np.median(d))
+
+
+def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH, t0_ns=None):
+    """
+    Yield the recording as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Recording (anything :class:`~gyro_noise_ros.bag.ImuBagReader` reads).
+    topic : str, optional, keyword-only
+        ``sensor_msgs/Imu`` topic; the single one when None.
+    rate_hz : float, optional, keyword-only
+        Nominal rate (Hz); from the stamps when None.
+    batch : int, keyword-only
+        Messages per batch.
+    t0_ns : int, optional, keyword-only
+        Stamp (ns) that becomes t = 0; the first sample's when None.
+
+    Yields
+    ------
+    tuple
+        Rate (Hz, fixed by the first batch), stamps (s, relative to ``t0_ns``), (n, 3)
+        specific force (m/s^2), (n, 3) angular rate (rad/s).
+
+    """
+    if rate_hz is not None and not (np.isfinite(rate_hz) and rate_hz > 0):
+        raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz!r}')
+    t0 = t0_ns
+    rate = rate_hz
+    with ImuBagReader(path, topic=topic) as reader:
+        for b in reader.iter_batches(batch):
+            if t0 is None:
+                t0 = int(b.stamp_ns[0])
+            if rate is None:
+                rate = rate_from_stamps(b.stamp_ns, str(path))
+            t = (b.stamp_ns.astype(np.int64) - t0) * 1e-9
+            yield float(rate), t, np.asarray(b.accel, np.float64), np.asarray(b.gyro, np.float64)
+
+
+def read_imu(path, *, topic=None, rate_hz=None, t0_ns=None):
+    """
+    Read a whole recording into memory (for records of a few million samples).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Recording.
+    topic : str, optional, keyword-only
+        ``sensor_msgs/Imu`` topic.
+    rate_hz : float, optional, keyword-only
+        Nominal rate (Hz).
+    t0_ns : int, optional, keyword-only
+        Stamp (ns) that becomes t = 0; the first sample's when None.
+
+    Returns
+    -------
+    tuple
+        ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` as in :func:`iter_imu`.
+
+    """
+    parts = list(iter_imu(path, topic=topic, rate_hz=rate_hz, t0_ns=t0_ns))
+    rate = parts[0][0]
+    return (rate, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts]),
+            np.concatenate([p[3] for p in parts]))

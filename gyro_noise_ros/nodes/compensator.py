@@ -1,0 +1,308 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROS 2 node ``imu_compensator``: calibration and thermal drift compensation after the driver.
+
+REP-145: the driver publishes what the device reports (``imu/data_raw``); this node applies the
+six-position calibration (bias, scale factor, misalignment of accelerometer and gyro,
+:mod:`gyro_noise_ros.calibration.apply`) and, given a causal thermal model, subtracts the gyro
+offset it predicts from the die temperature and its rate (:mod:`gyro_noise_ros.thermal.live`,
+evaluated per ``imu/temperature`` message, interpolated onto the gyro stamps). It publishes
+``imu/data_compensated`` (``sensor_msgs/Imu``, reliable keep-last deep queue per REP-2003) with
+the header stamp, frame_id, orientation and covariances of each input message unchanged, and
+``/diagnostics`` status ``'<node>: compensation'``. Ingestion as in the analyzer: raw
+subscriptions drained every ``drain_period_s`` and decoded and re-encoded in bulk. See
+``docs/compensation.md``.
+"""
+
+import math
+import sys
+import time
+
+from rcl_interfaces.msg import ParameterType
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu, Temperature
+
+from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
+                          diagnostics_publisher, ERROR, ParamSpec, PolledGroup, run_node,
+                          sensor_data_qos, SequenceGapCounter, take_all, unused_callback, WARN,
+                          worst)
+from ..bag import decode_temperature
+from ..bag.codec import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
+from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
+from ..errors import BagError, ParameterError
+from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live_model, RANGE_MARGIN,
+                            RANGE_NAMES, RANGE_OUTSIDE)
+from ..thermal.run import DEFAULT_RATE_WINDOW_S
+
+NODE_NAME = 'imu_compensator'
+_DEG = 180.0 / math.pi
+
+
+class ArrayParamSpec(ParamSpec):
+    """A table row whose value is a fixed-length array of doubles (``default`` a list)."""
+
+    @property
+    def ros_type(self):
+        """``PARAMETER_DOUBLE_ARRAY``."""
+        return ParameterType.PARAMETER_DOUBLE_ARRAY
+
+    def check(self, value):
+        """Refuse a wrong length or a non-finite element, naming the parameter."""
+        values = list(value)
+        if len(values) != len(self.default) or not all(math.isfinite(v) for v in values):
+            raise ParameterError(f"parameter '{self.name}' = {values!r} must be "
+                                 f'{len(self.default)} finite numbers (write 0.0, not 0)')
+
+
+_CAL_DOC = {
+    'accel_bias_m_s2': 'Accelerometer bias b, x y z',
+    'accel_scale_factor': 'Accelerometer scale-factor errors S, x y z (-0.0002 = -0.02 %)',
+    'accel_misalignment': 'Accelerometer cross-axis matrix M, 3x3 row-major, zero diagonal',
+    'gyro_bias_rad_s': 'Gyro bias b, x y z',
+    'gyro_scale_factor': 'Gyro scale-factor errors S, x y z',
+    'gyro_misalignment': 'Gyro cross-axis matrix M, 3x3 row-major, zero diagonal',
+}
+
+#: The parameter table (``config/imu_compensator.yaml`` lists every row with default and unit).
+PARAMETERS = (
+    ParamSpec('calibration_file', '', 'calibration.yaml of gyro_noise_calibrate; empty: the '
+              'calibration parameters below (e.g. --params-file calibration.yaml)',
+              read_only=True),
+    *(ArrayParamSpec(key, [0.0] * KEYS[key][0], _CAL_DOC[key] + '; measured = (I + diag(S) + M)'
+                     ' @ true + b', unit=KEYS[key][1], read_only=True) for key in _CAL_DOC),
+    ParamSpec('calibration_gravity_m_s2', 9.80665, 'Local gravity the calibration used (reported)',
+              unit='m/s^2', read_only=True, min_value=9.7, max_value=9.9),
+    ParamSpec('thermal_model_file', '', 'model.json of gyro_noise_thermal fit (a causal method); '
+              'empty: no thermal compensation', read_only=True),
+    ParamSpec('temperature_rate_window_s', 0.0, 'Trailing window of the temperature rate dT '
+              f"(0: the model's own, else {DEFAULT_RATE_WINDOW_S:g} s)", unit='s',
+              read_only=True, min_value=0.0, max_value=3600.0),
+    ParamSpec('temperature_margin_c', -1.0, 'Trusted margin beyond the trained temperature range '
+              "(-1: the model's own, else 5 degC)", unit='degC', read_only=True, min_value=-1.0,
+              max_value=200.0),
+    ParamSpec('out_of_range_action', 'hold', 'Beyond the margin the offset is never extrapolated: '
+              'hold the last trusted one, or none (calibration only)', read_only=True,
+              choices=BEYOND_ACTIONS),
+    ParamSpec('temperature_timeout_s', 2.0, 'WARN when the newest temperature is older than this '
+              '(the offset is held meanwhile)', unit='s', read_only=True, min_value=0.01,
+              max_value=3600.0),
+    ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
+              read_only=True, min_value=10, max_value=1_000_000),
+    ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
+              'publisher', unit='messages', read_only=True, min_value=10, max_value=1_000_000),
+    # 50 ms, not the analyzer's 20: the output latency grows by up to this much, but the fixed
+    # per-wake-up cost of rclpy and of the batch calls falls; measured CPU at 6.66 kHz with
+    # calibration + thermal 15-16 % of a core at 0.02 s, 11-12 % at 0.05 s (loaded 2-core machine,
+    # bench/bench_compensator.py). Lower it where latency matters more than CPU.
+    ParamSpec('drain_period_s', 0.05, 'Period of the loop taking queued messages; bounds the '
+              'added latency', unit='s', read_only=True, min_value=0.001, max_value=0.5),
+    ParamSpec('diagnostics_period_s', 1.0, 'Period of /diagnostics', unit='s', read_only=True,
+              min_value=0.05, max_value=3600.0),
+    ParamSpec('stale_after_s', 5.0, 'ERROR after this long without imu/data_raw', unit='s',
+              read_only=True, min_value=0.1, max_value=3600.0),
+    ParamSpec('hardware_id', '', 'hardware_id of the diagnostics (empty: the frame_id of the '
+              'data)', read_only=True),
+)
+
+
+def calibration_from(p):
+    """Build the calibration from the parameter values: the file, or the parameters (not both)."""
+    if not p['calibration_file']:
+        values = {key: p[key] if key == 'calibration_gravity_m_s2' else list(p[key])
+                  for key in KEYS}
+        return calibration_from_parameters(values, source='parameter'), 'parameters'
+    changed = [key for key in _CAL_DOC if any(list(p[key]))]
+    if changed:
+        raise ParameterError(f"give either 'calibration_file' or the calibration parameters, not "
+                             f"both (set: {', '.join(changed)})")
+    return load_calibration(p['calibration_file']), f"file {p['calibration_file']}"
+
+
+def _vec(values, scale=1.0):
+    return ', '.join(f'{v * scale:.6g}' for v in values)
+
+
+class ImuCompensatorNode(Node):
+    """
+    Calibration and thermal compensation node (see the module docstring).
+
+    Parameters
+    ----------
+    thermal_model : ThermalMethod or None, keyword-only
+        A causal model object used instead of ``thermal_model_file`` (embedding, tests).
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (e.g. ``parameter_overrides``).
+
+    """
+
+    def __init__(self, *, thermal_model=None, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        p = declare_parameter_table(self, PARAMETERS)
+        self._p = p
+        self._status_name = f'{self.get_name()}: compensation'
+        self.calibration, self._cal_source = calibration_from(p)
+        margin = None if p['temperature_margin_c'] < 0 else p['temperature_margin_c']
+        range_c = None
+        if thermal_model is None and p['thermal_model_file']:
+            thermal_model, range_c, file_margin = load_live_model(p['thermal_model_file'])
+            margin = file_margin if margin is None else margin
+        self.thermal = None if thermal_model is None else LiveDriftEvaluator(
+            thermal_model, range_c=range_c, rate_window_s=p['temperature_rate_window_s'] or None,
+            margin_c=margin, beyond=p['out_of_range_action'])
+        self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'uncorrected',
+                                     'temperatures'), 0)
+        self._transport = SequenceGapCounter()
+        self._frame_id = ''
+        self._last_data = self._last_temp = None
+        self._offset = None
+        self._rate = (time.monotonic(), 0, math.nan)  # time, published count, Hz
+        group = PolledGroup()
+        qos = sensor_data_qos(p['queue_depth'])
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                 raw=True, callback_group=group)
+        self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,
+                                                  qos, raw=True, callback_group=group)
+        out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
+                             reliability=ReliabilityPolicy.RELIABLE)
+        self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)
+        self._diag_pub = diagnostics_publisher(self)
+        self.create_timer(p['drain_period_s'], self.drain)
+        self.create_timer(p['diagnostics_period_s'], self.publish_diagnostics)
+        model = 'none' if self.thermal is None else self.thermal.name
+        self.get_logger().info(f'compensating {self._imu_sub.topic_name} -> '
+                               f'{self._pub.topic_name}: calibration from {self._cal_source}, '
+                               f'thermal model {model}')
+
+    def drain(self):
+        """Take queued temperatures and Imu messages, compensate them, publish."""
+        raws, _, _ = take_all(self._temp_sub, Temperature)
+        if raws and self.thermal is not None:
+            self.counts['temperatures'] += len(raws)
+            try:
+                stamp_ns, temperature_c = decode_temperature(raws)
+            except BagError as err:  # a corrupt message: drop the batch, count it, go on
+                self.thermal.rejected += len(raws)
+                self.get_logger().error(f'temperature batch dropped: {err}',
+                                        throttle_duration_sec=5.0)
+                stamp_ns, temperature_c = (), ()
+            if self.thermal.add_temperature(stamp_ns, temperature_c):
+                self._last_temp = time.monotonic()
+        raws, _, sequence = take_all(self._imu_sub, Imu)
+        if raws:
+            self.compensate(raws, sequence)
+
+    def compensate(self, raws, sequence=()):
+        """Decode a batch of raw Imu messages, correct them, publish the results."""
+        self.counts['received'] += len(raws)
+        self._transport.update(sequence)
+        self._last_data = time.monotonic()
+        buf, starts, lengths = join_raws(raws)
+        keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
+        if keep is not None:
+            self.counts['undecodable'] += len(raws) - keep.size
+            starts, lengths = starts[keep], lengths[keep]
+        if not stamp_ns.size:
+            return
+        gyro, accel = self.calibration.apply(gyro, accel)
+        if self.thermal is not None:
+            offset = self.thermal.drift_at(stamp_ns)
+            if offset is None:
+                self.counts['uncorrected'] += stamp_ns.size
+            else:
+                gyro -= offset
+                self._offset = offset[-1]
+        publish = self._pub.publish
+        for raw in patch_imu_spans(buf, starts, lengths, gyro, accel):
+            publish(raw)
+        self.counts['published'] += stamp_ns.size
+        if not self._frame_id:
+            self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
+
+    def diagnostics(self):
+        """Build the ``DiagnosticArray`` of the current state (one status)."""
+        now = time.monotonic()
+        t0, n0, _ = self._rate
+        if now - t0 >= 0.5:
+            n1 = self.counts['published']
+            self._rate = (now, n1, (n1 - n0) / (now - t0))
+        c, checks = self.counts, []
+        since = None if self._last_data is None else now - self._last_data
+        if since is None or since > self._p['stale_after_s']:
+            checks.append((ERROR, 'No imu/data_raw ' + ('yet.' if since is None else
+                                                        f'for {since:.1f} s.')))
+        cal = self.calibration
+        values = [('Calibration source', self._cal_source),
+                  ('Gyro bias (deg/s)', _vec(cal.gyro.bias, _DEG)),
+                  ('Gyro scale factor (%)', _vec(cal.gyro.scale_factor, 100.0)),
+                  ('Accelerometer bias (m/s^2)', _vec(cal.accel.bias)),
+                  ('Accelerometer scale factor (%)', _vec(cal.accel.scale_factor, 100.0)),
+                  ('Calibration gravity (m/s^2)', f'{cal.gravity_m_s2:.6g}')]
+        ev = self.thermal
+        if ev is None:
+            values.append(('Thermal model', 'none'))
+        else:
+            age = None if self._last_temp is None else now - self._last_temp
+            range_name = 'n/a' if ev.status is None else RANGE_NAMES[ev.status]
+            values += [
+                ('Thermal model', ev.name),
+                ('Thermal model range (degC)', f'{ev.range_lo_c:.4g} to {ev.range_hi_c:.4g}, '
+                 f'margin {ev.margin_c:.3g}'),
+                ('Temperature (degC)', f'{ev.temperature_c:.4g}'),
+                ('Temperature rate (degC/s)', f'{ev.rate_c_s:.4g}'),
+                ('Temperature age (s)', 'n/a' if age is None else f'{age:.2f}'),
+                ('Temperature range status', range_name),
+                ('Thermal offset (deg/s)', 'n/a' if self._offset is None else
+                 _vec(self._offset, _DEG)),
+                ('Temperature messages', str(c['temperatures'])),
+                ('Temperature messages rejected', str(ev.rejected)),
+                ('Temperature messages beyond range + margin',
+                 str(ev.knots_by_status[RANGE_OUTSIDE])),
+                ('Samples without thermal correction', str(c['uncorrected'])),
+            ]
+            if ev.status == RANGE_OUTSIDE:
+                checks.append((ERROR, f'Temperature {ev.temperature_c:.1f} degC is beyond the '
+                               f'model range + margin: offset not extrapolated '
+                               f"({self._p['out_of_range_action']})."))
+            elif ev.status == RANGE_MARGIN:
+                checks.append((WARN, f'Temperature {ev.temperature_c:.1f} degC is outside the '
+                               'trained range (within the margin).'))
+            if age is None:
+                checks.append((WARN, 'No imu/temperature yet: calibration only.'))
+            elif age > self._p['temperature_timeout_s']:
+                checks.append((WARN, f'Temperature is {age:.1f} s old: offset held.'))
+        values += [('Messages received', str(c['received'])),
+                   ('Messages published', str(c['published'])),
+                   ('Output rate (Hz)', f'{self._rate[2]:.1f}'),
+                   ('Messages undecodable', str(c['undecodable'])),
+                   ('Messages dropped before the node', str(self._transport.missing))]
+        level, message = worst(checks, 'Compensating.')
+        hardware_id = self._p['hardware_id'] or self._frame_id or 'unknown'
+        return diagnostic_array(self.get_clock().now().to_msg(), [diagnostic_status(
+            self._status_name, hardware_id, level, message, values)])
+
+    def publish_diagnostics(self):
+        """Publish :meth:`diagnostics` on ``/diagnostics``."""
+        self._diag_pub.publish(self.diagnostics())
+
+
+def main(args=None):
+    """Run the node until Ctrl-C or SIGTERM; exit code 2 for a bad parameter (one line)."""
+    return run_node(ImuCompensatorNode, args, prog=NODE_NAME)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,334 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Live evaluation of a causal thermal drift model: what the ``imu_compensator`` node subtracts.
+
+A thermal model (``gyro_noise_thermal fit``'s ``model.json``, or any object following
+:class:`~gyro_noise_ros.thermal.run.ThermalMethod` with ``causal = True``) gives the gyro offset
+``drift_rad_s(T, dT)`` as a function of the die temperature T (degC) and its rate dT (degC/s).
+:class:`LiveDriftEvaluator` evaluates it at the temperature message rate and interpolates the
+offset linearly in time onto the gyro stamps:
+
+- dT is :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` on a trailing buffer holding the
+  last ``rate_window_s`` of temperatures: the same trailing-window slope the offline fit used, so a
+  model sees the same inputs live as in training.
+- Each temperature message becomes a knot (stamp, offset). Gyro stamps between two knots get the
+  linear interpolation of the two offsets; gyro stamps after the newest knot get the newest offset
+  (live, the next temperature is not known yet); stamps before the first knot get the first one.
+- Range: a model is trusted over its training temperature range widened by its margin
+  (``range_margin_c``, the model's own or :data:`DEFAULT_RANGE_MARGIN_C`). A temperature outside
+  the range but within the margin is evaluated and flagged :data:`RANGE_MARGIN` (the node: WARN);
+  one beyond the margin is never extrapolated and is flagged :data:`RANGE_OUTSIDE` (the node:
+  ERROR): its knot holds the last offset evaluated inside the trusted span (``beyond='hold'``) or
+  carries no offset at all (``beyond='none'``).
+
+Non-causal methods need the whole record (VMD decomposition, time-frequency peak filtering,
+EMD, wavelet-threshold denoising of the full signal) and are refused with a message naming those
+offline-only steps. No ROS is imported here.
+"""
+
+import math
+
+import numpy as np
+
+from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from ..errors import ParameterError
+
+#: Methods that need the whole record, with the offline-only steps they rely on.
+NON_CAUSAL_METHODS = {
+    'parallel': 'VMD decomposition (MOPSO-chosen K, alpha) and TFPF filtering of the mixed modes',
+    'wtd': 'wavelet-threshold denoising of the whole record',
+    'emd_wtd_sabp': 'EMD decomposition and wavelet-threshold denoising of the modes',
+}
+
+#: Margin beyond the training temperature range when the model does not give its own (degC).
+DEFAULT_RANGE_MARGIN_C = 5.0
+
+#: Range status of a knot: inside the training range, within the margin, beyond the margin.
+RANGE_OK, RANGE_MARGIN, RANGE_OUTSIDE = 0, 1, 2
+RANGE_NAMES = {RANGE_OK: 'inside', RANGE_MARGIN: 'within margin', RANGE_OUTSIDE: 'outside'}
+
+BEYOND_ACTIONS = ('hold', 'none')
+
+_NS = 1_000_000_000
+
+
+def _model_value(method, key):
+    value = getattr(method, key, None)
+    if value is None and hasattr(method, 'to_dict'):
+        try:
+            value = method.to_dict().get(key)
+        except Exception:  # noqa: BLE001 - a model that cannot describe itself gives no value
+            value = None
+    return value
+
+
+def check_live_model(method, *, range_c=None, margin_c=None):
+    """
+    Check that a thermal model can run live and return its trusted temperature span.
+
+    Parameters
+    ----------
+    method : ThermalMethod
+        The model; needs ``name``, ``causal``, ``drift_rad_s`` and a training range.
+    range_c : (float, float) or None, keyword-only
+        Training temperature range (degC); None: the method's ``temperature_range_c`` attribute
+        or ``to_dict()`` key.
+    margin_c : float or None, keyword-only
+        Margin (degC) beyond the range; None: the model's ``range_margin_c`` or
+        :data:`DEFAULT_RANGE_MARGIN_C`.
+
+    Returns
+    -------
+    (float, float, float)
+        Training range low and high (degC) and the margin (degC).
+
+    Raises
+    ------
+    ParameterError
+        Non-causal model (naming its offline-only steps), no ``drift_rad_s``, or no valid range.
+
+    """
+    name = str(getattr(method, 'name', type(method).__name__))
+    if name in NON_CAUSAL_METHODS or not getattr(method, 'causal', False):
+        steps = NON_CAUSAL_METHODS.get(name, 'steps that use future samples')
+        raise ParameterError(
+            f"thermal model '{name}' is not causal: it needs {steps}, which run offline only "
+            f'(gyro_noise_thermal apply on a recording); fit a causal method (e.g. poly3) '
+            f'for live compensation')
+    if not callable(getattr(method, 'drift_rad_s', None)):
+        raise ParameterError(f"thermal model '{name}' has no drift_rad_s(T, dT): it cannot run "
+                             'live')
+    span = _model_value(method, 'temperature_range_c') if range_c is None else range_c
+    try:
+        lo, hi = (float(v) for v in span)
+    except (TypeError, ValueError):
+        raise ParameterError(f"thermal model '{name}' gives no training temperature range "
+                             f'(temperature_range_c = {span!r}): it cannot be checked '
+                             'live') from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+        raise ParameterError(f"thermal model '{name}': bad temperature_range_c {span!r}")
+    if margin_c is None:
+        margin_c = _model_value(method, 'range_margin_c')
+        margin_c = DEFAULT_RANGE_MARGIN_C if margin_c is None else margin_c
+    margin_c = float(margin_c)
+    # One evaluation at the middle of the range: the wrong shape or a NaN fails at start-up, not
+    # in the middle of a stream.
+    probe = np.asarray(method.drift_rad_s(np.array([(lo + hi) / 2]), np.zeros(1)))
+    if probe.shape != (1, 3) or not np.isfinite(probe).all():
+        raise ParameterError(f"thermal model '{name}': drift_rad_s(T, dT) must return finite "
+                             f'(n, 3) offsets, got {probe.shape} {probe.tolist()}')
+    if not (math.isfinite(margin_c) and margin_c >= 0):
+        raise ParameterError(f"thermal model '{name}': range margin must be >= 0 degC, got "
+                             f'{margin_c!r}')
+    return lo, hi, margin_c
+
+
+def load_live_model(path):
+    """
+    Load a ``model.json`` with the thermal registry (``thermal.methods.load_model``).
+
+    The registry returns the fitted method with what it was trained on (``training``:
+    ``temperature_min_c``, ``temperature_max_c``) and the package's range margin
+    (``methods.DEFAULT_RANGE_MARGIN_C``); a bare method carrying its own range is accepted too.
+
+    Parameters
+    ----------
+    path : str
+        ``model.json`` written by ``gyro_noise_thermal fit``.
+
+    Returns
+    -------
+    method : ThermalMethod
+    range_c : (float, float) or None
+        Training temperature range (degC); None when the method carries its own.
+    margin_c : float or None
+        The registry's default margin (degC); None: :data:`DEFAULT_RANGE_MARGIN_C`.
+
+    Raises
+    ------
+    GyroNoiseError
+        The registry's errors (unreadable file, unknown method), or ParameterError when this
+        build has no registry. Causality is checked by :func:`check_live_model`.
+
+    """
+    try:
+        from . import methods
+    except ImportError as err:
+        raise ParameterError(f'thermal model {path}: this build has no thermal model registry '
+                             f'(gyro_noise_ros.thermal.methods: {err})') from err
+    loaded = methods.load_model(path)
+    training = getattr(loaded, 'training', None)
+    method = getattr(loaded, 'method', loaded)
+    range_c = None
+    if training is not None:
+        range_c = (training.temperature_min_c, training.temperature_max_c)
+    return method, range_c, getattr(methods, 'DEFAULT_RANGE_MARGIN_C', None)
+
+
+class LiveDriftEvaluator:
+    """
+    Evaluate a causal thermal model on a live temperature stream, interpolate onto gyro stamps.
+
+    Parameters
+    ----------
+    method : ThermalMethod
+        Causal model (checked with :func:`check_live_model`).
+    range_c : (float, float) or None, keyword-only
+        Training temperature range (degC); None: the method's own.
+    rate_window_s : float or None, keyword-only
+        Trailing window of :func:`temperature_rate_c_s` (s); None: the model's own
+        ``rate_window_s`` (the window it was fitted with), else
+        :data:`~gyro_noise_ros.thermal.run.DEFAULT_RATE_WINDOW_S`.
+    margin_c : float or None, keyword-only
+        Range margin (degC); None: the model's.
+    beyond : str, keyword-only
+        What a knot beyond the margin carries: ``'hold'`` the last trusted offset, ``'none'`` zero.
+
+    """
+
+    def __init__(self, method, *, range_c=None, rate_window_s=None, margin_c=None,
+                 beyond='hold'):
+        lo, hi, margin = check_live_model(method, range_c=range_c, margin_c=margin_c)
+        self.range_lo_c, self.range_hi_c, self.margin_c = lo, hi, margin
+        if beyond not in BEYOND_ACTIONS:
+            raise ParameterError(f'beyond must be one of {BEYOND_ACTIONS}, got {beyond!r}')
+        if rate_window_s is None:
+            rate_window_s = _model_value(method, 'rate_window_s') or DEFAULT_RATE_WINDOW_S
+        if not rate_window_s > 0:
+            raise ParameterError(f'rate_window_s must be > 0, got {rate_window_s!r}')
+        self.method = method
+        self.name = str(getattr(method, 'name', type(method).__name__))
+        self.rate_window_s = float(rate_window_s)
+        self.beyond = beyond
+        self._t0_ns = None
+        self._buf_t = np.zeros(0)  # trailing temperature history, s since _t0_ns
+        self._buf_temp = np.zeros(0)
+        self._knot_t = np.zeros(0)  # knots: s since _t0_ns, offsets (k, 3)
+        self._knot_drift = np.zeros((0, 3))
+        self._trusted = None  # last offset evaluated inside range + margin
+        self.temperature_c = math.nan  # newest temperature, its rate and range status
+        self.rate_c_s = math.nan
+        self.status = None
+        self.stamp_ns = None
+        self.knots = 0
+        self.knots_by_status = {RANGE_OK: 0, RANGE_MARGIN: 0, RANGE_OUTSIDE: 0}
+        self.rejected = 0  # non-finite or not newer than the previous message
+
+    def range_status(self, temperature_c):
+        """Return the range status (RANGE_*) of each temperature, as an int array."""
+        temp = np.asarray(temperature_c, dtype=np.float64)
+        lo, hi, m = self.range_lo_c, self.range_hi_c, self.margin_c
+        status = np.full(temp.shape, RANGE_OUTSIDE, np.int8)
+        status[(temp >= lo - m) & (temp <= hi + m)] = RANGE_MARGIN
+        status[(temp >= lo) & (temp <= hi)] = RANGE_OK
+        return status
+
+    def add_temperature(self, stamp_ns, temperature_c):
+        """
+        Add temperature messages: each one newer than the last becomes a knot.
+
+        Parameters
+        ----------
+        stamp_ns : array_like of int
+            (k,) header stamps, ns.
+        temperature_c : array_like of float
+            (k,) temperatures, degC.
+
+        Returns
+        -------
+        int
+            Knots added (non-finite or stale messages are counted in ``rejected``).
+
+        """
+        stamps = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
+        temp = np.asarray(temperature_c, dtype=np.float64).reshape(-1)
+        order = np.argsort(stamps, kind='stable')
+        stamps, temp = stamps[order], temp[order]
+        keep = np.isfinite(temp)
+        if self.stamp_ns is not None:
+            keep &= stamps > self.stamp_ns
+        if keep.size > 1:
+            keep[1:] &= stamps[1:] > stamps[:-1]
+        self.rejected += int(keep.size - np.count_nonzero(keep))
+        stamps, temp = stamps[keep], temp[keep]
+        k = stamps.size
+        if k == 0:
+            return 0
+        if self._t0_ns is None:
+            self._t0_ns = int(stamps[0])
+        t = (stamps - self._t0_ns) / _NS
+        self._buf_t = np.concatenate((self._buf_t, t))
+        self._buf_temp = np.concatenate((self._buf_temp, temp))
+        rate = temperature_rate_c_s(self._buf_t, self._buf_temp, window_s=self.rate_window_s)[-k:]
+        status = self.range_status(temp)
+        drift = np.asarray(self.method.drift_rad_s(temp, rate), dtype=np.float64).reshape(k, 3)
+        outside = status == RANGE_OUTSIDE
+        if outside.any():
+            # Never extrapolate: a knot beyond the margin holds the last trusted offset (forward
+            # fill over the batch, seeded by earlier batches) or carries none.
+            fill = np.zeros(3) if self._trusted is None or self.beyond == 'none' else self._trusted
+            if self.beyond == 'hold':
+                idx = np.where(~outside, np.arange(k), -1)
+                np.maximum.accumulate(idx, out=idx)
+                drift = np.where((idx >= 0)[:, None], drift[np.maximum(idx, 0)], fill)
+            else:
+                drift[outside] = fill
+        if not outside.all():
+            self._trusted = drift[np.flatnonzero(~outside)[-1]].copy()
+        self._knot_t = np.concatenate((self._knot_t, t))
+        self._knot_drift = np.concatenate((self._knot_drift, drift))
+        # Keep what the next rate needs (the trailing window) and the knots gyro stamps still use.
+        self._buf_t, self._buf_temp = self._trailing(self._buf_t, self._buf_temp, t[-1])
+        self.temperature_c, self.rate_c_s = float(temp[-1]), float(rate[-1])
+        self.status, self.stamp_ns = int(status[-1]), int(stamps[-1])
+        self.knots += k
+        for code in self.knots_by_status:
+            self.knots_by_status[code] += int(np.count_nonzero(status == code))
+        return k
+
+    def _trailing(self, t, values, t_last):
+        first = np.searchsorted(t, t_last - self.rate_window_s, side='left')
+        return t[first:], values[first:]
+
+    def drift_at(self, stamp_ns):
+        """
+        Offset to subtract at each gyro stamp, linear in time between temperature knots.
+
+        Parameters
+        ----------
+        stamp_ns : array_like of int
+            (n,) gyro stamps, ns (non-decreasing within a batch).
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (n, 3) offsets in rad/s; None before the first temperature message.
+
+        """
+        if self._knot_t.size == 0:
+            return None
+        x = (np.asarray(stamp_ns, dtype=np.int64) - self._t0_ns) / _NS
+        out = np.empty((x.size, 3))
+        for axis in range(3):
+            out[:, axis] = np.interp(x, self._knot_t, self._knot_drift[:, axis])
+        if x.size:
+            # Knots before the one at or before the oldest stamp asked for are no longer needed
+            # (gyro stamps only advance); keep that one so the interval stays interpolated.
+            first = max(int(np.searchsorted(self._knot_t, x.min(), side='right')) - 1, 0)
+            if first:
+                self._knot_t = self._knot_t[first:]
+                self._knot_drift = self._knot_drift[first:]
+        return out

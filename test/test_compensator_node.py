@@ -1,0 +1,317 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+``imu_compensator`` in-process: published messages equal the pure computation; refusals.
+
+The node runs in this process with ``parameter_overrides`` (or an injected causal model) on a
+private ROS_DOMAIN_ID and its own rclpy context; a player node publishes serialised Imu and
+Temperature messages, a listener takes ``imu/data_compensated`` raw and decodes it.
+"""
+
+import os
+import random
+import subprocess
+import sys
+import time
+
+os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
+
+from _thermal_linear import LinearThermal  # noqa: E402
+from gyro_noise_ros.bag import decode_imu  # noqa: E402
+from gyro_noise_ros.bag.codec import encode_imu_cdr, encode_temperature_cdr  # noqa: E402
+from gyro_noise_ros.bag.codec import typestore  # noqa: E402
+from gyro_noise_ros.calibration.apply import calibration_from_parameters  # noqa: E402
+from gyro_noise_ros.errors import ParameterError  # noqa: E402
+from gyro_noise_ros.nodes import compensator  # noqa: E402
+from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup  # noqa: E402
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all  # noqa: E402
+from gyro_noise_ros.nodes._ros_common import unused_callback, WARN  # noqa: E402
+from gyro_noise_ros.thermal.live import LiveDriftEvaluator  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import rclpy  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+
+pytestmark = pytest.mark.ros
+
+RATE_HZ = 6660.0
+NS = 1_000_000_000
+T0_NS = 1_700_000_000 * NS
+
+
+@pytest.fixture
+def context():
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    yield ctx
+    rclpy.try_shutdown(context=ctx)
+
+
+def _calibration_params(seed):
+    rng = np.random.default_rng(seed)
+    mis = [rng.normal(0, 2e-3, (3, 3)) for _ in range(2)]
+    for m in mis:
+        np.fill_diagonal(m, 0.0)
+    return {'accel_bias_m_s2': rng.normal(0, 0.05, 3).tolist(),
+            'accel_scale_factor': rng.normal(0, 1e-3, 3).tolist(),
+            'accel_misalignment': mis[0].reshape(-1).tolist(),
+            'gyro_bias_rad_s': rng.normal(0, 0.01, 3).tolist(),
+            'gyro_scale_factor': rng.normal(0, 1e-3, 3).tolist(),
+            'gyro_misalignment': mis[1].reshape(-1).tolist()}
+
+
+def _imu_stream(n, seed):
+    rng = np.random.default_rng(seed)
+    stamps = T0_NS + np.rint(np.arange(n) * NS / RATE_HZ).astype(np.int64)
+    gyro = rng.normal(0, 0.5, (n, 3))
+    accel = rng.normal(0, 1.0, (n, 3)) + [0.0, 0.0, 9.81]
+    raws = encode_imu_cdr(stamps, gyro, accel, frame_id='imu_test',
+                          angular_velocity_covariance=np.diag([1e-6, 2e-6, 3e-6]),
+                          linear_acceleration_covariance=np.diag([4e-4, 5e-4, 6e-4]))
+    return stamps, gyro, accel, raws
+
+
+def _spin_until(executor, predicate, timeout_s):
+    deadline = time.monotonic() + timeout_s
+    while not predicate() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.01)
+    return predicate()
+
+
+class _Harness:
+    """Player of raw messages and listener of imu/data_compensated around one node."""
+
+    def __init__(self, context, node):
+        self.node = node
+        self.other = rclpy.create_node('test_compensator_io', context=context)
+        self.imu_pub = self.other.create_publisher(Imu, 'imu/data_raw', sensor_data_qos(5000))
+        self.temp_pub = self.other.create_publisher(Temperature, 'imu/temperature',
+                                                    sensor_data_qos(5000))
+        self._out = []
+        qos = QoSProfile(depth=50000, reliability=ReliabilityPolicy.RELIABLE)
+        # Taken in bulk like the node does (one spin per message would be far too slow).
+        self.sub = self.other.create_subscription(Imu, 'imu/data_compensated', unused_callback,
+                                                  qos, raw=True, callback_group=PolledGroup())
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(node)
+        self.executor.add_node(self.other)
+        assert _spin_until(self.executor, lambda: self.imu_pub.get_subscription_count() > 0
+                           and self.temp_pub.get_subscription_count() > 0, 20)
+        assert _spin_until(self.executor,
+                           lambda: node._pub.get_subscription_count() > 0, 20)
+        _spin_until(self.executor, lambda: False, 0.3)  # let the readers finish matching
+
+    def play(self, raws, *, temperatures=(), block=400):
+        """Publish temperatures then Imu blocks, each after the node took the previous one."""
+        for raw in temperatures:
+            self.temp_pub.publish(raw)
+        sent = self.node.counts['received']
+        for start in range(0, len(raws), block):
+            for raw in raws[start:start + block]:
+                self.imu_pub.publish(raw)
+            sent += len(raws[start:start + block])
+            got = _spin_until(self.executor, lambda: len(self.out) >= sent, 20)
+            assert got, (len(self.out), sent)
+
+    @property
+    def out(self):
+        """Every imu/data_compensated message received so far (serialised)."""
+        if self.executor is not None:
+            self._out += take_all(self.sub, Imu)[0]
+        return self._out
+
+    def close(self):
+        self.out
+        self.executor.shutdown()
+        self.executor = None
+        self.other.destroy_node()
+        self.node.destroy_node()
+
+
+def _overrides(**values):
+    return [Parameter(k, value=v) for k, v in values.items()]
+
+
+@pytest.mark.timeout(120)
+def test_published_messages_equal_the_pure_calibration(context):
+    params = _calibration_params(3)
+    node = compensator.ImuCompensatorNode(context=context,
+                                          parameter_overrides=_overrides(**params))
+    stamps, gyro, accel, raws = _imu_stream(3000, seed=4)
+    io = _Harness(context, node)
+    try:
+        io.play(raws)
+    finally:
+        io.close()
+    out = decode_imu(io.out)
+    assert out.frame_id == 'imu_test'
+    np.testing.assert_array_equal(out.stamp_ns, stamps)
+    exp_gyro, exp_accel = calibration_from_parameters(params).apply(gyro, accel)
+    # Same arithmetic on the same float64 values: bit-identical.
+    np.testing.assert_array_equal(out.gyro, exp_gyro)
+    np.testing.assert_array_equal(out.accel, exp_accel)
+    assert np.abs(out.gyro - gyro).max() > 1e-3  # the calibration did change the values
+    # Everything but the two vectors is copied: orientation, covariances, header.
+    msg = typestore().deserialize_cdr(io.out[17], 'sensor_msgs/msg/Imu')
+    assert msg.orientation_covariance[0] == -1.0 and msg.orientation.w == 1.0
+    np.testing.assert_array_equal(msg.angular_velocity_covariance,
+                                  np.diag([1e-6, 2e-6, 3e-6]).ravel())
+    np.testing.assert_array_equal(msg.linear_acceleration_covariance,
+                                  np.diag([4e-4, 5e-4, 6e-4]).ravel())
+    status = node.diagnostics().status[0]
+    values = {kv.key: kv.value for kv in status.values}
+    assert status.name == 'imu_compensator: compensation' and status.level == OK
+    assert values['Messages published'] == '3000' and values['Calibration source'] == 'parameters'
+    assert status.hardware_id == 'imu_test'
+
+
+@pytest.mark.timeout(120)
+def test_thermal_offset_is_subtracted_and_range_drives_the_level(context):
+    model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), offset=(1e-3, 0.0, 0.0),
+                          temperature_range_c=(20.0, 30.0), range_margin_c=2.0)
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                          parameter_overrides=_overrides(
+                                              temperature_rate_window_s=1.0))
+    stamps, gyro, accel, raws = _imu_stream(2 * int(RATE_HZ), seed=5)
+    t_stamps = T0_NS + np.arange(0, 2 * NS + 1, NS // 50)  # 50 Hz over the whole stream
+    temps = 25.0 + 2.0 * (t_stamps - T0_NS) / NS
+    io = _Harness(context, node)
+    try:
+        status = node.diagnostics().status[0]
+        assert status.level == ERROR  # no data yet
+        io.play(raws, temperatures=encode_temperature_cdr(t_stamps, temps, frame_id='imu_test'))
+        status = node.diagnostics().status[0]
+        assert status.level == OK, status.message
+        values = {kv.key: kv.value for kv in status.values}
+        assert values['Temperature range status'] == 'inside'
+        assert values['Thermal model'] == 'linear_test'
+        # Within the margin (31 degC): WARN; beyond it (40 degC): ERROR, offset not extrapolated.
+        late = t_stamps[-1] + NS // 50
+        for temp, level, range_name in ((31.0, WARN, 'within margin'), (40.0, ERROR, 'outside')):
+            late += NS // 50
+            io.temp_pub.publish(encode_temperature_cdr([late], [temp], frame_id='imu_test')[0])
+            assert _spin_until(io.executor, lambda: node.thermal.stamp_ns == late, 10)
+            status = node.diagnostics().status[0]
+            values = {kv.key: kv.value for kv in status.values}
+            assert status.level == level and values['Temperature range status'] == range_name
+        assert 'beyond the model range' in status.message
+    finally:
+        io.close()
+    out = decode_imu(io.out[:len(raws)])
+    ev = LiveDriftEvaluator(model, rate_window_s=1.0)
+    ev.add_temperature(t_stamps, temps)
+    expected = gyro - ev.drift_at(stamps)
+    # The node evaluated the same knots from batches of messages: the trailing-window rate's
+    # running sums start at another sample, so agreement is to rounding, not bit for bit.
+    np.testing.assert_allclose(out.gyro, expected, rtol=0, atol=1e-13)
+    np.testing.assert_array_equal(out.accel, accel)  # identity calibration: untouched
+
+
+def test_non_causal_model_is_refused(context):
+    with pytest.raises(ParameterError, match='VMD'):
+        compensator.ImuCompensatorNode(context=context,
+                                       thermal_model=LinearThermal(name='parallel'))
+
+
+def test_file_and_parameters_are_not_both_accepted(context, tmp_path):
+    path = tmp_path / 'calibration.yaml'
+    path.write_text('/**:\n  ros__parameters:\n' + ''.join(
+        f'    {k}: {v!r}\n' for k, v in _calibration_params(1).items()))
+    node = compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
+        calibration_file=str(path)))
+    assert node._cal_source == f'file {path}'
+    node.destroy_node()
+    with pytest.raises(ParameterError, match='not both'):
+        compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
+            calibration_file=str(path), gyro_bias_rad_s=[0.1, 0.0, 0.0]))
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize('args, words', [
+    (['-p', 'gyro_scale_factor:=[-1.0, 0.0, 0.0]'], "'gyro_scale_factor'"),
+    (['-p', 'accel_bias_m_s2:=[0.0, 0.0]'], "'accel_bias_m_s2'"),
+])
+def test_bad_parameters_give_one_line_and_exit_2(args, words):
+    proc = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
+                           '--ros-args', *args], capture_output=True, text=True, timeout=50)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and words in lines[0], proc.stderr
+    assert lines[0].startswith('imu_compensator: error:')
+
+
+def test_params_file_is_the_calibration_file(context, tmp_path):
+    # calibration.yaml works as a --params-file: the node's own parameter names are its keys.
+    params = _calibration_params(2)
+    path = tmp_path / 'calibration.yaml'
+    path.write_text('/**:\n  ros__parameters:\n' + ''.join(
+        f'    {k}: {v!r}\n' for k, v in params.items()) + '    calibration_gravity_m_s2: 9.81\n')
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, args=['--ros-args', '--params-file', str(path)])
+    try:
+        node = compensator.ImuCompensatorNode(context=ctx)
+        expected = calibration_from_parameters({**params, 'calibration_gravity_m_s2': 9.81})
+        for sensor in ('accel', 'gyro'):
+            got, want = getattr(node.calibration, sensor), getattr(expected, sensor)
+            for field in ('bias', 'scale_factor', 'misalignment'):
+                np.testing.assert_array_equal(getattr(got, field), getattr(want, field))
+        assert node.calibration.gravity_m_s2 == 9.81
+        assert node._cal_source == 'parameters'
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
+def test_model_file_through_the_registry(context, monkeypatch):
+    # The thermal registry (gyro_noise_ros.thermal.methods.load_model) returns the fitted method
+    # with its training record; a stand-in of that shape is enough to test the node's side.
+    import types
+
+    loaded = types.SimpleNamespace(
+        method=LinearThermal(temperature_range_c=None),
+        training=types.SimpleNamespace(temperature_min_c=15.0, temperature_max_c=35.0))
+    module = types.ModuleType('gyro_noise_ros.thermal.methods')
+    module.DEFAULT_RANGE_MARGIN_C = 5.0
+    module.load_model = lambda path: loaded
+    monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.methods', module)
+    node = compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
+        thermal_model_file='model.json'))
+    values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    assert values['Thermal model range (degC)'] == '15 to 35, margin 5'
+    node.destroy_node()
+    loaded.method = LinearThermal(name='parallel')
+    with pytest.raises(ParameterError, match='offline only'):
+        compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
+            thermal_model_file='model.json'))
+
+
+@pytest.mark.timeout(60)
+def test_corrupt_temperature_is_counted_not_fatal(context):
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=LinearThermal(
+        temperature_range_c=(0.0, 50.0)))
+    _, _, _, raws = _imu_stream(400, seed=6)
+    io = _Harness(context, node)
+    try:
+        good = encode_temperature_cdr([T0_NS], [25.0], frame_id='imu_test')[0]
+        io.play(raws, temperatures=[b'\x00\x01\x00\x00' + b'\xff' * 8, good])
+        assert _spin_until(io.executor, lambda: node.counts['temperatures'] >= 2, 10)
+        values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    finally:
+        io.close()
+    assert len(io.out) == 400
+    assert values['Temperature messages'] == '2'
+    assert int(values['Temperature messages rejected']) >= 1

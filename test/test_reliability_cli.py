@@ -1,0 +1,164 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+gyro_noise_reliability end to end on simulated bags, and its bad-input paths.
+
+The static records come from the scenario model (white + flicker + random walk, IEEE 952); the
+expected interval comes from the closed-form ADEV of the same model. Widths of single axes
+scatter (the paper's reason for the +/-50 % band), so the stress test reads the mean over three
+axes, as the paper does (420 s -> 945 s "average among the three axes").
+"""
+
+import json
+
+from _reliability_common import six_position_record, static_record, write_bag
+from gyro_noise_ros.calibration.emulate import BiasVariation, SensorErrors
+from gyro_noise_ros.calibration.static_record import CHANNELS, StaticRecord
+from gyro_noise_ros.cli.reliability import main
+from gyro_noise_ros.core.allan import allan_deviation
+import numpy as np
+import pytest
+
+RATE = 10.0
+N_ACC = 0.02 / np.sqrt(RATE)          # white noise density of the records (per sqrt(Hz))
+N_GYR = 2e-3 / np.sqrt(RATE)
+# plateau half the white ADEV at 1 s, random walk a fifth: interval ~0.6 s .. ~125 s (closed form)
+ERRORS = SensorErrors(accel_bias_instability_m_s2=N_ACC / 2 / 0.664,
+                      accel_random_walk_m_s2_sqrt_s=N_ACC / 5,
+                      gyro_bias_instability_rad_s=N_GYR / 2 / 0.664,
+                      gyro_random_walk_rad_s_sqrt_s=N_GYR / 5)
+KEYS = {'before_s', 'after_s', 'width_before_s', 'width_after_s', 'change', 'verdict'}
+
+
+def test_flicker_generator_gives_the_ieee952_plateau():
+    rng = np.random.default_rng(7)
+    x = BiasVariation(1.0, 0.0, RATE, rng).generate(int(RATE * 40000))
+    plateau = []
+    for ax in range(3):
+        res = allan_deviation(x[:, ax], RATE, taus='dense')
+        sel = (res.tau_s > 1.0) & (res.tau_s < 200.0)
+        plateau.append(res.adev[sel].mean())
+    # sqrt(2 ln2 / pi) B = 0.664 B; the mean of 3 axes over 1..200 s scatters by a few % (EDF
+    # > 100 per tau there), and the Gauss-Markov sum ripples by ~2 %: 8 % is a safe band
+    assert np.mean(plateau) == pytest.approx(0.664, rel=0.08)
+
+
+@pytest.fixture(scope='module')
+def bags(tmp_path_factory):
+    root = tmp_path_factory.mktemp('rel')
+    out = {}
+    for name, errors, seed in (('before', ERRORS, 1), ('after', ERRORS.stressed(
+            instability_factor=2.0), 2), ('same', ERRORS, 3)):
+        out[name] = str(write_bag(root / f'{name}_static', *static_record(
+            errors=errors, rate_hz=RATE, duration_s=12000.0, seed=seed)))
+    out['cal_before'] = str(write_bag(root / 'cal_before', *six_position_record(
+        dwell_s=20.0, seed=4)))
+    out['cal_after'] = str(write_bag(root / 'cal_after', *six_position_record(
+        dwell_s=20.0, seed=5, errors=SensorErrors().stressed())))
+    return out
+
+
+def test_full_procedure(tmp_path, bags, capsys):
+    out = tmp_path / 'rep'
+    assert main(['--before-calibration', bags['cal_before'], '--before-static', bags['before'],
+                 '--after-calibration', bags['cal_after'], '--after-static', bags['after'],
+                 '--gravity', '9.80665', '--out', str(out)]) == 0
+    doc = json.loads((out / 'reliability.json').read_text())
+    assert doc['c'] == 2.0 and doc['tolerance'] == 0.5
+    assert set(doc['bias_instability_interval']) == set(CHANNELS)
+    for entry in doc['bias_instability_interval'].values():
+        assert set(entry) >= KEYS
+        # closed form of this model: ~0.6 .. 125 s before (scatter of single records ~+/-30 %)
+        lo, hi = entry['before_s']
+        assert 0.4 < lo < 1.2 and 60.0 < hi < 250.0
+    # stress x2 on the flicker level: closed form +135 %; the three-axis mean must be beyond 50 %
+    for sensor in ('accel', 'gyro'):
+        assert doc['summary'][sensor]['mean_change'] > 0.5
+    # uniformity: paper 0.252 -> 2.955 mg carried by the simulated calibrations (4 sigma ~0.2 mg)
+    ub = doc['uniformity']['before']['accel_bias_std_m_s2'] / 9.80665e-3
+    ua = doc['uniformity']['after']['accel_bias_std_m_s2'] / 9.80665e-3
+    assert ub == pytest.approx(0.252, abs=0.2) and ua == pytest.approx(2.955, abs=0.2)
+    assert doc['calibration']['before']['accel']['misalignment'] is not None
+    assert set(doc['gravity_check']['after']) == {'mean_norm_raw_m_s2',
+                                                  'mean_norm_calibrated_m_s2'}
+    for f in ('reliability.md', 'fig6_accel.png', 'fig6_gyro.png', 'before/calibration.yaml',
+              'after/calibration.json'):
+        assert (out / f).exists(), f
+    md = (out / 'reliability.md').read_text()
+    assert '| accel_x |' in md and 'Table 6' in md
+
+
+def test_same_sensor_twice_is_physiological(tmp_path, bags):
+    out = tmp_path / 'rep'
+    assert main(['--before-static', bags['before'], '--after-static', bags['same'],
+                 '--no-figures', '--out', str(out)]) == 0
+    doc = json.loads((out / 'reliability.json').read_text())
+    for sensor in ('accel', 'gyro'):
+        assert abs(doc['summary'][sensor]['mean_change']) < 0.5
+    assert doc['calibration'] == {'before': None, 'after': None}
+
+
+def test_bad_records_are_undetermined_with_the_reason(tmp_path, bags, capsys):
+    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=600.0, seed=9)
+    accel_nan = accel.copy()
+    accel_nan[100, 1] = np.nan
+    nan_bag = write_bag(tmp_path / 'nan', t, accel_nan, gyro)
+    zero_bag = write_bag(tmp_path / 'zero', t, np.zeros_like(accel), gyro)
+    short_bag = write_bag(tmp_path / 'short', t[:12], accel[:12], gyro[:12])
+    moving = write_bag(tmp_path / 'moving', *six_position_record(dwell_s=20.0, seed=8))
+    out = tmp_path / 'rep'
+    assert main(['--before-static', str(nan_bag), '--after-static', str(zero_bag),
+                 '--no-figures', '--out', str(out)]) == 0
+    doc = json.loads((out / 'reliability.json').read_text())
+    iv = doc['bias_instability_interval']
+    assert iv['accel_y']['verdict'] == 'undetermined' and 'NaN' in iv['accel_y']['reason']
+    assert iv['accel_y']['change'] is None and iv['accel_y']['width_before_s'] is None
+    assert 'accelerometer reads ~0' in iv['accel_x']['reason_after']
+    assert iv['gyro_x']['verdict'] != 'undetermined' or 'open' in iv['gyro_x']['reason']
+    assert main(['--before-static', str(short_bag), '--after-static', str(moving),
+                 '--no-figures', '--out', str(out)]) == 0
+    doc = json.loads((out / 'reliability.json').read_text())
+    e = doc['bias_instability_interval']['gyro_z']
+    assert 'record too short' in e['reason_before']
+    assert 'record is not static' in e['reason_after']
+    assert e['before_s'] == [None, None] and e['verdict'] == 'undetermined'
+
+
+def test_exit_codes(tmp_path, bags, capsys):
+    out = str(tmp_path / 'rep')
+    assert main(['--out', out]) == 2
+    assert 'nothing to analyse' in capsys.readouterr().err
+    assert main(['--before-static', bags['before'], '--c', '0.5', '--out', out]) == 2
+    assert main(['--before-static', str(tmp_path / 'missing'), '--out', out]) == 3
+    # the only part given fails (a six-position record missing a dwell): nothing analysed -> 4
+    t, accel, gyro = six_position_record(dwell_s=20.0, seed=3)
+    five = write_bag(tmp_path / 'five', t[t < 110.0], accel[t < 110.0], gyro[t < 110.0])
+    capsys.readouterr()
+    assert main(['--before-calibration', str(five), '--gravity', '9.81', '--out', out]) == 4
+    err = capsys.readouterr().err
+    assert 'nothing could be analysed' in err and 'missing' in err
+
+
+def test_static_record_streams_like_one_batch():
+    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=3000.0, seed=12)
+    one = StaticRecord(RATE)
+    one.update(t, accel, gyro)
+    many = StaticRecord(RATE)
+    for k in range(0, t.size, 7777):
+        many.update(t[k:k + 7777], accel[k:k + 7777], gyro[k:k + 7777])
+    r1, _ = one.finish()
+    r2, _ = many.finish()
+    for ch in CHANNELS:
+        assert r1[ch].interval.lo_s == pytest.approx(r2[ch].interval.lo_s, rel=1e-9)

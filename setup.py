@@ -24,6 +24,8 @@ setup(
         'pyserial>=3.5',
         'matplotlib>=3.7',
         'PyYAML>=6',
+        # PX4 ULog input of gyro_noise_analyze / gyro_noise_explain (bag/tabular.py).
+        'pyulog>=1.0',
         # thermal baselines (paper 002 comparisons): wavelet-threshold denoising and EMD
         'PyWavelets>=1.1',
         'EMD-signal>=1.5',

@@ -115,9 +115,15 @@ def axis_summary_dict(summary, *, verdict=None):
         'alpha_var_variance': _json_num(seq.alpha_var_variance),
         'alpha_corr_mean': _json_num(seq.alpha_corr_mean),
         'alpha_corr_variance': _json_num(seq.alpha_corr_variance),
+        'alpha_var_multimodal': bool(getattr(seq, 'alpha_var_modes', ())),
+        'alpha_var_modes': [{'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_var_modes', ())],
+        'alpha_corr_multimodal': bool(getattr(seq, 'alpha_corr_modes', ())),
+        'alpha_corr_modes': [{'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_corr_modes', ())],
         'ties_var': seq.ties_var, 'ties_corr': seq.ties_corr,
         'temperature_mean_c': _json_num(summary.temperature_mean_c),
         'allan': allan_terms_dict(summary.noise_terms),
+        'allan_datasheet': (summary.datasheet.as_dict()
+                            if getattr(summary, 'datasheet', None) is not None else None),
     }
     if verdict is not None:
         out['health'] = {'level': verdict.level, 'message': verdict.message,
@@ -179,9 +185,65 @@ def _fmt(value, spec):
     return format(value, spec)
 
 
+def _modes_text(modes):
+    return ', '.join(f"{m['order']:.3f} ({m['chunks']} chunks)" for m in modes)
+
+
+def _plain_summary(b, axis, a):
+    """One plain-language paragraph for one bag and axis (issue 11: people first, tables after)."""
+    rate = b.get('rate_hz')
+    parts = [f"**{b['label']}, axis {axis}:** {b['samples']} samples over "
+             f"{_fmt(b['duration_s'], '.1f')} s at {_fmt(rate, '.4g')} Hz "
+             f"(rate from {b.get('rate_method') or 'the stamps'}"
+             + (', bursty stamps' if b.get('stamps_bursty') else '') + ')']
+    lost = b['samples_lost']
+    parts.append(f'{lost} sample(s) lost' if lost else 'no sample lost')
+    left = sum(v for k, v in (b.get('left_out') or {}).items() if isinstance(v, int))
+    if left:
+        parts.append(f'{left} sample(s) left out (window or motion)')
+    sheet = a.get('allan_datasheet') or {}
+    if sheet.get('arw_deg_per_sqrt_h') is not None:
+        parts.append(f"angle random walk {sheet['arw_deg_per_sqrt_h']:.3g} deg/sqrt(h) "
+                     f"({sheet['arw_ci_low_deg_per_sqrt_h']:.3g}-{sheet['arw_ci_high_deg_per_sqrt_h']:.3g})")
+    if sheet.get('bias_stability_deg_h') is not None:
+        bound = ' (upper bound: the curve never turned up)' if sheet.get('bias_stability_at_longest_tau') \
+            else ''
+        parts.append(f"bias stability {sheet['bias_stability_deg_h']:.3g} deg/h "
+                     f"({sheet['bias_stability_deg_s']:.3g} deg/s) at tau = "
+                     f"{sheet['bias_stability_tau_s']:.3g} s{bound}")
+    if sheet.get('fit_quality') == 'poor':
+        parts.append('the IEEE 952 fit misses the Allan curve (see the Allan table)')
+    drift, se = a.get('offset_drift_deg_s_per_h'), a.get('offset_drift_stderr_deg_s_per_h')
+    if drift is not None:
+        from .core.health import drift_t_threshold
+
+        sig = abs(drift) / se if se else float('nan')
+        need = drift_t_threshold(3.0, a['chunks'])
+        word = ('significant' if sig > need else 'not significant')
+        # With few chunks the Student-t quantile is far above 3: say what was needed, or
+        # "5.9 standard errors, not significant" reads as a contradiction.
+        parts.append(f'offset drift {drift:+.3g} +/- {_fmt(se, ".2g")} (deg/s)/h ({word} at the '
+                     f'3-sigma level: {_fmt(sig, ".2g")} standard errors, {_fmt(need, ".2g")} '
+                     f'needed with {a["chunks"]} chunks)')
+    for key, name in (('alpha_var', 'variance method'), ('alpha_corr', 'correlation method')):
+        if a.get(key + '_multimodal'):
+            parts.append(f'order ({name}) in separate modes: {_modes_text(a[key + "_modes"])}')
+        elif a.get(key + '_mean') is not None:
+            parts.append(f"order ({name}) {a[key + '_mean']:.3f}")
+    if 'health' in a:
+        parts.append(f"health {a['health']['level']}: {a['health']['message']}")
+    return '; '.join(parts) + '.'
+
+
+_CUSTOMARY = (('quantization_deg', 'Q (deg)'), ('angle_random_walk_deg_per_sqrt_h', 'N (deg/sqrt(h))'),
+              ('bias_instability_deg_per_h', 'B (deg/h)'),
+              ('rate_random_walk_deg_per_h_sqrt_h', 'K (deg/h/sqrt(h))'),
+              ('rate_ramp_deg_per_h2', 'R (deg/h^2)'))
+
+
 def summary_markdown(doc):
     """
-    Render the paper's Tables 3-6 (per axis, bags in the given order) and the counts as Markdown.
+    Render a plain-language summary, the paper's Tables 3-6 and the counts as Markdown.
 
     Parameters
     ----------
@@ -199,43 +261,79 @@ def summary_markdown(doc):
             if a not in axes:
                 axes.append(a)
     opts = doc['options']
-    lines = [
-        '# gyro_noise_analyze summary', '',
+    lines = ['# gyro_noise_analyze summary', '', '## In short', '']
+    for b in bags:
+        for axis, a in b['axes'].items():
+            lines += [_plain_summary(b, axis, a), '']
+        for text in b.get('warnings') or ():
+            lines += [f"* warning ({b['label']}): {text}"]
+        if b.get('warnings'):
+            lines.append('')
+    lines += [
+        '## Method', '',
         f"Tool {doc['tool']} {doc['version']}; chunk size {opts['chunk_size']} samples; order grid "
         f"{opts['order_grid']['start']:g}:{opts['order_grid']['stop']:g}:{opts['order_grid']['step']:g}; "
         f"memory L = {opts['memory']}; gap policy {opts['gap_policy']}. Tables follow paper 000 "
         '(Sierociuk et al., Sensors 2025): offset drift = least-squares slope of the chunk bias over time '
-        '(Table 3); variances over chunks with ddof = 1.', '']
+        '(Table 3, standard error valid for correlated chunk biases); variances over chunks with '
+        'ddof = 1. Confidence intervals are 68.3 % (1 sigma).', '']
     for axis in axes:
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
         lines += [f'## Axis {axis}', '',
-                  '### Table 3: offset drift', '',
-                  '| Sequence | Offset drift ((deg/s)/h) | Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
-                  '|---|---:|---:|---:|---:|']
+                  '### Paper 000 Table 3: offset drift', '',
+                  # The paper tabulates magnitudes; the sign is kept beside them so a
+                  # reader never has to guess which way the bias moved.
+                  '| Sequence | Offset drift, magnitude ((deg/s)/h) | Signed slope ((deg/s)/h) '
+                  '| Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
+                  '|---|---:|---:|---:|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['offset_drift_abs_deg_s_per_h'], '.6f')} | "
+                         f"{_fmt(a['offset_drift_deg_s_per_h'], '+.6f')} | "
                          f"{_fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
                          f"{_fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
-        lines += ['', '### Table 4: noise variance', '',
+        lines += ['', '### Paper 000 Table 4: noise variance', '',
                   '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance ((deg/s)^4) |',
                   '|---|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['mean_variance_deg2_s2'], '.6g')} | "
                          f"{_fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
         for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
-            lines += ['', f'### Table {num}: order, {method} method', '',
+            lines += ['', f'### Paper 000 Table {num}: order, {method} method', '',
                       '| Sequence | Estimated order | Variance of estimated order | Ties |', '|---|---:|---:|---:|']
             tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
             for label, a in rows:
-                lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | {_fmt(a[key + '_variance'], '.6f')} | "
-                             f'{a[tie]} |')
+                if a.get(key + '_multimodal'):
+                    # A mean between separate basins is where no chunk is: give the modes instead.
+                    lines.append(f"| {label} | modes: {_modes_text(a[key + '_modes'])} | "
+                                 f"{_fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
+                else:
+                    lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | "
+                                 f"{_fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
         if any(a.get('allan') for _, a in rows):
+            lines += ['', '### Allan deviation: datasheet numbers and IEEE 952 fit (customary units)', '',
+                      '| Sequence | ARW at 1 s (deg/sqrt(h)) | Bias stability (deg/h) | at tau (s) | '
+                      + ' | '.join(name for _, name in _CUSTOMARY) + ' | Fit | Short taus excluded below (s) |',
+                      '|---|' + '---:|' * (3 + len(_CUSTOMARY)) + '---|---:|']
+            for label, a in rows:
+                t = a.get('allan') or {}
+                d = a.get('allan_datasheet') or {}
+                arw = (f"{_fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} ({_fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
+                       f"-{_fmt(d.get('arw_ci_high_deg_per_sqrt_h'), '.3g')})")
+                bs = (f"{_fmt(d.get('bias_stability_deg_h'), '.4g')} ({_fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
+                      f"-{_fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
+                fit = d.get('fit_quality', '')
+                if fit:
+                    fit += f" (max error {100 * (d.get('fit_max_relative_error') or 0):.0f} %)"
+                lines.append(f"| {label} | {arw} | {bs} | {_fmt(d.get('bias_stability_tau_s'), '.4g')} | "
+                             + ' | '.join(_fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
+                             + f" | {fit} | {_fmt(d.get('band_limited_below_s'), '.3g')} |")
             keys = []
             for _, a in rows:
                 for k, v in (a.get('allan') or {}).items():
-                    if k not in keys and not isinstance(v, (dict, str)):
+                    if (k not in keys and not isinstance(v, (dict, str))
+                            and not any(k == c for c, _ in _CUSTOMARY)):
                         keys.append(k)
-            lines += ['', '### Allan deviation noise terms (SI, unit in the name)', '',
+            lines += ['', '### Allan deviation: IEEE 952 fit (SI, unit in the name)', '',
                       '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
             for label, a in rows:
                 terms = a.get('allan') or {}
@@ -249,11 +347,14 @@ def summary_markdown(doc):
                     lines.append(f"| {label} | {h['level']} | {h['message']} |")
         lines.append('')
     lines += ['## Input counts', '',
-              '| Sequence | Topic | Rate (Hz) | Duration (s) | Samples | Lost | Gaps | Out-of-order stamps | '
-              'NaN samples | Tail samples |', '|---|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+              '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | Samples | Lost | '
+              'Gaps | Out-of-order stamps | NaN samples | Tail samples |',
+              '|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|']
     for b in bags:
         nan = sum(a['nan_samples'] for a in b['axes'].values())
-        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.2f')} | "
+        jitter = b.get('stamp_jitter_s')
+        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.6g')} | {b.get('rate_method', '')} | "
+                     f"{_fmt(None if jitter is None else 1e3 * jitter, '.3g')} | "
                      f"{_fmt(b['duration_s'], '.1f')} | {b['samples']} | {b['samples_lost']} | {b['gaps']} | "
                      f"{b['out_of_order_stamps']} | {nan} | {b['tail_samples']} |")
     lines.append('')
@@ -280,7 +381,8 @@ def write_allan_csv(path, entries):
 
 
 def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, gyroscope_random_walk,
-                   accelerometer_noise_density=None, accelerometer_random_walk=None, source=''):
+                   accelerometer_noise_density=None, accelerometer_random_walk=None, source='',
+                   gyroscope_random_walk_note='', accelerometer_random_walk_note=''):
     """
     Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units).
 
@@ -299,6 +401,8 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, g
         (m/s^2/sqrt(Hz)) and (m/s^3/sqrt(Hz)).
     source : str
         Comment line saying which bag and axes the numbers come from.
+    gyroscope_random_walk_note, accelerometer_random_walk_note : str
+        Comment after the value (e.g. that it is a bound, not a fit).
     """
     def val(v):
         return 'null' if v is None or not math.isfinite(float(v)) else repr(float(v))
@@ -308,10 +412,12 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, g
         lines.append(f'# {source}')
     lines += [f'rostopic: {rostopic}', f'update_rate: {val(update_rate_hz)}  # Hz',
               f'gyroscope_noise_density: {val(gyroscope_noise_density)}  # rad/s/sqrt(Hz)',
-              f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)']
+              f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)'
+              + (f'; {gyroscope_random_walk_note}' if gyroscope_random_walk_note else '')]
     if accelerometer_noise_density is not None or accelerometer_random_walk is not None:
         lines += [f'accelerometer_noise_density: {val(accelerometer_noise_density)}  # m/s^2/sqrt(Hz)',
-                  f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)']
+                  f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)'
+                  + (f'; {accelerometer_random_walk_note}' if accelerometer_random_walk_note else '')]
     Path(path).write_text('\n'.join(lines) + '\n')
 
 
@@ -330,6 +436,11 @@ def plot_per_chunk(path, series, *, quantity):
     """
     Plot bias or variance per chunk over time, one panel per axis, bags overlaid (paper Figs. 2-5).
 
+    Markers are visible (not single pixels); on the bias figure each bag's least-squares drift line
+    (the Table 3 slope) is drawn and named in the legend. A bag with fewer than 2 chunks is not
+    plotted (a single point shows nothing over time) and the title says so; when no bag has 2
+    chunks no figure is written.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -337,24 +448,53 @@ def plot_per_chunk(path, series, *, quantity):
     series : dict
         ``{axis: [(label, t_mid_s array, value array in rad/s or (rad/s)^2), ...]}``.
     quantity : {'bias', 'variance'}, keyword-only
+        Which quantity the values are.
+
+    Returns
+    -------
+    bool
+        True when the figure was written.
+
     """
-    plt = _pyplot()
+    def finite(t, v):
+        t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
+        ok = np.isfinite(t) & np.isfinite(v)
+        return t[ok], v[ok]
+
     axes = list(series)
-    fig, panels = plt.subplots(len(axes), 1, figsize=(9, 2.6 * len(axes) + 0.6), squeeze=False, sharex=True)
+    if not any(finite(t, v)[0].size >= 2 for a in axes for _, t, v in series[a]):
+        return False
+    plt = _pyplot()
+    fig, panels = plt.subplots(len(axes), 1, figsize=(10, 2.8 * len(axes) + 0.8), squeeze=False,
+                               sharex=True)
     scale, unit = (_DEG, 'deg/s') if quantity == 'bias' else (_DEG2, '(deg/s)$^2$')
+    skipped = set()
     for ax_name, panel in zip(axes, panels[:, 0]):
         for label, t, v in series[ax_name]:
-            panel.plot(np.asarray(t) / 3600.0, np.asarray(v) * scale, '.', ms=2, label=label)
+            t, v = finite(t, v)
+            if t.size < 2:
+                skipped.add(label)
+                continue
+            hours = t / 3600.0
+            line, = panel.plot(hours, v * scale, 'o-', ms=4, lw=0.6, label=label)
+            if quantity == 'bias':
+                slope, icpt = np.polyfit(t, v, 1)
+                panel.plot(hours, (icpt + slope * t) * scale, '--', lw=1.2, color=line.get_color(),
+                           label=f'{label}: drift {slope * _DEG * 3600.0:+.3g} (deg/s)/h')
         panel.set_ylabel(f'{quantity} {ax_name} ({unit})')
         panel.grid(alpha=0.3)
+        if panel.get_legend_handles_labels()[1]:
+            panel.legend(fontsize=7, ncol=2)
     panels[-1, 0].set_xlabel('time from the first sample (h)')
-    handles, labels = panels[0, 0].get_legend_handles_labels()
-    if labels:
-        panels[0, 0].legend(fontsize=7, markerscale=4, ncol=min(5, len(labels)))
-    fig.suptitle(f'Chunk {quantity} per chunk')
+    title = f'Chunk {quantity} per chunk (markers: chunks'
+    title += '; dashed: least-squares drift, Table 3)' if quantity == 'bias' else ')'
+    if skipped:
+        title += f"\nnot plotted (fewer than 2 chunks): {', '.join(sorted(skipped))}"
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+    return True
 
 
 def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
@@ -398,7 +538,7 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
     plt.close(fig)
 
 
-def plot_allan(path, series):
+def plot_allan(path, series, *, confidence=0.683):
     """
     Overlay the Allan deviation of every bag with confidence bands and fitted terms (paper Fig. 10).
 
@@ -409,22 +549,26 @@ def plot_allan(path, series):
     series : dict
         ``{axis: [(label, tau_s, adev, ci_low, ci_high, fit_lines), ...]}`` in rad/s; ``fit_lines`` is a
         list of ``(name, tau_s, adev)`` model curves (may be empty).
+    confidence : float, keyword-only
+        Two-sided confidence of the bands (named in the legend).
     """
     plt = _pyplot()
     axes = list(series)
     fig, panels = plt.subplots(1, len(axes), figsize=(max(7.0, 5.5 * len(axes)), 4.8), squeeze=False)
     for ax_name, panel in zip(axes, panels[0]):
         for label, tau, adev, lo, hi, fits in series[ax_name]:
-            line, = panel.loglog(tau, np.asarray(adev) * _DEG, lw=1.3, label=label)
+            line, = panel.loglog(tau, np.asarray(adev) * _DEG, 'o-', ms=3, lw=1.3, label=label)
             panel.fill_between(tau, np.asarray(lo) * _DEG, np.asarray(hi) * _DEG, color=line.get_color(),
-                               alpha=0.15, lw=0)
-            for name, ftau, fadev in fits:
-                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8, color=line.get_color())
+                               alpha=0.15, lw=0, label=f'{label}: {100 * confidence:.1f} % interval')
+            for k, (name, ftau, fadev) in enumerate(fits):
+                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8, color=line.get_color(),
+                             label=f'{label}: IEEE 952 fit' if k == 0 else None)
         panel.set_xlabel('tau (s)')
         panel.set_ylabel(f'Allan deviation {ax_name} (deg/s)')
         panel.grid(True, which='both', alpha=0.3)
         panel.legend(fontsize=7)
-    fig.suptitle('Allan deviation (bands: confidence interval; dashed: fitted noise terms)', fontsize=10)
+    fig.suptitle(f'Allan deviation (markers: measured; bands: {100 * confidence:.1f} % confidence '
+                 'interval; dashed: fitted IEEE 952 noise terms)', fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -471,6 +615,13 @@ def allan_fit_lines(terms, tau):
     """
     if terms is None or len(tau) == 0:
         return []
+    lo, hi = getattr(terms, 'tau_min_s', None), getattr(terms, 'tau_max_s', None)
+    if lo is not None and hi is not None:
+        tau = np.asarray(tau, dtype=np.float64)
+        # only where it was fitted: band-limited short taus are left out of the fit
+        tau = tau[(tau >= lo * (1 - 1e-9)) & (tau <= hi * (1 + 1e-9))]
+        if tau.size == 0:
+            return []
     for name in ('model_adev', 'adev'):
         fn = getattr(terms, name, None)
         if callable(fn):

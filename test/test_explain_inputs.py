@@ -115,7 +115,7 @@ def test_cli_end_to_end(tmp_path, capsys):
     path = tmp_path / 'q.csv'
     _write_csv(path, meas.t_s, meas.rate)
     out = tmp_path / 'out'
-    assert main([str(path), '--out', str(out), '--ensemble', '6', '--seed', '3', '--quiet']) == 0
+    assert main([str(path), '--out', str(out), '--ensemble', '6', '--seed', '3', '--quiet', '--axis', 'z']) == 0
     assert 'quantization' in capsys.readouterr().out
     data = json.loads((out / 'explain.json').read_text())
     assert {'baseline', 'steps', 'gap_initial', 'gap_final', 'unexplained'} <= set(data)

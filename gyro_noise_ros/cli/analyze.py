@@ -28,6 +28,7 @@ import numpy as np
 
 from .. import __version__, report
 from ..bag import ImuBagReader, find_imu_topic
+from ..bag.tabular import is_table, TableImuReader
 from ..core.engine import AXES, GAP_POLICIES, EngineConfig, NoiseEngine, analyze_chunk
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
@@ -51,10 +52,12 @@ def build_parser():
     argparse.ArgumentParser
     """
     p = argparse.ArgumentParser(
-        prog=PROG, description='Characterise MEMS gyro noise in rosbags: per-chunk bias, variance and '
+        prog=PROG, description='Characterise MEMS gyro noise in rosbags, CSV tables and PX4 ULogs: '
+        'per-chunk bias, variance and '
         'fractional order (variance and correlation methods), Allan deviation, health verdicts.')
     p.add_argument('bags', nargs='+', metavar='BAG',
-                   help='rosbag2 directory, .db3 or .mcap file, or ROS 1 .bag file (order kept in tables)')
+                   help='rosbag2 directory, .db3 or .mcap file, ROS 1 .bag file, CSV table or PX4 .ulg '
+                        '(order kept in tables)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created if missing)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
     p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (default: found automatically)')
@@ -72,6 +75,13 @@ def build_parser():
     p.add_argument('--gap-policy', default='flag', choices=GAP_POLICIES,
                    help='flag: keep chunks with gaps and count; split: restart the chunk after a gap; '
                         'drop: leave chunks with gaps out of the statistics (default: flag)')
+    p.add_argument('--start', type=float, default=None, metavar='S',
+                   help='analyse from S seconds after the first sample of each bag')
+    p.add_argument('--end', type=float, default=None, metavar='S',
+                   help='analyse up to S seconds after the first sample of each bag')
+    p.add_argument('--static', default='auto', choices=('auto', 'off'),
+                   help='auto: find the longest static segment and skip motion, saying so (default); '
+                        'off: analyse everything')
     p.add_argument('--jobs', type=int, default=None, metavar='N',
                    help='worker processes for the identification (default: all cores; 1 = in-process)')
     p.add_argument('--reference', metavar='SUMMARY',
@@ -94,20 +104,34 @@ def build_parser():
 
 
 class _Progress:
-    """Plain-text progress on stderr, only when stderr is a terminal."""
+    """
+    Progress on stderr: a refreshed line on a terminal, else one plain line per 10 % (logs, CI).
+    """
 
     def __init__(self, enabled):
-        self.enabled = enabled and sys.stderr.isatty()
+        self.enabled = bool(enabled)
+        self.tty = self.enabled and sys.stderr.isatty()
         self._last = 0.0
+        self._decile = 0
 
     def update(self, label, done, total, chunks, started, *, final=False):
         if not self.enabled:
             return
         now = time.monotonic()
+        rate = done / max(now - started, 1e-9)
+        if not self.tty:
+            decile = int(10 * done / total) if total else 0
+            if decile <= self._decile and not (final and self._decile < 10):
+                return
+            self._decile = 10 if final else decile
+            pct = 100 if final else 10 * decile
+            sys.stderr.write(f'{label}: {pct}% {done}/{total} messages, {chunks} chunks, '
+                             f'{rate:,.0f} samples/s\n')
+            sys.stderr.flush()
+            return
         if not final and now - self._last < 0.5:
             return
         self._last = now
-        rate = done / max(now - started, 1e-9)
         pct = f'{100.0 * done / total:5.1f}%' if total else '  ?  '
         sys.stderr.write(f'\r{label}: {pct} {done}/{total} messages, {chunks} chunks, {rate:,.0f} samples/s   ')
         if final:
@@ -131,7 +155,8 @@ def _labels(paths, labels):
 
 def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None, jobs=1,
                  reference=None, reference_bag=None, thresholds=None, figures=True, curves=DEFAULT_CURVES,
-                 batch_size=DEFAULT_BATCH, progress=False, command=None):
+                 batch_size=DEFAULT_BATCH, progress=False, command=None, start_s=None, end_s=None,
+                 static='auto'):
     """
     Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
 
@@ -164,6 +189,10 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         Show progress on a terminal.
     command : list of str, optional
         Command line recorded in summary.json.
+    start_s, end_s : float, optional
+        Analyse only samples from ``start_s`` to ``end_s`` seconds after each bag's first sample.
+    static : {'auto', 'off'}
+        'auto': find the longest static segment (core/segments.py) and skip motion, saying so.
 
     Returns
     -------
@@ -172,6 +201,14 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         ``'_files'`` (written paths).
     """
     config = config if config is not None else EngineConfig()
+    if static not in ('auto', 'off'):
+        raise ParameterError(f"--static must be 'auto' or 'off', got {static!r}")
+    for name, value in (('--start', start_s), ('--end', end_s)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise ParameterError(f'{name} must be a number of seconds >= 0, got {value}')
+    if start_s is not None and end_s is not None and end_s <= start_s:
+        raise ParameterError(f'--end ({end_s:g} s) must be after --start ({start_s:g} s)')
+    select = (start_s, end_s, static)
     jobs = int(jobs)
     if jobs < 1:
         raise ParameterError(f'--jobs must be >= 1, got {jobs}')
@@ -181,7 +218,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     thresholds = thresholds if thresholds is not None else HealthThresholds()
     ref = reference_per_axis(str(reference), config.axes, bag=reference_bag) if reference is not None else {}
     # Fail fast on any unreadable bag or unresolvable topic before hours of work on the others.
-    topics = [find_imu_topic(p, topic) for p in paths]
+    topics = [_open(p, topic, temperature_topic, config.rate_hz).topic if is_table(p)
+              else find_imu_topic(p, topic) for p in paths]
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -195,7 +233,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
     try:
         for path, label, imu_topic in zip(paths, names, topics):
-            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
+            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, select,
                                csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
                                _Progress(progress), timing)
             bag_docs.append(doc)
@@ -209,6 +247,13 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
         raise InputDataError(f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
                              'lower --chunk-size (>= memory + 2)')
+    for b in bag_docs:
+        if not any(a['chunks'] for a in b['axes'].values()):
+            # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
+            why = '; '.join(f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf, {a['chunks_dropped']} dropped "
+                            f"for loss, {a['chunks_failed']} not identifiable (constant?)"
+                            for axis, a in b['axes'].items())
+            raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
 
     doc = {
         'tool': PROG, 'version': __version__,
@@ -242,10 +287,83 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     return doc
 
 
-def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, csv_writer,
+def _open(path, topic, temperature_topic, rate_hz):
+    if is_table(path):
+        return TableImuReader(path, topic=topic, temperature_topic=temperature_topic, rate_hz=rate_hz)
+    return ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
+
+
+def _select(stamps, first_ns, start_s, end_s, segment, left):
+    """Return the mask of samples inside --start/--end and the static segment; count the rest."""
+    rel = stamps - first_ns
+    keep = np.ones(stamps.shape[0], dtype=bool)
+    if start_s is not None:
+        before = rel < int(round(start_s * 1e9))
+        left['before_start'] += int(before.sum())
+        keep &= ~before
+    if end_s is not None:
+        after = rel > int(round(end_s * 1e9))
+        left['after_end'] += int((after & keep).sum())
+        keep &= ~after
+    if segment is not None and not segment.static_throughout:
+        moving = (stamps < segment.start_ns) | (stamps >= segment.end_ns)
+        left['motion'] += int((moving & keep).sum())
+        keep &= ~moving
+    return keep
+
+
+def _static_prepass(path, topic, temperature_topic, rate_hz, batch_size, start_s, end_s):
+    """Read stamps and rates once to find the longest static segment (core/segments.py)."""
+    from ..core.segments import WindowStats
+
+    stats = WindowStats()
+    first = None
+    log_time = False
+    with _open(path, topic, temperature_topic, rate_hz) as reader:
+        for batch in reader.iter_batches(batch_size):
+            stamps = batch.stamp_ns
+            if first is None and _stamps_unusable(stamps) and not _stamps_unusable(batch.log_ns):
+                log_time = True
+            if log_time:
+                stamps = batch.log_ns
+            if first is None:
+                first = int(stamps[0])
+            keep = _select(stamps, first, start_s, end_s, None,
+                           {'before_start': 0, 'after_end': 0, 'motion': 0})
+            stats.update(stamps[keep], batch.gyro[keep])
+    return stats.segment()
+
+
+def _stamps_unusable(stamps):
+    steps = np.diff(stamps)
+    return steps.size > 0 and np.count_nonzero(steps <= 0) > 0.1 * steps.size
+
+
+def warn(text):
+    """
+    Print one warning line on stderr.
+
+    Parameters
+    ----------
+    text : str
+    """
+    print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
+
+
+def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, select,
+                 csv_writer,
                  per_chunk, curve_store, allan_store, curves, batch_size, progress, timing):
     engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
-    with ImuBagReader(path, topic=imu_topic, temperature_topic=temperature_topic) as reader:
+    warnings = []
+    time_source = 'header'
+    start_s, end_s, static = select
+    segment = None
+    if static == 'auto':
+        segment = _static_prepass(path, imu_topic, temperature_topic, config.rate_hz, batch_size,
+                                  start_s, end_s)
+    left = {'before_start': 0, 'after_end': 0, 'motion': 0}
+    first_ns = None
+    with _open(path, imu_topic, temperature_topic, config.rate_hz) as reader:
         temps = reader.read_temperature()
         if temps is not None and temps[0].size:
             order = np.argsort(temps[0], kind='stable')
@@ -297,14 +415,33 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
             if batch is None:
                 break
             frame_id = frame_id or batch.frame_id
+            stamps = batch.stamp_ns
+            if done == 0 and _stamps_unusable(stamps):
+                if _stamps_unusable(batch.log_ns) or time_source == 'log':
+                    raise InputDataError(f'{label}: neither the header stamps nor the log times increase: '
+                                         'no time base')
+                time_source = 'log'
+                warnings.append('header stamps are not increasing (shuffled?): the recorder\'s log time is '
+                                'used as the time base')
+                warn(f'{label}: {warnings[-1]}')
+            if time_source == 'log':
+                stamps = batch.log_ns
+            if first_ns is None:
+                first_ns = int(stamps[0])
+            keep = _select(stamps, first_ns, start_s, end_s, segment, left)
+            done += len(batch)
+            if not keep.any():
+                continue
+            gyro_b, accel_b = batch.gyro, batch.accel
+            if not keep.all():
+                stamps, gyro_b, accel_b = stamps[keep], gyro_b[keep], accel_b[keep]
             temp = None
             if t_stamp is not None:
                 # Temperature is published slower than the IMU: linear interpolation at the IMU stamps,
                 # held constant before the first and after the last temperature message.
-                temp = np.interp(batch.stamp_ns.astype(np.float64), t_stamp, t_value)
-            submit(engine.ingest(batch.stamp_ns, batch.gyro, temp))
-            accel.update(batch.accel, engine.counts().rate_hz)
-            done += len(batch)
+                temp = np.interp(stamps.astype(np.float64), t_stamp, t_value)
+            submit(engine.ingest(stamps, gyro_b, temp))
+            accel.update(accel_b, engine.counts().rate_hz)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
         submit(engine.flush())
         while inflight:
@@ -316,11 +453,41 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         storage, undecodable = reader.storage, reader.undecodable_count
         temperature_topic_used = reader.temperature_topic
 
-    accel.update(None, engine.counts().rate_hz)
-    accel_terms = accel.terms()
+    counts = engine.counts()
+    accel.update(None, counts.rate_hz)
+    accel_terms = accel.terms(counts.rate_hz)
     summaries = engine.summary(allan=config.allan)
     verdicts = engine.health(summaries=summaries) if ref else {}
-    counts = engine.counts()
+    tb = counts.timebase
+    for text in (tb.warnings if tb is not None else ()):
+        warnings.append(text)
+        warn(f'{label}: {text}')
+    left_out = dict(left)
+    if segment is not None and not segment.static_throughout and first_ns is not None:
+        left_out['static_segment_s'] = [(segment.start_ns - first_ns) / 1e9,
+                                        (segment.end_ns - first_ns) / 1e9]
+        left_out['static_segments_s'] = [[(a - first_ns) / 1e9, (b - first_ns) / 1e9]
+                                         for a, b in segment.segments]
+    if counts.chunks and counts.tail_samples > 0.1 * counts.samples:
+        size = config.chunk_size
+        better = counts.samples // (counts.chunks + 1) if counts.chunks else counts.samples
+        hint = (f'; --chunk-size {better} would cut {counts.chunks + 1} chunks'
+                if better >= config.memory + 2 else '')
+        text = (f'{counts.tail_samples} of {counts.samples} samples '
+                f'({100.0 * counts.tail_samples / counts.samples:.0f} %) after the last complete chunk of '
+                f'{size} are not in the chunk tables (they are in the Allan deviation){hint}')
+        warnings.append(text)
+        warn(f'{label}: {text}')
+    if any(left.values()):
+        parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
+        parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
+        if left['motion']:
+            a, b = left_out['static_segment_s']
+            parts.append(f'{left["motion"]} in motion (analysing the longest static segment, '
+                         f't = {a:.1f}-{b:.1f} s after the first sample)')
+        text = f'{sum(left.values())} of {done} samples left out: ' + ', '.join(parts)
+        warnings.append(text)
+        warn(f'{label}: {text}')
     for axis, s in summaries.items():
         per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
         if s.allan is not None:
@@ -328,7 +495,12 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
     return {
         'label': label, 'path': str(path), 'topic': imu_topic, 'storage': storage, 'frame_id': frame_id,
         'temperature_topic': temperature_topic_used, 'messages': done, 'undecodable_messages': undecodable,
-        'rate_hz': report._json_num(counts.rate_hz), 'duration_s': counts.duration_s,
+        'rate_hz': report._json_num(counts.rate_hz), 'rate_method': counts.rate_method,
+        'time_source': time_source, 'stamps_bursty': counts.bursty,
+        'stamp_jitter_s': report._json_num(counts.jitter_s),
+        'timebase': tb.as_dict() if tb is not None else None, 'warnings': warnings,
+        'left_out': left_out, 'window_s': [start_s, end_s], 'static_detection': static,
+        'duration_s': counts.duration_s,
         'samples': counts.samples, 'samples_lost': counts.samples_lost, 'gaps': counts.gaps,
         'out_of_order_stamps': counts.out_of_order, 'chunks_cut': counts.chunks,
         'tail_samples': counts.tail_samples, 'discarded_samples': counts.discarded_samples,
@@ -371,15 +543,17 @@ class _AccelAllan:
                 acc.update(col[np.isfinite(col)])
         self.pending = []
 
-    def terms(self):
+    def terms(self, rate_hz):
         if self.acc is None:
             return {}
-        from ..core.allan import fit_noise_terms
+        from ..core.allan_readout import fit_noise_terms_band_limited, random_walk_bound
+        from ..core.timebase import rescale_allan
 
         out = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                t = fit_noise_terms(acc.result())
+                result = rescale_allan(acc.result(), rate_hz)
+                t = fit_noise_terms_band_limited(result)
             except (InputDataError, ParameterError, ValueError):
                 out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to fit
                 continue
@@ -390,7 +564,8 @@ class _AccelAllan:
                 'acceleration_random_walk_m_s3_per_sqrt_hz': t.rate_random_walk_rad_per_s_sqrt_s,
                 'ramp_m_s3': t.rate_ramp_rad_per_s2,
                 'tau_min_s': t.tau_min_s, 'tau_max_s': t.tau_max_s,
-                'rms_relative_residual': t.rms_relative_residual}
+                'rms_relative_residual': t.rms_relative_residual,
+                'acceleration_random_walk_bound_m_s3_per_sqrt_hz': random_walk_bound(result)}
         return out
 
 
@@ -411,10 +586,29 @@ def _write_allan_outputs(out, doc, allan_store, figures):
                        if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None), default=None)
     acc_walk = max((t['acceleration_random_walk_m_s3_per_sqrt_hz'] for t in acc_terms
                     if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None), default=None)
+    from ..core.allan_readout import random_walk_bound
+
+    walk_note = acc_walk_note = ''
+    if not (walk and math.isfinite(walk)):
+        bounds = [random_walk_bound(allan_store[(first['label'], a)][0]) for a in first['axes']
+                  if (first['label'], a) in allan_store]
+        bounds = [b for b in bounds if math.isfinite(b)]
+        if bounds:
+            walk = max(bounds)
+            walk_note = ('upper bound: the record does not resolve a rate random walk; K <= upper '
+                         'ADEV bound at the longest tau * sqrt(3 / tau) (docs/offline_tool.md)')
+    if acc_terms and not (acc_walk and math.isfinite(acc_walk)):
+        bounds = [t['acceleration_random_walk_bound_m_s3_per_sqrt_hz'] for t in acc_terms
+                  if t.get('acceleration_random_walk_bound_m_s3_per_sqrt_hz') is not None]
+        bounds = [b for b in bounds if math.isfinite(b)]
+        if bounds:
+            acc_walk = max(bounds)
+            acc_walk_note = 'upper bound, not resolved by the record (as for the gyroscope)'
     report.write_imu_yaml(
         out / 'imu.yaml', rostopic=first['topic'], update_rate_hz=first['rate_hz'] or float('nan'),
         gyroscope_noise_density=density, gyroscope_random_walk=walk,
         accelerometer_noise_density=acc_density, accelerometer_random_walk=acc_walk,
+        gyroscope_random_walk_note=walk_note, accelerometer_random_walk_note=acc_walk_note,
         source=f"from bag {first['label']} ({first['path']}), largest over axes {', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
     if figures and fig_series:
@@ -431,9 +625,9 @@ def _write_figures(out, config, per_chunk, curve_store):
     files = []
     bias = {a: [(label, r[:, 0], r[:, 1]) for label, r in v] for a, v in per_chunk.items()}
     var = {a: [(label, r[:, 0], r[:, 2]) for label, r in v] for a, v in per_chunk.items()}
-    report.plot_per_chunk(out / 'bias.png', bias, quantity='bias')
-    report.plot_per_chunk(out / 'variance.png', var, quantity='variance')
-    files += [out / 'bias.png', out / 'variance.png']
+    for name, data, quantity in (('bias.png', bias, 'bias'), ('variance.png', var, 'variance')):
+        if report.plot_per_chunk(out / name, data, quantity=quantity):
+            files.append(out / name)
     for (label, axis), rows in curve_store.items():
         path = out / f'curves_{_safe(label)}_{axis}.png'
         report.plot_curves(path, config.alphas, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
@@ -443,12 +637,48 @@ def _write_figures(out, config, per_chunk, curve_store):
     return files
 
 
+def parse_order_grid(text):
+    """
+    Parse ``--order-grid START:STOP:STEP`` and refuse degenerate or out-of-domain grids.
+
+    Parameters
+    ----------
+    text : str
+        ``START:STOP:STEP``; both ends are included, so STOP - START must be a whole number of
+        steps, with at least one step.
+
+    Returns
+    -------
+    numpy.ndarray
+        The grid.
+
+    Raises
+    ------
+    ParameterError
+        Negative orders or orders above 2 (the model's domain, paper 000: 0 <= alpha <= 2),
+        fewer than 2 points (STOP <= START or STEP > STOP - START), STOP not on the grid.
+    """
+    alphas = parse_grid(text)
+    start, stop, step = (float(v) for v in str(text).split(':'))
+    if start < 0.0 or stop > 2.0:
+        raise ParameterError(f'--order-grid {text}: orders must lie in 0..2 (the fractional-noise '
+                             f'model of the paper), got {start:g}..{stop:g}')
+    if stop <= start or step > stop - start:
+        raise ParameterError(f'--order-grid {text}: needs at least two points (STOP > START and '
+                             'STEP <= STOP - START)')
+    steps = (stop - start) / step
+    if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
+        raise ParameterError(f'--order-grid {text}: STOP - START is not a whole number of steps, '
+                             'so STOP would not be on the grid (both ends are included)')
+    return alphas
+
+
 def _body(argv):
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
         return err.code if isinstance(err.code, int) else 2
-    alphas = parse_grid(args.order_grid)
+    alphas = parse_order_grid(args.order_grid)
     axes = AXES if args.axis == 'all' else (args.axis,)
     if args.batch_size < 1:
         raise ParameterError(f'--batch-size must be >= 1, got {args.batch_size}')
@@ -461,23 +691,32 @@ def _body(argv):
                        temperature_topic=args.temperature_topic, config=config, jobs=jobs,
                        reference=args.reference, reference_bag=args.reference_bag,
                        figures=not args.no_figures, curves=args.curves,
-                       batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv])
+                       batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv],
+                       start_s=args.start, end_s=args.end, static=args.static)
     if not args.quiet:
         _print_summary(doc)
     return 0
 
 
+def _order_text(axis_doc, key):
+    # A mean over two separate basins (the model's 0/1 alias) is a number no chunk is near.
+    if axis_doc.get(key + '_multimodal'):
+        return 'modes ' + report._modes_text(axis_doc[key + '_modes'])
+    return report._fmt(axis_doc[key + '_mean'], '.3f')
+
+
 def _print_summary(doc):
     for b in doc['bags']:
         print(f"{b['label']}: {b['samples']} samples on {b['topic']} ({b['storage']}), "
-              f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.1f} Hz, {b['samples_lost']} lost in "
+              f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.6g} Hz ({b['rate_method']}"
+              f"{', bursty stamps' if b['stamps_bursty'] else ''}, stamp jitter "
+              f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
               f"{b['gaps']} gap(s), {b['out_of_order_stamps']} out-of-order stamp(s), "
               f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():
             line = (f"  {axis}: {a['chunks']} chunks, drift {report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
                     f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} (deg/s)^2, "
-                    f"order var {report._fmt(a['alpha_var_mean'], '.3f')}, "
-                    f"corr {report._fmt(a['alpha_corr_mean'], '.3f')}")
+                    f"order var {_order_text(a, 'alpha_var')}, corr {_order_text(a, 'alpha_corr')}")
             if a['nan_samples']:
                 line += f", {a['nan_samples']} NaN sample(s)"
             if 'health' in a:

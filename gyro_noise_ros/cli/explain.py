@@ -13,6 +13,7 @@ short verdict. Exit codes: see :mod:`gyro_noise_ros.cli._common`.
 """
 
 import argparse
+from pathlib import Path
 import sys
 
 from ._common import run_cli
@@ -23,12 +24,13 @@ PROG = 'gyro_noise_explain'
 def build_parser():
     """Return the argument parser."""
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0].strip())
-    p.add_argument('input', metavar='INPUT', help='rosbag2 / ROS 1 bag, or CSV (time_s, gyro_*_rad_s, '
-                   'optional temperature_c)')
+    p.add_argument('input', metavar='INPUT', help='rosbag2 / ROS 1 bag, PX4 ULog (.ulg), or CSV (time_s, '
+                   'gyro_*_rad_s, optional temperature_c)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the only one)')
     p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (naming it makes temperature '
                    'required)')
-    p.add_argument('--axis', choices=('x', 'y', 'z'), default='z', help='gyro axis (default z)')
+    p.add_argument('--axis', choices=('x', 'y', 'z', 'all'), default='all',
+                   help='gyro axis (default all: one run, one report, a subdirectory per axis)')
     p.add_argument('--seed', type=int, default=0, help='ensemble seed (default 0)')
     p.add_argument('--out', required=True, help='output directory')
     p.add_argument('--ensemble', type=int, default=16, help='ensemble members (default 16, >= 4)')
@@ -37,23 +39,98 @@ def build_parser():
                    'time_s, else overrides the mean rate of the stamps')
     p.add_argument('--require-temperature', action='store_true',
                    help='fail unless the input has a temperature')
+    p.add_argument('--start', type=float, default=None, metavar='S',
+                   help='analyse from S seconds after the first sample')
+    p.add_argument('--end', type=float, default=None, metavar='S',
+                   help='analyse up to S seconds after the first sample')
+    p.add_argument('--static', default='auto', choices=('auto', 'off'),
+                   help='auto: keep the longest static segment, skipping motion (default)')
     p.add_argument('--quiet', action='store_true', help='print only the verdict')
     return p
 
 
+def _check_options(args):
+    """Refuse bad options before the (possibly long) load of the input."""
+    from pathlib import Path
+
+    from ..errors import ParameterError
+
+    if args.ensemble < 4:
+        raise ParameterError(f'--ensemble must be >= 4 members, got {args.ensemble}')
+    if args.max_steps < 0:
+        raise ParameterError(f'--max-steps must be >= 0, got {args.max_steps}')
+    if args.seed < 0:
+        raise ParameterError(f'--seed must be >= 0, got {args.seed}')
+    if args.rate_hz is not None and not (args.rate_hz > 0 and args.rate_hz < float('inf')):
+        raise ParameterError(f'--rate-hz must be a positive number, got {args.rate_hz}')
+    for name, value in (('--start', args.start), ('--end', args.end)):
+        if value is not None and not (value >= 0 and value < float('inf')):
+            raise ParameterError(f'{name} must be a number of seconds >= 0, got {value}')
+    if args.start is not None and args.end is not None and args.end <= args.start:
+        raise ParameterError(f'--end ({args.end:g} s) must be after --start ({args.start:g} s)')
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f'--out {str(out)!r} exists and is not a directory')
+
+
+def _left_out_lines(left):
+    parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
+    parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
+    if left['motion']:
+        a, b = left['static_segment_s']
+        parts.append(f'{left["motion"]} in motion (the longest static segment, t = {a:.1f}-{b:.1f} s, '
+                     'is analysed)')
+    return [f'samples left out: {", ".join(parts)}'] if parts else []
+
+
 def _body(argv):
-    from ..explain.inputs import load_input
+    from ..explain.inputs import available_axes, load_input, select
     from ..explain.report import verdict, write_outputs
     from ..explain.workflow import explain
 
     args = build_parser().parse_args(argv)
-    meas = load_input(args.input, topic=args.topic, temperature_topic=args.temperature_topic, axis=args.axis,
-                      rate_hz=args.rate_hz, require_temperature=args.require_temperature)
+    _check_options(args)
+    axes = available_axes(args.input) if args.axis == 'all' else (args.axis,)
     progress = None if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
-    result = explain(meas, seed=args.seed, ensemble=args.ensemble, max_steps=args.max_steps, progress=progress)
-    out = write_outputs(result, args.out)
-    print(f'{PROG}: {verdict(result)} ({out / "explain.json"})')
+    out_root = Path(args.out)
+    results = {}
+    for k, axis in enumerate(axes):
+        meas = load_input(args.input, topic=args.topic, temperature_topic=args.temperature_topic, axis=axis,
+                          rate_hz=args.rate_hz, require_temperature=args.require_temperature)
+        meas, left = select(meas, start_s=args.start, end_s=args.end, static=args.static)
+        if k == 0:
+            for text in _left_out_lines(left) + list(meas.timebase.warnings if meas.timebase else ()):
+                print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
+        if progress is not None and len(axes) > 1:
+            progress(f'axis {axis} ({k + 1} of {len(axes)})')
+        result = explain(meas, seed=args.seed, ensemble=args.ensemble, max_steps=args.max_steps,
+                         progress=progress)
+        out = write_outputs(result, out_root / f'axis_{axis}' if len(axes) > 1 else out_root)
+        results[axis] = (result, out)
+        print(f'{PROG}: axis {axis}: {verdict(result)} ({out / "explain.json"})')
+    if len(axes) > 1:
+        _write_index(out_root, results, verdict)
     return 0
+
+
+def _write_index(out_root, results, verdict):
+    """One report for the run: every axis' verdict and report, figures linked from the subdirectories."""
+    import json
+
+    lines = ['# gyro_noise_explain: all axes', '']
+    lines += [f'* axis {axis}: {verdict(result)}' for axis, (result, _) in results.items()]
+    index = {'axes': {}}
+    for axis, (result, out) in results.items():
+        sub = out.name
+        text = (out / 'report.md').read_text()
+        text = text.replace('](', f']({sub}/').replace('\n# ', '\n## ')
+        if text.startswith('# '):
+            text = '#' + text
+        lines += ['', f'<!-- axis {axis} -->', text]
+        index['axes'][axis] = {'verdict': verdict(result), 'explain_json': f'{sub}/explain.json',
+                               'report_md': f'{sub}/report.md'}
+    (out_root / 'report.md').write_text('\n'.join(lines) + '\n')
+    (out_root / 'explain.json').write_text(json.dumps(index, indent=2) + '\n')
 
 
 def main(argv=None):

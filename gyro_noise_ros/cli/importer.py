@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputDataError, ParameterError
+from ..errors import BagError, InputDataError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.clock import Unwrapper
 from ..link.sdlog import SdLogReader
@@ -125,6 +125,14 @@ def _anchor(start_time, reader):
     return f'unix:{value!r}', value
 
 
+def _first_acked_config(paths, chunk_bytes):
+    """Return (odr_hz, gyro_fs_dps, accel_fs_g) of the first block that knows them, or None."""
+    for block in SdLogReader(paths, chunk_bytes=chunk_bytes):
+        if block.gyro_fs_dps and block.accel_fs_g:
+            return block.odr_hz, block.gyro_fs_dps, block.accel_fs_g
+    return None
+
+
 def import_logs(paths, out, *, storage='sqlite3', topic='imu/data_raw', temperature_topic='imu/temperature',
                 frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
                 temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
@@ -177,14 +185,24 @@ def import_logs(paths, out, *, storage='sqlite3', topic='imu/data_raw', temperat
     out = os.fspath(out)
     if os.path.exists(out):
         raise ParameterError(f'--out {out!r} exists; choose a new bag directory')
+    missing = [str(p_) for p_ in paths if not os.path.isfile(p_)]
+    if missing:
+        raise BagError(f'log file {missing[0]!r} does not exist' + (
+            f' (and {len(missing) - 1} more)' if len(missing) > 1 else ''))
     reader = SdLogReader(paths, chunk_bytes=chunk_bytes)
     heads = [f.header for f in reader.files if f.header is not None]
-    if not heads and (gyro_fs_dps is None or accel_fs_g is None):
-        raise InputDataError('no readable log header in the files: give --gyro-fs-dps and --accel-fs-g')
-    epoch, anchor = _anchor(start_time, reader)
     # until a header or an ack says otherwise, the first readable header's configuration holds (the
     # device cannot change it without writing an ACK frame)
     assumed = (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads else (None, None, None)
+    if not heads and (gyro_fs_dps is None or accel_fs_g is None):
+        # Corruption is never fatal (docs/portenta_link.md): an unreadable header is replaced by the
+        # configuration the first ACK frame carries.
+        assumed = _first_acked_config(paths, chunk_bytes)
+        if assumed is None:
+            raise InputDataError('no readable log header and no ACK frame with the scales in the files: '
+                                 'give --gyro-fs-dps and --accel-fs-g')
+        reader = SdLogReader(paths, chunk_bytes=chunk_bytes)
+    epoch, anchor = _anchor(start_time, reader)
     av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
     la_cov = np.diag([linear_acceleration_variance] * 3).reshape(9)
     unwrap = Unwrapper()

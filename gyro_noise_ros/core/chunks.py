@@ -154,17 +154,22 @@ class DriftEstimate:
     slope : float
         Signed slope, input unit per second (rad/s^2 for rates in rad/s).
     stderr : float
-        Its ordinary least-squares standard error (same unit); NaN with fewer than 3 chunks.
+        Its standard error, valid for correlated chunk biases (same unit): the largest of the
+        ordinary least-squares, the Newey-West and the variogram standard errors (see
+        :func:`drift_stderr`); NaN with fewer than 3 chunks.
     intercept : float
         Fitted bias at t = 0 (input unit).
     span_s : float
         Time between the first and last chunk mid-times (s).
+    stderr_ols : float
+        The ordinary least-squares standard error (independent chunk biases assumed).
     """
 
     slope: float
     stderr: float
     intercept: float
     span_s: float
+    stderr_ols: float = float('nan')
 
     @property
     def magnitude(self):
@@ -202,10 +207,68 @@ def offset_drift(t_s, bias):
     intercept = float(b.mean() - slope * t.mean())
     if t.size > 2:
         resid = b - (intercept + slope * t)
-        stderr = float(np.sqrt((resid @ resid) / (t.size - 2) / sxx))
+        stderr_ols = float(np.sqrt((resid @ resid) / (t.size - 2) / sxx))
+        stderr = max(stderr_ols, drift_stderr(t, b))
     else:
-        stderr = float('nan')
-    return DriftEstimate(slope, stderr, intercept, float(np.ptp(t)))
+        stderr = stderr_ols = float('nan')
+    return DriftEstimate(slope, stderr, intercept, float(np.ptp(t)), stderr_ols)
+
+
+def drift_stderr(t_s, bias):
+    """
+    Return a standard error of the least-squares drift slope that holds for correlated chunk biases.
+
+    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias: 0.5-0.9 on the
+    ADIS16405 runs), and the ordinary least-squares error then falls 5x short of the real spread of
+    the slope across runs. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k - mean t) / Sxx`` and
+    ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random walk included)
+    ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} - b_k)^2]`` the
+    variogram of the chunk biases (Cressie 1993, eq. 2.4.5). ``D`` is estimated from the
+    detrended biases (lags up to half the run, held constant beyond); detrending keeps a real
+    drift from inflating its own error but removes some long-lag variance, so on the ADIS16405
+    runs this error is still 1-3x below the spread of slopes across runs (docs/analysis.md).
+    The Newey-West (Bartlett, ``ceil(n^(1/3))`` lags) error is
+    computed too and the larger of the two returned (the variogram estimate can come out
+    negative or tiny on short records). Chunks are taken as equally spaced.
+
+    Parameters
+    ----------
+    t_s : array_like
+        Chunk mid-times (s), finite.
+    bias : array_like
+        Chunk biases (rate unit), finite.
+
+    Returns
+    -------
+    float
+        Standard error of the slope (rate unit per second); NaN with fewer than 3 chunks.
+    """
+    t = np.asarray(t_s, dtype=np.float64)
+    b = np.asarray(bias, dtype=np.float64)
+    n = t.size
+    if n < 3 or np.ptp(t) == 0:
+        return float('nan')
+    tc = t - t.mean()
+    sxx = float(tc @ tc)
+    w = tc / sxx
+    slope = float(w @ (b - b.mean()))
+    resid = b - b.mean() - slope * tc
+    u = tc * resid
+    lags = int(np.ceil(n ** (1.0 / 3.0)))
+    s = float(u @ u)
+    for m in range(1, min(lags, n - 1) + 1):
+        s += 2.0 * (1.0 - m / (lags + 1.0)) * float(u[m:] @ u[:-m])
+    nw = np.sqrt(max(s, 0.0) * n / (n - 2)) / sxx
+    centred = resid
+    half = max(1, n // 2)
+    d = np.empty(n)
+    d[0] = 0.0
+    for m in range(1, n):
+        d[m] = np.mean((centred[m:] - centred[:-m]) ** 2) if m <= half else d[half]
+    idx = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    var = -0.5 * float(w @ d[idx] @ w)
+    vario = np.sqrt(var) if var > 0 else 0.0
+    return float(max(nw, vario))
 
 
 @dataclass(frozen=True)
@@ -231,6 +294,9 @@ class SequenceSummary:
         Table 6 (correlation method).
     ties_var, ties_corr : int
         Chunks whose minimum was an exact tie (see :mod:`.fractional`).
+    alpha_var_modes, alpha_corr_modes : tuple of (float, int)
+        (mean order, chunks) of each mode when the chunk orders fall in separate basins
+        (:func:`order_modes`); empty when the distribution is unimodal, so the mean is meaningful.
     """
 
     chunks: int
@@ -245,6 +311,8 @@ class SequenceSummary:
     alpha_corr_variance: float
     ties_var: int
     ties_corr: int
+    alpha_var_modes: tuple = ()
+    alpha_corr_modes: tuple = ()
 
 
 def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0, ties_var=0,
@@ -285,4 +353,50 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
         bias_mean=float(np.nanmean(bias)) if bias.size else float('nan'),
         drift=offset_drift(t_mid_s, bias), mean_variance=mv, variance_of_variances=vv,
         alpha_var_mean=av_m, alpha_var_variance=av_v, alpha_corr_mean=ac_m, alpha_corr_variance=ac_v,
-        ties_var=int(ties_var), ties_corr=int(ties_corr))
+        ties_var=int(ties_var), ties_corr=int(ties_corr), alpha_var_modes=order_modes(alpha_var),
+        alpha_corr_modes=order_modes(alpha_corr))
+
+
+#: Smallest gap between sorted chunk orders that separates two modes (order units). The model's
+#: 0/1 alias puts basins ~1.0 apart; the paper's spread of sequence means is 0.009 (variance method)
+#: and of chunk orders ~0.4 (correlation method, a wide unimodal cloud), hence also the 3x rule.
+MODE_GAP = 0.3
+
+
+def order_modes(orders, *, gap=MODE_GAP):
+    """
+    Split chunk orders into modes when they fall in separate basins (issue 11: the mean of three
+    chunks at 0.02 and three at 1.02 is 0.52, where no chunk is).
+
+    Sorted finite orders are cut at every gap wider than ``gap`` and wider than 3x the pooled
+    standard deviation inside the pieces; with at least two pieces of 2 or more chunks the
+    distribution is multi-modal.
+
+    Parameters
+    ----------
+    orders : array_like
+        Chunk orders (NaN ignored).
+    gap : float, keyword-only
+        Smallest separating gap (order units).
+
+    Returns
+    -------
+    tuple of (float, int)
+        (mean order, chunk count) per mode, in increasing order; empty when unimodal.
+
+    """
+    x = np.sort(np.asarray(orders, dtype=np.float64))
+    x = x[np.isfinite(x)]
+    if x.size < 4:
+        return ()
+    cuts = np.flatnonzero(np.diff(x) > gap) + 1
+    if cuts.size == 0:
+        return ()
+    pieces = np.split(x, cuts)
+    if sum(p.size >= 2 for p in pieces) < 2:
+        return ()
+    within = np.concatenate([p - p.mean() for p in pieces])
+    pooled = float(np.sqrt(within @ within / max(within.size - len(pieces), 1)))
+    if np.min(np.diff(x)[cuts - 1]) <= 3.0 * pooled:
+        return ()
+    return tuple((float(p.mean()), int(p.size)) for p in pieces)

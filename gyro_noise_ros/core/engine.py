@@ -12,10 +12,19 @@ is split in three steps so that the caller decides where the heavy part runs:
 3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence statistics
    (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
 
-Stamps and gaps. The nominal sample period is ``1 / rate_hz``; when ``rate_hz`` is None it is the median
-step of the first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). Steps are taken
-from the latest stamp seen so far. A step larger than ``gap_factor`` nominal periods is a gap that lost
-``round(step / period) - 1`` samples. A step <= 0 is an out-of-order (or repeated) stamp: counted, never
+Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming, the
+period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the first
+:data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). At the end (:meth:`NoiseEngine.counts`,
+:meth:`NoiseEngine.summary`) the estimate over the whole run replaces it: the Allan taus are rescaled to it
+(tau = m / rate), and the counts report the method, the stamp jitter and the disagreement warnings.
+
+*Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger than
+``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples.
+*Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps shorter
+than half a period): a long step followed by a burst is jitter, not loss, so single steps are not read.
+Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate) + 1 - n`` when it
+exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the run (the timebase
+estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single step to split at). A step <= 0 is an out-of-order (or repeated) stamp: counted, never
 reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap
 (the hole is seen before the late sample arrives; the engine does not look back to fill it).
 The ``gap_policy`` decides what a gap does to the chunk it falls in:
@@ -45,18 +54,21 @@ import numpy as np
 from ..errors import InputDataError, ParameterError
 from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
 from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
+from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
+from .timebase import rescale_allan, TimebaseTracker
 
 #: Axis names in column order of the gyro array.
 AXES = ('x', 'y', 'z')
 #: Valid gap policies (see module doc).
 GAP_POLICIES = ('flag', 'split', 'drop')
-#: Stamps used to estimate the sample rate when it is not configured.
-RATE_ESTIMATE_SAMPLES = 101
+#: Stamps used to estimate the sample rate when it is not configured (16 timebase blocks).
+RATE_ESTIMATE_SAMPLES = 16 * 64 + 1
 #: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the caller,
 #: or failing identification (e.g. a constant chunk).
 STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
 _NS = 1_000_000_000
+_EARLY_CHECK = 101
 
 
 @dataclass(frozen=True)
@@ -368,9 +380,18 @@ class StreamCounts:
     discarded_samples, discarded_partials : int
         Samples and partial chunks thrown away by the 'split' policy.
     rate_hz : float
-        Nominal sample rate in use (Hz), NaN while still unknown.
+        Sample rate (Hz): configured, else the :mod:`.timebase` estimate over everything so far; NaN
+        while still unknown.
     duration_s : float
         Last minus first stamp (s).
+    rate_method : str
+        How ``rate_hz`` was obtained (:class:`.timebase.RateEstimate` ``method``).
+    bursty : bool
+        The stamps are bursty: loss is read from the deficit against elapsed time, not from steps.
+    jitter_s : float
+        RMS stamp jitter (s, :mod:`.timebase`).
+    timebase : timebase.RateEstimate or None
+        The full estimate (estimators, irregularity, warnings).
     """
 
     samples: int
@@ -383,6 +404,10 @@ class StreamCounts:
     discarded_partials: int
     rate_hz: float
     duration_s: float
+    rate_method: str = ''
+    bursty: bool = False
+    jitter_s: float = float('nan')
+    timebase: object = None
 
 
 @dataclass(frozen=True)
@@ -405,7 +430,10 @@ class AxisSummary:
     allan : object or None
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
     noise_terms : object or None
-        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable).
+        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
+        band-limited short taus left out (:mod:`.allan_readout`).
+    datasheet : allan_readout.DatasheetTerms or None
+        Bias stability (first ADEV minimum), ARW at 1 s, fit quality.
     """
 
     axis: str
@@ -420,6 +448,7 @@ class AxisSummary:
     temperature_mean_c: float
     allan: object = None
     noise_terms: object = None
+    datasheet: object = None
 
     @property
     def offset_drift_deg_s_per_h(self):
@@ -481,6 +510,12 @@ class NoiseEngine:
         self._key = self.config.identifier_key()
         self._period_ns = None if self.config.rate_hz is None else _NS / float(self.config.rate_hz)
         self._pending = []  # batches held until the rate is known
+        self._timebase = TimebaseTracker()
+        self._classified = False
+        self._bursty = False
+        self._allowance = 0.0  # per-chunk deficit allowance under bursty stamps (samples)
+        self._chunk_loss_events = 0
+        self._estimate_cache = (None, None)
         self._first_ns = None
         self._last_ns = None
         self._max_ns = None
@@ -535,27 +570,55 @@ class NoiseEngine:
         if n == 0:
             return []
         self._samples += n
+        self._timebase.update(stamps)
         g = np.ascontiguousarray(g[:, self._cols])
-        if self._period_ns is None:
+        if not self._classified:
+            # Held even with a configured rate: the stamp pattern (regular or bursty) decides how loss
+            # is read.
             self._pending.append((stamps, g, temp))
             held = sum(p[0].shape[0] for p in self._pending)
             if held < RATE_ESTIMATE_SAMPLES:
+                if held >= _EARLY_CHECK and len(self._pending) == 1 or held - n < _EARLY_CHECK <= held:
+                    self._early_check()
                 return []
             return self._release_pending()
         return self._process(stamps, g, temp)
+
+    def _early_check(self):
+        # Refuse obviously broken stamps (all equal, shuffled) after ~100 samples instead of 1025.
+        held = np.concatenate([p[0] for p in self._pending])
+        bad = int(np.count_nonzero(np.diff(held) <= 0))
+        if bad > 0.1 * (held.shape[0] - 1):
+            self._pending = []
+            raise InputDataError(f'cannot estimate the sample rate: {bad} of the first {held.shape[0] - 1} '
+                                 'stamp steps are not increasing')
 
     def _release_pending(self):
         stamps = np.concatenate([p[0] for p in self._pending])
         g = np.concatenate([p[1] for p in self._pending])
         temp = np.concatenate([p[2] for p in self._pending])
         self._pending = []
-        steps = np.diff(stamps[:RATE_ESTIMATE_SAMPLES])
-        steps = steps[steps > 0]
-        if steps.size == 0:
-            raise InputDataError(f'cannot estimate the sample rate: the first {stamps.shape[0]} stamps '
-                                 'never increase; set the rate explicitly')
-        self._period_ns = float(np.median(steps))
+        tracker = TimebaseTracker()
+        tracker.update(stamps)
+        try:
+            est = tracker.estimate(self.config.rate_hz)
+        except InputDataError as err:
+            raise InputDataError(f'cannot estimate the sample rate: {err}') from err
+        if not est.usable:
+            raise InputDataError(f'cannot estimate the sample rate: {est.warnings[0]} (first '
+                                 f'{stamps.shape[0]} samples)')
+        self._period_ns = _NS / est.rate_hz
+        self._classified = True
+        self._set_mode(est)
         return self._process(stamps, g, temp)
+
+    def _set_mode(self, est):
+        self._bursty = bool(est.bursty)
+        if self._bursty:
+            rate = _NS / self._period_ns
+            rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(est.stamp_rate_se_hz) else 0.0
+            self._allowance = (2.0 * est.max_step_s * rate + 6.0 * est.jitter_s * rate
+                               + 3.0 * rel_se * self.config.chunk_size + 1.0)
 
     def _process(self, stamps, g, temp):
         first = self._first_ns is None
@@ -569,7 +632,10 @@ class NoiseEngine:
         self._max_ns = int(run_max[-1])
         self._last_ns = int(stamps[-1])
         self._out_of_order += int(np.count_nonzero(steps[1:] <= 0 if first else steps <= 0))
-        gap = steps > self.config.gap_factor * self._period_ns
+        if self._bursty:
+            gap = np.zeros(stamps.shape[0], dtype=bool)  # loss is read per chunk from the deficit
+        else:
+            gap = steps > self.config.gap_factor * self._period_ns
         lost = np.zeros(stamps.shape[0], dtype=np.int64)
         if gap.any():
             lost[gap] = np.maximum(np.rint(steps[gap] / self._period_ns).astype(np.int64) - 1, 0)
@@ -631,11 +697,17 @@ class NoiseEngine:
         self._chunk_index += 1
         samples_lost = int(lost.sum())
         gaps = int(np.count_nonzero(lost))
+        if self._bursty:
+            deficit = (rel[-1] - rel[0]) / self._period_ns + 1.0 - rel.shape[0]
+            if deficit > self._allowance:
+                samples_lost, gaps = int(round(deficit)), 1
+                self._chunk_loss_events += 1
         finite_t = temp[np.isfinite(temp)]
         temperature = float(finite_t.mean()) if finite_t.size else _NAN
         t_start = rel[0] / 1e9
         t_mid = (rel[0] + rel[-1]) / 2e9
-        dropped = gaps > 0 and self.config.gap_policy == 'drop'
+        dropped = gaps > 0 and (self.config.gap_policy == 'drop'
+                                or (self._bursty and self.config.gap_policy == 'split'))
         jobs = []
         for k, axis in enumerate(self.config.axes):
             col = np.ascontiguousarray(g[:, k])
@@ -693,10 +765,10 @@ class NoiseEngine:
         if self._allan is None:
             return None, None
         try:
-            from . import allan as _allan_mod
             result = self._allan[axis].result()
-            fit = getattr(_allan_mod, 'fit_noise_terms', None)
-            terms = fit(result) if fit is not None else None
+            if self.config.rate_hz is None:
+                result = rescale_allan(result, self.counts().rate_hz)
+            terms = fit_noise_terms_band_limited(result)
         except (InputDataError, ParameterError, ValueError):
             return None, None
         return result, terms
@@ -765,12 +837,40 @@ class NoiseEngine:
         StreamCounts
         """
         held = sum(p[0].shape[0] for p in self._pending)
+        est = self.timebase()
+        rate = _NS / self._period_ns if self._period_ns else _NAN
+        if est is not None and self._period_ns:
+            rate = est.rate_hz
+        lost, gaps = self._lost, self._gaps
+        if self._bursty:
+            lost = est.loss_samples if est is not None else 0
+            gaps = self._chunk_loss_events
         return StreamCounts(
-            samples=self._samples, samples_lost=self._lost, gaps=self._gaps, out_of_order=self._out_of_order,
+            samples=self._samples, samples_lost=lost, gaps=gaps, out_of_order=self._out_of_order,
             chunks=self._chunk_index, tail_samples=self._buffered + held,
             discarded_samples=self._discarded, discarded_partials=self._discarded_partials,
-            rate_hz=_NS / self._period_ns if self._period_ns else _NAN,
-            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0)
+            rate_hz=rate,
+            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0,
+            rate_method=est.method if est is not None else '', bursty=self._bursty,
+            jitter_s=est.jitter_s if est is not None else _NAN, timebase=est)
+
+    def timebase(self):
+        """
+        Return the :mod:`.timebase` estimate over every stamp so far (None before 2 stamps).
+
+        Returns
+        -------
+        timebase.RateEstimate or None
+        """
+        n = self._timebase.samples
+        if self._estimate_cache[0] == n:
+            return self._estimate_cache[1]
+        try:
+            est = self._timebase.estimate(self.config.rate_hz)
+        except InputDataError:
+            est = None
+        self._estimate_cache = (n, est)
+        return est
 
     def summary(self, *, allan=True):
         """
@@ -795,13 +895,19 @@ class NoiseEngine:
                                      ties_corr=int(rows[:, 6].sum()))
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
+            sheet = None
+            if terms is not None:
+                try:
+                    sheet = datasheet_terms(result, terms)
+                except (InputDataError, ParameterError):
+                    sheet = None
             out[axis] = AxisSummary(
                 axis=axis, sequence=seq, stream=counts, nan_samples=state.nan_samples,
                 chunks_ok=state.by_status['ok'], chunks_nan=state.by_status['nan'],
                 chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
                 chunks_skipped=state.by_status['skipped'],
                 temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
-                allan=result, noise_terms=terms)
+                allan=result, noise_terms=terms, datasheet=sheet)
         return out
 
     def health(self, *, seconds_since_data=None, summaries=None):

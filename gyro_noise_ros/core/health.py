@@ -128,6 +128,8 @@ class ReferenceStats:
         Chunks behind these numbers.
     source : str
         Where it came from (file, bag, axis), for messages.
+    offset_drift_stderr_rad_s2 : float
+        Standard error of the reference drift (rad/s per s); NaN when unknown (old summaries).
     """
 
     offset_drift_rad_s2: float
@@ -136,6 +138,7 @@ class ReferenceStats:
     alpha_corr_mean: float
     chunks: int = 0
     source: str = ''
+    offset_drift_stderr_rad_s2: float = float('nan')
 
 
 @dataclass(frozen=True)
@@ -233,12 +236,31 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     sigma = abs(drift.slope) / drift.stderr if drift.stderr and math.isfinite(drift.stderr) else float('nan')
     significant = judged and math.isfinite(drift.slope) and (
         not math.isfinite(sigma) or sigma > drift_t_threshold(th.drift_min_sigma, seq.chunks))
+    drift_item = len(items)
     add('Offset drift ((deg/s)/h)', _fmt(drift_dph), 'OK', '')
-    if reference is not None and math.isfinite(reference.offset_drift_rad_s2) \
-            and reference.offset_drift_rad_s2 != 0.0:
+    ref_usable = (reference is not None and math.isfinite(reference.offset_drift_rad_s2)
+                  and reference.offset_drift_rad_s2 != 0.0)
+    differs = significant
+    if ref_usable:
+        # Both drifts carry an error: a ratio to a reference drift that is itself statistically
+        # zero means nothing, and a large ratio only counts when the two drifts differ
+        # significantly (errors added in quadrature).
+        ref_se = reference.offset_drift_stderr_rad_s2
+        ref_chunks = reference.chunks or seq.chunks
+        if math.isfinite(ref_se) and ref_se > 0:
+            ref_usable = (abs(reference.offset_drift_rad_s2) / ref_se
+                          > drift_t_threshold(th.drift_min_sigma, ref_chunks))
+            se = drift.stderr if math.isfinite(drift.stderr) else 0.0
+            z = abs(drift.slope - reference.offset_drift_rad_s2) / math.hypot(se, ref_se)
+            differs = significant and z > drift_t_threshold(th.drift_min_sigma,
+                                                            min(seq.chunks, ref_chunks))
+        if not ref_usable:
+            add('Offset drift / reference', 'n/a', 'OK',
+                'the reference drift is statistically zero: no ratio')
+    if ref_usable:
         ratio = abs(drift.slope) / abs(reference.offset_drift_rad_s2)
         level = 'OK'
-        if significant:
+        if differs:
             level = ('ERROR' if ratio > th.drift_ratio_error else
                      'WARN' if ratio > th.drift_ratio_warn else 'OK')
         limit = th.drift_ratio_error if level == 'ERROR' else th.drift_ratio_warn
@@ -251,7 +273,7 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
             level = ('ERROR' if abs(drift_dph) > th.drift_abs_error_deg_s_per_h else
                      'WARN' if abs(drift_dph) > th.drift_abs_warn_deg_s_per_h else 'OK')
         limit = th.drift_abs_error_deg_s_per_h if level == 'ERROR' else th.drift_abs_warn_deg_s_per_h
-        items[-1] = ('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
+        items[drift_item] = ('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
                      f'offset drift {abs(drift_dph):.4g} (deg/s)/h is '
                      f'{"above" if level != "OK" else "within"} the limit {limit:g} (deg/s)/h')
     add('Offset drift significance (sigma)', _fmt(sigma, 3), 'OK', '')
@@ -377,7 +399,8 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
             offset_drift_rad_s2=float(a['offset_drift_rad_s2']),
             mean_variance_rad2_s2=float(a['mean_variance_rad2_s2']),
             alpha_var_mean=float(a['alpha_var_mean']), alpha_corr_mean=float(a['alpha_corr_mean']),
-            chunks=int(a.get('chunks', 0)), source=f'{path}:{entry.get("label")}:{axis}')
+            chunks=int(a.get('chunks', 0)), source=f'{path}:{entry.get("label")}:{axis}',
+            offset_drift_stderr_rad_s2=float(a.get('offset_drift_stderr_rad_s2') or 'nan'))
     except (KeyError, TypeError, ValueError) as err:
         raise ParameterError(f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 

@@ -15,8 +15,12 @@ Two sources are read, both into a :class:`Measurement` (SI units):
   ``temperature_c`` (or ``temp_c``)              sensor temperature in degC (optional)
   ============================================  ===========================================================
 
-Stamps: the nominal rate is ``rate_hz`` if given, else ``(n - 1) / (t_last - t_first)`` (the mean rate,
-which stays right for bursty host-side stamps where the median interval does not).
+* a PX4 ULog ``.ulg`` (``sensor_combined`` or ``sensor_gyro``), through
+  :class:`gyro_noise_ros.bag.tabular.TableImuReader`.
+
+Stamps: the nominal rate is ``rate_hz`` if given, else the :mod:`gyro_noise_ros.core.timebase` estimate
+(the same estimator as ``gyro_noise_analyze``: step mean for device clocks, block median for bursty
+host stamps); the estimate, its method and its warnings are kept in ``Measurement.timebase``.
 """
 
 import csv
@@ -27,9 +31,10 @@ import numpy as np
 
 from ..errors import BagError, InputDataError, ParameterError
 
-#: Fewest samples the workflow accepts: 16 chunks of 1024 samples (the signatures need a few chunks and
-#: the order identification needs chunks longer than its memory).
-MIN_SAMPLES = 16384
+#: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks and
+#: the order identification needs chunks longer than its memory; the layout scales with the record, so
+#: a minute at 250 Hz, 15,000 samples, is enough).
+MIN_SAMPLES = 8192
 
 AXES = ('x', 'y', 'z')
 
@@ -53,6 +58,8 @@ class Measurement:
         'x', 'y' or 'z'.
     source : str
         Where the data came from (for the report).
+    timebase : core.timebase.RateEstimate or None
+        How the rate was obtained from the stamps (None without stamps).
     """
 
     rate: np.ndarray
@@ -61,6 +68,7 @@ class Measurement:
     temperature_c: np.ndarray = None
     axis: str = 'z'
     source: str = ''
+    timebase: object = None
 
     @property
     def n(self):
@@ -130,8 +138,12 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
         t = t - t[0]
         if t[-1] <= 0:
             raise InputDataError('all sample times are equal: give --rate-hz')
-    if rate_hz is None:
-        rate_hz = (n - 1) / t[-1]
+    timebase = None
+    if t_s is not None:
+        from ..core.timebase import estimate_rate
+
+        timebase = estimate_rate(t, unit='s', rate_hz=rate_hz)
+        rate_hz = timebase.rate_hz
     rate_hz = float(rate_hz)
     if not np.isfinite(rate_hz) or rate_hz <= 0:
         raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz}')
@@ -146,7 +158,8 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
                                  f'{int(np.argmax(bad))}')
     if require_temperature and temp is None:
         raise InputDataError(f'temperature was asked for but {source or "the input"} has none')
-    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis, source=source)
+    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis, source=source,
+                       timebase=timebase)
 
 
 def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
@@ -228,11 +241,16 @@ def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None
     Measurement
     """
     from ..bag import ImuBagReader
+    from ..bag.tabular import TableImuReader
 
     index = _check_axis(axis)
     require_temperature = require_temperature or temperature_topic is not None
     stamps, rates = [], []
-    with ImuBagReader(path, topic=topic, temperature_topic=temperature_topic) as reader:
+    if Path(path).suffix.lower() == '.ulg':
+        reader = TableImuReader(path, topic=topic, temperature_topic=temperature_topic)
+    else:
+        reader = ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
+    with reader:
         for batch in reader.iter_batches():
             stamps.append(batch.stamp_ns)
             rates.append(batch.gyro[:, index])
@@ -272,5 +290,79 @@ def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=No
         raise BagError(f'input {str(path)!r} does not exist')
     if path.suffix.lower() == '.csv':
         return load_csv(path, axis=axis, rate_hz=rate_hz, require_temperature=require_temperature)
+    # .ulg is read by bag.tabular.TableImuReader inside load_bag.
     return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis, rate_hz=rate_hz,
                     require_temperature=require_temperature)
+
+
+def select(meas, *, start_s=None, end_s=None, static='auto'):
+    """
+    Keep the part of a measurement to analyse: a time window, then its longest static segment.
+
+    Parameters
+    ----------
+    meas : Measurement
+    start_s, end_s : float, optional, keyword-only
+        Window in seconds after the first sample.
+    static : {'auto', 'off'}, keyword-only
+        'auto': keep the longest static segment (:mod:`gyro_noise_ros.core.segments`).
+
+    Returns
+    -------
+    tuple
+        ``(Measurement, left_out)`` with ``left_out`` a dict of sample counts ('before_start',
+        'after_end', 'motion') and, when motion was cut, 'static_segment_s'.
+    """
+    from ..core.segments import WindowStats
+
+    t = meas.t_s
+    keep = np.ones(meas.n, dtype=bool)
+    left = {'before_start': 0, 'after_end': 0, 'motion': 0}
+    if start_s is not None:
+        left['before_start'] = int((t < start_s).sum())
+        keep &= t >= start_s
+    if end_s is not None:
+        left['after_end'] = int((keep & (t > end_s)).sum())
+        keep &= t <= end_s
+    if static == 'auto':
+        stamps = np.rint(t * 1e9).astype(np.int64)
+        stats = WindowStats()
+        stats.update(stamps[keep], meas.rate[keep, None])
+        seg = stats.segment()
+        if seg is not None and not seg.static_throughout:
+            moving = keep & ((stamps < seg.start_ns) | (stamps >= seg.end_ns))
+            left['motion'] = int(moving.sum())
+            keep &= ~moving
+            left['static_segment_s'] = [seg.start_ns / 1e9, seg.end_ns / 1e9]
+    if keep.all():
+        return meas, left
+    temp = None if meas.temperature_c is None else meas.temperature_c[keep]
+    fixed = meas.timebase is not None and meas.timebase.method == 'configured'
+    out = make_measurement(meas.rate[keep], t_s=t[keep], rate_hz=meas.rate_hz if fixed else None,
+                           temperature_c=temp, axis=meas.axis, source=meas.source)
+    return out, left
+
+
+def available_axes(path):
+    """
+    Return the gyro axes an input holds (a CSV may carry only some; bags and ULogs carry all three).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Input file or bag.
+
+    Returns
+    -------
+    tuple of str
+    """
+    path = Path(path)
+    if path.suffix.lower() != '.csv' or not path.is_file():
+        return AXES
+    try:
+        with path.open(newline='') as fh:
+            header = [h.strip().lower() for h in next(csv.reader(fh), [])]
+    except OSError:
+        return AXES
+    found = tuple(a for a in AXES if f'gyro_{a}_rad_s' in header or f'gyro_{a}_dps' in header)
+    return found or AXES

@@ -18,10 +18,15 @@ from .effects import public_params
 DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}
 _LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
-_TITLES = {'allan': 'Allan deviation (deg/s)', 'psd': 'PSD ((rad/s)^2/Hz)', 'psd_peak': 'band peak / band mean',
-           'chunk_bias': 'chunk bias (deg/s)', 'chunk_variance': 'chunk variance ((rad/s)^2)',
-           'histogram': 'value histogram (counts)', 'stamps': 'stamp intervals (counts)',
+# One unit family per figure (deg/s), the unit in every axis label.
+_TITLES = {'allan': 'Allan deviation', 'psd': 'power spectral density', 'psd_peak': 'band peak / band mean',
+           'chunk_bias': 'chunk bias', 'chunk_variance': 'chunk variance',
+           'histogram': 'value histogram', 'stamps': 'stamp intervals',
            'temperature': 'corr(bias, T), corr(bias, dT/dt)'}
+_YLABELS = {'allan': 'ADEV (deg/s)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'peak / mean (1)',
+            'chunk_bias': 'bias (deg/s)', 'chunk_variance': 'variance ((deg/s)^2)',
+            'histogram': 'samples (count)', 'stamps': 'intervals (count)',
+            'temperature': 'correlation (1)'}
 
 
 def _untransform(name, values):
@@ -34,15 +39,22 @@ def _untransform(name, values):
 
 
 def _scale(name):
-    return DEG if name in ('allan', 'chunk_bias') else 1.0
+    if name in ('allan', 'chunk_bias'):
+        return DEG
+    return DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
 
 
 def _plot_one(ax, layout, name, comparisons, labels, colours):
-    _, unit, xs = sig.points(layout, name)
+    label, unit, xs = sig.points(layout, name)
     scale = _scale(name)
     if name == 'histogram' and layout.lattice is not None:
         xs = np.arange(xs.size)
-        unit = 'bin (value bins, then lattice phase)'
+        xlabel = 'bin (value bins, then lattice phase) (1)'
+    elif name == 'histogram':
+        xs = xs * DEG
+        xlabel = 'angular rate (deg/s)'
+    else:
+        xlabel = f'{label} ({unit or "1"})' if not unit.startswith('(') else f'{label} {unit}'
     first = None
     for comp, label, colour in zip(comparisons, labels, colours):
         if comp is None:
@@ -60,9 +72,10 @@ def _plot_one(ax, layout, name, comparisons, labels, colours):
         ax.set_xscale('log')
     if name in _LOG_Y:
         ax.set_yscale('log')
-    ax.set_title(_TITLES[name], fontsize=8)
-    ax.set_xlabel(unit, fontsize=7)
-    ax.tick_params(labelsize=6)
+    ax.set_title(_TITLES[name], fontsize=10)
+    ax.set_xlabel(xlabel, fontsize=9)
+    ax.set_ylabel(_YLABELS.get(name, ''), fontsize=9)
+    ax.tick_params(labelsize=8)
 
 
 def plot_signatures(path, layout, names, comparisons, labels, colours, title):
@@ -86,15 +99,16 @@ def plot_signatures(path, layout, names, comparisons, labels, colours, title):
 
     cols = min(4, len(names))
     rows = int(np.ceil(len(names) / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.5 * rows), squeeze=False)
+    # 4.5 in per panel at 100 dpi: 1800 px for the 4 columns of 7-8 signatures (issue 11: >= 1600).
+    fig, axes = plt.subplots(rows, cols, figsize=(4.5 * cols, 3.6 * rows), squeeze=False)
     for ax, name in zip(axes.ravel(), names):
         _plot_one(ax, layout, name, [c.get(name) if c else None for c in comparisons], labels, colours)
     for ax in axes.ravel()[len(names):]:
         ax.axis('off')
-    axes.ravel()[0].legend(fontsize=6, loc='best')
-    fig.suptitle(title, fontsize=9)
+    axes.ravel()[0].legend(fontsize=8, loc='best')
+    fig.suptitle(title, fontsize=11)
     fig.tight_layout()
-    fig.savefig(path, dpi=72)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 

@@ -152,7 +152,8 @@ def find_lattice(x):
     phase = np.mod(x - offset + 0.5 * step, step) / step - 0.5
     if np.mean(np.abs(phase) < 0.02) < 0.99:
         return None
-    offset = float(np.mod(offset, step))
+    # Reduced modulo the step into [-step/2, step/2): the lattice is the same, the number readable.
+    offset = float(np.mod(offset + 0.5 * step, step) - 0.5 * step)
     return step, offset
 
 

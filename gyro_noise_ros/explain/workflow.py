@@ -136,7 +136,9 @@ class ExplainResult:
         return {
             'input': {'source': meas.source, 'axis': meas.axis, 'samples': meas.n,
                       'rate_hz': meas.rate_hz, 'duration_s': meas.duration_s,
-                      'temperature': meas.temperature_c is not None},
+                      'temperature': meas.temperature_c is not None,
+                      'timebase': (meas.timebase.as_dict()
+                                   if getattr(meas, 'timebase', None) is not None else None)},
             'ensemble': self.ensemble,
             'seed': self.seed,
             'baseline': self.baseline.to_dict(),

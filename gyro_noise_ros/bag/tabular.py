@@ -1,0 +1,262 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+IMU records that are not bags: CSV tables and PX4 ULog files, read like :class:`ImuBagReader`.
+
+Both kinds are loaded whole (minutes to hours of 100-1000 Hz data, tens of MB) and served in
+:class:`ImuBatch` es, so ``gyro_noise_analyze`` and ``gyro_noise_explain`` read them as bags.
+
+CSV (one header line, comma separated, names case-insensitive):
+
+=============================================  ===================================================
+``time_s`` / ``t_s`` / ``time (s)``             sample time (s); or ``timestamp_us`` (us); optional
+                                                when the caller gives a rate
+``gyro_x_rad_s`` ... or ``gyro_x_dps`` ...      angular rate (rad/s or deg/s); x-io's
+                                                ``gyroscope x (deg/s)`` is accepted
+``acc_x_m_s2`` / ``accel_x_m_s2`` or ``_g``     specific force (m/s^2 or g), optional
+``temperature_c`` / ``temp_c``                  sensor temperature (degC), optional
+``seq``                                         per-sample counter, optional (exact loss)
+=============================================  ===================================================
+
+ULog (PX4, read with ``pyulog``): topic ``sensor_combined`` (``gyro_rad[0..2]``,
+``accelerometer_m_s2[0..2]``, default) or ``sensor_gyro`` (``x, y, z``, ``temperature``;
+instance 0); stamps are the ``timestamp`` field (us, the autopilot's monotonic clock).
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import BagError, InputDataError, ParameterError
+
+#: Suffixes read by :class:`TableImuReader`.
+TABLE_SUFFIXES = ('.csv', '.ulg')
+#: ULog topics understood, in order of preference.
+ULOG_TOPICS = ('sensor_combined', 'sensor_gyro')
+
+_G = 9.80665
+_AXES = 'xyz'
+
+
+def is_table(path):
+    """
+    Tell whether ``path`` is a CSV or ULog file (by suffix).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        File name.
+
+    Returns
+    -------
+    bool
+
+    """
+    return Path(path).suffix.lower() in TABLE_SUFFIXES
+
+
+class _Batch:
+    """Late import of ImuBatch (bag/__init__ imports this module)."""
+
+    @staticmethod
+    def make(stamp_ns, gyro, accel, frame_id):
+        from . import ImuBatch
+
+        return ImuBatch(stamp_ns=stamp_ns, log_ns=stamp_ns, gyro=gyro, accel=accel,
+                        frame_id=frame_id)
+
+
+def _csv_columns(names, path):
+    def col(*choices):
+        for c in choices:
+            if c in names:
+                return names.index(c)
+        return None
+
+    cols = {'t_s': col('time_s', 't_s', 'time (s)'), 't_us': col('timestamp_us'),
+            'seq': col('seq', 'sequence'), 'temp': col('temperature_c', 'temp_c')}
+    for a in _AXES:
+        rad = col(f'gyro_{a}_rad_s')
+        dps = col(f'gyro_{a}_dps', f'gyroscope {a} (deg/s)')
+        if rad is None and dps is None:
+            raise InputDataError(f'CSV {str(path)!r} has no column gyro_{a}_rad_s (or '
+                                 f'gyro_{a}_dps); columns: {", ".join(names)}')
+        cols[f'g{a}'] = (rad, 1.0) if rad is not None else (dps, np.pi / 180.0)
+        ms2 = col(f'acc_{a}_m_s2', f'accel_{a}_m_s2')
+        g = col(f'acc_{a}_g', f'accel_{a}_g', f'accelerometer {a} (g)')
+        cols[f'a{a}'] = ((ms2, 1.0) if ms2 is not None else (g, _G) if g is not None
+                         else (None, 1.0))
+    return cols
+
+
+def _load_csv(path, rate_hz):
+    import csv
+
+    try:
+        with Path(path).open(newline='') as fh:
+            header = next(csv.reader(fh), None)
+    except OSError as err:
+        raise BagError(f'cannot read CSV {str(path)!r}: {err.strerror or err}') from err
+    if not header:
+        raise BagError(f'CSV {str(path)!r} is empty (a header line is required)')
+    names = [h.strip().lower() for h in header]
+    cols = _csv_columns(names, path)
+    if cols['t_s'] is None and cols['t_us'] is None and rate_hz is None:
+        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
+    try:
+        data = np.loadtxt(path, delimiter=',', skiprows=1, ndmin=2, dtype=np.float64)
+    except ValueError as err:
+        raise BagError(f'CSV {str(path)!r} has a non-numeric value: {err}') from err
+    n = data.shape[0]
+    if n == 0:
+        raise InputDataError(f'too short to analyse: CSV {str(path)!r} has no data rows')
+    if cols['t_s'] is not None:
+        t = data[:, cols['t_s']]
+        if not np.all(np.isfinite(t)):
+            bad = int((~np.isfinite(t)).sum())
+            raise InputDataError(f'CSV {str(path)!r}: {bad} time value(s) are NaN/Inf')
+        stamp = np.rint((t - t[0]) * 1e9).astype(np.int64)
+    elif cols['t_us'] is not None:
+        stamp = np.rint((data[:, cols['t_us']] - data[0, cols['t_us']]) * 1e3).astype(np.int64)
+    else:
+        stamp = np.rint(np.arange(n) * (1e9 / float(rate_hz))).astype(np.int64)
+    gyro = np.column_stack([data[:, cols[f'g{a}'][0]] * cols[f'g{a}'][1] for a in _AXES])
+    accel = np.column_stack([data[:, cols[f'a{a}'][0]] * cols[f'a{a}'][1]
+                             if cols[f'a{a}'][0] is not None else np.full(n, np.nan)
+                             for a in _AXES])
+    temp = data[:, cols['temp']] if cols['temp'] is not None else None
+    seq = data[:, cols['seq']].astype(np.int64) if cols['seq'] is not None else None
+    return stamp, gyro, accel, temp, seq, 'csv'
+
+
+def _load_ulog(path, topic):
+    try:
+        from pyulog import ULog
+    except ImportError as err:  # pragma: no cover - pyulog is a dependency
+        raise BagError(f'reading ULog {str(path)!r} needs pyulog (pip install pyulog)') from err
+    wanted = ULOG_TOPICS if topic is None else (topic.lstrip('/'),)
+    if any(w not in ULOG_TOPICS for w in wanted):
+        raise BagError(f'ULog topic must be one of {ULOG_TOPICS}, got {topic!r}')
+    try:
+        log = ULog(str(path), message_name_filter_list=list(wanted))
+    except FileNotFoundError as err:
+        raise BagError(f'cannot read ULog {str(path)!r}: no such file') from err
+    except Exception as err:  # noqa: B902 - pyulog raises bare Exceptions on corrupt files
+        raise BagError(f'cannot read ULog {str(path)!r}: {err}') from err
+    found = {d.name: d for d in log.data_list if d.multi_id == 0}
+    name = next((w for w in wanted if w in found), None)
+    if name is None:
+        raise BagError(f'ULog {str(path)!r} has none of the topics {", ".join(wanted)}')
+    d = found[name].data
+    stamp = (d['timestamp'].astype(np.int64) - int(d['timestamp'][0])) * 1000
+    n = stamp.shape[0]
+    if name == 'sensor_combined':
+        gyro = np.column_stack([d[f'gyro_rad[{i}]'] for i in range(3)]).astype(np.float64)
+        accel = np.column_stack([d.get(f'accelerometer_m_s2[{i}]', np.full(n, np.nan))
+                                 for i in range(3)]).astype(np.float64)
+        temp = None
+    else:
+        gyro = np.column_stack([d[k] for k in 'xyz']).astype(np.float64)
+        accel = np.full((n, 3), np.nan)
+        temp = d['temperature'].astype(np.float64) if 'temperature' in d else None
+    return stamp, gyro, accel, temp, None, name
+
+
+class TableImuReader:
+    """
+    A CSV or ULog record served like :class:`ImuBagReader` (module doc for the columns).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.csv`` or ``.ulg`` file.
+    topic : str, optional
+        ULog topic (``sensor_combined`` or ``sensor_gyro``); ignored for CSV.
+    rate_hz : float, optional
+        Rate (Hz) for a CSV without a time column.
+
+    Attributes
+    ----------
+    topic, storage : str
+        ULog topic or 'csv'; 'csv' or 'ulog'.
+    message_count : int
+    temperature_topic : str or None
+        'temperature_c' when the record has a temperature.
+    undecodable_count : int
+        Always 0.
+    sequence : numpy.ndarray or None
+        Per-sample counter of a CSV ``seq`` column.
+
+    """
+
+    def __init__(self, path, *, topic=None, temperature_topic=None, rate_hz=None):
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise BagError(f'cannot read {str(self.path)!r}: no such file')
+        if self.path.suffix.lower() == '.ulg':
+            loaded = _load_ulog(self.path, topic)
+            self.storage = 'ulog'
+        else:
+            loaded = _load_csv(self.path, rate_hz)
+            self.storage = 'csv'
+        self._stamp, self._gyro, self._accel, self._temp, self.sequence, self.topic = loaded
+        self.message_count = int(self._stamp.shape[0])
+        self.temperature_topic = 'temperature_c' if self._temp is not None else None
+        if temperature_topic is not None and self._temp is None:
+            raise BagError(f'{str(self.path)!r} has no temperature')
+        self.undecodable_count = 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def close(self):
+        """Nothing to release (the record is in memory)."""
+
+    def iter_batches(self, batch_size=65536):
+        """
+        Yield the samples as :class:`ImuBatch` es of ``batch_size``.
+
+        Parameters
+        ----------
+        batch_size : int
+            Samples per batch (>= 1).
+
+        Yields
+        ------
+        ImuBatch
+
+        """
+        size = int(batch_size)
+        if size < 1:
+            raise ParameterError(f'batch_size must be a positive integer, got {batch_size!r}')
+        for i in range(0, self.message_count, size):
+            sl = slice(i, i + size)
+            yield _Batch.make(self._stamp[sl], self._gyro[sl], self._accel[sl], 'imu_link')
+
+    def read_temperature(self):
+        """
+        Return ``(stamp_ns, temperature_c)`` or None.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+
+        """
+        if self._temp is None:
+            return None
+        return self._stamp.copy(), self._temp.astype(np.float64)

@@ -1,0 +1,476 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Sample rate, stamp irregularity and sample loss from stamps: one estimator for every tool.
+
+Stamps come in many patterns: a device clock (one stamp per sample, regular, a few holes where
+samples were lost), host-receive times (bursts: a long wait, then many samples a few microseconds
+apart), USB packets (many samples sharing almost one stamp), two clocks drifting slowly apart. The
+median step is right for the first and wrong by any factor for the others (the MPU6050 recording:
+median step 2 ms, true mean rate 99.32 Hz). The mean rate ``(n - 1) / span`` is right for all of
+them until a sample is lost, which makes it too low.
+
+For regular stamps (no step shorter than half the local period) the rate is the **step mean**: the
+mean of the steps between 0.5 and 1.5 times the median step of their block, so a hole (a lost
+sample) is left out and uneven integration windows (PX4: 4.0 and 4.8 ms) are averaged as the sensor
+integrates them. For bursty stamps the estimator is the **block rate**: stamps are cut into
+consecutive blocks of ``k`` samples (``k`` grows until a block spans 50 typical largest steps, so
+one burst cannot dominate a block), each block gives ``k / duration``, and the median over blocks
+is the rate. Bursts only move a block boundary (the error shrinks as 1 / duration); a lost sample
+lengthens one block, which the median ignores; slow clock drift is averaged. Its standard error is
+``1.2533 * 1.4826 MAD / sqrt(blocks)`` (the median of near-normal block rates). When a per-sample
+sequence counter exists, ``(last - first) / span`` is used and loss is exact.
+
+**Loss is a deficit of samples against elapsed time**: ``span * rate + 1 - n`` over the run (or a
+window), reported only when it exceeds its resolution (the rate uncertainty times the span plus the
+stamp jitter), never a long step followed by a burst. Steps shorter than half the local period
+exist only when stamps are bursty (a lost sample never makes a step *shorter*); above 1 % of such
+steps the stamps are called **bursty** and callers must not read loss from single steps.
+
+**Jitter** is the RMS of the stamps about a straight line through each block of 64 samples (s).
+
+Memory is bounded: the tracker keeps one small row per block and merges neighbouring blocks in
+pairs when more than :data:`MAX_BLOCKS` are held, so it runs for days in a live node.
+"""
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+from ..errors import InputDataError, ParameterError
+
+#: Samples per base block.
+BASE_BLOCK = 64
+#: Blocks held before neighbours are merged in pairs.
+MAX_BLOCKS = 1 << 14
+#: A step shorter than this fraction of the local period only happens with bursty stamps.
+SHORT_STEP = 0.5
+#: Fraction of short steps above which stamps are called bursty.
+BURSTY_FRACTION = 0.01
+#: Relative difference between estimators above which a warning is given.
+DISAGREE = 0.01
+#: Fraction of non-increasing steps above which the stamps are not a time base.
+UNUSABLE_FRACTION = 0.01
+#: Fewest blocks for the block rate; below, the mean rate is used.
+MIN_BLOCKS = 8
+#: A block must span this many typical largest steps.
+BLOCK_SPAN_STEPS = 50.0
+
+_NS = 1e9
+
+
+@dataclass(frozen=True)
+class RateEstimate:
+    """
+    Sample rate of a stamped record and how its stamps behave.
+
+    Attributes
+    ----------
+    rate_hz : float
+        The rate in use (Hz): configured, or from ``method``.
+    method : str
+        'configured', 'sequence' (per-sample counter), 'step_mean' (regular stamps: the mean of the
+        steps within 0.5-1.5 local median steps, so holes do not count), 'block_median' (bursty
+        stamps, module doc) or 'mean' ((n - 1) / span, for records too short for blocks).
+    stamp_rate_hz : float
+        The rate the stamps give (Hz), whatever ``rate_hz`` is.
+    stamp_rate_se_hz : float
+        Standard error of ``stamp_rate_hz`` (Hz); NaN for 'mean'.
+    mean_rate_hz : float
+        (n - 1) / span (Hz); lower than the true rate when samples are lost.
+    median_step_rate_hz : float
+        1 / median step (Hz); wrong for bursty stamps.
+    samples : int
+        Stamps seen.
+    span_s : float
+        Last minus first stamp (s).
+    block_samples : int
+        Samples per block of the block rate.
+    bursty : bool
+        More than :data:`BURSTY_FRACTION` of the steps are shorter than half the local period.
+    short_step_fraction, long_step_fraction : float
+        Steps below 0.5 and above 1.5 local periods, as fractions of all steps.
+    jitter_s : float
+        RMS of the stamps about a line through each block of 64 samples (s).
+    max_step_s : float
+        Largest step (s).
+    out_of_order : int
+        Steps <= 0.
+    usable : bool
+        False when more than :data:`UNUSABLE_FRACTION` of the steps are <= 0 (shuffled stamps).
+    loss_samples : int
+        Samples missing against elapsed time (0 when within the resolution).
+    loss_resolution_samples : float
+        Smallest deficit the record resolves (samples).
+    deficit_samples : float
+        ``span * rate + 1 - n`` before rounding and thresholding (samples; < 0 is a surplus).
+    warnings : tuple of str
+        Sentences for the user (estimators disagree, bursts, loss, unusable stamps).
+
+    """
+
+    rate_hz: float
+    method: str
+    stamp_rate_hz: float
+    stamp_rate_se_hz: float
+    mean_rate_hz: float
+    median_step_rate_hz: float
+    samples: int
+    span_s: float
+    block_samples: int
+    bursty: bool
+    short_step_fraction: float
+    long_step_fraction: float
+    jitter_s: float
+    max_step_s: float
+    out_of_order: int
+    usable: bool
+    loss_samples: int
+    loss_resolution_samples: float
+    deficit_samples: float
+    warnings: tuple = ()
+
+    def as_dict(self):
+        """
+        Return the fields as JSON-able values (units in the keys).
+
+        Returns
+        -------
+        dict
+
+        """
+        out = {}
+        for name in self.__dataclass_fields__:
+            value = getattr(self, name)
+            if isinstance(value, float) and not math.isfinite(value):
+                value = None
+            out[name] = list(value) if isinstance(value, tuple) else value
+        return out
+
+
+class TimebaseTracker:
+    """
+    Streaming stamp statistics for :class:`RateEstimate`, in bounded memory (module doc).
+
+    Parameters
+    ----------
+    base_block : int, keyword-only
+        Samples per base block (>= 4).
+    max_blocks : int, keyword-only
+        Blocks held before merging in pairs (>= 2 * MIN_BLOCKS).
+
+    """
+
+    def __init__(self, *, base_block=BASE_BLOCK, max_blocks=MAX_BLOCKS):
+        if int(base_block) < 4 or int(max_blocks) < 2 * MIN_BLOCKS:
+            raise ParameterError(f'base_block must be >= 4 and max_blocks >= {2 * MIN_BLOCKS}, '
+                                 f'got {base_block!r}, {max_blocks!r}')
+        self._k = int(base_block)
+        self._max_blocks = int(max_blocks)
+        self._carry = np.empty(0, dtype=np.int64)
+        self._n = 0
+        self._first = None
+        self._last = None
+        self._out_of_order = 0
+        self._max_step = 0
+        self._short = 0
+        self._long = 0
+        self._steps_in_blocks = 0
+        self._jit_ss = 0.0
+        self._jit_n = 0
+        self._reg_n = 0
+        self._reg_sum = 0.0
+        self._reg_ss = 0.0
+        self._samples_per_block = self._k
+        self._dur = []  # ns per block
+        self._maxstep = []  # ns per block
+        self._medstep = []  # ns per block
+        self._seq_first = None
+        self._seq_last = None
+        self._seq_n = 0
+
+    @property
+    def samples(self):
+        """Stamps seen so far."""
+        return self._n
+
+    def update(self, stamp_ns, sequence=None):
+        """
+        Add stamps in delivery order.
+
+        Parameters
+        ----------
+        stamp_ns : array_like of int
+            Stamps (ns).
+        sequence : array_like of int, optional
+            Per-sample counter of the same length (wraps are not handled: give it unwrapped).
+
+        """
+        s = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
+        if s.size == 0:
+            return
+        if sequence is not None:
+            q = np.asarray(sequence, dtype=np.int64).reshape(-1)
+            if q.shape != s.shape:
+                raise InputDataError(
+                    f'sequence must match the stamps, got {q.shape} and {s.shape}')
+            if self._seq_first is None:
+                self._seq_first = int(q[0])
+            self._seq_last = int(q[-1])
+            self._seq_n += q.size
+        if self._first is None:
+            self._first = int(s[0])
+            steps = np.diff(s)
+        else:
+            steps = np.diff(np.concatenate(([np.int64(self._last)], s)))
+        self._last = int(s[-1])
+        self._n += s.size
+        if steps.size:
+            self._out_of_order += int(np.count_nonzero(steps <= 0))
+            self._max_step = max(self._max_step, int(steps.max()))
+        self._carry = np.concatenate((self._carry, s))
+        k = self._k
+        nb = (self._carry.size - 1) // k
+        if nb <= 0:
+            return
+        body = self._carry[:nb * k + 1]
+        idx = np.arange(nb)[:, None] * k + np.arange(k + 1)[None, :]
+        blk = body[idx].astype(np.float64)
+        blk -= blk[:, :1]
+        dur = blk[:, -1]
+        st = np.diff(blk, axis=1)
+        period = dur / k
+        with np.errstate(invalid='ignore', divide='ignore'):
+            self._short += int(np.count_nonzero(st < SHORT_STEP * period[:, None]))
+            self._long += int(np.count_nonzero(st > (2.0 - SHORT_STEP) * period[:, None]))
+        self._steps_in_blocks += st.size
+        med = np.median(st, axis=1)
+        reg = (st > SHORT_STEP * med[:, None]) & (st < (2.0 - SHORT_STEP) * med[:, None])
+        regular = st[reg]
+        self._reg_n += regular.size
+        self._reg_sum += float(regular.sum())
+        self._reg_ss += float(regular @ regular)
+        x = np.arange(k + 1, dtype=np.float64)
+        xc = x - x.mean()
+        slope = (blk @ xc) / (xc @ xc)
+        resid = blk - blk.mean(axis=1, keepdims=True) - slope[:, None] * xc[None, :]
+        self._jit_ss += float(np.sum(resid ** 2))
+        self._jit_n += resid.size
+        self._dur.append(dur)
+        self._maxstep.append(st.max(axis=1))
+        self._medstep.append(med)
+        self._carry = self._carry[nb * k:].copy()
+        if sum(d.size for d in self._dur) > self._max_blocks:
+            self._merge()
+
+    def _merge(self):
+        dur = np.concatenate(self._dur)
+        mx = np.concatenate(self._maxstep)
+        md = np.concatenate(self._medstep)
+        m = dur.size // 2 * 2
+        # An odd last block cannot be merged: it leaves the rows (its samples stay counted in n and
+        # span). New blocks are cut at the doubled size from now on.
+        self._dur = [dur[:m:2] + dur[1:m:2]]
+        self._maxstep = [np.maximum(mx[:m:2], mx[1:m:2])]
+        self._medstep = [0.5 * (md[:m:2] + md[1:m:2])]
+        self._k *= 2
+        self._samples_per_block = self._k
+
+    def estimate(self, rate_hz=None):
+        """
+        Return the rate estimate of everything seen so far.
+
+        Parameters
+        ----------
+        rate_hz : float, optional
+            Configured rate (Hz); the stamp estimate is still computed and compared.
+
+        Returns
+        -------
+        RateEstimate
+
+        Raises
+        ------
+        InputDataError
+            Fewer than 2 stamps, or a zero span without a configured rate.
+
+        """
+        n = self._n
+        if n < 2:
+            raise InputDataError(f'{n} stamp(s): at least 2 are needed to estimate a sample rate')
+        span_ns = float(self._last - self._first)
+        steps = n - 1
+        warnings = []
+        usable = self._out_of_order <= UNUSABLE_FRACTION * steps and span_ns > 0
+        if not usable:
+            warnings.append(f'{self._out_of_order} of {steps} stamp steps are not increasing: '
+                            'the stamps are not a time base')
+        mean_rate = steps / span_ns * _NS if span_ns > 0 else math.nan
+        dur = np.concatenate(self._dur) if self._dur else np.empty(0)
+        mx = np.concatenate(self._maxstep) if self._maxstep else np.empty(0)
+        md = np.concatenate(self._medstep) if self._medstep else np.empty(0)
+        med_step = float(np.median(md)) if md.size else (span_ns / steps)
+        median_step_rate = _NS / med_step if med_step > 0 else math.nan
+        k = self._samples_per_block
+        block_rate = se = math.nan
+        if dur.size >= MIN_BLOCKS:
+            typical_max = float(np.median(mx))
+            g = 1
+            while (dur.size // (2 * g) >= MIN_BLOCKS
+                   and float(np.median(_group(dur, g))) < BLOCK_SPAN_STEPS * typical_max):
+                g *= 2
+            d = _group(dur, g)
+            d = d[d > 0]
+            if d.size >= MIN_BLOCKS // 2:
+                rates = k * g / d * _NS
+                block_rate = float(np.median(rates))
+                mad = float(np.median(np.abs(rates - block_rate)))
+                se = 1.2533 * 1.4826 * mad / math.sqrt(rates.size)
+                k = k * g
+        short = self._short / self._steps_in_blocks if self._steps_in_blocks else 0.0
+        long_ = self._long / self._steps_in_blocks if self._steps_in_blocks else 0.0
+        bursty = short > BURSTY_FRACTION
+        if self._seq_n == n and self._seq_last is not None and span_ns > 0:
+            method = 'sequence'
+            stamp_rate = (self._seq_last - self._seq_first) / span_ns * _NS
+            se = math.nan
+        elif not bursty and self._reg_n >= MIN_BLOCKS * BASE_BLOCK // 2 and self._reg_sum > 0:
+            method = 'step_mean'
+            mean_step = self._reg_sum / self._reg_n
+            var_step = max(self._reg_ss / self._reg_n - mean_step ** 2, 0.0)
+            stamp_rate = _NS / mean_step
+            # Steps of a device clock are nearly independent; the jitter of one stamp enters two
+            # steps with opposite signs, so this is conservative.
+            se = stamp_rate * math.sqrt(var_step / self._reg_n) / mean_step
+        elif math.isfinite(block_rate):
+            method, stamp_rate = 'block_median', block_rate
+        else:
+            method, stamp_rate = 'mean', mean_rate
+        if rate_hz is not None:
+            rate = float(rate_hz)
+            if not (math.isfinite(rate) and rate > 0):
+                raise ParameterError(f'rate_hz must be a positive number, got {rate_hz!r}')
+            if math.isfinite(stamp_rate) and abs(stamp_rate / rate - 1.0) > DISAGREE and usable:
+                off = 100 * (stamp_rate / rate - 1)
+                warnings.append(f'the configured rate {rate:.6g} Hz differs from the rate of the '
+                                f'stamps, {stamp_rate:.6g} Hz ({method}), by {off:+.2f} %')
+            used_method = 'configured'
+        else:
+            if not math.isfinite(stamp_rate):
+                raise InputDataError('the stamps do not increase: cannot estimate a sample rate; '
+                                     'give the rate explicitly')
+            rate, used_method = stamp_rate, method
+        jitter = math.sqrt(self._jit_ss / self._jit_n) / _NS if self._jit_n else math.nan
+        if usable and math.isfinite(median_step_rate) and math.isfinite(stamp_rate) \
+                and abs(median_step_rate / stamp_rate - 1.0) > 2 * DISAGREE:
+            hint = ' (bursty stamps: host receive times or packets?)' if bursty else ''
+            warnings.append(f'the median stamp step gives {median_step_rate:.6g} Hz but the '
+                            f'{method} rate is {stamp_rate:.6g} Hz{hint}')
+        if method == 'sequence':
+            deficit = float((self._seq_last - self._seq_first) + 1 - n)
+            resolution = 0.5
+        else:
+            deficit = span_ns / _NS * rate + 1.0 - n
+            rate_rel = (se / stamp_rate) if math.isfinite(se) and stamp_rate > 0 else 0.0
+            jit = jitter if math.isfinite(jitter) else 0.0
+            resolution = (n * rate_rel * 3.0 + 3.0 * jit * rate
+                          + 2.0 * self._max_step / _NS * rate * bursty + 1.0)
+        loss = int(round(deficit)) if usable and deficit > resolution else 0
+        if loss:
+            warnings.append(f'{loss} sample(s) missing against elapsed time '
+                            f'({loss / (n + loss):.3g} of expected; resolution {resolution:.3g})')
+        elif usable and deficit < -resolution and used_method == 'configured':
+            warnings.append(
+                f'{-deficit:.0f} more samples than the configured rate allows over the span')
+        return RateEstimate(
+            rate_hz=float(rate), method=used_method, stamp_rate_hz=float(stamp_rate),
+            stamp_rate_se_hz=float(se), mean_rate_hz=float(mean_rate),
+            median_step_rate_hz=float(median_step_rate), samples=int(n), span_s=span_ns / _NS,
+            block_samples=int(k), bursty=bool(bursty), short_step_fraction=float(short),
+            long_step_fraction=float(long_), jitter_s=float(jitter),
+            max_step_s=self._max_step / _NS,
+            out_of_order=int(self._out_of_order), usable=bool(usable), loss_samples=loss,
+            loss_resolution_samples=float(resolution), deficit_samples=float(deficit),
+            warnings=tuple(warnings))
+
+
+def _group(dur, g):
+    if g == 1:
+        return dur
+    m = dur.size // g * g
+    return dur[:m].reshape(-1, g).sum(axis=1)
+
+
+def estimate_rate(t, *, unit='ns', rate_hz=None, sequence=None):
+    """
+    Estimate the sample rate, stamp irregularity and loss of a whole record (module doc).
+
+    Parameters
+    ----------
+    t : array_like
+        Stamps in delivery order: int ns (``unit='ns'``) or float seconds (``unit='s'``).
+    unit : {'ns', 's'}, keyword-only
+        Unit of ``t``.
+    rate_hz : float, optional, keyword-only
+        Configured rate (Hz); the stamps are still analysed and compared with it.
+    sequence : array_like of int, optional, keyword-only
+        Per-sample counter.
+
+    Returns
+    -------
+    RateEstimate
+
+    """
+    if unit == 's':
+        arr = np.asarray(t, dtype=np.float64).reshape(-1)
+        if not np.all(np.isfinite(arr)):
+            raise InputDataError(f'{int((~np.isfinite(arr)).sum())} sample time(s) are NaN/Inf')
+        base = arr[0] if arr.size else 0.0
+        stamps = np.rint((arr - base) * _NS).astype(np.int64)
+    elif unit == 'ns':
+        stamps = np.asarray(t).astype(np.int64).reshape(-1)
+    else:
+        raise ParameterError(f"unit must be 'ns' or 's', got {unit!r}")
+    tracker = TimebaseTracker()
+    tracker.update(stamps, sequence)
+    return tracker.estimate(rate_hz)
+
+
+def rescale_allan(result, rate_hz):
+    """
+    Return an Allan result with its taus recomputed for another sample rate.
+
+    The Allan deviation of rate samples depends only on the averaging factor m; tau = m / rate. A
+    streaming analysis that learns the rate better at the end rescales with this.
+
+    Parameters
+    ----------
+    result : allan.AllanResult
+        Allan deviation computed at another rate.
+    rate_hz : float
+        The rate (Hz).
+
+    Returns
+    -------
+    allan.AllanResult
+
+    """
+    from dataclasses import replace
+
+    rate = float(rate_hz)
+    if not (math.isfinite(rate) and rate > 0) or result is None or rate == result.rate_hz:
+        return result
+    return replace(result, tau_s=np.asarray(result.m, dtype=np.float64) / rate, rate_hz=rate)

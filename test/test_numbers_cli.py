@@ -1,0 +1,273 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Bad input that used to pass silently (issue 11), and the inputs both tools read."""
+
+import json
+
+from _realdata import real_data
+from gyro_noise_ros.bag import ImuBagWriter
+from gyro_noise_ros.cli import analyze, explain, importer
+from gyro_noise_ros.explain.inputs import load_input
+from gyro_noise_ros.link import protocol as p
+from gyro_noise_ros.link.sdlog import SdLogWriter
+import numpy as np
+import pytest
+
+MPU = ('mpu6050_static_sunsided', 'mpu6050_static_10min.csv')
+ULOG = ('px4_ulog_sample_static', 'sample.ulg')
+
+
+def _bag(path, gyro, rate_hz=1000.0):
+    n = gyro.shape[0]
+    stamps = 10 ** 18 + np.arange(n, dtype=np.int64) * int(1e9 / rate_hz)
+    with ImuBagWriter(path, storage='mcap') as writer:
+        writer.write_imu(stamps, gyro, np.zeros((n, 3)))
+    return path
+
+
+@pytest.mark.parametrize('fill', [np.nan, 0.25])
+def test_analyze_refuses_all_nan_or_constant_angular_velocity(tmp_path, fill, capsys):
+    bag = _bag(tmp_path / 'b.mcap', np.full((4000, 3), fill))
+    rc = analyze.main([str(bag), '--out', str(tmp_path / 'o'), '--chunk-size', '1000', '--memory',
+                       '50', '--order-grid', '0:2:0.1', '--jobs', '1', '--no-figures', '--quiet'])
+    assert rc == 4  # README: 4 = the data cannot be analysed
+    assert 'no chunk could be analysed' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('grid', ['0:2:5', '1:1:0.1', '-1:2:0.1', '0:2:0.3', '0:2.5:0.1'])
+def test_analyze_refuses_degenerate_or_out_of_domain_order_grids(tmp_path, grid, capsys):
+    rc = analyze.main([str(tmp_path / 'missing.mcap'), '--out', str(tmp_path / 'o'),
+                       f'--order-grid={grid}'])
+    assert rc == 2 and '--order-grid' in capsys.readouterr().err
+
+
+def test_analyze_falls_back_to_log_time_on_shuffled_header_stamps(tmp_path, capsys):
+    rng = np.random.default_rng(0)
+    n = 6000
+    log = 10 ** 18 + np.arange(n, dtype=np.int64) * 1_000_000  # 1 kHz receive times
+    header = rng.permutation(log)
+    with ImuBagWriter(tmp_path / 'b.mcap', storage='mcap') as writer:
+        writer.write_imu(header, rng.normal(0, 1e-3, (n, 3)), np.zeros((n, 3)), log_ns=log)
+    rc = analyze.main([str(tmp_path / 'b.mcap'), '--out', str(tmp_path / 'o'), '--chunk-size',
+                       '1000', '--memory', '50', '--order-grid', '0:2:0.1', '--jobs', '1',
+                       '--no-figures', '--quiet', '--no-allan'])
+    assert rc == 0
+    assert 'log time' in capsys.readouterr().err
+    bag = json.loads((tmp_path / 'o' / 'summary.json').read_text())['bags'][0]
+    assert bag['time_source'] == 'log' and bag['rate_hz'] == pytest.approx(1000.0, rel=1e-6)
+
+
+def test_explain_and_analyze_read_the_same_csv_with_one_rate_estimator(tmp_path):
+    path = real_data(*MPU)
+    meas = load_input(path, axis='x')
+    assert meas.timebase.method == 'block_median'
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--axis', 'x'])
+    assert rc == 0
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    # Same estimator on the same integer-ns stamps: equal to rounding.
+    assert bag['rate_hz'] == pytest.approx(meas.rate_hz, rel=1e-9)
+
+
+def test_both_tools_read_px4_ulog(tmp_path):
+    path = real_data(*ULOG)
+    meas = load_input(path, axis='z')
+    # SOURCE.md: 17,070 sensor_combined samples; the rate is the firmware's mean integration rate.
+    assert meas.n == 17070 and meas.rate_hz == pytest.approx(248.56, rel=1e-3)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--chunk-size', '5000', '--static', 'off'])
+    assert rc == 0
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    assert bag['storage'] == 'ulog' and bag['samples'] == 17070
+    assert bag['rate_hz'] == pytest.approx(meas.rate_hz, rel=1e-9)
+
+
+def test_explain_validates_options_before_loading(tmp_path, capsys):
+    # The input does not exist: a bad option must be reported first (exit 2, not 3).
+    for bad in (['--ensemble', '2'], ['--max-steps', '-1'], ['--rate-hz', '-5']):
+        assert explain.main([str(tmp_path / 'none.mcap'), '--out', str(tmp_path / 'o'), *bad]) == 2
+        assert 'none.mcap' not in capsys.readouterr().err
+
+
+def test_import_of_a_missing_file_exits_3(tmp_path, capsys):
+    assert importer.main([str(tmp_path / 'S001F000.GNL'), '--out', str(tmp_path / 'b')]) == 3
+    assert 'does not exist' in capsys.readouterr().err
+
+
+def test_import_recovers_the_scales_from_the_ack_after_a_corrupt_header(tmp_path):
+    rng = np.random.default_rng(1)
+    n = 512
+    samples = np.zeros(n, dtype=p.SAMPLE_DTYPE)
+    samples['seq'] = np.arange(n)
+    samples['t_us'] = np.arange(n) * 150
+    samples['gyro'] = rng.integers(-300, 300, (n, 3))
+    samples['accel'][:, 2] = 4096
+    logs = tmp_path / 'sd'
+    logs.mkdir()
+    with SdLogWriter(logs, sequence_id=1, odr_hz=6667.0, gyro_fs_dps=500, accel_fs_g=8) as w:
+        w.write_ack(p.Ack(command_id=1, ok=True, odr_hz=6667.0, gyro_fs_dps=500, accel_fs_g=8))
+        w.write_samples(samples)
+        paths = list(w.paths)
+    clean_bag = tmp_path / 'clean'
+    assert importer.main([*paths, '--out', str(clean_bag)]) == 0
+    data = bytearray(open(paths[0], 'rb').read())
+    assert data[3] == p.FRAME_LOG_HEADER
+    data[8] ^= 0x10  # one flipped bit inside the header payload: its CRC fails
+    open(paths[0], 'wb').write(bytes(data))
+    bag = tmp_path / 'recovered'
+    assert importer.main([*paths, '--out', str(bag)]) == 0
+    from gyro_noise_ros.bag import ImuBagReader
+
+    def gyro_of(path):
+        with ImuBagReader(path) as reader:
+            return np.concatenate([b.gyro for b in reader.iter_batches()])
+
+    # The same scale (500 deg/s) as with the intact header: identical angular rates.
+    np.testing.assert_array_equal(gyro_of(bag), gyro_of(clean_bag))
+
+
+def test_px4_motion_is_skipped_and_said(tmp_path, capsys):
+    path = real_data(*ULOG)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--chunk-size', '5000'])
+    assert rc == 0
+    err = capsys.readouterr().err
+    assert 'in motion' in err and 'left out' in err
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    # SOURCE.md (independent, 1 s rolling std of |w| < 0.005 rad/s): static from row 1700,
+    # t = 6.87 s, to the end; a 1 s window grid puts the start within a second of it.
+    a, b = bag['left_out']['static_segment_s']
+    assert 6.0 <= a <= 7.9 and b >= 68.3
+    assert abs(bag['left_out']['motion'] - 1700) < 250  # ~1 s of 248 Hz samples
+    assert bag['samples'] + bag['left_out']['motion'] == 17070
+    # Off: everything is analysed, handling included (variance ~1e5x the static one).
+    rc = analyze.main([str(path), '--out', str(tmp_path / 'all'), '--jobs', '1', '--no-figures',
+                       '--quiet', '--no-allan', '--chunk-size', '5000', '--static', 'off'])
+    assert rc == 0
+    whole = json.loads((tmp_path / 'all' / 'summary.json').read_text())['bags'][0]
+    assert whole['samples'] == 17070
+    moving, still = (d['axes']['x']['mean_variance_deg2_s2'] for d in (whole, bag))
+    assert moving > 100 * still
+
+
+def test_xio_static_segments_match_the_source_notes(tmp_path):
+    path = real_data('xio_fusion_sensor_data', 'sensor_data.csv')
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--chunk-size', '1000', '--memory', '100'])
+    assert rc == 0
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    # SOURCE.md: static at t = 0.5-12.5 s and 117.2-134.8 s, the hand motion in between.
+    a, b = bag['left_out']['static_segment_s']
+    assert 116.0 <= a <= 119.0 and b >= 134.0
+    segs = bag['left_out']['static_segments_s']
+    assert any(s[0] <= 1.0 and 11.0 <= s[1] <= 14.0 for s in segs)
+
+
+def test_start_end_window_on_mpu6050(tmp_path, capsys):
+    path = real_data(*MPU)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--no-allan', '--start', '100', '--end', '400', '--chunk-size', '5000'])
+    assert rc == 0
+    bag = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]
+    left = bag['left_out']
+    # 300 s at the true mean rate 99.32 Hz; 1 % for the bursty stamps at the window edges.
+    assert bag['samples'] == pytest.approx(300 * 99.32, rel=0.01)
+    assert bag['samples'] + left['before_start'] + left['after_end'] + left['motion'] == 65067
+    assert left['motion'] == 0  # a static recording
+    assert 'before --start' in capsys.readouterr().err
+    bad = ['--start', '5', '--end', '2']
+    assert analyze.main([str(path), '--out', str(tmp_path / 'x'), *bad]) == 2
+
+
+@pytest.mark.slow
+def test_explain_runs_all_axes_in_one_report_on_a_minute_at_250_hz(tmp_path, capsys):
+    # A minute of the real PX4 log at rest (the handling before is skipped automatically):
+    # 15,246 samples, under the old 16,384-sample floor.
+    path = real_data(*ULOG)
+    out = tmp_path / 'ex'
+    rc = explain.main([str(path), '--out', str(out), '--ensemble', '4', '--max-steps', '1',
+                       '--quiet'])
+    assert rc == 0
+    err = capsys.readouterr().err
+    assert 'in motion' in err
+    index = json.loads((out / 'explain.json').read_text())
+    assert set(index['axes']) == {'x', 'y', 'z'}
+    report = (out / 'report.md').read_text()
+    assert all(f'axis {a}:' in report for a in 'xyz')
+    assert '(axis_z/overview.png)' in report and (out / 'axis_z' / 'overview.png').is_file()
+    from matplotlib.image import imread
+    # 8 signature panels must be readable: at least 1600 px wide (issue 11).
+    assert imread(out / 'axis_z' / 'overview.png').shape[1] >= 1600
+    data = json.loads((out / 'axis_z' / 'explain.json').read_text())
+    # The static segment only: 248.56 Hz (firmware integration rate) over ~61 s.
+    assert data['input']['rate_hz'] == pytest.approx(248.56, rel=1e-3)
+    assert 14_000 < data['input']['samples'] < 15_600
+
+
+def test_mpu6050_two_mode_orders_and_a_summary_for_people(tmp_path):
+    path = real_data(*MPU)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures', '--quiet',
+                       '--axis', 'x'])
+    assert rc == 0
+    a = json.loads((tmp_path / 'summary.json').read_text())['bags'][0]['axes']['x']
+    # Independent: split the chunk orders of chunks.csv at 0.5 (the model's 0/1 alias).
+    import csv
+    with open(tmp_path / 'chunks.csv', newline='') as fh:
+        orders = np.array([float(r['alpha_var']) for r in csv.DictReader(fh) if r['axis'] == 'x'])
+    low, high = orders[orders < 0.5], orders[orders >= 0.5]
+    assert low.size >= 2 and high.size >= 2  # the issue: three chunks at 0.02, three at 1.02
+    assert a['alpha_var_multimodal']
+    modes = [(m['order'], m['chunks']) for m in a['alpha_var_modes']]
+    assert modes == [(pytest.approx(low.mean()), low.size),
+                     (pytest.approx(high.mean()), high.size)]
+    md = (tmp_path / 'summary.md').read_text()
+    assert md.index('## In short') < md.index('Paper 000 Table 3')
+    assert 'separate modes' in md and 'modes: ' in md
+    assert 'deg/sqrt(h)' in md and '(SI, unit in the name)' in md and '68.3 %' in md
+    # Table 3 shows the paper's magnitude and the signed slope beside it, never a bare abs().
+    slope = a['offset_drift_deg_s_per_h']
+    assert f"| {abs(slope):.6f} | {slope:+.6f} |" in md
+    # "N standard errors, not significant" states the t needed with this many chunks.
+    assert 'needed with 6 chunks' in md
+
+
+def test_console_line_gives_order_modes_not_their_mean(tmp_path, capsys):
+    rc = analyze.main([str(real_data(*MPU)), '--out', str(tmp_path), '--jobs', '1',
+                       '--no-figures', '--axis', 'x'])
+    assert rc == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith('  x:'))
+    assert 'order var modes ' in line and '(3 chunks)' in line
+
+
+def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path, capsys):
+    path = real_data(*MPU)
+    rc = analyze.main([str(path), '--out', str(tmp_path), '--jobs', '1', '--no-figures',
+                       '--no-allan', '--axis', 'z', '--batch-size', '5000'])
+    assert rc == 0
+    lines = [x for x in capsys.readouterr().err.splitlines() if '% ' in x and 'messages' in x]
+    # 65,067 messages in batches of 5,000: one line per 10 % crossed, the last at 100 %.
+    assert 9 <= len(lines) <= 11 and lines[-1].split(': ')[1].startswith('100%')
+
+
+def test_quantisation_offset_is_reduced_modulo_the_step():
+    from gyro_noise_ros.explain.signatures import find_lattice
+
+    rng = np.random.default_rng(2)
+    step = np.deg2rad(0.05)  # the ADIS16405 LSB
+    x = (0.9 + 40 + np.round(rng.normal(0, 5, 20_000))) * step  # offset 0.9 step off the grid
+    found_step, offset = find_lattice(x)
+    assert found_step == pytest.approx(step, rel=1e-6)
+    # Same lattice, reported in [-step/2, step/2): -0.1 step, not 40.9 or 0.9 steps.
+    assert offset == pytest.approx(-0.1 * step, abs=1e-6 * step)

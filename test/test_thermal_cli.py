@@ -236,3 +236,15 @@ def test_real_mpu6050_narrow_temperature_is_refused_then_scored_on_halves(tmp_pa
     second_half = np.radians(data[data.shape[0] // 2:, 1])
     expected = noise_metrics(second_half, doc['rate_hz']).arw_deg_sqrt_h
     assert doc['axes']['x']['raw']['arw_deg_sqrt_h'] == pytest.approx(expected, rel=1e-9)
+
+
+def test_fitted_model_json_loads_in_the_live_compensator(tmp_path):
+    from gyro_noise_ros.thermal.live import check_live_model, load_live_model
+
+    train, _, _ = _bag(tmp_path / 'train', 1, lo=15.0, hi=35.0)
+    assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'm'),
+                 '--quiet']) == 0
+    method, range_c, margin = load_live_model(str(tmp_path / 'm' / 'model.json'))
+    assert isinstance(method, LinearInT) and margin == methods.DEFAULT_RANGE_MARGIN_C
+    assert range_c[0] == 15.0 and range_c[1] == pytest.approx(35.0, abs=1e-3)
+    check_live_model(method, range_c=range_c, margin_c=margin)

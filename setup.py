@@ -13,17 +13,22 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE]),
         ('share/' + PACKAGE, ['package.xml']),
         ('share/' + PACKAGE + '/config', glob('config/*.yaml')),
+        ('share/' + PACKAGE + '/launch', glob('launch/*.launch.py')),
     ],
     python_requires='>=3.10',
+    # No version floors on what a ROS distribution provides from its OS packages (colcon users get
+    # numpy, scipy, numba, pyserial, matplotlib and PyYAML from apt, rosdep keys in package.xml):
+    # a floor above the distro's version makes setuptools-generated console scripts refuse to
+    # start. rosbags is pip-only (rosdep key python3-rosbags-pip).
     install_requires=[
         'setuptools',
-        'numpy>=1.26',
-        'scipy>=1.11',
-        'numba>=0.59',
+        'numpy',
+        'scipy',
+        'numba',
         'rosbags>=0.10',
-        'pyserial>=3.5',
-        'matplotlib>=3.7',
-        'PyYAML>=6',
+        'pyserial',
+        'matplotlib',
+        'PyYAML',
         # PX4 ULog input of gyro_noise_analyze / gyro_noise_explain (bag/tabular.py).
         'pyulog>=1.0',
         # thermal baselines (paper 002 comparisons): wavelet-threshold denoising and EMD
@@ -53,7 +58,7 @@ setup(
     },
     zip_safe=True,
     maintainer='gyro_noise_ros developers',
-    maintainer_email='gyro-noise-ros@example.invalid',
+    maintainer_email='gyro-noise-ros@users.noreply.github.com',
     description='Noise characterisation of MEMS gyroscopes (LSM6DSO32) live and from rosbags: '
                 'fractional-order identification, Allan deviation, diagnostics.',
     license='Apache-2.0',
@@ -66,6 +71,7 @@ setup(
             'portenta_emulator = gyro_noise_ros.cli.emulator:main',
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
+            'gyro_noise_monitor = gyro_noise_ros.nodes.monitor:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
             'gyro_noise_thermal = gyro_noise_ros.cli.thermal:main',
             'gyro_noise_calibrate = gyro_noise_ros.cli.calibrate:main',

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from .core.engine import rad_s2_to_deg_s_per_h
+from .core.items import DEG as _DEG
 
-_DEG = 180.0 / math.pi
 _DEG2 = _DEG ** 2
 
 #: Columns of chunks.csv, in order.

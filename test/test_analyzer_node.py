@@ -1,9 +1,12 @@
 """
-``noise_analyzer`` in-process: the same bag played into the node and given to the offline tool and to the
-engine yields identical per-chunk numbers; skipping when analysis falls behind; parameter refusals.
+``noise_analyzer`` in-process: same numbers as the offline tool and the engine, skipping, refusals.
 
-The node runs in this process with ``parameter_overrides`` on a private ROS_DOMAIN_ID and its own rclpy
-context; a publisher node replays the bag's serialised messages (bytes as stored, no re-encoding).
+The same bag played into the node and given to the offline tool and to the engine yields identical
+per-chunk numbers; the node skips chunks when analysis falls behind; bad parameters are refused.
+
+The node runs in this process with ``parameter_overrides`` on a private ROS_DOMAIN_ID and its own
+rclpy context; a publisher node replays the bag's serialised messages (bytes as stored, no
+re-encoding).
 """
 
 import math
@@ -14,30 +17,29 @@ import sys
 import threading
 import time
 
-import numpy as np
-import pytest
-
 os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
 
-import rclpy  # noqa: E402
 from geometry_msgs.msg import Vector3Stamped  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
-
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter  # noqa: E402
 from gyro_noise_ros.cli import analyze as analyze_cli  # noqa: E402
 from gyro_noise_ros.core.engine import NoiseEngine  # noqa: E402
+from gyro_noise_ros.core.live import CHUNK_TOPICS  # noqa: E402
 from gyro_noise_ros.core.simulate import simulate_fractional_noise  # noqa: E402
 from gyro_noise_ros.errors import ParameterError  # noqa: E402
 from gyro_noise_ros.nodes import analyzer  # noqa: E402
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import rclpy  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from sensor_msgs.msg import Imu, Temperature  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
 RATE_HZ = 6660.0
 # Small chunks, memory and grid keep the test fast; the comparison is exact whatever the sizes.
-SMALL = dict(chunk_size=2000, memory=200, order_grid_step=0.05, diagnostics_period_s=0.2)
+SMALL = {'chunk_size': 2000, 'memory': 200, 'order_grid_step': 0.05, 'diagnostics_period_s': 0.2}
 DEG = 180.0 / math.pi
 
 
@@ -54,7 +56,7 @@ def _overrides(**values):
 
 
 def _make_bag(path, n, *, seed, gaps=()):
-    """A rosbag2 with fractional noise (alpha 0.6) on 3 axes, optional removed samples, temperature."""
+    """Write a rosbag2: fractional noise (alpha 0.6) on 3 axes, removed samples, temperature."""
     rng = np.random.default_rng(seed)
     gyro = np.column_stack([simulate_fractional_noise(n, 0.6, -0.2, 3e-3, rng=rng, memory=200)
                             for _ in range(3)])
@@ -71,7 +73,7 @@ def _make_bag(path, n, *, seed, gaps=()):
 
 
 def _raw_messages(path):
-    """The bag's raw (serialised) messages in log-time order: (topic, bytes)."""
+    """Return the bag's raw (serialised) messages in log-time order: (topic, bytes)."""
     from rosbags.rosbag2 import Reader
 
     with Reader(path) as reader:
@@ -101,7 +103,8 @@ def _replay(context, node, messages, *, block=500):
         for topic, raw in messages[start:start + block]:
             pubs[topic].publish(raw)
             sent += topic == '/imu/data_raw'
-        assert _spin_until(executor, lambda: node.messages_received >= sent, 20), (node.messages_received, sent)
+        assert _spin_until(executor, lambda: node.messages_received >=
+                           sent, 20), (node.messages_received, sent)
     return executor, pub_node
 
 
@@ -110,7 +113,8 @@ def _fields(result):
 
 
 def _same(a, b):
-    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b))
+    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a)
+                      and math.isnan(b))
 
 
 @pytest.mark.timeout(180)
@@ -120,7 +124,7 @@ def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path):
     # Two gaps (5 and 1 samples) so samples_lost and gaps are compared too.
     kept = _make_bag(bag, n, seed=11, gaps=((3000, 5), (7400, 1)))
     node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**SMALL))
-    received = {name: [] for name in analyzer.CHUNK_TOPICS}
+    received = {name: [] for name in CHUNK_TOPICS}
     listener = rclpy.create_node('test_chunk_listener', context=context)
     for name in received:
         listener.create_subscription(Vector3Stamped, f'/noise_analyzer/{name}',
@@ -145,19 +149,22 @@ def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path):
         t_stamp, t_value = reader.read_temperature()
         for batch in reader.iter_batches(3000):
             temp = np.interp(batch.stamp_ns.astype(float), t_stamp.astype(float), t_value)
-            direct += [engine.analyze(job) for job in engine.ingest(batch.stamp_ns, batch.gyro, temp)]
+            direct += [engine.analyze(job)
+                       for job in engine.ingest(batch.stamp_ns, batch.gyro, temp)]
     direct.sort(key=lambda r: (r.chunk, r.axis))
     assert len(direct) == len(node_results) == 3 * chunks
     for mine, theirs in zip(node_results, direct):
         a, b = _fields(mine), _fields(theirs)
-        assert all(_same(a[k], b[k]) for k in a), {k: (a[k], b[k]) for k in a if not _same(a[k], b[k])}
+        assert all(_same(a[k], b[k])
+                   for k in a), {k: (a[k], b[k]) for k in a if not _same(a[k], b[k])}
     assert sum(r.samples_lost for r in node_results if r.axis == 'x') == 6
     assert {r.temperature_c for r in node_results} == {31.5}
 
     # The offline tool on the same bag: chunks.csv holds every number losslessly (repr).
     out = tmp_path / 'report'
-    rc = analyze_cli.main([str(bag), '--out', str(out), '--jobs', '1', '--chunk-size', '2000', '--memory', '200',
-                           '--order-grid', '0:2:0.05', '--no-figures', '--no-allan', '--quiet'])
+    rc = analyze_cli.main([str(bag), '--out', str(out), '--jobs', '1', '--chunk-size', '2000',
+                           '--memory', '200', '--order-grid', '0:2:0.05', '--no-figures',
+                           '--no-allan', '--quiet'])
     assert rc == 0
     import csv
     with open(out / 'chunks.csv') as fh:
@@ -165,18 +172,21 @@ def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path):
     assert len(rows) == len(node_results)
     for row, r in zip(rows, node_results):
         assert (row['axis'], int(row['chunk']), int(row['samples']), int(row['samples_lost']),
-                int(row['stamp_start_ns'])) == (r.axis, r.chunk, r.samples, r.samples_lost, r.stamp_start_ns)
-        for col, value in (('alpha_var', r.alpha_var), ('f_var', r.f_var), ('alpha_corr', r.alpha_corr),
-                           ('f_corr', r.f_corr), ('t_start_s', r.t_start_s)):
+                int(row['stamp_start_ns'])) == (r.axis, r.chunk, r.samples, r.samples_lost,
+                                                r.stamp_start_ns)
+        for col, value in (('alpha_var', r.alpha_var), ('f_var', r.f_var),
+                           ('alpha_corr', r.alpha_corr), ('f_corr', r.f_corr),
+                           ('t_start_s', r.t_start_s)):
             assert float(row[col]) == value, (col, row[col], value)
         bias_col = next(c for c in row if c.startswith('bias'))
         var_col = next(c for c in row if c.startswith('variance'))
         assert float(row[bias_col]) == pytest.approx(r.bias_rad_s * DEG, rel=1e-15, abs=0)
-        assert float(row[var_col]) == pytest.approx(r.variance_rad2_s2 * DEG ** 2, rel=1e-15, abs=0)
+        assert float(row[var_col]) == pytest.approx(
+            r.variance_rad2_s2 * DEG ** 2, rel=1e-15, abs=0)
 
     # The per-chunk topics carry the same numbers, x/y/z = axes, stamped with the chunk start.
     by_key = {(r.chunk, r.axis): r for r in node_results}
-    for name, (field, _) in analyzer.CHUNK_TOPICS.items():
+    for name, (field, _) in CHUNK_TOPICS.items():
         for chunk, msg in enumerate(received[name]):
             assert msg.header.frame_id == 'imu_bag'
             stamp = msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec
@@ -194,7 +204,7 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
     high_water = []
 
     def slow(job, **kw):
-        high_water.append(node._jobs.qsize())
+        high_water.append(node.live.queue_size)
         gate.wait(timeout=30)  # hold the worker until every chunk has been ingested
         return real(job, **kw)
 
@@ -211,7 +221,8 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
     try:
         executor, _ = _replay(context, node, messages, block=1000)
         gate.set()
-        assert _spin_until(executor, lambda: len(node.results) == 3 * chunks, 60), len(node.results)
+        assert _spin_until(executor, lambda: len(node.results)
+                           == 3 * chunks, 60), len(node.results)
         diag = node.diagnostics()
     finally:
         if executor is not None:
@@ -229,8 +240,8 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
         axis = status.name[-1]
         n_skipped = sum(r.axis == axis for r in skipped)
         assert values['Chunks skipped'] == f'{n_skipped} of {chunks}'
-        # More than half of the chunks skipped is above the default ERROR fraction (0.5); between 0.1
-        # and 0.5 WARN.
+        # More than half of the chunks skipped is above the default ERROR fraction (0.5); between
+        # 0.1 and 0.5 WARN.
         assert status.level == (b'\x02' if n_skipped > chunks / 2 else b'\x01')
         assert 'skipped' in status.message
 
@@ -274,29 +285,6 @@ def test_bad_parameter_exits_2_with_one_line():
                           env=dict(os.environ))
     assert done.returncode == 2
     lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
-    assert lines[-1].startswith('noise_analyzer: error:') and "'gap_policy'" in lines[-1], done.stderr
+    assert lines[-1].startswith('noise_analyzer: error:'), done.stderr
+    assert "'gap_policy'" in lines[-1], done.stderr
     assert 'Traceback' not in done.stderr
-
-
-def test_parse_axes():
-    assert analyzer.parse_axes('x,y,z') == ('x', 'y', 'z')
-    assert analyzer.parse_axes('z') == ('z',)
-    assert analyzer.parse_axes('xz') == ('x', 'z')
-    for bad in ('', 'x,x', 'q', 'x;y'):
-        with pytest.raises(ParameterError):
-            analyzer.parse_axes(bad)
-
-
-def test_allan_values_keep_their_keys():
-    keys = [k for k, _ in analyzer.allan_values(None)]
-    assert keys[0] == 'ADEV at 1 s (deg/s)' and all('(' in k for k in keys)
-    assert {v for _, v in analyzer.allan_values(None)} == {'n/a'}
-
-
-def test_format_status():
-    from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-
-    status = DiagnosticStatus(level=DiagnosticStatus.WARN, name='noise_analyzer: axis z', message='Drift.',
-                              values=[KeyValue(key='Bias (deg/s)', value='0.5'),
-                                      KeyValue(key='Chunks analysed', value='7')])
-    assert analyzer.format_status(status) == 'WARN  noise_analyzer: axis z: bias=0.5 chunks=7 | Drift.'

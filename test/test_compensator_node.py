@@ -311,7 +311,9 @@ def test_corrupt_temperature_is_counted_not_fatal(context):
     io = _Harness(context, node)
     try:
         good = encode_temperature_cdr([T0_NS], [25.0], frame_id='imu_test')[0]
-        io.play(raws, temperatures=[b'\x00\x01\x00\x00' + b'\xff' * 8, good])
+        io.play([], temperatures=[b'\x00\x01\x00\x00' + b'\xff' * 8])
+        assert _spin_until(io.executor, lambda: node.thermal.rejected >= 1, 10)
+        io.play(raws, temperatures=[good])
         assert _spin_until(io.executor, lambda: node.counts['temperatures'] >= 2, 10)
         values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
     finally:
@@ -319,3 +321,29 @@ def test_corrupt_temperature_is_counted_not_fatal(context):
     assert len(io.out) == 400
     assert values['Temperature messages'] == '2'
     assert int(values['Temperature messages rejected']) >= 1
+
+
+def test_imu_before_the_first_temperature_waits_then_is_dropped_never_published_raw(context):
+    node = compensator.ImuCompensatorNode(
+        context=context, thermal_model=LinearThermal(temperature_range_c=(0.0, 50.0)),
+        parameter_overrides=[Parameter('temperature_wait_s', value=0.3)])
+    _, _, _, raws = _imu_stream(400, seed=7)
+    io = _Harness(context, node)
+    try:
+        for raw in raws:
+            io.imu_pub.publish(raw)
+        assert _spin_until(io.executor, lambda: node.counts['uncorrected'] == 400, 10)
+        values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+        level = node.diagnostics().status[0].level
+        # A temperature now lets later messages through; the dropped ones stay dropped.
+        good = encode_temperature_cdr([T0_NS], [25.0], frame_id='imu_test')[0]
+        io.temp_pub.publish(good)
+        assert _spin_until(io.executor, lambda: node.counts['temperatures'] >= 1, 10)
+        for raw in raws[:100]:
+            io.imu_pub.publish(raw)
+        assert _spin_until(io.executor, lambda: len(io.out) >= 100, 10)
+    finally:
+        io.close()
+    assert values['Messages dropped waiting for the first temperature'] == '400'
+    assert level == WARN
+    assert len(io.out) == 100 and node.counts['published'] == 100

@@ -1,5 +1,5 @@
 """
-In-process tests of ``lsm6dso32_driver``: parameters, message content, publish-once, link lifecycle.
+In-process tests of ``lsm6dso32_driver``: parameters, messages, publish-once, link lifecycle.
 
 The node runs for real (rclpy, Fast DDS) in its own rclpy context. Known samples reach it either
 through ``publish_samples`` (what the reader thread calls for each decoded batch) or from a fake
@@ -18,18 +18,17 @@ import time
 # A private DDS domain for this test session (STYLE.md): set before any rclpy.init.
 os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
-
 from gyro_noise_ros.errors import ParameterError  # noqa: E402
 from gyro_noise_ros.link import protocol as P  # noqa: E402
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
-from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver, SequenceTracker  # noqa: E402
+from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import rclpy  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from sensor_msgs.msg import Imu, Temperature  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -80,8 +79,10 @@ class Harness:
         if listen:
             qos = sensor_data_qos(10000)
             self.sub_node.create_subscription(Imu, 'imu/data_raw', self.imu.append, qos)
-            self.sub_node.create_subscription(Temperature, 'imu/temperature', self.temps.append, qos)
-            self.sub_node.create_subscription(DiagnosticArray, '/diagnostics', self.diags.append, 10)
+            self.sub_node.create_subscription(
+                Temperature, 'imu/temperature', self.temps.append, qos)
+            self.sub_node.create_subscription(
+                DiagnosticArray, '/diagnostics', self.diags.append, 10)
             self.spin_until(lambda: self.driver._imu_pub.get_subscription_count() >= 1
                             and self.driver._temp_pub.get_subscription_count() >= 1, 10.0)
 
@@ -117,8 +118,10 @@ def make_samples(seq, *, gyro=None, accel=None, temp=None, period_us=150):
     s = np.zeros(seq.size, P.SAMPLE_DTYPE)
     s['seq'] = (seq % 2**32).astype(np.uint32)
     s['t_us'] = ((seq * period_us) % 2**32).astype(np.uint32)
-    # Default payload: gyro x carries the sequence number so a subscriber can tell which sample it got.
-    s['gyro'] = np.stack([seq % 30000, -(seq % 1000), np.full(seq.size, 7)], axis=1) if gyro is None else gyro
+    # Default payload: gyro x carries the sequence number so a subscriber can tell which sample it
+    # got.
+    s['gyro'] = np.stack([seq % 30000, -(seq % 1000), np.full(seq.size, 7)],
+                         axis=1) if gyro is None else gyro
     s['accel'] = np.array([0, 0, 1024]) if accel is None else accel
     s['temp'] = 512 if temp is None else temp
     return s
@@ -152,7 +155,8 @@ def test_bad_parameters_are_refused(context, name, value, fragment):
 
 def test_main_with_bad_parameter_prints_one_line_and_exits_2():
     proc = subprocess.run(
-        [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p', 'odr_hz:=1000.0'],
+        [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p',
+         'odr_hz:=1000.0'],
         capture_output=True, text=True, timeout=60, env=dict(os.environ))
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
@@ -173,90 +177,6 @@ def test_runtime_parameter_changes(harness):
 
 
 # --------------------------------------------------------------------------- sequence tracker
-
-
-def test_tracker_counts_gaps_across_wrap():
-    t = SequenceTracker(restart_window=100)
-    d = t.accept(np.array([2**32 - 3, 2**32 - 2], np.uint32))
-    assert d.keep.all() and d.lost == 0 and d.stop == 2
-    # ... 2**32-1 and 0 missing, then 1, 2, gap of 3..4, then 5
-    d = t.accept(np.array([1, 2, 5], np.uint32))
-    assert d.keep.all() and d.lost == 2 + 2 and t.last == 5
-
-
-def test_tracker_consecutive_batch_across_wrap():
-    t = SequenceTracker(restart_window=100)
-    t.accept(np.array([2**32 - 5], np.uint32))
-    d = t.accept(np.array([2**32 - 2, 2**32 - 1, 0, 1], np.uint32))
-    assert d.keep.all() and d.lost == 2 and t.last == 1
-
-
-def _reference_tracker(batches, window):
-    """Per-sample twin of SequenceTracker: (label per sample, total lost)."""
-    last, labels, lost = None, [], 0
-    for s in (int(v) for batch in batches for v in batch):
-        if last is None:
-            labels.append('keep')
-            last = s
-            continue
-        d = (s - last) % 2**32
-        d = d - 2**32 if d >= 2**31 else d
-        if d > 0:
-            labels.append('keep')
-            lost += d - 1
-            last = s
-        elif d > -window:
-            labels.append('dup')
-        else:
-            labels.append('restart')
-            last = s
-    return labels, lost
-
-
-def test_tracker_matches_its_per_sample_twin():
-    rng = np.random.default_rng(7)
-    for _ in range(300):
-        # Runs of consecutive counters near the wrap, joined by a step of +1, a gap, a re-send
-        # (back by 0..39, or 99: within the window of 100) or a restart (back by 100 or 200..4999).
-        seq, s = [], int(rng.integers(2**32 - 300, 2**32))
-        for _ in range(int(rng.integers(1, 8))):
-            step = [1, int(rng.integers(2, 50)), -int(rng.integers(0, 40)), -99, -100,
-                    -int(rng.integers(200, 5000))]
-            s = (s + step[int(rng.integers(len(step)))]) % 2**32
-            run = int(rng.integers(1, 30))
-            seq += [(s + k) % 2**32 for k in range(run)]
-            s = (s + run - 1) % 2**32
-        cuts = np.sort(rng.choice(np.arange(1, len(seq)), size=min(3, len(seq) - 1), replace=False))
-        batches = np.split(np.array(seq, np.uint32), cuts)
-
-        tracker, labels, lost, restart_next = SequenceTracker(restart_window=100), [], 0, False
-        for batch in batches:
-            while len(batch):
-                d = tracker.accept(batch)
-                part = ['keep' if k else 'dup' for k in d.keep]
-                if restart_next and part:
-                    part[0], restart_next = 'restart', False
-                labels += part
-                lost += d.lost
-                batch = batch[d.stop:]
-                if len(batch):  # what the driver does at a restart
-                    tracker.reset()
-                    restart_next = True
-        assert (labels, lost) == _reference_tracker(batches, 100), seq
-
-
-def test_tracker_drops_resent_samples_and_splits_at_restart():
-    t = SequenceTracker(restart_window=100)
-    t.accept(np.arange(1000, 1010, dtype=np.uint32))
-    d = t.accept(np.array([1005, 1006, 1009, 1010, 1012, 1011], np.uint32))
-    assert d.keep.tolist() == [False, False, False, True, True, False]
-    assert d.duplicates == 4 and d.lost == 1 and d.stop == 6
-    # A fall-back of 100 or more is a board restart: decide the prefix, stop at the restart.
-    d = t.accept(np.array([1013, 3, 4], np.uint32))
-    assert d.stop == 1 and d.keep.tolist() == [True] and d.lost == 0
-
-
-# --------------------------------------------------------------------------- message content
 
 
 @pytest.mark.parametrize('gyro_fs, accel_fs', [(2000, 32), (125, 4)])
@@ -300,7 +220,8 @@ def test_messages_for_known_samples(harness, gyro_fs, accel_fs):
     # Temperature for seq % 4 == 0 only, with the same stamp as the sample's Imu message.
     picked = np.flatnonzero(seq % 4 == 0)
     assert [stamp_ns(t) for t in h.temps] == stamps[picked].tolist()
-    np.testing.assert_allclose([t.temperature for t in h.temps], 25.0 + temp[picked] / 256.0, rtol=1e-15)
+    np.testing.assert_allclose([t.temperature for t in h.temps],
+                               25.0 + temp[picked] / 256.0, rtol=1e-15)
     assert all(t.variance == 0.01 and t.header.frame_id == 'my_imu' for t in h.temps)
 
 
@@ -309,8 +230,10 @@ def test_publish_once_and_loss_count(harness):
     cfg = LinkConfig(6667.0, 2000, 32)
     now = h.driver.get_clock().now().nanoseconds
     assert h.driver.publish_samples(make_samples(np.arange(0, 10)), now, cfg) == 10
-    assert h.driver.publish_samples(make_samples(np.arange(5, 15)), now + 10**6, cfg) == 5  # 5..9 again
-    assert h.driver.publish_samples(make_samples(np.arange(20, 25)), now + 2 * 10**6, cfg) == 5  # 15..19 lost
+    assert h.driver.publish_samples(make_samples(np.arange(5, 15)),
+                                    now + 10**6, cfg) == 5  # 5..9 again
+    assert h.driver.publish_samples(make_samples(np.arange(20, 25)),
+                                    now + 2 * 10**6, cfg) == 5  # 15..19 lost
     h.spin_until(lambda: len(h.imu) == 20, 10.0)
     got = [round(m.angular_velocity.x / gyro_lsb(2000)) for m in h.imu]
     assert got == list(range(15)) + list(range(20, 25))
@@ -416,7 +339,8 @@ def test_session_with_faults_and_reconnection(harness):
         status = h.driver.link_status()
         values = {kv.key: kv.value for kv in status.values}
         assert status.name == 'lsm6dso32_driver: link'
-        assert status.hardware_id == f'lsm6dso32@{board.url}'
+        # Sensor and board identity, never the port path (a socket URL has no USB serial number).
+        assert status.hardware_id == 'lsm6dso32/portenta_h7/imu_link'
         assert values['Connection'] == 'streaming'
         assert values['Samples lost'] == '15' and values['Samples published'] == '280'
         assert values['Duplicates dropped'] == '10' and int(values['CRC errors']) >= 1
@@ -454,7 +378,8 @@ def test_no_ack_then_nak_are_reported(harness):
 
 def test_diagnostics_topic_when_port_absent(harness):
     h = harness(diagnostics_period_s=0.2, reconnect_period_s=0.2)
-    h.spin_until(lambda: any(a.status and 'cannot open' in a.status[0].message for a in h.diags), 10.0)
+    h.spin_until(lambda: any(
+        a.status and 'cannot open' in a.status[0].message for a in h.diags), 10.0)
     status = [a for a in h.diags if 'cannot open' in a.status[0].message][-1].status[0]
     assert status.name == 'lsm6dso32_driver: link'
     assert status.level == DiagnosticStatus.ERROR
@@ -466,7 +391,8 @@ def test_diagnostics_topic_when_port_absent(harness):
     assert values['Connection'] == 'disconnected'
 
 
-@pytest.mark.parametrize('speed, level', [(1.0, DiagnosticStatus.OK), (0.5, DiagnosticStatus.WARN)],
+@pytest.mark.parametrize('speed, level',
+                         [(1.0, DiagnosticStatus.OK), (0.5, DiagnosticStatus.WARN)],
                          ids=['on_rate', 'half_rate'])
 def test_rate_check_against_the_acknowledged_odr(harness, speed, level):
     # The board acknowledges 6667 Hz and streams at speed x 6667 Hz (paced on absolute time, so

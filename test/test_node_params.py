@@ -6,15 +6,16 @@ defines ``NODE_NAME`` and ``PARAMETERS`` (see ``gyro_noise_ros/nodes/_ros_common
 """
 
 import importlib
+from pathlib import Path
 import pkgutil
 import re
-from pathlib import Path
-
-import pytest
-from rclpy.parameter import parameter_dict_from_yaml_file, parameter_value_to_python
 
 import gyro_noise_ros.nodes as nodes_pkg
 from gyro_noise_ros.nodes._ros_common import ParamSpec
+import pytest
+import rclpy
+from rclpy.parameter import Parameter, parameter_dict_from_yaml_file, parameter_value_to_python
+import yaml
 
 pytestmark = pytest.mark.ros
 
@@ -46,8 +47,11 @@ def test_driver_is_discovered():
 
 def test_every_config_file_belongs_to_a_node():
     names = set(_ids(NODE_MODULES))
-    orphans = [p.name for p in CONFIG_DIR.glob('*.yaml') if p.stem not in names]
-    assert not orphans, f'config files without a node module defining NODE_NAME/PARAMETERS: {orphans}'
+    # diagnostics_analyzers.yaml configures diagnostic_aggregator, not a node of this package.
+    orphans = [p.name for p in CONFIG_DIR.glob('*.yaml')
+               if p.stem not in names and p.stem != 'diagnostics_analyzers']
+    assert not orphans, ('config files without a node module defining NODE_NAME/PARAMETERS: '
+                         f'{orphans}')
 
 
 @pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
@@ -59,7 +63,8 @@ def test_table_is_well_formed(module):
         assert isinstance(spec, ParamSpec)
         assert re.fullmatch(r'[a-z][a-z0-9_]*', spec.name), spec.name
         assert spec.description.strip(), f'{spec.name} has no description'
-        assert (spec.min_value is None) == (spec.max_value is None), f'{spec.name}: give both bounds'
+        assert (spec.min_value is None) == (spec.max_value is None), \
+            f'{spec.name}: give both bounds'
         spec.check(spec.default)  # the default itself must satisfy its range and choices
         spec.descriptor()  # builds (type known, range of the right kind)
 
@@ -89,4 +94,48 @@ def test_yaml_comment_gives_unit_and_read_only(module):
         comment = lines[0].split('#', 1)[1].strip()
         unit = spec.unit or '-'
         assert comment.startswith(f'[{unit}]'), f'{spec.name}: comment must start with [{unit}]'
-        assert ('read_only' in comment) == spec.read_only, f'{spec.name}: read_only marker mismatch'
+        assert ('read_only' in comment) == spec.read_only, \
+            f'{spec.name}: read_only marker mismatch'
+
+
+@pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
+def test_yaml_is_keyed_for_any_namespace(module):
+    # Keyed by the bare node name, a file is silently ignored under -r __ns:=/robot1 (issue 10).
+    doc = yaml.safe_load((CONFIG_DIR / f'{module.NODE_NAME}.yaml').read_text())
+    assert list(doc) == ['/**'], f'top-level keys {list(doc)}: key the file /** so it applies '
+    'under any namespace'
+
+
+# (node class, parameter changed in a copy of the shipped file, value, extra overrides)
+_NAMESPACED = {
+    'gyro_noise_record': ('queue_depth', 12345),
+    'lsm6dso32_driver': ('qos_depth', 1234),
+}
+
+
+@pytest.mark.parametrize('name', sorted(_NAMESPACED))
+def test_shipped_file_applies_under_a_namespace(name, tmp_path):
+    module = next(m for m in NODE_MODULES if m.NODE_NAME == name)
+    param, value = _NAMESPACED[name]
+    text = (CONFIG_DIR / f'{name}.yaml').read_text()
+    changed = re.sub(rf'(\n\s+{param}: )\S+', rf'\g<1>{value}', text)
+    assert changed != text
+    path = tmp_path / f'{name}.yaml'
+    path.write_text(changed)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, args=['prog', '--ros-args', '-r', '__ns:=/robot1',
+                                  '--params-file', str(path)])
+    node = None
+    try:
+        overrides = [Parameter('output', value=str(tmp_path / 'bag'))] if name.endswith('record') \
+            else [Parameter('autostart', value=False)]
+        node_class = next(v for v in vars(module).values()
+                          if isinstance(v, type) and v.__module__ == module.__name__
+                          and hasattr(v, 'get_parameter'))
+        node = node_class(context=ctx, parameter_overrides=overrides)
+        assert node.get_namespace() == '/robot1'
+        assert node.get_parameter(param).value == value
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown(context=ctx)

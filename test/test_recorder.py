@@ -1,9 +1,10 @@
 """
 ``gyro_noise_record`` as a real process: loss-free at 6.66 kHz, clean close on SIGINT and SIGTERM.
 
-The replayer of ``test/test_analyzer_e2e.py`` publishes seeded samples in real time; the recorder writes
-them; after the signal the bag is read back with :class:`gyro_noise_ros.bag.ImuBagReader` and compared
-with what was published: the same count (nothing lost, nothing twice), the same stamps and values.
+The replayer of ``test/test_analyzer_e2e.py`` publishes seeded samples in real time; the recorder
+writes them; after the signal the bag is read back with :class:`gyro_noise_ros.bag.ImuBagReader`
+and compared with what was published: the same count (nothing lost, nothing twice), the same stamps
+and values.
 """
 
 import random
@@ -11,12 +12,10 @@ import signal
 import subprocess
 import sys
 
+from gyro_noise_ros.bag import ImuBagReader, list_topics
+from gyro_noise_ros.nodes.recorder import default_bag_name
 import numpy as np
 import pytest
-
-from gyro_noise_ros.bag import ImuBagReader, list_topics
-from gyro_noise_ros.nodes._ros_common import SequenceGapCounter
-from gyro_noise_ros.nodes.recorder import default_bag_name, imu_covariances, temperature_variances
 from test_analyzer_e2e import RATE_HZ, ros_env, start_replayer
 
 pytestmark = pytest.mark.ros
@@ -35,7 +34,8 @@ def _record(tmp_path, samples, seed, sig, storage):
     out = tmp_path / f'bag_{storage}'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', f'storage:={storage}'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
     # The replayer waits for the recorder's Imu subscription, publishes in real time at 6.66 kHz
     # and lingers 1 s, so the recorder has taken everything before the signal.
     rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1)
@@ -61,7 +61,8 @@ def test_records_every_message_at_6660_hz(tmp_path, sig, storage):
     assert rc == 0, err
     summary = [line for line in err.splitlines() if line.startswith('gyro_noise_record: received')]
     assert summary, err
-    assert f'received {samples} Imu' in summary[0] and f'wrote {samples} and' in summary[0], summary[0]
+    assert f'received {samples} Imu' in summary[0], summary[0]
+    assert f'wrote {samples} and' in summary[0], summary[0]
     assert '0 dropped' in summary[0]
 
     topics = {t.name: t for t in list_topics(out)}
@@ -86,7 +87,8 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
     out = tmp_path / 'killed'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', 'flush_period_s:=0.2'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
     rep = start_replayer(domain, '--samples', 10000, '--seed', 3, '--linger-s', 1.5)
     try:
         rep.communicate(timeout=120)
@@ -100,14 +102,16 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
     assert not (out / 'metadata.yaml').exists()
     with ImuBagReader(out / 'killed.db3') as reader:
         n = sum(len(b) for b in reader.iter_batches(100000))
-    # The replayer lingers 1.5 s after the last message, several flush periods of 0.2 s: all committed.
+    # The replayer lingers 1.5 s after the last message, several flush periods of 0.2 s: all
+    # committed.
     assert n == 10000
 
 
 def test_refuses_an_existing_output(tmp_path):
     env = ros_env(random.randint(100, 200))
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
-                           '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True, timeout=60)
+                           '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True,
+                          timeout=60)
     assert done.returncode == 3
     lines = done.stderr.strip().splitlines()
     assert lines[-1].startswith('gyro_noise_record: error:') and 'exists' in lines[-1], done.stderr
@@ -123,49 +127,12 @@ def test_refuses_an_unknown_storage(tmp_path):
     assert "parameter 'storage'" in done.stderr and 'Traceback' not in done.stderr
 
 
-def test_sequence_gap_counter():
-    c = SequenceGapCounter()
-    assert c.update([1, 2, 3]) == 0
-    assert c.update([5, 6]) == 1          # 4 missing
-    assert c.update([0, 0]) == 0          # no sequence numbers from the RMW: ignored
-    assert c.update([10, 11, 15]) == 6    # 7, 8, 9 and 12, 13, 14
-    assert c.update([1, 2]) == 0          # restarted publisher: a new run
-    assert c.missing == 7
-
-
-def test_imu_covariances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_imu_cdr
-
-    rng = np.random.default_rng(0)
-    av = rng.random((4, 9))
-    la = rng.random((4, 9))
-    raws = encode_imu_cdr(np.arange(4), rng.random((4, 3)), rng.random((4, 3)), frame_id='f',
-                          angular_velocity_covariance=av, linear_acceleration_covariance=la)
-    got_av, got_la = imu_covariances(raws)
-    np.testing.assert_array_equal(got_av, av)
-    np.testing.assert_array_equal(got_la, la)
-    # Mixed lengths (two frame_ids) take the per-message path.
-    raws2 = raws[:2] + encode_imu_cdr(np.arange(2), rng.random((2, 3)), rng.random((2, 3)),
-                                      frame_id='longer_frame', angular_velocity_covariance=av[2:],
-                                      linear_acceleration_covariance=la[2:])
-    got_av, got_la = imu_covariances(raws2)
-    np.testing.assert_array_equal(got_av, av)
-    np.testing.assert_array_equal(got_la, la)
-
-
-def test_temperature_variances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_temperature_cdr
-
-    raws = encode_temperature_cdr(np.arange(3), [20.0, 21.0, 22.0], frame_id='imu', variance=[0.5, 0.25, 0.0])
-    np.testing.assert_array_equal(temperature_variances(raws), [0.5, 0.25, 0.0])
-
-
 def test_default_bag_name():
     from datetime import datetime, timezone
 
-    assert default_bag_name(datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)) == 'gyro_noise_20260102_030405'
+    assert default_bag_name(datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)
+                            ) == 'gyro_noise_20260102_030405'
 
 
 if __name__ == '__main__':
     sys.exit(pytest.main([__file__, *sys.argv[1:]]))
-

@@ -1,21 +1,21 @@
 """
 Bulk numpy codec of ``sensor_msgs/Imu`` and ``sensor_msgs/Temperature`` (ROS 2 CDR and ROS 1).
 
-Messages are located in a byte buffer by (start, length) spans, grouped by length, and each group is
-read column-wise: a handful of byte columns (encapsulation, stamp, string length, the float64 that
-are needed) instead of one Python object per message. A message is accepted only if its byte length
-matches the layout its string length implies and the string's NUL sits where it must; everything
-else goes through rosbags' deserialiser, so the bulk path can never change a value.
+Messages are located in a byte buffer by (start, length) spans, grouped by length, and each group
+is read column-wise: a handful of byte columns (encapsulation, stamp, string length, the float64
+that are needed) instead of one Python object per message. A message is accepted only if its byte
+length matches the layout its string length implies and the string's NUL sits where it must;
+everything else goes through rosbags' deserialiser, so the bulk path can never change a value.
 
 Wire layouts (XCDR1; CDR alignment counts from the byte after the 4-byte encapsulation header):
 
-- ROS 2 CDR ``sensor_msgs/Imu``: encapsulation ``00 01 00 00`` (little-endian; ``00 00`` big-endian),
-  ``int32 sec``, ``uint32 nanosec``, ``uint32 L`` (frame_id length including its NUL), ``L`` bytes,
-  zero padding to 8, then 37 float64: orientation xyzw, orientation_covariance[9], angular_velocity
-  xyz, angular_velocity_covariance[9], linear_acceleration xyz, linear_acceleration_covariance[9].
-  Hence ``len = 4 + align8(12 + L) + 296``.
-- ROS 1 ``sensor_msgs/Imu``: ``uint32 seq``, ``uint32 sec``, ``uint32 nsec``, ``uint32 L`` (no NUL),
-  ``L`` bytes, the same 37 float64 unaligned: ``len = 16 + L + 296``.
+- ROS 2 CDR ``sensor_msgs/Imu``: encapsulation ``00 01 00 00`` (little-endian; ``00 00``
+  big-endian), ``int32 sec``, ``uint32 nanosec``, ``uint32 L`` (frame_id length including its NUL),
+  ``L`` bytes, zero padding to 8, then 37 float64: orientation xyzw, orientation_covariance[9],
+  angular_velocity xyz, angular_velocity_covariance[9], linear_acceleration xyz,
+  linear_acceleration_covariance[9]. Hence ``len = 4 + align8(12 + L) + 296``.
+- ROS 1 ``sensor_msgs/Imu``: ``uint32 seq``, ``uint32 sec``, ``uint32 nsec``, ``uint32 L`` (no
+  NUL), ``L`` bytes, the same 37 float64 unaligned: ``len = 16 + L + 296``.
 - ``sensor_msgs/Temperature``: the same header, then float64 temperature and variance.
 """
 
@@ -45,8 +45,8 @@ def typestore(ros1=False):
     """
     Return rosbags' typestore, built once per flavour (it costs ~50 ms).
 
-    ROS 1 messages need the Noetic definitions: their ``std_msgs/Header`` starts with ``uint32 seq``,
-    which the ROS 2 definitions lack.
+    ROS 1 messages need the Noetic definitions: their ``std_msgs/Header`` starts with ``uint32
+    seq``, which the ROS 2 definitions lack.
     """
     key = 'ros1' if ros1 else 'ros2'
     if key not in _TYPESTORES:
@@ -77,10 +77,11 @@ class _Group:
         if stride >= size and (m < 3 or (np.diff(starts) == stride).all()):
             # Evenly spaced messages (a joined list, or one topic's run of records in an MCAP
             # chunk) are one strided 2-D view: column reads then copy only the bytes they need.
-            self.view = as_strided(buf[int(starts[0]):], shape=(m, size), strides=(stride, 1), writeable=False)
+            self.view = as_strided(buf[int(starts[0]):], shape=(m, size), strides=(stride, 1),
+                                   writeable=False)
 
     def cols(self, first, width):
-        """Bytes ``[first, first + width)`` of every message, as a contiguous (m, width) uint8 array."""
+        """Return bytes ``[first, first + width)`` of every message as a contiguous uint8 array."""
         if self.view is not None:
             return np.ascontiguousarray(self.view[:, first:first + width])
         return self.buf[self.starts[:, None] + np.arange(first, first + width)]
@@ -121,6 +122,7 @@ def _decode_group(group, tail_f8, fields, ros1):
     stamp_ns : int64 (m,)
     values : float64 (m, sum of field counts)
         The selected float64 fields, in ``fields`` order; undefined where not ok.
+
     """
     m, size = group.starts.shape[0], group.size
     width = sum(count for _, count in fields)
@@ -195,6 +197,7 @@ def decode_spans(buf, starts, lengths, tail_f8, fields, ros1):
         Header stamps in ns.
     values : numpy.ndarray of float64, shape (n, k)
         The selected fields.
+
     """
     n = starts.shape[0]
     width = sum(count for _, count in fields)
@@ -208,7 +211,8 @@ def decode_spans(buf, starts, lengths, tail_f8, fields, ros1):
     values = np.zeros((n, width))
     for size in np.unique(lengths):
         idx = np.flatnonzero(lengths == size)
-        g_ok, g_stamp, g_values = _decode_group(_Group(buf, starts[idx], int(size)), tail_f8, fields, ros1)
+        g_ok, g_stamp, g_values = _decode_group(
+            _Group(buf, starts[idx], int(size)), tail_f8, fields, ros1)
         ok[idx] = g_ok
         stamp_ns[idx] = g_stamp
         values[idx] = g_values
@@ -233,9 +237,8 @@ def slow_decode(raw, msgtype, ros1):
             return store.deserialize_ros1(raw, msgtype)
         return store.deserialize_cdr(raw, msgtype)
     except Exception as err:  # noqa: BLE001 - rosbags raises many types on corrupt bytes
-        raise BagError(
-            f'a {msgtype} message of {len(raw)} bytes cannot be decoded ({type(err).__name__}: {err})'
-        ) from err
+        raise BagError(f'a {msgtype} message of {len(raw)} bytes cannot be decoded '
+                       f'({type(err).__name__}: {err})') from err
 
 
 def frame_id_of(raw, ros1):
@@ -252,6 +255,58 @@ def frame_id_of(raw, ros1):
     return raw[16:16 + length - 1].decode('utf-8', 'replace')
 
 
+def imu_covariances(raws):
+    """
+    Return the angular-velocity and linear-acceleration covariances of raw ROS 2 CDR Imu messages.
+
+    The covariances are float64 16..24 and 28..36 of the 37-float tail that ends the message (see
+    the layout in the module doc), whatever the frame_id length.
+
+    Parameters
+    ----------
+    raws : list of bytes
+        Serialised ``sensor_msgs/Imu`` (ROS 2 CDR, either endianness).
+
+    Returns
+    -------
+    angular_velocity_covariance, linear_acceleration_covariance : numpy.ndarray, shape (n, 9)
+        Row-major, in (rad/s)^2 and (m/s^2)^2.
+
+    """
+    n = len(raws)
+    tail_bytes = IMU_TAIL_F8 * 8
+    tails = np.empty((n, IMU_TAIL_F8))
+    lengths = {len(r) for r in raws}
+    if len(lengths) == 1 and all(r[1] == 1 for r in raws):
+        size = lengths.pop()
+        rows = np.frombuffer(b''.join(raws), np.uint8).reshape(n, size)
+        tails[:] = np.ascontiguousarray(rows[:, size - tail_bytes:]).view('<f8')
+    else:
+        for i, raw in enumerate(raws):
+            tails[i] = np.frombuffer(raw[-tail_bytes:], '<f8' if raw[1] == 1 else '>f8')
+    return tails[:, 16:25], tails[:, 28:37]
+
+
+def temperature_variances(raws):
+    """
+    Return the ``variance`` field of raw ROS 2 CDR ``sensor_msgs/Temperature`` messages.
+
+    It is the last float64 of the message (``temperature``, ``variance`` follow the header).
+
+    Parameters
+    ----------
+    raws : list of bytes
+        Serialised ``sensor_msgs/Temperature`` (ROS 2 CDR, either endianness).
+
+    Returns
+    -------
+    numpy.ndarray
+        Variances in degC^2.
+
+    """
+    return np.array([np.frombuffer(raw[-8:], '<f8' if raw[1] == 1 else '>f8')[0] for raw in raws])
+
+
 def _stamp_of(msg):
     return int(msg.header.stamp.sec) * _NS_PER_S + int(msg.header.stamp.nanosec)
 
@@ -266,6 +321,7 @@ def decode_imu_spans(buf, starts, lengths, ros1, skip_undecodable):
         Indices of the messages returned (None: all of them).
     stamp_ns : int64 (k,)
     gyro, accel : float64 (k, 3)
+
     """
     ok, stamp_ns, values = decode_spans(buf, starts, lengths, IMU_TAIL_F8, IMU_FIELDS, ros1)
     dropped = []
@@ -290,9 +346,11 @@ def decode_imu_spans(buf, starts, lengths, ros1, skip_undecodable):
 
 def decode_temperature_spans(buf, starts, lengths, ros1):
     """Decode Temperature messages located by spans; return (stamp_ns, temperature_c)."""
-    ok, stamp_ns, values = decode_spans(buf, starts, lengths, TEMPERATURE_TAIL_F8, TEMPERATURE_FIELDS, ros1)
+    ok, stamp_ns, values = decode_spans(
+        buf, starts, lengths, TEMPERATURE_TAIL_F8, TEMPERATURE_FIELDS, ros1)
     for i in np.flatnonzero(~ok):
-        msg = slow_decode(buf[starts[i]:starts[i] + lengths[i]].tobytes(), TEMPERATURE_MSGTYPE, ros1)
+        msg = slow_decode(buf[starts[i]:starts[i] + lengths[i]].tobytes(),
+                          TEMPERATURE_MSGTYPE, ros1)
         stamp_ns[i] = _stamp_of(msg)
         values[i, 0] = msg.temperature
     return stamp_ns, values[:, 0].copy()
@@ -313,6 +371,7 @@ def count_stamp_regressions(stamp_ns, *, previous_ns=None):
     -------
     int
         Number of indices ``i`` with ``stamp_ns[i] < stamp_ns[i - 1]``.
+
     """
     stamps = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
     if previous_ns is not None:
@@ -325,10 +384,11 @@ def count_stamp_regressions(stamp_ns, *, previous_ns=None):
 
 
 def split_stamps(stamp_ns, name):
-    """Validate integer ns stamps; return (stamps int64 (n,), sec, nanosec) with ROS 2 semantics."""
+    """Validate integer ns stamps; return (stamps int64 (n,), sec, nanosec), ROS 2 semantics."""
     stamps = np.asarray(stamp_ns)
     if stamps.dtype.kind not in 'iu':
-        if stamps.dtype.kind == 'f' and np.all(np.isfinite(stamps)) and np.all(stamps == np.round(stamps)):
+        if (stamps.dtype.kind == 'f' and np.all(np.isfinite(stamps))
+                and np.all(stamps == np.round(stamps))):
             stamps = stamps.astype(np.int64)
         else:
             raise ParameterError(f'{name} must be integer nanoseconds, got dtype {stamps.dtype}')
@@ -338,7 +398,8 @@ def split_stamps(stamp_ns, name):
     nsec = stamps - sec * _NS_PER_S
     if stamps.size and (sec.min() < -(2**31) or sec.max() >= 2**31):
         worst = int(stamps[np.argmax(np.abs(sec))])
-        raise ParameterError(f'{name} {worst} does not fit builtin_interfaces/Time (int32 seconds)')
+        raise ParameterError(
+            f'{name} {worst} does not fit builtin_interfaces/Time (int32 seconds)')
     return stamps, sec, nsec
 
 
@@ -347,7 +408,8 @@ def _vector3(values, n, name):
     if arr.shape == (3,) and n == 1:
         arr = arr.reshape(1, 3)
     if arr.shape != (n, 3):
-        raise ParameterError(f'{name} must have shape ({n}, 3) to match the stamps, got {arr.shape}')
+        raise ParameterError(
+            f'{name} must have shape ({n}, 3) to match the stamps, got {arr.shape}')
     return arr
 
 
@@ -359,7 +421,8 @@ def _covariance(values, n, name):
         return np.broadcast_to(arr.reshape(9), (n, 9))
     if arr.shape == (n, 9):
         return arr
-    raise ParameterError(f'{name} must have 9 values (row-major 3x3) or shape ({n}, 9), got {arr.shape}')
+    raise ParameterError(
+        f'{name} must have 9 values (row-major 3x3) or shape ({n}, 9), got {arr.shape}')
 
 
 def _encode_cdr(sec, nsec, frame_id, tail):
@@ -407,6 +470,7 @@ def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
     -------
     list of bytes
         One serialised message per stamp.
+
     """
     _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
     n = sec.shape[0]
@@ -416,7 +480,8 @@ def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
     tail[:, 13:16] = _vector3(gyro_rad_s, n, 'gyro_rad_s')
     tail[:, 16:25] = _covariance(angular_velocity_covariance, n, 'angular_velocity_covariance')
     tail[:, 25:28] = _vector3(accel_m_s2, n, 'accel_m_s2')
-    tail[:, 28:37] = _covariance(linear_acceleration_covariance, n, 'linear_acceleration_covariance')
+    tail[:, 28:37] = _covariance(linear_acceleration_covariance, n,
+                                 'linear_acceleration_covariance')
     return _encode_cdr(sec, nsec, frame_id, tail)
 
 
@@ -439,6 +504,7 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
     -------
     list of bytes
         One serialised message per stamp.
+
     """
     _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
     n = sec.shape[0]
@@ -450,7 +516,8 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
     try:
         tail[:, 1] = np.broadcast_to(np.asarray(variance, dtype=np.float64), (n,))
     except ValueError as err:
-        raise ParameterError(f'variance must be a float or have {n} values, got {np.shape(variance)}') from err
+        raise ParameterError(
+            f'variance must be a float or have {n} values, got {np.shape(variance)}') from err
     return _encode_cdr(sec, nsec, frame_id, tail)
 
 

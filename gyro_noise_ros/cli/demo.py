@@ -4,28 +4,28 @@
 ``python -m gyro_noise_ros.cli.demo --out demo_out [--quick]`` starts, as subprocesses on a private
 ``ROS_DOMAIN_ID``:
 
-1. ``noise_analyzer`` (live analysis, diagnostics), ``gyro_noise_record`` (the bag), the diagnostics
-   monitor (``noise_analyzer --echo``) and ``lsm6dso32_driver`` (which retries its port until the board
-   is there);
-2. ``portenta_emulator`` on a loopback TCP port, seeded, with a scripted helium-like bias transient: a
-   quiet phase, then a first-order rise of the bias of every axis;
+1. ``noise_analyzer`` (live analysis, diagnostics), ``gyro_noise_record`` (the bag), the
+   diagnostics monitor (``gyro_noise_monitor``) and ``lsm6dso32_driver`` (which retries its port
+   until the board is there);
+2. ``portenta_emulator`` on a loopback TCP port, seeded, with a scripted helium-like bias
+   transient: a quiet phase, then a first-order rise of the bias of every axis;
 
 prints the analyzer's diagnostics as they arrive (one line per chunk: level, bias, drift and orders
 per axis; the message of any axis that is not OK), and checks the story: the verdict is OK in the
-quiet phase and turns WARN (offset drift above its limit) when the bias rises. It then stops the live
-part (driver first, so the recorder and analyzer take the last messages, then recorder, analyzer,
-monitor, emulator), runs ``gyro_noise_analyze`` on the recording, and ends by printing where the tables
-and figures are.
+quiet phase and turns WARN (offset drift above its limit) when the bias rises. It then stops the
+live part (driver first, so the recorder and analyzer take the last messages, then recorder,
+analyzer, monitor, emulator), runs ``gyro_noise_analyze`` on the recording, and ends by printing
+where the tables and figures are.
 
 Demo settings, and why (every one is an ordinary parameter of the tools):
 
-- The board runs at real time (``--speed 1``) and the transient is compressed instead (seconds, not the
-  paper's hours): the driver maps device time onto host time, so at ``--speed k`` the stamps would run
-  k times fast and every rate-dependent number would be off by k; and five processes at 6.66 kHz
-  already take about one of the two cores. ``--speed`` is available for faster machines.
-- Drift is judged by absolute limits over the last ``history_chunks`` chunks (a sliding window, so the
-  verdict follows the transient): WARN above 1 (deg/s)/h, ERROR above 100 (deg/s)/h. The emulated quiet
-  bias drifts by a few hundredths of (deg/s)/h; the scripted rise starts at
+- The board runs at real time (``--speed 1``) and the transient is compressed instead (seconds, not
+  the paper's hours): the driver maps device time onto host time, so at ``--speed k`` the stamps
+  would run k times fast and every rate-dependent number would be off by k; and five processes at
+  6.66 kHz already take about one of the two cores. ``--speed`` is available for faster machines.
+- Drift is judged by absolute limits over the last ``history_chunks`` chunks (a sliding window, so
+  the verdict follows the transient): WARN above 1 (deg/s)/h, ERROR above 100 (deg/s)/h. The
+  emulated quiet bias drifts by a few hundredths of (deg/s)/h; the scripted rise starts at
   ``amplitude / tau`` = 6 (deg/s)/h (36 in ``--quick``).
 - Samples lost: WARN above 5 %, ERROR above 25 % of the expected samples (the tools' defaults are
   0.01 % and 1 %). On a busy shared machine the DDS transport drops some messages when a receiving
@@ -37,7 +37,9 @@ named) or the drift was not detected; 130 on Ctrl-C. Every subprocess is stopped
 """
 
 import argparse
+from dataclasses import dataclass
 import os
+from pathlib import Path
 import queue
 import random
 import re
@@ -48,11 +50,10 @@ import subprocess
 import sys
 import threading
 import time
-from dataclasses import dataclass
-from pathlib import Path
 
-from ..errors import GyroNoiseError
 from ._common import run_cli
+from ..errors import GyroNoiseError
+from ..monitor_lines import parse_axis_parts
 
 PROG = 'gyro_noise_demo'
 _MARKER = 'GYRO_NOISE_DEMO.txt'
@@ -83,6 +84,7 @@ class Story:
         Sliding window of the analyzer's sequence statistics (chunks).
     chunk_size : int
         Samples per chunk.
+
     """
 
     quiet_s: float
@@ -113,18 +115,22 @@ def build_parser():
     Returns
     -------
     argparse.ArgumentParser
+
     """
-    p = argparse.ArgumentParser(prog=PROG, description='Emulated board -> driver -> live analyzer and '
-                                'recorder -> offline report, with a helium-like bias transient.')
+    p = argparse.ArgumentParser(prog=PROG, description='Emulated board -> driver -> live analyzer '
+                                'and recorder -> offline report, with a helium-like bias '
+                                'transient.')
     p.add_argument('--out', default='demo_out', metavar='DIR',
                    help='output directory (created; a previous demo output there is replaced)')
     p.add_argument('--quick', action='store_true', help='short story (about 1 minute) for tests')
     p.add_argument('--seed', type=int, default=1, help='seed of the emulated sensor')
     p.add_argument('--speed', type=float, default=1.0,
-                   help='emulator pace as a multiple of real time (see the module doc before raising it)')
+                   help='emulator pace as a multiple of real time (see the module doc before '
+                   'raising it)')
     p.add_argument('--storage', default='sqlite3', choices=('sqlite3', 'mcap'), help='bag storage')
     p.add_argument('--jobs', type=int, default=2, help='worker processes of the offline analysis')
-    p.add_argument('--domain-id', type=int, default=None, help='ROS_DOMAIN_ID (default: random 100..200)')
+    p.add_argument('--domain-id', type=int, default=None,
+                   help='ROS_DOMAIN_ID (default: random 100..200)')
     return p
 
 
@@ -140,11 +146,13 @@ def _prepare_out(out):
         if not out.is_dir():
             raise DemoError(f'--out {str(out)!r} exists and is not a directory')
         if any(out.iterdir()) and not (out / _MARKER).exists():
-            raise DemoError(f'--out {str(out)!r} exists and is not a previous demo output; choose another')
+            raise DemoError(
+                f'--out {str(out)!r} exists and is not a previous demo output; choose another')
         for name in ('recording', 'report', 'logs'):
             shutil.rmtree(out / name, ignore_errors=True)
     (out / 'logs').mkdir(parents=True, exist_ok=True)
-    (out / _MARKER).write_text('Written by gyro_noise_ros.cli.demo; the next demo run replaces this directory.\n')
+    (out / _MARKER).write_text('Written by gyro_noise_ros.cli.demo; the next demo run replaces '
+                               'this directory.\n')
     return out
 
 
@@ -152,8 +160,8 @@ class Processes:
     """
     The demo's subprocesses: start, watch, stop in order, always clean up.
 
-    Each child runs in its own session so a Ctrl-C at the terminal reaches only the demo, which then
-    stops the children in a sensible order instead of all at once.
+    Each child runs in its own session so a Ctrl-C at the terminal reaches only the demo, which
+    then stops the children in a sensible order instead of all at once.
     """
 
     def __init__(self, env, log_dir):
@@ -167,8 +175,8 @@ class Processes:
         log = self.log_dir / f'{name}.log'
         fh = open(log, 'w')  # noqa: SIM115 - closed with the process in stop()
         stdout = subprocess.PIPE if capture_stdout else fh
-        proc = subprocess.Popen([sys.executable, '-m', *args], env=self.env, stdout=stdout, stderr=fh,
-                                stdin=subprocess.DEVNULL, start_new_session=True,
+        proc = subprocess.Popen([sys.executable, '-m', *args], env=self.env, stdout=stdout,
+                                stderr=fh, stdin=subprocess.DEVNULL, start_new_session=True,
                                 text=True, bufsize=1)
         self.procs[name] = (proc, fh)
         self.logs[name] = log
@@ -188,8 +196,8 @@ class Processes:
         """Raise DemoError if a process not being stopped has exited."""
         for name, (proc, _) in self.procs.items():
             if name not in self.stopping and proc.poll() is not None:
-                raise DemoError(f'{name} exited with code {proc.returncode}; log {self.logs[name]}: '
-                                f'{self.last_lines(name)}')
+                raise DemoError(f'{name} exited with code {proc.returncode}; log '
+                                f'{self.logs[name]}: {self.last_lines(name)}')
 
     def wait_for_log(self, name, pattern, timeout_s, what):
         deadline = time.monotonic() + timeout_s
@@ -198,8 +206,8 @@ class Processes:
             if re.search(pattern, self.log_text(name)):
                 return
             time.sleep(0.2)
-        raise DemoError(f'{name}: no sign of {what} after {timeout_s:.0f} s; log {self.logs[name]}: '
-                        f'{self.last_lines(name)}')
+        raise DemoError(f'{name}: no sign of {what} after {timeout_s:.0f} s; log '
+                        f'{self.logs[name]}: {self.last_lines(name)}')
 
     def stop(self, name, timeout_s=15.0):
         """SIGINT one process and wait; SIGKILL if it does not stop. Return its exit code."""
@@ -260,12 +268,13 @@ def _body(argv):
     previous = signal.signal(signal.SIGTERM, _interrupt)
     t_start = time.monotonic()
     print(f'{PROG}: ROS_DOMAIN_ID={domain}; logs in {out / "logs"}', flush=True)
+    warn_limit = DEMO_ANALYZER_PARAMS['drift_abs_warn_deg_s_per_h']
+    error_limit = DEMO_ANALYZER_PARAMS['drift_abs_error_deg_s_per_h']
     print(f'{PROG}: story: {story.quiet_s:.0f} s quiet, then the bias of every axis rises by '
           f'{story.amplitude_dps} deg/s with a time constant of {story.tau_s:.0f} s '
           f'(initial drift {story.amplitude_dps / story.tau_s * 3600:.0f} (deg/s)/h); live part '
-          f'{story.live_s:.0f} s; drift limits WARN {DEMO_ANALYZER_PARAMS["drift_abs_warn_deg_s_per_h"]:g} / '
-          f'ERROR {DEMO_ANALYZER_PARAMS["drift_abs_error_deg_s_per_h"]:g} (deg/s)/h over the last '
-          f'{story.history_chunks} chunks', flush=True)
+          f'{story.live_s:.0f} s; drift limits WARN {warn_limit:g} / ERROR {error_limit:g} '
+          f'(deg/s)/h over the last {story.history_chunks} chunks', flush=True)
     try:
         recording = out / 'recording'
         procs.start('noise_analyzer', ['gyro_noise_ros.nodes.analyzer', *_ros_args(
@@ -273,7 +282,7 @@ def _body(argv):
              'chunk_size': story.chunk_size})])
         procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', *_ros_args(
             {'output': str(recording), 'storage': args.storage})])
-        echo = procs.start('monitor', ['gyro_noise_ros.nodes.analyzer', '--echo', '--compact'],
+        echo = procs.start('monitor', ['gyro_noise_ros.nodes.monitor', '--compact'],
                            capture_stdout=True)
         lines = queue.Queue()
         threading.Thread(target=_reader, args=(echo.stdout, lines), daemon=True).start()
@@ -314,7 +323,8 @@ def _body(argv):
                             if ln.startswith('gyro_noise_record: received')), '')
         if rc != 0 or not (recording / 'metadata.yaml').exists():
             raise DemoError(f'gyro_noise_record did not close the bag cleanly (exit {rc}); log '
-                            f'{procs.logs["gyro_noise_record"]}: {procs.last_lines("gyro_noise_record")}')
+                            f'{procs.logs["gyro_noise_record"]}: '
+                            f'{procs.last_lines("gyro_noise_record")}')
         print(f'{PROG}: {record_line.split(": ", 1)[-1]}', flush=True)
     finally:
         procs.stop_all(['noise_analyzer', 'monitor', 'portenta_emulator'])
@@ -323,14 +333,15 @@ def _body(argv):
 
     report = out / 'report'
     print(f'{PROG}: offline analysis of the recording with gyro_noise_analyze ...', flush=True)
-    cmd = [sys.executable, '-m', 'gyro_noise_ros.cli.analyze', str(recording), '--out', str(report),
-           '--jobs', str(args.jobs), '--label', 'demo']
+    cmd = [sys.executable, '-m', 'gyro_noise_ros.cli.analyze', str(recording), '--out',
+           str(report), '--jobs', str(args.jobs), '--label', 'demo']
     try:
         done = subprocess.run(cmd, env=env, stdin=subprocess.DEVNULL, timeout=900)
     except subprocess.TimeoutExpired as err:
         raise DemoError('gyro_noise_analyze took more than 15 minutes') from err
     if done.returncode != 0:
-        raise DemoError(f'gyro_noise_analyze failed with exit code {done.returncode}: {" ".join(cmd)}')
+        raise DemoError(
+            f'gyro_noise_analyze failed with exit code {done.returncode}: {" ".join(cmd)}')
     _print_outputs(report, time.monotonic() - t_start)
     return 0
 
@@ -340,7 +351,7 @@ def _interrupt(signum, frame):
 
 
 def _next_line(lines, procs, deadline):
-    """The monitor's next line, or None at the deadline; raise if a process or the monitor died."""
+    """Return the monitor's next line, None at the deadline; raise if a process or it died."""
     while time.monotonic() < deadline:
         procs.check()
         try:
@@ -356,8 +367,8 @@ def _next_line(lines, procs, deadline):
 def _wait_line(lines, procs, timeout_s):
     line = _next_line(lines, procs, time.monotonic() + timeout_s)
     if line is None:
-        raise DemoError(f'no diagnostics from noise_analyzer after {timeout_s:.0f} s (DDS discovery?); '
-                        f'logs in {procs.log_dir}')
+        raise DemoError(f'no diagnostics from noise_analyzer after {timeout_s:.0f} s '
+                        f'(DDS discovery?); logs in {procs.log_dir}')
     return line
 
 
@@ -376,34 +387,24 @@ def _live(lines, procs, story, speed, t_stream):
     return seen
 
 
-_AXIS_PART = re.compile(r'\b([xyz]) (OK|WARN|ERROR|STALE) bias \S+ drift (\S+)')
-
-
-def _float(text):
-    try:
-        return float(text)
-    except ValueError:
-        return float('nan')
-
-
 def _check_story(seen, story):
-    """After the rise began, some axis must be WARN or ERROR with its drift above the WARN limit."""
+    """Check that after the rise began some axis was WARN or ERROR with its drift above limit."""
     chunk_lines = [(t, ln) for t, ln in seen if ' chunk ' in ln]
     if not chunk_lines:
         raise DemoError('the analyzer reported no chunk: did the driver publish? see the logs')
     rise = [ln for t, ln in chunk_lines if t >= story.quiet_s]
     quiet = [ln for t, ln in chunk_lines if t < story.quiet_s]
     limit = DEMO_ANALYZER_PARAMS['drift_abs_warn_deg_s_per_h']
-    warned = [ln for ln in rise if any(level in ('WARN', 'ERROR') and _float(drift) > limit
-                                       for _, level, drift in _AXIS_PART.findall(ln))]
+    warned = [ln for ln in rise if any(level in ('WARN', 'ERROR') and drift > limit
+                                       for _, level, drift in parse_axis_parts(ln))]
     if not warned:
-        raise DemoError('the drift was not detected: no axis turned WARN with its drift above the limit '
-                        'after the bias rose '
+        raise DemoError('the drift was not detected: no axis turned WARN with its drift above '
+                        'the limit after the bias rose '
                         f'({len(rise)} chunk reports in the rise phase)')
     ok_quiet = sum(ln.startswith('OK') for ln in quiet)
-    print(f'{PROG}: story checked: {ok_quiet} of {len(quiet)} quiet-phase reports OK; after the rise began, '
-          f'{len(warned)} of {len(rise)} reports had an axis at WARN or worse with its drift above '
-          f'{limit:g} (deg/s)/h', flush=True)
+    print(f'{PROG}: story checked: {ok_quiet} of {len(quiet)} quiet-phase reports OK; after the '
+          f'rise began, {len(warned)} of {len(rise)} reports had an axis at WARN or worse with '
+          f'its drift above {limit:g} (deg/s)/h', flush=True)
 
 
 def _print_outputs(report, elapsed_s):
@@ -415,7 +416,8 @@ def _print_outputs(report, elapsed_s):
             print(f'  {path}')
     for path in sorted(report.glob('*.png')):
         print(f'  {path}')
-    print(f'  (read {report / "summary.md"} first; docs/demo.md explains every number)', flush=True)
+    print(f'  (read {report / "summary.md"} first; docs/demo.md explains every number)',
+          flush=True)
 
 
 def main(argv=None):
@@ -431,6 +433,7 @@ def main(argv=None):
     -------
     int
         Exit code (module doc).
+
     """
     return run_cli(PROG, _body, argv)
 

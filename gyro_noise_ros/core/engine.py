@@ -1,16 +1,21 @@
 """
-Streaming analysis engine shared by the analyzer node and the offline tool (issue 4; paper 000 sec. 3.2-3.5).
+Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
-One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional temperature)``
-and cuts every selected axis into fixed-length chunks (10,000 samples by default, as in the paper). The work
-is split in three steps so that the caller decides where the heavy part runs:
+Issue 4.
 
-1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order counting,
-   chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete chunk and axis.
+One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional
+temperature)`` and cuts every selected axis into fixed-length chunks (10,000 samples by default, as
+in the paper). The work is split in three steps so that the caller decides where the heavy part
+runs:
+
+1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order
+   counting, chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete
+   chunk and axis.
 2. :func:`analyze_chunk` (heavy, pure, picklable): fractional-order identification by both methods
    (:class:`.fractional.OrderIdentifier`); safe in a worker thread or process.
-3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence statistics
-   (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
+3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence
+   statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
+   :meth:`NoiseEngine.health` are computed.
 
 Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming, the
 period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the first
@@ -31,18 +36,19 @@ The ``gap_policy`` decides what a gap does to the chunk it falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
 * ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
-  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every analysed
-  chunk is gap-free.
-* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the sequence
-  statistics.
+  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every
+  analysed chunk is gap-free.
+* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the
+  sequence statistics.
 
-NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status ``'nan'``
-(per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left out of the
-statistics. The incomplete tail at the end is counted (``tail_samples``), never silently dropped.
+NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status
+``'nan'`` (per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left
+out of the statistics. The incomplete tail at the end is counted (``tail_samples``), never silently
+dropped.
 
-Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every finite
-sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform sampling, so heavy
-loss biases it; the loss is reported beside it).
+Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every
+finite sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform
+sampling, so heavy loss biases it; the loss is reported beside it).
 """
 
 from collections import deque
@@ -51,11 +57,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import InputDataError, ParameterError
 from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
 from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
 from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
 from .timebase import rescale_allan, TimebaseTracker
+from ..errors import InputDataError, ParameterError
 
 #: Axis names in column order of the gyro array.
 AXES = ('x', 'y', 'z')
@@ -99,9 +105,11 @@ class EngineConfig:
     allan : bool
         Keep an incremental Allan deviation of the whole run.
     allan_taus : {'octave', 'dense'}
-        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per decade).
+        Averaging times of that Allan deviation (octave: 1, 2, 4, ... samples; dense: ~10 per
+        decade).
     history_chunks : int
         Chunks kept per axis for the sequence statistics; 0 = all (a live node may bound it).
+
     """
 
     chunk_size: int = DEFAULT_CHUNK_SIZE
@@ -120,29 +128,36 @@ class EngineConfig:
     def __post_init__(self):
         axes = tuple(self.axes) if not isinstance(self.axes, str) else (self.axes,)
         if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
-            raise ParameterError(f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
+            raise ParameterError(
+                f"axes must be distinct names among 'x', 'y', 'z', got {self.axes!r}")
         object.__setattr__(self, 'axes', axes)
         if self.gap_policy not in GAP_POLICIES:
-            raise ParameterError(f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
+            raise ParameterError(
+                f'gap_policy must be one of {GAP_POLICIES}, got {self.gap_policy!r}')
         if not (np.isfinite(self.gap_factor) and self.gap_factor > 1.0):
-            raise ParameterError(f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
+            raise ParameterError(
+                f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
         if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ParameterError(f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
+            raise ParameterError(
+                f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
         if self.allan_taus not in ('octave', 'dense'):
-            raise ParameterError(f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
+            raise ParameterError(
+                f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")
         if int(self.history_chunks) < 0:
             raise ParameterError(f'history_chunks must be >= 0, got {self.history_chunks!r}')
-        alphas = default_grid() if self.alphas is None else np.asarray(self.alphas, dtype=np.float64).ravel()
+        alphas = (default_grid() if self.alphas is None
+                  else np.asarray(self.alphas, dtype=np.float64).ravel())
         alphas.setflags(write=False)
         object.__setattr__(self, 'alphas', alphas)
-        # Build once to validate chunk_size / memory / max_lag / grid together with the core's messages.
-        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory), bool(self.demean),
-                       self.max_lag)
+        # Build once to validate chunk_size / memory / max_lag / grid together with the core's
+        # messages.
+        identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory),
+                       bool(self.demean), self.max_lag)
 
     def identifier_key(self):
         """Return the hashable arguments of :func:`identifier_for` for this configuration."""
-        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory), bool(self.demean),
-                None if self.max_lag is None else int(self.max_lag))
+        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory),
+                bool(self.demean), None if self.max_lag is None else int(self.max_lag))
 
     def as_dict(self):
         """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
@@ -150,9 +165,11 @@ class EngineConfig:
         return {
             'chunk_size': int(self.chunk_size), 'axes': list(self.axes),
             'order_grid': {'start': float(a[0]), 'stop': float(a[-1]),
-                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0, 'count': int(a.size)},
+                           'step': float(a[1] - a[0]) if a.size > 1 else 0.0,
+                           'count': int(a.size)},
             'memory': int(self.memory), 'demean': bool(self.demean), 'max_lag': self.max_lag,
-            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor), 'gap_policy': self.gap_policy,
+            'rate_hz': self.rate_hz, 'gap_factor': float(self.gap_factor),
+            'gap_policy': self.gap_policy,
             'allan': bool(self.allan), 'allan_taus': self.allan_taus,
             'history_chunks': int(self.history_chunks)}
 
@@ -160,7 +177,9 @@ class EngineConfig:
 @lru_cache(maxsize=8)
 def identifier_for(chunk_size, alphas, memory, demean, max_lag):
     """
-    Return a cached :class:`.fractional.OrderIdentifier` (its set-up transforms every grid filter once).
+    Return a cached :class:`.fractional.OrderIdentifier`.
+
+    Its set-up transforms every grid filter once, so one per configuration is kept.
 
     Parameters
     ----------
@@ -178,6 +197,7 @@ def identifier_for(chunk_size, alphas, memory, demean, max_lag):
     Returns
     -------
     OrderIdentifier
+
     """
     return OrderIdentifier(chunk_size, alphas=np.asarray(alphas), memory=memory, demean=demean,
                            max_lag=max_lag)
@@ -199,8 +219,8 @@ class ChunkJob:
     stamp_start_ns : int
         Stamp of the first sample (ns).
     t_start_s, t_mid_s : float
-        Time of the first sample and the midpoint of first and last sample, from the first sample of the
-        run (s).
+        Time of the first sample and the midpoint of first and last sample, from the first sample
+        of the run (s).
     samples_lost, gaps : int
         Samples lost in gaps between this chunk's samples, and the number of such gaps.
     nan_samples : int
@@ -213,6 +233,7 @@ class ChunkJob:
         Chunk mean (rad/s) and variance, ddof = 1 ((rad/s)^2); NaN for a 'nan' chunk.
     identifier_key : tuple
         Arguments of :func:`identifier_for`.
+
     """
 
     axis: str
@@ -243,8 +264,8 @@ class ChunkResult:
     """
     Per-chunk results of one axis (identical from the node and the offline tool for the same data).
 
-    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b`` is the
-    "same numbers" test between two runs.
+    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b``
+    is the "same numbers" test between two runs.
 
     Attributes
     ----------
@@ -265,13 +286,15 @@ class ChunkResult:
     j_min : float
         Minimum of J ((rad/s)^2).
     tie_var, tie_corr : bool
-        The minimum was an exact tie between grid orders (the largest is reported; see fractional.py).
+        The minimum was an exact tie between grid orders (the largest is reported; see
+        fractional.py).
     status : str
         One of :data:`STATUSES`.
     message : str
         Why the status is not 'ok' (empty otherwise).
     var_curve, j_curve : numpy.ndarray or None
         var(w)(alpha) and J(alpha) over the grid when curves were requested (not compared).
+
     """
 
     axis: str
@@ -300,7 +323,7 @@ class ChunkResult:
     j_curve: np.ndarray = field(default=None, repr=False, compare=False)
 
     def __eq__(self, other):
-        """Field-wise equality of the compared fields, NaN equal to NaN (curves are not compared)."""
+        """Compare field by field, NaN equal to NaN (curves are not compared)."""
         if not isinstance(other, ChunkResult):
             return NotImplemented
         return all(_same(getattr(self, f.name), getattr(other, f.name))
@@ -316,8 +339,9 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
-    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a chunk
-    that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or 'failed'.
+    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a
+    chunk that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or
+    'failed'.
 
     Parameters
     ----------
@@ -331,20 +355,22 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     Returns
     -------
     ChunkResult
+
     """
-    base = dict(axis=job.axis, chunk=job.chunk, t_start_s=job.t_start_s, t_mid_s=job.t_mid_s,
-                stamp_start_ns=job.stamp_start_ns, samples=int(job.samples.shape[0]),
-                samples_lost=job.samples_lost, gaps=job.gaps, nan_samples=job.nan_samples,
-                bias_rad_s=job.bias_rad_s, variance_rad2_s2=job.variance_rad2_s2,
-                temperature_c=job.temperature_c)
-    empty = dict(alpha_var=_NAN, f_var=_NAN, var_min=_NAN, alpha_corr=_NAN, f_corr=_NAN, j_min=_NAN,
-                 tie_var=False, tie_corr=False)
+    base = {'axis': job.axis, 'chunk': job.chunk, 't_start_s': job.t_start_s,
+            't_mid_s': job.t_mid_s, 'stamp_start_ns': job.stamp_start_ns,
+            'samples': int(job.samples.shape[0]), 'samples_lost': job.samples_lost,
+            'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
+            'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
+    empty = {'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
+             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False}
     if job.status == 'nan':
         return ChunkResult(**base, **empty, status='nan',
                            message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
     if job.status == 'dropped':
         return ChunkResult(**base, **empty, status='dropped',
-                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost (gap policy drop)')
+                           message=f'{job.gaps} gap(s), {job.samples_lost} sample(s) lost '
+                                   '(gap policy drop)')
     if identifier is None:
         identifier = identifier_for(*job.identifier_key)
     try:
@@ -458,7 +484,9 @@ class AxisSummary:
 
 def rad_s2_to_deg_s_per_h(value):
     """
-    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3, see chunks.py).
+    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
+
+    See chunks.py.
 
     Parameters
     ----------
@@ -469,6 +497,7 @@ def rad_s2_to_deg_s_per_h(value):
     -------
     float
         Drift in deg/s per hour.
+
     """
     return float(np.degrees(value) * 3600.0)
 
@@ -478,7 +507,8 @@ class _AxisState:
 
     def __init__(self, history):
         maxlen = history or None
-        self.rows = deque(maxlen=maxlen)  # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        self.rows = deque(maxlen=maxlen)
         self.nan_samples = 0
         self.by_status = dict.fromkeys(STATUSES, 0)
         self.last = None
@@ -486,18 +516,21 @@ class _AxisState:
 
 class NoiseEngine:
     """
-    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge (module doc).
+    Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge.
+
+    The module doc describes the steps.
 
     Parameters
     ----------
     config : EngineConfig
         Options.
     reference : optional, keyword-only
-        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the offline
-        tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all axes, or a dict
-        ``{axis: ReferenceStats}``.
+        Reference characterisation for the health verdicts: a path to a ``summary.json`` of the
+        offline tool (loaded per configured axis), one :class:`.health.ReferenceStats` for all
+        axes, or a dict ``{axis: ReferenceStats}``.
     thresholds : HealthThresholds, optional, keyword-only
         Verdict thresholds (default :class:`.health.HealthThresholds()`).
+
     """
 
     def __init__(self, config=None, *, reference=None, thresholds=None):
@@ -531,10 +564,12 @@ class NoiseEngine:
         self._allan = None
         self._allan_error = None
 
-    # ---- ingestion -------------------------------------------------------------------------------
+    # ---- ingestion
+    # -------------------------------------------------------------------------------
 
     def _reset_buffer(self):
-        self._buf = []  # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
+        self._buf = []
         self._buffered = 0
 
     def ingest(self, stamp_ns, gyro, temperature_c=None):
@@ -554,6 +589,7 @@ class NoiseEngine:
         -------
         list of ChunkJob
             One per completed chunk and configured axis, in chunk then axis order.
+
         """
         stamps = np.asarray(stamp_ns)
         if stamps.dtype.kind not in 'iu':
@@ -561,12 +597,14 @@ class NoiseEngine:
         stamps = stamps.astype(np.int64).reshape(-1)
         g = np.asarray(gyro, dtype=np.float64)
         if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] != stamps.shape[0]:
-            raise InputDataError(f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
+            raise InputDataError(
+                f'gyro must have shape ({stamps.shape[0]}, 3) to match stamp_ns, got {g.shape}')
         n = stamps.shape[0]
         if temperature_c is None:
             temp = np.full(n, np.nan)
         else:
-            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64), (n,)).astype(np.float64)
+            temp = np.broadcast_to(np.asarray(temperature_c, dtype=np.float64),
+                                   (n,)).astype(np.float64)
         if n == 0:
             return []
         self._samples += n
@@ -625,8 +663,8 @@ class NoiseEngine:
         if first:
             self._first_ns = int(stamps[0])
             self._max_ns = int(stamps[0])
-        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order count
-        # and does not also make the next step look like a gap.
+        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order
+        # count and does not also make the next step look like a gap.
         run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
         steps = stamps - run_max[:-1]
         self._max_ns = int(run_max[-1])
@@ -688,7 +726,8 @@ class NoiseEngine:
             jobs += self._make_jobs(rel[sl], chunk_lost, temp[sl], g[sl])
         self._reset_buffer()
         if whole < rel.shape[0]:
-            self._buf.append((rel[whole:].copy(), lost[whole:].copy(), temp[whole:].copy(), g[whole:].copy()))
+            self._buf.append((rel[whole:].copy(), lost[whole:].copy(),
+                             temp[whole:].copy(), g[whole:].copy()))
             self._buffered = rel.shape[0] - whole
         return jobs
 
@@ -722,19 +761,23 @@ class NoiseEngine:
                 var = float(col.var(ddof=1))
             jobs.append(ChunkJob(
                 axis=axis, chunk=index, samples=col, stamp_start_ns=int(rel[0]) + self._first_ns,
-                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost, gaps=gaps,
+                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost,
+                gaps=gaps,
                 nan_samples=nan, temperature_c=temperature, status=status, bias_rad_s=bias,
                 variance_rad2_s2=var, identifier_key=self._key))
         return jobs
 
     def flush(self):
         """
-        Finish ingestion: release samples held for rate estimation (the tail stays counted, unanalysed).
+        Finish ingestion: release samples held for rate estimation.
+
+        The tail stays counted, unanalysed.
 
         Returns
         -------
         list of ChunkJob
             Jobs completed by the released samples.
+
         """
         if self._pending:
             held = sum(p[0].shape[0] for p in self._pending)
@@ -742,7 +785,8 @@ class NoiseEngine:
                 return self._release_pending()
         return []
 
-    # ---- Allan -------------------------------------------------------------------------------------
+    # ---- Allan
+    # -------------------------------------------------------------------------------------
 
     def _feed_allan(self, g):
         if not self.config.allan or self._allan_error is not None:
@@ -773,7 +817,8 @@ class NoiseEngine:
             return None, None
         return result, terms
 
-    # ---- analysis and bookkeeping --------------------------------------------------------------------
+    # ---- analysis and bookkeeping
+    # --------------------------------------------------------------------
 
     @staticmethod
     def analyze(job, *, curves=False):
@@ -783,11 +828,14 @@ class NoiseEngine:
         Parameters
         ----------
         job : ChunkJob
+            The chunk to analyse.
         curves : bool, keyword-only
+            Keep the criterion curves in the result.
 
         Returns
         -------
         ChunkResult
+
         """
         return analyze_chunk(job, curves=curves)
 
@@ -798,15 +846,19 @@ class NoiseEngine:
         Parameters
         ----------
         result : ChunkResult
+            An analysed chunk of this engine.
+
         """
         state = self._axis.get(result.axis)
         if state is None:
-            raise ParameterError(f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
+            raise ParameterError(
+                f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
         state.by_status[result.status] = state.by_status.get(result.status, 0) + 1
         state.last = result
         if result.status == 'ok':
-            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2, result.alpha_var,
-                               result.alpha_corr, result.tie_var, result.tie_corr, result.temperature_c))
+            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
+                               result.alpha_var, result.alpha_corr, result.tie_var,
+                               result.tie_corr, result.temperature_c))
 
     def skip(self, job, reason=''):
         """
@@ -815,6 +867,7 @@ class NoiseEngine:
         Parameters
         ----------
         job : ChunkJob
+            The chunk not analysed.
         reason : str
             Why (kept in the returned result's message).
 
@@ -822,6 +875,7 @@ class NoiseEngine:
         -------
         ChunkResult
             A 'skipped' result (already recorded).
+
         """
         result = replace(analyze_chunk(replace(job, status='dropped')), status='skipped',
                          message=str(reason) or 'skipped')
@@ -835,6 +889,7 @@ class NoiseEngine:
         Returns
         -------
         StreamCounts
+
         """
         held = sum(p[0].shape[0] for p in self._pending)
         est = self.timebase()
@@ -879,19 +934,22 @@ class NoiseEngine:
         Parameters
         ----------
         allan : bool, keyword-only
-            Compute the Allan deviation and noise terms (the costly part; a live node may ask rarely).
+            Compute the Allan deviation and noise terms (the costly part; a live node may ask
+            rarely).
 
         Returns
         -------
         dict
             ``{axis: AxisSummary}`` in configured axis order.
+
         """
         counts = self.counts()
         out = {}
         for axis, state in self._axis.items():
-            rows = np.array([r for r in state.rows], dtype=np.float64).reshape(-1, 8)
+            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 8)
             seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
-                                     tail_samples=counts.tail_samples, ties_var=int(rows[:, 5].sum()),
+                                     tail_samples=counts.tail_samples,
+                                     ties_var=int(rows[:, 5].sum()),
                                      ties_corr=int(rows[:, 6].sum()))
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
@@ -917,7 +975,8 @@ class NoiseEngine:
         Parameters
         ----------
         seconds_since_data : float, optional, keyword-only
-            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict is STALE.
+            Time since the last sample arrived (s); above ``thresholds.stale_after_s`` the verdict
+            is STALE.
         summaries : dict, optional, keyword-only
             Reuse :meth:`summary` output (avoids recomputing it).
 
@@ -925,11 +984,13 @@ class NoiseEngine:
         -------
         dict
             ``{axis: HealthVerdict}``.
+
         """
         from .health import evaluate_health
 
         summaries = summaries if summaries is not None else self.summary(allan=False)
-        return {axis: evaluate_health(s, reference=self.reference.get(axis), thresholds=self.thresholds,
+        return {axis: evaluate_health(s, reference=self.reference.get(axis),
+                                      thresholds=self.thresholds,
                                       seconds_since_data=seconds_since_data)
                 for axis, s in summaries.items()}
 
@@ -937,3 +998,28 @@ class NoiseEngine:
     def allan_status(self):
         """Why the Allan deviation is unavailable (empty string when it is available or off)."""
         return self._allan_error or ''
+
+
+def warm_up(config):
+    """
+    Run the analysis path once on synthetic data so the first real chunk does not stall.
+
+    Builds (and caches, see :func:`identifier_for`) the order identifier of ``config``, plans its
+    FFTs, and compiles or loads the numba kernels of the Allan accumulator. A live node calls it
+    at start-up (STYLE.md: warm numba kernels before the first chunk).
+
+    Parameters
+    ----------
+    config : EngineConfig
+        The configuration the real data will be analysed with.
+
+    """
+    rng = np.random.default_rng(0)
+    n = int(config.chunk_size) + 1
+    rate_hz = config.rate_hz or 1000.0
+    engine = NoiseEngine(replace(config, rate_hz=rate_hz))
+    stamps = np.arange(n, dtype=np.int64) * int(_NS / rate_hz)
+    jobs = engine.ingest(stamps, rng.standard_normal((n, 3)) * 1e-3)
+    for job in jobs[:1]:
+        engine.record(engine.analyze(job))
+    engine.summary(allan=config.allan)

@@ -36,18 +36,23 @@ item and its message is one sentence naming that item.
 
 import json
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from scipy.special import stdtrit
 
 from ..errors import InputDataError, ParameterError
+from .items import DEG as _DEG, fmt as _fmt
 
 #: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
 LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
 LEVEL_BYTE = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
 
-_DEG = 180.0 / math.pi
+
+
+def _threshold(default, description, unit=''):
+    # One source for the node's parameter table, its YAML file and the docs (field metadata).
+    return field(default=default, metadata={'description': description, 'unit': unit})
 
 
 @dataclass(frozen=True)
@@ -77,20 +82,35 @@ class HealthThresholds:
         Seconds without data after which the verdict is STALE (s).
     """
 
-    drift_ratio_warn: float = 5.0
-    drift_ratio_error: float = 15.0
-    drift_abs_warn_deg_s_per_h: float = 0.02
-    drift_abs_error_deg_s_per_h: float = 0.05
-    drift_min_sigma: float = 3.0
-    min_chunks: int = 3
-    alpha_var_tolerance: float = 0.05
-    alpha_corr_tolerance: float = 0.25
-    variance_ratio_tolerance: float = 0.5
-    lost_fraction_warn: float = 1e-4
-    lost_fraction_error: float = 1e-2
-    skipped_fraction_warn: float = 0.1
-    skipped_fraction_error: float = 0.5
-    stale_after_s: float = 5.0
+    drift_ratio_warn: float = _threshold(
+        5.0, 'WARN when |offset drift| exceeds this multiple of the reference drift', 'x')
+    drift_ratio_error: float = _threshold(
+        15.0, 'ERROR when |offset drift| exceeds this multiple of the reference drift', 'x')
+    drift_abs_warn_deg_s_per_h: float = _threshold(
+        0.02, 'WARN above this |offset drift| when there is no reference', '(deg/s)/h')
+    drift_abs_error_deg_s_per_h: float = _threshold(
+        0.05, 'ERROR above this |offset drift| when there is no reference', '(deg/s)/h')
+    drift_min_sigma: float = _threshold(
+        3.0, 'Judge the drift only when |slope| exceeds this many standard errors', 'sigma')
+    min_chunks: int = _threshold(
+        3, 'Chunks needed before drift, order and variance are judged', 'chunks')
+    alpha_var_tolerance: float = _threshold(
+        0.05, 'WARN when the mean variance-method order leaves the reference by more (ERROR at '
+        'twice)')
+    alpha_corr_tolerance: float = _threshold(
+        0.25, 'WARN when the mean correlation-method order leaves the reference by more (ERROR '
+        'at twice)')
+    variance_ratio_tolerance: float = _threshold(
+        0.5, 'WARN when mean variance / reference leaves 1 +/- this (ERROR at twice)')
+    lost_fraction_warn: float = _threshold(
+        1e-4, 'WARN above this fraction of samples lost (from stamps)')
+    lost_fraction_error: float = _threshold(
+        1e-2, 'ERROR above this fraction of samples lost (from stamps)')
+    skipped_fraction_warn: float = _threshold(
+        0.1, 'WARN above this fraction of chunks skipped (analysis behind)')
+    skipped_fraction_error: float = _threshold(
+        0.5, 'ERROR above this fraction of chunks skipped (analysis behind)')
+    stale_after_s: float = _threshold(5.0, 'STALE after this long without data', 's')
 
     def __post_init__(self):
         for f in fields(self):
@@ -337,12 +357,6 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
         sentence = next(i[3] for i in items if i[2] == worst)
         message = sentence[0].upper() + sentence[1:] + '.'
     return HealthVerdict(worst, message, tuple((k, v, lvl) for k, v, lvl, _ in items))
-
-
-def _fmt(value, digits=4):
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return 'nan'
-    return f'{value:.{digits}g}'
 
 
 def load_reference(summary_json_path, *, bag=None, axis='z'):

@@ -1,39 +1,53 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 """
-Small ROS helpers shared by the node modules (driver, analyzer, recorder).
+Small ROS helpers shared by the node modules: QoS, timers, diagnostics, ``main()``, polled takes.
 
-Only modules under ``gyro_noise_ros/nodes/`` may import this file: it imports rclpy and message packages.
+Only modules under ``gyro_noise_ros/nodes/`` may import this file: it imports rclpy and message
+packages. Parameter tables are :mod:`._params` (re-exported here).
 
 Conventions every node module follows (``test/test_node_params.py`` relies on them):
 
 - ``NODE_NAME``: the default node name, also the stem of ``config/<NODE_NAME>.yaml``.
 - ``PARAMETERS``: a tuple of :class:`ParamSpec`, the single table the node declares with
-  :func:`declare_parameter_table`; the YAML file lists every entry with its default and, in the
-  trailing comment, ``[unit]`` (``[-]`` when dimensionless).
-- ``main(args=None)`` calls :func:`run_node`, the Jazzy ``main()`` pattern with parameter errors turned
-  into one line on stderr and exit code 2.
+  :func:`declare_parameter_table`.
+- ``main(args=None)`` calls :func:`run_node`, the Jazzy ``main()`` pattern with parameter errors
+  turned into one line on stderr and exit code 2.
 
 What diagnostic_updater would give (it is not installable from PyPI) is written here in its shape:
-:func:`diagnostic_status` builds a ``DiagnosticStatus`` named ``'<node>: <task>'`` with string values,
-:func:`worst` picks the level and the one-sentence message from explicit checks.
+:func:`diagnostic_status` builds a ``DiagnosticStatus`` named ``'<node>: <task>'`` with string
+values; the levels come from the pure verdicts (``core.health``, ``link.health``) or from
+:func:`worst` over explicit checks.
 """
 
-import math
-import re
 import sys
-from dataclasses import dataclass
 
-import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType,
-                                SetParametersResult)
+import rclpy
 from rclpy.callback_groups import CallbackGroup
-from rclpy.exceptions import ParameterException
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy_impl
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from ._params import declare_parameter_table, ParamSpec, specs_from_dataclass
 from ..errors import GyroNoiseError, ParameterError
+from ..link.sequence import SequenceGapCounter
+
+__all__ = ['declare_parameter_table', 'diagnostic_array', 'diagnostic_status',
+           'diagnostics_publisher', 'driver_qos', 'ERROR', 'OK', 'ParamSpec', 'PolledGroup',
+           'run_node', 'sensor_data_qos', 'SequenceGapCounter', 'specs_from_dataclass', 'STALE',
+           'take_all', 'unused_callback', 'wall_timer', 'WARN', 'worst']
 
 #: ``DiagnosticStatus`` levels, as the ``bytes`` rclpy uses for the ``byte`` field.
 OK = DiagnosticStatus.OK
@@ -41,193 +55,17 @@ WARN = DiagnosticStatus.WARN
 ERROR = DiagnosticStatus.ERROR
 STALE = DiagnosticStatus.STALE
 
-_RCLError = _rclpy_impl.RCLError
-
 _LEVEL_RANK = {OK: 0, WARN: 1, ERROR: 2, STALE: 3}
-
-_PYTHON_TO_ROS_TYPE = {
-    bool: ParameterType.PARAMETER_BOOL,
-    int: ParameterType.PARAMETER_INTEGER,
-    float: ParameterType.PARAMETER_DOUBLE,
-    str: ParameterType.PARAMETER_STRING,
-}
-
-_ROS_TYPE_NAME = {
-    ParameterType.PARAMETER_BOOL: 'a boolean (true/false)',
-    ParameterType.PARAMETER_INTEGER: 'an integer',
-    ParameterType.PARAMETER_DOUBLE: 'a floating-point number (write 1.0, not 1)',
-    ParameterType.PARAMETER_STRING: 'a string',
-}
-
-
-@dataclass(frozen=True)
-class ParamSpec:
-    """
-    One row of a node's parameter table.
-
-    Parameters
-    ----------
-    name : str
-        snake_case name with a unit suffix where the unit is not SI-obvious (``odr_hz``).
-    default : bool, int, float or str
-        Default value; its Python type is the ROS parameter type (1.0 is a double, 1 an integer).
-    description : str
-        One sentence for ``ros2 param describe``.
-    unit : str
-        Unit of the value, written in the YAML comment as ``[unit]``; ``''`` when dimensionless.
-    read_only : bool
-        True where a change at runtime would not take effect (port, rates, full scales).
-    min_value, max_value : int or float or None
-        Inclusive range, put into the descriptor so rclpy enforces it at start and at runtime;
-        give both or neither.
-    choices : tuple
-        Allowed values when the set is discrete (the descriptor cannot say so; checked by
-        :func:`declare_parameter_table` and the set-parameters callback it installs).
-    pattern : str
-        Regular expression a string value must match in full (e.g. a frame id); ``''``: any.
-    """
-
-    name: str
-    default: object
-    description: str
-    unit: str = ''
-    read_only: bool = False
-    min_value: object = None
-    max_value: object = None
-    choices: tuple = ()
-    pattern: str = ''
-
-    @property
-    def ros_type(self):
-        """The ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
-        return _PYTHON_TO_ROS_TYPE[type(self.default)]
-
-    def descriptor(self):
-        """
-        Build the ``ParameterDescriptor`` of this row.
-
-        Returns
-        -------
-        rcl_interfaces.msg.ParameterDescriptor
-            Description with the unit, read_only flag, range and a text form of the choices.
-        """
-        text = self.description + (f' [{self.unit}]' if self.unit else '')
-        desc = ParameterDescriptor(name=self.name, type=self.ros_type, description=text,
-                                   read_only=self.read_only)
-        if self.choices:
-            desc.additional_constraints = 'one of ' + ', '.join(str(c) for c in self.choices)
-        elif self.pattern:
-            desc.additional_constraints = f'matches {self.pattern}'
-        if self.min_value is not None:
-            if self.ros_type == ParameterType.PARAMETER_INTEGER:
-                desc.integer_range = [IntegerRange(from_value=int(self.min_value),
-                                                   to_value=int(self.max_value), step=0)]
-            else:
-                desc.floating_point_range = [FloatingPointRange(from_value=float(self.min_value),
-                                                                to_value=float(self.max_value),
-                                                                step=0.0)]
-        return desc
-
-    def check(self, value):
-        """
-        Validate a value against the range and the choices of this row.
-
-        Parameters
-        ----------
-        value : object
-            Candidate value (already of the right type: rclpy checks types).
-
-        Raises
-        ------
-        ParameterError
-            Naming the parameter, the bad value and what is allowed.
-        """
-        if self.pattern and not re.fullmatch(self.pattern, value):
-            raise ParameterError(f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
-        if self.choices and value not in self.choices:
-            raise ParameterError(f"parameter '{self.name}' = {value!r} is not one of "
-                                 + ', '.join(repr(c) for c in self.choices))
-        if self.min_value is not None and not self.min_value <= value <= self.max_value:
-            raise ParameterError(f"parameter '{self.name}' = {value!r} is outside "
-                                 f'[{self.min_value}, {self.max_value}]'
-                                 + (f' {self.unit}' if self.unit else ''))
-        if isinstance(value, float) and not math.isfinite(value):
-            raise ParameterError(f"parameter '{self.name}' = {value!r} is not finite")
-
-
-def declare_parameter_table(node, table, *, on_change=None):
-    """
-    Declare every row of a parameter table on a node and return the values.
-
-    Type, range and choice violations of the overrides (``--ros-args -p``, ``--params-file``,
-    ``parameter_overrides``) become one :class:`ParameterError` naming the parameter and value, so
-    :func:`run_node` can print one line and exit with code 2 instead of a traceback.
-
-    Parameters
-    ----------
-    node : rclpy.node.Node
-        The node to declare on.
-    table : sequence of ParamSpec
-        The node's ``PARAMETERS``.
-    on_change : callable or None
-        ``on_change(dict name -> new value)``, called after rclpy accepted a runtime change of
-        parameters that are not read_only (ranges and choices already checked). None: no hook.
-
-    Returns
-    -------
-    dict
-        Parameter name to value.
-
-    Raises
-    ------
-    ParameterError
-        An override has the wrong type, is out of range, or is not one of the choices.
-    """
-    by_name = {spec.name: spec for spec in table}
-    values = {}
-    for spec in table:
-        try:
-            value = node.declare_parameter(spec.name, spec.default, spec.descriptor()).value
-        except ParameterException as err:
-            raise ParameterError(_explain_parameter_exception(spec, err)) from err
-        spec.check(value)
-        values[spec.name] = value
-
-    def _validate(params):
-        for param in params:
-            spec = by_name.get(param.name)
-            if spec is None:
-                continue
-            try:
-                spec.check(param.value)
-            except ParameterError as err:
-                return SetParametersResult(successful=False, reason=str(err))
-        return SetParametersResult(successful=True)
-
-    node.add_on_set_parameters_callback(_validate)
-    if on_change is not None:
-        node.add_post_set_parameters_callback(
-            lambda params: on_change({p.name: p.value for p in params if p.name in by_name}))
-    return values
-
-
-def _explain_parameter_exception(spec, err):
-    text = str(err)
-    if 'expecting type' in text:
-        return (f"parameter '{spec.name}' must be {_ROS_TYPE_NAME[spec.ros_type]}: "
-                f'{text.split(": ")[0]}')
-    if spec.min_value is not None:
-        return (f"parameter '{spec.name}' is outside [{spec.min_value}, {spec.max_value}]"
-                + (f' {spec.unit}' if spec.unit else '') + f': {text}')
-    return f"parameter '{spec.name}': {text}"
 
 
 def sensor_data_qos(depth):
     """
-    Sensor-data QoS (best effort, volatile, keep last) with a chosen depth.
+    Return the sensor-data QoS (best effort, volatile, keep last) with a chosen depth.
 
-    rclpy's ``qos_profile_sensor_data`` keeps only 5 messages; a 6.66 kHz stream published in bursts
-    needs a deeper history so a subscriber that wakes every few milliseconds loses nothing.
+    What consumers subscribe with (REP-2003): a best-effort subscription matches both reliable
+    and best-effort publishers. rclpy's ``qos_profile_sensor_data`` keeps only 5 messages; a
+    6.66 kHz stream arriving in bursts needs a deeper history so a subscriber that wakes every few
+    milliseconds loses nothing.
 
     Parameters
     ----------
@@ -237,24 +75,76 @@ def sensor_data_qos(depth):
     Returns
     -------
     rclpy.qos.QoSProfile
+
     """
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
                       reliability=ReliabilityPolicy.BEST_EFFORT,
                       durability=DurabilityPolicy.VOLATILE)
 
 
-def diagnostics_publisher(node):
+def driver_qos(depth):
     """
-    Create the ``/diagnostics`` publisher the way diagnostic_updater does (absolute topic, reliable).
+    Return the QoS a driver publishes with (REP-2003): reliable, volatile, keep last ``depth``.
+
+    A reliable publisher serves every subscriber, the default-QoS (reliable) ones such as RViz or a
+    user's node as well as best-effort sensor-data ones; a best-effort publisher silently starves
+    every reliable subscriber.
+
+    Parameters
+    ----------
+    depth : int
+        History depth in messages (deep enough for the bursts of a 6.66 kHz stream).
+
+    Returns
+    -------
+    rclpy.qos.QoSProfile
+
+    """
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+def wall_timer(node, period_s, callback):
+    """
+    Create a timer on the steady (wall) clock, whatever ``use_sim_time`` says.
+
+    Draining subscriptions and periodic diagnostics must keep their cadence when ``/clock`` is
+    late, paused or absent (``ros2 bag play --clock`` under ``use_sim_time:=true``): on the ROS
+    clock such a timer stops, the subscription queues overflow and the analyzer reports samples
+    lost that were never lost. Stamps still come from the node clock.
 
     Parameters
     ----------
     node : rclpy.node.Node
+        The node owning the timer.
+    period_s : float
+        Period (s of wall time).
+    callback : callable
+        Called without arguments.
+
+    Returns
+    -------
+    rclpy.timer.Timer
+
+    """
+    return node.create_timer(period_s, callback, clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+
+def diagnostics_publisher(node):
+    """
+    Create the ``/diagnostics`` publisher as diagnostic_updater does (absolute topic, reliable).
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The publishing node.
 
     Returns
     -------
     rclpy.publisher.Publisher
         Publisher of ``diagnostic_msgs/DiagnosticArray``.
+
     """
     return node.create_publisher(DiagnosticArray, '/diagnostics', 10)
 
@@ -274,6 +164,7 @@ def worst(checks, ok_message):
     -------
     (bytes, str)
         Level and message for :func:`diagnostic_status`.
+
     """
     level, message = OK, ok_message
     for check_level, check_message in checks:
@@ -303,6 +194,7 @@ def diagnostic_status(name, hardware_id, level, message, values):
     Returns
     -------
     diagnostic_msgs.msg.DiagnosticStatus
+
     """
     return DiagnosticStatus(level=level, name=name, message=message, hardware_id=hardware_id,
                             values=[KeyValue(key=k, value=v if isinstance(v, str) else str(v))
@@ -318,10 +210,12 @@ def diagnostic_array(stamp, statuses):
     stamp : builtin_interfaces.msg.Time
         Usually ``node.get_clock().now().to_msg()``.
     statuses : sequence of DiagnosticStatus
+        The statuses, in order.
 
     Returns
     -------
     diagnostic_msgs.msg.DiagnosticArray
+
     """
     msg = DiagnosticArray(status=list(statuses))
     msg.header.stamp = stamp
@@ -330,7 +224,7 @@ def diagnostic_array(stamp, statuses):
 
 def run_node(node_factory, args=None, *, prog):
     """
-    The Jazzy ``main()`` pattern, with deliberate start-up errors as one line and an exit code.
+    Run a node with the Jazzy ``main()`` pattern; start-up errors give one line and an exit code.
 
     ``rclpy.init(args=args)``; build the node; ``rclpy.spin`` until Ctrl-C or an external shutdown;
     always ``destroy_node()`` and ``rclpy.try_shutdown()``.
@@ -348,12 +242,18 @@ def run_node(node_factory, args=None, *, prog):
     -------
     int
         Exit code: 0, or the error class's code (2 for bad parameters or malformed ROS arguments).
+
     """
     try:
         rclpy.init(args=args)
-    except _RCLError as err:
-        # A malformed --ros-args (e.g. "-p name:=" with no value) fails here, before any node exists.
-        print(f'{prog}: error: bad ROS arguments: {str(err).split(", at ")[0]}', file=sys.stderr)
+    except RuntimeError as err:
+        # A malformed or unknown --ros-args (e.g. "-p name:=" with no value, "--bogus") fails here,
+        # before any node exists. rclpy raises RCLInvalidROSArgsError or UnknownROSArgsError, which
+        # it exposes only in its private _rclpy_pybind11 module; both derive from RuntimeError,
+        # so the public base class is caught and the class name says which.
+        kind = type(err).__name__
+        what = 'unknown ROS arguments' if kind == 'UnknownROSArgsError' else 'bad ROS arguments'
+        print(f'{prog}: error: {what}: {str(err).split(", at ")[0]}', file=sys.stderr)
         return ParameterError.exit_code
     node = None
     try:
@@ -412,6 +312,7 @@ def take_all(sub, msg_type):
         Receive time of each (``MessageInfo['received_timestamp']``, system clock, ns).
     sequence : list of int
         DDS publication sequence number of each (0 if the middleware does not give one).
+
     """
     raws, received, sequence = [], [], []
     handle = sub.handle
@@ -428,35 +329,6 @@ def take_all(sub, msg_type):
     return raws, received, sequence
 
 
-class SequenceGapCounter:
-    """
-    Count messages missing from a stream of DDS publication sequence numbers.
-
-    A sequence number that does not increase starts a new run (a restarted publisher); a
-    sequence number of 0 means the middleware gave none and is ignored. The count assumes one
-    publisher per topic (``MessageInfo`` does not name the writer): with several, their numbers
-    interleave and the count is meaningless (the stamps-based ``Samples lost`` stays right).
-    """
-
-    def __init__(self):
-        self.last = None
-        self.missing = 0
-
-    def update(self, sequence):
-        """Add the sequence numbers of one batch (in arrival order); return the new misses."""
-        seq = np.asarray(sequence, dtype=np.int64)
-        seq = seq[seq > 0]
-        if seq.size == 0:
-            return 0
-        if self.last is not None:
-            seq = np.concatenate(([self.last], seq))
-        step = np.diff(seq)
-        new = int(step[step > 1].sum() - np.count_nonzero(step > 1))
-        self.last = int(seq[-1])
-        self.missing += new
-        return new
-
-
 def unused_callback(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
-    """The callback rclpy requires of a polled subscription; never called (see PolledGroup)."""
+    """Refuse to run: the callback rclpy requires of a polled subscription (see PolledGroup)."""
     raise AssertionError('polled subscriptions are drained by the node, not by the executor')

@@ -1,52 +1,69 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 """
 ROS 2 driver of the LSM6DSO32 read by an Arduino Portenta H7: ``lsm6dso32_driver``.
 
-Opens the board's serial port (a device path or any pyserial URL, e.g. ``socket://127.0.0.1:PORT``
-for the emulator), configures output data rate and full scales, waits for the board's
-acknowledgement, and from then on publishes every sample:
+A managed (lifecycle) node. *configure* starts the link: the board's serial port (a device path
+or a pyserial URL such as ``socket://127.0.0.1:PORT`` for the emulator) is opened and the board
+configured (CONFIGURE, then its ACK; ``link.session``), retried every ``reconnect_period_s`` until
+it succeeds; *activate* publishes the samples; *deactivate* stops publishing (the link stays up,
+samples are counted and dropped); *cleanup* and *shutdown* close the port. ``autostart`` (default
+true) walks the node to active at start, so ``lsm6dso32_driver --ros-args -p port:=...`` streams
+at once. Topics (REP-145, reliable keep-last ``qos_depth`` so every subscriber receives them,
+REP-2003):
 
-- ``imu/data_raw`` (``sensor_msgs/Imu``, one message per sample, REP-145: rad/s, m/s^2, orientation
-  unknown so ``orientation_covariance[0] = -1``, diagonal covariances from parameters, sensor-data QoS);
-- ``imu/temperature`` (``sensor_msgs/Temperature``, degC, one of every ``temperature_decimation``
-  samples, chosen by sequence counter so the choice survives reconnections);
-- ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): status ``'<node name>: link'``.
+- ``imu/data_raw`` (``sensor_msgs/Imu``, one message per sample: rad/s, m/s^2, orientation
+  unknown so ``orientation_covariance[0] = -1``, diagonal covariances from parameters);
+- ``imu/temperature`` (``sensor_msgs/Temperature``, degC, for samples whose counter is a multiple
+  of ``temperature_decimation``, so the choice survives reconnections);
+- ``/diagnostics``: status ``'<node name>: link'`` (keys in ``docs/diagnostics.md``).
 
-Threads. One reader thread owns the port: it reads, decodes (``link.protocol.Decoder``), maps device
-time to the node clock (``link.clock.DeviceClock``: stamps are monotonic and free of USB receive
-jitter), scales to SI (``link.lsm6dso32.to_si``), serialises the messages in bulk with numpy
-(``bag.encode_imu_cdr``) and publishes the serialised bytes itself; rclpy publishers are thread-safe,
-and publishing where the data is decoded avoids a queue between threads (nothing unbounded: if
-publishing falls behind, reads wait and the board's own buffer overflows, which the board flags).
-The executor only runs the diagnostics timer, so nothing ever blocks it.
-
-Losses and duplicates. The board numbers samples with a wrapping uint32 counter. The node publishes
-a sample only if its counter is ahead of the last published one (modulo 2**32), so nothing is ever
-published twice, also when a reconnected board re-sends buffered samples; every counter gap between
-published samples, within a connection or across an unplug, is counted in ``Samples lost``. A counter
-that falls back by more than one second of samples is a board restart: the node starts a new epoch
-(clock estimator reset, stamps still monotonic) instead of waiting for the old count.
-
-Unplug. Any read/write error or ``data_timeout_s`` of silence (at least three full frames at low
-rates) closes the port, reports ERROR with the reason and retries every ``reconnect_period_s`` until the port is back; the node never exits for it.
+One reader thread owns the port: it reads, decodes (``link.protocol.Decoder``), maps device time to
+the node clock (``link.clock.DeviceClock``), scales to SI, serialises in bulk
+(``bag.encode_imu_cdr``) and publishes the bytes itself (rclpy publishers are thread-safe), so no
+queue sits between threads and the executor only runs the diagnostics timer and the lifecycle
+services. A sample is published only if its wrapping uint32 counter is ahead of the last published
+one (``link.sequence.SequenceTracker``): nothing twice, every gap counted in ``Samples lost``; a
+counter falling back by more than one second of samples is a board restart (new epoch). Any
+read/write error or ``data_timeout_s`` of silence closes the port, reports ERROR and retries; the
+node never exits for it.
 """
 
+from dataclasses import fields
 import sys
 import threading
 import time
-from dataclasses import dataclass, fields
 
 import numpy as np
-import serial
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from sensor_msgs.msg import Imu, Temperature
 
+from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
+                          diagnostics_publisher, driver_qos, ParamSpec, run_node,
+                          specs_from_dataclass, wall_timer)
 from ..bag import encode_imu_cdr, encode_temperature_cdr
-from ..errors import LinkError, ParameterError
+from ..core.health import LEVEL_BYTE
+from ..errors import ParameterError
 from ..link import lsm6dso32
 from ..link.clock import DeviceClock
-from ..link.protocol import MAX_SAMPLES_PER_FRAME, Decoder, encode_configure
-from ._ros_common import (ERROR, WARN, ParamSpec, declare_parameter_table, diagnostic_array,
-                          diagnostic_status, diagnostics_publisher, run_node, sensor_data_qos, worst)
+from ..link.health import counters, judge_link, link_items, LinkThresholds, window_between
+from ..link.port import hardware_id_for, validate_port
+from ..link.reader import LinkReader
+from ..link.sequence import SequenceTracker
+from ..link.session import LinkConfig
+
+__all__ = ['LinkConfig', 'Lsm6dso32Driver', 'main', 'NODE_NAME', 'PARAMETERS']
 
 NODE_NAME = 'lsm6dso32_driver'
 
@@ -58,11 +75,16 @@ PARAMETERS = (
     ParamSpec('port', '/dev/ttyACM0',
               'Serial device of the board or a pyserial URL such as socket://127.0.0.1:PORT',
               read_only=True),
-    ParamSpec('baud_rate', 2_000_000,
-              'UART baud rate; ignored by USB CDC ports; a real UART needs about 2 MBd at 6.66 kHz',
-              unit='Bd', read_only=True, min_value=9600, max_value=12_000_000),
+    ParamSpec('baud_rate', 2_000_000, 'UART baud rate; ignored by USB CDC ports; a real UART '
+              'needs about 2 MBd at 6.66 kHz', unit='Bd', read_only=True, min_value=9600,
+              max_value=12_000_000),
     ParamSpec('frame_id', 'imu_link', 'header.frame_id of the published messages',
               pattern=r'[A-Za-z0-9_./-]+'),
+    ParamSpec('hardware_id', '', 'hardware_id of the diagnostics (empty: lsm6dso32/portenta_h7/ '
+              'and the USB serial number of the board, or the frame_id without one)',
+              read_only=True),
+    ParamSpec('autostart', True, 'Walk the lifecycle to active at start (false: a lifecycle '
+              'manager or launch file drives configure and activate)', read_only=True),
     ParamSpec('odr_hz', _DEFAULT_ODR, 'Output data rate requested from the board',
               unit='Hz', read_only=True, choices=tuple(lsm6dso32.ODRS_HZ)),
     ParamSpec('gyro_full_scale_dps', 2000, 'Gyroscope full scale requested from the board',
@@ -85,8 +107,8 @@ PARAMETERS = (
     ParamSpec('temperature_decimation', 128,
               'Publish imu/temperature for samples whose sequence number is a multiple of this',
               unit='samples', min_value=1, max_value=1_000_000),
-    ParamSpec('qos_depth', 5000, 'History depth of imu/data_raw and imu/temperature (sensor-data QoS)',
-              unit='messages', read_only=True, min_value=1, max_value=1_000_000),
+    ParamSpec('qos_depth', 5000, 'History depth of imu/data_raw and imu/temperature (reliable, '
+              'keep last)', unit='messages', read_only=True, min_value=1, max_value=1_000_000),
     ParamSpec('read_period_s', 0.01,
               'Longest wait of one port read; batches samples and bounds the publishing latency',
               unit='s', read_only=True, min_value=0.0005, max_value=0.5),
@@ -98,144 +120,18 @@ PARAMETERS = (
               unit='s', min_value=0.01, max_value=3600.0),
     ParamSpec('diagnostics_period_s', 1.0, 'Period of the link status on /diagnostics',
               unit='s', read_only=True, min_value=0.05, max_value=3600.0),
-    ParamSpec('rate_tolerance_ratio', 0.02,
-              'WARN when the measured sample rate differs from the configured ODR by more than this',
-              min_value=0.0, max_value=1.0),
-    ParamSpec('loss_warn_ratio', 0.0,
-              'WARN when the fraction of samples lost in one diagnostics period exceeds this',
-              min_value=0.0, max_value=1.0),
-    ParamSpec('loss_error_ratio', 0.01,
-              'ERROR when the fraction of samples lost in one diagnostics period exceeds this',
-              min_value=0.0, max_value=1.0),
+    *specs_from_dataclass(LinkThresholds, read_only=False),
 )
 
-_READ_SIZE = 1 << 16
-_UINT32 = 1 << 32
-
-
-def _wrapped_delta(a, b):
-    """Signed distance ``a - b`` of wrapping uint32 counters, in [-2**31, 2**31)."""
-    return ((np.asarray(a, np.int64) - np.asarray(b, np.int64) + (1 << 31)) % _UINT32) - (1 << 31)
-
-
-@dataclass(frozen=True)
-class Accepted:
-    """
-    What :meth:`SequenceTracker.accept` decided for a batch.
-
-    Attributes
-    ----------
-    keep : numpy.ndarray of bool
-        Samples of the accepted prefix to publish (counter ahead of everything published before).
-    stop : int
-        Length of the prefix decided; ``stop < len(batch)`` means a board restart at ``stop``.
-    lost : int
-        Counter gaps between the previous published sample and the kept ones.
-    duplicates : int
-        Samples dropped because their counter was already published.
-    """
-
-    keep: np.ndarray
-    stop: int
-    lost: int
-    duplicates: int
-
-
-class SequenceTracker:
-    """
-    Publish-once filter and loss counter over the board's wrapping uint32 sample counter.
-
-    Parameters
-    ----------
-    restart_window : int
-        A counter that falls back by at least this many samples is a board restart (new epoch),
-        a smaller fall-back is a re-sent duplicate.
-    """
-
-    def __init__(self, restart_window):
-        self.restart_window = int(restart_window)
-        self.last = None
-
-    def reset(self):
-        """Forget the last published counter (new epoch: the next sample is accepted as is)."""
-        self.last = None
-
-    def accept(self, seq):
-        """
-        Decide which samples of a batch to publish.
-
-        Parameters
-        ----------
-        seq : numpy.ndarray of uint32
-            Sample counters in arrival order.
-
-        Returns
-        -------
-        Accepted
-            The decision for ``seq[:stop]``; the caller resets its epoch and calls again with
-            ``seq[stop:]`` when ``stop < len(seq)``.
-        """
-        n = len(seq)
-        if n == 0:
-            return Accepted(np.zeros(0, bool), 0, 0, 0)
-        first, last = int(seq[0]), int(seq[-1])
-        # With no published sample yet the first one is accepted as is (its step counts as 1).
-        step0 = 1 if self.last is None else int(_wrapped_delta(first, self.last))
-        # uint32 differences wrap like the counter, so 1 means "next sample" across 2**32 too.
-        if step0 > 0 and (n == 1 or (last - first) % _UINT32 == n - 1
-                          and np.all(np.diff(np.asarray(seq, np.uint32)) == 1)):
-            # The common case, one call per read: consecutive after a gap of step0 - 1.
-            self.last = last
-            return Accepted(np.ones(n, bool), n, step0 - 1, 0)
-        seq64 = np.asarray(seq, np.int64)
-        steps = _wrapped_delta(seq64[1:], seq64[:-1])
-        if step0 > 0 and np.all(steps > 0):
-            # Strictly increasing with gaps inside the batch.
-            self.last = last
-            return Accepted(np.ones(n, bool), n, step0 - 1 + int(np.sum(steps - 1)), 0)
-        keep = np.zeros(n, bool)
-        lost = duplicates = 0
-        for i in range(n):
-            s = int(seq64[i])
-            if self.last is None:
-                keep[i] = True
-                self.last = s
-                continue
-            d = int(_wrapped_delta(s, self.last))
-            if d > 0:
-                keep[i] = True
-                lost += d - 1
-                self.last = s
-            elif d > -self.restart_window:
-                duplicates += 1
-            else:
-                return Accepted(keep[:i], i, lost, duplicates)
-        return Accepted(keep, n, lost, duplicates)
-
-
-@dataclass(frozen=True)
-class LinkConfig:
-    """Configuration the board acknowledged: rate in Hz, full scales in deg/s and g."""
-
-    odr_hz: float
-    gyro_fs_dps: int
-    accel_fs_g: int
-
-
-def _frame_interval_s(config):
-    """Longest normal silence of a link: three full frames (the firmware may batch up to 128)."""
-    return 3.0 * MAX_SAMPLES_PER_FRAME / config.odr_hz
-
-
-def _stats_dict(stats):
-    return {f.name: getattr(stats, f.name) for f in fields(stats)}
+_THRESHOLD_NAMES = tuple(f.name for f in fields(LinkThresholds))
+_OK = TransitionCallbackReturn.SUCCESS
 
 
 def _diag_cov(variance):
     return np.diag([variance] * 3).reshape(9)
 
 
-class Lsm6dso32Driver(Node):
+class Lsm6dso32Driver(LifecycleNode):
     """
     The ``lsm6dso32_driver`` node (see the module docstring).
 
@@ -244,65 +140,44 @@ class Lsm6dso32Driver(Node):
     node_name : str
         Node name (default :data:`NODE_NAME`).
     **kwargs
-        Passed to ``rclpy.node.Node`` (e.g. ``parameter_overrides``, ``context``).
+        Passed to ``rclpy.lifecycle.LifecycleNode`` (``parameter_overrides``, ``context``).
 
     Raises
     ------
     ParameterError
-        A parameter override is of the wrong type, out of range, or the port is not a usable name.
+        A parameter override is of the wrong type, out of range, or the port is not usable.
+
     """
 
     def __init__(self, node_name=NODE_NAME, **kwargs):
         super().__init__(node_name, **kwargs)
         p = declare_parameter_table(self, PARAMETERS, on_change=self._on_parameters_changed)
         self._params = p
-        port = p['port'].strip()
-        if not port:
-            raise ParameterError("parameter 'port' is empty: give a device path or a pyserial URL")
-        try:
-            serial.serial_for_url(port, do_not_open=True)
-        except (ValueError, serial.SerialException) as err:
-            raise ParameterError(f"parameter 'port' = {port!r} is not usable: {err}") from err
-        if p['loss_warn_ratio'] > p['loss_error_ratio']:
-            raise ParameterError(f"parameter 'loss_warn_ratio' = {p['loss_warn_ratio']} exceeds "
-                                 f"'loss_error_ratio' = {p['loss_error_ratio']}")
-        self._port = port
-        self._hardware_id = f'lsm6dso32@{port}'
+        self._port = validate_port(p['port'])
+        self._thresholds = LinkThresholds(**{k: p[k] for k in _THRESHOLD_NAMES})
+        self._hardware_id = p['hardware_id'] or hardware_id_for(self._port, p['frame_id'])
         self._status_name = f'{self.get_name()}: link'
         self._message_fields = self._make_message_fields(p)
-
-        qos = sensor_data_qos(p['qos_depth'])
+        qos = driver_qos(p['qos_depth'])
         self._imu_pub = self.create_publisher(Imu, 'imu/data_raw', qos)
         self._temp_pub = self.create_publisher(Temperature, 'imu/temperature', qos)
         self._diag_pub = diagnostics_publisher(self)
-
         self._device_clock = DeviceClock(nominal_rate_hz=float(p['odr_hz']))
         self._tracker = SequenceTracker(restart_window=max(1, int(round(p['odr_hz']))))
-
-        # Everything below is written by the reader thread and read by the diagnostics timer.
+        self._reader = LinkReader(self._port, lambda: self._params, self._handle,
+                                  now_ns=lambda: self.get_clock().now().nanoseconds,
+                                  on_error=self._link_failed, on_streaming=self._link_up)
+        # Written by the reader thread and the lifecycle callbacks, read by the diagnostics timer.
         self._lock = threading.Lock()
-        self._state = 'connecting'
-        self._last_error = 'none'
-        self._last_logged_error = None
-        self._config = None
-        self._link_stats = {}
-        self._published = 0
-        self._temperatures = 0
-        self._lost = 0
-        self._duplicates = 0
-        self._restarts = 0
-        self._connections = 0
-        self._streaming_since = None
-        self._last_sample_monotonic = None
-        self._diag_prev = {'time': time.monotonic(), 'published': 0, 'lost': 0, 'crc': 0, 'restarts': 0,
-                           'overruns': 0, 'frames': 0, 'samples_ok': 0}
-
-        self._stop = threading.Event()
-        self._reader = threading.Thread(target=self._reader_loop, name='lsm6dso32_reader', daemon=True)
-        self._reader.start()
-        self._diag_timer = self.create_timer(p['diagnostics_period_s'], self._publish_diagnostics)
-
-    # ------------------------------------------------------------------ parameters
+        self._lifecycle = 'unconfigured'
+        self._activated_at = time.monotonic()
+        self._counts = dict.fromkeys(('published', 'temperatures', 'lost', 'duplicates',
+                                      'restarts', 'discarded'), 0)
+        self._diag_prev = (time.monotonic(), counters(self.link_snapshot()))
+        wall_timer(self, p['diagnostics_period_s'], self._publish_diagnostics)
+        if p['autostart']:
+            self.trigger_configure()
+            self.trigger_activate()
 
     def _make_message_fields(self, p):
         return {
@@ -317,131 +192,81 @@ class Lsm6dso32Driver(Node):
         self._params = {**self._params, **changed}
         # One attribute swap: the reader thread sees either the old or the new set, never a mix.
         self._message_fields = self._make_message_fields(self._params)
+        try:
+            self._thresholds = LinkThresholds(**{k: self._params[k] for k in _THRESHOLD_NAMES})
+        except ParameterError as err:
+            self.get_logger().error(f'link thresholds unchanged: {err}')
 
-    # ------------------------------------------------------------------ reader thread
+    # ------------------------------------------------------------------ lifecycle
 
-    def _reader_loop(self):
-        # One decoder for the node's life: reset_stream() at each connection drops a partial frame
-        # but keeps the counters, so diagnostics add up over unplugs.
-        decoder = Decoder()
-        while not self._stop.is_set():
-            self._set_state('connecting')
-            try:
-                ser = serial.serial_for_url(self._port, baudrate=self._params['baud_rate'],
-                                            timeout=self._params['read_period_s'],
-                                            write_timeout=self._params['ack_timeout_s'])
-            except (serial.SerialException, OSError, ValueError) as err:
-                self._link_failed(f'cannot open {self._port}: {err}')
-                self._stop.wait(self._params['reconnect_period_s'])
-                continue
-            decoder.reset_stream()
-            try:
-                self._run_session(ser, decoder)
-            except (serial.SerialException, OSError, LinkError) as err:
-                self._link_failed(str(err) or type(err).__name__)
-            except Exception as err:  # noqa: BLE001 - the reader must outlive any single failure
-                if self._stop.is_set() or not self.context.ok():
-                    break
-                self.get_logger().error(f'reader thread: {err!r}')
-                self._link_failed(f'internal error: {err!r}')
-            finally:
-                try:
-                    ser.close()
-                except Exception:  # noqa: BLE001 - closing a vanished port may fail; it is gone anyway
-                    pass
-                with self._lock:
-                    self._link_stats = _stats_dict(decoder.stats)
-            if not self._stop.is_set():
-                self._stop.wait(self._params['reconnect_period_s'])
-        self._set_state('stopped')
+    def on_configure(self, state):
+        """Start the link: open the port and configure the board (retried until it works)."""
+        self._set_lifecycle('inactive')
+        self._reader.start()
+        return _OK
 
-    def _run_session(self, ser, decoder):
-        """Configure the board on an open port, then publish until the link fails or the node stops."""
-        self._set_state('configuring')
+    def on_activate(self, state):
+        """Publish the samples from now on."""
+        self._set_lifecycle('active')
+        return _OK
+
+    def on_deactivate(self, state):
+        """Stop publishing; the link stays up and its samples are counted and dropped."""
+        self._set_lifecycle('inactive')
+        return _OK
+
+    def on_cleanup(self, state):
+        """Stop the reader thread, which closes the port."""
+        self._reader.stop()
+        self._set_lifecycle('unconfigured')
+        return _OK
+
+    def on_shutdown(self, state):
+        """Close the port, from any state."""
+        return self.on_cleanup(state)
+
+    def on_error(self, state):
+        """Close the port after a failed transition."""
+        return self.on_cleanup(state)
+
+    def _set_lifecycle(self, name):
         with self._lock:
-            self._connections += 1
-            command_id = self._connections
-        p = self._params
-        ser.write(encode_configure(command_id=command_id, odr_hz=p['odr_hz'],
-                                   gyro_fs_dps=p['gyro_full_scale_dps'],
-                                   accel_fs_g=p['accel_full_scale_g']))
-        deadline = time.monotonic() + p['ack_timeout_s']
-        ack = None
-        while ack is None:
-            if self._stop.is_set():
-                return
-            if time.monotonic() > deadline:
-                raise LinkError(f'no acknowledgement of the configuration within {p["ack_timeout_s"]} s')
-            data = ser.read(_READ_SIZE)
-            if not data:
-                continue
-            host_ns = self.get_clock().now().nanoseconds
-            result = decoder.feed(data)
-            for ack_index, candidate in enumerate(result.acks):
-                if candidate.command_id == command_id:
-                    ack = candidate
-                    # Samples before the acknowledgement may carry the previous configuration's
-                    # scaling: they are dropped, and the counter gap counts them as lost.
-                    after = result.samples[result.ack_positions[ack_index]:]
-                    break
-        if not ack.ok:
-            raise LinkError(f'the board refused odr {p["odr_hz"]} Hz, gyro {p["gyro_full_scale_dps"]} '
-                            f'dps, accel {p["accel_full_scale_g"]} g: {ack.message}')
-        config = LinkConfig(float(ack.odr_hz), int(ack.gyro_fs_dps), int(ack.accel_fs_g))
-        now = time.monotonic()
-        with self._lock:
-            self._config = config
-            self._last_logged_error = None
-            self._streaming_since = now
-            self._last_sample_monotonic = now
-            self._state = 'streaming'
+            self._lifecycle = name
+            if name == 'active':
+                self._activated_at = time.monotonic()
+
+    # ------------------------------------------------------------------ reader callbacks
+
+    def _link_up(self, config):
         self.get_logger().info(f'streaming from {self._port}: {config.odr_hz:g} Hz, '
                                f'+/-{config.gyro_fs_dps} dps, +/-{config.accel_fs_g} g')
-        if len(after):
-            self.publish_samples(after, host_ns, config)
-        last_data = now
-        silence_s = max(p['data_timeout_s'], _frame_interval_s(config))
-        while not self._stop.is_set():
-            data = ser.read(_READ_SIZE)
-            now = time.monotonic()
-            if not data:
-                if now - last_data > silence_s:
-                    raise LinkError(f'no data for {silence_s:g} s')
-                continue
-            last_data = now
-            host_ns = self.get_clock().now().nanoseconds
-            result = decoder.feed(data)
-            if len(result.samples):
-                self.publish_samples(result.samples, host_ns, config)
-            with self._lock:
-                self._link_stats = _stats_dict(decoder.stats)
-                if len(result.samples):
-                    self._last_sample_monotonic = now
 
-    def _set_state(self, state):
-        with self._lock:
-            self._state = state
-            if state != 'streaming':
-                self._streaming_since = None
-
-    def _link_failed(self, reason):
-        with self._lock:
-            first = self._last_logged_error != reason
-            self._last_logged_error = reason
-            self._last_error = reason
-            self._state = 'disconnected'
-            self._streaming_since = None
+    def _link_failed(self, reason, first):
         if first:
             self.get_logger().error(f'link to {self._port}: {reason}; retrying every '
                                     f'{self._params["reconnect_period_s"]} s')
+
+    def _handle(self, samples, host_ns, config):
+        if self._lifecycle == 'active':
+            self.publish_samples(samples, host_ns, config)
+            return
+        # Inactive: the counter advances so that activation does not count a gap as loss.
+        while len(samples):
+            decision = self._tracker.accept(samples['seq'])
+            with self._lock:
+                self._counts['discarded'] += int(np.count_nonzero(decision.keep))
+            samples = samples[decision.stop:]
+            if len(samples):
+                self._tracker.reset()
 
     # ------------------------------------------------------------------ publishing
 
     def publish_samples(self, samples, host_receive_ns, config):
         """
-        Publish decoded samples: drop already published counters, stamp, scale, serialise, publish.
+        Publish decoded samples: drop already published counters, stamp, scale, serialise.
 
-        Called by the reader thread for every decoded batch; tests call it with known samples.
+        Called by the reader thread for every decoded batch while active; tests call it with
+        known samples.
 
         Parameters
         ----------
@@ -456,6 +281,7 @@ class Lsm6dso32Driver(Node):
         -------
         int
             Number of ``imu/data_raw`` messages published.
+
         """
         published = 0
         while len(samples):
@@ -463,15 +289,15 @@ class Lsm6dso32Driver(Node):
             part = samples[:decision.stop][decision.keep]
             published += self._publish_part(part, host_receive_ns, config)
             with self._lock:
-                self._lost += decision.lost
-                self._duplicates += decision.duplicates
+                self._counts['lost'] += decision.lost
+                self._counts['duplicates'] += decision.duplicates
             samples = samples[decision.stop:]
             if len(samples):
                 # The counter fell back by more than the restart window: a new board epoch.
                 self._tracker.reset()
                 self._device_clock.reset()
                 with self._lock:
-                    self._restarts += 1
+                    self._counts['restarts'] += 1
                 self.get_logger().warning(f'sample counter restarted at {int(samples["seq"][0])}')
         return published
 
@@ -496,32 +322,29 @@ class Lsm6dso32Driver(Node):
                                                frame_id=f['frame_id'], variance=f['temp_var']):
                 publish(blob)
         with self._lock:
-            self._published += n
-            self._temperatures += n_temp
+            self._counts['published'] += n
+            self._counts['temperatures'] += n_temp
         return n
 
     # ------------------------------------------------------------------ diagnostics
 
     def link_snapshot(self):
         """
-        Copy of the link counters (for diagnostics and tests).
+        Copy the link's state and counters (for diagnostics and tests).
 
         Returns
         -------
         dict
-            ``state``, ``last_error``, ``config``, ``published``, ``temperatures``, ``lost``,
-            ``duplicates``, ``restarts``, ``connections``, ``streaming_since``,
-            ``last_sample_monotonic`` and the decoder's counters summed over all connections.
+            :meth:`LinkReader.snapshot` (``state``, ``last_error``, ``config``, ``connections``,
+            ``streaming_since``, ``last_sample_monotonic``, ``link``), ``lifecycle`` and the
+            node's counters ``published``, ``temperatures``, ``lost``, ``duplicates``,
+            ``restarts``, ``discarded``.
+
         """
+        link = self._reader.snapshot()
         with self._lock:
-            link = dict(self._link_stats)
-            return {
-                'state': self._state, 'last_error': self._last_error, 'config': self._config,
-                'published': self._published, 'temperatures': self._temperatures,
-                'lost': self._lost, 'duplicates': self._duplicates, 'restarts': self._restarts,
-                'connections': self._connections, 'streaming_since': self._streaming_since,
-                'last_sample_monotonic': self._last_sample_monotonic, 'link': link,
-            }
+            return {**link, 'lifecycle': self._lifecycle, **self._counts,
+                    'activated_at': self._activated_at}
 
     def _publish_diagnostics(self):
         self._diag_pub.publish(diagnostic_array(self.get_clock().now().to_msg(),
@@ -531,119 +354,51 @@ class Lsm6dso32Driver(Node):
         """
         Build the ``'<node>: link'`` status from the counters since the previous call.
 
-        Levels (explicit thresholds from the parameters):
-
-        - ERROR: the port is not streaming (the message names the last error); no sample for a
-          diagnostics period (and at least three full frames); lost fraction in the period above
-          ``loss_error_ratio``.
-        - WARN: lost fraction above ``loss_warn_ratio``; CRC errors or sensor FIFO overruns in the
-          period; samples produced (published + lost) off the acknowledged ODR by more than
-          ``rate_tolerance_ratio`` plus two frames; a board counter restart.
+        The level is :func:`gyro_noise_ros.link.health.judge_link` of the window with the
+        thresholds of the parameters; the keys are listed in ``docs/diagnostics.md``.
 
         Returns
         -------
         diagnostic_msgs.msg.DiagnosticStatus
+
         """
         s = self.link_snapshot()
         now = time.monotonic()
-        p = self._params
-        link = s['link']
-        prev = self._diag_prev
-        self._diag_prev = {'time': now, 'published': s['published'], 'lost': s['lost'],
-                           'crc': link.get('crc_errors', 0), 'restarts': s['restarts'],
-                           'overruns': link.get('fifo_overruns', 0), 'frames': link.get('frames_ok', 0),
-                           'samples_ok': link.get('samples_ok', 0)}
-        since = prev['time'] if s['streaming_since'] is None else max(prev['time'], s['streaming_since'])
-        window = now - since
-        d_pub = s['published'] - prev['published']
-        d_lost = s['lost'] - prev['lost']
-        d_crc = link.get('crc_errors', 0) - prev['crc']
-        rate = d_pub / window if window > 0 else float('nan')
-        config = s['config']
-
-        checks = []
-        if s['state'] == 'disconnected':
-            checks.append((ERROR, f'Link down: {s["last_error"]}.'))
-        elif s['state'] != 'streaming':
-            checks.append((ERROR, f'Link {s["state"]}, not streaming yet (last error: {s["last_error"]}).'))
-        else:
-            silent = now - (s['last_sample_monotonic'] or now)
-            if config is not None and silent >= max(p['diagnostics_period_s'], _frame_interval_s(config)):
-                checks.append((ERROR, f'No samples for {silent:.1f} s.'))
-            if d_pub + d_lost > 0:
-                ratio = d_lost / (d_pub + d_lost)
-                text = f'{d_lost} samples lost in the last {window:.1f} s ({100 * ratio:.3g} %).'
-                if ratio > p['loss_error_ratio']:
-                    checks.append((ERROR, text))
-                elif ratio > p['loss_warn_ratio']:
-                    checks.append((WARN, text))
-            if d_crc > 0:
-                checks.append((WARN, f'{d_crc} CRC errors in the last {window:.1f} s.'))
-            d_overruns = link.get('fifo_overruns', 0) - prev['overruns']
-            if d_overruns > 0:
-                # Samples the sensor dropped before the board read them: not in the counter.
-                checks.append((WARN, f'The sensor FIFO overran {d_overruns} times in the last '
-                                     f'{window:.1f} s.'))
-            # The rate check counts lost samples as produced (losses have their own check) and
-            # allows two frames of slack: a window's count is quantised by whole frames.
-            d_frames = link.get('frames_ok', 0) - prev['frames']
-            per_frame = (link.get('samples_ok', 0) - prev['samples_ok']) / d_frames if d_frames else 1.0
-            expected = config.odr_hz * window if config is not None else 0.0
-            if (expected > 0 and abs(d_pub + d_lost - expected)
-                    > p['rate_tolerance_ratio'] * expected + 2.0 * per_frame):
-                checks.append((WARN, f'Sample rate {(d_pub + d_lost) / window:.1f} Hz differs from the '
-                                     f'configured {config.odr_hz:g} Hz.'))
-            if s['restarts'] > prev['restarts']:
-                checks.append((WARN, 'The board restarted its sample counter.'))
-        ok_message = (f'Streaming at {rate:.0f} Hz, no loss.' if s['state'] == 'streaming'
-                      else 'Link idle.')
-        level, message = worst(checks, ok_message)
-
-        def fmt(x, spec='g'):
-            return '-' if x is None else format(x, spec)
-
-        values = [
-            ('Connection', s['state']),
-            ('Port', self._port),
-            ('Configured rate (Hz)', fmt(config and config.odr_hz)),
-            ('Gyro full scale (deg/s)', fmt(config and config.gyro_fs_dps)),
-            ('Accel full scale (g)', fmt(config and config.accel_fs_g)),
-            ('Sample rate (Hz)', f'{rate:.1f}' if s['state'] == 'streaming' else '0.0'),
-            ('Samples published', s['published']),
-            ('Samples lost', s['lost']),
-            ('Samples flagged lost by the board', link.get('samples_flagged_lost', 0)),
-            ('Duplicates dropped', s['duplicates']),
-            ('CRC errors', link.get('crc_errors', 0)),
-            ('Resyncs', link.get('resyncs', 0)),
-            ('Bytes discarded', link.get('bytes_discarded', 0)),
-            ('Frames ok', link.get('frames_ok', 0)),
-            ('Sensor FIFO overruns', link.get('fifo_overruns', 0)),
-            ('Clock drift (ppm)', f'{self._device_clock.state.drift_ppm:.1f}'),
-            ('Connections', s['connections']),
-            ('Counter restarts', s['restarts']),
-            ('Temperature messages', s['temperatures']),
-            ('Last error', s['last_error']),
-        ]
-        return diagnostic_status(self._status_name, self._hardware_id, level, message, values)
-
-    # ------------------------------------------------------------------ shutdown
+        (prev_time, prev), self._diag_prev = self._diag_prev, (now, counters(s))
+        if s['lifecycle'] == 'unconfigured':
+            s['state'] = 'unconfigured'
+        elif s['lifecycle'] == 'inactive' and s['state'] == 'streaming':
+            s['state'] = 'inactive'
+        since = max(prev_time, s['streaming_since'] or prev_time, s['activated_at'])
+        window = window_between(prev, s, now=now, since=since,
+                                period_s=self._params['diagnostics_period_s'])
+        verdict = judge_link(window, self._thresholds)
+        values = link_items(s, window, port=self._port,
+                            drift_ppm=self._device_clock.state.drift_ppm)
+        return diagnostic_status(self._status_name, self._hardware_id,
+                                 bytes([LEVEL_BYTE[verdict.level]]), verdict.message, values)
 
     def destroy_node(self):
         """Stop and join the reader thread (it closes the port), then destroy the node."""
-        self._stop.set()
-        if self._reader.is_alive():
-            self._reader.join(timeout=5.0)
+        self._reader.stop()
         return super().destroy_node()
 
 
 def main(args=None):
     """
-    Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p`` / ``--params-file``.
+    Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p``/``--params-file``.
+
+    Parameters
+    ----------
+    args : list of str or None
+        Command line (None: ``sys.argv``).
 
     Returns
     -------
     int
-        0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter.
+        0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter or an
+        unknown ROS argument.
+
     """
     return run_node(Lsm6dso32Driver, args, prog=NODE_NAME)
 

@@ -20,19 +20,20 @@ one summary line is printed. With sqlite3 storage the bag is also committed ever
 ``flush_period_s``, so even a killed recorder (SIGKILL, power loss) leaves a readable ``.db3``.
 """
 
-import sys
 from datetime import datetime, timezone
 from pathlib import Path
+import sys
 
 import numpy as np
 from rclpy.node import Node
 from sensor_msgs.msg import Imu, Temperature
 
-from ..bag import ImuBagWriter, decode_imu, decode_temperature
-from ..bag.codec import frame_id_of
+from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_node,
+                          sensor_data_qos, take_all, unused_callback, wall_timer)
+from ..bag import decode_imu, decode_temperature, ImuBagWriter
+from ..bag.codec import frame_id_of, imu_covariances, temperature_variances
 from ..errors import BagError
-from ._ros_common import (ParamSpec, PolledGroup, SequenceGapCounter, declare_parameter_table, run_node,
-                          sensor_data_qos, take_all, unused_callback)
+from ..link.sequence import SequenceGapCounter
 
 NODE_NAME = 'gyro_noise_record'
 
@@ -45,54 +46,17 @@ PARAMETERS = (
     ParamSpec('record_temperature', True, 'Also record imu/temperature', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1000000),
-    ParamSpec('drain_period_s', 0.01, 'Period of the loop that takes queued messages and writes them',
+    ParamSpec('drain_period_s', 0.01,
+              'Period of the loop that takes queued messages and writes them',
               unit='s', read_only=True, min_value=0.001, max_value=0.5),
-    ParamSpec('flush_period_s', 2.0, 'Period of the sqlite3 commit that lets a killed recorder leave '
+    ParamSpec('flush_period_s', 2.0,
+              'Period of the sqlite3 commit that lets a killed recorder leave '
               'a readable .db3 (0: only at close)', unit='s', read_only=True, min_value=0.0,
               max_value=3600.0),
-    ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)', unit='s',
+    ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)',
+              unit='s',
               read_only=True, min_value=0.0, max_value=3600.0),
 )
-
-# Imu CDR: the covariances are float64 16..24 and 28..36 of the 37-float tail that ends the message
-# (see gyro_noise_ros/bag/codec.py for the layout).
-_IMU_TAIL_BYTES = 37 * 8
-
-
-def imu_covariances(raws):
-    """
-    Return the angular-velocity and linear-acceleration covariances of raw CDR Imu messages.
-
-    Parameters
-    ----------
-    raws : list of bytes
-        Serialised ``sensor_msgs/Imu`` (ROS 2 CDR, either endianness).
-
-    Returns
-    -------
-    angular_velocity_covariance, linear_acceleration_covariance : numpy.ndarray, shape (n, 9)
-        Row-major, in (rad/s)^2 and (m/s^2)^2.
-    """
-    n = len(raws)
-    tails = np.empty((n, 37))
-    lengths = {len(r) for r in raws}
-    if len(lengths) == 1 and all(r[1] == 1 for r in raws):
-        size = lengths.pop()
-        rows = np.frombuffer(b''.join(raws), np.uint8).reshape(n, size)
-        tails[:] = np.ascontiguousarray(rows[:, size - _IMU_TAIL_BYTES:]).view('<f8')
-    else:
-        for i, raw in enumerate(raws):
-            tails[i] = np.frombuffer(raw[-_IMU_TAIL_BYTES:], '<f8' if raw[1] == 1 else '>f8')
-    return tails[:, 16:25], tails[:, 28:37]
-
-
-def temperature_variances(raws):
-    """
-    Return the ``variance`` field (degC^2) of raw CDR ``sensor_msgs/Temperature`` messages.
-
-    It is the last float64 of the message (``temperature``, ``variance`` follow the header).
-    """
-    return np.array([np.frombuffer(raw[-8:], '<f8' if raw[1] == 1 else '>f8')[0] for raw in raws])
 
 
 def default_bag_name(now=None):
@@ -116,6 +80,7 @@ class RecorderNode(Node):
         A parameter is invalid.
     BagError
         The bag cannot be created (for example the output path exists).
+
     """
 
     def __init__(self, **kwargs):
@@ -136,17 +101,19 @@ class RecorderNode(Node):
                            'choose a new bag directory')
         group = PolledGroup()
         qos = sensor_data_qos(params['queue_depth'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos, raw=True,
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                 raw=True,
                                                  callback_group=group)
         self._temperature_sub = None
         if params['record_temperature']:
             self._temperature_sub = self.create_subscription(
-                Temperature, 'imu/temperature', unused_callback, qos, raw=True, callback_group=group)
-        self.create_timer(params['drain_period_s'], self.drain)
+                Temperature, 'imu/temperature', unused_callback, qos, raw=True,
+                callback_group=group)
+        wall_timer(self, params['drain_period_s'], self.drain)
         if params['flush_period_s'] > 0:
-            self.create_timer(params['flush_period_s'], self._flush)
+            wall_timer(self, params['flush_period_s'], self._flush)
         if params['report_period_s'] > 0:
-            self.create_timer(params['report_period_s'], self._report)
+            wall_timer(self, params['report_period_s'], self._report)
         self.get_logger().info(f'recording {self._imu_sub.topic_name}'
                                + (f' and {self._temperature_sub.topic_name}'
                                   if self._temperature_sub else '')
@@ -154,13 +121,14 @@ class RecorderNode(Node):
 
     @property
     def dropped(self):
-        """Messages the transport dropped before this node (gaps in publication sequence numbers)."""
+        """int: Messages the transport dropped before this node (publication sequence gaps)."""
         return self._imu_gaps.missing + self._temperature_gaps.missing
 
     def _open(self, frame_id):
         self._writer = ImuBagWriter(
             self.output, storage=self.storage, imu_topic=self._imu_sub.topic_name,
-            temperature_topic=(self._temperature_sub.topic_name if self._temperature_sub else None),
+            temperature_topic=(self._temperature_sub.topic_name if self._temperature_sub
+                               else None),
             frame_id=frame_id or 'imu_link')
 
     def drain(self):
@@ -186,7 +154,8 @@ class RecorderNode(Node):
             self.received_temperature += len(t_raws)
             self._temperature_gaps.update(t_sequence)
             stamp_ns, temperature_c = decode_temperature(t_raws)
-            self._writer.write_temperature(stamp_ns, temperature_c, variance=temperature_variances(t_raws),
+            self._writer.write_temperature(stamp_ns, temperature_c,
+                                           variance=temperature_variances(t_raws),
                                            log_ns=_log_times(t_received, stamp_ns))
             self.written_temperature += len(t_raws)
 
@@ -207,9 +176,11 @@ class RecorderNode(Node):
                 self._closed = True
                 if self._writer is not None:
                     self._writer.close()
-        where = self.output if self._writer is not None else f'{self.output} (not created: nothing received)'
+        where = (self.output if self._writer is not None
+                 else f'{self.output} (not created: nothing received)')
         return (f'{NODE_NAME}: received {self.received_imu} Imu and {self.received_temperature} '
-                f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} to '
+                f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} '
+                f'to '
                 f'{where}; {self.dropped} dropped in transport')
 
     def destroy_node(self):
@@ -241,6 +212,7 @@ def main(args=None):
     -------
     int
         0, or 2 for a bad parameter, 3 when the bag cannot be created.
+
     """
     return run_node(RecorderNode, args, prog=NODE_NAME)
 

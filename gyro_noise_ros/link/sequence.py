@@ -1,0 +1,186 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Sample and message counters: the board's wrapping uint32 sample counter and DDS sequence numbers.
+
+Pure numpy, no ROS. :class:`SequenceTracker` is the driver's publish-once filter and loss counter;
+:class:`SequenceGapCounter` counts messages missing from a stream of DDS publication sequence
+numbers (analyzer, recorder).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_UINT32 = 1 << 32
+
+
+def wrapped_delta(a, b):
+    """
+    Return the signed distance ``a - b`` of wrapping uint32 counters.
+
+    Parameters
+    ----------
+    a, b : int or array_like of int
+        Counter values in [0, 2**32).
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        ``a - b`` modulo 2**32, mapped into [-2**31, 2**31).
+
+    """
+    return ((np.asarray(a, np.int64) - np.asarray(b, np.int64) + (1 << 31)) % _UINT32) - (1 << 31)
+
+
+@dataclass(frozen=True)
+class Accepted:
+    """
+    What :meth:`SequenceTracker.accept` decided for a batch.
+
+    Attributes
+    ----------
+    keep : numpy.ndarray of bool
+        Samples of the accepted prefix to publish (counter ahead of everything published before).
+    stop : int
+        Length of the prefix decided; ``stop < len(batch)`` means a board restart at ``stop``.
+    lost : int
+        Counter gaps between the previous published sample and the kept ones.
+    duplicates : int
+        Samples dropped because their counter was already published.
+
+    """
+
+    keep: np.ndarray
+    stop: int
+    lost: int
+    duplicates: int
+
+
+class SequenceTracker:
+    """
+    Publish-once filter and loss counter over the board's wrapping uint32 sample counter.
+
+    Parameters
+    ----------
+    restart_window : int
+        A counter that falls back by at least this many samples is a board restart (new epoch),
+        a smaller fall-back (including a repeat of the last counter) is a re-sent duplicate.
+
+    """
+
+    def __init__(self, restart_window):
+        self.restart_window = int(restart_window)
+        self.last = None
+
+    def reset(self):
+        """Forget the last published counter (new epoch: the next sample is accepted as is)."""
+        self.last = None
+
+    def accept(self, seq):
+        """
+        Decide which samples of a batch to publish.
+
+        Parameters
+        ----------
+        seq : numpy.ndarray of uint32
+            Sample counters in arrival order.
+
+        Returns
+        -------
+        Accepted
+            The decision for ``seq[:stop]``; the caller resets its epoch and calls again with
+            ``seq[stop:]`` when ``stop < len(seq)``.
+
+        """
+        n = len(seq)
+        if n == 0:
+            return Accepted(np.zeros(0, bool), 0, 0, 0)
+        first, last = int(seq[0]), int(seq[-1])
+        # With no published sample yet the first one is accepted as is (its step counts as 1).
+        step0 = 1 if self.last is None else int(wrapped_delta(first, self.last))
+        # uint32 differences wrap like the counter, so 1 means "next sample" across 2**32 too.
+        # A one-sample batch takes this path only when it is ahead (step0 > 0); a repeat of the
+        # last counter (step0 == 0) falls through and is counted as a duplicate below.
+        if step0 > 0 and (n == 1 or (last - first) % _UINT32 == n - 1
+                          and np.all(np.diff(np.asarray(seq, np.uint32)) == 1)):
+            # The common case, one call per read: consecutive after a gap of step0 - 1.
+            self.last = last
+            return Accepted(np.ones(n, bool), n, step0 - 1, 0)
+        seq64 = np.asarray(seq, np.int64)
+        steps = wrapped_delta(seq64[1:], seq64[:-1])
+        if step0 > 0 and np.all(steps > 0):
+            # Strictly increasing with gaps inside the batch.
+            self.last = last
+            return Accepted(np.ones(n, bool), n, step0 - 1 + int(np.sum(steps - 1)), 0)
+        keep = np.zeros(n, bool)
+        lost = duplicates = 0
+        for i in range(n):
+            s = int(seq64[i])
+            if self.last is None:
+                keep[i] = True
+                self.last = s
+                continue
+            d = int(wrapped_delta(s, self.last))
+            if d > 0:
+                keep[i] = True
+                lost += d - 1
+                self.last = s
+            elif d > -self.restart_window:
+                duplicates += 1
+            else:
+                return Accepted(keep[:i], i, lost, duplicates)
+        return Accepted(keep, n, lost, duplicates)
+
+
+class SequenceGapCounter:
+    """
+    Count messages missing from a stream of DDS publication sequence numbers.
+
+    A sequence number that does not increase starts a new run (a restarted publisher); a
+    sequence number of 0 means the middleware gave none and is ignored. The count assumes one
+    publisher per topic (``MessageInfo`` does not name the writer): with several, their numbers
+    interleave and the count is meaningless (the stamps-based ``Samples lost`` stays right).
+    """
+
+    def __init__(self):
+        self.last = None
+        self.missing = 0
+
+    def update(self, sequence):
+        """
+        Add the sequence numbers of one batch and return the new misses.
+
+        Parameters
+        ----------
+        sequence : array_like of int
+            Publication sequence numbers in arrival order (0: none given).
+
+        Returns
+        -------
+        int
+            Messages missing between the previous batch and the end of this one.
+
+        """
+        seq = np.asarray(sequence, dtype=np.int64)
+        seq = seq[seq > 0]
+        if seq.size == 0:
+            return 0
+        if self.last is not None:
+            seq = np.concatenate(([self.last], seq))
+        step = np.diff(seq)
+        new = int(step[step > 1].sum() - np.count_nonzero(step > 1))
+        self.last = int(seq[-1])
+        self.missing += new
+        return new

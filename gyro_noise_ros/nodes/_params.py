@@ -1,0 +1,250 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Parameter tables of the nodes: one declaration per parameter, checked at start and at runtime.
+
+Only node modules import this file (it imports rclpy). Every node module defines ``NODE_NAME``
+and ``PARAMETERS`` (a tuple of :class:`ParamSpec`) and declares it with
+:func:`declare_parameter_table`; ``config/<NODE_NAME>.yaml`` lists every entry with its default
+and, in the trailing comment, ``[unit]`` (``test/test_node_params.py`` checks it). Limits that live
+in a pure dataclass give their rows through :func:`specs_from_dataclass`, so the description and
+unit are written once.
+"""
+
+from dataclasses import dataclass, fields, MISSING
+import math
+import re
+
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                ParameterType, SetParametersResult)
+from rclpy.exceptions import ParameterException
+
+from ..errors import ParameterError
+
+_PYTHON_TO_ROS_TYPE = {
+    bool: ParameterType.PARAMETER_BOOL,
+    int: ParameterType.PARAMETER_INTEGER,
+    float: ParameterType.PARAMETER_DOUBLE,
+    str: ParameterType.PARAMETER_STRING,
+}
+
+_ROS_TYPE_NAME = {
+    ParameterType.PARAMETER_BOOL: 'a boolean (true/false)',
+    ParameterType.PARAMETER_INTEGER: 'an integer',
+    ParameterType.PARAMETER_DOUBLE: 'a floating-point number (write 1.0, not 1)',
+    ParameterType.PARAMETER_STRING: 'a string',
+}
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """
+    One row of a node's parameter table.
+
+    Parameters
+    ----------
+    name : str
+        snake_case name with a unit suffix where the unit is not SI-obvious (``odr_hz``).
+    default : bool, int, float or str
+        Default value; its Python type is the ROS parameter type (1.0 is a double, 1 an integer).
+    description : str
+        One sentence for ``ros2 param describe``.
+    unit : str
+        Unit of the value, written in the YAML comment as ``[unit]``; ``''`` when dimensionless.
+    read_only : bool
+        True where a change at runtime would not take effect (port, rates, full scales).
+    min_value, max_value : int or float or None
+        Inclusive range, put into the descriptor so rclpy enforces it at start and at runtime;
+        give both or neither.
+    choices : tuple
+        Allowed values when the set is discrete (the descriptor cannot say so; checked by
+        :func:`declare_parameter_table` and the set-parameters callback it installs).
+    pattern : str
+        Regular expression a string value must match in full (e.g. a frame id); ``''``: any.
+
+    """
+
+    name: str
+    default: object
+    description: str
+    unit: str = ''
+    read_only: bool = False
+    min_value: object = None
+    max_value: object = None
+    choices: tuple = ()
+    pattern: str = ''
+
+    @property
+    def ros_type(self):
+        """Return the ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
+        return _PYTHON_TO_ROS_TYPE[type(self.default)]
+
+    def descriptor(self):
+        """
+        Build the ``ParameterDescriptor`` of this row.
+
+        Returns
+        -------
+        rcl_interfaces.msg.ParameterDescriptor
+            Description with the unit, read_only flag, range and a text form of the choices.
+
+        """
+        text = self.description + (f' [{self.unit}]' if self.unit else '')
+        desc = ParameterDescriptor(name=self.name, type=self.ros_type, description=text,
+                                   read_only=self.read_only)
+        if self.choices:
+            desc.additional_constraints = 'one of ' + ', '.join(str(c) for c in self.choices)
+        elif self.pattern:
+            desc.additional_constraints = f'matches {self.pattern}'
+        if self.min_value is not None:
+            if self.ros_type == ParameterType.PARAMETER_INTEGER:
+                desc.integer_range = [IntegerRange(from_value=int(self.min_value),
+                                                   to_value=int(self.max_value), step=0)]
+            else:
+                desc.floating_point_range = [FloatingPointRange(from_value=float(self.min_value),
+                                                                to_value=float(self.max_value),
+                                                                step=0.0)]
+        return desc
+
+    def check(self, value):
+        """
+        Validate a value against the range and the choices of this row.
+
+        Parameters
+        ----------
+        value : object
+            Candidate value (already of the right type: rclpy checks types).
+
+        Raises
+        ------
+        ParameterError
+            Naming the parameter, the bad value and what is allowed.
+
+        """
+        if self.pattern and not re.fullmatch(self.pattern, value):
+            raise ParameterError(
+                f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
+        if self.choices and value not in self.choices:
+            raise ParameterError(f"parameter '{self.name}' = {value!r} is not one of "
+                                 + ', '.join(repr(c) for c in self.choices))
+        if self.min_value is not None and not self.min_value <= value <= self.max_value:
+            raise ParameterError(f"parameter '{self.name}' = {value!r} is outside "
+                                 f'[{self.min_value}, {self.max_value}]'
+                                 + (f' {self.unit}' if self.unit else ''))
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ParameterError(f"parameter '{self.name}' = {value!r} is not finite")
+
+
+def declare_parameter_table(node, table, *, on_change=None):
+    """
+    Declare every row of a parameter table on a node and return the values.
+
+    Type, range and choice violations of the overrides (``--ros-args -p``, ``--params-file``,
+    ``parameter_overrides``) become one :class:`ParameterError` naming the parameter and value, so
+    :func:`run_node` can print one line and exit with code 2 instead of a traceback.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node to declare on.
+    table : sequence of ParamSpec
+        The node's ``PARAMETERS``.
+    on_change : callable or None
+        ``on_change(dict name -> new value)``, called after rclpy accepted a runtime change of
+        parameters that are not read_only (ranges and choices already checked). None: no hook.
+
+    Returns
+    -------
+    dict
+        Parameter name to value.
+
+    Raises
+    ------
+    ParameterError
+        An override has the wrong type, is out of range, or is not one of the choices.
+
+    """
+    by_name = {spec.name: spec for spec in table}
+    values = {}
+    for spec in table:
+        try:
+            value = node.declare_parameter(spec.name, spec.default, spec.descriptor()).value
+        except ParameterException as err:
+            raise ParameterError(_explain_parameter_exception(spec, err)) from err
+        spec.check(value)
+        values[spec.name] = value
+
+    def _validate(params):
+        for param in params:
+            spec = by_name.get(param.name)
+            if spec is None:
+                continue
+            try:
+                spec.check(param.value)
+            except ParameterError as err:
+                return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(_validate)
+    if on_change is not None:
+        node.add_post_set_parameters_callback(
+            lambda params: on_change({p.name: p.value for p in params if p.name in by_name}))
+    return values
+
+
+def _explain_parameter_exception(spec, err):
+    text = str(err)
+    if 'expecting type' in text:
+        return (f"parameter '{spec.name}' must be {_ROS_TYPE_NAME[spec.ros_type]}: "
+                f'{text.split(": ")[0]}')
+    if spec.min_value is not None:
+        return (f"parameter '{spec.name}' is outside [{spec.min_value}, {spec.max_value}]"
+                + (f' {spec.unit}' if spec.unit else '') + f': {text}')
+    return f"parameter '{spec.name}': {text}"
+
+
+def specs_from_dataclass(cls, *, read_only, float_range=(0.0, 1.0e9), int_range=(0, 1_000_000)):
+    """
+    Return one :class:`ParamSpec` per field of a frozen dataclass of limits, from its metadata.
+
+    The dataclass is the single source of each parameter's name, default, description and unit
+    (``field(metadata={'description': ..., 'unit': ..., 'min': ..., 'max': ...})``), so the node's
+    table, its YAML file and the docs cannot drift apart.
+
+    Parameters
+    ----------
+    cls : type
+        A dataclass whose fields have defaults and a ``description`` in their metadata.
+    read_only : bool
+        Whether the parameters are read-only.
+    float_range, int_range : (number, number)
+        Range of a field whose metadata gives none.
+
+    Returns
+    -------
+    tuple of ParamSpec
+
+    """
+    rows = []
+    for f in fields(cls):
+        if f.default is MISSING:
+            raise TypeError(f'{cls.__name__}.{f.name} has no default')
+        meta = f.metadata
+        lo, hi = float_range if isinstance(f.default, float) else int_range
+        default = f.default if isinstance(f.default, float) else int(f.default)
+        rows.append(ParamSpec(f.name, default, meta.get('description', f.name),
+                              unit=meta.get('unit', ''), read_only=read_only,
+                              min_value=type(default)(meta.get('min', lo)),
+                              max_value=type(default)(meta.get('max', hi))))
+    return tuple(rows)

@@ -20,6 +20,7 @@ private ROS_DOMAIN_ID and its own rclpy context; a player node publishes seriali
 Temperature messages, a listener takes ``imu/data_compensated`` raw and decodes it.
 """
 
+import importlib
 import os
 import random
 import subprocess
@@ -288,6 +289,9 @@ def test_model_file_through_the_registry(context, monkeypatch):
     module.DEFAULT_RANGE_MARGIN_C = 5.0
     module.load_model = lambda path: loaded
     monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.methods', module)
+    # `from . import methods` reads the package attribute once the real module was imported
+    monkeypatch.setattr(importlib.import_module('gyro_noise_ros.thermal'), 'methods', module,
+                        raising=False)
     node = compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
         thermal_model_file='model.json'))
     values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}

@@ -73,6 +73,7 @@ setup(
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',
             'gyro_noise_monitor = gyro_noise_ros.nodes.monitor:main',
             'gyro_noise_explain = gyro_noise_ros.cli.explain:main',
+            'gyro_noise_thermal = gyro_noise_ros.cli.thermal:main',
             'gyro_noise_calibrate = gyro_noise_ros.cli.calibrate:main',
             'gyro_noise_reliability = gyro_noise_ros.cli.reliability:main',
             'gyro_noise_excitation = gyro_noise_ros.cli.excitation:main',

@@ -20,6 +20,7 @@ private ROS_DOMAIN_ID and its own rclpy context; a player node publishes seriali
 Temperature messages, a listener takes ``imu/data_compensated`` raw and decodes it.
 """
 
+import importlib
 import os
 import random
 import subprocess
@@ -288,6 +289,9 @@ def test_model_file_through_the_registry(context, monkeypatch):
     module.DEFAULT_RANGE_MARGIN_C = 5.0
     module.load_model = lambda path: loaded
     monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.methods', module)
+    # `from . import methods` reads the package attribute once the real module was imported
+    monkeypatch.setattr(importlib.import_module('gyro_noise_ros.thermal'), 'methods', module,
+                        raising=False)
     node = compensator.ImuCompensatorNode(context=context, parameter_overrides=_overrides(
         thermal_model_file='model.json'))
     values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
@@ -307,7 +311,9 @@ def test_corrupt_temperature_is_counted_not_fatal(context):
     io = _Harness(context, node)
     try:
         good = encode_temperature_cdr([T0_NS], [25.0], frame_id='imu_test')[0]
-        io.play(raws, temperatures=[b'\x00\x01\x00\x00' + b'\xff' * 8, good])
+        io.play([], temperatures=[b'\x00\x01\x00\x00' + b'\xff' * 8])
+        assert _spin_until(io.executor, lambda: node.thermal.rejected >= 1, 10)
+        io.play(raws, temperatures=[good])
         assert _spin_until(io.executor, lambda: node.counts['temperatures'] >= 2, 10)
         values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
     finally:
@@ -315,3 +321,29 @@ def test_corrupt_temperature_is_counted_not_fatal(context):
     assert len(io.out) == 400
     assert values['Temperature messages'] == '2'
     assert int(values['Temperature messages rejected']) >= 1
+
+
+def test_imu_before_the_first_temperature_waits_then_is_dropped_never_published_raw(context):
+    node = compensator.ImuCompensatorNode(
+        context=context, thermal_model=LinearThermal(temperature_range_c=(0.0, 50.0)),
+        parameter_overrides=[Parameter('temperature_wait_s', value=0.3)])
+    _, _, _, raws = _imu_stream(400, seed=7)
+    io = _Harness(context, node)
+    try:
+        for raw in raws:
+            io.imu_pub.publish(raw)
+        assert _spin_until(io.executor, lambda: node.counts['uncorrected'] == 400, 10)
+        values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+        level = node.diagnostics().status[0].level
+        # A temperature now lets later messages through; the dropped ones stay dropped.
+        good = encode_temperature_cdr([T0_NS], [25.0], frame_id='imu_test')[0]
+        io.temp_pub.publish(good)
+        assert _spin_until(io.executor, lambda: node.counts['temperatures'] >= 1, 10)
+        for raw in raws[:100]:
+            io.imu_pub.publish(raw)
+        assert _spin_until(io.executor, lambda: len(io.out) >= 100, 10)
+    finally:
+        io.close()
+    assert values['Messages dropped waiting for the first temperature'] == '400'
+    assert level == WARN
+    assert len(io.out) == 100 and node.counts['published'] == 100

@@ -19,6 +19,7 @@ Per temperature message the rate from the whole history so far, the model evalua
 of the offsets onto the gyro stamps.
 """
 
+import importlib
 import sys
 import types
 
@@ -168,6 +169,9 @@ def _fake_registry(monkeypatch, method):
     module.DEFAULT_RANGE_MARGIN_C = 3.0
     module.load_model = lambda path: _Loaded(method)
     monkeypatch.setitem(sys.modules, 'gyro_noise_ros.thermal.methods', module)
+    # `from . import methods` reads the package attribute once the real module was imported
+    monkeypatch.setattr(importlib.import_module('gyro_noise_ros.thermal'), 'methods', module,
+                        raising=False)
 
 
 def test_model_file_range_comes_from_the_training_record(monkeypatch):

@@ -502,7 +502,7 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         'left_out': left_out, 'window_s': [start_s, end_s], 'static_detection': static,
         'duration_s': counts.duration_s,
         'samples': counts.samples, 'samples_lost': counts.samples_lost, 'gaps': counts.gaps,
-        'out_of_order_stamps': counts.out_of_order, 'chunks_cut': counts.chunks,
+        'out_of_order_stamps': counts.out_of_order, 'clock_steps': counts.clock_steps, 'chunks_cut': counts.chunks,
         'tail_samples': counts.tail_samples, 'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
         'allan_status': engine.allan_status,
@@ -711,7 +711,8 @@ def _print_summary(doc):
               f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.6g} Hz ({b['rate_method']}"
               f"{', bursty stamps' if b['stamps_bursty'] else ''}, stamp jitter "
               f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
-              f"{b['gaps']} gap(s), {b['out_of_order_stamps']} out-of-order stamp(s), "
+              f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
+              f"{b['out_of_order_stamps']} out-of-order stamp(s), "
               f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():
             line = (f"  {axis}: {a['chunks']} chunks, drift {report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "

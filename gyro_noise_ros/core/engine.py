@@ -24,7 +24,11 @@ period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` esti
 (tau = m / rate), and the counts report the method, the stamp jitter and the disagreement warnings.
 
 *Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger than
-``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples.
+``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples when it is a whole
+number of periods (within 6 robust sigmas of the step scatter, 0.1-0.45 of a period) or 2.5 periods and
+more. A long step of a fractional number of periods below that is a correction of the stamping clock
+(a driver re-anchoring its device-clock map, a host clock slewing: every later stamp stays on the
+grid), counted as a clock step (``StreamCounts.clock_steps``), not as loss.
 *Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps shorter
 than half a period): a long step followed by a burst is jitter, not loss, so single steps are not read.
 Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate) + 1 - n`` when it
@@ -418,6 +422,9 @@ class StreamCounts:
         RMS stamp jitter (s, :mod:`.timebase`).
     timebase : timebase.RateEstimate or None
         The full estimate (estimators, irregularity, warnings).
+    clock_steps : int
+        Long steps (regular stamps) that were not a whole number of periods: corrections of the
+        stamping clock, paid back by other steps, not lost samples.
     """
 
     samples: int
@@ -434,6 +441,7 @@ class StreamCounts:
     bursty: bool = False
     jitter_s: float = float('nan')
     timebase: object = None
+    clock_steps: int = 0
 
 
 @dataclass(frozen=True)
@@ -547,6 +555,10 @@ class NoiseEngine:
         self._classified = False
         self._bursty = False
         self._allowance = 0.0  # per-chunk deficit allowance under bursty stamps (samples)
+        # How far from a whole number of periods a long step may be and still be loss (regular
+        # stamps), and how many long steps were clock corrections instead.
+        self._step_tol = 0.45
+        self._clock_steps = 0
         self._chunk_loss_events = 0
         self._estimate_cache = (None, None)
         self._first_ns = None
@@ -648,6 +660,14 @@ class NoiseEngine:
         self._period_ns = _NS / est.rate_hz
         self._classified = True
         self._set_mode(est)
+        # Tolerance of the whole-period test for regular stamps: 6 robust sigmas of the step
+        # scatter (a median absolute deviation, so the clock corrections themselves do not widen
+        # it), at least 0.1 and at most 0.45 of a period.
+        ratio = np.diff(stamps) / self._period_ns
+        ratio = ratio[ratio > 0]
+        if ratio.size:
+            mad = 1.4826 * float(np.median(np.abs(ratio - 1.0)))
+            self._step_tol = min(0.45, max(0.1, 6.0 * mad))
         return self._process(stamps, g, temp)
 
     def _set_mode(self, est):
@@ -673,7 +693,15 @@ class NoiseEngine:
         if self._bursty:
             gap = np.zeros(stamps.shape[0], dtype=bool)  # loss is read per chunk from the deficit
         else:
-            gap = steps > self.config.gap_factor * self._period_ns
+            ratio = steps / self._period_ns
+            long_step = ratio > self.config.gap_factor
+            # A correction of the stamping clock (the driver re-anchoring its device-clock map,
+            # a host clock slewing) is one step of a non-whole number of periods, paid back by
+            # other steps: every later stamp stays on the grid. A lost sample shifts the grid by
+            # a whole period. Steps of 2.5 periods and more are loss whatever their fraction.
+            near_whole = np.abs(ratio - np.rint(ratio)) <= self._step_tol
+            gap = long_step & (near_whole | (ratio >= 2.5))
+            self._clock_steps += int(np.count_nonzero(long_step & ~gap))
         lost = np.zeros(stamps.shape[0], dtype=np.int64)
         if gap.any():
             lost[gap] = np.maximum(np.rint(steps[gap] / self._period_ns).astype(np.int64) - 1, 0)
@@ -907,7 +935,8 @@ class NoiseEngine:
             rate_hz=rate,
             duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0,
             rate_method=est.method if est is not None else '', bursty=self._bursty,
-            jitter_s=est.jitter_s if est is not None else _NAN, timebase=est)
+            jitter_s=est.jitter_s if est is not None else _NAN, timebase=est,
+            clock_steps=self._clock_steps)
 
     def timebase(self):
         """

@@ -100,6 +100,10 @@ PARAMETERS = (
     ParamSpec('temperature_timeout_s', 2.0, 'WARN when the newest temperature is older than this '
               '(the offset is held meanwhile)', unit='s', read_only=True, min_value=0.01,
               max_value=3600.0),
+    ParamSpec('temperature_wait_s', 2.0, 'With a thermal model, Imu messages that arrive before '
+              'the first temperature wait this long for it, then are dropped and counted: they '
+              'are never published uncorrected on the compensated topic', unit='s',
+              read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
@@ -165,6 +169,8 @@ class ImuCompensatorNode(Node):
             margin_c=margin, beyond=p['out_of_range_action'])
         self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'uncorrected',
                                      'temperatures'), 0)
+        # Batches waiting for the first temperature, and since when (monotonic s).
+        self._held, self._held_since = [], None
         self._transport = SequenceGapCounter()
         self._frame_id = ''
         self._last_data = self._last_temp = None
@@ -201,6 +207,8 @@ class ImuCompensatorNode(Node):
                 stamp_ns, temperature_c = (), ()
             if self.thermal.add_temperature(stamp_ns, temperature_c):
                 self._last_temp = time.monotonic()
+        if self._held:
+            self._release_held()
         raws, _, sequence = take_all(self._imu_sub, Imu)
         if raws:
             self.compensate(raws, sequence)
@@ -218,19 +226,36 @@ class ImuCompensatorNode(Node):
         if not stamp_ns.size:
             return
         gyro, accel = self.calibration.apply(gyro, accel)
+        if not self._frame_id:
+            self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
+        batch = (buf, starts, lengths, stamp_ns, gyro, accel)
+        if self.thermal is not None and (self._held or self.thermal.drift_at(stamp_ns[:0]) is None):
+            # Before the first temperature there is no offset: publishing these uncorrected on
+            # a topic named compensated would be a wrong number given calmly. Wait, then drop.
+            self._held.append(batch)
+            self._held_since = self._held_since or time.monotonic()
+            self._release_held()
+            return
+        self._emit(*batch)
+
+    def _release_held(self):
+        if self.thermal.drift_at(self._held[0][3][:0]) is not None:
+            held, self._held, self._held_since = self._held, [], None
+            for batch in held:
+                self._emit(*batch)
+        elif time.monotonic() - self._held_since > self._p['temperature_wait_s']:
+            self.counts['uncorrected'] += sum(b[3].size for b in self._held)
+            self._held, self._held_since = [], None
+
+    def _emit(self, buf, starts, lengths, stamp_ns, gyro, accel):
         if self.thermal is not None:
             offset = self.thermal.drift_at(stamp_ns)
-            if offset is None:
-                self.counts['uncorrected'] += stamp_ns.size
-            else:
-                gyro -= offset
-                self._offset = offset[-1]
+            gyro -= offset
+            self._offset = offset[-1]
         publish = self._pub.publish
         for raw in patch_imu_spans(buf, starts, lengths, gyro, accel):
             publish(raw)
         self.counts['published'] += stamp_ns.size
-        if not self._frame_id:
-            self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
 
     def diagnostics(self):
         """Build the ``DiagnosticArray`` of the current state (one status)."""
@@ -271,7 +296,9 @@ class ImuCompensatorNode(Node):
                 ('Temperature messages rejected', str(ev.rejected)),
                 ('Temperature messages beyond range + margin',
                  str(ev.knots_by_status[RANGE_OUTSIDE])),
-                ('Samples without thermal correction', str(c['uncorrected'])),
+                ('Messages dropped waiting for the first temperature', str(c['uncorrected'])),
+                ('Messages waiting for the first temperature',
+                 str(sum(b[3].size for b in self._held))),
             ]
             if ev.status == RANGE_OUTSIDE:
                 checks.append((ERROR, f'Temperature {ev.temperature_c:.1f} degC is beyond the '
@@ -280,8 +307,11 @@ class ImuCompensatorNode(Node):
             elif ev.status == RANGE_MARGIN:
                 checks.append((WARN, f'Temperature {ev.temperature_c:.1f} degC is outside the '
                                'trained range (within the margin).'))
+            if c['uncorrected']:
+                checks.append((WARN, f"{c['uncorrected']} messages dropped: no temperature "
+                               f"within {self._p['temperature_wait_s']:g} s of them."))
             if age is None:
-                checks.append((WARN, 'No imu/temperature yet: calibration only.'))
+                checks.append((WARN, 'No imu/temperature yet: Imu messages held, then dropped.'))
             elif age > self._p['temperature_timeout_s']:
                 checks.append((WARN, f'Temperature is {age:.1f} s old: offset held.'))
         values += [('Messages received', str(c['received'])),

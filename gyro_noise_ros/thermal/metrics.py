@@ -1,0 +1,768 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Honest metrics of a thermal method on a held-out run: noise terms, residual drift, bandwidth cost.
+
+Definitions (docs/thermal.md states the same):
+
+* **Angle random walk** N (deg/sqrt(h)): the value at tau = 1 s of the line of slope -1/2 fitted
+  (least squares in log-log, slope fixed) to the overlapping Allan deviation over
+  tau in [1/sqrt(10), sqrt(10)] s, as IEEE 952 and datasheets read it. The free log-log slope over
+  the same taus is reported beside it (``arw_slope``); ``arw_on_slope`` is False when it is more
+  than 0.15 away from -1/2, i.e. when the curve there is not white-noise dominated and N is only
+  the ADEV at 1 s.
+* **Bias stability** (deg/h): the minimum of the Allan deviation over all taus (~20 per
+  decade up to a quarter of the record), as datasheets and the paper's Figure 19 quote it;
+  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B). Its tau and
+  whether the minimum is at the longest tau (then only an upper bound) are reported.
+* **Residual drift** (deg/s): standard deviation (ddof = 1) of the means of consecutive,
+  non-overlapping 60-s windows of the output.
+* **Bandwidth cost**: a known rate (a logarithmic chirp over ``f_lo_hz``..``f_hi_hz`` and a train
+  of steps) is added to every axis of the held-out run; the method processes the run with and
+  without it; the difference is its response to the injected motion. Gain, phase and group delay
+  come from the band-averaged cross spectrum ``H = sum(Y conj(X)) / sum(|X|^2)`` over
+  log-spaced bands (20 per decade), with the bulk delay (cross-correlation peak) taken out
+  before averaging and put back after; the -3 dB bandwidth is the first band crossing of
+  ``|H| = 1/sqrt(2)`` going up in frequency (log-interpolated). The mean normalised step response
+  gives the 50 % delay, the 10-90 % rise time, the overshoot, the settled gain (< 1: slow motion
+  is removed) and the precursor, the largest change of the response in the last fifth of the
+  window before the step (> 5 %: the method responds to motion before it happens, which only an
+  offline, non-causal method can do).
+"""
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+import scipy.signal
+
+from .run import ThermalRun
+from ..core.allan import allan_deviation, bias_instability_from_minimum, dense_factors
+from ..errors import InputDataError, ParameterError
+
+__all__ = ['ARW_SLOPE_TOLERANCE', 'DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
+           'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
+           'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
+           'noise_metrics', 'step_response', 'verdict', 'white_noise_sigma']
+
+RAD2DEG = 180.0 / math.pi
+#: Largest |measured slope + 1/2| around tau = 1 s for the ARW read-out to count as on the slope.
+ARW_SLOPE_TOLERANCE = 0.15
+#: Window of the residual-drift means (s).
+DRIFT_WINDOW_S = 60.0
+#: Default amplitude of the injected chirp and steps (rad/s): 1 deg/s.
+DEFAULT_AMPLITUDE_RAD_S = math.radians(1.0)
+#: Default band of the injected chirp (Hz); the top is capped at 0.45 x the sample rate.
+DEFAULT_F_LO_HZ = 0.1
+DEFAULT_F_HI_HZ = 50.0
+#: Step-response precursor above which a method is called non-causal (fraction of the step).
+PRECURSOR_LIMIT = 0.05
+#: Bands per decade of the frequency-response estimate.
+BANDS_PER_DECADE = 20
+#: Allan factors per decade of the noise read-outs.
+_ADEV_PER_DECADE = 20
+
+
+@dataclass(frozen=True)
+class NoiseMetrics:
+    """
+    Noise read-outs of one axis (definitions in the module docstring).
+
+    Attributes
+    ----------
+    arw_deg_sqrt_h : float
+        Angle random walk (deg/sqrt(h)); NaN if the record is shorter than 2 x 0.32 s.
+    arw_slope : float
+        Free log-log slope of ADEV over the ARW taus (-0.5 for white rate noise).
+    arw_on_slope : bool
+        ``|arw_slope + 0.5| <= ARW_SLOPE_TOLERANCE``.
+    bias_stability_deg_h : float
+        Minimum of the Allan deviation (deg/h).
+    bias_stability_tau_s : float
+        Its averaging time (s).
+    bias_stability_at_longest_tau : bool
+        The minimum is the longest tau (an upper bound only).
+    bias_stability_at_shortest_tau : bool
+        The minimum is the shortest tau (one sample): the output is smoothed at the sample scale
+        and the number says nothing about the bias.
+    residual_drift_deg_s : float
+        Std of the 60-s means (deg/s); NaN with fewer than two windows.
+    drift_windows : int
+        Number of 60-s windows.
+    mean_deg_s : float
+        Mean of the output (deg/s).
+
+    """
+
+    arw_deg_sqrt_h: float
+    arw_slope: float
+    arw_on_slope: bool
+    bias_stability_deg_h: float
+    bias_stability_tau_s: float
+    bias_stability_at_longest_tau: bool
+    bias_stability_at_shortest_tau: bool
+    residual_drift_deg_s: float
+    drift_windows: int
+    mean_deg_s: float
+
+    def as_dict(self):
+        """
+        Return the JSON form (keys as the attribute names).
+
+        Returns
+        -------
+        dict
+
+        """
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def noise_metrics(rate_rad_s, rate_hz, *, drift_window_s=DRIFT_WINDOW_S):
+    """
+    Compute ARW, bias stability and residual drift of one axis.
+
+    Parameters
+    ----------
+    rate_rad_s : array_like
+        Angular rate (n,), rad/s, finite.
+    rate_hz : float
+        Sample rate (Hz).
+    drift_window_s : float, keyword-only
+        Window of the residual-drift means (s).
+
+    Returns
+    -------
+    NoiseMetrics
+
+    Raises
+    ------
+    InputDataError
+        Fewer than 8 samples or non-finite samples.
+
+    """
+    return _noise_metrics(rate_rad_s, rate_hz, drift_window_s)[0]
+
+
+def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
+    """Return (NoiseMetrics, (tau_s, adev_rad_s))."""
+    x = np.asarray(rate_rad_s, dtype=np.float64)
+    if x.ndim != 1 or x.size < 8:
+        raise InputDataError(f'noise metrics need at least 8 samples of one axis, got shape '
+                             f'{x.shape}')
+    ms = dense_factors(x.size, per_decade=_ADEV_PER_DECADE)
+    res = allan_deviation(x, rate_hz, taus=ms)
+    tau, adev = res.tau_s, res.adev
+    sel = (tau >= 10 ** -0.5) & (tau <= 10 ** 0.5) & (adev > 0)
+    arw, slope = math.nan, math.nan
+    if sel.sum() >= 1:
+        lt, la = np.log(tau[sel]), np.log(adev[sel])
+        arw = float(np.exp(np.mean(la + 0.5 * lt)))  # the slope -1/2 line at tau = 1 s
+        if sel.sum() >= 2:
+            slope = float(np.polyfit(lt, la, 1)[0])
+    mini = bias_instability_from_minimum(res)
+    window = int(round(drift_window_s * rate_hz))
+    k = x.size // window if window >= 1 else 0
+    drift = math.nan
+    if k >= 2:
+        means = x[:k * window].reshape(k, window).mean(axis=1)
+        drift = float(np.std(means, ddof=1) * RAD2DEG)
+    return NoiseMetrics(
+        arw_deg_sqrt_h=arw * RAD2DEG * 60.0,  # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
+        arw_slope=slope,
+        arw_on_slope=bool(abs(slope + 0.5) <= ARW_SLOPE_TOLERANCE),
+        bias_stability_deg_h=mini.adev_min_rad_per_s * RAD2DEG * 3600.0,
+        bias_stability_tau_s=mini.tau_s,
+        bias_stability_at_longest_tau=bool(mini.at_longest_tau),
+        bias_stability_at_shortest_tau=bool(mini.tau_s <= tau[0]),
+        residual_drift_deg_s=drift, drift_windows=int(k),
+        mean_deg_s=float(np.mean(x) * RAD2DEG)), (tau, adev)
+
+
+@dataclass(frozen=True)
+class Injection:
+    """
+    A known rate signal to add to a run, and where its parts lie.
+
+    Attributes
+    ----------
+    signal_rad_s : numpy.ndarray
+        The injected rate (n,), rad/s.
+    chirp : slice
+        Samples of the analysis window around the chirp (the chirp plus margins of zeros).
+    step_edges : numpy.ndarray
+        Sample index of each step edge (int64).
+    step_deltas_rad_s : numpy.ndarray
+        Rate change at each edge (rad/s).
+    step_window : int
+        Samples analysed before and after each edge.
+    f_lo_hz, f_hi_hz : float
+        Band the chirp covers and the response is reported over (Hz).
+    amplitude_rad_s : float
+        Chirp amplitude and step height (rad/s).
+
+    """
+
+    signal_rad_s: np.ndarray
+    chirp: slice
+    step_edges: np.ndarray
+    step_deltas_rad_s: np.ndarray
+    step_window: int
+    f_lo_hz: float
+    f_hi_hz: float
+    amplitude_rad_s: float
+
+
+def make_injection(n, rate_hz, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
+                   f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, chirp_s=300.0, hold_s=20.0,
+                   steps=6):
+    """
+    Build the injected rate: a logarithmic chirp, then a train of steps 0 -> A -> 0 -> ...
+
+    The chirp starts at 25 % of the run, the steps at 60 %; both shrink to fit a short run
+    (chirp at most 30 % of it, the step train at most 30 %). The chirp sweeps from
+    0.8 x ``f_lo_hz`` to ``f_hi_hz`` / 0.8 (capped at 0.45 x ``rate_hz``) under a 5 % Tukey
+    taper so the reported band is well excited.
+
+    Parameters
+    ----------
+    n : int
+        Samples of the run.
+    rate_hz : float
+        Sample rate (Hz).
+    amplitude_rad_s : float, keyword-only
+        Chirp amplitude and step height (rad/s).
+    f_lo_hz, f_hi_hz : float, keyword-only
+        Reported band (Hz); ``f_hi_hz`` is lowered to 0.45 x ``rate_hz`` / 1.25 if needed.
+    chirp_s : float, keyword-only
+        Chirp duration on a long run (s).
+    hold_s : float, keyword-only
+        Hold of each step on a long run (s).
+    steps : int, keyword-only
+        Number of step edges (even: the train ends at 0).
+
+    Returns
+    -------
+    Injection
+
+    Raises
+    ------
+    ParameterError
+        Bad band, amplitude or a run too short (under 20 chirp periods of ``f_lo_hz``).
+
+    """
+    if not (amplitude_rad_s > 0 and math.isfinite(amplitude_rad_s)):
+        raise ParameterError(f'injection amplitude must be > 0 rad/s, got {amplitude_rad_s!r}')
+    f_top = 0.45 * rate_hz / 1.25
+    f_hi = min(float(f_hi_hz), f_top)
+    if not 0 < f_lo_hz < f_hi:
+        raise ParameterError(f'injection band must satisfy 0 < f_lo < f_hi <= {f_top:.4g} Hz '
+                             f'(0.36 x the {rate_hz:.4g} Hz sample rate), got {f_lo_hz!r}..'
+                             f'{f_hi_hz!r} Hz')
+    duration = n / rate_hz
+    c_s = min(chirp_s, 0.3 * duration)
+    if c_s * f_lo_hz < 20:
+        raise ParameterError(f'the run ({duration:.4g} s) is too short to measure the response '
+                             f'down to {f_lo_hz:g} Hz: the chirp needs at least '
+                             f'{20 / f_lo_hz / 0.3:.4g} s of run; raise --f-lo-hz')
+    sig = np.zeros(n)
+    c0 = int(0.25 * n)
+    c_n = int(round(c_s * rate_hz))
+    t = np.arange(c_n) / rate_hz
+    f0, f1 = 0.8 * f_lo_hz, min(f_hi / 0.8, 0.45 * rate_hz)
+    sig[c0:c0 + c_n] = (amplitude_rad_s * scipy.signal.windows.tukey(c_n, 0.05)
+                        * scipy.signal.chirp(t, f0, t[-1], f1, method='logarithmic', phi=-90))
+    margin = int(0.1 * c_n)
+    chirp = slice(max(c0 - margin, 0), min(c0 + c_n + margin, n))
+    steps = max(2, int(steps) // 2 * 2)
+    hold = int(round(min(hold_s, 0.3 * duration / steps) * rate_hz))
+    if hold < 4:
+        raise ParameterError(f'the run ({duration:.4g} s) is too short for {steps} steps')
+    s0 = int(0.6 * n)
+    edges = s0 + hold * np.arange(steps, dtype=np.int64)
+    deltas = np.where(np.arange(steps) % 2 == 0, 1.0, -1.0) * amplitude_rad_s
+    for e, d in zip(edges, deltas):
+        sig[e:] += d
+    return Injection(signal_rad_s=sig, chirp=chirp, step_edges=edges, step_deltas_rad_s=deltas,
+                     step_window=hold // 2, f_lo_hz=float(f_lo_hz), f_hi_hz=float(f_hi),
+                     amplitude_rad_s=float(amplitude_rad_s))
+
+
+@dataclass(frozen=True)
+class FrequencyResponse:
+    """
+    Band-averaged frequency response of a method to injected motion.
+
+    Attributes
+    ----------
+    frequency_hz : numpy.ndarray
+        Band centres (geometric), Hz.
+    gain : numpy.ndarray
+        ``|H|`` (1 = passed unchanged).
+    phase_deg : numpy.ndarray
+        ``angle(H)``, unwrapped, degrees (negative = lag).
+    group_delay_s : numpy.ndarray
+        ``-d phase / d omega`` (s).
+    coherence : numpy.ndarray
+        Band-averaged magnitude-squared coherence of response and input (1 = linear, noise-free).
+    minus_3db_hz : float or None
+        First crossing of gain 1/sqrt(2) going up in frequency; None if not inside the band.
+    minus_3db_bound : str
+        'measured', 'below' (already below -3 dB at the lowest band) or 'above' (never below).
+
+    """
+
+    frequency_hz: np.ndarray
+    gain: np.ndarray
+    phase_deg: np.ndarray
+    group_delay_s: np.ndarray
+    coherence: np.ndarray
+    minus_3db_hz: object
+    minus_3db_bound: str
+
+    def gain_at(self, f_hz):
+        """
+        Interpolate the gain at ``f_hz`` (log frequency).
+
+        Parameters
+        ----------
+        f_hz : float
+            Frequency (Hz).
+
+        Returns
+        -------
+        float
+
+        """
+        return float(np.interp(np.log(f_hz), np.log(self.frequency_hz), self.gain))
+
+
+def frequency_response(injected, response, rate_hz, *, f_lo_hz, f_hi_hz,
+                       bands_per_decade=BANDS_PER_DECADE):
+    """
+    Estimate H(f) = response / injected from one record by band-averaged cross spectra.
+
+    Parameters
+    ----------
+    injected, response : array_like
+        Input and response (n,), same unit.
+    rate_hz : float
+        Sample rate (Hz).
+    f_lo_hz, f_hi_hz : float, keyword-only
+        Band reported (Hz).
+    bands_per_decade : int, keyword-only
+        Log-spaced bands per decade.
+
+    Returns
+    -------
+    FrequencyResponse
+
+    """
+    x = np.asarray(injected, dtype=float)
+    y = np.asarray(response, dtype=float)
+    xf, yf = np.fft.rfft(x), np.fft.rfft(y)
+    f = np.fft.rfftfreq(x.size, 1.0 / rate_hz)
+    # Averaging H over a band blurs a steep phase: a delay of d s turns by 2 pi f d across it.
+    # Take out the bulk delay (the cross-correlation peak, whole samples) first, put it back after.
+    xcorr = np.fft.irfft(yf * np.conj(xf), n=x.size)
+    lag = int(np.argmax(np.abs(xcorr)))
+    if lag > x.size // 2:
+        lag -= x.size
+    turn = np.exp(2j * np.pi * f * lag / rate_hz)
+    yf = yf * turn
+    n_b = max(int(math.ceil(math.log10(f_hi_hz / f_lo_hz) * bands_per_decade)), 1)
+    edges = f_lo_hz * (f_hi_hz / f_lo_hz) ** (np.arange(n_b + 1) / n_b)
+    centres, h, coh = [], [], []
+    sxy_all = yf * np.conj(xf)
+    sxx_all = np.abs(xf) ** 2
+    syy_all = np.abs(yf) ** 2
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        sel = (f >= lo) & (f < hi)
+        if not sel.any():
+            continue
+        sxx = sxx_all[sel].sum()
+        if sxx <= 0:
+            continue
+        sxy = sxy_all[sel].sum()
+        syy = syy_all[sel].sum()
+        centres.append(math.sqrt(lo * hi))
+        h.append(sxy / sxx * np.exp(-2j * np.pi * centres[-1] * lag / rate_hz))
+        coh.append(float(abs(sxy) ** 2 / (sxx * syy)) if syy > 0 else 0.0)
+    freq = np.array(centres)
+    h = np.array(h, dtype=complex)
+    gain = np.abs(h)
+    phase = np.unwrap(np.angle(h))
+    delay = (-np.gradient(phase, 2 * np.pi * freq) if freq.size > 1
+             else np.full(freq.size, math.nan))
+    limit = 1.0 / math.sqrt(2.0)
+    below = np.flatnonzero(gain < limit)
+    if below.size == 0:
+        f3, bound = None, 'above'
+    elif below[0] == 0:
+        f3, bound = None, 'below'
+    else:
+        j = below[0]
+        g0, g1 = 20 * np.log10(gain[j - 1]), 20 * np.log10(gain[j])
+        target = 20 * math.log10(limit)
+        frac = (target - g0) / (g1 - g0)
+        f3 = float(np.exp(np.log(freq[j - 1]) + frac * (np.log(freq[j]) - np.log(freq[j - 1]))))
+        bound = 'measured'
+    return FrequencyResponse(frequency_hz=freq, gain=gain, phase_deg=np.degrees(phase),
+                             group_delay_s=delay, coherence=np.array(coh), minus_3db_hz=f3,
+                             minus_3db_bound=bound)
+
+
+@dataclass(frozen=True)
+class StepResponse:
+    """
+    Mean normalised response to the injected steps (0 before, 1 after for a perfect pass).
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray
+        Time from the step (s), which happens half a sample before the edge sample.
+    response : numpy.ndarray
+        Mean normalised response.
+    delay_50_s : float
+        First time the response reaches 0.5 (s; negative: before the step). NaN if never.
+    rise_time_s : float
+        10 % to 90 % rise time (s); NaN if 90 % is never reached.
+    overshoot : float
+        Peak after the edge minus 1 (fraction of the step, >= 0 reported as measured).
+    settled_gain : float
+        Mean response over the last half of the window after the edge.
+    precursor : float
+        Largest change of the response over the last fifth of the window before the edge
+        (fraction of the step; 0 for a causal method).
+
+    """
+
+    t_s: np.ndarray
+    response: np.ndarray
+    delay_50_s: float
+    rise_time_s: float
+    overshoot: float
+    settled_gain: float
+    precursor: float
+
+
+def _first_crossing(t, r, level):
+    idx = np.flatnonzero(r >= level)
+    if idx.size == 0:
+        return math.nan
+    j = int(idx[0])
+    if j == 0:
+        return float(t[0])
+    return float(t[j - 1] + (level - r[j - 1]) / (r[j] - r[j - 1]) * (t[j] - t[j - 1]))
+
+
+def step_response(response, rate_hz, edges, deltas, window):
+    """
+    Average the response around each step edge, normalised by the step.
+
+    Parameters
+    ----------
+    response : array_like
+        Output difference (n,) caused by the injection.
+    rate_hz : float
+        Sample rate (Hz).
+    edges : array_like of int
+        Edge sample indices.
+    deltas : array_like of float
+        Step heights (same unit as ``response``).
+    window : int
+        Samples analysed before and after each edge (the mean of the first fifth of the window
+        is the baseline).
+
+    Returns
+    -------
+    StepResponse
+
+    """
+    y = np.asarray(response, dtype=float)
+    tail = max(window // 5, 1)
+    segs = []
+    for e, d in zip(edges, deltas):
+        seg = y[int(e) - window:int(e) + window]
+        # Baseline: the response at the start of the window, not the injected level, so a method
+        # passing a fraction g of slow motion shows g on every edge.
+        segs.append((seg - seg[:tail].mean()) / d)
+    r = np.mean(segs, axis=0)
+    # The step happens between the last sample before the edge and the edge sample.
+    t = (np.arange(2 * window) - window + 0.5) / rate_hz
+    after = t >= 0
+    # Causal responses still settling from the previous edge drift slowly before this one; a
+    # response to this edge before it happens changes quickly right before it. Compare the last
+    # fifth of the window before the edge with the sample just before that stretch.
+    pre = r[window - tail:window] - r[window - tail - 1] if window > tail else np.zeros(0)
+    post_t, post = t[after], r[after]
+    t10 = _first_crossing(post_t, post, 0.1)
+    t90 = _first_crossing(post_t, post, 0.9)
+    d50 = _first_crossing(t, r, 0.5)
+    # a non-causal filter crosses 50 % before the edge; report that crossing, from the full window
+    return StepResponse(t_s=t, response=r, delay_50_s=d50, rise_time_s=t90 - t10,
+                        overshoot=float(post.max() - 1.0),
+                        settled_gain=float(post[post.size // 2:].mean()),
+                        precursor=float(np.abs(pre).max()) if pre.size else 0.0)
+
+
+def _axis_bandwidth(injection, diff, rate_hz):
+    sl = injection.chirp
+    fr = frequency_response(injection.signal_rad_s[sl], diff[sl], rate_hz,
+                            f_lo_hz=injection.f_lo_hz, f_hi_hz=injection.f_hi_hz)
+    st = step_response(diff, rate_hz, injection.step_edges, injection.step_deltas_rad_s,
+                       injection.step_window)
+    return fr, st
+
+
+def _band_text(fr):
+    if fr.frequency_hz.size == 0:
+        return 'no band measured'
+    if fr.minus_3db_bound == 'measured':
+        return f'-3 dB at {fr.minus_3db_hz:.3g} Hz'
+    return (f'-3 dB {fr.minus_3db_bound} the measured band {fr.frequency_hz[0]:.3g}..'
+            f'{fr.frequency_hz[-1]:.3g} Hz')
+
+
+def _low_gain(fr):
+    # ADEV at tau = 1 s is most sensitive to motion between ~0.1 and ~1 Hz (its transfer function
+    # peaks near 0.37 / tau); attenuation there shows up as lower "ARW".
+    band = (fr.frequency_hz >= 0.1) & (fr.frequency_hz <= 1.0)
+    return float(fr.gain[band].min()) if band.any() else math.nan
+
+
+def verdict(raw, processed, fr, st, *, causal, small=None):
+    """
+    Say in plain words what a method did to the noise, to the drift and to motion.
+
+    Parameters
+    ----------
+    raw, processed : NoiseMetrics
+        One axis before and after.
+    fr : FrequencyResponse
+        Response to the chirp.
+    st : StepResponse
+        Response to the steps.
+    causal : bool
+        What the method declares.
+    small : tuple of (FrequencyResponse, StepResponse, float), optional
+        The same at small amplitude, and that amplitude (rad/s).
+
+    Returns
+    -------
+    dict
+        ``arw_ratio``, ``residual_drift_ratio``, ``low_band_min_gain``,
+        ``small_signal_low_band_min_gain``, ``arw_from_bandwidth`` (bool), ``measured_causal``
+        (bool), ``live_capable`` (bool) and ``text`` (sentences).
+
+    """
+    arw_ratio = processed.arw_deg_sqrt_h / raw.arw_deg_sqrt_h
+    drift_ratio = processed.residual_drift_deg_s / raw.residual_drift_deg_s
+    low_gain = _low_gain(fr)
+    cut = [f'motion at 0.1-1 Hz passed with gain down to {low_gain:.3g}'] if low_gain < 0.9 else []
+    if st.settled_gain < 0.9:
+        cut.append(f'a held step passed with {st.settled_gain:.3g}')
+    small_gain = math.nan
+    if small is not None:
+        s_fr, s_st, s_amp = small
+        small_gain = _low_gain(s_fr)
+        if small_gain < 0.9 or s_st.settled_gain < 0.9:
+            cut.append(f'motion of {s_amp * RAD2DEG:.3g} deg/s (the size of the noise) passed '
+                       f'with gain down to {min(small_gain, s_st.settled_gain):.3g} '
+                       f'({_band_text(s_fr)}): small motion goes with the noise')
+    from_bw = bool(arw_ratio < 0.9 and cut)
+    measured_causal = bool(st.precursor <= PRECURSOR_LIMIT)
+    text = []
+    if from_bw:
+        text.append(f'ARW x{arw_ratio:.3g} comes from removing bandwidth, not noise: '
+                    f'{"; ".join(cut)} ({_band_text(fr)}).')
+    elif arw_ratio < 0.9:
+        text.append(f'ARW x{arw_ratio:.3g} while motion at 0.1-1 Hz keeps gain >= '
+                    f'{low_gain:.3g} ({_band_text(fr)}).')
+    else:
+        text.append(f'ARW x{arw_ratio:.3g}: no denoising at tau = 1 s ({_band_text(fr)}).')
+    if not processed.arw_on_slope:
+        text.append(f'The processed ADEV slope near 1 s is {processed.arw_slope:.2f}, not -1/2: '
+                    'its ARW is only ADEV(1 s).')
+    if processed.bias_stability_at_shortest_tau:
+        text.append('Its ADEV minimum is at the shortest tau: the output is smoothed sample to '
+                    'sample, and that "bias stability" says nothing about the bias.')
+    text.append(f'Residual drift x{drift_ratio:.3g}.')
+    if not measured_causal:
+        text.append(f'Responds {st.precursor:.0%} of a step before it happens: non-causal, '
+                    'offline only.')
+    elif not causal:
+        text.append('Declared non-causal (offline only).')
+    return {'arw_ratio': _num(arw_ratio), 'residual_drift_ratio': _num(drift_ratio),
+            'low_band_min_gain': _num(low_gain),
+            'small_signal_low_band_min_gain': _num(small_gain), 'arw_from_bandwidth': from_bw,
+            'measured_causal': measured_causal, 'live_capable': bool(causal and measured_causal),
+            'text': ' '.join(text)}
+
+
+def _num(v):
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def _curve(values):
+    return [_num(v) for v in np.asarray(values, dtype=float)]
+
+
+def _run_with(run, gyro):
+    return ThermalRun(t_s=run.t_s, gyro_rad_s=gyro, temperature_c=run.temperature_c,
+                      rate_hz=run.rate_hz, name=run.name)
+
+
+def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
+                    f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, processed=None,
+                    small_signal=True):
+    """
+    Score a fitted method on a held-out run: noise, drift and bandwidth per axis.
+
+    Parameters
+    ----------
+    method : ThermalMethod
+        Fitted method.
+    run : ThermalRun
+        Held-out run (never the one it was fitted on).
+    amplitude_rad_s : float, keyword-only
+        Height of the injected chirp and steps (rad/s). Nonlinear methods (thresholding,
+        decompositions) respond differently to different amplitudes: state it with the result.
+    f_lo_hz, f_hi_hz : float, keyword-only
+        Band of the chirp (Hz).
+    processed : numpy.ndarray, optional
+        ``method.apply(run)`` if already computed.
+    small_signal : bool, keyword-only
+        Also inject the same signal scaled to the white-noise sigma of the run
+        (:func:`white_noise_sigma`) and report ``bandwidth_small_signal``: a nonlinear method
+        that passes a large motion may remove a small one (one more ``apply``).
+
+    Returns
+    -------
+    doc : dict
+        JSON-able: ``method``, ``causal``, ``injection`` and ``axes`` -> x/y/z -> ``raw``,
+        ``processed`` (:class:`NoiseMetrics` keys), ``bandwidth`` and ``verdict``.
+    processed : numpy.ndarray
+        The processed run (n, 3), rad/s.
+    curves : dict
+        Per axis: ``frequency`` (:class:`FrequencyResponse`), ``step`` (:class:`StepResponse`),
+        ``allan_raw`` and ``allan_processed`` ((tau_s, adev_rad_s) arrays), and with
+        ``small_signal`` ``frequency_small`` and ``step_small``, for figures.
+
+    """
+    gyro = np.asarray(run.gyro_rad_s, dtype=float)
+    n = gyro.shape[0]
+    inj = make_injection(n, run.rate_hz, amplitude_rad_s=amplitude_rad_s, f_lo_hz=f_lo_hz,
+                         f_hi_hz=f_hi_hz)
+    if processed is None:
+        processed = np.asarray(method.apply(run), dtype=float)
+    _check_output(method, processed, n)
+    diff = _response(method, run, gyro, processed, inj.signal_rad_s)
+    small_amp = small_diff = None
+    if small_signal:
+        small_amp = white_noise_sigma(gyro)
+        small_diff = _response(method, run, gyro, processed,
+                               inj.signal_rad_s * (small_amp / inj.amplitude_rad_s))
+    axes, curves = {}, {}
+    for a, name in enumerate('xyz'):
+        raw_m, raw_adev = _noise_metrics(gyro[:, a], run.rate_hz, DRIFT_WINDOW_S)
+        proc_m, proc_adev = _noise_metrics(processed[:, a], run.rate_hz, DRIFT_WINDOW_S)
+        fr, st = _axis_bandwidth(inj, diff[:, a], run.rate_hz)
+        curves[name] = {'frequency': fr, 'step': st, 'allan_raw': raw_adev,
+                        'allan_processed': proc_adev}
+        small = None
+        axes[name] = {'raw': _metrics_dict(raw_m), 'processed': _metrics_dict(proc_m),
+                      'bandwidth': _bandwidth_dict(fr, st)}
+        if small_signal:
+            # The same injection scaled to the noise's size: nonlinear methods (thresholds,
+            # decompositions) pass a large motion and remove a small one.
+            s_fr, s_st = _axis_bandwidth(inj, small_diff[:, a] * (inj.amplitude_rad_s
+                                                                  / small_amp), run.rate_hz)
+            small = (s_fr, s_st, small_amp)
+            curves[name].update(frequency_small=s_fr, step_small=s_st)
+            axes[name]['bandwidth_small_signal'] = dict(
+                _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD2DEG)
+        axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
+                                        small=small)
+    doc = {
+        'method': method.name, 'causal': bool(method.causal),
+        'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD2DEG,
+                      'small_signal_amplitude_deg_s': (small_amp * RAD2DEG if small_signal
+                                                       else None),
+                      'f_lo_hz': inj.f_lo_hz, 'f_hi_hz': inj.f_hi_hz,
+                      'chirp_start_s': inj.chirp.start / run.rate_hz,
+                      'chirp_stop_s': inj.chirp.stop / run.rate_hz,
+                      'step_edges_s': _curve(inj.step_edges / run.rate_hz)},
+        'axes': axes,
+    }
+    return doc, processed, curves
+
+
+def _response(method, run, gyro, processed, signal):
+    out = np.asarray(method.apply(_run_with(run, gyro + signal[:, None])), dtype=float)
+    _check_output(method, out, gyro.shape[0])
+    return out - processed
+
+
+def _metrics_dict(m):
+    return {k: _num(v) if isinstance(v, float) else v for k, v in m.as_dict().items()}
+
+
+def _delay(v):
+    # a pass-through's 50 % crossing lands on the step time up to rounding (1e-18 s): snap to ns
+    return _num(round(v, 9) + 0.0) if math.isfinite(v) else None  # + 0.0: no '-0'
+
+
+def _bandwidth_dict(fr, st):
+    return {
+        'minus_3db_hz': fr.minus_3db_hz, 'minus_3db_bound': fr.minus_3db_bound,
+        'gain_at_1hz': _num(fr.gain_at(1.0)) if fr.frequency_hz.size else None,
+        'low_band_min_gain': _num(_low_gain(fr)),
+        'step_delay_50_s': _delay(st.delay_50_s), 'step_rise_time_s': _delay(st.rise_time_s),
+        'step_overshoot': _num(st.overshoot), 'step_settled_gain': _num(st.settled_gain),
+        'step_precursor': _num(st.precursor),
+        'frequency_hz': _curve(fr.frequency_hz), 'gain': _curve(fr.gain),
+        'phase_deg': _curve(fr.phase_deg), 'group_delay_s': _curve(fr.group_delay_s),
+        'coherence': _curve(fr.coherence),
+    }
+
+
+def white_noise_sigma(gyro_rad_s):
+    """
+    Estimate the per-sample white-noise standard deviation, median over axes.
+
+    Uses first differences, std(diff(x)) / sqrt(2), which a slow drift does not inflate.
+
+    Parameters
+    ----------
+    gyro_rad_s : numpy.ndarray
+        Rate (n, 3), rad/s.
+
+    Returns
+    -------
+    float
+        rad/s; at least 1e-9 rad/s so a noise-free input still gets a finite injection.
+
+    """
+    d = np.diff(np.asarray(gyro_rad_s, dtype=float), axis=0)
+    return max(float(np.median(np.std(d, axis=0))) / math.sqrt(2.0), 1e-9)
+
+
+def _check_output(method, out, n):
+    if out.shape != (n, 3):
+        raise InputDataError(f'method {method.name!r} returned shape {out.shape}, expected '
+                             f'({n}, 3)')
+    if not np.isfinite(out).all():
+        raise InputDataError(f'method {method.name!r} returned NaN/Inf samples')

@@ -1,0 +1,414 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Figures and Markdown of gyro_noise_thermal: analogues of paper 002's Figures 10 and 12-19.
+
+Generic figures (every method): Figure 10 (temperature and raw output against time),
+Figure 15/18 (raw and processed output), Figure 17 (the drift a method removed, 60-s means,
+against time and temperature), Figure 19 (Allan deviation raw and processed), and the cost
+figures the paper does not have (gain, phase, group delay and step response to injected motion).
+Figure 13 (sample entropy and class of each mode) is drawn from a method's ``fit_info`` /
+``last_info`` (per-axis dicts with ``sample_entropy``, ``classes``, ``center_freqs_hz``, as the
+parallel model keeps them). Other method-specific figures (the paper's Figures 12, 14 and 16: the
+modes, the mixed part before and after TFPF, the network before and after BAS) come from the
+method itself when it offers ``report_figures(run, out_dir) -> [(file name, caption), ...]``.
+Everything is converted to deg/s at this edge; matplotlib runs on the Agg backend.
+"""
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ['method_figures', 'plot_allan', 'plot_bandwidth', 'plot_drift', 'plot_mode_classes',
+           'plot_output', 'plot_run', 'plot_steps', 'table_markdown']
+
+DEG = 180.0 / math.pi
+AXES = 'xyz'
+#: Points per trace in time plots (longer runs are reduced to min/max envelopes of blocks).
+_MAX_POINTS = 4000
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use('Agg', force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _thin(t, y):
+    """Reduce a long trace to a min/max envelope of at most ``_MAX_POINTS`` points."""
+    n = t.size
+    if n <= _MAX_POINTS:
+        return t, y
+    block = int(math.ceil(n / (_MAX_POINTS // 2)))
+    k = n // block
+    tb = t[:k * block].reshape(k, block)[:, 0]
+    yb = y[:k * block].reshape(k, block)
+    return np.repeat(tb, 2), np.column_stack([yb.min(axis=1), yb.max(axis=1)]).ravel()
+
+
+def _window_means(t, y, window_s):
+    n = int(round(window_s / np.median(np.diff(t)))) if t.size > 1 else 1
+    k = t.size // max(n, 1)
+    if k < 1:
+        return t[:1], y[:1]
+    return (t[:k * n].reshape(k, n).mean(axis=1),
+            y[:k * n].reshape(k, n, *y.shape[1:]).mean(axis=1))
+
+
+def _save(fig, plt, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_run(path, run):
+    """
+    Plot temperature and raw angular rate against time (paper Figure 10).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    run : ThermalRun
+        The recording.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(4, 1, figsize=(9, 8), sharex=True)
+    h = run.t_s / 3600.0
+    panels[0].plot(*_thin(h, run.temperature_c), color='tab:red', lw=0.8)
+    panels[0].set_ylabel('temperature (degC)')
+    for a, panel in enumerate(panels[1:]):
+        panel.plot(*_thin(h, run.gyro_rad_s[:, a] * DEG), lw=0.4, color='0.5')
+        tm, ym = _window_means(run.t_s, run.gyro_rad_s[:, a], 60.0)
+        panel.plot(tm / 3600.0, ym * DEG, color='k', lw=1.0, label='60-s means')
+        panel.set_ylabel(f'{AXES[a]} (deg/s)')
+        panel.legend(fontsize=7, loc='upper right')
+    panels[-1].set_xlabel('time (h)')
+    fig.suptitle(f'{run.name}: temperature and raw gyro output (cf. paper Fig. 10)', fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_output(path, run, processed, *, label):
+    """
+    Overlay raw and processed output, whole run and a 10-s zoom (paper Figures 15 and 18).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    run : ThermalRun
+        Raw data.
+    processed : numpy.ndarray
+        Processed rate (n, 3), rad/s.
+    label : str
+        Method name.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(3, 2, figsize=(11, 8), gridspec_kw={'width_ratios': [3, 1]})
+    h = run.t_s / 3600.0
+    mid = run.t_s.size // 2
+    zoom = slice(mid, min(mid + int(10 * run.rate_hz), run.t_s.size))
+    for a in range(3):
+        left, right = panels[a]
+        left.plot(*_thin(h, run.gyro_rad_s[:, a] * DEG), lw=0.4, color='0.6', label='raw')
+        left.plot(*_thin(h, processed[:, a] * DEG), lw=0.4, color='tab:blue', label=label)
+        left.set_ylabel(f'{AXES[a]} (deg/s)')
+        right.plot(run.t_s[zoom], run.gyro_rad_s[zoom, a] * DEG, lw=0.6, color='0.6')
+        right.plot(run.t_s[zoom], processed[zoom, a] * DEG, lw=0.8, color='tab:blue')
+        right.set_xlabel('time (s), 10-s zoom')
+    panels[0][0].legend(fontsize=7, loc='upper right')
+    panels[-1][0].set_xlabel('time (h)')
+    fig.suptitle(f'{run.name}: raw and {label} output (cf. paper Figs. 15, 18)', fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_drift(path, run, processed, *, label):
+    """
+    Plot the drift the method removed against time and temperature, 60-s means (paper Fig. 17).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    run : ThermalRun
+        Raw data.
+    processed : numpy.ndarray
+        Processed rate (n, 3), rad/s.
+    label : str
+        Method name.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(3, 2, figsize=(11, 8))
+    tm, raw_m = _window_means(run.t_s, run.gyro_rad_s, 60.0)
+    _, rem_m = _window_means(run.t_s, run.gyro_rad_s - processed, 60.0)
+    _, proc_m = _window_means(run.t_s, processed, 60.0)
+    _, temp_m = _window_means(run.t_s, run.temperature_c, 60.0)
+    for a in range(3):
+        left, right = panels[a]
+        left.plot(tm / 3600, raw_m[:, a] * DEG, color='0.4', lw=1.0, label='raw')
+        left.plot(tm / 3600, rem_m[:, a] * DEG, color='tab:red', lw=1.0, label='removed')
+        left.plot(tm / 3600, proc_m[:, a] * DEG, color='tab:blue', lw=1.0, label='residual')
+        left.set_ylabel(f'{AXES[a]} 60-s mean (deg/s)')
+        right.plot(temp_m, raw_m[:, a] * DEG, '.', ms=2, color='0.4')
+        right.plot(temp_m, rem_m[:, a] * DEG, '.', ms=2, color='tab:red')
+        right.set_xlabel('temperature (degC)')
+    panels[0][0].legend(fontsize=7)
+    panels[-1][0].set_xlabel('time (h)')
+    fig.suptitle(f'{run.name}: drift removed by {label} (cf. paper Fig. 17)', fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_allan(path, curves, *, title):
+    """
+    Overlay Allan deviations per axis (paper Figure 19).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    curves : dict
+        ``{label: {axis: (tau_s, adev_rad_s)}}``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(1, 3, figsize=(14, 4.6))
+    for a, panel in enumerate(panels):
+        for label, per_axis in curves.items():
+            tau, adev = per_axis[AXES[a]]
+            panel.loglog(tau, np.asarray(adev) * DEG * 3600.0, lw=1.1, label=label)
+        panel.axvline(1.0, color='0.7', lw=0.6, ls=':')
+        panel.set_xlabel('tau (s)')
+        panel.set_ylabel(f'Allan deviation {AXES[a]} (deg/h)')
+        panel.grid(True, which='both', alpha=0.3)
+    panels[0].legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_bandwidth(path, responses, *, title):
+    """
+    Plot gain, phase and group delay against frequency, one line per label and axis.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    responses : dict
+        ``{label: {axis: FrequencyResponse}}``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    for label, per_axis in responses.items():
+        for axis, fr in per_axis.items():
+            if fr.frequency_hz.size == 0:
+                continue
+            name = f'{label} {axis}' if len(per_axis) > 1 else label
+            line, = panels[0].semilogx(fr.frequency_hz, 20 * np.log10(np.maximum(fr.gain, 1e-6)),
+                                       lw=1.0, label=name)
+            # phase and delay of a response that is mostly not the input mean nothing
+            ok = np.where(fr.coherence >= 0.5, 1.0, np.nan)
+            panels[1].semilogx(fr.frequency_hz, fr.phase_deg * ok, lw=1.0,
+                               color=line.get_color())
+            panels[2].semilogx(fr.frequency_hz, fr.group_delay_s * 1e3 * ok, lw=1.0,
+                               color=line.get_color())
+    panels[0].axhline(-3.0, color='0.6', ls=':', lw=0.8)
+    panels[0].set_ylabel('gain (dB)')
+    panels[1].set_ylabel('phase (deg), coherence >= 0.5')
+    panels[2].set_ylabel('group delay (ms), coherence >= 0.5')
+    panels[2].set_xlabel('frequency (Hz)')
+    for p in panels:
+        p.grid(True, which='both', alpha=0.3)
+    panels[0].legend(fontsize=7, ncol=2)
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_steps(path, steps, *, title):
+    """
+    Plot the mean normalised step responses.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    steps : dict
+        ``{label: {axis: StepResponse}}``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(1, 2, figsize=(12, 4.5))
+    zoom = 0.5
+    for label, per_axis in steps.items():
+        for axis, st in per_axis.items():
+            name = f'{label} {axis}' if len(per_axis) > 1 else label
+            line, = panels[0].plot(st.t_s, st.response, lw=1.0, label=name)
+            near = np.abs(st.t_s) <= zoom
+            panels[1].plot(st.t_s[near], st.response[near], lw=1.0, marker='.', ms=3,
+                           color=line.get_color())
+    for panel, what in zip(panels, ('whole window', f'+/-{zoom:g} s')):
+        panel.axvline(0.0, color='0.6', lw=0.8, ls=':')
+        panel.axhline(1.0, color='0.6', lw=0.8, ls=':')
+        panel.set_xlabel(f'time from the step (s), {what}')
+        panel.grid(True, alpha=0.3)
+    panels[0].set_ylabel('response / step')
+    panels[0].legend(fontsize=7, ncol=2)
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+_CLASS_COLOURS = {'drift': 'tab:red', 'mixed': 'tab:orange', 'noise': 'tab:gray'}
+
+
+def plot_mode_classes(path, info, *, title):
+    """
+    Plot each mode's sample entropy coloured by its class, per axis (paper Figure 13).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    info : list of dict
+        Per axis: ``sample_entropy`` and ``classes`` (one per mode), optionally
+        ``center_freqs_hz``, as the parallel model's ``fit_info`` / ``last_info``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path or None
+        None when ``info`` lacks those keys.
+
+    """
+    try:
+        rows = [(np.asarray(ax['sample_entropy'], dtype=float), list(ax['classes']),
+                 np.asarray(ax.get('center_freqs_hz', []), dtype=float)) for ax in info]
+    except (KeyError, TypeError, ValueError):
+        return None
+    if len(rows) != 3 or any(e.size != len(c) for e, c, _ in rows):
+        return None
+    plt = _pyplot()
+    fig, panels = plt.subplots(1, 3, figsize=(14, 4.2))
+    for a, (panel, (ent, classes, freqs)) in enumerate(zip(panels, rows)):
+        idx = np.arange(1, ent.size + 1)
+        panel.bar(idx, ent, color=[_CLASS_COLOURS.get(c, 'tab:blue') for c in classes])
+        if freqs.size == ent.size:
+            for i, f in zip(idx, freqs):
+                panel.annotate(f'{f:.3g} Hz', (i, 0), rotation=90, fontsize=6, ha='center',
+                               va='bottom', xytext=(0, 2), textcoords='offset points')
+        panel.set_xlabel('IMF')
+        panel.set_ylabel(f'sample entropy, axis {AXES[a]}')
+        panel.set_xticks(idx)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
+    panels[0].legend(handles, list(_CLASS_COLOURS), fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+def method_figures(method, run, out_dir):
+    """
+    Ask the method for its own figures (paper Figures 12-14, 16), if it offers any.
+
+    Parameters
+    ----------
+    method : ThermalMethod
+        Fitted method; used only if it has ``report_figures(run, out_dir)``.
+    run : ThermalRun
+        The data the figures describe.
+    out_dir : pathlib.Path
+        Where to write them.
+
+    Returns
+    -------
+    list of (str, str)
+        (file name relative to ``out_dir``, caption).
+
+    """
+    hook = getattr(method, 'report_figures', None)
+    if not callable(hook):
+        return []
+    return [(str(name), str(caption)) for name, caption in hook(run, Path(out_dir))]
+
+
+def _cell(value, spec):
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return 'n/a'
+    if isinstance(value, bool):
+        return 'yes' if value else 'no'
+    if isinstance(value, str):
+        return value
+    return format(value, spec)
+
+
+def table_markdown(header, rows, specs):
+    """
+    Format a Markdown table.
+
+    Parameters
+    ----------
+    header : sequence of str
+        Column titles (with units).
+    rows : sequence of sequence
+        Cell values (None/NaN shown as n/a, bools as yes/no).
+    specs : sequence of str
+        Format spec per column for numbers.
+
+    Returns
+    -------
+    str
+
+    """
+    lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
+    for row in rows:
+        lines.append('| ' + ' | '.join(_cell(v, s) for v, s in zip(row, specs)) + ' |')
+    return '\n'.join(lines) + '\n'

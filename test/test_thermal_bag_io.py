@@ -1,0 +1,172 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Thermal bag I/O: a bag into a ThermalRun, the refusals, the compensated copy."""
+
+from _thermal_toy import T0_NS, write_thermal_bag
+from gyro_noise_ros.bag import ImuBagReader
+from gyro_noise_ros.bag.storage import BagSource
+from gyro_noise_ros.errors import BagError, InputDataError
+from gyro_noise_ros.thermal.bag_io import join_runs, read_thermal_run, write_compensated
+import numpy as np
+import pytest
+
+RATE = 50.0
+
+
+def _data(n=500, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / RATE
+    gyro = rng.normal(0.0, 1e-3, (n, 3))
+    temp_t = np.arange(0.0, t[-1] + 1.0, 1.0)
+    return t, gyro, temp_t, 20.0 + 0.5 * temp_t
+
+
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
+def test_reads_and_interpolates_temperature(tmp_path, storage):
+    t, gyro, temp_t, temp = _data()
+    path, _ = write_thermal_bag(tmp_path / 'b', t, gyro, temp_t, temp, storage=storage)
+    run, info = read_thermal_run(path)
+    np.testing.assert_allclose(run.t_s, t, atol=1e-9)
+    np.testing.assert_array_equal(run.gyro_rad_s, gyro)
+    # the temperature is a ramp, so linear interpolation reproduces it exactly
+    np.testing.assert_allclose(run.temperature_c, 20.0 + 0.5 * t, atol=1e-9)
+    assert run.rate_hz == pytest.approx(RATE) and run.name == 'b'
+    assert info.topic == '/imu/data_raw' and info.temperature_topic == '/imu/temperature'
+    assert info.temperature_samples == temp_t.size
+
+
+def test_out_of_order_stamps_are_sorted_and_mapped_back(tmp_path):
+    t, gyro, temp_t, temp = _data(100)
+    perm = np.arange(100)
+    perm[[10, 11]] = perm[[11, 10]]
+    path, _ = write_thermal_bag(tmp_path / 'b', t[perm], gyro[perm], temp_t, temp)
+    run, info = read_thermal_run(path)
+    np.testing.assert_array_equal(run.gyro_rad_s, gyro)
+    np.testing.assert_array_equal(info.order, perm.argsort())
+
+
+def test_refusals(tmp_path):
+    t, gyro, temp_t, temp = _data(500)
+    path, _ = write_thermal_bag(tmp_path / 'none', t, gyro, temp_t, temp, temperature_topic=None)
+    with pytest.raises(BagError, match='no sensor_msgs/msg/Temperature topic'):
+        read_thermal_run(path)
+    bad = gyro.copy()
+    bad[7, 2] = np.nan
+    path, _ = write_thermal_bag(tmp_path / 'nan', t, bad, temp_t, temp)
+    with pytest.raises(InputDataError, match='1 Imu message.*NaN'):
+        read_thermal_run(path)
+    bad_t = temp.copy()
+    bad_t[1] = np.inf
+    path, _ = write_thermal_bag(tmp_path / 'nant', t, gyro, temp_t, bad_t)
+    with pytest.raises(InputDataError, match='NaN/Inf temperature'):
+        read_thermal_run(path)
+    path, _ = write_thermal_bag(tmp_path / 'apart', t, gyro, temp_t + 1000.0, temp)
+    with pytest.raises(InputDataError, match='do not overlap'):
+        read_thermal_run(path)
+    path, _ = write_thermal_bag(tmp_path / 'half', t, gyro, temp_t[:3], temp[:3])
+    with pytest.raises(InputDataError, match='does not cover'):
+        read_thermal_run(path)
+    keep = (temp_t < 0.5) | (temp_t > 2.5)
+    path, _ = write_thermal_bag(tmp_path / 'hole', t, gyro, temp_t[keep], temp[keep])
+    with pytest.raises(InputDataError, match='no temperature for 3 s'):
+        read_thermal_run(path, max_gap_s=2.0)
+    t_dup = t.copy()
+    t_dup[5] = t_dup[4]
+    path, _ = write_thermal_bag(tmp_path / 'dup', t_dup, gyro, temp_t, temp)
+    with pytest.raises(InputDataError, match='repeats'):
+        read_thermal_run(path)
+
+
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
+def test_compensated_copy_changes_only_angular_velocity(tmp_path, storage):
+    t, gyro, temp_t, temp = _data(300)
+    perm = np.arange(300)
+    perm[[20, 21]] = perm[[21, 20]]
+    path, accel = write_thermal_bag(tmp_path / 'b', t[perm], gyro[perm], temp_t, temp,
+                                    storage=storage, extra_topic='/notes')
+    run, info = read_thermal_run(path)
+    processed = run.gyro_rad_s * 2.0 + 1.0
+    counts = write_compensated(info, processed, tmp_path / 'out')
+    assert counts == {'/imu/data_raw': 300, '/imu/temperature': temp_t.size, '/notes': 3}
+    with ImuBagReader(tmp_path / 'out') as r:
+        batch = next(r.iter_batches(10_000))
+        stamps, temps = r.read_temperature()
+    np.testing.assert_array_equal(batch.gyro, gyro[perm] * 2.0 + 1.0)
+    np.testing.assert_array_equal(batch.accel, accel)
+    np.testing.assert_array_equal(batch.stamp_ns, T0_NS + np.round(t[perm] * 1e9).astype(int))
+    np.testing.assert_array_equal(temps, temp)
+    src, out = BagSource(path), BagSource(tmp_path / 'out')
+    try:
+        a = b''.join(bytes(b[0][s:s + n]) for b in src.blocks('/notes')
+                     for s, n in zip(b[1], b[2]))
+        b_ = b''.join(bytes(b[0][s:s + n]) for b in out.blocks('/notes')
+                      for s, n in zip(b[1], b[2]))
+    finally:
+        src.close()
+        out.close()
+    assert a == b_ and b'note 2' in a
+
+
+def test_join_runs_leaves_a_gap_the_rate_window_never_straddles(tmp_path):
+    t, gyro, temp_t, temp = _data(100)
+    r1, _ = read_thermal_run(write_thermal_bag(tmp_path / 'a', t, gyro, temp_t, temp)[0])
+    r2, _ = read_thermal_run(write_thermal_bag(tmp_path / 'b', t, gyro, temp_t, temp)[0])
+    j = join_runs([r1, r2], gap_s=10.0)
+    assert j.t_s.size == 200 and j.name == 'a+b'
+    assert j.t_s[100] - j.t_s[99] == pytest.approx(10.0)
+    assert np.all(np.diff(j.t_s) > 0)
+
+
+def test_ros1_input_gives_a_ros2_copy(tmp_path):
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import get_typestore, Stores
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    ty = store.types
+    t, gyro, temp_t, temp = _data(120)
+    path = tmp_path / 'r1.bag'
+
+    def header(stamp):
+        s = ty['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp) % 10**9)
+        return ty['std_msgs/msg/Header'](seq=0, stamp=s, frame_id='imu_link')
+
+    v3 = ty['geometry_msgs/msg/Vector3']
+    with Writer(path) as w:
+        imu = w.add_connection('/imu/data_raw', 'sensor_msgs/msg/Imu', typestore=store)
+        tc = w.add_connection('/imu/temperature', 'sensor_msgs/msg/Temperature', typestore=store)
+        for k, tt in enumerate(temp_t):
+            stamp = T0_NS + int(round(tt * 1e9))
+            msg = ty['sensor_msgs/msg/Temperature'](header=header(stamp), temperature=temp[k],
+                                                    variance=0.0)
+            w.write(tc, stamp, store.serialize_ros1(msg, 'sensor_msgs/msg/Temperature'))
+        for k in range(t.size):
+            stamp = T0_NS + int(round(t[k] * 1e9))
+            msg = ty['sensor_msgs/msg/Imu'](
+                header=header(stamp),
+                orientation=ty['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
+                orientation_covariance=np.zeros(9), angular_velocity=v3(*gyro[k]),
+                angular_velocity_covariance=np.zeros(9),
+                linear_acceleration=v3(x=0.0, y=0.0, z=9.81),
+                linear_acceleration_covariance=np.zeros(9))
+            w.write(imu, stamp, store.serialize_ros1(msg, 'sensor_msgs/msg/Imu'))
+    run, info = read_thermal_run(path)
+    assert info.storage == 'ros1'
+    np.testing.assert_array_equal(run.gyro_rad_s, gyro)
+    counts = write_compensated(info, -run.gyro_rad_s, tmp_path / 'out')
+    assert counts == {'/imu/data_raw': 120, '/imu/temperature': temp_t.size}
+    with ImuBagReader(tmp_path / 'out') as r:
+        assert r.storage == 'sqlite3'
+        np.testing.assert_array_equal(next(r.iter_batches()).gyro, -gyro)
+        np.testing.assert_array_equal(r.read_temperature()[1], temp)

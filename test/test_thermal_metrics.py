@@ -1,0 +1,193 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Thermal metrics against closed forms: white-noise ARW, a first-order low-pass's response."""
+
+import math
+
+from _thermal_toy import FirstOrderLowPass, HardThreshold, Identity
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.thermal.metrics import (evaluate_method, frequency_response, make_injection,
+                                            noise_metrics, step_response)
+from gyro_noise_ros.thermal.run import ThermalRun
+import numpy as np
+import pytest
+
+DEG = 180.0 / math.pi
+
+
+def _run(n, rate_hz, sigma=0.01, seed=0):
+    rng = np.random.default_rng(seed)
+    return ThermalRun(t_s=np.arange(n) / rate_hz, gyro_rad_s=rng.normal(0.0, sigma, (n, 3)),
+                      temperature_c=np.full(n, 25.0), rate_hz=rate_hz, name='white')
+
+
+def test_white_noise_arw_is_sigma_over_sqrt_rate():
+    rate, sigma = 100.0, 0.01
+    x = np.random.default_rng(3).normal(0.0, sigma, 200_000)
+    m = noise_metrics(x, rate)
+    # N = sigma sqrt(tau0), rad/sqrt(s) -> deg/sqrt(h)
+    expected = sigma / math.sqrt(rate) * DEG * 60.0
+    # ADEV at tau 0.3-3 s from 2000 s: EDF >= ~900 per tau, so each point is within ~2.3 % (1
+    # sigma) and their log-mean within ~1 %; 4 % is beyond 3 sigma.
+    assert m.arw_deg_sqrt_h == pytest.approx(expected, rel=0.04)
+    assert m.arw_slope == pytest.approx(-0.5, abs=0.08)
+    assert m.arw_on_slope
+    # White rate noise keeps falling: the minimum is at the longest tau, an upper bound only.
+    assert m.bias_stability_at_longest_tau
+
+
+def test_bias_stability_is_the_adev_minimum_of_white_plus_random_walk():
+    rate, n_arw = 10.0, 1e-3
+    k_rrw = math.sqrt(3.0) * n_arw / 100.0  # AVAR = N^2/tau + K^2 tau/3: minimum at tau = 100 s
+    rng = np.random.default_rng(5)
+    n = 400_000
+    x = rng.normal(0.0, n_arw * math.sqrt(rate), n)
+    x += np.cumsum(rng.normal(0.0, k_rrw / math.sqrt(rate), n))
+    m = noise_metrics(x, rate)
+    expected = math.sqrt(2.0 * n_arw * k_rrw / math.sqrt(3.0)) * DEG * 3600.0
+    # Near tau = 100 s the 40000-s record gives ~600 overlapping averages, ADEV within ~5 % (1
+    # sigma) per point; the minimum of a flat, noisy bottom sits a little low: 15 %.
+    assert m.bias_stability_deg_h == pytest.approx(expected, rel=0.15)
+    assert 30.0 < m.bias_stability_tau_s < 300.0
+    assert not m.bias_stability_at_longest_tau
+
+
+def test_residual_drift_of_a_square_wave_is_exact():
+    rate = 10.0
+    window = int(60 * rate)
+    k = 10
+    x = np.repeat(np.where(np.arange(k) % 2 == 0, 1.0, -1.0), window) * 0.002
+    m = noise_metrics(x, rate)
+    assert m.drift_windows == k
+    assert m.residual_drift_deg_s == pytest.approx(0.002 * DEG * math.sqrt(k / (k - 1)), rel=1e-12)
+    assert m.mean_deg_s == pytest.approx(0.0, abs=1e-12)
+    assert math.isnan(noise_metrics(x[:int(1.5 * window)], rate).residual_drift_deg_s)
+
+
+def _lp_exact(f_hz, rate, fc):
+    a = 1.0 - math.exp(-2.0 * math.pi * fc / rate)
+    p = 1.0 - a
+    w = 2.0 * math.pi * np.asarray(f_hz) / rate
+    h = a / (1.0 - p * np.exp(-1j * w))
+    delay_samples = (p * np.cos(w) - p * p) / (1.0 - 2.0 * p * np.cos(w) + p * p)
+    cos3 = (1.0 + p * p - 2.0 * a * a) / (2.0 * p)  # |H|^2 = 1/2
+    return h, delay_samples / rate, math.acos(cos3) * rate / (2.0 * math.pi), p
+
+
+def test_first_order_lowpass_gain_phase_delay_and_bandwidth():
+    rate, fc = 200.0, 5.0
+    run = _run(int(200 * rate), rate)
+    doc, _, curves = evaluate_method(FirstOrderLowPass(fc), run, f_lo_hz=0.5, f_hi_hz=40.0)
+    fr, st = curves['x']['frequency'], curves['x']['step']
+    h, delay, f3, p = _lp_exact(fr.frequency_hz, rate, fc)
+    # A linear filter's response to the injection is exact (the noise cancels in the difference);
+    # what remains is the averaging of H over each 12 %-wide band: 2 % in gain, 2 deg in phase.
+    np.testing.assert_allclose(fr.gain, np.abs(h), rtol=0.02)
+    np.testing.assert_allclose(fr.phase_deg, np.degrees(np.angle(h)), atol=2.0)
+    low = fr.frequency_hz < fc
+    np.testing.assert_allclose(fr.group_delay_s[low][1:], delay[low][1:], rtol=0.05)
+    assert fr.minus_3db_bound == 'measured'
+    assert fr.minus_3db_hz == pytest.approx(f3, rel=0.02)
+    # Coherence of a noise-free linear response is 1 but for H changing inside a band (< 1 %).
+    assert np.all(fr.coherence > 0.99)
+    # Step of the recursion: y[k] = 1 - p^(k+1); 10-90 % rise = ln 9 / (2 pi fc) exactly,
+    # interpolation between samples costs at most one sample.
+    assert st.rise_time_s == pytest.approx(math.log(9.0) / (2 * math.pi * fc), abs=1.0 / rate)
+    assert st.delay_50_s == pytest.approx((math.log(0.5) / math.log(p) - 0.5) / rate,
+                                          abs=1.0 / rate)
+    assert st.precursor < 1e-9 and st.settled_gain == pytest.approx(1.0, abs=1e-6)
+    v = doc['axes']['x']['verdict']
+    assert v['measured_causal'] and v['live_capable'] and not v['arw_from_bandwidth']
+
+
+def test_identity_passes_everything():
+    run = _run(int(150 * 100.0), 100.0)
+    doc, proc, curves = evaluate_method(Identity(), run, f_lo_hz=0.5)
+    fr, st = curves['y']['frequency'], curves['y']['step']
+    np.testing.assert_allclose(fr.gain, 1.0, atol=1e-9)
+    np.testing.assert_allclose(fr.phase_deg, 0.0, atol=1e-6)
+    assert fr.minus_3db_bound == 'above' and fr.minus_3db_hz is None
+    assert st.delay_50_s == 0.0 and st.rise_time_s == 0.0 and st.precursor < 1e-12
+    ax = doc['axes']['y']
+    assert ax['raw'] == ax['processed']
+    assert ax['verdict']['arw_ratio'] == pytest.approx(1.0)
+    assert doc['injection']['f_hi_hz'] == pytest.approx(0.45 * 100.0 / 1.25)
+
+
+def test_slow_lowpass_arw_gain_is_called_bandwidth_removal():
+    run = _run(int(300 * 200.0), 200.0)
+    doc, _, _ = evaluate_method(FirstOrderLowPass(0.05), run, f_lo_hz=0.5, f_hi_hz=40.0)
+    v = doc['axes']['z']['verdict']
+    assert v['arw_ratio'] < 0.5
+    assert v['arw_from_bandwidth'] and v['measured_causal']
+    assert 'removing bandwidth' in v['text']
+    assert doc['axes']['z']['bandwidth']['minus_3db_bound'] == 'below'
+    # smoothed sample to sample: ADEV(tau0) ~ a sigma / sqrt(2) = 1e-3 sigma sits far below
+    # ADEV at the longest tau (~8e-3 sigma), so the "bias stability" is read at the shortest tau
+    assert doc['axes']['z']['processed']['bias_stability_at_shortest_tau']
+    assert not doc['axes']['z']['raw']['bias_stability_at_shortest_tau']
+    assert 'says nothing about the bias' in v['text']
+
+
+def test_threshold_passes_large_motion_and_removes_small_motion():
+    # White noise of 1e-3 rad/s zeroed below 3e-3 rad/s; the 1 deg/s (17 sigma) injection
+    # passes, the same injection at 1 sigma mostly does not.
+    run = _run(int(300 * 100.0), 100.0, sigma=1e-3)
+    doc, _, curves = evaluate_method(HardThreshold(3e-3), run, f_lo_hz=0.5)
+    ax = doc['axes']['x']
+    assert ax['bandwidth']['low_band_min_gain'] > 0.9
+    assert ax['bandwidth_small_signal']['low_band_min_gain'] < 0.5
+    assert doc['injection']['small_signal_amplitude_deg_s'] == pytest.approx(1e-3 * DEG,
+                                                                             rel=0.02)
+    v = ax['verdict']
+    assert v['arw_from_bandwidth'] and 'small motion goes with the noise' in v['text']
+    assert v['small_signal_low_band_min_gain'] < 0.5
+
+
+def test_zero_phase_filter_is_caught_responding_before_the_step():
+    run = _run(int(200 * 200.0), 200.0)
+    doc, _, curves = evaluate_method(FirstOrderLowPass(5.0, zero_phase=True), run, f_lo_hz=0.5)
+    fr, st = curves['x']['frequency'], curves['x']['step']
+    assert st.precursor > 0.2
+    np.testing.assert_allclose(fr.phase_deg, 0.0, atol=2.0)  # filtfilt: |H|^2, no phase
+    v = doc['axes']['x']['verdict']
+    assert not v['measured_causal'] and not v['live_capable'] and 'non-causal' in v['text']
+
+
+def test_frequency_response_of_a_pure_delay():
+    rate, lag = 100.0, 7
+    x = make_injection(60_000, rate, f_lo_hz=0.2).signal_rad_s
+    y = np.concatenate([np.zeros(lag), x[:-lag]])
+    fr = frequency_response(x, y, rate, f_lo_hz=0.2, f_hi_hz=30.0)
+    np.testing.assert_allclose(fr.gain, 1.0, atol=0.01)
+    np.testing.assert_allclose(fr.group_delay_s, lag / rate, rtol=0.01)
+
+
+def test_step_response_of_an_ideal_pass_and_a_gain():
+    edges, deltas = np.array([100, 300]), np.array([2.0, -2.0])
+    x = np.zeros(500)
+    x[100:300] = 2.0
+    st = step_response(0.5 * x, 10.0, edges, deltas, 50)
+    assert st.settled_gain == pytest.approx(0.5) and st.overshoot == pytest.approx(-0.5)
+    assert math.isnan(st.rise_time_s)
+
+
+def test_injection_refuses_a_run_too_short_or_a_bad_band():
+    with pytest.raises(ParameterError, match='too short'):
+        make_injection(1000, 100.0)
+    with pytest.raises(ParameterError, match='band'):
+        make_injection(100_000, 100.0, f_lo_hz=40.0, f_hi_hz=50.0)
+    with pytest.raises(ParameterError, match='amplitude'):
+        make_injection(100_000, 100.0, amplitude_rad_s=0.0)

@@ -1,5 +1,21 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Benchmark: overlapping Allan deviation of a 12 h, 6.66 kHz record (187,159,392 samples), octave taus.
+Benchmark.
+
+Overlapping Allan deviation of a 12 h, 6.66 kHz record (187,159,392 samples), octave taus.
 
 Usage:
     python bench/bench_allan.py [--samples N] [--rate-hz 6660] [--no-baseline] [--accumulator]
@@ -11,9 +27,10 @@ Side by side on the same white-noise data (numpy, seeded):
 * the plain-numpy baseline: ``x = cumsum(y - mean)``, then per tau
   ``d = x[2m:] - 2 x[m:-m] + x[:-2m]; avar = d @ d / (2 m^2 len(d))``.
 
-Prints the wall and CPU time of each (the machine may be shared: CPU time is the steadier), their ratios, the peak of numpy allocations during each call
-(tracemalloc; the input itself excluded), the process max RSS, and the largest relative ADEV
-difference between the two. ``--accumulator`` also times AllanAccumulator fed in 1 s batches.
+Prints the wall and CPU time of each (the machine may be shared: CPU time is the steadier), their
+ratios, the peak of numpy allocations during each call (tracemalloc; the input itself excluded),
+the process max RSS, and the largest relative ADEV difference between the two. ``--accumulator``
+also times AllanAccumulator fed in 1 s batches.
 """
 
 import argparse
@@ -24,9 +41,8 @@ import sys
 import time
 import tracemalloc
 
+from gyro_noise_ros.core.allan import allan_deviation, AllanAccumulator, octave_factors
 import numpy as np
-
-from gyro_noise_ros.core.allan import AllanAccumulator, allan_deviation, octave_factors
 
 SEQ_SAMPLES = 187_159_392
 
@@ -64,8 +80,9 @@ def _maxrss_mib():
 def main(argv=None):
     """Run the benchmark; returns 0."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('--samples', type=int, default=SEQ_SAMPLES,
-                        help=f'number of rate samples (default {SEQ_SAMPLES:,} = 12 h at 6.66 kHz)')
+    parser.add_argument(
+        '--samples', type=int, default=SEQ_SAMPLES,
+        help=f'number of rate samples (default {SEQ_SAMPLES:,} = 12 h at 6.66 kHz)')
     parser.add_argument('--rate-hz', type=float, default=6660.0, help='sample rate (Hz)')
     parser.add_argument('--no-baseline', action='store_true', help='skip the numpy baseline')
     parser.add_argument('--accumulator', action='store_true', help='also time AllanAccumulator')
@@ -100,8 +117,9 @@ def main(argv=None):
               f'({peak_np / y.nbytes:.2f} x input)   maxrss {rss2:,.0f} MiB')
         assert np.array_equal(ms, res.m)
         diff = np.max(np.abs(np.sqrt(avar_np) / res.adev - 1))
-        print(f'ratio numpy / allan_deviation: wall {t_np / t_fast:.2f}x, cpu {c_np / c_fast:.2f}x; '
-              f'memory {peak_np / max(peak_fast, 1):.2f}x; max |ADEV rel diff| {diff:.2e}')
+        print(
+            f'ratio numpy / allan_deviation: wall {t_np / t_fast:.2f}x, cpu {c_np / c_fast:.2f}x; '
+            f'memory {peak_np / max(peak_fast, 1):.2f}x; max |ADEV rel diff| {diff:.2e}')
         print(f'load average (1, 5, 15 min) at the end: {os.getloadavg()}')
 
     if args.accumulator:

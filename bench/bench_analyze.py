@@ -1,13 +1,27 @@
 #!/usr/bin/env python3
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Full-tool throughput of gyro_noise_analyze on a multi-million-sample bag: --jobs 1 vs --jobs 2.
 
 Writes one simulated bag (the paper's model, 3 axes, 6660 Hz) into a temporary directory, then runs
-the whole tool (decode, chunking, identification of every chunk by both methods on the full grid, Allan
-deviation, report files without figures) with ``--jobs 1`` and ``--jobs 2`` on the same bag, side by side
-in this process, and prints samples per second, the ratio, and the share of the time spent decoding
-(bag reading + bulk ``sensor_msgs/Imu`` decode, timed inside the tool); plus a decode-only pass as the
-baseline of that share.
+the whole tool (decode, chunking, identification of every chunk by both methods on the full grid,
+Allan deviation, report files without figures) with ``--jobs 1`` and ``--jobs 2`` on the same bag,
+side by side in this process, and prints samples per second, the ratio, and the share of the time
+spent decoding (bag reading + bulk ``sensor_msgs/Imu`` decode, timed inside the tool); plus a
+decode-only pass as the baseline of that share.
 
 Usage::
 
@@ -16,18 +30,17 @@ Usage::
 
 import argparse
 import os
+from pathlib import Path
 import shutil
 import sys
 import tempfile
 import time
-from pathlib import Path
-
-import numpy as np
 
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
 from gyro_noise_ros.cli.analyze import analyze_bags
 from gyro_noise_ros.core.engine import AXES, EngineConfig, NoiseEngine
 from gyro_noise_ros.core.simulate import FractionalNoise
+import numpy as np
 
 RATE_HZ = 6660.0
 
@@ -61,7 +74,11 @@ def _identify(seed):
 
 
 def available_speedup(count=40):
-    """The same chunk identifications in 1 and in 2 processes, no bag: what the machine gives right now."""
+    """
+    Time the same chunk identifications in 1 and in 2 processes, no bag.
+
+    This is the speed-up the machine gives right now.
+    """
     from concurrent.futures import ProcessPoolExecutor
 
     _identify(0)
@@ -83,7 +100,8 @@ def main(argv=None):
     p.add_argument('--storage', default='sqlite3', choices=('sqlite3', 'mcap'))
     p.add_argument('--axis', default='all', choices=[*AXES, 'all'])
     p.add_argument('--seed', type=int, default=1)
-    p.add_argument('--workdir', type=Path, default=None, help='where the bag goes (default: a temp dir)')
+    p.add_argument('--workdir', type=Path, default=None,
+                   help='where the bag goes (default: a temp dir)')
     args = p.parse_args(argv)
     print('command:', ' '.join([os.path.basename(sys.executable), *sys.argv]))
     print(f'cores: {os.cpu_count()} (shared machine; timings are noisy)')
@@ -93,7 +111,8 @@ def main(argv=None):
         t = time.perf_counter()
         write_bag(bag, args.samples, args.storage, args.seed)
         size_mb = sum(f.stat().st_size for f in bag.iterdir()) / 1e6
-        print(f'wrote {args.samples:,} samples ({args.storage}, {size_mb:.0f} MB) in {time.perf_counter() - t:.1f} s')
+        print(f'wrote {args.samples:,} samples ({args.storage}, {size_mb:.0f} MB) in '
+              f'{time.perf_counter() - t:.1f} s')
         n, dt = decode_only(bag)
         print(f'decode only (ImuBagReader.iter_batches): {n / dt:,.0f} samples/s ({dt:.1f} s)')
         axes = AXES if args.axis == 'all' else (args.axis,)
@@ -104,17 +123,19 @@ def main(argv=None):
         warm.summary()
         rows = []
         for jobs in (1, 2):
-            doc = analyze_bags([bag], out_dir=tmp / f'out{jobs}', config=EngineConfig(axes=axes), jobs=jobs,
-                               figures=False, curves=0)
+            doc = analyze_bags([bag], out_dir=tmp / f'out{jobs}', config=EngineConfig(axes=axes),
+                               jobs=jobs, figures=False, curves=0)
             tm = doc['_timing']
             rows.append((jobs, tm['total_s'], tm['decode_s']))
             chunks = sum(a['chunks'] for a in doc['bags'][0]['axes'].values())
-            print(f'--jobs {jobs}: {tm["total_s"]:.1f} s, {args.samples / tm["total_s"]:,.0f} samples/s, '
-                  f'{chunks} chunk identifications ({len(axes)} axes), decode {tm["decode_s"]:.1f} s '
-                  f'({100 * tm["decode_s"] / tm["total_s"]:.0f} %), main process waiting for workers '
-                  f'{tm["wait_s"]:.1f} s')
+            print(f'--jobs {jobs}: {tm["total_s"]:.1f} s, {args.samples / tm["total_s"]:,.0f} '
+                  'samples/s, ' f'{chunks} chunk identifications ({len(axes)} axes), decode '
+                  f'{tm["decode_s"]:.1f} s '
+                  f'({100 * tm["decode_s"] / tm["total_s"]:.0f} %), main process waiting for '
+                  'workers ' f'{tm["wait_s"]:.1f} s')
         (_, t1, _), (_, t2, _) = rows
-        print(f'speed-up --jobs 2 / --jobs 1: {t1 / t2:.2f}x (the bare identification in 2 processes vs 1, '
+        print(f'speed-up --jobs 2 / --jobs 1: {t1 / t2:.2f}x (the bare identification in 2 '
+              'processes vs 1, '
               f'no bag, measured just after: {available_speedup():.2f}x; load average '
               f'{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)')
         print(f'equivalent: a 12 h 6.66 kHz sequence (187,159,392 samples, {len(axes)} axes) in '

@@ -1,20 +1,40 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-``noise_analyzer`` ingestion: sustained message rate and CPU share of one core at 1x and 4x of 6.66 kHz.
+``noise_analyzer`` ingestion.
 
-A publisher process (this script, ``publish`` mode) sends pre-serialised ``sensor_msgs/Imu`` paced every
-millisecond; one subscriber process at a time receives them, measured from ``/proc`` (utime + stime)
-over the publishing window:
+Sustained message rate and CPU share of one core at 1x and 4x of 6.66 kHz.
 
-1. ``callback`` baseline: a plain rclpy subscription with a Python callback per message (the naive node);
+A publisher process (this script, ``publish`` mode) sends pre-serialised ``sensor_msgs/Imu`` paced
+every millisecond; one subscriber process at a time receives them, measured from ``/proc`` (utime +
+stime) over the publishing window:
+
+1. ``callback`` baseline: a plain rclpy subscription with a Python callback per message (the naive
+   node);
 2. ``null`` baseline: the ingestion floor, a polled ``raw=True`` subscription drained with
-   ``take_message`` every 10 ms (the pattern measured in ``../shared/ROS_ON_PIP.md``) that only counts;
-3. the real ``noise_analyzer`` (default parameters: chunks of 10,000, full 0:2:0.01 grid, both methods,
-   Allan deviation), its CPU split into the analysis worker thread (``/proc/<pid>/task/<tid>``) and the
-   rest (ingestion: take every ``drain_period_s`` = 20 ms, bulk decode, gap detection, chunking,
-   diagnostics; DDS receive threads are counted here, as in the baselines).
+   ``take_message`` every 10 ms (the pattern measured in ``../shared/ROS_ON_PIP.md``) that only
+   counts;
+3. the real ``noise_analyzer`` (default parameters: chunks of 10,000, full 0:2:0.01 grid, both
+   methods, Allan deviation), its CPU split into the analysis worker thread
+   (``/proc/<pid>/task/<tid>``) and the rest (ingestion: take every ``drain_period_s`` = 20 ms,
+   bulk decode, gap detection, chunking, diagnostics; DDS receive threads are counted here, as in
+   the baselines).
 
 Received counts come from the subscriber (its exit line; the analyzer's ``Samples received`` on
-``/diagnostics``, read here). Targets (issue 4): ingestion <= 25 % of one core at 6.66 kHz; no loss at 4x.
+``/diagnostics``, read here). Targets (issue 4): ingestion <= 25 % of one core at 6.66 kHz; no loss
+at 4x.
 
 Run: ``.venv/bin/python bench/bench_analyzer_node.py [--seconds 10] [--rates 6660,26640]``.
 The machine is shared and has 2 cores: numbers vary from run to run; the ratios are the point.
@@ -34,14 +54,15 @@ RATE_HZ = 6660.0
 
 
 def cpu_seconds(pid, tid=None):
-    """utime + stime of a process (or one of its threads), in seconds."""
+    """Return utime + stime of a process (or one of its threads), in seconds."""
     path = f'/proc/{pid}/stat' if tid is None else f'/proc/{pid}/task/{tid}/stat'
     with open(path) as fh:
         fields = fh.read().rsplit(')', 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
-# ---- child modes -----------------------------------------------------------------------------------
+# ---- child modes
+# -----------------------------------------------------------------------------------
 
 def _publish(rate_hz, seconds):
     import numpy as np
@@ -92,8 +113,8 @@ def _subscribe(mode, depth):
             count[0] += 1
         node.create_subscription(Imu, 'imu/data_raw', on_msg, sensor_data_qos(depth))
     else:
-        sub = node.create_subscription(Imu, 'imu/data_raw', lambda m: None, sensor_data_qos(depth), raw=True,
-                                       callback_group=PolledGroup())
+        sub = node.create_subscription(Imu, 'imu/data_raw', lambda m: None, sensor_data_qos(depth),
+                                       raw=True, callback_group=PolledGroup())
 
         def drain():
             count[0] += len(take_all(sub, Imu)[0])
@@ -108,7 +129,8 @@ def _subscribe(mode, depth):
         rclpy.try_shutdown()
 
 
-# ---- the measurement ---------------------------------------------------------------------------------
+# ---- the measurement
+# ---------------------------------------------------------------------------------
 
 def _analyzer_received(domain, timeout_s=5.0):
     """Latest 'Samples received' of noise_analyzer on /diagnostics (None if none arrived)."""
@@ -145,7 +167,8 @@ def _run(kind, rate_hz, seconds, depth, analyzer_params=()):
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
     here = os.path.abspath(__file__)
     if kind == 'analyzer':
-        cmd = [sys.executable, '-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args', '-p', f'queue_depth:={depth}']
+        cmd = [sys.executable, '-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args', '-p',
+               f'queue_depth:={depth}']
         for param in analyzer_params:
             cmd += ['-p', param]
     else:
@@ -157,7 +180,8 @@ def _run(kind, rate_hz, seconds, depth, analyzer_params=()):
         # Wait for warm-up; the worker's thread id comes in the log.
         deadline = time.monotonic() + 120
         text = ''
-        while time.monotonic() < deadline and not ('analysing ' in text and 'native thread id' in text):
+        while time.monotonic() < deadline and not ('analysing ' in text
+                                                   and 'native thread id' in text):
             time.sleep(0.2)
             text = open(log.name).read()
         worker_tid = int(text.split('native thread id ', 1)[1].split(')', 1)[0])
@@ -165,13 +189,19 @@ def _run(kind, rate_hz, seconds, depth, analyzer_params=()):
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert pub.stdout.readline().strip() == 'start'
-        c0, w0, t0 = cpu_seconds(sub.pid), cpu_seconds(sub.pid, worker_tid) if worker_tid else 0.0, \
-            time.monotonic()
+        c0, w0, t0 = (
+            cpu_seconds(sub.pid),
+            cpu_seconds(sub.pid, worker_tid) if worker_tid else 0.0,
+            time.monotonic(),
+        )
         line = pub.stdout.readline().split()
         published = int(line[1])
         time.sleep(0.5)
-        c1, w1, t1 = cpu_seconds(sub.pid), cpu_seconds(sub.pid, worker_tid) if worker_tid else 0.0, \
-            time.monotonic()
+        c1, w1, t1 = (
+            cpu_seconds(sub.pid),
+            cpu_seconds(sub.pid, worker_tid) if worker_tid else 0.0,
+            time.monotonic(),
+        )
         pub.communicate(timeout=30)
         extra = {}
         if kind == 'analyzer':
@@ -198,11 +228,13 @@ def main(argv=None):
     parser.add_argument('--seconds', type=float, default=10.0, help='publishing time per run (s)')
     parser.add_argument('--queue-depth', type=int, default=5000,
                         help='QoS history depth of every subscriber (the analyzer: queue_depth)')
-    parser.add_argument('-p', '--param', action='append', default=[], metavar='NAME:=VALUE',
-                        help='extra noise_analyzer parameter (repeatable), e.g. -p drain_period_s:=0.02')
+    parser.add_argument(
+        '-p', '--param', action='append', default=[], metavar='NAME:=VALUE',
+        help='extra noise_analyzer parameter (repeatable), e.g. -p drain_period_s:=0.02')
     parser.add_argument('--kinds', default='callback,null,analyzer',
                         help='subscribers to measure, among callback, null, analyzer')
-    parser.add_argument('--rates', default=f'{RATE_HZ:g},{4 * RATE_HZ:g}', help='comma-separated rates (Hz)')
+    parser.add_argument('--rates', default=f'{RATE_HZ:g},{4 * RATE_HZ:g}',
+                        help='comma-separated rates (Hz)')
     args = parser.parse_args(argv)
     rates = [float(r) for r in args.rates.split(',')]
     print('command:', shlex.join([sys.executable, *sys.argv]))
@@ -212,22 +244,24 @@ def main(argv=None):
         for kind in args.kinds.split(','):
             rows.append(_run(kind, rate, args.seconds, args.queue_depth, args.param))
             r = rows[-1]
-            print(f'  measured {kind:<9} at {rate:7.0f} Hz: {r["received"]}/{r["published"]} messages, '
-                  f'{100 * r["cpu"]:.1f} % of a core', flush=True)
+            print(f'  measured {kind:<9} at {rate:7.0f} Hz: {r["received"]}/{r["published"]} '
+                  'messages, ' f'{100 * r["cpu"]:.1f} % of a core', flush=True)
     print()
-    print(f'{"rate (Hz)":>9} | {"subscriber":<22} | {"received/published":>19} | {"CPU total":>9} | '
-          f'{"ingestion":>9} | {"analysis":>8} | vs null')
+    print(
+        f'{"rate (Hz)":>9} | {"subscriber":<22} | {"received/published":>19} | {"CPU total":>9} | '
+        f'{"ingestion":>9} | {"analysis":>8} | vs null')
     for r in rows:
         null = next((x for x in rows if x['rate'] == r['rate'] and x['kind'] == 'null'), None)
         ingest = r['cpu'] - r['worker']
         name = {'callback': 'callback per message', 'null': 'null raw drain (floor)',
                 'analyzer': 'noise_analyzer'}[r['kind']]
         analysis = f'{100 * r["worker"]:7.1f}%' if r['kind'] == 'analyzer' else f'{"-":>8}'
-        print(f'{r["rate"]:9.0f} | {name:<22} | {r["received"]:>9}/{r["published"]:<9} | {100 * r["cpu"]:8.1f}% | '
-              f'{100 * ingest:8.1f}% | {analysis} | ' + (f'x{ingest / null["cpu"]:.2f}' if null else '-'))
+        print(f'{r["rate"]:9.0f} | {name:<22} | {r["received"]:>9}/{r["published"]:<9} | '
+              f'{100 * r["cpu"]:8.1f}% | ' f'{100 * ingest:8.1f}% | {analysis} | '
+              + (f'x{ingest / null["cpu"]:.2f}' if null else '-'))
         if r['kind'] == 'analyzer':
-            print(f'{"":9} | {"":22}   samples lost {r.get("lost")}, chunks analysed {r.get("analysed")}, '
-                  f'skipped {r.get("skipped")}')
+            print(f'{"":9} | {"":22}   samples lost {r.get("lost")}, chunks analysed '
+                  f'{r.get("analysed")}, ' f'skipped {r.get("skipped")}')
     print(f'load average {os.getloadavg()[0]:.2f} at the end')
     return 0
 

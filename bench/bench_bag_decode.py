@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Bulk sensor_msgs/Imu decoding of gyro_noise_ros.bag against rosbags' per-message deserialiser.
 
@@ -15,26 +29,25 @@ Run: ``.venv/bin/python bench/bench_bag_decode.py [--messages 1000000]``
 """
 
 import argparse
+from pathlib import Path
 import shlex
 import sys
 import tempfile
 import time
-from pathlib import Path
 
+from gyro_noise_ros.bag import decode_imu, IMU_MSGTYPE, ImuBagReader, ImuBagWriter
 import numpy as np
 from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
-from gyro_noise_ros.bag import IMU_MSGTYPE, ImuBagReader, ImuBagWriter, decode_imu
+from rosbags.typesys import get_typestore, Stores
 
 TS = get_typestore(Stores.ROS2_JAZZY)
 TS1 = get_typestore(Stores.ROS1_NOETIC)
 
 
 def slow_arrays(pairs):
-    """rosbags per message: the baseline every user of rosbags writes."""
+    """Decode with rosbags per message: the baseline every user of rosbags writes."""
     n = len(pairs)
     stamp = np.empty(n, np.int64)
     log = np.empty(n, np.int64)
@@ -111,9 +124,11 @@ def slow_write(path, storage, stamps, gyro, accel):
         for s, g, a in zip(stamps.tolist(), gyro.tolist(), accel.tolist()):
             header = t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](
                 sec=s // 1_000_000_000, nanosec=s % 1_000_000_000), frame_id='imu_link')
-            msg = t[IMU_MSGTYPE](header=header, orientation=quat(0.0, 0.0, 0.0, 1.0), orientation_covariance=ocov,
-                                 angular_velocity=vec(*g), angular_velocity_covariance=np.zeros(9),
-                                 linear_acceleration=vec(*a), linear_acceleration_covariance=np.zeros(9))
+            msg = t[IMU_MSGTYPE](header=header, orientation=quat(0.0, 0.0, 0.0, 1.0),
+                                 orientation_covariance=ocov, angular_velocity=vec(*g),
+                                 angular_velocity_covariance=np.zeros(9),
+                                 linear_acceleration=vec(*a),
+                                 linear_acceleration_covariance=np.zeros(9))
             writer.write(conn, s, TS.serialize_cdr(msg, IMU_MSGTYPE))
 
 
@@ -132,8 +147,9 @@ def main(argv=None):
     parser.add_argument('--messages', type=int, default=1_000_000, help='Imu messages per bag')
     parser.add_argument('--write-messages', type=int, default=200_000,
                         help='messages for the (slow) writing comparison')
-    parser.add_argument('--ros1-messages', type=int, default=200_000,
-                        help='messages for the ROS 1 comparison (rosbags keeps its index in memory)')
+    parser.add_argument(
+        '--ros1-messages', type=int, default=200_000,
+        help='messages for the ROS 1 comparison (rosbags keeps its index in memory)')
     args = parser.parse_args(argv)
     n = args.messages
     rng = np.random.default_rng(0)
@@ -150,7 +166,8 @@ def main(argv=None):
             paths[storage] = Path(tmp, storage)
             with ImuBagWriter(paths[storage], storage=storage) as writer:
                 for i in range(0, n, 100_000):
-                    writer.write_imu(stamps[i:i + 100_000], gyro[i:i + 100_000], accel[i:i + 100_000])
+                    writer.write_imu(stamps[i:i + 100_000], gyro[i:i + 100_000],
+                                     accel[i:i + 100_000])
 
         with Reader(paths['sqlite3']) as reader:
             pairs = [(t, raw) for _, t, raw in reader.messages()]
@@ -158,11 +175,11 @@ def main(argv=None):
         raws = [raw for _, raw in pairs]
         logs = np.array([t for t, _ in pairs], np.int64)
 
-        def fast_decode():
+        def fast_decode(raws, logs):
             return np.concatenate([decode_imu(raws[i:i + 65536], log_ns=logs[i:i + 65536]).gyro
                                    for i in range(0, n, 65536)])
 
-        t_fast, fast = timed(fast_decode)
+        t_fast, fast = timed(fast_decode, raws, logs)
         assert np.array_equal(slow[2], fast), 'bulk and rosbags disagree'
         row('decode only (raw CDR in memory)', n, t_slow, t_fast)
         del pairs, raws, slow
@@ -181,12 +198,14 @@ def main(argv=None):
                 writer.write(conn, t, raw)
         t_slow, slow = timed(slow_read_ros1, ros1_path)
         t_fast, fast = timed(fast_read, ros1_path)
-        assert np.array_equal(slow, fast) and np.array_equal(fast, gyro[:m]), 'ros1: decoders disagree'
+        assert np.array_equal(
+            slow, fast) and np.array_equal(fast, gyro[:m]), 'ros1: decoders disagree'
         row(f'read + decode, ros1 ({m:,})', m, t_slow, t_fast)
 
         m = min(args.write_messages, n)
         for storage, plugin in (('sqlite3', StoragePlugin.SQLITE3), ('mcap', StoragePlugin.MCAP)):
-            t_slow, _ = timed(slow_write, Path(tmp, f'ws_{storage}'), plugin, stamps[:m], gyro[:m], accel[:m])
+            t_slow, _ = timed(slow_write, Path(tmp, f'ws_{storage}'), plugin, stamps[:m], gyro[:m],
+                              accel[:m])
 
             def fast_write(storage=storage):
                 with ImuBagWriter(Path(tmp, f'wf_{storage}'), storage=storage) as writer:

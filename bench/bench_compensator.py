@@ -154,6 +154,7 @@ def pure_cost(seconds=2.0):
     from gyro_noise_ros.thermal.live import LiveDriftEvaluator
 
     class Linear:
+
         name, causal, temperature_range_c = 'bench_linear', True, (-40.0, 85.0)
 
         def drift_rad_s(self, temperature_c, dtemp_c_s):

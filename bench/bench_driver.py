@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 CPU share of one core used by ``lsm6dso32_driver`` at the real link rate (6667 Hz, target <= 30 %).
 
@@ -9,8 +23,9 @@ Three runs against ``portenta_emulator`` streaming in real time on TCP loopback,
 2. the driver with no subscriber;
 3. the driver with one subscriber (this process, draining a raw subscription every 5 ms).
 
-Printed side by side with the emulator's own CPU in each run, the messages/s the subscriber received,
-and the command line that produced the numbers. Run: ``.venv/bin/python bench/bench_driver.py``.
+Printed side by side with the emulator's own CPU in each run, the messages/s the subscriber
+received, and the command line that produced the numbers. Run: ``.venv/bin/python
+bench/bench_driver.py``.
 """
 
 import argparse
@@ -25,7 +40,7 @@ import time
 TICK = os.sysconf('SC_CLK_TCK')
 ODR = 6667.0
 
-_READER = r'''
+_READER = r"""
 import sys, time, serial
 from gyro_noise_ros.link.protocol import Decoder
 ser = serial.serial_for_url(sys.argv[1], timeout=0.005)
@@ -38,11 +53,11 @@ try:
             n += len(dec.feed(data).samples)
 except KeyboardInterrupt:
     pass
-'''
+"""
 
 
 def cpu_seconds(pid):
-    """utime + stime of a process, in seconds (fields 14 and 15 of /proc/<pid>/stat)."""
+    """Return utime + stime of a process, in seconds (fields 14 and 15 of /proc/<pid>/stat)."""
     with open(f'/proc/{pid}/stat') as fh:
         fields = fh.read().rsplit(')', 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / TICK
@@ -55,8 +70,8 @@ def free_port():
 
 
 def start_emulator(port):
-    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp', f'127.0.0.1:{port}',
-                             '--seed', '1', '--accel-fs-g', '32'],
+    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp',
+                             f'127.0.0.1:{port}', '--seed', '1', '--accel-fs-g', '32'],
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     proc.stdout.readline()  # the URL: listening from now on
     return proc
@@ -84,8 +99,8 @@ class Subscriber:
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self.node = rclpy.create_node('bench_listener', context=self.context)
-        self.sub = self.node.create_subscription(Imu, 'imu/data_raw', lambda m: None, sensor_data_qos(20000),
-                                                 raw=True)
+        self.sub = self.node.create_subscription(Imu, 'imu/data_raw', lambda m: None,
+                                                 sensor_data_qos(20000), raw=True)
         self.count = 0
         self.dds_missing = 0  # gaps in the DDS publication sequence numbers: lost by the transport
         self._last_dds = None
@@ -115,9 +130,10 @@ def measure(kind, args, subscriber=None):
     if kind == 'reader':
         consumer = subprocess.Popen([sys.executable, '-c', _READER, url])
     else:
-        consumer = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
-                                     '-p', f'port:={url}', '-p', 'reconnect_period_s:=0.2'],
-                                    stderr=subprocess.DEVNULL, env=dict(os.environ))
+        consumer = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.driver',
+                                     '--ros-args', '-p', f'port:={url}', '-p',
+                                     'reconnect_period_s:=0.2'], stderr=subprocess.DEVNULL,
+                                    env=dict(os.environ))
     try:
         def wait(seconds):
             end = time.monotonic() + seconds
@@ -144,7 +160,8 @@ def measure(kind, args, subscriber=None):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--seconds', type=float, default=10.0, help='measurement window (s)')
-    parser.add_argument('--warmup', type=float, default=4.0, help='wait after start before measuring (s)')
+    parser.add_argument('--warmup', type=float, default=4.0,
+                        help='wait after start before measuring (s)')
     args = parser.parse_args(argv)
     os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
 
@@ -158,15 +175,17 @@ def main(argv=None):
 
     base = rows[0][1]['consumer']
     print(f'command: {shlex.join([sys.executable] + sys.argv)}')
-    print(f'emulator: real time, {ODR:g} Hz, TCP loopback; window {args.seconds:g} s after {args.warmup:g} s; '
-          f'{os.cpu_count()} cores (shared machine: expect noise)')
+    print(f'emulator: real time, {ODR:g} Hz, TCP loopback; window {args.seconds:g} s after '
+          f'{args.warmup:g} s; ' f'{os.cpu_count()} cores (shared machine: expect noise)')
     print(f'{"consumer":40s} {"CPU % of a core":>16s} {"x baseline":>11s} {"emulator CPU %":>15s} '
           f'{"published msg/s":>16s}')
     for name, r in rows:
         rate = '-' if r['rate'] is None else f'{r["rate"]:.0f}'
-        print(f'{name:40s} {r["consumer"]:16.1f} {r["consumer"] / base:11.2f} {r["emulator"]:15.1f} {rate:>16s}')
+        print(f'{name:40s} {r["consumer"]:16.1f} {r["consumer"] / base:11.2f} '
+              f'{r["emulator"]:15.1f} {rate:>16s}')
     print(f'published msg/s: counted by the subscriber from DDS publication numbers (received '
-          f'{sub.count}, lost by the best-effort transport {sub.dds_missing}, over warm-up and window)')
+          f'{sub.count}, lost by the best-effort transport {sub.dds_missing}, over warm-up and '
+          'window)')
     worst = max(r['consumer'] for name, r in rows[1:])
     print(f'driver CPU share at {ODR:g} Hz: {worst:.1f} % of one core (target <= 30 %)')
     return 0

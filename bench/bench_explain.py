@@ -1,14 +1,28 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Benchmark of gyro_noise_explain: wall time of the whole workflow against record length.
 
     .venv/bin/python bench/bench_explain.py [--hours 1] [--rate-hz 1000] [--ensemble 16] [--quick]
 
 Records are the synthetic baseline (paper model, alpha ~ 1, LSM6DSO32-like level) with a hidden
-quantization (LSB 0.3 sigma) and a sinusoid, so the loop does two steps and evaluates every candidate
-the fitters propose, the usual case for real data. Each length is timed once (the machine is shared; read
-the ratios, not the third digit). Printed side by side: seconds per phase, and the ratio of the time to
-the time of the shortest record (the baseline of the comparison) against the length ratio, which shows
-how the time grows with the record length (linear growth: equal ratios).
+quantization (LSB 0.3 sigma) and a sinusoid, so the loop does two steps and evaluates every
+candidate the fitters propose, the usual case for real data. Each length is timed once (the machine
+is shared; read the ratios, not the third digit). Printed side by side: seconds per phase, and the
+ratio of the time to the time of the shortest record (the baseline of the comparison) against the
+length ratio, which shows how the time grows with the record length (linear growth: equal ratios).
 """
 
 import argparse
@@ -60,7 +74,8 @@ def main(argv=None):
         s = result.seconds
         if base is None:
             base = (n, wall)
-        print(f'{n:>10} {n / args.rate_hz / 60:>7.1f}mn {s["fit_baseline"]:>7.1f} {s["simulate_baseline"]:>7.1f} '
+        print(f'{n:>10} {n / args.rate_hz / 60:>7.1f}mn {s["fit_baseline"]:>7.1f} '
+              f'{s["simulate_baseline"]:>7.1f} '
               f'{s["iterate"]:>7.1f} {wall:>8.1f} {n / base[0]:>9.1f} {wall / base[1]:>10.1f} '
               f'{",".join(result.named):<30}', flush=True)
     return 0

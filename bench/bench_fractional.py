@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Benchmark: fractional-order identification, fast path vs the per-order numpy.convolve oracle.
 
@@ -5,26 +19,25 @@ Usage:
     python bench/bench_fractional.py [--ref-chunks 2] [--chunks 200] [--jobs 2] [--full]
 
 Prints, side by side on the same 10,000-sample chunks (full grid 0:2:0.01, L = 1000, both methods):
-the oracle's time per chunk (test/_fractional_reference.py: numpy.convolve + numpy.correlate per order),
-the fast time per chunk, their ratio per core and the largest relative curve difference. Then the
-throughput with 1 and --jobs processes over --chunks chunks, extrapolated to a 12 h 6.66 kHz sequence
-(187,159,392 samples = 18,715 chunks); --full simulates and analyses the whole 12 h sequence for real.
+the oracle's time per chunk (test/_fractional_reference.py: numpy.convolve + numpy.correlate per
+order), the fast time per chunk, their ratio per core and the largest relative curve difference.
+Then the throughput with 1 and --jobs processes over --chunks chunks, extrapolated to a 12 h 6.66
+kHz sequence (187,159,392 samples = 18,715 chunks); --full simulates and analyses the whole 12 h
+sequence for real.
 """
 
 import argparse
+from concurrent.futures import ProcessPoolExecutor
 import os
 import platform
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
-
-import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 from _fractional_reference import curves_ref  # noqa: E402
-
 from gyro_noise_ros.core.fractional import OrderIdentifier  # noqa: E402
 from gyro_noise_ros.core.simulate import FractionalNoise  # noqa: E402
+import numpy as np  # noqa: E402
 
 SEQ_SAMPLES = 187_159_392
 CHUNK = 10_000
@@ -55,7 +68,8 @@ def main():
     p.add_argument('--ref-chunks', type=int, default=2)
     p.add_argument('--chunks', type=int, default=200)
     p.add_argument('--jobs', type=int, default=2)
-    p.add_argument('--full', action='store_true', help='simulate and analyse a whole 12 h sequence')
+    p.add_argument('--full', action='store_true',
+                   help='simulate and analyse a whole 12 h sequence')
     a = p.parse_args()
     print('command:', ' '.join([os.path.basename(sys.executable)] + sys.argv))
     print(f'cpu: {_cpu()}; cores usable: {len(os.sched_getaffinity(0))}; jobs: {a.jobs}')
@@ -71,10 +85,12 @@ def main():
     t_ref = (time.perf_counter() - t) / len(chunks)
     worst = 0.0
     for fr, (vc, jc, fc) in zip(fast, ref):
-        worst = max(worst, np.max(np.abs(fr.var_curve / vc - 1)), np.max(np.abs(fr.j_curve / jc - 1)),
-                    np.max(np.abs(fr.f_curve - fc) / np.maximum(np.abs(fc), 1e-300)))
-    print(f'per chunk, one core: oracle {t_ref * 1e3:.0f} ms, fast {t_fast * 1e3:.1f} ms, '
-          f'ratio {t_ref / t_fast:.1f}x (target >= 10x); max relative curve difference {worst:.1e}')
+        worst = max(
+            worst, np.max(np.abs(fr.var_curve / vc - 1)), np.max(np.abs(fr.j_curve / jc - 1)),
+            np.max(np.abs(fr.f_curve - fc) / np.maximum(np.abs(fc), 1e-300)))
+    print(
+        f'per chunk, one core: oracle {t_ref * 1e3:.0f} ms, fast {t_fast * 1e3:.1f} ms, '
+        f'ratio {t_ref / t_fast:.1f}x (target >= 10x); max relative curve difference {worst:.1e}')
 
     work = [gen.generate(CHUNK) for _ in range(a.chunks)]
     t = time.perf_counter()
@@ -87,19 +103,23 @@ def main():
         list(pool.map(_analyse, work, chunksize=8))
         tj = (time.perf_counter() - t) / len(work)
     n_chunks = SEQ_SAMPLES // CHUNK
-    print(f'{a.chunks} chunks: {t1 * 1e3:.1f} ms/chunk with 1 process, {tj * 1e3:.1f} ms/chunk with '
-          f'{a.jobs} ({t1 / tj:.2f}x)')
-    print(f'the paper\'s "12 h" sequence ({n_chunks} chunks), extrapolated: {n_chunks * t1 / 60:.1f} min with '
+    print(
+        f'{a.chunks} chunks: {t1 * 1e3:.1f} ms/chunk with 1 process, {tj * 1e3:.1f} ms/chunk with '
+        f'{a.jobs} ({t1 / tj:.2f}x)')
+    print(f'the paper\'s "12 h" sequence ({n_chunks} chunks), extrapolated: '
+          f'{n_chunks * t1 / 60:.1f} min with '
           f'1 process, {n_chunks * tj / 60:.1f} min with {a.jobs} (target <= 10 min)')
     true_12h = int(12 * 3600 * 6660) // CHUNK
-    print(f'(a true 12 h at 6.66 kHz is {true_12h} chunks: {true_12h * tj / 60:.1f} min with {a.jobs}; the paper\'s '
+    print(f'(a true 12 h at 6.66 kHz is {true_12h} chunks: {true_12h * tj / 60:.1f} min with '
+          f"{a.jobs}; the paper's "
           f'187,159,392 samples are 7.8 h at 6.66 kHz, see docs/analysis.md)')
     if a.full:
         # Simulate first (timed apart, 1.5 GB in memory), then time the analysis alone, as a user
         # analysing a recorded sequence would run it.
         n_full = n_chunks * CHUNK
         t = time.perf_counter()
-        seq = FractionalNoise(1.4, -0.5, 1e-3, rng=np.random.default_rng(1), sigma_nu=1e-3).generate(n_full)
+        seq = FractionalNoise(1.4, -0.5, 1e-3, rng=np.random.default_rng(1),
+                              sigma_nu=1e-3).generate(n_full)
         t_sim = time.perf_counter() - t
         with ProcessPoolExecutor(a.jobs) as pool:
             list(pool.map(_analyse, [seq[:CHUNK]] * (2 * a.jobs)))  # warm the workers
@@ -109,9 +129,12 @@ def main():
             t_an = time.perf_counter() - t
         av = np.array([r[0] for r in results])
         ac = np.array([r[1] for r in results])
-        print(f'full run: {n_full:,} samples simulated in {t_sim / 60:.1f} min; {len(results)} chunks analysed '
-              f'(both methods, full grid) in {t_an / 60:.1f} min with {a.jobs} processes (target <= 10 min); '
-              f'mean order: variance method {av.mean():.3f}, correlation method {ac.mean():.3f} (simulated 1.4)')
+        print(f'full run: {n_full:,} samples simulated in {t_sim / 60:.1f} min; {len(results)} '
+              'chunks analysed '
+              f'(both methods, full grid) in {t_an / 60:.1f} min with {a.jobs} processes (target '
+              '<= 10 min); '
+              f'mean order: variance method {av.mean():.3f}, correlation method {ac.mean():.3f} '
+              '(simulated 1.4)')
     return 0
 
 

@@ -1,10 +1,24 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Decoder throughput as a multiple of the LSM6DSO32 link rate (6667 samples/s; target >= 50x).
 
-The stream is fed in 4096-byte pieces, like serial reads. Side by side, in the same process, a naive
-baseline decoder (walks frames with struct, checks the CRC, unpacks every sample with struct: the
-obvious first implementation) shows what the vectorised decoder buys. Also the clean stream with 1 %
-of the frames corrupted, and the device-clock estimator per batch.
+The stream is fed in 4096-byte pieces, like serial reads. Side by side, in the same process, a
+naive baseline decoder (walks frames with struct, checks the CRC, unpacks every sample with struct:
+the obvious first implementation) shows what the vectorised decoder buys. Also the clean stream
+with 1 % of the frames corrupted, and the device-clock estimator per batch.
 
 Run: .venv/bin/python bench/bench_link_decode.py [--seconds 60]
 """
@@ -15,17 +29,20 @@ import sys
 import time
 import zlib
 
-import numpy as np
-
 from gyro_noise_ros.link.clock import DeviceClock
-from gyro_noise_ros.link.protocol import SAMPLE_DTYPE, Decoder, encode_samples
+from gyro_noise_ros.link.protocol import Decoder, encode_samples, SAMPLE_DTYPE
+import numpy as np
 
 LINK_RATE = 6667.0
 _SAMPLE = struct.Struct('<II3h3hhBB')
 
 
 def naive_decode(data):
-    """Baseline: frame walk with struct, CRC, per-sample struct.unpack (no resync needed: clean data)."""
+    """
+    Baseline.
+
+    Frame walk with struct, CRC, per-sample struct.unpack (no resync needed: clean data).
+    """
     out = []
     pos = 0
     n = len(data)
@@ -75,15 +92,18 @@ def main(argv=None):
     rng = np.random.default_rng(0)
     n = int(args.seconds * LINK_RATE)
     print(f'command: {" ".join([sys.executable] + sys.argv)}')
-    print(f'{n} samples = {args.seconds:g} s of link time at {LINK_RATE:g} Hz, fed in 4096-byte pieces')
-    print(f'{"case":42s} {"decoder":>12s} {"x link":>8s} {"naive":>12s} {"x link":>8s} {"speed-up":>8s}')
+    print(f'{n} samples = {args.seconds:g} s of link time at {LINK_RATE:g} Hz, fed in 4096-byte '
+          'pieces')
+    print(f'{"case":42s} {"decoder":>12s} {"x link":>8s} {"naive":>12s} {"x link":>8s} '
+          f'{"speed-up":>8s}')
     for batch in (1, 16, 128):
         stream = make_stream(n, batch, rng)
         t_dec, got = timed(lambda: run_decoder(stream))
         assert got == n
         t_naive, got_naive = timed(lambda: naive_decode(stream), repeat=1)
         assert got_naive == n
-        print(f'{f"clean, {batch} samples/frame":42s} {n / t_dec:10.0f}/s {n / t_dec / LINK_RATE:7.1f}x '
+        print(f'{f"clean, {batch} samples/frame":42s} {n / t_dec:10.0f}/s '
+              f'{n / t_dec / LINK_RATE:7.1f}x '
               f'{n / t_naive:10.0f}/s {n / t_naive / LINK_RATE:7.1f}x {t_naive / t_dec:7.1f}x')
     stream = bytearray(make_stream(n, 16, rng))
     frame_len = 10 + 16 * 24
@@ -91,7 +111,8 @@ def main(argv=None):
         stream[k * frame_len + 40] ^= 0xFF
     stream = bytes(stream)
     t_dec, got = timed(lambda: run_decoder(stream))
-    print(f'{"1 % of frames corrupted, 16 samples/frame":42s} {n / t_dec:10.0f}/s {n / t_dec / LINK_RATE:7.1f}x')
+    print(f'{"1 % of frames corrupted, 16 samples/frame":42s} {n / t_dec:10.0f}/s '
+          f'{n / t_dec / LINK_RATE:7.1f}x')
     clock = DeviceClock(nominal_rate_hz=LINK_RATE)
     batches = n // 16
     t_us = (np.arange(16) * 150).astype(np.uint32)

@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Benchmark: forward simulation of paper 000 eq. (2) (numba kernel) vs its plain-numpy twin.
 
@@ -5,9 +19,9 @@ Usage:
     python bench/bench_simulate.py [--samples 187159392] [--twin-samples 20000]
 
 Side by side in one process: the numba kernel and the plain-numpy twin of test/test_simulate.py
-(one numpy dot product per step) on the same --twin-samples, L = 1000, with the ratio; then the time
-to generate --samples (default: a whole 12 h sequence at 6.66 kHz, 187,159,392 samples) streamed in
-blocks, with eqs. 10-11 measurement noise and a bias, and its peak resident memory.
+(one numpy dot product per step) on the same --twin-samples, L = 1000, with the ratio; then the
+time to generate --samples (default: a whole 12 h sequence at 6.66 kHz, 187,159,392 samples)
+streamed in blocks, with eqs. 10-11 measurement noise and a bias, and its peak resident memory.
 """
 
 import argparse
@@ -16,10 +30,9 @@ import resource
 import sys
 import time
 
-import numpy as np
-
 from gyro_noise_ros.core.fractional import gl_coefficients
 from gyro_noise_ros.core.simulate import FractionalNoise
+import numpy as np
 
 
 def twin(w, alpha, f, memory):
@@ -59,8 +72,8 @@ def main():
     dt = time.perf_counter() - t
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     print(f'{a.samples} samples streamed in blocks of 10 M: {dt:.1f} s ({dt / 60:.2f} min, '
-          f'{a.samples / dt / 1e6:.2f} M samples/s), peak RSS growth {(rss1 - rss0) / 1024:.0f} MiB; '
-          f'mean {total / a.samples:.4g}')
+          f'{a.samples / dt / 1e6:.2f} M samples/s), peak RSS growth {(rss1 - rss0) / 1024:.0f} '
+          'MiB; ' f'mean {total / a.samples:.4g}')
     return 0
 
 

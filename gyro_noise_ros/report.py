@@ -1,9 +1,26 @@
-"""
-Report writers of the offline tool, ROS-free: CSV, JSON, Markdown, Kalibr-style YAML and PNG figures.
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-Units: the engine works in SI (rad/s); every number written here is converted at this edge and its unit
-is in the column or key name (``bias_deg_s``, ``variance_deg2_s2``, ``offset_drift_deg_s_per_h``). File
-formats are documented in ``docs/offline_tool.md``. Figures use matplotlib's Agg backend (no display).
+"""
+Report writers of the offline tool, ROS-free.
+
+CSV, JSON, Markdown, Kalibr-style YAML and PNG figures.
+
+Units: the engine works in SI (rad/s); every number written here is converted at this edge and its
+unit is in the column or key name (``bias_deg_s``, ``variance_deg2_s2``,
+``offset_drift_deg_s_per_h``). File formats are documented in ``docs/offline_tool.md``. Figures use
+matplotlib's Agg backend (no display).
 """
 
 import csv
@@ -19,10 +36,10 @@ from .core.items import DEG as _DEG
 _DEG2 = _DEG ** 2
 
 #: Columns of chunks.csv, in order.
-CHUNK_COLUMNS = (
-    'bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns', 'samples', 'samples_lost',
-    'gaps', 'nan_samples', 'bias_deg_s', 'variance_deg2_s2', 'alpha_var', 'f_var', 'var_min_deg2_s2',
-    'alpha_corr', 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'temperature_c', 'message')
+CHUNK_COLUMNS = ('bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns',
+                 'samples', 'samples_lost', 'gaps', 'nan_samples', 'bias_deg_s',
+                 'variance_deg2_s2', 'alpha_var', 'f_var', 'var_min_deg2_s2', 'alpha_corr',
+                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'temperature_c', 'message')
 
 #: Columns of allan.csv, in order.
 ALLAN_COLUMNS = ('bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n')
@@ -47,6 +64,7 @@ class ChunkCsvWriter:
     ----------
     path : str or os.PathLike
         Output file (overwritten).
+
     """
 
     def __init__(self, path):
@@ -64,13 +82,16 @@ class ChunkCsvWriter:
         bag : str
             Bag label.
         result : ChunkResult
+            One analysed chunk.
+
         """
         r = result
-        self._csv.writerow((
-            bag, r.axis, r.chunk, r.status, _num(r.t_start_s), _num(r.t_mid_s), r.stamp_start_ns, r.samples,
-            r.samples_lost, r.gaps, r.nan_samples, _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
-            _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2), _num(r.alpha_corr), _num(r.f_corr),
-            _num(r.j_min * _DEG2), int(r.tie_var), int(r.tie_corr), _num(r.temperature_c), r.message))
+        self._csv.writerow((bag, r.axis, r.chunk, r.status, _num(r.t_start_s), _num(r.t_mid_s),
+                            r.stamp_start_ns, r.samples, r.samples_lost, r.gaps, r.nan_samples,
+                            _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
+                            _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2),
+                            _num(r.alpha_corr), _num(r.f_corr), _num(r.j_min * _DEG2),
+                            int(r.tie_var), int(r.tie_corr), _num(r.temperature_c), r.message))
         self.rows += 1
 
     def close(self):
@@ -85,6 +106,7 @@ def axis_summary_dict(summary, *, verdict=None):
     Parameters
     ----------
     summary : AxisSummary
+        The axis' sequence statistics and counts.
     verdict : HealthVerdict, optional, keyword-only
         Added under ``health`` when given.
 
@@ -92,14 +114,18 @@ def axis_summary_dict(summary, *, verdict=None):
     -------
     dict
         Keys carry their units (module doc); NaN becomes null.
+
     """
     seq = summary.sequence
     d = seq.drift
     out = {
         'chunks': seq.chunks,
-        'chunks_nan': summary.chunks_nan, 'chunks_dropped': summary.chunks_dropped,
-        'chunks_failed': summary.chunks_failed, 'chunks_skipped': summary.chunks_skipped,
-        'nan_samples': summary.nan_samples, 'tail_samples': seq.tail_samples,
+        'chunks_nan': summary.chunks_nan,
+        'chunks_dropped': summary.chunks_dropped,
+        'chunks_failed': summary.chunks_failed,
+        'chunks_skipped': summary.chunks_skipped,
+        'nan_samples': summary.nan_samples,
+        'tail_samples': seq.tail_samples,
         'bias_mean_deg_s': _json_num(seq.bias_mean * _DEG),
         'offset_drift_deg_s_per_h': _json_num(rad_s2_to_deg_s_per_h(d.slope)),
         'offset_drift_abs_deg_s_per_h': _json_num(abs(rad_s2_to_deg_s_per_h(d.slope))),
@@ -108,7 +134,7 @@ def axis_summary_dict(summary, *, verdict=None):
         'offset_drift_rad_s2': _json_num(d.slope),
         'offset_drift_stderr_rad_s2': _json_num(d.stderr),
         'mean_variance_deg2_s2': _json_num(seq.mean_variance * _DEG2),
-        'variance_of_variances_deg4_s4': _json_num(seq.variance_of_variances * _DEG2 ** 2),
+        'variance_of_variances_deg4_s4': _json_num(seq.variance_of_variances * _DEG2**2),
         'mean_variance_rad2_s2': _json_num(seq.mean_variance),
         'variance_of_variances_rad4_s4': _json_num(seq.variance_of_variances),
         'alpha_var_mean': _json_num(seq.alpha_var_mean),
@@ -116,18 +142,27 @@ def axis_summary_dict(summary, *, verdict=None):
         'alpha_corr_mean': _json_num(seq.alpha_corr_mean),
         'alpha_corr_variance': _json_num(seq.alpha_corr_variance),
         'alpha_var_multimodal': bool(getattr(seq, 'alpha_var_modes', ())),
-        'alpha_var_modes': [{'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_var_modes', ())],
+        'alpha_var_modes': [
+            {'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_var_modes', ())
+        ],
         'alpha_corr_multimodal': bool(getattr(seq, 'alpha_corr_modes', ())),
-        'alpha_corr_modes': [{'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_corr_modes', ())],
-        'ties_var': seq.ties_var, 'ties_corr': seq.ties_corr,
+        'alpha_corr_modes': [
+            {'order': m, 'chunks': c} for m, c in getattr(seq, 'alpha_corr_modes', ())
+        ],
+        'ties_var': seq.ties_var,
+        'ties_corr': seq.ties_corr,
         'temperature_mean_c': _json_num(summary.temperature_mean_c),
         'allan': allan_terms_dict(summary.noise_terms),
-        'allan_datasheet': (summary.datasheet.as_dict()
-                            if getattr(summary, 'datasheet', None) is not None else None),
+        'allan_datasheet': (
+            summary.datasheet.as_dict()
+            if getattr(summary, 'datasheet', None) is not None
+            else None
+        ),
     }
     if verdict is not None:
         out['health'] = {'level': verdict.level, 'message': verdict.message,
-                         'items': [{'key': k, 'value': v, 'level': lv} for k, v, lv in verdict.items]}
+                         'items': [{'key': k, 'value': v, 'level': lv} for k, v,
+                                   lv in verdict.items]}
     return out
 
 
@@ -144,6 +179,7 @@ def allan_terms_dict(terms):
     Returns
     -------
     dict or None
+
     """
     if terms is None:
         return None
@@ -174,7 +210,10 @@ def write_json(path, doc):
     Parameters
     ----------
     path : str or os.PathLike
+        File to write.
     doc : dict
+        JSON-serialisable document.
+
     """
     Path(path).write_text(json.dumps(doc, indent=2, allow_nan=False) + '\n')
 
@@ -203,11 +242,16 @@ def _plain_summary(b, axis, a):
         parts.append(f'{left} sample(s) left out (window or motion)')
     sheet = a.get('allan_datasheet') or {}
     if sheet.get('arw_deg_per_sqrt_h') is not None:
-        parts.append(f"angle random walk {sheet['arw_deg_per_sqrt_h']:.3g} deg/sqrt(h) "
-                     f"({sheet['arw_ci_low_deg_per_sqrt_h']:.3g}-{sheet['arw_ci_high_deg_per_sqrt_h']:.3g})")
+        parts.append(
+            f"angle random walk {sheet['arw_deg_per_sqrt_h']:.3g} deg/sqrt(h) "
+            f"({sheet['arw_ci_low_deg_per_sqrt_h']:.3g}-{sheet['arw_ci_high_deg_per_sqrt_h']:.3g})"
+        )
     if sheet.get('bias_stability_deg_h') is not None:
-        bound = ' (upper bound: the curve never turned up)' if sheet.get('bias_stability_at_longest_tau') \
+        bound = (
+            ' (upper bound: the curve never turned up)'
+            if sheet.get('bias_stability_at_longest_tau')
             else ''
+        )
         parts.append(f"bias stability {sheet['bias_stability_deg_h']:.3g} deg/h "
                      f"({sheet['bias_stability_deg_s']:.3g} deg/s) at tau = "
                      f"{sheet['bias_stability_tau_s']:.3g} s{bound}")
@@ -235,10 +279,13 @@ def _plain_summary(b, axis, a):
     return '; '.join(parts) + '.'
 
 
-_CUSTOMARY = (('quantization_deg', 'Q (deg)'), ('angle_random_walk_deg_per_sqrt_h', 'N (deg/sqrt(h))'),
-              ('bias_instability_deg_per_h', 'B (deg/h)'),
-              ('rate_random_walk_deg_per_h_sqrt_h', 'K (deg/h/sqrt(h))'),
-              ('rate_ramp_deg_per_h2', 'R (deg/h^2)'))
+_CUSTOMARY = (
+    ('quantization_deg', 'Q (deg)'),
+    ('angle_random_walk_deg_per_sqrt_h', 'N (deg/sqrt(h))'),
+    ('bias_instability_deg_per_h', 'B (deg/h)'),
+    ('rate_random_walk_deg_per_h_sqrt_h', 'K (deg/h/sqrt(h))'),
+    ('rate_ramp_deg_per_h2', 'R (deg/h^2)'),
+)
 
 
 def summary_markdown(doc):
@@ -253,6 +300,7 @@ def summary_markdown(doc):
     Returns
     -------
     str
+
     """
     bags = doc['bags']
     axes = []
@@ -270,13 +318,19 @@ def summary_markdown(doc):
         if b.get('warnings'):
             lines.append('')
     lines += [
-        '## Method', '',
-        f"Tool {doc['tool']} {doc['version']}; chunk size {opts['chunk_size']} samples; order grid "
-        f"{opts['order_grid']['start']:g}:{opts['order_grid']['stop']:g}:{opts['order_grid']['step']:g}; "
+        '## Method',
+        '',
+        f"Tool {doc['tool']} {doc['version']}; chunk size {opts['chunk_size']} samples; order "
+        'grid '
+        f"{opts['order_grid']['start']:g}:{opts['order_grid']['stop']:g}:"
+        f"{opts['order_grid']['step']:g}; "
         f"memory L = {opts['memory']}; gap policy {opts['gap_policy']}. Tables follow paper 000 "
-        '(Sierociuk et al., Sensors 2025): offset drift = least-squares slope of the chunk bias over time '
+        '(Sierociuk et al., Sensors 2025): offset drift = least-squares slope of the chunk bias '
+        'over time '
         '(Table 3, standard error valid for correlated chunk biases); variances over chunks with '
-        'ddof = 1. Confidence intervals are 68.3 % (1 sigma).', '']
+        'ddof = 1. Confidence intervals are 68.3 % (1 sigma).',
+        '',
+    ]
     for axis in axes:
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
         lines += [f'## Axis {axis}', '',
@@ -292,14 +346,15 @@ def summary_markdown(doc):
                          f"{_fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
                          f"{_fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
         lines += ['', '### Paper 000 Table 4: noise variance', '',
-                  '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance ((deg/s)^4) |',
-                  '|---|---:|---:|']
+                  '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance '
+                  '((deg/s)^4) |', '|---|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['mean_variance_deg2_s2'], '.6g')} | "
                          f"{_fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
         for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
             lines += ['', f'### Paper 000 Table {num}: order, {method} method', '',
-                      '| Sequence | Estimated order | Variance of estimated order | Ties |', '|---|---:|---:|---:|']
+                      '| Sequence | Estimated order | Variance of estimated order | Ties |',
+                      '|---|---:|---:|---:|']
             tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
             for label, a in rows:
                 if a.get(key + '_multimodal'):
@@ -310,23 +365,29 @@ def summary_markdown(doc):
                     lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | "
                                  f"{_fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
         if any(a.get('allan') for _, a in rows):
-            lines += ['', '### Allan deviation: datasheet numbers and IEEE 952 fit (customary units)', '',
-                      '| Sequence | ARW at 1 s (deg/sqrt(h)) | Bias stability (deg/h) | at tau (s) | '
-                      + ' | '.join(name for _, name in _CUSTOMARY) + ' | Fit | Short taus excluded below (s) |',
-                      '|---|' + '---:|' * (3 + len(_CUSTOMARY)) + '---|---:|']
+            lines += [
+                '', '### Allan deviation: datasheet numbers and IEEE 952 fit (customary units)',
+                '',
+                '| Sequence | ARW at 1 s (deg/sqrt(h)) | Bias stability (deg/h) | at tau (s) | '
+                + ' | '.join(name for _, name in _CUSTOMARY)
+                + ' | Fit | Short taus excluded below (s) |', '|---|' + '---:|'
+                * (3 + len(_CUSTOMARY)) + '---|---:|']
             for label, a in rows:
                 t = a.get('allan') or {}
                 d = a.get('allan_datasheet') or {}
-                arw = (f"{_fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} ({_fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
+                arw = (f"{_fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} "
+                       f"({_fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
                        f"-{_fmt(d.get('arw_ci_high_deg_per_sqrt_h'), '.3g')})")
-                bs = (f"{_fmt(d.get('bias_stability_deg_h'), '.4g')} ({_fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
+                bs = (f"{_fmt(d.get('bias_stability_deg_h'), '.4g')} "
+                      f"({_fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
                       f"-{_fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
                 fit = d.get('fit_quality', '')
                 if fit:
                     fit += f" (max error {100 * (d.get('fit_max_relative_error') or 0):.0f} %)"
-                lines.append(f"| {label} | {arw} | {bs} | {_fmt(d.get('bias_stability_tau_s'), '.4g')} | "
-                             + ' | '.join(_fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
-                             + f" | {fit} | {_fmt(d.get('band_limited_below_s'), '.3g')} |")
+                lines.append(
+                    f"| {label} | {arw} | {bs} | {_fmt(d.get('bias_stability_tau_s'), '.4g')} | "
+                    + ' | '.join(_fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
+                    + f" | {fit} | {_fmt(d.get('band_limited_below_s'), '.3g')} |")
             keys = []
             for _, a in rows:
                 for k, v in (a.get('allan') or {}).items():
@@ -337,7 +398,8 @@ def summary_markdown(doc):
                       '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
             for label, a in rows:
                 terms = a.get('allan') or {}
-                lines.append(f'| {label} | ' + ' | '.join(_fmt(terms.get(k), '.4g') for k in keys) + ' |')
+                lines.append(f'| {label} | ' + ' | '.join(_fmt(terms.get(k), '.4g') for k in keys)
+                             + ' |')
         if any('health' in a for _, a in rows):
             lines += ['', '### Health verdict against the reference', '',
                       '| Sequence | Level | Message |', '|---|---|---|']
@@ -347,15 +409,17 @@ def summary_markdown(doc):
                     lines.append(f"| {label} | {h['level']} | {h['message']} |")
         lines.append('')
     lines += ['## Input counts', '',
-              '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | Samples | Lost | '
-              'Gaps | Out-of-order stamps | NaN samples | Tail samples |',
+              '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | '
+              'Samples | Lost | ' 'Gaps | Out-of-order stamps | NaN samples | Tail samples |',
               '|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|']
     for b in bags:
         nan = sum(a['nan_samples'] for a in b['axes'].values())
         jitter = b.get('stamp_jitter_s')
-        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.6g')} | {b.get('rate_method', '')} | "
+        lines.append(f"| {b['label']} | {b['topic']} | {_fmt(b['rate_hz'], '.6g')} | "
+                     f"{b.get('rate_method', '')} | "
                      f"{_fmt(None if jitter is None else 1e3 * jitter, '.3g')} | "
-                     f"{_fmt(b['duration_s'], '.1f')} | {b['samples']} | {b['samples_lost']} | {b['gaps']} | "
+                     f"{_fmt(b['duration_s'], '.1f')} | {b['samples']} | {b['samples_lost']} | "
+                     f"{b['gaps']} | "
                      f"{b['out_of_order_stamps']} | {nan} | {b['tail_samples']} |")
     lines.append('')
     return '\n'.join(lines)
@@ -368,8 +432,10 @@ def write_allan_csv(path, entries):
     Parameters
     ----------
     path : str or os.PathLike
+        CSV file to write.
     entries : iterable of (bag, axis, tau_s, adev_rad_s, ci_low_rad_s, ci_high_rad_s, n)
         Arrays per (bag, axis); the deviation and its confidence interval in rad/s.
+
     """
     with open(path, 'w', newline='') as fh:
         w = csv.writer(fh)
@@ -380,15 +446,17 @@ def write_allan_csv(path, entries):
                             _num(hi[i] * _DEG), int(n[i])))
 
 
-def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, gyroscope_random_walk,
-                   accelerometer_noise_density=None, accelerometer_random_walk=None, source='',
-                   gyroscope_random_walk_note='', accelerometer_random_walk_note=''):
+def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density,
+                   gyroscope_random_walk, accelerometer_noise_density=None,
+                   accelerometer_random_walk=None, source='', gyroscope_random_walk_note='',
+                   accelerometer_random_walk_note=''):
     """
     Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units).
 
     Parameters
     ----------
     path : str or os.PathLike
+        YAML file to write.
     rostopic : str
         IMU topic.
     update_rate_hz : float
@@ -403,11 +471,13 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, g
         Comment line saying which bag and axes the numbers come from.
     gyroscope_random_walk_note, accelerometer_random_walk_note : str
         Comment after the value (e.g. that it is a bound, not a fit).
+
     """
     def val(v):
         return 'null' if v is None or not math.isfinite(float(v)) else repr(float(v))
 
-    lines = ['# Kalibr-style IMU noise parameters written by gyro_noise_analyze (continuous-time, SI).']
+    lines = [
+        '# Kalibr-style IMU noise parameters written by gyro_noise_analyze (continuous-time, SI).']
     if source:
         lines.append(f'# {source}')
     lines += [f'rostopic: {rostopic}', f'update_rate: {val(update_rate_hz)}  # Hz',
@@ -415,13 +485,15 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density, g
               f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)'
               + (f'; {gyroscope_random_walk_note}' if gyroscope_random_walk_note else '')]
     if accelerometer_noise_density is not None or accelerometer_random_walk is not None:
-        lines += [f'accelerometer_noise_density: {val(accelerometer_noise_density)}  # m/s^2/sqrt(Hz)',
-                  f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)'
-                  + (f'; {accelerometer_random_walk_note}' if accelerometer_random_walk_note else '')]
+        lines += [
+            f'accelerometer_noise_density: {val(accelerometer_noise_density)}  # m/s^2/sqrt(Hz)',
+            f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)'
+            + (f'; {accelerometer_random_walk_note}' if accelerometer_random_walk_note else '')]
     Path(path).write_text('\n'.join(lines) + '\n')
 
 
-# ---- figures ---------------------------------------------------------------------------------------------
+# ---- figures
+# ---------------------------------------------------------------------------------------------
 
 def _pyplot():
     import matplotlib
@@ -501,9 +573,9 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
     """
     Plot var(alpha) and J(alpha) stacked over chunks as heat maps (paper Figs. 6-9).
 
-    Each chunk's curve is shown as log10(curve / its minimum), so the colour reads "how much worse than the
-    best order of that chunk" and the minimum line is visible whatever the chunk's noise level; the chosen
-    orders are overlaid as dots.
+    Each chunk's curve is shown as log10(curve / its minimum), so the colour reads "how much worse
+    than the best order of that chunk" and the minimum line is visible whatever the chunk's noise
+    level; the chosen orders are overlaid as dots.
 
     Parameters
     ----------
@@ -516,15 +588,20 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
     var_curves, j_curves : numpy.ndarray
         ``(len(chunks), len(alphas))`` curves.
     title : str
+        Figure title.
+
     """
     plt = _pyplot()
     fig, panels = plt.subplots(1, 2, figsize=(11, 4.2), squeeze=False)
-    for panel, curves, name in ((panels[0, 0], var_curves, 'var(w)'), (panels[0, 1], j_curves, 'J')):
+    for panel, curves, name in ((panels[0, 0], var_curves, 'var(w)'),
+                                (panels[0, 1], j_curves, 'J')):
         curves = np.asarray(curves, dtype=np.float64)
         low = np.nanmin(curves, axis=1, keepdims=True)
         rel = np.log10(curves / low)
-        extent = (alphas[0], alphas[-1], chunks[-1] + 0.5, chunks[0] - 0.5) if len(chunks) else None
-        im = panel.imshow(rel, aspect='auto', extent=extent, cmap='viridis', interpolation='nearest')
+        extent = (alphas[0], alphas[-1], chunks[-1] + 0.5, chunks[0]
+                  - 0.5) if len(chunks) else None
+        im = panel.imshow(rel, aspect='auto', extent=extent, cmap='viridis',
+                          interpolation='nearest')
         best = alphas[np.nanargmin(curves, axis=1)]
         panel.plot(best, chunks, 'r.', ms=3, label='minimum')
         panel.set_xlabel('order alpha')
@@ -540,29 +617,33 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
 
 def plot_allan(path, series, *, confidence=0.683):
     """
-    Overlay the Allan deviation of every bag with confidence bands and fitted terms (paper Fig. 10).
+    Overlay every bag's Allan deviation with confidence bands and fitted terms (paper Fig. 10).
 
     Parameters
     ----------
     path : str or os.PathLike
         PNG file.
     series : dict
-        ``{axis: [(label, tau_s, adev, ci_low, ci_high, fit_lines), ...]}`` in rad/s; ``fit_lines`` is a
-        list of ``(name, tau_s, adev)`` model curves (may be empty).
+        ``{axis: [(label, tau_s, adev, ci_low, ci_high, fit_lines), ...]}`` in rad/s; ``fit_lines``
+        is a list of ``(name, tau_s, adev)`` model curves (may be empty).
     confidence : float, keyword-only
         Two-sided confidence of the bands (named in the legend).
+
     """
     plt = _pyplot()
     axes = list(series)
-    fig, panels = plt.subplots(1, len(axes), figsize=(max(7.0, 5.5 * len(axes)), 4.8), squeeze=False)
+    fig, panels = plt.subplots(1, len(axes), figsize=(max(7.0, 5.5 * len(axes)), 4.8),
+                               squeeze=False)
     for ax_name, panel in zip(axes, panels[0]):
         for label, tau, adev, lo, hi, fits in series[ax_name]:
             line, = panel.loglog(tau, np.asarray(adev) * _DEG, 'o-', ms=3, lw=1.3, label=label)
-            panel.fill_between(tau, np.asarray(lo) * _DEG, np.asarray(hi) * _DEG, color=line.get_color(),
-                               alpha=0.15, lw=0, label=f'{label}: {100 * confidence:.1f} % interval')
+            panel.fill_between(tau, np.asarray(lo) * _DEG, np.asarray(hi) * _DEG,
+                               color=line.get_color(), alpha=0.15, lw=0,
+                               label=f'{label}: {100 * confidence:.1f} % interval')
             for k, (name, ftau, fadev) in enumerate(fits):
-                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8, color=line.get_color(),
-                             label=f'{label}: IEEE 952 fit' if k == 0 else None)
+                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8,
+                             color=line.get_color(), label=f'{label}: IEEE 952 fit' if k == 0
+                             else None)
         panel.set_xlabel('tau (s)')
         panel.set_ylabel(f'Allan deviation {ax_name} (deg/s)')
         panel.grid(True, which='both', alpha=0.3)
@@ -574,7 +655,8 @@ def plot_allan(path, series, *, confidence=0.683):
     plt.close(fig)
 
 
-# ---- Allan adapters (duck-typed on core.allan's AllanResult and noise-term fit) -------------------------
+# ---- Allan adapters (duck-typed on core.allan's AllanResult and noise-term fit)
+# -------------------------
 
 def allan_curve(result):
     """
@@ -583,10 +665,12 @@ def allan_curve(result):
     Parameters
     ----------
     result : core.allan.AllanResult
+        One analysed chunk.
 
     Returns
     -------
     tuple of numpy.ndarray
+
     """
     tau = np.asarray(result.tau_s, dtype=np.float64)
     adev = np.asarray(result.adev, dtype=np.float64)
@@ -599,7 +683,7 @@ def allan_curve(result):
 
 def allan_fit_lines(terms, tau):
     """
-    Return ``[(name, tau_s, adev_rad_s)]`` model curves of the fitted noise terms, for the Allan figure.
+    Return ``[(name, tau_s, adev_rad_s)]`` curves of the fitted noise terms (Allan figure).
 
     Parameters
     ----------
@@ -612,6 +696,7 @@ def allan_fit_lines(terms, tau):
     Returns
     -------
     list
+
     """
     if terms is None or len(tau) == 0:
         return []
@@ -634,25 +719,30 @@ def allan_fit_lines(terms, tau):
 
 def allan_kalibr(terms_list):
     """
-    Return (gyroscope_noise_density, gyroscope_random_walk) for imu.yaml: the largest over the axes.
+    Return (gyroscope_noise_density, gyroscope_random_walk) for imu.yaml.
+
+    The largest over the axes.
 
     Parameters
     ----------
     terms_list : list
-        Noise-term fits of the analysed axes (None entries ignored). Each provides ``kalibr()`` returning a
-        mapping, or attributes/keys ``noise_density`` / ``random_walk`` (SI).
+        Noise-term fits of the analysed axes (None entries ignored). Each provides ``kalibr()``
+        returning a mapping, or attributes/keys ``noise_density`` / ``random_walk`` (SI).
 
     Returns
     -------
     tuple of float
         NaN where no axis provides the value.
+
     """
     density, walk = [], []
     for terms in terms_list:
         if terms is None:
             continue
-        k = terms.kalibr() if callable(getattr(terms, 'kalibr', None)) else getattr(terms, 'kalibr', terms)
-        get = (k.get if isinstance(k, dict) else lambda name, default=None, _k=k: getattr(_k, name, default))
+        k = terms.kalibr() if callable(
+            getattr(terms, 'kalibr', None)) else getattr(terms, 'kalibr', terms)
+        get = (k.get if isinstance(k, dict) else lambda name, default=None,
+               _k=k: getattr(_k, name, default))
         for out, names in ((density, ('gyroscope_noise_density', 'noise_density')),
                            (walk, ('gyroscope_random_walk', 'random_walk'))):
             for name in names:

@@ -1,21 +1,43 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Plain-numpy twins of the Allan kernels (slow, obviously correct; tests only).
 
-Each function states the kernel it mirrors. No compensation tricks beyond what is said: these are the
-textbook formulas (paper 001 eq. 7, SP 1065 eqs. 9 and 11, Riley & Greenhall lag-1 ACF).
+Each function states the kernel it mirrors. No compensation tricks beyond what is said: these are
+the textbook formulas (paper 001 eq. 7, SP 1065 eqs. 9 and 11, Riley & Greenhall lag-1 ACF).
 """
 
 import numpy as np
 
 
 def phase_longdouble(y, offset):
-    """Twin of ``_integrate``: prefix sums of y - offset in extended precision, rounded to float64."""
+    """
+    Twin of ``_integrate``.
+
+    Prefix sums of y - offset in extended precision, rounded to float64.
+    """
     acc = np.cumsum(np.asarray(y, dtype=np.longdouble) - np.longdouble(offset))
     return np.concatenate(([0.0], acc.astype(np.float64)))
 
 
 def avar_from_phase(x, m, stride=1):
-    """Twin of ``_avar_sums``: mean of (x[i+2m] - 2x[i+m] + x[i])^2 / (2 m^2), i = 0, stride, ..."""
+    """
+    Twin of ``_avar_sums``.
+
+    Mean of (x[i+2m] - 2x[i+m] + x[i])^2 / (2 m^2), i = 0, stride, ...
+    """
     d = x[2 * m:] - 2.0 * x[m:-m] + x[:-2 * m]
     d = d[::stride]
     return float(np.sum(d * d) / (2.0 * m * m * d.size)), d.size
@@ -31,7 +53,7 @@ def avar_rate(y, m, *, overlapping=True, stride=None):
 
 
 def avar_naive(y, m):
-    """The same overlapping AVAR with a plain cumulative sum of the raw samples (no mean removal)."""
+    """Compute the overlapping AVAR with a plain cumulative sum of the raw samples (no offset)."""
     x = np.concatenate(([0.0], np.cumsum(np.asarray(y, dtype=np.float64))))
     return avar_from_phase(x, m, 1)[0]
 
@@ -47,7 +69,8 @@ def lag1_alpha(y, m):
     Twin of the lag-1 ACF noise identification (Riley & Greenhall 2004) on rate data.
 
     Non-overlapping m-averages, least-squares line removed (np.polyfit), differenced until
-    delta = r1 / (1 + r1) < 0.25 or d = 2; alpha = -round(2 delta) - 2 d. Returns (alpha, r1 at d=0).
+    delta = r1 / (1 + r1) < 0.25 or d = 2; alpha = -round(2 delta) - 2 d. Returns (alpha, r1 at
+    d=0).
     """
     y = np.asarray(y, dtype=np.float64)
     n = y.size // m

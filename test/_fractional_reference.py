@@ -1,9 +1,24 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Slow, obviously-correct twins of gyro_noise_ros.core.fractional (paper 000 eqs. 3-14): the oracle.
 
 Each step is written as the paper states it, with no FFT and no shared code with the package:
-coefficients from the binomial definition (eq. 4), the truncated sum (eqs. 3, 5) by direct convolution,
-f by the pseudoinverse (eq. 8), the biased autocorrelation (eq. 14) by direct correlation.
+coefficients from the binomial definition (eq. 4), the truncated sum (eqs. 3, 5) by direct
+convolution, f by the pseudoinverse (eq. 8), the biased autocorrelation (eq. 14) by direct
+correlation.
 """
 
 import numpy as np

@@ -1,6 +1,21 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Allan deviation (core/allan.py) against published numbers, Stable32, an independent R implementation,
-closed forms and plain-numpy twins.
+Allan deviation (core/allan.py) against published numbers and independent implementations.
+
+Published numbers, Stable32, an independent R implementation, closed forms and plain-numpy twins.
 
 References read at test time from ../shared/data/real (never copied into the package):
 NIST SP 1065 NBS14 (Riley 2008, pp. 107-108), Stable32 result files from the allantools test suite,
@@ -11,21 +26,26 @@ import csv
 import functools
 import gzip
 import math
-import os
-
-import numpy as np
-import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 import _allan_reference as ref
 from _realdata import real_data
 from gyro_noise_ros.core import _kernels_allan as kern
-from gyro_noise_ros.core.allan import (AllanAccumulator, NoiseTerms, allan_deviation,
-                                       bias_instability_from_minimum, confidence_bounds, dense_factors,
-                                       edf_greenhall, fit_noise_terms, octave_factors)
+from gyro_noise_ros.core.allan import (
+    allan_deviation,
+    AllanAccumulator,
+    bias_instability_from_minimum,
+    confidence_bounds,
+    dense_factors,
+    edf_greenhall,
+    fit_noise_terms,
+    NoiseTerms,
+    octave_factors,
+)
 from gyro_noise_ros.errors import InputDataError, ParameterError
-
+from hypothesis import given, settings
+from hypothesis import strategies as st
+import numpy as np
+import pytest
 
 
 def _load(rel):
@@ -44,14 +64,14 @@ def _stable32_rows(rel):
             if line.startswith('#') or not line.strip():
                 continue
             f = line.split()
-            rows.append(dict(m=int(f[0]), tau=float(f[1]), n=int(f[2]), alpha=int(f[3]),
-                             lo=float(f[4]), dev=f[5], hi=float(f[6])))
+            rows.append({'m': int(f[0]), 'tau': float(f[1]), 'n': int(f[2]), 'alpha': int(f[3]),
+                         'lo': float(f[4]), 'dev': f[5], 'hi': float(f[6])})
     return rows
 
 
 def _printed_equal(value, printed):
     """
-    True if ``value`` rounds to the printed decimal string.
+    Tell whether ``value`` rounds to the printed decimal string.
 
     Half a unit in the last printed digit, plus 1e-6 relative: Stable32 read its input from text
     files of finite precision, so a value within 1e-6 of a rounding boundary (one of 1277 rows
@@ -97,10 +117,10 @@ def _dataset(name):
     return _CACHE[name]
 
 
-# (dataset, result file, overlapping). The ocxo *_octave.txt files are NOT used for values: Stable32
-# ran them on the raw counter readings (its header: Average = 1.000000e+00, i.e. f / 1e7 without
-# removing 1), and lost about 4 digits doing so (its OADEV at AF 1 differs from its own ADEV at AF 1,
-# which must be identical). The *_alltau.txt files were run on the offset-free data.
+# (dataset, result file, overlapping). The ocxo *_octave.txt files are NOT used for values:
+# Stable32 ran them on the raw counter readings (its header: Average = 1.000000e+00, i.e. f / 1e7
+# without removing 1), and lost about 4 digits doing so (its OADEV at AF 1 differs from its own
+# ADEV at AF 1, which must be identical). The *_alltau.txt files were run on the offset-free data.
 VALUE_FILES = [
     ('ocxo', 'ocxo/stable32_adev_alltau.txt', False),
     ('ocxo', 'ocxo/stable32_oadev_alltau.txt', True),
@@ -116,11 +136,13 @@ VALUE_FILES = [
 ]
 
 
-# ---- published numbers ---------------------------------------------------------------------------
+# ---- published numbers
+# ---------------------------------------------------------------------------
 
 def test_nbs14_10point_frequency_and_phase():
     # NIST SP 1065 p. 107 (published to 7 significant digits)
-    y = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14', 'nbs14_10point_frequency.txt'))
+    y = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14',
+                             'nbs14_10point_frequency.txt'))
     x = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14', 'nbs14_10point_phase.txt'))
     for data, kind in ((y, 'rate'), (x, 'phase')):
         adev = allan_deviation(data, 1.0, taus=[1, 2], data_type=kind, overlapping=False).adev
@@ -130,7 +152,8 @@ def test_nbs14_10point_frequency_and_phase():
 
 
 def test_nbs14_1000point():
-    y = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14', 'nbs14_1000point_frequency.txt'))
+    y = np.loadtxt(real_data('allantools_stable32_reference', 'nbs14',
+                             'nbs14_1000point_frequency.txt'))
     assert y.size == 1000
     adev = allan_deviation(y, 1.0, taus=[1, 10, 100], overlapping=False).adev
     oadev = allan_deviation(y, 1.0, taus=[1, 10, 100]).adev
@@ -152,10 +175,12 @@ def test_stable32_values_and_term_counts(name, rel, overlapping):
 
 def test_stable32_noise_identification():
     # Stable32's Alpha column uses the lag-1 ACF when there are >= 30 averages (B1/R(n) below, with
-    # its own decision boundaries, which we do not claim to reproduce). Over the 691 such rows of the
-    # value files we agree on 681 (ocxo AF 5, 113, 463 in both ADEV and OADEV files; pink AF 218,
-    # 280, 326: borderline delta next to a rounding or 0.25 boundary), so require >= 98 % agreement:
-    # a wrong sign convention, a missing detrend or a wrong differencing rule each break tens of rows.
+    # its own decision boundaries, which we do not claim to reproduce). Over the 691 such rows of
+    # the value files we agree on 681 (ocxo AF 5, 113, 463 in both ADEV and OADEV files; pink AF
+    # 218, 280, 326: borderline delta next to a rounding or 0.25 boundary), so require >= 98 %
+    # agreement:
+    # a wrong sign convention, a missing detrend or a wrong differencing rule each break tens of
+    # rows.
     agree = total = 0
     for name, rel, overlapping in VALUE_FILES:
         data, kind, rate = _dataset(name)
@@ -184,11 +209,11 @@ CI_FILES = [
 @pytest.mark.parametrize('name,rel,overlapping', CI_FILES)
 def test_stable32_confidence_intervals(name, rel, overlapping):
     # Bounds relative to the deviation depend only on (alpha, m, N, estimator), so we compare the
-    # ratios MinSigma/Sigma and MaxSigma/Sigma with Stable32's alpha. Tolerance 1e-3: Stable32's EDF
-    # runs ~1 % above the published Greenhall-Riley tables (implied by both bounds alike, so not the
-    # chi-squared quantile), which moves the ratios by <= 5e-4 here; allantools needs 1e-3..2e-3 for
-    # the same files. Using the non-overlapping EDF for an overlapping file, or the wrong alpha,
-    # moves the ratios by several 1e-3 at the larger taus (checked below).
+    # ratios MinSigma/Sigma and MaxSigma/Sigma with Stable32's alpha. Tolerance 1e-3: Stable32's
+    # EDF runs ~1 % above the published Greenhall-Riley tables (implied by both bounds alike, so
+    # not the chi-squared quantile), which moves the ratios by <= 5e-4 here; allantools needs
+    # 1e-3..2e-3 for the same files. Using the non-overlapping EDF for an overlapping file, or the
+    # wrong alpha, moves the ratios by several 1e-3 at the larger taus (checked below).
     data, kind, rate = _dataset(name)
     n_phase = data.size + (1 if kind == 'rate' else 0)
     worst_wrong = 0.0
@@ -200,8 +225,8 @@ def test_stable32_confidence_intervals(name, rel, overlapping):
         assert math.sqrt(lo) == pytest.approx(row['lo'] / dev, rel=1e-3), row['m']
         assert math.sqrt(hi) == pytest.approx(row['hi'] / dev, rel=1e-3), row['m']
         wrong_alpha = 0 if row['alpha'] != 0 else -2
-        lo_w, _ = confidence_bounds(1.0, edf_greenhall(wrong_alpha, row['m'], n_phase, stride=stride,
-                                                       stable32=True))
+        lo_w, _ = confidence_bounds(
+            1.0, edf_greenhall(wrong_alpha, row['m'], n_phase, stride=stride, stable32=True))
         worst_wrong = max(worst_wrong, abs(math.sqrt(lo_w) / (row['lo'] / dev) - 1))
     assert worst_wrong > 3e-3
 
@@ -227,7 +252,8 @@ def test_adis16405_against_r_avar_package():
         np.testing.assert_allclose(res.tau_s, [float(r['tau_s']) for r in sel], rtol=1e-12)
 
 
-# ---- closed forms and twins ----------------------------------------------------------------------
+# ---- closed forms and twins
+# ----------------------------------------------------------------------
 
 def test_integrate_kernel_matches_extended_precision_twin():
     rng = np.random.default_rng(11)
@@ -342,13 +368,16 @@ def test_lag1_running_sums_equal_two_pass():
 def test_edf_closed_form_white_fm_nonoverlapping():
     # With point-sampled phase (the default model) Greenhall's basic sum is exact; the
     # non-overlapping AVAR of iid white-FM rate samples has EDF 2M^2/(3M-1) (see _allan_reference)
-    for m, n_phase in ((1, 101), (1, 5), (2, 1001), (4, 1001), (32, 4001), (40, 4001), (1000, 100_001)):
+    for m, n_phase in ((1, 101), (1, 5), (2, 1001), (4, 1001), (32, 4001), (40, 4001),
+                       (1000, 100_001)):
         big_m = (n_phase - 1 - 2 * m) // m + 1
         assert edf_greenhall(0, m, n_phase, stride=m) == pytest.approx(
             ref.edf_white_fm_nonoverlapping(big_m), rel=1e-9)
     # Stable32's averaged-phase model differs at small m only (documented)
-    assert edf_greenhall(0, 1, 1001, stride=1, stable32=True) > 1.1 * edf_greenhall(0, 1, 1001, stride=1)
-    assert edf_greenhall(0, 40, 4001, stride=40, stable32=True) == edf_greenhall(0, 40, 4001, stride=40)
+    assert edf_greenhall(
+        0, 1, 1001, stride=1, stable32=True) > 1.1 * edf_greenhall(0, 1, 1001, stride=1)
+    assert edf_greenhall(
+        0, 40, 4001, stride=40, stable32=True) == edf_greenhall(0, 40, 4001, stride=40)
 
 
 def test_edf_white_pm_shortcut_equals_full_basic_sum():
@@ -376,13 +405,15 @@ def test_edf_overlapping_exceeds_nonoverlapping():
 
 @pytest.mark.parametrize('confidence', [0.683, 0.95])
 def test_confidence_interval_coverage_white_noise(confidence):
-    # 1000 seeded white-noise records of 4096 samples; true ADEV = sigma / sqrt(m). Coverage per tau
-    # is a binomial proportion over independent records: sd = sqrt(p(1-p)/1000) <= 0.0148, so a
+    # 1000 seeded white-noise records of 4096 samples; true ADEV = sigma / sqrt(m). Coverage per
+    # tau is a binomial proportion over independent records: sd = sqrt(p(1-p)/1000) <= 0.0148, so a
     # 4.5-sd band fails by chance with probability < 1e-5 per tau.
     # (a) as delivered (identified noise type), at taus with >= 256 averages, where the lag-1 ACF
-    #     identifies white FM essentially always (sd of delta ~ 1/16, misrounding needs |delta| > 1/4);
+    #     identifies white FM essentially always (sd of delta ~ 1/16, misrounding needs
+    #     |delta| > 1/4);
     # (b) the EDF/chi-squared machinery alone with the true alpha = 0, at every tau. With fewer
-    #     averages the identification itself errs (e.g. 25 % wrong at 32 averages, as for Stable32),
+    #     averages the identification itself errs (e.g. 25 % wrong at 32 averages, as for
+    #     Stable32),
     #     which narrows or widens the bounds; that is a property of noise identification, not of
     #     the EDF, and is not what this test measures.
     rng = np.random.default_rng(19)
@@ -405,10 +436,12 @@ def test_confidence_interval_coverage_white_noise(confidence):
     assert np.all(np.abs(cov_true - confidence) < band), cov_true
 
 
-# ---- averaging factors and errors ----------------------------------------------------------------
+# ---- averaging factors and errors
+# ----------------------------------------------------------------
 
 def test_tau_sets():
-    np.testing.assert_array_equal(octave_factors(19982), 2 ** np.arange(13))   # Stable32: up to 4096
+    # Stable32: up to 4096
+    np.testing.assert_array_equal(octave_factors(19982), 2 ** np.arange(13))
     np.testing.assert_array_equal(octave_factors(3), [])
     d = dense_factors(10_000)
     assert d[0] == 1 and d[-1] <= 2500 and np.all(np.diff(d) > 0)
@@ -470,9 +503,10 @@ def test_float32_input_is_accepted():
     np.testing.assert_array_equal(a.avar, b.avar)
 
 
-# ---- noise terms ---------------------------------------------------------------------------------
+# ---- noise terms
+# ---------------------------------------------------------------------------------
 
-_TRUE = dict(q=2e-6, n=3e-4, b=5e-5, k=2e-6, r=1e-8)
+_TRUE = {'q': 2e-6, 'n': 3e-4, 'b': 5e-5, 'k': 2e-6, 'r': 1e-8}
 
 
 def _synthetic_result(tau, q, n, b, k, r):
@@ -480,9 +514,9 @@ def _synthetic_result(tau, q, n, b, k, r):
     avar = (3 * q ** 2 / tau ** 2 + n ** 2 / tau + 2 * math.log(2) / math.pi * b ** 2
             + k ** 2 * tau / 3 + r ** 2 * tau ** 2 / 2)
     ones = np.ones(tau.size)
-    return AllanResult(tau_s=tau, m=np.round(tau * 100).astype(np.int64), adev=np.sqrt(avar), avar=avar,
-                       n_terms=ones.astype(np.int64), stride=ones.astype(np.int64), edf=ones * 100,
-                       ci_low=np.sqrt(avar) * 0.9, ci_high=np.sqrt(avar) * 1.1,
+    return AllanResult(tau_s=tau, m=np.round(tau * 100).astype(np.int64), adev=np.sqrt(avar),
+                       avar=avar, n_terms=ones.astype(np.int64), stride=ones.astype(np.int64),
+                       edf=ones * 100, ci_low=np.sqrt(avar) * 0.9, ci_high=np.sqrt(avar) * 1.1,
                        noise_alpha=np.zeros(tau.size, np.int64), noise_type=('',) * tau.size,
                        confidence=0.683, rate_hz=100.0, n_samples=10 ** 9)
 
@@ -491,11 +525,13 @@ def test_fit_recovers_exact_curve():
     tau = np.logspace(-3, 5, 60)
     fit = fit_noise_terms(_synthetic_result(tau, **_TRUE))
     assert isinstance(fit, NoiseTerms)
-    got = (fit.quantization_rad, fit.angle_random_walk_rad_per_sqrt_s, fit.bias_instability_rad_per_s,
-           fit.rate_random_walk_rad_per_s_sqrt_s, fit.rate_ramp_rad_per_s2)
+    got = (fit.quantization_rad, fit.angle_random_walk_rad_per_sqrt_s,
+           fit.bias_instability_rad_per_s, fit.rate_random_walk_rad_per_s_sqrt_s,
+           fit.rate_ramp_rad_per_s2)
     np.testing.assert_allclose(got, list(_TRUE.values()), rtol=1e-6)
     assert fit.rms_relative_residual < 1e-9
-    np.testing.assert_allclose(fit.avar_model(tau), _synthetic_result(tau, **_TRUE).avar, rtol=1e-9)
+    np.testing.assert_allclose(fit.avar_model(tau), _synthetic_result(tau, **_TRUE).avar,
+                               rtol=1e-9)
 
 
 def test_fit_subset_and_units():
@@ -522,7 +558,8 @@ def test_fit_subset_and_units():
 
 
 def test_fit_recovers_simulated_arw_and_rrw():
-    # White rate noise of PSD N^2 (sd N sqrt(fs)) plus a rate random walk with increments K/sqrt(fs)
+    # White rate noise of PSD N^2 (sd N sqrt(fs)) plus a rate random walk with increments
+    # K/sqrt(fs)
     rng = np.random.default_rng(21)
     fs, n_arw, k_rrw = 100.0, 1e-3, 2e-5
     n = 2 ** 21
@@ -549,10 +586,12 @@ def test_bias_instability_from_minimum():
     deg_per_h = bi.bias_instability_rad_per_s * 180 / math.pi * 3600
     assert bi.bias_instability_deg_per_h == pytest.approx(deg_per_h)
     flat = _synthetic_result(tau, 0.0, 0.0, 2e-5, 0.0, 0.0)
-    assert bias_instability_from_minimum(flat).bias_instability_rad_per_s == pytest.approx(2e-5, rel=1e-9)
+    assert bias_instability_from_minimum(
+        flat).bias_instability_rad_per_s == pytest.approx(2e-5, rel=1e-9)
 
 
-# ---- accumulator ---------------------------------------------------------------------------------
+# ---- accumulator
+# ---------------------------------------------------------------------------------
 
 def _feed(acc, y, rng, max_batch):
     i = 0
@@ -572,7 +611,8 @@ def test_accumulator_bit_identical_to_batch(taus):
     _feed(acc, y, rng, 3000)
     res = acc.result()
     np.testing.assert_array_equal(res.m, batch.m)
-    for field in ('avar', 'adev', 'n_terms', 'stride', 'noise_alpha', 'edf', 'ci_low', 'ci_high', 'tau_s'):
+    for field in ('avar', 'adev', 'n_terms', 'stride', 'noise_alpha', 'edf', 'ci_low', 'ci_high',
+                  'tau_s'):
         np.testing.assert_array_equal(getattr(res, field), getattr(batch, field), err_msg=field)
     assert res.n_samples == batch.n_samples == y.size
 
@@ -637,8 +677,8 @@ def test_accumulator_strided_levels_and_memory(half, taus):
     # the strided estimator estimates the same AVAR: within 4 standard errors of the batch
     rel = np.abs(res.avar[~exact] / batch.avar[~exact] - 1)
     assert np.all(rel < 4 * np.sqrt(2 / res.edf[~exact]))
-    # memory: one ring of 2*half+1 phase points per level (level L is seeded at N = half * 2**(L-1)),
-    # plus a fixed amount per tracked tau
+    # memory: one ring of 2*half+1 phase points per level (level L is seeded at N = half *
+    # 2**(L-1)), plus a fixed amount per tracked tau
     levels = int(np.floor(np.log2(y.size / half))) + 2
     ring_bytes = levels * (2 * half + 1) * 8
     n_tau = acc._ms.size

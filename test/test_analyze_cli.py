@@ -1,21 +1,38 @@
-"""Tests of gyro_noise_analyze: tiny rosbags written with rosbags itself, every output file, every exit code."""
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Tests of gyro_noise_analyze.
+
+Tiny rosbags written with rosbags itself, every output file, every exit code.
+"""
 
 import csv
 import json
 import math
 import sys
 
-import numpy as np
-import pytest
-import yaml
-from rosbags.rosbag1 import Writer as Ros1Writer
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
 from gyro_noise_ros.cli.analyze import main
-from gyro_noise_ros.core.engine import EngineConfig, NoiseEngine, analyze_chunk
+from gyro_noise_ros.core.engine import analyze_chunk, EngineConfig, NoiseEngine
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
+import numpy as np
+import pytest
+from rosbags.rosbag1 import Writer as Ros1Writer
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_typestore, Stores
+import yaml
 
 ROS2 = get_typestore(Stores.ROS2_JAZZY)
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
@@ -31,7 +48,8 @@ ACCEL_SIGMA = 0.01  # m/s^2, white
 
 def sim(n, seed=0, drift_rad_s2=0.0):
     rng = np.random.default_rng(seed)
-    gyro = np.stack([simulate_fractional_noise(n, 1.4, -0.3, 1e-3, rng=rng, memory=MEMORY) for _ in range(3)], 1)
+    gyro = np.stack([simulate_fractional_noise(n, 1.4, -0.3, 1e-3, rng=rng, memory=MEMORY)
+                     for _ in range(3)], 1)
     stamps = T0 + np.arange(n, dtype=np.int64) * PERIOD_NS
     gyro += drift_rad_s2 * ((stamps - T0) / 1e9)[:, None]
     accel = np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0.0, ACCEL_SIGMA, (n, 3))
@@ -40,38 +58,52 @@ def sim(n, seed=0, drift_rad_s2=0.0):
 
 def imu_msg(store, stamp, gyro, accel, seq=None):
     t = store.types
-    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp) % 10**9)
-    header = (t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
-              else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
+    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp)
+                                                 % 10**9)
+    header = (
+        t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
+        else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
     v3 = t['geometry_msgs/msg/Vector3']
-    return t[IMU](header=header, orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
-                  orientation_covariance=np.array([-1.0] + [0.0] * 8),
-                  angular_velocity=v3(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
-                  angular_velocity_covariance=np.zeros(9),
-                  linear_acceleration=v3(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
-                  linear_acceleration_covariance=np.zeros(9))
+    return t[IMU](
+        header=header,
+        orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
+        orientation_covariance=np.array([-1.0] + [0.0] * 8),
+        angular_velocity=v3(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
+        angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=v3(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
+        linear_acceleration_covariance=np.zeros(9),
+    )
 
 
 def temp_msg(store, stamp, value, seq=None):
     t = store.types
-    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp) % 10**9)
-    header = (t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
-              else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
+    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp)
+                                                 % 10**9)
+    header = (
+        t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
+        else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
     return t[TEMP](header=header, temperature=float(value), variance=0.0)
 
 
-def write_ros2(path, stamps, gyro, accel, *, storage='sqlite3', topics=('/imu/data_raw',), temperature=None):
+def write_ros2(path, stamps, gyro, accel, *, storage='sqlite3', topics=('/imu/data_raw',),
+               temperature=None):
     plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
     with Writer(path, version=9, storage_plugin=plugin) as writer:
         conns = [writer.add_connection(t, IMU, typestore=ROS2) for t in topics]
-        tconn = writer.add_connection('/imu/temperature', TEMP, typestore=ROS2) if temperature is not None else None
+        tconn = writer.add_connection('/imu/temperature', TEMP,
+                                      typestore=ROS2) if temperature is not None else None
         for i in range(len(stamps)):
             raw = ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i]), IMU)
-            # Receive times always increase (readers deliver in receive-time order); header stamps may not.
+            # Receive times always increase (readers deliver in receive-time order); header stamps
+            # may not.
             for c in conns:
                 writer.write(c, T0 + i * PERIOD_NS, raw)
             if tconn is not None and i % 100 == 0:
-                writer.write(tconn, int(stamps[i]), ROS2.serialize_cdr(temp_msg(ROS2, stamps[i], temperature[i]), TEMP))
+                writer.write(
+                    tconn,
+                    int(stamps[i]),
+                    ROS2.serialize_cdr(temp_msg(ROS2, stamps[i], temperature[i]), TEMP),
+                )
     return path
 
 
@@ -79,8 +111,11 @@ def write_ros1(path, stamps, gyro, accel):
     with Ros1Writer(path) as writer:
         conn = writer.add_connection('/imu/data_raw', IMU, typestore=ROS1)
         for i in range(len(stamps)):
-            writer.write(conn, int(stamps[i]),
-                         ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU))
+            writer.write(
+                conn,
+                int(stamps[i]),
+                ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU),
+            )
     return path
 
 
@@ -90,8 +125,9 @@ def read_csv(path):
 
 
 def engine_results(stamps, gyro, temperature=None, **kw):
-    """The engine run directly on the arrays: what the tool must reproduce from the bag."""
-    cfg = EngineConfig(chunk_size=SIZE, memory=MEMORY, alphas=make_grid(0, 2, 0.1), allan=False, **kw)
+    """Run the engine directly on the arrays: what the tool must reproduce from the bag."""
+    cfg = EngineConfig(chunk_size=SIZE, memory=MEMORY, alphas=make_grid(0, 2, 0.1), allan=False,
+                       **kw)
     engine = NoiseEngine(cfg)
     jobs = engine.ingest(stamps, gyro, temperature) + engine.flush()
     return [analyze_chunk(j) for j in jobs]
@@ -102,7 +138,8 @@ def sqlite_bag(tmp_path_factory):
     n = 3 * SIZE + 77
     stamps, gyro, accel = sim(n, seed=1)
     temperature = 22.0 + 0.001 * np.arange(n)
-    path = write_ros2(tmp_path_factory.mktemp('bags') / 'seq_ref', stamps, gyro, accel, temperature=temperature)
+    path = write_ros2(tmp_path_factory.mktemp('bags') / 'seq_ref', stamps, gyro, accel,
+                      temperature=temperature)
     return path, stamps, gyro, temperature
 
 
@@ -114,12 +151,13 @@ def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
     assert 'seq_ref: 1877 samples' in printed and 'wrote' in printed
 
     rows = read_csv(out / 'chunks.csv')
-    for col in ('bag', 'axis', 'chunk', 't_start_s', 'samples', 'samples_lost', 'alpha_var', 'f_var', 'alpha_corr',
-                'f_corr', 'bias_deg_s', 'variance_deg2_s2', 'tie_var', 'tie_corr', 'var_min_deg2_s2',
-                'j_min_deg2_s2', 'temperature_c'):
+    for col in ('bag', 'axis', 'chunk', 't_start_s', 'samples', 'samples_lost', 'alpha_var',
+                'f_var', 'alpha_corr', 'f_corr', 'bias_deg_s', 'variance_deg2_s2', 'tie_var',
+                'tie_corr', 'var_min_deg2_s2', 'j_min_deg2_s2', 'temperature_c'):
         assert col in rows[0]
     assert len(rows) == 3 * 3
-    # The tool interpolates the 1-in-100 temperature messages; the engine gets the same interpolation here.
+    # The tool interpolates the 1-in-100 temperature messages; the engine gets the same
+    # interpolation here.
     t_idx = np.arange(0, len(stamps), 100)
     interp = np.interp(stamps.astype(float), stamps[t_idx].astype(float), temperature[t_idx])
     direct = {(r.chunk, r.axis): r for r in engine_results(stamps, gyro, interp)}
@@ -138,45 +176,55 @@ def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
     assert doc['tool'] == 'gyro_noise_analyze' and doc['options']['chunk_size'] == SIZE
     (bag,) = doc['bags']
     assert (bag['label'], bag['topic'], bag['storage']) == ('seq_ref', '/imu/data_raw', 'sqlite3')
-    assert (bag['samples'], bag['samples_lost'], bag['out_of_order_stamps'], bag['tail_samples']) == (1877, 0, 0, 77)
+    assert (bag['samples'], bag['samples_lost'], bag['out_of_order_stamps'],
+            bag['tail_samples']) == (1877, 0, 0, 77)
     assert bag['rate_hz'] == pytest.approx(1e9 / PERIOD_NS)
     z = bag['axes']['z']
     zs = [r for r in direct.values() if r.axis == 'z']
     assert z['chunks'] == 3 and z['nan_samples'] == 0
     assert z['alpha_var_mean'] == pytest.approx(np.mean([r.alpha_var for r in zs]), rel=1e-12)
-    assert z['mean_variance_deg2_s2'] == pytest.approx(np.mean([r.variance_rad2_s2 for r in zs]) * DEG ** 2,
-                                                       rel=1e-12)
-    for key in ('offset_drift_deg_s_per_h', 'offset_drift_stderr_deg_s_per_h', 'variance_of_variances_deg4_s4',
-                'alpha_var_variance', 'alpha_corr_mean', 'alpha_corr_variance', 'temperature_mean_c', 'allan'):
+    assert z[
+        'mean_variance_deg2_s2'] == pytest.approx(np.mean([r.variance_rad2_s2 for r in zs])
+                                                  * DEG ** 2, rel=1e-12)
+    for key in ('offset_drift_deg_s_per_h', 'offset_drift_stderr_deg_s_per_h',
+                'variance_of_variances_deg4_s4', 'alpha_var_variance', 'alpha_corr_mean',
+                'alpha_corr_variance', 'temperature_mean_c', 'allan'):
         assert key in z
     assert z['allan']['angle_random_walk_rad_per_sqrt_s'] > 0
 
     md = (out / 'summary.md').read_text()
-    for title in ('Table 3: offset drift', 'Table 4: noise variance', 'Table 5: order, variance method',
-                  'Table 6: order, correlation method', '(deg/s)/h', '(deg/s)^2', '| seq_ref |'):
+    for title in ('Table 3: offset drift', 'Table 4: noise variance',
+                  'Table 5: order, variance method', 'Table 6: order, correlation method',
+                  '(deg/s)/h', '(deg/s)^2', '| seq_ref |'):
         assert title in md
 
     allan = read_csv(out / 'allan.csv')
-    assert set(allan[0]) == {'bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n'}
+    assert set(allan[0]) == {'bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s',
+                             'n'}
     z_rows = [r for r in allan if r['axis'] == 'z']
     assert float(z_rows[0]['tau_s']) == pytest.approx(PERIOD_NS / 1e9)
-    assert all(float(r['ci_low_deg_s']) <= float(r['adev_deg_s']) <= float(r['ci_high_deg_s']) for r in z_rows)
+    assert all(float(r['ci_low_deg_s']) <= float(r['adev_deg_s']) <= float(r['ci_high_deg_s'])
+               for r in z_rows)
 
     imu = yaml.safe_load((out / 'imu.yaml').read_text())
-    assert imu['rostopic'] == '/imu/data_raw' and imu['update_rate'] == pytest.approx(1e9 / PERIOD_NS)
-    assert imu['gyroscope_noise_density'] == max(bag['axes'][a]['allan']['angle_random_walk_rad_per_sqrt_s']
-                                                 for a in 'xyz')
+    assert imu[
+        'rostopic'] == '/imu/data_raw' and imu['update_rate'] == pytest.approx(1e9 / PERIOD_NS)
+    assert imu['gyroscope_noise_density'] == max(
+        bag['axes'][a]['allan']['angle_random_walk_rad_per_sqrt_s'] for a in 'xyz')
     assert 'gyroscope_random_walk' in imu
-    # White accelerometer noise: ADEV = sigma / sqrt(tau fs), so the noise density is sigma / sqrt(fs).
-    # The 5-term fit on 1877 samples is dominated by the short taus (thousands of averages each); the
-    # largest of three axes is reported, so allow 15 %.
-    assert imu['accelerometer_noise_density'] == pytest.approx(ACCEL_SIGMA * math.sqrt(PERIOD_NS / 1e9), rel=0.15)
+    # White accelerometer noise: ADEV = sigma / sqrt(tau fs), so the noise density is sigma /
+    # sqrt(fs). The 5-term fit on 1877 samples is dominated by the short taus (thousands of
+    # averages each); the largest of three axes is reported, so allow 15 %.
+    assert imu['accelerometer_noise_density'] == pytest.approx(
+        ACCEL_SIGMA * math.sqrt(PERIOD_NS / 1e9), rel=0.15)
     assert 'accelerometer_random_walk' in imu
     assert set(bag['accelerometer_allan']) == {'x', 'y', 'z'}
 
     curves = np.load(out / 'curves.npz')
-    assert curves['seq_ref/z/var'].shape == (3, 21) and list(curves['seq_ref/z/chunk']) == [0, 1, 2]
-    for png in ('bias.png', 'variance.png', 'allan.png', 'curves_seq_ref_x.png', 'curves_seq_ref_z.png'):
+    assert curves[
+        'seq_ref/z/var'].shape == (3, 21) and list(curves['seq_ref/z/chunk']) == [0, 1, 2]
+    for png in ('bias.png', 'variance.png', 'allan.png', 'curves_seq_ref_x.png',
+                'curves_seq_ref_z.png'):
         assert (out / png).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
 
 
@@ -185,15 +233,17 @@ def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path):
     mc = write_ros2(tmp_path / 'mc', stamps, gyro, np.zeros_like(gyro), storage='mcap')
     r1 = write_ros1(tmp_path / 'old.bag', stamps, gyro, np.zeros_like(gyro))
     out = tmp_path / 'out'
-    assert main([str(r1), str(mc), str(sq), '--label', 'ROS1', 'MCAP', 'SQL', '--jobs', '2', '--axis', 'y',
-                 '--no-figures', '--out', str(out), *FAST]) == 0
+    assert main([str(r1), str(mc), str(sq), '--label', 'ROS1', 'MCAP', 'SQL', '--jobs', '2',
+                 '--axis', 'y', '--no-figures', '--out', str(out), *FAST]) == 0
     rows = read_csv(out / 'chunks.csv')
     assert [r['bag'] for r in rows] == ['ROS1'] * 3 + ['MCAP'] * 3 + ['SQL'] * 3
     assert {r['axis'] for r in rows} == {'y'}
     # Same samples in three containers, analysed in worker processes: identical numbers.
-    cols = ('bias_deg_s', 'variance_deg2_s2', 'alpha_var', 'f_var', 'alpha_corr', 'f_corr', 'j_min_deg2_s2')
+    cols = ('bias_deg_s', 'variance_deg2_s2', 'alpha_var', 'f_var', 'alpha_corr', 'f_corr',
+            'j_min_deg2_s2')
     for k in range(3):
-        assert [rows[k][c] for c in cols] == [rows[3 + k][c] for c in cols] == [rows[6 + k][c] for c in cols]
+        assert [rows[k][c] for c in cols] == [
+            rows[3 + k][c] for c in cols] == [rows[6 + k][c] for c in cols]
     doc = json.loads((out / 'summary.json').read_text())
     assert [b['storage'] for b in doc['bags']] == ['ros1', 'mcap', 'sqlite3']
     md = (out / 'summary.md').read_text()
@@ -208,26 +258,29 @@ def test_reference_adds_health_verdicts(tmp_path):
     # A strong bias ramp on every axis: 2 (deg/s) per second, far above the chunk-mean noise.
     stamps2, gyro2, accel2 = sim(n, seed=4, drift_rad_s2=math.radians(2.0))
     h1 = write_ros2(tmp_path / 'h1', stamps2, gyro2, accel2, storage='mcap')
-    assert main([str(ref), '--out', str(tmp_path / 'r'), '--jobs', '1', '--no-figures', *FAST]) == 0
+    assert main([str(ref), '--out', str(tmp_path / 'r'), '--jobs', '1', '--no-figures',
+                 *FAST]) == 0
     out = tmp_path / 'o'
-    assert main([str(ref), str(h1), '--reference', str(tmp_path / 'r' / 'summary.json'), '--jobs', '1',
-                 '--no-figures', '--out', str(out), *FAST]) == 0
+    assert main([str(ref), str(h1), '--reference', str(tmp_path / 'r' / 'summary.json'), '--jobs',
+                 '1', '--no-figures', '--out', str(out), *FAST]) == 0
     doc = json.loads((out / 'summary.json').read_text())
     ref_z, h1_z = doc['bags'][0]['axes']['z'], doc['bags'][1]['axes']['z']
     # The reference judged against itself is within every tolerance; the ramp is far beyond 15x.
     assert ref_z['health']['level'] == 'OK'
-    # The reference (white noise) has a statistically-zero drift: no ratio is formed (issue 11), and the
-    # ramp is judged against the absolute limits instead.
+    # The reference (white noise) has a statistically-zero drift: no ratio is formed (issue 11),
+    # and the ramp is judged against the absolute limits instead.
     assert h1_z['health']['level'] == 'ERROR' and 'limit' in h1_z['health']['message']
     items = {i['key']: i['value'] for i in h1_z['health']['items']}
     assert items['Offset drift / reference'] == 'n/a'
     assert doc['options']['thresholds']['drift_ratio_warn'] == 5.0
     assert '### Health verdict against the reference' in (out / 'summary.md').read_text()
     # A two-bag summary as reference needs the bag named.
-    assert main([str(h1), '--reference', str(out / 'summary.json'), '--out', str(tmp_path / 'x'), *FAST]) == 2
-    assert main([str(h1), '--reference', str(out / 'summary.json'), '--reference-bag', 'h1', '--jobs', '1',
-                 '--no-figures', '--out', str(tmp_path / 'x'), *FAST]) == 0
-    again = json.loads((tmp_path / 'x' / 'summary.json').read_text())['bags'][0]['axes']['z']['health']
+    assert main([str(h1), '--reference', str(out / 'summary.json'), '--out', str(tmp_path / 'x'),
+                 *FAST]) == 2
+    assert main([str(h1), '--reference', str(out / 'summary.json'), '--reference-bag', 'h1',
+                 '--jobs', '1', '--no-figures', '--out', str(tmp_path / 'x'), *FAST]) == 0
+    again = json.loads((tmp_path / 'x'
+                        / 'summary.json').read_text())['bags'][0]['axes']['z']['health']
     assert again['level'] == 'OK'  # h1 judged against itself
 
 
@@ -239,10 +292,12 @@ def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path):
     stamps[50], stamps[51] = stamps[51], stamps[50]
     bag = write_ros2(tmp_path / 'bad', stamps, gyro, accel)
     out = tmp_path / 'o'
-    assert main([str(bag), '--out', str(out), '--gap-policy', 'drop', '--jobs', '1', '--no-figures', *FAST]) == 0
+    assert main([str(bag), '--out', str(out), '--gap-policy', 'drop', '--jobs', '1',
+                 '--no-figures', *FAST]) == 0
     doc = json.loads((out / 'summary.json').read_text())
     b = doc['bags'][0]
-    # The swap is one out-of-order stamp and a one-sample hole seen before the late sample (engine doc).
+    # The swap is one out-of-order stamp and a one-sample hole seen before the late sample (engine
+    # doc).
     assert (b['samples_lost'], b['gaps'], b['out_of_order_stamps']) == (5 + 1, 1 + 1, 1)
     assert b['axes']['x']['nan_samples'] == 1 and b['axes']['x']['chunks_nan'] == 1
     # Chunk 0 holds the swap's hole and chunk 2 the 5-sample gap: both dropped; chunk 1 stays.
@@ -284,9 +339,11 @@ def odd_bags(tmp_path_factory):
     (['short', '--jobs', '0'], 2, '--jobs'),
     (['short', '--axis', 'w'], 2, 'invalid choice'),
 ])
-def test_bad_input_gives_one_line_and_documented_exit_code(odd_bags, tmp_path, capsys, args, code, text):
+def test_bad_input_gives_one_line_and_documented_exit_code(
+        odd_bags, tmp_path, capsys, args, code, text):
     argv = [str(odd_bags / args[0]) if not args[0].startswith('-') else args[0], *args[1:]]
-    argv = [str(odd_bags / a) if a in ('two', 'nothing.json') and i > 0 else a for i, a in enumerate(argv)]
+    argv = [str(odd_bags / a) if a in ('two', 'nothing.json') and i > 0 else a for i,
+            a in enumerate(argv)]
     assert main([*FAST, *argv, '--out', str(tmp_path / 'o')]) == code
     err = capsys.readouterr().err.strip().splitlines()
     assert text in err[-1]

@@ -1,23 +1,40 @@
-"""
-End to end with real processes: a replayer process -> ``noise_analyzer`` process -> a test subscriber.
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-The replayer is this file run as a script (``python test/test_analyzer_e2e.py publish ...``): it publishes
-seeded white noise as serialised ``sensor_msgs/Imu`` (and ``sensor_msgs/Temperature``) in real time,
-optionally with a bias ramp or gaps, after waiting for its subscribers. Three scenarios run side by side in
-their own namespaces (clean, drift, gaps), each with its own analyzer (node renamed so that the status
-names differ), and one in-process subscriber checks ``/diagnostics``: names, hardware_id, keys with units,
-levels (OK on clean data, WARN on the injected drift, WARN and the count for the injected loss).
+"""
+End to end with real processes.
+
+A replayer process -> ``noise_analyzer`` process -> a test subscriber.
+
+The replayer is this file run as a script (``python test/test_analyzer_e2e.py publish ...``): it
+publishes seeded white noise as serialised ``sensor_msgs/Imu`` (and ``sensor_msgs/Temperature``) in
+real time, optionally with a bias ramp or gaps, after waiting for its subscribers. Three scenarios
+run side by side in their own namespaces (clean, drift, gaps), each with its own analyzer (node
+renamed so that the status names differ), and one in-process subscriber checks ``/diagnostics``:
+names, hardware_id, keys with units, levels (OK on clean data, WARN on the injected drift, WARN and
+the count for the injected loss).
 
 The recorder test (``test/test_recorder.py``) uses the same replayer.
 """
 
 import argparse
 import os
+from pathlib import Path
 import random
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,15 +44,17 @@ pytestmark = pytest.mark.ros
 HERE = Path(__file__).resolve()
 RATE_HZ = 6660.0
 
-# Chunks of 2000 samples (0.3 s at 6.66 kHz), memory 200 and a 0.05 grid keep every analysis a few ms,
-# so the scenarios fit in seconds on two shared cores; the node's logic does not depend on the sizes.
+# Chunks of 2000 samples (0.3 s at 6.66 kHz), memory 200 and a 0.05 grid keep every analysis a few
+# ms, so the scenarios fit in seconds on two shared cores; the node's logic does not depend on the
+# sizes.
 ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'diagnostics_period_s:=0.5', 'allan_period_s:=1.0',
-                   # White noise of 0.004 rad/s per sample gives chunk means with sigma 9e-5 rad/s; the
-                   # least-squares slope of 10 of them over 3 s has a standard error of ~3e-5 rad/s^2
-                   # = 7 (deg/s)/h. The drift scenario's ramp is 1e-3 rad/s^2 = 206 (deg/s)/h. Limits
-                   # of 50 (WARN) and 2000 (ERROR) (deg/s)/h put the clean run 7 standard errors below
-                   # WARN and the ramp 4x above it, and an order of magnitude below ERROR.
+                   # White noise of 0.004 rad/s per sample gives chunk means with sigma 9e-5 rad/s;
+                   # the least-squares slope of 10 of them over 3 s has a standard error of ~3e-5
+                   # rad/s^2 = 7 (deg/s)/h. The drift scenario's ramp is 1e-3 rad/s^2 = 206
+                   # (deg/s)/h. Limits of 50 (WARN) and 2000 (ERROR) (deg/s)/h put the clean run 7
+                   # standard errors below WARN and the ramp 4x above it, and an order of magnitude
+                   # below ERROR.
                    'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=2000.0']
 
 
@@ -52,12 +71,16 @@ def start_replayer(domain_id, *args, namespace=None):
     cmd = [sys.executable, str(HERE), 'publish', *map(str, args)]
     if namespace:
         cmd += ['--ros-args', '-r', f'__ns:={namespace}']
-    return subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    return subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
 
 
 def stop(procs, sig_timeout=10.0):
-    """SIGINT every live process, wait, kill the stubborn ones; return {pid: (rc, stdout, stderr)}."""
+    """
+    SIGINT every live process, wait, kill the stubborn ones.
+
+    Return {pid: (rc, stdout, stderr)}.
+    """
     out = {}
     for p in procs:
         if p.poll() is None:
@@ -72,15 +95,15 @@ def stop(procs, sig_timeout=10.0):
     return out
 
 
-# ---- the replayer (script mode) -----------------------------------------------------------------------
+# ---- the replayer (script mode)
+# -----------------------------------------------------------------------
 
 def _publish_main(argv):
+    from gyro_noise_ros.bag import encode_imu_cdr, encode_temperature_cdr
+    from gyro_noise_ros.nodes._ros_common import sensor_data_qos
     import rclpy
     from rclpy.node import Node
     from sensor_msgs.msg import Imu, Temperature
-
-    from gyro_noise_ros.bag import encode_imu_cdr, encode_temperature_cdr
-    from gyro_noise_ros.nodes._ros_common import sensor_data_qos
 
     parser = argparse.ArgumentParser()
     parser.add_argument('--samples', type=int, required=True)
@@ -88,10 +111,12 @@ def _publish_main(argv):
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--sigma-rad-s', type=float, default=0.004)
     parser.add_argument('--drift-rad-s2', type=float, default=0.0)
-    parser.add_argument('--gap-every', type=int, default=0, help='drop samples after every N samples')
+    parser.add_argument('--gap-every', type=int, default=0,
+                        help='drop samples after every N samples')
     parser.add_argument('--gap-len', type=int, default=0)
     parser.add_argument('--frame-id', default='imu_link')
-    parser.add_argument('--subscribers', type=int, default=1, help='wait for this many Imu subscribers')
+    parser.add_argument('--subscribers', type=int, default=1,
+                        help='wait for this many Imu subscribers')
     parser.add_argument('--temperature-every', type=int, default=128)
     parser.add_argument('--linger-s', type=float, default=1.0)
     args = parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
@@ -100,7 +125,8 @@ def _publish_main(argv):
     n = args.samples
     index = np.arange(n, dtype=np.int64)
     if args.gap_every and args.gap_len:
-        # Sample k keeps its stamp k/rate; the samples removed leave stamp gaps the node must count.
+        # Sample k keeps its stamp k/rate; the samples removed leave stamp gaps the node must
+        # count.
         keep = (index % (args.gap_every + args.gap_len)) < args.gap_every
         index = index[keep]
     period_ns = 1e9 / args.rate_hz
@@ -139,7 +165,8 @@ def _publish_main(argv):
     return 0
 
 
-# ---- the test -------------------------------------------------------------------------------------------
+# ---- the test
+# -------------------------------------------------------------------------------------------
 
 @pytest.fixture(scope='module')
 def domain_id():
@@ -149,8 +176,8 @@ def domain_id():
 def _collect_diagnostics(domain_id, names, until, timeout_s):
     """Spin a subscriber on /diagnostics; return {status name: [DiagnosticStatus, ...]}."""
     os.environ['ROS_DOMAIN_ID'] = str(domain_id)
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
+    import rclpy
 
     context = rclpy.Context()
     rclpy.init(context=context)
@@ -158,8 +185,8 @@ def _collect_diagnostics(domain_id, names, until, timeout_s):
     try:
         node = rclpy.create_node('test_diagnostics_listener', context=context)
         node.create_subscription(DiagnosticArray, '/diagnostics',
-                                 lambda m: [seen[s.name].append(s) for s in m.status if s.name in seen],
-                                 100)
+                                 lambda m: [seen[s.name].append(s) for s in m.status
+                                            if s.name in seen], 100)
         executor = rclpy.executors.SingleThreadedExecutor(context=context)
         executor.add_node(node)
         deadline = time.monotonic() + timeout_s
@@ -199,7 +226,8 @@ def test_diagnostics_content_and_levels(domain_id):
                 cmd += ['-p', p]
             procs.append(subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
                                           stderr=subprocess.PIPE, text=True))
-            procs.append(start_replayer(domain_id, '--samples', samples, *rargs, namespace=f'/{name}'))
+            procs.append(start_replayer(domain_id, '--samples', samples, *rargs,
+                                        namespace=f'/{name}'))
             names[name] = [f'{node}: axis {a}' for a in 'xyz']
         all_names = [n for v in names.values() for n in v]
 
@@ -219,15 +247,17 @@ def test_diagnostics_content_and_levels(domain_id):
             v = _values(last)
             # Readable keys with units and string values, as diagnostic_updater would publish.
             for key in ('Bias (deg/s)', 'Variance ((deg/s)^2)', 'Offset drift ((deg/s)/h)',
-                        'Fractional order, variance method', 'Fractional order, correlation method',
-                        'Samples lost', 'Chunks skipped', 'Chunks analysed', 'Sample rate (Hz)',
-                        'ADEV at 1 s (deg/s)', 'Temperature (degC)'):
+                        'Fractional order, variance method',
+                        'Fractional order, correlation method', 'Samples lost', 'Chunks skipped',
+                        'Chunks analysed', 'Sample rate (Hz)', 'ADEV at 1 s (deg/s)',
+                        'Temperature (degC)'):
                 assert key in v, (status_name, key, sorted(v))
             assert abs(float(v['Sample rate (Hz)']) - RATE_HZ) < 1.0
             # White noise of 0.004 rad/s: chunk variance (0.004 * 180/pi)^2 = 0.0525 (deg/s)^2; a
             # 2000-sample variance has a relative standard error of sqrt(2/2000) = 3 %, so +/-15 %.
             assert float(v['Variance ((deg/s)^2)']) == pytest.approx(0.0525, rel=0.15)
-            # The replayer's temperature ramps 0.001 degC per sample from 25 degC over 22000 samples.
+            # The replayer's temperature ramps 0.001 degC per sample from 25 degC over 22000
+            # samples.
             assert 25.0 <= float(v['Temperature (degC)']) <= 47.0
             assert last.message and last.message.endswith('.')
     # With the parameter, hardware_id never changes; by default it is the frame_id of the data,
@@ -245,8 +275,10 @@ def test_diagnostics_content_and_levels(domain_id):
     drift = [seen[n][-1] for n in names['drift']]
     assert [s.level for s in drift] == [b'\x01'] * 3, [(s.level, s.message) for s in drift]
     assert all('offset drift' in s.message.lower() for s in drift)
-    # 1e-3 rad/s^2 = 206.3 (deg/s)/h; the fitted slope's standard error is ~7 (deg/s)/h (see above).
-    assert all(float(_values(s)['Offset drift ((deg/s)/h)']) == pytest.approx(206.3, abs=35) for s in drift)
+    # 1e-3 rad/s^2 = 206.3 (deg/s)/h; the fitted slope's standard error is ~7 (deg/s)/h (see
+    # above).
+    assert all(float(_values(s)['Offset drift ((deg/s)/h)']) == pytest.approx(206.3, abs=35)
+               for s in drift)
 
     gaps = [seen[n][-1] for n in names['gaps']]
     # Every 2003 samples 3 are removed: 10 gaps in 22000 samples, 30 samples lost, a fraction of

@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Tests of gyro_noise_ros.bag: round trips, bulk codec against rosbags' own (de)serialisers, errors.
 
@@ -7,32 +21,31 @@ bulk decoder is checked against an independent implementation on every field it 
 
 import math
 
-import numpy as np
-import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from rosbags.rosbag1 import Writer as Ros1Writer
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
 from _realdata import real_data
-
-from gyro_noise_ros.bag import codec, storage
 from gyro_noise_ros.bag import (
-    IMU_MSGTYPE,
-    TEMPERATURE_MSGTYPE,
-    ImuBagReader,
-    ImuBagWriter,
-    TopicInfo,
+    codec,
     count_stamp_regressions,
     decode_imu,
     decode_temperature,
     encode_imu_cdr,
     encode_temperature_cdr,
     find_imu_topic,
+    IMU_MSGTYPE,
+    ImuBagReader,
+    ImuBagWriter,
     list_topics,
+    storage,
+    TEMPERATURE_MSGTYPE,
+    TopicInfo,
 )
 from gyro_noise_ros.errors import BagError, ParameterError
+from hypothesis import given, HealthCheck, settings
+from hypothesis import strategies as st
+import numpy as np
+import pytest
+from rosbags.rosbag1 import Writer as Ros1Writer
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_typestore, Stores
 
 ROS2 = get_typestore(Stores.ROS2_JAZZY)
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
@@ -52,27 +65,27 @@ def imu_msg(store, stamp_ns, gyro, accel, frame_id='imu_link', *, seq=0, av_cov=
     vec = t['geometry_msgs/msg/Vector3']
     o_cov = np.zeros(9)
     o_cov[0] = o_cov0
-    return t[IMU_MSGTYPE](
-        header=header,
-        orientation=t['geometry_msgs/msg/Quaternion'](*orientation),
-        orientation_covariance=o_cov,
-        angular_velocity=vec(*map(float, gyro)),
-        angular_velocity_covariance=np.zeros(9) if av_cov is None else np.asarray(av_cov, float),
-        linear_acceleration=vec(*map(float, accel)),
-        linear_acceleration_covariance=np.zeros(9) if la_cov is None else np.asarray(la_cov, float),
-    )
+    return t[
+        IMU_MSGTYPE](header=header, orientation=t['geometry_msgs/msg/Quaternion'](*orientation),
+                     orientation_covariance=o_cov, angular_velocity=vec(*map(float, gyro)),
+                     angular_velocity_covariance=np.zeros(9) if av_cov is None
+                     else np.asarray(av_cov, float), linear_acceleration=vec(*map(float, accel)),
+                     linear_acceleration_covariance=np.zeros(9) if la_cov is None
+                     else np.asarray(la_cov, float),)
 
 
 def temperature_msg(store, stamp_ns, temp, variance=0.0, frame_id='imu_link'):
     t = store.types
     sec, nsec = divmod(int(stamp_ns), 1_000_000_000)
-    header = t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](sec=sec, nanosec=nsec),
-                                      frame_id=frame_id)
+    header = t[
+        'std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](sec=sec, nanosec=nsec),
+                               frame_id=frame_id)
     return t[TEMPERATURE_MSGTYPE](header=header, temperature=float(temp), variance=float(variance))
 
 
 def sample_data(rng, n, *, with_nan=True):
-    stamps = 1_700_000_000_000_000_000 + np.arange(n, dtype=np.int64) * 150_150 + rng.integers(0, 1000, n)
+    stamps = 1_700_000_000_000_000_000 + np.arange(
+        n, dtype=np.int64) * 150_150 + rng.integers(0, 1000, n)
     gyro = rng.normal(0.0, 0.01, (n, 3))
     accel = rng.normal(0.0, 0.1, (n, 3)) + (0.0, 0.0, 9.81)
     if with_nan and n > 5:
@@ -81,12 +94,14 @@ def sample_data(rng, n, *, with_nan=True):
     return stamps, gyro, accel
 
 
-def write_ros2_reference(path, storage, msgs, *, topic='/imu/data_raw', little_endian=True, extra=()):
+def write_ros2_reference(path, storage, msgs, *, topic='/imu/data_raw', little_endian=True,
+                         extra=()):
     """Write (log_ns, msg) pairs with rosbags' own writer and serialiser."""
     with Writer(path, version=9, storage_plugin=PLUGINS[storage]) as writer:
         conn = writer.add_connection(topic, IMU_MSGTYPE, typestore=ROS2)
         for log_ns, msg in msgs:
-            writer.write(conn, log_ns, ROS2.serialize_cdr(msg, IMU_MSGTYPE, little_endian=little_endian))
+            writer.write(
+                conn, log_ns, ROS2.serialize_cdr(msg, IMU_MSGTYPE, little_endian=little_endian))
         for etopic, etype, emsgs in extra:
             econn = writer.add_connection(etopic, etype, typestore=ROS2)
             for log_ns, msg in emsgs:
@@ -94,20 +109,23 @@ def write_ros2_reference(path, storage, msgs, *, topic='/imu/data_raw', little_e
 
 
 def concat(batches):
-    return (np.concatenate([b.stamp_ns for b in batches]), np.concatenate([b.log_ns for b in batches]),
-            np.concatenate([b.gyro for b in batches]), np.concatenate([b.accel for b in batches]))
+    return (np.concatenate([b.stamp_ns for b in batches]),
+            np.concatenate([b.log_ns for b in batches]), np.concatenate([b.gyro for b in batches]),
+            np.concatenate([b.accel for b in batches]))
 
 
 def assert_same_floats(actual, expected):
     # Bit-level equality, NaN included: decoding must not change a single value.
-    np.testing.assert_array_equal(np.asarray(actual).view(np.int64), np.asarray(expected).view(np.int64))
+    np.testing.assert_array_equal(np.asarray(actual).view(np.int64),
+                                  np.asarray(expected).view(np.int64))
 
 
 # -------------------------------------------------------------------------------------------------
 # Encoder: byte-exact against rosbags
 
 
-@pytest.mark.parametrize('frame_id', ['', 'a', 'imu', 'imu_lin', 'imu_link', 'imu_link_', 'imu_link_0123456'])
+@pytest.mark.parametrize('frame_id', ['', 'a', 'imu', 'imu_lin', 'imu_link', 'imu_link_',
+                                      'imu_link_0123456'])
 def test_encode_imu_is_byte_exact_against_rosbags(frame_id):
     rng = np.random.default_rng(1)
     stamps, gyro, accel = sample_data(rng, 20)
@@ -116,11 +134,12 @@ def test_encode_imu_is_byte_exact_against_rosbags(frame_id):
     av_cov = rng.normal(size=(20, 9))
     la_cov = np.arange(9.0)
     blobs = encode_imu_cdr(stamps, gyro, accel, frame_id=frame_id,
-                           angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
+                           angular_velocity_covariance=av_cov,
+                           linear_acceleration_covariance=la_cov)
     assert len(blobs) == 20
     for i in range(20):
-        ref = ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i], frame_id, av_cov=av_cov[i],
-                                         la_cov=la_cov), IMU_MSGTYPE)
+        ref = ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i], frame_id,
+                                         av_cov=av_cov[i], la_cov=la_cov), IMU_MSGTYPE)
         assert blobs[i] == bytes(ref), i
 
 
@@ -158,10 +177,12 @@ def bulk_ok(raws, ros1):
 
 def slow_reference(raws, ros1=False):
     store = ROS1 if ros1 else ROS2
-    msgs = [store.deserialize_ros1(r, IMU_MSGTYPE) if ros1 else store.deserialize_cdr(r, IMU_MSGTYPE)
-            for r in raws]
-    stamps = np.array([m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in msgs], np.int64)
-    gyro = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for m in msgs])
+    msgs = [store.deserialize_ros1(r, IMU_MSGTYPE) if ros1
+            else store.deserialize_cdr(r, IMU_MSGTYPE) for r in raws]
+    stamps = np.array([m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in msgs],
+                      np.int64)
+    gyro = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                     for m in msgs])
     accel = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
                       for m in msgs])
     return stamps, gyro, accel, msgs[0].header.frame_id
@@ -178,7 +199,8 @@ def mixed_raws(rng, n, *, ros1=False):
         if ros1:
             raws.append(bytes(store.serialize_ros1(msg, IMU_MSGTYPE)))
         else:
-            raws.append(bytes(store.serialize_cdr(msg, IMU_MSGTYPE, little_endian=bool(rng.integers(0, 2)))))
+            raws.append(bytes(store.serialize_cdr(msg, IMU_MSGTYPE,
+                                                  little_endian=bool(rng.integers(0, 2)))))
     return raws
 
 
@@ -198,7 +220,8 @@ def test_bulk_decode_equals_rosbags_on_mixed_lengths_and_endianness(ros1):
 
 
 def corruptions():
-    good = bytes(ROS2.serialize_cdr(imu_msg(ROS2, 5, (1, 2, 3), (4, 5, 6), 'abcdefg'), IMU_MSGTYPE))
+    good = bytes(ROS2.serialize_cdr(imu_msg(ROS2, 5, (1, 2, 3), (4, 5, 6), 'abcdefg'),
+                                    IMU_MSGTYPE))
     out = {}
     no_nul = bytearray(good)
     no_nul[16 + 7] = ord('h')
@@ -253,8 +276,8 @@ def test_undecodable_message_raises_or_is_skipped():
 
 def test_decode_temperature_equals_rosbags():
     stamps = np.array([3, 2_000_000_001, 5_000_000_000])
-    raws = [bytes(ROS2.serialize_cdr(temperature_msg(ROS2, s, 20.0 + s * 1e-9, 0.1, 'x' * i), TEMPERATURE_MSGTYPE))
-            for i, s in enumerate(stamps)]
+    raws = [bytes(ROS2.serialize_cdr(temperature_msg(ROS2, s, 20.0 + s * 1e-9, 0.1, 'x' * i),
+                                     TEMPERATURE_MSGTYPE)) for i, s in enumerate(stamps)]
     s, t = decode_temperature(raws)
     np.testing.assert_array_equal(s, stamps)
     np.testing.assert_array_equal(t, 20.0 + stamps * 1e-9)
@@ -284,7 +307,8 @@ def test_reader_on_rosbags_written_bag(tmp_path, storage):
     assert list_topics(path) == [TopicInfo('/imu/data_raw', IMU_MSGTYPE, 500),
                                  TopicInfo('/imu/temperature', TEMPERATURE_MSGTYPE, 10)]
     with ImuBagReader(path) as reader:
-        assert (reader.topic, reader.storage, reader.message_count) == ('/imu/data_raw', storage, 500)
+        assert (
+            reader.topic, reader.storage, reader.message_count) == ('/imu/data_raw', storage, 500)
         assert reader.temperature_topic == '/imu/temperature'
         assert reader.duration_s == pytest.approx(499 * 150e-6, abs=1e-9)
         batches = list(reader.iter_batches(batch_size=64))
@@ -304,7 +328,8 @@ def test_reader_on_rosbags_written_bag(tmp_path, storage):
 def test_reader_on_big_endian_and_bare_storage_file(tmp_path):
     rng = np.random.default_rng(6)
     stamps, gyro, accel = sample_data(rng, 50)
-    msgs = [(int(stamps[i]), imu_msg(ROS2, stamps[i], gyro[i], accel[i], 'be_frame')) for i in range(50)]
+    msgs = [(int(stamps[i]), imu_msg(ROS2, stamps[i], gyro[i], accel[i], 'be_frame'))
+            for i in range(50)]
     write_ros2_reference(tmp_path / 'bag', 'mcap', msgs, little_endian=False)
     (mcap,) = (tmp_path / 'bag').glob('*.mcap')
     for path in (mcap, tmp_path / 'bag' / 'metadata.yaml'):
@@ -325,14 +350,25 @@ def test_reader_on_ros1_bag(tmp_path):
         conn = writer.add_connection('/imu/data_raw', IMU_MSGTYPE, typestore=ROS1)
         tconn = writer.add_connection('/imu/temperature', TEMPERATURE_MSGTYPE, typestore=ROS1)
         for i in range(300):
-            writer.write(conn, int(stamps[i]) + 7,
-                         ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU_MSGTYPE))
+            writer.write(
+                conn,
+                int(stamps[i]) + 7,
+                ROS1.serialize_ros1(
+                    imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU_MSGTYPE
+                ),
+            )
         t = ROS1.types
         for i in range(0, 300, 100):
             header = t['std_msgs/msg/Header'](seq=i, stamp=t['builtin_interfaces/msg/Time'](
                 sec=int(stamps[i]) // 10**9, nanosec=int(stamps[i]) % 10**9), frame_id='imu_link')
-            writer.write(tconn, int(stamps[i]) + 7, ROS1.serialize_ros1(
-                t[TEMPERATURE_MSGTYPE](header=header, temperature=21.5 + i, variance=0.0), TEMPERATURE_MSGTYPE))
+            writer.write(
+                tconn,
+                int(stamps[i]) + 7,
+                ROS1.serialize_ros1(
+                    t[TEMPERATURE_MSGTYPE](header=header, temperature=21.5 + i, variance=0.0),
+                    TEMPERATURE_MSGTYPE,
+                ),
+            )
     assert find_imu_topic(path) == '/imu/data_raw'
     with ImuBagReader(path) as reader:
         assert reader.storage == 'ros1' and reader.message_count == 300
@@ -356,8 +392,13 @@ def test_writer_round_trip_and_rosbags_reads_it(tmp_path, storage):
     with ImuBagWriter(path, storage=storage, frame_id='board') as writer:
         writer.write_imu(stamps[:999], gyro[:999], accel[:999], angular_velocity_covariance=av_cov,
                          log_ns=stamps[:999] + 11)
-        writer.write_imu(int(stamps[999]), gyro[999], accel[999], angular_velocity_covariance=av_cov,
-                         log_ns=int(stamps[999]) + 11)  # single message, scalar stamp
+        writer.write_imu(
+            int(stamps[999]),
+            gyro[999],
+            accel[999],
+            angular_velocity_covariance=av_cov,
+            log_ns=int(stamps[999]) + 11,
+        )  # single message, scalar stamp
         writer.write_temperature(stamps[::100], np.linspace(20, 30, 10), variance=0.01)
     assert (writer.imu_count, writer.temperature_count) == (1000, 10)
     assert list_topics(path) == [TopicInfo('/imu/data_raw', IMU_MSGTYPE, 1000),
@@ -386,7 +427,8 @@ def test_writer_round_trip_and_rosbags_reads_it(tmp_path, storage):
 def test_real_mpu6050_recording_round_trips(tmp_path):
     # Real MEMS data (65,067 samples, see SOURCE.md) through the writer and reader: every value is
     # recovered bit-exactly and the author's published mean gyro X (4.53532 deg/s) is reproduced.
-    data = np.loadtxt(real_data('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'), delimiter=',', skiprows=1)
+    data = np.loadtxt(real_data('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'),
+                      delimiter=',', skiprows=1)
     stamps = np.round(data[:, 0] * 1e9).astype(np.int64)
     gyro = np.deg2rad(data[:, 1:4])
     accel = data[:, 4:7] * 9.80665
@@ -421,13 +463,15 @@ def two_imu_bag(path):
 def test_topic_discovery_rules(tmp_path):
     path = tmp_path / 'two'
     two_imu_bag(path)
-    with pytest.raises(BagError, match=r"2 sensor_msgs/msg/Imu topics \(/imu_a/data, /imu_b/data\)"):
+    with pytest.raises(BagError,
+                       match=r'2 sensor_msgs/msg/Imu topics \(/imu_a/data, /imu_b/data\)'):
         find_imu_topic(path)
     assert find_imu_topic(path, 'imu_b/data') == '/imu_b/data'
     assert find_imu_topic(path, '/imu_a/data') == '/imu_a/data'
     with pytest.raises(BagError, match="topic '/nope' is not in bag"):
         find_imu_topic(path, '/nope')
-    with pytest.raises(BagError, match='carries sensor_msgs/msg/Temperature, not sensor_msgs/msg/Imu'):
+    with pytest.raises(BagError,
+                       match='carries sensor_msgs/msg/Temperature, not sensor_msgs/msg/Imu'):
         ImuBagReader(path, topic='/imu_a/temperature')
     # Several temperature topics: the one beside the Imu topic is chosen.
     with ImuBagReader(path, topic='/imu_b/data') as reader:
@@ -445,7 +489,8 @@ def test_missing_and_non_bag_paths(tmp_path):
     with pytest.raises(BagError, match='is not a bag'):
         list_topics(text)
     (tmp_path / 'bad_meta').mkdir()
-    (tmp_path / 'bad_meta' / 'metadata.yaml').write_text('rosbag2_bagfile_information: [unclosed\n')
+    (tmp_path / 'bad_meta'
+     / 'metadata.yaml').write_text('rosbag2_bagfile_information: [unclosed\n')
     with pytest.raises(BagError, match='cannot be opened as rosbag2'):
         list_topics(tmp_path / 'bad_meta')
     (tmp_path / 'empty_dir').mkdir()
@@ -460,15 +505,16 @@ def test_empty_bags(tmp_path):
         find_imu_topic(tmp_path / 'nothing')
     with Writer(tmp_path / 'no_msgs', version=9, storage_plugin=StoragePlugin.MCAP) as writer:
         writer.add_connection('/imu/data_raw', IMU_MSGTYPE, typestore=ROS2)
-    with ImuBagReader(tmp_path / 'no_msgs') as reader, pytest.raises(BagError, match='has no messages'):
+    with ImuBagReader(
+            tmp_path / 'no_msgs') as reader, pytest.raises(BagError, match='has no messages'):
         list(reader.iter_batches())
 
 
 def test_corrupt_and_truncated_bags(tmp_path):
     rng = np.random.default_rng(9)
     stamps, gyro, accel = sample_data(rng, 20_000, with_nan=False)
-    for storage in ('sqlite3', 'mcap'):
-        with ImuBagWriter(tmp_path / storage, storage=storage) as writer:
+    for kind in ('sqlite3', 'mcap'):
+        with ImuBagWriter(tmp_path / kind, storage=kind) as writer:
             writer.write_imu(stamps, gyro, accel)
     (mcap,) = (tmp_path / 'mcap').glob('*.mcap')
     data = mcap.read_bytes()
@@ -479,7 +525,8 @@ def test_corrupt_and_truncated_bags(tmp_path):
                 pass
     (db3,) = (tmp_path / 'sqlite3').glob('*.db3')
     raw = bytearray(db3.read_bytes())
-    raw[100:] = rng.integers(0, 256, len(raw) - 100, dtype=np.uint8).tobytes()  # header kept, pages garbage
+    # header kept, pages garbage
+    raw[100:] = rng.integers(0, 256, len(raw) - 100, dtype=np.uint8).tobytes()
     db3.write_bytes(bytes(raw))
     with pytest.raises(BagError, match='sqlite3'):
         with ImuBagReader(tmp_path / 'sqlite3') as reader:
@@ -573,7 +620,8 @@ def reference_ros1_records(chunk):
         (dlen,) = struct.unpack_from('<I', chunk, pos + 4 + hlen)
         if fields[b'op'] == b'\x02':
             sec, nsec = struct.unpack('<II', fields[b'time'])
-            out.append((pos + 8 + hlen, dlen, struct.unpack('<I', fields[b'conn'])[0], sec * 10**9 + nsec))
+            out.append((pos + 8 + hlen, dlen, struct.unpack('<I', fields[b'conn'])[0], sec * 10**9
+                        + nsec))
         pos += 8 + hlen + dlen
     return [np.array(col, np.int64) for col in zip(*out)]
 
@@ -586,10 +634,11 @@ def test_ros1_record_scan_matches_struct_walk():
                  'time': b'time=' + struct.pack('<II', t // 10**9, t % 10**9)}
         return ros1_record([parts[k] for k in order], data)
 
-    connection = ros1_record([b'op=\x07', b'conn=' + struct.pack('<I', 0), b'topic=/imu'], b'type=x')
+    connection = ros1_record([b'op=\x07', b'conn=' + struct.pack('<I', 0), b'topic=/imu'],
+                             b'type=x')
     uniform = connection + b''.join(msg(0, 10**9 * i + 7, bytes([i]) * 30) for i in range(40))
-    mixed = b''.join(msg(i % 3, 5 * i, bytes(i % 5 + 1), ('time', 'op', 'conn') if i % 4 else ('op', 'conn', 'time'))
-                     for i in range(40)) + connection
+    mixed = b''.join(msg(i % 3, 5 * i, bytes(i % 5 + 1), ('time', 'op', 'conn') if i % 4
+                         else ('op', 'conn', 'time')) for i in range(40)) + connection
     for chunk in (uniform, mixed):
         got = storage.ros1_message_records(chunk)
         for a, b in zip(got, reference_ros1_records(chunk)):
@@ -611,7 +660,7 @@ def source_stream(path, topic, fast):
 
 
 def assert_block_reader_matches_rosbags(path, log, stamps, gyro):
-    """The block reader yields rosbags' raw stream per topic, and ImuBagReader the log-time order."""
+    """Check the block reader against rosbags' raw stream per topic, ImuBagReader's order."""
     for topic in ('/imu/data_raw', '/imu/temperature'):
         fast_log, fast_raws = source_stream(path, topic, True)
         slow_log, slow_raws = source_stream(path, topic, False)
@@ -642,7 +691,8 @@ def test_block_readers_yield_rosbags_order(tmp_path, storage_kind, pattern):
     path = tmp_path / 'bag'
     with ImuBagWriter(path, storage=storage_kind) as writer:
         for i in range(0, n, 500):
-            writer.write_imu(stamps[i:i + 500], gyro[i:i + 500], accel[i:i + 500], log_ns=log[i:i + 500])
+            writer.write_imu(stamps[i:i + 500], gyro[i:i + 500], accel[i:i + 500],
+                             log_ns=log[i:i + 500])
             writer.write_temperature(stamps[i], 25.0 + i, log_ns=log[i])
     assert_block_reader_matches_rosbags(path, log, stamps, gyro)
 
@@ -676,7 +726,8 @@ def test_db3_with_hot_journal_is_refused_with_advice(tmp_path):
     # Simulate a writer killed mid-transaction: a child process modifies the file and dies
     # without committing, leaving its rollback journal behind.
     code = ('import os, sqlite3; c = sqlite3.connect(%r); c.execute("PRAGMA cache_size=1");'
-            'c.execute("BEGIN"); c.executemany("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?, ?)",'
+            'c.execute("BEGIN"); c.executemany("INSERT INTO messages (topic_id, timestamp, data) '
+            'VALUES (1, ?, ?)",'
             ' ((i, bytes(4000)) for i in range(2000))); os._exit(0)') % str(db3)
     subprocess.run([sys.executable, '-c', code], check=True, timeout=60)
     assert db3.with_name(db3.name + '-journal').exists()
@@ -699,14 +750,18 @@ def damaged_messages(draw):
     store = ROS1 if ros1 else ROS2
     raws = []
     for _ in range(draw(st.integers(1, 12))):
-        frame = draw(st.text(alphabet='abc_/\u00e9', max_size=17))  # \u00e9: non-ASCII goes to rosbags
-        values = draw(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=6, max_size=6))
+        # \u00e9: non-ASCII goes to rosbags
+        frame = draw(st.text(alphabet='abc_/\u00e9', max_size=17))
+        values = draw(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=6,
+                               max_size=6))
         stamp = draw(st.integers(0, 2**31 * 10**9 - 1))
-        msg = imu_msg(store, stamp, values[:3], values[3:], frame, seq=draw(st.integers(0, 2**32 - 1)))
+        msg = imu_msg(store, stamp, values[:3], values[3:], frame,
+                      seq=draw(st.integers(0, 2**32 - 1)))
         if ros1:
             raw = bytearray(store.serialize_ros1(msg, IMU_MSGTYPE))
         else:
-            raw = bytearray(store.serialize_cdr(msg, IMU_MSGTYPE, little_endian=draw(st.booleans())))
+            raw = bytearray(store.serialize_cdr(msg, IMU_MSGTYPE,
+                                                little_endian=draw(st.booleans())))
         damage = draw(st.sampled_from(['none', 'flip', 'cut', 'extend']))
         if damage == 'flip':
             for pos in draw(st.lists(st.integers(0, len(raw) - 1), min_size=1, max_size=3)):
@@ -727,7 +782,8 @@ def test_fuzz_bulk_decoder_agrees_with_rosbags(case):
     expected = []
     for raw in raws:
         try:
-            msg = store.deserialize_ros1(raw, IMU_MSGTYPE) if ros1 else store.deserialize_cdr(raw, IMU_MSGTYPE)
+            msg = store.deserialize_ros1(
+                raw, IMU_MSGTYPE) if ros1 else store.deserialize_cdr(raw, IMU_MSGTYPE)
         except Exception:  # noqa: BLE001 - any refusal by rosbags
             continue
         av, la = msg.angular_velocity, msg.linear_acceleration
@@ -772,8 +828,9 @@ def test_damaged_bag_files_raise_only_bag_error(tmp_path, storage_kind):
     assert 'BagError' in outcomes
 
 
-@pytest.mark.parametrize(('storage_kind', 'mode'), [('sqlite3', 'FILE'), ('sqlite3', 'MESSAGE'),
-                                                    ('mcap', 'FILE'), ('mcap', 'MESSAGE'), ('mcap', 'STORAGE')])
+@pytest.mark.parametrize(('storage_kind', 'mode'),
+                         [('sqlite3', 'FILE'), ('sqlite3', 'MESSAGE'), ('mcap', 'FILE'),
+                          ('mcap', 'MESSAGE'), ('mcap', 'STORAGE')])
 def test_compressed_bags(tmp_path, storage_kind, mode):
     from rosbags.rosbag2 import CompressionFormat, CompressionMode
 
@@ -785,8 +842,11 @@ def test_compressed_bags(tmp_path, storage_kind, mode):
     with writer:
         conn = writer.add_connection('/imu', IMU_MSGTYPE, typestore=ROS2)
         for i in range(4000):
-            writer.write(conn, int(stamps[i]), ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i]),
-                                                                  IMU_MSGTYPE))
+            writer.write(
+                conn,
+                int(stamps[i]),
+                ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i]), IMU_MSGTYPE),
+            )
     with ImuBagReader(path) as reader:
         s, _, g, a = concat(list(reader.iter_batches(1500)))
     np.testing.assert_array_equal(s, stamps)
@@ -811,13 +871,25 @@ def test_ros1_block_reader_yields_rosbags_order(tmp_path, pattern):
         conn = writer.add_connection('/imu/data_raw', IMU_MSGTYPE, typestore=ROS1)
         tconn = writer.add_connection('/imu/temperature', TEMPERATURE_MSGTYPE, typestore=ROS1)
         for i in range(n):
-            writer.write(conn, int(log[i]),
-                         ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU_MSGTYPE))
+            writer.write(
+                conn,
+                int(log[i]),
+                ROS1.serialize_ros1(
+                    imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU_MSGTYPE
+                ),
+            )
             if i % 700 == 0:
-                header = t['std_msgs/msg/Header'](seq=i, stamp=t['builtin_interfaces/msg/Time'](sec=1, nanosec=i),
-                                                  frame_id='imu_link')
-                writer.write(tconn, int(log[i]), ROS1.serialize_ros1(
-                    t[TEMPERATURE_MSGTYPE](header=header, temperature=20.0 + i, variance=0.0), TEMPERATURE_MSGTYPE))
+                header = t['std_msgs/msg/Header'](
+                    seq=i, stamp=t['builtin_interfaces/msg/Time'](sec=1, nanosec=i),
+                    frame_id='imu_link')
+                writer.write(
+                    tconn,
+                    int(log[i]),
+                    ROS1.serialize_ros1(
+                        t[TEMPERATURE_MSGTYPE](header=header, temperature=20.0 + i, variance=0.0),
+                        TEMPERATURE_MSGTYPE,
+                    ),
+                )
     assert_block_reader_matches_rosbags(path, log, stamps, gyro)
 
 
@@ -826,7 +898,8 @@ def test_fsync_switches_sqlite_synchronous(tmp_path):
     # fsync=True every commit waits for the disk (sqlite's default, synchronous=FULL=2).
     for fsync, expected in ((False, 0), (True, 2)):
         with ImuBagWriter(tmp_path / f'f{fsync}', fsync=fsync) as writer:
-            assert writer._writer.storage.conn.execute('PRAGMA synchronous').fetchone() == (expected,)
+            assert writer._writer.storage.conn.execute(
+                'PRAGMA synchronous').fetchone() == (expected,)
             writer.write_imu([1], np.zeros(3), np.zeros(3))
 
 
@@ -838,14 +911,17 @@ def damaged_temperatures(draw):
     raws = []
     for _ in range(draw(st.integers(1, 8))):
         stamp = draw(st.integers(0, 2**31 - 1))
-        fields = {'stamp': t['builtin_interfaces/msg/Time'](sec=stamp, nanosec=draw(st.integers(0, 10**9 - 1))),
-                  'frame_id': draw(st.text(alphabet='ab_\u00e9', max_size=12))}
+        fields = {
+            'stamp': t['builtin_interfaces/msg/Time'](sec=stamp,
+                                                      nanosec=draw(st.integers(0, 10**9 - 1))),
+            'frame_id': draw(st.text(alphabet='ab_\u00e9', max_size=12))}
         if ros1:
             fields['seq'] = draw(st.integers(0, 2**32 - 1))
         msg = t[TEMPERATURE_MSGTYPE](header=t['std_msgs/msg/Header'](**fields),
                                      temperature=draw(st.floats()), variance=draw(st.floats()))
-        raw = bytearray(store.serialize_ros1(msg, TEMPERATURE_MSGTYPE) if ros1 else
-                        store.serialize_cdr(msg, TEMPERATURE_MSGTYPE, little_endian=draw(st.booleans())))
+        raw = bytearray(store.serialize_ros1(msg, TEMPERATURE_MSGTYPE) if ros1
+                        else store.serialize_cdr(msg, TEMPERATURE_MSGTYPE,
+                                                 little_endian=draw(st.booleans())))
         damage = draw(st.sampled_from(['none', 'flip', 'cut', 'extend']))
         if damage == 'flip':
             raw[draw(st.integers(0, len(raw) - 1))] ^= 1 << draw(st.integers(0, 7))
@@ -870,7 +946,8 @@ def test_fuzz_temperature_decoder_agrees_with_rosbags(case):
         except Exception:  # noqa: BLE001 - any refusal by rosbags
             refused = True
             continue
-        expected.append((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, msg.temperature))
+        expected.append((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
+                         msg.temperature))
     if refused:
         with pytest.raises(BagError, match='cannot be decoded'):
             decode_temperature(raws, ros1=ros1)

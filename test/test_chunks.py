@@ -1,10 +1,23 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Chunker, chunk moments and sequence summaries (paper 000 Tables 3-6)."""
 
+from gyro_noise_ros.core.chunks import chunk_moments, Chunker, offset_drift, summarise_sequence
+from gyro_noise_ros.errors import InputDataError, ParameterError
 import numpy as np
 import pytest
-
-from gyro_noise_ros.core.chunks import Chunker, chunk_moments, offset_drift, summarise_sequence
-from gyro_noise_ros.errors import InputDataError, ParameterError
 
 
 def test_chunker_splits_any_batching_exactly():
@@ -47,7 +60,8 @@ def test_offset_drift_recovers_line_and_stderr():
     rng = np.random.default_rng(1)
     b = 0.3 + 2e-4 * t + rng.normal(0, 1e-3, t.size)
     d = offset_drift(t, b)
-    # the OLS slope standard error is 1e-3 / sqrt(sum (t - mean t)^2) = 2.3e-6; 5e-6 is ~2 of them...
+    # the OLS slope standard error is 1e-3 / sqrt(sum (t - mean t)^2) = 2.3e-6; 5e-6 is ~2 of
+    # them...
     assert d.slope == pytest.approx(2e-4, abs=1e-5)
     assert d.stderr == pytest.approx(1e-3 / np.sqrt(np.sum((t - t.mean()) ** 2)), rel=0.3)
     assert d.magnitude == abs(d.slope)
@@ -58,9 +72,11 @@ def test_offset_drift_recovers_line_and_stderr():
 
 def test_summarise_sequence_tables():
     s = summarise_sequence([0, 1, 2, 3], [1.0, 1.1, 1.2, 1.3], [2.0, 4.0, 2.0, 4.0],
-                           [1.4, 1.4, 1.39, 1.41], [1.0, np.nan, 0.9, 1.1], tail_samples=12, ties_var=1)
+                           [1.4, 1.4, 1.39, 1.41], [1.0, np.nan, 0.9, 1.1], tail_samples=12,
+                           ties_var=1)
     assert s.chunks == 4 and s.tail_samples == 12 and s.ties_var == 1
     assert s.mean_variance == 3.0 and s.variance_of_variances == pytest.approx(4 / 3)
-    assert s.alpha_var_mean == pytest.approx(1.4) and s.alpha_var_variance == pytest.approx(2e-4 / 3)
+    assert s.alpha_var_mean == pytest.approx(
+        1.4) and s.alpha_var_variance == pytest.approx(2e-4 / 3)
     assert s.alpha_corr_mean == pytest.approx(1.0) and s.alpha_corr_variance == pytest.approx(0.01)
     assert s.drift.slope == pytest.approx(0.1)

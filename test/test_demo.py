@@ -1,16 +1,32 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-``make demo`` in its short mode: the whole chain runs, the drift is detected, the report is written, and
-every subprocess is gone afterwards, also after a Ctrl-C in the middle.
+``make demo`` in its short mode.
+
+The whole chain runs, the drift is detected, the report is written, and every subprocess is gone
+afterwards, also after a Ctrl-C in the middle.
 """
 
 import os
+from pathlib import Path
 import random
 import signal
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import pytest
 
@@ -18,13 +34,14 @@ pytestmark = pytest.mark.ros
 
 
 def _domain():
-    # Not the domain of this test process (other ROS tests set one), so only the demo's children match.
+    # Not the domain of this test process (other ROS tests set one), so only the demo's children
+    # match.
     mine = os.environ.get('ROS_DOMAIN_ID')
     return random.choice([d for d in range(100, 201) if str(d) != mine])
 
 
 def _our_processes(domain_id):
-    """PIDs of live processes whose environment has our private ROS_DOMAIN_ID."""
+    """Return the PIDs of live processes whose environment has our private ROS_DOMAIN_ID."""
     needle = f'ROS_DOMAIN_ID={domain_id}'.encode() + b'\x00'
     found = []
     for proc in Path('/proc').iterdir():
@@ -45,11 +62,13 @@ def _our_processes(domain_id):
 def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
     domain = _domain()
     out = tmp_path / 'demo'
-    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out', str(out),
-                           '--domain-id', str(domain)], capture_output=True, text=True, timeout=560)
+    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
+                           str(out), '--domain-id', str(domain)], capture_output=True, text=True,
+                          timeout=560)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     assert 'story checked' in done.stdout
-    assert any(line.strip().split('] ', 1)[-1].startswith('WARN') for line in done.stdout.splitlines())
+    assert any(line.strip().split('] ', 1)[-1].startswith('WARN')
+               for line in done.stdout.splitlines())
     report = out / 'report'
     for name in ('summary.md', 'summary.json', 'chunks.csv', 'allan.csv', 'imu.yaml', 'bias.png',
                  'allan.png'):
@@ -63,16 +82,18 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
 def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path):
     domain = _domain()
     out = tmp_path / 'demo'
-    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out', str(out),
-                             '--domain-id', str(domain)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
+                             str(out), '--domain-id', str(domain)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
     lines = []
-    reader = threading.Thread(target=lambda: lines.extend(iter(proc.stdout.readline, '')), daemon=True)
+    reader = threading.Thread(target=lambda: lines.extend(iter(proc.stdout.readline, '')),
+                              daemon=True)
     reader.start()
     try:
         # Interrupt in the live part: every process runs and the bag is being written.
         deadline = time.monotonic() + 150
-        while time.monotonic() < deadline and not any('] ' in ln and ' chunk ' in ln for ln in lines):
+        while time.monotonic() < deadline and not any('] ' in ln and ' chunk ' in ln
+                                                      for ln in lines):
             assert proc.poll() is None, ''.join(lines) + proc.stderr.read()
             time.sleep(0.2)
         assert len(_our_processes(domain)) == 5, ''.join(lines)
@@ -94,10 +115,11 @@ def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path):
 
 def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):
     (tmp_path / 'precious.txt').write_text('keep me')
-    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--out', str(tmp_path)],
-                          capture_output=True, text=True, timeout=60)
+    done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--out',
+                           str(tmp_path)], capture_output=True, text=True, timeout=60)
     assert done.returncode == 1
-    assert done.stderr.strip().startswith('gyro_noise_demo: error:') and 'not a previous demo' in done.stderr
+    assert done.stderr.strip().startswith(
+        'gyro_noise_demo: error:') and 'not a previous demo' in done.stderr
     assert (tmp_path / 'precious.txt').read_text() == 'keep me'
 
 
@@ -105,10 +127,13 @@ def test_a_failing_component_is_named_with_its_log(tmp_path):
     from gyro_noise_ros.cli.demo import DemoError, Processes
 
     procs = Processes(dict(os.environ, ROS_DOMAIN_ID=str(_domain())), tmp_path)
-    procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', '--ros-args', '-p', 'storage:=zip'])
+    procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', '--ros-args', '-p',
+                                      'storage:=zip'])
     try:
-        with pytest.raises(DemoError, match=r"gyro_noise_record exited with code 2; log .*gyro_noise_record.log: "
-                           r".*parameter 'storage'"):
+        with pytest.raises(
+                DemoError,
+                match=r'gyro_noise_record exited with code 2; log .*gyro_noise_record.log: '
+                r".*parameter 'storage'"):
             procs.wait_for_log('gyro_noise_record', r'recording ', 60, 'start-up')
     finally:
         procs.stop_all([])

@@ -1,6 +1,22 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-The board model and the portenta_emulator program: samples equal the ground truth to the quantum,
-configuration over the wire (pty and TCP), faults counted, unplug/replug, clean exit on signals.
+The board model and the portenta_emulator program.
+
+Samples equal the ground truth to the quantum, configuration over the wire (pty and TCP), faults
+counted, unplug/replug, clean exit on signals.
 """
 
 import json
@@ -10,16 +26,21 @@ import subprocess
 import sys
 import time
 
-import numpy as np
-import pytest
-import serial
-
 from gyro_noise_ros.cli import emulator as cli
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link import protocol as p
-from gyro_noise_ros.link.emulator import (BoardModel, FaultInjector, HeliumTransient, Vibration, read_truth,
-                                          stationary_gain)
+from gyro_noise_ros.link.emulator import (
+    BoardModel,
+    FaultInjector,
+    HeliumTransient,
+    read_truth,
+    stationary_gain,
+    Vibration,
+)
+import numpy as np
+import pytest
+import serial
 
 
 class WhiteNoise:
@@ -35,7 +56,7 @@ class WhiteNoise:
 def quiet_board(**kwargs):
     rng = np.random.default_rng(0)
     noise = [WhiteNoise(0.0, rng) for _ in range(3)]
-    defaults = dict(rng=rng, noise=noise, accel_noise_ug_rthz=0.0, bias_dps=0.0)
+    defaults = {'rng': rng, 'noise': noise, 'accel_noise_ug_rthz': 0.0, 'bias_dps': 0.0}
     defaults.update(kwargs)
     return BoardModel(**defaults)
 
@@ -50,7 +71,8 @@ def test_raw_equals_truth_to_the_quantum_and_clips():
     assert np.array_equal(raw, expected)
     inside = np.abs(truth.gyro_rad_s[:, :2]) < 32767 * lsb
     assert np.all(np.abs(raw[:, :2] * lsb - truth.gyro_rad_s[:, :2])[inside] <= lsb / 2 + 1e-15)
-    assert np.all(s['gyro'][:, 2] == 32767)  # 200 deg/s is beyond +/-125 dps: saturated like the sensor
+    # 200 deg/s is beyond +/-125 dps: saturated like the sensor
+    assert np.all(s['gyro'][:, 2] == 32767)
     alsb = lsm.accel_sensitivity_m_s2_per_lsb(4)
     assert np.all(np.abs(s['accel'] * alsb - truth.accel_m_s2) <= alsb / 2 + 1e-12)
 
@@ -68,22 +90,26 @@ def test_default_noise_matches_paper_table4_variance():
     board.next_samples(2000)  # the generator starts from rest: skip its transient
     board.next_samples(200_000)
     std_dps = np.degrees(board.last_truth.gyro_rad_s).std(axis=0)
-    # target sqrt(0.003414) = 0.05843 deg/s; 200k nearly-white samples per axis give a relative standard
-    # error of the std of ~1/sqrt(2*200k) = 0.16 %; correlation (alpha=1.4, f=-1.2) widens it a little: 2 %
+    # target sqrt(0.003414) = 0.05843 deg/s; 200k nearly-white samples per axis give a relative
+    # standard error of the std of ~1/sqrt(2*200k) = 0.16 %; correlation (alpha=1.4, f=-1.2) widens
+    # it a little: 2 %
     assert std_dps == pytest.approx(np.full(3, np.sqrt(0.003414)), rel=0.02)
     assert stationary_gain(1.4, -1.2) > 1.0
 
 
 def test_configure_ack_nak_over_bytes():
     board = quiet_board()
-    reply = board.handle_bytes(p.encode_configure(command_id=9, odr_hz=833, gyro_fs_dps=500, accel_fs_g=16))
+    reply = board.handle_bytes(p.encode_configure(command_id=9, odr_hz=833, gyro_fs_dps=500,
+                                                  accel_fs_g=16))
     ack = p.Decoder().feed(reply).acks[0]
     assert ack == p.Ack(9, True, 833.0, 500, 16, '', p.ACK_OK)
     assert (board.odr_hz, board.gyro_fs_dps, board.accel_fs_g) == (833.0, 500, 16)
-    for kwargs, code in ((dict(odr_hz=100, gyro_fs_dps=500, accel_fs_g=16), p.NAK_BAD_ODR),
-                         (dict(odr_hz=833, gyro_fs_dps=300, accel_fs_g=16), p.NAK_BAD_GYRO_FS),
-                         (dict(odr_hz=833, gyro_fs_dps=500, accel_fs_g=2), p.NAK_BAD_ACCEL_FS)):
-        nak = p.Decoder().feed(board.handle_bytes(p.encode_configure(command_id=10, **kwargs))).acks[0]
+    for kwargs, code in (({'odr_hz': 100, 'gyro_fs_dps': 500, 'accel_fs_g': 16}, p.NAK_BAD_ODR),
+                         ({'odr_hz': 833, 'gyro_fs_dps': 300, 'accel_fs_g': 16},
+                          p.NAK_BAD_GYRO_FS), ({'odr_hz': 833, 'gyro_fs_dps': 500,
+                                                'accel_fs_g': 2}, p.NAK_BAD_ACCEL_FS)):
+        nak = p.Decoder().feed(
+            board.handle_bytes(p.encode_configure(command_id=10, **kwargs))).acks[0]
         assert not nak.ok and nak.status == code and nak.message
         assert (nak.odr_hz, nak.gyro_fs_dps, nak.accel_fs_g) == (833.0, 500, 16)  # unchanged
 
@@ -93,14 +119,16 @@ def test_time_seq_and_clock_error_wrap():
     s = board.next_samples(20)
     assert s['seq'][9] == 2 ** 32 - 1 and s['seq'][10] == 0
     k = np.arange(20)
-    expected = (2 ** 32 - 1000 + np.floor(k / 6667 * 1e6 * (1 + 100e-6)).astype(np.int64)) % 2 ** 32
+    expected = (
+        2 ** 32 - 1000 + np.floor(k / 6667 * 1e6 * (1 + 100e-6)).astype(np.int64)) % 2 ** 32
     assert np.array_equal(s['t_us'].astype(np.int64), expected)
 
 
 def test_scripted_effects_closed_forms():
-    board = quiet_board(odr_hz=104, helium=HeliumTransient(amplitude_dps=(0, 0, 4.0), delay_s=10.0, tau_s=20.0),
-                        vibration=Vibration(frequency_hz=5.0, amplitude_dps=(1.0, 0, 0)),
-                        temperature_c=30.0, temp_drift_c_per_h=36.0, temp_sensitivity_dps_per_c=(0, 0.5, 0))
+    board = quiet_board(
+        odr_hz=104, helium=HeliumTransient(amplitude_dps=(0, 0, 4.0), delay_s=10.0, tau_s=20.0),
+        vibration=Vibration(frequency_hz=5.0, amplitude_dps=(1.0, 0, 0)), temperature_c=30.0,
+        temp_drift_c_per_h=36.0, temp_sensitivity_dps_per_c=(0, 0.5, 0))
     s = board.next_samples(104 * 60)
     truth = board.last_truth
     t = np.arange(s.size) / 104.0
@@ -113,16 +141,16 @@ def test_scripted_effects_closed_forms():
 
 
 def test_board_rejects_bad_parameters():
-    for kwargs in (dict(odr_hz=100), dict(gyro_fs_dps=3), dict(accel_fs_g=1), dict(noise_std_dps=-1),
-                   dict(f=1.0)):
+    for kwargs in ({'odr_hz': 100}, {'gyro_fs_dps': 3}, {'accel_fs_g': 1}, {'noise_std_dps': -1},
+                   {'f': 1.0}):
         with pytest.raises(ParameterError):
             BoardModel(rng=np.random.default_rng(0), **kwargs)
 
 
 def test_fault_injector_counts_match_decoder_exactly():
     board = quiet_board()
-    faults = FaultInjector(np.random.default_rng(3), drop_flagged_rate=0.03, drop_unflagged_rate=0.02,
-                           corrupt_rate=0.0)
+    faults = FaultInjector(np.random.default_rng(3), drop_flagged_rate=0.03,
+                           drop_unflagged_rate=0.02, corrupt_rate=0.0)
     dec = p.Decoder()
     for i in range(200):
         s = board.next_samples(16)
@@ -138,8 +166,8 @@ def test_fault_injector_counts_match_decoder_exactly():
 
 def test_fifo_overruns_flagged_carried_over_drops_and_invisible_to_seq():
     board = quiet_board(odr_hz=6667)
-    faults = FaultInjector(np.random.default_rng(8), drop_flagged_rate=0.05, drop_unflagged_rate=0.05,
-                           fifo_overrun_rate=0.002)
+    faults = FaultInjector(np.random.default_rng(8), drop_flagged_rate=0.05,
+                           drop_unflagged_rate=0.05, fifo_overrun_rate=0.002)
     dec = p.Decoder()
     generated, delivered = [], []
     for _ in range(300):
@@ -154,7 +182,8 @@ def test_fifo_overruns_flagged_carried_over_drops_and_invisible_to_seq():
     assert board.samples_overrun == faults.counts.fifo_overrun_samples
     # seq has no gaps for sensor-side losses: generated seq is contiguous
     assert np.array_equal(gen['seq'], np.arange(gen.size))
-    # twin: a delivered sample carries the flag iff an overrun sample was generated since the last delivery
+    # twin: a delivered sample carries the flag iff an overrun sample was generated since the last
+    # delivery
     kept = np.isin(gen['seq'], got['seq'])
     expected, carry = 0, False
     for flag, k in zip(gen['flags'].tolist(), kept.tolist()):
@@ -168,7 +197,8 @@ def test_fifo_overruns_flagged_carried_over_drops_and_invisible_to_seq():
     assert gen['t_us'][i] - gen['t_us'][i - 1] > 1.5 * 1e6 / 6667
 
 
-# --- the program -----------------------------------------------------------------------------------
+# --- the program
+# -----------------------------------------------------------------------------------
 
 def start(args, tmp_path):
     truth = tmp_path / 'truth.bin'
@@ -225,7 +255,8 @@ def check_against_truth(results, truth_path, args):
         for fs in np.unique(rec['gyro_fs_dps']):
             sel = rec['gyro_fs_dps'] == fs
             lsb = lsm.gyro_sensitivity_rad_s_per_lsb(int(fs))
-            si = lsm.to_si(res.samples[sel], gyro_fs_dps=int(fs), accel_fs_g=int(rec['accel_fs_g'][sel][0]))
+            si = lsm.to_si(res.samples[sel], gyro_fs_dps=int(fs),
+                           accel_fs_g=int(rec['accel_fs_g'][sel][0]))
             assert np.all(np.abs(si.gyro_rad_s - rec['gyro_rad_s'][sel]) <= lsb / 2 + 1e-12)
             if fs == 2000:
                 assert np.array_equal(res.samples['gyro'][sel], ref['gyro'][idx[sel]])
@@ -247,7 +278,8 @@ def test_program_serves_configures_and_matches_truth(transport, tmp_path):
         if transport == 'tcp':
             assert url.startswith('socket://127.0.0.1:') and int(url.rsplit(':', 1)[1]) > 0
         else:
-            assert url == str(tmp_path / 'ttyPORTENTA') and os.path.realpath(url).startswith('/dev/pts/')
+            assert url == str(tmp_path
+                              / 'ttyPORTENTA') and os.path.realpath(url).startswith('/dev/pts/')
         port = serial.serial_for_url(url, timeout=0.05)
         dec = p.Decoder()
         port.write(p.encode_configure(command_id=1, odr_hz=6667, gyro_fs_dps=250, accel_fs_g=8))
@@ -256,7 +288,8 @@ def test_program_serves_configures_and_matches_truth(transport, tmp_path):
                              and sum(r.samples.size for r in rs) > 3000)
         acks = [a for r in results for a in r.acks]
         assert acks[0].ok and acks[0].gyro_fs_dps == 250
-        assert not acks[1].ok and acks[1].status == p.NAK_BAD_GYRO_FS and acks[1].gyro_fs_dps == 250
+        assert not acks[
+            1].ok and acks[1].status == p.NAK_BAD_GYRO_FS and acks[1].gyro_fs_dps == 250
         assert check_against_truth(results, truth_path, args) > 3000
         assert dec.stats.crc_errors == 0 and dec.stats.bytes_discarded == 0
         # a clean stream: consecutive sequence numbers once connected
@@ -296,7 +329,8 @@ def test_program_unplug_replug_and_loss_counting(transport, tmp_path):
                 break
             results.append(dec.feed(data))
             if transport == 'tcp' and not data and sum(r.samples.size for r in results) >= 3000:
-                # pyserial's socket handler returns b'' on EOF after a timeout: probe the connection
+                # pyserial's socket handler returns b'' on EOF after a timeout: probe the
+                # connection
                 try:
                     port.write(b'\x00')
                     time.sleep(0.05)
@@ -335,7 +369,8 @@ def test_program_unplug_replug_and_loss_counting(transport, tmp_path):
 
 def test_program_writes_sd_files(tmp_path):
     out = tmp_path / 'sd'
-    code = cli.main(['--write-sd', str(out), '--samples', '20000', '--sd-file-bytes', '100000', '--seed', '2'])
+    code = cli.main(['--write-sd', str(out), '--samples', '20000', '--sd-file-bytes', '100000',
+                     '--seed', '2'])
     assert code == 0
     files = sorted(os.listdir(out))
     assert files[0] == 'S001F000.GNL' and len(files) == 5

@@ -1,26 +1,43 @@
-"""Tests of the streaming engine (gyro_noise_ros.core.engine): chunking, gaps, NaN, tail, equality with the core."""
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Tests of the streaming engine (gyro_noise_ros.core.engine).
+
+Chunking, gaps, NaN, tail, equality with the core.
+"""
 
 import pickle
 
-import numpy as np
-import pytest
-
 from gyro_noise_ros.core.chunks import chunk_moments, summarise_sequence
 from gyro_noise_ros.core.engine import (
+    analyze_chunk,
     AxisSummary,
     ChunkResult,
     EngineConfig,
     NoiseEngine,
-    analyze_chunk,
     rad_s2_to_deg_s_per_h,
 )
-from gyro_noise_ros.core.fractional import OrderIdentifier, make_grid
+from gyro_noise_ros.core.fractional import make_grid, OrderIdentifier
 from gyro_noise_ros.core.health import ReferenceStats
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.errors import InputDataError, ParameterError
+import numpy as np
+import pytest
 
-# Small chunks, short memory and a coarse grid keep each identification at ~1 ms; the logic under test
-# does not depend on the sizes.
+# Small chunks, short memory and a coarse grid keep each identification at ~1 ms; the logic under
+# test does not depend on the sizes.
 SIZE = 600
 MEMORY = 50
 GRID = make_grid(0.0, 2.0, 0.1)
@@ -29,7 +46,7 @@ T0 = 1_700_000_000_000_000_000
 
 
 def config(**kw):
-    base = dict(chunk_size=SIZE, memory=MEMORY, alphas=GRID, allan=False)
+    base = {'chunk_size': SIZE, 'memory': MEMORY, 'alphas': GRID, 'allan': False}
     base.update(kw)
     return EngineConfig(**base)
 
@@ -67,12 +84,15 @@ def test_per_chunk_numbers_equal_the_core_called_directly():
         moments = chunk_moments(chunk)
         # Same function on the same float64 data: bit-identical, not just close.
         assert r.bias_rad_s == moments.bias and r.variance_rad2_s2 == moments.variance
-        assert (r.alpha_var, r.f_var, r.var_min) == (direct.alpha_var, direct.f_var, direct.var_min)
-        assert (r.alpha_corr, r.f_corr, r.j_min) == (direct.alpha_corr, direct.f_corr, direct.j_min)
+        assert (r.alpha_var, r.f_var, r.var_min) == (direct.alpha_var, direct.f_var,
+                                                     direct.var_min)
+        assert (r.alpha_corr, r.f_corr, r.j_min) == (direct.alpha_corr, direct.f_corr,
+                                                     direct.j_min)
         assert r.status == 'ok' and r.samples == SIZE and r.samples_lost == 0
         assert r.stamp_start_ns == stamps[r.chunk * SIZE]
         assert r.t_start_s == pytest.approx(r.chunk * SIZE * PERIOD_NS / 1e9, abs=1e-12)
-        assert r.t_mid_s == pytest.approx((r.chunk * SIZE + (SIZE - 1) / 2) * PERIOD_NS / 1e9, abs=1e-12)
+        assert r.t_mid_s == pytest.approx((r.chunk * SIZE + (SIZE - 1) / 2) * PERIOD_NS / 1e9,
+                                          abs=1e-12)
     counts = engine.counts()
     assert counts.chunks == 3 and counts.tail_samples == 123 and counts.samples == len(stamps)
     assert counts.rate_hz == pytest.approx(1e9 / PERIOD_NS)
@@ -109,7 +129,7 @@ def test_results_survive_pickling_for_worker_processes():
 
 
 def with_gap(n, at, missing):
-    """Stamps with ``missing`` samples removed after index ``at`` (so the step there is missing + 1 periods)."""
+    """Return stamps with ``missing`` samples removed after ``at`` (step: missing + 1 periods)."""
     stamps, gyro = data(n + missing, seed=3)
     keep = np.r_[0:at + 1, at + 1 + missing:n + missing]
     return stamps[keep], gyro[keep]
@@ -165,7 +185,8 @@ def test_gap_policy_split_discards_the_partial_chunk():
     stamps, gyro = with_gap(3 * SIZE, at=SIZE + 100, missing=7)
     engine = NoiseEngine(config(axes=('x',), gap_policy='split'))
     jobs, results = run(engine, stamps, gyro)
-    # Chunk 0 complete; 101 samples before the gap thrown away; then chunk 1 starts right after the gap.
+    # Chunk 0 complete; 101 samples before the gap thrown away; then chunk 1 starts right after the
+    # gap.
     assert len(results) == 2
     assert all(r.samples_lost == 0 and r.gaps == 0 and r.status == 'ok' for r in results)
     assert results[1].stamp_start_ns == stamps[SIZE + 101]
@@ -226,7 +247,8 @@ def test_out_of_order_stamps_are_counted_not_reordered():
     engine = NoiseEngine(config(axes=('x',)))
     jobs, _ = run(engine, stamps, gyro, batch=100)  # the swap straddles a batch boundary
     assert engine.counts().out_of_order == 2
-    # Each leaves a 2-period step from the latest stamp: one sample counted lost per defect (engine doc).
+    # Each leaves a 2-period step from the latest stamp: one sample counted lost per defect (engine
+    # doc).
     assert (engine.counts().samples_lost, engine.counts().gaps) == (2, 2)
     np.testing.assert_array_equal(jobs[0].samples, gyro[:SIZE, 0])
 
@@ -284,7 +306,8 @@ def test_health_verdicts_come_from_the_engine():
     assert engine.health()['x'].level == 'STALE'
     run(engine, stamps, gyro)
     verdict = engine.health()['x']
-    # The variance (~1e-5 (rad/s)^2 here) is far below the reference's 1.0: ERROR on variance at least.
+    # The variance (~1e-5 (rad/s)^2 here) is far below the reference's 1.0: ERROR on variance at
+    # least.
     assert verdict.level == 'ERROR'
     assert engine.health(seconds_since_data=60.0)['x'].level == 'STALE'
 

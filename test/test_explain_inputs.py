@@ -1,18 +1,31 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Inputs (CSV, bags), bad-input errors and the gyro_noise_explain command line."""
 
 import json
 import subprocess
 import sys
 
-import numpy as np
-import pytest
-
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.cli.explain import main
 from gyro_noise_ros.errors import InputDataError, ParameterError
-from gyro_noise_ros.explain.inputs import MIN_SAMPLES, load_csv, load_input, make_measurement
-from gyro_noise_ros.explain.synthetic import make_record
 from gyro_noise_ros.explain.effects import NAMES
+from gyro_noise_ros.explain.inputs import load_csv, load_input, make_measurement, MIN_SAMPLES
+from gyro_noise_ros.explain.synthetic import make_record
+import numpy as np
+import pytest
 
 
 def _write_csv(path, t, rate, *, temperature=None, unit='rad_s'):
@@ -21,7 +34,8 @@ def _write_csv(path, t, rate, *, temperature=None, unit='rad_s'):
     if temperature is not None:
         cols.append('temperature_c')
         data.append(temperature)
-    np.savetxt(path, np.column_stack(data), delimiter=',', header=','.join(cols), comments='', fmt='%.12g')
+    np.savetxt(path, np.column_stack(data), delimiter=',', header=','.join(cols), comments='',
+               fmt='%.12g')
 
 
 def _record(n=MIN_SAMPLES + 100, seed=0):
@@ -80,7 +94,8 @@ def test_bag_with_temperature(tmp_path):
     meas = load_input(bag, axis='z', require_temperature=True)
     np.testing.assert_array_equal(meas.rate, rate)
     assert meas.rate_hz == pytest.approx(200.0, rel=1e-6)
-    # linear interpolation of a linear temperature ramp onto the Imu stamps is exact inside the span
+    # linear interpolation of a linear temperature ramp onto the Imu stamps is exact inside the
+    # span
     inner = t <= t[::200][-1]
     np.testing.assert_allclose(meas.temperature_c[inner], 25.0 + t[inner] * 0.01, rtol=1e-9)
     bag2 = tmp_path / 'bag2'
@@ -104,10 +119,12 @@ def test_cli_bad_input_exit_codes(tmp_path, capsys):
     assert 'NaN' in capsys.readouterr().err
     ok = tmp_path / 'ok.csv'
     _write_csv(ok, t, rate)
-    assert main([str(ok), '--out', str(tmp_path / 'o3'), '--require-temperature']) == InputDataError.exit_code
+    assert main([str(ok), '--out', str(tmp_path / 'o3'),
+                 '--require-temperature']) == InputDataError.exit_code
     assert 'temperature was asked for' in capsys.readouterr().err
     assert main([str(tmp_path / 'missing.bag'), '--out', str(tmp_path / 'o4')]) == 3
-    assert main([str(ok), '--out', str(tmp_path / 'o5'), '--ensemble', '2']) == ParameterError.exit_code
+    assert main([str(ok), '--out', str(tmp_path / 'o5'), '--ensemble',
+                 '2']) == ParameterError.exit_code
 
 
 def test_cli_end_to_end(tmp_path, capsys):
@@ -115,7 +132,8 @@ def test_cli_end_to_end(tmp_path, capsys):
     path = tmp_path / 'q.csv'
     _write_csv(path, meas.t_s, meas.rate)
     out = tmp_path / 'out'
-    assert main([str(path), '--out', str(out), '--ensemble', '6', '--seed', '3', '--quiet', '--axis', 'z']) == 0
+    assert main([str(path), '--out', str(out), '--ensemble', '6', '--seed', '3', '--quiet',
+                 '--axis', 'z']) == 0
     assert 'quantization' in capsys.readouterr().out
     data = json.loads((out / 'explain.json').read_text())
     assert {'baseline', 'steps', 'gap_initial', 'gap_final', 'unexplained'} <= set(data)
@@ -141,10 +159,13 @@ def test_cli_bag_without_asked_temperature(tmp_path, capsys):
     stamp_ns = (10 ** 9 + np.round(t * 1e9)).astype(np.int64)
     bag = tmp_path / 'bag'
     with ImuBagWriter(bag) as writer:
-        writer.write_imu(stamp_ns, np.column_stack((rate, rate, rate)), np.tile([0.0, 0.0, 9.81], (t.size, 1)))
-    code = main([str(bag), '--temperature-topic', '/imu/temperature', '--out', str(tmp_path / 'o')])
+        writer.write_imu(stamp_ns, np.column_stack((rate, rate, rate)),
+                         np.tile([0.0, 0.0, 9.81], (t.size, 1)))
+    code = main([str(bag), '--temperature-topic', '/imu/temperature', '--out',
+                 str(tmp_path / 'o')])
     err = capsys.readouterr().err
-    # the named topic does not exist: the bag reader refuses it (3, a recording problem) in one line
+    # the named topic does not exist: the bag reader refuses it (3, a recording problem) in one
+    # line
     assert code == 3 and 'temperature' in err and err.count('\n') == 1
     code = main([str(bag), '--require-temperature', '--out', str(tmp_path / 'o')])
     assert code == InputDataError.exit_code

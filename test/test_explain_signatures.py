@@ -1,14 +1,32 @@
-"""Signatures, band/gap, effect templates and the baseline fit of the discrepancy workflow."""
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-import numpy as np
-import pytest
-import scipy.signal
+"""Signatures, band/gap, effect templates and the baseline fit of the discrepancy workflow."""
 
 from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.explain import signatures as sig
 from gyro_noise_ros.explain.baseline import fit_baseline, model_gain, simulation_memory
-from gyro_noise_ros.explain.effects import (allan_template_from_psd, flicker_noise, gm_allan, null_exceeded)
+from gyro_noise_ros.explain.effects import (
+    allan_template_from_psd,
+    flicker_noise,
+    gm_allan,
+    null_exceeded,
+)
+import numpy as np
+import pytest
+import scipy.signal
 
 
 def test_welch_equals_scipy():
@@ -63,7 +81,8 @@ def test_compare_leave_one_out_and_gap():
         others = np.delete(members, j, axis=0)
         d.append(np.max(np.abs(members[j] - others.mean(0)) / others.std(0, ddof=1)))
     d = np.array(d)
-    expect = max(sig.MIN_THRESHOLD, d.max(), np.exp(np.log(d).mean() + sig.BAND_K * np.log(d).std(ddof=1)))
+    expect = max(sig.MIN_THRESHOLD, d.max(), np.exp(np.log(d).mean() + sig.BAND_K
+                                                    * np.log(d).std(ddof=1)))
     assert comp.threshold == pytest.approx(expect, rel=1e-9)
     far = members.mean(axis=0).copy()
     far[7] += 50 * members[:, 7].std(ddof=1)
@@ -76,7 +95,8 @@ def test_gm_closed_form_matches_psd_integral():
     # two-sided Lorentzian of a first-order Markov process, sd 1, correlation time 2 s (IEEE 952)
     tc = 2.0
     tau = np.geomspace(0.05, 50, 12)
-    integral = allan_template_from_psd(lambda f: 2 * tc / (1 + (2 * np.pi * f * tc) ** 2), tau, 1e4, 1e5)
+    integral = allan_template_from_psd(lambda f: 2 * tc / (1 + (2 * np.pi * f * tc) ** 2), tau,
+                                       1e4, 1e5)
     # the integral is truncated at fs/2 and 1/T; the bounds are far outside the Lorentzian's corner
     np.testing.assert_allclose(gm_allan(1.0, tc, tau), integral, rtol=0.02)
 
@@ -90,8 +110,8 @@ def test_flicker_template_floor_and_simulation():
     m = np.array([100, 1000])
     adev = np.mean([sig.allan_deviation_octaves(flicker_noise(200000, 100.0, 1.0, rng), 100.0, m)
                     for _ in range(8)], axis=0)
-    # 8 records of 2000 s: the ADEV at 10 s has ~200 independent averages per record, so the mean over
-    # 8 records is within ~5 %; 10 % allows for the low-frequency cut of the finite record
+    # 8 records of 2000 s: the ADEV at 10 s has ~200 independent averages per record, so the mean
+    # over 8 records is within ~5 %; 10 % allows for the low-frequency cut of the finite record
     np.testing.assert_allclose(adev, 0.664, rtol=0.10)
 
 
@@ -106,7 +126,8 @@ def test_simulation_memory_keeps_psd_within_one_percent():
         memory = simulation_memory(alpha, f, 1000.0)
         assert memory <= 1000
         freq = np.geomspace(0.1, 500.0, 200)
-        ratio = model_gain(alpha, f, memory, freq, 1000.0) / model_gain(alpha, f, 1000, freq, 1000.0)
+        ratio = model_gain(
+            alpha, f, memory, freq, 1000.0) / model_gain(alpha, f, 1000, freq, 1000.0)
         assert np.max(np.abs(ratio - 1)) <= 0.0101
 
 
@@ -117,10 +138,10 @@ def test_fit_baseline_recovers_simulated_model():
     assert model.bias_rad_s == pytest.approx(0.02, abs=2e-5)
     # the identification grid is 0.01; chunk estimates of 8000 samples scatter by a few 0.01
     assert model.alpha == pytest.approx(1.0, abs=0.08)
-    # the fit is judged above fs / 100 (baseline.py): there the model PSD must match the record's Welch
-    # PSD; averaged over 8 decade-wide bands of ~100 bins x 38 segments each, the estimate scatters by
-    # ~0.5 %, so 5 % leaves room for the 0.01-grid order and the errors-in-variables bias of f (paper
-    # 000 eq. 12)
+    # the fit is judged above fs / 100 (baseline.py): there the model PSD must match the record's
+    # Welch PSD; averaged over 8 decade-wide bands of ~100 bins x 38 segments each, the estimate
+    # scatters by ~0.5 %, so 5 % leaves room for the 0.01-grid order and the errors-in-variables
+    # bias of f (paper 000 eq. 12)
     freq, pxx = sig.welch(x, 1000.0, 2048)
     gain = model_gain(model.alpha, model.f, model.memory_sim, freq, 1000.0)
     model_psd = 2.0 / 1000.0 * (model.sigma_w_rad_s ** 2 * gain + model.sigma_nu_rad_s ** 2)
@@ -128,8 +149,8 @@ def test_fit_baseline_recovers_simulated_model():
     for lo, hi in zip(edges[:-1], edges[1:]):
         band = (freq >= lo) & (freq < hi)
         assert pxx[band].mean() == pytest.approx(model_psd[band].mean(), rel=0.05)
-    # the total variance, dominated by the same band, follows within 8 % (below fs / 100 the model is
-    # extrapolated by its (alpha, f))
+    # the total variance, dominated by the same band, follows within 8 % (below fs / 100 the model
+    # is extrapolated by its (alpha, f))
     sim = model.generator(np.random.default_rng(8)).generate(80000)
     assert np.var(sim) == pytest.approx(np.var(x), rel=0.08)
 

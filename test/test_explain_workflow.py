@@ -1,26 +1,39 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Hidden-effect proof of the discrepancy workflow (issue 5).
 
-Records come from :mod:`gyro_noise_ros.explain.synthetic`: the baseline and the effect parameters are
-drawn at random from the ranges documented there; the test asserts that the first named effect is the
-hidden one, that every step shrinks the gap and that the final model puts the measurement inside the
-band (G <= INSIDE_GAP). The default run uses one seeded record per case (20,000 samples at 100 Hz,
-150,000 for bias_instability, 8 members); the slow sweep runs 6 seeds per case and requires at least 4
-of 6 (the rates over 10 seeds and the false-alarm rate over 40 are in docs/discrepancy.md, with the
-commands).
+Records come from :mod:`gyro_noise_ros.explain.synthetic`: the baseline and the effect parameters
+are drawn at random from the ranges documented there; the test asserts that the first named effect
+is the hidden one, that every step shrinks the gap and that the final model puts the measurement
+inside the band (G <= INSIDE_GAP). The default run uses one seeded record per case (20,000 samples
+at 100 Hz, 150,000 for bias_instability, 8 members); the slow sweep runs 6 seeds per case and
+requires at least 4 of 6 (the rates over 10 seeds and the false-alarm rate over 40 are in
+docs/discrepancy.md, with the commands).
 """
 
+from gyro_noise_ros.explain.synthetic import EFFECTS, make_record
+from gyro_noise_ros.explain.workflow import explain, INSIDE_GAP
 import numpy as np
 import pytest
 
-from gyro_noise_ros.explain.synthetic import EFFECTS, make_record
-from gyro_noise_ros.explain.workflow import INSIDE_GAP, explain
-
-FAST = dict(n=20000, ensemble=8)
-#: Record length per effect in the default run. Flicker (bias_instability) needs two decades of tau above
-#: its crossing with the white noise to be told from one Gauss-Markov process (flicker is a superposition
-#: of them): with 20,000 samples it is mistaken for gauss_markov in 3 of 4 seeds, with 150,000 in none
-#: of 4 (docs/discrepancy.md). The other effects are named at 20,000 samples.
+FAST = {'n': 20000, 'ensemble': 8}
+#: Record length per effect in the default run. Flicker (bias_instability) needs two decades of tau
+#: above its crossing with the white noise to be told from one Gauss-Markov process (flicker is a
+#: superposition of them): with 20,000 samples it is mistaken for gauss_markov in 3 of 4 seeds,
+#: with 150,000 in none of 4 (docs/discrepancy.md). The other effects are named at 20,000 samples.
 LENGTH = {'bias_instability': 150000}
 
 
@@ -50,11 +63,13 @@ def test_fitted_parameters_are_close_to_the_hidden_ones():
     hidden = truth['sinusoid']
     # the frequency is refined between periodogram bins (bin width 1/T = 5 mHz here)
     assert params['frequency_hz'] == pytest.approx(hidden['frequency_hz'], abs=3e-3)
-    # amplitude >= 0.15 sigma over 20,000 samples: LS standard error ~ sigma * sqrt(2 / n) = 0.01 sigma
+    # amplitude >= 0.15 sigma over 20,000 samples: LS standard error ~ sigma * sqrt(2 / n) = 0.01
+    # sigma
     assert params['amplitude_rad_s'] == pytest.approx(hidden['amplitude_rad_s'], rel=0.15)
 
 
-@pytest.mark.parametrize('pair', [('quantization', 'bias_drift'), ('sinusoid', 'rate_random_walk')])
+@pytest.mark.parametrize(
+    'pair', [('quantization', 'bias_drift'), ('sinusoid', 'rate_random_walk')])
 def test_two_hidden_effects_are_both_found(pair):
     result, _ = _run(pair, 3, **FAST)
     _check_explained(result, pair)
@@ -78,7 +93,7 @@ def test_same_seed_same_result():
 
 @pytest.mark.slow
 @pytest.mark.parametrize('case', [(e,) for e in EFFECTS] + [('quantization', 'sinusoid'),
-                                                          ('sample_loss', 'bias_transient')])
+                                                            ('sample_loss', 'bias_transient')])
 def test_sweep_hidden_effects(case):
     n = max(LENGTH.get(e, FAST['n']) for e in case)
     ok = 0
@@ -86,8 +101,8 @@ def test_sweep_hidden_effects(case):
         result, _ = _run(case, seed, n=n, ensemble=FAST['ensemble'])
         ok += bool(result.named and result.named[0] in case and set(case) <= set(result.named)
                    and not result.unexplained)
-    # docs/discrepancy.md gives the measured rates over 10 seeds (70-100 % per effect at these lengths);
-    # 4 of 6 is a floor that fails only if the workflow gets materially worse
+    # docs/discrepancy.md gives the measured rates over 10 seeds (70-100 % per effect at these
+    # lengths); 4 of 6 is a floor that fails only if the workflow gets materially worse
     assert ok >= 4, f'{case}: {ok} of 6'
 
 

@@ -1,13 +1,33 @@
-"""Fractional-order identification (paper 000 eqs. 3-14) against the slow oracle and closed forms."""
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-import numpy as np
-import pytest
+"""Fractional-order identification (paper 000 eqs. 3-14) against the slow oracle, closed forms."""
 
 from _fractional_reference import curves_ref, gl_coefficients_ref, gl_difference_loop
-from gyro_noise_ros.core.fractional import (OrderIdentifier, default_grid, gl_coefficients, gl_difference,
-                                            identify_order, make_grid, parse_grid)
+from gyro_noise_ros.core.fractional import (
+    default_grid,
+    gl_coefficients,
+    gl_difference,
+    identify_order,
+    make_grid,
+    OrderIdentifier,
+    parse_grid,
+)
 from gyro_noise_ros.core.simulate import FractionalNoise
 from gyro_noise_ros.errors import InputDataError, ParameterError
+import numpy as np
+import pytest
 
 
 @pytest.mark.parametrize('alpha', [0.0, 0.37, 1.0, 1.4, 2.0, 2.5, -0.6])
@@ -23,14 +43,15 @@ def test_gl_coefficients_closed_forms():
     np.testing.assert_array_equal(gl_coefficients(1.0, 4), [1, -1, 0, 0, 0])
     np.testing.assert_array_equal(gl_coefficients(2.0, 4), [1, -2, 1, 0, 0])
     # alpha = 0.5: c_j = (-1)^j binom(1/2, j) = 1, -1/2, -1/8, -1/16, -5/128
-    np.testing.assert_allclose(gl_coefficients(0.5, 4), [1, -0.5, -0.125, -0.0625, -5 / 128], rtol=1e-15)
+    np.testing.assert_allclose(gl_coefficients(0.5, 4), [1, -0.5, -0.125, -0.0625, -5 / 128],
+                               rtol=1e-15)
 
 
 @pytest.mark.parametrize('alpha,memory', [(0.7, 5), (1.4, 13), (1.0, 3), (0.25, 40)])
 def test_gl_difference_is_eq3_with_truncation(alpha, memory):
     x = np.random.default_rng(1).standard_normal(60)
-    np.testing.assert_allclose(gl_difference(x, alpha, memory=memory), gl_difference_loop(x, alpha, memory),
-                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(gl_difference(x, alpha, memory=memory),
+                               gl_difference_loop(x, alpha, memory), rtol=1e-12, atol=1e-12)
 
 
 def test_gl_difference_order_one_is_first_difference():
@@ -45,7 +66,8 @@ def test_fast_curves_equal_reference(demean, max_lag):
     rng = np.random.default_rng(3)
     v = FractionalNoise(1.3, -0.4, 1e-3, rng=rng, memory=300).generate(2500) + 0.02
     alphas = make_grid(0.0, 2.0, 0.05)
-    fast = OrderIdentifier(2500, alphas=alphas, memory=300, demean=demean, max_lag=max_lag)(v, curves=True)
+    fast = OrderIdentifier(
+        2500, alphas=alphas, memory=300, demean=demean, max_lag=max_lag)(v, curves=True)
     var_c, j_c, f_c = curves_ref(v, alphas, 300, demean=demean, max_lag=max_lag)
     np.testing.assert_allclose(fast.var_curve, var_c, rtol=1e-9)
     np.testing.assert_allclose(fast.j_curve, j_c, rtol=1e-9)
@@ -64,7 +86,7 @@ def test_fast_curves_equal_reference_at_paper_size():
 
 
 def test_order_zero_and_one_tie_exactly_and_rule_reports_one():
-    """alpha = 0 with f and alpha = 1 with f - 1 give the same residual for any data (module doc)."""
+    """Alpha 0 with f and alpha 1 with f - 1 give the same residual for any data (module doc)."""
     v = FractionalNoise(1.0, -0.3, 1.0, rng=np.random.default_rng(5), memory=500).generate(4000)
     res = identify_order(v, memory=500, alphas=[0.0, 1.0, 2.0], curves=True)
     assert res.var_curve[1] == pytest.approx(res.var_curve[0], rel=1e-12)
@@ -76,8 +98,8 @@ def test_order_zero_and_one_tie_exactly_and_rule_reports_one():
     assert res.f_var == pytest.approx(-0.3, abs=0.05)
 
 
-# f values: inside the stable region (f < S_L(alpha), see core/simulate.py) and not at its edge, where
-# the process approaches a random walk and a 10,000-sample chunk no longer pins the order.
+# f values: inside the stable region (f < S_L(alpha), see core/simulate.py) and not at its edge,
+# where the process approaches a random walk and a 10,000-sample chunk no longer pins the order.
 RECOVERY_CASES = [(0.6, -0.3), (1.0, -0.2), (1.4, -0.5), (1.4, -0.05)]
 
 
@@ -86,12 +108,12 @@ def test_both_methods_recover_order(alpha, f):
     """
     Ten consecutive 10,000-sample chunks of one stationary run, no measurement noise.
 
-    Measured spread per chunk over 30 chunks (docs/analysis.md): alpha 1.4, both methods within 0.03 in
-    every chunk; alpha 0.6, standard deviation 0.03 (variance method) and 0.07 (correlation); alpha 1.0,
-    some chunks fall in the basin of the exact alias alpha = 0 (identical at 0 and 1, nearly so around
-    them). The claim tested is therefore on the sequence, as the paper's Tables 5-6 report it: the
-    median over chunks within 0.03 for both methods, and the variance-method mean over the chunks
-    outside the alias basin within 0.03.
+    Measured spread per chunk over 30 chunks (docs/analysis.md): alpha 1.4, both methods within
+    0.03 in every chunk; alpha 0.6, standard deviation 0.03 (variance method) and 0.07
+    (correlation); alpha 1.0, some chunks fall in the basin of the exact alias alpha = 0 (identical
+    at 0 and 1, nearly so around them). The claim tested is therefore on the sequence, as the
+    paper's Tables 5-6 report it: the median over chunks within 0.03 for both methods, and the
+    variance-method mean over the chunks outside the alias basin within 0.03.
     """
     ident = OrderIdentifier(10000)
     gen = FractionalNoise(alpha, f, 1.0, rng=np.random.default_rng(100))

@@ -1,23 +1,37 @@
-"""
-gyro_noise_import on emulator-written SD logs split across files, with injected corruption: the report's
-counts are exact and the bag (read back with rosbags) holds the right messages.
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-The reference is an independent walk over the *clean* files (frame by frame with struct, possible only
-because they are clean) and a plain-Python twin of the counter rules.
+"""
+gyro_noise_import on emulator-written SD logs split across files, with injected corruption.
+
+The report's counts are exact and the bag (read back with rosbags) holds the right messages.
+
+The reference is an independent walk over the *clean* files (frame by frame with struct, possible
+only because they are clean) and a plain-Python twin of the counter rules.
 """
 
 import os
 import struct
 
-import numpy as np
-import pytest
-from rosbags.highlevel import AnyReader
-from rosbags.typesys import Stores, get_typestore
-
 from gyro_noise_ros.cli import emulator as emu_cli
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link import protocol as p
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import get_typestore, Stores
 
 RTC = 1_700_000_000
 N_SAMPLES = 24_000
@@ -47,10 +61,11 @@ def twin_counts(seqs, flags):
 @pytest.fixture(scope='module')
 def sd_logs(tmp_path_factory):
     out = tmp_path_factory.mktemp('sd')
-    code = emu_cli.main(['--write-sd', str(out), '--samples', str(N_SAMPLES), '--sd-file-bytes', '120000',
-                         '--seed', '5', '--drop-flagged-rate', '0.002', '--drop-unflagged-rate', '0.002',
-                         '--rtc-unix-s', str(RTC), '--seq0', str(2 ** 32 - 5000), '--t0-us', str(2 ** 32 - 1_000_000),
-                         '--gyro-fs-dps', '500', '--accel-fs-g', '8'])
+    code = emu_cli.main(['--write-sd', str(out), '--samples', str(N_SAMPLES), '--sd-file-bytes',
+                         '120000', '--seed', '5', '--drop-flagged-rate', '0.002',
+                         '--drop-unflagged-rate', '0.002', '--rtc-unix-s', str(RTC), '--seq0',
+                         str(2 ** 32 - 5000), '--t0-us', str(2 ** 32 - 1_000_000), '--gyro-fs-dps',
+                         '500', '--accel-fs-g', '8'])
     assert code == 0
     files = sorted(str(out / f) for f in os.listdir(out))
     assert len(files) >= 4
@@ -67,7 +82,11 @@ def samples_of(frames):
 
 
 def corrupt_copy(files, clean, dest):
-    """Copy the logs with three injected faults; return (paths, kept samples, discarded bytes, regions)."""
+    """
+    Copy the logs with three injected faults.
+
+    Return (paths, kept samples, discarded bytes, regions).
+    """
     os.makedirs(dest, exist_ok=True)
     paths, kept, discarded, regions = [], [], 0, []
     for i, path in enumerate(files):
@@ -117,7 +136,8 @@ def read_bag(path):
             elif conn.topic == '/imu/temperature':
                 temp.append((0.0, msg.temperature))
                 temp_ns.append(stamp)
-    # column 0 is a placeholder: stamps are returned as exact int64 (float64 cannot hold ns since 1970)
+    # column 0 is a placeholder: stamps are returned as exact int64 (float64 cannot hold ns since
+    # 1970)
     return np.array(imu), np.array(temp), frame_ids, np.array(imu_ns), np.array(temp_ns)
 
 
@@ -164,7 +184,8 @@ def test_missing_middle_file_is_reported_and_counted(sd_logs, tmp_path):
     rep = importer.import_logs(use, tmp_path / 'bag', start_time='zero', temperature_rate_hz=0)
     assert rep.missing_file_indices == (2,)
     assert rep.samples_written == all_kept.size
-    lost, flagged = twin_counts(all_kept['seq'].astype(np.int64).tolist(), all_kept['flags'].tolist())
+    lost, flagged = twin_counts(all_kept['seq'].astype(np.int64).tolist(),
+                                all_kept['flags'].tolist())
     assert (rep.samples_lost, rep.samples_flagged_lost) == (lost, flagged)
     assert rep.first_stamp_ns == 0 and rep.temperature_written == 0
 
@@ -172,14 +193,20 @@ def test_missing_middle_file_is_reported_and_counted(sd_logs, tmp_path):
 def test_cli_prints_report_and_refuses_bad_input(sd_logs, tmp_path, capsys):
     files, _ = sd_logs
     bag = tmp_path / 'bag'
-    assert importer.main([*files, '--out', str(bag), '--start-time', '1000.5', '--topic', 'gyro/raw']) == 0
+    assert importer.main([*files, '--out', str(bag), '--start-time', '1000.5', '--topic',
+                          'gyro/raw']) == 0
     out = capsys.readouterr().out
-    assert 'samples written' in out and 'corrupt regions        0' in out and 'epoch unix:1000.5' in out
+    assert (
+        'samples written' in out
+        and 'corrupt regions        0' in out
+        and 'epoch unix:1000.5' in out
+    )
     assert importer.main([*files, '--out', str(bag)]) == 2  # exists
     assert 'exists' in capsys.readouterr().err
     junk = tmp_path / 'junk.GNL'
     junk.write_bytes(bytes(range(256)) * 40)
-    assert importer.main([str(junk), '--out', str(tmp_path / 'b2')]) == 4  # no header: scaling unknown
+    # no header: scaling unknown
+    assert importer.main([str(junk), '--out', str(tmp_path / 'b2')]) == 4
     assert importer.main([str(junk), '--out', str(tmp_path / 'b3'), '--gyro-fs-dps', '2000',
                           '--accel-fs-g', '4']) == 4  # no samples at all
     assert not (tmp_path / 'b3').exists()
@@ -193,13 +220,14 @@ def test_import_memory_does_not_grow_with_log_size(tmp_path):
     peaks = {}
     for n in (5_000, 10_000, 80_000):
         logs = tmp_path / f'logs{n}'
-        assert emu_cli.main(['--write-sd', str(logs), '--samples', str(n), '--sd-file-bytes', '300000']) == 0
+        assert emu_cli.main(['--write-sd', str(logs), '--samples', str(n), '--sd-file-bytes',
+                             '300000']) == 0
         files = sorted(str(logs / f) for f in os.listdir(logs))
         tracemalloc.start()
         importer.import_logs(files, tmp_path / f'bag{n}', chunk_bytes=1 << 16)
         peaks[n] = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
-    # 8x the data (0.5 MB more of samples as numpy arrays alone) must not raise the Python-heap peak
-    # by more than a chunk's worth of decoded data and bookkeeping: allow 25 % (the first, smaller
-    # run only warms caches and imports up)
+    # 8x the data (0.5 MB more of samples as numpy arrays alone) must not raise the Python-heap
+    # peak by more than a chunk's worth of decoded data and bookkeeping: allow 25 % (the first,
+    # smaller run only warms caches and imports up)
     assert peaks[80_000] < 1.25 * peaks[10_000], peaks

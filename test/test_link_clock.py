@@ -1,17 +1,32 @@
-"""
-Device-clock unwrapping and the device-to-host time estimator on an emulated clock with drift and jitter.
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-The emulated link: samples at 6667 Hz of device time, 16 per batch (417 batches/s), the device clock off
-by ``ppm`` against the host, each batch received ``latency + Exp(mean 2 ms)`` after its newest sample.
-The error of a stamp is ``stamp - (true host time of the sample + latency)`` (the constant latency is
-not observable and is documented as such).
 """
+Device-clock unwrapping and the device-to-host time estimator.
 
-import numpy as np
-import pytest
+On an emulated clock with drift and jitter.
+
+The emulated link: samples at 6667 Hz of device time, 16 per batch (417 batches/s), the device
+clock off by ``ppm`` against the host, each batch received ``latency + Exp(mean 2 ms)`` after its
+newest sample. The error of a stamp is ``stamp - (true host time of the sample + latency)`` (the
+constant latency is not observable and is documented as such).
+"""
 
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.link.clock import DeviceClock, Unwrapper
+import numpy as np
+import pytest
 
 ODR = 6667.0
 BATCH = 16
@@ -19,7 +34,8 @@ LATENCY_NS = 150_000
 H0 = 1_763_000_000_000_000_000  # a 2025 UNIX time in ns: the float64 trap is real at this size
 
 
-def emulate(clock, *, seconds, ppm, rng, t0_us=0, jitter_mean_ns=2e6, start_index=0, host_offset_ns=0):
+def emulate(clock, *, seconds, ppm, rng, t0_us=0, jitter_mean_ns=2e6, start_index=0,
+            host_offset_ns=0):
     """Run the clock over an emulated link; return (stamps, errors) in ns."""
     nbatch = int(seconds * ODR / BATCH)
     stamps, errors = [], []
@@ -60,13 +76,14 @@ def test_estimator_error_well_below_jitter(ppm, t0_us):
     assert np.all(np.diff(stamps) > 0)
     settled = err[int(5 * ODR):]  # after 5 s (5 closed blocks)
     # Jitter is Exp(2 ms). Block minima of ~417 draws sit ~5 us above the latency and their least-
-    # squares line over 60 blocks has an offset error of a few us; allow 100 us for the worst sample
-    # (20x below the 2 ms mean jitter, 1.5 % of a sample period) and 25 us for the mean.
+    # squares line over 60 blocks has an offset error of a few us; allow 100 us for the worst
+    # sample (20x below the 2 ms mean jitter, 1.5 % of a sample period) and 25 us for the mean.
     assert np.max(np.abs(settled)) < 100_000
     assert abs(np.mean(settled)) < 25_000
     # the drift estimate: the device runs fast by ppm, so host/device rate is 1/(1+ppm) - 1 ~ -ppm
     assert clock.state.drift_ppm == pytest.approx(-ppm, abs=1.0)
-    # the first second: slope not yet known, stamps late by at most the earliest batch's delay (~ms)
+    # the first second: slope not yet known, stamps late by at most the earliest batch's delay
+    # (~ms)
     assert np.max(np.abs(err[:int(ODR)])) < 20e6
 
 
@@ -101,9 +118,10 @@ def test_long_unplug_across_counter_wraps_is_bridged():
     start = int(20 * ODR) // BATCH * BATCH + gap_samples
     _, err = emulate(clock, seconds=5, ppm=30.0, rng=rng, start_index=start)
     assert clock.state.resets == 0
-    # A wrong number of wraps would be off by 71.6 min per wrap. What remains is the slope error of a
-    # fit over 20 blocks (~5 us noise each: ~0.2 ppm, 1.8 ms over 9000 s at one sigma): allow 10 ms
-    # just after the gap, and 1 ms once 5 s of new blocks anchor the line on both sides of the gap.
+    # A wrong number of wraps would be off by 71.6 min per wrap. What remains is the slope error of
+    # a fit over 20 blocks (~5 us noise each: ~0.2 ppm, 1.8 ms over 9000 s at one sigma): allow 10
+    # ms just after the gap, and 1 ms once 5 s of new blocks anchor the line on both sides of the
+    # gap.
     assert np.max(np.abs(err)) < 10_000_000
     assert np.max(np.abs(err[-int(ODR):])) < 1_000_000
 
@@ -114,6 +132,7 @@ def test_reset_keeps_monotonic_floor_and_bad_parameters_raise():
     clock.reset()
     b = clock.update(np.array([1000, 2000], dtype=np.uint32), H0 - 10_000_000)
     assert b[0] > a[-1]
-    for kwargs in ({'nominal_rate_hz': 0}, {'block_s': -1}, {'window_blocks': 1}, {'reset_threshold_s': 0}):
+    for kwargs in ({'nominal_rate_hz': 0}, {'block_s': -1}, {'window_blocks': 1},
+                   {'reset_threshold_s': 0}):
         with pytest.raises(ParameterError):
             DeviceClock(**kwargs)

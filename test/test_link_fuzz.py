@@ -1,18 +1,34 @@
-"""
-Property-based fuzzing of the link decoder (hypothesis): whatever the bytes, feed() never raises; every
-valid frame is recovered; counters are exact against what was injected.
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-The expected counters come from a plain-Python twin of the counter rules (gap = (seq - prev) mod 2**32
+"""
+Property-based fuzzing of the link decoder (hypothesis): whatever the bytes, feed() never raises.
+
+Every valid frame is recovered; counters are exact against what was injected.
+
+The expected counters come from a plain-Python twin of the counter rules (gap = (seq - prev) mod
+2**32
 - 1, backward jumps and duplicates excluded), not from the decoder.
 """
 
-import numpy as np
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from gyro_noise_ros.link import protocol as p
+from hypothesis import given, HealthCheck, settings
+from hypothesis import strategies as st
+import numpy as np
 
-SETTINGS = dict(deadline=None, max_examples=150, database=None, suppress_health_check=[HealthCheck.too_slow])
+SETTINGS = {'deadline': None, 'max_examples': 150, 'database': None,
+            'suppress_health_check': [HealthCheck.too_slow]}
 
 
 def expected_counts(seqs, flags):
@@ -32,15 +48,20 @@ def expected_counts(seqs, flags):
 
 @st.composite
 def frame_streams(draw, max_frames=8):
-    """A list of (frame bytes, samples) with increasing seq (random gaps) starting anywhere, maybe wrapping."""
+    """
+    Draw a list of (frame bytes, samples) with increasing seq (random gaps).
+
+    The seq starts anywhere and may wrap.
+    """
     start = draw(st.one_of(st.integers(0, 2 ** 32 - 1), st.integers(2 ** 32 - 300, 2 ** 32 - 1)))
     nframes = draw(st.integers(1, max_frames))
     frames = []
     seq = start
     for _ in range(nframes):
         if draw(st.integers(0, 5)) == 0:
-            ack = p.Ack(command_id=draw(st.integers(0, 2 ** 32 - 1)), ok=draw(st.booleans()), odr_hz=6667.0,
-                        gyro_fs_dps=2000, accel_fs_g=4, message=draw(st.text('abc xyz', max_size=10)),
+            ack = p.Ack(command_id=draw(st.integers(0, 2 ** 32 - 1)), ok=draw(st.booleans()),
+                        odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4,
+                        message=draw(st.text('abc xyz', max_size=10)),
                         status=draw(st.integers(0, 255)))
             frames.append((p.encode_ack(ack), None))
             continue
@@ -53,9 +74,10 @@ def frame_streams(draw, max_frames=8):
         s['seq'] = seqs
         s['t_us'] = draw(st.integers(0, 2 ** 32 - 1))
         # payload bytes from hypothesis: may contain A5 5A and other header look-alikes
-        s['gyro'] = np.array(draw(st.lists(st.integers(-32768, 32767), min_size=3 * n, max_size=3 * n))).reshape(n, 3)
-        s['flags'] = draw(st.lists(st.sampled_from([0, 0, p.FLAG_SAMPLE_LOST, p.FLAG_FIFO_OVERRUN, 3]),
-                                   min_size=n, max_size=n))
+        s['gyro'] = np.array(draw(st.lists(st.integers(-32768, 32767), min_size=3 * n, max_size=3
+                                           * n))).reshape(n, 3)
+        s['flags'] = draw(st.lists(st.sampled_from([0, 0, p.FLAG_SAMPLE_LOST, p.FLAG_FIFO_OVERRUN,
+                                                    3]), min_size=n, max_size=n))
         frames.append((p.encode_samples(s), s))
     return frames
 
@@ -101,7 +123,8 @@ def test_split_into_random_pieces_recovers_everything(frames, data):
     st_ = dec.stats
     lost, flagged = expected_counts(expected['seq'].tolist(), expected['flags'].tolist())
     assert (st_.samples_lost, st_.samples_flagged_lost) == (lost, flagged)
-    assert (st_.frames_ok, st_.crc_errors, st_.bytes_discarded, st_.resyncs) == (len(frames), 0, 0, 0)
+    assert (
+        st_.frames_ok, st_.crc_errors, st_.bytes_discarded, st_.resyncs) == (len(frames), 0, 0, 0)
 
 
 @settings(**SETTINGS)
@@ -145,7 +168,8 @@ def test_truncation_at_every_byte(frames):
         assert np.array_equal(samples, all_samples(frames[:complete]))
         kept = int(ends[complete - 1]) if complete else 0
         assert dec.stats.bytes_discarded == cut - kept
-        # a cut frame of two bytes or more starts with a valid sync and header prefix: counted as truncated
+        # a cut frame of two bytes or more starts with a valid sync and header prefix: counted as
+        # truncated
         if cut - kept >= 2:
             assert dec.stats.frames_truncated >= 1
         else:
@@ -173,8 +197,9 @@ def test_single_bit_flip_loses_exactly_that_frame(frames, data):
 
 
 @settings(**SETTINGS)
-@given(st.integers(2 ** 32 - 2000, 2 ** 32 - 1), st.lists(st.booleans(), min_size=50, max_size=400),
-       st.lists(st.booleans(), min_size=50, max_size=400))
+@given(
+    st.integers(2 ** 32 - 2000, 2 ** 32 - 1), st.lists(st.booleans(), min_size=50, max_size=400),
+    st.lists(st.booleans(), min_size=50, max_size=400))
 def test_counter_wrap_with_injected_drops_is_counted_exactly(start, keep_mask, flag_mask):
     n = len(keep_mask)
     seqs = (start + np.arange(n, dtype=np.uint64)) % 2 ** 32
@@ -187,7 +212,8 @@ def test_counter_wrap_with_injected_drops_is_counted_exactly(start, keep_mask, f
     flags[fm] = p.FLAG_SAMPLE_LOST
     s['flags'] = flags
     sent = s[keep]
-    dec, samples, _ = decode_all([p.encode_samples(sent[i:i + 16]) for i in range(0, sent.size, 16)])
+    dec, samples, _ = decode_all([p.encode_samples(sent[i:i + 16])
+                                  for i in range(0, sent.size, 16)])
     assert np.array_equal(samples, sent)
     assert dec.stats.samples_lost == int(n - keep.sum())
     lost, flagged = expected_counts(sent['seq'].tolist(), sent['flags'].tolist())
@@ -203,7 +229,8 @@ def test_runs_of_equal_frames_with_one_flip_and_an_ack(per_frame, nframes, data)
     s = np.zeros(per_frame * nframes, p.SAMPLE_DTYPE)
     s['seq'] = (start + np.arange(s.size, dtype=np.uint64)) % 2 ** 32
     s['gyro'] = data.draw(st.integers(-32768, 32767))
-    frames = [(p.encode_samples(s[i:i + per_frame]), s[i:i + per_frame]) for i in range(0, s.size, per_frame)]
+    frames = [(p.encode_samples(s[i:i + per_frame]), s[i:i + per_frame])
+              for i in range(0, s.size, per_frame)]
     ack_at = data.draw(st.integers(0, nframes))
     frames.insert(ack_at, (p.encode_ack(p.Ack(1, True, 6667.0, 2000, 4)), None))
     victim = data.draw(st.integers(0, len(frames) - 1))

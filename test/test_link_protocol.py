@@ -1,17 +1,30 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Wire protocol and LSM6DSO32 scaling against the documented layout and the datasheet numbers."""
 
 import struct
 
-import numpy as np
-import pytest
-
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link import protocol as p
+import numpy as np
+import pytest
 
 
 def crc32_bitwise(data):
-    """Obviously-correct CRC-32/IEEE (reflected 0xEDB88320, init and xorout 0xFFFFFFFF), bit by bit."""
+    """Compute CRC-32/IEEE bit by bit (reflected 0xEDB88320, init and xorout 0xFFFFFFFF)."""
     crc = 0xFFFFFFFF
     for byte in data:
         crc ^= byte
@@ -49,7 +62,8 @@ def test_worked_example_matches_layout_and_doc():
     sample['accel'] = (29, -24, 8204)
     sample['temp'] = 512
     encoded = p.encode_samples(sample)
-    expected = hand_frame(p.FRAME_SAMPLES, hand_sample(42, 123456, (14, -10, 3), (29, -24, 8204), 512, 0))
+    expected = hand_frame(
+        p.FRAME_SAMPLES, hand_sample(42, 123456, (14, -10, 3), (29, -24, 8204), 512, 0))
     assert encoded == expected
     assert encoded.hex(' ') == WORKED_EXAMPLE_HEX
     res = p.Decoder().feed(bytes.fromhex(WORKED_EXAMPLE_HEX))
@@ -63,16 +77,19 @@ def test_worked_example_matches_layout_and_doc():
 
 def test_sample_dtype_is_24_packed_little_endian_bytes():
     assert p.SAMPLE_DTYPE.itemsize == 24
-    assert [p.SAMPLE_DTYPE.fields[n][1] for n in ('seq', 't_us', 'gyro', 'accel', 'temp', 'flags')] == \
-        [0, 4, 8, 14, 20, 22]
+    assert [
+        p.SAMPLE_DTYPE.fields[n][1] for n in ('seq', 't_us', 'gyro', 'accel', 'temp', 'flags')
+    ] == [0, 4, 8, 14, 20, 22]
 
 
 def test_configure_and_ack_layout():
     cmd = p.encode_configure(command_id=7, odr_hz=12.5, gyro_fs_dps=125, accel_fs_g=32)
     assert cmd == hand_frame(p.FRAME_CONFIGURE, struct.pack('<IIHBB', 7, 12500, 125, 32, 0))
-    nak = p.Ack(command_id=7, ok=False, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, message='bad odr',
-                status=p.NAK_BAD_ODR)
-    assert p.encode_ack(nak) == hand_frame(p.FRAME_ACK, struct.pack('<IBBHI', 7, 1, 4, 2000, 6667000) + b'bad odr')
+    nak = p.Ack(command_id=7, ok=False, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4,
+                message='bad odr', status=p.NAK_BAD_ODR)
+    assert p.encode_ack(nak) == hand_frame(p.FRAME_ACK,
+                                           struct.pack('<IBBHI', 7, 1, 4, 2000, 6667000)
+                                           + b'bad odr')
     res = p.Decoder().feed(cmd + p.encode_ack(nak))
     assert res.commands == (p.Configure(7, 12.5, 125, 32),)
     assert res.acks == (nak,)
@@ -137,8 +154,8 @@ def test_counter_gaps_across_wrap_flags_duplicates_and_resets():
     res = dec.feed(p.encode_samples(_samples(seqs[:3], flags[:3])))
     res2 = dec.feed(p.encode_samples(_samples(seqs[3:], flags[3:])))
     lost = res.lost_before.tolist() + res2.lost_before.tolist()
-    # 2**32-3 -> 2**32-1 skips one; -> 0 none; 0 -> 3 skips two; 3 duplicate dropped; 4 none; 10 skips 5;
-    # 2 is a backward jump (board restart): no loss
+    # 2**32-3 -> 2**32-1 skips one; -> 0 none; 0 -> 3 skips two; 3 duplicate dropped; 4 none; 10
+    # skips 5; 2 is a backward jump (board restart): no loss
     assert lost == [0, 1, 0, 2, 0, 5, 0]
     st = dec.stats
     assert (st.samples_ok, st.samples_lost, st.samples_flagged_lost) == (7, 8, 7)
@@ -147,7 +164,8 @@ def test_counter_gaps_across_wrap_flags_duplicates_and_resets():
 
 def test_ack_positions_locate_configuration_changes():
     ack = p.Ack(command_id=1, ok=True, odr_hz=6667.0, gyro_fs_dps=250, accel_fs_g=8)
-    data = p.encode_samples(_samples([0, 1, 2])) + p.encode_ack(ack) + p.encode_samples(_samples([3]))
+    data = p.encode_samples(_samples([0, 1,
+                                      2])) + p.encode_ack(ack) + p.encode_samples(_samples([3]))
     res = p.Decoder().feed(data)
     assert res.ack_positions == (3,)
     assert res.samples.size == 4
@@ -179,11 +197,14 @@ def test_encoders_refuse_out_of_range_fields():
         p.encode_samples(np.zeros((2, 2), p.SAMPLE_DTYPE))
 
 
-# --- LSM6DSO32 scaling: datasheet sensitivities ---------------------------------------------------
+# --- LSM6DSO32 scaling: datasheet sensitivities
+# ---------------------------------------------------
 
-@pytest.mark.parametrize('fs, mdps', [(125, 4.375), (250, 8.75), (500, 17.5), (1000, 35.0), (2000, 70.0)])
+@pytest.mark.parametrize(
+    'fs, mdps', [(125, 4.375), (250, 8.75), (500, 17.5), (1000, 35.0), (2000, 70.0)])
 def test_gyro_sensitivity_datasheet(fs, mdps):
-    assert lsm.gyro_sensitivity_rad_s_per_lsb(fs) == pytest.approx(mdps * 1e-3 * np.pi / 180, rel=1e-15)
+    assert lsm.gyro_sensitivity_rad_s_per_lsb(
+        fs) == pytest.approx(mdps * 1e-3 * np.pi / 180, rel=1e-15)
     # full scale sits inside the int16 range with the datasheet sensitivity (32767 LSB > FS)
     assert 32767 * mdps * 1e-3 > fs
 
@@ -208,8 +229,9 @@ def test_to_si_values():
 
 @pytest.mark.parametrize('call', [lambda: lsm.gyro_sensitivity_rad_s_per_lsb(300),
                                   lambda: lsm.accel_sensitivity_m_s2_per_lsb(2),
-                                  lambda: lsm.to_si(np.zeros(1, p.SAMPLE_DTYPE), gyro_fs_dps=2000, accel_fs_g=3),
-                                  lambda: lsm.check_odr(100.0), lambda: lsm.check_odr('fast')])
+                                  lambda: lsm.to_si(np.zeros(1, p.SAMPLE_DTYPE), gyro_fs_dps=2000,
+                                                    accel_fs_g=3), lambda: lsm.check_odr(100.0),
+                                  lambda: lsm.check_odr('fast')])
 def test_bad_scales_and_rates_raise_parameter_error(call):
     with pytest.raises(ParameterError):
         call()

@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 STYLE.md section 1: every module outside ``gyro_noise_ros/nodes/`` imports and runs without ROS.
 
@@ -12,7 +26,7 @@ import sys
 
 import pytest
 
-_PROBE = r'''
+_PROBE = r"""
 import importlib, json, pkgutil, sys
 import gyro_noise_ros
 
@@ -20,8 +34,10 @@ def ros_loaded():
     return sorted(m for m in sys.modules
                   if m.split('.')[0] == 'rclpy' or m.split('.')[0].endswith('_msgs'))
 
-names = sorted(info.name for info in pkgutil.walk_packages(gyro_noise_ros.__path__, 'gyro_noise_ros.')
-               if not (info.name == 'gyro_noise_ros.nodes' or info.name.startswith('gyro_noise_ros.nodes.')))
+names = sorted(info.name
+               for info in pkgutil.walk_packages(gyro_noise_ros.__path__, 'gyro_noise_ros.')
+               if not (info.name == 'gyro_noise_ros.nodes'
+                       or info.name.startswith('gyro_noise_ros.nodes.')))
 names += sys.argv[1:]  # positive control: extra modules to import after the package's own
 report = {'modules': names, 'culprits': {}}
 for name in names:
@@ -31,7 +47,7 @@ for name in names:
         report['culprits'][name] = loaded
         break
 print(json.dumps(report))
-'''
+"""
 
 
 _CONTROL = 'gyro_noise_ros.nodes.driver'

@@ -238,7 +238,7 @@ def test_mpu6050_two_mode_orders_and_a_summary_for_people(tmp_path):
     assert 'deg/sqrt(h)' in md and '(SI, unit in the name)' in md and '68.3 %' in md
     # Table 3 shows the paper's magnitude and the signed slope beside it, never a bare abs().
     slope = a['offset_drift_deg_s_per_h']
-    assert f"| {abs(slope):.6f} | {slope:+.6f} |" in md
+    assert f'| {abs(slope):.6f} | {slope:+.6f} |' in md
     # "N standard errors, not significant" states the t needed with this many chunks.
     assert 'needed with 6 chunks' in md
 

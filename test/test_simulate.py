@@ -1,12 +1,29 @@
-"""Forward simulation of paper 000 eq. (2) / (10)-(11) against a plain-numpy twin and closed forms."""
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-import numpy as np
-import pytest
+"""Forward simulation of paper 000 eq. (2) / (10)-(11) against a plain-numpy twin, closed forms."""
 
 from gyro_noise_ros.core.fractional import gl_coefficients, gl_difference
-from gyro_noise_ros.core.simulate import (FractionalNoise, check_stability, require_stable,
-                                          simulate_fractional_noise)
+from gyro_noise_ros.core.simulate import (
+    check_stability,
+    FractionalNoise,
+    require_stable,
+    simulate_fractional_noise,
+)
 from gyro_noise_ros.errors import ParameterError, UnstableModelError
+import numpy as np
+import pytest
 
 
 def recursion_twin(w, alpha, f, memory):
@@ -24,7 +41,8 @@ def recursion_twin(w, alpha, f, memory):
 @pytest.mark.parametrize('alpha,f,memory', [(1.4, -0.5, 7), (0.6, -0.3, 12), (1.0, -0.2, 5)])
 def test_kernel_matches_twin(alpha, f, memory):
     w = np.random.default_rng(0).standard_normal(300)
-    fast = FractionalNoise(alpha, f, 1.0, rng=np.random.default_rng(0), memory=memory).generate(300)
+    fast = FractionalNoise(alpha, f, 1.0, rng=np.random.default_rng(0),
+                           memory=memory).generate(300)
     np.testing.assert_allclose(fast, recursion_twin(w, alpha, f, memory), rtol=1e-12, atol=1e-12)
 
 
@@ -47,8 +65,8 @@ def test_streaming_equals_one_call():
 def test_order_zero_is_ar1_with_known_variance():
     # alpha = 0: v[k+1] = f v[k] + w[k], stationary variance sigma^2 / (1 - f^2) = 1 / 0.75.
     v = simulate_fractional_noise(400_000, 0.0, 0.5, 1.0, rng=np.random.default_rng(3))[1000:]
-    # effective independent samples ~ n (1 - f) / (1 + f) = 133,000: the relative standard error of the
-    # variance is sqrt(2 / 133,000) = 0.4 %; 2 % is five standard errors.
+    # effective independent samples ~ n (1 - f) / (1 + f) = 133,000: the relative standard error of
+    # the variance is sqrt(2 / 133,000) = 0.4 %; 2 % is five standard errors.
     assert np.var(v) == pytest.approx(1 / 0.75, rel=0.02)
 
 
@@ -59,7 +77,8 @@ def test_measurement_noise_and_bias_are_added():
     extra = noisy - base
     # mean of 200,000 N(3, 0.25) draws: standard error 0.0011; tolerance 0.01 is nine of them
     assert extra.mean() == pytest.approx(3.0, abs=0.01)
-    # variance of the added noise: relative standard error sqrt(2/200000) = 0.3 %; 2 % is ~6 of them
+    # variance of the added noise: relative standard error sqrt(2/200000) = 0.3 %; 2 % is ~6 of
+    # them
     assert extra.var() == pytest.approx(0.25, rel=0.02)
 
 
@@ -82,7 +101,8 @@ def test_unstable_parameters_are_refused():
     with pytest.raises(UnstableModelError):
         FractionalNoise(1.4, 0.1, 1.0, rng=np.random.default_rng(0))
     with pytest.raises(UnstableModelError):
-        FractionalNoise(0.5, -3.0, 1.0, rng=np.random.default_rng(0))  # A(-1) < 0: oscillating divergence
+        # A(-1) < 0: oscillating divergence
+        FractionalNoise(0.5, -3.0, 1.0, rng=np.random.default_rng(0))
     assert require_stable(1.4, -0.5).stable
 
 

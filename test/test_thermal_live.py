@@ -154,6 +154,7 @@ def test_model_with_wrong_output_shape_is_refused_at_start():
 
 
 class _Training:
+
     temperature_min_c, temperature_max_c = 10.0, 40.0
 
 

@@ -1,11 +1,26 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Rosbag reading and writing for gyro_noise_ros, ROS-free (rosbags library only).
 
-Reads rosbag2 recordings (a directory with ``metadata.yaml``, or a bare ``.db3``/``.mcap`` file; sqlite3
-or MCAP storage) and ROS 1 ``.bag`` files; writes rosbag2 (sqlite3 or MCAP). ``sensor_msgs/Imu`` and
-``sensor_msgs/Temperature`` are decoded and encoded in bulk with numpy (:mod:`.codec`), and the
-rosbag2 message streams are read in blocks (:mod:`.storage`), so a 12 h 6.66 kHz recording streams
-in constant memory at millions of messages per second. See ``docs/bags.md``.
+Reads rosbag2 recordings (a directory with ``metadata.yaml``, or a bare ``.db3``/``.mcap`` file;
+sqlite3 or MCAP storage) and ROS 1 ``.bag`` files; writes rosbag2 (sqlite3 or MCAP).
+``sensor_msgs/Imu`` and ``sensor_msgs/Temperature`` are decoded and encoded in bulk with numpy
+(:mod:`.codec`), and the rosbag2 message streams are read in blocks (:mod:`.storage`), so a 12 h
+6.66 kHz recording streams in constant memory at millions of messages per second. See
+``docs/bags.md``.
 
 Topic discovery: with no topic given, the bag's single ``sensor_msgs/msg/Imu`` topic is used; topic
 names match with or without their leading slash. Every failure to read is a :class:`BagError` with
@@ -14,27 +29,27 @@ one sentence naming the bag and the problem.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
+import itertools
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import BagError, ParameterError
 from .codec import (
-    IMU_MSGTYPE,
-    TEMPERATURE_MSGTYPE,
     count_stamp_regressions,
     decode_imu_spans,
     decode_temperature_spans,
     encode_imu_cdr,
     encode_temperature_cdr,
     frame_id_of,
+    IMU_MSGTYPE,
     join_raws,
     split_stamps,
+    TEMPERATURE_MSGTYPE,
     typestore,
 )
-from .storage import STORAGES, BagSource, describe
+from .storage import BagSource, describe, STORAGES
+from ..errors import BagError, ParameterError
 
 __all__ = [
     'IMU_MSGTYPE',
@@ -52,6 +67,7 @@ __all__ = [
     'count_stamp_regressions',
 ]
 
+
 @dataclass(frozen=True)
 class TopicInfo:
     """
@@ -66,6 +82,7 @@ class TopicInfo:
         the topic's connections disagree.
     count : int
         Number of messages the bag's index or metadata reports for the topic.
+
     """
 
     name: str
@@ -90,6 +107,7 @@ class ImuBatch:
         ``linear_acceleration`` x, y, z in m/s^2.
     frame_id : str
         ``header.frame_id`` of the batch's first message.
+
     """
 
     stamp_ns: np.ndarray
@@ -130,6 +148,7 @@ def decode_imu(raws, *, log_ns=None, ros1=False, skip_undecodable=False):
     ------
     BagError
         A message cannot be decoded and ``skip_undecodable`` is False.
+
     """
     buf, starts, lengths = join_raws(raws)
     keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, ros1, skip_undecodable)
@@ -167,6 +186,7 @@ def decode_temperature(raws, *, ros1=False):
     ------
     BagError
         A message cannot be decoded.
+
     """
     return decode_temperature_spans(*join_raws(raws), ros1)
 
@@ -188,14 +208,16 @@ def _select_topic(topics, topic, msgtype, path):
             raise BagError(f'topic {topic!r} is not in bag {str(path)!r} (topics: {known})')
         name = matches[0]
         if topics[name][0] != msgtype:
-            raise BagError(f'topic {name!r} in bag {str(path)!r} carries {topics[name][0]}, not {msgtype}')
+            raise BagError(
+                f'topic {name!r} in bag {str(path)!r} carries {topics[name][0]}, not {msgtype}')
         return name
     candidates = sorted(name for name, (kind, _) in topics.items() if kind == msgtype)
     if not candidates:
         raise BagError(f'bag {str(path)!r} has no {msgtype} topic')
     if len(candidates) > 1:
-        raise BagError(f'bag {str(path)!r} has {len(candidates)} {msgtype} topics ({", ".join(candidates)}); '
-                       'choose one with --topic')
+        raise BagError(
+            f'bag {str(path)!r} has {len(candidates)} {msgtype} topics ({", ".join(candidates)}); '
+            'choose one with --topic')
     return candidates[0]
 
 
@@ -217,10 +239,12 @@ def list_topics(path):
     ------
     BagError
         The path is missing or not a readable bag.
+
     """
     source = BagSource(path)
     try:
-        return [TopicInfo(name, kind, count) for name, (kind, count) in sorted(source.topics().items())]
+        return [TopicInfo(name, kind, count) for name,
+                (kind, count) in sorted(source.topics().items())]
     finally:
         source.close()
 
@@ -247,6 +271,7 @@ def find_imu_topic(path, topic=None):
     BagError
         No Imu topic, several Imu topics (the message lists them), unknown topic, or a topic of
         another message type.
+
     """
     source = BagSource(path)
     try:
@@ -269,15 +294,16 @@ class ImuBagReader:
     Parameters
     ----------
     path : str or os.PathLike
-        rosbag2 directory (sqlite3 or MCAP), its ``metadata.yaml``, a ``.db3`` or ``.mcap`` file, or
-        a ROS 1 ``.bag`` file.
+        rosbag2 directory (sqlite3 or MCAP), its ``metadata.yaml``, a ``.db3`` or ``.mcap`` file,
+        or a ROS 1 ``.bag`` file.
     topic : str, optional
         Imu topic (with or without leading slash); the bag's single Imu topic if None.
     temperature_topic : str, optional
         ``sensor_msgs/Temperature`` topic. If None: the bag's single Temperature topic; when there
         are several, the one in the Imu topic's namespace; otherwise none.
     skip_undecodable : bool
-        Skip (and count in ``undecodable_count``) messages that cannot be decoded instead of raising.
+        Skip (and count in ``undecodable_count``) messages that cannot be decoded instead of
+        raising.
 
     Attributes
     ----------
@@ -298,6 +324,7 @@ class ImuBagReader:
     ------
     BagError
         Missing or corrupt bag, no/ambiguous/unknown Imu topic, wrong message type.
+
     """
 
     def __init__(self, path, *, topic=None, temperature_topic=None, skip_undecodable=False):
@@ -346,7 +373,11 @@ class ImuBagReader:
         return self._source
 
     def _decoded_blocks(self, source):
-        """Yield decoded blocks: (stamp, log, gyro, accel, (buf, starts, lengths) for frame ids)."""
+        """
+        Yield decoded blocks.
+
+        (stamp, log, gyro, accel, (buf, starts, lengths) for frame ids).
+        """
         for buf, starts, lengths, log_ns in source.blocks(self.topic):
             try:
                 keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, source.ros1,
@@ -378,8 +409,11 @@ class ImuBagReader:
         BagError
             The topic has no messages (raised at the end, nothing was yielded), the bag turns out
             corrupt or truncated, or a message cannot be decoded.
+
         """
-        if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
+        if isinstance(
+                batch_size, bool) or not isinstance(batch_size,
+                                                    (int, np.integer)) or batch_size < 1:
             raise ParameterError(f'batch_size must be a positive integer, got {batch_size!r}')
         source = self._open_source()
         size = int(batch_size)
@@ -412,6 +446,7 @@ class ImuBagReader:
         ------
         BagError
             The bag turns out corrupt or a message cannot be decoded.
+
         """
         if self.temperature_topic is None:
             return None
@@ -421,7 +456,8 @@ class ImuBagReader:
             try:
                 s, t = decode_temperature_spans(buf, starts, lengths, source.ros1)
             except BagError as err:
-                raise BagError(f'bag {str(self.path)!r}, topic {self.temperature_topic!r}: {err}') from err
+                raise BagError(
+                    f'bag {str(self.path)!r}, topic {self.temperature_topic!r}: {err}') from err
             stamps.append(s)
             temps.append(t)
         return np.concatenate(stamps), np.concatenate(temps)
@@ -438,8 +474,10 @@ def _take(pending, size, ros1):
             need -= k
         else:
             buf, starts, lengths = spans
-            parts.append((stamp[:need], log[:need], gyro[:need], accel[:need], (buf, starts[:need], lengths[:need])))
-            rest[0] = (stamp[need:], log[need:], gyro[need:], accel[need:], (buf, starts[need:], lengths[need:]))
+            parts.append((stamp[:need], log[:need], gyro[:need], accel[:need],
+                          (buf, starts[:need], lengths[:need])))
+            rest[0] = (stamp[need:], log[need:], gyro[need:], accel[need:],
+                       (buf, starts[need:], lengths[need:]))
             need = 0
     buf, starts, lengths = parts[0][4]
     frame_id = frame_id_of(buf[starts[0]:starts[0] + lengths[0]], ros1) or ''
@@ -487,6 +525,7 @@ class ImuBagWriter:
         Unknown storage or bad frame_id.
     BagError
         The bag cannot be created (path exists, not writable).
+
     """
 
     def __init__(self, path, *, storage='sqlite3', imu_topic='/imu/data_raw',
@@ -534,8 +573,12 @@ class ImuBagWriter:
             return
         try:
             storage = writer.storage
-            if (type(storage).__name__ == 'Sqlite3Writer' and hasattr(storage, 'cursor')
-                    and conn.id in getattr(writer, 'counts', {}) and hasattr(writer, 'min_timestamp')):
+            if (
+                type(storage).__name__ == 'Sqlite3Writer'
+                and hasattr(storage, 'cursor')
+                and conn.id in getattr(writer, 'counts', {})
+                and hasattr(writer, 'min_timestamp')
+            ):
                 # rosbags' Writer.write costs several us per message in Python; issuing the very
                 # INSERT it would issue through one executemany, plus its bookkeeping (count and
                 # time range for metadata.yaml), is several times cheaper. Any other rosbags
@@ -574,13 +617,15 @@ class ImuBagWriter:
             Angular velocity in rad/s.
         accel_m_s2 : array_like, shape (3,) or (n, 3)
             Linear acceleration in m/s^2.
-        angular_velocity_covariance, linear_acceleration_covariance : array_like, shape (9,) or (n, 9)
+        angular_velocity_covariance, linear_acceleration_covariance : array_like
+            Shape (9,) or (n, 9).
             Row-major covariances in (rad/s)^2 and (m/s^2)^2; zeros (unknown) if None.
         log_ns : int or array_like of int, optional
             Bag (receive) time in ns; the header stamps if None.
         topic : str, optional
             Another Imu topic of the same bag (e.g. a reference sensor), its connection created on
             first use; ``imu_topic`` if None (only those messages count in ``imu_count``).
+
         """
         stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
         blobs = encode_imu_cdr(stamps, gyro_rad_s, accel_m_s2, frame_id=self.frame_id,
@@ -620,11 +665,14 @@ class ImuBagWriter:
             Variance in degC^2 (0 = unknown).
         log_ns : int or array_like of int, optional
             Bag (receive) time in ns; the header stamps if None.
+
         """
         if self.temperature_topic is None:
-            raise ParameterError('temperature_topic is None, so this writer records no temperature')
+            raise ParameterError(
+                'temperature_topic is None, so this writer records no temperature')
         stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
-        blobs = encode_temperature_cdr(stamps, temperature_c, frame_id=self.frame_id, variance=variance)
+        blobs = encode_temperature_cdr(stamps, temperature_c, frame_id=self.frame_id,
+                                       variance=variance)
         logs = self._log_times(stamps, log_ns)
         if self._temperature_conn is None and self._writer is not None:
             try:
@@ -642,8 +690,9 @@ class ImuBagWriter:
 
         rosbags keeps one sqlite3 transaction open until :meth:`close`; committing it lets a killed
         recorder leave a ``.db3`` that :class:`ImuBagReader` reads directly (``metadata.yaml`` is
-        written by :meth:`close` only). MCAP files get their index only at :meth:`close`, so this is a
-        no-op for them. Costs one fsync-free commit; call it every few seconds, not per message.
+        written by :meth:`close` only). MCAP files get their index only at :meth:`close`, so this
+        is a no-op for them. Costs one fsync-free commit; call it every few seconds, not per
+        message.
         """
         writer = self._writer
         if writer is None:
@@ -662,4 +711,5 @@ class ImuBagWriter:
             try:
                 writer.close()
             except Exception as err:  # noqa: BLE001
-                raise BagError(f'bag {str(self.path)!r} cannot be finished: {describe(err)}') from err
+                raise BagError(
+                    f'bag {str(self.path)!r} cannot be finished: {describe(err)}') from err

@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Opening bags of every supported format and streaming one topic's raw messages in blocks.
 
@@ -12,13 +26,13 @@ MCAP file without chunk index, per-message compression), rosbags' own iterator i
 from __future__ import annotations
 
 import itertools
-import struct
 from pathlib import Path
+import struct
 
 import numpy as np
 
-from ..errors import BagError
 from .codec import join_raws
+from ..errors import BagError
 
 STORAGES = ('sqlite3', 'mcap')
 BLOCK = 16384
@@ -82,15 +96,17 @@ def _resolve(path):
         return _resolve(path.parent)
     kind = _sniff(path)
     if kind is None:
-        raise BagError(f'file {str(path)!r} is not a bag (expected a rosbag2 directory, a .db3 or .mcap '
-                       'file, or a ROS 1 .bag file)')
+        raise BagError(
+            f'file {str(path)!r} is not a bag (expected a rosbag2 directory, a .db3 or .mcap '
+            'file, or a ROS 1 .bag file)')
     journal = path.with_name(path.name + '-journal')
     if kind == 'sqlite3' and journal.exists() and journal.stat().st_size > 0:
         # A writer died mid-transaction; rosbags opens the file immutable and would ignore the
         # rollback journal, reading half-written pages.
-        raise BagError(f'sqlite3 file {str(path)!r} has an unfinished transaction ({journal.name}); roll it '
-                       f'back first: python3 -c "import sqlite3; sqlite3.connect({str(path)!r}).execute('
-                       "'PRAGMA integrity_check').fetchall()\"")
+        raise BagError(
+            f'sqlite3 file {str(path)!r} has an unfinished transaction ({journal.name}); roll it '
+            f'back first: python3 -c "import sqlite3; sqlite3.connect({str(path)!r}).execute('
+            "'PRAGMA integrity_check').fetchall()\"")
     if _SUFFIX.get(path.suffix) != kind:
         raise BagError(f'file {str(path)!r} holds {kind} data but its suffix is {path.suffix!r}; '
                        f'rename it to end in {dict(zip(_SUFFIX.values(), _SUFFIX))[kind]}')
@@ -115,6 +131,7 @@ def mcap_message_records(chunk):
     ------
     BagError
         A record runs past the end of the chunk or is too short for a Message.
+
     """
     size = len(chunk)
     buf = np.frombuffer(chunk, np.uint8)
@@ -141,7 +158,8 @@ def mcap_message_records(chunk):
         op, length = head(chunk, pos)
         end = pos + 9 + length
         if end > size:
-            raise BagError(f'MCAP chunk record at byte {pos} claims {length} bytes beyond the chunk')
+            raise BagError(
+                f'MCAP chunk record at byte {pos} claims {length} bytes beyond the chunk')
         if op == _MCAP_MESSAGE:
             if length < _MCAP_MSG_HEAD - 9:
                 raise BagError(f'MCAP message record at byte {pos} is too short ({length} bytes)')
@@ -194,6 +212,7 @@ def ros1_message_records(chunk):
     ------
     BagError
         A record runs past the end of the chunk or its header is malformed.
+
     """
     size = len(chunk)
     starts, lengths, conns, times = [], [], [], []
@@ -222,13 +241,15 @@ def ros1_message_records(chunk):
         rest = size - pos
         if tries and rest % stride == 0 and rest // stride > 1:
             tries -= 1
-            tail = _ros1_uniform_tail(chunk, pos, stride, hend + 4 - pos, conn[0] - pos, time[0] - pos)
+            tail = _ros1_uniform_tail(chunk, pos, stride, hend + 4 - pos, conn[0] - pos, time[0]
+                                      - pos)
             if tail is not None:
                 break
         starts.append(hend + 4)
         lengths.append(dlen)
         conns.append(int.from_bytes(conn[1], 'little'))
-        times.append(int.from_bytes(time[1][:4], 'little') * 1_000_000_000 + int.from_bytes(time[1][4:], 'little'))
+        times.append(int.from_bytes(time[1][:4], 'little') * 1_000_000_000
+                     + int.from_bytes(time[1][4:], 'little'))
         pos = dend
     out = tuple(np.array(col, np.int64) for col in (starts, lengths, conns, times))
     if tail is not None:
@@ -261,7 +282,7 @@ def _ros1_uniform_tail(chunk, pos, stride, head, c_at, t_at):
 
 class BagSource:
     """
-    A rosbags reader opened on any supported path, its storage kind and a block-wise message stream.
+    A rosbags reader on any supported path, its storage kind and a block-wise message stream.
 
     Parameters
     ----------
@@ -274,6 +295,7 @@ class BagSource:
     ------
     BagError
         Missing path, not a bag, or rosbags cannot open it.
+
     """
 
     def __init__(self, path, *, fast=True):
@@ -297,7 +319,8 @@ class BagSource:
             self.connections = list(reader.connections)
         except BagError:
             raise
-        except Exception as err:  # noqa: BLE001 - rosbags/apsw/zstd raise many types on corrupt files
+        # rosbags/apsw/zstd raise many types on corrupt files
+        except Exception as err:  # noqa: BLE001
             raise BagError(f'bag {str(self.path)!r} cannot be opened as {self.storage} '
                            f'(corrupt or truncated?): {describe(err)}') from err
 
@@ -306,7 +329,8 @@ class BagSource:
         out = {}
         for conn in self.connections:
             if self.ros1:
-                count = sum(int(c.connection_counts.get(conn.id, 0)) for c in self.reader.chunk_infos)
+                count = sum(int(c.connection_counts.get(conn.id, 0))
+                            for c in self.reader.chunk_infos)
             else:
                 count = int(conn.msgcount or 0)
             if conn.topic in out:
@@ -328,12 +352,13 @@ class BagSource:
 
     def blocks(self, topic, block=BLOCK):
         """
-        Yield one topic's messages as ``(buf uint8, starts, lengths, log_ns)`` blocks, in bag order.
+        Yield one topic's messages as ``(buf, starts, lengths, log_ns)`` blocks in bag order.
 
         Raises
         ------
         BagError
             The storage turns out corrupt or truncated.
+
         """
         delivered = 0
         try:
@@ -341,11 +366,13 @@ class BagSource:
                 delivered += item[1].shape[0]
                 yield item
         except BagError as err:
-            raise BagError(f'bag {str(self.path)!r} is corrupt after {delivered} messages on {topic!r}: '
-                           f'{err}') from err
+            raise BagError(
+                f'bag {str(self.path)!r} is corrupt after {delivered} messages on {topic!r}: '
+                f'{err}') from err
         except Exception as err:  # noqa: BLE001 - corrupt/truncated storage surfaces mid-stream
-            raise BagError(f'bag {str(self.path)!r} is corrupt or truncated after {delivered} messages on '
-                           f'{topic!r}: {describe(err)}') from err
+            raise BagError(
+                f'bag {str(self.path)!r} is corrupt or truncated after {delivered} messages on '
+                f'{topic!r}: {describe(err)}') from err
 
     def _storages(self):
         """rosbag2 storage readers in reading order, or None when the fast paths do not apply."""
@@ -390,8 +417,9 @@ class BagSource:
         ids = sorted({c.id for c in conns})
         # Same rows and order as rosbags' Sqlite3Reader.messages (timestamp order, served by the
         # timestamp index); rowid breaks ties in recording order.
-        query = (f'SELECT timestamp, data FROM messages WHERE topic_id IN ({",".join("?" * len(ids))}) '
-                 'ORDER BY timestamp, id')
+        query = (
+            f'SELECT timestamp, data FROM messages WHERE topic_id IN ({",".join("?" * len(ids))}) '
+            'ORDER BY timestamp, id')
         cursor = storage.dbconn.execute(query, ids)
         while rows := list(itertools.islice(cursor, block)):
             log_ns, raws = zip(*rows)
@@ -403,13 +431,15 @@ class BagSource:
         from rosbags.rosbag2.storage_mcap import decompress
 
         ids = np.array(sorted({c.id for c in conns}), np.int64)
-        chunks = sorted((c for c in storage.chunks if any(c.channel_count.get(int(i), 0) for i in ids)),
-                        key=lambda c: (c.message_start_time, c.chunk_start_offset))
+        chunks = sorted(
+            (c for c in storage.chunks if any(c.channel_count.get(int(i), 0) for i in ids)),
+            key=lambda c: (c.message_start_time, c.chunk_start_offset))
         ordered = all(b.message_start_time > a.message_end_time
-                      or (b.message_start_time == a.message_end_time and b.chunk_start_offset > a.chunk_start_offset)
-                      for a, b in itertools.pairwise(chunks))
+                      or (b.message_start_time == a.message_end_time and b.chunk_start_offset
+                          > a.chunk_start_offset) for a, b in itertools.pairwise(chunks))
         if not storage.chunks or not ordered:
-            # No chunk index, or chunks interleaved in time: rosbags merges them message by message.
+            # No chunk index, or chunks interleaved in time: rosbags merges them message by
+            # message.
             yield from self._generic_blocks(storage, conns, block)
             return
         with open(storage.path, 'rb') as fh:
@@ -438,11 +468,18 @@ class BagSource:
     def _ros1_blocks(self, conns, block):
         reader = self.reader
         ids = np.array(sorted({c.id for c in conns}), np.int64)
-        infos = sorted((c for c in reader.chunk_infos if any(c.connection_counts.get(int(i), 0) for i in ids)),
-                       key=lambda c: (c.start_time, c.pos))
+        infos = sorted(
+            (
+                c
+                for c in reader.chunk_infos
+                if any(c.connection_counts.get(int(i), 0) for i in ids)
+            ),
+            key=lambda c: (c.start_time, c.pos),
+        )
         # rosbags orders by (time, chunk position, offset) and reports end_time as last + 1 ns.
-        ordered = all(b.start_time >= a.end_time or (b.start_time == a.end_time - 1 and b.pos > a.pos)
-                      for a, b in itertools.pairwise(infos))
+        ordered = all(b.start_time >= a.end_time or (b.start_time == a.end_time - 1 and b.pos
+                                                     > a.pos) for a,
+                      b in itertools.pairwise(infos))
         if not ordered:
             # chunks overlap in time: only rosbags' per-message index gives its merge order
             full = self._full_ros1_reader()
@@ -465,8 +502,9 @@ class BagSource:
                 sel = np.flatnonzero(np.isin(conn, ids))
                 indexed = sum(info.connection_counts.get(int(i), 0) for i in ids)
                 if sel.size != indexed:
-                    raise BagError(f'ROS 1 chunk at byte {info.pos} holds {sel.size} messages of the topic '
-                                   f'but its index lists {indexed}')
+                    raise BagError(
+                        f'ROS 1 chunk at byte {info.pos} holds {sel.size} messages of the topic '
+                        f'but its index lists {indexed}')
                 sel = sel[np.argsort(time_ns[sel], kind='stable')]
                 buf = np.frombuffer(raw, np.uint8)
                 for i in range(0, sel.size, block):
@@ -487,7 +525,8 @@ class BagSource:
         if reader is not None:
             try:
                 reader.close()
-            except Exception:  # noqa: BLE001, S110 - closing a half-broken reader must not mask the cause
+            # closing a half-broken reader must not mask the cause
+            except Exception:  # noqa: BLE001, S110
                 pass
 
 

@@ -1,39 +1,56 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-gyro_noise_analyze: characterise gyro noise in rosbags (paper 000 Tables 3-6, Figs. 2-10), ROS-free.
+gyro_noise_analyze.
+
+Characterise gyro noise in rosbags (paper 000 Tables 3-6, Figs. 2-10), ROS-free.
 
 Usage::
 
     gyro_noise_analyze BAG [BAG ...] [--topic T] [--axis x|y|z|all] [--chunk-size N]
-        [--order-grid START:STOP:STEP] [--memory L] [--jobs N] [--reference SUMMARY] [--label NAME ...]
-        --out DIR
+        [--order-grid START:STOP:STEP] [--memory L] [--jobs N] [--reference SUMMARY] [--label NAME
+        ...] --out DIR
 
-Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags through :mod:`gyro_noise_ros.bag`, streams them in batches
-(constant memory apart from one small row per chunk), runs :class:`gyro_noise_ros.core.engine.NoiseEngine`
-with the chunk identification spread over ``--jobs`` worker processes (at most ``2 x jobs`` chunks in
-flight), and writes chunks.csv, summary.json, summary.md, allan.csv, imu.yaml, curves.npz and PNG figures
-into DIR. Formats and exit codes: ``docs/offline_tool.md``.
+Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags through :mod:`gyro_noise_ros.bag`, streams them in
+batches (constant memory apart from one small row per chunk), runs
+:class:`gyro_noise_ros.core.engine.NoiseEngine` with the chunk identification spread over
+``--jobs`` worker processes (at most ``2 x jobs`` chunks in flight), and writes chunks.csv,
+summary.json, summary.md, allan.csv, imu.yaml, curves.npz and PNG figures into DIR. Formats and
+exit codes: ``docs/offline_tool.md``.
 """
 
 import argparse
 import collections
+from concurrent.futures import ProcessPoolExecutor
 import datetime
 import math
 import os
+from pathlib import Path
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import numpy as np
 
+from ._common import run_cli
 from .. import __version__, report
-from ..bag import ImuBagReader, find_imu_topic
+from ..bag import find_imu_topic, ImuBagReader
 from ..bag.tabular import is_table, TableImuReader
-from ..core.engine import AXES, GAP_POLICIES, EngineConfig, NoiseEngine, analyze_chunk
+from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
 from ..errors import InputDataError, ParameterError
-from ._common import run_cli
 
 PROG = 'gyro_noise_analyze'
 
@@ -50,52 +67,69 @@ def build_parser():
     Returns
     -------
     argparse.ArgumentParser
+
     """
     p = argparse.ArgumentParser(
-        prog=PROG, description='Characterise MEMS gyro noise in rosbags, CSV tables and PX4 ULogs: '
+        prog=PROG,
+        description='Characterise MEMS gyro noise in rosbags, CSV tables and PX4 ULogs: '
         'per-chunk bias, variance and '
         'fractional order (variance and correlation methods), Allan deviation, health verdicts.')
-    p.add_argument('bags', nargs='+', metavar='BAG',
-                   help='rosbag2 directory, .db3 or .mcap file, ROS 1 .bag file, CSV table or PX4 .ulg '
-                        '(order kept in tables)')
-    p.add_argument('--out', required=True, metavar='DIR', help='output directory (created if missing)')
-    p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
-    p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (default: found automatically)')
-    p.add_argument('--axis', default='all', choices=[*AXES, 'all'], help='axis to analyse (default: all)')
-    p.add_argument('--chunk-size', type=int, default=10000, metavar='N', help='samples per chunk (10000)')
+    p.add_argument(
+        'bags', nargs='+', metavar='BAG',
+        help='rosbag2 directory, .db3 or .mcap file, ROS 1 .bag file, CSV table or PX4 .ulg '
+        '(order kept in tables)')
+    p.add_argument('--out', required=True, metavar='DIR',
+                   help='output directory (created if missing)')
+    p.add_argument('--topic',
+                   help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
+    p.add_argument('--temperature-topic',
+                   help='sensor_msgs/Temperature topic (default: found automatically)')
+    p.add_argument('--axis', default='all', choices=[*AXES, 'all'],
+                   help='axis to analyse (default: all)')
+    p.add_argument('--chunk-size', type=int, default=10000, metavar='N',
+                   help='samples per chunk (10000)')
     p.add_argument('--order-grid', default='0:2:0.01', metavar='START:STOP:STEP',
                    help='order grid, both ends included (0:2:0.01)')
     p.add_argument('--memory', type=int, default=DEFAULT_MEMORY, metavar='L',
                    help='memory L of the truncated GL difference (1000)')
-    p.add_argument('--max-lag', type=int, default=None, metavar='M', help='largest lag in J (default: all)')
-    p.add_argument('--no-demean', action='store_true', help='do not remove the chunk mean before identification')
-    p.add_argument('--rate-hz', type=float, default=None, help='nominal sample rate (default: from the stamps)')
+    p.add_argument('--max-lag', type=int, default=None, metavar='M',
+                   help='largest lag in J (default: all)')
+    p.add_argument('--no-demean', action='store_true',
+                   help='do not remove the chunk mean before identification')
+    p.add_argument('--rate-hz', type=float, default=None,
+                   help='nominal sample rate (default: from the stamps)')
     p.add_argument('--gap-factor', type=float, default=1.5,
                    help='a stamp step above this many nominal periods is a gap (1.5)')
-    p.add_argument('--gap-policy', default='flag', choices=GAP_POLICIES,
-                   help='flag: keep chunks with gaps and count; split: restart the chunk after a gap; '
-                        'drop: leave chunks with gaps out of the statistics (default: flag)')
+    p.add_argument(
+        '--gap-policy', default='flag', choices=GAP_POLICIES,
+        help='flag: keep chunks with gaps and count; split: restart the chunk after a gap; '
+        'drop: leave chunks with gaps out of the statistics (default: flag)')
     p.add_argument('--start', type=float, default=None, metavar='S',
                    help='analyse from S seconds after the first sample of each bag')
     p.add_argument('--end', type=float, default=None, metavar='S',
                    help='analyse up to S seconds after the first sample of each bag')
-    p.add_argument('--static', default='auto', choices=('auto', 'off'),
-                   help='auto: find the longest static segment and skip motion, saying so (default); '
-                        'off: analyse everything')
-    p.add_argument('--jobs', type=int, default=None, metavar='N',
-                   help='worker processes for the identification (default: all cores; 1 = in-process)')
-    p.add_argument('--reference', metavar='SUMMARY',
-                   help='summary.json of a reference recording: adds health verdicts per bag and axis')
+    p.add_argument(
+        '--static', default='auto', choices=('auto', 'off'),
+        help='auto: find the longest static segment and skip motion, saying so (default); '
+        'off: analyse everything')
+    p.add_argument(
+        '--jobs', type=int, default=None, metavar='N',
+        help='worker processes for the identification (default: all cores; 1 = in-process)')
+    p.add_argument(
+        '--reference', metavar='SUMMARY',
+        help='summary.json of a reference recording: adds health verdicts per bag and axis')
     p.add_argument('--reference-bag', metavar='LABEL',
                    help='bag label inside a --reference summary that holds several bags')
-    p.add_argument('--label', nargs='+', metavar='NAME', help='one label per bag for tables and figures')
+    p.add_argument('--label', nargs='+', metavar='NAME',
+                   help='one label per bag for tables and figures')
     p.add_argument('--curves', type=int, default=DEFAULT_CURVES, metavar='N',
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
                         f'({DEFAULT_CURVES}; 0 = none)')
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
-    p.add_argument('--allan-taus', default='octave', choices=('octave', 'dense'),
-                   help='Allan averaging times: octave (1, 2, 4, ... samples) or dense (~10 per decade)')
+    p.add_argument(
+        '--allan-taus', default='octave', choices=('octave', 'dense'),
+        help='Allan averaging times: octave (1, 2, 4, ... samples) or dense (~10 per decade)')
     p.add_argument('--batch-size', type=int, default=DEFAULT_BATCH, metavar='N',
                    help=f'messages decoded per batch ({DEFAULT_BATCH})')
     p.add_argument('--quiet', action='store_true', help='print only errors')
@@ -104,9 +138,7 @@ def build_parser():
 
 
 class _Progress:
-    """
-    Progress on stderr: a refreshed line on a terminal, else one plain line per 10 % (logs, CI).
-    """
+    """Progress on stderr: a refreshed line on a TTY, else one line per 10 % (logs, CI)."""
 
     def __init__(self, enabled):
         self.enabled = bool(enabled)
@@ -133,7 +165,8 @@ class _Progress:
             return
         self._last = now
         pct = f'{100.0 * done / total:5.1f}%' if total else '  ?  '
-        sys.stderr.write(f'\r{label}: {pct} {done}/{total} messages, {chunks} chunks, {rate:,.0f} samples/s   ')
+        sys.stderr.write(
+            f'\r{label}: {pct} {done}/{total} messages, {chunks} chunks, {rate:,.0f} samples/s   ')
         if final:
             sys.stderr.write('\n')
         sys.stderr.flush()
@@ -145,7 +178,8 @@ def _labels(paths, labels):
                  else Path(p).name for p in paths]
     else:
         if len(labels) != len(paths):
-            raise ParameterError(f'--label needs one name per bag: {len(paths)} bag(s), {len(labels)} label(s)')
+            raise ParameterError(
+                f'--label needs one name per bag: {len(paths)} bag(s), {len(labels)} label(s)')
         names = list(labels)
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
@@ -153,10 +187,10 @@ def _labels(paths, labels):
     return names
 
 
-def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None, jobs=1,
-                 reference=None, reference_bag=None, thresholds=None, figures=True, curves=DEFAULT_CURVES,
-                 batch_size=DEFAULT_BATCH, progress=False, command=None, start_s=None, end_s=None,
-                 static='auto'):
+def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None,
+                 jobs=1, reference=None, reference_bag=None, thresholds=None, figures=True,
+                 curves=DEFAULT_CURVES, batch_size=DEFAULT_BATCH, progress=False, command=None,
+                 start_s=None, end_s=None, static='auto'):
     """
     Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
 
@@ -179,6 +213,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     reference_bag : str, optional
         Bag label inside ``reference`` when it holds several bags.
     thresholds : HealthThresholds, optional
+        Health thresholds (default: :class:`HealthThresholds()`).
     figures : bool
         Write PNG figures.
     curves : int
@@ -199,6 +234,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     dict
         The summary.json document plus ``'_timing'`` (seconds: total, decode, analysis wait) and
         ``'_files'`` (written paths).
+
     """
     config = config if config is not None else EngineConfig()
     if static not in ('auto', 'off'):
@@ -216,7 +252,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         raise ParameterError(f'--curves must be >= 0, got {curves}')
     names = _labels([str(p) for p in paths], labels)
     thresholds = thresholds if thresholds is not None else HealthThresholds()
-    ref = reference_per_axis(str(reference), config.axes, bag=reference_bag) if reference is not None else {}
+    ref = reference_per_axis(str(reference), config.axes,
+                             bag=reference_bag) if reference is not None else {}
     # Fail fast on any unreadable bag or unresolvable topic before hours of work on the others.
     topics = [_open(p, topic, temperature_topic, config.rate_hz).topic if is_table(p)
               else find_imu_topic(p, topic) for p in paths]
@@ -224,7 +261,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise ParameterError(f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
+        raise ParameterError(
+            f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
 
     started = time.perf_counter()
     timing = {'decode_s': 0.0, 'wait_s': 0.0}
@@ -233,9 +271,9 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
     try:
         for path, label, imu_topic in zip(paths, names, topics):
-            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, select,
-                               csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
-                               _Progress(progress), timing)
+            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds,
+                               pool, jobs, select, csv_writer, per_chunk, curve_store, allan_store,
+                               curves, batch_size, _Progress(progress), timing)
             bag_docs.append(doc)
     finally:
         csv_writer.close()
@@ -245,26 +283,38 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
                for b in bag_docs for a in b['axes'].values()):
         counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
-        raise InputDataError(f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
-                             'lower --chunk-size (>= memory + 2)')
+        raise InputDataError(
+            f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
+            'lower --chunk-size (>= memory + 2)')
     for b in bag_docs:
         if not any(a['chunks'] for a in b['axes'].values()):
             # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
-            why = '; '.join(f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf, {a['chunks_dropped']} dropped "
-                            f"for loss, {a['chunks_failed']} not identifiable (constant?)"
-                            for axis, a in b['axes'].items())
+            why = '; '.join(
+                f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf, {a['chunks_dropped']} dropped "
+                f"for loss, {a['chunks_failed']} not identifiable (constant?)" for axis,
+                a in b['axes'].items())
             raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
 
     doc = {
-        'tool': PROG, 'version': __version__,
+        'tool': PROG,
+        'version': __version__,
         'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ'),
         'command': list(command) if command is not None else None,
-        'options': {**config.as_dict(), 'jobs': jobs, 'topic': topic, 'temperature_topic': temperature_topic,
-                    'reference': str(reference) if reference is not None else None,
-                    'reference_bag': reference_bag,
-                    'thresholds': {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
-                    if ref else None,
-                    'curves': curves, 'batch_size': batch_size},
+        'options': {
+            **config.as_dict(),
+            'jobs': jobs,
+            'topic': topic,
+            'temperature_topic': temperature_topic,
+            'reference': str(reference) if reference is not None else None,
+            'reference_bag': reference_bag,
+            'thresholds': (
+                {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
+                if ref
+                else None
+            ),
+            'curves': curves,
+            'batch_size': batch_size,
+        },
         'bags': bag_docs,
     }
     files = [out / 'chunks.csv']
@@ -289,7 +339,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
 
 def _open(path, topic, temperature_topic, rate_hz):
     if is_table(path):
-        return TableImuReader(path, topic=topic, temperature_topic=temperature_topic, rate_hz=rate_hz)
+        return TableImuReader(path, topic=topic, temperature_topic=temperature_topic,
+                              rate_hz=rate_hz)
     return ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
 
 
@@ -346,13 +397,15 @@ def warn(text):
     Parameters
     ----------
     text : str
+        The warning, without the program name.
+
     """
     print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
 
 
-def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs, select,
-                 csv_writer,
-                 per_chunk, curve_store, allan_store, curves, batch_size, progress, timing):
+def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
+                 select, csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
+                 progress, timing):
     engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
     warnings = []
     time_source = 'header'
@@ -418,11 +471,13 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
             stamps = batch.stamp_ns
             if done == 0 and _stamps_unusable(stamps):
                 if _stamps_unusable(batch.log_ns) or time_source == 'log':
-                    raise InputDataError(f'{label}: neither the header stamps nor the log times increase: '
-                                         'no time base')
+                    raise InputDataError(
+                        f'{label}: neither the header stamps nor the log times increase: '
+                        'no time base')
                 time_source = 'log'
-                warnings.append('header stamps are not increasing (shuffled?): the recorder\'s log time is '
-                                'used as the time base')
+                warnings.append(
+                    "header stamps are not increasing (shuffled?): the recorder's log time is "
+                    'used as the time base')
                 warn(f'{label}: {warnings[-1]}')
             if time_source == 'log':
                 stamps = batch.log_ns
@@ -437,8 +492,8 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
                 stamps, gyro_b, accel_b = stamps[keep], gyro_b[keep], accel_b[keep]
             temp = None
             if t_stamp is not None:
-                # Temperature is published slower than the IMU: linear interpolation at the IMU stamps,
-                # held constant before the first and after the last temperature message.
+                # Temperature is published slower than the IMU: linear interpolation at the IMU
+                # stamps, held constant before the first and after the last temperature message.
                 temp = np.interp(stamps.astype(np.float64), t_stamp, t_value)
             submit(engine.ingest(stamps, gyro_b, temp))
             accel.update(accel_b, engine.counts().rate_hz)
@@ -474,7 +529,8 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         hint = (f'; --chunk-size {better} would cut {counts.chunks + 1} chunks'
                 if better >= config.memory + 2 else '')
         text = (f'{counts.tail_samples} of {counts.samples} samples '
-                f'({100.0 * counts.tail_samples / counts.samples:.0f} %) after the last complete chunk of '
+                f'({100.0 * counts.tail_samples / counts.samples:.0f} %) after the last complete '
+                'chunk of '
                 f'{size} are not in the chunk tables (they are in the Allan deviation){hint}')
         warnings.append(text)
         warn(f'{label}: {text}')
@@ -493,21 +549,40 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         if s.allan is not None:
             allan_store[(label, axis)] = (s.allan, s.noise_terms)
     return {
-        'label': label, 'path': str(path), 'topic': imu_topic, 'storage': storage, 'frame_id': frame_id,
-        'temperature_topic': temperature_topic_used, 'messages': done, 'undecodable_messages': undecodable,
-        'rate_hz': report._json_num(counts.rate_hz), 'rate_method': counts.rate_method,
-        'time_source': time_source, 'stamps_bursty': counts.bursty,
+        'label': label,
+        'path': str(path),
+        'topic': imu_topic,
+        'storage': storage,
+        'frame_id': frame_id,
+        'temperature_topic': temperature_topic_used,
+        'messages': done,
+        'undecodable_messages': undecodable,
+        'rate_hz': report._json_num(counts.rate_hz),
+        'rate_method': counts.rate_method,
+        'time_source': time_source,
+        'stamps_bursty': counts.bursty,
         'stamp_jitter_s': report._json_num(counts.jitter_s),
-        'timebase': tb.as_dict() if tb is not None else None, 'warnings': warnings,
-        'left_out': left_out, 'window_s': [start_s, end_s], 'static_detection': static,
+        'timebase': tb.as_dict() if tb is not None else None,
+        'warnings': warnings,
+        'left_out': left_out,
+        'window_s': [start_s, end_s],
+        'static_detection': static,
         'duration_s': counts.duration_s,
-        'samples': counts.samples, 'samples_lost': counts.samples_lost, 'gaps': counts.gaps,
-        'out_of_order_stamps': counts.out_of_order, 'clock_steps': counts.clock_steps, 'chunks_cut': counts.chunks,
-        'tail_samples': counts.tail_samples, 'discarded_samples': counts.discarded_samples,
+        'samples': counts.samples,
+        'samples_lost': counts.samples_lost,
+        'gaps': counts.gaps,
+        'out_of_order_stamps': counts.out_of_order,
+        'clock_steps': counts.clock_steps,
+        'chunks_cut': counts.chunks,
+        'tail_samples': counts.tail_samples,
+        'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
         'allan_status': engine.allan_status,
         'accelerometer_allan': {a: report.allan_terms_dict(t) for a, t in accel_terms.items()},
-        'axes': {axis: report.axis_summary_dict(s, verdict=verdicts.get(axis)) for axis, s in summaries.items()},
+        'axes': {
+            axis: report.axis_summary_dict(s, verdict=verdicts.get(axis))
+            for axis, s in summaries.items()
+        },
     }
 
 
@@ -515,10 +590,11 @@ class _AccelAllan:
     """
     Allan deviation of the accelerometer axes, for the accelerometer_* keys of imu.yaml.
 
-    The IEEE 952 model is fitted to the specific-force rate in m/s^2 exactly as to the angular rate: the
-    fitted "angle random walk" is then the velocity random walk (m/s/sqrt(s) = m/s^2/sqrt(Hz), Kalibr's
-    accelerometer_noise_density) and the "rate random walk" the acceleration random walk (m/s^3/sqrt(Hz),
-    accelerometer_random_walk). Samples wait until the engine knows the sample rate.
+    The IEEE 952 model is fitted to the specific-force rate in m/s^2 exactly as to the angular
+    rate: the fitted "angle random walk" is then the velocity random walk (m/s/sqrt(s) =
+    m/s^2/sqrt(Hz), Kalibr's accelerometer_noise_density) and the "rate random walk" the
+    acceleration random walk (m/s^3/sqrt(Hz), accelerometer_random_walk). Samples wait until the
+    engine knows the sample rate.
     """
 
     def __init__(self, taus):
@@ -575,17 +651,20 @@ def _write_allan_outputs(out, doc, allan_store, figures):
     for (label, axis), (result, terms) in allan_store.items():
         tau, adev, lo, hi, n = report.allan_curve(result)
         entries.append((label, axis, tau, adev, lo, hi, n))
-        fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi, report.allan_fit_lines(terms, tau)))
+        fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi,
+                                                report.allan_fit_lines(terms, tau)))
     report.write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
-    density, walk = report.allan_kalibr(
-        [allan_store[(first['label'], a)][1] for a in first['axes'] if (first['label'], a) in allan_store])
+    density, walk = report.allan_kalibr([allan_store[(first['label'], a)][1] for a in first['axes']
+                                         if (first['label'], a) in allan_store])
     acc_terms = [t for t in first.get('accelerometer_allan', {}).values() if t]
     acc_density = max((t['velocity_random_walk_m_s2_per_sqrt_hz'] for t in acc_terms
-                       if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None), default=None)
+                       if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None),
+                      default=None)
     acc_walk = max((t['acceleration_random_walk_m_s3_per_sqrt_hz'] for t in acc_terms
-                    if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None), default=None)
+                    if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None),
+                   default=None)
     from ..core.allan_readout import random_walk_bound
 
     walk_note = acc_walk_note = ''
@@ -604,12 +683,14 @@ def _write_allan_outputs(out, doc, allan_store, figures):
         if bounds:
             acc_walk = max(bounds)
             acc_walk_note = 'upper bound, not resolved by the record (as for the gyroscope)'
-    report.write_imu_yaml(
-        out / 'imu.yaml', rostopic=first['topic'], update_rate_hz=first['rate_hz'] or float('nan'),
-        gyroscope_noise_density=density, gyroscope_random_walk=walk,
-        accelerometer_noise_density=acc_density, accelerometer_random_walk=acc_walk,
-        gyroscope_random_walk_note=walk_note, accelerometer_random_walk_note=acc_walk_note,
-        source=f"from bag {first['label']} ({first['path']}), largest over axes {', '.join(first['axes'])}")
+    report.write_imu_yaml(out / 'imu.yaml', rostopic=first['topic'],
+                          update_rate_hz=first['rate_hz'] or float('nan'),
+                          gyroscope_noise_density=density, gyroscope_random_walk=walk,
+                          accelerometer_noise_density=acc_density,
+                          accelerometer_random_walk=acc_walk, gyroscope_random_walk_note=walk_note,
+                          accelerometer_random_walk_note=acc_walk_note,
+                          source=f"from bag {first['label']} ({first['path']}), largest over axes "
+                          f"{', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
     if figures and fig_series:
         report.plot_allan(out / 'allan.png', fig_series)
@@ -630,8 +711,8 @@ def _write_figures(out, config, per_chunk, curve_store):
             files.append(out / name)
     for (label, axis), rows in curve_store.items():
         path = out / f'curves_{_safe(label)}_{axis}.png'
-        report.plot_curves(path, config.alphas, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
-                           np.array([r[2] for r in rows]),
+        report.plot_curves(path, config.alphas, np.array([r[0] for r in rows]),
+                           np.array([r[1] for r in rows]), np.array([r[2] for r in rows]),
                            title=f'{label}, axis {axis}: var(alpha) and J(alpha) over chunks')
         files.append(path)
     return files
@@ -657,6 +738,7 @@ def parse_order_grid(text):
     ParameterError
         Negative orders or orders above 2 (the model's domain, paper 000: 0 <= alpha <= 2),
         fewer than 2 points (STOP <= START or STEP > STOP - START), STOP not on the grid.
+
     """
     alphas = parse_grid(text)
     start, stop, step = (float(v) for v in str(text).split(':'))
@@ -684,8 +766,8 @@ def _body(argv):
         raise ParameterError(f'--batch-size must be >= 1, got {args.batch_size}')
     config = EngineConfig(chunk_size=args.chunk_size, axes=axes, alphas=alphas, memory=args.memory,
                           demean=not args.no_demean, max_lag=args.max_lag, rate_hz=args.rate_hz,
-                          gap_factor=args.gap_factor, gap_policy=args.gap_policy, allan=not args.no_allan,
-                          allan_taus=args.allan_taus)
+                          gap_factor=args.gap_factor, gap_policy=args.gap_policy,
+                          allan=not args.no_allan, allan_taus=args.allan_taus)
     jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
     doc = analyze_bags(args.bags, out_dir=args.out, labels=args.label, topic=args.topic,
                        temperature_topic=args.temperature_topic, config=config, jobs=jobs,
@@ -707,17 +789,20 @@ def _order_text(axis_doc, key):
 
 def _print_summary(doc):
     for b in doc['bags']:
-        print(f"{b['label']}: {b['samples']} samples on {b['topic']} ({b['storage']}), "
-              f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.6g} Hz ({b['rate_method']}"
-              f"{', bursty stamps' if b['stamps_bursty'] else ''}, stamp jitter "
-              f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
-              f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
-              f"{b['out_of_order_stamps']} out-of-order stamp(s), "
-              f"{b['tail_samples']} tail sample(s) not analysed")
+        print(
+            f"{b['label']}: {b['samples']} samples on {b['topic']} ({b['storage']}), "
+            f"{b['duration_s']:.1f} s at {b['rate_hz'] or float('nan'):.6g} Hz ({b['rate_method']}"
+            f"{', bursty stamps' if b['stamps_bursty'] else ''}, stamp jitter "
+            f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
+            f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
+            f"{b['out_of_order_stamps']} out-of-order stamp(s), "
+            f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():
-            line = (f"  {axis}: {a['chunks']} chunks, drift {report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
-                    f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} (deg/s)^2, "
-                    f"order var {_order_text(a, 'alpha_var')}, corr {_order_text(a, 'alpha_corr')}")
+            line = (f"  {axis}: {a['chunks']} chunks, drift "
+                    f"{report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
+                    f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} "
+                    '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "
+                    f"{_order_text(a, 'alpha_corr')}")
             if a['nan_samples']:
                 line += f", {a['nan_samples']} NaN sample(s)"
             if 'health' in a:
@@ -726,7 +811,8 @@ def _print_summary(doc):
     t = doc['_timing']
     print(f"time {t['total_s']:.1f} s (decode {t['decode_s']:.1f} s)")
     out = Path(doc['_files'][0]).parent
-    print(f'wrote {len(doc["_files"])} files to {out}: ' + ', '.join(Path(f).name for f in doc['_files']))
+    print(f'wrote {len(doc["_files"])} files to {out}: '
+          + ', '.join(Path(f).name for f in doc['_files']))
 
 
 def main(argv=None):
@@ -742,6 +828,7 @@ def main(argv=None):
     -------
     int
         Exit code (docs/offline_tool.md).
+
     """
     return run_cli(PROG, _body, argv)
 

@@ -1,17 +1,33 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 portenta_emulator: the Portenta H7 + LSM6DSO32 board, emulated, speaking the wire protocol.
 
-Serves ``docs/portenta_link.md`` on a pseudo-terminal (default; prints the device path) or on a loopback
-TCP port (``--tcp 127.0.0.1:0``; prints the pyserial URL ``socket://127.0.0.1:PORT``), one line on stdout,
-flushed. It answers CONFIGURE commands with ACK/NAK, streams SAMPLES frames paced in real time at the
-ODR (``--speed`` times faster), and keeps sampling while no host is connected (samples the host could
-not receive show up as a counter gap flagged FLAG_SAMPLE_LOST on the next sample sent, like the real
-board whose USB buffer is full). With ``--write-sd DIR`` it writes SD log files as fast as it can instead.
+Serves ``docs/portenta_link.md`` on a pseudo-terminal (default; prints the device path) or on a
+loopback TCP port (``--tcp 127.0.0.1:0``; prints the pyserial URL ``socket://127.0.0.1:PORT``), one
+line on stdout, flushed. It answers CONFIGURE commands with ACK/NAK, streams SAMPLES frames paced
+in real time at the ODR (``--speed`` times faster), and keeps sampling while no host is connected
+(samples the host could not receive show up as a counter gap flagged FLAG_SAMPLE_LOST on the next
+sample sent, like the real board whose USB buffer is full). With ``--write-sd DIR`` it writes SD
+log files as fast as it can instead.
 
 Examples::
 
     portenta_emulator --link /tmp/ttyPORTENTA            # pty, stable symlink, real time, forever
-    portenta_emulator --tcp 127.0.0.1:0 --speed 4 --seed 3 --corrupt-rate 1e-5 --disconnect-every-s 10
+    portenta_emulator --tcp 127.0.0.1:0 --speed 4 --seed 3 --corrupt-rate 1e-5 \
+        --disconnect-every-s 10
     portenta_emulator --write-sd logs/ --duration-s 60 --sd-file-bytes 1000000 --helium-delay-s 10
 
 Exit status 0 on SIGINT/SIGTERM or at the end of ``--samples``/``--duration-s``.
@@ -32,17 +48,28 @@ import tty
 
 import numpy as np
 
-from ..errors import LinkError, ParameterError
-from ..link import lsm6dso32 as lsm
-from ..link.emulator import (DEFAULT_ALPHA, DEFAULT_BIAS_DPS, DEFAULT_F, PAPER_NOISE_STD_DPS, TRUTH_DTYPE,
-                             BoardModel, FaultInjector, HeliumTransient, Vibration, truth_records)
-from ..link.protocol import MAX_SAMPLES_PER_FRAME, encode_samples
-from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
 from ._common import run_cli
 from ._scenario import add_scenario_arguments, scenario_from_args, write_bag
+from ..errors import LinkError, ParameterError
+from ..link import lsm6dso32 as lsm
+from ..link.emulator import (
+    BoardModel,
+    DEFAULT_ALPHA,
+    DEFAULT_BIAS_DPS,
+    DEFAULT_F,
+    FaultInjector,
+    HeliumTransient,
+    PAPER_NOISE_STD_DPS,
+    TRUTH_DTYPE,
+    truth_records,
+    Vibration,
+)
+from ..link.protocol import encode_samples, MAX_SAMPLES_PER_FRAME
+from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
 
 PROG = 'portenta_emulator'
-#: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in SDRAM):
+#: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in
+#: SDRAM):
 #: 1 MiB is ~6 s of data at 6.66 kHz, so a loaded test machine does not lose samples.
 TX_BUFFER_BYTES = 1 << 20
 
@@ -51,7 +78,8 @@ def _float_list(text):
     try:
         values = [float(v) for v in text.split(',')]
     except ValueError as err:
-        raise argparse.ArgumentTypeError(f'expected a number or three comma-separated numbers, got {text!r}') from err
+        raise argparse.ArgumentTypeError(
+            f'expected a number or three comma-separated numbers, got {text!r}') from err
     if len(values) not in (1, 3):
         raise argparse.ArgumentTypeError(f'expected 1 or 3 values, got {text!r}')
     return values[0] if len(values) == 1 else tuple(values)
@@ -64,20 +92,29 @@ def build_parser():
     Returns
     -------
     argparse.ArgumentParser
+
     """
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     out = p.add_argument_group('output (default: a pseudo-terminal)')
-    out.add_argument('--tcp', metavar='HOST:PORT', help='serve on a loopback TCP port instead (port 0: any)')
-    out.add_argument('--link', metavar='PATH', help='pty only: keep a symlink PATH -> the pty (survives replug)')
-    out.add_argument('--write-sd', metavar='DIR', help='write SD log files into DIR instead of serving')
-    out.add_argument('--sd-file-bytes', type=int, default=FAT32_MAX_FILE_BYTES, help='SD file size limit (bytes)')
+    out.add_argument('--tcp', metavar='HOST:PORT',
+                     help='serve on a loopback TCP port instead (port 0: any)')
+    out.add_argument('--link', metavar='PATH',
+                     help='pty only: keep a symlink PATH -> the pty (survives replug)')
+    out.add_argument('--write-sd', metavar='DIR',
+                     help='write SD log files into DIR instead of serving')
+    out.add_argument('--sd-file-bytes', type=int, default=FAT32_MAX_FILE_BYTES,
+                     help='SD file size limit (bytes)')
     out.add_argument('--sequence-id', type=int, default=1, help='SD sequence id')
-    out.add_argument('--rtc-unix-s', type=int, default=0, help='SD header RTC time at power-on (0 = unset)')
-    out.add_argument('--truth-out', metavar='FILE', help='append the ground truth of every sample (TRUTH_DTYPE)')
-    out.add_argument('--stats-out', metavar='FILE', help='write the fault/traffic counters as JSON at exit')
+    out.add_argument('--rtc-unix-s', type=int, default=0,
+                     help='SD header RTC time at power-on (0 = unset)')
+    out.add_argument('--truth-out', metavar='FILE',
+                     help='append the ground truth of every sample (TRUTH_DTYPE)')
+    out.add_argument('--stats-out', metavar='FILE',
+                     help='write the fault/traffic counters as JSON at exit')
     run = p.add_argument_group('run')
-    run.add_argument('--seed', type=int, default=0, help='seed of the sample streams (faults use seed+1)')
+    run.add_argument('--seed', type=int, default=0,
+                     help='seed of the sample streams (faults use seed+1)')
     run.add_argument('--speed', type=float, default=1.0, help='pace at this multiple of real time')
     run.add_argument('--samples', type=int, help='stop after this many samples')
     run.add_argument('--duration-s', type=float, help='stop after this much board time (s)')
@@ -86,25 +123,34 @@ def build_parser():
                      help='board transmit buffer; samples that do not fit are dropped and flagged')
     cfg = p.add_argument_group('power-on configuration')
     cfg.add_argument('--odr-hz', type=float, default=6667.0, help=f'one of {lsm.ODRS_HZ}')
-    cfg.add_argument('--gyro-fs-dps', type=int, default=2000, help=f'one of {lsm.GYRO_FULL_SCALES_DPS}')
+    cfg.add_argument('--gyro-fs-dps', type=int, default=2000,
+                     help=f'one of {lsm.GYRO_FULL_SCALES_DPS}')
     cfg.add_argument('--accel-fs-g', type=int, default=4, help=f'one of {lsm.ACCEL_FULL_SCALES_G}')
     cfg.add_argument('--seq0', type=int, default=0, help='first sequence number (wrap tests)')
-    cfg.add_argument('--t0-us', type=int, default=0, help='device time at power-on (us, wrap tests)')
+    cfg.add_argument('--t0-us', type=int, default=0,
+                     help='device time at power-on (us, wrap tests)')
     cfg.add_argument('--clock-ppm', type=float, default=0.0, help='board clock error (ppm)')
     noise = p.add_argument_group('sensor model')
-    noise.add_argument('--alpha', type=float, default=DEFAULT_ALPHA, help='fractional order (paper 000 eq. 2)')
-    noise.add_argument('--f', type=float, default=DEFAULT_F, help='noise parameter f (paper 000 eq. 2)')
+    noise.add_argument('--alpha', type=float, default=DEFAULT_ALPHA,
+                       help='fractional order (paper 000 eq. 2)')
+    noise.add_argument('--f', type=float, default=DEFAULT_F,
+                       help='noise parameter f (paper 000 eq. 2)')
     noise.add_argument('--noise-std-dps', type=float, default=PAPER_NOISE_STD_DPS,
                        help='stationary gyro noise standard deviation (deg/s)')
-    noise.add_argument('--bias-dps', type=_float_list, default=DEFAULT_BIAS_DPS, help='gyro bias x,y,z (deg/s)')
-    noise.add_argument('--temp-c', type=float, default=25.0, help='die temperature at power-on (degC)')
-    noise.add_argument('--temp-drift-c-per-h', type=float, default=0.0, help='temperature ramp (degC/h)')
+    noise.add_argument('--bias-dps', type=_float_list, default=DEFAULT_BIAS_DPS,
+                       help='gyro bias x,y,z (deg/s)')
+    noise.add_argument('--temp-c', type=float, default=25.0,
+                       help='die temperature at power-on (degC)')
+    noise.add_argument('--temp-drift-c-per-h', type=float, default=0.0,
+                       help='temperature ramp (degC/h)')
     noise.add_argument('--temp-sensitivity-dps-per-c', type=_float_list, default=0.0,
                        help='gyro bias change per degC (deg/s/degC)')
     noise.add_argument('--helium-amplitude-dps', type=_float_list, default=0.0,
                        help='helium-like bias rise, final value (deg/s); 0 = off')
-    noise.add_argument('--helium-delay-s', type=float, default=5400.0, help='delay before the rise (s)')
-    noise.add_argument('--helium-tau-s', type=float, default=7200.0, help='time constant of the rise (s)')
+    noise.add_argument('--helium-delay-s', type=float, default=5400.0,
+                       help='delay before the rise (s)')
+    noise.add_argument('--helium-tau-s', type=float, default=7200.0,
+                       help='time constant of the rise (s)')
     noise.add_argument('--thermal', choices=('off', 'oven'), default='off',
                        help='oven: the thermal model of docs/thermal_data.md (paper 002 oven '
                             'profile from --temp-c, die lag, bias from temperature and its '
@@ -112,20 +158,27 @@ def build_parser():
                             '--temp-sensitivity-dps-per-c')
     noise.add_argument('--thermal-compress', type=float, default=60.0,
                        help='run the ~14 h oven experiment this many times faster')
-    noise.add_argument('--vibration-hz', type=float, default=0.0, help='sinusoidal vibration frequency (Hz)')
-    noise.add_argument('--vibration-dps', type=_float_list, default=0.0, help='vibration rate amplitude (deg/s)')
-    noise.add_argument('--vibration-g', type=_float_list, default=0.0, help='vibration accel amplitude (g)')
+    noise.add_argument('--vibration-hz', type=float, default=0.0,
+                       help='sinusoidal vibration frequency (Hz)')
+    noise.add_argument('--vibration-dps', type=_float_list, default=0.0,
+                       help='vibration rate amplitude (deg/s)')
+    noise.add_argument('--vibration-g', type=_float_list, default=0.0,
+                       help='vibration accel amplitude (g)')
     fault = p.add_argument_group('fault injection')
-    fault.add_argument('--corrupt-rate', type=float, default=0.0, help='probability per byte sent/written')
+    fault.add_argument('--corrupt-rate', type=float, default=0.0,
+                       help='probability per byte sent/written')
     fault.add_argument('--drop-flagged-rate', type=float, default=0.0,
                        help='probability per sample of a board-side drop that the board flags')
     fault.add_argument('--drop-unflagged-rate', type=float, default=0.0,
                        help='probability per sample of a silent drop (only the counter shows it)')
-    fault.add_argument('--fifo-overrun-rate', type=float, default=0.0,
-                       help='probability per sample slot of a sensor FIFO overrun (1-32 samples lost in the '
-                            'sensor, invisible to seq, next sample flagged FIFO_OVERRUN; at most one per frame)')
-    fault.add_argument('--disconnect-after', type=int, help='unplug once after this many samples sent')
-    fault.add_argument('--disconnect-every-s', type=float, help='unplug after every this many seconds connected')
+    fault.add_argument(
+        '--fifo-overrun-rate', type=float, default=0.0,
+        help='probability per sample slot of a sensor FIFO overrun (1-32 samples lost in the '
+        'sensor, invisible to seq, next sample flagged FIFO_OVERRUN; at most one per frame)')
+    fault.add_argument('--disconnect-after', type=int,
+                       help='unplug once after this many samples sent')
+    fault.add_argument('--disconnect-every-s', type=float,
+                       help='unplug after every this many seconds connected')
     fault.add_argument('--unplug-s', type=float, default=1.0, help='how long an unplug lasts (s)')
     add_scenario_arguments(p)
     return p
@@ -144,13 +197,14 @@ def board_from_args(args):
     -------
     BoardModel
         Same seed and options give the same samples, sample for sample.
+
     """
     if not isinstance(args, argparse.Namespace):
         args = build_parser().parse_args(list(args))
     helium = None
     if np.any(np.asarray(args.helium_amplitude_dps) != 0):
-        helium = HeliumTransient(amplitude_dps=args.helium_amplitude_dps, delay_s=args.helium_delay_s,
-                                 tau_s=args.helium_tau_s)
+        helium = HeliumTransient(amplitude_dps=args.helium_amplitude_dps,
+                                 delay_s=args.helium_delay_s, tau_s=args.helium_tau_s)
     vibration = None
     if args.vibration_hz > 0:
         vibration = Vibration(frequency_hz=args.vibration_hz, amplitude_dps=args.vibration_dps,
@@ -158,16 +212,17 @@ def board_from_args(args):
     scenario = scenario_from_args(args)
     # with a scenario the specific force comes from its motion (gravity follows the attitude)
     extra = {} if scenario is None else {'scenario': scenario, 'accel_g': (0.0, 0.0, 0.0)}
-    return BoardModel(rng=np.random.default_rng(args.seed), odr_hz=args.odr_hz, gyro_fs_dps=args.gyro_fs_dps,
-                      accel_fs_g=args.accel_fs_g, alpha=args.alpha, f=args.f, noise_std_dps=args.noise_std_dps,
-                      bias_dps=args.bias_dps, temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
+    return BoardModel(rng=np.random.default_rng(args.seed), odr_hz=args.odr_hz,
+                      gyro_fs_dps=args.gyro_fs_dps, accel_fs_g=args.accel_fs_g, alpha=args.alpha,
+                      f=args.f, noise_std_dps=args.noise_std_dps, bias_dps=args.bias_dps,
+                      temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
                       temp_sensitivity_dps_per_c=args.temp_sensitivity_dps_per_c, helium=helium,
-                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0, t0_us=args.t0_us,
-                      thermal=_thermal_from_args(args), **extra)
+                      vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0,
+                      t0_us=args.t0_us, thermal=_thermal_from_args(args), **extra)
 
 
 def _thermal_from_args(args):
-    """The ThermalStream of ``--thermal oven`` (bias at 25 degC left to --bias-dps), or None."""
+    """Build the ThermalStream of ``--thermal oven`` (25 degC bias left to --bias-dps), or None."""
     if getattr(args, 'thermal', 'off') == 'off':
         return None
     from ..thermal.simulate import ThermalModel, ThermalStream
@@ -188,7 +243,8 @@ def _check_args(args):
     if args.write_sd and args.samples is None and args.duration_s is None:
         raise ParameterError('--write-sd needs --samples or --duration-s')
     if not 0 <= args.fifo_overrun_rate < 1:
-        raise ParameterError(f'--fifo-overrun-rate must be in [0, 1), got {args.fifo_overrun_rate}')
+        raise ParameterError(
+            f'--fifo-overrun-rate must be in [0, 1), got {args.fifo_overrun_rate}')
     if args.tx_buffer_bytes < 4096:
         raise ParameterError(f'--tx-buffer-bytes must be >= 4096, got {args.tx_buffer_bytes}')
     if args.unplug_s < 0:
@@ -205,6 +261,7 @@ def _check_args(args):
 
 
 class _Stopper:
+
     def __init__(self):
         self.stop = False
 
@@ -213,7 +270,11 @@ class _Stopper:
 
 
 class _PtyPort:
-    """A pseudo-terminal 'USB port'; unplug closes it, replug creates a new one (and moves the symlink)."""
+    """
+    A pseudo-terminal 'USB port'.
+
+    Unplug closes it, replug creates a new one (and moves the symlink).
+    """
 
     def __init__(self, link=None):
         self.link = link
@@ -273,7 +334,7 @@ class _PtyPort:
             return -1
 
     def drop_client(self):
-        """A pty cannot refuse a client; a disconnect is an unplug."""
+        """Do nothing: a pty cannot refuse a client; a disconnect is an unplug."""
 
     def discard_pending(self):
         """Forget bytes the departed client did not read, so the next one starts clean."""
@@ -288,7 +349,11 @@ class _PtyPort:
 
 
 class _TcpPort:
-    """A loopback TCP 'port' serving one client at a time; unplug drops the client and refuses others."""
+    """
+    A loopback TCP 'port' serving one client at a time.
+
+    Unplug drops the client and refuses others.
+    """
 
     def __init__(self, spec):
         host, _, port = spec.rpartition(':')
@@ -381,6 +446,7 @@ class _TcpPort:
 
 
 class _Counters:
+
     def __init__(self):
         self.samples_generated = 0
         self.samples_sent = 0
@@ -423,13 +489,15 @@ def _run_sd(args, board, faults, truth_fh, counters):
     os.makedirs(args.write_sd, exist_ok=True)
     corrupt = faults.corrupt if args.corrupt_rate > 0 else None
     with SdLogWriter(args.write_sd, sequence_id=args.sequence_id, odr_hz=board.odr_hz,
-                     gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g, max_file_bytes=args.sd_file_bytes,
-                     batch=args.batch, rtc_unix_s=args.rtc_unix_s, corrupt=corrupt) as writer:
+                     gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g,
+                     max_file_bytes=args.sd_file_bytes, batch=args.batch,
+                     rtc_unix_s=args.rtc_unix_s, corrupt=corrupt) as writer:
         # overruns are drawn at most once per chunk: go frame by frame when they are injected
-        chunk = args.batch if args.fifo_overrun_rate > 0 else args.batch * max(1, 65536 // args.batch)
+        chunk = args.batch if args.fifo_overrun_rate > 0 else args.batch * max(
+            1, 65536 // args.batch)
         while counters.samples_generated < total:
-            samples = _produce(board, faults, counters, min(chunk, total - counters.samples_generated),
-                               truth_fh)
+            samples = _produce(
+                board, faults, counters, min(chunk, total - counters.samples_generated), truth_fh)
             kept = faults.drop(samples)
             writer.write_samples(kept)
             counters.samples_sent += kept.size
@@ -439,7 +507,8 @@ def _run_sd(args, board, faults, truth_fh, counters):
 
 
 def _serve(args, board, faults, truth_fh, counters, stopper):
-    # warm the numba kernels up before the pacing clock starts: a JIT stall would come out as a burst
+    # warm the numba kernels up before the pacing clock starts: a JIT stall would come out as a
+    # burst
     cli_warm = board_from_args(args)
     cli_warm.next_samples(args.batch)
     port = _TcpPort(args.tcp) if args.tcp else _PtyPort(args.link)
@@ -499,9 +568,11 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
                     for start in range(0, kept.size, args.batch):
                         frame = encode_samples(kept[start:start + args.batch])
                         if len(outbuf) + len(frame) > args.tx_buffer_bytes:
-                            # buffer full: this frame and the rest of the batch are lost, the next is flagged
-                            faults.note_lost(kept.size - start,
-                                             carry_flags=int(np.bitwise_or.reduce(kept['flags'][start:])))
+                            # buffer full: this frame and the rest of the batch are lost, the next
+                            # is flagged
+                            faults.note_lost(
+                                kept.size - start,
+                                carry_flags=int(np.bitwise_or.reduce(kept['flags'][start:])))
                             counters.samples_unsent += kept.size - start
                             break
                         outbuf += faults.corrupt(frame)
@@ -532,8 +603,8 @@ def _serve(args, board, faults, truth_fh, counters, stopper):
             if total is not None and counters.samples_generated >= total and not outbuf:
                 break
             # sleep until the next frame is due or the host speaks
-            wait = max(0.001, min(0.02, seg_t0 + (counters.samples_generated - seg_n0 + args.batch) * period
-                                  - time.monotonic()))
+            wait = max(0.001, min(0.02, seg_t0 + (counters.samples_generated - seg_n0 + args.batch)
+                                  * period - time.monotonic()))
             rlist = [port.fd] if (connected and port.fd is not None) else []
             if isinstance(port, _TcpPort) and port.client is None:
                 rlist.append(port.listener)
@@ -561,6 +632,7 @@ def encode_samples_batched(samples, batch):
     Returns
     -------
     bytes
+
     """
     return b''.join(encode_samples(samples[i:i + batch]) for i in range(0, samples.size, batch))
 
@@ -569,8 +641,10 @@ def _body(argv):
     args = build_parser().parse_args(argv)
     _check_args(args)
     board = board_from_args(args)
-    faults = FaultInjector(np.random.default_rng(args.seed + 1), drop_flagged_rate=args.drop_flagged_rate,
-                           drop_unflagged_rate=args.drop_unflagged_rate, corrupt_rate=args.corrupt_rate,
+    faults = FaultInjector(np.random.default_rng(args.seed + 1),
+                           drop_flagged_rate=args.drop_flagged_rate,
+                           drop_unflagged_rate=args.drop_unflagged_rate,
+                           corrupt_rate=args.corrupt_rate,
                            fifo_overrun_rate=args.fifo_overrun_rate)
     counters = _Counters()
     stopper = _Stopper()
@@ -595,7 +669,7 @@ def _body(argv):
 
 def _produce(board, faults, counters, n, truth_fh):
     """
-    Let the sensor lose its injected FIFO overrun out of ``n`` samples, produce the rest, log truth.
+    Lose the injected FIFO overrun out of ``n`` samples, produce the rest, log the truth.
 
     Parameters
     ----------
@@ -614,6 +688,7 @@ def _produce(board, faults, counters, n, truth_fh):
     -------
     numpy.ndarray
         The produced samples (``n`` minus the overrun).
+
     """
     lost_in_sensor = faults.overrun(n)
     board.sensor_overrun(lost_in_sensor)
@@ -640,6 +715,7 @@ def main(argv=None):
     -------
     int
         Exit status.
+
     """
     return run_cli(PROG, _body, argv)
 

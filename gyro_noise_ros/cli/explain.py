@@ -1,15 +1,31 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-gyro_noise_explain: find where the simulation and the measurement disagree, name the missing effect,
-add it, show the gap shrink (see docs/discrepancy.md).
+gyro_noise_explain: name the effect a gyro noise model misses, add it, show the gap shrink.
+
+Finds where the simulation and the measurement disagree (see docs/discrepancy.md).
 
 Usage::
 
-    gyro_noise_explain INPUT [--topic T] [--temperature-topic T] [--axis x|y|z] [--seed S] --out DIR
-                       [--ensemble N] [--max-steps K] [--rate-hz HZ] [--require-temperature] [--quiet]
+    gyro_noise_explain INPUT [--topic T] [--temperature-topic T] [--axis x|y|z] [--seed S]
+                       --out DIR [--ensemble N] [--max-steps K] [--rate-hz HZ]
+                       [--require-temperature] [--quiet]
 
 INPUT is a rosbag2 directory / .db3 / .mcap, a ROS 1 .bag, or a .csv with the columns documented in
-:mod:`gyro_noise_ros.explain.inputs`. Writes DIR/explain.json, DIR/report.md and PNG figures; prints a
-short verdict. Exit codes: see :mod:`gyro_noise_ros.cli._common`.
+:mod:`gyro_noise_ros.explain.inputs`. Writes DIR/explain.json, DIR/report.md and PNG figures;
+prints a short verdict. Exit codes: see :mod:`gyro_noise_ros.cli._common`.
 """
 
 import argparse
@@ -24,18 +40,20 @@ PROG = 'gyro_noise_explain'
 def build_parser():
     """Return the argument parser."""
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0].strip())
-    p.add_argument('input', metavar='INPUT', help='rosbag2 / ROS 1 bag, PX4 ULog (.ulg), or CSV (time_s, '
+    p.add_argument('input', metavar='INPUT',
+                   help='rosbag2 / ROS 1 bag, PX4 ULog (.ulg), or CSV (time_s, '
                    'gyro_*_rad_s, optional temperature_c)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the only one)')
-    p.add_argument('--temperature-topic', help='sensor_msgs/Temperature topic (naming it makes temperature '
-                   'required)')
+    p.add_argument('--temperature-topic',
+                   help='sensor_msgs/Temperature topic (naming it makes temperature ' 'required)')
     p.add_argument('--axis', choices=('x', 'y', 'z', 'all'), default='all',
                    help='gyro axis (default all: one run, one report, a subdirectory per axis)')
     p.add_argument('--seed', type=int, default=0, help='ensemble seed (default 0)')
     p.add_argument('--out', required=True, help='output directory')
     p.add_argument('--ensemble', type=int, default=16, help='ensemble members (default 16, >= 4)')
     p.add_argument('--max-steps', type=int, default=6, help='most effects to add (default 6)')
-    p.add_argument('--rate-hz', type=float, help='nominal sample rate (Hz); required for a CSV without '
+    p.add_argument('--rate-hz', type=float,
+                   help='nominal sample rate (Hz); required for a CSV without '
                    'time_s, else overrides the mean rate of the stamps')
     p.add_argument('--require-temperature', action='store_true',
                    help='fail unless the input has a temperature')
@@ -78,8 +96,9 @@ def _left_out_lines(left):
     parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
     if left['motion']:
         a, b = left['static_segment_s']
-        parts.append(f'{left["motion"]} in motion (the longest static segment, t = {a:.1f}-{b:.1f} s, '
-                     'is analysed)')
+        parts.append(
+            f'{left["motion"]} in motion (the longest static segment, t = {a:.1f}-{b:.1f} s, '
+            'is analysed)')
     return [f'samples left out: {", ".join(parts)}'] if parts else []
 
 
@@ -95,11 +114,13 @@ def _body(argv):
     out_root = Path(args.out)
     results = {}
     for k, axis in enumerate(axes):
-        meas = load_input(args.input, topic=args.topic, temperature_topic=args.temperature_topic, axis=axis,
-                          rate_hz=args.rate_hz, require_temperature=args.require_temperature)
+        meas = load_input(args.input, topic=args.topic, temperature_topic=args.temperature_topic,
+                          axis=axis, rate_hz=args.rate_hz,
+                          require_temperature=args.require_temperature)
         meas, left = select(meas, start_s=args.start, end_s=args.end, static=args.static)
         if k == 0:
-            for text in _left_out_lines(left) + list(meas.timebase.warnings if meas.timebase else ()):
+            for text in _left_out_lines(left) + list(meas.timebase.warnings if meas.timebase
+                                                     else ()):
                 print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
         if progress is not None and len(axes) > 1:
             progress(f'axis {axis} ({k + 1} of {len(axes)})')
@@ -114,7 +135,11 @@ def _body(argv):
 
 
 def _write_index(out_root, results, verdict):
-    """One report for the run: every axis' verdict and report, figures linked from the subdirectories."""
+    """
+    One report for the run.
+
+    Every axis' verdict and report, figures linked from the subdirectories.
+    """
     import json
 
     lines = ['# gyro_noise_explain: all axes', '']

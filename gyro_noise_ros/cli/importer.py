@@ -1,17 +1,32 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 gyro_noise_import: convert the SD-card log files of one Portenta sequence into a rosbag2.
 
 Reads the files in (sequence, file index) order from their headers, streams them through the link
-decoder in constant memory, scales to SI with the configuration in force (file headers and ACK frames,
-or ``--gyro-fs-dps``/``--accel-fs-g`` which override both), and writes ``sensor_msgs/Imu`` (every
-sample) and ``sensor_msgs/Temperature`` (decimated to ``--temperature-rate-hz``) with
+decoder in constant memory, scales to SI with the configuration in force (file headers and ACK
+frames, or ``--gyro-fs-dps``/``--accel-fs-g`` which override both), and writes ``sensor_msgs/Imu``
+(every sample) and ``sensor_msgs/Temperature`` (decimated to ``--temperature-rate-hz``) with
 :class:`gyro_noise_ros.bag.ImuBagWriter`. Corrupt regions are skipped and reported, never fatal.
 
 Time stamps come from the device clock (the 32-bit microsecond counter, unwrapped), anchored by
 ``--start-time``:
 
 * ``auto`` (default): ``rtc`` when a header carries an RTC time, else ``zero``;
-* ``rtc``: the header's RTC time ``rtc_unix_s`` is the host time of the header's device time ``t_us``;
+* ``rtc``: the header's RTC time ``rtc_unix_s`` is the host time of the header's device time
+  ``t_us``;
 * ``zero``: the first sample is stamped 0 s;
 * a number: UNIX time (s) of the first sample.
 
@@ -23,18 +38,18 @@ Example::
 """
 
 import argparse
+from dataclasses import dataclass
 import os
 import shutil
 import sys
-from dataclasses import dataclass
 
 import numpy as np
 
+from ._common import run_cli
 from ..errors import BagError, InputDataError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.clock import Unwrapper
 from ..link.sdlog import SdLogReader
-from ._common import run_cli
 
 PROG = 'gyro_noise_import'
 #: LSM6DSO32 temperature sensor output data rate (datasheet: 52 Hz).
@@ -72,6 +87,7 @@ class ImportReport:
         Distinct (gyro_fs_dps, accel_fs_g, odr_hz) used for scaling, in order of appearance.
     epoch : str
         How stamps were anchored.
+
     """
 
     bag: str
@@ -112,14 +128,16 @@ def _anchor(start_time, reader):
         mode = 'rtc' if rtc_head is not None else 'zero'
     if mode == 'rtc':
         if rtc_head is None:
-            raise ParameterError("--start-time rtc: no log header carries an RTC time (rtc_unix_s = 0)")
+            raise ParameterError(
+                '--start-time rtc: no log header carries an RTC time (rtc_unix_s = 0)')
         return 'rtc', rtc_head
     if mode == 'zero':
         return 'zero', None
     try:
         value = float(mode)
     except ValueError as err:
-        raise ParameterError(f"--start-time must be auto, rtc, zero or UNIX seconds, got {start_time!r}") from err
+        raise ParameterError(
+            f'--start-time must be auto, rtc, zero or UNIX seconds, got {start_time!r}') from err
     if not np.isfinite(value) or value < 0:
         raise ParameterError(f'--start-time must be >= 0 UNIX seconds, got {start_time!r}')
     return f'unix:{value!r}', value
@@ -154,6 +172,7 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     topic, temperature_topic : str, keyword-only
         Topic names (a leading '/' is added).
     frame_id : str, keyword-only
+        Frame id of the Imu and Temperature messages.
     gyro_fs_dps, accel_fs_g : int, optional, keyword-only
         Force the scaling (deg/s, g), ignoring headers and acks.
     start_time : str, keyword-only
@@ -176,6 +195,7 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     Returns
     -------
     ImportReport
+
     """
     from ..bag import ImuBagWriter
     from ..bag.bulk import BulkImuBagWriter
@@ -186,7 +206,8 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
         accel_fs_g = lsm.check_accel_fs(accel_fs_g)
     for name, value in (('angular_velocity_variance', angular_velocity_variance),
                         ('linear_acceleration_variance', linear_acceleration_variance),
-                        ('temperature_variance', temperature_variance), ('temperature_rate_hz', temperature_rate_hz)):
+                        ('temperature_variance', temperature_variance),
+                        ('temperature_rate_hz', temperature_rate_hz)):
         if not (np.isfinite(value) and value >= 0):
             raise ParameterError(f'{name} must be finite and >= 0, got {value}')
     imu_topic = _topic(topic)
@@ -202,14 +223,16 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     heads = [f.header for f in reader.files if f.header is not None]
     # until a header or an ack says otherwise, the first readable header's configuration holds (the
     # device cannot change it without writing an ACK frame)
-    assumed = (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads else (None, None, None)
+    assumed = (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads else (
+        None, None, None)
     if not heads and (gyro_fs_dps is None or accel_fs_g is None):
-        # Corruption is never fatal (docs/portenta_link.md): an unreadable header is replaced by the
-        # configuration the first ACK frame carries.
+        # Corruption is never fatal (docs/portenta_link.md): an unreadable header is replaced by
+        # the configuration the first ACK frame carries.
         assumed = _first_acked_config(paths, chunk_bytes)
         if assumed is None:
-            raise InputDataError('no readable log header and no ACK frame with the scales in the files: '
-                                 'give --gyro-fs-dps and --accel-fs-g')
+            raise InputDataError(
+                'no readable log header and no ACK frame with the scales in the files: '
+                'give --gyro-fs-dps and --accel-fs-g')
         reader = SdLogReader(paths, chunk_bytes=chunk_bytes)
     epoch, anchor = _anchor(start_time, reader)
     av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
@@ -236,7 +259,8 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
             t = unwrap.unwrap(block.samples['t_us'])
             if offset_ns is None:
                 if epoch == 'rtc':
-                    # rtc_unix_s is the host time of the header's t_us; unwrap that t_us next to ours
+                    # rtc_unix_s is the host time of the header's t_us; unwrap that t_us next to
+                    # ours
                     d = (int(anchor.t_us) - int(block.samples['t_us'][0])) % (1 << 32)
                     if d >= 1 << 31:
                         d -= 1 << 32
@@ -252,16 +276,20 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
             jumps += int(np.count_nonzero(steps <= 0))
             prev_t = int(t[-1])
             si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
-            writer.write_imu(stamps, si.gyro_rad_s, si.accel_m_s2, angular_velocity_covariance=av_cov,
+            writer.write_imu(stamps, si.gyro_rad_s, si.accel_m_s2,
+                             angular_velocity_covariance=av_cov,
                              linear_acceleration_covariance=la_cov)
             written += block.samples.size
             if temp_topic is not None and odr:
                 # a running phase keeps the decimation even across blocks and ODR changes
-                phase = temp_acc + np.arange(1, block.samples.size + 1) * (temperature_rate_hz / odr)
-                pick = np.flatnonzero(np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
+                phase = temp_acc + np.arange(
+                    1, block.samples.size + 1) * (temperature_rate_hz / odr)
+                pick = np.flatnonzero(
+                    np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
                 temp_acc = float(phase[-1]) % 1.0
                 if pick.size:
-                    writer.write_temperature(stamps[pick], si.temperature_c[pick], variance=temperature_variance)
+                    writer.write_temperature(stamps[pick], si.temperature_c[pick],
+                                             variance=temperature_variance)
                     temp_written += pick.size
             if first is None:
                 first = int(stamps[0])
@@ -274,12 +302,13 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     st = rep.stats
     return ImportReport(bag=out, storage=storage, files=rep.files, samples_written=written,
                         temperature_written=temp_written, samples_lost=st.samples_lost,
-                        samples_flagged_lost=st.samples_flagged_lost, crc_errors=st.crc_errors, resyncs=st.resyncs,
-                        bytes_discarded=st.bytes_discarded, frames_truncated=st.frames_truncated,
-                        corrupt_regions=rep.corrupt_regions, corrupt_region_count=rep.corrupt_region_count,
+                        samples_flagged_lost=st.samples_flagged_lost, crc_errors=st.crc_errors,
+                        resyncs=st.resyncs, bytes_discarded=st.bytes_discarded,
+                        frames_truncated=st.frames_truncated, corrupt_regions=rep.corrupt_regions,
+                        corrupt_region_count=rep.corrupt_region_count,
                         missing_file_indices=rep.missing_file_indices, sequence_id=rep.sequence_id,
-                        first_stamp_ns=first, last_stamp_ns=last, time_jumps=jumps, configurations=tuple(configs),
-                        epoch=epoch)
+                        first_stamp_ns=first, last_stamp_ns=last, time_jumps=jumps,
+                        configurations=tuple(configs), epoch=epoch)
 
 
 def format_report(rep, *, max_regions=20):
@@ -289,39 +318,42 @@ def format_report(rep, *, max_regions=20):
     Parameters
     ----------
     rep : ImportReport
+        The import report.
     max_regions : int, keyword-only
         Corrupt regions listed (all are counted).
 
     Returns
     -------
     str
+
     """
-    lines = [f'{PROG}: sequence {rep.sequence_id}, {len(rep.files)} file(s) -> {rep.bag} ({rep.storage})']
+    lines = [f'{PROG}: sequence {rep.sequence_id}, {len(rep.files)} file(s) -> {rep.bag} '
+             f'({rep.storage})']
     for info in rep.files:
         head = info.header
-        desc = (f'file {head.file_index}, first seq {head.first_seq}' if head is not None else 'header unreadable')
+        desc = (f'file {head.file_index}, first seq {head.first_seq}' if head is not None
+                else 'header unreadable')
         lines.append(f'  {os.path.basename(info.path)}  {info.size_bytes} bytes  {desc}')
     total = rep.samples_written + rep.samples_lost
     pct = 100.0 * rep.samples_lost / total if total else 0.0
     span = (rep.last_stamp_ns - rep.first_stamp_ns) / 1e9
     lines += [
         f'samples written        {rep.samples_written}',
-        f'samples lost           {rep.samples_lost} ({pct:.4f} %; {rep.samples_flagged_lost} flagged by the board)',
-        f'temperature messages   {rep.temperature_written}',
-        f'CRC errors             {rep.crc_errors}',
-        f'resyncs                {rep.resyncs}',
+        f'samples lost           {rep.samples_lost} ({pct:.4f} %; {rep.samples_flagged_lost} '
+        'flagged by the board)', f'temperature messages   {rep.temperature_written}',
+        f'CRC errors             {rep.crc_errors}', f'resyncs                {rep.resyncs}',
         f'bytes discarded        {rep.bytes_discarded}',
         f'truncated frames       {rep.frames_truncated}',
         f'time jumps             {rep.time_jumps}',
         f'missing files          {", ".join(map(str, rep.missing_file_indices)) or "none"}',
-        f'stamps                 {rep.first_stamp_ns / 1e9:.6f} s .. {rep.last_stamp_ns / 1e9:.6f} s '
-        f'({span:.3f} s, epoch {rep.epoch})',
-        'scaling                ' + '; '.join(f'gyro +/-{g} dps, accel +/-{a} g, ODR {o} Hz'
-                                              for g, a, o in rep.configurations),
-        f'corrupt regions        {rep.corrupt_region_count}',
-    ]
+        f'stamps                 {rep.first_stamp_ns / 1e9:.6f} s .. '
+        f'{rep.last_stamp_ns / 1e9:.6f} s ' f'({span:.3f} s, epoch {rep.epoch})',
+        'scaling                ' + '; '.join(f'gyro +/-{g} dps, accel +/-{a} g, ODR {o} Hz' for g,
+                                              a, o in rep.configurations),
+        f'corrupt regions        {rep.corrupt_region_count}',]
     for region in rep.corrupt_regions[:max_regions]:
-        lines.append(f'  {os.path.basename(region.path)} @ {region.offset} (+{region.length} bytes)')
+        lines.append(
+            f'  {os.path.basename(region.path)} @ {region.offset} (+{region.length} bytes)')
     if rep.corrupt_region_count > max_regions:
         lines.append(f'  ... {rep.corrupt_region_count - max_regions} more')
     return '\n'.join(lines)
@@ -334,6 +366,7 @@ def build_parser():
     Returns
     -------
     argparse.ArgumentParser
+
     """
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -346,11 +379,14 @@ def build_parser():
     p.add_argument('--frame-id', default='imu_link')
     p.add_argument('--gyro-fs-dps', type=int, help='force the gyro full scale (deg/s)')
     p.add_argument('--accel-fs-g', type=int, help='force the accelerometer full scale (g)')
-    p.add_argument('--start-time', default='auto', help='auto, rtc, zero, or UNIX seconds of the first sample')
+    p.add_argument('--start-time', default='auto',
+                   help='auto, rtc, zero, or UNIX seconds of the first sample')
     p.add_argument('--temperature-rate-hz', type=float, default=TEMPERATURE_ODR_HZ,
                    help='Temperature messages per second (0: none)')
-    p.add_argument('--angular-velocity-variance', type=float, default=0.0, help='(rad/s)^2, 0 = unknown')
-    p.add_argument('--linear-acceleration-variance', type=float, default=0.0, help='(m/s^2)^2, 0 = unknown')
+    p.add_argument('--angular-velocity-variance', type=float, default=0.0,
+                   help='(rad/s)^2, 0 = unknown')
+    p.add_argument('--linear-acceleration-variance', type=float, default=0.0,
+                   help='(m/s^2)^2, 0 = unknown')
     p.add_argument('--temperature-variance', type=float, default=0.0, help='degC^2, 0 = unknown')
     p.add_argument('--chunk-bytes', type=int, default=1 << 20, help='read size (bytes)')
     return p
@@ -359,9 +395,9 @@ def build_parser():
 def _body(argv):
     args = build_parser().parse_args(argv)
     rep = import_logs(args.logs, args.out, storage=args.storage, topic=args.topic,
-                      temperature_topic=args.temperature_topic, frame_id=args.frame_id, gyro_fs_dps=args.gyro_fs_dps,
-                      accel_fs_g=args.accel_fs_g, start_time=args.start_time,
-                      temperature_rate_hz=args.temperature_rate_hz,
+                      temperature_topic=args.temperature_topic, frame_id=args.frame_id,
+                      gyro_fs_dps=args.gyro_fs_dps, accel_fs_g=args.accel_fs_g,
+                      start_time=args.start_time, temperature_rate_hz=args.temperature_rate_hz,
                       angular_velocity_variance=args.angular_velocity_variance,
                       linear_acceleration_variance=args.linear_acceleration_variance,
                       temperature_variance=args.temperature_variance, chunk_bytes=args.chunk_bytes)
@@ -382,6 +418,7 @@ def main(argv=None):
     -------
     int
         Exit status (0 also when corrupt regions were skipped).
+
     """
     return run_cli(PROG, _body, argv)
 

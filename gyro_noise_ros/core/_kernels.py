@@ -1,9 +1,23 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 numba kernels of the core (private).
 
-Every kernel here is called only through a public wrapper that validates its input (finite values, shapes,
-dtypes); each has a plain-numpy twin in ``test/`` it is checked against. All kernels share one set of
-compilation flags, :data:`JIT_OPTIONS`.
+Every kernel here is called only through a public wrapper that validates its input (finite values,
+shapes, dtypes); each has a plain-numpy twin in ``test/`` it is checked against. All kernels share
+one set of compilation flags, :data:`JIT_OPTIONS`.
 """
 
 import numba
@@ -11,8 +25,9 @@ import numpy as np
 
 #: Compilation flags of every kernel in the package. ``fastmath`` is left off: the kernels feed
 #: estimators that are compared to references at 1e-9 relative, and re-association of long sums
-#: would make results depend on the vector width of the machine. ``cache`` avoids re-JIT on start-up.
-JIT_OPTIONS = dict(cache=True, nogil=True, fastmath=False)
+#: would make results depend on the vector width of the machine. ``cache`` avoids re-JIT on
+#: start-up.
+JIT_OPTIONS = {'cache': True, 'nogil': True, 'fastmath': False}
 
 
 @numba.njit(**JIT_OPTIONS)
@@ -20,10 +35,10 @@ def _fractional_recursion(w, history, c_rev, f, out):  # pragma: no cover - comp
     """
     Run the recursion of paper 000 eq. (2) for ``len(w)`` steps.
 
-    ``history`` holds the last ``L`` outputs (oldest first, zeros before the start, which is how the
-    truncation L(k) = min(k, L) of eq. (5) enters); ``c_rev`` is (c_L, ..., c_1), the GL coefficients
-    of eq. (4) without c_0 = 1, reversed so the inner product runs over contiguous memory.
-    v[k+1] = f v[k] + w[k] - sum_{j=1}^{L} c_j v[k+1-j]. Returns the updated history.
+    ``history`` holds the last ``L`` outputs (oldest first, zeros before the start, which is how
+    the truncation L(k) = min(k, L) of eq. (5) enters); ``c_rev`` is (c_L, ..., c_1), the GL
+    coefficients of eq. (4) without c_0 = 1, reversed so the inner product runs over contiguous
+    memory. v[k+1] = f v[k] + w[k] - sum_{j=1}^{L} c_j v[k+1-j]. Returns the updated history.
     """
     big_l = c_rev.shape[0]
     n = w.shape[0]

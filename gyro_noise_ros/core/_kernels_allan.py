@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 numba kernels of the Allan-deviation estimator (private).
 
@@ -13,9 +27,8 @@ same arithmetic, operation for operation; ``fastmath`` stays off (``JIT_OPTIONS`
 re-associates nor contracts into FMAs.
 """
 
-import numba
-
 from gyro_noise_ros.core._kernels import JIT_OPTIONS
+import numba
 
 #: Terms per fold of the four partial sums into the compensated total. A power of two and a
 #: multiple of 4, so a 4-term group never straddles a fold point.
@@ -95,7 +108,7 @@ def _fold(lanes, tot, j):  # pragma: no cover - compiled
 
 @numba.njit(**JIT_OPTIONS)
 def _finish(lanes, tot, j):  # pragma: no cover - compiled
-    """Current sum of squares of tau ``j`` (lanes folded into a copy of the total)."""
+    """Return the sum of squares of tau ``j`` so far (lanes folded into a copy of the total)."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
     c = tot[j, 1]
@@ -121,7 +134,7 @@ def _add_term(lanes, tot, counts, j, d):  # pragma: no cover - compiled
 @numba.njit(**JIT_OPTIONS)
 def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover - compiled
     """
-    Sums of squared second differences of the phase ``x`` for every tau.
+    Sum the squared second differences of the phase ``x`` for every tau.
 
     Term t of tau j is d = (x[i + 2m] - 2 x[i + m]) + x[i] with i = t * strides[j],
     t = 0 .. n_terms[j] - 1 (paper 001 eq. 7 without the 1/(2 tau^2 n) factor).
@@ -255,7 +268,7 @@ def _acf_push(acf, j, z):  # pragma: no cover - compiled
 
 @numba.njit(**JIT_OPTIONS)
 def _acf_sums(x, ms, acf):  # pragma: no cover - compiled
-    """Feed every m-average z_j = (x[(j+1)m] - x[jm]) / m of the phase ``x`` to :func:`_acf_push`."""
+    """Feed each m-average z_j = (x[(j+1)m] - x[jm]) / m of the phase ``x`` to _acf_push."""
     n_x = x.shape[0]
     for j in range(ms.shape[0]):
         m = ms[j]
@@ -273,13 +286,14 @@ def _accumulate(y, offset, integ, k0, ring, level_pos, n_levels_active, ms, leve
 
     ``k0`` is the number of rate samples already seen (phase points x_0 .. x_k0 exist, x_0 = 0).
     Row L of ``ring`` keeps x_k for k a multiple of 2**L, the last ring.shape[1] = 2 * half + 1 of
-    them; ``level_pos[L]`` is the row position of the newest one. Taus are sorted by m, their levels
-    (``level_of``) are non-decreasing, ``level_end[L]`` counts the taus of levels <= L. Taus of level L
-    use only that row, so their terms start at i = 0 and advance in steps of 2**L (stride 1 for
-    level 0: exact fully overlapping; m is a multiple of 2**L and m / 2**L <= half). Row L + 1 is
-    seeded from row L when row L holds x_0 .. x_{half * 2**L} (nothing overwritten yet); the first
-    tau of level L + 1 has m >= half * 2**L, so its first m-average and term come no earlier.
-    ``next_push[j]`` is the k of the next m-average of tau j. Returns (k, n_levels_active).
+    them; ``level_pos[L]`` is the row position of the newest one. Taus are sorted by m, their
+    levels (``level_of``) are non-decreasing, ``level_end[L]`` counts the taus of levels <= L. Taus
+    of level L use only that row, so their terms start at i = 0 and advance in steps of 2**L
+    (stride 1 for level 0: exact fully overlapping; m is a multiple of 2**L and m / 2**L <= half).
+    Row L + 1 is seeded from row L when row L holds x_0 .. x_{half * 2**L} (nothing overwritten
+    yet); the first tau of level L + 1 has m >= half * 2**L, so its first m-average and term come
+    no earlier. ``next_push[j]`` is the k of the next m-average of tau j. Returns (k,
+    n_levels_active).
     """
     ring_len = ring.shape[1]
     n_levels = ring.shape[0]

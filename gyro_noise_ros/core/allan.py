@@ -1,10 +1,24 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Overlapping Allan deviation of gyro rate data, its confidence intervals and the IEEE 952 noise terms.
+Overlapping Allan deviation of gyro rate data, confidence intervals and IEEE 952 noise terms.
 
 Definitions (paper 001 eqs. 5-7; NIST SP 1065 eqs. 8-14). With rate samples ``y[k]`` (rad/s) at
 ``tau0 = 1 / rate_hz`` the angle (phase) is ``theta[k] = tau0 * sum_{j<k} y[j]`` (``theta[0] = 0``,
-``N + 1`` points for ``N`` samples) and, for an averaging factor ``m`` (``tau = m tau0``), the fully
-overlapping Allan variance is::
+``N + 1`` points for ``N`` samples) and, for an averaging factor ``m`` (``tau = m tau0``), the
+fully overlapping Allan variance is::
 
     AVAR(tau) = 1 / (2 tau^2 n) * sum_{i=0}^{n-1} (theta[i+2m] - 2 theta[i+m] + theta[i])^2,
     n = N + 1 - 2m terms.
@@ -15,17 +29,17 @@ between. All three are unbiased for the same AVAR; they differ only in their EDF
 
 Numerics: the rate's mean is subtracted before the cumulative sum (AVAR is invariant to a constant
 rate offset, exactly) and the cumulative sum is Neumaier-compensated, so each phase point is the
-correctly rounded prefix sum and its error does not grow with the record length. The sums of squares
-run in four lanes folded every 4096 terms into a compensated total. Memory: one float64 phase array
-of N + 1 points plus O(number of taus).
+correctly rounded prefix sum and its error does not grow with the record length. The sums of
+squares run in four lanes folded every 4096 terms into a compensated total. Memory: one float64
+phase array of N + 1 points plus O(number of taus).
 
 Confidence intervals: the dominant power-law noise at each tau is identified by the lag-1
 autocorrelation method (Riley & Greenhall 2004, the method of Stable32) when at least 30 m-averages
-exist, by the B1 ratio (Barnes) when 4 to 29 exist, and otherwise copied from the nearest shorter tau;
-the equivalent degrees of freedom follow Greenhall & Riley (PTTI 2003, "Uncertainty of stability
-variances based on finite differences", eqs. 7-13 and Tables 2-3) with point-sampled phase for
-alpha <= 0 (exact for sampled rate data; ``edf_greenhall(..., stable32=True)`` gives Stable32's
-averaged-phase variant); the bounds are chi-squared (SP 1065 eq. 45).
+exist, by the B1 ratio (Barnes) when 4 to 29 exist, and otherwise copied from the nearest shorter
+tau; the equivalent degrees of freedom follow Greenhall & Riley (PTTI 2003, "Uncertainty of
+stability variances based on finite differences", eqs. 7-13 and Tables 2-3) with point-sampled
+phase for alpha <= 0 (exact for sampled rate data; ``edf_greenhall(..., stable32=True)`` gives
+Stable32's averaged-phase variant); the bounds are chi-squared (SP 1065 eq. 45).
 ``noise_alpha`` is the exponent of the rate PSD S_y(f) ~ f^alpha:
 2 white PM (angle quantization), 1 flicker PM, 0 white FM (angle random walk),
 -1 flicker FM (bias instability), -2 random-walk FM (rate random walk), <= -3 drift (rate ramp).
@@ -34,11 +48,12 @@ Noise terms (IEEE Std 952-1997 annex C; paper 001 Fig. 1)::
 
     AVAR(tau) = 3 Q^2 / tau^2 + N^2 / tau + (2 ln 2 / pi) B^2 + K^2 tau / 3 + R^2 tau^2 / 2
 
-fitted by non-negative weighted least squares in the squared coefficients (:func:`fit_noise_terms`).
+fitted by non-negative weighted least squares in the squared coefficients
+(:func:`fit_noise_terms`).
 """
 
-import math
 from dataclasses import dataclass
+import math
 
 import numpy as np
 import scipy.optimize
@@ -48,11 +63,12 @@ from . import _kernels_allan as _k
 from ..errors import InputDataError, ParameterError
 
 __all__ = ['AdevMinimum', 'AllanAccumulator', 'AllanResult', 'NoiseTerms', 'NoiseTermsCustomary',
-           'allan_deviation', 'bias_instability_from_minimum', 'confidence_bounds', 'dense_factors',
-           'edf_greenhall', 'fit_noise_terms', 'octave_factors', 'DEFAULT_CONFIDENCE',
-           'DEFAULT_MAX_EXACT_M', 'NOISE_TYPE_NAMES']
+           'allan_deviation', 'bias_instability_from_minimum', 'confidence_bounds',
+           'dense_factors', 'edf_greenhall', 'fit_noise_terms', 'octave_factors',
+           'DEFAULT_CONFIDENCE', 'DEFAULT_MAX_EXACT_M', 'NOISE_TYPE_NAMES']
 
-#: Default two-sided confidence of the ADEV bounds (Stable32's "Confidence Factor = 0.683", 1 sigma).
+#: Default two-sided confidence of the ADEV bounds (Stable32's "Confidence Factor = 0.683", 1
+#: sigma).
 DEFAULT_CONFIDENCE = 0.683
 
 #: Averaging factors above this are never generated by 'octave' / 'dense' in the accumulator
@@ -107,7 +123,8 @@ class AllanResult:
     edf : numpy.ndarray
         Equivalent degrees of freedom of ``avar`` (Greenhall & Riley 2003).
     ci_low, ci_high : numpy.ndarray
-        Bounds of ``adev`` at the two-sided confidence ``confidence`` (chi-squared, SP 1065 eq. 45).
+        Bounds of ``adev`` at the two-sided confidence ``confidence`` (chi-squared, SP 1065 eq.
+        45).
     noise_alpha : numpy.ndarray
         Identified power-law exponent of the rate PSD at each tau (int64, see module doc).
     noise_type : tuple of str
@@ -118,6 +135,7 @@ class AllanResult:
         Sample rate (Hz).
     n_samples : int
         Number of rate samples analysed (phase data: number of phase points minus one).
+
     """
 
     tau_s: np.ndarray
@@ -153,6 +171,7 @@ def octave_factors(n_samples):
     numpy.ndarray
         Averaging factors (int64); empty when ``n_samples < 4``. The bound N/4 is Stable32's
         (the largest tau is a quarter of the record, leaving N/2 + 1 overlapping terms).
+
     """
     top = int(n_samples) // 4
     if top < 1:
@@ -175,6 +194,7 @@ def dense_factors(n_samples, *, per_decade=10):
     -------
     numpy.ndarray
         Sorted unique factors ``round(10**(k / per_decade))`` (int64), starting at 1.
+
     """
     if int(per_decade) < 1:
         raise ParameterError(f'per_decade must be >= 1, got {per_decade!r}')
@@ -189,12 +209,14 @@ def dense_factors(n_samples, *, per_decade=10):
 def _explicit_factors(taus):
     arr = np.asarray(taus)
     if arr.ndim != 1 or arr.size == 0:
-        raise ParameterError(f"taus must be 'octave', 'dense' or a non-empty 1-D array of averaging "
-                             f'factors, got {taus!r}')
+        raise ParameterError(
+            f"taus must be 'octave', 'dense' or a non-empty 1-D array of averaging "
+            f'factors, got {taus!r}')
     if not np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.complexfloating):
         raise ParameterError(f'taus must hold integer averaging factors, got dtype {arr.dtype}')
     if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)) or np.any(arr < 1):
-        raise ParameterError(f'taus must be integer averaging factors >= 1 (samples), got {taus!r}')
+        raise ParameterError(
+            f'taus must be integer averaging factors >= 1 (samples), got {taus!r}')
     return np.unique(arr.astype(np.int64))
 
 
@@ -297,6 +319,7 @@ def allan_deviation(data, rate_hz, *, taus='octave', data_type='rate', overlappi
         Not 1-D, NaN/Inf, or too few samples for any tau.
     ParameterError
         Bad ``rate_hz``, ``taus``, ``data_type``, ``confidence`` or ``offset_rad_per_s``.
+
     """
     rate = _check_rate(rate_hz)
     conf = _check_confidence(confidence)
@@ -332,7 +355,8 @@ def allan_deviation(data, rate_hz, *, taus='octave', data_type='rate', overlappi
             raise _non_finite_error(arr, 'data')
     else:
         if offset_rad_per_s is not None:
-            raise ParameterError('offset_rad_per_s applies to rate data only (data_type=\'phase\')')
+            raise ParameterError(
+                "offset_rad_per_s applies to rate data only (data_type='phase')")
         if not np.all(np.isfinite(arr)):
             raise _non_finite_error(arr, 'data')
         # Phase in units of (rate x samples) so both data types share the kernels; removing the
@@ -357,7 +381,8 @@ def _check_offset(offset):
     try:
         o = float(offset)
     except (TypeError, ValueError) as err:
-        raise ParameterError(f'offset_rad_per_s must be a finite number (rad/s), got {offset!r}') from err
+        raise ParameterError(
+            f'offset_rad_per_s must be a finite number (rad/s), got {offset!r}') from err
     if not math.isfinite(o):
         raise ParameterError(f'offset_rad_per_s must be a finite number (rad/s), got {offset!r}')
     return o
@@ -379,9 +404,9 @@ def _assemble(ms, strides, n_terms, sums, acf, n, rate, conf):
     lo, hi = confidence_bounds(avar, edf, conf)
     adev = np.sqrt(avar)
     names = tuple(NOISE_TYPE_NAMES[int(max(-3, min(2, a)))] for a in alpha)
-    fields = dict(tau_s=ms / rate, m=ms.copy(), adev=adev, avar=avar, n_terms=n_terms.copy(),
-                  stride=strides.copy(), edf=edf, ci_low=np.sqrt(lo), ci_high=np.sqrt(hi),
-                  noise_alpha=alpha)
+    fields = {'tau_s': ms / rate, 'm': ms.copy(), 'adev': adev, 'avar': avar,
+              'n_terms': n_terms.copy(), 'stride': strides.copy(), 'edf': edf,
+              'ci_low': np.sqrt(lo), 'ci_high': np.sqrt(hi), 'noise_alpha': alpha}
     for arr in fields.values():
         arr.flags.writeable = False   # the dataclass is frozen; so are its arrays
     return AllanResult(**fields, noise_type=names, confidence=conf, rate_hz=rate, n_samples=int(n))
@@ -566,6 +591,7 @@ def edf_greenhall(alpha, m, n_phase, *, stride=1, stable32=False):
     -------
     float
         EDF (> 0).
+
     """
     alpha = int(alpha)
     m = int(m)
@@ -589,7 +615,8 @@ def edf_greenhall(alpha, m, n_phase, *, stride=1, stable32=False):
             inv = (a0 - a1 / r) / r
         else:
             mp = _JMAX / r
-            inv = _basic_sum(_JMAX, _JMAX, mp, math.inf, alpha) / (_sz(0.0, math.inf, alpha) ** 2 * _JMAX)
+            inv = _basic_sum(
+                _JMAX, _JMAX, mp, math.inf, alpha) / (_sz(0.0, math.inf, alpha) ** 2 * _JMAX)
     elif alpha == 1:
         b0, b1 = _TABLE3_D2
         if jj <= _JMAX:
@@ -602,8 +629,10 @@ def edf_greenhall(alpha, m, n_phase, *, stride=1, stable32=False):
             inv = _basic_sum(_JMAX, _JMAX, mp, mp, 1) / ((b0 + b1 * math.log(m)) ** 2 * _JMAX)
     else:
         if math.ceil(r) <= 2:
-            # only lags that are whole multiples of tau correlate for white PM (sx vanishes off them)
-            inv = _basic_sum(jj, big_m, s_fac, m, 2, only_multiples=True) / (_sz(0.0, m, 2) ** 2 * big_m)
+            # only lags that are whole multiples of tau correlate for white PM (sx vanishes off
+            # them)
+            inv = _basic_sum(
+                jj, big_m, s_fac, m, 2, only_multiples=True) / (_sz(0.0, m, 2) ** 2 * big_m)
         else:
             a0, a1 = _TABLE2_D2[2]
             inv = (a0 - a1 / r) / big_m
@@ -627,6 +656,7 @@ def confidence_bounds(avar, edf, confidence=DEFAULT_CONFIDENCE):
     -------
     (numpy.ndarray, numpy.ndarray)
         Lower and upper bounds of the *variance*; take the square root for ADEV bounds.
+
     """
     conf = _check_confidence(confidence)
     avar = np.asarray(avar, dtype=np.float64)
@@ -656,6 +686,7 @@ class NoiseTermsCustomary:
         Rate random walk K (deg/h/sqrt(h)).
     rate_ramp_deg_per_h2 : float
         Rate ramp R (deg/h^2).
+
     """
 
     quantization_deg: float
@@ -692,6 +723,7 @@ class NoiseTerms:
         Range of tau used in the fit (s).
     rms_relative_residual : float
         Root-mean-square of (model - AVAR) / AVAR over the fitted taus.
+
     """
 
     quantization_rad: float
@@ -717,6 +749,7 @@ class NoiseTerms:
         -------
         numpy.ndarray
             AVAR ((rad/s)^2); unfitted terms contribute nothing.
+
         """
         tau = np.asarray(tau_s, dtype=np.float64)
         coef = np.nan_to_num(np.array(self._coefficients()), nan=0.0)
@@ -735,16 +768,20 @@ class NoiseTerms:
         -------
         numpy.ndarray
             ADEV (rad/s).
+
         """
         return np.sqrt(self.avar_model(tau_s))
 
     def as_dict(self):
         """
-        Return the terms as a flat dict: SI values, customary values and the fit range (units in keys).
+        Return the terms as a flat dict.
+
+        SI values, customary values and the fit range (units in keys).
 
         Returns
         -------
         dict
+
         """
         out = {name: getattr(self, name) for name in (
             'quantization_rad', 'angle_random_walk_rad_per_sqrt_s', 'bias_instability_rad_per_s',
@@ -767,15 +804,20 @@ class NoiseTerms:
         Returns
         -------
         NoiseTermsCustomary
+
         """
         return NoiseTermsCustomary(
             quantization_deg=self.quantization_rad * _RAD2DEG,
             # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
-            angle_random_walk_deg_per_sqrt_h=self.angle_random_walk_rad_per_sqrt_s * _RAD2DEG * 60.0,
+            angle_random_walk_deg_per_sqrt_h=self.angle_random_walk_rad_per_sqrt_s
+            * _RAD2DEG
+            * 60.0,
             bias_instability_deg_per_h=self.bias_instability_rad_per_s * _RAD2DEG * 3600.0,
-            rate_random_walk_deg_per_h_sqrt_h=(self.rate_random_walk_rad_per_s_sqrt_s * _RAD2DEG
-                                               * 3600.0 * 60.0),
-            rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * _RAD2DEG * 3600.0 ** 2)
+            rate_random_walk_deg_per_h_sqrt_h=(
+                self.rate_random_walk_rad_per_s_sqrt_s * _RAD2DEG * 3600.0 * 60.0
+            ),
+            rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * _RAD2DEG * 3600.0**2,
+        )
 
     def kalibr(self):
         """
@@ -787,6 +829,7 @@ class NoiseTerms:
             ``gyroscope_noise_density`` = N (rad/s/sqrt(Hz)) and ``gyroscope_random_walk`` = K
             (rad/s^2/sqrt(Hz)). Kalibr's README advises inflating both (e.g. x10) for real use;
             that choice is left to the user. NaN (unfitted) is reported as NaN.
+
         """
         return {'gyroscope_noise_density': float(self.angle_random_walk_rad_per_sqrt_s),
                 'gyroscope_random_walk': float(self.rate_random_walk_rad_per_s_sqrt_s)}
@@ -826,6 +869,7 @@ def fit_noise_terms(result, *, terms=_TERM_NAMES, tau_range_s=None, weighting='r
     Returns
     -------
     NoiseTerms
+
     """
     terms = tuple(terms)
     bad = [t for t in terms if t not in _TERM_NAMES]
@@ -839,7 +883,8 @@ def fit_noise_terms(result, *, terms=_TERM_NAMES, tau_range_s=None, weighting='r
     if tau_range_s is not None:
         lo, hi = (float(v) for v in tau_range_s)
         if not lo <= hi:
-            raise ParameterError(f'tau_range_s must be (low, high) with low <= high, got {tau_range_s!r}')
+            raise ParameterError(
+                f'tau_range_s must be (low, high) with low <= high, got {tau_range_s!r}')
         keep &= (tau >= lo) & (tau <= hi)
     cols = [_TERM_NAMES.index(t) for t in terms]
     if keep.sum() < len(cols):
@@ -860,9 +905,10 @@ def fit_noise_terms(result, *, terms=_TERM_NAMES, tau_range_s=None, weighting='r
     rms = float(np.sqrt(np.mean(((model - avar_k) / avar_k) ** 2)))
     q, n_, b_, k_, r_ = np.sqrt(coef)
     return NoiseTerms(quantization_rad=float(q), angle_random_walk_rad_per_sqrt_s=float(n_),
-                      bias_instability_rad_per_s=float(b_), rate_random_walk_rad_per_s_sqrt_s=float(k_),
-                      rate_ramp_rad_per_s2=float(r_), terms=terms, tau_min_s=float(tau_k[0]),
-                      tau_max_s=float(tau_k[-1]), rms_relative_residual=rms)
+                      bias_instability_rad_per_s=float(b_),
+                      rate_random_walk_rad_per_s_sqrt_s=float(k_), rate_ramp_rad_per_s2=float(r_),
+                      terms=terms, tau_min_s=float(tau_k[0]), tau_max_s=float(tau_k[-1]),
+                      rms_relative_residual=rms)
 
 
 @dataclass(frozen=True)
@@ -884,6 +930,7 @@ class AdevMinimum:
     at_longest_tau : bool
         True when the minimum is the last tau: the curve has not turned up yet, so the value is
         only an upper bound of B.
+
     """
 
     bias_instability_rad_per_s: float
@@ -905,14 +952,15 @@ def bias_instability_from_minimum(result):
     Returns
     -------
     AdevMinimum
+
     """
     adev = np.asarray(result.adev)
     if adev.size == 0:
         raise InputDataError('result has no taus')
     j = int(np.argmin(adev))
     b = float(adev[j] / math.sqrt(_B_FACTOR))
-    return AdevMinimum(bias_instability_rad_per_s=b, bias_instability_deg_per_h=b * _RAD2DEG * 3600.0,
-                       tau_s=float(result.tau_s[j]), adev_min_rad_per_s=float(adev[j]),
+    return AdevMinimum(bias_instability_rad_per_s=b, bias_instability_deg_per_h=b * _RAD2DEG
+                       * 3600.0, tau_s=float(result.tau_s[j]), adev_min_rad_per_s=float(adev[j]),
                        at_longest_tau=j == adev.size - 1)
 
 
@@ -954,14 +1002,18 @@ class AllanAccumulator:
         Constant removed from the rate before integration (rad/s). Default: the mean of the first
         batch. :func:`allan_deviation` defaults to the mean of all data, so the two agree to
         rounding (about 1e-12 relative) unless the same offset is passed to both.
+
     """
 
     def __init__(self, rate_hz, *, taus='octave', max_exact_m=DEFAULT_MAX_EXACT_M,
                  confidence=DEFAULT_CONFIDENCE, offset_rad_per_s=None):
         self._rate = _check_rate(rate_hz)
         self._conf = _check_confidence(confidence)
-        if isinstance(max_exact_m, bool) or not isinstance(max_exact_m, (int, np.integer)) or max_exact_m < 1:
-            raise ParameterError(f'max_exact_m must be an integer >= 1 (samples), got {max_exact_m!r}')
+        if isinstance(
+                max_exact_m, bool) or not isinstance(max_exact_m,
+                                                     (int, np.integer)) or max_exact_m < 1:
+            raise ParameterError(
+                f'max_exact_m must be an integer >= 1 (samples), got {max_exact_m!r}')
         self._half = int(max_exact_m)
         if isinstance(taus, str):
             if taus == 'octave':
@@ -1007,12 +1059,12 @@ class AllanAccumulator:
 
     @property
     def n_samples(self):
-        """Number of rate samples ingested so far."""
+        """Count the rate samples ingested so far."""
         return self._k
 
     @property
     def offset_rad_per_s(self):
-        """The constant removed before integration (rad/s), None before the first batch."""
+        """Return the constant removed before integration (rad/s), None before the first batch."""
         return self._offset
 
     @property
@@ -1030,6 +1082,7 @@ class AllanAccumulator:
         ----------
         rate : array_like
             1-D angular rate samples (rad/s), finite.
+
         """
         arr = _as_samples(rate, 'rate')
         if arr.size == 0:
@@ -1066,6 +1119,7 @@ class AllanAccumulator:
         ------
         InputDataError
             Too few samples for any tau so far.
+
         """
         n = self._k
         if self._kind == 'explicit':

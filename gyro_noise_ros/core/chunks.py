@@ -1,16 +1,31 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Streaming chunker, per-chunk statistics and per-sequence summaries (paper 000 sections 3.2-3.5).
 
-A sequence of angular-rate samples is cut into fixed-length chunks (10,000 by default, as in the paper);
-per chunk the bias (mean) and variance are taken, and the fractional order is identified by both methods
-(:mod:`.fractional`). Per sequence the paper tabulates:
+A sequence of angular-rate samples is cut into fixed-length chunks (10,000 by default, as in the
+paper); per chunk the bias (mean) and variance are taken, and the fractional order is identified by
+both methods (:mod:`.fractional`). Per sequence the paper tabulates:
 
-* Table 3, offset drift: defined here as the least-squares slope of the chunk bias against the chunk mid
-  time, in rate per time (rad/s per s inside; (deg/s)/h in reports). The paper gives it in "deg/h" without a
-  definition; with the bias in deg/s, its numbers read as (deg/s) per hour: integrating Table 3 over the
-  ten ~12 h sequences gives a bias change of ~3.5 deg/s, which matches the paper's "offset increased from
-  0.775 to 4.242". A slope (not the mean absolute chunk-to-chunk change) is used because chunk-to-chunk
-  differences are dominated by the chunk-mean noise, ~1000x the drift (see docs/analysis.md).
+* Table 3, offset drift: defined here as the least-squares slope of the chunk bias against the
+  chunk mid time, in rate per time (rad/s per s inside; (deg/s)/h in reports). The paper gives it
+  in "deg/h" without a definition; with the bias in deg/s, its numbers read as (deg/s) per hour:
+  integrating Table 3 over the ten ~12 h sequences gives a bias change of ~3.5 deg/s, which matches
+  the paper's "offset increased from 0.775 to 4.242". A slope (not the mean absolute chunk-to-chunk
+  change) is used because chunk-to-chunk differences are dominated by the chunk-mean noise, ~1000x
+  the drift (see docs/analysis.md).
 * Table 4, the mean of the chunk variances and the variance of the chunk variances;
 * Tables 5 and 6, the mean and the variance of the chunk orders of each method.
 
@@ -39,9 +54,10 @@ class Chunker:
 
     Notes
     -----
-    ``push`` accepts 1-D samples or 2-D ``(n, axes)`` arrays (one column per axis); chunks are returned
-    as new arrays (never views of the caller's buffer). The incomplete tail stays available as
-    :attr:`tail` and is counted in :attr:`tail_samples`, for reports.
+    ``push`` accepts 1-D samples or 2-D ``(n, axes)`` arrays (one column per axis); chunks are
+    returned as new arrays (never views of the caller's buffer). The incomplete tail stays
+    available as :attr:`tail` and is counted in :attr:`tail_samples`, for reports.
+
     """
 
     def __init__(self, size=DEFAULT_CHUNK_SIZE):
@@ -67,6 +83,7 @@ class Chunker:
         Returns
         -------
         list of numpy.ndarray
+
         """
         samples = np.asarray(samples, dtype=np.float64)
         if samples.ndim not in (1, 2):
@@ -95,14 +112,14 @@ class Chunker:
 
     @property
     def tail(self):
-        """The incomplete tail (fewer than ``size`` samples), as a new array."""
+        """Copy the incomplete tail into a new array (fewer than ``size`` samples)."""
         if not self._parts:
             return np.empty(0)
         return np.concatenate(self._parts)
 
     @property
     def tail_samples(self):
-        """Number of samples in the incomplete tail."""
+        """Count the samples in the incomplete tail."""
         return self._buffered
 
 
@@ -117,6 +134,7 @@ class ChunkMoments:
         Chunk mean (input unit, rad/s here).
     variance : float
         Chunk variance, ddof = 1 (squared input unit).
+
     """
 
     bias: float
@@ -135,10 +153,12 @@ def chunk_moments(chunk):
     Returns
     -------
     ChunkMoments
+
     """
     v = np.asarray(chunk, dtype=np.float64)
     if v.ndim != 1 or v.shape[0] < 2:
-        raise InputDataError(f'a chunk needs at least 2 samples in one dimension, got shape {v.shape}')
+        raise InputDataError(
+            f'a chunk needs at least 2 samples in one dimension, got shape {v.shape}')
     if not np.all(np.isfinite(v)):
         raise InputDataError(f'chunk has {int((~np.isfinite(v)).sum())} NaN/Inf sample(s)')
     return ChunkMoments(float(v.mean()), float(v.var(ddof=1)))
@@ -163,6 +183,7 @@ class DriftEstimate:
         Time between the first and last chunk mid-times (s).
     stderr_ols : float
         The ordinary least-squares standard error (independent chunk biases assumed).
+
     """
 
     slope: float
@@ -192,15 +213,18 @@ def offset_drift(t_s, bias):
     -------
     DriftEstimate
         NaN slope for fewer than 2 chunks.
+
     """
     t = np.asarray(t_s, dtype=np.float64)
     b = np.asarray(bias, dtype=np.float64)
     if t.shape != b.shape or t.ndim != 1:
-        raise InputDataError(f't_s and bias must be 1-D of equal length, got {t.shape} and {b.shape}')
+        raise InputDataError(
+            f't_s and bias must be 1-D of equal length, got {t.shape} and {b.shape}')
     ok = np.isfinite(t) & np.isfinite(b)
     t, b = t[ok], b[ok]
     if t.size < 2 or np.ptp(t) == 0:
-        return DriftEstimate(float('nan'), float('nan'), float(b.mean()) if b.size else float('nan'), 0.0)
+        return DriftEstimate(float('nan'), float('nan'), float(b.mean()) if b.size
+                             else float('nan'), 0.0)
     tc = t - t.mean()
     sxx = float(tc @ tc)
     slope = float(tc @ (b - b.mean()) / sxx)
@@ -216,18 +240,18 @@ def offset_drift(t_s, bias):
 
 def drift_stderr(t_s, bias):
     """
-    Return a standard error of the least-squares drift slope that holds for correlated chunk biases.
+    Return a standard error of the drift slope that holds for correlated chunk biases.
 
-    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias: 0.5-0.9 on the
-    ADIS16405 runs), and the ordinary least-squares error then falls 5x short of the real spread of
-    the slope across runs. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k - mean t) / Sxx`` and
-    ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random walk included)
-    ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} - b_k)^2]`` the
-    variogram of the chunk biases (Cressie 1993, eq. 2.4.5). ``D`` is estimated from the
-    detrended biases (lags up to half the run, held constant beyond); detrending keeps a real
-    drift from inflating its own error but removes some long-lag variance, so on the ADIS16405
-    runs this error is still 1-3x below the spread of slopes across runs (docs/analysis.md).
-    The Newey-West (Bartlett, ``ceil(n^(1/3))`` lags) error is
+    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias: 0.5-0.9 on
+    the ADIS16405 runs), and the ordinary least-squares error then falls 5x short of the real
+    spread of the slope across runs. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k - mean t) /
+    Sxx`` and ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random walk
+    included) ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} - b_k)^2]``
+    the variogram of the chunk biases (Cressie 1993, eq. 2.4.5). ``D`` is estimated from the
+    detrended biases (lags up to half the run, held constant beyond); detrending keeps a real drift
+    from inflating its own error but removes some long-lag variance, so on the ADIS16405 runs this
+    error is still 1-3x below the spread of slopes across runs (docs/analysis.md). The Newey-West
+    (Bartlett, ``ceil(n^(1/3))`` lags) error is
     computed too and the larger of the two returned (the variogram estimate can come out
     negative or tiny on short records). Chunks are taken as equally spaced.
 
@@ -242,6 +266,7 @@ def drift_stderr(t_s, bias):
     -------
     float
         Standard error of the slope (rate unit per second); NaN with fewer than 3 chunks.
+
     """
     t = np.asarray(t_s, dtype=np.float64)
     b = np.asarray(bias, dtype=np.float64)
@@ -297,6 +322,7 @@ class SequenceSummary:
     alpha_var_modes, alpha_corr_modes : tuple of (float, int)
         (mean order, chunks) of each mode when the chunk orders fall in separate basins
         (:func:`order_modes`); empty when the distribution is unimodal, so the mean is meaningful.
+
     """
 
     chunks: int
@@ -315,8 +341,8 @@ class SequenceSummary:
     alpha_corr_modes: tuple = ()
 
 
-def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0, ties_var=0,
-                       ties_corr=0):
+def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0,
+                       ties_var=0, ties_corr=0):
     """
     Summarise per-chunk results of one sequence and axis (paper 000 Tables 3-6).
 
@@ -334,6 +360,7 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
     Returns
     -------
     SequenceSummary
+
     """
     bias = np.asarray(bias, dtype=np.float64)
     variance = np.asarray(variance, dtype=np.float64)
@@ -348,25 +375,27 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
     mv, vv = mean_var(variance)
     av_m, av_v = mean_var(alpha_var)
     ac_m, ac_v = mean_var(alpha_corr)
-    return SequenceSummary(
-        chunks=int(bias.size), tail_samples=int(tail_samples),
-        bias_mean=float(np.nanmean(bias)) if bias.size else float('nan'),
-        drift=offset_drift(t_mid_s, bias), mean_variance=mv, variance_of_variances=vv,
-        alpha_var_mean=av_m, alpha_var_variance=av_v, alpha_corr_mean=ac_m, alpha_corr_variance=ac_v,
-        ties_var=int(ties_var), ties_corr=int(ties_corr), alpha_var_modes=order_modes(alpha_var),
-        alpha_corr_modes=order_modes(alpha_corr))
+    return SequenceSummary(chunks=int(bias.size), tail_samples=int(tail_samples),
+                           bias_mean=float(np.nanmean(bias)) if bias.size else float('nan'),
+                           drift=offset_drift(t_mid_s, bias), mean_variance=mv,
+                           variance_of_variances=vv, alpha_var_mean=av_m, alpha_var_variance=av_v,
+                           alpha_corr_mean=ac_m, alpha_corr_variance=ac_v, ties_var=int(ties_var),
+                           ties_corr=int(ties_corr), alpha_var_modes=order_modes(alpha_var),
+                           alpha_corr_modes=order_modes(alpha_corr))
 
 
 #: Smallest gap between sorted chunk orders that separates two modes (order units). The model's
-#: 0/1 alias puts basins ~1.0 apart; the paper's spread of sequence means is 0.009 (variance method)
-#: and of chunk orders ~0.4 (correlation method, a wide unimodal cloud), hence also the 3x rule.
+#: 0/1 alias puts basins ~1.0 apart; the paper's spread of sequence means is 0.009 (variance
+#: method) and of chunk orders ~0.4 (correlation method, a wide unimodal cloud), hence also the 3x
+#: rule.
 MODE_GAP = 0.3
 
 
 def order_modes(orders, *, gap=MODE_GAP):
     """
-    Split chunk orders into modes when they fall in separate basins (issue 11: the mean of three
-    chunks at 0.02 and three at 1.02 is 0.52, where no chunk is).
+    Split chunk orders into modes when they fall in separate basins.
+
+    The mean of three chunks at 0.02 and three at 1.02 is 0.52, where no chunk is (issue 11).
 
     Sorted finite orders are cut at every gap wider than ``gap`` and wider than 3x the pooled
     standard deviation inside the pieces; with at least two pieces of 2 or more chunks the

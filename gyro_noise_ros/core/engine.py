@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
@@ -17,26 +31,28 @@ runs:
    statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
    :meth:`NoiseEngine.health` are computed.
 
-Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming, the
-period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the first
-:data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). At the end (:meth:`NoiseEngine.counts`,
-:meth:`NoiseEngine.summary`) the estimate over the whole run replaces it: the Allan taus are rescaled to it
-(tau = m / rate), and the counts report the method, the stamp jitter and the disagreement warnings.
+Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming,
+the period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the
+first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). At the end
+(:meth:`NoiseEngine.counts`, :meth:`NoiseEngine.summary`) the estimate over the whole run replaces
+it: the Allan taus are rescaled to it (tau = m / rate), and the counts report the method, the stamp
+jitter and the disagreement warnings.
 
-*Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger than
-``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples when it is a whole
-number of periods (within 6 robust sigmas of the step scatter, 0.1-0.45 of a period) or 2.5 periods and
-more. A long step of a fractional number of periods below that is a correction of the stamping clock
-(a driver re-anchoring its device-clock map, a host clock slewing: every later stamp stays on the
-grid), counted as a clock step (``StreamCounts.clock_steps``), not as loss.
-*Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps shorter
-than half a period): a long step followed by a burst is jitter, not loss, so single steps are not read.
-Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate) + 1 - n`` when it
-exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the run (the timebase
-estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single step to split at). A step <= 0 is an out-of-order (or repeated) stamp: counted, never
-reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap
-(the hole is seen before the late sample arrives; the engine does not look back to fill it).
-The ``gap_policy`` decides what a gap does to the chunk it falls in:
+*Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger
+than ``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples when it
+is a whole number of periods (within 6 robust sigmas of the step scatter, 0.1-0.45 of a period) or
+2.5 periods and more. A long step of a fractional number of periods below that is a correction of
+the stamping clock (a driver re-anchoring its device-clock map, a host clock slewing: every later
+stamp stays on the grid), counted as a clock step (``StreamCounts.clock_steps``), not as loss.
+*Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps
+shorter than half a period): a long step followed by a burst is jitter, not loss, so single steps
+are not read. Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate)
++ 1 - n`` when it exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the
+run (the timebase estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single
+step to split at). A step <= 0 is an out-of-order (or repeated) stamp: counted, never reordered,
+never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap (the
+hole is seen before the late sample arrives; the engine does not look back to fill it). The
+``gap_policy`` decides what a gap does to the chunk it falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
 * ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
@@ -61,9 +77,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
-from .fractional import DEFAULT_MEMORY, OrderIdentifier, default_grid
 from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
+from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
+from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
 from .timebase import rescale_allan, TimebaseTracker
 from ..errors import InputDataError, ParameterError
 
@@ -73,8 +89,8 @@ AXES = ('x', 'y', 'z')
 GAP_POLICIES = ('flag', 'split', 'drop')
 #: Stamps used to estimate the sample rate when it is not configured (16 timebase blocks).
 RATE_ESTIMATE_SAMPLES = 16 * 64 + 1
-#: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the caller,
-#: or failing identification (e.g. a constant chunk).
+#: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the
+#: caller, or failing identification (e.g. a constant chunk).
 STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
 _NS = 1_000_000_000
@@ -410,8 +426,8 @@ class StreamCounts:
     discarded_samples, discarded_partials : int
         Samples and partial chunks thrown away by the 'split' policy.
     rate_hz : float
-        Sample rate (Hz): configured, else the :mod:`.timebase` estimate over everything so far; NaN
-        while still unknown.
+        Sample rate (Hz): configured, else the :mod:`.timebase` estimate over everything so far;
+        NaN while still unknown.
     duration_s : float
         Last minus first stamp (s).
     rate_method : str
@@ -425,6 +441,7 @@ class StreamCounts:
     clock_steps : int
         Long steps (regular stamps) that were not a whole number of periods: corrections of the
         stamping clock, paid back by other steps, not lost samples.
+
     """
 
     samples: int
@@ -468,6 +485,7 @@ class AxisSummary:
         band-limited short taus left out (:mod:`.allan_readout`).
     datasheet : allan_readout.DatasheetTerms or None
         Bias stability (first ADEV minimum), ARW at 1 s, fit quality.
+
     """
 
     axis: str
@@ -623,12 +641,13 @@ class NoiseEngine:
         self._timebase.update(stamps)
         g = np.ascontiguousarray(g[:, self._cols])
         if not self._classified:
-            # Held even with a configured rate: the stamp pattern (regular or bursty) decides how loss
-            # is read.
+            # Held even with a configured rate: the stamp pattern (regular or bursty) decides how
+            # loss is read.
             self._pending.append((stamps, g, temp))
             held = sum(p[0].shape[0] for p in self._pending)
             if held < RATE_ESTIMATE_SAMPLES:
-                if held >= _EARLY_CHECK and len(self._pending) == 1 or held - n < _EARLY_CHECK <= held:
+                if held >= _EARLY_CHECK and len(
+                        self._pending) == 1 or held - n < _EARLY_CHECK <= held:
                     self._early_check()
                 return []
             return self._release_pending()
@@ -640,8 +659,9 @@ class NoiseEngine:
         bad = int(np.count_nonzero(np.diff(held) <= 0))
         if bad > 0.1 * (held.shape[0] - 1):
             self._pending = []
-            raise InputDataError(f'cannot estimate the sample rate: {bad} of the first {held.shape[0] - 1} '
-                                 'stamp steps are not increasing')
+            raise InputDataError(
+                f'cannot estimate the sample rate: {bad} of the first {held.shape[0] - 1} '
+                'stamp steps are not increasing')
 
     def _release_pending(self):
         stamps = np.concatenate([p[0] for p in self._pending])
@@ -674,7 +694,8 @@ class NoiseEngine:
         self._bursty = bool(est.bursty)
         if self._bursty:
             rate = _NS / self._period_ns
-            rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(est.stamp_rate_se_hz) else 0.0
+            rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(
+                est.stamp_rate_se_hz) else 0.0
             self._allowance = (2.0 * est.max_step_s * rate + 6.0 * est.jitter_s * rate
                                + 3.0 * rel_se * self.config.chunk_size + 1.0)
 
@@ -928,15 +949,15 @@ class NoiseEngine:
         if self._bursty:
             lost = est.loss_samples if est is not None else 0
             gaps = self._chunk_loss_events
-        return StreamCounts(
-            samples=self._samples, samples_lost=lost, gaps=gaps, out_of_order=self._out_of_order,
-            chunks=self._chunk_index, tail_samples=self._buffered + held,
-            discarded_samples=self._discarded, discarded_partials=self._discarded_partials,
-            rate_hz=rate,
-            duration_s=(self._last_ns - self._first_ns) / 1e9 if self._first_ns is not None else 0.0,
-            rate_method=est.method if est is not None else '', bursty=self._bursty,
-            jitter_s=est.jitter_s if est is not None else _NAN, timebase=est,
-            clock_steps=self._clock_steps)
+        return StreamCounts(samples=self._samples, samples_lost=lost, gaps=gaps,
+                            out_of_order=self._out_of_order, chunks=self._chunk_index,
+                            tail_samples=self._buffered + held, discarded_samples=self._discarded,
+                            discarded_partials=self._discarded_partials, rate_hz=rate,
+                            duration_s=(self._last_ns - self._first_ns) / 1e9
+                            if self._first_ns is not None else 0.0, rate_method=est.method
+                            if est is not None else '', bursty=self._bursty, jitter_s=est.jitter_s
+                            if est is not None else _NAN, timebase=est,
+                            clock_steps=self._clock_steps)
 
     def timebase(self):
         """
@@ -945,6 +966,7 @@ class NoiseEngine:
         Returns
         -------
         timebase.RateEstimate or None
+
         """
         n = self._timebase.samples
         if self._estimate_cache[0] == n:

@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Fractional-order identification of gyroscope noise (paper 000, section 2, eqs. 1-14).
 
@@ -8,24 +22,24 @@ difference (eqs. 3-5)::
     L(k) = min(k, L)
 
 where ``k`` counts samples from the start of the analysed chunk (the chunk is the paper's unit of
-identification, so each chunk starts a fresh memory). For each order on a grid, ``f`` is the least-squares
-solution of eqs. (6)-(8) and the source noise is the equation error of eq. (9),
+identification, so each chunk starts a fresh memory). For each order on a grid, ``f`` is the
+least-squares solution of eqs. (6)-(8) and the source noise is the equation error of eq. (9),
 ``w[k] = Delta^alpha v[k+1] - f v[k]`` for ``k = 0 .. N-2`` (``n = N - 1`` values).
 
 Two order estimates (section 2, last part):
 
 * variance method: the order minimising ``var(w)`` (population variance, mean of ``w`` removed);
 * correlation method: the order minimising ``J = sum_{m=0}^{M} |R_w(m)|`` (eq. 13) with the biased
-  autocorrelation estimate ``R_w(m) = (1/n) sum_{k=0}^{n-1-m} w[k+m] w[k]`` (eq. 14); by default every lag,
-  ``M = n - 1``.
+  autocorrelation estimate ``R_w(m) = (1/n) sum_{k=0}^{n-1-m} w[k+m] w[k]`` (eq. 14); by default
+  every lag, ``M = n - 1``.
 
-Exact ties. For any data, order 0 and order 1 give the *same* residual: ``c_j`` vanishes for ``j >= 2``
-at both orders and the ``c_1 v[k]`` term is absorbed by ``f`` (``f_0 = f_1 + 1``). The same holds for any
-two orders whose coefficients differ only in ``c_0, c_1``, which on a grid means exactly {0, 1}. When the
-minimum of a curve is attained (within a relative 1e-9, far above rounding and far below any real
-difference) at several grid orders, the **largest** tied order is reported, because the paper reads
-order 1 as the integer-order (first-order colour) model of eq. (1); the tie is reported in
-``tied_alphas_*`` and never hidden.
+Exact ties. For any data, order 0 and order 1 give the *same* residual: ``c_j`` vanishes for ``j >=
+2`` at both orders and the ``c_1 v[k]`` term is absorbed by ``f`` (``f_0 = f_1 + 1``). The same
+holds for any two orders whose coefficients differ only in ``c_0, c_1``, which on a grid means
+exactly {0, 1}. When the minimum of a curve is attained (within a relative 1e-9, far above rounding
+and far below any real difference) at several grid orders, the **largest** tied order is reported,
+because the paper reads order 1 as the integer-order (first-order colour) model of eq. (1); the tie
+is reported in ``tied_alphas_*`` and never hidden.
 """
 
 from dataclasses import dataclass
@@ -39,7 +53,8 @@ from ..errors import InputDataError, ParameterError
 #: computations").
 DEFAULT_MEMORY = 1000
 
-#: Relative tolerance under which two grid values of a criterion count as an exact tie (see module doc).
+#: Relative tolerance under which two grid values of a criterion count as an exact tie (see module
+#: doc).
 TIE_RTOL = 1e-9
 
 
@@ -51,6 +66,7 @@ def default_grid():
     -------
     numpy.ndarray
         201 orders (dimensionless).
+
     """
     return np.round(np.arange(201) * 0.01, 10)
 
@@ -70,6 +86,7 @@ def make_grid(start, stop, step):
     -------
     numpy.ndarray
         The grid, rounded to 10 decimals so that e.g. 1.0 is exactly representable as a grid point.
+
     """
     start, stop, step = float(start), float(stop), float(step)
     if not all(np.isfinite([start, stop, step])):
@@ -96,6 +113,7 @@ def parse_grid(text):
     Returns
     -------
     numpy.ndarray
+
     """
     parts = str(text).split(':')
     if len(parts) != 3:
@@ -125,6 +143,7 @@ def gl_coefficients(alpha, memory=DEFAULT_MEMORY):
     -------
     numpy.ndarray
         ``L + 1`` coefficients, ``c_0 = 1``.
+
     """
     memory = _check_memory(memory)
     alpha = float(alpha)
@@ -155,6 +174,7 @@ def gl_difference(x, alpha, *, memory=DEFAULT_MEMORY):
     Returns
     -------
     numpy.ndarray
+
     """
     x = np.asarray(x, dtype=np.float64)
     c = gl_coefficients(alpha, memory)
@@ -180,13 +200,15 @@ class OrderIdentification:
     j_min : float
         That minimum of J, in the squared unit of the input.
     tied_alphas_var, tied_alphas_corr : tuple of float
-        All grid orders whose criterion equals the minimum within :data:`TIE_RTOL` (length 1 = no tie).
+        All grid orders whose criterion equals the minimum within :data:`TIE_RTOL` (length 1 = no
+        tie).
     bias : float
         The chunk mean (removed before identification when ``demean`` is on), in the input unit.
     alphas : numpy.ndarray
         The order grid.
     var_curve, j_curve, f_curve : numpy.ndarray or None
         var(w)(alpha), J(alpha) and f(alpha) over the grid when curves were requested.
+
     """
 
     alpha_var: float
@@ -210,8 +232,9 @@ class OrderIdentifier:
 
     The GL filters of every grid order are transformed once; each chunk then costs one forward FFT,
     and per order one inverse FFT (the truncated difference), one forward and one inverse FFT (the
-    full autocorrelation of the source noise). The results equal the direct per-order convolution and
-    correlation to rounding (checked in ``test/test_fractional.py`` against ``test/_fractional_reference.py``).
+    full autocorrelation of the source noise). The results equal the direct per-order convolution
+    and correlation to rounding (checked in ``test/test_fractional.py`` against
+    ``test/_fractional_reference.py``).
 
     Parameters
     ----------
@@ -222,17 +245,20 @@ class OrderIdentifier:
     memory : int, keyword-only
         L of eq. (5) (default 1000).
     demean : bool, keyword-only
-        Remove the chunk mean before identification (default True; the mean is reported as the bias).
+        Remove the chunk mean before identification (default True; the mean is reported as the
+        bias).
     max_lag : int or None, keyword-only
         Largest lag M in J (eq. 13); None = all lags, ``n - 1``.
     block : int, keyword-only
         Orders processed per vectorised block (memory/speed trade-off only).
+
     """
 
-    def __init__(self, chunk_size, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, max_lag=None,
-                 block=8):
+    def __init__(self, chunk_size, *, alphas=None, memory=DEFAULT_MEMORY, demean=True,
+                 max_lag=None, block=8):
         self.memory = _check_memory(memory)
-        self.alphas = default_grid() if alphas is None else np.asarray(alphas, dtype=np.float64).ravel()
+        self.alphas = default_grid() if alphas is None else np.asarray(
+            alphas, dtype=np.float64).ravel()
         if self.alphas.size == 0:
             raise ParameterError('the order grid is empty')
         if not np.all(np.isfinite(self.alphas)):
@@ -247,8 +273,9 @@ class OrderIdentifier:
             max_lag = self.n - 1
         max_lag = int(max_lag)
         if not 0 <= max_lag <= self.n - 1:
-            raise ParameterError(f'max_lag must be in [0, {self.n - 1}] for chunk_size {chunk_size}, '
-                                 f'got {max_lag}')
+            raise ParameterError(
+                f'max_lag must be in [0, {self.n - 1}] for chunk_size {chunk_size}, '
+                f'got {max_lag}')
         self.max_lag = max_lag
         self.demean = bool(demean)
         self.block = max(1, int(block))
@@ -271,6 +298,7 @@ class OrderIdentifier:
         Returns
         -------
         OrderIdentification
+
         """
         v = validate_chunk(chunk, self.chunk_size)
         bias = float(v.mean())
@@ -284,7 +312,8 @@ class OrderIdentifier:
         w_reg = v[:-1]
         ww = float(w_reg @ w_reg)
         if ww == 0.0:
-            raise InputDataError('the chunk is constant after removing its mean: the order is undefined')
+            raise InputDataError(
+                'the chunk is constant after removing its mean: the order is undefined')
         v_hat = scipy.fft.rfft(v, size)
         k = len(self.alphas)
         var_curve = np.empty(k)
@@ -310,7 +339,8 @@ class OrderIdentifier:
         return var_curve, j_curve, f_curve
 
 
-def identify_order(chunk, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, max_lag=None, curves=False):
+def identify_order(chunk, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, max_lag=None,
+                   curves=False):
     """
     Identify the fractional order of one chunk (convenience wrapper of :class:`OrderIdentifier`).
 
@@ -326,6 +356,7 @@ def identify_order(chunk, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, ma
     Returns
     -------
     OrderIdentification
+
     """
     chunk = np.asarray(chunk, dtype=np.float64)
     if chunk.ndim != 1:
@@ -349,6 +380,7 @@ def validate_chunk(chunk, size):
     Returns
     -------
     numpy.ndarray
+
     """
     v = np.asarray(chunk, dtype=np.float64)
     if v.ndim != 1:
@@ -358,7 +390,8 @@ def validate_chunk(chunk, size):
     bad = ~np.isfinite(v)
     if bad.any():
         first = int(np.argmax(bad))
-        raise InputDataError(f'chunk has {int(bad.sum())} NaN/Inf sample(s), first at index {first}')
+        raise InputDataError(
+            f'chunk has {int(bad.sum())} NaN/Inf sample(s), first at index {first}')
     if np.ptp(v) == 0.0:
         raise InputDataError(f'chunk is constant (all samples = {v[0]!r}): the order is undefined')
     return v
@@ -379,10 +412,12 @@ def select_minimum(alphas, curve):
     -------
     tuple
         Index of the reported order (the largest among exact ties) and the array of tied indices.
+
     """
     finite = np.isfinite(curve)
     if not finite.any():
-        raise InputDataError('the identification criterion is not finite for any order on the grid')
+        raise InputDataError(
+            'the identification criterion is not finite for any order on the grid')
     low = np.min(curve[finite])
     tied = np.flatnonzero(finite & (curve <= low + TIE_RTOL * abs(low)))
     best = tied[np.argmax(alphas[tied])]

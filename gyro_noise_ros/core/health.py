@@ -1,53 +1,72 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Health verdicts of one gyro axis: the same logic in the analyzer node and the offline tool (issue 4).
+Health verdicts of one gyro axis.
 
-A verdict compares a run's sequence statistics (paper 000 Tables 3-6) with a *reference characterisation*
-(the offline tool's ``summary.json`` of a reference recording, like the paper's "sequence ref") and with
-absolute limits. Every limit is a field of :class:`HealthThresholds`; the defaults are read off the paper:
+The same logic in the analyzer node and the offline tool (issue 4).
 
-* offset drift (Table 3): helium raised it ~20x over the reference in H1/H2 and it was still ~6x at the end
-  of exposure (H5), ~4x right after (AH1) and back to ~1x after 30 days (LAH). With a reference the
-  ratio |drift| / |reference drift| is judged: WARN above ``drift_ratio_warn`` (5x), ERROR above
-  ``drift_ratio_error`` (15x). Without a reference, absolute limits in (deg/s)/h: WARN above 0.02, ERROR
-  above 0.05 (the paper's reference is 0.0036, H1 0.065, H5 0.022). A drift is only judged once
-  ``min_chunks`` chunks are in and when it is significant: the t statistic |slope| / standard error must
-  exceed the Student-t quantile (n - 2 degrees of freedom for n chunks) at the same two-sided level as
-  ``drift_min_sigma`` standard deviations of a normal (3 sigma: p = 0.0027), because a short run's slope is
-  mostly chunk-mean noise and with few chunks the t statistic has heavy tails (a plain 3-sigma test fires
-  on ~20 % of 3-chunk white-noise runs, ~10 % of 4-chunk runs).
-* order (Tables 5, 6): the paper saw no change. WARN when the mean chunk order of the variance method
-  differs from the reference mean by more than ``alpha_var_tolerance`` (0.05, i.e. 5 grid steps; the
-  paper's spread over sequences is 0.009), of the correlation method by more than
-  ``alpha_corr_tolerance`` (0.25; its chunk spread is ~0.4 and sequence means moved by 0.13);
-  ERROR at twice the tolerance.
-* variance (Table 4): WARN when the mean chunk variance is outside ``1 +/- variance_ratio_tolerance``
-  (0.5, the +/-50 % "physiological" band of paper 001) times the reference, ERROR outside ``1 +/- 2x`` that
-  tolerance (lower bound clipped at 0).
+A verdict compares a run's sequence statistics (paper 000 Tables 3-6) with a *reference
+characterisation* (the offline tool's ``summary.json`` of a reference recording, like the paper's
+"sequence ref") and with absolute limits. Every limit is a field of :class:`HealthThresholds`; the
+defaults are read off the paper:
+
+* offset drift (Table 3): helium raised it ~20x over the reference in H1/H2 and it was still ~6x at
+  the end of exposure (H5), ~4x right after (AH1) and back to ~1x after 30 days (LAH). With a
+  reference the ratio |drift| / |reference drift| is judged: WARN above ``drift_ratio_warn`` (5x),
+  ERROR above ``drift_ratio_error`` (15x). Without a reference, absolute limits in (deg/s)/h: WARN
+  above 0.02, ERROR above 0.05 (the paper's reference is 0.0036, H1 0.065, H5 0.022). A drift is
+  only judged once ``min_chunks`` chunks are in and when it is significant: the t statistic |slope|
+  / standard error must exceed the Student-t quantile (n - 2 degrees of freedom for n chunks) at
+  the same two-sided level as ``drift_min_sigma`` standard deviations of a normal (3 sigma: p =
+  0.0027), because a short run's slope is mostly chunk-mean noise and with few chunks the t
+  statistic has heavy tails (a plain 3-sigma test fires on ~20 % of 3-chunk white-noise runs, ~10 %
+  of 4-chunk runs).
+* order (Tables 5, 6): the paper saw no change. WARN when the mean chunk order of the variance
+  method differs from the reference mean by more than ``alpha_var_tolerance`` (0.05, i.e. 5 grid
+  steps; the paper's spread over sequences is 0.009), of the correlation method by more than
+  ``alpha_corr_tolerance`` (0.25; its chunk spread is ~0.4 and sequence means moved by 0.13); ERROR
+  at twice the tolerance.
+* variance (Table 4): WARN when the mean chunk variance is outside ``1 +/-
+  variance_ratio_tolerance`` (0.5, the +/-50 % "physiological" band of paper 001) times the
+  reference, ERROR outside ``1 +/- 2x`` that tolerance (lower bound clipped at 0).
 * samples lost (from stamps) as a fraction of expected samples: WARN above ``lost_fraction_warn``
   (1e-4), ERROR above ``lost_fraction_error`` (1e-2). NaN/Inf samples: WARN if any, ERROR above
   ``lost_fraction_error`` as a fraction. Out-of-order stamps: WARN if any.
-* chunks skipped by a node that fell behind: WARN above ``skipped_fraction_warn`` (0.1) of the chunks,
-  ERROR above ``skipped_fraction_error`` (0.5).
-* STALE: no complete chunk yet, or no data for more than ``stale_after_s`` (5 s) when the caller says so.
+* chunks skipped by a node that fell behind: WARN above ``skipped_fraction_warn`` (0.1) of the
+  chunks, ERROR above ``skipped_fraction_error`` (0.5).
+* STALE: no complete chunk yet, or no data for more than ``stale_after_s`` (5 s) when the caller
+  says so.
 
-Levels are ordered OK < WARN < ERROR < STALE (as diagnostic_msgs: 0, 1, 2, 3); the verdict is the worst
-item and its message is one sentence naming that item.
+Levels are ordered OK < WARN < ERROR < STALE (as diagnostic_msgs: 0, 1, 2, 3); the verdict is the
+worst item and its message is one sentence naming that item.
 """
 
+from dataclasses import dataclass, field, fields
 import json
 import math
-from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from scipy.special import stdtrit
 
+from .items import DEG as _DEG
+from .items import fmt as _fmt
 from ..errors import InputDataError, ParameterError
-from .items import DEG as _DEG, fmt as _fmt
 
 #: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
 LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
 LEVEL_BYTE = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
-
 
 
 def _threshold(default, description, unit=''):
@@ -80,6 +99,7 @@ class HealthThresholds:
         Limits on skipped / all chunks.
     stale_after_s : float
         Seconds without data after which the verdict is STALE (s).
+
     """
 
     drift_ratio_warn: float = _threshold(
@@ -116,19 +136,23 @@ class HealthThresholds:
         for f in fields(self):
             value = getattr(self, f.name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise ParameterError(f'health threshold {f.name} must be a finite number >= 0, got {value!r}')
+                raise ParameterError(
+                    f'health threshold {f.name} must be a finite number >= 0, got {value!r}')
         if self.drift_ratio_error < self.drift_ratio_warn:
-            raise ParameterError(f'drift_ratio_error ({self.drift_ratio_error}) must be >= drift_ratio_warn '
-                                 f'({self.drift_ratio_warn})')
+            raise ParameterError(
+                f'drift_ratio_error ({self.drift_ratio_error}) must be >= drift_ratio_warn '
+                f'({self.drift_ratio_warn})')
         if self.drift_abs_error_deg_s_per_h < self.drift_abs_warn_deg_s_per_h:
-            raise ParameterError('drift_abs_error_deg_s_per_h must be >= drift_abs_warn_deg_s_per_h, got '
-                                 f'{self.drift_abs_error_deg_s_per_h} < {self.drift_abs_warn_deg_s_per_h}')
+            raise ParameterError(
+                'drift_abs_error_deg_s_per_h must be >= drift_abs_warn_deg_s_per_h, got '
+                f'{self.drift_abs_error_deg_s_per_h} < {self.drift_abs_warn_deg_s_per_h}')
         if self.lost_fraction_error < self.lost_fraction_warn:
             raise ParameterError(f'lost_fraction_error ({self.lost_fraction_error}) must be >= '
                                  f'lost_fraction_warn ({self.lost_fraction_warn})')
         if self.skipped_fraction_error < self.skipped_fraction_warn:
-            raise ParameterError(f'skipped_fraction_error ({self.skipped_fraction_error}) must be >= '
-                                 f'skipped_fraction_warn ({self.skipped_fraction_warn})')
+            raise ParameterError(
+                f'skipped_fraction_error ({self.skipped_fraction_error}) must be >= '
+                f'skipped_fraction_warn ({self.skipped_fraction_warn})')
 
 
 @dataclass(frozen=True)
@@ -150,6 +174,7 @@ class ReferenceStats:
         Where it came from (file, bag, axis), for messages.
     offset_drift_stderr_rad_s2 : float
         Standard error of the reference drift (rad/s per s); NaN when unknown (old summaries).
+
     """
 
     offset_drift_rad_s2: float
@@ -174,6 +199,7 @@ class HealthVerdict:
         One sentence naming the worst item.
     items : tuple of (str, str, str)
         (readable key with unit, formatted value, level) for every check, in a stable order.
+
     """
 
     level: str
@@ -182,7 +208,7 @@ class HealthVerdict:
 
     @property
     def level_byte(self):
-        """The level as a diagnostic_msgs/DiagnosticStatus byte (0 OK, 1 WARN, 2 ERROR, 3 STALE)."""
+        """Return the level as a DiagnosticStatus byte (0 OK, 1 WARN, 2 ERROR, 3 STALE)."""
         return LEVEL_BYTE[self.level]
 
 
@@ -216,6 +242,7 @@ def drift_t_threshold(min_sigma, chunks):
     float
         The Student-t quantile with ``chunks - 2`` degrees of freedom at the same two-sided level;
         infinity with fewer than 3 chunks.
+
     """
     if chunks < 3:
         return math.inf
@@ -235,12 +262,14 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
         Reference characterisation; without it drift is judged by absolute limits and order and
         variance are only reported.
     thresholds : HealthThresholds, optional, keyword-only
+        Limits of the verdicts (default: :class:`HealthThresholds()`).
     seconds_since_data : float, optional, keyword-only
         Time since the last sample (s); STALE above ``thresholds.stale_after_s``.
 
     Returns
     -------
     HealthVerdict
+
     """
     th = thresholds if thresholds is not None else HealthThresholds()
     seq = summary.sequence
@@ -253,7 +282,8 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     judged = seq.chunks >= th.min_chunks
     drift = seq.drift
     drift_dph = drift.slope * _DEG * 3600.0
-    sigma = abs(drift.slope) / drift.stderr if drift.stderr and math.isfinite(drift.stderr) else float('nan')
+    sigma = abs(drift.slope) / drift.stderr if drift.stderr and math.isfinite(
+        drift.stderr) else float('nan')
     significant = judged and math.isfinite(drift.slope) and (
         not math.isfinite(sigma) or sigma > drift_t_threshold(th.drift_min_sigma, seq.chunks))
     drift_item = len(items)
@@ -292,10 +322,13 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
         if significant:
             level = ('ERROR' if abs(drift_dph) > th.drift_abs_error_deg_s_per_h else
                      'WARN' if abs(drift_dph) > th.drift_abs_warn_deg_s_per_h else 'OK')
-        limit = th.drift_abs_error_deg_s_per_h if level == 'ERROR' else th.drift_abs_warn_deg_s_per_h
+        limit = (
+            th.drift_abs_error_deg_s_per_h if level == 'ERROR' else th.drift_abs_warn_deg_s_per_h
+        )
         items[drift_item] = ('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
-                     f'offset drift {abs(drift_dph):.4g} (deg/s)/h is '
-                     f'{"above" if level != "OK" else "within"} the limit {limit:g} (deg/s)/h')
+                             f'offset drift {abs(drift_dph):.4g} (deg/s)/h is '
+                             f'{"above" if level != "OK" else "within"} the limit '
+                             f'{limit:g} (deg/s)/h')
     add('Offset drift significance (sigma)', _fmt(sigma, 3), 'OK', '')
 
     add('Fractional order, variance method', _fmt(seq.alpha_var_mean, 4), 'OK', '')
@@ -303,11 +336,12 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     var_deg = seq.mean_variance * _DEG ** 2
     add('Mean variance ((deg/s)^2)', _fmt(var_deg), 'OK', '')
     if reference is not None and judged:
-        for key, mean, ref, tol, name in (
-                ('Order deviation, variance method', seq.alpha_var_mean, reference.alpha_var_mean,
-                 th.alpha_var_tolerance, 'variance-method order'),
-                ('Order deviation, correlation method', seq.alpha_corr_mean, reference.alpha_corr_mean,
-                 th.alpha_corr_tolerance, 'correlation-method order')):
+        for key, mean, ref, tol, name in (('Order deviation, variance method', seq.alpha_var_mean,
+                                           reference.alpha_var_mean, th.alpha_var_tolerance,
+                                           'variance-method order'),
+                                          ('Order deviation, correlation method',
+                                           seq.alpha_corr_mean, reference.alpha_corr_mean,
+                                           th.alpha_corr_tolerance, 'correlation-method order')):
             dev = abs(mean - ref)
             level = _band(dev, tol)
             add(key, _fmt(mean - ref, 4), level,
@@ -317,22 +351,31 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
             ratio = seq.mean_variance / reference.mean_variance_rad2_s2
             level = _band(abs(ratio - 1.0), th.variance_ratio_tolerance)
             add('Variance / reference', _fmt(ratio, 4), level,
-                f'mean variance is {ratio:.3g}x the reference (tolerance +/-{th.variance_ratio_tolerance:.0%})')
+                f'mean variance is {ratio:.3g}x the reference (tolerance '
+                f'+/-{th.variance_ratio_tolerance:.0%})')
 
     expected = stream.samples + stream.samples_lost
     lost_frac = stream.samples_lost / expected if expected else 0.0
     level = ('ERROR' if lost_frac > th.lost_fraction_error else
              'WARN' if lost_frac > th.lost_fraction_warn else 'OK')
     add('Samples lost', f'{stream.samples_lost} ({lost_frac:.3g})', level,
-        f'{stream.samples_lost} samples lost in {stream.gaps} gap(s) ({lost_frac:.3g} of expected)')
+        f'{stream.samples_lost} samples lost in {stream.gaps} gap(s) ({lost_frac:.3g} of '
+        'expected)')
     nan_frac = summary.nan_samples / stream.samples if stream.samples else 0.0
-    level = 'ERROR' if nan_frac > th.lost_fraction_error else 'WARN' if summary.nan_samples else 'OK'
+    level = (
+        'ERROR' if nan_frac > th.lost_fraction_error else 'WARN' if summary.nan_samples else 'OK'
+    )
     add('NaN samples', str(summary.nan_samples), level,
         f'{summary.nan_samples} NaN/Inf samples ({summary.chunks_nan} chunk(s) not analysed)')
     add('Out-of-order stamps', str(stream.out_of_order), 'WARN' if stream.out_of_order else 'OK',
         f'{stream.out_of_order} stamps not later than their predecessor')
-    total = summary.chunks_ok + summary.chunks_nan + summary.chunks_dropped + summary.chunks_failed \
+    total = (
+        summary.chunks_ok
+        + summary.chunks_nan
+        + summary.chunks_dropped
+        + summary.chunks_failed
         + summary.chunks_skipped
+    )
     skip_frac = summary.chunks_skipped / total if total else 0.0
     level = ('ERROR' if skip_frac > th.skipped_fraction_error else
              'WARN' if skip_frac > th.skipped_fraction_warn else 'OK')
@@ -361,7 +404,7 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
 
 def load_reference(summary_json_path, *, bag=None, axis='z'):
     """
-    Read one bag's and axis' reference characterisation from a ``summary.json`` of gyro_noise_analyze.
+    Read one bag's and axis' reference from a ``summary.json`` of gyro_noise_analyze.
 
     Parameters
     ----------
@@ -380,26 +423,30 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
     ------
     ParameterError
         Missing/unreadable file, unknown or ambiguous bag, missing axis.
+
     """
     path = Path(summary_json_path)
     try:
         data = json.loads(path.read_text())
     except OSError as err:
-        raise ParameterError(f'reference summary {str(path)!r} cannot be read: {err.strerror or err}') from err
+        raise ParameterError(
+            f'reference summary {str(path)!r} cannot be read: {err.strerror or err}') from err
     except ValueError as err:
         raise ParameterError(f'reference summary {str(path)!r} is not JSON: {err}') from err
     bags = data.get('bags') if isinstance(data, dict) else None
     if not isinstance(bags, list) or not bags:
-        raise ParameterError(f'reference summary {str(path)!r} has no "bags" list (not a gyro_noise_analyze '
-                             'summary.json?)')
+        raise ParameterError(
+            f'reference summary {str(path)!r} has no "bags" list (not a gyro_noise_analyze '
+            'summary.json?)')
     if bag is None:
         if len(bags) != 1:
             names = ', '.join(str(b.get('label')) for b in bags)
-            raise ParameterError(f'reference summary {str(path)!r} holds {len(bags)} bags ({names}); '
-                                 'choose one')
+            raise ParameterError(
+                f'reference summary {str(path)!r} holds {len(bags)} bags ({names}); ' 'choose one')
         entry = bags[0]
     else:
-        matches = [b for b in bags if bag in (b.get('label'), b.get('path'), Path(str(b.get('path'))).name)]
+        matches = [b for b in bags if bag in (b.get('label'), b.get('path'),
+                                              Path(str(b.get('path'))).name)]
         if not matches:
             raise ParameterError(f'bag {bag!r} is not in reference summary {str(path)!r}')
         entry = matches[0]
@@ -416,7 +463,8 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
             chunks=int(a.get('chunks', 0)), source=f'{path}:{entry.get("label")}:{axis}',
             offset_drift_stderr_rad_s2=float(a.get('offset_drift_stderr_rad_s2') or 'nan'))
     except (KeyError, TypeError, ValueError) as err:
-        raise ParameterError(f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
+        raise ParameterError(
+            f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 
 
 def reference_per_axis(reference, axes, *, bag=None):
@@ -426,14 +474,17 @@ def reference_per_axis(reference, axes, *, bag=None):
     Parameters
     ----------
     reference : None, str, os.PathLike, ReferenceStats or dict
-        A summary.json path (loaded per axis; its single bag), one ReferenceStats for all axes, or a dict.
+        A summary.json path (loaded per axis; its single bag), one ReferenceStats for all axes, or
+        a dict.
     axes : tuple of str
+        Axis names to return references for.
     bag : str, optional, keyword-only
         Bag label or path inside a summary.json holding several bags.
 
     Returns
     -------
     dict
+
     """
     if reference is None:
         return {}
@@ -454,6 +505,8 @@ def reference_per_axis(reference, axes, *, bag=None):
                 if 'is not in reference summary' not in str(err) or 'axis' not in str(err):
                     raise
         if not out:
-            raise ParameterError(f'reference summary {str(reference)!r} has none of the axes {list(axes)}')
+            raise ParameterError(
+                f'reference summary {str(reference)!r} has none of the axes {list(axes)}')
         return out
-    raise InputDataError(f'reference must be a path, ReferenceStats or dict, got {type(reference).__name__}')
+    raise InputDataError(
+        f'reference must be a path, ReferenceStats or dict, got {type(reference).__name__}')

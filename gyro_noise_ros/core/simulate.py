@@ -1,3 +1,17 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Seeded forward models of gyroscope noise (paper 000 eqs. 2, 10, 11).
 
@@ -6,18 +20,20 @@ difference of eqs. (3)-(5), is run forward as
 
     v[k+1] = f v[k] + w[k] - sum_{j=1}^{min(k+1, L)} c_j(alpha) v[k+1-j],   w ~ N(0, sigma_w^2),
 
-starting from rest (zero history, which is exactly the truncation L(k) = min(k, L)). With measurement
-noise (eqs. 10-11) the state is x and the output is ``v = x + nu``, ``nu ~ N(0, sigma_nu^2)``; a constant
-bias is added last. Generation streams in blocks with O(L) state, so a 12 h record at 6.66 kHz
-(187,159,392 samples) needs no more memory than its output (or none, block by block).
+starting from rest (zero history, which is exactly the truncation L(k) = min(k, L)). With
+measurement noise (eqs. 10-11) the state is x and the output is ``v = x + nu``, ``nu ~ N(0,
+sigma_nu^2)``; a constant bias is added last. Generation streams in blocks with O(L) state, so a 12
+h record at 6.66 kHz (187,159,392 samples) needs no more memory than its output (or none, block by
+block).
 
 Stability. The recursion is a linear filter ``w -> v`` with denominator
-``A(z) = 1 + (c_1 - f) z^-1 + sum_{j=2}^{L} c_j z^-j``; it is stable (the output stationary) iff all L
-roots of ``z^L A(z)`` lie strictly inside the unit circle. :func:`check_stability` decides this with the
-argument principle on a dense unit-circle grid and refuses marginal cases. Two necessary conditions make
-the region easy to picture: ``A(1) = S_L(alpha) - f > 0`` with ``S_L = sum_{j<=L} c_j`` (tiny for
-alpha near 1, exactly 0 at alpha = 1: hence ``f < 0`` is required there; f = 0 at alpha = 1 is a random
-walk), and ``A(-1) = sum_j |c_j| + f > 0`` (roughly ``f > -2^alpha``).
+``A(z) = 1 + (c_1 - f) z^-1 + sum_{j=2}^{L} c_j z^-j``; it is stable (the output stationary) iff
+all L roots of ``z^L A(z)`` lie strictly inside the unit circle. :func:`check_stability` decides
+this with the argument principle on a dense unit-circle grid and refuses marginal cases. Two
+necessary conditions make the region easy to picture: ``A(1) = S_L(alpha) - f > 0`` with ``S_L =
+sum_{j<=L} c_j`` (tiny for alpha near 1, exactly 0 at alpha = 1: hence ``f < 0`` is required there;
+f = 0 at alpha = 1 is a random walk), and ``A(-1) = sum_j |c_j| + f > 0`` (roughly ``f >
+-2^alpha``).
 """
 
 from dataclasses import dataclass
@@ -25,9 +41,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import ParameterError, UnstableModelError
 from ._kernels import _fractional_recursion
 from .fractional import DEFAULT_MEMORY, gl_coefficients
+from ..errors import ParameterError, UnstableModelError
 
 #: Samples generated per kernel call when streaming (bounds temporary memory).
 BLOCK = 1 << 20
@@ -48,6 +64,7 @@ class StabilityReport:
         Smallest |A(e^{i w})| on the grid, relative to its largest (0 means a pole on the circle).
     winding : int
         Winding number of A(e^{i w}) around 0 (0 for a stable recursion).
+
     """
 
     stable: bool
@@ -74,6 +91,7 @@ def check_stability(alpha, f, memory=DEFAULT_MEMORY):
     Returns
     -------
     StabilityReport
+
     """
     c = gl_coefficients(alpha, memory)
     a = c.copy()
@@ -102,12 +120,14 @@ def require_stable(alpha, f, memory=DEFAULT_MEMORY):
         Model parameters of eq. (2).
     memory : int
         L of eq. (5).
+
     """
     report = check_stability(float(alpha), float(f), int(memory))
     if not report.stable:
         raise UnstableModelError(
             f'fractional noise model alpha={alpha}, f={f}, L={memory} is unstable or marginal '
-            f'(A(1)={report.a_at_one:.3g} must be > 0, A(-1)={report.a_at_minus_one:.3g} must be > 0, '
+            f'(A(1)={report.a_at_one:.3g} must be > 0, A(-1)={report.a_at_minus_one:.3g} must be '
+            '> 0, '
             f'winding number {report.winding} must be 0): its output would not be stationary; '
             f'choose f < {report.a_at_one + f:.4g}')
     return report
@@ -133,6 +153,7 @@ class FractionalNoise:
         Standard deviation of the white measurement noise of eq. (11) (output unit; 0 = none).
     bias : float, keyword-only
         Constant added to every output sample (output unit).
+
     """
 
     def __init__(self, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0, bias=0.0):
@@ -165,6 +186,7 @@ class FractionalNoise:
         -------
         numpy.ndarray
             float64 samples in the unit of ``sigma_w``.
+
         """
         n = int(n)
         if n < 0:
@@ -173,7 +195,8 @@ class FractionalNoise:
         for start in range(0, n, BLOCK):
             stop = min(n, start + BLOCK)
             w = self.rng.standard_normal(stop - start) * self.sigma_w
-            self._history = _fractional_recursion(w, self._history, self._c_rev, self.f, out[start:stop])
+            self._history = _fractional_recursion(w, self._history, self._c_rev, self.f,
+                                                  out[start:stop])
         if self.sigma_nu > 0:
             for start in range(0, n, BLOCK):
                 stop = min(n, start + BLOCK)
@@ -184,7 +207,8 @@ class FractionalNoise:
         return out
 
 
-def simulate_fractional_noise(n, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0, bias=0.0):
+def simulate_fractional_noise(n, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0,
+                              bias=0.0):
     """
     Return ``n`` samples of the fractional-order noise of eq. (2) (with eqs. 10-11 and a bias).
 
@@ -195,12 +219,14 @@ def simulate_fractional_noise(n, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMOR
     alpha, f, sigma_w : float
         Order, noise parameter, source-noise standard deviation (output unit).
     rng : numpy.random.Generator, keyword-only
+        Random generator of the source noise.
     memory, sigma_nu, bias : keyword-only
         See :class:`FractionalNoise`.
 
     Returns
     -------
     numpy.ndarray
+
     """
     return FractionalNoise(alpha, f, sigma_w, rng=rng, memory=memory, sigma_nu=sigma_nu,
                            bias=bias).generate(n)

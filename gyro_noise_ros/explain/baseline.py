@@ -1,36 +1,56 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Baseline model of the discrepancy workflow: bias + fractional-order noise + white measurement noise.
+Baseline model of the discrepancy workflow.
 
-Paper 000 eqs. (2), (10), (11): ``Delta^alpha x[k+1] = f x[k] + w[k]``, ``v[k] = x[k] + nu[k]`` plus a
-constant bias. Fitting:
+Bias + fractional-order noise + white measurement noise.
 
-1. bias = the record mean (rad/s); the effects' terms are zero-mean over the record, so the bias never
-   competes with them;
-2. (alpha, f): the paper's variance method (:class:`~gyro_noise_ros.core.fractional.OrderIdentifier`, memory
-   L = 1000 or less for short chunks) on up to 16 chunks spread over the record. Near-white data makes
-   the branches (alpha ~ 0, f) and (alpha ~ 1, f - 1) nearly tie (the exact {0, 1} tie of the module doc
-   of :mod:`~gyro_noise_ros.core.fractional`): the var(alpha) curve has two local minima within a few
-   0.1 %, and low-frequency effects (Gauss-Markov, flicker) tip the balance to the long-memory alpha ~ 0
-   branch, which then soaks them up. So every local minimum within 1 % of a chunk's minimum gives a
-   candidate pair (alpha, f(alpha)), and the one whose model spectrum fits the record's Welch PSD best is
-   kept (pairs that fail the stability check of
-   :func:`~gyro_noise_ros.core.simulate.check_stability` at the simulation memory are skipped). The fit
-   is judged above fs / 100 only, where the baseline dominates (below, the bias effects of the catalogue
-   compete with it, and a long-memory pair would otherwise soak them up); among pairs within 10 % of
-   the best misfit the one with the shortest simulation memory is kept (least structure, fastest);
+Paper 000 eqs. (2), (10), (11): ``Delta^alpha x[k+1] = f x[k] + w[k]``, ``v[k] = x[k] + nu[k]``
+plus a constant bias. Fitting:
+
+1. bias = the record mean (rad/s); the effects' terms are zero-mean over the record, so the bias
+   never competes with them;
+2. (alpha, f): the paper's variance method
+   (:class:`~gyro_noise_ros.core.fractional.OrderIdentifier`, memory L = 1000 or less for short
+   chunks) on up to 16 chunks spread over the record. Near-white data makes the branches (alpha ~
+   0, f) and (alpha ~ 1, f - 1) nearly tie (the exact {0, 1} tie of the module doc of
+   :mod:`~gyro_noise_ros.core.fractional`): the var(alpha) curve has two local minima within a few
+   0.1 %, and low-frequency effects (Gauss-Markov, flicker) tip the balance to the long-memory
+   alpha ~ 0 branch, which then soaks them up. So every local minimum within 1 % of a chunk's
+   minimum gives a candidate pair (alpha, f(alpha)), and the one whose model spectrum fits the
+   record's Welch PSD best is kept (pairs that fail the stability check of
+   :func:`~gyro_noise_ros.core.simulate.check_stability` at the simulation memory are skipped). The
+   fit is judged above fs / 100 only, where the baseline dominates (below, the bias effects of the
+   catalogue compete with it, and a long-memory pair would otherwise soak them up); among pairs
+   within 10 % of the best misfit the one with the shortest simulation memory is kept (least
+   structure, fastest);
 3. f is refined by the same PSD misfit (a bounded 1-D search within +/-0.3 of the identified value,
-   kept only if stable): the least-squares f of eqs. (6)-(8) is biased by the measurement noise (eq. 12
-   shows nu entering the equation error), which leaves the model spectrum a few % off near fs / 100;
+   kept only if stable): the least-squares f of eqs. (6)-(8) is biased by the measurement noise
+   (eq. 12 shows nu entering the equation error), which leaves the model spectrum a few % off near
+   fs / 100;
 4. sigma_w, sigma_nu: with (alpha, f) fixed the model PSD is linear in the two variances,
-   ``S(f) = (2 / fs) (sigma_w^2 / |A(e^{i 2 pi f / fs})|^2 + sigma_nu^2)`` (one-sided, rad^2/s^2/Hz), so they
-   are a non-negative least-squares fit on the Welch bins above fs / 100, iteratively reweighted by the
-   previous model (relative errors without the downward bias of weighting by the estimate itself); bins
-   more than 3x above the fit (spectral lines) are dropped.
+   ``S(f) = (2 / fs) (sigma_w^2 / |A(e^{i 2 pi f / fs})|^2 + sigma_nu^2)`` (one-sided,
+   rad^2/s^2/Hz), so they are a non-negative least-squares fit on the Welch bins above fs / 100,
+   iteratively reweighted by the previous model (relative errors without the downward bias of
+   weighting by the estimate itself); bins more than 3x above the fit (spectral lines) are dropped.
 
-Simulation memory. The ensemble uses the smallest L_sim in (25, 50, 100, 200, 500, 1000) whose model PSD
-is within 1 % of the L = 1000 model at every frequency (:func:`simulation_memory`): 1 % is below the
-0.01 dex (2.3 %) tolerance of the PSD and Allan bands, and near order 1 the GL coefficients decay like
-j^(-1-alpha), so L_sim is typically 25-200 and the simulation 5-40x faster than with L = 1000.
+Simulation memory. The ensemble uses the smallest L_sim in (25, 50, 100, 200, 500, 1000) whose
+model PSD is within 1 % of the L = 1000 model at every frequency (:func:`simulation_memory`): 1 %
+is below the 0.01 dex (2.3 %) tolerance of the PSD and Allan bands, and near order 1 the GL
+coefficients decay like j^(-1-alpha), so L_sim is typically 25-200 and the simulation 5-40x faster
+than with L = 1000.
 """
 
 from dataclasses import asdict, dataclass
@@ -38,14 +58,14 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.optimize
 
-from ..core.fractional import DEFAULT_MEMORY, OrderIdentifier, gl_coefficients
-from ..core.simulate import FractionalNoise, check_stability
 from .signatures import welch
+from ..core.fractional import DEFAULT_MEMORY, gl_coefficients, OrderIdentifier
+from ..core.simulate import check_stability, FractionalNoise
 
 MEMORY_STEPS = (25, 50, 100, 200, 500, 1000)
 MAX_ID_CHUNKS = 16
-#: Local minima of the variance-method curve within this relative distance of its minimum are candidate
-#: branches (module doc).
+#: Local minima of the variance-method curve within this relative distance of its minimum are
+#: candidate branches (module doc).
 BRANCH_TOLERANCE = 0.01
 
 
@@ -76,6 +96,7 @@ class BaselineModel:
         Chunks the order was identified on.
     psd_misfit : float
         RMS of log10(measured / model PSD) over the Welch bins used.
+
     """
 
     bias_rad_s: float
@@ -95,16 +116,17 @@ class BaselineModel:
 
     def generator(self, rng):
         """Return a :class:`~gyro_noise_ros.core.simulate.FractionalNoise` for this model."""
-        return FractionalNoise(self.alpha, self.f, self.sigma_w_rad_s, rng=rng, memory=self.memory_sim,
-                               sigma_nu=self.sigma_nu_rad_s, bias=self.bias_rad_s)
+        return FractionalNoise(self.alpha, self.f, self.sigma_w_rad_s, rng=rng,
+                               memory=self.memory_sim, sigma_nu=self.sigma_nu_rad_s,
+                               bias=self.bias_rad_s)
 
 
 def model_gain(alpha, f, memory, freq_hz, rate_hz):
     """
     Return ``1 / |A(e^{i w})|^2`` of the recursion of eq. (2) at the given frequencies.
 
-    A is evaluated by one FFT on a grid of 2^17 points and interpolated: with L <= 1000 it varies on
-    the scale fs / L, 130x coarser than the grid.
+    A is evaluated by one FFT on a grid of 2^17 points and interpolated: with L <= 1000 it varies
+    on the scale fs / L, 130x coarser than the grid.
 
     Parameters
     ----------
@@ -120,6 +142,7 @@ def model_gain(alpha, f, memory, freq_hz, rate_hz):
     Returns
     -------
     numpy.ndarray
+
     """
     a = gl_coefficients(alpha, memory)
     a[1] -= f
@@ -131,7 +154,7 @@ def model_gain(alpha, f, memory, freq_hz, rate_hz):
 
 def simulation_memory(alpha, f, rate_hz, *, memory_fit=DEFAULT_MEMORY, tolerance=0.01):
     """
-    Return the smallest L_sim whose model PSD is within ``tolerance`` of the L = ``memory_fit`` model.
+    Return the smallest L_sim whose model PSD is within ``tolerance`` of L = ``memory_fit``.
 
     Parameters
     ----------
@@ -147,6 +170,7 @@ def simulation_memory(alpha, f, rate_hz, *, memory_fit=DEFAULT_MEMORY, tolerance
     Returns
     -------
     int
+
     """
     freq = np.concatenate(([0.0], np.geomspace(rate_hz * 1e-4, rate_hz / 2, 400)))
     ref = model_gain(alpha, f, memory_fit, freq, rate_hz)
@@ -165,8 +189,8 @@ def _fit_variances(freq, pxx, gain, rate_hz):
     keep = band
     weight = pxx
     for _ in range(3):
-        # relative weights from the previous model, not from the noisy estimate itself: 1 / pxx weights
-        # would favour bins that happen to come out low and bias the fit down by several %
+        # relative weights from the previous model, not from the noisy estimate itself: 1 / pxx
+        # weights would favour bins that happen to come out low and bias the fit down by several %
         design = np.column_stack((gain, np.ones_like(gain)))[keep] / weight[keep, None]
         coef, _ = scipy.optimize.nnls(design, pxx[keep] / weight[keep])
         model = gain * coef[0] + coef[1]
@@ -177,9 +201,14 @@ def _fit_variances(freq, pxx, gain, rate_hz):
 
 
 def _refine_f(alpha, f, memory, freq, pxx, rate_hz):
-    """Refine f by the PSD misfit above fs / 100 within +/-0.3; keep the identified f if unstable."""
+    """
+    Refine f by the PSD misfit above fs / 100 within +/-0.3.
+
+    Keep the identified f if unstable.
+    """
     def misfit(value):
-        return _fit_variances(freq, pxx, model_gain(alpha, value, memory, freq, rate_hz), rate_hz)[1]
+        return _fit_variances(freq, pxx, model_gain(alpha, value, memory, freq, rate_hz),
+                              rate_hz)[1]
 
     res = scipy.optimize.minimize_scalar(misfit, bounds=(f - 0.3, f + 0.3), method='bounded',
                                          options={'xatol': 1e-4})
@@ -203,6 +232,7 @@ def fit_baseline(x, rate_hz):
     Returns
     -------
     BaselineModel
+
     """
     n = x.shape[0]
     chunk = int(min(10000, n // 8))
@@ -235,7 +265,8 @@ def fit_baseline(x, rate_hz):
     best = None
     if fits:
         lowest = min(fit[0] for fit in fits)
-        best = min((fit for fit in fits if fit[0] <= 1.1 * lowest), key=lambda fit: (fit[5], fit[0]))
+        best = min((fit for fit in fits if fit[0] <= 1.1 * lowest),
+                   key=lambda fit: (fit[5], fit[0]))
     else:
         # every identified pair is unstable: fall back to white noise (alpha 0, f 0: v[k+1] = w[k])
         gain = np.ones_like(freq)
@@ -243,6 +274,7 @@ def fit_baseline(x, rate_hz):
         best = (misfit, 0.0, 0.0, var_w, var_nu, MEMORY_STEPS[0])
     misfit, alpha, f, var_w, var_nu, memory_sim = best
     return BaselineModel(bias_rad_s=float(np.mean(x)), alpha=float(alpha), f=float(f),
-                         sigma_w_rad_s=float(np.sqrt(var_w)), sigma_nu_rad_s=float(np.sqrt(var_nu)),
-                         memory_fit=memory_fit, memory_sim=int(memory_sim), chunk_size=chunk,
-                         chunks_identified=count, psd_misfit=misfit)
+                         sigma_w_rad_s=float(np.sqrt(var_w)),
+                         sigma_nu_rad_s=float(np.sqrt(var_nu)), memory_fit=memory_fit,
+                         memory_sim=int(memory_sim), chunk_size=chunk, chunks_identified=count,
+                         psd_misfit=misfit)

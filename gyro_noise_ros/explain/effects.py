@@ -1,42 +1,65 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Catalogue of effects the discrepancy workflow can add to the baseline: one fitter and one simulation term each.
+Catalogue of effects the discrepancy workflow can add to the baseline.
 
-Every effect has a ``name`` (the key written to explain.json), ``fit(ctx) -> dict | None`` (parameters in SI
-with the unit in the name, or None when the data show nothing of it) and a way to enter the simulation:
+One fitter and one simulation term each.
 
-* additive terms (``term``) are zero-mean over the record (the constant stays in the baseline bias);
-  deterministic ones are the same in every member, stochastic ones are drawn per member from the member's
-  own generator;
+Every effect has a ``name`` (the key written to explain.json), ``fit(ctx) -> dict | None``
+(parameters in SI with the unit in the name, or None when the data show nothing of it) and a way to
+enter the simulation:
+
+* additive terms (``term``) are zero-mean over the record (the constant stays in the baseline
+  bias); deterministic ones are the same in every member, stochastic ones are drawn per member from
+  the member's own generator;
 * ``quantization`` rounds the member's values onto the fitted lattice (applied last);
 * ``sample_loss`` and ``stamp_jitter`` change the member's stamps only.
 
 Time inside a term is the nominal sample time ``k / rate_hz``.
 
-=========================  ==========================================================================
+=========================  ========================================================================
 effect                     parameters (SI) and model
-=========================  ==========================================================================
-quantization               ``step_rad_s``, ``offset_rad_s``: v -> offset + step * round((v - offset) / step)
-sinusoid                   ``amplitude_rad_s``, ``frequency_hz``, ``phase_rad``: A sin(2 pi f t + phi)
+=========================  ========================================================================
+quantization               ``step_rad_s``, ``offset_rad_s``: v -> offset + step * round((v -
+                           offset) / step)
+sinusoid                   ``amplitude_rad_s``, ``frequency_hz``, ``phase_rad``: A sin(2 pi f t +
+                           phi)
 bias_drift                 ``slope_rad_s2``: R (t - T/2), the rate ramp (Allan: R tau / sqrt 2)
-bias_transient             ``amplitude_rad_s``, ``delay_s``, ``time_constant_s``: A (1 - exp(-(t - t0) / tc))
-                           for t >= t0, else 0 (a delayed first-order rise, or decay for A < 0)
-rate_random_walk           ``k_rad_s_per_sqrt_s``: K, a random walk of the bias, PSD (K / 2 pi)^2 / f^2,
-                           Allan variance K^2 tau / 3 (IEEE 952 two-sided PSDs, paper 001 Fig. 1, eq. 8)
-bias_instability           ``b_rad_s``: B, flicker bias, PSD B^2 / (2 pi f) between 1 / T and fs / 2
-                           (Allan floor 0.664 B)
-gauss_markov               ``sigma_rad_s``, ``correlation_time_s``: first-order Markov bias, stationary sd
-                           sigma, b[k+1] = phi b[k] + sqrt(1 - phi^2) sigma n[k], phi = exp(-1 / (fs tc))
-temperature_sensitivity    ``coefficient_rad_s_per_degc``, ``rate_coefficient_rad_s_per_degc_per_s``: bias
-                           = kT (T - mean T) + kdT dT/dt (paper 002 eq. 7: T and its rate as inputs)
-sample_loss                ``gap_rate_per_s``, ``mean_lost_samples``, ``max_lost_samples``: Poisson gap events,
-                           lost counts resampled from the measured gaps
-stamp_jitter               ``jitter_rms_s``, ``short_interval_fraction``: stamps built from the measured
-                           intervals resampled (bursty host-side stamps; an extra effect)
-=========================  ==========================================================================
+bias_transient             ``amplitude_rad_s``, ``delay_s``, ``time_constant_s``: A (1 - exp(-(t -
+                           t0) / tc)) for t >= t0, else 0 (a delayed first-order rise, or decay for
+                           A < 0)
+rate_random_walk           ``k_rad_s_per_sqrt_s``: K, a random walk of the bias, PSD (K / 2 pi)^2 /
+                           f^2, Allan variance K^2 tau / 3 (IEEE 952 two-sided PSDs, paper 001 Fig.
+                           1, eq. 8)
+bias_instability           ``b_rad_s``: B, flicker bias, PSD B^2 / (2 pi f) between 1 / T and fs /
+                           2 (Allan floor 0.664 B)
+gauss_markov               ``sigma_rad_s``, ``correlation_time_s``: first-order Markov bias,
+                           stationary sd sigma, b[k+1] = phi b[k] + sqrt(1 - phi^2) sigma n[k], phi
+                           = exp(-1 / (fs tc))
+temperature_sensitivity    ``coefficient_rad_s_per_degc``,
+                           ``rate_coefficient_rad_s_per_degc_per_s``: bias = kT (T - mean T) + kdT
+                           dT/dt (paper 002 eq. 7: T and its rate as inputs)
+sample_loss                ``gap_rate_per_s``, ``mean_lost_samples``, ``max_lost_samples``: Poisson
+                           gap events, lost counts resampled from the measured gaps
+stamp_jitter               ``jitter_rms_s``, ``short_interval_fraction``: stamps built from the
+                           measured intervals resampled (bursty host-side stamps; an extra effect)
+=========================  ========================================================================
 
-Detection. A fitter reports an effect only when its statistic on the data exceeds the same statistic on the
-current model's ensemble members (the null): above the worst member and above the members' mean + 5 sd
-(:func:`null_exceeded`); the workflow then keeps the candidate only if
+Detection. A fitter reports an effect only when its statistic on the data exceeds the same
+statistic on the current model's ensemble members (the null): above the worst member and above the
+members' mean + 5 sd (:func:`null_exceeded`); the workflow then keeps the candidate only if
 it shrinks the gap.
 """
 
@@ -47,8 +70,9 @@ from .signatures import chunk_series, compare, temperature_rate
 
 
 #: Standard deviations above the members' mean statistic a detection must lie (and above the worst
-#: member). The statistics are non-negative, often chi-square-like with an atom at 0, so the log-normal
-#: rule of the bands does not apply; for a chi-square with 1 dof, mean + 5 sd = 8.1 has a tail of 0.4 %.
+#: member). The statistics are non-negative, often chi-square-like with an atom at 0, so the
+#: log-normal rule of the bands does not apply; for a chi-square with 1 dof, mean + 5 sd = 8.1 has
+#: a tail of 0.4 %.
 NULL_K = 5.0
 
 
@@ -66,6 +90,7 @@ def null_exceeded(stat, null):
     Returns
     -------
     bool
+
     """
     null = np.asarray(null, dtype=np.float64)
     limit = max(float(null.max()), float(null.mean() + NULL_K * null.std(ddof=1)))
@@ -74,8 +99,10 @@ def null_exceeded(stat, null):
 
 class Context:
     """
-    What fitters see: the measurement, the residual after accepted deterministic terms, the layout and the
-    current model's ensemble signatures.
+    What fitters see.
+
+    The measurement, the residual after accepted deterministic terms, the layout and the current
+    model's ensemble signatures.
 
     Attributes
     ----------
@@ -89,6 +116,7 @@ class Context:
         Signatures of each member of the current model.
     accepted : dict
         name -> params of the effects already in the model.
+
     """
 
     def __init__(self, meas, residual, layout, meas_sig, member_sig, accepted):
@@ -110,7 +138,11 @@ class Context:
 
 
 class Effect:
-    """Base class: name, number of parameters, kind ('additive', 'stochastic', 'quantization', 'stamps')."""
+    """
+    Base class.
+
+    Name, number of parameters, kind ('additive', 'stochastic', 'quantization', 'stamps').
+    """
 
     name = ''
     n_params = 1
@@ -132,7 +164,11 @@ def _zero_mean(x):
 
 
 class Quantization(Effect):
-    """Output rounded to a lattice (LSB); fitted from the values themselves (see signatures.find_lattice)."""
+    """
+    Output rounded to a lattice (LSB).
+
+    Fitted from the values themselves (see signatures.find_lattice).
+    """
 
     name = 'quantization'
     n_params = 2
@@ -156,7 +192,11 @@ class Quantization(Effect):
 
 
 class Sinusoid(Effect):
-    """A sine at one frequency, found as the strongest line of the periodogram over its local background."""
+    """
+    A sine at one frequency.
+
+    Found as the strongest line of the periodogram over its local background.
+    """
 
     name = 'sinusoid'
     n_params = 3
@@ -189,15 +229,21 @@ class Sinusoid(Effect):
         den = lp[0] - 2 * lp[1] + lp[2]
         delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
         freq = (k + float(np.clip(delta, -0.5, 0.5))) * rate_hz / n
-        # the line must also be where the measurement leaves the psd or psd_peak band: a steep background
-        # (random walk, flicker) fools the local-median test at low frequency, but the ensemble of the
-        # current model has the same steep background
+        # the line must also be where the measurement leaves the psd or psd_peak band: a steep
+        # background (random walk, flicker) fools the local-median test at low frequency, but the
+        # ensemble of the current model has the same steep background
         edges = ctx.layout.band_edges
         band = int(np.searchsorted(edges, freq)) - 1
         if 0 <= band < edges.size - 1:
-            # narrow low bands hold one Welch bin, where a line raises the band mean, not the peak ratio
-            outside = [abs(c.z[band]) > c.threshold for c in
-                       (compare(name, ctx.meas_sig[name], ctx.members(name)) for name in ('psd', 'psd_peak'))]
+            # narrow low bands hold one Welch bin, where a line raises the band mean, not the peak
+            # ratio
+            outside = [
+                abs(c.z[band]) > c.threshold
+                for c in (
+                    compare(name, ctx.meas_sig[name], ctx.members(name))
+                    for name in ('psd', 'psd_peak')
+                )
+            ]
             if not any(outside):
                 return None
         t = ctx.t_nominal
@@ -213,7 +259,11 @@ class Sinusoid(Effect):
 
 
 def _centred_fit_stat(basis, y):
-    """RSS reductions of one-regressor fits: basis (R, K) and y (..., K) -> (..., R), plus amplitudes."""
+    """
+    RSS reductions of one-regressor fits.
+
+    Basis (R, K) and y (..., K) -> (..., R), plus amplitudes.
+    """
     bc = basis - basis.mean(axis=1, keepdims=True)
     yc = y - y.mean(axis=-1, keepdims=True)
     norm = np.einsum('rk,rk->r', bc, bc)
@@ -250,7 +300,7 @@ class BiasTransient(Effect):
 
     @staticmethod
     def shape(t, delay, tc):
-        """Unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
+        """Return the unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
         return np.where(t >= delay, -np.expm1(-np.maximum(t - delay, 0.0) / tc), 0.0)
 
     def _grid(self, t, duration):
@@ -270,7 +320,8 @@ class BiasTransient(Effect):
         if not null_exceeded(float(stat[best]), null.max(axis=1)):
             return None
         delay, tc = pairs[best]
-        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay), 'time_constant_s': float(tc)}
+        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay),
+                'time_constant_s': float(tc)}
 
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
@@ -279,7 +330,11 @@ class BiasTransient(Effect):
 
 
 class TemperatureSensitivity(Effect):
-    """Bias proportional to temperature and to its rate (paper 002), least squares on the chunk series."""
+    """
+    Bias proportional to temperature and to its rate (paper 002).
+
+    Fitted by least squares on the chunk series.
+    """
 
     name = 'temperature_sensitivity'
     n_params = 2
@@ -341,6 +396,7 @@ def allan_template_from_psd(psd, tau_s, rate_hz, duration_s):
     -------
     numpy.ndarray
         Allan variance ((rad/s)^2).
+
     """
     freq = np.geomspace(1.0 / duration_s, rate_hz / 2.0, 6000)
     x = np.pi * np.outer(tau_s, freq)
@@ -349,13 +405,18 @@ def allan_template_from_psd(psd, tau_s, rate_hz, duration_s):
 
 
 def gm_allan(sigma, tc, tau):
-    """Closed-form Allan variance of a first-order Gauss-Markov process (stationary sd sigma, time tc)."""
+    """Return the closed-form AVAR of a first-order Gauss-Markov process (sd sigma, time tc)."""
     x = tau / tc
-    return 2.0 * sigma ** 2 * tc / tau * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x)) / (2.0 * x))
+    return 2.0 * sigma ** 2 * tc / tau * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x))
+                                          / (2.0 * x))
 
 
 class _AllanFitted(Effect):
-    """Common part: weighted least squares of a template to the excess Allan variance, null from members."""
+    """
+    Common part.
+
+    Weighted least squares of a template to the excess Allan variance, null from members.
+    """
 
     kind = 'stochastic'
 
@@ -367,7 +428,8 @@ class _AllanFitted(Effect):
         avar_m = ctx.meas_sig['allan'] ** 2
         members = ctx.members('allan') ** 2
         mean = members.mean(axis=0)
-        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very closely
+        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very
+        # closely
         sd = np.maximum(members.std(axis=0, ddof=1), 0.05 * mean)
         extras, templ = self.templates(ctx)
         w = 1.0 / sd ** 2
@@ -385,12 +447,13 @@ class _AllanFitted(Effect):
         loo = members - (members.sum(axis=0)[None, :] - members) / (count - 1)
         null, _ = best(loo)
         r = int(np.argmax(stat[:, 0]))
-        if not null_exceeded(float(stat[r, 0]), null.max(axis=0)) or not self.resolved(r, len(extras)):
+        if not null_exceeded(
+                float(stat[r, 0]), null.max(axis=0)) or not self.resolved(r, len(extras)):
             return None
         return self.params(float(amp[r, 0]), extras[r])
 
     def resolved(self, index, count):
-        """Whether the best template (of ``count``) is one the record can tell from its neighbours."""
+        """Tell whether the record tells the best template (of ``count``) from its neighbours."""
         return True
 
 
@@ -412,7 +475,11 @@ class RateRandomWalk(_AllanFitted):
 
 
 def flicker_noise(n, rate_hz, b_rad_s, rng):
-    """Flicker bias with PSD B^2 / (2 pi f) (IEEE 952 convention) from 1 / T to fs / 2, by spectral shaping."""
+    """
+    Flicker bias with PSD B^2 / (2 pi f) (IEEE 952 convention) from 1 / T to fs / 2.
+
+    Made by spectral shaping.
+    """
     spec = np.fft.rfft(rng.standard_normal(n))
     freq = np.fft.rfftfreq(n, 1.0 / rate_hz)
     gain = np.zeros_like(freq)
@@ -430,8 +497,8 @@ class BiasInstability(_AllanFitted):
 
     def templates(self, ctx):
         duration = ctx.meas.n / ctx.meas.rate_hz
-        t = allan_template_from_psd(lambda f: 1.0 / (2 * np.pi * f), ctx.layout.tau_s, ctx.meas.rate_hz,
-                                    duration)
+        t = allan_template_from_psd(lambda f: 1.0 / (2 * np.pi * f), ctx.layout.tau_s,
+                                    ctx.meas.rate_hz, duration)
         return [{}], t[None, :]
 
     def params(self, amp, extra):
@@ -442,7 +509,11 @@ class BiasInstability(_AllanFitted):
 
 
 class GaussMarkov(_AllanFitted):
-    """First-order Gauss-Markov bias; correlation time on a log grid (3 / fs .. T / 10), variance by LS."""
+    """
+    First-order Gauss-Markov bias.
+
+    Correlation time on a log grid (3 / fs .. T / 10), variance by LS.
+    """
 
     name = 'gauss_markov'
     n_params = 2
@@ -451,15 +522,16 @@ class GaussMarkov(_AllanFitted):
         duration = ctx.meas.n / ctx.meas.rate_hz
         tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, 30)
         tau = ctx.layout.tau_s
-        return [{'correlation_time_s': float(c)} for c in tcs], np.array([gm_allan(1.0, c, tau) for c in tcs])
+        return [{'correlation_time_s': float(c)} for c in tcs], np.array(
+            [gm_allan(1.0, c, tau) for c in tcs])
 
     def params(self, amp, extra):
         return {'sigma_rad_s': float(np.sqrt(amp)), **extra}
 
     def resolved(self, index, count):
-        # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the Allan
-        # peak at 1.89 tc is not inside the tau range: a random walk or flicker bias looks the same there,
-        # and those one-parameter effects are the answer
+        # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the
+        # Allan peak at 1.89 tc is not inside the tau range: a random walk or flicker bias looks
+        # the same there, and those one-parameter effects are the answer
         return index < count - 2
 
     def term(self, params, n, rate_hz, rng, ctx):
@@ -479,12 +551,16 @@ def _intervals(ctx):
 
 
 def jittery(intervals):
-    """True when more than 1 % of the stamp intervals are shorter than half a period (bursty delivery)."""
+    """Tell whether over 1 % of the stamp intervals are below half a period (bursty delivery)."""
     return bool(np.mean(intervals < 0.5) > 0.01)
 
 
 class SampleLoss(Effect):
-    """Gaps in otherwise regular stamps: Poisson gap events, lost counts resampled from the measured gaps."""
+    """
+    Gaps in otherwise regular stamps.
+
+    Poisson gap events, lost counts resampled from the measured gaps.
+    """
 
     name = 'sample_loss'
     n_params = 2
@@ -513,7 +589,11 @@ class SampleLoss(Effect):
 
 
 class StampJitter(Effect):
-    """Bursty or jittered stamps (host-side receive times): intervals resampled from the measurement."""
+    """
+    Bursty or jittered stamps (host-side receive times).
+
+    Intervals resampled from the measurement.
+    """
 
     name = 'stamp_jitter'
     n_params = 2
@@ -535,8 +615,9 @@ class StampJitter(Effect):
 
 
 #: The catalogue in the order candidates are listed in reports.
-CATALOGUE = (Quantization(), Sinusoid(), BiasDrift(), BiasTransient(), RateRandomWalk(), BiasInstability(),
-             GaussMarkov(), TemperatureSensitivity(), SampleLoss(), StampJitter())
+CATALOGUE = (Quantization(), Sinusoid(), BiasDrift(), BiasTransient(), RateRandomWalk(),
+             BiasInstability(), GaussMarkov(), TemperatureSensitivity(), SampleLoss(),
+             StampJitter())
 NAMES = tuple(e.name for e in CATALOGUE)
 
 

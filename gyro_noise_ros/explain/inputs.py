@@ -1,26 +1,42 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Inputs of the discrepancy workflow: one gyro axis with stamps, optionally the sensor temperature.
 
 Two sources are read, both into a :class:`Measurement` (SI units):
 
-* a rosbag2 directory / ``.db3`` / ``.mcap`` or a ROS 1 ``.bag`` with ``sensor_msgs/Imu`` (and optionally
-  ``sensor_msgs/Temperature``), through :class:`gyro_noise_ros.bag.ImuBagReader`; the temperature is
-  interpolated linearly onto the Imu stamps;
+* a rosbag2 directory / ``.db3`` / ``.mcap`` or a ROS 1 ``.bag`` with ``sensor_msgs/Imu`` (and
+  optionally ``sensor_msgs/Temperature``), through :class:`gyro_noise_ros.bag.ImuBagReader`; the
+  temperature is interpolated linearly onto the Imu stamps;
 * a CSV file with a header line. Documented columns (any order, extra columns ignored):
 
-  ============================================  ===========================================================
-  ``time_s`` (or ``t_s``)                        sample time in s (optional when ``rate_hz`` is given)
-  ``gyro_x_rad_s``, ``gyro_y_rad_s``,            angular rate in rad/s; ``gyro_x_dps`` ... (deg/s) are
-  ``gyro_z_rad_s``                               accepted instead and converted (only the chosen axis is needed)
-  ``temperature_c`` (or ``temp_c``)              sensor temperature in degC (optional)
-  ============================================  ===========================================================
+  ====================================  ===========================================================
+  ``time_s`` (or ``t_s``)               sample time in s (optional when ``rate_hz`` is given)
+  ``gyro_x_rad_s``, ``gyro_y_rad_s``,   angular rate in rad/s; ``gyro_x_dps`` ... (deg/s) are
+  ``gyro_z_rad_s``                      accepted instead and converted (only the chosen axis is
+                                        needed)
+  ``temperature_c`` (or ``temp_c``)     sensor temperature in degC (optional)
+  ====================================  ===========================================================
 
 * a PX4 ULog ``.ulg`` (``sensor_combined`` or ``sensor_gyro``), through
   :class:`gyro_noise_ros.bag.tabular.TableImuReader`.
 
-Stamps: the nominal rate is ``rate_hz`` if given, else the :mod:`gyro_noise_ros.core.timebase` estimate
-(the same estimator as ``gyro_noise_analyze``: step mean for device clocks, block median for bursty
-host stamps); the estimate, its method and its warnings are kept in ``Measurement.timebase``.
+Stamps: the nominal rate is ``rate_hz`` if given, else the :mod:`gyro_noise_ros.core.timebase`
+estimate (the same estimator as ``gyro_noise_analyze``: step mean for device clocks, block median
+for bursty host stamps); the estimate, its method and its warnings are kept in
+``Measurement.timebase``.
 """
 
 import csv
@@ -31,9 +47,9 @@ import numpy as np
 
 from ..errors import BagError, InputDataError, ParameterError
 
-#: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks and
-#: the order identification needs chunks longer than its memory; the layout scales with the record, so
-#: a minute at 250 Hz, 15,000 samples, is enough).
+#: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks
+#: and the order identification needs chunks longer than its memory; the layout scales with the
+#: record, so a minute at 250 Hz, 15,000 samples, is enough).
 MIN_SAMPLES = 8192
 
 AXES = ('x', 'y', 'z')
@@ -60,6 +76,7 @@ class Measurement:
         Where the data came from (for the report).
     timebase : core.timebase.RateEstimate or None
         How the rate was obtained from the stamps (None without stamps).
+
     """
 
     rate: np.ndarray
@@ -72,7 +89,7 @@ class Measurement:
 
     @property
     def n(self):
-        """Number of samples."""
+        """Count the samples."""
         return int(self.rate.shape[0])
 
     @property
@@ -110,18 +127,21 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
     Returns
     -------
     Measurement
+
     """
     _check_axis(axis)
     rate = np.asarray(rate, dtype=np.float64).ravel()
     n = rate.shape[0]
     bad = ~np.isfinite(rate)
     if bad.any():
-        raise InputDataError(f'angular rate ({axis} axis) has {int(bad.sum())} NaN/Inf sample(s), first at '
-                             f'index {int(np.argmax(bad))}; remove or repair them first')
+        raise InputDataError(
+            f'angular rate ({axis} axis) has {int(bad.sum())} NaN/Inf sample(s), first at '
+            f'index {int(np.argmax(bad))}; remove or repair them first')
     if n < MIN_SAMPLES:
         raise InputDataError(f'too short to analyse: {n} samples, need at least {MIN_SAMPLES}')
     if np.ptp(rate) == 0.0:
-        raise InputDataError(f'angular rate ({axis} axis) is constant ({rate[0]!r}): nothing to analyse')
+        raise InputDataError(
+            f'angular rate ({axis} axis) is constant ({rate[0]!r}): nothing to analyse')
     if t_s is None:
         if rate_hz is None:
             raise ParameterError('rate_hz is required when no sample times are given')
@@ -131,10 +151,12 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
         if t.shape[0] != n:
             raise InputDataError(f'{t.shape[0]} sample times for {n} samples')
         if not np.all(np.isfinite(t)):
-            raise InputDataError(f'sample times have {int((~np.isfinite(t)).sum())} NaN/Inf value(s)')
+            raise InputDataError(
+                f'sample times have {int((~np.isfinite(t)).sum())} NaN/Inf value(s)')
         if np.any(np.diff(t) < 0):
-            raise InputDataError(f'sample times go backwards {int((np.diff(t) < 0).sum())} time(s); '
-                                 'sort the recording or give --rate-hz and no time column')
+            raise InputDataError(
+                f'sample times go backwards {int((np.diff(t) < 0).sum())} time(s); '
+                'sort the recording or give --rate-hz and no time column')
         t = t - t[0]
         if t[-1] <= 0:
             raise InputDataError('all sample times are equal: give --rate-hz')
@@ -154,12 +176,13 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
             raise InputDataError(f'{temp.shape[0]} temperature values for {n} samples')
         bad = ~np.isfinite(temp)
         if bad.any():
-            raise InputDataError(f'temperature has {int(bad.sum())} NaN/Inf value(s), first at index '
-                                 f'{int(np.argmax(bad))}')
+            raise InputDataError(
+                f'temperature has {int(bad.sum())} NaN/Inf value(s), first at index '
+                f'{int(np.argmax(bad))}')
     if require_temperature and temp is None:
         raise InputDataError(f'temperature was asked for but {source or "the input"} has none')
-    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis, source=source,
-                       timebase=timebase)
+    return Measurement(rate=rate, t_s=t, rate_hz=rate_hz, temperature_c=temp, axis=axis,
+                       source=source, timebase=timebase)
 
 
 def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
@@ -171,6 +194,7 @@ def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
     path : str or os.PathLike
         CSV file with a header line.
     axis : {'x', 'y', 'z'}, keyword-only
+        Gyro axis to analyse.
     rate_hz : float, keyword-only
         Nominal rate (Hz); required when there is no time column, else overrides the mean rate.
     require_temperature : bool, keyword-only
@@ -179,6 +203,7 @@ def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
     Returns
     -------
     Measurement
+
     """
     _check_axis(axis)
     path = Path(path)
@@ -202,8 +227,9 @@ def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
     i_dps = col(f'gyro_{axis}_dps')
     i_temp = col('temperature_c', 'temp_c')
     if i_rad is None and i_dps is None:
-        raise InputDataError(f'CSV {str(path)!r} has no column gyro_{axis}_rad_s (or gyro_{axis}_dps); '
-                             f'columns: {", ".join(names)}')
+        raise InputDataError(
+            f'CSV {str(path)!r} has no column gyro_{axis}_rad_s (or gyro_{axis}_dps); '
+            f'columns: {", ".join(names)}')
     if i_t is None and rate_hz is None:
         raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
     try:
@@ -229,16 +255,19 @@ def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None
     path : str or os.PathLike
         rosbag2 directory/file or ROS 1 bag.
     topic, temperature_topic : str, keyword-only
-        Imu and Temperature topics (auto-detected when None, see ImuBagReader). Naming a temperature
-        topic means temperature is required.
+        Imu and Temperature topics (auto-detected when None, see ImuBagReader). Naming a
+        temperature topic means temperature is required.
     axis : {'x', 'y', 'z'}, keyword-only
+        Gyro axis to analyse.
     rate_hz : float, keyword-only
         Nominal rate (Hz); None means the mean rate of the header stamps.
     require_temperature : bool, keyword-only
+        Raise InputDataError if there is no temperature.
 
     Returns
     -------
     Measurement
+
     """
     from ..bag import ImuBagReader
     from ..bag.tabular import TableImuReader
@@ -264,9 +293,11 @@ def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None
         order = np.argsort(ts, kind='stable')
         temp = np.interp(t_s, ts[order], temperature[1][order])
     elif require_temperature:
-        raise InputDataError(f'temperature was asked for but bag {str(path)!r} has no temperature messages')
-    return make_measurement(np.concatenate(rates), t_s=t_s, rate_hz=rate_hz, temperature_c=temp, axis=axis,
-                            source=f'{path} ({imu_topic})', require_temperature=require_temperature)
+        raise InputDataError(
+            f'temperature was asked for but bag {str(path)!r} has no temperature messages')
+    return make_measurement(np.concatenate(rates), t_s=t_s, rate_hz=rate_hz, temperature_c=temp,
+                            axis=axis, source=f'{path} ({imu_topic})',
+                            require_temperature=require_temperature)
 
 
 def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
@@ -284,6 +315,7 @@ def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=No
     Returns
     -------
     Measurement
+
     """
     path = Path(path)
     if not path.exists():
@@ -291,8 +323,8 @@ def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=No
     if path.suffix.lower() == '.csv':
         return load_csv(path, axis=axis, rate_hz=rate_hz, require_temperature=require_temperature)
     # .ulg is read by bag.tabular.TableImuReader inside load_bag.
-    return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis, rate_hz=rate_hz,
-                    require_temperature=require_temperature)
+    return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis,
+                    rate_hz=rate_hz, require_temperature=require_temperature)
 
 
 def select(meas, *, start_s=None, end_s=None, static='auto'):
@@ -302,6 +334,7 @@ def select(meas, *, start_s=None, end_s=None, static='auto'):
     Parameters
     ----------
     meas : Measurement
+        The loaded input.
     start_s, end_s : float, optional, keyword-only
         Window in seconds after the first sample.
     static : {'auto', 'off'}, keyword-only
@@ -312,6 +345,7 @@ def select(meas, *, start_s=None, end_s=None, static='auto'):
     tuple
         ``(Measurement, left_out)`` with ``left_out`` a dict of sample counts ('before_start',
         'after_end', 'motion') and, when motion was cut, 'static_segment_s'.
+
     """
     from ..core.segments import WindowStats
 
@@ -345,7 +379,7 @@ def select(meas, *, start_s=None, end_s=None, static='auto'):
 
 def available_axes(path):
     """
-    Return the gyro axes an input holds (a CSV may carry only some; bags and ULogs carry all three).
+    Return the gyro axes an input holds (a CSV may carry only some; bags and ULogs hold three).
 
     Parameters
     ----------
@@ -355,6 +389,7 @@ def available_axes(path):
     Returns
     -------
     tuple of str
+
     """
     path = Path(path)
     if path.suffix.lower() != '.csv' or not path.is_file():

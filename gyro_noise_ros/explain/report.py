@@ -1,5 +1,21 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Outputs of the discrepancy workflow: explain.json, report.md and PNG figures (see docs/discrepancy.md).
+Outputs of the discrepancy workflow.
+
+explain.json, report.md and PNG figures (see docs/discrepancy.md).
 
 Figures show each signature in its natural units: the measurement (black) against the ensemble band
 ``mu +/- T_s sd`` of the model before a step (grey) and after it (blue), transformed back from the
@@ -11,18 +27,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ParameterError
 from . import signatures as sig
 from .effects import public_params
+from ..errors import ParameterError
 
 DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}
 _LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
 # One unit family per figure (deg/s), the unit in every axis label.
-_TITLES = {'allan': 'Allan deviation', 'psd': 'power spectral density', 'psd_peak': 'band peak / band mean',
-           'chunk_bias': 'chunk bias', 'chunk_variance': 'chunk variance',
-           'histogram': 'value histogram', 'stamps': 'stamp intervals',
-           'temperature': 'corr(bias, T), corr(bias, dT/dt)'}
+_TITLES = {'allan': 'Allan deviation', 'psd': 'power spectral density',
+           'psd_peak': 'band peak / band mean', 'chunk_bias': 'chunk bias',
+           'chunk_variance': 'chunk variance', 'histogram': 'value histogram',
+           'stamps': 'stamp intervals', 'temperature': 'corr(bias, T), corr(bias, dT/dt)'}
 _YLABELS = {'allan': 'ADEV (deg/s)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'peak / mean (1)',
             'chunk_bias': 'bias (deg/s)', 'chunk_variance': 'variance ((deg/s)^2)',
             'histogram': 'samples (count)', 'stamps': 'intervals (count)',
@@ -85,13 +101,18 @@ def plot_signatures(path, layout, names, comparisons, labels, colours, title):
     Parameters
     ----------
     path : pathlib.Path
+        PNG file to write.
     layout : Layout
+        Where each signature is evaluated.
     names : list of str
         Signatures to draw.
     comparisons : list of dict
         One dict (name -> Comparison) per band to draw; the last one marks the outside points.
     labels, colours : list of str
+        Legend label and colour per band.
     title : str
+        Figure title.
+
     """
     import matplotlib
     matplotlib.use('Agg')
@@ -102,7 +123,8 @@ def plot_signatures(path, layout, names, comparisons, labels, colours, title):
     # 4.5 in per panel at 100 dpi: 1800 px for the 4 columns of 7-8 signatures (issue 11: >= 1600).
     fig, axes = plt.subplots(rows, cols, figsize=(4.5 * cols, 3.6 * rows), squeeze=False)
     for ax, name in zip(axes.ravel(), names):
-        _plot_one(ax, layout, name, [c.get(name) if c else None for c in comparisons], labels, colours)
+        _plot_one(ax, layout, name, [c.get(name) if c else None for c in comparisons], labels,
+                  colours)
     for ax in axes.ravel()[len(names):]:
         ax.axis('off')
     axes.ravel()[0].legend(fontsize=8, loc='best')
@@ -120,7 +142,8 @@ def _fmt_params(params):
 def verdict(result):
     """One-paragraph verdict printed by the command line tool."""
     if not result.steps and not result.unexplained:
-        return (f'consistent with the baseline model (fractional noise alpha={result.baseline.alpha:.2f}): '
+        return ('consistent with the baseline model (fractional noise '
+                f'alpha={result.baseline.alpha:.2f}): '
                 f'gap {result.gap_final:.3f}, nothing named')
     named = ', '.join(s.effect for s in result.steps) or 'nothing'
     text = f'added {named}; gap {result.gap_initial:.3f} -> {result.gap_final:.3f}'
@@ -138,34 +161,39 @@ def write_outputs(result, out_dir):
     Parameters
     ----------
     result : ExplainResult
+        The workflow's result.
     out_dir : str or os.PathLike
+        Output directory (created).
 
     Returns
     -------
     pathlib.Path
         The directory.
+
     """
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise ParameterError(f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
+        raise ParameterError(
+            f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
     data = result.to_dict()
     (out / 'explain.json').write_text(json.dumps(data, indent=2, default=_json_default) + '\n')
     layout = result.layout
     names = list(result.comparisons_initial)
     figures = []
     plot_signatures(out / 'overview.png', layout, names,
-                    [result.comparisons_initial, result.comparisons_final if result.steps else None],
-                    ['baseline', 'final model'], ['0.6', 'tab:blue'],
+                    [result.comparisons_initial, result.comparisons_final if result.steps
+                     else None], ['baseline', 'final model'], ['0.6', 'tab:blue'],
                     f'measurement vs ensemble: baseline (grey), final model (blue); gap '
                     f'{result.gap_initial:.3f} -> {result.gap_final:.3f}')
     figures.append('overview.png')
     for i, step in enumerate(result.steps, 1):
         changed = [n for n in names if step.before[n].g > 1 or step.after[n].g > 1] or names[:4]
         name = f'step{i}_{step.effect}.png'
-        plot_signatures(out / name, layout, changed[:4], [step.before, step.after], ['before', 'after'],
-                        ['0.6', 'tab:blue'], f'step {i}: + {step.effect} (gap {step.gap_before:.3f} -> '
+        plot_signatures(out / name, layout, changed[:4], [step.before, step.after],
+                        ['before', 'after'], ['0.6', 'tab:blue'],
+                        f'step {i}: + {step.effect} (gap {step.gap_before:.3f} -> '
                         f'{step.gap_after:.3f})')
         figures.append(name)
     (out / 'report.md').write_text(_markdown(result))
@@ -185,42 +213,44 @@ def _markdown(result):
     lines = [
         '# Discrepancy report', '',
         f'Input: `{meas.source}`, axis {meas.axis}, {meas.n} samples at {meas.rate_hz:.6g} Hz '
-        f'({meas.duration_s:.1f} s){", with temperature" if meas.temperature_c is not None else ""}.',
-        f'Ensemble: {result.ensemble} members, seed {result.seed}. Run time {result.seconds["total"]:.1f} s.', '',
-        f'**Verdict:** {verdict(result)}', '',
-        '## Baseline model (paper 000 eqs. 2, 10, 11)', '',
-        '| parameter | value |', '|---|---|',
+        f'({meas.duration_s:.1f} '
+        f's){", with temperature" if meas.temperature_c is not None else ""}.',
+        f'Ensemble: {result.ensemble} members, seed {result.seed}. Run time '
+        f'{result.seconds["total"]:.1f} s.', '', f'**Verdict:** {verdict(result)}', '',
+        '## Baseline model (paper 000 eqs. 2, 10, 11)', '', '| parameter | value |', '|---|---|',
         f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * DEG:.5g} deg/s) |',
-        f'| order alpha (variance method) | {base.alpha:.3f} |',
-        f'| f | {base.f:.5g} |',
+        f'| order alpha (variance method) | {base.alpha:.3f} |', f'| f | {base.f:.5g} |',
         f'| sigma_w | {base.sigma_w_rad_s:.4g} rad/s |',
         f'| sigma_nu (white measurement noise) | {base.sigma_nu_rad_s:.4g} rad/s |',
         f'| memory L (fit / simulation) | {base.memory_fit} / {base.memory_sim} |',
         f'| chunks identified (size) | {base.chunks_identified} ({base.chunk_size}) |',
         f'| PSD misfit above fs/100 (rms dex) | {base.psd_misfit:.3f} |', '',
-        f'Initial gap G = {result.gap_initial:.3f} (definition: docs/discrepancy.md; 0 = inside every band).', '',
-    ]
+        f'Initial gap G = {result.gap_initial:.3f} (definition: docs/discrepancy.md; 0 = inside '
+        'every band).', '',]
     if result.where_final or result.steps:
         first = result.steps[0].where if result.steps else result.where_final
         lines += ['Where the baseline leaves the band:', ''] + [f'- {w}' for w in first] + ['']
     lines += ['![overview](overview.png)', '']
     for i, step in enumerate(result.steps, 1):
-        lines += [f'## Step {i}: {step.effect}', '',
-                  f'Parameters: {_fmt_params(step.params)}.', '',
-                  f'Gap {step.gap_before:.3f} -> {step.gap_after:.3f}. Candidates tried (gap after): '
-                  + ', '.join(f'{k} {v:.3f}' for k, v in step.candidates.items()) + '.', '']
+        lines += [
+            f'## Step {i}: {step.effect}', '', f'Parameters: {_fmt_params(step.params)}.', '',
+            f'Gap {step.gap_before:.3f} -> {step.gap_after:.3f}. Candidates tried (gap after): '
+            + ', '.join(f'{k} {v:.3f}' for k, v in step.candidates.items()) + '.', '']
         if step.where_after:
-            lines += ['Still outside after this step:', ''] + [f'- {w}' for w in step.where_after] + ['']
+            lines += [
+                'Still outside after this step:', ''] + [f'- {w}' for w in step.where_after] + ['']
         lines += [f'![step {i}](step{i}_{step.effect}.png)', '']
     lines += ['## Result', '']
     if result.unexplained:
-        lines += ['**Unexplained**: no catalogue effect brings the measurement inside the band. Still outside:', '']
+        lines += ['**Unexplained**: no catalogue effect brings the measurement inside the band. '
+                  'Still outside:', '']
         lines += [f'- {w}' for w in result.where_final] + ['']
         if result.tried_last:
             lines += ['Rejected candidates of the last round (gap after): '
                       + ', '.join(f'{k} {v:.3f}' for k, v in result.tried_last.items()) + '.', '']
     else:
-        lines += [f'Inside the ensemble band (gap {result.gap_final:.3f} <= 0.1, the tolerance).', '']
+        lines += [f'Inside the ensemble band (gap {result.gap_final:.3f} <= 0.1, the tolerance).',
+                  '']
     lines += ['| signature | g (worst point / band edge) | band half-width (z) |', '|---|---|---|']
     for name, comp in result.comparisons_final.items():
         lines.append(f'| {name} | {comp.g:.3f} | {comp.threshold:.2f} |')

@@ -1,46 +1,65 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Signatures that compare a measurement with a simulated ensemble, the band and the scalar gap.
 
-Each signature is a vector of points on an axis fixed by the measurement (the :class:`Layout`), so the
-measurement and every ensemble member are evaluated at the same points. Each exposes different effects:
+Each signature is a vector of points on an axis fixed by the measurement (the :class:`Layout`), so
+the measurement and every ensemble member are evaluated at the same points. Each exposes different
+effects:
 
-=================  =========================================  ======================  ==========================
-name               points                                     compared as             exposes
-=================  =========================================  ======================  ==========================
-``allan``          overlapping Allan deviation at tau =       log10                   RRW, flicker, Gauss-Markov,
-                   m / rate_hz, m = 1, sqrt 2, 2, ... n/10                            ramp, sinusoid
+=================  =======================================  ==============  =======================
+name               points                                   compared as     exposes
+=================  =======================================  ==============  =======================
+``allan``          overlapping Allan deviation at tau =     log10           RRW, flicker, GM,
+                   m / rate_hz, m = 1, sqrt 2, 2, ... n/10                  ramp, sinusoid
                    (paper 001 eq. 7)
-``psd``            Welch PSD, Hann, 50 % overlap, averaged    log10                   sinusoid, colour, GM
+``psd``            Welch PSD, Hann, 50 % overlap, averaged  log10           sinusoid, colour, GM
                    in up to 40 log-spaced frequency bands
-``psd_peak``       largest Welch bin of each band over the    log10                   spectral lines
+``psd_peak``       largest Welch bin of each band over the  log10           spectral lines
                    band mean
-``chunk_bias``     mean of each of ~100 equal chunks          linear (rad/s)          ramp, transient, steps
-``chunk_variance`` variance of each chunk                     log10                   non-stationary noise
-``histogram``      value histogram, 32 bins over mean +/-     sqrt(count) (variance   quantisation, non-Gauss
-                   4 sd; plus 10 lattice-phase bins when the  stabilising for
-                   values sit on a lattice                    Poisson counts)
-``stamps``         counts of stamp intervals dt / period in   sqrt(count)             sample loss, jitter
-                   [0, .5), [.5, 1.5), [1.5, 2.5), [2.5, 5.5),
-                   [5.5, 20.5), [20.5, inf)
-``temperature``    correlation of the chunk bias with chunk   linear                  temperature sensitivity
-                   temperature and with its rate dT/dt
-=================  =========================================  ======================  ==========================
+``chunk_bias``     mean of each of ~100 equal chunks        linear (rad/s)  ramp, transient, steps
+``chunk_variance`` variance of each chunk                   log10           non-stationary noise
+``histogram``      value histogram, 32 bins over mean +/-   sqrt(count)     quantisation, non-Gauss
+                   4 sd; plus 10 lattice-phase bins when
+                   the values sit on a lattice
+``stamps``         counts of stamp intervals dt / period    sqrt(count)     sample loss, jitter
+                   in [0, .5), [.5, 1.5), [1.5, 2.5),
+                   [2.5, 5.5), [5.5, 20.5), [20.5, inf)
+``temperature``    correlation of the chunk bias with       linear          temperature sensitivity
+                   chunk temperature and with its rate
+                   dT/dt
+=================  =======================================  ==============  =======================
+
+sqrt(count) stabilises the variance of Poisson counts; GM is the Gauss-Markov bias.
 
 Band and gap (the definitions the report and the tests use)
 ----------------------------------------------------------
 For signature s with points i, let Y[j, i] be the transformed values of the N members and y[i] the
 measurement's. With mu_i, sd_i the ensemble mean and standard deviation (``sd_i`` floored, see
 :data:`SD_FLOOR`: a model tolerance of 0.01 dex for log quantities, half a count for sqrt counts),
-``z_i = (y_i - mu_i) / sd_i`` and ``D_s = max_i |z_i|``. The same statistic for each member against the
-other N - 1 (leave-one-out) gives ``D_s,j``; the band half-width in z units is
-``T_s = max(3, max_j D_s,j, exp(mean(ln D_s,j) + 3 sd(ln D_s,j)))`` (a log-normal extrapolation of the
-members' own worst deviations to about the 99.9th percentile, never below the worst member nor 3). The
-measurement is **inside the band** of s iff ``g_s = D_s / T_s <= 1``; the **band** drawn in the figures is
-``mu_i +/- T_s sd_i``.
+``z_i = (y_i - mu_i) / sd_i`` and ``D_s = max_i |z_i|``. The same statistic for each member against
+the other N - 1 (leave-one-out) gives ``D_s,j``; the band half-width in z units is ``T_s = max(3,
+max_j D_s,j, exp(mean(ln D_s,j) + 3 sd(ln D_s,j)))`` (a log-normal extrapolation of the members'
+own worst deviations to about the 99.9th percentile, never below the worst member nor 3). The
+measurement is **inside the band** of s iff ``g_s = D_s / T_s <= 1``; the **band** drawn in the
+figures is ``mu_i +/- T_s sd_i``.
 
-The scalar gap is ``G = sum_s ln(max(g_s, 1))``: zero iff the measurement is inside every band, and each
-signature adds the log of how many band half-widths its worst point lies out. It is comparable between
-models because every model is judged by its own ensemble, with the same layout and the same rule.
+The scalar gap is ``G = sum_s ln(max(g_s, 1))``: zero iff the measurement is inside every band, and
+each signature adds the log of how many band half-widths its worst point lies out. It is comparable
+between models because every model is judged by its own ensemble, with the same layout and the same
+rule.
 """
 
 from dataclasses import dataclass
@@ -49,14 +68,15 @@ import numpy as np
 import scipy.signal
 
 #: Transform and sd floor per signature (see module doc).
-TRANSFORM = {'allan': 'log10', 'psd': 'log10', 'psd_peak': 'log10', 'chunk_bias': 'linear', 'chunk_variance': 'log10',
-             'histogram': 'sqrt', 'stamps': 'sqrt', 'temperature': 'linear'}
-SD_FLOOR = {'allan': 0.01, 'psd': 0.01, 'psd_peak': 0.01, 'chunk_bias': 0.0, 'chunk_variance': 0.01, 'histogram': 0.5,
-            'stamps': 0.5, 'temperature': 0.01}
+TRANSFORM = {'allan': 'log10', 'psd': 'log10', 'psd_peak': 'log10', 'chunk_bias': 'linear',
+             'chunk_variance': 'log10', 'histogram': 'sqrt', 'stamps': 'sqrt',
+             'temperature': 'linear'}
+SD_FLOOR = {'allan': 0.01, 'psd': 0.01, 'psd_peak': 0.01, 'chunk_bias': 0.0,
+            'chunk_variance': 0.01, 'histogram': 0.5, 'stamps': 0.5, 'temperature': 0.01}
 #: Number of log-standard-deviations of the members' worst deviations that sets the band edge.
 BAND_K = 3.0
-#: Smallest band half-width in z units: with few or identical members (ideal stamps) the members' own
-#: deviations say nothing, and a 3-sigma point-wise band is the conventional floor.
+#: Smallest band half-width in z units: with few or identical members (ideal stamps) the members'
+#: own deviations say nothing, and a 3-sigma point-wise band is the conventional floor.
 MIN_THRESHOLD = 3.0
 STAMP_EDGES = np.array([0.0, 0.5, 1.5, 2.5, 5.5, 20.5, np.inf])
 N_CHUNKS = 100
@@ -90,6 +110,7 @@ class Layout:
         (step_rad_s, offset_rad_s) of the measurement's value lattice, when it has one.
     temperature : bool
         Whether the temperature signature is evaluated.
+
     """
 
     rate_hz: float
@@ -131,11 +152,14 @@ def find_lattice(x):
     Returns
     -------
     tuple or None
-        ``(step, offset)`` in rad/s, or None when fewer than 99 % of the samples lie within 2 % of a
-        step of one lattice, or the values are not on a few levels (more than n / 4 distinct values).
+        ``(step, offset)`` in rad/s, or None when fewer than 99 % of the samples lie within 2 % of
+        a step of one lattice, or the values are not on a few levels (more than n / 4 distinct
+        values).
+
     """
     sd = float(np.std(x))
-    # rounding far below any realistic LSB keeps text-file round-off from splitting one level in two
+    # rounding far below any realistic LSB keeps text-file round-off from splitting one level in
+    # two
     eps = 1e-7 * sd
     levels = np.unique(np.round(x / eps)) * eps
     if levels.size < 3 or levels.size > x.size // 4:
@@ -147,7 +171,8 @@ def find_lattice(x):
     q0 = float(d.min())
     k = np.round(d / q0)
     step = float(np.sum(d * k) / np.sum(k * k))
-    # circular mean: levels a hair below a lattice point must not average with those a hair above it
+    # circular mean: levels a hair below a lattice point must not average with those a hair above
+    # it
     offset = float(np.angle(np.mean(np.exp(2j * np.pi * levels / step))) / (2 * np.pi) * step)
     phase = np.mod(x - offset + 0.5 * step, step) / step - 0.5
     if np.mean(np.abs(phase) < 0.02) < 0.99:
@@ -173,6 +198,7 @@ def make_layout(x, rate_hz, *, temperature=False):
     Returns
     -------
     Layout
+
     """
     n = x.shape[0]
     m_max = n // 10
@@ -185,8 +211,9 @@ def make_layout(x, rate_hz, *, temperature=False):
     chunk = max(64, n // N_CHUNKS)
     mu, sd = float(np.mean(x)), float(np.std(x))
     hist_edges = np.linspace(mu - 4 * sd, mu + 4 * sd, N_HIST + 1)
-    return Layout(rate_hz=float(rate_hz), n=n, m=m, nperseg=nperseg, band_edges=band_edges, chunk=chunk,
-                  hist_edges=hist_edges, lattice=find_lattice(x), temperature=bool(temperature))
+    return Layout(rate_hz=float(rate_hz), n=n, m=m, nperseg=nperseg, band_edges=band_edges,
+                  chunk=chunk, hist_edges=hist_edges, lattice=find_lattice(x),
+                  temperature=bool(temperature))
 
 
 def allan_deviation_octaves(x, rate_hz, m):
@@ -194,9 +221,9 @@ def allan_deviation_octaves(x, rate_hz, m):
     Return the overlapping Allan deviation at cluster sizes ``m`` (paper 001 eq. 7).
 
     The overlapping sum is taken with a stride of max(1, m // 8, n // 2^20) samples: for m > 8 the
-    terms it skips are almost fully correlated with their neighbours, and for short tau more than 2^20
-    terms estimate the deviation to 0.1 %, far inside the 0.01 dex tolerance of the band; the cost per
-    tau drops from O(n) to O(min(8 n / m, 2^20)).
+    terms it skips are almost fully correlated with their neighbours, and for short tau more than
+    2^20 terms estimate the deviation to 0.1 %, far inside the 0.01 dex tolerance of the band; the
+    cost per tau drops from O(n) to O(min(8 n / m, 2^20)).
 
     Parameters
     ----------
@@ -211,6 +238,7 @@ def allan_deviation_octaves(x, rate_hz, m):
     -------
     numpy.ndarray
         Allan deviation (rad/s) per m.
+
     """
     theta = np.concatenate(([0.0], np.cumsum(x - x.mean())))
     n = x.shape[0]
@@ -220,8 +248,8 @@ def allan_deviation_octaves(x, rate_hz, m):
         stride = max(1, mi // 8, n >> 20)
         count = (n - 2 * mi) // stride + 1
         # strided views, no index arrays: the terms theta[i + 2m] - 2 theta[i + m] + theta[i]
-        d = (theta[2 * mi:2 * mi + count * stride:stride] - 2.0 * theta[mi:mi + count * stride:stride]
-             + theta[:count * stride:stride])
+        d = (theta[2 * mi:2 * mi + count * stride:stride] - 2.0
+             * theta[mi:mi + count * stride:stride] + theta[:count * stride:stride])
         out[i] = np.sqrt(np.dot(d, d) / count / (2.0 * mi * mi))
     return out
 
@@ -230,8 +258,8 @@ def welch(x, rate_hz, nperseg):
     """
     Welch PSD estimate: Hann window, 50 % overlap, mean removed once, one-sided density.
 
-    Equal to ``scipy.signal.welch(x - mean(x), fs, 'hann', nperseg, detrend=False)`` (checked in the
-    tests) without its per-segment bookkeeping, which dominated the ensemble run time.
+    Equal to ``scipy.signal.welch(x - mean(x), fs, 'hann', nperseg, detrend=False)`` (checked in
+    the tests) without its per-segment bookkeeping, which dominated the ensemble run time.
 
     Parameters
     ----------
@@ -246,6 +274,7 @@ def welch(x, rate_hz, nperseg):
     -------
     tuple of numpy.ndarray
         Frequencies (Hz) and PSD ((rad/s)^2 / Hz).
+
     """
     window = scipy.signal.get_window('hann', nperseg)
     segs = np.lib.stride_tricks.sliding_window_view(x - x.mean(), nperseg)[::nperseg // 2]
@@ -266,7 +295,8 @@ def temperature_rate(temperature_c, rate_hz, chunk):
     """
     Return chunk-mean temperature (degC) and its rate dT/dt (degC/s) per chunk.
 
-    The rate is the central difference of the chunk means, which averages the sensor's LSB steps out.
+    The rate is the central difference of the chunk means, which averages the sensor's LSB steps
+    out.
     """
     t_mean, _ = chunk_series(temperature_c, chunk)
     dt = chunk / rate_hz
@@ -281,6 +311,7 @@ def compute(layout, x, t_s, temperature_c=None):
     Parameters
     ----------
     layout : Layout
+        Where each signature is evaluated.
     x : numpy.ndarray
         Angular rate (rad/s), ``layout.n`` samples.
     t_s : numpy.ndarray or None
@@ -292,6 +323,7 @@ def compute(layout, x, t_s, temperature_c=None):
     -------
     dict
         name -> 1-D numpy.ndarray.
+
     """
     out = {}
     out['allan'] = allan_deviation_octaves(x, layout.rate_hz, layout.m)
@@ -319,7 +351,8 @@ def compute(layout, x, t_s, temperature_c=None):
         out['stamps'] = np.zeros(STAMP_EDGES.size - 1)
         out['stamps'][1] = layout.n - 1
     else:
-        out['stamps'] = np.histogram(np.diff(t_s) * layout.rate_hz, bins=STAMP_EDGES)[0].astype(np.float64)
+        out['stamps'] = np.histogram(np.diff(t_s) * layout.rate_hz,
+                                     bins=STAMP_EDGES)[0].astype(np.float64)
     if layout.temperature:
         t_mean, t_rate = temperature_rate(temperature_c, layout.rate_hz, layout.chunk)
         out['temperature'] = np.array([_corr(bias, t_mean), _corr(bias, t_rate)])
@@ -327,7 +360,11 @@ def compute(layout, x, t_s, temperature_c=None):
 
 
 def _uniform_counts(x, lo, hi, bins):
-    """np.histogram(x, bins, range=(lo, hi)) counts (values outside dropped, hi inclusive), via bincount."""
+    """
+    Count as np.histogram(x, bins, range=(lo, hi)), via bincount.
+
+    Values outside are dropped, hi is inclusive.
+    """
     scaled = (x - lo) * (bins / (hi - lo))
     inside = (scaled >= 0) & (x <= hi)
     idx = np.minimum(scaled[inside].astype(np.int64), bins - 1)
@@ -359,6 +396,7 @@ def points(layout, name):
     -------
     tuple
         (label, unit, numpy.ndarray)
+
     """
     if name == 'allan':
         return 'tau', 's', layout.tau_s
@@ -370,9 +408,14 @@ def points(layout, name):
         centres = 0.5 * (layout.hist_edges[:-1] + layout.hist_edges[1:])
         if layout.lattice is not None:
             centres = np.concatenate((centres, np.arange(N_PHASE) / N_PHASE))
-        return 'value', 'rad/s (then lattice phase)' if layout.lattice is not None else 'rad/s', centres
+        return (
+            'value',
+            'rad/s (then lattice phase)' if layout.lattice is not None else 'rad/s',
+            centres,
+        )
     if name == 'stamps':
-        return 'interval / period', '', 0.5 * (STAMP_EDGES[:-1] + np.minimum(STAMP_EDGES[1:], 40.0))
+        return 'interval / period', '', 0.5 * (STAMP_EDGES[:-1]
+                                               + np.minimum(STAMP_EDGES[1:], 40.0))
     return 'correlation with', '(T, dT/dt)', np.array([0.0, 1.0])
 
 
@@ -396,6 +439,7 @@ class Comparison:
         D_s / T_s (> 1: outside the band).
     outside : numpy.ndarray of bool
         Points where |z| > T_s.
+
     """
 
     name: str
@@ -409,7 +453,7 @@ class Comparison:
 
     @property
     def gap(self):
-        """This signature's share of the scalar gap, ln(max(g, 1))."""
+        """Return this signature's share of the scalar gap, ln(max(g, 1))."""
         return float(np.log(max(self.g, 1.0)))
 
 
@@ -420,6 +464,7 @@ def compare(name, measured, members):
     Parameters
     ----------
     name : str
+        Signature name (a key of the layout).
     measured : numpy.ndarray
         Untransformed measurement values.
     members : numpy.ndarray
@@ -428,6 +473,7 @@ def compare(name, measured, members):
     Returns
     -------
     Comparison
+
     """
     y = transform(name, measured)
     yy = transform(name, np.asarray(members))
@@ -447,7 +493,8 @@ def compare(name, measured, members):
     d_members = np.max(np.abs(yy - mu_l) / sd_l, axis=1)
     z = (y - mu) / sd
     log_d = np.log(np.maximum(d_members, 1e-6))
-    threshold = float(max(MIN_THRESHOLD, d_members.max(), np.exp(log_d.mean() + BAND_K * log_d.std(ddof=1))))
+    threshold = float(max(MIN_THRESHOLD, d_members.max(),
+                          np.exp(log_d.mean() + BAND_K * log_d.std(ddof=1))))
     d = float(np.max(np.abs(z)))
     return Comparison(name=name, y=y, mu=mu, sd=sd, z=z, threshold=threshold, g=d / threshold,
                       outside=np.abs(z) > threshold)
@@ -462,10 +509,10 @@ def mean_log_score(comparisons):
     """
     Return sum_s mean_i (z_i^2 / 2 + ln sd_i): a Gaussian negative log-likelihood per point.
 
-    The gap is 0 for every model whose bands contain the measurement; this secondary score still tells
-    such models apart (the workflow uses it only among candidates with tied gaps). Unlike the z alone it
-    is a proper score: a model cannot win by widening its band (the ln sd term), only by putting its
-    ensemble where the measurement is.
+    The gap is 0 for every model whose bands contain the measurement; this secondary score still
+    tells such models apart (the workflow uses it only among candidates with tied gaps). Unlike the
+    z alone it is a proper score: a model cannot win by widening its band (the ln sd term), only by
+    putting its ensemble where the measurement is.
     """
     return float(sum(np.mean(0.5 * c.z ** 2 + np.log(c.sd)) for c in comparisons.values()))
 
@@ -477,12 +524,15 @@ def describe_where(layout, comparison):
     Parameters
     ----------
     layout : Layout
+        The layout the comparison was computed on.
     comparison : Comparison
+        The comparison to describe.
 
     Returns
     -------
     str
         Empty if inside the band.
+
     """
     if not comparison.outside.any():
         return ''
@@ -492,11 +542,17 @@ def describe_where(layout, comparison):
     side = 'above' if comparison.z[idx].mean() > 0 else 'below'
     if name == 'temperature':
         which = ['T', 'dT/dt']
-        return f'correlation of chunk bias with {", ".join(which[i] for i in idx)} outside the band'
+        return (
+            f'correlation of chunk bias with {", ".join(which[i] for i in idx)} outside the band'
+        )
     if name == 'stamps':
         labels = ['<0.5', '0.5-1.5', '1.5-2.5', '2.5-5.5', '5.5-20.5', '>20.5']
-        return f'stamp intervals (periods) {", ".join(labels[i] for i in idx)} counts {side} the band'
+        return (
+            f'stamp intervals (periods) {", ".join(labels[i] for i in idx)} counts {side} the band'
+        )
     if name == 'histogram' and layout.lattice is not None and idx.max() >= N_HIST:
-        return f'values sit on a lattice of {layout.lattice[0]:.4g} rad/s that the model does not produce'
+        return (f'values sit on a lattice of {layout.lattice[0]:.4g} rad/s '
+                'that the model does not produce')
     lo, hi = xs[idx.min()], xs[idx.max()]
-    return f'{name} {side} the band for {label} {lo:.4g}..{hi:.4g} {unit} ({idx.size} of {xs.size} points)'
+    return (f'{name} {side} the band for {label} {lo:.4g}..{hi:.4g} {unit} '
+            f'({idx.size} of {xs.size} points)')

@@ -1,43 +1,61 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Records with a hidden effect, drawn at random from documented ranges (the proof of the workflow).
 
-The baseline is the paper's model (000 eqs. 2, 10, 11) with parameters drawn like the sensors seen so far
-(the ADIS16405 identifies at alpha ~ 1.04, f ~ -0.87; the MPU6050 at alpha ~ 1.0, f ~ -1.0, i.e. near
-white):
+The baseline is the paper's model (000 eqs. 2, 10, 11) with parameters drawn like the sensors seen
+so far (the ADIS16405 identifies at alpha ~ 1.04, f ~ -0.87; the MPU6050 at alpha ~ 1.0, f ~ -1.0,
+i.e. near white):
 
-==================  ============================================================================
+==================  ==============================================================================
 baseline            alpha ~ U[0.8, 1.2], f ~ U[-1.0, -0.6] (redrawn until stable at L = 1000),
-                    sigma_w ~ U[0.5, 2] mrad/s (0.03-0.11 deg/s, an LSM6DSO32 at 1 kHz is ~0.1 deg/s),
-                    sigma_nu / sigma_w ~ U[0, 0.5], bias ~ U[-0.02, 0.02] rad/s (LSM6DSO32 ZRL +/-1 deg/s)
-==================  ============================================================================
+                    sigma_w ~ U[0.5, 2] mrad/s (0.03-0.11 deg/s, an LSM6DSO32 at 1 kHz is ~0.1
+                    deg/s), sigma_nu / sigma_w ~ U[0, 0.5], bias ~ U[-0.02, 0.02] rad/s (LSM6DSO32
+                    ZRL +/-1 deg/s)
+==================  ==============================================================================
 
-Effect sizes are tied to the record so that each is visible in it but not dominant: sigma is the sample
-sd of the baseline, ``N = sigma / sqrt(fs)`` its white-noise (ARW) level, ``s_c = sigma / sqrt(chunk)`` the
-noise of a chunk mean (100 chunks per record), T the duration, tc the crossing time of an Allan slope with
-the white-noise slope ``N / sqrt(tau)``:
+Effect sizes are tied to the record so that each is visible in it but not dominant: sigma is the
+sample sd of the baseline, ``N = sigma / sqrt(fs)`` its white-noise (ARW) level, ``s_c = sigma /
+sqrt(chunk)`` the noise of a chunk mean (100 chunks per record), T the duration, tc the crossing
+time of an Allan slope with the white-noise slope ``N / sqrt(tau)``:
 
-=========================  =================================================================================
-quantization               step ~ U[0.1, 0.6] sigma (ADIS16405: 0.14 sigma, LSM6DSO32 +/-2000 dps: ~0.6 sigma),
-                           offset ~ U[0, step)
+=========================  ========================================================================
+quantization               step ~ U[0.1, 0.6] sigma (ADIS16405: 0.14 sigma, LSM6DSO32 +/-2000 dps:
+                           ~0.6 sigma), offset ~ U[0, step)
 sinusoid                   amplitude ~ U[0.15, 0.5] sigma, frequency log-uniform in [0.01, 0.4] fs,
                            phase ~ U[0, 2 pi)
 bias_drift                 total change R T ~ +/-U[15, 30] s_c
-bias_transient             amplitude ~ +/-U[15, 30] s_c, delay ~ U[0.1, 0.4] T, time constant ~ U[0.04, 0.15] T
+bias_transient             amplitude ~ +/-U[15, 30] s_c, delay ~ U[0.1, 0.4] T, time constant ~
+                           U[0.04, 0.15] T
 rate_random_walk           K = sqrt(3) N / tc, tc ~ log-U[T / 300, T / 60]
-bias_instability           B = N / (0.664 sqrt(tc)), tc ~ log-U[T / 1000, T / 200] (a flat Allan floor needs
-                           a decade or more of tau above the white-noise slope)
-gauss_markov               correlation time ~ log-U[T / 100, T / 30], sigma such that its Allan deviation at
-                           2 tc is U[3, 5] times the white noise's (a much shorter correlation time is
-                           the baseline's own dynamics: paper 000 eq. 1 is a first-order Gauss-Markov
-                           process, and the fitted (alpha ~ 1, f) absorbs it)
-temperature_sensitivity    T(t) = 25 + dT (1 - exp(-t / tT)) + c sin(2 pi t / P + phi) degC (warm-up plus
-                           HVAC-like cycling; a pure exponential warm-up would be a bias_transient by
-                           construction), dT ~ U[3, 8] degC, tT ~ U[0.15, 0.4] T, c ~ U[0.3, 1] dT,
-                           P ~ U[1/6, 1/2] T;
-                           kT = +/-U[20, 40] s_c / dT; kdT = 0 or (half the draws) +/-U[0.5, 1] kT tT
-                           (MEMS zero-rate drift: 0.005-0.05 deg/s/degC)
-sample_loss                U[5, 30] gap events per record, geometric(p = 0.5, mean 2) samples lost each (<= 20)
-=========================  =================================================================================
+bias_instability           B = N / (0.664 sqrt(tc)), tc ~ log-U[T / 1000, T / 200] (a flat Allan
+                           floor needs a decade or more of tau above the white-noise slope)
+gauss_markov               correlation time ~ log-U[T / 100, T / 30], sigma such that its Allan
+                           deviation at 2 tc is U[3, 5] times the white noise's (a much shorter
+                           correlation time is the baseline's own dynamics: paper 000 eq. 1 is a
+                           first-order Gauss-Markov process, and the fitted (alpha ~ 1, f) absorbs
+                           it)
+temperature_sensitivity    T(t) = 25 + dT (1 - exp(-t / tT)) + c sin(2 pi t / P + phi) degC
+                           (warm-up plus HVAC-like cycling; a pure exponential warm-up would be a
+                           bias_transient by construction), dT ~ U[3, 8] degC, tT ~ U[0.15, 0.4] T,
+                           c ~ U[0.3, 1] dT, P ~ U[1/6, 1/2] T; kT = +/-U[20, 40] s_c / dT; kdT = 0
+                           or (half the draws) +/-U[0.5, 1] kT tT (MEMS zero-rate drift: 0.005-0.05
+                           deg/s/degC)
+sample_loss                U[5, 30] gap events per record, geometric(p = 0.5, mean 2) samples lost
+                           each (<= 20)
+=========================  ========================================================================
 """
 
 import sys
@@ -45,13 +63,13 @@ import sys
 import numpy as np
 import scipy.signal
 
-from ..core.simulate import check_stability, simulate_fractional_noise
 from .effects import BiasTransient, flicker_noise, gm_allan
 from .inputs import make_measurement
+from ..core.simulate import check_stability, simulate_fractional_noise
 
 CHUNKS = 100
-EFFECTS = ('quantization', 'sinusoid', 'bias_drift', 'bias_transient', 'rate_random_walk', 'bias_instability',
-           'gauss_markov', 'temperature_sensitivity', 'sample_loss')
+EFFECTS = ('quantization', 'sinusoid', 'bias_drift', 'bias_transient', 'rate_random_walk',
+           'bias_instability', 'gauss_markov', 'temperature_sensitivity', 'sample_loss')
 
 
 def draw_baseline(rng):
@@ -79,9 +97,11 @@ def draw_effect(name, rng, *, sigma, rate_hz, n):
     name : str
         A catalogue name (see :data:`EFFECTS`).
     rng : numpy.random.Generator
+        Random generator for the drawn parameters.
     sigma : float, keyword-only
         Sample sd of the baseline (rad/s).
     rate_hz : float, keyword-only
+        Sample rate (Hz).
     n : int, keyword-only
         Samples.
 
@@ -89,6 +109,7 @@ def draw_effect(name, rng, *, sigma, rate_hz, n):
     -------
     dict
         Parameters with the catalogue's names (SI).
+
     """
     duration = n / rate_hz
     white = sigma / np.sqrt(rate_hz)
@@ -116,15 +137,18 @@ def draw_effect(name, rng, *, sigma, rate_hz, n):
         corr = float(np.exp(rng.uniform(np.log(duration / 100), np.log(duration / 30))))
         ratio = rng.uniform(3, 5)
         unit = np.sqrt(gm_allan(1.0, corr, 2 * corr))
-        return {'sigma_rad_s': ratio * white / np.sqrt(2 * corr) / unit, 'correlation_time_s': corr}
+        return {'sigma_rad_s': ratio * white / np.sqrt(2 * corr) / unit,
+                'correlation_time_s': corr}
     if name == 'temperature_sensitivity':
         d_temp = rng.uniform(3, 8)
         t_temp = rng.uniform(0.15, 0.4) * duration
         k_t = _sign(rng) * rng.uniform(20, 40) * s_c / d_temp
         k_dt = 0.0 if rng.random() < 0.5 else _sign(rng) * rng.uniform(0.5, 1.0) * k_t * t_temp
         return {'coefficient_rad_s_per_degc': k_t, 'rate_coefficient_rad_s_per_degc_per_s': k_dt,
-                '_delta_degc': d_temp, '_time_constant_s': t_temp, '_cycle_degc': rng.uniform(0.3, 1.0) * d_temp,
-                '_cycle_s': rng.uniform(1 / 6, 1 / 2) * duration, '_cycle_phase': rng.uniform(0, 2 * np.pi)}
+                '_delta_degc': d_temp, '_time_constant_s': t_temp,
+                '_cycle_degc': rng.uniform(0.3, 1.0) * d_temp,
+                '_cycle_s': rng.uniform(1 / 6, 1 / 2) * duration,
+                '_cycle_phase': rng.uniform(0, 2 * np.pi)}
     if name == 'sample_loss':
         events = int(rng.integers(5, 31))
         return {'events': events, 'lost': np.minimum(rng.geometric(0.5, size=events), 20)}
@@ -140,9 +164,11 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
     effects : sequence of str
         Effect names (empty: effect-free data).
     rng : numpy.random.Generator
+        Random generator for the record and the effect parameters.
     n : int, keyword-only
         Samples.
     rate_hz : float, keyword-only
+        Sample rate (Hz).
     baseline : dict, optional
         Baseline parameters (drawn when None).
 
@@ -150,6 +176,7 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
     -------
     tuple
         (Measurement, truth) where truth is {'baseline': ..., effect name: params}.
+
     """
     base = draw_baseline(rng) if baseline is None else baseline
     x = simulate_fractional_noise(n, base['alpha'], base['f'], base['sigma_w'], rng=rng,
@@ -166,11 +193,13 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
         if name == 'quantization':
             quant = p
         elif name == 'sinusoid':
-            x = x + p['amplitude_rad_s'] * np.sin(2 * np.pi * p['frequency_hz'] * t + p['phase_rad'])
+            x = x + p['amplitude_rad_s'] * np.sin(2 * np.pi * p['frequency_hz'] * t
+                                                  + p['phase_rad'])
         elif name == 'bias_drift':
             x = x + p['slope_rad_s2'] * t
         elif name == 'bias_transient':
-            x = x + p['amplitude_rad_s'] * BiasTransient.shape(t, p['delay_s'], p['time_constant_s'])
+            x = x + p[
+                'amplitude_rad_s'] * BiasTransient.shape(t, p['delay_s'], p['time_constant_s'])
         elif name == 'rate_random_walk':
             x = x + np.cumsum(rng.standard_normal(n)) * p['k_rad_s_per_sqrt_s'] / np.sqrt(rate_hz)
         elif name == 'bias_instability':
@@ -197,7 +226,8 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
     if quant is not None:
         x = quant['offset_rad_s'] + quant['step_rad_s'] * np.round((x - quant['offset_rad_s'])
                                                                    / quant['step_rad_s'])
-    meas = make_measurement(x, t_s=stamps, rate_hz=rate_hz, temperature_c=temperature, source='synthetic')
+    meas = make_measurement(x, t_s=stamps, rate_hz=rate_hz, temperature_c=temperature,
+                            source='synthetic')
     return meas, truth
 
 
@@ -210,22 +240,26 @@ def sweep(effects, seeds, *, n=60000, rate_hz=100.0, ensemble=16, progress=None)
     effects : sequence of tuple of str
         Each entry is the set of hidden effects of one case (empty tuple: effect-free).
     seeds : sequence of int
+        Seeds, one record per seed and combination.
     n, rate_hz, ensemble : keyword-only
+        Samples per record, sample rate (Hz) and ensemble members, as in :func:`.workflow.explain`.
     progress : callable, optional
         Called with one line per run.
 
     Returns
     -------
     dict
-        case name -> {'runs', 'first_correct', 'all_found', 'inside', 'named_any', 'extra'}; for the
-        effect-free case ``named_any`` / ``runs`` is the false-alarm rate.
+        case name -> {'runs', 'first_correct', 'all_found', 'inside', 'named_any', 'extra'}; for
+        the effect-free case ``named_any`` / ``runs`` is the false-alarm rate.
+
     """
     from .workflow import explain
 
     table = {}
     for hidden in effects:
         key = '+'.join(hidden) or 'none'
-        row = dict(runs=0, first_correct=0, all_found=0, inside=0, named_any=0, extra=0)
+        row = {'runs': 0, 'first_correct': 0, 'all_found': 0, 'inside': 0, 'named_any': 0,
+               'extra': 0}
         for seed in seeds:
             meas, _ = make_record(hidden, np.random.default_rng([seed, 7]), n=n, rate_hz=rate_hz)
             result = explain(meas, seed=seed, ensemble=ensemble)
@@ -244,11 +278,16 @@ def sweep(effects, seeds, *, n=60000, rate_hz=100.0, ensemble=16, progress=None)
 
 
 def main(argv=None):
-    """``python -m gyro_noise_ros.explain.synthetic``: detection and false-alarm rates over seeds."""
+    """
+    ``python -m gyro_noise_ros.explain.synthetic``.
+
+    Detection and false-alarm rates over seeds.
+    """
     import argparse
 
     p = argparse.ArgumentParser(description='hidden-effect sweep of the discrepancy workflow')
-    p.add_argument('--effects', default='all', help="comma list of cases, '+' joins effects of one case, "
+    p.add_argument('--effects', default='all',
+                   help="comma list of cases, '+' joins effects of one case, "
                    "'none' is effect-free; 'all' = every catalogue effect alone")
     p.add_argument('--seeds', type=int, default=20)
     p.add_argument('--first-seed', type=int, default=100)
@@ -263,8 +302,8 @@ def main(argv=None):
     table = sweep(cases, seeds, n=args.samples, ensemble=args.ensemble, progress=say)
     print(f'{"case":<40} {"runs":>5} {"first ok":>9} {"all found":>9} {"inside":>7} {"extra":>6}')
     for key, row in table.items():
-        print(f'{key:<40} {row["runs"]:>5} {row["first_correct"]:>9} {row["all_found"]:>9} {row["inside"]:>7} '
-              f'{row["extra"]:>6}')
+        print(f'{key:<40} {row["runs"]:>5} {row["first_correct"]:>9} {row["all_found"]:>9} '
+              f'{row["inside"]:>7} ' f'{row["extra"]:>6}')
     return 0
 
 

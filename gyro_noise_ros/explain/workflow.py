@@ -1,50 +1,69 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-The discrepancy workflow: fit the baseline, simulate an ensemble, find where the measurement leaves the
-band, name the missing effect, add it, show the gap shrink (see docs/discrepancy.md).
+The discrepancy workflow.
+
+Fit the baseline, simulate an ensemble, find where the measurement leaves the band, name the
+missing effect, add it, show the gap shrink (see docs/discrepancy.md).
 
 Loop (at most ``max_steps`` times):
 
-1. compare the measurement with the current model's ensemble on every signature (:mod:`.signatures`);
-   stop if the gap G is 0 (inside every band);
-2. every catalogue effect not yet in the model runs its fitter on the data (:mod:`.effects`); each one
-   that reports parameters is added to the model on trial, the ensemble re-simulated (same member seeds:
+1. compare the measurement with the current model's ensemble on every signature
+   (:mod:`.signatures`); stop if the gap G is 0 (inside every band);
+2. every catalogue effect not yet in the model runs its fitter on the data (:mod:`.effects`); each
+   one that reports parameters is added to the model on trial, the ensemble re-simulated (same
+   member seeds:
    common random numbers, so the trials differ only by the effect) and the gap recomputed;
-3. the candidate with the smallest gap wins; among candidates within :data:`TIE_GAP` of it (typically
-   several models that all bring the measurement inside the bands) the one with the smallest
-   :func:`~.signatures.mean_log_score` plus :data:`PARAM_PENALTY` per parameter (so a ramp beats a
-   three-parameter transient that mimics it equally well); it is accepted when it
-   shrinks the gap by at least :data:`INSIDE_GAP`, else the loop stops and the record is
-   "unexplained" at the places still outside the band;
+3. the candidate with the smallest gap wins; among candidates within :data:`TIE_GAP` of it
+   (typically several models that all bring the measurement inside the bands) the one with the
+   smallest :func:`~.signatures.mean_log_score` plus :data:`PARAM_PENALTY` per parameter (so a ramp
+   beats a three-parameter transient that mimics it equally well); it is accepted when it shrinks
+   the gap by at least :data:`INSIDE_GAP`, else the loop stops and the record is "unexplained" at
+   the places still outside the band;
 4. after a deterministic additive effect (sinusoid, ramp, transient, temperature) is accepted, the
-   baseline is refitted to the residual (measurement minus the accepted deterministic terms): a strong
-   line or ramp distorts the first identification. If the refit differs materially the members are
-   regenerated (same seeds) and, unless that widens the gap, the refitted baseline is kept and the
-   step's gap_after is the gap with it (memory: the previous members are held until decided).
+   baseline is refitted to the residual (measurement minus the accepted deterministic terms): a
+   strong line or ramp distorts the first identification. If the refit differs materially the
+   members are regenerated (same seeds) and, unless that widens the gap, the refitted baseline is
+   kept and the step's gap_after is the gap with it (memory: the previous members are held until
+   decided).
 
-Ensemble. ``ensemble`` members (default 16) of the baseline are generated once, each with its own seeded
-generator (``numpy.random.default_rng([seed, member, 0])``); an accepted additive effect is added into the
-members in place (its stochastic draws use ``default_rng([seed, member, 1 + catalogue index])``), the
-lattice and stamp effects are applied when a member is evaluated. Memory: ``ensemble`` float64 copies of
-the record (16 x 3.6e6 samples = 460 MB for 1 h at 1 kHz).
+Ensemble. ``ensemble`` members (default 16) of the baseline are generated once, each with its own
+seeded generator (``numpy.random.default_rng([seed, member, 0])``); an accepted additive effect is
+added into the members in place (its stochastic draws use ``default_rng([seed, member, 1 +
+catalogue index])``), the lattice and stamp effects are applied when a member is evaluated. Memory:
+``ensemble`` float64 copies of the record (16 x 3.6e6 samples = 460 MB for 1 h at 1 kHz).
 """
 
-import time
 from dataclasses import dataclass, field
+import time
 
 import numpy as np
 
-from ..errors import ParameterError
 from . import signatures as sig
 from .baseline import fit_baseline
-from .effects import CATALOGUE, Context, Quantization, public_params
+from .effects import CATALOGUE, Context, public_params, Quantization
+from ..errors import ParameterError
 
 #: Candidates whose gap is within this of the best one count as tied; among them the smallest
 #: mean_log_score + PARAM_PENALTY * (number of parameters) wins.
 TIE_GAP = 0.05
 PARAM_PENALTY = 0.25
-#: The measurement counts as inside the band when G <= INSIDE_GAP (its worst points lie at most ~10 %
-#: of a band half-width beyond the edge on one signature), and an effect must shrink G by at least this
-#: much to be accepted: smaller changes are within the run-to-run scatter of the band edges.
+#: The measurement counts as inside the band when G <= INSIDE_GAP (its worst points lie at most ~10
+#: % of a band half-width beyond the edge on one signature), and an effect must shrink G by at
+#: least this much to be accepted: smaller changes are within the run-to-run scatter of the band
+#: edges.
 INSIDE_GAP = 0.1
 
 
@@ -68,6 +87,7 @@ class Step:
         Every candidate tried in this step -> its gap (the chosen one included).
     before, after : dict
         Signature comparisons before and after (for figures; not serialised).
+
     """
 
     effect: str
@@ -107,6 +127,7 @@ class ExplainResult:
     seed : int
     seconds : dict
         Wall time of the phases (s).
+
     """
 
     measurement: object
@@ -131,34 +152,57 @@ class ExplainResult:
         return [s.effect for s in self.steps]
 
     def to_dict(self):
-        """The explain.json layout (see docs/discrepancy.md)."""
+        """Return the explain.json layout (see docs/discrepancy.md)."""
         meas = self.measurement
         return {
-            'input': {'source': meas.source, 'axis': meas.axis, 'samples': meas.n,
-                      'rate_hz': meas.rate_hz, 'duration_s': meas.duration_s,
-                      'temperature': meas.temperature_c is not None,
-                      'timebase': (meas.timebase.as_dict()
-                                   if getattr(meas, 'timebase', None) is not None else None)},
+            'input': {
+                'source': meas.source,
+                'axis': meas.axis,
+                'samples': meas.n,
+                'rate_hz': meas.rate_hz,
+                'duration_s': meas.duration_s,
+                'temperature': meas.temperature_c is not None,
+                'timebase': (
+                    meas.timebase.as_dict()
+                    if getattr(meas, 'timebase', None) is not None
+                    else None
+                ),
+            },
             'ensemble': self.ensemble,
             'seed': self.seed,
             'baseline': self.baseline.to_dict(),
             'baseline_final': self.final_baseline.to_dict(),
-            'steps': [{'effect': s.effect, 'params': public_params(s.params),
-                       'gap_before': s.gap_before, 'gap_after': s.gap_after, 'where': s.where,
-                       'where_after': s.where_after, 'candidates': s.candidates} for s in self.steps],
+            'steps': [
+                {
+                    'effect': s.effect,
+                    'params': public_params(s.params),
+                    'gap_before': s.gap_before,
+                    'gap_after': s.gap_after,
+                    'where': s.where,
+                    'where_after': s.where_after,
+                    'candidates': s.candidates,
+                }
+                for s in self.steps
+            ],
             'gap_initial': self.gap_initial,
             'gap_final': self.gap_final,
             'unexplained': self.unexplained,
             'where_final': self.where_final,
             'rejected_candidates': self.tried_last,
-            'signatures_final': {name: {'g': c.g, 'threshold_z': c.threshold}
-                                 for name, c in self.comparisons_final.items()},
+            'signatures_final': {
+                name: {'g': c.g, 'threshold_z': c.threshold}
+                for name, c in self.comparisons_final.items()
+            },
             'seconds': self.seconds,
         }
 
 
 class _Model:
-    """The ensemble of the current model: members with the accepted additive terms already added."""
+    """
+    The ensemble of the current model.
+
+    Members with the accepted additive terms already added.
+    """
 
     def __init__(self, meas, layout, baseline, ensemble, seed):
         self.meas, self.layout, self.seed = meas, layout, seed
@@ -229,9 +273,9 @@ class _Model:
 
 
 def _changed(new, old):
-    """True when a refitted baseline differs materially (order, f, or a level by more than 2 %)."""
-    level = np.hypot(new.sigma_w_rad_s, new.sigma_nu_rad_s) / max(np.hypot(old.sigma_w_rad_s, old.sigma_nu_rad_s),
-                                                                   1e-300)
+    """Tell whether a refitted baseline differs materially (order, f, or a level by over 2 %)."""
+    level = np.hypot(new.sigma_w_rad_s, new.sigma_nu_rad_s) / max(
+        np.hypot(old.sigma_w_rad_s, old.sigma_nu_rad_s), 1e-300)
     return (new.alpha != old.alpha or abs(new.f - old.f) > 1e-3 or abs(level - 1) > 0.02
             or new.memory_sim != old.memory_sim)
 
@@ -270,6 +314,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     Returns
     -------
     ExplainResult
+
     """
     ensemble, max_steps, seed = int(ensemble), int(max_steps), int(seed)
     if ensemble < 4:
@@ -285,7 +330,8 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     meas_sig = sig.compute(layout, meas.rate, meas.t_s, meas.temperature_c)
     baseline = first_baseline = fit_baseline(meas.rate, meas.rate_hz)
     seconds['fit_baseline'] = time.perf_counter() - t0
-    say(f'baseline: alpha={baseline.alpha:.2f} f={baseline.f:.3f} sigma_w={baseline.sigma_w_rad_s:.3g} rad/s '
+    say(f'baseline: alpha={baseline.alpha:.2f} f={baseline.f:.3f} '
+        f'sigma_w={baseline.sigma_w_rad_s:.3g} rad/s '
         f'sigma_nu={baseline.sigma_nu_rad_s:.3g} rad/s (L_sim={baseline.memory_sim})')
     t1 = time.perf_counter()
     model = _Model(meas, layout, baseline, ensemble, seed)
@@ -308,7 +354,8 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
             params = effect.fit(ctx)
             if params is None:
                 continue
-            det = effect.term(params, meas.n, meas.rate_hz, None, ctx) if effect.kind == 'additive' else None
+            det = effect.term(params, meas.n, meas.rate_hz, None,
+                              ctx) if effect.kind == 'additive' else None
             trial_sig = model.signatures((effect, params, det), ctx)
             trial_cmp = compare_all(layout, meas_sig, trial_sig)
             trial_gap = sig.total_gap(trial_cmp)
@@ -339,19 +386,27 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
                 refit_cmp = compare_all(layout, meas_sig, refit_sig)
                 refit_gap = sig.total_gap(refit_cmp)
                 if refit_gap <= trial_gap:
-                    baseline, trial_sig, trial_cmp, trial_gap = refit, refit_sig, refit_cmp, refit_gap
-                    say(f'  baseline refitted on the residual: alpha={baseline.alpha:.2f} f={baseline.f:.3f}')
+                    baseline, trial_sig, trial_cmp, trial_gap = (
+                        refit,
+                        refit_sig,
+                        refit_cmp,
+                        refit_gap,
+                    )
+                    say(f'  baseline refitted on the residual: alpha={baseline.alpha:.2f} '
+                        f'f={baseline.f:.3f}')
                 else:
                     model.members = previous[1]
         steps.append(Step(effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
-                          where=where_outside(layout, comparisons), where_after=where_outside(layout, trial_cmp),
-                          candidates=tried, before=comparisons, after=trial_cmp))
+                          where=where_outside(layout, comparisons),
+                          where_after=where_outside(layout, trial_cmp), candidates=tried,
+                          before=comparisons, after=trial_cmp))
         say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
         member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap
     seconds['iterate'] = time.perf_counter() - t2
     seconds['total'] = time.perf_counter() - t0
-    return ExplainResult(measurement=meas, layout=layout, baseline=first_baseline, final_baseline=baseline,
-                         steps=steps, gap_initial=gap_initial,
-                         gap_final=gap, unexplained=gap > INSIDE_GAP, where_final=where_outside(layout, comparisons),
-                         comparisons_initial=initial, comparisons_final=comparisons, tried_last=tried_last,
-                         ensemble=ensemble, seed=seed, seconds=seconds)
+    return ExplainResult(measurement=meas, layout=layout, baseline=first_baseline,
+                         final_baseline=baseline, steps=steps, gap_initial=gap_initial,
+                         gap_final=gap, unexplained=gap > INSIDE_GAP,
+                         where_final=where_outside(layout, comparisons),
+                         comparisons_initial=initial, comparisons_final=comparisons,
+                         tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds)

@@ -1,25 +1,41 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-Device time to host time: unwrapping of the 32-bit microsecond counter and an offset-and-drift estimator.
+Device time to host time.
+
+Unwrapping of the 32-bit microsecond counter and an offset-and-drift estimator.
 
 Model. The board stamps every sample with its own clock ``d`` (microseconds, uint32, wraps every
-2**32 us = 71.6 min). A batch whose newest sample has device time ``d_k`` is received by the host at
-``h_k = a + b d_k + L + e_k`` (host ns), where ``a`` is the clock offset, ``b = 1 + drift`` the rate
-ratio (a 50 ppm crystal gives b - 1 = 5e-5), ``L`` the smallest transport latency and ``e_k >= 0`` the
-USB/OS receive jitter (typically exponential-like, milliseconds).
+2**32 us = 71.6 min). A batch whose newest sample has device time ``d_k`` is received by the host
+at ``h_k = a + b d_k + L + e_k`` (host ns), where ``a`` is the clock offset, ``b = 1 + drift`` the
+rate ratio (a 50 ppm crystal gives b - 1 = 5e-5), ``L`` the smallest transport latency and ``e_k >=
+0`` the USB/OS receive jitter (typically exponential-like, milliseconds).
 
-Estimator (minimum-delay line fit). Jitter only ever *adds* delay, so the informative receive times are
-the earliest ones. Device time is cut into blocks of ``block_s`` (1 s); per block the host keeps the
-single point with the smallest ``h - d``; a least-squares line through the minima of the last
-``window_blocks`` closed blocks (60) gives ``a`` and ``b`` (extrapolated over the open block).
-With F frames per block the block minimum exceeds ``L`` by about mean(e)/F (about 5 us for 2 ms mean
-jitter and 417 frames/s), so the line lies within a few microseconds of ``a + b d + L``, whatever the
-jitter. Each sample is stamped ``a + b d - latency_ns``; ``latency_ns`` (default 0) is the constant
-``L``, which no receive-only method can observe. Stamps are then clamped to be at most the receive
-time (a sample cannot be received before it exists) and forced strictly increasing (1 ns apart at
-least), so a correction of the line never moves time backwards.
+Estimator (minimum-delay line fit). Jitter only ever *adds* delay, so the informative receive times
+are the earliest ones. Device time is cut into blocks of ``block_s`` (1 s); per block the host
+keeps the single point with the smallest ``h - d``; a least-squares line through the minima of the
+last ``window_blocks`` closed blocks (60) gives ``a`` and ``b`` (extrapolated over the open block).
+With F frames per block the block minimum exceeds ``L`` by about mean(e)/F (about 5 us for 2 ms
+mean jitter and 417 frames/s), so the line lies within a few microseconds of ``a + b d + L``,
+whatever the jitter. Each sample is stamped ``a + b d - latency_ns``; ``latency_ns`` (default 0) is
+the constant ``L``, which no receive-only method can observe. Stamps are then clamped to be at most
+the receive time (a sample cannot be received before it exists) and forced strictly increasing (1
+ns apart at least), so a correction of the line never moves time backwards.
 
-Until the first block closes the slope is taken as 1 and the offset as the smallest ``h - d`` seen so
-far: stamps of the first second can be late by up to the jitter of the earliest batches.
+Until the first block closes the slope is taken as 1 and the offset as the smallest ``h - d`` seen
+so far: stamps of the first second can be late by up to the jitter of the earliest batches.
 
 Resets. A backward jump of device time (board restart), or a device-time gap that disagrees with
 the host-time gap by more than ``reset_threshold_s`` (long unplug across a wrap, a board reset to
@@ -73,6 +89,7 @@ class Unwrapper:
         -------
         numpy.ndarray
             int64 unwrapped values (the first batch ever starts at its raw value).
+
         """
         raw = np.asarray(values).astype(np.uint32, copy=False)
         if raw.size == 0:
@@ -113,6 +130,7 @@ class ClockState:
         Estimator restarts (device clock jumps).
     samples : int
         Samples stamped.
+
     """
 
     offset_ns: float
@@ -138,14 +156,18 @@ class DeviceClock:
     latency_ns : int, keyword-only
         Constant transport latency to subtract (ns); not observable by the estimator.
     reset_threshold_s : float, keyword-only
-        Disagreement between device and host gaps between two batches that restarts the estimator (s).
+        Disagreement between device and host gaps between two batches that restarts the estimator
+        (s).
     max_drift_ppm : float, keyword-only
-        Bound on the fitted drift (ppm); a fit beyond it falls back to slope 1 (bad data, not a clock).
+        Bound on the fitted drift (ppm); a fit beyond it falls back to slope 1 (bad data, not a
+        clock).
+
     """
 
     def __init__(self, *, nominal_rate_hz=None, block_s=1.0, window_blocks=60, latency_ns=0,
                  reset_threshold_s=0.5, max_drift_ppm=2000.0):
-        if nominal_rate_hz is not None and not (np.isfinite(nominal_rate_hz) and nominal_rate_hz > 0):
+        if nominal_rate_hz is not None and not (np.isfinite(nominal_rate_hz) and nominal_rate_hz
+                                                > 0):
             raise ParameterError(f'nominal_rate_hz must be > 0, got {nominal_rate_hz}')
         if not (np.isfinite(block_s) and block_s > 0):
             raise ParameterError(f'block_s must be > 0, got {block_s}')
@@ -183,7 +205,7 @@ class DeviceClock:
         self._d0 = 0.0
 
     def reset(self):
-        """Forget everything except the monotonic floor (stamps never go back, even after a reset)."""
+        """Forget all but the monotonic floor (stamps never go back, even after a reset)."""
         self._start_epoch()
         self._resets += 1
 
@@ -197,7 +219,7 @@ class DeviceClock:
 
     @property
     def measured_rate_hz(self):
-        """float or None: sample rate seen in host time (needs a nominal rate to be meaningful)."""
+        """Return the sample rate seen in host time, or None without a nominal rate."""
         if self.nominal_rate_hz is None:
             return None
         return self.nominal_rate_hz / (1.0 + self._s / 1000.0)
@@ -217,6 +239,7 @@ class DeviceClock:
         -------
         numpy.ndarray
             int64 host-time stamps (ns), one per sample, strictly increasing across all calls.
+
         """
         raw = np.asarray(t_us)
         if raw.size == 0:
@@ -229,7 +252,8 @@ class DeviceClock:
         if self._last_d is not None:
             dd = int(d[0]) - self._last_d
             dh = h - self._last_h
-            if dd < 0 or abs(dd * 1000.0 * (1.0 + self._s / 1000.0) - dh) > self._reset_ns + 2e-3 * abs(dh):
+            if dd < 0 or abs(dd * 1000.0 * (1.0 + self._s / 1000.0)
+                             - dh) > self._reset_ns + 2e-3 * abs(dh):
                 self.reset()
                 d = self._unwrap.unwrap(raw)
         d_last = int(d[-1])
@@ -237,8 +261,10 @@ class DeviceClock:
             self._h_ref, self._d_ref = h, d_last
         self._observe(d_last - self._d_ref, h - self._h_ref)
         rel = d - self._d_ref
-        # exact integer part plus a small float correction: float64 cannot hold ns since 1970 exactly
-        correction = np.rint(self._a + self._s * (rel.astype(np.float64) - self._d0)).astype(np.int64)
+        # exact integer part plus a small float correction: float64 cannot hold ns since 1970
+        # exactly
+        correction = np.rint(self._a + self._s * (rel.astype(np.float64)
+                                                  - self._d0)).astype(np.int64)
         stamps = self._h_ref + 1000 * rel + correction - self.latency_ns
         # causality: the newest sample existed before it was received
         excess = int(stamps[-1]) - (h - self.latency_ns)
@@ -278,8 +304,9 @@ class DeviceClock:
     def _fit(self):
         pts = list(self._blocks)
         if len(self._blocks) < 2:
-            # the open block's running minimum is used only while there is nothing better: right after
-            # a block opens it is a single, possibly very late, point and would pull the line up
+            # the open block's running minimum is used only while there is nothing better: right
+            # after a block opens it is a single, possibly very late, point and would pull the line
+            # up
             if self._cur_min is not None:
                 pts.append(self._cur_min)
             # not enough closed blocks for a slope: slope 0 (b = 1), offset from the lowest point

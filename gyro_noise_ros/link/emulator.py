@@ -1,47 +1,76 @@
-"""
-Pure model of the Portenta H7 + LSM6DSO32 board: samples with ground truth, configuration commands, faults.
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
-No I/O and no threads: ``cli/emulator.py`` serves this model on a pseudo-terminal or TCP and writes SD logs.
+"""
+Pure model of the Portenta H7 + LSM6DSO32 board.
+
+Samples with ground truth, configuration commands, faults.
+
+No I/O and no threads: ``cli/emulator.py`` serves this model on a pseudo-terminal or TCP and writes
+SD logs.
 
 Signal model of one gyro axis at sample k (time ``t_k``, seconds since power-on)::
 
-    rate_k = bias + v_k + helium(t_k) + temp_sens * (T(t_k) - T(0)) + vib_amp * sin(2 pi vib_hz t_k + phase)
+    rate_k = bias + v_k + helium(t_k) + temp_sens * (T(t_k) - T(0))
+             + vib_amp * sin(2 pi vib_hz t_k + phase)
     raw_k  = clip(round(rate_k / LSB(gyro_fs)), -32768, 32767)
 
 With ``thermal`` (``portenta_emulator --thermal oven``) the temperature and its effect on the bias
 come from :mod:`gyro_noise_ros.thermal.simulate` instead (``docs/thermal_data.md``).
 
-``v_k`` is the fractional-order noise of paper 000 eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]``, run by
-:class:`gyro_noise_ros.core.simulate.FractionalNoise` (truncated GL difference, eqs. 3-5, L = 1000), one
-independent generator per axis. The default noise level is the paper's own measurement (Table 4,
-reference sequence: noise variance 0.0034 (deg/s)^2, i.e. a standard deviation of 0.058 deg/s), which
-is the LSM6DSO-family rate noise density of 3.8 mdps/sqrt(Hz) over a ~235 Hz noise bandwidth; ``sigma_w``
-is set so the stationary output has that standard deviation. The default order is the paper's
-variance-method estimate, alpha = 1.4 (Table 5); the paper gives no f, we take f = -1.2 (stable, and
-nearly white like the measured noise). The default bias is the paper's initial offset, ~0.8 deg/s
-(section 4: "the offset increased from a value of 0.775 to 4.242").
+``v_k`` is the fractional-order noise of paper 000 eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]``,
+run by :class:`gyro_noise_ros.core.simulate.FractionalNoise` (truncated GL difference, eqs. 3-5, L
+= 1000), one independent generator per axis. The default noise level is the paper's own measurement
+(Table 4, reference sequence: noise variance 0.0034 (deg/s)^2, i.e. a standard deviation of 0.058
+deg/s), which is the LSM6DSO-family rate noise density of 3.8 mdps/sqrt(Hz) over a ~235 Hz noise
+bandwidth; ``sigma_w`` is set so the stationary output has that standard deviation. The default
+order is the paper's variance-method estimate, alpha = 1.4 (Table 5); the paper gives no f, we take
+f = -1.2 (stable, and nearly white like the measured noise). The default bias is the paper's
+initial offset, ~0.8 deg/s (section 4: "the offset increased from a value of 0.775 to 4.242").
 
 The helium effect is a delayed first-order rise of the bias, ``A (1 - exp(-(t - delay)/tau))`` for
-``t > delay`` (paper 000 Fig. 3: the offset starts to rise after ~1.5 h of exposure). Temperature moves
-linearly at ``temp_drift_c_per_h`` and leaks into the bias with ``temp_sensitivity_dps_per_c``.
+``t > delay`` (paper 000 Fig. 3: the offset starts to rise after ~1.5 h of exposure). Temperature
+moves linearly at ``temp_drift_c_per_h`` and leaks into the bias with
+``temp_sensitivity_dps_per_c``.
 
 Determinism: every random stream (one per gyro axis, accelerometer, temperature) is a child of the
 ``rng`` given, consumed one draw per sample, so sample k is the same whatever the batch sizes, the
 pacing, the connection state or the fault injection (which uses its own generator). Sensor FIFO
-overruns (:meth:`BoardModel.sensor_overrun`) consume sample slots without a ``seq``, so with them the
-truth must be matched by ``seq`` (``--truth-out``), not by position.
+overruns (:meth:`BoardModel.sensor_overrun`) consume sample slots without a ``seq``, so with them
+the truth must be matched by ``seq`` (``--truth-out``), not by position.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import lsm6dso32 as lsm
+from .protocol import (
+    Ack,
+    ACK_OK,
+    Decoder,
+    encode_ack,
+    FLAG_FIFO_OVERRUN,
+    FLAG_SAMPLE_LOST,
+    NAK_BAD_ACCEL_FS,
+    NAK_BAD_GYRO_FS,
+    NAK_BAD_ODR,
+    SAMPLE_DTYPE,
+)
 from ..core.fractional import DEFAULT_MEMORY, gl_coefficients
 from ..core.simulate import FractionalNoise, require_stable
 from ..errors import ParameterError
-from . import lsm6dso32 as lsm
-from .protocol import (ACK_OK, FLAG_FIFO_OVERRUN, FLAG_SAMPLE_LOST, NAK_BAD_ACCEL_FS, NAK_BAD_GYRO_FS, NAK_BAD_ODR,
-                       SAMPLE_DTYPE, Ack, Decoder, encode_ack)
 
 DEG = np.pi / 180.0
 #: Paper 000 Table 4, reference sequence: mean noise variance 0.003414 (deg/s)^2.
@@ -69,7 +98,9 @@ def stationary_gain(alpha, f, memory=DEFAULT_MEMORY):
     float
         sqrt(sum_k h_k^2) with h the impulse response of w -> v, by Parseval:
         sum h^2 = mean over a dense unit-circle grid of 1 / |A(e^{i w})|^2,
-        A(z) = 1 + (c_1 - f) z^-1 + sum_{j>=2} c_j z^-j (exact up to aliasing of h beyond the grid size).
+        A(z) = 1 + (c_1 - f) z^-1 + sum_{j>=2} c_j z^-j (exact up to aliasing of h beyond the grid
+        size).
+
     """
     require_stable(alpha, f, memory)
     a = gl_coefficients(alpha, memory).copy()
@@ -94,6 +125,7 @@ class HeliumTransient:
         Time before the rise starts (s).
     tau_s : float
         Time constant of the rise (s).
+
     """
 
     amplitude_dps: object = 3.5
@@ -116,6 +148,7 @@ class Vibration:
         Specific-force amplitude (g).
     phase_rad : float
         Phase at t = 0 (rad).
+
     """
 
     frequency_hz: float = 50.0
@@ -143,6 +176,7 @@ class Truth:
         (n,) true die temperature (degC).
     gyro_fs_dps, accel_fs_g : int
         Full scales the batch was quantised with.
+
     """
 
     seq: np.ndarray
@@ -176,7 +210,8 @@ class BoardModel:
     alpha, f : float, keyword-only
         Fractional noise model of paper 000 eq. (2).
     noise_std_dps : float, keyword-only
-        Stationary standard deviation of the gyro noise (deg/s); ignored when ``sigma_w_dps`` is given.
+        Stationary standard deviation of the gyro noise (deg/s); ignored when ``sigma_w_dps`` is
+        given.
     sigma_w_dps : float, optional, keyword-only
         Source-noise standard deviation of eq. (2) (deg/s).
     memory : int, keyword-only
@@ -209,12 +244,14 @@ class BoardModel:
     scenario : object with ``apply(t_s, gyro, accel)`` and ``skip(n)``, optional, keyword-only
         Reliability-procedure scenario (:class:`gyro_noise_ros.calibration.emulate.Scenario`):
         adds motion seen through sensor errors to the samples before quantisation.
+
     """
 
-    def __init__(self, *, rng, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, alpha=DEFAULT_ALPHA, f=DEFAULT_F,
-                 noise_std_dps=PAPER_NOISE_STD_DPS, sigma_w_dps=None, memory=DEFAULT_MEMORY,
-                 bias_dps=DEFAULT_BIAS_DPS, accel_g=(0.0, 0.0, 1.0), accel_noise_ug_rthz=ACCEL_NOISE_DENSITY_UG_RTHZ,
-                 temperature_c=25.0, temp_drift_c_per_h=0.0, temp_sensitivity_dps_per_c=0.0, helium=None,
+    def __init__(self, *, rng, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, alpha=DEFAULT_ALPHA,
+                 f=DEFAULT_F, noise_std_dps=PAPER_NOISE_STD_DPS, sigma_w_dps=None,
+                 memory=DEFAULT_MEMORY, bias_dps=DEFAULT_BIAS_DPS, accel_g=(0.0, 0.0, 1.0),
+                 accel_noise_ug_rthz=ACCEL_NOISE_DENSITY_UG_RTHZ, temperature_c=25.0,
+                 temp_drift_c_per_h=0.0, temp_sensitivity_dps_per_c=0.0, helium=None,
                  vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None, scenario=None,
                  thermal=None):
         if not isinstance(rng, np.random.Generator):
@@ -227,7 +264,8 @@ class BoardModel:
         if noise is None:
             if sigma_w_dps is None:
                 if not (np.isfinite(noise_std_dps) and noise_std_dps >= 0):
-                    raise ParameterError(f'noise_std_dps must be finite and >= 0, got {noise_std_dps}')
+                    raise ParameterError(
+                        f'noise_std_dps must be finite and >= 0, got {noise_std_dps}')
                 sigma_w_dps = noise_std_dps / stationary_gain(alpha, f, memory)
             self.sigma_w_rad_s = float(sigma_w_dps) * DEG
             noise = [FractionalNoise(alpha, f, self.sigma_w_rad_s, rng=streams[i], memory=memory)
@@ -238,20 +276,24 @@ class BoardModel:
         self.bias_rad_s = _vec3('bias_dps', bias_dps) * DEG
         self.accel_m_s2 = _vec3('accel_g', accel_g) * lsm.STANDARD_GRAVITY
         if not (np.isfinite(accel_noise_ug_rthz) and accel_noise_ug_rthz >= 0):
-            raise ParameterError(f'accel_noise_ug_rthz must be finite and >= 0, got {accel_noise_ug_rthz}')
+            raise ParameterError(
+                f'accel_noise_ug_rthz must be finite and >= 0, got {accel_noise_ug_rthz}')
         self.accel_noise_ug_rthz = float(accel_noise_ug_rthz)
         self.temperature0_c = float(temperature_c)
         self.temp_drift_c_per_s = float(temp_drift_c_per_h) / 3600.0
-        self.temp_sens_rad_s_per_c = _vec3('temp_sensitivity_dps_per_c', temp_sensitivity_dps_per_c) * DEG
+        self.temp_sens_rad_s_per_c = _vec3('temp_sensitivity_dps_per_c',
+                                           temp_sensitivity_dps_per_c) * DEG
         self.helium = helium
         self.vibration = vibration
         self.thermal = thermal
         if helium is not None and not (helium.tau_s > 0 and helium.delay_s >= 0):
             raise ParameterError(f'helium needs tau_s > 0 and delay_s >= 0, got {helium}')
         if vibration is not None and not vibration.frequency_hz >= 0:
-            raise ParameterError(f'vibration frequency_hz must be >= 0, got {vibration.frequency_hz}')
+            raise ParameterError(
+                f'vibration frequency_hz must be >= 0, got {vibration.frequency_hz}')
         if not (np.isfinite(clock_ppm) and abs(clock_ppm) < 1e5):
-            raise ParameterError(f'clock_ppm must be finite and |clock_ppm| < 1e5, got {clock_ppm}')
+            raise ParameterError(
+                f'clock_ppm must be finite and |clock_ppm| < 1e5, got {clock_ppm}')
         self.clock_ppm = float(clock_ppm)
         self.seq = int(seq0) % (1 << 32)
         self.t0_us = int(t0_us) % (1 << 32)
@@ -277,6 +319,7 @@ class BoardModel:
         Parameters
         ----------
         command_id : int
+            Id of the CONFIGURE command, echoed in the acknowledgement.
         odr_hz : float
             Requested ODR (Hz).
         gyro_fs_dps, accel_fs_g : int
@@ -286,23 +329,26 @@ class BoardModel:
         -------
         Ack
             ok with the new configuration, or a NAK naming the bad value (configuration unchanged).
+
         """
-        checks = ((NAK_BAD_ODR, lsm.check_odr, odr_hz), (NAK_BAD_GYRO_FS, lsm.check_gyro_fs, gyro_fs_dps),
+        checks = ((NAK_BAD_ODR, lsm.check_odr, odr_hz),
+                  (NAK_BAD_GYRO_FS, lsm.check_gyro_fs, gyro_fs_dps),
                   (NAK_BAD_ACCEL_FS, lsm.check_accel_fs, accel_fs_g))
         values = []
         for code, check, value in checks:
             try:
                 values.append(check(value))
             except ParameterError as err:
-                return Ack(command_id=command_id, ok=False, odr_hz=self.odr_hz, gyro_fs_dps=self.gyro_fs_dps,
-                           accel_fs_g=self.accel_fs_g, message=str(err)[:64], status=code)
+                return Ack(command_id=command_id, ok=False, odr_hz=self.odr_hz,
+                           gyro_fs_dps=self.gyro_fs_dps, accel_fs_g=self.accel_fs_g,
+                           message=str(err)[:64], status=code)
         odr, gyro_fs, accel_fs = values
         if odr != self.odr_hz:
             self._seg_start_s = self.time_s
             self._seg_index = 0
         self.odr_hz, self.gyro_fs_dps, self.accel_fs_g = odr, gyro_fs, accel_fs
-        ack = Ack(command_id=command_id, ok=True, odr_hz=odr, gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs,
-                  message='', status=ACK_OK)
+        ack = Ack(command_id=command_id, ok=True, odr_hz=odr, gyro_fs_dps=gyro_fs,
+                  accel_fs_g=accel_fs, message='', status=ACK_OK)
         self.config_changes.append((self.samples_generated, ack))
         return ack
 
@@ -313,17 +359,20 @@ class BoardModel:
         Parameters
         ----------
         data : bytes
+            Bytes received from the host.
 
         Returns
         -------
         bytes
             Encoded ACK/NAK frames (empty when no complete command arrived).
+
         """
         result = self._decoder.feed(data)
         out = []
         for cmd in result.commands:
             out.append(encode_ack(self.configure(command_id=cmd.command_id, odr_hz=cmd.odr_hz,
-                                                 gyro_fs_dps=cmd.gyro_fs_dps, accel_fs_g=cmd.accel_fs_g)))
+                                                 gyro_fs_dps=cmd.gyro_fs_dps,
+                                                 accel_fs_g=cmd.accel_fs_g)))
         return b''.join(out)
 
     @property
@@ -335,13 +384,15 @@ class BoardModel:
         """
         Let the sensor FIFO overrun: ``k`` samples are produced but never read by the board.
 
-        Time and the noise processes advance by ``k`` samples, ``seq`` does not (the board never saw
-        them), and the next sample read carries FLAG_FIFO_OVERRUN. No truth is recorded for them.
+        Time and the noise processes advance by ``k`` samples, ``seq`` does not (the board never
+        saw them), and the next sample read carries FLAG_FIFO_OVERRUN. No truth is recorded for
+        them.
 
         Parameters
         ----------
         k : int
             Samples lost inside the sensor (>= 0).
+
         """
         k = int(k)
         if k <= 0:
@@ -372,6 +423,7 @@ class BoardModel:
         -------
         numpy.ndarray
             :data:`~gyro_noise_ros.link.protocol.SAMPLE_DTYPE` records, flags 0.
+
         """
         n = int(n)
         if n < 0:
@@ -388,17 +440,20 @@ class BoardModel:
             gyro += th.bias_rad_s
             temp_read = self.thermal.measure_c(temp, self._temp_rng)
         accel = np.broadcast_to(self.accel_m_s2, (n, 3)).copy()
-        accel_std = self.accel_noise_ug_rthz * 1e-6 * lsm.STANDARD_GRAVITY * np.sqrt(self.odr_hz / 2.0)
+        accel_std = self.accel_noise_ug_rthz * 1e-6 * lsm.STANDARD_GRAVITY * np.sqrt(
+            self.odr_hz / 2.0)
         accel += self._accel_rng.standard_normal((n, 3)) * accel_std
         if self.helium is not None:
             h = self.helium
-            rise = np.where(t > h.delay_s, -np.expm1(-(np.maximum(t - h.delay_s, 0.0)) / h.tau_s), 0.0)
+            rise = np.where(t > h.delay_s, -np.expm1(-(np.maximum(t - h.delay_s, 0.0)) / h.tau_s),
+                            0.0)
             gyro += np.outer(rise, _vec3('helium amplitude_dps', h.amplitude_dps) * DEG)
         if self.vibration is not None:
             v = self.vibration
             s = np.sin(2.0 * np.pi * v.frequency_hz * t + v.phase_rad)
             gyro += np.outer(s, _vec3('vibration amplitude_dps', v.amplitude_dps) * DEG)
-            accel += np.outer(s, _vec3('vibration accel_amplitude_g', v.accel_amplitude_g) * lsm.STANDARD_GRAVITY)
+            accel += np.outer(s, _vec3('vibration accel_amplitude_g', v.accel_amplitude_g)
+                              * lsm.STANDARD_GRAVITY)
         if self.scenario is not None:
             gyro, accel = self.scenario.apply(t, gyro, accel)
         out = np.zeros(n, dtype=SAMPLE_DTYPE)
@@ -413,7 +468,8 @@ class BoardModel:
             out['flags'][0] |= FLAG_FIFO_OVERRUN
             self._fifo_overrun = False
         self.last_truth = Truth(seq=out['seq'].copy(), time_s=t, gyro_rad_s=gyro, accel_m_s2=accel,
-                                temperature_c=temp, gyro_fs_dps=self.gyro_fs_dps, accel_fs_g=self.accel_fs_g)
+                                temperature_c=temp, gyro_fs_dps=self.gyro_fs_dps,
+                                accel_fs_g=self.accel_fs_g)
         self.seq = (self.seq + n) % (1 << 32)
         self._seg_index += n
         self.samples_generated += n
@@ -437,11 +493,13 @@ class FaultCounts:
         Dropped samples followed by a kept sample and preceded by one (what a decoder of the kept
         samples reports as ``samples_lost``).
     visible_flagged_lost : int
-        Of those, the ones in runs before a flagged sample (the decoder's ``samples_flagged_lost``).
+        Of those, the ones in runs before a flagged sample (the decoder's
+        ``samples_flagged_lost``).
     fifo_overruns : int
         Sensor FIFO overrun events injected (:meth:`FaultInjector.overrun`).
     fifo_overrun_samples : int
         Samples lost inside the sensor by them (invisible to ``seq``).
+
     """
 
     dropped_flagged: int = 0
@@ -471,16 +529,22 @@ class FaultInjector:
 
     Notes
     -----
-    A dropped run is flagged when any sample in it was a flagged drop, so the flagged count is the sum
-    of the gaps before flagged samples, which is what the decoder reports as ``samples_flagged_lost``.
-    Drops at the very end of a stream (no later sample) are counted but invisible to a decoder. The
-    flags of dropped samples (FIFO_OVERRUN) are OR-ed into the next sample kept, as the firmware must.
+    A dropped run is flagged when any sample in it was a flagged drop, so the flagged count is the
+    sum of the gaps before flagged samples, which is what the decoder reports as
+    ``samples_flagged_lost``. Drops at the very end of a stream (no later sample) are counted but
+    invisible to a decoder. The flags of dropped samples (FIFO_OVERRUN) are OR-ed into the next
+    sample kept, as the firmware must.
+
     """
 
     def __init__(self, rng, *, drop_flagged_rate=0.0, drop_unflagged_rate=0.0, corrupt_rate=0.0,
                  fifo_overrun_rate=0.0):
-        for name, value in (('drop_flagged_rate', drop_flagged_rate), ('drop_unflagged_rate', drop_unflagged_rate),
-                            ('corrupt_rate', corrupt_rate), ('fifo_overrun_rate', fifo_overrun_rate)):
+        for name, value in (
+            ('drop_flagged_rate', drop_flagged_rate),
+            ('drop_unflagged_rate', drop_unflagged_rate),
+            ('corrupt_rate', corrupt_rate),
+            ('fifo_overrun_rate', fifo_overrun_rate),
+        ):
             if not 0.0 <= value < 1.0:
                 raise ParameterError(f'{name} must be in [0, 1), got {value}')
         if drop_flagged_rate + drop_unflagged_rate >= 1.0:
@@ -491,7 +555,8 @@ class FaultInjector:
         self.drop_unflagged_rate = float(drop_unflagged_rate)
         self.corrupt_rate = float(corrupt_rate)
         self.fifo_overrun_rate = float(fifo_overrun_rate)
-        self._pending_carry = 0   # flags of dropped samples still to be OR-ed into the next kept one
+        # flags of dropped samples still to be OR-ed into the next kept one
+        self._pending_carry = 0
         self._pending_flag = False
         self._pending_run = 0
         self._c = dict.fromkeys(FaultCounts.__dataclass_fields__, 0)
@@ -516,6 +581,7 @@ class FaultInjector:
         int
             Samples (0 .. n-1, at most 32) the sensor loses first; give them to
             :meth:`BoardModel.sensor_overrun` and read only the rest.
+
         """
         if self.fifo_overrun_rate == 0 or n < 2:
             return 0
@@ -528,17 +594,22 @@ class FaultInjector:
 
     def note_lost(self, n, *, flagged=True, carry_flags=0):
         """
-        Record ``n`` samples lost outside the injector (e.g. transmit buffer full); flag the next sample.
+        Record ``n`` samples lost outside the injector (e.g. transmit buffer full).
 
-        The samples must be consecutive with the ones given to :meth:`drop` (they are counted in the
-        ``visible_*`` counts once a later sample is kept).
+        Flag the next sample.
+
+        The samples must be consecutive with the ones given to :meth:`drop` (they are counted in
+        the ``visible_*`` counts once a later sample is kept).
 
         Parameters
         ----------
         n : int
+            Number of samples lost.
         flagged : bool, keyword-only
+            Whether the board flags the loss in the next frame.
         carry_flags : int, keyword-only
             OR of the lost samples' flags, carried into the next sample kept.
+
         """
         if n > 0:
             self._pending_flag = self._pending_flag or flagged
@@ -558,17 +629,24 @@ class FaultInjector:
         -------
         numpy.ndarray
             The kept samples (a copy).
+
         """
         n = samples.size
         if n == 0:
             return samples.copy()
-        if (self.drop_flagged_rate == 0 and self.drop_unflagged_rate == 0 and not self._pending_flag
-                and not self._pending_run and not self._pending_carry):
+        if (
+            self.drop_flagged_rate == 0
+            and self.drop_unflagged_rate == 0
+            and not self._pending_flag
+            and not self._pending_run
+            and not self._pending_carry
+        ):
             self._seen_kept = True
             return samples.copy()
         u = self.rng.random(n)
         flagged = u < self.drop_flagged_rate
-        unflagged = (u >= self.drop_flagged_rate) & (u < self.drop_flagged_rate + self.drop_unflagged_rate)
+        unflagged = (u >= self.drop_flagged_rate) & (u < self.drop_flagged_rate
+                                                     + self.drop_unflagged_rate)
         self._c['dropped_flagged'] += int(flagged.sum())
         self._c['dropped_unflagged'] += int(unflagged.sum())
         kept = samples[~(flagged | unflagged)].copy()
@@ -611,10 +689,12 @@ class FaultInjector:
         Parameters
         ----------
         data : bytes
+            Bytes about to be sent on the link.
 
         Returns
         -------
         bytes
+
         """
         if self.corrupt_rate == 0 or not data:
             return data
@@ -626,7 +706,8 @@ class FaultInjector:
         return arr.tobytes()
 
 
-#: Ground-truth record written by ``portenta_emulator --truth-out`` (little-endian, packed, 64 bytes).
+#: Ground-truth record written by ``portenta_emulator --truth-out`` (little-endian, packed, 64
+#: bytes).
 TRUTH_DTYPE = np.dtype([
     ('seq', '<u4'),
     ('gyro_fs_dps', '<u2'),
@@ -640,15 +721,17 @@ TRUTH_DTYPE = np.dtype([
 
 def truth_records(truth):
     """
-    Pack a :class:`Truth` into TRUTH_DTYPE records (temperature is exact in the raw word and left out).
+    Pack a :class:`Truth` into TRUTH_DTYPE records (temperature, exact in the raw word, left out).
 
     Parameters
     ----------
     truth : Truth
+        The emulator's ground truth.
 
     Returns
     -------
     numpy.ndarray
+
     """
     rec = np.zeros(truth.seq.size, dtype=TRUTH_DTYPE)
     rec['seq'] = truth.seq
@@ -667,11 +750,13 @@ def read_truth(path):
     Parameters
     ----------
     path : str
+        Truth file written by the emulator.
 
     Returns
     -------
     numpy.ndarray
         TRUTH_DTYPE records, one per generated sample (sent or not), in order.
+
     """
     with open(path, 'rb') as fh:
         data = fh.read()

@@ -1,6 +1,21 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
-LSM6DSO32 scaling of raw output words to SI units (ST datasheet, "Mechanical characteristics" and
-"Temperature sensor characteristics" tables).
+LSM6DSO32 scaling of raw output words to SI units.
+
+ST datasheet, "Mechanical characteristics" and "Temperature sensor characteristics" tables.
 
 ================  ============================  =============================
 full scale        sensitivity (typ.)            one LSB in SI
@@ -17,9 +32,9 @@ accel +/-32 g     0.976 mg/LSB                  9.57129e-3 m/s^2
 temperature       256 LSB/degC, 0 LSB = 25 degC
 ================  ============================  =============================
 
-with g = 9.80665 m/s^2 (standard gravity). Gyro rate noise density in high-performance mode: 3.8 mdps/sqrt(Hz)
-typical, the LSM6DSO family figure (LSM6DSO datasheet DS12140, table 2, "independent of the ODR and FS");
-``emulator.BoardModel`` derives its default noise level from it (see there).
+with g = 9.80665 m/s^2 (standard gravity). Gyro rate noise density in high-performance mode: 3.8
+mdps/sqrt(Hz) typical, the LSM6DSO family figure (LSM6DSO datasheet DS12140, table 2, "independent
+of the ODR and FS"); ``emulator.BoardModel`` derives its default noise level from it (see there).
 """
 
 from dataclasses import dataclass
@@ -33,8 +48,9 @@ STANDARD_GRAVITY = 9.80665
 GYRO_FULL_SCALES_DPS = (125, 250, 500, 1000, 2000)
 ACCEL_FULL_SCALES_G = (4, 8, 16, 32)
 #: Output data rates of CTRL1_XL/CTRL2_G in high-performance mode (Hz). The datasheet labels them
-#: 12.5, 26, 52, 104, 208, 416, 833, 1666, 3332, 6664 (or 1.66k, 3.33k, 6.66k); the values here are ST's driver names
-#: (``LSM6DSO32_GY_ODR_6667Hz``...). The sensor's own oscillator sets the true rate (+/- a few %).
+#: 12.5, 26, 52, 104, 208, 416, 833, 1666, 3332, 6664 (or 1.66k, 3.33k, 6.66k); the values here are
+#: ST's driver names (``LSM6DSO32_GY_ODR_6667Hz``...). The sensor's own oscillator sets the true
+#: rate (+/- a few %).
 ODRS_HZ = (12.5, 26.0, 52.0, 104.0, 208.0, 417.0, 833.0, 1667.0, 3333.0, 6667.0)
 
 _GYRO_MDPS_PER_LSB = {125: 4.375, 250: 8.75, 500: 17.5, 1000: 35.0, 2000: 70.0}
@@ -69,6 +85,7 @@ def check_gyro_fs(fs_dps):
     Returns
     -------
     int
+
     """
     return _as_int_choice('gyro_fs_dps', fs_dps, GYRO_FULL_SCALES_DPS)
 
@@ -85,6 +102,7 @@ def check_accel_fs(fs_g):
     Returns
     -------
     int
+
     """
     return _as_int_choice('accel_fs_g', fs_g, ACCEL_FULL_SCALES_G)
 
@@ -102,6 +120,7 @@ def check_odr(odr_hz):
     -------
     float
         The table value.
+
     """
     try:
         value = float(odr_hz)
@@ -126,6 +145,7 @@ def gyro_sensitivity_rad_s_per_lsb(fs_dps):
     -------
     float
         rad/s per LSB (datasheet mdps/LSB times pi/180000).
+
     """
     return _GYRO_MDPS_PER_LSB[check_gyro_fs(fs_dps)] * 1e-3 * np.pi / 180.0
 
@@ -143,6 +163,7 @@ def accel_sensitivity_m_s2_per_lsb(fs_g):
     -------
     float
         m/s^2 per LSB (datasheet mg/LSB times 9.80665e-3).
+
     """
     return _ACCEL_MG_PER_LSB[check_accel_fs(fs_g)] * 1e-3 * STANDARD_GRAVITY
 
@@ -154,11 +175,13 @@ def temperature_c(raw):
     Parameters
     ----------
     raw : array_like of int16
+        Raw temperature register values.
 
     Returns
     -------
     numpy.ndarray
         float64 degC (25 + raw / 256).
+
     """
     return TEMPERATURE_OFFSET_C + np.asarray(raw, dtype=np.float64) / TEMPERATURE_LSB_PER_C
 
@@ -176,6 +199,7 @@ class Scaled:
         (n, 3) float64 specific force (m/s^2).
     temperature_c : numpy.ndarray
         (n,) float64 die temperature (degC).
+
     """
 
     gyro_rad_s: np.ndarray
@@ -200,6 +224,7 @@ def to_si(samples, *, gyro_fs_dps, accel_fs_g):
     Returns
     -------
     Scaled
+
     """
     g_lsb = gyro_sensitivity_rad_s_per_lsb(gyro_fs_dps)
     a_lsb = accel_sensitivity_m_s2_per_lsb(accel_fs_g)
@@ -209,7 +234,8 @@ def to_si(samples, *, gyro_fs_dps, accel_fs_g):
         accel = samples['accel'].astype(np.float64) * a_lsb
         temp = temperature_c(samples['temp'])
     except (ValueError, KeyError, IndexError) as err:
-        raise ParameterError(f'samples must have fields gyro, accel, temp, got dtype {samples.dtype}') from err
+        raise ParameterError(
+            f'samples must have fields gyro, accel, temp, got dtype {samples.dtype}') from err
     return Scaled(gyro.reshape(-1, 3), accel.reshape(-1, 3), temp.reshape(-1))
 
 
@@ -228,6 +254,7 @@ def quantise(values, lsb):
     -------
     numpy.ndarray
         int16 words, round to nearest, saturating at -32768 and 32767 like the sensor.
+
     """
     words = np.rint(np.asarray(values, dtype=np.float64) / lsb)
     return np.clip(words, -32768, 32767).astype(np.int16)

@@ -1,8 +1,22 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Portenta link wire protocol: frame codec with resynchronisation and loss counters (pure, no I/O).
 
-The contract a firmware author implements is ``docs/portenta_link.md``; this module is its reference
-implementation. In short, every frame is little-endian::
+The contract a firmware author implements is ``docs/portenta_link.md``; this module is its
+reference implementation. In short, every frame is little-endian::
 
     offset size field
     0      2    sync marker A5 5A
@@ -16,14 +30,14 @@ implementation. In short, every frame is little-endian::
 
 A SAMPLES payload is 1..MAX_SAMPLES_PER_FRAME records of :data:`SAMPLE_DTYPE` (24 bytes each).
 
-The :class:`Decoder` never raises on bad bytes: it checks the header (version, type, length bounds of the
-type) and then the CRC before it decodes anything, and on any failure it drops one byte and searches
-for the next sync marker. Counters (:class:`LinkStats`) say what happened.
+The :class:`Decoder` never raises on bad bytes: it checks the header (version, type, length bounds
+of the type) and then the CRC before it decodes anything, and on any failure it drops one byte and
+searches for the next sync marker. Counters (:class:`LinkStats`) say what happened.
 """
 
+from dataclasses import dataclass, field
 import struct
 import zlib
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -43,7 +57,8 @@ FRAME_OVERHEAD = HEADER_SIZE + CRC_SIZE
 
 #: One sample as it travels on the wire and sits on the SD card (24 bytes, little-endian, packed).
 SAMPLE_DTYPE = np.dtype([
-    ('seq', '<u4'),        # per-sample counter, +1 per sample the board read from the sensor, wraps at 2**32
+    # per-sample counter, +1 per sample the board read from the sensor, wraps at 2**32
+    ('seq', '<u4'),
     ('t_us', '<u4'),       # board time of the sample in microseconds, wraps at 2**32 (71.6 min)
     ('gyro', '<i2', (3,)),   # raw OUTX/Y/Z_G
     ('accel', '<i2', (3,)),  # raw OUTX/Y/Z_A
@@ -54,9 +69,11 @@ SAMPLE_DTYPE = np.dtype([
 SAMPLE_SIZE = SAMPLE_DTYPE.itemsize
 assert SAMPLE_SIZE == 24
 
-#: The sensor FIFO overran before this sample: the sensor dropped samples the board never saw (not in seq).
+#: The sensor FIFO overran before this sample: the sensor dropped samples the board never saw (not
+#: in seq).
 FLAG_FIFO_OVERRUN = 0x01
-#: The board dropped samples just before this one (buffer full, SD busy); the seq gap says how many.
+#: The board dropped samples just before this one (buffer full, SD busy); the seq gap says how
+#: many.
 FLAG_SAMPLE_LOST = 0x02
 
 MAX_SAMPLES_PER_FRAME = 128
@@ -64,7 +81,8 @@ MAX_MESSAGE_BYTES = 64
 
 _CONFIGURE = struct.Struct('<IIHBB')      # command_id, odr_mhz, gyro_fs_dps, accel_fs_g, reserved
 _ACK = struct.Struct('<IBBHI')            # command_id, status, accel_fs_g, gyro_fs_dps, odr_mhz
-_LOG_HEADER = struct.Struct('<IIIHBBIII')  # sequence_id, file_index, odr_mhz, gyro_fs, accel_fs, reserved,
+# sequence_id, file_index, odr_mhz, gyro_fs, accel_fs, reserved,
+_LOG_HEADER = struct.Struct('<IIIHBBIII')
 #                                           first_seq, t_us, rtc_unix_s
 _HEADER = struct.Struct('<2sBBH')
 _CRC = struct.Struct('<I')
@@ -113,6 +131,7 @@ class Ack:
         Human-readable reason (ASCII, at most 64 bytes on the wire); empty for a plain ACK.
     status : int
         Wire status code (ACK_OK or a NAK_* code). 0 with ``ok=False`` is sent as NAK_UNSPECIFIED.
+
     """
 
     command_id: int
@@ -139,6 +158,7 @@ class Configure:
         Requested gyro full scale (deg/s).
     accel_fs_g : int
         Requested accelerometer full scale (g).
+
     """
 
     command_id: int
@@ -168,6 +188,7 @@ class LogHeader:
         Board time (us, same clock as the samples) when the file was opened.
     rtc_unix_s : int
         Real-time clock (UNIX seconds) at ``t_us``; 0 when the board's RTC is not set.
+
     """
 
     sequence_id: int
@@ -200,7 +221,8 @@ class LinkStats:
     samples_lost : int
         Samples missing according to the sequence counter (gaps, across wrap-around).
     samples_flagged_lost : int
-        Part of ``samples_lost`` the board reported itself (gaps before samples with FLAG_SAMPLE_LOST).
+        Part of ``samples_lost`` the board reported itself (gaps before samples with
+        FLAG_SAMPLE_LOST).
     acks : int
         ACK/NAK frames received.
     naks : int
@@ -221,6 +243,7 @@ class LinkStats:
         LOG_HEADER frames decoded.
     bytes_total : int
         Bytes fed.
+
     """
 
     frames_ok: int = 0
@@ -268,8 +291,9 @@ class DecodeResult:
     header_positions : tuple of int
         For each header, how many of ``samples`` came before it.
     discarded : tuple of (int, int)
-        ``(offset, length)`` of each discarded region that ended during this call; offsets count bytes
-        fed to this decoder since it was created.
+        ``(offset, length)`` of each discarded region that ended during this call; offsets count
+        bytes fed to this decoder since it was created.
+
     """
 
     samples: np.ndarray = field(default_factory=lambda: _EMPTY_SAMPLES)
@@ -300,8 +324,9 @@ def encode_samples(samples):
     Returns
     -------
     bytes
-        One frame, or consecutive frames of at most MAX_SAMPLES_PER_FRAME samples each when more are
-        given; empty for no samples.
+        One frame, or consecutive frames of at most MAX_SAMPLES_PER_FRAME samples each when more
+        are given; empty for no samples.
+
     """
     arr = np.asarray(samples)
     if arr.ndim != 1:
@@ -313,7 +338,8 @@ def encode_samples(samples):
                 if name in (arr.dtype.names or ()):
                     conv[name] = arr[name]
         except (TypeError, ValueError) as err:
-            raise ParameterError(f'samples must have the fields of SAMPLE_DTYPE, got {arr.dtype}') from err
+            raise ParameterError(
+                f'samples must have the fields of SAMPLE_DTYPE, got {arr.dtype}') from err
         arr = conv
     out = []
     for start in range(0, arr.size, MAX_SAMPLES_PER_FRAME):
@@ -346,6 +372,7 @@ def encode_configure(*, command_id, odr_hz, gyro_fs_dps, accel_fs_g):
     Returns
     -------
     bytes
+
     """
     command_id = _check_u32('command_id', command_id)
     odr_mhz = _check_u32('odr_hz (in mHz)', _mhz(odr_hz))
@@ -353,7 +380,8 @@ def encode_configure(*, command_id, odr_hz, gyro_fs_dps, accel_fs_g):
         raise ParameterError(f'gyro_fs_dps must fit in uint16, got {gyro_fs_dps}')
     if not 0 <= int(accel_fs_g) < 2 ** 8:
         raise ParameterError(f'accel_fs_g must fit in uint8, got {accel_fs_g}')
-    return _frame(FRAME_CONFIGURE, _CONFIGURE.pack(command_id, odr_mhz, int(gyro_fs_dps), int(accel_fs_g), 0))
+    return _frame(FRAME_CONFIGURE, _CONFIGURE.pack(command_id, odr_mhz, int(gyro_fs_dps),
+                                                   int(accel_fs_g), 0))
 
 
 def encode_ack(ack):
@@ -363,15 +391,18 @@ def encode_ack(ack):
     Parameters
     ----------
     ack : Ack
+        The acknowledgement to encode.
 
     Returns
     -------
     bytes
+
     """
     status = ACK_OK if ack.ok else (int(ack.status) or NAK_UNSPECIFIED)
     msg = str(ack.message).encode('ascii', 'replace')[:MAX_MESSAGE_BYTES]
-    payload = _ACK.pack(_check_u32('command_id', ack.command_id), status, int(ack.accel_fs_g) & 0xFF,
-                        int(ack.gyro_fs_dps) & 0xFFFF, _check_u32('odr_hz (in mHz)', _mhz(ack.odr_hz)))
+    payload = _ACK.pack(_check_u32('command_id', ack.command_id), status, int(ack.accel_fs_g)
+                        & 0xFF, int(ack.gyro_fs_dps) & 0xFFFF,
+                        _check_u32('odr_hz (in mHz)', _mhz(ack.odr_hz)))
     return _frame(FRAME_ACK, payload + msg)
 
 
@@ -382,10 +413,12 @@ def encode_log_header(header):
     Parameters
     ----------
     header : LogHeader
+        The header to encode.
 
     Returns
     -------
     bytes
+
     """
     payload = _LOG_HEADER.pack(
         _check_u32('sequence_id', header.sequence_id), _check_u32('file_index', header.file_index),
@@ -402,10 +435,12 @@ def crc32(data):
     Parameters
     ----------
     data : bytes-like
+        Bytes to checksum.
 
     Returns
     -------
     int
+
     """
     return zlib.crc32(data) & 0xFFFFFFFF
 
@@ -417,16 +452,16 @@ class Decoder:
     """
     Incremental frame decoder: feed it bytes in any pieces, get samples, acks and counters.
 
-    ``feed`` never raises, whatever the bytes. A candidate frame is accepted only when the sync marker,
-    version, type and the type's length bounds are right *and* the CRC matches; otherwise one byte is
-    dropped and the search for the next sync marker goes on, so a valid frame is never lost behind a
-    corrupt one. A frame cut by the end of the input stays buffered until more bytes come or
-    :meth:`flush` declares the input finished.
+    ``feed`` never raises, whatever the bytes. A candidate frame is accepted only when the sync
+    marker, version, type and the type's length bounds are right *and* the CRC matches; otherwise
+    one byte is dropped and the search for the next sync marker goes on, so a valid frame is never
+    lost behind a corrupt one. A frame cut by the end of the input stays buffered until more bytes
+    come or :meth:`flush` declares the input finished.
 
     The sequence counter is tracked across calls (and across :meth:`reset_stream`): the gap between
-    consecutive samples, modulo 2**32, minus one, is the number of samples lost; a backward jump (gap
-    of 2**31 or more) is a board restart and counts no loss; an equal seq is a duplicate and is
-    dropped.
+    consecutive samples, modulo 2**32, minus one, is the number of samples lost; a backward jump
+    (gap of 2**31 or more) is a board restart and counts no loss; an equal seq is a duplicate and
+    is dropped.
     """
 
     def __init__(self):
@@ -443,7 +478,7 @@ class Decoder:
 
     @property
     def last_seq(self):
-        """int or None: seq of the last delivered sample."""
+        """Return the seq of the last delivered sample, or None."""
         return self._last_seq
 
     @property
@@ -459,6 +494,7 @@ class Decoder:
         -------
         DecodeResult
             The discarded partial region, if any (counted in bytes_discarded).
+
         """
         try:
             return self._finish(truncate=True, drop_all=True)
@@ -473,6 +509,7 @@ class Decoder:
         Returns
         -------
         DecodeResult
+
         """
         try:
             return self._finish(truncate=True, drop_all=False)
@@ -497,6 +534,7 @@ class Decoder:
         ------
         ParameterError
             Only when ``data`` is not bytes-like at all (a programming error, not bad input bytes).
+
         """
         if data is not None and not isinstance(data, (bytes, bytearray, memoryview)):
             raise ParameterError(f'data must be bytes-like, got {type(data).__name__}')
@@ -570,8 +608,13 @@ class Decoder:
                     break
                 _, version, ftype, length = unpack_header(buf, pos)
                 rule = rules.get(ftype)
-                if (version != PROTOCOL_VERSION or rule is None or length < rule[0] or length > rule[1]
-                        or length % rule[2]):
+                if (
+                    version != PROTOCOL_VERSION
+                    or rule is None
+                    or length < rule[0]
+                    or length > rule[1]
+                    or length % rule[2]
+                ):
                     self._discard_to(pos, pos + 1)
                     pos += 1
                     continue
@@ -598,8 +641,9 @@ class Decoder:
                     res.nsamples += length // SAMPLE_SIZE
                     pos = end + CRC_SIZE
                     size = FRAME_OVERHEAD + length
-                    # bulk path for small frames only: there the per-frame Python work dominates (2-5x
-                    # faster at 1-16 samples per frame); for large frames the CRC does and it gains nothing
+                    # bulk path for small frames only: there the per-frame Python work dominates
+                    # (2-5x faster at 1-16 samples per frame); for large frames the CRC does and it
+                    # gains nothing
                     if size <= _BULK_MAX_FRAME and n - pos >= 4 * size:
                         good = self._same_size_run(mv, pos, n, size, res)
                         c['frames_ok'] += good
@@ -626,11 +670,11 @@ class Decoder:
     @staticmethod
     def _same_size_run(mv, pos, n, size, res):
         """
-        Accept, in bulk, the valid SAMPLES frames at ``pos`` with the header of the frame just accepted.
+        Accept in bulk the valid SAMPLES frames at ``pos`` with the header just accepted.
 
         In a synchronised stream every frame of one batch size has the same 6 header bytes, so the
-        header check runs on a (frames, size) byte matrix and only the CRC stays per frame. Stops at
-        the first frame that differs or fails its CRC (the byte-wise path then deals with it).
+        header check runs on a (frames, size) byte matrix and only the CRC stays per frame. Stops
+        at the first frame that differs or fails its CRC (the byte-wise path then deals with it).
         Returns the number of frames accepted.
         """
         m = (n - pos) // size
@@ -652,7 +696,11 @@ class Decoder:
         return good
 
     def _account_samples(self, samples, ack_positions, header_positions):
-        """Counter bookkeeping over the decoded samples; returns (kept samples, lost_before, positions)."""
+        """
+        Counter bookkeeping over the decoded samples.
+
+        Returns (kept samples, lost_before, positions).
+        """
         c = self._c
         seq = samples['seq']
         prev = np.empty_like(seq)
@@ -691,6 +739,7 @@ class Decoder:
 
 
 class _Collector:
+
     __slots__ = ('payloads', 'nsamples', 'acks', 'ack_positions', 'commands', 'headers',
                  'header_positions', 'discarded')
 
@@ -716,25 +765,28 @@ class _Collector:
             samples, lost, ack_pos, head_pos = dec._account_samples(samples, ack_pos, head_pos)
         else:
             samples, lost = _EMPTY_SAMPLES, _EMPTY_LOST
-        return DecodeResult(samples=samples, acks=tuple(self.acks), lost_before=lost, ack_positions=ack_pos,
-                            commands=tuple(self.commands), headers=tuple(self.headers),
-                            header_positions=head_pos, discarded=tuple(self.discarded))
+        return DecodeResult(samples=samples, acks=tuple(self.acks), lost_before=lost,
+                            ack_positions=ack_pos, commands=tuple(self.commands),
+                            headers=tuple(self.headers), header_positions=head_pos,
+                            discarded=tuple(self.discarded))
 
 
 def _decode_ack(payload):
     command_id, status, accel_fs, gyro_fs, odr_mhz = _ACK.unpack_from(payload, 0)
     message = bytes(payload[_ACK.size:]).decode('ascii', 'replace')
-    return Ack(command_id=command_id, ok=status == ACK_OK, odr_hz=odr_mhz / 1000.0, gyro_fs_dps=gyro_fs,
-               accel_fs_g=accel_fs, message=message, status=status)
+    return Ack(command_id=command_id, ok=status == ACK_OK, odr_hz=odr_mhz / 1000.0,
+               gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs, message=message, status=status)
 
 
 def _decode_configure(payload):
     command_id, odr_mhz, gyro_fs, accel_fs, _ = _CONFIGURE.unpack_from(payload, 0)
-    return Configure(command_id=command_id, odr_hz=odr_mhz / 1000.0, gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs)
+    return Configure(command_id=command_id, odr_hz=odr_mhz / 1000.0, gyro_fs_dps=gyro_fs,
+                     accel_fs_g=accel_fs)
 
 
 def _decode_log_header(payload):
     (sequence_id, file_index, odr_mhz, gyro_fs, accel_fs, _, first_seq, t_us,
      rtc) = _LOG_HEADER.unpack_from(payload, 0)
     return LogHeader(sequence_id=sequence_id, file_index=file_index, odr_hz=odr_mhz / 1000.0,
-                     gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs, first_seq=first_seq, t_us=t_us, rtc_unix_s=rtc)
+                     gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs, first_seq=first_seq, t_us=t_us,
+                     rtc_unix_s=rtc)

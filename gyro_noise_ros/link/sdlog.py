@@ -1,28 +1,52 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 SD-card log files of the Portenta board: writer and constant-memory streaming reader.
 
 A log file is the wire stream itself (``docs/portenta_link.md``): it starts with a LOG_HEADER frame
 (sequence id, file index, configuration at file open, first seq, device time, RTC time) followed by
 SAMPLES frames, and an ACK frame wherever the configuration changed. One acquisition sequence (one
-power-on recording) is split across files named ``S<sss>F<fff>.GNL`` (8.3 names for FAT32, ``sss`` =
-sequence id modulo 1000, ``fff`` = file index), each below the FAT32 limit of 4 GiB - 1 bytes; a file
-ends at a frame boundary and the next one continues the same sequence counter and device clock.
+power-on recording) is split across files named ``S<sss>F<fff>.GNL`` (8.3 names for FAT32, ``sss``
+= sequence id modulo 1000, ``fff`` = file index), each below the FAT32 limit of 4 GiB - 1 bytes; a
+file ends at a frame boundary and the next one continues the same sequence counter and device
+clock.
 
 The reader orders files by (sequence id, file index) from their headers (by name when a header is
 unreadable), feeds them through one :class:`~gyro_noise_ros.link.protocol.Decoder` (so counter gaps
 across file boundaries are counted), flushes it at the end of every file (a frame cut by the end of
-a file is discarded, not glued to the next file), and reports every corrupt region by file and offset.
+a file is discarded, not glued to the next file), and reports every corrupt region by file and
+offset.
 """
 
+from dataclasses import dataclass, field
 import os
 import re
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .protocol import (
+    Decoder,
+    encode_ack,
+    encode_log_header,
+    encode_samples,
+    LinkStats,
+    LogHeader,
+    MAX_FRAME_SIZE,
+    MAX_SAMPLES_PER_FRAME,
+)
 from ..errors import InputDataError, ParameterError
-from .protocol import (MAX_FRAME_SIZE, MAX_SAMPLES_PER_FRAME, Decoder, LinkStats, LogHeader, encode_ack,
-                       encode_log_header, encode_samples)
 
 #: FAT32 file-size limit (bytes); the paper's board stopped a sequence there (~12 h at 6.66 kHz).
 FAT32_MAX_FILE_BYTES = (1 << 32) - 1
@@ -39,12 +63,14 @@ def log_file_name(sequence_id, file_index):
     Parameters
     ----------
     sequence_id : int
+        Recording sequence number.
     file_index : int
         0 .. 999.
 
     Returns
     -------
     str
+
     """
     if not 0 <= int(file_index) <= 999:
         raise ParameterError(f'file_index must be in 0..999 for an 8.3 name, got {file_index}')
@@ -69,9 +95,11 @@ class SdLogWriter:
     batch : int, keyword-only
         Samples per SAMPLES frame.
     rtc_unix_s : int, keyword-only
-        RTC time at power-on (UNIX s, 0 = not set); each header gets it advanced by the device time.
+        RTC time at power-on (UNIX s, 0 = not set); each header gets it advanced by the device
+        time.
     corrupt : callable, optional, keyword-only
         ``bytes -> bytes`` applied to everything written (fault injection).
+
     """
 
     def __init__(self, directory, *, sequence_id, odr_hz, gyro_fs_dps, accel_fs_g,
@@ -82,7 +110,8 @@ class SdLogWriter:
         if not 1 <= int(batch) <= MAX_SAMPLES_PER_FRAME:
             raise ParameterError(f'batch must be in 1..{MAX_SAMPLES_PER_FRAME}, got {batch}')
         if int(max_file_bytes) < 2 * MAX_FRAME_SIZE:
-            raise ParameterError(f'max_file_bytes must be >= {2 * MAX_FRAME_SIZE}, got {max_file_bytes}')
+            raise ParameterError(
+                f'max_file_bytes must be >= {2 * MAX_FRAME_SIZE}, got {max_file_bytes}')
         self.sequence_id = int(sequence_id)
         self.config = (float(odr_hz), int(gyro_fs_dps), int(accel_fs_g))
         self.max_file_bytes = int(max_file_bytes)
@@ -114,9 +143,9 @@ class SdLogWriter:
         if self.rtc_unix_s:
             rtc = self.rtc_unix_s + ((t_us - self._t_origin_us) % (1 << 32)) // 1_000_000
         odr, gfs, afs = self.config
-        self._write(encode_log_header(LogHeader(sequence_id=self.sequence_id, file_index=index, odr_hz=odr,
-                                                gyro_fs_dps=gfs, accel_fs_g=afs, first_seq=first_seq,
-                                                t_us=t_us, rtc_unix_s=rtc)))
+        self._write(encode_log_header(LogHeader(sequence_id=self.sequence_id, file_index=index,
+                                                odr_hz=odr, gyro_fs_dps=gfs, accel_fs_g=afs,
+                                                first_seq=first_seq, t_us=t_us, rtc_unix_s=rtc)))
 
     def _write(self, data):
         if self._corrupt is not None:
@@ -137,6 +166,7 @@ class SdLogWriter:
         ----------
         samples : numpy.ndarray
             SAMPLE_DTYPE records.
+
         """
         for start in range(0, samples.size, self.batch):
             part = samples[start:start + self.batch]
@@ -149,8 +179,10 @@ class SdLogWriter:
         Parameters
         ----------
         ack : Ack
+            The acknowledgement to log.
         next_seq, t_us : int, keyword-only
             Used for the header if this opens a new file.
+
         """
         if ack.ok:
             self.config = (float(ack.odr_hz), int(ack.gyro_fs_dps), int(ack.accel_fs_g))
@@ -178,6 +210,7 @@ class LogBlock:
     odr_hz : float or None
     gyro_fs_dps, accel_fs_g : int or None
         Configuration in force (None when neither a header nor an ack has said it yet).
+
     """
 
     path: str
@@ -199,6 +232,7 @@ class CorruptRegion:
     offset : int
         Byte offset in the file.
     length : int
+
     """
 
     path: str
@@ -217,6 +251,7 @@ class LogFileInfo:
     size_bytes : int
     header : LogHeader or None
         None when the file's first frame is not a readable LOG_HEADER.
+
     """
 
     path: str
@@ -244,6 +279,7 @@ class LogReport:
     sequence_id : int or None
     samples_without_config : int
         Samples read before any header or ack gave the configuration.
+
     """
 
     files: tuple
@@ -263,17 +299,20 @@ def read_header(path):
     Parameters
     ----------
     path : str
+        Log file.
 
     Returns
     -------
     LogHeader or None
+
     """
     with open(path, 'rb') as fh:
         head = fh.read(2 * MAX_FRAME_SIZE)
     dec = Decoder()
     res = dec.feed(head)
     # the header must be the very first frame: nothing discarded at offset 0, no sample before it
-    if res.headers and res.header_positions[0] == 0 and not (res.discarded and res.discarded[0][0] == 0):
+    if res.headers and res.header_positions[
+            0] == 0 and not (res.discarded and res.discarded[0][0] == 0):
         return res.headers[0]
     return None
 
@@ -297,7 +336,9 @@ class SdLogReader:
     Notes
     -----
     Iterate to get :class:`LogBlock` objects; :attr:`report` is complete when the iteration ends.
-    Raises InputDataError before reading when the headers name different sequences or a file is missing.
+    Raises InputDataError before reading when the headers name different sequences or a file is
+    missing.
+
     """
 
     def __init__(self, paths, *, chunk_bytes=1 << 20):
@@ -317,8 +358,9 @@ class SdLogReader:
             infos.append(LogFileInfo(path=path, size_bytes=size, header=header))
         seqs = {i.header.sequence_id for i in infos if i.header is not None}
         if len(seqs) > 1:
-            raise InputDataError(f'log files belong to different sequences {sorted(seqs)}; import one sequence '
-                                 'at a time')
+            raise InputDataError(
+                f'log files belong to different sequences {sorted(seqs)}; import one sequence '
+                'at a time')
         self.sequence_id = seqs.pop() if seqs else None
 
         def key(item):
@@ -339,7 +381,7 @@ class SdLogReader:
 
     @property
     def report(self):
-        """LogReport or None: the summary once the iteration has finished."""
+        """Return the LogReport once the iteration has finished, else None."""
         return self._report
 
     def __iter__(self):
@@ -373,12 +415,17 @@ class SdLogReader:
                         break
         self._report = LogReport(files=self.files, stats=dec.stats, corrupt_regions=tuple(regions),
                                  corrupt_region_count=region_count,
-                                 missing_file_indices=self.missing_file_indices, sequence_id=self.sequence_id,
-                                 samples_without_config=no_config, warnings=tuple(self._warnings))
+                                 missing_file_indices=self.missing_file_indices,
+                                 sequence_id=self.sequence_id, samples_without_config=no_config,
+                                 warnings=tuple(self._warnings))
 
     @staticmethod
     def _split(path, res, config):
-        """Cut a DecodeResult at configuration changes; return (blocks, configuration after them)."""
+        """
+        Cut a DecodeResult at configuration changes.
+
+        Return (blocks, configuration after them).
+        """
         events = []
         for pos, head in zip(res.header_positions, res.headers):
             events.append((pos, (head.odr_hz, head.gyro_fs_dps, head.accel_fs_g)))
@@ -390,7 +437,8 @@ class SdLogReader:
         start = 0
         for pos, new_config in events + [(res.samples.size, None)]:
             if pos > start:
-                blocks.append(LogBlock(path, res.samples[start:pos], res.lost_before[start:pos], *config))
+                blocks.append(LogBlock(path, res.samples[start:pos], res.lost_before[start:pos],
+                                       *config))
                 start = pos
             if new_config is not None:
                 config = new_config

@@ -229,7 +229,8 @@ class ImuCompensatorNode(Node):
         if not self._frame_id:
             self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
         batch = (buf, starts, lengths, stamp_ns, gyro, accel)
-        if self.thermal is not None and (self._held or self.thermal.drift_at(stamp_ns[:0]) is None):
+        if self.thermal is not None and (self._held
+                                         or self.thermal.drift_at(stamp_ns[:0]) is None):
             # Before the first temperature there is no offset: publishing these uncorrected on
             # a topic named compensated would be a wrong number given calmly. Wait, then drop.
             self._held.append(batch)

@@ -17,10 +17,11 @@ End to end: emulator -> driver -> imu_compensator (a fitted poly3 thermal model)
 
 The emulator ramps the die temperature and leaks it into the gyro bias with a known linear
 sensitivity; the driver publishes what the device reports (REP-145). First a training run
-(emulator seed 7) is recorded with ``gyro_noise_record`` and the PX4-style ``poly3`` model
-(``thermal.baselines.TemperaturePolynomial``) is fitted on the bag, as ``gyro_noise_thermal fit``
-does. Then on a held-out run (seed 8) the compensator subtracts that model's offset, evaluated per
-imu/temperature message and interpolated onto the gyro stamps. Two analyzers run side by side,
+(emulator seed 7) is recorded with ``gyro_noise_record`` and the PX4-style ``poly3`` model is
+fitted on the bag with ``gyro_noise_thermal fit`` (the documented path: ``model.json``, loaded by
+the node's ``thermal_model_file`` parameter). Then on a held-out run (seed 8) the compensator
+subtracts that model's offset, evaluated per imu/temperature message and interpolated onto the
+gyro stamps. Two analyzers run side by side,
 on ``imu/data_raw`` and remapped onto ``imu/data_compensated``: the first sees the offset drift
 the ramp causes, the second sees it gone.
 """
@@ -34,10 +35,7 @@ import subprocess
 import sys
 import time
 
-from gyro_noise_ros.bag import ImuBagReader
-from gyro_noise_ros.thermal.baselines import TemperaturePolynomial
-from gyro_noise_ros.thermal.run import ThermalRun
-import numpy as np
+from gyro_noise_ros.cli import thermal as thermal_cli
 import pytest
 
 pytestmark = pytest.mark.ros
@@ -55,18 +53,6 @@ TRAIN_S = 14.0
 ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'diagnostics_period_s:=0.5', 'allan:=false',
                    'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0']
-
-# The compensator with the fitted model (model.json and its loader, the thermal registry, are
-# another module's; the fitted parameters go through to_dict/from_dict, which model.json holds).
-_COMPENSATOR = r"""
-import json, sys
-from gyro_noise_ros.nodes import compensator
-from gyro_noise_ros.nodes._ros_common import run_node
-from gyro_noise_ros.thermal.baselines import TemperaturePolynomial
-model = TemperaturePolynomial.from_dict(json.loads(sys.argv[1]))
-sys.exit(run_node(lambda: compensator.ImuCompensatorNode(thermal_model=model), sys.argv[2:],
-                  prog='imu_compensator'))
-"""
 
 
 def _free_port():
@@ -160,19 +146,12 @@ class _Chain:
                          for p in sorted(self.tmp_path.glob(f'{self.tag}_*.log')))
 
 
-def _fit_poly3(bag):
-    """Fit poly3 on a recorded bag: gyro with the temperature interpolated onto its stamps."""
-    with ImuBagReader(bag) as reader:
-        batches = list(reader.iter_batches())
-        t_stamp, t_value = reader.read_temperature()
-    stamps = np.concatenate([b.stamp_ns for b in batches])
-    gyro = np.concatenate([b.gyro for b in batches])
-    temp = np.interp(stamps.astype(float), t_stamp.astype(float), t_value)
-    run = ThermalRun(t_s=(stamps - stamps[0]) / 1e9, gyro_rad_s=gyro, temperature_c=temp,
-                     rate_hz=6667.0, name=str(bag))
-    model = TemperaturePolynomial()
-    model.fit(run, rng=np.random.default_rng(0))
-    return model, run
+def _fit_poly3(bag, out):
+    """Fit poly3 on a recorded bag with the command-line tool; return model.json's path."""
+    rc = thermal_cli.main(['fit', str(bag), '--method', 'poly3', '--no-figures', '--quiet',
+                           '--out', str(out)])
+    assert rc == 0
+    return out / 'model.json'
 
 
 @pytest.mark.slow
@@ -190,8 +169,9 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
         time.sleep(TRAIN_S)
     finally:
         train.stop()
-    model, run = _fit_poly3(bag)
-    assert run.t_s[-1] > TRAIN_S / 2, train.text()
+    model_json = _fit_poly3(bag, tmp_path / 'model')
+    training = json.loads(model_json.read_text())['training']
+    assert training['duration_s'] > TRAIN_S / 2, train.text()
 
     # 2. Held-out run: raw and compensated side by side.
     test = _Chain(tmp_path, 'test')
@@ -211,8 +191,8 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
             for p in ANALYZER_PARAMS:
                 argv += ['-p', p]
             test.start(name, argv)
-        test.start('compensator', [sys.executable, '-c', _COMPENSATOR,
-                                   json.dumps(model.to_dict()), '--ros-args',
+        test.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
+                                   '--ros-args', '-p', f'thermal_model_file:={model_json}',
                                    '-p', 'drain_period_s:=0.02'])
         test.emulator_and_driver(seed=8)
         seen = _collect(names, done, timeout_s=150)

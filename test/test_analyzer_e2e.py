@@ -36,6 +36,7 @@ import subprocess
 import sys
 import time
 
+from _e2e import chunks, collect_diagnostics, values
 import numpy as np
 import pytest
 
@@ -174,36 +175,9 @@ def domain_id():
 
 
 def _collect_diagnostics(domain_id, names, until, timeout_s):
-    """Spin a subscriber on /diagnostics; return {status name: [DiagnosticStatus, ...]}."""
+    """Spin a subscriber on /diagnostics in ``domain_id``; see :func:`_e2e.collect_diagnostics`."""
     os.environ['ROS_DOMAIN_ID'] = str(domain_id)
-    from diagnostic_msgs.msg import DiagnosticArray
-    import rclpy
-
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    seen = {n: [] for n in names}
-    try:
-        node = rclpy.create_node('test_diagnostics_listener', context=context)
-        node.create_subscription(DiagnosticArray, '/diagnostics',
-                                 lambda m: [seen[s.name].append(s) for s in m.status
-                                            if s.name in seen], 100)
-        executor = rclpy.executors.SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline and not until(seen):
-            executor.spin_once(timeout_sec=0.1)
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
-    return seen
-
-
-def _values(status):
-    return {kv.key: kv.value for kv in status.values}
-
-
-def _chunks(status):
-    return int(_values(status).get('Chunks analysed', '0'))
+    return collect_diagnostics(names, until, timeout_s)
 
 
 @pytest.mark.timeout(240)
@@ -232,19 +206,19 @@ def test_diagnostics_content_and_levels(domain_id):
         all_names = [n for v in names.values() for n in v]
 
         def done(seen):
-            return all(seen[n] and _chunks(seen[n][-1]) >= 10 for n in all_names)
+            return all(seen[n] and chunks(seen[n][-1]) >= 10 for n in all_names)
 
         seen = _collect_diagnostics(domain_id, all_names, done, timeout_s=150)
     finally:
         results = stop(procs)
     logs = '\n'.join(f'--- rc={rc}\n{o}\n{e}' for rc, o, e in results.values())
     assert all(seen[n] for n in all_names), f'no diagnostics for some axes\n{logs}'
-    assert done(seen), ({n: _chunks(seen[n][-1]) for n in all_names}, logs)
+    assert done(seen), ({n: chunks(seen[n][-1]) for n in all_names}, logs)
 
     for name, axis_names in names.items():
         for status_name in axis_names:
             last = seen[status_name][-1]
-            v = _values(last)
+            v = values(last)
             # Readable keys with units and string values, as diagnostic_updater would publish.
             for key in ('Bias (deg/s)', 'Variance ((deg/s)^2)', 'Offset drift ((deg/s)/h)',
                         'Fractional order, variance method',
@@ -262,7 +236,7 @@ def test_diagnostics_content_and_levels(domain_id):
             assert last.message and last.message.endswith('.')
     # With the parameter, hardware_id never changes; by default it is the frame_id of the data,
     # known once the first message has arrived ('unknown' in the periodic statuses before that).
-    hw = {name: {s.hardware_id for n in axis_names for s in seen[n] if _chunks(s) > 0}
+    hw = {name: {s.hardware_id for n in axis_names for s in seen[n] if chunks(s) > 0}
           for name, axis_names in names.items()}
     assert {s.hardware_id for n in names['clean'] for s in seen[n]} == {'lsm6dso32-test-1'}
     assert hw['drift'] == {'imu_drift'}
@@ -270,22 +244,22 @@ def test_diagnostics_content_and_levels(domain_id):
 
     clean = [seen[n][-1] for n in names['clean']]
     assert [s.level for s in clean] == [b'\x00'] * 3, [(s.level, s.message) for s in clean]
-    assert all(_values(s)['Samples lost'].startswith('0 ') for s in clean)
+    assert all(values(s)['Samples lost'].startswith('0 ') for s in clean)
 
     drift = [seen[n][-1] for n in names['drift']]
     assert [s.level for s in drift] == [b'\x01'] * 3, [(s.level, s.message) for s in drift]
     assert all('offset drift' in s.message.lower() for s in drift)
     # 1e-3 rad/s^2 = 206.3 (deg/s)/h; the fitted slope's standard error is ~7 (deg/s)/h (see
     # above).
-    assert all(float(_values(s)['Offset drift ((deg/s)/h)']) == pytest.approx(206.3, abs=35)
+    assert all(float(values(s)['Offset drift ((deg/s)/h)']) == pytest.approx(206.3, abs=35)
                for s in drift)
 
     gaps = [seen[n][-1] for n in names['gaps']]
     # Every 2003 samples 3 are removed: 10 gaps in 22000 samples, 30 samples lost, a fraction of
     # 1.4e-3 of the expected samples, above the default WARN limit of 1e-4.
     for s in gaps:
-        lost = int(_values(s)['Samples lost'].split()[0])
-        assert 27 <= lost <= 33, _values(s)['Samples lost']
+        lost = int(values(s)['Samples lost'].split()[0])
+        assert 27 <= lost <= 33, values(s)['Samples lost']
         assert s.level == b'\x01', (s.level, s.message)
         assert 'samples lost' in s.message
 

@@ -29,12 +29,11 @@ import json
 import os
 from pathlib import Path
 import random
-import select
-import socket
 import subprocess
 import sys
 import time
 
+from _e2e import chunks, collect_diagnostics, free_port, readline, values
 from gyro_noise_ros.cli import thermal as thermal_cli
 import pytest
 
@@ -55,55 +54,6 @@ ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0']
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
-
-
-def _readline(proc, timeout_s):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        ready, _, _ = select.select([proc.stdout], [], [], 0.2)
-        if ready:
-            line = proc.stdout.readline()
-            if line:
-                return line.strip()
-        if proc.poll() is not None:
-            break
-    raise AssertionError(f'emulator printed no port (exit {proc.poll()})')
-
-
-def _collect(names, until, timeout_s):
-    import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
-
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    seen = {n: [] for n in names}
-    try:
-        node = rclpy.create_node('test_e2e_diagnostics', context=context)
-        node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: [
-            seen[s.name].append(s) for s in m.status if s.name in seen], 100)
-        executor = rclpy.executors.SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline and not until(seen):
-            executor.spin_once(timeout_sec=0.1)
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
-    return seen
-
-
-def _values(status):
-    return {kv.key: kv.value for kv in status.values}
-
-
-def _chunks(status):
-    return int(_values(status).get('Chunks analysed', '0'))
-
-
 class _Chain:
     """Start, and always stop, the processes of one run; logs in tmp_path."""
 
@@ -121,10 +71,10 @@ class _Chain:
     def emulator_and_driver(self, seed):
         emu = self.start('emulator', [
             sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp',
-            f'127.0.0.1:{_free_port()}', '--seed', str(seed), '--accel-fs-g', '32', '--temp-c',
+            f'127.0.0.1:{free_port()}', '--seed', str(seed), '--accel-fs-g', '32', '--temp-c',
             '25.0', '--temp-drift-c-per-h', str(RAMP_C_PER_H), '--temp-sensitivity-dps-per-c',
             ','.join(map(str, SENSITIVITY_DPS_PER_C))], stdout=subprocess.PIPE, text=True)
-        url = _readline(emu, 60.0)
+        url = readline(emu, 60.0)
         self.start('driver', [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
                               '-p', f'port:={url}', '-p', 'reconnect_period_s:=0.2'])
 
@@ -180,7 +130,7 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
     chunks_wanted = 16
 
     def done(seen):
-        return all(seen[n] and _chunks(seen[n][-1]) >= chunks_wanted for n in names[:-1]) \
+        return all(seen[n] and chunks(seen[n][-1]) >= chunks_wanted for n in names[:-1]) \
             and bool(seen[names[-1]])
 
     try:
@@ -195,18 +145,18 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
                                    '--ros-args', '-p', f'thermal_model_file:={model_json}',
                                    '-p', 'drain_period_s:=0.02'])
         test.emulator_and_driver(seed=8)
-        seen = _collect(names, done, timeout_s=150)
+        seen = collect_diagnostics(names, done, timeout_s=150)
     finally:
         test.stop()
-    assert done(seen), ({n: seen[n] and _chunks(seen[n][-1]) for n in names[:-1]}, test.text())
+    assert done(seen), ({n: seen[n] and chunks(seen[n][-1]) for n in names[:-1]}, test.text())
 
-    comp = _values(seen['imu_compensator: compensation'][-1])
+    comp = values(seen['imu_compensator: compensation'][-1])
     assert comp['Thermal model'] == 'poly3'
     # The held-out run stays inside the training run's temperature span (it is shorter).
     assert comp['Temperature range status'] == 'inside', comp
     for axis, expected in zip('xyz', EXPECTED_DRIFT):
-        raw = _values(seen[f'analyzer_raw: axis {axis}'][-1])
-        fixed = _values(seen[f'analyzer_comp: axis {axis}'][-1])
+        raw = values(seen[f'analyzer_raw: axis {axis}'][-1])
+        fixed = values(seen[f'analyzer_comp: axis {axis}'][-1])
         raw_drift = float(raw['Offset drift ((deg/s)/h)'])
         fixed_drift = float(fixed['Offset drift ((deg/s)/h)'])
         # The raw stream carries the emulator's ramp x sensitivity; the analyzer's slope over 16+

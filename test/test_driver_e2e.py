@@ -39,15 +39,14 @@ monotonic stamps under a device clock that runs 4x fast.
 import json
 import math
 import os
-import select
 import signal
-import socket
 import subprocess
 import sys
 import time
 
 os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
 
+from _e2e import free_port, readline  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from gyro_noise_ros.bag import decode_imu, decode_temperature  # noqa: E402
 from gyro_noise_ros.cli.emulator import board_from_args  # noqa: E402
@@ -67,19 +66,6 @@ SIGNAL = ['--odr-hz', '6667', '--gyro-fs-dps', '2000', '--accel-fs-g', '32',
           '--vibration-hz', '0.11', '--vibration-dps', '1500,0,0']
 
 
-def _readline(proc, timeout_s):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        ready, _, _ = select.select([proc.stdout], [], [], 0.2)
-        if ready:
-            line = proc.stdout.readline()
-            if line:
-                return line.strip()
-        if proc.poll() is not None:
-            break
-    raise AssertionError(f'emulator printed no port (exit {proc.poll()})')
-
-
 class Processes:
     """Start, and always stop, the subprocesses of one test."""
 
@@ -95,7 +81,7 @@ class Processes:
              str(stats), *args],
             stdout=subprocess.PIPE, stderr=open(self.tmp_path / f'{name}.log', 'w'), text=True)
         self.procs.append(proc)
-        return proc, _readline(proc, 60.0), stats
+        return proc, readline(proc, 60.0), stats
 
     def driver(self, url, *params):
         argv = [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
@@ -278,7 +264,7 @@ def test_emulator_to_driver_with_faults_and_unplug(procs, listener):
     emu_args = ['--seed', '11', *SIGNAL]
     # The driver starts first, with no board on its port (it retries), so the test's subscription
     # is matched before the first sample is published.
-    port = _free_port()
+    port = free_port()
     url = f'socket://127.0.0.1:{port}'
     driver = procs.driver(url)
     listener.wait_for_publisher(60.0)
@@ -363,14 +349,8 @@ def test_emulator_to_driver_with_faults_and_unplug(procs, listener):
     np.testing.assert_array_equal(temp_c, 25.0 + samples['temp'][temp_seq] / 256.0)
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
-
-
 def test_board_restart_on_the_same_port(procs, listener):
-    port = _free_port()
+    port = free_port()
     args_a = ['--seed', '21', *SIGNAL]
     args_b = ['--seed', '22', *SIGNAL]
     driver = procs.driver(f'socket://127.0.0.1:{port}')
@@ -436,7 +416,7 @@ def test_accelerated_emulator(procs, listener):
     # not care; stamps stay strictly increasing (the estimator refuses a 300 % drift as a clock).
     emu_args = ['--seed', '41', '--odr-hz', '1667', '--gyro-fs-dps', '2000', '--accel-fs-g', '32',
                 '--vibration-hz', '0.4', '--vibration-dps', '1500,0,0']
-    port = _free_port()
+    port = free_port()
     driver = procs.driver(f'socket://127.0.0.1:{port}', 'odr_hz:=1667.0')
     listener.wait_for_publisher(60.0)
     emu, _, stats_path = procs.emulator(*emu_args, '--speed', '4', tcp=f'127.0.0.1:{port}')

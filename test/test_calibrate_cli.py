@@ -16,7 +16,9 @@
 
 import json
 
+from _realdata import real_data
 from _reliability_common import six_position_record, write_bag
+from gyro_noise_ros.calibration import records
 from gyro_noise_ros.calibration.emulate import MG, PAPER_BEFORE_BIAS_MG, SensorErrors
 from gyro_noise_ros.calibration.sixpos import normal_gravity
 from gyro_noise_ros.cli.calibrate import main
@@ -98,3 +100,14 @@ def test_exit_codes(tmp_path, record, capsys):
     assert 'accelerometer reads ~0' in capsys.readouterr().err
     assert main([str(five), '--gravity', '9.81', '--min-static-s', '30', '--out', out]) == 4
     assert '--min-static-s 30' in capsys.readouterr().err
+
+
+def test_rate_from_bursty_host_stamps_is_the_mean_rate_not_the_median_step():
+    # The MPU6050 record's host stamps come in bursts: median step 2 ms, true mean rate
+    # 99.32 Hz (issue 11). The calibration tools use the package's one estimator.
+    data = np.loadtxt(real_data('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'),
+                      delimiter=',', skiprows=1, usecols=0)
+    stamps = np.round(data * 1e9).astype(np.int64)
+    mean_rate = (stamps.size - 1) / ((stamps[-1] - stamps[0]) / 1e9)
+    assert records.rate_from_stamps(stamps[:65536], 'mpu6050') == pytest.approx(mean_rate,
+                                                                                rel=0.01)

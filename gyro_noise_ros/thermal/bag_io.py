@@ -38,6 +38,7 @@ from .run import ThermalRun
 from ..bag import ImuBagReader, ImuBagWriter, TEMPERATURE_MSGTYPE
 from ..bag.codec import join_raws, typestore
 from ..bag.storage import BagSource, describe
+from ..core.timebase import estimate_rate
 from ..errors import BagError, InputDataError, ParameterError
 
 __all__ = ['DEFAULT_MAX_GAP_S', 'MAX_EDGE_S', 'ThermalBag', 'join_runs', 'read_thermal_run',
@@ -181,9 +182,10 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
         temperature = np.full(t_s.size, float(temp[0]))
     else:
         temperature = np.interp(t_s, t_temp, temp)
-    # Samples per second over the run: the methods index samples, and host-stamped recordings
-    # arrive in bursts (median step 2 ms at a 100 Hz mean rate), where a median would mislead.
-    rate_hz = float((t_s.size - 1) / t_s[-1])
+    # The package's one estimator (core.timebase): right on bursty host stamps (median step
+    # 2 ms at a 100 Hz mean rate), where a median step would mislead, and not lowered by loss.
+    est = estimate_rate(stamp, unit='ns')
+    rate_hz = float(est.rate_hz) if est.usable else float((t_s.size - 1) / t_s[-1])
     run = ThermalRun(t_s=t_s, gyro_rad_s=gyro, temperature_c=temperature, rate_hz=rate_hz,
                      name=name or _label(path))
     info = ThermalBag(path=Path(path), topic=imu_topic, temperature_topic=temp_topic,

@@ -58,7 +58,7 @@ STALE = DiagnosticStatus.STALE
 _LEVEL_RANK = {OK: 0, WARN: 1, ERROR: 2, STALE: 3}
 
 
-def sensor_data_qos(depth):
+def sensor_data_qos(depth, reliable=False):
     """
     Return the sensor-data QoS (best effort, volatile, keep last) with a chosen depth.
 
@@ -67,18 +67,24 @@ def sensor_data_qos(depth):
     6.66 kHz stream arriving in bursts needs a deeper history so a subscriber that wakes every few
     milliseconds loses nothing.
 
+    With ``reliable`` the subscription asks for reliable delivery instead (the nodes' ``reliable``
+    parameter): the middleware then retransmits what a busy host missed, so a transport drop is
+    not counted as a lost sensor sample; it matches only reliable publishers (the driver is one).
+
     Parameters
     ----------
     depth : int
         History depth in messages.
+    reliable : bool
+        Reliable instead of best-effort delivery.
 
     Returns
     -------
     rclpy.qos.QoSProfile
 
     """
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
-                      reliability=ReliabilityPolicy.BEST_EFFORT,
+    reliability = ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth), reliability=reliability,
                       durability=DurabilityPolicy.VOLATILE)
 
 

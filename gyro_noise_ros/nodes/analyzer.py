@@ -118,6 +118,9 @@ PARAMETERS = (
               read_only=True, min_value=0.05, max_value=3600.0),
     ParamSpec('allan_period_s', 10.0, 'Period of the Allan deviation update in the diagnostics',
               unit='s', read_only=True, min_value=0.1, max_value=86400.0),
+    ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
+              'publisher such as the driver) instead of sensor-data best effort, so a busy host '
+              'drops no message that would count as a lost sample', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     # 20 ms, not 10: each executor wake-up costs a fixed few hundred microseconds in rclpy
@@ -184,7 +187,7 @@ class NoiseAnalyzerNode(Node):
         self._allan_due = 0.0
 
         group = PolledGroup()
-        qos = sensor_data_qos(p['queue_depth'])
+        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
                                                  raw=True, callback_group=group)
         self._temperature_sub = None

@@ -58,6 +58,9 @@ PARAMETERS = (
     ParamSpec('storage', 'sqlite3', 'rosbag2 storage plugin', read_only=True,
               choices=('sqlite3', 'mcap')),
     ParamSpec('record_temperature', True, 'Also record imu/temperature', read_only=True),
+    ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
+              'publisher such as the driver) instead of sensor-data best effort, so a busy host '
+              'drops no message that would count as a lost sample', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1000000),
     ParamSpec('drain_period_s', 0.01,
@@ -114,7 +117,7 @@ class RecorderNode(Node):
             raise BagError(f"parameter 'output' = {self.output!r}: the path exists; "
                            'choose a new bag directory')
         group = PolledGroup()
-        qos = sensor_data_qos(params['queue_depth'])
+        qos = sensor_data_qos(params['queue_depth'], params['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
                                                  raw=True,
                                                  callback_group=group)

@@ -10,7 +10,7 @@ STAMP := $(VENV)/.installed
 $(STAMP): setup.py setup.cfg package.xml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[ros,test]'
+	$(PY) -m pip install --quiet -e '.[ros,test,dask]'
 	touch $(STAMP)
 
 venv: $(STAMP)

@@ -57,6 +57,10 @@ setup(
             'ros-jazzy-common-interfaces',
             'ros-jazzy-rmw-fastrtps-cpp',
         ],
+        # --scheduler of gyro_noise_analyze / _explain / _thermal: the work units on a Dask
+        # distributed cluster (gyro_noise_ros/cluster.py, docs/scale.md). Optional: without it
+        # --scheduler says which extra to install; `make venv` installs it so the tests run.
+        'dask': ['distributed>=2024.1'],
         # The ament linters run for real in `make test`: ament_flake8 needs flake8 and the
         # plugins its ROS package depends on (python3-flake8-*), listed here for pip.
         'test': [

@@ -53,3 +53,9 @@ class LinkError(GyroNoiseError):
     """The Portenta link cannot be used: bad port, no acknowledgement, bad configuration."""
 
     exit_code = 5
+
+
+class ClusterError(GyroNoiseError):
+    """A Dask scheduler (``--scheduler``) cannot be reached, or its cluster failed in the run."""
+
+    exit_code = 5

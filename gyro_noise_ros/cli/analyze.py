@@ -20,8 +20,8 @@ Characterise gyro noise in rosbags (paper 000 Tables 3-6, Figs. 2-10), ROS-free.
 Usage::
 
     gyro_noise_analyze BAG [BAG ...] [--topic T] [--axis x|y|z|all] [--chunk-size N]
-        [--order-grid START:STOP:STEP] [--memory L] [--jobs N] [--reference SUMMARY] [--label NAME
-        ...] --out DIR
+        [--order-grid START:STOP:STEP] [--memory L] [--jobs N] [--scheduler ADDRESS]
+        [--reference SUMMARY] [--label NAME ...] --out DIR
 
 Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags through :mod:`gyro_noise_ros.bag`, streams them in
 batches (constant memory apart from one small row per chunk), runs
@@ -33,7 +33,6 @@ exit codes: ``docs/offline_tool.md``.
 
 import argparse
 import collections
-from concurrent.futures import ProcessPoolExecutor
 import datetime
 import math
 import os
@@ -47,6 +46,7 @@ from ._common import run_cli
 from .. import __version__, report
 from ..bag import find_imu_topic, ImuBagReader
 from ..bag.tabular import is_table, TableImuReader
+from ..cluster import make_executor
 from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
@@ -115,6 +115,10 @@ def build_parser():
     p.add_argument(
         '--jobs', type=int, default=None, metavar='N',
         help='worker processes for the identification (default: all cores; 1 = in-process)')
+    p.add_argument(
+        '--scheduler', metavar='ADDRESS',
+        help='Dask scheduler (tcp://host:8786): identify the chunks on that cluster instead of '
+        'local processes (pip extra dask; docs/scale.md)')
     p.add_argument(
         '--reference', metavar='SUMMARY',
         help='summary.json of a reference recording: adds health verdicts per bag and axis')
@@ -190,7 +194,7 @@ def _labels(paths, labels):
 def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None,
                  jobs=1, reference=None, reference_bag=None, thresholds=None, figures=True,
                  curves=DEFAULT_CURVES, batch_size=DEFAULT_BATCH, progress=False, command=None,
-                 start_s=None, end_s=None, static='auto'):
+                 start_s=None, end_s=None, static='auto', scheduler=None):
     """
     Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
 
@@ -228,6 +232,9 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         Analyse only samples from ``start_s`` to ``end_s`` seconds after each bag's first sample.
     static : {'auto', 'off'}
         'auto': find the longest static segment (core/segments.py) and skip motion, saying so.
+    scheduler : str, optional
+        Dask scheduler address: the chunks go to that cluster instead of ``jobs`` local
+        processes, at most ``2 x max(jobs, cluster threads)`` in flight (:mod:`..cluster`).
 
     Returns
     -------
@@ -266,7 +273,9 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
 
     started = time.perf_counter()
     timing = {'decode_s': 0.0, 'wait_s': 0.0}
-    pool = ProcessPoolExecutor(max_workers=jobs) if jobs > 1 else None
+    pool = make_executor(jobs, scheduler)
+    if scheduler is not None:
+        jobs = max(jobs, pool.nthreads)
     csv_writer = report.ChunkCsvWriter(out / 'chunks.csv')
     bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
     try:
@@ -314,6 +323,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
             ),
             'curves': curves,
             'batch_size': batch_size,
+            'scheduler': pool.address if scheduler is not None else None,
         },
         'bags': bag_docs,
     }
@@ -774,7 +784,8 @@ def _body(argv):
                        reference=args.reference, reference_bag=args.reference_bag,
                        figures=not args.no_figures, curves=args.curves,
                        batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv],
-                       start_s=args.start, end_s=args.end, static=args.static)
+                       start_s=args.start, end_s=args.end, static=args.static,
+                       scheduler=args.scheduler)
     if not args.quiet:
         _print_summary(doc)
     return 0

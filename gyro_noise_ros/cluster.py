@@ -1,0 +1,294 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Where the pure work units run: local worker processes, or a Dask distributed cluster.
+
+The command-line tools hand their heavy, pure work units (one chunk of one axis in
+gyro_noise_analyze, one ensemble member's signatures in gyro_noise_explain, one MOPSO particle in
+gyro_noise_thermal) to a :class:`concurrent.futures.Executor` and take the results back in
+submission order. :func:`make_executor` returns that executor:
+
+* no scheduler: a :class:`~concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes, or
+  ``None`` for ``jobs <= 1`` (the caller then runs in-process), exactly as before;
+* ``scheduler='tcp://host:8786'``: a :class:`DaskExecutor` on a ``distributed.Client`` connected to
+  that scheduler. Tasks are submitted with ``pure=True``: their key is a hash of the function and
+  its arguments, and since the work units are pure (same inputs, same outputs) a task that Dask
+  runs again after losing a worker gives the same result, so nothing is lost or duplicated.
+
+``distributed`` is optional (pip extra ``dask``): it is imported only when a scheduler is named,
+and its absence then gives :class:`~gyro_noise_ros.errors.ParameterError` (exit 2) naming the
+extra. A scheduler that cannot be reached, or is lost during the run, gives
+:class:`~gyro_noise_ros.errors.ClusterError` (exit 5). See docs/scale.md.
+"""
+
+import collections
+import concurrent.futures as cf
+import importlib.metadata
+import itertools
+
+from . import __version__
+from .errors import ClusterError, ParameterError
+
+#: pip extra that installs Dask distributed.
+EXTRA = 'dask'
+#: The one line shown when ``distributed`` is missing.
+MISSING = ('--scheduler needs Dask distributed, which is not installed: pip install '
+           f"'gyro_noise_ros[{EXTRA}]', or pip install distributed, or apt install "
+           'python3-distributed')
+
+
+def dask_available():
+    """
+    Tell whether ``distributed`` can be imported.
+
+    Returns
+    -------
+    bool
+
+    """
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def make_executor(jobs=1, scheduler=None, *, timeout_s=None):
+    """
+    Return the executor for the work units: local processes, or a Dask cluster.
+
+    Parameters
+    ----------
+    jobs : int
+        Worker processes without a scheduler (``<= 1``: ``None`` is returned and the caller
+        works in-process). Ignored with a scheduler (the cluster has its own workers).
+    scheduler : str, optional
+        Address of a Dask scheduler (``tcp://host:8786``, ``host:8786``), or an object with an
+        ``address`` attribute (e.g. a ``distributed.LocalCluster``).
+    timeout_s : float, optional
+        Connection timeout (s); default Dask's ``distributed.comm.timeouts.connect`` (30 s,
+        environment variable ``DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT``).
+
+    Returns
+    -------
+    concurrent.futures.Executor or None
+        ``shutdown()`` it at the end (for a :class:`DaskExecutor` that closes the client).
+
+    Raises
+    ------
+    ParameterError
+        ``distributed`` is not installed, or the address is empty.
+    ClusterError
+        The scheduler cannot be reached, or a worker lacks this version of gyro_noise_ros.
+
+    """
+    if scheduler is None:
+        return cf.ProcessPoolExecutor(max_workers=int(jobs)) if int(jobs) > 1 else None
+    address = getattr(scheduler, 'address', scheduler)
+    if not isinstance(address, str) or not address.strip():
+        raise ParameterError(f'--scheduler needs an address such as tcp://host:8786, got '
+                             f'{address!r}')
+    try:
+        import distributed
+    except ImportError:
+        raise ParameterError(MISSING) from None
+    try:
+        extra = {} if timeout_s is None else {'timeout': float(timeout_s)}
+        client = distributed.Client(address.strip(), set_as_default=False, **extra)
+    except (OSError, TimeoutError, ValueError, TypeError) as err:
+        raise ClusterError(f'--scheduler {address}: cannot connect to a Dask scheduler there '
+                           f'({_reason(err)})') from None
+    try:
+        _check_workers(client, address)
+    except BaseException:
+        client.close()
+        raise
+    return DaskExecutor(client)
+
+
+def _reason(err):
+    text = ' '.join(str(err).split())
+    return f'{type(err).__name__}: {text}' if text else type(err).__name__
+
+
+def _check_workers(client, address):
+    """Refuse workers without this version of gyro_noise_ros (results would differ or fail)."""
+    try:
+        found = client.run(importlib.metadata.version, 'gyro_noise_ros', on_error='return')
+    except (OSError, TimeoutError) as err:
+        raise ClusterError(f'--scheduler {address}: {_reason(err)}') from None
+    bad = {w: (v if isinstance(v, str) else 'not installed') for w, v in found.items()
+           if v != __version__}
+    if bad:
+        listed = ', '.join(f'{w} ({v})' for w, v in sorted(bad.items())[:3])
+        more = f' and {len(bad) - 3} more' if len(bad) > 3 else ''
+        raise ClusterError(
+            f'--scheduler {address}: {len(bad)} worker(s) do not have gyro_noise_ros '
+            f'{__version__}: {listed}{more}; install the same version on every worker')
+
+
+class DaskExecutor(cf.Executor):
+    """
+    A :class:`concurrent.futures.Executor` on a ``distributed.Client`` (pure tasks).
+
+    ``submit`` returns a plain :class:`concurrent.futures.Future`; its ``result()`` raises the
+    task's own exception, or :class:`ClusterError` when Dask gives up on the task (the scheduler
+    lost, a task that killed ``distributed.scheduler.allowed-failures`` workers).
+    ``map`` yields results in input order and keeps at most ``2 x threads`` tasks in flight.
+    ``shutdown`` closes the client. Build it with :func:`make_executor`.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        Connected client; owned (closed by :meth:`shutdown`).
+
+    Attributes
+    ----------
+    client : distributed.Client
+    address : str
+        The scheduler's address.
+
+    """
+
+    def __init__(self, client):
+        self.client = client
+        self.address = client.scheduler.address
+        self._pending = set()
+        self._closed = False
+
+    @property
+    def nthreads(self):
+        """Return the worker threads in the cluster now (>= 1)."""
+        return max(1, sum(self.client.nthreads().values()))
+
+    def submit(self, fn, /, *args, **kwargs):
+        """
+        Submit ``fn(*args, **kwargs)`` as a pure Dask task.
+
+        Parameters
+        ----------
+        fn : callable
+            Importable on the workers (a module-level function of gyro_noise_ros).
+        *args, **kwargs
+            Its arguments (picklable).
+
+        Returns
+        -------
+        concurrent.futures.Future
+
+        """
+        if self._closed:
+            raise RuntimeError('cannot submit after shutdown')
+        task = self.client.submit(fn, *args, pure=True, **kwargs)
+        out = cf.Future()
+        out.set_running_or_notify_cancel()
+        self._pending.add(task)
+        address = self.address
+
+        def done(task):
+            self._pending.discard(task)
+            if out.done():
+                return
+            try:
+                out.set_result(task.result())
+            except BaseException as err:  # noqa: B902 - handed to the waiting caller
+                out.set_exception(_translate(err, address))
+
+        task.add_done_callback(done)
+        return out
+
+    def map(self, fn, *iterables, timeout=None, chunksize=1, window=None):  # noqa: A003
+        """
+        Return an iterator of ``fn(*args)`` over ``zip(*iterables)``, in order.
+
+        Parameters
+        ----------
+        fn : callable
+            The work unit (as for :meth:`submit`).
+        *iterables
+            Consumed lazily: at most ``window`` calls are in flight.
+        timeout : float, optional
+            Seconds to wait for each result.
+        chunksize : int
+            Ignored (for signature compatibility).
+        window : int, optional
+            Calls in flight (default ``2 x`` the cluster's threads).
+
+        Returns
+        -------
+        iterator
+
+        """
+        window = int(window) if window else 2 * self.nthreads
+        args = zip(*iterables)
+
+        def results():
+            inflight = collections.deque(self.submit(fn, *a)
+                                         for a in itertools.islice(args, window))
+            try:
+                while inflight:
+                    value = inflight.popleft().result(timeout)
+                    inflight.extend(self.submit(fn, *a) for a in itertools.islice(args, 1))
+                    yield value
+            finally:
+                for f in inflight:
+                    f.cancel()
+
+        return results()
+
+    def shutdown(self, wait=True, *, cancel_futures=False):
+        """
+        Cancel what is left if asked, and close the client (the cluster keeps running).
+
+        Parameters
+        ----------
+        wait : bool
+            Wait for pending tasks unless ``cancel_futures``.
+        cancel_futures : bool
+            Cancel pending tasks.
+
+        """
+        if self._closed:
+            return
+        self._closed = True
+        pending = list(self._pending)
+        try:
+            if cancel_futures and pending:
+                self.client.cancel(pending)
+            elif wait and pending:
+                import distributed
+
+                distributed.wait(pending)
+        finally:
+            self.client.close()
+
+
+def _translate(err, address):
+    """Turn Dask's failures of the cluster (not of the task) into ClusterError."""
+    name = type(err).__name__
+    if isinstance(err, cf.CancelledError) or name in ('CancelledError', 'FutureCancelledError'):
+        return ClusterError(f'--scheduler {address}: a task was cancelled by Dask (scheduler '
+                            f'lost or restarted?): {_reason(err)}')
+    if name == 'KilledWorker':
+        return ClusterError(f'--scheduler {address}: Dask gave up on a task that was running on '
+                            f'workers that died ({_reason(err)}); see the logs of the workers '
+                            '(memory?)')
+    if isinstance(err, (ModuleNotFoundError, ImportError)):
+        return ClusterError(f'--scheduler {address}: a worker cannot import the work unit '
+                            f'({_reason(err)}); install gyro_noise_ros {__version__} on every '
+                            'worker')
+    if isinstance(err, (OSError, TimeoutError)) and not hasattr(err, 'exit_code'):
+        return ClusterError(f'--scheduler {address}: {_reason(err)}')
+    return err

@@ -75,8 +75,8 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None):
         Worker processes without a scheduler (``<= 1``: ``None`` is returned and the caller
         works in-process). Ignored with a scheduler (the cluster has its own workers).
     scheduler : str, optional
-        Address of a Dask scheduler (``tcp://host:8786``, ``host:8786``), or an object with an
-        ``address`` attribute (e.g. a ``distributed.LocalCluster``).
+        Address of a Dask scheduler (``tcp://host:8786``, ``host:8786``), or a cluster object
+        with a ``scheduler_address`` (e.g. a ``distributed.LocalCluster``).
     timeout_s : float, optional
         Connection timeout (s); default Dask's ``distributed.comm.timeouts.connect`` (30 s,
         environment variable ``DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT``).
@@ -96,7 +96,7 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None):
     """
     if scheduler is None:
         return cf.ProcessPoolExecutor(max_workers=int(jobs)) if int(jobs) > 1 else None
-    address = getattr(scheduler, 'address', scheduler)
+    address = getattr(scheduler, 'scheduler_address', scheduler)
     if not isinstance(address, str) or not address.strip():
         raise ParameterError(f'--scheduler needs an address such as tcp://host:8786, got '
                              f'{address!r}')

@@ -21,7 +21,7 @@ Usage::
 
     gyro_noise_explain INPUT [--topic T] [--temperature-topic T] [--axis x|y|z] [--seed S]
                        --out DIR [--ensemble N] [--max-steps K] [--rate-hz HZ]
-                       [--require-temperature] [--quiet]
+                       [--require-temperature] [--scheduler ADDRESS] [--quiet]
 
 INPUT is a rosbag2 directory / .db3 / .mcap, a ROS 1 .bag, or a .csv with the columns documented in
 :mod:`gyro_noise_ros.explain.inputs`. Writes DIR/explain.json, DIR/report.md and PNG figures;
@@ -63,6 +63,9 @@ def build_parser():
                    help='analyse up to S seconds after the first sample')
     p.add_argument('--static', default='auto', choices=('auto', 'off'),
                    help='auto: keep the longest static segment, skipping motion (default)')
+    p.add_argument('--scheduler', metavar='ADDRESS',
+                   help='Dask scheduler (tcp://host:8786): evaluate the ensemble members on that '
+                   'cluster (same result; pip extra dask; docs/scale.md)')
     p.add_argument('--quiet', action='store_true', help='print only the verdict')
     return p
 
@@ -103,12 +106,23 @@ def _left_out_lines(left):
 
 
 def _body(argv):
+    from ..cluster import make_executor
+
+    args = build_parser().parse_args(argv)
+    _check_options(args)
+    pool = make_executor(1, args.scheduler) if args.scheduler is not None else None
+    try:
+        return _run(args, map if pool is None else pool.map)
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
+
+
+def _run(args, map_fn):
     from ..explain.inputs import available_axes, load_input, select
     from ..explain.report import verdict, write_outputs
     from ..explain.workflow import explain
 
-    args = build_parser().parse_args(argv)
-    _check_options(args)
     axes = available_axes(args.input) if args.axis == 'all' else (args.axis,)
     progress = None if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
     out_root = Path(args.out)
@@ -125,7 +139,7 @@ def _body(argv):
         if progress is not None and len(axes) > 1:
             progress(f'axis {axis} ({k + 1} of {len(axes)})')
         result = explain(meas, seed=args.seed, ensemble=args.ensemble, max_steps=args.max_steps,
-                         progress=progress)
+                         progress=progress, map_fn=map_fn)
         out = write_outputs(result, out_root / f'axis_{axis}' if len(axes) > 1 else out_root)
         results[axis] = (result, out)
         print(f'{PROG}: axis {axis}: {verdict(result)} ({out / "explain.json"})')

@@ -17,9 +17,11 @@ gyro_noise_thermal: fit, apply and compare temperature-drift / denoising methods
 
 Usage::
 
-    gyro_noise_thermal fit BAG [BAG ...] [--topic T] [--temperature-topic T] [--method M] --out DIR
+    gyro_noise_thermal fit BAG [BAG ...] [--topic T] [--temperature-topic T] [--method M]
+        [--scheduler ADDRESS] --out DIR
     gyro_noise_thermal apply BAG --model DIR/model.json --out OUT
     gyro_noise_thermal compare TRAIN_BAG TEST_BAG --out DIR [--methods M,M,...]
+        [--scheduler ADDRESS]
     gyro_noise_thermal simulate --seed S --out DIR [--hours H] [--rate-hz R] [--compress X]
         [--storage sqlite3|mcap] [--temperature-rate-hz R] [--no-hysteresis]
 
@@ -41,7 +43,8 @@ import numpy as np
 
 from ._common import run_cli
 from .. import __version__
-from ..errors import InputDataError, ParameterError
+from ..cluster import make_executor
+from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
 from ..thermal import methods as registry
 from ..thermal import report
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,
@@ -87,6 +90,9 @@ def _add_fit_options(p):
     p.add_argument('--min-range-c', type=float, default=registry.DEFAULT_MIN_RANGE_C,
                    help='smallest training temperature span, degC '
                         f'({registry.DEFAULT_MIN_RANGE_C:g})')
+    p.add_argument('--scheduler', metavar='ADDRESS',
+                   help='Dask scheduler (tcp://host:8786): evaluate the parallel model\'s MOPSO '
+                   'particles on that cluster (same model; pip extra dask; docs/scale.md)')
 
 
 def _add_output_options(p):
@@ -187,9 +193,27 @@ def _join(runs):
     return join_runs(runs, gap_s=DEFAULT_RATE_WINDOW_S + 1.0 / runs[0].rate_hz)
 
 
-def _fit(method_name, run, *, seed, sources):
+def _fit(method_name, run, *, seed, sources, executor=None):
     return registry.fit_method(method_name, run, rng=np.random.default_rng(seed),
-                               sources=sources)
+                               sources=sources, executor=executor)
+
+
+def _executor(args, names):
+    """Connect to --scheduler (None without one); say so when no method has work to send."""
+    if args.scheduler is None:
+        return None
+
+    def distributes(name):
+        try:
+            return hasattr(registry.method_class(name), 'executor')
+        except GyroNoiseError:  # reported by the fit itself
+            return True
+
+    pool = make_executor(1, args.scheduler)
+    if not args.quiet and not any(distributes(n) for n in names):
+        print(f'{PROG}: warning: --scheduler: {", ".join(names)} has no work units to '
+              'distribute (only the parallel model does); it runs here', file=sys.stderr)
+    return pool
 
 
 def _in_sample(run, processed):
@@ -221,9 +245,15 @@ def _cmd_fit(args, argv):
     runs, bags = _read_runs(args.bags, args)
     run = _join(runs)
     registry.check_trainable(run, min_range_c=args.min_range_c)
-    started = time.monotonic()
-    model = _fit(args.method, run, seed=args.seed, sources=[str(b.path) for b in bags])
-    fit_s = time.monotonic() - started
+    pool = _executor(args, [args.method])
+    try:
+        started = time.monotonic()
+        model = _fit(args.method, run, seed=args.seed, sources=[str(b.path) for b in bags],
+                     executor=pool)
+        fit_s = time.monotonic() - started
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
     files = [out / 'model.json']
     registry.save_model(model.method, files[0], training=model.training)
     processed = np.asarray(model.method.apply(run), dtype=float)
@@ -490,10 +520,12 @@ def _cmd_compare(args, argv):
     registry.check_trainable(train, min_range_c=args.min_range_c)
     out = _out_dir(args.out)
     results, errors, curves = {}, {}, {}
+    pool = _executor(args, names)
     for name in names:
         try:
             started = time.monotonic()
-            model = _fit(name, train, seed=args.seed, sources=[str(train_bag.path)])
+            model = _fit(name, train, seed=args.seed, sources=[str(train_bag.path)],
+                         executor=pool)
             fit_s = time.monotonic() - started
             registry.check_temperature_range(model, test.temperature_c,
                                              margin_c=args.range_margin_c)
@@ -501,6 +533,9 @@ def _cmd_compare(args, argv):
             processed = np.asarray(model.method.apply(test), dtype=float)
             apply_s = time.monotonic() - started
             doc, processed, cur = _score(model.method, test, args, processed)
+        except ClusterError:
+            pool.shutdown(cancel_futures=True)  # the cluster failed, not the method: stop
+            raise
         except Exception as err:  # noqa: BLE001 - reported in the table, see below
             # One method failing (missing module, a fit that diverges, a bug in it) must not
             # hide the others; its error is reported in compare.json and compare.md.
@@ -513,6 +548,8 @@ def _cmd_compare(args, argv):
         results[name], curves[name] = doc, cur
         if not args.quiet:
             print(f'{name}: scored (fit {fit_s:.1f} s, apply {apply_s:.1f} s)')
+    if pool is not None:
+        pool.shutdown(cancel_futures=True)
     if not results:
         raise InputDataError('no method could be trained and scored: '
                              + '; '.join(f'{k}: {v}' for k, v in errors.items()))

@@ -47,6 +47,7 @@ catalogue index])``), the lattice and stamp effects are applied when a member is
 """
 
 from dataclasses import dataclass, field
+import itertools
 import time
 
 import numpy as np
@@ -204,8 +205,8 @@ class _Model:
     Members with the accepted additive terms already added.
     """
 
-    def __init__(self, meas, layout, baseline, ensemble, seed):
-        self.meas, self.layout, self.seed = meas, layout, seed
+    def __init__(self, meas, layout, baseline, ensemble, seed, map_fn=map):
+        self.meas, self.layout, self.seed, self.map_fn = meas, layout, seed, map_fn
         self.members = [baseline.generator(np.random.default_rng([seed, j, 0])).generate(meas.n)
                         for j in range(ensemble)]
         self.quantization = None
@@ -240,11 +241,10 @@ class _Model:
         return x, t
 
     def signatures(self, trial=None, ctx=None):
-        out = []
-        for j in range(len(self.members)):
-            x, t = self._series(j, trial, ctx)
-            out.append(sig.compute(self.layout, x, t, self.meas.temperature_c))
-        return out
+        # One pure work unit per member, in member order (map_fn: local or a Dask cluster's).
+        series = (self._series(j, trial, ctx) for j in range(len(self.members)))
+        return list(self.map_fn(member_signatures, itertools.repeat(self.layout), series,
+                                itertools.repeat(self.meas.temperature_c)))
 
     def rebase(self, baseline, det_sum, ctx):
         """Regenerate the members from a refitted baseline, keeping the accepted additive terms."""
@@ -272,6 +272,29 @@ class _Model:
         self.accepted[effect.name] = params
 
 
+def member_signatures(layout, series, temperature_c):
+    """
+    Evaluate one ensemble member's signatures (the pure work unit shipped to ``map_fn``).
+
+    Parameters
+    ----------
+    layout : Layout
+        Where the signatures are evaluated.
+    series : tuple
+        ``(x, t)``: the member's rate (rad/s) and stamps (s) or None.
+    temperature_c : numpy.ndarray or None
+        The measurement's temperature (degC), shared by every member.
+
+    Returns
+    -------
+    dict
+        :func:`.signatures.compute` of the member.
+
+    """
+    x, t = series
+    return sig.compute(layout, x, t, temperature_c)
+
+
 def _changed(new, old):
     """Tell whether a refitted baseline differs materially (order, f, or a level by over 2 %)."""
     level = np.hypot(new.sigma_w_rad_s, new.sigma_nu_rad_s) / max(
@@ -292,7 +315,8 @@ def where_outside(layout, comparisons):
     return [sig.describe_where(layout, c) for c in worst if c.outside.any()]
 
 
-def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None):
+def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None,
+            map_fn=map):
     """
     Run the discrepancy workflow on one measured axis (module doc).
 
@@ -310,6 +334,10 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         Candidates (default: the whole catalogue).
     progress : callable, optional
         Called with one-line status texts.
+    map_fn : callable, keyword-only
+        ``map``-like function (results in order) that evaluates the members' signatures, e.g.
+        the ``map`` of :func:`gyro_noise_ros.cluster.make_executor`'s executor; the result does
+        not depend on it.
 
     Returns
     -------
@@ -334,7 +362,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         f'sigma_w={baseline.sigma_w_rad_s:.3g} rad/s '
         f'sigma_nu={baseline.sigma_nu_rad_s:.3g} rad/s (L_sim={baseline.memory_sim})')
     t1 = time.perf_counter()
-    model = _Model(meas, layout, baseline, ensemble, seed)
+    model = _Model(meas, layout, baseline, ensemble, seed, map_fn)
     seconds['simulate_baseline'] = time.perf_counter() - t1
     t2 = time.perf_counter()
     member_sig = model.signatures()

@@ -464,7 +464,7 @@ def check_temperature_range(model, temperature_c, *, margin_c=DEFAULT_RANGE_MARG
     return lo, hi
 
 
-def fit_method(name, run, *, rng, sources=None, **options):
+def fit_method(name, run, *, rng, sources=None, executor=None, **options):
     """
     Build, fit and wrap a method with its training summary.
 
@@ -478,6 +478,10 @@ def fit_method(name, run, *, rng, sources=None, **options):
         Passed to ``fit``.
     sources : sequence of str, optional
         Recording names for :class:`TrainingInfo`.
+    executor : concurrent.futures.Executor, optional
+        Where a method with an ``executor`` attribute (the parallel model: its MOPSO particles)
+        runs its pure work units, e.g. a Dask cluster (:mod:`gyro_noise_ros.cluster`); the
+        caller shuts it down. Not part of the model: the fit is the same without it.
     **options
         Constructor options.
 
@@ -489,7 +493,14 @@ def fit_method(name, run, *, rng, sources=None, **options):
     if not isinstance(run, ThermalRun):
         raise ParameterError(f'run must be a ThermalRun, got {type(run).__name__}')
     method = get_method(name, **options)
-    method.fit(run, rng=rng)
+    if executor is not None and hasattr(method, 'executor'):
+        method.executor = executor
+        try:
+            method.fit(run, rng=rng)
+        finally:
+            method.executor = None
+    else:
+        method.fit(run, rng=rng)
     return ThermalModel(method=method, training=training_info(run, sources=sources))
 
 

@@ -41,8 +41,7 @@ subtracted from the sum of the drift modes, and the two parts added. VMD and TFP
 record: the model is offline only (``causal = False``); the live node refuses it.
 """
 
-from concurrent.futures import ProcessPoolExecutor
-
+from gyro_noise_ros.cluster import make_executor
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.thermal.classify import classify_modes
 from gyro_noise_ros.thermal.elman import ElmanModel, fit_elman
@@ -115,6 +114,11 @@ class ParallelModel:
 
     name = 'parallel'
     causal = False
+    #: Executor of the MOPSO fitness evaluations (e.g. a Dask cluster's, from
+    #: :func:`gyro_noise_ros.cluster.make_executor`), set by the caller, who shuts it down; None:
+    #: ``workers`` local processes. Where the work runs, not what it computes: not an option,
+    #: not in :meth:`to_dict` (the fit is the same either way).
+    executor = None
 
     def __init__(self, **options):
         unknown = set(options) - set(DEFAULT_OPTIONS)
@@ -136,14 +140,15 @@ class ParallelModel:
         x_all, temp, rate = self._inputs(run)
         o = self.options
         axes, info = [], []
-        pool = ProcessPoolExecutor(int(o['workers'])) if int(o['workers']) > 1 else None
+        own = None if self.executor is not None else make_executor(int(o['workers']))
+        pool = self.executor if self.executor is not None else own
         try:
             for a in range(3):
                 axes.append(self._fit_axis(x_all[:, a], temp, rate, run.rate_hz, rng, pool,
                                            info))
         finally:
-            if pool is not None:
-                pool.shutdown()
+            if own is not None:
+                own.shutdown()
         self.axes = axes
         self.rate_hz = float(run.rate_hz)
         self.temperature_range_c = [float(temp.min()), float(temp.max())]

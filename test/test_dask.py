@@ -126,6 +126,39 @@ def test_executor_map_keeps_order_with_a_small_window(dask_cluster):
     assert pool.client.status == 'closed'
 
 
+def alignment(x):
+    """Return the address of an array's data modulo 16, as a work unit sees it."""
+    return x.ctypes.data % 16
+
+
+@needs_dask
+def test_work_units_get_aligned_arrays_and_full_size_chunks_match(dask_cluster):
+    from gyro_noise_ros.core.engine import analyze_chunk, EngineConfig, NoiseEngine
+
+    # Dask alone hands a worker views into the message at any byte offset (float64 at odd
+    # addresses were seen, and gave a var_min 1 ulp off): each work unit must see aligned arrays,
+    # as in a local process.
+    pool = cluster.make_executor(scheduler=dask_cluster.scheduler_address)
+    try:
+        # (numpy allocates with malloc: 16-byte aligned; pickled bytes keep that alignment)
+        assert [pool.submit(alignment, np.arange(float(n))).result() for n in (7, 10000)] == [0, 0]
+        # Full-size chunks (10,000 samples, the default grid), as the bench runs them.
+        engine = NoiseEngine(EngineConfig(axes=('x',), rate_hz=RATE_HZ))
+        rng = np.random.default_rng(3)
+        n = 80000
+        jobs = engine.ingest(np.arange(n, dtype=np.int64) * 150_150, rng.normal(size=(n, 3)))
+        jobs += engine.flush()
+        futures = [pool.submit(analyze_chunk, job, curves=True) for job in jobs]
+        for job, future in zip(jobs, futures):
+            local, remote = analyze_chunk(job, curves=True), future.result()
+            assert remote == local
+            assert np.array_equal(remote.var_curve, local.var_curve)
+            assert np.array_equal(remote.j_curve, local.j_curve)
+    finally:
+        pool.shutdown()
+    assert len(jobs) == 8
+
+
 @needs_dask
 def test_a_task_error_is_the_task_error(dask_cluster):
     # A bug inside a work unit is not a cluster failure: its own exception comes back.

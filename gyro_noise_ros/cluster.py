@@ -42,8 +42,8 @@ extra. A scheduler that cannot be reached, or is lost during the run, gives
 
 import collections
 import concurrent.futures as cf
-import importlib.metadata
 import itertools
+import os
 import pickle
 
 from . import __version__
@@ -73,7 +73,7 @@ def dask_available():
     return True
 
 
-def make_executor(jobs=1, scheduler=None, *, timeout_s=None):
+def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
     """
     Return the executor for the work units: local processes, or a Dask cluster.
 
@@ -88,6 +88,9 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None):
     timeout_s : float, optional
         Connection timeout (s); default Dask's ``distributed.comm.timeouts.connect`` (30 s,
         environment variable ``DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT``).
+    warn : callable, optional
+        Called with one line of text about the cluster's set-up (workers started with Dask's
+        default ``MALLOC_TRIM_THRESHOLD_``: about 2x slower, see docs/scale.md).
 
     Returns
     -------
@@ -119,7 +122,7 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None):
         raise ClusterError(f'--scheduler {address}: cannot connect to a Dask scheduler there '
                            f'({_reason(err)})') from None
     try:
-        _check_workers(client, address)
+        _check_workers(client, address, warn)
     except BaseException:
         client.close()
         raise
@@ -131,20 +134,47 @@ def _reason(err):
     return f'{type(err).__name__}: {text}' if text else type(err).__name__
 
 
-def _check_workers(client, address):
-    """Refuse workers without this version of gyro_noise_ros (results would differ or fail)."""
+def worker_facts():
+    """
+    Return what the client checks on every worker (runs on the worker).
+
+    Returns
+    -------
+    dict
+        ``version``: gyro_noise_ros version; ``malloc_trim_threshold``: the environment variable
+        ``MALLOC_TRIM_THRESHOLD_`` (None when unset).
+
+    """
+    return {'version': __version__,
+            'malloc_trim_threshold': os.environ.get('MALLOC_TRIM_THRESHOLD_')}
+
+
+#: Set-up line for workers (docs/scale.md): Dask's nanny exports MALLOC_TRIM_THRESHOLD_=65536 to
+#: its workers, which turns off glibc's adaptive mmap threshold: every temporary array of the
+#: identification is then a fresh mmap with page faults, about 2x the CPU time per chunk.
+MALLOC_ADVICE = ('start the workers with DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON__'
+                 'MALLOC_TRIM_THRESHOLD_=None for about twice the speed (docs/scale.md)')
+
+
+def _check_workers(client, address, warn):
+    """Refuse workers without this version of gyro_noise_ros; warn about a slow set-up."""
     try:
-        found = client.run(importlib.metadata.version, 'gyro_noise_ros', on_error='return')
+        found = client.run(worker_facts, on_error='return')
     except (OSError, TimeoutError) as err:
         raise ClusterError(f'--scheduler {address}: {_reason(err)}') from None
-    bad = {w: (v if isinstance(v, str) else 'not installed') for w, v in found.items()
-           if v != __version__}
+    bad = {w: (f.get('version') if isinstance(f, dict) else 'not installed')
+           for w, f in found.items()
+           if not (isinstance(f, dict) and f.get('version') == __version__)}
     if bad:
         listed = ', '.join(f'{w} ({v})' for w, v in sorted(bad.items())[:3])
         more = f' and {len(bad) - 3} more' if len(bad) > 3 else ''
         raise ClusterError(
             f'--scheduler {address}: {len(bad)} worker(s) do not have gyro_noise_ros '
             f'{__version__}: {listed}{more}; install the same version on every worker')
+    trimmed = sum(1 for f in found.values() if f.get('malloc_trim_threshold') is not None)
+    if trimmed and warn is not None:
+        warn(f'--scheduler {address}: {trimmed} of {len(found)} worker(s) run with '
+             f'MALLOC_TRIM_THRESHOLD_ set (the Dask default); {MALLOC_ADVICE}')
 
 
 class DaskExecutor(cf.Executor):

@@ -58,12 +58,15 @@ ANALYZE = ['--chunk-size', '1000', '--memory', '60', '--order-grid', '0:2:0.05',
 def dask_cluster():
     if not HAVE_DASK:
         pytest.skip("distributed not installed (pip install -e '.[dask]')")
+    import dask
     from distributed import LocalCluster
 
-    # Two worker processes (not threads) so that one can be killed; no dashboard (no bokeh).
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=50) as c:
-        yield c
+    # Two worker processes (not threads) so that one can be killed; no dashboard (no bokeh);
+    # workers without Dask's MALLOC_TRIM_THRESHOLD_, as docs/scale.md advises (speed only).
+    with dask.config.set({'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}):
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                          dashboard_address=None, silence_logs=50) as c:
+            yield c
 
 
 @pytest.fixture(scope='module')
@@ -160,6 +163,29 @@ def test_work_units_get_aligned_arrays_and_full_size_chunks_match(dask_cluster):
 
 
 @needs_dask
+@pytest.mark.filterwarnings('ignore:Port .* is already in use')  # another user's dashboard
+def test_workers_are_checked_on_connecting(dask_cluster, monkeypatch):
+    from distributed import LocalCluster
+
+    said = []
+    pool = cluster.make_executor(scheduler=dask_cluster, warn=said.append)
+    pool.shutdown()
+    assert said == []  # the fixture's workers run without MALLOC_TRIM_THRESHOLD_
+    # A worker in this process (threads) sees this process's environment and version.
+    monkeypatch.setenv('MALLOC_TRIM_THRESHOLD_', '65536')
+    with LocalCluster(n_workers=1, processes=False, dashboard_address=None,
+                      worker_dashboard_address=None) as c:
+        cluster.make_executor(scheduler=c, warn=said.append).shutdown()
+        assert len(said) == 1 and '1 of 1 worker(s) run with MALLOC_TRIM_THRESHOLD_' in said[0]
+        assert cluster.MALLOC_ADVICE in said[0]
+        # a worker with another version of the package is refused
+        monkeypatch.setattr(cluster, 'worker_facts', lambda: {'version': '0.0.0-other'})
+        with pytest.raises(cluster.ClusterError, match=r'1 worker\(s\) do not have gyro_noise_ros '
+                           r'.*\(0.0.0-other\); install the same version'):
+            cluster.make_executor(scheduler=c)
+
+
+@needs_dask
 def test_a_task_error_is_the_task_error(dask_cluster):
     # A bug inside a work unit is not a cluster failure: its own exception comes back.
     pool = cluster.make_executor(scheduler=dask_cluster.scheduler_address)
@@ -190,6 +216,24 @@ def test_explain_ensemble_on_the_cluster_is_identical(dask_cluster):
     for name, c in local.comparisons_final.items():
         d = remote.comparisons_final[name]
         assert np.array_equal(c.mu, d.mu) and np.array_equal(c.sd, d.sd)
+
+
+@needs_dask
+def test_explain_cli_with_scheduler_writes_the_local_explain_json(dask_cluster, table, tmp_path):
+    # The CLI wiring: --scheduler reaches explain() (no step needed here: the initial ensemble
+    # is already evaluated through the cluster).
+    common = [str(table), '--axis', 'x', '--ensemble', '4', '--max-steps', '0', '--static', 'off',
+              '--quiet']
+    assert explain_main([*common, '--out', str(tmp_path / 'local')]) == 0
+    assert explain_main([*common, '--out', str(tmp_path / 'dask'), '--scheduler',
+                         dask_cluster.scheduler_address]) == 0
+    docs = []
+    for name in ('local', 'dask'):
+        doc = json.loads((tmp_path / name / 'explain.json').read_text())
+        doc.pop('seconds')
+        docs.append(doc)
+    assert docs[0] == docs[1]
+    assert docs[0]['ensemble'] == 4 and docs[0]['input']['samples'] == 14500
 
 
 def _thermal_bag(path, seed):

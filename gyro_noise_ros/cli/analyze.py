@@ -273,7 +273,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
 
     started = time.perf_counter()
     timing = {'decode_s': 0.0, 'wait_s': 0.0}
-    pool = make_executor(jobs, scheduler)
+    pool = make_executor(jobs, scheduler, warn=warn)
     if scheduler is not None:
         jobs = max(jobs, pool.nthreads)
     csv_writer = report.ChunkCsvWriter(out / 'chunks.csv')

@@ -110,7 +110,10 @@ def _body(argv):
 
     args = build_parser().parse_args(argv)
     _check_options(args)
-    pool = make_executor(1, args.scheduler) if args.scheduler is not None else None
+    pool = None
+    if args.scheduler is not None:
+        pool = make_executor(1, args.scheduler, warn=lambda text: print(
+            f'{PROG}: warning: {text}', file=sys.stderr, flush=True))
     try:
         return _run(args, map if pool is None else pool.map)
     finally:

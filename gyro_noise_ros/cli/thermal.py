@@ -209,7 +209,8 @@ def _executor(args, names):
         except GyroNoiseError:  # reported by the fit itself
             return True
 
-    pool = make_executor(1, args.scheduler)
+    pool = make_executor(1, args.scheduler, warn=lambda text: print(
+        f'{PROG}: warning: {text}', file=sys.stderr, flush=True))
     if not args.quiet and not any(distributes(n) for n in names):
         print(f'{PROG}: warning: --scheduler: {", ".join(names)} has no work units to '
               'distribute (only the parallel model does); it runs here', file=sys.stderr)

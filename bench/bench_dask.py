@@ -20,12 +20,16 @@ both methods, Allan deviation, no figures) side by side in this process:
 
 1. overhead: ``--jobs N`` (a ProcessPoolExecutor of N processes, started inside the run as the
    tool does) against ``--scheduler`` on a LocalCluster of N worker processes x 1 thread (started
-   before, as a standing cluster is; warmed by one small run). Ratio = Dask time / local time;
-2. throughput against the number of workers: LocalClusters of 1, 2, 4 worker processes x 1
-   thread, and the same ``--jobs`` locally. On a 2-core machine the 4-worker row shows
-   oversubscription, not scaling.
+   before, as a standing cluster is; warmed by one small run), once with Dask's default worker
+   environment (``MALLOC_TRIM_THRESHOLD_=65536``) and once without it (docs/scale.md advises
+   it). Ratio = Dask time / local time;
+2. throughput against the number of workers (without that variable): LocalClusters of 1, 2, 4
+   worker processes x 1 thread, and the same ``--jobs`` locally (``--jobs 1``: in-process). On a
+   2-core machine the 4-worker row shows oversubscription, not scaling.
 
-Every Dask run's chunks.csv is compared with the local run's (must be byte-identical).
+Every Dask run's chunks.csv is compared with the in-process run's (must be byte-identical).
+Each row is the best of two local and two Dask runs, alternated, to damp the load of a shared
+machine.
 
 Usage::
 
@@ -72,11 +76,12 @@ def run(bag, out, *, jobs=1, scheduler=None):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    p.add_argument('--samples', type=int, default=1_000_000)
+    p.add_argument('--samples', type=int, default=600_000)
     p.add_argument('--jobs', type=int, default=2, help='workers of the overhead comparison')
     p.add_argument('--workers', default='1,2,4', help='LocalCluster sizes of the scaling rows')
     p.add_argument('--seed', type=int, default=1)
     args = p.parse_args(argv)
+    import dask
     from distributed import LocalCluster
 
     sizes = [int(v) for v in args.workers.split(',')]
@@ -90,36 +95,49 @@ def main(argv=None):
         write_bag(small, 40_000, args.seed + 1)
         n = args.samples
 
-        def cluster(workers):
-            c = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                             dashboard_address=None, silence_logs=40)
+        def cluster(workers, dask_default_env=False):
+            # A LocalCluster's nannies live in this process and export their pre-spawn
+            # environment here too: drop it before a cluster that must not have it.
+            os.environ.pop('MALLOC_TRIM_THRESHOLD_', None)
+            value = '65536' if dask_default_env else None
+            with dask.config.set({'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_':
+                                  value}):
+                c = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                 dashboard_address=None, silence_logs=40)
+            os.environ.pop('MALLOC_TRIM_THRESHOLD_', None)
             run(small, tmp / 'warm', scheduler=c.scheduler_address)  # imports, numba, identifier
             return c
 
-        print(f'\n1. overhead, {args.jobs} workers, {n:,} samples x 3 axes')
-        local_s, chunks = run(bag, tmp / 'local', jobs=args.jobs)
-        reference = (tmp / 'local' / 'chunks.csv').read_bytes()
-        with cluster(args.jobs) as c:
-            dask_s, _ = run(bag, tmp / 'dask', scheduler=c.scheduler_address)
-        same = (tmp / 'dask' / 'chunks.csv').read_bytes() == reference
-        again_s, _ = run(bag, tmp / 'local2', jobs=args.jobs)  # the local path once more
-        local_s = min(local_s, again_s)
-        print(f'  local --jobs {args.jobs}: {local_s:.1f} s ({n / local_s:,.0f} samples/s, '
-              f'{chunks} chunk identifications; best of 2, before and after)')
-        print(f'  Dask LocalCluster {args.jobs} x 1 thread: {dask_s:.1f} s '
-              f'({n / dask_s:,.0f} samples/s); chunks.csv identical: {same}')
-        print(f'  ratio Dask / local time: {dask_s / local_s:.2f} '
-              f'(load average now {os.getloadavg()[0]:.1f})')
+        def side_by_side(workers, dask_default_env=False, tag=''):
+            """Return the best of 2 local and of 2 Dask runs, alternated; and identical?."""
+            local, remote, same = [], [], True
+            with cluster(workers, dask_default_env) as c:
+                for k in range(2):
+                    local.append(run(bag, tmp / f'l{tag}{k}', jobs=workers)[0])
+                    remote.append(run(bag, tmp / f'd{tag}{k}', scheduler=c.scheduler_address)[0])
+                    same &= (tmp / f'd{tag}{k}' / 'chunks.csv').read_bytes() == reference
+            return min(local), min(remote), same
 
-        print('\n2. throughput against workers (LocalCluster, 1 thread per worker process)')
+        print(f'\n1. overhead, {args.jobs} workers, {n:,} samples x 3 axes (best of 2 runs each, '
+              'local and Dask alternated)')
+        _, chunks = run(bag, tmp / 'local', jobs=1)
+        reference = (tmp / 'local' / 'chunks.csv').read_bytes()
+        for default_env, what in ((True, "Dask's default worker env (MALLOC_TRIM_THRESHOLD_="
+                                         '65536)'),
+                                  (False, 'MALLOC_TRIM_THRESHOLD_ unset (docs/scale.md)')):
+            ls, ds, same = side_by_side(args.jobs, default_env, tag=f'o{int(default_env)}')
+            print(f'  {what}: local --jobs {args.jobs} {ls:.1f} s ({n / ls:,.0f} samples/s), '
+                  f'Dask {args.jobs} x 1 thread {ds:.1f} s ({n / ds:,.0f} samples/s): ratio '
+                  f'Dask / local time {ds / ls:.2f}; chunks.csv identical to --jobs 1: {same}')
+        print(f'  ({chunks} chunk identifications; load average now {os.getloadavg()[0]:.1f})')
+
+        print('\n2. throughput against workers (LocalCluster, 1 thread per worker process, '
+              'MALLOC_TRIM_THRESHOLD_ unset; best of 2 alternated runs)')
         print('  | workers | local --jobs s | local samples/s | Dask s | Dask samples/s | '
               'Dask/local |')
         print('  |---:|---:|---:|---:|---:|---:|')
         for w in sizes:
-            ls, _ = run(bag, tmp / f'l{w}', jobs=w)
-            with cluster(w) as c:
-                ds, _ = run(bag, tmp / f'd{w}', scheduler=c.scheduler_address)
-            same = (tmp / f'd{w}' / 'chunks.csv').read_bytes() == reference
+            ls, ds, same = side_by_side(w, tag=f'w{w}')
             print(f'  | {w} | {ls:.1f} | {n / ls:,.0f} | {ds:.1f} | {n / ds:,.0f} | '
                   f'{ds / ls:.2f} |' + ('' if same else ' (chunks.csv DIFFERS)'))
         print(f'  (load average at the end {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)')

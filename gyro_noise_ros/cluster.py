@@ -40,6 +40,7 @@ extra. A scheduler that cannot be reached, or is lost during the run, gives
 :class:`~gyro_noise_ros.errors.ClusterError` (exit 5). See docs/scale.md.
 """
 
+import asyncio
 import collections
 import concurrent.futures as cf
 import itertools
@@ -90,7 +91,7 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
         environment variable ``DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT``).
     warn : callable, optional
         Called with one line of text about the cluster's set-up (workers started with Dask's
-        default ``MALLOC_TRIM_THRESHOLD_``: about 2x slower, see docs/scale.md).
+        default ``MALLOC_TRIM_THRESHOLD_=65536``: about 2x slower, see docs/scale.md).
 
     Returns
     -------
@@ -115,9 +116,16 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
         import distributed
     except ImportError:
         raise ParameterError(MISSING) from None
+    import dask.utils
+
+    address = address.strip()
+    if timeout_s is None:
+        timeout_s = dask.utils.parse_timedelta(
+            dask.config.get('distributed.comm.timeouts.connect'), 's')
     try:
-        extra = {} if timeout_s is None else {'timeout': float(timeout_s)}
-        client = distributed.Client(address.strip(), set_as_default=False, **extra)
+        # Probe first: a Client that fails to start prints a traceback when it is collected.
+        asyncio.run(_probe(address, float(timeout_s)))
+        client = distributed.Client(address, set_as_default=False, timeout=float(timeout_s))
     except (OSError, TimeoutError, ValueError, TypeError) as err:
         raise ClusterError(f'--scheduler {address}: cannot connect to a Dask scheduler there '
                            f'({_reason(err)})') from None
@@ -127,6 +135,16 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
         client.close()
         raise
     return DaskExecutor(client)
+
+
+async def _probe(address, timeout_s):
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    # the client's TLS settings (distributed.comm.tls) for tls:// addresses, as Client uses them
+    args = Security().get_connection_args('client')
+    comm = await connect(address, timeout=timeout_s, **args)
+    await comm.close()
 
 
 def _reason(err):
@@ -141,19 +159,30 @@ def worker_facts():
     Returns
     -------
     dict
-        ``version``: gyro_noise_ros version; ``malloc_trim_threshold``: the environment variable
-        ``MALLOC_TRIM_THRESHOLD_`` (None when unset).
+        ``version``: gyro_noise_ros version; ``malloc_trim_threshold``: the glibc environment
+        variable ``MALLOC_TRIM_THRESHOLD_`` (None when unset).
 
     """
     return {'version': __version__,
             'malloc_trim_threshold': os.environ.get('MALLOC_TRIM_THRESHOLD_')}
 
 
-#: Set-up line for workers (docs/scale.md): Dask's nanny exports MALLOC_TRIM_THRESHOLD_=65536 to
-#: its workers, which turns off glibc's adaptive mmap threshold: every temporary array of the
-#: identification is then a fresh mmap with page faults, about 2x the CPU time per chunk.
-MALLOC_ADVICE = ('start the workers with DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON__'
-                 'MALLOC_TRIM_THRESHOLD_=None for about twice the speed (docs/scale.md)')
+def _small_trim(value):
+    """Tell whether a MALLOC_TRIM_THRESHOLD_ value makes glibc return freed memory too eagerly."""
+    if value is None:
+        return False
+    try:
+        return int(value) < 2**25  # glibc's own adaptive thresholds go up to 32 MiB
+    except ValueError:
+        return False
+
+
+#: Set-up line for workers (docs/scale.md). Dask's nanny exports MALLOC_TRIM_THRESHOLD_=65536 to
+#: its workers: glibc then returns freed memory at once and stops adapting its mmap threshold
+#: (128 kB), so every temporary array of the identification comes with fresh page faults: about
+#: 2x the CPU time per chunk.
+MALLOC_ADVICE = ('set distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_ to null in the '
+                 "workers' Dask configuration for about twice the speed (docs/scale.md)")
 
 
 def _check_workers(client, address, warn):
@@ -171,10 +200,10 @@ def _check_workers(client, address, warn):
         raise ClusterError(
             f'--scheduler {address}: {len(bad)} worker(s) do not have gyro_noise_ros '
             f'{__version__}: {listed}{more}; install the same version on every worker')
-    trimmed = sum(1 for f in found.values() if f.get('malloc_trim_threshold') is not None)
+    trimmed = sum(1 for f in found.values() if _small_trim(f.get('malloc_trim_threshold')))
     if trimmed and warn is not None:
         warn(f'--scheduler {address}: {trimmed} of {len(found)} worker(s) run with '
-             f'MALLOC_TRIM_THRESHOLD_ set (the Dask default); {MALLOC_ADVICE}')
+             f'a small MALLOC_TRIM_THRESHOLD_ (the Dask default); {MALLOC_ADVICE}')
 
 
 class DaskExecutor(cf.Executor):

@@ -176,7 +176,8 @@ def test_workers_are_checked_on_connecting(dask_cluster, monkeypatch):
     with LocalCluster(n_workers=1, processes=False, dashboard_address=None,
                       worker_dashboard_address=None) as c:
         cluster.make_executor(scheduler=c, warn=said.append).shutdown()
-        assert len(said) == 1 and '1 of 1 worker(s) run with MALLOC_TRIM_THRESHOLD_' in said[0]
+        assert len(said) == 1
+        assert '1 of 1 worker(s) run with a small MALLOC_TRIM_THRESHOLD_' in said[0]
         assert cluster.MALLOC_ADVICE in said[0]
         # a worker with another version of the package is refused
         monkeypatch.setattr(cluster, 'worker_facts', lambda: {'version': '0.0.0-other'})
@@ -296,6 +297,24 @@ def test_unreachable_scheduler_is_one_line_and_exit_5(tool, table, tmp_path, cap
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
     assert err[0].startswith(f'gyro_noise_{tool}: error: --scheduler {address}: cannot connect')
+
+
+@needs_dask
+def test_unreachable_scheduler_whole_process_stderr_is_one_line(table, tmp_path):
+    # In a process of its own: nothing may print after the error line (e.g. a half-started
+    # Client's traceback when it is collected at exit).
+    import subprocess
+    import sys
+
+    address = f'tcp://127.0.0.1:{_free_port()}'
+    env = {**os.environ, 'DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT': '1s'}
+    proc = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.analyze', str(table), '--out',
+                           str(tmp_path / 'o'), '--scheduler', address, *ANALYZE],
+                          capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 5
+    assert proc.stderr.strip().splitlines() == [
+        f'gyro_noise_analyze: error: --scheduler {address}: cannot connect to a Dask scheduler '
+        f'there (OSError: Timed out trying to connect to {address} after 1 s)']
 
 
 def test_without_distributed_scheduler_is_one_line_naming_the_extra(table, tmp_path, capsys,

@@ -44,6 +44,7 @@ import asyncio
 import collections
 import concurrent.futures as cf
 import itertools
+import logging
 import os
 import pickle
 
@@ -129,12 +130,33 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
     except (OSError, TimeoutError, ValueError, TypeError) as err:
         raise ClusterError(f'--scheduler {address}: cannot connect to a Dask scheduler there '
                            f'({_reason(err)})') from None
+    restore = _mute_dask_logs()
     try:
         _check_workers(client, address, warn)
     except BaseException:
         client.close()
+        restore()
         raise
-    return DaskExecutor(client)
+    return DaskExecutor(client, restore=restore)
+
+
+def _mute_dask_logs():
+    """
+    Keep Dask's own log handlers (stderr) to CRITICAL while the tool's client is open.
+
+    distributed logs a lost scheduler as an ERROR with a traceback on stderr; the tools say it
+    in one line (:class:`ClusterError`). Returns the function that restores the levels.
+    """
+    saved = [(h, h.level) for name in ('distributed', 'tornado')
+             for h in logging.getLogger(name).handlers]
+    for handler, _ in saved:
+        handler.setLevel(max(handler.level, logging.CRITICAL))
+
+    def restore():
+        for handler, level in saved:
+            handler.setLevel(level)
+
+    return restore
 
 
 async def _probe(address, timeout_s):
@@ -220,6 +242,8 @@ class DaskExecutor(cf.Executor):
     ----------
     client : distributed.Client
         Connected client; owned (closed by :meth:`shutdown`).
+    restore : callable, optional
+        Called after the client is closed (restores Dask's log levels).
 
     Attributes
     ----------
@@ -229,8 +253,9 @@ class DaskExecutor(cf.Executor):
 
     """
 
-    def __init__(self, client):
+    def __init__(self, client, *, restore=None):
         self.client = client
+        self._restore = restore
         self.address = client.scheduler.address
         self._pending = set()
         self._closed = False
@@ -342,7 +367,11 @@ class DaskExecutor(cf.Executor):
 
                 distributed.wait(pending)
         finally:
-            self.client.close()
+            try:
+                self.client.close()
+            finally:
+                if self._restore is not None:
+                    self._restore()
 
 
 #: Pickle protocol of tasks and results: 4 keeps numpy arrays in-band (protocol 5 without a

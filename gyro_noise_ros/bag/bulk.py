@@ -38,6 +38,7 @@ from collections import defaultdict
 import io
 import struct
 
+import numba
 import numpy as np
 
 from . import ImuBagWriter
@@ -99,24 +100,41 @@ class BulkImuBagWriter(ImuBagWriter):
         return storage
 
     def _write_mcap_rows(self, conn, log_ns, rows):
-        storage = self._writer.storage
         n, size = rows.shape
-        rec = _MCAP_MESSAGE_HEAD + size
-        records = np.empty((n, rec), np.uint8)
-        records[:, 0] = 0x05
-        records[:, 1:9] = np.array([rec - 9], '<u8').view(np.uint8)
-        records[:, 9:11] = np.array([conn.id], '<u2').view(np.uint8)
-        records[:, 11:15] = 0
         times = np.ascontiguousarray(log_ns, dtype='<u8')
+        records = np.empty((n, _MCAP_MESSAGE_HEAD + size), np.uint8)
+        records[:, :_MCAP_MESSAGE_HEAD] = _mcap_record_head(conn.id, size)
         records[:, 15:23] = times.view(np.uint8).reshape(n, 8)
         records[:, 23:31] = records[:, 15:23]
-        records[:, 31:] = rows
+        records[:, _MCAP_MESSAGE_HEAD:] = rows
+        self._write_mcap_records(conn, times, records)
+
+    def _write_mcap_records(self, conn, times, records):
+        """
+        Append MCAP message records (rows of ``records``, log times ``times``) to the chunks.
+
+        A chunk that this block fills from its first message on goes to the file straight from
+        ``records`` (same bytes as rosbags' pending chunk closed by :class:`_McapChunkCloser`);
+        the rest goes through rosbags' pending chunk as rosbags' ``write`` would.
+        """
+        storage = self._writer.storage
+        n, rec = records.shape
         flat = memoryview(records).cast('B')
+        full = MCAP_CHUNK_BYTES // rec + 1  # messages that close a chunk begun empty
         done = 0
         try:
             while done < n:
                 chunk = storage.chunk
                 pos = chunk.bio.tell()
+                if pos == 0 and n - done >= full:
+                    part = times[done:done + full]
+                    index = np.empty((full, 2), '<u8')
+                    index[:, 0] = part
+                    index[:, 1] = rec * np.arange(full, dtype=np.uint64)
+                    _emit_chunk(storage, int(part.min()), int(part.max()),
+                                flat[done * rec:(done + full) * rec], {conn.id: [index]})
+                    done += full
+                    continue
                 # rosbags closes the chunk after the first message that ends past the limit
                 take = min(n - done, max(0, (MCAP_CHUNK_BYTES - pos) // rec) + 1)
                 part = times[done:done + take]
@@ -132,6 +150,8 @@ class BulkImuBagWriter(ImuBagWriter):
                     storage.close_chunk()
         except Exception as err:  # noqa: BLE001 - disk full
             raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
+        finally:
+            flat.release()
         first, last = int(times.min()), int(times.max())
         storage.message_start_time = min(storage.message_start_time, first)
         storage.message_end_time = max(storage.message_end_time, last)
@@ -185,15 +205,24 @@ class BulkImuBagWriter(ImuBagWriter):
             As in :meth:`ImuBagWriter.write_imu`.
 
         """
-        stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
-        rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id,
-                         angular_velocity_covariance, linear_acceleration_covariance)
+        stamps, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
         conn = self._imu_conn
         if topic is not None and topic != self.imu_topic:
             conn = self._extra_imu(topic)
-        self._write_rows(conn, self._log_times(stamps, log_ns), rows)
+        logs = self._log_times(stamps, log_ns)
+        records = None
+        if stamps.shape[0] and self._mcap_storage(conn) is not None:
+            records = _imu_records(conn.id, stamps, sec, nsec, logs, gyro_rad_s, accel_m_s2,
+                                   self.frame_id, angular_velocity_covariance,
+                                   linear_acceleration_covariance)
+        if records is not None:
+            self._write_mcap_records(conn, np.ascontiguousarray(logs, '<u8'), records)
+        else:
+            rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id,
+                             angular_velocity_covariance, linear_acceleration_covariance)
+            self._write_rows(conn, logs, rows)
         if conn is self._imu_conn:
-            self.imu_count += rows.shape[0]
+            self.imu_count += stamps.shape[0]
 
     def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
         """
@@ -253,6 +282,106 @@ def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
     return rows
 
 
+def _mcap_record_head(channel_id, size):
+    """Return the first 31 bytes of an MCAP message record (times zero) for a message size."""
+    return np.frombuffer(struct.pack('<BQHIQQ', 0x05, _MCAP_MESSAGE_HEAD - 9 + size, channel_id,
+                                     0, 0, 0), np.uint8)
+
+
+def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, frame_id, av_cov,
+                 la_cov):
+    """
+    Return the MCAP message records of Imu messages as one (n, record) byte matrix, or None.
+
+    Same bytes as :func:`_imu_rows` behind the record head of rosbags' ``write`` (opcode, length,
+    channel, sequence 0, log and publish time), built in one pass per message by a compiled loop:
+    the first message's record is the template, then stamps, log times and the two vectors are
+    written over it. None when the messages do not share their covariances (the caller then
+    takes the general path).
+    """
+    n = stamps.shape[0]
+    gyro = np.asarray(gyro_rad_s, dtype=np.float64)
+    accel = np.asarray(accel_m_s2, dtype=np.float64)
+    shared = all(c is None or np.shape(c) in ((9,), (3, 3)) for c in (av_cov, la_cov))
+    if not shared or gyro.shape != (n, 3) or accel.shape != (n, 3):
+        return None
+    first = encode_imu_rows(stamps[:1], gyro[:1], accel[:1], frame_id=frame_id,
+                            angular_velocity_covariance=av_cov,
+                            linear_acceleration_covariance=la_cov)
+    size = first.shape[1]
+    vec = _MCAP_MESSAGE_HEAD + size - 8 * IMU_TAIL_F8
+    template = np.concatenate((_mcap_record_head(channel_id, size), first[0]))
+    records = np.empty((n, template.size), np.uint8)
+    vectors = np.empty((n, 6), '<f8')
+    vectors[:, :3] = gyro
+    vectors[:, 3:] = accel
+    stamp = np.empty((n, 2), '<u4')
+    stamp[:, 0] = sec  # int32 seconds: two's complement, the bytes of '<i4'
+    stamp[:, 1] = nsec
+    _fill_imu_records(records, template,
+                      np.ascontiguousarray(log_ns, '<i8').view(np.uint8).reshape(n, 8),
+                      stamp.view(np.uint8).reshape(n, 8), vectors.view(np.uint8).reshape(n, 48),
+                      _MCAP_MESSAGE_HEAD + 4, vec + 13 * 8, vec + 25 * 8)
+    return records
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_imu_records(out, template, log_ns, stamp, vectors, at_stamp, at_gyro,
+                      at_accel):  # pragma: no cover - compiled; tested through the bag bytes
+    """
+    Copy the template into each row, then write log/publish time, stamp and vectors.
+
+    ``log_ns`` (n, 8), ``stamp`` (n, 8) and ``vectors`` (n, 48) are the little-endian bytes of
+    the log time, the stamp (sec, nanosec) and the six float64 of each message.
+    """
+    n, rec = out.shape
+    for i in range(n):
+        for k in range(rec):
+            out[i, k] = template[k]
+        for k in range(8):
+            out[i, 15 + k] = log_ns[i, k]
+            out[i, 23 + k] = log_ns[i, k]
+            out[i, at_stamp + k] = stamp[i, k]
+        for k in range(24):
+            out[i, at_gyro + k] = vectors[i, k]
+            out[i, at_accel + k] = vectors[i, 24 + k]
+
+
+def _emit_chunk(storage, start_time, end_time, data, msgs):
+    """
+    Write one MCAP chunk (uncompressed) with its message indexes; record its chunk index.
+
+    The bytes of rosbags' ``McapWriter.close_chunk``: chunk record, one message index record per
+    channel (``msgs``: channel id -> list of (k, 2) (log time, offset) arrays or pairs, in write
+    order), and the chunk index entry appended to ``storage.chunks``.
+    """
+    size = len(data)
+    compressed = storage.compressor(data)
+    head = struct.pack('<QQQI', start_time, end_time, size, 0)
+    body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
+    out = storage.bio
+    chunk_start = out.tell()
+    out.write(b'\x06' + struct.pack('<Q', len(body) + len(compressed)) + body)
+    out.write(compressed)
+    chunk_end = out.tell()
+    offsets = []
+    for cid, entries in msgs.items():
+        offsets.append((cid, out.tell()))
+        pairs = np.concatenate([np.asarray(e, dtype='<u8').reshape(-1, 2) for e in entries]) \
+            if entries else np.zeros((0, 2), '<u8')
+        index = pairs.astype('<u8').tobytes()
+        out.write(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)) + index)
+    rec = io.BytesIO()
+    rec.write(struct.pack('<QQQQI', start_time, end_time, chunk_start, chunk_end - chunk_start,
+                          len(offsets) * 10))
+    for cid, offset in offsets:
+        rec.write(struct.pack('<HQ', cid, offset))
+    rec.write(struct.pack('<Q', out.tell() - chunk_end))
+    rec.write(_mcap_string(storage.compression))
+    rec.write(struct.pack('<QQ', len(compressed), size))
+    storage.chunks.append(rec)
+
+
 class _McapChunkCloser:
     """
     rosbags' ``McapWriter.close_chunk`` with the message index written from numpy.
@@ -271,33 +400,12 @@ class _McapChunkCloser:
 
         storage = self.storage
         chunk = storage.chunk
-        head = struct.pack('<QQQI', chunk.message_start_time, chunk.message_end_time,
-                           chunk.bio.tell(), 0)
-        compressed = storage.compressor(chunk.bio.getvalue())
-        body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
-        chunk_start = storage.bio.tell()
-        storage.bio.write(b'\x06' + struct.pack('<Q', len(body) + len(compressed)))
-        storage.bio.write(body)
-        storage.bio.write(compressed)
-        chunk_end = storage.bio.tell()
-        offsets = []
-        for cid, entries in chunk.msgs.items():
-            offsets.append((cid, storage.bio.tell()))
-            pairs = np.concatenate([np.asarray(e, dtype='<u8').reshape(-1, 2) for e in entries]) \
-                if entries else np.zeros((0, 2), '<u8')
-            data = pairs.astype('<u8').tobytes()
-            payload = struct.pack('<HI', cid, len(data)) + data
-            storage.bio.write(b'\x07' + struct.pack('<Q', len(payload)))
-            storage.bio.write(payload)
-        rec = io.BytesIO()
-        rec.write(struct.pack('<QQQQI', chunk.message_start_time, chunk.message_end_time,
-                              chunk_start, chunk_end - chunk_start, len(offsets) * 10))
-        for cid, offset in offsets:
-            rec.write(struct.pack('<HQ', cid, offset))
-        rec.write(struct.pack('<Q', storage.bio.tell() - chunk_end))
-        rec.write(_mcap_string(storage.compression))
-        rec.write(struct.pack('<QQ', len(compressed), chunk.bio.tell()))
-        storage.chunks.append(rec)
+        data = chunk.bio.getbuffer()
+        try:
+            _emit_chunk(storage, chunk.message_start_time, chunk.message_end_time, data,
+                        chunk.msgs)
+        finally:
+            data.release()
         storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
 
 

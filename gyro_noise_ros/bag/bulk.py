@@ -36,7 +36,9 @@ from __future__ import annotations
 
 from collections import defaultdict
 import io
+import queue
 import struct
+import threading
 
 import numba
 import numpy as np
@@ -65,9 +67,16 @@ class BulkImuBagWriter(ImuBagWriter):
     :class:`ImuBagWriter` that writes blocks of messages at once (same bag, byte for byte).
 
     Parameters and attributes are those of :class:`ImuBagWriter`. On a rosbags version whose
-    sqlite3 writer layout is not the one recognised here, or with MCAP storage, messages take the
-    per-message path of :class:`ImuBagWriter`.
+    sqlite3 or MCAP writer layout is not the one recognised here, messages take the per-message
+    path of :class:`ImuBagWriter`.
+
+    With MCAP storage the file is written by a background thread (:class:`BackgroundFile`), so
+    the disk writes overlap the encoding of the next block; set the class attribute
+    :attr:`background_io` to False to write from the calling thread.
     """
+
+    #: Write MCAP files from a background thread (see :class:`BackgroundFile`).
+    background_io = True
 
     def _bulk_cursor(self, conn):
         """Return the sqlite3 cursor if the rosbags layout allows the block insert, else None."""
@@ -96,6 +105,8 @@ class BulkImuBagWriter(ImuBagWriter):
             return None
         if getattr(storage, '_gyro_noise_bulk', False) is False:
             storage.close_chunk = _McapChunkCloser(storage)
+            if self.background_io:
+                storage.bio = BackgroundFile(storage.bio)
             storage._gyro_noise_bulk = True
         return storage
 
@@ -150,8 +161,6 @@ class BulkImuBagWriter(ImuBagWriter):
                     storage.close_chunk()
         except Exception as err:  # noqa: BLE001 - disk full
             raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
-        finally:
-            flat.release()
         first, last = int(times.min()), int(times.max())
         storage.message_start_time = min(storage.message_start_time, first)
         storage.message_end_time = max(storage.message_end_time, last)
@@ -312,27 +321,27 @@ def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, 
     vec = _MCAP_MESSAGE_HEAD + size - 8 * IMU_TAIL_F8
     template = np.concatenate((_mcap_record_head(channel_id, size), first[0]))
     records = np.empty((n, template.size), np.uint8)
-    vectors = np.empty((n, 6), '<f8')
-    vectors[:, :3] = gyro
-    vectors[:, 3:] = accel
-    stamp = np.empty((n, 2), '<u4')
-    stamp[:, 0] = sec  # int32 seconds: two's complement, the bytes of '<i4'
-    stamp[:, 1] = nsec
-    _fill_imu_records(records, template,
-                      np.ascontiguousarray(log_ns, '<i8').view(np.uint8).reshape(n, 8),
-                      stamp.view(np.uint8).reshape(n, 8), vectors.view(np.uint8).reshape(n, 48),
-                      _MCAP_MESSAGE_HEAD + 4, vec + 13 * 8, vec + 25 * 8)
+
+    def as_bytes(values, dtype, width):
+        return np.ascontiguousarray(values, dtype).view(np.uint8).reshape(n, width)
+
+    # sec and nanosec were range-checked by split_stamps: the low 4 bytes of the little-endian
+    # int64 are the int32 / uint32 of the message
+    _fill_imu_records(records, template, as_bytes(log_ns, '<i8', 8), as_bytes(sec, '<i8', 8),
+                      as_bytes(nsec, '<i8', 8), as_bytes(gyro, '<f8', 24),
+                      as_bytes(accel, '<f8', 24), _MCAP_MESSAGE_HEAD + 4, vec + 13 * 8,
+                      vec + 25 * 8)
     return records
 
 
 @numba.njit(cache=True, nogil=True)
-def _fill_imu_records(out, template, log_ns, stamp, vectors, at_stamp, at_gyro,
+def _fill_imu_records(out, template, log_ns, sec, nsec, gyro, accel, at_stamp, at_gyro,
                       at_accel):  # pragma: no cover - compiled; tested through the bag bytes
     """
     Copy the template into each row, then write log/publish time, stamp and vectors.
 
-    ``log_ns`` (n, 8), ``stamp`` (n, 8) and ``vectors`` (n, 48) are the little-endian bytes of
-    the log time, the stamp (sec, nanosec) and the six float64 of each message.
+    ``log_ns``, ``sec``, ``nsec`` (n, 8) are the little-endian bytes of int64 values, ``gyro``
+    and ``accel`` (n, 24) those of three float64 per message.
     """
     n, rec = out.shape
     for i in range(n):
@@ -341,10 +350,12 @@ def _fill_imu_records(out, template, log_ns, stamp, vectors, at_stamp, at_gyro,
         for k in range(8):
             out[i, 15 + k] = log_ns[i, k]
             out[i, 23 + k] = log_ns[i, k]
-            out[i, at_stamp + k] = stamp[i, k]
+        for k in range(4):
+            out[i, at_stamp + k] = sec[i, k]
+            out[i, at_stamp + 4 + k] = nsec[i, k]
         for k in range(24):
-            out[i, at_gyro + k] = vectors[i, k]
-            out[i, at_accel + k] = vectors[i, 24 + k]
+            out[i, at_gyro + k] = gyro[i, k]
+            out[i, at_accel + k] = accel[i, k]
 
 
 def _emit_chunk(storage, start_time, end_time, data, msgs):
@@ -359,24 +370,31 @@ def _emit_chunk(storage, start_time, end_time, data, msgs):
     compressed = storage.compressor(data)
     head = struct.pack('<QQQI', start_time, end_time, size, 0)
     body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
-    out = storage.bio
-    chunk_start = out.tell()
-    out.write(b'\x06' + struct.pack('<Q', len(body) + len(compressed)) + body)
-    out.write(compressed)
-    chunk_end = out.tell()
+    chunk_start = storage.bio.tell()
+    parts = [b'\x06' + struct.pack('<Q', len(body) + len(compressed)) + body, compressed]
+    chunk_end = chunk_start + len(parts[0]) + len(compressed)
     offsets = []
+    end = chunk_end
     for cid, entries in msgs.items():
-        offsets.append((cid, out.tell()))
+        offsets.append((cid, end))
         pairs = np.concatenate([np.asarray(e, dtype='<u8').reshape(-1, 2) for e in entries]) \
             if entries else np.zeros((0, 2), '<u8')
         index = pairs.astype('<u8').tobytes()
-        out.write(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)) + index)
+        parts.append(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)) + index)
+        end += len(parts[-1])
+    # one call: a BackgroundFile queues the chunk as one item
+    write_all = getattr(storage.bio, 'write_all', None)
+    if write_all is not None:
+        write_all(parts)
+    else:
+        for part in parts:
+            storage.bio.write(part)
     rec = io.BytesIO()
     rec.write(struct.pack('<QQQQI', start_time, end_time, chunk_start, chunk_end - chunk_start,
                           len(offsets) * 10))
     for cid, offset in offsets:
         rec.write(struct.pack('<HQ', cid, offset))
-    rec.write(struct.pack('<Q', out.tell() - chunk_end))
+    rec.write(struct.pack('<Q', end - chunk_end))
     rec.write(_mcap_string(storage.compression))
     rec.write(struct.pack('<QQ', len(compressed), size))
     storage.chunks.append(rec)
@@ -400,13 +418,115 @@ class _McapChunkCloser:
 
         storage = self.storage
         chunk = storage.chunk
-        data = chunk.bio.getbuffer()
-        try:
-            _emit_chunk(storage, chunk.message_start_time, chunk.message_end_time, data,
-                        chunk.msgs)
-        finally:
-            data.release()
+        # a view, not a copy; it may wait in a BackgroundFile queue: the closed chunk's BytesIO
+        # is never written again
+        _emit_chunk(storage, chunk.message_start_time, chunk.message_end_time,
+                    chunk.bio.getbuffer(), chunk.msgs)
         storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
+
+
+class BackgroundFile:
+    """
+    A binary file written in order by a background thread: ``write`` queues, ``tell`` counts.
+
+    Wraps the file rosbags' MCAP writer writes to (it calls only ``write``, ``tell`` and
+    ``close``). At most ``depth`` writes wait in the queue (the caller blocks beyond), so memory
+    stays bounded; the data objects (bytes, memoryviews of message blocks) must not change until
+    written, which the bulk writer guarantees (each block is a new array). A failed write is
+    raised by the next ``write``, ``flush`` or ``close``; ``close`` waits for every queued write.
+
+    Parameters
+    ----------
+    raw : file object
+        Open binary file.
+    depth : int
+        Queued writes at most.
+
+    """
+
+    def __init__(self, raw, depth=16):
+        self.raw = raw
+        self._pos = raw.tell()
+        self._queue = queue.Queue(depth)
+        self._error = None
+        self._thread = threading.Thread(target=self._drain, name='gyro_noise_mcap_writer',
+                                        daemon=True)
+        self._thread.start()
+
+    def _drain(self):
+        while True:
+            parts = self._queue.get()
+            try:
+                if parts is None:
+                    return
+                if self._error is None:
+                    for data in parts:
+                        self.raw.write(data)
+            except BaseException as err:  # noqa: B036 - handed to the writing thread
+                self._error = err
+            finally:
+                self._queue.task_done()
+
+    def _check(self):
+        if self._error is not None:
+            err, self._error = self._error, None
+            raise OSError(f'background write failed: {err}') from err
+
+    def write(self, data):
+        """
+        Queue ``data`` for writing; return its length in bytes.
+
+        Parameters
+        ----------
+        data : bytes-like
+            Not to be modified afterwards.
+
+        Returns
+        -------
+        int
+
+        """
+        return self.write_all((data,))
+
+    def write_all(self, parts):
+        """
+        Queue several writes as one item; return their total length in bytes.
+
+        Parameters
+        ----------
+        parts : sequence of bytes-like
+            Not to be modified afterwards.
+
+        Returns
+        -------
+        int
+
+        """
+        self._check()
+        size = sum(memoryview(data).nbytes for data in parts)
+        self._queue.put(parts)
+        self._pos += size
+        return size
+
+    def tell(self):
+        """Return the file position after every queued write (bytes)."""
+        return self._pos
+
+    def flush(self):
+        """Wait for every queued write, then flush the file."""
+        self._queue.join()
+        self._check()
+        self.raw.flush()
+
+    def close(self):
+        """Write everything queued, stop the thread, close the file."""
+        if self._thread.is_alive():
+            self._queue.put(None)
+            self._thread.join()
+        try:
+            self._check()
+        finally:
+            self.raw.close()
 
 
 def _mcap_string(text):

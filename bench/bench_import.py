@@ -26,7 +26,9 @@ decoding, scaling and writing included):
 * ``bulk``: the bulk writer behind the byte-wise Decoder (``scan=False``: the previous session's
   new path, to show what the scanner adds);
 * ``new``: the defaults: :class:`gyro_noise_ros.link.scan.ScanDecoder` and
-  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter`.
+  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter` (MCAP written by a background thread);
+* ``new 1 thr``: ``new`` with ``BulkImuBagWriter.background_io = False`` (MCAP only: every
+  write from the importing thread).
 
 Each for sqlite3 and MCAP storage (MCAP is the default). Rounds are interleaved (every path once
 per round, the order rotated) so that a change of the machine's load hits every path alike; the
@@ -50,6 +52,7 @@ import tempfile
 import time
 
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.bag.bulk import BulkImuBagWriter
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import protocol as p
 from gyro_noise_ros.link.sdlog import SdLogWriter
@@ -95,28 +98,30 @@ PATHS = {
     'rosbags': {'bulk': False, 'scan': True},
     'bulk': {'bulk': True, 'scan': False},
     'new': {},
+    'new 1 thr': {},
 }
 
 
 def run_path(name, files, out, storage):
-    """Import with one path; return seconds."""
+    """Import with one path; return (wall seconds, CPU seconds of the process, all threads)."""
     ctx = rosbags_per_message() if name == 'rosbags' else contextlib.nullcontext()
+    BulkImuBagWriter.background_io = name != 'new 1 thr'
     with ctx:
-        start = time.perf_counter()
+        cpu, start = time.process_time(), time.perf_counter()
         importer.import_logs(files, out, storage=storage, **PATHS[name])
-        return time.perf_counter() - start
+        return time.perf_counter() - start, time.process_time() - cpu
 
 
 def disk_floor(directory, nbytes):
     """Write ``nbytes`` from memory in 1 MiB writes to a new file in ``directory``; seconds."""
     block = np.full(1 << 20, 7, np.uint8)
     path = os.path.join(directory, 'floor.bin')
-    start = time.perf_counter()
+    cpu, start = time.process_time(), time.perf_counter()
     with open(path, 'wb') as fh:
         for _ in range(nbytes >> 20):
             fh.write(block)
         fh.write(block[:nbytes & ((1 << 20) - 1)])
-    seconds = time.perf_counter() - start
+    seconds = time.perf_counter() - start, time.process_time() - cpu
     os.remove(path)
     return seconds
 
@@ -167,7 +172,8 @@ def main(argv=None):
         # warm-up: imports, numba kernels, page cache of the log files
         importer.import_logs(files, os.path.join(tmp, 'warm'), storage='mcap')
         shutil.rmtree(os.path.join(tmp, 'warm'))
-        runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS]
+        runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS
+                if storage == 'mcap' or name != 'new 1 thr']
         runs.append(('disk floor', 'mcap'))
         times = {run: [] for run in runs}
         loads = []
@@ -195,12 +201,13 @@ def main(argv=None):
             times['disk floor', 'mcap'].append(disk_floor(tmp, mcap_bytes))
         print(f'{args.rounds} interleaved round(s); load average after each: '
               + ', '.join(f'{v:.1f}' for v in loads))
-        med = {run: float(np.median(v)) for run, v in times.items()}
+        med = {run: float(np.median([w for w, _ in v])) for run, v in times.items()}
+        cpu = {run: float(np.median([c for _, c in v])) for run, v in times.items()}
 
         def ratio(a, b):
-            """Median over rounds of time(b) / time(a)."""
+            """Median over rounds of wall time(b) / wall time(a)."""
             k = min(len(times[a]), len(times[b]))
-            return float(np.median(np.array(times[b][:k]) / np.array(times[a][:k])))
+            return float(np.median([times[b][i][0] / times[a][i][0] for i in range(k)]))
 
         print(f'{"path":<11s} {"storage":<8s} {"samples/s":>11s} {"vs old sqlite3":>15s} '
               f'{"vs old, same storage":>21s} {"vs rosbags Writer, same storage":>32s}')
@@ -212,6 +219,15 @@ def main(argv=None):
                   f'{cells[0]:>14.1f}x {cells[1]:>20.1f}x {cells[2]:>31.1f}x')
         print(f'(disk floor: {mcap_bytes / 1e6:.0f} MB, the size of the MCAP bag; median seconds: '
               + ', '.join(f'{n} {s} {med[n, s]:.3f}' for n, s in runs) + ')')
+        print('\nCPU seconds of the importing process (all threads, system time included; less '
+              'sensitive to the load than wall time)')
+        print(f'{"path":<11s} {"storage":<8s} {"CPU s":>7s} {"vs old sqlite3":>15s} '
+              f'{"vs old, same storage":>21s}')
+        for name, storage in runs:
+            run = (name, storage)
+            print(f'{name:<11s} {storage:<8s} {cpu[run]:>7.3f} '
+                  f'{cpu["old", "sqlite3"] / cpu[run]:>14.1f}x '
+                  f'{cpu["old", storage] / cpu[run]:>20.1f}x')
         if not args.rss_samples:
             return 0
         print('\npeak RSS of one import process (MB) against log size')

@@ -35,6 +35,7 @@ See ``docs/scale.md``.
 from __future__ import annotations
 
 from collections import defaultdict
+import functools
 import io
 import queue
 import struct
@@ -118,19 +119,21 @@ class BulkImuBagWriter(ImuBagWriter):
         records[:, 15:23] = times.view(np.uint8).reshape(n, 8)
         records[:, 23:31] = records[:, 15:23]
         records[:, _MCAP_MESSAGE_HEAD:] = rows
-        self._write_mcap_records(conn, times, records)
+        self._write_mcap_records(conn, times, records.shape[1], lambda a, b: records[a:b])
 
-    def _write_mcap_records(self, conn, times, records):
+    def _write_mcap_records(self, conn, times, rec, build):
         """
-        Append MCAP message records (rows of ``records``, log times ``times``) to the chunks.
+        Append MCAP message records to the chunks.
 
-        A chunk that this block fills from its first message on goes to the file straight from
-        ``records`` (same bytes as rosbags' pending chunk closed by :class:`_McapChunkCloser`);
-        the rest goes through rosbags' pending chunk as rosbags' ``write`` would.
+        ``times`` are the log times, ``rec`` the record size, ``build(a, b)`` returns the records
+        of messages a to b - 1 as a C-contiguous (b - a, rec) byte matrix not changed afterwards.
+        Records are built one chunk at a time (they are written while in the CPU cache). A chunk
+        that this call fills from its first message on goes to the file straight from its
+        records (same bytes as rosbags' pending chunk closed by :class:`_McapChunkCloser`); the
+        rest goes through rosbags' pending chunk as rosbags' ``write`` would.
         """
         storage = self._writer.storage
-        n, rec = records.shape
-        flat = memoryview(records).cast('B')
+        n = times.shape[0]
         full = MCAP_CHUNK_BYTES // rec + 1  # messages that close a chunk begun empty
         done = 0
         try:
@@ -141,15 +144,16 @@ class BulkImuBagWriter(ImuBagWriter):
                     part = times[done:done + full]
                     index = np.empty((full, 2), '<u8')
                     index[:, 0] = part
-                    index[:, 1] = rec * np.arange(full, dtype=np.uint64)
-                    _emit_chunk(storage, int(part.min()), int(part.max()),
-                                flat[done * rec:(done + full) * rec], {conn.id: [index]})
+                    index[:, 1] = _offsets(rec, full)
+                    data = memoryview(build(done, done + full)).cast('B')
+                    _emit_chunk(storage, int(part.min()), int(part.max()), data,
+                                {conn.id: [index]})
                     done += full
                     continue
                 # rosbags closes the chunk after the first message that ends past the limit
                 take = min(n - done, max(0, (MCAP_CHUNK_BYTES - pos) // rec) + 1)
                 part = times[done:done + take]
-                chunk.bio.write(flat[done * rec:(done + take) * rec])
+                chunk.bio.write(memoryview(build(done, done + take)).cast('B'))
                 index = np.empty((take, 2), '<u8')
                 index[:, 0] = part
                 index[:, 1] = pos + rec * np.arange(take, dtype=np.uint64)
@@ -219,13 +223,13 @@ class BulkImuBagWriter(ImuBagWriter):
         if topic is not None and topic != self.imu_topic:
             conn = self._extra_imu(topic)
         logs = self._log_times(stamps, log_ns)
-        records = None
+        build = None
         if stamps.shape[0] and self._mcap_storage(conn) is not None:
-            records = _imu_records(conn.id, stamps, sec, nsec, logs, gyro_rad_s, accel_m_s2,
-                                   self.frame_id, angular_velocity_covariance,
-                                   linear_acceleration_covariance)
-        if records is not None:
-            self._write_mcap_records(conn, np.ascontiguousarray(logs, '<u8'), records)
+            build = _imu_records(conn.id, stamps, sec, nsec, logs, gyro_rad_s, accel_m_s2,
+                                 self.frame_id, angular_velocity_covariance,
+                                 linear_acceleration_covariance)
+        if build is not None:
+            self._write_mcap_records(conn, np.ascontiguousarray(logs, '<u8'), *build)
         else:
             rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id,
                              angular_velocity_covariance, linear_acceleration_covariance)
@@ -291,6 +295,14 @@ def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
     return rows
 
 
+@functools.lru_cache(maxsize=8)
+def _offsets(rec, count):
+    """Return the chunk offsets of ``count`` records of ``rec`` bytes (uint64, read-only)."""
+    out = rec * np.arange(count, dtype=np.uint64)
+    out.flags.writeable = False
+    return out
+
+
 def _mcap_record_head(channel_id, size):
     """Return the first 31 bytes of an MCAP message record (times zero) for a message size."""
     return np.frombuffer(struct.pack('<BQHIQQ', 0x05, _MCAP_MESSAGE_HEAD - 9 + size, channel_id,
@@ -300,13 +312,14 @@ def _mcap_record_head(channel_id, size):
 def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, frame_id, av_cov,
                  la_cov):
     """
-    Return the MCAP message records of Imu messages as one (n, record) byte matrix, or None.
+    Return (record size, ``build``) for the MCAP message records of Imu messages, or None.
 
-    Same bytes as :func:`_imu_rows` behind the record head of rosbags' ``write`` (opcode, length,
-    channel, sequence 0, log and publish time), built in one pass per message by a compiled loop:
-    the first message's record is the template, then stamps, log times and the two vectors are
-    written over it. None when the messages do not share their covariances (the caller then
-    takes the general path).
+    ``build(a, b)`` returns the records of messages a to b - 1 as a new (b - a, record) byte
+    matrix: the bytes of :func:`_imu_rows` behind the record head of rosbags' ``write`` (opcode,
+    length, channel, sequence 0, log and publish time), built in one pass per message by a
+    compiled loop: the first message's record is the template, then stamps, log times and the two
+    vectors are written over it. None when the messages do not share their covariances (the
+    caller then takes the general path).
     """
     n = stamps.shape[0]
     gyro = np.asarray(gyro_rad_s, dtype=np.float64)
@@ -320,18 +333,22 @@ def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, 
     size = first.shape[1]
     vec = _MCAP_MESSAGE_HEAD + size - 8 * IMU_TAIL_F8
     template = np.concatenate((_mcap_record_head(channel_id, size), first[0]))
-    records = np.empty((n, template.size), np.uint8)
 
     def as_bytes(values, dtype, width):
         return np.ascontiguousarray(values, dtype).view(np.uint8).reshape(n, width)
 
     # sec and nanosec were range-checked by split_stamps: the low 4 bytes of the little-endian
     # int64 are the int32 / uint32 of the message
-    _fill_imu_records(records, template, as_bytes(log_ns, '<i8', 8), as_bytes(sec, '<i8', 8),
-                      as_bytes(nsec, '<i8', 8), as_bytes(gyro, '<f8', 24),
-                      as_bytes(accel, '<f8', 24), _MCAP_MESSAGE_HEAD + 4, vec + 13 * 8,
-                      vec + 25 * 8)
-    return records
+    fields = (as_bytes(log_ns, '<i8', 8), as_bytes(sec, '<i8', 8), as_bytes(nsec, '<i8', 8),
+              as_bytes(gyro, '<f8', 24), as_bytes(accel, '<f8', 24))
+    at = (_MCAP_MESSAGE_HEAD + 4, vec + 13 * 8, vec + 25 * 8)
+
+    def build(a, b):
+        records = np.empty((b - a, template.size), np.uint8)
+        _fill_imu_records(records, template, *(f[a:b] for f in fields), *at)
+        return records
+
+    return template.size, build
 
 
 @numba.njit(cache=True, nogil=True)
@@ -377,11 +394,12 @@ def _emit_chunk(storage, start_time, end_time, data, msgs):
     end = chunk_end
     for cid, entries in msgs.items():
         offsets.append((cid, end))
-        pairs = np.concatenate([np.asarray(e, dtype='<u8').reshape(-1, 2) for e in entries]) \
-            if entries else np.zeros((0, 2), '<u8')
-        index = pairs.astype('<u8').tobytes()
-        parts.append(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)) + index)
-        end += len(parts[-1])
+        pairs = [np.ascontiguousarray(e, dtype='<u8').reshape(-1, 2) for e in entries]
+        index = memoryview(pairs[0] if len(pairs) == 1 else np.concatenate(
+            pairs or [np.zeros((0, 2), '<u8')])).cast('B')
+        parts.append(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)))
+        parts.append(index)
+        end += len(parts[-2]) + len(index)
     # one call: a BackgroundFile queues the chunk as one item
     write_all = getattr(storage.bio, 'write_all', None)
     if write_all is not None:

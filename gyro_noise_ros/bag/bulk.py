@@ -450,8 +450,9 @@ class BackgroundFile:
     Wraps the file rosbags' MCAP writer writes to (it calls only ``write``, ``tell`` and
     ``close``). At most ``depth`` writes wait in the queue (the caller blocks beyond), so memory
     stays bounded; the data objects (bytes, memoryviews of message blocks) must not change until
-    written, which the bulk writer guarantees (each block is a new array). A failed write is
-    raised by the next ``write``, ``flush`` or ``close``; ``close`` waits for every queued write.
+    written, which the bulk writer guarantees (each chunk is a new array). A failed write is
+    raised by every later ``write``, ``flush`` and ``close`` (nothing more is written);
+    ``close`` waits for every queued write.
 
     Parameters
     ----------
@@ -486,9 +487,9 @@ class BackgroundFile:
                 self._queue.task_done()
 
     def _check(self):
+        # sticky: after a failed write nothing more is written, every call raises
         if self._error is not None:
-            err, self._error = self._error, None
-            raise OSError(f'background write failed: {err}') from err
+            raise OSError(f'background write failed: {self._error}') from self._error
 
     def write(self, data):
         """

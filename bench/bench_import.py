@@ -26,9 +26,7 @@ decoding, scaling and writing included):
 * ``bulk``: the bulk writer behind the byte-wise Decoder (``scan=False``: the previous session's
   new path, to show what the scanner adds);
 * ``new``: the defaults: :class:`gyro_noise_ros.link.scan.ScanDecoder` and
-  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter` (MCAP written by a background thread);
-* ``new 1 thr``: ``new`` with ``BulkImuBagWriter.background_io = False`` (MCAP only: every
-  write from the importing thread).
+  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter`.
 
 Each for sqlite3 and MCAP storage (MCAP is the default). Rounds are interleaved (every path once
 per round, the order rotated) so that a change of the machine's load hits every path alike; the
@@ -52,7 +50,6 @@ import tempfile
 import time
 
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
-from gyro_noise_ros.bag.bulk import BulkImuBagWriter
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import protocol as p
 from gyro_noise_ros.link.sdlog import SdLogWriter
@@ -98,14 +95,12 @@ PATHS = {
     'rosbags': {'bulk': False, 'scan': True},
     'bulk': {'bulk': True, 'scan': False},
     'new': {},
-    'new 1 thr': {},
 }
 
 
 def run_path(name, files, out, storage):
     """Import with one path; return (wall seconds, CPU seconds of the process, all threads)."""
     ctx = rosbags_per_message() if name == 'rosbags' else contextlib.nullcontext()
-    BulkImuBagWriter.background_io = name != 'new 1 thr'
     with ctx:
         cpu, start = time.process_time(), time.perf_counter()
         importer.import_logs(files, out, storage=storage, **PATHS[name])
@@ -161,9 +156,9 @@ def main(argv=None):
                         '(empty: skip)')
     args = parser.parse_args(argv)
     cores = len(os.sched_getaffinity(0))
-    print(f'bench_import: {args.samples} samples, 1 process on {cores} visible core(s) (the MCAP '
-          f'writer adds one I/O thread); load average {os.getloadavg()[0]:.1f} at the start '
-          '(other work on the machine slows every path)')
+    print(f'bench_import: {args.samples} samples, 1 process, no worker threads, on {cores} '
+          f'visible core(s); load average {os.getloadavg()[0]:.1f} at the start (other work on the '
+          'machine slows every path)')
     tmp = tempfile.mkdtemp(prefix='bench_import_', dir=args.out_dir)
     try:
         files = make_logs(os.path.join(tmp, 'logs'), args.samples)
@@ -172,8 +167,7 @@ def main(argv=None):
         # warm-up: imports, numba kernels, page cache of the log files
         importer.import_logs(files, os.path.join(tmp, 'warm'), storage='mcap')
         shutil.rmtree(os.path.join(tmp, 'warm'))
-        runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS
-                if storage == 'mcap' or name != 'new 1 thr']
+        runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS]
         runs.append(('disk floor', 'mcap'))
         times = {run: [] for run in runs}
         loads = []

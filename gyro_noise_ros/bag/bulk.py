@@ -37,9 +37,7 @@ from __future__ import annotations
 from collections import defaultdict
 import functools
 import io
-import queue
 import struct
-import threading
 
 import numba
 import numpy as np
@@ -70,14 +68,7 @@ class BulkImuBagWriter(ImuBagWriter):
     Parameters and attributes are those of :class:`ImuBagWriter`. On a rosbags version whose
     sqlite3 or MCAP writer layout is not the one recognised here, messages take the per-message
     path of :class:`ImuBagWriter`.
-
-    With MCAP storage the file is written by a background thread (:class:`BackgroundFile`), so
-    the disk writes overlap the encoding of the next block; set the class attribute
-    :attr:`background_io` to False to write from the calling thread.
     """
-
-    #: Write MCAP files from a background thread (see :class:`BackgroundFile`).
-    background_io = True
 
     def _bulk_cursor(self, conn):
         """Return the sqlite3 cursor if the rosbags layout allows the block insert, else None."""
@@ -106,8 +97,6 @@ class BulkImuBagWriter(ImuBagWriter):
             return None
         if getattr(storage, '_gyro_noise_bulk', False) is False:
             storage.close_chunk = _McapChunkCloser(storage)
-            if self.background_io:
-                storage.bio = BackgroundFile(storage.bio)
             storage._gyro_noise_bulk = True
         return storage
 
@@ -126,11 +115,11 @@ class BulkImuBagWriter(ImuBagWriter):
         Append MCAP message records to the chunks.
 
         ``times`` are the log times, ``rec`` the record size, ``build(a, b)`` returns the records
-        of messages a to b - 1 as a C-contiguous (b - a, rec) byte matrix not changed afterwards.
-        Records are built one chunk at a time (they are written while in the CPU cache). A chunk
-        that this call fills from its first message on goes to the file straight from its
-        records (same bytes as rosbags' pending chunk closed by :class:`_McapChunkCloser`); the
-        rest goes through rosbags' pending chunk as rosbags' ``write`` would.
+        of messages a to b - 1 as a C-contiguous (b - a, rec) byte matrix. Records are built one
+        chunk at a time (they are written while in the CPU cache). A chunk that this call fills
+        from its first message on goes to the file straight from its records (same bytes as
+        rosbags' pending chunk closed by :class:`_McapChunkCloser`); the rest goes through
+        rosbags' pending chunk as rosbags' ``write`` would.
         """
         storage = self._writer.storage
         n = times.shape[0]
@@ -400,13 +389,8 @@ def _emit_chunk(storage, start_time, end_time, data, msgs):
         parts.append(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)))
         parts.append(index)
         end += len(parts[-2]) + len(index)
-    # one call: a BackgroundFile queues the chunk as one item
-    write_all = getattr(storage.bio, 'write_all', None)
-    if write_all is not None:
-        write_all(parts)
-    else:
-        for part in parts:
-            storage.bio.write(part)
+    for part in parts:
+        storage.bio.write(part)
     rec = io.BytesIO()
     rec.write(struct.pack('<QQQQI', start_time, end_time, chunk_start, chunk_end - chunk_start,
                           len(offsets) * 10))
@@ -436,116 +420,13 @@ class _McapChunkCloser:
 
         storage = self.storage
         chunk = storage.chunk
-        # a view, not a copy; it may wait in a BackgroundFile queue: the closed chunk's BytesIO
-        # is never written again
-        _emit_chunk(storage, chunk.message_start_time, chunk.message_end_time,
-                    chunk.bio.getbuffer(), chunk.msgs)
-        storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
-
-
-class BackgroundFile:
-    """
-    A binary file written in order by a background thread: ``write`` queues, ``tell`` counts.
-
-    Wraps the file rosbags' MCAP writer writes to (it calls only ``write``, ``tell`` and
-    ``close``). At most ``depth`` writes wait in the queue (the caller blocks beyond), so memory
-    stays bounded; the data objects (bytes, memoryviews of message blocks) must not change until
-    written, which the bulk writer guarantees (each chunk is a new array). A failed write is
-    raised by every later ``write``, ``flush`` and ``close`` (nothing more is written);
-    ``close`` waits for every queued write.
-
-    Parameters
-    ----------
-    raw : file object
-        Open binary file.
-    depth : int
-        Queued writes at most.
-
-    """
-
-    def __init__(self, raw, depth=16):
-        self.raw = raw
-        self._pos = raw.tell()
-        self._queue = queue.Queue(depth)
-        self._error = None
-        self._thread = threading.Thread(target=self._drain, name='gyro_noise_mcap_writer',
-                                        daemon=True)
-        self._thread.start()
-
-    def _drain(self):
-        while True:
-            parts = self._queue.get()
-            try:
-                if parts is None:
-                    return
-                if self._error is None:
-                    for data in parts:
-                        self.raw.write(data)
-            except BaseException as err:  # noqa: B036 - handed to the writing thread
-                self._error = err
-            finally:
-                self._queue.task_done()
-
-    def _check(self):
-        # sticky: after a failed write nothing more is written, every call raises
-        if self._error is not None:
-            raise OSError(f'background write failed: {self._error}') from self._error
-
-    def write(self, data):
-        """
-        Queue ``data`` for writing; return its length in bytes.
-
-        Parameters
-        ----------
-        data : bytes-like
-            Not to be modified afterwards.
-
-        Returns
-        -------
-        int
-
-        """
-        return self.write_all((data,))
-
-    def write_all(self, parts):
-        """
-        Queue several writes as one item; return their total length in bytes.
-
-        Parameters
-        ----------
-        parts : sequence of bytes-like
-            Not to be modified afterwards.
-
-        Returns
-        -------
-        int
-
-        """
-        self._check()
-        size = sum(memoryview(data).nbytes for data in parts)
-        self._queue.put(parts)
-        self._pos += size
-        return size
-
-    def tell(self):
-        """Return the file position after every queued write (bytes)."""
-        return self._pos
-
-    def flush(self):
-        """Wait for every queued write, then flush the file."""
-        self._queue.join()
-        self._check()
-        self.raw.flush()
-
-    def close(self):
-        """Write everything queued, stop the thread, close the file."""
-        if self._thread.is_alive():
-            self._queue.put(None)
-            self._thread.join()
+        data = chunk.bio.getbuffer()  # a view, not a copy
         try:
-            self._check()
+            _emit_chunk(storage, chunk.message_start_time, chunk.message_end_time, data,
+                        chunk.msgs)
         finally:
-            self.raw.close()
+            data.release()
+        storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
 
 
 def _mcap_string(text):

@@ -157,8 +157,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     cores = len(os.sched_getaffinity(0))
     print(f'bench_import: {args.samples} samples, 1 process, no worker threads, on {cores} '
-          f'visible core(s); load average {os.getloadavg()[0]:.1f} at the start (other work on the '
-          'machine slows every path)')
+          f'visible core(s); load average {os.getloadavg()[0]:.1f} at the start (other work on '
+          'the machine slows every path)')
     tmp = tempfile.mkdtemp(prefix='bench_import_', dir=args.out_dir)
     try:
         files = make_logs(os.path.join(tmp, 'logs'), args.samples)

@@ -33,8 +33,9 @@ per round, the order rotated) so that a change of the machine's load hits every 
 table gives the median time per path and the median over rounds of the per-round ratio. Every
 path's bag is checked (first round) to hold the same message bytes. ``disk floor``: the time to
 write as many bytes as the new MCAP bag holds, from memory in 1 MiB writes, into the same
-directory: no importer can beat it. Peak RSS: each (path, log size) imports in a fresh process;
-``VmHWM`` of that process.
+directory: no importer can beat it. ``read only``: iterating ``SdLogReader`` over the log with
+the byte-wise Decoder or the scanner, nothing written (the reading share of an import). Peak RSS:
+each (path, log size) imports in a fresh process; ``VmHWM`` of that process.
 
 Run: ``.venv/bin/python bench/bench_import.py [--samples 1000000] [--rounds 3] [--out-dir DIR]
 [--rss-samples 250000,1000000,4000000]``
@@ -52,7 +53,7 @@ import time
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import protocol as p
-from gyro_noise_ros.link.sdlog import SdLogWriter
+from gyro_noise_ros.link.sdlog import SdLogReader, SdLogWriter
 import numpy as np
 
 
@@ -107,6 +108,14 @@ def run_path(name, files, out, storage):
         return time.perf_counter() - start, time.process_time() - cpu
 
 
+def read_only(files, scan):
+    """Iterate the logs with SdLogReader; return (wall seconds, CPU seconds)."""
+    cpu, start = time.process_time(), time.perf_counter()
+    for _ in SdLogReader(files, scan=scan):
+        pass
+    return time.perf_counter() - start, time.process_time() - cpu
+
+
 def disk_floor(directory, nbytes):
     """Write ``nbytes`` from memory in 1 MiB writes to a new file in ``directory``; seconds."""
     block = np.full(1 << 20, 7, np.uint8)
@@ -145,6 +154,10 @@ def peak_rss_mb(files, out, storage, bulk):
     return int(res.stdout.split()[-1]) / 1024.0
 
 
+def _x(value):
+    return '-' if np.isnan(value) else f'{value:.1f}x'
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('--samples', type=int, default=1_000_000, help='samples in the speed log')
@@ -168,13 +181,16 @@ def main(argv=None):
         importer.import_logs(files, os.path.join(tmp, 'warm'), storage='mcap')
         shutil.rmtree(os.path.join(tmp, 'warm'))
         runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS]
-        runs.append(('disk floor', 'mcap'))
+        runs += [('disk floor', 'mcap'), ('read only', 'Decoder'), ('read only', 'scanner')]
         times = {run: [] for run in runs}
         loads = []
         reference, mcap_bytes = None, None
         for rnd in range(args.rounds):
             shift = rnd % len(runs)
             for name, storage in runs[shift:] + runs[:shift]:
+                if name == 'read only':
+                    times[name, storage].append(read_only(files, storage == 'scanner'))
+                    continue
                 if name == 'disk floor':
                     if mcap_bytes is not None:
                         times[name, storage].append(disk_floor(tmp, mcap_bytes))
@@ -199,7 +215,9 @@ def main(argv=None):
         cpu = {run: float(np.median([c for _, c in v])) for run, v in times.items()}
 
         def ratio(a, b):
-            """Median over rounds of wall time(b) / wall time(a)."""
+            """Median over rounds of wall time(b) / wall time(a) (nan: no such path)."""
+            if b not in times:
+                return float('nan')
             k = min(len(times[a]), len(times[b]))
             return float(np.median([times[b][i][0] / times[a][i][0] for i in range(k)]))
 
@@ -210,7 +228,7 @@ def main(argv=None):
             cells = [ratio(run, ('old', 'sqlite3')), ratio(run, ('old', storage)),
                      ratio(run, ('rosbags', storage))]
             print(f'{name:<11s} {storage:<8s} {args.samples / med[run]:>11,.0f} '
-                  f'{cells[0]:>14.1f}x {cells[1]:>20.1f}x {cells[2]:>31.1f}x')
+                  f'{_x(cells[0]):>15s} {_x(cells[1]):>21s} {_x(cells[2]):>32s}')
         print(f'(disk floor: {mcap_bytes / 1e6:.0f} MB, the size of the MCAP bag; median seconds: '
               + ', '.join(f'{n} {s} {med[n, s]:.3f}' for n, s in runs) + ')')
         print('\nCPU seconds of the importing process (all threads, system time included; less '
@@ -220,8 +238,8 @@ def main(argv=None):
         for name, storage in runs:
             run = (name, storage)
             print(f'{name:<11s} {storage:<8s} {cpu[run]:>7.3f} '
-                  f'{cpu["old", "sqlite3"] / cpu[run]:>14.1f}x '
-                  f'{cpu["old", storage] / cpu[run]:>20.1f}x')
+                  f'{_x(cpu["old", "sqlite3"] / cpu[run]):>15s} '
+                  f'{_x(cpu.get(("old", storage), float("nan")) / cpu[run]):>21s}')
         if not args.rss_samples:
             return 0
         print('\npeak RSS of one import process (MB) against log size')

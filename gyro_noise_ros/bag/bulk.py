@@ -24,10 +24,12 @@ sqlite3 fast path still costs one ``executemany`` row (several microseconds) per
   and its bag times as one JSON array read by ``json_each``, so sqlite does the per-row work
   in C. Same schema, same rows in the same order, same ``metadata.yaml`` (rosbags' writer still
   creates and closes the bag).
-* MCAP: the block's message records (opcode, length, channel, sequence 0, log and publish time,
-  CDR) are laid out in one numpy byte matrix and appended to rosbags' pending chunk, which is
-  closed at exactly the message where rosbags would close it (past :data:`MCAP_CHUNK_BYTES`);
-  the chunk's message index is written from numpy too. The file is byte-identical to rosbags' own.
+* MCAP: the message records (opcode, length, channel, sequence 0, log and publish time, CDR)
+  are laid out one chunk at a time in a numpy byte matrix (Imu messages by a compiled loop over
+  a template message); a chunk that a block fills from its first message on goes straight to the
+  file with its message index, the rest through rosbags' pending chunk. Chunks are closed at
+  exactly the message where rosbags would close them (past :data:`MCAP_CHUNK_BYTES`). The file
+  is byte-identical to rosbags' own.
 
 See ``docs/scale.md``.
 """

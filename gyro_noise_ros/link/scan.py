@@ -29,6 +29,10 @@ takes over again.
 
 The scanner keeps no more than the Decoder does: the bytes of the frame cut by the end of a
 block wait for the next block (the carry-over).
+
+The byte-wise part of :meth:`ScanDecoder._run` is a copy of ``Decoder._run`` with the compiled
+loop inserted at each sync marker; a change of the Decoder's rules must be made in both
+(``test/test_link_scan.py`` fails when they differ).
 """
 
 import zlib

@@ -361,7 +361,10 @@ class ParallelModel:
 
     def _plot_parts(self, run, a, dec, info, mixed_in, mixed_out, drift, elman):
         """Keep what the report figures need of one axis of an apply, at plot size."""
-        from gyro_noise_ros.thermal.report import envelope
+        from gyro_noise_ros.thermal.report import envelope as full_envelope, PANEL_POINTS
+
+        def envelope(t, y):
+            return full_envelope(t, y, PANEL_POINTS)
 
         t_h = np.asarray(run.t_s, dtype=float) / 3600.0
         n = t_h.size

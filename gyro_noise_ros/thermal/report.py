@@ -47,6 +47,8 @@ DEG = 180.0 / math.pi
 AXES = 'xyz'
 #: Points per trace in time plots (longer runs are reduced to min/max envelopes of blocks).
 _MAX_POINTS = 4000
+#: Points per trace of the narrower panels of the method figures (two per pixel column).
+PANEL_POINTS = 1600
 
 
 def _pyplot():
@@ -99,8 +101,9 @@ def _window_means(t, y, window_s):
             y[:k * n].reshape(k, n, *y.shape[1:]).mean(axis=1))
 
 
-def _save(fig, plt, path):
-    fig.tight_layout()
+def _save(fig, plt, path, *, tight=True):
+    if tight:
+        fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)
@@ -486,7 +489,11 @@ def plot_modes(path, axes, *, title):
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
     fig.legend(handles, list(_CLASS_COLOURS), fontsize=8, loc='upper right', ncol=3)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    # fixed margins: tight_layout over up to 39 panels costs more than drawing them
+    top = 1.0 - 0.75 / fig.get_figheight()
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.55 / fig.get_figheight(), top=top,
+                        wspace=0.25, hspace=0.35)
+    return _save(fig, plt, path, tight=False)
 
 
 def plot_before_after(path, axes, *, title, before, after):

@@ -230,7 +230,12 @@ class ParallelModel:
             info.append(self._axis_info(dec, cls, run.rate_hz))
             parts.append(self._plot_parts(run, a, dec, info[-1], mixed_in, mixed, drift, elman))
         self.last_info = info
-        self._report_parts = (weakref.ref(run), parts)
+        try:
+            key = weakref.ref(run)
+        except TypeError:  # a run type without weak references: hold it until the next apply
+            def key():
+                return run
+        self._report_parts = (key, parts)
         return out
 
     def drift_prediction_rad_s(self, run):

@@ -91,8 +91,8 @@ def _add_fit_options(p):
                    help='smallest training temperature span, degC '
                         f'({registry.DEFAULT_MIN_RANGE_C:g})')
     p.add_argument('--scheduler', metavar='ADDRESS',
-                   help='Dask scheduler (tcp://host:8786): evaluate the parallel model\'s MOPSO '
-                   'particles on that cluster (same model; pip extra dask; docs/scale.md)')
+                   help='Dask scheduler (tcp://host:8786): evaluate the MOPSO particles of the '
+                   'parallel model on that cluster (same model; pip extra dask; docs/scale.md)')
 
 
 def _add_output_options(p):

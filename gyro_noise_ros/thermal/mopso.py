@@ -38,6 +38,11 @@ modes' values are combined; the mean is our reading). K is rounded to an integer
   objectives to [0, 1] over the final archive and take the point nearest to the ideal point
   (0, 0); ties go to the smaller K, then the smaller alpha.
 
+* Refinement (:func:`refine`, ours, not in the paper): when the search ran on a cheaper
+  stand-in of the fitness (windows of the record), its best points, stratified by K, are
+  re-evaluated with a reference fitness (the whole record) and the pick's alpha is polished by
+  a compass search; the pick is then made on the reference fitness.
+
 Everything random comes from one ``numpy.random.Generator``; the result is a deterministic
 function of the seed. Fitness functions are plain picklable callables, evaluated through
 ``map_fn`` (the built-in ``map`` by default; a process pool's ``map`` distributes them).
@@ -127,10 +132,15 @@ class MopsoResult:
     search_pick: tuple = None
 
 
-def dominates(a, b):
-    """Return True when fitness ``a`` Pareto-dominates ``b`` (minimisation)."""
-    a, b = np.asarray(a), np.asarray(b)
-    return bool(np.all(a <= b) and np.any(a < b))
+def dominates(a, b, *, margin=0.0):
+    """
+    Return True when fitness ``a`` Pareto-dominates ``b`` (minimisation).
+
+    With ``margin > 0``, ``a`` must also be better than ``b`` by more than that fraction of
+    ``|b|`` in at least one objective (differences below the fitness's resolution ignored).
+    """
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return bool(np.all(a <= b) and np.any(a < b - margin * np.abs(b)))
 
 
 def _key(p):
@@ -331,11 +341,12 @@ def refine(result, fitness, *, points=10, polish=10, bounds=PAPER_BOUNDS, map_fn
        each K's first candidate comes first (the search fitness may misrank K, the structural
        parameter), then the others in that order. The first ``points`` are evaluated with
        ``fitness``.
-    2. Polish: a compass search in alpha around the current pick (same K): alpha - s and
-       alpha + s (rounded, inside ``bounds``, not yet evaluated) are evaluated and the pick is
-       taken again over the non-dominated set of every reference evaluation; the step s
-       starts at a quarter of the alpha range and halves whenever the pick does not move,
-       until ``polish`` evaluations are spent or s < 1.
+    2. Polish: a compass search around the current pick (K, alpha): (K, alpha - s),
+       (K, alpha + s), (K - 1, alpha) and (K + 1, alpha) (rounded, inside ``bounds``, not yet
+       evaluated) are evaluated and the pick is taken again over the non-dominated set of
+       every reference evaluation; the alpha step s starts at a quarter of the alpha range and
+       halves whenever the pick does not move, until ``polish`` evaluations are spent or
+       s < 1.
 
     The archive returned is the non-dominated set of all reference evaluations and the pick
     follows :func:`pick_compromise` on the reference fitness. Deterministic (no randomness).
@@ -365,6 +376,7 @@ def refine(result, fitness, *, points=10, polish=10, bounds=PAPER_BOUNDS, map_fn
     if int(points) < 1 or int(polish) < 0:
         raise ParameterError(f'points must be >= 1 and polish >= 0, got {points!r}, '
                              f'{polish!r}')
+    k_lo, k_hi = int(round(bounds[0][0])), int(round(bounds[0][1]))
     a_lo, a_hi = float(bounds[1][0]), float(bounds[1][1])
     keys, fit = evaluated_points(result)
     ranks = pareto_ranks(fit)
@@ -397,6 +409,7 @@ def refine(result, fitness, *, points=10, polish=10, bounds=PAPER_BOUNDS, map_fn
     while spent < int(polish) and step >= 1.0:
         k, a = int(arch_p[best, 0]), float(arch_p[best, 1])
         probes = [(k, float(round(min(max(v, a_lo), a_hi)))) for v in (a - step, a + step)]
+        probes += [(j, a) for j in (k - 1, k + 1) if k_lo <= j <= k_hi]
         probes = [q for q in dict.fromkeys(probes) if q not in done][:int(polish) - spent]
         if probes:
             evaluate(probes)

@@ -22,8 +22,13 @@ Fit on a training run:
    ``fitness_samples`` consecutive samples spread evenly over the run (same sample rate, so
    alpha and the centre frequencies mean the same as on the whole run; the O(n^2) fuzzy
    entropy costs ``windows x samples^2`` instead of ``n^2``), evaluations are cached by
-   (K, alpha), and ``workers > 1`` spreads them over processes. ``fitness_samples=None``
-   evaluates on the whole run (the naive path).
+   (K, alpha), and ``workers > 1`` spreads them over processes. The windowed fitness ranks
+   points unlike the whole-run one, so :func:`.mopso.refine` then re-evaluates
+   ``refine_points`` of the search's best points (each K's best first) and ``refine_polish``
+   alpha steps around the pick with the reference fitness: the whole run when it holds at
+   most ``refine_windows x refine_samples`` samples, that many longer windows otherwise; the
+   pick is made on it. ``fitness_samples=None`` evaluates on the whole run (the naive path,
+   no refinement).
 2. VMD of the whole run with (K, alpha), warm-started from the middle window's centre frequencies
    (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
    spectrum, so the 1.44 M-sample run stays within seconds).

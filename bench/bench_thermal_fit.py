@@ -18,7 +18,7 @@ Speed of the parallel model's fit/apply (issue 9 section 7): fast path against t
 Small case, for each seed: the naive path (MOPSO fitness on the whole run, fitness_samples=None,
 reference ADMM VMD of the whole run), the fast path (fitness on 4 windows of 128 samples,
 cached, then ``refine``: the best 10 points re-evaluated with the whole-run fitness and the
-pick's alpha polished with 10 more, exact-solver whole-run VMD warm-started) and the fast path
+pick polished with 16 more, exact-solver whole-run VMD warm-started) and the fast path
 without refinement (refine_points=0), fitted with the same MOPSO budget and seed. Per axis it
 prints each pick's whole-run fitness (fuzzy, permutation entropy), whether the naive pick
 dominates the fast pick, whether any point of the naive archive does, and the held-out residual

@@ -331,7 +331,7 @@ def evaluated_points(result):
     return keys, np.array(list(seen.values()), dtype=float).reshape(-1, 2)
 
 
-def refine(result, fitness, *, points=10, polish=10, bounds=PAPER_BOUNDS, map_fn=map):
+def refine(result, fitness, *, points=10, polish=16, bounds=PAPER_BOUNDS, map_fn=map):
     """
     Re-evaluate a search's most promising points with a reference fitness and pick again.
 
@@ -341,12 +341,12 @@ def refine(result, fitness, *, points=10, polish=10, bounds=PAPER_BOUNDS, map_fn
        each K's first candidate comes first (the search fitness may misrank K, the structural
        parameter), then the others in that order. The first ``points`` are evaluated with
        ``fitness``.
-    2. Polish: a compass search around the current pick (K, alpha): (K, alpha - s),
-       (K, alpha + s), (K - 1, alpha) and (K + 1, alpha) (rounded, inside ``bounds``, not yet
-       evaluated) are evaluated and the pick is taken again over the non-dominated set of
-       every reference evaluation; the alpha step s starts at a quarter of the alpha range and
-       halves whenever the pick does not move, until ``polish`` evaluations are spent or
-       s < 1.
+    2. Polish: a compass search around the current pick (K, alpha): (K, alpha - s) and
+       (K, alpha + s), in the first round also (K - 1, alpha) and (K + 1, alpha) (rounded,
+       inside ``bounds``, not yet evaluated), are evaluated and the pick is taken again over
+       the non-dominated set of every reference evaluation; the alpha step s starts at a
+       quarter of the alpha range and halves whenever the pick does not move, until
+       ``polish`` evaluations are spent or s < 1.
 
     The archive returned is the non-dominated set of all reference evaluations and the pick
     follows :func:`pick_compromise` on the reference fitness. Deterministic (no randomness).
@@ -409,7 +409,8 @@ def refine(result, fitness, *, points=10, polish=10, bounds=PAPER_BOUNDS, map_fn
     while spent < int(polish) and step >= 1.0:
         k, a = int(arch_p[best, 0]), float(arch_p[best, 1])
         probes = [(k, float(round(min(max(v, a_lo), a_hi)))) for v in (a - step, a + step)]
-        probes += [(j, a) for j in (k - 1, k + 1) if k_lo <= j <= k_hi]
+        if not spent:
+            probes += [(j, a) for j in (k - 1, k + 1) if k_lo <= j <= k_hi]
         probes = [q for q in dict.fromkeys(probes) if q not in done][:int(polish) - spent]
         if probes:
             evaluate(probes)

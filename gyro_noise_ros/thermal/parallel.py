@@ -69,7 +69,7 @@ DEFAULT_OPTIONS = {
     'fitness_samples': 256,
     'fitness_windows': 4,
     'refine_points': 10,
-    'refine_polish': 10,
+    'refine_polish': 16,
     'refine_samples': 1024,
     'refine_windows': 4,
     'vmd_tol': 1e-7,

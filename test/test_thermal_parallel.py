@@ -127,10 +127,11 @@ def test_process_pool_gives_the_serial_result():
 def test_fast_pick_is_not_dominated_by_the_naive_pick():
     # Issue 9 section 7 on a small case where the naive path is affordable: MOPSO on the
     # whole-run fitness (fitness_samples=None) against the fast path (4 windows of 128 samples,
-    # then refine: 10 points re-evaluated on the whole run, 10 polish steps), same budget and
+    # then refine: 10 points re-evaluated on the whole run, 16 polish steps), same budget and
     # seed. Under the whole-run fitness the fast pick must not be Pareto-dominated by the naive
-    # pick on any axis. Without refinement (refine_points=0) the windowed pick was dominated on
-    # 6 of 15 axes of the bench's 5 seeds; with it on none (bench/bench_thermal_fit.py).
+    # pick on any axis. Without refinement (refine_points=0) this case fails on axes 1 and 2:
+    # the windowed pick has K = 8 or more where the whole-run front has K = 4 or 5. The bench
+    # (bench/bench_thermal_fit.py) measures the same over several seeds.
     train, _ = thermal_run(21, n=768, rate_hz=1.0)
     budget = {'n_particles': 10, 'iterations': 4, 'elman_epochs': 1, 'elman_iterations': 10}
     naive = ParallelModel(**budget, fitness_samples=None)
@@ -145,10 +146,11 @@ def test_fast_pick_is_not_dominated_by_the_naive_pick():
         # stores the pick's whole-run fitness (same computation, bit for bit).
         stored = fast.axes[ax]['fitness']
         assert (stored['fuzzy_entropy'], stored['permutation_entropy']) == f_fast
+        assert not dominates(f_naive, f_fast), (ax, f_naive, f_fast)
         info = fast.fit_info[ax]['mopso']
         assert info['reference_shape'] == [1, 768]
-        assert 0 < info['reference_evaluations'] <= 20
-        assert not dominates(f_naive, f_fast), (ax, f_naive, f_fast)
+        # 10 screened points and at most 16 polish steps.
+        assert 0 < info['reference_evaluations'] <= 26
 
 
 def test_bad_input(fitted):

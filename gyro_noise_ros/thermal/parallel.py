@@ -24,11 +24,11 @@ Fit on a training run:
    entropy costs ``windows x samples^2`` instead of ``n^2``), evaluations are cached by
    (K, alpha), and ``workers > 1`` spreads them over processes. The windowed fitness ranks
    points unlike the whole-run one, so :func:`.mopso.refine` then re-evaluates
-   ``refine_points`` of the search's best points (each K's best first) and ``refine_polish``
-   alpha steps around the pick with the reference fitness: the whole run when it holds at
-   most ``refine_windows x refine_samples`` samples, that many longer windows otherwise; the
-   pick is made on it. ``fitness_samples=None`` evaluates on the whole run (the naive path,
-   no refinement).
+   ``refine_points`` of the search's best points (each K's best first) and spends
+   ``refine_polish`` evaluations on a compass search around the pick, all with the reference
+   fitness: the whole run when it holds at most ``refine_windows x refine_samples`` samples,
+   that many longer windows otherwise; the pick is made on it (the archive in ``fit_info``
+   too). ``fitness_samples=None`` evaluates on the whole run (the naive path, no refinement).
 2. VMD of the whole run with (K, alpha), warm-started from the middle window's centre frequencies
    (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
    spectrum, so the 1.44 M-sample run stays within seconds).
@@ -192,7 +192,7 @@ class ParallelModel:
         ref_segs = fitness_windows(x, o['refine_samples'], o['refine_windows'])
         if segs.size != x.size and int(o['refine_points']) > 0:
             # The windowed fitness misranks points; re-evaluate the best of them (and polish
-            # the pick's alpha) with the reference fitness: the whole run when it is at most
+            # the pick) with the reference fitness: the whole run when it is at most
             # refine_windows x refine_samples long, longer windows otherwise.
             reference = VmdFitness(np.ascontiguousarray(ref_segs), tol=o['vmd_tol'],
                                    max_iter=int(o['vmd_max_iter']))

@@ -24,9 +24,9 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-#: A small MOPSO budget keeps each fit to seconds; the algorithm is the same.
+#: A small MOPSO and refinement budget keeps each fit to seconds; the algorithm is the same.
 SMALL = {'n_particles': 8, 'iterations': 3, 'fitness_samples': 128, 'elman_epochs': 10,
-         'elman_samples': 500}
+         'elman_samples': 500, 'refine_points': 4, 'refine_polish': 4, 'refine_samples': 512}
 
 
 def thermal_run(seed, n=40000, rate_hz=5.0, noise_rad_s=0.01):

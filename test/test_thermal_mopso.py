@@ -130,7 +130,7 @@ def test_pareto_ranks_match_peeling():
 
 
 def _mirrored(key):
-    """A misleading search fitness: _schaffer with K mirrored, its front is K in [10, 12]."""
+    """Return a misleading search fitness: _schaffer with K mirrored (front K in [10, 12])."""
     k, alpha = key
     return _schaffer((19 - k, alpha))
 

@@ -130,27 +130,29 @@ def abs_sum(corr, count, out, scale):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def next_order(d, spec, v, c_last, memory, one_minus_e, e_n, shifted_hat, d_out,
+def next_order(d, spec, parents, v, c_last, memory, one_minus_e, e_n, shifted_hat, d_out,
                spec_out):  # pragma: no cover - compiled
     """
     Difference of order ``a + 1`` from that of order ``a``, in time and frequency.
 
-    ``d_out[k] = d[k] - d[k-1] + [k >= L] c_L v[k - L]`` (``d[-1] = v[0]``) and ``spec_out = (1 -
-    e) spec + d[n-1] e^n - v[0] + c_L shifted_hat`` (see :class:`.fractional._FastPlan`).
+    For output row ``i`` and input row ``r = parents[i]``: ``d_out[k] = d[k] - d[k-1] + [k >= L]
+    c_L v[k - L]`` (``d[-1] = v[0]``) and ``spec_out = (1 - e) spec + d[n-1] e^n - v[0] + c_L
+    shifted_hat`` (see :class:`.fractional._FastPlan`), ``c_L = c_last[i]``.
     """
-    rows, n = d.shape
+    n = d.shape[1]
     m = spec.shape[1]
     v0 = v[0]
-    for r in range(rows):
-        c = c_last[r]
-        d_out[r, 0] = d[r, 0] - v0
+    for i in range(parents.shape[0]):
+        r = parents[i]
+        c = c_last[i]
+        d_out[i, 0] = d[r, 0] - v0
         for k in range(1, n):
-            d_out[r, k] = d[r, k] - d[r, k - 1]
+            d_out[i, k] = d[r, k] - d[r, k - 1]
         for k in range(memory, n):
-            d_out[r, k] += c * v[k - memory]
+            d_out[i, k] += c * v[k - memory]
         last = d[r, n - 1]
         for q in range(m):
-            spec_out[r, q] = (one_minus_e[q] * spec[r, q] + last * e_n[q] - v0
+            spec_out[i, q] = (one_minus_e[q] * spec[r, q] + last * e_n[q] - v0
                               + c * shifted_hat[q])
 
 

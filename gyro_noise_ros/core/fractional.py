@@ -579,7 +579,8 @@ class _FastPlan:
             return
         dc = np.empty((len(kids), d.shape[1]))
         sc = np.empty((len(kids), spec.shape[1]), dtype=np.complex128)
-        _kf.next_order(d[parents], spec[parents], v, self.c_last[idx[parents]], ident.memory,
+        parents = np.asarray(parents)
+        _kf.next_order(d, spec, parents, v, self.c_last[idx[parents]], ident.memory,
                        self.one_minus_e, self.e_n, shifted_hat, dc, sc)
         self._emit(np.asarray(kids), dc, sc, ctx, out)
 

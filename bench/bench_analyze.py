@@ -131,7 +131,7 @@ def _imported_from(code_root, workdir):
 def compare_outputs(a, b):
     """Return a list of (file, identical) for the report files of two runs."""
     rows = []
-    for name in ('chunks.csv', 'allan.csv', 'imu.yaml'):
+    for name in ('chunks.csv', 'allan.csv', 'imu.yaml', 'summary.md'):
         rows.append((name, (a / name).read_bytes() == (b / name).read_bytes()))
     da, db = (json.loads((d / 'summary.json').read_text()) for d in (a, b))
     for d in (da, db):

@@ -55,7 +55,7 @@ def outputs(out):
     doc['options'].pop('jobs')
     with np.load(out / 'curves.npz') as z:
         curves = {k: z[k] for k in z.files}
-    return (out / 'chunks.csv').read_bytes(), doc, curves
+    return (out / 'chunks.csv').read_bytes() + (out / 'summary.md').read_bytes(), doc, curves
 
 
 def assert_same(a, b):

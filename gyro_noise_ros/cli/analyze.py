@@ -439,9 +439,10 @@ class _MotionWatch:
     The static-segment statistics of the prepass, gathered during the analysis pass instead.
 
     The same batches and selection as :func:`_static_prepass` go into the same
-    :class:`..core.segments.WindowStats`, so :meth:`segment` is the prepass' segment. At a few
-    doubling window counts the provisional segment is looked at; when it already shows motion the
-    pass is abandoned early (the record will need the prepass anyway).
+    :class:`..core.segments.WindowStats`, so :meth:`segment` is the prepass' segment. Each time
+    the window count has grown by a quarter the provisional segment is looked at; when it already
+    shows motion the pass is abandoned (the record will need the prepass anyway). Motion that
+    only the end of a record reveals costs the analysis twice.
     """
 
     def __init__(self):
@@ -457,7 +458,7 @@ class _MotionWatch:
         windows = len(self.stats._rows)
         if windows < self._next_check:
             return False
-        self._next_check = 2 * windows
+        self._next_check = windows + max(1, windows // 4)
         seg = self.stats.segment()
         return seg is not None and not seg.static_throughout
 

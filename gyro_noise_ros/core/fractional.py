@@ -436,6 +436,8 @@ class OrderIdentifier:
         """
         if not (np.all(np.isfinite(var_fast)) and np.all(np.isfinite(j_fast))):
             return None
+        if not (var_fast.min() > 0.0 and j_fast.min() > 0.0):
+            return None  # a residual that vanishes: relative bounds say nothing there
         rows = np.union1d(_candidates(var_fast), _candidates(j_fast))
         exact = self._exact_rows(v, rows)
         guard = 0.1 * LOCATE_RTOL

@@ -16,7 +16,8 @@
 Benchmark: fractional-order identification, fast path vs the per-order numpy.convolve oracle.
 
 Usage:
-    python bench/bench_fractional.py [--ref-chunks 2] [--repeat 5] [--chunks 200] [--jobs 2] [--full]
+    python bench/bench_fractional.py [--ref-chunks 2] [--repeat 5] [--chunks 200] [--jobs 2]
+        [--full]
 
 Prints, side by side on the same 10,000-sample chunks (full grid 0:2:0.01, L = 1000, both methods):
 the oracle's time per chunk (test/_fractional_reference.py: numpy.convolve + numpy.correlate per

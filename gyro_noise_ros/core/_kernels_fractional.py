@@ -18,12 +18,12 @@ numba kernels of the fast fractional-order identification (private; :mod:`.fract
 Each fuses a few vector passes of :class:`.fractional._FastPlan` over a block of orders into one
 loop, so the block is read once instead of once per numpy operation. They are called only by
 ``_FastPlan`` (inputs validated there) and checked through it against the per-order
-``numpy.convolve`` oracle of ``test/_fractional_reference.py``. Flags: :data:`._kernels.JIT_OPTIONS`
-(no fastmath; sums use four partial accumulators, which changes rounding, not accuracy).
+``numpy.convolve`` oracle of ``test/_fractional_reference.py``. Flags:
+:data:`._kernels.JIT_OPTIONS` (no fastmath; sums use partial accumulators, which changes rounding,
+not accuracy).
 """
 
 import numba
-import numpy as np
 
 from ._kernels import JIT_OPTIONS
 
@@ -50,7 +50,7 @@ def _sum4(x, n):  # pragma: no cover - compiled
 @numba.njit(**JIT_OPTIONS)
 def residual_moments(d, w_reg, ww, f_out, var_out):  # pragma: no cover - compiled
     """
-    Per row of ``d``: ``f = d . w_reg / ww`` (eq. 8) and the population variance of ``d - f w_reg``.
+    Per row of ``d``: ``f = d . w_reg / ww`` (eq. 8) and the population variance of the residual.
 
     ``d`` is (rows, n), ``w_reg`` (n,); results go to ``f_out`` and ``var_out`` (rows,). Two passes
     (the mean first), as numpy's var, without storing the residual.
@@ -159,7 +159,7 @@ def next_order(d, spec, parents, v, c_last, memory, one_minus_e, e_n, shifted_ha
 @numba.njit(**JIT_OPTIONS)
 def cosine_prep(spec, f, reg_hat, sin_t, cos_t, y, odd):  # pragma: no cover - compiled
     """
-    First half of the autocorrelation by a half-length real FFT (a DCT-I, Numerical Recipes cosft1).
+    Fold a power spectrum for its inverse transform by a half-length real FFT (DCT-I, cosft1).
 
     The power spectrum ``P = |spec - f reg_hat|^2`` (``m = N + 1`` bins of a size ``2N`` real
     transform) is real and even, so its inverse transform is the DCT-I of P. It is folded into

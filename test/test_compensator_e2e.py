@@ -171,3 +171,133 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
         # Hence one bound for all axes, 10 % of the largest raw drift (14 (deg/s)/h).
         limit = 0.1 * max(abs(d) for d in EXPECTED_DRIFT)
         assert abs(fixed_drift) < limit, (axis, fixed_drift, limit, test.text())
+
+
+# --- The oven: the emulator's thermal model (paper 002 section 4.1, docs/thermal_data.md) ---
+#
+# ``--thermal oven`` streams the die temperature lagging the oven (tau 600 s) and the gyro bias
+# it causes (cubic + knee in T, a term in dT/dt, hysteresis). The whole 14 h profile heats then
+# steps down, so a least-squares slope over all of it is not significantly non-zero on every axis
+# (measured 1.4 sigma on x): the analyzer's offset drift is a straight line. The test streams the
+# profile's first 30 s at 267x compression, i.e. its first 8010 s: the room hold, the heat to
+# 60 degC at 2 degC/min and most of the hold there (a warm-up, which is what the seeker's loop
+# sees). The bias then moves by (+0.55, -0.14, +0.25) deg/s: offset drift about (67, -23, 27)
+# (deg/s)/h at 6-10 sigma of the analyzer's drift standard error (the robust one: the largest of
+# OLS, Newey-West and variogram), on 833 Hz with the paper-000 noise (0.058 deg/s per sample).
+OVEN_COMPRESS = 267.0
+OVEN_DURATION_S = 30.0
+# 833 Hz, not 6.66 kHz: the chain (5 processes) must keep up on a loaded 2-core machine; the
+# thermal model does not depend on the rate. One Temperature message every 16 samples is the
+# sensor's 52 Hz temperature output, as the driver's default decimation (128) gives at 6.66 kHz.
+OVEN_ODR_HZ = 833.0
+OVEN_TEMPERATURE_DECIMATION = 16
+OVEN_ANALYZER_PARAMS = ['chunk_size:=500', 'memory:=200', 'order_grid_step:=0.05',
+                        'diagnostics_period_s:=0.5', 'allan:=false', 'reliable:=true']
+
+
+def _oven_emulator_args(seed):
+    return ['--thermal', 'oven', '--thermal-compress', str(OVEN_COMPRESS), '--temp-c', '25.0',
+            '--odr-hz', str(OVEN_ODR_HZ), '--accel-fs-g', '32', '--seed', str(seed),
+            '--duration-s', str(OVEN_DURATION_S)]
+
+
+def _statuses_after(seen, marks, name):
+    return seen[name][marks[name]:] if marks else []
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(400)
+def test_oven_drift_gone_on_the_compensated_stream(tmp_path, monkeypatch):
+    from gyro_noise_ros.cli import emulator as emulator_cli
+    from gyro_noise_ros.core.health import drift_t_threshold
+
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(100, 200)))
+
+    # 1. Training run (seed 7) at the same compression, written by the emulator as the driver
+    # would publish it (--write-bag: same quantisation, Temperature at the same 52 Hz), and the
+    # documented fit: the default method bp (causal), inputs T and its trailing-window rate.
+    # Training at the live compression matters: the rate input is in degC per real second, 267x
+    # the natural rate here; a model trained on an uncompressed run would see rates far outside
+    # its training inputs.
+    bag = tmp_path / 'oven_train'
+    assert emulator_cli.main(_oven_emulator_args(7) + [
+        '--write-bag', str(bag),
+        '--bag-temperature-decimation', str(OVEN_TEMPERATURE_DECIMATION)]) == 0
+    rc = thermal_cli.main(['fit', str(bag), '--method', 'bp', '--no-figures', '--quiet',
+                           '--out', str(tmp_path / 'model')])
+    assert rc == 0
+    model_json = tmp_path / 'model' / 'model.json'
+    assert json.loads(model_json.read_text())['causal'] is True
+
+    # 2. Held-out run (seed 8): nodes first, the board last, so the analyzers see the profile
+    # from its start (the board's clock runs from power-on, connected or not).
+    chain = _Chain(tmp_path, 'oven')
+    names = [f'{a}: axis {x}' for a in ('analyzer_raw', 'analyzer_comp') for x in 'xyz']
+    names += ['imu_compensator: compensation', 'lsm6dso32_driver: link']
+    port = free_port()
+    marks = {}  # per status: how many had arrived when the board was seen to have stopped
+    emu = None
+
+    def done(seen):
+        # Finished when the board has stopped and every analyzer's chunk count has stayed put
+        # over its last 4 statuses (2 s) since then: everything sent has been analysed.
+        if emu is None or emu.poll() is None:
+            return False
+        if not marks:
+            marks.update({n: len(seen[n]) for n in names})
+            return False
+        for name in names[:6]:
+            after = _statuses_after(seen, marks, name)
+            if len(after) < 4 or len({chunks(s) for s in after[-4:]}) != 1:
+                return False
+        return bool(_statuses_after(seen, marks, names[6]))
+
+    try:
+        for name, remap in (('analyzer_raw', []),
+                            ('analyzer_comp', ['-r', 'imu/data_raw:=imu/data_compensated'])):
+            argv = [sys.executable, '-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args',
+                    '-r', f'__node:={name}', *remap]
+            for p in OVEN_ANALYZER_PARAMS:
+                argv += ['-p', p]
+            chain.start(name, argv)
+        chain.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
+                                    '--ros-args', '-p', f'thermal_model_file:={model_json}',
+                                    '-p', 'reliable:=true'])
+        chain.start('driver', [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
+                               '-p', f'port:=socket://127.0.0.1:{port}',
+                               '-p', 'reconnect_period_s:=0.2', '-p', f'odr_hz:={OVEN_ODR_HZ}',
+                               '-p', f'temperature_decimation:={OVEN_TEMPERATURE_DECIMATION}'])
+        up = collect_diagnostics(names, lambda seen: all(seen[n] for n in names), timeout_s=120)
+        assert all(up[n] for n in names), ([n for n in names if not up[n]], chain.text())
+        emu = chain.start('emulator', [sys.executable, '-m', 'gyro_noise_ros.cli.emulator',
+                                       '--tcp', f'127.0.0.1:{port}',
+                                       *_oven_emulator_args(8)])
+        seen = collect_diagnostics(names, done, timeout_s=240)
+    finally:
+        chain.stop()
+    assert done(seen), ({n: seen[n] and chunks(seen[n][-1]) for n in names[:6]}, chain.text())
+
+    comp = values(seen['imu_compensator: compensation'][-1])
+    assert comp['Thermal model'] == 'bp', comp
+    assert comp['Temperature range status'] != 'outside', comp
+    assert int(comp['Messages published']) > 0.7 * OVEN_DURATION_S * OVEN_ODR_HZ, comp
+    for axis in 'xyz':
+        raw = values(seen[f'analyzer_raw: axis {axis}'][-1])
+        fixed = values(seen[f'analyzer_comp: axis {axis}'][-1])
+        n_raw, n_fixed = int(raw['Chunks analysed']), int(fixed['Chunks analysed'])
+        # ~48 chunks of 0.6 s in 30 s; a slow start or skipped analyses cost a few.
+        assert min(n_raw, n_fixed) >= 30, (axis, n_raw, n_fixed, chain.text())
+        raw_drift = float(raw['Offset drift ((deg/s)/h)'])
+        fixed_drift = float(fixed['Offset drift ((deg/s)/h)'])
+        raw_sigma = float(raw['Offset drift significance (sigma)'])
+        fixed_sigma = float(fixed['Offset drift significance (sigma)'])
+        # The analyzer's own rule: |slope| / stderr above the two-sided 3-sigma Student-t
+        # quantile (3.2 at 48 chunks) is a drift. Raw: measured 6.3-9.8 sigma on five seeds
+        # offline, a thermal (deterministic) drift, so the margin is the model's, not luck's.
+        assert raw_sigma > drift_t_threshold(3.0, n_raw), (axis, raw, chain.text())
+        # Compensated: what is left is the fit's error and the paper-000 noise; measured offline
+        # on five held-out seeds (the live evaluator fed as the node feeds it) 0.04-1.4 sigma,
+        # |drift| below 0.6 (deg/s)/h. Not significant by the same rule, and below 5 % of the
+        # raw drift (23-67 (deg/s)/h), so 'gone' is both statistical and in magnitude.
+        assert fixed_sigma < drift_t_threshold(3.0, n_fixed), (axis, fixed, raw, chain.text())
+        assert abs(fixed_drift) < 0.05 * abs(raw_drift), (axis, fixed_drift, raw_drift)

@@ -38,7 +38,7 @@ QUIET = ['--no-figures', '--quiet']
 
 
 def _synthetic(n=40_000, seed=3):
-    """Static run, 400 s: temperature 10 -> 40 -> 25 degC, a cubic drift in it, white noise."""
+    """Return a static 400-s run: temperature 10 -> 40 -> 25 degC, cubic drift, white noise."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) / RATE
     temp = np.interp(t, [0.0, 0.6 * t[-1], t[-1]], [10.0, 40.0, 25.0])

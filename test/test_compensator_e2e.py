@@ -201,6 +201,32 @@ def _oven_emulator_args(seed):
             '--duration-s', str(OVEN_DURATION_S)]
 
 
+def test_write_bag_temperature_decimation(tmp_path, capsys):
+    # The oven test's training bag carries Temperature as the driver publishes it: one message
+    # for every N-th sample (N = 16 at 833 Hz is the sensor's 52 Hz), stamped as that sample.
+    from gyro_noise_ros.bag import ImuBagReader
+    from gyro_noise_ros.cli import emulator as emulator_cli
+    import numpy as np
+
+    common = _oven_emulator_args(1)[:-2] + ['--samples', '1000']
+    for decimation, expected in ((16, 63), (0, 2)):  # 0: once a second (833 samples)
+        bag = tmp_path / f'd{decimation}'
+        assert emulator_cli.main(common + ['--write-bag', str(bag),
+                                           '--bag-temperature-decimation',
+                                           str(decimation)]) == 0
+        with ImuBagReader(bag) as reader:
+            imu = np.concatenate([b.stamp_ns for b in reader.iter_batches()])
+            stamp, temp = reader.read_temperature()
+        every = decimation or 833
+        np.testing.assert_array_equal(stamp, imu[::every])
+        assert stamp.size == expected
+        assert np.all((temp > 20.0) & (temp < 30.0))  # room 25 degC + 2 self-heating, early
+    assert emulator_cli.main(common + ['--write-bag', str(tmp_path / 'bad'),
+                                       '--bag-temperature-decimation', '-1']) == 2
+    assert not (tmp_path / 'bad').exists()
+    assert 'bag-temperature-decimation' in capsys.readouterr().err
+
+
 def _statuses_after(seen, marks, name):
     return seen[name][marks[name]:] if marks else []
 

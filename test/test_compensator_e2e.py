@@ -51,7 +51,8 @@ EXPECTED_DRIFT = [s * RAMP_C_PER_H for s in SENSITIVITY_DPS_PER_C]  # (deg/s)/h
 TRAIN_S = 14.0
 ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'diagnostics_period_s:=0.5', 'allan:=false',
-                   'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0']
+                   'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0',
+                   'reliable:=true']
 
 
 class _Chain:
@@ -114,7 +115,7 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
     train = _Chain(tmp_path, 'train')
     try:
         train.start('recorder', [sys.executable, '-m', 'gyro_noise_ros.nodes.recorder',
-                                 '--ros-args', '-p', f'output:={bag}'])
+                                 '--ros-args', '-p', f'output:={bag}', '-p', 'reliable:=true'])
         train.emulator_and_driver(seed=7)
         time.sleep(TRAIN_S)
     finally:
@@ -143,7 +144,7 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
             test.start(name, argv)
         test.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
                                    '--ros-args', '-p', f'thermal_model_file:={model_json}',
-                                   '-p', 'drain_period_s:=0.02'])
+                                   '-p', 'drain_period_s:=0.02', '-p', 'reliable:=true'])
         test.emulator_and_driver(seed=8)
         seen = collect_diagnostics(names, done, timeout_s=150)
     finally:

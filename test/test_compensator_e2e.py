@@ -49,6 +49,14 @@ SENSITIVITY_DPS_PER_C = (0.02, -0.02, 0.01)
 EXPECTED_DRIFT = [s * RAMP_C_PER_H for s in SENSITIVITY_DPS_PER_C]  # (deg/s)/h
 # Wall time of the recorded training run (its temperature span must hold the held-out run's).
 TRAIN_S = 14.0
+# The analyzers (and the recorder) subscribe reliable: a transport drop on a loaded host is
+# retransmitted, not counted. The compensator keeps its default best-effort input here: a
+# reliable stream is delivered in order, so after a lost message nothing newer arrives until the
+# middleware has repaired it (Fast DDS: up to a heartbeat period); a stalled imu/temperature means
+# the offset of newer gyro samples is the last one, held, which on a 2 degC/s ramp is wrong by
+# 0.04 deg/s per second of stall. Best effort loses the message instead, and the offset is
+# interpolated across the hole. (Two runs of this test at load 10-13 with a reliable compensator
+# left 26 and 34 (deg/s)/h on x; a stall is the suspected cause, not proven.)
 ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'diagnostics_period_s:=0.5', 'allan:=false',
                    'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0',
@@ -175,7 +183,7 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
             test.start(name, argv)
         test.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
                                    '--ros-args', '-p', f'thermal_model_file:={model_json}',
-                                   '-p', 'drain_period_s:=0.02', '-p', 'reliable:=true'])
+                                   '-p', 'drain_period_s:=0.02'])
         test.driver(port)
         ready = [*names, 'lsm6dso32_driver: link']
         up = collect_diagnostics(ready, lambda seen: all(seen.values()), timeout_s=120)
@@ -324,9 +332,9 @@ def test_oven_drift_gone_on_the_compensated_stream(tmp_path, monkeypatch):
             for p in OVEN_ANALYZER_PARAMS:
                 argv += ['-p', p]
             chain.start(name, argv)
+        # The compensator keeps its default best-effort input (see above ANALYZER_PARAMS).
         chain.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
-                                    '--ros-args', '-p', f'thermal_model_file:={model_json}',
-                                    '-p', 'reliable:=true'])
+                                    '--ros-args', '-p', f'thermal_model_file:={model_json}'])
         chain.driver(port, f'odr_hz:={OVEN_ODR_HZ}',
                      f'temperature_decimation:={OVEN_TEMPERATURE_DECIMATION}')
         up = collect_diagnostics(names, lambda seen: all(seen[n] for n in names), timeout_s=120)

@@ -151,6 +151,15 @@ class Effect:
     def fit(self, ctx):  # pragma: no cover - interface
         raise NotImplementedError
 
+    def estimate(self, ctx):
+        """
+        Return the parameters the fitter would report, without its detection test.
+
+        Used to refit the effect on records simulated from the final model (the parametric
+        bootstrap of :mod:`.uncertainty`); None when the record gives no estimate.
+        """
+        return self.fit(ctx)
+
     def term(self, params, n, rate_hz, rng, ctx):  # pragma: no cover - interface
         raise NotImplementedError
 
@@ -195,15 +204,19 @@ class Sinusoid(Effect):
     """
     A sine at one frequency.
 
-    Found as the strongest line of the periodogram over its local background.
+    Found as the strongest line of the periodogram over its local background; the frequency is
+    refined from the three DFT bins around the peak (Candan 2011) and then by Gauss-Newton steps of
+    the least-squares sine fit (the maximum-likelihood frequency in white noise), amplitude and
+    phase by linear least squares at that frequency.
     """
 
     name = 'sinusoid'
     n_params = 3
 
     @staticmethod
-    def _line_ratio(x, rate_hz):
-        spec = np.abs(np.fft.rfft(x - x.mean())) ** 2
+    def _line_ratio(x):
+        coef = np.fft.rfft(x - x.mean())
+        spec = coef.real ** 2 + coef.imag ** 2
         # local background: median of blocks of 64 bins (a line occupies 1-3 bins), interpolated
         block = 64
         nb = spec.shape[0] // block
@@ -213,22 +226,66 @@ class Sinusoid(Effect):
         ratio = spec / np.maximum(background, 1e-300)
         # at least 10 cycles per record: slower 'lines' are the bias effects' business
         ratio[:10] = 0.0
-        return spec, ratio
+        return coef, ratio
+
+    @staticmethod
+    def line(x, rate_hz, k, coef):
+        """
+        Fit the sine whose periodogram peak is bin ``k`` (class doc).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            Samples (rad/s).
+        rate_hz : float
+            Sample rate (Hz).
+        k : int
+            Peak bin of ``numpy.fft.rfft(x - mean)``, 1 <= k < bins - 1.
+        coef : numpy.ndarray
+            That rfft.
+
+        Returns
+        -------
+        dict
+            ``amplitude_rad_s``, ``frequency_hz``, ``phase_rad``.
+
+        """
+        n = x.shape[0]
+        lo, mid, hi = coef[k - 1], coef[k], coef[k + 1]
+        den = 2.0 * mid - lo - hi
+        delta = float(np.real((lo - hi) / den)) if den != 0 else 0.0
+        # Candan's bias correction of Jacobsen's estimator for the rectangular window
+        delta = float(np.clip(delta * np.tan(np.pi / n) / (np.pi / n), -0.5, 0.5))
+        bin_w = 2.0 * np.pi * rate_hz / n
+        start = omega = (k + delta) * bin_w
+        t = np.arange(n) / rate_hz
+        tc = t - t.mean()
+        y = x - x.mean()
+        for _ in range(3):
+            s, c = np.sin(omega * t), np.cos(omega * t)
+            a, b = _normal_ls((s, c), y)
+            # derivative of a sin(w t) + b cos(w t) in w, centred in time (better conditioned; the
+            # constant part lies in the span of sin and cos)
+            step = _normal_ls((s, c, tc * (a * c - b * s)), y)[2]
+            if not np.isfinite(step) or abs(omega + step - start) > bin_w:
+                break
+            omega += step
+            if abs(step) < 1e-6 * bin_w:
+                break
+        a, b = _normal_ls((np.sin(omega * t), np.cos(omega * t)), y)
+        return {'amplitude_rad_s': float(np.hypot(a, b)),
+                'frequency_hz': float(omega / (2 * np.pi)), 'phase_rad': float(np.arctan2(b, a))}
 
     def fit(self, ctx):
         x = ctx.residual
-        rate_hz = ctx.meas.rate_hz
-        n = x.shape[0]
-        spec, ratio = self._line_ratio(x, rate_hz)
+        coef, ratio = self._line_ratio(x)
         k = int(np.argmax(ratio))
         # exponential (chi-square 2 dof) periodogram ordinates: P(ratio > r) = exp(-r); ask for a
         # false-alarm probability of 1e-3 over all bins
-        if ratio[k] < np.log(ratio.shape[0]) + np.log(1e3) or k + 1 >= spec.shape[0]:
+        if ratio[k] < np.log(ratio.shape[0]) + np.log(1e3) or k + 1 >= coef.shape[0]:
             return None
-        lp = np.log(spec[k - 1:k + 2])
-        den = lp[0] - 2 * lp[1] + lp[2]
-        delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
-        freq = (k + float(np.clip(delta, -0.5, 0.5))) * rate_hz / n
+        params = self.line(x, ctx.meas.rate_hz, k, coef)
+        freq = params['frequency_hz']
         # the line must also be where the measurement leaves the psd or psd_peak band: a steep
         # background (random walk, flicker) fools the local-median test at low frequency, but the
         # ensemble of the current model has the same steep background
@@ -246,16 +303,27 @@ class Sinusoid(Effect):
             ]
             if not any(outside):
                 return None
-        t = ctx.t_nominal
-        design = np.column_stack((np.sin(2 * np.pi * freq * t), np.cos(2 * np.pi * freq * t)))
-        (a, b), *_ = np.linalg.lstsq(design, x - x.mean(), rcond=None)
-        return {'amplitude_rad_s': float(np.hypot(a, b)), 'frequency_hz': float(freq),
-                'phase_rad': float(np.arctan2(b, a))}
+        return params
+
+    def estimate(self, ctx):
+        """Return the parameters of the strongest line without the detection test (or None)."""
+        x = ctx.residual
+        coef, ratio = self._line_ratio(x)
+        k = int(np.argmax(ratio))
+        if k < 1 or k + 1 >= coef.shape[0]:
+            return None
+        return self.line(x, ctx.meas.rate_hz, k, coef)
 
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
         return _zero_mean(params['amplitude_rad_s']
                           * np.sin(2 * np.pi * params['frequency_hz'] * t + params['phase_rad']))
+
+
+def _normal_ls(columns, y):
+    """Least-squares coefficients of ``y`` on a few columns, by the normal equations."""
+    design = np.array(columns)
+    return np.linalg.solve(design @ design.T, design @ y)
 
 
 def _centred_fit_stat(basis, y):
@@ -287,6 +355,11 @@ class BiasDrift(Effect):
             return None
         return {'slope_rad_s2': float(amp[0])}
 
+    def estimate(self, ctx):
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        _, amp = _centred_fit_stat(ctx.layout.chunk_t_s[None, :], y)
+        return {'slope_rad_s2': float(amp[0])}
+
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
         return _zero_mean(params['slope_rad_s2'] * t)
@@ -303,11 +376,24 @@ class BiasTransient(Effect):
         """Return the unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
         return np.where(t >= delay, -np.expm1(-np.maximum(t - delay, 0.0) / tc), 0.0)
 
+    #: Grid of the delay (fractions of the record, linear) and of the time constant (fractions of
+    #: the record, geometric); its spacing is the resolution of the two parameters.
+    DELAY_GRID = np.linspace(0.0, 0.8, 17)
+    TC_GRID = np.geomspace(1.0 / 300.0, 1.0, 20)
+
     def _grid(self, t, duration):
-        delays = np.linspace(0.0, 0.8, 17) * duration
-        tcs = np.geomspace(duration / 300.0, duration, 20)
-        pairs = [(d, c) for d in delays for c in tcs]
+        pairs = [(d * duration, c * duration) for d in self.DELAY_GRID for c in self.TC_GRID]
         return pairs, np.array([self.shape(t, d, c) for d, c in pairs])
+
+    def estimate(self, ctx):
+        t = ctx.layout.chunk_t_s
+        pairs, basis = self._grid(t, ctx.meas.n / ctx.meas.rate_hz)
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        stat, amp = _centred_fit_stat(basis, y)
+        best = int(np.argmax(stat))
+        delay, tc = pairs[best]
+        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay),
+                'time_constant_s': float(tc)}
 
     def fit(self, ctx):
         t = ctx.layout.chunk_t_s
@@ -362,6 +448,16 @@ class TemperatureSensitivity(Effect):
             return None
         return {'coefficient_rad_s_per_degc': float(coef[1, 0]),
                 'rate_coefficient_rad_s_per_degc_per_s': float(coef[2, 0])}
+
+    def estimate(self, ctx):
+        if ctx.meas.temperature_c is None:
+            return None
+        t_mean, t_rate = self._regressors(ctx)
+        design = np.column_stack((np.ones_like(t_mean), t_mean - t_mean.mean(), t_rate))
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+        return {'coefficient_rad_s_per_degc': float(coef[1]),
+                'rate_coefficient_rad_s_per_degc_per_s': float(coef[2])}
 
     def term(self, params, n, rate_hz, rng, ctx):
         temp = ctx.meas.temperature_c
@@ -424,22 +520,52 @@ class _AllanFitted(Effect):
         """Return (list of extra-params dicts, array (R, taus) of unit-amplitude templates)."""
         raise NotImplementedError
 
+    @staticmethod
+    def weights(members):
+        """Return the inverse-variance weights of the Allan variances ``members`` (N, taus)."""
+        mean = members.mean(axis=0)
+        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very
+        # closely
+        return 1.0 / np.maximum(members.std(axis=0, ddof=1), 0.05 * mean) ** 2
+
+    @staticmethod
+    def best(templ, w, excess):
+        """
+        Weighted LS amplitude of each template on each excess Allan variance.
+
+        Parameters
+        ----------
+        templ : numpy.ndarray
+            Unit-amplitude templates (R, taus).
+        w : numpy.ndarray
+            Weights (taus,).
+        excess : numpy.ndarray
+            Excess Allan variances (K, taus) ((rad/s)^2).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The RSS reduction and the amplitude (clipped at 0), each (R, K).
+
+        """
+        num = (templ * w) @ excess.T
+        den = (templ ** 2 * w).sum(axis=1)
+        amp = np.maximum(num, 0.0) / den[:, None]
+        return amp ** 2 * den[:, None], amp
+
+    def amplitude(self, params):
+        """Return the template amplitude (Allan variance scale, (rad/s)^2) of ``params``."""
+        raise NotImplementedError  # pragma: no cover - interface
+
     def fit(self, ctx):
         avar_m = ctx.meas_sig['allan'] ** 2
         members = ctx.members('allan') ** 2
         mean = members.mean(axis=0)
-        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very
-        # closely
-        sd = np.maximum(members.std(axis=0, ddof=1), 0.05 * mean)
         extras, templ = self.templates(ctx)
-        w = 1.0 / sd ** 2
+        w = self.weights(members)
 
         def best(excess):
-            num = (templ * w) @ excess.T
-            den = (templ ** 2 * w).sum(axis=1)
-            amp = np.maximum(num, 0.0) / den[:, None]
-            stat = amp ** 2 * den[:, None]
-            return stat, amp
+            return self.best(templ, w, excess)
 
         stat, amp = best((avar_m - mean)[None, :])
         # leave-one-out null: each member against the mean of the others
@@ -468,6 +594,9 @@ class RateRandomWalk(_AllanFitted):
 
     def params(self, amp, extra):
         return {'k_rad_s_per_sqrt_s': float(np.sqrt(amp))}
+
+    def amplitude(self, params):
+        return params['k_rad_s_per_sqrt_s'] ** 2
 
     def term(self, params, n, rate_hz, rng, ctx):
         steps = rng.standard_normal(n) * params['k_rad_s_per_sqrt_s'] / np.sqrt(rate_hz)
@@ -504,6 +633,9 @@ class BiasInstability(_AllanFitted):
     def params(self, amp, extra):
         return {'b_rad_s': float(np.sqrt(amp))}
 
+    def amplitude(self, params):
+        return params['b_rad_s'] ** 2
+
     def term(self, params, n, rate_hz, rng, ctx):
         return _zero_mean(flicker_noise(n, rate_hz, params['b_rad_s'], rng))
 
@@ -520,13 +652,19 @@ class GaussMarkov(_AllanFitted):
 
     def templates(self, ctx):
         duration = ctx.meas.n / ctx.meas.rate_hz
-        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, 30)
+        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, self.GRID_POINTS)
         tau = ctx.layout.tau_s
         return [{'correlation_time_s': float(c)} for c in tcs], np.array(
             [gm_allan(1.0, c, tau) for c in tcs])
 
+    #: Geometric grid of the correlation time: 3 / fs .. T / 10 in this many points.
+    GRID_POINTS = 30
+
     def params(self, amp, extra):
         return {'sigma_rad_s': float(np.sqrt(amp)), **extra}
+
+    def amplitude(self, params):
+        return params['sigma_rad_s'] ** 2
 
     def resolved(self, index, count):
         # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the
@@ -603,6 +741,10 @@ class StampJitter(Effect):
         d = _intervals(ctx)
         if not jittery(d):
             return None
+        return self.estimate(ctx)
+
+    def estimate(self, ctx):
+        d = _intervals(ctx)
         k = np.arange(ctx.meas.n)
         line = np.polyval(np.polyfit(k, ctx.meas.t_s, 1), k)
         return {'jitter_rms_s': float(np.sqrt(np.mean((ctx.meas.t_s - line) ** 2))),

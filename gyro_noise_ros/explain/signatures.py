@@ -177,9 +177,50 @@ def find_lattice(x):
     phase = np.mod(x - offset + 0.5 * step, step) / step - 0.5
     if np.mean(np.abs(phase) < 0.02) < 0.99:
         return None
-    # Reduced modulo the step into [-step/2, step/2): the lattice is the same, the number readable.
-    offset = float(np.mod(offset + 0.5 * step, step) - 0.5 * step)
+    step, offset, _ = lattice_fit(levels, step, offset)
     return step, offset
+
+
+def lattice_fit(levels, step, offset):
+    """
+    Least-squares lattice through the distinct values: ``level = offset + k step``, k integer.
+
+    Parameters
+    ----------
+    levels : numpy.ndarray
+        Distinct sample values (rad/s).
+    step, offset : float
+        A first lattice (rad/s), which fixes each level's index k.
+
+    Returns
+    -------
+    tuple
+        ``(step, offset, cov)``: the LS step and offset (the offset reduced modulo the step into
+        [-step/2, step/2): the lattice is the same, the number readable), and the 2 x 2 covariance
+        of (step, offset) from the levels' scatter about the line (None with fewer than 3 levels
+        on the lattice). Levels further than 2 % of a step from the lattice are left out.
+
+    """
+    k = np.round((levels - offset) / step)
+    on = np.abs(levels - offset - k * step) < 0.02 * step
+    levels, k = levels[on], k[on]
+    if levels.size < 3:
+        return step, float(np.mod(offset + 0.5 * step, step) - 0.5 * step), None
+    for _ in range(2):
+        design = np.column_stack((k, np.ones_like(k)))
+        coef, *_ = np.linalg.lstsq(design, levels, rcond=None)
+        # renumber the levels so that the intercept is the reduced offset
+        shift = np.floor((coef[1] + 0.5 * coef[0]) / coef[0])
+        if shift == 0:
+            break
+        k = k + shift
+    resid = levels - design @ coef
+    # find_lattice rounds the values to 1e-7 of their sd (about 2e-8 of the levels' sd): that
+    # rounding is the least scatter the levels can show
+    eps = 2e-8 * float(np.std(levels))
+    s2 = max(float(resid @ resid) / (levels.size - 2), eps ** 2 / 12.0)
+    cov = s2 * np.linalg.inv(design.T @ design)
+    return float(coef[0]), float(coef[1]), cov
 
 
 def make_layout(x, rate_hz, *, temperature=False):

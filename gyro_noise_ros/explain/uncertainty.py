@@ -201,7 +201,7 @@ def replicate(model, index):
     t_s = t if t is not None else np.arange(model.n) / model.rate_hz
     meas = model.meas(rate=x, t_s=t_s)
     out = {}
-    for effect, _ in model.accepted:
+    for effect, params in model.accepted:
         if effect.kind in ('stochastic', 'quantization'):
             continue
         residual = x
@@ -210,7 +210,7 @@ def replicate(model, index):
                 residual = residual - term
         try:
             out[effect.name] = effect.estimate(Context(meas, residual, model.layout, None, None,
-                                                       {}))
+                                                       {}), near=params)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             out[effect.name] = None
     if any(effect.kind == 'stochastic' for effect, _ in model.accepted):
@@ -252,7 +252,7 @@ def grid_resolution(model, effect, params):
 
 def summarise(value, refits, *, unit, kind, floor=0.0, scale=1.0, replicates=None):
     """
-    Standard error, interval and resolution of one parameter from its refits (module doc).
+    Return the standard error, interval and resolution of one parameter (module doc).
 
     Parameters
     ----------
@@ -314,7 +314,7 @@ def summarise(value, refits, *, unit, kind, floor=0.0, scale=1.0, replicates=Non
 
 def lattice_uncertainty(x, step, offset):
     """
-    Standard errors of a value lattice's step and offset (module doc).
+    Return the standard errors of a value lattice's step and offset (module doc).
 
     Parameters
     ----------
@@ -351,7 +351,7 @@ def lattice_uncertainty(x, step, offset):
 
 def bootstrap(model, replicates, *, values=None, mapper=map):
     """
-    Standard errors and intervals of every accepted effect parameter (module doc).
+    Return standard errors and intervals of every accepted effect parameter (module doc).
 
     Parameters
     ----------

@@ -64,9 +64,11 @@ it shrinks the gap.
 """
 
 import numpy as np
+import scipy.interpolate
+import scipy.optimize
 import scipy.signal
 
-from .signatures import chunk_series, compare, temperature_rate
+from .signatures import chunk_series, compare, temperature_edges, temperature_rate
 
 
 #: Standard deviations above the members' mean statistic a detection must lie (and above the worst
@@ -431,7 +433,12 @@ class BiasDrift(Effect):
 
 
 class BiasTransient(Effect):
-    """Delayed first-order rise or decay of the bias, grid search over delay and time constant."""
+    """
+    Delayed first-order rise or decay of the bias.
+
+    Grid search over delay and time constant (detection), then the least-squares delay and time
+    constant on the chunk means (Nelder-Mead from the best grid point, amplitude by linear LS).
+    """
 
     name = 'bias_transient'
     n_params = 3
@@ -441,8 +448,22 @@ class BiasTransient(Effect):
         """Return the unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
         return np.where(t >= delay, -np.expm1(-np.maximum(t - delay, 0.0) / tc), 0.0)
 
+    @staticmethod
+    def chunk_shape(edges, delay, tc):
+        """
+        Return the mean of the unit transient over each interval of ``edges`` (s), in closed form.
+
+        The integral of 1 - exp(-(t - d) / tc) from max(a, d) to b, divided by b - a.
+        """
+        a, b = edges[:-1], edges[1:]
+        lo = np.maximum(a, delay)
+        inside = b > delay
+        decay = (np.exp(-np.maximum(lo - delay, 0.0) / tc)
+                 - np.exp(-np.maximum(b - delay, 0.0) / tc))
+        return np.where(inside, (b - lo) - tc * decay, 0.0) / (b - a)
+
     #: Grid of the delay (fractions of the record, linear) and of the time constant (fractions of
-    #: the record, geometric); its spacing is the resolution of the two parameters.
+    #: the record, geometric) of the detection; the estimate is then refined off the grid.
     DELAY_GRID = np.linspace(0.0, 0.8, 17)
     TC_GRID = np.geomspace(1.0 / 300.0, 1.0, 20)
 
@@ -450,29 +471,54 @@ class BiasTransient(Effect):
         pairs = [(d * duration, c * duration) for d in self.DELAY_GRID for c in self.TC_GRID]
         return pairs, np.array([self.shape(t, d, c) for d, c in pairs])
 
-    def estimate(self, ctx, near=None):
-        t = ctx.layout.chunk_t_s
-        pairs, basis = self._grid(t, ctx.meas.n / ctx.meas.rate_hz)
-        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
-        stat, amp = _centred_fit_stat(basis, y)
+    def _refine(self, ctx, y, delay, tc):
+        """Least-squares (amplitude, delay, tc) on the chunk means ``y``, from a start point."""
+        chunk, rate_hz = ctx.layout.chunk, ctx.meas.rate_hz
+        duration = ctx.meas.n / rate_hz
+        edges = np.arange(y.shape[0] + 1) * chunk / rate_hz
+        yc = y - y.mean()
+
+        def fit(p):
+            d, c = p[0] * duration, np.exp(p[1]) * duration
+            basis = self.chunk_shape(edges, d, c)
+            basis = basis - basis.mean()
+            norm = basis @ basis
+            amp = (basis @ yc) / norm if norm > 0 else 0.0
+            return amp, float(((yc - amp * basis) ** 2).sum())
+
+        def rss(p):
+            if not (0.0 <= p[0] <= 0.95 and np.log(1e-3) <= p[1] <= np.log(10.0)):
+                return float('inf')
+            return fit(p)[1]
+
+        start = np.array([delay / duration, np.log(tc / duration)])
+        res = scipy.optimize.minimize(rss, start, method='Nelder-Mead',
+                                      options={'xatol': 1e-4, 'fatol': 1e-12 * (yc @ yc),
+                                               'initial_simplex': [start, start + [0.02, 0.0],
+                                                                   start + [0.0, 0.2]]})
+        best = res.x if np.isfinite(res.fun) and res.fun <= rss(start) else start
+        amp = fit(best)[0]
+        return {'amplitude_rad_s': float(amp), 'delay_s': float(best[0] * duration),
+                'time_constant_s': float(np.exp(best[1]) * duration)}
+
+    def _grid_best(self, ctx, y):
+        pairs, basis = self._grid(ctx.layout.chunk_t_s, ctx.meas.n / ctx.meas.rate_hz)
+        stat, _ = _centred_fit_stat(basis, y)
         best = int(np.argmax(stat))
-        delay, tc = pairs[best]
-        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay),
-                'time_constant_s': float(tc)}
+        return pairs, basis, stat, best
+
+    def estimate(self, ctx, near=None):
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        pairs, _, _, best = self._grid_best(ctx, y)
+        return self._refine(ctx, y, *pairs[best])
 
     def fit(self, ctx):
-        t = ctx.layout.chunk_t_s
-        duration = ctx.meas.n / ctx.meas.rate_hz
-        pairs, basis = self._grid(t, duration)
         y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
-        stat, amp = _centred_fit_stat(basis, y)
+        pairs, basis, stat, best = self._grid_best(ctx, y)
         null, _ = _centred_fit_stat(basis, ctx.members('chunk_bias'))
-        best = int(np.argmax(stat))
         if not null_exceeded(float(stat[best]), null.max(axis=1)):
             return None
-        delay, tc = pairs[best]
-        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay),
-                'time_constant_s': float(tc)}
+        return self._refine(ctx, y, *pairs[best])
 
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
@@ -527,9 +573,11 @@ class TemperatureSensitivity(Effect):
     def term(self, params, n, rate_hz, rng, ctx):
         temp = ctx.meas.temperature_c
         chunk = ctx.layout.chunk
-        t_mean, t_rate = temperature_rate(temp, rate_hz, chunk)
+        # dT/dt at every sample: the derivative of the cubic spline through the chunk-boundary
+        # temperatures, whose mean over each chunk is the fitted regressor exactly
+        edge_t, edge_temp = temperature_edges(temp, rate_hz, chunk)
         t = np.arange(n) / rate_hz
-        rate = np.interp(t, ctx.layout.chunk_t_s, t_rate)
+        rate = scipy.interpolate.CubicSpline(edge_t, edge_temp).derivative()(t)
         return _zero_mean(params['coefficient_rad_s_per_degc'] * (temp - temp.mean())
                           + params['rate_coefficient_rad_s_per_degc_per_s'] * rate)
 
@@ -641,7 +689,9 @@ class _AllanFitted(Effect):
         if not null_exceeded(
                 float(stat[r, 0]), null.max(axis=0)) or not self.resolved(r, len(extras)):
             return None
-        return self.params(float(amp[r, 0]), extras[r])
+        # the weights travel with the parameters (private): the bootstrap refits with the same
+        # estimator
+        return {**self.params(float(amp[r, 0]), extras[r]), '_allan_weights': w}
 
     def resolved(self, index, count):
         """Tell whether the record tells the best template (of ``count``) from its neighbours."""

@@ -334,17 +334,50 @@ def chunk_series(values, chunk):
     return blocks.mean(axis=1), blocks.var(axis=1, ddof=1)
 
 
+def temperature_edges(temperature_c, rate_hz, chunk):
+    """
+    Return the times (s) of the chunk boundaries and the temperature (degC) there.
+
+    Boundary j lies half a sample before the first sample of chunk j.
+
+    Each boundary value is the intercept of a least-squares line through the samples within
+    ``max(4, chunk // 8)`` samples of the boundary (one-sided at the ends of the record), which
+    averages the sensor's LSB steps out and, unlike a window mean, is unbiased on a slope.
+    """
+    n = temperature_c.shape[0]
+    k = n // chunk
+    edge = np.arange(k + 1) * chunk - 0.5
+    half = max(4, chunk // 8)
+    lo = np.clip(np.ceil(edge - half), 0, n).astype(np.int64)
+    hi = np.clip(np.floor(edge + half) + 1, 0, n).astype(np.int64)
+    index = np.arange(n, dtype=np.float64)
+    c0 = np.concatenate(([0.0], np.cumsum(temperature_c)))
+    c1 = np.concatenate(([0.0], np.cumsum(index * temperature_c)))
+    m = (hi - lo).astype(np.float64)
+    sk = (lo + hi - 1) * m / 2.0
+    skk = ((hi - 1) * hi * (2 * hi - 1) - (lo - 1) * lo * (2 * lo - 1)) / 6.0
+    sy = c0[hi] - c0[lo]
+    su = sk - m * edge
+    suu = skk - 2.0 * edge * sk + m * edge * edge
+    suy = (c1[hi] - c1[lo]) - edge * sy
+    den = m * suu - su * su
+    slope = np.where(den > 0, (m * suy - su * sy) / np.where(den > 0, den, 1.0), 0.0)
+    value = (sy - slope * su) / m
+    return edge / rate_hz, value
+
+
 def temperature_rate(temperature_c, rate_hz, chunk):
     """
-    Return chunk-mean temperature (degC) and its rate dT/dt (degC/s) per chunk.
+    Return chunk-mean temperature (degC) and the chunk mean of its rate dT/dt (degC/s).
 
-    The rate is the central difference of the chunk means, which averages the sensor's LSB steps
-    out.
+    The mean of dT/dt over a chunk is exactly the temperature difference between its ends over its
+    duration; the end values come from :func:`temperature_edges`. (A central difference of the
+    chunk means, used before, is 2 % low for a cycle of 17 chunks, enough to bias a fitted rate
+    coefficient by tens of standard errors.)
     """
     t_mean, _ = chunk_series(temperature_c, chunk)
-    dt = chunk / rate_hz
-    rate = np.gradient(t_mean, dt) if t_mean.size > 1 else np.zeros_like(t_mean)
-    return t_mean, rate
+    _, edge = temperature_edges(temperature_c, rate_hz, chunk)
+    return t_mean, np.diff(edge) * rate_hz / chunk
 
 
 def compute(layout, x, t_s, temperature_c=None):

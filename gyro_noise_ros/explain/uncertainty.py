@@ -27,8 +27,11 @@ of the refits is the standard error:
 * the Allan-fitted stochastic effects (rate_random_walk, bias_instability, gauss_markov) are
   refitted on the excess of the record's Allan variance over the leave-one-out mean of the other
   B - 1 records, plus the effect's own fitted Allan variance (Allan variances of independent
-  processes add, so this is the excess over the final model without the effect); the spread is
-  scaled by sqrt((B - 1) / B) for the noise the leave-one-out mean adds;
+  processes add, so this is the excess over the final model without the effect), with the weights
+  the fit used (the estimator must be the same: weights from records that include the effect
+  would make a more efficient estimator and an error 1.7x too small, measured on
+  rate_random_walk); the noise of the leave-one-out mean stands in for the noise of the ensemble
+  mean the fit subtracted;
 * the stamp effects (sample_loss, stamp_jitter) are refitted on the simulated stamps;
 * ``quantization`` is not bootstrapped (a simulated record sits exactly on the fitted lattice and
   would return it exactly): its step and offset are the least-squares line through the measured
@@ -39,8 +42,8 @@ The bootstrap is conditional on the fitted baseline and the other accepted effec
 how far the estimator scatters when the record is as noisy as the model says, not how the
 baseline's own fit or the choice of effects would change.
 
-Parameters found on a grid (the delay and time constant of ``bias_transient``, the correlation
-time of ``gauss_markov``) add the grid's rounding error, spacing / sqrt(12), in quadrature. The
+A parameter found on a grid (the correlation time of ``gauss_markov``) adds the grid's rounding
+error, spacing / sqrt(12), in quadrature. The
 interval is ``value +/- t_{0.975, m - 1} stderr`` with m the successful refits (Student's t
 accounts for the bootstrap's own noise in the standard error, about 1 / sqrt(2 (m - 1)) relative),
 clipped at 0 for parameters that cannot be negative.
@@ -62,7 +65,7 @@ from types import SimpleNamespace
 import numpy as np
 import scipy.stats
 
-from .effects import BiasTransient, Context, GaussMarkov, NAMES, Quantization
+from .effects import Context, GaussMarkov, NAMES, Quantization
 from .signatures import allan_deviation_octaves, lattice_fit
 
 #: Replicate b uses member index REPLICATE_OFFSET + b in the seed sequence: never an ensemble
@@ -230,7 +233,8 @@ def _allan_refits(model, effect, params, avar):
         r_hat = 0
     loo = (avar.sum(axis=0)[None, :] - avar) / (count - 1)
     excess = avar - loo + effect.amplitude(params) * templ[r_hat][None, :]
-    stat, amp = effect.best(templ, effect.weights(avar), excess)
+    weights = params.get('_allan_weights')
+    stat, amp = effect.best(templ, effect.weights(avar) if weights is None else weights, excess)
     best = np.argmax(stat, axis=0)
     return [effect.params(float(amp[r, b]), extras[r]) for b, r in enumerate(best)]
 
@@ -239,10 +243,6 @@ def grid_resolution(model, effect, params):
     """Return parameter -> rounding sd (spacing / sqrt 12) of the grid it was found on."""
     root12 = np.sqrt(12.0)
     duration = model.n / model.rate_hz
-    if isinstance(effect, BiasTransient):
-        delays, tcs = effect.DELAY_GRID, effect.TC_GRID
-        return {'delay_s': (delays[1] - delays[0]) * duration / root12,
-                'time_constant_s': params['time_constant_s'] * np.log(tcs[1] / tcs[0]) / root12}
     if isinstance(effect, GaussMarkov):
         ratio = (duration / 10.0) / (3.0 / model.rate_hz)
         return {'correlation_time_s': params['correlation_time_s'] * np.log(ratio)
@@ -250,7 +250,7 @@ def grid_resolution(model, effect, params):
     return {}
 
 
-def summarise(value, refits, *, unit, kind, floor=0.0, scale=1.0, replicates=None):
+def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
     """
     Return the standard error, interval and resolution of one parameter (module doc).
 
@@ -264,8 +264,6 @@ def summarise(value, refits, *, unit, kind, floor=0.0, scale=1.0, replicates=Non
         See :data:`PARAMETERS`.
     floor : float, keyword-only
         Grid rounding sd added in quadrature.
-    scale : float, keyword-only
-        Factor on the refits' sd (the leave-one-out correction).
     replicates : int, keyword-only
         B (default: len(refits)).
 
@@ -290,7 +288,7 @@ def summarise(value, refits, *, unit, kind, floor=0.0, scale=1.0, replicates=Non
     dev = arr - value
     if kind == 'angle':
         dev = np.angle(np.exp(1j * dev))
-    boot_sd = float(np.std(dev, ddof=1)) * scale
+    boot_sd = float(np.std(dev, ddof=1))
     stderr = float(np.hypot(boot_sd, floor))
     t = float(scipy.stats.t.ppf(0.975, arr.size - 1))
     lo, hi = value - t * stderr, value + t * stderr
@@ -304,7 +302,7 @@ def summarise(value, refits, *, unit, kind, floor=0.0, scale=1.0, replicates=Non
                    f'{stderr / max(abs(value), 1e-300):.2g})')
     elif kind == 'angle' and t * stderr >= np.pi:
         out.update(resolved=False, note='unresolved: the 95 % interval spans the whole circle')
-    elif boot_sd > 0 and abs(shift) > BIAS_LIMIT * boot_sd / scale and abs(shift) > floor:
+    elif boot_sd > 0 and abs(shift) > BIAS_LIMIT * boot_sd and abs(shift) > floor:
         out.update(resolved=False,
                    note=f'unresolved: the refits average {value + shift:.4g} {unit}, '
                    f'{abs(shift) / boot_sd:.1f} stderr from the value: the model does not '
@@ -384,10 +382,8 @@ def bootstrap(model, replicates, *, values=None, mapper=map):
             lattice = lattice_uncertainty(values, public['step_rad_s'], public['offset_rad_s'])
             out[effect.name] = lattice
             continue
-        scale = 1.0
         if effect.kind == 'stochastic':
             refits = _allan_refits(model, effect, params, avar)
-            scale = np.sqrt((count - 1) / count)
         else:
             refits = [r[effect.name] for r in results]
         floors = grid_resolution(model, effect, params)
@@ -396,7 +392,7 @@ def bootstrap(model, replicates, *, values=None, mapper=map):
             unit, kind = PARAMETERS.get(name, ('', 'location'))
             entry[name] = summarise(value, [None if r is None else r.get(name) for r in refits],
                                     unit=unit, kind=kind, floor=floors.get(name, 0.0),
-                                    scale=scale, replicates=count)
+                                    replicates=count)
         out[effect.name] = entry
     return out
 

@@ -96,10 +96,11 @@ def test_interval_covers_the_true_line_and_ramp_95_percent():
     # nearly uncorrelated). With exact 95 % coverage P(hits <= 70 of 80) = 0.65 % (binomial), so
     # >= 71 fails a correct method rarely; 40 seeds gave 153 of 160 while writing this test
     assert sum(hits) >= 71, f'{sum(hits)} of {len(hits)} intervals hold the true value'
-    # the other side (intervals too wide): (value - true) / stderr must have sd ~1; with 80
-    # values its sampling error is ~8 % (plus ~16 % per stderr from 20 replicates, averaged), so
-    # 0.7..1.4 fails only when the stderr is off by a factor ~1.4
-    assert 0.7 <= float(np.std(z)) <= 1.4, np.std(z)
+    # the other side (intervals too wide): with the right stderr, (value - true) / stderr is
+    # about Student t with 19 dof (the stderr from 20 replicates is itself uncertain by 16 %):
+    # sd 1.06; the sd of 80 such values scatters by ~10 % (more with the t tails; 1.36 was seen
+    # on one set of 40 records), so 0.7..1.5 fails only for a stderr off by a factor ~1.5
+    assert 0.7 <= float(np.std(z)) <= 1.5, np.std(z)
 
 
 def test_interval_covers_the_true_rate_random_walk():

@@ -355,11 +355,12 @@ def _sine_gauss_newton(y, ty, t, tc, tc2, omega):
     """
     Least-squares sine at ``omega`` and one Gauss-Newton step of its frequency.
 
-    Model ``a sin(w t) + b cos(w t)``; the step solves the linearised LS problem in (a, b, dw)
-    with the frequency derivative ``tc (a cos - b sin)`` (tc: centred time; its constant part lies
-    in the span of sin and cos). The 3 x 3 normal equations are built from sums of cos(2 w t) and
-    sin(2 w t) (weighted by 1, tc, tc^2) and of y and tc y against cos and sin: two trigonometric
-    evaluations and ten dot products per call, O(n).
+    Model ``a sin(w t) + b cos(w t) + c0 + c1 tc`` (tc: centred time; the offset and the linear
+    trend are nuisance terms, so a ramp in the record does not leak into the line); the step
+    solves the linearised LS problem in (a, b, c0, c1, dw) with the frequency derivative
+    ``tc (a cos - b sin)``. The normal equations are built from sums of cos(2 w t) and sin(2 w t)
+    weighted by 1, tc, tc^2, of cos and sin weighted by the same, and of y and tc y against cos and
+    sin: two trigonometric evaluations and fourteen dot products per call, O(n).
 
     Returns
     -------
@@ -376,18 +377,25 @@ def _sine_gauss_newton(y, ty, t, tc, tc2, omega):
     t2 = complex(_dot(tc2, cos2), _dot(tc2, sin2))
     tye = complex(_dot(ty, cos), _dot(ty, sin))
     ss, cc, sc = (n - s2.real) / 2, (n + s2.real) / 2, s2.imag / 2
+    s1, c1 = float(sin.sum()), float(cos.sum())
+    st, ct = _dot(tc, sin), _dot(tc, cos)
+    st2, ct2 = _dot(tc2, sin), _dot(tc2, cos)
+    tt, t0 = float(tc2.sum()), float(tc.sum())
     ys, yc = _dot(y, sin), _dot(y, cos)
-    det = ss * cc - sc * sc
-    a = (cc * ys - sc * yc) / det
-    b = (ss * yc - sc * ys) / det
-    # sums of tc s^2, tc c^2, tc s c (sum of tc = 0) and of tc^2 (a c - b s)^2
-    tss, tcc, tsc = -t1.real / 2, t1.real / 2, t1.imag / 2
-    gg = ((a * a + b * b) / 2 * tc2.sum() + (a * a - b * b) / 2 * t2.real - a * b * t2.imag)
-    sg, cg = a * tsc - b * tss, a * tcc - b * tsc
-    gy = a * tye.real - b * tye.imag
-    gram = np.array([[ss, sc, sg], [sc, cc, cg], [sg, cg, gg]])
+    rhs = np.array([ys, yc, float(y.sum()), float(ty.sum())])
+    gram = np.array([[ss, sc, s1, st], [sc, cc, c1, ct], [s1, c1, n, t0], [st, ct, t0, tt]])
     try:
-        step = float(np.linalg.solve(gram, np.array([ys, yc, gy]))[2])
+        a, b = np.linalg.solve(gram, rhs)[:2]
+    except np.linalg.LinAlgError:
+        return float('nan'), float('nan'), float('nan')
+    # g = tc (a cos - b sin): its sums against sin, cos, 1, tc, itself and y
+    tss, tcc, tsc = (t0 - t1.real) / 2, (t0 + t1.real) / 2, t1.imag / 2
+    gg = (a * a + b * b) / 2 * tt + (a * a - b * b) / 2 * t2.real - a * b * t2.imag
+    g = np.array([a * tsc - b * tss, a * tcc - b * tsc, a * ct - b * st, a * ct2 - b * st2])
+    gy = a * tye.real - b * tye.imag
+    full = np.block([[gram, g[:, None]], [g[None, :], np.array([[gg]])]])
+    try:
+        step = float(np.linalg.solve(full, np.append(rhs, gy))[4])
     except np.linalg.LinAlgError:
         step = float('nan')
     return float(a), float(b), step

@@ -23,7 +23,8 @@ b, ...])``), each accepted effect is refitted on each record with the fitter's o
 of the refits is the standard error:
 
 * deterministic effects (sinusoid, bias_drift, bias_transient, temperature_sensitivity) are
-  refitted on the record minus the other accepted deterministic terms;
+  refitted on the record minus the deterministic terms accepted before them (what their fitter
+  saw on the measurement);
 * the Allan-fitted stochastic effects (rate_random_walk, bias_instability, gauss_markov) are
   refitted on the excess of the record's Allan variance over the leave-one-out mean of the other
   B - 1 records, plus the effect's own fitted Allan variance (Allan variances of independent
@@ -204,13 +205,17 @@ def replicate(model, index):
     t_s = t if t is not None else np.arange(model.n) / model.rate_hz
     meas = model.meas(rate=x, t_s=t_s)
     out = {}
+    earlier = []
     for effect, params in model.accepted:
+        # the fitter saw the record minus the deterministic terms accepted before it: so does the
+        # refit (the later ones stay in, as they were in the measurement)
+        residual = x
+        for name in earlier:
+            residual = residual - model.det_terms[name]
+        if effect.name in model.det_terms:
+            earlier.append(effect.name)
         if effect.kind in ('stochastic', 'quantization'):
             continue
-        residual = x
-        for name, term in model.det_terms.items():
-            if name != effect.name:
-                residual = residual - term
         try:
             out[effect.name] = effect.estimate(Context(meas, residual, model.layout, None, None,
                                                        {}), near=params)

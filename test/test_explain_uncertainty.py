@@ -29,6 +29,7 @@ from types import SimpleNamespace
 from _realdata import real_data
 from gyro_noise_ros.cli.explain import main
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
+from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.explain import uncertainty as unc
 from gyro_noise_ros.explain.baseline import BaselineModel, simulation_memory
 from gyro_noise_ros.explain.effects import BiasDrift, Context, RateRandomWalk, Sinusoid
@@ -229,3 +230,12 @@ def test_real_mpu6050_every_parameter_has_a_stderr_or_a_flag(tmp_path, capsys):
     assert step['ci95'][0] <= lsb <= step['ci95'][1], (step, lsb)
     assert '±' in printed and 'step_rad_s' in printed
     assert '±' in (out / 'report.md').read_text()
+
+
+def test_cli_refuses_a_bad_bootstrap_before_loading(tmp_path, capsys):
+    # exit 2 (bad option) although the input does not exist (3): options are checked first
+    assert main([str(tmp_path / 'missing.csv'), '--out', str(tmp_path / 'o'),
+                 '--bootstrap', '3']) == 2
+    assert '--bootstrap' in capsys.readouterr().err
+    with pytest.raises(ParameterError):
+        explain(None, bootstrap=-1)

@@ -47,7 +47,10 @@ def _record(tmp_path, samples, seed, sig, storage):
     domain = random.randint(100, 200)
     out = tmp_path / f'bag_{storage}'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
-                            '-p', f'output:={out}', '-p', f'storage:={storage}'],
+                            '-p', f'output:={out}', '-p', f'storage:={storage}',
+                            # The replayer publishes reliable, as the driver does: a reliable
+                            # subscription keeps a loaded host from dropping messages in transport.
+                            '-p', 'reliable:=true'],
                            env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
     # The replayer waits for the recorder's Imu subscription, publishes in real time at 6.66 kHz

@@ -32,7 +32,8 @@ from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.explain import uncertainty as unc
 from gyro_noise_ros.explain.baseline import BaselineModel, simulation_memory
-from gyro_noise_ros.explain.effects import BiasDrift, Context, RateRandomWalk, Sinusoid
+from gyro_noise_ros.explain.effects import (BiasDrift, Context, GaussMarkov, RateRandomWalk,
+                                            Sinusoid)
 from gyro_noise_ros.explain.inputs import make_measurement
 from gyro_noise_ros.explain.signatures import allan_deviation_octaves, make_layout
 from gyro_noise_ros.explain.synthetic import make_record
@@ -186,6 +187,10 @@ def test_summarise_flags_what_the_bootstrap_cannot_resolve():
     assert count['stderr'] is None and not count['resolved']
     text = unc.format_value(good)
     assert '±' in text and text.endswith(' s')
+    # a Gauss-Markov correlation time at the shortest grid point (3 samples) is only a bound
+    at_100_hz = SimpleNamespace(rate_hz=100.0)
+    assert 'upper bound' in unc.grid_edge(at_100_hz, GaussMarkov(), 'correlation_time_s', 0.03)
+    assert unc.grid_edge(at_100_hz, GaussMarkov(), 'correlation_time_s', 0.05) == ''
 
 
 def test_workflow_json_and_bootstrap_off():

@@ -56,8 +56,9 @@ A parameter is **unresolved** (``resolved`` false, with the reason in ``note``) 
   the whole circle for a phase: the record does not tell the value from 0;
 * the refits' mean lies more than :data:`BIAS_LIMIT` standard errors from the value: the model
   does not reproduce its own estimate (the estimator is biased under it, or the value comes from a
-  feature the model does not simulate, e.g. the jitter of bursty stamps that the model builds by
-  resampling the intervals).
+  feature the model does not simulate);
+* the Gauss-Markov correlation time sits at the shortest point of its grid (3 samples): only an
+  upper bound (:func:`grid_edge`; the longest points are refused by the fitter already).
 """
 
 from dataclasses import dataclass
@@ -255,6 +256,21 @@ def grid_resolution(model, effect, params):
     return {}
 
 
+def grid_edge(model, effect, name, value):
+    """
+    Return why a grid-found value is only a bound ('' when it is not at the grid's edge).
+
+    The Gauss-Markov correlation time at the shortest grid point (3 samples) can be shorter still:
+    the baseline's own first-order dynamics (paper 000 eq. 1) overlap it there.
+    """
+    if isinstance(effect, GaussMarkov) and name == 'correlation_time_s':
+        shortest = 3.0 / model.rate_hz
+        if value <= shortest * (1.0 + 1e-9):
+            return (f'at the shortest grid point ({shortest:.3g} s = 3 samples): an upper bound, '
+                    'not a measurement')
+    return ''
+
+
 def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
     """
     Return the standard error, interval and resolution of one parameter (module doc).
@@ -398,6 +414,9 @@ def bootstrap(model, replicates, *, values=None, mapper=map):
             entry[name] = summarise(value, [None if r is None else r.get(name) for r in refits],
                                     unit=unit, kind=kind, floor=floors.get(name, 0.0),
                                     replicates=count)
+            edge = grid_edge(model, effect, name, value)
+            if edge and entry[name]['resolved']:
+                entry[name].update(resolved=False, note=f'unresolved: {edge}')
         out[effect.name] = entry
     return out
 

@@ -26,7 +26,8 @@ Usage::
 INPUT is a rosbag2 directory / .db3 / .mcap, a ROS 1 .bag, or a .csv with the columns documented in
 :mod:`gyro_noise_ros.explain.inputs`. Writes DIR/explain.json, DIR/report.md and PNG figures;
 prints a short verdict and the named effects' parameters as value ± standard error (parametric
-bootstrap of the final model, ``--bootstrap`` records). Exit codes: see :mod:`gyro_noise_ros.cli._common`.
+bootstrap of the final model, ``--bootstrap`` records). Exit codes: see
+:mod:`gyro_noise_ros.cli._common`.
 """
 
 import argparse

@@ -246,6 +246,9 @@ def _cmd_fit(args, argv):
     if not args.no_figures:
         figs.append(('Temperature and raw output (cf. Fig. 10)',
                      report.plot_run(out / 'training_fig10_run.png', run)))
+        figs.append(('Raw and processed training output, whole run and a 10-s zoom (cf. Fig. 18)',
+                     report.plot_output(out / 'training_fig18_output.png', run, processed,
+                                        label=model.method.name)))
         figs.append(('Drift removed on the training data (cf. Fig. 17)',
                      report.plot_drift(out / 'training_fig17_drift.png', run, processed,
                                        label=model.method.name)))
@@ -254,11 +257,10 @@ def _cmd_fit(args, argv):
             title=f'{run.name}: sample entropy and class of each mode (training)')
         if fig13 is not None:
             figs.append(('Sample entropy and class of each mode (cf. Fig. 13)', fig13))
-        for name, caption in report.method_figures(model.method, run, out):
-            figs.append((caption, out / name))
+        figs.extend(_method_figures(model.method, run, out))
     files.append(_write_json(out / 'training.json', doc))
     files.append(_write_md(out / 'training.md', _training_md(doc, figs, out)))
-    files.extend(p for _, p in figs)
+    files.extend(p for _, p in figs if p is not None)
     if not args.quiet:
         t = model.training
         print(f'{model.method.name}: fitted on {t.samples} samples ({t.duration_s / 3600:.3g} h, '
@@ -274,6 +276,12 @@ def _write_md(path, text):
 
 def _fig_md(figs, out):
     return ''.join(f'\n![{cap}]({Path(p).relative_to(out)})\n\n*{cap}*\n' for cap, p in figs)
+
+
+def _method_figures(method, run, out):
+    """Return the method's own figures as (caption, path or None) entries."""
+    return [(caption, None if name is None else out / name)
+            for name, caption in report.method_figures(method, run, out)]
 
 
 def _training_md(doc, figs, out):
@@ -293,7 +301,7 @@ def _training_md(doc, figs, out):
                 ['axis', 'raw residual drift (deg/s)', 'processed residual drift (deg/s)',
                  'raw ARW (deg/sqrt(h))', 'processed ARW (deg/sqrt(h))'],
                 rows, ['', '.4g', '.4g', '.4g', '.4g'])
-            + _fig_md(figs, out))
+            + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
 def _out_dir(path):
@@ -329,8 +337,10 @@ def _cmd_apply(args, argv):
     started = time.monotonic()
     processed = np.asarray(model.method.apply(run), dtype=float)
     apply_s = time.monotonic() - started
-    # the scoring applies the method again to injected runs; keep this run's diagnostics
+    # the scoring applies the method again to injected runs; keep this run's diagnostics, and
+    # draw the method's own figures now, while its last apply is this run (no second VMD)
     info = copy.deepcopy(getattr(model.method, 'last_info', None))
+    method_figs = [] if args.no_figures else _method_figures(model.method, run, out)
     scored, processed, curves = _score(model.method, run, args, processed)
     in_sample = str(bag.path) in model.training.sources or str(Path(args.bag).resolve()) in {
         str(Path(s).resolve()) for s in model.training.sources}
@@ -353,17 +363,17 @@ def _cmd_apply(args, argv):
     doc.update(scored)
     figs = []
     if not args.no_figures:
-        figs = _apply_figures(out, run, processed, model.method, curves, info)
+        figs = _apply_figures(out, run, processed, model.method, curves, info, method_figs)
     files.append(_write_json(out / 'metrics.json', doc))
     files.append(_write_md(out / 'report.md', _apply_md(doc, figs, out)))
-    files.extend(p for _, p in figs)
+    files.extend(p for _, p in figs if p is not None)
     if not args.quiet:
         _print_axes(doc)
         print(f'wrote {len(files)} files to {out}')
     return 0
 
 
-def _apply_figures(out, run, processed, method, curves, info):
+def _apply_figures(out, run, processed, method, curves, info, method_figs):
     name = method.name
     figs = [('Temperature and raw output (cf. Fig. 10)',
              report.plot_run(out / 'fig10_run.png', run))]
@@ -371,10 +381,9 @@ def _apply_figures(out, run, processed, method, curves, info):
                                      title=f'{run.name}: sample entropy and class of each mode')
     if fig13 is not None:
         figs.append(('Sample entropy and class of each mode (cf. Fig. 13)', fig13))
-    for fname, caption in report.method_figures(method, run, out):
-        figs.append((caption, out / fname))
-    figs.append(('Raw and processed output (cf. Figs. 15, 18)',
-                 report.plot_output(out / 'fig15_18_output.png', run, processed, label=name)))
+    figs.extend(method_figs)
+    figs.append(('Raw and processed output, whole run and a 10-s zoom (cf. Fig. 18)',
+                 report.plot_output(out / 'fig18_output.png', run, processed, label=name)))
     figs.append(('Drift removed, 60-s means, against time and temperature (cf. Fig. 17)',
                  report.plot_drift(out / 'fig17_drift.png', run, processed, label=name)))
     allan = {label: {axis: c[key] for axis, c in curves.items()}
@@ -445,7 +454,7 @@ def _apply_md(doc, figs, out):
               f'to the run{_small_text(inj)}.\n\n'
             + verdicts + '\n## Definitions\n\n'
             + ''.join(f'- `{k}`: {v}\n' for k, v in doc['definitions'].items())
-            + _fig_md(figs, out))
+            + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
 def _small_text(inj):

@@ -55,8 +55,9 @@ TRAIN_S = 14.0
 # middleware has repaired it (Fast DDS: up to a heartbeat period); a stalled imu/temperature means
 # the offset of newer gyro samples is the last one, held, which on a 2 degC/s ramp is wrong by
 # 0.04 deg/s per second of stall. Best effort loses the message instead, and the offset is
-# interpolated across the hole. (Two runs of this test at load 10-13 with a reliable compensator
-# left 26 and 34 (deg/s)/h on x; a stall is the suspected cause, not proven.)
+# interpolated across the hole. (Three of twenty runs of this test at load 4-13 with a reliable
+# compensator failed, 26 and 34 (deg/s)/h left on x where the message was kept; a stall is the
+# suspected cause, not proven.)
 ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'diagnostics_period_s:=0.5', 'allan:=false',
                    'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0',

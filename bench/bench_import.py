@@ -13,22 +13,32 @@
 # limitations under the License.
 
 """
-SD-log import speed and memory: the bulk writer against the per-message path, side by side.
+SD-log import speed and memory: old path, rosbags' writer and the new path, side by side.
 
 Paths, all through ``gyro_noise_ros.cli.importer.import_logs`` on the same log files (reading, link
-decoding and scaling included):
+decoding, scaling and writing included):
 
-* ``old``: ``bulk=False`` (the per-message :class:`ImuBagWriter` path of the current main, kept
-  callable in the package for this comparison; one ``executemany`` row per message for sqlite3);
-* ``rosbags``: ``bulk=False`` with :class:`ImuBagWriter`'s writes patched to call rosbags'
+* ``old``: ``bulk=False``: the byte-wise :class:`Decoder` and the per-message
+  :class:`ImuBagWriter` (one ``executemany`` row per message for sqlite3), kept callable in the
+  package as this baseline;
+* ``rosbags``: the new frame scanner, then :class:`ImuBagWriter` patched to call rosbags'
   ``Writer.write`` once per message (CDR still encoded in bulk: rosbags' own writer at its best);
-* ``new``: ``bulk=True`` (:class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter`).
+* ``bulk``: the bulk writer behind the byte-wise Decoder (``scan=False``: the previous session's
+  new path, to show what the scanner adds);
+* ``new``: the defaults: :class:`gyro_noise_ros.link.scan.ScanDecoder` and
+  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter`.
 
-Each for sqlite3 and MCAP storage; every path's bag is checked to hold the same message bytes.
-Peak RSS: each (path, log size) imports in a fresh process; ``VmHWM`` of that process.
+Each for sqlite3 and MCAP storage (MCAP is the default). Rounds are interleaved (every path once
+per round, the order rotated) so that a change of the machine's load hits every path alike; the
+table gives the median time per path and the median over rounds of the per-round ratio. Every
+path's bag is checked (first round) to hold the same message bytes. ``disk floor``: the time to
+write as many bytes as the new MCAP bag holds, from memory in 1 MiB writes, into the same
+directory: no importer can beat it. ``read only``: iterating ``SdLogReader`` over the log with
+the byte-wise Decoder or the scanner, nothing written (the reading share of an import). Peak RSS:
+each (path, log size) imports in a fresh process; ``VmHWM`` of that process.
 
-Run: ``.venv/bin/python bench/bench_import.py [--samples 400000]
-[--rss-samples 100000,400000,1600000]``
+Run: ``.venv/bin/python bench/bench_import.py [--samples 1000000] [--rounds 3] [--out-dir DIR]
+[--rss-samples 250000,1000000,4000000]``
 """
 
 import argparse
@@ -43,7 +53,7 @@ import time
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import protocol as p
-from gyro_noise_ros.link.sdlog import SdLogWriter
+from gyro_noise_ros.link.sdlog import SdLogReader, SdLogWriter
 import numpy as np
 
 
@@ -81,13 +91,47 @@ def rosbags_per_message():
         ImuBagWriter._write = original
 
 
+PATHS = {
+    'old': {'bulk': False, 'scan': False},
+    'rosbags': {'bulk': False, 'scan': True},
+    'bulk': {'bulk': True, 'scan': False},
+    'new': {},
+}
+
+
 def run_path(name, files, out, storage):
-    """Import with one path; return seconds."""
+    """Import with one path; return (wall seconds, CPU seconds of the process, all threads)."""
     ctx = rosbags_per_message() if name == 'rosbags' else contextlib.nullcontext()
     with ctx:
-        start = time.perf_counter()
-        importer.import_logs(files, out, storage=storage, bulk=(name == 'new'))
-        return time.perf_counter() - start
+        cpu, start = time.process_time(), time.perf_counter()
+        importer.import_logs(files, out, storage=storage, **PATHS[name])
+        return time.perf_counter() - start, time.process_time() - cpu
+
+
+def read_only(files, scan):
+    """Iterate the logs with SdLogReader; return (wall seconds, CPU seconds)."""
+    cpu, start = time.process_time(), time.perf_counter()
+    for _ in SdLogReader(files, scan=scan):
+        pass
+    return time.perf_counter() - start, time.process_time() - cpu
+
+
+def disk_floor(directory, nbytes):
+    """Write ``nbytes`` from memory in 1 MiB writes to a new file in ``directory``; seconds."""
+    block = np.full(1 << 20, 7, np.uint8)
+    path = os.path.join(directory, 'floor.bin')
+    cpu, start = time.process_time(), time.perf_counter()
+    with open(path, 'wb') as fh:
+        for _ in range(nbytes >> 20):
+            fh.write(block)
+        fh.write(block[:nbytes & ((1 << 20) - 1)])
+    seconds = time.perf_counter() - start, time.process_time() - cpu
+    os.remove(path)
+    return seconds
+
+
+def bag_bytes(bag):
+    return sum(os.path.getsize(os.path.join(bag, f)) for f in os.listdir(bag))
 
 
 def gyro_of(bag):
@@ -110,43 +154,94 @@ def peak_rss_mb(files, out, storage, bulk):
     return int(res.stdout.split()[-1]) / 1024.0
 
 
+def _x(value):
+    return '-' if np.isnan(value) else f'{value:.1f}x'
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument('--samples', type=int, default=400_000, help='samples in the speed log')
-    parser.add_argument('--rss-samples', default='100000,400000,1600000',
-                        help='comma-separated log sizes (samples) for the peak-RSS table')
+    parser.add_argument('--samples', type=int, default=1_000_000, help='samples in the speed log')
+    parser.add_argument('--rounds', type=int, default=3, help='interleaved rounds')
+    parser.add_argument('--out-dir', default=None,
+                        help='where logs and bags go (default: a temporary directory)')
+    parser.add_argument('--rss-samples', default='250000,1000000,4000000',
+                        help='comma-separated log sizes (samples) for the peak-RSS table '
+                        '(empty: skip)')
     args = parser.parse_args(argv)
     cores = len(os.sched_getaffinity(0))
-    print(f'bench_import: {args.samples} samples, 1 process on {cores} visible core(s); '
-          f'load average {os.getloadavg()[0]:.1f} '
-          '(other work on the machine slows every path alike)')
-    tmp = tempfile.mkdtemp(prefix='bench_import_')
+    print(f'bench_import: {args.samples} samples, 1 process, no worker threads, on {cores} '
+          f'visible core(s); load average {os.getloadavg()[0]:.1f} at the start (other work on '
+          'the machine slows every path)')
+    tmp = tempfile.mkdtemp(prefix='bench_import_', dir=args.out_dir)
     try:
         files = make_logs(os.path.join(tmp, 'logs'), args.samples)
         size_mb = sum(os.path.getsize(f) for f in files) / 1e6
-        print(f'log: {len(files)} file(s), {size_mb:.1f} MB')
-        # warm-up: imports, page cache of the log files
+        print(f'log: {len(files)} file(s), {size_mb:.1f} MB; bags in {tmp}')
+        # warm-up: imports, numba kernels, page cache of the log files
         importer.import_logs(files, os.path.join(tmp, 'warm'), storage='mcap')
-        times, reference = {}, None
-        for storage in ('sqlite3', 'mcap'):
-            for name in ('old', 'rosbags', 'new'):
+        shutil.rmtree(os.path.join(tmp, 'warm'))
+        runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS]
+        runs += [('disk floor', 'mcap'), ('read only', 'Decoder'), ('read only', 'scanner')]
+        times = {run: [] for run in runs}
+        loads = []
+        reference, mcap_bytes = None, None
+        for rnd in range(args.rounds):
+            shift = rnd % len(runs)
+            for name, storage in runs[shift:] + runs[:shift]:
+                if name == 'read only':
+                    times[name, storage].append(read_only(files, storage == 'scanner'))
+                    continue
+                if name == 'disk floor':
+                    if mcap_bytes is not None:
+                        times[name, storage].append(disk_floor(tmp, mcap_bytes))
+                    continue
                 out = os.path.join(tmp, f'{name}_{storage}')
-                times[name, storage] = run_path(name, files, out, storage)
-                gyro = gyro_of(out)
-                if reference is None:
-                    reference = gyro
-                elif not np.array_equal(gyro.view(np.uint64), reference.view(np.uint64)):
-                    raise SystemExit(f'{name} {storage}: messages differ from the first path')
+                times[name, storage].append(run_path(name, files, out, storage))
+                if name == 'new' and storage == 'mcap':
+                    mcap_bytes = bag_bytes(out)
+                if rnd == 0:
+                    gyro = gyro_of(out)
+                    if reference is None:
+                        reference = gyro
+                    elif not np.array_equal(gyro.view(np.uint64), reference.view(np.uint64)):
+                        raise SystemExit(f'{name} {storage}: messages differ from the first path')
                 shutil.rmtree(out)
-        base = times['old', 'sqlite3']
-        print(f'{"path":<10s} {"storage":<8s} {"samples/s":>12s} {"vs old sqlite3":>15s} '
-              f'{"vs same storage old":>20s} {"vs rosbags Writer":>18s}')
-        for storage in ('sqlite3', 'mcap'):
-            for name in ('old', 'rosbags', 'new'):
-                t = times[name, storage]
-                print(f'{name:<10s} {storage:<8s} {args.samples / t:>12,.0f} {base / t:>14.1f}x '
-                      f'{times["old", storage] / t:>19.1f}x '
-                      f'{times["rosbags", storage] / t:>17.1f}x')
+            loads.append(os.getloadavg()[0])
+        if not times['disk floor', 'mcap']:
+            times['disk floor', 'mcap'].append(disk_floor(tmp, mcap_bytes))
+        print(f'{args.rounds} interleaved round(s); load average after each: '
+              + ', '.join(f'{v:.1f}' for v in loads))
+        med = {run: float(np.median([w for w, _ in v])) for run, v in times.items()}
+        cpu = {run: float(np.median([c for _, c in v])) for run, v in times.items()}
+
+        def ratio(a, b):
+            """Median over rounds of wall time(b) / wall time(a) (nan: no such path)."""
+            if b not in times:
+                return float('nan')
+            k = min(len(times[a]), len(times[b]))
+            return float(np.median([times[b][i][0] / times[a][i][0] for i in range(k)]))
+
+        print(f'{"path":<11s} {"storage":<8s} {"samples/s":>11s} {"vs old sqlite3":>15s} '
+              f'{"vs old, same storage":>21s} {"vs rosbags Writer, same storage":>32s}')
+        for name, storage in runs:
+            run = (name, storage)
+            cells = [ratio(run, ('old', 'sqlite3')), ratio(run, ('old', storage)),
+                     ratio(run, ('rosbags', storage))]
+            print(f'{name:<11s} {storage:<8s} {args.samples / med[run]:>11,.0f} '
+                  f'{_x(cells[0]):>15s} {_x(cells[1]):>21s} {_x(cells[2]):>32s}')
+        print(f'(disk floor: {mcap_bytes / 1e6:.0f} MB, the size of the MCAP bag; median seconds: '
+              + ', '.join(f'{n} {s} {med[n, s]:.3f}' for n, s in runs) + ')')
+        print('\nCPU seconds of the importing process (all threads, system time included; less '
+              'sensitive to the load than wall time)')
+        print(f'{"path":<11s} {"storage":<8s} {"CPU s":>7s} {"vs old sqlite3":>15s} '
+              f'{"vs old, same storage":>21s}')
+        for name, storage in runs:
+            run = (name, storage)
+            print(f'{name:<11s} {storage:<8s} {cpu[run]:>7.3f} '
+                  f'{_x(cpu["old", "sqlite3"] / cpu[run]):>15s} '
+                  f'{_x(cpu.get(("old", storage), float("nan")) / cpu[run]):>21s}')
+        if not args.rss_samples:
+            return 0
         print('\npeak RSS of one import process (MB) against log size')
         print(f'{"samples":>10s} {"log MB":>8s} {"old sqlite3":>12s} {"new sqlite3":>12s} '
               f'{"new mcap":>10s}')

@@ -98,7 +98,7 @@ def test_apply_with_figures_and_in_sample_warning(tmp_path):
                  str(out), '--f-lo-hz', '0.5', '--no-bag', '--quiet']) == 0
     text = (out / 'report.md').read_text()
     assert 'in-sample' in text
-    for name in ('fig10_run.png', 'fig15_18_output.png', 'fig17_drift.png', 'fig19_allan.png',
+    for name in ('fig10_run.png', 'fig18_output.png', 'fig17_drift.png', 'fig19_allan.png',
                  'bandwidth.png', 'steps.png'):
         assert (out / name).stat().st_size > 1000 and f']({name})' in text
     assert not (out / 'compensated').exists()

@@ -24,10 +24,12 @@ sqlite3 fast path still costs one ``executemany`` row (several microseconds) per
   and its bag times as one JSON array read by ``json_each``, so sqlite does the per-row work
   in C. Same schema, same rows in the same order, same ``metadata.yaml`` (rosbags' writer still
   creates and closes the bag).
-* MCAP: the block's message records (opcode, length, channel, sequence 0, log and publish time,
-  CDR) are laid out in one numpy byte matrix and appended to rosbags' pending chunk, which is
-  closed at exactly the message where rosbags would close it (past :data:`MCAP_CHUNK_BYTES`);
-  the chunk's message index is written from numpy too. The file is byte-identical to rosbags' own.
+* MCAP: the message records (opcode, length, channel, sequence 0, log and publish time, CDR)
+  are laid out one chunk at a time in a numpy byte matrix (Imu messages by a compiled loop over
+  a template message); a chunk that a block fills from its first message on goes straight to the
+  file with its message index, the rest through rosbags' pending chunk. Chunks are closed at
+  exactly the message where rosbags would close them (past :data:`MCAP_CHUNK_BYTES`). The file
+  is byte-identical to rosbags' own.
 
 See ``docs/scale.md``.
 """
@@ -35,9 +37,11 @@ See ``docs/scale.md``.
 from __future__ import annotations
 
 from collections import defaultdict
+import functools
 import io
 import struct
 
+import numba
 import numpy as np
 
 from . import ImuBagWriter
@@ -64,8 +68,8 @@ class BulkImuBagWriter(ImuBagWriter):
     :class:`ImuBagWriter` that writes blocks of messages at once (same bag, byte for byte).
 
     Parameters and attributes are those of :class:`ImuBagWriter`. On a rosbags version whose
-    sqlite3 writer layout is not the one recognised here, or with MCAP storage, messages take the
-    per-message path of :class:`ImuBagWriter`.
+    sqlite3 or MCAP writer layout is not the one recognised here, messages take the per-message
+    path of :class:`ImuBagWriter`.
     """
 
     def _bulk_cursor(self, conn):
@@ -99,28 +103,48 @@ class BulkImuBagWriter(ImuBagWriter):
         return storage
 
     def _write_mcap_rows(self, conn, log_ns, rows):
-        storage = self._writer.storage
         n, size = rows.shape
-        rec = _MCAP_MESSAGE_HEAD + size
-        records = np.empty((n, rec), np.uint8)
-        records[:, 0] = 0x05
-        records[:, 1:9] = np.array([rec - 9], '<u8').view(np.uint8)
-        records[:, 9:11] = np.array([conn.id], '<u2').view(np.uint8)
-        records[:, 11:15] = 0
         times = np.ascontiguousarray(log_ns, dtype='<u8')
+        records = np.empty((n, _MCAP_MESSAGE_HEAD + size), np.uint8)
+        records[:, :_MCAP_MESSAGE_HEAD] = _mcap_record_head(conn.id, size)
         records[:, 15:23] = times.view(np.uint8).reshape(n, 8)
         records[:, 23:31] = records[:, 15:23]
-        records[:, 31:] = rows
-        flat = memoryview(records).cast('B')
+        records[:, _MCAP_MESSAGE_HEAD:] = rows
+        self._write_mcap_records(conn, times, records.shape[1], lambda a, b: records[a:b])
+
+    def _write_mcap_records(self, conn, times, rec, build):
+        """
+        Append MCAP message records to the chunks.
+
+        ``times`` are the log times, ``rec`` the record size, ``build(a, b)`` returns the records
+        of messages a to b - 1 as a C-contiguous (b - a, rec) byte matrix. Records are built one
+        chunk at a time (they are written while in the CPU cache). A chunk that this call fills
+        from its first message on goes to the file straight from its records (same bytes as
+        rosbags' pending chunk closed by :class:`_McapChunkCloser`); the rest goes through
+        rosbags' pending chunk as rosbags' ``write`` would.
+        """
+        storage = self._writer.storage
+        n = times.shape[0]
+        full = MCAP_CHUNK_BYTES // rec + 1  # messages that close a chunk begun empty
         done = 0
         try:
             while done < n:
                 chunk = storage.chunk
                 pos = chunk.bio.tell()
+                if pos == 0 and n - done >= full:
+                    part = times[done:done + full]
+                    index = np.empty((full, 2), '<u8')
+                    index[:, 0] = part
+                    index[:, 1] = _offsets(rec, full)
+                    data = memoryview(build(done, done + full)).cast('B')
+                    _emit_chunk(storage, int(part.min()), int(part.max()), data,
+                                {conn.id: [index]})
+                    done += full
+                    continue
                 # rosbags closes the chunk after the first message that ends past the limit
                 take = min(n - done, max(0, (MCAP_CHUNK_BYTES - pos) // rec) + 1)
                 part = times[done:done + take]
-                chunk.bio.write(flat[done * rec:(done + take) * rec])
+                chunk.bio.write(memoryview(build(done, done + take)).cast('B'))
                 index = np.empty((take, 2), '<u8')
                 index[:, 0] = part
                 index[:, 1] = pos + rec * np.arange(take, dtype=np.uint64)
@@ -185,15 +209,24 @@ class BulkImuBagWriter(ImuBagWriter):
             As in :meth:`ImuBagWriter.write_imu`.
 
         """
-        stamps = split_stamps(stamp_ns, 'stamp_ns')[0]
-        rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id,
-                         angular_velocity_covariance, linear_acceleration_covariance)
+        stamps, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
         conn = self._imu_conn
         if topic is not None and topic != self.imu_topic:
             conn = self._extra_imu(topic)
-        self._write_rows(conn, self._log_times(stamps, log_ns), rows)
+        logs = self._log_times(stamps, log_ns)
+        build = None
+        if stamps.shape[0] and self._mcap_storage(conn) is not None:
+            build = _imu_records(conn.id, stamps, sec, nsec, logs, gyro_rad_s, accel_m_s2,
+                                 self.frame_id, angular_velocity_covariance,
+                                 linear_acceleration_covariance)
+        if build is not None:
+            self._write_mcap_records(conn, np.ascontiguousarray(logs, '<u8'), *build)
+        else:
+            rows = _imu_rows(stamps, gyro_rad_s, accel_m_s2, self.frame_id,
+                             angular_velocity_covariance, linear_acceleration_covariance)
+            self._write_rows(conn, logs, rows)
         if conn is self._imu_conn:
-            self.imu_count += rows.shape[0]
+            self.imu_count += stamps.shape[0]
 
     def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
         """
@@ -253,6 +286,124 @@ def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
     return rows
 
 
+@functools.lru_cache(maxsize=8)
+def _offsets(rec, count):
+    """Return the chunk offsets of ``count`` records of ``rec`` bytes (uint64, read-only)."""
+    out = rec * np.arange(count, dtype=np.uint64)
+    out.flags.writeable = False
+    return out
+
+
+def _mcap_record_head(channel_id, size):
+    """Return the first 31 bytes of an MCAP message record (times zero) for a message size."""
+    return np.frombuffer(struct.pack('<BQHIQQ', 0x05, _MCAP_MESSAGE_HEAD - 9 + size, channel_id,
+                                     0, 0, 0), np.uint8)
+
+
+def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, frame_id, av_cov,
+                 la_cov):
+    """
+    Return (record size, ``build``) for the MCAP message records of Imu messages, or None.
+
+    ``build(a, b)`` returns the records of messages a to b - 1 as a new (b - a, record) byte
+    matrix: the bytes of :func:`_imu_rows` behind the record head of rosbags' ``write`` (opcode,
+    length, channel, sequence 0, log and publish time), built in one pass per message by a
+    compiled loop: the first message's record is the template, then stamps, log times and the two
+    vectors are written over it. None when the messages do not share their covariances (the
+    caller then takes the general path).
+    """
+    n = stamps.shape[0]
+    gyro = np.asarray(gyro_rad_s, dtype=np.float64)
+    accel = np.asarray(accel_m_s2, dtype=np.float64)
+    shared = all(c is None or np.shape(c) in ((9,), (3, 3)) for c in (av_cov, la_cov))
+    if not shared or gyro.shape != (n, 3) or accel.shape != (n, 3):
+        return None
+    first = encode_imu_rows(stamps[:1], gyro[:1], accel[:1], frame_id=frame_id,
+                            angular_velocity_covariance=av_cov,
+                            linear_acceleration_covariance=la_cov)
+    size = first.shape[1]
+    vec = _MCAP_MESSAGE_HEAD + size - 8 * IMU_TAIL_F8
+    template = np.concatenate((_mcap_record_head(channel_id, size), first[0]))
+
+    def as_bytes(values, dtype, width):
+        return np.ascontiguousarray(values, dtype).view(np.uint8).reshape(n, width)
+
+    # sec and nanosec were range-checked by split_stamps: the low 4 bytes of the little-endian
+    # int64 are the int32 / uint32 of the message
+    fields = (as_bytes(log_ns, '<i8', 8), as_bytes(sec, '<i8', 8), as_bytes(nsec, '<i8', 8),
+              as_bytes(gyro, '<f8', 24), as_bytes(accel, '<f8', 24))
+    at = (_MCAP_MESSAGE_HEAD + 4, vec + 13 * 8, vec + 25 * 8)
+
+    def build(a, b):
+        records = np.empty((b - a, template.size), np.uint8)
+        _fill_imu_records(records, template, *(f[a:b] for f in fields), *at)
+        return records
+
+    return template.size, build
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_imu_records(out, template, log_ns, sec, nsec, gyro, accel, at_stamp, at_gyro,
+                      at_accel):  # pragma: no cover - compiled; tested through the bag bytes
+    """
+    Copy the template into each row, then write log/publish time, stamp and vectors.
+
+    ``log_ns``, ``sec``, ``nsec`` (n, 8) are the little-endian bytes of int64 values, ``gyro``
+    and ``accel`` (n, 24) those of three float64 per message.
+    """
+    n, rec = out.shape
+    for i in range(n):
+        for k in range(rec):
+            out[i, k] = template[k]
+        for k in range(8):
+            out[i, 15 + k] = log_ns[i, k]
+            out[i, 23 + k] = log_ns[i, k]
+        for k in range(4):
+            out[i, at_stamp + k] = sec[i, k]
+            out[i, at_stamp + 4 + k] = nsec[i, k]
+        for k in range(24):
+            out[i, at_gyro + k] = gyro[i, k]
+            out[i, at_accel + k] = accel[i, k]
+
+
+def _emit_chunk(storage, start_time, end_time, data, msgs):
+    """
+    Write one MCAP chunk (uncompressed) with its message indexes; record its chunk index.
+
+    The bytes of rosbags' ``McapWriter.close_chunk``: chunk record, one message index record per
+    channel (``msgs``: channel id -> list of (k, 2) (log time, offset) arrays or pairs, in write
+    order), and the chunk index entry appended to ``storage.chunks``.
+    """
+    size = len(data)
+    compressed = storage.compressor(data)
+    head = struct.pack('<QQQI', start_time, end_time, size, 0)
+    body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
+    chunk_start = storage.bio.tell()
+    parts = [b'\x06' + struct.pack('<Q', len(body) + len(compressed)) + body, compressed]
+    chunk_end = chunk_start + len(parts[0]) + len(compressed)
+    offsets = []
+    end = chunk_end
+    for cid, entries in msgs.items():
+        offsets.append((cid, end))
+        pairs = [np.ascontiguousarray(e, dtype='<u8').reshape(-1, 2) for e in entries]
+        index = memoryview(pairs[0] if len(pairs) == 1 else np.concatenate(
+            pairs or [np.zeros((0, 2), '<u8')])).cast('B')
+        parts.append(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)))
+        parts.append(index)
+        end += len(parts[-2]) + len(index)
+    for part in parts:
+        storage.bio.write(part)
+    rec = io.BytesIO()
+    rec.write(struct.pack('<QQQQI', start_time, end_time, chunk_start, chunk_end - chunk_start,
+                          len(offsets) * 10))
+    for cid, offset in offsets:
+        rec.write(struct.pack('<HQ', cid, offset))
+    rec.write(struct.pack('<Q', end - chunk_end))
+    rec.write(_mcap_string(storage.compression))
+    rec.write(struct.pack('<QQ', len(compressed), size))
+    storage.chunks.append(rec)
+
+
 class _McapChunkCloser:
     """
     rosbags' ``McapWriter.close_chunk`` with the message index written from numpy.
@@ -271,33 +422,12 @@ class _McapChunkCloser:
 
         storage = self.storage
         chunk = storage.chunk
-        head = struct.pack('<QQQI', chunk.message_start_time, chunk.message_end_time,
-                           chunk.bio.tell(), 0)
-        compressed = storage.compressor(chunk.bio.getvalue())
-        body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
-        chunk_start = storage.bio.tell()
-        storage.bio.write(b'\x06' + struct.pack('<Q', len(body) + len(compressed)))
-        storage.bio.write(body)
-        storage.bio.write(compressed)
-        chunk_end = storage.bio.tell()
-        offsets = []
-        for cid, entries in chunk.msgs.items():
-            offsets.append((cid, storage.bio.tell()))
-            pairs = np.concatenate([np.asarray(e, dtype='<u8').reshape(-1, 2) for e in entries]) \
-                if entries else np.zeros((0, 2), '<u8')
-            data = pairs.astype('<u8').tobytes()
-            payload = struct.pack('<HI', cid, len(data)) + data
-            storage.bio.write(b'\x07' + struct.pack('<Q', len(payload)))
-            storage.bio.write(payload)
-        rec = io.BytesIO()
-        rec.write(struct.pack('<QQQQI', chunk.message_start_time, chunk.message_end_time,
-                              chunk_start, chunk_end - chunk_start, len(offsets) * 10))
-        for cid, offset in offsets:
-            rec.write(struct.pack('<HQ', cid, offset))
-        rec.write(struct.pack('<Q', storage.bio.tell() - chunk_end))
-        rec.write(_mcap_string(storage.compression))
-        rec.write(struct.pack('<QQ', len(compressed), chunk.bio.tell()))
-        storage.chunks.append(rec)
+        data = chunk.bio.getbuffer()  # a view, not a copy
+        try:
+            _emit_chunk(storage, chunk.message_start_time, chunk.message_end_time, data,
+                        chunk.msgs)
+        finally:
+            data.release()
         storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
 
 

@@ -143,9 +143,9 @@ def _anchor(start_time, reader):
     return f'unix:{value!r}', value
 
 
-def _first_acked_config(paths, chunk_bytes):
+def _first_acked_config(paths, chunk_bytes, scan):
     """Return (odr_hz, gyro_fs_dps, accel_fs_g) of the first block that knows them, or None."""
-    for block in SdLogReader(paths, chunk_bytes=chunk_bytes):
+    for block in SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan):
         if block.gyro_fs_dps and block.accel_fs_g:
             return block.odr_hz, block.gyro_fs_dps, block.accel_fs_g
     return None
@@ -156,7 +156,7 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
                 frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
                 temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
                 linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20,
-                bulk=True):
+                bulk=True, scan=None):
     """
     Convert SD log files of one sequence to a rosbag2.
 
@@ -191,6 +191,10 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
         Write with :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter` (same bag, byte for byte, many
         times faster); False keeps the per-message :class:`gyro_noise_ros.bag.ImuBagWriter` path
         (the baseline of ``bench/bench_import.py``).
+    scan : bool, optional, keyword-only
+        Decode the logs with the compiled frame scanner (:class:`SdLogReader` ``scan=True``; same
+        blocks and report); None (default) follows ``bulk``, so ``bulk=False`` is the whole old
+        path.
 
     Returns
     -------
@@ -219,7 +223,8 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     if missing:
         raise BagError(f'log file {missing[0]!r} does not exist' + (
             f' (and {len(missing) - 1} more)' if len(missing) > 1 else ''))
-    reader = SdLogReader(paths, chunk_bytes=chunk_bytes)
+    scan = bulk if scan is None else bool(scan)
+    reader = SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan)
     heads = [f.header for f in reader.files if f.header is not None]
     # until a header or an ack says otherwise, the first readable header's configuration holds (the
     # device cannot change it without writing an ACK frame)
@@ -228,12 +233,12 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     if not heads and (gyro_fs_dps is None or accel_fs_g is None):
         # Corruption is never fatal (docs/portenta_link.md): an unreadable header is replaced by
         # the configuration the first ACK frame carries.
-        assumed = _first_acked_config(paths, chunk_bytes)
+        assumed = _first_acked_config(paths, chunk_bytes, scan)
         if assumed is None:
             raise InputDataError(
                 'no readable log header and no ACK frame with the scales in the files: '
                 'give --gyro-fs-dps and --accel-fs-g')
-        reader = SdLogReader(paths, chunk_bytes=chunk_bytes)
+        reader = SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan)
     epoch, anchor = _anchor(start_time, reader)
     av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
     la_cov = np.diag([linear_acceleration_variance] * 3).reshape(9)

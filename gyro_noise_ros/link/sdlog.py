@@ -46,6 +46,7 @@ from .protocol import (
     MAX_FRAME_SIZE,
     MAX_SAMPLES_PER_FRAME,
 )
+from .scan import ScanDecoder
 from ..errors import InputDataError, ParameterError
 
 #: FAT32 file-size limit (bytes); the paper's board stopped a sequence there (~12 h at 6.66 kHz).
@@ -332,6 +333,11 @@ class SdLogReader:
         Log files, in any order.
     chunk_bytes : int, keyword-only
         Read size (bytes).
+    scan : bool, keyword-only
+        Decode with the compiled :class:`~gyro_noise_ros.link.scan.ScanDecoder` (default) or,
+        False, with the byte-wise :class:`~gyro_noise_ros.link.protocol.Decoder` (the reference
+        it is tested against, and the baseline of ``bench/bench_import.py``). Same blocks, same
+        report.
 
     Notes
     -----
@@ -341,13 +347,14 @@ class SdLogReader:
 
     """
 
-    def __init__(self, paths, *, chunk_bytes=1 << 20):
+    def __init__(self, paths, *, chunk_bytes=1 << 20, scan=True):
         paths = [os.fspath(p) for p in paths]
         if not paths:
             raise ParameterError('paths must name at least one log file')
         if int(chunk_bytes) < 1:
             raise ParameterError(f'chunk_bytes must be >= 1, got {chunk_bytes}')
         self.chunk_bytes = int(chunk_bytes)
+        self._decoder_class = ScanDecoder if scan else Decoder
         infos = []
         for path in paths:
             try:
@@ -385,7 +392,7 @@ class SdLogReader:
         return self._report
 
     def __iter__(self):
-        dec = Decoder()
+        dec = self._decoder_class()
         config = (None, None, None)
         regions = []
         region_count = 0

@@ -13,32 +13,42 @@
 # limitations under the License.
 
 """
-Figures and Markdown of gyro_noise_thermal: analogues of paper 002's Figures 10 and 12-19.
+Figures and Markdown of gyro_noise_thermal: analogues of paper 002's Figures 10-19.
 
 Generic figures (every method): Figure 10 (temperature and raw output against time),
-Figure 15/18 (raw and processed output), Figure 17 (the drift a method removed, 60-s means,
+Figure 18 (raw and processed output), Figure 17 (the drift a method removed, 60-s means,
 against time and temperature), Figure 19 (Allan deviation raw and processed), and the cost
 figures the paper does not have (gain, phase, group delay and step response to injected motion).
 Figure 13 (sample entropy and class of each mode) is drawn from a method's ``fit_info`` /
 ``last_info`` (per-axis dicts with ``sample_entropy``, ``classes``, ``center_freqs_hz``, as the
-parallel model keeps them). Other method-specific figures (the paper's Figures 12, 14 and 16: the
-modes, the mixed part before and after TFPF, the network before and after BAS) come from the
-method itself when it offers ``report_figures(run, out_dir) -> [(file name, caption), ...]``.
-Everything is converted to deg/s at this edge; matplotlib runs on the Agg backend.
+parallel model keeps them). The other method-specific figures (the paper's Figures 11, 12 and
+14-17: the MOPSO archive, the modes, the mixed part before and after TFPF, the denoised output,
+the network before and after BAS, the drift part and its compensation) come from the method
+itself when it offers ``report_figures(run, out_dir) -> [(file name or None, caption), ...]``
+(:func:`method_figures`; the parallel model's uses :func:`plot_mopso`, :func:`plot_modes`,
+:func:`plot_before_after` and :func:`plot_network`). :func:`figures_markdown` writes the
+report's figure section: one row per paper figure 10-19 naming its analogue, or saying in one
+line why the method has none. Everything is converted to deg/s at this edge; long runs are
+reduced to min/max envelopes (:func:`envelope`); matplotlib runs on the Agg backend.
 """
 
 import math
 from pathlib import Path
+import re
 
 import numpy as np
 
-__all__ = ['method_figures', 'plot_allan', 'plot_bandwidth', 'plot_drift', 'plot_mode_classes',
-           'plot_output', 'plot_run', 'plot_steps', 'table_markdown']
+__all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
+           'plot_allan', 'plot_bandwidth', 'plot_before_after', 'plot_drift', 'plot_mode_classes',
+           'plot_modes', 'plot_mopso', 'plot_network', 'plot_output', 'plot_run', 'plot_steps',
+           'table_markdown']
 
 DEG = 180.0 / math.pi
 AXES = 'xyz'
 #: Points per trace in time plots (longer runs are reduced to min/max envelopes of blocks).
 _MAX_POINTS = 4000
+#: Points per trace of the narrower panels of the method figures (two per pixel column).
+PANEL_POINTS = 1600
 
 
 def _pyplot():
@@ -50,16 +60,36 @@ def _pyplot():
     return plt
 
 
-def _thin(t, y):
-    """Reduce a long trace to a min/max envelope of at most ``_MAX_POINTS`` points."""
+def envelope(t, y, max_points=_MAX_POINTS):
+    """
+    Reduce a long trace to a min/max envelope of at most about ``max_points`` points.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Abscissa (n,).
+    y : numpy.ndarray
+        Values (n,).
+    max_points : int
+        Points kept; shorter traces are returned as they are.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (t, y) of the envelope: each block's first abscissa twice, its minimum and maximum.
+
+    """
     n = t.size
-    if n <= _MAX_POINTS:
+    if n <= max_points:
         return t, y
-    block = int(math.ceil(n / (_MAX_POINTS // 2)))
+    block = int(math.ceil(n / (max_points // 2)))
     k = n // block
     tb = t[:k * block].reshape(k, block)[:, 0]
     yb = y[:k * block].reshape(k, block)
     return np.repeat(tb, 2), np.column_stack([yb.min(axis=1), yb.max(axis=1)]).ravel()
+
+
+_thin = envelope
 
 
 def _window_means(t, y, window_s):
@@ -71,8 +101,9 @@ def _window_means(t, y, window_s):
             y[:k * n].reshape(k, n, *y.shape[1:]).mean(axis=1))
 
 
-def _save(fig, plt, path):
-    fig.tight_layout()
+def _save(fig, plt, path, *, tight=True):
+    if tight:
+        fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)
@@ -112,7 +143,7 @@ def plot_run(path, run):
 
 def plot_output(path, run, processed, *, label):
     """
-    Overlay raw and processed output, whole run and a 10-s zoom (paper Figures 15 and 18).
+    Overlay raw and processed output, whole run and a 10-s zoom (paper Figure 18).
 
     Parameters
     ----------
@@ -145,7 +176,7 @@ def plot_output(path, run, processed, *, label):
         right.set_xlabel('time (s), 10-s zoom')
     panels[0][0].legend(fontsize=7, loc='upper right')
     panels[-1][0].set_xlabel('time (h)')
-    fig.suptitle(f'{run.name}: raw and {label} output (cf. paper Figs. 15, 18)', fontsize=10)
+    fig.suptitle(f'{run.name}: raw and {label} output (cf. paper Fig. 18)', fontsize=10)
     return _save(fig, plt, path)
 
 
@@ -301,7 +332,7 @@ def plot_steps(path, steps, *, title):
         panel.axhline(1.0, color='0.6', lw=0.8, ls=':')
         panel.set_xlabel(f'time from the step (s), {what}')
         panel.grid(True, alpha=0.3)
-    panels[0].set_ylabel('response / step')
+    panels[0].set_ylabel('response / step (ratio)')
     panels[0].legend(fontsize=7, ncol=2)
     fig.suptitle(title, fontsize=10)
     return _save(fig, plt, path)
@@ -346,8 +377,8 @@ def plot_mode_classes(path, info, *, title):
             for i, f in zip(idx, freqs):
                 panel.annotate(f'{f:.3g} Hz', (i, 0), rotation=90, fontsize=6, ha='center',
                                va='bottom', xytext=(0, 2), textcoords='offset points')
-        panel.set_xlabel('IMF')
-        panel.set_ylabel(f'sample entropy, axis {AXES[a]}')
+        panel.set_xlabel('IMF (index, by ascending centre frequency)')
+        panel.set_ylabel(f'sample entropy, axis {AXES[a]} (nats)')
         panel.set_xticks(idx)
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
     panels[0].legend(handles, list(_CLASS_COLOURS), fontsize=7)
@@ -355,9 +386,292 @@ def plot_mode_classes(path, info, *, title):
     return _save(fig, plt, path)
 
 
+def plot_mopso(path, axes, *, title):
+    """
+    Plot the final MOPSO archive and the picked point per axis (paper Figure 11).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    axes : list of dict or None
+        Per axis (three): ``fuzzy_entropy``, ``permutation_entropy``, ``k``, ``alpha`` (one per
+        archive point) and ``pick`` = (k, alpha, fuzzy entropy, permutation entropy); None for
+        an axis without an archive.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    from matplotlib.ticker import MaxNLocator
+
+    fig, panels = plt.subplots(2, 3, figsize=(14, 7.5))
+    for a in range(3):
+        front, space = panels[0][a], panels[1][a]
+        ax = axes[a] if a < len(axes) else None
+        if ax is None:
+            for panel in (front, space):
+                panel.text(0.5, 0.5, 'no archive recorded', ha='center', va='center',
+                           transform=panel.transAxes)
+        else:
+            fe = np.asarray(ax['fuzzy_entropy'], dtype=float)
+            pe = np.asarray(ax['permutation_entropy'], dtype=float)
+            order = np.argsort(fe)
+            front.plot(fe[order], pe[order], 'o-', ms=4, lw=0.6, color='tab:blue',
+                       label=f'archive ({fe.size} points)')
+            k, alpha, fe_pick, pe_pick = ax['pick']
+            front.plot([fe_pick], [pe_pick], '*', ms=14, color='tab:red',
+                       label=f'picked K = {int(k)}, alpha = {alpha:.0f}')
+            space.plot(np.asarray(ax['k'], dtype=float), np.asarray(ax['alpha'], dtype=float),
+                       'o', ms=4, color='tab:blue', label='archive')
+            space.plot([k], [alpha], '*', ms=14, color='tab:red', label='picked')
+            space.xaxis.set_major_locator(MaxNLocator(integer=True))
+            front.legend(fontsize=7)
+            space.legend(fontsize=7)
+        front.set_xlabel(f'mean fuzzy entropy of the modes, axis {AXES[a]} (nats)')
+        front.set_ylabel('mean permutation entropy (normalised, 0-1)')
+        space.set_xlabel('K (number of modes)')
+        space.set_ylabel('alpha (bandwidth penalty, dimensionless)')
+        for panel in (front, space):
+            panel.grid(True, alpha=0.3)
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_modes(path, axes, *, title):
+    """
+    Plot the input and each VMD mode against time, per axis, coloured by class (paper Fig. 12).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    axes : list of dict
+        Per axis (three): ``t_h`` (time, h), ``input`` and ``modes`` (list, one per mode), rad/s,
+        on the ``t_h`` grid (e.g. :func:`envelope`), ``center_freqs_hz`` and ``classes`` (one
+        per mode, ascending centre frequency).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    rows = 1 + max(len(ax['modes']) for ax in axes)
+    fig, panels = plt.subplots(rows, 3, figsize=(14, 1.6 + 0.95 * rows), sharex='col',
+                               squeeze=False)
+    for a, ax in enumerate(axes):
+        col = panels[:, a]
+        col[0].plot(ax['t_h'], np.asarray(ax['input']) * DEG, lw=0.4, color='k')
+        col[0].set_ylabel(f'{AXES[a]} input (deg/s)', fontsize=7)
+        col[0].set_title(f'axis {AXES[a]}', fontsize=9)
+        labelled = zip(ax['modes'], ax['center_freqs_hz'], ax['classes'])
+        for i, (mode, f_hz, cls) in enumerate(labelled):
+            panel = col[i + 1]
+            panel.plot(ax['t_h'], np.asarray(mode) * DEG, lw=0.4,
+                       color=_CLASS_COLOURS.get(cls, 'tab:blue'))
+            panel.set_ylabel(f'IMF{i + 1} (deg/s)', fontsize=7)
+            panel.text(0.01, 0.95, f'{cls}, centre {f_hz:.3g} Hz', transform=panel.transAxes,
+                       fontsize=7, va='top', ha='left',
+                       bbox={'facecolor': 'white', 'alpha': 0.7, 'lw': 0})
+        for panel in col[len(ax['modes']) + 1:]:
+            panel.set_visible(False)
+        col[len(ax['modes'])].set_xlabel('time (h)')
+        col[len(ax['modes'])].xaxis.set_tick_params(labelbottom=True)
+        for panel in col:
+            panel.tick_params(labelsize=7)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
+    fig.legend(handles, list(_CLASS_COLOURS), fontsize=8, loc='upper right', ncol=3)
+    fig.suptitle(title, fontsize=10)
+    # fixed margins: tight_layout over up to 39 panels costs more than drawing them
+    top = 1.0 - 0.75 / fig.get_figheight()
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.55 / fig.get_figheight(), top=top,
+                        wspace=0.25, hspace=0.35)
+    return _save(fig, plt, path, tight=False)
+
+
+def plot_before_after(path, axes, *, title, before, after):
+    """
+    Overlay a signal before and after a processing step: whole run and a zoom (Figs. 14, 15).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    axes : list of dict
+        Per axis (three): ``t_h`` (time, h) with ``before`` and ``after`` on it (rad/s, e.g.
+        :func:`envelope` of each), ``zoom_t_s`` (time, s) with ``zoom_before`` and
+        ``zoom_after`` (rad/s, every sample of a short stretch), ``name`` (what the signal is).
+    title : str
+        Figure title.
+    before, after : str
+        Legend labels.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    fig, panels = plt.subplots(3, 2, figsize=(12, 8), gridspec_kw={'width_ratios': [3, 2]})
+    for a, ax in enumerate(axes):
+        left, right = panels[a]
+        left.plot(ax['t_h'], np.asarray(ax['before']) * DEG, lw=0.4, color='0.6', label=before)
+        left.plot(ax['t_h'], np.asarray(ax['after']) * DEG, lw=0.4, color='tab:blue',
+                  label=after)
+        left.set_ylabel(f'{AXES[a]} {ax["name"]} (deg/s)', fontsize=8)
+        zt = np.asarray(ax['zoom_t_s'])
+        right.plot(zt, np.asarray(ax['zoom_before']) * DEG, lw=0.6, color='0.6')
+        right.plot(zt, np.asarray(ax['zoom_after']) * DEG, lw=0.9, color='tab:blue')
+        span = zt[-1] - zt[0] if zt.size > 1 else 0.0
+        right.set_xlabel(f'time (s), {span:.3g}-s zoom')
+        right.set_ylabel(f'{AXES[a]} (deg/s)', fontsize=8)
+    panels[0][0].legend(fontsize=7, loc='upper right')
+    panels[-1][0].set_xlabel('time (h)')
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+def plot_network(path, axes, *, title):
+    """
+    Plot rows of panels of slow series against time, one row per axis (paper Figs. 16, 17).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG file.
+    axes : list of list of dict
+        Per axis (three rows), the panels of the row: ``title``, ``t_h`` (time, h) and
+        ``lines``: a list of (label, values in rad/s on ``t_h``, colour).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    plt = _pyplot()
+    cols = max(len(row) for row in axes)
+    fig, panels = plt.subplots(3, cols, figsize=(6 * cols + 1, 8), squeeze=False,
+                               sharex=True)
+    for a, row in enumerate(axes):
+        for c, cell in enumerate(row):
+            panel = panels[a][c]
+            for label, values, colour in cell['lines']:
+                panel.plot(cell['t_h'], np.asarray(values) * DEG, lw=1.0, color=colour,
+                           label=label)
+            panel.set_ylabel(f'{AXES[a]} (deg/s)')
+            panel.set_title(cell['title'], fontsize=8)
+            panel.legend(fontsize=7)
+            panel.grid(True, alpha=0.3)
+    for panel in panels[-1]:
+        panel.set_xlabel('time (h)')
+    fig.suptitle(title, fontsize=10)
+    return _save(fig, plt, path)
+
+
+#: Paper 002's result figures: number -> (what it shows, why a method may have no analogue;
+#: None for the generic figures every method gets). Figures 1-9 show the device, the algorithms
+#: and the test rig.
+PAPER_FIGURES = {
+    10: ('temperature and gyro output against time', None),
+    11: ('MOPSO particles and the Pareto front of (K, alpha)',
+         'it chooses no VMD parameters by MOPSO'),
+    12: ('the VMD modes (IMFs) of the output', 'it does not decompose the output into modes'),
+    13: ('sample entropy and class of each IMF', 'it has no modes classified by sample entropy'),
+    14: ('the mixed modes before and after TFPF', 'it has no mixed part filtered by TFPF'),
+    15: ('the output before and after denoising alone',
+         'it has no separate denoising stage (its whole output is the Fig. 18 analogue)'),
+    16: ("the Elman network's prediction before and after BAS",
+         'it has no network whose weights beetle antennae search optimises'),
+    17: ('the drift part, its prediction and its compensation', None),
+    18: ('the final output after denoising and compensation', None),
+    19: ('Allan deviation before and after processing', None),
+}
+
+_FIG_REF = re.compile(r'\bFigs?\.\s*(\d+(?:\s*(?:,|-|and)\s*\d+)*)')
+
+
+def figure_numbers(caption):
+    """
+    Return the paper figure numbers a caption cites ('Fig. 12', 'Figs. 15, 18', 'Figs. 12-14').
+
+    Parameters
+    ----------
+    caption : str
+        Figure caption.
+
+    Returns
+    -------
+    list of int
+        Sorted, without repeats.
+
+    """
+    found = set()
+    for group in _FIG_REF.findall(caption):
+        for part in re.split(r'\s*(?:,|and)\s*', group):
+            ends = [int(v) for v in re.split(r'\s*-\s*', part) if v]
+            found.update(range(ends[0], ends[-1] + 1))
+    return sorted(found)
+
+
+def figures_markdown(figs, out, *, method):
+    """
+    Write a report's figure section: paper figures 10-19 and their analogues, then the images.
+
+    Parameters
+    ----------
+    figs : list of (str, path or None)
+        (caption, PNG path) per figure; a caption cites the paper figures it mirrors as 'Fig. N'
+        or 'Figs. N, M' (:func:`figure_numbers`). A None path is a figure the method has no
+        analogue for, the caption saying why.
+    out : pathlib.Path
+        Report directory (image links are relative to it).
+    method : str
+        Method name, for the lines about missing analogues.
+
+    Returns
+    -------
+    str
+        Markdown.
+
+    """
+    drawn = [(cap, Path(p)) for cap, p in figs if p is not None]
+    said = [cap for cap, p in figs if p is None]
+    rows = []
+    for num, (shows, missing) in PAPER_FIGURES.items():
+        files = [f'`{p.relative_to(out)}`' for cap, p in drawn if num in figure_numbers(cap)]
+        why = [cap for cap in said if num in figure_numbers(cap)]
+        if files:
+            here = ', '.join(files)
+        elif why:
+            here = f'none: {why[0]}'
+        elif missing is None:
+            here = 'not drawn in this report' + ('' if num != 19 else ' (`apply` draws the '
+                                                 'Allan deviations of a held-out run)')
+        else:
+            here = f'no analogue for `{method}`: {missing}'
+        rows.append(f'| {num} | {shows} | {here} |')
+    order = sorted(range(len(drawn)), key=lambda i: (min(figure_numbers(drawn[i][0]) or [99]),
+                                                     i))
+    images = ''.join(f'\n![{drawn[i][0]}]({drawn[i][1].relative_to(out)})\n\n*{drawn[i][0]}*\n'
+                     for i in order)
+    return ('\n## Figures\n\nPaper 002 shows its results in Figures 10-19 (1-9 are the device, '
+            f'the algorithms and the rig). Their analogues for `{method}` on this run:\n\n'
+            '| paper figure | shows | here |\n|---|---|---|\n' + '\n'.join(rows) + '\n'
+            + images)
+
+
 def method_figures(method, run, out_dir):
     """
-    Ask the method for its own figures (paper Figures 12-14, 16), if it offers any.
+    Ask the method for its own figures (paper Figures 11, 12, 14-17), if it offers any.
 
     Parameters
     ----------
@@ -370,14 +684,16 @@ def method_figures(method, run, out_dir):
 
     Returns
     -------
-    list of (str, str)
-        (file name relative to ``out_dir``, caption).
+    list of (str or None, str)
+        (file name relative to ``out_dir``, caption); a None name is a paper figure the method
+        has no analogue for, its caption saying why. Empty for a method without the hook.
 
     """
     hook = getattr(method, 'report_figures', None)
     if not callable(hook):
         return []
-    return [(str(name), str(caption)) for name, caption in hook(run, Path(out_dir))]
+    return [(None if name is None else str(name), str(caption))
+            for name, caption in hook(run, Path(out_dir))]
 
 
 def _cell(value, spec):

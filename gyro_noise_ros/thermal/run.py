@@ -66,6 +66,16 @@ class ThermalMethod(Protocol):
     the processed angular rate (n, 3) in rad/s for another. ``to_dict``/``from_dict`` round-trip
     every fitted parameter through JSON. Causal methods also implement
     ``drift_rad_s(temperature_c, dtemp_c_s) -> (n, 3)``: the gyro offset to subtract, used live.
+
+    Optional (not part of the checked protocol; a method without it contributes no figures of
+    its own): ``report_figures(run, out_dir) -> list of (file name or None, caption)``. Called
+    by the ``fit`` and ``apply`` reports right after ``apply(run)`` on the same run object, it
+    writes PNG files into the existing directory ``out_dir`` (names relative to it) for the
+    paper figures only the method can draw (the parallel model: Figures 11, 12 and 14-17).
+    Each caption names the paper figure it mirrors as 'Fig. N' or 'Figs. N, M', which is how
+    the report's table of Figures 10-19 finds it; an entry whose name is None draws nothing and
+    its caption says why that figure is absent. Figures must be cheap: plot-sized data, no
+    second fit.
     """
 
     name: str

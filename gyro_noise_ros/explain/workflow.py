@@ -44,6 +44,10 @@ seeded generator (``numpy.random.default_rng([seed, member, 0])``); an accepted 
 added into the members in place (its stochastic draws use ``default_rng([seed, member, 1 +
 catalogue index])``), the lattice and stamp effects are applied when a member is evaluated. Memory:
 ``ensemble`` float64 copies of the record (16 x 3.6e6 samples = 460 MB for 1 h at 1 kHz).
+
+Uncertainties. After the loop every accepted effect parameter gets a standard error and a 95 %
+interval from a parametric bootstrap of the final model (:mod:`.uncertainty`, ``bootstrap``
+records, default :data:`DEFAULT_BOOTSTRAP`; 0 switches it off).
 """
 
 from dataclasses import dataclass, field
@@ -54,6 +58,7 @@ import numpy as np
 from . import signatures as sig
 from .baseline import fit_baseline
 from .effects import CATALOGUE, Context, public_params, Quantization
+from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel
 from ..errors import ParameterError
 
 #: Candidates whose gap is within this of the best one count as tied; among them the smallest
@@ -65,6 +70,10 @@ PARAM_PENALTY = 0.25
 #: least this much to be accepted: smaller changes are within the run-to-run scatter of the band
 #: edges.
 INSIDE_GAP = 0.1
+#: Records simulated from the final model for the parameter uncertainties: the standard error is
+#: itself uncertain by about 1 / sqrt(2 (B - 1)) = 16 % at B = 20, which Student's t in the
+#: interval accounts for; each record costs about one ensemble member.
+DEFAULT_BOOTSTRAP = 20
 
 
 @dataclass(frozen=True)
@@ -127,6 +136,11 @@ class ExplainResult:
     seed : int
     seconds : dict
         Wall time of the phases (s).
+    uncertainty : dict
+        effect name -> parameter -> {value, stderr, ci95, unit, method, resolved, note}
+        (:mod:`.uncertainty`); empty when the bootstrap is off or nothing was named.
+    bootstrap : int
+        Replicates of the bootstrap (0: off).
 
     """
 
@@ -145,6 +159,8 @@ class ExplainResult:
     ensemble: int
     seed: int
     seconds: dict
+    uncertainty: dict = field(default_factory=dict)
+    bootstrap: int = 0
 
     @property
     def named(self):
@@ -170,12 +186,18 @@ class ExplainResult:
             },
             'ensemble': self.ensemble,
             'seed': self.seed,
+            'bootstrap': {
+                'replicates': self.bootstrap,
+                'seed': self.seed,
+                'method': 'parametric bootstrap of the final model (docs/discrepancy.md)',
+            },
             'baseline': self.baseline.to_dict(),
             'baseline_final': self.final_baseline.to_dict(),
             'steps': [
                 {
                     'effect': s.effect,
                     'params': public_params(s.params),
+                    'uncertainty': self.uncertainty.get(s.effect, {}),
                     'gap_before': s.gap_before,
                     'gap_after': s.gap_after,
                     'where': s.where,
@@ -292,7 +314,8 @@ def where_outside(layout, comparisons):
     return [sig.describe_where(layout, c) for c in worst if c.outside.any()]
 
 
-def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None):
+def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None,
+            bootstrap=DEFAULT_BOOTSTRAP, mapper=map):
     """
     Run the discrepancy workflow on one measured axis (module doc).
 
@@ -310,6 +333,12 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         Candidates (default: the whole catalogue).
     progress : callable, optional
         Called with one-line status texts.
+    bootstrap : int, keyword-only
+        Records simulated from the final model for the parameter uncertainties (0: none, else
+        >= 5).
+    mapper : callable, keyword-only
+        ``mapper(func, iterable)`` like the builtin ``map``, over which the bootstrap records are
+        computed (each call is the pure, picklable :func:`.uncertainty.replicate`).
 
     Returns
     -------
@@ -323,6 +352,9 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         raise ParameterError(f'max_steps must be >= 0, got {max_steps}')
     if seed < 0:
         raise ParameterError(f'seed must be >= 0, got {seed}')
+    bootstrap = int(bootstrap)
+    if bootstrap != 0 and bootstrap < 5:
+        raise ParameterError(f'bootstrap must be 0 (off) or >= 5 records, got {bootstrap}')
     say = progress or (lambda text: None)
     seconds = {}
     t0 = time.perf_counter()
@@ -342,6 +374,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     gap = sig.total_gap(comparisons)
     initial, gap_initial = comparisons, gap
     residual = meas.rate.copy()
+    det_terms = {}
     steps = []
     tried_last = {}
     say(f'gap {gap:.3f}')
@@ -374,6 +407,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
             break
         model.accept(effect, params, det, ctx)
         if det is not None:
+            det_terms[effect.name] = det
             residual = residual - det
             refit = fit_baseline(residual, meas.rate_hz)
             if _changed(refit, baseline):
@@ -403,10 +437,22 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
         member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap
     seconds['iterate'] = time.perf_counter() - t2
+    uncertainty = {}
+    if bootstrap and steps:
+        t3 = time.perf_counter()
+        by_name = {effect.name: effect for effect in effects}
+        final = FinalModel(n=meas.n, rate_hz=meas.rate_hz, temperature_c=meas.temperature_c,
+                           layout=layout, baseline=baseline,
+                           accepted=tuple((by_name[s.effect], s.params) for s in steps),
+                           det_terms=det_terms, seed=seed)
+        uncertainty = bootstrap_uncertainty(final, bootstrap, values=meas.rate, mapper=mapper)
+        seconds['bootstrap'] = time.perf_counter() - t3
+        say(f'uncertainties: parametric bootstrap of the final model, {bootstrap} records')
     seconds['total'] = time.perf_counter() - t0
     return ExplainResult(measurement=meas, layout=layout, baseline=first_baseline,
                          final_baseline=baseline, steps=steps, gap_initial=gap_initial,
                          gap_final=gap, unexplained=gap > INSIDE_GAP,
                          where_final=where_outside(layout, comparisons),
                          comparisons_initial=initial, comparisons_final=comparisons,
-                         tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds)
+                         tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds,
+                         uncertainty=uncertainty, bootstrap=bootstrap if steps else 0)

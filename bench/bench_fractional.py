@@ -16,11 +16,15 @@
 Benchmark: fractional-order identification, fast path vs the per-order numpy.convolve oracle.
 
 Usage:
-    python bench/bench_fractional.py [--ref-chunks 2] [--chunks 200] [--jobs 2] [--full]
+    python bench/bench_fractional.py [--ref-chunks 2] [--repeat 5] [--chunks 200] [--jobs 2]
+        [--full]
 
 Prints, side by side on the same 10,000-sample chunks (full grid 0:2:0.01, L = 1000, both methods):
 the oracle's time per chunk (test/_fractional_reference.py: numpy.convolve + numpy.correlate per
-order), the fast time per chunk, their ratio per core and the largest relative curve difference.
+order) and the CPU time per chunk of each algorithm of OrderIdentifier ('exact': the released
+blocked FFT algorithm; 'fast'; 'auto', the default: fast location + exact values), their speed-up
+per core against the oracle and against 'exact', the largest relative curve difference of 'fast'
+and 'exact' from the oracle, and whether 'auto' gave the results of 'exact' bit for bit.
 Then the throughput with 1 and --jobs processes over --chunks chunks, extrapolated to a 12 h 6.66
 kHz sequence (187,159,392 samples = 18,715 chunks); --full simulates and analyses the whole 12 h
 sequence for real.
@@ -66,6 +70,8 @@ def _cpu():
 def main():
     p = argparse.ArgumentParser(description='fractional identification benchmark')
     p.add_argument('--ref-chunks', type=int, default=2)
+    p.add_argument('--repeat', type=int, default=5,
+                   help='timed passes over the --ref-chunks chunks per algorithm')
     p.add_argument('--chunks', type=int, default=200)
     p.add_argument('--jobs', type=int, default=2)
     p.add_argument('--full', action='store_true',
@@ -75,22 +81,42 @@ def main():
     print(f'cpu: {_cpu()}; cores usable: {len(os.sched_getaffinity(0))}; jobs: {a.jobs}')
     gen = FractionalNoise(1.4, -0.5, 1e-3, rng=np.random.default_rng(0), sigma_nu=1e-3)
     chunks = [gen.generate(CHUNK) for _ in range(a.ref_chunks)]
-    ident = OrderIdentifier(CHUNK)
-    ident(chunks[0])  # warm-up (FFT plans)
-    t = time.perf_counter()
-    fast = [ident(c, curves=True) for c in chunks]
-    t_fast = (time.perf_counter() - t) / len(chunks)
-    t = time.perf_counter()
-    ref = [curves_ref(c, ident.alphas, 1000) for c in chunks]
-    t_ref = (time.perf_counter() - t) / len(chunks)
-    worst = 0.0
-    for fr, (vc, jc, fc) in zip(fast, ref):
-        worst = max(
-            worst, np.max(np.abs(fr.var_curve / vc - 1)), np.max(np.abs(fr.j_curve / jc - 1)),
-            np.max(np.abs(fr.f_curve - fc) / np.maximum(np.abs(fc), 1e-300)))
-    print(
-        f'per chunk, one core: oracle {t_ref * 1e3:.0f} ms, fast {t_fast * 1e3:.1f} ms, '
-        f'ratio {t_ref / t_fast:.1f}x (target >= 10x); max relative curve difference {worst:.1e}')
+    idents = {name: OrderIdentifier(CHUNK, algorithm=name) for name in ('exact', 'fast', 'auto')}
+    for ident in idents.values():
+        ident(chunks[0])  # warm-up (FFT plans, numba kernels)
+    cpu = {name: [] for name in idents}
+    results = {name: [] for name in idents}
+    for _ in range(a.repeat):
+        for name, ident in idents.items():  # interleaved, so load changes hit all alike
+            for c in chunks:
+                t = time.process_time()
+                results[name].append(ident(c, curves=name != 'auto'))
+                cpu[name].append(time.process_time() - t)
+    per = {name: float(np.median(v)) for name, v in cpu.items()}
+    t = time.process_time()
+    ref = [curves_ref(c, idents['exact'].alphas, 1000) for c in chunks]
+    t_ref = (time.process_time() - t) / len(chunks)
+
+    def worst(name):
+        out = 0.0
+        for fr, (vc, jc, fc) in zip(results[name], ref):
+            out = max(out, np.max(np.abs(fr.var_curve / vc - 1)),
+                      np.max(np.abs(fr.j_curve / jc - 1)),
+                      np.max(np.abs(fr.f_curve - fc) / np.maximum(np.abs(fc), 1e-300)))
+        return out
+
+    fields = ('alpha_var', 'f_var', 'var_min', 'alpha_corr', 'f_corr', 'j_min',
+              'tied_alphas_var', 'tied_alphas_corr')
+    same = all(getattr(x, f) == getattr(y, f) for x, y in zip(results['auto'], results['exact'])
+               for f in fields)
+    print(f'CPU time per chunk, one core (median of {a.repeat} x {len(chunks)}; load average '
+          f'{os.getloadavg()[0]:.1f}): oracle {t_ref * 1e3:.0f} ms')
+    for name in ('exact', 'fast', 'auto'):
+        extra = (f', max relative curve difference from the oracle {worst(name):.1e}'
+                 if name != 'auto' else
+                 f', results bit-identical to exact: {"yes" if same else "NO"}')
+        print(f'  {name:5s} {per[name] * 1e3:6.1f} ms: {t_ref / per[name]:6.1f}x the oracle, '
+              f'{per["exact"] / per[name]:.2f}x exact{extra}')
 
     work = [gen.generate(CHUNK) for _ in range(a.chunks)]
     t = time.perf_counter()

@@ -234,7 +234,8 @@ class DaskExecutor(cf.Executor):
 
     ``submit`` returns a plain :class:`concurrent.futures.Future`; its ``result()`` raises the
     task's own exception, or :class:`ClusterError` when Dask gives up on the task (the scheduler
-    lost, a task that killed ``distributed.scheduler.allowed-failures`` workers).
+    lost, a task that killed ``distributed.scheduler.allowed-failures`` workers); cancelling it
+    before it finishes cancels the Dask task.
     ``map`` yields results in input order and keeps at most ``2 x threads`` tasks in flight.
     ``shutdown`` closes the client. Build it with :func:`make_executor`.
 
@@ -288,19 +289,30 @@ class DaskExecutor(cf.Executor):
         payload = cloudpickle.dumps((fn, args, kwargs), protocol=_PROTOCOL)
         task = self.client.submit(run_pickled, payload, pure=True)
         out = cf.Future()
-        out.set_running_or_notify_cancel()
         self._pending.add(task)
         address = self.address
+
+        def cancelled(out):
+            if out.cancelled():  # the caller gave up on it: so does the cluster
+                task.cancel()
 
         def done(task):
             self._pending.discard(task)
             if out.done():
                 return
             try:
-                out.set_result(pickle.loads(task.result()))
+                value, error = pickle.loads(task.result()), None
             except BaseException as err:  # noqa: B902 - handed to the waiting caller
-                out.set_exception(_translate(err, address))
+                value, error = None, _translate(err, address)
+            try:
+                if error is None:
+                    out.set_result(value)
+                else:
+                    out.set_exception(error)
+            except cf.InvalidStateError:  # cancelled meanwhile
+                pass
 
+        out.add_done_callback(cancelled)
         task.add_done_callback(done)
         return out
 

@@ -33,7 +33,7 @@ import subprocess
 import sys
 import time
 
-from _e2e import chunks, collect_diagnostics, free_port, readline, values
+from _e2e import chunks, collect_diagnostics, free_port, values
 from gyro_noise_ros.cli import thermal as thermal_cli
 import pytest
 
@@ -49,9 +49,19 @@ SENSITIVITY_DPS_PER_C = (0.02, -0.02, 0.01)
 EXPECTED_DRIFT = [s * RAMP_C_PER_H for s in SENSITIVITY_DPS_PER_C]  # (deg/s)/h
 # Wall time of the recorded training run (its temperature span must hold the held-out run's).
 TRAIN_S = 14.0
+# The analyzers (and the recorder) subscribe reliable: a transport drop on a loaded host is
+# retransmitted, not counted. The compensator keeps its default best-effort input here: a
+# reliable stream is delivered in order, so after a lost message nothing newer arrives until the
+# middleware has repaired it (Fast DDS: up to a heartbeat period); a stalled imu/temperature means
+# the offset of newer gyro samples is the last one, held, which on a 2 degC/s ramp is wrong by
+# 0.04 deg/s per second of stall. Best effort loses the message instead, and the offset is
+# interpolated across the hole. (Three of twenty runs of this test at load 4-13 with a reliable
+# compensator failed, 26 and 34 (deg/s)/h left on x where the message was kept; a stall is the
+# suspected cause, not proven.)
 ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'diagnostics_period_s:=0.5', 'allan:=false',
-                   'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0']
+                   'drift_abs_warn_deg_s_per_h:=50.0', 'drift_abs_error_deg_s_per_h:=100000.0',
+                   'reliable:=true']
 
 
 class _Chain:
@@ -68,15 +78,28 @@ class _Chain:
         self.procs.append(proc)
         return proc
 
-    def emulator_and_driver(self, seed):
-        emu = self.start('emulator', [
-            sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp',
-            f'127.0.0.1:{free_port()}', '--seed', str(seed), '--accel-fs-g', '32', '--temp-c',
-            '25.0', '--temp-drift-c-per-h', str(RAMP_C_PER_H), '--temp-sensitivity-dps-per-c',
-            ','.join(map(str, SENSITIVITY_DPS_PER_C))], stdout=subprocess.PIPE, text=True)
-        url = readline(emu, 60.0)
-        self.start('driver', [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
-                              '-p', f'port:={url}', '-p', 'reconnect_period_s:=0.2'])
+    def driver(self, port, *params):
+        """Start the driver on a port nobody serves yet: it retries every 0.2 s."""
+        argv = [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p',
+                f'port:=socket://127.0.0.1:{port}', '-p', 'reconnect_period_s:=0.2']
+        for p in params:
+            argv += ['-p', p]
+        self.start('driver', argv)
+
+    def emulator(self, port, args):
+        """Start the board last, on the driver's port, so the driver connects at its power-on."""
+        return self.start('emulator', [sys.executable, '-m', 'gyro_noise_ros.cli.emulator',
+                                       '--tcp', f'127.0.0.1:{port}', *args])
+
+    def wait_for_log(self, name, text, timeout_s):
+        """Wait until the log of process ``name`` holds ``text``; fail with the logs if not."""
+        path = self.tmp_path / f'{self.tag}_{name}.log'
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if text in path.read_text():
+                return
+            time.sleep(0.2)
+        raise AssertionError(f'{name} never logged {text!r}\n{self.text()}')
 
     def stop(self):
         # Consumers first (the recorder closes its bag), then the driver, then the emulator.
@@ -96,6 +119,12 @@ class _Chain:
                          for p in sorted(self.tmp_path.glob(f'{self.tag}_*.log')))
 
 
+def _ramp_args(seed, temp_c):
+    return ['--seed', str(seed), '--accel-fs-g', '32', '--temp-c', str(temp_c),
+            '--temp-drift-c-per-h', str(RAMP_C_PER_H),
+            '--temp-sensitivity-dps-per-c', ','.join(map(str, SENSITIVITY_DPS_PER_C))]
+
+
 def _fit_poly3(bag, out):
     """Fit poly3 on a recorded bag with the command-line tool; return model.json's path."""
     rc = thermal_cli.main(['fit', str(bag), '--method', 'poly3', '--no-figures', '--quiet',
@@ -109,13 +138,23 @@ def _fit_poly3(bag, out):
 def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
     monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(100, 200)))
 
-    # 1. Training run, recorded.
+    # 1. Training run, recorded. The nodes first and the board last: the board's temperature
+    # ramps from its power-on, connected or not, so a driver that connects late (a loaded host:
+    # seconds) would start the recording warmer, and the held-out run could begin below the
+    # trained range, where poly3 holds its edge value and the compensated stream keeps the ramp
+    # (CI saw 34 (deg/s)/h left on x that way).
     bag = tmp_path / 'train_bag'
     train = _Chain(tmp_path, 'train')
+    port = free_port()
     try:
         train.start('recorder', [sys.executable, '-m', 'gyro_noise_ros.nodes.recorder',
-                                 '--ros-args', '-p', f'output:={bag}'])
-        train.emulator_and_driver(seed=7)
+                                 '--ros-args', '-p', f'output:={bag}', '-p', 'reliable:=true'])
+        train.driver(port)
+        up = collect_diagnostics(['lsm6dso32_driver: link'], lambda seen: all(seen.values()),
+                                 timeout_s=120)
+        assert all(up.values()), train.text()
+        train.wait_for_log('recorder', 'recording', 120)
+        train.emulator(port, _ramp_args(7, 25.0))
         time.sleep(TRAIN_S)
     finally:
         train.stop()
@@ -133,6 +172,8 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
         return all(seen[n] and chunks(seen[n][-1]) >= chunks_wanted for n in names[:-1]) \
             and bool(seen[names[-1]])
 
+    port = free_port()
+
     try:
         for name, remap in (('analyzer_raw', []),
                             ('analyzer_comp', ['-r', 'imu/data_raw:=imu/data_compensated'])):
@@ -144,7 +185,13 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
         test.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
                                    '--ros-args', '-p', f'thermal_model_file:={model_json}',
                                    '-p', 'drain_period_s:=0.02'])
-        test.emulator_and_driver(seed=8)
+        test.driver(port)
+        ready = [*names, 'lsm6dso32_driver: link']
+        up = collect_diagnostics(ready, lambda seen: all(seen.values()), timeout_s=120)
+        assert all(up.values()), ([n for n in ready if not up[n]], test.text())
+        # 27 degC, 2 degC above the training run's start: the held-out run (about 5-10 s, 10-20
+        # degC) stays inside the trained 25-53 degC even if a driver connects a second late.
+        test.emulator(port, _ramp_args(8, 27.0))
         seen = collect_diagnostics(names, done, timeout_s=150)
     finally:
         test.stop()
@@ -171,3 +218,155 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
         # Hence one bound for all axes, 10 % of the largest raw drift (14 (deg/s)/h).
         limit = 0.1 * max(abs(d) for d in EXPECTED_DRIFT)
         assert abs(fixed_drift) < limit, (axis, fixed_drift, limit, test.text())
+
+
+# --- The oven: the emulator's thermal model (paper 002 section 4.1, docs/thermal_data.md) ---
+#
+# ``--thermal oven`` streams the die temperature lagging the oven (tau 600 s) and the gyro bias
+# it causes (cubic + knee in T, a term in dT/dt, hysteresis). The whole 14 h profile heats then
+# steps down, so a least-squares slope over all of it is not significantly non-zero on every axis
+# (measured 1.4 sigma on x): the analyzer's offset drift is a straight line. The test streams the
+# profile's first 30 s at 267x compression, i.e. its first 8010 s: the room hold, the heat to
+# 60 degC at 2 degC/min and most of the hold there (a warm-up, which is what the seeker's loop
+# sees). The bias then moves by (+0.55, -0.14, +0.25) deg/s: offset drift about (67, -23, 27)
+# (deg/s)/h at 6-10 sigma of the analyzer's drift standard error (the robust one: the largest of
+# OLS, Newey-West and variogram), on 833 Hz with the paper-000 noise (0.058 deg/s per sample).
+OVEN_COMPRESS = 267.0
+OVEN_DURATION_S = 30.0
+# 833 Hz, not 6.66 kHz: the chain (5 processes) must keep up on a loaded 2-core machine; the
+# thermal model does not depend on the rate. One Temperature message every 16 samples is the
+# sensor's 52 Hz temperature output, as the driver's default decimation (128) gives at 6.66 kHz.
+OVEN_ODR_HZ = 833.0
+OVEN_TEMPERATURE_DECIMATION = 16
+OVEN_ANALYZER_PARAMS = ['chunk_size:=500', 'memory:=200', 'order_grid_step:=0.05',
+                        'diagnostics_period_s:=0.5', 'allan:=false', 'reliable:=true']
+
+
+def _oven_emulator_args(seed):
+    return ['--thermal', 'oven', '--thermal-compress', str(OVEN_COMPRESS), '--temp-c', '25.0',
+            '--odr-hz', str(OVEN_ODR_HZ), '--accel-fs-g', '32', '--seed', str(seed),
+            '--duration-s', str(OVEN_DURATION_S)]
+
+
+def test_write_bag_temperature_decimation(tmp_path, capsys):
+    # The oven test's training bag carries Temperature as the driver publishes it: one message
+    # for every N-th sample (N = 16 at 833 Hz is the sensor's 52 Hz), stamped as that sample.
+    from gyro_noise_ros.bag import ImuBagReader
+    from gyro_noise_ros.cli import emulator as emulator_cli
+    import numpy as np
+
+    common = _oven_emulator_args(1)[:-2] + ['--samples', '1000']
+    for decimation, expected in ((16, 63), (0, 2)):  # 0: once a second (833 samples)
+        bag = tmp_path / f'd{decimation}'
+        assert emulator_cli.main(common + ['--write-bag', str(bag),
+                                           '--bag-temperature-decimation',
+                                           str(decimation)]) == 0
+        with ImuBagReader(bag) as reader:
+            imu = np.concatenate([b.stamp_ns for b in reader.iter_batches()])
+            stamp, temp = reader.read_temperature()
+        every = decimation or 833
+        np.testing.assert_array_equal(stamp, imu[::every])
+        assert stamp.size == expected
+        assert np.all((temp > 20.0) & (temp < 30.0))  # room 25 degC + 2 self-heating, early
+    assert emulator_cli.main(common + ['--write-bag', str(tmp_path / 'bad'),
+                                       '--bag-temperature-decimation', '-1']) == 2
+    assert not (tmp_path / 'bad').exists()
+    assert 'bag-temperature-decimation' in capsys.readouterr().err
+
+
+def _statuses_after(seen, marks, name):
+    return seen[name][marks[name]:] if marks else []
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(400)
+def test_oven_drift_gone_on_the_compensated_stream(tmp_path, monkeypatch):
+    from gyro_noise_ros.cli import emulator as emulator_cli
+    from gyro_noise_ros.core.health import drift_t_threshold
+
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(100, 200)))
+
+    # 1. Training run (seed 7) at the same compression, written by the emulator as the driver
+    # would publish it (--write-bag: same quantisation, Temperature at the same 52 Hz), and the
+    # documented fit: the default method bp (causal), inputs T and its trailing-window rate.
+    # Training at the live compression matters: the rate input is in degC per real second, 267x
+    # the natural rate here; a model trained on an uncompressed run would see rates far outside
+    # its training inputs.
+    bag = tmp_path / 'oven_train'
+    assert emulator_cli.main(_oven_emulator_args(7) + [
+        '--write-bag', str(bag),
+        '--bag-temperature-decimation', str(OVEN_TEMPERATURE_DECIMATION)]) == 0
+    rc = thermal_cli.main(['fit', str(bag), '--method', 'bp', '--no-figures', '--quiet',
+                           '--out', str(tmp_path / 'model')])
+    assert rc == 0
+    model_json = tmp_path / 'model' / 'model.json'
+    assert json.loads(model_json.read_text())['causal'] is True
+
+    # 2. Held-out run (seed 8): nodes first, the board last, so the analyzers see the profile
+    # from its start (the board's clock runs from power-on, connected or not).
+    chain = _Chain(tmp_path, 'oven')
+    names = [f'{a}: axis {x}' for a in ('analyzer_raw', 'analyzer_comp') for x in 'xyz']
+    names += ['imu_compensator: compensation', 'lsm6dso32_driver: link']
+    port = free_port()
+    marks = {}  # per status: how many had arrived when the board was seen to have stopped
+    emu = None
+
+    def done(seen):
+        # Finished when the board has stopped and every analyzer's chunk count has stayed put
+        # over its last 4 statuses (2 s) since then: everything sent has been analysed.
+        if emu is None or emu.poll() is None:
+            return False
+        if not marks:
+            marks.update({n: len(seen[n]) for n in names})
+            return False
+        for name in names[:6]:
+            after = _statuses_after(seen, marks, name)
+            if len(after) < 4 or len({chunks(s) for s in after[-4:]}) != 1:
+                return False
+        return bool(_statuses_after(seen, marks, names[6]))
+
+    try:
+        for name, remap in (('analyzer_raw', []),
+                            ('analyzer_comp', ['-r', 'imu/data_raw:=imu/data_compensated'])):
+            argv = [sys.executable, '-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args',
+                    '-r', f'__node:={name}', *remap]
+            for p in OVEN_ANALYZER_PARAMS:
+                argv += ['-p', p]
+            chain.start(name, argv)
+        # The compensator keeps its default best-effort input (see above ANALYZER_PARAMS).
+        chain.start('compensator', [sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',
+                                    '--ros-args', '-p', f'thermal_model_file:={model_json}'])
+        chain.driver(port, f'odr_hz:={OVEN_ODR_HZ}',
+                     f'temperature_decimation:={OVEN_TEMPERATURE_DECIMATION}')
+        up = collect_diagnostics(names, lambda seen: all(seen[n] for n in names), timeout_s=120)
+        assert all(up[n] for n in names), ([n for n in names if not up[n]], chain.text())
+        emu = chain.emulator(port, _oven_emulator_args(8))
+        seen = collect_diagnostics(names, done, timeout_s=240)
+    finally:
+        chain.stop()
+    assert done(seen), ({n: seen[n] and chunks(seen[n][-1]) for n in names[:6]}, chain.text())
+
+    comp = values(seen['imu_compensator: compensation'][-1])
+    assert comp['Thermal model'] == 'bp', comp
+    assert comp['Temperature range status'] != 'outside', comp
+    assert int(comp['Messages published']) > 0.7 * OVEN_DURATION_S * OVEN_ODR_HZ, comp
+    for axis in 'xyz':
+        raw = values(seen[f'analyzer_raw: axis {axis}'][-1])
+        fixed = values(seen[f'analyzer_comp: axis {axis}'][-1])
+        n_raw, n_fixed = int(raw['Chunks analysed']), int(fixed['Chunks analysed'])
+        # ~48 chunks of 0.6 s in 30 s; a slow start or skipped analyses cost a few.
+        assert min(n_raw, n_fixed) >= 30, (axis, n_raw, n_fixed, chain.text())
+        raw_drift = float(raw['Offset drift ((deg/s)/h)'])
+        fixed_drift = float(fixed['Offset drift ((deg/s)/h)'])
+        raw_sigma = float(raw['Offset drift significance (sigma)'])
+        fixed_sigma = float(fixed['Offset drift significance (sigma)'])
+        # The analyzer's own rule: |slope| / stderr above the two-sided 3-sigma Student-t
+        # quantile (3.2 at 48 chunks) is a drift. Raw: measured 6.3-9.8 sigma on five seeds
+        # offline, a thermal (deterministic) drift, so the margin is the model's, not luck's.
+        assert raw_sigma > drift_t_threshold(3.0, n_raw), (axis, raw, chain.text())
+        # Compensated: what is left is the fit's error and the paper-000 noise; measured offline
+        # on five held-out seeds (the live evaluator fed as the node feeds it) 0.04-1.4 sigma,
+        # |drift| below 0.6 (deg/s)/h. Not significant by the same rule, and below 5 % of the
+        # raw drift (23-67 (deg/s)/h), so 'gone' is both statistical and in magnitude.
+        assert fixed_sigma < drift_t_threshold(3.0, n_fixed), (axis, fixed, raw, chain.text())
+        assert abs(fixed_drift) < 0.05 * abs(raw_drift), (axis, fixed_drift, raw_drift)

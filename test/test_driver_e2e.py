@@ -86,7 +86,11 @@ class Processes:
     def driver(self, url, *params):
         argv = [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
                 '-p', f'port:={url}', '-p', 'reconnect_period_s:=0.2',
-                '-p', 'diagnostics_period_s:=0.5']
+                '-p', 'diagnostics_period_s:=0.5',
+                # 9 s of reliable history at 6.66 kHz: a listener starved for seconds on a loaded
+                # host gets the messages resent instead of overwritten (a CI-like run at load 9
+                # lost 7379 with the default 5000).
+                '-p', 'qos_depth:=60000']
         for p in params:
             argv += ['-p', p]
         proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL,

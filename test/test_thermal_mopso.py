@@ -17,8 +17,8 @@
 import pickle
 
 from gyro_noise_ros.thermal.entropy import fuzzy_entropy, permutation_entropy
-from gyro_noise_ros.thermal.mopso import (_truncate, dominates, mopso, pick_compromise,
-                                          VmdFitness)
+from gyro_noise_ros.thermal.mopso import (_truncate, dominates, evaluated_points, mopso,
+                                          pareto_ranks, pick_compromise, refine, VmdFitness)
 from gyro_noise_ros.thermal.vmd import vmd
 import numpy as np
 import pytest
@@ -105,3 +105,62 @@ def test_vmd_fitness_is_mean_over_modes():
 def test_bad_bounds():
     with pytest.raises(ValueError):
         mopso(_schaffer, rng=np.random.default_rng(0), bounds=((4, 2), (1, 2)))
+
+
+def _slow_ranks(fit):
+    """Twin of pareto_ranks: peel the non-dominated points, one front at a time."""
+    ranks = [None] * len(fit)
+    left = set(range(len(fit)))
+    r = 0
+    while left:
+        front = {i for i in left if not any(dominates(fit[j], fit[i]) for j in left)}
+        for i in front:
+            ranks[i] = r
+        left -= front
+        r += 1
+    return ranks
+
+
+def test_pareto_ranks_match_peeling():
+    rng = np.random.default_rng(4)
+    # Rounded to a coarse grid so that ties and duplicates occur.
+    fit = np.round(rng.random((60, 2)) * 5) / 5
+    assert pareto_ranks(fit).tolist() == _slow_ranks(fit)
+    assert pareto_ranks(np.array([[1.0, 2.0], [0.0, 3.0], [2.0, 2.0]])).tolist() == [0, 0, 1]
+
+
+def _mirrored(key):
+    """Return a misleading search fitness: _schaffer with K mirrored (front K in [10, 12])."""
+    k, alpha = key
+    return _schaffer((19 - k, alpha))
+
+
+def test_refine_recovers_the_reference_front():
+    res = mopso(_mirrored, rng=np.random.default_rng(1), bounds=((4, 12), (1000, 10000)),
+                n_particles=20, iterations=5)
+    ref = refine(res, _schaffer, points=10, polish=12, bounds=((4, 12), (1000, 10000)))
+    assert ref.search_pick == (res.k, res.alpha)
+    assert ref.reference_evaluations <= 22
+    # Screening puts each evaluated K's best point first, so the reference's K = 6..9 are seen;
+    # the polish halves its alpha step from 2250 down to 140 or less within 12 evaluations
+    # and moves towards alpha = 4000 whenever a probe dominates the pick.
+    assert 6 <= ref.k <= 9
+    assert abs(ref.alpha - 4000) < 300
+    # The archive is the non-dominated set of the reference evaluations; the pick is in it.
+    f = ref.archive_fitness
+    assert not any(dominates(f[i], f[j]) for i in range(len(f)) for j in range(len(f)))
+    assert tuple(f[pick_compromise(ref.archive_params, f)]) == ref.fitness
+    assert ref.fitness == _schaffer((ref.k, ref.alpha))
+    # Deterministic, and the map_fn receives only distinct keys.
+    calls = []
+
+    def recording_map(fn, keys):
+        calls.extend(keys)
+        return map(fn, keys)
+
+    again = refine(res, _schaffer, points=10, polish=12, bounds=((4, 12), (1000, 10000)),
+                   map_fn=recording_map)
+    assert (again.k, again.alpha) == (ref.k, ref.alpha)
+    assert len(calls) == len(set(calls)) == ref.reference_evaluations
+    keys, _ = evaluated_points(res)
+    assert len(keys) == res.evaluations

@@ -81,6 +81,10 @@ def add_scenario_arguments(parser):
                    help='write a rosbag2 directly (no pacing, no link; needs --duration-s or '
                         '--samples, default the scenario length)')
     g.add_argument('--bag-storage', choices=('sqlite3', 'mcap'), default='sqlite3')
+    g.add_argument('--bag-temperature-decimation', type=int, default=0, metavar='N',
+                   help='--write-bag: a Temperature message for every N-th sample, as the '
+                        "driver's temperature_decimation does (128: 52 Hz at 6.66 kHz); 0: once "
+                        'a second')
     g.add_argument('--orientation', default='+z', help='axis up at rest (+x .. -z)')
     g.add_argument('--latitude', type=float, default=45.0,
                    help='latitude (deg): Earth rate and WGS-84 gravity of the scenario')
@@ -251,7 +255,9 @@ def write_bag(args, board, truth_fh=None, counters=None):
     reference = isinstance(motion, Excitation)
     gyro_lsb = lsm.gyro_sensitivity_rad_s_per_lsb(board.gyro_fs_dps)
     accel_lsb = lsm.accel_sensitivity_m_s2_per_lsb(board.accel_fs_g)
-    every = max(1, int(round(board.odr_hz)))   # temperature once a second
+    every = args.bag_temperature_decimation or max(1, int(round(board.odr_hz)))
+    if every < 0:
+        raise ParameterError(f'--bag-temperature-decimation must be >= 0, got {every}')
     done = 0
     with ImuBagWriter(args.write_bag, storage=args.bag_storage) as w:
         while done < total:

@@ -26,7 +26,8 @@ Usage::
 Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags through :mod:`gyro_noise_ros.bag`, streams them in
 batches (constant memory apart from one small row per chunk), runs
 :class:`gyro_noise_ros.core.engine.NoiseEngine` with the chunk identification spread over
-``--jobs`` worker processes (at most ``2 x jobs`` chunks in flight), and writes chunks.csv,
+``--jobs`` worker processes (at most ``4 x jobs`` plus one decoded batch of chunks in flight),
+and writes chunks.csv,
 summary.json, summary.md, allan.csv, imu.yaml, curves.npz and PNG figures into DIR. Formats and
 exit codes: ``docs/offline_tool.md``.
 """
@@ -147,6 +148,10 @@ class _Progress:
     def __init__(self, enabled):
         self.enabled = bool(enabled)
         self.tty = self.enabled and sys.stderr.isatty()
+        self._last = 0.0
+        self._decile = 0
+
+    def restart(self):
         self._last = 0.0
         self._decile = 0
 
@@ -273,10 +278,14 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
 
     started = time.perf_counter()
     timing = {'decode_s': 0.0, 'wait_s': 0.0}
+    if jobs > 1 and scheduler is None:
+        # Worker processes are forked from this one: build the identifier and load its
+        # compiled kernels once here, so each worker inherits them instead of redoing it.
+        _warm_identifier(config)
     pool = make_executor(jobs, scheduler, warn=warn)
     if scheduler is not None:
         jobs = max(jobs, pool.nthreads)
-    csv_writer = report.ChunkCsvWriter(out / 'chunks.csv')
+    csv_writer = _ChunkRows(out / 'chunks.csv')
     bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
     try:
         for path, label, imu_topic in zip(paths, names, topics):
@@ -347,6 +356,14 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     return doc
 
 
+def _warm_identifier(config):
+    """Identify one synthetic chunk with the configuration's cached identifier (kernels load)."""
+    from ..core.engine import identifier_for
+
+    ident = identifier_for(*config.identifier_key())
+    ident(np.random.default_rng(0).standard_normal(config.chunk_size))
+
+
 def _open(path, topic, temperature_topic, rate_hz):
     if is_table(path):
         return TableImuReader(path, topic=topic, temperature_topic=temperature_topic,
@@ -413,17 +430,93 @@ def warn(text):
     print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
 
 
+class _ChunkRows(report.ChunkCsvWriter):
+    """chunks.csv that can take back the rows of a bag (a speculative pass that was not kept)."""
+
+    def mark(self):
+        self._fh.flush()
+        return self._fh.tell(), self.rows
+
+    def rollback(self, mark):
+        self._fh.flush()
+        self._fh.seek(mark[0])
+        self._fh.truncate()
+        self.rows = mark[1]
+
+
+class _MotionWatch:
+    """
+    The static-segment statistics of the prepass, gathered during the analysis pass instead.
+
+    The same batches and selection as :func:`_static_prepass` go into the same
+    :class:`..core.segments.WindowStats`, so :meth:`segment` is the prepass' segment. Each time
+    the window count has grown by a quarter the provisional segment is looked at; when it already
+    shows motion the pass is abandoned (the record will need the prepass anyway). Motion that
+    only the end of a record reveals costs the analysis twice.
+    """
+
+    def __init__(self):
+        from ..core.segments import WindowStats
+
+        self.stats = WindowStats()
+        self._next_check = 64
+
+    def update(self, stamps, gyro):
+        self.stats.update(stamps, gyro)
+
+    def moving(self):
+        windows = len(self.stats._rows)
+        if windows < self._next_check:
+            return False
+        self._next_check = windows + max(1, windows // 4)
+        seg = self.stats.segment()
+        return seg is not None and not seg.static_throughout
+
+    def segment(self):
+        return self.stats.segment()
+
+
 def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
                  select, csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
                  progress, timing):
+    args = (path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
+            select, csv_writer, curve_store, curves, batch_size, progress, timing)
+    start_s, end_s, static = select
+    if static != 'auto':
+        state = _analysis_pass(*args, segment=None, watch=None, say=warn)
+        return _bag_doc(state, path, label, imu_topic, config, ref, select, None, per_chunk,
+                        allan_store)
+    # One read of the bag when it is static throughout (the usual noise recording): the pass
+    # gathers the prepass' statistics while it analyses everything; only when they show motion
+    # are its rows taken back and the bag read twice, as before (prepass, then the segment).
+    mark = csv_writer.mark()
+    watch = _MotionWatch()
+    state = _analysis_pass(*args, segment=None, watch=watch, say=warn)
+    if state is not None:
+        segment = watch.segment()
+        if segment is None or segment.static_throughout:
+            return _bag_doc(state, path, label, imu_topic, config, ref, select, segment,
+                            per_chunk, allan_store)
+    csv_writer.rollback(mark)
+    for axis in config.axes:
+        curve_store.pop((label, axis), None)
+    progress.restart()
+    segment = _static_prepass(path, imu_topic, temperature_topic, config.rate_hz, batch_size,
+                              start_s, end_s)
+    # the first pass already printed the warnings of the stream's start
+    state = _analysis_pass(*args, segment=segment, watch=None, say=lambda text: None)
+    return _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_chunk,
+                    allan_store)
+
+
+def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
+                   select, csv_writer, curve_store, curves, batch_size, progress, timing, *,
+                   segment, watch, say):
+    """Read the bag once and analyse it; None when ``watch`` saw motion (pass abandoned)."""
     engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
     warnings = []
     time_source = 'header'
     start_s, end_s, static = select
-    segment = None
-    if static == 'auto':
-        segment = _static_prepass(path, imu_topic, temperature_topic, config.rate_hz, batch_size,
-                                  start_s, end_s)
     left = {'before_start': 0, 'after_end': 0, 'motion': 0}
     first_ns = None
     with _open(path, imu_topic, temperature_topic, config.rate_hz) as reader:
@@ -437,7 +530,9 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         stride = max(1, math.ceil(est_chunks / curves)) if curves else 0
         kept = collections.Counter()
         inflight = collections.deque()
-        max_inflight = 2 * jobs
+        # Room for one decoded batch of chunks beyond the workers' own: the workers keep busy
+        # while this process decodes the next batch.
+        max_inflight = 4 * jobs + len(config.axes) * (batch_size // config.chunk_size + 1)
         rows = {a: [] for a in config.axes}
         done = 0
         t0 = time.monotonic()
@@ -488,13 +583,19 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
                 warnings.append(
                     "header stamps are not increasing (shuffled?): the recorder's log time is "
                     'used as the time base')
-                warn(f'{label}: {warnings[-1]}')
+                say(f'{label}: {warnings[-1]}')
             if time_source == 'log':
                 stamps = batch.log_ns
             if first_ns is None:
                 first_ns = int(stamps[0])
             keep = _select(stamps, first_ns, start_s, end_s, segment, left)
             done += len(batch)
+            if watch is not None:
+                watch.update(stamps[keep], batch.gyro[keep])
+                if watch.moving():
+                    for fut in inflight:
+                        fut.cancel()
+                    return None
             if not keep.any():
                 continue
             gyro_b, accel_b = batch.gyro, batch.accel
@@ -517,7 +618,21 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
         progress.update(label, done, reader.message_count, engine.counts().chunks, t0, final=True)
         storage, undecodable = reader.storage, reader.undecodable_count
         temperature_topic_used = reader.temperature_topic
+    return {'engine': engine, 'warnings': warnings, 'time_source': time_source, 'left': left,
+            'first_ns': first_ns, 'accel': accel, 'rows': rows, 'done': done,
+            'frame_id': frame_id, 'storage': storage, 'undecodable': undecodable,
+            'temperature_topic': temperature_topic_used}
 
+
+def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_chunk,
+             allan_store):
+    """Summarise one analysed bag: its entry in summary.json (and the per-axis stores)."""
+    engine, warnings, left = state['engine'], state['warnings'], state['left']
+    first_ns, accel, rows = state['first_ns'], state['accel'], state['rows']
+    done, frame_id, time_source = state['done'], state['frame_id'], state['time_source']
+    storage, undecodable = state['storage'], state['undecodable']
+    temperature_topic_used = state['temperature_topic']
+    start_s, end_s, static = select
     counts = engine.counts()
     accel.update(None, counts.rate_hz)
     accel_terms = accel.terms(counts.rate_hz)

@@ -20,12 +20,14 @@ Finds where the simulation and the measurement disagree (see docs/discrepancy.md
 Usage::
 
     gyro_noise_explain INPUT [--topic T] [--temperature-topic T] [--axis x|y|z] [--seed S]
-                       --out DIR [--ensemble N] [--max-steps K] [--rate-hz HZ]
+                       --out DIR [--ensemble N] [--max-steps K] [--bootstrap B] [--rate-hz HZ]
                        [--require-temperature] [--scheduler ADDRESS] [--quiet]
 
 INPUT is a rosbag2 directory / .db3 / .mcap, a ROS 1 .bag, or a .csv with the columns documented in
 :mod:`gyro_noise_ros.explain.inputs`. Writes DIR/explain.json, DIR/report.md and PNG figures;
-prints a short verdict. Exit codes: see :mod:`gyro_noise_ros.cli._common`.
+prints a short verdict and the named effects' parameters as value ± standard error (parametric
+bootstrap of the final model, ``--bootstrap`` records). Exit codes: see
+:mod:`gyro_noise_ros.cli._common`.
 """
 
 import argparse
@@ -52,6 +54,9 @@ def build_parser():
     p.add_argument('--out', required=True, help='output directory')
     p.add_argument('--ensemble', type=int, default=16, help='ensemble members (default 16, >= 4)')
     p.add_argument('--max-steps', type=int, default=6, help='most effects to add (default 6)')
+    p.add_argument('--bootstrap', type=int, default=20, metavar='B',
+                   help='records simulated from the final model for the standard errors of the '
+                   'effect parameters (default 20; 0: off, else >= 5)')
     p.add_argument('--rate-hz', type=float,
                    help='nominal sample rate (Hz); required for a CSV without '
                    'time_s, else overrides the mean rate of the stamps')
@@ -82,6 +87,8 @@ def _check_options(args):
         raise ParameterError(f'--max-steps must be >= 0, got {args.max_steps}')
     if args.seed < 0:
         raise ParameterError(f'--seed must be >= 0, got {args.seed}')
+    if args.bootstrap != 0 and args.bootstrap < 5:
+        raise ParameterError(f'--bootstrap must be 0 (off) or >= 5 records, got {args.bootstrap}')
     if args.rate_hz is not None and not (args.rate_hz > 0 and args.rate_hz < float('inf')):
         raise ParameterError(f'--rate-hz must be a positive number, got {args.rate_hz}')
     for name, value in (('--start', args.start), ('--end', args.end)):
@@ -123,7 +130,7 @@ def _body(argv):
 
 def _run(args, map_fn):
     from ..explain.inputs import available_axes, load_input, select
-    from ..explain.report import verdict, write_outputs
+    from ..explain.report import parameter_lines, verdict, write_outputs
     from ..explain.workflow import explain
 
     axes = available_axes(args.input) if args.axis == 'all' else (args.axis,)
@@ -142,16 +149,18 @@ def _run(args, map_fn):
         if progress is not None and len(axes) > 1:
             progress(f'axis {axis} ({k + 1} of {len(axes)})')
         result = explain(meas, seed=args.seed, ensemble=args.ensemble, max_steps=args.max_steps,
-                         progress=progress, map_fn=map_fn)
+                         bootstrap=args.bootstrap, progress=progress, mapper=map_fn)
         out = write_outputs(result, out_root / f'axis_{axis}' if len(axes) > 1 else out_root)
         results[axis] = (result, out)
         print(f'{PROG}: axis {axis}: {verdict(result)} ({out / "explain.json"})')
+        for line in parameter_lines(result):
+            print(f'{PROG}: axis {axis}:   {line}')
     if len(axes) > 1:
-        _write_index(out_root, results, verdict)
+        _write_index(out_root, results, verdict, parameter_lines)
     return 0
 
 
-def _write_index(out_root, results, verdict):
+def _write_index(out_root, results, verdict, parameter_lines):
     """
     One report for the run.
 
@@ -160,7 +169,9 @@ def _write_index(out_root, results, verdict):
     import json
 
     lines = ['# gyro_noise_explain: all axes', '']
-    lines += [f'* axis {axis}: {verdict(result)}' for axis, (result, _) in results.items()]
+    for axis, (result, _) in results.items():
+        lines.append(f'* axis {axis}: {verdict(result)}')
+        lines += [f'  * {line}' for line in parameter_lines(result)]
     index = {'axes': {}}
     for axis, (result, out) in results.items():
         sub = out.name

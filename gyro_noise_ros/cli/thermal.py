@@ -33,6 +33,7 @@ one table. Formats, metric definitions and exit codes: ``docs/thermal.md``.
 
 import argparse
 import copy
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -153,7 +154,12 @@ def build_parser():
 
     c = sub.add_parser('compare', help='train every method on one run, score on another')
     c.add_argument('train', metavar='TRAIN_BAG', help='training recording')
-    c.add_argument('test', metavar='TEST_BAG', help='held-out test recording')
+    c.add_argument('test', metavar='TEST_BAG', nargs='?',
+                   help='held-out test recording (omit with --split-at)')
+    c.add_argument('--split-at', type=float, metavar='FRACTION',
+                   help='one recording only: train on its first FRACTION of time (0..1), test '
+                        'on the rest (adjacent halves of one run are not independent runs; '
+                        'docs/thermal.md, "Real data")')
     c.add_argument('--out', required=True, metavar='DIR', help='output directory')
     c.add_argument('--methods', default=None,
                    help='comma-separated methods (default: all known: '
@@ -510,23 +516,80 @@ def _same_run(a, b):
     return bool(np.array_equal(a.gyro_rad_s, b.gyro_rad_s))
 
 
-def _cmd_compare(args, argv):
+def split_run(run, fraction):
+    """
+    Split one run in time: the first ``fraction`` of its duration, and the rest.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        The recording.
+    fraction : float
+        Share of the duration (0 < fraction < 1) that goes to the first part.
+
+    Returns
+    -------
+    first, rest : ThermalRun
+        ``rest`` has its times counted from its own first sample, as a separate recording would;
+        both keep the whole run's ``rate_hz``.
+    cut_s : float
+        Time of the cut (s from the run's first sample).
+
+    """
+    if not (math.isfinite(fraction) and 0.0 < fraction < 1.0):
+        raise ParameterError(f'--split-at must be between 0 and 1, got {fraction!r}')
+    t = run.t_s
+    cut_s = float(t[0] + fraction * (t[-1] - t[0]))
+    k = int(np.searchsorted(t, cut_s, side='left'))
+    if k < 3 or t.size - k < 3:
+        raise InputDataError(f'run {run.name!r}: --split-at {fraction:g} leaves fewer than 3 '
+                             'samples on one side')
+    first = dataclasses.replace(run, t_s=t[:k], gyro_rad_s=run.gyro_rad_s[:k],
+                                temperature_c=run.temperature_c[:k],
+                                name=f'{run.name} [0, {cut_s:.1f}) s')
+    rest = dataclasses.replace(run, t_s=t[k:] - t[k], gyro_rad_s=run.gyro_rad_s[k:],
+                               temperature_c=run.temperature_c[k:],
+                               name=f'{run.name} [{cut_s:.1f}, {t[-1]:.1f}] s')
+    return first, rest, cut_s
+
+
+def _compare_runs(args):
+    """Read TRAIN_BAG and TEST_BAG, or split TRAIN_BAG in time (--split-at)."""
+    def read(path):
+        return read_thermal_run(path, topic=args.topic, temperature_topic=args.temperature_topic,
+                                max_gap_s=args.max_gap_s)
+
+    if args.split_at is not None:
+        if args.test is not None:
+            raise ParameterError('--split-at takes one recording (TRAIN_BAG only), got two')
+        if not (math.isfinite(args.split_at) and 0.0 < args.split_at < 1.0):
+            raise ParameterError(f'--split-at must be between 0 and 1, got {args.split_at!r}')
+        whole, bag = read(args.train)
+        train, test, cut_s = split_run(whole, args.split_at)
+        split = {'fraction': args.split_at, 'cut_s': cut_s, 'duration_s': float(whole.t_s[-1]),
+                 'note': 'train and test are adjacent parts of one run (one power-on, one '
+                         'temperature history): not independent runs'}
+        end_s = split['duration_s']
+        return (train, test, f'{bag.path} [0, {cut_s:.1f}) s',
+                f'{bag.path} [{cut_s:.1f}, {end_s:.1f}] s', split)
+    if args.test is None:
+        raise ParameterError('compare needs TRAIN_BAG and TEST_BAG, or one bag and --split-at')
     if Path(args.train).resolve() == Path(args.test).resolve():
         raise ParameterError('TRAIN_BAG and TEST_BAG are the same recording; a method must be '
                              'scored on a run it was not trained on')
+    (train, train_bag), (test, test_bag) = read(args.train), read(args.test)
+    if _same_run(train, test):
+        raise ParameterError('TRAIN_BAG and TEST_BAG hold the same samples; a method must be '
+                             'scored on a run it was not trained on')
+    return train, test, str(train_bag.path), str(test_bag.path), None
+
+
+def _cmd_compare(args, argv):
     names = (registry.method_names() if args.methods is None
              else [m.strip() for m in args.methods.split(',') if m.strip()])
     if not names:
         raise ParameterError('--methods names no method')
-    train, train_bag = read_thermal_run(args.train, topic=args.topic,
-                                        temperature_topic=args.temperature_topic,
-                                        max_gap_s=args.max_gap_s)
-    test, test_bag = read_thermal_run(args.test, topic=args.topic,
-                                      temperature_topic=args.temperature_topic,
-                                      max_gap_s=args.max_gap_s)
-    if _same_run(train, test):
-        raise ParameterError('TRAIN_BAG and TEST_BAG hold the same samples; a method must be '
-                             'scored on a run it was not trained on')
+    train, test, train_label, test_label, split = _compare_runs(args)
     registry.check_trainable(train, min_range_c=args.min_range_c)
     out = _out_dir(args.out)
     results, errors, curves = {}, {}, {}
@@ -534,8 +597,7 @@ def _cmd_compare(args, argv):
     for name in names:
         try:
             started = time.monotonic()
-            model = _fit(name, train, seed=args.seed, sources=[str(train_bag.path)],
-                         executor=pool)
+            model = _fit(name, train, seed=args.seed, sources=[train_label], executor=pool)
             fit_s = time.monotonic() - started
             registry.check_temperature_range(model, test.temperature_c,
                                              margin_c=args.range_margin_c)
@@ -564,7 +626,8 @@ def _cmd_compare(args, argv):
         raise InputDataError('no method could be trained and scored: '
                              + '; '.join(f'{k}: {v}' for k, v in errors.items()))
     summary = {'tool': f'{PROG} compare', 'package_version': __version__,
-               'command': [PROG, *argv], 'train': str(train_bag.path), 'test': str(test_bag.path),
+               'command': [PROG, *argv], 'train': train_label, 'test': test_label,
+               'split': split,
                'seed': args.seed, 'train_rate_hz': train.rate_hz, 'test_rate_hz': test.rate_hz,
                'train_temperature_c': [float(train.temperature_c.min()),
                                        float(train.temperature_c.max())],
@@ -652,6 +715,8 @@ def _compare_md(summary, rows, figs, out):
             f'({summary["train_temperature_c"][0]:.2f}..{summary["train_temperature_c"][1]:.2f}'
             f' degC), scored on {summary["test"]} ({summary["test_temperature_c"][0]:.2f}..'
             f'{summary["test_temperature_c"][1]:.2f} degC), seed {summary["seed"]}.\n\n'
+            + (f'**One recording split in time at {summary["split"]["fraction"]:g} of its '
+               f'length: {summary["split"]["note"]}.**\n\n' if summary.get('split') else '')
             + report.table_markdown(_COMPARE_HEADER, rows, _COMPARE_SPECS)
             + f'\nBest held-out ({best["rule"]}): **{best["method"]}**.\n\n'
             + (f'Not scored:\n\n{errs}\n' if errs else '')

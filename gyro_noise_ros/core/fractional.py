@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
+from . import _kernels_fractional as _kf
 from ..errors import InputDataError, ParameterError
 
 #: Default memory length L of the truncated GL difference (paper 000: "L = 1000 is used for all
@@ -226,20 +227,54 @@ class OrderIdentification:
     f_curve: np.ndarray = None
 
 
+#: Algorithms of :class:`OrderIdentifier`: see its doc.
+ALGORITHMS = ('auto', 'exact', 'fast')
+
+#: Relative difference allowed between the fast and the exact criterion values when the fast
+#: curves only locate the minimum (algorithm ``'auto'``). Every order whose fast value lies within
+#: this of the tie band of the fast minimum is recomputed exactly; the differences measured are
+#: 1e-14 to 1e-11 (``test/test_fractional_fast.py``), and each chunk checks them again on the
+#: orders it recomputes (10x tighter) before trusting the location.
+LOCATE_RTOL = 1e-6
+
+
 class OrderIdentifier:
     """
     Identify the fractional order of chunks of a fixed length, fast (paper 000 eqs. 3-14).
 
-    The GL filters of every grid order are transformed once; each chunk then costs one forward FFT,
-    and per order one inverse FFT (the truncated difference), one forward and one inverse FFT (the
-    full autocorrelation of the source noise). The results equal the direct per-order convolution
-    and correlation to rounding (checked in ``test/test_fractional.py`` against
+    Three algorithms give the same orders; they differ in speed and in the last bits of the
+    criterion values:
+
+    * ``'exact'``: the GL filters of every grid order are transformed once; each chunk then costs
+      one forward FFT and, per order, one inverse FFT (the truncated difference), one forward and
+      one inverse FFT (the full autocorrelation of the source noise), in blocks of ``block``
+      orders. Its values are the reference of the package: bit for bit those of every earlier
+      release.
+    * ``'fast'``: per order only what the order needs (:class:`_FastPlan`). Where the grid holds
+      both ``alpha - 1`` and ``alpha`` (0..1 and 1..2 on the default grid), the difference of order
+      ``alpha`` follows from that of ``alpha - 1`` exactly, in time and in frequency
+      (``c_j(alpha) = c_j(alpha - 1) - c_{j-1}(alpha - 1)``, the truncation at L adding one known
+      term), so those orders cost one inverse FFT instead of three; the source-noise spectrum is
+      ``D - f V`` (one transform of the difference, none of the residual), and the power spectrum
+      is formed without a complex product. Equal to the direct per-order convolution to rounding,
+      not to the bit of ``'exact'``.
+    * ``'auto'`` (default): the fast curves locate the minimum of each criterion; the orders whose
+      fast value lies within :data:`LOCATE_RTOL` of the tie band are recomputed by ``'exact'``
+      (their whole ``block``, as ``'exact'`` computes it) and the minimum, its ties, f and the
+      reported values are taken from those exact values. The results are therefore bit for bit
+      those of ``'exact'`` as long as the fast curves are within :data:`LOCATE_RTOL` of the exact
+      ones (they are within ~1e-11); when the recomputed orders disagree by more than a tenth of
+      that, or a fast value is not finite, the chunk falls back to ``'exact'``. With
+      ``curves=True`` the curves come from ``'exact'``.
+
+    The results equal the direct per-order convolution and correlation to rounding (checked in
+    ``test/test_fractional.py`` and ``test/test_fractional_fast.py`` against
     ``test/_fractional_reference.py``).
 
     Parameters
     ----------
     chunk_size : int
-        N, the number of samples per chunk (> memory + 2... at least ``memory + 2``).
+        N, the number of samples per chunk (at least ``memory + 2``).
     alphas : array_like, keyword-only
         Order grid (default 0.00:2.00:0.01).
     memory : int, keyword-only
@@ -250,12 +285,16 @@ class OrderIdentifier:
     max_lag : int or None, keyword-only
         Largest lag M in J (eq. 13); None = all lags, ``n - 1``.
     block : int, keyword-only
-        Orders processed per vectorised block (memory/speed trade-off only).
+        Orders processed per vectorised block. It sets the blocks of ``'exact'`` and so the last
+        bits of its values (the matrix-vector product of a block rounds by block): keep the
+        default to reproduce earlier results.
+    algorithm : {'auto', 'exact', 'fast'}, keyword-only
+        See above (default 'auto').
 
     """
 
     def __init__(self, chunk_size, *, alphas=None, memory=DEFAULT_MEMORY, demean=True,
-                 max_lag=None, block=8):
+                 max_lag=None, block=8, algorithm='auto'):
         self.memory = _check_memory(memory)
         self.alphas = default_grid() if alphas is None else np.asarray(
             alphas, dtype=np.float64).ravel()
@@ -276,13 +315,17 @@ class OrderIdentifier:
             raise ParameterError(
                 f'max_lag must be in [0, {self.n - 1}] for chunk_size {chunk_size}, '
                 f'got {max_lag}')
+        if algorithm not in ALGORITHMS:
+            raise ParameterError(f'algorithm must be one of {ALGORITHMS}, got {algorithm!r}')
+        self.algorithm = algorithm
         self.max_lag = max_lag
         self.demean = bool(demean)
         self.block = max(1, int(block))
         self._conv_size = scipy.fft.next_fast_len(chunk_size + self.memory, real=True)
         self._corr_size = scipy.fft.next_fast_len(self.n + self.max_lag + 1, real=True)
-        coeffs = np.stack([gl_coefficients(a, self.memory) for a in self.alphas])
-        self._coeff_hat = scipy.fft.rfft(coeffs, self._conv_size, axis=1)
+        self._coeffs = np.stack([gl_coefficients(a, self.memory) for a in self.alphas])
+        self._coeff_hat = scipy.fft.rfft(self._coeffs, self._conv_size, axis=1)
+        self._fast = None  # _FastPlan, built on first use
 
     def __call__(self, chunk, *, curves=False):
         """
@@ -304,16 +347,24 @@ class OrderIdentifier:
         bias = float(v.mean())
         if self.demean:
             v = v - bias
-        var_curve, j_curve, f_curve = self._curves(v)
-        return _summarise(self.alphas, var_curve, j_curve, f_curve, bias, curves)
+        _regressor(v)
+        if self.algorithm == 'exact' or (curves and self.algorithm == 'auto'):
+            var_curve, j_curve, f_curve = self._curves(v)
+            return _summarise(self.alphas, var_curve, j_curve, f_curve, bias, curves)
+        if self._fast is None:
+            self._fast = _FastPlan(self)
+        fast = self._fast.curves(v)
+        if self.algorithm == 'fast':
+            return _summarise(self.alphas, *fast, bias, curves)
+        located = self._locate(v, *fast)
+        if located is None:
+            located = self._curves(v)
+        return _summarise(self.alphas, *located, bias, False)
 
     def _curves(self, v):
+        """Return the criterion curves by the 'exact' algorithm (every order, in blocks)."""
         n, size = self.n, self._conv_size
-        w_reg = v[:-1]
-        ww = float(w_reg @ w_reg)
-        if ww == 0.0:
-            raise InputDataError(
-                'the chunk is constant after removing its mean: the order is undefined')
+        w_reg, ww = _regressor(v)
         v_hat = scipy.fft.rfft(v, size)
         k = len(self.alphas)
         var_curve = np.empty(k)
@@ -321,6 +372,7 @@ class OrderIdentifier:
         f_curve = np.empty(k)
         # w is written into a zero-padded buffer so the correlation FFT needs no padding copy
         padded = np.zeros((self.block, self._corr_size))
+        conj = np.empty((self.block, self._corr_size // 2 + 1), dtype=np.complex128)
         for start in range(0, k, self.block):
             stop = min(k, start + self.block)
             rows = stop - start
@@ -332,11 +384,207 @@ class OrderIdentifier:
             np.subtract(d, w, out=w)
             var_curve[start:stop] = w.var(axis=1)
             spec = scipy.fft.rfft(padded[:rows], axis=1)
-            power = np.multiply(spec, spec.conj(), out=spec)
+            # the same operands, in the same order, as spec * spec.conj() (the complex product
+            # rounds its imaginary part differently when the operands are swapped)
+            power = np.multiply(spec, np.conjugate(spec, out=conj[:rows]), out=spec)
             r = scipy.fft.irfft(power, self._corr_size, axis=1)
             j_curve[start:stop] = np.abs(r[:, :self.max_lag + 1]).sum(axis=1) / n
             f_curve[start:stop] = f
         return var_curve, j_curve, f_curve
+
+    def _exact_rows(self, v, rows):
+        """
+        Return var, J and f of the grid orders ``rows`` exactly as :meth:`_curves` computes them.
+
+        The difference and f are computed for the whole block of each order (f is a
+        matrix-vector product over the block, whose rounding depends on the block); everything
+        after f is per order, and numpy and pocketfft round a row alike whether it is alone or in
+        a block (``test/test_fractional_fast.py`` checks this against :meth:`_curves`).
+        """
+        n, size, blk = self.n, self._conv_size, self.block
+        w_reg, ww = _regressor(v)
+        v_hat = scipy.fft.rfft(v, size)
+        k = len(self.alphas)
+        out = np.empty((3, rows.shape[0]))
+        padded = np.zeros((1, self._corr_size))
+        w = padded[:, :n]
+        for b in np.unique(rows // blk):
+            start = int(b) * blk
+            stop = min(k, start + blk)
+            diff = scipy.fft.irfft(self._coeff_hat[start:stop] * v_hat, size, axis=1)
+            d = diff[:, 1:n + 1]
+            f = (d @ w_reg) / ww
+            for pos in np.flatnonzero((rows >= start) & (rows < stop)):
+                r = int(rows[pos]) - start
+                np.multiply(f[r], w_reg, out=w[0])
+                np.subtract(d[r], w[0], out=w[0])
+                var = w.var(axis=1)
+                spec = scipy.fft.rfft(padded, axis=1)
+                power = np.multiply(spec, spec.conj(), out=spec)
+                corr = scipy.fft.irfft(power, self._corr_size, axis=1)
+                out[0, pos] = var[0]
+                out[1, pos] = (np.abs(corr[:, :self.max_lag + 1]).sum(axis=1) / n)[0]
+                out[2, pos] = f[r]
+        return out
+
+    def _locate(self, v, var_fast, j_fast, f_fast):
+        """
+        Return 'exact' curves that hold exact values wherever a minimum can be, +inf elsewhere.
+
+        None when the fast curves cannot be trusted for this chunk (not finite, or farther from
+        the exact values than :data:`LOCATE_RTOL` / 10 on the recomputed orders).
+        """
+        if not (np.all(np.isfinite(var_fast)) and np.all(np.isfinite(j_fast))):
+            return None
+        if not (var_fast.min() > 0.0 and j_fast.min() > 0.0):
+            return None  # a residual that vanishes: relative bounds say nothing there
+        rows = np.union1d(_candidates(var_fast), _candidates(j_fast))
+        exact = self._exact_rows(v, rows)
+        guard = 0.1 * LOCATE_RTOL
+        for fast, ex in ((var_fast[rows], exact[0]), (j_fast[rows], exact[1])):
+            if not (np.all(np.isfinite(ex)) and np.all(np.abs(fast - ex) <= guard * np.abs(ex))):
+                return None
+        k = len(self.alphas)
+        curves = np.full((3, k), np.inf)
+        curves[2] = np.nan
+        curves[:, rows] = exact
+        return curves[0], curves[1], curves[2]
+
+
+def _regressor(v):
+    """Return ``(v[:-1], v[:-1] @ v[:-1])`` (eq. 7's regressor and its energy), or raise."""
+    w_reg = v[:-1]
+    ww = float(w_reg @ w_reg)
+    if ww == 0.0:
+        raise InputDataError(
+            'the chunk is constant after removing its mean: the order is undefined')
+    return w_reg, ww
+
+
+def _candidates(curve):
+    """
+    Return the grid indices whose exact value may be the minimum or tie with it.
+
+    If every fast value is within a relative ``d`` = :data:`LOCATE_RTOL` of its exact value,
+    every exact tie of the exact minimum ``e*`` has a fast value at most ``(1 + d)(1 + TIE_RTOL)
+    e*``, and ``e*`` is at most ``low / (1 - d)`` (``low`` the fast minimum; both criteria are
+    non-negative).
+    """
+    low = float(curve.min())
+    bound = low * (1.0 + TIE_RTOL) * (1.0 + LOCATE_RTOL) / (1.0 - LOCATE_RTOL)
+    return np.flatnonzero(curve <= bound)
+
+
+class _FastPlan:
+    """
+    The set-up of the 'fast' algorithm for one :class:`OrderIdentifier` (see its doc).
+
+    With ``d_a[k] = Delta^a v[k + 1]`` (k = 0 .. n - 1) and ``c_j(a + 1) = c_j(a) - c_{j-1}(a)``,
+    the truncated sums (eq. 5) give ``d_{a+1}[k] = d_a[k] - d_a[k-1] + [k >= L] c_L(a) v[k - L]``
+    with ``d_a[-1] = v[0]``; on the correlation transform size S (> n) that is
+    ``D_{a+1} = (1 - e) D_a + d_a[n-1] e^n - v[0] + c_L(a) e^L V_L`` with ``e = exp(-2 pi i q /
+    S)`` and ``V_L`` the transform of ``v[0 .. n - L - 1]``. Orders whose ``a - 1`` is on the grid
+    are derived so (chains included: 2.00 from 1.00 from 0.00); the others ("base" orders) are
+    computed by FFT convolution. The residual transform is ``W = D - f V`` (V the transform of
+    the regressor ``v[0 .. n - 1]``), and ``J`` comes from one inverse transform of ``|W|^2``.
+    """
+
+    def __init__(self, ident):
+        self.ident = ident
+        a = ident.alphas
+        k = a.shape[0]
+        order = np.argsort(a, kind='stable')
+        sorted_a = a[order]
+        parent = np.full(k, -1)
+        target = a - 1.0
+        pos = np.clip(np.searchsorted(sorted_a, target), 0, k - 1)
+        for i in range(k):
+            for p in (pos[i] - 1, pos[i]):
+                if 0 <= p < k and abs(sorted_a[p] - target[i]) <= 1e-12 * max(1.0, abs(a[i])):
+                    if order[p] != i:
+                        parent[i] = order[p]
+                    break
+        self.parent = parent
+        self.base = np.flatnonzero(parent < 0)
+        self.children = {}
+        for i in np.flatnonzero(parent >= 0):
+            self.children.setdefault(int(parent[i]), []).append(int(i))
+        size = ident.chunk_size + ident.memory
+        self.conv_size = scipy.fft.next_fast_len(size, real=True)
+        self.coeff_hat = scipy.fft.rfft(ident._coeffs[self.base], self.conv_size, axis=1)
+        self.c_last = ident._coeffs[:, ident.memory].copy()
+        s = ident._corr_size
+        q = np.arange(s // 2 + 1)
+
+        def twiddle(m):
+            return np.exp(-2j * np.pi * ((q * m) % s) / s)
+
+        self.one_minus_e = 1.0 - twiddle(1)
+        # The autocorrelation by a half-length FFT needs S = 2N with N even.
+        self.cosine = None
+        if s % 4 == 0:
+            half = np.arange(s // 2) * (2.0 * np.pi / s)
+            self.cosine = (np.sin(half), np.cos(half))
+        self.e_n = twiddle(ident.n)
+        self.e_l = twiddle(ident.memory)
+
+    def curves(self, v):
+        """Return (var_curve, j_curve, f_curve) of the demeaned chunk ``v`` (fast algorithm)."""
+        ident = self.ident
+        n, big_n, s, big_l = ident.n, ident.chunk_size, ident._corr_size, ident.memory
+        w_reg, ww = _regressor(v)
+        k = ident.alphas.shape[0]
+        out = np.empty((3, k))
+        ctx = (v, w_reg, ww, scipy.fft.rfft(w_reg, s),
+               self.e_l * scipy.fft.rfft(v[:n - big_l], s))
+        v_hat = scipy.fft.rfft(v, self.conv_size)
+        padded = np.zeros((ident.block, s))
+        for start in range(0, self.base.shape[0], ident.block):
+            idx = self.base[start:start + ident.block]
+            diff = scipy.fft.irfft(self.coeff_hat[start:start + ident.block] * v_hat,
+                                   self.conv_size, axis=1)
+            d = padded[:idx.shape[0], :n]
+            d[...] = diff[:, 1:big_n]
+            self._emit(idx, d, scipy.fft.rfft(padded[:idx.shape[0]], axis=1), ctx, out)
+        return out[0], out[1], out[2]
+
+    def _emit(self, idx, d, spec, ctx, out):
+        """Fill var, J and f of the orders ``idx`` from their differences; recurse to a + 1."""
+        ident = self.ident
+        v, w_reg, ww, reg_hat, shifted_hat = ctx
+        rows = idx.shape[0]
+        f = np.empty(rows)
+        var = np.empty(rows)
+        _kf.residual_moments(d, w_reg, ww, f, var)
+        j = np.empty(rows)
+        if self.cosine is not None:
+            sin_t, cos_t = self.cosine
+            folded = np.empty((rows, sin_t.shape[0]))
+            odd = np.empty(rows)
+            _kf.cosine_prep(spec, f, reg_hat, sin_t, cos_t, folded, odd)
+            _kf.cosine_abs_sum(scipy.fft.rfft(folded, axis=1), odd, ident.max_lag + 1,
+                               1.0 / (sin_t.shape[0] * ident.n), j)
+        else:
+            power = np.empty(spec.shape, dtype=np.complex128)
+            _kf.residual_power(spec, f, reg_hat, power)
+            corr = scipy.fft.irfft(power, ident._corr_size, axis=1)
+            _kf.abs_sum(corr, ident.max_lag + 1, j, 1.0 / ident.n)
+        out[0, idx] = var
+        out[1, idx] = j
+        out[2, idx] = f
+        parents, kids = [], []
+        for row, i in enumerate(idx):
+            for child in self.children.get(int(i), ()):
+                parents.append(row)
+                kids.append(child)
+        if not kids:
+            return
+        dc = np.empty((len(kids), d.shape[1]))
+        sc = np.empty((len(kids), spec.shape[1]), dtype=np.complex128)
+        parents = np.asarray(parents)
+        _kf.next_order(d, spec, parents, v, self.c_last[idx[parents]], ident.memory,
+                       self.one_minus_e, self.e_n, shifted_hat, dc, sc)
+        self._emit(np.asarray(kids), dc, sc, ctx, out)
 
 
 def identify_order(chunk, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, max_lag=None,

@@ -64,9 +64,11 @@ it shrinks the gap.
 """
 
 import numpy as np
+import scipy.interpolate
+import scipy.optimize
 import scipy.signal
 
-from .signatures import chunk_series, compare, temperature_rate
+from .signatures import chunk_series, compare, temperature_edges, temperature_rate
 
 
 #: Standard deviations above the members' mean statistic a detection must lie (and above the worst
@@ -151,6 +153,16 @@ class Effect:
     def fit(self, ctx):  # pragma: no cover - interface
         raise NotImplementedError
 
+    def estimate(self, ctx, near=None):
+        """
+        Return the parameters the fitter would report, without its detection test.
+
+        Used to refit the effect on records simulated from the final model (the parametric
+        bootstrap of :mod:`.uncertainty`); None when the record gives no estimate. ``near`` holds
+        the fitted parameters (an effect may start its search there).
+        """
+        return self.fit(ctx)
+
     def term(self, params, n, rate_hz, rng, ctx):  # pragma: no cover - interface
         raise NotImplementedError
 
@@ -195,15 +207,19 @@ class Sinusoid(Effect):
     """
     A sine at one frequency.
 
-    Found as the strongest line of the periodogram over its local background.
+    Found as the strongest line of the periodogram over its local background; the frequency is
+    refined from the three DFT bins around the peak (Candan 2011) and then by Gauss-Newton steps of
+    the least-squares sine fit (the maximum-likelihood frequency in white noise), amplitude and
+    phase by linear least squares at that frequency.
     """
 
     name = 'sinusoid'
     n_params = 3
 
     @staticmethod
-    def _line_ratio(x, rate_hz):
-        spec = np.abs(np.fft.rfft(x - x.mean())) ** 2
+    def _line_ratio(x):
+        coef = np.fft.rfft(x - x.mean())
+        spec = coef.real ** 2 + coef.imag ** 2
         # local background: median of blocks of 64 bins (a line occupies 1-3 bins), interpolated
         block = 64
         nb = spec.shape[0] // block
@@ -213,22 +229,77 @@ class Sinusoid(Effect):
         ratio = spec / np.maximum(background, 1e-300)
         # at least 10 cycles per record: slower 'lines' are the bias effects' business
         ratio[:10] = 0.0
-        return spec, ratio
+        return coef, ratio
+
+    @staticmethod
+    def line(x, rate_hz, k, coef, start_hz=None):
+        """
+        Fit the sine whose periodogram peak is bin ``k`` (class doc).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            Samples (rad/s).
+        rate_hz : float
+            Sample rate (Hz).
+        k : int
+            Peak bin of ``numpy.fft.rfft(x - mean)``, 1 <= k < bins - 1.
+        coef : numpy.ndarray
+            That rfft.
+        start_hz : float, optional
+            Start the refinement here instead of at the three-bin estimate (``k`` and ``coef``
+            are then not used): the bootstrap refits a line near its fitted frequency.
+
+        Returns
+        -------
+        dict or None
+            ``amplitude_rad_s``, ``frequency_hz``, ``phase_rad``; None when the least-squares
+            refinement leaves the bin it started in.
+
+        """
+        n = x.shape[0]
+        bin_w = 2.0 * np.pi * rate_hz / n
+        if start_hz is None:
+            lo, mid, hi = coef[k - 1], coef[k], coef[k + 1]
+            den = 2.0 * mid - lo - hi
+            delta = float(np.real((lo - hi) / den)) if den != 0 else 0.0
+            # Candan's bias correction of Jacobsen's estimator for the rectangular window
+            delta = float(np.clip(delta * np.tan(np.pi / n) / (np.pi / n), -0.5, 0.5))
+            start = (k + delta) * bin_w
+        else:
+            start = 2.0 * np.pi * float(start_hz)
+        omega = start
+        t = np.arange(n) / rate_hz
+        tc = t - t.mean()
+        y = x - x.mean()
+        ty = tc * y
+        tc2 = tc * tc
+        # Gauss-Newton from a start within a fraction of a bin converges in 1-3 steps; it stops
+        # when the step is below 1e-3 bin (far below the frequency's standard error)
+        for _ in range(4):
+            a, b, step = _sine_gauss_newton(y, ty, t, tc, tc2, omega)
+            if not np.isfinite(step) or abs(omega + step - start) > bin_w:
+                if start_hz is not None:
+                    return None
+                break
+            if abs(step) < 1e-3 * bin_w:
+                break
+            omega += step
+        else:
+            a, b, _ = _sine_gauss_newton(y, ty, t, tc, tc2, omega)
+        return {'amplitude_rad_s': float(np.hypot(a, b)),
+                'frequency_hz': float(omega / (2 * np.pi)), 'phase_rad': float(np.arctan2(b, a))}
 
     def fit(self, ctx):
         x = ctx.residual
-        rate_hz = ctx.meas.rate_hz
-        n = x.shape[0]
-        spec, ratio = self._line_ratio(x, rate_hz)
+        coef, ratio = self._line_ratio(x)
         k = int(np.argmax(ratio))
         # exponential (chi-square 2 dof) periodogram ordinates: P(ratio > r) = exp(-r); ask for a
         # false-alarm probability of 1e-3 over all bins
-        if ratio[k] < np.log(ratio.shape[0]) + np.log(1e3) or k + 1 >= spec.shape[0]:
+        if ratio[k] < np.log(ratio.shape[0]) + np.log(1e3) or k + 1 >= coef.shape[0]:
             return None
-        lp = np.log(spec[k - 1:k + 2])
-        den = lp[0] - 2 * lp[1] + lp[2]
-        delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
-        freq = (k + float(np.clip(delta, -0.5, 0.5))) * rate_hz / n
+        params = self.line(x, ctx.meas.rate_hz, k, coef)
+        freq = params['frequency_hz']
         # the line must also be where the measurement leaves the psd or psd_peak band: a steep
         # background (random walk, flicker) fools the local-median test at low frequency, but the
         # ensemble of the current model has the same steep background
@@ -246,16 +317,88 @@ class Sinusoid(Effect):
             ]
             if not any(outside):
                 return None
-        t = ctx.t_nominal
-        design = np.column_stack((np.sin(2 * np.pi * freq * t), np.cos(2 * np.pi * freq * t)))
-        (a, b), *_ = np.linalg.lstsq(design, x - x.mean(), rcond=None)
-        return {'amplitude_rad_s': float(np.hypot(a, b)), 'frequency_hz': float(freq),
-                'phase_rad': float(np.arctan2(b, a))}
+        return params
+
+    def estimate(self, ctx, near=None):
+        """
+        Return the parameters of the strongest line without the detection test (or None).
+
+        With ``near`` (fitted parameters) the line is refined from their frequency instead of
+        searched for (the bootstrap refit: no periodogram, and None if it leaves that bin).
+        """
+        x = ctx.residual
+        if near is not None:
+            return self.line(x, ctx.meas.rate_hz, None, None, start_hz=near['frequency_hz'])
+        coef, ratio = self._line_ratio(x)
+        k = int(np.argmax(ratio))
+        if k < 1 or k + 1 >= coef.shape[0]:
+            return None
+        return self.line(x, ctx.meas.rate_hz, k, coef)
 
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
         return _zero_mean(params['amplitude_rad_s']
                           * np.sin(2 * np.pi * params['frequency_hz'] * t + params['phase_rad']))
+
+
+def _dot(a, b):
+    """
+    Return the dot product of two 1-D arrays without BLAS.
+
+    OpenBLAS ``ddot`` wakes its thread pool; on a loaded machine that costs ~20 ms per call
+    against ~10 us for einsum at 20,000 samples.
+    """
+    return float(np.einsum('i,i->', a, b))
+
+
+def _sine_gauss_newton(y, ty, t, tc, tc2, omega):
+    """
+    Least-squares sine at ``omega`` and one Gauss-Newton step of its frequency.
+
+    Model ``a sin(w t) + b cos(w t) + c0 + c1 tc`` (tc: centred time; the offset and the linear
+    trend are nuisance terms, so a ramp in the record does not leak into the line); the step
+    solves the linearised LS problem in (a, b, c0, c1, dw) with the frequency derivative
+    ``tc (a cos - b sin)``. The normal equations are built from sums of cos(2 w t) and sin(2 w t)
+    weighted by 1, tc, tc^2, of cos and sin weighted by the same, and of y and tc y against cos and
+    sin: two trigonometric evaluations and fourteen dot products per call, O(n).
+
+    Returns
+    -------
+    tuple
+        (a, b) of the LS fit at ``omega`` and the step dw (rad/s).
+
+    """
+    cos, sin = np.cos(omega * t), np.sin(omega * t)
+    # cos(2 w t) and sin(2 w t)
+    cos2, sin2 = cos * cos - sin * sin, 2.0 * sin * cos
+    n = y.shape[0]
+    s2 = complex(cos2.sum(), sin2.sum())
+    t1 = complex(_dot(tc, cos2), _dot(tc, sin2))
+    t2 = complex(_dot(tc2, cos2), _dot(tc2, sin2))
+    tye = complex(_dot(ty, cos), _dot(ty, sin))
+    ss, cc, sc = (n - s2.real) / 2, (n + s2.real) / 2, s2.imag / 2
+    s1, c1 = float(sin.sum()), float(cos.sum())
+    st, ct = _dot(tc, sin), _dot(tc, cos)
+    st2, ct2 = _dot(tc2, sin), _dot(tc2, cos)
+    tt, t0 = float(tc2.sum()), float(tc.sum())
+    ys, yc = _dot(y, sin), _dot(y, cos)
+    rhs = np.array([ys, yc, float(y.sum()), float(ty.sum())])
+    gram = np.array([[ss, sc, s1, st], [sc, cc, c1, ct], [s1, c1, n, t0], [st, ct, t0, tt]])
+    try:
+        a, b = np.linalg.solve(gram, rhs)[:2]
+    except np.linalg.LinAlgError:
+        return float('nan'), float('nan'), float('nan')
+    # g = tc (a cos - b sin): its sums against sin, cos, 1, tc, itself and y
+    tss, tcc, tsc = (t0 - t1.real) / 2, (t0 + t1.real) / 2, t1.imag / 2
+    gg = (a * a + b * b) / 2 * tt + (a * a - b * b) / 2 * t2.real - a * b * t2.imag
+    g = np.array([a * tsc - b * tss, a * tcc - b * tsc, a * ct - b * st, a * ct2 - b * st2])
+    gy = a * tye.real - b * tye.imag
+    full = np.block([[gram, g[:, None]], [g[None, :], np.array([[gg]])]])
+    try:
+        step = float(np.linalg.solve(full, np.append(rhs, gy))[4])
+    except np.linalg.LinAlgError:
+        step = float('nan')
+    return float(a), float(b), step
 
 
 def _centred_fit_stat(basis, y):
@@ -287,13 +430,23 @@ class BiasDrift(Effect):
             return None
         return {'slope_rad_s2': float(amp[0])}
 
+    def estimate(self, ctx, near=None):
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        _, amp = _centred_fit_stat(ctx.layout.chunk_t_s[None, :], y)
+        return {'slope_rad_s2': float(amp[0])}
+
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
         return _zero_mean(params['slope_rad_s2'] * t)
 
 
 class BiasTransient(Effect):
-    """Delayed first-order rise or decay of the bias, grid search over delay and time constant."""
+    """
+    Delayed first-order rise or decay of the bias.
+
+    Grid search over delay and time constant (detection), then the least-squares delay and time
+    constant on the chunk means (Nelder-Mead from the best grid point, amplitude by linear LS).
+    """
 
     name = 'bias_transient'
     n_params = 3
@@ -303,25 +456,77 @@ class BiasTransient(Effect):
         """Return the unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
         return np.where(t >= delay, -np.expm1(-np.maximum(t - delay, 0.0) / tc), 0.0)
 
+    @staticmethod
+    def chunk_shape(edges, delay, tc):
+        """
+        Return the mean of the unit transient over each interval of ``edges`` (s), in closed form.
+
+        The integral of 1 - exp(-(t - d) / tc) from max(a, d) to b, divided by b - a.
+        """
+        a, b = edges[:-1], edges[1:]
+        lo = np.maximum(a, delay)
+        inside = b > delay
+        decay = (np.exp(-np.maximum(lo - delay, 0.0) / tc)
+                 - np.exp(-np.maximum(b - delay, 0.0) / tc))
+        return np.where(inside, (b - lo) - tc * decay, 0.0) / (b - a)
+
+    #: Grid of the delay (fractions of the record, linear) and of the time constant (fractions of
+    #: the record, geometric) of the detection; the estimate is then refined off the grid.
+    DELAY_GRID = np.linspace(0.0, 0.8, 17)
+    TC_GRID = np.geomspace(1.0 / 300.0, 1.0, 20)
+
     def _grid(self, t, duration):
-        delays = np.linspace(0.0, 0.8, 17) * duration
-        tcs = np.geomspace(duration / 300.0, duration, 20)
-        pairs = [(d, c) for d in delays for c in tcs]
+        pairs = [(d * duration, c * duration) for d in self.DELAY_GRID for c in self.TC_GRID]
         return pairs, np.array([self.shape(t, d, c) for d, c in pairs])
 
-    def fit(self, ctx):
-        t = ctx.layout.chunk_t_s
-        duration = ctx.meas.n / ctx.meas.rate_hz
-        pairs, basis = self._grid(t, duration)
-        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
-        stat, amp = _centred_fit_stat(basis, y)
-        null, _ = _centred_fit_stat(basis, ctx.members('chunk_bias'))
+    def _refine(self, ctx, y, delay, tc):
+        """Least-squares (amplitude, delay, tc) on the chunk means ``y``, from a start point."""
+        chunk, rate_hz = ctx.layout.chunk, ctx.meas.rate_hz
+        duration = ctx.meas.n / rate_hz
+        edges = np.arange(y.shape[0] + 1) * chunk / rate_hz
+        yc = y - y.mean()
+
+        def fit(p):
+            d, c = p[0] * duration, np.exp(p[1]) * duration
+            basis = self.chunk_shape(edges, d, c)
+            basis = basis - basis.mean()
+            norm = basis @ basis
+            amp = (basis @ yc) / norm if norm > 0 else 0.0
+            return amp, float(((yc - amp * basis) ** 2).sum())
+
+        def rss(p):
+            if not (0.0 <= p[0] <= 0.95 and np.log(1e-3) <= p[1] <= np.log(10.0)):
+                return float('inf')
+            return fit(p)[1]
+
+        start = np.array([delay / duration, np.log(tc / duration)])
+        res = scipy.optimize.minimize(rss, start, method='Nelder-Mead',
+                                      options={'xatol': 1e-4, 'fatol': 1e-12 * (yc @ yc),
+                                               'initial_simplex': [start, start + [0.02, 0.0],
+                                                                   start + [0.0, 0.2]]})
+        best = res.x if np.isfinite(res.fun) and res.fun <= rss(start) else start
+        amp = fit(best)[0]
+        return {'amplitude_rad_s': float(amp), 'delay_s': float(best[0] * duration),
+                'time_constant_s': float(np.exp(best[1]) * duration)}
+
+    def _grid_best(self, ctx, y):
+        pairs, basis = self._grid(ctx.layout.chunk_t_s, ctx.meas.n / ctx.meas.rate_hz)
+        stat, _ = _centred_fit_stat(basis, y)
         best = int(np.argmax(stat))
+        return pairs, basis, stat, best
+
+    def estimate(self, ctx, near=None):
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        pairs, _, _, best = self._grid_best(ctx, y)
+        return self._refine(ctx, y, *pairs[best])
+
+    def fit(self, ctx):
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        pairs, basis, stat, best = self._grid_best(ctx, y)
+        null, _ = _centred_fit_stat(basis, ctx.members('chunk_bias'))
         if not null_exceeded(float(stat[best]), null.max(axis=1)):
             return None
-        delay, tc = pairs[best]
-        return {'amplitude_rad_s': float(amp[best]), 'delay_s': float(delay),
-                'time_constant_s': float(tc)}
+        return self._refine(ctx, y, *pairs[best])
 
     def term(self, params, n, rate_hz, rng, ctx):
         t = np.arange(n) / rate_hz
@@ -363,12 +568,24 @@ class TemperatureSensitivity(Effect):
         return {'coefficient_rad_s_per_degc': float(coef[1, 0]),
                 'rate_coefficient_rad_s_per_degc_per_s': float(coef[2, 0])}
 
+    def estimate(self, ctx, near=None):
+        if ctx.meas.temperature_c is None:
+            return None
+        t_mean, t_rate = self._regressors(ctx)
+        design = np.column_stack((np.ones_like(t_mean), t_mean - t_mean.mean(), t_rate))
+        y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
+        coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+        return {'coefficient_rad_s_per_degc': float(coef[1]),
+                'rate_coefficient_rad_s_per_degc_per_s': float(coef[2])}
+
     def term(self, params, n, rate_hz, rng, ctx):
         temp = ctx.meas.temperature_c
         chunk = ctx.layout.chunk
-        t_mean, t_rate = temperature_rate(temp, rate_hz, chunk)
+        # dT/dt at every sample: the derivative of the cubic spline through the chunk-boundary
+        # temperatures, whose mean over each chunk is the fitted regressor exactly
+        edge_t, edge_temp = temperature_edges(temp, rate_hz, chunk)
         t = np.arange(n) / rate_hz
-        rate = np.interp(t, ctx.layout.chunk_t_s, t_rate)
+        rate = scipy.interpolate.CubicSpline(edge_t, edge_temp).derivative()(t)
         return _zero_mean(params['coefficient_rad_s_per_degc'] * (temp - temp.mean())
                           + params['rate_coefficient_rad_s_per_degc_per_s'] * rate)
 
@@ -424,22 +641,52 @@ class _AllanFitted(Effect):
         """Return (list of extra-params dicts, array (R, taus) of unit-amplitude templates)."""
         raise NotImplementedError
 
+    @staticmethod
+    def weights(members):
+        """Return the inverse-variance weights of the Allan variances ``members`` (N, taus)."""
+        mean = members.mean(axis=0)
+        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very
+        # closely
+        return 1.0 / np.maximum(members.std(axis=0, ddof=1), 0.05 * mean) ** 2
+
+    @staticmethod
+    def best(templ, w, excess):
+        """
+        Weighted LS amplitude of each template on each excess Allan variance.
+
+        Parameters
+        ----------
+        templ : numpy.ndarray
+            Unit-amplitude templates (R, taus).
+        w : numpy.ndarray
+            Weights (taus,).
+        excess : numpy.ndarray
+            Excess Allan variances (K, taus) ((rad/s)^2).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The RSS reduction and the amplitude (clipped at 0), each (R, K).
+
+        """
+        num = (templ * w) @ excess.T
+        den = (templ ** 2 * w).sum(axis=1)
+        amp = np.maximum(num, 0.0) / den[:, None]
+        return amp ** 2 * den[:, None], amp
+
+    def amplitude(self, params):
+        """Return the template amplitude of ``params`` (Allan variance scale, (rad/s)^2)."""
+        raise NotImplementedError  # pragma: no cover - interface
+
     def fit(self, ctx):
         avar_m = ctx.meas_sig['allan'] ** 2
         members = ctx.members('allan') ** 2
         mean = members.mean(axis=0)
-        # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very
-        # closely
-        sd = np.maximum(members.std(axis=0, ddof=1), 0.05 * mean)
         extras, templ = self.templates(ctx)
-        w = 1.0 / sd ** 2
+        w = self.weights(members)
 
         def best(excess):
-            num = (templ * w) @ excess.T
-            den = (templ ** 2 * w).sum(axis=1)
-            amp = np.maximum(num, 0.0) / den[:, None]
-            stat = amp ** 2 * den[:, None]
-            return stat, amp
+            return self.best(templ, w, excess)
 
         stat, amp = best((avar_m - mean)[None, :])
         # leave-one-out null: each member against the mean of the others
@@ -450,7 +697,9 @@ class _AllanFitted(Effect):
         if not null_exceeded(
                 float(stat[r, 0]), null.max(axis=0)) or not self.resolved(r, len(extras)):
             return None
-        return self.params(float(amp[r, 0]), extras[r])
+        # the weights travel with the parameters (private): the bootstrap refits with the same
+        # estimator
+        return {**self.params(float(amp[r, 0]), extras[r]), '_allan_weights': w}
 
     def resolved(self, index, count):
         """Tell whether the record tells the best template (of ``count``) from its neighbours."""
@@ -468,6 +717,9 @@ class RateRandomWalk(_AllanFitted):
 
     def params(self, amp, extra):
         return {'k_rad_s_per_sqrt_s': float(np.sqrt(amp))}
+
+    def amplitude(self, params):
+        return params['k_rad_s_per_sqrt_s'] ** 2
 
     def term(self, params, n, rate_hz, rng, ctx):
         steps = rng.standard_normal(n) * params['k_rad_s_per_sqrt_s'] / np.sqrt(rate_hz)
@@ -504,6 +756,9 @@ class BiasInstability(_AllanFitted):
     def params(self, amp, extra):
         return {'b_rad_s': float(np.sqrt(amp))}
 
+    def amplitude(self, params):
+        return params['b_rad_s'] ** 2
+
     def term(self, params, n, rate_hz, rng, ctx):
         return _zero_mean(flicker_noise(n, rate_hz, params['b_rad_s'], rng))
 
@@ -520,13 +775,19 @@ class GaussMarkov(_AllanFitted):
 
     def templates(self, ctx):
         duration = ctx.meas.n / ctx.meas.rate_hz
-        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, 30)
+        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, self.GRID_POINTS)
         tau = ctx.layout.tau_s
         return [{'correlation_time_s': float(c)} for c in tcs], np.array(
             [gm_allan(1.0, c, tau) for c in tcs])
 
+    #: Geometric grid of the correlation time: 3 / fs .. T / 10 in this many points.
+    GRID_POINTS = 30
+
     def params(self, amp, extra):
         return {'sigma_rad_s': float(np.sqrt(amp)), **extra}
+
+    def amplitude(self, params):
+        return params['sigma_rad_s'] ** 2
 
     def resolved(self, index, count):
         # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the
@@ -603,6 +864,10 @@ class StampJitter(Effect):
         d = _intervals(ctx)
         if not jittery(d):
             return None
+        return self.estimate(ctx)
+
+    def estimate(self, ctx, near=None):
+        d = _intervals(ctx)
         k = np.arange(ctx.meas.n)
         line = np.polyval(np.polyfit(k, ctx.meas.t_s, 1), k)
         return {'jitter_rms_s': float(np.sqrt(np.mean((ctx.meas.t_s - line) ** 2))),

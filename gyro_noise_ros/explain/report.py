@@ -29,6 +29,7 @@ import numpy as np
 
 from . import signatures as sig
 from .effects import public_params
+from .uncertainty import format_value
 from ..errors import ParameterError
 
 DEG = 180.0 / np.pi
@@ -139,6 +140,50 @@ def _fmt_params(params):
                      for k, v in public_params(params).items())
 
 
+def _uncertainty_text(entry):
+    text = format_value(entry)
+    note = entry['note']
+    if note.startswith('unresolved'):
+        note = 'UNRESOLVED' + note[len('unresolved'):]
+    return f'{text} [{note}]' if note and not entry['resolved'] else text
+
+
+def parameter_lines(result):
+    """
+    One line per accepted effect: its parameters as ``value ± stderr unit``.
+
+    Parameters flagged unresolved say so (docs/discrepancy.md); without a bootstrap the point
+    values are given with "(no uncertainty: --bootstrap 0)".
+    """
+    lines = []
+    for step in result.steps:
+        entries = result.uncertainty.get(step.effect)
+        if entries:
+            parts = [f'{name} = {_uncertainty_text(entry)}' for name, entry in entries.items()]
+        else:
+            parts = [_fmt_params(step.params) + ' (no uncertainty: bootstrap off)']
+        lines.append(f'{step.effect}: ' + '; '.join(parts))
+    return lines
+
+
+def _uncertainty_table(step, result):
+    entries = result.uncertainty.get(step.effect)
+    if not entries:
+        return [f'Parameters: {_fmt_params(step.params)} (no uncertainty: the bootstrap was off).',
+                '']
+    lines = ['| parameter | value ± stderr | 95 % interval | method | note |',
+             '|---|---|---|---|---|']
+    for name, entry in entries.items():
+        ci = entry['ci95']
+        interval = '-' if ci is None else f'[{ci[0]:.6g}, {ci[1]:.6g}] {entry["unit"]}'
+        note = entry['note'] if entry['note'] else 'resolved'
+        if not entry['resolved'] and entry['note'].startswith('unresolved'):
+            note = '**UNRESOLVED**' + entry['note'][len('unresolved'):]
+        lines.append(f'| {name} | {format_value(entry)} | {interval} | {entry["method"]} | '
+                     f'{note} |')
+    return lines + ['']
+
+
 def verdict(result):
     """One-paragraph verdict printed by the command line tool."""
     if not result.steps and not result.unexplained:
@@ -217,6 +262,16 @@ def _markdown(result):
         f's){", with temperature" if meas.temperature_c is not None else ""}.',
         f'Ensemble: {result.ensemble} members, seed {result.seed}. Run time '
         f'{result.seconds["total"]:.1f} s.', '', f'**Verdict:** {verdict(result)}', '',
+    ]
+    if result.steps:
+        lines += ['Effects named (value ± standard error):', '']
+        lines += [f'- {line}' for line in parameter_lines(result)] + ['']
+        lines += [
+            'Standard errors and 95 % intervals: parametric bootstrap of the final model '
+            f'({result.bootstrap} simulated records, each effect refitted; the lattice by least '
+            'squares; docs/discrepancy.md, "Uncertainties"); conditional on the fitted baseline.'
+            if result.bootstrap else 'Point values only: the bootstrap was off.', '']
+    lines += [
         '## Baseline model (paper 000 eqs. 2, 10, 11)', '', '| parameter | value |', '|---|---|',
         f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * DEG:.5g} deg/s) |',
         f'| order alpha (variance method) | {base.alpha:.3f} |', f'| f | {base.f:.5g} |',
@@ -233,7 +288,7 @@ def _markdown(result):
     lines += ['![overview](overview.png)', '']
     for i, step in enumerate(result.steps, 1):
         lines += [
-            f'## Step {i}: {step.effect}', '', f'Parameters: {_fmt_params(step.params)}.', '',
+            f'## Step {i}: {step.effect}', ''] + _uncertainty_table(step, result) + [
             f'Gap {step.gap_before:.3f} -> {step.gap_after:.3f}. Candidates tried (gap after): '
             + ', '.join(f'{k} {v:.3f}' for k, v in step.candidates.items()) + '.', '']
         if step.where_after:

@@ -177,9 +177,50 @@ def find_lattice(x):
     phase = np.mod(x - offset + 0.5 * step, step) / step - 0.5
     if np.mean(np.abs(phase) < 0.02) < 0.99:
         return None
-    # Reduced modulo the step into [-step/2, step/2): the lattice is the same, the number readable.
-    offset = float(np.mod(offset + 0.5 * step, step) - 0.5 * step)
+    step, offset, _ = lattice_fit(levels, step, offset)
     return step, offset
+
+
+def lattice_fit(levels, step, offset):
+    """
+    Least-squares lattice through the distinct values: ``level = offset + k step``, k integer.
+
+    Parameters
+    ----------
+    levels : numpy.ndarray
+        Distinct sample values (rad/s).
+    step, offset : float
+        A first lattice (rad/s), which fixes each level's index k.
+
+    Returns
+    -------
+    tuple
+        ``(step, offset, cov)``: the LS step and offset (the offset reduced modulo the step into
+        [-step/2, step/2): the lattice is the same, the number readable), and the 2 x 2 covariance
+        of (step, offset) from the levels' scatter about the line (None with fewer than 3 levels
+        on the lattice). Levels further than 2 % of a step from the lattice are left out.
+
+    """
+    k = np.round((levels - offset) / step)
+    on = np.abs(levels - offset - k * step) < 0.02 * step
+    levels, k = levels[on], k[on]
+    if levels.size < 3:
+        return step, float(np.mod(offset + 0.5 * step, step) - 0.5 * step), None
+    for _ in range(2):
+        design = np.column_stack((k, np.ones_like(k)))
+        coef, *_ = np.linalg.lstsq(design, levels, rcond=None)
+        # renumber the levels so that the intercept is the reduced offset
+        shift = np.floor((coef[1] + 0.5 * coef[0]) / coef[0])
+        if shift == 0:
+            break
+        k = k + shift
+    resid = levels - design @ coef
+    # find_lattice rounds the values to 1e-7 of their sd (about 2e-8 of the levels' sd): that
+    # rounding is the least scatter the levels can show
+    eps = 2e-8 * float(np.std(levels))
+    s2 = max(float(resid @ resid) / (levels.size - 2), eps ** 2 / 12.0)
+    cov = s2 * np.linalg.inv(design.T @ design)
+    return float(coef[0]), float(coef[1]), cov
 
 
 def make_layout(x, rate_hz, *, temperature=False):
@@ -250,7 +291,9 @@ def allan_deviation_octaves(x, rate_hz, m):
         # strided views, no index arrays: the terms theta[i + 2m] - 2 theta[i + m] + theta[i]
         d = (theta[2 * mi:2 * mi + count * stride:stride] - 2.0
              * theta[mi:mi + count * stride:stride] + theta[:count * stride:stride])
-        out[i] = np.sqrt(np.dot(d, d) / count / (2.0 * mi * mi))
+        # einsum, not np.dot: OpenBLAS ddot wakes its thread pool, which on a loaded machine
+        # costs milliseconds per call (7 ms per tau at 20,000 samples measured, 150x einsum)
+        out[i] = np.sqrt(np.einsum('i,i->', d, d) / count / (2.0 * mi * mi))
     return out
 
 
@@ -291,17 +334,50 @@ def chunk_series(values, chunk):
     return blocks.mean(axis=1), blocks.var(axis=1, ddof=1)
 
 
+def temperature_edges(temperature_c, rate_hz, chunk):
+    """
+    Return the times (s) of the chunk boundaries and the temperature (degC) there.
+
+    Boundary j lies half a sample before the first sample of chunk j.
+
+    Each boundary value is the intercept of a least-squares line through the samples within
+    ``max(4, chunk // 8)`` samples of the boundary (one-sided at the ends of the record), which
+    averages the sensor's LSB steps out and, unlike a window mean, is unbiased on a slope.
+    """
+    n = temperature_c.shape[0]
+    k = n // chunk
+    edge = np.arange(k + 1) * chunk - 0.5
+    half = max(4, chunk // 8)
+    lo = np.clip(np.ceil(edge - half), 0, n).astype(np.int64)
+    hi = np.clip(np.floor(edge + half) + 1, 0, n).astype(np.int64)
+    index = np.arange(n, dtype=np.float64)
+    c0 = np.concatenate(([0.0], np.cumsum(temperature_c)))
+    c1 = np.concatenate(([0.0], np.cumsum(index * temperature_c)))
+    m = (hi - lo).astype(np.float64)
+    sk = (lo + hi - 1) * m / 2.0
+    skk = ((hi - 1) * hi * (2 * hi - 1) - (lo - 1) * lo * (2 * lo - 1)) / 6.0
+    sy = c0[hi] - c0[lo]
+    su = sk - m * edge
+    suu = skk - 2.0 * edge * sk + m * edge * edge
+    suy = (c1[hi] - c1[lo]) - edge * sy
+    den = m * suu - su * su
+    slope = np.where(den > 0, (m * suy - su * sy) / np.where(den > 0, den, 1.0), 0.0)
+    value = (sy - slope * su) / m
+    return edge / rate_hz, value
+
+
 def temperature_rate(temperature_c, rate_hz, chunk):
     """
-    Return chunk-mean temperature (degC) and its rate dT/dt (degC/s) per chunk.
+    Return chunk-mean temperature (degC) and the chunk mean of its rate dT/dt (degC/s).
 
-    The rate is the central difference of the chunk means, which averages the sensor's LSB steps
-    out.
+    The mean of dT/dt over a chunk is exactly the temperature difference between its ends over its
+    duration; the end values come from :func:`temperature_edges`. (A central difference of the
+    chunk means, used before, is 2 % low for a cycle of 17 chunks, enough to bias a fitted rate
+    coefficient by tens of standard errors.)
     """
     t_mean, _ = chunk_series(temperature_c, chunk)
-    dt = chunk / rate_hz
-    rate = np.gradient(t_mean, dt) if t_mean.size > 1 else np.zeros_like(t_mean)
-    return t_mean, rate
+    _, edge = temperature_edges(temperature_c, rate_hz, chunk)
+    return t_mean, np.diff(edge) * rate_hz / chunk
 
 
 def compute(layout, x, t_s, temperature_c=None):

@@ -277,11 +277,110 @@ def sweep(effects, seeds, *, n=60000, rate_hz=100.0, ensemble=16, progress=None)
     return table
 
 
+def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
+    """
+    Count how often the 95 % interval of each effect parameter holds the hidden value.
+
+    The effects of ``case`` are fitted with the fitters' estimators (deterministic ones in the
+    order given, each on the record minus the others fitted so far; Allan-fitted ones against
+    ``members`` baseline-only members, as the workflow's ensemble) and bootstrapped with the
+    *true* baseline (:mod:`.uncertainty` is conditional on the baseline by design; the baseline
+    fit takes seconds).
+
+    Parameters
+    ----------
+    case : tuple of str
+        Hidden effects (sinusoid, bias_drift, bias_transient, temperature_sensitivity,
+        rate_random_walk, bias_instability, gauss_markov).
+    seeds : sequence of int
+        One record per seed.
+    n, rate_hz : keyword-only
+        Samples and rate (Hz).
+    replicates, members : int, keyword-only
+        Bootstrap records; null members of the Allan fits.
+
+    Returns
+    -------
+    dict
+        parameter -> {'runs', 'inside', 'z_sd'} (z: (value - true) / stderr), plus
+        ``'_not_fitted'``: records on which an Allan-fitted effect was not detected.
+
+    """
+    from types import SimpleNamespace
+
+    from .baseline import BaselineModel, simulation_memory
+    from .effects import CATALOGUE, Context
+    from .signatures import allan_deviation_octaves, make_layout
+    from .uncertainty import bootstrap, FinalModel
+
+    by_name = {e.name: e for e in CATALOGUE}
+    supported = ('sinusoid', 'bias_drift', 'bias_transient', 'temperature_sensitivity',
+                 'rate_random_walk', 'bias_instability', 'gauss_markov')
+    for name in case:
+        if name not in supported:
+            raise ValueError(f'coverage: {name!r} is not one of {", ".join(supported)}')
+    rows, missed = {}, 0
+    for seed in seeds:
+        meas, truth = make_record(case, np.random.default_rng([seed, 17]), n=n, rate_hz=rate_hz)
+        b = truth['baseline']
+        base = BaselineModel(bias_rad_s=b['bias'], alpha=b['alpha'], f=b['f'],
+                             sigma_w_rad_s=b['sigma_w'], sigma_nu_rad_s=b['sigma_nu'],
+                             memory_fit=1000,
+                             memory_sim=simulation_memory(b['alpha'], b['f'], rate_hz),
+                             chunk_size=0, chunks_identified=0, psd_misfit=0.0)
+        layout = make_layout(meas.rate, rate_hz, temperature=meas.temperature_c is not None)
+        m = SimpleNamespace(n=meas.n, rate_hz=rate_hz, t_s=meas.t_s,
+                            temperature_c=meas.temperature_c, rate=meas.rate)
+        accepted, det = [], {}
+        for name in case:
+            effect = by_name[name]
+            if effect.kind == 'stochastic':
+                null = [{'allan': allan_deviation_octaves(base.generator(
+                    np.random.default_rng([seed, j, 99])).generate(n), rate_hz, layout.m)}
+                    for j in range(members)]
+                ctx = Context(m, meas.rate, layout,
+                              {'allan': allan_deviation_octaves(meas.rate, rate_hz, layout.m)},
+                              null, {})
+                params = effect.fit(ctx)
+            else:
+                residual = meas.rate - sum(det.values()) if det else meas.rate
+                ctx = Context(m, residual, layout, None, None, {})
+                params = effect.estimate(ctx)
+                det[name] = effect.term(params, n, rate_hz, None, ctx)
+            if params is None:
+                break
+            accepted.append((effect, params))
+        if len(accepted) < len(case):
+            missed += 1
+            continue
+        model = FinalModel(n=n, rate_hz=rate_hz, temperature_c=meas.temperature_c, layout=layout,
+                           baseline=base, accepted=tuple(accepted), det_terms=det, seed=seed)
+        for effect_name, entries in bootstrap(model, replicates).items():
+            for name, entry in entries.items():
+                true = truth[effect_name].get(name)
+                if true is None or entry['stderr'] is None or not entry['stderr'] > 0:
+                    continue
+                diff = entry['value'] - true
+                if entry['unit'] == 'rad':
+                    diff = float(np.angle(np.exp(1j * diff)))
+                row = rows.setdefault(f'{effect_name}.{name}', {'runs': 0, 'inside': 0, 'z': []})
+                row['runs'] += 1
+                row['inside'] += bool(abs(diff) <= entry['ci95'][1] - entry['value']
+                                      if entry['unit'] == 'rad'
+                                      else entry['ci95'][0] <= true <= entry['ci95'][1])
+                row['z'].append(diff / entry['stderr'])
+    out = {k: {'runs': r['runs'], 'inside': r['inside'], 'z_sd': float(np.std(r['z']))}
+           for k, r in rows.items()}
+    out['_not_fitted'] = missed
+    return out
+
+
 def main(argv=None):
     """
     ``python -m gyro_noise_ros.explain.synthetic``.
 
-    Detection and false-alarm rates over seeds.
+    Detection and false-alarm rates over seeds; with ``--coverage``, the coverage of the
+    parameters' 95 % intervals.
     """
     import argparse
 
@@ -294,11 +393,27 @@ def main(argv=None):
     p.add_argument('--samples', type=int, default=60000)
     p.add_argument('--ensemble', type=int, default=16)
     p.add_argument('--verbose', action='store_true')
+    p.add_argument('--coverage', action='store_true',
+                   help='coverage of the 95 %% intervals of the effect parameters instead '
+                   '(effects: sinusoid, bias_drift, bias_transient, temperature_sensitivity, '
+                   'rate_random_walk, bias_instability, gauss_markov)')
+    p.add_argument('--bootstrap', type=int, default=20, help='bootstrap records (--coverage)')
     args = p.parse_args(argv)
     cases = [(e,) for e in EFFECTS] if args.effects == 'all' else \
         [tuple(c.split('+')) if c != 'none' else () for c in args.effects.split(',')]
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     say = (lambda text: print(text, file=sys.stderr, flush=True)) if args.verbose else None
+    if args.coverage:
+        print(f'{"parameter":<58} {"runs":>5} {"inside 95 %":>11} {"sd of z":>8}')
+        for case in cases:
+            table = coverage(case, seeds, n=args.samples, replicates=args.bootstrap)
+            for key, row in table.items():
+                if key != '_not_fitted':
+                    print(f'{"+".join(case) + ": " + key:<58} {row["runs"]:>5} '
+                          f'{row["inside"]:>11} {row["z_sd"]:>8.2f}')
+            if table['_not_fitted']:
+                print(f'{"+".join(case)}: not detected on {table["_not_fitted"]} records')
+        return 0
     table = sweep(cases, seeds, n=args.samples, ensemble=args.ensemble, progress=say)
     print(f'{"case":<40} {"runs":>5} {"first ok":>9} {"all found":>9} {"inside":>7} {"extra":>6}')
     for key, row in table.items():

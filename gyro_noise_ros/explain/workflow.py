@@ -44,6 +44,10 @@ seeded generator (``numpy.random.default_rng([seed, member, 0])``); an accepted 
 added into the members in place (its stochastic draws use ``default_rng([seed, member, 1 +
 catalogue index])``), the lattice and stamp effects are applied when a member is evaluated. Memory:
 ``ensemble`` float64 copies of the record (16 x 3.6e6 samples = 460 MB for 1 h at 1 kHz).
+
+Uncertainties. After the loop every accepted effect parameter gets a standard error and a 95 %
+interval from a parametric bootstrap of the final model (:mod:`.uncertainty`, ``bootstrap``
+records, default :data:`DEFAULT_BOOTSTRAP`; 0 switches it off).
 """
 
 from dataclasses import dataclass, field
@@ -55,6 +59,7 @@ import numpy as np
 from . import signatures as sig
 from .baseline import fit_baseline
 from .effects import CATALOGUE, Context, public_params, Quantization
+from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel
 from ..errors import ParameterError
 
 #: Candidates whose gap is within this of the best one count as tied; among them the smallest
@@ -66,6 +71,10 @@ PARAM_PENALTY = 0.25
 #: least this much to be accepted: smaller changes are within the run-to-run scatter of the band
 #: edges.
 INSIDE_GAP = 0.1
+#: Records simulated from the final model for the parameter uncertainties: the standard error is
+#: itself uncertain by about 1 / sqrt(2 (B - 1)) = 16 % at B = 20, which Student's t in the
+#: interval accounts for; each record costs about one ensemble member.
+DEFAULT_BOOTSTRAP = 20
 
 
 @dataclass(frozen=True)
@@ -128,6 +137,11 @@ class ExplainResult:
     seed : int
     seconds : dict
         Wall time of the phases (s).
+    uncertainty : dict
+        effect name -> parameter -> {value, stderr, ci95, unit, method, resolved, note}
+        (:mod:`.uncertainty`); empty when the bootstrap is off or nothing was named.
+    bootstrap : int
+        Replicates of the bootstrap (0: off).
 
     """
 
@@ -146,6 +160,8 @@ class ExplainResult:
     ensemble: int
     seed: int
     seconds: dict
+    uncertainty: dict = field(default_factory=dict)
+    bootstrap: int = 0
 
     @property
     def named(self):
@@ -171,12 +187,18 @@ class ExplainResult:
             },
             'ensemble': self.ensemble,
             'seed': self.seed,
+            'bootstrap': {
+                'replicates': self.bootstrap,
+                'seed': self.seed,
+                'method': 'parametric bootstrap of the final model (docs/discrepancy.md)',
+            },
             'baseline': self.baseline.to_dict(),
             'baseline_final': self.final_baseline.to_dict(),
             'steps': [
                 {
                     'effect': s.effect,
                     'params': public_params(s.params),
+                    'uncertainty': self.uncertainty.get(s.effect, {}),
                     'gap_before': s.gap_before,
                     'gap_after': s.gap_after,
                     'where': s.where,
@@ -205,8 +227,8 @@ class _Model:
     Members with the accepted additive terms already added.
     """
 
-    def __init__(self, meas, layout, baseline, ensemble, seed, map_fn=map):
-        self.meas, self.layout, self.seed, self.map_fn = meas, layout, seed, map_fn
+    def __init__(self, meas, layout, baseline, ensemble, seed, mapper=map):
+        self.meas, self.layout, self.seed, self.mapper = meas, layout, seed, mapper
         self.members = [baseline.generator(np.random.default_rng([seed, j, 0])).generate(meas.n)
                         for j in range(ensemble)]
         self.quantization = None
@@ -241,9 +263,9 @@ class _Model:
         return x, t
 
     def signatures(self, trial=None, ctx=None):
-        # One pure work unit per member, in member order (map_fn: local or a Dask cluster's).
+        # One pure work unit per member, in member order (mapper: local or a Dask cluster's).
         series = (self._series(j, trial, ctx) for j in range(len(self.members)))
-        return list(self.map_fn(member_signatures, itertools.repeat(self.layout), series,
+        return list(self.mapper(member_signatures, itertools.repeat(self.layout), series,
                                 itertools.repeat(self.meas.temperature_c)))
 
     def rebase(self, baseline, det_sum, ctx):
@@ -274,7 +296,7 @@ class _Model:
 
 def member_signatures(layout, series, temperature_c):
     """
-    Evaluate one ensemble member's signatures (the pure work unit shipped to ``map_fn``).
+    Evaluate one ensemble member's signatures (the pure work unit shipped to ``mapper``).
 
     Parameters
     ----------
@@ -316,7 +338,7 @@ def where_outside(layout, comparisons):
 
 
 def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None,
-            map_fn=map):
+            bootstrap=DEFAULT_BOOTSTRAP, mapper=map):
     """
     Run the discrepancy workflow on one measured axis (module doc).
 
@@ -334,10 +356,14 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         Candidates (default: the whole catalogue).
     progress : callable, optional
         Called with one-line status texts.
-    map_fn : callable, keyword-only
-        ``map``-like function (results in order) that evaluates the members' signatures, e.g.
-        the ``map`` of :func:`gyro_noise_ros.cluster.make_executor`'s executor; the result does
-        not depend on it.
+    bootstrap : int, keyword-only
+        Records simulated from the final model for the parameter uncertainties (0: none, else
+        >= 5).
+    mapper : callable, keyword-only
+        ``mapper(func, *iterables)`` like the builtin ``map`` (results in order), over which the
+        ensemble members' signatures (:func:`member_signatures`) and the bootstrap records (the
+        pure, picklable :func:`.uncertainty.replicate`) are computed; e.g. the ``map`` of
+        :func:`gyro_noise_ros.cluster.make_executor`'s executor. The result does not depend on it.
 
     Returns
     -------
@@ -351,6 +377,9 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         raise ParameterError(f'max_steps must be >= 0, got {max_steps}')
     if seed < 0:
         raise ParameterError(f'seed must be >= 0, got {seed}')
+    bootstrap = int(bootstrap)
+    if bootstrap != 0 and bootstrap < 5:
+        raise ParameterError(f'bootstrap must be 0 (off) or >= 5 records, got {bootstrap}')
     say = progress or (lambda text: None)
     seconds = {}
     t0 = time.perf_counter()
@@ -362,7 +391,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         f'sigma_w={baseline.sigma_w_rad_s:.3g} rad/s '
         f'sigma_nu={baseline.sigma_nu_rad_s:.3g} rad/s (L_sim={baseline.memory_sim})')
     t1 = time.perf_counter()
-    model = _Model(meas, layout, baseline, ensemble, seed, map_fn)
+    model = _Model(meas, layout, baseline, ensemble, seed, mapper)
     seconds['simulate_baseline'] = time.perf_counter() - t1
     t2 = time.perf_counter()
     member_sig = model.signatures()
@@ -370,6 +399,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     gap = sig.total_gap(comparisons)
     initial, gap_initial = comparisons, gap
     residual = meas.rate.copy()
+    det_terms = {}
     steps = []
     tried_last = {}
     say(f'gap {gap:.3f}')
@@ -402,6 +432,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
             break
         model.accept(effect, params, det, ctx)
         if det is not None:
+            det_terms[effect.name] = det
             residual = residual - det
             refit = fit_baseline(residual, meas.rate_hz)
             if _changed(refit, baseline):
@@ -431,10 +462,22 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
         member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap
     seconds['iterate'] = time.perf_counter() - t2
+    uncertainty = {}
+    if bootstrap and steps:
+        t3 = time.perf_counter()
+        by_name = {effect.name: effect for effect in effects}
+        final = FinalModel(n=meas.n, rate_hz=meas.rate_hz, temperature_c=meas.temperature_c,
+                           layout=layout, baseline=baseline,
+                           accepted=tuple((by_name[s.effect], s.params) for s in steps),
+                           det_terms=det_terms, seed=seed)
+        uncertainty = bootstrap_uncertainty(final, bootstrap, values=meas.rate, mapper=mapper)
+        seconds['bootstrap'] = time.perf_counter() - t3
+        say(f'uncertainties: parametric bootstrap of the final model, {bootstrap} records')
     seconds['total'] = time.perf_counter() - t0
     return ExplainResult(measurement=meas, layout=layout, baseline=first_baseline,
                          final_baseline=baseline, steps=steps, gap_initial=gap_initial,
                          gap_final=gap, unexplained=gap > INSIDE_GAP,
                          where_final=where_outside(layout, comparisons),
                          comparisons_initial=initial, comparisons_final=comparisons,
-                         tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds)
+                         tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds,
+                         uncertainty=uncertainty, bootstrap=bootstrap if steps else 0)

@@ -104,6 +104,10 @@ PARAMETERS = (
               'the first temperature wait this long for it, then are dropped and counted: they '
               'are never published uncorrected on the compensated topic', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
+    ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
+              'publisher such as the driver) instead of sensor-data best effort, so a busy host '
+              'drops no message that would leave a gap in the compensated stream',
+              read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
@@ -177,7 +181,7 @@ class ImuCompensatorNode(Node):
         self._offset = None
         self._rate = (time.monotonic(), 0, math.nan)  # time, published count, Hz
         group = PolledGroup()
-        qos = sensor_data_qos(p['queue_depth'])
+        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
                                                  raw=True, callback_group=group)
         self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,

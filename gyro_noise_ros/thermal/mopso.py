@@ -38,6 +38,11 @@ modes' values are combined; the mean is our reading). K is rounded to an integer
   objectives to [0, 1] over the final archive and take the point nearest to the ideal point
   (0, 0); ties go to the smaller K, then the smaller alpha.
 
+* Refinement (:func:`refine`, ours, not in the paper): when the search ran on a cheaper
+  stand-in of the fitness (windows of the record), its best points, stratified by K, are
+  re-evaluated with a reference fitness (the whole record) and the pick's alpha is polished by
+  a compass search; the pick is then made on the reference fitness.
+
 Everything random comes from one ``numpy.random.Generator``; the result is a deterministic
 function of the seed. Fitness functions are plain picklable callables, evaluated through
 ``map_fn`` (the built-in ``map`` by default; a process pool's ``map`` distributes them).
@@ -108,6 +113,10 @@ class MopsoResult:
         Fitness requests (particles times iterations); the rest were cache hits.
     history : list
         Per iteration, the positions (Np, 2) and fitness (Np, 2) evaluated (paper Figure 11).
+    reference_evaluations : int
+        Points re-evaluated with the reference fitness by :func:`refine` (0 without it).
+    search_pick : tuple or None
+        After :func:`refine`, the (K, alpha) the search fitness alone would have picked.
 
     """
 
@@ -119,12 +128,24 @@ class MopsoResult:
     evaluations: int
     requested: int
     history: list = field(repr=False, default_factory=list)
+    reference_evaluations: int = 0
+    search_pick: tuple = None
 
 
-def dominates(a, b):
-    """Return True when fitness ``a`` Pareto-dominates ``b`` (minimisation)."""
-    a, b = np.asarray(a), np.asarray(b)
-    return bool(np.all(a <= b) and np.any(a < b))
+def dominates(a, b, *, margin=0.0):
+    """
+    Return True when fitness ``a`` Pareto-dominates ``b`` (minimisation).
+
+    With ``margin > 0``, ``a`` must also be better than ``b`` by more than that fraction of
+    ``|b|`` in at least one objective (differences below the fitness's resolution ignored).
+    """
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return bool(np.all(a <= b) and np.any(a < b - margin * np.abs(b)))
+
+
+def _key(p):
+    """Return the cache key of a position: K rounded to an integer, alpha to 1."""
+    return int(round(p[0])), float(round(p[1]))
 
 
 def _cells(fit, n_grid):
@@ -234,12 +255,9 @@ def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40,
     cache = {}
     requested = 0
 
-    def key_of(p):
-        return int(round(p[0])), float(round(p[1]))
-
     def evaluate(pos):
         nonlocal requested
-        keys = [key_of(p) for p in pos]
+        keys = [_key(p) for p in pos]
         requested += len(keys)
         todo = list(dict.fromkeys(k for k in keys if k not in cache))
         for k, f in zip(todo, map_fn(fitness, todo)):
@@ -251,7 +269,7 @@ def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40,
     fit = evaluate(pos)
     history = [(pos.copy(), fit.copy())]
     pbest, pbest_fit = pos.copy(), fit.copy()
-    arch_p, arch_f = _non_dominated(np.array([key_of(p) for p in pos], dtype=float), fit)
+    arch_p, arch_f = _non_dominated(np.array([_key(p) for p in pos], dtype=float), fit)
     arch_p, arch_f = _truncate(arch_p, arch_f, archive_size, n_grid, gen)
     for _ in range(iterations - 1):
         leaders = np.array([_leader(arch_p, arch_f, n_grid, gen) for _ in range(n_particles)])
@@ -269,7 +287,7 @@ def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40,
             if dominates(fit[i], pbest_fit[i]) or (
                     not dominates(pbest_fit[i], fit[i]) and coin[i] < 0.5):
                 pbest[i], pbest_fit[i] = pos[i], fit[i]
-        cand_p = np.vstack([arch_p, [key_of(p) for p in pos]])
+        cand_p = np.vstack([arch_p, [_key(p) for p in pos]])
         cand_f = np.vstack([arch_f, fit])
         arch_p, arch_f = _non_dominated(cand_p, cand_f)
         arch_p, arch_f = _truncate(arch_p, arch_f, archive_size, n_grid, gen)
@@ -278,3 +296,131 @@ def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40,
                        fitness=tuple(arch_f[best]), archive_params=arch_p,
                        archive_fitness=arch_f, evaluations=len(cache), requested=requested,
                        history=history)
+
+
+def pareto_ranks(fit):
+    """
+    Return the non-dominated sorting rank of each point (0 for the first front).
+
+    Rank r holds the points dominated only by points of ranks below r (minimisation).
+    """
+    fit = np.asarray(fit, dtype=float).reshape(-1, 2)
+    n = len(fit)
+    # dom[i, j]: point i dominates point j.
+    le = np.all(fit[:, None, :] <= fit[None, :, :], axis=2)
+    lt = np.any(fit[:, None, :] < fit[None, :, :], axis=2)
+    dom = le & lt
+    ranks = np.full(n, -1)
+    left = np.ones(n, dtype=bool)
+    r = 0
+    while left.any():
+        front = left & ~dom[left].any(axis=0)
+        ranks[front] = r
+        left &= ~front
+        r += 1
+    return ranks
+
+
+def evaluated_points(result):
+    """Return the distinct (K, alpha) keys a search evaluated and their fitness, (m, 2) each."""
+    seen = {}
+    for pos, fit in result.history:
+        for p, f in zip(pos, fit):
+            seen.setdefault(_key(p), tuple(float(v) for v in f))
+    keys = np.array(list(seen), dtype=float).reshape(-1, 2)
+    return keys, np.array(list(seen.values()), dtype=float).reshape(-1, 2)
+
+
+def refine(result, fitness, *, points=10, polish=16, bounds=PAPER_BOUNDS, map_fn=map):
+    """
+    Re-evaluate a search's most promising points with a reference fitness and pick again.
+
+    1. Screening: the candidates are the distinct (K, alpha) the search evaluated, ordered by
+       their Pareto rank under the search's fitness (:func:`pareto_ranks`), then by the
+       compromise distance of :func:`pick_compromise` within their rank, then by K and alpha;
+       each K's first candidate comes first (the search fitness may misrank K, the structural
+       parameter), then the others in that order. The first ``points`` are evaluated with
+       ``fitness``.
+    2. Polish: a compass search around the current pick (K, alpha): (K, alpha - s) and
+       (K, alpha + s), in the first round also (K - 1, alpha) and (K + 1, alpha) (rounded,
+       inside ``bounds``, not yet evaluated), are evaluated and the pick is taken again over
+       the non-dominated set of every reference evaluation; the alpha step s starts at a
+       quarter of the alpha range and halves whenever the pick does not move, until
+       ``polish`` evaluations are spent or s < 1.
+
+    The archive returned is the non-dominated set of all reference evaluations and the pick
+    follows :func:`pick_compromise` on the reference fitness. Deterministic (no randomness).
+
+    Parameters
+    ----------
+    result : MopsoResult
+        Outcome of :func:`mopso` (its ``history`` is used).
+    fitness : callable
+        The reference fitness, ``fitness((k, alpha)) -> (f1, f2)``, pure and picklable.
+    points : int, keyword-only
+        Screening evaluations (>= 1).
+    polish : int, keyword-only
+        Polish evaluations (>= 0).
+    bounds : tuple, keyword-only
+        ((k_min, k_max), (alpha_min, alpha_max)) of the search.
+    map_fn : callable, keyword-only
+        ``map``-like function for the evaluations (in order).
+
+    Returns
+    -------
+    MopsoResult
+        The new pick, archive and fitness (reference), ``reference_evaluations`` and
+        ``search_pick`` set; counts and history of the search kept.
+
+    """
+    if int(points) < 1 or int(polish) < 0:
+        raise ParameterError(f'points must be >= 1 and polish >= 0, got {points!r}, '
+                             f'{polish!r}')
+    k_lo, k_hi = int(round(bounds[0][0])), int(round(bounds[0][1]))
+    a_lo, a_hi = float(bounds[1][0]), float(bounds[1][1])
+    keys, fit = evaluated_points(result)
+    ranks = pareto_ranks(fit)
+    dist = np.empty(len(fit))
+    for r in np.unique(ranks):
+        members = ranks == r
+        f = fit[members]
+        lo, hi = f.min(axis=0), f.max(axis=0)
+        norm = (f - lo) / np.where(hi > lo, hi - lo, 1.0)
+        dist[members] = np.round(np.hypot(norm[:, 0], norm[:, 1]), 12)
+    order = np.lexsort((keys[:, 1], keys[:, 0], dist, ranks))
+    first = np.zeros(len(order), dtype=bool)
+    first[np.unique(keys[order, 0], return_index=True)[1]] = True
+    order = np.concatenate([order[first], order[~first]])[:int(points)]
+    done = {}
+
+    def evaluate(todo):
+        for key, f in zip(todo, map_fn(fitness, todo)):
+            done[key] = tuple(float(v) for v in f)
+
+    def pick():
+        p, f = _non_dominated(np.array(list(done), dtype=float),
+                              np.array(list(done.values()), dtype=float))
+        return p, f, pick_compromise(p, f)
+
+    evaluate([_key(p) for p in keys[order]])
+    arch_p, arch_f, best = pick()
+    step = (a_hi - a_lo) / 4.0
+    spent = 0
+    while spent < int(polish) and step >= 1.0:
+        k, a = int(arch_p[best, 0]), float(arch_p[best, 1])
+        probes = [(k, float(round(min(max(v, a_lo), a_hi)))) for v in (a - step, a + step)]
+        if not spent:
+            probes += [(j, a) for j in (k - 1, k + 1) if k_lo <= j <= k_hi]
+        probes = [q for q in dict.fromkeys(probes) if q not in done][:int(polish) - spent]
+        if probes:
+            evaluate(probes)
+            spent += len(probes)
+            arch_p, arch_f, best = pick()
+        if not probes or _key(arch_p[best]) == (k, a):
+            step /= 2.0
+    return MopsoResult(k=int(arch_p[best, 0]), alpha=float(arch_p[best, 1]),
+                       fitness=tuple(arch_f[best]), archive_params=arch_p,
+                       archive_fitness=arch_f, evaluations=result.evaluations,
+                       requested=result.requested, history=result.history,
+                       reference_evaluations=len(done),
+                       search_pick=(result.k, result.alpha))

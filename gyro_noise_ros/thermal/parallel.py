@@ -22,8 +22,13 @@ Fit on a training run:
    ``fitness_samples`` consecutive samples spread evenly over the run (same sample rate, so
    alpha and the centre frequencies mean the same as on the whole run; the O(n^2) fuzzy
    entropy costs ``windows x samples^2`` instead of ``n^2``), evaluations are cached by
-   (K, alpha), and ``workers > 1`` spreads them over processes. ``fitness_samples=None``
-   evaluates on the whole run (the naive path).
+   (K, alpha), and ``workers > 1`` spreads them over processes. The windowed fitness ranks
+   points unlike the whole-run one, so :func:`.mopso.refine` then re-evaluates
+   ``refine_points`` of the search's best points (each K's best first) and spends
+   ``refine_polish`` evaluations on a compass search around the pick, all with the reference
+   fitness: the whole run when it holds at most ``refine_windows x refine_samples`` samples,
+   that many longer windows otherwise; the pick is made on it (the archive in ``fit_info``
+   too). ``fitness_samples=None`` evaluates on the whole run (the naive path, no refinement).
 2. VMD of the whole run with (K, alpha), warm-started from the middle window's centre frequencies
    (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
    spectrum, so the 1.44 M-sample run stays within seconds).
@@ -55,7 +60,7 @@ from gyro_noise_ros.cluster import make_executor
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.thermal.classify import classify_modes
 from gyro_noise_ros.thermal.elman import ElmanModel, fit_elman
-from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, VmdFitness
+from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, refine, VmdFitness
 from gyro_noise_ros.thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 from gyro_noise_ros.thermal.tfpf import tfpf
 from gyro_noise_ros.thermal.vmd import vmd
@@ -72,6 +77,10 @@ DEFAULT_OPTIONS = {
     'c2': 1.5,
     'fitness_samples': 256,
     'fitness_windows': 4,
+    'refine_points': 10,
+    'refine_polish': 16,
+    'refine_samples': 1024,
+    'refine_windows': 4,
     'vmd_tol': 1e-7,
     'vmd_max_iter': 500,
     'full_vmd_iter': 30,
@@ -139,9 +148,12 @@ class ParallelModel:
         if unknown:
             raise ParameterError(f'unknown ParallelModel options: {sorted(unknown)}')
         self.options = {**DEFAULT_OPTIONS, **options}
-        fs = self.options['fitness_samples']
-        if fs is not None and int(fs) < 64:
-            raise ParameterError(f'fitness_samples must be >= 64 or None, got {fs!r}')
+        for name in ('fitness_samples', 'refine_samples'):
+            fs = self.options[name]
+            if fs is not None and int(fs) < 64:
+                raise ParameterError(f'{name} must be >= 64 or None, got {fs!r}')
+        if int(self.options['refine_points']) < 0 or int(self.options['refine_polish']) < 0:
+            raise ParameterError('refine_points and refine_polish must be >= 0')
         self.axes = None
         self.rate_hz = None
         self.temperature_range_c = None
@@ -177,10 +189,21 @@ class ParallelModel:
         segs = fitness_windows(x, o['fitness_samples'], o['fitness_windows'])
         fitness = VmdFitness(np.ascontiguousarray(segs), tol=o['vmd_tol'],
                              max_iter=int(o['vmd_max_iter']))
-        res = mopso(fitness, rng=swarm_rng, bounds=tuple(tuple(b) for b in o['bounds']),
+        bounds = tuple(tuple(b) for b in o['bounds'])
+        map_fn = map if pool is None else pool.map
+        res = mopso(fitness, rng=swarm_rng, bounds=bounds,
                     n_particles=int(o['n_particles']), archive_size=int(o['archive_size']),
                     iterations=int(o['iterations']), w=o['w'], c1=o['c1'], c2=o['c2'],
-                    map_fn=map if pool is None else pool.map)
+                    map_fn=map_fn)
+        ref_segs = fitness_windows(x, o['refine_samples'], o['refine_windows'])
+        if segs.size != x.size and int(o['refine_points']) > 0:
+            # The windowed fitness misranks points; re-evaluate the best of them (and polish
+            # the pick) with the reference fitness: the whole run when it is at most
+            # refine_windows x refine_samples long, longer windows otherwise.
+            reference = VmdFitness(np.ascontiguousarray(ref_segs), tol=o['vmd_tol'],
+                                   max_iter=int(o['vmd_max_iter']))
+            res = refine(res, reference, points=int(o['refine_points']),
+                         polish=int(o['refine_polish']), bounds=bounds, map_fn=map_fn)
         if segs.size == x.size:
             dec = vmd(x, k=res.k, alpha=res.alpha, tol=o['vmd_tol'],
                       max_iter=int(o['vmd_max_iter']))
@@ -201,7 +224,15 @@ class ParallelModel:
                              'archive_k': res.archive_params[:, 0].astype(int).tolist(),
                              'archive_alpha': res.archive_params[:, 1].tolist(),
                              'archive_fuzzy_entropy': res.archive_fitness[:, 0].tolist(),
-                             'archive_permutation_entropy': res.archive_fitness[:, 1].tolist()}
+                             'archive_permutation_entropy': res.archive_fitness[:, 1].tolist(),
+                             'reference_evaluations': res.reference_evaluations,
+                             'search_k': (res.k if res.search_pick is None
+                                          else int(res.search_pick[0])),
+                             'search_alpha': (res.alpha if res.search_pick is None
+                                              else float(res.search_pick[1])),
+                             'fitness_shape': list(segs.shape),
+                             'reference_shape': (list(ref_segs.shape) if res.search_pick
+                                                 is not None else list(segs.shape))}
         return {'k': res.k, 'alpha': res.alpha,
                 'fitness': {'fuzzy_entropy': res.fitness[0],
                             'permutation_entropy': res.fitness[1]},

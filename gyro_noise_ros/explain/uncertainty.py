@@ -1,0 +1,443 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Standard errors and 95 % intervals of the accepted effect parameters (docs/discrepancy.md).
+
+Method: **parametric bootstrap** of the final model. ``B`` records are simulated from the model
+the workflow ended with (the final baseline plus every accepted effect, exactly as the ensemble
+members are built, but with their own seeds ``numpy.random.default_rng([seed, REPLICATE_OFFSET +
+b, ...])``), each accepted effect is refitted on each record with the fitter's own estimator
+(:meth:`~.effects.Effect.estimate`: the same numbers without the detection test), and the spread
+of the refits is the standard error:
+
+* deterministic effects (sinusoid, bias_drift, bias_transient, temperature_sensitivity) are
+  refitted on the record minus the deterministic terms accepted before them (what their fitter
+  saw on the measurement);
+* the Allan-fitted stochastic effects (rate_random_walk, bias_instability, gauss_markov) are
+  refitted on the excess of the record's Allan variance over the leave-one-out mean of the other
+  B - 1 records, plus the effect's own fitted Allan variance (Allan variances of independent
+  processes add, so this is the excess over the final model without the effect), with the weights
+  the fit used (the estimator must be the same: weights from records that include the effect
+  would make a more efficient estimator and an error 1.7x too small, measured on
+  rate_random_walk); the noise of the leave-one-out mean stands in for the noise of the ensemble
+  mean the fit subtracted;
+* the stamp effects (sample_loss, stamp_jitter) are refitted on the simulated stamps;
+* ``quantization`` is not bootstrapped (a simulated record sits exactly on the fitted lattice and
+  would return it exactly): its step and offset are the least-squares line through the measured
+  levels against their integer indices, the standard errors that line's (the scatter of the levels
+  about the lattice: text round-off, or values off the lattice).
+
+The bootstrap is conditional on the fitted baseline and the other accepted effects: it measures
+how far the estimator scatters when the record is as noisy as the model says, not how the
+baseline's own fit or the choice of effects would change.
+
+A parameter found on a grid (the correlation time of ``gauss_markov``) adds the grid's rounding
+error, spacing / sqrt(12), in quadrature. The
+interval is ``value +/- t_{0.975, m - 1} stderr`` with m the successful refits (Student's t
+accounts for the bootstrap's own noise in the standard error, about 1 / sqrt(2 (m - 1)) relative),
+clipped at 0 for parameters that cannot be negative.
+
+A parameter is **unresolved** (``resolved`` false, with the reason in ``note``) when
+
+* fewer than :data:`MIN_OK_FRACTION` of the refits give a finite number;
+* the interval reaches zero (``t stderr >= |value|``) for a scale or signed parameter, or spans
+  the whole circle for a phase: the record does not tell the value from 0;
+* the refits' mean lies more than :data:`BIAS_LIMIT` standard errors from the value: the model
+  does not reproduce its own estimate (the estimator is biased under it, or the value comes from a
+  feature the model does not simulate);
+* the Gauss-Markov correlation time sits at the shortest point of its grid (3 samples): only an
+  upper bound (:func:`grid_edge`; the longest points are refused by the fitter already).
+"""
+
+from dataclasses import dataclass
+from types import SimpleNamespace
+
+import numpy as np
+import scipy.stats
+
+from .effects import Context, GaussMarkov, NAMES, Quantization
+from .signatures import allan_deviation_octaves, lattice_fit
+
+#: Replicate b uses member index REPLICATE_OFFSET + b in the seed sequence: never an ensemble
+#: member's index.
+REPLICATE_OFFSET = 1 << 20
+#: Fewer successful refits than this fraction of B: the parameter is unresolved.
+MIN_OK_FRACTION = 0.8
+#: Refits' mean further than this many (bootstrap) standard errors from the value: unresolved.
+BIAS_LIMIT = 3.0
+METHOD_BOOTSTRAP = 'parametric bootstrap'
+METHOD_LATTICE = 'lattice least squares'
+
+#: Unit and kind of every effect parameter. Kinds: 'scale' (> 0), 'signed', 'angle' (rad),
+#: 'location' (no zero test), 'count' (no standard error).
+PARAMETERS = {
+    'step_rad_s': ('rad/s', 'scale'),
+    'offset_rad_s': ('rad/s', 'location'),
+    'amplitude_rad_s': ('rad/s', 'signed'),
+    'frequency_hz': ('Hz', 'scale'),
+    'phase_rad': ('rad', 'angle'),
+    'slope_rad_s2': ('rad/s^2', 'signed'),
+    'delay_s': ('s', 'location'),
+    'time_constant_s': ('s', 'scale'),
+    'k_rad_s_per_sqrt_s': ('rad/s/sqrt(s)', 'scale'),
+    'b_rad_s': ('rad/s', 'scale'),
+    'sigma_rad_s': ('rad/s', 'scale'),
+    'correlation_time_s': ('s', 'scale'),
+    'coefficient_rad_s_per_degc': ('rad/s/degC', 'signed'),
+    'rate_coefficient_rad_s_per_degc_per_s': ('rad/s/(degC/s)', 'signed'),
+    'gap_rate_per_s': ('1/s', 'scale'),
+    'mean_lost_samples': ('samples', 'scale'),
+    'max_lost_samples': ('samples', 'count'),
+    'jitter_rms_s': ('s', 'scale'),
+    'short_interval_fraction': ('1', 'scale'),
+}
+
+
+@dataclass(frozen=True)
+class FinalModel:
+    """
+    What a replicate needs to simulate the final model and refit its effects (picklable).
+
+    Attributes
+    ----------
+    n : int
+        Samples.
+    rate_hz : float
+        Nominal rate (Hz).
+    temperature_c : numpy.ndarray or None
+        Measured temperature (drives temperature_sensitivity).
+    layout : Layout
+        Signature layout of the measurement.
+    baseline : BaselineModel
+        The final baseline.
+    accepted : tuple
+        (Effect, params) of every accepted effect, in order.
+    det_terms : dict
+        name -> the simulated term (rad/s, n samples) of each accepted deterministic effect.
+    seed : int
+        Seed of the run.
+
+    """
+
+    n: int
+    rate_hz: float
+    temperature_c: object
+    layout: object
+    baseline: object
+    accepted: tuple
+    det_terms: dict
+    seed: int
+
+    def meas(self, rate=None, t_s=None):
+        """Return the measurement-like object the fitters read."""
+        return SimpleNamespace(n=self.n, rate_hz=self.rate_hz, temperature_c=self.temperature_c,
+                               rate=rate, t_s=t_s)
+
+
+def _rng(model, index, stream):
+    return np.random.default_rng([model.seed, REPLICATE_OFFSET + int(index), stream])
+
+
+def simulate(model, index):
+    """
+    Simulate replicate ``index`` of the final model.
+
+    Built as the ensemble members are (:mod:`.workflow`): baseline, deterministic terms, stochastic
+    terms, then the lattice and the stamps.
+
+    Returns
+    -------
+    tuple
+        (x in rad/s, stamps in s or None for ideal stamps).
+
+    """
+    n, rate_hz = model.n, model.rate_hz
+    ctx = Context(model.meas(), None, model.layout, None, None, {})
+    x = model.baseline.generator(_rng(model, index, 0)).generate(n)
+    for term in model.det_terms.values():
+        x += term
+    quant, t = None, None
+    for effect, params in model.accepted:
+        stream = 1 + NAMES.index(effect.name)
+        if effect.kind == 'stochastic':
+            x += effect.term(params, n, rate_hz, _rng(model, index, stream), ctx)
+        elif effect.kind == 'quantization':
+            quant = params
+        elif effect.kind == 'stamps':
+            t = effect.stamps(params, n, rate_hz, _rng(model, index, stream), ctx)
+    if quant is not None:
+        x = Quantization.apply(quant, x)
+    return x, t
+
+
+def replicate(model, index):
+    """
+    Simulate replicate ``index`` and refit every accepted effect on it (pure; picklable).
+
+    The one function :func:`bootstrap` maps over the replicates (a scheduler may run it anywhere).
+
+    Parameters
+    ----------
+    model : FinalModel
+        The final model.
+    index : int
+        Replicate number (0 .. B - 1).
+
+    Returns
+    -------
+    dict
+        effect name -> refitted params (or None), and ``'_avar'`` -> the replicate's Allan
+        variance on the layout ((rad/s)^2) when a stochastic effect is accepted.
+
+    """
+    x, t = simulate(model, index)
+    t_s = t if t is not None else np.arange(model.n) / model.rate_hz
+    meas = model.meas(rate=x, t_s=t_s)
+    out = {}
+    earlier = []
+    for effect, params in model.accepted:
+        # the fitter saw the record minus the deterministic terms accepted before it: so does the
+        # refit (the later ones stay in, as they were in the measurement)
+        residual = x
+        for name in earlier:
+            residual = residual - model.det_terms[name]
+        if effect.name in model.det_terms:
+            earlier.append(effect.name)
+        if effect.kind in ('stochastic', 'quantization'):
+            continue
+        try:
+            out[effect.name] = effect.estimate(Context(meas, residual, model.layout, None, None,
+                                                       {}), near=params)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            out[effect.name] = None
+    if any(effect.kind == 'stochastic' for effect, _ in model.accepted):
+        out['_avar'] = allan_deviation_octaves(x, model.rate_hz, model.layout.m) ** 2
+    return out
+
+
+def _allan_refits(model, effect, params, avar):
+    """Refit a stochastic effect on each replicate's leave-one-out excess (module doc)."""
+    count = avar.shape[0]
+    ctx = Context(model.meas(), None, model.layout, None, None, {})
+    extras, templ = effect.templates(ctx)
+    if isinstance(effect, GaussMarkov):
+        tcs = np.array([e['correlation_time_s'] for e in extras])
+        r_hat = int(np.argmin(np.abs(np.log(tcs / params['correlation_time_s']))))
+    else:
+        r_hat = 0
+    loo = (avar.sum(axis=0)[None, :] - avar) / (count - 1)
+    excess = avar - loo + effect.amplitude(params) * templ[r_hat][None, :]
+    weights = params.get('_allan_weights')
+    stat, amp = effect.best(templ, effect.weights(avar) if weights is None else weights, excess)
+    best = np.argmax(stat, axis=0)
+    return [effect.params(float(amp[r, b]), extras[r]) for b, r in enumerate(best)]
+
+
+def grid_resolution(model, effect, params):
+    """Return parameter -> rounding sd (spacing / sqrt 12) of the grid it was found on."""
+    root12 = np.sqrt(12.0)
+    duration = model.n / model.rate_hz
+    if isinstance(effect, GaussMarkov):
+        ratio = (duration / 10.0) / (3.0 / model.rate_hz)
+        return {'correlation_time_s': params['correlation_time_s'] * np.log(ratio)
+                / (effect.GRID_POINTS - 1) / root12}
+    return {}
+
+
+def grid_edge(model, effect, name, value):
+    """
+    Return why a grid-found value is only a bound ('' when it is not at the grid's edge).
+
+    The Gauss-Markov correlation time at the shortest grid point (3 samples) can be shorter still:
+    the baseline's own first-order dynamics (paper 000 eq. 1) overlap it there.
+    """
+    if isinstance(effect, GaussMarkov) and name == 'correlation_time_s':
+        shortest = 3.0 / model.rate_hz
+        if value <= shortest * (1.0 + 1e-9):
+            return (f'at the shortest grid point ({shortest:.3g} s = 3 samples): an upper bound, '
+                    'not a measurement')
+    return ''
+
+
+def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
+    """
+    Return the standard error, interval and resolution of one parameter (module doc).
+
+    Parameters
+    ----------
+    value : float
+        The fitted value.
+    refits : sequence of float
+        The bootstrap refits (NaN or None for a failed refit).
+    unit, kind : str, keyword-only
+        See :data:`PARAMETERS`.
+    floor : float, keyword-only
+        Grid rounding sd added in quadrature.
+    replicates : int, keyword-only
+        B (default: len(refits)).
+
+    Returns
+    -------
+    dict
+        ``value``, ``stderr``, ``ci95`` [lo, hi], ``unit``, ``method``, ``resolved``, ``note``.
+
+    """
+    count = len(refits) if replicates is None else int(replicates)
+    out = {'value': float(value), 'stderr': None, 'ci95': None, 'unit': unit,
+           'method': f'{METHOD_BOOTSTRAP} ({count} replicates)', 'resolved': False, 'note': ''}
+    if kind == 'count':
+        out['method'] = 'none'
+        out['note'] = 'a count (the largest measured gap), no standard error'
+        return out
+    arr = np.array([np.nan if r is None else r for r in refits], dtype=np.float64)
+    arr = arr[np.isfinite(arr)]
+    if arr.size < max(2, MIN_OK_FRACTION * count):
+        out['note'] = f'unresolved: the refit failed on {count - arr.size} of {count} replicates'
+        return out
+    dev = arr - value
+    if kind == 'angle':
+        dev = np.angle(np.exp(1j * dev))
+    boot_sd = float(np.std(dev, ddof=1))
+    stderr = float(np.hypot(boot_sd, floor))
+    t = float(scipy.stats.t.ppf(0.975, arr.size - 1))
+    lo, hi = value - t * stderr, value + t * stderr
+    if kind == 'scale':
+        lo = max(lo, 0.0)
+    out.update(stderr=stderr, ci95=[float(lo), float(hi)], resolved=True)
+    shift = float(np.mean(dev))
+    if kind in ('scale', 'signed') and t * stderr >= abs(value):
+        out.update(resolved=False,
+                   note=f'unresolved: the 95 % interval reaches 0 (relative stderr '
+                   f'{stderr / max(abs(value), 1e-300):.2g})')
+    elif kind == 'angle' and t * stderr >= np.pi:
+        out.update(resolved=False, note='unresolved: the 95 % interval spans the whole circle')
+    elif boot_sd > 0 and abs(shift) > BIAS_LIMIT * boot_sd and abs(shift) > floor:
+        out.update(resolved=False,
+                   note=f'unresolved: the refits average {value + shift:.4g} {unit}, '
+                   f'{abs(shift) / boot_sd:.1f} stderr from the value: the model does not '
+                   'reproduce its own estimate')
+    return out
+
+
+def lattice_uncertainty(x, step, offset):
+    """
+    Return the standard errors of a value lattice's step and offset (module doc).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Measured samples (rad/s).
+    step, offset : float
+        The lattice found by :func:`~.signatures.find_lattice` (itself the least-squares line of
+        :func:`~.signatures.lattice_fit`).
+
+    Returns
+    -------
+    dict
+        ``step_rad_s`` and ``offset_rad_s`` -> the :func:`summarise` layout (method
+        ``lattice least squares``).
+
+    """
+    eps = 1e-7 * float(np.std(x))
+    levels = np.unique(np.round(x / eps)) * eps
+    _, _, cov = lattice_fit(levels, step, offset)
+    out = {}
+    for i, (name, value) in enumerate((('step_rad_s', step), ('offset_rad_s', offset))):
+        entry = {'value': float(value), 'stderr': None, 'ci95': None, 'unit': 'rad/s',
+                 'method': METHOD_LATTICE, 'resolved': False,
+                 'note': 'unresolved: fewer than 3 levels on the lattice'}
+        if cov is not None:
+            stderr = float(np.sqrt(cov[i, i]))
+            # the levels' scatter is round-off, not Gaussian noise: the normal quantile
+            entry.update(stderr=stderr, ci95=[float(value - 1.96 * stderr),
+                                              float(value + 1.96 * stderr)],
+                         resolved=True, note='')
+        out[name] = entry
+    return out
+
+
+def bootstrap(model, replicates, *, values=None, mapper=map):
+    """
+    Return standard errors and intervals of every accepted effect parameter (module doc).
+
+    Parameters
+    ----------
+    model : FinalModel
+        The final model of the workflow.
+    replicates : int
+        B, records simulated from it (>= 2).
+    values : numpy.ndarray, keyword-only
+        The measured samples (rad/s), for the quantization lattice.
+    mapper : callable, keyword-only
+        ``mapper(func, iterable)`` like the builtin ``map`` (the default); the only place the
+        replicates are computed, so a parallel scheduler can be put here.
+
+    Returns
+    -------
+    dict
+        effect name -> parameter -> ``{value, stderr, ci95, unit, method, resolved, note}``.
+
+    """
+    from functools import partial
+
+    count = int(replicates)
+    results = list(mapper(partial(replicate, model), range(count)))
+    avar = (np.array([r['_avar'] for r in results]) if results and '_avar' in results[0]
+            else None)
+    out = {}
+    for effect, params in model.accepted:
+        public = {k: v for k, v in params.items() if not k.startswith('_')}
+        if effect.kind == 'quantization':
+            lattice = lattice_uncertainty(values, public['step_rad_s'], public['offset_rad_s'])
+            out[effect.name] = lattice
+            continue
+        if effect.kind == 'stochastic':
+            refits = _allan_refits(model, effect, params, avar)
+        else:
+            refits = [r[effect.name] for r in results]
+        floors = grid_resolution(model, effect, params)
+        entry = {}
+        for name, value in public.items():
+            unit, kind = PARAMETERS.get(name, ('', 'location'))
+            entry[name] = summarise(value, [None if r is None else r.get(name) for r in refits],
+                                    unit=unit, kind=kind, floor=floors.get(name, 0.0),
+                                    replicates=count)
+            edge = grid_edge(model, effect, name, value)
+            if edge and entry[name]['resolved']:
+                entry[name].update(resolved=False, note=f'unresolved: {edge}')
+        out[effect.name] = entry
+    return out
+
+
+def format_value(entry, digits=4):
+    """
+    Return ``value +/- stderr unit`` (or the reason there is none) for reports.
+
+    The value is given to the second significant digit of the standard error.
+    """
+    value, stderr, unit = entry['value'], entry['stderr'], entry['unit']
+    unit = '' if unit == '1' else f' {unit}'
+    if stderr is None or not np.isfinite(stderr):
+        return f'{value:.{digits}g}{unit} (no standard error)'
+    if stderr > 0 and value != 0:
+        places = int(np.floor(np.log10(abs(value)))) - int(np.floor(np.log10(stderr))) + 2
+        places = min(max(places, 2), 10)
+    else:
+        places = digits
+    return f'{value:.{places}g} ± {stderr:.2g}{unit}'
+
+
+__all__ = ['FinalModel', 'PARAMETERS', 'bootstrap', 'format_value', 'lattice_uncertainty',
+           'replicate', 'simulate', 'summarise']

@@ -206,7 +206,7 @@ def test_explain_ensemble_on_the_cluster_is_identical(dask_cluster):
     local = explain(meas, seed=1, ensemble=6, max_steps=1)
     pool = cluster.make_executor(scheduler=dask_cluster.scheduler_address)
     try:
-        remote = explain(meas, seed=1, ensemble=6, max_steps=1, map_fn=pool.map)
+        remote = explain(meas, seed=1, ensemble=6, max_steps=1, mapper=pool.map)
     finally:
         pool.shutdown()
     a, b = local.to_dict(), remote.to_dict()
@@ -261,7 +261,8 @@ def test_thermal_mopso_particles_on_the_cluster_give_the_same_model(dask_cluster
     # passes its --scheduler executor to fit_method exactly so (the exit-5 test shows it connects).
     run, _ = read_thermal_run(_thermal_bag(tmp_path / 'train', 5))
     small = {'n_particles': 6, 'iterations': 2, 'fitness_samples': 128, 'elman_epochs': 2,
-             'elman_iterations': 5, 'elman_samples': 400}
+             'elman_iterations': 5, 'elman_samples': 400, 'refine_points': 2, 'refine_polish': 2,
+             'refine_samples': 256}
     local = methods.fit_method('parallel', run, rng=np.random.default_rng(4), **small)
     pool = cluster.make_executor(scheduler=dask_cluster.scheduler_address)
     try:

@@ -65,7 +65,8 @@ def dask_cluster():
     # workers without Dask's MALLOC_TRIM_THRESHOLD_, as docs/scale.md advises (speed only).
     with dask.config.set({'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}):
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                          dashboard_address=None, silence_logs=50) as c:
+                          dashboard_address=None, worker_dashboard_address=None,
+                          silence_logs=50) as c:
             yield c
 
 

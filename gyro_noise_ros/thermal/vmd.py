@@ -66,6 +66,19 @@ class VmdResult:
 
 
 @numba.njit(cache=True, fastmath=False)
+def _update_centres(omega, num, den, diff, old_norm, fix_dc):  # pragma: no cover - JIT
+    """Set each centre frequency to its mode's spectral centroid (eq. 6); return eq. 7's sum."""
+    total = 0.0
+    for k in range(omega.size):
+        if den[k] > 0.0:
+            omega[k] = num[k] / den[k]
+        if fix_dc and k == 0:
+            omega[k] = 0.0
+        total += diff[k] / max(old_norm[k], 1e-300)
+    return total
+
+
+@numba.njit(cache=True, fastmath=False)
 def _admm_sweep(f_hat, freqs, u, lam, omega, alpha, tau, fix_dc):  # pragma: no cover - JIT
     """Run one ADMM iteration in place; return sum_k ||du_k||^2 / ||u_k||^2 (eq. 7)."""
     nbins, k_modes = u.shape
@@ -95,14 +108,7 @@ def _admm_sweep(f_hat, freqs, u, lam, omega, alpha, tau, fix_dc):  # pragma: no 
             old_norm[k] += old.real * old.real + old.imag * old.imag
         if tau != 0.0:
             lam[j] = lam[j] + tau * (s - fj)
-    total = 0.0
-    for k in range(k_modes):
-        if den[k] > 0.0:
-            omega[k] = num[k] / den[k]
-        if fix_dc and k == 0:
-            omega[k] = 0.0
-        total += diff[k] / max(old_norm[k], 1e-300)
-    return total
+    return _update_centres(omega, num, den, diff, old_norm, fix_dc)
 
 
 @numba.njit(cache=True, fastmath=False)
@@ -133,14 +139,7 @@ def _exact_sweep(f_hat, freqs, u, omega, alpha, fix_dc):  # pragma: no cover - J
             dd = new - old
             diff[k] += dd.real * dd.real + dd.imag * dd.imag
             old_norm[k] += old.real * old.real + old.imag * old.imag
-    total = 0.0
-    for k in range(k_modes):
-        if den[k] > 0.0:
-            omega[k] = num[k] / den[k]
-        if fix_dc and k == 0:
-            omega[k] = 0.0
-        total += diff[k] / max(old_norm[k], 1e-300)
-    return total
+    return _update_centres(omega, num, den, diff, old_norm, fix_dc)
 
 
 def mirror_extend(signal):

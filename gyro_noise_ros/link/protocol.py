@@ -584,6 +584,7 @@ class Decoder:
         crc_unpack = _CRC.unpack_from
         rules = _LENGTH_RULES
         mv = memoryview(buf)
+        run = self._start_run(buf, n)
         try:
             while True:
                 if n - pos < 2:
@@ -599,6 +600,13 @@ class Decoder:
                     self._discard_to(pos, nxt)
                     pos = nxt
                     continue
+                if run is not None and self._disc_start is None:
+                    # a subclass's bulk path at each sync marker; a frame that ends a discarded
+                    # region goes the byte-wise way below (it closes the region)
+                    new_pos = self._run_frames(run, pos, n, res)
+                    if new_pos != pos:
+                        pos = new_pos
+                        continue
                 if n - pos < HEADER_SIZE:
                     if final:
                         c['frames_truncated'] += 1
@@ -637,17 +645,7 @@ class Decoder:
                 c['frames_ok'] += 1
                 payload_start = pos + HEADER_SIZE
                 if ftype == FRAME_SAMPLES:
-                    res.payloads.append(bytes(mv[payload_start:end]))
-                    res.nsamples += length // SAMPLE_SIZE
-                    pos = end + CRC_SIZE
-                    size = FRAME_OVERHEAD + length
-                    # bulk path for small frames only: there the per-frame Python work dominates
-                    # (2-5x faster at 1-16 samples per frame); for large frames the CRC does and it
-                    # gains nothing
-                    if size <= _BULK_MAX_FRAME and n - pos >= 4 * size:
-                        good = self._same_size_run(mv, pos, n, size, res)
-                        c['frames_ok'] += good
-                        pos += good * size
+                    pos = self._samples_frame(run, mv, pos, end, n, res)
                     continue
                 elif ftype == FRAME_ACK:
                     res.acks.append(_decode_ack(mv[payload_start:end]))
@@ -662,6 +660,36 @@ class Decoder:
             mv.release()
         if final:
             self._close_region(res, self._base + pos)
+        return self._finish_run(run, buf, pos, res)
+
+    # Hooks of _run: this class decodes frame by frame; link.scan.ScanDecoder overrides them to
+    # consume runs of SAMPLES frames in a compiled loop, with the byte-wise rules above unchanged.
+
+    def _start_run(self, buf, n):
+        """Return the state of a bulk path for one ``_run`` over ``buf[:n]``; None: none."""
+        return None
+
+    def _run_frames(self, run, pos, n, res):
+        """Consume complete valid frames from the sync marker at ``pos``; return the new pos."""
+        return pos
+
+    def _samples_frame(self, run, mv, pos, end, n, res):
+        """Take the valid SAMPLES frame at ``pos`` (payload up to ``end``); return the next pos."""
+        length = end - pos - HEADER_SIZE
+        res.payloads.append(bytes(mv[pos + HEADER_SIZE:end]))
+        res.nsamples += length // SAMPLE_SIZE
+        pos = end + CRC_SIZE
+        size = FRAME_OVERHEAD + length
+        # bulk path for small frames only: there the per-frame Python work dominates (2-5x
+        # faster at 1-16 samples per frame); for large frames the CRC does and it gains nothing
+        if size <= _BULK_MAX_FRAME and n - pos >= 4 * size:
+            good = self._same_size_run(mv, pos, n, size, res)
+            self._c['frames_ok'] += good
+            pos += good * size
+        return pos
+
+    def _finish_run(self, run, buf, pos, res):
+        """Drop the consumed bytes from the buffer; return the DecodeResult of the run."""
         if pos:
             del buf[:pos]
             self._base += pos
@@ -753,15 +781,26 @@ class _Collector:
         self.header_positions = []
         self.discarded = []
 
-    def result(self, dec):
+    def result(self, dec, payload=None):
+        """
+        Count, account and return the DecodeResult.
+
+        ``payload``: the samples' bytes when they were gathered in one uint8 array rather than
+        in ``payloads``.
+        """
         c = dec._c
         c['acks'] += len(self.acks)
         c['naks'] += sum(1 for a in self.acks if not a.ok)
         c['commands'] += len(self.commands)
         c['log_headers'] += len(self.headers)
         ack_pos, head_pos = tuple(self.ack_positions), tuple(self.header_positions)
-        if self.payloads:
+        if payload is not None and payload.size:
+            samples = payload.view(SAMPLE_DTYPE)
+        elif payload is None and self.payloads:
             samples = np.frombuffer(b''.join(self.payloads), dtype=SAMPLE_DTYPE).copy()
+        else:
+            samples = None
+        if samples is not None:
             samples, lost, ack_pos, head_pos = dec._account_samples(samples, ack_pos, head_pos)
         else:
             samples, lost = _EMPTY_SAMPLES, _EMPTY_LOST

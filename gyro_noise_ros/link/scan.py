@@ -30,37 +30,23 @@ takes over again.
 The scanner keeps no more than the Decoder does: the bytes of the frame cut by the end of a
 block wait for the next block (the carry-over).
 
-The byte-wise part of :meth:`ScanDecoder._run` is a copy of ``Decoder._run`` with the compiled
-loop inserted at each sync marker; a change of the Decoder's rules must be made in both
-(``test/test_link_scan.py`` fails when they differ).
+The byte-wise rules are the Decoder's own ``_run``: the scanner overrides only its hooks (the
+bulk path at each sync marker, where a SAMPLES frame's payload goes, how the run ends), so a
+change of the rules applies to both (``test/test_link_scan.py`` checks them call for call).
 """
-
-import zlib
 
 import numba
 import numpy as np
 
 from .protocol import (
-    _Collector,
-    _CRC,
-    _EMPTY_LOST,
-    _EMPTY_SAMPLES,
-    _HEADER,
     _LENGTH_RULES,
     CRC_SIZE,
     Decoder,
-    DecodeResult,
-    FRAME_ACK,
-    FRAME_CONFIGURE,
-    FRAME_LOG_HEADER,
     FRAME_SAMPLES,
     HEADER_SIZE,
     PROTOCOL_VERSION,
-    SAMPLE_DTYPE,
     SAMPLE_SIZE,
-    SYNC,
 )
-from .protocol import _decode_ack, _decode_configure, _decode_log_header
 
 
 def _crc_tables():
@@ -159,123 +145,42 @@ class ScanDecoder(Decoder):
     microseconds, negligible for blocks of kilobytes.
     """
 
-    def _run(self, *, final):
-        buf = self._buf
-        n = len(buf)
-        pos = 0
-        res = _Collector()
-        c = self._c
-        find = buf.find
-        unpack_header = _HEADER.unpack_from
-        crc_unpack = _CRC.unpack_from
-        rules = _LENGTH_RULES
-        mv = memoryview(buf)
-        arr = np.frombuffer(buf, np.uint8) if n else np.zeros(0, np.uint8)
-        out = np.empty(n, np.uint8)
-        out_pos = 0
+    def _start_run(self, buf, n):
+        # the samples of the run are copied into one array (no more bytes than the buffer holds)
+        return _ScanRun(np.frombuffer(buf, np.uint8) if n else np.zeros(0, np.uint8),
+                        np.empty(n, np.uint8))
+
+    def _run_frames(self, run, pos, n, res):
         lo, hi, step = _SAMPLES_RULE
-        try:
-            while True:
-                if n - pos < 2:
-                    if final and pos < n:
-                        self._discard_to(pos, n)
-                        pos = n
-                    break
-                if buf[pos] != 0xA5 or buf[pos + 1] != 0x5A:
-                    nxt = find(SYNC, pos + 1)
-                    if nxt < 0:
-                        # keep a trailing A5: it may be the first half of the next sync marker
-                        nxt = n - 1 if (buf[n - 1] == 0xA5 and not final) else n
-                    self._discard_to(pos, nxt)
-                    pos = nxt
-                    continue
-                if self._disc_start is None:
-                    # the compiled run; a frame that ends a discarded region goes the byte-wise
-                    # way below (it closes the region)
-                    new_pos, new_out, frames = _scan_samples(
-                        arr, pos, n, out, out_pos, CRC_TABLES, PROTOCOL_VERSION, FRAME_SAMPLES,
-                        lo, hi, step)
-                    if frames:
-                        c['frames_ok'] += frames
-                        res.nsamples += (new_out - out_pos) // SAMPLE_SIZE
-                        pos, out_pos = new_pos, new_out
-                        continue
-                if n - pos < HEADER_SIZE:
-                    if final:
-                        c['frames_truncated'] += 1
-                        self._discard_to(pos, pos + 1)
-                        pos += 1
-                        continue
-                    break
-                _, version, ftype, length = unpack_header(buf, pos)
-                rule = rules.get(ftype)
-                if (
-                    version != PROTOCOL_VERSION
-                    or rule is None
-                    or length < rule[0]
-                    or length > rule[1]
-                    or length % rule[2]
-                ):
-                    self._discard_to(pos, pos + 1)
-                    pos += 1
-                    continue
-                end = pos + HEADER_SIZE + length
-                if end + CRC_SIZE > n:
-                    if final:
-                        c['frames_truncated'] += 1
-                        self._discard_to(pos, pos + 1)
-                        pos += 1
-                        continue
-                    break
-                if zlib.crc32(mv[pos:end]) != crc_unpack(buf, end)[0]:
-                    c['crc_errors'] += 1
-                    self._discard_to(pos, pos + 1)
-                    pos += 1
-                    continue
-                # a valid frame: any discarded region ends here
-                if self._disc_start is not None:
-                    self._close_region(res, self._base + pos)
-                c['frames_ok'] += 1
-                payload_start = pos + HEADER_SIZE
-                if ftype == FRAME_SAMPLES:
-                    out[out_pos:out_pos + length] = arr[payload_start:end]
-                    out_pos += length
-                    res.nsamples += length // SAMPLE_SIZE
-                elif ftype == FRAME_ACK:
-                    res.acks.append(_decode_ack(mv[payload_start:end]))
-                    res.ack_positions.append(res.nsamples)
-                elif ftype == FRAME_CONFIGURE:
-                    res.commands.append(_decode_configure(mv[payload_start:end]))
-                elif ftype == FRAME_LOG_HEADER:
-                    res.headers.append(_decode_log_header(mv[payload_start:end]))
-                    res.header_positions.append(res.nsamples)
-                pos = end + CRC_SIZE
-        finally:
-            del arr
-            mv.release()
-        if final:
-            self._close_region(res, self._base + pos)
+        new_pos, new_out, frames = _scan_samples(
+            run.arr, pos, n, run.out, run.out_pos, CRC_TABLES, PROTOCOL_VERSION, FRAME_SAMPLES,
+            lo, hi, step)
+        if frames:
+            self._c['frames_ok'] += frames
+            res.nsamples += (new_out - run.out_pos) // SAMPLE_SIZE
+            run.out_pos = new_out
+        return new_pos
+
+    def _samples_frame(self, run, mv, pos, end, n, res):
+        start = pos + HEADER_SIZE
+        run.out[run.out_pos:run.out_pos + end - start] = run.arr[start:end]
+        run.out_pos += end - start
+        res.nsamples += (end - start) // SAMPLE_SIZE
+        return end + CRC_SIZE
+
+    def _finish_run(self, run, buf, pos, res):
         # the carry-over (at most one partial frame) goes to a new buffer: ``buf`` may still be
         # exported (numba holds its arguments while it compiles), so it cannot be resized
+        run.arr = None
         self._buf = buf[pos:]
         self._base += pos
-        return _result(res, self, out[:out_pos])
+        return res.result(self, run.out[:run.out_pos])
 
 
-def _result(res, dec, payload):
-    """Return what ``_Collector.result`` returns, the samples taken from one payload array."""
-    c = dec._c
-    c['acks'] += len(res.acks)
-    c['naks'] += sum(1 for a in res.acks if not a.ok)
-    c['commands'] += len(res.commands)
-    c['log_headers'] += len(res.headers)
-    ack_pos, head_pos = tuple(res.ack_positions), tuple(res.header_positions)
-    if payload.size:
-        samples = payload.view(SAMPLE_DTYPE)
-        samples, lost, ack_pos, head_pos = dec._account_samples(samples, ack_pos, head_pos)
-    else:
-        samples, lost = _EMPTY_SAMPLES, _EMPTY_LOST
-    return DecodeResult(samples=samples, acks=tuple(res.acks), lost_before=lost,
-                        ack_positions=ack_pos, commands=tuple(res.commands),
-                        headers=tuple(res.headers), header_positions=head_pos,
-                        discarded=tuple(res.discarded))
+class _ScanRun:
+    """State of one ``ScanDecoder._run``: the buffer as an array, the samples gathered so far."""
+
+    __slots__ = ('arr', 'out', 'out_pos')
+
+    def __init__(self, arr, out):
+        self.arr, self.out, self.out_pos = arr, out, 0

@@ -45,7 +45,7 @@ import numpy as np
 from ._common import run_cli
 from .. import __version__
 from ..cluster import make_executor
-from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
+from ..errors import ClusterError, GyroNoiseError, InputDataError, make_out_dir, ParameterError
 from ..thermal import methods as registry
 from ..thermal import report
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,
@@ -248,7 +248,7 @@ def _write_json(path, doc):
 
 
 def _cmd_fit(args, argv):
-    out = _out_dir(args.out)
+    out = make_out_dir(args.out)
     runs, bags = _read_runs(args.bags, args)
     run = _join(runs)
     registry.check_trainable(run, min_range_c=args.min_range_c)
@@ -335,16 +335,6 @@ def _training_md(doc, figs, out):
             + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
-def _out_dir(path):
-    out = Path(path)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ParameterError(f'--out {str(out)!r} cannot be created: {err.strerror or err}') \
-            from err
-    return out
-
-
 # ---------------------------------------------------------------------------------------------
 # apply
 
@@ -359,7 +349,7 @@ def _cmd_apply(args, argv):
     run, bag = read_thermal_run(args.bag, topic=args.topic,
                                 temperature_topic=args.temperature_topic,
                                 max_gap_s=args.max_gap_s)
-    out = _out_dir(args.out)
+    out = make_out_dir(args.out)
     t_lo, t_hi = registry.check_temperature_range(model, run.temperature_c,
                                                   margin_c=args.range_margin_c)
     if not args.no_bag and (out / 'compensated').exists():
@@ -591,7 +581,7 @@ def _cmd_compare(args, argv):
         raise ParameterError('--methods names no method')
     train, test, train_label, test_label, split = _compare_runs(args)
     registry.check_trainable(train, min_range_c=args.min_range_c)
-    out = _out_dir(args.out)
+    out = make_out_dir(args.out)
     results, errors, curves = {}, {}, {}
     pool = _executor(args, names)
     for name in names:
@@ -755,7 +745,7 @@ def _cmd_simulate(args, argv):
         raise registry.MethodUnavailableError(
             f'the thermal simulator is not available (gyro_noise_ros.thermal.simulate: '
             f'{err})') from err
-    _out_dir(args.out)
+    make_out_dir(args.out)
     result = simulate_from_args(args)
     paths = result if isinstance(result, (list, tuple)) else [result]
     print(f'wrote {", ".join(str(p) for p in paths)}')

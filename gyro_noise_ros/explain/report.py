@@ -23,14 +23,13 @@ comparison domain of :mod:`.signatures`.
 """
 
 import json
-from pathlib import Path
 
 import numpy as np
 
 from . import signatures as sig
 from .effects import public_params
 from .uncertainty import format_value
-from ..errors import ParameterError
+from ..errors import make_out_dir
 
 DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}
@@ -216,12 +215,7 @@ def write_outputs(result, out_dir):
         The directory.
 
     """
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ParameterError(
-            f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
+    out = make_out_dir(out_dir)
     data = result.to_dict()
     (out / 'explain.json').write_text(json.dumps(data, indent=2, default=_json_default) + '\n')
     layout = result.layout

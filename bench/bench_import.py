@@ -35,10 +35,14 @@ path's bag is checked (first round) to hold the same message bytes. ``disk floor
 write as many bytes as the new MCAP bag holds, from memory in 1 MiB writes, into the same
 directory: no importer can beat it. ``read only``: iterating ``SdLogReader`` over the log with
 the byte-wise Decoder or the scanner, nothing written (the reading share of an import). Peak RSS:
-each (path, log size) imports in a fresh process; ``VmHWM`` of that process.
+each (path, log size) imports in a fresh process; ``VmHWM`` of that process. ``--baseline PATH``
+adds the importer of older code (e.g. ``git worktree add --detach /tmp/base 12f9979``, the code
+issue 12 was filed against) run in a fresh process with ``PYTHONPATH=PATH``, in sqlite3 (its
+default) and MCAP, in the same rounds; its second ``import_logs`` call is timed (the first warms
+up, as the warm-up below does for this code).
 
 Run: ``.venv/bin/python bench/bench_import.py [--samples 1000000] [--rounds 3] [--out-dir DIR]
-[--rss-samples 250000,1000000,4000000]``
+[--rss-samples 250000,1000000,4000000] [--baseline PATH]``
 """
 
 import argparse
@@ -108,6 +112,40 @@ def run_path(name, files, out, storage):
         return time.perf_counter() - start, time.process_time() - cpu
 
 
+BASELINE_SCRIPT = """
+import os, sys, time
+from gyro_noise_ros.cli import importer
+files, out, storage = sys.argv[1].split(os.pathsep), sys.argv[2], sys.argv[3]
+importer.import_logs(files, out + '_warm', storage=storage)  # imports, caches, as for 'new'
+cpu, start = time.process_time(), time.perf_counter()
+importer.import_logs(files, out, storage=storage)
+print(time.perf_counter() - start, time.process_time() - cpu)
+"""
+
+
+def run_baseline(root, files, out, storage):
+    """
+    Import with the code under ``root`` (e.g. a worktree of older code) in a fresh process.
+
+    Returns (wall seconds, CPU seconds) of its second ``import_logs`` call (the first warms up).
+    """
+    env = dict(os.environ, PYTHONPATH=root)
+    proc = subprocess.run([sys.executable, '-c', BASELINE_SCRIPT, os.pathsep.join(files), out,
+                           storage], env=env, cwd=os.path.dirname(out), capture_output=True,
+                          text=True)
+    if proc.returncode != 0:
+        raise SystemExit(f'baseline {root}: exit {proc.returncode}: {proc.stderr.strip()}')
+    shutil.rmtree(out + '_warm', ignore_errors=True)
+    wall, cpu = (float(v) for v in proc.stdout.split())
+    return wall, cpu
+
+
+def _git_head(root):
+    out = subprocess.run(['git', '-C', root, 'rev-parse', '--short', 'HEAD'],
+                         capture_output=True, text=True)
+    return out.stdout.strip() or '?'
+
+
 def read_only(files, scan):
     """Iterate the logs with SdLogReader; return (wall seconds, CPU seconds)."""
     cpu, start = time.process_time(), time.perf_counter()
@@ -167,6 +205,10 @@ def main(argv=None):
     parser.add_argument('--rss-samples', default='250000,1000000,4000000',
                         help='comma-separated log sizes (samples) for the peak-RSS table '
                         '(empty: skip)')
+    parser.add_argument('--baseline', default=None, metavar='PATH',
+                        help='also time the importer of the code under PATH (a worktree of older '
+                        'code, e.g. the commit the issue was filed against) in a fresh process, '
+                        'sqlite3 and MCAP, in the same rounds')
     args = parser.parse_args(argv)
     cores = len(os.sched_getaffinity(0))
     print(f'bench_import: {args.samples} samples, 1 process, no worker threads, on {cores} '
@@ -181,6 +223,11 @@ def main(argv=None):
         importer.import_logs(files, os.path.join(tmp, 'warm'), storage='mcap')
         shutil.rmtree(os.path.join(tmp, 'warm'))
         runs = [(name, storage) for storage in ('sqlite3', 'mcap') for name in PATHS]
+        if args.baseline:
+            base = os.path.abspath(args.baseline)
+            print(f'baseline: {base} (git {_git_head(base)}), run in a fresh process; its '
+                  'second import_logs call is timed')
+            runs += [('baseline', 'sqlite3'), ('baseline', 'mcap')]
         runs += [('disk floor', 'mcap'), ('read only', 'Decoder'), ('read only', 'scanner')]
         times = {run: [] for run in runs}
         loads = []
@@ -196,7 +243,10 @@ def main(argv=None):
                         times[name, storage].append(disk_floor(tmp, mcap_bytes))
                     continue
                 out = os.path.join(tmp, f'{name}_{storage}')
-                times[name, storage].append(run_path(name, files, out, storage))
+                if name == 'baseline':
+                    times[name, storage].append(run_baseline(base, files, out, storage))
+                else:
+                    times[name, storage].append(run_path(name, files, out, storage))
                 if name == 'new' and storage == 'mcap':
                     mcap_bytes = bag_bytes(out)
                 if rnd == 0:
@@ -229,6 +279,11 @@ def main(argv=None):
                      ratio(run, ('rosbags', storage))]
             print(f'{name:<11s} {storage:<8s} {args.samples / med[run]:>11,.0f} '
                   f'{_x(cells[0]):>15s} {_x(cells[1]):>21s} {_x(cells[2]):>32s}')
+        if args.baseline:
+            b_sql, b_mcap = ('baseline', 'sqlite3'), ('baseline', 'mcap')
+            print(f'new mcap against the baseline: {_x(ratio(("new", "mcap"), b_sql))} (its '
+                  f'sqlite3), {_x(ratio(("new", "mcap"), b_mcap))} (its MCAP); new sqlite3 '
+                  f'against its sqlite3: {_x(ratio(("new", "sqlite3"), b_sql))}')
         print(f'(disk floor: {mcap_bytes / 1e6:.0f} MB, the size of the MCAP bag; median seconds: '
               + ', '.join(f'{n} {s} {med[n, s]:.3f}' for n, s in runs) + ')')
         print('\nCPU seconds of the importing process (all threads, system time included; less '

@@ -41,7 +41,6 @@ import functools
 import io
 import struct
 
-import numba
 import numpy as np
 
 from . import ImuBagWriter
@@ -305,12 +304,15 @@ def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, 
     """
     Return (record size, ``build``) for the MCAP message records of Imu messages, or None.
 
-    ``build(a, b)`` returns the records of messages a to b - 1 as a new (b - a, record) byte
-    matrix: the bytes of :func:`_imu_rows` behind the record head of rosbags' ``write`` (opcode,
-    length, channel, sequence 0, log and publish time), built in one pass per message by a
-    compiled loop: the first message's record is the template, then stamps, log times and the two
-    vectors are written over it. None when the messages do not share their covariances (the
-    caller then takes the general path).
+    ``build(a, b)`` returns the records of messages a to b - 1 as a (b - a, record) byte matrix:
+    the bytes of :func:`_imu_rows` behind the record head of rosbags' ``write`` (opcode, length,
+    channel, sequence 0, log and publish time). The first message's record is the template; it
+    is copied once into every row of a buffer that each call reuses, and only the stamps, log
+    times and the two vectors are written over it, field by field through a structured view of
+    the buffer (64 of the ~355 bytes of a record), so
+    the returned matrix is a view that the next call overwrites: the caller writes it out (or
+    copies it) first. None when the messages do not share their covariances (the caller then
+    takes the general path).
     """
     n = stamps.shape[0]
     gyro = np.asarray(gyro_rad_s, dtype=np.float64)
@@ -325,45 +327,30 @@ def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, 
     vec = _MCAP_MESSAGE_HEAD + size - 8 * IMU_TAIL_F8
     template = np.concatenate((_mcap_record_head(channel_id, size), first[0]))
 
-    def as_bytes(values, dtype, width):
-        return np.ascontiguousarray(values, dtype).view(np.uint8).reshape(n, width)
-
-    # sec and nanosec were range-checked by split_stamps: the low 4 bytes of the little-endian
-    # int64 are the int32 / uint32 of the message
-    fields = (as_bytes(log_ns, '<i8', 8), as_bytes(sec, '<i8', 8), as_bytes(nsec, '<i8', 8),
-              as_bytes(gyro, '<f8', 24), as_bytes(accel, '<f8', 24))
-    at = (_MCAP_MESSAGE_HEAD + 4, vec + 13 * 8, vec + 25 * 8)
+    # Where the per-message fields lie in a record (the rest is the template). sec and nanosec
+    # were range-checked by split_stamps, so their int32 / uint32 casts are exact.
+    at_stamp, at_gyro, at_accel = _MCAP_MESSAGE_HEAD + 4, vec + 13 * 8, vec + 25 * 8
+    layout = np.dtype({'names': ['log', 'publish', 'sec', 'nanosec', 'gyro', 'accel'],
+                       'formats': ['<i8', '<i8', '<i4', '<u4', ('<f8', (3,)), ('<f8', (3,))],
+                       'offsets': [15, 23, at_stamp, at_stamp + 4, at_gyro, at_accel],
+                       'itemsize': template.size})
+    reused = []
 
     def build(a, b):
-        records = np.empty((b - a, template.size), np.uint8)
-        _fill_imu_records(records, template, *(f[a:b] for f in fields), *at)
+        if not reused or reused[0].shape[0] < b - a:
+            reused[:] = [np.empty((b - a, template.size), np.uint8)]
+            reused[0][...] = template
+        records = reused[0][:b - a]
+        fields = records.reshape(-1).view(layout)
+        fields['log'] = log_ns[a:b]
+        fields['publish'] = log_ns[a:b]
+        fields['sec'] = sec[a:b]
+        fields['nanosec'] = nsec[a:b]
+        fields['gyro'] = gyro[a:b]
+        fields['accel'] = accel[a:b]
         return records
 
     return template.size, build
-
-
-@numba.njit(cache=True, nogil=True)
-def _fill_imu_records(out, template, log_ns, sec, nsec, gyro, accel, at_stamp, at_gyro,
-                      at_accel):  # pragma: no cover - compiled; tested through the bag bytes
-    """
-    Copy the template into each row, then write log/publish time, stamp and vectors.
-
-    ``log_ns``, ``sec``, ``nsec`` (n, 8) are the little-endian bytes of int64 values, ``gyro``
-    and ``accel`` (n, 24) those of three float64 per message.
-    """
-    n, rec = out.shape
-    for i in range(n):
-        for k in range(rec):
-            out[i, k] = template[k]
-        for k in range(8):
-            out[i, 15 + k] = log_ns[i, k]
-            out[i, 23 + k] = log_ns[i, k]
-        for k in range(4):
-            out[i, at_stamp + k] = sec[i, k]
-            out[i, at_stamp + 4 + k] = nsec[i, k]
-        for k in range(24):
-            out[i, at_gyro + k] = gyro[i, k]
-            out[i, at_accel + k] = accel[i, k]
 
 
 def _emit_chunk(storage, start_time, end_time, data, msgs):
@@ -376,11 +363,12 @@ def _emit_chunk(storage, start_time, end_time, data, msgs):
     """
     size = len(data)
     compressed = storage.compressor(data)
+    compressed_size = len(compressed)
     head = struct.pack('<QQQI', start_time, end_time, size, 0)
-    body = head + _mcap_string(storage.compression) + struct.pack('<Q', len(compressed))
+    body = head + _mcap_string(storage.compression) + struct.pack('<Q', compressed_size)
     chunk_start = storage.bio.tell()
-    parts = [b'\x06' + struct.pack('<Q', len(body) + len(compressed)) + body, compressed]
-    chunk_end = chunk_start + len(parts[0]) + len(compressed)
+    parts = [b'\x06' + struct.pack('<Q', len(body) + compressed_size) + body, compressed]
+    chunk_end = chunk_start + len(parts[0]) + compressed_size
     offsets = []
     end = chunk_end
     for cid, entries in msgs.items():
@@ -400,7 +388,7 @@ def _emit_chunk(storage, start_time, end_time, data, msgs):
         rec.write(struct.pack('<HQ', cid, offset))
     rec.write(struct.pack('<Q', end - chunk_end))
     rec.write(_mcap_string(storage.compression))
-    rec.write(struct.pack('<QQ', len(compressed), size))
+    rec.write(struct.pack('<QQ', compressed_size, size))
     storage.chunks.append(rec)
 
 

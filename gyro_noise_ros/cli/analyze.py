@@ -35,6 +35,7 @@ exit codes: ``docs/offline_tool.md``.
 import argparse
 import collections
 import datetime
+import functools
 import math
 import os
 from pathlib import Path
@@ -42,6 +43,7 @@ import sys
 import time
 
 import numpy as np
+import threadpoolctl
 
 from ._common import run_cli
 from .. import __version__, report
@@ -51,7 +53,7 @@ from ..cluster import make_executor
 from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
-from ..errors import InputDataError, ParameterError
+from ..errors import InputDataError, make_out_dir, ParameterError
 
 PROG = 'gyro_noise_analyze'
 
@@ -196,6 +198,23 @@ def _labels(paths, labels):
     return names
 
 
+def _one_blas_thread(func):
+    """
+    Run ``func`` with one BLAS thread in this process (and so in the workers it forks).
+
+    The identification's only BLAS call is a matrix-vector product of 8 orders (``'exact'``);
+    OpenBLAS' own threads gain nothing there and spin after each call, taking a core from the
+    worker processes: measured 1.07x less CPU end to end with ``--jobs 2`` on 2 cores
+    (docs/scale.md). The results do not change (each dot product is one thread's either way).
+    """
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with threadpoolctl.threadpool_limits(limits=1, user_api='blas'):
+            return func(*args, **kwargs)
+    return wrapper
+
+
+@_one_blas_thread
 def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None,
                  jobs=1, reference=None, reference_bag=None, thresholds=None, figures=True,
                  curves=DEFAULT_CURVES, batch_size=DEFAULT_BATCH, progress=False, command=None,
@@ -266,37 +285,48 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     thresholds = thresholds if thresholds is not None else HealthThresholds()
     ref = reference_per_axis(str(reference), config.axes,
                              bag=reference_bag) if reference is not None else {}
-    # Fail fast on any unreadable bag or unresolvable topic before hours of work on the others.
-    topics = [_open(p, topic, temperature_topic, config.rate_hz).topic if is_table(p)
-              else find_imu_topic(p, topic) for p in paths]
-    out = Path(out_dir)
+    first_reader = None
     try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ParameterError(
-            f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
+        # Fail fast on any unreadable bag or unresolvable topic before hours of work on the
+        # others. The first bag's reader stays open for its analysis: opening a sqlite3 bag
+        # counts its messages (a scan of the whole table, about 0.25 s per million messages).
+        topics = []
+        for i, p in enumerate(paths):
+            if is_table(p):
+                topics.append(_open(p, topic, temperature_topic, config.rate_hz).topic)
+            elif i == 0:
+                first_reader = ImuBagReader(p, topic=topic, temperature_topic=temperature_topic)
+                topics.append(first_reader.topic)
+            else:
+                topics.append(find_imu_topic(p, topic))
+        out = make_out_dir(out_dir)
 
-    started = time.perf_counter()
-    timing = {'decode_s': 0.0, 'wait_s': 0.0}
-    if jobs > 1 and scheduler is None:
-        # Worker processes are forked from this one: build the identifier and load its
-        # compiled kernels once here, so each worker inherits them instead of redoing it.
-        _warm_identifier(config)
-    pool = make_executor(jobs, scheduler, warn=warn)
-    if scheduler is not None:
-        jobs = max(jobs, pool.nthreads)
-    csv_writer = _ChunkRows(out / 'chunks.csv')
-    bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
-    try:
-        for path, label, imu_topic in zip(paths, names, topics):
-            doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds,
-                               pool, jobs, select, csv_writer, per_chunk, curve_store, allan_store,
-                               curves, batch_size, _Progress(progress), timing)
-            bag_docs.append(doc)
+        started = time.perf_counter()
+        timing = {'decode_s': 0.0, 'wait_s': 0.0}
+        if jobs > 1 and scheduler is None:
+            # Worker processes are forked from this one: build the identifier and load its
+            # compiled kernels once here, so each worker inherits them instead of redoing it.
+            _warm_identifier(config)
+        pool = make_executor(jobs, scheduler, warn=warn)
+        if scheduler is not None:
+            jobs = max(jobs, pool.nthreads)
+        csv_writer = _ChunkRows(out / 'chunks.csv')
+        bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
+        try:
+            for i, (path, label, imu_topic) in enumerate(zip(paths, names, topics)):
+                doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref,
+                                   thresholds, pool, jobs, select, csv_writer, per_chunk,
+                                   curve_store, allan_store, curves, batch_size,
+                                   _Progress(progress), timing,
+                                   reader=first_reader if i == 0 else None)
+                bag_docs.append(doc)
+        finally:
+            csv_writer.close()
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)
     finally:
-        csv_writer.close()
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+        if first_reader is not None:
+            first_reader.close()  # idempotent; open here only when the run failed before it
 
     if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
                for b in bag_docs for a in b['axes'].values()):
@@ -478,12 +508,13 @@ class _MotionWatch:
 
 def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
                  select, csv_writer, per_chunk, curve_store, allan_store, curves, batch_size,
-                 progress, timing):
+                 progress, timing, *, reader=None):
+    """Analyse one bag (``reader``: the bag already open, used by its first pass)."""
     args = (path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
             select, csv_writer, curve_store, curves, batch_size, progress, timing)
     start_s, end_s, static = select
     if static != 'auto':
-        state = _analysis_pass(*args, segment=None, watch=None, say=warn)
+        state = _analysis_pass(*args, segment=None, watch=None, say=warn, reader=reader)
         return _bag_doc(state, path, label, imu_topic, config, ref, select, None, per_chunk,
                         allan_store)
     # One read of the bag when it is static throughout (the usual noise recording): the pass
@@ -491,7 +522,7 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
     # are its rows taken back and the bag read twice, as before (prepass, then the segment).
     mark = csv_writer.mark()
     watch = _MotionWatch()
-    state = _analysis_pass(*args, segment=None, watch=watch, say=warn)
+    state = _analysis_pass(*args, segment=None, watch=watch, say=warn, reader=reader)
     if state is not None:
         segment = watch.segment()
         if segment is None or segment.static_throughout:
@@ -511,15 +542,21 @@ def _analyze_one(path, label, imu_topic, temperature_topic, config, ref, thresho
 
 def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thresholds, pool, jobs,
                    select, csv_writer, curve_store, curves, batch_size, progress, timing, *,
-                   segment, watch, say):
-    """Read the bag once and analyse it; None when ``watch`` saw motion (pass abandoned)."""
+                   segment, watch, say, reader=None):
+    """
+    Read the bag once and analyse it; None when ``watch`` saw motion (pass abandoned).
+
+    ``reader``: the bag already open (closed at the end of the pass), else it is opened here.
+    """
     engine = NoiseEngine(config, reference=ref or None, thresholds=thresholds)
     warnings = []
     time_source = 'header'
     start_s, end_s, static = select
     left = {'before_start': 0, 'after_end': 0, 'motion': 0}
     first_ns = None
-    with _open(path, imu_topic, temperature_topic, config.rate_hz) as reader:
+    if reader is None:
+        reader = _open(path, imu_topic, temperature_topic, config.rate_hz)
+    with reader:
         temps = reader.read_temperature()
         if temps is not None and temps[0].size:
             order = np.argsort(temps[0], kind='stable')

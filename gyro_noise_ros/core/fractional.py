@@ -42,6 +42,7 @@ because the paper reads order 1 as the integer-order (first-order colour) model 
 is reported in ``tied_alphas_*`` and never hidden.
 """
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -265,7 +266,9 @@ class OrderIdentifier:
       those of ``'exact'`` as long as the fast curves are within :data:`LOCATE_RTOL` of the exact
       ones (they are within ~1e-11); when the recomputed orders disagree by more than a tenth of
       that, or a fast value is not finite, the chunk falls back to ``'exact'``. With
-      ``curves=True`` the curves come from ``'exact'``.
+      ``curves=True`` the curves are the fast ones with the recomputed exact values in place
+      (equal to the oracle to rounding, and their minima are the reported values bit for bit);
+      use ``'exact'`` for the released curves to the bit.
 
     The results equal the direct per-order convolution and correlation to rounding (checked in
     ``test/test_fractional.py`` and ``test/test_fractional_fast.py`` against
@@ -348,7 +351,7 @@ class OrderIdentifier:
         if self.demean:
             v = v - bias
         _regressor(v)
-        if self.algorithm == 'exact' or (curves and self.algorithm == 'auto'):
+        if self.algorithm == 'exact':
             var_curve, j_curve, f_curve = self._curves(v)
             return _summarise(self.alphas, var_curve, j_curve, f_curve, bias, curves)
         if self._fast is None:
@@ -358,8 +361,21 @@ class OrderIdentifier:
             return _summarise(self.alphas, *fast, bias, curves)
         located = self._locate(v, *fast)
         if located is None:
-            located = self._curves(v)
-        return _summarise(self.alphas, *located, bias, False)
+            return _summarise(self.alphas, *self._curves(v), bias, curves)
+        rows, exact = located
+        k = len(self.alphas)
+        held = np.full((3, k), np.inf)
+        held[2] = np.nan
+        held[:, rows] = exact
+        result = _summarise(self.alphas, held[0], held[1], held[2], bias, False)
+        if not curves:
+            return result
+        # The curves: the fast values, with the exact values where they were recomputed, so the
+        # minimum of each curve is the reported one, bit for bit.
+        spliced = np.array(fast)
+        spliced[:, rows] = exact
+        return dataclasses.replace(result, var_curve=spliced[0], j_curve=spliced[1],
+                                   f_curve=spliced[2])
 
     def _curves(self, v):
         """Return the criterion curves by the 'exact' algorithm (every order, in blocks)."""
@@ -429,7 +445,9 @@ class OrderIdentifier:
 
     def _locate(self, v, var_fast, j_fast, f_fast):
         """
-        Return 'exact' curves that hold exact values wherever a minimum can be, +inf elsewhere.
+        Return the grid orders where a minimum can be, and their exact values.
+
+        ``(rows, values)``: ``values`` is a (3, len(rows)) array of var, J and f.
 
         None when the fast curves cannot be trusted for this chunk (not finite, or farther from
         the exact values than :data:`LOCATE_RTOL` / 10 on the recomputed orders).
@@ -444,11 +462,7 @@ class OrderIdentifier:
         for fast, ex in ((var_fast[rows], exact[0]), (j_fast[rows], exact[1])):
             if not (np.all(np.isfinite(ex)) and np.all(np.abs(fast - ex) <= guard * np.abs(ex))):
                 return None
-        k = len(self.alphas)
-        curves = np.full((3, k), np.inf)
-        curves[2] = np.nan
-        curves[:, rows] = exact
-        return curves[0], curves[1], curves[2]
+        return rows, exact
 
 
 def _regressor(v):
@@ -511,7 +525,7 @@ class _FastPlan:
             self.children.setdefault(int(parent[i]), []).append(int(i))
         size = ident.chunk_size + ident.memory
         self.conv_size = scipy.fft.next_fast_len(size, real=True)
-        self.coeff_hat = scipy.fft.rfft(ident._coeffs[self.base], self.conv_size, axis=1)
+        self.coeff_hat = np.fft.rfft(ident._coeffs[self.base], self.conv_size, axis=1)
         self.c_last = ident._coeffs[:, ident.memory].copy()
         s = ident._corr_size
         q = np.arange(s // 2 + 1)
@@ -535,17 +549,17 @@ class _FastPlan:
         w_reg, ww = _regressor(v)
         k = ident.alphas.shape[0]
         out = np.empty((3, k))
-        ctx = (v, w_reg, ww, scipy.fft.rfft(w_reg, s),
-               self.e_l * scipy.fft.rfft(v[:n - big_l], s))
-        v_hat = scipy.fft.rfft(v, self.conv_size)
+        ctx = (v, w_reg, ww, np.fft.rfft(w_reg, s),
+               self.e_l * np.fft.rfft(v[:n - big_l], s))
+        v_hat = np.fft.rfft(v, self.conv_size)
         padded = np.zeros((ident.block, s))
         for start in range(0, self.base.shape[0], ident.block):
             idx = self.base[start:start + ident.block]
-            diff = scipy.fft.irfft(self.coeff_hat[start:start + ident.block] * v_hat,
-                                   self.conv_size, axis=1)
+            diff = np.fft.irfft(self.coeff_hat[start:start + ident.block] * v_hat,
+                                self.conv_size, axis=1)
             d = padded[:idx.shape[0], :n]
             d[...] = diff[:, 1:big_n]
-            self._emit(idx, d, scipy.fft.rfft(padded[:idx.shape[0]], axis=1), ctx, out)
+            self._emit(idx, d, np.fft.rfft(padded[:idx.shape[0]], axis=1), ctx, out)
         return out[0], out[1], out[2]
 
     def _emit(self, idx, d, spec, ctx, out):
@@ -562,12 +576,12 @@ class _FastPlan:
             folded = np.empty((rows, sin_t.shape[0]))
             odd = np.empty(rows)
             _kf.cosine_prep(spec, f, reg_hat, sin_t, cos_t, folded, odd)
-            _kf.cosine_abs_sum(scipy.fft.rfft(folded, axis=1), odd, ident.max_lag + 1,
+            _kf.cosine_abs_sum(np.fft.rfft(folded, axis=1), odd, ident.max_lag + 1,
                                1.0 / (sin_t.shape[0] * ident.n), j)
         else:
             power = np.empty(spec.shape, dtype=np.complex128)
             _kf.residual_power(spec, f, reg_hat, power)
-            corr = scipy.fft.irfft(power, ident._corr_size, axis=1)
+            corr = np.fft.irfft(power, ident._corr_size, axis=1)
             _kf.abs_sum(corr, ident.max_lag + 1, j, 1.0 / ident.n)
         out[0, idx] = var
         out[1, idx] = j

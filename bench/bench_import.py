@@ -25,16 +25,23 @@ decoding, scaling and writing included):
   ``Writer.write`` once per message (CDR still encoded in bulk: rosbags' own writer at its best);
 * ``bulk``: the bulk writer behind the byte-wise Decoder (``scan=False``: the previous session's
   new path, to show what the scanner adds);
-* ``new``: the defaults: :class:`gyro_noise_ros.link.scan.ScanDecoder` and
-  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter`.
+* ``new-1t``: :class:`gyro_noise_ros.link.scan.ScanDecoder` and
+  :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter` in one thread (``threads=1``);
+* ``new``: the defaults: the same, with the bag written by a second thread while the next blocks
+  are decoded (``threads=2`` when two CPUs are usable, as here).
 
-Each for sqlite3 and MCAP storage (MCAP is the default). Rounds are interleaved (every path once
+The old, rosbags and bulk paths run in one thread, as the old importer did. Each for sqlite3
+and MCAP storage (MCAP is the default). Rounds are interleaved (every path once
 per round, the order rotated) so that a change of the machine's load hits every path alike; the
 table gives the median time per path and the median over rounds of the per-round ratio. Every
 path's bag is checked (first round) to hold the same message bytes. ``disk floor``: the time to
 write as many bytes as the new MCAP bag holds, from memory in 1 MiB writes, into the same
-directory: no importer can beat it. ``read only``: iterating ``SdLogReader`` over the log with
-the byte-wise Decoder or the scanner, nothing written (the reading share of an import). Peak RSS:
+directory: what a single thread writing the bytes alone costs. On a virtual machine that hands
+freed memory back to its host, writing into page-cache memory not touched for a while costs
+several times more than into recently freed memory, so this row (like every row, less visibly)
+varies from round to round; each round's time is printed too. ``read only``: iterating
+``SdLogReader`` over the log with the byte-wise Decoder or the scanner, nothing written (the
+reading share of an import). Peak RSS:
 each (path, log size) imports in a fresh process; ``VmHWM`` of that process. ``--baseline PATH``
 adds the importer of older code (e.g. ``git worktree add --detach /tmp/base 12f9979``, the code
 issue 12 was filed against) run in a fresh process with ``PYTHONPATH=PATH``, in sqlite3 (its
@@ -96,9 +103,10 @@ def rosbags_per_message():
 
 
 PATHS = {
-    'old': {'bulk': False, 'scan': False},
-    'rosbags': {'bulk': False, 'scan': True},
-    'bulk': {'bulk': True, 'scan': False},
+    'old': {'bulk': False, 'scan': False, 'threads': 1},
+    'rosbags': {'bulk': False, 'scan': True, 'threads': 1},
+    'bulk': {'bulk': True, 'scan': False, 'threads': 1},
+    'new-1t': {'threads': 1},
     'new': {},
 }
 
@@ -211,9 +219,9 @@ def main(argv=None):
                         'sqlite3 and MCAP, in the same rounds')
     args = parser.parse_args(argv)
     cores = len(os.sched_getaffinity(0))
-    print(f'bench_import: {args.samples} samples, 1 process, no worker threads, on {cores} '
-          f'visible core(s); load average {os.getloadavg()[0]:.1f} at the start (other work on '
-          'the machine slows every path)')
+    print(f'bench_import: {args.samples} samples, 1 process (one thread, or two for "new"), on '
+          f'{cores} visible core(s); load average {os.getloadavg()[0]:.1f} at the start (other '
+          'work on the machine slows every path)')
     tmp = tempfile.mkdtemp(prefix='bench_import_', dir=args.out_dir)
     try:
         files = make_logs(os.path.join(tmp, 'logs'), args.samples)
@@ -247,7 +255,7 @@ def main(argv=None):
                     times[name, storage].append(run_baseline(base, files, out, storage))
                 else:
                     times[name, storage].append(run_path(name, files, out, storage))
-                if name == 'new' and storage == 'mcap':
+                if name == 'new-1t' and storage == 'mcap':
                     mcap_bytes = bag_bytes(out)
                 if rnd == 0:
                     gyro = gyro_of(out)
@@ -281,25 +289,32 @@ def main(argv=None):
                   f'{_x(cells[0]):>15s} {_x(cells[1]):>21s} {_x(cells[2]):>32s}')
         if args.baseline:
             b_sql, b_mcap = ('baseline', 'sqlite3'), ('baseline', 'mcap')
-            print(f'new mcap against the baseline: {_x(ratio(("new", "mcap"), b_sql))} (its '
-                  f'sqlite3), {_x(ratio(("new", "mcap"), b_mcap))} (its MCAP); new sqlite3 '
-                  f'against its sqlite3: {_x(ratio(("new", "sqlite3"), b_sql))}')
-        print(f'(disk floor: {mcap_bytes / 1e6:.0f} MB, the size of the MCAP bag; median seconds: '
+            for name in ('new', 'new-1t'):
+                print(f'{name} mcap against the baseline: {_x(ratio((name, "mcap"), b_sql))} '
+                      f'(its sqlite3), {_x(ratio((name, "mcap"), b_mcap))} (its MCAP); {name} '
+                      f'sqlite3 against its sqlite3: {_x(ratio((name, "sqlite3"), b_sql))}; CPU '
+                      f'{_x(cpu[b_sql] / cpu[name, "mcap"])}, '
+                      f'{_x(cpu[b_mcap] / cpu[name, "mcap"])}, '
+                      f'{_x(cpu[b_sql] / cpu[name, "sqlite3"])}')
+        floor = [w for w, _ in times['disk floor', 'mcap']]
+        print(f'(disk floor: {mcap_bytes / 1e6:.0f} MB, the size of the MCAP bag, in '
+              + ', '.join(f'{w:.3f}' for w in floor) + ' s by round; median seconds: '
               + ', '.join(f'{n} {s} {med[n, s]:.3f}' for n, s in runs) + ')')
         print('\nCPU seconds of the importing process (all threads, system time included; less '
               'sensitive to the load than wall time)')
         print(f'{"path":<11s} {"storage":<8s} {"CPU s":>7s} {"vs old sqlite3":>15s} '
-              f'{"vs old, same storage":>21s}')
+              f'{"vs old, same storage":>21s} {"vs rosbags Writer, same storage":>32s}')
         for name, storage in runs:
             run = (name, storage)
             print(f'{name:<11s} {storage:<8s} {cpu[run]:>7.3f} '
                   f'{_x(cpu["old", "sqlite3"] / cpu[run]):>15s} '
-                  f'{_x(cpu.get(("old", storage), float("nan")) / cpu[run]):>21s}')
+                  f'{_x(cpu.get(("old", storage), float("nan")) / cpu[run]):>21s} '
+                  f'{_x(cpu.get(("rosbags", storage), float("nan")) / cpu[run]):>32s}')
         if not args.rss_samples:
             return 0
         print('\npeak RSS of one import process (MB) against log size')
         print(f'{"samples":>10s} {"log MB":>8s} {"old sqlite3":>12s} {"new sqlite3":>12s} '
-              f'{"new mcap":>10s}')
+              f'{"new mcap":>10s}   (new: default threads)')
         for n in (int(v) for v in args.rss_samples.split(',')):
             logs = make_logs(os.path.join(tmp, f'rss{n}'), n)
             mb = sum(os.path.getsize(f) for f in logs) / 1e6

@@ -67,15 +67,17 @@ def corrupt_logs(tmp_path_factory):
     return files
 
 
+@pytest.mark.parametrize('threads', [1, 2])
 @pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
-def test_bulk_import_writes_the_old_paths_bytes(corrupt_logs, tmp_path, storage):
+def test_bulk_import_writes_the_old_paths_bytes(corrupt_logs, tmp_path, storage, threads):
     reports, bags = {}, {}
     for bulk in (False, True):
         # same bag name in two folders: the name is inside the MCAP file and metadata.yaml
         bag = tmp_path / str(bulk) / 'bag'
         bag.parent.mkdir()
         reports[bulk] = importer.import_logs(corrupt_logs, bag, storage=storage, bulk=bulk,
-                                             angular_velocity_variance=1e-6, chunk_bytes=1 << 14)
+                                             angular_velocity_variance=1e-6, chunk_bytes=1 << 14,
+                                             threads=threads if bulk else 1)
         bags[bulk] = bag
     old, new = reports[False], reports[True]
     assert old.crc_errors > 0 and old.corrupt_region_count > 0 and old.temperature_written > 0
@@ -128,3 +130,32 @@ def test_bulk_writer_api_matches_imu_bag_writer(tmp_path, storage):
     if storage == 'mcap':
         assert (open(storage_file(bags[BulkImuBagWriter]), 'rb').read()
                 == open(storage_file(bags[ImuBagWriter]), 'rb').read())
+
+
+def test_a_failed_write_in_the_writer_thread_is_raised_once_and_stops_the_import(
+        corrupt_logs, tmp_path, monkeypatch):
+    calls = []
+
+    def failing(self, *args, **kwargs):
+        calls.append(len(calls))
+        if len(calls) == 3:
+            raise importer.BagError('bag: writing failed: No space left on device')
+
+    monkeypatch.setattr(BulkImuBagWriter, 'write_imu', failing)
+    with pytest.raises(importer.BagError, match='No space left'):
+        importer.import_logs(corrupt_logs, tmp_path / 'bag', threads=2, chunk_bytes=1 << 12)
+    # the writes queued behind the failed one were dropped, not run
+    assert len(calls) == 3
+
+
+def test_threads_must_be_one_or_two(corrupt_logs, tmp_path):
+    with pytest.raises(importer.ParameterError, match='threads'):
+        importer.import_logs(corrupt_logs, tmp_path / 'bag', threads=3)
+
+
+@pytest.mark.parametrize('threads', [1, 2])
+def test_a_bag_that_cannot_be_created_is_one_error(corrupt_logs, tmp_path, threads):
+    blocker = tmp_path / 'file'
+    blocker.write_text('x')
+    with pytest.raises(importer.BagError, match='cannot be created'):
+        importer.import_logs(corrupt_logs, blocker / 'bag', threads=threads)

@@ -211,6 +211,19 @@ def test_cli_prints_report_and_refuses_bad_input(sd_logs, tmp_path, capsys):
                           '--accel-fs-g', '4']) == 4  # no samples at all
     assert not (tmp_path / 'b3').exists()
     assert importer.main([*files, '--out', str(tmp_path / 'b4'), '--gyro-fs-dps', '300']) == 2
+    # the writer thread changes nothing the user sees: same report, same messages
+    capsys.readouterr()
+    reports = []
+    for threads in ('1', '2'):
+        out_bag = tmp_path / threads / 'bag'
+        assert importer.main([*files, '--out', str(out_bag), '--threads', threads]) == 0
+        reports.append(capsys.readouterr().out.replace(str(out_bag), 'BAG'))
+    assert reports[0] == reports[1] and 'samples written' in reports[0]
+    for one, two in zip(read_bag(tmp_path / '1' / 'bag'), read_bag(tmp_path / '2' / 'bag')):
+        if isinstance(one, set):
+            assert one == two
+        else:
+            np.testing.assert_array_equal(one, two)
 
 
 @pytest.mark.slow

@@ -25,7 +25,7 @@ sqlite3 fast path still costs one ``executemany`` row (several microseconds) per
   in C. Same schema, same rows in the same order, same ``metadata.yaml`` (rosbags' writer still
   creates and closes the bag).
 * MCAP: the message records (opcode, length, channel, sequence 0, log and publish time, CDR)
-  are laid out one chunk at a time in a numpy byte matrix (Imu messages by a compiled loop over
+  are laid out one chunk at a time in a numpy byte matrix (Imu messages written field by field over
   a template message); a chunk that a block fills from its first message on goes straight to the
   file with its message index, the rest through rosbags' pending chunk. Chunks are closed at
   exactly the message where rosbags would close them (past :data:`MCAP_CHUNK_BYTES`). The file

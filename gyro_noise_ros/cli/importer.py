@@ -40,8 +40,10 @@ Example::
 import argparse
 from dataclasses import dataclass
 import os
+import queue
 import shutil
 import sys
+import threading
 
 import numpy as np
 
@@ -156,7 +158,7 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
                 frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
                 temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
                 linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20,
-                bulk=True, scan=None):
+                bulk=True, scan=None, threads=None):
     """
     Convert SD log files of one sequence to a rosbag2.
 
@@ -195,6 +197,11 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
         Decode the logs with the compiled frame scanner (:class:`SdLogReader` ``scan=True``; same
         blocks and report); None (default) follows ``bulk``, so ``bulk=False`` is the whole old
         path.
+    threads : {1, 2}, optional, keyword-only
+        2: the bag is written by a second thread, in order, while this one reads, decodes and
+        scales the next blocks (at most :data:`WRITE_QUEUE_BLOCKS` blocks wait between them, so
+        memory stays constant); 1: one thread does both. None (default): 2 when this process
+        may run on two or more CPUs and ``bulk`` is on, else 1. Same bag, byte for byte.
 
     Returns
     -------
@@ -214,6 +221,10 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
                         ('temperature_rate_hz', temperature_rate_hz)):
         if not (np.isfinite(value) and value >= 0):
             raise ParameterError(f'{name} must be finite and >= 0, got {value}')
+    if threads is None:
+        threads = 2 if bulk and _usable_cpus() >= 2 else 1
+    if threads not in (1, 2):
+        raise ParameterError(f'threads must be 1 or 2, got {threads!r}')
     imu_topic = _topic(topic)
     temp_topic = _topic(temperature_topic) if temperature_rate_hz > 0 else None
     out = os.fspath(out)
@@ -251,8 +262,12 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     configs = []
     written = temp_written = 0
     writer_class = BulkImuBagWriter if bulk else ImuBagWriter
-    with writer_class(out, storage=storage, imu_topic=imu_topic, temperature_topic=temp_topic,
-                      frame_id=frame_id) as writer:
+
+    def open_writer():
+        return writer_class(out, storage=storage, imu_topic=imu_topic,
+                            temperature_topic=temp_topic, frame_id=frame_id)
+
+    with _BagWrites(open_writer, threaded=threads == 2) as writes:
         for block in reader:
             if block.samples.size == 0:
                 continue
@@ -281,9 +296,8 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
             jumps += int(np.count_nonzero(steps <= 0))
             prev_t = int(t[-1])
             si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
-            writer.write_imu(stamps, si.gyro_rad_s, si.accel_m_s2,
-                             angular_velocity_covariance=av_cov,
-                             linear_acceleration_covariance=la_cov)
+            writes.call('write_imu', stamps, si.gyro_rad_s, si.accel_m_s2,
+                        angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
             written += block.samples.size
             if temp_topic is not None and odr:
                 # a running phase keeps the decimation even across blocks and ODR changes
@@ -293,8 +307,8 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
                     np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
                 temp_acc = float(phase[-1]) % 1.0
                 if pick.size:
-                    writer.write_temperature(stamps[pick], si.temperature_c[pick],
-                                             variance=temperature_variance)
+                    writes.call('write_temperature', stamps[pick], si.temperature_c[pick],
+                                variance=temperature_variance)
                     temp_written += pick.size
             if first is None:
                 first = int(stamps[0])
@@ -314,6 +328,95 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
                         missing_file_indices=rep.missing_file_indices, sequence_id=rep.sequence_id,
                         first_stamp_ns=first, last_stamp_ns=last, time_jumps=jumps,
                         configurations=tuple(configs), epoch=epoch)
+
+
+#: Blocks (``chunk_bytes`` of log each, about 2.4 MB of arrays per MB of log) that may wait for the
+#: writer thread.
+WRITE_QUEUE_BLOCKS = 4
+
+
+def _usable_cpus():
+    """Return the number of CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+class _BagWrites:
+    """
+    The bag writer and its writes, in a second thread (``threaded``) or in the caller's.
+
+    ``open_writer()`` creates the writer; in the threaded mode it is created, used and closed in
+    the writer thread only (rosbags' sqlite3 connection may only be used by the thread that made
+    it), and :meth:`call` queues the writes in order. The first exception of the writer thread
+    (creating the bag, a write, finishing it) is raised again in the caller: at its next
+    :meth:`call` or when the ``with`` block ends; the writes queued after a failed one are
+    dropped, as the single thread would never have made them. Leaving the block waits for every
+    queued write and finishes the bag, also when the caller failed (the bag then holds what was
+    written, as in the single-threaded path).
+    """
+
+    def __init__(self, open_writer, threaded):
+        self._open = open_writer
+        self._queue = queue.Queue(WRITE_QUEUE_BLOCKS) if threaded else None
+        self._writer = None
+        self._error = None
+        self._thread = None
+        self._ready = threading.Event()
+
+    def __enter__(self):
+        if self._queue is None:
+            self._writer = self._open()
+            return self
+        self._thread = threading.Thread(target=self._work, name='gyro_noise_import writer',
+                                        daemon=True)
+        self._thread.start()
+        self._ready.wait()
+        if self._error is not None:  # the bag could not be created
+            self._thread.join()
+            raise self._error
+        return self
+
+    def _work(self):
+        try:
+            writer = self._open()
+        except BaseException as err:  # noqa: B036 - raised in the caller
+            self._error = err
+            return
+        finally:
+            self._ready.set()
+        try:
+            while (item := self._queue.get()) is not None:
+                if self._error is None:
+                    try:
+                        getattr(writer, item[0])(*item[1], **item[2])
+                    except BaseException as err:  # noqa: B036 - raised in the caller
+                        self._error = err
+        finally:
+            try:
+                writer.close()
+            except BaseException as err:  # noqa: B036 - raised in the caller
+                if self._error is None:
+                    self._error = err
+
+    def call(self, method, *args, **kwargs):
+        """Call the writer's ``method(*args, **kwargs)`` now, or queue it for the writer thread."""
+        if self._queue is None:
+            getattr(self._writer, method)(*args, **kwargs)
+            return
+        if self._error is not None:
+            raise self._error
+        self._queue.put((method, args, kwargs))
+
+    def __exit__(self, exc_type, exc, tb):
+        if self._queue is None:
+            return self._writer.__exit__(exc_type, exc, tb)
+        self._queue.put(None)  # the thread drains the queue, also after an error
+        self._thread.join()
+        if self._error is not None and exc is None:
+            raise self._error
+        return False
 
 
 def format_report(rep, *, max_regions=20):
@@ -394,6 +497,9 @@ def build_parser():
                    help='(m/s^2)^2, 0 = unknown')
     p.add_argument('--temperature-variance', type=float, default=0.0, help='degC^2, 0 = unknown')
     p.add_argument('--chunk-bytes', type=int, default=1 << 20, help='read size (bytes)')
+    p.add_argument('--threads', choices=('auto', '1', '2'), default='auto',
+                   help='2: a second thread writes the bag while the next blocks are decoded; '
+                        '1: one thread, the least CPU; auto: 2 when two CPUs are usable')
     return p
 
 
@@ -405,7 +511,8 @@ def _body(argv):
                       start_time=args.start_time, temperature_rate_hz=args.temperature_rate_hz,
                       angular_velocity_variance=args.angular_velocity_variance,
                       linear_acceleration_variance=args.linear_acceleration_variance,
-                      temperature_variance=args.temperature_variance, chunk_bytes=args.chunk_bytes)
+                      temperature_variance=args.temperature_variance, chunk_bytes=args.chunk_bytes,
+                      threads=None if args.threads == 'auto' else int(args.threads))
     print(format_report(rep), flush=True)
     return 0
 

@@ -20,8 +20,6 @@ tools turn each class into one clear line and a documented exit code (see ``cli/
 Messages name the offending argument and its value.
 """
 
-from pathlib import Path
-
 
 class GyroNoiseError(Exception):
     """Base class of every deliberate error in gyro_noise_ros."""
@@ -57,26 +55,13 @@ class LinkError(GyroNoiseError):
     exit_code = 5
 
 
+class OutputError(GyroNoiseError):
+    """An output cannot be written: ``--out`` not writable, a file in the way, disk full."""
+
+    exit_code = 6
+
+
 class ClusterError(GyroNoiseError):
     """A Dask scheduler (``--scheduler``) cannot be reached, or its cluster failed in the run."""
 
     exit_code = 5
-
-
-def make_out_dir(path):
-    """
-    Create the output directory ``path`` (and its parents) of a tool; return it as a Path.
-
-    Raises
-    ------
-    ParameterError
-        It cannot be created (one line naming it and the reason, for the tools' ``--out``).
-
-    """
-    out = Path(path)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ParameterError(
-            f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
-    return out

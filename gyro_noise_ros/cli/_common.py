@@ -23,7 +23,8 @@ Exit codes (documented in the README):
 2     bad command line or parameter value (argparse uses 2 as well)
 3     a recording cannot be read (missing, corrupt, no or ambiguous topic, wrong type)
 4     the data cannot be analysed (NaN/Inf, too short, constant)
-5     the Portenta link cannot be used
+5     the Portenta link cannot be used, or the Dask cluster is lost
+6     an output cannot be written (``--out`` not writable, a file in the way, disk full)
 130   interrupted (Ctrl-C)
 ====  ==========================================================================
 """

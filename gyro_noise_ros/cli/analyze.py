@@ -53,7 +53,8 @@ from ..cluster import make_executor
 from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
-from ..errors import InputDataError, make_out_dir, ParameterError
+from ..errors import InputDataError, ParameterError
+from ..outputs import make_out_dir
 
 PROG = 'gyro_noise_analyze'
 

@@ -45,7 +45,8 @@ import numpy as np
 from ._common import run_cli
 from .. import __version__
 from ..cluster import make_executor
-from ..errors import ClusterError, GyroNoiseError, InputDataError, make_out_dir, ParameterError
+from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
+from ..outputs import make_out_dir
 from ..thermal import methods as registry
 from ..thermal import report
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,

@@ -29,7 +29,7 @@ import numpy as np
 from . import signatures as sig
 from .effects import public_params
 from .uncertainty import format_value
-from ..errors import make_out_dir
+from ..outputs import make_out_dir
 
 DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}

@@ -382,7 +382,7 @@ def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
     monkeypatch.setattr(analyze, 'ImuBagReader', Spy)
     blocker = tmp_path / 'file'
     blocker.write_text('x')
-    assert main([*FAST, str(odd_bags / 'short'), '--out', str(blocker / 'o')]) == 2
+    assert main([*FAST, str(odd_bags / 'short'), '--out', str(blocker / 'o')]) == 6
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'cannot be created' in err[0]
     assert opened and all(r._source is None for r in opened)  # the topic check's reader closed

@@ -635,15 +635,19 @@ def kalibr_noise(readouts, *, record_s=None):
         k, r = max(walks, key=lambda kr: kr[0]['random_walk'])
         out['random_walk'] = k['random_walk']
         length = f' ({record_s:.4g} s)' if record_s is not None and math.isfinite(record_s) else ''
-        if any(kk['too_short'] for kk, _ in walks):
+        bound = 'K <= upper ADEV bound at the longest tau x sqrt(3 / tau)'
+        fitted = r.rate_random_walk_rad_per_s_sqrt_s
+        fitted = (f'the fitted K, {fitted:.3g}, is smaller' if math.isfinite(fitted) and fitted > 0
+                  else 'the fit finds none')
+        short = [rr for kk, rr in walks if kk['too_short']]
+        if short:
             out['random_walk_note'] = (
                 f'record too short{length} for a random walk: the Allan curve is still falling '
-                f'at its longest tau ({r.bias_stability_tau_s:.3g} s); this is only an upper '
-                'bound, K <= upper ADEV bound at the longest tau x sqrt(3 / tau)')
+                f'at its longest tau ({short[0].bias_stability_tau_s:.3g} s), so this is only an '
+                f'upper bound, {bound}')
         elif k['random_walk_is_bound']:
-            out['random_walk_note'] = ('upper bound: the record does not resolve a rate random '
-                                       'walk; K <= upper ADEV bound at the longest tau x '
-                                       'sqrt(3 / tau) (the fitted K is smaller)')
+            out['random_walk_note'] = (f'upper bound: the record{length} does not resolve a '
+                                       f'random walk; {bound} ({fitted})')
     return out
 
 

@@ -827,8 +827,9 @@ def _write_allan_outputs(out, doc, allan_store, accel_readouts, figures):
     if first['storage'] in ('csv', 'ulog'):
         # a table or a ULog has no ROS topic: name the usual raw IMU topic and say so
         topic = report.DEFAULT_IMU_TOPIC
-        note = (f"the input was a {first['storage']} file ({first['topic']}), not a bag: set "
-                'the topic your IMU driver publishes')
+        what = (f"a {first['storage']} file" if first['topic'] == first['storage']
+                else f"a {first['storage']} file ({first['topic']})")
+        note = f'the input was {what}, not a bag: set the topic your IMU driver publishes'
     report.write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
                           update_rate_hz=first['rate_hz'] or float('nan'),
                           gyroscope=report.kalibr_noise(gyro, record_s=record_s),

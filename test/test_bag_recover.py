@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Killed recordings: a truncated MCAP read by its chunks, a hot sqlite3 journal through a copy, repair.
+Killed recordings: a cut MCAP read by its chunks, a hot sqlite3 journal through a copy, repair.
 
 What a killed writer leaves on disk is reproduced without killing anything: a bag is written with
 :class:`ImuBagWriter` (flushing as the recorder does) and its storage file is copied, or cut, at a
@@ -174,7 +174,7 @@ def test_flush_bounds_what_a_killed_mcap_writer_loses(tmp_path):
 
 
 def _kill_mid_transaction(db3, rows=2000):
-    """A child process inserts without committing and dies, leaving a hot rollback journal."""
+    """Insert rows in a child process that dies without committing (a hot rollback journal)."""
     code = ('import os, sqlite3; c = sqlite3.connect(%r); c.execute("PRAGMA cache_size=1");'
             'c.execute("BEGIN"); c.executemany("INSERT INTO messages (topic_id, timestamp, data) '
             'VALUES (1, ?, ?)", ((i, bytes(4000)) for i in range(%d))); os._exit(0)')
@@ -234,8 +234,8 @@ def test_repair_writes_a_complete_bag_and_leaves_the_input(tmp_path, storage, ca
     assert out == tmp_path / 'killed_repaired'
     assert f'wrote {expected.size + exp_temps[0].size} messages' in capsys.readouterr().out
     assert {p.name: _sha(p) for p in killed.iterdir()} == hashes
-    assert sorted(p.name for p in out.iterdir()) == ['killed_repaired' + src.suffix,
-                                                      'metadata.yaml']
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ['killed_repaired' + src.suffix, 'metadata.yaml']
     assert sorted(p.name for p in tmp_path.iterdir()) == ['full', 'killed', 'killed_repaired']
     # rosbags opens it through metadata.yaml, counts consistent with the messages
     with AnyReader([out]) as reader:

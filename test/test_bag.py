@@ -38,7 +38,7 @@ from gyro_noise_ros.bag import (
     TEMPERATURE_MSGTYPE,
     TopicInfo,
 )
-from gyro_noise_ros.errors import BagError, ParameterError
+from gyro_noise_ros.errors import BagError, OutputError, ParameterError
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
 import numpy as np
@@ -553,7 +553,7 @@ def test_parameter_errors(tmp_path):
         with pytest.raises(ParameterError, match='log_ns'):
             writer.write_imu([1, 2], np.zeros((2, 3)), np.zeros((2, 3)), log_ns=[1])
         writer.write_imu([1, 2], np.zeros((2, 3)), np.zeros((2, 3)))
-    with pytest.raises(BagError, match='exists already'):
+    with pytest.raises(OutputError, match='exists already'):
         ImuBagWriter(tmp_path / 'y')
     with ImuBagReader(tmp_path / 'y') as reader:
         for bad in (0, -3, 2.5, True):

@@ -49,7 +49,7 @@ from .codec import (
     typestore,
 )
 from .storage import BagSource, describe, STORAGES
-from ..errors import BagError, ParameterError
+from ..errors import BagError, OutputError, ParameterError
 
 __all__ = [
     'IMU_MSGTYPE',
@@ -516,7 +516,7 @@ def write_raw(writer, conn, log_ns, blobs, path):
 
     Raises
     ------
-    BagError
+    OutputError
         Writing failed (disk full, sqlite errors).
 
     """
@@ -544,7 +544,7 @@ def write_raw(writer, conn, log_ns, blobs, path):
         for t, blob in zip(log_ns.tolist(), blobs):
             writer.write(conn, t, blob)
     except Exception as err:  # noqa: BLE001 - disk full, sqlite errors
-        raise BagError(f'bag {str(path)!r}: writing failed: {describe(err)}') from err
+        raise OutputError(f'bag {str(path)!r}: writing failed: {describe(err)}') from err
 
 
 class ImuBagWriter:
@@ -578,8 +578,9 @@ class ImuBagWriter:
     ------
     ParameterError
         Unknown storage or bad frame_id.
-    BagError
-        The bag cannot be created (path exists, not writable).
+    OutputError
+        The bag cannot be created (path exists, not writable); later, a write, flush or close
+        fails (disk full). Exit code 6 in the tools, like every output that cannot be written.
 
     """
 
@@ -610,7 +611,8 @@ class ImuBagWriter:
                 conn.execute('PRAGMA synchronous=OFF')
             self._imu_conn = writer.add_connection(imu_topic, IMU_MSGTYPE, typestore=typestore())
         except Exception as err:  # noqa: BLE001 - rosbags WriterError, OSError, sqlite errors
-            raise BagError(f'bag {str(self.path)!r} cannot be created: {describe(err)}') from err
+            raise OutputError(
+                f'bag {str(self.path)!r} cannot be created: {describe(err)}') from err
         self._temperature_conn = None
 
     def __enter__(self):
@@ -678,8 +680,8 @@ class ImuBagWriter:
                 extra[topic] = self._writer.add_connection(topic, IMU_MSGTYPE,
                                                            typestore=typestore())
             except Exception as err:  # noqa: BLE001 - rosbags WriterError
-                raise BagError(f'bag {str(self.path)!r}: cannot add topic {topic!r}: '
-                               f'{describe(err)}') from err
+                raise OutputError(f'bag {str(self.path)!r}: cannot add topic {topic!r}: '
+                                  f'{describe(err)}') from err
         return extra[topic]
 
     def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
@@ -710,8 +712,9 @@ class ImuBagWriter:
                 self._temperature_conn = self._writer.add_connection(
                     self.temperature_topic, TEMPERATURE_MSGTYPE, typestore=typestore())
             except Exception as err:  # noqa: BLE001
-                raise BagError(f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
-                               f'{describe(err)}') from err
+                raise OutputError(
+                    f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
+                    f'{describe(err)}') from err
         self._write(self._temperature_conn, logs, blobs)
         self.temperature_count += len(blobs)
 
@@ -744,7 +747,7 @@ class ImuBagWriter:
             if bio is not None:
                 bio.flush()
         except Exception as err:  # noqa: BLE001
-            raise BagError(f'bag {str(self.path)!r}: flush failed: {describe(err)}') from err
+            raise OutputError(f'bag {str(self.path)!r}: flush failed: {describe(err)}') from err
 
     def close(self):
         """Finish the bag: write its index and ``metadata.yaml`` (idempotent)."""
@@ -753,5 +756,5 @@ class ImuBagWriter:
             try:
                 writer.close()
             except Exception as err:  # noqa: BLE001
-                raise BagError(
+                raise OutputError(
                     f'bag {str(self.path)!r} cannot be finished: {describe(err)}') from err

@@ -55,27 +55,42 @@ def _domain():
 def _record(tmp_path, samples, seed, sig, storage):
     domain = _domain()
     out = tmp_path / f'bag_{storage}'
+    log = tmp_path / f'recorder_{storage}.log'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', f'storage:={storage}',
                             # The replayer publishes reliable, as the driver does: a reliable
                             # subscription keeps a loaded host from dropping messages in transport.
-                            '-p', 'reliable:=true'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True)
-    # The replayer waits for the recorder's Imu subscription, publishes in real time at 6.66 kHz
-    # and lingers 1 s, so the recorder has taken everything before the signal.
-    rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1)
+                            '-p', 'reliable:=true', '-p', 'report_period_s:=0.25'],
+                           env=ros_env(domain), stdout=subprocess.DEVNULL, stderr=open(log, 'w'))
+    # The replayer waits for the recorder's Imu subscription and publishes in real time at
+    # 6.66 kHz; it then lingers (its reliable writer resends what a starved recorder has not
+    # taken yet) until the recorder reports every message written, and only then the signal comes.
+    rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1,
+                         '--linger-s', 60)
     try:
-        rep_out, rep_err = rep.communicate(timeout=120)
-        assert rep.returncode == 0, rep_err
+        deadline = time.monotonic() + 120.0
+        want = (samples, len(range(0, samples, 128)))  # the replayer's temperature decimation
+        while (any(got < need for got, need in zip(_progress(log), want))
+               and time.monotonic() < deadline):
+            assert rep.poll() is None, rep.communicate()
+            time.sleep(0.1)
         rec.send_signal(sig)
-        rec_out, rec_err = rec.communicate(timeout=30)
+        rec.wait(timeout=30)
     finally:
         for p in (rep, rec):
             if p.poll() is None:
                 p.kill()
                 p.communicate()
-    return out, rec.returncode, rec_err
+    return out, rec.returncode, log.read_text()
+
+
+def _progress(log):
+    """(Imu, Temperature) messages the recorder last reported written ((0, 0) before any)."""
+    import re
+
+    counts = re.findall(r'\[gyro_noise_record\]: (\d+) Imu, (\d+) Temperature',
+                        log.read_text())
+    return tuple(map(int, counts[-1])) if counts else (0, 0)
 
 
 @pytest.mark.timeout(180)

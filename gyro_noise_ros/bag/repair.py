@@ -34,7 +34,7 @@ import numpy as np
 
 from . import write_raw
 from .codec import typestore
-from .storage import BagSource, describe, mcap_message_records, STORAGES
+from .storage import BagSource, describe, mcap_message_records, read_mcap_chunk, STORAGES
 from ..errors import BagError, OutputError, ParameterError
 from ..outputs import staged_new_dir
 
@@ -150,8 +150,6 @@ def _storage_order_blocks(source):
                         yield (conns[cid], np.array([r[1] for r in run], np.int64),
                                [r[2] for r in run])
             continue
-        from rosbags.rosbag2.storage_mcap import decompress
-
         chunks = sorted(storage.chunks, key=lambda c: c.chunk_start_offset)
         if not chunks and storage.statistics and storage.statistics.message_count:
             stream = storage.messages(list(conns.values()))
@@ -162,11 +160,7 @@ def _storage_order_blocks(source):
             continue
         with open(storage.path, 'rb') as fh:
             for info in chunks:
-                fh.seek(info.chunk_start_offset + 9 + 24)
-                crc = int.from_bytes(fh.read(4), 'little')
-                fh.seek(info.chunk_start_offset + 9 + 40 + len(info.compression))
-                raw = decompress(fh.read(info.compressed_size), info.compression,
-                                 info.uncompressed_size, crc)
+                raw = read_mcap_chunk(fh, info)
                 starts, lengths, channel, log_ns = mcap_message_records(raw)
                 if channel.size == 0:
                     continue

@@ -191,6 +191,42 @@ def mcap_message_records(chunk):
             np.array(log_ns, np.uint64).astype(np.int64))
 
 
+def read_mcap_chunk(fh, info):
+    """
+    Read, decompress and CRC-check one MCAP chunk with rosbags' ``decompress``.
+
+    Parameters
+    ----------
+    fh : file object
+        The MCAP file, opened for binary reading.
+    info : rosbags.rosbag2.storage_mcap.ChunkInfo
+        The chunk's index entry.
+
+    Returns
+    -------
+    bytes
+        The chunk's records.
+
+    Raises
+    ------
+    BagError
+        The chunk is cut off by the end of the file (rosbags raises its own errors on a bad
+        compression or checksum).
+
+    """
+    from rosbags.rosbag2.storage_mcap import decompress
+
+    # Chunk record: opcode, length, start, end, uncompressed size (8 each), crc (4),
+    # compression string (4 + len), compressed size (8), records.
+    fh.seek(info.chunk_start_offset + 9 + 24)
+    crc = int.from_bytes(fh.read(4), 'little')
+    fh.seek(info.chunk_start_offset + 9 + 40 + len(info.compression))
+    data = fh.read(info.compressed_size)
+    if len(data) != info.compressed_size:
+        raise BagError(f'MCAP chunk at byte {info.chunk_start_offset} is cut off')
+    return decompress(data, info.compression, info.uncompressed_size, crc)
+
+
 def _ros1_header(chunk, start, stop):
     """Fields of a ROS 1 record header as {name: (value offset, value bytes)}."""
     fields = {}
@@ -459,8 +495,6 @@ class BagSource:
             yield buf, starts, lengths, log_ns
 
     def _mcap_blocks(self, storage, conns, block):
-        from rosbags.rosbag2.storage_mcap import decompress
-
         ids = np.array(sorted({c.id for c in conns}), np.int64)
         chunks = sorted(
             (c for c in storage.chunks if any(c.channel_count.get(int(i), 0) for i in ids)),
@@ -475,16 +509,7 @@ class BagSource:
             return
         with open(storage.path, 'rb') as fh:
             for info in chunks:
-                # Chunk record: opcode, length, start, end, uncompressed size (8 each), crc (4),
-                # compression string (4 + len), compressed size (8), records.
-                fh.seek(info.chunk_start_offset + 9 + 24)
-                crc = int.from_bytes(fh.read(4), 'little')
-                fh.seek(info.chunk_start_offset + 9 + 40 + len(info.compression))
-                data = fh.read(info.compressed_size)
-                if len(data) != info.compressed_size:
-                    raise BagError(f'MCAP chunk at byte {info.chunk_start_offset} is cut off')
-                raw = decompress(data, info.compression, info.uncompressed_size, crc)
-                del data
+                raw = read_mcap_chunk(fh, info)
                 starts, lengths, channel, log_ns = mcap_message_records(raw)
                 sel = np.flatnonzero(np.isin(channel, ids))
                 if sel.size == 0:

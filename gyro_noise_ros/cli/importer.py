@@ -32,6 +32,10 @@ Time stamps come from the device clock (the 32-bit microsecond counter, unwrappe
 
 Bag time (the storage's receive time) equals the header stamp.
 
+The bag is built under a hidden name beside ``--out`` and renamed when it is complete, so an
+interrupted or failed import leaves nothing that looks like a bag and can simply be run again. A
+log file given twice, or files holding the same samples, are refused before anything is written.
+
 Example::
 
     gyro_noise_import /media/sd/S001F*.GNL --out seq1_bag --storage mcap
@@ -545,7 +549,11 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status (0 also when corrupt regions were skipped).
+        Exit status: 0 (also when corrupt regions were skipped); 2 bad option (``--chunk-bytes``
+        outside 1..64 MiB included) or a log file named twice; 3 a log file missing; 4 logs that
+        are not one sequence (different sequences, the same file twice, overlapping sample
+        counters) or hold no valid sample; 6 ``--out`` exists or the bag cannot be written; 130
+        interrupted. Whatever the failure, no bag is left under ``--out``.
 
     """
     return run_cli(PROG, _body, argv)

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import atexit
 from dataclasses import dataclass
+import functools
 import os
 from pathlib import Path
 import shutil
@@ -182,6 +183,7 @@ def _walk_chunk(raw):
     return schemas, channels, counts, start, end
 
 
+@functools.lru_cache(maxsize=None)
 def recovering_mcap_reader_class():
     """
     Return rosbags' ``McapReader`` extended to read a file without summary and footer.
@@ -378,6 +380,7 @@ def recovering_mcap_reader_class():
     return RecoveringMcapReader
 
 
+@functools.lru_cache(maxsize=None)
 def recovering_reader_class():
     """
     Return rosbags' unified ``Reader`` with :func:`recovering_mcap_reader_class` for bare files.
@@ -555,10 +558,8 @@ def rolled_back_copy(db3):
         shutil.rmtree(folder, ignore_errors=True)
         raise BagError(f'sqlite3 file {str(db3)!r}: its unfinished transaction '
                        f'({journal.name}) cannot be rolled back in a copy: {err}') from err
-    if journal_is_hot(copy):
-        shutil.rmtree(folder, ignore_errors=True)
-        raise BagError(f'sqlite3 file {str(db3)!r}: sqlite left its journal {journal.name} in '
-                       'place in the copy (not a rollback journal of this file?)')
+    # A journal sqlite did not judge hot (a zeroed header) stays; it holds nothing to roll back,
+    # and rosbags opens the copy immutable, ignoring it.
     _COPIES[key] = copy
     return copy
 

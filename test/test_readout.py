@@ -33,8 +33,8 @@ from gyro_noise_ros.cli import analyze
 from gyro_noise_ros.core.allan import allan_deviation, AllanResult, fit_noise_terms
 from gyro_noise_ros.core.engine import EngineConfig, NoiseEngine
 from gyro_noise_ros.core.items import allan_items, fmt
-from gyro_noise_ros.core.readout import (adev_at, adev_floor, B_FACTOR, random_walk_bound,
-                                         read_allan, usable_start)
+from gyro_noise_ros.core.readout import (adev_at, adev_floor, B_FACTOR, MAX_TAU_FRACTION,
+                                         random_walk_bound, read_allan, usable_start)
 from gyro_noise_ros.errors import InputDataError
 from gyro_noise_ros.thermal.metrics import noise_metrics
 import numpy as np
@@ -87,10 +87,14 @@ def test_floor_of_an_exact_curve_is_its_minimum_and_b_is_it_over_0664():
     assert d['bias_instability_deg_h'] == pytest.approx(r.bias_instability_rad_s * DEG * 3600)
 
 
-def test_white_noise_never_turns_up_an_upper_bound_at_the_last_tau():
+def test_white_noise_never_turns_up_an_upper_bound_at_the_last_readable_tau():
     tau = _octaves(0.01, 40.96)
-    r = read_allan(_curve(tau, n=1e-3))
-    assert r.bias_stability_upper_bound and r.bias_stability_tau_s == tau[-1]
+    res = _curve(tau, n=1e-3)
+    r = read_allan(res)
+    # the record is 4 x the last tau here: a tenth of it ends before the last two octaves
+    last = tau[tau <= MAX_TAU_FRACTION * res.n_samples / res.rate_hz][-1]
+    assert r.bias_stability_upper_bound and r.bias_stability_tau_s == last
+    assert adev_floor(tau, res.adev).upper_bound and adev_floor(tau, res.adev).index == tau.size - 1
     # a noisy up-tick on the last, low-EDF tau is not a turning point either
     avar = 1e-6 / tau
     avar[-1] *= 2.5
@@ -111,19 +115,24 @@ def test_a_band_limited_bump_at_the_shortest_taus_is_not_the_floor():
     assert not r.bias_stability_upper_bound
 
 
-def test_a_dip_on_few_degrees_of_freedom_does_not_move_the_floor():
+def test_the_floor_is_the_minimum_up_to_a_tenth_of_the_record():
     tau = _octaves(0.01, 1310.72)
     sig = np.sqrt(np.maximum(1e-6 / tau, 1e-8) + 1e-12 * tau)   # floor 1e-4 from 100 s
     j = int(np.argmin(sig))
     dipped = sig.copy()
-    dipped[-1] = 0.75 * sig[j]              # ADIS run 1, x: 0.0052 against 0.00706
-    edf = np.linspace(1e5, 9.0, tau.size)   # 9 degrees of freedom at the last tau
-    f = adev_floor(tau, dipped, edf=edf)
-    assert f.index == j and not f.upper_bound
-    # the same dip on many degrees of freedom is real: the floor moves to it
-    assert adev_floor(tau, dipped, edf=np.full(tau.size, 1e4)).index == tau.size - 1
-    # without degrees of freedom every difference counts (paper 001's plain reading)
-    assert adev_floor(tau, dipped).index == tau.size - 1
+    dipped[-1] = 0.75 * sig[j]              # a dip on the last, low-EDF tau
+    edf = np.linspace(1e5, 9.0, tau.size)
+    # past a tenth of the record (here 1000 s) a dip cannot hold the floor
+    f = adev_floor(tau, dipped, edf=edf, max_tau_s=1000.0)
+    assert f.index == j
+    # ... but it says the floor may lie lower: an upper bound
+    assert f.upper_bound and not adev_floor(tau, sig, edf=edf, max_tau_s=1000.0).upper_bound
+    # inside it, the lowest value is the floor, whatever its EDF
+    assert adev_floor(tau, dipped, edf=edf).index == tau.size - 1
+    # the readout passes a tenth of the record
+    res = _result(tau, dipped ** 2, edf)
+    assert res.n_samples / res.rate_hz * MAX_TAU_FRACTION < tau[-1]
+    assert read_allan(res).bias_stability_tau_s == tau[j]
 
 
 def test_a_floor_that_barely_rises_is_real_when_the_curve_flattened_into_it():
@@ -136,12 +145,14 @@ def test_a_floor_that_barely_rises_is_real_when_the_curve_flattened_into_it():
     r = read_allan(res)
     assert r.bias_stability_tau_s < tau[-1] and not r.bias_stability_upper_bound
     assert r.bias_stability_rad_s == pytest.approx(B_FACTOR * 1e-4, rel=0.05)
-    # a floor that is only approached (still falling at the last tau) is an upper bound there
-    still = read_allan(_curve(tau, n=1e-3, b=1e-4))
-    assert still.bias_stability_upper_bound and still.bias_stability_tau_s == tau[-1]
+    # a floor that is only approached (still falling past the readable taus) is an upper bound
+    still = _curve(tau, n=1e-3, b=1e-4)
+    last = tau[tau <= MAX_TAU_FRACTION * still.n_samples / still.rate_hz][-1]
+    r = read_allan(still)
+    assert r.bias_stability_upper_bound and r.bias_stability_tau_s == last
 
 
-def test_adis16405_run1_x_first_minimum_against_the_r_avar_reference():
+def test_adis16405_run1_x_against_the_r_avar_reference():
     g = np.load(real_data('adis16405_static', 'adis_16405_imu1.npz'))['gyro_dps']
     result = allan_deviation(np.deg2rad(g[:, 0]), 100.0, taus='octave')
     r = read_allan(result)
@@ -151,20 +162,22 @@ def test_adis16405_run1_x_first_minimum_against_the_r_avar_reference():
         rows = [row for row in csv.DictReader(fh) if row['channel'] == 'Gyro. X']
     tau_ref = np.array([float(row['tau_s']) for row in rows])
     adev_ref = np.array([float(row['adev']) for row in rows])
-    # Independent: the R avar curve's first minimum is at 81.92 s, 0.0070628 deg/s (the datasheet:
-    # 0.007 deg/s); its global minimum lies later (1311 s, 0.0052) on 9 degrees of freedom.
-    first = int(np.flatnonzero(np.diff(adev_ref) > 0)[0])
-    assert tau_ref[first] == pytest.approx(81.92)
-    assert adev_ref.argmin() > first
-    assert r.bias_stability_tau_s == pytest.approx(tau_ref[first])
-    assert d['bias_stability_deg_s'] == pytest.approx(adev_ref[first], rel=1e-4)
+    # Independent (R avar, octave taus): the minimum over taus up to a tenth of the record
+    # (1000 s) is at 655 s; the curve dips further at 1311 s on 9 degrees of freedom.
+    short = tau_ref <= 0.1 * g.shape[0] / 100.0
+    j = int(np.argmin(np.where(short, adev_ref, np.inf)))
+    assert tau_ref[j] == pytest.approx(655.36)
+    assert adev_ref.argmin() > j
+    assert r.bias_stability_tau_s == pytest.approx(tau_ref[j])
+    assert d['bias_stability_deg_s'] == pytest.approx(adev_ref[j], rel=1e-4)
     assert d['bias_stability_ci_low_deg_s'] < d['bias_stability_deg_s'] < d[
         'bias_stability_ci_high_deg_s']
-    assert not r.bias_stability_upper_bound
+    # the curve dips lower at 1311 s: the floor may lie lower, an upper bound
+    assert r.bias_stability_upper_bound
     # ARW on the -1/2 region against the reference ADEV at 1.28 s scaled along -1/2 (the curve
     # is on the -1/2 slope there: local slope -0.48 to -0.50); 3 % covers the slope.
-    j = int(np.argmin(np.abs(tau_ref - 1.28)))
-    arw_ref = adev_ref[j] * np.sqrt(tau_ref[j]) * 60.0
+    k = int(np.argmin(np.abs(tau_ref - 1.28)))
+    arw_ref = adev_ref[k] * np.sqrt(tau_ref[k]) * 60.0
     assert d['arw_deg_per_sqrt_h'] == pytest.approx(arw_ref, rel=0.03)
     assert d['arw_ci_low_deg_per_sqrt_h'] < arw_ref < d['arw_ci_high_deg_per_sqrt_h']
     assert r.fit_quality == 'good'

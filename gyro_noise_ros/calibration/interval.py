@@ -102,7 +102,8 @@ def _cross(t0, s0, t1, s1, level):
     return math.exp(math.log(t0) + frac * (math.log(t1) - math.log(t0)))
 
 
-def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF):
+def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF,
+                              max_tau_s=math.inf):
     """
     Return the tau interval where the Allan deviation stays below ``c * sigma_min``.
 
@@ -122,6 +123,9 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
         reading).
     min_edf : float, keyword-only
         Least EDF of a tau that may hold sigma_min.
+    max_tau_s : float, keyword-only
+        Longest tau that may hold sigma_min (s): pass a tenth of the record
+        (``core.readout.MAX_TAU_FRACTION``) to read the analyzer's bias stability.
 
     Returns
     -------
@@ -149,7 +153,8 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
                         f'record too short: {tau.size} usable taus (need {MIN_TAUS})')
     if np.any(np.diff(tau) <= 0):
         raise ParameterError('tau_s must be strictly increasing')
-    floor = adev_floor(tau, sig, edf=edf, min_edf=min_edf if edf is not None else 0.0)
+    floor = adev_floor(tau, sig, edf=edf, min_edf=min_edf if edf is not None else 0.0,
+                       max_tau_s=max_tau_s)
     if floor.index < 0:
         return Interval(None, None, nan, nan, nan, c, f'record too short: {floor.reason}')
     i = floor.index

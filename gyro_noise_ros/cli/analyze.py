@@ -136,7 +136,7 @@ def build_parser():
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
     p.add_argument(
-        '--allan-taus', default='octave', choices=('octave', 'dense'),
+        '--allan-taus', default='dense', choices=('octave', 'dense'),
         help='Allan averaging times: octave (1, 2, 4, ... samples) or dense (~10 per decade)')
     p.add_argument('--batch-size', type=int, default=DEFAULT_BATCH, metavar='N',
                    help=f'messages decoded per batch ({DEFAULT_BATCH})')

@@ -142,7 +142,7 @@ class EngineConfig:
     gap_factor: float = 1.5
     gap_policy: str = 'flag'
     allan: bool = True
-    allan_taus: str = 'octave'
+    allan_taus: str = 'dense'
     history_chunks: int = 0
 
     def __post_init__(self):

@@ -34,23 +34,24 @@ each key. The rules, and why:
   part of the usable curve: a bump there (ADIS16405 run 2, z: 0.384 deg/s at 0.01-0.02 s) is not
   the bias floor. :func:`band_limited_below` reports the flattened part alone; the IEEE 952 fit
   (:func:`fit_noise_terms_band_limited`) leaves only that out (it has a Q term for the rest).
-* **Bias stability** (:func:`adev_floor`): the ADEV where the usable curve stops falling. Start at
-  its first local minimum (the next tau is not lower). A later tau replaces it only when its Allan
-  variance is *significantly* lower: the one-sided F test of the two variances with their
+* **Bias stability** (:func:`adev_floor`): the lowest ADEV of the usable curve over the taus no
+  longer than a tenth of the record (:data:`MAX_TAU_FRACTION`). Past a tenth of the record the
+  overlapping estimator rests on about ten degrees of freedom or fewer (for flicker noise; SP 1065
+  Table 5), so a dip there is as likely noise as floor: ADIS16405 run 1, x falls to 0.0052 deg/s
+  at 1311 s on 9 EDF. Up to a tenth the minimum is what an independent reading of the same curve
+  gives (docs/readout.md); on ADIS16405 run 1, x the curve is still falling at 1000 s (0.0052 deg/s
+  against 0.00706 at 82 s, the datasheet's 0.007), and the reading says so with the flag below.
+  The floor is a *real* turning point when the curve around it has left the -1/2 line of white
+  noise: some earlier tau lies significantly below the -1/2 line through the floor (the curve
+  flattened into it) or some later tau significantly above (it stopped falling). "Significantly":
+  the one-sided F test of the two variances (``AVAR * tau``, constant on that line) with their
   equivalent degrees of freedom (Greenhall & Riley EDF, ``AllanResult.edf``) at level
-  :data:`SIGNIFICANCE` (2.5 %, the upper end of a 95 % interval); then the search goes on from
-  the first local minimum at or after that tau. So a dip resting on a few degrees of freedom does
-  not move the floor: ADIS16405 run 1, x, the first minimum 0.00706 deg/s at 82 s (EDF 112; the
-  datasheet's 0.007 deg/s) stays against 0.0052 deg/s at 1311 s (EDF 9, F ratio 1.8 where 2.9 is
-  needed), while the ripple of a 25 Hz disturbance at 0.04 s does not hold it either (82 s is
-  lower by a factor the test cannot attribute to chance). The two variances overlap in data and
-  are positively correlated; the test treats them as independent, which makes it conservative
-  (it moves the floor less often than its level says).
-  The floor is a *real* turning point when the curve after it stops falling like white noise: some
-  later tau lies significantly above the -1/2 line through the floor (the same F test on
-  ``AVAR * tau``). Otherwise the curve has not been seen to turn up within the record: the value
-  reported is the lowest usable ADEV from there on, flagged as an **upper bound**
-  (``bias_stability_upper_bound``). Reported with its tau, its EDF and its confidence interval.
+  :data:`SIGNIFICANCE` (2.5 %, the upper end of a 95 % interval); the two variances overlap in data
+  and are positively correlated, so treating them as independent makes the test conservative.
+  Otherwise the curve was not seen to turn up within the record, and the value is flagged an
+  **upper bound** (``bias_stability_upper_bound``); so it is too when a longer tau, past the
+  readable tenth, lies lower still (the floor may lie lower). Reported with its tau, its EDF and its
+  confidence interval.
 * **B** = bias stability / 0.6643, the IEEE 952 bias-instability coefficient (the flicker floor of
   the Allan deviation is ``sqrt(2 ln 2 / pi) B``, IEEE 952 eq. C.27; paper 001 Fig. 1).
 * **Angle random walk** N: the -1/2 line through ONE contiguous region, read at tau = 1 s
@@ -86,8 +87,8 @@ import scipy.stats
 from .allan import fit_noise_terms
 from ..errors import InputDataError, ParameterError
 
-__all__ = ['AdevFloor', 'AllanReadout', 'B_FACTOR', 'BAND_LIMITED_SLOPE', 'QUANTIZATION_SLOPE',
-           'SIGNIFICANCE', 'WHITE_SLOPE_TOLERANCE', 'adev_at', 'adev_floor',
+__all__ = ['AdevFloor', 'AllanReadout', 'B_FACTOR', 'BAND_LIMITED_SLOPE', 'MAX_TAU_FRACTION',
+           'QUANTIZATION_SLOPE', 'SIGNIFICANCE', 'WHITE_SLOPE_TOLERANCE', 'adev_at', 'adev_floor',
            'band_limited_below', 'fit_noise_terms_band_limited', 'random_walk_bound',
            'read_allan', 'usable_start']
 
@@ -101,6 +102,8 @@ WHITE_SLOPE_TOLERANCE = 0.15
 QUANTIZATION_SLOPE_TOLERANCE = 0.15
 #: One-sided level of the F tests of the bias-stability rule (the upper end of a 95 % interval).
 SIGNIFICANCE = 0.025
+#: The bias stability is read over taus no longer than this fraction of the record.
+MAX_TAU_FRACTION = 0.1
 #: Flicker floor of the ADEV per unit B, sqrt(2 ln 2 / pi) = 0.6643 (IEEE 952 eq. C.27).
 B_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 #: Fit-quality limits (relative ADEV error).
@@ -371,15 +374,7 @@ def _f_upper(edf_num, edf_den):
     return float(scipy.stats.f.ppf(1.0 - SIGNIFICANCE, edf_num, edf_den))
 
 
-def _first_turn(adev, idx, start):
-    """First position p >= start in ``idx`` whose next point is not lower (or the last)."""
-    p = start
-    while p + 1 < idx.size and adev[idx[p + 1]] < adev[idx[p]]:
-        p += 1
-    return p
-
-
-def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0):
+def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0, max_tau_s=math.inf):
     """
     Find where an Allan deviation stops falling: the bias-stability rule of the module doc.
 
@@ -390,11 +385,14 @@ def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0):
     adev : array_like
         Allan deviation at those taus (any unit); non-finite and non-positive values are ignored.
     edf : array_like, optional, keyword-only
-        Equivalent degrees of freedom of each Allan variance (``AllanResult.edf``). Without it
-        every difference counts as significant: the floor is then the smallest usable value
-        (the plain reading of paper 001 section 6).
+        Equivalent degrees of freedom of each Allan variance (``AllanResult.edf``), for the
+        upper-bound test. Without it every difference counts as significant.
     min_edf : float, keyword-only
-        Taus with fewer degrees of freedom are ignored (default 0: the F tests weigh them).
+        Taus with fewer degrees of freedom may not hold the floor (default 0).
+    max_tau_s : float, keyword-only
+        Longest tau that may hold the floor (s; :func:`read_allan` passes a tenth of the record,
+        :data:`MAX_TAU_FRACTION`); longer taus still count in the upper-bound test. When no
+        usable tau is that short, the shortest usable tau is taken (flagged by the test).
 
     Returns
     -------
@@ -430,15 +428,10 @@ def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0):
         return AdevFloor(-1, nan, nan, False, start,
                          f'no tau with at least {float(min_edf):g} degrees of freedom')
     avar = sig * sig
-    p = _first_turn(sig, idx, 0)
-    while True:
-        j = idx[p]
-        later = [q for q in range(p + 1, idx.size)
-                 if avar[j] > avar[idx[q]] * _f_upper(dof[j], dof[idx[q]])]
-        if not later:
-            break
-        p = _first_turn(sig, idx, later[0])
-    j = idx[p]
+    short = idx[tau[idx] <= float(max_tau_s)]
+    cand = short if short.size else idx[:1]
+    j = int(cand[np.argmin(sig[cand])])
+    p = int(np.searchsorted(idx, j))
     # A real floor: the curve has left the -1/2 line of white noise there. Some earlier tau lies
     # significantly below the -1/2 line through it (the curve flattened into it), or some later
     # tau significantly above (it stopped falling). On that line AVAR * tau is constant.
@@ -446,7 +439,9 @@ def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0):
     real = p + 1 < idx.size and (
         any(level[j] > level[i] * _f_upper(dof[j], dof[i]) for i in idx[:p])
         or any(level[i] > level[j] * _f_upper(dof[i], dof[j]) for i in idx[p + 1:]))
-    return AdevFloor(int(j), float(tau[j]), float(sig[j]), not real, start)
+    # a longer tau (past the readable tenth) lower still: the floor may lie lower
+    deeper = bool(np.any(sig[idx[p + 1:]] < sig[j]))
+    return AdevFloor(int(j), float(tau[j]), float(sig[j]), not real or deeper, start)
 
 
 def adev_at(result, tau_s):
@@ -559,7 +554,8 @@ def read_allan(result, terms=None):
             terms = fit_noise_terms_band_limited(result)
         except InputDataError:
             terms = None    # too few taus for the five terms: no fit to judge, no fitted K
-    floor = adev_floor(tau, adev, edf=edf)
+    floor = adev_floor(tau, adev, edf=edf, max_tau_s=MAX_TAU_FRACTION * float(result.n_samples)
+                       / float(result.rate_hz))
     j = floor.index
     arw, arw_lo, arw_hi, span, from_region = _arw(tau, adev, lo, hi, floor.usable_from,
                                                   max(j, floor.usable_from + 1), result)

@@ -65,3 +65,33 @@ class ClusterError(GyroNoiseError):
     """A Dask scheduler (``--scheduler``) cannot be reached, or its cluster failed in the run."""
 
     exit_code = 5
+
+
+def nothing_left_error(*, start_s=None, end_s=None, record_end_s=None, label=None):
+    """
+    Return the error of a ``--start``/``--end`` window that selects no sample (exit code 4).
+
+    Parameters
+    ----------
+    start_s, end_s : float, optional, keyword-only
+        The window (s after the record's first sample).
+    record_end_s : float, optional, keyword-only
+        The last sample's time (s after the first).
+    label : str, optional, keyword-only
+        Which record, as a message prefix.
+
+    Returns
+    -------
+    InputDataError
+
+    """
+    prefix = f'{label}: ' if label else ''
+    if start_s is not None and record_end_s is not None and start_s > record_end_s:
+        why = f'--start {start_s:g} s is past the record end {record_end_s:.6g} s'
+    else:
+        window = ' and '.join(f'{name} {value:g} s' for name, value in
+                              (('--start', start_s), ('--end', end_s)) if value is not None)
+        why = f'no sample between {window or "the window bounds"}'
+        if record_end_s is not None:
+            why += f' (the record spans 0-{record_end_s:.6g} s)'
+    return InputDataError(f'{prefix}nothing left to analyse: {why}')

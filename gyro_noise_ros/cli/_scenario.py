@@ -35,7 +35,7 @@ from ..calibration.emulate import (Excitation, MG, PAPER_AFTER_BIAS_MG, PAPER_AF
                                    PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT, Scenario,
                                    SensorErrors, SixPosition, Static)
 from ..calibration.sixpos import normal_gravity
-from ..errors import ParameterError
+from ..errors import OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 
 DEG = np.pi / 180.0
@@ -250,7 +250,7 @@ def write_bag(args, board, truth_fh=None, counters=None):
     if total is None or total <= 0:
         raise ParameterError('--write-bag needs --duration-s or --samples (a positive length)')
     if os.path.exists(args.write_bag):
-        raise ParameterError(f'--write-bag {args.write_bag!r} exists; give a new directory')
+        raise OutputError(f'--write-bag {args.write_bag!r} exists; give a new directory')
     motion = board.scenario.motion if board.scenario is not None else None
     reference = isinstance(motion, Excitation)
     gyro_lsb = lsm.gyro_sensitivity_rad_s_per_lsb(board.gyro_fs_dps)

@@ -34,6 +34,8 @@ exit codes: ``docs/offline_tool.md``.
 
 import argparse
 import collections
+import contextlib
+import dataclasses
 import datetime
 import functools
 import math
@@ -53,8 +55,9 @@ from ..cluster import make_executor
 from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
-from ..errors import InputDataError, ParameterError
-from ..outputs import make_out_dir
+from ..core.plausible import mask_non_physical, MAX_RATE_RAD_S, MAX_SPECIFIC_FORCE_M_S2
+from ..errors import InputDataError, nothing_left_error, OutputError, ParameterError
+from ..outputs import staged_output
 
 PROG = 'gyro_noise_analyze'
 
@@ -286,106 +289,116 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     thresholds = thresholds if thresholds is not None else HealthThresholds()
     ref = reference_per_axis(str(reference), config.axes,
                              bag=reference_bag) if reference is not None else {}
-    first_reader = None
-    try:
-        # Fail fast on any unreadable bag or unresolvable topic before hours of work on the
-        # others. The first bag's reader stays open for its analysis: opening a sqlite3 bag
-        # counts its messages (a scan of the whole table, about 0.25 s per million messages).
-        topics = []
-        for i, p in enumerate(paths):
-            if is_table(p):
-                topics.append(_open(p, topic, temperature_topic, config.rate_hz).topic)
-            elif i == 0:
-                first_reader = ImuBagReader(p, topic=topic, temperature_topic=temperature_topic)
-                topics.append(first_reader.topic)
-            else:
-                topics.append(find_imu_topic(p, topic))
-        out = make_out_dir(out_dir)
-
-        started = time.perf_counter()
-        timing = {'decode_s': 0.0, 'wait_s': 0.0}
-        if jobs > 1 and scheduler is None:
-            # Worker processes are forked from this one: build the identifier and load its
-            # compiled kernels once here, so each worker inherits them instead of redoing it.
-            _warm_identifier(config)
-        pool = make_executor(jobs, scheduler, warn=warn)
-        if scheduler is not None:
-            jobs = max(jobs, pool.nthreads)
-        csv_writer = _ChunkRows(out / 'chunks.csv')
-        bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
+    with contextlib.ExitStack() as stack:
+        # Every file is written into a hidden staging folder inside --out and published there
+        # only when the whole run succeeded: an error or an interrupt leaves no result.
+        first_reader = None
         try:
-            for i, (path, label, imu_topic) in enumerate(zip(paths, names, topics)):
-                doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref,
-                                   thresholds, pool, jobs, select, csv_writer, per_chunk,
-                                   curve_store, allan_store, curves, batch_size,
-                                   _Progress(progress), timing,
-                                   reader=first_reader if i == 0 else None)
-                bag_docs.append(doc)
+            # Fail fast on any unreadable bag or unresolvable topic before hours of work on the
+            # others. The first bag's reader stays open for its analysis: opening a sqlite3 bag
+            # counts its messages (a scan of the whole table, about 0.25 s per million messages).
+            topics = []
+            for i, p in enumerate(paths):
+                if is_table(p):
+                    topics.append(_open(p, topic, temperature_topic, config.rate_hz).topic)
+                elif i == 0:
+                    first_reader = ImuBagReader(p, topic=topic,
+                                                temperature_topic=temperature_topic)
+                    topics.append(first_reader.topic)
+                else:
+                    topics.append(find_imu_topic(p, topic))
+            out = stack.enter_context(staged_output(out_dir))
+
+            started = time.perf_counter()
+            timing = {'decode_s': 0.0, 'wait_s': 0.0}
+            if jobs > 1 and scheduler is None:
+                # Worker processes are forked from this one: build the identifier and load its
+                # compiled kernels once here, so each worker inherits them instead of redoing it.
+                _warm_identifier(config)
+            pool = make_executor(jobs, scheduler, warn=warn)
+            if scheduler is not None:
+                jobs = max(jobs, pool.nthreads)
+            with _writing():
+                csv_writer = _ChunkRows(out / 'chunks.csv')
+            bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
+            try:
+                for i, (path, label, imu_topic) in enumerate(zip(paths, names, topics)):
+                    doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref,
+                                       thresholds, pool, jobs, select, csv_writer, per_chunk,
+                                       curve_store, allan_store, curves, batch_size,
+                                       _Progress(progress), timing,
+                                       reader=first_reader if i == 0 else None)
+                    bag_docs.append(doc)
+            finally:
+                csv_writer.close()
+                if pool is not None:
+                    pool.shutdown(wait=True, cancel_futures=True)
         finally:
-            csv_writer.close()
-            if pool is not None:
-                pool.shutdown(wait=True, cancel_futures=True)
-    finally:
-        if first_reader is not None:
-            first_reader.close()  # idempotent; open here only when the run failed before it
+            if first_reader is not None:
+                first_reader.close()  # idempotent; open here only when the run failed before it
 
-    if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
-               for b in bag_docs for a in b['axes'].values()):
-        counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
-        raise InputDataError(
-            f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
-            'lower --chunk-size (>= memory + 2)')
-    for b in bag_docs:
-        if not any(a['chunks'] for a in b['axes'].values()):
-            # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
-            why = '; '.join(
-                f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf, {a['chunks_dropped']} dropped "
-                f"for loss, {a['chunks_failed']} not identifiable (constant?)" for axis,
-                a in b['axes'].items())
-            raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
-    # the readout objects themselves are for imu.yaml, not for summary.json
-    accel_readouts = {b['label']: b.pop('_accelerometer_readouts') for b in bag_docs}
+        if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
+                   for b in bag_docs for a in b['axes'].values()):
+            counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
+            raise InputDataError(
+                f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
+                'lower --chunk-size (>= memory + 2)')
+        for b in bag_docs:
+            if not any(a['chunks'] for a in b['axes'].values()):
+                # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
+                why = '; '.join(
+                    f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf or non-physical values, "
+                    f"{a['chunks_dropped']} dropped for loss, {a['chunks_failed']} not "
+                    'identifiable (constant?)' for axis, a in b['axes'].items())
+                raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
+        # the readout objects themselves are for imu.yaml, not for summary.json
+        accel_readouts = {b['label']: b.pop('_accelerometer_readouts') for b in bag_docs}
 
-    doc = {
-        'tool': PROG,
-        'version': __version__,
-        'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ'),
-        'command': list(command) if command is not None else None,
-        'options': {
-            **config.as_dict(),
-            'jobs': jobs,
-            'topic': topic,
-            'temperature_topic': temperature_topic,
-            'reference': str(reference) if reference is not None else None,
-            'reference_bag': reference_bag,
-            'thresholds': (
-                {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
-                if ref
-                else None
-            ),
-            'curves': curves,
-            'batch_size': batch_size,
-            'scheduler': pool.address if scheduler is not None else None,
-        },
-        'bags': bag_docs,
-    }
-    files = [out / 'chunks.csv']
-    report.write_json(out / 'summary.json', doc)
-    (out / 'summary.md').write_text(report.summary_markdown(doc))
-    files += [out / 'summary.json', out / 'summary.md']
-    files += _write_allan_outputs(out, doc, allan_store, accel_readouts, figures)
-    if curve_store:
-        arrays = {'alphas': config.alphas}
-        for (label, axis), rows in curve_store.items():
-            arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows], dtype=np.int64)
-            arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
-            arrays[f'{label}/{axis}/j'] = np.array([r[2] for r in rows])
-        np.savez_compressed(out / 'curves.npz', **arrays)
-        files.append(out / 'curves.npz')
-    if figures:
-        files += _write_figures(out, config, per_chunk, curve_store)
-    doc['_timing'] = {'total_s': time.perf_counter() - started, **timing}
-    doc['_files'] = [str(f) for f in files]
+        doc = {
+            'tool': PROG,
+            'version': __version__,
+            'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime(
+                '%Y-%m-%dT%H:%M:%SZ'),
+            'command': list(command) if command is not None else None,
+            'options': {
+                **config.as_dict(),
+                'jobs': jobs,
+                'topic': topic,
+                'temperature_topic': temperature_topic,
+                'reference': str(reference) if reference is not None else None,
+                'reference_bag': reference_bag,
+                'thresholds': (
+                    {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
+                    if ref
+                    else None
+                ),
+                'curves': curves,
+                'batch_size': batch_size,
+                'scheduler': pool.address if scheduler is not None else None,
+            },
+            'bags': bag_docs,
+        }
+        with _writing():
+            files = [out / 'chunks.csv']
+            report.write_json(out / 'summary.json', doc)
+            (out / 'summary.md').write_text(report.summary_markdown(doc))
+            files += [out / 'summary.json', out / 'summary.md']
+            files += _write_allan_outputs(out, doc, allan_store, accel_readouts, figures)
+            if curve_store:
+                arrays = {'alphas': config.alphas}
+                for (label, axis), rows in curve_store.items():
+                    arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows],
+                                                               dtype=np.int64)
+                    arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
+                    arrays[f'{label}/{axis}/j'] = np.array([r[2] for r in rows])
+                np.savez_compressed(out / 'curves.npz', **arrays)
+                files.append(out / 'curves.npz')
+            if figures:
+                files += _write_figures(out, config, per_chunk, curve_store)
+        doc['_timing'] = {'total_s': time.perf_counter() - started, **timing}
+        doc['_files'] = [str(f) for f in files]
+    # the files under their published names
+    doc['_files'] = [str(Path(out_dir) / Path(f).name) for f in doc['_files']]
     return doc
 
 
@@ -431,7 +444,7 @@ def _static_prepass(path, topic, temperature_topic, rate_hz, batch_size, start_s
     first = None
     log_time = False
     with _open(path, topic, temperature_topic, rate_hz) as reader:
-        for batch in reader.iter_batches(batch_size):
+        for batch in _plausible(reader.iter_batches(batch_size), None):
             stamps = batch.stamp_ns
             if first is None and _stamps_unusable(stamps) and not _stamps_unusable(batch.log_ns):
                 log_time = True
@@ -443,6 +456,34 @@ def _static_prepass(path, topic, temperature_topic, rate_hz, batch_size, start_s
                            {'before_start': 0, 'after_end': 0, 'motion': 0})
             stats.update(stamps[keep], batch.gyro[keep])
     return stats.segment()
+
+
+def _plausible(batches, counts):
+    """Yield the batches with non-physical values as NaN (core/plausible.py), counted."""
+    for batch in batches:
+        gyro, n_gyro = mask_non_physical(batch.gyro, MAX_RATE_RAD_S)
+        accel, n_accel = mask_non_physical(batch.accel, MAX_SPECIFIC_FORCE_M_S2)
+        if n_gyro or n_accel:
+            if counts is not None:
+                counts['gyro'] += n_gyro
+                counts['accel'] += n_accel
+            batch = dataclasses.replace(batch, gyro=gyro, accel=accel)
+        yield batch
+
+
+def _check_chunk_fits(count, label, config):
+    """Refuse a record shorter than one chunk before reading it (``count``: 0 = unknown)."""
+    if not count:
+        return
+    shortest = config.memory + 2
+    if count < shortest:
+        raise InputDataError(
+            f'{label}: too short to analyse: {count} samples; the shortest chunk the order '
+            f'identification takes is memory L + 2 = {shortest} samples')
+    if count < config.chunk_size:
+        raise ParameterError(
+            f'--chunk-size {config.chunk_size} is larger than the record {label} ({count} '
+            f'samples): give at most {count} (and at least memory L + 2 = {shortest})')
 
 
 def _stamps_unusable(stamps):
@@ -463,8 +504,22 @@ def warn(text):
     print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
 
 
+@contextlib.contextmanager
+def _writing():
+    """Turn an OS error while writing the results (disk full, quota) into OutputError."""
+    try:
+        yield
+    except OSError as err:
+        where = f' ({err.filename})' if err.filename else ''
+        raise OutputError(f'cannot write the results: {err.strerror or err}{where}') from err
+
+
 class _ChunkRows(report.ChunkCsvWriter):
     """chunks.csv that can take back the rows of a bag (a speculative pass that was not kept)."""
+
+    def write(self, *args, **kwargs):
+        with _writing():
+            return super().write(*args, **kwargs)
 
     def mark(self):
         self._fh.flush()
@@ -561,6 +616,7 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
     if reader is None:
         reader = _open(path, imu_topic, temperature_topic, config.rate_hz)
     with reader:
+        _check_chunk_fits(reader.message_count, label, config)
         temps = reader.read_temperature()
         if temps is not None and temps[0].size:
             order = np.argsort(temps[0], kind='stable')
@@ -606,7 +662,8 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
                     finish(result)
 
         accel = _AccelAllan(config.allan and config.allan_taus)
-        batches = reader.iter_batches(batch_size)
+        non_physical = {'gyro': 0, 'accel': 0}
+        batches = _plausible(reader.iter_batches(batch_size), non_physical)
         while True:
             d0 = time.perf_counter()
             batch = next(batches, None)
@@ -651,6 +708,9 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
             submit(engine.ingest(stamps, gyro_b, temp))
             accel.update(accel_b, engine.counts().rate_hz)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
+        if done and left['before_start'] + left['after_end'] >= done:
+            raise nothing_left_error(start_s=start_s, end_s=end_s, label=label,
+                                     record_end_s=(last_ns - first_ns) / 1e9)
         submit(engine.flush())
         while inflight:
             w0 = time.perf_counter()
@@ -663,7 +723,7 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
     return {'engine': engine, 'warnings': warnings, 'time_source': time_source, 'left': left,
             'first_ns': first_ns, 'last_ns': last_ns, 'accel': accel, 'rows': rows, 'done': done,
             'frame_id': frame_id, 'storage': storage, 'undecodable': undecodable,
-            'temperature_topic': temperature_topic_used}
+            'temperature_topic': temperature_topic_used, 'non_physical': non_physical}
 
 
 def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_chunk,
@@ -674,6 +734,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     done, frame_id, time_source = state['done'], state['frame_id'], state['time_source']
     storage, undecodable = state['storage'], state['undecodable']
     temperature_topic_used = state['temperature_topic']
+    non_physical = state['non_physical']
     start_s, end_s, static = select
     counts = engine.counts()
     accel.update(None, counts.rate_hz)
@@ -693,6 +754,13 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         left_out['static_segments_s'] = [[(a - first_ns) / 1e9,
                                           (min(b, state['last_ns']) - first_ns) / 1e9]
                                          for a, b in segment.segments]
+    if any(non_physical.values()):
+        text = (f"{non_physical['gyro']} angular rate value(s) beyond {MAX_RATE_RAD_S:g} rad/s "
+                f"and {non_physical['accel']} specific force value(s) beyond "
+                f'{MAX_SPECIFIC_FORCE_M_S2:g} m/s^2 are not measurements (corrupt record or '
+                'wrong unit): treated as NaN, their chunks left out')
+        warnings.append(text)
+        warn(f'{label}: {text}')
     if counts.chunks and counts.tail_samples > 0.1 * counts.samples:
         size = config.chunk_size
         better = counts.samples // (counts.chunks + 1) if counts.chunks else counts.samples
@@ -727,6 +795,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         'temperature_topic': temperature_topic_used,
         'messages': done,
         'undecodable_messages': undecodable,
+        'non_physical_values': dict(non_physical),
         'rate_hz': report._json_num(counts.rate_hz),
         'rate_method': counts.rate_method,
         'time_source': time_source,

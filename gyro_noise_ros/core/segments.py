@@ -104,10 +104,10 @@ class WindowStats:
 
         """
         s = np.asarray(stamp_ns, dtype=np.int64)
+        if s.size == 0:
+            return  # e.g. a --start past the end: nothing selected (and nothing to reshape)
         g = np.asarray(gyro, dtype=np.float64)
         g = g.reshape(g.shape[0], -1)
-        if s.size == 0:
-            return
         if self._t0 is None:
             self._t0 = int(s[0])
         ok = np.all(np.isfinite(g), axis=1)
@@ -159,7 +159,9 @@ class WindowStats:
         edges = [(self._t0 + int(keys[a]) * self._w, self._t0 + (int(keys[b - 1]) + 1) * self._w)
                  for a, b in runs]
         if not runs:
-            return StaticSegment(0, 0, False, len(keys), 0, (), tuple(float(v) for v in noise))
+            # an empty segment at the record's start, never at stamp 0 (1970)
+            return StaticSegment(self._t0, self._t0, False, len(keys), 0, (),
+                                 tuple(float(v) for v in noise))
         best = max(range(len(runs)), key=lambda i: runs[i][1] - runs[i][0])
         length = runs[best][1] - runs[best][0]
         throughout = length >= STATIC_ALL * len(keys)

@@ -332,7 +332,7 @@ def odd_bags(tmp_path_factory):
     (['two', '--topic', '/c/imu'], 3, "topic '/c/imu' is not in bag"),
     (['short', '--topic', '/imu/temperature'], 3, 'not sensor_msgs/msg/Imu'),
     (['empty'], 3, 'no messages'),
-    (['cut'], 3, 'corrupt or truncated'),
+    (['cut'], 3, 'truncated MCAP'),
     (['short'], 2, '--chunk-size 600 is larger than the record short (200 samples)'),
     (['short', '--order-grid', '0:2'], 2, 'START:STOP:STEP'),
     (['short', '--chunk-size', '40'], 2, 'chunk_size'),

@@ -435,6 +435,9 @@ class ImuBagReader:
             delivered += have
             yield _take(pending, have, source.ros1)[0]
         if delivered == 0 and self.undecodable_count == 0:
+            if self.recovery:
+                raise BagError(f'bag {str(self.path)!r}: nothing on topic {self.topic!r} could '
+                               f'be recovered: {self.recovery}')
             raise BagError(f'bag {str(self.path)!r} has no messages on topic {self.topic!r}')
 
     def read_temperature(self):

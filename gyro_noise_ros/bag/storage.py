@@ -382,6 +382,11 @@ class BagSource:
         #: McapTruncation of an MCAP file without footer, else None.
         self.truncation = truncation
         if truncation is not None:
+            if truncation.messages == 0:
+                reader.close()
+                raise BagError(f'bag {str(self.path)!r} is a truncated MCAP with nothing to '
+                               f'recover: no complete chunk before the cut '
+                               f'({truncation.stop_reason})')
             notes = [truncation_note(self.path, truncation)]
         #: The one-line note on a recording read although its writer did not finish it, or None.
         self.recovery = notes[0] if notes else None

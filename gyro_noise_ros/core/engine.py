@@ -633,6 +633,9 @@ class NoiseEngine:
         self.reference = _health.reference_per_axis(reference, self.config.axes)
         self._cols = [AXES.index(a) for a in self.config.axes]
         self._key = self.config.identifier_key()
+        grid = self.config.alphas
+        # the grid's step (its mean step if uneven): the floor of the orders' chunk spread
+        self._order_step = float((grid[-1] - grid[0]) / (grid.size - 1)) if grid.size > 1 else 0.0
         self._period_ns = None if self.config.rate_hz is None else _NS / float(self.config.rate_hz)
         self._pending = []  # batches held until the rate is known
         self._timebase = TimebaseTracker()
@@ -1119,7 +1122,8 @@ class NoiseEngine:
             seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
                                      tail_samples=counts.tail_samples,
                                      ties_var=int(rows[:, 5].sum()),
-                                     ties_corr=int(rows[:, 6].sum()))
+                                     ties_corr=int(rows[:, 6].sum()),
+                                     order_step=self._order_step)
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
             sheet = None

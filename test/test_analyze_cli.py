@@ -287,7 +287,7 @@ def test_reference_adds_health_verdicts(tmp_path):
     assert again['level'] == 'OK'  # h1 judged against itself
 
 
-def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path):
+def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path, capsys):
     stamps, gyro, accel = sim(3 * SIZE + 20, seed=5)
     gyro[SIZE + 3, 0] = np.nan
     stamps = np.delete(stamps, np.arange(2 * SIZE + 10, 2 * SIZE + 15))  # 5 samples lost
@@ -299,6 +299,8 @@ def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path):
                  '--no-figures', *FAST]) == 0
     doc = json.loads((out / 'summary.json').read_text())
     b = doc['bags'][0]
+    # said in one line, counted, never reordered
+    assert '1 stamp(s) earlier than the latest before them' in capsys.readouterr().err
     # The swap is one out-of-order stamp and a one-sample hole seen before the late sample (engine
     # doc).
     assert (b['samples_lost'], b['gaps'], b['out_of_order_stamps']) == (5 + 1, 1 + 1, 1)

@@ -691,6 +691,11 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     for text in (tb.warnings if tb is not None else ()):
         warnings.append(text)
         warn(f'{label}: {text}')
+    if counts.out_of_order:
+        text = (f'{counts.out_of_order} stamp(s) earlier than the latest before them: counted as '
+                'out of order, not reordered (each also leaves a one-sample gap)')
+        warnings.append(text)
+        warn(f'{label}: {text}')
     if counts.longest_gaps:
         t_s, length_s, missing = counts.longest_gaps[0]
         text = (f'{counts.gaps} stamp gap(s), {counts.samples_lost} sample(s) missing; the '

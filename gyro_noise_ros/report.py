@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .core.engine import rad_s2_to_deg_s_per_h
+from .core.health import reference_dict, ROBUST_JSON_KEY
 from .core.items import DEG as _DEG
 
 _DEG2 = _DEG ** 2
@@ -159,6 +160,8 @@ def axis_summary_dict(summary, *, verdict=None):
             else None
         ),
     }
+    # what a later run's --reference check compares with (core/health.py)
+    out[ROBUST_JSON_KEY] = reference_dict(seq)
     if verdict is not None:
         out['health'] = {'level': verdict.level, 'message': verdict.message,
                          'items': [{'key': k, 'value': v, 'level': lv} for k, v,

@@ -31,11 +31,19 @@ both methods (:mod:`.fractional`). Per sequence the paper tabulates:
 
 Variances across chunks use ``ddof = 1`` (unbiased over chunks); the variance inside a chunk uses
 ``ddof = 1`` as well.
+
+Beside the paper's means, every per-chunk quantity (bias, log variance, both orders) gets a robust
+location and spread (:func:`robust_location`), which the reference check of :mod:`.health`
+compares like with like: the median of the chunks, or of the dominant mode when the chunk orders
+fall in separate basins (:func:`order_modes`), and the normal-consistent standard deviation of
+those chunks without the 5 % lowest and highest.
 """
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
+from scipy.special import ndtri
 
 from ..errors import InputDataError, ParameterError
 
@@ -322,6 +330,10 @@ class SequenceSummary:
     alpha_var_modes, alpha_corr_modes : tuple of (float, int)
         (mean order, chunks) of each mode when the chunk orders fall in separate basins
         (:func:`order_modes`); empty when the distribution is unimodal, so the mean is meaningful.
+    bias_robust, log_variance_robust, alpha_var_robust, alpha_corr_robust : RobustLocation or None
+        Robust location and spread of the chunk biases (rate unit), of the natural log of the
+        chunk variances (log of the squared rate unit) and of the chunk orders (dominant mode when
+        multimodal), for the reference check; None when not computed.
 
     """
 
@@ -339,10 +351,14 @@ class SequenceSummary:
     ties_corr: int
     alpha_var_modes: tuple = ()
     alpha_corr_modes: tuple = ()
+    bias_robust: object = None
+    log_variance_robust: object = None
+    alpha_var_robust: object = None
+    alpha_corr_robust: object = None
 
 
 def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0,
-                       ties_var=0, ties_corr=0):
+                       ties_var=0, ties_corr=0, order_step=0.0):
     """
     Summarise per-chunk results of one sequence and axis (paper 000 Tables 3-6).
 
@@ -356,6 +372,8 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
         Chunk orders of the variance and correlation methods (NaN where not identified).
     tail_samples, ties_var, ties_corr : int, keyword-only
         Counts carried into the summary.
+    order_step : float, keyword-only
+        Step of the order grid (floor of the orders' robust spread, :func:`robust_location`).
 
     Returns
     -------
@@ -375,13 +393,21 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
     mv, vv = mean_var(variance)
     av_m, av_v = mean_var(alpha_var)
     ac_m, ac_v = mean_var(alpha_corr)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        log_var = np.log(variance)
     return SequenceSummary(chunks=int(bias.size), tail_samples=int(tail_samples),
                            bias_mean=float(np.nanmean(bias)) if bias.size else float('nan'),
                            drift=offset_drift(t_mid_s, bias), mean_variance=mv,
                            variance_of_variances=vv, alpha_var_mean=av_m, alpha_var_variance=av_v,
                            alpha_corr_mean=ac_m, alpha_corr_variance=ac_v, ties_var=int(ties_var),
                            ties_corr=int(ties_corr), alpha_var_modes=order_modes(alpha_var),
-                           alpha_corr_modes=order_modes(alpha_corr))
+                           alpha_corr_modes=order_modes(alpha_corr),
+                           bias_robust=robust_location(bias),
+                           log_variance_robust=robust_location(log_var),
+                           alpha_var_robust=robust_location(alpha_var, resolution=order_step,
+                                                            modes=True),
+                           alpha_corr_robust=robust_location(alpha_corr, resolution=order_step,
+                                                             modes=True))
 
 
 #: Smallest gap between sorted chunk orders that separates two modes (order units). The model's
@@ -389,6 +415,24 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
 #: method) and of chunk orders ~0.4 (correlation method, a wide unimodal cloud), hence also the 3x
 #: rule.
 MODE_GAP = 0.3
+
+
+def _mode_pieces(orders, gap):
+    x = np.sort(np.asarray(orders, dtype=np.float64))
+    x = x[np.isfinite(x)]
+    if x.size < 4:
+        return []
+    cuts = np.flatnonzero(np.diff(x) > gap) + 1
+    if cuts.size == 0:
+        return []
+    pieces = np.split(x, cuts)
+    if sum(p.size >= 2 for p in pieces) < 2:
+        return []
+    within = np.concatenate([p - p.mean() for p in pieces])
+    pooled = float(np.sqrt(within @ within / max(within.size - len(pieces), 1)))
+    if np.min(np.diff(x)[cuts - 1]) <= 3.0 * pooled:
+        return []
+    return pieces
 
 
 def order_modes(orders, *, gap=MODE_GAP):
@@ -414,18 +458,139 @@ def order_modes(orders, *, gap=MODE_GAP):
         (mean order, chunk count) per mode, in increasing order; empty when unimodal.
 
     """
-    x = np.sort(np.asarray(orders, dtype=np.float64))
+    return tuple((float(p.mean()), int(p.size)) for p in _mode_pieces(orders, gap))
+
+
+#: Fraction of the chunks left out on each side before the standard deviation of the rest is the
+#: robust spread (rounded down to whole chunks: none below 20 chunks).
+SPREAD_TRIM = 0.05
+
+
+def _truncated_sd(kept):
+    """Return the SD of a standard normal truncated to its central ``kept`` fraction."""
+    if kept >= 1.0:
+        return 1.0
+    z = float(ndtri(0.5 + kept / 2.0))
+    return math.sqrt(1.0 - 2.0 * z * math.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi) / kept)
+
+
+@dataclass(frozen=True)
+class RobustLocation:
+    """
+    Robust location and spread of one quantity over the chunks of a sequence.
+
+    Attributes
+    ----------
+    location : float
+        Median of the population (input unit).
+    spread : float
+        Standard deviation of the population without its ``floor(0.05 n)`` lowest and highest
+        values, divided by that of a standard normal truncated alike (0.7893 for 100 chunks), so
+        that it estimates the standard deviation of normal chunk values while 5 % outliers on
+        either side cannot move it; never below ``resolution / sqrt(12)`` (the spread of values
+        rounded to a grid). Input unit.
+    count : int
+        Chunks in the population.
+    total : int
+        Finite chunk values.
+    population : str
+        'all chunks' or 'dominant mode' (the largest of :func:`order_modes`' basins).
+    modes : tuple of (float, int)
+        :func:`order_modes` of the values when asked for, else empty.
+
+    """
+
+    location: float
+    spread: float
+    count: int
+    total: int
+    population: str = 'all chunks'
+    modes: tuple = ()
+
+    def as_dict(self):
+        """
+        Return the fields as JSON-able values (NaN as None, modes as lists).
+
+        Returns
+        -------
+        dict
+
+        """
+        def num(v):
+            return float(v) if np.isfinite(v) else None
+
+        return {'location': num(self.location), 'spread': num(self.spread),
+                'count': int(self.count), 'total': int(self.total),
+                'population': self.population,
+                'modes': [[float(m), int(c)] for m, c in self.modes]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """
+        Build from :meth:`as_dict` output (a reference summary.json).
+
+        Parameters
+        ----------
+        d : dict
+            As written by :meth:`as_dict`.
+
+        Returns
+        -------
+        RobustLocation
+
+        """
+        def num(v):
+            return float('nan') if v is None else float(v)
+
+        return cls(location=num(d['location']), spread=num(d['spread']), count=int(d['count']),
+                   total=int(d['total']), population=str(d['population']),
+                   modes=tuple((float(m), int(c)) for m, c in d.get('modes', ())))
+
+
+def robust_location(values, *, resolution=0.0, modes=False, gap=MODE_GAP):
+    """
+    Return the robust location and spread of per-chunk values (module doc).
+
+    Parameters
+    ----------
+    values : array_like
+        One value per chunk (NaN/Inf ignored).
+    resolution : float, keyword-only
+        Grid step of the values (the order grid; 0 for continuous values): the spread is at least
+        ``resolution / sqrt(12)``, so identical chunk orders do not give a zero tolerance.
+    modes : bool, keyword-only
+        Look for separate basins (:func:`order_modes`) and describe the dominant one.
+    gap : float, keyword-only
+        Smallest gap separating modes (order units).
+
+    Returns
+    -------
+    RobustLocation
+        NaN location and spread without finite values.
+
+    """
+    x = np.asarray(values, dtype=np.float64).ravel()
     x = x[np.isfinite(x)]
-    if x.size < 4:
-        return ()
-    cuts = np.flatnonzero(np.diff(x) > gap) + 1
-    if cuts.size == 0:
-        return ()
-    pieces = np.split(x, cuts)
-    if sum(p.size >= 2 for p in pieces) < 2:
-        return ()
-    within = np.concatenate([p - p.mean() for p in pieces])
-    pooled = float(np.sqrt(within @ within / max(within.size - len(pieces), 1)))
-    if np.min(np.diff(x)[cuts - 1]) <= 3.0 * pooled:
-        return ()
-    return tuple((float(p.mean()), int(p.size)) for p in pieces)
+    total = int(x.size)
+    found = ()
+    population = 'all chunks'
+    if modes:
+        pieces = _mode_pieces(x, gap)
+        if pieces:
+            found = tuple((float(p.mean()), int(p.size)) for p in pieces)
+            # the largest basin; between equal ones the higher order, as for exact ties in
+            # fractional.py (order 1 is the paper's integer-order model)
+            x = max(reversed(pieces), key=len)
+            population = 'dominant mode'
+    if x.size == 0:
+        return RobustLocation(float('nan'), float('nan'), 0, total, population, found)
+    floor = float(resolution) / math.sqrt(12.0)
+    if x.size < 2:
+        return RobustLocation(float(x[0]), float('nan'), 1, total, population, found)
+    n = x.size
+    k = int(SPREAD_TRIM * n)
+    central = np.sort(x)[k:n - k]
+    spread = (float(central.std(ddof=1)) / _truncated_sd(central.size / n)
+              if central.size > 1 else 0.0)
+    return RobustLocation(float(np.median(x)), max(spread, floor), int(x.size), total,
+                          population, found)

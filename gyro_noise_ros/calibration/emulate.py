@@ -491,9 +491,10 @@ def pose_attitudes(n):
     Return ``n`` static attitudes whose "up" directions cover the sensor's sphere evenly.
 
     The body-frame up directions are a Fibonacci lattice (equal-area spiral), headings advance by
-    the golden angle: deterministic, every axis seen with both signs, consecutive poses tens of
-    degrees apart so each turn tilts gravity (a turn about the vertical tells the gyro
-    calibration nothing).
+    the golden angle, and the spiral is visited from both ends alternately (first, last,
+    second, ...): deterministic, every axis seen with both signs, opposite directions close in
+    time (a slow bias drift then cannot pose as a scale factor), each turn tilting gravity by
+    well over 90 degrees (a turn about the vertical tells the gyro calibration nothing).
 
     Parameters
     ----------
@@ -511,7 +512,8 @@ def pose_attitudes(n):
         raise ParameterError(f'the number of poses must be >= 1, got {n}')
     golden = np.pi * (3.0 - np.sqrt(5.0))
     out = []
-    for k in range(n):
+    order = [k // 2 if k % 2 == 0 else n - 1 - k // 2 for k in range(n)]
+    for k in order:
         z = 1.0 - 2.0 * (k + 0.5) / n
         r = np.sqrt(max(0.0, 1.0 - z * z))
         up = np.array([r * np.cos(golden * k), r * np.sin(golden * k), z])

@@ -218,6 +218,8 @@ class CalibrationResult:
         ``{'accel': DwellNoise, 'gyro': DwellNoise}``.
     non_finite_samples : int
         Samples dropped for NaN/Inf over all recordings.
+    left_out : tuple of str
+        Multi-pose: poses the gravity check rejected, left out of the fit.
 
     """
 
@@ -240,6 +242,7 @@ class CalibrationResult:
     mean_norm_raw_m_s2: float
     noise: dict
     non_finite_samples: int
+    left_out: tuple = ()
     version: str = __version__
 
     @property
@@ -259,8 +262,8 @@ class CalibrationResult:
 
     @property
     def gravity_check_consistent(self):
-        """bool: every held-out dwell agrees with g."""
-        return all(c.consistent for c in self.gravity_check)
+        """bool: every held-out dwell used agrees with g (rejected poses are left out)."""
+        return all(c.consistent for c in self.gravity_check if c.label not in self.left_out)
 
     def warnings(self):
         """
@@ -279,7 +282,11 @@ class CalibrationResult:
                 where = f' in {d.source}' if d.source else ''
                 out.append(f'dwell {d.orientation} at t={d.t_start_s:.1f} s{where}: '
                            f'{d.non_finite_samples} NaN/Inf samples dropped')
-        bad = [c for c in self.gravity_check if not c.consistent]
+        if self.left_out:
+            out.append('left out of the fit, the gravity check rejects them: '
+                       + '; '.join(self.left_out))
+        bad = [c for c in self.gravity_check
+               if not c.consistent and c.label not in self.left_out]
         if bad:
             out.append('gravity check failed (leave-one-out, false-alarm '
                        f'{self.params.alpha:g}): ' + '; '.join(
@@ -360,6 +367,7 @@ class CalibrationResult:
                 'loo_mean_norm_m_s2': float(np.mean([self.gravity_m_s2 + c.residual_m_s2
                                                      for c in loo])) if loo else None,
                 'consistent': self.gravity_check_consistent,
+                'left_out': list(self.left_out),
                 'dwells': [c.as_dict() for c in loo],
             },
             'noise_model': noise,
@@ -528,6 +536,7 @@ def run_calibration(params):
                  res.accel_misalignment_sigma, res.accel_residual_m_s2)
         gyro_bias, gyro_sigma = res.gyro_bias_rad_s, res.gyro_bias_sigma_rad_s
         raw = mean_norm([d.accel_mean_m_s2 for d in chosen.values()])
+        left_out = ()
     else:
         dwells = _time_order(select_poses(detections, params.settings), params)
         mp, loo, accel_noise = calibrate_poses(dwells, g, alpha=params.alpha)
@@ -535,6 +544,11 @@ def run_calibration(params):
                                      [d.window_n for d in dwells],
                                      [d.window_gyro_rad_s for d in dwells])
         pairs = ()
+        left_out = mp.left_out
+        if left_out:
+            # the rest of the workflow sees only the poses the fit used
+            labels = [c.label for c in loo]
+            dwells = [d for d, lab in zip(dwells, labels) if lab not in left_out]
         accel_index = list(range(len(dwells)))
         means = np.array([d.accel_mean_m_s2 for d in dwells])
         directions = mp.compensate(means)
@@ -547,7 +561,7 @@ def run_calibration(params):
                                   gyro_noise)
     return CalibrationResult(params, tuple(dwells), short, *accel, gyro_bias, gyro_sigma, gyro,
                              note, tuple(pairs), tuple(loo), raw,
-                             {'accel': accel_noise, 'gyro': gyro_noise}, nonfinite)
+                             {'accel': accel_noise, 'gyro': gyro_noise}, nonfinite, left_out)
 
 
 def _fmt(values):

@@ -139,11 +139,13 @@ class MultiPoseResult:
         (3, 3) lower-triangular cross-axis terms (zero diagonal and upper part) and their
         standard uncertainties (0 where fixed by the frame).
     residual_m_s2 : numpy.ndarray
-        (n,) ``|calibrated pose| - g`` of each pose (m/s^2).
+        (n,) ``|calibrated pose| - g`` of each pose kept (m/s^2).
     rms_residual_m_s2 : float
         sqrt(RSS / (n - 9)) (m/s^2).
     covariance : numpy.ndarray
         (9, 9) covariance of (b, S, M[1,0], M[2,0], M[2,1]).
+    left_out : tuple of str
+        Poses the gravity check rejected, not used in the fit.
 
     """
 
@@ -157,6 +159,7 @@ class MultiPoseResult:
     residual_m_s2: np.ndarray
     rms_residual_m_s2: float
     covariance: np.ndarray
+    left_out: tuple = ()
 
     @property
     def matrix(self):
@@ -240,6 +243,11 @@ def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     """
     Run the multi-pose fit on dwells, with uncertainties and the leave-one-out gravity check.
 
+    A pose the gravity check rejects (a knock, a pose that moved) also bends the fit of every
+    other pose's check, so the worst rejected pose is set aside and the checks are run again,
+    until none is rejected; the calibration is then fitted without the poses set aside (named in
+    ``MultiPoseResult.left_out``), as long as 9 remain.
+
     Parameters
     ----------
     dwells : sequence of Dwell
@@ -252,15 +260,41 @@ def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     Returns
     -------
     (MultiPoseResult, tuple of LeaveOneOut, DwellNoise)
+        The calibration, one check per pose (in the order given), the accelerometer's noise
+        model (of the poses kept).
+
+    Raises
+    ------
+    InputDataError
+        Too few poses, or too few left once the rejected ones are set aside.
 
     """
     means, g = _check_means([d.accel_mean_m_s2 for d in dwells], gravity_m_s2)
+    n = len(dwells)
     theta = multi_pose(means, g)
     fitter = DwellNoiseFitter([d.window_t_s for d in dwells], [d.window_n for d in dwells],
                               [d.window_accel_m_s2 for d in dwells])
+    out = []
+    while True:
+        checks = leave_one_out(dwells, g, theta, fitter, alpha=alpha, exclude=out)
+        bad = [k for k in range(n) if k not in out and not checks[k].consistent]
+        if not bad or n - len(out) - 1 < MIN_POSES + 1:
+            break
+        out.append(max(bad, key=lambda k: abs(checks[k].z)))
+        keep = [k for k in range(n) if k not in out]
+        theta = _solve(means[keep], g, theta)
+    keep = [k for k in range(n) if k not in out]
+    if len(keep) < MIN_POSES:
+        raise InputDataError(f'multi-pose calibration: only {len(keep)} poses pass the gravity '
+                             f'check (need {MIN_POSES})')
+    kept = [dwells[k] for k in keep]
+    means = means[keep]
+    theta = multi_pose(means, g)
+    fitter = DwellNoiseFitter([d.window_t_s for d in kept], [d.window_n for d in kept],
+                              [d.window_accel_m_s2 for d in kept])
     resid = _residual(theta, means, g)
     jac, v = _jacobian(theta, means, g)
-    proj = np.eye(len(dwells)) - jac @ np.linalg.solve(jac.T @ jac, jac.T)
+    proj = np.eye(len(kept)) - jac @ np.linalg.solve(jac.T @ jac, jac.T)
     noise = fitter.fit(residual_loading=proj[:, :, None] * v[None, :, :],
                        residuals=proj @ resid)
     cov = noise.covariance(_loading(theta, means, g))
@@ -270,17 +304,17 @@ def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     mis_sig = np.zeros((3, 3))
     for k, (j, i) in enumerate(LOWER):
         mis_sig[j, i] = sig[6 + k]
-    n = len(dwells)
     result = MultiPoseResult(g, b, sig[:3], theta[3:6], sig[3:6], mis, mis_sig, resid,
-                             float(np.sqrt(np.sum(resid ** 2) / max(n - 9, 1))), cov)
-    return result, leave_one_out(dwells, g, theta, fitter, alpha=alpha), noise
+                             float(np.sqrt(np.sum(resid ** 2) / max(len(kept) - 9, 1))), cov,
+                             tuple(checks[k].label for k in sorted(out)))
+    return result, checks, noise
 
 
 def _label(k, d):
     return f'pose {k + 1} ({d.orientation} at t={d.t_start_s:.1f} s)'
 
 
-def leave_one_out(dwells, gravity_m_s2, theta, fitter, *, alpha=DEFAULT_ALPHA):
+def leave_one_out(dwells, gravity_m_s2, theta, fitter, *, alpha=DEFAULT_ALPHA, exclude=()):
     """
     Refit without each pose in turn and compare its calibrated norm with g.
 
@@ -294,12 +328,14 @@ def leave_one_out(dwells, gravity_m_s2, theta, fitter, *, alpha=DEFAULT_ALPHA):
     gravity_m_s2 : float
         Local gravity (m/s^2).
     theta : numpy.ndarray
-        The full fit (starting point of the refits).
+        A fit (starting point of the refits).
     fitter : DwellNoiseFitter
         Of the same dwells.
     alpha : float, keyword-only
         False-alarm probability over all poses (Bonferroni, two-sided; z read against Student's t
         with n - 10 degrees of freedom, those of the residuals the noise model leans on).
+    exclude : sequence of int, keyword-only
+        Poses left out of every refit (already rejected).
 
     Returns
     -------
@@ -309,10 +345,10 @@ def leave_one_out(dwells, gravity_m_s2, theta, fitter, *, alpha=DEFAULT_ALPHA):
     means = np.array([d.accel_mean_m_s2 for d in dwells])
     g = float(gravity_m_s2)
     n = means.shape[0]
-    dof = max(1, n - 1 - 9)       # the noise model leans on the other poses' residuals
     out = []
     for k in range(n):
-        keep = np.flatnonzero(np.arange(n) != k)
+        keep = np.flatnonzero((np.arange(n) != k) & ~np.isin(np.arange(n), list(exclude)))
+        dof = max(1, keep.size - 9)       # the noise model leans on the other poses' residuals
         th = _solve(means[keep], g, theta)
         resid_k = float(_residual(th, means[k:k + 1], g)[0])
         jac, v = _jacobian(th, means[keep], g)

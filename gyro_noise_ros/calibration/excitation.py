@@ -46,8 +46,10 @@ measured in ``docs/reliability.md`` by ``docs/scripts/excitation_verdicts.py``):
   coefficients have variance 2 sigma^2 / N, so ``sum A_k^2 N / (2 sigma^2)`` against
   chi-square(2 (H - 1));
 * sweep against a reference: the mean deviation against its standard error (the scatter of the
-  rising-minus-falling deviation per bin over sqrt 2 is the noise of one bin), *matches* /
-  *gain differs*; and the deviations about their mean, *flat* / *frequency-dependent*.
+  rising-minus-falling deviation per bin over sqrt 2 is the noise of one bin, with the bins seen
+  both ways less one degrees of freedom), Student's t, *matches* / *gain differs*; and the
+  variance of the deviations about their mean over that noise, F, *flat* /
+  *frequency-dependent*.
 """
 
 from dataclasses import dataclass
@@ -55,7 +57,7 @@ import math
 
 import numpy as np
 from scipy.signal import butter, hilbert, sosfiltfilt
-from scipy.stats import chi2, norm
+from scipy.stats import chi2, f as f_dist, t as t_dist
 
 from ..errors import InputDataError, ParameterError
 
@@ -522,6 +524,9 @@ def _deviation_tests(dev_up, dev_down):
     se = sigma / math.sqrt(values.size)
     if not sigma > 0:
         return mean, se, sigma, nan, nan
-    gain_p = float(2.0 * norm.sf(abs(mean) / se))
-    flat_p = float(chi2.sf(float(np.sum((values - mean) ** 2)) / sigma ** 2, values.size - 1))
+    # sigma comes from the m bins seen both ways: m - 1 degrees of freedom, hence t and F
+    dof = int(np.count_nonzero(both)) - 1
+    gain_p = float(2.0 * t_dist.sf(abs(mean) / se, dof))
+    spread = float(np.sum((values - mean) ** 2)) / (values.size - 1)
+    flat_p = float(f_dist.sf(spread / sigma ** 2, values.size - 1, dof))
     return mean, se, sigma, gain_p, flat_p

@@ -54,7 +54,7 @@ each other pair is tested once more against the remaining one alone (window nois
 chi-square(3)). Which dwell of a failing pair is the bad one: the one whose removal leaves the
 smaller cross-axis column (a real cross-axis term is ~0.1-1 %, a tilt of a few degrees is
 5-9 %). The false-alarm and detection rates are measured in ``docs/reliability.md``
-(``docs/scripts/calibration_tilt_test.py``).
+(``docs/scripts/calibration_uncertainty.py``).
 
 **Gravity check that can fail** (replacing paper section 6's, which on the same dwells and the
 same g returns g by construction): leave one dwell out, calibrate from the other five (its axis's

@@ -395,8 +395,48 @@ def _schedule(labels, dwell_s, move_s, lead_s):
     return out
 
 
+class _PoseSequence:
+    """Dwells in a list of attitudes joined by turns (``labels()`` and ``attitudes()``)."""
+
+    @property
+    def duration_s(self):
+        """float: time until the end of the last dwell (s)."""
+        k = len(self.labels())
+        return self.lead_s + k * self.dwell_s + (k - 1) * self.move_s
+
+    def schedule(self):
+        """
+        Return the dwells as (label, start, end) in scenario time (s).
+
+        Returns
+        -------
+        list of (str, float, float)
+
+        """
+        return _schedule(self.labels(), self.dwell_s, self.move_s, self.lead_s)
+
+    def true(self, t_s):
+        """
+        Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times (s); before the start and after the end the sensor rests in the first / last
+            attitude.
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            (n, 3) each.
+
+        """
+        return _sequence_true(self.attitudes(), t_s, self.dwell_s, self.move_s, self.lead_s,
+                              self.gravity_m_s2, self.latitude_deg)
+
+
 @dataclass(frozen=True)
-class SixPosition:
+class SixPosition(_PoseSequence):
     """
     A six-position sequence: dwells joined by rotations.
 
@@ -436,12 +476,6 @@ class SixPosition:
         if not (self.dwell_s > 0 and self.move_s > 0 and self.lead_s >= 0):
             raise ParameterError(f'dwell_s and move_s must be > 0, lead_s >= 0, got {self}')
 
-    @property
-    def duration_s(self):
-        """float: time until the end of the last dwell (s)."""
-        k = len(self.order)
-        return self.lead_s + k * self.dwell_s + (k - 1) * self.move_s
-
     def attitudes(self):
         """
         Return the sensor-to-world rotation of each dwell, tilts included.
@@ -455,35 +489,9 @@ class SixPosition:
         return [Rotation.from_euler('x', tilt.get(o, 0.0), degrees=True) * attitude(o)
                 for o in self.order]
 
-    def schedule(self):
-        """
-        Return the dwells as (orientation, start, end) in scenario time (s).
-
-        Returns
-        -------
-        list of (str, float, float)
-
-        """
-        return _schedule(self.order, self.dwell_s, self.move_s, self.lead_s)
-
-    def true(self, t_s):
-        """
-        Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
-
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s); before the start and after the end the sensor rests in the first / last
-            orientation.
-
-        Returns
-        -------
-        (numpy.ndarray, numpy.ndarray)
-            (n, 3) each.
-
-        """
-        return _sequence_true(self.attitudes(), t_s, self.dwell_s, self.move_s, self.lead_s,
-                              self.gravity_m_s2, self.latitude_deg)
+    def labels(self):
+        """Return the orientations in the order visited (the schedule's labels)."""
+        return list(self.order)
 
 
 def pose_attitudes(n):
@@ -523,7 +531,7 @@ def pose_attitudes(n):
 
 
 @dataclass(frozen=True)
-class MultiPose:
+class MultiPose(_PoseSequence):
     """
     The multi-pose sequence of the |a| = g calibration: static poses in arbitrary attitudes.
 
@@ -555,12 +563,6 @@ class MultiPose:
         if not (self.dwell_s > 0 and self.move_s > 0 and self.lead_s >= 0):
             raise ParameterError(f'dwell_s and move_s must be > 0, lead_s >= 0, got {self}')
 
-    @property
-    def duration_s(self):
-        """float: time until the end of the last dwell (s)."""
-        k = int(self.poses)
-        return self.lead_s + k * self.dwell_s + (k - 1) * self.move_s
-
     def attitudes(self):
         """
         Return the sensor-to-world rotation of each pose.
@@ -572,35 +574,9 @@ class MultiPose:
         """
         return pose_attitudes(self.poses)
 
-    def schedule(self):
-        """
-        Return the dwells as (label, start, end) in scenario time (s).
-
-        Returns
-        -------
-        list of (str, float, float)
-
-        """
-        return _schedule([f'pose {k + 1}' for k in range(int(self.poses))], self.dwell_s,
-                         self.move_s, self.lead_s)
-
-    def true(self, t_s):
-        """
-        Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
-
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s).
-
-        Returns
-        -------
-        (numpy.ndarray, numpy.ndarray)
-            (n, 3) each.
-
-        """
-        return _sequence_true(self.attitudes(), t_s, self.dwell_s, self.move_s, self.lead_s,
-                              self.gravity_m_s2, self.latitude_deg)
+    def labels(self):
+        """Return the pose names in the order visited (the schedule's labels)."""
+        return [f'pose {k + 1}' for k in range(int(self.poses))]
 
 
 @dataclass(frozen=True)

@@ -45,6 +45,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import t as t_dist
 
+from .apply import SensorCalibration
 from .dwell_noise import DwellNoiseFitter
 from .sixpos import DEFAULT_ALPHA, LeaveOneOut
 from .static import MIN_POSES
@@ -180,8 +181,8 @@ class MultiPoseResult:
         numpy.ndarray
 
         """
-        meas = np.asarray(measured_m_s2, dtype=np.float64)
-        return np.linalg.solve(self.matrix, (meas - self.bias_m_s2).T).T
+        return SensorCalibration(self.bias_m_s2, self.scale_factor,
+                                 self.misalignment).apply(measured_m_s2)
 
 
 def _check_means(means, g):

@@ -76,6 +76,7 @@ import math
 import numpy as np
 from scipy.stats import chi2, f as f_dist, t as t_dist
 
+from .apply import SensorCalibration
 from .dwell_noise import DwellNoiseFitter, fit_dwell_noise
 from .static import ORIENTATIONS
 from ..errors import InputDataError, ParameterError
@@ -230,8 +231,8 @@ class SixPositionResult:
             (..., 3) compensated specific force (m/s^2).
 
         """
-        meas = np.asarray(measured_m_s2, dtype=np.float64)
-        return np.linalg.solve(self.accel_matrix, (meas - self.accel_bias_m_s2).T).T
+        return SensorCalibration(self.accel_bias_m_s2, self.accel_scale_factor,
+                                 self.accel_misalignment).apply(measured_m_s2)
 
 
 def six_position(accel_means_m_s2, gravity_m_s2, *, gyro_means_rad_s=None, accel_noise=None,
@@ -429,6 +430,13 @@ def _loo_matrix(a, g, out):
     return cols, b
 
 
+def _standardise(vector, var):
+    """Return the standard deviation and ``|vector|^2 / var`` (inf without a variance)."""
+    if not var > 0:
+        return float('nan'), float('inf')
+    return math.sqrt(var), float(vector @ vector / var)
+
+
 def _suspect(a, g, i):
     """Name the dwell of pair i that does not fit, and its tilt (deg) from the prediction."""
     # the bad dwell is the one whose removal leaves the smaller cross-axis column
@@ -478,9 +486,7 @@ def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
         disagreement = dvec @ a
         loading = np.stack([_per_axis(evec, j) for j in range(3)])
         noise = fitter.fit(residual_loading=loading, residuals=evec @ a)
-        var = noise.variance(dvec)
-        sigma = math.sqrt(var) if var > 0 else float('nan')
-        stat = float(disagreement @ disagreement / var) if var > 0 else float('inf')
+        sigma, stat = _standardise(disagreement, noise.variance(dvec))
         tests.append((disagreement, sigma, stat, float(f_dist.sf(stat / 3.0, 3, CHECK_DOF))))
         for out in (2 * i, 2 * i + 1):
             cols, b = _loo_matrix(a, g, out)
@@ -505,9 +511,7 @@ def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
             cvec[[2 * i, 2 * i + 1]] = 1.0
             cvec[[2 * other, 2 * other + 1]] = -1.0
             disagreement = cvec @ a
-            var = fitter.fit().variance(cvec)
-            sigma = math.sqrt(var) if var > 0 else float('nan')
-            stat = float(disagreement @ disagreement / var) if var > 0 else float('inf')
+            sigma, stat = _standardise(disagreement, fitter.fit().variance(cvec))
             p = float(chi2.sf(stat, 3))
             ok = p >= alpha / 3.0
         suspect, tilt = (None, float('nan')) if ok else _suspect(a, g, i)

@@ -125,8 +125,9 @@ def test_an_all_nan_dwell_is_said_as_nan():
     sel = (t > 169.0) & (t < 200.0)                               # the whole -y dwell
     accel[sel] = np.nan
     det = _detect(t, accel, gyro, rate=100.0)
-    with pytest.raises(InputDataError, match=r'orientation\(s\) -y missing: the recording holds '
-                                             r'3\d\.\d s of NaN/Inf samples at t=16\d'):
+    with pytest.raises(InputDataError, match=r'no finite dwell for orientation\(s\) -y: the '
+                                             r'recording holds 3\d\.\d s of NaN/Inf samples at '
+                                             r't=16\d'):
         select_six([det])
 
 

@@ -614,8 +614,8 @@ def select_six(detections, settings=DetectorSettings()):
     if missing:
         gaps = '; '.join(g for g in (det.describe_gaps(settings.min_static_s)
                                      for det in detections) if g)
-        lead = (f'orientation(s) {", ".join(missing)} missing: the recording holds {gaps} '
-                f'(an all-NaN dwell?)' if gaps else
+        lead = (f'no finite dwell for orientation(s) {", ".join(missing)}: the recording holds '
+                f'{gaps} (an all-NaN dwell?)' if gaps else
                 f'orientation(s) {", ".join(missing)} missing')
         near = [d for d in short if d.orientation in missing]
         extra = (f'; shorter than --min-static-s {settings.min_static_s:g} s: '

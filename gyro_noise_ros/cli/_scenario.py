@@ -36,7 +36,7 @@ from ..calibration.emulate import (Excitation, MG, MultiPose, PAPER_AFTER_BIAS_M
                                    PAPER_BEFORE_SCALE_PCT, Scenario, SensorErrors, SixPosition,
                                    Static)
 from ..calibration.sixpos import normal_gravity
-from ..errors import ParameterError
+from ..errors import OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..outputs import staged_new_dir
 
@@ -281,7 +281,7 @@ def write_bag(args, board, truth_fh=None, counters=None):
     if total is None or total <= 0:
         raise ParameterError('--write-bag needs --duration-s or --samples (a positive length)')
     if os.path.exists(args.write_bag):
-        raise ParameterError(f'--write-bag {args.write_bag!r} exists; give a new directory')
+        raise OutputError(f'--write-bag {args.write_bag!r} exists; give a new directory')
     name = os.path.basename(os.path.normpath(args.write_bag))
     with staged_new_dir(args.write_bag, option='--write-bag') as stage:
         # built as a hidden sibling and renamed when complete: an error or Ctrl-C leaves no

@@ -180,8 +180,9 @@ def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
         C-contiguous; every message of one frame_id has the same size.
 
     """
-    return encode_cdr_rows(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id,
-                                       angular_velocity_covariance, linear_acceleration_covariance))
+    return encode_cdr_rows(*_imu_parts(
+        stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
+        linear_acceleration_covariance))
 
 
 def _imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,

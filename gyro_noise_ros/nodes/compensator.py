@@ -41,9 +41,9 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
                           sensor_data_qos, SequenceGapCounter, take_all, unused_callback, WARN,
                           worst)
 from ..bag import decode_temperature
-from ..bag.codec import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
 from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
 from ..errors import BagError, ParameterError
+from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
 from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live_model, RANGE_MARGIN,
                             RANGE_NAMES, RANGE_OUTSIDE)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S

@@ -35,11 +35,11 @@ from pathlib import Path
 import numpy as np
 
 from .run import ThermalRun
-from ..bag import ImuBagReader, ImuBagWriter, TEMPERATURE_MSGTYPE
-from ..bag.codec import join_raws, typestore
+from ..bag import ImuBagReader, ImuBagWriter
 from ..bag.storage import BagSource, describe
 from ..core.timebase import estimate_rate
 from ..errors import BagError, InputDataError, ParameterError
+from ..msgs import join_raws, TEMPERATURE_MSGTYPE, typestore
 
 __all__ = ['DEFAULT_MAX_GAP_S', 'MAX_EDGE_S', 'ThermalBag', 'join_runs', 'read_thermal_run',
            'write_compensated']

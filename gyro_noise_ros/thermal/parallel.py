@@ -93,6 +93,7 @@ DEFAULT_OPTIONS = {
     'elman_iterations': 100,
     'elman_epochs': 20,
     'elman_samples': 2000,
+    'elman_refine': 300,
     'rate_window_s': DEFAULT_RATE_WINDOW_S,
     'workers': 1,
 }
@@ -218,7 +219,8 @@ class ParallelModel:
         q = max(1, -(-x.size // int(o['elman_samples'])))
         elman = fit_elman(block_means(np.c_[temp, rate], q), block_means(drift, q),
                           dt_s=q / rate_hz, rng=elman_rng, hidden=tuple(o['elman_hidden']),
-                          iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']))
+                          iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']),
+                          refine_iterations=int(o['elman_refine']), symmetric=(1,))
         info.append(self._axis_info(dec, cls, rate_hz))
         info[-1]['mopso'] = {'evaluations': res.evaluations, 'requested': res.requested,
                              'archive_k': res.archive_params[:, 0].astype(int).tolist(),

@@ -39,7 +39,8 @@ def _slow_twin(model, t_ns, temp, gyro_ns, window_s):
     t_s = (t_ns - t_ns[0]) / NS
     knots = []
     for i in range(t_ns.size):
-        rate = temperature_rate_c_s(t_s[:i + 1], temp[:i + 1], window_s=window_s)[-1]
+        rate = temperature_rate_c_s(t_s[:i + 1], temp[:i + 1], window_s=window_s,
+                                    start='partial')[-1]
         knots.append(model.drift_rad_s(temp[i:i + 1], np.array([rate]))[0])
     knots = np.array(knots)
     x = (gyro_ns - t_ns[0]) / NS

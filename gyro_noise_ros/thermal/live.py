@@ -272,7 +272,8 @@ class LiveDriftEvaluator:
         t = (stamps - self._t0_ns) / _NS
         self._buf_t = np.concatenate((self._buf_t, t))
         self._buf_temp = np.concatenate((self._buf_temp, temp))
-        rate = temperature_rate_c_s(self._buf_t, self._buf_temp, window_s=self.rate_window_s)[-k:]
+        rate = temperature_rate_c_s(self._buf_t, self._buf_temp, window_s=self.rate_window_s,
+                                    start='partial')[-k:]
         status = self.range_status(temp)
         drift = np.asarray(self.method.drift_rad_s(temp, rate), dtype=np.float64).reshape(k, 3)
         outside = status == RANGE_OUTSIDE

@@ -15,8 +15,8 @@
 """Elman network (paper 002 eq. 33) and beetle antennae search (eqs. 30-32)."""
 
 from _thermal_reference import elman_forward_loop
-from gyro_noise_ros.thermal.elman import (_forward, _mse_grad, bas_minimize, ElmanModel,
-                                          fit_elman, n_weights)
+from gyro_noise_ros.thermal.elman import (_forward, _mse_grad, bas_minimize, DriftModel,
+                                          ElmanModel, fit_drift, fit_elman, n_weights)
 from gyro_noise_ros.thermal.run import temperature_rate_c_s
 import numpy as np
 import pytest
@@ -111,3 +111,24 @@ def test_bad_input():
     with pytest.raises(ValueError):
         fit_elman(np.ones((5, 2)), np.ones(5), dt_s=1.0, rng=np.random.default_rng(0),
                   symmetric=(2,))
+
+
+def test_drift_model_extrapolates_with_its_basis_beyond_the_trained_range():
+    x, y = _drift_case()
+    heating = x[:, 1] >= 0
+    model = fit_drift(x[heating], y[heating], dt_s=7.2, rng=np.random.default_rng(2), epochs=2,
+                      weight_decay=1e-3)
+    # the law is a cubic in T plus a term linear in dT: the basis holds it exactly, so least
+    # squares on the heating half recovers the cooling half to the scatter of rounding
+    cooling = x[~heating]
+    assert model.outside(cooling).mean() > 0.9
+    np.testing.assert_allclose(model.base_part(cooling), y[~heating], atol=1e-3 * np.std(y))
+    # the network's part is evaluated at the edge of the trained range out there
+    held = np.clip(cooling, model.range_lo, model.range_hi)
+    np.testing.assert_allclose(model.predict(cooling) - model.base_part(cooling),
+                               model.network.predict(held), rtol=0, atol=1e-12 * np.std(y))
+    again = DriftModel.from_dict(model.to_dict())
+    assert np.array_equal(again.predict(x), model.predict(x))
+    # an older model file held the bare network: it loads as base 'none', never clipped
+    bare = DriftModel.from_dict(model.network.to_dict())
+    assert bare.base == 'none' and np.array_equal(bare.predict(x), model.network.predict(x))

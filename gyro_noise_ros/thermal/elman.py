@@ -339,7 +339,8 @@ class ElmanModel:
 
 
 def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epochs=20,
-              d0=1.0, step0=1.0, init_scale=0.5, refine_iterations=300, symmetric=()):
+              d0=1.0, step0=1.0, init_scale=0.5, refine_iterations=300, symmetric=(),
+              weight_decay=0.0):
     """
     Fit an Elman network to a target series: beetle antennae search, then a local refinement.
 
@@ -368,6 +369,10 @@ def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epoch
         Input columns scaled by their largest magnitude (0 stays 0, the span is
         ``[-max |x|, max |x|]``) instead of their min..max: a rate, whose zero is the steady
         state and whose sign a one-way training run may never change.
+    weight_decay : float, keyword-only
+        Adds ``weight_decay * |theta|^2`` to the fitness (both stages): small weights keep
+        the sigmoids near their linear range, so the network stays smooth where the training
+        run has no data.
 
     Returns
     -------
@@ -400,16 +405,22 @@ def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epoch
     xn = np.ascontiguousarray(2.0 * (x - x_lo) / span - 1.0)
     yn = 2.0 * (y - y_lo) / (y_hi - y_lo) - 1.0
 
+    wd = float(weight_decay)
+
     def mse(theta):
-        return float(np.mean((_forward(theta, xn, hidden[0], hidden[1]) - yn) ** 2))
+        return float(np.mean((_forward(theta, xn, hidden[0], hidden[1]) - yn) ** 2)
+                     + wd * np.dot(theta, theta))
+
+    def mse_grad(theta):
+        value, grad = _mse_grad(theta, xn, yn, hidden[0], hidden[1])
+        return value + wd * np.dot(theta, theta), grad + 2.0 * wd * theta
 
     theta0 = init_scale * rng.standard_normal(n_weights(x.shape[1], hidden))
     theta_bas, bas_mse, _ = bas_minimize(mse, theta0, rng=rng, iterations=iterations,
                                          epochs=epochs, d0=d0, step0=step0)
     theta, best = theta_bas, bas_mse
     if int(refine_iterations) > 0:
-        res = scipy.optimize.minimize(_mse_grad, theta_bas, args=(xn, yn, hidden[0], hidden[1]),
-                                      jac=True, method='L-BFGS-B',
+        res = scipy.optimize.minimize(mse_grad, theta_bas, jac=True, method='L-BFGS-B',
                                       options={'maxiter': int(refine_iterations)})
         # keep whichever is better: L-BFGS returns its last point, which a line search that
         # failed on a flat stretch may leave no better than the start
@@ -419,3 +430,165 @@ def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epoch
     return ElmanModel(theta=theta, hidden=hidden, x_lo=x_lo, x_hi=x_hi, y_lo=y_lo, y_hi=y_hi,
                       dt_s=float(dt_s), train_mse=best, bas_mse=float(bas_mse),
                       theta_bas=np.asarray(theta_bas, dtype=float))
+
+
+#: Stated bases of :class:`DriftModel` (least squares first, the network on what is left).
+DRIFT_BASES = ('cubic_rate', 'none')
+
+
+def drift_basis(inputs, t_ref_c, base):
+    """
+    Return the design matrix of a stated drift basis at inputs (n, 2) = [T, dT].
+
+    ``'cubic_rate'``: ``1, d, d^2, d^3, dT`` with ``d = T - t_ref_c`` (a cubic in temperature
+    and a term linear in its rate: the form of a thermal-gradient drift); ``'none'``: no
+    columns.
+
+    Parameters
+    ----------
+    inputs : array_like
+        (n, 2): T (degC), dT (degC/s).
+    t_ref_c : float
+        Centre of the polynomial (degC).
+    base : str
+        One of :data:`DRIFT_BASES`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, 5) or (n, 0).
+
+    """
+    x = np.asarray(inputs, dtype=float)
+    if base == 'none':
+        return np.zeros((x.shape[0], 0))
+    if base != 'cubic_rate':
+        raise ParameterError(f'drift base must be one of {DRIFT_BASES}, got {base!r}')
+    d = x[:, 0] - t_ref_c
+    return np.column_stack([np.ones_like(d), d, d * d, d * d * d, x[:, 1]])
+
+
+@dataclass(frozen=True)
+class DriftModel:
+    """
+    The drift model of the parallel model: a stated basis plus an Elman network on the rest.
+
+    ``predict(M) = basis(M) @ coef + network(clip(M))``: the basis (least squares) continues
+    beyond the trained range of [T, dT]; the network's part is evaluated with its inputs held
+    at the edge of that range (a network extrapolates to anything; the basis extrapolates the
+    way its stated form says).
+
+    Attributes
+    ----------
+    base : str
+        One of :data:`DRIFT_BASES`.
+    t_ref_c : float
+        Centre of the basis polynomial (degC).
+    coef : numpy.ndarray
+        Basis coefficients (output unit per unit of each column).
+    network : ElmanModel
+        The network trained on the target minus the basis fit.
+    range_lo, range_hi : numpy.ndarray
+        Trained range of each input (the network's inputs are clipped to it).
+
+    """
+
+    base: str
+    t_ref_c: float
+    coef: np.ndarray
+    network: ElmanModel
+    range_lo: np.ndarray
+    range_hi: np.ndarray
+
+    @property
+    def dt_s(self):
+        """float: step of the grid the model runs on (s)."""
+        return self.network.dt_s
+
+    def outside(self, inputs):
+        """Return a boolean (n,) marking input rows outside the trained range."""
+        x = np.asarray(inputs, dtype=float)
+        return np.any((x < self.range_lo) | (x > self.range_hi), axis=1)
+
+    def base_part(self, inputs):
+        """Return the basis part of the prediction (n,)."""
+        return drift_basis(inputs, self.t_ref_c, self.base) @ self.coef
+
+    def predict(self, inputs, *, theta=None):
+        """Return the drift (n,) at inputs (n, 2) on the grid (``theta``: see ElmanModel)."""
+        x = np.asarray(inputs, dtype=float)
+        held = np.clip(x, self.range_lo, self.range_hi)
+        return self.base_part(x) + self.network.predict(held, theta=theta)
+
+    def to_dict(self):
+        """Return every parameter as JSON-able values."""
+        return {'base': self.base, 't_ref_c': self.t_ref_c, 'coef': self.coef.tolist(),
+                'range_lo': self.range_lo.tolist(), 'range_hi': self.range_hi.tolist(),
+                'network': self.network.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d):
+        """
+        Rebuild from :meth:`to_dict` output, or from an older model's bare network dict.
+
+        A bare :class:`ElmanModel` dict (the drift model before the basis existed) becomes
+        ``base = 'none'`` with the network's own scaling range as the trained range.
+        """
+        if 'network' not in d:
+            net = ElmanModel.from_dict(d)
+            return cls(base='none', t_ref_c=0.0, coef=np.zeros(0), network=net,
+                       range_lo=np.full(net.x_lo.size, -np.inf),
+                       range_hi=np.full(net.x_hi.size, np.inf))
+        return cls(base=str(d['base']), t_ref_c=float(d['t_ref_c']),
+                   coef=np.asarray(d['coef'], dtype=float),
+                   network=ElmanModel.from_dict(d['network']),
+                   range_lo=np.asarray(d['range_lo'], dtype=float),
+                   range_hi=np.asarray(d['range_hi'], dtype=float))
+
+
+def fit_drift(inputs, target, *, dt_s, rng, base='cubic_rate', **network_options):
+    """
+    Fit a :class:`DriftModel`: least squares on the stated basis, then the network on the rest.
+
+    Parameters
+    ----------
+    inputs : array_like
+        (n, 2) [T (degC), dT (degC/s)] on a grid of step ``dt_s``.
+    target : array_like
+        (n,) the drift part (rad/s).
+    dt_s : float, keyword-only
+        Grid step (s).
+    rng : numpy.random.Generator, keyword-only
+        For the network (:func:`fit_elman`).
+    base : str, keyword-only
+        One of :data:`DRIFT_BASES`.
+    **network_options
+        Passed to :func:`fit_elman` (``symmetric=(1,)`` unless given).
+
+    Returns
+    -------
+    DriftModel
+
+    """
+    x = np.asarray(inputs, dtype=float)
+    y = np.asarray(target, dtype=float).reshape(-1)
+    if x.ndim != 2 or x.shape[1] != 2 or x.shape[0] != y.size:
+        raise InputDataError(f'fit_drift needs inputs (n, 2) and target (n,), got {x.shape}, '
+                             f'{y.shape}')
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise InputDataError('fit_drift: inputs or target contain NaN or Inf')
+    t_ref = float(np.mean(x[:, 0]))
+    a = drift_basis(x, t_ref, base)
+    coef = np.zeros(a.shape[1])
+    if a.shape[1]:
+        if x.shape[0] < 2 * a.shape[1]:
+            raise InputDataError(f'fit_drift: {x.shape[0]} grid points for a {a.shape[1]}-term '
+                                 'basis')
+        # columns scaled to rms 1 for conditioning (d^3 spans ~1e4 where dT spans ~1e-2)
+        scale = np.sqrt(np.mean(a * a, axis=0))
+        scale = np.where(scale > 0, scale, 1.0)
+        coef = np.linalg.lstsq(a / scale, y, rcond=None)[0] / scale
+    network_options.setdefault('symmetric', (1,))
+    net = fit_elman(x, y - a @ coef, dt_s=dt_s, rng=rng, **network_options)
+    return DriftModel(base=base, t_ref_c=t_ref, coef=coef, network=net,
+                      range_lo=x.min(axis=0), range_hi=x.max(axis=0))

@@ -51,7 +51,6 @@ modes and parts, the drift part on the network's grid), so the report costs no s
 it follows ``apply`` on the same run object.
 """
 
-import dataclasses
 import inspect
 from pathlib import Path
 import weakref
@@ -59,7 +58,7 @@ import weakref
 from gyro_noise_ros.cluster import make_executor
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.thermal.classify import classify_modes
-from gyro_noise_ros.thermal.elman import ElmanModel, fit_elman
+from gyro_noise_ros.thermal.elman import DriftModel, fit_drift, fit_elman
 from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, refine, VmdFitness
 from gyro_noise_ros.thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 from gyro_noise_ros.thermal.tfpf import tfpf
@@ -94,6 +93,8 @@ DEFAULT_OPTIONS = {
     'elman_epochs': 20,
     'elman_samples': 2000,
     'elman_refine': 300,
+    'elman_weight_decay': 1e-3,
+    'drift_base': 'cubic_rate',
     'rate_window_s': DEFAULT_RATE_WINDOW_S,
     'workers': 1,
 }
@@ -217,10 +218,12 @@ class ParallelModel:
         cls = self._classify(dec)
         drift = dec.modes[cls.mask('drift')].sum(axis=0)
         q = max(1, -(-x.size // int(o['elman_samples'])))
-        elman = fit_elman(block_means(np.c_[temp, rate], q), block_means(drift, q),
-                          dt_s=q / rate_hz, rng=elman_rng, hidden=tuple(o['elman_hidden']),
+        elman = fit_drift(block_means(np.c_[temp, rate], q), block_means(drift, q),
+                          dt_s=q / rate_hz, rng=elman_rng, base=o['drift_base'],
+                          hidden=tuple(o['elman_hidden']),
                           iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']),
-                          refine_iterations=int(o['elman_refine']), symmetric=(1,))
+                          refine_iterations=int(o['elman_refine']),
+                          weight_decay=float(o['elman_weight_decay']))
         info.append(self._axis_info(dec, cls, rate_hz))
         info[-1]['mopso'] = {'evaluations': res.evaluations, 'requested': res.requested,
                              'archive_k': res.archive_params[:, 0].astype(int).tolist(),
@@ -264,9 +267,10 @@ class ParallelModel:
             if cls.mask('mixed').any():
                 mixed = tfpf(mixed_in, window=int(o['tfpf_window']))
             drift = dec.modes[cls.mask('drift')].sum(axis=0)
-            elman = ElmanModel.from_dict(ax['elman'])
+            elman = DriftModel.from_dict(ax['elman'])
             out[:, a] = mixed + drift - self._drift_prediction(elman, run, temp, rate)
             info.append(self._axis_info(dec, cls, run.rate_hz))
+            info[-1]['outside_trained_range_fraction'] = self._outside(elman, run, temp, rate)
             parts.append(self._plot_parts(run, a, dec, info[-1], mixed_in, mixed, drift, elman))
         self.last_info = info
         try:
@@ -283,8 +287,14 @@ class ParallelModel:
             raise ParameterError('ParallelModel used before fit (or from_dict)')
         _, temp, rate = self._inputs(run)
         return np.column_stack([
-            self._drift_prediction(ElmanModel.from_dict(ax['elman']), run, temp, rate)
+            self._drift_prediction(DriftModel.from_dict(ax['elman']), run, temp, rate)
             for ax in self.axes])
+
+    @staticmethod
+    def _outside(elman, run, temp, rate):
+        """Fraction of the network's grid points outside the trained [T, dT] range."""
+        q = max(1, int(round(elman.dt_s * run.rate_hz)))
+        return float(np.mean(elman.outside(block_means(np.c_[temp, rate], q))))
 
     @staticmethod
     def _drift_prediction(elman, run, temp, rate):
@@ -436,14 +446,14 @@ class ParallelModel:
         scale = inspect.signature(fit_elman).parameters['init_scale'].default
         rows16, rows17 = [], []
         for ax, p in zip(self.axes, parts):
-            elman = ElmanModel.from_dict(ax['elman'])
+            elman = DriftModel.from_dict(ax['elman'])
             q = p['q']
             grid = block_means(np.c_[temp, rate], q)
             centres = np.arange(grid.shape[0]) * q + 0.5 * (min(q, t.size) - 1)
             t_h = np.interp(centres, np.arange(t.size), t) / 3600.0
-            start = dataclasses.replace(elman, theta=scale * np.random.default_rng(0)
-                                        .standard_normal(elman.theta.size))
-            actual, after, before = p['drift_blocks'], elman.predict(grid), start.predict(grid)
+            start = scale * np.random.default_rng(0).standard_normal(elman.network.theta.size)
+            actual, after = p['drift_blocks'], elman.predict(grid)
+            before = elman.predict(grid, theta=start)
             rows16.append([
                 {'title': 'before BAS (random start weights): rms error '
                           f'{_rms_deg_s(before - actual):.3g} deg/s', 't_h': t_h,

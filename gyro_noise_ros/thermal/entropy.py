@@ -182,6 +182,34 @@ def _sample_counts(x, m, r):  # pragma: no cover - JIT
     return a_count, b_count
 
 
+def sample_entropy_counts(x, *, m=2, tolerance):
+    """
+    Return (A, B) of the sample entropy: template pairs matching at lengths m + 1 and m.
+
+    Parameters
+    ----------
+    x : array_like
+        Series (n,), n >= m + 2, finite.
+    m : int, keyword-only
+        Template length (>= 1).
+    tolerance : float, keyword-only
+        Absolute Chebyshev tolerance (same unit as ``x``; :func:`sample_entropy` uses
+        ``r std(x)``). Counts of several windows with one tolerance add up to the entropy of
+        the pooled templates, ``-ln(sum A / sum B)``.
+
+    Returns
+    -------
+    tuple of int
+
+    """
+    m = int(m)
+    if m < 1:
+        raise ParameterError(f'm must be >= 1, got {m}')
+    a = _series(x, m + 2, 'sample_entropy_counts')
+    a_count, b_count = _sample_counts(a, m, float(tolerance))
+    return int(a_count), int(b_count)
+
+
 def sample_entropy(x, *, m=2, r=0.2):
     """
     Sample entropy of a series (Richman and Moorman 2000; the paper's ref. [41]).

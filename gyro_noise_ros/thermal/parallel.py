@@ -87,6 +87,7 @@ DEFAULT_OPTIONS = {
     'drift_max': 0.5,
     'noise_min': 1.5,
     'entropy_samples': 2000,
+    'entropy_scale': None,
     'tfpf_window': 31,
     'elman_hidden': [6, 6],
     'elman_iterations': 100,
@@ -473,7 +474,9 @@ class ParallelModel:
     def _classify(self, dec):
         o = self.options
         return classify_modes(dec.modes, dec.center_freqs, drift_max=o['drift_max'],
-                              noise_min=o['noise_min'], max_samples=int(o['entropy_samples']))
+                              noise_min=o['noise_min'], max_samples=int(o['entropy_samples']),
+                              scale=(None if o['entropy_scale'] is None
+                                     else int(o['entropy_scale'])))
 
     @staticmethod
     def _axis_info(dec, cls, rate_hz):

@@ -24,8 +24,9 @@ work. Three shapes cover every tool:
   folder is removed; after ``kill -9`` it stays, hidden and named partial, and the next run
   removes it once its process is gone. The user's folder itself is never moved or emptied (it may
   be ``.`` or hold other files).
-* :func:`staged_new_dir` -- a folder that must not exist yet (a rosbag2 bag): built as a hidden
-  sibling ``.<name>.partial-<pid>`` and renamed to its name on success (one atomic rename).
+* :func:`staged_new_dir` -- a folder that must not exist yet (a rosbag2 bag): built under its own
+  name inside a hidden sibling ``.<name>.partial-<pid>`` and renamed into place on success (one
+  atomic rename; the storage files rosbags names after the folder keep the right name).
 * :func:`atomic_write_bytes` / :func:`atomic_write_text` -- one file, through a temporary sibling
   and ``os.replace``.
 
@@ -196,16 +197,25 @@ def staged_new_dir(path, *, option='output'):
                           f'{_reason(err)}') from err
     if not os.access(parent, os.W_OK | os.X_OK):
         raise OutputError(f'{option} {str(final)!r}: its folder is not writable')
-    stage = parent / f'.{final.name}.partial-{os.getpid()}'
-    if stage.exists():
-        shutil.rmtree(stage)
+    # The stage carries the final name inside a hidden holder folder: rosbags (like ros2 bag)
+    # names a bag's storage file after its folder, and that name must survive the rename.
+    holder = parent / f'.{final.name}.partial-{os.getpid()}'
+    if holder.exists():
+        shutil.rmtree(holder)
+    try:
+        holder.mkdir()
+    except OSError as err:
+        raise OutputError(f'{option} {str(final)!r}: its folder is not writable: '
+                          f'{_reason(err)}') from err
+    stage = holder / final.name
     try:
         yield stage
     except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
+        shutil.rmtree(holder, ignore_errors=True)
         raise
     try:
         os.rename(stage, final)
+        holder.rmdir()
     except OSError as err:
         raise OutputError(f'cannot rename {str(stage)!r} to {option} {str(final)!r}: '
                           f'{_reason(err)}') from err

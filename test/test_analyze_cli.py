@@ -193,8 +193,10 @@ def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
     assert z['allan']['angle_random_walk_rad_per_sqrt_s'] > 0
 
     md = (out / 'summary.md').read_text()
-    for title in ('Table 3: offset drift', 'Table 4: noise variance',
-                  'Table 5: order, variance method', 'Table 6: order, correlation method',
+    for title in ('offset drift of the chunk bias (paper 000 Table 3)',
+                  'variance within chunks (paper 000 Table 4)',
+                  'fractional order, variance method (paper 000 Table 5)',
+                  'fractional order, correlation method (paper 000 Table 6)',
                   '(deg/s)/h', '(deg/s)^2', '| seq_ref |'):
         assert title in md
 
@@ -210,11 +212,11 @@ def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
     assert imu[
         'rostopic'] == '/imu/data_raw' and imu['update_rate'] == pytest.approx(1e9 / PERIOD_NS)
     assert imu['gyroscope_noise_density'] == max(
-        bag['axes'][a]['allan']['angle_random_walk_rad_per_sqrt_s'] for a in 'xyz')
+        bag['axes'][a]['allan_datasheet']['arw_rad_per_sqrt_s'] for a in 'xyz')
     assert 'gyroscope_random_walk' in imu
     # White accelerometer noise: ADEV = sigma / sqrt(tau fs), so the noise density is sigma /
-    # sqrt(fs). The 5-term fit on 1877 samples is dominated by the short taus (thousands of
-    # averages each); the largest of three axes is reported, so allow 15 %.
+    # sqrt(fs). The -1/2 region of 1877 samples starts at the short taus (thousands of averages
+    # each); the largest of three axes is reported, so allow 15 %.
     assert imu['accelerometer_noise_density'] == pytest.approx(
         ACCEL_SIGMA * math.sqrt(PERIOD_NS / 1e9), rel=0.15)
     assert 'accelerometer_random_walk' in imu

@@ -22,11 +22,13 @@ import time
 from types import SimpleNamespace
 
 from gyro_noise_ros.bag.codec import imu_covariances, temperature_variances
+from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.health import HealthThresholds
 from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
 from gyro_noise_ros.core.live import LiveAnalysis, parse_axes, TemperatureTrack
+from gyro_noise_ros.core.readout import read_allan
 from gyro_noise_ros.errors import LinkError, ParameterError
 from gyro_noise_ros.link import protocol as P
 from gyro_noise_ros.link.health import judge_link, LinkThresholds, LinkWindow
@@ -184,13 +186,20 @@ def test_allan_items_keep_their_keys():
     assert {v for _, v in items} == {'n/a'}
 
 
-def test_allan_item_at_one_second_interpolates_a_power_law():
-    # ADEV = 0.01 rad/s * tau^-1/2 sampled at tau 0.5 and 2 s: log-log
-    # interpolation at 1 s is exact.
-    allan = SimpleNamespace(tau_s=[0.5, 2.0], adev=[0.01 / np.sqrt(0.5), 0.01 / np.sqrt(2.0)])
-    items = dict(allan_items(SimpleNamespace(allan=allan, noise_terms=None)))
-    assert items['ADEV at 1 s (deg/s)'] == fmt(0.01 * 180.0 / np.pi)
-    assert items['ADEV minimum at tau (s)'] == '2'
+def test_allan_items_are_the_readout():
+    # White rate noise for 400 s at 100 Hz: the items show the one readout's numbers, the bias
+    # stability marked as an upper bound (white noise keeps falling to the longest tau).
+    rate = 100.0
+    result = allan_deviation(np.random.default_rng(4).normal(0.0, 0.01, 40_000), rate)
+    r = read_allan(result)
+    items = dict(allan_items(SimpleNamespace(readout=r)))
+    assert items['ADEV at 1 s (deg/s)'] == fmt(r.adev_1s_rad_s * 180.0 / np.pi)
+    assert r.bias_stability_upper_bound
+    assert items['Bias stability (deg/s)'] == '<=' + fmt(r.bias_stability_rad_s * 180.0 / np.pi)
+    assert items['Bias stability tau (s)'] == fmt(result.tau_s[-1])
+    assert items['Angle random walk (deg/sqrt(h))'] == fmt(
+        r.arw_rad_per_sqrt_s * 180.0 / np.pi * 60.0)
+    assert dict(allan_items(SimpleNamespace(readout=None))) == dict(allan_items(None))
 
 
 def test_fmt():

@@ -119,10 +119,13 @@ def test_unwritable_out_is_refused_as_root_too(tmp_path, monkeypatch):
 def test_staged_new_dir_renames_on_success_and_refuses_existing(tmp_path):
     bag = tmp_path / 'run1'
     with staged_new_dir(bag) as stage:
-        assert not stage.exists() and stage.name.startswith('.run1.partial-')
+        # the stage has the final name (rosbags names storage files after it), in a hidden holder
+        assert not stage.exists() and stage.name == 'run1'
+        assert stage.parent.name.startswith('.run1.partial-')
         stage.mkdir()
         (stage / 'metadata.yaml').write_text('m')
     assert (bag / 'metadata.yaml').read_text() == 'm'
+    assert [p.name for p in tmp_path.iterdir()] == ['run1']
     with pytest.raises(OutputError, match='already exists'):
         with staged_new_dir(bag):
             pass

@@ -39,13 +39,14 @@ def test_white_noise_arw_is_sigma_over_sqrt_rate():
     m = noise_metrics(x, rate)
     # N = sigma sqrt(tau0), rad/sqrt(s) -> deg/sqrt(h)
     expected = sigma / math.sqrt(rate) * DEG * 60.0
-    # ADEV at tau 0.3-3 s from 2000 s: EDF >= ~900 per tau, so each point is within ~2.3 % (1
-    # sigma) and their log-mean within ~1 %; 4 % is beyond 3 sigma.
+    # The -1/2 region is the whole curve (white noise): its log-mean is dominated in variance by
+    # the long taus (EDF ~10-100, 7-22 % per point) but averages ~90 taus; within ~1.5 % (1
+    # sigma), so 4 % is beyond 2.5 sigma.
     assert m.arw_deg_sqrt_h == pytest.approx(expected, rel=0.04)
     assert m.arw_slope == pytest.approx(-0.5, abs=0.08)
     assert m.arw_on_slope
-    # White rate noise keeps falling: the minimum is at the longest tau, an upper bound only.
-    assert m.bias_stability_at_longest_tau
+    # White rate noise keeps falling: never seen to turn up, an upper bound only.
+    assert m.bias_stability_upper_bound
 
 
 def test_bias_stability_is_the_adev_minimum_of_white_plus_random_walk():
@@ -61,7 +62,7 @@ def test_bias_stability_is_the_adev_minimum_of_white_plus_random_walk():
     # sigma) per point; the minimum of a flat, noisy bottom sits a little low: 15 %.
     assert m.bias_stability_deg_h == pytest.approx(expected, rel=0.15)
     assert 30.0 < m.bias_stability_tau_s < 300.0
-    assert not m.bias_stability_at_longest_tau
+    assert not m.bias_stability_upper_bound
 
 
 def test_residual_drift_of_a_square_wave_is_exact():
@@ -130,15 +131,20 @@ def test_slow_lowpass_arw_gain_is_called_bandwidth_removal():
     run = _run(int(300 * 200.0), 200.0)
     doc, _, _ = evaluate_method(FirstOrderLowPass(0.05), run, f_lo_hz=0.5, f_hi_hz=40.0)
     v = doc['axes']['z']['verdict']
-    assert v['arw_ratio'] < 0.5
+    # The ARW is read above the smoothing, where the low-pass lets the white noise through: it
+    # drops far less than ADEV(1 s) does (the filter's time constant is 3.2 s) but still below
+    # the 0.9 that calls it a gain, on a 300-s record whose -1/2 region is short.
+    assert v['arw_ratio'] < 0.9
     assert v['arw_from_bandwidth'] and v['measured_causal']
     assert 'removing bandwidth' in v['text']
     assert doc['axes']['z']['bandwidth']['minus_3db_bound'] == 'below'
-    # smoothed sample to sample: ADEV(tau0) ~ a sigma / sqrt(2) = 1e-3 sigma sits far below
-    # ADEV at the longest tau (~8e-3 sigma), so the "bias stability" is read at the shortest tau
-    assert doc['axes']['z']['processed']['bias_stability_at_shortest_tau']
-    assert not doc['axes']['z']['raw']['bias_stability_at_shortest_tau']
-    assert 'says nothing about the bias' in v['text']
+    # smoothed sample to sample: the processed ADEV rises (slope +1/2, not -1/2) up to the
+    # filter's time constant (1 / (2 pi 0.05 Hz) = 3.2 s) and only then falls; the readout
+    # leaves those taus out, so no "bias stability" is read off the smoothing
+    proc, raw = doc['axes']['z']['processed'], doc['axes']['z']['raw']
+    assert proc['band_limited_below_s'] > 3.2 and raw['band_limited_below_s'] == 0.0
+    assert proc['bias_stability_tau_s'] >= proc['band_limited_below_s']
+    assert 'smoothed' in v['text']
 
 
 def test_threshold_passes_large_motion_and_removes_small_motion():

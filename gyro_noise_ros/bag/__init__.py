@@ -49,7 +49,7 @@ from .codec import (
     typestore,
 )
 from .storage import BagSource, describe, STORAGES
-from ..errors import BagError, ParameterError
+from ..errors import BagError, OutputError, ParameterError
 
 __all__ = [
     'IMU_MSGTYPE',
@@ -319,6 +319,10 @@ class ImuBagReader:
         Span of the whole bag in s (first to last message of any topic, receive time).
     undecodable_count : int
         Messages skipped so far (only with ``skip_undecodable``).
+    recovery : str or None
+        The note (also said once on stderr) when the recording is read although its writer did
+        not finish it: an MCAP file without footer read by its chunks, an sqlite3 file read
+        through a rolled-back copy, a bag without ``metadata.yaml``; None for a finished bag.
 
     Raises
     ------
@@ -338,6 +342,7 @@ class ImuBagReader:
             self.message_count = topics[self.topic][1]
             self.duration_s = self._source.duration_s()
             self.temperature_topic = self._pick_temperature(topics, temperature_topic)
+            self.recovery = self._source.recovery
         except BaseException:
             self._source.close()
             raise
@@ -492,6 +497,56 @@ def _take(pending, size, ros1):
 # Writer
 
 
+def write_raw(writer, conn, log_ns, blobs, path):
+    """
+    Append serialised messages of one connection to an open rosbags ``Writer``.
+
+    Parameters
+    ----------
+    writer : rosbags.rosbag2.Writer
+        The open writer.
+    conn : rosbags.interfaces.Connection
+        A connection of ``writer``.
+    log_ns : numpy.ndarray of int64, shape (n,)
+        Bag (receive) times in ns.
+    blobs : sequence of bytes-like, length n
+        The serialised messages.
+    path : str or os.PathLike
+        The bag, for messages.
+
+    Raises
+    ------
+    OutputError
+        Writing failed (disk full, sqlite errors).
+
+    """
+    if not len(blobs):
+        return
+    try:
+        storage = writer.storage
+        if (
+            type(storage).__name__ == 'Sqlite3Writer'
+            and hasattr(storage, 'cursor')
+            and conn.id in getattr(writer, 'counts', {})
+            and hasattr(writer, 'min_timestamp')
+        ):
+            # rosbags' Writer.write costs several us per message in Python; issuing the very
+            # INSERT it would issue through one executemany, plus its bookkeeping (count and
+            # time range for metadata.yaml), is several times cheaper. Any other rosbags
+            # layout takes the per-message path below.
+            storage.cursor.executemany(
+                'INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)',
+                zip(itertools.repeat(conn.id), log_ns.tolist(), blobs))
+            writer.counts[conn.id] += len(blobs)
+            writer.min_timestamp = min(writer.min_timestamp, int(log_ns.min()))
+            writer.max_timestamp = max(writer.max_timestamp, int(log_ns.max()))
+            return
+        for t, blob in zip(log_ns.tolist(), blobs):
+            writer.write(conn, t, blob)
+    except Exception as err:  # noqa: BLE001 - disk full, sqlite errors
+        raise OutputError(f'bag {str(path)!r}: writing failed: {describe(err)}') from err
+
+
 class ImuBagWriter:
     """
     Write ``sensor_msgs/Imu`` and ``sensor_msgs/Temperature`` into a new rosbag2.
@@ -523,8 +578,9 @@ class ImuBagWriter:
     ------
     ParameterError
         Unknown storage or bad frame_id.
-    BagError
-        The bag cannot be created (path exists, not writable).
+    OutputError
+        The bag cannot be created (path exists, not writable); later, a write, flush or close
+        fails (disk full). Exit code 6 in the tools, like every output that cannot be written.
 
     """
 
@@ -555,7 +611,8 @@ class ImuBagWriter:
                 conn.execute('PRAGMA synchronous=OFF')
             self._imu_conn = writer.add_connection(imu_topic, IMU_MSGTYPE, typestore=typestore())
         except Exception as err:  # noqa: BLE001 - rosbags WriterError, OSError, sqlite errors
-            raise BagError(f'bag {str(self.path)!r} cannot be created: {describe(err)}') from err
+            raise OutputError(
+                f'bag {str(self.path)!r} cannot be created: {describe(err)}') from err
         self._temperature_conn = None
 
     def __enter__(self):
@@ -569,31 +626,7 @@ class ImuBagWriter:
         writer = self._writer
         if writer is None:
             raise BagError(f'bag {str(self.path)!r} is closed')
-        if not blobs:
-            return
-        try:
-            storage = writer.storage
-            if (
-                type(storage).__name__ == 'Sqlite3Writer'
-                and hasattr(storage, 'cursor')
-                and conn.id in getattr(writer, 'counts', {})
-                and hasattr(writer, 'min_timestamp')
-            ):
-                # rosbags' Writer.write costs several us per message in Python; issuing the very
-                # INSERT it would issue through one executemany, plus its bookkeeping (count and
-                # time range for metadata.yaml), is several times cheaper. Any other rosbags
-                # layout takes the per-message path below.
-                storage.cursor.executemany(
-                    'INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)',
-                    zip(itertools.repeat(conn.id), log_ns.tolist(), blobs))
-                writer.counts[conn.id] += len(blobs)
-                writer.min_timestamp = min(writer.min_timestamp, int(log_ns.min()))
-                writer.max_timestamp = max(writer.max_timestamp, int(log_ns.max()))
-                return
-            for t, blob in zip(log_ns.tolist(), blobs):
-                writer.write(conn, t, blob)
-        except Exception as err:  # noqa: BLE001 - disk full, sqlite errors
-            raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
+        write_raw(writer, conn, log_ns, blobs, self.path)
 
     @staticmethod
     def _log_times(stamps, log_ns):
@@ -647,8 +680,8 @@ class ImuBagWriter:
                 extra[topic] = self._writer.add_connection(topic, IMU_MSGTYPE,
                                                            typestore=typestore())
             except Exception as err:  # noqa: BLE001 - rosbags WriterError
-                raise BagError(f'bag {str(self.path)!r}: cannot add topic {topic!r}: '
-                               f'{describe(err)}') from err
+                raise OutputError(f'bag {str(self.path)!r}: cannot add topic {topic!r}: '
+                                  f'{describe(err)}') from err
         return extra[topic]
 
     def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
@@ -679,30 +712,42 @@ class ImuBagWriter:
                 self._temperature_conn = self._writer.add_connection(
                     self.temperature_topic, TEMPERATURE_MSGTYPE, typestore=typestore())
             except Exception as err:  # noqa: BLE001
-                raise BagError(f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
-                               f'{describe(err)}') from err
+                raise OutputError(
+                    f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
+                    f'{describe(err)}') from err
         self._write(self._temperature_conn, logs, blobs)
         self.temperature_count += len(blobs)
 
     def flush(self):
         """
-        Make what was written so far survive a crash of this process (sqlite3 storage).
+        Make what was written so far survive a crash of this process (both storages).
 
-        rosbags keeps one sqlite3 transaction open until :meth:`close`; committing it lets a killed
-        recorder leave a ``.db3`` that :class:`ImuBagReader` reads directly (``metadata.yaml`` is
-        written by :meth:`close` only). MCAP files get their index only at :meth:`close`, so this
-        is a no-op for them. Costs one fsync-free commit; call it every few seconds, not per
-        message.
+        sqlite3: rosbags keeps one transaction open until :meth:`close`; this commits it, so a
+        killed writer leaves a ``.db3`` whose rollback journal :class:`ImuBagReader` rolls back
+        (in a copy) to this point. MCAP: the pending chunk (rosbags closes one only past 1 MiB)
+        is closed and the file buffer handed to the operating system, so a killed writer leaves
+        whole chunks that :class:`ImuBagReader` reads without the missing summary. Either way
+        ``metadata.yaml`` is written by :meth:`close` only. Costs one fsync-free commit or one
+        chunk record; call it about once a second, not per message.
         """
         writer = self._writer
         if writer is None:
             raise BagError(f'bag {str(self.path)!r} is closed')
-        conn = getattr(writer.storage, 'conn', None)
-        if self.storage == 'sqlite3' and conn is not None:
-            try:
-                conn.commit()
-            except Exception as err:  # noqa: BLE001
-                raise BagError(f'bag {str(self.path)!r}: commit failed: {describe(err)}') from err
+        storage = writer.storage
+        try:
+            if self.storage == 'sqlite3':
+                conn = getattr(storage, 'conn', None)
+                if conn is not None:
+                    conn.commit()
+                return
+            chunk = getattr(storage, 'chunk', None)
+            if chunk is not None and any(chunk.msgs.values()):
+                storage.close_chunk()
+            bio = getattr(storage, 'bio', None)
+            if bio is not None:
+                bio.flush()
+        except Exception as err:  # noqa: BLE001
+            raise OutputError(f'bag {str(self.path)!r}: flush failed: {describe(err)}') from err
 
     def close(self):
         """Finish the bag: write its index and ``metadata.yaml`` (idempotent)."""
@@ -711,5 +756,5 @@ class ImuBagWriter:
             try:
                 writer.close()
             except Exception as err:  # noqa: BLE001
-                raise BagError(
+                raise OutputError(
                     f'bag {str(self.path)!r} cannot be finished: {describe(err)}') from err

@@ -343,6 +343,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
                 f"for loss, {a['chunks_failed']} not identifiable (constant?)" for axis,
                 a in b['axes'].items())
             raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
+    # the readout objects themselves are for imu.yaml, not for summary.json
+    accel_readouts = {b['label']: b.pop('_accelerometer_readouts') for b in bag_docs}
 
     doc = {
         'tool': PROG,
@@ -371,7 +373,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     report.write_json(out / 'summary.json', doc)
     (out / 'summary.md').write_text(report.summary_markdown(doc))
     files += [out / 'summary.json', out / 'summary.md']
-    files += _write_allan_outputs(out, doc, allan_store, figures)
+    files += _write_allan_outputs(out, doc, allan_store, accel_readouts, figures)
     if curve_store:
         arrays = {'alphas': config.alphas}
         for (label, axis), rows in curve_store.items():
@@ -555,6 +557,7 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
     start_s, end_s, static = select
     left = {'before_start': 0, 'after_end': 0, 'motion': 0}
     first_ns = None
+    last_ns = -2 ** 63
     if reader is None:
         reader = _open(path, imu_topic, temperature_topic, config.rate_hz)
     with reader:
@@ -626,6 +629,7 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
                 stamps = batch.log_ns
             if first_ns is None:
                 first_ns = int(stamps[0])
+            last_ns = max(last_ns, int(stamps.max()))
             keep = _select(stamps, first_ns, start_s, end_s, segment, left)
             done += len(batch)
             if watch is not None:
@@ -657,7 +661,7 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
         storage, undecodable = reader.storage, reader.undecodable_count
         temperature_topic_used = reader.temperature_topic
     return {'engine': engine, 'warnings': warnings, 'time_source': time_source, 'left': left,
-            'first_ns': first_ns, 'accel': accel, 'rows': rows, 'done': done,
+            'first_ns': first_ns, 'last_ns': last_ns, 'accel': accel, 'rows': rows, 'done': done,
             'frame_id': frame_id, 'storage': storage, 'undecodable': undecodable,
             'temperature_topic': temperature_topic_used}
 
@@ -673,7 +677,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     start_s, end_s, static = select
     counts = engine.counts()
     accel.update(None, counts.rate_hz)
-    accel_terms = accel.terms(counts.rate_hz)
+    accel_readouts = accel.readouts(counts.rate_hz)
     summaries = engine.summary(allan=config.allan)
     verdicts = engine.health(summaries=summaries) if ref else {}
     tb = counts.timebase
@@ -682,9 +686,12 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         warn(f'{label}: {text}')
     left_out = dict(left)
     if segment is not None and not segment.static_throughout and first_ns is not None:
+        # The segments end on window boundaries; a time range never runs past the last sample.
+        end_ns = min(segment.end_ns, state['last_ns'])
         left_out['static_segment_s'] = [(segment.start_ns - first_ns) / 1e9,
-                                        (segment.end_ns - first_ns) / 1e9]
-        left_out['static_segments_s'] = [[(a - first_ns) / 1e9, (b - first_ns) / 1e9]
+                                        (end_ns - first_ns) / 1e9]
+        left_out['static_segments_s'] = [[(a - first_ns) / 1e9,
+                                          (min(b, state['last_ns']) - first_ns) / 1e9]
                                          for a, b in segment.segments]
     if counts.chunks and counts.tail_samples > 0.1 * counts.samples:
         size = config.chunk_size
@@ -710,7 +717,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     for axis, s in summaries.items():
         per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
         if s.allan is not None:
-            allan_store[(label, axis)] = (s.allan, s.noise_terms)
+            allan_store[(label, axis)] = (s.allan, s.noise_terms, s.readout)
     return {
         'label': label,
         'path': str(path),
@@ -741,7 +748,9 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
         'allan_status': engine.allan_status,
-        'accelerometer_allan': {a: report.allan_terms_dict(t) for a, t in accel_terms.items()},
+        'accelerometer_allan': {a: report.accelerometer_readout_dict(r)
+                                for a, r in accel_readouts.items()},
+        '_accelerometer_readouts': accel_readouts,
         'axes': {
             axis: report.axis_summary_dict(s, verdict=verdicts.get(axis))
             for axis, s in summaries.items()
@@ -782,36 +791,26 @@ class _AccelAllan:
                 acc.update(col[np.isfinite(col)])
         self.pending = []
 
-    def terms(self, rate_hz):
+    def readouts(self, rate_hz):
+        """Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes."""
         if self.acc is None:
             return {}
-        from ..core.allan_readout import fit_noise_terms_band_limited, random_walk_bound
+        from ..core.readout import read_allan
         from ..core.timebase import rescale_allan
 
         out = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                result = rescale_allan(acc.result(), rate_hz)
-                t = fit_noise_terms_band_limited(result)
+                out[axis] = read_allan(rescale_allan(acc.result(), rate_hz))
             except (InputDataError, ParameterError, ValueError):
-                out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to fit
-                continue
-            out[axis] = {
-                'quantization_m_s': t.quantization_rad,
-                'velocity_random_walk_m_s2_per_sqrt_hz': t.angle_random_walk_rad_per_sqrt_s,
-                'bias_instability_m_s2': t.bias_instability_rad_per_s,
-                'acceleration_random_walk_m_s3_per_sqrt_hz': t.rate_random_walk_rad_per_s_sqrt_s,
-                'ramp_m_s3': t.rate_ramp_rad_per_s2,
-                'tau_min_s': t.tau_min_s, 'tau_max_s': t.tau_max_s,
-                'rms_relative_residual': t.rms_relative_residual,
-                'acceleration_random_walk_bound_m_s3_per_sqrt_hz': random_walk_bound(result)}
+                out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to read
         return out
 
 
-def _write_allan_outputs(out, doc, allan_store, figures):
+def _write_allan_outputs(out, doc, allan_store, accel_readouts, figures):
     """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
     entries, fig_series = [], {}
-    for (label, axis), (result, terms) in allan_store.items():
+    for (label, axis), (result, terms, _) in allan_store.items():
         tau, adev, lo, hi, n = report.allan_curve(result)
         entries.append((label, axis, tau, adev, lo, hi, n))
         fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi,
@@ -819,39 +818,23 @@ def _write_allan_outputs(out, doc, allan_store, figures):
     report.write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
-    density, walk = report.allan_kalibr([allan_store[(first['label'], a)][1] for a in first['axes']
-                                         if (first['label'], a) in allan_store])
-    acc_terms = [t for t in first.get('accelerometer_allan', {}).values() if t]
-    acc_density = max((t['velocity_random_walk_m_s2_per_sqrt_hz'] for t in acc_terms
-                       if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None),
-                      default=None)
-    acc_walk = max((t['acceleration_random_walk_m_s3_per_sqrt_hz'] for t in acc_terms
-                    if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None),
-                   default=None)
-    from ..core.allan_readout import random_walk_bound
-
-    walk_note = acc_walk_note = ''
-    if not (walk and math.isfinite(walk)):
-        bounds = [random_walk_bound(allan_store[(first['label'], a)][0]) for a in first['axes']
-                  if (first['label'], a) in allan_store]
-        bounds = [b for b in bounds if math.isfinite(b)]
-        if bounds:
-            walk = max(bounds)
-            walk_note = ('upper bound: the record does not resolve a rate random walk; K <= upper '
-                         'ADEV bound at the longest tau * sqrt(3 / tau) (docs/offline_tool.md)')
-    if acc_terms and not (acc_walk and math.isfinite(acc_walk)):
-        bounds = [t['acceleration_random_walk_bound_m_s3_per_sqrt_hz'] for t in acc_terms
-                  if t.get('acceleration_random_walk_bound_m_s3_per_sqrt_hz') is not None]
-        bounds = [b for b in bounds if math.isfinite(b)]
-        if bounds:
-            acc_walk = max(bounds)
-            acc_walk_note = 'upper bound, not resolved by the record (as for the gyroscope)'
-    report.write_imu_yaml(out / 'imu.yaml', rostopic=first['topic'],
+    gyro = [allan_store[(first['label'], a)][2] for a in first['axes']
+            if (first['label'], a) in allan_store]
+    record_s = first['duration_s']
+    accel = accel_readouts.get(first['label']) or {}
+    accel_noise = (report.kalibr_noise(list(accel.values()), record_s=record_s)
+                   if any(r is not None for r in accel.values()) else None)
+    topic, note = first['topic'], ''
+    if first['storage'] in ('csv', 'ulog'):
+        # a table or a ULog has no ROS topic: name the usual raw IMU topic and say so
+        topic = report.DEFAULT_IMU_TOPIC
+        what = (f"a {first['storage']} file" if first['topic'] == first['storage']
+                else f"a {first['storage']} file ({first['topic']})")
+        note = f'the input was {what}, not a bag: set the topic your IMU driver publishes'
+    report.write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
                           update_rate_hz=first['rate_hz'] or float('nan'),
-                          gyroscope_noise_density=density, gyroscope_random_walk=walk,
-                          accelerometer_noise_density=acc_density,
-                          accelerometer_random_walk=acc_walk, gyroscope_random_walk_note=walk_note,
-                          accelerometer_random_walk_note=acc_walk_note,
+                          gyroscope=report.kalibr_noise(gyro, record_s=record_s),
+                          accelerometer=accel_noise,
                           source=f"from bag {first['label']} ({first['path']}), largest over axes "
                           f"{', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
@@ -967,6 +950,9 @@ def _print_summary(doc):
                     f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} "
                     '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "
                     f"{_order_text(a, 'alpha_corr')}")
+            sheet = a.get('allan_datasheet')
+            if sheet:
+                line += ', ' + report.readout_text(sheet)
             if a['nan_samples']:
                 line += f", {a['nan_samples']} NaN sample(s)"
             if 'health' in a:

@@ -59,11 +59,14 @@ PROG = 'gyro_noise_thermal'
 
 #: Definitions written into metrics.json and the reports (docs/thermal.md says the same).
 DEFINITIONS = {
-    'arw_deg_sqrt_h': 'angle random walk: the slope -1/2 line fitted to the overlapping Allan '
-                      'deviation over tau 0.32..3.2 s, read at tau = 1 s (IEEE 952)',
-    'arw_slope': 'free log-log slope of the Allan deviation over the same taus (-0.5 = white)',
-    'bias_stability_deg_h': 'minimum of the Allan deviation (not divided by 0.664), as '
-                            'datasheets and paper 002 Figure 19 quote it',
+    'arw_deg_sqrt_h': 'angle random walk: the -1/2 line of one contiguous white-noise region of '
+                      'the overlapping Allan deviation, read at tau = 1 s (IEEE 952; the one '
+                      'readout, core/readout.py)',
+    'arw_slope': 'free log-log slope of the Allan deviation over the taus N was read from '
+                 '(-0.5 = white)',
+    'bias_stability_deg_h': 'Allan deviation where its usable curve stops falling (not divided '
+                            'by 0.664), as datasheets and paper 002 Figure 19 quote it; the one '
+                            'readout, core/readout.py',
     'residual_drift_deg_s': 'standard deviation (ddof 1) of the means of consecutive 60-s windows',
     'minus_3db_hz': 'first frequency where the gain to injected motion falls below 1/sqrt(2) '
                     '(bound: measured / below / above the measured band)',

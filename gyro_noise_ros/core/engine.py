@@ -77,9 +77,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
 from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
+from .readout import fit_noise_terms_band_limited, read_allan
 from .timebase import rescale_allan, TimebaseTracker
 from ..errors import InputDataError, ParameterError
 
@@ -482,9 +482,10 @@ class AxisSummary:
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
     noise_terms : object or None
         The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
-        band-limited short taus left out (:mod:`.allan_readout`).
-    datasheet : allan_readout.DatasheetTerms or None
-        Bias stability (first ADEV minimum), ARW at 1 s, fit quality.
+        band-limited short taus left out (:mod:`.readout`).
+    readout : readout.AllanReadout or None
+        The datasheet numbers of the Allan deviation (:func:`.readout.read_allan`: bias
+        stability, B, ARW, K and its bound, Q, fit quality).
 
     """
 
@@ -500,7 +501,7 @@ class AxisSummary:
     temperature_mean_c: float
     allan: object = None
     noise_terms: object = None
-    datasheet: object = None
+    readout: object = None
 
     @property
     def offset_drift_deg_s_per_h(self):
@@ -861,9 +862,12 @@ class NoiseEngine:
             result = self._allan[axis].result()
             if self.config.rate_hz is None:
                 result = rescale_allan(result, self.counts().rate_hz)
-            terms = fit_noise_terms_band_limited(result)
         except (InputDataError, ParameterError, ValueError):
             return None, None
+        try:
+            terms = fit_noise_terms_band_limited(result)
+        except (InputDataError, ParameterError, ValueError):
+            terms = None    # too few taus for the fit; the readout still reads the curve
         return result, terms
 
     # ---- analysis and bookkeeping
@@ -1005,9 +1009,9 @@ class NoiseEngine:
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
             sheet = None
-            if terms is not None:
+            if result is not None:
                 try:
-                    sheet = datasheet_terms(result, terms)
+                    sheet = read_allan(result, terms)
                 except (InputDataError, ParameterError):
                     sheet = None
             out[axis] = AxisSummary(
@@ -1016,7 +1020,7 @@ class NoiseEngine:
                 chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
                 chunks_skipped=state.by_status['skipped'],
                 temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
-                allan=result, noise_terms=terms, datasheet=sheet)
+                allan=result, noise_terms=terms, readout=sheet)
         return out
 
     def health(self, *, seconds_since_data=None, summaries=None):

@@ -17,16 +17,17 @@ Honest metrics of a thermal method on a held-out run: noise terms, residual drif
 
 Definitions (docs/thermal.md states the same):
 
-* **Angle random walk** N (deg/sqrt(h)): the value at tau = 1 s of the line of slope -1/2 fitted
-  (least squares in log-log, slope fixed) to the overlapping Allan deviation over
-  tau in [1/sqrt(10), sqrt(10)] s, as IEEE 952 and datasheets read it. The free log-log slope over
-  the same taus is reported beside it (``arw_slope``); ``arw_on_slope`` is False when it is more
-  than 0.15 away from -1/2, i.e. when the curve there is not white-noise dominated and N is only
-  the ADEV at 1 s.
-* **Bias stability** (deg/h): the minimum of the Allan deviation over all taus (~20 per
-  decade up to a quarter of the record), as datasheets and the paper's Figure 19 quote it;
-  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B). Its tau and
-  whether the minimum is at the longest tau (then only an upper bound) are reported.
+* **Angle random walk** N (deg/sqrt(h)) and **bias stability** (deg/h): the one Allan readout
+  (:func:`..core.readout.read_allan`) of the overlapping Allan deviation at the ``'dense'`` taus
+  (~10 per decade up to a quarter of the record, as ``gyro_noise_analyze --allan-taus dense``), as
+  the offline and live analyzers read them: N is the -1/2 line of
+  one contiguous white-noise region read at tau = 1 s (``arw_on_slope`` False: the curve has no
+  such region and N is only ADEV(1 s)); bias stability is where the usable curve stops falling,
+  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B), with its tau
+  and ``bias_stability_upper_bound`` when the curve was not seen to turn up. Taus flattened by
+  smoothing (a low-pass or wavelet denoiser smooths sample to sample) are left out of both:
+  ``band_limited_below_s`` says up to where, so a denoiser cannot show a "bias stability" read
+  off its own smoothing.
 * **Residual drift** (deg/s): standard deviation (ddof = 1) of the means of consecutive,
   non-overlapping 60-s windows of the output.
 * **Bandwidth cost**: a known rate (a logarithmic chirp over ``f_lo_hz``..``f_hi_hz`` and a train
@@ -49,17 +50,16 @@ import math
 import numpy as np
 import scipy.signal
 
-from ..core.allan import allan_deviation, bias_instability_from_minimum, dense_factors
+from ..core.allan import allan_deviation
+from ..core.readout import read_allan
 from ..errors import InputDataError, ParameterError
 
-__all__ = ['ARW_SLOPE_TOLERANCE', 'DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
+__all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
            'noise_metrics', 'noise_path_gain', 'step_response', 'verdict', 'white_noise_sigma']
 
 RAD2DEG = 180.0 / math.pi
-#: Largest |measured slope + 1/2| around tau = 1 s for the ARW read-out to count as on the slope.
-ARW_SLOPE_TOLERANCE = 0.15
 #: Window of the residual-drift means (s).
 DRIFT_WINDOW_S = 60.0
 #: Default amplitude of the injected chirp and steps (rad/s): 1 deg/s.
@@ -73,8 +73,6 @@ PRECURSOR_LIMIT = 0.05
 BANDS_PER_DECADE = 20
 #: Seed of the white noise of the noise path (the same noise for every method).
 NOISE_PATH_SEED = 20211021
-#: Allan factors per decade of the noise read-outs.
-_ADEV_PER_DECADE = 20
 
 
 @dataclass(frozen=True)
@@ -85,20 +83,21 @@ class NoiseMetrics:
     Attributes
     ----------
     arw_deg_sqrt_h : float
-        Angle random walk (deg/sqrt(h)); NaN if the record is shorter than 2 x 0.32 s.
+        Angle random walk (deg/sqrt(h)); NaN when neither a -1/2 region nor tau = 1 s is on the
+        curve.
     arw_slope : float
-        Free log-log slope of ADEV over the ARW taus (-0.5 for white rate noise).
+        Free log-log slope of ADEV over the taus N was read from (-0.5 for white rate noise; NaN
+        for the ADEV(1 s) reading).
     arw_on_slope : bool
-        ``|arw_slope + 0.5| <= ARW_SLOPE_TOLERANCE``.
+        N comes from a contiguous -1/2 region (False: from ADEV(1 s)).
     bias_stability_deg_h : float
-        Minimum of the Allan deviation (deg/h).
+        Bias stability (deg/h), the readout's floor.
     bias_stability_tau_s : float
         Its averaging time (s).
-    bias_stability_at_longest_tau : bool
-        The minimum is the longest tau (an upper bound only).
-    bias_stability_at_shortest_tau : bool
-        The minimum is the shortest tau (one sample): the output is smoothed at the sample scale
-        and the number says nothing about the bias.
+    bias_stability_upper_bound : bool
+        The curve was not seen to turn up: an upper bound only.
+    band_limited_below_s : float
+        Taus below this are flattened by smoothing and left out of the readout (s; 0.0: none).
     residual_drift_deg_s : float
         Std of the 60-s means (deg/s); NaN with fewer than two windows.
     drift_windows : int
@@ -113,8 +112,8 @@ class NoiseMetrics:
     arw_on_slope: bool
     bias_stability_deg_h: float
     bias_stability_tau_s: float
-    bias_stability_at_longest_tau: bool
-    bias_stability_at_shortest_tau: bool
+    bias_stability_upper_bound: bool
+    band_limited_below_s: float
     residual_drift_deg_s: float
     drift_windows: int
     mean_deg_s: float
@@ -163,17 +162,18 @@ def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
     if x.ndim != 1 or x.size < 8:
         raise InputDataError(f'noise metrics need at least 8 samples of one axis, got shape '
                              f'{x.shape}')
-    ms = dense_factors(x.size, per_decade=_ADEV_PER_DECADE)
-    res = allan_deviation(x, rate_hz, taus=ms)
+    res = allan_deviation(x, rate_hz, taus='dense')
     tau, adev = res.tau_s, res.adev
-    sel = (tau >= 10 ** -0.5) & (tau <= 10 ** 0.5) & (adev > 0)
-    arw, slope = math.nan, math.nan
-    if sel.sum() >= 1:
-        lt, la = np.log(tau[sel]), np.log(adev[sel])
-        arw = float(np.exp(np.mean(la + 0.5 * lt)))  # the slope -1/2 line at tau = 1 s
-        if sel.sum() >= 2:
-            slope = float(np.polyfit(lt, la, 1)[0])
-    mini = bias_instability_from_minimum(res)
+    nan = math.nan
+    try:
+        r = read_allan(res)
+    except InputDataError:
+        # a constant output (a method that returns its input's mean) has no Allan curve
+        r = None
+    slope = nan
+    if r is not None and r.arw_from_region:
+        sel = (tau >= r.arw_tau_range_s[0]) & (tau <= r.arw_tau_range_s[1])
+        slope = float(np.polyfit(np.log(tau[sel]), np.log(adev[sel]), 1)[0])
     window = int(round(drift_window_s * rate_hz))
     k = x.size // window if window >= 1 else 0
     drift = math.nan
@@ -181,13 +181,14 @@ def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
         means = x[:k * window].reshape(k, window).mean(axis=1)
         drift = float(np.std(means, ddof=1) * RAD2DEG)
     return NoiseMetrics(
-        arw_deg_sqrt_h=arw * RAD2DEG * 60.0,  # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
+        # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
+        arw_deg_sqrt_h=r.arw_rad_per_sqrt_s * RAD2DEG * 60.0 if r else nan,
         arw_slope=slope,
-        arw_on_slope=bool(abs(slope + 0.5) <= ARW_SLOPE_TOLERANCE),
-        bias_stability_deg_h=mini.adev_min_rad_per_s * RAD2DEG * 3600.0,
-        bias_stability_tau_s=mini.tau_s,
-        bias_stability_at_longest_tau=bool(mini.at_longest_tau),
-        bias_stability_at_shortest_tau=bool(mini.tau_s <= tau[0]),
+        arw_on_slope=bool(r and r.arw_from_region),
+        bias_stability_deg_h=r.bias_stability_rad_s * RAD2DEG * 3600.0 if r else nan,
+        bias_stability_tau_s=r.bias_stability_tau_s if r else nan,
+        bias_stability_upper_bound=bool(r and r.bias_stability_upper_bound),
+        band_limited_below_s=r.band_limited_below_s if r else nan,
         residual_drift_deg_s=drift, drift_windows=int(k),
         mean_deg_s=float(np.mean(x) * RAD2DEG)), (tau, adev)
 
@@ -641,17 +642,20 @@ def verdict(raw, processed, fr, st, *, causal, small=None, noise_gain=None):
     elif arw_ratio < 0.9:
         text.append(f'ARW x{arw_ratio:.3g} while motion at 0.1-1 Hz keeps gain >= '
                     f'{low_gain:.3g} ({_band_text(fr)}).')
+    elif math.isfinite(arw_ratio):
+        text.append(f'ARW x{arw_ratio:.3g}: no denoising ({_band_text(fr)}).')
     else:
-        text.append(f'ARW x{arw_ratio:.3g}: no denoising at tau = 1 s ({_band_text(fr)}).')
-    if noise_gain is not None and abs(output_ratio - arw_ratio) > 0.05:
+        text.append(f'No ARW can be read off the processed Allan curve ({_band_text(fr)}).')
+    if (noise_gain is not None and math.isfinite(output_ratio)
+            and abs(output_ratio - arw_ratio) > 0.05):
         text.append(f'(The ARW read-out of the output is x{output_ratio:.3g} of the input one: '
                     'the difference is drift in the ADEV of the input near 1 s, not noise.)')
     if not processed.arw_on_slope:
-        text.append(f'The processed ADEV slope near 1 s is {processed.arw_slope:.2f}, not -1/2: '
-                    'its ARW is only ADEV(1 s).')
-    if processed.bias_stability_at_shortest_tau:
-        text.append('Its ADEV minimum is at the shortest tau: the output is smoothed sample to '
-                    'sample, and that "bias stability" says nothing about the bias.')
+        text.append('The processed Allan curve has no -1/2 region: its ARW is only ADEV(1 s).')
+    if processed.band_limited_below_s > max(raw.band_limited_below_s, 0.0):
+        text.append(f'Its output is smoothed: the Allan deviation is flattened below '
+                    f'{processed.band_limited_below_s:.3g} s, so ARW and bias stability are read '
+                    'above that, never off the smoothing.')
     text.append(f'Residual drift x{drift_ratio:.3g}.')
     if not measured_causal:
         text.append(f'Responds {st.precursor:.0%} of a step before it happens: non-causal, '

@@ -78,7 +78,7 @@ def _read_parm(text):
 
 
 def _ardupilot_correction(p, stype, temperature, cal_temp):
-    """ArduPilot's TCal correct_sensor: -P(clip(T) - 35) + P(clip(CALTEMP) - 35), P / 1e6."""
+    """Return ArduPilot TCal correct_sensor: -P(clip(T) - 35) + P(clip(CALTEMP) - 35)."""
     tmin, tmax = p['INS_TCAL1_TMIN'], p['INS_TCAL1_TMAX']
 
     def poly(u, axis):

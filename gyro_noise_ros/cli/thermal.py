@@ -66,12 +66,20 @@ DEFINITIONS = {
                  '(-0.5 = white)',
     'bias_stability_deg_h': 'Allan deviation where its usable curve stops falling (not divided '
                             'by 0.664), as datasheets and paper 002 Figure 19 quote it; the one '
-                            'readout, core/readout.py',
+                            'readout, core/readout.py; an upper bound (tables: <=) when '
+                            'bias_stability_upper_bound, the curve not seen to turn up',
+    'noise_path': 'white noise the size of the run noise (fixed seed) added to the run; '
+                  'arw_gain is the ARW of the response of the method to it (output with minus '
+                  'output without) over the ARW of that noise: the arw_ratio of the verdict, 1 '
+                  'for any drift model, free of the drift that leaks into the ADEV of the output',
     'residual_drift_deg_s': 'standard deviation (ddof 1) of the means of consecutive 60-s windows',
     'minus_3db_hz': 'first frequency where the gain to injected motion falls below 1/sqrt(2) '
                     '(bound: measured / below / above the measured band)',
     'step_precursor': 'largest change of the step response in the last fifth of the window '
                       'before the step (> 0.05: non-causal)',
+    'step_lead_s': 'how long before a step the response first moves by more than 5 % of it: '
+                   'the look-ahead of a non-causal method, the latency a causal version of it '
+                   'would add',
     'bandwidth_small_signal': 'the same injection scaled to the white-noise sigma of the run '
                               '(std of first differences / sqrt 2): what a nonlinear method '
                               'does to motion the size of the noise',
@@ -421,8 +429,10 @@ def _apply_figures(out, run, processed, method, curves, info, method_figs):
     if 'frequency_small' in curves['x']:
         responses[f'{name} small'] = {a: c['frequency_small'] for a, c in curves.items()}
         steps[f'{name} small'] = {a: c['step_small'] for a, c in curves.items()}
+    small = responses.pop(f'{name} small', None)
     figs.append(('Response to injected motion (large and noise-sized): gain, phase, group delay',
                  report.plot_bandwidth(out / 'bandwidth.png', responses,
+                                       small=None if small is None else {name: small},
                                        title=f'{name}: response to an injected chirp')))
     figs.append(('Mean normalised step response (t < 0: before the step)',
                  report.plot_steps(out / 'steps.png', steps,
@@ -435,25 +445,25 @@ def _axis_rows(axes):
     for axis, v in axes.items():
         raw, proc, bw = v['raw'], v['processed'], v['bandwidth']
         rows.append((axis, raw['arw_deg_sqrt_h'], proc['arw_deg_sqrt_h'],
-                     raw['bias_stability_deg_h'], proc['bias_stability_deg_h'],
+                     (v.get('noise_path') or {}).get('arw_gain'),
+                     report.bias_stability_cell(raw), report.bias_stability_cell(proc),
                      raw['residual_drift_deg_s'], proc['residual_drift_deg_s'],
-                     _bw_cell(bw), v['verdict']['small_signal_low_band_min_gain'],
-                     bw['step_delay_50_s'], v['verdict']['live_capable']))
+                     _bw_cell(bw), report.minus_3db_cell(v.get('bandwidth_small_signal')),
+                     v['verdict']['small_signal_low_band_min_gain'],
+                     bw['step_delay_50_s'], bw.get('step_lead_s'), v['verdict']['live_capable']))
     return rows
 
 
-def _bw_cell(bw):
-    if bw['minus_3db_bound'] == 'measured':
-        return f'{bw["minus_3db_hz"]:.3g}'
-    return '< band' if bw['minus_3db_bound'] == 'below' else '> band'
-
+_bw_cell = report.minus_3db_cell
 
 _AXIS_HEADER = ['axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
-                'bias stability raw (deg/h)', 'bias stability processed (deg/h)',
+                'ARW gain, noise path', 'bias stability raw (deg/h)',
+                'bias stability processed (deg/h)',
                 'residual drift raw (deg/s)', 'residual drift processed (deg/s)',
-                '-3 dB (Hz)', 'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
-                'live-capable']
-_AXIS_SPECS = ['', '.4g', '.4g', '.4g', '.4g', '.4g', '.4g', '', '.3g', '.3g', '']
+                '-3 dB, 1 deg/s motion (Hz)', '-3 dB, noise-sized motion (Hz)',
+                'noise-sized min gain 0.1-1 Hz', 'step delay 50 % (s)',
+                'look-ahead before a step (s)', 'live-capable']
+_AXIS_SPECS = ['', '.4g', '.4g', '.3g', '', '', '.4g', '.4g', '', '', '.3g', '.3g', '.3g', '']
 
 
 def _apply_md(doc, figs, out):
@@ -633,12 +643,12 @@ def _cmd_compare(args, argv):
     if not args.no_figures:
         figs = _compare_figures(out, test, curves)
     files = [_write_json(out / 'compare.json', summary)]
-    rows = _compare_rows(results)
+    rows = report.compare_rows(results)
     files.append(_write_csv(out / 'compare.csv', rows))
     files.append(_write_md(out / 'compare.md', _compare_md(summary, rows, figs, out)))
     files.extend(p for _, p in figs)
     if not args.quiet:
-        print(report.table_markdown(_COMPARE_HEADER, rows, _COMPARE_SPECS))
+        print(report.compare_markdown(rows))
         print(f'wrote {len(files)} files to {out}')
     return 0
 
@@ -661,41 +671,16 @@ def _best(results):
                     'live-capable and do not gain ARW by removing bandwidth'}
 
 
-_COMPARE_HEADER = ['method', 'axis', 'ARW (deg/sqrt(h))', 'bias stability (deg/h)',
-                   'residual drift (deg/s)', '-3 dB (Hz)', 'small-signal min gain 0.1-1 Hz',
-                   'step delay 50 % (s)', 'settled step gain', 'live-capable',
-                   'ARW from removed bandwidth']
-_COMPARE_SPECS = ['', '', '.4g', '.4g', '.4g', '', '.3g', '.3g', '.3g', '', '']
-
-
-def _compare_rows(results):
-    rows = []
-    first = next(iter(results.values()))
-    for axis, v in first['axes'].items():
-        raw = v['raw']
-        rows.append(('(raw input)', axis, raw['arw_deg_sqrt_h'], raw['bias_stability_deg_h'],
-                     raw['residual_drift_deg_s'], '', None, None, None, None, None))
-    for name, doc in results.items():
-        for axis, v in doc['axes'].items():
-            proc, bw, vd = v['processed'], v['bandwidth'], v['verdict']
-            rows.append((name, axis, proc['arw_deg_sqrt_h'], proc['bias_stability_deg_h'],
-                         proc['residual_drift_deg_s'], _bw_cell(bw),
-                         vd['small_signal_low_band_min_gain'], bw['step_delay_50_s'],
-                         bw['step_settled_gain'], vd['live_capable'], vd['arw_from_bandwidth']))
-    return rows
-
-
 def _write_csv(path, rows):
     import csv
 
-    keys = ['method', 'axis', 'arw_deg_sqrt_h', 'bias_stability_deg_h', 'residual_drift_deg_s',
-            'minus_3db_hz', 'small_signal_low_band_min_gain', 'step_delay_50_s',
-            'step_settled_gain', 'live_capable', 'arw_from_bandwidth']
+    keys = [key for _, key, _ in report.COMPARE_COLUMNS]
+    keys.insert(keys.index('bias_stability_deg_h') + 1, 'bias_stability_upper_bound')
     with open(path, 'w', newline='') as fh:
         w = csv.writer(fh)
         w.writerow(keys)
         for row in rows:
-            w.writerow(['' if v is None else v for v in row])
+            w.writerow(['' if row.get(k) is None else row[k] for k in keys])
     return Path(path)
 
 
@@ -711,7 +696,7 @@ def _compare_md(summary, rows, figs, out):
             f'{summary["test_temperature_c"][1]:.2f} degC), seed {summary["seed"]}.\n\n'
             + (f'**One recording split in time at {summary["split"]["fraction"]:g} of its '
                f'length: {summary["split"]["note"]}.**\n\n' if summary.get('split') else '')
-            + report.table_markdown(_COMPARE_HEADER, rows, _COMPARE_SPECS)
+            + report.compare_markdown(rows)
             + f'\nBest held-out ({best["rule"]}): **{best["method"]}**.\n\n'
             + (f'Not scored:\n\n{errs}\n' if errs else '')
             + '## Verdicts\n\n' + verdicts + '\n## Definitions\n\n'
@@ -731,7 +716,10 @@ def _compare_figures(out, test, curves):
         ('Response to injected motion, axis x',
          report.plot_bandwidth(out / 'compare_bandwidth.png',
                                {n: {'x': c['x']['frequency']} for n, c in curves.items()},
-                               title='gain, phase, group delay to an injected chirp (axis x)')),
+                               small={n: {'x': c['x']['frequency_small']}
+                                      for n, c in curves.items() if 'frequency_small' in c['x']},
+                               title='gain (1 deg/s motion solid, noise-sized dashed), phase, '
+                                     'group delay to an injected chirp (axis x)')),
         ('Mean normalised step response, axis x',
          report.plot_steps(out / 'compare_steps.png',
                            {n: {'x': c['x']['step']} for n, c in curves.items()},

@@ -1,0 +1,96 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Regenerate docs/thermal.md's real-data table: ``compare --split-at 0.5`` on the MPU6050 record.
+
+Usage::
+
+    python docs/scripts/thermal_real_table.py [--data DIR] [--work DIR]
+        [--write docs/thermal.md]
+
+``--data`` defaults to ``$GYRO_NOISE_REAL_DATA``, else ``../shared/data/real`` (as the tests).
+
+Runs exactly the commands docs/thermal.md shows ("Real data"): the CSV converted to a bag by
+``table_to_thermal_bag.py``, then ``gyro_noise_thermal compare BAG --split-at 0.5 --f-lo-hz
+0.25 --min-range-c 0.1``, and prints the table of ``compare.json`` (the tool's own
+:func:`gyro_noise_ros.thermal.report.compare_markdown`) and the methods not scored. With
+``--write`` the table between the markers ``<!-- real-table:begin -->`` and
+``<!-- real-table:end -->`` of that file is replaced, so the page holds what the tool printed.
+Exit 1 with one line when the record is missing.
+"""
+
+import argparse
+import json
+import os
+from pathlib import Path
+import sys
+import tempfile
+import time
+
+from gyro_noise_ros.cli.thermal import main as thermal_main
+from gyro_noise_ros.thermal.report import compare_markdown, compare_rows
+
+RECORD = 'mpu6050_static_sunsided/mpu6050_static_10min.csv'
+BEGIN, END = '<!-- real-table:begin -->', '<!-- real-table:end -->'
+
+
+def main():
+    """Run the documented commands and print (or write) the table."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[1])
+    parser.add_argument('--data', default=os.environ.get('GYRO_NOISE_REAL_DATA',
+                                                         '../shared/data/real'))
+    parser.add_argument('--work', default=None, help='keep the bag and compare/ here')
+    parser.add_argument('--write', default=None, help='Markdown file to update in place')
+    args = parser.parse_args()
+    record = Path(args.data) / RECORD
+    if not record.is_file():
+        print(f'thermal_real_table: {record} not found (see shared/data/real/README.md)',
+              file=sys.stderr)
+        return 1
+    sys.path.insert(0, str(Path(__file__).parent))
+    from table_to_thermal_bag import convert
+
+    work = Path(args.work or tempfile.mkdtemp(prefix='thermal_real_'))
+    bag, out = work / 'mpu_bag', work / 'mpu_cmp'
+    if not bag.exists():
+        convert(str(record), str(bag))
+    start = time.perf_counter()
+    code = thermal_main(['compare', str(bag), '--split-at', '0.5', '--f-lo-hz', '0.25',
+                         '--min-range-c', '0.1', '--out', str(out), '--quiet'])
+    took = time.perf_counter() - start
+    if code != 0:
+        print(f'thermal_real_table: compare exited {code}', file=sys.stderr)
+        return 1
+    summary = json.loads((out / 'compare.json').read_text())
+    table = compare_markdown(compare_rows(summary['methods']))
+    errors = ''.join(f'- `{k}`: not scored: "{v}"\n' for k, v in summary['errors'].items())
+    block = (f'{BEGIN}\n{table}\nNot scored:\n\n{errors}\n'
+             f'(`docs/scripts/thermal_real_table.py`; compare took {took:.0f} s on a 2-core '
+             f'machine shared with other jobs.)\n{END}')
+    print(block)
+    if args.write:
+        page = Path(args.write)
+        text = page.read_text()
+        if BEGIN not in text or END not in text:
+            print(f'thermal_real_table: {page} has no {BEGIN} ... {END} block', file=sys.stderr)
+            return 1
+        head, rest = text.split(BEGIN, 1)
+        page.write_text(head + block + rest.split(END, 1)[1])
+        print(f'updated {page}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

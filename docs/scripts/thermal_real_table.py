@@ -53,6 +53,8 @@ def main():
                                                          '../shared/data/real'))
     parser.add_argument('--work', default=None, help='keep the bag and compare/ here')
     parser.add_argument('--write', default=None, help='Markdown file to update in place')
+    parser.add_argument('--reuse', action='store_true',
+                        help='format WORK/mpu_cmp/compare.json of an earlier run, no compare')
     args = parser.parse_args()
     record = Path(args.data) / RECORD
     if not record.is_file():
@@ -66,19 +68,22 @@ def main():
     bag, out = work / 'mpu_bag', work / 'mpu_cmp'
     if not bag.exists():
         convert(str(record), str(bag))
-    start = time.perf_counter()
-    code = thermal_main(['compare', str(bag), '--split-at', '0.5', '--f-lo-hz', '0.25',
-                         '--min-range-c', '0.1', '--out', str(out), '--quiet'])
-    took = time.perf_counter() - start
-    if code != 0:
-        print(f'thermal_real_table: compare exited {code}', file=sys.stderr)
-        return 1
+    took = None
+    if not (args.reuse and (out / 'compare.json').is_file()):
+        start = time.perf_counter()
+        code = thermal_main(['compare', str(bag), '--split-at', '0.5', '--f-lo-hz', '0.25',
+                             '--min-range-c', '0.1', '--out', str(out), '--quiet'])
+        took = time.perf_counter() - start
+        if code != 0:
+            print(f'thermal_real_table: compare exited {code}', file=sys.stderr)
+            return 1
     summary = json.loads((out / 'compare.json').read_text())
     table = compare_markdown(compare_rows(summary['methods']))
     errors = ''.join(f'- `{k}`: not scored: "{v}"\n' for k, v in summary['errors'].items())
+    when = ('' if took is None else f'; compare took {took:.0f} s on a 2-core machine shared '
+            'with other jobs')
     block = (f'{BEGIN}\n{table}\nNot scored:\n\n{errors}\n'
-             f'(`docs/scripts/thermal_real_table.py`; compare took {took:.0f} s on a 2-core '
-             f'machine shared with other jobs.)\n{END}')
+             f'(`docs/scripts/thermal_real_table.py`{when}.)\n{END}')
     print(block)
     if args.write:
         page = Path(args.write)

@@ -985,7 +985,8 @@ def compare_markdown(rows):
             if key == 'bias_stability_deg_h':
                 line.append(bias_stability_cell(row, spec))
             else:
-                line.append(row.get(key))
+                # a key the row lacks (the raw input has no bandwidth) is an empty cell
+                line.append(row.get(key, ''))
         cells.append(line)
     return table_markdown(header, cells, ['' if k == 'bias_stability_deg_h' else spec
                                           for _, k, spec in COMPARE_COLUMNS])

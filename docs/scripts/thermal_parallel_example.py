@@ -181,7 +181,7 @@ def part2(model, test, figures):
 
 
 def part3(model, figures):
-    """A run with a known mixed band through the model's apply and its report figures."""
+    """Put a run with a known mixed band through the apply of the model and its figures."""
     rate, n = 1.0, 24000
     rng = np.random.default_rng(3)
     t = np.arange(n) / rate

@@ -33,20 +33,26 @@ Fit on a training run:
    (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
    spectrum, so the 1.44 M-sample run stays within seconds).
 3. The modes are classified by sample entropy (:mod:`.classify`) into drift, mixed, noise.
-4. An Elman network trained by beetle antennae search (:mod:`.elman`) learns the drift part
-   from [T, dT] (dT from :func:`..run.temperature_rate_c_s`), on block means over
-   ``dt = ceil(n / elman_samples)`` samples (the drift is slow; the recurrence runs on that
-   grid, here and when applied).
+4. The drift model (:func:`.elman.fit_drift`) learns the drift part from [T, dT] (dT from
+   :func:`..run.temperature_rate_c_s`), on block means over ``dt = ceil(n / elman_samples)``
+   samples (the drift is slow; the recurrence runs on that grid, here and when applied):
+   least squares on the stated basis ``drift_base`` (a cubic in T and a term linear in dT),
+   then an Elman network trained by beetle antennae search and refined by L-BFGS
+   (``elman_refine``, weight decay ``elman_weight_decay``) on what the basis leaves.
+   ``drift_base='none'`` with no decay is the paper's drift model, the network alone.
 
 Apply to another run: VMD with the trained K, alpha, warm-started from the trained centre
 frequencies (converted through Hz if the sample rate differs; at most ``apply_vmd_iter``
 iterations), classification of the new modes, the noise modes dropped, TFPF
-(:mod:`.tfpf`) on the sum of the mixed modes, the Elman prediction (interpolated from its grid)
-subtracted from the sum of the drift modes, and the two parts added. VMD and TFPF need the whole
+(:mod:`.tfpf`) on the sum of the mixed modes, the drift model's prediction (interpolated from
+its grid; beyond the trained [T, dT] range the basis extrapolates and the network's inputs are
+held at the range's edge, ``last_info`` counts the fraction) subtracted from the sum of the
+drift modes, and the two parts added. VMD and TFPF need the whole
 record: the model is offline only (``causal = False``); the live node refuses it.
 
-Report: :meth:`ParallelModel.report_figures` draws the paper's Figures 11, 12 and 14-17 for a
-run from what :meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the
+Report: :meth:`ParallelModel.report_figures` (the hook; the drawing is
+:func:`..report.parallel_figures`) gives the paper's Figures 11, 12 and 14-17 for a run from what
+:meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the
 modes and parts, the drift part on the network's grid), so the report costs no second VMD when
 it follows ``apply`` on the same run object.
 """

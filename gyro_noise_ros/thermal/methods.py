@@ -694,9 +694,15 @@ def fit_method(name, run, *, rng, sources=None, executor=None, accel=True, **opt
             method.executor = None
     else:
         method.fit(run, rng=rng)
-    accel_poly = fit_accel(run) if accel and run.accel_m_s2 is not None else None
+    accel_poly, notes = None, ()
+    if accel and run.accel_m_s2 is not None:
+        try:
+            accel_poly = fit_accel(run)
+        except InputDataError as err:
+            # the gyro model stands on its own; say why the accelerometer has none
+            notes = (f'accelerometer not compensated: {err}',)
     window = float(getattr(method, 'rate_window_s', DEFAULT_RATE_WINDOW_S))
-    return ThermalModel(method=method, accel=accel_poly,
+    return ThermalModel(method=method, accel=accel_poly, notes=notes,
                         training=training_info(run, sources=sources, rate_window_s=window))
 
 

@@ -291,8 +291,7 @@ def _fit_poly3(tmp_path, **kw):
     return tmp_path / 'm' / 'model.json'
 
 
-def test_model_from_another_version_loads_with_a_note_and_empty_parameters_fail(tmp_path,
-                                                                              capsys):
+def test_other_version_loads_with_a_note_and_empty_parameters_fail(tmp_path, capsys):
     model = _fit_poly3(tmp_path)
     test, _, _ = _bag(tmp_path / 'test', 2)
     doc = json.loads(model.read_text())

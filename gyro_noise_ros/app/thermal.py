@@ -1488,3 +1488,91 @@ def write_export(result, out_dir):
         _write(stage / 'export.json', _json(result.as_dict()))
     return [Path(out_dir) / n for n in ('thermal_px4.params', 'thermal_ardupilot.parm',
                                         'export.json')]
+
+
+# ---------------------------------------------------------------------------------------------
+# held-out shapes (the docs' comparison table)
+
+#: Train -> test shape pairs of the held-out table: a replicate, then runs shaped differently.
+HELDOUT_PAIRS = (('heating', 'heating'), ('heating', 'cooling'), ('heating', 'cycle'),
+                 ('staircase', 'cool_reheat'), ('cycle', 'sine'))
+#: Methods of the held-out table: (label, --method, options).
+HELDOUT_METHODS = (('poly3', 'poly3', {}), ('linear_tdt', 'linear_tdt', {}),
+                   ('linear_tdt rate_degree=3', 'linear_tdt', {'rate_degree': 3}),
+                   ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
+
+
+def heldout_scores(*, pairs=HELDOUT_PAIRS, methods=HELDOUT_METHODS, seeds=(1, 2, 3, 4, 5),
+                   rate_hz=20.0, hours=1.0, progress=None):
+    """
+    Score methods on simulated held-out pairs against the least-squares oracle.
+
+    For every pair and seed: :func:`~gyro_noise_ros.thermal.simulate.simulate_pair` (training
+    run ``hours`` long at ``rate_hz``, the test run its whole profile at the same compression),
+    each method fitted on the training run and applied to the test run, the residual drift
+    (std of 60-s means, deg/s) averaged over the three axes; the same for the raw test run and
+    the two oracles (:func:`oracle_scores`).
+
+    Parameters
+    ----------
+    pairs : sequence of (str, str), keyword-only
+        Train and test shapes.
+    methods : sequence of (str, str, dict), keyword-only
+        (label, method name, constructor options).
+    seeds : sequence of int, keyword-only
+        Seeds of the pairs.
+    rate_hz, hours : float, keyword-only
+        Sample rate (Hz) and training run length (h).
+    progress : callable, optional, keyword-only
+        Called with one line per pair and seed.
+
+    Returns
+    -------
+    list of dict
+        One row per pair and method (``raw``, the oracles, then ``methods``): ``train``,
+        ``test``, ``method``, ``per_seed_deg_s``, ``mean_deg_s``, ``ratio_to_oracle`` (mean over
+        seeds of the method / mean of the true-terms oracle), ``seed_ratios`` (per seed),
+        ``rate_outside_fraction`` (share of test samples outside the trained dT range, mean
+        over seeds; None for the rows without a model).
+
+    """
+    from ..thermal.simulate import make_profile, simulate_pair, ThermalModel
+
+    model = ThermalModel()
+    rows = []
+    for train_shape, test_shape in pairs:
+        scores, outside = {}, {}
+        for seed in seeds:
+            (_, train, ta), (_, test, tb) = simulate_pair(
+                seed=seed, rate_hz=rate_hz, hours=hours, model=model,
+                profile=make_profile(train_shape), test_profile=make_profile(test_shape))
+            oracle = oracle_scores(train, ta, test, tb, model)
+            raw = [_num(noise_metrics(test.gyro_rad_s[:, a], rate_hz).residual_drift_deg_s)
+                   for a in range(3)]
+            scores.setdefault('raw', []).append(float(np.mean(raw)))
+            scores.setdefault('oracle: true terms', []).append(
+                oracle['true_terms']['mean_residual_drift_deg_s'])
+            scores.setdefault('oracle: measured T, dT', []).append(
+                oracle['measured_terms']['mean_residual_drift_deg_s'])
+            for label, name, options in methods:
+                fitted = registry.fit_method(name, train, rng=np.random.default_rng(seed),
+                                             accel=False, **options)
+                out = np.asarray(fitted.method.apply(test), dtype=float)
+                drift = [noise_metrics(out[:, a], rate_hz).residual_drift_deg_s
+                         for a in range(3)]
+                scores.setdefault(label, []).append(float(np.mean(drift)))
+                outside.setdefault(label, []).append(_range(fitted, test).as_dict())
+            if progress is not None:
+                progress(f'{train_shape} -> {test_shape}, seed {seed}: done')
+        base = np.asarray(scores['oracle: true terms'])
+        for label, values in scores.items():
+            values = np.asarray(values)
+            reps = outside.get(label)
+            rows.append({
+                'train': train_shape, 'test': test_shape, 'method': label,
+                'per_seed_deg_s': values.tolist(), 'mean_deg_s': float(values.mean()),
+                'ratio_to_oracle': float(values.mean() / base.mean()),
+                'seed_ratios': (values / base).tolist(),
+                'rate_outside_fraction': None if reps is None else float(np.mean(
+                    [(r['rate_below'] + r['rate_above']) / r['samples'] for r in reps]))})
+    return rows

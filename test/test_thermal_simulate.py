@@ -226,18 +226,3 @@ def test_bad_arguments():
         ThermalStream(ThermalModel(tau_die_s=0.0))
     with pytest.raises(ParameterError, match='non-decreasing'):
         ThermalStream().step([2.0, 1.0])
-
-
-def test_argument_helpers(tmp_path):
-    import argparse
-
-    from gyro_noise_ros.thermal.simulate import add_simulate_arguments, simulate_from_args
-
-    parser = argparse.ArgumentParser()
-    add_simulate_arguments(parser)
-    args = parser.parse_args(['--seed', '2', '--out', str(tmp_path), '--hours', '0.01',
-                              '--rate-hz', '20', '--no-hysteresis', '--storage', 'mcap'])
-    train, test = simulate_from_args(args)
-    settings = json.loads((tmp_path / 'simulation.json').read_text())
-    assert settings['model']['hysteresis_half_width_c'] == 0.0 and settings['storage'] == 'mcap'
-    assert settings['duration_s'] == 36.0 and train.is_dir() and test.is_dir()

@@ -1156,11 +1156,114 @@ def simulate_pair(*, seed, rate_hz=100.0, hours=None, compress=None, model=None,
     return out
 
 
+def pair_settings(pair, *, seed, rate_hz, hours, storage, model, profile, test_profile,
+                  temperature_rate_hz):
+    """
+    Return the settings of a simulated pair as written to ``simulation.json``.
+
+    Parameters
+    ----------
+    pair : list
+        From :func:`simulate_pair`.
+    seed, rate_hz, hours, storage, temperature_rate_hz : keyword-only
+        As given to :func:`simulate_pair` / :func:`write_train_test`.
+    model : ThermalModel, keyword-only
+        The device.
+    profile, test_profile : OvenProfile or ShapeProfile, keyword-only
+        The profiles (``test_profile`` None: the training one).
+
+    Returns
+    -------
+    dict
+
+    """
+    test = profile if test_profile is None else test_profile
+    return {'seed': seed, 'rate_hz': rate_hz, 'hours': hours,
+            'duration_s': float(pair[0][1].t_s.size / rate_hz),
+            'test_duration_s': float(pair[1][1].t_s.size / rate_hz),
+            'compress': pair[0][2].compress, 'storage': storage,
+            'temperature_rate_hz': temperature_rate_hz, 'model': asdict(model),
+            'profile': dict(asdict(profile), shape=profile.shape),
+            'test_profile': dict(asdict(test), shape=test.shape)}
+
+
+def write_pair(out_dir, pair, settings, *, storage='sqlite3'):
+    """
+    Write a simulated pair: ``train/``, ``test/`` bags, their truth and ``simulation.json``.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Existing folder (``train/`` and ``test/`` must not exist in it).
+    pair : list
+        From :func:`simulate_pair`.
+    settings : dict
+        From :func:`pair_settings`.
+    storage : {'sqlite3', 'mcap'}, keyword-only
+        rosbag2 storage plugin.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        ``(train_bag, test_bag)``.
+
+    """
+    out = Path(out_dir)
+    paths = []
+    for label, run, truth in pair:
+        paths.append(write_run_bag(out / label, run, truth, storage=storage))
+        np.savez_compressed(out / f'{label}_truth.npz', **truth_arrays(run, truth))
+    (out / 'simulation.json').write_text(json.dumps(settings, indent=2, default=list) + '\n')
+    return tuple(paths)
+
+
+def load_truth(path):
+    """
+    Read a ``<label>_truth.npz`` back into a :class:`ThermalTruth`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file :func:`write_pair` wrote.
+
+    Returns
+    -------
+    ThermalTruth
+
+    """
+    with np.load(path) as z:
+        kw = {k: z[k] for k in z.files if k != 't_s'}
+    for key in ('room_c', 'compress'):
+        kw[key] = float(kw[key])
+    kw['shape'] = str(kw.get('shape', 'oven'))
+    return ThermalTruth(**kw)
+
+
+def model_from_settings(settings):
+    """
+    Rebuild the :class:`ThermalModel` of a ``simulation.json`` document.
+
+    Parameters
+    ----------
+    settings : dict
+        The document.
+
+    Returns
+    -------
+    ThermalModel
+
+    """
+    fields = ThermalModel.__dataclass_fields__
+    kw = {k: tuple(v) if isinstance(v, list) else v
+          for k, v in settings['model'].items() if k in fields}
+    return ThermalModel(**kw)
+
+
 def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
                      storage='sqlite3', model=None, profile=None, test_profile=None,
                      temperature_rate_hz=TEMPERATURE_RATE_HZ):
     """
-    Simulate a train/test pair (:func:`simulate_pair`) and write them as rosbag2 recordings.
+    Simulate a train/test pair (:func:`simulate_pair`) and write them (:func:`write_pair`).
 
     ``out_dir`` receives ``train/`` and ``test/`` (bags), ``train_truth.npz`` and
     ``test_truth.npz`` (:func:`truth_arrays`) and ``simulation.json`` (every setting, so the
@@ -1198,65 +1301,7 @@ def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
     pair = simulate_pair(seed=seed, rate_hz=rate_hz, hours=hours, compress=compress,
                          model=model, profile=profile, test_profile=test_profile,
                          temperature_rate_hz=temperature_rate_hz)
-    paths = []
-    for label, run, truth in pair:
-        paths.append(write_run_bag(out / label, run, truth, storage=storage))
-        np.savez_compressed(out / f'{label}_truth.npz', **truth_arrays(run, truth))
-    test = profile if test_profile is None else test_profile
-    settings = {'seed': seed, 'rate_hz': rate_hz, 'hours': hours,
-                'duration_s': float(pair[0][1].t_s.size / rate_hz),
-                'test_duration_s': float(pair[1][1].t_s.size / rate_hz),
-                'compress': pair[0][2].compress, 'storage': storage,
-                'temperature_rate_hz': temperature_rate_hz, 'model': asdict(model),
-                'profile': dict(asdict(profile), shape=profile.shape),
-                'test_profile': dict(asdict(test), shape=test.shape)}
-    (out / 'simulation.json').write_text(json.dumps(settings, indent=2, default=list) + '\n')
-    return tuple(paths)
-
-
-def add_simulate_arguments(parser):
-    """
-    Add the options of ``gyro_noise_thermal simulate`` to an argparse parser.
-
-    ``--seed``, ``--out`` (required), ``--hours``, ``--compress``, ``--rate-hz``,
-    ``--storage``, ``--temperature-rate-hz``, ``--no-hysteresis``; pass the parsed namespace
-    to :func:`simulate_from_args`.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        Parser (or subparser) to extend.
-
-    """
-    parser.add_argument('--seed', type=int, default=0, help='seed of the train/test pair')
-    parser.add_argument('--out', required=True, help='output directory (train/, test/, truth)')
-    parser.add_argument('--hours', type=float, help='run length (h); default: the whole profile')
-    parser.add_argument('--compress', type=float,
-                        help='time compression of the oven experiment (default: fill --hours)')
-    parser.add_argument('--rate-hz', type=float, default=100.0, help='gyro sample rate (Hz)')
-    parser.add_argument('--storage', choices=('sqlite3', 'mcap'), default='sqlite3')
-    parser.add_argument('--temperature-rate-hz', type=float, default=TEMPERATURE_RATE_HZ,
-                        help='rate of the Temperature messages (Hz)')
-    parser.add_argument('--no-hysteresis', action='store_true',
-                        help='switch the bias hysteresis off')
-
-
-def simulate_from_args(args):
-    """
-    Run :func:`write_train_test` with the options of :func:`add_simulate_arguments`.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed options.
-
-    Returns
-    -------
-    tuple of pathlib.Path
-        ``(train_bag, test_bag)``.
-
-    """
-    model = ThermalModel(hysteresis_half_width_c=0.0) if args.no_hysteresis else ThermalModel()
-    return write_train_test(args.out, seed=args.seed, hours=args.hours, rate_hz=args.rate_hz,
-                            compress=args.compress, storage=args.storage, model=model,
-                            temperature_rate_hz=args.temperature_rate_hz)
+    settings = pair_settings(pair, seed=seed, rate_hz=rate_hz, hours=hours, storage=storage,
+                             model=model, profile=profile, test_profile=test_profile,
+                             temperature_rate_hz=temperature_rate_hz)
+    return write_pair(out, pair, settings, storage=storage)

@@ -53,6 +53,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+from gyro_noise_ros.app.thermal import bandwidth_cell
 from gyro_noise_ros.thermal import report
 from gyro_noise_ros.thermal.elman import fit_drift
 from gyro_noise_ros.thermal.metrics import evaluate_method, RAD2DEG
@@ -128,8 +129,8 @@ def part1(model, test, figures):
         ratios.append((arw_p / arw_r, bs_ratio, v['noise_path']['arw_gain']))
         print(f'| tool, axis {axis} | {arw_r:.4g} | {arw_p:.3g} | {arw_p / arw_r:.3g} | '
               f'{v["noise_path"]["arw_gain"]:.3g} | {_bs(raw)} | {_bs(proc)} | '
-              f'{bs_ratio:.3g} | {report.minus_3db_cell(bw)} / '
-              f'{report.minus_3db_cell(small)} | {bw["step_lead_s"]:.3g} |')
+              f'{bs_ratio:.3g} | {bandwidth_cell(bw)} / '
+              f'{bandwidth_cell(small)} | {bw["step_lead_s"]:.3g} |')
     print('\n(`<=`: the readout saw no minimum, an upper bound.)\n')
     if figures:
         plt = report._pyplot()
@@ -165,8 +166,8 @@ def part2(model, test, figures):
         v = doc['axes']['x']
         bw = v['bandwidth']
         print(f'| {method.name} | {v["noise_path"]["arw_gain"]:.3g} | '
-              f'{report.minus_3db_cell(bw)} / '
-              f'{report.minus_3db_cell(v.get("bandwidth_small_signal"))} | '
+              f'{bandwidth_cell(bw)} / '
+              f'{bandwidth_cell(v.get("bandwidth_small_signal"))} | '
               f'{bw["step_delay_50_s"]:.3g} | {bw["step_lead_s"]:.3g} | '
               f'{"yes" if v["verdict"]["live_capable"] else "no"} |')
         steps[method.name] = {'x': curves['x']['step']}

@@ -24,8 +24,8 @@ Usage::
 
 Runs exactly the commands docs/thermal.md shows ("Real data"): the CSV converted to a bag by
 ``table_to_thermal_bag.py``, then ``gyro_noise_thermal compare BAG --split-at 0.5 --f-lo-hz
-0.25 --min-range-c 0.1``, and prints the table of ``compare.json`` (the tool's own
-:func:`gyro_noise_ros.thermal.report.compare_markdown`) and the methods not scored. With
+0.25 --min-range-c 0.1``, and prints the table the tool wrote into ``compare.md`` and the
+methods not scored (``compare.json``). With
 ``--write`` the table between the markers ``<!-- real-table:begin -->`` and
 ``<!-- real-table:end -->`` of that file is replaced, so the page holds what the tool printed.
 Exit 1 with one line when the record is missing.
@@ -40,7 +40,6 @@ import tempfile
 import time
 
 from gyro_noise_ros.cli.thermal import main as thermal_main
-from gyro_noise_ros.thermal.report import compare_markdown, compare_rows
 
 RECORD = 'mpu6050_static_sunsided/mpu6050_static_10min.csv'
 BEGIN, END = '<!-- real-table:begin -->', '<!-- real-table:end -->'
@@ -78,7 +77,12 @@ def main():
             print(f'thermal_real_table: compare exited {code}', file=sys.stderr)
             return 1
     summary = json.loads((out / 'compare.json').read_text())
-    table = compare_markdown(compare_rows(summary['methods']))
+    # the table exactly as the tool wrote it into compare.md (its first Markdown table)
+    lines = (out / 'compare.md').read_text().splitlines()
+    first = next(i for i, line in enumerate(lines) if line.startswith('|'))
+    stop = next((i for i in range(first, len(lines)) if not lines[i].startswith('|')),
+                len(lines))
+    table = '\n'.join(lines[first:stop]) + '\n'
     errors = ''.join(f'- `{k}`: not scored: "{v}"\n' for k, v in summary['errors'].items())
     when = ('' if took is None else f'; compare took {took:.0f} s on a 2-core machine shared '
             'with other jobs')

@@ -49,7 +49,8 @@ from ..thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 
 __all__ = ['ApplyResult', 'BagOptions', 'CompareResult', 'DEFINITIONS', 'ExportResult',
            'FitResult', 'ScoreOptions', 'SimulateResult', 'apply_model', 'compare', 'export',
-           'fit', 'oracle_scores', 'simulate', 'split_run', 'write_apply', 'write_compare',
+           'fit', 'oracle_scores', 'simulate', 'split_run', 'table_cells', 'write_apply',
+           'write_compare',
            'write_export', 'write_fit', 'write_simulate']
 
 PROG = 'gyro_noise_thermal'
@@ -60,12 +61,21 @@ DEFINITIONS = {
                       'deviation over tau 0.32..3.2 s, read at tau = 1 s (IEEE 952)',
     'arw_slope': 'free log-log slope of the Allan deviation over the same taus (-0.5 = white)',
     'bias_stability_deg_h': 'minimum of the Allan deviation (not divided by 0.664), as '
-                            'datasheets and paper 002 Figure 19 quote it',
+                            'datasheets and paper 002 Figure 19 quote it; an upper bound '
+                            '(tables: <=) when bias_stability_upper_bound, the curve not seen '
+                            'to turn up',
+    'noise_path': 'white noise the size of the run noise (fixed seed) added to the run; '
+                  'arw_gain is the ARW of the response of the method to it (output with minus '
+                  'output without) over the ARW of that noise: the arw_ratio of the verdict, 1 '
+                  'for any drift model, free of the drift that leaks into the ADEV of the output',
     'residual_drift_deg_s': 'standard deviation (ddof 1) of the means of consecutive 60-s windows',
     'minus_3db_hz': 'first frequency where the gain to injected motion falls below 1/sqrt(2) '
                     '(bound: measured / below / above the measured band)',
     'step_precursor': 'largest change of the step response in the last fifth of the window '
                       'before the step (> 0.05: non-causal)',
+    'step_lead_s': 'how long before a step the response first moves by more than 5 % of it: '
+                   'the look-ahead of a non-causal method, the latency a causal version of it '
+                   'would add',
     'bandwidth_small_signal': 'the same injection scaled to the white-noise sigma of the run '
                               '(std of first differences / sqrt 2): what a nonlinear method '
                               'does to motion the size of the noise',
@@ -652,8 +662,10 @@ def _apply_figures(out, run, processed, method, curves, info, method_figs):
     if 'frequency_small' in curves['x']:
         responses[f'{name} small'] = {a: c['frequency_small'] for a, c in curves.items()}
         steps[f'{name} small'] = {a: c['step_small'] for a, c in curves.items()}
+    small = responses.pop(f'{name} small', None)
     figs.append(('Response to injected motion (large and noise-sized): gain, phase, group delay',
                  report.plot_bandwidth(out / 'bandwidth.png', responses,
+                                       small=None if small is None else {name: small},
                                        title=f'{name}: response to an injected chirp')))
     figs.append(('Mean normalised step response (t < 0: before the step)',
                  report.plot_steps(out / 'steps.png', steps,
@@ -667,25 +679,29 @@ def bandwidth_cell(bw):
 
     Parameters
     ----------
-    bw : dict
-        A ``bandwidth`` block of metrics.json.
+    bw : dict or None
+        A ``bandwidth`` block of metrics.json (None, e.g. no small-signal block: empty).
 
     Returns
     -------
     str
 
     """
+    if bw is None:
+        return ''
     if bw['minus_3db_bound'] == 'measured':
         return f'{bw["minus_3db_hz"]:.3g}'
     return '< band' if bw['minus_3db_bound'] == 'below' else '> band'
 
 
 AXIS_HEADER = ['axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
-               'bias stability raw (deg/h)', 'bias stability processed (deg/h)',
+               'ARW gain, noise path', 'bias stability raw (deg/h)',
+               'bias stability processed (deg/h)',
                'residual drift raw (deg/s)', 'residual drift processed (deg/s)',
-               '-3 dB (Hz)', 'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
-               'live-capable']
-AXIS_SPECS = ['', '.4g', '.4g', '.4g', '.4g', '.4g', '.4g', '', '.3g', '.3g', '']
+               '-3 dB, 1 deg/s motion (Hz)', '-3 dB, noise-sized motion (Hz)',
+               'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
+               'look-ahead before a step (s)', 'live-capable']
+AXIS_SPECS = ['', '.4g', '.4g', '.3g', '', '', '.4g', '.4g', '', '', '.3g', '.3g', '.3g', '']
 
 
 def axis_rows(axes):
@@ -702,14 +718,19 @@ def axis_rows(axes):
     list of tuple
 
     """
+    from ..thermal.report import bias_stability_cell
+
     rows = []
     for axis, v in axes.items():
         raw, proc, bw = v['raw'], v['processed'], v['bandwidth']
         rows.append((axis, raw['arw_deg_sqrt_h'], proc['arw_deg_sqrt_h'],
-                     raw['bias_stability_deg_h'], proc['bias_stability_deg_h'],
+                     (v.get('noise_path') or {}).get('arw_gain'),
+                     bias_stability_cell(raw), bias_stability_cell(proc),
                      raw['residual_drift_deg_s'], proc['residual_drift_deg_s'],
-                     bandwidth_cell(bw), v['verdict']['small_signal_low_band_min_gain'],
-                     bw['step_delay_50_s'], v['verdict']['live_capable']))
+                     bandwidth_cell(bw), bandwidth_cell(v.get('bandwidth_small_signal')),
+                     v['verdict']['small_signal_low_band_min_gain'],
+                     bw['step_delay_50_s'], bw.get('step_lead_s'),
+                     v['verdict']['live_capable']))
     return rows
 
 
@@ -946,7 +967,9 @@ class CompareResult:
     summary : dict
         compare.json (see :meth:`as_dict`).
     rows : list of tuple
-        The table (:data:`COMPARE_HEADER`), raw input and oracles first.
+        The table's values, raw input and oracles first: the columns of compare.csv
+        (:data:`COMPARE_HEADER` plus the bias-stability upper-bound flag last; numbers as
+        numbers, :func:`table_cells` formats them as compare.md shows them).
     curves : dict
         Per method the per-axis responses and Allan curves, for the figures.
     test : ThermalRun
@@ -1119,15 +1142,21 @@ def _best(results):
                     'live-capable and do not gain ARW by removing bandwidth'}
 
 
-COMPARE_HEADER = ['method', 'axis', 'ARW (deg/sqrt(h))', 'bias stability (deg/h)',
-                  'residual drift (deg/s)', 'x oracle', '-3 dB (Hz)',
-                  'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)', 'settled step gain',
+COMPARE_HEADER = ['method', 'axis', 'ARW of the output (deg/sqrt(h))', 'ARW gain, noise path',
+                  'bias stability (deg/h; <= upper bound)', 'residual drift (deg/s)',
+                  'x oracle', '-3 dB, 1 deg/s motion (Hz)', '-3 dB, noise-sized motion (Hz)',
+                  'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
+                  'look-ahead before a step (s)', 'settled step gain',
                   'outside trained range', 'live-capable', 'ARW from removed bandwidth']
-COMPARE_SPECS = ['', '', '.4g', '.4g', '.4g', '.3g', '', '.3g', '.3g', '.3g', '.2%', '', '']
-_CSV_KEYS = ['method', 'axis', 'arw_deg_sqrt_h', 'bias_stability_deg_h', 'residual_drift_deg_s',
-             'residual_drift_over_oracle', 'minus_3db_hz', 'small_signal_low_band_min_gain',
-             'step_delay_50_s', 'step_settled_gain', 'fraction_outside_trained_range',
-             'live_capable', 'arw_from_bandwidth']
+COMPARE_SPECS = ['', '', '.4g', '.3g', '', '.4g', '.3g', '', '', '.3g', '.3g', '.3g', '.3g',
+                 '.2%', '', '']
+#: compare.csv: the table's columns with numbers for numbers (the bias stability as a number
+#: and its upper-bound flag beside it).
+_CSV_KEYS = ['method', 'axis', 'arw_deg_sqrt_h', 'arw_gain_noise_path', 'bias_stability_deg_h',
+             'residual_drift_deg_s', 'residual_drift_over_oracle', 'minus_3db_hz',
+             'small_signal_minus_3db_hz', 'small_signal_low_band_min_gain', 'step_delay_50_s',
+             'step_lead_s', 'step_settled_gain', 'fraction_outside_trained_range',
+             'live_capable', 'arw_from_bandwidth', 'bias_stability_upper_bound']
 
 
 def _compare_rows(summary):
@@ -1145,25 +1174,54 @@ def _compare_rows(summary):
 
     for axis, v in first['axes'].items():
         raw = v['raw']
-        rows.append(('(raw input)', axis, raw['arw_deg_sqrt_h'], raw['bias_stability_deg_h'],
-                     raw['residual_drift_deg_s'], ratio(raw['residual_drift_deg_s'], axis), '',
-                     None, None, None, None, None, None))
+        rows.append(('(raw input)', axis, raw['arw_deg_sqrt_h'], None,
+                     raw['bias_stability_deg_h'], raw['residual_drift_deg_s'],
+                     ratio(raw['residual_drift_deg_s'], axis), '', '', None, None, None, None,
+                     None, None, None, raw.get('bias_stability_upper_bound')))
     if oracle:
         for key, label in (('true_terms', '(oracle: true terms)'),
                            ('measured_terms', '(oracle: measured T, dT)')):
             for axis, value in oracle[key]['axes'].items():
-                rows.append((label, axis, None, None, value, ratio(value, axis), '', None, None,
-                             None, None, None, None))
+                rows.append((label, axis, None, None, None, value, ratio(value, axis), '', '',
+                             None, None, None, None, None, None, None, None))
     for name, doc in results.items():
         for axis, v in doc['axes'].items():
             proc, bw, vd = v['processed'], v['bandwidth'], v['verdict']
-            rows.append((name, axis, proc['arw_deg_sqrt_h'], proc['bias_stability_deg_h'],
-                         proc['residual_drift_deg_s'],
+            rows.append((name, axis, proc['arw_deg_sqrt_h'],
+                         (v.get('noise_path') or {}).get('arw_gain'),
+                         proc['bias_stability_deg_h'], proc['residual_drift_deg_s'],
                          ratio(proc['residual_drift_deg_s'], axis), bandwidth_cell(bw),
+                         bandwidth_cell(v.get('bandwidth_small_signal')),
                          vd['small_signal_low_band_min_gain'], bw['step_delay_50_s'],
-                         bw['step_settled_gain'], doc['range']['fraction_outside'],
-                         vd['live_capable'], vd['arw_from_bandwidth']))
+                         bw.get('step_lead_s'), bw['step_settled_gain'],
+                         doc['range']['fraction_outside'], vd['live_capable'],
+                         vd['arw_from_bandwidth'], proc.get('bias_stability_upper_bound')))
     return rows
+
+
+def table_cells(rows):
+    """
+    Return compare rows as the Markdown table shows them (an upper bound of bias stability '<=').
+
+    Parameters
+    ----------
+    rows : list of tuple
+        :attr:`CompareResult.rows`.
+
+    Returns
+    -------
+    list of tuple
+        One cell per :data:`COMPARE_HEADER` column.
+
+    """
+    from ..thermal.report import bias_stability_cell
+
+    cells = []
+    for row in rows:
+        bs = '' if row[4] is None else bias_stability_cell(
+            {'bias_stability_deg_h': row[4], 'bias_stability_upper_bound': row[-1]})
+        cells.append(row[:4] + (bs,) + row[5:-1])
+    return cells
 
 
 def _csv(rows):
@@ -1208,7 +1266,7 @@ def _compare_md(summary, rows, figs, out):
             + (f'**One recording split in time at {summary["split"]["fraction"]:g} of its '
                f'length: {summary["split"]["note"]}.**\n\n' if summary.get('split') else '')
             + oracle
-            + report.table_markdown(COMPARE_HEADER, rows, COMPARE_SPECS)
+            + report.table_markdown(COMPARE_HEADER, table_cells(rows), COMPARE_SPECS)
             + f'\nBest held-out ({best["rule"]}): **{best["method"]}**.\n\n'
             + (f'Not scored:\n\n{errs}\n' if errs else '')
             + '## Outside the trained range\n\n' + ranges
@@ -1231,7 +1289,10 @@ def _compare_figures(out, test, curves):
         ('Response to injected motion, axis x',
          report.plot_bandwidth(out / 'compare_bandwidth.png',
                                {n: {'x': c['x']['frequency']} for n, c in curves.items()},
-                               title='gain, phase, group delay to an injected chirp (axis x)')),
+                               small={n: {'x': c['x']['frequency_small']}
+                                      for n, c in curves.items() if 'frequency_small' in c['x']},
+                               title='gain (1 deg/s motion solid, noise-sized dashed), phase, '
+                                     'group delay to an injected chirp (axis x)')),
         ('Mean normalised step response, axis x',
          report.plot_steps(out / 'compare_steps.png',
                            {n: {'x': c['x']['step']} for n, c in curves.items()},

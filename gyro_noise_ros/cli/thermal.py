@@ -266,7 +266,8 @@ def _cmd_compare(args, argv):
     if not args.quiet:
         from ..thermal import report
 
-        print(report.table_markdown(app.COMPARE_HEADER, result.rows, app.COMPARE_SPECS))
+        print(report.table_markdown(app.COMPARE_HEADER, app.table_cells(result.rows),
+                                    app.COMPARE_SPECS))
         print(f'wrote {len(files)} files to {args.out}')
     return 0
 

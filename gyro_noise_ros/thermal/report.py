@@ -42,8 +42,7 @@ import numpy as np
 __all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
            'plot_allan', 'plot_bandwidth', 'plot_before_after', 'plot_drift', 'plot_mode_classes',
            'plot_modes', 'plot_mopso', 'plot_network', 'plot_output', 'plot_run', 'plot_steps',
-           'parallel_figures', 'table_markdown', 'COMPARE_COLUMNS', 'bias_stability_cell',
-           'compare_markdown', 'compare_rows', 'minus_3db_cell']
+           'parallel_figures', 'table_markdown', 'bias_stability_cell']
 
 DEG = 180.0 / math.pi
 AXES = 'xyz'
@@ -855,27 +854,6 @@ def method_figures(method, run, out_dir):
             for name, caption in hook(run, Path(out_dir))]
 
 
-def minus_3db_cell(bandwidth):
-    """
-    Format a ``bandwidth`` block's -3 dB corner: Hz, or '< band' / '> band' when not crossed.
-
-    Parameters
-    ----------
-    bandwidth : dict
-        ``minus_3db_hz`` and ``minus_3db_bound`` (metrics.json's ``bandwidth`` keys).
-
-    Returns
-    -------
-    str
-
-    """
-    if bandwidth is None:
-        return ''
-    if bandwidth['minus_3db_bound'] == 'measured':
-        return f'{bandwidth["minus_3db_hz"]:.3g}'
-    return '< band' if bandwidth['minus_3db_bound'] == 'below' else '> band'
-
-
 def bias_stability_cell(metrics, spec='.4g'):
     """
     Format a bias stability: the value, or '<= value' when the readout gives an upper bound.
@@ -896,100 +874,6 @@ def bias_stability_cell(metrics, spec='.4g'):
     if value is None or not math.isfinite(value):
         return 'n/a'
     return ('<= ' if metrics.get('bias_stability_upper_bound') else '') + format(value, spec)
-
-
-#: Columns of the compare table: (title with unit, key of :func:`compare_rows`, format).
-COMPARE_COLUMNS = (
-    ('method', 'method', ''), ('axis', 'axis', ''),
-    ('ARW of the output (deg/sqrt(h))', 'arw_deg_sqrt_h', '.4g'),
-    ('ARW gain, noise path', 'arw_gain_noise_path', '.3g'),
-    ('bias stability (deg/h; <= upper bound)', 'bias_stability_deg_h', '.4g'),
-    ('residual drift (deg/s)', 'residual_drift_deg_s', '.4g'),
-    ('-3 dB, 1 deg/s motion (Hz)', 'minus_3db_hz', ''),
-    ('-3 dB, noise-sized motion (Hz)', 'small_signal_minus_3db_hz', ''),
-    ('noise-sized min gain 0.1-1 Hz', 'small_signal_low_band_min_gain', '.3g'),
-    ('step delay 50 % (s)', 'step_delay_50_s', '.3g'),
-    ('look-ahead before a step (s)', 'step_lead_s', '.3g'),
-    ('settled step gain', 'step_settled_gain', '.3g'),
-    ('live-capable', 'live_capable', ''),
-    ('ARW from removed bandwidth', 'arw_from_bandwidth', ''),
-)
-
-
-def compare_rows(results):
-    """
-    Return the compare table's rows: the raw input's axes, then every method's.
-
-    Parameters
-    ----------
-    results : dict
-        ``{method: evaluate_method doc}`` (compare.json's ``methods``).
-
-    Returns
-    -------
-    list of dict
-        One dict per row, keyed as :data:`COMPARE_COLUMNS` plus
-        ``bias_stability_upper_bound``; numbers stay numbers (the CSV), cells are formatted
-        by :func:`compare_markdown`.
-
-    """
-    rows = []
-    first = next(iter(results.values()))
-    for axis, v in first['axes'].items():
-        raw = v['raw']
-        rows.append({'method': '(raw input)', 'axis': axis,
-                     'arw_deg_sqrt_h': raw['arw_deg_sqrt_h'],
-                     'bias_stability_deg_h': raw['bias_stability_deg_h'],
-                     'bias_stability_upper_bound': raw.get('bias_stability_upper_bound'),
-                     'residual_drift_deg_s': raw['residual_drift_deg_s']})
-    for name, doc in results.items():
-        for axis, v in doc['axes'].items():
-            proc, bw, vd = v['processed'], v['bandwidth'], v['verdict']
-            small = v.get('bandwidth_small_signal')
-            rows.append({
-                'method': name, 'axis': axis, 'arw_deg_sqrt_h': proc['arw_deg_sqrt_h'],
-                'arw_gain_noise_path': (v.get('noise_path') or {}).get('arw_gain'),
-                'bias_stability_deg_h': proc['bias_stability_deg_h'],
-                'bias_stability_upper_bound': proc.get('bias_stability_upper_bound'),
-                'residual_drift_deg_s': proc['residual_drift_deg_s'],
-                'minus_3db_hz': minus_3db_cell(bw),
-                'small_signal_minus_3db_hz': minus_3db_cell(small),
-                'small_signal_low_band_min_gain': vd['small_signal_low_band_min_gain'],
-                'step_delay_50_s': bw['step_delay_50_s'],
-                'step_lead_s': bw.get('step_lead_s'),
-                'step_settled_gain': bw['step_settled_gain'],
-                'live_capable': vd['live_capable'],
-                'arw_from_bandwidth': vd['arw_from_bandwidth']})
-    return rows
-
-
-def compare_markdown(rows):
-    """
-    Format :func:`compare_rows` as a Markdown table (upper bounds of bias stability as '<=').
-
-    Parameters
-    ----------
-    rows : list of dict
-        From :func:`compare_rows`.
-
-    Returns
-    -------
-    str
-
-    """
-    header = [title for title, _, _ in COMPARE_COLUMNS]
-    cells = []
-    for row in rows:
-        line = []
-        for _, key, spec in COMPARE_COLUMNS:
-            if key == 'bias_stability_deg_h':
-                line.append(bias_stability_cell(row, spec))
-            else:
-                # a key the row lacks (the raw input has no bandwidth) is an empty cell
-                line.append(row.get(key, ''))
-        cells.append(line)
-    return table_markdown(header, cells, ['' if k == 'bias_stability_deg_h' else spec
-                                          for _, k, spec in COMPARE_COLUMNS])
 
 
 def _cell(value, spec):

@@ -77,7 +77,8 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     assert doc['method'] == 'toy_linear' and not doc['in_sample']
     for axis in 'xyz':
         ax = doc['axes'][axis]
-        assert set(ax) == {'raw', 'processed', 'bandwidth', 'bandwidth_small_signal', 'verdict'}
+        assert set(ax) == {'raw', 'processed', 'bandwidth', 'bandwidth_small_signal', 'noise_path',
+                           'verdict'}
         assert {'arw_deg_sqrt_h', 'bias_stability_deg_h', 'residual_drift_deg_s'} <= set(ax['raw'])
         # the drift (up to 0.003 rad/s peak) dominates the raw 60-s means, not the processed
         assert ax['processed']['residual_drift_deg_s'] < 0.3 * ax['raw']['residual_drift_deg_s']

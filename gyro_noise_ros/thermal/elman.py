@@ -60,25 +60,31 @@ import scipy.optimize
 
 
 @numba.njit(cache=True)
+def _offsets(n_in, n1, n2):  # pragma: no cover - JIT
+    """Return where W1, W2, a_i, W3, W4, a_j, W5 and a_k start in the weight vector."""
+    o_w2 = n1 * n1
+    o_ai = o_w2 + n1 * n_in
+    o_w3 = o_ai + n1
+    o_w4 = o_w3 + n2 * n1
+    o_aj = o_w4 + n2 * n2
+    o_w5 = o_aj + n2
+    return 0, o_w2, o_ai, o_w3, o_w4, o_aj, o_w5, o_w5 + n2
+
+
+@numba.njit(cache=True)
+def _unpack(theta, n_in, n1, n2):  # pragma: no cover - JIT
+    """Return views of W1, W2, a_i, W3, W4, a_j, W5 and the scalar a_k (eq. 33)."""
+    o_w1, o_w2, o_ai, o_w3, o_w4, o_aj, o_w5, o_ak = _offsets(n_in, n1, n2)
+    return (theta[o_w1:o_w2].reshape(n1, n1), theta[o_w2:o_ai].reshape(n1, n_in),
+            theta[o_ai:o_w3], theta[o_w3:o_w4].reshape(n2, n1),
+            theta[o_w4:o_aj].reshape(n2, n2), theta[o_aj:o_w5], theta[o_w5:o_ak], theta[o_ak])
+
+
+@numba.njit(cache=True)
 def _forward(theta, x, n1, n2):  # pragma: no cover - JIT
     """Run the Elman recurrence of eq. 33 over inputs x (n, n_in); return y (n,)."""
     n, n_in = x.shape
-    o = 0
-    w1 = theta[o:o + n1 * n1].reshape(n1, n1)
-    o += n1 * n1
-    w2 = theta[o:o + n1 * n_in].reshape(n1, n_in)
-    o += n1 * n_in
-    ai = theta[o:o + n1]
-    o += n1
-    w3 = theta[o:o + n2 * n1].reshape(n2, n1)
-    o += n2 * n1
-    w4 = theta[o:o + n2 * n2].reshape(n2, n2)
-    o += n2 * n2
-    aj = theta[o:o + n2]
-    o += n2
-    w5 = theta[o:o + n2]
-    o += n2
-    ak = theta[o]
+    w1, w2, ai, w3, w4, aj, w5, ak = _unpack(theta, n_in, n1, n2)
     oi = np.full(n1, 0.5)
     oh = np.full(n2, 0.5)
     new_i = np.empty(n1)
@@ -112,28 +118,8 @@ def _forward(theta, x, n1, n2):  # pragma: no cover - JIT
 def _mse_grad(theta, x, y, n1, n2):  # pragma: no cover - JIT
     """Return (mean squared error of eq. 34, its gradient) by back-propagation through time."""
     n, n_in = x.shape
-    o = 0
-    w1 = theta[o:o + n1 * n1].reshape(n1, n1)
-    o += n1 * n1
-    w2 = theta[o:o + n1 * n_in].reshape(n1, n_in)
-    o += n1 * n_in
-    o_ai = o
-    o += n1
-    o_w3 = o
-    w3 = theta[o:o + n2 * n1].reshape(n2, n1)
-    o += n2 * n1
-    o_w4 = o
-    w4 = theta[o:o + n2 * n2].reshape(n2, n2)
-    o += n2 * n2
-    o_aj = o
-    o += n2
-    o_w5 = o
-    w5 = theta[o:o + n2]
-    o += n2
-    o_ak = o
-    ai = theta[o_ai:o_ai + n1]
-    aj = theta[o_aj:o_aj + n2]
-    ak = theta[o_ak]
+    w1, w2, ai, w3, w4, aj, w5, ak = _unpack(theta, n_in, n1, n2)
+    _, o_w2, o_ai, o_w3, o_w4, o_aj, o_w5, o_ak = _offsets(n_in, n1, n2)
     # forward pass, keeping every state (row k + 1 is step k; row 0 the 0.5 start)
     oi = np.full((n + 1, n1), 0.5)
     oh = np.full((n + 1, n2), 0.5)
@@ -163,8 +149,8 @@ def _mse_grad(theta, x, y, n1, n2):  # pragma: no cover - JIT
     mse /= n
     # backward pass
     g = np.zeros(theta.size)
-    g_w1 = g[0:n1 * n1].reshape(n1, n1)
-    g_w2 = g[n1 * n1:n1 * n1 + n1 * n_in].reshape(n1, n_in)
+    g_w1 = g[0:o_w2].reshape(n1, n1)
+    g_w2 = g[o_w2:o_ai].reshape(n1, n_in)
     g_w3 = g[o_w3:o_w3 + n2 * n1].reshape(n2, n1)
     g_w4 = g[o_w4:o_w4 + n2 * n2].reshape(n2, n2)
     carry_i = np.zeros(n1)
@@ -212,7 +198,7 @@ def _mse_grad(theta, x, y, n1, n2):  # pragma: no cover - JIT
 def n_weights(n_in, hidden):
     """Return the length of the weight vector of an Elman network (eq. 33)."""
     n1, n2 = hidden
-    return n1 * n1 + n1 * n_in + n1 + n2 * n1 + n2 * n2 + n2 + n2 + 1
+    return int(_offsets(int(n_in), int(n1), int(n2))[-1]) + 1
 
 
 def bas_minimize(fun, x0, *, rng, iterations=100, epochs=1, d0=1.0, step0=1.0):

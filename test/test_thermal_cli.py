@@ -275,12 +275,12 @@ def test_compare_refuses_an_unknown_method_before_any_work(tmp_path, capsys):
 
 
 def test_training_shorter_than_the_rate_windows_is_refused(tmp_path, capsys):
-    # 20 s of training spanning 30 degC: enough span, too short to see dT
-    bag, _, _ = _bag(tmp_path / 'b', 0, n=int(20 * RATE))
+    # 15 s of training spanning 30 degC: enough span, too short to see dT
+    bag, _, _ = _bag(tmp_path / 'b', 0, n=int(15 * RATE))
     assert main(['fit', bag, '--method', 'linear_tdt', '--out', str(tmp_path / 'o'),
                  '--quiet']) == 4
     err = capsys.readouterr().err
-    assert 'needs at least 30 s' in err and len(err.strip().splitlines()) == 1
+    assert 'needs at least 20 s' in err and len(err.strip().splitlines()) == 1
     assert main(['fit', bag, '--method', 'poly3', '--out', str(tmp_path / 'p'),
                  '--quiet']) == 0
 

@@ -47,11 +47,12 @@ from ..thermal.metrics import (DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT
                                DRIFT_WINDOW_S, evaluate_method, noise_metrics, RAD2DEG)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 
-__all__ = ['ApplyResult', 'BagOptions', 'CompareResult', 'DEFINITIONS', 'ExportResult',
-           'FitResult', 'ScoreOptions', 'SimulateResult', 'apply_model', 'compare', 'export',
-           'fit', 'oracle_scores', 'simulate', 'split_run', 'table_cells', 'write_apply',
-           'write_compare',
-           'write_export', 'write_fit', 'write_simulate']
+__all__ = ['ApplyResult', 'BagOptions', 'COMPARE_HEADER', 'CompareResult', 'DEFINITIONS',
+           'ExportResult', 'FitResult', 'HELDOUT_METHODS', 'HELDOUT_PAIRS', 'ScoreOptions',
+           'SimulateResult', 'apply_model', 'bandwidth_cell', 'check_method_names', 'compare',
+           'export', 'fit', 'heldout_scores', 'oracle_scores', 'simulate', 'split_run',
+           'table_cells', 'write_apply', 'write_compare', 'write_export', 'write_fit',
+           'write_simulate']
 
 PROG = 'gyro_noise_thermal'
 

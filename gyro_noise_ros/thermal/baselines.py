@@ -50,9 +50,9 @@ from ..errors import InputDataError, ParameterError
 #: A temperature model needs at least this temperature span in its training run (degC).
 MIN_TEMPERATURE_SPAN_C = 1.0
 #: A method that uses dT needs a training run at least this many rate windows long: one to fill
-#: the trailing window, the rest to see dT vary (with less, a 10-term fit on a 5-s run once gave
-#: coefficients of several rad/s).
-MIN_TRAINING_WINDOWS = 3.0
+#: the trailing window, one of filled rates to see dT vary (with less, a 10-term fit on a 5-s run
+#: once gave coefficients of several rad/s).
+MIN_TRAINING_WINDOWS = 2.0
 
 
 # -------------------------------------------------------------------------------------------

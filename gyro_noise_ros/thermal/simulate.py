@@ -90,8 +90,35 @@ SINE_POINTS_PER_PERIOD = 64
 SOAK_SPEED_UP = 20.0
 
 
+class _PiecewiseProfile:
+    """What every oven profile offers on top of its ``breakpoints()``."""
+
+    @property
+    def duration_s(self):
+        """float: length of the whole profile (s); 50250 s (13.96 h) for the paper's oven."""
+        return float(self.breakpoints()[0][-1])
+
+    def temperature_c(self, t_s):
+        """
+        Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times (s) in uncompressed profile time.
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape as ``t_s``.
+
+        """
+        times, temps = self.breakpoints()
+        return np.interp(np.asarray(t_s, dtype=float), times, temps)
+
+
 @dataclass(frozen=True)
-class OvenProfile:
+class OvenProfile(_PiecewiseProfile):
     """
     The oven set-point of paper 002 section 4.1, piecewise linear in time.
 
@@ -183,32 +210,9 @@ class OvenProfile:
         """Return the profile with the room (its first temperature) at ``start_c`` (degC)."""
         return replace(self, room_c=float(start_c))
 
-    @property
-    def duration_s(self):
-        """float: length of the whole profile (s); 50250 s (13.96 h) with the defaults."""
-        return float(self.breakpoints()[0][-1])
-
-    def temperature_c(self, t_s):
-        """
-        Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
-
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s) in uncompressed profile time.
-
-        Returns
-        -------
-        numpy.ndarray
-            Same shape as ``t_s``.
-
-        """
-        times, temps = self.breakpoints()
-        return np.interp(np.asarray(t_s, dtype=float), times, temps)
-
 
 @dataclass(frozen=True)
-class ShapeProfile:
+class ShapeProfile(_PiecewiseProfile):
     """
     An oven set-point of one of the shapes a held-out test needs, piecewise linear in time.
 
@@ -349,29 +353,6 @@ class ShapeProfile:
     def starting_at(self, start_c):
         """Return the profile shifted so that it starts at ``start_c`` (degC)."""
         return self.shifted(float(start_c) - float(self.breakpoints()[1][0]))
-
-    @property
-    def duration_s(self):
-        """float: length of the whole profile (s)."""
-        return float(self.breakpoints()[0][-1])
-
-    def temperature_c(self, t_s):
-        """
-        Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
-
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s) in uncompressed profile time.
-
-        Returns
-        -------
-        numpy.ndarray
-            Same shape as ``t_s``.
-
-        """
-        times, temps = self.breakpoints()
-        return np.interp(np.asarray(t_s, dtype=float), times, temps)
 
 
 def make_profile(shape, **options):

@@ -42,8 +42,9 @@ differences in spreads and in standard errors; the candidate noise-colour statis
 spread, shift, distances); a sweep of the shared multiplier ``reference_warn_sigma``
 (``reference_error_sigma`` at twice it) and of the colour multiplier
 ``reference_colour_warn_sigma`` (``reference_colour_error_sigma`` at twice it); the rule that
-chose each default (the smallest multiple of 0.5 without a false alarm at every record length,
-plus 0.5) and its leave-one-run-out check; the robust locations of the runs; the shift each change
+chose each default (the smallest multiple of 0.5 without a false alarm, plus 0.5: on the full
+records for the shared multiplier, at every record length for the colour multiplier) and its
+leave-one-run-out check; the robust locations of the runs; the shift each change
 causes per axis; detection against the bias-step size; rates for shorter records (the first 10-50
 chunks of each run). ``--cache`` keeps the per-chunk values (9,000 identifications: 33 minutes
 here on two shared cores; the colours a few minutes more) for reruns.
@@ -59,9 +60,10 @@ import os
 import sys
 import time
 
+from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.chunks import noise_colour, robust_location, summarise_sequence
 from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
-from gyro_noise_ros.core.fractional import gl_difference, OrderIdentifier
+from gyro_noise_ros.core.fractional import gl_coefficients, gl_difference, OrderIdentifier
 from gyro_noise_ros.core.health import (evaluate_health, HealthThresholds, ReferenceStats,
                                         spread_distance)
 import numpy as np
@@ -90,6 +92,8 @@ LENGTHS = (10, 25, 50, 100)
 #: Added to the smallest multiplier without false alarms (one step of the 0.5 grid): the largest
 #: differences between unchanged runs sit just under it, so a seventh run may cross it.
 MARGIN = 0.5
+#: GL filter orders of the colour's size table.
+SIZE_ORDERS = (0.03, 0.05, 0.07, -0.03, -0.05, -0.07)
 COLOUR_KEY = 'Noise colour deviation (ADEV slope, m = 2-64 samples)'
 #: Pooled-periodogram bins (Fourier frequencies per bin) of the PSD-slope candidates.
 PSD_BIN = 10
@@ -174,6 +178,38 @@ def _unkey(key):
     return kind, int(run), axis
 
 
+def _extras(gyro, run):
+    """
+    Return the per-run extras of one run (rad/s, 3 columns) keyed as in the cache.
+
+    ``size|order``: chunk colours of the run filtered by a GL filter of ``order``
+    (:data:`SIZE_ORDERS`); ``spectrum``: the chunk-averaged periodogram's power at 40-50 Hz over
+    that at 1-10 Hz, and the frequency of its largest 1-Hz-smoothed value between 10 and 30 Hz;
+    ``slopes``: local slopes of the whole run's ADEV between m = 1, 2, 4, ..., 64.
+    """
+    out = {}
+    ms = np.array([1, 2, 4, 8, 16, 32, 64])
+    f = np.fft.rfftfreq(CHUNK, 1.0 / RATE_HZ)
+    smooth = int(round(1.0 / (f[1] - f[0])))
+    for i, axis in enumerate(AXES):
+        x = gyro[:, i]
+        m = float(x.mean())
+        for order in SIZE_ORDERS:
+            chunks = (m + gl_difference(x - m, order)).reshape(-1, CHUNK)
+            out[('size', str(order), run, axis)] = np.array([noise_colour(c) for c in chunks])
+        chunks = x.reshape(-1, CHUNK)
+        power = np.mean(np.abs(np.fft.rfft(chunks - chunks.mean(axis=1, keepdims=True),
+                                           axis=1)) ** 2, axis=0)
+        band = (f >= 10.0) & (f <= 30.0)
+        smoothed = np.convolve(power, np.ones(smooth) / smooth, mode='same')
+        out[('spectrum', 'none', run, axis)] = np.array([
+            power[(f >= 40.0) & (f <= 50.0)].mean() / power[(f >= 1.0) & (f <= 10.0)].mean(),
+            f[band][np.argmax(smoothed[band])]])
+        adev = allan_deviation(x, RATE_HZ, taus=ms).adev
+        out[('slopes', 'none', run, axis)] = np.diff(np.log(adev)) / np.diff(np.log(ms))
+    return out
+
+
 def chunk_values(data_dir, jobs, cache):
     """
     Return the per-chunk values of every run, kind and axis.
@@ -185,8 +221,8 @@ def chunk_values(data_dir, jobs, cache):
     jobs : int
         Identification processes.
     cache : str or None
-        npz file read if present (the colours are added to a cache that lacks them), else
-        written.
+        npz file read if present (the colours and extras are added to a cache that lacks them),
+        else written.
 
     Returns
     -------
@@ -195,13 +231,21 @@ def chunk_values(data_dir, jobs, cache):
         orders and the noise colour.
     candidates : dict
         ``{(kind, run, axis): array (100, len(CANDIDATES))}``: the candidate colour statistics.
+    extras : dict
+        ``{(what, kind, run, axis): array}`` of :func:`_extras`.
 
     """
-    orders, colours = {}, {}
+    orders, colours, extras = {}, {}, {}
     if cache and os.path.exists(cache):
         stored = np.load(cache)
         for k in stored.files:
-            (colours if k.startswith('colour|') else orders)[_unkey(k)] = stored[k]
+            parts = k.split('|')
+            if len(parts) == 3:
+                orders[_unkey(k)] = stored[k]
+            elif parts[0] == 'colour':
+                colours[_unkey(k)] = stored[k]
+            else:
+                extras[(parts[0],) + _unkey(k)] = stored[k]
     if not orders:
         t0 = time.time()
         with ProcessPoolExecutor(jobs) as pool:
@@ -211,17 +255,29 @@ def chunk_values(data_dir, jobs, cache):
                     [chunks.mean(axis=1), chunks.var(axis=1, ddof=1), ident])
                 if kind == KINDS[-1] and axis == AXES[-1]:
                     print(f'run {run} identified ({time.time() - t0:.0f} s)', file=sys.stderr)
-        colours = {}
-    if len(colours) != len(orders):
+        colours, extras = {}, {}
+    if len(colours) != len(orders) or not extras:
         t0 = time.time()
         for run, kind, axis, chunks in _runs(data_dir):
             colours[(kind, run, axis)] = np.column_stack([f(chunks) for _, f in CANDIDATES])
+        for run in RUNS:
+            extras.update(_extras(np.deg2rad(np.load(os.path.join(
+                data_dir, f'adis_16405_imu{run}.npz'))['gyro_dps']), run))
         print(f'noise colours computed ({time.time() - t0:.0f} s)', file=sys.stderr)
         if cache:
             np.savez(cache, **{_key(*k): v for k, v in orders.items()},
-                     **{_key(*k, prefix='colour|'): v for k, v in colours.items()})
+                     **{_key(*k, prefix='colour|'): v for k, v in colours.items()},
+                     **{_key(*k[1:], prefix=f'{k[0]}|'): v for k, v in extras.items()})
     values = {k: np.column_stack([v, colours[k][:, 0]]) for k, v in orders.items()}
-    return values, colours
+    return values, colours, extras
+
+
+def _closed_form_colour(order, memory=1000, factors=(2, 4, 8, 16, 32, 64)):
+    """Exact ADEV slope of white noise filtered by the truncated GL difference of ``order``."""
+    c = gl_coefficients(order, memory)
+    avar = [np.sum(np.convolve(np.r_[np.ones(m), -np.ones(m)], c) ** 2) / (2.0 * m * m)
+            for m in factors]
+    return float(np.polyfit(np.log(factors), 0.5 * np.log(avar), 1)[0])
 
 
 _SEQ = {}
@@ -304,14 +360,16 @@ def _thresholds(k=None, colour=None):
     return th
 
 
-def fit_multiplier(values, pairs, *, colour=False):
+def fit_multiplier(values, pairs, *, colour=False, lengths=None):
     """
     Return the multiplier rule's choice on ``pairs``, for the shared or the colour multiplier.
 
     The rule: the smallest multiple of 0.5 up to 8 with no false alarm (no WARN, no ERROR, ERROR
-    at twice the multiplier) on the unchanged ``pairs`` at any record length of :data:`LENGTHS`,
-    plus :data:`MARGIN`. The shared multiplier is judged on every item but the noise colour
-    (which keeps its default), the colour multiplier on the noise colour alone.
+    at twice the multiplier) on the unchanged ``pairs``, plus :data:`MARGIN`; on the full records
+    (100 chunks) for the shared multiplier, at every record length of :data:`LENGTHS` for the
+    colour multiplier (module doc of ``core/health.py``: at 100 chunks alone it would give 1.5,
+    which false-alarms on 10-chunk records). The shared multiplier is judged on every item but the
+    noise colour (which keeps its default), the colour multiplier on the noise colour alone.
 
     Parameters
     ----------
@@ -321,6 +379,8 @@ def fit_multiplier(values, pairs, *, colour=False):
         (checked run, reference run, axis) comparisons to fit on.
     colour : bool, keyword-only
         Fit the colour multiplier instead of the shared one.
+    lengths : tuple of int, optional, keyword-only
+        Record lengths (chunks) instead of the rule's.
 
     Returns
     -------
@@ -328,9 +388,11 @@ def fit_multiplier(values, pairs, *, colour=False):
         None when no multiplier up to 8 keeps them.
 
     """
+    if lengths is None:
+        lengths = LENGTHS if colour else (CHUNKS_PER_RUN,)
     for k in np.arange(0.5, 8.01, 0.5):
         th = _thresholds(colour=k) if colour else _thresholds(k)
-        if not any(_alarmed(v, colour) for n in LENGTHS
+        if not any(_alarmed(v, colour) for n in lengths
                    for v in _verdicts(values, 'none', th, pairs, chunks=n)):
             return float(k) + MARGIN
     return None
@@ -378,7 +440,7 @@ def main():
     parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1)
     parser.add_argument('--cache', default=None, help='npz of the per-chunk values')
     args = parser.parse_args()
-    values, cand = chunk_values(args.data, args.jobs, args.cache)
+    values, cand, extras = chunk_values(args.data, args.jobs, args.cache)
     default = HealthThresholds()
     pairs = _pairs()
     k0, c0 = default.reference_warn_sigma, default.reference_colour_warn_sigma
@@ -395,10 +457,16 @@ def main():
         print(f'| {kind} | {levels["OK"]} | {levels["WARN"]} | {levels["ERROR"]} | '
               f'{_pct(_flagged(verdicts), len(pairs))} | {_items(verdicts)} |')
 
+    blind = _thresholds(colour=1000.0)
+    print('\nWithout the noise colour (its multipliers at 1000): '
+          + ', '.join(f'{kind} {_pct(_flagged(_verdicts(values, kind, blind, pairs)), len(pairs))}'
+                      for kind in KINDS[3:]) + ' flagged.')
+
     print('\nLargest difference between unchanged runs (90 comparisons), in pooled chunk spreads '
-          '(the rule) and in pooled standard errors of the location (spread / sqrt(chunks)).\n')
-    print('| quantity | in spreads | in standard errors |')
-    print('|---|---:|---:|')
+          '(the rule) and in pooled standard errors of the location (spread / sqrt(chunks)); '
+          'and in pooled chunk spreads on the first 10 chunks of each run.\n')
+    print('| quantity | in spreads | in standard errors | in spreads, 10 chunks |')
+    print('|---|---:|---:|---:|')
     for name, field_name in (('bias', 'bias_robust'), ('log variance', 'log_variance_robust'),
                              ('variance-method order', 'alpha_var_robust'),
                              ('correlation-method order', 'alpha_corr_robust'),
@@ -411,9 +479,49 @@ def main():
             d_spread = max(d_spread, diff / math.hypot(m.spread, q.spread))
             se = math.hypot(m.spread / math.sqrt(m.count), q.spread / math.sqrt(q.count))
             d_se = max(d_se, diff / se)
-        print(f'| {name} | {d_spread:.2f} | {d_se:.1f} |')
+        d_short = max(spread_distance(
+            getattr(_sequence(values[('none', a, axis)][:10], ('none', a, axis, 10)), field_name),
+            getattr(_sequence(values[('none', r, axis)][:10], ('none', r, axis, 10)), field_name))
+            for a, r, axis in pairs)
+        print(f'| {name} | {d_spread:.2f} | {d_se:.1f} | {d_short:.2f} |')
 
     _candidate_table({'names': CANDIDATES, 'values': cand}, pairs)
+
+    print('\nClosed form (white noise filtered by the truncated GL difference, L = 1000): the '
+          'ADEV slope over m = 2-64 samples moves by '
+          f'{_closed_form_colour(0.1) - _closed_form_colour(0.0):+.3f} (order +0.1) and '
+          f'{_closed_form_colour(-0.1) - _closed_form_colour(0.0):+.3f} (order -0.1).')
+    print("\nThe runs' spectra and Allan curves: power at 40-50 Hz over power at 1-10 Hz of "
+          'the chunk-averaged periodogram per axis, the frequency of the largest 1-Hz-smoothed '
+          "power between 10 and 30 Hz on z, and the local slopes of the whole run's ADEV on x "
+          'and z between m = 1, 2, 4, 8 samples.\n')
+    print('| run | x: 40-50 / 1-10 Hz | y: 40-50 / 1-10 Hz | z: 40-50 / 1-10 Hz | '
+          'z: peak 10-30 Hz | x: slopes m = 1-2, 2-4, 4-8 | z: slopes m = 1-2, 2-4, 4-8 |')
+    print('|---|---:|---:|---:|---:|---|---|')
+    for run in RUNS:
+        spec = {a: extras[('spectrum', 'none', run, a)] for a in AXES}
+        slopes = {a: extras[('slopes', 'none', run, a)][:3] for a in 'xz'}
+        print(f'| imu{run} | ' + ' | '.join(f'{spec[a][0]:.2f}' for a in AXES)
+              + f' | {spec["z"][1]:.1f} Hz | '
+              + ' | '.join(', '.join(f'{v:+.2f}' for v in slopes[a]) for a in 'xz') + ' |')
+
+    print(f'\nFilter size (the colour item alone, multiplier {c0:g}): a GL filter of order d in '
+          'the checked run; median shift of the colour and the share of the 90 comparisons the '
+          'colour item flags.\n')
+    print('| filter order | colour shift | flagged by the colour |')
+    print('|---:|---:|---:|')
+    for order in sorted(SIZE_ORDERS + (-0.1, 0.1), key=lambda o: (abs(o), -o)):
+        kind = {0.1: KINDS[3], -0.1: KINDS[4]}.get(order)
+        col = {(r, a): (cand[(kind, r, a)][:, 0] if kind else
+                        extras[('size', str(order), r, a)]) for r in RUNS for a in AXES}
+        shift = np.median([np.median(col[(r, a)]) - np.median(cand[('none', r, a)][:, 0])
+                           for r in RUNS for a in AXES])
+        flagged = 0
+        for a, r, axis in pairs:
+            d = spread_distance(robust_location(col[(a, axis)]),
+                                robust_location(cand[('none', r, axis)][:, 0]))
+            flagged += d > c0
+        print(f'| {order:+g} | {shift:+.3f} | {_pct(flagged, len(pairs))} |')
 
     print(f'\nShared multiplier sweep (ERROR at twice the multiplier; noise colour at {c0:g}): '
           'false alarms and detection.\n')
@@ -447,9 +555,15 @@ def main():
         print(f'| {k:g} | ' + ' | '.join(cells + det) + ' |')
 
     print(f'\nThe rule on all {len(pairs)} comparisons gives {fit_multiplier(values, pairs):g} '
-          f'(shared) and {fit_multiplier(values, pairs, colour=True):g} (noise colour).')
-    print('\nLeave one run out: the rule (the smallest of 0.5, 1, ... 8 without a false alarm at '
-          f'any record length of {", ".join(map(str, LENGTHS))} chunks, plus {MARGIN:g}) on the '
+          f'for the shared multiplier (no false alarm on the 100-chunk records; '
+          f'{fit_multiplier(values, pairs, lengths=LENGTHS):g} if it had to hold at every '
+          f'record length) and {fit_multiplier(values, pairs, colour=True):g} for the colour '
+          f'multiplier (at every record length; '
+          f'{fit_multiplier(values, pairs, colour=True, lengths=(CHUNKS_PER_RUN,)):g} on the '
+          '100-chunk records alone).')
+    print('\nLeave one run out: the rule (the smallest of 0.5, 1, ... 8 without a false alarm, '
+          f'plus {MARGIN:g}; for the shared multiplier on the 100-chunk records, for the colour '
+          f'multiplier at every record length of {", ".join(map(str, LENGTHS))} chunks) on the '
           '60 comparisons among the other five runs, applied to the 30 comparisons that involve '
           'the held-out run (as checked run or as reference; 100 chunks).\n')
     big = max(BIAS_SIZES_DEG_S)

@@ -42,11 +42,11 @@ The *noise colour* of a chunk (:func:`noise_colour`) is the least-squares log-lo
 overlapping Allan deviation over the averaging factors m = 2, 4, ..., 64 samples: -0.5 for white
 rate noise (angle random walk), 0 for flicker, +0.5 for a random walk, -1 for white angle noise. A
 fractional difference of order d (a GL filter) multiplies the rate PSD by ``|2 sin(pi f)|^(2d)``
-and so moves the slope by about -d (-0.088 for d = 0.1 over this band on the ADIS16405, whose
-Bartlett filter bends m = 1-2). Unlike the paper's identified orders, which a 0.1 filter moves by
-only 0.02-0.08 on that sensor, it follows the filter, and its chunk-to-chunk spread (~0.012 with
-10,000 samples) is close to the least any estimate of a spectral slope from one chunk can have
-(docs/verdicts.md).
+and so moves the slope by about -0.9 d over this band (closed form for white noise: -0.089 for d =
+0.1; -0.088 on the ADIS16405, whose Bartlett filter bends m = 1-2, hence m = 1 left out). Unlike
+the paper's identified orders, which a 0.1 filter moves by only 0.02-0.08 on that sensor, it
+follows the filter. Its chunk-to-chunk spread (~0.0125 with 10,000 samples) is estimation noise:
+six runs of that sensor agree to 0.005 (docs/verdicts.md).
 """
 
 from dataclasses import dataclass
@@ -62,9 +62,9 @@ from ..errors import InputDataError, ParameterError
 DEFAULT_CHUNK_SIZE = 10000
 
 #: Averaging factors (samples) of the noise colour (:func:`noise_colour`). m = 1 is left out: on
-#: band-limited sensors (the ADIS16405's Bartlett filter) the ADEV bends there. m = 64 is the
-#: largest octave a 10,000-sample chunk resolves with ~150 EDF (and the largest that a chunk of
-#: 4 x 64 samples holds under the N/4 rule of the Allan taus).
+#: band-limited sensors (the ADIS16405's Bartlett filter) the ADEV bends there. m = 64 keeps ~230
+#: EDF from a 10,000-sample chunk of white noise, and a chunk of 256 samples holds it under the
+#: N/4 rule of the Allan taus.
 NOISE_COLOUR_FACTORS = (2, 4, 8, 16, 32, 64)
 
 

@@ -101,7 +101,7 @@ from .health import evaluate_health, HealthThresholds, reference_per_axis
 from .readout import fit_noise_terms_band_limited, read_allan
 from .stamps import (MAX_GAP_EVENTS, RATE_ESTIMATE_SAMPLES, StampAccountant, StampedBatch,
                      StreamCounts)
-from .timebase import rescale_allan
+from .timebase import RateEstimate, rescale_allan
 from ..errors import InputDataError, ParameterError
 
 __all__ = ['analyze_chunk', 'AllanFeed', 'AXES', 'AxisSummary', 'chunk_jobs', 'ChunkJob',
@@ -169,7 +169,7 @@ class EngineConfig:
     allan_taus: str = 'dense'
     history_chunks: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         axes = tuple(self.axes) if not isinstance(self.axes, str) else (self.axes,)
         if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
             raise ParameterError(
@@ -198,12 +198,12 @@ class EngineConfig:
         identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory),
                        bool(self.demean), self.max_lag)
 
-    def identifier_key(self):
+    def identifier_key(self) -> tuple:
         """Return the hashable arguments of :func:`identifier_for` for this configuration."""
         return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory),
                 bool(self.demean), None if self.max_lag is None else int(self.max_lag))
 
-    def as_dict(self):
+    def as_dict(self) -> dict:
         """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
         a = self.alphas
         return {
@@ -219,7 +219,8 @@ class EngineConfig:
 
 
 @lru_cache(maxsize=8)
-def identifier_for(chunk_size, alphas, memory, demean, max_lag):
+def identifier_for(chunk_size: int, alphas: tuple, memory: int, demean: bool,
+                   max_lag: int | None) -> OrderIdentifier:
     """
     Return a cached :class:`.fractional.OrderIdentifier`.
 
@@ -296,7 +297,7 @@ class ChunkJob:
     identifier_key: tuple = field(repr=False)
 
 
-def _same(a, b):
+def _same(a: object, b: object) -> bool:
     """Equality that treats NaN as equal to NaN (results carry NaN for 'not identified')."""
     if isinstance(a, float) and isinstance(b, float):
         return a == b or (a != a and b != b)
@@ -370,7 +371,7 @@ class ChunkResult:
     var_curve: np.ndarray = field(default=None, repr=False, compare=False)
     j_curve: np.ndarray = field(default=None, repr=False, compare=False)
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         """Compare field by field, NaN equal to NaN (curves are not compared)."""
         if not isinstance(other, ChunkResult):
             return NotImplemented
@@ -380,7 +381,8 @@ class ChunkResult:
     __hash__ = None
 
 
-def analyze_chunk(job, identifier=None, *, curves=False):
+def analyze_chunk(job: ChunkJob, identifier: OrderIdentifier | None = None, *,
+                  curves: bool = False) -> ChunkResult:
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
@@ -474,12 +476,12 @@ class AxisSummary:
     readout: object = None
 
     @property
-    def offset_drift_deg_s_per_h(self):
+    def offset_drift_deg_s_per_h(self) -> float:
         """Signed offset drift (Table 3) in (deg/s)/h."""
         return rad_s2_to_deg_s_per_h(self.sequence.drift.slope)
 
 
-def rad_s2_to_deg_s_per_h(value):
+def rad_s2_to_deg_s_per_h(value: float) -> float:
     """
     Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
 
@@ -822,7 +824,8 @@ class NoiseEngine:
             self._discarded += dropped
             self._discarded_partials += 1
 
-    def _push(self, rel, lost, temp, g) -> list[ChunkJob]:
+    def _push(self, rel: np.ndarray, lost: np.ndarray, temp: np.ndarray,
+              g: np.ndarray) -> list[ChunkJob]:
         jobs = []
         chunks = self._chunker.push_columns(rel, lost, temp, g)
         first_index = self._chunker.chunks_out - len(chunks)
@@ -910,7 +913,7 @@ class NoiseEngine:
                                    discarded_samples=self._discarded,
                                    discarded_partials=self._discarded_partials)
 
-    def timebase(self):
+    def timebase(self) -> RateEstimate | None:
         """
         Return the :mod:`.timebase` estimate over every stamp so far (None before 2 stamps).
 

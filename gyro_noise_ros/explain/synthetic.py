@@ -61,11 +61,11 @@ sample_loss                U[5, 30] gap events per record, geometric(p = 0.5, me
 import sys
 
 import numpy as np
-import scipy.signal
 
-from .effects import BiasTransient, flicker_noise, gm_allan
+from .effects import BiasTransient, flicker_noise
 from .inputs import make_measurement
-from ..core.simulate import check_stability, simulate_fractional_noise
+from ..core.simulate import (check_stability, gauss_markov, gauss_markov_avar,
+                             simulate_fractional_noise)
 
 CHUNKS = 100
 EFFECTS = ('quantization', 'sinusoid', 'bias_drift', 'bias_transient', 'rate_random_walk',
@@ -136,7 +136,7 @@ def draw_effect(name, rng, *, sigma, rate_hz, n):
     if name == 'gauss_markov':
         corr = float(np.exp(rng.uniform(np.log(duration / 100), np.log(duration / 30))))
         ratio = rng.uniform(3, 5)
-        unit = np.sqrt(gm_allan(1.0, corr, 2 * corr))
+        unit = np.sqrt(gauss_markov_avar(2 * corr, 1.0, corr))
         return {'sigma_rad_s': ratio * white / np.sqrt(2 * corr) / unit,
                 'correlation_time_s': corr}
     if name == 'temperature_sensitivity':
@@ -205,10 +205,8 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
         elif name == 'bias_instability':
             x = x + flicker_noise(n, rate_hz, p['b_rad_s'], rng)
         elif name == 'gauss_markov':
-            phi = np.exp(-1.0 / (rate_hz * p['correlation_time_s']))
-            drive = rng.standard_normal(n) * p['sigma_rad_s'] * np.sqrt(1 - phi * phi)
-            drive[0] = rng.standard_normal() * p['sigma_rad_s']
-            x = x + scipy.signal.lfilter([1.0], [1.0, -phi], drive)
+            x = x + gauss_markov(n, rate_hz, std=p['sigma_rad_s'],
+                                 corr_time_s=p['correlation_time_s'], rng=rng)
         elif name == 'temperature_sensitivity':
             omega = 2 * np.pi / p['_cycle_s']
             temperature = (25.0 + p['_delta_degc'] * -np.expm1(-t / p['_time_constant_s'])
@@ -310,7 +308,8 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
 
     from .baseline import BaselineModel, simulation_memory
     from .effects import CATALOGUE, Context
-    from .signatures import allan_deviation_octaves, make_layout
+    from .signatures import make_layout
+    from ..core.allan import allan_deviation_values
     from .uncertainty import bootstrap, FinalModel
 
     by_name = {e.name: e for e in CATALOGUE}
@@ -335,11 +334,12 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
         for name in case:
             effect = by_name[name]
             if effect.kind == 'stochastic':
-                null = [{'allan': allan_deviation_octaves(base.generator(
-                    np.random.default_rng([seed, j, 99])).generate(n), rate_hz, layout.m)}
+                null = [{'allan': allan_deviation_values(base.generator(
+                    np.random.default_rng([seed, j, 99])).generate(n), rate_hz, taus=layout.m)}
                     for j in range(members)]
                 ctx = Context(m, meas.rate, layout,
-                              {'allan': allan_deviation_octaves(meas.rate, rate_hz, layout.m)},
+                              {'allan': allan_deviation_values(meas.rate, rate_hz,
+                                                               taus=layout.m)},
                               null, {})
                 params = effect.fit(ctx)
             else:

@@ -15,10 +15,15 @@
 """Signatures, band/gap, effect templates and the baseline fit of the discrepancy workflow."""
 
 from gyro_noise_ros.core.allan import allan_deviation, allan_deviation_values
-from gyro_noise_ros.core.simulate import gauss_markov_avar, simulate_fractional_noise
+from gyro_noise_ros.core.fractional import gl_coefficients
+from gyro_noise_ros.core.simulate import (
+    check_stability,
+    gauss_markov_avar,
+    simulate_fractional_noise,
+)
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.explain import signatures as sig
-from gyro_noise_ros.explain.baseline import fit_baseline, model_gain, simulation_memory
+from gyro_noise_ros.explain.baseline import fit_baseline, model_gain, simulation_memory, stable
 from gyro_noise_ros.explain.effects import (
     allan_template_from_psd,
     flicker_noise,
@@ -128,6 +133,28 @@ def test_simulation_memory_keeps_psd_within_one_percent():
         ratio = model_gain(
             alpha, f, memory, freq, 1000.0) / model_gain(alpha, f, 1000, freq, 1000.0)
         assert np.max(np.abs(ratio - 1)) <= 0.0101
+
+
+def test_model_gain_and_stability_shortcut_equal_their_slow_twins():
+    # model_gain keeps the FFT of the GL coefficients per (alpha, L) and adds -f e^{-iw}; the
+    # slow twin takes one FFT of the full polynomial per call. stable() decides by a
+    # coefficient-sum bound where it can, else asks core; it must agree with core everywhere,
+    # unstable and marginal pairs included (f beyond S_L(alpha), alpha far from 1)
+    rng = np.random.default_rng(11)
+    freq = np.geomspace(0.01, 50.0, 300)
+    grid = np.arange(65537) * (100.0 / 131072)
+    decided = []
+    for _ in range(60):
+        alpha, f = round(rng.uniform(-0.2, 1.9), 2), round(rng.uniform(-2.5, 1.0), 6)
+        memory = int(rng.choice([25, 100, 1000]))
+        a = gl_coefficients(alpha, memory)
+        a[1] -= f
+        slow = 1.0 / np.interp(freq, grid, np.abs(np.fft.rfft(a, 131072)) ** 2)
+        # rounding only: the two sums differ in the last bits, near a pole relatively more
+        np.testing.assert_allclose(model_gain(alpha, f, memory, freq, 100.0), slow, rtol=1e-9)
+        decided.append(stable(alpha, f, memory))
+        assert decided[-1] == check_stability(alpha, f, memory).stable, (alpha, f, memory)
+    assert 0 < sum(decided) < len(decided)  # both answers were exercised
 
 
 def test_fit_baseline_recovers_simulated_model():

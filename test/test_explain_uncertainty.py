@@ -33,8 +33,10 @@ from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.explain import uncertainty as unc
 from gyro_noise_ros.explain.baseline import BaselineModel, simulation_memory
-from gyro_noise_ros.explain.effects import BiasDrift, Context, RateRandomWalk, Sinusoid
+from gyro_noise_ros.explain.effects import (BiasDrift, BiasTransient, Context, RateRandomWalk,
+                                            Sinusoid)
 from gyro_noise_ros.explain.inputs import make_measurement
+from gyro_noise_ros.explain.report import parameter_lines
 from gyro_noise_ros.explain.signatures import make_layout
 from gyro_noise_ros.explain.synthetic import make_record
 from gyro_noise_ros.explain.workflow import explain
@@ -237,6 +239,34 @@ def test_time_scales_outside_what_the_record_resolves_are_bounds():
     assert check('sinusoid', 'frequency_hz', dict(line, frequency_hz=7.0), [6.9, 7.1])['resolved']
     # parameters without a time scale are not judged
     assert check('bias_transient', 'amplitude_rad_s', transient) is None
+
+
+def test_a_time_constant_longer_than_the_record_is_a_bound_not_a_value():
+    # the PX4 case on a record with a known answer: a rise with tc = 2 T starting at 0.4 T (the
+    # record shows 0.6 T = 120 s of it, 26 % of the step): the workflow names the transient, and
+    # its time constant must come out as a lower bound that holds (<= the true 400 s), not as
+    # "value ± stderr"
+    meas, _ = make_record((), np.random.default_rng([1, 21]), n=20000)
+    duration = meas.n / RATE_HZ
+    t = np.arange(meas.n) / RATE_HZ
+    chunk_noise = np.std(meas.rate) / np.sqrt(meas.n // 100)
+    rise = 150 * chunk_noise * BiasTransient.shape(t, 0.4 * duration, 2 * duration)
+    result = explain(make_measurement(meas.rate + rise, rate_hz=RATE_HZ), seed=1, ensemble=8,
+                     bootstrap=10)
+    assert result.named == ['bias_transient'], result.named
+    entry = result.uncertainty['bias_transient']['time_constant_s']
+    after_onset = duration - result.steps[0].params['delay_s']
+    assert not entry['resolved'] and 'longer than the record resolves' in entry['note']
+    assert entry['bound']['upper'] is None
+    assert 0 < entry['bound']['lower'] <= after_onset * (1 + 1e-9)
+    assert entry['bound']['lower'] <= 2 * duration  # the bound holds for the true value
+    # only the initial slope is measured: the amplitude is flagged with it
+    assert not result.uncertainty['bias_transient']['amplitude_rad_s']['resolved']
+    # the same check on the value alone, kept in explain.json for --bootstrap 0
+    assert not result.steps[0].time_scales['time_constant_s']['resolved']
+    line = parameter_lines(result)[0]
+    assert 'time_constant_s >= ' in line and 'UNRESOLVED: longer than the record' in line
+    assert 'time_constant_s = ' not in line
 
 
 def test_workflow_json_and_bootstrap_off():

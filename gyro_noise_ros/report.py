@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .core.engine import rad_s2_to_deg_s_per_h
+from .core.health import reference_dict, ROBUST_JSON_KEY
 from .core.items import DEG as _DEG
 
 _DEG2 = _DEG ** 2
@@ -39,7 +40,8 @@ _DEG2 = _DEG ** 2
 CHUNK_COLUMNS = ('bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns',
                  'samples', 'samples_lost', 'gaps', 'nan_samples', 'bias_deg_s',
                  'variance_deg2_s2', 'alpha_var', 'f_var', 'var_min_deg2_s2', 'alpha_corr',
-                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'temperature_c', 'message')
+                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'noise_colour_adev_slope',
+                 'temperature_c', 'message')
 
 #: Columns of allan.csv, in order.
 ALLAN_COLUMNS = ('bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n')
@@ -91,7 +93,8 @@ class ChunkCsvWriter:
                             _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
                             _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2),
                             _num(r.alpha_corr), _num(r.f_corr), _num(r.j_min * _DEG2),
-                            int(r.tie_var), int(r.tie_corr), _num(r.temperature_c), r.message))
+                            int(r.tie_var), int(r.tie_corr), _num(r.noise_colour),
+                            _num(r.temperature_c), r.message))
         self.rows += 1
 
     def close(self):
@@ -159,6 +162,8 @@ def axis_summary_dict(summary, *, verdict=None):
             else None
         ),
     }
+    # what a later run's --reference check compares with (core/health.py)
+    out[ROBUST_JSON_KEY] = reference_dict(seq)
     if verdict is not None:
         out['health'] = {'level': verdict.level, 'message': verdict.message,
                          'items': [{'key': k, 'value': v, 'level': lv} for k, v,

@@ -484,8 +484,20 @@ def _check_chunk_fits(count, label, config):
 
 
 def _stamps_unusable(stamps):
+    """
+    Tell whether the first batch's stamps cannot be a time base (then the log time is tried).
+
+    Equal consecutive stamps are a normal time base (a packet of samples stamped once); only
+    stamps that go backwards (shuffled) or never advance (a driver that leaves the header stamp
+    at zero) are unusable. A batch too small to tell is usable.
+    """
     steps = np.diff(stamps)
-    return steps.size > 0 and np.count_nonzero(steps <= 0) > 0.1 * steps.size
+    if steps.size == 0:
+        return False
+    if np.count_nonzero(steps < 0) > 0.1 * steps.size:
+        return True
+    # 64 equal stamps in a row would be one packet of 64 samples or more: no advance at all
+    return steps.size >= 64 and not np.any(steps > 0)
 
 
 def warn(text):
@@ -742,6 +754,18 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     for text in (tb.warnings if tb is not None else ()):
         warnings.append(text)
         warn(f'{label}: {text}')
+    if counts.out_of_order:
+        text = (f'{counts.out_of_order} stamp(s) earlier than the latest before them: counted as '
+                'out of order, not reordered (each also leaves a one-sample gap)')
+        warnings.append(text)
+        warn(f'{label}: {text}')
+    if counts.longest_gaps:
+        t_s, length_s, missing = counts.longest_gaps[0]
+        text = (f'{counts.gaps} stamp gap(s), {counts.samples_lost} sample(s) missing; the '
+                f'longest {length_s:.6g} s at t = {t_s:.3f} s after the first sample ({missing} '
+                'samples missing)')
+        warnings.append(text)
+        warn(f'{label}: {text}')
     left_out = dict(left)
     if segment is not None and not segment.static_throughout and first_ns is not None:
         # The segments end on window boundaries; a time range never runs past the last sample.
@@ -809,6 +833,9 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         'gaps': counts.gaps,
         'out_of_order_stamps': counts.out_of_order,
         'clock_steps': counts.clock_steps,
+        'equal_stamps': counts.equal_stamps,
+        'longest_gaps': [{'start_s': t, 'length_s': d, 'missing_samples': m}
+                         for t, d, m in counts.longest_gaps],
         'chunks_cut': counts.chunks,
         'tail_samples': counts.tail_samples,
         'discarded_samples': counts.discarded_samples,
@@ -1009,6 +1036,7 @@ def _print_summary(doc):
             f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
             f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
             f"{b['out_of_order_stamps']} out-of-order stamp(s), "
+            f"{b['equal_stamps']} equal to the one before, "
             f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():
             line = (f"  {axis}: {a['chunks']} chunks, drift "

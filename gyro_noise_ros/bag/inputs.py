@@ -46,7 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import ImuBagReader
+from .reader import ImuBagReader
 from .tabular import csv_gyro_axes, is_table, TableImuReader
 from ..errors import BagError, InputDataError
 

@@ -331,7 +331,7 @@ def odd_bags(tmp_path_factory):
 
 
 @pytest.mark.parametrize('args, code, text', [
-    (['missing'], 3, 'does not exist'),
+    (['missing'], 3, 'no such file or folder'),
     (['notabag.txt'], 3, 'not a bag'),
     (['two'], 3, 'choose one with --topic'),
     (['two', '--topic', '/c/imu'], 3, "topic '/c/imu' is not in bag"),

@@ -702,6 +702,26 @@ def _sensor_sentence(name, e, doc):
     return f'These records cannot tell whether the {name} changed: {e["basis"]}.'
 
 
+def _floor_sentences(doc):
+    out = []
+    for s in SENSORS:
+        logs, var = [], 0.0
+        for a in 'xyz':
+            ch = f'{s}_{a}'
+            r = (doc['noise_terms'][ch].get('ratio_after_before') or {}).get(
+                _term_keys(ch)['bias_stability'])
+            if not r or r['log_ratio_sd'] is None:
+                break
+            logs.append(math.log(r['ratio']))
+            var += r['log_ratio_sd'] ** 2
+        else:
+            m = math.exp(sum(logs) / 3)
+            sd = m * math.sqrt(var) / 3
+            out.append(f"The {NAMES[s]}'s noise floor (bias stability, the minimum of the Allan "
+                       f'deviation) changed by x{m:.2f} +/- {sd:.2f} (mean of the three axes).')
+    return out
+
+
 def in_short(doc):
     """
     Return the plain-language summary of a reliability document, one sentence per item.
@@ -724,6 +744,8 @@ def in_short(doc):
     else:
         out.append('No verdict on the noise: it needs a static record before and one after '
                    f'(given: {", ".join(s for s in SIDES if statics[s]) or "none"}).')
+    if statics['before'] and statics['after']:
+        out += _floor_sentences(doc)
     u = doc['uniformity']
     if u['before'] and u['after']:
         b = u['before']['accel_bias_std_m_s2'] / MG
@@ -775,7 +797,7 @@ def _pm(v, sd, spec, scale=1.0):
         return 'n/a'
     if sd is None:
         return format(v * scale, spec)
-    return f'{format(v * scale, spec)} +/- {format(sd * scale, spec)}'
+    return f'{format(v * scale, spec)} +/- {format(sd * scale, spec.lstrip("+"))}'
 
 
 def _interval_rows(doc):

@@ -40,7 +40,8 @@ _DEG2 = _DEG ** 2
 CHUNK_COLUMNS = ('bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns',
                  'samples', 'samples_lost', 'gaps', 'nan_samples', 'bias_deg_s',
                  'variance_deg2_s2', 'alpha_var', 'f_var', 'var_min_deg2_s2', 'alpha_corr',
-                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'temperature_c', 'message')
+                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'noise_colour_adev_slope',
+                 'temperature_c', 'message')
 
 #: Columns of allan.csv, in order.
 ALLAN_COLUMNS = ('bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n')
@@ -92,7 +93,8 @@ class ChunkCsvWriter:
                             _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
                             _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2),
                             _num(r.alpha_corr), _num(r.f_corr), _num(r.j_min * _DEG2),
-                            int(r.tie_var), int(r.tie_corr), _num(r.temperature_c), r.message))
+                            int(r.tie_var), int(r.tie_corr), _num(r.noise_colour),
+                            _num(r.temperature_c), r.message))
         self.rows += 1
 
     def close(self):

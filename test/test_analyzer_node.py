@@ -227,7 +227,7 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
     chunks = 8
     n = chunks * 2000
     stamps = (np.arange(n) * 1e9 / RATE_HZ).astype(np.int64) + 10 ** 18
-    from gyro_noise_ros.bag import encode_imu_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr
 
     messages = [('/imu/data_raw', raw) for raw in
                 encode_imu_cdr(stamps, rng.standard_normal((n, 3)) * 1e-3, np.zeros((n, 3)))]
@@ -264,7 +264,7 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
 def test_unusable_stamps_give_error_not_a_crash(context):
     # Every stamp equal: the sample rate cannot be estimated, so the engine rejects the batches
     # once the samples held for the estimate are in (equal stamps alone are one packet: normal).
-    from gyro_noise_ros.bag import encode_imu_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr
     from gyro_noise_ros.core.engine import RATE_ESTIMATE_SAMPLES
 
     node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**SMALL))

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Tests of gyro_noise_ros.bag: round trips, bulk codec against rosbags' own (de)serialisers, errors.
+Tests of gyro_noise_ros.bag and .msgs: round trips, the bulk codec against rosbags, errors.
 
 Reference bags are built with the rosbags writers and rosbags' per-message serialisers, so the
 bulk decoder is checked against an independent implementation on every field it returns.
@@ -23,22 +23,27 @@ import math
 
 from _realdata import real_data
 from gyro_noise_ros.bag import (
-    codec,
-    count_stamp_regressions,
     decode_imu,
     decode_temperature,
-    encode_imu_cdr,
-    encode_temperature_cdr,
     find_imu_topic,
-    IMU_MSGTYPE,
     ImuBagReader,
     ImuBagWriter,
     list_topics,
     storage,
-    TEMPERATURE_MSGTYPE,
     TopicInfo,
 )
 from gyro_noise_ros.errors import BagError, OutputError, ParameterError
+from gyro_noise_ros.msgs import (
+    count_stamp_regressions,
+    decode_spans,
+    encode_imu_cdr,
+    encode_temperature_cdr,
+    IMU_FIELDS,
+    IMU_MSGTYPE,
+    IMU_TAIL_F8,
+    join_raws,
+    TEMPERATURE_MSGTYPE,
+)
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
 import numpy as np
@@ -172,7 +177,7 @@ def test_encode_rejects_bad_input():
 
 def bulk_ok(raws, ros1):
     """Which messages the bulk path accepts (the rest go to rosbags)."""
-    return codec.decode_spans(*codec.join_raws(raws), codec.IMU_TAIL_F8, codec.IMU_FIELDS, ros1)[0]
+    return decode_spans(*join_raws(raws), IMU_TAIL_F8, IMU_FIELDS, ros1)[0]
 
 
 def slow_reference(raws, ros1=False):

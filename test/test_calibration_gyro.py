@@ -140,9 +140,9 @@ def test_calibration_yaml_gyro_terms_are_applied_by_the_compensator(tmp_path):
     import rclpy
     import yaml
     from gyro_noise_ros.bag import decode_imu
-    from gyro_noise_ros.bag.codec import encode_imu_cdr
     from gyro_noise_ros.cli.calibrate import main as calibrate
     from gyro_noise_ros.cli.emulator import main as emulator
+    from gyro_noise_ros.msgs import encode_imu_cdr
     from gyro_noise_ros.nodes import compensator
     from rclpy.parameter import Parameter
 

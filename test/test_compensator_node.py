@@ -31,10 +31,10 @@ os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
 
 from _thermal_linear import LinearThermal  # noqa: E402
 from gyro_noise_ros.bag import decode_imu  # noqa: E402
-from gyro_noise_ros.bag.codec import encode_imu_cdr, encode_temperature_cdr  # noqa: E402
-from gyro_noise_ros.bag.codec import typestore  # noqa: E402
 from gyro_noise_ros.calibration.apply import calibration_from_parameters  # noqa: E402
 from gyro_noise_ros.errors import ParameterError  # noqa: E402
+from gyro_noise_ros.msgs import encode_imu_cdr, encode_temperature_cdr  # noqa: E402
+from gyro_noise_ros.msgs import typestore  # noqa: E402
 from gyro_noise_ros.nodes import compensator  # noqa: E402
 from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup  # noqa: E402
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all  # noqa: E402

@@ -18,9 +18,11 @@ Tests of the streaming engine (gyro_noise_ros.core.engine).
 Chunking, gaps, NaN, tail, equality with the core.
 """
 
+import math
 import pickle
 
-from gyro_noise_ros.core.chunks import chunk_moments, RobustLocation, summarise_sequence
+from gyro_noise_ros.core.chunks import (chunk_moments, noise_colour, RobustLocation,
+                                        summarise_sequence)
 from gyro_noise_ros.core.engine import (
     analyze_chunk,
     AxisSummary,
@@ -88,6 +90,7 @@ def test_per_chunk_numbers_equal_the_core_called_directly():
                                                      direct.var_min)
         assert (r.alpha_corr, r.f_corr, r.j_min) == (direct.alpha_corr, direct.f_corr,
                                                      direct.j_min)
+        assert r.noise_colour == noise_colour(chunk) and math.isfinite(r.noise_colour)
         assert r.status == 'ok' and r.samples == SIZE and r.samples_lost == 0
         assert r.stamp_start_ns == stamps[r.chunk * SIZE]
         assert r.t_start_s == pytest.approx(r.chunk * SIZE * PERIOD_NS / 1e9, abs=1e-12)
@@ -101,7 +104,7 @@ def test_per_chunk_numbers_equal_the_core_called_directly():
     expected = summarise_sequence([r.t_mid_s for r in ys], [r.bias_rad_s for r in ys],
                                   [r.variance_rad2_s2 for r in ys], [r.alpha_var for r in ys],
                                   [r.alpha_corr for r in ys], tail_samples=123,
-                                  order_step=0.1)
+                                  order_step=0.1, noise_colour=[r.noise_colour for r in ys])
     assert s.sequence == expected
     assert s.sequence.tail_samples == 123
     assert s.offset_drift_deg_s_per_h == rad_s2_to_deg_s_per_h(expected.drift.slope)

@@ -162,6 +162,60 @@ def test_reference_comparisons_in_pooled_chunk_spreads(field, key, spreads, expe
             assert 'pooled chunk spreads' in v.message and v.message.endswith('.')
 
 
+COLOUR_KEY = 'Noise colour deviation (ADEV slope, m = 2-64 samples)'
+
+
+@pytest.mark.parametrize('spreads, expected', [(2.49, 'OK'), (2.51, 'WARN'), (4.99, 'WARN'),
+                                               (5.01, 'ERROR')])
+def test_noise_colour_in_pooled_chunk_spreads_with_its_own_multipliers(spreads, expected):
+    # the same distance as the other items, against reference_colour_warn_sigma (2.5) and
+    # reference_colour_error_sigma (5)
+    ref = replace(REF_STATS, noise_colour=robust(-0.47, 0.012))
+    pooled = math.hypot(0.012, 0.012)
+    for sign in (1.0, -1.0):
+        s = with_chunk_stats(summary())
+        s = replace(s, sequence=replace(s.sequence, noise_colour_robust=robust(
+            -0.47 + sign * spreads * pooled, 0.012)))
+        v = evaluate_health(s, reference=ref)
+        assert item_level(v, COLOUR_KEY) == expected and v.level == expected
+        values = {k: val for k, val, _ in v.items}
+        assert values[COLOUR_KEY].endswith(f'({spreads:.3g} spreads)')
+        colour = -0.47 + sign * spreads * pooled
+        assert values['Noise colour (ADEV slope, m = 2-64 samples)'] == f'{colour:.4g}'
+        if expected != 'OK':
+            assert v.message.startswith(f'Noise colour (ADEV slope) {colour:.3f} (median of 100 '
+                                        'chunks) differs from the reference -0.470'), v.message
+            assert 'pooled chunk spreads' in v.message
+    th = HealthThresholds(reference_colour_warn_sigma=1.0, reference_colour_error_sigma=2.0)
+    s = with_chunk_stats(summary())
+    s = replace(s, sequence=replace(s.sequence, noise_colour_robust=robust(-0.47 + 1.5 * pooled,
+                                                                           0.012)))
+    assert item_level(evaluate_health(s, reference=ref, thresholds=th), COLOUR_KEY) == 'WARN'
+    # the shared multipliers do not move it
+    th = HealthThresholds(reference_warn_sigma=1.0, reference_error_sigma=2.0)
+    assert item_level(evaluate_health(s, reference=ref, thresholds=th), COLOUR_KEY) == 'OK'
+    with pytest.raises(ParameterError, match='reference_colour_error_sigma'):
+        HealthThresholds(reference_colour_warn_sigma=5.0, reference_colour_error_sigma=4.0)
+
+
+def test_noise_colour_missing_or_not_computed_is_said():
+    s = with_chunk_stats(summary())
+    s = replace(s, sequence=replace(s.sequence, noise_colour_robust=robust(-0.3, 0.01)))
+    # a reference written before the noise colour existed: n/a, the rest still compared
+    v = evaluate_health(s, reference=REF_STATS)
+    assert {k: val for k, val, _ in v.items}[COLOUR_KEY] == 'n/a' and v.level == 'OK'
+    assert item_level(v, 'Order deviation, variance method') == 'OK'
+    # chunks shorter than 4 x 64 samples have no colour (all NaN)
+    nan = RobustLocation(float('nan'), float('nan'), 0, 0)
+    ref = replace(REF_STATS, noise_colour=robust(-0.3, 0.01))
+    s = replace(s, sequence=replace(s.sequence, noise_colour_robust=nan))
+    v = evaluate_health(s, reference=ref)
+    assert {k: val for k, val, _ in v.items}[COLOUR_KEY] == 'n/a' and v.level == 'OK'
+    s = replace(s, sequence=replace(s.sequence, noise_colour_robust=robust(-0.3, 0.01, count=9)))
+    v = evaluate_health(s, reference=ref)
+    assert {k: val for k, val, _ in v.items}[COLOUR_KEY] == 'undetermined'
+
+
 def test_tolerance_follows_the_spread_of_both_records():
     # One order difference of 0.05, judged against chunk spreads of both records: 0.05 /
     # hypot(s, s_ref) is 1.86 with (0.025, 0.01), 3.54 with (0.01, 0.01), 7.07 with (0.005,
@@ -261,7 +315,8 @@ def write_summary(path, bags):
 
 
 STATS = summarise_sequence(np.arange(12.0), np.linspace(0, 1e-3, 12), np.full(12, 2e-6),
-                           [0.02, 0.03] + [1.4] * 10, np.full(12, 1.0), order_step=0.01)
+                           [0.02, 0.03] + [1.4] * 10, np.full(12, 1.0), order_step=0.01,
+                           noise_colour=np.linspace(-0.5, -0.45, 12))
 AXIS = {'offset_drift_rad_s2': 1e-9, 'mean_variance_rad2_s2': 2e-6, 'alpha_var_mean': 1.4,
         'alpha_corr_mean': 1.0, 'chunks': 12, 'reference_statistics': reference_dict(STATS)}
 
@@ -273,9 +328,10 @@ def test_load_reference(tmp_path):
     assert (r.offset_drift_rad_s2, r.mean_variance_rad2_s2, r.alpha_var_mean, r.chunks) == (
         1e-9, 2e-6, 1.4, 12)
     # the robust statistics survive the JSON round trip, mode structure included
-    assert (r.bias, r.log_variance, r.alpha_var, r.alpha_corr) == (
+    assert (r.bias, r.log_variance, r.alpha_var, r.alpha_corr, r.noise_colour) == (
         STATS.bias_robust, STATS.log_variance_robust, STATS.alpha_var_robust,
-        STATS.alpha_corr_robust)
+        STATS.alpha_corr_robust, STATS.noise_colour_robust)
+    assert r.noise_colour.location == pytest.approx(-0.475) and r.noise_colour.count == 12
     assert r.alpha_var.population == 'dominant mode' and r.alpha_var.count == 10
     with pytest.raises(ParameterError, match="axis 'x'"):
         load_reference(p, axis='x')

@@ -21,7 +21,6 @@ from dataclasses import fields
 import time
 from types import SimpleNamespace
 
-from gyro_noise_ros.bag.codec import imu_covariances, temperature_variances
 from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
@@ -36,6 +35,7 @@ from gyro_noise_ros.link.port import hardware_id_for, validate_port
 from gyro_noise_ros.link.sequence import SequenceGapCounter, SequenceTracker
 from gyro_noise_ros.link.session import handshake, LinkConfig, ODR_TOLERANCE_RATIO
 from gyro_noise_ros.monitor_lines import format_array, format_status, parse_axis_parts
+from gyro_noise_ros.msgs import imu_covariances, temperature_variances
 import numpy as np
 import pytest
 
@@ -136,7 +136,7 @@ def test_sequence_gap_counter():
 
 
 def test_imu_covariances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_imu_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr
 
     rng = np.random.default_rng(0)
     av = rng.random((4, 9))
@@ -156,7 +156,7 @@ def test_imu_covariances_read_back_what_was_encoded():
 
 
 def test_temperature_variances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_temperature_cdr
+    from gyro_noise_ros.msgs import encode_temperature_cdr
 
     raws = encode_temperature_cdr(np.arange(3), [20.0, 21.0, 22.0], frame_id='imu',
                                   variance=[0.5, 0.25, 0.0])

@@ -94,7 +94,8 @@ def test_white_noise_never_turns_up_an_upper_bound_at_the_last_readable_tau():
     # the record is 4 x the last tau here: a tenth of it ends before the last two octaves
     last = tau[tau <= MAX_TAU_FRACTION * res.n_samples / res.rate_hz][-1]
     assert r.bias_stability_upper_bound and r.bias_stability_tau_s == last
-    assert adev_floor(tau, res.adev).upper_bound and adev_floor(tau, res.adev).index == tau.size - 1
+    floor = adev_floor(tau, res.adev)
+    assert floor.upper_bound and floor.index == tau.size - 1
     # a noisy up-tick on the last, low-EDF tau is not a turning point either
     avar = 1e-6 / tau
     avar[-1] *= 2.5

@@ -27,7 +27,7 @@ import time
 os.environ.setdefault('ROS_DOMAIN_ID', str(100 + (os.getpid() + 37) % 100))
 
 from builtin_interfaces.msg import Time  # noqa: E402
-from gyro_noise_ros.bag import encode_imu_cdr  # noqa: E402
+from gyro_noise_ros.msgs import encode_imu_cdr  # noqa: E402
 from gyro_noise_ros.nodes.analyzer import NoiseAnalyzerNode  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

@@ -280,8 +280,9 @@ def markdown(results, sim, args, elapsed):
     out = ['# The one Allan readout on every real record', '',
            f'Made by `python docs/scripts/readout_table.py` (commit {commit}, {today}, '
            f'{elapsed:.0f} s); the rules are in `gyro_noise_ros/core/readout.py` and '
-           "`docs/allan.md`. Ours: the readout of the dense Allan deviation (~10 taus per "
-           "decade, the analyzer's default). Independent: this script's own plain-numpy overlapping ADEV at 10 "
+           '`docs/allan.md`. Ours: the readout of the dense Allan deviation (~10 taus per '
+           "decade, the analyzer's default). Independent: this script's own plain-numpy "
+           'overlapping ADEV at 10 '
            'factors per decade (its minimum over 10 samples to a tenth of the record; its '
            'contiguous -1/2 fit). Before: the rules the tools used until this change (first '
            'minimum over all taus; ARW from every tau of slope -1/2 +/- 0.15 wherever it sits). '
@@ -318,7 +319,7 @@ def markdown(results, sim, args, elapsed):
         out += ['', f"Rows that fail: {', '.join(f'{n} {a}' for n, a in fails)}."]
     ends = [f'{name} {axis}' for (name, axis, _), v in results if v['ind_at_end']]
     if ends:
-        out += ['', f"The independent minimum is the last tau of its range (a tenth of the "
+        out += ['', 'The independent minimum is the last tau of its range (a tenth of the '
                 f"record) on {', '.join(ends)}: the curve is still falling there on about ten "
                 'degrees of freedom, and the readout, which reads the same range, flags the '
                 'value an upper bound where a longer tau lies lower still.']

@@ -43,8 +43,10 @@ import struct
 
 import numpy as np
 
-from . import ImuBagWriter
-from .codec import (
+from .storage import describe
+from .writer import ImuBagWriter
+from ..errors import BagError, OutputError
+from ..msgs import (
     encode_imu_rows,
     encode_temperature_rows,
     IMU_TAIL_F8,
@@ -52,8 +54,6 @@ from .codec import (
     TEMPERATURE_MSGTYPE,
     typestore,
 )
-from .storage import describe
-from ..errors import BagError, OutputError
 
 #: Messages per ``INSERT ... SELECT`` statement (blocks of a few MB; measured best near 10k).
 SQL_BLOCK = 8192

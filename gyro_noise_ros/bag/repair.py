@@ -32,10 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import write_raw
-from .codec import typestore
 from .storage import BagSource, describe, mcap_message_records, read_mcap_chunk, STORAGES
+from .writer import write_raw
 from ..errors import BagError, OutputError, ParameterError
+from ..msgs import typestore
 from ..outputs import staged_new_dir
 
 #: Messages handed to the writer at once.

@@ -32,10 +32,10 @@ import struct
 
 import numpy as np
 
-from .codec import join_raws
 from .recover import (announce, journal_is_hot, recovering_reader_class, rollback_note,
                       rolled_back_copy, truncation_note)
 from ..errors import BagError
+from ..msgs import join_raws
 
 STORAGES = ('sqlite3', 'mcap')
 BLOCK = 16384

@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .batch import ImuBatch
 from ..errors import BagError, InputDataError, ParameterError
 
 #: Suffixes read by :class:`TableImuReader`.
@@ -65,17 +66,6 @@ def is_table(path):
 
     """
     return Path(path).suffix.lower() in TABLE_SUFFIXES
-
-
-class _Batch:
-    """Late import of ImuBatch (bag/__init__ imports this module)."""
-
-    @staticmethod
-    def make(stamp_ns, gyro, accel, frame_id):
-        from . import ImuBatch
-
-        return ImuBatch(stamp_ns=stamp_ns, log_ns=stamp_ns, gyro=gyro, accel=accel,
-                        frame_id=frame_id)
 
 
 def read_csv(path, *, check_header=None):
@@ -312,7 +302,9 @@ class TableImuReader:
             raise ParameterError(f'batch_size must be a positive integer, got {batch_size!r}')
         for i in range(0, self.message_count, size):
             sl = slice(i, i + size)
-            yield _Batch.make(self._stamp[sl], self._gyro[sl], self._accel[sl], 'imu_link')
+            stamp_ns = self._stamp[sl]
+            yield ImuBatch(stamp_ns=stamp_ns, log_ns=stamp_ns, gyro=self._gyro[sl],
+                           accel=self._accel[sl], frame_id='imu_link')
 
     def read_temperature(self):
         """

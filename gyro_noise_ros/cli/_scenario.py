@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-The reliability-procedure scenario of ``portenta_emulator``: options, model, direct bag output.
+The scenarios of ``portenta_emulator``: reliability motion, thermal profiles, direct bag output.
 
 Kept apart from ``cli/emulator.py`` (which only calls :func:`add_scenario_arguments`,
 :func:`scenario_from_args` and :func:`write_bag`); the model is
@@ -23,6 +23,11 @@ noise, gyro bias (``--bias-dps``) and temperature model stay. ``--write-bag DIR`
 samples the driver would publish (quantised at the configured full scales, scaled to SI) straight
 into a rosbag2, as fast as they are generated: no pacing, no serial link. See
 ``docs/reliability.md``.
+
+The thermal part: ``--thermal SHAPE`` (:data:`THERMAL_CHOICES`) builds the board's
+:class:`~gyro_noise_ros.thermal.simulate.ThermalStream` (:func:`thermal_from_args`): the paper's
+oven from ``--temp-c``, or a held-out shape (heating, cooling, staircases, cycles, soak, sine) at
+its own set-points, compressed ``--thermal-compress`` times. See ``docs/thermal_data.md``.
 """
 
 import argparse
@@ -51,6 +56,38 @@ DEFAULT_STRESS_INSTABILITY = 1.7
 RANDOM_WALK_PER_WHITE = 1.0 / 11.5
 #: Epoch of the stamps of --write-bag (UNIX s).
 BAG_EPOCH_NS = 1_700_000_000 * 10**9
+#: ``--thermal`` values: off, then the profiles of ``thermal.simulate.SHAPES``.
+THERMAL_CHOICES = ('off', 'oven', 'heating', 'cooling', 'staircase', 'staircase_down', 'cycle',
+                   'cool_reheat', 'soak', 'sine')
+
+
+def thermal_from_args(args):
+    """
+    Build the board's thermal stream of ``--thermal`` (None for ``off``).
+
+    The drift law's constant terms (gyro bias, accelerometer offset at 25 degC) are left out:
+    the board has its own ``--bias-dps`` and accelerometer offset; what the profile adds is the
+    temperature-dependent part. ``oven`` starts at ``--temp-c`` (its room); the other shapes
+    keep their own set-points (``docs/thermal_data.md``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``portenta_emulator`` arguments (``thermal``, ``thermal_compress``, ``temp_c``).
+
+    Returns
+    -------
+    ThermalStream or None
+
+    """
+    shape = getattr(args, 'thermal', 'off')
+    if shape == 'off':
+        return None
+    from ..thermal.simulate import make_profile, ThermalModel, ThermalStream
+
+    room = args.temp_c if shape == 'oven' else None
+    return ThermalStream(ThermalModel(bias_dps=0.0, accel_bias_mg=0.0), make_profile(shape),
+                         compress=args.thermal_compress, room_c=room)
 
 
 def _floats(count):

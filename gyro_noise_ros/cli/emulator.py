@@ -53,7 +53,8 @@ import tty
 import numpy as np
 
 from ._common import run_cli
-from ._scenario import add_scenario_arguments, scenario_from_args, write_bag
+from ._scenario import (add_scenario_arguments, scenario_from_args, THERMAL_CHOICES,
+                        thermal_from_args, write_bag)
 from ..errors import LinkError, OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.emulator import (
@@ -156,13 +157,16 @@ def build_parser():
                        help='delay before the rise (s)')
     noise.add_argument('--helium-tau-s', type=float, default=7200.0,
                        help='time constant of the rise (s)')
-    noise.add_argument('--thermal', choices=('off', 'oven'), default='off',
-                       help='oven: the thermal model of docs/thermal_data.md (paper 002 oven '
-                            'profile from --temp-c, die lag, bias from temperature and its '
-                            'rate, hysteresis) replaces --temp-drift-c-per-h and '
+    noise.add_argument('--thermal', choices=THERMAL_CHOICES, default='off',
+                       help='the thermal model of docs/thermal_data.md (die lag, bias from '
+                            'temperature and its rate, hysteresis, accelerometer offset) with '
+                            'an oven profile: oven (paper 002, from --temp-c), heating, '
+                            'cooling, staircase, staircase_down, cycle, cool_reheat, soak, '
+                            'sine; replaces --temp-drift-c-per-h and '
                             '--temp-sensitivity-dps-per-c')
     noise.add_argument('--thermal-compress', type=float, default=60.0,
-                       help='run the ~14 h oven experiment this many times faster')
+                       help='run the thermal profile this many times faster (the ~14 h oven '
+                            'in 14 min at 60)')
     noise.add_argument('--vibration-hz', type=float, default=0.0,
                        help='sinusoidal vibration frequency (Hz)')
     noise.add_argument('--vibration-dps', type=_float_list, default=0.0,
@@ -223,17 +227,7 @@ def board_from_args(args):
                       temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
                       temp_sensitivity_dps_per_c=args.temp_sensitivity_dps_per_c, helium=helium,
                       vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0,
-                      t0_us=args.t0_us, thermal=_thermal_from_args(args), **extra)
-
-
-def _thermal_from_args(args):
-    """Build the ThermalStream of ``--thermal oven`` (25 degC bias left to --bias-dps), or None."""
-    if getattr(args, 'thermal', 'off') == 'off':
-        return None
-    from ..thermal.simulate import ThermalModel, ThermalStream
-
-    return ThermalStream(ThermalModel(bias_dps=0.0), compress=args.thermal_compress,
-                         room_c=args.temp_c)
+                      t0_us=args.t0_us, thermal=thermal_from_args(args), **extra)
 
 
 def _check_args(args):

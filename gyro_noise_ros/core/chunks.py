@@ -32,11 +32,21 @@ both methods (:mod:`.fractional`). Per sequence the paper tabulates:
 Variances across chunks use ``ddof = 1`` (unbiased over chunks); the variance inside a chunk uses
 ``ddof = 1`` as well.
 
-Beside the paper's means, every per-chunk quantity (bias, log variance, both orders) gets a robust
-location and spread (:func:`robust_location`), which the reference check of :mod:`.health`
-compares like with like: the median of the chunks, or of the dominant mode when the chunk orders
-fall in separate basins (:func:`order_modes`), and the normal-consistent standard deviation of
-those chunks without the 5 % lowest and highest.
+Beside the paper's means, every per-chunk quantity (bias, log variance, both orders, the noise
+colour) gets a robust location and spread (:func:`robust_location`), which the reference check of
+:mod:`.health` compares like with like: the median of the chunks, or of the dominant mode when the
+chunk orders fall in separate basins (:func:`order_modes`), and the normal-consistent standard
+deviation of those chunks without the 5 % lowest and highest.
+
+The *noise colour* of a chunk (:func:`noise_colour`) is the least-squares log-log slope of its
+overlapping Allan deviation over the averaging factors m = 2, 4, ..., 64 samples: -0.5 for white
+rate noise (angle random walk), 0 for flicker, +0.5 for a random walk, -1 for white angle noise. A
+fractional difference of order d (a GL filter) multiplies the rate PSD by ``|2 sin(pi f)|^(2d)``
+and so moves the slope by about -0.9 d over this band (closed form for white noise: -0.089 for d =
+0.1; -0.088 on the ADIS16405, whose Bartlett filter bends m = 1-2, hence m = 1 left out). Unlike
+the paper's identified orders, which a 0.1 filter moves by only 0.02-0.08 on that sensor, it
+follows the filter. Its chunk-to-chunk spread (~0.0125 with 10,000 samples) is estimation noise:
+six runs of that sensor agree to 0.005 (docs/verdicts.md).
 """
 
 from dataclasses import dataclass
@@ -45,10 +55,17 @@ import math
 import numpy as np
 from scipy.special import ndtri
 
+from .allan import allan_deviation
 from ..errors import InputDataError, ParameterError
 
 #: Default chunk length (paper 000 section 3.2).
 DEFAULT_CHUNK_SIZE = 10000
+
+#: Averaging factors (samples) of the noise colour (:func:`noise_colour`). m = 1 is left out: on
+#: band-limited sensors (the ADIS16405's Bartlett filter) the ADEV bends there. m = 64 keeps ~230
+#: EDF from a 10,000-sample chunk of white noise, and a chunk of 256 samples holds it under the
+#: N/4 rule of the Allan taus.
+NOISE_COLOUR_FACTORS = (2, 4, 8, 16, 32, 64)
 
 
 class Chunker:
@@ -170,6 +187,55 @@ def chunk_moments(chunk):
     if not np.all(np.isfinite(v)):
         raise InputDataError(f'chunk has {int((~np.isfinite(v)).sum())} NaN/Inf sample(s)')
     return ChunkMoments(float(v.mean()), float(v.var(ddof=1)))
+
+
+def noise_colour(chunk, *, factors=NOISE_COLOUR_FACTORS):
+    """
+    Return the noise colour of one chunk: the log-log slope of its Allan deviation.
+
+    The least-squares slope of ``log ADEV(m)`` against ``log m`` over ``factors``, with the fully
+    overlapping Allan deviation of :func:`.allan.allan_deviation` (paper 001 eq. 7, NIST SP 1065
+    eq. 11). Dimensionless and independent of the sample rate, the scale and the mean of the
+    chunk: -0.5 for white rate noise, 0 for flicker, +0.5 for a random walk (module doc).
+
+    Parameters
+    ----------
+    chunk : array_like
+        Finite rate samples of one chunk (any unit, e.g. rad/s).
+    factors : sequence of int, keyword-only
+        Averaging factors (samples, >= 1, at least two distinct).
+
+    Returns
+    -------
+    float
+        The slope; NaN when the chunk is shorter than ``4 * max(factors)`` samples (the N/4 rule
+        of the Allan taus) or constant (zero Allan deviation).
+
+    Raises
+    ------
+    InputDataError
+        Not 1-D, or NaN/Inf samples.
+    ParameterError
+        Fewer than two distinct factors, or a factor below 1.
+
+    """
+    v = np.asarray(chunk, dtype=np.float64)
+    if v.ndim != 1:
+        raise InputDataError(f'a chunk must be 1-D, got shape {v.shape}')
+    if not np.all(np.isfinite(v)):
+        raise InputDataError(f'chunk has {int((~np.isfinite(v)).sum())} NaN/Inf sample(s)')
+    m = np.unique(np.asarray(factors, dtype=np.int64))
+    if m.size < 2 or m[0] < 1:
+        raise ParameterError(
+            f'factors must hold at least two distinct averaging factors >= 1, got {factors!r}')
+    if v.shape[0] < 4 * m[-1]:
+        return float('nan')
+    adev = allan_deviation(v, 1.0, taus=m).adev
+    if not np.all(adev > 0):
+        return float('nan')
+    x = np.log(m.astype(np.float64))
+    xc = x - x.mean()
+    return float(xc @ np.log(adev) / (xc @ xc))
 
 
 @dataclass(frozen=True)
@@ -334,6 +400,9 @@ class SequenceSummary:
         Robust location and spread of the chunk biases (rate unit), of the natural log of the
         chunk variances (log of the squared rate unit) and of the chunk orders (dominant mode when
         multimodal), for the reference check; None when not computed.
+    noise_colour_robust : RobustLocation or None
+        Robust location and spread of the chunks' noise colour (:func:`noise_colour`,
+        dimensionless); None when not computed.
 
     """
 
@@ -355,10 +424,11 @@ class SequenceSummary:
     log_variance_robust: object = None
     alpha_var_robust: object = None
     alpha_corr_robust: object = None
+    noise_colour_robust: object = None
 
 
 def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0,
-                       ties_var=0, ties_corr=0, order_step=0.0):
+                       ties_var=0, ties_corr=0, order_step=0.0, noise_colour=None):
     """
     Summarise per-chunk results of one sequence and axis (paper 000 Tables 3-6).
 
@@ -374,6 +444,8 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
         Counts carried into the summary.
     order_step : float, keyword-only
         Step of the order grid (floor of the orders' robust spread, :func:`robust_location`).
+    noise_colour : array_like, optional, keyword-only
+        Chunk noise colours (:func:`noise_colour`; NaN where not computed); None: not summarised.
 
     Returns
     -------
@@ -407,7 +479,9 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
                            alpha_var_robust=robust_location(alpha_var, resolution=order_step,
                                                             modes=True),
                            alpha_corr_robust=robust_location(alpha_corr, resolution=order_step,
-                                                             modes=True))
+                                                             modes=True),
+                           noise_colour_robust=(None if noise_colour is None
+                                                else robust_location(noise_colour)))
 
 
 #: Smallest gap between sorted chunk orders that separates two modes (order units). The model's

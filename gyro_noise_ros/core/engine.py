@@ -83,7 +83,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
+from .chunks import DEFAULT_CHUNK_SIZE, noise_colour, SequenceSummary, summarise_sequence
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
 from .readout import fit_noise_terms_band_limited, read_allan
 from .timebase import rescale_allan, TimebaseTracker
@@ -364,6 +364,9 @@ class ChunkResult:
     tie_var, tie_corr : bool
         The minimum was an exact tie between grid orders (the largest is reported; see
         fractional.py).
+    noise_colour : float
+        Log-log slope of the chunk's Allan deviation over m = 2-64 samples (dimensionless,
+        :func:`.chunks.noise_colour`); NaN when the chunk is too short or not analysed.
     status : str
         One of :data:`STATUSES`.
     message : str
@@ -392,6 +395,7 @@ class ChunkResult:
     j_min: float
     tie_var: bool
     tie_corr: bool
+    noise_colour: float
     temperature_c: float
     status: str
     message: str = ''
@@ -415,9 +419,9 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
-    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a
-    chunk that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or
-    'failed'.
+    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`, and the chunk's noise colour
+    (:func:`.chunks.noise_colour`). Never raises for bad data: a chunk that cannot be identified
+    (NaN, constant) comes back with NaN orders and status 'nan' or 'failed'.
 
     Parameters
     ----------
@@ -439,7 +443,8 @@ def analyze_chunk(job, identifier=None, *, curves=False):
             'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
             'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
     empty = {'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
-             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False}
+             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False,
+             'noise_colour': _NAN}
     if job.status == 'nan':
         return ChunkResult(**base, **empty, status='nan',
                            message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
@@ -457,7 +462,8 @@ def analyze_chunk(job, identifier=None, *, curves=False):
         **base, alpha_var=ident.alpha_var, f_var=ident.f_var, var_min=ident.var_min,
         alpha_corr=ident.alpha_corr, f_corr=ident.f_corr, j_min=ident.j_min,
         tie_var=len(ident.tied_alphas_var) > 1, tie_corr=len(ident.tied_alphas_corr) > 1,
-        status='ok', var_curve=ident.var_curve, j_curve=ident.j_curve)
+        noise_colour=noise_colour(job.samples), status='ok', var_curve=ident.var_curve,
+        j_curve=ident.j_curve)
 
 
 @dataclass(frozen=True)
@@ -600,7 +606,7 @@ class _AxisState:
 
     def __init__(self, history):
         maxlen = history or None
-        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp, noise colour)
         self.rows = deque(maxlen=maxlen)
         self.nan_samples = 0
         self.by_status = dict.fromkeys(STATUSES, 0)
@@ -1030,7 +1036,7 @@ class NoiseEngine:
         if result.status == 'ok':
             state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
                                result.alpha_var, result.alpha_corr, result.tie_var,
-                               result.tie_corr, result.temperature_c))
+                               result.tie_corr, result.temperature_c, result.noise_colour))
 
     def skip(self, job, reason=''):
         """
@@ -1122,12 +1128,12 @@ class NoiseEngine:
         counts = self.counts()
         out = {}
         for axis, state in self._axis.items():
-            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 8)
+            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 9)
             seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
                                      tail_samples=counts.tail_samples,
                                      ties_var=int(rows[:, 5].sum()),
                                      ties_corr=int(rows[:, 6].sum()),
-                                     order_step=self._order_step)
+                                     order_step=self._order_step, noise_colour=rows[:, 8])
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
             sheet = None

@@ -54,6 +54,16 @@ defaults are read off the paper or measured on repeat runs of one sensor:
   false alarm, 4.5, plus 0.5; measured false-alarm and detection rates and a leave-one-run-out
   check in ``docs/verdicts.md`` (``docs/scripts/verdict_rates.py``). With fewer than
   ``reference_min_chunks`` (10) chunks in either record the comparison is "undetermined".
+* the noise colour against a reference (the log-log slope of each chunk's Allan deviation over m
+  = 2-64 samples, :func:`.chunks.noise_colour`): the same robust locations in pooled chunk
+  spreads, with its own multipliers, WARN above ``reference_colour_warn_sigma`` (2.5), ERROR above
+  ``reference_colour_error_sigma`` (5). Its own, because its chunk spread is estimation noise
+  (~0.012 from 10,000 samples) and not a difference between runs: the six ADIS16405 runs differ
+  by at most 1.0 pooled spread (1.6 on 10-chunk records), so the shared multiplier 5 would let a
+  colour change of ~0.09 (a GL filter of order 0.1, the detection target) pass half the time.
+  Chosen by the same rule on every record length of ``docs/verdicts.md`` (the smallest multiple
+  of 0.5 without a false alarm, 2.0, plus 0.5). It catches a filtering of the noise that the
+  identified orders miss (a GL filter of order 0.1 moves them by 0.02-0.08 on that sensor).
 * samples lost (from stamps) as a fraction of expected samples: WARN above ``lost_fraction_warn``
   (1e-4), ERROR above ``lost_fraction_error`` (1e-2). NaN/Inf samples: WARN if any, ERROR above
   ``lost_fraction_error`` as a fraction. Out-of-order (decreasing) stamps: WARN if any; equal
@@ -74,7 +84,7 @@ from pathlib import Path
 
 from scipy.special import stdtrit
 
-from .chunks import RobustLocation
+from .chunks import NOISE_COLOUR_FACTORS, RobustLocation
 from .items import DEG as _DEG
 from .items import fmt as _fmt
 from ..errors import InputDataError, ParameterError
@@ -106,8 +116,10 @@ class HealthThresholds:
     reference_warn_sigma, reference_error_sigma : float
         Limits on a difference from the reference: in pooled chunk spreads for bias, variance and
         both orders, in pooled standard errors for the offset drift (its Student-t equivalent).
+    reference_colour_warn_sigma, reference_colour_error_sigma : float
+        Limits on the difference of the noise colour from the reference, in pooled chunk spreads.
     reference_min_chunks : int
-        Chunks each record needs before bias, variance and orders are compared.
+        Chunks each record needs before bias, variance, orders and noise colour are compared.
     lost_fraction_warn, lost_fraction_error : float
         Limits on lost / expected samples (also NaN samples / samples for ERROR).
     skipped_fraction_warn, skipped_fraction_error : float
@@ -133,9 +145,15 @@ class HealthThresholds:
     reference_error_sigma: float = _threshold(
         10.0, 'ERROR when bias, variance, an order or the drift differs from the reference by '
         'more than this many sigma', 'sigma')
+    reference_colour_warn_sigma: float = _threshold(
+        2.5, 'WARN when the noise colour (ADEV log-log slope, m = 2-64 samples) differs from the '
+        'reference by more than this many pooled chunk spreads (docs/verdicts.md)', 'sigma')
+    reference_colour_error_sigma: float = _threshold(
+        5.0, 'ERROR when the noise colour differs from the reference by more than this many '
+        'pooled chunk spreads', 'sigma')
     reference_min_chunks: int = _threshold(
-        10, 'Chunks each record needs before bias, variance and orders are compared with the '
-        'reference (fewer: undetermined)', 'chunks')
+        10, 'Chunks each record needs before bias, variance, orders and noise colour are '
+        'compared with the reference (fewer: undetermined)', 'chunks')
     lost_fraction_warn: float = _threshold(
         1e-4, 'WARN above this fraction of samples lost (from stamps)')
     lost_fraction_error: float = _threshold(
@@ -160,6 +178,10 @@ class HealthThresholds:
             raise ParameterError(
                 f'reference_error_sigma ({self.reference_error_sigma}) must be >= '
                 f'reference_warn_sigma ({self.reference_warn_sigma})')
+        if self.reference_colour_error_sigma < self.reference_colour_warn_sigma:
+            raise ParameterError(
+                f'reference_colour_error_sigma ({self.reference_colour_error_sigma}) must be >= '
+                f'reference_colour_warn_sigma ({self.reference_colour_warn_sigma})')
         if self.lost_fraction_error < self.lost_fraction_warn:
             raise ParameterError(f'lost_fraction_error ({self.lost_fraction_error}) must be >= '
                                  f'lost_fraction_warn ({self.lost_fraction_warn})')
@@ -188,10 +210,10 @@ class ReferenceStats:
         Where it came from (file, bag, axis), for messages.
     offset_drift_stderr_rad_s2 : float
         Standard error of the reference drift (rad/s per s); NaN when unknown.
-    bias, log_variance, alpha_var, alpha_corr : chunks.RobustLocation or None
+    bias, log_variance, alpha_var, alpha_corr, noise_colour : chunks.RobustLocation or None
         Robust location and spread of the reference's chunk biases (rad/s), natural log of chunk
-        variances (of (rad/s)^2) and orders: what bias, variance and orders are compared with.
-        None: those comparisons are not made (said in the items).
+        variances (of (rad/s)^2), orders and noise colours: what bias, variance, orders and
+        noise colour are compared with. None: those comparisons are not made (said in the items).
 
     """
 
@@ -206,6 +228,7 @@ class ReferenceStats:
     log_variance: RobustLocation = None
     alpha_var: RobustLocation = None
     alpha_corr: RobustLocation = None
+    noise_colour: RobustLocation = None
 
     @classmethod
     def from_sequence(cls, sequence, *, source=''):
@@ -230,7 +253,8 @@ class ReferenceStats:
                    alpha_corr_mean=sequence.alpha_corr_mean, chunks=sequence.chunks,
                    source=source, offset_drift_stderr_rad_s2=sequence.drift.stderr,
                    bias=sequence.bias_robust, log_variance=sequence.log_variance_robust,
-                   alpha_var=sequence.alpha_var_robust, alpha_corr=sequence.alpha_corr_robust)
+                   alpha_var=sequence.alpha_var_robust, alpha_corr=sequence.alpha_corr_robust,
+                   noise_colour=getattr(sequence, 'noise_colour_robust', None))
 
 
 @dataclass(frozen=True)
@@ -355,6 +379,9 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     add('Fractional order, correlation method', _fmt(seq.alpha_corr_mean, 4), 'OK', '')
     var_deg = seq.mean_variance * _DEG ** 2
     add('Mean variance ((deg/s)^2)', _fmt(var_deg), 'OK', '')
+    colour = getattr(seq, 'noise_colour_robust', None)
+    if colour is not None:
+        add(COLOUR_NAME, _fmt(colour.location, 4), 'OK', '')
     if reference is not None:
         for spec in _COMPARISONS:
             add(*_compare(spec, getattr(seq, spec[1], None), getattr(reference, spec[2], None),
@@ -409,6 +436,8 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     return HealthVerdict(worst, message, tuple((k, v, lvl) for k, v, lvl, _ in items))
 
 
+#: Item key of the run's noise colour (robust location of the chunk values, informative).
+COLOUR_NAME = 'Noise colour (ADEV slope, m = 2-64 samples)'
 #: The like-with-like comparisons with a reference: (item key, SequenceSummary field,
 #: ReferenceStats field, name in sentences, kind of quantity).
 _COMPARISONS = (
@@ -418,7 +447,16 @@ _COMPARISONS = (
      'variance-method order', 'order'),
     ('Order deviation, correlation method', 'alpha_corr_robust', 'alpha_corr',
      'correlation-method order', 'order'),
+    ('Noise colour deviation (ADEV slope, m = 2-64 samples)', 'noise_colour_robust',
+     'noise_colour', 'noise colour (ADEV slope)', 'colour'),
 )
+
+
+def _limits(kind, th):
+    """Return the (WARN, ERROR) multipliers of a comparison of ``kind`` (module doc)."""
+    if kind == 'colour':
+        return th.reference_colour_warn_sigma, th.reference_colour_error_sigma
+    return th.reference_warn_sigma, th.reference_error_sigma
 
 
 def _drift_ratio(drift, reference, th):
@@ -516,7 +554,12 @@ def _compare(spec, mine, ref, th):
     key, _, _, name, kind = spec
     if mine is None or ref is None:
         side = 'this run' if mine is None else 'the reference'
-        return key, 'n/a', 'OK', f'{name}: no chunk statistics for {side}'
+        older = ' (a summary.json of an older gyro_noise_analyze)' if kind == 'colour' else ''
+        return key, 'n/a', 'OK', f'{name}: no chunk statistics for {side}{older}'
+    if kind == 'colour' and 0 in (mine.total, ref.total):
+        side = 'this run' if not mine.total else 'the reference'
+        return (key, 'n/a', 'OK', f'{name}: not computed for {side} (chunks of fewer than '
+                f'{4 * max(NOISE_COLOUR_FACTORS)} samples)')
     need = int(th.reference_min_chunks)
     if mine.count < need or ref.count < need:
         return (key, 'undetermined', 'OK',
@@ -532,9 +575,9 @@ def _compare(spec, mine, ref, th):
         value, by = f'{math.exp(diff):.4g}', f'a factor {math.exp(diff):.3g}'
     else:
         value, by = f'{diff:+.4f}', f'{abs(diff):.3f}'
-    level = ('ERROR' if d > th.reference_error_sigma else
-             'WARN' if d > th.reference_warn_sigma else 'OK')
-    limit = th.reference_error_sigma if level == 'ERROR' else th.reference_warn_sigma
+    warn, error = _limits(kind, th)
+    level = 'ERROR' if d > error else 'WARN' if d > warn else 'OK'
+    limit = error if level == 'ERROR' else warn
     return (key, f'{value} ({d:.3g} spreads)', level,
             f'{name} {_describe(mine, kind)} differs from the reference {_describe(ref, kind)} by '
             f'{by}, {d:.3g} pooled chunk spreads ({"above" if level != "OK" else "within"} '
@@ -553,9 +596,10 @@ def reference_dict(sequence):
     Returns
     -------
     dict
-        ``{'bias_rad_s', 'log_variance_rad2_s2', 'alpha_var', 'alpha_corr'}``, each the
-        :meth:`.chunks.RobustLocation.as_dict` of that quantity (the variance as the natural log
-        of the chunk variances in (rad/s)^2); None where not computed.
+        ``{'bias_rad_s', 'log_variance_rad2_s2', 'alpha_var', 'alpha_corr',
+        'noise_colour_adev_slope'}``, each the :meth:`.chunks.RobustLocation.as_dict` of that
+        quantity (the variance as the natural log of the chunk variances in (rad/s)^2, the noise
+        colour dimensionless); None where not computed.
 
     """
     out = {}
@@ -567,7 +611,8 @@ def reference_dict(sequence):
 
 #: summary.json keys of the robust chunk statistics and the SequenceSummary fields they hold.
 ROBUST_KEYS = (('bias_rad_s', 'bias_robust'), ('log_variance_rad2_s2', 'log_variance_robust'),
-               ('alpha_var', 'alpha_var_robust'), ('alpha_corr', 'alpha_corr_robust'))
+               ('alpha_var', 'alpha_var_robust'), ('alpha_corr', 'alpha_corr_robust'),
+               ('noise_colour_adev_slope', 'noise_colour_robust'))
 #: The per-axis key of summary.json holding :func:`reference_dict`.
 ROBUST_JSON_KEY = 'reference_statistics'
 
@@ -641,7 +686,8 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
             chunks=int(a.get('chunks', 0)), source=f'{path}:{entry.get("label")}:{axis}',
             offset_drift_stderr_rad_s2=float(a.get('offset_drift_stderr_rad_s2') or 'nan'),
             bias=stats['bias_robust'], log_variance=stats['log_variance_robust'],
-            alpha_var=stats['alpha_var_robust'], alpha_corr=stats['alpha_corr_robust'])
+            alpha_var=stats['alpha_var_robust'], alpha_corr=stats['alpha_corr_robust'],
+            noise_colour=stats['noise_colour_robust'])
     except (KeyError, TypeError, ValueError) as err:
         raise ParameterError(
             f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err

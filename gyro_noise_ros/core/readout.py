@@ -50,8 +50,8 @@ each key. The rules, and why:
   and are positively correlated, so treating them as independent makes the test conservative.
   Otherwise the curve was not seen to turn up within the record, and the value is flagged an
   **upper bound** (``bias_stability_upper_bound``); so it is too when a longer tau, past the
-  readable tenth, lies lower still (the floor may lie lower). Reported with its tau, its EDF and its
-  confidence interval.
+  readable tenth, lies lower still (the floor may lie lower). Reported with its tau, its EDF and
+  its confidence interval.
 * **B** = bias stability / 0.6643, the IEEE 952 bias-instability coefficient (the flicker floor of
   the Allan deviation is ``sqrt(2 ln 2 / pi) B``, IEEE 952 eq. C.27; paper 001 Fig. 1).
 * **Angle random walk** N: the -1/2 line through ONE contiguous region, read at tau = 1 s

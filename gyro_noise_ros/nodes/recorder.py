@@ -52,9 +52,9 @@ from sensor_msgs.msg import Imu, Temperature
 from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_node,
                           sensor_data_qos, take_all, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
-from ..bag.codec import frame_id_of, imu_covariances, temperature_variances
 from ..errors import OutputError
 from ..link.sequence import SequenceGapCounter
+from ..msgs import frame_id_of, imu_covariances, temperature_variances
 
 NODE_NAME = 'gyro_noise_record'
 

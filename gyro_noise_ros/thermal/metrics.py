@@ -43,13 +43,13 @@ Definitions (docs/thermal.md states the same):
   offline, non-causal method can do).
 """
 
+import dataclasses
 from dataclasses import dataclass
 import math
 
 import numpy as np
 import scipy.signal
 
-from .run import ThermalRun
 from ..core.allan import allan_deviation
 from ..core.readout import read_allan
 from ..errors import InputDataError, ParameterError
@@ -57,7 +57,7 @@ from ..errors import InputDataError, ParameterError
 __all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
-           'noise_metrics', 'step_response', 'verdict', 'white_noise_sigma']
+           'noise_metrics', 'noise_path_gain', 'step_response', 'verdict', 'white_noise_sigma']
 
 RAD2DEG = 180.0 / math.pi
 #: Window of the residual-drift means (s).
@@ -71,6 +71,8 @@ DEFAULT_F_HI_HZ = 50.0
 PRECURSOR_LIMIT = 0.05
 #: Bands per decade of the frequency-response estimate.
 BANDS_PER_DECADE = 20
+#: Seed of the white noise of the noise path (the same noise for every method).
+NOISE_PATH_SEED = 20211021
 
 
 @dataclass(frozen=True)
@@ -446,6 +448,11 @@ class StepResponse:
     precursor : float
         Largest change of the response over the last fifth of the window before the edge
         (fraction of the step; 0 for a causal method).
+    lead_s : float
+        How long before the step the response first moves by more than
+        :data:`PRECURSOR_LIMIT` of it from its level at the window's start (s; 0 when it does
+        not move before the step): the look-ahead the method uses, i.e. the latency a causal
+        version of it would have to add.
 
     """
 
@@ -456,6 +463,7 @@ class StepResponse:
     overshoot: float
     settled_gain: float
     precursor: float
+    lead_s: float = 0.0
 
 
 def _first_crossing(t, r, level):
@@ -511,11 +519,20 @@ def step_response(response, rate_hz, edges, deltas, window):
     t10 = _first_crossing(post_t, post, 0.1)
     t90 = _first_crossing(post_t, post, 0.9)
     d50 = _first_crossing(t, r, 0.5)
+    # the look-ahead: after the last sample before the edge still within the limit of the
+    # starting level (the baseline is the first fifth of the window)
+    quiet = np.flatnonzero(np.abs(r[:window]) <= PRECURSOR_LIMIT)
+    if quiet.size == 0:
+        lead = float(-t[0])
+    elif quiet[-1] == window - 1:
+        lead = 0.0
+    else:
+        lead = float(-t[quiet[-1] + 1])
     # a non-causal filter crosses 50 % before the edge; report that crossing, from the full window
     return StepResponse(t_s=t, response=r, delay_50_s=d50, rise_time_s=t90 - t10,
                         overshoot=float(post.max() - 1.0),
                         settled_gain=float(post[post.size // 2:].mean()),
-                        precursor=float(np.abs(pre).max()) if pre.size else 0.0)
+                        precursor=float(np.abs(pre).max()) if pre.size else 0.0, lead_s=lead)
 
 
 def _axis_bandwidth(injection, diff, rate_hz):
@@ -543,7 +560,34 @@ def _low_gain(fr):
     return float(fr.gain[band].min()) if band.any() else math.nan
 
 
-def verdict(raw, processed, fr, st, *, causal, small=None):
+def noise_path_gain(injected_rad_s, response_rad_s, rate_hz):
+    """
+    Return the ARW gain of a method on its noise path: ARW of its response over ARW of the input.
+
+    ``injected_rad_s`` is white noise added to a run, ``response_rad_s`` the method's output
+    with it minus its output without it. A drift model subtracts the same drift from both, so
+    its response is the injected noise itself and the gain is 1 whatever the drift does to the
+    ADEV of the output; a denoiser's response is the part of the noise it keeps.
+
+    Parameters
+    ----------
+    injected_rad_s, response_rad_s : array_like
+        (n,) rad/s.
+    rate_hz : float
+        Sample rate (Hz).
+
+    Returns
+    -------
+    float
+        ``ARW(response) / ARW(injected)``, both read as in :func:`noise_metrics`.
+
+    """
+    a_in = _noise_metrics(injected_rad_s, rate_hz, DRIFT_WINDOW_S)[0].arw_deg_sqrt_h
+    a_out = _noise_metrics(response_rad_s, rate_hz, DRIFT_WINDOW_S)[0].arw_deg_sqrt_h
+    return a_out / a_in
+
+
+def verdict(raw, processed, fr, st, *, causal, small=None, noise_gain=None):
     """
     Say in plain words what a method did to the noise, to the drift and to motion.
 
@@ -559,16 +603,23 @@ def verdict(raw, processed, fr, st, *, causal, small=None):
         What the method declares.
     small : tuple of (FrequencyResponse, StepResponse, float), optional
         The same at small amplitude, and that amplitude (rad/s).
+    noise_gain : float, optional
+        :func:`noise_path_gain` of the axis. When given it is the ``arw_ratio`` (drift leaking
+        into the output's ADEV near 1 s is not noise removed); ``output_arw_ratio`` keeps the
+        ratio of the output's and the input's ARW read-outs either way.
 
     Returns
     -------
     dict
-        ``arw_ratio``, ``residual_drift_ratio``, ``low_band_min_gain``,
+        ``arw_ratio``, ``output_arw_ratio``, ``arw_source`` ('noise path' or 'output'),
+        ``residual_drift_ratio``, ``low_band_min_gain``,
         ``small_signal_low_band_min_gain``, ``arw_from_bandwidth`` (bool), ``measured_causal``
         (bool), ``live_capable`` (bool) and ``text`` (sentences).
 
     """
-    arw_ratio = processed.arw_deg_sqrt_h / raw.arw_deg_sqrt_h
+    output_ratio = processed.arw_deg_sqrt_h / raw.arw_deg_sqrt_h
+    arw_ratio = output_ratio if noise_gain is None else float(noise_gain)
+    source = 'output' if noise_gain is None else 'noise path'
     drift_ratio = processed.residual_drift_deg_s / raw.residual_drift_deg_s
     low_gain = _low_gain(fr)
     cut = [f'motion at 0.1-1 Hz passed with gain down to {low_gain:.3g}'] if low_gain < 0.9 else []
@@ -595,6 +646,10 @@ def verdict(raw, processed, fr, st, *, causal, small=None):
         text.append(f'ARW x{arw_ratio:.3g}: no denoising ({_band_text(fr)}).')
     else:
         text.append(f'No ARW can be read off the processed Allan curve ({_band_text(fr)}).')
+    if (noise_gain is not None and math.isfinite(output_ratio)
+            and abs(output_ratio - arw_ratio) > 0.05):
+        text.append(f'(The ARW read-out of the output is x{output_ratio:.3g} of the input one: '
+                    'the difference is drift in the ADEV of the input near 1 s, not noise.)')
     if not processed.arw_on_slope:
         text.append('The processed Allan curve has no -1/2 region: its ARW is only ADEV(1 s).')
     if processed.band_limited_below_s > max(raw.band_limited_below_s, 0.0):
@@ -607,7 +662,8 @@ def verdict(raw, processed, fr, st, *, causal, small=None):
                     'offline only.')
     elif not causal:
         text.append('Declared non-causal (offline only).')
-    return {'arw_ratio': _num(arw_ratio), 'residual_drift_ratio': _num(drift_ratio),
+    return {'arw_ratio': _num(arw_ratio), 'output_arw_ratio': _num(output_ratio),
+            'arw_source': source, 'residual_drift_ratio': _num(drift_ratio),
             'low_band_min_gain': _num(low_gain),
             'small_signal_low_band_min_gain': _num(small_gain), 'arw_from_bandwidth': from_bw,
             'measured_causal': measured_causal, 'live_capable': bool(causal and measured_causal),
@@ -624,13 +680,12 @@ def _curve(values):
 
 
 def _run_with(run, gyro):
-    return ThermalRun(t_s=run.t_s, gyro_rad_s=gyro, temperature_c=run.temperature_c,
-                      rate_hz=run.rate_hz, name=run.name)
+    return dataclasses.replace(run, gyro_rad_s=gyro)
 
 
 def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
                     f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, processed=None,
-                    small_signal=True):
+                    small_signal=True, noise_path=True):
     """
     Score a fitted method on a held-out run: noise, drift and bandwidth per axis.
 
@@ -651,6 +706,11 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         Also inject the same signal scaled to the white-noise sigma of the run
         (:func:`white_noise_sigma`) and report ``bandwidth_small_signal``: a nonlinear method
         that passes a large motion may remove a small one (one more ``apply``).
+    noise_path : bool, keyword-only
+        Also add white noise of the run's own size (:func:`white_noise_sigma`, a fixed seed)
+        and take the ARW gain from the method's response to it (:func:`noise_path_gain`, one
+        more ``apply``): the verdict's ``arw_ratio``, free of the drift that leaks into the
+        output's ADEV near 1 s. Without it the ratio of the output's read-outs is used.
 
     Returns
     -------
@@ -673,6 +733,12 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         processed = np.asarray(method.apply(run), dtype=float)
     _check_output(method, processed, n)
     diff = _response(method, run, gyro, processed, inj.signal_rad_s)
+    noise_in = noise_diff = None
+    if noise_path:
+        # a fixed seed: the same noise for every method scored on this run
+        noise_in = (white_noise_sigma(gyro)
+                    * np.random.default_rng(NOISE_PATH_SEED).standard_normal(gyro.shape))
+        noise_diff = _response(method, run, gyro, processed, noise_in)
     small_amp = small_diff = None
     if small_signal:
         small_amp = white_noise_sigma(gyro)
@@ -697,14 +763,21 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
             curves[name].update(frequency_small=s_fr, step_small=s_st)
             axes[name]['bandwidth_small_signal'] = dict(
                 _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD2DEG)
+        gain = None
+        if noise_path:
+            gain = noise_path_gain(noise_in[:, a], noise_diff[:, a], run.rate_hz)
+            axes[name]['noise_path'] = {'arw_gain': _num(gain),
+                                        'amplitude_deg_s': _num(np.std(noise_in[:, a])
+                                                                * RAD2DEG)}
         axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
-                                        small=small)
+                                        small=small, noise_gain=gain)
     doc = {
         'method': method.name, 'causal': bool(method.causal),
         'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD2DEG,
                       'small_signal_amplitude_deg_s': (small_amp * RAD2DEG if small_signal
                                                        else None),
                       'f_lo_hz': inj.f_lo_hz, 'f_hi_hz': inj.f_hi_hz,
+                      'noise_path_seed': NOISE_PATH_SEED if noise_path else None,
                       'chirp_start_s': inj.chirp.start / run.rate_hz,
                       'chirp_stop_s': inj.chirp.stop / run.rate_hz,
                       'step_edges_s': _curve(inj.step_edges / run.rate_hz)},
@@ -714,7 +787,8 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
 
 
 def _response(method, run, gyro, processed, signal):
-    out = np.asarray(method.apply(_run_with(run, gyro + signal[:, None])), dtype=float)
+    add = signal if signal.ndim == 2 else signal[:, None]
+    out = np.asarray(method.apply(_run_with(run, gyro + add)), dtype=float)
     _check_output(method, out, gyro.shape[0])
     return out - processed
 
@@ -735,7 +809,7 @@ def _bandwidth_dict(fr, st):
         'low_band_min_gain': _num(_low_gain(fr)),
         'step_delay_50_s': _delay(st.delay_50_s), 'step_rise_time_s': _delay(st.rise_time_s),
         'step_overshoot': _num(st.overshoot), 'step_settled_gain': _num(st.settled_gain),
-        'step_precursor': _num(st.precursor),
+        'step_precursor': _num(st.precursor), 'step_lead_s': _delay(st.lead_s),
         'frequency_hz': _curve(fr.frequency_hz), 'gain': _curve(fr.gain),
         'phase_deg': _curve(fr.phase_deg), 'group_delay_s': _curve(fr.group_delay_s),
         'coherence': _curve(fr.coherence),

@@ -26,7 +26,7 @@ import math
 from _reliability_common import static_record
 from gyro_noise_ros.calibration.emulate import BiasVariation, SensorErrors
 from gyro_noise_ros.calibration.interval import (band_test, bias_instability_interval, compare,
-                                                 Interval, log_adev_sd, overall, Verdict)
+                                                 log_adev_sd, overall, Verdict)
 from gyro_noise_ros.calibration.static_record import CHANNELS, StaticRecord, Term
 from gyro_noise_ros.core.allan import allan_deviation, fit_noise_terms
 from gyro_noise_ros.core.readout import (fit_noise_terms_band_limited, MAX_TAU_FRACTION,

@@ -35,10 +35,14 @@ written, only the disk I/O is skipped). Parts::
 Run (seeded: the same numbers every time; per-record results are cached in --cache)::
 
     nice python docs/scripts/reliability_verdicts.py --part all --cache /tmp/relcache
+
+``--write`` puts the tables into docs/reliability.md between its markers, with the command.
 """
 
 import argparse
+import contextlib
 import dataclasses
+import io
 import json
 import math
 import os
@@ -55,6 +59,7 @@ from gyro_noise_ros.core.simulate import gauss_markov_avar
 from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link.emulator import ACCEL_NOISE_DENSITY_UG_RTHZ
 import numpy as np
+import scipy.stats
 
 DEG = math.pi / 180.0
 
@@ -138,6 +143,26 @@ def truth():
     return {s: (out[(s, False)], out[(s, True)]) for s in ('accel', 'gyro')}
 
 
+_TRUTH = {}
+
+
+def _truth_ratio(ch):
+    """Return the emulator's true width ratio after/before --stress of one channel."""
+    if not _TRUTH:
+        _TRUTH.update({s: a.width_s / b.width_s for s, (b, a) in truth().items()})
+    return _TRUTH[ch.split('_')[0]]
+
+
+def _upper95(k, n):
+    """Return the one-sided 95 % Clopper-Pearson upper bound of a rate k / n."""
+    return 1.0 if k >= n else float(scipy.stats.beta.ppf(0.95, k + 1, n - k))
+
+
+def _lower95(k, n):
+    """Return the one-sided 95 % Clopper-Pearson lower bound of a rate k / n."""
+    return 0.0 if k <= 0 else float(scipy.stats.beta.ppf(0.05, k, n - k + 1))
+
+
 def part_truth():
     print('\n### Truth: the emulator model, closed form\n')
     print('| sensor | interval before (s) | interval after --stress (s) | width ratio |')
@@ -145,6 +170,9 @@ def part_truth():
     for sensor, (b, a) in truth().items():
         print(f'| {sensor} (x, y, z alike) | {b.lo_s:.3g} - {b.hi_s:.4g} | {a.lo_s:.3g} - '
               f'{a.hi_s:.4g} | {a.width_s / b.width_s:.3f} |')
+    big = [ch for ch in CHANNELS if _truth_ratio(ch) >= 2.0]
+    print('\nChannels --stress changes by 2x or more (emulator truth): '
+          f'{", ".join(big) or "none"}.')
 
 
 def part_sigma(n, cache):
@@ -186,12 +214,12 @@ def part_sigma(n, cache):
                   f'{spread / stated:.2f} | {np.mean(z <= 1):.0%} | {np.mean(z <= 1.645):.0%} |')
 
 
-def _pairs(pairs, cache, odr, hours, seeds):
+def _pairs(pairs, cache, odr, hours, seeds, stress_pairs=None):
     a0, b0, s0 = seeds
     null = [(record(a0 + i, odr, hours, False, cache), record(b0 + i, odr, hours, False, cache))
             for i in range(pairs)]
     stress = [(record(a0 + i, odr, hours, False, cache), record(s0 + i, odr, hours, True, cache))
-              for i in range(pairs)]
+              for i in range(pairs if stress_pairs is None else stress_pairs)]
     return null, stress
 
 
@@ -214,9 +242,10 @@ def _count(pairs_list, tolerance=0.5):
     return ch, sen, old, decide, changes
 
 
-def part_pairs(label, pairs, cache, odr, hours, seeds):
-    null, stress = _pairs(pairs, cache, odr, hours, seeds)
-    print(f'\n### {label}: {pairs} pairs of {hours:g} h records at {odr:g} Hz\n')
+def part_pairs(label, pairs, cache, odr, hours, seeds, stress_pairs=None):
+    null, stress = _pairs(pairs, cache, odr, hours, seeds, stress_pairs)
+    print(f'\n### {label}: {pairs} unstressed pairs and {len(stress)} stressed pairs of '
+          f'{hours:g} h records at {odr:g} Hz\n')
     print('| pairs | channels | beyond | physiological | undetermined | old rule (abs(change) '
           '> 50 %) | sensors beyond / physiological / undetermined | median record that '
           'would decide (h) | median change |')
@@ -229,6 +258,23 @@ def part_pairs(label, pairs, cache, odr, hours, seeds):
               f'{ch["undetermined"]} | {old} | {sen["beyond"]} / {sen["physiological"]} / '
               f'{sen["undetermined"]} of {2 * len(pl)} | {med} | '
               f'{100 * np.median(changes):+.0f} % |')
+    fa, n_null = _count(null)[0]['beyond'], 6 * len(null)
+    det = n_det = 0
+    for b, a in stress:
+        verdicts, _ = verdicts_of(_Static(b), _Static(a))
+        for name, v in verdicts.items():
+            if _truth_ratio(name) >= 2.0:
+                n_det += 1
+                det += v.verdict == 'beyond'
+    sen_fa = _count(null)[1]['beyond']
+    sen_det = _count(stress)[1]['beyond']
+    print(f'\nFalse-alarm rate (unstressed pairs, channel called beyond): {fa} of {n_null} '
+          f'({100 * fa / n_null:.1f} %, one-sided 95 % upper bound '
+          f'{100 * _upper95(fa, n_null):.1f} %); sensors: {sen_fa} of {2 * len(null)}. '
+          'Detection rate (channels --stress changes '
+          f'by 2x or more, called beyond): {det} of {n_det} ({100 * det / max(n_det, 1):.0f} %, '
+          f'one-sided 95 % lower bound {100 * _lower95(det, n_det):.0f} %); sensors: {sen_det} of '
+          f'{2 * len(stress)}.')
     amb = sum(1 for pl in (null, stress) for pair in pl for rec in pair
               for c in rec['channels'].values() if c['interval']['fallback_s'] is not None)
     sig = sum(1 for pl in (null, stress) for pair in pl for rec in pair
@@ -245,20 +291,60 @@ def main(argv=None):
     p.add_argument('--cache', help='folder for per-record results (resumable)')
     p.add_argument('--sigma-records', type=int, default=100)
     p.add_argument('--pairs', type=int, default=10)
+    p.add_argument('--stress-pairs', type=int, default=None,
+                   help='unstressed -> --stress pairs at the default length (default: --pairs)')
     p.add_argument('--long-pairs', type=int, default=4)
+    p.add_argument('--long-stress-pairs', type=int, default=None)
     p.add_argument('--long-hours', type=float, default=48.0)
+    p.add_argument('--write', action='store_true',
+                   help='write the tables into docs/reliability.md between its markers '
+                        '(with --part all)')
     args = p.parse_args(argv)
+    if args.write and args.part != 'all':
+        p.error('--write needs --part all')
     parts = ('truth', 'sigma', 'default', 'long') if args.part == 'all' else (args.part,)
+    if args.write:
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            _run(parts, args)
+        _write_doc(buf.getvalue(), argv if argv is not None else sys.argv[1:])
+        print(buf.getvalue())
+        return 0
+    _run(parts, args)
+    return 0
+
+
+BEGIN = '<!-- reliability_verdicts.py: begin -->'
+END = '<!-- reliability_verdicts.py: end -->'
+
+
+def _write_doc(text, argv):
+    """Replace the tables between the markers of docs/reliability.md."""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'reliability.md')
+    with open(path) as fh:
+        doc = fh.read()
+    if doc.count(BEGIN) != 1 or doc.count(END) != 1:
+        sys.exit(f'{path}: needs exactly one {BEGIN} and one {END}')
+    cmd = ' '.join(['nice python docs/scripts/reliability_verdicts.py'] + list(argv))
+    block = f'{BEGIN}\nMade by `{cmd}`.\n{text.rstrip()}\n{END}'
+    head, rest = doc.split(BEGIN)
+    doc = head + block + rest.split(END, 1)[1]
+    with open(path + '.tmp', 'w') as fh:
+        fh.write(doc)
+    os.replace(path + '.tmp', path)
+
+
+def _run(parts, args):
     if 'truth' in parts:
         part_truth()
     if 'sigma' in parts:
         part_sigma(args.sigma_records, args.cache)
     if 'default' in parts:
-        part_pairs('Default length', args.pairs, args.cache, 104.0, 4, (1000, 2000, 3000))
+        part_pairs('Default length', args.pairs, args.cache, 104.0, 4, (1000, 2000, 3000),
+                   args.stress_pairs)
     if 'long' in parts:
         part_pairs('Long records', args.long_pairs, args.cache, 12.5, args.long_hours,
-                   (4000, 5000, 6000))
-    return 0
+                   (4000, 5000, 6000), args.long_stress_pairs)
 
 
 if __name__ == '__main__':

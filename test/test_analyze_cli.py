@@ -376,7 +376,7 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
 
 def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
         odd_bags, tmp_path, capsys, monkeypatch):
-    from gyro_noise_ros.cli import analyze
+    from gyro_noise_ros.app import analyze
 
     opened = []
 

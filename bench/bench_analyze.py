@@ -249,7 +249,7 @@ def _git_head(root):
 
 
 def in_process(args, bag, tmp):
-    from gyro_noise_ros.cli.analyze import analyze_bags
+    from gyro_noise_ros.app.analyze import analyze_bags, AnalyzeParams
 
     axes = AXES if args.axis == 'all' else (args.axis,)
     # Load the numba caches (Allan kernels) once here so that neither timed run pays for it.
@@ -259,11 +259,12 @@ def in_process(args, bag, tmp):
     warm.summary()
     rows = []
     for jobs in (1, 2):
-        doc = analyze_bags([bag], out_dir=tmp / f'out{jobs}', config=EngineConfig(axes=axes),
-                           jobs=jobs, figures=False, curves=args.curves)
-        tm = doc['_timing']
+        result = analyze_bags(AnalyzeParams(paths=(bag,), out_dir=tmp / f'out{jobs}',
+                                            config=EngineConfig(axes=axes), jobs=jobs,
+                                            figures=False, curves=args.curves))
+        tm = result.timing
         rows.append((jobs, tm['total_s'], tm['decode_s']))
-        chunks = sum(a['chunks'] for a in doc['bags'][0]['axes'].values())
+        chunks = sum(a['chunks'] for a in result.bags[0]['axes'].values())
         print(f'--jobs {jobs}: {tm["total_s"]:.1f} s, {args.samples / tm["total_s"]:,.0f} '
               'samples/s, ' f'{chunks} chunk identifications ({len(axes)} axes), decode '
               f'{tm["decode_s"]:.1f} s '

@@ -34,10 +34,10 @@ import time
 os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
 
 from geometry_msgs.msg import Vector3Stamped  # noqa: E402
+from gyro_noise_ros.app.live import CHUNK_TOPICS  # noqa: E402
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter  # noqa: E402
 from gyro_noise_ros.cli import analyze as analyze_cli  # noqa: E402
 from gyro_noise_ros.core.engine import NoiseEngine  # noqa: E402
-from gyro_noise_ros.core.live import CHUNK_TOPICS  # noqa: E402
 from gyro_noise_ros.core.simulate import simulate_fractional_noise  # noqa: E402
 from gyro_noise_ros.errors import ParameterError  # noqa: E402
 from gyro_noise_ros.nodes import analyzer  # noqa: E402

@@ -128,7 +128,7 @@ def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):
 
 
 def test_a_failing_component_is_named_with_its_log(tmp_path):
-    from gyro_noise_ros.cli.demo import DemoError, Processes
+    from gyro_noise_ros.app.demo import DemoError, Processes
 
     procs = Processes(dict(os.environ, ROS_DOMAIN_ID=str(_domain())), tmp_path)
     procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', '--ros-args', '-p',

@@ -21,12 +21,12 @@ from dataclasses import fields
 import time
 from types import SimpleNamespace
 
+from gyro_noise_ros.app.live import LiveAnalysis, parse_axes, TemperatureTrack
 from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.health import HealthThresholds
 from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
-from gyro_noise_ros.core.live import LiveAnalysis, parse_axes, TemperatureTrack
 from gyro_noise_ros.core.readout import read_allan
 from gyro_noise_ros.errors import LinkError, ParameterError
 from gyro_noise_ros.link import protocol as P

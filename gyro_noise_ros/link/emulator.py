@@ -17,8 +17,8 @@ Pure model of the Portenta H7 + LSM6DSO32 board.
 
 Samples with ground truth, configuration commands, faults.
 
-No I/O and no threads: ``cli/emulator.py`` serves this model on a pseudo-terminal or TCP and writes
-SD logs.
+No I/O and no threads: :mod:`gyro_noise_ros.link.serve` serves this model on a pseudo-terminal or
+TCP and writes SD logs.
 
 Signal model of one gyro axis at sample k (time ``t_k``, seconds since power-on)::
 

@@ -59,12 +59,12 @@ from sensor_msgs.msg import Imu, Temperature
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           specs_from_dataclass, take_all, unused_callback, wall_timer)
+from ..app.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import axis_status, HealthThresholds
 from ..core.items import allan_items, DEG, fmt, last_chunk_items, stream_items
-from ..core.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..errors import GyroNoiseError
 from ..link.sequence import SequenceGapCounter
 

@@ -18,36 +18,33 @@
 The same bag played into the node and given to the offline tool and to the engine yields identical
 per-chunk numbers; the node skips chunks when analysis falls behind; bad parameters are refused.
 
-The node runs in this process with ``parameter_overrides`` on a private ROS_DOMAIN_ID and its own
-rclpy context; a publisher node replays the bag's serialised messages (bytes as stored, no
-re-encoding).
+The node runs in this process with ``parameter_overrides`` in the test's private graph
+(``ros_graph`` in ``conftest.py``) and its own rclpy context; a publisher node replays the bag's
+serialised messages (bytes as stored, no re-encoding).
 """
 
 import math
 import os
-import random
 import subprocess
 import sys
 import threading
 import time
 
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
-
-from geometry_msgs.msg import Vector3Stamped  # noqa: E402
-from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter  # noqa: E402
-from gyro_noise_ros.cli import analyze as analyze_cli  # noqa: E402
-from gyro_noise_ros.core.engine import NoiseEngine  # noqa: E402
-from gyro_noise_ros.core.live import CHUNK_TOPICS  # noqa: E402
-from gyro_noise_ros.core.simulate import simulate_fractional_noise  # noqa: E402
-from gyro_noise_ros.errors import ParameterError  # noqa: E402
-from gyro_noise_ros.nodes import analyzer  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+from geometry_msgs.msg import Vector3Stamped
+from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.cli import analyze as analyze_cli
+from gyro_noise_ros.core.engine import NoiseEngine
+from gyro_noise_ros.core.live import CHUNK_TOPICS
+from gyro_noise_ros.core.simulate import simulate_fractional_noise
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.nodes import analyzer
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos
+import numpy as np
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import Imu, Temperature
 
 pytestmark = pytest.mark.ros
 
@@ -55,14 +52,6 @@ RATE_HZ = 6660.0
 # Small chunks, memory and grid keep the test fast; the comparison is exact whatever the sizes.
 SMALL = {'chunk_size': 2000, 'memory': 200, 'order_grid_step': 0.05, 'diagnostics_period_s': 0.2}
 DEG = 180.0 / math.pi
-
-
-@pytest.fixture
-def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
 
 
 def _overrides(**values):

@@ -28,7 +28,6 @@ the ramp causes, the second sees it gone.
 import json
 import os
 from pathlib import Path
-import random
 import subprocess
 import sys
 import time
@@ -135,9 +134,7 @@ def _fit_poly3(bag, out):
 
 @pytest.mark.slow
 @pytest.mark.timeout(300)
-def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path, monkeypatch):
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(100, 200)))
-
+def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path):
     # 1. Training run, recorded. The nodes first and the board last: the board's temperature
     # ramps from its power-on, connected or not, so a driver that connects late (a loaded host:
     # seconds) would start the recording warmer, and the held-out run could begin below the
@@ -280,11 +277,9 @@ def _statuses_after(seen, marks, name):
 
 @pytest.mark.slow
 @pytest.mark.timeout(400)
-def test_oven_drift_gone_on_the_compensated_stream(tmp_path, monkeypatch):
+def test_oven_drift_gone_on_the_compensated_stream(tmp_path):
     from gyro_noise_ros.cli import emulator as emulator_cli
     from gyro_noise_ros.core.health import drift_t_threshold
-
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(100, 200)))
 
     # 1. Training run (seed 7) at the same compression, written by the emulator as the driver
     # would publish it (--write-bag: same quantisation, Temperature at the same 52 Hz), and the

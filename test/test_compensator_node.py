@@ -15,52 +15,41 @@
 """
 ``imu_compensator`` in-process: published messages equal the pure computation; refusals.
 
-The node runs in this process with ``parameter_overrides`` (or an injected causal model) on a
-private ROS_DOMAIN_ID and its own rclpy context; a player node publishes serialised Imu and
-Temperature messages, a listener takes ``imu/data_compensated`` raw and decodes it.
+The node runs in this process with ``parameter_overrides`` (or an injected causal model) in the
+test's private graph (``ros_graph`` in ``conftest.py``) and its own rclpy context; a player node
+publishes serialised Imu and Temperature messages, a listener takes ``imu/data_compensated`` raw
+and decodes it.
 """
 
 import importlib
-import os
-import random
 import subprocess
 import sys
 import time
 
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
-
-from _thermal_linear import LinearThermal  # noqa: E402
-from gyro_noise_ros.bag import decode_imu  # noqa: E402
-from gyro_noise_ros.bag.codec import encode_imu_cdr, encode_temperature_cdr  # noqa: E402
-from gyro_noise_ros.bag.codec import typestore  # noqa: E402
-from gyro_noise_ros.calibration.apply import calibration_from_parameters  # noqa: E402
-from gyro_noise_ros.errors import ParameterError  # noqa: E402
-from gyro_noise_ros.nodes import compensator  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import unused_callback, WARN  # noqa: E402
-from gyro_noise_ros.thermal.live import LiveDriftEvaluator  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+from _thermal_linear import LinearThermal
+from gyro_noise_ros.bag import decode_imu
+from gyro_noise_ros.bag.codec import encode_imu_cdr, encode_temperature_cdr
+from gyro_noise_ros.bag.codec import typestore
+from gyro_noise_ros.calibration.apply import calibration_from_parameters
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.nodes import compensator
+from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all
+from gyro_noise_ros.nodes._ros_common import unused_callback, WARN
+from gyro_noise_ros.thermal.live import LiveDriftEvaluator
+import numpy as np
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu, Temperature
 
 pytestmark = pytest.mark.ros
 
 RATE_HZ = 6660.0
 NS = 1_000_000_000
 T0_NS = 1_700_000_000 * NS
-
-
-@pytest.fixture
-def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
 
 
 def _calibration_params(seed):

@@ -21,7 +21,6 @@ and compared with what was published: the same count (nothing lost, nothing twic
 and values.
 """
 
-import random
 import signal
 import subprocess
 import sys
@@ -44,18 +43,17 @@ def _expected(samples, seed, sigma=0.004):
 
 
 def _record(tmp_path, samples, seed, sig, storage):
-    domain = random.randint(100, 200)
     out = tmp_path / f'bag_{storage}'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', f'storage:={storage}',
                             # The replayer publishes reliable, as the driver does: a reliable
                             # subscription keeps a loaded host from dropping messages in transport.
                             '-p', 'reliable:=true'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           env=ros_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
     # The replayer waits for the recorder's Imu subscription, publishes in real time at 6.66 kHz
     # and lingers 1 s, so the recorder has taken everything before the signal.
-    rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1)
+    rep = start_replayer('--samples', samples, '--seed', seed, '--subscribers', 1)
     try:
         rep_out, rep_err = rep.communicate(timeout=120)
         assert rep.returncode == 0, rep_err
@@ -100,13 +98,12 @@ def test_records_every_message_at_6660_hz(tmp_path, sig, storage):
 
 @pytest.mark.timeout(120)
 def test_killed_recorder_leaves_a_readable_db3(tmp_path):
-    domain = random.randint(100, 200)
     out = tmp_path / 'killed'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                             '-p', f'output:={out}', '-p', 'flush_period_s:=0.2'],
-                           env=ros_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           env=ros_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
-    rep = start_replayer(domain, '--samples', 10000, '--seed', 3, '--linger-s', 1.5)
+    rep = start_replayer('--samples', 10000, '--seed', 3, '--linger-s', 1.5)
     try:
         rep.communicate(timeout=120)
         rec.kill()  # SIGKILL: no drain, no close, no metadata.yaml
@@ -125,7 +122,7 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
 
 
 def test_refuses_an_existing_output(tmp_path):
-    env = ros_env(random.randint(100, 200))
+    env = ros_env()
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                            '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True,
                           timeout=60)
@@ -136,7 +133,7 @@ def test_refuses_an_existing_output(tmp_path):
 
 
 def test_refuses_an_unknown_storage(tmp_path):
-    env = ros_env(random.randint(100, 200))
+    env = ros_env()
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                            '-p', f'output:={tmp_path / "b"}', '-p', 'storage:=zip'],
                           env=env, capture_output=True, text=True, timeout=60)

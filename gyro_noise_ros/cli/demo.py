@@ -15,8 +15,9 @@
 """
 ``make demo``: the whole story on one machine, from an emulated board to the offline report.
 
-``python -m gyro_noise_ros.cli.demo --out demo_out [--quick]`` starts, as subprocesses on a private
-``ROS_DOMAIN_ID``:
+``python -m gyro_noise_ros.cli.demo --out demo_out [--quick]`` starts, as subprocesses in a private
+ROS graph (a ``ROS_DOMAIN_ID`` checked free on this host and held while the demo runs,
+localhost-only discovery: :func:`gyro_noise_ros.rosgraph.lease_domain`, as the tests use):
 
 1. ``noise_analyzer`` (live analysis, diagnostics), ``gyro_noise_record`` (the bag), the
    diagnostics monitor (``gyro_noise_monitor``) and ``lsm6dso32_driver`` (which retries its port
@@ -55,7 +56,6 @@ from dataclasses import dataclass
 import os
 from pathlib import Path
 import queue
-import random
 import re
 import shutil
 import signal
@@ -66,6 +66,7 @@ import threading
 import time
 
 from ._common import run_cli
+from .. import rosgraph
 from ..errors import GyroNoiseError
 from ..monitor_lines import parse_axis_parts
 
@@ -144,7 +145,8 @@ def build_parser():
     p.add_argument('--storage', default='sqlite3', choices=('sqlite3', 'mcap'), help='bag storage')
     p.add_argument('--jobs', type=int, default=2, help='worker processes of the offline analysis')
     p.add_argument('--domain-id', type=int, default=None,
-                   help='ROS_DOMAIN_ID (default: random 100..200)')
+                   help='ROS_DOMAIN_ID (default: one in 1..101 checked free on this host and held '
+                   'while the demo runs)')
     return p
 
 
@@ -268,12 +270,23 @@ def _reader(stream, lines):
 
 def _body(argv):
     args = build_parser().parse_args(argv)
+    if args.domain_id is not None and not 0 <= args.domain_id <= 232:
+        raise DemoError(f'--domain-id must be in [0, 232], got {args.domain_id}')
+    # Held until the demo ends: another demo, a test run or a bench on this host skips it.
+    lease = rosgraph.lease_domain() if args.domain_id is None else None
+    try:
+        return _demo(args, lease.domain_id if lease else args.domain_id)
+    finally:
+        if lease is not None:
+            lease.release()
+
+
+def _demo(args, domain):
     story = QUICK if args.quick else FULL
     if not 0.1 <= args.speed <= 100:
         raise DemoError(f'--speed must be in [0.1, 100], got {args.speed}')
     out = _prepare_out(args.out)
-    domain = args.domain_id if args.domain_id is not None else random.randint(100, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
+    env = rosgraph.isolated_env(domain, dict(os.environ, PYTHONUNBUFFERED='1'))
     port = _free_port()
     url = f'socket://127.0.0.1:{port}'
     procs = Processes(env, out / 'logs')
@@ -281,7 +294,7 @@ def _body(argv):
     # A SIGTERM to the demo gets the same orderly cleanup as Ctrl-C.
     previous = signal.signal(signal.SIGTERM, _interrupt)
     t_start = time.monotonic()
-    print(f'{PROG}: ROS_DOMAIN_ID={domain}; logs in {out / "logs"}', flush=True)
+    print(f'{PROG}: ROS_DOMAIN_ID={domain} (localhost only); logs in {out / "logs"}', flush=True)
     warn_limit = DEMO_ANALYZER_PARAMS['drift_abs_warn_deg_s_per_h']
     error_limit = DEMO_ANALYZER_PARAMS['drift_abs_error_deg_s_per_h']
     print(f'{PROG}: story: {story.quiet_s:.0f} s quiet, then the bias of every axis rises by '

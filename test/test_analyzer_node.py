@@ -273,6 +273,49 @@ def test_unusable_stamps_give_error_not_a_crash(context):
         assert int(values['Batches rejected']) >= 1
 
 
+@pytest.mark.timeout(120)
+def test_a_second_publisher_is_counted_apart_named_and_warns(context):
+    from gyro_noise_ros.bag import encode_imu_cdr
+
+    node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+        **SMALL, rate_hz=RATE_HZ))
+    lines = []  # what the node's 1 s timer logs
+    check = node._imu_watch.check
+    node._imu_watch.check = lambda n: lines.extend(check(n)) or lines[len(lines):]
+    players = [rclpy.create_node(name, context=context) for name in ('player_a', 'player_b')]
+    pubs = [p.create_publisher(Imu, 'imu/data_raw', sensor_data_qos(5000)) for p in players]
+    executor = SingleThreadedExecutor(context=context)
+    for n in (node, *players):
+        executor.add_node(n)
+    n = 3000
+    stamps = 10 ** 18 + (np.arange(n) * 1e9 / RATE_HZ).astype(np.int64)
+    raws = encode_imu_cdr(stamps, np.zeros((n, 3)), np.zeros((n, 3)))
+    try:
+        assert _spin_until(executor, lambda: all(p.get_subscription_count() for p in pubs), 20)
+        _spin_until(executor, lambda: False, 0.5)
+        # Every third message from b: 2000 from a, 1000 from b, interleaved.
+        for k, raw in enumerate(raws):
+            pubs[k % 3 == 2].publish(raw)
+            if k % 500 == 499:
+                assert _spin_until(executor, lambda: node.messages_received > k, 20)
+        assert _spin_until(executor, lambda: node.messages_received == n, 20)
+        assert _spin_until(executor, lambda: len(lines) == 2, 5)  # the next check
+        diag = node.diagnostics()
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+    assert [severity for severity, _ in lines] == ['info', 'warn']
+    assert lines[1][1].startswith('another publisher on /imu/data_raw: /player_b (besides '
+                                  '/player_a); the analysis mixes their samples')
+    for status in diag.status:
+        values = {kv.key: kv.value for kv in status.values}
+        assert values['Publishers'] == '2'
+        assert values['Messages per publisher'] == ('/player_a 2000 (0 dropped); /player_b 1000 '
+                                                    '(0 dropped)')
+        assert values['Messages dropped before the node'] == '0'
+        assert status.level >= b'\x01'
+
+
 def test_bad_parameters_are_refused_in_process(context):
     for bad, words in (({'axes': 'x,w'}, "'axes'"), ({'chunk_size': 100}, 'chunk_size'),
                        ({'reference_summary': '/nonexistent/summary.json'}, 'cannot be read'),

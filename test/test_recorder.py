@@ -121,6 +121,44 @@ def test_killed_recorder_leaves_a_readable_db3(tmp_path):
     assert n == 10000
 
 
+@pytest.mark.timeout(180)
+def test_two_publishers_are_counted_apart_and_named(tmp_path):
+    # Two replayers (two writers of imu/data_raw, as a second driver or another robot's graph
+    # would be): the recorder counts each one's messages and sequence gaps apart (one counter for
+    # both read millions of drops in interleaved numbers) and warns, naming both.
+    samples = 20000  # 3 s each: they overlap even when one starts seconds after the other
+    out = tmp_path / 'two'
+    rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                            '-p', f'output:={out}', '-p', 'reliable:=true'],
+                           env=ros_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    # Each lingers 5 s after its last message: the recorder takes 13,320 messages a second here
+    # and may be seconds behind on a loaded host; a reliable writer resends only while it lives.
+    reps = [start_replayer('--samples', samples, '--seed', seed, '--linger-s', 5, node_name=name)
+            for seed, name in ((1, 'replayer_a'), (2, 'replayer_b'))]
+    try:
+        for rep in reps:
+            assert rep.communicate(timeout=120)[0].startswith(f'published {samples}')
+        rec.send_signal(signal.SIGINT)
+        _, err = rec.communicate(timeout=30)
+    finally:
+        for p in (*reps, rec):
+            if p.poll() is None:
+                p.kill()
+                p.communicate()
+    assert rec.returncode == 0, err
+    summary = next(ln for ln in err.splitlines() if ln.startswith('gyro_noise_record: received'))
+    assert f'received {2 * samples} Imu' in summary and '; 0 dropped in transport' in summary
+    imu_part = summary.split('publishers of /imu/data_raw: ', 1)[1].split('; publishers of')[0]
+    assert sorted(imu_part.split('; ')) == [f'/replayer_a {samples} (0 dropped)',
+                                            f'/replayer_b {samples} (0 dropped)'], summary
+    warnings = [ln for ln in err.splitlines() if 'another publisher on /imu/data_raw' in ln]
+    assert len(warnings) == 1, err[-3000:]
+    assert ('/replayer_b (besides /replayer_a)' in warnings[0]
+            or '/replayer_a (besides /replayer_b)' in warnings[0]), warnings[0]
+    assert {t.name: t.count for t in list_topics(out)}['/imu/data_raw'] == 2 * samples
+
+
 def test_refuses_an_existing_output(tmp_path):
     env = ros_env()
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',

@@ -38,6 +38,7 @@ import ctypes
 
 import numpy as np
 
+from ._ros_common import take_all
 from ..link.sequence import PublisherCounts
 
 # rmw_message_info_t (rmw 7, Jazzy): source and received timestamps (int64), publication and
@@ -191,19 +192,7 @@ class RawTaker:
         return raws, rec['received_ns'].tolist(), rec['publication'].tolist(), rec['gid'].copy()
 
     def _take_rclpy(self):
-        raws, received, sequence = [], [], []
-        handle = self.sub.handle
-        with handle:
-            take = handle.take_message
-            while True:
-                item = take(self.msg_type, True)
-                if item is None:
-                    break
-                raw, info = item
-                raws.append(raw)
-                received.append(info.get('received_timestamp') or 0)
-                sequence.append(info.get('publication_sequence_number') or 0)
-        return raws, received, sequence, None
+        return (*take_all(self.sub, self.msg_type), None)
 
     def close(self):
         """Free the serialisation buffer (idempotent)."""

@@ -68,7 +68,7 @@ def _publish(rate_hz, seconds):
     import rclpy
     from sensor_msgs.msg import Imu
 
-    from gyro_noise_ros.bag import encode_imu_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr
     from gyro_noise_ros.nodes._ros_common import sensor_data_qos
 
     n = int(rate_hz * seconds)

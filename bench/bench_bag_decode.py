@@ -35,7 +35,8 @@ import sys
 import tempfile
 import time
 
-from gyro_noise_ros.bag import decode_imu, IMU_MSGTYPE, ImuBagReader, ImuBagWriter
+from gyro_noise_ros.bag import decode_imu, ImuBagReader, ImuBagWriter
+from gyro_noise_ros.msgs import IMU_MSGTYPE
 import numpy as np
 from rosbags.rosbag1 import Reader as Ros1Reader
 from rosbags.rosbag1 import Writer as Ros1Writer

@@ -36,7 +36,7 @@ import subprocess
 import sys
 import tempfile
 
-from gyro_noise_ros.bag import IMU_MSGTYPE
+from gyro_noise_ros.msgs import IMU_MSGTYPE
 import numpy as np
 from rosbags.rosbag1 import Writer
 from rosbags.typesys import get_typestore, Stores

@@ -20,8 +20,6 @@ tools turn each class into one clear line and a documented exit code (see ``cli/
 Messages name the offending argument and its value.
 """
 
-from pathlib import Path
-
 
 class GyroNoiseError(Exception):
     """Base class of every deliberate error in gyro_noise_ros."""
@@ -57,26 +55,43 @@ class LinkError(GyroNoiseError):
     exit_code = 5
 
 
+class OutputError(GyroNoiseError):
+    """An output cannot be written: ``--out`` not writable, a file in the way, disk full."""
+
+    exit_code = 6
+
+
 class ClusterError(GyroNoiseError):
     """A Dask scheduler (``--scheduler``) cannot be reached, or its cluster failed in the run."""
 
     exit_code = 5
 
 
-def make_out_dir(path):
+def nothing_left_error(*, start_s=None, end_s=None, record_end_s=None, label=None):
     """
-    Create the output directory ``path`` (and its parents) of a tool; return it as a Path.
+    Return the error of a ``--start``/``--end`` window that selects no sample (exit code 4).
 
-    Raises
-    ------
-    ParameterError
-        It cannot be created (one line naming it and the reason, for the tools' ``--out``).
+    Parameters
+    ----------
+    start_s, end_s : float, optional, keyword-only
+        The window (s after the record's first sample).
+    record_end_s : float, optional, keyword-only
+        The last sample's time (s after the first).
+    label : str, optional, keyword-only
+        Which record, as a message prefix.
+
+    Returns
+    -------
+    InputDataError
 
     """
-    out = Path(path)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ParameterError(
-            f'--out {str(out)!r} cannot be created: {err.strerror or err}') from err
-    return out
+    prefix = f'{label}: ' if label else ''
+    if start_s is not None and record_end_s is not None and start_s > record_end_s:
+        why = f'--start {start_s:g} s is past the record end {record_end_s:.6g} s'
+    else:
+        window = ' and '.join(f'{name} {value:g} s' for name, value in
+                              (('--start', start_s), ('--end', end_s)) if value is not None)
+        why = f'no sample between {window or "the window bounds"}'
+        if record_end_s is not None:
+            why += f' (the record spans 0-{record_end_s:.6g} s)'
+    return InputDataError(f'{prefix}nothing left to analyse: {why}')

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .core.engine import rad_s2_to_deg_s_per_h
+from .core.health import reference_dict, ROBUST_JSON_KEY
 from .core.items import DEG as _DEG
 
 _DEG2 = _DEG ** 2
@@ -39,7 +40,8 @@ _DEG2 = _DEG ** 2
 CHUNK_COLUMNS = ('bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns',
                  'samples', 'samples_lost', 'gaps', 'nan_samples', 'bias_deg_s',
                  'variance_deg2_s2', 'alpha_var', 'f_var', 'var_min_deg2_s2', 'alpha_corr',
-                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'temperature_c', 'message')
+                 'f_corr', 'j_min_deg2_s2', 'tie_var', 'tie_corr', 'noise_colour_adev_slope',
+                 'temperature_c', 'message')
 
 #: Columns of allan.csv, in order.
 ALLAN_COLUMNS = ('bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n')
@@ -91,7 +93,8 @@ class ChunkCsvWriter:
                             _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
                             _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2),
                             _num(r.alpha_corr), _num(r.f_corr), _num(r.j_min * _DEG2),
-                            int(r.tie_var), int(r.tie_corr), _num(r.temperature_c), r.message))
+                            int(r.tie_var), int(r.tie_corr), _num(r.noise_colour),
+                            _num(r.temperature_c), r.message))
         self.rows += 1
 
     def close(self):
@@ -154,16 +157,79 @@ def axis_summary_dict(summary, *, verdict=None):
         'temperature_mean_c': _json_num(summary.temperature_mean_c),
         'allan': allan_terms_dict(summary.noise_terms),
         'allan_datasheet': (
-            summary.datasheet.as_dict()
-            if getattr(summary, 'datasheet', None) is not None
+            summary.readout.as_dict()
+            if getattr(summary, 'readout', None) is not None
             else None
         ),
     }
+    # what a later run's --reference check compares with (core/health.py)
+    out[ROBUST_JSON_KEY] = reference_dict(seq)
     if verdict is not None:
         out['health'] = {'level': verdict.level, 'message': verdict.message,
                          'items': [{'key': k, 'value': v, 'level': lv} for k, v,
                                    lv in verdict.items]}
     return out
+
+
+def readout_text(sheet):
+    """
+    Return the readout's datasheet numbers in one line (the tool's printed summary).
+
+    Parameters
+    ----------
+    sheet : dict
+        ``allan_datasheet`` of summary.json (:meth:`.core.readout.AllanReadout.as_dict`).
+
+    Returns
+    -------
+    str
+        ``bias stability [<=]X deg/h (Y deg/s) at tau = T s, ARW Z deg/sqrt(h)``.
+
+    """
+    bound = '<=' if sheet.get('bias_stability_upper_bound') else ''
+    return (f"bias stability {bound}{_fmt(sheet.get('bias_stability_deg_h'), '.3g')} deg/h "
+            f"({bound}{_fmt(sheet.get('bias_stability_deg_s'), '.3g')} deg/s) at tau = "
+            f"{_fmt(sheet.get('bias_stability_tau_s'), '.3g')} s, ARW "
+            f"{_fmt(sheet.get('arw_deg_per_sqrt_h'), '.3g')} deg/sqrt(h)")
+
+
+def accelerometer_readout_dict(readout):
+    """
+    Return the accelerometer entry of summary.json from an axis' readout (SI, units in keys).
+
+    The readout of specific force in m/s^2 is read exactly as for the angular rate: its "angle
+    random walk" is the velocity random walk (m/s/sqrt(s) = m/s^2/sqrt(Hz), Kalibr's
+    accelerometer_noise_density), its "rate random walk" the acceleration random walk
+    (m/s^3/sqrt(Hz), accelerometer_random_walk).
+
+    Parameters
+    ----------
+    readout : core.readout.AllanReadout or None
+        Readout of one accelerometer axis.
+
+    Returns
+    -------
+    dict or None
+
+    """
+    if readout is None:
+        return None
+    r = readout
+    return {k: (_json_num(v) if isinstance(v, float) else v) for k, v in {
+        'velocity_random_walk_m_s2_per_sqrt_hz': r.arw_rad_per_sqrt_s,
+        'velocity_random_walk_ci_low_m_s2_per_sqrt_hz': r.arw_ci_low_rad_per_sqrt_s,
+        'velocity_random_walk_ci_high_m_s2_per_sqrt_hz': r.arw_ci_high_rad_per_sqrt_s,
+        'velocity_random_walk_from_region': r.arw_from_region,
+        'bias_stability_m_s2': r.bias_stability_rad_s,
+        'bias_stability_tau_s': r.bias_stability_tau_s,
+        'bias_stability_upper_bound': r.bias_stability_upper_bound,
+        'bias_instability_m_s2': r.bias_instability_rad_s,
+        'acceleration_random_walk_m_s3_per_sqrt_hz': r.rate_random_walk_rad_per_s_sqrt_s,
+        'acceleration_random_walk_resolved': r.rate_random_walk_resolved,
+        'acceleration_random_walk_bound_m_s3_per_sqrt_hz':
+            r.rate_random_walk_bound_rad_per_s_sqrt_s,
+        'fit_quality': r.fit_quality,
+    }.items()}
 
 
 def allan_terms_dict(terms):
@@ -228,8 +294,49 @@ def _modes_text(modes):
     return ', '.join(f"{m['order']:.3f} ({m['chunks']} chunks)" for m in modes)
 
 
+#: One line per number: what it is and which to compare with a datasheet (the "In short"
+#: definitions of summary.md, reused by any other report of the same document).
+IN_SHORT_DEFINITIONS = (
+    ('Bias stability', 'the level where the Allan deviation stops falling (deg/h, or deg/s): how '
+     'steady the bias stays at the best averaging time. Compare it with a datasheet\'s "in-run '
+     'bias stability". "<=" marks an upper bound: the record ended before the curve turned up.'),
+    ('B', 'bias stability / 0.664, the IEEE 952 bias-instability coefficient (deg/h). Some '
+     'datasheets quote B instead of the bias stability: check which one they mean.'),
+    ('ARW', 'angle random walk, the white-noise level: the -1/2 slope line of the Allan deviation '
+     'read at 1 s (deg/sqrt(h)). Compare it with a datasheet\'s "angle random walk"; a rate noise '
+     'density in deg/s/sqrt(Hz) is ARW / 60.'),
+    ('N', 'the same angle random walk in SI units (rad/s/sqrt(Hz)), the '
+     'gyroscope_noise_density of imu.yaml (Kalibr).'),
+    ('K', 'rate random walk, the +1/2 slope at long averaging times (deg/h/sqrt(h)); most records '
+     'only bound it from above. In SI it is the gyroscope_random_walk of imu.yaml.'),
+    ('Offset drift', 'the least-squares slope of the per-chunk bias over time ((deg/s)/h), with '
+     'its standard error and whether it is significant.'),
+    ('Order, variance method / correlation method', 'the fractional order alpha of the noise '
+     'model of paper 000 (Delta^alpha v = f v + w), identified chunk by chunk by two methods: 0 '
+     'is white noise, 1 a random walk, in between noise with memory. A property of the noise, '
+     'not a datasheet number.'),
+)
+
+
+def _drift_text(a):
+    drift, se = a.get('offset_drift_deg_s_per_h'), a.get('offset_drift_stderr_deg_s_per_h')
+    if drift is None:
+        return None
+    from .core.health import drift_t_threshold
+
+    sig = abs(drift) / se if se else float('nan')
+    need = drift_t_threshold(3.0, a['chunks'])
+    word = 'significant' if sig > need else 'not significant'
+    # With few chunks the Student-t quantile is far above 3: "5.9 standard errors, not
+    # significant" must say why, or it reads as a contradiction.
+    return (f'offset drift {drift:+.3g} +/- {_fmt(se, ".2g")} (deg/s)/h, {_fmt(sig, ".2g")} '
+            f'standard errors from zero: {word} (with {a["chunks"]} chunks a 3-sigma test needs '
+            f'{_fmt(need, ".2g")} standard errors, the Student-t quantile of the same '
+            'false-alarm rate)')
+
+
 def _plain_summary(b, axis, a):
-    """One plain-language paragraph for one bag and axis (issue 11: people first, tables after)."""
+    """One plain-language paragraph for one bag and axis (people first, tables after)."""
     rate = b.get('rate_hz')
     parts = [f"**{b['label']}, axis {axis}:** {b['samples']} samples over "
              f"{_fmt(b['duration_s'], '.1f')} s at {_fmt(rate, '.4g')} Hz "
@@ -241,34 +348,26 @@ def _plain_summary(b, axis, a):
     if left:
         parts.append(f'{left} sample(s) left out (window or motion)')
     sheet = a.get('allan_datasheet') or {}
-    if sheet.get('arw_deg_per_sqrt_h') is not None:
-        parts.append(
-            f"angle random walk {sheet['arw_deg_per_sqrt_h']:.3g} deg/sqrt(h) "
-            f"({sheet['arw_ci_low_deg_per_sqrt_h']:.3g}-{sheet['arw_ci_high_deg_per_sqrt_h']:.3g})"
-        )
     if sheet.get('bias_stability_deg_h') is not None:
-        bound = (
-            ' (upper bound: the curve never turned up)'
-            if sheet.get('bias_stability_at_longest_tau')
-            else ''
-        )
-        parts.append(f"bias stability {sheet['bias_stability_deg_h']:.3g} deg/h "
+        bound = '<= ' if sheet.get('bias_stability_upper_bound') else ''
+        why = (' (an upper bound: the curve had not turned up by the end of the record)'
+               if bound else '')
+        parts.append(f"bias stability {bound}{sheet['bias_stability_deg_h']:.3g} deg/h "
                      f"({sheet['bias_stability_deg_s']:.3g} deg/s) at tau = "
-                     f"{sheet['bias_stability_tau_s']:.3g} s{bound}")
+                     f"{sheet['bias_stability_tau_s']:.3g} s{why}, B {bound}"
+                     f"{sheet['bias_instability_deg_h']:.3g} deg/h")
+    if sheet.get('arw_deg_per_sqrt_h') is not None:
+        source = ('' if sheet.get('arw_from_region')
+                  else ', read at 1 s: the curve has no -1/2 region')
+        parts.append(
+            f"ARW {sheet['arw_deg_per_sqrt_h']:.3g} deg/sqrt(h) "
+            f"({sheet['arw_ci_low_deg_per_sqrt_h']:.3g}-"
+            f"{sheet['arw_ci_high_deg_per_sqrt_h']:.3g}{source})")
     if sheet.get('fit_quality') == 'poor':
-        parts.append('the IEEE 952 fit misses the Allan curve (see the Allan table)')
-    drift, se = a.get('offset_drift_deg_s_per_h'), a.get('offset_drift_stderr_deg_s_per_h')
-    if drift is not None:
-        from .core.health import drift_t_threshold
-
-        sig = abs(drift) / se if se else float('nan')
-        need = drift_t_threshold(3.0, a['chunks'])
-        word = ('significant' if sig > need else 'not significant')
-        # With few chunks the Student-t quantile is far above 3: say what was needed, or
-        # "5.9 standard errors, not significant" reads as a contradiction.
-        parts.append(f'offset drift {drift:+.3g} +/- {_fmt(se, ".2g")} (deg/s)/h ({word} at the '
-                     f'3-sigma level: {_fmt(sig, ".2g")} standard errors, {_fmt(need, ".2g")} '
-                     f'needed with {a["chunks"]} chunks)')
+        parts.append('the IEEE 952 model fit misses the Allan curve (see the Allan tables)')
+    drift = _drift_text(a)
+    if drift:
+        parts.append(drift)
     for key, name in (('alpha_var', 'variance method'), ('alpha_corr', 'correlation method')):
         if a.get(key + '_multimodal'):
             parts.append(f'order ({name}) in separate modes: {_modes_text(a[key + "_modes"])}')
@@ -277,6 +376,38 @@ def _plain_summary(b, axis, a):
     if 'health' in a:
         parts.append(f"health {a['health']['level']}: {a['health']['message']}")
     return '; '.join(parts) + '.'
+
+
+def in_short_markdown(doc):
+    """
+    Return the plain-language "In short" section of a summary.json document, as Markdown.
+
+    One line defines each number (bias stability, B, ARW, N, K, offset drift, the two orders)
+    and says which to compare with a datasheet; then one paragraph per bag and axis, and the
+    bags' warnings.
+
+    Parameters
+    ----------
+    doc : dict
+        The summary.json document.
+
+    Returns
+    -------
+    str
+        Markdown, starting with the ``## In short`` heading.
+
+    """
+    lines = ['## In short', '']
+    lines += [f'* **{name}**: {text}' for name, text in IN_SHORT_DEFINITIONS]
+    lines.append('')
+    for b in doc['bags']:
+        for axis, a in b['axes'].items():
+            lines += [_plain_summary(b, axis, a), '']
+        for text in b.get('warnings') or ():
+            lines += [f"* warning ({b['label']}): {text}"]
+        if b.get('warnings'):
+            lines.append('')
+    return '\n'.join(lines)
 
 
 _CUSTOMARY = (
@@ -309,14 +440,7 @@ def summary_markdown(doc):
             if a not in axes:
                 axes.append(a)
     opts = doc['options']
-    lines = ['# gyro_noise_analyze summary', '', '## In short', '']
-    for b in bags:
-        for axis, a in b['axes'].items():
-            lines += [_plain_summary(b, axis, a), '']
-        for text in b.get('warnings') or ():
-            lines += [f"* warning ({b['label']}): {text}"]
-        if b.get('warnings'):
-            lines.append('')
+    lines = ['# gyro_noise_analyze summary', '', in_short_markdown(doc)]
     lines += [
         '## Method',
         '',
@@ -334,7 +458,8 @@ def summary_markdown(doc):
     for axis in axes:
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
         lines += [f'## Axis {axis}', '',
-                  '### Paper 000 Table 3: offset drift', '',
+                  '### How fast the bias moves: offset drift of the chunk bias '
+                  '(paper 000 Table 3)', '',
                   # The paper tabulates magnitudes; the sign is kept beside them so a
                   # reader never has to guess which way the bias moved.
                   '| Sequence | Offset drift, magnitude ((deg/s)/h) | Signed slope ((deg/s)/h) '
@@ -345,14 +470,16 @@ def summary_markdown(doc):
                          f"{_fmt(a['offset_drift_deg_s_per_h'], '+.6f')} | "
                          f"{_fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
                          f"{_fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
-        lines += ['', '### Paper 000 Table 4: noise variance', '',
+        lines += ['', '### How large the noise is: variance within chunks (paper 000 Table 4)',
+                  '',
                   '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance '
                   '((deg/s)^4) |', '|---|---:|---:|']
         for label, a in rows:
             lines.append(f"| {label} | {_fmt(a['mean_variance_deg2_s2'], '.6g')} | "
                          f"{_fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
         for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
-            lines += ['', f'### Paper 000 Table {num}: order, {method} method', '',
+            lines += ['', f'### How much memory the noise has: fractional order, {method} '
+                      f'method (paper 000 Table {num})', '',
                       '| Sequence | Estimated order | Variance of estimated order | Ties |',
                       '|---|---:|---:|---:|']
             tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
@@ -364,37 +491,58 @@ def summary_markdown(doc):
                 else:
                     lines.append(f"| {label} | {_fmt(a[key + '_mean'], '.6f')} | "
                                  f"{_fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
-        if any(a.get('allan') for _, a in rows):
+        if any(a.get('allan') or a.get('allan_datasheet') for _, a in rows):
             lines += [
-                '', '### Allan deviation: datasheet numbers and IEEE 952 fit (customary units)',
-                '',
-                '| Sequence | ARW at 1 s (deg/sqrt(h)) | Bias stability (deg/h) | at tau (s) | '
-                + ' | '.join(name for _, name in _CUSTOMARY)
-                + ' | Fit | Short taus excluded below (s) |', '|---|' + '---:|'
-                * (3 + len(_CUSTOMARY)) + '---|---:|']
+                '', '### Allan deviation: the datasheet numbers (customary units)', '',
+                'Read off the curve by the one readout (core/readout.py, docs/allan.md): '
+                'intervals at the stated confidence; "<=" an upper bound.', '',
+                '| Sequence | Bias stability (deg/h) | at tau (s) | B = bias stability / 0.664 '
+                '(deg/h) | ARW (deg/sqrt(h)) | ARW read over taus (s) | K fit (deg/h/sqrt(h)) '
+                '| K bound (deg/h/sqrt(h)) | Usable from tau (s) |',
+                '|---|---:|---:|---:|---:|---|---:|---:|---:|']
             for label, a in rows:
-                t = a.get('allan') or {}
                 d = a.get('allan_datasheet') or {}
+                bound = '<= ' if d.get('bias_stability_upper_bound') else ''
+                bs = (f"{bound}{_fmt(d.get('bias_stability_deg_h'), '.4g')} "
+                      f"({_fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
+                      f"-{_fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
                 arw = (f"{_fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} "
                        f"({_fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
                        f"-{_fmt(d.get('arw_ci_high_deg_per_sqrt_h'), '.3g')})")
-                bs = (f"{_fmt(d.get('bias_stability_deg_h'), '.4g')} "
-                      f"({_fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
-                      f"-{_fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
+                span = d.get('arw_tau_range_s') or [None, None]
+                where = (f"{_fmt(span[0], '.3g')}-{_fmt(span[1], '.3g')}"
+                         if d.get('arw_from_region') else 'ADEV(1 s): no -1/2 region')
+                k_fit = _fmt(d.get('rate_random_walk_deg_per_h_sqrt_h'), '.3g')
+                if d and not d.get('rate_random_walk_resolved'):
+                    k_fit += ' (not resolved)'
+                lines.append(
+                    f"| {label} | {bs} | {_fmt(d.get('bias_stability_tau_s'), '.4g')} | "
+                    f"{bound}{_fmt(d.get('bias_instability_deg_h'), '.4g')} | {arw} | {where} | "
+                    f"{k_fit} | {_fmt(d.get('rate_random_walk_bound_deg_per_h_sqrt_h'), '.3g')} "
+                    f"| {_fmt(d.get('usable_from_s'), '.3g')} |")
+            lines += [
+                '', '### Allan deviation: IEEE 952 model fit (customary units)', '',
+                'The five-term model fitted to the whole usable curve (band-limited short taus '
+                'left out): a model for simulation and filters, not the datasheet numbers above.',
+                '', '| Sequence | ' + ' | '.join(name for _, name in _CUSTOMARY)
+                + ' | Fit | Short taus excluded below (s) |',
+                '|---|' + '---:|' * len(_CUSTOMARY) + '---|---:|']
+            for label, a in rows:
+                t = a.get('allan') or {}
+                d = a.get('allan_datasheet') or {}
                 fit = d.get('fit_quality', '')
                 if fit:
                     fit += f" (max error {100 * (d.get('fit_max_relative_error') or 0):.0f} %)"
-                lines.append(
-                    f"| {label} | {arw} | {bs} | {_fmt(d.get('bias_stability_tau_s'), '.4g')} | "
-                    + ' | '.join(_fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
-                    + f" | {fit} | {_fmt(d.get('band_limited_below_s'), '.3g')} |")
+                lines.append(f'| {label} | '
+                             + ' | '.join(_fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
+                             + f" | {fit} | {_fmt(d.get('band_limited_below_s'), '.3g')} |")
             keys = []
             for _, a in rows:
                 for k, v in (a.get('allan') or {}).items():
                     if (k not in keys and not isinstance(v, (dict, str))
                             and not any(k == c for c, _ in _CUSTOMARY)):
                         keys.append(k)
-            lines += ['', '### Allan deviation: IEEE 952 fit (SI, unit in the name)', '',
+            lines += ['', '### Allan deviation: IEEE 952 model fit (SI, unit in the name)', '',
                       '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
             for label, a in rows:
                 terms = a.get('allan') or {}
@@ -446,12 +594,72 @@ def write_allan_csv(path, entries):
                             _num(hi[i] * _DEG), int(n[i])))
 
 
-def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density,
-                   gyroscope_random_walk, accelerometer_noise_density=None,
-                   accelerometer_random_walk=None, source='', gyroscope_random_walk_note='',
-                   accelerometer_random_walk_note=''):
+#: Topic written into imu.yaml for inputs that have none (CSV tables, PX4 ULogs).
+DEFAULT_IMU_TOPIC = '/imu/data_raw'
+
+
+def kalibr_noise(readouts, *, record_s=None):
     """
-    Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units).
+    Return one sensor's Kalibr noise parameters from its axes' readouts, with the notes to say.
+
+    Kalibr takes one number per sensor: the largest over the axes (the noisiest axis bounds the
+    others). The random walk of each axis is the larger of its fitted K and its bound
+    (:meth:`.core.readout.AllanReadout.kalibr`).
+
+    Parameters
+    ----------
+    readouts : list of core.readout.AllanReadout or None
+        The analysed axes (None entries ignored).
+    record_s : float, optional, keyword-only
+        Record length (s), named in the notes.
+
+    Returns
+    -------
+    dict
+        ``noise_density`` and ``random_walk`` (SI; None when no axis gives one: a zero or
+        missing density is never written as a number), ``noise_density_note`` and
+        ``random_walk_note`` (empty when there is nothing to say).
+
+    """
+    rs = [r for r in readouts if r is not None]
+    dens = [r for r in rs if math.isfinite(r.arw_rad_per_sqrt_s) and r.arw_rad_per_sqrt_s > 0]
+    walks = [(r.kalibr(), r) for r in rs]
+    walks = [(k, r) for k, r in walks if math.isfinite(k['random_walk']) and k['random_walk'] > 0]
+    out = {'noise_density': None, 'random_walk': None, 'noise_density_note': '',
+           'random_walk_note': ''}
+    if dens:
+        best = max(dens, key=lambda r: r.arw_rad_per_sqrt_s)
+        out['noise_density'] = best.arw_rad_per_sqrt_s
+        if not best.arw_from_region:
+            out['noise_density_note'] = ('read as ADEV(1 s) x sqrt(1 s): the Allan curve has no '
+                                         '-1/2 (white-noise) region')
+    else:
+        out['noise_density_note'] = ('not measured: no -1/2 region and no tau = 1 s on the Allan '
+                                     'curve (record too short); give it from the datasheet')
+    if walks:
+        k, r = max(walks, key=lambda kr: kr[0]['random_walk'])
+        out['random_walk'] = k['random_walk']
+        length = f' ({record_s:.4g} s)' if record_s is not None and math.isfinite(record_s) else ''
+        bound = 'K <= upper ADEV bound at the longest tau x sqrt(3 / tau)'
+        fitted = r.rate_random_walk_rad_per_s_sqrt_s
+        fitted = (f'the fitted K, {fitted:.3g}, is smaller' if math.isfinite(fitted) and fitted > 0
+                  else 'the fit finds none')
+        short = [rr for kk, rr in walks if kk['too_short']]
+        if short:
+            out['random_walk_note'] = (
+                f'record too short{length} for a random walk: the Allan curve is still falling '
+                f'at its longest tau ({short[0].bias_stability_tau_s:.3g} s), so this is only an '
+                f'upper bound, {bound}')
+        elif k['random_walk_is_bound']:
+            out['random_walk_note'] = (f'upper bound: the record{length} does not resolve a '
+                                       f'random walk; {bound} ({fitted})')
+    return out
+
+
+def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope, accelerometer=None,
+                   rostopic_note='', source=''):
+    """
+    Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units), notes as YAML comments.
 
     Parameters
     ----------
@@ -461,34 +669,37 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope_noise_density,
         IMU topic.
     update_rate_hz : float
         Sample rate (Hz).
-    gyroscope_noise_density : float
-        Rate white noise density (rad/s/sqrt(Hz)); None or NaN writes null.
-    gyroscope_random_walk : float
-        Rate random walk (rad/s^2/sqrt(Hz)).
-    accelerometer_noise_density, accelerometer_random_walk : float, optional
-        (m/s^2/sqrt(Hz)) and (m/s^3/sqrt(Hz)).
+    gyroscope : dict
+        :func:`kalibr_noise` of the gyroscope axes (rad/s/sqrt(Hz), rad/s^2/sqrt(Hz)).
+    accelerometer : dict, optional
+        The same for the accelerometer (m/s^2/sqrt(Hz), m/s^3/sqrt(Hz)); omitted when None.
+    rostopic_note : str
+        Comment above ``rostopic`` (e.g. that the input had no topic).
     source : str
         Comment line saying which bag and axes the numbers come from.
-    gyroscope_random_walk_note, accelerometer_random_walk_note : str
-        Comment after the value (e.g. that it is a bound, not a fit).
 
     """
     def val(v):
         return 'null' if v is None or not math.isfinite(float(v)) else repr(float(v))
 
+    def entry(key, value, unit, note):
+        return ([f'# {key}: {note}'] if note else []) + [f'{key}: {val(value)}  # {unit}']
+
     lines = [
         '# Kalibr-style IMU noise parameters written by gyro_noise_analyze (continuous-time, SI).']
     if source:
         lines.append(f'# {source}')
-    lines += [f'rostopic: {rostopic}', f'update_rate: {val(update_rate_hz)}  # Hz',
-              f'gyroscope_noise_density: {val(gyroscope_noise_density)}  # rad/s/sqrt(Hz)',
-              f'gyroscope_random_walk: {val(gyroscope_random_walk)}  # rad/s^2/sqrt(Hz)'
-              + (f'; {gyroscope_random_walk_note}' if gyroscope_random_walk_note else '')]
-    if accelerometer_noise_density is not None or accelerometer_random_walk is not None:
-        lines += [
-            f'accelerometer_noise_density: {val(accelerometer_noise_density)}  # m/s^2/sqrt(Hz)',
-            f'accelerometer_random_walk: {val(accelerometer_random_walk)}  # m/s^3/sqrt(Hz)'
-            + (f'; {accelerometer_random_walk_note}' if accelerometer_random_walk_note else '')]
+    if rostopic_note:
+        lines.append(f'# rostopic: {rostopic_note}')
+    lines += [f'rostopic: {rostopic}', f'update_rate: {val(update_rate_hz)}  # Hz']
+    sensors = [('gyroscope', gyroscope, 'rad/s/sqrt(Hz)', 'rad/s^2/sqrt(Hz)')]
+    if accelerometer is not None:
+        sensors.append(('accelerometer', accelerometer, 'm/s^2/sqrt(Hz)', 'm/s^3/sqrt(Hz)'))
+    for name, noise, u_density, u_walk in sensors:
+        lines += entry(f'{name}_noise_density', noise['noise_density'], u_density,
+                       noise['noise_density_note'])
+        lines += entry(f'{name}_random_walk', noise['random_walk'], u_walk,
+                       noise['random_walk_note'])
     Path(path).write_text('\n'.join(lines) + '\n')
 
 
@@ -715,39 +926,3 @@ def allan_fit_lines(terms, tau):
             except (TypeError, ValueError):
                 return []
     return []
-
-
-def allan_kalibr(terms_list):
-    """
-    Return (gyroscope_noise_density, gyroscope_random_walk) for imu.yaml.
-
-    The largest over the axes.
-
-    Parameters
-    ----------
-    terms_list : list
-        Noise-term fits of the analysed axes (None entries ignored). Each provides ``kalibr()``
-        returning a mapping, or attributes/keys ``noise_density`` / ``random_walk`` (SI).
-
-    Returns
-    -------
-    tuple of float
-        NaN where no axis provides the value.
-
-    """
-    density, walk = [], []
-    for terms in terms_list:
-        if terms is None:
-            continue
-        k = terms.kalibr() if callable(
-            getattr(terms, 'kalibr', None)) else getattr(terms, 'kalibr', terms)
-        get = (k.get if isinstance(k, dict) else lambda name, default=None,
-               _k=k: getattr(_k, name, default))
-        for out, names in ((density, ('gyroscope_noise_density', 'noise_density')),
-                           (walk, ('gyroscope_random_walk', 'random_walk'))):
-            for name in names:
-                v = get(name, None)
-                if v is not None and math.isfinite(float(v)):
-                    out.append(float(v))
-                    break
-    return (max(density) if density else float('nan'), max(walk) if walk else float('nan'))

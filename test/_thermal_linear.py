@@ -37,6 +37,8 @@ class LinearThermal:
         self.t_ref = float(t_ref)
         self.offset = np.asarray(offset, dtype=float)
         self.rate_gain = np.asarray(rate_gain, dtype=float)
+        # a model without a rate term does not wait for the rate window live (as poly3)
+        self.uses_rate = bool(np.any(self.rate_gain != 0))
         self.temperature_range_c = (None if temperature_range_c is None
                                     else tuple(temperature_range_c))
         if range_margin_c is not None:

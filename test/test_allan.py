@@ -33,7 +33,6 @@ from gyro_noise_ros.core import _kernels_allan as kern
 from gyro_noise_ros.core.allan import (
     allan_deviation,
     AllanAccumulator,
-    bias_instability_from_minimum,
     confidence_bounds,
     dense_factors,
     edf_greenhall,
@@ -572,22 +571,6 @@ def test_fit_recovers_simulated_arw_and_rrw():
     # and 35 % tolerances are ~3 standard errors
     assert fit.angle_random_walk_rad_per_sqrt_s == pytest.approx(n_arw, rel=0.03)
     assert fit.rate_random_walk_rad_per_s_sqrt_s == pytest.approx(k_rrw, rel=0.35)
-
-
-def test_bias_instability_from_minimum():
-    tau = np.logspace(-2, 4, 61)
-    res = _synthetic_result(tau, 0.0, 1e-4, 2e-5, 1e-7, 0.0)
-    bi = bias_instability_from_minimum(res)
-    # the minimum of the full curve sits slightly above the pure flicker floor 0.6643 B
-    assert bi.bias_instability_rad_per_s == pytest.approx(2e-5, rel=0.2)
-    assert bi.bias_instability_rad_per_s > 2e-5
-    assert bi.adev_min_rad_per_s == pytest.approx(res.adev.min())
-    assert not bi.at_longest_tau
-    deg_per_h = bi.bias_instability_rad_per_s * 180 / math.pi * 3600
-    assert bi.bias_instability_deg_per_h == pytest.approx(deg_per_h)
-    flat = _synthetic_result(tau, 0.0, 0.0, 2e-5, 0.0, 0.0)
-    assert bias_instability_from_minimum(
-        flat).bias_instability_rad_per_s == pytest.approx(2e-5, rel=1e-9)
 
 
 # ---- accumulator

@@ -101,7 +101,7 @@ def stop(procs, sig_timeout=10.0):
 # -----------------------------------------------------------------------
 
 def _publish_main(argv):
-    from gyro_noise_ros.bag import encode_imu_cdr, encode_temperature_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr, encode_temperature_cdr
     from gyro_noise_ros.nodes._ros_common import driver_qos
     import rclpy
     from rclpy.node import Node

@@ -216,7 +216,7 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
     chunks = 8
     n = chunks * 2000
     stamps = (np.arange(n) * 1e9 / RATE_HZ).astype(np.int64) + 10 ** 18
-    from gyro_noise_ros.bag import encode_imu_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr
 
     messages = [('/imu/data_raw', raw) for raw in
                 encode_imu_cdr(stamps, rng.standard_normal((n, 3)) * 1e-3, np.zeros((n, 3)))]
@@ -251,11 +251,13 @@ def test_falls_behind_by_skipping_with_a_bounded_queue(context):
 
 @pytest.mark.timeout(120)
 def test_unusable_stamps_give_error_not_a_crash(context):
-    # Every stamp equal: the sample rate cannot be estimated, so the engine rejects the batches.
-    from gyro_noise_ros.bag import encode_imu_cdr
+    # Every stamp equal: the sample rate cannot be estimated, so the engine rejects the batches
+    # once the samples held for the estimate are in (equal stamps alone are one packet: normal).
+    from gyro_noise_ros.msgs import encode_imu_cdr
+    from gyro_noise_ros.core.engine import RATE_ESTIMATE_SAMPLES
 
     node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**SMALL))
-    n = 600
+    n = RATE_ESTIMATE_SAMPLES + 75
     messages = [('/imu/data_raw', raw) for raw in
                 encode_imu_cdr(np.full(n, 10 ** 18), np.zeros((n, 3)), np.zeros((n, 3)))]
     executor = None
@@ -320,7 +322,7 @@ def test_bad_parameters_are_refused_in_process(context):
     for bad, words in (({'axes': 'x,w'}, "'axes'"), ({'chunk_size': 100}, 'chunk_size'),
                        ({'reference_summary': '/nonexistent/summary.json'}, 'cannot be read'),
                        ({'order_grid_start': 1.0, 'order_grid_stop': 0.5}, 'stop'),
-                       ({'drift_ratio_warn': 20.0}, 'drift_ratio_error')):
+                       ({'reference_warn_sigma': 20.0}, 'reference_error_sigma')):
         with pytest.raises(ParameterError, match=words):
             analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**bad))
 

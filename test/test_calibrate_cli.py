@@ -54,19 +54,27 @@ def test_one_bag_gives_all_three_files(tmp_path, record, capsys):
                                atol=0.25)
     for key in ('accel_bias_std_m_s2', 'accel_scale_factor_std'):
         assert key in doc['uniformity']
-    assert set(doc['gravity_check']) == {'mean_norm_raw_m_s2', 'mean_norm_calibrated_m_s2'}
+    gc = doc['gravity_check']
+    assert gc['consistent'] and len(gc['dwells']) == 6 and 'leave-one-out' in gc['method']
+    assert doc['consistency']['consistent'] and len(doc['consistency']['pairs']) == 3
     np.testing.assert_allclose(doc['gyro']['bias_rad_s'], [0.01, -0.02, 0.005], atol=1e-4)
+    # the record's gyro has no scale error: the five turns put every estimate near 0 (4 sigma)
+    est = np.asarray(doc['gyro']['estimated'])
+    sf = np.asarray(doc['gyro']['scale_factor'])
+    sig = np.asarray(doc['gyro']['scale_factor_sigma'])
+    assert np.all(np.abs(sf[est.diagonal()]) < 4 * sig[est.diagonal()])
     params = yaml.safe_load((out / 'calibration.yaml').read_text())
     p = params['/**']['ros__parameters']
     assert list(p) == YAML_KEYS
     assert p['calibration_gravity_m_s2'] == g
     assert len(p['accel_misalignment']) == 9 and len(p['gyro_misalignment']) == 9
     assert p['accel_bias_m_s2'] == doc['accel']['bias_m_s2']
-    assert p['gyro_scale_factor'] == [0.0, 0.0, 0.0]
+    assert p['gyro_scale_factor'] == doc['gyro']['scale_factor']
+    assert p['gyro_misalignment'] == sum(doc['gyro']['misalignment'], [])
     text = (out / 'calibration.yaml').read_text()
     assert text.startswith('#') and 'Sources: ' in text
     md = (out / 'calibration.md').read_text()
-    assert '| bx |' in md and 'mg' in md and 'uniformity' in md
+    assert '| bx |' in md and 'mg' in md and 'uniformity' in md and 'leave-one-out' in md
     printed = capsys.readouterr()
     assert 'dwell +z' in printed.out and 'warning' not in printed.err
 
@@ -100,6 +108,17 @@ def test_exit_codes(tmp_path, record, capsys):
     assert 'accelerometer reads ~0' in capsys.readouterr().err
     assert main([str(five), '--gravity', '9.81', '--min-static-s', '30', '--out', out]) == 4
     assert '--min-static-s 30' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('where', ['file', 'under_file'])
+def test_out_in_the_way_is_exit_6_before_reading_anything(tmp_path, capsys, where):
+    blocker = tmp_path / 'blocker'
+    blocker.write_text('x')
+    out = blocker if where == 'file' else blocker / 'out'
+    # the recording does not even exist: the output is checked first
+    assert main([str(tmp_path / 'nope'), '--gravity', '9.81', '--out', str(out)]) == 6
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'Traceback' not in err and 'blocker' in err
 
 
 def test_rate_from_bursty_host_stamps_is_the_mean_rate_not_the_median_step():

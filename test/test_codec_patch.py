@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-bag.codec.patch_imu_spans against rosbags: replacing the two vectors gives rosbags' own bytes.
+msgs.patch_imu_spans against rosbags: replacing the two vectors gives rosbags' own bytes.
 
 Messages of both byte orders, several frame_id lengths (every CDR padding case) and a non-ASCII
 frame_id (the rosbags fallback) are serialised by rosbags, patched in bulk, and compared byte for
@@ -22,8 +22,8 @@ byte with rosbags' serialisation of the same messages with the new vectors.
 
 import copy
 
-from gyro_noise_ros.bag.codec import join_raws, patch_imu_spans, typestore
 from gyro_noise_ros.errors import BagError
+from gyro_noise_ros.msgs import join_raws, patch_imu_spans, typestore
 import numpy as np
 import pytest
 

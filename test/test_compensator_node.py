@@ -28,10 +28,10 @@ import time
 
 from _thermal_linear import LinearThermal
 from gyro_noise_ros.bag import decode_imu
-from gyro_noise_ros.bag.codec import encode_imu_cdr, encode_temperature_cdr
-from gyro_noise_ros.bag.codec import typestore
 from gyro_noise_ros.calibration.apply import calibration_from_parameters
 from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.msgs import encode_imu_cdr, encode_temperature_cdr
+from gyro_noise_ros.msgs import typestore
 from gyro_noise_ros.nodes import compensator
 from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all

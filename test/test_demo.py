@@ -78,6 +78,7 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path, ros_graph):
         assert (report / name).is_file(), name
         assert str(report / name) in done.stdout  # the demo ends by saying where they are
     assert (out / 'recording' / 'metadata.yaml').is_file()
+    assert 'finished: the report is complete' in (out / 'GYRO_NOISE_DEMO.txt').read_text()
     assert _our_processes(domain) == []
 
 
@@ -113,13 +114,16 @@ def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path, ros_graph)
     assert _our_processes(domain) == []
     # The recorder was stopped with SIGINT, so the bag was closed properly.
     assert (out / 'recording' / 'metadata.yaml').is_file()
+    # ... but the demo output is not a finished one, and says so
+    assert 'NOT FINISHED' in (out / 'GYRO_NOISE_DEMO.txt').read_text()
+    assert not (out / 'report').exists()
 
 
 def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):
     (tmp_path / 'precious.txt').write_text('keep me')
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--out',
                            str(tmp_path)], capture_output=True, text=True, timeout=60)
-    assert done.returncode == 1
+    assert done.returncode == 6  # an output problem (README exit codes)
     assert done.stderr.strip().startswith(
         'gyro_noise_demo: error:') and 'not a previous demo' in done.stderr
     assert (tmp_path / 'precious.txt').read_text() == 'keep me'

@@ -68,7 +68,7 @@ def test_analyzer_keys_are_documented(context, tmp_path):
         assert _spin_until(executor, lambda: len(node.results) >= 12, 60)
         for status in node.diagnostics().status:
             seen |= _keys(status)
-        assert {'Last chunk', 'ADEV minimum (deg/s)', 'Offset drift ((deg/s)/h)'} <= seen
+        assert {'Last chunk', 'Bias stability (deg/s)', 'Offset drift ((deg/s)/h)'} <= seen
         assert seen <= documented, f'undocumented keys: {sorted(seen - documented)}'
     finally:
         if executor is not None:

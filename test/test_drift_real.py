@@ -51,7 +51,7 @@ def _drift_level(seq, ref):
     rs = ReferenceStats(ref.drift.slope, ref.mean_variance, 0.5, 0.5, chunks=ref.chunks,
                         offset_drift_stderr_rad_s2=ref.drift.stderr)
     items = evaluate_health(_summary(seq), reference=rs).items
-    return next(level for key, _, level in items if key == 'Offset drift / reference')
+    return next(level for key, _, level in items if key == 'Offset drift deviation (sigma)')
 
 
 def test_drift_stderr_follows_the_spread_across_runs(runs):
@@ -74,8 +74,10 @@ def test_imu2_against_imu1_is_not_an_error(runs):
 
 
 def test_false_alarms_over_all_pairs_of_real_runs(runs):
-    # None of the six static runs drifts; judged at 3 sigma, ~0.3 % of the 90 (run, reference,
-    # axis) cases may alarm by chance: allow 2.
+    # None of the six static runs drifts; the difference of two slopes is judged against both
+    # standard errors at the verdict's thresholds (5 sigma, Student-t equivalent); the errors are
+    # still 1-2.5x below the real spread of slopes (above), so allow 2 of the 90 (run,
+    # reference, axis) cases to alarm (docs/verdicts.md measures 0).
     levels = [_drift_level(runs[(a, ax)], runs[(r, ax)])
               for a, r in itertools.permutations(range(1, 7), 2) for ax in range(3)]
     assert sum(lvl != 'OK' for lvl in levels) <= 2

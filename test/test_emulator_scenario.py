@@ -91,7 +91,7 @@ def test_write_bag_and_calibrate_recover_table6(tmp_path, capsys):
     # the board's default gyro bias (0.775, -0.35, 0.25) deg/s; Earth rate cancels
     np.testing.assert_allclose(np.degrees(doc['gyro']['bias_rad_s']), [0.775, -0.35, 0.25],
                                atol=0.02)
-    assert emulator(['--scenario', 'six-position', '--write-bag', str(bag)]) == 2
+    assert emulator(['--scenario', 'six-position', '--write-bag', str(bag)]) == 6  # in the way
     assert emulator(['--scenario', 'static', '--write-bag', str(tmp_path / 'x')]) == 2
 
 
@@ -123,3 +123,53 @@ def test_default_stress_factor_gives_the_papers_125_percent():
     after = width(0.5 * _scenario.DEFAULT_STRESS_INSTABILITY)
     assert before == pytest.approx(420.0, rel=0.15)        # paper: 420 s
     assert after / before - 1.0 == pytest.approx(1.25, abs=0.1)
+
+
+def test_write_bag_multi_pose_and_a_tilted_six_position(tmp_path, capsys):
+    # the multi-pose scenario: arbitrary attitudes, |a| = g fit, gyro from the turns
+    bag = tmp_path / 'multi'
+    assert emulator(['--odr-hz', '104', '--seed', '6', '--scenario', 'multi-pose', '--poses',
+                     '12', '--dwell-s', '15', '--gyro-scale-pct', '0.3,-0.2,0.1',
+                     '--write-bag', str(bag)] + QUIET) == 0
+    out = tmp_path / 'cal'
+    assert calibrate([str(bag), '--mode', 'multi-pose', '--latitude', '45', '--out',
+                      str(out)]) == 0
+    doc = json.loads((out / 'calibration.json').read_text())
+    assert doc['mode'] == 'multi-pose' and len(doc['dwells']) == 12
+    # quantised white noise only: b within 0.05 mg, S within 0.005 % (> 5 sigma, as above)
+    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG, PAPER_BEFORE_BIAS_MG,
+                               atol=0.05)
+    np.testing.assert_allclose(np.asarray(doc['accel']['scale_factor']) * 100,
+                               PAPER_BEFORE_SCALE_PCT, atol=0.005)
+    sf, sig = (np.asarray(doc['gyro'][k]) for k in ('scale_factor', 'scale_factor_sigma'))
+    assert np.all(np.abs(sf - [0.003, -0.002, 0.001]) < 4 * sig)
+    # a six-position fixture with its +y dwell tilted by 4 deg: named, refused
+    bag = tmp_path / 'tilt'
+    assert emulator(['--odr-hz', '104', '--seed', '7', '--scenario', 'six-position',
+                     '--dwell-s', '20', '--tilt', '+y:4', '--write-bag', str(bag)] + QUIET) == 0
+    capsys.readouterr()
+    assert calibrate([str(bag), '--latitude', '45', '--out', str(tmp_path / 'c2')]) == 4
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'dwell +y at t=' in err and 'deg off' in err
+
+
+def test_bad_scenario_options_leave_nothing_behind(tmp_path, capsys):
+    # a bad --orientation fails before any bag folder exists (a retry must not find one), an
+    # excitation at or above Nyquist is a bad option: exit 2, one line
+    bag = tmp_path / 'static'
+    assert emulator(['--scenario', 'static', '--orientation', 'up', '--duration-s', '2',
+                     '--write-bag', str(bag)]) == 2
+    assert list(tmp_path.iterdir()) == []
+    for extra in (['--scenario', 'sine', '--excite-hz', '60'],
+                  ['--scenario', 'sweep', '--excite-hz', '5', '--sweep-to-hz', '52']):
+        capsys.readouterr()
+        assert emulator(['--odr-hz', '104', '--duration-s', '2', '--write-bag',
+                         str(tmp_path / 'x')] + extra) == 2
+        err = capsys.readouterr().err
+        assert 'Nyquist (52 Hz' in err and 'Traceback' not in err
+    assert list(tmp_path.iterdir()) == []
+    # the retry with a good orientation works, and the bag's storage file has the bag's name
+    assert emulator(['--scenario', 'static', '--orientation=-z', '--odr-hz', '104',
+                     '--duration-s', '2', '--write-bag', str(bag)]) == 0
+    assert sorted(p.name for p in bag.iterdir()) == ['metadata.yaml', 'static.db3']
+    assert [p.name for p in tmp_path.iterdir()] == ['static']

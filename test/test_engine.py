@@ -18,9 +18,11 @@ Tests of the streaming engine (gyro_noise_ros.core.engine).
 Chunking, gaps, NaN, tail, equality with the core.
 """
 
+import math
 import pickle
 
-from gyro_noise_ros.core.chunks import chunk_moments, summarise_sequence
+from gyro_noise_ros.core.chunks import (chunk_moments, noise_colour, RobustLocation,
+                                        summarise_sequence)
 from gyro_noise_ros.core.engine import (
     analyze_chunk,
     AxisSummary,
@@ -30,7 +32,7 @@ from gyro_noise_ros.core.engine import (
     rad_s2_to_deg_s_per_h,
 )
 from gyro_noise_ros.core.fractional import make_grid, OrderIdentifier
-from gyro_noise_ros.core.health import ReferenceStats
+from gyro_noise_ros.core.health import HealthThresholds, ReferenceStats
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.errors import InputDataError, ParameterError
 import numpy as np
@@ -88,6 +90,7 @@ def test_per_chunk_numbers_equal_the_core_called_directly():
                                                      direct.var_min)
         assert (r.alpha_corr, r.f_corr, r.j_min) == (direct.alpha_corr, direct.f_corr,
                                                      direct.j_min)
+        assert r.noise_colour == noise_colour(chunk) and math.isfinite(r.noise_colour)
         assert r.status == 'ok' and r.samples == SIZE and r.samples_lost == 0
         assert r.stamp_start_ns == stamps[r.chunk * SIZE]
         assert r.t_start_s == pytest.approx(r.chunk * SIZE * PERIOD_NS / 1e9, abs=1e-12)
@@ -100,7 +103,8 @@ def test_per_chunk_numbers_equal_the_core_called_directly():
     ys = [r for r in results if r.axis == 'y']
     expected = summarise_sequence([r.t_mid_s for r in ys], [r.bias_rad_s for r in ys],
                                   [r.variance_rad2_s2 for r in ys], [r.alpha_var for r in ys],
-                                  [r.alpha_corr for r in ys], tail_samples=123)
+                                  [r.alpha_corr for r in ys], tail_samples=123,
+                                  order_step=0.1, noise_colour=[r.noise_colour for r in ys])
     assert s.sequence == expected
     assert s.sequence.tail_samples == 123
     assert s.offset_drift_deg_s_per_h == rad_s2_to_deg_s_per_h(expected.drift.slope)
@@ -243,13 +247,14 @@ def test_out_of_order_stamps_are_counted_not_reordered():
     stamps, gyro = data(2 * SIZE, seed=5)
     stamps = stamps.copy()
     stamps[[100, 101]] = stamps[[101, 100]]  # one regression (101 -> 100), steps stay < gap
-    stamps[300] = stamps[299]  # a repeated stamp
+    stamps[300] = stamps[299]  # a repeated stamp: 299 and 300 stamped once, like one packet
     engine = NoiseEngine(config(axes=('x',)))
     jobs, _ = run(engine, stamps, gyro, batch=100)  # the swap straddles a batch boundary
-    assert engine.counts().out_of_order == 2
-    # Each leaves a 2-period step from the latest stamp: one sample counted lost per defect (engine
-    # doc).
-    assert (engine.counts().samples_lost, engine.counts().gaps) == (2, 2)
+    # Only the regression is out of order; the equal stamp is a normal time base.
+    assert (engine.counts().out_of_order, engine.counts().equal_stamps) == (1, 1)
+    # The swap leaves a 2-period step from the latest stamp: one sample counted lost (engine doc).
+    # The 2-period step after the repeated stamp is paid by the sample sharing its stamp.
+    assert (engine.counts().samples_lost, engine.counts().gaps) == (1, 1)
     np.testing.assert_array_equal(jobs[0].samples, gyro[:SIZE, 0])
 
 
@@ -301,14 +306,16 @@ def test_skip_is_recorded_and_history_is_bounded():
 def test_health_verdicts_come_from_the_engine():
     stamps, gyro = data(4 * SIZE, seed=9)
     ref = ReferenceStats(offset_drift_rad_s2=1e-12, mean_variance_rad2_s2=1.0, alpha_var_mean=0.0,
-                         alpha_corr_mean=0.0)
-    engine = NoiseEngine(config(axes=('x',)), reference=ref)
+                         alpha_corr_mean=0.0, log_variance=RobustLocation(0.0, 0.1, 100, 100))
+    engine = NoiseEngine(config(axes=('x',)), reference=ref,
+                         thresholds=HealthThresholds(reference_min_chunks=3))
     assert engine.health()['x'].level == 'STALE'
     run(engine, stamps, gyro)
     verdict = engine.health()['x']
-    # The variance (~1e-5 (rad/s)^2 here) is far below the reference's 1.0: ERROR on variance at
-    # least.
+    # The variance (~1e-5 (rad/s)^2 here) is far below the reference's 1.0 (log 0, chunk spread
+    # 0.1 in log units): ERROR on variance at least.
     assert verdict.level == 'ERROR'
+    assert {k: lv for k, _, lv in verdict.items}['Variance / reference'] == 'ERROR'
     assert engine.health(seconds_since_data=60.0)['x'].level == 'STALE'
 
 
@@ -364,7 +371,7 @@ def test_allan_deviation_of_the_run_matches_the_batch_estimator():
     s = engine.summary()
     for axis, col in (('x', 0), ('z', 2)):
         finite = gyro[:, col][np.isfinite(gyro[:, col])]
-        ref = allan_deviation(finite, engine.counts().rate_hz)
+        ref = allan_deviation(finite, engine.counts().rate_hz, taus=engine.config.allan_taus)
         # The accumulator removes the first batch's mean, the batch estimator the global mean: the
         # module documents agreement to ~1e-12 relative; 1e-9 leaves room for the summation order.
         np.testing.assert_allclose(s[axis].allan.adev, ref.adev, rtol=1e-9)

@@ -154,9 +154,17 @@ def test_cli_dwell_before_after(tmp_path, capsys):
     assert doc['after']['amplitude_g'] == pytest.approx(0.28, abs=1e-3)
     assert doc['change']['amplitude_relative'] == pytest.approx(0.28 / 0.3 - 1, abs=3e-3)
     assert doc['after']['thd'] == pytest.approx(0.05, abs=3e-3)
+    # a 5 % second harmonic is far out of the noise, the clean sine is not
+    assert doc['before']['clean'] and not doc['after']['clean']
+    assert doc['change']['amplitude_change_significant']
     for f in ('excitation.md', 'excitation_before.png', 'excitation_after.png'):
         assert (out / f).exists()
     assert 'THD' in capsys.readouterr().out
+    md = (out / 'excitation.md').read_text()
+    # labels with units and percentages, never the JSON's raw key names or fractions
+    assert 'amplitude (g)' in md and 'THD' in md and 'DISTORTED' in md and '%' in md
+    for key in ('amplitude_stability', 'thd_noise', 'cycle_amplitude_mean', 'amplitude_m_s2'):
+        assert key not in md
 
 
 def test_cli_sweep_with_reference_and_exit_codes(tmp_path, capsys):
@@ -181,3 +189,49 @@ def test_cli_sweep_with_reference_and_exit_codes(tmp_path, capsys):
     assert main(base + ['--dwell', '2.0']) == 4                      # no sine at 2 Hz
     err = capsys.readouterr().err
     assert 'no sine' in err
+    assert doc['before']['matches_reference'] is False       # a 3 % gain error is not noise
+    assert doc['before']['mean_deviation'] == pytest.approx(0.03, abs=0.003)
+
+
+def test_a_record_that_is_not_the_excitation_asked_for_is_refused(tmp_path, capsys):
+    # an 8 Hz dwell record: analysed as a sweep, or as a 7 Hz dwell, it must be refused with one
+    # line, not turned into tables (exit 4)
+    t, x = _sine(3000, 0.3 * G, 8.0, noise=0.04)
+    accel = np.zeros((t.size, 3))
+    accel[:, 2] = G
+    accel[:, 0] = x - G
+    bag = _bag(tmp_path / 'd8', t, accel, np.zeros((t.size, 3)))
+    base = [bag, '--sensor', 'accel', '--axis', 'x', '--no-figures']
+    for extra, why in ((['--sweep', '5', '10', '0.5'], 'does not sweep 5-10 Hz'),
+                       (['--dwell', '7'], 'not the requested --dwell 7 Hz')):
+        out = tmp_path / ('o' + extra[1])
+        assert main(base + extra + ['--out', str(out)]) == 4
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and why in err, err
+        assert not (out / 'excitation.json').exists()
+    # the right request passes, and 2 % of tolerance is the default
+    assert main(base + ['--dwell', '8.1', '--out', str(tmp_path / 'ok')]) == 0
+
+
+@pytest.mark.parametrize('where', ['file', 'under_file'])
+def test_out_in_the_way_is_exit_6_before_reading(tmp_path, capsys, where):
+    blocker = tmp_path / 'blocker'
+    blocker.write_text('x')
+    out = blocker if where == 'file' else blocker / 'out'
+    assert main([str(tmp_path / 'nope'), '--sensor', 'accel', '--axis', 'x', '--dwell', '8',
+                 '--out', str(out)]) == 6
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'Traceback' not in err
+
+
+def test_dwell_verdicts_see_modulation_and_harmonics_not_noise():
+    # noise alone: steady and clean; 1 % amplitude modulation: unsteady; 1 % second
+    # harmonic: distorted (30 s at 100 Hz, noise 0.04 m/s^2 against 2.9 m/s^2; false alarm 1e-3)
+    _, x = _sine(3000, 0.3 * G, 8.0, noise=0.04)
+    r = sine_dwell(x, FS, 8.0)
+    assert r.steady and r.clean
+    assert r.stability_noise == pytest.approx(0.04 * np.sqrt(2 / 12.5) / (0.3 * G), rel=0.1)
+    _, x = _sine(3000, 0.3 * G, 8.0, noise=0.04, am=0.01)
+    assert not sine_dwell(x, FS, 8.0).steady
+    _, x = _sine(3000, 0.3 * G, 8.0, noise=0.04, h2=0.01)
+    assert not sine_dwell(x, FS, 8.0).clean

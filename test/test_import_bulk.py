@@ -139,13 +139,15 @@ def test_a_failed_write_in_the_writer_thread_is_raised_once_and_stops_the_import
     def failing(self, *args, **kwargs):
         calls.append(len(calls))
         if len(calls) == 3:
-            raise importer.BagError('bag: writing failed: No space left on device')
+            raise importer.OutputError('bag: writing failed: No space left on device')
 
     monkeypatch.setattr(BulkImuBagWriter, 'write_imu', failing)
-    with pytest.raises(importer.BagError, match='No space left'):
+    with pytest.raises(importer.OutputError, match='No space left'):
         importer.import_logs(corrupt_logs, tmp_path / 'bag', threads=2, chunk_bytes=1 << 12)
     # the writes queued behind the failed one were dropped, not run
     assert len(calls) == 3
+    # and no bag, finished-looking or hidden, is left
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_threads_must_be_one_or_two(corrupt_logs, tmp_path):
@@ -157,5 +159,5 @@ def test_threads_must_be_one_or_two(corrupt_logs, tmp_path):
 def test_a_bag_that_cannot_be_created_is_one_error(corrupt_logs, tmp_path, threads):
     blocker = tmp_path / 'file'
     blocker.write_text('x')
-    with pytest.raises(importer.BagError, match='cannot be created'):
+    with pytest.raises(importer.OutputError, match='cannot be created'):
         importer.import_logs(corrupt_logs, blocker / 'bag', threads=threads)

@@ -201,7 +201,7 @@ def test_cli_prints_report_and_refuses_bad_input(sd_logs, tmp_path, capsys):
         and 'corrupt regions        0' in out
         and 'epoch unix:1000.5' in out
     )
-    assert importer.main([*files, '--out', str(bag)]) == 2  # exists
+    assert importer.main([*files, '--out', str(bag)]) == 6  # exists: an output in the way
     assert 'exists' in capsys.readouterr().err
     junk = tmp_path / 'junk.GNL'
     junk.write_bytes(bytes(range(256)) * 40)
@@ -244,3 +244,67 @@ def test_import_memory_does_not_grow_with_log_size(tmp_path):
     # peak by more than a chunk's worth of decoded data and bookkeeping: allow 25 % (the first,
     # smaller run only warms caches and imports up)
     assert peaks[80_000] < 1.25 * peaks[10_000], peaks
+
+
+def test_same_log_twice_or_overlapping_logs_are_refused(sd_logs, tmp_path, capsys):
+    files, clean = sd_logs
+    # the same file twice (as given, or through another path): a command-line mistake, exit 2
+    other_path = os.path.join(os.path.dirname(files[0]), '.', os.path.basename(files[0]))
+    for twice in ([files[0], files[0]], [*files, other_path]):
+        assert importer.main([*twice, '--out', str(tmp_path / 'b')]) == 2
+        err = capsys.readouterr().err
+        assert 'given twice' in err and os.path.basename(files[0]) in err
+    # a copy under another name: the same data twice, exit 4, both files named
+    copy = tmp_path / 'S001F009.GNL'
+    copy.write_bytes(clean[files[1]])
+    assert importer.main([*files, str(copy), '--out', str(tmp_path / 'b')]) == 4
+    err = capsys.readouterr().err
+    assert 'S001F001.GNL' in err and 'S001F009.GNL' in err and 'same log twice' in err
+    # overlapping sequences: file 2 with the first half of file 3's frames appended
+    frames = walk_frames(clean[files[3]])
+    mid = frames[len(frames) // 2][0]
+    overlap = tmp_path / 'overlap'
+    overlap.mkdir()
+    for path in files:
+        (overlap / os.path.basename(path)).write_bytes(clean[path])
+    (overlap / os.path.basename(files[2])).write_bytes(clean[files[2]] + clean[files[3]][
+        frames[1][0]:mid])
+    logs = sorted(str(p) for p in overlap.iterdir())
+    assert importer.main([*logs, '--out', str(tmp_path / 'b')]) == 4
+    err = capsys.readouterr().err
+    assert 'overlap' in err and 'S001F002.GNL' in err and 'S001F003.GNL' in err
+    assert err.count('\n') == 1 and 'Traceback' not in err
+    assert not (tmp_path / 'b').exists()
+
+
+def test_interrupted_or_failed_import_leaves_no_bag_and_a_retry_works(sd_logs, tmp_path,
+                                                                      monkeypatch, capsys):
+    files, clean = sd_logs
+    bag = tmp_path / 'bag'
+    # a read size whose buffers cannot be had: refused before anything is written
+    assert importer.main([*files, '--out', str(bag), '--chunk-bytes', '100000000000000']) == 2
+    assert 'chunk_bytes must be in 1..' in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+    from gyro_noise_ros.link import sdlog
+
+    real_split = sdlog.SdLogReader._split
+    calls = []
+
+    def interrupt_midway(path, res, config):
+        calls.append(path)
+        if len(calls) == 20:
+            raise KeyboardInterrupt
+        return real_split(path, res, config)
+
+    for threads in ('1', '2'):
+        calls.clear()
+        monkeypatch.setattr(sdlog.SdLogReader, '_split', staticmethod(interrupt_midway))
+        code = importer.main([*files, '--out', str(bag), '--threads', threads,
+                              '--chunk-bytes', '4096'])
+        assert code == 130 and len(calls) == 20
+        assert list(tmp_path.iterdir()) == []  # nothing that looks finished, nothing hidden
+        monkeypatch.setattr(sdlog.SdLogReader, '_split', staticmethod(real_split))
+    assert importer.main([*files, '--out', str(bag)]) == 0
+    assert sorted(p.name for p in bag.iterdir()) == ['bag.mcap', 'metadata.yaml']
+    expected = sum(samples_of(walk_frames(clean[f])).size for f in files)
+    assert read_bag(bag)[0].shape[0] == expected

@@ -65,6 +65,7 @@ def report():
 def test_non_node_modules_do_not_import_ros(report):
     # Guards the discovery: the link layer must be among the modules checked.
     assert 'gyro_noise_ros.link.protocol' in report['modules']
+    assert 'gyro_noise_ros.msgs.imu' in report['modules']
     assert not any(m.startswith('gyro_noise_ros.nodes') for m in report['modules'][:-1])
     culprits = {m: v for m, v in report['culprits'].items() if m != _CONTROL}
     assert culprits == {}, f'ROS imported by: {culprits}'

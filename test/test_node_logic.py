@@ -21,12 +21,13 @@ from dataclasses import fields
 import time
 from types import SimpleNamespace
 
-from gyro_noise_ros.bag.codec import imu_covariances, temperature_variances
+from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.health import HealthThresholds
 from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
 from gyro_noise_ros.core.live import LiveAnalysis, parse_axes, TemperatureTrack
+from gyro_noise_ros.core.readout import read_allan
 from gyro_noise_ros.errors import LinkError, ParameterError
 from gyro_noise_ros.link import protocol as P
 from gyro_noise_ros.link.health import judge_link, LinkThresholds, LinkWindow
@@ -34,6 +35,7 @@ from gyro_noise_ros.link.port import hardware_id_for, validate_port
 from gyro_noise_ros.link.sequence import SequenceGapCounter, SequenceTracker
 from gyro_noise_ros.link.session import handshake, LinkConfig, ODR_TOLERANCE_RATIO
 from gyro_noise_ros.monitor_lines import format_array, format_status, parse_axis_parts
+from gyro_noise_ros.msgs import imu_covariances, temperature_variances
 import numpy as np
 import pytest
 
@@ -134,7 +136,7 @@ def test_sequence_gap_counter():
 
 
 def test_imu_covariances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_imu_cdr
+    from gyro_noise_ros.msgs import encode_imu_cdr
 
     rng = np.random.default_rng(0)
     av = rng.random((4, 9))
@@ -154,7 +156,7 @@ def test_imu_covariances_read_back_what_was_encoded():
 
 
 def test_temperature_variances_read_back_what_was_encoded():
-    from gyro_noise_ros.bag import encode_temperature_cdr
+    from gyro_noise_ros.msgs import encode_temperature_cdr
 
     raws = encode_temperature_cdr(np.arange(3), [20.0, 21.0, 22.0], frame_id='imu',
                                   variance=[0.5, 0.25, 0.0])
@@ -184,13 +186,21 @@ def test_allan_items_keep_their_keys():
     assert {v for _, v in items} == {'n/a'}
 
 
-def test_allan_item_at_one_second_interpolates_a_power_law():
-    # ADEV = 0.01 rad/s * tau^-1/2 sampled at tau 0.5 and 2 s: log-log
-    # interpolation at 1 s is exact.
-    allan = SimpleNamespace(tau_s=[0.5, 2.0], adev=[0.01 / np.sqrt(0.5), 0.01 / np.sqrt(2.0)])
-    items = dict(allan_items(SimpleNamespace(allan=allan, noise_terms=None)))
-    assert items['ADEV at 1 s (deg/s)'] == fmt(0.01 * 180.0 / np.pi)
-    assert items['ADEV minimum at tau (s)'] == '2'
+def test_allan_items_are_the_readout():
+    # White rate noise for 400 s at 100 Hz: the items show the one readout's numbers, the bias
+    # stability marked as an upper bound at the last tau it reads (a tenth of the record: white
+    # noise keeps falling to the longest tau).
+    rate = 100.0
+    result = allan_deviation(np.random.default_rng(4).normal(0.0, 0.01, 40_000), rate)
+    r = read_allan(result)
+    items = dict(allan_items(SimpleNamespace(readout=r)))
+    assert items['ADEV at 1 s (deg/s)'] == fmt(r.adev_1s_rad_s * 180.0 / np.pi)
+    assert r.bias_stability_upper_bound
+    assert items['Bias stability (deg/s)'] == '<=' + fmt(r.bias_stability_rad_s * 180.0 / np.pi)
+    assert items['Bias stability tau (s)'] == fmt(result.tau_s[result.tau_s <= 40.0][-1])
+    assert items['Angle random walk (deg/sqrt(h))'] == fmt(
+        r.arw_rad_per_sqrt_s * 180.0 / np.pi * 60.0)
+    assert dict(allan_items(SimpleNamespace(readout=None))) == dict(allan_items(None))
 
 
 def test_fmt():

@@ -233,14 +233,14 @@ def test_mpu6050_two_mode_orders_and_a_summary_for_people(tmp_path):
     assert modes == [(pytest.approx(low.mean()), low.size),
                      (pytest.approx(high.mean()), high.size)]
     md = (tmp_path / 'summary.md').read_text()
-    assert md.index('## In short') < md.index('Paper 000 Table 3')
+    assert md.index('## In short') < md.index('paper 000 Table 3')
     assert 'separate modes' in md and 'modes: ' in md
     assert 'deg/sqrt(h)' in md and '(SI, unit in the name)' in md and '68.3 %' in md
     # Table 3 shows the paper's magnitude and the signed slope beside it, never a bare abs().
     slope = a['offset_drift_deg_s_per_h']
     assert f'| {abs(slope):.6f} | {slope:+.6f} |' in md
     # "N standard errors, not significant" states the t needed with this many chunks.
-    assert 'needed with 6 chunks' in md
+    assert 'with 6 chunks a 3-sigma test needs' in md
 
 
 def test_console_line_gives_order_modes_not_their_mean(tmp_path, capsys):

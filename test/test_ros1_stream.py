@@ -22,8 +22,9 @@ line.
 
 import tracemalloc
 
-from gyro_noise_ros.bag import IMU_MSGTYPE, ImuBagReader, storage
+from gyro_noise_ros.bag import ImuBagReader, storage
 from gyro_noise_ros.errors import BagError
+from gyro_noise_ros.msgs import IMU_MSGTYPE
 import numpy as np
 import pytest
 from rosbags.rosbag1 import Writer

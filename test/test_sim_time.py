@@ -24,7 +24,7 @@ judge losses from the stamps only.
 import time
 
 from builtin_interfaces.msg import Time
-from gyro_noise_ros.bag import encode_imu_cdr
+from gyro_noise_ros.msgs import encode_imu_cdr
 from gyro_noise_ros.nodes.analyzer import NoiseAnalyzerNode
 import numpy as np
 import pytest

@@ -104,7 +104,7 @@ def _run_node_logic(model, stream, max_wait_s, drain_s=0.02):
         if g1 > g:
             gate.push(np.arange(g, g1), gyro_ns[g:g1], now)
             g = g1
-        for idx, i, j, _ in gate.release(ev.stamp_ns, now):
+        for idx, i, j, _ in gate.release(ev.offset_stamp_ns, now):
             offsets[idx[i:j]] = ev.drift_at(gyro_ns[idx[i:j]])
         assert now < 100, 'the stream never drained'
     return offsets, gate

@@ -21,7 +21,8 @@ from gyro_noise_ros.thermal.baselines import (_fit_net, BASELINES, BPNetwork, Em
                                               LinearTdT, RawMethod, simulated_annealing,
                                               TemperaturePolynomial, wavelet_denoise,
                                               WaveletThreshold, zero_crossing_hz)
-from gyro_noise_ros.thermal.run import temperature_rate_c_s, ThermalMethod, ThermalRun
+from gyro_noise_ros.thermal.run import (RateWindowError, temperature_rate_c_s,
+                                        ThermalMethod, ThermalRun)
 from gyro_noise_ros.thermal.simulate import simulate_run
 import numpy as np
 import pytest
@@ -65,29 +66,93 @@ def test_poly3_recovers_a_cubic_and_clips_like_px4():
     assert (m.t_min_c, m.t_max_c, m.t_ref_c) == (-10.0, 50.0, 20.0)
     np.testing.assert_allclose(m.coef, coef, rtol=1e-7, atol=1e-13)
     np.testing.assert_allclose(m.apply(_run(t, gyro, temp)), 0.0, atol=1e-12)
-    # outside the calibration range the temperature is clipped (PX4 calc_thermal_offsets_1D)
+    # beyond the calibration range the offset is held at the ends (PX4's documented formula);
+    # stated in out_of_range and counted by methods.range_report, never silent
+    assert 'held' in m.out_of_range
     out = m.drift_rad_s([-30.0, 80.0], [0.0, 0.0])
     np.testing.assert_allclose(out, m.drift_rad_s([-10.0, 50.0], [0.0, 0.0]), rtol=1e-12)
+
+
+def _poly_truth(temp_c, rate_c_s):
+    x, r = temp_c - 20.0, rate_c_s * 100.0
+    return np.column_stack([1e-3 + 2e-4 * x - 3e-6 * x * x + 1e-7 * x ** 3 + 5e-3 * r,
+                            -4e-4 * x + 2e-3 * r * r - 1e-4 * x * r,
+                            1e-8 * x ** 3 + 1e-3 * r ** 3 + 3e-5 * x * x * r])
+
+
+def _gradient_truth(temp_c, rate_c_s):
+    x, r = temp_c - 20.0, rate_c_s * 100.0
+    return np.column_stack([1e-3 + 2e-4 * x - 3e-6 * x * x + 1e-7 * x ** 3 + 5e-3 * r,
+                            -4e-4 * x - 1e-4 * x * r, 1e-8 * x ** 3 + 3e-5 * x * x * r])
 
 
 def test_linear_tdt_recovers_a_polynomial_in_t_and_dt():
     t = np.arange(0.0, 4000.0, 0.5)
     temp = _temperature(t)
     rate = temperature_rate_c_s(t, temp)
-
-    def truth(temp_c, rate_c_s):
-        x, r = temp_c - 20.0, rate_c_s * 100.0
-        return np.column_stack([1e-3 + 2e-4 * x - 3e-6 * x * x + 1e-7 * x ** 3 + 5e-3 * r,
-                                -4e-4 * x + 2e-3 * r * r - 1e-4 * x * r,
-                                1e-8 * x ** 3 + 1e-3 * r ** 3 + 3e-5 * x * x * r])
-
-    m = LinearTdT()
-    m.fit(_run(t, truth(temp, rate), temp), rng=np.random.default_rng(0))
+    full = LinearTdT(rate_degree=3)
+    full.fit(_run(t, _poly_truth(temp, rate), temp), rng=np.random.default_rng(0))
+    assert full.n_terms == 10
     # a polynomial of total degree 3 is identified on any in-range points (unisolvent here)
     probe_t = np.random.default_rng(1).uniform(temp.min(), temp.max(), 500)
     probe_r = np.random.default_rng(2).uniform(rate.min(), rate.max(), 500)
-    np.testing.assert_allclose(m.drift_rad_s(probe_t, probe_r), truth(probe_t, probe_r),
-                               atol=1e-12)
+    np.testing.assert_allclose(full.drift_rad_s(probe_t, probe_r),
+                               _poly_truth(probe_t, probe_r), atol=1e-12)
+    # the default basis (cubic in T, dT with T dT and T^2 dT: 7 terms) identifies its own
+    # family and extrapolates it: nothing is clipped beyond the trained range
+    m = LinearTdT()
+    assert m.n_terms == 7
+    m.fit(_run(t, _gradient_truth(temp, rate), temp), rng=np.random.default_rng(0))
+    far_t = np.array([temp.min() - 10.0, temp.max() + 10.0, 20.0])
+    far_r = np.array([rate.min() * 3.0, rate.max() * 3.0, -rate.max() * 2.0])
+    np.testing.assert_allclose(m.drift_rad_s(far_t, far_r), _gradient_truth(far_t, far_r),
+                               atol=1e-11)
+    assert 'extrapolated' in m.out_of_range
+
+
+def test_linear_tdt_is_plain_least_squares_on_its_basis(sim_pair):
+    train, test, _ = sim_pair
+    m = LinearTdT()
+    m.fit(train, rng=np.random.default_rng(0))
+    # slow twin: the seven monomials written out, in degC and degC/s, solved by lstsq
+    rate = temperature_rate_c_s(train.t_s, train.temperature_c)
+    x, r = train.temperature_c - 20.0, rate * 100.0
+
+    def design(x, r):
+        return np.column_stack([np.ones_like(x), x, r, x * x, x * r, x ** 3, x * x * r])
+
+    coef = np.linalg.lstsq(design(x, r), train.gyro_rad_s, rcond=None)[0]
+    test_rate = temperature_rate_c_s(test.t_s, test.temperature_c)
+    expected = test.gyro_rad_s - design(test.temperature_c - 20.0, test_rate * 100.0) @ coef
+    # the same least-squares problem in another scaling: equal to its conditioning (~1e-10
+    # rad/s here, against a drift of ~1e-2 rad/s)
+    np.testing.assert_allclose(m.apply(test), expected, rtol=0, atol=1e-9)
+
+
+def test_networks_continue_linearly_beyond_the_trained_box(sim_pair):
+    train, _, _ = sim_pair
+    for shortcut in (True, False):
+        m = BPNetwork(epochs=300, shortcut=shortcut)
+        m.fit(train, rng=np.random.default_rng(3))
+        net = m.net
+        lo, hi = net.x_min, net.x_max
+        edge = np.array([[hi[0], lo[1]], [lo[0], hi[1]]])
+        step = np.array([[4.0, -0.02], [-3.0, 0.01]])
+        beyond = edge + step
+        # the network part beyond the box is its value at the nearest point of the box plus
+        # the gradient there (central differences, 1e-6 of the box) times the step out
+        h = 1e-6 * (hi - lo)
+        grad = np.stack([(net.network(edge + h * e) - net.network(edge - h * e)) / (2 * h[i])
+                         for i, e in enumerate(np.eye(2))], axis=1)
+        expected = net.network(edge) + np.einsum('ni,nio->no', step, grad)
+        np.testing.assert_allclose(net.network(beyond), expected, rtol=1e-5, atol=1e-12)
+        if shortcut:
+            basis, coef = net.shortcut
+            np.testing.assert_allclose(m.drift_rad_s(beyond[:, 0], beyond[:, 1]),
+                                       net.network(beyond)
+                                       + basis(beyond[:, 0], beyond[:, 1]) @ coef, atol=1e-15)
+        else:
+            assert net.shortcut is None
 
 
 def _hand_haar_denoise(x, level):
@@ -157,11 +222,12 @@ def test_annealing_alone_trains_the_network():
     temp = _temperature(t)
     y = _smooth_target(temp, temperature_rate_c_s(t, temp))
     run = _run(t, y, temp)
-    untrained = BPNetwork(epochs=0)
+    # the network alone (no linear shortcut), as the paper's SA-BP
+    untrained = BPNetwork(epochs=0, shortcut=False)
     untrained.fit(run, rng=np.random.default_rng(6))
     x = np.column_stack([temp, temperature_rate_c_s(t, temp)])
     _, mse = _fit_net(x, y, 8, np.random.default_rng(6), sa_iterations=3000, epochs=0,
-                      learning_rate=0.01)
+                      learning_rate=0.01, shortcut=False)
     # standardised MSE: random weights sit near 1 (they predict ~ nothing); annealing alone
     # (no gradient step) must get well below that
     assert untrained.train_mse > 0.3
@@ -238,11 +304,20 @@ def test_refusals(sim_pair):
     flat = ThermalRun(t_s=train.t_s, gyro_rad_s=train.gyro_rad_s,
                       temperature_c=np.full(train.t_s.size, 25.0), rate_hz=train.rate_hz,
                       name='flat')
+    short = ThermalRun(t_s=train.t_s[:300], gyro_rad_s=train.gyro_rad_s[:300],
+                       temperature_c=np.linspace(20, 25, 300), rate_hz=train.rate_hz,
+                       name='short')
     for cls in (TemperaturePolynomial, LinearTdT, BPNetwork, EmdWtdSaBp):
         with pytest.raises(InputDataError, match='spans'):
             cls().fit(flat, rng=np.random.default_rng(0))
         with pytest.raises(ParameterError, match='not fitted'):
             cls().apply(train)
+        # 15 s of training: a method using dT needs two 10-s rate windows
+        if cls.uses_rate:
+            with pytest.raises(RateWindowError, match='needs at least 20 s'):
+                cls().fit(short, rng=np.random.default_rng(0))
+        else:
+            cls().fit(short, rng=np.random.default_rng(0))
     bad = ThermalRun(t_s=train.t_s, gyro_rad_s=train.gyro_rad_s,
                      temperature_c=np.where(np.arange(train.t_s.size) == 3, np.nan, 25.0),
                      rate_hz=train.rate_hz)

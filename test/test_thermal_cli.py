@@ -59,10 +59,11 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'm'),
                  '--quiet']) == 0
     model = json.loads((tmp_path / 'm' / 'model.json').read_text())
-    assert model['method'] == 'toy_linear' and model['format_version'] == 1
+    assert model['method'] == 'toy_linear' and model['format_version'] == 2
     assert set(model['training']) == {'temperature_min_c', 'temperature_max_c',
                                       'temperature_rate_min_c_s', 'temperature_rate_max_c_s',
-                                      'rate_hz', 'samples', 'duration_s', 'sources'}
+                                      'rate_hz', 'samples', 'duration_s', 'sources',
+                                      'rate_window_s'}
     # a linear drift in T is recovered by the linear model (noise 2e-3 rad/s, 6000 samples)
     np.testing.assert_allclose(model['parameters']['coef_rad_s'][1], SLOPE, atol=2e-5)
     training = json.loads((tmp_path / 'm' / 'training.json').read_text())
@@ -76,7 +77,8 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     assert doc['method'] == 'toy_linear' and not doc['in_sample']
     for axis in 'xyz':
         ax = doc['axes'][axis]
-        assert set(ax) == {'raw', 'processed', 'bandwidth', 'bandwidth_small_signal', 'verdict'}
+        assert set(ax) == {'raw', 'processed', 'bandwidth', 'bandwidth_small_signal', 'noise_path',
+                           'verdict'}
         assert {'arw_deg_sqrt_h', 'bias_stability_deg_h', 'residual_drift_deg_s'} <= set(ax['raw'])
         # the drift (up to 0.003 rad/s peak) dominates the raw 60-s means, not the processed
         assert ax['processed']['residual_drift_deg_s'] < 0.3 * ax['raw']['residual_drift_deg_s']
@@ -248,3 +250,168 @@ def test_fitted_model_json_loads_in_the_live_compensator(tmp_path):
     assert isinstance(method, LinearInT) and margin == methods.DEFAULT_RANGE_MARGIN_C
     assert range_c[0] == 15.0 and range_c[1] == pytest.approx(35.0, abs=1e-3)
     check_live_model(method, range_c=range_c, margin_c=margin)
+
+
+@pytest.mark.parametrize('value', ['nan', '-5', 'inf'])
+def test_min_range_must_be_finite_and_non_negative(tmp_path, capsys, value):
+    bag, _, _ = _bag(tmp_path / 'b', 0)
+    for argv in (['fit', bag], ['compare', bag, '--split-at', '0.5']):
+        assert main([*argv, '--out', str(tmp_path / 'o'), '--quiet',
+                     f'--min-range-c={value}']) == 2
+        err = capsys.readouterr().err
+        assert '--min-range-c must be a finite temperature span' in err
+        assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / 'o').exists()
+
+
+def test_compare_refuses_an_unknown_method_before_any_work(tmp_path, capsys):
+    train, _, _ = _bag(tmp_path / 'train', 1)
+    test, _, _ = _bag(tmp_path / 'test', 2)
+    assert main(['compare', train, test, '--out', str(tmp_path / 'c'), '--methods',
+                 'poly3,nosuch', *FAST]) == 2
+    err = capsys.readouterr().err
+    assert "unknown method(s) 'nosuch' in --methods" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / 'c').exists()
+
+
+def test_training_shorter_than_the_rate_windows_is_refused(tmp_path, capsys):
+    # 15 s of training spanning 30 degC: enough span, too short to see dT
+    bag, _, _ = _bag(tmp_path / 'b', 0, n=int(15 * RATE))
+    assert main(['fit', bag, '--method', 'linear_tdt', '--out', str(tmp_path / 'o'),
+                 '--quiet']) == 4
+    err = capsys.readouterr().err
+    assert 'needs at least 20 s' in err and len(err.strip().splitlines()) == 1
+    assert main(['fit', bag, '--method', 'poly3', '--out', str(tmp_path / 'p'),
+                 '--quiet']) == 0
+
+
+def _fit_poly3(tmp_path, **kw):
+    train, _, _ = _bag(tmp_path / 'train', 1, **kw)
+    assert main(['fit', train, '--method', 'poly3', '--out', str(tmp_path / 'm'),
+                 '--quiet']) == 0
+    return tmp_path / 'm' / 'model.json'
+
+
+def test_other_version_loads_with_a_note_and_empty_parameters_fail(tmp_path, capsys):
+    model = _fit_poly3(tmp_path)
+    test, _, _ = _bag(tmp_path / 'test', 2)
+    doc = json.loads(model.read_text())
+    doc['package_version'] = '9.9.9'
+    (tmp_path / 'old.json').write_text(json.dumps(doc))
+    assert main(['apply', test, '--model', str(tmp_path / 'old.json'), '--out',
+                 str(tmp_path / 'a'), '--no-bag', '--f-lo-hz', '0.5', '--no-figures']) == 0
+    err = capsys.readouterr().err
+    assert 'note: model file' in err and 'gyro_noise_ros 9.9.9' in err
+    metrics = json.loads((tmp_path / 'a' / 'metrics.json').read_text())
+    assert metrics['model']['package_version'] == '9.9.9'
+    assert any('9.9.9' in n for n in metrics['notes'])
+    doc['parameters'] = {}
+    (tmp_path / 'empty.json').write_text(json.dumps(doc))
+    assert main(['apply', test, '--model', str(tmp_path / 'empty.json'), '--out',
+                 str(tmp_path / 'b'), *FAST]) == 3
+    err = capsys.readouterr().err
+    assert 'has no fitted parameters' in err and len(err.strip().splitlines()) == 1
+
+
+def test_test_run_too_short_for_the_injection_is_exit_4(tmp_path, capsys):
+    model = _fit_poly3(tmp_path)
+    short, _, _ = _bag(tmp_path / 'short', 2, n=int(200 * RATE))
+    # the default chirp starts at 0.1 Hz and needs 666.7 s of run
+    assert main(['apply', short, '--model', str(model), '--out', str(tmp_path / 'a'),
+                 '--quiet']) == 4
+    err = capsys.readouterr().err
+    assert 'needs 666.7 s (raise --f-lo-hz' in err and len(err.strip().splitlines()) == 1
+
+
+def test_apply_reports_the_share_outside_the_trained_range(tmp_path):
+    model = _fit_poly3(tmp_path, lo=20.0, hi=30.0)
+    test, _, _ = _bag(tmp_path / 'test', 2, lo=18.0, hi=30.0)
+    assert main(['apply', test, '--model', str(model), '--out', str(tmp_path / 'a'),
+                 *FAST]) == 0
+    doc = json.loads((tmp_path / 'a' / 'metrics.json').read_text())
+    rng = doc['range']
+    assert rng['temperature_below'] > 0 and rng['temperature_above'] == 0
+    assert rng['outside'] >= rng['temperature_below']
+    assert rng['fraction_outside'] == pytest.approx(rng['outside'] / rng['samples'])
+    assert 'held at its value at the nearest end' in rng['treatment']
+    text = (tmp_path / 'a' / 'report.md').read_text()
+    assert f'{rng["outside"]} of {rng["samples"]} samples' in text
+
+
+def test_accelerometer_is_compensated_beside_the_gyro(tmp_path):
+    model = _fit_poly3(tmp_path)
+    doc = json.loads(model.read_text())
+    assert doc['accel']['relative_to_t_ref'] and doc['accel']['parameters']['relative']
+    test, _, temp = _bag(tmp_path / 'test', 2)
+    assert main(['apply', test, '--model', str(model), '--out', str(tmp_path / 'a'),
+                 *FAST]) == 0
+    from gyro_noise_ros.thermal.baselines import TemperaturePolynomial
+
+    poly = TemperaturePolynomial.from_dict(doc['accel']['parameters'])
+    with ImuBagReader(tmp_path / 'a' / 'compensated') as r:
+        batch = next(r.iter_batches(100_000))
+    with ImuBagReader(test) as r:
+        raw = next(r.iter_batches(100_000)).accel
+    np.testing.assert_allclose(batch.accel, raw - poly.drift_rad_s(temp, 0.0), atol=1e-12)
+    metrics = json.loads((tmp_path / 'a' / 'metrics.json').read_text())
+    assert set(metrics['accel']['axes']) == {'x', 'y', 'z'}
+
+
+def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
+    model = _fit_poly3(tmp_path)
+    out = tmp_path / 'e'
+    assert main(['export', '--model', str(model), '--out', str(out), '--px4-gyro-id',
+                 '123', '--quiet']) == 0
+    params = (out / 'thermal_px4.params').read_text()
+    assert '1\t1\tTC_G0_ID\t123\t6' in params and 'TC_A0_X3_2' in params
+    parm = (out / 'thermal_ardupilot.parm').read_text()
+    assert 'INS_TCAL1_ENABLE 1' in parm and 'INS_TCAL1_GYR3_Z' in parm
+    doc = json.loads((out / 'export.json').read_text())
+    assert doc['px4']['TC_G0_ID'] == 123 and doc['accelerometer']
+    train, _, _ = _bag(tmp_path / 'train2', 1)
+    assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'l'),
+                 '--quiet']) == 0
+    assert main(['export', '--model', str(tmp_path / 'l' / 'model.json'), '--out',
+                 str(tmp_path / 'f')]) == 2
+    assert "'toy_linear' cannot be exported" in capsys.readouterr().err
+
+
+def test_an_interrupted_fit_leaves_no_model(tmp_path, monkeypatch):
+    from gyro_noise_ros.thermal import report
+
+    train, _, _ = _bag(tmp_path / 'train', 1)
+
+    def stop(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report, 'plot_run', stop)
+    assert main(['fit', train, '--method', 'poly3', '--out', str(tmp_path / 'm'),
+                 '--quiet']) == 130
+    assert not (tmp_path / 'm' / 'model.json').exists()
+    assert [p.name for p in (tmp_path / 'm').iterdir()] == []
+
+
+def test_simulate_shapes_and_compare_prints_the_oracle(tmp_path, capsys):
+    out = tmp_path / 's'
+    assert main(['simulate', '--seed', '2', '--out', str(out), '--shape', 'heating',
+                 '--test-shape', 'cooling', '--hours', '0.25', '--rate-hz', '10']) == 0
+    settings = json.loads((out / 'simulation.json').read_text())
+    assert settings['profile']['shape'] == 'heating'
+    assert settings['test_profile']['shape'] == 'cooling'
+    capsys.readouterr()
+    assert main(['compare', str(out / 'train'), str(out / 'test'), '--out',
+                 str(tmp_path / 'c'), '--methods', 'poly3,linear_tdt', '--f-lo-hz', '0.5',
+                 '--no-figures']) == 0
+    printed = capsys.readouterr().out
+    assert '(oracle: true terms)' in printed and '(oracle: measured T, dT)' in printed
+    doc = json.loads((tmp_path / 'c' / 'compare.json').read_text())
+    assert doc['oracle']['true_terms']['mean_residual_drift_deg_s'] > 0
+    for name in ('poly3', 'linear_tdt'):
+        ratio = doc['methods'][name]['ratio_to_oracle']
+        drift = [v['processed']['residual_drift_deg_s']
+                 for v in doc['methods'][name]['axes'].values()]
+        assert ratio == pytest.approx(np.mean(drift)
+                                      / doc['oracle']['true_terms']['mean_residual_drift_deg_s'])
+        # heating-trained, cooling-tested: nearly every test rate is below the trained range
+        assert doc['methods'][name]['range']['rate_below'] > 0.5 * \
+            doc['methods'][name]['range']['samples']

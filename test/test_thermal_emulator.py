@@ -19,6 +19,7 @@ from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link.emulator import BoardModel
 from gyro_noise_ros.thermal.simulate import DEG, ThermalModel, ThermalStream
 import numpy as np
+import pytest
 
 
 class _Zero:
@@ -92,3 +93,30 @@ def test_cli_option_builds_the_oven_board():
     # removed, only the noise is left.
     assert np.all(np.std(block_means(gyro), 0) > 0.1)
     assert np.all(np.std(block_means(gyro - bias), 0) < 0.015)
+
+
+def test_cli_shapes_build_held_out_boards():
+    for shape, first, last in (('cooling', 52.0, 12.0), ('heating', 12.0, 52.0),
+                               ('cool_reheat', 52.0, 52.0)):
+        board = cli.board_from_args(['--thermal', shape, '--thermal-compress', '200',
+                                     '--odr-hz', '104', '--seed', '2'])
+        assert board.thermal.profile.shape == shape
+        n = int(board.thermal.duration_s * 104)
+        samples = board.next_samples(n)
+        temp = lsm.temperature_c(samples['temp'])
+        # the shapes' own set-points (10..50 degC) plus 2 degC of self-heating. The die lags
+        # the oven by tau / X = 3 s: at the end of a ramp by rate x tau = 10 degC, which the
+        # last hold (9 s, three time constants) brings down to 10 e^-3 = 0.5 degC
+        assert abs(temp[:50].mean() - first) < 0.05
+        assert abs(temp[-50:].mean() - last) < 0.6
+    # the accelerometer's offset change follows the die: the cooling board's 1-s means of x
+    # fall by the model's 40 degC of c1 (0.1 mg/degC) = 4 mg, far above their 0.1 mg scatter
+    board = cli.board_from_args(['--thermal', 'cooling', '--thermal-compress', '200',
+                                 '--odr-hz', '104', '--seed', '2'])
+    n = int(board.thermal.duration_s * 104)
+    accel = board.next_samples(n)['accel'].astype(float) * lsm.accel_sensitivity_m_s2_per_lsb(
+        board.accel_fs_g)
+    first, last = accel[:104 * 5, 0].mean(), accel[-104 * 5:, 0].mean()
+    model = ThermalModel()
+    expected = (model.accel_bias_m_s2([12.0]) - model.accel_bias_m_s2([52.0]))[0, 0]
+    assert last - first == pytest.approx(expected, abs=0.3e-3 * 9.80665)

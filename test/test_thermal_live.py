@@ -35,11 +35,19 @@ NS = 1_000_000_000
 
 
 def _slow_twin(model, t_ns, temp, gyro_ns, window_s):
-    """Oracle: knot i uses temperature_rate_c_s on samples 0..i only; offsets by np.interp."""
+    """
+    Return the twin: knot i's rate from samples 0..i only, offsets by np.interp.
+
+    Before the window is filled (t_i < window_s) a knot takes the rate of the first knot
+    whose window is, as temperature_rate_c_s(start='backfill') does offline.
+    """
     t_s = (t_ns - t_ns[0]) / NS
+    rates = [temperature_rate_c_s(t_s[:i + 1], temp[:i + 1], window_s=window_s,
+                                  start='partial')[-1] for i in range(t_ns.size)]
+    first = int(np.argmax(t_s >= window_s))
     knots = []
     for i in range(t_ns.size):
-        rate = temperature_rate_c_s(t_s[:i + 1], temp[:i + 1], window_s=window_s)[-1]
+        rate = rates[i] if t_s[i] >= window_s else rates[first]
         knots.append(model.drift_rad_s(temp[i:i + 1], np.array([rate]))[0])
     knots = np.array(knots)
     x = (gyro_ns - t_ns[0]) / NS
@@ -78,8 +86,14 @@ def test_batched_evaluation_matches_slow_twin():
         if i_t >= t_ns.size:
             stop = gyro_ns.size
         if stop > i_g:
-            got.append(ev.drift_at(gyro_ns[i_g:stop]))
-            i_g = stop
+            out = ev.drift_at(gyro_ns[i_g:stop])
+            # no offset before the 4-s rate window has filled: the node holds those samples
+            # and asks again with the next batch
+            if out is not None:
+                got.append(out)
+                i_g = stop
+            else:
+                assert (t_ns[i_t - 1] - t_ns[0]) / NS < window and ev.pending == i_t
     got = np.concatenate(got)
     # Same arithmetic up to the rate's running sums, which start at another sample (trailing
     # buffer vs whole history): differences at rounding level of offsets around 1e-2 rad/s.
@@ -96,6 +110,33 @@ def test_hold_after_newest_knot_and_none_before_first():
     rate = 2.0  # two samples 1 s apart within the 1-s window: the slope is exact
     np.testing.assert_allclose(out[:, 0], [0.0, 1.0, 2.0])
     assert ev.rate_c_s == pytest.approx(rate)
+
+
+def test_start_up_waits_for_the_rate_window_and_backfills():
+    model = LinearThermal(rate_gain=(1.0, 0.0, 0.0), temperature_range_c=(0.0, 50.0))
+    ev = LiveDriftEvaluator(model, rate_window_s=2.0, rate_range_c_s=(0.0, 0.5))
+    assert ev.start_up_s == 2.0
+    # a 0.25 degC/s ramp read every 0.5 s: no offset until 2 s after the first message
+    ev.add_temperature(NS // 2 * np.arange(4), 20.0 + 0.125 * np.arange(4))
+    assert ev.drift_at(np.array([0])) is None and ev.pending == 4 and ev.knots == 4
+    ev.add_temperature(NS // 2 * np.arange(4, 6), 20.0 + 0.125 * np.arange(4, 6))
+    assert ev.pending == 0
+    # every knot, the waiting ones too, carries the first filled window's rate (exact on a
+    # ramp): the offline backfill
+    out = ev.drift_at(NS // 2 * np.arange(6))
+    temps = 20.0 + 0.125 * np.arange(6)
+    np.testing.assert_allclose(out[:, 0] - model.drift_rad_s(temps, np.zeros(6))[:, 0], 0.25,
+                               atol=1e-12)
+    assert ev.knots_rate_outside == 0
+    # a cooling rate is outside the trained (heating) rate range: counted, not clipped
+    ev.add_temperature(NS // 2 * np.arange(6, 16), 20.625 - 0.5 * np.arange(1, 11))
+    assert ev.knots_rate_outside >= 5 and ev.rate_c_s < 0
+    poly = LinearThermal(temperature_range_c=(0.0, 50.0))
+    poly.uses_rate = False
+    ev = LiveDriftEvaluator(poly, rate_window_s=2.0)
+    assert ev.start_up_s == 0.0
+    ev.add_temperature([NS], [25.0])
+    assert ev.drift_at(np.array([NS])) is not None
 
 
 def test_stale_and_non_finite_temperatures_are_rejected():

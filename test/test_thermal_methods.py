@@ -136,3 +136,93 @@ def test_trainable_refuses_constant_and_narrow_temperature():
     bad.gyro_rad_s[5, 1] = np.nan
     with pytest.raises(InputDataError, match='NaN'):
         check_trainable(bad)
+
+
+def test_min_range_must_be_a_finite_non_negative_span():
+    run = _run(np.linspace(25.0, 30.0, 100))
+    for bad in (float('nan'), -5.0, float('inf')):
+        with pytest.raises(ParameterError, match='--min-range-c'):
+            check_trainable(run, min_range_c=bad)
+    check_trainable(run, min_range_c=0.0)
+
+
+def test_trainable_needs_two_rate_windows_for_a_rate_method():
+    # 15 s of a fast ramp: enough span, too short for a method that uses dT
+    run = _run(np.linspace(20.0, 30.0, 150))
+    check_trainable(run, method='poly3')
+    with pytest.raises(InputDataError, match='needs at least 20 s'):
+        check_trainable(run, method='linear_tdt')
+    with pytest.raises(MethodUnavailableError):
+        check_trainable(run, method='nosuch')
+
+
+def test_range_report_counts_t_and_dt():
+    run = _run(np.linspace(10.0, 40.0, 3000))
+    info = training_info(run)
+    # the training rate is one value (a ramp): 0.1 degC/s with 0.1-s samples
+    assert info.temperature_rate_min_c_s == pytest.approx(30.0 / 299.9, rel=1e-9)
+    temp = np.array([5.0, 20.0, 30.0, 45.0, 25.0])
+    rate = np.array([0.0, 30.0 / 299.9, -0.1, 30.0 / 299.9, 30.0 / 299.9])
+    rep = methods.range_report(info, temp, rate, treatment='held')
+    assert (rep.temperature_below, rep.temperature_above) == (1, 1)
+    # 0 and -0.1 are below the trained rate, which is one value
+    assert (rep.rate_below, rep.rate_above) == (2, 0)
+    assert rep.outside == 3 and rep.fraction_outside == pytest.approx(0.6)
+    assert '3 of 5 samples (60 %)' in rep.text() and rep.text().endswith('held')
+    assert rep.as_dict()['fraction_outside'] == pytest.approx(0.6)
+    # a run shorter than the rate window has no rate range: dT is not checked
+    short = training_info(_run(np.linspace(10.0, 40.0, 50)))
+    assert short.temperature_rate_min_c_s is None
+    assert methods.range_report(short, temp, rate).rate_below == 0
+
+
+def _saved(tmp_path):
+    run = _run(np.linspace(10.0, 40.0, 3000))
+    method = get_method('toy_linear')
+    method.fit(run, rng=np.random.default_rng(0))
+    save_model(method, tmp_path / 'model.json', training=training_info(run))
+    return json.loads((tmp_path / 'model.json').read_text())
+
+
+def test_model_from_another_version_loads_with_a_note(tmp_path):
+    doc = _saved(tmp_path)
+    assert not load_model(tmp_path / 'model.json').notes
+    doc['package_version'] = '9.9.9'
+    (tmp_path / 'old.json').write_text(json.dumps(doc))
+    model = load_model(tmp_path / 'old.json')
+    assert model.package_version == '9.9.9'
+    assert len(model.notes) == 1 and 'written by gyro_noise_ros 9.9.9' in model.notes[0]
+    # format version 1 (no accel, no rate window) is still read
+    doc['format_version'] = 1
+    del doc['accel'], doc['training']['rate_window_s']
+    (tmp_path / 'v1.json').write_text(json.dumps(doc))
+    assert load_model(tmp_path / 'v1.json').training.rate_window_s == 10.0
+
+
+def test_model_with_empty_parameters_is_refused(tmp_path):
+    doc = _saved(tmp_path)
+    for empty in ({}, None, []):
+        doc['parameters'] = empty
+        (tmp_path / 'e.json').write_text(json.dumps(doc))
+        with pytest.raises(ModelFileError, match='no fitted parameters'):
+            load_model(tmp_path / 'e.json')
+
+
+def test_accelerometer_polynomial_is_fitted_and_saved(tmp_path):
+    temp = np.linspace(10.0, 40.0, 3000)
+    run = _run(temp)
+    d = temp - 25.0
+    accel = np.column_stack([1e-3 * d, 9.80665 - 2e-4 * d + 1e-5 * d ** 2, 0.5 + 3e-6 * d ** 3])
+    run = ThermalRun(t_s=run.t_s, gyro_rad_s=run.gyro_rad_s, temperature_c=temp,
+                     rate_hz=run.rate_hz, accel_m_s2=accel)
+    model = methods.fit_method('poly3', run, rng=np.random.default_rng(0))
+    poly = model.accel
+    # T_ref is the middle of the range (25); the change from T_ref is exact, X0 is 0
+    assert poly.t_ref_c == 25.0 and poly.relative
+    np.testing.assert_allclose(poly.drift_rad_s(temp, 0.0), accel - [0.0, 9.80665, 0.5],
+                               atol=1e-12)
+    save_model(model.method, tmp_path / 'm.json', training=model.training, accel=poly)
+    again = load_model(tmp_path / 'm.json')
+    np.testing.assert_array_equal(again.accel.coef, poly.coef)
+    assert methods.fit_method('poly3', run, rng=np.random.default_rng(0), accel=False).accel \
+        is None

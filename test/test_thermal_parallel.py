@@ -25,8 +25,14 @@ import pytest
 from scipy.signal import lfilter
 
 #: A small MOPSO and refinement budget keeps each fit to seconds; the algorithm is the same.
-SMALL = {'n_particles': 8, 'iterations': 3, 'fitness_samples': 128, 'elman_epochs': 10,
-         'elman_samples': 500, 'refine_points': 4, 'refine_polish': 4, 'refine_samples': 512}
+SMALL = {'n_particles': 8, 'iterations': 3, 'fitness_samples': 128, 'elman_epochs': 3,
+         'elman_samples': 500, 'refine_points': 4, 'refine_polish': 4, 'refine_samples': 512,
+         'elman_refine': 100}
+#: Smaller still, for the tests that compare two fits (determinism, process pool): the
+#: reference fitness on 4 windows of 128 samples instead of the whole 2000-sample run (16x
+#: fewer entropy pairs), one BAS epoch, a short refinement.
+TINY = {**SMALL, 'iterations': 2, 'refine_samples': 128, 'refine_points': 2, 'refine_polish': 2,
+        'elman_epochs': 1, 'elman_iterations': 30, 'elman_refine': 20}
 
 
 def thermal_run(seed, n=40000, rate_hz=5.0, noise_rad_s=0.01):
@@ -94,15 +100,16 @@ def test_json_round_trip(fitted):
     for ax in d['axes']:
         assert 4 <= ax['k'] <= 12 and 1000 <= ax['alpha'] <= 10000
         assert set(ax['classes']) <= {'drift', 'mixed', 'noise'}
-        assert {'theta', 'x_lo', 'x_hi', 'y_lo', 'y_hi', 'dt_s'} <= set(ax['elman'])
+        assert {'base', 't_ref_c', 'coef', 'range_lo', 'range_hi'} <= set(ax['elman'])
+        assert {'theta', 'theta_bas', 'x_lo', 'x_hi', 'y_lo', 'y_hi', 'dt_s'} <= set(
+            ax['elman']['network'])
     again = ParallelModel.from_dict(d)
     assert np.array_equal(again.apply(test), fitted.apply(test))
 
 
 def test_deterministic():
     train, _ = thermal_run(4, n=2000)
-    opts = {**SMALL, 'iterations': 2, 'elman_epochs': 2}
-    a, b = ParallelModel(**opts), ParallelModel(**opts)
+    a, b = ParallelModel(**TINY), ParallelModel(**TINY)
     a.fit(train, rng=np.random.default_rng(9))
     b.fit(train, rng=np.random.default_rng(9))
     assert a.to_dict() == b.to_dict()
@@ -113,8 +120,7 @@ def test_process_pool_gives_the_serial_result():
     # Distributing the particle evaluations (workers=2) must not change anything: the
     # fitness is pure and the pool's map keeps the order.
     train, _ = thermal_run(8, n=2000)
-    opts = {**SMALL, 'iterations': 2, 'elman_epochs': 2}
-    serial, pooled = ParallelModel(**opts), ParallelModel(**opts, workers=2)
+    serial, pooled = ParallelModel(**TINY), ParallelModel(**TINY, workers=2)
     serial.fit(train, rng=np.random.default_rng(3))
     pooled.fit(train, rng=np.random.default_rng(3))
     a, b = serial.to_dict(), pooled.to_dict()
@@ -133,7 +139,8 @@ def test_fast_pick_is_not_dominated_by_the_naive_pick():
     # the windowed pick has K = 8 or more where the whole-run front has K = 4 or 5. The bench
     # (bench/bench_thermal_fit.py) measures the same over several seeds.
     train, _ = thermal_run(21, n=768, rate_hz=1.0)
-    budget = {'n_particles': 10, 'iterations': 4, 'elman_epochs': 1, 'elman_iterations': 10}
+    budget = {'n_particles': 10, 'iterations': 4, 'elman_epochs': 1, 'elman_iterations': 10,
+              'elman_refine': 10}
     naive = ParallelModel(**budget, fitness_samples=None)
     fast = ParallelModel(**budget, fitness_samples=128)
     naive.fit(train, rng=np.random.default_rng(5))
@@ -167,3 +174,30 @@ def test_bad_input(fitted):
         ParallelModel().apply(run)
     with pytest.raises(ParameterError):
         ParallelModel.from_dict({'method': 'poly3'})
+
+
+def test_a_mixed_band_goes_through_tfpf_in_apply(fitted):
+    # A run with a band holding signal and noise (a 0.01-Hz oscillation of 0.6 noise std at
+    # 1 Hz, 12000 samples) decomposed around drift, oscillation and noise: apply must class
+    # that mode mixed and filter it by TFPF (the mixed branch of the paper's Figure 7).
+    n, noise = 12000, 1e-3
+    rng = np.random.default_rng(6)
+    t = np.arange(n, dtype=float)
+    temp = 20.0 + 20.0 * t / t[-1]
+    tone = 0.6 * noise * np.sin(2 * np.pi * 0.01 * t)
+    run = ThermalRun(t_s=t, gyro_rad_s=tone[:, None] + noise * rng.standard_normal((n, 3)),
+                     temperature_c=temp, rate_hz=1.0)
+    d = fitted.to_dict()
+    d['options'] = dict(d['options'], entropy_scale=16)
+    d['axes'] = [dict(ax, k=3, alpha=10000.0, center_freqs_hz=[0.0, 0.01, 0.25])
+                 for ax in d['axes']]
+    model = ParallelModel.from_dict(d)
+    model.apply(run)
+    parts = model._report_parts[1]
+    for info, part in zip(model.last_info, parts):
+        assert info['classes'] == ['drift', 'mixed', 'noise']
+        before, after = np.asarray(part['zoom_mixed_in']), np.asarray(part['zoom_mixed_out'])
+        # the mixed part is the middle mode, and TFPF changed it (by ~7 % of its rms on the
+        # known-band cases of test_thermal_tfpf_classify; here over a 620-sample zoom)
+        assert np.std(before) > 0
+        assert np.sqrt(np.mean((after - before) ** 2)) > 0.03 * np.std(before)

@@ -26,7 +26,8 @@ import math
 from pathlib import Path
 
 from _thermal_toy import write_thermal_bag
-from gyro_noise_ros.cli.thermal import main, split_run
+from gyro_noise_ros.app.thermal import split_run
+from gyro_noise_ros.cli.thermal import main
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.thermal.run import ThermalRun
 import numpy as np

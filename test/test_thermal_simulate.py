@@ -19,9 +19,10 @@ import json
 
 from gyro_noise_ros.bag import ImuBagReader
 from gyro_noise_ros.core.allan import allan_deviation
+from gyro_noise_ros.core.simulate import gauss_markov_avar
 from gyro_noise_ros.errors import ParameterError
-from gyro_noise_ros.thermal.simulate import (DEG, gauss_markov_allan_variance, gyro_noise_rad_s,
-                                             OvenProfile, resolve_timing, simulate_run,
+from gyro_noise_ros.thermal.simulate import (DEG, gyro_noise_rad_s, MG, OvenProfile,
+                                             resolve_timing, simulate_run, STANDARD_GRAVITY,
                                              ThermalModel, ThermalStream, write_train_test)
 import numpy as np
 import pytest
@@ -122,6 +123,10 @@ def test_hysteresis_is_a_loop_of_height_2hr():
                     + np.asarray(model.gradient_dps_per_c_s)[i] * th.die_rate_c_s / 20.0
                     + np.asarray(model.hysteresis_dps_per_c)[i] * diff)
         np.testing.assert_allclose(th.bias_rad_s[:, i] / DEG, expected, atol=1e-12)
+        accel = (np.asarray(model.accel_bias_mg)[i] + np.asarray(model.accel_lin_mg_per_c)[i] * d
+                 + np.asarray(model.accel_quad_mg_per_c2)[i] * d ** 2
+                 + np.asarray(model.accel_cubic_mg_per_c3)[i] * d ** 3)
+        np.testing.assert_allclose(th.accel_bias_m_s2[:, i] / MG, accel, atol=1e-12)
     off = ThermalStream(replace(model, hysteresis_half_width_c=0.0), compress=20.0)
     th_off = off.step(np.arange(0, 2600.0, 0.5))
     np.testing.assert_array_equal(th_off.played_c, th_off.die_c)
@@ -136,16 +141,11 @@ def test_compression_is_a_time_scaling():
     np.testing.assert_allclose(fast.die_rate_c_s, 10.0 * slow.die_rate_c_s, atol=1e-9)
 
 
-def test_gauss_markov_closed_form_limits_and_floor():
-    q, tc = 2.0, 50.0
-    small = gauss_markov_allan_variance([1e-4, 1e-2], q, tc)
-    np.testing.assert_allclose(small, (2 * q * q / tc) * np.array([1e-4, 1e-2]) / 3, rtol=1e-3)
-    big = gauss_markov_allan_variance([1e6], q, tc)
-    np.testing.assert_allclose(big, 2 * q * q * tc / 1e6, rtol=1e-3)
+def test_gauss_markov_floor():
     model = ThermalModel()
     qm = model.gauss_markov_std_dps()
     taus = np.logspace(-1, 5, 2000)
-    adev = np.sqrt(sum(gauss_markov_allan_variance(taus, qm, t) for t in model.bi_corr_times_s))
+    adev = np.sqrt(sum(gauss_markov_avar(taus, qm, t) for t in model.bi_corr_times_s))
     assert adev.max() == pytest.approx(0.664 * model.bias_instability_dps, rel=1e-3)
 
 
@@ -159,7 +159,7 @@ def test_gyro_noise_allan_matches_closed_form():
     assert np.var(noise) == pytest.approx(model.arw_dps_rthz ** 2 * rate + 2 * qm * qm, rel=0.05)
     res = allan_deviation(noise[:, 0], rate, taus=np.array([1, 10, 100, 1000]))
     theory = (model.arw_dps_rthz ** 2 / res.tau_s
-              + sum(gauss_markov_allan_variance(res.tau_s, qm, t) for t in model.bi_corr_times_s))
+              + sum(gauss_markov_avar(res.tau_s, qm, t) for t in model.bi_corr_times_s))
     # 40000 s of data: at tau = 100 s the overlapping estimator has ~ 300 equivalent degrees of
     # freedom (8 % 1-sigma on the deviation), at 1000 s about 30 (~13 %); 30 % is > 2 sigma there.
     np.testing.assert_allclose(res.adev, np.sqrt(theory), rtol=0.3)
@@ -180,6 +180,12 @@ def test_simulate_run_is_deterministic_and_sensor_is_quantised():
     err = ta.temperature_reading_c - ta.die_c[ta.temperature_index]
     assert np.std(err) == pytest.approx(np.hypot(0.02, lsb / np.sqrt(12)), rel=0.07)
     np.testing.assert_allclose(a.gyro_rad_s, ta.drift_rad_s + ta.noise_rad_s)
+    gravity = np.array([0.0, 0.0, STANDARD_GRAVITY])
+    np.testing.assert_allclose(a.accel_m_s2, gravity + ta.accel_drift_m_s2 + ta.accel_noise_m_s2)
+    # accelerometer white noise: density 70 ug/sqrt(Hz) over the 25-Hz Nyquist band; 9000 x 3
+    # samples give a 2-sigma scatter of ~1 % on the standard deviation
+    assert np.std(ta.accel_noise_m_s2) == pytest.approx(70e-6 * STANDARD_GRAVITY * 5.0,
+                                                        rel=0.03)
     assert a.temperature_c.shape == a.t_s.shape and a.rate_hz == 50.0
     assert ta.compress == pytest.approx(OvenProfile().duration_s / 720.0)
     # the runs differ in room temperature and turn-on bias, not in the device
@@ -196,6 +202,10 @@ def test_train_test_bags_hold_the_runs(tmp_path):
         gyro = np.concatenate([b.gyro for b in reader.iter_batches()])
         stamps, temps = reader.read_temperature()
     np.testing.assert_array_equal(gyro, truth['drift_rad_s'] + truth['noise_rad_s'])
+    with ImuBagReader(train) as reader:
+        accel = np.concatenate([b.accel for b in reader.iter_batches()])
+    np.testing.assert_allclose(accel - [0.0, 0.0, STANDARD_GRAVITY],
+                               truth['accel_drift_m_s2'] + truth['accel_noise_m_s2'], atol=1e-12)
     np.testing.assert_array_equal(temps, truth['temperature_reading_c'])
     # one Temperature message per round(40 / 52) = 1 Imu message
     assert temps.size == gyro.shape[0]
@@ -216,18 +226,3 @@ def test_bad_arguments():
         ThermalStream(ThermalModel(tau_die_s=0.0))
     with pytest.raises(ParameterError, match='non-decreasing'):
         ThermalStream().step([2.0, 1.0])
-
-
-def test_argument_helpers(tmp_path):
-    import argparse
-
-    from gyro_noise_ros.thermal.simulate import add_simulate_arguments, simulate_from_args
-
-    parser = argparse.ArgumentParser()
-    add_simulate_arguments(parser)
-    args = parser.parse_args(['--seed', '2', '--out', str(tmp_path), '--hours', '0.01',
-                              '--rate-hz', '20', '--no-hysteresis', '--storage', 'mcap'])
-    train, test = simulate_from_args(args)
-    settings = json.loads((tmp_path / 'simulation.json').read_text())
-    assert settings['model']['hysteresis_half_width_c'] == 0.0 and settings['storage'] == 'mcap'
-    assert settings['duration_s'] == 36.0 and train.is_dir() and test.is_dir()

@@ -18,10 +18,11 @@ False-alarm rate of the offset-drift verdict over ordered pairs of the six real 
 Usage: python docs/scripts/drift_false_alarms.py [--data DIR]
 None of the six static runs drifts. Each run (100 chunks of 10,000 samples, 100 Hz) is judged by
 ``core.health.evaluate_health`` against every other run as reference, per axis (90 cases),
-three ways: the old rule (OLS standard error, ratio only), the new error with the reference
-error ignored, and the new rule (both errors). Prints the counts of the levels of the item
-'Offset drift / reference', and the spread of the slopes across runs beside the mean OLS and new
-standard errors.
+two ways: with the ordinary least-squares standard errors of both slopes, and with the
+correlation-robust errors the verdict uses (``chunks.drift_stderr``). Prints the counts of the
+levels of the item 'Offset drift deviation (sigma)' (the difference of the slopes in standard
+errors of both, default thresholds), and the spread of the slopes across runs beside the mean OLS
+and robust standard errors.
 """
 
 import argparse
@@ -51,17 +52,18 @@ def _sequences(data):
     return seqs
 
 
-def _level(seq, ref, *, ref_error, old):
+def _level(seq, ref, *, ols):
     stream = StreamCounts(samples=10 ** 6, samples_lost=0, gaps=0, out_of_order=0, chunks=100,
                           tail_samples=0, discarded_samples=0, discarded_partials=0, rate_hz=100.0,
                           duration_s=1e4)
-    if old:
+    if ols:
         seq = replace(seq, drift=replace(seq.drift, stderr=seq.drift.stderr_ols))
     rs = ReferenceStats(ref.drift.slope, ref.mean_variance, 0.5, 0.5, chunks=ref.chunks,
-                        offset_drift_stderr_rad_s2=ref.drift.stderr if ref_error else float('nan'))
+                        offset_drift_stderr_rad_s2=ref.drift.stderr_ols if ols
+                        else ref.drift.stderr)
     summary = AxisSummary('x', seq, stream, 0, 100, 0, 0, 0, 0, float('nan'))
     items = evaluate_health(summary, reference=rs).items
-    return next(level for key, _, level in items if key == 'Offset drift / reference')
+    return next(level for key, _, level in items if key == 'Offset drift deviation (sigma)')
 
 
 def main():
@@ -70,13 +72,12 @@ def main():
     parser.add_argument('--data', default=DEFAULT_DATA)
     args = parser.parse_args()
     seqs = _sequences(args.data)
-    for name, ref_error, old in (('old: OLS error, ratio only', False, True),
-                                 ('new error, reference error ignored', False, False),
-                                 ('new: both errors', True, False)):
+    for name, ols in (('OLS errors of both slopes', True),
+                      ('correlation-robust errors of both slopes (the verdict)', False)):
         counts = {'OK': 0, 'WARN': 0, 'ERROR': 0}
         for (a, r) in itertools.permutations(range(1, 7), 2):
             for ax in range(3):
-                counts[_level(seqs[(a, ax)], seqs[(r, ax)], ref_error=ref_error, old=old)] += 1
+                counts[_level(seqs[(a, ax)], seqs[(r, ax)], ols=ols)] += 1
         print(f'{name}: {counts} of 90')
     print('| axis | spread of slopes ((deg/s)/h) | mean OLS error | mean new error |')
     print('|---|---:|---:|---:|')

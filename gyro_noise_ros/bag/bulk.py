@@ -43,8 +43,10 @@ import struct
 
 import numpy as np
 
-from . import ImuBagWriter
-from .codec import (
+from .storage import describe
+from .writer import ImuBagWriter
+from ..errors import BagError, OutputError
+from ..msgs import (
     encode_imu_rows,
     encode_temperature_rows,
     IMU_TAIL_F8,
@@ -52,8 +54,6 @@ from .codec import (
     TEMPERATURE_MSGTYPE,
     typestore,
 )
-from .storage import describe
-from ..errors import BagError
 
 #: Messages per ``INSERT ... SELECT`` statement (blocks of a few MB; measured best near 10k).
 SQL_BLOCK = 8192
@@ -154,7 +154,7 @@ class BulkImuBagWriter(ImuBagWriter):
                 if chunk.bio.tell() > MCAP_CHUNK_BYTES:
                     storage.close_chunk()
         except Exception as err:  # noqa: BLE001 - disk full
-            raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
+            raise OutputError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
         first, last = int(times.min()), int(times.max())
         storage.message_start_time = min(storage.message_start_time, first)
         storage.message_end_time = max(storage.message_end_time, last)
@@ -188,7 +188,7 @@ class BulkImuBagWriter(ImuBagWriter):
                 cursor.execute(sql, (flat[start * size:(start + len(part)) * size],
                                      '[' + ','.join(map(str, part)) + ']'))
         except Exception as err:  # noqa: BLE001 - disk full, sqlite errors
-            raise BagError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
+            raise OutputError(f'bag {str(self.path)!r}: writing failed: {describe(err)}') from err
         writer.counts[conn.id] += rows.shape[0]
         writer.min_timestamp = min(writer.min_timestamp, int(log_ns.min()))
         writer.max_timestamp = max(writer.max_timestamp, int(log_ns.max()))
@@ -249,8 +249,9 @@ class BulkImuBagWriter(ImuBagWriter):
                 self._temperature_conn = self._writer.add_connection(
                     self.temperature_topic, TEMPERATURE_MSGTYPE, typestore=typestore())
             except Exception as err:  # noqa: BLE001 - rosbags WriterError
-                raise BagError(f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
-                               f'{describe(err)}') from err
+                raise OutputError(
+                    f'bag {str(self.path)!r}: cannot add {self.temperature_topic!r}: '
+                    f'{describe(err)}') from err
         self._write_rows(self._temperature_conn, logs, rows)
         self.temperature_count += rows.shape[0]
 

@@ -32,8 +32,10 @@ import struct
 
 import numpy as np
 
-from .codec import join_raws
+from .recover import (announce, journal_is_hot, recovering_reader_class, rollback_note,
+                      rolled_back_copy, truncation_note)
 from ..errors import BagError
+from ..msgs import join_raws
 
 STORAGES = ('sqlite3', 'mcap')
 BLOCK = 16384
@@ -81,16 +83,26 @@ def _metadata_storage(meta):
 
 
 def _resolve(path):
-    """Return (path to hand to rosbags, storage kind) or raise BagError."""
+    """
+    Return (path to hand to rosbags, storage kind, notes) or raise BagError.
+
+    ``notes`` are the sentences to say about a recording that is read although its writer did
+    not finish it (no ``metadata.yaml``; an sqlite3 file read through a rolled-back copy).
+    """
     if path.is_dir():
         files = sorted(path.glob('*.db3')) + sorted(path.glob('*.mcap'))
         if (path / 'metadata.yaml').exists():
             # rosbags validates the metadata and its files (which may be zstd-compressed); only
             # the storage kind is needed here.
-            return path, _metadata_storage(path / 'metadata.yaml')
+            return path, _metadata_storage(path / 'metadata.yaml'), []
         if len(files) == 1:
             # A recording whose writer died before writing metadata.yaml: read the storage file.
-            return _resolve(files[0])
+            target, kind, notes = _resolve(files[0])
+            if not notes and kind != 'mcap':
+                notes = [f'bag {str(path)!r} has no metadata.yaml (its writer did not finish): '
+                         f'reading its storage file {files[0].name}; `gyro_noise_record repair '
+                         f'{path}` writes a complete bag']
+            return target, kind, notes
         detail = ' and several storage files' if files else ''
         raise BagError(f'directory {str(path)!r} is not a rosbag2 bag (no metadata.yaml{detail})')
     if path.name == 'metadata.yaml':
@@ -100,18 +112,23 @@ def _resolve(path):
         raise BagError(
             f'file {str(path)!r} is not a bag (expected a rosbag2 directory, a .db3 or .mcap '
             'file, or a ROS 1 .bag file)')
-    journal = path.with_name(path.name + '-journal')
-    if kind == 'sqlite3' and journal.exists() and journal.stat().st_size > 0:
-        # A writer died mid-transaction; rosbags opens the file immutable and would ignore the
-        # rollback journal, reading half-written pages.
-        raise BagError(
-            f'sqlite3 file {str(path)!r} has an unfinished transaction ({journal.name}); roll it '
-            f'back first: python3 -c "import sqlite3; sqlite3.connect({str(path)!r}).execute('
-            "'PRAGMA integrity_check').fetchall()\"")
     if _SUFFIX.get(path.suffix) != kind:
         raise BagError(f'file {str(path)!r} holds {kind} data but its suffix is {path.suffix!r}; '
                        f'rename it to end in {dict(zip(_SUFFIX.values(), _SUFFIX))[kind]}')
-    return path, kind
+    if kind == 'sqlite3' and journal_is_hot(path):
+        # A writer died mid-transaction; rosbags opens the file immutable and would ignore the
+        # rollback journal, reading half-written pages.
+        return rolled_back_copy(path), kind, [rollback_note(_bag_name(path), path)]
+    return path, kind, []
+
+
+def _bag_name(path):
+    """Name the bag as a user does: its folder when the file is its only storage file."""
+    parent = path.parent
+    if not (parent / 'metadata.yaml').exists() and [
+            p for p in parent.iterdir() if p.suffix in _SUFFIX] == [path]:
+        return parent
+    return path
 
 
 def mcap_message_records(chunk):
@@ -172,6 +189,42 @@ def mcap_message_records(chunk):
         pos = end
     return (np.array(starts, np.int64), np.array(lengths, np.int64), np.array(channel, np.int64),
             np.array(log_ns, np.uint64).astype(np.int64))
+
+
+def read_mcap_chunk(fh, info):
+    """
+    Read, decompress and CRC-check one MCAP chunk with rosbags' ``decompress``.
+
+    Parameters
+    ----------
+    fh : file object
+        The MCAP file, opened for binary reading.
+    info : rosbags.rosbag2.storage_mcap.ChunkInfo
+        The chunk's index entry.
+
+    Returns
+    -------
+    bytes
+        The chunk's records.
+
+    Raises
+    ------
+    BagError
+        The chunk is cut off by the end of the file (rosbags raises its own errors on a bad
+        compression or checksum).
+
+    """
+    from rosbags.rosbag2.storage_mcap import decompress
+
+    # Chunk record: opcode, length, start, end, uncompressed size (8 each), crc (4),
+    # compression string (4 + len), compressed size (8), records.
+    fh.seek(info.chunk_start_offset + 9 + 24)
+    crc = int.from_bytes(fh.read(4), 'little')
+    fh.seek(info.chunk_start_offset + 9 + 40 + len(info.compression))
+    data = fh.read(info.compressed_size)
+    if len(data) != info.compressed_size:
+        raise BagError(f'MCAP chunk at byte {info.chunk_start_offset} is cut off')
+    return decompress(data, info.compression, info.uncompressed_size, crc)
 
 
 def _ros1_header(chunk, start, stop):
@@ -304,7 +357,7 @@ class BagSource:
         self.fast = fast
         if not self.path.exists():
             raise BagError(f'bag path {str(self.path)!r} does not exist')
-        target, self.storage = _resolve(self.path)
+        target, self.storage, notes = _resolve(self.path)
         self.ros1 = self.storage == 'ros1'
         self.reader = None
         try:
@@ -313,7 +366,8 @@ class BagSource:
                 # reader needs only the chunk list
                 Reader = _lean_ros1_reader_class() if fast else _full_ros1_reader_class()
             else:
-                from rosbags.rosbag2 import Reader
+                # rosbags' Reader, and a bare MCAP file without footer read by its chunks
+                Reader = recovering_reader_class()
             reader = Reader(target)
             reader.open()
             self.reader = reader
@@ -324,6 +378,20 @@ class BagSource:
         except Exception as err:  # noqa: BLE001
             raise BagError(f'bag {str(self.path)!r} cannot be opened as {self.storage} '
                            f'(corrupt or truncated?): {describe(err)}') from err
+        truncation = getattr(getattr(reader, 'storage', None), 'truncation', None)
+        #: McapTruncation of an MCAP file without footer, else None.
+        self.truncation = truncation
+        if truncation is not None:
+            if truncation.messages == 0:
+                reader.close()
+                raise BagError(f'bag {str(self.path)!r} is a truncated MCAP with nothing to '
+                               f'recover: no complete chunk before the cut '
+                               f'({truncation.stop_reason})')
+            notes = [truncation_note(self.path, truncation)]
+        #: The one-line note on a recording read although its writer did not finish it, or None.
+        self.recovery = notes[0] if notes else None
+        if self.recovery:
+            announce(self.recovery)
 
     def topics(self):
         """Return ``{name: (msgtype or None, count)}`` merged over connections."""
@@ -432,8 +500,6 @@ class BagSource:
             yield buf, starts, lengths, log_ns
 
     def _mcap_blocks(self, storage, conns, block):
-        from rosbags.rosbag2.storage_mcap import decompress
-
         ids = np.array(sorted({c.id for c in conns}), np.int64)
         chunks = sorted(
             (c for c in storage.chunks if any(c.channel_count.get(int(i), 0) for i in ids)),
@@ -448,16 +514,7 @@ class BagSource:
             return
         with open(storage.path, 'rb') as fh:
             for info in chunks:
-                # Chunk record: opcode, length, start, end, uncompressed size (8 each), crc (4),
-                # compression string (4 + len), compressed size (8), records.
-                fh.seek(info.chunk_start_offset + 9 + 24)
-                crc = int.from_bytes(fh.read(4), 'little')
-                fh.seek(info.chunk_start_offset + 9 + 40 + len(info.compression))
-                data = fh.read(info.compressed_size)
-                if len(data) != info.compressed_size:
-                    raise BagError(f'MCAP chunk at byte {info.chunk_start_offset} is cut off')
-                raw = decompress(data, info.compression, info.uncompressed_size, crc)
-                del data
+                raw = read_mcap_chunk(fh, info)
                 starts, lengths, channel, log_ns = mcap_message_records(raw)
                 sel = np.flatnonzero(np.isin(channel, ids))
                 if sel.size == 0:

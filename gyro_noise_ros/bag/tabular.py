@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .batch import ImuBatch
 from ..errors import BagError, InputDataError, ParameterError
 
 #: Suffixes read by :class:`TableImuReader`.
@@ -67,15 +68,86 @@ def is_table(path):
     return Path(path).suffix.lower() in TABLE_SUFFIXES
 
 
-class _Batch:
-    """Late import of ImuBatch (bag/__init__ imports this module)."""
+def read_csv(path, *, check_header=None):
+    """
+    Read a CSV table of numbers with one header line (the reading every tool shares).
 
-    @staticmethod
-    def make(stamp_ns, gyro, accel, frame_id):
-        from . import ImuBatch
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    check_header : callable, optional, keyword-only
+        Called with the header names before the rows are read (so a wrong format is said before
+        a missing row); it raises to refuse them.
 
-        return ImuBatch(stamp_ns=stamp_ns, log_ns=stamp_ns, gyro=gyro, accel=accel,
-                        frame_id=frame_id)
+    Returns
+    -------
+    tuple
+        ``(names, data)``: the header names, stripped and lower-case, and the rows as a float64
+        array of shape (rows, columns).
+
+    Raises
+    ------
+    BagError
+        The file cannot be read, is empty (no header line), or holds a value that is not a
+        number or a row of another length (exit code 3: the input is unreadable).
+    InputDataError
+        A header and no data rows (exit code 4: readable, nothing to analyse).
+
+    """
+    import csv
+    import warnings
+
+    path = Path(path)
+    try:
+        with path.open(newline='') as fh:
+            header = next(csv.reader(fh), None)
+    except (OSError, UnicodeDecodeError, csv.Error) as err:
+        reason = getattr(err, 'strerror', None) or err
+        raise BagError(f'cannot read CSV {str(path)!r}: {reason}') from err
+    if not header or not any(h.strip() for h in header):
+        raise BagError(f'CSV {str(path)!r} is empty (a header line is required)')
+    names = [h.strip().lower() for h in header]
+    if check_header is not None:
+        check_header(names)
+    try:
+        with warnings.catch_warnings():
+            # numpy warns (UserWarning) on a header without rows: said below as one error line
+            warnings.simplefilter('ignore', UserWarning)
+            data = np.loadtxt(path, delimiter=',', skiprows=1, ndmin=2, dtype=np.float64)
+    except (ValueError, UnicodeDecodeError) as err:
+        raise BagError(f'CSV {str(path)!r} has a non-numeric value or a short row: '
+                       f'{err}') from err
+    except OSError as err:
+        raise BagError(f'cannot read CSV {str(path)!r}: {err.strerror or err}') from err
+    if data.shape[0] == 0:
+        raise InputDataError(f'too short to analyse: CSV {str(path)!r} has no data rows')
+    if any(names[data.shape[1]:]):
+        # a named column the rows do not reach (an empty name after a trailing comma is fine)
+        raise BagError(f'CSV {str(path)!r} has {len(names)} header names but '
+                       f'{data.shape[1]} values per row')
+    return names, data
+
+
+def missing_column_error(path, wanted, names):
+    """
+    Return the error of a CSV without a required column (exit code 3: a wrong format).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    wanted : str
+        The column(s) looked for, as said to the user.
+    names : list of str
+        The header names found.
+
+    Returns
+    -------
+    BagError
+
+    """
+    return BagError(f'CSV {str(path)!r} has no column {wanted}; columns: {", ".join(names)}')
 
 
 def _csv_columns(names, path):
@@ -91,8 +163,7 @@ def _csv_columns(names, path):
         rad = col(f'gyro_{a}_rad_s')
         dps = col(f'gyro_{a}_dps', f'gyroscope {a} (deg/s)')
         if rad is None and dps is None:
-            raise InputDataError(f'CSV {str(path)!r} has no column gyro_{a}_rad_s (or '
-                                 f'gyro_{a}_dps); columns: {", ".join(names)}')
+            raise missing_column_error(path, f'gyro_{a}_rad_s (or gyro_{a}_dps)', names)
         cols[f'g{a}'] = (rad, 1.0) if rad is not None else (dps, np.pi / 180.0)
         ms2 = col(f'acc_{a}_m_s2', f'accel_{a}_m_s2')
         g = col(f'acc_{a}_g', f'accel_{a}_g', f'accelerometer {a} (g)')
@@ -102,26 +173,11 @@ def _csv_columns(names, path):
 
 
 def _load_csv(path, rate_hz):
-    import csv
-
-    try:
-        with Path(path).open(newline='') as fh:
-            header = next(csv.reader(fh), None)
-    except OSError as err:
-        raise BagError(f'cannot read CSV {str(path)!r}: {err.strerror or err}') from err
-    if not header:
-        raise BagError(f'CSV {str(path)!r} is empty (a header line is required)')
-    names = [h.strip().lower() for h in header]
+    names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path))
     cols = _csv_columns(names, path)
     if cols['t_s'] is None and cols['t_us'] is None and rate_hz is None:
         raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
-    try:
-        data = np.loadtxt(path, delimiter=',', skiprows=1, ndmin=2, dtype=np.float64)
-    except ValueError as err:
-        raise BagError(f'CSV {str(path)!r} has a non-numeric value: {err}') from err
     n = data.shape[0]
-    if n == 0:
-        raise InputDataError(f'too short to analyse: CSV {str(path)!r} has no data rows')
     if cols['t_s'] is not None:
         t = data[:, cols['t_s']]
         if not np.all(np.isfinite(t)):
@@ -246,7 +302,9 @@ class TableImuReader:
             raise ParameterError(f'batch_size must be a positive integer, got {batch_size!r}')
         for i in range(0, self.message_count, size):
             sl = slice(i, i + size)
-            yield _Batch.make(self._stamp[sl], self._gyro[sl], self._accel[sl], 'imu_link')
+            stamp_ns = self._stamp[sl]
+            yield ImuBatch(stamp_ns=stamp_ns, log_ns=stamp_ns, gyro=self._gyro[sl],
+                           accel=self._accel[sl], frame_id='imu_link')
 
     def read_temperature(self):
         """

@@ -32,7 +32,11 @@ Motions (what the sensor goes through, world frame ENU with z up, Earth rate at 
 
 * :class:`SixPosition`: a dwell in each of six orientations (any order), joined by rotations about
   a fixed body axis with a smooth (1 - cos) angle profile; the specific force follows the
-  attitude (no lever arm: the sensor sits on the rotation axis).
+  attitude (no lever arm: the sensor sits on the rotation axis). A dwell may be tilted
+  (``tilts``), as a badly seated fixture is.
+* :class:`MultiPose`: the same with any number of poses in arbitrary attitudes
+  (:func:`pose_attitudes`), the multi-pose |a| = g calibration's recording. The turns carry the
+  gyro's scale factor and misalignment like any rate.
 * :class:`Static`: one orientation.
 * :class:`Excitation`: static plus a sine dwell or a linear up-and-down sine sweep on one axis of
   the accelerometer or the gyro (paper 001 section 5.3); :meth:`Excitation.reference` is what an
@@ -324,6 +328,9 @@ class Static:
     latitude_deg: float = 45.0
     heading_deg: float = 0.0
 
+    def __post_init__(self):
+        attitude(self.orientation)      # a bad orientation fails here, before any output
+
     def true(self, t_s):
         """
         Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
@@ -353,8 +360,83 @@ def _earth_and_gravity(rot, rate_body, g, lat):
             np.broadcast_to(inv.apply(np.array([0.0, 0.0, g])), shape).copy())
 
 
+def _sequence_true(atts, t_s, dwell_s, move_s, lead_s, g, lat):
+    """Dwell in each attitude, turn to the next about a fixed body axis, (1 - cos) profile."""
+    t = np.asarray(t_s, dtype=np.float64)
+    period = dwell_s + move_s
+    u = t - lead_s
+    k = np.clip(np.floor(u / period).astype(np.int64), 0, len(atts) - 1)
+    phase = u - k * period
+    moving = (u > 0) & (phase > dwell_s) & (k < len(atts) - 1)
+    rate = np.zeros((t.size, 3))
+    quats = np.empty((t.size, 4))
+    for j in range(len(atts)):
+        sel = k == j
+        if not np.any(sel):
+            continue
+        r0 = atts[j]
+        quats[sel] = r0.as_quat()
+        mv = sel & moving
+        if np.any(mv):
+            rel = (r0.inv() * atts[j + 1]).as_rotvec()
+            x = (phase[mv] - dwell_s) / move_s
+            s = (1.0 - np.cos(np.pi * x)) / 2.0
+            quats[mv] = (r0 * Rotation.from_rotvec(np.outer(s, rel))).as_quat()
+            rate[mv] = np.outer(np.pi / (2.0 * move_s) * np.sin(np.pi * x), rel)
+    return _earth_and_gravity(Rotation.from_quat(quats), rate, g, lat)
+
+
+def _schedule(labels, dwell_s, move_s, lead_s):
+    out = []
+    t = lead_s
+    for o in labels:
+        out.append((o, t, t + dwell_s))
+        t += dwell_s + move_s
+    return out
+
+
+class _PoseSequence:
+    """Dwells in a list of attitudes joined by turns (``labels()`` and ``attitudes()``)."""
+
+    @property
+    def duration_s(self):
+        """float: time until the end of the last dwell (s)."""
+        k = len(self.labels())
+        return self.lead_s + k * self.dwell_s + (k - 1) * self.move_s
+
+    def schedule(self):
+        """
+        Return the dwells as (label, start, end) in scenario time (s).
+
+        Returns
+        -------
+        list of (str, float, float)
+
+        """
+        return _schedule(self.labels(), self.dwell_s, self.move_s, self.lead_s)
+
+    def true(self, t_s):
+        """
+        Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times (s); before the start and after the end the sensor rests in the first / last
+            attitude.
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            (n, 3) each.
+
+        """
+        return _sequence_true(self.attitudes(), t_s, self.dwell_s, self.move_s, self.lead_s,
+                              self.gravity_m_s2, self.latitude_deg)
+
+
 @dataclass(frozen=True)
-class SixPosition:
+class SixPosition(_PoseSequence):
     """
     A six-position sequence: dwells joined by rotations.
 
@@ -370,6 +452,9 @@ class SixPosition:
         Dwell before the first one counts (s): time spent in the first orientation before.
     gravity_m_s2, latitude_deg : float
         Local gravity (m/s^2), latitude (deg).
+    tilts : tuple of (str, float)
+        ``(orientation, degrees)``: that dwell's fixture is tilted by so many degrees about the
+        horizontal world x axis (a badly seated fixture; the turns into and out of it follow).
 
     """
 
@@ -379,75 +464,119 @@ class SixPosition:
     lead_s: float = 0.0
     gravity_m_s2: float = STANDARD_GRAVITY
     latitude_deg: float = 45.0
+    tilts: tuple = ()
 
     def __post_init__(self):
         for o in self.order:
             attitude(o)
+        for o, deg in self.tilts:
+            if o not in self.order or not np.isfinite(deg):
+                raise ParameterError(f'a tilt names an orientation of the order and a finite '
+                                     f'angle, got {o!r}: {deg!r}')
         if not (self.dwell_s > 0 and self.move_s > 0 and self.lead_s >= 0):
             raise ParameterError(f'dwell_s and move_s must be > 0, lead_s >= 0, got {self}')
 
-    @property
-    def duration_s(self):
-        """float: time until the end of the last dwell (s)."""
-        k = len(self.order)
-        return self.lead_s + k * self.dwell_s + (k - 1) * self.move_s
-
-    def schedule(self):
+    def attitudes(self):
         """
-        Return the dwells as (orientation, start, end) in scenario time (s).
+        Return the sensor-to-world rotation of each dwell, tilts included.
 
         Returns
         -------
-        list of (str, float, float)
+        list of scipy.spatial.transform.Rotation
 
         """
-        out = []
-        t = self.lead_s
-        for o in self.order:
-            out.append((o, t, t + self.dwell_s))
-            t += self.dwell_s + self.move_s
-        return out
+        tilt = dict(self.tilts)
+        return [Rotation.from_euler('x', tilt.get(o, 0.0), degrees=True) * attitude(o)
+                for o in self.order]
 
-    def true(self, t_s):
+    def labels(self):
+        """Return the orientations in the order visited (the schedule's labels)."""
+        return list(self.order)
+
+
+def pose_attitudes(n):
+    """
+    Return ``n`` static attitudes whose "up" directions cover the sensor's sphere evenly.
+
+    The body-frame up directions are a Fibonacci lattice (equal-area spiral), headings advance by
+    the golden angle, and the spiral is visited from both ends alternately (first, last,
+    second, ...): deterministic, every axis seen with both signs, opposite directions close in
+    time (a slow bias drift then cannot pose as a scale factor), each turn tilting gravity by
+    well over 90 degrees (a turn about the vertical tells the gyro calibration nothing).
+
+    Parameters
+    ----------
+    n : int
+        Number of poses (>= 9 for the multi-pose calibration).
+
+    Returns
+    -------
+    list of scipy.spatial.transform.Rotation
+        Sensor-to-world rotations.
+
+    """
+    n = int(n)
+    if n < 1:
+        raise ParameterError(f'the number of poses must be >= 1, got {n}')
+    golden = np.pi * (3.0 - np.sqrt(5.0))
+    out = []
+    order = [k // 2 if k % 2 == 0 else n - 1 - k // 2 for k in range(n)]
+    for k in order:
+        z = 1.0 - 2.0 * (k + 0.5) / n
+        r = np.sqrt(max(0.0, 1.0 - z * z))
+        up = np.array([r * np.cos(golden * k), r * np.sin(golden * k), z])
+        align, _ = Rotation.align_vectors([[0.0, 0.0, 1.0]], [up])
+        out.append(Rotation.from_euler('z', np.degrees(golden) * k, degrees=True) * align)
+    return out
+
+
+@dataclass(frozen=True)
+class MultiPose(_PoseSequence):
+    """
+    The multi-pose sequence of the |a| = g calibration: static poses in arbitrary attitudes.
+
+    Attributes
+    ----------
+    poses : int
+        Number of poses (:func:`pose_attitudes`).
+    dwell_s : float
+        Length of each dwell (s).
+    move_s : float
+        Length of each turn (s).
+    lead_s : float
+        Rest in the first pose before its dwell counts (s).
+    gravity_m_s2, latitude_deg : float
+        Local gravity (m/s^2), latitude (deg).
+
+    """
+
+    poses: int = 18
+    dwell_s: float = 30.0
+    move_s: float = 5.0
+    lead_s: float = 0.0
+    gravity_m_s2: float = STANDARD_GRAVITY
+    latitude_deg: float = 45.0
+
+    def __post_init__(self):
+        if int(self.poses) != self.poses or self.poses < 2:
+            raise ParameterError(f'poses must be an integer >= 2, got {self.poses!r}')
+        if not (self.dwell_s > 0 and self.move_s > 0 and self.lead_s >= 0):
+            raise ParameterError(f'dwell_s and move_s must be > 0, lead_s >= 0, got {self}')
+
+    def attitudes(self):
         """
-        Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
-
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s); before the start and after the end the sensor rests in the first / last
-            orientation.
+        Return the sensor-to-world rotation of each pose.
 
         Returns
         -------
-        (numpy.ndarray, numpy.ndarray)
-            (n, 3) each.
+        list of scipy.spatial.transform.Rotation
 
         """
-        t = np.asarray(t_s, dtype=np.float64)
-        period = self.dwell_s + self.move_s
-        u = t - self.lead_s
-        k = np.clip(np.floor(u / period).astype(np.int64), 0, len(self.order) - 1)
-        phase = u - k * period
-        moving = (u > 0) & (phase > self.dwell_s) & (k < len(self.order) - 1)
-        rate = np.zeros((t.size, 3))
-        quats = np.empty((t.size, 4))
-        att = [attitude(o) for o in self.order]
-        for j in range(len(self.order)):
-            sel = k == j
-            if not np.any(sel):
-                continue
-            r0 = att[j]
-            quats[sel] = r0.as_quat()
-            mv = sel & moving
-            if np.any(mv):
-                rel = (r0.inv() * att[j + 1]).as_rotvec()
-                x = (phase[mv] - self.dwell_s) / self.move_s
-                s = (1.0 - np.cos(np.pi * x)) / 2.0
-                quats[mv] = (r0 * Rotation.from_rotvec(np.outer(s, rel))).as_quat()
-                rate[mv] = np.outer(np.pi / (2.0 * self.move_s) * np.sin(np.pi * x), rel)
-        return _earth_and_gravity(Rotation.from_quat(quats), rate, self.gravity_m_s2,
-                                  self.latitude_deg)
+        return pose_attitudes(self.poses)
+
+    def labels(self):
+        """Return the pose names in the order visited (the schedule's labels)."""
+        return [f'pose {k + 1}' for k in range(int(self.poses))]
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,26 @@ instantaneous amplitude and frequency, and the amplitude is averaged in frequenc
 for rising and falling frequency. With a reference channel (the paper's piezoelectric feedback
 accelerometer) the same is done on it, and the deviation ``amplitude / reference - 1`` is given
 per bin.
+
+**The record must be what was asked for** (one line, exit 4, otherwise): a dwell's fitted
+frequency within ``frequency_tol`` (relative, default 2 %, a shaker's setting error is far
+smaller) of the requested one, and a sweep's instantaneous frequency must cover at least 80 % of
+the requested band (a dwell record analysed as a sweep stays at one frequency).
+
+**Verdicts** (statistical tests against the record's own noise, false-alarm ``alpha`` each; rates
+measured in ``docs/reliability.md`` by ``docs/scripts/excitation_verdicts.py``):
+
+* *steady* / *unsteady*: the per-cycle amplitudes scatter no more than white noise of the fit's
+  residual rms sigma explains, sigma sqrt(2 / samples per cycle): ``(n - 1) s^2 / sigma_c^2``
+  against chi-square(n - 1);
+* *clean* / *distorted*: the harmonics 2..H are no larger than noise: each harmonic's two
+  coefficients have variance 2 sigma^2 / N, so ``sum A_k^2 N / (2 sigma^2)`` against
+  chi-square(2 (H - 1));
+* sweep against a reference: the mean deviation against its standard error (the scatter of the
+  rising-minus-falling deviation per bin over sqrt 2 is the noise of one bin, with the bins seen
+  both ways less one degrees of freedom), Student's t, *matches* / *gain differs*; and the
+  variance of the deviations about their mean over that noise, F, *flat* /
+  *frequency-dependent*.
 """
 
 from dataclasses import dataclass
@@ -37,10 +57,17 @@ import math
 
 import numpy as np
 from scipy.signal import butter, hilbert, sosfiltfilt
+from scipy.stats import chi2, f as f_dist, t as t_dist
 
 from ..errors import InputDataError, ParameterError
 
 DEFAULT_HARMONICS = 5
+#: Largest relative difference between the requested and the fitted dwell frequency.
+DEFAULT_FREQUENCY_TOL = 0.02
+#: Least fraction of the requested sweep band the record's frequency must cover.
+MIN_SWEEP_COVERAGE = 0.8
+#: False-alarm probability of each verdict.
+DEFAULT_ALPHA = 1e-3
 
 
 def _check(x, rate_hz, name='samples'):
@@ -152,6 +179,16 @@ class DwellResult:
         Excited span analysed (s from the first sample).
     cycles : int
         Whole cycles in it.
+    frequency_sigma_hz, amplitude_sigma : float
+        Standard errors of the fitted frequency (Hz) and amplitude (white residual assumed).
+    stability_noise : float
+        The amplitude stability white noise alone would give (relative).
+    stability_p, distortion_p : float
+        p-values of the steadiness and distortion tests (module docstring).
+    thd_noise : float
+        The THD white noise alone would show, on average (ratio).
+    alpha : float
+        False-alarm probability of the verdicts.
 
     """
 
@@ -170,6 +207,23 @@ class DwellResult:
     start_s: float
     duration_s: float
     cycles: int
+    frequency_sigma_hz: float = float('nan')
+    amplitude_sigma: float = float('nan')
+    stability_noise: float = float('nan')
+    stability_p: float = float('nan')
+    distortion_p: float = float('nan')
+    thd_noise: float = float('nan')
+    alpha: float = DEFAULT_ALPHA
+
+    @property
+    def steady(self):
+        """bool: the per-cycle amplitude scatters no more than noise explains."""
+        return not self.stability_p < self.alpha
+
+    @property
+    def clean(self):
+        """bool: no harmonic stands out of the noise."""
+        return not self.distortion_p < self.alpha
 
 
 def _cycle_amplitudes(x, rate_hz, f):
@@ -187,7 +241,8 @@ def _cycle_amplitudes(x, rate_hz, f):
     return amps, starts, per
 
 
-def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS):
+def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS,
+               frequency_tol=DEFAULT_FREQUENCY_TOL, alpha=DEFAULT_ALPHA):
     """
     Analyse a sine-dwell record (paper 001 section 5.3, Figures 7, 8, 10, 11).
 
@@ -201,6 +256,10 @@ def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS):
         Nominal excitation frequency (Hz), below Nyquist.
     harmonics : int, keyword-only
         Harmonics used for the THD (those at or above Nyquist are left out).
+    frequency_tol : float, keyword-only
+        Largest relative difference between ``frequency_hz`` and the fitted frequency.
+    alpha : float, keyword-only
+        False-alarm probability of the steadiness and distortion verdicts.
 
     Returns
     -------
@@ -211,7 +270,8 @@ def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS):
     ParameterError
         Frequency at or above Nyquist.
     InputDataError
-        NaN/Inf, fewer than 3 cycles, or no sine at that frequency above the noise.
+        NaN/Inf, fewer than 3 cycles, no sine at that frequency above the noise, or a sine at
+        another frequency than requested.
 
     """
     x = _check(x, rate_hz)
@@ -219,6 +279,8 @@ def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS):
     if not (math.isfinite(f0) and 0 < f0 < rate_hz / 2.0):
         raise ParameterError(f'--dwell frequency must be in (0, {rate_hz / 2:g}) Hz (Nyquist), '
                              f'got {frequency_hz!r}')
+    if not (math.isfinite(frequency_tol) and frequency_tol > 0):
+        raise ParameterError(f'frequency tolerance must be > 0, got {frequency_tol!r}')
     if x.size < 3 * rate_hz / f0:
         raise InputDataError(f'record of {x.size} samples holds fewer than 3 cycles at {f0:g} Hz')
     amps, starts, per = _cycle_amplitudes(x, rate_hz, _fft_peak(x, rate_hz, f0))
@@ -227,8 +289,6 @@ def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS):
     lo, hi = int(starts[on[0]]), int(starts[on[-1]] + round(per))
     seg = x[lo:hi]
     f, amp, _, offset = sine_fit4(seg, rate_hz, _fft_peak(seg, rate_hz, f0))
-    if abs(f - f0) > 0.2 * f0:
-        raise InputDataError(f'no sine near {f0:g} Hz: the fit went to {f:.4g} Hz')
     cyc, _, _ = _cycle_amplitudes(seg, rate_hz, f)
     t = np.arange(seg.size) / rate_hz
     ks = [k for k in range(1, int(harmonics) + 1) if k * f < rate_hz / 2.0]
@@ -238,18 +298,41 @@ def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS):
     rms = float(np.sqrt(np.mean(resid ** 2)))
     # a sine must stand clear of the noise: its rms (A / sqrt 2) above 3 x the residual rms per
     # ~sqrt(samples) would be a weak criterion; require A > 3 residual rms / sqrt(cycle samples)
-    if h[0] < 3.0 * rms / math.sqrt(max(per, 1.0)):
+    if h[0] < 3.0 * rms / math.sqrt(max(per, 1.0)) or abs(f - f0) > 0.2 * f0:
         raise InputDataError(f'no sine at {f0:g} Hz above the noise (amplitude {h[0]:.3g}, '
                              f'noise rms {rms:.3g})')
+    n = seg.size
+    # 4-parameter fit: frequency standard error from its Gauss-Newton covariance
+    w = 2.0 * np.pi * f * t
+    deriv = 2.0 * np.pi * t * (-coef[1] * np.sin(w) + coef[2] * np.cos(w))
+    jac = np.column_stack([np.ones(n), np.cos(w), np.sin(w), deriv])
+    try:
+        f_sig = rms * math.sqrt(float(np.linalg.inv(jac.T @ jac)[3, 3]))
+    except np.linalg.LinAlgError:
+        f_sig = float('nan')
+    if abs(f - f0) > max(frequency_tol * f0, 5.0 * f_sig):
+        raise InputDataError(
+            f'the record holds a sine at {f:.4g} Hz, not the requested --dwell {f0:g} Hz '
+            f'(tolerance {100 * frequency_tol:g} %): another record, or another frequency?')
     mean = float(cyc.mean())
     std = float(cyc.std(ddof=1)) if cyc.size > 1 else float('nan')
+    sigma_c = rms * math.sqrt(2.0 / per)          # one cycle's amplitude from white noise
+    stab_p = (float(chi2.sf((cyc.size - 1) * std ** 2 / sigma_c ** 2, cyc.size - 1))
+              if cyc.size > 1 and sigma_c > 0 else float('nan'))
+    dof = 2 * (len(ks) - 1)
+    var_coef = 2.0 * rms ** 2 / n                 # each harmonic coefficient, white noise
+    dist_p = (float(chi2.sf(float(np.sum(h[1:] ** 2)) / var_coef, dof))
+              if dof > 0 and var_coef > 0 else float('nan'))
     return DwellResult(
         frequency_hz=float(f), amplitude=float(h[0]), offset=float(coef[0]), cycle_amplitude=cyc,
         cycle_amplitude_mean=mean, cycle_amplitude_std=std,
         cycle_amplitude_min=float(cyc.min()), cycle_amplitude_max=float(cyc.max()),
         amplitude_stability=std / mean if mean > 0 else float('nan'), harmonics=h,
         thd=float(np.sqrt(np.sum(h[1:] ** 2)) / h[0]), residual_rms=rms,
-        start_s=lo / rate_hz, duration_s=seg.size / rate_hz, cycles=int(cyc.size))
+        start_s=lo / rate_hz, duration_s=seg.size / rate_hz, cycles=int(cyc.size),
+        frequency_sigma_hz=f_sig, amplitude_sigma=math.sqrt(var_coef),
+        stability_noise=sigma_c / mean if mean > 0 else float('nan'), stability_p=stab_p,
+        distortion_p=dist_p, thd_noise=math.sqrt(dof * var_coef) / h[0], alpha=float(alpha))
 
 
 @dataclass(frozen=True)
@@ -269,6 +352,17 @@ class SweepResult:
         ``amplitude / reference - 1`` per bin.
     t_s, inst_frequency_hz, inst_amplitude : numpy.ndarray
         Decimated time series of the instantaneous frequency and amplitude (for figures).
+    frequency_range_hz : (float, float)
+        5th and 95th percentiles of the instantaneous frequency over the excited span (Hz).
+    mean_deviation, mean_deviation_sigma : float
+        Mean of the per-bin deviations and its standard error (NaN without a reference or with
+        fewer than 3 bins seen both rising and falling).
+    bin_deviation_sigma : float
+        Noise of one bin's deviation (rising minus falling scatter over sqrt 2).
+    gain_p, flatness_p : float
+        p-values of "matches the reference" and "flat" (module docstring).
+    alpha : float
+        False-alarm probability of the verdicts.
 
     """
 
@@ -282,6 +376,23 @@ class SweepResult:
     t_s: np.ndarray
     inst_frequency_hz: np.ndarray
     inst_amplitude: np.ndarray
+    frequency_range_hz: tuple = (float('nan'), float('nan'))
+    mean_deviation: float = float('nan')
+    mean_deviation_sigma: float = float('nan')
+    bin_deviation_sigma: float = float('nan')
+    gain_p: float = float('nan')
+    flatness_p: float = float('nan')
+    alpha: float = DEFAULT_ALPHA
+
+    @property
+    def matches_reference(self):
+        """Whether the mean deviation is within noise (None without a reference)."""
+        return None if math.isnan(self.gain_p) else not self.gain_p < self.alpha
+
+    @property
+    def flat(self):
+        """Whether the deviation stays flat with frequency within noise (None: no reference)."""
+        return None if math.isnan(self.flatness_p) else not self.flatness_p < self.alpha
 
 
 def _instantaneous(x, rate_hz, f_lo, f_hi):
@@ -304,7 +415,8 @@ def _smooth(v, n):
     return np.convolve(v, k, mode='same')
 
 
-def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bins=None):
+def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bins=None,
+               alpha=DEFAULT_ALPHA):
     """
     Analyse a sine-sweep record (paper 001 section 5.3, Figures 9 and 12).
 
@@ -322,10 +434,19 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
         Reference channel on the same time base (the shaker's feedback sensor).
     bins : int, optional, keyword-only
         Number of frequency bins across the band (default: one per 0.25 Hz, at least 4).
+    alpha : float, keyword-only
+        False-alarm probability of the verdicts against the reference.
 
     Returns
     -------
     SweepResult
+
+    Raises
+    ------
+    ParameterError
+        A band not below Nyquist, a rate <= 0, a reference of another length.
+    InputDataError
+        NaN/Inf, fewer than 3 cycles, or a record whose frequency does not sweep the band.
 
     """
     x = _check(x, rate_hz)
@@ -343,10 +464,19 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
     amp, freq = _instantaneous(x, rate_hz, lo, hi)
     # smooth over one cycle of the lowest frequency, direction over ~0.2 Hz of sweep
     fs = _smooth(freq, max(1, int(rate_hz / lo)))
+    edge0 = int(2 * rate_hz / lo)
+    inner = slice(edge0, max(edge0 + 1, x.size - edge0))
+    excited = amp[inner] >= 0.5 * np.percentile(amp[inner], 90)
+    f_lo, f_hi = (float(v) for v in np.percentile(fs[inner][excited], [5, 95]))
+    covered = max(0.0, min(f_hi, hi) - max(f_lo, lo))
+    if covered < MIN_SWEEP_COVERAGE * (hi - lo):
+        hint = (f'a sine dwell? (--dwell {np.median(fs[inner][excited]):.3g})'
+                if f_hi - f_lo < 0.1 * (hi - lo) else 'another band?')
+        raise InputDataError(f'the record does not sweep {lo:g}-{hi:g} Hz: its frequency stays '
+                             f'within {f_lo:.3g}-{f_hi:.3g} Hz, {hint}')
     direction = np.sign(np.gradient(_smooth(fs, max(1, int(rate_hz * 0.2 / sweep_rate_hz_s)))))
-    edge = int(2 * rate_hz / lo)          # Hilbert / filter edge effects
     valid = np.zeros(x.size, dtype=bool)
-    valid[edge:x.size - edge] = True
+    valid[inner] = True                   # Hilbert / filter edge effects
     valid &= (fs >= lo) & (fs <= hi)
 
     def binned(a, sel):
@@ -363,6 +493,8 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
     down = valid & (direction < 0)
     res = {'amplitude_up': binned(amp, up), 'amplitude_down': binned(amp, down)}
     ref_up = ref_down = dev_up = dev_down = None
+    nan = float('nan')
+    stats = (nan, nan, nan, nan, nan)
     if reference is not None:
         r = _check(reference, rate_hz, 'reference')
         if r.size != x.size:
@@ -372,7 +504,29 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
         with np.errstate(invalid='ignore', divide='ignore'):
             dev_up = res['amplitude_up'] / ref_up - 1.0
             dev_down = res['amplitude_down'] / ref_down - 1.0
+        stats = _deviation_tests(dev_up, dev_down)
     step = max(1, x.size // 4000)
     return SweepResult(centres, res['amplitude_up'], res['amplitude_down'], ref_up, ref_down,
                        dev_up, dev_down, np.arange(0, x.size, step) / rate_hz, fs[::step],
-                       amp[::step])
+                       amp[::step], (f_lo, f_hi), *stats, float(alpha))
+
+
+def _deviation_tests(dev_up, dev_down):
+    """Mean deviation, its standard error, one bin's noise, gain and flatness p-values."""
+    nan = float('nan')
+    both = np.isfinite(dev_up) & np.isfinite(dev_down)
+    values = np.concatenate([dev_up[np.isfinite(dev_up)], dev_down[np.isfinite(dev_down)]])
+    if np.count_nonzero(both) < 3 or values.size < 2:
+        return nan, nan, nan, nan, nan
+    # a bin seen rising and falling measures the same gain twice: their difference is noise
+    sigma = float(np.std(dev_up[both] - dev_down[both], ddof=1) / math.sqrt(2.0))
+    mean = float(values.mean())
+    se = sigma / math.sqrt(values.size)
+    if not sigma > 0:
+        return mean, se, sigma, nan, nan
+    # sigma comes from the m bins seen both ways: m - 1 degrees of freedom, hence t and F
+    dof = int(np.count_nonzero(both)) - 1
+    gain_p = float(2.0 * t_dist.sf(abs(mean) / se, dof))
+    spread = float(np.sum((values - mean) ** 2)) / (values.size - 1)
+    flat_p = float(f_dist.sf(spread / sigma ** 2, values.size - 1, dof))
+    return mean, se, sigma, gain_p, flat_p

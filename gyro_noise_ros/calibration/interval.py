@@ -20,6 +20,11 @@ Paper 001 section 6: take the Allan deviation curve, its minimum sigma_min, and 
 times between the two crossings of the curve with that level around the minimum. The paper reads
 420 s before and 945 s after the vibration (+125 %) and calls +/-50 % physiological.
 
+sigma_min is the bias stability of the one Allan readout (:func:`..core.readout.adev_floor`):
+where the usable curve stops falling, a later dip resting on few degrees of freedom does not move
+it (the rule and its F test are in :mod:`..core.readout`). Without degrees of freedom it is the
+smallest usable value (the paper's plain reading).
+
 Here the crossings are searched outwards from the minimum: the lower one is the last tau below
 the minimum where the curve is at or above the level, the upper one the first above it. Between
 the two bracketing points the crossing is interpolated linearly in log(tau)-log(sigma) (Allan
@@ -32,6 +37,7 @@ import math
 
 import numpy as np
 
+from ..core.readout import adev_floor
 from ..errors import ParameterError
 
 #: Paper 001 section 6.
@@ -40,8 +46,9 @@ DEFAULT_TOLERANCE = 0.5
 #: Fewer taus than this cannot show a minimum with two flanks.
 MIN_TAUS = 5
 #: sigma_min is taken among taus whose Allan variance has at least this many equivalent degrees
-#: of freedom (68 % interval of ADEV about +/-23 %): the last taus of a record (EDF ~ 1-3) can dip
-#: far below the true floor and would move the whole interval.
+#: of freedom (68 % interval of ADEV about +/-23 %), on top of the readout's own F test: the last
+#: taus of a record (EDF ~ 1-3) can dip far below the true floor and would move the whole
+#: interval.
 DEFAULT_MIN_EDF = 10.0
 
 
@@ -95,7 +102,8 @@ def _cross(t0, s0, t1, s1, level):
     return math.exp(math.log(t0) + frac * (math.log(t1) - math.log(t0)))
 
 
-def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF):
+def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF,
+                              max_tau_s=math.inf):
     """
     Return the tau interval where the Allan deviation stays below ``c * sigma_min``.
 
@@ -110,10 +118,14 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
         Level factor (> 1; paper 001: 2).
     edf : array_like, optional, keyword-only
         Equivalent degrees of freedom of each tau (``AllanResult.edf``); with it, sigma_min is
-        the minimum over the taus with ``edf >= min_edf`` (the crossings are still searched over
-        all taus). Without it, over all taus (the paper's plain reading).
+        the readout's floor over the taus with ``edf >= min_edf`` (the crossings are still
+        searched over all taus). Without it, the smallest usable value (the paper's plain
+        reading).
     min_edf : float, keyword-only
         Least EDF of a tau that may hold sigma_min.
+    max_tau_s : float, keyword-only
+        Longest tau that may hold sigma_min (s): pass a tenth of the record
+        (``core.readout.MAX_TAU_FRACTION``) to read the analyzer's bias stability.
 
     Returns
     -------
@@ -129,23 +141,23 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
         raise ParameterError(f'tau_s and adev must be 1-D of one length, got {tau.shape}, '
                              f'{sig.shape}')
     keep = np.isfinite(tau) & np.isfinite(sig) & (sig > 0) & (tau > 0)
-    trusted = np.ones(tau.shape, dtype=bool)
     if edf is not None:
         edf = np.asarray(edf, dtype=np.float64)
         if edf.shape != tau.shape:
             raise ParameterError(f'edf must match tau_s, got {edf.shape} and {tau.shape}')
-        trusted = np.nan_to_num(edf, nan=0.0) >= float(min_edf)
-    tau, sig, trusted = tau[keep], sig[keep], trusted[keep]
+        edf = edf[keep]
+    tau, sig = tau[keep], sig[keep]
     nan = float('nan')
     if tau.size < MIN_TAUS:
         return Interval(None, None, nan, nan, nan, c,
                         f'record too short: {tau.size} usable taus (need {MIN_TAUS})')
     if np.any(np.diff(tau) <= 0):
         raise ParameterError('tau_s must be strictly increasing')
-    if not np.any(trusted):
-        return Interval(None, None, nan, nan, nan, c,
-                        f'record too short: no tau with at least {min_edf:g} degrees of freedom')
-    i = int(np.flatnonzero(trusted)[np.argmin(sig[trusted])])
+    floor = adev_floor(tau, sig, edf=edf, min_edf=min_edf if edf is not None else 0.0,
+                       max_tau_s=max_tau_s)
+    if floor.index < 0:
+        return Interval(None, None, nan, nan, nan, c, f'record too short: {floor.reason}')
+    i = floor.index
     smin = float(sig[i])
     level = c * smin
     lo = hi = None

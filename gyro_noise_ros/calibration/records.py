@@ -106,6 +106,29 @@ def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH, t0_ns=None):
             yield float(rate), t, np.asarray(b.accel, np.float64), np.asarray(b.gyro, np.float64)
 
 
+def first_stamp_ns(path, *, topic=None):
+    """
+    Return the stamp of a recording's first Imu sample (ns), None when it holds none.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Recording.
+    topic : str, optional, keyword-only
+        ``sensor_msgs/Imu`` topic.
+
+    Returns
+    -------
+    int or None
+
+    """
+    with ImuBagReader(path, topic=topic) as reader:
+        for b in reader.iter_batches(1024):
+            if b.stamp_ns.size:
+                return int(b.stamp_ns[0])
+    return None
+
+
 def read_imu(path, *, topic=None, rate_hz=None, t0_ns=None):
     """
     Read a whole recording into memory (for records of a few million samples).

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Six-position static calibration (paper 001 eqs. 1-4) and the local gravity model.
+Six-position static calibration (paper 001 eqs. 1-4), its consistency test and the local gravity.
 
 Error model (paper 001 eq. 1 with the cross-coupling written as a matrix), for the accelerometer
 and likewise for the gyro::
@@ -33,19 +33,51 @@ and, beyond the paper, the least-squares solution of all 18 equations for the fu
 the cross-axis terms ``M[j, i] = (l_j(+i) - l_j(-i)) / (2 g)`` (j != i): the nominal gravity
 directions are orthogonal, so the least squares decouple into these differences.
 
+**Uncertainties** are those of linear combinations of dwell means under the sensor's own
+variogram (:mod:`~gyro_noise_ros.calibration.dwell_noise`: window means inside the dwells plus the
+6 residual degrees of freedom of the 18 equations), so bias wander between the dwells is in them.
+The bias uncertainty is against the bias during the calibration (that module's docstring).
+
+**Consistency (a tilt cannot pass silently).** The model says every pair of opposite dwells has
+the same sum ``s_i = l(+i) + l(-i) = 2 b`` (3 axes); cross-axis terms cannot change that. A dwell
+tilted by delta moves its pair's sum by about ``g sin(delta)`` across and ``g (1 - cos delta)``
+along its axis. For each pair ``D_i = s_i - (s_k + s_l) / 2`` is compared with its standard
+deviation under a noise model fitted with the *other* two pairs' disagreement ``s_k - s_l`` (so a
+bad pair cannot hide itself by inflating the noise). That disagreement is the only direct measure
+of the wander between dwells minutes apart (3 degrees of freedom); the window means inside the
+dwells add what the variogram's shape carries. So the statistic ``F = |D_i|^2 / (3 var)`` is read
+against F(3, NU) with ``NU = 6`` effective degrees of freedom for the variance, not against
+chi-square(3) (which false-alarmed in 4 % of emulated calibrations at a nominal 0.03 %), at
+``alpha / 3`` (Bonferroni over three pairs); the measured false-alarm rate is in the docs.
+A bad pair also shifts the mean the other two are compared with, so when the worst pair fails,
+each other pair is tested once more against the remaining one alone (window noise only,
+chi-square(3)). Which dwell of a failing pair is the bad one: the one whose removal leaves the
+smaller cross-axis column (a real cross-axis term is ~0.1-1 %, a tilt of a few degrees is
+5-9 %). The false-alarm and detection rates are measured in ``docs/reliability.md``
+(``docs/scripts/calibration_uncertainty.py``).
+
+**Gravity check that can fail** (replacing paper section 6's, which on the same dwells and the
+same g returns g by construction): leave one dwell out, calibrate from the other five (its axis's
+column from the opposite dwell alone, the bias from the other two pairs) and compare the norm of
+the held-out dwell, calibrated, with g. It is the along-axis part of ``D_i``: a tilt, a bias step
+between dwells, or a scale asymmetry between the + and - direction all show in it.
+
 Gyro bias: ``b_g,i = (w_i(+i) + w_i(-i)) / 2``. Turning axis i from up to down reverses its
 share of the vertical Earth rate (Omega_E sin(latitude)), which cancels in the sum. What remains:
 a dwell tilted by delta from vertical adds up to Omega_E * sin(delta) (7.3e-5 rad/s times delta in
 rad), and gyro cross-axis terms pick up the horizontal Earth rate (Omega_E cos(latitude)) times the
 misalignment; both are far below a MEMS bias (~1e-3 rad/s). The gyro scale factor and misalignment
-cannot be seen with the Earth rate alone; they are reported as 0 (not estimated).
+need rotations: :mod:`~gyro_noise_ros.calibration.gyro_turns`.
 """
 
 from dataclasses import dataclass
 import math
 
 import numpy as np
+from scipy.stats import chi2, f as f_dist, t as t_dist
 
+from .apply import SensorCalibration
+from .dwell_noise import DwellNoiseFitter, fit_dwell_noise
 from .static import ORIENTATIONS
 from ..errors import InputDataError, ParameterError
 
@@ -61,6 +93,12 @@ WGS84_F = 1.0 / 298.257223563
 WGS84_M = 0.00344978650684
 #: Earth rotation rate (rad/s), WGS-84.
 EARTH_RATE_RAD_S = 7.292115e-5
+#: False-alarm probability of the consistency test and of the gravity check (per calibration).
+DEFAULT_ALPHA = 1e-3
+#: Effective degrees of freedom of the variance behind both checks (module docstring): 3 from
+#: the other pairs' disagreement, more from the windows; the emulated false-alarm rate of the
+#: tests at this value is measured in docs/reliability.md.
+CHECK_DOF = 6
 
 
 def normal_gravity(latitude_deg, height_m=0.0):
@@ -100,6 +138,41 @@ def normal_gravity(latitude_deg, height_m=0.0):
                  + 3.0 * h * h / WGS84_A ** 2)
 
 
+def _table(values, name):
+    if isinstance(values, dict):
+        values = [values[o] for o in ORIENTATIONS]
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.shape != (6, 3):
+        raise ParameterError(f'{name} must hold 6 x 3 values, got shape {arr.shape}')
+    return arr
+
+
+def _nominal(g):
+    """(6, 3) true specific force of each dwell, in :data:`ORIENTATIONS` order (m/s^2)."""
+    return np.repeat(np.eye(3), 2, axis=0) * np.tile([g, -g], 3)[:, None]
+
+
+def residual_projector():
+    """
+    Return the 6x6 projector onto the residuals of the 18 equations (6 dwells, 4 unknowns).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``I - X pinv(X)`` with ``X = [1, nominal direction]``; its rows sum to zero (contrasts).
+
+    """
+    x = np.column_stack([np.ones(6), _nominal(1.0)])
+    return np.eye(6) - x @ np.linalg.pinv(x)
+
+
+def _per_axis(c, j):
+    """(m, 3) loading that applies the dwell weights ``c`` to axis j only."""
+    out = np.zeros((len(c), 3))
+    out[:, j] = c
+    return out
+
+
 @dataclass(frozen=True)
 class SixPositionResult:
     """
@@ -118,10 +191,12 @@ class SixPositionResult:
     gyro_bias_rad_s, gyro_bias_sigma_rad_s : numpy.ndarray
         (3,) gyro bias and its standard uncertainty (rad/s).
     accel_residual_m_s2 : float
-        Scatter of the dwell means about the fitted model: sqrt(RSS / 6) over the 18 equations
-        and 12 unknowns (m/s^2). It holds the dwell-to-dwell wander (flicker, random walk,
-        handling) that the within-dwell spread cannot see; the accelerometer uncertainties use
-        the larger of the two per dwell.
+        Scatter of the dwell means about the fitted model, sqrt(RSS / 6) over the 18 equations
+        and 12 unknowns (m/s^2).
+
+    Notes
+    -----
+    Uncertainties are NaN without noise models (``six_position`` called on bare means).
 
     """
 
@@ -156,12 +231,12 @@ class SixPositionResult:
             (..., 3) compensated specific force (m/s^2).
 
         """
-        meas = np.asarray(measured_m_s2, dtype=np.float64)
-        return np.linalg.solve(self.accel_matrix, (meas - self.accel_bias_m_s2).T).T
+        return SensorCalibration(self.accel_bias_m_s2, self.accel_scale_factor,
+                                 self.accel_misalignment).apply(measured_m_s2)
 
 
-def six_position(accel_means_m_s2, gravity_m_s2, *, accel_sems_m_s2=None, gyro_means_rad_s=None,
-                 gyro_sems_rad_s=None):
+def six_position(accel_means_m_s2, gravity_m_s2, *, gyro_means_rad_s=None, accel_noise=None,
+                 gyro_noise=None):
     """
     Estimate bias, scale factor and cross-axis terms from the six dwell means.
 
@@ -172,11 +247,10 @@ def six_position(accel_means_m_s2, gravity_m_s2, *, accel_sems_m_s2=None, gyro_m
         :data:`~gyro_noise_ros.calibration.static.ORIENTATIONS` (+x, -x, +y, -y, +z, -z).
     gravity_m_s2 : float
         Local gravity (m/s^2).
-    accel_sems_m_s2 : mapping or array_like, optional, keyword-only
-        Standard errors of those means from the spread inside each dwell (m/s^2), raised to the
-        dwell-to-dwell scatter of the model residuals; uncertainties are NaN without them.
-    gyro_means_rad_s, gyro_sems_rad_s : mapping or array_like, optional, keyword-only
-        Gyro dwell means and their standard errors (rad/s); gyro outputs NaN without them.
+    gyro_means_rad_s : mapping or array_like, optional, keyword-only
+        Gyro dwell means (rad/s); gyro outputs NaN without them.
+    accel_noise, gyro_noise : DwellNoise, optional, keyword-only
+        Noise models of the six dwells (same order); uncertainties are NaN without them.
 
     Returns
     -------
@@ -187,47 +261,288 @@ def six_position(accel_means_m_s2, gravity_m_s2, *, accel_sems_m_s2=None, gyro_m
     if not (math.isfinite(g) and 5.0 < g < 15.0):
         raise ParameterError(f'gravity must be a plausible value in m/s^2 (5..15), '
                              f'got {gravity_m_s2!r}')
-
-    def table(values, name):
-        if values is None:
-            return np.full((6, 3), np.nan)
-        if isinstance(values, dict):
-            values = [values[o] for o in ORIENTATIONS]
-        arr = np.asarray(values, dtype=np.float64)
-        if arr.shape != (6, 3):
-            raise ParameterError(f'{name} must hold 6 x 3 values, got shape {arr.shape}')
-        return arr
-
-    a = table(accel_means_m_s2, 'accel_means_m_s2')
+    a = _table(accel_means_m_s2, 'accel_means_m_s2')
     if not np.all(np.isfinite(a)):
         raise InputDataError('a dwell mean of the accelerometer is NaN/Inf')
-    a_se = table(accel_sems_m_s2, 'accel_sems_m_s2')
-    w = table(gyro_means_rad_s, 'gyro_means_rad_s')
-    w_se = table(gyro_sems_rad_s, 'gyro_sems_rad_s')
+    w = (np.full((6, 3), np.nan) if gyro_means_rad_s is None
+         else _table(gyro_means_rad_s, 'gyro_means_rad_s'))
     plus, minus = a[0::2], a[1::2]            # row i: dwell +i / -i
-    # least squares of all 18 equations: A[:, i] = (l(+i) - l(-i)) / 2g, b = mean of the six;
-    # 6 residual degrees of freedom measure how far the dwell means scatter about the model
-    cols = ((plus - minus) / (2.0 * g)).T
-    nominal = np.repeat(np.eye(3), 2, axis=0) * np.tile([g, -g], 3)[:, None]
-    resid = a - nominal @ cols.T - a.mean(axis=0)
+    resid = residual_projector() @ a
     scatter = float(np.sqrt(np.sum(resid ** 2) / 6.0))
-    a_se = np.where(np.isfinite(a_se), np.maximum(a_se, scatter), a_se)
-    sp, sm = a_se[0::2], a_se[1::2]
-    diff_se = np.sqrt(sp ** 2 + sm ** 2)      # row i, column j: se of l_j(+i) - l_j(-i)
     idx = np.arange(3)
     bias = (plus[idx, idx] + minus[idx, idx]) / 2.0                   # eq. 3
-    bias_se = diff_se[idx, idx] / 2.0
     scale = (plus[idx, idx] - minus[idx, idx] - 2.0 * g) / (2.0 * g)  # eq. 4
-    scale_se = diff_se[idx, idx] / (2.0 * g)
     # column i of (I + D + M) is (l(+i) - l(-i)) / 2g; row i of `plus - minus` is that column
     mis = ((plus - minus) / (2.0 * g)).T
-    mis_se = (diff_se / (2.0 * g)).T
     np.fill_diagonal(mis, 0.0)
-    np.fill_diagonal(mis_se, 0.0)
     gyro = (w[0::2][idx, idx] + w[1::2][idx, idx]) / 2.0
-    gyro_se = np.sqrt(w_se[0::2][idx, idx] ** 2 + w_se[1::2][idx, idx] ** 2) / 2.0
+    pair_sum = np.zeros((3, 6))               # row i: weights of the pair +i, -i
+    pair_diff = np.zeros((3, 6))
+    for i in range(3):
+        pair_sum[i, 2 * i] = pair_sum[i, 2 * i + 1] = 0.5
+        pair_diff[i, 2 * i], pair_diff[i, 2 * i + 1] = 1.0 / (2.0 * g), -1.0 / (2.0 * g)
+    nan3, nan33 = np.full(3, np.nan), np.full((3, 3), np.nan)
+    bias_se, scale_se, mis_se, gyro_se = nan3, nan3, nan33, nan3
+    if accel_noise is not None:
+        bias_se = np.sqrt(np.maximum(accel_noise.variance(pair_sum), 0.0))
+        col_se = np.sqrt(np.maximum(accel_noise.variance(pair_diff), 0.0))   # every axis j
+        scale_se = col_se.copy()
+        mis_se = np.tile(col_se, (3, 1))
+        np.fill_diagonal(mis_se, 0.0)
+    if gyro_noise is not None:
+        gyro_se = np.sqrt(np.maximum(gyro_noise.variance(pair_sum), 0.0))
     return SixPositionResult(g, bias, bias_se, scale, scale_se, mis, mis_se, gyro, gyro_se,
                              scatter)
+
+
+def noise_models(dwells):
+    """
+    Fit the accelerometer and gyro noise models of six dwells (module docstring).
+
+    Parameters
+    ----------
+    dwells : mapping
+        Orientation -> :class:`~gyro_noise_ros.calibration.static.Dwell` (with window means).
+
+    Returns
+    -------
+    (DwellNoise, DwellNoise)
+        Accelerometer (tied to the 6 residual degrees of freedom of the 18 equations) and gyro
+        (windows only: the horizontal Earth rate differs between dwells and is no wander).
+
+    """
+    dw = [dwells[o] for o in ORIENTATIONS]
+    times = [d.window_t_s for d in dw]
+    counts = [d.window_n for d in dw]
+    a = np.array([d.accel_mean_m_s2 for d in dw])
+    p = residual_projector()
+    loading = np.concatenate([np.stack([_per_axis(p[r], j) for r in range(6)]) for j in range(3)])
+    resid = (p @ a).T.reshape(-1)
+    accel = fit_dwell_noise(times, counts, [d.window_accel_m_s2 for d in dw],
+                            residual_loading=loading, residuals=resid)
+    gyro = fit_dwell_noise(times, counts, [d.window_gyro_rad_s for d in dw])
+    return accel, gyro
+
+
+@dataclass(frozen=True)
+class PairCheck:
+    """
+    Consistency of one pair of opposite dwells with the other two (module docstring).
+
+    Attributes
+    ----------
+    axis : str
+        ``'x'``, ``'y'`` or ``'z'``.
+    disagreement_m_s2 : numpy.ndarray
+        (3,) ``D_i = s_i - (s_k + s_l) / 2`` (m/s^2).
+    sigma_m_s2 : float
+        Standard deviation of each component under the noise model of the other pairs (m/s^2).
+    chi2 : float
+        ``|D_i|^2 / sigma^2``.
+    p_value : float
+        Upper tail probability of ``chi2 / 3`` under F(3, CHECK_DOF) (or of ``chi2`` under
+        chi-square(3) for a pair retested after another failed).
+    consistent : bool
+        ``p_value >= alpha / 3``.
+    suspect : str or None
+        The dwell of the pair that does not fit (inconsistent pairs only).
+    suspect_tilt_deg : float
+        Angle between that dwell's specific force and the direction the rest of the calibration
+        predicts for it (deg; NaN when consistent).
+
+    """
+
+    axis: str
+    disagreement_m_s2: np.ndarray
+    sigma_m_s2: float
+    chi2: float
+    p_value: float
+    consistent: bool
+    suspect: object = None
+    suspect_tilt_deg: float = float('nan')
+
+    def as_dict(self):
+        """Return JSON-ready values (units in the keys)."""
+        return {'axis': self.axis, 'disagreement_m_s2': self.disagreement_m_s2.tolist(),
+                'sigma_m_s2': self.sigma_m_s2, 'chi2': self.chi2, 'p_value': self.p_value,
+                'consistent': self.consistent, 'suspect': self.suspect,
+                'suspect_tilt_deg': (None if not math.isfinite(self.suspect_tilt_deg)
+                                     else self.suspect_tilt_deg)}
+
+
+@dataclass(frozen=True)
+class LeaveOneOut:
+    """
+    Gravity check of one held-out dwell or pose: its calibrated norm against g.
+
+    Attributes
+    ----------
+    label : str
+        The dwell (orientation, or pose number and start time).
+    residual_m_s2 : float
+        ``|calibrated held-out mean| - g`` with the calibration of the others (m/s^2).
+    sigma_m_s2 : float
+        Its standard deviation under the noise model (m/s^2).
+    z : float
+        ``residual / sigma``.
+    p_value : float
+        Two-sided tail probability of ``z`` under Student's t with the check's degrees of freedom.
+    consistent : bool
+        ``p_value >= alpha / n`` (Bonferroni over the n dwells).
+
+    """
+
+    label: str
+    residual_m_s2: float
+    sigma_m_s2: float
+    z: float
+    p_value: float
+    consistent: bool
+
+    def as_dict(self):
+        """Return JSON-ready values (units in the keys)."""
+        return {'dwell': self.label, 'residual_m_s2': self.residual_m_s2,
+                'sigma_m_s2': self.sigma_m_s2, 'z': self.z, 'p_value': self.p_value,
+                'consistent': self.consistent}
+
+
+def _pair_weights(i):
+    k, l_ = [a for a in range(3) if a != i]
+    d = np.zeros(6)
+    d[[2 * i, 2 * i + 1]] = 1.0
+    d[[2 * k, 2 * k + 1, 2 * l_, 2 * l_ + 1]] = -0.5
+    e = np.zeros(6)
+    e[[2 * k, 2 * k + 1]] = 1.0
+    e[[2 * l_, 2 * l_ + 1]] = -1.0
+    return d, e
+
+
+def _loo_matrix(a, g, out):
+    """Calibration (A, b) of the six dwells in ``a`` without dwell index ``out``."""
+    i = out // 2
+    others = [k for k in range(3) if k != i]
+    b = np.mean([a[2 * k] + a[2 * k + 1] for k in others], axis=0) / 2.0
+    cols = np.zeros((3, 3))
+    for k in others:
+        cols[:, k] = (a[2 * k] - a[2 * k + 1]) / (2.0 * g)
+    keep = out + 1 if out % 2 == 0 else out - 1          # the opposite dwell
+    cols[:, i] = (a[keep] - b) / g * (1.0 if keep % 2 == 0 else -1.0)
+    return cols, b
+
+
+def _standardise(vector, var):
+    """Return the standard deviation and ``|vector|^2 / var`` (inf without a variance)."""
+    if not var > 0:
+        return float('nan'), float('inf')
+    return math.sqrt(var), float(vector @ vector / var)
+
+
+def _suspect(a, g, i):
+    """Name the dwell of pair i that does not fit, and its tilt (deg) from the prediction."""
+    # the bad dwell is the one whose removal leaves the smaller cross-axis column
+    off = [k for k in range(3) if k != i]
+    size = []
+    for out in (2 * i, 2 * i + 1):
+        cols, _ = _loo_matrix(a, g, out)
+        size.append(float(np.linalg.norm(cols[off, i])))
+    out = 2 * i + int(np.argmin(size))
+    cols, b = _loo_matrix(a, g, out)
+    sign = 1.0 if out % 2 == 0 else -1.0
+    pred = sign * g * cols[:, i]
+    meas = a[out] - b
+    cosang = pred @ meas / (np.linalg.norm(pred) * np.linalg.norm(meas))
+    return ORIENTATIONS[out], float(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))
+
+
+def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
+    """
+    Test the six dwells against the model and run the leave-one-out gravity check.
+
+    Parameters
+    ----------
+    dwells : mapping
+        Orientation -> :class:`~gyro_noise_ros.calibration.static.Dwell`.
+    gravity_m_s2 : float
+        Local gravity (m/s^2).
+    alpha : float, keyword-only
+        False-alarm probability of each of the two tests over the whole calibration.
+
+    Returns
+    -------
+    (tuple of PairCheck, tuple of LeaveOneOut)
+        One check per pair (x, y, z), one gravity check per dwell (:data:`ORIENTATIONS` order).
+
+    """
+    if not 0.0 < alpha < 1.0:
+        raise ParameterError(f'alpha must be in (0, 1), got {alpha!r}')
+    g = float(gravity_m_s2)
+    dw = [dwells[o] for o in ORIENTATIONS]
+    a = np.array([d.accel_mean_m_s2 for d in dw])
+    times = [d.window_t_s for d in dw]
+    fitter = DwellNoiseFitter(times, [d.window_n for d in dw], [d.window_accel_m_s2 for d in dw])
+    tests, loo = [], []
+    for i in range(3):
+        dvec, evec = _pair_weights(i)
+        disagreement = dvec @ a
+        loading = np.stack([_per_axis(evec, j) for j in range(3)])
+        noise = fitter.fit(residual_loading=loading, residuals=evec @ a)
+        sigma, stat = _standardise(disagreement, noise.variance(dvec))
+        tests.append((disagreement, sigma, stat, float(f_dist.sf(stat / 3.0, 3, CHECK_DOF))))
+        for out in (2 * i, 2 * i + 1):
+            cols, b = _loo_matrix(a, g, out)
+            resid = float(np.linalg.norm(np.linalg.solve(cols, a[out] - b)) - g)
+            z = resid / sigma if sigma > 0 else float('inf')
+            pz = float(2.0 * t_dist.sf(abs(z), CHECK_DOF))
+            loo.append((out, LeaveOneOut(ORIENTATIONS[out], resid, sigma, z, pz,
+                                         pz >= alpha / 6.0)))
+    worst = int(np.argmax([t[2] for t in tests]))
+    bad = tests[worst][3] < alpha / 3.0
+    pairs = []
+    for i in range(3):
+        disagreement, sigma, stat, p = tests[i]
+        ok = True
+        if bad and i == worst:
+            ok = False
+        elif bad:
+            # a bad pair also moves the mean the other two are compared with: test those
+            # against each other alone, with the noise of the windows (no residual is clean)
+            other = 3 - i - worst
+            cvec = np.zeros(6)
+            cvec[[2 * i, 2 * i + 1]] = 1.0
+            cvec[[2 * other, 2 * other + 1]] = -1.0
+            disagreement = cvec @ a
+            sigma, stat = _standardise(disagreement, fitter.fit().variance(cvec))
+            p = float(chi2.sf(stat, 3))
+            ok = p >= alpha / 3.0
+        suspect, tilt = (None, float('nan')) if ok else _suspect(a, g, i)
+        pairs.append(PairCheck('xyz'[i], disagreement, sigma, stat, p, ok, suspect, tilt))
+    loo.sort(key=lambda item: item[0])
+    return tuple(pairs), tuple(item[1] for item in loo)
+
+
+def calibrate_six(dwells, gravity_m_s2):
+    """
+    Run the six-position estimator with the noise models of its dwells.
+
+    Parameters
+    ----------
+    dwells : mapping
+        Orientation -> :class:`~gyro_noise_ros.calibration.static.Dwell`.
+    gravity_m_s2 : float
+        Local gravity (m/s^2).
+
+    Returns
+    -------
+    (SixPositionResult, DwellNoise, DwellNoise)
+        Estimate with uncertainties, accelerometer and gyro noise models.
+
+    """
+    dw = [dwells[o] for o in ORIENTATIONS]
+    accel_noise, gyro_noise = noise_models(dwells)
+    res = six_position([d.accel_mean_m_s2 for d in dw], gravity_m_s2,
+                       gyro_means_rad_s=[d.gyro_mean_rad_s for d in dw],
+                       accel_noise=accel_noise, gyro_noise=gyro_noise)
+    return res, accel_noise, gyro_noise
 
 
 def uniformity(values):
@@ -248,27 +563,23 @@ def uniformity(values):
     return float(np.std(np.asarray(values, dtype=np.float64), ddof=1))
 
 
-def gravity_check(accel_means_m_s2, result):
+def mean_norm(accel_means_m_s2):
     """
-    Return the mean |a| over the six dwells, raw and after the calibration (paper 001 section 6).
+    Return the mean |a| over dwells, raw (paper 001 section 6: 9.848 m/s^2 before calibration).
 
     The norm of each dwell's mean is used (the mean of per-sample norms would add the noise
-    variance / (2 g) to both numbers), averaged with equal weight over the dwells.
+    variance / (2 g)), averaged with equal weight over the dwells.
 
     Parameters
     ----------
     accel_means_m_s2 : array_like
-        (6, 3) dwell means (m/s^2).
-    result : SixPositionResult
-        The calibration to apply.
+        (n, 3) dwell means (m/s^2).
 
     Returns
     -------
-    (float, float)
-        Mean norm raw and calibrated (m/s^2).
+    float
+        Mean norm (m/s^2).
 
     """
     a = np.asarray(accel_means_m_s2, dtype=np.float64)
-    raw = float(np.mean(np.linalg.norm(a, axis=1)))
-    cal = float(np.mean(np.linalg.norm(result.compensate_accel(a), axis=1)))
-    return raw, cal
+    return float(np.mean(np.linalg.norm(a, axis=1)))

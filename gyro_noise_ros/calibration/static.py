@@ -13,10 +13,11 @@
 # limitations under the License.
 
 """
-Static-dwell detection for the six-position calibration (paper 001 section 3.1).
+Static-dwell detection for the six-position and multi-pose calibrations (paper 001 section 3.1).
 
 A recording is cut into consecutive windows of ``window_s`` seconds (by sample count at the
-recording's rate). A window is **static** when
+recording's rate). A sample holding NaN/Inf in any channel is dropped (counted, never averaged);
+a window keeping fewer than half of its samples is a **gap**. A window is **static** when
 
 * every accelerometer axis has a standard deviation below ``accel_std_max_m_s2`` (a rotation or a
   handling bump moves the specific force by far more than the sensor noise), and
@@ -24,15 +25,19 @@ recording's rate). A window is **static** when
   rate (the median of the window means: the gyro bias, since a calibration recording is mostly
   static), so a slow turn about the vertical axis, which leaves the accelerometer unchanged, is
   not taken as static, and
-* every sample in it is finite (NaN/Inf windows are never static; they are counted).
+* it is not a gap.
 
 Consecutive static windows whose mean specific force differs by less than ``merge_tol_m_s2`` form
-one dwell; ``trim_windows`` windows are dropped at each end of a dwell so that the settling after a
-rotation does not leak into the mean. Each dwell is classified by the axis and sign of gravity:
-REP-103 accelerometers read +g on the axis pointing up, so a dwell whose mean is close to +g on x
-is orientation ``+x``. Its tilt is the angle between the mean vector and that axis.
+one dwell; a gap between two such windows does not split it (its samples are counted as dropped),
+so a few NaN samples never turn one dwell into two. ``trim_windows`` windows are dropped at each
+end of a dwell so that the settling after a rotation does not leak into the mean. Each dwell is
+classified by the axis and sign of gravity: REP-103 accelerometers read +g on the axis pointing
+up, so a dwell whose mean is close to +g on x is orientation ``+x``. Its tilt is the angle between
+the mean vector and that axis.
 
-Only window sums are kept, so a recording of any length streams in constant memory.
+Only window sums are kept (and, per dwell, its window means for the noise model of
+:mod:`~gyro_noise_ros.calibration.dwell_noise`), so a recording of any length streams in constant
+memory.
 """
 
 from dataclasses import dataclass, field
@@ -54,8 +59,17 @@ DEFAULT_GYRO_RATE_MAX_RAD_S = 0.02
 DEFAULT_MERGE_TOL_M_S2 = 0.2
 DEFAULT_TRIM_WINDOWS = 1
 DEFAULT_MIN_STATIC_S = 10.0
-#: A dwell whose mean lies farther than this from its axis is "tilted" (fixture not square).
-DEFAULT_MAX_TILT_DEG = 10.0
+#: A six-position dwell whose mean lies farther than this from its axis is not taken as that
+#: orientation at all. Smaller tilts are judged by the consistency test of
+#: :func:`~gyro_noise_ros.calibration.sixpos.consistency` against the noise; 5 deg leaves room
+#: for a 40 mg bias plus 1 % cross-axis terms (3 deg of apparent tilt) and keeps the error a tilt
+#: can put on a bias before that test, g (1 - cos 5 deg) / 2, below 2 mg.
+DEFAULT_MAX_TILT_DEG = 5.0
+#: Least fraction of a window's samples that must be finite, else the window is a gap.
+MIN_FINITE_FRACTION = 0.5
+#: Least number of static poses of the multi-pose fit: 9 unknowns (3 biases, 3 scale factors,
+#: 3 non-orthogonality terms).
+MIN_POSES = 9
 
 
 @dataclass(frozen=True)
@@ -116,18 +130,22 @@ class Windows:
     t_end_s : numpy.ndarray
         Stamp of each window's last sample (s).
     n : numpy.ndarray
-        Samples per window (int64).
+        Samples per window (int64), finite or not.
     accel_mean_m_s2, accel_std_m_s2 : numpy.ndarray
-        (w, 3) mean and standard deviation of the specific force (m/s^2); NaN in non-finite
-        windows.
+        (w, 3) mean and standard deviation of the specific force over the window's finite samples
+        (m/s^2); NaN in a window with fewer than two.
     gyro_mean_rad_s, gyro_std_rad_s : numpy.ndarray
-        (w, 3) mean and standard deviation of the angular rate (rad/s); NaN in non-finite windows.
+        (w, 3) mean and standard deviation of the angular rate (rad/s), likewise.
     finite : numpy.ndarray
         bool, every sample of the window finite.
     rate_hz : float
         Sample rate used to size the windows (Hz).
     source : str
         Name of the recording (for messages).
+    n_good : numpy.ndarray, optional
+        Samples per window with all six channels finite (int64); ``n`` when not given.
+    window_samples : int
+        Samples of a whole window (0: unknown).
 
     """
 
@@ -141,11 +159,29 @@ class Windows:
     finite: np.ndarray
     rate_hz: float
     source: str = ''
+    n_good: np.ndarray = None
+    window_samples: int = 0
+
+    def __post_init__(self):
+        if self.n_good is None:
+            object.__setattr__(self, 'n_good', np.where(self.finite, self.n, 0))
+
+    @property
+    def usable(self):
+        """numpy.ndarray: bool, the window keeps enough finite samples (else it is a gap)."""
+        return (self.n_good >= 2) & (self.n_good >= MIN_FINITE_FRACTION * self.n)
 
     @property
     def non_finite_samples(self):
-        """int: samples in windows holding NaN/Inf (an upper bound of the NaN/Inf count)."""
-        return int(self.n[~self.finite].sum())
+        """int: samples dropped because one of their channels is NaN/Inf."""
+        return int((self.n - self.n_good).sum())
+
+    @property
+    def duration_s(self):
+        """float: first to last stamp plus one sample period (s); 0 without windows."""
+        if self.n.size == 0:
+            return 0.0
+        return float(self.t_end_s[-1] - self.t_start_s[0] + 1.0 / self.rate_hz)
 
 
 class WindowAccumulator:
@@ -196,18 +232,8 @@ class WindowAccumulator:
         data = np.concatenate([self._pend, data])
         full = (t.shape[0] // self.size) * self.size
         if full:
-            self._add(t[:full], data[:full])
+            self._rows.append(_window_stats(t[:full], data[:full], self.size))
         self._pend_t, self._pend = t[full:], data[full:]
-
-    def _add(self, t, data):
-        w = t.shape[0] // self.size
-        blocks = data.reshape(w, self.size, 6)
-        tb = t.reshape(w, self.size)
-        finite = np.all(np.isfinite(blocks), axis=(1, 2))
-        with np.errstate(invalid='ignore'):
-            mean = blocks.mean(axis=1)
-            std = blocks.std(axis=1, ddof=1)
-        self._rows.append((tb[:, 0], tb[:, -1], np.full(w, self.size), mean, std, finite))
 
     def result(self):
         """
@@ -220,19 +246,34 @@ class WindowAccumulator:
         """
         rows = list(self._rows)
         if self._pend_t.shape[0] >= 2:
-            t, data = self._pend_t, self._pend
-            finite = bool(np.all(np.isfinite(data)))
-            with np.errstate(invalid='ignore'):
-                rows.append((t[:1], t[-1:], np.array([t.shape[0]]), data.mean(axis=0)[None],
-                             data.std(axis=0, ddof=1)[None], np.array([finite])))
+            rows.append(_window_stats(self._pend_t, self._pend, self._pend_t.shape[0]))
         if not rows:
-            return Windows(np.empty(0), np.empty(0), np.empty(0, np.int64), np.empty((0, 3)),
-                           np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 3)),
-                           np.empty(0, bool), self.rate_hz, self.source)
-        cols = [np.concatenate([r[i] for r in rows]) for i in range(6)]
+            e3 = np.empty((0, 3))
+            return Windows(np.empty(0), np.empty(0), np.empty(0, np.int64), e3, e3, e3, e3,
+                           np.empty(0, bool), self.rate_hz, self.source, np.empty(0, np.int64),
+                           self.size)
+        cols = [np.concatenate([r[i] for r in rows]) for i in range(7)]
         mean, std = cols[3], cols[4]
         return Windows(cols[0], cols[1], cols[2].astype(np.int64), mean[:, :3], std[:, :3],
-                       mean[:, 3:], std[:, 3:], cols[5], self.rate_hz, self.source)
+                       mean[:, 3:], std[:, 3:], cols[5], self.rate_hz, self.source,
+                       cols[6].astype(np.int64), self.size)
+
+
+def _window_stats(t, data, size):
+    """Per-window first/last stamp, count, mean and std over the rows finite in every channel."""
+    w = t.shape[0] // size
+    blocks = data[:w * size].reshape(w, size, 6)
+    tb = t[:w * size].reshape(w, size)
+    good = np.all(np.isfinite(blocks), axis=2)
+    n_good = good.sum(axis=1)
+    x = np.where(good[:, :, None], blocks, 0.0)
+    with np.errstate(invalid='ignore', divide='ignore'):
+        mean = x.sum(axis=1) / n_good[:, None]
+        dev = np.where(good[:, :, None], blocks - mean[:, None, :], 0.0)
+        std = np.sqrt((dev * dev).sum(axis=1) / (n_good[:, None] - 1))
+    mean[n_good < 1] = np.nan
+    std[n_good < 2] = np.nan
+    return (tb[:, 0], tb[:, -1], np.full(w, size), mean, std, n_good == size, n_good)
 
 
 @dataclass(frozen=True)
@@ -245,20 +286,28 @@ class Dwell:
     orientation : str
         One of :data:`ORIENTATIONS` (the axis and sign of gravity).
     t_start_s, duration_s : float
-        First stamp (s) and length (s) of the samples used (after trimming).
+        First stamp (s) and span (s) of the windows used (after trimming; gaps inside included).
     samples : int
-        Samples used.
+        Finite samples used.
     accel_mean_m_s2, gyro_mean_rad_s : numpy.ndarray
         (3,) mean specific force (m/s^2) and angular rate (rad/s).
     accel_sem_m_s2, gyro_sem_rad_s : numpy.ndarray
-        (3,) standard error of those means from the spread of the window means (m/s^2, rad/s):
-        std(window means, ddof=1) / sqrt(windows), which keeps noise correlated within a window.
+        (3,) spread of the window means / sqrt(windows) (m/s^2, rad/s): the standard error of
+        the mean if the window means were independent. The calibration's uncertainties do not
+        use it (they come from :mod:`~gyro_noise_ros.calibration.dwell_noise`, which sees the
+        wander between windows); it is reported as the white-noise part.
     accel_std_m_s2 : numpy.ndarray
         (3,) sample standard deviation inside the dwell (pooled over windows, m/s^2).
     tilt_deg : float
         Angle between the mean specific force and the orientation's axis (deg).
     source : str
         Recording the dwell comes from.
+    non_finite_samples : int
+        Samples inside the dwell's span dropped for NaN/Inf.
+    window_t_s, window_n : numpy.ndarray
+        Centre stamp (s) and finite samples of each window used.
+    window_accel_m_s2, window_gyro_rad_s : numpy.ndarray
+        (k, 3) window means (the noise model's input).
 
     """
 
@@ -273,10 +322,20 @@ class Dwell:
     accel_std_m_s2: np.ndarray
     tilt_deg: float
     source: str = ''
+    non_finite_samples: int = 0
+    window_t_s: np.ndarray = field(default=None, repr=False, compare=False)
+    window_n: np.ndarray = field(default=None, repr=False, compare=False)
+    window_accel_m_s2: np.ndarray = field(default=None, repr=False, compare=False)
+    window_gyro_rad_s: np.ndarray = field(default=None, repr=False, compare=False)
+
+    @property
+    def t_end_s(self):
+        """float: end of the span used (s), one sample period after its last stamp."""
+        return self.t_start_s + self.duration_s
 
     def describe(self):
         """
-        Return a one-phrase description (orientation, start, duration, recording).
+        Return a one-phrase description (orientation, start, duration, recording, NaN dropped).
 
         Returns
         -------
@@ -284,8 +343,10 @@ class Dwell:
 
         """
         where = f' in {self.source}' if self.source else ''
+        nan = (f', {self.non_finite_samples} NaN/Inf samples dropped'
+               if self.non_finite_samples else '')
         return (f'{self.orientation} at t={self.t_start_s:.1f} s for {self.duration_s:.1f} s'
-                f'{where} (tilt {self.tilt_deg:.1f} deg)')
+                f'{where} (tilt {self.tilt_deg:.1f} deg{nan})')
 
     def as_dict(self):
         """
@@ -298,6 +359,7 @@ class Dwell:
         """
         return {'orientation': self.orientation, 't_start_s': self.t_start_s,
                 'duration_s': self.duration_s, 'samples': self.samples,
+                'non_finite_samples': self.non_finite_samples,
                 'source': self.source, 'tilt_deg': self.tilt_deg,
                 'accel_mean_m_s2': self.accel_mean_m_s2.tolist(),
                 'accel_sem_m_s2': self.accel_sem_m_s2.tolist(),
@@ -317,11 +379,15 @@ class Detection:
     short : tuple of Dwell
         Static stretches shorter than ``min_static_s`` (reported, never used).
     static_fraction : float
-        Fraction of the (finite) windows that were static.
+        Fraction of the usable (non-gap) windows that were static.
     non_finite_samples : int
-        Samples in windows holding NaN/Inf.
+        Samples dropped for NaN/Inf in the whole recording.
     reference_gyro_rad_s : numpy.ndarray
         (3,) reference rate of the gyro criterion (rad/s).
+    gaps : tuple of (float, float, int)
+        Runs of gap windows (mostly NaN/Inf): start (s), length (s), samples.
+    source : str
+        Name of the recording.
 
     """
 
@@ -330,6 +396,26 @@ class Detection:
     static_fraction: float
     non_finite_samples: int
     reference_gyro_rad_s: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    gaps: tuple = ()
+    source: str = ''
+
+    def describe_gaps(self, min_s=0.0):
+        """
+        Return the NaN/Inf gaps at least ``min_s`` long as one phrase ('' without any).
+
+        Parameters
+        ----------
+        min_s : float
+            Shortest gap listed (s).
+
+        Returns
+        -------
+        str
+
+        """
+        where = f' in {self.source}' if self.source else ''
+        return '; '.join(f'{length:.1f} s of NaN/Inf samples at t={t0:.1f} s{where}'
+                         for t0, length, _ in self.gaps if length >= min_s)
 
 
 def classify(accel_mean_m_s2):
@@ -355,27 +441,50 @@ def classify(accel_mean_m_s2):
     return sign + 'xyz'[i], tilt
 
 
-def _dwell(win, lo, hi, orientation, tilt):
-    sl = slice(lo, hi)
-    n = win.n[sl].astype(np.float64)
+def _dwell(win, idx):
+    """Build a Dwell from the usable window indices ``idx`` (increasing) of ``win``."""
+    n = win.n_good[idx].astype(np.float64)
     total = n.sum()
     w = n / total
-    am = (win.accel_mean_m_s2[sl] * w[:, None]).sum(axis=0)
-    gm = (win.gyro_mean_rad_s[sl] * w[:, None]).sum(axis=0)
-    k = hi - lo
+    am = (win.accel_mean_m_s2[idx] * w[:, None]).sum(axis=0)
+    gm = (win.gyro_mean_rad_s[idx] * w[:, None]).sum(axis=0)
+    k = idx.size
     if k >= 2:
-        a_sem = win.accel_mean_m_s2[sl].std(axis=0, ddof=1) / np.sqrt(k)
-        g_sem = win.gyro_mean_rad_s[sl].std(axis=0, ddof=1) / np.sqrt(k)
+        a_sem = win.accel_mean_m_s2[idx].std(axis=0, ddof=1) / np.sqrt(k)
+        g_sem = win.gyro_mean_rad_s[idx].std(axis=0, ddof=1) / np.sqrt(k)
     else:
-        a_sem = win.accel_std_m_s2[lo] / np.sqrt(n[0])
-        g_sem = win.gyro_std_rad_s[lo] / np.sqrt(n[0])
+        a_sem = win.accel_std_m_s2[idx[0]] / np.sqrt(n[0])
+        g_sem = win.gyro_std_rad_s[idx[0]] / np.sqrt(n[0])
     # pooled within-window variance plus the spread of window means about the dwell mean
-    var = (((n - 1)[:, None] * win.accel_std_m_s2[sl] ** 2).sum(axis=0)
-           + (n[:, None] * (win.accel_mean_m_s2[sl] - am) ** 2).sum(axis=0)) / max(total - 1, 1)
+    var = (((n - 1)[:, None] * win.accel_std_m_s2[idx] ** 2).sum(axis=0)
+           + (n[:, None] * (win.accel_mean_m_s2[idx] - am) ** 2).sum(axis=0)) / max(total - 1, 1)
+    lo, hi = int(idx[0]), int(idx[-1])
     # the dwell spans whole windows: from the first stamp to one sample period past the last
-    duration = float(win.t_end_s[hi - 1] - win.t_start_s[lo] + 1.0 / win.rate_hz)
+    duration = float(win.t_end_s[hi] - win.t_start_s[lo] + 1.0 / win.rate_hz)
+    span = slice(lo, hi + 1)
+    dropped = int((win.n[span] - win.n_good[span]).sum())
+    orientation, tilt = classify(am)
+    centre = (win.t_start_s[idx] + win.t_end_s[idx]) / 2.0
     return Dwell(orientation, float(win.t_start_s[lo]), duration, int(total), am, gm, a_sem, g_sem,
-                 np.sqrt(var), float(tilt), win.source)
+                 np.sqrt(var), float(tilt), win.source, dropped, centre,
+                 win.n_good[idx].copy(), win.accel_mean_m_s2[idx].copy(),
+                 win.gyro_mean_rad_s[idx].copy())
+
+
+def _gaps(win, usable):
+    out = []
+    i, w = 0, usable.size
+    while i < w:
+        if usable[i]:
+            i += 1
+            continue
+        j = i
+        while j < w and not usable[j]:
+            j += 1
+        length = float(win.t_end_s[j - 1] - win.t_start_s[i] + 1.0 / win.rate_hz)
+        out.append((float(win.t_start_s[i]), length, int(win.n[i:j].sum())))
+        i = j
+    return tuple(out)
 
 
 def find_dwells(windows, settings=DetectorSettings()):
@@ -396,26 +505,30 @@ def find_dwells(windows, settings=DetectorSettings()):
     Raises
     ------
     InputDataError
-        No finite window, or an accelerometer that reads zero (no ``linear_acceleration``).
+        No samples, a detector window longer than the recording, no finite window, or an
+        accelerometer that reads zero (no ``linear_acceleration``).
 
     """
     win = windows
     name = f' {win.source!r}' if win.source else ''
-    if win.n.size == 0 or not np.any(win.finite):
-        raise InputDataError(f'recording{name} holds no finite samples (all NaN/Inf or empty)')
-    fin = win.finite
-    norm = np.linalg.norm(win.accel_mean_m_s2[fin], axis=1)
+    if win.n.size == 0:
+        raise InputDataError(f'recording{name} holds fewer than two samples')
+    if win.window_samples and int(win.n.sum()) < win.window_samples:
+        raise InputDataError(
+            f'recording{name} lasts {win.duration_s:.3g} s, shorter than one detector window '
+            f'(--window-s {settings.window_s:g} s): give a shorter --window-s')
+    usable = win.usable
+    if not np.any(usable):
+        raise InputDataError(f'recording{name} holds no finite samples (all NaN/Inf)')
+    norm = np.linalg.norm(win.accel_mean_m_s2[usable], axis=1)
     if np.median(norm) < 1.0:
         raise InputDataError(f'recording{name}: the accelerometer reads ~0 (median |a| '
                              f'{np.median(norm):.3g} m/s^2): no linear_acceleration recorded?')
-    ref = np.median(win.gyro_mean_rad_s[fin], axis=0)
+    ref = np.median(win.gyro_mean_rad_s[usable], axis=0)
     with np.errstate(invalid='ignore'):
         quiet = np.all(win.accel_std_m_s2 < settings.accel_std_max_m_s2, axis=1)
         still = np.all(np.abs(win.gyro_mean_rad_s - ref) < settings.gyro_rate_max_rad_s, axis=1)
-    static = fin & quiet & still
-    step = np.zeros(win.n.size, dtype=bool)
-    step[1:] = np.all(np.abs(np.diff(win.accel_mean_m_s2, axis=0)) < settings.merge_tol_m_s2,
-                      axis=1)
+    static = usable & quiet & still
     dwells, short = [], []
     trim = int(settings.trim_windows)
     i, w = 0, win.n.size
@@ -423,19 +536,37 @@ def find_dwells(windows, settings=DetectorSettings()):
         if not static[i]:
             i += 1
             continue
+        run = [i]
         j = i + 1
-        while j < w and static[j] and step[j]:
-            j += 1
-        lo, hi = i + trim, j - trim
-        if hi > lo:
-            n = win.n[lo:hi].astype(np.float64)
-            mean = (win.accel_mean_m_s2[lo:hi] * (n / n.sum())[:, None]).sum(axis=0)
-            orientation, tilt = classify(mean)
-            d = _dwell(win, lo, hi, orientation, tilt)
+        while j < w:
+            k = j
+            while k < w and not usable[k]:      # a gap does not end a dwell ...
+                k += 1
+            close = k < w and static[k] and np.all(
+                np.abs(win.accel_mean_m_s2[k] - win.accel_mean_m_s2[run[-1]])
+                < settings.merge_tol_m_s2)
+            if not close:                       # ... unless the sensor moved across it
+                break
+            run.append(k)
+            j = k + 1
+        idx = np.asarray(run[trim:len(run) - trim], dtype=np.int64)
+        if idx.size:
+            d = _dwell(win, idx)
             (dwells if d.duration_s >= settings.min_static_s else short).append(d)
-        i = j
-    return Detection(tuple(dwells), tuple(short), float(static[fin].mean()),
-                     win.non_finite_samples, ref)
+        i = run[-1] + 1
+    return Detection(tuple(dwells), tuple(short), float(static[usable].mean()),
+                     win.non_finite_samples, ref, _gaps(win, usable), win.source)
+
+
+def _no_dwell(short, settings):
+    if short:
+        return InputDataError(
+            f'no static dwell of at least --min-static-s {settings.min_static_s:g} s; shorter '
+            f'ones: {"; ".join(d.describe() for d in short)}')
+    return InputDataError(
+        'no static dwell found: the recording never stops moving (accelerometer std >= '
+        f'{settings.accel_std_max_m_s2:g} m/s^2 or gyro away from its median by >= '
+        f'{settings.gyro_rate_max_rad_s:g} rad/s in every {settings.window_s:g} s window)')
 
 
 def select_six(detections, settings=DetectorSettings()):
@@ -457,25 +588,19 @@ def select_six(detections, settings=DetectorSettings()):
     Raises
     ------
     InputDataError
-        A recording that never stops moving, a tilted dwell, two dwells for one orientation, or a
-        missing orientation (the message names the dwells concerned).
+        A recording that never stops moving, a dwell tilted beyond ``max_tilt_deg``, two dwells
+        for one orientation, or a missing orientation (the message names the dwells concerned,
+        and NaN/Inf stretches where a dwell could have been).
 
     """
     dwells = [d for det in detections for d in det.dwells]
     short = [d for det in detections for d in det.short]
     if not dwells:
-        if short:
-            raise InputDataError(
-                f'no static dwell of at least --min-static-s {settings.min_static_s:g} s; shorter '
-                f'ones: {"; ".join(d.describe() for d in short)}')
-        raise InputDataError(
-            'no static dwell found: the recording never stops moving (accelerometer std >= '
-            f'{settings.accel_std_max_m_s2:g} m/s^2 or gyro away from its median by >= '
-            f'{settings.gyro_rate_max_rad_s:g} rad/s in every {settings.window_s:g} s window)')
+        raise _no_dwell(short, settings)
     tilted = [d for d in dwells if d.tilt_deg > settings.max_tilt_deg]
     if tilted:
-        raise InputDataError(f'dwell tilted more than {settings.max_tilt_deg:g} deg from any '
-                             f'axis: '
+        raise InputDataError(f'dwell tilted more than --max-tilt-deg {settings.max_tilt_deg:g} '
+                             f'deg from any axis: '
                              f'{"; ".join(d.describe() for d in tilted)}')
     chosen = {}
     for o in ORIENTATIONS:
@@ -487,9 +612,52 @@ def select_six(detections, settings=DetectorSettings()):
             chosen[o] = mine[0]
     missing = [o for o in ORIENTATIONS if o not in chosen]
     if missing:
+        gaps = '; '.join(g for g in (det.describe_gaps(settings.min_static_s)
+                                     for det in detections) if g)
+        lead = (f'no finite dwell for orientation(s) {", ".join(missing)}: the recording holds '
+                f'{gaps} (an all-NaN dwell?)' if gaps else
+                f'orientation(s) {", ".join(missing)} missing')
         near = [d for d in short if d.orientation in missing]
         extra = (f'; shorter than --min-static-s {settings.min_static_s:g} s: '
                  f'{"; ".join(d.describe() for d in near)}') if near else ''
-        raise InputDataError(f'orientation(s) {", ".join(missing)} missing; found: '
+        raise InputDataError(f'{lead}; found: '
                              f'{"; ".join(d.describe() for d in chosen.values())}{extra}')
     return chosen
+
+
+def select_poses(detections, settings=DetectorSettings(), *, min_poses=MIN_POSES):
+    """
+    Return every static dwell of the recordings as a pose of the multi-pose calibration.
+
+    Parameters
+    ----------
+    detections : sequence of Detection
+        One per recording.
+    settings : DetectorSettings
+        ``min_static_s`` is named in messages.
+    min_poses : int, keyword-only
+        Least number of poses.
+
+    Returns
+    -------
+    list of Dwell
+        In recording order.
+
+    Raises
+    ------
+    InputDataError
+        Fewer than ``min_poses`` dwells (the message counts them and names the short ones).
+
+    """
+    dwells = [d for det in detections for d in det.dwells]
+    short = [d for det in detections for d in det.short]
+    if not dwells:
+        raise _no_dwell(short, settings)
+    if len(dwells) < min_poses:
+        extra = (f'; {len(short)} more shorter than --min-static-s '
+                 f'{settings.min_static_s:g} s' if short else '')
+        gaps = '; '.join(g for g in (det.describe_gaps() for det in detections) if g)
+        raise InputDataError(f'multi-pose calibration needs at least {min_poses} static poses, '
+                             f'found {len(dwells)}{extra}'
+                             + (f' (and {gaps})' if gaps else ''))
+    return dwells

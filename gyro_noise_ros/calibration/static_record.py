@@ -196,7 +196,7 @@ class StaticRecord:
                               f'its {self.settings.window_s:g} s windows are static '
                               f'(need {100 * STATIC_FRACTION_MIN:.0f} %)')
             return out
-        fin = win.finite
+        fin = win.usable
         mean = np.nanmean(win.accel_mean_m_s2[fin], axis=0)
         out['orientation'] = classify(mean)[0]
         kinds = {d.orientation for d in det.dwells + det.short}

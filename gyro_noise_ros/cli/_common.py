@@ -22,20 +22,64 @@ Exit codes (documented in the README):
 1     unexpected internal error (a bug: please report the message)
 2     bad command line or parameter value (argparse uses 2 as well)
 3     a recording cannot be read (missing, corrupt, no or ambiguous topic, wrong type)
-4     the data cannot be analysed (NaN/Inf, too short, constant)
-5     the Portenta link cannot be used
-130   interrupted (Ctrl-C)
+4     the data cannot be analysed (NaN/Inf or non-physical values, too short, constant,
+      nothing left to analyse after ``--start``/``--end``)
+5     the Portenta link cannot be used, or the Dask cluster is lost
+6     an output cannot be written (``--out`` not writable, a file in the way, disk full)
+130   interrupted (Ctrl-C, SIGTERM where a tool turns it into an interrupt); nothing is left
+      under the outputs' final names
 ====  ==========================================================================
+
+The same cause gives the same code in every tool: a CSV that is empty, has the wrong header
+or a non-numeric value is unreadable (3); a CSV with a header and no rows is readable but holds
+nothing to analyse (4).
 """
 
+import os
+from pathlib import Path
 import sys
 
-from ..errors import GyroNoiseError
+from ..errors import GyroNoiseError, OutputError
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+
+
+def check_out_option(path, *, option='--out'):
+    """
+    Refuse an output folder that cannot be made, before any long work (nothing is created).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The folder named by the user (may not exist yet).
+    option : str, keyword-only
+        How the user named it, for the message.
+
+    Raises
+    ------
+    OutputError
+        ``path`` is an existing file, lies under a file, or its nearest existing folder cannot be
+        written (as root every folder is writable: the staging step then finds the rest).
+
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise OutputError(f'{option} {str(out)!r} is an existing file, not a folder')
+    ancestor = out
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.exists():
+        return
+    if not ancestor.is_dir():
+        raise OutputError(f'{option} {str(out)!r} cannot be created: {str(ancestor)!r} is a '
+                          'file')
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        what = 'is not writable' if ancestor == out else (
+            f'cannot be created: {str(ancestor)!r} is not writable')
+        raise OutputError(f'{option} {str(out)!r} {what}: permission denied')
 
 
 def run_cli(prog, body, argv):

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-The reliability-procedure scenario of ``portenta_emulator``: options, model, direct bag output.
+The scenarios of ``portenta_emulator``: reliability motion, thermal profiles, direct bag output.
 
 Kept apart from ``cli/emulator.py`` (which only calls :func:`add_scenario_arguments`,
 :func:`scenario_from_args` and :func:`write_bag`); the model is
@@ -23,6 +23,11 @@ noise, gyro bias (``--bias-dps``) and temperature model stay. ``--write-bag DIR`
 samples the driver would publish (quantised at the configured full scales, scaled to SI) straight
 into a rosbag2, as fast as they are generated: no pacing, no serial link. See
 ``docs/reliability.md``.
+
+The thermal part: ``--thermal SHAPE`` (:data:`THERMAL_CHOICES`) builds the board's
+:class:`~gyro_noise_ros.thermal.simulate.ThermalStream` (:func:`thermal_from_args`): the paper's
+oven from ``--temp-c``, or a held-out shape (heating, cooling, staircases, cycles, soak, sine) at
+its own set-points, compressed ``--thermal-compress`` times. See ``docs/thermal_data.md``.
 """
 
 import argparse
@@ -31,12 +36,14 @@ import os
 import numpy as np
 
 from ..bag import ImuBagWriter
-from ..calibration.emulate import (Excitation, MG, PAPER_AFTER_BIAS_MG, PAPER_AFTER_SCALE_PCT,
-                                   PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT, Scenario,
-                                   SensorErrors, SixPosition, Static)
+from ..calibration.emulate import (Excitation, MG, MultiPose, PAPER_AFTER_BIAS_MG,
+                                   PAPER_AFTER_SCALE_PCT, PAPER_BEFORE_BIAS_MG,
+                                   PAPER_BEFORE_SCALE_PCT, Scenario, SensorErrors, SixPosition,
+                                   Static)
 from ..calibration.sixpos import normal_gravity
-from ..errors import ParameterError
+from ..errors import OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
+from ..outputs import staged_new_dir
 
 DEG = np.pi / 180.0
 #: Default cross-axis terms (%), xy, xz, yx, yz, zx, zy (a few tenths of a degree).
@@ -49,6 +56,38 @@ DEFAULT_STRESS_INSTABILITY = 1.7
 RANDOM_WALK_PER_WHITE = 1.0 / 11.5
 #: Epoch of the stamps of --write-bag (UNIX s).
 BAG_EPOCH_NS = 1_700_000_000 * 10**9
+#: ``--thermal`` values: off, then the profiles of ``thermal.simulate.SHAPES``.
+THERMAL_CHOICES = ('off', 'oven', 'heating', 'cooling', 'staircase', 'staircase_down', 'cycle',
+                   'cool_reheat', 'soak', 'sine')
+
+
+def thermal_from_args(args):
+    """
+    Build the board's thermal stream of ``--thermal`` (None for ``off``).
+
+    The drift law's constant terms (gyro bias, accelerometer offset at 25 degC) are left out:
+    the board has its own ``--bias-dps`` and accelerometer offset; what the profile adds is the
+    temperature-dependent part. ``oven`` starts at ``--temp-c`` (its room); the other shapes
+    keep their own set-points (``docs/thermal_data.md``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``portenta_emulator`` arguments (``thermal``, ``thermal_compress``, ``temp_c``).
+
+    Returns
+    -------
+    ThermalStream or None
+
+    """
+    shape = getattr(args, 'thermal', 'off')
+    if shape == 'off':
+        return None
+    from ..thermal.simulate import make_profile, ThermalModel, ThermalStream
+
+    room = args.temp_c if shape == 'oven' else None
+    return ThermalStream(ThermalModel(bias_dps=0.0, accel_bias_mg=0.0), make_profile(shape),
+                         compress=args.thermal_compress, room_c=room)
 
 
 def _floats(count):
@@ -64,6 +103,17 @@ def _floats(count):
     return parse
 
 
+def _tilt(text):
+    orientation, sep, deg = text.partition(':')
+    try:
+        value = float(deg)
+    except ValueError:
+        value = None
+    if not sep or value is None or not np.isfinite(value):
+        raise argparse.ArgumentTypeError(f'expected DWELL:DEG such as +x:4, got {text!r}')
+    return orientation.strip(), value
+
+
 def add_scenario_arguments(parser):
     """
     Add the reliability-scenario options to the emulator's parser.
@@ -75,8 +125,10 @@ def add_scenario_arguments(parser):
 
     """
     g = parser.add_argument_group('reliability scenario (paper 001, docs/reliability.md)')
-    g.add_argument('--scenario', choices=('static', 'six-position', 'sine', 'sweep'),
-                   help='motion: rest, six-position calibration sequence, sine dwell or sweep')
+    g.add_argument('--scenario', choices=('static', 'six-position', 'multi-pose', 'sine',
+                                          'sweep'),
+                   help='motion: rest, six-position calibration sequence, multi-pose sequence '
+                        '(>= 9 arbitrary static poses, imu_tk), sine dwell or sweep')
     g.add_argument('--write-bag', metavar='DIR',
                    help='write a rosbag2 directly (no pacing, no link; needs --duration-s or '
                         '--samples, default the scenario length)')
@@ -92,6 +144,11 @@ def add_scenario_arguments(parser):
     g.add_argument('--move-s', type=float, default=5.0, help='rotation between dwells (s)')
     g.add_argument('--lead-s', type=float, default=5.0, help='rest before the first dwell (s)')
     g.add_argument('--order', default='+z,-z,+x,-x,+y,-y', help='six-position order')
+    g.add_argument('--tilt', type=_tilt, action='append', default=[], metavar='DWELL:DEG',
+                   help='six-position: tilt that dwell by DEG about a horizontal axis (a badly '
+                        'seated fixture), e.g. +x:4; repeatable')
+    g.add_argument('--poses', type=int, default=18,
+                   help='multi-pose: number of static poses (>= 9 for the calibration)')
     g.add_argument('--accel-bias-mg', type=_floats(3),
                    help='accelerometer bias (mg); default paper Table 6 (before, or after with '
                         '--stress)')
@@ -147,10 +204,23 @@ def scenario_from_args(args):
     if not getattr(args, 'scenario', None):
         return None
     g = normal_gravity(args.latitude)
+    if args.scenario in ('sine', 'sweep'):
+        nyquist = args.odr_hz / 2.0
+        top = max(args.excite_hz, args.sweep_to_hz if args.scenario == 'sweep' else 0.0)
+        if not (np.isfinite(top) and top < nyquist):
+            name = '--sweep-to-hz' if top != args.excite_hz else '--excite-hz'
+            raise ParameterError(f'{name} {top:g} Hz is not below Nyquist ({nyquist:g} Hz at '
+                                 f'--odr-hz {args.odr_hz:g})')
+    if args.tilt and args.scenario != 'six-position':
+        raise ParameterError('--tilt applies to --scenario six-position')
     if args.scenario == 'six-position':
         motion = SixPosition(order=tuple(o.strip() for o in args.order.split(',')),
                              dwell_s=args.dwell_s, move_s=args.move_s, lead_s=args.lead_s,
-                             gravity_m_s2=g, latitude_deg=args.latitude)
+                             gravity_m_s2=g, latitude_deg=args.latitude,
+                             tilts=tuple(args.tilt))
+    elif args.scenario == 'multi-pose':
+        motion = MultiPose(poses=args.poses, dwell_s=args.dwell_s, move_s=args.move_s,
+                           lead_s=args.lead_s, gravity_m_s2=g, latitude_deg=args.latitude)
     else:
         motion = Static(orientation=args.orientation, gravity_m_s2=g,
                         latitude_deg=args.latitude)
@@ -209,7 +279,7 @@ def scenario_length_s(scenario):
 
     """
     motion = scenario.motion
-    if isinstance(motion, SixPosition):
+    if isinstance(motion, (SixPosition, MultiPose)):
         return motion.duration_s + motion.lead_s
     return None
 
@@ -236,8 +306,6 @@ def write_bag(args, board, truth_fh=None, counters=None):
         Exit status 0.
 
     """
-    from ..link.emulator import truth_records
-
     total = None
     if args.samples is not None:
         total = args.samples
@@ -250,7 +318,19 @@ def write_bag(args, board, truth_fh=None, counters=None):
     if total is None or total <= 0:
         raise ParameterError('--write-bag needs --duration-s or --samples (a positive length)')
     if os.path.exists(args.write_bag):
-        raise ParameterError(f'--write-bag {args.write_bag!r} exists; give a new directory')
+        raise OutputError(f'--write-bag {args.write_bag!r} exists; give a new directory')
+    with staged_new_dir(args.write_bag, option='--write-bag') as stage:
+        # built under a hidden holder and renamed when complete: an error or Ctrl-C leaves no
+        # bag folder behind to block the retry (the stage already carries the bag's name, which
+        # the writer gives its storage file)
+        _write_samples(args, board, stage, total, truth_fh, counters)
+    print(args.write_bag, flush=True)
+    return 0
+
+
+def _write_samples(args, board, path, total, truth_fh, counters):
+    from ..link.emulator import truth_records
+
     motion = board.scenario.motion if board.scenario is not None else None
     reference = isinstance(motion, Excitation)
     gyro_lsb = lsm.gyro_sensitivity_rad_s_per_lsb(board.gyro_fs_dps)
@@ -259,7 +339,7 @@ def write_bag(args, board, truth_fh=None, counters=None):
     if every < 0:
         raise ParameterError(f'--bag-temperature-decimation must be >= 0, got {every}')
     done = 0
-    with ImuBagWriter(args.write_bag, storage=args.bag_storage) as w:
+    with ImuBagWriter(path, storage=args.bag_storage) as w:
         while done < total:
             n = min(65536, total - done)
             s = board.next_samples(n)
@@ -279,5 +359,3 @@ def write_bag(args, board, truth_fh=None, counters=None):
             if counters is not None:
                 counters.samples_generated += n
                 counters.samples_sent += n
-    print(args.write_bag, flush=True)
-    return 0

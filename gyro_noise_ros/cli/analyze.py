@@ -34,6 +34,8 @@ exit codes: ``docs/offline_tool.md``.
 
 import argparse
 import collections
+import contextlib
+import dataclasses
 import datetime
 import functools
 import math
@@ -53,7 +55,9 @@ from ..cluster import make_executor
 from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
-from ..errors import InputDataError, make_out_dir, ParameterError
+from ..core.plausible import mask_non_physical, MAX_RATE_RAD_S, MAX_SPECIFIC_FORCE_M_S2
+from ..errors import InputDataError, nothing_left_error, OutputError, ParameterError
+from ..outputs import staged_output
 
 PROG = 'gyro_noise_analyze'
 
@@ -135,7 +139,7 @@ def build_parser():
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
     p.add_argument(
-        '--allan-taus', default='octave', choices=('octave', 'dense'),
+        '--allan-taus', default='dense', choices=('octave', 'dense'),
         help='Allan averaging times: octave (1, 2, 4, ... samples) or dense (~10 per decade)')
     p.add_argument('--batch-size', type=int, default=DEFAULT_BATCH, metavar='N',
                    help=f'messages decoded per batch ({DEFAULT_BATCH})')
@@ -285,104 +289,116 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
     thresholds = thresholds if thresholds is not None else HealthThresholds()
     ref = reference_per_axis(str(reference), config.axes,
                              bag=reference_bag) if reference is not None else {}
-    first_reader = None
-    try:
-        # Fail fast on any unreadable bag or unresolvable topic before hours of work on the
-        # others. The first bag's reader stays open for its analysis: opening a sqlite3 bag
-        # counts its messages (a scan of the whole table, about 0.25 s per million messages).
-        topics = []
-        for i, p in enumerate(paths):
-            if is_table(p):
-                topics.append(_open(p, topic, temperature_topic, config.rate_hz).topic)
-            elif i == 0:
-                first_reader = ImuBagReader(p, topic=topic, temperature_topic=temperature_topic)
-                topics.append(first_reader.topic)
-            else:
-                topics.append(find_imu_topic(p, topic))
-        out = make_out_dir(out_dir)
-
-        started = time.perf_counter()
-        timing = {'decode_s': 0.0, 'wait_s': 0.0}
-        if jobs > 1 and scheduler is None:
-            # Worker processes are forked from this one: build the identifier and load its
-            # compiled kernels once here, so each worker inherits them instead of redoing it.
-            _warm_identifier(config)
-        pool = make_executor(jobs, scheduler, warn=warn)
-        if scheduler is not None:
-            jobs = max(jobs, pool.nthreads)
-        csv_writer = _ChunkRows(out / 'chunks.csv')
-        bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
+    with contextlib.ExitStack() as stack:
+        # Every file is written into a hidden staging folder inside --out and published there
+        # only when the whole run succeeded: an error or an interrupt leaves no result.
+        first_reader = None
         try:
-            for i, (path, label, imu_topic) in enumerate(zip(paths, names, topics)):
-                doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref,
-                                   thresholds, pool, jobs, select, csv_writer, per_chunk,
-                                   curve_store, allan_store, curves, batch_size,
-                                   _Progress(progress), timing,
-                                   reader=first_reader if i == 0 else None)
-                bag_docs.append(doc)
+            # Fail fast on any unreadable bag or unresolvable topic before hours of work on the
+            # others. The first bag's reader stays open for its analysis: opening a sqlite3 bag
+            # counts its messages (a scan of the whole table, about 0.25 s per million messages).
+            topics = []
+            for i, p in enumerate(paths):
+                if is_table(p):
+                    topics.append(_open(p, topic, temperature_topic, config.rate_hz).topic)
+                elif i == 0:
+                    first_reader = ImuBagReader(p, topic=topic,
+                                                temperature_topic=temperature_topic)
+                    topics.append(first_reader.topic)
+                else:
+                    topics.append(find_imu_topic(p, topic))
+            out = stack.enter_context(staged_output(out_dir))
+
+            started = time.perf_counter()
+            timing = {'decode_s': 0.0, 'wait_s': 0.0}
+            if jobs > 1 and scheduler is None:
+                # Worker processes are forked from this one: build the identifier and load its
+                # compiled kernels once here, so each worker inherits them instead of redoing it.
+                _warm_identifier(config)
+            pool = make_executor(jobs, scheduler, warn=warn)
+            if scheduler is not None:
+                jobs = max(jobs, pool.nthreads)
+            with _writing():
+                csv_writer = _ChunkRows(out / 'chunks.csv')
+            bag_docs, per_chunk, curve_store, allan_store = [], {}, {}, {}
+            try:
+                for i, (path, label, imu_topic) in enumerate(zip(paths, names, topics)):
+                    doc = _analyze_one(path, label, imu_topic, temperature_topic, config, ref,
+                                       thresholds, pool, jobs, select, csv_writer, per_chunk,
+                                       curve_store, allan_store, curves, batch_size,
+                                       _Progress(progress), timing,
+                                       reader=first_reader if i == 0 else None)
+                    bag_docs.append(doc)
+            finally:
+                csv_writer.close()
+                if pool is not None:
+                    pool.shutdown(wait=True, cancel_futures=True)
         finally:
-            csv_writer.close()
-            if pool is not None:
-                pool.shutdown(wait=True, cancel_futures=True)
-    finally:
-        if first_reader is not None:
-            first_reader.close()  # idempotent; open here only when the run failed before it
+            if first_reader is not None:
+                first_reader.close()  # idempotent; open here only when the run failed before it
 
-    if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
-               for b in bag_docs for a in b['axes'].values()):
-        counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
-        raise InputDataError(
-            f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
-            'lower --chunk-size (>= memory + 2)')
-    for b in bag_docs:
-        if not any(a['chunks'] for a in b['axes'].values()):
-            # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
-            why = '; '.join(
-                f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf, {a['chunks_dropped']} dropped "
-                f"for loss, {a['chunks_failed']} not identifiable (constant?)" for axis,
-                a in b['axes'].items())
-            raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
+        if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
+                   for b in bag_docs for a in b['axes'].values()):
+            counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
+            raise InputDataError(
+                f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
+                'lower --chunk-size (>= memory + 2)')
+        for b in bag_docs:
+            if not any(a['chunks'] for a in b['axes'].values()):
+                # Never exit 0 having analysed nothing: say why each axis has no analysed chunk.
+                why = '; '.join(
+                    f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf or non-physical values, "
+                    f"{a['chunks_dropped']} dropped for loss, {a['chunks_failed']} not "
+                    'identifiable (constant?)' for axis, a in b['axes'].items())
+                raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
+        # the readout objects themselves are for imu.yaml, not for summary.json
+        accel_readouts = {b['label']: b.pop('_accelerometer_readouts') for b in bag_docs}
 
-    doc = {
-        'tool': PROG,
-        'version': __version__,
-        'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ'),
-        'command': list(command) if command is not None else None,
-        'options': {
-            **config.as_dict(),
-            'jobs': jobs,
-            'topic': topic,
-            'temperature_topic': temperature_topic,
-            'reference': str(reference) if reference is not None else None,
-            'reference_bag': reference_bag,
-            'thresholds': (
-                {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
-                if ref
-                else None
-            ),
-            'curves': curves,
-            'batch_size': batch_size,
-            'scheduler': pool.address if scheduler is not None else None,
-        },
-        'bags': bag_docs,
-    }
-    files = [out / 'chunks.csv']
-    report.write_json(out / 'summary.json', doc)
-    (out / 'summary.md').write_text(report.summary_markdown(doc))
-    files += [out / 'summary.json', out / 'summary.md']
-    files += _write_allan_outputs(out, doc, allan_store, figures)
-    if curve_store:
-        arrays = {'alphas': config.alphas}
-        for (label, axis), rows in curve_store.items():
-            arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows], dtype=np.int64)
-            arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
-            arrays[f'{label}/{axis}/j'] = np.array([r[2] for r in rows])
-        np.savez_compressed(out / 'curves.npz', **arrays)
-        files.append(out / 'curves.npz')
-    if figures:
-        files += _write_figures(out, config, per_chunk, curve_store)
-    doc['_timing'] = {'total_s': time.perf_counter() - started, **timing}
-    doc['_files'] = [str(f) for f in files]
+        doc = {
+            'tool': PROG,
+            'version': __version__,
+            'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime(
+                '%Y-%m-%dT%H:%M:%SZ'),
+            'command': list(command) if command is not None else None,
+            'options': {
+                **config.as_dict(),
+                'jobs': jobs,
+                'topic': topic,
+                'temperature_topic': temperature_topic,
+                'reference': str(reference) if reference is not None else None,
+                'reference_bag': reference_bag,
+                'thresholds': (
+                    {k: getattr(thresholds, k) for k in thresholds.__dataclass_fields__}
+                    if ref
+                    else None
+                ),
+                'curves': curves,
+                'batch_size': batch_size,
+                'scheduler': pool.address if scheduler is not None else None,
+            },
+            'bags': bag_docs,
+        }
+        with _writing():
+            files = [out / 'chunks.csv']
+            report.write_json(out / 'summary.json', doc)
+            (out / 'summary.md').write_text(report.summary_markdown(doc))
+            files += [out / 'summary.json', out / 'summary.md']
+            files += _write_allan_outputs(out, doc, allan_store, accel_readouts, figures)
+            if curve_store:
+                arrays = {'alphas': config.alphas}
+                for (label, axis), rows in curve_store.items():
+                    arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows],
+                                                               dtype=np.int64)
+                    arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
+                    arrays[f'{label}/{axis}/j'] = np.array([r[2] for r in rows])
+                np.savez_compressed(out / 'curves.npz', **arrays)
+                files.append(out / 'curves.npz')
+            if figures:
+                files += _write_figures(out, config, per_chunk, curve_store)
+        doc['_timing'] = {'total_s': time.perf_counter() - started, **timing}
+        doc['_files'] = [str(f) for f in files]
+    # the files under their published names
+    doc['_files'] = [str(Path(out_dir) / Path(f).name) for f in doc['_files']]
     return doc
 
 
@@ -428,7 +444,7 @@ def _static_prepass(path, topic, temperature_topic, rate_hz, batch_size, start_s
     first = None
     log_time = False
     with _open(path, topic, temperature_topic, rate_hz) as reader:
-        for batch in reader.iter_batches(batch_size):
+        for batch in _plausible(reader.iter_batches(batch_size), None):
             stamps = batch.stamp_ns
             if first is None and _stamps_unusable(stamps) and not _stamps_unusable(batch.log_ns):
                 log_time = True
@@ -442,9 +458,49 @@ def _static_prepass(path, topic, temperature_topic, rate_hz, batch_size, start_s
     return stats.segment()
 
 
+def _plausible(batches, counts):
+    """Yield the batches with non-physical values as NaN (core/plausible.py), counted."""
+    for batch in batches:
+        gyro, n_gyro = mask_non_physical(batch.gyro, MAX_RATE_RAD_S)
+        accel, n_accel = mask_non_physical(batch.accel, MAX_SPECIFIC_FORCE_M_S2)
+        if n_gyro or n_accel:
+            if counts is not None:
+                counts['gyro'] += n_gyro
+                counts['accel'] += n_accel
+            batch = dataclasses.replace(batch, gyro=gyro, accel=accel)
+        yield batch
+
+
+def _check_chunk_fits(count, label, config):
+    """Refuse a record shorter than one chunk before reading it (``count``: 0 = unknown)."""
+    if not count:
+        return
+    shortest = config.memory + 2
+    if count < shortest:
+        raise InputDataError(
+            f'{label}: too short to analyse: {count} samples; the shortest chunk the order '
+            f'identification takes is memory L + 2 = {shortest} samples')
+    if count < config.chunk_size:
+        raise ParameterError(
+            f'--chunk-size {config.chunk_size} is larger than the record {label} ({count} '
+            f'samples): give at most {count} (and at least memory L + 2 = {shortest})')
+
+
 def _stamps_unusable(stamps):
+    """
+    Tell whether the first batch's stamps cannot be a time base (then the log time is tried).
+
+    Equal consecutive stamps are a normal time base (a packet of samples stamped once); only
+    stamps that go backwards (shuffled) or never advance (a driver that leaves the header stamp
+    at zero) are unusable. A batch too small to tell is usable.
+    """
     steps = np.diff(stamps)
-    return steps.size > 0 and np.count_nonzero(steps <= 0) > 0.1 * steps.size
+    if steps.size == 0:
+        return False
+    if np.count_nonzero(steps < 0) > 0.1 * steps.size:
+        return True
+    # 64 equal stamps in a row would be one packet of 64 samples or more: no advance at all
+    return steps.size >= 64 and not np.any(steps > 0)
 
 
 def warn(text):
@@ -460,8 +516,22 @@ def warn(text):
     print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
 
 
+@contextlib.contextmanager
+def _writing():
+    """Turn an OS error while writing the results (disk full, quota) into OutputError."""
+    try:
+        yield
+    except OSError as err:
+        where = f' ({err.filename})' if err.filename else ''
+        raise OutputError(f'cannot write the results: {err.strerror or err}{where}') from err
+
+
 class _ChunkRows(report.ChunkCsvWriter):
     """chunks.csv that can take back the rows of a bag (a speculative pass that was not kept)."""
+
+    def write(self, *args, **kwargs):
+        with _writing():
+            return super().write(*args, **kwargs)
 
     def mark(self):
         self._fh.flush()
@@ -554,9 +624,11 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
     start_s, end_s, static = select
     left = {'before_start': 0, 'after_end': 0, 'motion': 0}
     first_ns = None
+    last_ns = -2 ** 63
     if reader is None:
         reader = _open(path, imu_topic, temperature_topic, config.rate_hz)
     with reader:
+        _check_chunk_fits(reader.message_count, label, config)
         temps = reader.read_temperature()
         if temps is not None and temps[0].size:
             order = np.argsort(temps[0], kind='stable')
@@ -602,7 +674,8 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
                     finish(result)
 
         accel = _AccelAllan(config.allan and config.allan_taus)
-        batches = reader.iter_batches(batch_size)
+        non_physical = {'gyro': 0, 'accel': 0}
+        batches = _plausible(reader.iter_batches(batch_size), non_physical)
         while True:
             d0 = time.perf_counter()
             batch = next(batches, None)
@@ -625,6 +698,7 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
                 stamps = batch.log_ns
             if first_ns is None:
                 first_ns = int(stamps[0])
+            last_ns = max(last_ns, int(stamps.max()))
             keep = _select(stamps, first_ns, start_s, end_s, segment, left)
             done += len(batch)
             if watch is not None:
@@ -646,6 +720,9 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
             submit(engine.ingest(stamps, gyro_b, temp))
             accel.update(accel_b, engine.counts().rate_hz)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
+        if done and left['before_start'] + left['after_end'] >= done:
+            raise nothing_left_error(start_s=start_s, end_s=end_s, label=label,
+                                     record_end_s=(last_ns - first_ns) / 1e9)
         submit(engine.flush())
         while inflight:
             w0 = time.perf_counter()
@@ -656,9 +733,9 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
         storage, undecodable = reader.storage, reader.undecodable_count
         temperature_topic_used = reader.temperature_topic
     return {'engine': engine, 'warnings': warnings, 'time_source': time_source, 'left': left,
-            'first_ns': first_ns, 'accel': accel, 'rows': rows, 'done': done,
+            'first_ns': first_ns, 'last_ns': last_ns, 'accel': accel, 'rows': rows, 'done': done,
             'frame_id': frame_id, 'storage': storage, 'undecodable': undecodable,
-            'temperature_topic': temperature_topic_used}
+            'temperature_topic': temperature_topic_used, 'non_physical': non_physical}
 
 
 def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_chunk,
@@ -669,22 +746,45 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     done, frame_id, time_source = state['done'], state['frame_id'], state['time_source']
     storage, undecodable = state['storage'], state['undecodable']
     temperature_topic_used = state['temperature_topic']
+    non_physical = state['non_physical']
     start_s, end_s, static = select
     counts = engine.counts()
     accel.update(None, counts.rate_hz)
-    accel_terms = accel.terms(counts.rate_hz)
+    accel_readouts = accel.readouts(counts.rate_hz)
     summaries = engine.summary(allan=config.allan)
     verdicts = engine.health(summaries=summaries) if ref else {}
     tb = counts.timebase
     for text in (tb.warnings if tb is not None else ()):
         warnings.append(text)
         warn(f'{label}: {text}')
+    if counts.out_of_order:
+        text = (f'{counts.out_of_order} stamp(s) earlier than the latest before them: counted as '
+                'out of order, not reordered (each also leaves a one-sample gap)')
+        warnings.append(text)
+        warn(f'{label}: {text}')
+    if counts.longest_gaps:
+        t_s, length_s, missing = counts.longest_gaps[0]
+        text = (f'{counts.gaps} stamp gap(s), {counts.samples_lost} sample(s) missing; the '
+                f'longest {length_s:.6g} s at t = {t_s:.3f} s after the first sample ({missing} '
+                'samples missing)')
+        warnings.append(text)
+        warn(f'{label}: {text}')
     left_out = dict(left)
     if segment is not None and not segment.static_throughout and first_ns is not None:
+        # The segments end on window boundaries; a time range never runs past the last sample.
+        end_ns = min(segment.end_ns, state['last_ns'])
         left_out['static_segment_s'] = [(segment.start_ns - first_ns) / 1e9,
-                                        (segment.end_ns - first_ns) / 1e9]
-        left_out['static_segments_s'] = [[(a - first_ns) / 1e9, (b - first_ns) / 1e9]
+                                        (end_ns - first_ns) / 1e9]
+        left_out['static_segments_s'] = [[(a - first_ns) / 1e9,
+                                          (min(b, state['last_ns']) - first_ns) / 1e9]
                                          for a, b in segment.segments]
+    if any(non_physical.values()):
+        text = (f"{non_physical['gyro']} angular rate value(s) beyond {MAX_RATE_RAD_S:g} rad/s "
+                f"and {non_physical['accel']} specific force value(s) beyond "
+                f'{MAX_SPECIFIC_FORCE_M_S2:g} m/s^2 are not measurements (corrupt record or '
+                'wrong unit): treated as NaN, their chunks left out')
+        warnings.append(text)
+        warn(f'{label}: {text}')
     if counts.chunks and counts.tail_samples > 0.1 * counts.samples:
         size = config.chunk_size
         better = counts.samples // (counts.chunks + 1) if counts.chunks else counts.samples
@@ -709,7 +809,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
     for axis, s in summaries.items():
         per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
         if s.allan is not None:
-            allan_store[(label, axis)] = (s.allan, s.noise_terms)
+            allan_store[(label, axis)] = (s.allan, s.noise_terms, s.readout)
     return {
         'label': label,
         'path': str(path),
@@ -719,6 +819,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         'temperature_topic': temperature_topic_used,
         'messages': done,
         'undecodable_messages': undecodable,
+        'non_physical_values': dict(non_physical),
         'rate_hz': report._json_num(counts.rate_hz),
         'rate_method': counts.rate_method,
         'time_source': time_source,
@@ -735,12 +836,17 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         'gaps': counts.gaps,
         'out_of_order_stamps': counts.out_of_order,
         'clock_steps': counts.clock_steps,
+        'equal_stamps': counts.equal_stamps,
+        'longest_gaps': [{'start_s': t, 'length_s': d, 'missing_samples': m}
+                         for t, d, m in counts.longest_gaps],
         'chunks_cut': counts.chunks,
         'tail_samples': counts.tail_samples,
         'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
         'allan_status': engine.allan_status,
-        'accelerometer_allan': {a: report.allan_terms_dict(t) for a, t in accel_terms.items()},
+        'accelerometer_allan': {a: report.accelerometer_readout_dict(r)
+                                for a, r in accel_readouts.items()},
+        '_accelerometer_readouts': accel_readouts,
         'axes': {
             axis: report.axis_summary_dict(s, verdict=verdicts.get(axis))
             for axis, s in summaries.items()
@@ -781,36 +887,26 @@ class _AccelAllan:
                 acc.update(col[np.isfinite(col)])
         self.pending = []
 
-    def terms(self, rate_hz):
+    def readouts(self, rate_hz):
+        """Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes."""
         if self.acc is None:
             return {}
-        from ..core.allan_readout import fit_noise_terms_band_limited, random_walk_bound
+        from ..core.readout import read_allan
         from ..core.timebase import rescale_allan
 
         out = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                result = rescale_allan(acc.result(), rate_hz)
-                t = fit_noise_terms_band_limited(result)
+                out[axis] = read_allan(rescale_allan(acc.result(), rate_hz))
             except (InputDataError, ParameterError, ValueError):
-                out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to fit
-                continue
-            out[axis] = {
-                'quantization_m_s': t.quantization_rad,
-                'velocity_random_walk_m_s2_per_sqrt_hz': t.angle_random_walk_rad_per_sqrt_s,
-                'bias_instability_m_s2': t.bias_instability_rad_per_s,
-                'acceleration_random_walk_m_s3_per_sqrt_hz': t.rate_random_walk_rad_per_s_sqrt_s,
-                'ramp_m_s3': t.rate_ramp_rad_per_s2,
-                'tau_min_s': t.tau_min_s, 'tau_max_s': t.tau_max_s,
-                'rms_relative_residual': t.rms_relative_residual,
-                'acceleration_random_walk_bound_m_s3_per_sqrt_hz': random_walk_bound(result)}
+                out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to read
         return out
 
 
-def _write_allan_outputs(out, doc, allan_store, figures):
+def _write_allan_outputs(out, doc, allan_store, accel_readouts, figures):
     """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
     entries, fig_series = [], {}
-    for (label, axis), (result, terms) in allan_store.items():
+    for (label, axis), (result, terms, _) in allan_store.items():
         tau, adev, lo, hi, n = report.allan_curve(result)
         entries.append((label, axis, tau, adev, lo, hi, n))
         fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi,
@@ -818,39 +914,23 @@ def _write_allan_outputs(out, doc, allan_store, figures):
     report.write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
-    density, walk = report.allan_kalibr([allan_store[(first['label'], a)][1] for a in first['axes']
-                                         if (first['label'], a) in allan_store])
-    acc_terms = [t for t in first.get('accelerometer_allan', {}).values() if t]
-    acc_density = max((t['velocity_random_walk_m_s2_per_sqrt_hz'] for t in acc_terms
-                       if t.get('velocity_random_walk_m_s2_per_sqrt_hz') is not None),
-                      default=None)
-    acc_walk = max((t['acceleration_random_walk_m_s3_per_sqrt_hz'] for t in acc_terms
-                    if t.get('acceleration_random_walk_m_s3_per_sqrt_hz') is not None),
-                   default=None)
-    from ..core.allan_readout import random_walk_bound
-
-    walk_note = acc_walk_note = ''
-    if not (walk and math.isfinite(walk)):
-        bounds = [random_walk_bound(allan_store[(first['label'], a)][0]) for a in first['axes']
-                  if (first['label'], a) in allan_store]
-        bounds = [b for b in bounds if math.isfinite(b)]
-        if bounds:
-            walk = max(bounds)
-            walk_note = ('upper bound: the record does not resolve a rate random walk; K <= upper '
-                         'ADEV bound at the longest tau * sqrt(3 / tau) (docs/offline_tool.md)')
-    if acc_terms and not (acc_walk and math.isfinite(acc_walk)):
-        bounds = [t['acceleration_random_walk_bound_m_s3_per_sqrt_hz'] for t in acc_terms
-                  if t.get('acceleration_random_walk_bound_m_s3_per_sqrt_hz') is not None]
-        bounds = [b for b in bounds if math.isfinite(b)]
-        if bounds:
-            acc_walk = max(bounds)
-            acc_walk_note = 'upper bound, not resolved by the record (as for the gyroscope)'
-    report.write_imu_yaml(out / 'imu.yaml', rostopic=first['topic'],
+    gyro = [allan_store[(first['label'], a)][2] for a in first['axes']
+            if (first['label'], a) in allan_store]
+    record_s = first['duration_s']
+    accel = accel_readouts.get(first['label']) or {}
+    accel_noise = (report.kalibr_noise(list(accel.values()), record_s=record_s)
+                   if any(r is not None for r in accel.values()) else None)
+    topic, note = first['topic'], ''
+    if first['storage'] in ('csv', 'ulog'):
+        # a table or a ULog has no ROS topic: name the usual raw IMU topic and say so
+        topic = report.DEFAULT_IMU_TOPIC
+        what = (f"a {first['storage']} file" if first['topic'] == first['storage']
+                else f"a {first['storage']} file ({first['topic']})")
+        note = f'the input was {what}, not a bag: set the topic your IMU driver publishes'
+    report.write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
                           update_rate_hz=first['rate_hz'] or float('nan'),
-                          gyroscope_noise_density=density, gyroscope_random_walk=walk,
-                          accelerometer_noise_density=acc_density,
-                          accelerometer_random_walk=acc_walk, gyroscope_random_walk_note=walk_note,
-                          accelerometer_random_walk_note=acc_walk_note,
+                          gyroscope=report.kalibr_noise(gyro, record_s=record_s),
+                          accelerometer=accel_noise,
                           source=f"from bag {first['label']} ({first['path']}), largest over axes "
                           f"{', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
@@ -959,6 +1039,7 @@ def _print_summary(doc):
             f"{1e3 * (b['stamp_jitter_s'] or float('nan')):.3g} ms), {b['samples_lost']} lost in "
             f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
             f"{b['out_of_order_stamps']} out-of-order stamp(s), "
+            f"{b['equal_stamps']} equal to the one before, "
             f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():
             line = (f"  {axis}: {a['chunks']} chunks, drift "
@@ -966,6 +1047,9 @@ def _print_summary(doc):
                     f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} "
                     '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "
                     f"{_order_text(a, 'alpha_corr')}")
+            sheet = a.get('allan_datasheet')
+            if sheet:
+                line += ', ' + report.readout_text(sheet)
             if a['nan_samples']:
                 line += f", {a['nan_samples']} NaN sample(s)"
             if 'health' in a:

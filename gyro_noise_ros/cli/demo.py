@@ -47,8 +47,11 @@ Demo settings, and why (every one is an ordinary parameter of the tools):
   process is not scheduled for tens of milliseconds; the losses are still counted and printed, but
   they should not hide the drift story. ``docs/demo.md`` explains how to read them.
 
-Exit status: 0 when the story ran and the report was written; 1 when a component failed (its log is
-named) or the drift was not detected; 130 on Ctrl-C. Every subprocess is stopped on every path.
+Exit status: 0 when the story ran and the report was written; 1 when a component failed (its log
+is named) or the drift was not detected; 2 for a bad option; 6 when ``--out`` cannot be used (a
+file, a folder that is not a previous demo output, not writable); 130 on Ctrl-C. Every subprocess
+is stopped on every path. ``GYRO_NOISE_DEMO.txt`` in ``--out`` says whether the run finished; the
+report folder appears only complete (``gyro_noise_analyze`` stages its files).
 """
 
 import argparse
@@ -65,10 +68,11 @@ import sys
 import threading
 import time
 
-from ._common import run_cli
+from ._common import check_out_option, run_cli
 from .. import rosgraph
-from ..errors import GyroNoiseError
+from ..errors import GyroNoiseError, OutputError, ParameterError
 from ..monitor_lines import parse_axis_parts
+from ..outputs import atomic_write_text
 
 PROG = 'gyro_noise_demo'
 _MARKER = 'GYRO_NOISE_DEMO.txt'
@@ -158,18 +162,29 @@ def _free_port():
 
 def _prepare_out(out):
     out = Path(out)
-    if out.exists():
-        if not out.is_dir():
-            raise DemoError(f'--out {str(out)!r} exists and is not a directory')
-        if any(out.iterdir()) and not (out / _MARKER).exists():
-            raise DemoError(
-                f'--out {str(out)!r} exists and is not a previous demo output; choose another')
+    check_out_option(out)
+    if out.exists() and any(out.iterdir()) and not (out / _MARKER).exists():
+        raise OutputError(
+            f'--out {str(out)!r} exists and is not a previous demo output; choose another')
+    try:
         for name in ('recording', 'report', 'logs'):
-            shutil.rmtree(out / name, ignore_errors=True)
-    (out / 'logs').mkdir(parents=True, exist_ok=True)
-    (out / _MARKER).write_text('Written by gyro_noise_ros.cli.demo; the next demo run replaces '
-                               'this directory.\n')
+            if (out / name).is_dir():
+                shutil.rmtree(out / name)
+            elif (out / name).exists():
+                (out / name).unlink()
+        (out / 'logs').mkdir(parents=True, exist_ok=True)
+        _mark(out, finished=False)
+    except OSError as err:
+        raise OutputError(f'--out {str(out)!r} cannot be prepared: {err.strerror or err}') from err
     return out
+
+
+def _mark(out, *, finished):
+    """Say in the marker file whether the demo output is complete (a stopped run is not)."""
+    state = ('finished: the report is complete' if finished else
+             'NOT FINISHED: a run is going on, or was stopped or failed')
+    atomic_write_text(out / _MARKER, f'Written by gyro_noise_ros.cli.demo; {state}. The next '
+                      'demo run replaces this directory.\n')
 
 
 class Processes:
@@ -271,7 +286,8 @@ def _reader(stream, lines):
 def _body(argv):
     args = build_parser().parse_args(argv)
     if args.domain_id is not None and not 0 <= args.domain_id <= 232:
-        raise DemoError(f'--domain-id must be in [0, 232], got {args.domain_id}')
+        raise ParameterError(f'--domain-id must be a ROS_DOMAIN_ID in 0..232, got '
+                             f'{args.domain_id}')
     # Held until the demo ends: another demo, a test run or a bench on this host skips it.
     lease = rosgraph.lease_domain() if args.domain_id is None else None
     try:
@@ -284,7 +300,9 @@ def _body(argv):
 def _demo(args, domain):
     story = QUICK if args.quick else FULL
     if not 0.1 <= args.speed <= 100:
-        raise DemoError(f'--speed must be in [0.1, 100], got {args.speed}')
+        raise ParameterError(f'--speed must be in [0.1, 100], got {args.speed}')
+    if args.jobs < 1:
+        raise ParameterError(f'--jobs must be >= 1, got {args.jobs}')
     out = _prepare_out(args.out)
     env = rosgraph.isolated_env(domain, dict(os.environ, PYTHONUNBUFFERED='1'))
     port = _free_port()
@@ -366,9 +384,15 @@ def _demo(args, domain):
         done = subprocess.run(cmd, env=env, stdin=subprocess.DEVNULL, timeout=900)
     except subprocess.TimeoutExpired as err:
         raise DemoError('gyro_noise_analyze took more than 15 minutes') from err
+    if done.returncode == 130:
+        raise KeyboardInterrupt
     if done.returncode != 0:
         raise DemoError(
             f'gyro_noise_analyze failed with exit code {done.returncode}: {" ".join(cmd)}')
+    if not (report / 'summary.json').is_file():
+        # never exit 0 having analysed nothing
+        raise DemoError(f'gyro_noise_analyze exited 0 but wrote no {report / "summary.json"}')
+    _mark(out, finished=True)
     _print_outputs(report, time.monotonic() - t_start)
     return 0
 

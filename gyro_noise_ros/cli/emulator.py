@@ -30,13 +30,17 @@ Examples::
         --disconnect-every-s 10
     portenta_emulator --write-sd logs/ --duration-s 60 --sd-file-bytes 1000000 --helium-delay-s 10
 
-Exit status 0 on SIGINT/SIGTERM or at the end of ``--samples``/``--duration-s``.
+Exit status 0 on SIGINT/SIGTERM or at the end of ``--samples``/``--duration-s``; 2 for a bad
+option, 5 when the link cannot be served, 6 when an output (``--write-sd``, ``--write-bag``,
+``--truth-out``, ``--stats-out``) cannot be written (see ``cli/_common.py``).
 """
 
 import argparse
 import dataclasses
+import functools
 import json
 import os
+from pathlib import Path
 import pty
 import select
 import signal
@@ -49,8 +53,9 @@ import tty
 import numpy as np
 
 from ._common import run_cli
-from ._scenario import add_scenario_arguments, scenario_from_args, write_bag
-from ..errors import LinkError, ParameterError
+from ._scenario import (add_scenario_arguments, scenario_from_args, THERMAL_CHOICES,
+                        thermal_from_args, write_bag)
+from ..errors import LinkError, OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.emulator import (
     BoardModel,
@@ -66,6 +71,7 @@ from ..link.emulator import (
 )
 from ..link.protocol import encode_samples, MAX_SAMPLES_PER_FRAME
 from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
+from ..outputs import atomic_write_text, make_out_dir
 
 PROG = 'portenta_emulator'
 #: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in
@@ -151,13 +157,16 @@ def build_parser():
                        help='delay before the rise (s)')
     noise.add_argument('--helium-tau-s', type=float, default=7200.0,
                        help='time constant of the rise (s)')
-    noise.add_argument('--thermal', choices=('off', 'oven'), default='off',
-                       help='oven: the thermal model of docs/thermal_data.md (paper 002 oven '
-                            'profile from --temp-c, die lag, bias from temperature and its '
-                            'rate, hysteresis) replaces --temp-drift-c-per-h and '
+    noise.add_argument('--thermal', choices=THERMAL_CHOICES, default='off',
+                       help='the thermal model of docs/thermal_data.md (die lag, bias from '
+                            'temperature and its rate, hysteresis, accelerometer offset) with '
+                            'an oven profile: oven (paper 002, from --temp-c), heating, '
+                            'cooling, staircase, staircase_down, cycle, cool_reheat, soak, '
+                            'sine; replaces --temp-drift-c-per-h and '
                             '--temp-sensitivity-dps-per-c')
     noise.add_argument('--thermal-compress', type=float, default=60.0,
-                       help='run the ~14 h oven experiment this many times faster')
+                       help='run the thermal profile this many times faster (the ~14 h oven '
+                            'in 14 min at 60)')
     noise.add_argument('--vibration-hz', type=float, default=0.0,
                        help='sinusoidal vibration frequency (Hz)')
     noise.add_argument('--vibration-dps', type=_float_list, default=0.0,
@@ -218,17 +227,7 @@ def board_from_args(args):
                       temperature_c=args.temp_c, temp_drift_c_per_h=args.temp_drift_c_per_h,
                       temp_sensitivity_dps_per_c=args.temp_sensitivity_dps_per_c, helium=helium,
                       vibration=vibration, clock_ppm=args.clock_ppm, seq0=args.seq0,
-                      t0_us=args.t0_us, thermal=_thermal_from_args(args), **extra)
-
-
-def _thermal_from_args(args):
-    """Build the ThermalStream of ``--thermal oven`` (25 degC bias left to --bias-dps), or None."""
-    if getattr(args, 'thermal', 'off') == 'off':
-        return None
-    from ..thermal.simulate import ThermalModel, ThermalStream
-
-    return ThermalStream(ThermalModel(bias_dps=0.0), compress=args.thermal_compress,
-                         room_c=args.temp_c)
+                      t0_us=args.t0_us, thermal=thermal_from_args(args), **extra)
 
 
 def _check_args(args):
@@ -254,6 +253,13 @@ def _check_args(args):
     compress = args.thermal_compress
     if args.thermal != 'off' and not (np.isfinite(compress) and compress > 0):
         raise ParameterError(f'--thermal-compress must be > 0, got {args.thermal_compress}')
+    for option, path in (('--truth-out', args.truth_out), ('--stats-out', args.stats_out)):
+        if path is None:
+            continue
+        if Path(path).is_dir():
+            raise OutputError(f'{option} {path!r} is a folder, not a file')
+        if not Path(path).parent.is_dir():
+            raise OutputError(f'{option} {path!r}: its folder does not exist')
     if args.tcp and args.write_sd:
         raise ParameterError('--tcp and --write-sd exclude each other')
     if args.link and (args.tcp or args.write_sd):
@@ -468,10 +474,7 @@ def _write_stats(args, counters, faults, board, extra=None):
         data.update(extra)
     line = json.dumps(data, sort_keys=True)
     if args.stats_out:
-        tmp = args.stats_out + '.tmp'
-        with open(tmp, 'w', encoding='utf-8') as fh:
-            fh.write(line + '\n')
-        os.replace(tmp, args.stats_out)
+        atomic_write_text(args.stats_out, line + '\n')
     return line
 
 
@@ -484,9 +487,9 @@ def _total_samples(args, board):
     return min(limits) if limits else None
 
 
-def _run_sd(args, board, faults, truth_fh, counters):
+def _run_sd(args, board, truth_fh, counters, *, faults):
     total = _total_samples(args, board)
-    os.makedirs(args.write_sd, exist_ok=True)
+    make_out_dir(args.write_sd, option='--write-sd')
     corrupt = faults.corrupt if args.corrupt_rate > 0 else None
     with SdLogWriter(args.write_sd, sequence_id=args.sequence_id, odr_hz=board.odr_hz,
                      gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g,
@@ -649,12 +652,19 @@ def _body(argv):
     counters = _Counters()
     stopper = _Stopper()
     old = {sig: signal.signal(sig, stopper) for sig in (signal.SIGINT, signal.SIGTERM)}
-    truth_fh = open(args.truth_out, 'ab') if args.truth_out else None
     try:
-        if args.write_bag:
-            code = write_bag(args, board, truth_fh, counters)
-        elif args.write_sd:
-            code = _run_sd(args, board, faults, truth_fh, counters)
+        truth_fh = open(args.truth_out, 'ab') if args.truth_out else None
+    except OSError as err:
+        raise OutputError(f'--truth-out {args.truth_out!r} cannot be written: '
+                          f'{err.strerror or err}') from err
+    try:
+        if args.write_bag or args.write_sd:
+            try:
+                run = write_bag if args.write_bag else functools.partial(_run_sd, faults=faults)
+                code = run(args, board, truth_fh, counters)
+            except OSError as err:  # an SD file, the bag or the truth log: nothing is read
+                where = f' ({err.filename})' if err.filename else ''
+                raise OutputError(f'cannot write: {err.strerror or err}{where}') from err
         else:
             code = _serve(args, board, faults, truth_fh, counters, stopper)
     finally:
@@ -662,8 +672,10 @@ def _body(argv):
             truth_fh.close()
         for sig, handler in old.items():
             signal.signal(sig, handler)
-        line = _write_stats(args, counters, faults, board)
-        print(f'{PROG}: {line}', file=sys.stderr, flush=True)
+        if counters.samples_generated or sys.exc_info()[0] is None:
+            # (a refusal before the first sample says only its one error line)
+            line = _write_stats(args, counters, faults, board)
+            print(f'{PROG}: {line}', file=sys.stderr, flush=True)
     return code
 
 

@@ -19,35 +19,31 @@ Usage::
 
     gyro_noise_excitation BAG [BAG_AFTER] --sensor accel|gyro --axis x|y|z
         (--dwell FREQ_HZ | --sweep F0_HZ F1_HZ RATE_HZ_S) [--reference-topic T] [--topic T]
-        [--harmonics H] --out DIR
+        [--harmonics H] [--frequency-tol FRACTION] [--alpha P] --out DIR
 
 Sine dwell: estimated frequency and amplitude, per-cycle amplitude statistics (the paper's
-"amplitude stability") and THD. Sine sweep: amplitude against instantaneous frequency, rising and
-falling, and its deviation from the reference channel (``--reference-topic``: a second
-``sensor_msgs/Imu`` topic in the same bag, e.g. the shaker's feedback accelerometer, same axis)
-when one is recorded. With BAG_AFTER, before and after side by side. Writes ``excitation.json``,
-``excitation.md`` and ``excitation_before.png`` (``excitation_after.png``): the whole acquisition
-and the waveform detail (paper Figures 7-12). Methods: :mod:`gyro_noise_ros.calibration.
-excitation`.
+"amplitude stability") and THD, each with the value noise alone would give and a verdict
+(steady, clean). Sine sweep: amplitude against instantaneous frequency, rising and falling, and
+its deviation from the reference channel (``--reference-topic``: a second ``sensor_msgs/Imu``
+topic in the same bag, e.g. the shaker's feedback accelerometer, same axis) when one is
+recorded, with gain and flatness verdicts. A record that is not the excitation asked for (a
+dwell at another frequency, a dwell record analysed as a sweep) is refused. With BAG_AFTER,
+before and after side by side. The workflow is :mod:`gyro_noise_ros.app.excitation`; writes
+``excitation.json``, ``excitation.md`` and ``excitation_before.png`` (``excitation_after.png``).
 
-Exit codes: 0 ok, 2 bad option (frequency at or above Nyquist), 3 unreadable recording,
-4 data cannot be analysed (NaN/Inf samples, fewer than 3 cycles, no sine above the noise).
+Exit codes: 0 ok, 2 bad option (frequency at or above Nyquist), 3 unreadable recording, 4 data
+cannot be analysed (NaN/Inf samples, fewer than 3 cycles, no sine above the noise, not the
+excitation asked for), 6 ``--out`` cannot be written (checked before reading anything).
 """
 
 import argparse
-import json
-import math
 import os
 import sys
 
-import numpy as np
-
 from ._common import run_cli
-from .. import __version__
-from ..calibration import records
-from ..calibration.excitation import DEFAULT_HARMONICS, sine_dwell, sine_sweep
-from ..calibration.sixpos import STANDARD_GRAVITY
-from ..errors import ParameterError
+from ..app.excitation import ExcitationParams, run_excitation, write_excitation
+from ..calibration.excitation import DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS
+from ..outputs import make_out_dir
 
 PROG = 'gyro_noise_excitation'
 
@@ -77,219 +73,43 @@ def build_parser():
     p.add_argument('--topic', help='sensor_msgs/Imu topic of the sensor under test')
     p.add_argument('--harmonics', type=int, default=DEFAULT_HARMONICS,
                    help='harmonics in the THD (those below Nyquist)')
+    p.add_argument('--frequency-tol', type=float, default=DEFAULT_FREQUENCY_TOL,
+                   metavar='FRACTION',
+                   help='largest relative difference between --dwell and the measured frequency')
+    p.add_argument('--alpha', type=float, default=DEFAULT_ALPHA, metavar='P',
+                   help='false-alarm probability of each verdict')
     p.add_argument('--rate-hz', type=float, help='nominal sample rate (default: from the stamps)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
     return p
 
 
-def _channel(args, accel, gyro):
-    i = 'xyz'.index(args.axis)
-    return (accel if args.sensor == 'accel' else gyro)[:, i]
-
-
-def _lst(a):
-    return [None if not math.isfinite(float(v)) else float(v) for v in np.ravel(a)]
-
-
-def analyze(path, args):
-    """
-    Analyse one recording; return (JSON entry, result, t, x).
-
-    Parameters
-    ----------
-    path : path
-        Recording.
-    args : argparse.Namespace
-        Parsed options.
-
-    Returns
-    -------
-    tuple
-
-    """
-    rate, t, accel, gyro = records.read_imu(path, topic=args.topic, rate_hz=args.rate_hz)
-    x = _channel(args, accel, gyro)
-    u = 'm_s2' if args.sensor == 'accel' else 'rad_s'
-    entry = {'source': str(path), 'rate_hz': rate, 'samples': int(x.size)}
-    if args.dwell is not None:
-        r = sine_dwell(x, rate, args.dwell, harmonics=args.harmonics)
-        entry.update({
-            'frequency_hz': r.frequency_hz, f'amplitude_{u}': r.amplitude,
-            f'offset_{u}': r.offset, f'cycle_amplitude_mean_{u}': r.cycle_amplitude_mean,
-            f'cycle_amplitude_std_{u}': r.cycle_amplitude_std,
-            f'cycle_amplitude_min_{u}': r.cycle_amplitude_min,
-            f'cycle_amplitude_max_{u}': r.cycle_amplitude_max,
-            'amplitude_stability': r.amplitude_stability, 'thd': r.thd,
-            f'harmonics_{u}': _lst(r.harmonics), f'residual_rms_{u}': r.residual_rms,
-            'start_s': r.start_s, 'duration_s': r.duration_s, 'cycles': r.cycles})
-        if args.sensor == 'accel':
-            entry['amplitude_g'] = r.amplitude / STANDARD_GRAVITY
-        return entry, r, t, x
-    ref = None
-    if args.reference_topic:
-        # both topics share the bag's clock: absolute stamps, reference put on the sensor's
-        _, ta, _, _ = records.read_imu(path, topic=args.topic, rate_hz=args.rate_hz, t0_ns=0)
-        _, rt, racc, rgyr = records.read_imu(path, topic=args.reference_topic, t0_ns=0)
-        ref = np.interp(ta, rt, _channel(args, racc, rgyr))
-    f0, f1, rate_hz_s = args.sweep
-    r = sine_sweep(x, rate, f0, f1, rate_hz_s, reference=ref)
-    entry.update({'bin_hz': _lst(r.bin_hz), f'amplitude_up_{u}': _lst(r.amplitude_up),
-                  f'amplitude_down_{u}': _lst(r.amplitude_down)})
-    if ref is not None:
-        entry.update({f'reference_up_{u}': _lst(r.reference_up),
-                      f'reference_down_{u}': _lst(r.reference_down),
-                      'deviation_up': _lst(r.deviation_up),
-                      'deviation_down': _lst(r.deviation_down)})
-        dev = np.concatenate([r.deviation_up, r.deviation_down])
-        dev = dev[np.isfinite(dev)]
-        entry['max_abs_deviation'] = float(np.max(np.abs(dev))) if dev.size else None
-    return entry, r, t, x
-
-
-def plot(path, args, label, result, t, x):
-    """
-    Draw the whole acquisition and the waveform detail (paper 001 Figures 7-12).
-
-    Parameters
-    ----------
-    path : path
-        PNG file.
-    args : argparse.Namespace
-        Parsed options.
-    label : str
-        'before' or 'after'.
-    result : DwellResult or SweepResult
-        Analysis.
-    t, x : numpy.ndarray
-        Time (s) and samples.
-
-    """
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
-    scale, unit = ((1.0 / STANDARD_GRAVITY, 'g') if args.sensor == 'accel' else
-                   (180.0 / math.pi, 'deg/s'))
-    fig, (pa, pb) = plt.subplots(1, 2, figsize=(11, 4.2))
-    pa.plot(t, x * scale, lw=0.5)
-    pa.set_xlabel('time (s)')
-    pa.set_ylabel(f'{args.sensor} {args.axis} ({unit})')
-    pa.set_title(f'(a) whole acquisition, {label}')
-    if args.dwell is not None:
-        lo = int(result.start_s * len(t) / max(t[-1], 1e-9))
-        n = int(4 * len(t) / max(t[-1], 1e-9) / result.frequency_hz)
-        pb.plot(t[lo:lo + n], x[lo:lo + n] * scale, '.-', lw=0.8, ms=3)
-        pb.set_xlabel('time (s)')
-        pb.set_title(f'(b) wave form: {result.frequency_hz:.3f} Hz, amplitude '
-                     f'{result.amplitude * scale:.4g} {unit}, THD {100 * result.thd:.2f} %',
-                     fontsize=9)
-    else:
-        pb.plot(result.bin_hz, result.amplitude_up * scale, 'o-', label='rising frequency')
-        pb.plot(result.bin_hz, result.amplitude_down * scale, 's-', label='falling frequency')
-        if result.reference_up is not None:
-            pb.plot(result.bin_hz, result.reference_up * scale, 'k--', lw=1, label='reference')
-        pb.set_xlabel('instantaneous frequency (Hz)')
-        pb.set_ylabel(f'amplitude ({unit})')
-        pb.set_title('(b) amplitude against frequency', fontsize=9)
-        pb.legend(fontsize=8)
-    for panel in (pa, pb):
-        panel.grid(True, alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def markdown(doc):
-    """
-    Return ``excitation.md``.
-
-    Parameters
-    ----------
-    doc : dict
-        The ``excitation.json`` document.
-
-    Returns
-    -------
-    str
-
-    """
-    sides = [s for s in ('before', 'after') if doc.get(s)]
-    out = [f'# Excitation check ({doc["mode"]}, {doc["sensor"]} {doc["axis"]})', '',
-           '| quantity | ' + ' | '.join(sides) + ' |', '|---|' + '---|' * len(sides)]
-    keys = [k for k in doc[sides[0]] if not isinstance(doc[sides[0]][k], list)
-            and k not in ('source',)]
-    for k in keys:
-        vals = []
-        for s in sides:
-            v = doc[s].get(k)
-            vals.append(f'{v:.6g}' if isinstance(v, float) else str(v))
-        out.append(f'| {k} | ' + ' | '.join(vals) + ' |')
-    if doc['mode'] == 'sweep':
-        u = doc['unit']
-        for s in sides:
-            e = doc[s]
-            out += ['', f'## {s}: amplitude per frequency bin ({u})', '',
-                    '| f (Hz) | rising | falling | deviation rising | deviation falling |',
-                    '|---|---|---|---|---|']
-            for k, f in enumerate(e['bin_hz']):
-                def g(name):
-                    v = e.get(name)
-                    return 'n/a' if v is None or v[k] is None else f'{v[k]:.4g}'
-                out.append(f'| {f:.3f} | {g(f"amplitude_up_{u}")} | {g(f"amplitude_down_{u}")} '
-                           f'| {g("deviation_up")} | {g("deviation_down")} |')
-    if doc.get('change'):
-        out += ['', 'Change after/before: ' + ', '.join(
-            f'{k} {v:+.4g}' for k, v in doc['change'].items() if v is not None)]
-    return '\n'.join(out) + '\n'
-
-
 def _body(argv):
     args = build_parser().parse_args(argv)
-    if len(args.bags) > 2:
-        raise ParameterError(f'give one recording, or two (before and after); got '
-                             f'{len(args.bags)}')
-    if args.harmonics < 1:
-        raise ParameterError(f'--harmonics must be >= 1, got {args.harmonics}')
-    if args.reference_topic and args.dwell is not None:
-        raise ParameterError('--reference-topic applies to --sweep')
-    u = 'm_s2' if args.sensor == 'accel' else 'rad_s'
-    doc = {'sensor': args.sensor, 'axis': args.axis,
-           'mode': 'dwell' if args.dwell is not None else 'sweep', 'unit': u,
-           'nominal': ({'frequency_hz': args.dwell} if args.dwell is not None else
-                       dict(zip(('f0_hz', 'f1_hz', 'rate_hz_s'), args.sweep))),
-           'version': __version__}
-    plots = []
-    for side, path in zip(('before', 'after'), args.bags):
-        entry, res, t, x = analyze(path, args)
-        doc[side] = entry
-        plots.append((side, res, t, x))
-    if 'after' in doc and args.dwell is not None:
-        b, a = doc['before'], doc['after']
-        doc['change'] = {
-            'amplitude_relative': a[f'amplitude_{u}'] / b[f'amplitude_{u}'] - 1.0,
-            'frequency_hz': a['frequency_hz'] - b['frequency_hz'],
-            'amplitude_stability': a['amplitude_stability'] - b['amplitude_stability'],
-            'thd': a['thd'] - b['thd']}
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'excitation.json'), 'w') as fh:
-        json.dump(doc, fh, indent=2)
-    with open(os.path.join(args.out, 'excitation.md'), 'w') as fh:
-        fh.write(markdown(doc))
-    if not args.no_figures:
-        for side, res, t, x in plots:
-            plot(os.path.join(args.out, f'excitation_{side}.png'), args, side, res, t, x)
-    for side, _, _, _ in plots:
-        e = doc[side]
-        if args.dwell is not None:
-            print(f'{side}: {e["frequency_hz"]:.4f} Hz, amplitude {e[f"amplitude_{u}"]:.5g} '
-                  f'{u}, amplitude stability {100 * e["amplitude_stability"]:.2f} %, '
-                  f'THD {100 * e["thd"]:.2f} %')
+    params = ExcitationParams(
+        paths=tuple(args.bags), sensor=args.sensor, axis=args.axis, dwell_hz=args.dwell,
+        sweep=args.sweep, reference_topic=args.reference_topic, topic=args.topic,
+        harmonics=args.harmonics, rate_hz=args.rate_hz, frequency_tol=args.frequency_tol,
+        alpha=args.alpha, figures=not args.no_figures)
+    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+    result = run_excitation(params)
+    write_excitation(result, args.out)
+    k, unit = params.display
+    for side, res in result.sides.items():
+        r = res.analysis
+        if params.mode == 'dwell':
+            print(f'{side}: {r.frequency_hz:.4f} Hz, amplitude {r.amplitude * k:.5g} {unit}, '
+                  f'amplitude stability {100 * r.amplitude_stability:.3f} % '
+                  f'({"steady" if r.steady else "UNSTEADY"}), THD {100 * r.thd:.3f} % '
+                  f'({"clean" if r.clean else "DISTORTED"})')
+        elif r.reference_up is None:
+            print(f'{side}: sweep analysed in {len(r.bin_hz)} bins (no reference)')
         else:
-            dev = e.get('max_abs_deviation')
-            print(f'{side}: sweep analysed in {len(e["bin_hz"])} bins' + (
-                '' if dev is None else f', largest deviation from the reference '
-                f'{100 * dev:.2f} %'))
+            print(f'{side}: sweep analysed in {len(r.bin_hz)} bins, mean deviation from the '
+                  f'reference {100 * r.mean_deviation:+.3f} +/- '
+                  f'{100 * r.mean_deviation_sigma:.3f} % '
+                  f'({"matches" if r.matches_reference else "GAIN DIFFERS"}, '
+                  f'{"flat" if r.flat else "FREQUENCY-DEPENDENT"})')
     print(f'wrote {os.path.join(args.out, "excitation.json")}, excitation.md')
     return 0
 

@@ -34,9 +34,15 @@ import argparse
 from pathlib import Path
 import sys
 
-from ._common import run_cli
+from ._common import check_out_option, run_cli
 
 PROG = 'gyro_noise_explain'
+#: Most ensemble members or bootstrap records: each costs a simulated copy of the record (time
+#: and memory), 16 and 20 are the defaults; beyond this the number is a typo, not a wish.
+MAX_RECORDS = 10000
+#: Sample rates --rate-hz accepts (Hz): every gyro samples inside; outside, the record's times
+#: overflow or vanish in floating point.
+RATE_RANGE_HZ = (1e-3, 1e9)
 
 
 def build_parser():
@@ -76,29 +82,27 @@ def build_parser():
 
 
 def _check_options(args):
-    """Refuse bad options before the (possibly long) load of the input."""
-    from pathlib import Path
-
+    """Refuse bad options and an unusable --out before the (possibly long) load of the input."""
     from ..errors import ParameterError
 
-    if args.ensemble < 4:
-        raise ParameterError(f'--ensemble must be >= 4 members, got {args.ensemble}')
+    if not 4 <= args.ensemble <= MAX_RECORDS:
+        raise ParameterError(f'--ensemble must be 4 to {MAX_RECORDS} members, got {args.ensemble}')
     if args.max_steps < 0:
         raise ParameterError(f'--max-steps must be >= 0, got {args.max_steps}')
     if args.seed < 0:
         raise ParameterError(f'--seed must be >= 0, got {args.seed}')
-    if args.bootstrap != 0 and args.bootstrap < 5:
-        raise ParameterError(f'--bootstrap must be 0 (off) or >= 5 records, got {args.bootstrap}')
-    if args.rate_hz is not None and not (args.rate_hz > 0 and args.rate_hz < float('inf')):
-        raise ParameterError(f'--rate-hz must be a positive number, got {args.rate_hz}')
+    if args.bootstrap != 0 and not 5 <= args.bootstrap <= MAX_RECORDS:
+        raise ParameterError(f'--bootstrap must be 0 (off) or 5 to {MAX_RECORDS} records, got '
+                             f'{args.bootstrap}')
+    if args.rate_hz is not None and not RATE_RANGE_HZ[0] <= args.rate_hz <= RATE_RANGE_HZ[1]:
+        raise ParameterError(f'--rate-hz must be {RATE_RANGE_HZ[0]:g} to {RATE_RANGE_HZ[1]:g} Hz, '
+                             f'got {args.rate_hz}')
     for name, value in (('--start', args.start), ('--end', args.end)):
         if value is not None and not (value >= 0 and value < float('inf')):
             raise ParameterError(f'{name} must be a number of seconds >= 0, got {value}')
     if args.start is not None and args.end is not None and args.end <= args.start:
         raise ParameterError(f'--end ({args.end:g} s) must be after --start ({args.start:g} s)')
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f'--out {str(out)!r} exists and is not a directory')
+    check_out_option(args.out)
 
 
 def _left_out_lines(left):
@@ -129,38 +133,60 @@ def _body(argv):
 
 
 def _run(args, map_fn):
+    from contextlib import ExitStack
+
     from ..explain.inputs import available_axes, load_input, select
-    from ..explain.report import parameter_lines, verdict, write_outputs
+    from ..explain.report import parameter_lines, verdict, write_files
     from ..explain.workflow import explain
+    from ..outputs import staged_output
 
     axes = available_axes(args.input) if args.axis == 'all' else (args.axis,)
     progress = None if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
     out_root = Path(args.out)
     results = {}
-    for k, axis in enumerate(axes):
-        meas = load_input(args.input, topic=args.topic, temperature_topic=args.temperature_topic,
-                          axis=axis, rate_hz=args.rate_hz,
-                          require_temperature=args.require_temperature)
-        meas, left = select(meas, start_s=args.start, end_s=args.end, static=args.static)
-        if k == 0:
-            for text in _left_out_lines(left) + list(meas.timebase.warnings if meas.timebase
-                                                     else ()):
-                print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
-        if progress is not None and len(axes) > 1:
-            progress(f'axis {axis} ({k + 1} of {len(axes)})')
-        result = explain(meas, seed=args.seed, ensemble=args.ensemble, max_steps=args.max_steps,
-                         bootstrap=args.bootstrap, progress=progress, mapper=map_fn)
-        out = write_outputs(result, out_root / f'axis_{axis}' if len(axes) > 1 else out_root)
-        results[axis] = (result, out)
-        print(f'{PROG}: axis {axis}: {verdict(result)} ({out / "explain.json"})')
-        for line in parameter_lines(result):
-            print(f'{PROG}: axis {axis}:   {line}')
-    if len(axes) > 1:
-        _write_index(out_root, results, verdict, parameter_lines)
+    with ExitStack() as stack:
+        stage = None
+        for k, axis in enumerate(axes):
+            meas = load_input(args.input, topic=args.topic,
+                              temperature_topic=args.temperature_topic, axis=axis,
+                              rate_hz=args.rate_hz, require_temperature=args.require_temperature)
+            meas, left = select(meas, start_s=args.start, end_s=args.end, static=args.static)
+            if stage is None:
+                # Created once the input proved readable; every axis is written into it and
+                # published together at the end: an interrupted run leaves no result behind.
+                stage = stack.enter_context(staged_output(out_root))
+            if k == 0:
+                for text in _left_out_lines(left) + list(meas.timebase.warnings if meas.timebase
+                                                         else ()):
+                    print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
+            if progress is not None and len(axes) > 1:
+                progress(f'axis {axis} ({k + 1} of {len(axes)})')
+            result = explain(meas, seed=args.seed, ensemble=args.ensemble,
+                             max_steps=args.max_steps, bootstrap=args.bootstrap,
+                             progress=progress, mapper=map_fn)
+            sub = f'axis_{axis}' if len(axes) > 1 else ''
+            write_files(result, _mkdir(stage / sub))
+            results[axis] = (result, sub)
+            print(f'{PROG}: axis {axis}: {verdict(result)} '
+                  f'({out_root / sub / "explain.json"})')
+            for line in parameter_lines(result):
+                print(f'{PROG}: axis {axis}:   {line}')
+        if len(axes) > 1:
+            _write_index(stage, results, verdict, parameter_lines)
     return 0
 
 
-def _write_index(out_root, results, verdict, parameter_lines):
+def _mkdir(folder):
+    from ..errors import OutputError
+
+    try:
+        folder.mkdir(exist_ok=True)
+    except OSError as err:
+        raise OutputError(f'cannot create {str(folder)!r}: {err.strerror or err}') from err
+    return folder
+
+
+def _write_index(stage, results, verdict, parameter_lines):
     """
     One report for the run.
 
@@ -168,22 +194,27 @@ def _write_index(out_root, results, verdict, parameter_lines):
     """
     import json
 
+    from ..errors import OutputError
+
     lines = ['# gyro_noise_explain: all axes', '']
     for axis, (result, _) in results.items():
         lines.append(f'* axis {axis}: {verdict(result)}')
         lines += [f'  * {line}' for line in parameter_lines(result)]
     index = {'axes': {}}
-    for axis, (result, out) in results.items():
-        sub = out.name
-        text = (out / 'report.md').read_text()
-        text = text.replace('](', f']({sub}/').replace('\n# ', '\n## ')
-        if text.startswith('# '):
-            text = '#' + text
-        lines += ['', f'<!-- axis {axis} -->', text]
-        index['axes'][axis] = {'verdict': verdict(result), 'explain_json': f'{sub}/explain.json',
-                               'report_md': f'{sub}/report.md'}
-    (out_root / 'report.md').write_text('\n'.join(lines) + '\n')
-    (out_root / 'explain.json').write_text(json.dumps(index, indent=2) + '\n')
+    try:
+        for axis, (result, sub) in results.items():
+            text = (stage / sub / 'report.md').read_text()
+            text = text.replace('](', f']({sub}/').replace('\n# ', '\n## ')
+            if text.startswith('# '):
+                text = '#' + text
+            lines += ['', f'<!-- axis {axis} -->', text]
+            index['axes'][axis] = {'verdict': verdict(result),
+                                   'explain_json': f'{sub}/explain.json',
+                                   'report_md': f'{sub}/report.md'}
+        (stage / 'report.md').write_text('\n'.join(lines) + '\n')
+        (stage / 'explain.json').write_text(json.dumps(index, indent=2) + '\n')
+    except OSError as err:
+        raise OutputError(f'cannot write the results: {err.strerror or err}') from err
 
 
 def main(argv=None):

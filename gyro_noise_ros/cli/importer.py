@@ -32,6 +32,10 @@ Time stamps come from the device clock (the 32-bit microsecond counter, unwrappe
 
 Bag time (the storage's receive time) equals the header stamp.
 
+The bag is built under a hidden name beside ``--out`` and renamed when it is complete, so an
+interrupted or failed import leaves nothing that looks like a bag and can simply be run again. A
+log file given twice, or files holding the same samples, are refused before anything is written.
+
 Example::
 
     gyro_noise_import /media/sd/S001F*.GNL --out seq1_bag --storage mcap
@@ -41,17 +45,17 @@ import argparse
 from dataclasses import dataclass
 import os
 import queue
-import shutil
 import sys
 import threading
 
 import numpy as np
 
 from ._common import run_cli
-from ..errors import BagError, InputDataError, ParameterError
+from ..errors import BagError, InputDataError, OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.clock import Unwrapper
 from ..link.sdlog import SdLogReader
+from ..outputs import staged_new_dir
 
 PROG = 'gyro_noise_import'
 #: LSM6DSO32 temperature sensor output data rate (datasheet: 52 Hz).
@@ -228,8 +232,8 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     imu_topic = _topic(topic)
     temp_topic = _topic(temperature_topic) if temperature_rate_hz > 0 else None
     out = os.fspath(out)
-    if os.path.exists(out):
-        raise ParameterError(f'--out {out!r} exists; choose a new bag directory')
+    if os.path.lexists(out):
+        raise OutputError(f'--out {out!r} exists; choose a new bag directory')
     missing = [str(p_) for p_ in paths if not os.path.isfile(p_)]
     if missing:
         raise BagError(f'log file {missing[0]!r} does not exist' + (
@@ -253,71 +257,23 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
     epoch, anchor = _anchor(start_time, reader)
     av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
     la_cov = np.diag([linear_acceleration_variance] * 3).reshape(9)
-    unwrap = Unwrapper()
-    offset_ns = None
-    first = last = None
-    jumps = 0
-    prev_t = None
-    temp_acc = 0.0
-    configs = []
-    written = temp_written = 0
     writer_class = BulkImuBagWriter if bulk else ImuBagWriter
 
-    def open_writer():
-        return writer_class(out, storage=storage, imu_topic=imu_topic,
-                            temperature_topic=temp_topic, frame_id=frame_id)
-
-    with _BagWrites(open_writer, threaded=threads == 2) as writes:
-        for block in reader:
-            if block.samples.size == 0:
-                continue
-            odr = block.odr_hz if block.odr_hz is not None else assumed[0]
-            gfs = gyro_fs_dps if gyro_fs_dps is not None else (block.gyro_fs_dps or assumed[1])
-            afs = accel_fs_g if accel_fs_g is not None else (block.accel_fs_g or assumed[2])
-            if (gfs, afs, odr) not in configs:
-                configs.append((gfs, afs, odr))
-            t = unwrap.unwrap(block.samples['t_us'])
-            if offset_ns is None:
-                if epoch == 'rtc':
-                    # rtc_unix_s is the host time of the header's t_us; unwrap that t_us next to
-                    # ours
-                    d = (int(anchor.t_us) - int(block.samples['t_us'][0])) % (1 << 32)
-                    if d >= 1 << 31:
-                        d -= 1 << 32
-                    offset_ns = anchor.rtc_unix_s * 1_000_000_000 - (int(t[0]) + d) * 1000
-                elif epoch == 'zero':
-                    offset_ns = -int(t[0]) * 1000
-                else:
-                    offset_ns = int(round(anchor * 1e9)) - int(t[0]) * 1000
-            stamps = t * 1000 + offset_ns
-            steps = np.diff(t, prepend=t[0] if prev_t is None else prev_t)
-            if prev_t is None:
-                steps[0] = 1
-            jumps += int(np.count_nonzero(steps <= 0))
-            prev_t = int(t[-1])
-            si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
-            writes.call('write_imu', stamps, si.gyro_rad_s, si.accel_m_s2,
-                        angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
-            written += block.samples.size
-            if temp_topic is not None and odr:
-                # a running phase keeps the decimation even across blocks and ODR changes
-                phase = temp_acc + np.arange(
-                    1, block.samples.size + 1) * (temperature_rate_hz / odr)
-                pick = np.flatnonzero(
-                    np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
-                temp_acc = float(phase[-1]) % 1.0
-                if pick.size:
-                    writes.call('write_temperature', stamps[pick], si.temperature_c[pick],
-                                variance=temperature_variance)
-                    temp_written += pick.size
-            if first is None:
-                first = int(stamps[0])
-            last = int(stamps[-1])
-    rep = reader.report
-    if written == 0:
-        shutil.rmtree(out, ignore_errors=True)
-        raise InputDataError(f'no valid samples in {len(reader.files)} log file(s) '
-                             f'({rep.stats.bytes_discarded} bytes discarded)')
+    # The bag is built under a hidden name and renamed when finished: an interrupted or failed
+    # import leaves nothing that looks like a bag, and a retry with the same --out works.
+    with staged_new_dir(out, option='--out') as stage:
+        with _BagWrites(lambda: writer_class(stage, storage=storage, imu_topic=imu_topic,
+                                             temperature_topic=temp_topic, frame_id=frame_id),
+                        threaded=threads == 2) as writes:
+            first, last, written, temp_written, jumps, configs = _convert(
+                reader, writes, assumed=assumed, gyro_fs_dps=gyro_fs_dps, accel_fs_g=accel_fs_g,
+                epoch=epoch, anchor=anchor, temp_topic=temp_topic,
+                temperature_rate_hz=temperature_rate_hz, temperature_variance=temperature_variance,
+                av_cov=av_cov, la_cov=la_cov)
+        rep = reader.report
+        if written == 0:
+            raise InputDataError(f'no valid samples in {len(reader.files)} log file(s) '
+                                 f'({rep.stats.bytes_discarded} bytes discarded)')
     st = rep.stats
     return ImportReport(bag=out, storage=storage, files=rep.files, samples_written=written,
                         temperature_written=temp_written, samples_lost=st.samples_lost,
@@ -328,6 +284,70 @@ def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
                         missing_file_indices=rep.missing_file_indices, sequence_id=rep.sequence_id,
                         first_stamp_ns=first, last_stamp_ns=last, time_jumps=jumps,
                         configurations=tuple(configs), epoch=epoch)
+
+
+def _convert(reader, writes, *, assumed, gyro_fs_dps, accel_fs_g, epoch, anchor, temp_topic,
+             temperature_rate_hz, temperature_variance, av_cov, la_cov):
+    """
+    Stream the log blocks through the scaling into the bag writes.
+
+    Returns (first stamp, last stamp, Imu written, Temperature written, time jumps,
+    configurations).
+    """
+    unwrap = Unwrapper()
+    offset_ns = None
+    first = last = None
+    jumps = 0
+    prev_t = None
+    temp_acc = 0.0
+    configs = []
+    written = temp_written = 0
+    for block in reader:
+        if block.samples.size == 0:
+            continue
+        odr = block.odr_hz if block.odr_hz is not None else assumed[0]
+        gfs = gyro_fs_dps if gyro_fs_dps is not None else (block.gyro_fs_dps or assumed[1])
+        afs = accel_fs_g if accel_fs_g is not None else (block.accel_fs_g or assumed[2])
+        if (gfs, afs, odr) not in configs:
+            configs.append((gfs, afs, odr))
+        t = unwrap.unwrap(block.samples['t_us'])
+        if offset_ns is None:
+            if epoch == 'rtc':
+                # rtc_unix_s is the host time of the header's t_us; unwrap that t_us next to
+                # ours
+                d = (int(anchor.t_us) - int(block.samples['t_us'][0])) % (1 << 32)
+                if d >= 1 << 31:
+                    d -= 1 << 32
+                offset_ns = anchor.rtc_unix_s * 1_000_000_000 - (int(t[0]) + d) * 1000
+            elif epoch == 'zero':
+                offset_ns = -int(t[0]) * 1000
+            else:
+                offset_ns = int(round(anchor * 1e9)) - int(t[0]) * 1000
+        stamps = t * 1000 + offset_ns
+        steps = np.diff(t, prepend=t[0] if prev_t is None else prev_t)
+        if prev_t is None:
+            steps[0] = 1
+        jumps += int(np.count_nonzero(steps <= 0))
+        prev_t = int(t[-1])
+        si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
+        writes.call('write_imu', stamps, si.gyro_rad_s, si.accel_m_s2,
+                    angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
+        written += block.samples.size
+        if temp_topic is not None and odr:
+            # a running phase keeps the decimation even across blocks and ODR changes
+            phase = temp_acc + np.arange(
+                1, block.samples.size + 1) * (temperature_rate_hz / odr)
+            pick = np.flatnonzero(
+                np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
+            temp_acc = float(phase[-1]) % 1.0
+            if pick.size:
+                writes.call('write_temperature', stamps[pick], si.temperature_c[pick],
+                            variance=temperature_variance)
+                temp_written += pick.size
+        if first is None:
+            first = int(stamps[0])
+        last = int(stamps[-1])
+    return first, last, written, temp_written, jumps, configs
 
 
 #: Blocks (``chunk_bytes`` of log each, about 2.4 MB of arrays per MB of log) that may wait for the
@@ -529,7 +549,11 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status (0 also when corrupt regions were skipped).
+        Exit status: 0 (also when corrupt regions were skipped); 2 bad option (``--chunk-bytes``
+        outside 1..64 MiB included) or a log file named twice; 3 a log file missing; 4 logs that
+        are not one sequence (different sequences, the same file twice, overlapping sample
+        counters) or hold no valid sample; 6 ``--out`` exists or the bag cannot be written; 130
+        interrupted. Whatever the failure, no bag is left under ``--out``.
 
     """
     return run_cli(PROG, _body, argv)

@@ -30,7 +30,9 @@ indicators and the gravity check. Writes ``reliability.json``, ``reliability.md`
 ``fig6_accel.png``, ``fig6_gyro.png`` and ``before/`` ``after/`` calibration files into DIR.
 
 Exit codes: 0 ok (some parts may be undetermined, see the report), 2 bad option or nothing
-given, 3 unreadable recording, 4 nothing could be analysed (every given part failed).
+given, 3 unreadable recording, 4 a static record that cannot be analysed at all (too short for
+the Allan analysis, constant, not static: one line naming it), or every given part failed, 6
+``--out`` cannot be written (checked before reading anything).
 """
 
 import argparse
@@ -41,13 +43,16 @@ import sys
 
 import numpy as np
 
-from . import calibrate as cal
 from ._common import run_cli
 from .. import __version__
+from ..app.calibrate import (CalibrateParams, calibration_files, MG, resolve_gravity,
+                             run_calibration, table6_rows)
 from ..calibration import records
 from ..calibration.interval import compare, DEFAULT_C, DEFAULT_MIN_EDF, DEFAULT_TOLERANCE
+from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, unit_of
 from ..errors import InputDataError, ParameterError
+from ..outputs import atomic_write_text, make_out_dir, staged_output
 
 PROG = 'gyro_noise_reliability'
 PARTS = ('before_calibration', 'before_static', 'after_calibration', 'after_static')
@@ -125,7 +130,26 @@ def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None
             kw = {} if settings is None else {'settings': settings}
             rec = StaticRecord(rate, c=c, source=str(path), min_edf=min_edf, **kw)
         rec.update(t, accel, gyro)
+    if rec is None:
+        raise InputDataError(f'static record {str(path)!r} holds no Imu samples')
     results, check = rec.finish()
+    if not any(r.interval.closed for r in results.values()):
+        # not one channel can give its bias-instability interval: a 20 s record, a constant
+        # one, a six-position record given as static... six "undetermined" and exit 0 would
+        # hide that the record is not what the procedure needs
+        reasons = [r.interval.reason for r in results.values()
+                   if not math.isfinite(r.interval.sigma_min) and r.interval.reason]
+        if reasons:
+            why = reasons[0]
+        else:
+            longest = max(float(np.asarray(r.allan.tau_s)[-1]) for r in results.values()
+                          if r.allan is not None)
+            why = ('record too short: no channel has a bias-instability interval that closes '
+                   f'inside it '
+                   f'(longest tau {longest:.3g} s); a static record must be several times longer '
+                   f'than the interval (hours for a MEMS sensor)')
+        raise InputDataError(f'static record {str(path)!r} ({rec.duration_s:.1f} s, '
+                             f'{rec.samples} samples) cannot be analysed: {why}')
     doc = {'source': str(path), 'rate_hz': rec.rate_hz, 'samples': rec.samples,
            'duration_s': rec.duration_s, **check}
     return results, doc
@@ -223,7 +247,7 @@ def markdown(doc):
     str
 
     """
-    mg = cal.MG
+    mg = MG
     out = ['# Reliability test (paper 001): before / after', '',
            f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
            f'physiological within +/-{100 * doc["tolerance"]:.0f} % of the before width.', '',
@@ -258,8 +282,8 @@ def markdown(doc):
     if cb or ca:
         out += ['', '## Six-position calibration (paper 001 Table 6)', '',
                 '| | before | after |', '|---|---|---|']
-        rows_b = cal.table6_rows(cb) if cb else None
-        rows_a = cal.table6_rows(ca) if ca else None
+        rows_b = table6_rows(cb) if cb else None
+        rows_a = table6_rows(ca) if ca else None
         for k in range(6):
             name = (rows_b or rows_a)[k][0]
             unit = 'mg' if name.startswith('b') else '%'
@@ -277,16 +301,24 @@ def markdown(doc):
                 f'{u(ua, "accel_bias_std_m_s2", 1 / mg, ".3f")} mg |',
                 f'| std of scale factors | {u(ub, "accel_scale_factor_std", 100, ".3f")} % | '
                 f'{u(ua, "accel_scale_factor_std", 100, ".3f")} % |',
-                f'| gravity check raw | '
+                f'| gravity check, mean abs(a) raw (m/s^2) | '
                 f'{u(cb and cb["gravity_check"], "mean_norm_raw_m_s2", 1, ".4f")} | '
                 f'{u(ca and ca["gravity_check"], "mean_norm_raw_m_s2", 1, ".4f")} |',
-                f'| gravity check calibrated | '
-                f'{u(cb and cb["gravity_check"], "mean_norm_calibrated_m_s2", 1, ".4f")} | '
-                f'{u(ca and ca["gravity_check"], "mean_norm_calibrated_m_s2", 1, ".4f")} |']
+                f'| gravity check, leave-one-out calibrated (m/s^2) | '
+                f'{u(cb and cb["gravity_check"], "loo_mean_norm_m_s2", 1, ".5f")} | '
+                f'{u(ca and ca["gravity_check"], "loo_mean_norm_m_s2", 1, ".5f")} |',
+                f'| gravity check verdict | '
+                f'{_verdict(cb)} | {_verdict(ca)} |']
     if doc['errors']:
         out += ['', '## Parts that could not be analysed', '']
         out += [f'- {k}: {v}' for k, v in doc['errors'].items()]
     return '\n'.join(out) + '\n'
+
+
+def _verdict(doc):
+    if doc is None:
+        return 'not given'
+    return 'consistent' if doc['gravity_check']['consistent'] else 'inconsistent'
 
 
 def plot_fig6(path, sensor, before, after, intervals, c):
@@ -359,31 +391,30 @@ def _body(argv):
         raise ParameterError(f'--min-edf must be >= 0, got {args.min_edf}')
     if not (math.isfinite(args.tolerance) and args.tolerance >= 0):
         raise ParameterError(f'--tolerance must be >= 0, got {args.tolerance}')
-    if args.height != 0.0 and args.latitude is None:
-        raise ParameterError('--height needs --latitude')
-    gravity, note, warning = cal.resolve_gravity(args.gravity, args.latitude, args.height)
-    settings = cal.DetectorSettings(min_static_s=args.min_static_s)
-    errors, cals, statics, docs = {}, {}, {}, {}
-    if (args.before_calibration or args.after_calibration) and warning:
-        print(f'{PROG}: warning: {warning}', file=sys.stderr)
+    gravity = resolve_gravity(args.gravity, args.latitude, args.height)
+    settings = DetectorSettings(min_static_s=args.min_static_s)
+    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+    errors, cals, statics, docs, files = {}, {}, {}, {}, {}
+    if (args.before_calibration or args.after_calibration) and gravity.warning:
+        print(f'{PROG}: warning: {gravity.warning}', file=sys.stderr)
     for side in ('before', 'after'):
         bags = getattr(args, f'{side}_calibration')
         if bags:
             try:
-                cals[side], _ = cal.calibrate(bags, gravity_m_s2=gravity, topic=args.topic,
-                                              settings=settings, rate_hz=args.rate_hz)
-                cal.write_outputs(os.path.join(args.out, side), cals[side], note)
+                res = run_calibration(CalibrateParams(
+                    paths=tuple(bags), gravity=gravity, topic=args.topic, rate_hz=args.rate_hz,
+                    settings=settings))
             except InputDataError as err:
                 errors[f'{side}_calibration'] = str(err)
                 print(f'{PROG}: warning: {side} calibration: {err}', file=sys.stderr)
+            else:
+                cals[side] = res.as_dict()
+                files[side] = calibration_files(res)
         bag = getattr(args, f'{side}_static')
         if bag:
-            try:
-                statics[side], docs[side] = analyze_static(
-                    bag, topic=args.topic, rate_hz=args.rate_hz, c=args.c, min_edf=args.min_edf)
-            except InputDataError as err:
-                errors[f'{side}_static'] = str(err)
-                print(f'{PROG}: warning: {side} static record: {err}', file=sys.stderr)
+            # a static record that cannot be analysed at all is refused (exit 4, one line)
+            statics[side], docs[side] = analyze_static(
+                bag, topic=args.topic, rate_hz=args.rate_hz, c=args.c, min_edf=args.min_edf)
     if len(errors) == len(given):
         raise InputDataError('nothing could be analysed: ' + '; '.join(
             f'{k}: {v}' for k, v in errors.items()))
@@ -406,15 +437,17 @@ def _body(argv):
         'errors': errors,
         'version': __version__,
     }
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'reliability.json'), 'w') as fh:
-        json.dump(doc, fh, indent=2)
-    with open(os.path.join(args.out, 'reliability.md'), 'w') as fh:
-        fh.write(markdown(doc))
-    if statics and not args.no_figures:
-        for sensor in ('accel', 'gyro'):
-            plot_fig6(os.path.join(args.out, f'fig6_{sensor}.png'), sensor,
-                      statics.get('before'), statics.get('after'), intervals, args.c)
+    with staged_output(args.out) as stage:
+        for side, named in files.items():
+            (stage / side).mkdir()
+            for name, text in named.items():
+                atomic_write_text(stage / side / name, text)
+        atomic_write_text(stage / 'reliability.json', json.dumps(doc, indent=2) + '\n')
+        atomic_write_text(stage / 'reliability.md', markdown(doc))
+        if statics and not args.no_figures:
+            for sensor in ('accel', 'gyro'):
+                plot_fig6(stage / f'fig6_{sensor}.png', sensor, statics.get('before'),
+                          statics.get('after'), intervals, args.c)
     for ch, e in intervals.items():
         if e['verdict'] != 'undetermined' or statics:
             change = 'n/a' if e['change'] is None else f'{100 * e["change"]:+.0f} %'

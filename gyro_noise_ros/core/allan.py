@@ -62,9 +62,9 @@ import scipy.stats
 from . import _kernels_allan as _k
 from ..errors import InputDataError, ParameterError
 
-__all__ = ['AdevMinimum', 'AllanAccumulator', 'AllanResult', 'NoiseTerms', 'NoiseTermsCustomary',
-           'allan_deviation', 'bias_instability_from_minimum', 'confidence_bounds',
-           'dense_factors', 'edf_greenhall', 'fit_noise_terms', 'octave_factors',
+__all__ = ['AllanAccumulator', 'AllanResult', 'NoiseTerms', 'NoiseTermsCustomary',
+           'allan_deviation', 'confidence_bounds', 'dense_factors', 'edf_greenhall',
+           'fit_noise_terms', 'octave_factors',
            'DEFAULT_CONFIDENCE', 'DEFAULT_MAX_EXACT_M', 'NOISE_TYPE_NAMES']
 
 #: Default two-sided confidence of the ADEV bounds (Stable32's "Confidence Factor = 0.683", 1
@@ -909,59 +909,6 @@ def fit_noise_terms(result, *, terms=_TERM_NAMES, tau_range_s=None, weighting='r
                       rate_random_walk_rad_per_s_sqrt_s=float(k_), rate_ramp_rad_per_s2=float(r_),
                       terms=terms, tau_min_s=float(tau_k[0]), tau_max_s=float(tau_k[-1]),
                       rms_relative_residual=rms)
-
-
-@dataclass(frozen=True)
-class AdevMinimum:
-    """
-    The classic bias-instability read-out: the minimum of the ADEV curve divided by 0.664.
-
-    Attributes
-    ----------
-    bias_instability_rad_per_s : float
-        min(ADEV) / sqrt(2 ln 2 / pi) (rad/s); sqrt(2 ln 2 / pi) = 0.6643 is the flicker-floor
-        ADEV per unit B (IEEE 952 C.3).
-    bias_instability_deg_per_h : float
-        The same in deg/h.
-    tau_s : float
-        Averaging time of the minimum (s).
-    adev_min_rad_per_s : float
-        The minimum ADEV itself (rad/s).
-    at_longest_tau : bool
-        True when the minimum is the last tau: the curve has not turned up yet, so the value is
-        only an upper bound of B.
-
-    """
-
-    bias_instability_rad_per_s: float
-    bias_instability_deg_per_h: float
-    tau_s: float
-    adev_min_rad_per_s: float
-    at_longest_tau: bool
-
-
-def bias_instability_from_minimum(result):
-    """
-    Read the bias instability off the minimum of the Allan deviation (IEEE 952 C.3).
-
-    Parameters
-    ----------
-    result : AllanResult
-        Allan deviation of rate data (rad/s).
-
-    Returns
-    -------
-    AdevMinimum
-
-    """
-    adev = np.asarray(result.adev)
-    if adev.size == 0:
-        raise InputDataError('result has no taus')
-    j = int(np.argmin(adev))
-    b = float(adev[j] / math.sqrt(_B_FACTOR))
-    return AdevMinimum(bias_instability_rad_per_s=b, bias_instability_deg_per_h=b * _RAD2DEG
-                       * 3600.0, tau_s=float(result.tau_s[j]), adev_min_rad_per_s=float(adev[j]),
-                       at_longest_tau=j == adev.size - 1)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -31,16 +31,41 @@ both methods (:mod:`.fractional`). Per sequence the paper tabulates:
 
 Variances across chunks use ``ddof = 1`` (unbiased over chunks); the variance inside a chunk uses
 ``ddof = 1`` as well.
+
+Beside the paper's means, every per-chunk quantity (bias, log variance, both orders, the noise
+colour) gets a robust location and spread (:func:`robust_location`), which the reference check of
+:mod:`.health` compares like with like: the median of the chunks, or of the dominant mode when the
+chunk orders fall in separate basins (:func:`order_modes`), and the normal-consistent standard
+deviation of those chunks without the 5 % lowest and highest.
+
+The *noise colour* of a chunk (:func:`noise_colour`) is the least-squares log-log slope of its
+overlapping Allan deviation over the averaging factors m = 2, 4, ..., 64 samples: -0.5 for white
+rate noise (angle random walk), 0 for flicker, +0.5 for a random walk, -1 for white angle noise. A
+fractional difference of order d (a GL filter) multiplies the rate PSD by ``|2 sin(pi f)|^(2d)``
+and so moves the slope by about -0.9 d over this band (closed form for white noise: -0.089 for d =
+0.1; -0.088 on the ADIS16405, whose Bartlett filter bends m = 1-2, hence m = 1 left out). Unlike
+the paper's identified orders, which a 0.1 filter moves by only 0.02-0.08 on that sensor, it
+follows the filter. Its chunk-to-chunk spread (~0.0125 with 10,000 samples) is estimation noise:
+six runs of that sensor agree to 0.005 (docs/verdicts.md).
 """
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
+from scipy.special import ndtri
 
+from .allan import allan_deviation
 from ..errors import InputDataError, ParameterError
 
 #: Default chunk length (paper 000 section 3.2).
 DEFAULT_CHUNK_SIZE = 10000
+
+#: Averaging factors (samples) of the noise colour (:func:`noise_colour`). m = 1 is left out: on
+#: band-limited sensors (the ADIS16405's Bartlett filter) the ADEV bends there. m = 64 keeps ~230
+#: EDF from a 10,000-sample chunk of white noise, and a chunk of 256 samples holds it under the
+#: N/4 rule of the Allan taus.
+NOISE_COLOUR_FACTORS = (2, 4, 8, 16, 32, 64)
 
 
 class Chunker:
@@ -162,6 +187,55 @@ def chunk_moments(chunk):
     if not np.all(np.isfinite(v)):
         raise InputDataError(f'chunk has {int((~np.isfinite(v)).sum())} NaN/Inf sample(s)')
     return ChunkMoments(float(v.mean()), float(v.var(ddof=1)))
+
+
+def noise_colour(chunk, *, factors=NOISE_COLOUR_FACTORS):
+    """
+    Return the noise colour of one chunk: the log-log slope of its Allan deviation.
+
+    The least-squares slope of ``log ADEV(m)`` against ``log m`` over ``factors``, with the fully
+    overlapping Allan deviation of :func:`.allan.allan_deviation` (paper 001 eq. 7, NIST SP 1065
+    eq. 11). Dimensionless and independent of the sample rate, the scale and the mean of the
+    chunk: -0.5 for white rate noise, 0 for flicker, +0.5 for a random walk (module doc).
+
+    Parameters
+    ----------
+    chunk : array_like
+        Finite rate samples of one chunk (any unit, e.g. rad/s).
+    factors : sequence of int, keyword-only
+        Averaging factors (samples, >= 1, at least two distinct).
+
+    Returns
+    -------
+    float
+        The slope; NaN when the chunk is shorter than ``4 * max(factors)`` samples (the N/4 rule
+        of the Allan taus) or constant (zero Allan deviation).
+
+    Raises
+    ------
+    InputDataError
+        Not 1-D, or NaN/Inf samples.
+    ParameterError
+        Fewer than two distinct factors, or a factor below 1.
+
+    """
+    v = np.asarray(chunk, dtype=np.float64)
+    if v.ndim != 1:
+        raise InputDataError(f'a chunk must be 1-D, got shape {v.shape}')
+    if not np.all(np.isfinite(v)):
+        raise InputDataError(f'chunk has {int((~np.isfinite(v)).sum())} NaN/Inf sample(s)')
+    m = np.unique(np.asarray(factors, dtype=np.int64))
+    if m.size < 2 or m[0] < 1:
+        raise ParameterError(
+            f'factors must hold at least two distinct averaging factors >= 1, got {factors!r}')
+    if v.shape[0] < 4 * m[-1]:
+        return float('nan')
+    adev = allan_deviation(v, 1.0, taus=m).adev
+    if not np.all(adev > 0):
+        return float('nan')
+    x = np.log(m.astype(np.float64))
+    xc = x - x.mean()
+    return float(xc @ np.log(adev) / (xc @ xc))
 
 
 @dataclass(frozen=True)
@@ -322,6 +396,13 @@ class SequenceSummary:
     alpha_var_modes, alpha_corr_modes : tuple of (float, int)
         (mean order, chunks) of each mode when the chunk orders fall in separate basins
         (:func:`order_modes`); empty when the distribution is unimodal, so the mean is meaningful.
+    bias_robust, log_variance_robust, alpha_var_robust, alpha_corr_robust : RobustLocation or None
+        Robust location and spread of the chunk biases (rate unit), of the natural log of the
+        chunk variances (log of the squared rate unit) and of the chunk orders (dominant mode when
+        multimodal), for the reference check; None when not computed.
+    noise_colour_robust : RobustLocation or None
+        Robust location and spread of the chunks' noise colour (:func:`noise_colour`,
+        dimensionless); None when not computed.
 
     """
 
@@ -339,10 +420,15 @@ class SequenceSummary:
     ties_corr: int
     alpha_var_modes: tuple = ()
     alpha_corr_modes: tuple = ()
+    bias_robust: object = None
+    log_variance_robust: object = None
+    alpha_var_robust: object = None
+    alpha_corr_robust: object = None
+    noise_colour_robust: object = None
 
 
 def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0,
-                       ties_var=0, ties_corr=0):
+                       ties_var=0, ties_corr=0, order_step=0.0, noise_colour=None):
     """
     Summarise per-chunk results of one sequence and axis (paper 000 Tables 3-6).
 
@@ -356,6 +442,10 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
         Chunk orders of the variance and correlation methods (NaN where not identified).
     tail_samples, ties_var, ties_corr : int, keyword-only
         Counts carried into the summary.
+    order_step : float, keyword-only
+        Step of the order grid (floor of the orders' robust spread, :func:`robust_location`).
+    noise_colour : array_like, optional, keyword-only
+        Chunk noise colours (:func:`noise_colour`; NaN where not computed); None: not summarised.
 
     Returns
     -------
@@ -375,13 +465,23 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
     mv, vv = mean_var(variance)
     av_m, av_v = mean_var(alpha_var)
     ac_m, ac_v = mean_var(alpha_corr)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        log_var = np.log(variance)
     return SequenceSummary(chunks=int(bias.size), tail_samples=int(tail_samples),
                            bias_mean=float(np.nanmean(bias)) if bias.size else float('nan'),
                            drift=offset_drift(t_mid_s, bias), mean_variance=mv,
                            variance_of_variances=vv, alpha_var_mean=av_m, alpha_var_variance=av_v,
                            alpha_corr_mean=ac_m, alpha_corr_variance=ac_v, ties_var=int(ties_var),
                            ties_corr=int(ties_corr), alpha_var_modes=order_modes(alpha_var),
-                           alpha_corr_modes=order_modes(alpha_corr))
+                           alpha_corr_modes=order_modes(alpha_corr),
+                           bias_robust=robust_location(bias),
+                           log_variance_robust=robust_location(log_var),
+                           alpha_var_robust=robust_location(alpha_var, resolution=order_step,
+                                                            modes=True),
+                           alpha_corr_robust=robust_location(alpha_corr, resolution=order_step,
+                                                             modes=True),
+                           noise_colour_robust=(None if noise_colour is None
+                                                else robust_location(noise_colour)))
 
 
 #: Smallest gap between sorted chunk orders that separates two modes (order units). The model's
@@ -389,6 +489,24 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
 #: method) and of chunk orders ~0.4 (correlation method, a wide unimodal cloud), hence also the 3x
 #: rule.
 MODE_GAP = 0.3
+
+
+def _mode_pieces(orders, gap):
+    x = np.sort(np.asarray(orders, dtype=np.float64))
+    x = x[np.isfinite(x)]
+    if x.size < 4:
+        return []
+    cuts = np.flatnonzero(np.diff(x) > gap) + 1
+    if cuts.size == 0:
+        return []
+    pieces = np.split(x, cuts)
+    if sum(p.size >= 2 for p in pieces) < 2:
+        return []
+    within = np.concatenate([p - p.mean() for p in pieces])
+    pooled = float(np.sqrt(within @ within / max(within.size - len(pieces), 1)))
+    if np.min(np.diff(x)[cuts - 1]) <= 3.0 * pooled:
+        return []
+    return pieces
 
 
 def order_modes(orders, *, gap=MODE_GAP):
@@ -414,18 +532,139 @@ def order_modes(orders, *, gap=MODE_GAP):
         (mean order, chunk count) per mode, in increasing order; empty when unimodal.
 
     """
-    x = np.sort(np.asarray(orders, dtype=np.float64))
+    return tuple((float(p.mean()), int(p.size)) for p in _mode_pieces(orders, gap))
+
+
+#: Fraction of the chunks left out on each side before the standard deviation of the rest is the
+#: robust spread (rounded down to whole chunks: none below 20 chunks).
+SPREAD_TRIM = 0.05
+
+
+def _truncated_sd(kept):
+    """Return the SD of a standard normal truncated to its central ``kept`` fraction."""
+    if kept >= 1.0:
+        return 1.0
+    z = float(ndtri(0.5 + kept / 2.0))
+    return math.sqrt(1.0 - 2.0 * z * math.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi) / kept)
+
+
+@dataclass(frozen=True)
+class RobustLocation:
+    """
+    Robust location and spread of one quantity over the chunks of a sequence.
+
+    Attributes
+    ----------
+    location : float
+        Median of the population (input unit).
+    spread : float
+        Standard deviation of the population without its ``floor(0.05 n)`` lowest and highest
+        values, divided by that of a standard normal truncated alike (0.7893 for 100 chunks), so
+        that it estimates the standard deviation of normal chunk values while 5 % outliers on
+        either side cannot move it; never below ``resolution / sqrt(12)`` (the spread of values
+        rounded to a grid). Input unit.
+    count : int
+        Chunks in the population.
+    total : int
+        Finite chunk values.
+    population : str
+        'all chunks' or 'dominant mode' (the largest of :func:`order_modes`' basins).
+    modes : tuple of (float, int)
+        :func:`order_modes` of the values when asked for, else empty.
+
+    """
+
+    location: float
+    spread: float
+    count: int
+    total: int
+    population: str = 'all chunks'
+    modes: tuple = ()
+
+    def as_dict(self):
+        """
+        Return the fields as JSON-able values (NaN as None, modes as lists).
+
+        Returns
+        -------
+        dict
+
+        """
+        def num(v):
+            return float(v) if np.isfinite(v) else None
+
+        return {'location': num(self.location), 'spread': num(self.spread),
+                'count': int(self.count), 'total': int(self.total),
+                'population': self.population,
+                'modes': [[float(m), int(c)] for m, c in self.modes]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """
+        Build from :meth:`as_dict` output (a reference summary.json).
+
+        Parameters
+        ----------
+        d : dict
+            As written by :meth:`as_dict`.
+
+        Returns
+        -------
+        RobustLocation
+
+        """
+        def num(v):
+            return float('nan') if v is None else float(v)
+
+        return cls(location=num(d['location']), spread=num(d['spread']), count=int(d['count']),
+                   total=int(d['total']), population=str(d['population']),
+                   modes=tuple((float(m), int(c)) for m, c in d.get('modes', ())))
+
+
+def robust_location(values, *, resolution=0.0, modes=False, gap=MODE_GAP):
+    """
+    Return the robust location and spread of per-chunk values (module doc).
+
+    Parameters
+    ----------
+    values : array_like
+        One value per chunk (NaN/Inf ignored).
+    resolution : float, keyword-only
+        Grid step of the values (the order grid; 0 for continuous values): the spread is at least
+        ``resolution / sqrt(12)``, so identical chunk orders do not give a zero tolerance.
+    modes : bool, keyword-only
+        Look for separate basins (:func:`order_modes`) and describe the dominant one.
+    gap : float, keyword-only
+        Smallest gap separating modes (order units).
+
+    Returns
+    -------
+    RobustLocation
+        NaN location and spread without finite values.
+
+    """
+    x = np.asarray(values, dtype=np.float64).ravel()
     x = x[np.isfinite(x)]
-    if x.size < 4:
-        return ()
-    cuts = np.flatnonzero(np.diff(x) > gap) + 1
-    if cuts.size == 0:
-        return ()
-    pieces = np.split(x, cuts)
-    if sum(p.size >= 2 for p in pieces) < 2:
-        return ()
-    within = np.concatenate([p - p.mean() for p in pieces])
-    pooled = float(np.sqrt(within @ within / max(within.size - len(pieces), 1)))
-    if np.min(np.diff(x)[cuts - 1]) <= 3.0 * pooled:
-        return ()
-    return tuple((float(p.mean()), int(p.size)) for p in pieces)
+    total = int(x.size)
+    found = ()
+    population = 'all chunks'
+    if modes:
+        pieces = _mode_pieces(x, gap)
+        if pieces:
+            found = tuple((float(p.mean()), int(p.size)) for p in pieces)
+            # the largest basin; between equal ones the higher order, as for exact ties in
+            # fractional.py (order 1 is the paper's integer-order model)
+            x = max(reversed(pieces), key=len)
+            population = 'dominant mode'
+    if x.size == 0:
+        return RobustLocation(float('nan'), float('nan'), 0, total, population, found)
+    floor = float(resolution) / math.sqrt(12.0)
+    if x.size < 2:
+        return RobustLocation(float(x[0]), float('nan'), 1, total, population, found)
+    n = x.size
+    k = int(SPREAD_TRIM * n)
+    central = np.sort(x)[k:n - k]
+    spread = (float(central.std(ddof=1)) / _truncated_sd(central.size / n)
+              if central.size > 1 else 0.0)
+    return RobustLocation(float(np.median(x)), max(spread, floor), int(x.size), total,
+                          population, found)

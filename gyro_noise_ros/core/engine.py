@@ -44,14 +44,20 @@ is a whole number of periods (within 6 robust sigmas of the step scatter, 0.1-0.
 2.5 periods and more. A long step of a fractional number of periods below that is a correction of
 the stamping clock (a driver re-anchoring its device-clock map, a host clock slewing: every later
 stamp stays on the grid), counted as a clock step (``StreamCounts.clock_steps``), not as loss.
+Samples that share the stamp right after a long step (a packet stamped once) are the samples the
+step seemed to skip: they are subtracted from its loss (a group reaching the end of a batch waits
+for the next batch), so a packet-stamped record shows no phantom loss. Every gap is kept as (start,
+length, missing samples) and the longest are reported (``StreamCounts.longest_gaps``).
 *Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps
 shorter than half a period): a long step followed by a burst is jitter, not loss, so single steps
 are not read. Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate)
 + 1 - n`` when it exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the
 run (the timebase estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single
-step to split at). A step <= 0 is an out-of-order (or repeated) stamp: counted, never reordered,
-never a gap. So two swapped samples count as one out-of-order stamp *and* one one-sample gap (the
-hole is seen before the late sample arrives; the engine does not look back to fill it). The
+step to split at). A step of zero (a stamp equal to the latest one: one packet) is a normal time
+base, counted in ``equal_stamps`` and nothing else. A step < 0 is an out-of-order stamp: counted,
+never reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one
+one-sample gap (the hole is seen before the late sample arrives; the engine does not look back to
+fill it). The
 ``gap_policy`` decides what a gap does to the chunk it falls in:
 
 * ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
@@ -77,9 +83,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from .allan_readout import datasheet_terms, fit_noise_terms_band_limited
-from .chunks import DEFAULT_CHUNK_SIZE, SequenceSummary, summarise_sequence
+from .chunks import DEFAULT_CHUNK_SIZE, noise_colour, SequenceSummary, summarise_sequence
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
+from .readout import fit_noise_terms_band_limited, read_allan
 from .timebase import rescale_allan, TimebaseTracker
 from ..errors import InputDataError, ParameterError
 
@@ -93,8 +99,58 @@ RATE_ESTIMATE_SAMPLES = 16 * 64 + 1
 #: caller, or failing identification (e.g. a constant chunk).
 STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
+#: Gaps kept (the longest, by missing samples) for the reports; all are counted.
+MAX_GAP_EVENTS = 5
+
 _NS = 1_000_000_000
 _EARLY_CHECK = 101
+
+
+def _packet_loss(steps, at, apparent, credit):
+    """
+    Subtract the samples of equal-stamp groups next to long steps from their apparent loss.
+
+    A packet of samples stamped once shows as zero steps right after a long step (stamped with
+    its last sample's time) or right before one (its first sample's time): those samples are the
+    ones the long step seemed to skip. Each zero step pays for one missing sample of the long step
+    it touches (before it first, then after it), once.
+
+    Parameters
+    ----------
+    steps : numpy.ndarray of int64
+        Steps of the batch from the latest earlier stamp (ns).
+    at : numpy.ndarray of int
+        Indices of the long steps, increasing.
+    apparent : numpy.ndarray of int64
+        ``round(step / period) - 1`` at those indices.
+    credit : int
+        Zero steps at the end of the previous batch not yet paid to a long step.
+
+    Returns
+    -------
+    lost : numpy.ndarray of int64
+        Samples missing at each long step.
+    credit : int
+        Zero steps at the end of this batch not paid to a long step.
+
+    """
+    nonzero = np.flatnonzero(steps != 0)
+    lost = np.array(apparent, dtype=np.int64)
+    used_after = {}
+    for n, i in enumerate(at.tolist()):
+        k = int(np.searchsorted(nonzero, i)) - 1
+        prev = int(nonzero[k]) if k >= 0 else -1
+        before = i - prev - 1 - used_after.get(prev, 0) + (credit if prev < 0 else 0)
+        nxt = int(nonzero[k + 2]) if k + 2 < nonzero.size else steps.size
+        after = nxt - i - 1
+        take = min(int(lost[n]), before)
+        lost[n] -= take
+        take = min(int(lost[n]), after)
+        lost[n] -= take
+        used_after[i] = take
+    last = int(nonzero[-1]) if nonzero.size else -1
+    trailing = steps.size - last - 1 - used_after.get(last, 0) + (credit if last < 0 else 0)
+    return lost, int(trailing)
 
 
 @dataclass(frozen=True)
@@ -142,7 +198,7 @@ class EngineConfig:
     gap_factor: float = 1.5
     gap_policy: str = 'flag'
     allan: bool = True
-    allan_taus: str = 'octave'
+    allan_taus: str = 'dense'
     history_chunks: int = 0
 
     def __post_init__(self):
@@ -308,6 +364,9 @@ class ChunkResult:
     tie_var, tie_corr : bool
         The minimum was an exact tie between grid orders (the largest is reported; see
         fractional.py).
+    noise_colour : float
+        Log-log slope of the chunk's Allan deviation over m = 2-64 samples (dimensionless,
+        :func:`.chunks.noise_colour`); NaN when the chunk is too short or not analysed.
     status : str
         One of :data:`STATUSES`.
     message : str
@@ -336,6 +395,7 @@ class ChunkResult:
     j_min: float
     tie_var: bool
     tie_corr: bool
+    noise_colour: float
     temperature_c: float
     status: str
     message: str = ''
@@ -359,9 +419,9 @@ def analyze_chunk(job, identifier=None, *, curves=False):
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
-    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`. Never raises for bad data: a
-    chunk that cannot be identified (NaN, constant) comes back with NaN orders and status 'nan' or
-    'failed'.
+    Paper 000 eqs. (3)-(14) via :class:`.fractional.OrderIdentifier`, and the chunk's noise colour
+    (:func:`.chunks.noise_colour`). Never raises for bad data: a chunk that cannot be identified
+    (NaN, constant) comes back with NaN orders and status 'nan' or 'failed'.
 
     Parameters
     ----------
@@ -383,7 +443,8 @@ def analyze_chunk(job, identifier=None, *, curves=False):
             'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
             'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
     empty = {'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
-             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False}
+             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False,
+             'noise_colour': _NAN}
     if job.status == 'nan':
         return ChunkResult(**base, **empty, status='nan',
                            message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
@@ -401,7 +462,8 @@ def analyze_chunk(job, identifier=None, *, curves=False):
         **base, alpha_var=ident.alpha_var, f_var=ident.f_var, var_min=ident.var_min,
         alpha_corr=ident.alpha_corr, f_corr=ident.f_corr, j_min=ident.j_min,
         tie_var=len(ident.tied_alphas_var) > 1, tie_corr=len(ident.tied_alphas_corr) > 1,
-        status='ok', var_curve=ident.var_curve, j_curve=ident.j_curve)
+        noise_colour=noise_colour(job.samples), status='ok', var_curve=ident.var_curve,
+        j_curve=ident.j_curve)
 
 
 @dataclass(frozen=True)
@@ -418,7 +480,7 @@ class StreamCounts:
     gaps : int
         Stamp steps above ``gap_factor`` nominal periods.
     out_of_order : int
-        Stamps not later than their predecessor (step <= 0).
+        Stamps earlier than the latest stamp before them (step < 0).
     chunks : int
         Complete chunks cut so far (per axis).
     tail_samples : int
@@ -441,6 +503,14 @@ class StreamCounts:
     clock_steps : int
         Long steps (regular stamps) that were not a whole number of periods: corrections of the
         stamping clock, paid back by other steps, not lost samples.
+    equal_stamps : int
+        Stamps equal to the one before (samples of one packet): a normal time base, neither out of
+        order nor a gap.
+    longest_gaps : tuple of (float, float, int)
+        The longest gaps (at most :data:`MAX_GAP_EVENTS`, most missing samples first) as (start
+        after the first sample in s, length of the stamp step in s, missing samples); with
+        bursty stamps the start and length are those of the longest step of the chunk whose
+        deficit showed the loss.
 
     """
 
@@ -459,6 +529,8 @@ class StreamCounts:
     jitter_s: float = float('nan')
     timebase: object = None
     clock_steps: int = 0
+    equal_stamps: int = 0
+    longest_gaps: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -482,9 +554,10 @@ class AxisSummary:
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
     noise_terms : object or None
         The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
-        band-limited short taus left out (:mod:`.allan_readout`).
-    datasheet : allan_readout.DatasheetTerms or None
-        Bias stability (first ADEV minimum), ARW at 1 s, fit quality.
+        band-limited short taus left out (:mod:`.readout`).
+    readout : readout.AllanReadout or None
+        The datasheet numbers of the Allan deviation (:func:`.readout.read_allan`: bias
+        stability, B, ARW, K and its bound, Q, fit quality).
 
     """
 
@@ -500,7 +573,7 @@ class AxisSummary:
     temperature_mean_c: float
     allan: object = None
     noise_terms: object = None
-    datasheet: object = None
+    readout: object = None
 
     @property
     def offset_drift_deg_s_per_h(self):
@@ -533,7 +606,7 @@ class _AxisState:
 
     def __init__(self, history):
         maxlen = history or None
-        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp)
+        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp, noise colour)
         self.rows = deque(maxlen=maxlen)
         self.nan_samples = 0
         self.by_status = dict.fromkeys(STATUSES, 0)
@@ -567,6 +640,9 @@ class NoiseEngine:
         self.reference = _health.reference_per_axis(reference, self.config.axes)
         self._cols = [AXES.index(a) for a in self.config.axes]
         self._key = self.config.identifier_key()
+        grid = self.config.alphas
+        # the grid's step (its mean step if uneven): the floor of the orders' chunk spread
+        self._order_step = float((grid[-1] - grid[0]) / (grid.size - 1)) if grid.size > 1 else 0.0
         self._period_ns = None if self.config.rate_hz is None else _NS / float(self.config.rate_hz)
         self._pending = []  # batches held until the rate is known
         self._timebase = TimebaseTracker()
@@ -588,6 +664,10 @@ class NoiseEngine:
         self._lost = 0
         self._gaps = 0
         self._out_of_order = 0
+        self._equal = 0
+        self._credit = 0  # zero steps at the end of the last batch not paid to a long step
+        self._hold = None  # (stamps, gyro, temperature) of an equal-stamp group after a gap
+        self._gap_events = []  # (t_s, length_s, missing samples), the longest MAX_GAP_EVENTS
         self._discarded = 0
         self._discarded_partials = 0
         self._axis = {a: _AxisState(int(self.config.history_chunks)) for a in self.config.axes}
@@ -654,14 +734,15 @@ class NoiseEngine:
         return self._process(stamps, g, temp)
 
     def _early_check(self):
-        # Refuse obviously broken stamps (all equal, shuffled) after ~100 samples instead of 1025.
+        # Refuse obviously broken (shuffled) stamps after ~100 samples instead of 1025. Equal
+        # stamps are not broken: a packet of samples shares one stamp.
         held = np.concatenate([p[0] for p in self._pending])
-        bad = int(np.count_nonzero(np.diff(held) <= 0))
+        bad = int(np.count_nonzero(np.diff(held) < 0))
         if bad > 0.1 * (held.shape[0] - 1):
             self._pending = []
             raise InputDataError(
                 f'cannot estimate the sample rate: {bad} of the first {held.shape[0] - 1} '
-                'stamp steps are not increasing')
+                'stamp steps go backwards (a stamp earlier than its predecessor)')
 
     def _release_pending(self):
         stamps = np.concatenate([p[0] for p in self._pending])
@@ -696,10 +777,15 @@ class NoiseEngine:
             rate = _NS / self._period_ns
             rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(
                 est.stamp_rate_se_hz) else 0.0
-            self._allowance = (2.0 * est.max_step_s * rate + 6.0 * est.jitter_s * rate
+            self._allowance = (2.0 * est.burst_step_s * rate + 6.0 * est.jitter_s * rate
                                + 3.0 * rel_se * self.config.chunk_size + 1.0)
 
-    def _process(self, stamps, g, temp):
+    def _process(self, stamps, g, temp, *, final=False):
+        if self._hold is not None:
+            hs, hg, ht = self._hold
+            self._hold = None
+            stamps, g, temp = (np.concatenate((hs, stamps)), np.concatenate((hg, g)),
+                               np.concatenate((ht, temp)))
         first = self._first_ns is None
         if first:
             self._first_ns = int(stamps[0])
@@ -708,9 +794,27 @@ class NoiseEngine:
         # count and does not also make the next step look like a gap.
         run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
         steps = stamps - run_max[:-1]
+        if first:
+            steps[0] = max(1, int(round(self._period_ns)))  # the first sample has no step
+        if not self._bursty and not final:
+            # A long step whose equal-stamp group reaches the end of the batch may be followed
+            # by more samples of the same stamp in the next batch: they fill the hole, so the
+            # group waits for that batch (or flush) before its loss is decided.
+            moved = np.flatnonzero(steps != 0)
+            j = int(moved[-1]) if moved.size else -1
+            if j >= 0:
+                if steps[j] > self.config.gap_factor * self._period_ns:
+                    self._hold = (stamps[j:].copy(), g[j:].copy(), temp[j:].copy())
+                    stamps, g, temp, steps = stamps[:j], g[:j], temp[:j], steps[:j]
+                    run_max = run_max[:j + 1]
+                    if stamps.shape[0] == 0:
+                        return []
         self._max_ns = int(run_max[-1])
         self._last_ns = int(stamps[-1])
-        self._out_of_order += int(np.count_nonzero(steps[1:] <= 0 if first else steps <= 0))
+        # A stamp equal to the latest one is a sample of the same packet (a normal time base);
+        # only a stamp earlier than the latest is out of order.
+        self._out_of_order += int(np.count_nonzero(steps < 0))
+        self._equal += int(np.count_nonzero(steps == 0))
         if self._bursty:
             gap = np.zeros(stamps.shape[0], dtype=bool)  # loss is read per chunk from the deficit
         else:
@@ -724,10 +828,19 @@ class NoiseEngine:
             gap = long_step & (near_whole | (ratio >= 2.5))
             self._clock_steps += int(np.count_nonzero(long_step & ~gap))
         lost = np.zeros(stamps.shape[0], dtype=np.int64)
+        at = np.flatnonzero(gap)
+        # Samples sharing a stamp next to a long step (one packet stamped once) are the ones it
+        # seemed to skip: a packet-stamped record shows no phantom loss.
+        lost[at], self._credit = _packet_loss(
+            steps, at, np.maximum(np.rint(steps[at] / self._period_ns).astype(np.int64) - 1, 0),
+            self._credit)
+        gap[at] = lost[at] > 0
         if gap.any():
-            lost[gap] = np.maximum(np.rint(steps[gap] / self._period_ns).astype(np.int64) - 1, 0)
             self._gaps += int(gap.sum())
             self._lost += int(lost.sum())
+            for i in np.flatnonzero(gap):
+                self._log_gap((int(run_max[i]) - self._first_ns) / 1e9, steps[i] / 1e9,
+                              int(lost[i]))
         self._feed_allan(g)
         rel = stamps - self._first_ns
         jobs = []
@@ -743,6 +856,11 @@ class NoiseEngine:
                 jobs += self._push(rel[a:b], lost_a, temp[a:b], g[a:b])
             return jobs
         return self._push(rel, lost, temp, g)
+
+    def _log_gap(self, t_s, length_s, missing):
+        self._gap_events.append((float(t_s), float(length_s), int(missing)))
+        if len(self._gap_events) > 4 * MAX_GAP_EVENTS:
+            self._gap_events = sorted(self._gap_events, key=lambda e: -e[2])[:MAX_GAP_EVENTS]
 
     def _discard_partial(self):
         if self._buffered:
@@ -790,6 +908,9 @@ class NoiseEngine:
             if deficit > self._allowance:
                 samples_lost, gaps = int(round(deficit)), 1
                 self._chunk_loss_events += 1
+                longest = int(np.argmax(np.diff(rel)))
+                self._log_gap(rel[longest] / 1e9, (rel[longest + 1] - rel[longest]) / 1e9,
+                              samples_lost)
         finite_t = temp[np.isfinite(temp)]
         temperature = float(finite_t.mean()) if finite_t.size else _NAN
         t_start = rel[0] / 1e9
@@ -828,11 +949,16 @@ class NoiseEngine:
             Jobs completed by the released samples.
 
         """
+        jobs = []
         if self._pending:
             held = sum(p[0].shape[0] for p in self._pending)
             if held >= 2:
-                return self._release_pending()
-        return []
+                jobs = self._release_pending()
+        if self._hold is not None:
+            empty = np.empty(0, dtype=np.int64)
+            jobs += self._process(empty, np.empty((0, len(self.config.axes))), np.empty(0),
+                                  final=True)
+        return jobs
 
     # ---- Allan
     # -------------------------------------------------------------------------------------
@@ -861,9 +987,12 @@ class NoiseEngine:
             result = self._allan[axis].result()
             if self.config.rate_hz is None:
                 result = rescale_allan(result, self.counts().rate_hz)
-            terms = fit_noise_terms_band_limited(result)
         except (InputDataError, ParameterError, ValueError):
             return None, None
+        try:
+            terms = fit_noise_terms_band_limited(result)
+        except (InputDataError, ParameterError, ValueError):
+            terms = None    # too few taus for the fit; the readout still reads the curve
         return result, terms
 
     # ---- analysis and bookkeeping
@@ -907,7 +1036,7 @@ class NoiseEngine:
         if result.status == 'ok':
             state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
                                result.alpha_var, result.alpha_corr, result.tie_var,
-                               result.tie_corr, result.temperature_c))
+                               result.tie_corr, result.temperature_c, result.noise_colour))
 
     def skip(self, job, reason=''):
         """
@@ -957,7 +1086,9 @@ class NoiseEngine:
                             if self._first_ns is not None else 0.0, rate_method=est.method
                             if est is not None else '', bursty=self._bursty, jitter_s=est.jitter_s
                             if est is not None else _NAN, timebase=est,
-                            clock_steps=self._clock_steps)
+                            clock_steps=self._clock_steps, equal_stamps=self._equal,
+                            longest_gaps=tuple(sorted(self._gap_events,
+                                                      key=lambda e: -e[2])[:MAX_GAP_EVENTS]))
 
     def timebase(self):
         """
@@ -997,17 +1128,18 @@ class NoiseEngine:
         counts = self.counts()
         out = {}
         for axis, state in self._axis.items():
-            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 8)
+            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 9)
             seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
                                      tail_samples=counts.tail_samples,
                                      ties_var=int(rows[:, 5].sum()),
-                                     ties_corr=int(rows[:, 6].sum()))
+                                     ties_corr=int(rows[:, 6].sum()),
+                                     order_step=self._order_step, noise_colour=rows[:, 8])
             temps = rows[:, 7][np.isfinite(rows[:, 7])]
             result, terms = self._allan_result(axis) if allan else (None, None)
             sheet = None
-            if terms is not None:
+            if result is not None:
                 try:
-                    sheet = datasheet_terms(result, terms)
+                    sheet = read_allan(result, terms)
                 except (InputDataError, ParameterError):
                     sheet = None
             out[axis] = AxisSummary(
@@ -1016,7 +1148,7 @@ class NoiseEngine:
                 chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
                 chunks_skipped=state.by_status['skipped'],
                 temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
-                allan=result, noise_terms=terms, datasheet=sheet)
+                allan=result, noise_terms=terms, readout=sheet)
         return out
 
     def health(self, *, seconds_since_data=None, summaries=None):

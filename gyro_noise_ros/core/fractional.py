@@ -44,6 +44,7 @@ is reported in ``tied_alphas_*`` and never hidden.
 
 import dataclasses
 from dataclasses import dataclass
+import os
 
 import numpy as np
 import scipy.fft
@@ -324,6 +325,7 @@ class OrderIdentifier:
         self.max_lag = max_lag
         self.demean = bool(demean)
         self.block = max(1, int(block))
+        _check_table_memory(self.alphas.size, chunk_size, self.memory)
         self._conv_size = scipy.fft.next_fast_len(chunk_size + self.memory, real=True)
         self._corr_size = scipy.fft.next_fast_len(self.n + self.max_lag + 1, real=True)
         self._coeffs = np.stack([gl_coefficients(a, self.memory) for a in self.alphas])
@@ -698,6 +700,58 @@ def _summarise(alphas, var_curve, j_curve, f_curve, bias, curves):
         var_curve=var_curve if curves else None,
         j_curve=j_curve if curves else None,
         f_curve=f_curve if curves else None)
+
+
+def physical_memory_bytes():
+    """
+    Return the machine's physical memory in bytes, or None where the OS does not say.
+
+    Returns
+    -------
+    int or None
+
+    """
+    try:
+        pages, page = os.sysconf('SC_PHYS_PAGES'), os.sysconf('SC_PAGE_SIZE')
+    except (AttributeError, ValueError, OSError):  # Windows has no sysconf
+        return None
+    return pages * page if pages > 0 and page > 0 else None
+
+
+def table_bytes(orders, chunk_size, memory):
+    """
+    Estimate the bytes of the spectra an :class:`OrderIdentifier` keeps (its largest tables).
+
+    Per grid order, the half spectrum (complex128) of the GL coefficients zero-padded to about
+    ``chunk_size + memory`` points, once for the exact and once for the fast algorithm: 8 bytes
+    per padded point each.
+
+    Parameters
+    ----------
+    orders : int
+        Grid orders.
+    chunk_size, memory : int
+        Samples per chunk and memory L.
+
+    Returns
+    -------
+    int
+
+    """
+    return 16 * int(orders) * (int(chunk_size) + int(memory))
+
+
+def _check_table_memory(orders, chunk_size, memory):
+    # Refuse before allocating: a chunk size beyond the machine otherwise ends in a MemoryError
+    # (or an OverflowError in the FFT planner) deep inside numpy/scipy. Half of the physical
+    # memory leaves room for the data, the worker processes and the rest of the system.
+    total = physical_memory_bytes()
+    need = table_bytes(orders, chunk_size, memory)
+    if total is not None and need > total // 2:
+        raise ParameterError(
+            f'chunk_size ({chunk_size}) with memory L = {memory} needs about '
+            f'{need / 2**30:.3g} GiB for the tables of the {orders} grid orders, more than half '
+            f"of this machine's {total / 2**30:.3g} GiB; the paper uses 10000 samples per chunk")
 
 
 def _check_memory(memory):

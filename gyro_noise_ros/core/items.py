@@ -23,8 +23,6 @@ parentheses as diagnostic_msgs conventions want (``'Bias (deg/s)'``); missing nu
 
 import math
 
-import numpy as np
-
 #: Degrees per radian: SI inside, degrees only at the edges (keys say which).
 DEG = 180.0 / math.pi
 
@@ -80,51 +78,39 @@ def last_chunk_items(result):
 
 
 #: Keys of :func:`allan_items`, in order.
-ALLAN_KEYS = ('ADEV at 1 s (deg/s)', 'ADEV minimum (deg/s)', 'ADEV minimum at tau (s)',
+ALLAN_KEYS = ('ADEV at 1 s (deg/s)', 'Bias stability (deg/s)', 'Bias stability tau (s)',
               'Angle random walk (deg/sqrt(h))', 'Bias instability (deg/h)')
 
 
 def allan_items(summary):
     """
-    Return an axis' Allan deviation items: ADEV at 1 s, its minimum, fitted noise terms.
+    Return an axis' Allan deviation items, all read by :func:`.readout.read_allan`.
 
     Parameters
     ----------
     summary : engine.AxisSummary or None
-        With ``allan`` (and possibly ``noise_terms``) filled in; None or no Allan result gives
-        ``'n/a'`` values (the keys stay, so dashboards see a stable set).
+        With ``readout`` filled in; None or no readout gives ``'n/a'`` values (the keys stay,
+        so dashboards see a stable set).
 
     Returns
     -------
     list of (str, str)
-        The :data:`ALLAN_KEYS` with their values.
+        The :data:`ALLAN_KEYS` with their values: ADEV at 1 s (``n/a`` until the run is 4 s long:
+        taus stop at a quarter of the record, no extrapolation), the bias stability (``<=``
+        before it when the curve has not turned up yet: an upper bound) and its tau, the angle
+        random walk N and the bias instability B = bias stability / 0.664.
 
     """
     out = dict.fromkeys(ALLAN_KEYS, 'n/a')
-    result = None if summary is None else summary.allan
-    if result is not None:
-        tau = np.asarray(result.tau_s, dtype=np.float64)
-        adev = np.asarray(result.adev, dtype=np.float64)
-        good = np.isfinite(adev) & (adev > 0)
-        tau, adev = tau[good], adev[good]
-        # Octave taus rarely hit 1 s exactly: interpolate in log-log (ADEV is a power law between
-        # neighbouring octaves); no extrapolation, so 'n/a' until the run is 4 s long (tau <= N/4).
-        if tau.size > 1 and tau[0] <= 1.0 <= tau[-1]:
-            adev_1s = float(np.exp(np.interp(0.0, np.log(tau), np.log(adev))))
-            out['ADEV at 1 s (deg/s)'] = fmt(adev_1s * DEG)
-        if tau.size:
-            i = int(np.argmin(adev))
-            out['ADEV minimum (deg/s)'] = fmt(adev[i] * DEG)
-            out['ADEV minimum at tau (s)'] = fmt(tau[i])
-    terms = None if summary is None else summary.noise_terms
-    if terms is not None:
-        try:
-            customary = terms.customary()
-            arw = customary.angle_random_walk_deg_per_sqrt_h
-            out['Angle random walk (deg/sqrt(h))'] = fmt(arw)
-            out['Bias instability (deg/h)'] = fmt(customary.bias_instability_deg_per_h)
-        except (AttributeError, TypeError, ValueError):
-            pass
+    r = None if summary is None else getattr(summary, 'readout', None)
+    if r is not None:
+        out['ADEV at 1 s (deg/s)'] = fmt(r.adev_1s_rad_s * DEG)
+        bound = '<=' if r.bias_stability_upper_bound else ''
+        out['Bias stability (deg/s)'] = bound + fmt(r.bias_stability_rad_s * DEG)
+        out['Bias stability tau (s)'] = fmt(r.bias_stability_tau_s)
+        # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
+        out['Angle random walk (deg/sqrt(h))'] = fmt(r.arw_rad_per_sqrt_s * DEG * 60.0)
+        out['Bias instability (deg/h)'] = bound + fmt(r.bias_instability_rad_s * DEG * 3600.0)
     return list(out.items())
 
 

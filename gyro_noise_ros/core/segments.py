@@ -23,8 +23,12 @@ the 20th percentile of its window standard deviations (robust when motion fills 
 as in the x-io example); the static rate is the median window mean of the windows at that noise
 level. A window is **moving** when on any axis its standard deviation exceeds ``3x`` the static
 noise level, or its mean departs from the static rate by more than ``3x`` that level (a slow turn
-raises the mean, not the spread). The analysed segment is the longest run of consecutive static
-windows; when it covers at least 95 % of the windows the record counts as static throughout.
+raises the mean, not the spread). The analysed segment is the longest run of static windows; when
+it covers at least 95 % of the windows the record counts as static throughout.
+
+Only a moving window ends a run. Windows without samples (a stamp gap: the recorder or the link
+lost data) do not: the samples on both sides of a gap belong to one static run, and the gap is
+reported by the engine as a gap (its length and the samples missing), never as motion.
 """
 
 from dataclasses import dataclass
@@ -58,7 +62,7 @@ class StaticSegment:
     windows, static_windows : int
         Windows in the record and static windows in total.
     segments : tuple of (int, int)
-        Every static run as (start_ns, end_ns).
+        Every static run as (start_ns, end_ns); a run may span windows without data (gaps).
     noise_rad_s : tuple of float
         Static noise level per axis (rad/s).
 
@@ -104,10 +108,10 @@ class WindowStats:
 
         """
         s = np.asarray(stamp_ns, dtype=np.int64)
+        if s.size == 0:
+            return  # e.g. a --start past the end: nothing selected (and nothing to reshape)
         g = np.asarray(gyro, dtype=np.float64)
         g = g.reshape(g.shape[0], -1)
-        if s.size == 0:
-            return
         if self._t0 is None:
             self._t0 = int(s[0])
         ok = np.all(np.isfinite(g), axis=1)
@@ -145,11 +149,8 @@ class WindowStats:
         keys = np.array(keys)
         runs, start = [], None
         for i, still in enumerate(~moving):
-            # consecutive windows only: a missing window (no data) breaks a run
-            if still and start is not None and keys[i] != keys[i - 1] + 1:
-                runs.append((start, i))
-                start = i
-            elif still and start is None:
+            # windows without data (a stamp gap) are skipped, not motion: only motion ends a run
+            if still and start is None:
                 start = i
             elif not still and start is not None:
                 runs.append((start, i))
@@ -159,7 +160,9 @@ class WindowStats:
         edges = [(self._t0 + int(keys[a]) * self._w, self._t0 + (int(keys[b - 1]) + 1) * self._w)
                  for a, b in runs]
         if not runs:
-            return StaticSegment(0, 0, False, len(keys), 0, (), tuple(float(v) for v in noise))
+            # an empty segment at the record's start, never at stamp 0 (1970)
+            return StaticSegment(self._t0, self._t0, False, len(keys), 0, (),
+                                 tuple(float(v) for v in noise))
         best = max(range(len(runs)), key=lambda i: runs[i][1] - runs[i][0])
         length = runs[best][1] - runs[best][0]
         throughout = length >= STATIC_ALL * len(keys)

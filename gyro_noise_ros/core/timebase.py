@@ -39,7 +39,15 @@ stamp jitter), never a long step followed by a burst. Steps shorter than half th
 exist only when stamps are bursty (a lost sample never makes a step *shorter*); above 1 % of such
 steps the stamps are called **bursty** and callers must not read loss from single steps.
 
-**Jitter** is the RMS of the stamps about a straight line through each block of 64 samples (s).
+**Jitter** is the RMS of the stamps about a straight line through each block of 64 samples (s);
+blocks holding a gap (a step of :data:`GAP_STEPS` typical block maxima or more) are left out, so a
+one-hour hole is loss, not jitter.
+
+**Equal consecutive stamps are a normal time base**: a host-stamped driver gives every sample of
+one USB packet its packet's stamp. Such steps (exactly zero) are counted (``equal_steps``) and
+make the stamps bursty when they exceed 1 % of the steps; they never make the stamps unusable. Only
+**decreasing** stamps (a step < 0: shuffled or re-sent messages) do, above
+:data:`UNUSABLE_FRACTION` of the steps, and so does a record whose stamps never advance (span 0).
 
 Memory is bounded: the tracker keeps one small row per block and merges neighbouring blocks in
 pairs when more than :data:`MAX_BLOCKS` are held, so it runs for days in a live node.
@@ -62,8 +70,12 @@ SHORT_STEP = 0.5
 BURSTY_FRACTION = 0.01
 #: Relative difference between estimators above which a warning is given.
 DISAGREE = 0.01
-#: Fraction of non-increasing steps above which the stamps are not a time base.
+#: Fraction of decreasing steps (< 0) above which the stamps are not a time base (equal stamps
+#: are not counted: module doc).
 UNUSABLE_FRACTION = 0.01
+#: A block whose largest step exceeds this many median block maxima holds a gap: it is left out
+#: of the jitter and of the burst length.
+GAP_STEPS = 10.0
 #: Fewest blocks for the block rate; below, the mean rate is used.
 MIN_BLOCKS = 8
 #: A block must span this many typical largest steps.
@@ -104,13 +116,15 @@ class RateEstimate:
     short_step_fraction, long_step_fraction : float
         Steps below 0.5 and above 1.5 local periods, as fractions of all steps.
     jitter_s : float
-        RMS of the stamps about a line through each block of 64 samples (s).
+        RMS of the stamps about a line through each block of 64 samples (s), blocks holding a gap
+        (see ``burst_step_s``) left out.
     max_step_s : float
         Largest step (s).
     out_of_order : int
-        Steps <= 0.
+        Decreasing steps (< 0): a stamp earlier than its predecessor.
     usable : bool
-        False when more than :data:`UNUSABLE_FRACTION` of the steps are <= 0 (shuffled stamps).
+        False when more than :data:`UNUSABLE_FRACTION` of the steps decrease (shuffled stamps) or
+        the stamps never advance (span 0).
     loss_samples : int
         Samples missing against elapsed time (0 when within the resolution).
     loss_resolution_samples : float
@@ -119,6 +133,13 @@ class RateEstimate:
         ``span * rate + 1 - n`` before rounding and thresholding (samples; < 0 is a surplus).
     warnings : tuple of str
         Sentences for the user (estimators disagree, bursts, loss, unusable stamps).
+    equal_steps : int
+        Steps of exactly zero (samples sharing their predecessor's stamp, e.g. one USB packet):
+        a normal time base, counted for information.
+    burst_step_s : float
+        Largest step that is not a gap (s): the largest step of the blocks whose largest step is
+        below :data:`GAP_STEPS` times the median block maximum. The longest burst wait of bursty
+        stamps; a gap counts as loss, not as jitter.
 
     """
 
@@ -142,6 +163,8 @@ class RateEstimate:
     loss_resolution_samples: float
     deficit_samples: float
     warnings: tuple = ()
+    equal_steps: int = 0
+    burst_step_s: float = math.nan
 
     def as_dict(self):
         """
@@ -185,12 +208,13 @@ class TimebaseTracker:
         self._first = None
         self._last = None
         self._out_of_order = 0
+        self._equal = 0
         self._max_step = 0
         self._short = 0
         self._long = 0
         self._steps_in_blocks = 0
-        self._jit_ss = 0.0
-        self._jit_n = 0
+        self._jss = []  # sum of squared residuals about the block's line (ns^2), per block
+        self._jn = []  # residuals per block
         self._reg_n = 0
         self._reg_sum = 0.0
         self._reg_ss = 0.0
@@ -239,7 +263,8 @@ class TimebaseTracker:
         self._last = int(s[-1])
         self._n += s.size
         if steps.size:
-            self._out_of_order += int(np.count_nonzero(steps <= 0))
+            self._out_of_order += int(np.count_nonzero(steps < 0))
+            self._equal += int(np.count_nonzero(steps == 0))
             self._max_step = max(self._max_step, int(steps.max()))
         self._carry = np.concatenate((self._carry, s))
         k = self._k
@@ -267,8 +292,8 @@ class TimebaseTracker:
         xc = x - x.mean()
         slope = (blk @ xc) / (xc @ xc)
         resid = blk - blk.mean(axis=1, keepdims=True) - slope[:, None] * xc[None, :]
-        self._jit_ss += float(np.sum(resid ** 2))
-        self._jit_n += resid.size
+        self._jss.append(np.sum(resid ** 2, axis=1))
+        self._jn.append(np.full(nb, k + 1, dtype=np.int64))
         self._dur.append(dur)
         self._maxstep.append(st.max(axis=1))
         self._medstep.append(med)
@@ -286,6 +311,9 @@ class TimebaseTracker:
         self._dur = [dur[:m:2] + dur[1:m:2]]
         self._maxstep = [np.maximum(mx[:m:2], mx[1:m:2])]
         self._medstep = [0.5 * (md[:m:2] + md[1:m:2])]
+        jss, jn = np.concatenate(self._jss), np.concatenate(self._jn)
+        self._jss = [jss[:m:2] + jss[1:m:2]]
+        self._jn = [jn[:m:2] + jn[1:m:2]]
         self._k *= 2
         self._samples_per_block = self._k
 
@@ -315,9 +343,15 @@ class TimebaseTracker:
         steps = n - 1
         warnings = []
         usable = self._out_of_order <= UNUSABLE_FRACTION * steps and span_ns > 0
-        if not usable:
-            warnings.append(f'{self._out_of_order} of {steps} stamp steps are not increasing: '
-                            'the stamps are not a time base')
+        if self._out_of_order > UNUSABLE_FRACTION * steps:
+            warnings.append(f'{self._out_of_order} of {steps} stamp steps go backwards (a stamp '
+                            'earlier than its predecessor): the stamps are not a time base')
+        elif span_ns == 0:
+            warnings.append(f'all {n} stamps are equal (they never advance): the stamps are not a '
+                            'time base')
+        elif span_ns < 0:
+            warnings.append('the last stamp is earlier than the first: the stamps are not a time '
+                            'base')
         mean_rate = steps / span_ns * _NS if span_ns > 0 else math.nan
         dur = np.concatenate(self._dur) if self._dur else np.empty(0)
         mx = np.concatenate(self._maxstep) if self._maxstep else np.empty(0)
@@ -370,10 +404,19 @@ class TimebaseTracker:
             used_method = 'configured'
         else:
             if not math.isfinite(stamp_rate):
-                raise InputDataError('the stamps do not increase: cannot estimate a sample rate; '
+                raise InputDataError(warnings[0] if not usable else
+                                     'the stamps do not increase: cannot estimate a sample rate; '
                                      'give the rate explicitly')
             rate, used_method = stamp_rate, method
-        jitter = math.sqrt(self._jit_ss / self._jit_n) / _NS if self._jit_n else math.nan
+        jitter, burst_step = math.nan, self._max_step / _NS
+        if mx.size:
+            # A block holding a gap (a step of 10 typical block maxima and more) would make the
+            # gap's length look like jitter, and a burst wait like hours: both leave it out.
+            calm = mx <= GAP_STEPS * float(np.median(mx))
+            jss, jn = np.concatenate(self._jss)[calm], np.concatenate(self._jn)[calm]
+            if jn.sum():
+                jitter = math.sqrt(float(jss.sum()) / float(jn.sum())) / _NS
+                burst_step = float(mx[calm].max()) / _NS
         if usable and math.isfinite(median_step_rate) and math.isfinite(stamp_rate) \
                 and abs(median_step_rate / stamp_rate - 1.0) > 2 * DISAGREE:
             hint = ' (bursty stamps: host receive times or packets?)' if bursty else ''
@@ -387,7 +430,7 @@ class TimebaseTracker:
             rate_rel = (se / stamp_rate) if math.isfinite(se) and stamp_rate > 0 else 0.0
             jit = jitter if math.isfinite(jitter) else 0.0
             resolution = (n * rate_rel * 3.0 + 3.0 * jit * rate
-                          + 2.0 * self._max_step / _NS * rate * bursty + 1.0)
+                          + 2.0 * burst_step * rate * bursty + 1.0)
         loss = int(round(deficit)) if usable and deficit > resolution else 0
         if loss:
             warnings.append(f'{loss} sample(s) missing against elapsed time '
@@ -404,7 +447,8 @@ class TimebaseTracker:
             max_step_s=self._max_step / _NS,
             out_of_order=int(self._out_of_order), usable=bool(usable), loss_samples=loss,
             loss_resolution_samples=float(resolution), deficit_samples=float(deficit),
-            warnings=tuple(warnings))
+            warnings=tuple(warnings), equal_steps=int(self._equal),
+            burst_step_s=float(burst_step))
 
 
 def _group(dur, g):

@@ -45,7 +45,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import BagError, InputDataError, ParameterError
+from ..core.plausible import MAX_RATE_RAD_S, non_physical
+from ..errors import BagError, InputDataError, nothing_left_error, ParameterError
 
 #: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks
 #: and the order identification needs chunks longer than its memory; the layout scales with the
@@ -137,6 +138,13 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
         raise InputDataError(
             f'angular rate ({axis} axis) has {int(bad.sum())} NaN/Inf sample(s), first at '
             f'index {int(np.argmax(bad))}; remove or repair them first')
+    huge = non_physical(rate, MAX_RATE_RAD_S)
+    if huge.any():
+        raise InputDataError(
+            f'angular rate ({axis} axis) has {int(huge.sum())} sample(s) beyond '
+            f'{MAX_RATE_RAD_S:g} rad/s, first at index {int(np.argmax(huge))} '
+            f'({rate[np.argmax(huge)]:.3g}): not a measurement (a corrupt record or a wrong '
+            'unit); remove or repair them first')
     if n < MIN_SAMPLES:
         raise InputDataError(f'too short to analyse: {n} samples, need at least {MIN_SAMPLES}')
     if np.ptp(rate) == 0.0:
@@ -205,39 +213,25 @@ def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
     Measurement
 
     """
+    from ..bag.tabular import missing_column_error, read_csv
+
     _check_axis(axis)
     path = Path(path)
-    try:
-        with path.open(newline='') as fh:
-            header = next(csv.reader(fh), None)
-    except OSError as err:
-        raise InputDataError(f'cannot read CSV {str(path)!r}: {err.strerror or err}') from err
-    if not header:
-        raise InputDataError(f'CSV {str(path)!r} is empty (a header line is required)')
-    names = [h.strip().lower() for h in header]
 
-    def col(*choices):
-        for c in choices:
-            if c in names:
-                return names.index(c)
-        return None
+    def col(names, *choices):
+        return next((names.index(c) for c in choices if c in names), None)
 
-    i_t = col('time_s', 't_s')
-    i_rad = col(f'gyro_{axis}_rad_s')
-    i_dps = col(f'gyro_{axis}_dps')
-    i_temp = col('temperature_c', 'temp_c')
-    if i_rad is None and i_dps is None:
-        raise InputDataError(
-            f'CSV {str(path)!r} has no column gyro_{axis}_rad_s (or gyro_{axis}_dps); '
-            f'columns: {", ".join(names)}')
-    if i_t is None and rate_hz is None:
-        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
-    try:
-        data = np.loadtxt(path, delimiter=',', skiprows=1, ndmin=2, dtype=np.float64)
-    except ValueError as err:
-        raise InputDataError(f'CSV {str(path)!r} has a non-numeric value: {err}') from err
-    if data.shape[0] == 0:
-        raise InputDataError(f'too short to analyse: CSV {str(path)!r} has no data rows')
+    def check(names):
+        if col(names, f'gyro_{axis}_rad_s', f'gyro_{axis}_dps') is None:
+            raise missing_column_error(path, f'gyro_{axis}_rad_s (or gyro_{axis}_dps)', names)
+        if col(names, 'time_s', 't_s') is None and rate_hz is None:
+            raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
+
+    names, data = read_csv(path, check_header=check)
+    i_t = col(names, 'time_s', 't_s')
+    i_rad = col(names, f'gyro_{axis}_rad_s')
+    i_dps = col(names, f'gyro_{axis}_dps')
+    i_temp = col(names, 'temperature_c', 'temp_c')
     rate = data[:, i_rad] if i_rad is not None else np.deg2rad(data[:, i_dps])
     return make_measurement(
         rate, t_s=None if i_t is None else data[:, i_t], rate_hz=rate_hz,
@@ -358,6 +352,8 @@ def select(meas, *, start_s=None, end_s=None, static='auto'):
     if end_s is not None:
         left['after_end'] = int((keep & (t > end_s)).sum())
         keep &= t <= end_s
+    if not keep.any():
+        raise nothing_left_error(start_s=start_s, end_s=end_s, record_end_s=float(t[-1]))
     if static == 'auto':
         stamps = np.rint(t * 1e9).astype(np.int64)
         stats = WindowStats()
@@ -397,7 +393,7 @@ def available_axes(path):
     try:
         with path.open(newline='') as fh:
             header = [h.strip().lower() for h in next(csv.reader(fh), [])]
-    except OSError:
-        return AXES
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return AXES  # load_csv says what is wrong with the file
     found = tuple(a for a in AXES if f'gyro_{a}_rad_s' in header or f'gyro_{a}_dps' in header)
     return found or AXES

@@ -23,13 +23,15 @@ comparison domain of :mod:`.signatures`.
 """
 
 import json
+from pathlib import Path
 
 import numpy as np
 
 from . import signatures as sig
 from .effects import public_params
 from .uncertainty import format_value
-from ..errors import make_out_dir
+from ..errors import OutputError
+from ..outputs import staged_output
 
 DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}
@@ -200,7 +202,10 @@ def verdict(result):
 
 def write_outputs(result, out_dir):
     """
-    Write explain.json, report.md and the figures to ``out_dir``.
+    Write explain.json, report.md and the figures to ``out_dir``, all or nothing.
+
+    The files are staged and published together (:func:`gyro_noise_ros.outputs.staged_output`):
+    an error or an interrupt leaves no explain.json without its report.
 
     Parameters
     ----------
@@ -214,29 +219,70 @@ def write_outputs(result, out_dir):
     pathlib.Path
         The directory.
 
+    Raises
+    ------
+    OutputError
+        The directory cannot be created or written.
+
     """
-    out = make_out_dir(out_dir)
+    with staged_output(out_dir) as stage:
+        write_files(result, stage)
+    return Path(out_dir)
+
+
+def write_files(result, folder):
+    """
+    Write explain.json, report.md and the figures into an existing (staging) folder.
+
+    Parameters
+    ----------
+    result : ExplainResult
+        The workflow's result.
+    folder : pathlib.Path
+        Where to write; a caller that stages several results (one per axis) publishes them.
+
+    Returns
+    -------
+    list of str
+        The names written.
+
+    Raises
+    ------
+    OutputError
+        A file cannot be written.
+
+    """
+    try:
+        return _write_files(result, Path(folder))
+    except OSError as err:  # disk full, quota, a folder removed under the run
+        where = f' ({err.filename})' if err.filename else ''
+        raise OutputError(f'cannot write the results: {err.strerror or err}{where}') from err
+
+
+def _write_files(result, folder):
     data = result.to_dict()
-    (out / 'explain.json').write_text(json.dumps(data, indent=2, default=_json_default) + '\n')
+    (folder / 'explain.json').write_text(
+        json.dumps(data, indent=2, default=_json_default) + '\n')
     layout = result.layout
     names = list(result.comparisons_initial)
-    figures = []
-    plot_signatures(out / 'overview.png', layout, names,
+    files = ['explain.json']
+    plot_signatures(folder / 'overview.png', layout, names,
                     [result.comparisons_initial, result.comparisons_final if result.steps
                      else None], ['baseline', 'final model'], ['0.6', 'tab:blue'],
                     f'measurement vs ensemble: baseline (grey), final model (blue); gap '
                     f'{result.gap_initial:.3f} -> {result.gap_final:.3f}')
-    figures.append('overview.png')
+    files.append('overview.png')
     for i, step in enumerate(result.steps, 1):
         changed = [n for n in names if step.before[n].g > 1 or step.after[n].g > 1] or names[:4]
         name = f'step{i}_{step.effect}.png'
-        plot_signatures(out / name, layout, changed[:4], [step.before, step.after],
+        plot_signatures(folder / name, layout, changed[:4], [step.before, step.after],
                         ['before', 'after'], ['0.6', 'tab:blue'],
                         f'step {i}: + {step.effect} (gap {step.gap_before:.3f} -> '
                         f'{step.gap_after:.3f})')
-        figures.append(name)
-    (out / 'report.md').write_text(_markdown(result))
-    return out
+        files.append(name)
+    (folder / 'report.md').write_text(_markdown(result))
+    files.append('report.md')
+    return files
 
 
 def _json_default(value):

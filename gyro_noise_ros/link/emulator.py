@@ -443,6 +443,8 @@ class BoardModel:
         accel_std = self.accel_noise_ug_rthz * 1e-6 * lsm.STANDARD_GRAVITY * np.sqrt(
             self.odr_hz / 2.0)
         accel += self._accel_rng.standard_normal((n, 3)) * accel_std
+        if self.thermal is not None:
+            accel += th.accel_bias_m_s2
         if self.helium is not None:
             h = self.helium
             rise = np.where(t > h.delay_s, -np.expm1(-(np.maximum(t - h.delay_s, 0.0)) / h.tau_s),

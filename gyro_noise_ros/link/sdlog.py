@@ -47,6 +47,7 @@ from .protocol import (
     MAX_SAMPLES_PER_FRAME,
 )
 from .scan import ScanDecoder
+from .sequence import wrapped_delta
 from ..errors import InputDataError, ParameterError
 
 #: FAT32 file-size limit (bytes); the paper's board stopped a sequence there (~12 h at 6.66 kHz).
@@ -55,6 +56,10 @@ FILE_NAME_FORMAT = 'S{sequence:03d}F{index:03d}.GNL'
 FILE_NAME_RE = re.compile(r'^S(\d{3})F(\d{3})\.GNL$', re.IGNORECASE)
 #: Corrupt regions kept in a report (the total count is always exact).
 MAX_REPORTED_REGIONS = 1000
+#: Largest read size (bytes): a block of log is decoded into about 2.4 times its size of arrays
+#: and a few blocks are in flight, so 64 MiB keeps an import under about 1 GB; a larger value
+#: is refused up front instead of failing half-way with a memory error.
+MAX_CHUNK_BYTES = 64 << 20
 
 
 def log_file_name(sequence_id, file_index):
@@ -318,6 +323,82 @@ def read_header(path):
     return None
 
 
+def sample_span(path):
+    """
+    Return the sample counters at the start and at the end of a log file.
+
+    Only the first and the last ``2 * MAX_FRAME_SIZE`` bytes are decoded (a frame cut by the end
+    of the file is skipped, so the last counter is that of the last complete frame).
+
+    Parameters
+    ----------
+    path : str
+        Log file.
+
+    Returns
+    -------
+    tuple of (int, int) or None
+        (first, last) sample counter, or None when either end holds no valid SAMPLES frame.
+
+    """
+    window = 2 * MAX_FRAME_SIZE
+    with open(path, 'rb') as fh:
+        head = fh.read(window)
+        size = fh.seek(0, 2)
+        fh.seek(max(0, size - window))
+        tail = fh.read()
+    first = Decoder().feed(head).samples
+    last = Decoder().feed(tail).samples
+    if first.size == 0 or last.size == 0:
+        return None
+    return int(first['seq'][0]), int(last['seq'][-1])
+
+
+def _check_distinct(infos):
+    """Refuse a file named twice (ParameterError), two files of the same data (InputDataError)."""
+    seen = {}
+    for info in infos:
+        try:
+            key = os.path.realpath(info.path)
+            st = os.stat(info.path)
+            ident = (st.st_dev, st.st_ino)
+        except OSError as err:
+            raise InputDataError(f'cannot read log file {info.path!r}: {err}') from err
+        for other, (other_key, other_ident) in seen.items():
+            if key == other_key or ident == other_ident:
+                raise ParameterError(f'log file {info.path!r} is given twice (also as '
+                                     f'{other!r}); give each file once')
+        seen[info.path] = (key, ident)
+    heads = {}
+    for info in infos:
+        if info.header is None:
+            continue
+        key = (info.header.sequence_id, info.header.file_index)
+        if key in heads:
+            raise InputDataError(
+                f'log files {heads[key]!r} and {info.path!r} both hold file {key[1]} of '
+                f'sequence {key[0]} (the same log twice?); give each file once')
+        heads[key] = info.path
+
+
+def _check_overlaps(files):
+    """Refuse consecutive files whose sample counters overlap (InputDataError naming both)."""
+    previous = None
+    for info in files:
+        try:
+            span = sample_span(info.path)
+        except OSError as err:
+            raise InputDataError(f'cannot read log file {info.path!r}: {err}') from err
+        if span is None:
+            continue
+        if previous is not None and int(wrapped_delta(span[0], previous[1][1])) <= 0:
+            raise InputDataError(
+                f'log files {previous[0]!r} (samples {previous[1][0]}..{previous[1][1]}) and '
+                f'{info.path!r} (samples {span[0]}..{span[1]}) overlap: the same samples '
+                'twice; give each part of the sequence once')
+        previous = (info.path, span)
+
+
 def _name_key(path):
     m = FILE_NAME_RE.match(os.path.basename(path))
     return (int(m.group(1)), int(m.group(2))) if m else None
@@ -342,8 +423,10 @@ class SdLogReader:
     Notes
     -----
     Iterate to get :class:`LogBlock` objects; :attr:`report` is complete when the iteration ends.
-    Raises InputDataError before reading when the headers name different sequences or a file is
-    missing.
+    Raises before reading: ParameterError when a file is named twice or ``chunk_bytes`` is
+    outside 1 .. :data:`MAX_CHUNK_BYTES`; InputDataError when a file cannot be read, the headers
+    name different sequences, two files hold the same file of the sequence, or the sample
+    counters of two consecutive files overlap (the same samples twice).
 
     """
 
@@ -351,8 +434,9 @@ class SdLogReader:
         paths = [os.fspath(p) for p in paths]
         if not paths:
             raise ParameterError('paths must name at least one log file')
-        if int(chunk_bytes) < 1:
-            raise ParameterError(f'chunk_bytes must be >= 1, got {chunk_bytes}')
+        if not 1 <= int(chunk_bytes) <= MAX_CHUNK_BYTES:
+            raise ParameterError(f'chunk_bytes must be in 1..{MAX_CHUNK_BYTES} (64 MiB), got '
+                                 f'{chunk_bytes}')
         self.chunk_bytes = int(chunk_bytes)
         self._decoder_class = ScanDecoder if scan else Decoder
         infos = []
@@ -378,6 +462,8 @@ class SdLogReader:
             return (0, named[1], pos) if named else (1, pos, pos)
 
         self.files = tuple(info for _, info in sorted(enumerate(infos), key=key))
+        _check_distinct(self.files)
+        _check_overlaps(self.files)
         indices = sorted(i.header.file_index for i in self.files if i.header is not None)
         missing = []
         if indices:

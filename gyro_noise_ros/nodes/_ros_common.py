@@ -270,6 +270,12 @@ def run_node(node_factory, args=None, *, prog):
         return err.exit_code
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:  # noqa: BLE001 - only the shutdown race below is swallowed
+        # SIGINT/SIGTERM shut the context down from rclpy's signal handler; a spin caught
+        # building its wait set at that moment raises RCLError ("the given context is not
+        # valid"): that is the requested shutdown, not a failure.
+        if rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()

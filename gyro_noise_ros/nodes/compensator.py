@@ -19,7 +19,8 @@ REP-145: the driver publishes what the device reports (``imu/data_raw``); this n
 six-position calibration (bias, scale factor, misalignment of accelerometer and gyro,
 :mod:`gyro_noise_ros.calibration.apply`) and, given a causal thermal model, subtracts the gyro
 offset it predicts from the die temperature and its rate (:mod:`gyro_noise_ros.thermal.live`,
-evaluated per ``imu/temperature`` message, interpolated onto the gyro stamps). It publishes
+evaluated per ``imu/temperature`` message, interpolated onto the gyro stamps) and, when the model
+has one, the accelerometer's temperature-dependent offset change. It publishes
 ``imu/data_compensated`` (``sensor_msgs/Imu``, reliable keep-last deep queue per REP-2003) with
 the header stamp, frame_id, orientation and covariances of each input message unchanged, and
 ``/diagnostics`` status ``'<node>: compensation'``. Ingestion as in the analyzer: raw
@@ -48,10 +49,10 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
                           sensor_data_qos, SequenceGapCounter, take_all, unused_callback, WARN,
                           worst)
 from ..bag import decode_temperature
-from ..bag.codec import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
 from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
 from ..errors import BagError, ParameterError
-from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live_model, RANGE_MARGIN,
+from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
+from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, RANGE_MARGIN,
                             RANGE_NAMES, RANGE_OUTSIDE, TemperatureGate)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S
 
@@ -108,8 +109,9 @@ PARAMETERS = (
               '(the offset is held meanwhile)', unit='s', read_only=True, min_value=0.01,
               max_value=3600.0),
     ParamSpec('temperature_wait_s', 2.0, 'With a thermal model, Imu messages that arrive before '
-              'the first temperature wait this long for it, then are dropped and counted: they '
-              'are never published uncorrected on the compensated topic', unit='s',
+              'the first offset wait this long (plus the rate window for a model that uses dT, '
+              'which needs its window filled) for it, then are dropped and counted: they are '
+              'never published uncorrected on the compensated topic', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
     # 4 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
     # Fast DDS's default period 3 s (the 6.66 kHz Imu stream is repaired sooner, by heartbeats
@@ -121,6 +123,8 @@ PARAMETERS = (
               'interpolated, never held from an older temperature; past it the sample gets the '
               'latest offset and is counted (0: never wait, the latest offset at once)', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
+    ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
+              'change when model.json has one', read_only=True),
     ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
               'publisher such as the driver) instead of sensor-data best effort, so a busy host '
               'drops no message that would leave a gap in the compensated stream',
@@ -161,6 +165,14 @@ def _vec(values, scale=1.0):
     return ', '.join(f'{v * scale:.6g}' for v in values)
 
 
+def _share(ev):
+    """Share (%) of evaluated temperature messages outside the trained range of T or dT."""
+    evaluated = sum(ev.knots_by_status.values())
+    if not evaluated:
+        return 'n/a'
+    return f'{100.0 * ev.knots_outside / evaluated:.3g}'
+
+
 class ImuCompensatorNode(Node):
     """
     Calibration and thermal compensation node (see the module docstring).
@@ -181,22 +193,34 @@ class ImuCompensatorNode(Node):
         self._status_name = f'{self.get_name()}: compensation'
         self.calibration, self._cal_source = calibration_from(p)
         margin = None if p['temperature_margin_c'] < 0 else p['temperature_margin_c']
-        range_c = None
+        range_c = rate_range = accel_model = None
+        notes = ()
         if thermal_model is None and p['thermal_model_file']:
-            thermal_model, range_c, file_margin = load_live_model(p['thermal_model_file'])
-            margin = file_margin if margin is None else margin
+            live = load_live(p['thermal_model_file'])
+            thermal_model, range_c, rate_range = live.method, live.range_c, live.rate_range_c_s
+            margin = live.margin_c if margin is None else margin
+            accel_model = live.accel if p['accel_thermal'] else None
+            notes = live.notes
+        window = p['temperature_rate_window_s'] or None
         self.thermal = None if thermal_model is None else LiveDriftEvaluator(
-            thermal_model, range_c=range_c, rate_window_s=p['temperature_rate_window_s'] or None,
-            margin_c=margin, beyond=p['out_of_range_action'])
+            thermal_model, range_c=range_c, rate_window_s=window, margin_c=margin,
+            beyond=p['out_of_range_action'], rate_range_c_s=rate_range)
+        self.thermal_accel = None if accel_model is None else LiveDriftEvaluator(
+            accel_model, range_c=range_c, margin_c=margin, beyond=p['out_of_range_action'])
+        for note in notes:
+            self.get_logger().warning(note)
         self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'temperatures'), 0)
-        # Samples wait for a temperature at or after their stamp (bounded; dropped before the
-        # first one).
-        self._gate = TemperatureGate(p['max_temperature_wait_s'], p['temperature_wait_s'])
+        # Samples wait for an offset at or after their stamp (bounded). Before the first offset
+        # (the first temperature, plus the rate window for a model using dT) they are dropped.
+        start_up_s = 0.0 if self.thermal is None else self.thermal.start_up_s
+        self._gate = TemperatureGate(p['max_temperature_wait_s'],
+                                     p['temperature_wait_s'] + start_up_s)
         self._late_reported = 0
         self._transport = SequenceGapCounter()
         self._frame_id = ''
         self._last_data = self._last_temp = None
         self._offset = None
+        self._accel_offset = None
         self._rate = (time.monotonic(), 0, math.nan)  # time, published count, Hz
         group = PolledGroup()
         qos = sensor_data_qos(p['queue_depth'], p['reliable'])
@@ -229,6 +253,8 @@ class ImuCompensatorNode(Node):
                 stamp_ns, temperature_c = (), ()
             if self.thermal.add_temperature(stamp_ns, temperature_c):
                 self._last_temp = time.monotonic()
+            if self.thermal_accel is not None:
+                self.thermal_accel.add_temperature(stamp_ns, temperature_c)
         raws, _, sequence = take_all(self._imu_sub, Imu)
         if raws:
             self.compensate(raws, sequence)
@@ -261,7 +287,7 @@ class ImuCompensatorNode(Node):
         self._release()
 
     def _release(self):
-        for batch, i, j, _ in self._gate.release(self.thermal.stamp_ns, time.monotonic()):
+        for batch, i, j, _ in self._gate.release(self.thermal.offset_stamp_ns, time.monotonic()):
             buf, starts, lengths, stamp_ns, gyro, accel = batch
             self._emit(buf, starts[i:j], lengths[i:j], stamp_ns[i:j], gyro[i:j], accel[i:j])
 
@@ -270,6 +296,11 @@ class ImuCompensatorNode(Node):
             offset = self.thermal.drift_at(stamp_ns)
             gyro -= offset
             self._offset = offset[-1]
+        if self.thermal_accel is not None:
+            accel_offset = self.thermal_accel.drift_at(stamp_ns)
+            if accel_offset is not None:
+                accel -= accel_offset
+                self._accel_offset = accel_offset[-1]
         publish = self._pub.publish
         for raw in patch_imu_spans(buf, starts, lengths, gyro, accel):
             publish(raw)
@@ -319,6 +350,15 @@ class ImuCompensatorNode(Node):
                 ('Temperature messages rejected', str(ev.rejected)),
                 ('Temperature messages beyond range + margin',
                  str(ev.knots_by_status[RANGE_OUTSIDE])),
+                ('Thermal model rate range (degC/s)', 'unknown' if ev.rate_range_c_s is None
+                 else f'{ev.rate_range_c_s[0]:.4g} to {ev.rate_range_c_s[1]:.4g}'),
+                ('Temperature messages outside the trained rate range',
+                 str(ev.knots_rate_outside)),
+                ('Share outside the trained range of T or dT (%)', _share(ev)),
+                ('Temperature messages waiting for the rate window', str(ev.pending)),
+                ('Accelerometer thermal offset (mg)',
+                 'none' if self.thermal_accel is None else 'n/a' if self._accel_offset is None
+                 else _vec(self._accel_offset, 1e3 / 9.80665)),
                 ('Messages dropped waiting for the first temperature', str(self._gate.dropped)),
                 ('Messages waiting for a temperature', str(self._gate.waiting)),
                 ('Longest wait for a temperature (s)', f'{self._gate.longest_wait_s:.3f}'),

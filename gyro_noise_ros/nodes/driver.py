@@ -52,7 +52,6 @@ from sensor_msgs.msg import Imu, Temperature
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, driver_qos, ParamSpec, run_node,
                           specs_from_dataclass, wall_timer)
-from ..bag import encode_imu_cdr, encode_temperature_cdr
 from ..core.health import LEVEL_BYTE
 from ..errors import ParameterError
 from ..link import lsm6dso32
@@ -62,6 +61,7 @@ from ..link.port import hardware_id_for, validate_port
 from ..link.reader import LinkReader
 from ..link.sequence import SequenceTracker
 from ..link.session import LinkConfig
+from ..msgs import encode_imu_cdr, encode_temperature_cdr
 
 __all__ = ['LinkConfig', 'Lsm6dso32Driver', 'main', 'NODE_NAME', 'PARAMETERS']
 

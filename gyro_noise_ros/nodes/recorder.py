@@ -33,8 +33,15 @@ transport dropped before they reached this node, counted as ``dropped``. When a 
 appears on a recorded topic (another driver, a replayed bag, another robot's graph) the recorder
 warns once, naming the publishers: the bag then mixes their streams. On SIGINT or SIGTERM the
 queues are drained once more and the bag is closed cleanly (its ``metadata.yaml`` written), then
-one summary line is printed. With sqlite3 storage the bag is also committed every
-``flush_period_s``, so even a killed recorder (SIGKILL, power loss) leaves a readable ``.db3``.
+one summary line is printed.
+
+Crash safety: every ``flush_period_s`` (0.5 s) the bag is flushed (:meth:`ImuBagWriter.flush`:
+sqlite3 commits its transaction; MCAP closes its pending chunk, which rosbags also closes past
+1 MiB, about 0.44 s at 6.66 kHz, and hands it to the operating system). A recorder killed by
+SIGKILL therefore loses at most the messages of the last ``flush_period_s`` plus those still
+queued in DDS (a drain period, 10 ms, when the host keeps up); the tools read the killed
+recording as it is and ``gyro_noise_record repair`` writes a complete bag from it
+(``docs/bags.md``).
 """
 
 from datetime import datetime, timezone
@@ -50,8 +57,8 @@ from ._publishers import PublisherWatch, RawTaker
 from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_node,
                           sensor_data_qos, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
-from ..bag.codec import frame_id_of, imu_covariances, temperature_variances
-from ..errors import BagError
+from ..errors import OutputError
+from ..msgs import frame_id_of, imu_covariances, temperature_variances
 
 NODE_NAME = 'gyro_noise_record'
 
@@ -70,10 +77,10 @@ PARAMETERS = (
     ParamSpec('drain_period_s', 0.01,
               'Period of the loop that takes queued messages and writes them',
               unit='s', read_only=True, min_value=0.001, max_value=0.5),
-    ParamSpec('flush_period_s', 2.0,
-              'Period of the sqlite3 commit that lets a killed recorder leave '
-              'a readable .db3 (0: only at close)', unit='s', read_only=True, min_value=0.0,
-              max_value=3600.0),
+    ParamSpec('flush_period_s', 0.5,
+              'Period of the flush (sqlite3 commit, MCAP chunk closed) that bounds what a '
+              'killed recorder loses (0: only at close)', unit='s', read_only=True,
+              min_value=0.0, max_value=3600.0),
     ParamSpec('report_period_s', 10.0, 'Period of the progress line in the log (0: never)',
               unit='s',
               read_only=True, min_value=0.0, max_value=3600.0),
@@ -99,7 +106,7 @@ class RecorderNode(Node):
     ------
     ParameterError
         A parameter is invalid.
-    BagError
+    OutputError
         The bag cannot be created (for example the output path exists).
 
     """
@@ -116,8 +123,8 @@ class RecorderNode(Node):
         self._writer = None
         self._closed = False
         if Path(self.output).exists():
-            raise BagError(f"parameter 'output' = {self.output!r}: the path exists; "
-                           'choose a new bag directory')
+            raise OutputError(f"parameter 'output' = {self.output!r}: the path exists; "
+                              'choose a new bag directory')
         group = PolledGroup()
         qos = sensor_data_qos(params['queue_depth'], params['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
@@ -265,7 +272,8 @@ def main(args=None):
     Returns
     -------
     int
-        0, or 2 for a bad parameter, 3 when the bag cannot be created.
+        0, or 2 for a bad parameter, 6 when the bag cannot be created (the path exists, not
+        writable) or written (disk full).
 
     """
     return run_node(RecorderNode, args, prog=NODE_NAME)

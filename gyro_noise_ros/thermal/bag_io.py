@@ -24,9 +24,10 @@ samples, repeated Imu stamps, temperature stamps that do not cover the Imu stamp
 longer than ``max_gap_s`` (:class:`InputDataError`, exit 4).
 
 :func:`write_compensated` writes a rosbag2 copy of the bag in which only the Imu
-``angular_velocity`` is replaced (patched in the serialised bytes, so orientation, acceleration,
-covariances, frame ids and stamps are kept bit for bit) and every other topic, the temperature
-included, is copied unchanged (ROS 1 input is converted to ROS 2 CDR).
+``angular_velocity`` (and, with an accelerometer model, ``linear_acceleration``) is replaced
+(patched in the serialised bytes, so orientation, covariances, frame ids and stamps are kept bit
+for bit) and every other topic, the temperature included, is copied unchanged (ROS 1 input is
+converted to ROS 2 CDR).
 """
 
 from dataclasses import dataclass
@@ -35,11 +36,11 @@ from pathlib import Path
 import numpy as np
 
 from .run import ThermalRun
-from ..bag import ImuBagReader, ImuBagWriter, TEMPERATURE_MSGTYPE
-from ..bag.codec import join_raws, typestore
+from ..bag import ImuBagReader, ImuBagWriter
 from ..bag.storage import BagSource, describe
 from ..core.timebase import estimate_rate
 from ..errors import BagError, InputDataError, ParameterError
+from ..msgs import join_raws, TEMPERATURE_MSGTYPE, typestore
 
 __all__ = ['DEFAULT_MAX_GAP_S', 'MAX_EDGE_S', 'ThermalBag', 'join_runs', 'read_thermal_run',
            'write_compensated']
@@ -50,8 +51,10 @@ DEFAULT_MAX_GAP_S = 10.0
 MAX_EDGE_S = 1.0
 
 # sensor_msgs/Imu ends with 37 float64 (orientation 4, its covariance 9, angular velocity 3, ...);
-# angular_velocity x starts 37 - 13 = 24 float64 before the end, in CDR and ROS 1 alike.
+# angular_velocity x starts 37 - 13 = 24 float64 before the end, in CDR and ROS 1 alike; then
+# its covariance (9), then linear_acceleration x, 12 float64 before the end.
 _AV_FROM_END = 8 * 24
+_LA_FROM_END = 8 * 12
 
 
 @dataclass(frozen=True)
@@ -126,7 +129,8 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
     -------
     run : ThermalRun
         ``t_s`` counts from the first Imu stamp; ``rate_hz`` is the mean rate,
-        (n - 1) / (last stamp - first stamp).
+        (n - 1) / (last stamp - first stamp); ``accel_m_s2`` the linear acceleration (None
+        when some of it is not finite: the gyro methods do not need it).
     bag : ThermalBag
 
     Raises
@@ -142,15 +146,17 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
         raise ParameterError(f'max_gap_s must be > 0 s, got {max_gap_s!r}')
     with ImuBagReader(path, topic=topic, temperature_topic=temperature_topic) as reader:
         temp_topic = _pick_temperature_topic(reader, temperature_topic)
-        stamps, gyros = [], []
+        stamps, gyros, accels = [], [], []
         for batch in reader.iter_batches():
             stamps.append(batch.stamp_ns)
             gyros.append(batch.gyro)
+            accels.append(batch.accel)
         temp_stamp, temp = reader.read_temperature()
         storage, imu_topic = reader.storage, reader.topic
     where = f'bag {str(path)!r}'
     stamp = np.concatenate(stamps)
     gyro = np.concatenate(gyros)
+    accel = np.concatenate(accels)
     if stamp.size < 3:
         raise InputDataError(f'{where}: {stamp.size} Imu message(s) on {imu_topic!r}; at least 3 '
                              'are needed')
@@ -168,6 +174,7 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
     order = np.argsort(stamp, kind='stable')
     stamp = stamp[order]
     gyro = gyro[order]
+    accel = accel[order] if np.isfinite(accel).all() else None
     if (np.diff(stamp) == 0).any():
         k = int(np.argmax(np.diff(stamp) == 0))
         raise InputDataError(f'{where}: Imu stamp {int(stamp[k])} ns repeats on {imu_topic!r}; '
@@ -187,7 +194,7 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
     est = estimate_rate(stamp, unit='ns')
     rate_hz = float(est.rate_hz) if est.usable else float((t_s.size - 1) / t_s[-1])
     run = ThermalRun(t_s=t_s, gyro_rad_s=gyro, temperature_c=temperature, rate_hz=rate_hz,
-                     name=name or _label(path))
+                     name=name or _label(path), accel_m_s2=accel)
     info = ThermalBag(path=Path(path), topic=imu_topic, temperature_topic=temp_topic,
                       storage=storage, stamp_ns=stamp, order=order.astype(np.int64),
                       temperature_samples=int(temp.size))
@@ -252,15 +259,18 @@ def join_runs(runs, *, gap_s):
     for r in runs:
         ts.append(r.t_s - r.t_s[0] + offset)
         offset = ts[-1][-1] + gap_s
+    accel = None
+    if all(r.accel_m_s2 is not None for r in runs):
+        accel = np.concatenate([r.accel_m_s2 for r in runs])
     return ThermalRun(t_s=np.concatenate(ts),
                       gyro_rad_s=np.concatenate([r.gyro_rad_s for r in runs]),
                       temperature_c=np.concatenate([r.temperature_c for r in runs]),
-                      rate_hz=rate, name='+'.join(r.name for r in runs))
+                      rate_hz=rate, name='+'.join(r.name for r in runs), accel_m_s2=accel)
 
 
-def write_compensated(bag, processed_rad_s, out_dir, *, storage=None):
+def write_compensated(bag, processed_rad_s, out_dir, *, storage=None, accel_m_s2=None):
     """
-    Write a rosbag2 copy of ``bag.path`` with the Imu angular velocity replaced.
+    Write a rosbag2 copy of ``bag.path`` with the Imu angular velocity (and acceleration) replaced.
 
     Parameters
     ----------
@@ -272,6 +282,8 @@ def write_compensated(bag, processed_rad_s, out_dir, *, storage=None):
         Bag directory to create (must not exist).
     storage : {'sqlite3', 'mcap'}, optional
         Output storage; default the input's (sqlite3 for ROS 1 input).
+    accel_m_s2 : array_like, optional, keyword-only
+        Processed linear acceleration (n, 3), m/s^2, same order; None keeps the input's.
 
     Returns
     -------
@@ -292,6 +304,13 @@ def write_compensated(bag, processed_rad_s, out_dir, *, storage=None):
         raise ParameterError(f'processed_rad_s has shape {proc.shape}, the bag has {n} samples')
     in_bag_order = np.empty_like(proc)
     in_bag_order[bag.order] = proc
+    accel_in_bag_order = None
+    if accel_m_s2 is not None:
+        acc = np.asarray(accel_m_s2, dtype=np.float64)
+        if acc.shape != (n, 3):
+            raise ParameterError(f'accel_m_s2 has shape {acc.shape}, the bag has {n} samples')
+        accel_in_bag_order = np.empty_like(acc)
+        accel_in_bag_order[bag.order] = acc
     if storage is None:
         storage = bag.storage if bag.storage in ('sqlite3', 'mcap') else 'sqlite3'
     source = BagSource(bag.path)
@@ -307,8 +326,10 @@ def write_compensated(bag, processed_rad_s, out_dir, *, storage=None):
                     conn = writer._imu_conn
                 else:
                     conn = _add_connection(writer._writer, source, topic, msgtype, store)
+                imu = topic == bag.topic
                 counts[topic] = _copy_topic(source, writer, conn, topic, msgtype, store,
-                                            in_bag_order if topic == bag.topic else None)
+                                            in_bag_order if imu else None,
+                                            accel_in_bag_order if imu else None)
     finally:
         source.close()
     if counts.get(bag.topic) != n:
@@ -333,8 +354,8 @@ def _add_connection(writer, source, topic, msgtype, store):
         raise BagError(f'cannot copy topic {topic!r} ({msgtype}): {describe(err)}') from err
 
 
-def _copy_topic(source, writer, conn, topic, msgtype, store, gyro):
-    """Copy one topic's messages; patch angular_velocity from ``gyro`` (bag order) if given."""
+def _copy_topic(source, writer, conn, topic, msgtype, store, gyro, accel=None):
+    """Copy one topic; patch angular_velocity / linear_acceleration (bag order) if given."""
     done = 0
     for buf, starts, lengths, log_ns in source.blocks(topic):
         k = starts.shape[0]
@@ -347,6 +368,9 @@ def _copy_topic(source, writer, conn, topic, msgtype, store, gyro):
             buf, starts, lengths = join_raws(raws)
         if gyro is not None:
             buf = _patch_angular_velocity(buf, starts, lengths, gyro[done:done + k])
+        if accel is not None:
+            buf = _patch_angular_velocity(buf, starts, lengths, accel[done:done + k],
+                                          from_end=_LA_FROM_END)
         blob = buf.tobytes()
         raws = [blob[s:s + m] for s, m in zip(starts.tolist(), lengths.tolist())]
         writer._write(conn, log_ns, raws)
@@ -354,10 +378,10 @@ def _copy_topic(source, writer, conn, topic, msgtype, store, gyro):
     return done
 
 
-def _patch_angular_velocity(buf, starts, lengths, xyz):
-    """Return a copy of ``buf`` with each CDR Imu message's angular_velocity set to ``xyz``."""
+def _patch_angular_velocity(buf, starts, lengths, xyz, *, from_end=_AV_FROM_END):
+    """Return a copy of ``buf`` with each CDR Imu message's vector ``from_end`` set to ``xyz``."""
     out = np.array(buf, dtype=np.uint8, copy=True)
-    at = (starts + lengths - _AV_FROM_END)[:, None] + np.arange(24)
+    at = (starts + lengths - from_end)[:, None] + np.arange(24)
     little = out[starts + 1] == 1
     for mask, order in ((little, '<'), (~little, '>')):
         if mask.any():

@@ -52,30 +52,43 @@ def _series(x, min_len, what):
 @numba.njit(cache=True)
 def _fuzzy_phi(x, m, n_vec, width, theta):  # pragma: no cover - JIT
     """Return (Phi^m, Phi^(m+1)) of eqs. 12-13 over the first n_vec vectors."""
-    base_m = np.empty(n_vec)
-    base_m1 = np.empty(n_vec)
+    # the vectors minus their own means (eqs. 8-9), once, instead of per pair
+    ym = np.empty((n_vec, m))
+    ym1 = np.empty((n_vec, m + 1))
     for p in range(n_vec):
         s = 0.0
         for i in range(m):
             s += x[p + i]
-        base_m[p] = s / m
-        base_m1[p] = (s + x[p + m]) / (m + 1)
+        base_m = s / m
+        base_m1 = (s + x[p + m]) / (m + 1)
+        for i in range(m):
+            ym[p, i] = x[p + i] - base_m
+        for i in range(m + 1):
+            ym1[p, i] = x[p + i] - base_m1
+    # theta = 2 (the default) as a product: a pow call per pair costs more than the rest
+    square = theta == 2.0
     sum_m = 0.0
     sum_m1 = 0.0
     for p in range(n_vec - 1):
         for q in range(p + 1, n_vec):
             dm = 0.0
             for i in range(m):
-                v = abs((x[p + i] - base_m[p]) - (x[q + i] - base_m[q]))
+                v = abs(ym[p, i] - ym[q, i])
                 if v > dm:
                     dm = v
             dm1 = 0.0
             for i in range(m + 1):
-                v = abs((x[p + i] - base_m1[p]) - (x[q + i] - base_m1[q]))
+                v = abs(ym1[p, i] - ym1[q, i])
                 if v > dm1:
                     dm1 = v
-            sum_m += np.exp(-(dm / width) ** theta)
-            sum_m1 += np.exp(-(dm1 / width) ** theta)
+            u = dm / width
+            u1 = dm1 / width
+            if square:
+                sum_m += np.exp(-(u * u))
+                sum_m1 += np.exp(-(u1 * u1))
+            else:
+                sum_m += np.exp(-u ** theta)
+                sum_m1 += np.exp(-u1 ** theta)
     pairs = n_vec * (n_vec - 1) / 2.0
     return sum_m / pairs, sum_m1 / pairs
 
@@ -167,6 +180,34 @@ def _sample_counts(x, m, r):  # pragma: no cover - JIT
                 if abs(x[p + m] - x[q + m]) < r:
                     a_count += 1
     return a_count, b_count
+
+
+def sample_entropy_counts(x, *, m=2, tolerance):
+    """
+    Return (A, B) of the sample entropy: template pairs matching at lengths m + 1 and m.
+
+    Parameters
+    ----------
+    x : array_like
+        Series (n,), n >= m + 2, finite.
+    m : int, keyword-only
+        Template length (>= 1).
+    tolerance : float, keyword-only
+        Absolute Chebyshev tolerance (same unit as ``x``; :func:`sample_entropy` uses
+        ``r std(x)``). Counts of several windows with one tolerance add up to the entropy of
+        the pooled templates, ``-ln(sum A / sum B)``.
+
+    Returns
+    -------
+    tuple of int
+
+    """
+    m = int(m)
+    if m < 1:
+        raise ParameterError(f'm must be >= 1, got {m}')
+    a = _series(x, m + 2, 'sample_entropy_counts')
+    a_count, b_count = _sample_counts(a, m, float(tolerance))
+    return int(a_count), int(b_count)
 
 
 def sample_entropy(x, *, m=2, r=0.2):

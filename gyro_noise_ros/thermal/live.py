@@ -23,7 +23,11 @@ offset linearly in time onto the gyro stamps:
 
 - dT is :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` on a trailing buffer holding the
   last ``rate_window_s`` of temperatures: the same trailing-window slope the offline fit used, so a
-  model sees the same inputs live as in training.
+  model sees the same inputs live as in training. As offline, the first ``rate_window_s`` after
+  the first temperature message have no filled window: those messages wait (pending knots) and
+  get the rate of the first message whose window is filled (the offline backfill); a model that
+  does not use dT (``uses_rate = False``, e.g. ``poly3``) does not wait. :attr:`start_up_s` is
+  that wait; the node holds the gyro samples meanwhile.
 - Each temperature message becomes a knot (stamp, offset). Gyro stamps between two knots get the
   linear interpolation of the two offsets; gyro stamps after the newest knot get the newest offset
   (live, the next temperature is not known yet); stamps before the first knot get the first one.
@@ -32,14 +36,18 @@ offset linearly in time onto the gyro stamps:
   the range but within the margin is evaluated and flagged :data:`RANGE_MARGIN` (the node: WARN);
   one beyond the margin is never extrapolated and is flagged :data:`RANGE_OUTSIDE` (the node:
   ERROR): its knot holds the last offset evaluated inside the trusted span (``beyond='hold'``) or
-  carries no offset at all (``beyond='none'``).
+  carries no offset at all (``beyond='none'``). The rate is checked against the model's trained
+  rate range (``rate_range_c_s``) too: knots outside it are counted (:attr:`knots_rate_outside`)
+  and the model treats them as its ``out_of_range`` says (extrapolated, never clipped).
 
 Non-causal methods need the whole record (VMD decomposition, time-frequency peak filtering,
 EMD, wavelet-threshold denoising of the full signal) and are refused with a message naming those
 offline-only steps. No ROS is imported here.
 """
 
+from dataclasses import dataclass, field
 import math
+from typing import Optional
 
 import numpy as np
 
@@ -164,6 +172,54 @@ def load_live_model(path):
         build has no registry. Causality is checked by :func:`check_live_model`.
 
     """
+    live = load_live(path)
+    return live.method, live.range_c, live.margin_c
+
+
+@dataclass(frozen=True)
+class LiveModel:
+    """
+    What the live node needs from a model.json.
+
+    Attributes
+    ----------
+    method : ThermalMethod
+        The fitted gyro model.
+    range_c : (float, float) or None
+        Training temperature range (degC); None: the method's own.
+    margin_c : float or None
+        The registry's range margin (degC).
+    rate_range_c_s : (float, float) or None
+        Training temperature-rate range (degC/s), filled windows only; None: unknown.
+    accel : object or None
+        The accelerometer's relative polynomial (``drift_rad_s(T, dT)`` in m/s^2), if fitted.
+    notes : tuple of str
+        What loading noticed (e.g. another package version).
+
+    """
+
+    method: object
+    range_c: Optional[tuple] = None
+    margin_c: Optional[float] = None
+    rate_range_c_s: Optional[tuple] = None
+    accel: object = None
+    notes: tuple = field(default_factory=tuple)
+
+
+def load_live(path):
+    """
+    Load a ``model.json`` with everything the live node uses (:class:`LiveModel`).
+
+    Parameters
+    ----------
+    path : str
+        ``model.json`` written by ``gyro_noise_thermal fit``.
+
+    Returns
+    -------
+    LiveModel
+
+    """
     try:
         from . import methods
     except ImportError as err:
@@ -175,7 +231,13 @@ def load_live_model(path):
     range_c = None
     if training is not None:
         range_c = (training.temperature_min_c, training.temperature_max_c)
-    return method, range_c, getattr(methods, 'DEFAULT_RANGE_MARGIN_C', None)
+    margin = getattr(methods, 'DEFAULT_RANGE_MARGIN_C', None)
+    rate = None
+    if training is not None and getattr(training, 'temperature_rate_min_c_s', None) is not None:
+        rate = (training.temperature_rate_min_c_s, training.temperature_rate_max_c_s)
+    return LiveModel(method=method, range_c=range_c, margin_c=margin, rate_range_c_s=rate,
+                     accel=getattr(loaded, 'accel', None),
+                     notes=tuple(getattr(loaded, 'notes', ())))
 
 
 class LiveDriftEvaluator:
@@ -196,11 +258,13 @@ class LiveDriftEvaluator:
         Range margin (degC); None: the model's.
     beyond : str, keyword-only
         What a knot beyond the margin carries: ``'hold'`` the last trusted offset, ``'none'`` zero.
+    rate_range_c_s : (float, float) or None, keyword-only
+        The model's trained rate range (degC/s): knots outside it are counted.
 
     """
 
     def __init__(self, method, *, range_c=None, rate_window_s=None, margin_c=None,
-                 beyond='hold'):
+                 beyond='hold', rate_range_c_s=None):
         lo, hi, margin = check_live_model(method, range_c=range_c, margin_c=margin_c)
         self.range_lo_c, self.range_hi_c, self.margin_c = lo, hi, margin
         if beyond not in BEYOND_ACTIONS:
@@ -213,6 +277,12 @@ class LiveDriftEvaluator:
         self.name = str(getattr(method, 'name', type(method).__name__))
         self.rate_window_s = float(rate_window_s)
         self.beyond = beyond
+        # a model that does not declare it is assumed to use dT (and to wait for its window)
+        self.uses_rate = bool(getattr(method, 'uses_rate', True))
+        self.rate_range_c_s = None if rate_range_c_s is None else tuple(
+            float(v) for v in rate_range_c_s)
+        self._pending_t = np.zeros(0)   # messages waiting for the first filled rate window
+        self._pending_temp = np.zeros(0)
         self._t0_ns = None
         self._buf_t = np.zeros(0)  # trailing temperature history, s since _t0_ns
         self._buf_temp = np.zeros(0)
@@ -225,7 +295,28 @@ class LiveDriftEvaluator:
         self.stamp_ns = None
         self.knots = 0
         self.knots_by_status = {RANGE_OK: 0, RANGE_MARGIN: 0, RANGE_OUTSIDE: 0}
+        self.knots_rate_outside = 0  # knots whose rate is outside the trained rate range
+        self.knots_outside = 0  # knots outside the trained range of T or of dT
         self.rejected = 0  # non-finite or not newer than the previous message
+
+    @property
+    def start_up_s(self):
+        """float: how long after the first temperature the first offset exists (s)."""
+        return self.rate_window_s if self.uses_rate else 0.0
+
+    @property
+    def offset_stamp_ns(self):
+        """int or None: stamp of the newest knot (ns); None before the first offset exists."""
+        # Knots are added in stamp order and, once the rate window has filled, every accepted
+        # message becomes one at once: the newest knot is the newest message.
+        if self._knot_t.size == 0 or self._pending_t.size:
+            return None
+        return self.stamp_ns
+
+    @property
+    def pending(self):
+        """int: temperature messages waiting for the rate window to fill."""
+        return int(self._pending_t.size)
 
     def range_status(self, temperature_c):
         """Return the range status (RANGE_*) of each temperature, as an int array."""
@@ -272,7 +363,31 @@ class LiveDriftEvaluator:
         t = (stamps - self._t0_ns) / _NS
         self._buf_t = np.concatenate((self._buf_t, t))
         self._buf_temp = np.concatenate((self._buf_temp, temp))
-        rate = temperature_rate_c_s(self._buf_t, self._buf_temp, window_s=self.rate_window_s)[-k:]
+        # the buffer holds the whole trailing window, so its partial-window slope is the full
+        # window's once the window is filled (rate_window_filled counts from the first message)
+        rate = temperature_rate_c_s(self._buf_t, self._buf_temp, window_s=self.rate_window_s,
+                                    start='partial')[-k:]
+        self._buf_t, self._buf_temp = self._trailing(self._buf_t, self._buf_temp, t[-1])
+        self.temperature_c, self.stamp_ns = float(temp[-1]), int(stamps[-1])
+        self.status = int(self.range_status(temp[-1:])[0])
+        self.knots += k
+        if self.uses_rate:
+            filled = t >= self.rate_window_s * (1.0 - 1e-9)
+            t = np.concatenate((self._pending_t, t))
+            temp = np.concatenate((self._pending_temp, temp))
+            rate = np.concatenate((np.full(self._pending_t.size, np.nan), rate))
+            filled = np.concatenate((np.zeros(self._pending_t.size, dtype=bool), filled))
+            if not filled.any():
+                self._pending_t, self._pending_temp = t, temp
+                return k
+            first = int(np.argmax(filled))
+            rate[:first] = rate[first]   # the offline backfill (run.temperature_rate_c_s)
+            self._pending_t, self._pending_temp = np.zeros(0), np.zeros(0)
+        self._add_knots(t, temp, rate)
+        return k
+
+    def _add_knots(self, t, temp, rate):
+        k = t.size
         status = self.range_status(temp)
         drift = np.asarray(self.method.drift_rad_s(temp, rate), dtype=np.float64).reshape(k, 3)
         outside = status == RANGE_OUTSIDE
@@ -290,14 +405,15 @@ class LiveDriftEvaluator:
             self._trusted = drift[np.flatnonzero(~outside)[-1]].copy()
         self._knot_t = np.concatenate((self._knot_t, t))
         self._knot_drift = np.concatenate((self._knot_drift, drift))
-        # Keep what the next rate needs (the trailing window) and the knots gyro stamps still use.
-        self._buf_t, self._buf_temp = self._trailing(self._buf_t, self._buf_temp, t[-1])
-        self.temperature_c, self.rate_c_s = float(temp[-1]), float(rate[-1])
-        self.status, self.stamp_ns = int(status[-1]), int(stamps[-1])
-        self.knots += k
+        self.rate_c_s = float(rate[-1])
         for code in self.knots_by_status:
             self.knots_by_status[code] += int(np.count_nonzero(status == code))
-        return k
+        rate_out = np.zeros(k, dtype=bool)
+        if self.uses_rate and self.rate_range_c_s is not None:
+            lo, hi = self.rate_range_c_s
+            rate_out = (rate < lo) | (rate > hi)
+            self.knots_rate_outside += int(np.count_nonzero(rate_out))
+        self.knots_outside += int(np.count_nonzero(rate_out | (status != RANGE_OK)))
 
     def _trailing(self, t, values, t_last):
         first = np.searchsorted(t, t_last - self.rate_window_s, side='left')

@@ -22,32 +22,38 @@ method whose module is missing or broken fails with one clear :class:`MethodUnav
 naming it, while the others still work. :func:`register_method` adds a class at run time (tests,
 user plug-ins).
 
-``model.json`` (format version 1) holds the method name, every fitted parameter (the method's
-``to_dict()`` under ``parameters``) and what the model was trained on (temperature and
-temperature-rate range, sample rate, source names): :func:`save_model` / :func:`load_model`.
-:func:`check_temperature_range` refuses to apply a model more than ``margin_c`` (default
-:data:`DEFAULT_RANGE_MARGIN_C`) outside the temperatures it was trained on: every data-driven
-drift model extrapolates badly, a third-order polynomial worst of all.
+``model.json`` (format version 2; version 1 is still read) holds the method name, every fitted
+parameter (the method's ``to_dict()`` under ``parameters``), the accelerometer's polynomial
+(``accel``, when the training bags had accelerometer data) and what the model was trained on
+(temperature and temperature-rate range, sample rate, source names): :func:`save_model` /
+:func:`load_model`. :func:`check_temperature_range` refuses to apply a model more than
+``margin_c`` (default :data:`DEFAULT_RANGE_MARGIN_C`) outside the temperatures it was trained on:
+every data-driven drift model extrapolates badly, a third-order polynomial worst of all.
+:func:`range_report` counts the samples outside the trained range of T and of dT, which each
+method treats as its ``out_of_range`` attribute says.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import datetime
 import importlib
 import json
 import math
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 
-from .run import temperature_rate_c_s, ThermalMethod, ThermalRun
+from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalMethod, ThermalRun
 from .. import __version__
 from ..errors import GyroNoiseError, InputDataError, ParameterError
+from ..outputs import atomic_write_text
 
 __all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_RANGE_MARGIN_C',
            'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
-           'TemperatureRangeError', 'ThermalModel', 'TrainingInfo', 'check_temperature_range',
-           'check_trainable', 'fit_method', 'get_method', 'load_model', 'method_class',
-           'method_names', 'register_method', 'save_model', 'to_jsonable', 'training_info']
+           'RangeReport', 'TemperatureRangeError', 'ThermalModel', 'TrainingInfo',
+           'accel_view', 'check_temperature_range', 'check_trainable', 'fit_accel',
+           'fit_method', 'get_method', 'load_model', 'method_class', 'method_names',
+           'range_report', 'register_method', 'save_model', 'to_jsonable', 'training_info']
 
 #: The built-in methods: ``--method`` name -> (module, class name). Imported on first use.
 BUILTIN_METHODS = {
@@ -60,11 +66,12 @@ BUILTIN_METHODS = {
     'parallel': ('gyro_noise_ros.thermal.parallel', 'ParallelModel'),
 }
 
-#: Default ``--method`` of ``gyro_noise_thermal fit``: the held-out winner of
-#: ``gyro_noise_thermal compare`` (lowest mean residual drift on the test run among the methods
-#: that keep the full bandwidth and run causally) on three simulated train/test pairs; the
-#: measurement and its limits are in docs/thermal.md, "The default method".
-DEFAULT_METHOD = 'bp'
+#: Default ``--method`` of ``gyro_noise_thermal fit``: the held-out winner among the methods that
+#: keep the full bandwidth and run causally, on runs shaped differently from their training run
+#: (docs/scripts/thermal_heldout.py, 5 seeds x 5 shape pairs: mean ratio to the least-squares
+#: oracle 1.18 for linear_tdt, 1.30 for bp, lower on 4 of the 5 pairs); docs/thermal.md,
+#: "The default method".
+DEFAULT_METHOD = 'linear_tdt'
 
 #: How far (degC) outside the trained temperature range a model may still be applied.
 DEFAULT_RANGE_MARGIN_C = 5.0
@@ -74,7 +81,9 @@ DEFAULT_MIN_RANGE_C = 2.0
 
 #: ``format`` and ``format_version`` of model.json.
 MODEL_FORMAT = 'gyro_noise_ros.thermal.model'
-MODEL_FORMAT_VERSION = 1
+MODEL_FORMAT_VERSION = 2
+#: The format versions :func:`load_model` reads (1: no ``accel``, no ``rate_window_s``).
+READABLE_FORMAT_VERSIONS = (1, 2)
 
 _registered = {}
 
@@ -215,8 +224,10 @@ class TrainingInfo:
     ----------
     temperature_min_c, temperature_max_c : float
         Range of the training temperature (degC).
-    temperature_rate_min_c_s, temperature_rate_max_c_s : float
-        Range of the causal temperature rate (degC/s, :func:`temperature_rate_c_s`).
+    temperature_rate_min_c_s, temperature_rate_max_c_s : float or None
+        Range of the causal temperature rate (degC/s, :func:`temperature_rate_c_s` over
+        filled windows only: no start-up outliers); None when the run is shorter than the
+        window.
     rate_hz : float
         Sample rate of the training data (Hz).
     samples : int
@@ -225,17 +236,20 @@ class TrainingInfo:
         Training duration (s), summed over sources.
     sources : tuple of str
         Names of the recordings trained on.
+    rate_window_s : float
+        Window of the temperature rate (s).
 
     """
 
     temperature_min_c: float
     temperature_max_c: float
-    temperature_rate_min_c_s: float
-    temperature_rate_max_c_s: float
+    temperature_rate_min_c_s: Optional[float]
+    temperature_rate_max_c_s: Optional[float]
     rate_hz: float
     samples: int
     duration_s: float
     sources: tuple
+    rate_window_s: float = DEFAULT_RATE_WINDOW_S
 
     def as_dict(self):
         """
@@ -251,7 +265,7 @@ class TrainingInfo:
         return out
 
 
-def training_info(run, *, sources=None):
+def training_info(run, *, sources=None, rate_window_s=DEFAULT_RATE_WINDOW_S):
     """
     Summarise a training run.
 
@@ -261,6 +275,8 @@ def training_info(run, *, sources=None):
         The (possibly joined) training data.
     sources : sequence of str, optional
         Recording names (default: ``[run.name]``).
+    rate_window_s : float, keyword-only
+        Window of the temperature rate (s): the fitted method's.
 
     Returns
     -------
@@ -268,14 +284,132 @@ def training_info(run, *, sources=None):
 
     """
     temp = np.asarray(run.temperature_c, dtype=float)
-    rate = temperature_rate_c_s(run.t_s, temp)
     t = np.asarray(run.t_s, dtype=float)
+    rate = temperature_rate_c_s(t, temp, window_s=rate_window_s, start='nan')
+    filled = rate[np.isfinite(rate)]
     return TrainingInfo(
         temperature_min_c=float(np.min(temp)), temperature_max_c=float(np.max(temp)),
-        temperature_rate_min_c_s=float(np.min(rate)), temperature_rate_max_c_s=float(np.max(rate)),
+        temperature_rate_min_c_s=float(np.min(filled)) if filled.size else None,
+        temperature_rate_max_c_s=float(np.max(filled)) if filled.size else None,
         rate_hz=float(run.rate_hz), samples=int(t.size),
         duration_s=float(t.size / run.rate_hz),
-        sources=tuple(sources) if sources is not None else (run.name,))
+        sources=tuple(sources) if sources is not None else (run.name,),
+        rate_window_s=float(rate_window_s))
+
+
+@dataclass(frozen=True)
+class RangeReport:
+    """
+    How much of a run lies outside a model's trained range of T and of dT.
+
+    Attributes
+    ----------
+    samples : int
+        Samples checked.
+    temperature_below, temperature_above : int
+        Samples below ``temperature_min_c`` / above ``temperature_max_c``.
+    rate_below, rate_above : int
+        Samples whose temperature rate is below / above the trained rate range (0 when the
+        training has no rate range).
+    outside : int
+        Samples outside in T or dT (each counted once).
+    temperature_range_c, rate_range_c_s : list of float or None
+        The trained ranges.
+    run_temperature_c, run_rate_c_s : list of float
+        The run's own [min, max].
+    treatment : str
+        What the method does there (its ``out_of_range`` attribute).
+
+    """
+
+    samples: int
+    temperature_below: int
+    temperature_above: int
+    rate_below: int
+    rate_above: int
+    outside: int
+    temperature_range_c: list
+    rate_range_c_s: Optional[list]
+    run_temperature_c: list
+    run_rate_c_s: list
+    treatment: str
+
+    @property
+    def fraction_outside(self):
+        """float: ``outside / samples``."""
+        return self.outside / self.samples if self.samples else 0.0
+
+    def as_dict(self):
+        """
+        Return the JSON form (the attributes and ``fraction_outside``).
+
+        Returns
+        -------
+        dict
+
+        """
+        out = {k: getattr(self, k) for k in self.__dataclass_fields__}
+        out['fraction_outside'] = self.fraction_outside
+        return out
+
+    def text(self):
+        """
+        Return one sentence for reports and logs.
+
+        Returns
+        -------
+        str
+
+        """
+        if not self.outside:
+            return 'the whole run is inside the trained range of T and dT'
+        pct = 100.0 * self.fraction_outside
+        return (f'{self.outside} of {self.samples} samples ({pct:.3g} %) outside the trained '
+                f'range (T below {self.temperature_below}, above {self.temperature_above}; dT '
+                f'below {self.rate_below}, above {self.rate_above}): {self.treatment}')
+
+
+def range_report(training, temperature_c, rate_c_s, *, treatment=''):
+    """
+    Count the samples outside the trained range of T and of dT.
+
+    Parameters
+    ----------
+    training : TrainingInfo
+        The model's training summary.
+    temperature_c : array_like
+        Temperature of the run (n,), degC.
+    rate_c_s : array_like
+        Its temperature rate (n,), degC/s (the same estimator and window as in training).
+    treatment : str, keyword-only
+        What the method does outside (its ``out_of_range``).
+
+    Returns
+    -------
+    RangeReport
+
+    """
+    temp = np.asarray(temperature_c, dtype=float).reshape(-1)
+    rate = np.asarray(rate_c_s, dtype=float).reshape(-1)
+    t_lo, t_hi = training.temperature_min_c, training.temperature_max_c
+    below_t, above_t = temp < t_lo, temp > t_hi
+    r_lo, r_hi = training.temperature_rate_min_c_s, training.temperature_rate_max_c_s
+    if r_lo is None or r_hi is None:
+        below_r = above_r = np.zeros(temp.size, dtype=bool)
+        rate_range = None
+    else:
+        below_r, above_r = rate < r_lo, rate > r_hi
+        rate_range = [r_lo, r_hi]
+    outside = below_t | above_t | below_r | above_r
+    finite = rate[np.isfinite(rate)]
+    return RangeReport(
+        samples=int(temp.size), temperature_below=int(below_t.sum()),
+        temperature_above=int(above_t.sum()), rate_below=int(below_r.sum()),
+        rate_above=int(above_r.sum()), outside=int(outside.sum()),
+        temperature_range_c=[t_lo, t_hi], rate_range_c_s=rate_range,
+        run_temperature_c=[float(temp.min()), float(temp.max())] if temp.size else [],
+        run_rate_c_s=[float(finite.min()), float(finite.max())] if finite.size else [],
+        treatment=str(treatment))
 
 
 @dataclass(frozen=True)
@@ -290,12 +424,19 @@ class ThermalModel:
     training : TrainingInfo
     package_version : str
         gyro_noise_ros version that wrote the file.
+    accel : TemperaturePolynomial or None
+        The accelerometer's polynomial (offset change relative to its ``t_ref_c``, m/s^2), when
+        the training data had accelerometer samples.
+    notes : tuple of str
+        What :func:`load_model` noticed and let pass (e.g. written by another package version).
 
     """
 
     method: object
     training: TrainingInfo
     package_version: str = __version__
+    accel: object = None
+    notes: tuple = field(default_factory=tuple)
 
 
 def to_jsonable(value):
@@ -328,23 +469,23 @@ def to_jsonable(value):
     return value
 
 
-def save_model(method, path, *, training):
+def model_document(method, *, training, accel=None):
     """
-    Write a fitted method to model.json.
+    Return the model.json document of a fitted method (what :func:`save_model` writes).
 
     Parameters
     ----------
     method : ThermalMethod
         A fitted method (``to_dict()`` must give every fitted parameter).
-    path : str or os.PathLike
-        File to write (its directory must exist).
     training : TrainingInfo
         What it was trained on (:func:`training_info`).
+    accel : TemperaturePolynomial, optional, keyword-only
+        The accelerometer's fitted polynomial.
 
     Returns
     -------
     dict
-        The document written.
+        JSON-able.
 
     """
     doc = {
@@ -356,9 +497,35 @@ def save_model(method, path, *, training):
         'created_utc': datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds'),
         'training': training.as_dict(),
         'parameters': method.to_dict(),
+        'accel': None if accel is None else {
+            'unit': 'm/s^2', 'relative_to_t_ref': True, 'parameters': accel.to_dict()},
     }
-    doc = to_jsonable(doc)
-    Path(path).write_text(json.dumps(doc, indent=1, allow_nan=False) + '\n')
+    return to_jsonable(doc)
+
+
+def save_model(method, path, *, training, accel=None):
+    """
+    Write a fitted method to model.json (atomically: a half-written file is never left).
+
+    Parameters
+    ----------
+    method : ThermalMethod
+        A fitted method (``to_dict()`` must give every fitted parameter).
+    path : str or os.PathLike
+        File to write (its directory must exist).
+    training : TrainingInfo
+        What it was trained on (:func:`training_info`).
+    accel : TemperaturePolynomial, optional, keyword-only
+        The accelerometer's fitted polynomial.
+
+    Returns
+    -------
+    dict
+        The document written.
+
+    """
+    doc = model_document(method, training=training, accel=accel)
+    atomic_write_text(path, json.dumps(doc, indent=1, allow_nan=False) + '\n')
     return doc
 
 
@@ -394,33 +561,57 @@ def load_model(path):
     if not isinstance(doc, dict) or doc.get('format') != MODEL_FORMAT:
         raise ModelFileError(f'{str(path)!r} is not a gyro_noise_ros thermal model '
                              f'(format {doc.get("format") if isinstance(doc, dict) else None!r})')
-    if doc.get('format_version') != MODEL_FORMAT_VERSION:
+    if doc.get('format_version') not in READABLE_FORMAT_VERSIONS:
         raise ModelFileError(f'model file {str(path)!r} has format_version '
                              f'{doc.get("format_version")!r}; this version reads '
-                             f'{MODEL_FORMAT_VERSION}')
+                             f'{", ".join(str(v) for v in READABLE_FORMAT_VERSIONS)}')
+
+    def rate(value):
+        return None if value is None else float(value)
+
     try:
         name = doc['method']
         tr = doc['training']
         training = TrainingInfo(
             temperature_min_c=float(tr['temperature_min_c']),
             temperature_max_c=float(tr['temperature_max_c']),
-            temperature_rate_min_c_s=float(tr['temperature_rate_min_c_s']),
-            temperature_rate_max_c_s=float(tr['temperature_rate_max_c_s']),
+            temperature_rate_min_c_s=rate(tr['temperature_rate_min_c_s']),
+            temperature_rate_max_c_s=rate(tr['temperature_rate_max_c_s']),
             rate_hz=float(tr['rate_hz']), samples=int(tr['samples']),
-            duration_s=float(tr['duration_s']), sources=tuple(tr['sources']))
+            duration_s=float(tr['duration_s']), sources=tuple(tr['sources']),
+            rate_window_s=float(tr.get('rate_window_s', DEFAULT_RATE_WINDOW_S)))
         params = doc['parameters']
     except (KeyError, TypeError, ValueError) as err:
         raise ModelFileError(f'model file {str(path)!r} lacks or garbles {err}') from err
+    if not isinstance(params, dict) or not params:
+        raise ModelFileError(f'model file {str(path)!r} has no fitted parameters '
+                             f'("parameters": {json.dumps(params)}); fit the model again')
     cls = method_class(name)
+    method = _from_dict(cls, params, f'model file {str(path)!r}: parameters of method {name!r}')
+    accel = None
+    if doc.get('accel'):
+        from .baselines import TemperaturePolynomial
+
+        accel = _from_dict(TemperaturePolynomial, (doc['accel'] or {}).get('parameters'),
+                           f'model file {str(path)!r}: accelerometer parameters')
+    version = str(doc.get('package_version', ''))
+    notes = ()
+    if version != __version__:
+        notes = (f'model file {str(path)!r} was written by gyro_noise_ros {version or "?"}, '
+                 f'this is {__version__}; it loads, but refit if the methods changed since',)
+    return ThermalModel(method=method, training=training, package_version=version,
+                        accel=accel, notes=notes)
+
+
+def _from_dict(cls, params, where):
+    if not isinstance(params, dict) or not params:
+        raise ModelFileError(f'{where} are empty')
     try:
-        method = cls.from_dict(params)
+        return cls.from_dict(params)
     except GyroNoiseError:
         raise
-    except (KeyError, TypeError, ValueError) as err:
-        raise ModelFileError(f'model file {str(path)!r}: parameters of method {name!r} are '
-                             f'invalid ({type(err).__name__}: {err})') from err
-    return ThermalModel(method=method, training=training,
-                        package_version=str(doc.get('package_version', '')))
+    except (KeyError, TypeError, ValueError, AttributeError) as err:
+        raise ModelFileError(f'{where} are invalid ({type(err).__name__}: {err})') from err
 
 
 def check_temperature_range(model, temperature_c, *, margin_c=DEFAULT_RANGE_MARGIN_C):
@@ -464,7 +655,7 @@ def check_temperature_range(model, temperature_c, *, margin_c=DEFAULT_RANGE_MARG
     return lo, hi
 
 
-def fit_method(name, run, *, rng, sources=None, executor=None, **options):
+def fit_method(name, run, *, rng, sources=None, executor=None, accel=True, **options):
     """
     Build, fit and wrap a method with its training summary.
 
@@ -482,6 +673,9 @@ def fit_method(name, run, *, rng, sources=None, executor=None, **options):
         Where a method with an ``executor`` attribute (the parallel model: its MOPSO particles)
         runs its pure work units, e.g. a Dask cluster (:mod:`gyro_noise_ros.cluster`); the
         caller shuts it down. Not part of the model: the fit is the same without it.
+    accel : bool, keyword-only
+        Also fit the accelerometer's polynomial (:func:`fit_accel`) when the run has
+        accelerometer samples.
     **options
         Constructor options.
 
@@ -501,10 +695,103 @@ def fit_method(name, run, *, rng, sources=None, executor=None, **options):
             method.executor = None
     else:
         method.fit(run, rng=rng)
-    return ThermalModel(method=method, training=training_info(run, sources=sources))
+    accel_poly, notes = None, ()
+    if accel and run.accel_m_s2 is not None:
+        try:
+            accel_poly = fit_accel(run)
+        except InputDataError as err:
+            # the gyro model stands on its own; say why the accelerometer has none
+            notes = (f'accelerometer not compensated: {err}',)
+    window = float(getattr(method, 'rate_window_s', DEFAULT_RATE_WINDOW_S))
+    return ThermalModel(method=method, accel=accel_poly, notes=notes,
+                        training=training_info(run, sources=sources, rate_window_s=window))
 
 
-def check_trainable(run, *, min_range_c=DEFAULT_MIN_RANGE_C):
+def accel_view(run):
+    """
+    Return the run with its accelerometer samples in place of the gyro's.
+
+    The drift methods are unit-agnostic (an offset per axis as a function of T and dT); the
+    accelerometer's polynomial is fitted and applied on this view (``gyro_rad_s`` then holds
+    m/s^2).
+
+    Parameters
+    ----------
+    run : ThermalRun
+        A run with ``accel_m_s2``.
+
+    Returns
+    -------
+    ThermalRun
+
+    """
+    if run.accel_m_s2 is None:
+        raise InputDataError(f'run {run.name!r} has no accelerometer samples')
+    return ThermalRun(t_s=run.t_s, gyro_rad_s=np.asarray(run.accel_m_s2, dtype=float),
+                      temperature_c=run.temperature_c, rate_hz=run.rate_hz,
+                      name=f'{run.name} (accelerometer)')
+
+
+def fit_accel(run):
+    """
+    Fit the accelerometer's temperature polynomial (PX4 ``TC_A0_*`` form).
+
+    Per axis a cubic in ``T - T_ref`` (``T_ref`` the middle of the training range) of the
+    specific force, with its constant term removed: what is compensated is the *change* of
+    the accelerometer offset from ``T_ref`` (gravity and the offset at ``T_ref`` belong to the
+    six-position calibration). Beyond the trained range the change is held at the range's
+    ends, as PX4 and ArduPilot do.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        Training data with ``accel_m_s2`` (static: the specific force constant but for the
+        temperature effect).
+
+    Returns
+    -------
+    TemperaturePolynomial
+        Fitted, ``relative=True``.
+
+    """
+    from .baselines import TemperaturePolynomial
+
+    poly = TemperaturePolynomial(relative=True)
+    poly.fit(accel_view(run), rng=np.random.default_rng(0))
+    return poly
+
+
+def check_min_range(min_range_c):
+    """
+    Validate ``--min-range-c``: a finite number of degC, >= 0.
+
+    Parameters
+    ----------
+    min_range_c : float
+        The value.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        NaN, infinite or negative.
+
+    """
+    try:
+        value = float(min_range_c)
+    except (TypeError, ValueError):
+        raise ParameterError(f'--min-range-c must be a number of degC, got {min_range_c!r}') \
+            from None
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ParameterError(f'--min-range-c must be a finite temperature span >= 0 degC, got '
+                             f'{min_range_c!r}')
+    return value
+
+
+def check_trainable(run, *, min_range_c=DEFAULT_MIN_RANGE_C, method=None):
     """
     Refuse training data a temperature model cannot be fitted on.
 
@@ -513,14 +800,21 @@ def check_trainable(run, *, min_range_c=DEFAULT_MIN_RANGE_C):
     run : ThermalRun
         Training data.
     min_range_c : float, keyword-only
-        Smallest accepted temperature span, max - min (degC).
+        Smallest accepted temperature span, max - min (degC, finite, >= 0).
+    method : str, optional, keyword-only
+        ``--method`` about to be fitted: a method that uses dT also needs a run at least
+        ``baselines.MIN_TRAINING_WINDOWS`` rate windows long.
 
     Raises
     ------
+    ParameterError
+        ``min_range_c`` NaN, infinite or negative.
     InputDataError
-        Constant temperature, a span below ``min_range_c``, or non-finite samples.
+        Constant temperature, a span below ``min_range_c``, non-finite samples, or a run too
+        short for the method's rate window.
 
     """
+    min_range_c = check_min_range(min_range_c)
     temp = np.asarray(run.temperature_c, dtype=float)
     gyro = np.asarray(run.gyro_rad_s, dtype=float)
     if not (np.isfinite(temp).all() and np.isfinite(gyro).all()):
@@ -534,3 +828,10 @@ def check_trainable(run, *, min_range_c=DEFAULT_MIN_RANGE_C):
                              f'{hi - lo:.3g} degC ({lo:.2f}..{hi:.2f}), less than the '
                              f'{min_range_c:g} degC needed to fit a drift model '
                              '(--min-range-c)')
+    if method is not None:
+        cls = method_class(method)
+        if getattr(cls, 'uses_rate', False):
+            from .baselines import check_rate_training
+
+            check_rate_training(np.asarray(run.t_s, dtype=float), DEFAULT_RATE_WINDOW_S,
+                                run.name)

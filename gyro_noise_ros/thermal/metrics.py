@@ -17,16 +17,17 @@ Honest metrics of a thermal method on a held-out run: noise terms, residual drif
 
 Definitions (docs/thermal.md states the same):
 
-* **Angle random walk** N (deg/sqrt(h)): the value at tau = 1 s of the line of slope -1/2 fitted
-  (least squares in log-log, slope fixed) to the overlapping Allan deviation over
-  tau in [1/sqrt(10), sqrt(10)] s, as IEEE 952 and datasheets read it. The free log-log slope over
-  the same taus is reported beside it (``arw_slope``); ``arw_on_slope`` is False when it is more
-  than 0.15 away from -1/2, i.e. when the curve there is not white-noise dominated and N is only
-  the ADEV at 1 s.
-* **Bias stability** (deg/h): the minimum of the Allan deviation over all taus (~20 per
-  decade up to a quarter of the record), as datasheets and the paper's Figure 19 quote it;
-  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B). Its tau and
-  whether the minimum is at the longest tau (then only an upper bound) are reported.
+* **Angle random walk** N (deg/sqrt(h)) and **bias stability** (deg/h): the one Allan readout
+  (:func:`..core.readout.read_allan`) of the overlapping Allan deviation at the ``'dense'`` taus
+  (~10 per decade up to a quarter of the record, as ``gyro_noise_analyze --allan-taus dense``), as
+  the offline and live analyzers read them: N is the -1/2 line of
+  one contiguous white-noise region read at tau = 1 s (``arw_on_slope`` False: the curve has no
+  such region and N is only ADEV(1 s)); bias stability is where the usable curve stops falling,
+  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B), with its tau
+  and ``bias_stability_upper_bound`` when the curve was not seen to turn up. Taus flattened by
+  smoothing (a low-pass or wavelet denoiser smooths sample to sample) are left out of both:
+  ``band_limited_below_s`` says up to where, so a denoiser cannot show a "bias stability" read
+  off its own smoothing.
 * **Residual drift** (deg/s): standard deviation (ddof = 1) of the means of consecutive,
   non-overlapping 60-s windows of the output.
 * **Bandwidth cost**: a known rate (a logarithmic chirp over ``f_lo_hz``..``f_hi_hz`` and a train
@@ -42,24 +43,23 @@ Definitions (docs/thermal.md states the same):
   offline, non-causal method can do).
 """
 
+import dataclasses
 from dataclasses import dataclass
 import math
 
 import numpy as np
 import scipy.signal
 
-from .run import ThermalRun
-from ..core.allan import allan_deviation, bias_instability_from_minimum, dense_factors
+from ..core.allan import allan_deviation
+from ..core.readout import read_allan
 from ..errors import InputDataError, ParameterError
 
-__all__ = ['ARW_SLOPE_TOLERANCE', 'DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
+__all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
-           'noise_metrics', 'step_response', 'verdict', 'white_noise_sigma']
+           'noise_metrics', 'noise_path_gain', 'step_response', 'verdict', 'white_noise_sigma']
 
 RAD2DEG = 180.0 / math.pi
-#: Largest |measured slope + 1/2| around tau = 1 s for the ARW read-out to count as on the slope.
-ARW_SLOPE_TOLERANCE = 0.15
 #: Window of the residual-drift means (s).
 DRIFT_WINDOW_S = 60.0
 #: Default amplitude of the injected chirp and steps (rad/s): 1 deg/s.
@@ -71,8 +71,8 @@ DEFAULT_F_HI_HZ = 50.0
 PRECURSOR_LIMIT = 0.05
 #: Bands per decade of the frequency-response estimate.
 BANDS_PER_DECADE = 20
-#: Allan factors per decade of the noise read-outs.
-_ADEV_PER_DECADE = 20
+#: Seed of the white noise of the noise path (the same noise for every method).
+NOISE_PATH_SEED = 20211021
 
 
 @dataclass(frozen=True)
@@ -83,20 +83,21 @@ class NoiseMetrics:
     Attributes
     ----------
     arw_deg_sqrt_h : float
-        Angle random walk (deg/sqrt(h)); NaN if the record is shorter than 2 x 0.32 s.
+        Angle random walk (deg/sqrt(h)); NaN when neither a -1/2 region nor tau = 1 s is on the
+        curve.
     arw_slope : float
-        Free log-log slope of ADEV over the ARW taus (-0.5 for white rate noise).
+        Free log-log slope of ADEV over the taus N was read from (-0.5 for white rate noise; NaN
+        for the ADEV(1 s) reading).
     arw_on_slope : bool
-        ``|arw_slope + 0.5| <= ARW_SLOPE_TOLERANCE``.
+        N comes from a contiguous -1/2 region (False: from ADEV(1 s)).
     bias_stability_deg_h : float
-        Minimum of the Allan deviation (deg/h).
+        Bias stability (deg/h), the readout's floor.
     bias_stability_tau_s : float
         Its averaging time (s).
-    bias_stability_at_longest_tau : bool
-        The minimum is the longest tau (an upper bound only).
-    bias_stability_at_shortest_tau : bool
-        The minimum is the shortest tau (one sample): the output is smoothed at the sample scale
-        and the number says nothing about the bias.
+    bias_stability_upper_bound : bool
+        The curve was not seen to turn up: an upper bound only.
+    band_limited_below_s : float
+        Taus below this are flattened by smoothing and left out of the readout (s; 0.0: none).
     residual_drift_deg_s : float
         Std of the 60-s means (deg/s); NaN with fewer than two windows.
     drift_windows : int
@@ -111,8 +112,8 @@ class NoiseMetrics:
     arw_on_slope: bool
     bias_stability_deg_h: float
     bias_stability_tau_s: float
-    bias_stability_at_longest_tau: bool
-    bias_stability_at_shortest_tau: bool
+    bias_stability_upper_bound: bool
+    band_limited_below_s: float
     residual_drift_deg_s: float
     drift_windows: int
     mean_deg_s: float
@@ -161,17 +162,18 @@ def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
     if x.ndim != 1 or x.size < 8:
         raise InputDataError(f'noise metrics need at least 8 samples of one axis, got shape '
                              f'{x.shape}')
-    ms = dense_factors(x.size, per_decade=_ADEV_PER_DECADE)
-    res = allan_deviation(x, rate_hz, taus=ms)
+    res = allan_deviation(x, rate_hz, taus='dense')
     tau, adev = res.tau_s, res.adev
-    sel = (tau >= 10 ** -0.5) & (tau <= 10 ** 0.5) & (adev > 0)
-    arw, slope = math.nan, math.nan
-    if sel.sum() >= 1:
-        lt, la = np.log(tau[sel]), np.log(adev[sel])
-        arw = float(np.exp(np.mean(la + 0.5 * lt)))  # the slope -1/2 line at tau = 1 s
-        if sel.sum() >= 2:
-            slope = float(np.polyfit(lt, la, 1)[0])
-    mini = bias_instability_from_minimum(res)
+    nan = math.nan
+    try:
+        r = read_allan(res)
+    except InputDataError:
+        # a constant output (a method that returns its input's mean) has no Allan curve
+        r = None
+    slope = nan
+    if r is not None and r.arw_from_region:
+        sel = (tau >= r.arw_tau_range_s[0]) & (tau <= r.arw_tau_range_s[1])
+        slope = float(np.polyfit(np.log(tau[sel]), np.log(adev[sel]), 1)[0])
     window = int(round(drift_window_s * rate_hz))
     k = x.size // window if window >= 1 else 0
     drift = math.nan
@@ -179,13 +181,14 @@ def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
         means = x[:k * window].reshape(k, window).mean(axis=1)
         drift = float(np.std(means, ddof=1) * RAD2DEG)
     return NoiseMetrics(
-        arw_deg_sqrt_h=arw * RAD2DEG * 60.0,  # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
+        # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
+        arw_deg_sqrt_h=r.arw_rad_per_sqrt_s * RAD2DEG * 60.0 if r else nan,
         arw_slope=slope,
-        arw_on_slope=bool(abs(slope + 0.5) <= ARW_SLOPE_TOLERANCE),
-        bias_stability_deg_h=mini.adev_min_rad_per_s * RAD2DEG * 3600.0,
-        bias_stability_tau_s=mini.tau_s,
-        bias_stability_at_longest_tau=bool(mini.at_longest_tau),
-        bias_stability_at_shortest_tau=bool(mini.tau_s <= tau[0]),
+        arw_on_slope=bool(r and r.arw_from_region),
+        bias_stability_deg_h=r.bias_stability_rad_s * RAD2DEG * 3600.0 if r else nan,
+        bias_stability_tau_s=r.bias_stability_tau_s if r else nan,
+        bias_stability_upper_bound=bool(r and r.bias_stability_upper_bound),
+        band_limited_below_s=r.band_limited_below_s if r else nan,
         residual_drift_deg_s=drift, drift_windows=int(k),
         mean_deg_s=float(np.mean(x) * RAD2DEG)), (tau, adev)
 
@@ -445,6 +448,11 @@ class StepResponse:
     precursor : float
         Largest change of the response over the last fifth of the window before the edge
         (fraction of the step; 0 for a causal method).
+    lead_s : float
+        How long before the step the response first moves by more than
+        :data:`PRECURSOR_LIMIT` of it from its level at the window's start (s; 0 when it does
+        not move before the step): the look-ahead the method uses, i.e. the latency a causal
+        version of it would have to add.
 
     """
 
@@ -455,6 +463,7 @@ class StepResponse:
     overshoot: float
     settled_gain: float
     precursor: float
+    lead_s: float = 0.0
 
 
 def _first_crossing(t, r, level):
@@ -510,11 +519,20 @@ def step_response(response, rate_hz, edges, deltas, window):
     t10 = _first_crossing(post_t, post, 0.1)
     t90 = _first_crossing(post_t, post, 0.9)
     d50 = _first_crossing(t, r, 0.5)
+    # the look-ahead: after the last sample before the edge still within the limit of the
+    # starting level (the baseline is the first fifth of the window)
+    quiet = np.flatnonzero(np.abs(r[:window]) <= PRECURSOR_LIMIT)
+    if quiet.size == 0:
+        lead = float(-t[0])
+    elif quiet[-1] == window - 1:
+        lead = 0.0
+    else:
+        lead = float(-t[quiet[-1] + 1])
     # a non-causal filter crosses 50 % before the edge; report that crossing, from the full window
     return StepResponse(t_s=t, response=r, delay_50_s=d50, rise_time_s=t90 - t10,
                         overshoot=float(post.max() - 1.0),
                         settled_gain=float(post[post.size // 2:].mean()),
-                        precursor=float(np.abs(pre).max()) if pre.size else 0.0)
+                        precursor=float(np.abs(pre).max()) if pre.size else 0.0, lead_s=lead)
 
 
 def _axis_bandwidth(injection, diff, rate_hz):
@@ -542,7 +560,34 @@ def _low_gain(fr):
     return float(fr.gain[band].min()) if band.any() else math.nan
 
 
-def verdict(raw, processed, fr, st, *, causal, small=None):
+def noise_path_gain(injected_rad_s, response_rad_s, rate_hz):
+    """
+    Return the ARW gain of a method on its noise path: ARW of its response over ARW of the input.
+
+    ``injected_rad_s`` is white noise added to a run, ``response_rad_s`` the method's output
+    with it minus its output without it. A drift model subtracts the same drift from both, so
+    its response is the injected noise itself and the gain is 1 whatever the drift does to the
+    ADEV of the output; a denoiser's response is the part of the noise it keeps.
+
+    Parameters
+    ----------
+    injected_rad_s, response_rad_s : array_like
+        (n,) rad/s.
+    rate_hz : float
+        Sample rate (Hz).
+
+    Returns
+    -------
+    float
+        ``ARW(response) / ARW(injected)``, both read as in :func:`noise_metrics`.
+
+    """
+    a_in = _noise_metrics(injected_rad_s, rate_hz, DRIFT_WINDOW_S)[0].arw_deg_sqrt_h
+    a_out = _noise_metrics(response_rad_s, rate_hz, DRIFT_WINDOW_S)[0].arw_deg_sqrt_h
+    return a_out / a_in
+
+
+def verdict(raw, processed, fr, st, *, causal, small=None, noise_gain=None):
     """
     Say in plain words what a method did to the noise, to the drift and to motion.
 
@@ -558,16 +603,23 @@ def verdict(raw, processed, fr, st, *, causal, small=None):
         What the method declares.
     small : tuple of (FrequencyResponse, StepResponse, float), optional
         The same at small amplitude, and that amplitude (rad/s).
+    noise_gain : float, optional
+        :func:`noise_path_gain` of the axis. When given it is the ``arw_ratio`` (drift leaking
+        into the output's ADEV near 1 s is not noise removed); ``output_arw_ratio`` keeps the
+        ratio of the output's and the input's ARW read-outs either way.
 
     Returns
     -------
     dict
-        ``arw_ratio``, ``residual_drift_ratio``, ``low_band_min_gain``,
+        ``arw_ratio``, ``output_arw_ratio``, ``arw_source`` ('noise path' or 'output'),
+        ``residual_drift_ratio``, ``low_band_min_gain``,
         ``small_signal_low_band_min_gain``, ``arw_from_bandwidth`` (bool), ``measured_causal``
         (bool), ``live_capable`` (bool) and ``text`` (sentences).
 
     """
-    arw_ratio = processed.arw_deg_sqrt_h / raw.arw_deg_sqrt_h
+    output_ratio = processed.arw_deg_sqrt_h / raw.arw_deg_sqrt_h
+    arw_ratio = output_ratio if noise_gain is None else float(noise_gain)
+    source = 'output' if noise_gain is None else 'noise path'
     drift_ratio = processed.residual_drift_deg_s / raw.residual_drift_deg_s
     low_gain = _low_gain(fr)
     cut = [f'motion at 0.1-1 Hz passed with gain down to {low_gain:.3g}'] if low_gain < 0.9 else []
@@ -590,21 +642,28 @@ def verdict(raw, processed, fr, st, *, causal, small=None):
     elif arw_ratio < 0.9:
         text.append(f'ARW x{arw_ratio:.3g} while motion at 0.1-1 Hz keeps gain >= '
                     f'{low_gain:.3g} ({_band_text(fr)}).')
+    elif math.isfinite(arw_ratio):
+        text.append(f'ARW x{arw_ratio:.3g}: no denoising ({_band_text(fr)}).')
     else:
-        text.append(f'ARW x{arw_ratio:.3g}: no denoising at tau = 1 s ({_band_text(fr)}).')
+        text.append(f'No ARW can be read off the processed Allan curve ({_band_text(fr)}).')
+    if (noise_gain is not None and math.isfinite(output_ratio)
+            and abs(output_ratio - arw_ratio) > 0.05):
+        text.append(f'(The ARW read-out of the output is x{output_ratio:.3g} of the input one: '
+                    'the difference is drift in the ADEV of the input near 1 s, not noise.)')
     if not processed.arw_on_slope:
-        text.append(f'The processed ADEV slope near 1 s is {processed.arw_slope:.2f}, not -1/2: '
-                    'its ARW is only ADEV(1 s).')
-    if processed.bias_stability_at_shortest_tau:
-        text.append('Its ADEV minimum is at the shortest tau: the output is smoothed sample to '
-                    'sample, and that "bias stability" says nothing about the bias.')
+        text.append('The processed Allan curve has no -1/2 region: its ARW is only ADEV(1 s).')
+    if processed.band_limited_below_s > max(raw.band_limited_below_s, 0.0):
+        text.append(f'Its output is smoothed: the Allan deviation is flattened below '
+                    f'{processed.band_limited_below_s:.3g} s, so ARW and bias stability are read '
+                    'above that, never off the smoothing.')
     text.append(f'Residual drift x{drift_ratio:.3g}.')
     if not measured_causal:
         text.append(f'Responds {st.precursor:.0%} of a step before it happens: non-causal, '
                     'offline only.')
     elif not causal:
         text.append('Declared non-causal (offline only).')
-    return {'arw_ratio': _num(arw_ratio), 'residual_drift_ratio': _num(drift_ratio),
+    return {'arw_ratio': _num(arw_ratio), 'output_arw_ratio': _num(output_ratio),
+            'arw_source': source, 'residual_drift_ratio': _num(drift_ratio),
             'low_band_min_gain': _num(low_gain),
             'small_signal_low_band_min_gain': _num(small_gain), 'arw_from_bandwidth': from_bw,
             'measured_causal': measured_causal, 'live_capable': bool(causal and measured_causal),
@@ -621,13 +680,12 @@ def _curve(values):
 
 
 def _run_with(run, gyro):
-    return ThermalRun(t_s=run.t_s, gyro_rad_s=gyro, temperature_c=run.temperature_c,
-                      rate_hz=run.rate_hz, name=run.name)
+    return dataclasses.replace(run, gyro_rad_s=gyro)
 
 
 def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
                     f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, processed=None,
-                    small_signal=True):
+                    small_signal=True, noise_path=True):
     """
     Score a fitted method on a held-out run: noise, drift and bandwidth per axis.
 
@@ -648,6 +706,11 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         Also inject the same signal scaled to the white-noise sigma of the run
         (:func:`white_noise_sigma`) and report ``bandwidth_small_signal``: a nonlinear method
         that passes a large motion may remove a small one (one more ``apply``).
+    noise_path : bool, keyword-only
+        Also add white noise of the run's own size (:func:`white_noise_sigma`, a fixed seed)
+        and take the ARW gain from the method's response to it (:func:`noise_path_gain`, one
+        more ``apply``): the verdict's ``arw_ratio``, free of the drift that leaks into the
+        output's ADEV near 1 s. Without it the ratio of the output's read-outs is used.
 
     Returns
     -------
@@ -670,6 +733,12 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         processed = np.asarray(method.apply(run), dtype=float)
     _check_output(method, processed, n)
     diff = _response(method, run, gyro, processed, inj.signal_rad_s)
+    noise_in = noise_diff = None
+    if noise_path:
+        # a fixed seed: the same noise for every method scored on this run
+        noise_in = (white_noise_sigma(gyro)
+                    * np.random.default_rng(NOISE_PATH_SEED).standard_normal(gyro.shape))
+        noise_diff = _response(method, run, gyro, processed, noise_in)
     small_amp = small_diff = None
     if small_signal:
         small_amp = white_noise_sigma(gyro)
@@ -694,14 +763,21 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
             curves[name].update(frequency_small=s_fr, step_small=s_st)
             axes[name]['bandwidth_small_signal'] = dict(
                 _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD2DEG)
+        gain = None
+        if noise_path:
+            gain = noise_path_gain(noise_in[:, a], noise_diff[:, a], run.rate_hz)
+            axes[name]['noise_path'] = {'arw_gain': _num(gain),
+                                        'amplitude_deg_s': _num(np.std(noise_in[:, a])
+                                                                * RAD2DEG)}
         axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
-                                        small=small)
+                                        small=small, noise_gain=gain)
     doc = {
         'method': method.name, 'causal': bool(method.causal),
         'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD2DEG,
                       'small_signal_amplitude_deg_s': (small_amp * RAD2DEG if small_signal
                                                        else None),
                       'f_lo_hz': inj.f_lo_hz, 'f_hi_hz': inj.f_hi_hz,
+                      'noise_path_seed': NOISE_PATH_SEED if noise_path else None,
                       'chirp_start_s': inj.chirp.start / run.rate_hz,
                       'chirp_stop_s': inj.chirp.stop / run.rate_hz,
                       'step_edges_s': _curve(inj.step_edges / run.rate_hz)},
@@ -711,7 +787,8 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
 
 
 def _response(method, run, gyro, processed, signal):
-    out = np.asarray(method.apply(_run_with(run, gyro + signal[:, None])), dtype=float)
+    add = signal if signal.ndim == 2 else signal[:, None]
+    out = np.asarray(method.apply(_run_with(run, gyro + add)), dtype=float)
     _check_output(method, out, gyro.shape[0])
     return out - processed
 
@@ -732,7 +809,7 @@ def _bandwidth_dict(fr, st):
         'low_band_min_gain': _num(_low_gain(fr)),
         'step_delay_50_s': _delay(st.delay_50_s), 'step_rise_time_s': _delay(st.rise_time_s),
         'step_overshoot': _num(st.overshoot), 'step_settled_gain': _num(st.settled_gain),
-        'step_precursor': _num(st.precursor),
+        'step_precursor': _num(st.precursor), 'step_lead_s': _delay(st.lead_s),
         'frequency_hz': _curve(fr.frequency_hz), 'gain': _curve(fr.gain),
         'phase_deg': _curve(fr.phase_deg), 'group_delay_s': _curve(fr.group_delay_s),
         'coherence': _curve(fr.coherence),

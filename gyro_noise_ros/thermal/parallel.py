@@ -33,33 +33,37 @@ Fit on a training run:
    (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
    spectrum, so the 1.44 M-sample run stays within seconds).
 3. The modes are classified by sample entropy (:mod:`.classify`) into drift, mixed, noise.
-4. An Elman network trained by beetle antennae search (:mod:`.elman`) learns the drift part
-   from [T, dT] (dT from :func:`..run.temperature_rate_c_s`), on block means over
-   ``dt = ceil(n / elman_samples)`` samples (the drift is slow; the recurrence runs on that
-   grid, here and when applied).
+4. The drift model (:func:`.elman.fit_drift`) learns the drift part from [T, dT] (dT from
+   :func:`..run.temperature_rate_c_s`), on block means over ``dt = ceil(n / elman_samples)``
+   samples (the drift is slow; the recurrence runs on that grid, here and when applied):
+   least squares on the stated basis ``drift_base`` (a cubic in T and a term linear in dT),
+   then an Elman network trained by beetle antennae search and refined by L-BFGS
+   (``elman_refine``, weight decay ``elman_weight_decay``) on what the basis leaves.
+   ``drift_base='none'`` with no decay is the paper's drift model, the network alone.
 
 Apply to another run: VMD with the trained K, alpha, warm-started from the trained centre
 frequencies (converted through Hz if the sample rate differs; at most ``apply_vmd_iter``
 iterations), classification of the new modes, the noise modes dropped, TFPF
-(:mod:`.tfpf`) on the sum of the mixed modes, the Elman prediction (interpolated from its grid)
-subtracted from the sum of the drift modes, and the two parts added. VMD and TFPF need the whole
+(:mod:`.tfpf`) on the sum of the mixed modes, the drift model's prediction (interpolated from
+its grid; beyond the trained [T, dT] range the basis extrapolates and the network's inputs are
+held at the range's edge, ``last_info`` counts the fraction) subtracted from the sum of the
+drift modes, and the two parts added. VMD and TFPF need the whole
 record: the model is offline only (``causal = False``); the live node refuses it.
 
-Report: :meth:`ParallelModel.report_figures` draws the paper's Figures 11, 12 and 14-17 for a
-run from what :meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the
+Report: :meth:`ParallelModel.report_figures` (the hook; the drawing is
+:func:`..report.parallel_figures`) gives the paper's Figures 11, 12 and 14-17 for a run from what
+:meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the
 modes and parts, the drift part on the network's grid), so the report costs no second VMD when
 it follows ``apply`` on the same run object.
 """
 
-import dataclasses
-import inspect
 from pathlib import Path
 import weakref
 
 from gyro_noise_ros.cluster import make_executor
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.thermal.classify import classify_modes
-from gyro_noise_ros.thermal.elman import ElmanModel, fit_elman
+from gyro_noise_ros.thermal.elman import DriftModel, fit_drift
 from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, refine, VmdFitness
 from gyro_noise_ros.thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 from gyro_noise_ros.thermal.tfpf import tfpf
@@ -88,11 +92,15 @@ DEFAULT_OPTIONS = {
     'drift_max': 0.5,
     'noise_min': 1.5,
     'entropy_samples': 2000,
+    'entropy_scale': None,
     'tfpf_window': 31,
     'elman_hidden': [6, 6],
     'elman_iterations': 100,
     'elman_epochs': 20,
     'elman_samples': 2000,
+    'elman_refine': 300,
+    'elman_weight_decay': 1e-3,
+    'drift_base': 'cubic_rate',
     'rate_window_s': DEFAULT_RATE_WINDOW_S,
     'workers': 1,
 }
@@ -111,10 +119,6 @@ def fitness_windows(x, n, count):
     n, count = int(n), int(count)
     starts = np.linspace(0, x.size - n, count).round().astype(int)
     return np.stack([x[s:s + n] for s in starts])
-
-
-def _rms_deg_s(x):
-    return float(np.degrees(np.sqrt(np.mean(np.square(x))))) if np.size(x) else float('nan')
 
 
 def block_means(x, q):
@@ -216,9 +220,12 @@ class ParallelModel:
         cls = self._classify(dec)
         drift = dec.modes[cls.mask('drift')].sum(axis=0)
         q = max(1, -(-x.size // int(o['elman_samples'])))
-        elman = fit_elman(block_means(np.c_[temp, rate], q), block_means(drift, q),
-                          dt_s=q / rate_hz, rng=elman_rng, hidden=tuple(o['elman_hidden']),
-                          iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']))
+        elman = fit_drift(block_means(np.c_[temp, rate], q), block_means(drift, q),
+                          dt_s=q / rate_hz, rng=elman_rng, base=o['drift_base'],
+                          hidden=tuple(o['elman_hidden']),
+                          iterations=int(o['elman_iterations']), epochs=int(o['elman_epochs']),
+                          refine_iterations=int(o['elman_refine']),
+                          weight_decay=float(o['elman_weight_decay']))
         info.append(self._axis_info(dec, cls, rate_hz))
         info[-1]['mopso'] = {'evaluations': res.evaluations, 'requested': res.requested,
                              'archive_k': res.archive_params[:, 0].astype(int).tolist(),
@@ -262,9 +269,10 @@ class ParallelModel:
             if cls.mask('mixed').any():
                 mixed = tfpf(mixed_in, window=int(o['tfpf_window']))
             drift = dec.modes[cls.mask('drift')].sum(axis=0)
-            elman = ElmanModel.from_dict(ax['elman'])
+            elman = DriftModel.from_dict(ax['elman'])
             out[:, a] = mixed + drift - self._drift_prediction(elman, run, temp, rate)
             info.append(self._axis_info(dec, cls, run.rate_hz))
+            info[-1]['outside_trained_range_fraction'] = self._outside(elman, run, temp, rate)
             parts.append(self._plot_parts(run, a, dec, info[-1], mixed_in, mixed, drift, elman))
         self.last_info = info
         try:
@@ -281,8 +289,14 @@ class ParallelModel:
             raise ParameterError('ParallelModel used before fit (or from_dict)')
         _, temp, rate = self._inputs(run)
         return np.column_stack([
-            self._drift_prediction(ElmanModel.from_dict(ax['elman']), run, temp, rate)
+            self._drift_prediction(DriftModel.from_dict(ax['elman']), run, temp, rate)
             for ax in self.axes])
+
+    @staticmethod
+    def _outside(elman, run, temp, rate):
+        """Fraction of the network's grid points outside the trained [T, dT] range."""
+        q = max(1, int(round(elman.dt_s * run.rate_hz)))
+        return float(np.mean(elman.outside(block_means(np.c_[temp, rate], q))))
 
     @staticmethod
     def _drift_prediction(elman, run, temp, rate):
@@ -296,13 +310,10 @@ class ParallelModel:
         """
         Draw the paper's Figures 11, 12 and 14-17 for a run; return (file name, caption) each.
 
-        The run's decomposition comes from the last :meth:`apply` if it was called on this
-        same run object (the CLI calls this right after it), else ``apply(run)`` is run once
-        (which also replaces :attr:`last_info`). MOPSO is never re-run: Figure 11 is drawn
-        from :attr:`fit_info`, which exists only in the process that fitted the model;
-        otherwise its entry has no file name and its caption says where the figure is.
-        Figure 13 (sample entropy and class of each mode) is the report's generic figure from
-        :attr:`last_info` (:func:`..report.plot_mode_classes`).
+        The drawing is :func:`..report.parallel_figures` (the report module's); this is the
+        method hook of ``ThermalMethod``. The run's decomposition comes from the last
+        :meth:`apply` if it was called on this same run object, else ``apply(run)`` is run
+        once (which also replaces :attr:`last_info`).
 
         Parameters
         ----------
@@ -322,78 +333,7 @@ class ParallelModel:
 
         if self.axes is None:
             raise ParameterError('ParallelModel used before fit (or from_dict)')
-        parts = self._parts_for(run)
-        out_dir = Path(out_dir)
-        name = run.name or 'run'
-        figs = [self._mopso_figure(report, out_dir, name)]
-        report.plot_modes(out_dir / 'fig12_modes.png', [
-            {'t_h': p['t_h'], 'input': p['input'], 'modes': p['modes'],
-             'center_freqs_hz': p['center_freqs_hz'], 'classes': p['classes']} for p in parts],
-            title=f'{name}: VMD modes with the trained K and alpha, coloured by class')
-        ks = ', '.join(str(ax['k']) for ax in self.axes)
-        figs.append(('fig12_modes.png', f'VMD of the run into K = {ks} modes (x, y, z), each '
-                     'with its class and centre frequency, min/max envelopes of long runs '
-                     '(cf. Fig. 12)'))
-        zoom_t = [np.asarray(run.t_s)[p['zoom']] for p in parts]
-        report.plot_before_after(out_dir / 'fig14_tfpf.png', [
-            {'t_h': p['t_h'], 'before': p['mixed_in'], 'after': p['mixed_out'],
-             'zoom_t_s': zt, 'zoom_before': p['zoom_mixed_in'],
-             'zoom_after': p['zoom_mixed_out'], 'name': 'mixed part'}
-            for p, zt in zip(parts, zoom_t)],
-            title=f'{name}: sum of the mixed modes before and after TFPF '
-                  f'(window {int(self.options["tfpf_window"])} samples)',
-            before='mixed part', after='after TFPF')
-        figs.append(('fig14_tfpf.png', 'Sum of the mixed modes before and after time-frequency '
-                     'peak filtering, whole run and a zoom of 20 TFPF windows (cf. Fig. 14); '
-                     'an axis without mixed modes shows zeros'))
-        report.plot_before_after(out_dir / 'fig15_denoised.png', [
-            {'t_h': p['t_h'], 'before': p['input'], 'after': p['denoised'],
-             'zoom_t_s': zt, 'zoom_before': np.asarray(run.gyro_rad_s)[p['zoom'], a],
-             'zoom_after': p['zoom_denoised'], 'name': 'output'}
-            for a, (p, zt) in enumerate(zip(parts, zoom_t))],
-            title=f'{name}: raw output and denoised output (noise modes dropped, mixed part '
-                  'TFPF-filtered, drift part not yet compensated)',
-            before='raw', after='denoised')
-        figs.append(('fig15_denoised.png', 'Raw output and the denoised output before drift '
-                     'compensation: mixed part after TFPF plus the drift part (cf. Fig. 15)'))
-        net16, net17 = self._network_panels(run, parts)
-        report.plot_network(out_dir / 'fig16_elman.png', net16,
-                            title=f'{name}: drift part and the Elman prediction from [T, dT], '
-                                  'before and after beetle antennae search')
-        figs.append(('fig16_elman.png', 'Drift part (sum of the drift modes, block means on the '
-                     "network's grid) and the Elman prediction from temperature and its rate: "
-                     'left a network with random start weights drawn as BAS draws its start '
-                     "(seed 0; the fit's own start is not stored), right the BAS-trained "
-                     'network (cf. Fig. 16)'))
-        report.plot_network(out_dir / 'fig17_drift_part.png', net17,
-                            title=f'{name}: drift part, its prediction and its compensation')
-        figs.append(('fig17_drift_part.png', 'Drift part and its Elman prediction (a), and the '
-                     'compensated drift part, drift minus prediction (b) (cf. Fig. 17)'))
-        return figs
-
-    def _mopso_figure(self, report, out_dir, name):
-        info = self.fit_info or []
-        archives = [ax.get('mopso') for ax in info]
-        keys = ('archive_fuzzy_entropy', 'archive_permutation_entropy', 'archive_k',
-                'archive_alpha')
-        if len(archives) != 3 or not all(a and all(k in a for k in keys) for a in archives):
-            return (None, 'the MOPSO archive (Fig. 11) is drawn by `fit` beside model.json '
-                          '(fig11_mopso.png of the training report); model.json keeps only '
-                          'the picked K and alpha')
-        axes = []
-        for arch, ax in zip(archives, self.axes):
-            fit = ax.get('fitness', {})
-            axes.append({'fuzzy_entropy': arch['archive_fuzzy_entropy'],
-                         'permutation_entropy': arch['archive_permutation_entropy'],
-                         'k': arch['archive_k'], 'alpha': arch['archive_alpha'],
-                         'pick': (ax['k'], ax['alpha'], fit.get('fuzzy_entropy', np.nan),
-                                  fit.get('permutation_entropy', np.nan))})
-        report.plot_mopso(out_dir / 'fig11_mopso.png', axes,
-                          title=f'{name}: final MOPSO archive (Pareto front) and the picked '
-                                '(K, alpha), per axis')
-        return ('fig11_mopso.png', 'Final MOPSO archive: the Pareto front of mean fuzzy and '
-                'permutation entropy, and the archive in (K, alpha), with the picked point '
-                '(cf. Fig. 11; the paper also shows the swarm per iteration)')
+        return report.parallel_figures(self, run, self._parts_for(run), Path(out_dir))
 
     def _parts_for(self, run):
         kept = self._report_parts
@@ -426,42 +366,38 @@ class ParallelModel:
                 'zoom_mixed_out': mixed_out[zoom].copy(), 'zoom_denoised': denoised[zoom].copy(),
                 'drift_blocks': block_means(drift, q), 'q': q}
 
-    def _network_panels(self, run, parts):
-        """Return the panel rows of Figures 16 and 17 (the drift part on the network's grid)."""
+    def network_grid(self, run, q):
+        """
+        Return the drift model's inputs on a run's grid of ``q`` samples, and the grid's times.
+
+        Parameters
+        ----------
+        run : ThermalRun
+            The run.
+        q : int
+            Samples per grid point (the network's step).
+
+        Returns
+        -------
+        inputs : numpy.ndarray
+            (m, 2): block means of T (degC) and dT (degC/s).
+        t_h : numpy.ndarray
+            (m,) time of each grid point (h).
+
+        """
         _, temp, rate = self._inputs(run)
         t = np.asarray(run.t_s, dtype=float)
-        # the distribution fit_elman draws BAS's start from (it is not stored with the model)
-        scale = inspect.signature(fit_elman).parameters['init_scale'].default
-        rows16, rows17 = [], []
-        for ax, p in zip(self.axes, parts):
-            elman = ElmanModel.from_dict(ax['elman'])
-            q = p['q']
-            grid = block_means(np.c_[temp, rate], q)
-            centres = np.arange(grid.shape[0]) * q + 0.5 * (min(q, t.size) - 1)
-            t_h = np.interp(centres, np.arange(t.size), t) / 3600.0
-            start = dataclasses.replace(elman, theta=scale * np.random.default_rng(0)
-                                        .standard_normal(elman.theta.size))
-            actual, after, before = p['drift_blocks'], elman.predict(grid), start.predict(grid)
-            rows16.append([
-                {'title': 'before BAS (random start weights): rms error '
-                          f'{_rms_deg_s(before - actual):.3g} deg/s', 't_h': t_h,
-                 'lines': [('drift part', actual, 'k'), ('prediction', before, 'tab:orange')]},
-                {'title': 'after BAS (the fitted network): rms error '
-                          f'{_rms_deg_s(after - actual):.3g} deg/s', 't_h': t_h,
-                 'lines': [('drift part', actual, 'k'), ('prediction', after, 'tab:blue')]}])
-            rows17.append([
-                {'title': '(a) drift part and its prediction from [T, dT]', 't_h': t_h,
-                 'lines': [('drift part', actual, 'k'), ('Elman prediction', after, 'tab:blue')]},
-                {'title': '(b) compensated drift part (drift part - prediction): rms '
-                          f'{_rms_deg_s(actual - after):.3g} deg/s', 't_h': t_h,
-                 'lines': [('compensated drift part', actual - after, 'tab:green')]}])
-        return rows16, rows17
+        grid = block_means(np.c_[temp, rate], q)
+        centres = np.arange(grid.shape[0]) * q + 0.5 * (min(q, t.size) - 1)
+        return grid, np.interp(centres, np.arange(t.size), t) / 3600.0
 
     # -- helpers ---------------------------------------------------------------------------
     def _classify(self, dec):
         o = self.options
         return classify_modes(dec.modes, dec.center_freqs, drift_max=o['drift_max'],
-                              noise_min=o['noise_min'], max_samples=int(o['entropy_samples']))
+                              noise_min=o['noise_min'], max_samples=int(o['entropy_samples']),
+                              scale=(None if o['entropy_scale'] is None
+                                     else int(o['entropy_scale'])))
 
     @staticmethod
     def _axis_info(dec, cls, rate_hz):

@@ -32,6 +32,7 @@ line why the method has none. Everything is converted to deg/s at this edge; lon
 reduced to min/max envelopes (:func:`envelope`); matplotlib runs on the Agg backend.
 """
 
+import inspect
 import math
 from pathlib import Path
 import re
@@ -41,7 +42,7 @@ import numpy as np
 __all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
            'plot_allan', 'plot_bandwidth', 'plot_before_after', 'plot_drift', 'plot_mode_classes',
            'plot_modes', 'plot_mopso', 'plot_network', 'plot_output', 'plot_run', 'plot_steps',
-           'table_markdown']
+           'parallel_figures', 'table_markdown', 'bias_stability_cell']
 
 DEG = 180.0 / math.pi
 AXES = 'xyz'
@@ -254,7 +255,7 @@ def plot_allan(path, curves, *, title):
     return _save(fig, plt, path)
 
 
-def plot_bandwidth(path, responses, *, title):
+def plot_bandwidth(path, responses, *, title, small=None):
     """
     Plot gain, phase and group delay against frequency, one line per label and axis.
 
@@ -263,9 +264,13 @@ def plot_bandwidth(path, responses, *, title):
     path : str or os.PathLike
         PNG file.
     responses : dict
-        ``{label: {axis: FrequencyResponse}}``.
+        ``{label: {axis: FrequencyResponse}}``, the response to the large injection.
     title : str
         Figure title.
+    small : dict, optional
+        The same for the noise-sized injection, drawn dashed in the same colour (gain only:
+        its phase is that of a response mostly made of noise). Each measured -3 dB corner is
+        marked on its curve.
 
     Returns
     -------
@@ -274,21 +279,33 @@ def plot_bandwidth(path, responses, *, title):
     """
     plt = _pyplot()
     fig, panels = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    small = small or {}
+
+    def gain_line(fr, name, style, colour=None):
+        line, = panels[0].semilogx(fr.frequency_hz, 20 * np.log10(np.maximum(fr.gain, 1e-6)),
+                                   lw=1.0, ls=style, label=name, color=colour)
+        if fr.minus_3db_bound == 'measured':
+            panels[0].plot([fr.minus_3db_hz], [-3.0], 'o', ms=5, mfc='none',
+                           color=line.get_color())
+        return line
+
     for label, per_axis in responses.items():
         for axis, fr in per_axis.items():
             if fr.frequency_hz.size == 0:
                 continue
             name = f'{label} {axis}' if len(per_axis) > 1 else label
-            line, = panels[0].semilogx(fr.frequency_hz, 20 * np.log10(np.maximum(fr.gain, 1e-6)),
-                                       lw=1.0, label=name)
+            line = gain_line(fr, name, '-')
             # phase and delay of a response that is mostly not the input mean nothing
             ok = np.where(fr.coherence >= 0.5, 1.0, np.nan)
             panels[1].semilogx(fr.frequency_hz, fr.phase_deg * ok, lw=1.0,
                                color=line.get_color())
             panels[2].semilogx(fr.frequency_hz, fr.group_delay_s * 1e3 * ok, lw=1.0,
                                color=line.get_color())
+            fr_small = small.get(label, {}).get(axis)
+            if fr_small is not None and fr_small.frequency_hz.size:
+                gain_line(fr_small, f'{name}, noise-sized', '--', line.get_color())
     panels[0].axhline(-3.0, color='0.6', ls=':', lw=0.8)
-    panels[0].set_ylabel('gain (dB)')
+    panels[0].set_ylabel('gain (dB); dashed: noise-sized motion; o: -3 dB')
     panels[1].set_ylabel('phase (deg), coherence >= 0.5')
     panels[2].set_ylabel('group delay (ms), coherence >= 0.5')
     panels[2].set_xlabel('frequency (Hz)')
@@ -577,6 +594,147 @@ def plot_network(path, axes, *, title):
     return _save(fig, plt, path)
 
 
+def _rms_deg_s(x):
+    return float(np.degrees(np.sqrt(np.mean(np.square(x))))) if np.size(x) else float('nan')
+
+
+def parallel_figures(model, run, parts, out_dir):
+    """
+    Draw the parallel model's own figures (paper Figures 11, 12 and 14-17) for a run.
+
+    MOPSO is never re-run: Figure 11 is drawn from the model's ``fit_info``, which exists only
+    in the process that fitted the model; otherwise its entry has no file name and its caption
+    says where the figure is. Figure 13 (sample entropy and class of each mode) is the report's
+    generic figure (:func:`plot_mode_classes`).
+
+    Parameters
+    ----------
+    model : ParallelModel
+        The fitted model (its ``axes``, ``options``, ``fit_info``, ``network_grid``).
+    run : ThermalRun
+        The run the figures describe.
+    parts : list of dict
+        Per axis, what the model's ``apply`` kept of that run at plot size (envelopes of the
+        input, modes and parts; a zoom; the drift part on the network's grid).
+    out_dir : pathlib.Path
+        Existing directory the PNG files are written to.
+
+    Returns
+    -------
+    list of (str or None, str)
+        File name relative to ``out_dir`` (None: no figure) and a caption citing the paper
+        figure it mirrors ('Fig. N').
+
+    """
+    out_dir = Path(out_dir)
+    name = run.name or 'run'
+    figs = [_mopso_figure(model, out_dir, name)]
+    plot_modes(out_dir / 'fig12_modes.png', [
+        {'t_h': p['t_h'], 'input': p['input'], 'modes': p['modes'],
+         'center_freqs_hz': p['center_freqs_hz'], 'classes': p['classes']} for p in parts],
+        title=f'{name}: VMD modes with the trained K and alpha, coloured by class')
+    ks = ', '.join(str(ax['k']) for ax in model.axes)
+    figs.append(('fig12_modes.png', f'VMD of the run into K = {ks} modes (x, y, z), each '
+                 'with its class and centre frequency, min/max envelopes of long runs '
+                 '(cf. Fig. 12)'))
+    zoom_t = [np.asarray(run.t_s)[p['zoom']] for p in parts]
+    n_mixed = [p['classes'].count('mixed') for p in parts]
+    plot_before_after(out_dir / 'fig14_tfpf.png', [
+        {'t_h': p['t_h'], 'before': p['mixed_in'], 'after': p['mixed_out'],
+         'zoom_t_s': zt, 'zoom_before': p['zoom_mixed_in'],
+         'zoom_after': p['zoom_mixed_out'], 'name': f'mixed part ({m} modes)'}
+        for p, zt, m in zip(parts, zoom_t, n_mixed)],
+        title=f'{name}: sum of the mixed modes before and after TFPF '
+              f'(window {int(model.options["tfpf_window"])} samples)',
+        before='mixed part', after='after TFPF')
+    empty = ', '.join(a for a, m in zip(AXES, n_mixed) if m == 0)
+    figs.append(('fig14_tfpf.png', 'Sum of the mixed modes before and after time-frequency '
+                 'peak filtering, whole run and a zoom of 20 TFPF windows (cf. Fig. 14)'
+                 + (f'; no mode of axis {empty} is classed mixed on this run, so it shows '
+                    'zeros' if empty else '')))
+    plot_before_after(out_dir / 'fig15_denoised.png', [
+        {'t_h': p['t_h'], 'before': p['input'], 'after': p['denoised'],
+         'zoom_t_s': zt, 'zoom_before': np.asarray(run.gyro_rad_s)[p['zoom'], a],
+         'zoom_after': p['zoom_denoised'], 'name': 'output'}
+        for a, (p, zt) in enumerate(zip(parts, zoom_t))],
+        title=f'{name}: raw output and denoised output (noise modes dropped, mixed part '
+              'TFPF-filtered, drift part not yet compensated)',
+        before='raw', after='denoised')
+    figs.append(('fig15_denoised.png', 'Raw output and the denoised output before drift '
+                 'compensation: mixed part after TFPF plus the drift part (cf. Fig. 15)'))
+    net16, net17 = _network_panels(model, run, parts)
+    plot_network(out_dir / 'fig16_elman.png', net16,
+                 title=f'{name}: drift part and its prediction from [T, dT]: a random start, '
+                       'after beetle antennae search, after the local refinement')
+    figs.append(('fig16_elman.png', 'Drift part (sum of the drift modes, block means on the '
+                 "network's grid) and the drift model's prediction from temperature and its "
+                 'rate: with network weights drawn as BAS draws its start (seed 0; the '
+                 "fit's own start is not stored), after BAS, and after the L-BFGS refinement "
+                 '(the fitted model) (cf. Fig. 16)'))
+    plot_network(out_dir / 'fig17_drift_part.png', net17,
+                 title=f'{name}: drift part, its prediction and its compensation')
+    figs.append(('fig17_drift_part.png', 'Drift part and its prediction (a), and the '
+                 'compensated drift part, drift minus prediction (b) (cf. Fig. 17)'))
+    return figs
+
+
+def _mopso_figure(model, out_dir, name):
+    info = model.fit_info or []
+    archives = [ax.get('mopso') for ax in info]
+    keys = ('archive_fuzzy_entropy', 'archive_permutation_entropy', 'archive_k',
+            'archive_alpha')
+    if len(archives) != 3 or not all(a and all(k in a for k in keys) for a in archives):
+        return (None, 'the MOPSO archive (Fig. 11) is drawn by `fit` beside model.json '
+                      '(fig11_mopso.png of the training report); model.json keeps only '
+                      'the picked K and alpha')
+    axes = []
+    for arch, ax in zip(archives, model.axes):
+        fit = ax.get('fitness', {})
+        axes.append({'fuzzy_entropy': arch['archive_fuzzy_entropy'],
+                     'permutation_entropy': arch['archive_permutation_entropy'],
+                     'k': arch['archive_k'], 'alpha': arch['archive_alpha'],
+                     'pick': (ax['k'], ax['alpha'], fit.get('fuzzy_entropy', np.nan),
+                              fit.get('permutation_entropy', np.nan))})
+    plot_mopso(out_dir / 'fig11_mopso.png', axes,
+               title=f'{name}: final MOPSO archive (Pareto front) and the picked '
+                     '(K, alpha), per axis')
+    return ('fig11_mopso.png', 'Final MOPSO archive: the Pareto front of mean fuzzy and '
+            'permutation entropy, and the archive in (K, alpha), with the picked point '
+            '(cf. Fig. 11; the paper also shows the swarm per iteration)')
+
+
+def _network_panels(model, run, parts):
+    """Return the panel rows of Figures 16 and 17 (the drift part on the network's grid)."""
+    from .elman import DriftModel, fit_elman
+
+    # the distribution fit_elman draws BAS's start from (it is not stored with the model)
+    scale = inspect.signature(fit_elman).parameters['init_scale'].default
+    rows16, rows17 = [], []
+    for ax, p in zip(model.axes, parts):
+        drift_model = DriftModel.from_dict(ax['elman'])
+        grid, t_h = model.network_grid(run, p['q'])
+        net = drift_model.network
+        start = scale * np.random.default_rng(0).standard_normal(net.theta.size)
+        actual, after = p['drift_blocks'], drift_model.predict(grid)
+        stages = [('random start', drift_model.predict(grid, theta=start), 'tab:orange')]
+        if net.theta_bas is not None:
+            stages.append(('after BAS', drift_model.predict(grid, theta=net.theta_bas),
+                           'tab:purple'))
+        stages.append(('after BAS and refinement (fitted)' if net.theta_bas is not None
+                       else 'after BAS (fitted)', after, 'tab:blue'))
+        rows16.append([{'title': f'{label}: rms error {_rms_deg_s(pred - actual):.3g} deg/s',
+                        't_h': t_h,
+                        'lines': [('drift part', actual, 'k'), ('prediction', pred, colour)]}
+                       for label, pred, colour in stages])
+        rows17.append([
+            {'title': '(a) drift part and its prediction from [T, dT]', 't_h': t_h,
+             'lines': [('drift part', actual, 'k'), ('prediction', after, 'tab:blue')]},
+            {'title': '(b) compensated drift part (drift part - prediction): rms '
+                      f'{_rms_deg_s(actual - after):.3g} deg/s', 't_h': t_h,
+             'lines': [('compensated drift part', actual - after, 'tab:green')]}])
+    return rows16, rows17
+
+
 #: Paper 002's result figures: number -> (what it shows, why a method may have no analogue;
 #: None for the generic figures every method gets). Figures 1-9 show the device, the algorithms
 #: and the test rig.
@@ -694,6 +852,28 @@ def method_figures(method, run, out_dir):
         return []
     return [(None if name is None else str(name), str(caption))
             for name, caption in hook(run, Path(out_dir))]
+
+
+def bias_stability_cell(metrics, spec='.4g'):
+    """
+    Format a bias stability: the value, or '<= value' when the readout gives an upper bound.
+
+    Parameters
+    ----------
+    metrics : dict
+        ``bias_stability_deg_h`` and ``bias_stability_upper_bound`` (metrics.json keys).
+    spec : str
+        Number format.
+
+    Returns
+    -------
+    str
+
+    """
+    value = metrics.get('bias_stability_deg_h')
+    if value is None or not math.isfinite(value):
+        return 'n/a'
+    return ('<= ' if metrics.get('bias_stability_upper_bound') else '') + format(value, spec)
 
 
 def _cell(value, spec):

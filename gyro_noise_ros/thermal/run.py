@@ -24,9 +24,11 @@ compensation node evaluates.
 """
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Optional, Protocol, runtime_checkable
 
 import numpy as np
+
+from ..errors import InputDataError
 
 
 @dataclass(frozen=True)
@@ -46,6 +48,9 @@ class ThermalRun:
         Sample rate, Hz.
     name : str
         Label for reports (file name or seed).
+    accel_m_s2 : numpy.ndarray or None
+        Specific force (n, 3), m/s^2, sensor frame, when the recording has it (the
+        accelerometer's temperature compensation is fitted on it); None otherwise.
 
     """
 
@@ -54,6 +59,7 @@ class ThermalRun:
     temperature_c: np.ndarray
     rate_hz: float
     name: str = ''
+    accel_m_s2: Optional[np.ndarray] = None
 
 
 @runtime_checkable
@@ -94,8 +100,43 @@ class ThermalMethod(Protocol):
 #: Default trailing window of the temperature-rate estimate (s).
 DEFAULT_RATE_WINDOW_S = 10.0
 
+#: What :func:`temperature_rate_c_s` gives where its trailing window is not yet filled.
+RATE_START_MODES = ('backfill', 'nan', 'partial')
 
-def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S):
+
+class RateWindowError(InputDataError):
+    """A record is shorter than the temperature-rate window, so it has no rate (exit code 4)."""
+
+
+def rate_window_filled(t_s, window_s):
+    """
+    Return which samples have a filled trailing rate window.
+
+    Sample k's window ``[t_k - window_s, t_k]`` is filled when it lies inside the record:
+    ``t_k - t_0 >= window_s`` (to 1e-9 relative, so a window that ends exactly on a stamp
+    counts).
+
+    Parameters
+    ----------
+    t_s : array_like
+        Sample times (n,), s, non-decreasing.
+    window_s : float
+        Window length (s, > 0).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        (n,).
+
+    """
+    t = np.asarray(t_s, dtype=float)
+    if t.size == 0:
+        return np.zeros(0, dtype=bool)
+    return (t - t[0]) >= window_s * (1.0 - 1e-9)
+
+
+def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S,
+                         start='backfill'):
     """
     Estimate the temperature rate causally: least-squares slope over a trailing window.
 
@@ -103,7 +144,16 @@ def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S):
     same number is available live (the compensation node keeps that much temperature history)
     and offline. A slope fitted over many samples rather than a first difference keeps the
     temperature sensor's noise and LSB steps out of dT; the price is a delay of about
-    ``window_s / 2``. Where the window holds fewer than two distinct stamps the rate is 0.
+    ``window_s / 2``.
+
+    While the window is not yet filled (the first ``window_s`` of a record) it holds few
+    samples and their slope is dominated by the sensor's noise and LSB: 0.02 degC of noise
+    over 0.1 s of 52-Hz readings gives a slope scatter of ~0.3 degC/s, ten times a chamber's
+    ramp. So by default (``start='backfill'``) those samples get the rate of the first sample
+    whose window is filled (:func:`rate_window_filled`): unbiased for a steady ramp and never an
+    outlier; live, the compensation node holds the first ``window_s`` of data until that rate
+    exists. ``start='nan'`` leaves NaN there, ``start='partial'`` fits whatever the window holds
+    (0 with fewer than two distinct stamps): the noisy start the training range once included.
 
     Parameters
     ----------
@@ -113,11 +163,19 @@ def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S):
         Temperature (n,), degC.
     window_s : float, keyword-only
         Length of the trailing window, seconds (> 0).
+    start : {'backfill', 'nan', 'partial'}, keyword-only
+        What the samples before the first filled window get (see above).
 
     Returns
     -------
     numpy.ndarray
         dT/dt (n,), degC/s.
+
+    Raises
+    ------
+    RateWindowError
+        ``start='backfill'`` and no sample's window is filled (the record is shorter than
+        ``window_s``).
 
     """
     t = np.asarray(t_s, dtype=float)
@@ -127,6 +185,8 @@ def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S):
                          f'and {temp.shape}')
     if not window_s > 0:
         raise ValueError(f'window_s must be > 0, got {window_s!r}')
+    if start not in RATE_START_MODES:
+        raise ValueError(f'start must be one of {RATE_START_MODES}, got {start!r}')
     if t.size == 0:
         return np.zeros(0)
     # Centre the time axis on the run's start so the running sums keep their precision.
@@ -137,16 +197,26 @@ def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S):
     s_y = np.concatenate([zero, np.cumsum(temp)])
     s_ty = np.concatenate([zero, np.cumsum(tc * temp)])
     end = np.arange(1, t.size + 1)
-    start = np.searchsorted(t, t - window_s, side='left')
-    n = end - start
-    sum_t = s_t[end] - s_t[start]
-    sum_tt = s_tt[end] - s_tt[start]
-    sum_y = s_y[end] - s_y[start]
-    sum_ty = s_ty[end] - s_ty[start]
+    first = np.searchsorted(t, t - window_s, side='left')
+    n = end - first
+    sum_t = s_t[end] - s_t[first]
+    sum_tt = s_tt[end] - s_tt[first]
+    sum_y = s_y[end] - s_y[first]
+    sum_ty = s_ty[end] - s_ty[first]
     denom = n * sum_tt - sum_t * sum_t
     rate = np.zeros(t.size)
     # denom > 0 exactly when the window holds two distinct stamps; a relative floor guards
     # against cancellation when the stamps are nearly equal.
     ok = denom > 1e-12 * np.maximum(n * sum_tt, 1e-300)
     rate[ok] = (n[ok] * sum_ty[ok] - sum_t[ok] * sum_y[ok]) / denom[ok]
+    if start == 'partial':
+        return rate
+    filled = rate_window_filled(t, window_s)
+    if not filled.any():
+        if start == 'nan':
+            return np.full(t.size, np.nan)
+        raise RateWindowError(f'the record is {t[-1] - t[0]:.3g} s long, shorter than the '
+                              f'{window_s:g}-s window of the temperature rate dT')
+    k = int(np.argmax(filled))
+    rate[:k] = rate[k] if start == 'backfill' else np.nan
     return rate

@@ -13,17 +13,26 @@
 # limitations under the License.
 
 """
-Seeded thermal test data: an oven profile, a die lagging it, a gyro bias driven by both.
+Seeded thermal test data: oven profiles of several shapes, a lagging die, the drift it drives.
 
-The experiment of paper 002 (section 4.1): one hour at room temperature, a fast heat to 60 degC,
-one hour there, then down in 10 degC steps to -40 degC with one hour at every step. The oven air
-temperature ``u(t)`` is piecewise linear (:class:`OvenProfile`). The die follows it through one
-first-order thermal lag (a lumped board in oven air)::
+**Profiles.** The oven air temperature ``u(t)`` is piecewise linear in (natural, uncompressed)
+time. :class:`OvenProfile` is the experiment of paper 002 (section 4.1): one hour at room
+temperature, a fast heat to 60 degC, one hour there, then down in 10 degC steps to -40 degC with
+one hour at every step. :class:`ShapeProfile` gives the runs a held-out test needs, shaped
+differently from a training run: ``heating`` (a cold-soaked board warmed, the usual warm-up
+calibration), ``cooling``, ``staircase`` (heating in steps) and ``staircase_down``, ``cycle``
+(heat then cool, repeated), ``cool_reheat`` (cool then heat), ``soak`` (a cold board put into a
+warm chamber: the oven jumps, the die follows exponentially) and ``sine`` (a slow sinusoidal
+set-point). :data:`SHAPES` lists the names; :func:`make_profile` builds one by name.
+
+**Die.** One first-order thermal lag (a lumped board in oven air)::
 
     tau dT/dt = u(t) + dT_self - T
 
 solved exactly for piecewise-linear ``u`` between samples (first-order hold), so the die rate is
-exact too: ``dT/dt = (u + dT_self - T) / tau``. The gyro bias of axis i (deg/s) is
+exact too: ``dT/dt = (u + dT_self - T) / tau``.
+
+**Gyro drift** of axis i (deg/s)::
 
     b_i = b0 + c1 d + c2 d^2 + c3 d^3 + k tanh((T - T_k) / w_k) + g dT/dt_nat + h (z - T),
     d = T - T_ref,
@@ -31,18 +40,24 @@ exact too: ``dT/dt = (u + dT_self - T) / tau``. The gyro bias of axis i (deg/s) 
 a cubic plus a smooth knee (so that no low-order polynomial is exactly right), a thermal-gradient
 term proportional to the die rate, and an optional hysteresis: ``z`` is the play (backlash)
 operator of half-width r applied to T, so ``z - T`` is -r while heating, +r while cooling, and the
-bias-versus-temperature curve is a loop of height 2 h r. The temperature sensor reads
-``T + N(0, s^2)`` rounded to its LSB (1/256 degC, LSM6DSO32). The gyro adds white rate noise
-(angle random walk N) and a bias-instability-like sum of Gauss-Markov processes.
+bias-versus-temperature curve is a loop of height 2 h r. The seven terms are
+:meth:`ThermalModel.bias_terms`, the basis of the least-squares oracle
+(:mod:`gyro_noise_ros.thermal.oracle`). **Accelerometer drift** (mg): a cubic in d, the
+zero-g level change of the datasheet. The temperature sensor reads ``T + N(0, s^2)`` rounded to its
+LSB (1/256 degC, LSM6DSO32). The gyro adds white rate noise (angle random walk N) and a
+bias-instability-like sum of Gauss-Markov processes (the package's one model,
+:class:`gyro_noise_ros.core.simulate.GaussMarkov`); the accelerometer white noise.
 
 Time compression ``X`` runs the whole thermal experiment X times faster: oven, lag (tau / X) and
 the gradient term (which uses the rate in uncompressed time, ``dT/dt_nat = dT/dt / X``), so the
 bias-versus-temperature trajectory is the uncompressed one, only faster; the noise is not
-compressed. Every constant is documented on :class:`ThermalModel` and in ``docs/thermal_data.md``.
+compressed. A train/test pair shares one compression (the same device in real time). Every
+constant is documented on :class:`ThermalModel` and in ``docs/thermal_data.md``.
 """
 
 from dataclasses import asdict, dataclass, replace
 import json
+import math
 from pathlib import Path
 
 import numba
@@ -50,9 +65,13 @@ import numpy as np
 
 from .run import ThermalRun
 from ..core._kernels import JIT_OPTIONS
+from ..core.simulate import gauss_markov_avar, GaussMarkov
 from ..errors import ParameterError
 
 DEG = np.pi / 180.0
+#: Standard gravity (m/s^2), for mg.
+STANDARD_GRAVITY = 9.80665
+MG = 1e-3 * STANDARD_GRAVITY
 #: LSM6DSO32 temperature output sensitivity, 256 LSB/degC (datasheet), i.e. one LSB in degC.
 TEMPERATURE_LSB_C = 1.0 / 256.0
 #: Output rate of the LSM6DSO32 temperature sensor (datasheet: 52 Hz); the driver publishes
@@ -60,10 +79,46 @@ TEMPERATURE_LSB_C = 1.0 / 256.0
 TEMPERATURE_RATE_HZ = 52.0
 #: Header stamp of the first sample written to a bag (2023-11-14, any fixed value would do).
 DEFAULT_START_NS = 1_700_000_000 * 1_000_000_000
+#: Every profile name :func:`make_profile` knows: the paper's oven, then the shapes.
+SHAPES = ('oven', 'heating', 'cooling', 'staircase', 'staircase_down', 'cycle', 'cool_reheat',
+          'soak', 'sine')
+#: Breakpoints per period of the ``sine`` shape (the oven between them is linear; the die's lag
+#: smooths the corners: at 64 per period the set-point departs from a sine by < 0.12 % of its
+#: amplitude, 1 - cos(pi / 64)).
+SINE_POINTS_PER_PERIOD = 64
+#: The ``soak`` shape jumps the oven this many times faster than ``rate_c_s``.
+SOAK_SPEED_UP = 20.0
+
+
+class _PiecewiseProfile:
+    """What every oven profile offers on top of its ``breakpoints()``."""
+
+    @property
+    def duration_s(self):
+        """float: length of the whole profile (s); 50250 s (13.96 h) for the paper's oven."""
+        return float(self.breakpoints()[0][-1])
+
+    def temperature_c(self, t_s):
+        """
+        Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times (s) in uncompressed profile time.
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape as ``t_s``.
+
+        """
+        times, temps = self.breakpoints()
+        return np.interp(np.asarray(t_s, dtype=float), times, temps)
 
 
 @dataclass(frozen=True)
-class OvenProfile:
+class OvenProfile(_PiecewiseProfile):
     """
     The oven set-point of paper 002 section 4.1, piecewise linear in time.
 
@@ -98,6 +153,11 @@ class OvenProfile:
     heat_rate_c_s: float = 2.0 / 60.0
     cool_rate_c_s: float = 1.0 / 60.0
 
+    @property
+    def shape(self):
+        """str: ``'oven'``."""
+        return 'oven'
+
     def breakpoints(self):
         """
         Return the corners of the profile.
@@ -130,39 +190,214 @@ class OvenProfile:
             temps.append(level)
         return np.asarray(times), np.asarray(temps)
 
-    @property
-    def duration_s(self):
-        """float: length of the whole profile (s); 50250 s (13.96 h) with the defaults."""
-        return float(self.breakpoints()[0][-1])
-
-    def temperature_c(self, t_s):
+    def shifted(self, delta_c):
         """
-        Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
+        Return the profile of a run whose room is ``delta_c`` warmer (the set-points stay).
 
         Parameters
         ----------
-        t_s : array_like
-            Times (s) in uncompressed profile time.
+        delta_c : float
+            Room temperature change (degC).
 
         Returns
         -------
-        numpy.ndarray
-            Same shape as ``t_s``.
+        OvenProfile
 
         """
-        times, temps = self.breakpoints()
-        return np.interp(np.asarray(t_s, dtype=float), times, temps)
+        return replace(self, room_c=self.room_c + float(delta_c))
+
+    def starting_at(self, start_c):
+        """Return the profile with the room (its first temperature) at ``start_c`` (degC)."""
+        return replace(self, room_c=float(start_c))
+
+
+@dataclass(frozen=True)
+class ShapeProfile(_PiecewiseProfile):
+    """
+    An oven set-point of one of the shapes a held-out test needs, piecewise linear in time.
+
+    All in natural (uncompressed) time, between ``low_c`` and ``high_c`` (``span`` apart), ramps
+    at ``rate_c_s``, holds of ``hold_s``; ``offset_c`` shifts every set-point (the run-to-run
+    room spread). Breakpoints per shape (``h`` = ``hold_s``, ``r`` = ``span / rate_c_s``):
+
+    ============== ===========================================================================
+    shape          set-point
+    ============== ===========================================================================
+    heating        low for h, ramp to high (r), high for h
+    cooling        high for h, ramp to low (r), low for h
+    staircase      low for h, then ``steps`` equal steps up, each ramped (r / steps), held h
+    staircase_down the same from high, down
+    cycle          low for h, then ``cycles`` x (ramp up, high for h, ramp down, low for h)
+    cool_reheat    high for h, then ``cycles`` x (ramp down, low for h, ramp up, high for h)
+    soak           low for 60 s, a jump to high ``SOAK_SPEED_UP`` x faster than r, high for 3 h
+    sine           mid + span/2 sin(2 pi t / ``period_s``), ``2 cycles`` periods from mid up
+    ============== ===========================================================================
+
+    Attributes
+    ----------
+    shape : str
+        One of :data:`SHAPES` except ``'oven'`` (that is :class:`OvenProfile`).
+    low_c, high_c : float
+        Lowest and highest set-point (degC), low < high.
+    rate_c_s : float
+        Ramp rate (degC/s, > 0); 1 degC/min by default (a lab chamber).
+    hold_s : float
+        Every hold (s, > 0).
+    steps : int
+        Steps of the staircases (>= 1).
+    cycles : int
+        Repeats of ``cycle`` and ``cool_reheat``, periods of ``sine`` (>= 1; ``sine`` runs
+        ``2 cycles``).
+    period_s : float
+        Period of ``sine`` (s, > 0; 5400 s: two periods last about as long as a cycle).
+    offset_c : float
+        Added to every set-point (degC).
+
+    """
+
+    shape: str = 'heating'
+    low_c: float = 10.0
+    high_c: float = 50.0
+    rate_c_s: float = 1.0 / 60.0
+    hold_s: float = 1800.0
+    steps: int = 4
+    cycles: int = 1
+    period_s: float = 5400.0
+    offset_c: float = 0.0
+
+    def _check(self):
+        if self.shape not in SHAPES or self.shape == 'oven':
+            raise ParameterError(f'shape must be one of {", ".join(SHAPES[1:])}, got '
+                                 f'{self.shape!r}')
+        for name in ('low_c', 'high_c', 'rate_c_s', 'hold_s', 'period_s', 'offset_c'):
+            if not math.isfinite(getattr(self, name)):
+                raise ParameterError(f'{name} must be finite, got {getattr(self, name)!r}')
+        if not (self.low_c < self.high_c and self.rate_c_s > 0 and self.hold_s > 0
+                and self.period_s > 0):
+            raise ParameterError(f'profile needs low_c < high_c and rate, hold, period > 0, got '
+                                 f'{self}')
+        for name in ('steps', 'cycles'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, np.integer)) and value >= 1):
+                raise ParameterError(f'{name} must be an integer >= 1, got {value!r}')
+
+    def breakpoints(self):
+        """
+        Return the corners of the profile.
+
+        Returns
+        -------
+        times_s : numpy.ndarray
+            Increasing times (s) from 0.
+        temperatures_c : numpy.ndarray
+            Oven temperature at those times (degC).
+
+        """
+        self._check()
+        lo, hi, h = float(self.low_c), float(self.high_c), float(self.hold_s)
+        span = hi - lo
+        ramp = span / self.rate_c_s
+        times, temps = [0.0], []
+
+        def go(level, duration):
+            times.append(times[-1] + duration)
+            temps.append(level)
+
+        if self.shape == 'sine':
+            mid, amp = 0.5 * (lo + hi), 0.5 * span
+            k = np.arange(SINE_POINTS_PER_PERIOD * 2 * int(self.cycles) + 1)
+            t = k * (self.period_s / SINE_POINTS_PER_PERIOD)
+            u = mid + amp * np.sin(2.0 * np.pi * k / SINE_POINTS_PER_PERIOD)
+            return t, u + self.offset_c
+        start = {'heating': lo, 'staircase': lo, 'cycle': lo, 'soak': lo}.get(self.shape, hi)
+        temps.append(start)
+        if self.shape == 'soak':
+            go(lo, 60.0)
+            go(hi, ramp / SOAK_SPEED_UP)
+            go(hi, 3.0 * h)
+        else:
+            go(start, h)
+        if self.shape in ('heating', 'cooling'):
+            go(hi if self.shape == 'heating' else lo, ramp)
+            go(temps[-1], h)
+        elif self.shape in ('staircase', 'staircase_down'):
+            sign = 1.0 if self.shape == 'staircase' else -1.0
+            for i in range(1, int(self.steps) + 1):
+                go(start + sign * span * i / self.steps, ramp / self.steps)
+                go(temps[-1], h)
+        elif self.shape in ('cycle', 'cool_reheat'):
+            other = hi if self.shape == 'cycle' else lo
+            for _ in range(int(self.cycles)):
+                go(other, ramp)
+                go(other, h)
+                go(start, ramp)
+                go(start, h)
+        return np.asarray(times), np.asarray(temps) + self.offset_c
+
+    def shifted(self, delta_c):
+        """
+        Return the profile with every set-point ``delta_c`` warmer (degC).
+
+        Parameters
+        ----------
+        delta_c : float
+            Change (degC).
+
+        Returns
+        -------
+        ShapeProfile
+
+        """
+        return replace(self, offset_c=self.offset_c + float(delta_c))
+
+    def starting_at(self, start_c):
+        """Return the profile shifted so that it starts at ``start_c`` (degC)."""
+        return self.shifted(float(start_c) - float(self.breakpoints()[1][0]))
+
+
+def make_profile(shape, **options):
+    """
+    Build a profile by name: ``'oven'`` (:class:`OvenProfile`) or a :class:`ShapeProfile` shape.
+
+    Parameters
+    ----------
+    shape : str
+        One of :data:`SHAPES`.
+    **options
+        Fields of the profile class (e.g. ``low_c``, ``high_c``, ``hold_s``).
+
+    Returns
+    -------
+    OvenProfile or ShapeProfile
+
+    Raises
+    ------
+    ParameterError
+        Unknown shape, an option the class does not have, or bad values.
+
+    """
+    if shape not in SHAPES:
+        raise ParameterError(f'unknown thermal profile {shape!r} (known: {", ".join(SHAPES)})')
+    cls = OvenProfile if shape == 'oven' else ShapeProfile
+    if shape != 'oven':
+        options = dict(options, shape=shape)
+    unknown = set(options) - set(cls.__dataclass_fields__)
+    if unknown:
+        raise ParameterError(f'profile {shape!r} has no option(s) {", ".join(sorted(unknown))}')
+    profile = cls(**options)
+    profile.breakpoints()  # validates
+    return profile
 
 
 @dataclass(frozen=True)
 class ThermalModel:
     """
-    Constants of the simulated device: die lag, bias law, temperature sensor, gyro noise.
+    Constants of the simulated device: die lag, drift laws, temperature sensor, noise.
 
     Per-axis values are 3-tuples (x, y, z) or one number for all axes. Magnitudes follow the
     LSM6DSO32 datasheet where it gives one (zero-rate level change about 0.01 deg/s/degC, rate
-    noise density 3.8 mdps/sqrt(Hz), temperature sensor 256 LSB/degC); the rest are plausible
-    orders of magnitude, stated as such.
+    noise density 3.8 mdps/sqrt(Hz), zero-g level change about 0.1 mg/degC, temperature sensor
+    256 LSB/degC); the rest are plausible orders of magnitude, stated as such.
 
     Attributes
     ----------
@@ -171,7 +406,7 @@ class ThermalModel:
     self_heating_c : float
         Die temperature above the oven air at equilibrium (degC).
     t_ref_c : float
-        Reference temperature of the bias polynomial (degC).
+        Reference temperature of the bias polynomials (degC).
     bias_dps : float or 3-tuple
         Bias at ``t_ref_c`` at rest (deg/s).
     lin_dps_per_c, quad_dps_per_c2, cubic_dps_per_c3 : float or 3-tuple
@@ -187,6 +422,13 @@ class ThermalModel:
         r of the play operator (degC); 0 switches hysteresis off.
     hysteresis_dps_per_c : float or 3-tuple
         h: bias per degC of (z - T) (deg/s/degC); the loop is 2 h r high.
+    accel_bias_mg : float or 3-tuple
+        Accelerometer zero-g offset at ``t_ref_c`` (mg).
+    accel_lin_mg_per_c, accel_quad_mg_per_c2, accel_cubic_mg_per_c3 : float or 3-tuple
+        Accelerometer offset polynomial in (T - t_ref_c) (mg per degC^i); the datasheet's
+        zero-g level change is about 0.1 mg/degC.
+    accel_noise_ug_rthz : float
+        Accelerometer white noise density (ug/sqrt(Hz)); 70 as the emulator's LSM6DSO32.
     temp_noise_c : float
         Standard deviation of the temperature sensor's noise (degC).
     temp_lsb_c : float
@@ -200,7 +442,8 @@ class ThermalModel:
     turn_on_bias_dps : float
         Run-to-run (turn-on) bias repeatability, standard deviation (deg/s).
     room_spread_c : float
-        Run-to-run room temperature spread, uniform +- (degC).
+        Run-to-run temperature spread, uniform +- (degC): the room of :class:`OvenProfile`, every
+        set-point of a :class:`ShapeProfile`.
 
     """
 
@@ -217,6 +460,11 @@ class ThermalModel:
     gradient_dps_per_c_s: object = (3.0, -2.0, 2.5)
     hysteresis_half_width_c: float = 1.0
     hysteresis_dps_per_c: object = (0.004, -0.003, 0.003)
+    accel_bias_mg: object = (5.0, -3.0, 8.0)
+    accel_lin_mg_per_c: object = (0.10, -0.08, 0.12)
+    accel_quad_mg_per_c2: object = (1.0e-3, -8.0e-4, 5.0e-4)
+    accel_cubic_mg_per_c3: object = (-1.0e-5, 1.0e-5, 5.0e-6)
+    accel_noise_ug_rthz: float = 70.0
     temp_noise_c: float = 0.02
     temp_lsb_c: float = TEMPERATURE_LSB_C
     arw_dps_rthz: float = 3.8e-3
@@ -224,6 +472,9 @@ class ThermalModel:
     bi_corr_times_s: tuple = (10.0, 100.0, 1000.0)
     turn_on_bias_dps: float = 0.005
     room_spread_c: float = 1.0
+
+    #: Names of the columns of :meth:`bias_terms`.
+    TERMS = ('1', 'd', 'd^2', 'd^3', 'knee', 'dT/dt_nat', 'z - T')
 
     def vec(self, name):
         """Return per-axis attribute ``name`` as a float array (3,)."""
@@ -238,16 +489,62 @@ class ThermalModel:
             if not getattr(self, name) > 0:
                 raise ParameterError(f'{name} must be > 0, got {getattr(self, name)!r}')
         for name in ('hysteresis_half_width_c', 'temp_noise_c', 'temp_lsb_c', 'arw_dps_rthz',
-                     'bias_instability_dps', 'turn_on_bias_dps', 'room_spread_c'):
+                     'bias_instability_dps', 'turn_on_bias_dps', 'room_spread_c',
+                     'accel_noise_ug_rthz'):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f'{name} must be finite and >= 0, got {value!r}')
         if not all(tc > 0 for tc in self.bi_corr_times_s):
             raise ParameterError(f'bi_corr_times_s must be > 0, got {self.bi_corr_times_s!r}')
 
+    def bias_coefficients_dps(self):
+        """
+        Return the gyro drift law's coefficient of every term of :meth:`bias_terms`.
+
+        Returns
+        -------
+        numpy.ndarray
+            (7, 3), deg/s per unit of each term, rows in the order of :attr:`TERMS`.
+
+        """
+        return np.stack([self.vec(k) for k in (
+            'bias_dps', 'lin_dps_per_c', 'quad_dps_per_c2', 'cubic_dps_per_c3', 'knee_dps',
+            'gradient_dps_per_c_s', 'hysteresis_dps_per_c')])
+
+    def bias_terms(self, die_c, die_rate_nat_c_s, played_c):
+        """
+        Return the seven terms of the gyro drift law, one column each (:attr:`TERMS`).
+
+        ``[1, d, d^2, d^3, tanh((T - T_k) / w_k), dT/dt_nat, z - T]`` with ``d = T - t_ref_c``:
+        the drift is these times :meth:`bias_coefficients_dps`, and they are the basis of the
+        least-squares oracle.
+
+        Parameters
+        ----------
+        die_c : array_like
+            Die temperature T (n,), degC.
+        die_rate_nat_c_s : array_like
+            Die rate in uncompressed time (n,), degC/s.
+        played_c : array_like
+            Play-operator output z (n,), degC (equal to ``die_c`` without hysteresis).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n, 7).
+
+        """
+        temp = np.asarray(die_c, dtype=float).reshape(-1)
+        d = temp - self.t_ref_c
+        return np.column_stack([
+            np.ones_like(d), d, d * d, d * d * d,
+            np.tanh((temp - self.knee_c) / self.knee_width_c),
+            np.asarray(die_rate_nat_c_s, dtype=float).reshape(-1),
+            np.asarray(played_c, dtype=float).reshape(-1) - temp])
+
     def bias_rad_s(self, die_c, die_rate_nat_c_s, played_c):
         """
-        Evaluate the bias law of the module docstring.
+        Evaluate the gyro drift law of the module docstring.
 
         Parameters
         ----------
@@ -264,23 +561,36 @@ class ThermalModel:
             Bias (n, 3), rad/s.
 
         """
-        temp = np.asarray(die_c, dtype=float)[:, None]
-        d = temp - self.t_ref_c
-        rate = np.asarray(die_rate_nat_c_s, dtype=float)[:, None]
-        play = np.asarray(played_c, dtype=float)[:, None] - temp
-        b = (self.vec('bias_dps') + d * (self.vec('lin_dps_per_c') + d * (
-            self.vec('quad_dps_per_c2') + d * self.vec('cubic_dps_per_c3')))
-            + self.vec('knee_dps') * np.tanh((temp - self.knee_c) / self.knee_width_c)
-            + self.vec('gradient_dps_per_c_s') * rate
-            + self.vec('hysteresis_dps_per_c') * play)
-        return b * DEG
+        terms = self.bias_terms(die_c, die_rate_nat_c_s, played_c)
+        return (terms @ self.bias_coefficients_dps()) * DEG
+
+    def accel_bias_m_s2(self, die_c):
+        """
+        Evaluate the accelerometer offset law: a cubic in ``d = T - t_ref_c``.
+
+        Parameters
+        ----------
+        die_c : array_like
+            Die temperature T (n,), degC.
+
+        Returns
+        -------
+        numpy.ndarray
+            Offset (n, 3), m/s^2 (added to the specific force).
+
+        """
+        d = np.asarray(die_c, dtype=float).reshape(-1)[:, None] - self.t_ref_c
+        mg = (self.vec('accel_bias_mg') + d * (self.vec('accel_lin_mg_per_c') + d * (
+            self.vec('accel_quad_mg_per_c2') + d * self.vec('accel_cubic_mg_per_c3'))))
+        return mg * MG
 
     def gauss_markov_std_dps(self):
         """
         Return the standard deviation q of each Gauss-Markov process (deg/s).
 
         Chosen so that the closed-form Allan deviation of their sum
-        (:func:`gauss_markov_allan_variance`) peaks at 0.664 B over 0.1 s .. 1e5 s.
+        (:func:`gyro_noise_ros.core.simulate.gauss_markov_avar`) peaks at 0.664 B over
+        0.1 s .. 1e5 s.
 
         Returns
         -------
@@ -290,38 +600,8 @@ class ThermalModel:
         if self.bias_instability_dps == 0 or not self.bi_corr_times_s:
             return 0.0
         taus = np.logspace(-1, 5, 600)
-        unit = sum(gauss_markov_allan_variance(taus, 1.0, tc) for tc in self.bi_corr_times_s)
+        unit = sum(gauss_markov_avar(taus, 1.0, tc) for tc in self.bi_corr_times_s)
         return float(0.664 * self.bias_instability_dps / np.sqrt(unit.max()))
-
-
-def gauss_markov_allan_variance(tau_s, std, corr_time_s):
-    """
-    Allan variance of a continuous first-order Gauss-Markov process (closed form).
-
-    ``sigma^2(tau) = q^2 (T/tau)^2 (2 tau/T - 3 + 4 exp(-tau/T) - exp(-2 tau/T))``, which tends
-    to the rate random walk ``(2 q^2 / T) tau / 3`` for tau << T and to white noise
-    ``2 q^2 T / tau`` for tau >> T.
-
-    Parameters
-    ----------
-    tau_s : array_like
-        Averaging times (s, > 0).
-    std : float
-        Process standard deviation q (any rate unit; the result is in its square).
-    corr_time_s : float
-        Correlation time T (s).
-
-    Returns
-    -------
-    numpy.ndarray
-
-    """
-    x = np.asarray(tau_s, dtype=float) / corr_time_s
-    bracket = 2 * x - 3 + 4 * np.exp(-x) - np.exp(-2 * x)
-    # the bracket cancels to (2/3) x^3 for small x; use the series there
-    small = x < 1e-3
-    bracket = np.where(small, (2.0 / 3.0) * x ** 3 - 0.5 * x ** 4, bracket)
-    return std ** 2 * bracket / x ** 2
 
 
 @numba.njit(**JIT_OPTIONS)
@@ -350,6 +630,47 @@ def _lag_play(t, u, tau, r, t0, u0, y0, z0, y_out, z_out):  # pragma: no cover -
         up = u[k]
 
 
+@numba.njit(**JIT_OPTIONS)
+def _play(x, r, z0, z_out):  # pragma: no cover - compiled
+    """Run the play operator of half-width r: z = min(max(z_prev, x - r), x + r), from z0."""
+    zp = z0
+    for k in range(x.shape[0]):
+        zp = min(max(zp, x[k] - r), x[k] + r)
+        z_out[k] = zp
+
+
+def play_operator(x, half_width, *, start=None):
+    """
+    Apply the play (backlash) operator of half-width ``half_width`` to a sequence.
+
+    ``z[k] = min(max(z[k-1], x[k] - r), x[k] + r)``, ``z[-1] = start`` (default ``x[0]``): the
+    hysteresis state of the drift law, here for a measured temperature (the oracle on measured
+    inputs).
+
+    Parameters
+    ----------
+    x : array_like
+        Input (n,), e.g. temperature in degC.
+    half_width : float
+        r (same unit, >= 0).
+    start : float, optional, keyword-only
+        State before the first sample.
+
+    Returns
+    -------
+    numpy.ndarray
+        z (n,).
+
+    """
+    x = np.ascontiguousarray(x, dtype=float).reshape(-1)
+    if not (math.isfinite(half_width) and half_width >= 0):
+        raise ParameterError(f'half_width must be finite and >= 0, got {half_width!r}')
+    out = np.empty_like(x)
+    if x.size:
+        _play(x, float(half_width), float(x[0] if start is None else start), out)
+    return out
+
+
 @dataclass(frozen=True)
 class ThermalSamples:
     """
@@ -366,7 +687,9 @@ class ThermalSamples:
     played_c : numpy.ndarray
         Play-operator output z (n,), degC.
     bias_rad_s : numpy.ndarray
-        Thermal bias (n, 3), rad/s.
+        Thermal gyro bias (n, 3), rad/s.
+    accel_bias_m_s2 : numpy.ndarray
+        Thermal accelerometer offset (n, 3), m/s^2.
 
     """
 
@@ -375,11 +698,12 @@ class ThermalSamples:
     die_rate_c_s: np.ndarray
     played_c: np.ndarray
     bias_rad_s: np.ndarray
+    accel_bias_m_s2: np.ndarray
 
 
 class ThermalStream:
     """
-    The oven, the die and the thermal bias, evaluated batch by batch with state carried over.
+    The oven, the die and the thermal drift, evaluated batch by batch with state carried over.
 
     The same times give the same values whatever the batch sizes (the recursion runs sample by
     sample). Used by :func:`simulate_run` (one batch) and by the Portenta emulator (many).
@@ -388,12 +712,13 @@ class ThermalStream:
     ----------
     model : ThermalModel, optional
         Device constants (defaults if None).
-    profile : OvenProfile, optional
-        Oven profile (defaults if None).
+    profile : OvenProfile or ShapeProfile, optional
+        Oven profile (the paper's :class:`OvenProfile` if None).
     compress : float, keyword-only
         Time compression X (>= 1 speeds up; any value > 0 allowed).
     room_c : float, optional, keyword-only
-        Overrides ``profile.room_c`` (run-to-run room temperature).
+        The temperature the profile starts at: the room of an :class:`OvenProfile`; a
+        :class:`ShapeProfile` is shifted so that it starts there.
 
     """
 
@@ -402,7 +727,7 @@ class ThermalStream:
         self.model.check()
         profile = OvenProfile() if profile is None else profile
         if room_c is not None:
-            profile = replace(profile, room_c=float(room_c))
+            profile = profile.starting_at(float(room_c))
         self.profile = profile
         self._times, self._temps = profile.breakpoints()
         if not (np.isfinite(compress) and compress > 0):
@@ -450,7 +775,8 @@ class ThermalStream:
         rate = (u - y) / self.tau_s
         bias = self.model.bias_rad_s(y, rate / self.compress, z)
         return ThermalSamples(oven_c=u - self.model.self_heating_c, die_c=y, die_rate_c_s=rate,
-                              played_c=z, bias_rad_s=bias)
+                              played_c=z, bias_rad_s=bias,
+                              accel_bias_m_s2=self.model.accel_bias_m_s2(y))
 
     def measure_c(self, die_c, rng):
         """
@@ -480,8 +806,9 @@ def gyro_noise_rad_s(n, rate_hz, model, rng):
     White rate noise plus the Gauss-Markov sum of the bias-instability floor.
 
     White: per-sample standard deviation ``N sqrt(rate_hz)`` (so sigma^2(tau) = N^2 / tau).
-    Gauss-Markov: ``x[k+1] = phi x[k] + sqrt(1 - phi^2) q e[k]``, ``phi = exp(-1/(rate_hz T))``,
-    started from its stationary distribution (exact sampling of the continuous process).
+    Gauss-Markov: one :class:`gyro_noise_ros.core.simulate.GaussMarkov` per correlation time
+    (exact sampling, started from its stationary distribution), each of standard deviation
+    :meth:`ThermalModel.gauss_markov_std_dps`.
 
     Parameters
     ----------
@@ -500,17 +827,12 @@ def gyro_noise_rad_s(n, rate_hz, model, rng):
         Noise (n, 3), rad/s.
 
     """
-    from scipy.signal import lfilter
-
     white_rng, gm_rng = rng.spawn(2)
     noise = white_rng.standard_normal((n, 3)) * (model.arw_dps_rthz * np.sqrt(rate_hz))
     q = model.gauss_markov_std_dps()
     if q > 0 and n:
         for corr_time, sub in zip(model.bi_corr_times_s, gm_rng.spawn(len(model.bi_corr_times_s))):
-            phi = np.exp(-1.0 / (rate_hz * corr_time))
-            e = sub.standard_normal((n, 3)) * (q * np.sqrt(1.0 - phi * phi))
-            x0 = sub.standard_normal(3) * q
-            noise += lfilter([1.0], [1.0, -phi], e, axis=0, zi=(phi * x0)[None, :])[0]
+            noise += GaussMarkov(q, corr_time, rate_hz, rng=sub, shape=(3,)).generate(n)
     return noise * DEG
 
 
@@ -523,33 +845,46 @@ class ThermalTruth:
     ----------
     oven_c, die_c, die_rate_c_s : numpy.ndarray
         (n,) oven air (degC), die (degC) and die rate (degC/s, real time) at every sample.
+    played_c : numpy.ndarray
+        (n,) the hysteresis state z (degC): ``z - die_c`` is the drift law's last term.
     drift_rad_s : numpy.ndarray
         (n, 3) the thermal bias plus the turn-on bias: everything in the gyro output but noise.
     noise_rad_s : numpy.ndarray
         (n, 3) white plus Gauss-Markov noise.
+    accel_drift_m_s2 : numpy.ndarray
+        (n, 3) the accelerometer's thermal offset (gravity not included).
+    accel_noise_m_s2 : numpy.ndarray
+        (n, 3) its white noise.
     temperature_index : numpy.ndarray
         Indices of the samples at which the temperature sensor was read (Temperature messages).
     temperature_reading_c : numpy.ndarray
         The readings at those samples (degC).
     room_c : float
-        Room temperature of this run (degC).
+        The temperature the profile started at for this run (degC): the room of the paper's
+        oven, the first set-point of a shape (both include the run-to-run spread).
     turn_on_bias_rad_s : numpy.ndarray
         (3,) this run's turn-on bias, rad/s (included in ``drift_rad_s``).
     compress : float
         Time compression X.
+    shape : str
+        The profile's shape (:data:`SHAPES`).
 
     """
 
     oven_c: np.ndarray
     die_c: np.ndarray
     die_rate_c_s: np.ndarray
+    played_c: np.ndarray
     drift_rad_s: np.ndarray
     noise_rad_s: np.ndarray
+    accel_drift_m_s2: np.ndarray
+    accel_noise_m_s2: np.ndarray
     temperature_index: np.ndarray
     temperature_reading_c: np.ndarray
     room_c: float
     turn_on_bias_rad_s: np.ndarray
     compress: float
+    shape: str = 'oven'
 
 
 def resolve_timing(profile, *, hours=None, compress=None):
@@ -563,7 +898,7 @@ def resolve_timing(profile, *, hours=None, compress=None):
 
     Parameters
     ----------
-    profile : OvenProfile
+    profile : OvenProfile or ShapeProfile
         The profile whose natural length is compressed.
     hours : float, optional, keyword-only
         Run length (h).
@@ -592,20 +927,25 @@ def resolve_timing(profile, *, hours=None, compress=None):
 def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, profile=None,
                  temperature_rate_hz=TEMPERATURE_RATE_HZ, name=''):
     """
-    Simulate one static oven run: the ThermalRun a recording would give, and the truth.
+    Simulate one static run: the ThermalRun a recording would give, and the truth.
+
+    The device lies flat (+1 g on z, REP-103); the gyro reads drift + turn-on bias + noise, the
+    accelerometer gravity + its thermal offset + noise.
 
     Parameters
     ----------
     rng : numpy.random.Generator, keyword-only
-        Parent of every random stream (room temperature, turn-on bias, gyro noise, sensor noise).
+        Parent of every random stream (temperature spread, turn-on bias, gyro noise, sensor
+        noise, accelerometer noise).
     rate_hz : float, keyword-only
         Gyro sample rate (Hz).
     hours, compress : float, optional, keyword-only
         Run length and time compression (see :func:`resolve_timing`).
     model : ThermalModel, optional, keyword-only
         Device constants (defaults if None).
-    profile : OvenProfile, optional, keyword-only
-        Oven profile (defaults if None).
+    profile : OvenProfile or ShapeProfile, optional, keyword-only
+        Oven profile (the paper's :class:`OvenProfile` if None); :func:`make_profile` builds one
+        by shape name.
     temperature_rate_hz : float, keyword-only
         The temperature is read at every m-th sample, ``m = max(1, round(rate_hz / this))``
         (the driver publishes it the same way); the run's temperature is those readings
@@ -633,23 +973,29 @@ def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, p
     if n < 2:
         raise ParameterError(f'run of {duration_s} s at {rate_hz} Hz has fewer than 2 samples')
     run_rng, noise_rng, temp_rng = rng.spawn(3)
-    room_c = profile.room_c + run_rng.uniform(-1.0, 1.0) * model.room_spread_c
+    profile = profile.shifted(run_rng.uniform(-1.0, 1.0) * model.room_spread_c)
     turn_on = run_rng.standard_normal(3) * model.turn_on_bias_dps * DEG
+    accel_rng = run_rng.spawn(1)[0]
     t = np.arange(n) / rate_hz
-    stream = ThermalStream(model, profile, compress=compress, room_c=room_c)
+    stream = ThermalStream(model, profile, compress=compress)
     th = stream.step(t)
     drift = th.bias_rad_s + turn_on
     noise = gyro_noise_rad_s(n, rate_hz, model, noise_rng)
+    accel_noise = accel_rng.standard_normal((n, 3)) * (
+        model.accel_noise_ug_rthz * 1e-6 * STANDARD_GRAVITY * np.sqrt(rate_hz / 2.0))
     m = max(1, int(round(rate_hz / temperature_rate_hz)))
     idx = np.arange(0, n, m)
     reading = stream.measure_c(th.die_c[idx], temp_rng)
+    gravity = np.array([0.0, 0.0, STANDARD_GRAVITY])
     run = ThermalRun(t_s=t, gyro_rad_s=drift + noise,
                      temperature_c=np.interp(t, t[idx], reading), rate_hz=float(rate_hz),
-                     name=name)
+                     name=name, accel_m_s2=gravity + th.accel_bias_m_s2 + accel_noise)
     truth = ThermalTruth(oven_c=th.oven_c, die_c=th.die_c, die_rate_c_s=th.die_rate_c_s,
-                         drift_rad_s=drift, noise_rad_s=noise, temperature_index=idx,
-                         temperature_reading_c=reading, room_c=float(room_c),
-                         turn_on_bias_rad_s=turn_on, compress=compress)
+                         played_c=th.played_c, drift_rad_s=drift, noise_rad_s=noise,
+                         accel_drift_m_s2=th.accel_bias_m_s2, accel_noise_m_s2=accel_noise,
+                         temperature_index=idx, temperature_reading_c=reading,
+                         room_c=float(th.oven_c[0]), turn_on_bias_rad_s=turn_on,
+                         compress=compress, shape=profile.shape)
     return run, truth
 
 
@@ -659,10 +1005,10 @@ def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START
     """
     Write a simulated run as a rosbag2: ``sensor_msgs/Imu`` and ``sensor_msgs/Temperature``.
 
-    The Imu messages carry the gyro samples and a static +1 g on z (REP-103, lying flat); the
-    Temperature messages carry the sensor readings at ``truth.temperature_index`` (variance 0,
-    unknown, as the driver publishes by default). Header stamps are ``start_ns + t_s``; bag
-    time equals the stamp.
+    The Imu messages carry the gyro samples and the run's accelerometer samples (a static +1 g
+    on z if the run has none); the Temperature messages carry the sensor readings at
+    ``truth.temperature_index`` (variance 0, unknown, as the driver publishes by default). Header
+    stamps are ``start_ns + t_s``; bag time equals the stamp.
 
     Parameters
     ----------
@@ -692,14 +1038,15 @@ def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START
     from ..bag import ImuBagWriter
 
     stamps = start_ns + np.round(run.t_s * 1e9).astype(np.int64)
-    accel = np.array([0.0, 0.0, 9.80665])
+    accel = run.accel_m_s2
+    if accel is None:
+        accel = np.broadcast_to(np.array([0.0, 0.0, STANDARD_GRAVITY]), (stamps.size, 3))
     chunk = 200_000
     with ImuBagWriter(path, storage=storage, imu_topic=imu_topic,
                       temperature_topic=temperature_topic, frame_id=frame_id) as writer:
         for lo in range(0, stamps.size, chunk):
             hi = min(lo + chunk, stamps.size)
-            writer.write_imu(stamps[lo:hi], run.gyro_rad_s[lo:hi],
-                             np.broadcast_to(accel, (hi - lo, 3)))
+            writer.write_imu(stamps[lo:hi], run.gyro_rad_s[lo:hi], accel[lo:hi])
         t_stamps = stamps[truth.temperature_index]
         for lo in range(0, t_stamps.size, chunk):
             writer.write_temperature(t_stamps[lo:lo + chunk],
@@ -708,17 +1055,200 @@ def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START
     return Path(path)
 
 
+def truth_arrays(run, truth):
+    """
+    Return the arrays of a run's truth as saved in ``<label>_truth.npz``.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        The run (its stamps).
+    truth : ThermalTruth
+        Its truth.
+
+    Returns
+    -------
+    dict
+        Name -> array or scalar.
+
+    """
+    return {'t_s': run.t_s, 'oven_c': truth.oven_c, 'die_c': truth.die_c,
+            'die_rate_c_s': truth.die_rate_c_s, 'played_c': truth.played_c,
+            'drift_rad_s': truth.drift_rad_s, 'noise_rad_s': truth.noise_rad_s,
+            'accel_drift_m_s2': truth.accel_drift_m_s2,
+            'accel_noise_m_s2': truth.accel_noise_m_s2,
+            'temperature_index': truth.temperature_index,
+            'temperature_reading_c': truth.temperature_reading_c, 'room_c': truth.room_c,
+            'turn_on_bias_rad_s': truth.turn_on_bias_rad_s, 'compress': truth.compress,
+            'shape': truth.shape}
+
+
+def simulate_pair(*, seed, rate_hz=100.0, hours=None, compress=None, model=None, profile=None,
+                  test_profile=None, temperature_rate_hz=TEMPERATURE_RATE_HZ):
+    """
+    Simulate two runs of one device in one time compression: train and (held-out) test.
+
+    Both runs share the device (``model``) and the compression; they differ in everything a
+    second run differs in: noise, temperature spread, turn-on bias (seed streams 0 and 1 of
+    ``numpy.random.SeedSequence(seed)``), and in the oven profile when ``test_profile`` is
+    given (a held-out run of another shape). The compression comes from the training profile
+    and ``hours``/``compress`` (:func:`resolve_timing`); the test run is its whole profile at
+    that compression (``hours`` long too when its profile is the training one).
+
+    Parameters
+    ----------
+    seed : int, keyword-only
+        Seed of both runs.
+    rate_hz : float, keyword-only
+        Gyro sample rate (Hz).
+    hours, compress : float, optional, keyword-only
+        Training run length and compression.
+    model : ThermalModel, optional, keyword-only
+        Device constants (defaults if None).
+    profile : OvenProfile or ShapeProfile, optional, keyword-only
+        Training profile (the paper's oven if None).
+    test_profile : OvenProfile or ShapeProfile, optional, keyword-only
+        Test profile (None: the training profile, a replicate run).
+    temperature_rate_hz : float, keyword-only
+        Rate of the temperature readings (see :func:`simulate_run`).
+
+    Returns
+    -------
+    list of (str, ThermalRun, ThermalTruth)
+        ``[('train', run, truth), ('test', run, truth)]``.
+
+    """
+    model = ThermalModel() if model is None else model
+    profile = OvenProfile() if profile is None else profile
+    duration_s, comp = resolve_timing(profile, hours=hours, compress=compress)
+    test = profile if test_profile is None else test_profile
+    timings = [(duration_s / 3600.0, comp)]
+    timings.append(timings[0] if test_profile is None
+                   else (resolve_timing(test, compress=comp)[0] / 3600.0, comp))
+    out = []
+    children = np.random.SeedSequence(seed).spawn(2)
+    for label, child, prof, (run_h, run_x) in zip(('train', 'test'), children, (profile, test),
+                                                  timings):
+        run, truth = simulate_run(rng=np.random.default_rng(child), rate_hz=rate_hz,
+                                  hours=run_h, compress=run_x, model=model, profile=prof,
+                                  temperature_rate_hz=temperature_rate_hz,
+                                  name=f'{label} {prof.shape} (seed {seed})')
+        out.append((label, run, truth))
+    return out
+
+
+def pair_settings(pair, *, seed, rate_hz, hours, storage, model, profile, test_profile,
+                  temperature_rate_hz):
+    """
+    Return the settings of a simulated pair as written to ``simulation.json``.
+
+    Parameters
+    ----------
+    pair : list
+        From :func:`simulate_pair`.
+    seed, rate_hz, hours, storage, temperature_rate_hz : keyword-only
+        As given to :func:`simulate_pair` / :func:`write_train_test`.
+    model : ThermalModel, keyword-only
+        The device.
+    profile, test_profile : OvenProfile or ShapeProfile, keyword-only
+        The profiles (``test_profile`` None: the training one).
+
+    Returns
+    -------
+    dict
+
+    """
+    test = profile if test_profile is None else test_profile
+    return {'seed': seed, 'rate_hz': rate_hz, 'hours': hours,
+            'duration_s': float(pair[0][1].t_s.size / rate_hz),
+            'test_duration_s': float(pair[1][1].t_s.size / rate_hz),
+            'compress': pair[0][2].compress, 'storage': storage,
+            'temperature_rate_hz': temperature_rate_hz, 'model': asdict(model),
+            'profile': dict(asdict(profile), shape=profile.shape),
+            'test_profile': dict(asdict(test), shape=test.shape)}
+
+
+def write_pair(out_dir, pair, settings, *, storage='sqlite3'):
+    """
+    Write a simulated pair: ``train/``, ``test/`` bags, their truth and ``simulation.json``.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Existing folder (``train/`` and ``test/`` must not exist in it).
+    pair : list
+        From :func:`simulate_pair`.
+    settings : dict
+        From :func:`pair_settings`.
+    storage : {'sqlite3', 'mcap'}, keyword-only
+        rosbag2 storage plugin.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        ``(train_bag, test_bag)``.
+
+    """
+    out = Path(out_dir)
+    paths = []
+    for label, run, truth in pair:
+        paths.append(write_run_bag(out / label, run, truth, storage=storage))
+        np.savez_compressed(out / f'{label}_truth.npz', **truth_arrays(run, truth))
+    (out / 'simulation.json').write_text(json.dumps(settings, indent=2, default=list) + '\n')
+    return tuple(paths)
+
+
+def load_truth(path):
+    """
+    Read a ``<label>_truth.npz`` back into a :class:`ThermalTruth`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file :func:`write_pair` wrote.
+
+    Returns
+    -------
+    ThermalTruth
+
+    """
+    with np.load(path) as z:
+        kw = {k: z[k] for k in z.files if k != 't_s'}
+    for key in ('room_c', 'compress'):
+        kw[key] = float(kw[key])
+    kw['shape'] = str(kw.get('shape', 'oven'))
+    return ThermalTruth(**kw)
+
+
+def model_from_settings(settings):
+    """
+    Rebuild the :class:`ThermalModel` of a ``simulation.json`` document.
+
+    Parameters
+    ----------
+    settings : dict
+        The document.
+
+    Returns
+    -------
+    ThermalModel
+
+    """
+    fields = ThermalModel.__dataclass_fields__
+    kw = {k: tuple(v) if isinstance(v, list) else v
+          for k, v in settings['model'].items() if k in fields}
+    return ThermalModel(**kw)
+
+
 def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
-                     storage='sqlite3', model=None, profile=None,
+                     storage='sqlite3', model=None, profile=None, test_profile=None,
                      temperature_rate_hz=TEMPERATURE_RATE_HZ):
     """
-    Simulate two runs of one device (train and test) and write them as rosbag2 recordings.
+    Simulate a train/test pair (:func:`simulate_pair`) and write them (:func:`write_pair`).
 
-    Both runs share the device (``model``) and the oven profile, and differ in everything a
-    second oven run differs in: noise, room temperature, turn-on bias (seed streams 0 and 1 of
-    ``numpy.random.SeedSequence(seed)``). ``out_dir`` receives ``train/`` and ``test/`` (bags),
-    ``train_truth.npz`` and ``test_truth.npz`` (the :class:`ThermalTruth` arrays) and
-    ``simulation.json`` (every setting, so the runs can be reproduced).
+    ``out_dir`` receives ``train/`` and ``test/`` (bags), ``train_truth.npz`` and
+    ``test_truth.npz`` (:func:`truth_arrays`) and ``simulation.json`` (every setting, so the
+    runs can be reproduced).
 
     Parameters
     ----------
@@ -727,15 +1257,15 @@ def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
     seed : int, keyword-only
         Seed of both runs.
     hours, compress : float, optional, keyword-only
-        See :func:`resolve_timing`.
+        See :func:`resolve_timing` (the training run's).
     rate_hz : float, keyword-only
         Gyro sample rate (Hz).
     storage : {'sqlite3', 'mcap'}, keyword-only
         rosbag2 storage plugin.
     model : ThermalModel, optional, keyword-only
         Device constants (defaults if None).
-    profile : OvenProfile, optional, keyword-only
-        Oven profile (defaults if None).
+    profile, test_profile : OvenProfile or ShapeProfile, optional, keyword-only
+        Training and test profiles (see :func:`simulate_pair`).
     temperature_rate_hz : float, keyword-only
         Rate of the Temperature messages (see :func:`simulate_run`).
 
@@ -749,72 +1279,10 @@ def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
     out.mkdir(parents=True, exist_ok=True)
     model = ThermalModel() if model is None else model
     profile = OvenProfile() if profile is None else profile
-    paths = []
-    duration_s, comp = resolve_timing(profile, hours=hours, compress=compress)
-    children = np.random.SeedSequence(seed).spawn(2)
-    for label, child in zip(('train', 'test'), children):
-        run, truth = simulate_run(rng=np.random.default_rng(child), rate_hz=rate_hz, hours=hours,
-                                  compress=compress, model=model, profile=profile,
-                                  temperature_rate_hz=temperature_rate_hz,
-                                  name=f'{label} (seed {seed})')
-        paths.append(write_run_bag(out / label, run, truth, storage=storage))
-        np.savez_compressed(out / f'{label}_truth.npz', t_s=run.t_s, oven_c=truth.oven_c,
-                            die_c=truth.die_c, die_rate_c_s=truth.die_rate_c_s,
-                            drift_rad_s=truth.drift_rad_s, noise_rad_s=truth.noise_rad_s,
-                            temperature_index=truth.temperature_index,
-                            temperature_reading_c=truth.temperature_reading_c,
-                            room_c=truth.room_c, turn_on_bias_rad_s=truth.turn_on_bias_rad_s,
-                            compress=truth.compress)
-    settings = {'seed': seed, 'rate_hz': rate_hz, 'hours': hours, 'duration_s': duration_s,
-                'compress': comp, 'storage': storage, 'temperature_rate_hz': temperature_rate_hz,
-                'model': asdict(model), 'profile': asdict(profile)}
-    (out / 'simulation.json').write_text(json.dumps(settings, indent=2, default=list) + '\n')
-    return tuple(paths)
-
-
-def add_simulate_arguments(parser):
-    """
-    Add the options of ``gyro_noise_thermal simulate`` to an argparse parser.
-
-    ``--seed``, ``--out`` (required), ``--hours``, ``--compress``, ``--rate-hz``,
-    ``--storage``, ``--temperature-rate-hz``, ``--no-hysteresis``; pass the parsed namespace
-    to :func:`simulate_from_args`.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        Parser (or subparser) to extend.
-
-    """
-    parser.add_argument('--seed', type=int, default=0, help='seed of the train/test pair')
-    parser.add_argument('--out', required=True, help='output directory (train/, test/, truth)')
-    parser.add_argument('--hours', type=float, help='run length (h); default: the whole profile')
-    parser.add_argument('--compress', type=float,
-                        help='time compression of the oven experiment (default: fill --hours)')
-    parser.add_argument('--rate-hz', type=float, default=100.0, help='gyro sample rate (Hz)')
-    parser.add_argument('--storage', choices=('sqlite3', 'mcap'), default='sqlite3')
-    parser.add_argument('--temperature-rate-hz', type=float, default=TEMPERATURE_RATE_HZ,
-                        help='rate of the Temperature messages (Hz)')
-    parser.add_argument('--no-hysteresis', action='store_true',
-                        help='switch the bias hysteresis off')
-
-
-def simulate_from_args(args):
-    """
-    Run :func:`write_train_test` with the options of :func:`add_simulate_arguments`.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed options.
-
-    Returns
-    -------
-    tuple of pathlib.Path
-        ``(train_bag, test_bag)``.
-
-    """
-    model = ThermalModel(hysteresis_half_width_c=0.0) if args.no_hysteresis else ThermalModel()
-    return write_train_test(args.out, seed=args.seed, hours=args.hours, rate_hz=args.rate_hz,
-                            compress=args.compress, storage=args.storage, model=model,
-                            temperature_rate_hz=args.temperature_rate_hz)
+    pair = simulate_pair(seed=seed, rate_hz=rate_hz, hours=hours, compress=compress,
+                         model=model, profile=profile, test_profile=test_profile,
+                         temperature_rate_hz=temperature_rate_hz)
+    settings = pair_settings(pair, seed=seed, rate_hz=rate_hz, hours=hours, storage=storage,
+                             model=model, profile=profile, test_profile=test_profile,
+                             temperature_rate_hz=temperature_rate_hz)
+    return write_pair(out, pair, settings, storage=storage)

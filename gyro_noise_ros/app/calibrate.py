@@ -1,0 +1,783 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The static calibration workflow: recordings in, one :class:`CalibrationResult` out, files written.
+
+Shared by ``gyro_noise_calibrate`` and the calibration parts of ``gyro_noise_reliability``.
+
+Steps (``docs/reliability.md`` section 1):
+
+1. every recording is streamed through the static-dwell detector (constant memory);
+2. ``six-position`` (paper 001 eqs. 3-4): one dwell per orientation, the consistency test (a
+   tilted dwell is named and refused) and the estimate with uncertainties from the dwells' own
+   variogram; ``multi-pose`` (imu_tk): every dwell a pose, |a| = g fit;
+3. the gyro's scale factor and misalignment from the turns between consecutive dwells of one
+   recording (a second pass reads only the turns), when the turns determine them;
+4. the leave-one-out gravity check.
+
+:func:`write_calibration` writes ``calibration.json`` (:meth:`CalibrationResult.as_dict`),
+``calibration.yaml`` (a ROS 2 parameter file ``imu_compensator`` loads) and ``calibration.md``.
+"""
+
+from dataclasses import dataclass, field, replace
+import datetime
+import json
+import math
+import os
+
+import numpy as np
+
+from .. import __version__
+from ..calibration import records
+from ..calibration.dwell_noise import fit_dwell_noise
+from ..calibration.gyro_turns import fit_gyro_turns, Turn
+from ..calibration.multipose import calibrate_poses
+from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EARTH_RATE_RAD_S,
+                                  mean_norm, normal_gravity, STANDARD_GRAVITY, uniformity)
+from ..calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS, select_poses,
+                                  select_six, WindowAccumulator)
+from ..errors import InputDataError, ParameterError
+from ..outputs import atomic_write_text, staged_output
+
+MODEL = 'measured = (I + diag(scale_factor) + misalignment) @ true + bias'
+#: One milli-g in m/s^2 (standard gravity, as the paper's mg).
+MG = STANDARD_GRAVITY * 1e-3
+MODES = ('six-position', 'multi-pose')
+GYRO_TURNS = ('auto', 'off')
+FILES = ('calibration.json', 'calibration.yaml', 'calibration.md')
+FRAMES = {
+    'six-position': 'the fixture: gravity along +x, +y, +z in the six dwells',
+    'multi-pose': "the accelerometer's: x along its x sensing axis, y in the plane of its x and "
+                  'y axes (imu_tk)',
+}
+
+
+@dataclass(frozen=True)
+class Gravity:
+    """
+    The local gravity of a calibration and how it was obtained.
+
+    Attributes
+    ----------
+    value_m_s2 : float
+        Gravity (m/s^2).
+    source : str
+        How it was obtained (one phrase).
+    warning : str or None
+        A line to print (standard gravity used for want of a local value).
+    latitude_deg : float or None
+        Geodetic latitude when given (deg; the Earth rate in the multi-pose gyro bias).
+
+    """
+
+    value_m_s2: float = STANDARD_GRAVITY
+    source: str = 'standard gravity 9.80665 (no local value given)'
+    warning: object = None
+    latitude_deg: object = None
+
+
+def resolve_gravity(gravity=None, latitude=None, height=0.0):
+    """
+    Return the gravity to use and how it was obtained.
+
+    Parameters
+    ----------
+    gravity : float, optional
+        Explicit local gravity (m/s^2).
+    latitude : float, optional
+        Geodetic latitude (deg) for WGS-84 normal gravity.
+    height : float
+        Ellipsoidal height (m), with ``latitude`` only.
+
+    Returns
+    -------
+    Gravity
+
+    """
+    if height != 0.0 and latitude is None:
+        raise ParameterError('--height needs --latitude')
+    if gravity is not None:
+        if not (math.isfinite(gravity) and 5.0 < gravity < 15.0):
+            raise ParameterError(f'--gravity must be in m/s^2 (5..15), got {gravity!r}')
+        return Gravity(float(gravity), 'given (--gravity)')
+    if latitude is not None:
+        g = normal_gravity(latitude, height)
+        return Gravity(g, f'WGS-84 normal gravity at latitude {latitude:g} deg, height '
+                          f'{height:g} m', None, float(latitude))
+    return Gravity(warning='no --gravity or --latitude: using standard gravity 9.80665 m/s^2; '
+                           'the scale factors then carry the local gravity anomaly (up to '
+                           '+/-0.3 %)')
+
+
+@dataclass(frozen=True)
+class CalibrateParams:
+    """
+    What to calibrate and how.
+
+    Attributes
+    ----------
+    paths : tuple of str
+        Recordings: one holding every dwell (with the turns between them), or one per dwell.
+    gravity : Gravity
+        Local gravity.
+    mode : str
+        ``'six-position'`` (paper 001) or ``'multi-pose'`` (imu_tk, >= 9 arbitrary poses).
+    topic : str or None
+        ``sensor_msgs/Imu`` topic (the single one when None).
+    rate_hz : float or None
+        Nominal rate (Hz); from the stamps when None.
+    settings : DetectorSettings
+        Static-dwell detector.
+    alpha : float
+        False-alarm probability of the consistency test and of the gravity check.
+    gyro_turns : str
+        ``'auto'``: estimate the gyro scale factor and misalignment from the turns when they
+        determine them; ``'off'``: never (they stay 0).
+
+    """
+
+    paths: tuple
+    gravity: Gravity = field(default_factory=Gravity)
+    mode: str = 'six-position'
+    topic: object = None
+    rate_hz: object = None
+    settings: DetectorSettings = field(default_factory=DetectorSettings)
+    alpha: float = DEFAULT_ALPHA
+    gyro_turns: str = 'auto'
+
+    def __post_init__(self):
+        object.__setattr__(self, 'paths', tuple(str(p) for p in self.paths))
+        if not self.paths:
+            raise ParameterError('give at least one recording')
+        if self.mode not in MODES:
+            raise ParameterError(f'--mode must be one of {", ".join(MODES)}, got {self.mode!r}')
+        if self.gyro_turns not in GYRO_TURNS:
+            raise ParameterError(f'--gyro-turns must be one of {", ".join(GYRO_TURNS)}, got '
+                                 f'{self.gyro_turns!r}')
+        if not (math.isfinite(self.alpha) and 0.0 < self.alpha < 0.5):
+            raise ParameterError(f'--alpha must be in (0, 0.5), got {self.alpha!r}')
+        if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
+
+
+def _arr(v):
+    return [None if not math.isfinite(float(x)) else float(x) for x in np.ravel(v)]
+
+
+def _mat(v):
+    a = np.asarray(v, dtype=np.float64)
+    return [[None if not math.isfinite(float(x)) else float(x) for x in row] for row in a]
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """
+    Everything a calibration reports (``calibration.json`` is :meth:`as_dict`).
+
+    Attributes
+    ----------
+    params : CalibrateParams
+        What was asked.
+    dwells : tuple of Dwell
+        The dwells used, in recording and time order.
+    short_dwells : tuple of Dwell
+        Static stretches shorter than ``--min-static-s`` (reported, not used).
+    accel_bias_m_s2, accel_bias_sigma_m_s2 : numpy.ndarray
+        (3,) bias and standard uncertainty (m/s^2).
+    accel_scale_factor, accel_scale_factor_sigma : numpy.ndarray
+        (3,) dimensionless.
+    accel_misalignment, accel_misalignment_sigma : numpy.ndarray
+        (3, 3) zero diagonal (multi-pose: lower triangular, the frame fixes the rest).
+    accel_residual_rms_m_s2 : float
+        Scatter of the dwell means about the fitted model (m/s^2).
+    gyro_bias_rad_s, gyro_bias_sigma_rad_s : numpy.ndarray
+        (3,) gyro bias and standard uncertainty (rad/s).
+    gyro : GyroTurnResult or None
+        Scale factor and misalignment from the turns (None: not estimated, see ``gyro_note``).
+    gyro_note : str
+        Why the gyro scale/misalignment are (partly) not estimated; '' when all are.
+    consistency : tuple of PairCheck
+        Six-position consistency test (empty for multi-pose).
+    gravity_check : tuple of LeaveOneOut
+        Leave-one-out gravity check, one per dwell.
+    mean_norm_raw_m_s2 : float
+        Mean |a| of the raw dwell means (paper 001 section 6).
+    noise : dict
+        ``{'accel': DwellNoise, 'gyro': DwellNoise}``.
+    non_finite_samples : int
+        Samples dropped for NaN/Inf over all recordings.
+    left_out : tuple of str
+        Multi-pose: poses the gravity check rejected, left out of the fit.
+
+    """
+
+    params: CalibrateParams
+    dwells: tuple
+    short_dwells: tuple
+    accel_bias_m_s2: np.ndarray
+    accel_bias_sigma_m_s2: np.ndarray
+    accel_scale_factor: np.ndarray
+    accel_scale_factor_sigma: np.ndarray
+    accel_misalignment: np.ndarray
+    accel_misalignment_sigma: np.ndarray
+    accel_residual_rms_m_s2: float
+    gyro_bias_rad_s: np.ndarray
+    gyro_bias_sigma_rad_s: np.ndarray
+    gyro: object
+    gyro_note: str
+    consistency: tuple
+    gravity_check: tuple
+    mean_norm_raw_m_s2: float
+    noise: dict
+    non_finite_samples: int
+    left_out: tuple = ()
+    version: str = __version__
+
+    @property
+    def gravity_m_s2(self):
+        """float: the gravity used (m/s^2)."""
+        return self.params.gravity.value_m_s2
+
+    @property
+    def gyro_scale_factor(self):
+        """numpy.ndarray: (3,) gyro scale factors (0 where not estimated)."""
+        return np.zeros(3) if self.gyro is None else self.gyro.scale_factor
+
+    @property
+    def gyro_misalignment(self):
+        """numpy.ndarray: (3, 3) gyro cross-axis terms (0 where not estimated)."""
+        return np.zeros((3, 3)) if self.gyro is None else self.gyro.misalignment
+
+    @property
+    def gravity_check_consistent(self):
+        """bool: every held-out dwell used agrees with g (rejected poses are left out)."""
+        return all(c.consistent for c in self.gravity_check if c.label not in self.left_out)
+
+    def warnings(self):
+        """
+        Return the lines a tool prints on stderr (standard gravity, NaN dropped, failed check).
+
+        Returns
+        -------
+        list of str
+
+        """
+        out = []
+        if self.params.gravity.warning:
+            out.append(self.params.gravity.warning)
+        for d in self.dwells:
+            if d.non_finite_samples:
+                where = f' in {d.source}' if d.source else ''
+                out.append(f'dwell {d.orientation} at t={d.t_start_s:.1f} s{where}: '
+                           f'{d.non_finite_samples} NaN/Inf samples dropped')
+        if self.left_out:
+            out.append('left out of the fit, the gravity check rejects them: '
+                       + '; '.join(self.left_out))
+        bad = [c for c in self.gravity_check
+               if not c.consistent and c.label not in self.left_out]
+        if bad:
+            out.append('gravity check failed (leave-one-out, false-alarm '
+                       f'{self.params.alpha:g}): ' + '; '.join(
+                           f'{c.label}: |a| - g = {c.residual_m_s2 / MG:+.3f} mg '
+                           f'({c.z:+.1f} sigma)' for c in bad))
+        if self.gyro_note:
+            out.append(f'gyro: {self.gyro_note}')
+        return out
+
+    def as_dict(self):
+        """
+        Return the ``calibration.json`` document (SI, units in the keys).
+
+        Returns
+        -------
+        dict
+
+        """
+        p = self.params
+        gyro = self.gyro
+        gyro_doc = {
+            'bias_rad_s': _arr(self.gyro_bias_rad_s),
+            'bias_sigma_rad_s': _arr(self.gyro_bias_sigma_rad_s),
+            'scale_factor': _arr(self.gyro_scale_factor),
+            'misalignment': _mat(self.gyro_misalignment),
+            'scale_factor_estimated': bool(gyro is not None and gyro.estimated.diagonal().all()),
+            'method': 'integration of the turns between static poses (imu_tk), bias '
+                      'interpolated between the poses',
+            'note': self.gyro_note,
+        }
+        if gyro is not None:
+            gyro_doc.update({
+                'scale_factor_sigma': _arr(gyro.scale_factor_sigma),
+                'misalignment_sigma': _mat(gyro.misalignment_sigma),
+                'estimated': gyro.estimated.tolist(),
+                'turns': gyro.turns, 'chi2': gyro.chi2, 'dof': gyro.dof,
+                'turn_residual_deg': _arr(gyro.residual_deg),
+                'turn_rotation_deg': _arr(gyro.rotation_deg)})
+        loo = self.gravity_check
+        noise = {k: {'window_s': n.window_s, 'white': float(n.coef[0]),
+                     'flicker': float(n.coef[1]), 'walk': float(n.coef[2]),
+                     'unit': 'm_s2^2' if k == 'accel' else 'rad_s^2'}
+                 for k, n in self.noise.items()}
+        return {
+            'mode': p.mode,
+            'gravity_m_s2': self.gravity_m_s2,
+            'gravity_source': p.gravity.source,
+            'model': MODEL,
+            'frame': FRAMES[p.mode],
+            'sources': list(p.paths),
+            'dwells': [d.as_dict() for d in self.dwells],
+            'accel': {
+                'bias_m_s2': _arr(self.accel_bias_m_s2),
+                'bias_sigma_m_s2': _arr(self.accel_bias_sigma_m_s2),
+                'scale_factor': _arr(self.accel_scale_factor),
+                'scale_factor_sigma': _arr(self.accel_scale_factor_sigma),
+                'misalignment': _mat(self.accel_misalignment),
+                'misalignment_sigma': _mat(self.accel_misalignment_sigma),
+                'residual_rms_m_s2': self.accel_residual_rms_m_s2,
+            },
+            'gyro': gyro_doc,
+            'uncertainty': 'one standard uncertainty against the value during the calibration, '
+                           'from the variogram of the dwells (white noise and bias wander)',
+            'uniformity': {
+                'accel_bias_std_m_s2': uniformity(self.accel_bias_m_s2),
+                'accel_scale_factor_std': uniformity(self.accel_scale_factor),
+                'gyro_bias_std_rad_s': uniformity(self.gyro_bias_rad_s),
+            },
+            'consistency': {
+                'alpha': p.alpha,
+                'consistent': all(c.consistent for c in self.consistency),
+                'pairs': [c.as_dict() for c in self.consistency],
+            },
+            'gravity_check': {
+                'method': 'leave-one-out: each dwell calibrated by the others, |a| - g',
+                'alpha': p.alpha,
+                'mean_norm_raw_m_s2': self.mean_norm_raw_m_s2,
+                'loo_mean_norm_m_s2': float(np.mean([self.gravity_m_s2 + c.residual_m_s2
+                                                     for c in loo])) if loo else None,
+                'consistent': self.gravity_check_consistent,
+                'left_out': list(self.left_out),
+                'dwells': [c.as_dict() for c in loo],
+            },
+            'noise_model': noise,
+            'detector': {k: getattr(p.settings, k) for k in p.settings.__dataclass_fields__},
+            'non_finite_samples': self.non_finite_samples,
+            'short_dwells': [d.as_dict() for d in self.short_dwells],
+            'version': self.version,
+        }
+
+
+def _detect(params):
+    out = []
+    for path in params.paths:
+        acc = None
+        for rate, t, accel, gyro in records.iter_imu(path, topic=params.topic,
+                                                     rate_hz=params.rate_hz):
+            if acc is None:
+                acc = WindowAccumulator(rate, window_s=params.settings.window_s, source=path)
+            acc.update(t, accel, gyro)
+        if acc is None:
+            raise InputDataError(f'recording {path!r} holds no Imu samples')
+        out.append(find_dwells(acc.result(), params.settings))
+    if len(params.paths) > 1:
+        # dwells of separate recordings: the noise model needs their real distance in time
+        # (stamps; messages keep each recording's own t = 0)
+        first = [records.first_stamp_ns(p, topic=params.topic) for p in params.paths]
+        t0 = min(first)
+        out = [replace(det, dwells=tuple(replace(d, window_t_s=d.window_t_s + (f - t0) * 1e-9)
+                                         for d in det.dwells))
+               for det, f in zip(out, first)]
+    return out
+
+
+def _refuse_inconsistent(pairs, chosen, alpha):
+    bad = [c for c in pairs if not c.consistent]
+    if not bad:
+        return
+    parts = []
+    for c in bad:
+        d = chosen[c.suspect]
+        off = float(np.linalg.norm(c.disagreement_m_s2)) / MG
+        parts.append(f'dwell {d.describe()} does not fit the other five: its pair disagrees '
+                     f'with the others by {off:.2f} mg ({math.sqrt(c.chi2):.0f} sigma), the '
+                     f'direction of gravity in it is {c.suspect_tilt_deg:.2f} deg off what they '
+                     f'predict (a tilted fixture, or a bump)')
+    raise InputDataError('; '.join(parts) + f' [consistency test, false-alarm {alpha:g}]: '
+                         're-seat and re-record it, or record >= 9 poses for --mode multi-pose')
+
+
+def _turn_spans(dwells):
+    spans = {}
+    for k in range(len(dwells) - 1):
+        a, b = dwells[k], dwells[k + 1]
+        if a.source == b.source:
+            spans.setdefault(a.source, []).append((k, a.t_end_s, b.t_start_s))
+    return spans
+
+
+def _read_turns(params, dwells):
+    out = []
+    for path, spans in _turn_spans(dwells).items():
+        parts = {k: ([], []) for k, _, _ in spans}
+        for _, t, _, gyro in records.iter_imu(path, topic=params.topic, rate_hz=params.rate_hz):
+            for k, lo, hi in spans:
+                if t.size and (t[-1] < lo or t[0] > hi):
+                    continue
+                sel = (t >= lo - 1e-9) & (t <= hi + 1e-9)
+                if np.any(sel):
+                    parts[k][0].append(t[sel])
+                    parts[k][1].append(gyro[sel])
+        for k, _, _ in spans:
+            ts, gs = parts[k]
+            if ts:
+                tt, gg = np.concatenate(ts), np.concatenate(gs)
+                good = np.all(np.isfinite(gg), axis=1)
+                out.append(Turn(k, k + 1, tt[good], gg[good]))
+    return out
+
+
+def _gyro_from_turns(params, dwells, directions, accel_noise, accel_index, gyro_noise):
+    if params.gyro_turns == 'off':
+        return None, 'not estimated (--gyro-turns off)'
+    turns = _read_turns(params, dwells)
+    if not turns:
+        return None, ('not estimated: the dwells come from separate recordings, so no turn '
+                      'between them was recorded')
+    g = params.gravity.value_m_s2
+    dvar = []
+    for turn in turns:
+        c = np.zeros(len(accel_noise.weights))
+        c[accel_index[turn.before]] += 1.0
+        c[accel_index[turn.after]] -= 1.0
+        # each transverse component: the two directions' disagreement from accelerometer noise
+        dvar.append(accel_noise.variance(c) / g ** 2)
+    try:
+        res = fit_gyro_turns(turns, directions, dwells, gyro_noise, direction_variance=dvar)
+    except InputDataError as err:
+        return None, f'not estimated: {err}'
+    missing = res.not_estimated
+    note = (f'{", ".join(missing)} not determined by the {res.turns} turns (left at 0): '
+            'record the multi-pose sequence (turns about varied axes)' if missing else '')
+    return res, note
+
+
+def _time_order(dwells, params):
+    rank = {p: k for k, p in enumerate(params.paths)}
+    return sorted(dwells, key=lambda d: (rank.get(d.source, 0), d.t_start_s))
+
+
+def _multi_pose_gyro_bias(dwells, directions, latitude_deg):
+    w = np.array([d.samples for d in dwells], dtype=np.float64)
+    w /= w.sum()
+    gm = np.array([d.gyro_mean_rad_s for d in dwells])
+    up = directions / np.linalg.norm(directions, axis=1, keepdims=True)
+    bias = w @ gm
+    if latitude_deg is not None:
+        lat = math.radians(latitude_deg)
+        # the vertical Earth rate is known in each pose (up = the specific force at rest)
+        bias = bias - EARTH_RATE_RAD_S * math.sin(lat) * (w @ up)
+        horiz = EARTH_RATE_RAD_S * math.cos(lat)
+        # the horizontal part's heading is unknown: random per pose, variance (1 - u_j^2) / 2
+        var = horiz ** 2 * (w ** 2 @ (1.0 - up ** 2)) / 2.0
+    else:
+        var = EARTH_RATE_RAD_S ** 2 * np.sum(w ** 2) / 3.0 * np.ones(3)
+    return bias, np.sqrt(var)
+
+
+def run_calibration(params):
+    """
+    Run the whole calibration on recordings (module docstring).
+
+    Parameters
+    ----------
+    params : CalibrateParams
+        What to calibrate and how.
+
+    Returns
+    -------
+    CalibrationResult
+
+    Raises
+    ------
+    InputDataError
+        The dwells do not give a calibration (missing, duplicate, tilted or inconsistent, too
+        short, never static, all-zero accelerometer, NaN), with one line naming the dwell.
+    BagError
+        A recording cannot be read.
+
+    """
+    detections = _detect(params)
+    g = params.gravity.value_m_s2
+    short = tuple(d for det in detections for d in det.short)
+    nonfinite = int(sum(det.non_finite_samples for det in detections))
+    if params.mode == 'six-position':
+        chosen = select_six(detections, params.settings)
+        pairs, loo = consistency(chosen, g, alpha=params.alpha)
+        _refuse_inconsistent(pairs, chosen, params.alpha)
+        res, accel_noise, gyro_noise = calibrate_six(chosen, g)
+        dwells = _time_order(chosen.values(), params)
+        index = {id(d): ORIENTATIONS.index(d.orientation) for d in dwells}
+        accel_index = [index[id(d)] for d in dwells]
+        means = np.array([d.accel_mean_m_s2 for d in dwells])
+        directions = res.compensate_accel(means)
+        accel = (res.accel_bias_m_s2, res.accel_bias_sigma_m_s2, res.accel_scale_factor,
+                 res.accel_scale_factor_sigma, res.accel_misalignment,
+                 res.accel_misalignment_sigma, res.accel_residual_m_s2)
+        gyro_bias, gyro_sigma = res.gyro_bias_rad_s, res.gyro_bias_sigma_rad_s
+        raw = mean_norm([d.accel_mean_m_s2 for d in chosen.values()])
+        left_out = ()
+    else:
+        dwells = _time_order(select_poses(detections, params.settings), params)
+        mp, loo, accel_noise = calibrate_poses(dwells, g, alpha=params.alpha)
+        gyro_noise = fit_dwell_noise([d.window_t_s for d in dwells],
+                                     [d.window_n for d in dwells],
+                                     [d.window_gyro_rad_s for d in dwells])
+        pairs = ()
+        left_out = mp.left_out
+        if left_out:
+            # the rest of the workflow sees only the poses the fit used
+            labels = [c.label for c in loo]
+            dwells = [d for d, lab in zip(dwells, labels) if lab not in left_out]
+        accel_index = list(range(len(dwells)))
+        means = np.array([d.accel_mean_m_s2 for d in dwells])
+        directions = mp.compensate(means)
+        accel = (mp.bias_m_s2, mp.bias_sigma_m_s2, mp.scale_factor, mp.scale_factor_sigma,
+                 mp.misalignment, mp.misalignment_sigma, mp.rms_residual_m_s2)
+        gyro_bias, gyro_sigma = _multi_pose_gyro_bias(dwells, directions,
+                                                      params.gravity.latitude_deg)
+        raw = mean_norm(means)
+    gyro, note = _gyro_from_turns(params, dwells, directions, accel_noise, accel_index,
+                                  gyro_noise)
+    return CalibrationResult(params, tuple(dwells), short, *accel, gyro_bias, gyro_sigma, gyro,
+                             note, tuple(pairs), tuple(loo), raw,
+                             {'accel': accel_noise, 'gyro': gyro_noise}, nonfinite, left_out)
+
+
+def _fmt(values):
+    return '[' + ', '.join(repr(float(v)) for v in np.ravel(values)) + ']'
+
+
+def yaml_text(result):
+    """
+    Return the ``calibration.yaml`` ROS 2 parameter file of a calibration.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The calibration.
+
+    Returns
+    -------
+    str
+
+    """
+    p = result.params
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')
+    lines = [
+        f'# {p.mode} calibration written by gyro_noise_calibrate {result.version} on {stamp}',
+        '# Sources: ' + ', '.join(p.paths),
+        f'# Gravity used: {result.gravity_m_s2!r} m/s^2 ({p.gravity.source})',
+        f'# Model: {MODEL}; compensation: true = inv(I + diag(S) + M) @ (measured - bias)',
+        f'# Frame: {FRAMES[p.mode]}',
+        '# Units: accel bias m/s^2, gyro bias rad/s, scale factors dimensionless '
+        '(-0.0002 = -0.02 %), misalignment 3x3 row-major with zero diagonal',
+    ]
+    if result.gyro_note:
+        lines.append(f'# Gyro: {result.gyro_note}')
+    lines += [
+        '/**:',
+        '  ros__parameters:',
+        f'    accel_bias_m_s2: {_fmt(result.accel_bias_m_s2)}',
+        f'    accel_scale_factor: {_fmt(result.accel_scale_factor)}',
+        f'    accel_misalignment: {_fmt(result.accel_misalignment)}',
+        f'    gyro_bias_rad_s: {_fmt(result.gyro_bias_rad_s)}',
+        f'    gyro_scale_factor: {_fmt(result.gyro_scale_factor)}',
+        f'    gyro_misalignment: {_fmt(result.gyro_misalignment)}',
+        f'    calibration_gravity_m_s2: {float(result.gravity_m_s2)!r}',
+    ]
+    return '\n'.join(lines) + '\n'
+
+
+def table6_rows(doc):
+    """
+    Return the paper Table 6 rows (bias in mg, scale factor in %) of a calibration document.
+
+    Parameters
+    ----------
+    doc : dict
+        The ``calibration.json`` document (:meth:`CalibrationResult.as_dict`).
+
+    Returns
+    -------
+    list of (str, float, float)
+        Name, value and standard uncertainty in the printed unit.
+
+    """
+    a = doc['accel']
+    rows = [(f'b{ax}', a['bias_m_s2'][i] / MG, a['bias_sigma_m_s2'][i] / MG)
+            for i, ax in enumerate('xyz')]
+    rows += [(f'S{ax}', a['scale_factor'][i] * 100.0, a['scale_factor_sigma'][i] * 100.0)
+             for i, ax in enumerate('xyz')]
+    return rows
+
+
+def _pm(value, sigma, spec):
+    if value is None:
+        return 'n/a'
+    if sigma is None:
+        return format(value, spec)
+    return f'{format(value, spec)} +/- {format(sigma, spec)}'
+
+
+def markdown(result):
+    """
+    Return ``calibration.md``: Table 6 layout, cross-axis terms, gyro, checks, dwells.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The calibration.
+
+    Returns
+    -------
+    str
+
+    """
+    doc = result.as_dict()
+    title = ('Six-position calibration (paper 001 Table 6 layout)'
+             if doc['mode'] == 'six-position' else 'Multi-pose calibration (|a| = g, imu_tk)')
+    out = [f'# {title}', '',
+           f'Gravity used: {doc["gravity_m_s2"]:.5f} m/s^2 ({doc["gravity_source"]}). '
+           'mg = 9.80665e-3 m/s^2. Frame: ' + doc['frame'] + '.', '',
+           'Uncertainties: one standard uncertainty, against the value during the calibration, '
+           'from the variogram of the dwells (white noise and bias wander between dwells).', '',
+           '| parameter | value | std. uncertainty |', '|---|---|---|']
+    for name, value, sig in table6_rows(doc):
+        unit = 'mg' if name.startswith('b') else '%'
+        out.append(f'| {name} | {value:.4f} {unit} | {sig:.4f} {unit} |')
+    m = np.asarray(doc['accel']['misalignment'], dtype=float)
+    ms = np.asarray([[np.nan if v is None else v for v in row]
+                     for row in doc['accel']['misalignment_sigma']], dtype=float)
+    out += ['', 'Accelerometer cross-axis terms (row = measured axis, column = true axis, %, '
+            '+/- one standard uncertainty):', '', '| | x | y | z |', '|---|---|---|---|']
+    for j, ax in enumerate('xyz'):
+        out.append(f'| {ax} | ' + ' | '.join(
+            '-' if i == j else _pm(100 * m[j, i], 100 * ms[j, i], '.4f') for i in range(3))
+            + ' |')
+    gyro = doc['gyro']
+    gb = np.degrees(np.asarray(gyro['bias_rad_s']))
+    gs = np.degrees(np.asarray(gyro['bias_sigma_rad_s']))
+    out += ['', '## Gyro', '',
+            '| axis | bias (deg/s) | scale factor (%) |', '|---|---|---|']
+    est = np.asarray(gyro.get('estimated', np.zeros((3, 3), bool)))
+    for i, ax in enumerate('xyz'):
+        if est[i, i]:
+            scale = _pm(100 * gyro['scale_factor'][i], 100 * gyro['scale_factor_sigma'][i], '.4f')
+        else:
+            scale = 'not estimated'
+        out.append(f'| {ax} | {gb[i]:.5f} +/- {gs[i]:.5f} | {scale} |')
+    if result.gyro is not None:
+        gm = np.asarray(gyro['misalignment'])
+        gms = np.asarray([[np.nan if v is None else v for v in row]
+                          for row in gyro['misalignment_sigma']], dtype=float)
+        out += ['', f'Gyro cross-axis terms (%), from {gyro["turns"]} turns between static '
+                f'poses (chi2 {gyro["chi2"]:.1f} for {gyro["dof"]} degrees of freedom):', '',
+                '| | x | y | z |', '|---|---|---|---|']
+        for j, ax in enumerate('xyz'):
+            cells = []
+            for i in range(3):
+                if i == j:
+                    cells.append('-')
+                elif est[j, i]:
+                    cells.append(_pm(100 * gm[j, i], 100 * gms[j, i], '.4f'))
+                else:
+                    cells.append('not estimated')
+            out.append(f'| {ax} | ' + ' | '.join(cells) + ' |')
+    if gyro['note']:
+        out += ['', f'Gyro: {gyro["note"]}.']
+    u = doc['uniformity']
+    out += ['', '## Indicators (paper 001 section 6)', '',
+            f'- uniformity of the biases (std, ddof=1): {u["accel_bias_std_m_s2"] / MG:.4f} mg',
+            f'- uniformity of the scale factors (std, ddof=1): '
+            f'{100 * u["accel_scale_factor_std"]:.4f} %']
+    gc = doc['gravity_check']
+    out += ['', '## Gravity check (leave-one-out)', '',
+            f'Each dwell calibrated by the others; |a| - g against its standard deviation, '
+            f'false-alarm {gc["alpha"]:g} over all dwells. Mean |a| raw '
+            f'{gc["mean_norm_raw_m_s2"]:.4f} m/s^2, held-out calibrated '
+            f'{gc["loo_mean_norm_m_s2"]:.5f} m/s^2; verdict: '
+            f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.', '',
+            '| dwell | abs(a) - g (mg) | sigma (mg) | z | verdict |', '|---|---|---|---|---|']
+    for c in gc['dwells']:
+        out.append(f'| {c["dwell"]} | {c["residual_m_s2"] / MG:+.4f} | '
+                   f'{c["sigma_m_s2"] / MG:.4f} | {c["z"]:+.2f} | '
+                   f'{"consistent" if c["consistent"] else "inconsistent"} |')
+    if doc['consistency']['pairs']:
+        out += ['', '## Consistency of opposite dwells (a tilt cannot pass silently)', '',
+                '| pair | disagreement (mg) | sigma (mg) | p | verdict |',
+                '|---|---|---|---|---|']
+        for c in doc['consistency']['pairs']:
+            dis = float(np.linalg.norm(c['disagreement_m_s2'])) / MG
+            out.append(f'| +/-{c["axis"]} | {dis:.4f} | {c["sigma_m_s2"] / MG:.4f} | '
+                       f'{c["p_value"]:.3g} | '
+                       f'{"consistent" if c["consistent"] else "inconsistent"} |')
+    out += ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
+            '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
+    for d in doc['dwells']:
+        out.append(f'| {d["orientation"]} | {d["t_start_s"]:.2f} | {d["duration_s"]:.2f} | '
+                   f'{d["samples"]} | {d["non_finite_samples"]} | {d["tilt_deg"]:.2f} | '
+                   f'{d["source"]} |')
+    return '\n'.join(out) + '\n'
+
+
+def calibration_files(result):
+    """
+    Return the files of a calibration: name -> text.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The calibration.
+
+    Returns
+    -------
+    dict
+
+    """
+    return {'calibration.json': json.dumps(result.as_dict(), indent=2) + '\n',
+            'calibration.yaml': yaml_text(result),
+            'calibration.md': markdown(result)}
+
+
+def write_calibration(result, out_dir):
+    """
+    Write calibration.json, calibration.yaml and calibration.md (published together or not at all).
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The calibration.
+    out_dir : str or os.PathLike
+        Output folder (created).
+
+    Returns
+    -------
+    list of str
+        The files written.
+
+    """
+    with staged_output(out_dir) as stage:
+        for name, text in calibration_files(result).items():
+            atomic_write_text(stage / name, text)
+    return [os.path.join(str(out_dir), name) for name in FILES]

@@ -1,0 +1,176 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""PX4 and ArduPilot export, checked with each autopilot's documented formula written here."""
+
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.thermal.baselines import LinearTdT, TemperaturePolynomial
+from gyro_noise_ros.thermal.export import (ardupilot_parameters, calibration_of,
+                                           px4_parameters, write_ardupilot_parm,
+                                           write_px4_params)
+from gyro_noise_ros.thermal.methods import fit_accel
+from gyro_noise_ros.thermal.run import ThermalRun
+import numpy as np
+import pytest
+
+
+@pytest.fixture(scope='module')
+def fitted():
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 3000.0, 0.5)
+    temp = 5.0 + 50.0 * t / t[-1] + rng.normal(0, 0.02, t.size)
+    d = temp - 25.0
+    gyro = np.column_stack([0.003 + 2e-4 * d - 3e-6 * d ** 2 + 4e-8 * d ** 3,
+                            -0.002 + 1e-4 * d + 5e-6 * d ** 2, 0.001 - 3e-4 * d + 2e-8 * d ** 3])
+    accel = np.column_stack([0.05 + 1e-3 * d, -0.02 - 8e-4 * d + 1e-5 * d ** 2,
+                             9.80665 + 1.2e-3 * d - 1e-7 * d ** 3])
+    run = ThermalRun(t_s=t, gyro_rad_s=gyro + rng.normal(0, 1e-4, gyro.shape),
+                     temperature_c=temp, rate_hz=2.0, accel_m_s2=accel)
+    poly = TemperaturePolynomial()
+    poly.fit(run, rng=rng)
+    return poly, fit_accel(run), temp
+
+
+def _read_px4(text):
+    """Parse a QGroundControl parameter file: name -> value (ints for type 6)."""
+    out = {}
+    for line in text.splitlines():
+        if line.startswith('#') or not line.strip():
+            continue
+        vehicle, component, name, value, kind = line.split('\t')
+        assert (vehicle, component) == ('1', '1') and kind in ('6', '9')
+        out[name] = int(value) if kind == '6' else float(value)
+    return out
+
+
+def _px4_offset(p, sensor, temperature, dtype=float):
+    """PX4's documented compensation: delta = clip(T) - TREF, offset = sum Xn delta^n."""
+    f = np.dtype(dtype).type
+    out = np.zeros((temperature.size, 3), dtype=dtype)
+    tmin, tmax, tref = (f(p[f'TC_{sensor}0_{k}']) for k in ('TMIN', 'TMAX', 'TREF'))
+    delta = np.clip(temperature.astype(dtype), tmin, tmax) - tref
+    for axis in range(3):
+        for n in range(4):
+            out[:, axis] += f(p[f'TC_{sensor}0_X{n}_{axis}']) * delta ** n
+    return out
+
+
+def _read_parm(text):
+    out = {}
+    for line in text.splitlines():
+        if line.startswith('#') or not line.strip():
+            continue
+        name, value = line.split()
+        out[name] = float(value)
+    return out
+
+
+def _ardupilot_correction(p, stype, temperature, cal_temp):
+    """Return ArduPilot TCal correct_sensor: -P(clip(T) - 35) + P(clip(CALTEMP) - 35)."""
+    tmin, tmax = p['INS_TCAL1_TMIN'], p['INS_TCAL1_TMAX']
+
+    def poly(u, axis):
+        c = [p[f'INS_TCAL1_{stype}{k}_{"XYZ"[axis]}'] * 1e-6 for k in (1, 2, 3)]
+        return (c[0] + (c[1] + c[2] * u) * u) * u
+
+    t = np.clip(temperature, tmin, tmax)
+    tc = np.clip(cal_temp, tmin, tmax)
+    return np.column_stack([-poly(t - 35.0, a) + poly(tc - 35.0, a) for a in range(3)])
+
+
+def test_px4_parameters_reproduce_the_model(fitted, tmp_path):
+    poly, accel_poly, temp = fitted
+    gyro, accel = calibration_of(poly), calibration_of(accel_poly, unit='m/s^2')
+    text = write_px4_params(tmp_path / 'tc.params',
+                            px4_parameters(gyro, accel, gyro_device_id=2359306),
+                            comment='from test')
+    assert (tmp_path / 'tc.params').read_text() == text
+    p = _read_px4(text)
+    assert p['TC_G_ENABLE'] == 1 and p['TC_A_ENABLE'] == 1 and p['TC_G0_ID'] == 2359306
+    # the model's own range and midpoint reference, as PX4's process_sensor_caldata.py sets them
+    assert p['TC_G0_TMIN'] == temp.min() and p['TC_G0_TMAX'] == temp.max()
+    assert p['TC_G0_TREF'] == pytest.approx((temp.min() + temp.max()) / 2, abs=1e-12)
+    probe = np.linspace(-20.0, 80.0, 1001)   # inside and beyond the range (held there)
+    want = poly.drift_rad_s(probe, np.zeros_like(probe))
+    span = np.ptp(want, axis=0).max()
+    np.testing.assert_allclose(_px4_offset(p, 'G', probe), want, rtol=0, atol=1e-6 * span)
+    # as the firmware evaluates it, in float32: still ~1e-6 of the offset's span
+    np.testing.assert_allclose(_px4_offset(p, 'G', probe, np.float32), want, rtol=0,
+                               atol=1e-6 * span)
+    want_a = accel_poly.drift_rad_s(probe, np.zeros_like(probe))
+    np.testing.assert_allclose(_px4_offset(p, 'A', probe), want_a, rtol=0,
+                               atol=1e-6 * np.ptp(want_a, axis=0).max())
+    # the accelerometer's polynomial is relative: X0 = 0, the change from TREF
+    assert all(p[f'TC_A0_X0_{a}'] == 0.0 for a in range(3))
+
+
+def test_ardupilot_parameters_reproduce_the_model(fitted, tmp_path):
+    poly, accel_poly, temp = fitted
+    gyro, accel = calibration_of(poly), calibration_of(accel_poly, unit='m/s^2')
+    text = write_ardupilot_parm(tmp_path / 'tcal.parm', ardupilot_parameters(gyro, accel))
+    p = _read_parm(text)
+    assert p['INS_TCAL1_ENABLE'] == 1.0 and 'INS_TCAL1_ENABLE 1' in text
+    assert p['INS_TCAL1_TMIN'] == temp.min() and p['INS_TCAL1_TMAX'] == temp.max()
+    probe = np.linspace(-20.0, 80.0, 1001)
+    want = poly.drift_rad_s(probe, np.zeros_like(probe))
+    span = np.ptp(want, axis=0).max()
+    # gyro: raw - OFFS + correction; with the exported offsets at CALTEMP it is raw - model
+    offs = np.array([p[f'INS_GYROFFS_{a}'] for a in 'XYZ'])
+    removed = offs - _ardupilot_correction(p, 'GYR', probe, p['INS_GYR1_CALTEMP'])
+    np.testing.assert_allclose(removed, want, rtol=0, atol=1e-6 * span)
+    # whatever offset ArduPilot measures at boot, the temperature-dependent part is the model's
+    # change from that temperature
+    boot = 31.7
+    change = -_ardupilot_correction(p, 'GYR', probe, boot)
+    np.testing.assert_allclose(change, want - poly.drift_rad_s([boot], [0.0]), rtol=0,
+                               atol=1e-6 * span)
+    # accelerometer: the change from the calibration temperature, to 1e-6 of its span
+    want_a = accel_poly.drift_rad_s(probe, np.zeros_like(probe))
+    change_a = -_ardupilot_correction(p, 'ACC', probe, 25.0)
+    np.testing.assert_allclose(change_a, want_a - accel_poly.drift_rad_s([25.0], [0.0]),
+                               rtol=0, atol=1e-6 * np.ptp(want_a, axis=0).max())
+    only = _read_parm(write_ardupilot_parm(tmp_path / 'g.parm',
+                                           ardupilot_parameters(gyro, gyro_offsets=False)))
+    assert 'INS_GYROFFS_X' not in only and 'INS_TCAL1_ACC1_X' not in only
+
+
+def test_export_refusals(fitted):
+    poly, _, temp = fitted
+    with pytest.raises(ParameterError, match="'linear_tdt' cannot be exported"):
+        calibration_of(LinearTdT())
+    with pytest.raises(ParameterError, match='order 3'):
+        wide = TemperaturePolynomial(order=5)
+        wide.coef, wide.t_ref_c, wide.t_min_c, wide.t_max_c = np.zeros((3, 6)), 20.0, 0.0, 40.0
+        calibration_of(wide)
+    with pytest.raises(ParameterError, match='instance'):
+        px4_parameters(calibration_of(poly), instance=3)
+    with pytest.raises(ParameterError, match='IMU number'):
+        ardupilot_parameters(calibration_of(poly), imu=4)
+    with pytest.raises(ParameterError, match='nothing to export'):
+        px4_parameters(None)
+    hot = TemperaturePolynomial()
+    hot.coef, hot.t_ref_c, hot.t_min_c, hot.t_max_c = np.zeros((3, 4)), 90.0, 70.0, 110.0
+    with pytest.raises(ParameterError, match='-70..80 degC'):
+        ardupilot_parameters(calibration_of(hot))
+
+
+def test_reexpansion_is_exact(fitted):
+    poly, _, _ = fitted
+    cal = calibration_of(poly)
+    x = np.linspace(cal.t_min_c, cal.t_max_c, 50)
+    for ref in (35.0, -10.0, cal.t_ref_c):
+        b = cal.about(ref)
+        got = np.column_stack([np.polyval(b[a, ::-1], x - ref) for a in range(3)])
+        np.testing.assert_allclose(got, cal.offset(x), rtol=0, atol=1e-14)

@@ -213,7 +213,10 @@ def test_compensated_stream_shows_the_thermal_drift_gone(tmp_path):
           f"offset {comp['Messages compensated with a held offset']}, published "
           f"{comp['Messages published']}, dropped before the node "
           f"{comp['Messages dropped before the node']}; compensated drift "
-          + ', '.join(f'{a} {d:.1f}' for a, d in drifts.items()) + ' (deg/s)/h')
+          + ', '.join(f'{a} {d:.1f}' for a, d in drifts.items()) + ' (deg/s)/h; raw x: '
+          + ', '.join(f'{k} {values(seen["analyzer_raw: axis x"][-1]).get(k)}' for k in (
+              'Offset drift ((deg/s)/h)', 'Sample rate (Hz)', 'Samples lost',
+              'Chunks analysed')))
     assert comp['Thermal model'] == 'poly3'
     # The held-out run stays inside the training run's temperature span (it is shorter).
     assert comp['Temperature range status'] == 'inside', comp

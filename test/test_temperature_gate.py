@@ -87,7 +87,7 @@ def _stalled_stream(rng, seconds, stall_prob, stall_s):
 
 
 def _run_node_logic(model, stream, max_wait_s, drain_s=0.02):
-    """What the node does: each drain adds the temperatures arrived, then releases samples."""
+    """Run the node's logic: each drain adds the temperatures arrived, then releases samples."""
     gyro_ns, gyro_arrive, temp_ns, temp_c, temp_arrive = stream
     ev = LiveDriftEvaluator(model, rate_window_s=1.0)
     gate = TemperatureGate(max_wait_s=max_wait_s, first_wait_s=2.0)

@@ -306,7 +306,7 @@ class LiveDriftEvaluator:
 
     @property
     def offset_stamp_ns(self):
-        """int or None: stamp of the newest knot (ns); None before the first offset exists."""
+        """Stamp of the newest knot (ns, int); None before the first offset exists."""
         # Knots are added in stamp order and, once the rate window has filled, every accepted
         # message becomes one at once: the newest knot is the newest message.
         if self._knot_t.size == 0 or self._pending_t.size:

@@ -743,7 +743,7 @@ def _judge(args, chain, report, bags):
 
 
 def _print(report, passed):
-    load = ', '.join(f"{report[k][0]:.1f}" for k in ('load_start', 'load_end') if k in report)
+    load = ', '.join(f'{report[k][0]:.1f}' for k in ('load_start', 'load_end') if k in report)
     # A starved chain (load well above the cores) fails the checks by lag, not by a fault: say so.
     print(f"\n{report['minutes']:g} min, {report['cores']} cores, 1-min load average at the "
           f'start and the end: {load}')

@@ -116,7 +116,7 @@ PARAMETERS = (
     # 4 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
     # Fast DDS's default period 3 s (the 6.66 kHz Imu stream is repaired sooner, by heartbeats
     # piggybacked on its data), plus the NACK response and the drain period. Runs at load 13 with
-    # a 1 s bound held 2,000-15,000 samples per run past it (docs/compensation.md). The normal
+    # a 1 s bound held 2,000-15,000 samples per run past it (test_compensator_e2e). The normal
     # wait is one temperature period (19 ms at 52 Hz) plus the drain period.
     ParamSpec('max_temperature_wait_s', 4.0, 'With a thermal model, a gyro sample newer than the '
               'latest temperature waits up to this long for the next one, so its offset is '

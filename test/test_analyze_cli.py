@@ -331,7 +331,7 @@ def odd_bags(tmp_path_factory):
 
 
 @pytest.mark.parametrize('args, code, text', [
-    (['missing'], 3, 'does not exist'),
+    (['missing'], 3, 'no such file or folder'),
     (['notabag.txt'], 3, 'not a bag'),
     (['two'], 3, 'choose one with --topic'),
     (['two', '--topic', '/c/imu'], 3, "topic '/c/imu' is not in bag"),
@@ -376,17 +376,18 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
 
 def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
         odd_bags, tmp_path, capsys, monkeypatch):
-    from gyro_noise_ros.cli import analyze
+    from gyro_noise_ros.bag import inputs
 
     opened = []
 
-    class Spy(analyze.ImuBagReader):
+    class Spy(inputs.ImuBagReader):
 
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
             opened.append(self)
 
-    monkeypatch.setattr(analyze, 'ImuBagReader', Spy)
+    # analyze opens its inputs through the one input layer
+    monkeypatch.setattr(inputs, 'ImuBagReader', Spy)
     blocker = tmp_path / 'file'
     blocker.write_text('x')
     assert main([*FAST, str(odd_bags / 'short'), '--out', str(blocker / 'o')]) == 6

@@ -49,8 +49,8 @@ import threadpoolctl
 
 from ._common import run_cli
 from .. import __version__, report
-from ..bag import find_imu_topic, ImuBagReader
-from ..bag.tabular import is_table, TableImuReader
+from ..bag import find_imu_topic
+from ..bag.inputs import is_table, open_imu
 from ..cluster import make_executor
 from ..core.engine import analyze_chunk, AXES, EngineConfig, GAP_POLICIES, NoiseEngine
 from ..core.fractional import DEFAULT_MEMORY, parse_grid
@@ -302,8 +302,7 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
                 if is_table(p):
                     topics.append(_open(p, topic, temperature_topic, config.rate_hz).topic)
                 elif i == 0:
-                    first_reader = ImuBagReader(p, topic=topic,
-                                                temperature_topic=temperature_topic)
+                    first_reader = _open(p, topic, temperature_topic, config.rate_hz)
                     topics.append(first_reader.topic)
                 else:
                     topics.append(find_imu_topic(p, topic))
@@ -411,10 +410,8 @@ def _warm_identifier(config):
 
 
 def _open(path, topic, temperature_topic, rate_hz):
-    if is_table(path):
-        return TableImuReader(path, topic=topic, temperature_topic=temperature_topic,
-                              rate_hz=rate_hz)
-    return ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
+    # the one input layer: what analyze reads, explain reads, with the same refusals
+    return open_imu(path, topic=topic, temperature_topic=temperature_topic, rate_hz=rate_hz)
 
 
 def _select(stamps, first_ns, start_s, end_s, segment, left):

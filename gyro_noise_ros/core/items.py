@@ -21,13 +21,74 @@ parentheses as diagnostic_msgs conventions want (``'Bias (deg/s)'``); missing nu
 ``'nan'`` or ``'n/a'`` so dashboards keep a stable set of keys.
 """
 
+from dataclasses import dataclass
 import math
 
 #: Degrees per radian: SI inside, degrees only at the edges (keys say which).
 DEG = 180.0 / math.pi
 
+#: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
+LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
+LEVEL_BYTE = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
 
-def fmt(value, digits=4):
+
+@dataclass(frozen=True)
+class TaskStatus:
+    """
+    What one diagnostic task reports per period: the shape every node's status is built from.
+
+    Each node keeps cumulative counters it bumps cheaply on the hot path; on the diagnostics
+    timer a pure function or task object (``link.health.LinkTask``, ``core.health.axis_status``,
+    ``diagnostics.compensation.CompensationTask``) takes their differences, picks the level
+    from explicit limits held in a thresholds dataclass and returns this; the node only wraps it
+    in a ``diagnostic_msgs/DiagnosticStatus`` (ros/diagnostics' diagnostic_updater tasks).
+
+    Attributes
+    ----------
+    level : str
+        One of :data:`LEVELS`.
+    message : str
+        One sentence naming the worst item.
+    values : tuple of (str, str)
+        Readable keys with the unit in parentheses and their formatted values, in a stable order.
+
+    """
+
+    level: str
+    message: str
+    values: tuple
+
+    @property
+    def level_byte(self) -> int:
+        """int: The level as a DiagnosticStatus byte value (0 OK ... 3 STALE)."""
+        return LEVEL_BYTE[self.level]
+
+
+def worst(checks, ok_message: str) -> tuple[str, str]:
+    """
+    Pick the level and message of the worst failed check (the first one among equals).
+
+    Parameters
+    ----------
+    checks : iterable of (str, str)
+        Level (one of :data:`LEVELS`) and one-sentence message of each check that did not pass.
+    ok_message : str
+        Message when no check is worse than OK.
+
+    Returns
+    -------
+    (str, str)
+        Level and message.
+
+    """
+    level, message = 'OK', ok_message
+    for check_level, check_message in checks:
+        if LEVELS.index(check_level) > LEVELS.index(level):
+            level, message = check_level, check_message
+    return level, message
+
+
+def fmt(value: float | int | None, digits: int = 4) -> str:
     """
     Format a number with ``digits`` significant digits; ``'nan'`` for None, NaN or infinity.
 
@@ -48,7 +109,7 @@ def fmt(value, digits=4):
     return f'{value:.{digits}g}'
 
 
-def last_chunk_items(result):
+def last_chunk_items(result) -> list[tuple[str, str]]:
     """
     Return the items of the latest chunk of one axis.
 
@@ -82,7 +143,7 @@ ALLAN_KEYS = ('ADEV at 1 s (deg/s)', 'Bias stability (deg/s)', 'Bias stability t
               'Angle random walk (deg/sqrt(h))', 'Bias instability (deg/h)')
 
 
-def allan_items(summary):
+def allan_items(summary) -> list[tuple[str, str]]:
     """
     Return an axis' Allan deviation items, all read by :func:`.readout.read_allan`.
 
@@ -114,7 +175,8 @@ def allan_items(summary):
     return list(out.items())
 
 
-def stream_items(counts, *, chunk_size, mean_temperature_c):
+def stream_items(counts, *, chunk_size: int,
+                 mean_temperature_c: float) -> list[tuple[str, str]]:
     """
     Return the stream counters of one axis.
 

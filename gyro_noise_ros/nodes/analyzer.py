@@ -69,7 +69,7 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
 from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
-from ..core.health import HealthThresholds, LEVEL_BYTE
+from ..core.health import axis_status, HealthThresholds
 from ..core.items import allan_items, DEG, fmt, last_chunk_items, stream_items
 from ..core.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..errors import GyroNoiseError
@@ -140,10 +140,6 @@ PARAMETERS = (
               'are skipped', unit='chunks', read_only=True, min_value=1, max_value=10_000),
     ParamSpec('log_chunks', False, 'Log one line per analysed chunk', read_only=True),
 )
-
-
-def _level_byte(level):
-    return bytes([LEVEL_BYTE[level]])
 
 
 class NoiseAnalyzerNode(Node):
@@ -335,25 +331,14 @@ class NoiseAnalyzerNode(Node):
                 ('Publishers', str(len(active))),
                 ('Messages per publisher', self._imu_watch.summary()),
             ]
-            level, message = verdict.level, verdict.message
-            if len(active) > 1 and level in ('OK', 'WARN'):
-                # A second sensor's samples in the chunks: every number is suspect; WARN at least,
-                # and the message names it unless a worse verdict already leads.
-                if level == 'OK':
-                    message = (f'{len(active)} publishers on {self._imu_watch.topic}: their '
-                               'samples are mixed.')
-                level = 'WARN'
             live = self.live
-            if live.rejected_batches:
-                values.append(('Batches rejected', str(live.rejected_batches)))
-                values.append(('Last rejection', live.last_rejection))
-                # ERROR while data arrives but is rejected (rather than STALE for 'no chunk yet');
-                # once batches are accepted again only the count stays.
-                silent = since is not None and since > self.thresholds.stale_after_s
-                if live.last_batch_rejected and not silent:
-                    level, message = 'ERROR', f'Samples rejected: {live.last_rejection}.'
+            status = axis_status(verdict, values, rejected_batches=live.rejected_batches,
+                                 last_rejection=live.last_rejection,
+                                 rejecting=live.last_batch_rejected, seconds_since_data=since,
+                                 thresholds=self.thresholds, publishers=len(active))
             statuses.append(diagnostic_status(f'{self.get_name()}: axis {axis}', hardware_id,
-                                              _level_byte(level), message, values))
+                                              bytes([status.level_byte]), status.message,
+                                              status.values))
         return diagnostic_array(self.get_clock().now().to_msg(), statuses)
 
     def publish_diagnostics(self):

@@ -45,19 +45,17 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
-                          diagnostics_publisher, ERROR, ParamSpec, PolledGroup, run_node,
-                          sensor_data_qos, SequenceGapCounter, take_all, unused_callback, WARN,
-                          worst)
+                          diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
+                          SequenceGapCounter, take_all, unused_callback)
 from ..bag import decode_temperature
 from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
+from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
-from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, RANGE_MARGIN,
-                            RANGE_NAMES, RANGE_OUTSIDE, TemperatureGate)
+from ..thermal.live import BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TemperatureGate
 from ..thermal.run import DEFAULT_RATE_WINDOW_S
 
 NODE_NAME = 'imu_compensator'
-_DEG = 180.0 / math.pi
 
 
 class ArrayParamSpec(ParamSpec):
@@ -161,18 +159,6 @@ def calibration_from(p):
     return load_calibration(p['calibration_file']), f"file {p['calibration_file']}"
 
 
-def _vec(values, scale=1.0):
-    return ', '.join(f'{v * scale:.6g}' for v in values)
-
-
-def _share(ev):
-    """Share (%) of evaluated temperature messages outside the trained range of T or dT."""
-    evaluated = sum(ev.knots_by_status.values())
-    if not evaluated:
-        return 'n/a'
-    return f'{100.0 * ev.knots_outside / evaluated:.3g}'
-
-
 class ImuCompensatorNode(Node):
     """
     Calibration and thermal compensation node (see the module docstring).
@@ -209,19 +195,24 @@ class ImuCompensatorNode(Node):
             accel_model, range_c=range_c, margin_c=margin, beyond=p['out_of_range_action'])
         for note in notes:
             self.get_logger().warning(note)
-        self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'temperatures'), 0)
+        # Diagnostics: counters ticked on the hot path, judged on the timer.
+        self._diag = CompensationTask(
+            CompensationThresholds(stale_after_s=p['stale_after_s'],
+                                   temperature_timeout_s=p['temperature_timeout_s'],
+                                   temperature_wait_s=p['temperature_wait_s'],
+                                   max_temperature_wait_s=p['max_temperature_wait_s']),
+            calibration=self.calibration, calibration_source=self._cal_source,
+            out_of_range_action=p['out_of_range_action'], now=time.monotonic())
+        self.counts = self._diag.counts
         # Samples wait for an offset at or after their stamp (bounded). Before the first offset
         # (the first temperature, plus the rate window for a model using dT) they are dropped.
         start_up_s = 0.0 if self.thermal is None else self.thermal.start_up_s
         self._gate = TemperatureGate(p['max_temperature_wait_s'],
                                      p['temperature_wait_s'] + start_up_s)
-        self._late_reported = 0
         self._transport = SequenceGapCounter()
         self._frame_id = ''
-        self._last_data = self._last_temp = None
         self._offset = None
         self._accel_offset = None
-        self._rate = (time.monotonic(), 0, math.nan)  # time, published count, Hz
         group = PolledGroup()
         qos = sensor_data_qos(p['queue_depth'], p['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
@@ -252,7 +243,7 @@ class ImuCompensatorNode(Node):
                                         throttle_duration_sec=5.0)
                 stamp_ns, temperature_c = (), ()
             if self.thermal.add_temperature(stamp_ns, temperature_c):
-                self._last_temp = time.monotonic()
+                self._diag.tick_temperature(time.monotonic())
             if self.thermal_accel is not None:
                 self.thermal_accel.add_temperature(stamp_ns, temperature_c)
         raws, _, sequence = take_all(self._imu_sub, Imu)
@@ -265,7 +256,7 @@ class ImuCompensatorNode(Node):
         """Decode a batch of raw Imu messages, correct them, publish the results."""
         self.counts['received'] += len(raws)
         self._transport.update(sequence)
-        self._last_data = time.monotonic()
+        self._diag.tick_data(time.monotonic())
         buf, starts, lengths = join_raws(raws)
         keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
         if keep is not None:
@@ -308,92 +299,19 @@ class ImuCompensatorNode(Node):
 
     def diagnostics(self, record=False):
         """
-        Build the ``DiagnosticArray`` of the current state (one status).
+        Build the ``DiagnosticArray`` of the current state (one status, see the task).
 
         ``record``: this status is published, so the late samples it reports are not reported
         again (the periodic timer passes True).
         """
-        now = time.monotonic()
-        t0, n0, _ = self._rate
-        if now - t0 >= 0.5:
-            n1 = self.counts['published']
-            self._rate = (now, n1, (n1 - n0) / (now - t0))
-        c, checks = self.counts, []
-        since = None if self._last_data is None else now - self._last_data
-        if since is None or since > self._p['stale_after_s']:
-            checks.append((ERROR, 'No imu/data_raw ' + ('yet.' if since is None else
-                                                        f'for {since:.1f} s.')))
-        cal = self.calibration
-        values = [('Calibration source', self._cal_source),
-                  ('Gyro bias (deg/s)', _vec(cal.gyro.bias, _DEG)),
-                  ('Gyro scale factor (%)', _vec(cal.gyro.scale_factor, 100.0)),
-                  ('Accelerometer bias (m/s^2)', _vec(cal.accel.bias)),
-                  ('Accelerometer scale factor (%)', _vec(cal.accel.scale_factor, 100.0)),
-                  ('Calibration gravity (m/s^2)', f'{cal.gravity_m_s2:.6g}')]
-        ev = self.thermal
-        if ev is None:
-            values.append(('Thermal model', 'none'))
-        else:
-            age = None if self._last_temp is None else now - self._last_temp
-            range_name = 'n/a' if ev.status is None else RANGE_NAMES[ev.status]
-            values += [
-                ('Thermal model', ev.name),
-                ('Thermal model range (degC)', f'{ev.range_lo_c:.4g} to {ev.range_hi_c:.4g}, '
-                 f'margin {ev.margin_c:.3g}'),
-                ('Temperature (degC)', f'{ev.temperature_c:.4g}'),
-                ('Temperature rate (degC/s)', f'{ev.rate_c_s:.4g}'),
-                ('Temperature age (s)', 'n/a' if age is None else f'{age:.2f}'),
-                ('Temperature range status', range_name),
-                ('Thermal offset (deg/s)', 'n/a' if self._offset is None else
-                 _vec(self._offset, _DEG)),
-                ('Temperature messages', str(c['temperatures'])),
-                ('Temperature messages rejected', str(ev.rejected)),
-                ('Temperature messages beyond range + margin',
-                 str(ev.knots_by_status[RANGE_OUTSIDE])),
-                ('Thermal model rate range (degC/s)', 'unknown' if ev.rate_range_c_s is None
-                 else f'{ev.rate_range_c_s[0]:.4g} to {ev.rate_range_c_s[1]:.4g}'),
-                ('Temperature messages outside the trained rate range',
-                 str(ev.knots_rate_outside)),
-                ('Share outside the trained range of T or dT (%)', _share(ev)),
-                ('Temperature messages waiting for the rate window', str(ev.pending)),
-                ('Accelerometer thermal offset (mg)',
-                 'none' if self.thermal_accel is None else 'n/a' if self._accel_offset is None
-                 else _vec(self._accel_offset, 1e3 / 9.80665)),
-                ('Messages dropped waiting for the first temperature', str(self._gate.dropped)),
-                ('Messages waiting for a temperature', str(self._gate.waiting)),
-                ('Longest wait for a temperature (s)', f'{self._gate.longest_wait_s:.3f}'),
-                ('Messages compensated with a held offset', str(self._gate.late)),
-            ]
-            if ev.status == RANGE_OUTSIDE:
-                checks.append((ERROR, f'Temperature {ev.temperature_c:.1f} degC is beyond the '
-                               f'model range + margin: offset not extrapolated '
-                               f"({self._p['out_of_range_action']})."))
-            elif ev.status == RANGE_MARGIN:
-                checks.append((WARN, f'Temperature {ev.temperature_c:.1f} degC is outside the '
-                               'trained range (within the margin).'))
-            if self._gate.dropped:
-                checks.append((WARN, f'{self._gate.dropped} messages dropped: no temperature '
-                               f"within {self._p['temperature_wait_s']:g} s of them."))
-            late = self._gate.late - self._late_reported
-            if late:
-                # WARN for the period in which it happened (the count stays in the values).
-                checks.append((WARN, f'{late} messages compensated with a held offset: no newer '
-                               f"temperature within {self._p['max_temperature_wait_s']:g} s."))
-                if record:
-                    self._late_reported = self._gate.late
-            if age is None:
-                checks.append((WARN, 'No imu/temperature yet: Imu messages held, then dropped.'))
-            elif age > self._p['temperature_timeout_s']:
-                checks.append((WARN, f'Temperature is {age:.1f} s old: offset held.'))
-        values += [('Messages received', str(c['received'])),
-                   ('Messages published', str(c['published'])),
-                   ('Output rate (Hz)', f'{self._rate[2]:.1f}'),
-                   ('Messages undecodable', str(c['undecodable'])),
-                   ('Messages dropped before the node', str(self._transport.missing))]
-        level, message = worst(checks, 'Compensating.')
+        status = self._diag.run(
+            time.monotonic(), thermal=self.thermal, thermal_accel=self.thermal_accel,
+            offset=self._offset, accel_offset=self._accel_offset, hold=self._gate,
+            transport_missing=self._transport.missing, record=record)
         hardware_id = self._p['hardware_id'] or self._frame_id or 'unknown'
         return diagnostic_array(self.get_clock().now().to_msg(), [diagnostic_status(
-            self._status_name, hardware_id, level, message, values)])
+            self._status_name, hardware_id, bytes([status.level_byte]), status.message,
+            status.values)])
 
     def publish_diagnostics(self):
         """Publish :meth:`diagnostics` on ``/diagnostics``."""

@@ -191,7 +191,10 @@ def main(argv=None):
     parser.add_argument('--only', choices=('pass-through', 'calibration', 'thermal'),
                         help='measure one configuration only')
     args = parser.parse_args(argv)
-    os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
+    from gyro_noise_ros.rosgraph import lease_domain
+
+    lease = lease_domain()  # a private graph, held until this process exits
+    lease.export()
     listener = Listener()
     rows = []
     try:

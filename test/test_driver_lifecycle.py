@@ -35,7 +35,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu
-from test_driver_node import context, FakeBoard, Harness, harness, make_samples  # noqa: F401
+from test_driver_node import FakeBoard, Harness, harness, make_samples  # noqa: F401
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 

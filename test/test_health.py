@@ -407,3 +407,24 @@ def test_axis_status_adds_refused_batches_and_is_error_only_while_data_is_refuse
     assert silent.level == verdict.level and silent.values == refused.values
     accepted = axis_status(verdict, values, rejected_batches=2, last_rejection='bad stamps')
     assert accepted.level == 'OK' and accepted.level_byte == 0
+
+
+def test_axis_status_is_at_least_warn_with_more_than_one_publisher():
+    ok = evaluate_health(summary())
+    values = [(k, v) for k, v, _ in ok.items]
+    assert axis_status(ok, values, publishers=1).level == 'OK'
+    mixed = axis_status(ok, values, publishers=2)
+    assert (mixed.level, mixed.message) == ('WARN', '2 publishers of the data: their samples '
+                                            'are mixed.')
+    assert mixed.values == tuple(values)
+    # A WARN verdict stays WARN and keeps its own message; worse verdicts are left alone.
+    warn = evaluate_health(summary(drift_dph=0.03, out_of_order=3))
+    assert axis_status(warn, values, publishers=2).message == warn.message
+    for verdict in (evaluate_health(summary(drift_dph=1.0, stderr_dph=0.3)),
+                    evaluate_health(summary(), seconds_since_data=6.0)):
+        status = axis_status(verdict, values, publishers=3)
+        assert (status.level, status.message) == (verdict.level, verdict.message)
+    # Refused batches while data arrives: ERROR over the publishers' WARN.
+    refused = axis_status(ok, values, publishers=2, rejected_batches=1, last_rejection='bad',
+                          rejecting=True, seconds_since_data=0.1)
+    assert (refused.level, refused.message) == ('ERROR', 'Samples rejected: bad.')

@@ -17,17 +17,17 @@ The demo's workflow: an emulated board, the live nodes, a recording, the offline
 
 Shared by ``gyro_noise_demo`` (``make demo``; the story, its settings and exit codes are in that
 module's docstring and ``docs/demo.md``). :func:`run_demo` starts the nodes and the emulator as
-subprocesses on a private ``ROS_DOMAIN_ID``, prints the analyzer's diagnostics as they arrive,
-checks the story (OK in the quiet phase, WARN once the bias rises), stops everything in order,
-runs ``gyro_noise_analyze`` on the recording and returns a :class:`DemoResult`. Every subprocess
-is stopped on every path.
+subprocesses in a private ROS graph (a ``ROS_DOMAIN_ID`` checked free on this host and held while
+the demo runs, localhost-only discovery: :func:`gyro_noise_ros.rosgraph.lease_domain`), prints the
+analyzer's diagnostics as they arrive, checks the story (OK in the quiet phase, WARN once the
+bias rises), stops everything in order, runs ``gyro_noise_analyze`` on the recording and returns
+a :class:`DemoResult`. Every subprocess is stopped on every path.
 """
 
 from dataclasses import dataclass
 import os
 from pathlib import Path
 import queue
-import random
 import re
 import shutil
 import signal
@@ -38,6 +38,7 @@ import threading
 import time
 from typing import Any, Dict, IO, List, Optional, Tuple
 
+from .. import rosgraph
 from ..errors import GyroNoiseError, OutputError, ParameterError
 from ..monitor_lines import parse_axis_parts
 from ..outputs import atomic_write_text
@@ -120,7 +121,8 @@ class DemoParams:
     jobs : int
         Worker processes of the offline analysis.
     domain_id : int or None
-        ``ROS_DOMAIN_ID`` (None: random 100..200).
+        ``ROS_DOMAIN_ID`` (None: one in 1..101 checked free on this host and held while the
+        demo runs).
 
     Raises
     ------
@@ -196,13 +198,22 @@ def run_demo(params: DemoParams) -> DemoResult:
         Interrupted during the offline analysis.
 
     """
+    # Held until the demo ends: another demo, a test run or a bench on this host skips it.
+    lease = rosgraph.lease_domain() if params.domain_id is None else None
+    try:
+        return _run(params, lease.domain_id if lease else params.domain_id)
+    finally:
+        if lease is not None:
+            lease.release()
+
+
+def _run(params: DemoParams, domain: int) -> DemoResult:
     story = params.story
     out = _prepare_out(Path(params.out))
-    domain = params.domain_id if params.domain_id is not None else random.randint(100, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
+    env = rosgraph.isolated_env(domain, dict(os.environ, PYTHONUNBUFFERED='1'))
     procs = Processes(env, out / 'logs')
     t_start = time.monotonic()
-    print(f'{TOOL}: ROS_DOMAIN_ID={domain}; logs in {out / "logs"}', flush=True)
+    print(f'{TOOL}: ROS_DOMAIN_ID={domain} (localhost only); logs in {out / "logs"}', flush=True)
     _print_story(story)
     recording = out / 'recording'
     seen = _live_part(params, procs, recording, t_start)

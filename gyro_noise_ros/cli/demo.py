@@ -15,8 +15,9 @@
 """
 ``make demo``: the whole story on one machine, from an emulated board to the offline report.
 
-``python -m gyro_noise_ros.cli.demo --out demo_out [--quick]`` starts, as subprocesses on a private
-``ROS_DOMAIN_ID``:
+``python -m gyro_noise_ros.cli.demo --out demo_out [--quick]`` starts, as subprocesses in a private
+ROS graph (a ``ROS_DOMAIN_ID`` checked free on this host and held while the demo runs,
+localhost-only discovery: :func:`gyro_noise_ros.rosgraph.lease_domain`, as the tests use):
 
 1. ``noise_analyzer`` (live analysis, diagnostics), ``gyro_noise_record`` (the bag), the
    diagnostics monitor (``gyro_noise_monitor``) and ``lsm6dso32_driver`` (which retries its port
@@ -87,7 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--storage', default='sqlite3', choices=('sqlite3', 'mcap'), help='bag storage')
     p.add_argument('--jobs', type=int, default=2, help='worker processes of the offline analysis')
     p.add_argument('--domain-id', type=int, default=None,
-                   help='ROS_DOMAIN_ID (default: random 100..200)')
+                   help='ROS_DOMAIN_ID (default: one in 1..101 checked free on this host and held '
+                   'while the demo runs)')
     return p
 
 

@@ -454,14 +454,17 @@ def _chunk_items(summary, th, seconds_since_data) -> list[tuple[str, str, str, s
 def axis_status(verdict: HealthVerdict, values: list, *, rejected_batches: int = 0,
                 last_rejection: str = '', rejecting: bool = False,
                 seconds_since_data: float | None = None,
-                thresholds: HealthThresholds | None = None) -> TaskStatus:
+                thresholds: HealthThresholds | None = None, publishers: int = 1) -> TaskStatus:
     """
-    Return the analyzer's status of one axis: the verdict, plus the batches the engine refused.
+    Return the analyzer's status of one axis: the verdict, the publishers, the refused batches.
 
     The analyzer's diagnostics task on its timer: the engine's counters (ticked while ingesting)
-    are judged by :func:`evaluate_health`; refused batches add their count and reason to the
-    values, and while data arrives but is refused the level is ERROR (rather than STALE for 'no
-    chunk yet'); once batches are accepted again only the count stays.
+    are judged by :func:`evaluate_health`. More than one publisher of the data means a second
+    sensor's samples are mixed into the chunks and every number is suspect: an OK or WARN verdict
+    becomes WARN, and an OK one's message names the publishers (a worse verdict's message
+    leads). Refused batches add their count and reason to the values, and while data arrives but
+    is refused the level is ERROR (rather than STALE for 'no chunk yet'); once batches are
+    accepted again only the count stays.
 
     Parameters
     ----------
@@ -479,6 +482,8 @@ def axis_status(verdict: HealthVerdict, values: list, *, rejected_batches: int =
         Time since the last message arrived (s); None before any.
     thresholds : HealthThresholds, optional, keyword-only
         Their ``stale_after_s``: no data for longer is silence, not refusal.
+    publishers : int, keyword-only
+        Publishers of the data that delivered recently (the node's count).
 
     Returns
     -------
@@ -488,6 +493,10 @@ def axis_status(verdict: HealthVerdict, values: list, *, rejected_batches: int =
     th = thresholds if thresholds is not None else HealthThresholds()
     values = list(values)
     level, message = verdict.level, verdict.message
+    if publishers > 1 and level in ('OK', 'WARN'):
+        if level == 'OK':
+            message = f'{publishers} publishers of the data: their samples are mixed.'
+        level = 'WARN'
     if rejected_batches:
         values += [('Batches rejected', str(rejected_batches)), ('Last rejection', last_rejection)]
         silent = seconds_since_data is not None and seconds_since_data > th.stale_after_s

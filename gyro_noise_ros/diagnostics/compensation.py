@@ -17,17 +17,20 @@ The ``imu_compensator``'s diagnostics task (pure, no ROS): ``'<node>: compensati
 
 Tick on the hot path, run on the timer (diagnostic_updater's shape): the node bumps the counters
 of :class:`CompensationTask` (``counts``, :meth:`~CompensationTask.tick_data`,
-:meth:`~CompensationTask.tick_temperature`) as it takes and publishes messages; once per
-diagnostics period :meth:`~CompensationTask.run` measures the output rate from the difference of
-the published count, picks the level from the explicit limits of
+:meth:`~CompensationTask.tick_temperature`) as it takes and publishes messages, and its
+:class:`~gyro_noise_ros.thermal.live.TemperatureGate` counts the samples it holds, drops and
+releases late; once per diagnostics period :meth:`~CompensationTask.run` measures the output rate
+from the difference of the published count, picks the level from the explicit limits of
 :class:`CompensationThresholds` and returns the status with its key/values
 (``docs/compensation.md``):
 
 - ERROR: no ``imu/data_raw`` yet, or none for ``stale_after_s``; a temperature beyond the
   thermal model's range + margin (the offset is not extrapolated).
 - WARN: a temperature outside the trained range but within the margin; Imu messages dropped
-  because no temperature came within ``temperature_wait_s``; no temperature yet; the newest
-  temperature older than ``temperature_timeout_s`` (the offset is held).
+  because no temperature came within ``temperature_wait_s``; samples compensated with a held
+  offset because no newer temperature came within ``max_temperature_wait_s``, in the period
+  since the previous published status (the count stays in the values); no temperature yet; the
+  newest temperature older than ``temperature_timeout_s`` (the offset is held).
 
 The message is the sentence of the worst check (the first among equals), else
 ``'Compensating.'``.
@@ -51,7 +54,7 @@ class CompensationThresholds:
     """
     Limits of the compensator's status.
 
-    The node fills the first three from its parameters of the same names, whose table
+    The node fills the first four from its parameters of the same names, whose table
     (``nodes/compensator.PARAMETERS``, ``config/imu_compensator.yaml``) describes them.
 
     Attributes
@@ -63,6 +66,9 @@ class CompensationThresholds:
     temperature_wait_s : float
         How long Imu messages wait for the first temperature before they are dropped (s); named
         in the WARN that counts them.
+    max_temperature_wait_s : float
+        How long a sample newer than the latest temperature waits for the next one before it is
+        compensated with the latest offset (s); named in the WARN that counts them.
     rate_interval_s : float
         Shortest interval over which the output rate is measured (s).
 
@@ -71,6 +77,7 @@ class CompensationThresholds:
     stale_after_s: float = 5.0
     temperature_timeout_s: float = 2.0
     temperature_wait_s: float = 2.0
+    max_temperature_wait_s: float = 4.0
     rate_interval_s: float = 0.5
 
     def __post_init__(self) -> None:
@@ -165,8 +172,8 @@ class CompensationTask:
     Attributes
     ----------
     counts : dict of str to int
-        ``received``, ``published``, ``undecodable``, ``uncorrected`` (dropped waiting for the
-        first temperature) and ``temperatures`` messages; the node adds to them.
+        ``received``, ``published``, ``undecodable`` and ``temperatures`` messages; the node adds
+        to them.
 
     """
 
@@ -176,10 +183,10 @@ class CompensationTask:
         self.calibration = calibration
         self.calibration_source = calibration_source
         self.out_of_range_action = out_of_range_action
-        self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'uncorrected',
-                                     'temperatures'), 0)
+        self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'temperatures'), 0)
         self.last_data_s = None
         self.last_temperature_s = None
+        self._late_reported = 0  # the hold's late count up to the previous published status
         self._rate = (now, 0, math.nan)  # time, published count, Hz
 
     def tick_data(self, now: float) -> None:
@@ -212,7 +219,8 @@ class CompensationTask:
         return self._rate[2]
 
     def run(self, now: float, *, thermal=None, thermal_accel=None, offset=None,
-            accel_offset=None, waiting: int = 0, transport_missing: int = 0) -> TaskStatus:
+            accel_offset=None, hold=None, transport_missing: int = 0,
+            record: bool = False) -> TaskStatus:
         """
         Judge the period ending at ``now`` and return the status (module doc lists the checks).
 
@@ -224,10 +232,14 @@ class CompensationTask:
             The gyro's and the accelerometer's thermal evaluators (None: no such model).
         offset, accel_offset : numpy.ndarray or None, keyword-only
             Offsets subtracted from the latest sample (rad/s, m/s^2); None before one.
-        waiting : int, keyword-only
-            Imu messages held now, waiting for the first temperature.
+        hold : thermal.live.TemperatureGate or None, keyword-only
+            The samples' hold for a temperature at or after their stamp: its ``dropped``,
+            ``waiting``, ``longest_wait_s`` and ``late`` are reported (None: all zero).
         transport_missing : int, keyword-only
             Messages lost before the node (DDS sequence gaps).
+        record : bool, keyword-only
+            This status is published (the node's timer): the late samples it reports are not
+            reported again in the next one.
 
         Returns
         -------
@@ -247,8 +259,8 @@ class CompensationTask:
             age = (None if self.last_temperature_s is None
                    else now - self.last_temperature_s)
             values += self._thermal_items(thermal, thermal_accel, offset, accel_offset, age,
-                                          waiting)
-            checks += self._thermal_checks(thermal, age)
+                                          hold)
+            checks += self._thermal_checks(thermal, age, hold, record)
         c = self.counts
         values += [('Messages received', str(c['received'])),
                    ('Messages published', str(c['published'])),
@@ -259,7 +271,7 @@ class CompensationTask:
         return TaskStatus(level, message, tuple(values))
 
     def _thermal_items(self, ev, accel_ev, offset, accel_offset, age,
-                       waiting) -> list[tuple[str, str]]:
+                       hold) -> list[tuple[str, str]]:
         """Return the key/values of the thermal model, its inputs and its counts."""
         return [
             ('Thermal model', ev.name),
@@ -283,12 +295,15 @@ class CompensationTask:
              'none' if accel_ev is None else 'n/a' if accel_offset is None
              else vector_text(accel_offset, _M_S2_TO_MG)),
             ('Messages dropped waiting for the first temperature',
-             str(self.counts['uncorrected'])),
-            ('Messages waiting for the first temperature', str(waiting)),
+             str(0 if hold is None else hold.dropped)),
+            ('Messages waiting for a temperature', str(0 if hold is None else hold.waiting)),
+            ('Longest wait for a temperature (s)',
+             f'{0.0 if hold is None else hold.longest_wait_s:.3f}'),
+            ('Messages compensated with a held offset', str(0 if hold is None else hold.late)),
         ]
 
-    def _thermal_checks(self, ev, age) -> list[tuple[str, str]]:
-        """Return the failed checks of the thermal model's range and its temperature input."""
+    def _thermal_checks(self, ev, age, hold, record) -> list[tuple[str, str]]:
+        """Return the failed checks of the thermal model's range, its input and the hold."""
         th, checks = self.thresholds, []
         if ev.status == RANGE_OUTSIDE:
             checks.append(('ERROR', f'Temperature {ev.temperature_c:.1f} degC is beyond the '
@@ -297,10 +312,17 @@ class CompensationTask:
         elif ev.status == RANGE_MARGIN:
             checks.append(('WARN', f'Temperature {ev.temperature_c:.1f} degC is outside the '
                            'trained range (within the margin).'))
-        uncorrected = self.counts['uncorrected']
-        if uncorrected:
-            checks.append(('WARN', f'{uncorrected} messages dropped: no temperature '
+        dropped, late = (0, 0) if hold is None else (hold.dropped, hold.late)
+        if dropped:
+            checks.append(('WARN', f'{dropped} messages dropped: no temperature '
                            f'within {th.temperature_wait_s:g} s of them.'))
+        if late > self._late_reported:
+            # WARN for the period in which it happened (the count stays in the values).
+            checks.append(('WARN', f'{late - self._late_reported} messages compensated with a '
+                           'held offset: no newer temperature within '
+                           f'{th.max_temperature_wait_s:g} s.'))
+            if record:
+                self._late_reported = late
         if age is None:
             checks.append(('WARN', 'No imu/temperature yet: Imu messages held, then dropped.'))
         elif age > th.temperature_timeout_s:

@@ -26,6 +26,13 @@ the header stamp, frame_id, orientation and covariances of each input message un
 ``/diagnostics`` status ``'<node>: compensation'``. Ingestion as in the analyzer: raw
 subscriptions drained every ``drain_period_s`` and decoded and re-encoded in bulk. See
 ``docs/compensation.md``.
+
+With a thermal model, a gyro sample is published once a temperature at or after its stamp is known,
+so its offset is interpolated between two temperature messages, never held from an older one
+(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): over a reliable subscription a lost
+temperature message stalls the newer ones until it is resent, and a held offset on a temperature
+ramp is wrong by the drift rate times the stall. The wait is bounded by ``max_temperature_wait_s``;
+a sample that waited that long is compensated with the newest offset and counted.
 """
 
 import math
@@ -45,7 +52,7 @@ from ..calibration.apply import calibration_from_parameters, KEYS, load_calibrat
 from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
-from ..thermal.live import BEYOND_ACTIONS, LiveDriftEvaluator, load_live
+from ..thermal.live import BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TemperatureGate
 from ..thermal.run import DEFAULT_RATE_WINDOW_S
 
 NODE_NAME = 'imu_compensator'
@@ -103,6 +110,16 @@ PARAMETERS = (
               'the first offset wait this long (plus the rate window for a model that uses dT, '
               'which needs its window filled) for it, then are dropped and counted: they are '
               'never published uncorrected on the compensated topic', unit='s',
+              read_only=True, min_value=0.0, max_value=60.0),
+    # 4 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
+    # Fast DDS's default period 3 s (the 6.66 kHz Imu stream is repaired sooner, by heartbeats
+    # piggybacked on its data), plus the NACK response and the drain period. Runs at load 13 with
+    # a 1 s bound held 2,000-15,000 samples per run past it (test_compensator_e2e). The normal
+    # wait is one temperature period (19 ms at 52 Hz) plus the drain period.
+    ParamSpec('max_temperature_wait_s', 4.0, 'With a thermal model, a gyro sample newer than the '
+              'latest temperature waits up to this long for the next one, so its offset is '
+              'interpolated, never held from an older temperature; past it the sample gets the '
+              'latest offset and is counted (0: never wait, the latest offset at once)', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
               'change when model.json has one', read_only=True),
@@ -182,12 +199,16 @@ class ImuCompensatorNode(Node):
         self._diag = CompensationTask(
             CompensationThresholds(stale_after_s=p['stale_after_s'],
                                    temperature_timeout_s=p['temperature_timeout_s'],
-                                   temperature_wait_s=p['temperature_wait_s']),
+                                   temperature_wait_s=p['temperature_wait_s'],
+                                   max_temperature_wait_s=p['max_temperature_wait_s']),
             calibration=self.calibration, calibration_source=self._cal_source,
             out_of_range_action=p['out_of_range_action'], now=time.monotonic())
         self.counts = self._diag.counts
-        # Batches waiting for the first temperature, and since when (monotonic s).
-        self._held, self._held_since = [], None
+        # Samples wait for an offset at or after their stamp (bounded). Before the first offset
+        # (the first temperature, plus the rate window for a model using dT) they are dropped.
+        start_up_s = 0.0 if self.thermal is None else self.thermal.start_up_s
+        self._gate = TemperatureGate(p['max_temperature_wait_s'],
+                                     p['temperature_wait_s'] + start_up_s)
         self._transport = SequenceGapCounter()
         self._frame_id = ''
         self._offset = None
@@ -225,11 +246,11 @@ class ImuCompensatorNode(Node):
                 self._diag.tick_temperature(time.monotonic())
             if self.thermal_accel is not None:
                 self.thermal_accel.add_temperature(stamp_ns, temperature_c)
-        if self._held:
-            self._release_held()
         raws, _, sequence = take_all(self._imu_sub, Imu)
         if raws:
             self.compensate(raws, sequence)
+        elif self.thermal is not None:
+            self._release()  # a new temperature or a timeout lets held samples go
 
     def compensate(self, raws, sequence=()):
         """Decode a batch of raw Imu messages, correct them, publish the results."""
@@ -247,25 +268,19 @@ class ImuCompensatorNode(Node):
         if not self._frame_id:
             self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
         batch = (buf, starts, lengths, stamp_ns, gyro, accel)
-        if self.thermal is not None and (self._held
-                                         or self.thermal.drift_at(stamp_ns[:0]) is None):
-            # Before the first temperature there is no offset: publishing these uncorrected on
-            # a topic named compensated would be a wrong number given calmly. Wait, then drop.
-            self._held.append(batch)
-            self._held_since = self._held_since or time.monotonic()
-            self._release_held()
+        if self.thermal is None:
+            self._emit(*batch)
             return
-        self._emit(*batch)
+        # Before the first temperature there is no offset: publishing these uncorrected on a
+        # topic named compensated would be a wrong number given calmly (the gate drops them after
+        # temperature_wait_s); after it, samples wait for a temperature at or after their stamp.
+        self._gate.push(batch, stamp_ns, time.monotonic())
+        self._release()
 
-    def _release_held(self):
-        if self.thermal.drift_at(self._held[0][3][:0]) is not None:
-            held, self._held, self._held_since = self._held, [], None
-            for batch in held:
-                self._emit(*batch)
-        elif time.monotonic() - self._held_since > (self._p['temperature_wait_s']
-                                                    + self.thermal.start_up_s):
-            self.counts['uncorrected'] += sum(b[3].size for b in self._held)
-            self._held, self._held_since = [], None
+    def _release(self):
+        for batch, i, j, _ in self._gate.release(self.thermal.offset_stamp_ns, time.monotonic()):
+            buf, starts, lengths, stamp_ns, gyro, accel = batch
+            self._emit(buf, starts[i:j], lengths[i:j], stamp_ns[i:j], gyro[i:j], accel[i:j])
 
     def _emit(self, buf, starts, lengths, stamp_ns, gyro, accel):
         if self.thermal is not None:
@@ -282,12 +297,17 @@ class ImuCompensatorNode(Node):
             publish(raw)
         self.counts['published'] += stamp_ns.size
 
-    def diagnostics(self):
-        """Build the ``DiagnosticArray`` of the current state (one status, see the task)."""
+    def diagnostics(self, record=False):
+        """
+        Build the ``DiagnosticArray`` of the current state (one status, see the task).
+
+        ``record``: this status is published, so the late samples it reports are not reported
+        again (the periodic timer passes True).
+        """
         status = self._diag.run(
             time.monotonic(), thermal=self.thermal, thermal_accel=self.thermal_accel,
-            offset=self._offset, accel_offset=self._accel_offset,
-            waiting=sum(b[3].size for b in self._held), transport_missing=self._transport.missing)
+            offset=self._offset, accel_offset=self._accel_offset, hold=self._gate,
+            transport_missing=self._transport.missing, record=record)
         hardware_id = self._p['hardware_id'] or self._frame_id or 'unknown'
         return diagnostic_array(self.get_clock().now().to_msg(), [diagnostic_status(
             self._status_name, hardware_id, bytes([status.level_byte]), status.message,
@@ -295,7 +315,7 @@ class ImuCompensatorNode(Node):
 
     def publish_diagnostics(self):
         """Publish :meth:`diagnostics` on ``/diagnostics``."""
-        self._diag_pub.publish(self.diagnostics())
+        self._diag_pub.publish(self.diagnostics(record=True))
 
 
 def main(args=None):

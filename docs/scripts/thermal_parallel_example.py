@@ -56,12 +56,13 @@ from pathlib import Path
 from gyro_noise_ros.app.thermal import bandwidth_cell
 from gyro_noise_ros.thermal import report
 from gyro_noise_ros.thermal.elman import fit_drift
-from gyro_noise_ros.thermal.metrics import evaluate_method, RAD2DEG
+from gyro_noise_ros.thermal.metrics import evaluate_method
 from gyro_noise_ros.thermal.parallel import block_means, ParallelModel
 from gyro_noise_ros.thermal.run import temperature_rate_c_s, ThermalRun
 from gyro_noise_ros.thermal.simulate import make_profile, simulate_pair
 from gyro_noise_ros.thermal.tfpf import tfpf
 from gyro_noise_ros.thermal.vmd import vmd
+from gyro_noise_ros.units import RAD_TO_DEG
 import numpy as np
 import scipy.signal
 
@@ -267,7 +268,8 @@ def main():
         part2(model, test, args.figures)
     if '3' in args.parts:
         part3(model, args.figures)
-    print(f'(units: ARW from deg/sqrt(h) x 60; the tool in rad/s inside, {RAD2DEG:.4f} deg/rad)')
+    print(f'(units: ARW from deg/sqrt(h) x 60; the tool in rad/s inside, '
+          f'{RAD_TO_DEG:.4f} deg/rad)')
 
 
 if __name__ == '__main__':

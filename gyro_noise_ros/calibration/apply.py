@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ParameterError
+from ..units import STANDARD_GRAVITY_M_S2
 
 #: Key -> (number of values, unit); the keys of ``calibration.yaml`` and of the node parameters.
 KEYS = {
@@ -53,9 +54,6 @@ KEYS = {
 #: few percent of the identity (condition number about 1.1 at most); 10 already means scale errors
 #: of tens of percent, i.e. a wrong file, not a sensor.
 MAX_CONDITION = 10.0
-
-#: Value of ``calibration_gravity_m_s2`` when absent (standard gravity).
-STANDARD_GRAVITY_M_S2 = 9.80665
 
 
 @dataclass(frozen=True)

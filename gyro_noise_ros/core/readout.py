@@ -86,6 +86,7 @@ import scipy.stats
 
 from .allan import fit_noise_terms
 from ..errors import InputDataError, ParameterError
+from ..units import RAD_TO_DEG, S_PER_H
 
 __all__ = ['AdevFloor', 'AllanReadout', 'B_FACTOR', 'BAND_LIMITED_SLOPE', 'MAX_TAU_FRACTION',
            'QUANTIZATION_SLOPE', 'SIGNIFICANCE', 'WHITE_SLOPE_TOLERANCE', 'adev_at', 'adev_floor',
@@ -109,8 +110,6 @@ B_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 #: Fit-quality limits (relative ADEV error).
 POOR_MAX_ERROR = 0.25
 POOR_RMS = 0.20
-
-_DEG = 180.0 / math.pi
 
 
 def _num(v):
@@ -218,19 +217,19 @@ class AllanReadout:
         out['arw_tau_range_s'] = [_num(v) for v in self.arw_tau_range_s]
         for key in ('bias_stability', 'bias_stability_ci_low', 'bias_stability_ci_high'):
             v = getattr(self, f'{key}_rad_s')
-            out[f'{key}_deg_s'] = _num(v * _DEG)
-            out[f'{key}_deg_h'] = _num(v * _DEG * 3600.0)
-        out['bias_instability_deg_h'] = _num(self.bias_instability_rad_s * _DEG * 3600.0)
+            out[f'{key}_deg_s'] = _num(v * RAD_TO_DEG)
+            out[f'{key}_deg_h'] = _num(v * RAD_TO_DEG * S_PER_H)
+        out['bias_instability_deg_h'] = _num(self.bias_instability_rad_s * RAD_TO_DEG * S_PER_H)
         for key in ('arw', 'arw_ci_low', 'arw_ci_high'):
             # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
-            out[f'{key}_deg_per_sqrt_h'] = _num(getattr(self, f'{key}_rad_per_sqrt_s') * _DEG
-                                                * 60.0)
-        out['adev_1s_deg_s'] = _num(self.adev_1s_rad_s * _DEG)
+            out[f'{key}_deg_per_sqrt_h'] = _num(getattr(self, f'{key}_rad_per_sqrt_s')
+                                                * RAD_TO_DEG * 60.0)
+        out['adev_1s_deg_s'] = _num(self.adev_1s_rad_s * RAD_TO_DEG)
         for key in ('rate_random_walk', 'rate_random_walk_bound'):
             # rad/s/sqrt(s) -> deg/h/sqrt(h): 3600 per (s -> h) and 60 per sqrt(s) -> sqrt(h)
             out[f'{key}_deg_per_h_sqrt_h'] = _num(getattr(self, f'{key}_rad_per_s_sqrt_s')
-                                                  * _DEG * 3600.0 * 60.0)
-        out['quantization_deg'] = _num(self.quantization_rad * _DEG)
+                                                  * RAD_TO_DEG * S_PER_H * 60.0)
+        out['quantization_deg'] = _num(self.quantization_rad * RAD_TO_DEG)
         return out
 
     def kalibr(self):

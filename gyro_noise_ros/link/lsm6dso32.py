@@ -42,8 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-
-STANDARD_GRAVITY = 9.80665
+from ..units import STANDARD_GRAVITY_M_S2
 
 GYRO_FULL_SCALES_DPS = (125, 250, 500, 1000, 2000)
 ACCEL_FULL_SCALES_G = (4, 8, 16, 32)
@@ -165,7 +164,7 @@ def accel_sensitivity_m_s2_per_lsb(fs_g):
         m/s^2 per LSB (datasheet mg/LSB times 9.80665e-3).
 
     """
-    return _ACCEL_MG_PER_LSB[check_accel_fs(fs_g)] * 1e-3 * STANDARD_GRAVITY
+    return _ACCEL_MG_PER_LSB[check_accel_fs(fs_g)] * 1e-3 * STANDARD_GRAVITY_M_S2
 
 
 def temperature_c(raw):

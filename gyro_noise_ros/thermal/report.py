@@ -39,12 +39,13 @@ import re
 
 import numpy as np
 
+from ..units import RAD_TO_DEG
+
 __all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
            'plot_allan', 'plot_bandwidth', 'plot_before_after', 'plot_drift', 'plot_mode_classes',
            'plot_modes', 'plot_mopso', 'plot_network', 'plot_output', 'plot_run', 'plot_steps',
            'parallel_figures', 'table_markdown', 'bias_stability_cell']
 
-DEG = 180.0 / math.pi
 AXES = 'xyz'
 #: Points per trace in time plots (longer runs are reduced to min/max envelopes of blocks).
 _MAX_POINTS = 4000
@@ -132,9 +133,9 @@ def plot_run(path, run):
     panels[0].plot(*_thin(h, run.temperature_c), color='tab:red', lw=0.8)
     panels[0].set_ylabel('temperature (degC)')
     for a, panel in enumerate(panels[1:]):
-        panel.plot(*_thin(h, run.gyro_rad_s[:, a] * DEG), lw=0.4, color='0.5')
+        panel.plot(*_thin(h, run.gyro_rad_s[:, a] * RAD_TO_DEG), lw=0.4, color='0.5')
         tm, ym = _window_means(run.t_s, run.gyro_rad_s[:, a], 60.0)
-        panel.plot(tm / 3600.0, ym * DEG, color='k', lw=1.0, label='60-s means')
+        panel.plot(tm / 3600.0, ym * RAD_TO_DEG, color='k', lw=1.0, label='60-s means')
         panel.set_ylabel(f'{AXES[a]} (deg/s)')
         panel.legend(fontsize=7, loc='upper right')
     panels[-1].set_xlabel('time (h)')
@@ -169,11 +170,11 @@ def plot_output(path, run, processed, *, label):
     zoom = slice(mid, min(mid + int(10 * run.rate_hz), run.t_s.size))
     for a in range(3):
         left, right = panels[a]
-        left.plot(*_thin(h, run.gyro_rad_s[:, a] * DEG), lw=0.4, color='0.6', label='raw')
-        left.plot(*_thin(h, processed[:, a] * DEG), lw=0.4, color='tab:blue', label=label)
+        left.plot(*_thin(h, run.gyro_rad_s[:, a] * RAD_TO_DEG), lw=0.4, color='0.6', label='raw')
+        left.plot(*_thin(h, processed[:, a] * RAD_TO_DEG), lw=0.4, color='tab:blue', label=label)
         left.set_ylabel(f'{AXES[a]} (deg/s)')
-        right.plot(run.t_s[zoom], run.gyro_rad_s[zoom, a] * DEG, lw=0.6, color='0.6')
-        right.plot(run.t_s[zoom], processed[zoom, a] * DEG, lw=0.8, color='tab:blue')
+        right.plot(run.t_s[zoom], run.gyro_rad_s[zoom, a] * RAD_TO_DEG, lw=0.6, color='0.6')
+        right.plot(run.t_s[zoom], processed[zoom, a] * RAD_TO_DEG, lw=0.8, color='tab:blue')
         right.set_xlabel('time (s), 10-s zoom')
     panels[0][0].legend(fontsize=7, loc='upper right')
     panels[-1][0].set_xlabel('time (h)')
@@ -209,12 +210,12 @@ def plot_drift(path, run, processed, *, label):
     _, temp_m = _window_means(run.t_s, run.temperature_c, 60.0)
     for a in range(3):
         left, right = panels[a]
-        left.plot(tm / 3600, raw_m[:, a] * DEG, color='0.4', lw=1.0, label='raw')
-        left.plot(tm / 3600, rem_m[:, a] * DEG, color='tab:red', lw=1.0, label='removed')
-        left.plot(tm / 3600, proc_m[:, a] * DEG, color='tab:blue', lw=1.0, label='residual')
+        left.plot(tm / 3600, raw_m[:, a] * RAD_TO_DEG, color='0.4', lw=1.0, label='raw')
+        left.plot(tm / 3600, rem_m[:, a] * RAD_TO_DEG, color='tab:red', lw=1.0, label='removed')
+        left.plot(tm / 3600, proc_m[:, a] * RAD_TO_DEG, color='tab:blue', lw=1.0, label='residual')
         left.set_ylabel(f'{AXES[a]} 60-s mean (deg/s)')
-        right.plot(temp_m, raw_m[:, a] * DEG, '.', ms=2, color='0.4')
-        right.plot(temp_m, rem_m[:, a] * DEG, '.', ms=2, color='tab:red')
+        right.plot(temp_m, raw_m[:, a] * RAD_TO_DEG, '.', ms=2, color='0.4')
+        right.plot(temp_m, rem_m[:, a] * RAD_TO_DEG, '.', ms=2, color='tab:red')
         right.set_xlabel('temperature (degC)')
     panels[0][0].legend(fontsize=7)
     panels[-1][0].set_xlabel('time (h)')
@@ -245,7 +246,7 @@ def plot_allan(path, curves, *, title):
     for a, panel in enumerate(panels):
         for label, per_axis in curves.items():
             tau, adev = per_axis[AXES[a]]
-            panel.loglog(tau, np.asarray(adev) * DEG * 3600.0, lw=1.1, label=label)
+            panel.loglog(tau, np.asarray(adev) * RAD_TO_DEG * 3600.0, lw=1.1, label=label)
         panel.axvline(1.0, color='0.7', lw=0.6, ls=':')
         panel.set_xlabel('tau (s)')
         panel.set_ylabel(f'Allan deviation {AXES[a]} (deg/h)')
@@ -485,13 +486,13 @@ def plot_modes(path, axes, *, title):
                                squeeze=False)
     for a, ax in enumerate(axes):
         col = panels[:, a]
-        col[0].plot(ax['t_h'], np.asarray(ax['input']) * DEG, lw=0.4, color='k')
+        col[0].plot(ax['t_h'], np.asarray(ax['input']) * RAD_TO_DEG, lw=0.4, color='k')
         col[0].set_ylabel(f'{AXES[a]} input (deg/s)', fontsize=7)
         col[0].set_title(f'axis {AXES[a]}', fontsize=9)
         labelled = zip(ax['modes'], ax['center_freqs_hz'], ax['classes'])
         for i, (mode, f_hz, cls) in enumerate(labelled):
             panel = col[i + 1]
-            panel.plot(ax['t_h'], np.asarray(mode) * DEG, lw=0.4,
+            panel.plot(ax['t_h'], np.asarray(mode) * RAD_TO_DEG, lw=0.4,
                        color=_CLASS_COLOURS.get(cls, 'tab:blue'))
             panel.set_ylabel(f'IMF{i + 1} (deg/s)', fontsize=7)
             panel.text(0.01, 0.95, f'{cls}, centre {f_hz:.3g} Hz', transform=panel.transAxes,
@@ -539,13 +540,14 @@ def plot_before_after(path, axes, *, title, before, after):
     fig, panels = plt.subplots(3, 2, figsize=(12, 8), gridspec_kw={'width_ratios': [3, 2]})
     for a, ax in enumerate(axes):
         left, right = panels[a]
-        left.plot(ax['t_h'], np.asarray(ax['before']) * DEG, lw=0.4, color='0.6', label=before)
-        left.plot(ax['t_h'], np.asarray(ax['after']) * DEG, lw=0.4, color='tab:blue',
+        left.plot(ax['t_h'], np.asarray(ax['before']) * RAD_TO_DEG, lw=0.4, color='0.6',
+                  label=before)
+        left.plot(ax['t_h'], np.asarray(ax['after']) * RAD_TO_DEG, lw=0.4, color='tab:blue',
                   label=after)
         left.set_ylabel(f'{AXES[a]} {ax["name"]} (deg/s)', fontsize=8)
         zt = np.asarray(ax['zoom_t_s'])
-        right.plot(zt, np.asarray(ax['zoom_before']) * DEG, lw=0.6, color='0.6')
-        right.plot(zt, np.asarray(ax['zoom_after']) * DEG, lw=0.9, color='tab:blue')
+        right.plot(zt, np.asarray(ax['zoom_before']) * RAD_TO_DEG, lw=0.6, color='0.6')
+        right.plot(zt, np.asarray(ax['zoom_after']) * RAD_TO_DEG, lw=0.9, color='tab:blue')
         span = zt[-1] - zt[0] if zt.size > 1 else 0.0
         right.set_xlabel(f'time (s), {span:.3g}-s zoom')
         right.set_ylabel(f'{AXES[a]} (deg/s)', fontsize=8)
@@ -582,7 +584,7 @@ def plot_network(path, axes, *, title):
         for c, cell in enumerate(row):
             panel = panels[a][c]
             for label, values, colour in cell['lines']:
-                panel.plot(cell['t_h'], np.asarray(values) * DEG, lw=1.0, color=colour,
+                panel.plot(cell['t_h'], np.asarray(values) * RAD_TO_DEG, lw=1.0, color=colour,
                            label=label)
             panel.set_ylabel(f'{AXES[a]} (deg/s)')
             panel.set_title(cell['title'], fontsize=8)

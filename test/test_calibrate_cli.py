@@ -124,7 +124,8 @@ def test_out_in_the_way_is_exit_6_before_reading_anything(tmp_path, capsys, wher
 
 def test_rate_from_bursty_host_stamps_is_the_mean_rate_not_the_median_step():
     # The MPU6050 record's host stamps come in bursts: median step 2 ms, true mean rate
-    # 99.32 Hz (issue 11). The calibration tools use the package's one estimator.
+    # 99.32 Hz (the median would say 500 Hz). The calibration tools use the package's one
+    # estimator.
     data = np.loadtxt(real_data('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'),
                       delimiter=',', skiprows=1, usecols=0)
     stamps = np.round(data * 1e9).astype(np.int64)

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Hidden-effect proof of the discrepancy workflow (issue 5).
+Hidden-effect proof of the discrepancy workflow: known effects injected, found again.
 
 Records come from :mod:`gyro_noise_ros.explain.synthetic`: the baseline and the effect parameters
 are drawn at random from the ranges documented there; the test asserts that the first named effect

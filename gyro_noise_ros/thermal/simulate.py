@@ -64,7 +64,7 @@ import numba
 import numpy as np
 
 from .run import ThermalRun
-from ..core._kernels import JIT_OPTIONS
+from ..core.jit import JIT_OPTIONS
 from ..core.simulate import gauss_markov_avar, GaussMarkov
 from ..errors import ParameterError
 from ..units import DEG_TO_RAD, MG_TO_M_S2, STANDARD_GRAVITY_M_S2

@@ -38,6 +38,7 @@ from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFA
                                       sine_dwell, sine_sweep)
 from ..errors import InputDataError, ParameterError
 from ..outputs import atomic_write_text, staged_output
+from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
 
 SIDES = ('before', 'after')
@@ -452,10 +453,7 @@ def plot(path, params, label, side):
         The record and its analysis.
 
     """
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     scale, unit = params.display
     t, x, result = side.t_s, side.x, side.analysis
     fig, (pa, pb) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -482,9 +480,7 @@ def plot(path, params, label, side):
         pb.legend(fontsize=8)
     for panel in (pa, pb):
         panel.grid(True, alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110, tight=True)
 
 
 def write_excitation(result, out_dir):

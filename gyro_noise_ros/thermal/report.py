@@ -39,6 +39,7 @@ import re
 
 import numpy as np
 
+from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG
 
 __all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
@@ -51,15 +52,6 @@ AXES = 'xyz'
 _MAX_POINTS = 4000
 #: Points per trace of the narrower panels of the method figures (two per pixel column).
 PANEL_POINTS = 1600
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use('Agg', force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def envelope(t, y, max_points=_MAX_POINTS):
@@ -103,14 +95,6 @@ def _window_means(t, y, window_s):
             y[:k * n].reshape(k, n, *y.shape[1:]).mean(axis=1))
 
 
-def _save(fig, plt, path, *, tight=True):
-    if tight:
-        fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return Path(path)
-
-
 def plot_run(path, run):
     """
     Plot temperature and raw angular rate against time (paper Figure 10).
@@ -127,7 +111,7 @@ def plot_run(path, run):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(4, 1, figsize=(9, 8), sharex=True)
     h = run.t_s / 3600.0
     panels[0].plot(*_thin(h, run.temperature_c), color='tab:red', lw=0.8)
@@ -140,7 +124,7 @@ def plot_run(path, run):
         panel.legend(fontsize=7, loc='upper right')
     panels[-1].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: temperature and raw gyro output (cf. paper Fig. 10)', fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_output(path, run, processed, *, label):
@@ -163,7 +147,7 @@ def plot_output(path, run, processed, *, label):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 2, figsize=(11, 8), gridspec_kw={'width_ratios': [3, 1]})
     h = run.t_s / 3600.0
     mid = run.t_s.size // 2
@@ -179,7 +163,7 @@ def plot_output(path, run, processed, *, label):
     panels[0][0].legend(fontsize=7, loc='upper right')
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: raw and {label} output (cf. paper Fig. 18)', fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_drift(path, run, processed, *, label):
@@ -202,7 +186,7 @@ def plot_drift(path, run, processed, *, label):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 2, figsize=(11, 8))
     tm, raw_m = _window_means(run.t_s, run.gyro_rad_s, 60.0)
     _, rem_m = _window_means(run.t_s, run.gyro_rad_s - processed, 60.0)
@@ -220,7 +204,7 @@ def plot_drift(path, run, processed, *, label):
     panels[0][0].legend(fontsize=7)
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: drift removed by {label} (cf. paper Fig. 17)', fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_allan(path, curves, *, title):
@@ -241,7 +225,7 @@ def plot_allan(path, curves, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 3, figsize=(14, 4.6))
     for a, panel in enumerate(panels):
         for label, per_axis in curves.items():
@@ -253,7 +237,7 @@ def plot_allan(path, curves, *, title):
         panel.grid(True, which='both', alpha=0.3)
     panels[0].legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_bandwidth(path, responses, *, title, small=None):
@@ -278,7 +262,7 @@ def plot_bandwidth(path, responses, *, title, small=None):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
     small = small or {}
 
@@ -314,7 +298,7 @@ def plot_bandwidth(path, responses, *, title, small=None):
         p.grid(True, which='both', alpha=0.3)
     panels[0].legend(fontsize=7, ncol=2)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_steps(path, steps, *, title):
@@ -335,7 +319,7 @@ def plot_steps(path, steps, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 2, figsize=(12, 4.5))
     zoom = 0.5
     for label, per_axis in steps.items():
@@ -353,7 +337,7 @@ def plot_steps(path, steps, *, title):
     panels[0].set_ylabel('response / step (ratio)')
     panels[0].legend(fontsize=7, ncol=2)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 _CLASS_COLOURS = {'drift': 'tab:red', 'mixed': 'tab:orange', 'noise': 'tab:gray'}
@@ -386,7 +370,7 @@ def plot_mode_classes(path, info, *, title):
         return None
     if len(rows) != 3 or any(e.size != len(c) for e, c, _ in rows):
         return None
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 3, figsize=(14, 4.2))
     for a, (panel, (ent, classes, freqs)) in enumerate(zip(panels, rows)):
         idx = np.arange(1, ent.size + 1)
@@ -401,7 +385,7 @@ def plot_mode_classes(path, info, *, title):
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
     panels[0].legend(handles, list(_CLASS_COLOURS), fontsize=7)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_mopso(path, axes, *, title):
@@ -424,7 +408,7 @@ def plot_mopso(path, axes, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.ticker import MaxNLocator
 
     fig, panels = plt.subplots(2, 3, figsize=(14, 7.5))
@@ -457,7 +441,7 @@ def plot_mopso(path, axes, *, title):
         for panel in (front, space):
             panel.grid(True, alpha=0.3)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_modes(path, axes, *, title):
@@ -480,7 +464,7 @@ def plot_modes(path, axes, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     rows = 1 + max(len(ax['modes']) for ax in axes)
     fig, panels = plt.subplots(rows, 3, figsize=(14, 1.6 + 0.95 * rows), sharex='col',
                                squeeze=False)
@@ -511,7 +495,7 @@ def plot_modes(path, axes, *, title):
     top = 1.0 - 0.75 / fig.get_figheight()
     fig.subplots_adjust(left=0.06, right=0.99, bottom=0.55 / fig.get_figheight(), top=top,
                         wspace=0.25, hspace=0.35)
-    return _save(fig, plt, path, tight=False)
+    return save_figure(fig, path, dpi=100)
 
 
 def plot_before_after(path, axes, *, title, before, after):
@@ -536,7 +520,7 @@ def plot_before_after(path, axes, *, title, before, after):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 2, figsize=(12, 8), gridspec_kw={'width_ratios': [3, 2]})
     for a, ax in enumerate(axes):
         left, right = panels[a]
@@ -554,7 +538,7 @@ def plot_before_after(path, axes, *, title, before, after):
     panels[0][0].legend(fontsize=7, loc='upper right')
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_network(path, axes, *, title):
@@ -576,7 +560,7 @@ def plot_network(path, axes, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     cols = max(len(row) for row in axes)
     fig, panels = plt.subplots(3, cols, figsize=(6 * cols + 1, 8), squeeze=False,
                                sharex=True)
@@ -593,7 +577,7 @@ def plot_network(path, axes, *, title):
     for panel in panels[-1]:
         panel.set_xlabel('time (h)')
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def _rms_deg_s(x):

@@ -1560,9 +1560,10 @@ def write_export(result, out_dir):
 HELDOUT_PAIRS = (('heating', 'heating'), ('heating', 'cooling'), ('heating', 'cycle'),
                  ('staircase', 'cool_reheat'), ('cycle', 'sine'))
 #: Methods of the held-out table: (label, --method, options).
-HELDOUT_METHODS = (('poly3', 'poly3', {}), ('linear_tdt', 'linear_tdt', {}),
-                   ('linear_tdt rate_degree=3', 'linear_tdt', {'rate_degree': 3}),
-                   ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
+HELDOUT_METHODS: tuple[tuple[str, str, dict[str, object]], ...] = (
+    ('poly3', 'poly3', {}), ('linear_tdt', 'linear_tdt', {}),
+    ('linear_tdt rate_degree=3', 'linear_tdt', {'rate_degree': 3}),
+    ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
 
 
 def heldout_scores(*, pairs=HELDOUT_PAIRS, methods=HELDOUT_METHODS, seeds=(1, 2, 3, 4, 5),

@@ -609,7 +609,7 @@ class Excitation:
     axis: str = 'x'
     amplitude: float = 0.3 * STANDARD_GRAVITY_M_S2
     frequency_hz: float = 8.0
-    sweep_to_hz: float = None
+    sweep_to_hz: float | None = None
     sweep_rate_hz_s: float = 0.5
     start_s: float = 0.0
     base: Static = field(default_factory=Static)

@@ -112,7 +112,7 @@ class LinkWindow:
     frames_ok: int = 0
     samples_ok: int = 0
     restarted: bool = False
-    odr_hz: float = None
+    odr_hz: float | None = None
     seconds_since_sample: float = 0.0
     silence_limit_s: float = float('inf')
 

@@ -32,8 +32,9 @@ import pytest
 # Module-level definitions of a unit factor: NAME = 180/pi, pi/180, 9.80665 (with optional
 # annotation). Factors written inline in an expression are not constants and are left alone.
 _DEFINITION = re.compile(
-    r'^[A-Za-z_][A-Za-z0-9_]*\s*(?::[^=]+)?=\s*'
-    r'(?:180(?:\.0*)?\s*/\s*(?:np|numpy|math)\.pi|(?:np|numpy|math)\.pi\s*/\s*180(?:\.0*)?'
+    r'^[A-Za-z_][A-Za-z0-9_]*[ \t]*(?::[^=\n]+)?=[ \t]*'
+    r'(?:180(?:\.0*)?[ \t]*/[ \t]*(?:np|numpy|math)\.pi'
+    r'|(?:np|numpy|math)\.pi[ \t]*/[ \t]*180(?:\.0*)?'
     r'|9\.80665)[ \t]*(?:#.*)?$', re.MULTILINE)
 
 # Modules other helpers were editing when the factors moved (one-line import swaps were not
@@ -79,3 +80,6 @@ def test_the_scan_finds_a_definition():
                  'RAD2DEG: float = 180 / math.pi', 'STANDARD_GRAVITY = 9.80665'):
         assert _DEFINITION.search(line), line
     assert not _DEFINITION.search('x = y * 180.0 / np.pi')
+    # a match never runs over a line end (a docstring line with a colon above a definition)
+    assert _DEFINITION.search('of :class:`X` and\n_RAD_TO_DEG = 180.0 / math.pi').group(0) == (
+        '_RAD_TO_DEG = 180.0 / math.pi')

@@ -149,7 +149,7 @@ def compare_outputs(a, b):
 
     Every file must be bit-identical, with two stated exceptions that are not results: keys that
     only the new run's summary.json has, holding null (options added since, left unset); and
-    the criterion curves of curves.npz, which issue 12 asks to equal the oracle to 1e-9 (the
+    the criterion curves of curves.npz, which must equal the oracle to 1e-9 relative (the
     default algorithm returns the fast curves with the exact values where a minimum can be):
     compared to rtol 1e-9, and their minima (the reported values) bit for bit.
     """
@@ -194,7 +194,7 @@ def compare_outputs(a, b):
                         same = False
                 if same and not bitwise:
                     same = worst <= 1e-9
-                    note = (f'criterion curves within {worst:.1e} relative (issue 12: 1e-9), '
+                    note = (f'criterion curves within {worst:.1e} relative (required: 1e-9), '
                             'minima bit-identical')
         rows.append(('curves.npz (every array)', same, note))
     return rows

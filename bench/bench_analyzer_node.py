@@ -33,7 +33,7 @@ stime) over the publishing window:
    the baselines).
 
 Received counts come from the subscriber (its exit line; the analyzer's ``Samples received`` on
-``/diagnostics``, read here). Targets (issue 4): ingestion <= 25 % of one core at 6.66 kHz; no loss
+``/diagnostics``, read here). Targets: ingestion <= 25 % of one core at 6.66 kHz; no loss
 at 4x.
 
 Run: ``.venv/bin/python bench/bench_analyzer_node.py [--seconds 10] [--rates 6660,26640]``.

@@ -15,7 +15,7 @@
 """
 CPU share of ``imu_compensator`` at 6.66 kHz, as a ratio to the driver's own cost in the same run.
 
-Issue 8/9 budget: calibration + thermal compensation at the full rate within 15 % of one core.
+Budget: calibration + thermal compensation at the full rate within 15 % of one core.
 One chain, emulator (real time, TCP loopback) -> ``lsm6dso32_driver`` -> ``imu_compensator`` ->
 a raw subscriber in this process draining ``imu/data_compensated`` every 5 ms, is started for
 each compensator configuration; the driver's and the compensator's CPU (utime + stime from

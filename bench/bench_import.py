@@ -44,7 +44,7 @@ varies from round to round; each round's time is printed too. ``read only``: ite
 reading share of an import). Peak RSS:
 each (path, log size) imports in a fresh process; ``VmHWM`` of that process. ``--baseline PATH``
 adds the importer of older code (e.g. ``git worktree add --detach /tmp/base 12f9979``, the code
-issue 12 was filed against) run in a fresh process with ``PYTHONPATH=PATH``, in sqlite3 (its
+before the importer's speed-up) run in a fresh process with ``PYTHONPATH=PATH``, in sqlite3 (its
 default) and MCAP, in the same rounds; its second ``import_logs`` call is timed (the first warms
 up, as the warm-up below does for this code).
 

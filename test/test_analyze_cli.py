@@ -269,7 +269,7 @@ def test_reference_adds_health_verdicts(tmp_path):
     ref_z, h1_z = doc['bags'][0]['axes']['z'], doc['bags'][1]['axes']['z']
     # The reference judged against itself is within every tolerance; the ramp is far beyond it.
     assert ref_z['health']['level'] == 'OK'
-    # The reference (white noise) has a statistically-zero drift: no ratio is formed (issue 11);
+    # The reference (white noise) has a statistically-zero drift: no ratio of it is formed;
     # the two slopes are still compared, in standard errors of both.
     assert h1_z['health']['level'] == 'ERROR'
     assert 'standard errors of both' in h1_z['health']['message']
@@ -362,7 +362,8 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
     path = sqlite_bag[0]
     args = [str(path), '--axis', 'x', '--no-figures', '--no-allan', '--jobs', '1', *FAST[:-1]]
     assert main([*args, '--out', str(tmp_path / 'a')]) == 0
-    # stderr is not a terminal under pytest: plain lines, one per 10 % (issue 11); one batch here.
+    # stderr is not a terminal under pytest: plain lines, one per 10 % (no carriage returns in a
+    # log); one batch here.
     err = capsys.readouterr().err
     assert err.startswith('seq_ref: 100% 1877/1877 messages, 3 chunks') and err.count('\n') == 1
     assert '\r' not in err

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-gyro_noise_analyze's pipeline changes for speed (issue 12 item 2) change no output.
+gyro_noise_analyze's speed-ups (worker processes, warmed kernels, fast criteria) change no output.
 
 * --jobs 1 and --jobs 2 write the same files (the workers inherit the warmed identifier; more
   chunks in flight);

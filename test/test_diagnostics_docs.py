@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-``docs/diagnostics.md`` lists every ``/diagnostics`` key the nodes publish (issue 11 item 11).
+``docs/diagnostics.md`` lists every ``/diagnostics`` key the nodes publish, and no other.
 
 The nodes run in-process: the driver unconfigured and streaming-less (its key set is fixed), the
 analyzer before any data and after a few chunks of a bag (its key set grows with the data).

@@ -14,8 +14,8 @@
 """
 ``lsm6dso32_driver`` as a ROS user meets it: QoS, lifecycle services, start-up errors, duplicates.
 
-Issue 10 items 1 and 5, issue 11 item 11. The driver runs in-process on a private context and
-domain (see test_driver_node, whose harness and fake board are reused).
+The driver runs in-process on a private context and domain (see test_driver_node, whose harness
+and fake board are reused).
 """
 
 import os

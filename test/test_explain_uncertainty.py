@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Standard errors and 95 % intervals of the explain effect parameters (issue 11 item 9).
+Standard errors and 95 % intervals of the explain effect parameters.
 
 Records with known effect parameters come from :mod:`gyro_noise_ros.explain.synthetic`. The
 coverage tests fit the effects with the fitters' own estimators and bootstrap the model with the

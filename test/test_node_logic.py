@@ -14,7 +14,8 @@
 """
 ROS-free tests of the pure pieces the nodes call: counters, link verdict, items, monitor lines.
 
-These moved out of the node modules (issue 13); the node tests still run them end to end.
+These live outside the node modules so they run without ROS; the node tests still run them end
+to end.
 """
 
 from dataclasses import fields

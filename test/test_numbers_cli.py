@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Bad input that used to pass silently (issue 11), and the inputs both tools read."""
+"""Bad input that once passed silently, and the inputs both tools read."""
 
 import json
 
@@ -268,7 +268,7 @@ def test_explain_runs_all_axes_in_one_report_on_a_minute_at_250_hz(tmp_path, cap
     assert all(f'axis {a}:' in report for a in 'xyz')
     assert '(axis_z/overview.png)' in report and (out / 'axis_z' / 'overview.png').is_file()
     from matplotlib.image import imread
-    # 8 signature panels must be readable: at least 1600 px wide (issue 11).
+    # 8 signature panels must be readable: at least 1600 px wide (200 px per panel).
     assert imread(out / 'axis_z' / 'overview.png').shape[1] >= 1600
     checked = 0
     for axis in 'xyz':

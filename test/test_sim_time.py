@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-The analyzer under ``use_sim_time`` with a late, paused or absent ``/clock`` (issue 10 item 6).
+The analyzer under ``use_sim_time`` with a late, paused or absent ``/clock``.
 
 What ``ros2 bag play --clock`` does, written as a test publisher (``ros2 bag`` is not on PyPI):
 ``/clock`` once at the first stamp, then paused, while Imu messages stamped on the recording's

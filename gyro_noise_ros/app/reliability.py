@@ -53,13 +53,13 @@ from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, TERMS, unit_of
 from ..errors import BagError, InputDataError, ParameterError
 from ..outputs import atomic_write_text, staged_output
+from ..units import RAD_TO_DEG
 
 PARTS = ('before_calibration', 'before_static', 'after_calibration', 'after_static')
 SIDES = ('before', 'after')
 SENSORS = ('accel', 'gyro')
-_DEG = 180.0 / math.pi
 #: Printed unit and SI-to-printed factor of each channel family.
-UNITS = {'m_s2': ('m/s^2', 1.0), 'rad_s': ('deg/s', _DEG)}
+UNITS = {'m_s2': ('m/s^2', 1.0), 'rad_s': ('deg/s', RAD_TO_DEG)}
 TERM_UNITS = {
     'white_noise': ('{u}_per_sqrt_hz', '{p}/sqrt(Hz)'),
     'bias_stability': ('{u}', '{p}'),
@@ -870,10 +870,10 @@ def _calibration_rows(doc):
             for side in SIDES:
                 d = g[side]
                 cells.append('not given' if d is None else
-                             _pm(d['bias_rad_s'][i], d['bias_sigma_rad_s'][i], '.5f', _DEG))
+                             _pm(d['bias_rad_s'][i], d['bias_sigma_rad_s'][i], '.5f', RAD_TO_DEG))
             ch = g.get('bias_change_rad_s')
             cells.append('n/a' if not ch else _pm(ch[i], g['bias_change_sigma_rad_s'][i],
-                                                  '+.5f', _DEG))
+                                                  '+.5f', RAD_TO_DEG))
             for side in SIDES:
                 d = g[side]
                 est = d is not None and d['estimated'] is not None and d['estimated'][i][i]
@@ -935,8 +935,8 @@ def _indicator_rows(doc):
             f'{u(ub, "accel_scale_factor_std", 100, ".3f")} | '
             f'{u(ua, "accel_scale_factor_std", 100, ".3f")} |',
             f'| std of the gyro biases across axes (deg/s) | '
-            f'{u(ub, "gyro_bias_std_rad_s", _DEG, ".5f")} | '
-            f'{u(ua, "gyro_bias_std_rad_s", _DEG, ".5f")} |',
+            f'{u(ub, "gyro_bias_std_rad_s", RAD_TO_DEG, ".5f")} | '
+            f'{u(ua, "gyro_bias_std_rad_s", RAD_TO_DEG, ".5f")} |',
             f'| gravity check, mean abs(a) of the raw dwells (m/s^2) | '
             f'{u(gb, "mean_norm_raw_m_s2", 1, ".4f")} | {u(ga, "mean_norm_raw_m_s2", 1, ".4f")} |',
             f'| gravity check, mean abs(a) of each dwell calibrated by the others (m/s^2) | '

@@ -41,13 +41,13 @@ import numpy as np
 
 from .batch import ImuBatch
 from ..errors import BagError, InputDataError, ParameterError
+from ..units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 
 #: Suffixes read by :class:`TableImuReader`.
 TABLE_SUFFIXES = ('.csv', '.ulg')
 #: ULog topics understood, in order of preference.
 ULOG_TOPICS = ('sensor_combined', 'sensor_gyro')
 
-_G = 9.80665
 _AXES = 'xyz'
 
 
@@ -163,7 +163,7 @@ def _gyro_column(names, axis):
     dps = _col(names, f'gyro_{axis}_dps', f'gyroscope {axis} (deg/s)')
     if rad is None and dps is None:
         return None
-    return (rad, 1.0) if rad is not None else (dps, np.pi / 180.0)
+    return (rad, 1.0) if rad is not None else (dps, DEG_TO_RAD)
 
 
 def csv_gyro_axes(names):
@@ -197,8 +197,8 @@ def _csv_columns(names, path, gyro_axes=_AXES):
         cols[f'g{a}'] = gyro if gyro is not None else (None, 1.0)
         ms2 = col(f'acc_{a}_m_s2', f'accel_{a}_m_s2')
         g = col(f'acc_{a}_g', f'accel_{a}_g', f'accelerometer {a} (g)')
-        cols[f'a{a}'] = ((ms2, 1.0) if ms2 is not None else (g, _G) if g is not None
-                         else (None, 1.0))
+        cols[f'a{a}'] = ((ms2, 1.0) if ms2 is not None
+                         else (g, STANDARD_GRAVITY_M_S2) if g is not None else (None, 1.0))
     return cols
 
 

@@ -61,6 +61,7 @@ import scipy.stats
 
 from . import _kernels_allan as _k
 from ..errors import InputDataError, ParameterError
+from ..units import RAD_TO_DEG, S_PER_H
 
 __all__ = ['AllanAccumulator', 'AllanResult', 'NoiseTerms', 'NoiseTermsCustomary',
            'allan_deviation', 'allan_deviation_values', 'confidence_bounds', 'dense_factors',
@@ -97,7 +98,6 @@ NOISE_TYPE_NAMES = {
 _TERM_NAMES = ('quantization', 'angle_random_walk', 'bias_instability', 'rate_random_walk',
                'rate_ramp')
 _B_FACTOR = 2.0 * math.log(2.0) / math.pi   # AVAR of flicker FM plateau per B^2 (IEEE 952 C.3)
-_RAD2DEG = 180.0 / math.pi
 
 
 @dataclass(frozen=True)
@@ -856,16 +856,16 @@ class NoiseTerms:
 
         """
         return NoiseTermsCustomary(
-            quantization_deg=self.quantization_rad * _RAD2DEG,
+            quantization_deg=self.quantization_rad * RAD_TO_DEG,
             # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
             angle_random_walk_deg_per_sqrt_h=self.angle_random_walk_rad_per_sqrt_s
-            * _RAD2DEG
+            * RAD_TO_DEG
             * 60.0,
-            bias_instability_deg_per_h=self.bias_instability_rad_per_s * _RAD2DEG * 3600.0,
+            bias_instability_deg_per_h=self.bias_instability_rad_per_s * RAD_TO_DEG * S_PER_H,
             rate_random_walk_deg_per_h_sqrt_h=(
-                self.rate_random_walk_rad_per_s_sqrt_s * _RAD2DEG * 3600.0 * 60.0
+                self.rate_random_walk_rad_per_s_sqrt_s * RAD_TO_DEG * S_PER_H * 60.0
             ),
-            rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * _RAD2DEG * 3600.0**2,
+            rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * RAD_TO_DEG * S_PER_H**2,
         )
 
     def kalibr(self):

@@ -85,10 +85,10 @@ from pathlib import Path
 from scipy.special import stdtrit
 
 from .chunks import NOISE_COLOUR_FACTORS, RobustLocation
-from .items import DEG as _DEG
 from .items import fmt as _fmt
 from .items import LEVEL_BYTE, LEVELS, TaskStatus
 from ..errors import InputDataError, ParameterError
+from ..units import RAD_TO_DEG
 
 
 def _threshold(default, description, unit=''):
@@ -365,7 +365,7 @@ def _drift_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
     items = []
     judged = seq.chunks >= th.min_chunks
     drift = seq.drift
-    drift_dph = drift.slope * _DEG * 3600.0
+    drift_dph = drift.slope * RAD_TO_DEG * 3600.0
     sigma = abs(drift.slope) / drift.stderr if drift.stderr and math.isfinite(
         drift.stderr) else float('nan')
     significant = judged and math.isfinite(drift.slope) and (
@@ -393,7 +393,7 @@ def _sequence_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
     """Return the orders, variance and colour of the run and their comparisons (reference)."""
     items = [('Fractional order, variance method', _fmt(seq.alpha_var_mean, 4), 'OK', ''),
              ('Fractional order, correlation method', _fmt(seq.alpha_corr_mean, 4), 'OK', ''),
-             ('Mean variance ((deg/s)^2)', _fmt(seq.mean_variance * _DEG ** 2), 'OK', '')]
+             ('Mean variance ((deg/s)^2)', _fmt(seq.mean_variance * RAD_TO_DEG ** 2), 'OK', '')]
     colour = getattr(seq, 'noise_colour_robust', None)
     if colour is not None:
         items.append((COLOUR_NAME, _fmt(colour.location, 4), 'OK', ''))
@@ -571,7 +571,7 @@ def _compare_drift(seq, reference, th):
     error = th.reference_error_sigma * inflation
     level = 'ERROR' if z > error else 'WARN' if z > warn else 'OK'
     limit = error if level == 'ERROR' else warn
-    per_h = _DEG * 3600.0
+    per_h = RAD_TO_DEG * 3600.0
     return (key, _fmt(z, 3), level,
             f'offset drift {drift.slope * per_h:+.4g} (deg/s)/h differs from the reference '
             f'{ref * per_h:+.4g} (deg/s)/h by {z:.3g} standard errors of both '
@@ -582,9 +582,9 @@ def _compare_drift(seq, reference, th):
 
 def _describe(loc, kind):
     if kind == 'rate':
-        value = f'{loc.location * _DEG:.4g} deg/s'
+        value = f'{loc.location * RAD_TO_DEG:.4g} deg/s'
     elif kind == 'log':
-        value = f'{math.exp(loc.location) * _DEG ** 2:.4g} (deg/s)^2'
+        value = f'{math.exp(loc.location) * RAD_TO_DEG ** 2:.4g} (deg/s)^2'
     else:
         value = f'{loc.location:.3f}'
     if loc.population == 'dominant mode':
@@ -639,7 +639,7 @@ def _compare(spec, mine, ref, th):
         return key, 'n/a', 'OK', f'{name}: no finite chunk values'
     diff = mine.location - ref.location
     if kind == 'rate':
-        value, by = f'{diff * _DEG:+.4g}', f'{abs(diff) * _DEG:.3g} deg/s'
+        value, by = f'{diff * RAD_TO_DEG:+.4g}', f'{abs(diff) * RAD_TO_DEG:.3g} deg/s'
     elif kind == 'log':
         value, by = f'{math.exp(diff):.4g}', f'a factor {math.exp(diff):.3g}'
     else:

@@ -24,8 +24,7 @@ parentheses as diagnostic_msgs conventions want (``'Bias (deg/s)'``); missing nu
 from dataclasses import dataclass
 import math
 
-#: Degrees per radian: SI inside, degrees only at the edges (keys say which).
-DEG = 180.0 / math.pi
+from ..units import RAD_TO_DEG
 
 #: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
 LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
@@ -127,8 +126,8 @@ def last_chunk_items(result) -> list[tuple[str, str]]:
     """
     return [
         ('Last chunk', f'{result.chunk} ({result.status})'),
-        ('Bias (deg/s)', fmt(result.bias_rad_s * DEG)),
-        ('Variance ((deg/s)^2)', fmt(result.variance_rad2_s2 * DEG ** 2)),
+        ('Bias (deg/s)', fmt(result.bias_rad_s * RAD_TO_DEG)),
+        ('Variance ((deg/s)^2)', fmt(result.variance_rad2_s2 * RAD_TO_DEG ** 2)),
         ('Last chunk fractional order, variance method', fmt(result.alpha_var, 3)),
         ('Last chunk fractional order, correlation method', fmt(result.alpha_corr, 3)),
         ('Last chunk f, variance method', fmt(result.f_var)),
@@ -165,13 +164,14 @@ def allan_items(summary) -> list[tuple[str, str]]:
     out = dict.fromkeys(ALLAN_KEYS, 'n/a')
     r = None if summary is None else getattr(summary, 'readout', None)
     if r is not None:
-        out['ADEV at 1 s (deg/s)'] = fmt(r.adev_1s_rad_s * DEG)
+        out['ADEV at 1 s (deg/s)'] = fmt(r.adev_1s_rad_s * RAD_TO_DEG)
         bound = '<=' if r.bias_stability_upper_bound else ''
-        out['Bias stability (deg/s)'] = bound + fmt(r.bias_stability_rad_s * DEG)
+        out['Bias stability (deg/s)'] = bound + fmt(r.bias_stability_rad_s * RAD_TO_DEG)
         out['Bias stability tau (s)'] = fmt(r.bias_stability_tau_s)
         # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
-        out['Angle random walk (deg/sqrt(h))'] = fmt(r.arw_rad_per_sqrt_s * DEG * 60.0)
-        out['Bias instability (deg/h)'] = bound + fmt(r.bias_instability_rad_s * DEG * 3600.0)
+        out['Angle random walk (deg/sqrt(h))'] = fmt(r.arw_rad_per_sqrt_s * RAD_TO_DEG * 60.0)
+        out['Bias instability (deg/h)'] = bound + fmt(
+            r.bias_instability_rad_s * RAD_TO_DEG * 3600.0)
     return list(out.items())
 
 

@@ -42,9 +42,9 @@ import math
 from ..core.items import TaskStatus, worst
 from ..errors import ParameterError
 from ..thermal.live import RANGE_MARGIN, RANGE_NAMES, RANGE_OUTSIDE
+from ..units import RAD_TO_DEG
 
 #: Degrees per radian (the diagnostics show deg/s; SI inside).
-_RAD_TO_DEG = 180.0 / math.pi
 #: Milli-g per m/s^2 (standard gravity 9.80665 m/s^2).
 _M_S2_TO_MG = 1e3 / 9.80665
 
@@ -145,7 +145,7 @@ def calibration_items(calibration, source: str) -> list[tuple[str, str]]:
     """
     cal = calibration
     return [('Calibration source', source),
-            ('Gyro bias (deg/s)', vector_text(cal.gyro.bias, _RAD_TO_DEG)),
+            ('Gyro bias (deg/s)', vector_text(cal.gyro.bias, RAD_TO_DEG)),
             ('Gyro scale factor (%)', vector_text(cal.gyro.scale_factor, 100.0)),
             ('Accelerometer bias (m/s^2)', vector_text(cal.accel.bias)),
             ('Accelerometer scale factor (%)', vector_text(cal.accel.scale_factor, 100.0)),
@@ -282,7 +282,7 @@ class CompensationTask:
             ('Temperature age (s)', 'n/a' if age is None else f'{age:.2f}'),
             ('Temperature range status', 'n/a' if ev.status is None else RANGE_NAMES[ev.status]),
             ('Thermal offset (deg/s)', 'n/a' if offset is None else
-             vector_text(offset, _RAD_TO_DEG)),
+             vector_text(offset, RAD_TO_DEG)),
             ('Temperature messages', str(self.counts['temperatures'])),
             ('Temperature messages rejected', str(ev.rejected)),
             ('Temperature messages beyond range + margin', str(ev.knots_by_status[RANGE_OUTSIDE])),

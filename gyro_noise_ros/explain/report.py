@@ -32,8 +32,8 @@ from .effects import public_params
 from .uncertainty import format_value, PARAMETERS
 from ..errors import OutputError
 from ..outputs import staged_output
+from ..units import RAD_TO_DEG
 
-DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}
 _LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
 # One unit family per figure (deg/s), the unit in every axis label.
@@ -58,8 +58,8 @@ def _untransform(name, values):
 
 def _scale(name):
     if name in ('allan', 'chunk_bias'):
-        return DEG
-    return DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
+        return RAD_TO_DEG
+    return RAD_TO_DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
 
 
 def _plot_one(ax, layout, name, comparisons, labels, colours):
@@ -69,7 +69,7 @@ def _plot_one(ax, layout, name, comparisons, labels, colours):
         xs = np.arange(xs.size)
         xlabel = 'bin (value bins, then lattice phase) (1)'
     elif name == 'histogram':
-        xs = xs * DEG
+        xs = xs * RAD_TO_DEG
         xlabel = 'angular rate (deg/s)'
     else:
         xlabel = f'{label} ({unit or "1"})' if not unit.startswith('(') else f'{label} {unit}'
@@ -359,7 +359,7 @@ def _markdown(result):
             if result.bootstrap else 'Point values only: the bootstrap was off.', '']
     lines += [
         '## Baseline model (paper 000 eqs. 2, 10, 11)', '', '| parameter | value |', '|---|---|',
-        f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * DEG:.5g} deg/s) |',
+        f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * RAD_TO_DEG:.5g} deg/s) |',
         f'| order alpha (variance method) | {base.alpha:.3f} |', f'| f | {base.f:.5g} |',
         f'| sigma_w | {base.sigma_w_rad_s:.4g} rad/s |',
         f'| sigma_nu (white measurement noise) | {base.sigma_nu_rad_s:.4g} rad/s |',

@@ -28,6 +28,7 @@ key/values (run on the timer), returned as a :class:`gyro_noise_ros.core.items.T
 """
 
 from dataclasses import dataclass, field, fields
+from typing import Any, Mapping
 
 from .session import frame_interval_s
 from ..core.items import TaskStatus, worst
@@ -38,7 +39,7 @@ _IDLE = {'unconfigured': 'Unconfigured (lifecycle): the port is closed.',
          'inactive': 'Inactive (lifecycle): the link is up, samples are not published.'}
 
 
-def _limit(default, description, unit=''):
+def _limit(default: float, description: str, unit: str = '') -> Any:
     return field(default=default, metadata={'description': description, 'unit': unit,
                                             'min': 0.0, 'max': 1.0})
 
@@ -65,7 +66,7 @@ class LinkThresholds:
     loss_error_ratio: float = _limit(
         0.01, 'ERROR when the fraction of samples lost in one diagnostics period exceeds this')
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
             if not 0.0 <= value <= 1.0:
@@ -112,12 +113,12 @@ class LinkWindow:
     frames_ok: int = 0
     samples_ok: int = 0
     restarted: bool = False
-    odr_hz: float = None
+    odr_hz: float | None = None
     seconds_since_sample: float = 0.0
     silence_limit_s: float = float('inf')
 
     @property
-    def rate_hz(self):
+    def rate_hz(self) -> float:
         """float: Published samples per second in the window (NaN for an empty window)."""
         return self.published / self.window_s if self.window_s > 0 else float('nan')
 
@@ -143,7 +144,8 @@ class LinkVerdict:
     checks: tuple
 
 
-def judge_link(window: LinkWindow, thresholds: LinkThresholds | None = None) -> LinkVerdict:
+def judge_link(window: 'LinkWindow',
+               thresholds: 'LinkThresholds | None' = None) -> 'LinkVerdict':
     """
     Judge one window of the link (module doc lists the checks).
 
@@ -205,7 +207,7 @@ _NODE_COUNTERS = ('published', 'lost', 'restarts')
 _LINK_COUNTERS = ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')
 
 
-def counters(snapshot: dict) -> dict:
+def counters(snapshot: Mapping[str, Any]) -> dict[str, int]:
     """
     Return the cumulative counters a window is the difference of.
 
@@ -224,8 +226,8 @@ def counters(snapshot: dict) -> dict:
                                                            for k in _LINK_COUNTERS}}
 
 
-def window_between(prev: dict, snapshot: dict, *, now: float, since: float,
-                   period_s: float) -> LinkWindow:
+def window_between(prev: Mapping[str, Any], snapshot: Mapping[str, Any], *, now: float,
+                   since: float, period_s: float) -> 'LinkWindow':
     """
     Build the :class:`LinkWindow` from one diagnostics report to the next.
 
@@ -260,8 +262,8 @@ def window_between(prev: dict, snapshot: dict, *, now: float, since: float,
         **{k: cur[k] - prev[k] for k in ('published', 'lost', *_LINK_COUNTERS)})
 
 
-def link_items(snapshot: dict, window: LinkWindow, *, port: str,
-               drift_ppm: float) -> list[tuple[str, object]]:
+def link_items(snapshot: Mapping[str, Any], window: 'LinkWindow', *, port: str,
+               drift_ppm: float | None) -> list[tuple[str, str]]:
     """
     Return the key/values of the ``'<node>: link'`` status (``docs/diagnostics.md``).
 
@@ -283,7 +285,7 @@ def link_items(snapshot: dict, window: LinkWindow, *, port: str,
     """
     s, link, config = snapshot, snapshot['link'], snapshot['config']
 
-    def fmt(x):
+    def fmt(x: float | None) -> str:
         return '-' if x is None else format(x, 'g')
 
     return [

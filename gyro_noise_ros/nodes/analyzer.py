@@ -71,8 +71,9 @@ from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import axis_status, HealthThresholds
-from ..core.items import allan_items, DEG, fmt, last_chunk_items, stream_items
+from ..core.items import allan_items, fmt, last_chunk_items, stream_items
 from ..errors import GyroNoiseError
+from ..units import RAD_TO_DEG
 
 
 NODE_NAME = 'noise_analyzer'
@@ -234,7 +235,8 @@ class NoiseAnalyzerNode(Node):
             elif self._params['log_chunks']:
                 self.get_logger().info(
                     f'chunk {result.chunk} axis {result.axis}: {result.status}, bias '
-                    f'{fmt(result.bias_rad_s * DEG)} deg/s, alpha {fmt(result.alpha_var)} (var) '
+                    f'{fmt(result.bias_rad_s * RAD_TO_DEG)} deg/s, '
+                    f'alpha {fmt(result.alpha_var)} (var) '
                     f'{fmt(result.alpha_corr)} (corr)')
         for per_axis in chunks:
             self._publish_chunk(per_axis)

@@ -25,8 +25,14 @@ import pytest
 from scipy.signal import lfilter
 
 #: A small MOPSO and refinement budget keeps each fit to seconds; the algorithm is the same.
-SMALL = {'n_particles': 8, 'iterations': 3, 'fitness_samples': 128, 'elman_epochs': 3,
-         'elman_samples': 500, 'refine_points': 4, 'refine_polish': 4, 'refine_samples': 512,
+#: The tests on this fit check what the model does with the (K, alpha) it picked, not how good
+#: the pick is (test_fast_pick_is_not_dominated_by_the_naive_pick does that): 4 particles, 2
+#: iterations and a refinement of 2 + 2 points on 256 samples (was 8, 3 and 4 + 4 on 512; the
+#: refinement's fuzzy entropy costs the square of its samples) leave the held-out residual at
+#: 2.5-4.6 % of the raw rms per axis (2.4-4.3 % with the old budget), far inside the one-third
+#: bound, with the drift mode first and noise modes on every axis.
+SMALL = {'n_particles': 4, 'iterations': 2, 'fitness_samples': 128, 'elman_epochs': 3,
+         'elman_samples': 500, 'refine_points': 2, 'refine_polish': 2, 'refine_samples': 256,
          'elman_refine': 100}
 #: Smaller still, for the test that compares two fits (determinism and process pool): the
 #: reference fitness on 4 windows of 128 samples instead of the whole 2000-sample run (16x

@@ -85,8 +85,9 @@ def test_six_bags_and_standard_gravity_warning(tmp_path, record, capsys, make_re
     bags = []
     for k in range(6):
         sel = (t >= k * 24.0 + 1.0) & (t < k * 24.0 + 19.0)   # inside each 20 s dwell
-        bags.append(str(make_record(tmp_path / f'b{k}', gyro[sel], t_s=t[sel] - t[sel][0],
-                                     accel_m_s2=accel[sel])))
+        bag = make_record(tmp_path / f'b{k}', gyro[sel], t_s=t[sel] - t[sel][0],
+                          accel_m_s2=accel[sel])
+        bags.append(str(bag))
     assert main(bags + ['--out', str(tmp_path / 'out')]) == 0
     assert 'warning: no --gravity or --latitude' in capsys.readouterr().err
     doc = json.loads((tmp_path / 'out' / 'calibration.json').read_text())

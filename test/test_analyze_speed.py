@@ -25,7 +25,7 @@ gyro_noise_analyze's speed-ups (worker processes, warmed kernels, fast criteria)
 import json
 
 from gyro_noise_ros.app import analyze as analyze_app
-from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.bag import ImuBagReader
 from gyro_noise_ros.cli import analyze
 from gyro_noise_ros.core.simulate import FractionalNoise
 import numpy as np
@@ -36,17 +36,14 @@ ARGS = ['--chunk-size', '2000', '--memory', '100', '--order-grid', '0:2:0.1', '-
         '--no-figures', '--curves', '3']
 
 
-def write_bag(path, n, motion_s=0.0, seed=0):
+def write_bag(make_record, path, n, motion_s=0.0, seed=0):
     rng = np.random.default_rng(seed)
     gyro = np.stack([FractionalNoise(1.3, -0.5, 1e-3, rng=rng, memory=100).generate(n)
                      for _ in range(3)], axis=1)
     t = np.arange(n) / RATE_HZ
     moving = t < motion_s
     gyro[moving, 2] += 0.8 * np.sin(2 * np.pi * 0.7 * t[moving])  # hand turning the sensor
-    stamps = 1_700_000_000 * 10**9 + np.round(t * 1e9).astype(np.int64)
-    with ImuBagWriter(path) as writer:
-        writer.write_imu(stamps, gyro, np.tile([0.0, 0.0, 9.8], (n, 1)))
-    return path
+    return make_record(path, gyro, t_s=t, accel_m_s2=np.tile([0.0, 0.0, 9.8], (n, 1)))
 
 
 def outputs(out):
@@ -68,10 +65,10 @@ def assert_same(a, b):
 
 
 @pytest.fixture(scope='module')
-def bags(tmp_path_factory):
+def bags(tmp_path_factory, make_record):
     d = tmp_path_factory.mktemp('speed')
-    return (write_bag(d / 'static', 24_000, seed=1),
-            write_bag(d / 'motion', 24_000, motion_s=6.0, seed=2))
+    return (write_bag(make_record, d / 'static', 24_000, seed=1),
+            write_bag(make_record, d / 'motion', 24_000, motion_s=6.0, seed=2))
 
 
 @pytest.fixture

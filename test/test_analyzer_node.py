@@ -32,7 +32,7 @@ import time
 
 from geometry_msgs.msg import Vector3Stamped
 from gyro_noise_ros.app.live import CHUNK_TOPICS
-from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.bag import ImuBagReader
 from gyro_noise_ros.cli import analyze as analyze_cli
 from gyro_noise_ros.core.engine import NoiseEngine
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
@@ -58,7 +58,7 @@ def _overrides(**values):
     return [Parameter(k, value=v) for k, v in values.items()]
 
 
-def _make_bag(path, n, *, seed, gaps=()):
+def _make_bag(make_record, path, n, *, seed, gaps=()):
     """Write a rosbag2: fractional noise (alpha 0.6) on 3 axes, removed samples, temperature."""
     rng = np.random.default_rng(seed)
     gyro = np.column_stack([simulate_fractional_noise(n, 0.6, -0.2, 3e-3, rng=rng, memory=200)
@@ -68,10 +68,10 @@ def _make_bag(path, n, *, seed, gaps=()):
     for start, length in gaps:
         keep[start:start + length] = False
     stamps = 1_700_000_000_000_000_000 + np.rint(index * 1e9 / RATE_HZ).astype(np.int64)
-    with ImuBagWriter(path, frame_id='imu_bag') as writer:
-        writer.write_imu(stamps[keep], gyro[keep], np.zeros((keep.sum(), 3)))
-        t_idx = np.arange(0, n, 128)
-        writer.write_temperature(stamps[t_idx], np.full(t_idx.size, 31.5))
+    t_idx = np.arange(0, n, 128)
+    make_record(path, gyro[keep], stamps_ns=stamps[keep], accel_m_s2=np.zeros((keep.sum(), 3)),
+                temperature_c=np.full(t_idx.size, 31.5), temperature_stamps_ns=stamps[t_idx],
+                frame_id='imu_bag')
     return int(keep.sum())
 
 
@@ -121,11 +121,11 @@ def _same(a, b):
 
 
 @pytest.mark.timeout(180)
-def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path):
+def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path, make_record):
     bag = tmp_path / 'ref'
     n = 6 * 2000 + 700
     # Two gaps (5 and 1 samples) so samples_lost and gaps are compared too.
-    kept = _make_bag(bag, n, seed=11, gaps=((3000, 5), (7400, 1)))
+    kept = _make_bag(make_record, bag, n, seed=11, gaps=((3000, 5), (7400, 1)))
     node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**SMALL))
     received = {name: [] for name in CHUNK_TOPICS}
     listener = rclpy.create_node('test_chunk_listener', context=context)

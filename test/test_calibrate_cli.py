@@ -17,7 +17,7 @@
 import json
 
 from _realdata import real_data
-from _reliability_common import six_position_record, write_bag
+from _reliability_common import six_position_record
 from gyro_noise_ros.calibration import records
 from gyro_noise_ros.calibration.emulate import PAPER_BEFORE_BIAS_MG, SensorErrors
 from gyro_noise_ros.calibration.sixpos import normal_gravity
@@ -37,8 +37,9 @@ def record():
                                errors=SensorErrors(gyro_bias_rad_s=(0.01, -0.02, 0.005)))
 
 
-def test_one_bag_gives_all_three_files(tmp_path, record, capsys):
-    bag = write_bag(tmp_path / 'six', *record)
+def test_one_bag_gives_all_three_files(tmp_path, record, capsys, make_record):
+    t, accel, gyro = record
+    bag = make_record(tmp_path / 'six', gyro, t_s=t, accel_m_s2=accel)
     out = tmp_path / 'out'
     assert main([str(bag), '--latitude', '45', '--height', '200', '--out', str(out)]) == 0
     doc = json.loads((out / 'calibration.json').read_text())
@@ -80,12 +81,14 @@ def test_one_bag_gives_all_three_files(tmp_path, record, capsys):
     assert 'dwell +z' in printed.out and 'warning' not in printed.err
 
 
-def test_six_bags_and_standard_gravity_warning(tmp_path, record, capsys):
+def test_six_bags_and_standard_gravity_warning(tmp_path, record, capsys, make_record):
     t, accel, gyro = record
     bags = []
     for k in range(6):
         sel = (t >= k * 24.0 + 1.0) & (t < k * 24.0 + 19.0)   # inside each 20 s dwell
-        bags.append(str(write_bag(tmp_path / f'b{k}', t[sel] - t[sel][0], accel[sel], gyro[sel])))
+        bag = make_record(tmp_path / f'b{k}', gyro[sel], t_s=t[sel] - t[sel][0],
+                          accel_m_s2=accel[sel])
+        bags.append(str(bag))
     assert main(bags + ['--out', str(tmp_path / 'out')]) == 0
     assert 'warning: no --gravity or --latitude' in capsys.readouterr().err
     doc = json.loads((tmp_path / 'out' / 'calibration.json').read_text())
@@ -93,18 +96,19 @@ def test_six_bags_and_standard_gravity_warning(tmp_path, record, capsys):
     assert sorted(d['source'] for d in doc['dwells']) == sorted(bags)
 
 
-def test_exit_codes(tmp_path, record, capsys):
+def test_exit_codes(tmp_path, record, capsys, make_record):
     t, accel, gyro = record
     out = str(tmp_path / 'out')
     assert main([str(tmp_path / 'nope'), '--out', out]) == 3
     assert main(['x', '--gravity', '100', '--out', out]) == 2
     assert main(['x', '--height', '100', '--out', out]) == 2
-    five = write_bag(tmp_path / 'five', t[t < 115.0], accel[t < 115.0], gyro[t < 115.0])
+    five = make_record(tmp_path / 'five', gyro[t < 115.0], t_s=t[t < 115.0],
+                       accel_m_s2=accel[t < 115.0])
     capsys.readouterr()
     assert main([str(five), '--gravity', '9.81', '--out', out]) == 4
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and 'orientation(s) -y missing' in err
-    zero = write_bag(tmp_path / 'zero', t, np.zeros_like(accel), gyro)
+    zero = make_record(tmp_path / 'zero', gyro, t_s=t, accel_m_s2=np.zeros_like(accel))
     assert main([str(zero), '--gravity', '9.81', '--out', out]) == 4
     assert 'accelerometer reads ~0' in capsys.readouterr().err
     assert main([str(five), '--gravity', '9.81', '--min-static-s', '30', '--out', out]) == 4

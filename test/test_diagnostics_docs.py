@@ -53,7 +53,7 @@ def test_driver_keys_are_documented(context):
     assert published == _documented('`lsm6dso32_driver`')
 
 
-def test_analyzer_keys_are_documented(context, tmp_path):
+def test_analyzer_keys_are_documented(context, tmp_path, make_record):
     documented = _documented('`noise_analyzer`')
     node = NoiseAnalyzerNode(context=context, parameter_overrides=[
         Parameter('chunk_size', value=1000), Parameter('memory', value=100),
@@ -63,7 +63,7 @@ def test_analyzer_keys_are_documented(context, tmp_path):
         seen = set()
         for status in node.diagnostics().status:
             seen |= _keys(status)
-        _make_bag(tmp_path / 'bag', 5000, seed=3)
+        _make_bag(make_record, tmp_path / 'bag', 5000, seed=3)
         executor, pub_node = _replay(context, node, _raw_messages(tmp_path / 'bag'))
         assert _spin_until(executor, lambda: len(node.results) >= 12, 60)
         for status in node.diagnostics().status:

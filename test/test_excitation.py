@@ -20,8 +20,6 @@ Oracles: synthetic sines and sweeps with known amplitude, frequency and THD.
 
 import json
 
-from _reliability_common import T0_NS
-from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.calibration.emulate import Excitation
 from gyro_noise_ros.calibration.excitation import sine_dwell, sine_fit4, sine_sweep
 from gyro_noise_ros.cli.excitation import main
@@ -128,16 +126,12 @@ def test_sweep_amplitude_and_deviation_from_reference():
         np.testing.assert_allclose(dev, -0.02, atol=0.01)
 
 
-def _bag(path, t, accel, gyro, ref_accel=None):
-    stamps = T0_NS + np.round(t * 1e9).astype(np.int64)
-    with ImuBagWriter(path, temperature_topic=None) as w:
-        w.write_imu(stamps, gyro, accel)
-        if ref_accel is not None:
-            w.write_imu(stamps, np.zeros_like(gyro), ref_accel, topic='/shaker/imu')
-    return str(path)
+def _bag(make_record, path, t, accel, gyro, ref_accel=None):
+    extra = None if ref_accel is None else {'/shaker/imu': (np.zeros_like(gyro), ref_accel)}
+    return str(make_record(path, gyro, t_s=t, accel_m_s2=accel, extra_imu=extra))
 
 
-def test_cli_dwell_before_after(tmp_path, capsys):
+def test_cli_dwell_before_after(tmp_path, capsys, make_record):
     t, x_before = _sine(3000, 0.3 * G, 8.0, noise=0.04)
     _, x_after = _sine(3000, 0.28 * G, 8.0, h2=0.05, noise=0.04, seed=1)
     bags = []
@@ -145,7 +139,7 @@ def test_cli_dwell_before_after(tmp_path, capsys):
         accel = np.zeros((t.size, 3))
         accel[:, 2] = G
         accel[:, 0] = x - G
-        bags.append(_bag(tmp_path / name, t, accel, np.zeros((t.size, 3))))
+        bags.append(_bag(make_record, tmp_path / name, t, accel, np.zeros((t.size, 3))))
     out = tmp_path / 'out'
     assert main(bags + ['--sensor', 'accel', '--axis', 'x', '--dwell', '8', '--out',
                         str(out)]) == 0
@@ -167,14 +161,14 @@ def test_cli_dwell_before_after(tmp_path, capsys):
         assert key not in md
 
 
-def test_cli_sweep_with_reference_and_exit_codes(tmp_path, capsys):
+def test_cli_sweep_with_reference_and_exit_codes(tmp_path, capsys, make_record):
     ex = Excitation(sensor='accel', axis='y', amplitude=0.3 * G, frequency_hz=5.0,
                     sweep_to_hz=10.0, sweep_rate_hz_s=0.5)
     t = np.arange(4000) / FS
     ref = np.zeros((t.size, 3))
     ref[:, 1] = ex.reference(t)[:, 1]
     accel = ref * 1.03 + [0.0, 0.0, G]
-    bag = _bag(tmp_path / 's', t, accel, np.zeros((t.size, 3)), ref_accel=ref)
+    bag = _bag(make_record, tmp_path / 's', t, accel, np.zeros((t.size, 3)), ref_accel=ref)
     out = str(tmp_path / 'out')
     assert main([bag, '--topic', '/imu/data_raw', '--sensor', 'accel', '--axis', 'y', '--sweep',
                  '5', '10', '0.5', '--reference-topic', '/shaker/imu', '--out', out]) == 0
@@ -193,14 +187,14 @@ def test_cli_sweep_with_reference_and_exit_codes(tmp_path, capsys):
     assert doc['before']['mean_deviation'] == pytest.approx(0.03, abs=0.003)
 
 
-def test_a_record_that_is_not_the_excitation_asked_for_is_refused(tmp_path, capsys):
+def test_a_record_that_is_not_the_excitation_asked_for_is_refused(tmp_path, capsys, make_record):
     # an 8 Hz dwell record: analysed as a sweep, or as a 7 Hz dwell, it must be refused with one
     # line, not turned into tables (exit 4)
     t, x = _sine(3000, 0.3 * G, 8.0, noise=0.04)
     accel = np.zeros((t.size, 3))
     accel[:, 2] = G
     accel[:, 0] = x - G
-    bag = _bag(tmp_path / 'd8', t, accel, np.zeros((t.size, 3)))
+    bag = _bag(make_record, tmp_path / 'd8', t, accel, np.zeros((t.size, 3)))
     base = [bag, '--sensor', 'accel', '--axis', 'x', '--no-figures']
     for extra, why in ((['--sweep', '5', '10', '0.5'], 'does not sweep 5-10 Hz'),
                        (['--dwell', '7'], 'not the requested --dwell 7 Hz')):

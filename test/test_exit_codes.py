@@ -36,14 +36,12 @@ import subprocess
 import sys
 from typing import NamedTuple
 
-from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.explain.inputs import MIN_SAMPLES
 import numpy as np
 import pytest
 
 PERIOD_S = 0.005           # 200 Hz
 N = MIN_SAMPLES + 808      # 9000 samples: the explain floor and 15 analyze chunks of 600
-T0_NS = 1_700_000_000 * 10**9
 COLUMNS = 'time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s'
 # Small analyze settings (the numbers do not matter here, only the path to the exit code).
 FAST = ['--chunk-size', '600', '--memory', '50', '--order-grid', '0:2:0.1', '--quiet',
@@ -64,22 +62,16 @@ def _gyro(n, seed):
     return np.random.default_rng(seed).standard_normal((n, 3)) * 1e-3
 
 
-def _write_csv(path, gyro):
-    t = np.arange(gyro.shape[0]) * PERIOD_S
-    np.savetxt(path, np.column_stack([t, gyro]), delimiter=',', header=COLUMNS, comments='',
-               fmt='%.17g')
-
-
-def _write_bag(path, gyro):
-    n = gyro.shape[0]
-    stamps = T0_NS + np.round(np.arange(n) * PERIOD_S * 1e9).astype(np.int64)
-    with ImuBagWriter(path) as writer:
-        writer.write_imu(stamps, gyro, np.tile([0.0, 0.0, 9.81], (n, 1)))
-
-
 @pytest.fixture(scope='module')
-def inputs(tmp_path_factory):
+def inputs(tmp_path_factory, make_record):
     d = tmp_path_factory.mktemp('inputs')
+
+    def _write_csv(path, gyro):
+        make_record(path, gyro, rate_hz=1 / PERIOD_S, storage='csv')
+
+    def _write_bag(path, gyro):
+        make_record(path, gyro, rate_hz=1 / PERIOD_S)
+
     _write_csv(d / 'ok.csv', _gyro(N, 1))
     _write_bag(d / 'bag', _gyro(N, 1))
     (d / 'empty.csv').write_text('')
@@ -294,12 +286,13 @@ def test_codes_are_the_readme_table():
 # --- non-physical values: counted, no numpy warning, no time before the record -------------
 
 
-def test_a_few_non_physical_values_are_counted_and_their_chunks_left_out(tmp_path, capsys):
+def test_a_few_non_physical_values_are_counted_and_their_chunks_left_out(tmp_path, capsys,
+                                                                         make_record):
     from gyro_noise_ros.cli.analyze import main
 
     gyro = _gyro(N, 3)
     gyro[1000:1010, 1] = 1e300  # inside chunk 1 of axis y
-    _write_bag(tmp_path / 'bag', gyro)
+    make_record(tmp_path / 'bag', gyro, rate_hz=1 / PERIOD_S)
     out = tmp_path / 'out'
     assert main([str(tmp_path / 'bag'), *FAST, '--out', str(out)]) == 0
     err = capsys.readouterr().err
@@ -492,9 +485,9 @@ def _interrupt_subprocess(argv, ready, cwd):
 
 
 @pytest.mark.timeout(600)
-def test_a_real_sigint_to_analyze_leaves_nothing(tmp_path):
+def test_a_real_sigint_to_analyze_leaves_nothing(tmp_path, make_record):
     bag = tmp_path / 'long'
-    _write_bag(bag, _gyro(100_000, 4))
+    make_record(bag, _gyro(100_000, 4), rate_hz=1 / PERIOD_S)
     out = tmp_path / 'out'
     # progress goes to stderr once per 10 % (not a terminal): interrupt after the first tenth
     code, err = _interrupt_subprocess(

@@ -27,7 +27,6 @@ import math
 from types import SimpleNamespace
 
 from _realdata import real_data
-from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.calibration.interval import bias_instability_interval
 from gyro_noise_ros.cli import analyze
 from gyro_noise_ros.core.allan import allan_deviation, AllanResult, fit_noise_terms
@@ -268,12 +267,11 @@ def _white_plus_walk(n, rate, seed):
     return x + np.cumsum(rng.normal(0.0, k_rrw / math.sqrt(rate), (n, 3)), axis=0)
 
 
-def test_one_curve_gives_one_number_in_every_tool(tmp_path, capsys):
+def test_one_curve_gives_one_number_in_every_tool(tmp_path, capsys, make_record):
     rate, n = 100.0, 100_000
     gyro = _white_plus_walk(n, rate, 11)
     stamps = 10 ** 18 + np.arange(n, dtype=np.int64) * 10_000_000
-    with ImuBagWriter(tmp_path / 'w.mcap', storage='mcap') as writer:
-        writer.write_imu(stamps, gyro, np.zeros((n, 3)) + [0, 0, 9.81])
+    make_record(tmp_path / 'w.mcap', gyro, stamps_ns=stamps, storage='mcap')
     # the readout of the one estimator's curve, on the analyzer's taus
     truth = read_allan(allan_deviation(gyro[:, 0], rate, taus='dense'))
     assert not truth.bias_stability_upper_bound
@@ -327,14 +325,14 @@ def _analyze(path, out, *extra):
     return text, yaml.safe_load(text)
 
 
-def test_imu_yaml_random_walk_is_the_larger_of_fit_and_bound(tmp_path):
+def test_imu_yaml_random_walk_is_the_larger_of_fit_and_bound(tmp_path, make_record):
     # Pure white noise over 40 s: the fitted random walk is 0 and the curve never turns up;
     # Kalibr needs a positive number, and the file says the record is too short for one.
     rng = np.random.default_rng(3)
     n = 40_000
     stamps = 10 ** 18 + np.arange(n, dtype=np.int64) * 1_000_000
-    with ImuBagWriter(tmp_path / 'w.mcap', storage='mcap') as writer:
-        writer.write_imu(stamps, rng.normal(0, 1e-3, (n, 3)), rng.normal(0, 1e-2, (n, 3)))
+    make_record(tmp_path / 'w.mcap', rng.normal(0, 1e-3, (n, 3)), stamps_ns=stamps,
+                accel_m_s2=rng.normal(0, 1e-2, (n, 3)), storage='mcap')
     text, doc = _analyze(tmp_path / 'w.mcap', tmp_path / 'o')
     summary = json.loads((tmp_path / 'o' / 'summary.json').read_text())['bags'][0]
     bounds = [summary['axes'][a]['allan_datasheet']['rate_random_walk_bound_rad_per_s_sqrt_s']

@@ -129,38 +129,10 @@ def test_join_runs_leaves_a_gap_the_rate_window_never_straddles(tmp_path):
     assert np.all(np.diff(j.t_s) > 0)
 
 
-def test_ros1_input_gives_a_ros2_copy(tmp_path):
-    from rosbags.rosbag1 import Writer
-    from rosbags.typesys import get_typestore, Stores
-
-    store = get_typestore(Stores.ROS1_NOETIC)
-    ty = store.types
+def test_ros1_input_gives_a_ros2_copy(tmp_path, make_record):
     t, gyro, temp_t, temp = _data(120)
-    path = tmp_path / 'r1.bag'
-
-    def header(stamp):
-        s = ty['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp) % 10**9)
-        return ty['std_msgs/msg/Header'](seq=0, stamp=s, frame_id='imu_link')
-
-    v3 = ty['geometry_msgs/msg/Vector3']
-    with Writer(path) as w:
-        imu = w.add_connection('/imu/data_raw', 'sensor_msgs/msg/Imu', typestore=store)
-        tc = w.add_connection('/imu/temperature', 'sensor_msgs/msg/Temperature', typestore=store)
-        for k, tt in enumerate(temp_t):
-            stamp = T0_NS + int(round(tt * 1e9))
-            msg = ty['sensor_msgs/msg/Temperature'](header=header(stamp), temperature=temp[k],
-                                                    variance=0.0)
-            w.write(tc, stamp, store.serialize_ros1(msg, 'sensor_msgs/msg/Temperature'))
-        for k in range(t.size):
-            stamp = T0_NS + int(round(t[k] * 1e9))
-            msg = ty['sensor_msgs/msg/Imu'](
-                header=header(stamp),
-                orientation=ty['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
-                orientation_covariance=np.zeros(9), angular_velocity=v3(*gyro[k]),
-                angular_velocity_covariance=np.zeros(9),
-                linear_acceleration=v3(x=0.0, y=0.0, z=9.81),
-                linear_acceleration_covariance=np.zeros(9))
-            w.write(imu, stamp, store.serialize_ros1(msg, 'sensor_msgs/msg/Imu'))
+    path = make_record(tmp_path / 'r1.bag', gyro, t_s=t, temperature_c=temp,
+                       temperature_t_s=temp_t, storage='ros1', t0_ns=T0_NS)
     run, info = read_thermal_run(path)
     assert info.storage == 'ros1'
     np.testing.assert_array_equal(run.gyro_rad_s, gyro)

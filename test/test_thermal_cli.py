@@ -69,6 +69,10 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     training = json.loads((tmp_path / 'm' / 'training.json').read_text())
     assert set(training['in_sample']) == {'x', 'y', 'z'}
     assert (tmp_path / 'm' / 'training.md').read_text().startswith('# Training report')
+    # the one fit of this file that draws its figures (the others pass --no-figures)
+    for name in ('training_fig10_run.png', 'training_fig18_output.png',
+                 'training_fig17_drift.png'):
+        assert (tmp_path / 'm' / name).stat().st_size > 1000, name
 
     out = tmp_path / 'a'
     assert main(['apply', test, '--model', str(tmp_path / 'm' / 'model.json'), '--out',
@@ -94,7 +98,7 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
 def test_apply_with_figures_and_in_sample_warning(tmp_path):
     train, _, _ = _bag(tmp_path / 'train', 1)
     assert main(['fit', train, '--method', 'toy_lowpass', '--out', str(tmp_path / 'm'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
     out = tmp_path / 'a'
     assert main(['apply', train, '--model', str(tmp_path / 'm' / 'model.json'), '--out',
                  str(out), '--f-lo-hz', '0.5', '--no-bag', '--quiet']) == 0
@@ -155,7 +159,7 @@ def test_apply_refuses_outside_trained_range(tmp_path, capsys):
     train, _, _ = _bag(tmp_path / 'train', 1, lo=20.0, hi=30.0)
     test, _, _ = _bag(tmp_path / 'test', 2, lo=10.0, hi=30.0)
     assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'm'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
     model = str(tmp_path / 'm' / 'model.json')
     assert main(['apply', test, '--model', model, '--out', str(tmp_path / 'a'), *FAST]) == 4
     assert 'leaves the model' in capsys.readouterr().err
@@ -169,7 +173,7 @@ def test_fit_on_two_bags_joins_them(tmp_path):
     a, _, _ = _bag(tmp_path / 'a', 1, lo=10.0, hi=25.0)
     b, _, _ = _bag(tmp_path / 'b', 2, lo=25.0, hi=40.0)
     assert main(['fit', a, b, '--method', 'toy_linear', '--out', str(tmp_path / 'm'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
     t = json.loads((tmp_path / 'm' / 'model.json').read_text())['training']
     assert t['samples'] == 2 * N and t['sources'] == [a, b]
     # the cosine profiles peak between two 1-s temperature samples
@@ -225,7 +229,7 @@ def test_real_mpu6050_narrow_temperature_is_refused_then_scored_on_halves(tmp_pa
     assert 'spans only' in err and len(err.strip().splitlines()) == 1
     # poly3 itself refuses spans under 1 degC; a linear model is fitted to score the halves
     assert main(['fit', first, '--method', 'toy_linear', '--min-range-c', '0.1', '--out',
-                 str(tmp_path / 'm'), '--quiet']) == 0
+                 str(tmp_path / 'm'), '--quiet', '--no-figures']) == 0
     assert main(['apply', second, '--model', str(tmp_path / 'm' / 'model.json'), '--out',
                  str(tmp_path / 'a'), '--f-lo-hz', '0.5', '--no-bag', '--no-figures',
                  '--quiet']) == 0
@@ -245,7 +249,7 @@ def test_fitted_model_json_loads_in_the_live_compensator(tmp_path):
 
     train, _, _ = _bag(tmp_path / 'train', 1, lo=15.0, hi=35.0)
     assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'm'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
     method, range_c, margin = load_live_model(str(tmp_path / 'm' / 'model.json'))
     assert isinstance(method, LinearInT) and margin == methods.DEFAULT_RANGE_MARGIN_C
     assert range_c[0] == 15.0 and range_c[1] == pytest.approx(35.0, abs=1e-3)
@@ -282,13 +286,13 @@ def test_training_shorter_than_the_rate_windows_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert 'needs at least 20 s' in err and len(err.strip().splitlines()) == 1
     assert main(['fit', bag, '--method', 'poly3', '--out', str(tmp_path / 'p'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
 
 
 def _fit_poly3(tmp_path, **kw):
     train, _, _ = _bag(tmp_path / 'train', 1, **kw)
     assert main(['fit', train, '--method', 'poly3', '--out', str(tmp_path / 'm'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
     return tmp_path / 'm' / 'model.json'
 
 
@@ -370,7 +374,7 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
     assert doc['px4']['TC_G0_ID'] == 123 and doc['accelerometer']
     train, _, _ = _bag(tmp_path / 'train2', 1)
     assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'l'),
-                 '--quiet']) == 0
+                 '--quiet', '--no-figures']) == 0
     assert main(['export', '--model', str(tmp_path / 'l' / 'model.json'), '--out',
                  str(tmp_path / 'f')]) == 2
     assert "'toy_linear' cannot be exported" in capsys.readouterr().err

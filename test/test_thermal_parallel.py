@@ -25,14 +25,21 @@ import pytest
 from scipy.signal import lfilter
 
 #: A small MOPSO and refinement budget keeps each fit to seconds; the algorithm is the same.
-SMALL = {'n_particles': 8, 'iterations': 3, 'fitness_samples': 128, 'elman_epochs': 3,
-         'elman_samples': 500, 'refine_points': 4, 'refine_polish': 4, 'refine_samples': 512,
+#: The tests on this fit check what the model does with the (K, alpha) it picked, not how good
+#: the pick is (test_fast_pick_is_not_dominated_by_the_naive_pick does that): 4 particles, 2
+#: iterations and a refinement of 2 + 2 points on 256 samples (was 8, 3 and 4 + 4 on 512; the
+#: refinement's fuzzy entropy costs the square of its samples) leave the held-out residual at
+#: 2.5-4.6 % of the raw rms per axis (2.4-4.3 % with the old budget), far inside the one-third
+#: bound, with the drift mode first and noise modes on every axis.
+SMALL = {'n_particles': 4, 'iterations': 2, 'fitness_samples': 128, 'elman_epochs': 3,
+         'elman_samples': 500, 'refine_points': 2, 'refine_polish': 2, 'refine_samples': 256,
          'elman_refine': 100}
-#: Smaller still, for the tests that compare two fits (determinism, process pool): the
+#: Smaller still, for the test that compares two fits (determinism and process pool): the
 #: reference fitness on 4 windows of 128 samples instead of the whole 2000-sample run (16x
-#: fewer entropy pairs), one BAS epoch, a short refinement.
-TINY = {**SMALL, 'iterations': 2, 'refine_samples': 128, 'refine_points': 2, 'refine_polish': 2,
-        'elman_epochs': 1, 'elman_iterations': 30, 'elman_refine': 20}
+#: fewer entropy pairs), 4 particles (2 per worker of the pool), one BAS epoch of 10
+#: iterations, a short refinement: every stage still runs.
+TINY = {**SMALL, 'n_particles': 4, 'iterations': 2, 'refine_samples': 128, 'refine_points': 2,
+        'refine_polish': 2, 'elman_epochs': 1, 'elman_iterations': 10, 'elman_refine': 20}
 
 
 def thermal_run(seed, n=40000, rate_hz=5.0, noise_rad_s=0.01):
@@ -107,25 +114,18 @@ def test_json_round_trip(fitted):
     assert np.array_equal(again.apply(test), fitted.apply(test))
 
 
-def test_deterministic():
-    train, _ = thermal_run(4, n=2000)
-    a, b = ParallelModel(**TINY), ParallelModel(**TINY)
-    a.fit(train, rng=np.random.default_rng(9))
-    b.fit(train, rng=np.random.default_rng(9))
-    assert a.to_dict() == b.to_dict()
-
-
-@pytest.mark.slow
-def test_process_pool_gives_the_serial_result():
-    # Distributing the particle evaluations (workers=2) must not change anything: the
-    # fitness is pure and the pool's map keeps the order.
+def test_two_fits_with_one_seed_are_identical_serial_or_pooled():
+    # Determinism and the process pool in one comparison: two fits of the same run with the
+    # same seed, the second distributing the particle evaluations (workers=2), must give the
+    # same model. A fit that depended on anything but its seed (a global RNG, a warm cache, set
+    # order) would differ between the two fits as much as a pool that reordered the fitness
+    # values would, so one pair of fits checks both (it was two pairs).
     train, _ = thermal_run(8, n=2000)
     serial, pooled = ParallelModel(**TINY), ParallelModel(**TINY, workers=2)
     serial.fit(train, rng=np.random.default_rng(3))
     pooled.fit(train, rng=np.random.default_rng(3))
     a, b = serial.to_dict(), pooled.to_dict()
-    a['options'].pop('workers')
-    b['options'].pop('workers')
+    assert (a['options'].pop('workers'), b['options'].pop('workers')) == (1, 2)
     assert a == b
 
 

@@ -337,7 +337,7 @@ def _one_blas_thread(func: Callable) -> Callable:
     (docs/scale.md). The results do not change (each dot product is one thread's either way).
     """
     @functools.wraps(func)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
         with threadpoolctl.threadpool_limits(limits=1, user_api='blas'):
             return func(*args, **kwargs)
     return wrapper
@@ -356,9 +356,9 @@ def _writing() -> Iterator[None]:
 class _ChunkRows(report.ChunkCsvWriter):
     """chunks.csv that can take back the rows of a bag (a speculative pass that was not kept)."""
 
-    def write(self, *args, **kwargs):
+    def write(self, *args: Any, **kwargs: Any) -> None:
         with _writing():
-            return super().write(*args, **kwargs)
+            super().write(*args, **kwargs)
 
     def mark(self) -> Tuple[int, int]:
         self._fh.flush()
@@ -933,7 +933,7 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: Optional[StaticSegment]
     counts = state.engine.counts()
     label = bag.label
 
-    def add(text):
+    def add(text: str) -> None:
         warnings.append(text)
         warn(f'{label}: {text}')
 

@@ -261,8 +261,8 @@ class _Progress:
             if decile <= self._decile and not (final and self._decile < 10):
                 return
             self._decile = 10 if final else decile
-            pct = 100 if final else 10 * decile
-            sys.stderr.write(f'{label}: {pct}% {done}/{total} messages, {chunks} chunks, '
+            percent = 100 if final else 10 * decile
+            sys.stderr.write(f'{label}: {percent}% {done}/{total} messages, {chunks} chunks, '
                              f'{rate:,.0f} samples/s\n')
             sys.stderr.flush()
             return
@@ -337,7 +337,7 @@ def _one_blas_thread(func: Callable) -> Callable:
     (docs/scale.md). The results do not change (each dot product is one thread's either way).
     """
     @functools.wraps(func)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
         with threadpoolctl.threadpool_limits(limits=1, user_api='blas'):
             return func(*args, **kwargs)
     return wrapper
@@ -356,9 +356,9 @@ def _writing() -> Iterator[None]:
 class _ChunkRows(report.ChunkCsvWriter):
     """chunks.csv that can take back the rows of a bag (a speculative pass that was not kept)."""
 
-    def write(self, *args, **kwargs):
+    def write(self, *args: Any, **kwargs: Any) -> None:
         with _writing():
-            return super().write(*args, **kwargs)
+            super().write(*args, **kwargs)
 
     def mark(self) -> Tuple[int, int]:
         self._fh.flush()
@@ -578,7 +578,7 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool) -> List[P
         files += [out / 'summary.json', out / 'summary.md']
         files += _write_allan_outputs(out, doc, result.allan, result.accelerometer, figures)
         if result.curves:
-            arrays = {'alphas': result.alphas}
+            arrays: Dict[str, Any] = {'alphas': result.alphas}
             for (label, axis), rows in result.curves.items():
                 arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows], dtype=np.int64)
                 arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
@@ -724,6 +724,7 @@ def _analyze_one(run: _Run, bag: _Bag, progress: _Progress, *,
     if run.params.static != 'auto':
         state = _analysis_pass(run, bag, progress, segment=None, watch=None, say=warn,
                                reader=reader)
+        assert state is not None  # only a watched pass is abandoned
         return _bag_doc(run, bag, state, None)
     # One read of the bag when it is static throughout (the usual noise recording): the pass
     # gathers the prepass' statistics while it analyses everything; only when they show motion
@@ -743,6 +744,7 @@ def _analyze_one(run: _Run, bag: _Bag, progress: _Progress, *,
     # the first pass already printed the warnings of the stream's start
     state = _analysis_pass(run, bag, progress, segment=segment, watch=None,
                            say=lambda text: None)
+    assert state is not None  # only a watched pass is abandoned
     return _bag_doc(run, bag, state, segment)
 
 
@@ -761,11 +763,11 @@ class _ChunkFeed:
         self.run, self.label, self.engine = run, bag.label, engine
         est_chunks = max(1, message_count // config.chunk_size)
         self.stride = max(1, math.ceil(est_chunks / params.curves)) if params.curves else 0
-        self.kept = collections.Counter()
-        self.inflight = collections.deque()
+        self.kept: collections.Counter[str] = collections.Counter()
+        self.inflight: collections.deque[Any] = collections.deque()  # futures
         self.max_inflight = (4 * run.jobs
                              + len(config.axes) * (params.batch_size // config.chunk_size + 1))
-        self.rows = {a: [] for a in config.axes}
+        self.rows: Dict[str, list] = {a: [] for a in config.axes}
 
     def _want_curves(self, job: Any) -> bool:
         return (bool(self.stride) and job.chunk % self.stride == 0
@@ -828,7 +830,7 @@ class _TimeBase:
     def __init__(self, label: str, warnings: List[str], say: Callable[[str], None]) -> None:
         self.label, self.warnings, self.say = label, warnings, say
         self.source = 'header'
-        self.first_ns = None
+        self.first_ns: Optional[int] = None
         self.last_ns = -2 ** 63
 
     def stamps(self, batch: Any, first_batch: bool) -> np.ndarray:
@@ -864,7 +866,7 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
     params, config, timing = run.params, run.params.config, run.stores.timing
     label = bag.label
     engine = NoiseEngine(config, reference=run.ref or None, thresholds=params.thresholds)
-    warnings = []
+    warnings: List[str] = []
     left = {'before_start': 0, 'after_end': 0, 'motion': 0}
     timebase = _TimeBase(label, warnings, say)
     if reader is None:
@@ -887,6 +889,7 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
                 break
             frame_id = frame_id or batch.frame_id
             stamps = timebase.stamps(batch, done == 0)
+            assert timebase.first_ns is not None  # set by the first batch's stamps
             keep = _select(stamps, timebase.first_ns, params.start_s, params.end_s, segment,
                            left)
             done += len(batch)
@@ -901,7 +904,7 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
             if not keep.all():
                 stamps, gyro_b, accel_b = stamps[keep], gyro_b[keep], accel_b[keep]
             temp = None
-            if t_stamp is not None:
+            if t_stamp is not None and t_value is not None:  # both or neither
                 # Temperature is published slower than the IMU: linear interpolation at the IMU
                 # stamps, held constant before the first and after the last temperature message.
                 temp = np.interp(stamps.astype(np.float64), t_stamp, t_value)
@@ -909,6 +912,7 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
             accel.update(accel_b, engine.counts().rate_hz)
             progress.update(label, done, reader.message_count, engine.counts().chunks, t0)
         if done and left['before_start'] + left['after_end'] >= done:
+            assert timebase.first_ns is not None  # set by the first batch's stamps
             raise nothing_left_error(start_s=params.start_s, end_s=params.end_s, label=label,
                                      record_end_s=(timebase.last_ns - timebase.first_ns) / 1e9)
         feed.submit(engine.flush())
@@ -929,7 +933,7 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: Optional[StaticSegment]
     counts = state.engine.counts()
     label = bag.label
 
-    def add(text):
+    def add(text: str) -> None:
         warnings.append(text)
         warn(f'{label}: {text}')
 
@@ -944,7 +948,7 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: Optional[StaticSegment]
         add(f'{counts.gaps} stamp gap(s), {counts.samples_lost} sample(s) missing; the '
             f'longest {length_s:.6g} s at t = {t_s:.3f} s after the first sample ({missing} '
             'samples missing)')
-    left_out = dict(left)
+    left_out: Dict[str, Any] = dict(left)
     if segment is not None and not segment.static_throughout and first_ns is not None:
         # The segments end on window boundaries; a time range never runs past the last sample.
         end_ns = min(segment.end_ns, state.last_ns)
@@ -1053,8 +1057,8 @@ class _AccelAllan:
 
     def __init__(self, taus: Any) -> None:
         self.taus = taus or None
-        self.acc = None
-        self.pending = []
+        self.acc: Optional[List[AllanAccumulator]] = None
+        self.pending: List[np.ndarray] = []
 
     def update(self, accel: Optional[np.ndarray], rate_hz: float) -> None:
         if self.taus is None:
@@ -1075,7 +1079,7 @@ class _AccelAllan:
         """Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes."""
         if self.acc is None:
             return {}
-        out = {}
+        out: Dict[str, Any] = {}
         for axis, acc in zip(AXES, self.acc):
             try:
                 out[axis] = read_allan(rescale_allan(acc.result(), rate_hz))
@@ -1087,7 +1091,8 @@ class _AccelAllan:
 def _write_allan_outputs(out: Path, doc: Dict[str, Any], allan_store: Dict[tuple, tuple],
                          accel_readouts: Dict[str, dict], figures: bool) -> List[Path]:
     """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
-    entries, fig_series = [], {}
+    entries: List[tuple] = []
+    fig_series: Dict[str, list] = {}
     for (label, axis), (result, terms, _) in allan_store.items():
         tau, adev, lo, hi, n = report.allan_curve(result)
         entries.append((label, axis, tau, adev, lo, hi, n))
@@ -1126,7 +1131,7 @@ def _safe(name: str) -> str:
     return ''.join(c if c.isalnum() or c in '-_.' else '_' for c in name)
 
 
-def _write_figures(out: Path, alphas: np.ndarray, per_chunk: Dict[str, list],
+def _write_figures(out: Path, alphas: Optional[np.ndarray], per_chunk: Dict[str, list],
                    curve_store: Dict[tuple, list]) -> List[Path]:
     files = []
     bias = {a: [(label, r[:, 0], r[:, 1]) for label, r in v] for a, v in per_chunk.items()}

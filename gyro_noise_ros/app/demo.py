@@ -36,7 +36,7 @@ import subprocess
 import sys
 import threading
 import time
-from typing import Any, Dict, IO, List, Optional, Tuple
+from typing import Any, Dict, IO, List, Optional, Set, Tuple
 
 from .. import rosgraph
 from ..errors import GyroNoiseError, OutputError, ParameterError
@@ -201,7 +201,9 @@ def run_demo(params: DemoParams) -> DemoResult:
     # Held until the demo ends: another demo, a test run or a bench on this host skips it.
     lease = rosgraph.lease_domain() if params.domain_id is None else None
     try:
-        return _run(params, lease.domain_id if lease else params.domain_id)
+        domain = lease.domain_id if lease else params.domain_id
+        assert domain is not None  # leased when not given
+        return _run(params, domain)
     finally:
         if lease is not None:
             lease.release()
@@ -253,7 +255,7 @@ def _live_part(params: DemoParams, procs: 'Processes', recording: Path,
             {'output': str(recording), 'storage': params.storage})])
         echo = procs.start('monitor', ['gyro_noise_ros.nodes.monitor', '--compact'],
                            capture_stdout=True)
-        lines = queue.Queue()
+        lines: queue.Queue[Optional[str]] = queue.Queue()  # None: the monitor's end
         threading.Thread(target=_reader, args=(echo.stdout, lines), daemon=True).start()
         procs.start('lsm6dso32_driver', ['gyro_noise_ros.nodes.driver', *_ros_args({'port': url})])
         print(f'{TOOL}: starting the nodes ...', flush=True)
@@ -362,9 +364,9 @@ class Processes:
     def __init__(self, env: Dict[str, str], log_dir: 'os.PathLike[str] | str') -> None:
         self.env = env
         self.log_dir = Path(log_dir)
-        self.procs = {}
-        self.logs = {}
-        self.stopping = set()
+        self.procs: Dict[str, Tuple[subprocess.Popen, IO[str]]] = {}  # name -> (process, log)
+        self.logs: Dict[str, Path] = {}
+        self.stopping: Set[str] = set()
 
     def start(self, name: str, args: List[str], *,
               capture_stdout: bool = False) -> subprocess.Popen:

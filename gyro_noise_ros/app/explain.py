@@ -43,7 +43,7 @@ from ..bag.inputs import read_imu, recorded_axes
 from ..errors import OutputError, ParameterError
 from ..explain import report, workflow
 from ..explain.inputs import from_record, select
-from ..outputs import staged_output
+from ..outputs import staged_output, StrPath
 
 __all__ = ['AxisExplained', 'ExplainInput', 'ExplainParams', 'ExplainRun', 'MAX_RECORDS',
            'RATE_RANGE_HZ', 'check_output', 'prepare_explain', 'run_explain', 'write_explain']
@@ -111,7 +111,7 @@ class ExplainParams:
     max_steps: int = 6
     bootstrap: int = workflow.DEFAULT_BOOTSTRAP
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, 'path', str(self.path))
         if self.axis not in AXIS_CHOICES:
             raise ParameterError(f"--axis must be one of {', '.join(AXIS_CHOICES)}, got "
@@ -184,7 +184,7 @@ class AxisExplained:
     """
 
     axis: str
-    result: object
+    result: workflow.ExplainResult
     left_out: dict
     folder: str = ''
 
@@ -330,7 +330,7 @@ def run_explain(prepared: ExplainInput, *, progress: Optional[Callable[[str], No
     return ExplainRun(params=params, axes=tuple(axes), warnings=prepared.warnings)
 
 
-def check_output(out_dir) -> None:
+def check_output(out_dir: StrPath) -> None:
     """
     Make sure the outputs can be staged in ``out_dir`` before the long work (nothing is written).
 
@@ -349,7 +349,7 @@ def check_output(out_dir) -> None:
         pass
 
 
-def write_explain(run: ExplainRun, out_dir) -> list:
+def write_explain(run: ExplainRun, out_dir: StrPath) -> list:
     """
     Write every axis' explain.json, report.md and figures, and the index (module doc, step 3).
 

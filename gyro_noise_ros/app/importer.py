@@ -94,9 +94,9 @@ class ImportReport:
     corrupt_regions: tuple
     corrupt_region_count: int
     missing_file_indices: tuple
-    sequence_id: object
-    first_stamp_ns: object
-    last_stamp_ns: object
+    sequence_id: Optional[int]
+    first_stamp_ns: Optional[int]
+    last_stamp_ns: Optional[int]
     time_jumps: int
     configurations: tuple
     epoch: str
@@ -228,16 +228,19 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
     heads = [f.header for f in reader.files if f.header is not None]
     # until a header or an ack says otherwise, the first readable header's configuration holds (the
     # device cannot change it without writing an ACK frame)
-    assumed = (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads else (
-        None, None, None)
+    # (odr_hz, gyro_fs_dps, accel_fs_g), None where unknown
+    assumed: Tuple[Any, Optional[int], Optional[int]] = (
+        (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads
+        else (None, None, None))
     if not heads and (gyro_fs_dps is None or accel_fs_g is None):
         # Corruption is never fatal (docs/portenta_link.md): an unreadable header is replaced by
         # the configuration the first ACK frame carries.
-        assumed = _first_acked_config(paths, chunk_bytes, scan)
-        if assumed is None:
+        acked = _first_acked_config(paths, chunk_bytes, scan)
+        if acked is None:
             raise InputDataError(
                 'no readable log header and no ACK frame with the scales in the files: '
                 'give --gyro-fs-dps and --accel-fs-g')
+        assumed = acked
         reader = SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan)
     epoch, anchor = _anchor(start_time, reader)
     av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
@@ -271,8 +274,11 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
                         configurations=tuple(configs), epoch=epoch)
 
 
-def _convert(reader, writes, *, assumed, gyro_fs_dps, accel_fs_g, epoch, anchor, temp_topic,
-             temperature_rate_hz, temperature_variance, av_cov, la_cov):
+def _convert(reader: SdLogReader, writes: '_BagWrites', *,
+             assumed: Tuple[Any, Optional[int], Optional[int]], gyro_fs_dps: Optional[int],
+             accel_fs_g: Optional[int], epoch: str, anchor: Any, temp_topic: Optional[str],
+             temperature_rate_hz: float, temperature_variance: float, av_cov: np.ndarray,
+             la_cov: np.ndarray) -> Tuple[Optional[int], Optional[int], int, int, int, list]:
     """
     Stream the log blocks through the scaling into the bag writes.
 
@@ -314,6 +320,7 @@ def _convert(reader, writes, *, assumed, gyro_fs_dps, accel_fs_g, epoch, anchor,
             steps[0] = 1
         jumps += int(np.count_nonzero(steps <= 0))
         prev_t = int(t[-1])
+        assert gfs is not None and afs is not None  # from the options, a header or an ACK
         si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
         writes.call('write_imu', stamps, si.gyro_rad_s, si.accel_m_s2,
                     angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
@@ -364,13 +371,15 @@ class _BagWrites:
 
     def __init__(self, open_writer: Callable[[], Any], threaded: bool) -> None:
         self._open = open_writer
-        self._queue = queue.Queue(WRITE_QUEUE_BLOCKS) if threaded else None
-        self._writer = None
-        self._error = None
-        self._thread = None
+        # (method name, args, kwargs) of the writer calls, None: the end
+        self._queue: Optional[queue.Queue[Optional[Tuple[str, tuple, dict]]]] = (
+            queue.Queue(WRITE_QUEUE_BLOCKS) if threaded else None)
+        self._writer: Any = None  # the bag writer (unthreaded)
+        self._error: Optional[BaseException] = None
+        self._thread: Optional[threading.Thread] = None
         self._ready = threading.Event()
 
-    def __enter__(self):
+    def __enter__(self) -> '_BagWrites':
         if self._queue is None:
             self._writer = self._open()
             return self
@@ -383,7 +392,7 @@ class _BagWrites:
             raise self._error
         return self
 
-    def _work(self):
+    def _work(self) -> None:
         try:
             writer = self._open()
         except BaseException as err:  # noqa: B036 - raised in the caller
@@ -391,6 +400,7 @@ class _BagWrites:
             return
         finally:
             self._ready.set()
+        assert self._queue is not None  # the thread runs only when threaded
         try:
             while (item := self._queue.get()) is not None:
                 if self._error is None:
@@ -414,10 +424,11 @@ class _BagWrites:
             raise self._error
         self._queue.put((method, args, kwargs))
 
-    def __exit__(self, exc_type, exc, tb):
+    def __exit__(self, exc_type: Any, exc: Optional[BaseException], tb: Any) -> Any:
         if self._queue is None:
             return self._writer.__exit__(exc_type, exc, tb)
         self._queue.put(None)  # the thread drains the queue, also after an error
+        assert self._thread is not None  # started by __enter__ when threaded
         self._thread.join()
         if self._error is not None and exc is None:
             raise self._error

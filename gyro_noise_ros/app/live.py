@@ -30,7 +30,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
-from ..core.engine import AXES, ChunkResult, EngineConfig, NoiseEngine
+from ..core.engine import AXES, ChunkJob, ChunkResult, EngineConfig, NoiseEngine
 from ..core.fractional import make_grid
 from ..core.health import HealthThresholds
 from ..errors import GyroNoiseError, ParameterError
@@ -134,8 +134,8 @@ class TemperatureTrack:
     """
 
     def __init__(self) -> None:
-        self.stamp_ns = None
-        self.temperature_c = None
+        self.stamp_ns: Optional[np.ndarray] = None
+        self.temperature_c: Optional[np.ndarray] = None
 
     def add(self, stamp_ns: np.ndarray, temperature_c: np.ndarray) -> None:
         """
@@ -153,7 +153,7 @@ class TemperatureTrack:
         temperature_c = np.asarray(temperature_c, np.float64)
         if not stamp_ns.size:
             return
-        if self.stamp_ns is not None:
+        if self.stamp_ns is not None and self.temperature_c is not None:  # both or neither
             # Keep the previous latest message so samples between two batches are interpolated.
             stamp_ns = np.concatenate((self.stamp_ns[-1:], stamp_ns))
             temperature_c = np.concatenate((self.temperature_c[-1:], temperature_c))
@@ -175,7 +175,7 @@ class TemperatureTrack:
             degC per stamp; one float when only one message is known; None before any.
 
         """
-        if self.stamp_ns is None:
+        if self.stamp_ns is None or self.temperature_c is None:  # both or neither
             return None
         if self.stamp_ns.size == 1:
             return float(self.temperature_c[0])
@@ -208,15 +208,20 @@ class LiveAnalysis:
         self.config = config
         self.engine = NoiseEngine(config, reference=reference, thresholds=thresholds)
         self.temperature = TemperatureTrack()
-        self.results = deque(maxlen=10_000)  # recent ChunkResults in completion order
-        self.last = {}  # axis -> latest ChunkResult
+        # recent ChunkResults in completion order
+        self.results: deque[ChunkResult] = deque(maxlen=10_000)
+        self.last: Dict[str, ChunkResult] = {}  # axis -> latest ChunkResult
         self.rejected_batches = 0
         self.last_rejection = ''
         self.last_batch_rejected = False
-        self._chunks = {}  # chunk index -> {axis: ChunkResult} until all axes are in
-        self._jobs = queue.Queue(maxsize=int(queue_chunks) * len(config.axes))
-        self._done = queue.SimpleQueue()
-        self._finished = []
+        # chunk index -> {axis: ChunkResult} until all axes are in
+        self._chunks: Dict[int, Dict[str, ChunkResult]] = {}
+        self._jobs: queue.Queue[ChunkJob] = queue.Queue(
+            maxsize=int(queue_chunks) * len(config.axes))
+        # (job, result, None) or (job, None, the error the analysis raised)
+        self._done: queue.SimpleQueue[
+            Tuple[ChunkJob, Optional[ChunkResult], Optional[Exception]]] = queue.SimpleQueue()
+        self._finished: List[ChunkResult] = []
         self._stop = threading.Event()
         self._on_worker_start = on_worker_start
         self._worker = threading.Thread(target=self._work, name='noise_analyzer_worker',
@@ -305,6 +310,7 @@ class LiveAnalysis:
             if err is not None:
                 result = self.engine.skip(job, f'analysis failed: {err}')
             else:
+                assert result is not None  # no error: the worker put a result
                 self.engine.record(result)
             self._finish(result)
         finished, self._finished = self._finished, []

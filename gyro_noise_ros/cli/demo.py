@@ -101,6 +101,7 @@ def _body(argv: List[str]) -> int:
     result = run_demo(params)
     if result.interrupted:
         return 130
+    assert result.report is not None  # a run not interrupted has its report
     _print_outputs(result.report, result.elapsed_s)
     return 0
 

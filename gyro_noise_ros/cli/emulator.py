@@ -40,7 +40,7 @@ import argparse
 from pathlib import Path
 import signal
 import sys
-from typing import BinaryIO, List, Optional
+from typing import BinaryIO, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -69,7 +69,7 @@ from ..outputs import atomic_write_text
 PROG = 'portenta_emulator'
 
 
-def _float_list(text: str) -> List[float]:
+def _float_list(text: str) -> Union[float, Tuple[float, ...]]:
     try:
         values = [float(v) for v in text.split(',')]
     except ValueError as err:
@@ -257,8 +257,9 @@ def _check_args(args: argparse.Namespace) -> None:
 
 def _write_sd(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
               truth_fh: Optional[BinaryIO], counters: Counters) -> int:
-    options = SdOptions(out_dir=args.write_sd,
-                        total=total_samples(args.samples, args.duration_s, board.odr_hz),
+    total = total_samples(args.samples, args.duration_s, board.odr_hz)
+    assert total is not None  # _check_args: --write-sd needs --samples or --duration-s
+    options = SdOptions(out_dir=args.write_sd, total=total,
                         sequence_id=args.sequence_id, max_file_bytes=args.sd_file_bytes,
                         batch=args.batch, rtc_unix_s=args.rtc_unix_s,
                         corrupt=args.corrupt_rate > 0, overruns=args.fifo_overrun_rate > 0)

@@ -78,7 +78,9 @@ def format_report(rep: ImportReport, *, max_regions: int = 20) -> str:
         lines.append(f'  {os.path.basename(info.path)}  {info.size_bytes} bytes  {desc}')
     total = rep.samples_written + rep.samples_lost
     pct = 100.0 * rep.samples_lost / total if total else 0.0
-    span = (rep.last_stamp_ns - rep.first_stamp_ns) / 1e9
+    first_ns, last_ns = rep.first_stamp_ns, rep.last_stamp_ns
+    assert first_ns is not None and last_ns is not None  # an import writes samples or fails
+    span = (last_ns - first_ns) / 1e9
     lines += [
         f'samples written        {rep.samples_written}',
         f'samples lost           {rep.samples_lost} ({pct:.4f} %; {rep.samples_flagged_lost} '
@@ -88,8 +90,8 @@ def format_report(rep: ImportReport, *, max_regions: int = 20) -> str:
         f'truncated frames       {rep.frames_truncated}',
         f'time jumps             {rep.time_jumps}',
         f'missing files          {", ".join(map(str, rep.missing_file_indices)) or "none"}',
-        f'stamps                 {rep.first_stamp_ns / 1e9:.6f} s .. '
-        f'{rep.last_stamp_ns / 1e9:.6f} s ' f'({span:.3f} s, epoch {rep.epoch})',
+        f'stamps                 {first_ns / 1e9:.6f} s .. '
+        f'{last_ns / 1e9:.6f} s ' f'({span:.3f} s, epoch {rep.epoch})',
         'scaling                ' + '; '.join(f'gyro +/-{g} dps, accel +/-{a} g, ODR {o} Hz' for g,
                                               a, o in rep.configurations),
         f'corrupt regions        {rep.corrupt_region_count}',]

@@ -94,8 +94,8 @@ class Chunker:
         if size_i != size or size_i < 2:
             raise ParameterError(f'chunk size must be an integer >= 2, got {size!r}')
         self.size = size_i
-        self._parts = []  # tuples of aligned column arrays
-        self._shape = None
+        self._parts: list[tuple[np.ndarray, ...]] = []  # tuples of aligned column arrays
+        self._shape: tuple[tuple[int, ...], ...] | None = None
         self._buffered = 0
         self.samples_in = 0
         self.chunks_out = 0
@@ -147,7 +147,7 @@ class Chunker:
             old, new = (s[0] if len(s) == 1 else s for s in (self._shape, shape))
             raise InputDataError(f'sample shape changed from {old} to {new}')
         self.samples_in += n
-        out = []
+        out: list[tuple[np.ndarray, ...]] = []
         if n == 0:
             return out
         self._parts.append(columns)

@@ -90,6 +90,7 @@ beside it).
 from collections import deque
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -158,11 +159,11 @@ class EngineConfig:
 
     chunk_size: int = DEFAULT_CHUNK_SIZE
     axes: tuple = AXES
-    alphas: np.ndarray = None
+    alphas: np.ndarray | None = None
     memory: int = DEFAULT_MEMORY
     demean: bool = True
-    max_lag: int = None
-    rate_hz: float = None
+    max_lag: int | None = None
+    rate_hz: float | None = None
     gap_factor: float = 1.5
     gap_policy: str = 'flag'
     allan: bool = True
@@ -198,14 +199,19 @@ class EngineConfig:
         identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory),
                        bool(self.demean), self.max_lag)
 
+    def _grid(self) -> np.ndarray:
+        """Return the order grid (never None once built: ``__post_init__`` fills the default)."""
+        assert self.alphas is not None
+        return self.alphas
+
     def identifier_key(self) -> tuple:
         """Return the hashable arguments of :func:`identifier_for` for this configuration."""
-        return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory),
+        return (int(self.chunk_size), tuple(self._grid().tolist()), int(self.memory),
                 bool(self.demean), None if self.max_lag is None else int(self.max_lag))
 
     def as_dict(self) -> dict:
         """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
-        a = self.alphas
+        a = self._grid()
         return {
             'chunk_size': int(self.chunk_size), 'axes': list(self.axes),
             'order_grid': {'start': float(a[0]), 'stop': float(a[-1]),
@@ -368,8 +374,8 @@ class ChunkResult:
     temperature_c: float
     status: str
     message: str = ''
-    var_curve: np.ndarray = field(default=None, repr=False, compare=False)
-    j_curve: np.ndarray = field(default=None, repr=False, compare=False)
+    var_curve: np.ndarray | None = field(default=None, repr=False, compare=False)
+    j_curve: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __eq__(self, other: object) -> bool:
         """Compare field by field, NaN equal to NaN (curves are not compared)."""
@@ -378,7 +384,7 @@ class ChunkResult:
         return all(_same(getattr(self, f.name), getattr(other, f.name))
                    for f in fields(self) if f.compare)
 
-    __hash__ = None
+    # Defining __eq__ leaves the class unhashable (Python sets __hash__ to None).
 
 
 def analyze_chunk(job: ChunkJob, identifier: OrderIdentifier | None = None, *,
@@ -404,14 +410,17 @@ def analyze_chunk(job: ChunkJob, identifier: OrderIdentifier | None = None, *,
     ChunkResult
 
     """
-    base = {'axis': job.axis, 'chunk': job.chunk, 't_start_s': job.t_start_s,
-            't_mid_s': job.t_mid_s, 'stamp_start_ns': job.stamp_start_ns,
-            'samples': int(job.samples.shape[0]), 'samples_lost': job.samples_lost,
-            'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
-            'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
-    empty = {'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
-             'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False,
-             'noise_colour': _NAN}
+    # keyword arguments of ChunkResult, of mixed types
+    base: dict[str, Any] = {
+        'axis': job.axis, 'chunk': job.chunk, 't_start_s': job.t_start_s,
+        't_mid_s': job.t_mid_s, 'stamp_start_ns': job.stamp_start_ns,
+        'samples': int(job.samples.shape[0]), 'samples_lost': job.samples_lost,
+        'gaps': job.gaps, 'nan_samples': job.nan_samples, 'bias_rad_s': job.bias_rad_s,
+        'variance_rad2_s2': job.variance_rad2_s2, 'temperature_c': job.temperature_c}
+    empty: dict[str, Any] = {
+        'alpha_var': _NAN, 'f_var': _NAN, 'var_min': _NAN, 'alpha_corr': _NAN,
+        'f_corr': _NAN, 'j_min': _NAN, 'tie_var': False, 'tie_corr': False,
+        'noise_colour': _NAN}
     if job.status == 'nan':
         return ChunkResult(**base, **empty, status='nan',
                            message=f'{job.nan_samples} NaN/Inf sample(s) on axis {job.axis}')
@@ -573,7 +582,7 @@ class AllanFeed:
     def __init__(self, axes: tuple, taus: str) -> None:
         self.axes = axes
         self.taus = taus
-        self._acc = None
+        self._acc: dict[str, AllanAccumulator] | None = None
         self.error = ''  # why the Allan deviation is unavailable
 
     def feed(self, gyro: np.ndarray, rate_hz: float) -> None:
@@ -651,7 +660,7 @@ class SequenceBook:
                'temperature', 'noise_colour')
 
     def __init__(self, axes: tuple, history: int) -> None:
-        self._rows = {a: deque(maxlen=history or None) for a in axes}
+        self._rows: dict[str, deque[tuple]] = {a: deque(maxlen=history or None) for a in axes}
         self.nan_samples = dict.fromkeys(axes, 0)
         self.by_status = {a: dict.fromkeys(STATUSES, 0) for a in axes}
         self.last = dict.fromkeys(axes)
@@ -734,7 +743,7 @@ class NoiseEngine:
         self.reference = reference_per_axis(reference, self.config.axes)
         self._cols = [AXES.index(a) for a in self.config.axes]
         self._key = self.config.identifier_key()
-        grid = self.config.alphas
+        grid = self.config._grid()
         # the grid's step (its mean step if uneven): the floor of the orders' chunk spread
         self._order_step = float((grid[-1] - grid[0]) / (grid.size - 1)) if grid.size > 1 else 0.0
         self._stamps = StampAccountant(self.config.rate_hz, self.config.gap_factor,
@@ -805,6 +814,7 @@ class NoiseEngine:
         for batch in batches:
             temp, g = batch.payload
             if self.config.allan:
+                assert self._stamps.period_ns is not None  # known before samples are released
                 self._allan.feed(g, _NS / self._stamps.period_ns)
             if self.config.gap_policy == 'split' and batch.gap.any():
                 # A new chunk starts at the first sample after each gap; the partial chunk
@@ -827,6 +837,8 @@ class NoiseEngine:
     def _push(self, rel: np.ndarray, lost: np.ndarray, temp: np.ndarray,
               g: np.ndarray) -> list[ChunkJob]:
         jobs = []
+        first_ns = self._stamps.first_ns
+        assert first_ns is not None  # set by the first released samples
         chunks = self._chunker.push_columns(rel, lost, temp, g)
         first_index = self._chunker.chunks_out - len(chunks)
         for index, (rel_c, lost_c, temp_c, g_c) in enumerate(chunks, first_index):
@@ -837,7 +849,7 @@ class NoiseEngine:
             dropped = gaps > 0 and (self.config.gap_policy == 'drop'
                                     or (bursty and self.config.gap_policy == 'split'))
             chunk = chunk_jobs(index, rel_c, samples_lost, gaps, temp_c,
-                               g_c, axes=self.config.axes, first_ns=self._stamps.first_ns,
+                               g_c, axes=self.config.axes, first_ns=first_ns,
                                dropped=dropped, identifier_key=self._key)
             for job in chunk:
                 self._book.nan_samples[job.axis] += job.nan_samples

@@ -221,11 +221,11 @@ class ReferenceStats:
     chunks: int = 0
     source: str = ''
     offset_drift_stderr_rad_s2: float = float('nan')
-    bias: RobustLocation = None
-    log_variance: RobustLocation = None
-    alpha_var: RobustLocation = None
-    alpha_corr: RobustLocation = None
-    noise_colour: RobustLocation = None
+    bias: RobustLocation | None = None
+    log_variance: RobustLocation | None = None
+    alpha_var: RobustLocation | None = None
+    alpha_corr: RobustLocation | None = None
+    noise_colour: RobustLocation | None = None
 
     @classmethod
     def from_sequence(cls, sequence, *, source=''):

@@ -160,7 +160,7 @@ class StreamCounts:
     rate_method: str = ''
     bursty: bool = False
     jitter_s: float = float('nan')
-    timebase: object = None
+    timebase: RateEstimate | None = None
     clock_steps: int = 0
     equal_stamps: int = 0
     longest_gaps: tuple = ()
@@ -210,7 +210,8 @@ class StampAccountant:
         self.gap_factor = float(gap_factor)
         self.chunk_size = int(chunk_size)
         self.period_ns = None if rate_hz is None else _NS / float(rate_hz)
-        self._pending = []  # (stamps, payload) batches held until the stamp pattern is known
+        # (stamps, payload) batches held until the stamp pattern is known
+        self._pending: list[tuple[np.ndarray, tuple]] = []
         self._timebase = TimebaseTracker()
         self._classified = False
         self.bursty = False
@@ -220,18 +221,20 @@ class StampAccountant:
         self._step_tol = 0.45
         self._clock_steps = 0
         self._chunk_loss_events = 0
-        self._estimate_cache = (None, None)
-        self.first_ns = None
-        self._last_ns = None
-        self._max_ns = None
+        self._estimate_cache: tuple[int | None, RateEstimate | None] = (None, None)
+        self.first_ns: int | None = None
+        self._last_ns: int | None = None
+        self._max_ns: int | None = None
         self._samples = 0
         self._lost = 0
         self._gaps = 0
         self._out_of_order = 0
         self._equal = 0
         self._credit = 0  # zero steps at the end of the last batch not paid to a long step
-        self._hold = None  # (stamps, payload) of an equal-stamp group after a long step
-        self._gap_events = []  # (t_s, length_s, missing samples), the longest MAX_GAP_EVENTS
+        # (stamps, payload) of an equal-stamp group after a long step
+        self._hold: tuple[np.ndarray, tuple] | None = None
+        # (t_s, length_s, missing samples), the longest MAX_GAP_EVENTS
+        self._gap_events: list[tuple[float, float, int]] = []
 
     @property
     def held_samples(self) -> int:
@@ -330,6 +333,7 @@ class StampAccountant:
     def _set_mode(self, est: RateEstimate) -> None:
         self.bursty = bool(est.bursty)
         if self.bursty:
+            assert self.period_ns is not None  # set from ``est`` just before
             rate = _NS / self.period_ns
             rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(
                 est.stamp_rate_se_hz) else 0.0
@@ -342,6 +346,8 @@ class StampAccountant:
         if first:
             self.first_ns = int(stamps[0])
             self._max_ns = int(stamps[0])
+        # both known here: stamps are processed only once the rate is known
+        assert self._max_ns is not None and self.period_ns is not None
         # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order
         # count and does not also make the next step look like a gap.
         run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
@@ -407,6 +413,7 @@ class StampAccountant:
         self._out_of_order += int(np.count_nonzero(steps < 0))
         self._equal += int(np.count_nonzero(steps == 0))
         lost, gap = self._gaps_of(steps)
+        assert self.first_ns is not None  # set by _steps
         if gap.any():
             self._gaps += int(gap.sum())
             self._lost += int(lost.sum())
@@ -500,7 +507,7 @@ class StampAccountant:
             chunks=chunks, tail_samples=tail_samples + self.held_samples,
             discarded_samples=discarded_samples, discarded_partials=discarded_partials,
             rate_hz=rate, duration_s=(self._last_ns - self.first_ns) / 1e9
-            if self.first_ns is not None else 0.0,
+            if self.first_ns is not None and self._last_ns is not None else 0.0,
             rate_method=est.method if est is not None else '', bursty=self.bursty,
             jitter_s=est.jitter_s if est is not None else _NAN, timebase=est,
             clock_steps=self._clock_steps, equal_stamps=self._equal,

@@ -184,8 +184,8 @@ class CompensationTask:
         self.calibration_source = calibration_source
         self.out_of_range_action = out_of_range_action
         self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'temperatures'), 0)
-        self.last_data_s = None
-        self.last_temperature_s = None
+        self.last_data_s: float | None = None
+        self.last_temperature_s: float | None = None
         self._late_reported = 0  # the hold's late count up to the previous published status
         self._rate = (now, 0, math.nan)  # time, published count, Hz
 

@@ -68,7 +68,7 @@ class Measurement:
     rate: np.ndarray
     t_s: np.ndarray
     rate_hz: float
-    temperature_c: np.ndarray = None
+    temperature_c: np.ndarray | None = None
     axis: str = 'z'
     source: str = ''
     timebase: object = None

@@ -123,7 +123,7 @@ class Layout:
     band_edges: np.ndarray
     chunk: int
     hist_edges: np.ndarray
-    lattice: tuple = None
+    lattice: tuple | None = None
     temperature: bool = False
 
     @property

@@ -111,8 +111,8 @@ class Step:
     where_after: list
     candidates: dict
     time_scales: dict = field(default_factory=dict)
-    before: dict = field(repr=False, default=None)
-    after: dict = field(repr=False, default=None)
+    before: dict | None = field(repr=False, default=None)
+    after: dict | None = field(repr=False, default=None)
 
 
 @dataclass(frozen=True)

@@ -309,9 +309,9 @@ class PtyPort:
 
     def __init__(self, link: Optional[str] = None) -> None:
         self.link = link
-        self.fd = None
-        self.path = None
-        self._poll = None
+        self.fd: Optional[int] = None
+        self.path = ''  # the pty's device, set by plug()
+        self._poll: Optional[select.poll] = None
         self.plug()
 
     def plug(self) -> None:
@@ -343,12 +343,14 @@ class PtyPort:
         return self.link or self.path
 
     def connected(self) -> bool:
-        if self.fd is None:
+        if self.fd is None or self._poll is None:  # both set by plug()
             return False
         events = self._poll.poll(0)
         return not any(ev & select.POLLHUP for _, ev in events)
 
     def read(self) -> bytes:
+        if self.fd is None:
+            return b''  # unplugged (the loop reads only a connected port)
         try:
             return os.read(self.fd, 4096)
         except (BlockingIOError, InterruptedError):
@@ -357,6 +359,8 @@ class PtyPort:
             return b''  # EIO: no client
 
     def write(self, data: bytes) -> int:
+        if self.fd is None:
+            return -1  # unplugged (the loop writes only to a connected port)
         try:
             return os.write(self.fd, data)
         except (BlockingIOError, InterruptedError):
@@ -387,9 +391,9 @@ class TcpPort:
     """
 
     def __init__(self, spec: str) -> None:
-        host, _, port = spec.rpartition(':')
+        host, _, port_text = spec.rpartition(':')
         try:
-            port = int(port)
+            port = int(port_text)
         except ValueError as err:
             raise ParameterError(f'--tcp must be HOST:PORT, got {spec!r}') from err
         host = host or '127.0.0.1'
@@ -402,7 +406,7 @@ class TcpPort:
             raise LinkError(f'cannot listen on --tcp {spec!r}: {err}') from err
         self.listener.listen(4)
         self.listener.setblocking(False)
-        self.client = None
+        self.client: Optional[socket.socket] = None
         self.plugged = True
         self.name = f'socket://{host}:{self.listener.getsockname()[1]}'
 
@@ -496,10 +500,10 @@ class _Link:
         self.paced_odr = board.odr_hz
         self.period = 1.0 / (board.odr_hz * options.speed)
         self.was_connected = False
-        self.connected_since = None
+        self.connected_since: Optional[float] = None
         self.sent_this_connection = 0
         self.disconnect_after = options.disconnect_after
-        self.unplugged_until = None
+        self.unplugged_until: Optional[float] = None
 
     def track_connection(self, now: float) -> bool:
         """Replug when due, accept a TCP client, count (dis)connections; return connected."""
@@ -579,7 +583,9 @@ class _Link:
         if self.disconnect_after is not None and (self.sent_this_connection
                                                   >= self.disconnect_after):
             unplug, self.disconnect_after = True, None
-        if options.disconnect_every_s and now - self.connected_since >= options.disconnect_every_s:
+        # connected_since is set at the first connection; this runs only while connected
+        if (options.disconnect_every_s and self.connected_since is not None
+                and now - self.connected_since >= options.disconnect_every_s):
             unplug = True
         if unplug:
             self.port.unplug()
@@ -594,7 +600,8 @@ class _Link:
         wait = max(0.001, min(0.02, self.seg_t0 + (self.counters.samples_generated - self.seg_n0
                                                    + self.options.batch)
                               * self.period - time.monotonic()))
-        rlist = [port.fd] if (connected and port.fd is not None) else []
+        rlist: List[Union[int, socket.socket]] = (
+            [port.fd] if (connected and port.fd is not None) else [])
         if isinstance(port, TcpPort) and port.client is None:
             rlist.append(port.listener)
         wlist = [port.fd] if (connected and self.outbuf and port.fd is not None) else []

@@ -35,6 +35,7 @@ the analyzer use both.
 """
 
 import ctypes
+from typing import Any
 
 import numpy as np
 
@@ -66,7 +67,8 @@ class _Uint8Array(ctypes.Structure):
                 ('buffer_capacity', ctypes.c_size_t), ('allocator', _Allocator)]
 
 
-_LIB = {}
+# the libraries and their functions, by name (CDLL objects and function pointers)
+_LIB: dict[str, Any] = {}
 
 
 def _libraries():

@@ -19,6 +19,7 @@ The whole chain runs, the drift is detected, the report is written, and every su
 afterwards, also after a Ctrl-C in the middle.
 """
 
+import json
 import os
 from pathlib import Path
 import random
@@ -28,6 +29,7 @@ import sys
 import threading
 import time
 
+from _html_report import check_in_browser, check_static
 import pytest
 
 pytestmark = pytest.mark.ros
@@ -70,10 +72,14 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
     assert any(line.strip().split('] ', 1)[-1].startswith('WARN')
                for line in done.stdout.splitlines())
     report = out / 'report'
-    for name in ('summary.md', 'summary.json', 'chunks.csv', 'allan.csv', 'imu.yaml', 'bias.png',
-                 'allan.png'):
+    for name in ('report.html', 'summary.md', 'summary.json', 'chunks.csv', 'allan.csv',
+                 'imu.yaml', 'bias.png', 'allan.png'):
         assert (report / name).is_file(), name
         assert str(report / name) in done.stdout  # the demo ends by saying where they are
+    # the one page to open: the summary's numbers, under 5 MB, drawn in a browser
+    assert (report / 'report.html').stat().st_size <= 5 * 1024 * 1024
+    check_static(report / 'report.html', json.loads((report / 'summary.json').read_text()))
+    check_in_browser(report / 'report.html', tmp_path, figures=4)
     assert (out / 'recording' / 'metadata.yaml').is_file()
     assert 'finished: the report is complete' in (out / 'GYRO_NOISE_DEMO.txt').read_text()
     assert _our_processes(domain) == []

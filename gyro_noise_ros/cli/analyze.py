@@ -28,8 +28,8 @@ batches (constant memory apart from one small row per chunk), runs
 :class:`gyro_noise_ros.core.engine.NoiseEngine` with the chunk identification spread over
 ``--jobs`` worker processes (at most ``4 x jobs`` plus one decoded batch of chunks in flight),
 and writes chunks.csv,
-summary.json, summary.md, allan.csv, imu.yaml, curves.npz and PNG figures into DIR. Formats and
-exit codes: ``docs/offline_tool.md``.
+summary.json, summary.md, allan.csv, imu.yaml, curves.npz, PNG figures and report.html into DIR.
+Formats and exit codes: ``docs/offline_tool.md``.
 """
 
 import argparse
@@ -57,6 +57,7 @@ from ..core.fractional import DEFAULT_MEMORY, parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
 from ..core.plausible import mask_non_physical, MAX_RATE_RAD_S, MAX_SPECIFIC_FORCE_M_S2
 from ..errors import InputDataError, nothing_left_error, OutputError, ParameterError
+from ..htmlreport.analyze import write_analyze_html
 from ..outputs import staged_output
 
 PROG = 'gyro_noise_analyze'
@@ -137,6 +138,8 @@ def build_parser():
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
                         f'({DEFAULT_CURVES}; 0 = none)')
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
+    p.add_argument('--no-html', action='store_true',
+                   help='write no report.html (the interactive one-file report)')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
     p.add_argument(
         '--allan-taus', default='dense', choices=('octave', 'dense'),
@@ -222,7 +225,7 @@ def _one_blas_thread(func):
 def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=None, config=None,
                  jobs=1, reference=None, reference_bag=None, thresholds=None, figures=True,
                  curves=DEFAULT_CURVES, batch_size=DEFAULT_BATCH, progress=False, command=None,
-                 start_s=None, end_s=None, static='auto', scheduler=None):
+                 start_s=None, end_s=None, static='auto', scheduler=None, html=True):
     """
     Analyse bags and write the report files (the body of gyro_noise_analyze, callable from Python).
 
@@ -248,6 +251,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
         Health thresholds (default: :class:`HealthThresholds()`).
     figures : bool
         Write PNG figures.
+    html : bool
+        Write report.html (:mod:`..htmlreport.analyze`).
     curves : int
         Chunks per bag and axis whose curves are kept.
     batch_size : int
@@ -395,6 +400,8 @@ def analyze_bags(paths, *, out_dir, labels=None, topic=None, temperature_topic=N
                 files.append(out / 'curves.npz')
             if figures:
                 files += _write_figures(out, config, per_chunk, curve_store)
+            if html:
+                files.append(write_analyze_html(out, doc, per_chunk, allan_store))
         doc['_timing'] = {'total_s': time.perf_counter() - started, **timing}
         doc['_files'] = [str(f) for f in files]
     # the files under their published names
@@ -653,7 +660,8 @@ def _analysis_pass(path, label, imu_topic, temperature_topic, config, ref, thres
         def finish(result):
             engine.record(result)
             csv_writer.write(label, result)
-            rows[result.axis].append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2))
+            rows[result.axis].append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
+                                      result.alpha_var, result.alpha_corr))
             if result.var_curve is not None:
                 curve_store.setdefault((label, result.axis), []).append(
                     (result.chunk, result.var_curve, result.j_curve))
@@ -807,7 +815,7 @@ def _bag_doc(state, path, label, imu_topic, config, ref, select, segment, per_ch
         warnings.append(text)
         warn(f'{label}: {text}')
     for axis, s in summaries.items():
-        per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 3)))
+        per_chunk.setdefault(axis, []).append((label, np.array(rows[axis]).reshape(-1, 5)))
         if s.allan is not None:
             allan_store[(label, axis)] = (s.allan, s.noise_terms, s.readout)
     return {
@@ -1017,7 +1025,7 @@ def _body(argv):
                        figures=not args.no_figures, curves=args.curves,
                        batch_size=args.batch_size, progress=not args.quiet, command=[PROG, *argv],
                        start_s=args.start, end_s=args.end, static=args.static,
-                       scheduler=args.scheduler)
+                       scheduler=args.scheduler, html=not args.no_html)
     if not args.quiet:
         _print_summary(doc)
     return 0

@@ -35,8 +35,6 @@ CHROMIUM = '/usr/bin/chromium'
 CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
                  '--disable-background-networking', '--disable-component-update',
                  '--disable-sync']
-#: The first colour of the figures' palette (Bokeh Category10): every figure's first curve.
-FIRST_COLOUR = (0x1F, 0x77, 0xB4)
 
 
 class _Parser(HTMLParser):
@@ -45,7 +43,7 @@ class _Parser(HTMLParser):
     def __init__(self):
         super().__init__(convert_charrefs=True)
         self.data = None
-        self.nums = []        # (pointer, fmt, text)
+        self.nums = []        # (pointer, fmt, text, scale)
         self.cells = []       # text of each <td> of section#tables outside the number spans
         self.refs = []        # (tag, attribute, value)
         self.sections = {}    # id -> text
@@ -53,6 +51,7 @@ class _Parser(HTMLParser):
         self._script_json = False
         self._json = []
         self._num = None
+        self._key = False
         self._cell = None
         self._section = None
 
@@ -68,8 +67,11 @@ class _Parser(HTMLParser):
             self.sections.setdefault(self._section, '')
         if tag == 'td' and self._section == 'tables':
             self._cell = []
+        if tag == 'code' and attrs.get('class') == 'key' and self._cell is not None:
+            self._key = True
         if tag == 'span' and attrs.get('class') == 'num':
-            self._num = [attrs['data-json'], attrs['data-fmt'], '']
+            self._num = [attrs['data-json'], attrs['data-fmt'], '',
+                         float(attrs.get('data-scale', '1.0'))]
 
     def handle_endtag(self, tag):
         if tag == 'script' and self._script_json:
@@ -78,6 +80,8 @@ class _Parser(HTMLParser):
         if tag == 'span' and self._num is not None:
             self.nums.append(tuple(self._num))
             self._num = None
+        if tag == 'code':
+            self._key = False
         if tag == 'td' and self._cell is not None:
             self.cells.append(''.join(self._cell))
             self._cell = None
@@ -89,7 +93,8 @@ class _Parser(HTMLParser):
             self._json.append(data)
         elif self._num is not None:
             self._num[2] += data
-        elif self._cell is not None:
+        elif self._cell is not None and not self._key:
+            # a JSON key name (code.key) may hold a unit's digits (m_s2): not a number
             self._cell.append(data)
         if self._section is not None:
             self.sections[self._section] += data
@@ -112,17 +117,17 @@ def resolve(doc, pointer):
     return value
 
 
-def shown(value, fmt):
-    """How a value must read on the page."""
+def shown(value, fmt, scale=1.0):
+    """How a value must read on the page (numbers times ``scale``, a unit conversion)."""
     if value is None:
         return 'n/a'
     if isinstance(value, bool):
         return 'yes' if value else 'no'
     if isinstance(value, str):
         return value
-    if isinstance(value, int) and fmt in ('', 'd'):
+    if isinstance(value, int) and fmt in ('', 'd') and scale == 1.0:
         return str(value)
-    return format(value, fmt)
+    return format(value * scale if scale != 1.0 else value, fmt)
 
 
 def check_static(html_path, json_doc, *, min_numbers=1):
@@ -135,8 +140,8 @@ def check_static(html_path, json_doc, *, min_numbers=1):
     # the page carries exactly the JSON document the tool wrote
     assert page.data == json_doc
     assert len(page.nums) >= min_numbers
-    for pointer, fmt, text in page.nums:
-        assert text == shown(resolve(json_doc, pointer), fmt), (pointer, fmt, text)
+    for pointer, fmt, text, scale in page.nums:
+        assert text == shown(resolve(json_doc, pointer), fmt, scale), (pointer, fmt, text)
     # every digit in a table cell is inside a number span that came from the JSON
     for cell in page.cells:
         assert not re.search(r'\d', cell), cell
@@ -169,8 +174,8 @@ def check_in_browser(html_path, tmp_path, *, figures):
     """
     Load a report.html in headless Chromium and check it.
 
-    Asserts no console error, no request leaving the file and every figure drawn (its first
-    curve's colour on screen); keeps a full-page screenshot under ``tmp_path``, returns its path.
+    Asserts no console error, no request leaving the file and every figure drawn (its curves'
+    colours on screen); keeps a full-page screenshot under ``tmp_path``, returns its path.
     """
     try:
         from playwright.sync_api import sync_playwright
@@ -179,7 +184,6 @@ def check_in_browser(html_path, tmp_path, *, figures):
     exe = CHROMIUM if os.path.exists(CHROMIUM) else shutil.which('chromium')
     if not exe:
         _no_browser(f'{CHROMIUM} not found')
-    import numpy as np
 
     errors, requests = [], []
     with sync_playwright() as pw:
@@ -212,10 +216,12 @@ def check_in_browser(html_path, tmp_path, *, figures):
                 div = divs.nth(k)
                 div.scroll_into_view_if_needed()
                 px = _pixels(div.screenshot())
-                near = np.all(np.abs(px - np.array(FIRST_COLOUR)) <= 40, axis=-1)
-                # a drawn curve with markers covers hundreds of pixels; a blank or failed
-                # figure has none of the palette's colour
-                assert near.sum() >= 50, f'figure {k} looks blank ({near.sum()} curve pixels)'
+                # Axes, text and toolbar are grey or black; the curves are the palette's
+                # saturated colours. A curve across the plot covers thousands of pixels, the
+                # legend swatches about a hundred; a blank or failed figure has none of them.
+                coloured = (px.max(axis=-1) - px.min(axis=-1)) > 60
+                assert coloured.sum() >= 400, (
+                    f'figure {k} looks blank ({coloured.sum()} coloured pixels)')
                 assert px.shape[0] > 100 and px.shape[1] > 300, px.shape
         finally:
             browser.close()

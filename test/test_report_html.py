@@ -66,7 +66,7 @@ def test_every_number_on_the_page_is_the_json(analyzed):
     out, _ = analyzed
     doc = json.loads((out / 'summary.json').read_text())
     page = check_static(out / 'report.html', doc, min_numbers=100)
-    shown = {p for p, _, _ in page.nums}
+    shown = {n[0] for n in page.nums}
     # the key numbers of every bag and axis are on the page
     for i, b in enumerate(doc['bags']):
         for axis in b['axes']:
@@ -191,3 +191,180 @@ def test_demo_length_report_is_small(tmp_path):
     size = (out / 'report.html').stat().st_size
     assert size <= DEMO_LIMIT_BYTES, size
 
+
+# --- gyro_noise_thermal compare | apply ------------------------------------------------------
+
+@pytest.fixture(scope='module')
+def thermal_outputs(tmp_path_factory):
+    """Compare two toy methods and apply one (figures and pages written)."""
+    return make_thermal_outputs(tmp_path_factory.mktemp('thermal'))
+
+
+def make_thermal_outputs(tmp):
+    """Run compare (two toy methods), fit and apply (with and without --no-html) under tmp."""
+    from _thermal_toy import FirstOrderLowPass, LinearInT, write_thermal_bag
+    from gyro_noise_ros.cli.thermal import main as thermal_main
+    from gyro_noise_ros.thermal import methods
+
+    methods.register_method('toy_linear', LinearInT)
+    methods.register_method('toy_lowpass', FirstOrderLowPass)
+    try:
+        bags = []
+        for seed in (1, 2):
+            # the toy drift of test_thermal_cli: linear in T over a heating and cooling half-cosine
+            rng = np.random.default_rng(seed)
+            n = 6000
+            t = np.arange(n) / 20.0
+            temp_t = np.arange(0.0, t[-1] + 1.0, 1.0)
+            temp = 10.0 + 15.0 * (1 - np.cos(2 * np.pi * temp_t / (t[-1] + 1.0)))
+            gyro = rng.normal(0.0, 2e-3, (n, 3)) + np.outer(np.interp(t, temp_t, temp) - 25.0,
+                                                            [2e-4, -1e-4, 5e-5])
+            write_thermal_bag(tmp / f'run{seed}', t, gyro, temp_t, temp)
+            bags.append(str(tmp / f'run{seed}'))
+        quick = ['--f-lo-hz', '0.5', '--quiet']
+        assert thermal_main(['compare', *bags, '--out', str(tmp / 'c'), '--methods',
+                             'toy_linear,toy_lowpass', *quick]) == 0
+        assert thermal_main(['fit', bags[0], '--method', 'toy_linear', '--out',
+                             str(tmp / 'm'), '--quiet']) == 0
+        assert thermal_main(['apply', bags[1], '--model', str(tmp / 'm' / 'model.json'),
+                             '--out', str(tmp / 'a'), '--no-bag', *quick]) == 0
+        assert thermal_main(['apply', bags[1], '--model', str(tmp / 'm' / 'model.json'),
+                             '--out', str(tmp / 'a2'), '--no-bag', '--no-html',
+                             *quick]) == 0
+    finally:
+        methods._registered.pop('toy_linear', None)
+        methods._registered.pop('toy_lowpass', None)
+    return tmp, bags
+
+
+def test_thermal_compare_page_is_compare_json(thermal_outputs):
+    tmp, bags = thermal_outputs
+    doc = json.loads((tmp / 'c' / 'compare.json').read_text())
+    page = check_static(tmp / 'c' / 'report.html', doc, min_numbers=40)
+    shown = {n[0] for n in page.nums}
+    for name in ('toy_linear', 'toy_lowpass'):
+        for axis in 'xyz':
+            assert f'/methods/{name}/axes/{axis}/processed/residual_drift_deg_s' in shown
+    text = page.sections['in-short']
+    assert doc['best_held_out']['method'] in text
+    for m in doc['methods'].values():
+        for v in m['axes'].values():
+            assert v['verdict']['text'] in text
+    for bag in bags:
+        assert bag in page.sections['method']
+
+
+def test_thermal_apply_page_is_metrics_json(thermal_outputs):
+    tmp, _ = thermal_outputs
+    doc = json.loads((tmp / 'a' / 'metrics.json').read_text())
+    page = check_static(tmp / 'a' / 'report.html', doc, min_numbers=20)
+    assert {f'/axes/{a}/processed/residual_drift_deg_s' for a in 'xyz'} <= {
+        n[0] for n in page.nums}
+    assert (tmp / 'a' / 'report.html').read_text().count('<div class="figure">') == 4
+    assert not (tmp / 'a2' / 'report.html').exists() and (tmp / 'a2' / 'metrics.json').exists()
+
+
+# --- gyro_noise_calibrate ----------------------------------------------------------------------
+
+def make_calibration(tmp):
+    """Calibrate an emulated six-position record into tmp/cal (and tmp/cal_nohtml)."""
+    from _reliability_common import six_position_record, write_bag as write_six
+    from gyro_noise_ros.calibration.emulate import SensorErrors
+    from gyro_noise_ros.cli.calibrate import main as calibrate_main
+
+    record = six_position_record(dwell_s=20.0, seed=21,
+                                 errors=SensorErrors(gyro_bias_rad_s=(0.01, -0.02, 0.005)))
+    bag = write_six(tmp / 'six', *record)
+    assert calibrate_main([str(bag), '--gravity', '9.81', '--out', str(tmp / 'cal')]) == 0
+    assert calibrate_main([str(bag), '--gravity', '9.81', '--out', str(tmp / 'cal_nohtml'),
+                           '--no-html']) == 0
+    return tmp / 'cal', bag
+
+
+def test_calibrate_page_is_calibration_json(tmp_path):
+    out, bag = make_calibration(tmp_path)
+    doc = json.loads((out / 'calibration.json').read_text())
+    page = check_static(out / 'report.html', doc, min_numbers=40)
+    shown = {n[0]: n for n in page.nums}
+    # the SI values are shown in calibration.md's units, and checked through their scale
+    assert shown['/accel/bias_m_s2/0'][3] == pytest.approx(1 / 9.80665e-3)
+    assert '/gyro/bias_rad_s/2' in shown and '/gravity_check/dwells/0/z' in shown
+    assert 'gyro_noise_calibrate' in page.sections['method']
+    assert hashlib.sha256(next(p for p in sorted(bag.rglob('*')) if p.is_file())
+                          .read_bytes()).hexdigest() in page.sections['method']
+    assert not (tmp_path / 'cal_nohtml' / 'report.html').exists()
+    assert (tmp_path / 'cal_nohtml' / 'calibration.json').exists()
+
+
+# --- gyro_noise_reliability --------------------------------------------------------------------
+
+def make_reliability(tmp):
+    """Before/after static records (instability doubled) into tmp/rel (and tmp/rel_nohtml)."""
+    from _reliability_common import static_record, write_bag as write_rec
+    from gyro_noise_ros.calibration.emulate import SensorErrors
+    from gyro_noise_ros.cli.reliability import main as reliability_main
+
+    rate = 10.0
+    n_acc, n_gyr = 0.02 / np.sqrt(rate), 2e-3 / np.sqrt(rate)
+    # test_reliability_cli's sensor: an interval ~0.6 s .. ~125 s, closed by a 3000 s record
+    errors = SensorErrors(accel_bias_instability_m_s2=n_acc / 2 / 0.664,
+                          accel_random_walk_m_s2_sqrt_s=n_acc / 5,
+                          gyro_bias_instability_rad_s=n_gyr / 2 / 0.664,
+                          gyro_random_walk_rad_s_sqrt_s=n_gyr / 5)
+    bags = [str(write_rec(tmp / name, *static_record(errors=e, rate_hz=rate, duration_s=3000.0,
+                                                     seed=seed)))
+            for name, e, seed in (('before', errors, 1),
+                                  ('after', errors.stressed(instability_factor=2.0), 2))]
+    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures']
+    assert reliability_main([*args, '--out', str(tmp / 'rel')]) == 0
+    assert reliability_main([*args, '--out', str(tmp / 'rel_nohtml'), '--no-html']) == 0
+    return tmp / 'rel', bags
+
+
+def test_reliability_page_is_reliability_json(tmp_path):
+    out, bags = make_reliability(tmp_path)
+    doc = json.loads((out / 'reliability.json').read_text())
+    page = check_static(out / 'report.html', doc, min_numbers=30)
+    shown = {n[0] for n in page.nums}
+    for ch in ('accel_x', 'gyro_z'):
+        assert f'/bias_instability_interval/{ch}/width_before_s' in shown
+        assert f'/bias_instability_interval/{ch}/verdict' in shown
+    for ch, e in doc['bias_instability_interval'].items():
+        assert f'{ch}: {e["verdict"]}' in page.sections['in-short']
+    assert not (tmp_path / 'rel_nohtml' / 'report.html').exists()
+
+
+# --- gyro_noise_excitation ---------------------------------------------------------------------
+
+def make_excitation(tmp):
+    """Check a sine dwell before and after (5 % second harmonic after) into tmp/exc(_nohtml)."""
+    from gyro_noise_ros.cli.excitation import main as excitation_main
+
+    g, fs = 9.80665, 100.0
+    t = np.arange(3000) / fs
+    bags = []
+    for name, amp, h2, seed in (('b', 0.3 * g, 0.0, 0), ('a', 0.28 * g, 0.05, 1)):
+        rng = np.random.default_rng(seed)
+        accel = np.zeros((t.size, 3))
+        accel[:, 2] = g
+        accel[:, 0] = (amp * np.sin(2 * np.pi * 8.0 * t + 0.4)
+                       + h2 * amp * np.sin(4 * np.pi * 8.0 * t + 1) + rng.normal(0, 0.04, t.size))
+        with ImuBagWriter(tmp / name, temperature_topic=None) as w:
+            w.write_imu(T0_NS + np.round(t * 1e9).astype(np.int64), np.zeros((t.size, 3)), accel)
+        bags.append(str(tmp / name))
+    args = [*bags, '--sensor', 'accel', '--axis', 'x', '--dwell', '8', '--no-figures']
+    assert excitation_main([*args, '--out', str(tmp / 'exc')]) == 0
+    assert excitation_main([*args, '--out', str(tmp / 'exc_nohtml'), '--no-html']) == 0
+    return tmp / 'exc', bags
+
+
+def test_excitation_page_is_excitation_json(tmp_path):
+    out, _ = make_excitation(tmp_path)
+    doc = json.loads((out / 'excitation.json').read_text())
+    page = check_static(out / 'report.html', doc, min_numbers=30)
+    shown = {n[0]: n for n in page.nums}
+    # SI in the JSON, g on the page (excitation.md's unit), checked through the scale
+    assert shown['/before/amplitude_m_s2'][3] == pytest.approx(1 / 9.80665)
+    assert '/change/amplitude_relative' in shown
+    assert 'after, distortion verdict: DISTORTED' in page.sections['in-short']
+    assert not (tmp_path / 'exc_nohtml' / 'report.html').exists()

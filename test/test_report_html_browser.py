@@ -23,7 +23,8 @@ or playwright the tests skip with one line (fail under ``CI=true``): see test/_h
 from _html_report import check_in_browser
 from gyro_noise_ros.cli.analyze import main as analyze_main
 import pytest
-from test_report_html import FAST, write_bag
+from test_report_html import (FAST, make_calibration, make_excitation, make_reliability,
+                              make_thermal_outputs, write_bag)
 
 
 @pytest.mark.timeout(300)
@@ -35,3 +36,43 @@ def test_analyze_report_renders(tmp_path):
     shot = check_in_browser(out / 'report.html', tmp_path, figures=4)
     assert shot.stat().st_size > 10_000
 
+
+@pytest.mark.timeout(300)
+def test_thermal_compare_and_apply_reports_render(tmp_path):
+    tmp, _ = make_thermal_outputs(tmp_path)
+    check_in_browser(tmp / 'c' / 'report.html', tmp_path / 'compare', figures=3)
+    check_in_browser(tmp / 'a' / 'report.html', tmp_path / 'apply', figures=4)
+
+
+@pytest.mark.timeout(300)
+def test_calibrate_report_renders(tmp_path):
+    out, _ = make_calibration(tmp_path)
+    check_in_browser(out / 'report.html', tmp_path / 'shot', figures=1)
+
+
+@pytest.mark.timeout(300)
+def test_reliability_report_renders(tmp_path):
+    out, _ = make_reliability(tmp_path)
+    check_in_browser(out / 'report.html', tmp_path / 'shot', figures=2)
+
+
+@pytest.mark.timeout(300)
+def test_excitation_report_renders(tmp_path):
+    out, _ = make_excitation(tmp_path)
+    check_in_browser(out / 'report.html', tmp_path / 'shot', figures=1)
+
+
+@pytest.mark.timeout(300)
+def test_a_figure_with_nothing_drawn_is_caught(tmp_path):
+    """The rendering check can fail: a figure whose curves are all NaN shows only its legend."""
+    import numpy as np
+    from gyro_noise_ros.htmlreport.figures import series_figure
+    from gyro_noise_ros.htmlreport.page import Page, write_report_html
+
+    t = np.arange(10.0)
+    empty = series_figure([(name, t, np.full(10, np.nan)) for name in 'abc'], title='empty',
+                          x_label='time (s)', y_label='value (1)')
+    page = write_report_html(Page(title='blank', data={}, in_short_markdown='## In short',
+                                  figures=(('nothing drawn', empty),)), tmp_path / 'blank.html')
+    with pytest.raises(AssertionError, match='looks blank'):
+        check_in_browser(page, tmp_path, figures=1)

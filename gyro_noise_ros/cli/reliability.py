@@ -52,6 +52,7 @@ from ..calibration.interval import compare, DEFAULT_C, DEFAULT_MIN_EDF, DEFAULT_
 from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, unit_of
 from ..errors import InputDataError, ParameterError
+from ..htmlreport.reliability import write_reliability_html
 from ..outputs import atomic_write_text, make_out_dir, staged_output
 
 PROG = 'gyro_noise_reliability'
@@ -95,6 +96,7 @@ def build_parser():
     p.add_argument('--min-static-s', type=float, default=10.0,
                    help='shortest usable calibration dwell (s)')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
+    p.add_argument('--no-html', action='store_true', help='write no report.html')
     return p
 
 
@@ -444,6 +446,8 @@ def _body(argv):
                 atomic_write_text(stage / side / name, text)
         atomic_write_text(stage / 'reliability.json', json.dumps(doc, indent=2) + '\n')
         atomic_write_text(stage / 'reliability.md', markdown(doc))
+        if not args.no_html:
+            write_reliability_html(doc, statics, stage, command=[PROG, *argv])
         if statics and not args.no_figures:
             for sensor in ('accel', 'gyro'):
                 plot_fig6(stage / f'fig6_{sensor}.png', sensor, statics.get('before'),

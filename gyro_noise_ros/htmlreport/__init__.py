@@ -21,6 +21,6 @@ document and in-memory arrays into a page (:mod:`.analyze`, ...). Bokeh is impor
 page is written. What the page holds and why Bokeh: ``docs/report_html.md``.
 """
 
-from .page import Num, Page, render_html, Table, write_report_html
+from .page import Key, Num, Page, render_html, Table, write_report_html
 
-__all__ = ['Num', 'Page', 'Table', 'render_html', 'write_report_html']
+__all__ = ['Key', 'Num', 'Page', 'Table', 'render_html', 'write_report_html']

@@ -20,13 +20,10 @@ variance and orders; the Allan results), never from summary.md. "In short" is
 :func:`..report.in_short_markdown` of the same document.
 """
 
-import math
-
 from .figures import allan_figure, series_figure
-from .page import Num, Page, pointer, Table, write_report_html
+from .page import Key, Num, Page, pointer, Table, write_report_html
 from .. import report
-
-_DEG = 180.0 / math.pi
+from ..core.items import DEG as _DEG
 
 METHOD = """\
 Each record is cut into chunks; per chunk the bias (mean), the noise variance and the fractional
@@ -35,7 +32,8 @@ are identified by two methods (variance and correlation) over the order grid. Ac
 offset drift = least-squares slope of the chunk bias over time (Table 3; its standard error is
 valid for correlated chunk biases), variances over chunks with ddof = 1 (Tables 4-6). The
 overlapping Allan deviation of the whole record is read by the one datasheet readout
-(core/readout.py, docs/allan.md) and fitted by the five-term IEEE 952 model; intervals are 68.3 % (1 sigma).
+(core/readout.py, docs/allan.md) and fitted by the five-term IEEE 952 model; intervals are
+68.3 % (1 sigma).
 Every option of the run (chunk size, order grid, memory L, gap policy, ...) is in the Options
 table; docs/offline_tool.md explains every column.
 """
@@ -170,7 +168,7 @@ def _tables(doc):
     opts = doc['options']
     tables.append(Table(
         'Options', ('Option', 'Value'),
-        tuple((k, Num(pointer('options', k), 'g')) for k, v in opts.items()
+        tuple((Key(k), Num(pointer('options', k), 'g')) for k, v in opts.items()
               if v is None or isinstance(v, (bool, int, float, str)))))
     return tables
 

@@ -170,9 +170,9 @@ def allan_figure(curves, *, title, unit):
                  legend_label=c['name'])
         hover_renderers.append(fig.scatter('tau_s', 'adev', source=src, color=colour, size=4))
         for fit_name, fit_tau, fit_adev in c.get('fit') or ():
-            fig.line(np.asarray(fit_tau, dtype=np.float64), np.asarray(fit_adev,
-                                                                          dtype=np.float64),
-                     color=colour, line_dash='dashed', line_width=1,
+            fig.line(np.asarray(fit_tau, dtype=np.float64),
+                     np.asarray(fit_adev, dtype=np.float64), color=colour,
+                     line_dash='dashed', line_width=1,
                      legend_label=f"{c['name']}: {fit_name}")
     fig.add_tools(HoverTool(renderers=hover_renderers, tooltips=[
         ('curve', '@name'), ('tau (s)', '@tau_s{0.000g}'), (f'ADEV ({unit})', '@adev{0.0000e}'),

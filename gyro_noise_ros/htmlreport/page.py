@@ -57,12 +57,31 @@ class Num:
         ``format()`` spec for numbers (ignored for strings and booleans).
     prefix : str
         Text before the value (e.g. ``'<= '`` for an upper bound); no digits.
+    scale : float
+        Unit conversion at the edge: the cell shows ``value * scale`` (e.g. m/s^2 -> mg when
+        the JSON is SI and the table customary); 1 shows the JSON value itself.
 
     """
 
     pointer: str
     fmt: str = '.6g'
     prefix: str = ''
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class Key:
+    """
+    A JSON key name shown in a table cell (as code; its digits are a unit, not a number).
+
+    Attributes
+    ----------
+    name : str
+        The key, e.g. ``noise_density_m_s2_per_sqrt_hz``.
+
+    """
+
+    name: str
 
 
 @dataclass(frozen=True)
@@ -77,8 +96,8 @@ class Table:
     columns : tuple of str
         Column headers, units in parentheses.
     rows : tuple of tuple
-        Cells: a ``str`` (plain text), a :class:`Num`, or a tuple of both (one cell of several
-        parts, e.g. a value and its interval).
+        Cells: a ``str`` (plain text), a :class:`Num`, a :class:`Key`, or a tuple of them (one
+        cell of several parts, e.g. a value and its interval).
     note : str
         A sentence under the heading (plain text).
 
@@ -191,7 +210,7 @@ def pointer(*parts):
     return ''.join('/' + str(p).replace('~', '~0').replace('/', '~1') for p in parts)
 
 
-def format_value(value, fmt):
+def format_value(value, fmt, scale=1.0):
     """
     Format one JSON value for a table cell: None as ``n/a``, booleans as yes/no.
 
@@ -201,6 +220,8 @@ def format_value(value, fmt):
         A JSON scalar.
     fmt : str
         ``format()`` spec applied to numbers.
+    scale : float
+        Factor applied to numbers first (a unit conversion).
 
     Returns
     -------
@@ -211,10 +232,10 @@ def format_value(value, fmt):
         return 'n/a'
     if isinstance(value, bool):
         return 'yes' if value else 'no'
-    if isinstance(value, int) and fmt in ('', 'd'):
+    if isinstance(value, int) and fmt in ('', 'd') and scale == 1.0:
         return str(value)
     if isinstance(value, (int, float)):
-        return format(value, fmt)
+        return format(value * scale if scale != 1.0 else value, fmt)
     return str(value)
 
 
@@ -323,10 +344,13 @@ def _cell(doc, cell):
     for part in parts:
         if isinstance(part, Num):
             value = resolve_pointer(doc, part.pointer)
+            scale = (f' data-scale="{part.scale!r}"' if part.scale != 1.0 else '')
             out.append(f'{html.escape(part.prefix)}<span class="num" '
                        f'data-json="{html.escape(part.pointer)}" '
-                       f'data-fmt="{html.escape(part.fmt)}">'
-                       f'{html.escape(format_value(value, part.fmt))}</span>')
+                       f'data-fmt="{html.escape(part.fmt)}"{scale}>'
+                       f'{html.escape(format_value(value, part.fmt, part.scale))}</span>')
+        elif isinstance(part, Key):
+            out.append(f'<code class="key">{html.escape(part.name)}</code>')
         else:
             out.append(html.escape(str(part)))
     return '<td>' + ''.join(out) + '</td>'

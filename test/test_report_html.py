@@ -368,3 +368,24 @@ def test_excitation_page_is_excitation_json(tmp_path):
     assert '/change/amplitude_relative' in shown
     assert 'after, distortion verdict: DISTORTED' in page.sections['in-short']
     assert not (tmp_path / 'exc_nohtml' / 'report.html').exists()
+
+
+def test_page_pieces_nan_pointers_markdown(tmp_path):
+    from gyro_noise_ros.htmlreport.page import (Num, Page, pointer, resolve_pointer, Table,
+                                                write_report_html)
+
+    doc = {'a/b': {'~x': [1.5, float('nan')]}, 'none': None, 'ok': True}
+    p = pointer('a/b', '~x', 1)
+    assert p == '/a~1b/~0x/1' and resolve_pointer(doc, pointer('a/b', '~x', 0)) == 1.5
+    with pytest.raises(KeyError):
+        resolve_pointer(doc, '/missing')
+    # a NaN in a tool's JSON (json.dumps writes it) never fails the page
+    page = Page(title='t', data=doc, in_short_markdown='## In short\n\n* **a**: `b` <c>\n  d',
+                tables=(Table('T', ('Name', 'Value'),
+                              (('a', Num(p, '.3g')), ('n', Num('/none')), ('o', Num('/ok')))),))
+    text = write_report_html(page, tmp_path / 'r.html').read_text()
+    assert '>nan</span>' in text and '>n/a</span>' in text and '>yes</span>' in text
+    assert ('<ul><li><strong>a</strong>: <code>b</code> &lt;c&gt; d</li></ul>'
+            in markdown_to_html(page.in_short_markdown))
+    # no figure: no BokehJS at all
+    assert 'Bokeh' not in text

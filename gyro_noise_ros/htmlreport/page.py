@@ -404,8 +404,10 @@ def render_html(page):
     inline = Resources(mode='inline', components=['bokeh'])
 
     doc = page.data
-    # "</" inside the JSON would end the script element early: escape it as JSON allows.
-    data = json.dumps(doc, indent=1, allow_nan=False).replace('</', '<\\/')
+    # "</" inside the JSON would end the script element early: escape it as JSON allows. NaN is
+    # kept as the tools' own json.dumps writes it (the same tokens as their file): a page must
+    # never fail a run whose JSON file was written.
+    data = json.dumps(doc, indent=1).replace('</', '<\\/')
     figures = [m for _, m in page.figures]
     script, divs = components(figures) if figures else ('', ())
     parts = [

@@ -389,3 +389,38 @@ def test_page_pieces_nan_pointers_markdown(tmp_path):
             in markdown_to_html(page.in_short_markdown))
     # no figure: no BokehJS at all
     assert 'Bokeh' not in text
+
+
+# --- gyro_noise_explain ------------------------------------------------------------------------
+
+def make_explain(tmp):
+    """Explain one axis of a CSV record of the paper's noise (small ensemble) into tmp/exp."""
+    from gyro_noise_ros.cli.explain import main as explain_main
+    from gyro_noise_ros.core.simulate import simulate_fractional_noise
+
+    rate = 1000.0
+    rng = np.random.default_rng(12)
+    n = 14500
+    gyro = np.stack([simulate_fractional_noise(n, 1.3, -0.4, 1e-3, rng=rng, memory=60)
+                     for _ in range(3)], 1)
+    path = tmp / 'rec.csv'
+    lines = ['time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s']
+    lines += [f'{k / rate!r},{float(g[0])!r},{float(g[1])!r},{float(g[2])!r}'
+              for k, g in enumerate(gyro)]
+    path.write_text('\n'.join(lines) + '\n')
+    common = [str(path), '--axis', 'x', '--ensemble', '4', '--max-steps', '1', '--static',
+              'off', '--quiet']
+    assert explain_main([*common, '--out', str(tmp / 'exp')]) == 0
+    assert explain_main([*common, '--out', str(tmp / 'exp_nohtml'), '--no-html']) == 0
+    return tmp / 'exp', path
+
+
+def test_explain_page_is_explain_json(tmp_path):
+    out, _ = make_explain(tmp_path)
+    doc = json.loads((out / 'explain.json').read_text())
+    page = check_static(out / 'report.html', doc, min_numbers=12)
+    shown = {n[0] for n in page.nums}
+    assert {'/gap_initial', '/gap_final', '/baseline/alpha'} <= shown
+    assert 'Verdict:' in page.sections['in-short']
+    assert 'gyro_noise_explain' in page.sections['method']
+    assert not (tmp_path / 'exp_nohtml' / 'report.html').exists()

@@ -23,8 +23,8 @@ or playwright the tests skip with one line (fail under ``CI=true``): see test/_h
 from _html_report import check_in_browser
 from gyro_noise_ros.cli.analyze import main as analyze_main
 import pytest
-from test_report_html import (FAST, make_calibration, make_excitation, make_reliability,
-                              make_thermal_outputs, write_bag)
+from test_report_html import (FAST, make_calibration, make_excitation, make_explain,
+                              make_reliability, make_thermal_outputs, write_bag)
 
 
 @pytest.mark.timeout(300)
@@ -76,3 +76,9 @@ def test_a_figure_with_nothing_drawn_is_caught(tmp_path):
                                   figures=(('nothing drawn', empty),)), tmp_path / 'blank.html')
     with pytest.raises(AssertionError, match='looks blank'):
         check_in_browser(page, tmp_path, figures=1)
+
+
+@pytest.mark.timeout(300)
+def test_explain_report_renders(tmp_path):
+    out, _ = make_explain(tmp_path)
+    check_in_browser(out / 'report.html', tmp_path / 'shot', figures=1)

@@ -78,6 +78,8 @@ def build_parser():
                    help='Dask scheduler (tcp://host:8786): evaluate the ensemble members on that '
                    'cluster (same result; pip extra dask; docs/scale.md)')
     p.add_argument('--quiet', action='store_true', help='print only the verdict')
+    p.add_argument('--no-html', action='store_true',
+                   help='write no report.html (one per axis, beside its explain.json)')
     return p
 
 
@@ -126,18 +128,19 @@ def _body(argv):
         pool = make_executor(1, args.scheduler, warn=lambda text: print(
             f'{PROG}: warning: {text}', file=sys.stderr, flush=True))
     try:
-        return _run(args, map if pool is None else pool.map)
+        return _run(args, map if pool is None else pool.map, [PROG, *argv])
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
 
 
-def _run(args, map_fn):
+def _run(args, map_fn, command):
     from contextlib import ExitStack
 
     from ..explain.inputs import available_axes, load_input, select
     from ..explain.report import parameter_lines, verdict, write_files
     from ..explain.workflow import explain
+    from ..htmlreport.explain import write_explain_html
     from ..outputs import staged_output
 
     axes = available_axes(args.input) if args.axis == 'all' else (args.axis,)
@@ -166,6 +169,8 @@ def _run(args, map_fn):
                              progress=progress, mapper=map_fn)
             sub = f'axis_{axis}' if len(axes) > 1 else ''
             write_files(result, _mkdir(stage / sub))
+            if not args.no_html:
+                write_explain_html(result, stage / sub, command=command)
             results[axis] = (result, sub)
             print(f'{PROG}: axis {axis}: {verdict(result)} '
                   f'({out_root / sub / "explain.json"})')

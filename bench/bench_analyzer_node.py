@@ -33,7 +33,7 @@ stime) over the publishing window:
    the baselines).
 
 Received counts come from the subscriber (its exit line; the analyzer's ``Samples received`` on
-``/diagnostics``, read here). Targets (issue 4): ingestion <= 25 % of one core at 6.66 kHz; no loss
+``/diagnostics``, read here). Targets: ingestion <= 25 % of one core at 6.66 kHz; no loss
 at 4x.
 
 Run: ``.venv/bin/python bench/bench_analyzer_node.py [--seconds 10] [--rates 6660,26640]``.
@@ -42,7 +42,6 @@ The machine is shared and has 2 cores: numbers vary from run to run; the ratios 
 
 import argparse
 import os
-import random
 import shlex
 import subprocess
 import sys
@@ -132,9 +131,9 @@ def _subscribe(mode, depth):
 # ---- the measurement
 # ---------------------------------------------------------------------------------
 
-def _analyzer_received(domain, timeout_s=5.0):
+def _analyzer_received(lease, timeout_s=5.0):
     """Latest 'Samples received' of noise_analyzer on /diagnostics (None if none arrived)."""
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    lease.export()
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
 
@@ -163,8 +162,14 @@ def _analyzer_received(domain, timeout_s=5.0):
 
 
 def _run(kind, rate_hz, seconds, depth, analyzer_params=()):
-    domain = random.randint(100, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
+    from gyro_noise_ros.rosgraph import lease_domain
+
+    with lease_domain() as lease:  # a private graph per run, checked free and held
+        return _run_in(lease, kind, rate_hz, seconds, depth, analyzer_params)
+
+
+def _run_in(lease, kind, rate_hz, seconds, depth, analyzer_params):
+    env = lease.env(dict(os.environ, PYTHONUNBUFFERED='1'))
     here = os.path.abspath(__file__)
     if kind == 'analyzer':
         cmd = [sys.executable, '-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args', '-p',
@@ -205,7 +210,7 @@ def _run(kind, rate_hz, seconds, depth, analyzer_params=()):
         pub.communicate(timeout=30)
         extra = {}
         if kind == 'analyzer':
-            extra = _analyzer_received(domain)
+            extra = _analyzer_received(lease)
             received = extra.pop('received', -1)
         sub.send_signal(2)
         out, _ = sub.communicate(timeout=30)

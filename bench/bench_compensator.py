@@ -15,7 +15,7 @@
 """
 CPU share of ``imu_compensator`` at 6.66 kHz, as a ratio to the driver's own cost in the same run.
 
-Issue 8/9 budget: calibration + thermal compensation at the full rate within 15 % of one core.
+Budget: calibration + thermal compensation at the full rate within 15 % of one core.
 One chain, emulator (real time, TCP loopback) -> ``lsm6dso32_driver`` -> ``imu_compensator`` ->
 a raw subscriber in this process draining ``imu/data_compensated`` every 5 ms, is started for
 each compensator configuration; the driver's and the compensator's CPU (utime + stime from
@@ -191,7 +191,10 @@ def main(argv=None):
     parser.add_argument('--only', choices=('pass-through', 'calibration', 'thermal'),
                         help='measure one configuration only')
     args = parser.parse_args(argv)
-    os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
+    from gyro_noise_ros.rosgraph import lease_domain
+
+    lease = lease_domain()  # a private graph, held until this process exits
+    lease.export()
     listener = Listener()
     rows = []
     try:

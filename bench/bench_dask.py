@@ -44,8 +44,8 @@ import sys
 import tempfile
 import time
 
+from gyro_noise_ros.app.analyze import analyze_bags, AnalyzeParams
 from gyro_noise_ros.bag import ImuBagWriter
-from gyro_noise_ros.cli.analyze import analyze_bags
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.simulate import FractionalNoise
 import numpy as np
@@ -68,10 +68,11 @@ def write_bag(path, n, seed):
 def run(bag, out, *, jobs=1, scheduler=None):
     """Analyse ``bag`` into ``out``; return (seconds, chunk identifications)."""
     t = time.perf_counter()
-    doc = analyze_bags([bag], out_dir=out, config=EngineConfig(), jobs=jobs, scheduler=scheduler,
-                       figures=False, curves=0, static='off')
+    result = analyze_bags(AnalyzeParams(paths=(bag,), out_dir=out, config=EngineConfig(),
+                                        jobs=jobs, scheduler=scheduler, figures=False, curves=0,
+                                        static='off'))
     seconds = time.perf_counter() - t
-    return seconds, sum(a['chunks'] for a in doc['bags'][0]['axes'].values())
+    return seconds, sum(a['chunks'] for a in result.bags[0]['axes'].values())
 
 
 def main(argv=None):

@@ -163,7 +163,10 @@ def main(argv=None):
     parser.add_argument('--warmup', type=float, default=4.0,
                         help='wait after start before measuring (s)')
     args = parser.parse_args(argv)
-    os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
+    from gyro_noise_ros.rosgraph import lease_domain
+
+    lease = lease_domain()  # a private graph, held until this process exits
+    lease.export()
 
     rows = [('decode-only reader (baseline, no ROS)', measure('reader', args)),
             ('lsm6dso32_driver, no subscriber', measure('driver', args))]

@@ -15,7 +15,7 @@
 """
 SD-log import speed and memory: old path, rosbags' writer and the new path, side by side.
 
-Paths, all through ``gyro_noise_ros.cli.importer.import_logs`` on the same log files (reading, link
+Paths, all through ``gyro_noise_ros.app.importer.import_logs`` on the same log files (reading, link
 decoding, scaling and writing included):
 
 * ``old``: ``bulk=False``: the byte-wise :class:`Decoder` and the per-message
@@ -44,7 +44,7 @@ varies from round to round; each round's time is printed too. ``read only``: ite
 reading share of an import). Peak RSS:
 each (path, log size) imports in a fresh process; ``VmHWM`` of that process. ``--baseline PATH``
 adds the importer of older code (e.g. ``git worktree add --detach /tmp/base 12f9979``, the code
-issue 12 was filed against) run in a fresh process with ``PYTHONPATH=PATH``, in sqlite3 (its
+before the importer's speed-up) run in a fresh process with ``PYTHONPATH=PATH``, in sqlite3 (its
 default) and MCAP, in the same rounds; its second ``import_logs`` call is timed (the first warms
 up, as the warm-up below does for this code).
 
@@ -61,8 +61,8 @@ import sys
 import tempfile
 import time
 
+from gyro_noise_ros.app import importer
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
-from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import protocol as p
 from gyro_noise_ros.link.sdlog import SdLogReader, SdLogWriter
 import numpy as np
@@ -122,7 +122,10 @@ def run_path(name, files, out, storage):
 
 BASELINE_SCRIPT = """
 import os, sys, time
-from gyro_noise_ros.cli import importer
+try:
+    from gyro_noise_ros.app import importer
+except ImportError:  # a baseline from before the application layer
+    from gyro_noise_ros.cli import importer
 files, out, storage = sys.argv[1].split(os.pathsep), sys.argv[2], sys.argv[3]
 importer.import_logs(files, out + '_warm', storage=storage)  # imports, caches, as for 'new'
 cpu, start = time.process_time(), time.perf_counter()
@@ -191,7 +194,7 @@ HWM = ("\nprint(next(int(line.split()[1]) for line in open('/proc/self/status') 
 
 def peak_rss_mb(files, out, storage, bulk):
     """Import in a fresh process; return its peak RSS in MB."""
-    code = ('import sys; from gyro_noise_ros.cli import importer; '
+    code = ('import sys; from gyro_noise_ros.app import importer; '
             'importer.import_logs(sys.argv[3:], sys.argv[1], storage=sys.argv[2], '
             f'bulk={bulk!r})' + HWM)
     # VmHWM of the child's own image (ru_maxrss would include the forking parent's peak)

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Speed of the parallel model's fit/apply (issue 9 section 7): fast path against the naive one.
+Speed of the parallel model's fit/apply: the fast path against the naive one.
 
 Small case, for each seed: the naive path (MOPSO fitness on the whole run, fitness_samples=None,
 reference ADMM VMD of the whole run), the fast path (fitness on 4 windows of 128 samples,

@@ -67,7 +67,9 @@ class ClusterError(GyroNoiseError):
     exit_code = 5
 
 
-def nothing_left_error(*, start_s=None, end_s=None, record_end_s=None, label=None):
+def nothing_left_error(*, start_s: float | None = None, end_s: float | None = None,
+                       record_end_s: float | None = None,
+                       label: str | None = None) -> InputDataError:
     """
     Return the error of a ``--start``/``--end`` window that selects no sample (exit code 4).
 

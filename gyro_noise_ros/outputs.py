@@ -38,21 +38,25 @@ import os
 from pathlib import Path
 import secrets
 import shutil
+from typing import Iterator, Union
 
 from .errors import OutputError
 
 __all__ = ['atomic_write_bytes', 'atomic_write_text', 'make_out_dir', 'PARTIAL_PREFIX',
            'staged_new_dir', 'staged_output']
 
+#: A file or folder name as the tools accept it.
+StrPath = Union[str, 'os.PathLike[str]']
+
 #: Name prefix of staging folders inside an output folder.
 PARTIAL_PREFIX = '.partial-'
 
 
-def _reason(err):
+def _reason(err: OSError) -> str:
     return err.strerror or str(err)
 
 
-def make_out_dir(path, *, option='--out'):
+def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
     """
     Create the output folder ``path`` (and its parents) of a tool and check it can be written.
 
@@ -85,7 +89,7 @@ def make_out_dir(path, *, option='--out'):
     return out
 
 
-def _pid_alive(pid):
+def _pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -95,7 +99,7 @@ def _pid_alive(pid):
     return True
 
 
-def _remove_stale_partials(out):
+def _remove_stale_partials(out: Path) -> None:
     for entry in out.glob(PARTIAL_PREFIX + '*'):
         try:
             pid = int(entry.name[len(PARTIAL_PREFIX):].split('-', 1)[0])
@@ -105,7 +109,7 @@ def _remove_stale_partials(out):
             shutil.rmtree(entry, ignore_errors=True)
 
 
-def _publish(stage, out):
+def _publish(stage: Path, out: Path) -> None:
     for entry in sorted(stage.iterdir()):
         target = out / entry.name
         if entry.is_dir() and target.is_dir():
@@ -121,7 +125,7 @@ def _publish(stage, out):
 
 
 @contextmanager
-def staged_output(path, *, option='--out'):
+def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
     """
     Stage a tool's outputs and publish them in ``path`` only if the body finishes (module doc).
 
@@ -164,7 +168,7 @@ def staged_output(path, *, option='--out'):
 
 
 @contextmanager
-def staged_new_dir(path, *, option='output'):
+def staged_new_dir(path: StrPath, *, option: str = 'output') -> Iterator[Path]:
     """
     Build a folder that must not exist yet under a hidden sibling name; rename it on success.
 
@@ -221,7 +225,7 @@ def staged_new_dir(path, *, option='output'):
                           f'{_reason(err)}') from err
 
 
-def atomic_write_bytes(path, data):
+def atomic_write_bytes(path: StrPath, data: bytes) -> None:
     """
     Write ``data`` to ``path`` through a temporary sibling and ``os.replace`` (module doc).
 
@@ -254,7 +258,7 @@ def atomic_write_bytes(path, data):
         raise OutputError(f'cannot write {str(target)!r}: {_reason(err)}') from err
 
 
-def atomic_write_text(path, text, encoding='utf-8'):
+def atomic_write_text(path: StrPath, text: str, encoding: str = 'utf-8') -> None:
     """
     Write ``text`` to ``path`` atomically (:func:`atomic_write_bytes`).
 

@@ -32,9 +32,9 @@ import numpy as np
 
 from .core.engine import rad_s2_to_deg_s_per_h
 from .core.health import reference_dict, ROBUST_JSON_KEY
-from .core.items import DEG as _DEG
+from .units import RAD_TO_DEG
 
-_DEG2 = _DEG ** 2
+_DEG2 = RAD_TO_DEG ** 2
 
 #: Columns of chunks.csv, in order.
 CHUNK_COLUMNS = ('bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stamp_start_ns',
@@ -90,7 +90,7 @@ class ChunkCsvWriter:
         r = result
         self._csv.writerow((bag, r.axis, r.chunk, r.status, _num(r.t_start_s), _num(r.t_mid_s),
                             r.stamp_start_ns, r.samples, r.samples_lost, r.gaps, r.nan_samples,
-                            _num(r.bias_rad_s * _DEG), _num(r.variance_rad2_s2 * _DEG2),
+                            _num(r.bias_rad_s * RAD_TO_DEG), _num(r.variance_rad2_s2 * _DEG2),
                             _num(r.alpha_var), _num(r.f_var), _num(r.var_min * _DEG2),
                             _num(r.alpha_corr), _num(r.f_corr), _num(r.j_min * _DEG2),
                             int(r.tie_var), int(r.tie_corr), _num(r.noise_colour),
@@ -129,7 +129,7 @@ def axis_summary_dict(summary, *, verdict=None):
         'chunks_skipped': summary.chunks_skipped,
         'nan_samples': summary.nan_samples,
         'tail_samples': seq.tail_samples,
-        'bias_mean_deg_s': _json_num(seq.bias_mean * _DEG),
+        'bias_mean_deg_s': _json_num(seq.bias_mean * RAD_TO_DEG),
         'offset_drift_deg_s_per_h': _json_num(rad_s2_to_deg_s_per_h(d.slope)),
         'offset_drift_abs_deg_s_per_h': _json_num(abs(rad_s2_to_deg_s_per_h(d.slope))),
         'offset_drift_stderr_deg_s_per_h': _json_num(rad_s2_to_deg_s_per_h(d.stderr)),
@@ -590,8 +590,8 @@ def write_allan_csv(path, entries):
         w.writerow(ALLAN_COLUMNS)
         for bag, axis, tau, adev, lo, hi, n in entries:
             for i in range(len(tau)):
-                w.writerow((bag, axis, _num(tau[i]), _num(adev[i] * _DEG), _num(lo[i] * _DEG),
-                            _num(hi[i] * _DEG), int(n[i])))
+                w.writerow((bag, axis, _num(tau[i]), _num(adev[i] * RAD_TO_DEG),
+                            _num(lo[i] * RAD_TO_DEG), _num(hi[i] * RAD_TO_DEG), int(n[i])))
 
 
 #: Topic written into imu.yaml for inputs that have none (CSV tables, PX4 ULogs).
@@ -750,7 +750,7 @@ def plot_per_chunk(path, series, *, quantity):
     plt = _pyplot()
     fig, panels = plt.subplots(len(axes), 1, figsize=(10, 2.8 * len(axes) + 0.8), squeeze=False,
                                sharex=True)
-    scale, unit = (_DEG, 'deg/s') if quantity == 'bias' else (_DEG2, '(deg/s)$^2$')
+    scale, unit = (RAD_TO_DEG, 'deg/s') if quantity == 'bias' else (_DEG2, '(deg/s)$^2$')
     skipped = set()
     for ax_name, panel in zip(axes, panels[:, 0]):
         for label, t, v in series[ax_name]:
@@ -763,7 +763,7 @@ def plot_per_chunk(path, series, *, quantity):
             if quantity == 'bias':
                 slope, icpt = np.polyfit(t, v, 1)
                 panel.plot(hours, (icpt + slope * t) * scale, '--', lw=1.2, color=line.get_color(),
-                           label=f'{label}: drift {slope * _DEG * 3600.0:+.3g} (deg/s)/h')
+                           label=f'{label}: drift {slope * RAD_TO_DEG * 3600.0:+.3g} (deg/s)/h')
         panel.set_ylabel(f'{quantity} {ax_name} ({unit})')
         panel.grid(alpha=0.3)
         if panel.get_legend_handles_labels()[1]:
@@ -847,12 +847,13 @@ def plot_allan(path, series, *, confidence=0.683):
                                squeeze=False)
     for ax_name, panel in zip(axes, panels[0]):
         for label, tau, adev, lo, hi, fits in series[ax_name]:
-            line, = panel.loglog(tau, np.asarray(adev) * _DEG, 'o-', ms=3, lw=1.3, label=label)
-            panel.fill_between(tau, np.asarray(lo) * _DEG, np.asarray(hi) * _DEG,
+            line, = panel.loglog(tau, np.asarray(adev) * RAD_TO_DEG, 'o-', ms=3, lw=1.3,
+                                 label=label)
+            panel.fill_between(tau, np.asarray(lo) * RAD_TO_DEG, np.asarray(hi) * RAD_TO_DEG,
                                color=line.get_color(), alpha=0.15, lw=0,
                                label=f'{label}: {100 * confidence:.1f} % interval')
             for k, (name, ftau, fadev) in enumerate(fits):
-                panel.loglog(ftau, np.asarray(fadev) * _DEG, ls='--', lw=0.8,
+                panel.loglog(ftau, np.asarray(fadev) * RAD_TO_DEG, ls='--', lw=0.8,
                              color=line.get_color(), label=f'{label}: IEEE 952 fit' if k == 0
                              else None)
         panel.set_xlabel('tau (s)')

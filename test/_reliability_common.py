@@ -33,11 +33,18 @@ def six_position_record(*, errors=None, rate_hz=100.0, dwell_s=30.0, move_s=4.0,
                     gyro_noise_rad_s=gyro_noise)
 
 
-def write_bag(path, t, accel, gyro, *, topic='/imu/data_raw'):
-    """Write an Imu bag (stamps T0 + t)."""
+def write_bag(path, t, accel, gyro, *, topic='/imu/data_raw', temperature_degc=None):
+    """Write an Imu bag (stamps T0 + t), with sensor_msgs/Temperature at 1 Hz when given."""
     stamps = T0_NS + np.round(np.asarray(t) * 1e9).astype(np.int64)
-    with ImuBagWriter(path, imu_topic=topic, temperature_topic=None) as w:
+    temp_topic = None if temperature_degc is None else '/imu/temperature'
+    with ImuBagWriter(path, imu_topic=topic, temperature_topic=temp_topic) as w:
         w.write_imu(stamps, gyro, accel)
+        if temperature_degc is not None:
+            # temperature_degc: a constant or a function of t (s)
+            ts = np.arange(float(t[0]), float(t[-1]), 1.0)
+            temp = (temperature_degc(ts) if callable(temperature_degc)
+                    else np.full(ts.size, float(temperature_degc)))
+            w.write_temperature(T0_NS + np.round(ts * 1e9).astype(np.int64), temp)
     return path
 
 

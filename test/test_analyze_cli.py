@@ -269,7 +269,7 @@ def test_reference_adds_health_verdicts(tmp_path):
     ref_z, h1_z = doc['bags'][0]['axes']['z'], doc['bags'][1]['axes']['z']
     # The reference judged against itself is within every tolerance; the ramp is far beyond it.
     assert ref_z['health']['level'] == 'OK'
-    # The reference (white noise) has a statistically-zero drift: no ratio is formed (issue 11);
+    # The reference (white noise) has a statistically-zero drift: no ratio of it is formed;
     # the two slopes are still compared, in standard errors of both.
     assert h1_z['health']['level'] == 'ERROR'
     assert 'standard errors of both' in h1_z['health']['message']
@@ -331,7 +331,7 @@ def odd_bags(tmp_path_factory):
 
 
 @pytest.mark.parametrize('args, code, text', [
-    (['missing'], 3, 'does not exist'),
+    (['missing'], 3, 'no such file or folder'),
     (['notabag.txt'], 3, 'not a bag'),
     (['two'], 3, 'choose one with --topic'),
     (['two', '--topic', '/c/imu'], 3, "topic '/c/imu' is not in bag"),
@@ -362,7 +362,8 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
     path = sqlite_bag[0]
     args = [str(path), '--axis', 'x', '--no-figures', '--no-allan', '--jobs', '1', *FAST[:-1]]
     assert main([*args, '--out', str(tmp_path / 'a')]) == 0
-    # stderr is not a terminal under pytest: plain lines, one per 10 % (issue 11); one batch here.
+    # stderr is not a terminal under pytest: plain lines, one per 10 % (no carriage returns in a
+    # log); one batch here.
     err = capsys.readouterr().err
     assert err.startswith('seq_ref: 100% 1877/1877 messages, 3 chunks') and err.count('\n') == 1
     assert '\r' not in err
@@ -376,17 +377,18 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
 
 def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
         odd_bags, tmp_path, capsys, monkeypatch):
-    from gyro_noise_ros.cli import analyze
+    from gyro_noise_ros.bag import inputs
 
     opened = []
 
-    class Spy(analyze.ImuBagReader):
+    class Spy(inputs.ImuBagReader):
 
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
             opened.append(self)
 
-    monkeypatch.setattr(analyze, 'ImuBagReader', Spy)
+    # analyze opens its inputs through the one input layer
+    monkeypatch.setattr(inputs, 'ImuBagReader', Spy)
     blocker = tmp_path / 'file'
     blocker.write_text('x')
     assert main([*FAST, str(odd_bags / 'short'), '--out', str(blocker / 'o')]) == 6

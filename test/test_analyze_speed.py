@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-gyro_noise_analyze's pipeline changes for speed (issue 12 item 2) change no output.
+gyro_noise_analyze's speed-ups (worker processes, warmed kernels, fast criteria) change no output.
 
 * --jobs 1 and --jobs 2 write the same files (the workers inherit the warmed identifier; more
   chunks in flight);
@@ -24,6 +24,7 @@ gyro_noise_analyze's pipeline changes for speed (issue 12 item 2) change no outp
 
 import json
 
+from gyro_noise_ros.app import analyze as analyze_app
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
 from gyro_noise_ros.cli import analyze
 from gyro_noise_ros.core.simulate import FractionalNoise
@@ -117,7 +118,7 @@ def motion_reference(bags, tmp_path_factory):
 def test_a_bag_with_motion_gives_the_same_files_however_the_attempt_ends(
         bags, motion_reference, tmp_path, monkeypatch, reads, moving):
     # True: the single read is abandoned at the first batch; False: only after the whole bag
-    monkeypatch.setattr(analyze._MotionWatch, 'moving', lambda self: moving)
+    monkeypatch.setattr(analyze_app._MotionWatch, 'moving', lambda self: moving)
     got = run(bags[1], tmp_path / 'got', '--jobs', '2')
     assert len(reads) == 3  # the attempt, the prepass and the analysis of the segment
     assert_same(motion_reference, got)

@@ -25,13 +25,13 @@ renamed so that the status names differ), and one in-process subscriber checks `
 names, hardware_id, keys with units, levels (OK on clean data, WARN on the injected drift, WARN and
 the count for the injected loss).
 
-The recorder test (``test/test_recorder.py``) uses the same replayer.
+The recorder test (``test/test_recorder.py``) uses the same replayer. Every process runs in the
+test's private graph (``ros_graph`` in ``conftest.py``): they inherit its environment.
 """
 
 import argparse
 import os
 from pathlib import Path
-import random
 import subprocess
 import sys
 import time
@@ -60,20 +60,20 @@ ANALYZER_PARAMS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
                    'reliable:=true']
 
 
-def ros_env(domain_id):
-    """Environment of a ROS subprocess on a private domain."""
-    env = dict(os.environ)
-    env['ROS_DOMAIN_ID'] = str(domain_id)
-    env.setdefault('PYTHONUNBUFFERED', '1')
-    return env
+def ros_env():
+    """Environment of a ROS subprocess: the test's private graph (``os.environ``), unbuffered."""
+    assert os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] == 'LOCALHOST', 'outside ros_graph'
+    return dict(os.environ, PYTHONUNBUFFERED='1')
 
 
-def start_replayer(domain_id, *args, namespace=None):
+def start_replayer(*args, namespace=None, node_name=None):
     """Start this file as the replayer process; return the Popen."""
     cmd = [sys.executable, str(HERE), 'publish', *map(str, args)]
-    if namespace:
-        cmd += ['--ros-args', '-r', f'__ns:={namespace}']
-    return subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
+    remaps = ([f'__ns:={namespace}'] if namespace else []) + (
+        [f'__node:={node_name}'] if node_name else [])
+    if remaps:
+        cmd += ['--ros-args', *(a for r in remaps for a in ('-r', r))]
+    return subprocess.Popen(cmd, env=ros_env(), stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
 
 
@@ -173,19 +173,8 @@ def _publish_main(argv):
 # ---- the test
 # -------------------------------------------------------------------------------------------
 
-@pytest.fixture(scope='module')
-def domain_id():
-    return random.randint(100, 200)
-
-
-def _collect_diagnostics(domain_id, names, until, timeout_s):
-    """Spin a subscriber on /diagnostics in ``domain_id``; see :func:`_e2e.collect_diagnostics`."""
-    os.environ['ROS_DOMAIN_ID'] = str(domain_id)
-    return collect_diagnostics(names, until, timeout_s)
-
-
 @pytest.mark.timeout(240)
-def test_diagnostics_content_and_levels(domain_id):
+def test_diagnostics_content_and_levels():
     scenarios = {
         # name: replayer args, analyzer extra params
         'clean': (['--seed', 1, '--frame-id', 'imu_clean'], ['hardware_id:=lsm6dso32-test-1']),
@@ -202,17 +191,16 @@ def test_diagnostics_content_and_levels(domain_id):
                    '-r', f'__ns:=/{name}', '-r', f'__node:={node}']
             for p in ANALYZER_PARAMS + params:
                 cmd += ['-p', p]
-            procs.append(subprocess.Popen(cmd, env=ros_env(domain_id), stdout=subprocess.PIPE,
+            procs.append(subprocess.Popen(cmd, env=ros_env(), stdout=subprocess.PIPE,
                                           stderr=subprocess.PIPE, text=True))
-            procs.append(start_replayer(domain_id, '--samples', samples, *rargs,
-                                        namespace=f'/{name}'))
+            procs.append(start_replayer('--samples', samples, *rargs, namespace=f'/{name}'))
             names[name] = [f'{node}: axis {a}' for a in 'xyz']
         all_names = [n for v in names.values() for n in v]
 
         def done(seen):
             return all(seen[n] and chunks(seen[n][-1]) >= 10 for n in all_names)
 
-        seen = _collect_diagnostics(domain_id, all_names, done, timeout_s=150)
+        seen = collect_diagnostics(all_names, done, timeout_s=150)
     finally:
         results = stop(procs)
     logs = '\n'.join(f'--- rc={rc}\n{o}\n{e}' for rc, o, e in results.values())

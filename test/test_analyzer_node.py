@@ -18,36 +18,33 @@
 The same bag played into the node and given to the offline tool and to the engine yields identical
 per-chunk numbers; the node skips chunks when analysis falls behind; bad parameters are refused.
 
-The node runs in this process with ``parameter_overrides`` on a private ROS_DOMAIN_ID and its own
-rclpy context; a publisher node replays the bag's serialised messages (bytes as stored, no
-re-encoding).
+The node runs in this process with ``parameter_overrides`` in the test's private graph
+(``ros_graph`` in ``conftest.py``) and its own rclpy context; a publisher node replays the bag's
+serialised messages (bytes as stored, no re-encoding).
 """
 
 import math
 import os
-import random
 import subprocess
 import sys
 import threading
 import time
 
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
-
-from geometry_msgs.msg import Vector3Stamped  # noqa: E402
-from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter  # noqa: E402
-from gyro_noise_ros.cli import analyze as analyze_cli  # noqa: E402
-from gyro_noise_ros.core.engine import NoiseEngine  # noqa: E402
-from gyro_noise_ros.core.live import CHUNK_TOPICS  # noqa: E402
-from gyro_noise_ros.core.simulate import simulate_fractional_noise  # noqa: E402
-from gyro_noise_ros.errors import ParameterError  # noqa: E402
-from gyro_noise_ros.nodes import analyzer  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+from geometry_msgs.msg import Vector3Stamped
+from gyro_noise_ros.app.live import CHUNK_TOPICS
+from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.cli import analyze as analyze_cli
+from gyro_noise_ros.core.engine import NoiseEngine
+from gyro_noise_ros.core.simulate import simulate_fractional_noise
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.nodes import analyzer
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos
+import numpy as np
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import Imu, Temperature
 
 pytestmark = pytest.mark.ros
 
@@ -55,14 +52,6 @@ RATE_HZ = 6660.0
 # Small chunks, memory and grid keep the test fast; the comparison is exact whatever the sizes.
 SMALL = {'chunk_size': 2000, 'memory': 200, 'order_grid_step': 0.05, 'diagnostics_period_s': 0.2}
 DEG = 180.0 / math.pi
-
-
-@pytest.fixture
-def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
 
 
 def _overrides(**values):
@@ -284,6 +273,49 @@ def test_unusable_stamps_give_error_not_a_crash(context):
         assert status.level == b'\x02', (status.level, status.message)
         assert status.message.startswith('Samples rejected: ') and 'sample rate' in status.message
         assert int(values['Batches rejected']) >= 1
+
+
+@pytest.mark.timeout(120)
+def test_a_second_publisher_is_counted_apart_named_and_warns(context):
+    from gyro_noise_ros.bag import encode_imu_cdr
+
+    node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+        **SMALL, rate_hz=RATE_HZ))
+    lines = []  # what the node's 1 s timer logs
+    check = node._imu_watch.check
+    node._imu_watch.check = lambda n: lines.extend(check(n)) or lines[len(lines):]
+    players = [rclpy.create_node(name, context=context) for name in ('player_a', 'player_b')]
+    pubs = [p.create_publisher(Imu, 'imu/data_raw', sensor_data_qos(5000)) for p in players]
+    executor = SingleThreadedExecutor(context=context)
+    for n in (node, *players):
+        executor.add_node(n)
+    n = 3000
+    stamps = 10 ** 18 + (np.arange(n) * 1e9 / RATE_HZ).astype(np.int64)
+    raws = encode_imu_cdr(stamps, np.zeros((n, 3)), np.zeros((n, 3)))
+    try:
+        assert _spin_until(executor, lambda: all(p.get_subscription_count() for p in pubs), 20)
+        _spin_until(executor, lambda: False, 0.5)
+        # Every third message from b: 2000 from a, 1000 from b, interleaved.
+        for k, raw in enumerate(raws):
+            pubs[k % 3 == 2].publish(raw)
+            if k % 500 == 499:
+                assert _spin_until(executor, lambda: node.messages_received > k, 20)
+        assert _spin_until(executor, lambda: node.messages_received == n, 20)
+        assert _spin_until(executor, lambda: len(lines) == 2, 5)  # the next check
+        diag = node.diagnostics()
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+    assert [severity for severity, _ in lines] == ['info', 'warn']
+    assert lines[1][1].startswith('another publisher on /imu/data_raw: /player_b (besides '
+                                  '/player_a); the analysis mixes their samples')
+    for status in diag.status:
+        values = {kv.key: kv.value for kv in status.values}
+        assert values['Publishers'] == '2'
+        assert values['Messages per publisher'] == ('/player_a 2000 (0 dropped); /player_b 1000 '
+                                                    '(0 dropped)')
+        assert values['Messages dropped before the node'] == '0'
+        assert status.level >= b'\x01'
 
 
 def test_bad_parameters_are_refused_in_process(context):

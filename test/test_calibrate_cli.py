@@ -19,9 +19,10 @@ import json
 from _realdata import real_data
 from _reliability_common import six_position_record, write_bag
 from gyro_noise_ros.calibration import records
-from gyro_noise_ros.calibration.emulate import MG, PAPER_BEFORE_BIAS_MG, SensorErrors
+from gyro_noise_ros.calibration.emulate import PAPER_BEFORE_BIAS_MG, SensorErrors
 from gyro_noise_ros.calibration.sixpos import normal_gravity
 from gyro_noise_ros.cli.calibrate import main
+from gyro_noise_ros.units import MG_TO_M_S2
 import numpy as np
 import pytest
 import yaml
@@ -50,8 +51,8 @@ def test_one_bag_gives_all_three_files(tmp_path, record, capsys):
     assert np.all(np.diag(doc['accel']['misalignment']) == 0)
     # the record was made with standard gravity: the local value shifts S by (9.80665 / g - 1)
     # and leaves b alone (within 4 sigma, ~0.25 mg here)
-    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG, PAPER_BEFORE_BIAS_MG,
-                               atol=0.25)
+    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG_TO_M_S2,
+                               PAPER_BEFORE_BIAS_MG, atol=0.25)
     for key in ('accel_bias_std_m_s2', 'accel_scale_factor_std'):
         assert key in doc['uniformity']
     gc = doc['gravity_check']
@@ -123,7 +124,8 @@ def test_out_in_the_way_is_exit_6_before_reading_anything(tmp_path, capsys, wher
 
 def test_rate_from_bursty_host_stamps_is_the_mean_rate_not_the_median_step():
     # The MPU6050 record's host stamps come in bursts: median step 2 ms, true mean rate
-    # 99.32 Hz (issue 11). The calibration tools use the package's one estimator.
+    # 99.32 Hz (the median would say 500 Hz). The calibration tools use the package's one
+    # estimator.
     data = np.loadtxt(real_data('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'),
                       delimiter=',', skiprows=1, usecols=0)
     stamps = np.round(data * 1e9).astype(np.int64)

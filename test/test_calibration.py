@@ -22,7 +22,7 @@ numbers (Table 6 and the section 6 standard deviations), and the slow least-squa
 
 from _reliability_common import six_position_record
 from _sixpos_reference import lstsq_matrix, paper_bias, paper_scale
-from gyro_noise_ros.calibration.emulate import (MG, PAPER_AFTER_BIAS_MG, PAPER_AFTER_SCALE_PCT,
+from gyro_noise_ros.calibration.emulate import (PAPER_AFTER_BIAS_MG, PAPER_AFTER_SCALE_PCT,
                                                 PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT,
                                                 SensorErrors)
 from gyro_noise_ros.calibration.sixpos import (calibrate_six, EARTH_RATE_RAD_S, normal_gravity,
@@ -30,6 +30,7 @@ from gyro_noise_ros.calibration.sixpos import (calibrate_six, EARTH_RATE_RAD_S, 
 from gyro_noise_ros.calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS,
                                                select_six, WindowAccumulator)
 from gyro_noise_ros.errors import InputDataError, ParameterError
+from gyro_noise_ros.units import MG_TO_M_S2
 import numpy as np
 import pytest
 
@@ -114,9 +115,9 @@ def test_table6_values_are_recovered_from_a_simulated_record(stressed):
     # 0.04 / sqrt(2800) / sqrt(2) = 5.3e-4 m/s^2 = 0.054 mg (no wander here: the variogram's
     # white term alone); fitted to 6 x 28 window means per axis, pooled over 3 axes, so it is
     # itself uncertain by ~1 / sqrt(2 * 250) = 5 %: accept 0.035..0.08 mg (> 6 sigma)
-    sig_b = res.accel_bias_sigma_m_s2 / MG
+    sig_b = res.accel_bias_sigma_m_s2 / MG_TO_M_S2
     assert np.all((sig_b > 0.035) & (sig_b < 0.08)), sig_b
-    np.testing.assert_array_less(np.abs(res.accel_bias_m_s2 / MG - bias_mg), 4 * sig_b)
+    np.testing.assert_array_less(np.abs(res.accel_bias_m_s2 / MG_TO_M_S2 - bias_mg), 4 * sig_b)
     np.testing.assert_array_less(np.abs(res.accel_scale_factor * 100 - scale_pct),
                                  4 * res.accel_scale_factor_sigma * 100)
     off = ~np.eye(3, dtype=bool)
@@ -124,7 +125,8 @@ def test_table6_values_are_recovered_from_a_simulated_record(stressed):
                                  4 * res.accel_misalignment_sigma[off])
     # paper section 6 spreads: 0.252 / 2.955 mg and 0.025 / 0.087 %, to within what the
     # estimation noise allows (std of 3 values moves by at most ~sigma: 0.05 mg, 0.005 %)
-    assert uniformity(res.accel_bias_m_s2) / MG == pytest.approx(uniformity(bias_mg), abs=0.1)
+    assert uniformity(res.accel_bias_m_s2) / MG_TO_M_S2 == pytest.approx(uniformity(bias_mg),
+                                                                         abs=0.1)
     assert uniformity(res.accel_scale_factor) * 100 == pytest.approx(uniformity(scale_pct),
                                                                      abs=0.01)
 
@@ -145,7 +147,8 @@ def test_earth_rate_cancels_in_the_gyro_bias():
 def test_any_order_and_settling_is_trimmed():
     t, accel, gyro = six_position_record(order=('-y', '+x', '-z', '+y', '-x', '+z'), seed=4)
     res, dw = _calibrate(t, accel, gyro)
-    np.testing.assert_array_less(np.abs(res.accel_bias_m_s2 / MG - PAPER_BEFORE_BIAS_MG), 0.2)
+    np.testing.assert_array_less(
+        np.abs(res.accel_bias_m_s2 / MG_TO_M_S2 - PAPER_BEFORE_BIAS_MG), 0.2)
     # 30 s dwells minus one 1 s window at each end
     assert all(27.5 <= d.duration_s <= 29.5 for d in dw[:-1])
 

@@ -20,23 +20,18 @@ sample-by-sample rotation product as the twin of the tree composition, and the m
 ``inv(I + diag(S) + M) @ (raw - b)`` computed here from the YAML against ``imu_compensator``.
 """
 
-import os
-
-os.environ.setdefault('ROS_DOMAIN_ID', '17')
-os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-
-from gyro_noise_ros.calibration.dwell_noise import fit_dwell_noise  # noqa: E402
-from gyro_noise_ros.calibration.emulate import (MultiPose, Scenario, SensorErrors,  # noqa: E402
+from gyro_noise_ros.calibration.dwell_noise import fit_dwell_noise
+from gyro_noise_ros.calibration.emulate import (MultiPose, Scenario, SensorErrors,
                                                 simulate, SixPosition)
-from gyro_noise_ros.calibration.gyro_turns import compose, fit_gyro_turns, Turn  # noqa: E402
-from gyro_noise_ros.calibration.multipose import calibrate_poses, triangular  # noqa: E402
-from gyro_noise_ros.calibration.sixpos import calibrate_six  # noqa: E402
-from gyro_noise_ros.calibration.static import (DetectorSettings, find_dwells,  # noqa: E402
+from gyro_noise_ros.calibration.gyro_turns import compose, fit_gyro_turns, Turn
+from gyro_noise_ros.calibration.multipose import calibrate_poses, triangular
+from gyro_noise_ros.calibration.sixpos import calibrate_six
+from gyro_noise_ros.calibration.static import (DetectorSettings, find_dwells,
                                                ORIENTATIONS, select_poses, select_six,
                                                WindowAccumulator)
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from scipy.spatial.transform import Rotation  # noqa: E402
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
 
 G = 9.80665
 RATE = 104.0

@@ -15,52 +15,41 @@
 """
 ``imu_compensator`` in-process: published messages equal the pure computation; refusals.
 
-The node runs in this process with ``parameter_overrides`` (or an injected causal model) on a
-private ROS_DOMAIN_ID and its own rclpy context; a player node publishes serialised Imu and
-Temperature messages, a listener takes ``imu/data_compensated`` raw and decodes it.
+The node runs in this process with ``parameter_overrides`` (or an injected causal model) in the
+test's private graph (``ros_graph`` in ``conftest.py``) and its own rclpy context; a player node
+publishes serialised Imu and Temperature messages, a listener takes ``imu/data_compensated`` raw
+and decodes it.
 """
 
 import importlib
-import os
-import random
 import subprocess
 import sys
 import time
 
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
-
-from _thermal_linear import LinearThermal  # noqa: E402
-from gyro_noise_ros.bag import decode_imu  # noqa: E402
-from gyro_noise_ros.calibration.apply import calibration_from_parameters  # noqa: E402
-from gyro_noise_ros.errors import ParameterError  # noqa: E402
-from gyro_noise_ros.msgs import encode_imu_cdr, encode_temperature_cdr  # noqa: E402
-from gyro_noise_ros.msgs import typestore  # noqa: E402
-from gyro_noise_ros.nodes import compensator  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import unused_callback, WARN  # noqa: E402
-from gyro_noise_ros.thermal.live import LiveDriftEvaluator  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+from _thermal_linear import LinearThermal
+from gyro_noise_ros.bag import decode_imu
+from gyro_noise_ros.calibration.apply import calibration_from_parameters
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.msgs import encode_imu_cdr, encode_temperature_cdr
+from gyro_noise_ros.msgs import typestore
+from gyro_noise_ros.nodes import compensator
+from gyro_noise_ros.nodes._ros_common import ERROR, OK, PolledGroup
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos, take_all
+from gyro_noise_ros.nodes._ros_common import unused_callback, WARN
+from gyro_noise_ros.thermal.live import LiveDriftEvaluator
+import numpy as np
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu, Temperature
 
 pytestmark = pytest.mark.ros
 
 RATE_HZ = 6660.0
 NS = 1_000_000_000
 T0_NS = 1_700_000_000 * NS
-
-
-@pytest.fixture
-def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
 
 
 def _calibration_params(seed):
@@ -223,6 +212,64 @@ def test_thermal_offset_is_subtracted_and_range_drives_the_level(context):
     np.testing.assert_array_equal(out.accel, accel)  # identity calibration: untouched
 
 
+@pytest.mark.timeout(120)
+def test_samples_newer_than_the_latest_temperature_wait_for_the_next_one(context):
+    # A reliable imu/temperature stalled behind a resent message: the gyro samples after the
+    # newest temperature must not get its offset, held; they wait (max_temperature_wait_s) and
+    # get the interpolated one when the next temperature comes, or, past the bound, the newest
+    # one and a count.
+    model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), temperature_range_c=(20.0, 30.0))
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                          parameter_overrides=_overrides(
+                                              temperature_rate_window_s=1.0,
+                                              max_temperature_wait_s=0.5,
+                                              drain_period_s=0.01))
+    n = int(RATE_HZ)  # 1 s of samples
+    stamps, gyro, accel, raws = _imu_stream(n + 400, seed=8)
+    t_stamps = T0_NS + np.array([0, NS // 2, NS])
+    temps = np.array([25.0, 26.0, 28.0])  # a ramp that speeds up: a held offset would show
+    t_raws = encode_temperature_cdr(t_stamps, temps, frame_id='imu_test')
+    io = _Harness(context, node)
+    half = int(np.searchsorted(stamps, t_stamps[1], side='right'))
+    try:
+        for raw in t_raws[:2]:
+            io.temp_pub.publish(raw)
+        assert _spin_until(io.executor, lambda: node.thermal.stamp_ns == t_stamps[1], 10)
+        for start in range(0, n, 400):  # in blocks, as play() does (best-effort player)
+            for raw in raws[start:min(n, start + 400)]:
+                io.imu_pub.publish(raw)
+            assert _spin_until(io.executor, lambda: node.counts['received'] == min(
+                n, start + 400), 20)
+        # Up to the 0.5 s temperature: published; the rest waits.
+        assert _spin_until(io.executor, lambda: len(io.out) == half, 5), (len(io.out), half)
+        waiting = node._gate.waiting
+        io.temp_pub.publish(t_raws[2])  # the stalled temperature arrives (0.5 s bound not hit)
+        assert _spin_until(io.executor, lambda: len(io.out) == n, 10)
+        # Beyond the last temperature, with no newer one: published after 0.5 s, counted.
+        for raw in raws[n:]:
+            io.imu_pub.publish(raw)
+        assert _spin_until(io.executor, lambda: len(io.out) == n + 400, 10)
+        status = node.diagnostics().status[0]
+        values = {kv.key: kv.value for kv in status.values}
+    finally:
+        io.close()
+    assert waiting == n - half
+    # Sample n is stamped at the 1 s temperature exactly (covered); the 399 after it went late.
+    assert values['Messages compensated with a held offset'] == '399'
+    assert status.level == WARN and 'held offset' in status.message
+    assert 0.0 < float(values['Longest wait for a temperature (s)']) < 0.5
+    out = decode_imu(io.out)
+    twin = LiveDriftEvaluator(model, rate_window_s=1.0)
+    twin.add_temperature(t_stamps, temps)
+    expected = gyro[:n] - twin.drift_at(stamps[:n])
+    # Every sample of the first second interpolated between the knots around it, as if no
+    # temperature had been late (to rounding: the rate's running sums start elsewhere).
+    np.testing.assert_allclose(out.gyro[:n], expected, rtol=0, atol=1e-13)
+    # The late ones: the newest offset (the 1 s knot's), held.
+    np.testing.assert_allclose(out.gyro[n + 1:], gyro[n + 1:] - twin.drift_at(t_stamps[2:])[0],
+                               rtol=0, atol=1e-13)
+
+
 def test_non_causal_model_is_refused(context):
     with pytest.raises(ParameterError, match='VMD'):
         compensator.ImuCompensatorNode(context=context,
@@ -332,7 +379,7 @@ def test_imu_before_the_first_temperature_waits_then_is_dropped_never_published_
     try:
         for raw in raws:
             io.imu_pub.publish(raw)
-        assert _spin_until(io.executor, lambda: node.counts['uncorrected'] == 400, 10)
+        assert _spin_until(io.executor, lambda: node._gate.dropped == 400, 10)
         values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
         level = node.diagnostics().status[0].level
         # A temperature now lets later messages through; the dropped ones stay dropped.

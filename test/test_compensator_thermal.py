@@ -15,33 +15,18 @@
 
 """imu_compensator with a model.json: accelerometer compensation and the trained dT range."""
 
-import os
-import random
-
-os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(100, 200)))
-
-from gyro_noise_ros.bag import decode_imu  # noqa: E402
-from gyro_noise_ros.msgs import encode_temperature_cdr  # noqa: E402
-from gyro_noise_ros.nodes import compensator  # noqa: E402
-from gyro_noise_ros.thermal import methods  # noqa: E402
-from gyro_noise_ros.thermal.run import ThermalRun  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from test_compensator_node import _Harness, _imu_stream, NS, RATE_HZ  # noqa: E402
-from test_compensator_node import _spin_until, T0_NS  # noqa: E402
+from gyro_noise_ros.bag import decode_imu
+from gyro_noise_ros.msgs import encode_temperature_cdr
+from gyro_noise_ros.nodes import compensator
+from gyro_noise_ros.thermal import methods
+from gyro_noise_ros.thermal.run import ThermalRun
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+from test_compensator_node import _Harness, _imu_stream, NS, RATE_HZ
+from test_compensator_node import _spin_until, T0_NS
 
 pytestmark = pytest.mark.ros
-
-
-@pytest.fixture
-def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
 
 
 def _model_file(tmp_path, method):

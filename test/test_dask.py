@@ -33,7 +33,7 @@ import signal
 import socket
 
 from gyro_noise_ros import cluster
-from gyro_noise_ros.cli import analyze as analyze_cli
+from gyro_noise_ros.app import analyze as analyze_app
 from gyro_noise_ros.cli.analyze import main as analyze_main
 from gyro_noise_ros.cli.explain import main as explain_main
 from gyro_noise_ros.cli.thermal import main as thermal_main
@@ -363,7 +363,7 @@ def test_a_worker_killed_mid_run_loses_and_duplicates_nothing(dask_cluster, tabl
     # the kernel's OOM killer or a pulled cable would end it): Dask computes the task again on
     # a live worker; every chunk is in chunks.csv once and the files equal the local run's.
     marker = tmp_path / 'killed.pid'
-    monkeypatch.setattr(analyze_cli, 'analyze_chunk', functools.partial(die_once, str(marker), 5))
+    monkeypatch.setattr(analyze_app, 'analyze_chunk', functools.partial(die_once, str(marker), 5))
     out = tmp_path / 'killed'
     assert analyze_main([str(table), '--out', str(out), '--scheduler',
                          dask_cluster.scheduler_address, *ANALYZE]) == 0

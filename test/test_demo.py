@@ -16,13 +16,14 @@
 ``make demo`` in its short mode.
 
 The whole chain runs, the drift is detected, the report is written, and every subprocess is gone
-afterwards, also after a Ctrl-C in the middle.
+afterwards, also after a Ctrl-C in the middle. The demo leases its own private graph
+(:func:`gyro_noise_ros.rosgraph.lease_domain`, the function ``ros_graph`` in ``conftest.py`` uses):
+the domain it prints is free, not the one this test holds, and its processes are found by it.
 """
 
 import json
-import os
 from pathlib import Path
-import random
+import re
 import signal
 import subprocess
 import sys
@@ -35,11 +36,14 @@ import pytest
 pytestmark = pytest.mark.ros
 
 
-def _domain():
-    # Not the domain of this test process (other ROS tests set one), so only the demo's children
-    # match.
-    mine = os.environ.get('ROS_DOMAIN_ID')
-    return random.choice([d for d in range(100, 201) if str(d) != mine])
+def _printed_domain(stdout, held):
+    """Return the ROS_DOMAIN_ID the demo printed first; check it is private and not ``held``."""
+    found = re.search(r'ROS_DOMAIN_ID=(\d+) \(localhost only\)', stdout)
+    assert found, stdout[:2000]
+    domain = int(found.group(1))
+    # The test holds its own domain's lock: the demo's lease must have skipped it.
+    assert 1 <= domain <= 101 and domain != held
+    return domain
 
 
 def _our_processes(domain_id):
@@ -61,13 +65,12 @@ def _our_processes(domain_id):
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
-def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
-    domain = _domain()
+def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path, ros_graph):
     out = tmp_path / 'demo'
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
-                           str(out), '--domain-id', str(domain)], capture_output=True, text=True,
-                          timeout=560)
+                           str(out)], capture_output=True, text=True, timeout=560)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    domain = _printed_domain(done.stdout, ros_graph.domain_id)
     assert 'story checked' in done.stdout
     assert any(line.strip().split('] ', 1)[-1].startswith('WARN')
                for line in done.stdout.splitlines())
@@ -86,12 +89,10 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path):
 
 
 @pytest.mark.timeout(240)
-def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path):
-    domain = _domain()
+def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path, ros_graph):
     out = tmp_path / 'demo'
     proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
-                             str(out), '--domain-id', str(domain)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     lines = []
     reader = threading.Thread(target=lambda: lines.extend(iter(proc.stdout.readline, '')),
                               daemon=True)
@@ -103,6 +104,7 @@ def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path):
                                                       for ln in lines):
             assert proc.poll() is None, ''.join(lines) + proc.stderr.read()
             time.sleep(0.2)
+        domain = _printed_domain(''.join(lines), ros_graph.domain_id)
         assert len(_our_processes(domain)) == 5, ''.join(lines)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
@@ -133,10 +135,10 @@ def test_refuses_an_output_that_is_not_a_demo_output(tmp_path):
     assert (tmp_path / 'precious.txt').read_text() == 'keep me'
 
 
-def test_a_failing_component_is_named_with_its_log(tmp_path):
-    from gyro_noise_ros.cli.demo import DemoError, Processes
+def test_a_failing_component_is_named_with_its_log(tmp_path, ros_graph):
+    from gyro_noise_ros.app.demo import DemoError, Processes
 
-    procs = Processes(dict(os.environ, ROS_DOMAIN_ID=str(_domain())), tmp_path)
+    procs = Processes(ros_graph.env(), tmp_path)
     procs.start('gyro_noise_record', ['gyro_noise_ros.nodes.recorder', '--ros-args', '-p',
                                       'storage:=zip'])
     try:

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-``docs/diagnostics.md`` lists every ``/diagnostics`` key the nodes publish (issue 11 item 11).
+``docs/diagnostics.md`` lists every ``/diagnostics`` key the nodes publish, and no other.
 
 The nodes run in-process: the driver unconfigured and streaming-less (its key set is fixed), the
 analyzer before any data and after a few chunks of a bag (its key set grows with the data).
@@ -25,8 +25,7 @@ from gyro_noise_ros.nodes.analyzer import NoiseAnalyzerNode
 from gyro_noise_ros.nodes.driver import Lsm6dso32Driver
 import pytest
 from rclpy.parameter import Parameter
-from test_analyzer_node import (_make_bag, _raw_messages, _replay, _spin_until,  # noqa: F401
-                                context)
+from test_analyzer_node import _make_bag, _raw_messages, _replay, _spin_until
 from test_driver_node import closed_port_url
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(180)]
@@ -44,7 +43,7 @@ def _keys(status):
     return {kv.key for kv in status.values}
 
 
-def test_driver_keys_are_documented(context):  # noqa: F811
+def test_driver_keys_are_documented(context):
     driver = Lsm6dso32Driver(context=context, parameter_overrides=[
         Parameter('port', value=closed_port_url()), Parameter('autostart', value=False)])
     try:
@@ -54,7 +53,7 @@ def test_driver_keys_are_documented(context):  # noqa: F811
     assert published == _documented('`lsm6dso32_driver`')
 
 
-def test_analyzer_keys_are_documented(context, tmp_path):  # noqa: F811
+def test_analyzer_keys_are_documented(context, tmp_path):
     documented = _documented('`noise_analyzer`')
     node = NoiseAnalyzerNode(context=context, parameter_overrides=[
         Parameter('chunk_size', value=1000), Parameter('memory', value=100),

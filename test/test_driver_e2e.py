@@ -44,18 +44,16 @@ import subprocess
 import sys
 import time
 
-os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
-
-from _e2e import free_port, readline  # noqa: E402
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
-from gyro_noise_ros.bag import decode_imu, decode_temperature  # noqa: E402
-from gyro_noise_ros.cli.emulator import board_from_args  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+from _e2e import free_port, readline
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from gyro_noise_ros.bag import decode_imu, decode_temperature
+from gyro_noise_ros.cli.emulator import board_from_args
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos
+import numpy as np
+import pytest
+import rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu, Temperature
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.timeout(180)]
 

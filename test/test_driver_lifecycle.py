@@ -14,8 +14,8 @@
 """
 ``lsm6dso32_driver`` as a ROS user meets it: QoS, lifecycle services, start-up errors, duplicates.
 
-Issue 10 items 1 and 5, issue 11 item 11. The driver runs in-process on a private context and
-domain (see test_driver_node, whose harness and fake board are reused).
+The driver runs in-process on a private context and domain (see test_driver_node, whose harness
+and fake board are reused).
 """
 
 import os
@@ -35,7 +35,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu
-from test_driver_node import context, FakeBoard, Harness, harness, make_samples  # noqa: F401
+from test_driver_node import FakeBoard, Harness, harness, make_samples  # noqa: F401
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 

@@ -29,20 +29,17 @@ import sys
 import threading
 import time
 
-# A private DDS domain for this test session (STYLE.md): set before any rclpy.init.
-os.environ.setdefault('ROS_DOMAIN_ID', str(100 + os.getpid() % 100))
-
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
-from gyro_noise_ros.errors import ParameterError  # noqa: E402
-from gyro_noise_ros.link import protocol as P  # noqa: E402
-from gyro_noise_ros.nodes._ros_common import sensor_data_qos  # noqa: E402
-from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import rclpy  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from sensor_msgs.msg import Imu, Temperature  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.link import protocol as P
+from gyro_noise_ros.nodes._ros_common import sensor_data_qos
+from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver
+import numpy as np
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import Imu, Temperature
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -58,16 +55,6 @@ def gyro_lsb(fs_dps):
 
 def accel_lsb(fs_g):
     return ACCEL_MG[fs_g] * 1e-3 * G0
-
-
-@pytest.fixture
-def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    try:
-        yield ctx
-    finally:
-        rclpy.try_shutdown(context=ctx)
 
 
 def closed_port_url():

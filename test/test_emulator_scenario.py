@@ -21,7 +21,7 @@ bias-instability interval, and bags come out without pacing.
 
 import json
 
-from gyro_noise_ros.calibration.emulate import (MG, PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT,
+from gyro_noise_ros.calibration.emulate import (PAPER_BEFORE_BIAS_MG, PAPER_BEFORE_SCALE_PCT,
                                                 SixPosition)
 from gyro_noise_ros.calibration.interval import bias_instability_interval
 from gyro_noise_ros.calibration.sixpos import normal_gravity
@@ -30,6 +30,7 @@ from gyro_noise_ros.cli.calibrate import main as calibrate
 from gyro_noise_ros.cli.emulator import board_from_args, build_parser
 from gyro_noise_ros.cli.emulator import main as emulator
 from gyro_noise_ros.cli.excitation import main as excitation
+from gyro_noise_ros.units import MG_TO_M_S2
 import numpy as np
 import pytest
 
@@ -80,8 +81,8 @@ def test_write_bag_and_calibrate_recover_table6(tmp_path, capsys):
     doc = json.loads((out / 'calibration.json').read_text())
     # quantised (0.12 mg LSB) white noise of 0.5 mg per sample, ~1900 samples per dwell:
     # s.e. of b ~0.008 mg, of S ~0.0008 %; 0.05 mg and 0.005 % are > 5 sigma
-    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG, PAPER_BEFORE_BIAS_MG,
-                               atol=0.05)
+    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG_TO_M_S2,
+                               PAPER_BEFORE_BIAS_MG, atol=0.05)
     np.testing.assert_allclose(np.asarray(doc['accel']['scale_factor']) * 100,
                                PAPER_BEFORE_SCALE_PCT, atol=0.005)
     mis = np.asarray(doc['accel']['misalignment']) * 100
@@ -137,8 +138,8 @@ def test_write_bag_multi_pose_and_a_tilted_six_position(tmp_path, capsys):
     doc = json.loads((out / 'calibration.json').read_text())
     assert doc['mode'] == 'multi-pose' and len(doc['dwells']) == 12
     # quantised white noise only: b within 0.05 mg, S within 0.005 % (> 5 sigma, as above)
-    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG, PAPER_BEFORE_BIAS_MG,
-                               atol=0.05)
+    np.testing.assert_allclose(np.asarray(doc['accel']['bias_m_s2']) / MG_TO_M_S2,
+                               PAPER_BEFORE_BIAS_MG, atol=0.05)
     np.testing.assert_allclose(np.asarray(doc['accel']['scale_factor']) * 100,
                                PAPER_BEFORE_SCALE_PCT, atol=0.005)
     sf, sig = (np.asarray(doc['gyro'][k]) for k in ('scale_factor', 'scale_factor_sigma'))

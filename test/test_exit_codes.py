@@ -138,7 +138,7 @@ TABLES = {
         Row('bad option value', ['{bag}', *FAST, '--jobs', '0'], 2, '--jobs'),
     ],
     'gyro_noise_explain': [
-        Row('missing input', ['{missing.csv}'], 3, 'does not exist'),
+        Row('missing input', ['{missing.csv}'], 3, 'no such file'),
         Row('empty CSV', ['{empty.csv}'], 3, 'is empty'),
         Row('wrong CSV headers', ['{wrong.csv}'], 3, 'has no column gyro_x_rad_s'),
         Row('non-numeric CSV value', ['{nonnumeric.csv}'], 3, 'non-numeric'),
@@ -413,10 +413,10 @@ def test_out_without_write_permission_for_real(prog, inputs, tmp_path):
 @pytest.fixture(scope='module')
 def explain_result(inputs):
     """Return a real (small) result of the workflow, so explain's writing is tested quickly."""
-    from gyro_noise_ros.explain.inputs import load_csv
+    from gyro_noise_ros.explain.inputs import load_input
     from gyro_noise_ros.explain.workflow import explain
 
-    return explain(load_csv(inputs / 'ok.csv', axis='z'), seed=0, ensemble=4, max_steps=0,
+    return explain(load_input(inputs / 'ok.csv', axis='z'), seed=0, ensemble=4, max_steps=0,
                    bootstrap=0)
 
 

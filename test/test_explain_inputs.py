@@ -22,7 +22,7 @@ from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.cli.explain import main
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.explain.effects import NAMES
-from gyro_noise_ros.explain.inputs import load_csv, load_input, make_measurement, MIN_SAMPLES
+from gyro_noise_ros.explain.inputs import load_input, make_measurement, MIN_SAMPLES
 from gyro_noise_ros.explain.synthetic import make_record
 import numpy as np
 import pytest
@@ -47,15 +47,15 @@ def test_csv_columns_and_units(tmp_path):
     t, rate = _record()
     path = tmp_path / 'a.csv'
     _write_csv(path, t, rate, temperature=np.full(t.size, 25.0))
-    meas = load_csv(path, axis='z')
+    meas = load_input(path, axis='z')
     np.testing.assert_allclose(meas.rate, rate, rtol=1e-11)
     assert meas.rate_hz == pytest.approx(200.0, rel=1e-9)
     assert meas.temperature_c is not None and meas.axis == 'z'
     # deg/s columns are converted to rad/s
     path2 = tmp_path / 'b.csv'
     _write_csv(path2, t, np.rad2deg(rate), unit='dps')
-    np.testing.assert_allclose(load_csv(path2, axis='z').rate, rate, rtol=1e-10)
-    assert load_csv(path2, axis='x').rate[0] == pytest.approx(rate[0] * 0.5, rel=1e-10)
+    np.testing.assert_allclose(load_input(path2, axis='z').rate, rate, rtol=1e-10)
+    assert load_input(path2, axis='x').rate[0] == pytest.approx(rate[0] * 0.5, rel=1e-10)
 
 
 def test_csv_without_time_needs_rate(tmp_path):
@@ -63,8 +63,8 @@ def test_csv_without_time_needs_rate(tmp_path):
     path = tmp_path / 'c.csv'
     np.savetxt(path, rate[:, None], delimiter=',', header='gyro_z_rad_s', comments='')
     with pytest.raises(ParameterError, match='rate-hz'):
-        load_csv(path)
-    assert load_csv(path, rate_hz=100.0).rate_hz == 100.0
+        load_input(path)
+    assert load_input(path, rate_hz=100.0).rate_hz == 100.0
 
 
 def test_bad_input_errors(tmp_path):

@@ -14,14 +14,19 @@
 
 """Signatures, band/gap, effect templates and the baseline fit of the discrepancy workflow."""
 
-from gyro_noise_ros.core.allan import allan_deviation
-from gyro_noise_ros.core.simulate import simulate_fractional_noise
+from gyro_noise_ros.core.allan import allan_deviation, allan_deviation_values
+from gyro_noise_ros.core.fractional import gl_coefficients
+from gyro_noise_ros.core.simulate import (
+    check_stability,
+    gauss_markov_avar,
+    simulate_fractional_noise,
+)
+from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.explain import signatures as sig
-from gyro_noise_ros.explain.baseline import fit_baseline, model_gain, simulation_memory
+from gyro_noise_ros.explain.baseline import fit_baseline, model_gain, simulation_memory, stable
 from gyro_noise_ros.explain.effects import (
     allan_template_from_psd,
     flicker_noise,
-    gm_allan,
     null_exceeded,
 )
 import numpy as np
@@ -37,23 +42,22 @@ def test_welch_equals_scipy():
     np.testing.assert_allclose(p1, p2, rtol=1e-12)
 
 
-def test_allan_octaves_match_core_allan():
-    x = np.random.default_rng(2).standard_normal(50000)
-    m = np.array([1, 2, 3, 4, 6, 8])
-    ours = sig.allan_deviation_octaves(x, 100.0, m)
-    ref = allan_deviation(x, 100.0, taus=m).adev
-    # stride 1 for m <= 8: the same fully overlapping estimator, equal to rounding
-    np.testing.assert_allclose(ours, ref, rtol=1e-9)
+def test_allan_signature_is_the_core_estimator_bit_for_bit():
+    # One Allan estimator: the signature at the layout's half-octave factors is core.allan's
+    # fully overlapping deviation, the same bits as allan_deviation(...).adev
+    x = np.random.default_rng(2).standard_normal(50000) * 1e-3 + 0.01
+    layout = sig.make_layout(x, 100.0)
+    ours = sig.compute(layout, x, None)['allan']
+    np.testing.assert_array_equal(ours, allan_deviation(x, 100.0, taus=layout.m).adev)
+    np.testing.assert_array_equal(ours, allan_deviation_values(x, 100.0, taus=layout.m))
+    assert layout.m[0] == 1 and layout.m[-1] <= x.size // 10
 
 
-def test_allan_octaves_strided_close_to_full():
-    x = np.random.default_rng(3).standard_normal(200000)
-    m = np.array([64, 256, 1024])
-    ours = sig.allan_deviation_octaves(x, 100.0, m)
-    ref = allan_deviation(x, 100.0, taus=m).adev
-    # stride m/8 skips 7 of 8 terms that are ~90 % correlated with their neighbours: the difference
-    # is a small fraction of the 1-sigma CI (~ 1 / sqrt(n / m) = 7 % at m = 1024)
-    np.testing.assert_allclose(ours, ref, rtol=0.03)
+def test_allan_values_refuse_what_allan_deviation_refuses():
+    with pytest.raises(ParameterError):
+        allan_deviation_values(np.ones(100), 0.0, taus=[1])
+    with pytest.raises(InputDataError, match='NaN'):
+        allan_deviation_values(np.array([1.0, np.nan, 2.0, 3.0, 4.0]), 1.0)
 
 
 def test_find_lattice_exact_and_round_off():
@@ -98,7 +102,7 @@ def test_gm_closed_form_matches_psd_integral():
     integral = allan_template_from_psd(lambda f: 2 * tc / (1 + (2 * np.pi * f * tc) ** 2), tau,
                                        1e4, 1e5)
     # the integral is truncated at fs/2 and 1/T; the bounds are far outside the Lorentzian's corner
-    np.testing.assert_allclose(gm_allan(1.0, tc, tau), integral, rtol=0.02)
+    np.testing.assert_allclose(gauss_markov_avar(tau, 1.0, tc), integral, rtol=0.02)
 
 
 def test_flicker_template_floor_and_simulation():
@@ -108,7 +112,7 @@ def test_flicker_template_floor_and_simulation():
     np.testing.assert_allclose(floor, 0.664, rtol=0.02)
     rng = np.random.default_rng(6)
     m = np.array([100, 1000])
-    adev = np.mean([sig.allan_deviation_octaves(flicker_noise(200000, 100.0, 1.0, rng), 100.0, m)
+    adev = np.mean([allan_deviation_values(flicker_noise(200000, 100.0, 1.0, rng), 100.0, taus=m)
                     for _ in range(8)], axis=0)
     # 8 records of 2000 s: the ADEV at 10 s has ~200 independent averages per record, so the mean
     # over 8 records is within ~5 %; 10 % allows for the low-frequency cut of the finite record
@@ -129,6 +133,28 @@ def test_simulation_memory_keeps_psd_within_one_percent():
         ratio = model_gain(
             alpha, f, memory, freq, 1000.0) / model_gain(alpha, f, 1000, freq, 1000.0)
         assert np.max(np.abs(ratio - 1)) <= 0.0101
+
+
+def test_model_gain_and_stability_shortcut_equal_their_slow_twins():
+    # model_gain keeps the FFT of the GL coefficients per (alpha, L) and adds -f e^{-iw}; the
+    # slow twin takes one FFT of the full polynomial per call. stable() decides by a
+    # coefficient-sum bound where it can, else asks core; it must agree with core everywhere,
+    # unstable and marginal pairs included (f beyond S_L(alpha), alpha far from 1)
+    rng = np.random.default_rng(11)
+    freq = np.geomspace(0.01, 50.0, 300)
+    grid = np.arange(65537) * (100.0 / 131072)
+    decided = []
+    for _ in range(60):
+        alpha, f = round(rng.uniform(-0.2, 1.9), 2), round(rng.uniform(-2.5, 1.0), 6)
+        memory = int(rng.choice([25, 100, 1000]))
+        a = gl_coefficients(alpha, memory)
+        a[1] -= f
+        slow = 1.0 / np.interp(freq, grid, np.abs(np.fft.rfft(a, 131072)) ** 2)
+        # rounding only: the two sums differ in the last bits, near a pole relatively more
+        np.testing.assert_allclose(model_gain(alpha, f, memory, freq, 100.0), slow, rtol=1e-9)
+        decided.append(stable(alpha, f, memory))
+        assert decided[-1] == check_stability(alpha, f, memory).stable, (alpha, f, memory)
+    assert 0 < sum(decided) < len(decided)  # both answers were exercised
 
 
 def test_fit_baseline_recovers_simulated_model():

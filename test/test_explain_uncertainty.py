@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Standard errors and 95 % intervals of the explain effect parameters (issue 11 item 9).
+Standard errors and 95 % intervals of the explain effect parameters.
 
 Records with known effect parameters come from :mod:`gyro_noise_ros.explain.synthetic`. The
 coverage tests fit the effects with the fitters' own estimators and bootstrap the model with the
@@ -28,14 +28,16 @@ from types import SimpleNamespace
 
 from _realdata import real_data
 from gyro_noise_ros.cli.explain import main
+from gyro_noise_ros.core.allan import allan_deviation_values
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.explain import uncertainty as unc
 from gyro_noise_ros.explain.baseline import BaselineModel, simulation_memory
-from gyro_noise_ros.explain.effects import (BiasDrift, Context, GaussMarkov, RateRandomWalk,
+from gyro_noise_ros.explain.effects import (BiasDrift, BiasTransient, Context, RateRandomWalk,
                                             Sinusoid)
 from gyro_noise_ros.explain.inputs import make_measurement
-from gyro_noise_ros.explain.signatures import allan_deviation_octaves, make_layout
+from gyro_noise_ros.explain.report import parameter_lines
+from gyro_noise_ros.explain.signatures import make_layout
 from gyro_noise_ros.explain.synthetic import make_record
 from gyro_noise_ros.explain.workflow import explain
 import numpy as np
@@ -115,12 +117,12 @@ def test_interval_covers_the_true_rate_random_walk():
                                   n=20000)
         layout = make_layout(meas.rate, meas.rate_hz)
         base = _baseline(truth)
-        members = [{'allan': allan_deviation_octaves(
+        members = [{'allan': allan_deviation_values(
             base.generator(np.random.default_rng([seed, j, 99])).generate(meas.n), RATE_HZ,
-            layout.m)} for j in range(8)]
+            taus=layout.m)} for j in range(8)]
         ctx = Context(_meas(meas), meas.rate, layout,
-                      {'allan': allan_deviation_octaves(meas.rate, RATE_HZ, layout.m)}, members,
-                      {})
+                      {'allan': allan_deviation_values(meas.rate, RATE_HZ, taus=layout.m)},
+                      members, {})
         params = effect.fit(ctx)
         if params is None:
             continue
@@ -187,10 +189,84 @@ def test_summarise_flags_what_the_bootstrap_cannot_resolve():
     assert count['stderr'] is None and not count['resolved']
     text = unc.format_value(good)
     assert '±' in text and text.endswith(' s')
-    # a Gauss-Markov correlation time at the shortest grid point (3 samples) is only a bound
-    at_100_hz = SimpleNamespace(rate_hz=100.0)
-    assert 'upper bound' in unc.grid_edge(at_100_hz, GaussMarkov(), 'correlation_time_s', 0.03)
-    assert unc.grid_edge(at_100_hz, GaussMarkov(), 'correlation_time_s', 0.05) == ''
+
+
+def test_time_scales_outside_what_the_record_resolves_are_bounds():
+    # 20,000 samples at 100 Hz: T = 200 s, chunks of 200 samples (2 s), Allan taus to ~2000
+    # samples (the layout's n / 10), so the Gauss-Markov limit is that tau / 1.89
+    x = np.random.default_rng(0).standard_normal(20000)
+    layout = make_layout(x, RATE_HZ)
+    where = {'n': 20000, 'rate_hz': RATE_HZ, 'layout': layout}
+    tau_max = layout.tau_s[-1]
+
+    def check(effect, name, params, interval=None):
+        return unc.time_scale_check(effect, name, params, interval, **where)
+
+    # the PX4 case: a 620 s time constant fitted on a record that shows 54 s after the onset
+    transient = {'amplitude_rad_s': 1e-3, 'delay_s': 150.0, 'time_constant_s': 620.0}
+    out = check('bias_transient', 'time_constant_s', transient, [139.0, 1101.0])
+    assert not out['resolved'] and 'longer than the record resolves' in out['note']
+    # the bound is the smaller of the interval's lower end and what the record shows (50 s)
+    assert out['bound'] == {'lower': pytest.approx(50.0), 'upper': None}
+    assert out['resolvable'] == [pytest.approx(2.0), pytest.approx(50.0)]
+    # inside: resolved, no bound
+    inside = check('bias_transient', 'time_constant_s', dict(transient, time_constant_s=20.0),
+                   [12.0, 28.0])
+    assert inside['resolved'] and inside['bound'] is None and inside['note'] == ''
+    # without an interval the value alone is judged
+    assert not check('bias_transient', 'time_constant_s', transient)['resolved']
+    # a rise faster than one chunk is a step: only an upper bound
+    fast = check('bias_transient', 'time_constant_s', dict(transient, time_constant_s=1.0),
+                 [0.2, 1.8])
+    assert fast['bound'] == {'lower': None, 'upper': pytest.approx(2.0)}
+    # Gauss-Markov: 3 samples at the short end (the old grid-edge rule), the Allan peak at the
+    # long end
+    gm = {'sigma_rad_s': 1e-3, 'correlation_time_s': 0.03}
+    edge = check('gauss_markov', 'correlation_time_s', gm, [0.03, 0.05])
+    assert not edge['resolved'] and edge['bound']['upper'] == pytest.approx(0.05)
+    assert check('gauss_markov', 'correlation_time_s', dict(gm, correlation_time_s=5.0),
+                 [3.0, 7.0])['resolved']
+    late = check('gauss_markov', 'correlation_time_s', dict(gm, correlation_time_s=0.9 * tau_max),
+                 [0.6 * tau_max, 1.3 * tau_max])
+    assert not late['resolved']
+    # the interval's lower end (0.6 tau_max) lies past the limit: the limit is the bound
+    assert late['bound']['lower'] == pytest.approx(tau_max / unc.GM_PEAK_TAU)
+    # a frequency's bounds are its period's, inverted: a period longer than the record
+    line = {'amplitude_rad_s': 1e-3, 'frequency_hz': 0.004, 'phase_rad': 0.0}
+    slow = check('sinusoid', 'frequency_hz', line, [0.003, 0.0045])
+    assert not slow['resolved']
+    assert slow['bound'] == {'lower': None, 'upper': pytest.approx(0.005)}
+    assert check('sinusoid', 'frequency_hz', dict(line, frequency_hz=7.0), [6.9, 7.1])['resolved']
+    # parameters without a time scale are not judged
+    assert check('bias_transient', 'amplitude_rad_s', transient) is None
+
+
+def test_a_time_constant_longer_than_the_record_is_a_bound_not_a_value():
+    # the PX4 case on a record with a known answer: a rise with tc = 2 T starting at 0.4 T (the
+    # record shows 0.6 T = 120 s of it, 26 % of the step): the workflow names the transient, and
+    # its time constant must come out as a lower bound that holds (<= the true 400 s), not as
+    # "value ± stderr"
+    meas, _ = make_record((), np.random.default_rng([1, 21]), n=20000)
+    duration = meas.n / RATE_HZ
+    t = np.arange(meas.n) / RATE_HZ
+    chunk_noise = np.std(meas.rate) / np.sqrt(meas.n // 100)
+    rise = 150 * chunk_noise * BiasTransient.shape(t, 0.4 * duration, 2 * duration)
+    result = explain(make_measurement(meas.rate + rise, rate_hz=RATE_HZ), seed=1, ensemble=8,
+                     bootstrap=10)
+    assert result.named == ['bias_transient'], result.named
+    entry = result.uncertainty['bias_transient']['time_constant_s']
+    after_onset = duration - result.steps[0].params['delay_s']
+    assert not entry['resolved'] and 'longer than the record resolves' in entry['note']
+    assert entry['bound']['upper'] is None
+    assert 0 < entry['bound']['lower'] <= after_onset * (1 + 1e-9)
+    assert entry['bound']['lower'] <= 2 * duration  # the bound holds for the true value
+    # only the initial slope is measured: the amplitude is flagged with it
+    assert not result.uncertainty['bias_transient']['amplitude_rad_s']['resolved']
+    # the same check on the value alone, kept in explain.json for --bootstrap 0
+    assert not result.steps[0].time_scales['time_constant_s']['resolved']
+    line = parameter_lines(result)[0]
+    assert 'time_constant_s >= ' in line and 'UNRESOLVED: longer than the record' in line
+    assert 'time_constant_s = ' not in line
 
 
 def test_workflow_json_and_bootstrap_off():

@@ -13,15 +13,19 @@
 # limitations under the License.
 
 """
-Hidden-effect proof of the discrepancy workflow (issue 5).
+Hidden-effect proof of the discrepancy workflow: one sweep, several checks.
 
 Records come from :mod:`gyro_noise_ros.explain.synthetic`: the baseline and the effect parameters
-are drawn at random from the ranges documented there; the test asserts that the first named effect
-is the hidden one, that every step shrinks the gap and that the final model puts the measurement
-inside the band (G <= INSIDE_GAP). The default run uses one seeded record per case (20,000 samples
-at 100 Hz, 150,000 for bias_instability, 8 members); the slow sweep runs 6 seeds per case and
-requires at least 4 of 6 (the rates over 10 seeds and the false-alarm rate over 40 are in
-docs/discrepancy.md, with the commands).
+are drawn at random from the ranges documented there. Every record is explained once, in one
+module-scoped pass (:func:`sweep`), and the tests below read the same results: each hidden effect
+(and four pairs) named first on its first record with every step shrinking the gap and the final
+model inside the band; the detection rate over all the sweep's records; nothing named on
+effect-free records; the fitted line close to the hidden one; a rerun giving the same result.
+Records of 20,000 samples at 100 Hz (150,000 for bias_instability), 8 members, no bootstrap (the
+uncertainties are tested in test_explain_uncertainty.py). The rates over 10 seeds per case and the
+false-alarm rate over 40 records, with their commands, are in docs/discrepancy.md. (Before, the
+same checks ran as 17 separate records plus a slow sweep of 86 more: ~200 s on a quiet machine;
+now 39 records, each explained once.)
 """
 
 from gyro_noise_ros.explain.synthetic import EFFECTS, make_record
@@ -29,36 +33,87 @@ from gyro_noise_ros.explain.workflow import explain, INSIDE_GAP
 import numpy as np
 import pytest
 
-FAST = {'n': 20000, 'ensemble': 8}
-#: Record length per effect in the default run. Flicker (bias_instability) needs two decades of tau
-#: above its crossing with the white noise to be told from one Gauss-Markov process (flicker is a
-#: superposition of them): with 20,000 samples it is mistaken for gauss_markov in 3 of 4 seeds,
-#: with 150,000 in none of 4 (docs/discrepancy.md). The other effects are named at 20,000 samples.
+N = 20000
+ENSEMBLE = 8
+#: Record length per effect. Flicker (bias_instability) needs two decades of tau above its crossing
+#: with the white noise to be told from one Gauss-Markov process (flicker is a superposition of
+#: them): with 20,000 samples it is mistaken for another effect in 4 of 10 seeds, with 150,000 in
+#: none of 10 (docs/discrepancy.md). The other effects are named at 20,000 samples.
 LENGTH = {'bias_instability': 150000}
+#: Seeds of each hidden case: the first is checked record by record, every one counts in the
+#: detection rate. Seed 0 for the single effects; 3 for the two pairs checked so far (seed 0 of
+#: sinusoid + rate_random_walk draws a random walk too weak to be seen in 20,000 samples); 100
+#: for the other two pairs (explained on 10 of 10 seeds 100-109).
+SEEDS = {**{(e,): (0, 100) for e in EFFECTS},
+         ('quantization', 'bias_drift'): (3, 100), ('sinusoid', 'rate_random_walk'): (3, 100),
+         ('quantization', 'sinusoid'): (100, 101), ('sample_loss', 'bias_transient'): (100, 101)}
+#: Effect-free records: 0-2 must name nothing (as the seed-0 records above), 100-108 count in the
+#: false-alarm rate.
+NULL_SEEDS = (0, 1, 2) + tuple(range(100, 109))
 
 
-def _run(hidden, seed, *, n, ensemble):
+def _run(hidden, seed, *, n=N, ensemble=ENSEMBLE):
     meas, truth = make_record(hidden, np.random.default_rng([seed, 7]), n=n)
-    return explain(meas, seed=seed, ensemble=ensemble), truth
+    return meas, truth, explain(meas, seed=seed, ensemble=ensemble, bootstrap=0)
 
 
-def _check_explained(result, hidden):
-    assert result.named, f'nothing named for hidden {hidden}'
-    assert result.named[0] in hidden, f'first named {result.named} for hidden {hidden}'
-    assert result.gap_initial > INSIDE_GAP
-    for step in result.steps:
-        assert step.gap_after < step.gap_before
-    assert result.gap_final <= INSIDE_GAP and not result.unexplained, result.where_final
+def _explained(result, hidden):
+    """Return '' when the record is explained as it should be, else why not."""
+    if not result.named or result.named[0] not in hidden:
+        return f'first named {result.named} for hidden {hidden}'
+    if not set(hidden) <= set(result.named):
+        return f'named {result.named}, hidden {hidden}'
+    if result.gap_initial <= INSIDE_GAP:
+        return f'the baseline alone was inside the band (gap {result.gap_initial:.3f})'
+    if any(step.gap_after >= step.gap_before for step in result.steps):
+        return 'a step did not shrink the gap'
+    if result.unexplained or result.gap_final > INSIDE_GAP:
+        return f'final gap {result.gap_final:.3f}: {result.where_final}'
+    return ''
 
 
-@pytest.mark.parametrize('effect', EFFECTS)
-def test_hidden_effect_is_named_first(effect):
-    result, _ = _run((effect,), 0, n=LENGTH.get(effect, FAST['n']), ensemble=FAST['ensemble'])
-    _check_explained(result, (effect,))
+@pytest.fixture(scope='module')
+def sweep():
+    """Explain every record of the sweep once: (case, seed) -> (measurement, truth, result)."""
+    out = {}
+    for case, seeds in SEEDS.items():
+        n = max(LENGTH.get(e, N) for e in case)
+        for seed in seeds:
+            out[case, seed] = _run(case, seed, n=n)
+    for seed in NULL_SEEDS:
+        out[(), seed] = _run((), seed)
+    return out
 
 
-def test_fitted_parameters_are_close_to_the_hidden_ones():
-    result, truth = _run(('sinusoid',), 1, **FAST)
+@pytest.mark.parametrize('case', list(SEEDS), ids=['+'.join(c) for c in SEEDS])
+def test_hidden_effect_is_named_first_and_explained(sweep, case):
+    _, _, result = sweep[case, SEEDS[case][0]]
+    assert _explained(result, case) == ''
+
+
+def test_detection_rate_over_the_sweep(sweep):
+    misses = {key: why for key in sweep if key[0]
+              for why in [_explained(sweep[key][2], key[0])] if why}
+    runs = sum(1 for key in sweep if key[0])
+    # measured over seeds 100-109 (docs/discrepancy.md): about 91 % of these 13 cases fully
+    # explained (first named, all found, inside the band). With a 9 % miss rate P(more than 5
+    # misses of 26) is 2.5 % (binomial); at a 30 % miss rate (a workflow materially worse) the
+    # check fails with 84 %
+    assert len(misses) <= 5, f'{len(misses)} of {runs} records: {misses}'
+
+
+def test_effect_free_data_names_nothing(sweep):
+    named = {seed: sweep[(), seed][2].named for seed in NULL_SEEDS if sweep[(), seed][2].named}
+    assert not any(seed in named for seed in (0, 1, 2)), named
+    # 0 of 40 named (docs/discrepancy.md; 95 % upper bound 7 %): with a 2 % false-alarm rate
+    # P(more than 1 of 12) is 2 %, with 20 % (a broken null) 73 %
+    assert len(named) <= 1, named
+    for seed in NULL_SEEDS:
+        assert not sweep[(), seed][2].unexplained
+
+
+def test_fitted_line_is_close_to_the_hidden_one(sweep):
+    _, truth, result = sweep[('sinusoid',), 0]
     params = result.steps[0].params
     hidden = truth['sinusoid']
     # the frequency is refined between periodogram bins (bin width 1/T = 5 mHz here)
@@ -68,49 +123,8 @@ def test_fitted_parameters_are_close_to_the_hidden_ones():
     assert params['amplitude_rad_s'] == pytest.approx(hidden['amplitude_rad_s'], rel=0.15)
 
 
-@pytest.mark.parametrize(
-    'pair', [('quantization', 'bias_drift'), ('sinusoid', 'rate_random_walk')])
-def test_two_hidden_effects_are_both_found(pair):
-    result, _ = _run(pair, 3, **FAST)
-    _check_explained(result, pair)
-    assert set(pair) <= set(result.named), result.named
-
-
-@pytest.mark.parametrize('seed', [0, 1, 2])
-def test_effect_free_data_names_nothing(seed):
-    result, _ = _run((), seed, **FAST)
-    assert result.named == []
-    assert not result.unexplained
-
-
-def test_same_seed_same_result():
-    meas, _ = make_record(('bias_drift',), np.random.default_rng([4, 7]), n=20000)
-    a = explain(meas, seed=5, ensemble=6)
-    b = explain(meas, seed=5, ensemble=6)
-    assert a.to_dict()['steps'] == b.to_dict()['steps']
-    assert a.gap_initial == b.gap_initial
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize('case', [(e,) for e in EFFECTS] + [('quantization', 'sinusoid'),
-                                                            ('sample_loss', 'bias_transient')])
-def test_sweep_hidden_effects(case):
-    n = max(LENGTH.get(e, FAST['n']) for e in case)
-    ok = 0
-    for seed in range(100, 106):
-        result, _ = _run(case, seed, n=n, ensemble=FAST['ensemble'])
-        ok += bool(result.named and result.named[0] in case and set(case) <= set(result.named)
-                   and not result.unexplained)
-    # docs/discrepancy.md gives the measured rates over 10 seeds (70-100 % per effect at these
-    # lengths); 4 of 6 is a floor that fails only if the workflow gets materially worse
-    assert ok >= 4, f'{case}: {ok} of 6'
-
-
-@pytest.mark.slow
-def test_sweep_false_alarms():
-    named = 0
-    for seed in range(100, 120):
-        result, _ = _run((), seed, **FAST)
-        named += bool(result.named)
-    # 0 of 40 measured (docs/discrepancy.md); at most 1 of 20 here
-    assert named <= 1
+def test_same_seed_same_result(sweep):
+    meas, _, first = sweep[('bias_drift',), 0]
+    again = explain(meas, seed=0, ensemble=ENSEMBLE, bootstrap=0)
+    assert again.to_dict()['steps'] == first.to_dict()['steps']
+    assert again.gap_initial == first.gap_initial and again.gap_final == first.gap_final

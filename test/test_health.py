@@ -26,6 +26,7 @@ from gyro_noise_ros.core.chunks import (DriftEstimate, RobustLocation, SequenceS
                                         summarise_sequence)
 from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
 from gyro_noise_ros.core.health import (
+    axis_status,
     drift_t_threshold,
     evaluate_health,
     HealthThresholds,
@@ -388,3 +389,42 @@ def test_no_drift_false_alarm_on_white_noise_with_few_chunks():
     # the level is p = 0.0027: 54 expected of 20,000 (sd ~7); a plain 3-sigma test fires ~1900
     # times
     assert fires < 100
+
+
+def test_axis_status_adds_refused_batches_and_is_error_only_while_data_is_refused():
+    verdict = evaluate_health(summary())
+    values = [(k, v) for k, v, _ in verdict.items]
+    plain = axis_status(verdict, values)
+    assert (plain.level, plain.message, plain.values) == (verdict.level, verdict.message,
+                                                          tuple(values))
+    refused = axis_status(verdict, values, rejected_batches=2, last_rejection='bad stamps',
+                          rejecting=True, seconds_since_data=1.0)
+    assert (refused.level, refused.message) == ('ERROR', 'Samples rejected: bad stamps.')
+    assert refused.values[-2:] == (('Batches rejected', '2'), ('Last rejection', 'bad stamps'))
+    # silent for longer than stale_after_s (5 s): the verdict's own level, the count stays
+    silent = axis_status(verdict, values, rejected_batches=2, last_rejection='bad stamps',
+                         rejecting=True, seconds_since_data=5.5)
+    assert silent.level == verdict.level and silent.values == refused.values
+    accepted = axis_status(verdict, values, rejected_batches=2, last_rejection='bad stamps')
+    assert accepted.level == 'OK' and accepted.level_byte == 0
+
+
+def test_axis_status_is_at_least_warn_with_more_than_one_publisher():
+    ok = evaluate_health(summary())
+    values = [(k, v) for k, v, _ in ok.items]
+    assert axis_status(ok, values, publishers=1).level == 'OK'
+    mixed = axis_status(ok, values, publishers=2)
+    assert (mixed.level, mixed.message) == ('WARN', '2 publishers of the data: their samples '
+                                            'are mixed.')
+    assert mixed.values == tuple(values)
+    # A WARN verdict stays WARN and keeps its own message; worse verdicts are left alone.
+    warn = evaluate_health(summary(drift_dph=0.03, out_of_order=3))
+    assert axis_status(warn, values, publishers=2).message == warn.message
+    for verdict in (evaluate_health(summary(drift_dph=1.0, stderr_dph=0.3)),
+                    evaluate_health(summary(), seconds_since_data=6.0)):
+        status = axis_status(verdict, values, publishers=3)
+        assert (status.level, status.message) == (verdict.level, verdict.message)
+    # Refused batches while data arrives: ERROR over the publishers' WARN.
+    refused = axis_status(ok, values, publishers=2, rejected_batches=1, last_rejection='bad',
+                          rejecting=True, seconds_since_data=0.1)
+    assert (refused.level, refused.message) == ('ERROR', 'Samples rejected: bad.')

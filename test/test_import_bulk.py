@@ -25,10 +25,10 @@ import dataclasses
 import os
 import sqlite3
 
+from gyro_noise_ros.app import importer as import_app
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.bag.bulk import BulkImuBagWriter, MCAP_CHUNK_BYTES
 from gyro_noise_ros.cli import emulator as emu_cli
-from gyro_noise_ros.cli import importer
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Reader
@@ -75,9 +75,10 @@ def test_bulk_import_writes_the_old_paths_bytes(corrupt_logs, tmp_path, storage,
         # same bag name in two folders: the name is inside the MCAP file and metadata.yaml
         bag = tmp_path / str(bulk) / 'bag'
         bag.parent.mkdir()
-        reports[bulk] = importer.import_logs(corrupt_logs, bag, storage=storage, bulk=bulk,
-                                             angular_velocity_variance=1e-6, chunk_bytes=1 << 14,
-                                             threads=threads if bulk else 1)
+        reports[bulk] = import_app.import_logs(corrupt_logs, bag, storage=storage, bulk=bulk,
+                                               angular_velocity_variance=1e-6,
+                                               chunk_bytes=1 << 14,
+                                               threads=threads if bulk else 1)
         bags[bulk] = bag
     old, new = reports[False], reports[True]
     assert old.crc_errors > 0 and old.corrupt_region_count > 0 and old.temperature_written > 0
@@ -139,11 +140,11 @@ def test_a_failed_write_in_the_writer_thread_is_raised_once_and_stops_the_import
     def failing(self, *args, **kwargs):
         calls.append(len(calls))
         if len(calls) == 3:
-            raise importer.OutputError('bag: writing failed: No space left on device')
+            raise import_app.OutputError('bag: writing failed: No space left on device')
 
     monkeypatch.setattr(BulkImuBagWriter, 'write_imu', failing)
-    with pytest.raises(importer.OutputError, match='No space left'):
-        importer.import_logs(corrupt_logs, tmp_path / 'bag', threads=2, chunk_bytes=1 << 12)
+    with pytest.raises(import_app.OutputError, match='No space left'):
+        import_app.import_logs(corrupt_logs, tmp_path / 'bag', threads=2, chunk_bytes=1 << 12)
     # the writes queued behind the failed one were dropped, not run
     assert len(calls) == 3
     # and no bag, finished-looking or hidden, is left
@@ -151,13 +152,13 @@ def test_a_failed_write_in_the_writer_thread_is_raised_once_and_stops_the_import
 
 
 def test_threads_must_be_one_or_two(corrupt_logs, tmp_path):
-    with pytest.raises(importer.ParameterError, match='threads'):
-        importer.import_logs(corrupt_logs, tmp_path / 'bag', threads=3)
+    with pytest.raises(import_app.ParameterError, match='threads'):
+        import_app.import_logs(corrupt_logs, tmp_path / 'bag', threads=3)
 
 
 @pytest.mark.parametrize('threads', [1, 2])
 def test_a_bag_that_cannot_be_created_is_one_error(corrupt_logs, tmp_path, threads):
     blocker = tmp_path / 'file'
     blocker.write_text('x')
-    with pytest.raises(importer.OutputError, match='cannot be created'):
-        importer.import_logs(corrupt_logs, blocker / 'bag', threads=threads)
+    with pytest.raises(import_app.OutputError, match='cannot be created'):
+        import_app.import_logs(corrupt_logs, blocker / 'bag', threads=threads)

@@ -24,6 +24,7 @@ only because they are clean) and a plain-Python twin of the counter rules.
 import os
 import struct
 
+from gyro_noise_ros.app import importer as import_app
 from gyro_noise_ros.cli import emulator as emu_cli
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import lsm6dso32 as lsm
@@ -147,7 +148,7 @@ def test_import_with_corruption_counts_exact_and_bag_right(sd_logs, tmp_path, st
     paths, kept, discarded, regions = corrupt_copy(files, clean, tmp_path / 'logs')
     bag = tmp_path / 'bag'
     # files given out of order: the importer orders them by their headers
-    rep = importer.import_logs(paths[::-1], bag, storage=storage, angular_velocity_variance=1e-6)
+    rep = import_app.import_logs(paths[::-1], bag, storage=storage, angular_velocity_variance=1e-6)
     assert rep.samples_written == kept.size
     assert rep.bytes_discarded == discarded
     assert rep.resyncs == 3 and rep.corrupt_region_count == 3
@@ -181,7 +182,7 @@ def test_missing_middle_file_is_reported_and_counted(sd_logs, tmp_path):
     files, clean = sd_logs
     use = [f for i, f in enumerate(files) if i != 2]
     all_kept = np.concatenate([samples_of(walk_frames(clean[f])) for f in use])
-    rep = importer.import_logs(use, tmp_path / 'bag', start_time='zero', temperature_rate_hz=0)
+    rep = import_app.import_logs(use, tmp_path / 'bag', start_time='zero', temperature_rate_hz=0)
     assert rep.missing_file_indices == (2,)
     assert rep.samples_written == all_kept.size
     lost, flagged = twin_counts(all_kept['seq'].astype(np.int64).tolist(),
@@ -237,7 +238,7 @@ def test_import_memory_does_not_grow_with_log_size(tmp_path):
                              '300000']) == 0
         files = sorted(str(logs / f) for f in os.listdir(logs))
         tracemalloc.start()
-        importer.import_logs(files, tmp_path / f'bag{n}', chunk_bytes=1 << 16)
+        import_app.import_logs(files, tmp_path / f'bag{n}', chunk_bytes=1 << 16)
         peaks[n] = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
     # 8x the data (0.5 MB more of samples as numpy arrays alone) must not raise the Python-heap

@@ -28,6 +28,7 @@ import dataclasses
 import os
 import zlib
 
+from gyro_noise_ros.app import importer as import_app
 from gyro_noise_ros.cli import emulator as emu_cli
 from gyro_noise_ros.cli import importer
 from gyro_noise_ros.link import protocol as p
@@ -243,7 +244,7 @@ def test_import_with_scanner_writes_the_same_bag_and_report(damaged_logs, tmp_pa
     for scan in (False, True):
         bag = tmp_path / str(scan) / 'bag'
         bag.parent.mkdir()
-        reports[scan] = importer.import_logs(damaged_logs, bag, scan=scan, chunk_bytes=4099)
+        reports[scan] = import_app.import_logs(damaged_logs, bag, scan=scan, chunk_bytes=4099)
         mcap = next(f for f in os.listdir(bag) if f.endswith('.mcap'))
         files[scan] = open(bag / mcap, 'rb').read()
     assert reports[True].corrupt_region_count > 3

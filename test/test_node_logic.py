@@ -14,23 +14,24 @@
 """
 ROS-free tests of the pure pieces the nodes call: counters, link verdict, items, monitor lines.
 
-These moved out of the node modules (issue 13); the node tests still run them end to end.
+These live outside the node modules so they run without ROS; the node tests still run them end
+to end.
 """
 
 from dataclasses import fields
 import time
 from types import SimpleNamespace
 
+from gyro_noise_ros.app.live import LiveAnalysis, parse_axes, TemperatureTrack
 from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.health import HealthThresholds
 from gyro_noise_ros.core.items import allan_items, ALLAN_KEYS, fmt
-from gyro_noise_ros.core.live import LiveAnalysis, parse_axes, TemperatureTrack
 from gyro_noise_ros.core.readout import read_allan
 from gyro_noise_ros.errors import LinkError, ParameterError
 from gyro_noise_ros.link import protocol as P
-from gyro_noise_ros.link.health import judge_link, LinkThresholds, LinkWindow
+from gyro_noise_ros.link.health import judge_link, LinkTask, LinkThresholds, LinkWindow
 from gyro_noise_ros.link.port import hardware_id_for, validate_port
 from gyro_noise_ros.link.sequence import SequenceGapCounter, SequenceTracker
 from gyro_noise_ros.link.session import handshake, LinkConfig, ODR_TOLERANCE_RATIO
@@ -242,6 +243,33 @@ def test_link_verdict_levels():
 def test_link_thresholds_are_checked():
     with pytest.raises(ParameterError, match='loss_warn_ratio'):
         LinkThresholds(loss_warn_ratio=0.5, loss_error_ratio=0.1)
+
+
+def _snapshot(published, lost, **kw):
+    base = {'state': 'streaming', 'last_error': 'none', 'config': None, 'connections': 1,
+            'streaming_since': 0.0, 'last_sample_monotonic': None, 'lifecycle': 'active',
+            'activated_at': 0.0, 'published': published, 'lost': lost, 'restarts': 0,
+            'duplicates': 0, 'discarded': 0, 'temperatures': 0, 'link': {'crc_errors': 0}}
+    base.update(kw)
+    return base
+
+
+def test_link_task_judges_the_difference_since_the_previous_run():
+    task = LinkTask(LinkThresholds(), port='tcp://x', period_s=1.0, now=0.0,
+                    snapshot=_snapshot(0, 0))
+    status = task.run(_snapshot(1000, 20), 1.0, drift_ppm=0.0)
+    assert status.level == 'ERROR' and '20 samples lost in the last 1.0 s' in status.message
+    values = dict(status.values)
+    assert values['Samples lost'] == '20' and values['Sample rate (Hz)'] == '1000.0'
+    # the next window has no new loss: the cumulative 20 no longer count
+    status = task.run(_snapshot(2000, 20), 2.0, drift_ppm=0.0)
+    assert (status.level, status.message) == ('OK', 'Streaming at 1000 Hz, no loss.')
+    task.thresholds = LinkThresholds(loss_error_ratio=0.05)  # a runtime parameter change
+    assert task.run(_snapshot(3000, 40), 3.0, drift_ppm=0.0).level == 'WARN'
+    idle = _snapshot(3000, 40, lifecycle='unconfigured')
+    status = task.run(idle, 4.0, drift_ppm=0.0)
+    assert status.level == 'OK' and status.message.startswith('Unconfigured (lifecycle)')
+    assert dict(status.values)['Connection'] == 'unconfigured' and idle['state'] == 'streaming'
 
 
 def _status(name, level, message, **values):

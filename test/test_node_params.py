@@ -114,7 +114,7 @@ def test_yaml_comment_gives_unit_and_read_only(module):
 
 @pytest.mark.parametrize('module', NODE_MODULES, ids=_ids(NODE_MODULES))
 def test_yaml_is_keyed_for_any_namespace(module):
-    # Keyed by the bare node name, a file is silently ignored under -r __ns:=/robot1 (issue 10).
+    # Keyed by the bare node name, a file is silently ignored under -r __ns:=/robot1.
     doc = yaml.safe_load((CONFIG_DIR / f'{module.NODE_NAME}.yaml').read_text())
     assert list(doc) == ['/**'], f'top-level keys {list(doc)}: key the file /** so it applies '
     'under any namespace'

@@ -22,7 +22,6 @@ and values.
 """
 
 import os
-import random
 import signal
 import subprocess
 import sys
@@ -47,13 +46,7 @@ def _expected(samples, seed, sigma=0.004):
     return stamps, rng.standard_normal((samples, 3)) * sigma
 
 
-def _domain():
-    """Return the ROS domain of this run: ROS_DOMAIN_ID if exported, else a random one."""
-    return int(os.environ.get('ROS_DOMAIN_ID') or random.randint(100, 200))
-
-
 def _record(tmp_path, samples, seed, sig, storage):
-    domain = _domain()
     out = tmp_path / f'bag_{storage}'
     log = tmp_path / f'recorder_{storage}.log'
     rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
@@ -61,11 +54,11 @@ def _record(tmp_path, samples, seed, sig, storage):
                             # The replayer publishes reliable, as the driver does: a reliable
                             # subscription keeps a loaded host from dropping messages in transport.
                             '-p', 'reliable:=true', '-p', 'report_period_s:=0.25'],
-                           env=ros_env(domain), stdout=subprocess.DEVNULL, stderr=open(log, 'w'))
+                           env=ros_env(), stdout=subprocess.DEVNULL, stderr=open(log, 'w'))
     # The replayer waits for the recorder's Imu subscription and publishes in real time at
     # 6.66 kHz; it then lingers (its reliable writer resends what a starved recorder has not
     # taken yet) until the recorder reports every message written, and only then the signal comes.
-    rep = start_replayer(domain, '--samples', samples, '--seed', seed, '--subscribers', 1,
+    rep = start_replayer('--samples', samples, '--seed', seed, '--subscribers', 1,
                          '--linger-s', 60)
     try:
         deadline = time.monotonic() + 120.0
@@ -165,7 +158,7 @@ def _driver_published(stamps_counts, t_ns):
 @pytest.mark.slow
 @pytest.mark.timeout(240)
 @pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
-def test_killed_recorder_keeps_all_but_the_last_second(tmp_path, storage):
+def test_killed_recorder_keeps_all_but_the_last_second(tmp_path, storage, ros_graph):
     """
     Emulator -> driver -> gyro_noise_record, kill -9 after 20 s.
 
@@ -183,8 +176,7 @@ def test_killed_recorder_keeps_all_but_the_last_second(tmp_path, storage):
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rosbags.highlevel import AnyReader
 
-    domain = _domain()
-    env = ros_env(domain)
+    env = ros_env()
     bag, log = tmp_path / storage, tmp_path / 'recorder.log'
     procs = []
     try:
@@ -202,7 +194,7 @@ def test_killed_recorder_keeps_all_but_the_last_second(tmp_path, storage):
             env=env, stdout=subprocess.DEVNULL, stderr=open(tmp_path / 'driver.log', 'w'))
         procs.append(driver)
         context = rclpy.Context()
-        rclpy.init(context=context, domain_id=domain)
+        rclpy.init(context=context, domain_id=ros_graph.domain_id)
         statuses = []
         try:
             node = rclpy.create_node('test_kill_listener', context=context)
@@ -295,8 +287,46 @@ def test_killed_recorder_keeps_all_but_the_last_second(tmp_path, storage):
     assert counts['/imu/data_raw'] == kept and fixed.messages == sum(counts.values())
 
 
+@pytest.mark.timeout(180)
+def test_two_publishers_are_counted_apart_and_named(tmp_path):
+    # Two replayers (two writers of imu/data_raw, as a second driver or another robot's graph
+    # would be): the recorder counts each one's messages and sequence gaps apart (one counter for
+    # both read millions of drops in interleaved numbers) and warns, naming both.
+    samples = 20000  # 3 s each: they overlap even when one starts seconds after the other
+    out = tmp_path / 'two'
+    rec = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                            '-p', f'output:={out}', '-p', 'reliable:=true'],
+                           env=ros_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    # Each lingers 5 s after its last message: the recorder takes 13,320 messages a second here
+    # and may be seconds behind on a loaded host; a reliable writer resends only while it lives.
+    reps = [start_replayer('--samples', samples, '--seed', seed, '--linger-s', 5, node_name=name)
+            for seed, name in ((1, 'replayer_a'), (2, 'replayer_b'))]
+    try:
+        for rep in reps:
+            assert rep.communicate(timeout=120)[0].startswith(f'published {samples}')
+        rec.send_signal(signal.SIGINT)
+        _, err = rec.communicate(timeout=30)
+    finally:
+        for p in (*reps, rec):
+            if p.poll() is None:
+                p.kill()
+                p.communicate()
+    assert rec.returncode == 0, err
+    summary = next(ln for ln in err.splitlines() if ln.startswith('gyro_noise_record: received'))
+    assert f'received {2 * samples} Imu' in summary and '; 0 dropped in transport' in summary
+    imu_part = summary.split('publishers of /imu/data_raw: ', 1)[1].split('; publishers of')[0]
+    assert sorted(imu_part.split('; ')) == [f'/replayer_a {samples} (0 dropped)',
+                                            f'/replayer_b {samples} (0 dropped)'], summary
+    warnings = [ln for ln in err.splitlines() if 'another publisher on /imu/data_raw' in ln]
+    assert len(warnings) == 1, err[-3000:]
+    assert ('/replayer_b (besides /replayer_a)' in warnings[0]
+            or '/replayer_a (besides /replayer_b)' in warnings[0]), warnings[0]
+    assert {t.name: t.count for t in list_topics(out)}['/imu/data_raw'] == 2 * samples
+
+
 def test_refuses_an_existing_output(tmp_path):
-    env = ros_env(_domain())
+    env = ros_env()
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                            '-p', f'output:={tmp_path}'], env=env, capture_output=True, text=True,
                           timeout=60)
@@ -307,7 +337,7 @@ def test_refuses_an_existing_output(tmp_path):
 
 
 def test_refuses_an_unknown_storage(tmp_path):
-    env = ros_env(_domain())
+    env = ros_env()
     done = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
                            '-p', f'output:={tmp_path / "b"}', '-p', 'storage:=zip'],
                           env=env, capture_output=True, text=True, timeout=60)

@@ -24,6 +24,7 @@ axes, as the paper does (420 s -> 945 s "average among the three axes").
 import json
 
 from _reliability_common import six_position_record, static_record, write_bag
+from gyro_noise_ros.app.reliability import in_short
 from gyro_noise_ros.calibration.emulate import BiasVariation, SensorErrors
 from gyro_noise_ros.calibration.static_record import CHANNELS, StaticRecord
 from gyro_noise_ros.cli.reliability import main
@@ -61,10 +62,12 @@ def bags(tmp_path_factory):
     out = {}
     for name, errors, seed in (('before', ERRORS, 1), ('after', ERRORS.stressed(
             instability_factor=2.0), 2), ('same', ERRORS, 3)):
+        # the before record carries a 25 -> 26 degC ramp (sensor_msgs/Temperature at 1 Hz)
+        temp = (lambda t: 25.0 + t / 12000.0) if name == 'before' else None
         out[name] = str(write_bag(root / f'{name}_static', *static_record(
-            errors=errors, rate_hz=RATE, duration_s=12000.0, seed=seed)))
+            errors=errors, rate_hz=RATE, duration_s=12000.0, seed=seed), temperature_degc=temp))
     out['cal_before'] = str(write_bag(root / 'cal_before', *six_position_record(
-        dwell_s=20.0, seed=4)))
+        dwell_s=20.0, seed=4), temperature_degc=lambda t: 30.0 + 0.01 * t))
     out['cal_after'] = str(write_bag(root / 'cal_after', *six_position_record(
         dwell_s=20.0, seed=5, errors=SensorErrors().stressed())))
     return out
@@ -76,38 +79,96 @@ def test_full_procedure(tmp_path, bags, capsys):
                  '--after-calibration', bags['cal_after'], '--after-static', bags['after'],
                  '--gravity', '9.80665', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
-    assert doc['c'] == 2.0 and doc['tolerance'] == 0.5
+    assert doc['c'] == 2.0 and doc['tolerance'] == 0.5 and doc['alpha'] == 0.05
     assert set(doc['bias_instability_interval']) == set(CHANNELS)
     for entry in doc['bias_instability_interval'].values():
         assert set(entry) >= KEYS
         # closed form of this model: ~0.6 .. 125 s before (scatter of single records ~+/-30 %)
         lo, hi = entry['before_s']
         assert 0.4 < lo < 1.2 and 60.0 < hi < 250.0
+        if entry['change'] is not None:
+            # every width and change carries its uncertainty and its 90 % interval
+            assert entry['width_sigma_before_s'] > 0 and entry['change_sd'] > 0
+            assert entry['ci'][0] < entry['change'] < entry['ci'][1]
+            assert entry['verdict'] in ('beyond', 'physiological', 'undetermined')
+            if entry['verdict'] == 'undetermined':
+                assert len(entry['decide_record_s']) == 2
+                assert min(entry['decide_record_s']) > 12000.0
     # stress x2 on the flicker level: closed form +135 %; the three-axis mean must be beyond 50 %
     for sensor in ('accel', 'gyro'):
         assert doc['summary'][sensor]['mean_change'] > 0.5
+        o = doc['overall'][sensor]
+        # a widening: never called physiological; beyond or undetermined with its basis
+        assert o['verdict'] in ('beyond', 'undetermined') and o['basis']
+        assert o['mean_change'] > 0.5 and o['mean_change_sd'] > 0
+    # the noise terms: the one readout's numbers, each with a 68 % bracket that holds it
+    for ch, e in doc['noise_terms'].items():
+        for side in ('before', 'after'):
+            for key, value in e[side].items():
+                if key.endswith('_ci68'):
+                    lo, hi = value
+                    v = e[side][key[:-5]]
+                    assert lo <= v and (hi is None or v <= hi), (ch, key)
+        assert e['ratio_after_before']
     # uniformity: paper 0.252 -> 2.955 mg carried by the simulated calibrations (4 sigma ~0.2 mg)
     ub = doc['uniformity']['before']['accel_bias_std_m_s2'] / 9.80665e-3
     ua = doc['uniformity']['after']['accel_bias_std_m_s2'] / 9.80665e-3
     assert ub == pytest.approx(0.252, abs=0.2) and ua == pytest.approx(2.955, abs=0.2)
     assert doc['calibration']['before']['accel']['misalignment'] is not None
+    # Table 6 before/after with the change and its standard uncertainty (mg, %)
+    rows = {r['parameter']: r for r in doc['table6']}
+    assert set(rows) == {'bx', 'by', 'bz', 'Sx', 'Sy', 'Sz'}
+    by = rows['by']
+    assert by['unit'] == 'mg' and by['change'] == pytest.approx(by['after'] - by['before'])
+    assert by['change_sigma'] == pytest.approx(np.hypot(by['before_sigma'], by['after_sigma']))
+    # paper Table 6: by -4.4 -> -8.3 mg; the calibrations recover it within 0.3 mg
+    assert by['change'] == pytest.approx(-3.9, abs=0.3)
+    g = doc['gyro_calibration']
+    assert len(g['before']['bias_rad_s']) == 3 and len(g['bias_change_sigma_rad_s']) == 3
+    assert doc['accel_cross_axis']['after']['misalignment_sigma'] is not None
     gc = doc['gravity_check']['after']
     assert gc['consistent'] and {'mean_norm_raw_m_s2', 'loo_mean_norm_m_s2'} <= set(gc)
+    # temperatures: the before record's ramp 25 -> 26 degC, the before dwells at 30 degC + ramp
+    tb = doc['static_records']['before']['temperature']
+    assert tb['mean_degc'] == pytest.approx(25.5, abs=0.01) and tb['max_degc'] < 26.0
+    assert doc['static_records']['after']['temperature'] is None      # not recorded
+    dwells = doc['dwell_temperatures']['before']
+    assert len(dwells) == 6
+    for d in dwells:
+        mid = d['t_start_s'] + d['duration_s'] / 2
+        assert d['temperature']['mean_degc'] == pytest.approx(30.0 + 0.01 * mid, abs=0.01)
+    assert all(d['temperature'] is None for d in doc['dwell_temperatures']['after'])
     for f in ('reliability.md', 'fig6_accel.png', 'fig6_gyro.png', 'before/calibration.yaml',
-              'after/calibration.json'):
+              'after/calibration.json', 'adev_before.csv', 'adev_after.csv'):
         assert (out / f).exists(), f
+    # the curves behind Figure 6: tau_s and, per channel, ADEV, its interval and EDF, in SI
+    lines = (out / 'adev_before.csv').read_text().splitlines()
+    head = lines[0].split(',')
+    assert head[0] == 'tau_s' and 'accel_x_adev_m_s2' in head and 'gyro_z_ci_high_rad_s' in head
+    assert len(head) == 1 + 6 * 4 and len(lines) > 30
+    row = dict(zip(head, map(float, lines[1].split(','))))
+    assert row['gyro_x_ci_low_rad_s'] < row['gyro_x_adev_rad_s'] < row['gyro_x_ci_high_rad_s']
     md = (out / 'reliability.md').read_text()
-    assert '| accel_x |' in md and 'Table 6' in md
+    # the verdict first: the plain-language summary, then the overall verdict, then evidence
+    assert md.index('## In short') < md.index('## Overall verdict') < md.index(
+        '## Bias-instability interval') < md.index('Table 6')
+    assert '| accel_x |' in md or '| accel_x (ambiguous) |' in md
+    assert '(m/s^2) |' in md and 'degC' in md and '| by (mg) |' in md
+    assert in_short(doc)[0].startswith(('The accelerometer', 'These records'))
+    assert capsys.readouterr().out.count('accel:') == 1
 
 
-def test_same_sensor_twice_is_physiological(tmp_path, bags):
+def test_same_sensor_twice_is_never_beyond(tmp_path, bags):
     out = tmp_path / 'rep'
     assert main(['--before-static', bags['before'], '--after-static', bags['same'],
                  '--no-figures', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
     for sensor in ('accel', 'gyro'):
-        assert abs(doc['summary'][sensor]['mean_change']) < 0.5
-    assert doc['calibration'] == {'before': None, 'after': None}
+        assert doc['overall'][sensor]['verdict'] != 'beyond'
+    assert all(e['verdict'] != 'beyond' for e in doc['bias_instability_interval'].values())
+    assert doc['calibration'] == {'before': None, 'after': None} and doc['table6'] is None
+    md = (out / 'reliability.md').read_text()
+    assert 'Table 6' not in md and not (out / 'fig6_accel.png').exists()
 
 
 def test_bad_channels_are_undetermined_with_the_reason(tmp_path, bags, capsys):
@@ -124,7 +185,10 @@ def test_bad_channels_are_undetermined_with_the_reason(tmp_path, bags, capsys):
     assert iv['accel_y']['verdict'] == 'undetermined' and 'NaN' in iv['accel_y']['reason']
     assert iv['accel_y']['change'] is None and iv['accel_y']['width_before_s'] is None
     assert 'accelerometer reads ~0' in iv['accel_x']['reason_after']
-    assert iv['gyro_x']['verdict'] != 'undetermined' or 'open' in iv['gyro_x']['reason']
+    # the same gyro samples in both records: no change, but 600 s cannot decide +/-50 %
+    g = iv['gyro_x']
+    assert g['change'] == 0.0 and g['verdict'] == 'undetermined'
+    assert 'open' in g['reason'] or 'times as long would decide' in g['reason']
 
 
 def test_unusable_static_records_are_refused_with_one_line(tmp_path, bags, capsys):

@@ -123,14 +123,14 @@ def test_no_html_writes_none(tmp_path):
 
 
 def test_interrupted_page_leaves_nothing_that_looks_finished(tmp_path, monkeypatch):
-    import gyro_noise_ros.cli.analyze as cli
+    import gyro_noise_ros.app.analyze as app
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
     # report.html is written inside the staged output: an interrupt while writing it publishes
     # none of the run's files
-    monkeypatch.setattr(cli, 'write_analyze_html', interrupted)
+    monkeypatch.setattr(app, 'write_analyze_html', interrupted)
     bag = write_bag(tmp_path / 'bag', 2 * 600, 200.0, seed=4)
     out = tmp_path / 'out'
     assert analyze_main([str(bag), '--out', str(out), *FAST]) == 130

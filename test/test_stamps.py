@@ -16,13 +16,14 @@
 Stamps as a time base: equal stamps (packets stamped once), decreasing stamps, stamp gaps.
 
 The live engine and gyro_noise_analyze share these rules (core/engine.py, core/timebase.py,
-core/segments.py, cli/analyze.py).
+core/segments.py, app/analyze.py).
 """
 
 import csv
 import json
 import math
 
+from gyro_noise_ros.app import analyze as analyze_app
 from gyro_noise_ros.cli import analyze
 from gyro_noise_ros.core.engine import EngineConfig, NoiseEngine
 from gyro_noise_ros.core.fractional import make_grid
@@ -195,5 +196,5 @@ def test_stamps_that_never_advance_are_not_a_time_base():
         NoiseEngine(EngineConfig(chunk_size=1000, memory=50, alphas=make_grid(0, 2, 0.5),
                                  allan=False)).ingest(same, np.zeros((2000, 3)))
     # the analyze tool then tries the log time; a packet of equal stamps is not that case
-    assert analyze._stamps_unusable(same)
-    assert not analyze._stamps_unusable(np.repeat(np.arange(100) * 10_000_000, 8))
+    assert analyze_app._stamps_unusable(same)
+    assert not analyze_app._stamps_unusable(np.repeat(np.arange(100) * 10_000_000, 8))

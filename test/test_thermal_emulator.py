@@ -17,7 +17,8 @@
 from gyro_noise_ros.cli import emulator as cli
 from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link.emulator import BoardModel
-from gyro_noise_ros.thermal.simulate import DEG, ThermalModel, ThermalStream
+from gyro_noise_ros.thermal.simulate import ThermalModel, ThermalStream
+from gyro_noise_ros.units import DEG_TO_RAD
 import numpy as np
 import pytest
 
@@ -42,7 +43,7 @@ def test_board_bias_and_temperature_are_the_models():
     truth_gyro = board.last_truth.gyro_rad_s
     t = np.arange(10_000) / 104.0
     expected = twin.step(t)
-    offset = np.array([0.1, 0.2, 0.3]) * DEG
+    offset = np.array([0.1, 0.2, 0.3]) * DEG_TO_RAD
     np.testing.assert_allclose(truth_gyro, expected.bias_rad_s[-1000:] + offset, atol=1e-15)
     np.testing.assert_array_equal(board.last_truth.temperature_c, expected.die_c[-1000:])
     read = lsm.temperature_c(np.concatenate([s['temp'] for s in samples]))
@@ -80,9 +81,9 @@ def test_cli_option_builds_the_oven_board():
     # the oven goes 20 -> 60 -> -40 degC in ~60 s; the die follows 2 degC above it, lagging
     assert abs(temp[:100].mean() - 22.0) < 0.01
     assert temp.max() > 60.0 and temp[-100:].mean() < -36.0
-    gyro = lsm.gyro_sensitivity_rad_s_per_lsb(2000) * samples['gyro'].astype(float) / DEG
+    gyro = lsm.gyro_sensitivity_rad_s_per_lsb(2000) * samples['gyro'].astype(float) / DEG_TO_RAD
     twin = ThermalStream(ThermalModel(bias_dps=0.0), compress=840.0, room_c=20.0)
-    bias = twin.step(np.arange(n) / 104.0).bias_rad_s / DEG
+    bias = twin.step(np.arange(n) / 104.0).bias_rad_s / DEG_TO_RAD
     blocks = n // 104
 
     def block_means(x):

@@ -131,13 +131,13 @@ def test_process_pool_gives_the_serial_result():
 
 @pytest.mark.slow
 def test_fast_pick_is_not_dominated_by_the_naive_pick():
-    # Issue 9 section 7 on a small case where the naive path is affordable: MOPSO on the
-    # whole-run fitness (fitness_samples=None) against the fast path (4 windows of 128 samples,
-    # then refine: 10 points re-evaluated on the whole run, 16 polish steps), same budget and
-    # seed. Under the whole-run fitness the fast pick must not be Pareto-dominated by the naive
-    # pick on any axis. Without refinement (refine_points=0) this case fails on axes 1 and 2:
-    # the windowed pick has K = 8 or more where the whole-run front has K = 4 or 5. The bench
-    # (bench/bench_thermal_fit.py) measures the same over several seeds.
+    # The fast fit must not lose to the naive one, on a small case where the naive path is
+    # affordable: MOPSO on the whole-run fitness (fitness_samples=None) against the fast path (4
+    # windows of 128 samples, then refine: 10 points re-evaluated on the whole run, 16 polish
+    # steps), same budget and seed. Under the whole-run fitness the fast pick must not be
+    # Pareto-dominated by the naive pick on any axis. Without refinement (refine_points=0) this
+    # case fails on axes 1 and 2: the windowed pick has K = 8 or more where the whole-run front has
+    # K = 4 or 5. The bench (bench/bench_thermal_fit.py) measures the same over several seeds.
     train, _ = thermal_run(21, n=768, rate_hz=1.0)
     budget = {'n_particles': 10, 'iterations': 4, 'elman_epochs': 1, 'elman_iterations': 10,
               'elman_refine': 10}

@@ -20,8 +20,9 @@ from dataclasses import replace
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.thermal.oracle import (fit_oracle, measured_terms, oracle_residual,
                                            true_terms)
-from gyro_noise_ros.thermal.simulate import (DEG, make_profile, play_operator, ShapeProfile,
-                                             SHAPES, simulate_pair, ThermalModel)
+from gyro_noise_ros.thermal.simulate import (make_profile, play_operator, ShapeProfile, SHAPES,
+                                             simulate_pair, ThermalModel)
+from gyro_noise_ros.units import DEG_TO_RAD
 import numpy as np
 import pytest
 
@@ -123,12 +124,12 @@ def test_oracle_is_exact_without_noise():
     oracle = fit_oracle(true_terms(ta, QUIET), train.gyro_rad_s)
     assert oracle.rank == 7
     # the fitted coefficients are the law's, to the conditioning of a 7-term polynomial basis
-    np.testing.assert_allclose(oracle.coef / DEG, QUIET.bias_coefficients_dps(), rtol=1e-6,
+    np.testing.assert_allclose(oracle.coef / DEG_TO_RAD, QUIET.bias_coefficients_dps(), rtol=1e-6,
                                atol=1e-10)
     residual = oracle_residual(train, ta, test, tb, QUIET)
     assert np.max(np.abs(residual)) < 1e-9
     # the terms are the law: drift == terms @ coefficients
-    np.testing.assert_allclose(true_terms(tb, QUIET) @ QUIET.bias_coefficients_dps() * DEG,
+    np.testing.assert_allclose(true_terms(tb, QUIET) @ QUIET.bias_coefficients_dps() * DEG_TO_RAD,
                                tb.drift_rad_s, atol=1e-15)
 
 
@@ -143,7 +144,7 @@ def test_oracle_is_plain_least_squares():
     coef = np.linalg.solve(ata.astype(float), aty.astype(float))
     # residual drift depends on the prediction; both solve the same well-posed problem, to the
     # conditioning of the unscaled normal equations (~1e11 here, so ~1e-5 relative)
-    np.testing.assert_allclose(a_test @ oracle.coef, a_test @ coef, rtol=0, atol=1e-6 * DEG)
+    np.testing.assert_allclose(a_test @ oracle.coef, a_test @ coef, rtol=0, atol=1e-6 * DEG_TO_RAD)
     with pytest.raises(ParameterError):
         fit_oracle(a_train[:3], train.gyro_rad_s[:3])
 

@@ -21,9 +21,10 @@ from gyro_noise_ros.bag import ImuBagReader
 from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.simulate import gauss_markov_avar
 from gyro_noise_ros.errors import ParameterError
-from gyro_noise_ros.thermal.simulate import (DEG, gyro_noise_rad_s, MG, OvenProfile,
-                                             resolve_timing, simulate_run, STANDARD_GRAVITY,
-                                             ThermalModel, ThermalStream, write_train_test)
+from gyro_noise_ros.thermal.simulate import (gyro_noise_rad_s, OvenProfile, resolve_timing,
+                                             simulate_run, ThermalModel, ThermalStream,
+                                             write_train_test)
+from gyro_noise_ros.units import DEG_TO_RAD, MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 import numpy as np
 import pytest
 
@@ -122,11 +123,11 @@ def test_hysteresis_is_a_loop_of_height_2hr():
                     + np.asarray(model.knee_dps)[i] * np.tanh((th.die_c - 5.0) / 8.0)
                     + np.asarray(model.gradient_dps_per_c_s)[i] * th.die_rate_c_s / 20.0
                     + np.asarray(model.hysteresis_dps_per_c)[i] * diff)
-        np.testing.assert_allclose(th.bias_rad_s[:, i] / DEG, expected, atol=1e-12)
+        np.testing.assert_allclose(th.bias_rad_s[:, i] / DEG_TO_RAD, expected, atol=1e-12)
         accel = (np.asarray(model.accel_bias_mg)[i] + np.asarray(model.accel_lin_mg_per_c)[i] * d
                  + np.asarray(model.accel_quad_mg_per_c2)[i] * d ** 2
                  + np.asarray(model.accel_cubic_mg_per_c3)[i] * d ** 3)
-        np.testing.assert_allclose(th.accel_bias_m_s2[:, i] / MG, accel, atol=1e-12)
+        np.testing.assert_allclose(th.accel_bias_m_s2[:, i] / MG_TO_M_S2, accel, atol=1e-12)
     off = ThermalStream(replace(model, hysteresis_half_width_c=0.0), compress=20.0)
     th_off = off.step(np.arange(0, 2600.0, 0.5))
     np.testing.assert_array_equal(th_off.played_c, th_off.die_c)
@@ -152,7 +153,7 @@ def test_gauss_markov_floor():
 def test_gyro_noise_allan_matches_closed_form():
     model = ThermalModel(bias_instability_dps=0.01, bi_corr_times_s=(2.0, 20.0))
     rate = 10.0
-    noise = gyro_noise_rad_s(400_000, rate, model, np.random.default_rng(5)) / DEG
+    noise = gyro_noise_rad_s(400_000, rate, model, np.random.default_rng(5)) / DEG_TO_RAD
     qm = model.gauss_markov_std_dps()
     # variance: white N^2 fs plus q^2 per Gauss-Markov process; the GM part has only ~ 3 x 40000 /
     # (2 x 20) independent values, so its share scatters by ~2 %: 5 % on the total is > 2 sigma
@@ -180,11 +181,11 @@ def test_simulate_run_is_deterministic_and_sensor_is_quantised():
     err = ta.temperature_reading_c - ta.die_c[ta.temperature_index]
     assert np.std(err) == pytest.approx(np.hypot(0.02, lsb / np.sqrt(12)), rel=0.07)
     np.testing.assert_allclose(a.gyro_rad_s, ta.drift_rad_s + ta.noise_rad_s)
-    gravity = np.array([0.0, 0.0, STANDARD_GRAVITY])
+    gravity = np.array([0.0, 0.0, STANDARD_GRAVITY_M_S2])
     np.testing.assert_allclose(a.accel_m_s2, gravity + ta.accel_drift_m_s2 + ta.accel_noise_m_s2)
     # accelerometer white noise: density 70 ug/sqrt(Hz) over the 25-Hz Nyquist band; 9000 x 3
     # samples give a 2-sigma scatter of ~1 % on the standard deviation
-    assert np.std(ta.accel_noise_m_s2) == pytest.approx(70e-6 * STANDARD_GRAVITY * 5.0,
+    assert np.std(ta.accel_noise_m_s2) == pytest.approx(70e-6 * STANDARD_GRAVITY_M_S2 * 5.0,
                                                         rel=0.03)
     assert a.temperature_c.shape == a.t_s.shape and a.rate_hz == 50.0
     assert ta.compress == pytest.approx(OvenProfile().duration_s / 720.0)
@@ -204,7 +205,7 @@ def test_train_test_bags_hold_the_runs(tmp_path):
     np.testing.assert_array_equal(gyro, truth['drift_rad_s'] + truth['noise_rad_s'])
     with ImuBagReader(train) as reader:
         accel = np.concatenate([b.accel for b in reader.iter_batches()])
-    np.testing.assert_allclose(accel - [0.0, 0.0, STANDARD_GRAVITY],
+    np.testing.assert_allclose(accel - [0.0, 0.0, STANDARD_GRAVITY_M_S2],
                                truth['accel_drift_m_s2'] + truth['accel_noise_m_s2'], atol=1e-12)
     np.testing.assert_array_equal(temps, truth['temperature_reading_c'])
     # one Temperature message per round(40 / 52) = 1 Imu message

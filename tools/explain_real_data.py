@@ -17,19 +17,25 @@ Run the discrepancy workflow on the real recordings in ../shared/data/real/.
 
 Results in docs/discrepancy.md.
 
-    .venv/bin/python tools/explain_real_data.py [--data ../shared/data/real] [--out
-    /tmp/explain_real]
-                                                [--figures docs/figures/discrepancy] [--only
-                                                adis|mpu]
+    .venv/bin/python tools/explain_real_data.py [--data ../shared/data/real]
+        [--out /tmp/explain_real] [--figures docs/figures/discrepancy] [--only adis|mpu|px4]
+        [--ensemble 16] [--seed 0] [--bootstrap 20]
 
 * ADIS16405 (``adis16405_static/adis_16405_imu1.npz``): 1,000,000 samples per axis at 100 Hz, no
-  stamps (the nominal rate is used), values in deg/s on a 0.05 deg/s lattice (SOURCE.md);
+  stamps (the nominal rate is used), values in deg/s on a 0.05 deg/s lattice (SOURCE.md); an
+  ``.npz`` is not a recording format, so its measurements are built here and handed to the
+  application layer;
 * MPU6050 (``mpu6050_static_sunsided/mpu6050_static_10min.csv``): 65,067 samples, bursty host
-  stamps (mean rate 99.3 Hz), temperature in degC; the CSV is read by the tool's own CSV reader
-  (its columns ``t_s``, ``gyro_*_dps``, ``temp_c`` are among the documented aliases).
+  stamps (mean rate 99.3 Hz), temperature in degC; read by the tool's own input layer
+  (:mod:`gyro_noise_ros.bag.inputs`: columns ``t_s``, ``gyro_*_dps``, ``temp_c``);
+* PX4 (``px4_ulog_sample_static/sample.ulg``): ``sensor_combined`` at 248.6 Hz, motion then
+  ~61 s at rest: the longest static segment is analysed (``--static auto``).
 
-Each run writes OUT/<name>/explain.json, report.md and figures; with ``--figures`` the overview and
-step figures are copied (renamed ``<name>_*.png``) into that directory. A summary table is printed.
+Every case runs through :mod:`gyro_noise_ros.app.explain` (the workflow of
+``gyro_noise_explain``) and writes OUT/<name>/explain.json, report.md and figures (one folder per
+axis); with ``--figures`` the overview and step figures are copied (renamed
+``<name>_<axis>_*.png``) into that directory. A summary table and every named effect's
+parameters (value ± stderr, or the bound of an unresolved time scale) are printed.
 """
 
 import argparse
@@ -43,68 +49,76 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _cases(data, only):
-    from gyro_noise_ros.explain.inputs import load_csv, make_measurement
+def _prepared(data, only, args):
+    from gyro_noise_ros.app.explain import ExplainInput, ExplainParams, prepare_explain
+    from gyro_noise_ros.explain.inputs import make_measurement
 
+    common = {'seed': args.seed, 'ensemble': args.ensemble, 'bootstrap': args.bootstrap}
     if only in (None, 'adis'):
         path = data / 'adis16405_static' / 'adis_16405_imu1.npz'
         gyro_dps = np.load(path)['gyro_dps']
-        for i, axis in enumerate('xyz'):
-            yield f'adis16405_imu1_{axis}', lambda i=i, axis=axis: make_measurement(
-                np.deg2rad(gyro_dps[:, i]), rate_hz=100.0, axis=axis,
-                source=f'{path.name} (100 Hz nominal)')
+        meas = tuple(make_measurement(np.deg2rad(gyro_dps[:, i]), rate_hz=100.0, axis=axis,
+                                      source=f'{path.name} (100 Hz nominal)')
+                     for i, axis in enumerate('xyz'))
+        none = {'before_start': 0, 'after_end': 0, 'motion': 0}
+        yield 'adis16405_imu1', ExplainInput(params=ExplainParams(path=path, **common),
+                                             measurements=meas, left_out=(none,) * 3,
+                                             warnings=())
     if only in (None, 'mpu'):
         path = data / 'mpu6050_static_sunsided' / 'mpu6050_static_10min.csv'
-        for axis in 'xyz':
-            yield f'mpu6050_{axis}', lambda axis=axis: load_csv(path, axis=axis)
+        yield 'mpu6050', prepare_explain(ExplainParams(path=path, **common))
+    if only in (None, 'px4'):
+        path = data / 'px4_ulog_sample_static' / 'sample.ulg'
+        yield 'px4', prepare_explain(ExplainParams(path=path, **common))
 
 
 def main(argv=None):
     """Run every case and print the summary."""
-    from gyro_noise_ros.explain.report import verdict, write_outputs
-    from gyro_noise_ros.explain.workflow import explain
+    from gyro_noise_ros.app.explain import run_explain, write_explain
 
     p = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     p.add_argument('--data', default=str(ROOT.parent / 'shared' / 'data' / 'real'))
     p.add_argument('--out', default='/tmp/explain_real')
     p.add_argument('--figures', help='copy the figures here (e.g. docs/figures/discrepancy)')
-    p.add_argument('--only', choices=('adis', 'mpu'))
+    p.add_argument('--only', choices=('adis', 'mpu', 'px4'))
     p.add_argument('--ensemble', type=int, default=16)
     p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--bootstrap', type=int, default=20)
     args = p.parse_args(argv)
     data = Path(args.data)
     rows = []
-    for name, load in _cases(data, args.only):
-        meas = load()
+    for name, prepared in _prepared(data, args.only, args):
+        for text in prepared.warnings:
+            print(f'{name}: warning: {text}', flush=True)
         start = time.perf_counter()
-        result = explain(meas, seed=args.seed, ensemble=args.ensemble)
+        run = run_explain(prepared)
         seconds = time.perf_counter() - start
-        out = write_outputs(result, Path(args.out) / name)
-        if args.figures:
-            dest = Path(args.figures)
-            dest.mkdir(parents=True, exist_ok=True)
-            for png in sorted(out.glob('*.png')):
-                shutil.copy(png, dest / f'{name}_{png.name}')
-        b = result.baseline
-        rows.append((name, meas.n, meas.rate_hz, b.alpha, b.f, b.sigma_w_rad_s, b.sigma_nu_rad_s,
-                     result.gap_initial, result.gap_final, result.named, result.unexplained,
-                     seconds))
-        print(f'{name}: {verdict(result)}', flush=True)
-        for step in result.steps:
-            params = {k: v for k, v in step.params.items() if not k.startswith('_')}
-            print(f'    {step.effect}: {params}', flush=True)
-        if result.unexplained:
-            for where in result.where_final:
-                print(f'    still outside: {where}', flush=True)
+        out = Path(args.out) / name
+        write_explain(run, out)
+        for axis in run.axes:
+            case = f'{name}_{axis.axis}'
+            result, meas = axis.result, axis.result.measurement
+            if args.figures:
+                dest = Path(args.figures)
+                dest.mkdir(parents=True, exist_ok=True)
+                for png in sorted((out / axis.folder).glob('*.png')):
+                    shutil.copy(png, dest / f'{case}_{png.name}')
+            b = result.baseline
+            rows.append((case, meas.n, meas.rate_hz, b.alpha, b.f, b.sigma_w_rad_s,
+                         b.sigma_nu_rad_s, result.gap_initial, result.gap_final, result.named,
+                         result.unexplained, result.seconds['total']))
+            print(f'{case}: {axis.verdict}', flush=True)
+            for line in axis.parameter_lines:
+                print(f'    {line}', flush=True)
+        print(f'{name}: {seconds:.0f} s', flush=True)
     print()
     print('| case | samples | rate Hz | alpha | f | sigma_w rad/s | sigma_nu rad/s | gap initial '
-          '| gap final | ' 'named | unexplained | s |')
+          '| gap final | named | unexplained | s |')
     print('|---|---|---|---|---|---|---|---|---|---|---|---|')
     for r in rows:
         print(f'| {r[0]} | {r[1]} | {r[2]:.2f} | {r[3]:.2f} | {r[4]:.3f} | {r[5]:.3g} | '
-              f'{r[6]:.3g} | {r[7]:.2f} | '
-              f'{r[8]:.2f} | {", ".join(r[9]) or "-"} | {"yes" if r[10] else "no"} | {r[11]:.0f} '
-              '|')
+              f'{r[6]:.3g} | {r[7]:.2f} | {r[8]:.2f} | {", ".join(r[9]) or "-"} | '
+              f'{"yes" if r[10] else "no"} | {r[11]:.0f} |')
     return 0
 
 

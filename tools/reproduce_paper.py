@@ -40,9 +40,11 @@ import shutil
 import sys
 import time
 
+from gyro_noise_ros.app.analyze import analyze_bags, AnalyzeParams, parse_order_grid
 from gyro_noise_ros.bag import ImuBagWriter
-from gyro_noise_ros.cli.analyze import main as analyze_main
+from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.simulate import FractionalNoise
+from gyro_noise_ros.errors import GyroNoiseError
 import numpy as np
 
 #: Paper 000, Table 3 (offset drift, read as (deg/s)/h; see core/chunks.py), Table 4 (mean noise
@@ -348,18 +350,26 @@ def main(argv=None):
     print(f'simulation and bag writing: {time.perf_counter() - t0:.0f} s', flush=True)
     out_ref = args.workdir / 'report_ref'
     common = ['--axis', 'z', '--jobs', str(args.jobs), '--allan-taus', 'dense']
-    code = analyze_main([str(sims['ref'][0]), '--out', str(out_ref), '--no-figures', '--curves',
-                         '0', *common])
-    if code:
-        return code
+    # gyro_noise_analyze's defaults with the options of ``common`` (the same engine as its CLI)
+    config = EngineConfig(axes=('z',), alphas=parse_order_grid('0:2:0.01'), allan_taus='dense')
+    ref_argv = [str(sims['ref'][0]), '--out', str(out_ref), '--no-figures', '--curves', '0',
+                *common]
     out = args.workdir / 'report'
     command = ['gyro_noise_analyze', *[str(sims[s][0]) for s in PAPER], '--label', *PAPER,
                '--reference', str(out_ref / 'summary.json'), '--out', str(out), *common]
-    t1 = time.perf_counter()
-    code = analyze_main(command[1:])
-    elapsed = time.perf_counter() - t1
-    if code:
-        return code
+    try:
+        analyze_bags(AnalyzeParams(
+            paths=(sims['ref'][0],), out_dir=out_ref, config=config, jobs=args.jobs,
+            figures=False, curves=0, progress=True, command=('gyro_noise_analyze', *ref_argv)))
+        t1 = time.perf_counter()
+        analyze_bags(AnalyzeParams(
+            paths=tuple(sims[s][0] for s in PAPER), out_dir=out, labels=tuple(PAPER),
+            reference=out_ref / 'summary.json', config=config, jobs=args.jobs, progress=True,
+            command=tuple(command)))
+        elapsed = time.perf_counter() - t1
+    except GyroNoiseError as err:
+        print(f'gyro_noise_analyze: error: {err}', file=sys.stderr)
+        return err.exit_code
     (args.workdir / 'run.json').write_text(json.dumps({'elapsed_s': elapsed, 'command': command}))
     publish(args, sims, n, seconds, k, sigma_w, elapsed, command)
     if not args.keep_bags:

@@ -31,7 +31,7 @@ log-log regression within 0.1 of -1/2, the longest run of such taus, the -1/2 li
 mean of log(ADEV sqrt(tau)) over it, read at 1 s); the EDF of the flicker-FM floor by the simple
 formula of NIST SP 1065 Table 5 (5 N^2 / (4 m (N + 3 m))), shown beside it.
 
-Criteria (issue 17): bias stability within 20 % of the independent minimum (a flagged upper bound
+Criteria: bias stability within 20 % of the independent minimum (a flagged upper bound
 may sit lower, never more than 20 % higher); ARW within 5 % of the independent contiguous fit,
 and its interval containing it. "Before": the rules the tools used until this change (first
 minimum over all taus; ARW from every tau whose local slope is within 0.15 of -1/2, wherever it
@@ -63,7 +63,7 @@ DEG = 180.0 / math.pi
 #: ADIS16405 datasheet: in-run bias stability 0.007 deg/s, angle random walk 2.0 deg/sqrt(h).
 ADIS_BIAS_STABILITY_DEG_S = 0.007
 ADIS_ARW_DEG_SQRT_H = 2.0
-#: Acceptance (issue 17).
+#: Acceptance: relative tolerances of the bias stability and the ARW (see the criteria above).
 BIAS_TOLERANCE = 0.20
 ARW_TOLERANCE = 0.05
 #: Independent estimator: averaging factors per decade, slope window of the -1/2 fit.

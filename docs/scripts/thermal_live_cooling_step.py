@@ -38,12 +38,12 @@ temperature.
 import argparse
 from pathlib import Path
 
+from gyro_noise_ros.plotting import pyplot, save_figure
 from gyro_noise_ros.thermal.baselines import BPNetwork, LinearTdT, TemperaturePolynomial
 from gyro_noise_ros.thermal.live import LiveDriftEvaluator
 from gyro_noise_ros.thermal.simulate import make_profile, simulate_pair
+from gyro_noise_ros.units import RAD_TO_DEG
 import numpy as np
-
-DEG = 180.0 / np.pi
 
 
 def live_compensate(method, run, truth):
@@ -103,21 +103,17 @@ def main():
         m60 = means(out, minute)
         excursion = np.max(np.abs(m60 - m60.mean(axis=0)), axis=0)
         for a, axis in enumerate('xyz'):
-            print(f'| {name} | {axis} | {s1[a] * DEG:.4f} | {raw_std[a] / s1[a]:.1f} | '
-                  f'{step[a] * DEG:+.4f} | {excursion[a] * DEG:.4f} |')
+            print(f'| {name} | {axis} | {s1[a] * RAD_TO_DEG:.4f} | {raw_std[a] / s1[a]:.1f} | '
+                  f'{step[a] * RAD_TO_DEG:+.4f} | {excursion[a] * RAD_TO_DEG:.4f} |')
     if args.figure:
-        import matplotlib
-
-        matplotlib.use('Agg', force=True)
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         fig, panels = plt.subplots(2, 1, figsize=(10, 7), sharex=True,
                                    gridspec_kw={'height_ratios': [1, 3]})
         t_min = means(test.t_s[start:], second) / 60.0
         panels[0].plot(test.t_s / 60.0, truth.die_c, color='tab:red', lw=1.0)
         panels[0].set_ylabel('die temperature (degC)')
         for name, out in outputs.items():
-            panels[1].plot(t_min, means(out[:, 0], second) * DEG, lw=0.6,
+            panels[1].plot(t_min, means(out[:, 0], second) * RAD_TO_DEG, lw=0.6,
                            label=name, alpha=0.5 if name == 'raw' else 0.9)
         panels[1].set_ylabel('x, 1-s means (deg/s)')
         panels[1].set_xlabel('time (min)')
@@ -126,9 +122,8 @@ def main():
             p.grid(True, alpha=0.3)
         fig.suptitle('Live compensation (LiveDriftEvaluator, 52-Hz temperature) of a cooling step '
                      'after a warm-up calibration', fontsize=10)
-        fig.tight_layout()
         Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(args.figure, dpi=100)
+        save_figure(fig, args.figure, dpi=100, tight=True)
         print(f'\nwrote {args.figure}')
 
 

@@ -54,14 +54,16 @@ import math
 from pathlib import Path
 
 from gyro_noise_ros.app.thermal import bandwidth_cell
+from gyro_noise_ros.plotting import pyplot, save_figure
 from gyro_noise_ros.thermal import report
 from gyro_noise_ros.thermal.elman import fit_drift
-from gyro_noise_ros.thermal.metrics import evaluate_method, RAD2DEG
+from gyro_noise_ros.thermal.metrics import evaluate_method
 from gyro_noise_ros.thermal.parallel import block_means, ParallelModel
 from gyro_noise_ros.thermal.run import temperature_rate_c_s, ThermalRun
 from gyro_noise_ros.thermal.simulate import make_profile, simulate_pair
 from gyro_noise_ros.thermal.tfpf import tfpf
 from gyro_noise_ros.thermal.vmd import vmd
+from gyro_noise_ros.units import RAD_TO_DEG
 import numpy as np
 import scipy.signal
 
@@ -133,7 +135,7 @@ def part1(model, test, figures):
               f'{bandwidth_cell(small)} | {bw["step_lead_s"]:.3g} |')
     print('\n(`<=`: the readout saw no minimum, an upper bound.)\n')
     if figures:
-        plt = report._pyplot()
+        plt = pyplot()
         fig, panel = plt.subplots(figsize=(8, 4.5))
         labels = ['ARW', 'bias stability']
         paper = [p['arw_processed'] / p['arw_raw'], p['bias_processed'] / p['bias_raw']]
@@ -150,7 +152,7 @@ def part1(model, test, figures):
         panel.legend(fontsize=7)
         fig.suptitle('Paper 002 Fig. 19 ratios beside the tool on the docs example '
                      '(heating -> cooling, 20 Hz)', fontsize=10)
-        report._save(fig, plt, Path(figures) / 'paper_vs_tool.png')
+        save_figure(fig, Path(figures) / 'paper_vs_tool.png', dpi=100, tight=True)
 
 
 def part2(model, test, figures):
@@ -267,7 +269,8 @@ def main():
         part2(model, test, args.figures)
     if '3' in args.parts:
         part3(model, args.figures)
-    print(f'(units: ARW from deg/sqrt(h) x 60; the tool in rad/s inside, {RAD2DEG:.4f} deg/rad)')
+    print(f'(units: ARW from deg/sqrt(h) x 60; the tool in rad/s inside, '
+          f'{RAD_TO_DEG:.4f} deg/rad)')
 
 
 if __name__ == '__main__':

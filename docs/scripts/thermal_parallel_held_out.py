@@ -35,7 +35,7 @@ drift, the standard deviation of the 60-s means of the output (deg/s,
 - ``parallel, network alone``: the drift part as the paper writes it, the Elman network on
   [T, dT] only (``drift_base='none'``, no weight decay).
 
-The last lines check the acceptance of issue 19 item 2 on the mean over axes: parallel within
+The last lines check the held-out acceptance on the mean over axes: parallel within
 2x of the oracle, and at least 5x below poly3, seed by seed. ``--budget paper`` fits with the
 default (the paper's) MOPSO budget, minutes per fit; ``--budget small`` (the default here) with
 :data:`SMALL_BUDGET`: MOPSO chooses K and alpha, which shape the noise modes, while the drift

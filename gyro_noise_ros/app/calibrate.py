@@ -45,16 +45,18 @@ from ..calibration.dwell_noise import fit_dwell_noise
 from ..calibration.gyro_turns import fit_gyro_turns, Turn
 from ..calibration.multipose import calibrate_poses
 from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EARTH_RATE_RAD_S,
-                                  mean_norm, normal_gravity, STANDARD_GRAVITY, uniformity)
+                                  mean_norm, normal_gravity, uniformity)
 from ..calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS, select_poses,
                                   select_six, WindowAccumulator)
 from ..errors import InputDataError, ParameterError
 from ..htmlreport.calibrate import write_calibrate_html
 from ..outputs import atomic_write_text, staged_output
+from ..units import MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
 MODEL = 'measured = (I + diag(scale_factor) + misalignment) @ true + bias'
-#: One milli-g in m/s^2 (standard gravity, as the paper's mg).
-MG = STANDARD_GRAVITY * 1e-3
+#: One milli-g in m/s^2: the old name of :data:`gyro_noise_ros.units.MG_TO_M_S2`, kept while
+#: the reliability workflow still imports it from here.
+MG = MG_TO_M_S2
 MODES = ('six-position', 'multi-pose')
 GYRO_TURNS = ('auto', 'off')
 FILES = ('calibration.json', 'calibration.yaml', 'calibration.md')
@@ -83,7 +85,7 @@ class Gravity:
 
     """
 
-    value_m_s2: float = STANDARD_GRAVITY
+    value_m_s2: float = STANDARD_GRAVITY_M_S2
     source: str = 'standard gravity 9.80665 (no local value given)'
     warning: object = None
     latitude_deg: object = None
@@ -291,7 +293,7 @@ class CalibrationResult:
         if bad:
             out.append('gravity check failed (leave-one-out, false-alarm '
                        f'{self.params.alpha:g}): ' + '; '.join(
-                           f'{c.label}: |a| - g = {c.residual_m_s2 / MG:+.3f} mg '
+                           f'{c.label}: |a| - g = {c.residual_m_s2 / MG_TO_M_S2:+.3f} mg '
                            f'({c.z:+.1f} sigma)' for c in bad))
         if self.gyro_note:
             out.append(f'gyro: {self.gyro_note}')
@@ -409,7 +411,7 @@ def _refuse_inconsistent(pairs, chosen, alpha):
     parts = []
     for c in bad:
         d = chosen[c.suspect]
-        off = float(np.linalg.norm(c.disagreement_m_s2)) / MG
+        off = float(np.linalg.norm(c.disagreement_m_s2)) / MG_TO_M_S2
         parts.append(f'dwell {d.describe()} does not fit the other five: its pair disagrees '
                      f'with the others by {off:.2f} mg ({math.sqrt(c.chi2):.0f} sigma), the '
                      f'direction of gravity in it is {c.suspect_tilt_deg:.2f} deg off what they '
@@ -626,7 +628,7 @@ def table6_rows(doc):
 
     """
     a = doc['accel']
-    rows = [(f'b{ax}', a['bias_m_s2'][i] / MG, a['bias_sigma_m_s2'][i] / MG)
+    rows = [(f'b{ax}', a['bias_m_s2'][i] / MG_TO_M_S2, a['bias_sigma_m_s2'][i] / MG_TO_M_S2)
             for i, ax in enumerate('xyz')]
     rows += [(f'S{ax}', a['scale_factor'][i] * 100.0, a['scale_factor_sigma'][i] * 100.0)
              for i, ax in enumerate('xyz')]
@@ -709,7 +711,8 @@ def markdown(result):
         out += ['', f'Gyro: {gyro["note"]}.']
     u = doc['uniformity']
     out += ['', '## Indicators (paper 001 section 6)', '',
-            f'- uniformity of the biases (std, ddof=1): {u["accel_bias_std_m_s2"] / MG:.4f} mg',
+            '- uniformity of the biases (std, ddof=1): '
+            f'{u["accel_bias_std_m_s2"] / MG_TO_M_S2:.4f} mg',
             f'- uniformity of the scale factors (std, ddof=1): '
             f'{100 * u["accel_scale_factor_std"]:.4f} %']
     gc = doc['gravity_check']
@@ -721,16 +724,16 @@ def markdown(result):
             f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.', '',
             '| dwell | abs(a) - g (mg) | sigma (mg) | z | verdict |', '|---|---|---|---|---|']
     for c in gc['dwells']:
-        out.append(f'| {c["dwell"]} | {c["residual_m_s2"] / MG:+.4f} | '
-                   f'{c["sigma_m_s2"] / MG:.4f} | {c["z"]:+.2f} | '
+        out.append(f'| {c["dwell"]} | {c["residual_m_s2"] / MG_TO_M_S2:+.4f} | '
+                   f'{c["sigma_m_s2"] / MG_TO_M_S2:.4f} | {c["z"]:+.2f} | '
                    f'{"consistent" if c["consistent"] else "inconsistent"} |')
     if doc['consistency']['pairs']:
         out += ['', '## Consistency of opposite dwells (a tilt cannot pass silently)', '',
                 '| pair | disagreement (mg) | sigma (mg) | p | verdict |',
                 '|---|---|---|---|---|']
         for c in doc['consistency']['pairs']:
-            dis = float(np.linalg.norm(c['disagreement_m_s2'])) / MG
-            out.append(f'| +/-{c["axis"]} | {dis:.4f} | {c["sigma_m_s2"] / MG:.4f} | '
+            dis = float(np.linalg.norm(c['disagreement_m_s2'])) / MG_TO_M_S2
+            out.append(f'| +/-{c["axis"]} | {dis:.4f} | {c["sigma_m_s2"] / MG_TO_M_S2:.4f} | '
                        f'{c["p_value"]:.3g} | '
                        f'{"consistent" if c["consistent"] else "inconsistent"} |')
     out += ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '

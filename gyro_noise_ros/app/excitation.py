@@ -36,10 +36,11 @@ from .. import __version__
 from ..calibration import records
 from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
                                       sine_dwell, sine_sweep)
-from ..calibration.sixpos import STANDARD_GRAVITY
 from ..errors import InputDataError, ParameterError
 from ..htmlreport.excitation import write_excitation_html
 from ..outputs import atomic_write_text, staged_output
+from ..plotting import pyplot, save_figure
+from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
 
 SIDES = ('before', 'after')
 
@@ -126,8 +127,8 @@ class ExcitationParams:
     @property
     def display(self):
         """(float, str): factor from SI to the printed unit and its name (g or deg/s)."""
-        return ((1.0 / STANDARD_GRAVITY, 'g') if self.sensor == 'accel' else
-                (180.0 / math.pi, 'deg/s'))
+        return ((1.0 / STANDARD_GRAVITY_M_S2, 'g') if self.sensor == 'accel' else
+                (RAD_TO_DEG, 'deg/s'))
 
 
 @dataclass(frozen=True)
@@ -247,7 +248,7 @@ class ExcitationResult:
                     f'harmonics_{u}': _lst(r.harmonics), f'residual_rms_{u}': r.residual_rms,
                     'start_s': r.start_s, 'duration_s': r.duration_s, 'cycles': r.cycles})
                 if p.sensor == 'accel':
-                    entry['amplitude_g'] = r.amplitude / STANDARD_GRAVITY
+                    entry['amplitude_g'] = r.amplitude / STANDARD_GRAVITY_M_S2
             else:
                 entry.update({'bin_hz': _lst(r.bin_hz), f'amplitude_up_{u}': _lst(r.amplitude_up),
                               f'amplitude_down_{u}': _lst(r.amplitude_down),
@@ -453,10 +454,7 @@ def plot(path, params, label, side):
         The record and its analysis.
 
     """
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     scale, unit = params.display
     t, x, result = side.t_s, side.x, side.analysis
     fig, (pa, pb) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -483,9 +481,7 @@ def plot(path, params, label, side):
         pb.legend(fontsize=8)
     for panel in (pa, pb):
         panel.grid(True, alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110, tight=True)
 
 
 def write_excitation(result, out_dir, *, html=True, command=None):

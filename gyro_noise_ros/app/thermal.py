@@ -45,8 +45,9 @@ from ..thermal import methods as registry
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,
                               write_compensated)
 from ..thermal.metrics import (DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ,
-                               DRIFT_WINDOW_S, evaluate_method, noise_metrics, RAD2DEG)
+                               DRIFT_WINDOW_S, evaluate_method, noise_metrics)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
 
 __all__ = ['ApplyResult', 'BagOptions', 'COMPARE_HEADER', 'CompareResult', 'DEFINITIONS',
            'ExportResult', 'FitResult', 'HELDOUT_METHODS', 'HELDOUT_PAIRS', 'ScoreOptions',
@@ -135,7 +136,7 @@ class ScoreOptions:
 
     """
 
-    amplitude_deg_s: float = DEFAULT_AMPLITUDE_RAD_S * RAD2DEG
+    amplitude_deg_s: float = DEFAULT_AMPLITUDE_RAD_S * RAD_TO_DEG
     f_lo_hz: float = DEFAULT_F_LO_HZ
     f_hi_hz: float = DEFAULT_F_HI_HZ
     small_signal: bool = True
@@ -247,7 +248,7 @@ def _in_sample(run, processed):
 
 def _accel_block(accel_poly, run, processed_accel):
     """Per-axis residual drift (60-s means) of the accelerometer, raw and processed (mg)."""
-    mg = 1e3 / 9.80665
+    mg = 1e3 / STANDARD_GRAVITY_M_S2
     raw = _residual_drift(run.accel_m_s2, run.rate_hz)
     proc = _residual_drift(processed_accel, run.rate_hz)
     return {'method': 'poly3 (relative to T_ref)', 't_ref_c': accel_poly.t_ref_c,
@@ -514,7 +515,7 @@ def _check_injection_length(run, score):
 
 
 def _score(method, run, score, processed):
-    return evaluate_method(method, run, amplitude_rad_s=score.amplitude_deg_s / RAD2DEG,
+    return evaluate_method(method, run, amplitude_rad_s=score.amplitude_deg_s / RAD_TO_DEG,
                            f_lo_hz=score.f_lo_hz, f_hi_hz=score.f_hi_hz, processed=processed,
                            small_signal=score.small_signal)
 
@@ -1568,9 +1569,10 @@ def write_export(result, out_dir):
 HELDOUT_PAIRS = (('heating', 'heating'), ('heating', 'cooling'), ('heating', 'cycle'),
                  ('staircase', 'cool_reheat'), ('cycle', 'sine'))
 #: Methods of the held-out table: (label, --method, options).
-HELDOUT_METHODS = (('poly3', 'poly3', {}), ('linear_tdt', 'linear_tdt', {}),
-                   ('linear_tdt rate_degree=3', 'linear_tdt', {'rate_degree': 3}),
-                   ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
+HELDOUT_METHODS: tuple[tuple[str, str, dict[str, object]], ...] = (
+    ('poly3', 'poly3', {}), ('linear_tdt', 'linear_tdt', {}),
+    ('linear_tdt rate_degree=3', 'linear_tdt', {'rate_degree': 3}),
+    ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
 
 
 def heldout_scores(*, pairs=HELDOUT_PAIRS, methods=HELDOUT_METHODS, seeds=(1, 2, 3, 4, 5),

@@ -31,7 +31,8 @@ This face only hands names on; each lives in one module:
 - :mod:`gyro_noise_ros.msgs`: the message types, encoders and :func:`count_stamp_regressions`.
 
 Beside them, not handed on: :mod:`.storage` (block reading), :mod:`.bulk` (block writing),
-:mod:`.tabular` (CSV and ULog read like bags), :mod:`.recover` and :mod:`.repair` (unfinished
+:mod:`.tabular` (CSV and ULog read like bags), :mod:`.inputs` (the one input layer: a path of
+any of these kinds opened by the right reader), :mod:`.recover` and :mod:`.repair` (unfinished
 recordings).
 """
 

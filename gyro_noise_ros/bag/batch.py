@@ -22,8 +22,10 @@ table reader serve the same :class:`ImuBatch`. The bytes are read by :mod:`gyro_
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ParameterError
 from ..msgs import decode_imu_spans, decode_temperature_spans, frame_id_of, join_raws
@@ -55,11 +57,12 @@ class ImuBatch:
     accel: np.ndarray
     frame_id: str
 
-    def __len__(self):
+    def __len__(self) -> int:
         return int(self.stamp_ns.shape[0])
 
 
-def decode_imu(raws, *, log_ns=None, ros1=False, skip_undecodable=False):
+def decode_imu(raws: Sequence[bytes], *, log_ns: ArrayLike | None = None, ros1: bool = False,
+               skip_undecodable: bool = False) -> ImuBatch:
     """
     Decode raw ``sensor_msgs/Imu`` messages in bulk.
 
@@ -99,7 +102,8 @@ def decode_imu(raws, *, log_ns=None, ros1=False, skip_undecodable=False):
     return ImuBatch(stamp_ns, log, gyro, accel, frame_id)
 
 
-def decode_temperature(raws, *, ros1=False):
+def decode_temperature(raws: Sequence[bytes], *,
+                       ros1: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """
     Decode raw ``sensor_msgs/Temperature`` messages in bulk.
 

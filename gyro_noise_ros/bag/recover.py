@@ -47,6 +47,7 @@ import shutil
 import struct
 import sys
 import tempfile
+from typing import Any
 
 import numpy as np
 
@@ -67,7 +68,7 @@ _CHUNK_HEAD = struct.Struct('<QQQI')
 #: Free space kept beyond the copy itself when a rolled-back copy is made (bytes).
 COPY_MARGIN_BYTES = 64 << 20
 
-_announced = set()
+_announced: set[str] = set()
 
 
 def announce(text):
@@ -468,7 +469,7 @@ def truncation_note(path, truncation):
 # ---------------------------------------------------------------------------------------------
 # sqlite3: a hot rollback journal, rolled back in a copy
 
-_COPIES = {}
+_COPIES: dict[str, Any] = {}
 
 
 def journal_is_hot(db3):

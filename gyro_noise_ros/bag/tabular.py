@@ -41,13 +41,13 @@ import numpy as np
 
 from .batch import ImuBatch
 from ..errors import BagError, InputDataError, ParameterError
+from ..units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 
 #: Suffixes read by :class:`TableImuReader`.
 TABLE_SUFFIXES = ('.csv', '.ulg')
 #: ULog topics understood, in order of preference.
 ULOG_TOPICS = ('sensor_combined', 'sensor_gyro')
 
-_G = 9.80665
 _AXES = 'xyz'
 
 
@@ -150,31 +150,61 @@ def missing_column_error(path, wanted, names):
     return BagError(f'CSV {str(path)!r} has no column {wanted}; columns: {", ".join(names)}')
 
 
-def _csv_columns(names, path):
-    def col(*choices):
-        for c in choices:
-            if c in names:
-                return names.index(c)
+def _col(names, *choices):
+    for c in choices:
+        if c in names:
+            return names.index(c)
+    return None
+
+
+def _gyro_column(names, axis):
+    """Return (column index, factor to rad/s) of one gyro axis, or None when it is missing."""
+    rad = _col(names, f'gyro_{axis}_rad_s')
+    dps = _col(names, f'gyro_{axis}_dps', f'gyroscope {axis} (deg/s)')
+    if rad is None and dps is None:
         return None
+    return (rad, 1.0) if rad is not None else (dps, DEG_TO_RAD)
+
+
+def csv_gyro_axes(names):
+    """
+    Return the gyro axes a CSV header holds, in the order x, y, z.
+
+    Parameters
+    ----------
+    names : list of str
+        Header names, stripped and lower-case (as :func:`read_csv` returns them).
+
+    Returns
+    -------
+    tuple of str
+
+    """
+    return tuple(a for a in _AXES if _gyro_column(names, a) is not None)
+
+
+def _csv_columns(names, path, gyro_axes=_AXES):
+    def col(*choices):
+        return _col(names, *choices)
 
     cols = {'t_s': col('time_s', 't_s', 'time (s)'), 't_us': col('timestamp_us'),
             'seq': col('seq', 'sequence'), 'temp': col('temperature_c', 'temp_c')}
     for a in _AXES:
-        rad = col(f'gyro_{a}_rad_s')
-        dps = col(f'gyro_{a}_dps', f'gyroscope {a} (deg/s)')
-        if rad is None and dps is None:
+        gyro = _gyro_column(names, a)
+        if gyro is None and a in gyro_axes:
             raise missing_column_error(path, f'gyro_{a}_rad_s (or gyro_{a}_dps)', names)
-        cols[f'g{a}'] = (rad, 1.0) if rad is not None else (dps, np.pi / 180.0)
+        # an axis the caller does not need may be missing: it reads as NaN
+        cols[f'g{a}'] = gyro if gyro is not None else (None, 1.0)
         ms2 = col(f'acc_{a}_m_s2', f'accel_{a}_m_s2')
         g = col(f'acc_{a}_g', f'accel_{a}_g', f'accelerometer {a} (g)')
-        cols[f'a{a}'] = ((ms2, 1.0) if ms2 is not None else (g, _G) if g is not None
-                         else (None, 1.0))
+        cols[f'a{a}'] = ((ms2, 1.0) if ms2 is not None
+                         else (g, STANDARD_GRAVITY_M_S2) if g is not None else (None, 1.0))
     return cols
 
 
-def _load_csv(path, rate_hz):
-    names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path))
-    cols = _csv_columns(names, path)
+def _load_csv(path, rate_hz, gyro_axes):
+    names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path, gyro_axes))
+    cols = _csv_columns(names, path, gyro_axes)
     if cols['t_s'] is None and cols['t_us'] is None and rate_hz is None:
         raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
     n = data.shape[0]
@@ -188,7 +218,9 @@ def _load_csv(path, rate_hz):
         stamp = np.rint((data[:, cols['t_us']] - data[0, cols['t_us']]) * 1e3).astype(np.int64)
     else:
         stamp = np.rint(np.arange(n) * (1e9 / float(rate_hz))).astype(np.int64)
-    gyro = np.column_stack([data[:, cols[f'g{a}'][0]] * cols[f'g{a}'][1] for a in _AXES])
+    gyro = np.column_stack([data[:, cols[f'g{a}'][0]] * cols[f'g{a}'][1]
+                            if cols[f'g{a}'][0] is not None else np.full(n, np.nan)
+                            for a in _AXES])
     accel = np.column_stack([data[:, cols[f'a{a}'][0]] * cols[f'a{a}'][1]
                              if cols[f'a{a}'][0] is not None else np.full(n, np.nan)
                              for a in _AXES])
@@ -242,6 +274,8 @@ class TableImuReader:
         ULog topic (``sensor_combined`` or ``sensor_gyro``); ignored for CSV.
     rate_hz : float, optional
         Rate (Hz) for a CSV without a time column.
+    gyro_axes : str or tuple of str, optional
+        The gyro axes a CSV must hold (default all three); a missing other axis reads as NaN.
 
     Attributes
     ----------
@@ -257,7 +291,8 @@ class TableImuReader:
 
     """
 
-    def __init__(self, path, *, topic=None, temperature_topic=None, rate_hz=None):
+    def __init__(self, path, *, topic=None, temperature_topic=None, rate_hz=None,
+                 gyro_axes=_AXES):
         self.path = Path(path)
         if not self.path.is_file():
             raise BagError(f'cannot read {str(self.path)!r}: no such file')
@@ -265,7 +300,7 @@ class TableImuReader:
             loaded = _load_ulog(self.path, topic)
             self.storage = 'ulog'
         else:
-            loaded = _load_csv(self.path, rate_hz)
+            loaded = _load_csv(self.path, rate_hz, tuple(gyro_axes))
             self.storage = 'csv'
         self._stamp, self._gyro, self._accel, self._temp, self.sequence, self.topic = loaded
         self.message_count = int(self._stamp.shape[0])

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from .storage import BagSource
 from ..errors import BagError
 from ..msgs import IMU_MSGTYPE
+from ..outputs import StrPath
 
 
 @dataclass(frozen=True)
@@ -51,11 +52,12 @@ class TopicInfo:
     count: int
 
 
-def _norm(name):
+def _norm(name: str) -> str:
     return name.lstrip('/')
 
 
-def _select_topic(topics, topic, msgtype, path):
+def _select_topic(topics: dict[str, tuple[str, int]], topic: str | None, msgtype: str,
+                  path: StrPath) -> str:
     """Pick the topic of ``msgtype`` (the single one if ``topic`` is None); raise BagError."""
     if topic is not None:
         matches = [name for name in topics if _norm(name) == _norm(topic)]
@@ -77,7 +79,7 @@ def _select_topic(topics, topic, msgtype, path):
     return candidates[0]
 
 
-def list_topics(path):
+def list_topics(path: StrPath) -> list[TopicInfo]:
     """
     List the topics of a bag.
 
@@ -105,7 +107,7 @@ def list_topics(path):
         source.close()
 
 
-def find_imu_topic(path, topic=None):
+def find_imu_topic(path: StrPath, topic: str | None = None) -> str:
     """
     Name the ``sensor_msgs/Imu`` topic to analyse.
 

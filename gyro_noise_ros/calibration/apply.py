@@ -33,10 +33,14 @@ dict of the same keys (the node's parameters). No ROS is imported here.
 from dataclasses import dataclass
 import math
 from pathlib import Path
+from typing import Any, Mapping
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ParameterError
+from ..outputs import StrPath
+from ..units import STANDARD_GRAVITY_M_S2
 
 #: Key -> (number of values, unit); the keys of ``calibration.yaml`` and of the node parameters.
 KEYS = {
@@ -53,9 +57,6 @@ KEYS = {
 #: few percent of the identity (condition number about 1.1 at most); 10 already means scale errors
 #: of tens of percent, i.e. a wrong file, not a sensor.
 MAX_CONDITION = 10.0
-
-#: Value of ``calibration_gravity_m_s2`` when absent (standard gravity).
-STANDARD_GRAVITY_M_S2 = 9.80665
 
 
 @dataclass(frozen=True)
@@ -79,21 +80,21 @@ class SensorCalibration:
     misalignment: np.ndarray
 
     @property
-    def matrix(self):
+    def matrix(self) -> np.ndarray:
         """``I + diag(S) + M``: true -> measured (before the bias)."""
         return np.eye(3) + np.diag(self.scale_factor) + self.misalignment
 
     @property
-    def inverse(self):
+    def inverse(self) -> np.ndarray:
         """``inv(I + diag(S) + M)``: measured - bias -> true."""
         return np.linalg.inv(self.matrix)
 
     @property
-    def is_identity(self):
+    def is_identity(self) -> bool:
         """Tell whether applying the calibration changes nothing (all zeros)."""
         return not (self.bias.any() or self.scale_factor.any() or self.misalignment.any())
 
-    def apply(self, measured):
+    def apply(self, measured: ArrayLike) -> np.ndarray:
         """
         Correct a batch of samples.
 
@@ -132,7 +133,8 @@ class Calibration:
     gyro: SensorCalibration
     gravity_m_s2: float = STANDARD_GRAVITY_M_S2
 
-    def apply(self, gyro_rad_s, accel_m_s2):
+    def apply(self, gyro_rad_s: ArrayLike,
+              accel_m_s2: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """
         Correct a batch of gyro and accelerometer samples.
 
@@ -150,13 +152,13 @@ class Calibration:
         return self.gyro.apply(gyro_rad_s), self.accel.apply(accel_m_s2)
 
 
-def identity():
+def identity() -> Calibration:
     """Return the calibration that changes nothing (the node's default)."""
     zero = SensorCalibration(np.zeros(3), np.zeros(3), np.zeros((3, 3)))
     return Calibration(zero, zero)
 
 
-def _values(params, key, source):
+def _values(params: Mapping[str, Any], key: str, source: str) -> np.ndarray:
     count, _ = KEYS[key]
     value = params[key]
     arr = np.asarray(value, dtype=object).reshape(-1)
@@ -171,7 +173,8 @@ def _values(params, key, source):
     return out
 
 
-def _sensor(params, prefix, bias_key, source):
+def _sensor(params: Mapping[str, Any], prefix: str, bias_key: str,
+            source: str) -> SensorCalibration:
     bias = _values(params, bias_key, source)
     scale = _values(params, f'{prefix}_scale_factor', source)
     mis = _values(params, f'{prefix}_misalignment', source).reshape(3, 3)
@@ -188,7 +191,8 @@ def _sensor(params, prefix, bias_key, source):
     return cal
 
 
-def calibration_from_parameters(params, *, source='calibration'):
+def calibration_from_parameters(params: Mapping[str, Any], *,
+                                source: str = 'calibration') -> Calibration:
     """
     Build a :class:`Calibration` from a dict with the keys of :data:`KEYS`.
 
@@ -211,7 +215,7 @@ def calibration_from_parameters(params, *, source='calibration'):
         singular / ill-conditioned matrix; the message names the key.
 
     """
-    full = {key: [0.0] * count for key, (count, _) in KEYS.items()}
+    full: dict[str, Any] = {key: [0.0] * count for key, (count, _) in KEYS.items()}
     full['calibration_gravity_m_s2'] = STANDARD_GRAVITY_M_S2
     full.update({k: v for k, v in params.items() if k in KEYS})
     gravity = float(_values(full, 'calibration_gravity_m_s2', source)[0])
@@ -222,7 +226,7 @@ def calibration_from_parameters(params, *, source='calibration'):
                        gravity_m_s2=gravity)
 
 
-def load_calibration(path):
+def load_calibration(path: StrPath) -> Calibration:
     """
     Read a ``calibration.yaml`` (ROS parameter file) as written by ``gyro_noise_calibrate``.
 

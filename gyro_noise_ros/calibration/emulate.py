@@ -54,11 +54,11 @@ import numpy as np
 from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
-from .sixpos import EARTH_RATE_RAD_S, STANDARD_GRAVITY
+from .sixpos import EARTH_RATE_RAD_S
 from .static import ORIENTATIONS
 from ..errors import ParameterError
+from ..units import MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
-MG = STANDARD_GRAVITY * 1e-3
 #: Paper 001 Table 6, before the vibration test: biases (mg) and scale factors (%).
 PAPER_BEFORE_BIAS_MG = (-4.9, -4.4, -4.7)
 PAPER_BEFORE_SCALE_PCT = (-0.02, -0.07, -0.05)
@@ -141,7 +141,7 @@ class SensorErrors:
 
     """
 
-    accel_bias_m_s2: object = tuple(b * MG for b in PAPER_BEFORE_BIAS_MG)
+    accel_bias_m_s2: object = tuple(b * MG_TO_M_S2 for b in PAPER_BEFORE_BIAS_MG)
     accel_scale_factor: object = tuple(s / 100.0 for s in PAPER_BEFORE_SCALE_PCT)
     accel_misalignment: object = None
     gyro_bias_rad_s: object = (0.0, 0.0, 0.0)
@@ -197,7 +197,7 @@ class SensorErrors:
 
         """
         if accel_bias_m_s2 is None:
-            accel_bias_m_s2 = tuple(b * MG for b in PAPER_AFTER_BIAS_MG)
+            accel_bias_m_s2 = tuple(b * MG_TO_M_S2 for b in PAPER_AFTER_BIAS_MG)
         if accel_scale_factor is None:
             accel_scale_factor = tuple(s / 100.0 for s in PAPER_AFTER_SCALE_PCT)
         return replace(
@@ -324,7 +324,7 @@ class Static:
     """
 
     orientation: str = '+z'
-    gravity_m_s2: float = STANDARD_GRAVITY
+    gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
     heading_deg: float = 0.0
 
@@ -462,7 +462,7 @@ class SixPosition(_PoseSequence):
     dwell_s: float = 60.0
     move_s: float = 5.0
     lead_s: float = 0.0
-    gravity_m_s2: float = STANDARD_GRAVITY
+    gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
     tilts: tuple = ()
 
@@ -554,7 +554,7 @@ class MultiPose(_PoseSequence):
     dwell_s: float = 30.0
     move_s: float = 5.0
     lead_s: float = 0.0
-    gravity_m_s2: float = STANDARD_GRAVITY
+    gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
 
     def __post_init__(self):
@@ -607,9 +607,9 @@ class Excitation:
 
     sensor: str = 'accel'
     axis: str = 'x'
-    amplitude: float = 0.3 * STANDARD_GRAVITY
+    amplitude: float = 0.3 * STANDARD_GRAVITY_M_S2
     frequency_hz: float = 8.0
-    sweep_to_hz: float = None
+    sweep_to_hz: float | None = None
     sweep_rate_hz_s: float = 0.5
     start_s: float = 0.0
     base: Static = field(default_factory=Static)

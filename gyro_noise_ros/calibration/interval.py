@@ -13,29 +13,66 @@
 # limitations under the License.
 
 """
-Bias-instability interval of paper 001 section 6 and the before/after verdict.
+Bias-instability interval of paper 001 section 6, its uncertainty, and the before/after verdicts.
 
 Paper 001 section 6: take the Allan deviation curve, its minimum sigma_min, and the level
 ``c * sigma_min`` (c = 2 in the paper); the **bias-instability interval** is the range of cluster
 times between the two crossings of the curve with that level around the minimum. The paper reads
 420 s before and 945 s after the vibration (+125 %) and calls +/-50 % physiological.
 
-sigma_min is the bias stability of the one Allan readout (:func:`..core.readout.adev_floor`):
-where the usable curve stops falling, a later dip resting on few degrees of freedom does not move
-it (the rule and its F test are in :mod:`..core.readout`). Without degrees of freedom it is the
-smallest usable value (the paper's plain reading).
+**sigma_min** is the bias stability of the one Allan readout (:func:`..core.readout.adev_floor`,
+read over taus up to a tenth of the record when ``max_tau_s`` is given): the number
+``gyro_noise_analyze`` prints for the same curve. The crossings are searched outwards from it: the
+lower one is the last tau below the minimum where the curve is at or above the level, the upper
+one the first above it; between the two bracketing points the crossing is interpolated linearly
+in log(tau)-log(sigma). A side where the curve never reaches the level inside the record is
+**open** (None, never extrapolated) and the width is undefined.
 
-Here the crossings are searched outwards from the minimum: the lower one is the last tau below
-the minimum where the curve is at or above the level, the upper one the first above it. Between
-the two bracketing points the crossing is interpolated linearly in log(tau)-log(sigma) (Allan
-curves are piecewise straight there). A side where the curve never reaches the level inside the
-record is **open**: its end is reported as None, never extrapolated, and the width is undefined.
+**Uncertainty of the width** (:func:`bias_instability_interval` with ``edf``): propagated from the
+equivalent degrees of freedom of the Allan variance (Greenhall & Riley EDF, ``AllanResult.edf``),
+not bootstrapped. An Allan variance with EDF nu is distributed as ``AVAR chi2_nu / nu``, so the
+standard deviation of log ADEV is ``e(nu) = sqrt(trigamma(nu / 2)) / 2`` (exact for that law,
+``1 / sqrt(2 nu)`` for large nu). A crossing moves when the level or the curve moves:
+``d log tau_x = (d log sigma_min - d log ADEV(tau_x)) / s_x``, with ``s_x`` the log-log slope of
+the curve at the crossing. So::
+
+    var(W) = e_min^2 (tau_hi / |s_hi| + tau_lo / |s_lo|)^2 + (tau_hi e_hi / s_hi)^2
+             + (tau_lo e_lo / s_lo)^2
+
+with ``e_min`` at sigma_min's tau and ``e_hi``, ``e_lo`` interpolated at the crossings. The three
+errors are taken as independent (measured: correlation 0.03 between log sigma_min and log ADEV at
+the upper crossing on the emulator's model). The slope is that of a fitted IEEE 952 model at the
+crossing (``model_adev``), not of the two noisy bracketing points; without a model, the
+least-squares slope of the curve over three taus either side. Why not a block bootstrap: the
+upper crossing sits where random walk dominates, and resampling blocks shorter than the record
+destroys exactly that long-term structure. The stated sigma is checked against the spread of the
+width over 100 emulated records (``docs/scripts/reliability_verdicts.py``); it falls as the
+square root of the record length (EDF at a fixed tau is proportional to it), which is how
+:func:`compare` says how long a record would decide.
+
+**An ambiguous upper crossing**: after the curve has crossed the level upwards it may fall back
+below it at longer taus (a noisy tail, or a real second dip). Then the interval could also end at
+the last upward crossing (or stay open). The interval records where the curve falls back
+(``fallback_s``) and whether the fall-back is **significant** (the one-sided upper confidence
+bound of the ADEV at some tau of it, from its EDF at level ``alpha``, stays below the level): a
+significant fall-back makes the width undetermined; a non-significant one is flagged and kept.
+
+**Verdicts** (:func:`compare`): the change of the width is tested on log(W_after / W_before),
+whose standard deviation is the root sum of squares of the two relative width uncertainties.
+``beyond``: the one-sided test at level ``alpha`` (default 5 %) rejects "the change is within
++/- tolerance", i.e. the lower (upper) one-sided 95 % bound of the ratio is above 1 + tolerance
+(below 1 - tolerance). ``physiological``: both one-sided tests reject "beyond" (the 90 % two-sided
+interval lies inside the band, the two one-sided tests procedure). ``undetermined`` otherwise,
+with the record length that would decide at the present estimate. :func:`overall` gives one
+verdict per sensor from its three axes.
 """
 
 from dataclasses import dataclass
 import math
 
 import numpy as np
+import scipy.special
+import scipy.stats
 
 from ..core.readout import adev_floor
 from ..errors import ParameterError
@@ -43,13 +80,44 @@ from ..errors import ParameterError
 #: Paper 001 section 6.
 DEFAULT_C = 2.0
 DEFAULT_TOLERANCE = 0.5
+#: One-sided level of each test of a verdict (a 95 % one-sided bound).
+DEFAULT_ALPHA = 0.05
 #: Fewer taus than this cannot show a minimum with two flanks.
 MIN_TAUS = 5
-#: sigma_min is taken among taus whose Allan variance has at least this many equivalent degrees
-#: of freedom (68 % interval of ADEV about +/-23 %), on top of the readout's own F test: the last
-#: taus of a record (EDF ~ 1-3) can dip far below the true floor and would move the whole
-#: interval.
-DEFAULT_MIN_EDF = 10.0
+#: sigma_min only among taus with at least this many EDF, on top of the readout's rule (0: the
+#: readout's rule alone, so the interval's sigma_min is the analyzer's bias stability).
+DEFAULT_MIN_EDF = 0.0
+#: A crossing where the curve's log-log slope is flatter than this has no usable uncertainty
+#: (a flat curve crosses a level anywhere within its noise).
+MIN_CROSSING_SLOPE = 0.05
+#: Taus on each side for the least-squares slope when no model is given.
+SLOPE_HALF_WIDTH = 3
+
+
+def log_adev_sd(edf):
+    """
+    Return the standard deviation of log ADEV of an Allan variance with ``edf`` degrees of freedom.
+
+    ``AVAR_hat = AVAR chi2_nu / nu``, so ``var(log ADEV_hat) = var(log chi2_nu) / 4 =
+    trigamma(nu / 2) / 4`` (exact for the chi-squared law; about ``1 / (2 nu)`` for large nu).
+
+    Parameters
+    ----------
+    edf : float or array_like
+        Equivalent degrees of freedom (> 0).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Standard deviation of the natural log of the ADEV; inf where ``edf`` is not > 0.
+
+    """
+    nu = np.asarray(edf, dtype=np.float64)
+    with np.errstate(invalid='ignore'):
+        good = np.isfinite(nu) & (nu > 0)
+    out = np.full(nu.shape, np.inf)
+    out[good] = 0.5 * np.sqrt(scipy.special.polygamma(1, nu[good] / 2.0))
+    return float(out) if out.ndim == 0 else out
 
 
 @dataclass(frozen=True)
@@ -71,6 +139,23 @@ class Interval:
         The factor.
     reason : str
         Empty when both ends are closed, otherwise why the width is undefined.
+    width_sd_log : float
+        Standard deviation of log(width) (module doc); NaN without EDF, inf when a crossing is
+        on a flat part of the curve.
+    lo_sd_log, hi_sd_log : float
+        Standard deviations of log(lo_s), log(hi_s).
+    slope_lo, slope_hi : float
+        Log-log slopes used at the crossings.
+    record_s : float
+        Length of the record the curve comes from (s); NaN when not given.
+    fallback_s : tuple of float or None
+        First and last tau (s) after the upper crossing where the curve is back below the
+        level: an ambiguous upper crossing; None when it never falls back.
+    fallback_significant : bool
+        The fall-back is significant (module doc): the width is then undetermined.
+    hi_last_s : float or None
+        Where the interval would end if the fall-back belonged to it: the last upward crossing,
+        None when the curve ends below the level (open).
 
     """
 
@@ -81,6 +166,15 @@ class Interval:
     level: float
     c: float
     reason: str = ''
+    width_sd_log: float = math.nan
+    lo_sd_log: float = math.nan
+    hi_sd_log: float = math.nan
+    slope_lo: float = math.nan
+    slope_hi: float = math.nan
+    record_s: float = math.nan
+    fallback_s: object = None
+    fallback_significant: bool = False
+    hi_last_s: object = None
 
     @property
     def closed(self):
@@ -92,6 +186,31 @@ class Interval:
         """Width ``hi_s - lo_s`` (s) when closed, else None."""
         return self.hi_s - self.lo_s if self.closed else None
 
+    @property
+    def ambiguous(self):
+        """bool: the curve falls back below the level after the upper crossing."""
+        return self.fallback_s is not None
+
+    def fallback_note(self):
+        """
+        Return one sentence on an ambiguous upper crossing ('' when there is none).
+
+        Returns
+        -------
+        str
+
+        """
+        if self.fallback_s is None:
+            return ''
+        a, b = self.fallback_s
+        end = ('open (the curve ends below the level)' if self.hi_last_s is None
+               else f'{self.hi_last_s:.4g} s')
+        kind = ('significantly (beyond the ADEV uncertainty there)' if self.fallback_significant
+                else 'within the ADEV uncertainty there')
+        return (f'ambiguous upper crossing: the curve falls back under {self.c:g} sigma_min '
+                f'for tau {a:.4g}-{b:.4g} s, {kind}; read to the last crossing the interval '
+                f'would end at {end}')
+
 
 def _cross(t0, s0, t1, s1, level):
     # linear in log-log between (t0, s0) and (t1, s1)
@@ -102,8 +221,41 @@ def _cross(t0, s0, t1, s1, level):
     return math.exp(math.log(t0) + frac * (math.log(t1) - math.log(t0)))
 
 
+def _interp_log(tau, values, t):
+    """Interpolate ``values`` (positive, inf allowed) at ``t`` in log-log."""
+    with np.errstate(divide='ignore'):
+        lv = np.log(values)
+    if not np.all(np.isfinite(lv)):
+        # an inf neighbour makes the interpolated value inf too
+        j = int(np.clip(np.searchsorted(tau, t), 1, tau.size - 1))
+        if not (np.isfinite(lv[j - 1]) and np.isfinite(lv[j])):
+            return math.inf
+    return float(np.exp(np.interp(math.log(t), np.log(tau), lv)))
+
+
+def _slope(tau, sig, t, sign, model_adev):
+    """Log-log slope at ``t`` on the side ``sign`` (+1 rising, -1 falling); NaN when unusable."""
+    if model_adev is not None:
+        h = 0.05
+        try:
+            a, b = (float(v) for v in model_adev(np.array([t * math.exp(-h), t * math.exp(h)])))
+        except (ValueError, FloatingPointError):
+            a = b = math.nan
+        if a > 0 and b > 0 and math.isfinite(a) and math.isfinite(b):
+            s = (math.log(b) - math.log(a)) / (2.0 * h)
+            if sign * s >= MIN_CROSSING_SLOPE:
+                return s
+    j = int(np.searchsorted(tau, t))
+    sel = slice(max(0, j - SLOPE_HALF_WIDTH), min(tau.size, j + SLOPE_HALF_WIDTH))
+    if sel.stop - sel.start < 2:
+        return math.nan
+    s = float(np.polyfit(np.log(tau[sel]), np.log(sig[sel]), 1)[0])
+    return s if sign * s >= MIN_CROSSING_SLOPE else math.nan
+
+
 def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF,
-                              max_tau_s=math.inf):
+                              max_tau_s=math.inf, model_adev=None, record_s=math.nan,
+                              alpha=DEFAULT_ALPHA):
     """
     Return the tau interval where the Allan deviation stays below ``c * sigma_min``.
 
@@ -117,15 +269,22 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
     c : float, keyword-only
         Level factor (> 1; paper 001: 2).
     edf : array_like, optional, keyword-only
-        Equivalent degrees of freedom of each tau (``AllanResult.edf``); with it, sigma_min is
-        the readout's floor over the taus with ``edf >= min_edf`` (the crossings are still
-        searched over all taus). Without it, the smallest usable value (the paper's plain
-        reading).
+        Equivalent degrees of freedom of each tau (``AllanResult.edf``): the readout's test of
+        the floor uses them, and the width gets its uncertainty from them (module doc). Without
+        them sigma_min is the smallest usable value (the paper's plain reading) and the width
+        has no uncertainty (NaN).
     min_edf : float, keyword-only
-        Least EDF of a tau that may hold sigma_min.
+        Least EDF of a tau that may hold sigma_min (0: the readout's rule alone).
     max_tau_s : float, keyword-only
         Longest tau that may hold sigma_min (s): pass a tenth of the record
         (``core.readout.MAX_TAU_FRACTION``) to read the analyzer's bias stability.
+    model_adev : callable, optional, keyword-only
+        ``model_adev(tau_s) -> ADEV`` of a fitted model (``NoiseTerms.model_adev``), for the
+        slope at the crossings.
+    record_s : float, keyword-only
+        Length of the record (s), kept for the record-length extrapolation of :func:`compare`.
+    alpha : float, keyword-only
+        One-sided level of the test that a fall-back below the level is significant.
 
     Returns
     -------
@@ -148,19 +307,23 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
         edf = edf[keep]
     tau, sig = tau[keep], sig[keep]
     nan = float('nan')
+    record_s = float(record_s)
     if tau.size < MIN_TAUS:
         return Interval(None, None, nan, nan, nan, c,
-                        f'record too short: {tau.size} usable taus (need {MIN_TAUS})')
+                        f'record too short: {tau.size} usable taus (need {MIN_TAUS})',
+                        record_s=record_s)
     if np.any(np.diff(tau) <= 0):
         raise ParameterError('tau_s must be strictly increasing')
     floor = adev_floor(tau, sig, edf=edf, min_edf=min_edf if edf is not None else 0.0,
                        max_tau_s=max_tau_s)
     if floor.index < 0:
-        return Interval(None, None, nan, nan, nan, c, f'record too short: {floor.reason}')
+        return Interval(None, None, nan, nan, nan, c, f'record too short: {floor.reason}',
+                        record_s=record_s)
     i = floor.index
     smin = float(sig[i])
     level = c * smin
     lo = hi = None
+    k = None
     above = np.flatnonzero(sig[:i] >= level)
     if above.size:
         j = int(above[-1])
@@ -176,7 +339,54 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
     if hi is None:
         reasons.append(f'upper end open: the curve does not come back above {c:g} sigma_min '
                        f'up to the longest tau {tau[-1]:.3g} s')
-    return Interval(lo, hi, float(tau[i]), smin, level, c, '; '.join(reasons))
+    fallback, significant, hi_last = None, False, None
+    if k is not None:
+        below = k + np.flatnonzero(sig[k:] < level)
+        if below.size:
+            fallback = (float(tau[below[0]]), float(tau[below[-1]]))
+            last = int(below[-1])
+            if last + 1 < tau.size:
+                hi_last = _cross(tau[last], sig[last], tau[last + 1], sig[last + 1], level)
+            if edf is not None:
+                nu = edf[below]
+                ok = np.isfinite(nu) & (nu > 0)
+                # one-sided upper confidence bound of ADEV at each fall-back tau
+                upper = sig[below][ok] * np.sqrt(nu[ok] / scipy.stats.chi2.ppf(alpha, nu[ok]))
+                significant = bool(np.any(upper < level))
+    sd = _uncertainty(tau, sig, edf, i, lo, hi, model_adev)
+    return Interval(lo, hi, float(tau[i]), smin, level, c, '; '.join(reasons), *sd,
+                    record_s=record_s, fallback_s=fallback, fallback_significant=significant,
+                    hi_last_s=hi_last)
+
+
+def _uncertainty(tau, sig, edf, i, lo, hi, model_adev):
+    """Return (width_sd_log, lo_sd_log, hi_sd_log, slope_lo, slope_hi) (module doc)."""
+    nan = math.nan
+    if edf is None:
+        return nan, nan, nan, nan, nan
+    e = log_adev_sd(edf)
+    e_min = float(e[i])
+    out_lo = out_hi = (nan, nan)
+    if lo is not None:
+        s = _slope(tau, sig, lo, -1.0, model_adev)
+        e_x = _interp_log(tau, e, lo)
+        out_lo = (math.hypot(e_min, e_x) / abs(s) if math.isfinite(s) else math.inf, s)
+    if hi is not None:
+        s = _slope(tau, sig, hi, 1.0, model_adev)
+        e_x = _interp_log(tau, e, hi)
+        out_hi = (math.hypot(e_min, e_x) / abs(s) if math.isfinite(s) else math.inf, s)
+    width_sd = nan
+    if lo is not None and hi is not None:
+        s_lo, s_hi = abs(out_lo[1]), abs(out_hi[1])
+        if not (math.isfinite(s_lo) and math.isfinite(s_hi)):
+            width_sd = math.inf
+        else:
+            e_lo = _interp_log(tau, e, lo)
+            e_hi = _interp_log(tau, e, hi)
+            var = ((e_min * (hi / s_hi + lo / s_lo)) ** 2 + (hi * e_hi / s_hi) ** 2
+                   + (lo * e_lo / s_lo) ** 2)
+            width_sd = math.sqrt(var) / (hi - lo)
+    return width_sd, out_lo[0], out_hi[0], out_lo[1], out_hi[1]
 
 
 def undetermined(reason, c=DEFAULT_C):
@@ -199,6 +409,85 @@ def undetermined(reason, c=DEFAULT_C):
     return Interval(None, None, nan, nan, nan, float(c), reason)
 
 
+def _check_tolerance(tolerance, alpha):
+    tol = float(tolerance)
+    if not (math.isfinite(tol) and tol >= 0):
+        raise ParameterError(f'tolerance must be finite and >= 0, got {tolerance!r}')
+    a = float(alpha)
+    if not (math.isfinite(a) and 0.0 < a < 0.5):
+        raise ParameterError(f'alpha must be in (0, 0.5), got {alpha!r}')
+    up = math.log1p(tol)
+    down = math.log1p(-tol) if tol < 1.0 else -math.inf
+    return tol, a, up, down
+
+
+@dataclass(frozen=True)
+class BandTest:
+    """
+    A relative change tested against the +/- tolerance band (module doc).
+
+    Attributes
+    ----------
+    verdict : str
+        ``'beyond'``, ``'physiological'`` or ``'undetermined'``.
+    log_ratio, log_ratio_sd : float
+        log(after / before) and its standard deviation.
+    ci : tuple of float
+        Two-sided ``1 - 2 alpha`` interval of the relative change (e.g. 90 %: each end is a
+        one-sided 95 % bound).
+    decide_factor : float or None
+        How many times longer both records would have to be for the verdict to be decided at
+        the present estimate (1.0 when decided; None when no length would, the estimate sitting
+        on a band edge).
+
+    """
+
+    verdict: str
+    log_ratio: float
+    log_ratio_sd: float
+    ci: tuple
+    decide_factor: object
+
+
+def band_test(log_ratio, log_ratio_sd, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
+    """
+    Test a change ``log(after / before)`` with its standard deviation against the band.
+
+    Parameters
+    ----------
+    log_ratio, log_ratio_sd : float
+        The change as a log ratio, and its standard deviation (finite, > 0).
+    tolerance : float, keyword-only
+        Half-width of the physiological band (0.5: ratios 0.5 .. 1.5).
+    alpha : float, keyword-only
+        One-sided level of each test.
+
+    Returns
+    -------
+    BandTest
+
+    """
+    _, a, up, down = _check_tolerance(tolerance, alpha)
+    lr, s = float(log_ratio), float(log_ratio_sd)
+    z = float(scipy.stats.norm.ppf(1.0 - a))
+    lo, hi = lr - z * s, lr + z * s
+    ci = (math.expm1(lo), math.expm1(hi))
+    if lo > up or hi < down:
+        return BandTest('beyond', lr, s, ci, 1.0)
+    if hi <= up and lo >= down:
+        return BandTest('physiological', lr, s, ci, 1.0)
+    # outside the band: the edge it crossed; inside: the nearer edge
+    if lr > up:
+        d = lr - up
+    elif lr < down:
+        d = down - lr
+    else:
+        d = min(up - lr, lr - down)
+    # the standard deviation falls as 1 / sqrt(record length) (EDF proportional to it)
+    factor = (z * s / d) ** 2 if d > 0 else None
+    return BandTest('undetermined', lr, s, ci, factor)
+
+
 @dataclass(frozen=True)
 class Verdict:
     """
@@ -209,18 +498,35 @@ class Verdict:
     change : float or None
         ``width_after / width_before - 1``; None when undetermined.
     verdict : str
-        ``'physiological'`` (|change| <= tolerance), ``'beyond'`` or ``'undetermined'``.
+        ``'physiological'``, ``'beyond'`` or ``'undetermined'`` (module doc).
     reason : str
         Why undetermined (empty otherwise).
+    change_sd : float or None
+        Standard deviation of ``change`` (``(1 + change) * log_ratio_sd``, first order).
+    log_ratio, log_ratio_sd : float or None
+        log(width_after / width_before) and its standard deviation.
+    ci : tuple or None
+        Two-sided ``1 - 2 alpha`` interval of ``change``.
+    decide_record_s : tuple or None
+        Lengths of the before and after records (s) that would decide an undetermined verdict
+        at the present estimate (None when decided, or when no length would).
+    notes : tuple of str
+        Ambiguous crossings that did not change the verdict.
 
     """
 
     change: object
     verdict: str
     reason: str = ''
+    change_sd: object = None
+    log_ratio: object = None
+    log_ratio_sd: object = None
+    ci: object = None
+    decide_record_s: object = None
+    notes: tuple = ()
 
 
-def compare(before, after, *, tolerance=DEFAULT_TOLERANCE):
+def compare(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
     """
     Compare two bias-instability intervals (paper 001 section 6: +/-50 % is physiological).
 
@@ -230,24 +536,147 @@ def compare(before, after, *, tolerance=DEFAULT_TOLERANCE):
         None when that record was not given.
     tolerance : float, keyword-only
         Largest relative change still physiological (paper: 0.5).
+    alpha : float, keyword-only
+        One-sided level of each test (module doc).
 
     Returns
     -------
     Verdict
 
     """
-    tol = float(tolerance)
-    if not (math.isfinite(tol) and tol >= 0):
-        raise ParameterError(f'tolerance must be finite and >= 0, got {tolerance!r}')
+    _check_tolerance(tolerance, alpha)
     reasons = []
+    notes = []
     for name, iv in (('before', before), ('after', after)):
         if iv is None:
             reasons.append(f'no {name} record')
         elif not iv.closed:
             reasons.append(f'{name}: {iv.reason}')
+        elif iv.ambiguous:
+            if iv.fallback_significant:
+                reasons.append(f'{name}: {iv.fallback_note()}')
+            else:
+                notes.append(f'{name}: {iv.fallback_note()}')
     if reasons:
-        return Verdict(None, 'undetermined', '; '.join(reasons))
+        return Verdict(None, 'undetermined', '; '.join(reasons), notes=tuple(notes))
     if before.width_s <= 0:
         return Verdict(None, 'undetermined', 'before: zero-width interval')
     change = after.width_s / before.width_s - 1.0
-    return Verdict(change, 'physiological' if abs(change) <= tol else 'beyond')
+    sd = math.hypot(before.width_sd_log, after.width_sd_log)
+    if not math.isfinite(sd):
+        why = ('a crossing lies on a flat part of the curve' if math.isinf(sd)
+               else 'no degrees of freedom for the Allan variance')
+        return Verdict(change, 'undetermined', f'the width has no uncertainty: {why}',
+                       notes=tuple(notes))
+    t = band_test(math.log1p(change), sd, tolerance=tolerance, alpha=alpha)
+    decide = None
+    reason = ''
+    if t.verdict == 'undetermined':
+        if t.decide_factor is None:
+            reason = ('the change sits on the tolerance edge: no record length decides it at '
+                      'this estimate')
+        else:
+            decide = (t.decide_factor * before.record_s, t.decide_factor * after.record_s)
+            reason = (f'the {100 * (1 - 2 * alpha):.0f} % interval of the change '
+                      f'({100 * t.ci[0]:+.0f} % .. {100 * t.ci[1]:+.0f} %) straddles '
+                      f'+/-{100 * tolerance:.0f} %; records {t.decide_factor:.1f} times as long '
+                      'would decide it at this estimate')
+    return Verdict(change, t.verdict, reason, (1.0 + change) * sd, t.log_ratio, sd, t.ci,
+                   decide, tuple(notes))
+
+
+@dataclass(frozen=True)
+class SensorVerdict:
+    """
+    The verdict of one sensor (accelerometer or gyro) from its three axes (:func:`overall`).
+
+    Attributes
+    ----------
+    verdict : str
+        ``'beyond'``, ``'physiological'`` or ``'undetermined'``.
+    basis : str
+        How it was reached (one sentence).
+    mean_change, mean_change_sd : float or None
+        Geometric mean over the axes of the width ratio, minus 1, and its standard deviation.
+    ci : tuple or None
+        Two-sided ``1 - 2 alpha`` interval of ``mean_change``.
+    axes_beyond : tuple of str
+        Axes beyond at the Bonferroni level ``alpha / 3``.
+    decide_factor : float or None
+        How many times longer the records would have to be to decide the three-axis mean.
+
+    """
+
+    verdict: str
+    basis: str
+    mean_change: object = None
+    mean_change_sd: object = None
+    ci: object = None
+    axes_beyond: tuple = ()
+    decide_factor: object = None
+
+
+def overall(verdicts, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
+    """
+    Return one sensor's verdict from the verdicts of its axes.
+
+    Rule: **beyond** when some axis is beyond at the Bonferroni level ``alpha / n`` (one
+    damaged axis is not averaged away), or when the three-axis mean of log(width ratio) (the
+    paper's "average among the three axes") is beyond at ``alpha``; **physiological** when the
+    mean is physiological and no axis is beyond; **undetermined** otherwise. The axes are taken
+    as independent for the mean's standard deviation ``sqrt(sum sd_i^2) / n``. A sensor whose
+    true change sits on a band edge is called beyond with probability at most 2 alpha (union of
+    the two tests).
+
+    Parameters
+    ----------
+    verdicts : dict
+        ``{axis name: Verdict}``.
+    tolerance : float, keyword-only
+        Half-width of the band.
+    alpha : float, keyword-only
+        One-sided level.
+
+    Returns
+    -------
+    SensorVerdict
+
+    """
+    _check_tolerance(tolerance, alpha)
+    n = len(verdicts)
+    usable = {k: v for k, v in verdicts.items()
+              if v.log_ratio is not None and v.log_ratio_sd is not None
+              and math.isfinite(v.log_ratio_sd)}
+    beyond = tuple(k for k, v in usable.items() if band_test(
+        v.log_ratio, v.log_ratio_sd, tolerance=tolerance, alpha=alpha / n).verdict == 'beyond')
+    mean = None
+    if n and len(usable) == n:
+        m = sum(v.log_ratio for v in usable.values()) / n
+        s = math.sqrt(sum(v.log_ratio_sd ** 2 for v in usable.values())) / n
+        mean = band_test(m, s, tolerance=tolerance, alpha=alpha)
+    pct = f'{100 * tolerance:.0f} %'
+    conf = f'{100 * (1 - alpha):.0f} %'
+    if beyond or (mean is not None and mean.verdict == 'beyond'):
+        parts = []
+        if beyond:
+            parts.append(f'{", ".join(beyond)} beyond +/-{pct} at one-sided '
+                         f'{100 * (1 - alpha / n):.1f} % (Bonferroni over {n} axes)')
+        if mean is not None and mean.verdict == 'beyond':
+            parts.append(f'the three-axis mean beyond +/-{pct} at one-sided {conf}')
+        verdict, basis = 'beyond', '; '.join(parts)
+    elif mean is not None and mean.verdict == 'physiological':
+        verdict = 'physiological'
+        basis = (f'the three-axis mean within +/-{pct} at one-sided {conf} on both sides, no '
+                 'axis beyond')
+    else:
+        verdict = 'undetermined'
+        if mean is None:
+            basis = (f'{n - len(usable)} of {n} axes without a width change, and none beyond')
+        else:
+            basis = (f'the {100 * (1 - 2 * alpha):.0f} % interval of the three-axis mean '
+                     f'straddles +/-{pct}, no axis beyond')
+    if mean is None:
+        return SensorVerdict(verdict, basis, axes_beyond=beyond)
+    return SensorVerdict(verdict, basis, math.expm1(mean.log_ratio),
+                         math.exp(mean.log_ratio) * mean.log_ratio_sd, mean.ci, beyond,
+                         mean.decide_factor if mean.verdict == 'undetermined' else None)

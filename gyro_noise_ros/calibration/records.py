@@ -154,3 +154,65 @@ def read_imu(path, *, topic=None, rate_hz=None, t0_ns=None):
     rate = parts[0][0]
     return (rate, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts]),
             np.concatenate([p[3] for p in parts]))
+
+
+def read_temperature(path, *, topic=None, t0_ns=None):
+    """
+    Read a recording's ``sensor_msgs/Temperature`` samples, stamps relative to ``t0_ns``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Recording.
+    topic : str, optional, keyword-only
+        ``sensor_msgs/Imu`` topic (selects the Imu stream; the temperature topic is the bag's
+        single one, or the one in the Imu topic's namespace).
+    t0_ns : int, optional, keyword-only
+        Stamp (ns) that becomes t = 0; the first Imu sample's when None (as :func:`iter_imu`).
+
+    Returns
+    -------
+    tuple or None
+        ``(t_s, temperature_degc)`` float64 arrays, or None when the recording has no (single)
+        temperature topic.
+
+    """
+    with ImuBagReader(path, topic=topic) as reader:
+        got = reader.read_temperature()
+    if got is None:
+        return None
+    if t0_ns is None:
+        t0_ns = first_stamp_ns(path, topic=topic)
+        if t0_ns is None:
+            return None
+    stamps, temp = got
+    return (stamps.astype(np.int64) - int(t0_ns)) * 1e-9, np.asarray(temp, np.float64)
+
+
+def temperature_stats(temperature, start_s=-np.inf, end_s=np.inf):
+    """
+    Return mean, min and max temperature over ``[start_s, end_s]`` (degC), None when none.
+
+    Parameters
+    ----------
+    temperature : tuple or None
+        ``(t_s, temperature_degc)`` from :func:`read_temperature`.
+    start_s, end_s : float
+        Span (s, same origin as ``t_s``).
+
+    Returns
+    -------
+    dict or None
+        ``{'mean_degc', 'min_degc', 'max_degc', 'samples'}``; None without temperature samples
+        in the span (non-finite readings are left out).
+
+    """
+    if temperature is None:
+        return None
+    t, temp = temperature
+    sel = (t >= start_s) & (t <= end_s) & np.isfinite(temp)
+    if not np.any(sel):
+        return None
+    v = temp[sel]
+    return {'mean_degc': float(np.mean(v)), 'min_degc': float(np.min(v)),
+            'max_degc': float(np.max(v)), 'samples': int(v.size)}

@@ -81,8 +81,6 @@ from .dwell_noise import DwellNoiseFitter, fit_dwell_noise
 from .static import ORIENTATIONS
 from ..errors import InputDataError, ParameterError
 
-#: Standard gravity (m/s^2), used with no local value and as the unit "g" of mg.
-STANDARD_GRAVITY = 9.80665
 #: WGS-84 (NIMA TR8350.2, 3rd ed., ch. 4): equatorial normal gravity (m/s^2), Somigliana constant
 #: k, first eccentricity squared, semi-major axis (m), flattening, m = omega^2 a^2 b / GM.
 WGS84_GAMMA_E = 9.7803253359

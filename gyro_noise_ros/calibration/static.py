@@ -159,7 +159,7 @@ class Windows:
     finite: np.ndarray
     rate_hz: float
     source: str = ''
-    n_good: np.ndarray = None
+    n_good: np.ndarray | None = None
     window_samples: int = 0
 
     def __post_init__(self):
@@ -323,10 +323,10 @@ class Dwell:
     tilt_deg: float
     source: str = ''
     non_finite_samples: int = 0
-    window_t_s: np.ndarray = field(default=None, repr=False, compare=False)
-    window_n: np.ndarray = field(default=None, repr=False, compare=False)
-    window_accel_m_s2: np.ndarray = field(default=None, repr=False, compare=False)
-    window_gyro_rad_s: np.ndarray = field(default=None, repr=False, compare=False)
+    window_t_s: np.ndarray | None = field(default=None, repr=False, compare=False)
+    window_n: np.ndarray | None = field(default=None, repr=False, compare=False)
+    window_accel_m_s2: np.ndarray | None = field(default=None, repr=False, compare=False)
+    window_gyro_rad_s: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def t_end_s(self):

@@ -18,8 +18,11 @@ Allan analysis of a long static record, every accelerometer and gyro axis (paper
 :class:`StaticRecord` takes ``(t, accel, gyro)`` batches and keeps, per channel, a streaming
 overlapping Allan accumulator on the dense tau grid (:class:`gyro_noise_ros.core.allan.
 AllanAccumulator`), and the 1 s window statistics of the static-dwell detector. Its
-:meth:`StaticRecord.finish` gives, per channel, the Allan deviation, the paper's bias-instability
-interval and the fitted noise terms, or the reason why not:
+:meth:`StaticRecord.finish` gives, per channel, the Allan deviation, its one readout
+(``core.readout.read_allan``), the paper's bias-instability interval with the uncertainty of its
+width (sigma_min is the readout's bias stability, read over taus up to a tenth of the record, so
+``gyro_noise_analyze`` prints the same number for the same curve) and the noise terms with their
+uncertainties (:func:`noise_terms`), or the reason why not:
 
 * a channel holding NaN/Inf samples stops at the first one: undetermined (the Allan variance of a
   record with holes would be made up);
@@ -29,20 +32,26 @@ interval and the fitted noise terms, or the reason why not:
 * too few samples for five taus: undetermined ("record too short").
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+import math
 
 import numpy as np
 
-from .interval import bias_instability_interval, DEFAULT_C, DEFAULT_MIN_EDF, undetermined
+from .interval import (bias_instability_interval, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
+                       log_adev_sd, undetermined)
 from .static import classify, DetectorSettings, find_dwells, WindowAccumulator
-from ..core.allan import AllanAccumulator, fit_noise_terms
+from ..core.allan import AllanAccumulator
+from ..core.readout import fit_noise_terms_band_limited, MAX_TAU_FRACTION, read_allan
 from ..errors import GyroNoiseError
 
 CHANNELS = ('accel_x', 'accel_y', 'accel_z', 'gyro_x', 'gyro_y', 'gyro_z')
 #: Fraction of the 1 s windows that must be static for a "static" record.
 STATIC_FRACTION_MIN = 0.9
-#: Terms fitted beside the interval: white noise, flicker floor, random walk (IEEE 952).
-TERMS = ('angle_random_walk', 'bias_instability', 'rate_random_walk')
+#: Terms of the model whose slope the crossings' uncertainty uses: white noise, flicker floor,
+#: random walk (IEEE 952).
+SLOPE_TERMS = ('angle_random_walk', 'bias_instability', 'rate_random_walk')
+#: Noise terms reported per channel (from the one readout, ``core.readout.read_allan``).
+TERMS = ('white_noise', 'bias_stability', 'random_walk')
 
 
 def unit_of(channel):
@@ -63,6 +72,101 @@ def unit_of(channel):
 
 
 @dataclass(frozen=True)
+class Term:
+    """
+    One noise term with its standard uncertainty (from the record's EDF).
+
+    Attributes
+    ----------
+    value : float
+        The term (SI: white noise per sqrt(Hz), bias stability flat, random walk per sqrt(s)).
+    sd_log : float
+        Standard deviation of log(value); inf when the record does not resolve the term.
+    how : str
+        Where ``sd_log`` comes from (one phrase).
+
+    """
+
+    value: float
+    sd_log: float
+    how: str = ''
+
+    @property
+    def bracket(self):
+        """(float, float): ``value * exp(-+sd_log)``, a 68 % interval that holds the value."""
+        if not math.isfinite(self.sd_log):
+            return (0.0, math.inf)
+        return (self.value * math.exp(-self.sd_log), self.value * math.exp(self.sd_log))
+
+
+def _white_sd(allan, readout):
+    """Return the sd of log N: the least-determined tau of the readout's -1/2 region."""
+    tau = np.asarray(allan.tau_s, dtype=np.float64)
+    edf = np.asarray(allan.edf, dtype=np.float64)
+    a, b = readout.arw_tau_range_s
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return math.inf
+    if readout.arw_from_region:
+        sel = (tau >= a * (1 - 1e-9)) & (tau <= b * (1 + 1e-9))
+    else:
+        sel = np.arange(tau.size) == int(np.argmin(np.abs(np.log(tau))))
+    # the region's level is a mean of strongly correlated points: no better than its worst
+    return float(np.max(log_adev_sd(edf[sel]))) if np.any(sel) else math.inf
+
+
+def _random_walk_sd(allan, k):
+    """Return the sd of log K, read at the longest readable tau (a tenth of the record)."""
+    if not (math.isfinite(k) and k > 0):
+        return math.inf
+    tau = np.asarray(allan.tau_s, dtype=np.float64)
+    record_s = float(allan.n_samples) / float(allan.rate_hz)
+    readable = np.flatnonzero(tau <= MAX_TAU_FRACTION * record_s)
+    if not readable.size:
+        return math.inf
+    j = int(readable[-1])
+    avar = float(np.asarray(allan.avar)[j])
+    walk = k * k * tau[j] / 3.0
+    # d log K = (AVAR / K^2 tau / 3) d log ADEV at that tau: the other terms dilute it
+    return float(log_adev_sd(np.asarray(allan.edf)[j])) * max(1.0, avar / walk)
+
+
+def noise_terms(allan, readout):
+    """
+    Return the three noise terms of one channel with their uncertainties.
+
+    Parameters
+    ----------
+    allan : AllanResult
+        The channel's Allan deviation.
+    readout : AllanReadout
+        Its readout (:func:`..core.readout.read_allan`).
+
+    Returns
+    -------
+    dict
+        ``{'white_noise': Term, 'bias_stability': Term, 'random_walk': Term}``, the readout's
+        numbers: the angle (velocity) random walk N, with the EDF of the least-determined tau of
+        its -1/2 region (the region's points are strongly correlated, so their mean is hardly
+        better); the bias stability (sigma_min), with the EDF of its tau; the fitted random walk
+        K, with the EDF at the longest readable tau (a tenth of the record, where the readout
+        stops trusting the curve) scaled by the share of K in the Allan variance there. Each
+        standard deviation is checked against the spread over emulated repeats
+        (``docs/reliability.md``).
+
+    """
+    k = readout.rate_random_walk_rad_per_s_sqrt_s
+    return {
+        'white_noise': Term(readout.arw_rad_per_sqrt_s, _white_sd(allan, readout),
+                            'EDF of the least-determined tau of the -1/2 region'),
+        'bias_stability': Term(readout.bias_stability_rad_s,
+                               float(log_adev_sd(readout.bias_stability_edf)),
+                               'EDF of its tau (chi-squared)'),
+        'random_walk': Term(k, _random_walk_sd(allan, k),
+                            'EDF at a tenth of the record, scaled by the share of K there'),
+    }
+
+
+@dataclass(frozen=True)
 class ChannelResult:
     """
     Allan analysis of one channel of a static record.
@@ -74,11 +178,12 @@ class ChannelResult:
     allan : AllanResult or None
         Allan deviation (None when undetermined before any tau).
     interval : Interval
-        Bias-instability interval (paper 001 section 6).
+        Bias-instability interval (paper 001 section 6), with its uncertainty.
     terms : dict or None
-        ``{'noise_density': (value, lo, hi), 'bias_instability': ..., 'random_walk': ...}`` in the
-        channel's unit (per sqrt(Hz), flat, per sqrt(s)); lo/hi from refitting the confidence
-        bounds of the Allan deviation (an approximate bracket).
+        :func:`noise_terms` (None when the curve has no readout).
+    readout : AllanReadout or None
+        The one datasheet readout of the curve (its bias stability is the interval's
+        sigma_min).
 
     """
 
@@ -86,23 +191,7 @@ class ChannelResult:
     allan: object
     interval: object
     terms: object = None
-
-
-def _fit(allan):
-    try:
-        fits = [fit_noise_terms(a, terms=TERMS) for a in (
-            allan, replace(allan, avar=np.asarray(allan.ci_low) ** 2),
-            replace(allan, avar=np.asarray(allan.ci_high) ** 2))]
-    except GyroNoiseError:
-        return None
-    names = (('noise_density', 'angle_random_walk_rad_per_sqrt_s'),
-             ('bias_instability', 'bias_instability_rad_per_s'),
-             ('random_walk', 'rate_random_walk_rad_per_s_sqrt_s'))
-    out = {}
-    for key, attr in names:
-        vals = [float(getattr(f, attr)) for f in fits]
-        out[key] = (vals[0], min(vals[1], vals[2]), max(vals[1], vals[2]))
-    return out
+    readout: object = None
 
 
 class StaticRecord:
@@ -120,15 +209,18 @@ class StaticRecord:
     source : str, keyword-only
         Record name for messages.
     min_edf : float, keyword-only
-        Least EDF of a tau that may hold sigma_min.
+        Least EDF of a tau that may hold sigma_min (0: the readout's rule alone).
+    alpha : float, keyword-only
+        One-sided level of the test of a fall-back below the level (ambiguous crossing).
 
     """
 
     def __init__(self, rate_hz, *, c=DEFAULT_C, settings=DetectorSettings(), source='',
-                 min_edf=DEFAULT_MIN_EDF):
+                 min_edf=DEFAULT_MIN_EDF, alpha=DEFAULT_ALPHA):
         self.rate_hz = float(rate_hz)
         self.c = c
         self.min_edf = min_edf
+        self.alpha = alpha
         self.settings = settings
         self.source = source
         self._acc = [AllanAccumulator(self.rate_hz, taus='dense') for _ in CHANNELS]
@@ -233,7 +325,21 @@ class StaticRecord:
                 out[ch] = ChannelResult(ch, allan, undetermined('constant signal (all-zero '
                                                                 'Allan deviation)', self.c))
                 continue
+            record_s = float(allan.n_samples) / float(allan.rate_hz)
+            try:
+                readout = read_allan(allan)
+                terms = noise_terms(allan, readout)
+            except GyroNoiseError:
+                readout = terms = None
+            try:
+                model = fit_noise_terms_band_limited(allan, terms=SLOPE_TERMS).model_adev
+            except GyroNoiseError:
+                model = None
+            # sigma_min is the readout's bias stability: taus up to a tenth of the record
             iv = bias_instability_interval(allan.tau_s, allan.adev, c=self.c, edf=allan.edf,
-                                           min_edf=self.min_edf)
-            out[ch] = ChannelResult(ch, allan, iv, _fit(allan))
+                                           min_edf=self.min_edf,
+                                           max_tau_s=MAX_TAU_FRACTION * record_s,
+                                           model_adev=model, record_s=record_s,
+                                           alpha=self.alpha)
+            out[ch] = ChannelResult(ch, allan, iv, terms, readout)
         return out, check

@@ -36,7 +36,7 @@ import os
 import numpy as np
 
 from ..bag import ImuBagWriter
-from ..calibration.emulate import (Excitation, MG, MultiPose, PAPER_AFTER_BIAS_MG,
+from ..calibration.emulate import (Excitation, MultiPose, PAPER_AFTER_BIAS_MG,
                                    PAPER_AFTER_SCALE_PCT, PAPER_BEFORE_BIAS_MG,
                                    PAPER_BEFORE_SCALE_PCT, Scenario, SensorErrors, SixPosition,
                                    Static)
@@ -44,8 +44,8 @@ from ..calibration.sixpos import normal_gravity
 from ..errors import OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..outputs import staged_new_dir
+from ..units import DEG_TO_RAD, MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
-DEG = np.pi / 180.0
 #: Default cross-axis terms (%), xy, xz, yx, yz, zx, zy (a few tenths of a degree).
 DEFAULT_MISALIGNMENT_PCT = (0.10, -0.05, 0.08, 0.03, -0.10, 0.05)
 #: Flicker factor of --stress: widens the default bias-instability interval by ~+125 %
@@ -225,7 +225,7 @@ def scenario_from_args(args):
         motion = Static(orientation=args.orientation, gravity_m_s2=g,
                         latitude_deg=args.latitude)
         if args.scenario in ('sine', 'sweep'):
-            unit = MG * 1e3 if args.excite_sensor == 'accel' else DEG
+            unit = MG_TO_M_S2 * 1e3 if args.excite_sensor == 'accel' else DEG_TO_RAD
             motion = Excitation(
                 sensor=args.excite_sensor, axis=args.excite_axis,
                 amplitude=args.excite_amplitude * unit, frequency_hz=args.excite_hz,
@@ -234,21 +234,23 @@ def scenario_from_args(args):
     # white-noise ADEV at 1 s: accel density / sqrt(2) (one-sided density over ODR/2); gyro
     # std / sqrt(ODR) (the board's fractional noise is nearly white)
     from ..link.emulator import ACCEL_NOISE_DENSITY_UG_RTHZ
-    n_acc = ACCEL_NOISE_DENSITY_UG_RTHZ * 1e-6 * lsm.STANDARD_GRAVITY / np.sqrt(2.0)
-    n_gyr = args.noise_std_dps * DEG / np.sqrt(args.odr_hz)
-    b_acc = (args.accel_bias_instability_ug * 1e-6 * lsm.STANDARD_GRAVITY
+    n_acc = ACCEL_NOISE_DENSITY_UG_RTHZ * 1e-6 * STANDARD_GRAVITY_M_S2 / np.sqrt(2.0)
+    n_gyr = args.noise_std_dps * DEG_TO_RAD / np.sqrt(args.odr_hz)
+    b_acc = (args.accel_bias_instability_ug * 1e-6 * STANDARD_GRAVITY_M_S2
              if args.accel_bias_instability_ug is not None else n_acc / 2.0 / 0.664)
-    k_acc = (args.accel_random_walk_ug_sqrt_s * 1e-6 * lsm.STANDARD_GRAVITY
+    k_acc = (args.accel_random_walk_ug_sqrt_s * 1e-6 * STANDARD_GRAVITY_M_S2
              if args.accel_random_walk_ug_sqrt_s is not None else n_acc * RANDOM_WALK_PER_WHITE)
-    b_gyr = (args.gyro_bias_instability_dps * DEG if args.gyro_bias_instability_dps is not None
+    b_gyr = (args.gyro_bias_instability_dps * DEG_TO_RAD
+             if args.gyro_bias_instability_dps is not None
              else n_gyr / 2.0 / 0.664)
-    k_gyr = (args.gyro_random_walk_dps_sqrt_s * DEG if args.gyro_random_walk_dps_sqrt_s
+    k_gyr = (args.gyro_random_walk_dps_sqrt_s * DEG_TO_RAD if args.gyro_random_walk_dps_sqrt_s
              is not None else n_gyr * RANDOM_WALK_PER_WHITE)
     bias = args.accel_bias_mg or (PAPER_AFTER_BIAS_MG if args.stress else PAPER_BEFORE_BIAS_MG)
     scale = args.accel_scale_pct or (PAPER_AFTER_SCALE_PCT if args.stress
                                      else PAPER_BEFORE_SCALE_PCT)
     errors = SensorErrors(
-        accel_bias_m_s2=np.asarray(bias) * MG, accel_scale_factor=np.asarray(scale) / 100.0,
+        accel_bias_m_s2=np.asarray(bias) * MG_TO_M_S2,
+        accel_scale_factor=np.asarray(scale) / 100.0,
         accel_misalignment=np.asarray(args.accel_misalignment_pct) / 100.0,
         gyro_scale_factor=np.asarray(args.gyro_scale_pct) / 100.0,
         gyro_misalignment=np.asarray(args.gyro_misalignment_pct) / 100.0,
@@ -258,7 +260,7 @@ def scenario_from_args(args):
         errors = errors.stressed(instability_factor=args.stress_instability_factor,
                                  accel_bias_m_s2=errors.accel_bias_m_s2,
                                  accel_scale_factor=errors.accel_scale_factor,
-                                 gyro_bias_change_rad_s=0.05 * DEG)
+                                 gyro_bias_change_rad_s=0.05 * DEG_TO_RAD)
     # its own stream: the board's noise stays sample for sample what it is without a scenario
     rng = np.random.default_rng([args.seed, 2])
     return Scenario(motion, errors, args.odr_hz, rng)

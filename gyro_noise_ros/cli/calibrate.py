@@ -39,11 +39,12 @@ import os
 import sys
 
 from ._common import run_cli
-from ..app.calibrate import (CalibrateParams, GYRO_TURNS, MG, MODES, resolve_gravity,
+from ..app.calibrate import (CalibrateParams, GYRO_TURNS, MODES, resolve_gravity,
                              run_calibration, table6_rows, write_calibration)
 from ..calibration.sixpos import DEFAULT_ALPHA
 from ..calibration.static import DetectorSettings
 from ..outputs import make_out_dir
+from ..units import MG_TO_M_S2
 
 PROG = 'gyro_noise_calibrate'
 
@@ -149,7 +150,7 @@ def _body(argv):
     verdict = 'consistent' if result.gravity_check_consistent else 'INCONSISTENT'
     worst = max(result.gravity_check, key=lambda c: abs(c.z))
     print(f'gravity check (leave-one-out): {verdict}, largest |a| - g '
-          f'{worst.residual_m_s2 / MG:+.4f} mg ({worst.z:+.1f} sigma, {worst.label})')
+          f'{worst.residual_m_s2 / MG_TO_M_S2:+.4f} mg ({worst.z:+.1f} sigma, {worst.label})')
     print(f'wrote {os.path.join(args.out, "calibration.json")}, calibration.yaml, calibration.md')
     return 0
 

@@ -21,7 +21,8 @@ line on stdout, flushed. It answers CONFIGURE commands with ACK/NAK, streams SAM
 in real time at the ODR (``--speed`` times faster), and keeps sampling while no host is connected
 (samples the host could not receive show up as a counter gap flagged FLAG_SAMPLE_LOST on the next
 sample sent, like the real board whose USB buffer is full). With ``--write-sd DIR`` it writes SD
-log files as fast as it can instead.
+log files as fast as it can instead. The transports are :mod:`gyro_noise_ros.link.serve`; this
+module turns the command line into the board and its options.
 
 Examples::
 
@@ -36,26 +37,17 @@ option, 5 when the link cannot be served, 6 when an output (``--write-sd``, ``--
 """
 
 import argparse
-import dataclasses
-import functools
-import json
-import os
 from pathlib import Path
-import pty
-import select
 import signal
-import socket
 import sys
-import termios
-import time
-import tty
+from typing import BinaryIO, List, Optional
 
 import numpy as np
 
 from ._common import run_cli
 from ._scenario import (add_scenario_arguments, scenario_from_args, THERMAL_CHOICES,
                         thermal_from_args, write_bag)
-from ..errors import LinkError, OutputError, ParameterError
+from ..errors import OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.emulator import (
     BoardModel,
@@ -66,21 +58,18 @@ from ..link.emulator import (
     HeliumTransient,
     PAPER_NOISE_STD_DPS,
     TRUTH_DTYPE,
-    truth_records,
     Vibration,
 )
-from ..link.protocol import encode_samples, MAX_SAMPLES_PER_FRAME
-from ..link.sdlog import FAT32_MAX_FILE_BYTES, SdLogWriter
-from ..outputs import atomic_write_text, make_out_dir
+from ..link.protocol import MAX_SAMPLES_PER_FRAME
+from ..link.sdlog import FAT32_MAX_FILE_BYTES
+from ..link.serve import (Counters, SdOptions, serve, ServeOptions, stats_line, Stopper,
+                          total_samples, TX_BUFFER_BYTES, write_sd_logs)
+from ..outputs import atomic_write_text
 
 PROG = 'portenta_emulator'
-#: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in
-#: SDRAM):
-#: 1 MiB is ~6 s of data at 6.66 kHz, so a loaded test machine does not lose samples.
-TX_BUFFER_BYTES = 1 << 20
 
 
-def _float_list(text):
+def _float_list(text: str) -> List[float]:
     try:
         values = [float(v) for v in text.split(',')]
     except ValueError as err:
@@ -91,7 +80,7 @@ def _float_list(text):
     return values[0] if len(values) == 1 else tuple(values)
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of portenta_emulator.
 
@@ -193,7 +182,7 @@ def build_parser():
     return p
 
 
-def board_from_args(args):
+def board_from_args(args: 'argparse.Namespace | List[str]') -> BoardModel:
     """
     Build the BoardModel that ``portenta_emulator`` with these arguments runs.
 
@@ -230,7 +219,7 @@ def board_from_args(args):
                       t0_us=args.t0_us, thermal=thermal_from_args(args), **extra)
 
 
-def _check_args(args):
+def _check_args(args: argparse.Namespace) -> None:
     if args.speed <= 0 or not np.isfinite(args.speed):
         raise ParameterError(f'--speed must be > 0, got {args.speed}')
     if not 1 <= args.batch <= MAX_SAMPLES_PER_FRAME:
@@ -266,381 +255,33 @@ def _check_args(args):
         raise ParameterError('--link applies to the pseudo-terminal only')
 
 
-class _Stopper:
-
-    def __init__(self):
-        self.stop = False
-
-    def __call__(self, signum, frame):
-        self.stop = True
-
-
-class _PtyPort:
-    """
-    A pseudo-terminal 'USB port'.
-
-    Unplug closes it, replug creates a new one (and moves the symlink).
-    """
-
-    def __init__(self, link=None):
-        self.link = link
-        self.fd = None
-        self.path = None
-        self._poll = None
-        self.plug()
-
-    def plug(self):
-        master, slave = pty.openpty()
-        # raw: no echo, no line discipline, 8 bit clean, before any client can open it
-        tty.setraw(slave)
-        self.path = os.ttyname(slave)
-        os.close(slave)
-        os.set_blocking(master, False)
-        self.fd = master
-        self._poll = select.poll()
-        self._poll.register(master, select.POLLIN | select.POLLOUT)
-        if self.link:
-            tmp = f'{self.link}.tmp{os.getpid()}'
-            if os.path.lexists(tmp):
-                os.unlink(tmp)
-            os.symlink(self.path, tmp)
-            os.replace(tmp, self.link)
-
-    def unplug(self):
-        if self.fd is not None:
-            os.close(self.fd)
-            self.fd = None
-        if self.link and os.path.lexists(self.link):
-            os.unlink(self.link)
-
-    @property
-    def name(self):
-        return self.link or self.path
-
-    def connected(self):
-        if self.fd is None:
-            return False
-        events = self._poll.poll(0)
-        return not any(ev & select.POLLHUP for _, ev in events)
-
-    def read(self):
-        try:
-            return os.read(self.fd, 4096)
-        except (BlockingIOError, InterruptedError):
-            return b''
-        except OSError:
-            return b''  # EIO: no client
-
-    def write(self, data):
-        try:
-            return os.write(self.fd, data)
-        except (BlockingIOError, InterruptedError):
-            return 0
-        except OSError:
-            return -1
-
-    def drop_client(self):
-        """Do nothing: a pty cannot refuse a client; a disconnect is an unplug."""
-
-    def discard_pending(self):
-        """Forget bytes the departed client did not read, so the next one starts clean."""
-        if self.fd is not None:
-            try:
-                termios.tcflush(self.fd, termios.TCIOFLUSH)
-            except OSError:
-                pass
-
-    def close(self):
-        self.unplug()
-
-
-class _TcpPort:
-    """
-    A loopback TCP 'port' serving one client at a time.
-
-    Unplug drops the client and refuses others.
-    """
-
-    def __init__(self, spec):
-        host, _, port = spec.rpartition(':')
-        try:
-            port = int(port)
-        except ValueError as err:
-            raise ParameterError(f'--tcp must be HOST:PORT, got {spec!r}') from err
-        host = host or '127.0.0.1'
-        self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            self.listener.bind((host, port))
-        except OSError as err:
-            self.listener.close()
-            raise LinkError(f'cannot listen on --tcp {spec!r}: {err}') from err
-        self.listener.listen(4)
-        self.listener.setblocking(False)
-        self.client = None
-        self.plugged = True
-        self.name = f'socket://{host}:{self.listener.getsockname()[1]}'
-
-    @property
-    def fd(self):
-        return self.client.fileno() if self.client is not None else None
-
-    def plug(self):
-        self.plugged = True
-
-    def unplug(self):
-        self.drop_client()
-        self.plugged = False
-
-    def drop_client(self):
-        if self.client is not None:
-            try:
-                self.client.close()
-            except OSError:
-                pass
-            self.client = None
-
-    def discard_pending(self):
-        """Nothing to do: a TCP connection's buffers go with it."""
-
-    def poll_accept(self):
-        try:
-            conn, _ = self.listener.accept()
-        except (BlockingIOError, InterruptedError):
-            return False
-        except OSError:
-            return False
-        if not self.plugged or self.client is not None:
-            conn.close()
-            return False
-        conn.setblocking(False)
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.client = conn
-        return True
-
-    def connected(self):
-        return self.client is not None
-
-    def read(self):
-        if self.client is None:
-            return b''
-        try:
-            data = self.client.recv(4096)
-        except (BlockingIOError, InterruptedError):
-            return b''
-        except OSError:
-            self.drop_client()
-            return b''
-        if not data:
-            self.drop_client()  # orderly close by the host
-        return data
-
-    def write(self, data):
-        if self.client is None:
-            return -1
-        try:
-            return self.client.send(data)
-        except (BlockingIOError, InterruptedError):
-            return 0
-        except OSError:
-            self.drop_client()
-            return -1
-
-    def close(self):
-        self.drop_client()
-        self.listener.close()
-
-
-class _Counters:
-
-    def __init__(self):
-        self.samples_generated = 0
-        self.samples_sent = 0
-        self.samples_unsent = 0   # generated while no host was connected or the TX buffer was full
-        self.frames_sent = 0
-        self.connections = 0
-        self.disconnects = 0
-        self.commands = 0
-
-
-def _write_stats(args, counters, faults, board, extra=None):
-    data = dict(vars(counters))
-    data.update(dataclasses.asdict(faults.counts))
-    data['seq_next'] = board.seq
-    data['odr_hz'] = board.odr_hz
-    data['gyro_fs_dps'] = board.gyro_fs_dps
-    data['accel_fs_g'] = board.accel_fs_g
-    if extra:
-        data.update(extra)
-    line = json.dumps(data, sort_keys=True)
-    if args.stats_out:
-        atomic_write_text(args.stats_out, line + '\n')
-    return line
-
-
-def _total_samples(args, board):
-    limits = []
-    if args.samples is not None:
-        limits.append(args.samples)
-    if args.duration_s is not None:
-        limits.append(int(round(args.duration_s * board.odr_hz)))
-    return min(limits) if limits else None
-
-
-def _run_sd(args, board, truth_fh, counters, *, faults):
-    total = _total_samples(args, board)
-    make_out_dir(args.write_sd, option='--write-sd')
-    corrupt = faults.corrupt if args.corrupt_rate > 0 else None
-    with SdLogWriter(args.write_sd, sequence_id=args.sequence_id, odr_hz=board.odr_hz,
-                     gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g,
-                     max_file_bytes=args.sd_file_bytes, batch=args.batch,
-                     rtc_unix_s=args.rtc_unix_s, corrupt=corrupt) as writer:
-        # overruns are drawn at most once per chunk: go frame by frame when they are injected
-        chunk = args.batch if args.fifo_overrun_rate > 0 else args.batch * max(
-            1, 65536 // args.batch)
-        while counters.samples_generated < total:
-            samples = _produce(
-                board, faults, counters, min(chunk, total - counters.samples_generated), truth_fh)
-            kept = faults.drop(samples)
-            writer.write_samples(kept)
-            counters.samples_sent += kept.size
-    for path in writer.paths:
+def _write_sd(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
+              truth_fh: Optional[BinaryIO], counters: Counters) -> int:
+    options = SdOptions(out_dir=args.write_sd,
+                        total=total_samples(args.samples, args.duration_s, board.odr_hz),
+                        sequence_id=args.sequence_id, max_file_bytes=args.sd_file_bytes,
+                        batch=args.batch, rtc_unix_s=args.rtc_unix_s,
+                        corrupt=args.corrupt_rate > 0, overruns=args.fifo_overrun_rate > 0)
+    for path in write_sd_logs(board, faults, counters, truth_fh, options):
         print(path, flush=True)
     return 0
 
 
-def _serve(args, board, faults, truth_fh, counters, stopper):
-    # warm the numba kernels up before the pacing clock starts: a JIT stall would come out as a
-    # burst
-    cli_warm = board_from_args(args)
-    cli_warm.next_samples(args.batch)
-    port = _TcpPort(args.tcp) if args.tcp else _PtyPort(args.link)
-    print(port.name, flush=True)
-    total = _total_samples(args, board)
-    outbuf = bytearray()
-    t_start = time.monotonic()
-    seg_t0, seg_n0 = t_start, 0          # pacing segment (restarts at an ODR change)
-    paced_odr = board.odr_hz
-    period = 1.0 / (board.odr_hz * args.speed)
-    was_connected = False
-    connected_since = None
-    sent_this_connection = 0
-    disconnect_after = args.disconnect_after
-    unplugged_until = None
-    try:
-        while not stopper.stop:
-            now = time.monotonic()
-            if unplugged_until is not None and now >= unplugged_until:
-                port.plug()
-                unplugged_until = None
-            if isinstance(port, _TcpPort) and unplugged_until is None and port.client is None:
-                port.poll_accept()
-            connected = unplugged_until is None and port.connected()
-            if connected and not was_connected:
-                counters.connections += 1
-                connected_since = now
-                sent_this_connection = 0
-                outbuf.clear()
-            if was_connected and not connected:
-                counters.disconnects += 1
-                outbuf.clear()
-                port.discard_pending()
-            was_connected = connected
-            # host -> board
-            if connected:
-                data = port.read()
-                connected = port.connected()
-                if data:
-                    reply = board.handle_bytes(data)
-                    counters.commands = board.command_stats.commands
-                    if reply:
-                        outbuf += reply  # acks are never dropped
-                        if board.odr_hz != paced_odr:
-                            paced_odr = board.odr_hz
-                            seg_t0, seg_n0 = now, counters.samples_generated
-                            period = 1.0 / (board.odr_hz * args.speed)
-            # sampling
-            due = seg_n0 + int((now - seg_t0) / period)
-            if total is not None:
-                due = min(due, total)
-            n = due - counters.samples_generated
-            if n > 0:
-                samples = _produce(board, faults, counters, n, truth_fh)
-                if connected:
-                    kept = faults.drop(samples)
-                    for start in range(0, kept.size, args.batch):
-                        frame = encode_samples(kept[start:start + args.batch])
-                        if len(outbuf) + len(frame) > args.tx_buffer_bytes:
-                            # buffer full: this frame and the rest of the batch are lost, the next
-                            # is flagged
-                            faults.note_lost(
-                                kept.size - start,
-                                carry_flags=int(np.bitwise_or.reduce(kept['flags'][start:])))
-                            counters.samples_unsent += kept.size - start
-                            break
-                        outbuf += faults.corrupt(frame)
-                        counters.samples_sent += min(args.batch, kept.size - start)
-                        sent_this_connection += min(args.batch, kept.size - start)
-                        counters.frames_sent += 1
-                else:
-                    faults.note_lost(n, carry_flags=int(np.bitwise_or.reduce(samples['flags'])))
-                    counters.samples_unsent += n
-            # board -> host
-            if connected and outbuf:
-                written = port.write(bytes(outbuf[:65536]))
-                if written > 0:
-                    del outbuf[:written]
-            # scripted disconnects
-            if connected:
-                unplug = False
-                if disconnect_after is not None and sent_this_connection >= disconnect_after:
-                    unplug, disconnect_after = True, None
-                if args.disconnect_every_s and now - connected_since >= args.disconnect_every_s:
-                    unplug = True
-                if unplug:
-                    port.unplug()
-                    unplugged_until = now + args.unplug_s
-                    counters.disconnects += 1
-                    was_connected = False
-                    outbuf.clear()
-            if total is not None and counters.samples_generated >= total and not outbuf:
-                break
-            # sleep until the next frame is due or the host speaks
-            wait = max(0.001, min(0.02, seg_t0 + (counters.samples_generated - seg_n0 + args.batch)
-                                  * period - time.monotonic()))
-            rlist = [port.fd] if (connected and port.fd is not None) else []
-            if isinstance(port, _TcpPort) and port.client is None:
-                rlist.append(port.listener)
-            wlist = [port.fd] if (connected and outbuf and port.fd is not None) else []
-            try:
-                select.select(rlist, wlist, [], wait)
-            except (OSError, ValueError):
-                time.sleep(wait)
-    finally:
-        port.close()
-    return 0
+def _serve(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
+           truth_fh: Optional[BinaryIO], counters: Counters, stopper: Stopper) -> int:
+    options = ServeOptions(
+        tcp=args.tcp, link=args.link, speed=args.speed, batch=args.batch,
+        tx_buffer_bytes=args.tx_buffer_bytes,
+        total=total_samples(args.samples, args.duration_s, board.odr_hz),
+        disconnect_after=args.disconnect_after, disconnect_every_s=args.disconnect_every_s,
+        unplug_s=args.unplug_s)
+    # a twin board warms the numba kernels up before the pacing clock starts: a JIT stall would
+    # come out as a burst
+    return serve(board, faults, options, counters=counters, stopper=stopper, truth_fh=truth_fh,
+                 warm=board_from_args(args))
 
 
-def encode_samples_batched(samples, batch):
-    """
-    Encode samples as consecutive SAMPLES frames of at most ``batch`` samples.
-
-    Parameters
-    ----------
-    samples : numpy.ndarray
-        SAMPLE_DTYPE records.
-    batch : int
-        Samples per frame.
-
-    Returns
-    -------
-    bytes
-
-    """
-    return b''.join(encode_samples(samples[i:i + batch]) for i in range(0, samples.size, batch))
-
-
-def _body(argv):
+def _body(argv: List[str]) -> int:
     args = build_parser().parse_args(argv)
     _check_args(args)
     board = board_from_args(args)
@@ -649,8 +290,8 @@ def _body(argv):
                            drop_unflagged_rate=args.drop_unflagged_rate,
                            corrupt_rate=args.corrupt_rate,
                            fifo_overrun_rate=args.fifo_overrun_rate)
-    counters = _Counters()
-    stopper = _Stopper()
+    counters = Counters()
+    stopper = Stopper()
     old = {sig: signal.signal(sig, stopper) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         truth_fh = open(args.truth_out, 'ab') if args.truth_out else None
@@ -660,8 +301,10 @@ def _body(argv):
     try:
         if args.write_bag or args.write_sd:
             try:
-                run = write_bag if args.write_bag else functools.partial(_run_sd, faults=faults)
-                code = run(args, board, truth_fh, counters)
+                if args.write_bag:
+                    code = write_bag(args, board, truth_fh, counters)
+                else:
+                    code = _write_sd(args, board, faults, truth_fh, counters)
             except OSError as err:  # an SD file, the bag or the truth log: nothing is read
                 where = f' ({err.filename})' if err.filename else ''
                 raise OutputError(f'cannot write: {err.strerror or err}{where}') from err
@@ -674,47 +317,14 @@ def _body(argv):
             signal.signal(sig, handler)
         if counters.samples_generated or sys.exc_info()[0] is None:
             # (a refusal before the first sample says only its one error line)
-            line = _write_stats(args, counters, faults, board)
+            line = stats_line(counters, faults, board)
+            if args.stats_out:
+                atomic_write_text(args.stats_out, line + '\n')
             print(f'{PROG}: {line}', file=sys.stderr, flush=True)
     return code
 
 
-def _produce(board, faults, counters, n, truth_fh):
-    """
-    Lose the injected FIFO overrun out of ``n`` samples, produce the rest, log the truth.
-
-    Parameters
-    ----------
-    board : BoardModel
-        The board.
-    faults : object
-        The fault injector (``overrun(n)`` draws the samples lost inside the sensor).
-    counters : object
-        Traffic counters; ``samples_generated`` counts produced and overrun samples.
-    n : int
-        Samples due.
-    truth_fh : file or None
-        Ground-truth log (flushed, so a reader sees whole records).
-
-    Returns
-    -------
-    numpy.ndarray
-        The produced samples (``n`` minus the overrun).
-
-    """
-    lost_in_sensor = faults.overrun(n)
-    board.sensor_overrun(lost_in_sensor)
-    counters.samples_generated += lost_in_sensor
-    n -= lost_in_sensor
-    samples = board.next_samples(n)
-    counters.samples_generated += n
-    if truth_fh is not None:
-        truth_fh.write(truth_records(board.last_truth).tobytes())
-        truth_fh.flush()
-    return samples
-
-
-def main(argv=None):
+def main(argv: Optional[List[str]] = None) -> int:
     """
     Run portenta_emulator.
 
@@ -732,7 +342,7 @@ def main(argv=None):
     return run_cli(PROG, _body, argv)
 
 
-__all__ = ['main', 'build_parser', 'board_from_args', 'encode_samples_batched', 'TRUTH_DTYPE']
+__all__ = ['main', 'build_parser', 'board_from_args', 'TRUTH_DTYPE']
 
 if __name__ == '__main__':
     sys.exit(main())

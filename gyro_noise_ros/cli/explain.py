@@ -19,14 +19,17 @@ Finds where the simulation and the measurement disagree (see docs/discrepancy.md
 
 Usage::
 
-    gyro_noise_explain INPUT [--topic T] [--temperature-topic T] [--axis x|y|z] [--seed S]
+    gyro_noise_explain INPUT [--topic T] [--temperature-topic T] [--axis x|y|z|all] [--seed S]
                        --out DIR [--ensemble N] [--max-steps K] [--bootstrap B] [--rate-hz HZ]
-                       [--require-temperature] [--scheduler ADDRESS] [--quiet]
+                       [--require-temperature] [--start S] [--end S] [--static auto|off]
+                       [--scheduler ADDRESS] [--quiet]
 
-INPUT is a rosbag2 directory / .db3 / .mcap, a ROS 1 .bag, or a .csv with the columns documented in
-:mod:`gyro_noise_ros.explain.inputs`. Writes DIR/explain.json, DIR/report.md and PNG figures;
-prints a short verdict and the named effects' parameters as value ± standard error (parametric
-bootstrap of the final model, ``--bootstrap`` records). Exit codes: see
+INPUT is any recording ``gyro_noise_analyze`` reads (:mod:`gyro_noise_ros.bag.inputs`: a rosbag2
+folder / .db3 / .mcap, a ROS 1 .bag, a CSV, a PX4 .ulg). Writes DIR/explain.json, DIR/report.md
+and PNG figures; prints a short verdict and the named effects' parameters as value ± standard
+error (parametric bootstrap of the final model, ``--bootstrap`` records), or the bound the record
+gives for a time scale it does not resolve. The workflow is
+:mod:`gyro_noise_ros.app.explain`; this module only parses, calls it and prints. Exit codes: see
 :mod:`gyro_noise_ros.cli._common`.
 """
 
@@ -35,14 +38,10 @@ from pathlib import Path
 import sys
 
 from ._common import check_out_option, run_cli
+from ..app.explain import (check_output, ExplainParams, MAX_RECORDS, prepare_explain,
+                           run_explain, write_explain)
 
 PROG = 'gyro_noise_explain'
-#: Most ensemble members or bootstrap records: each costs a simulated copy of the record (time
-#: and memory), 16 and 20 are the defaults; beyond this the number is a typo, not a wish.
-MAX_RECORDS = 10000
-#: Sample rates --rate-hz accepts (Hz): every gyro samples inside; outside, the record's times
-#: overflow or vanish in floating point.
-RATE_RANGE_HZ = (1e-3, 1e9)
 
 
 def build_parser():
@@ -50,10 +49,11 @@ def build_parser():
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0].strip())
     p.add_argument('input', metavar='INPUT',
                    help='rosbag2 / ROS 1 bag, PX4 ULog (.ulg), or CSV (time_s, '
-                   'gyro_*_rad_s, optional temperature_c)')
+                   'gyro_*_rad_s or gyro_*_dps, optional temperature_c; the spellings of '
+                   'docs/offline_tool.md)')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the only one)')
     p.add_argument('--temperature-topic',
-                   help='sensor_msgs/Temperature topic (naming it makes temperature ' 'required)')
+                   help='sensor_msgs/Temperature topic (naming it makes temperature required)')
     p.add_argument('--axis', choices=('x', 'y', 'z', 'all'), default='all',
                    help='gyro axis (default all: one run, one report, a subdirectory per axis)')
     p.add_argument('--seed', type=int, default=0, help='ensemble seed (default 0)')
@@ -62,7 +62,7 @@ def build_parser():
     p.add_argument('--max-steps', type=int, default=6, help='most effects to add (default 6)')
     p.add_argument('--bootstrap', type=int, default=20, metavar='B',
                    help='records simulated from the final model for the standard errors of the '
-                   'effect parameters (default 20; 0: off, else >= 5)')
+                   f'effect parameters (default 20; 0: off, else 5 to {MAX_RECORDS})')
     p.add_argument('--rate-hz', type=float,
                    help='nominal sample rate (Hz); required for a CSV without '
                    'time_s, else overrides the mean rate of the stamps')
@@ -83,143 +83,42 @@ def build_parser():
     return p
 
 
-def _check_options(args):
-    """Refuse bad options and an unusable --out before the (possibly long) load of the input."""
-    from ..errors import ParameterError
-
-    if not 4 <= args.ensemble <= MAX_RECORDS:
-        raise ParameterError(f'--ensemble must be 4 to {MAX_RECORDS} members, got {args.ensemble}')
-    if args.max_steps < 0:
-        raise ParameterError(f'--max-steps must be >= 0, got {args.max_steps}')
-    if args.seed < 0:
-        raise ParameterError(f'--seed must be >= 0, got {args.seed}')
-    if args.bootstrap != 0 and not 5 <= args.bootstrap <= MAX_RECORDS:
-        raise ParameterError(f'--bootstrap must be 0 (off) or 5 to {MAX_RECORDS} records, got '
-                             f'{args.bootstrap}')
-    if args.rate_hz is not None and not RATE_RANGE_HZ[0] <= args.rate_hz <= RATE_RANGE_HZ[1]:
-        raise ParameterError(f'--rate-hz must be {RATE_RANGE_HZ[0]:g} to {RATE_RANGE_HZ[1]:g} Hz, '
-                             f'got {args.rate_hz}')
-    for name, value in (('--start', args.start), ('--end', args.end)):
-        if value is not None and not (value >= 0 and value < float('inf')):
-            raise ParameterError(f'{name} must be a number of seconds >= 0, got {value}')
-    if args.start is not None and args.end is not None and args.end <= args.start:
-        raise ParameterError(f'--end ({args.end:g} s) must be after --start ({args.start:g} s)')
-    check_out_option(args.out)
-
-
-def _left_out_lines(left):
-    parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
-    parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
-    if left['motion']:
-        a, b = left['static_segment_s']
-        parts.append(
-            f'{left["motion"]} in motion (the longest static segment, t = {a:.1f}-{b:.1f} s, '
-            'is analysed)')
-    return [f'samples left out: {", ".join(parts)}'] if parts else []
+def _say(text):
+    print(text, file=sys.stderr, flush=True)
 
 
 def _body(argv):
     from ..cluster import make_executor
 
     args = build_parser().parse_args(argv)
-    _check_options(args)
+    # bad options and an unusable --out are refused before the (possibly long) load of the input
+    params = ExplainParams(path=args.input, axis=args.axis, topic=args.topic,
+                           temperature_topic=args.temperature_topic, rate_hz=args.rate_hz,
+                           require_temperature=args.require_temperature, start_s=args.start,
+                           end_s=args.end, static=args.static, seed=args.seed,
+                           ensemble=args.ensemble, max_steps=args.max_steps,
+                           bootstrap=args.bootstrap)
+    check_out_option(args.out)
+    prepared = prepare_explain(params)
+    for text in prepared.warnings:
+        _say(f'{PROG}: warning: {text}')
+    check_output(args.out)   # the input proved readable: the output must take the results
     pool = None
     if args.scheduler is not None:
-        pool = make_executor(1, args.scheduler, warn=lambda text: print(
-            f'{PROG}: warning: {text}', file=sys.stderr, flush=True))
+        pool = make_executor(1, args.scheduler, warn=lambda text: _say(f'{PROG}: warning: {text}'))
     try:
-        return _run(args, map if pool is None else pool.map, [PROG, *argv])
+        run = run_explain(prepared, progress=None if args.quiet else _say,
+                          mapper=map if pool is None else pool.map)
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
-
-
-def _run(args, map_fn, command):
-    from contextlib import ExitStack
-
-    from ..explain.inputs import available_axes, load_input, select
-    from ..explain.report import parameter_lines, verdict, write_files
-    from ..explain.workflow import explain
-    from ..htmlreport.explain import write_explain_html
-    from ..outputs import staged_output
-
-    axes = available_axes(args.input) if args.axis == 'all' else (args.axis,)
-    progress = None if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
-    out_root = Path(args.out)
-    results = {}
-    with ExitStack() as stack:
-        stage = None
-        for k, axis in enumerate(axes):
-            meas = load_input(args.input, topic=args.topic,
-                              temperature_topic=args.temperature_topic, axis=axis,
-                              rate_hz=args.rate_hz, require_temperature=args.require_temperature)
-            meas, left = select(meas, start_s=args.start, end_s=args.end, static=args.static)
-            if stage is None:
-                # Created once the input proved readable; every axis is written into it and
-                # published together at the end: an interrupted run leaves no result behind.
-                stage = stack.enter_context(staged_output(out_root))
-            if k == 0:
-                for text in _left_out_lines(left) + list(meas.timebase.warnings if meas.timebase
-                                                         else ()):
-                    print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
-            if progress is not None and len(axes) > 1:
-                progress(f'axis {axis} ({k + 1} of {len(axes)})')
-            result = explain(meas, seed=args.seed, ensemble=args.ensemble,
-                             max_steps=args.max_steps, bootstrap=args.bootstrap,
-                             progress=progress, mapper=map_fn)
-            sub = f'axis_{axis}' if len(axes) > 1 else ''
-            write_files(result, _mkdir(stage / sub))
-            if not args.no_html:
-                write_explain_html(result, stage / sub, command=command)
-            results[axis] = (result, sub)
-            print(f'{PROG}: axis {axis}: {verdict(result)} '
-                  f'({out_root / sub / "explain.json"})')
-            for line in parameter_lines(result):
-                print(f'{PROG}: axis {axis}:   {line}')
-        if len(axes) > 1:
-            _write_index(stage, results, verdict, parameter_lines)
+    write_explain(run, args.out, html=not args.no_html, command=(PROG, *argv))
+    for axis in run.axes:
+        print(f'{PROG}: axis {axis.axis}: {axis.verdict} '
+              f'({Path(args.out) / axis.folder / "explain.json"})')
+        for line in axis.parameter_lines:
+            print(f'{PROG}: axis {axis.axis}:   {line}')
     return 0
-
-
-def _mkdir(folder):
-    from ..errors import OutputError
-
-    try:
-        folder.mkdir(exist_ok=True)
-    except OSError as err:
-        raise OutputError(f'cannot create {str(folder)!r}: {err.strerror or err}') from err
-    return folder
-
-
-def _write_index(stage, results, verdict, parameter_lines):
-    """
-    One report for the run.
-
-    Every axis' verdict and report, figures linked from the subdirectories.
-    """
-    import json
-
-    from ..errors import OutputError
-
-    lines = ['# gyro_noise_explain: all axes', '']
-    for axis, (result, _) in results.items():
-        lines.append(f'* axis {axis}: {verdict(result)}')
-        lines += [f'  * {line}' for line in parameter_lines(result)]
-    index = {'axes': {}}
-    try:
-        for axis, (result, sub) in results.items():
-            text = (stage / sub / 'report.md').read_text()
-            text = text.replace('](', f']({sub}/').replace('\n# ', '\n## ')
-            if text.startswith('# '):
-                text = '#' + text
-            lines += ['', f'<!-- axis {axis} -->', text]
-            index['axes'][axis] = {'verdict': verdict(result),
-                                   'explain_json': f'{sub}/explain.json',
-                                   'report_md': f'{sub}/report.md'}
-        (stage / 'report.md').write_text('\n'.join(lines) + '\n')
-        (stage / 'explain.json').write_text(json.dumps(index, indent=2) + '\n')
-    except OSError as err:
-        raise OutputError(f'cannot write the results: {err.strerror or err}') from err
 
 
 def main(argv=None):

@@ -18,8 +18,9 @@ gyro_noise_import: convert the SD-card log files of one Portenta sequence into a
 Reads the files in (sequence, file index) order from their headers, streams them through the link
 decoder in constant memory, scales to SI with the configuration in force (file headers and ACK
 frames, or ``--gyro-fs-dps``/``--accel-fs-g`` which override both), and writes ``sensor_msgs/Imu``
-(every sample) and ``sensor_msgs/Temperature`` (decimated to ``--temperature-rate-hz``) with
-:class:`gyro_noise_ros.bag.ImuBagWriter`. Corrupt regions are skipped and reported, never fatal.
+(every sample) and ``sensor_msgs/Temperature`` (decimated to ``--temperature-rate-hz``); the
+workflow is :func:`gyro_noise_ros.app.importer.import_logs`. Corrupt regions are skipped and
+reported, never fatal.
 
 Time stamps come from the device clock (the 32-bit microsecond counter, unwrapped), anchored by
 ``--start-time``:
@@ -42,404 +43,17 @@ Example::
 """
 
 import argparse
-from dataclasses import dataclass
 import os
-import queue
 import sys
-import threading
-
-import numpy as np
+from typing import List, Optional
 
 from ._common import run_cli
-from ..errors import BagError, InputDataError, OutputError, ParameterError
-from ..link import lsm6dso32 as lsm
-from ..link.clock import Unwrapper
-from ..link.sdlog import SdLogReader
-from ..outputs import staged_new_dir
+from ..app.importer import import_logs, ImportReport, TEMPERATURE_ODR_HZ
 
 PROG = 'gyro_noise_import'
-#: LSM6DSO32 temperature sensor output data rate (datasheet: 52 Hz).
-TEMPERATURE_ODR_HZ = 52.0
 
 
-@dataclass(frozen=True)
-class ImportReport:
-    """
-    Outcome of :func:`import_logs`.
-
-    Attributes
-    ----------
-    bag : str
-    storage : str
-    files : tuple of sdlog.LogFileInfo
-    samples_written : int
-        Imu messages.
-    temperature_written : int
-        Temperature messages.
-    samples_lost : int
-        Counter gaps (including across files).
-    samples_flagged_lost : int
-        Part of the losses the board flagged.
-    crc_errors, resyncs, bytes_discarded, frames_truncated : int
-        Decoder counters.
-    corrupt_regions : tuple of sdlog.CorruptRegion
-    corrupt_region_count : int
-    missing_file_indices : tuple of int
-    sequence_id : int or None
-    first_stamp_ns, last_stamp_ns : int or None
-    time_jumps : int
-        Places where device time did not increase (stamps kept as the device said).
-    configurations : tuple of (int, int, float)
-        Distinct (gyro_fs_dps, accel_fs_g, odr_hz) used for scaling, in order of appearance.
-    epoch : str
-        How stamps were anchored.
-
-    """
-
-    bag: str
-    storage: str
-    files: tuple
-    samples_written: int
-    temperature_written: int
-    samples_lost: int
-    samples_flagged_lost: int
-    crc_errors: int
-    resyncs: int
-    bytes_discarded: int
-    frames_truncated: int
-    corrupt_regions: tuple
-    corrupt_region_count: int
-    missing_file_indices: tuple
-    sequence_id: object
-    first_stamp_ns: object
-    last_stamp_ns: object
-    time_jumps: int
-    configurations: tuple
-    epoch: str
-
-
-def _topic(name):
-    name = str(name)
-    if not name or any(c.isspace() for c in name):
-        raise ParameterError(f'topic must be a non-empty name without spaces, got {name!r}')
-    return name if name.startswith('/') else '/' + name
-
-
-def _anchor(start_time, reader):
-    """Return (epoch description, function(first_t_us_unwrapped, headers) -> offset) pieces."""
-    heads = [f.header for f in reader.files if f.header is not None]
-    rtc_head = next((h for h in heads if h.rtc_unix_s), None)
-    mode = start_time
-    if mode == 'auto':
-        mode = 'rtc' if rtc_head is not None else 'zero'
-    if mode == 'rtc':
-        if rtc_head is None:
-            raise ParameterError(
-                '--start-time rtc: no log header carries an RTC time (rtc_unix_s = 0)')
-        return 'rtc', rtc_head
-    if mode == 'zero':
-        return 'zero', None
-    try:
-        value = float(mode)
-    except ValueError as err:
-        raise ParameterError(
-            f'--start-time must be auto, rtc, zero or UNIX seconds, got {start_time!r}') from err
-    if not np.isfinite(value) or value < 0:
-        raise ParameterError(f'--start-time must be >= 0 UNIX seconds, got {start_time!r}')
-    return f'unix:{value!r}', value
-
-
-def _first_acked_config(paths, chunk_bytes, scan):
-    """Return (odr_hz, gyro_fs_dps, accel_fs_g) of the first block that knows them, or None."""
-    for block in SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan):
-        if block.gyro_fs_dps and block.accel_fs_g:
-            return block.odr_hz, block.gyro_fs_dps, block.accel_fs_g
-    return None
-
-
-def import_logs(paths, out, *, storage='mcap', topic='imu/data_raw',
-                temperature_topic='imu/temperature',
-                frame_id='imu_link', gyro_fs_dps=None, accel_fs_g=None, start_time='auto',
-                temperature_rate_hz=TEMPERATURE_ODR_HZ, angular_velocity_variance=0.0,
-                linear_acceleration_variance=0.0, temperature_variance=0.0, chunk_bytes=1 << 20,
-                bulk=True, scan=None, threads=None):
-    """
-    Convert SD log files of one sequence to a rosbag2.
-
-    Parameters
-    ----------
-    paths : sequence of str
-        Log files (any order).
-    out : str
-        Bag directory to create (must not exist).
-    storage : {'mcap', 'sqlite3'}, keyword-only
-        MCAP by default: the faster of the two here, the rosbag2 default since Iron (see
-        ``docs/scale.md``).
-    topic, temperature_topic : str, keyword-only
-        Topic names (a leading '/' is added).
-    frame_id : str, keyword-only
-        Frame id of the Imu and Temperature messages.
-    gyro_fs_dps, accel_fs_g : int, optional, keyword-only
-        Force the scaling (deg/s, g), ignoring headers and acks.
-    start_time : str, keyword-only
-        'auto', 'rtc', 'zero' or UNIX seconds of the first sample (see the module docstring).
-    temperature_rate_hz : float, keyword-only
-        Temperature messages per second of data (Hz); 0 writes none.
-    angular_velocity_variance : float, keyword-only
-        Diagonal of the Imu angular velocity covariance ((rad/s)^2; 0 = unknown).
-    linear_acceleration_variance : float, keyword-only
-        Diagonal of the linear acceleration covariance ((m/s^2)^2; 0 = unknown).
-    temperature_variance : float, keyword-only
-        Temperature variance (degC^2; 0 = unknown).
-    chunk_bytes : int, keyword-only
-        Read size (bytes).
-    bulk : bool, keyword-only
-        Write with :class:`gyro_noise_ros.bag.bulk.BulkImuBagWriter` (same bag, byte for byte, many
-        times faster); False keeps the per-message :class:`gyro_noise_ros.bag.ImuBagWriter` path
-        (the baseline of ``bench/bench_import.py``).
-    scan : bool, optional, keyword-only
-        Decode the logs with the compiled frame scanner (:class:`SdLogReader` ``scan=True``; same
-        blocks and report); None (default) follows ``bulk``, so ``bulk=False`` is the whole old
-        path.
-    threads : {1, 2}, optional, keyword-only
-        2: the bag is written by a second thread, in order, while this one reads, decodes and
-        scales the next blocks (at most :data:`WRITE_QUEUE_BLOCKS` blocks wait between them, so
-        memory stays constant); 1: one thread does both. None (default): 2 when this process
-        may run on two or more CPUs and ``bulk`` is on, else 1. Same bag, byte for byte.
-
-    Returns
-    -------
-    ImportReport
-
-    """
-    from ..bag import ImuBagWriter
-    from ..bag.bulk import BulkImuBagWriter
-
-    if gyro_fs_dps is not None:
-        gyro_fs_dps = lsm.check_gyro_fs(gyro_fs_dps)
-    if accel_fs_g is not None:
-        accel_fs_g = lsm.check_accel_fs(accel_fs_g)
-    for name, value in (('angular_velocity_variance', angular_velocity_variance),
-                        ('linear_acceleration_variance', linear_acceleration_variance),
-                        ('temperature_variance', temperature_variance),
-                        ('temperature_rate_hz', temperature_rate_hz)):
-        if not (np.isfinite(value) and value >= 0):
-            raise ParameterError(f'{name} must be finite and >= 0, got {value}')
-    if threads is None:
-        threads = 2 if bulk and _usable_cpus() >= 2 else 1
-    if threads not in (1, 2):
-        raise ParameterError(f'threads must be 1 or 2, got {threads!r}')
-    imu_topic = _topic(topic)
-    temp_topic = _topic(temperature_topic) if temperature_rate_hz > 0 else None
-    out = os.fspath(out)
-    if os.path.lexists(out):
-        raise OutputError(f'--out {out!r} exists; choose a new bag directory')
-    missing = [str(p_) for p_ in paths if not os.path.isfile(p_)]
-    if missing:
-        raise BagError(f'log file {missing[0]!r} does not exist' + (
-            f' (and {len(missing) - 1} more)' if len(missing) > 1 else ''))
-    scan = bulk if scan is None else bool(scan)
-    reader = SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan)
-    heads = [f.header for f in reader.files if f.header is not None]
-    # until a header or an ack says otherwise, the first readable header's configuration holds (the
-    # device cannot change it without writing an ACK frame)
-    assumed = (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads else (
-        None, None, None)
-    if not heads and (gyro_fs_dps is None or accel_fs_g is None):
-        # Corruption is never fatal (docs/portenta_link.md): an unreadable header is replaced by
-        # the configuration the first ACK frame carries.
-        assumed = _first_acked_config(paths, chunk_bytes, scan)
-        if assumed is None:
-            raise InputDataError(
-                'no readable log header and no ACK frame with the scales in the files: '
-                'give --gyro-fs-dps and --accel-fs-g')
-        reader = SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan)
-    epoch, anchor = _anchor(start_time, reader)
-    av_cov = np.diag([angular_velocity_variance] * 3).reshape(9)
-    la_cov = np.diag([linear_acceleration_variance] * 3).reshape(9)
-    writer_class = BulkImuBagWriter if bulk else ImuBagWriter
-
-    # The bag is built under a hidden name and renamed when finished: an interrupted or failed
-    # import leaves nothing that looks like a bag, and a retry with the same --out works.
-    with staged_new_dir(out, option='--out') as stage:
-        with _BagWrites(lambda: writer_class(stage, storage=storage, imu_topic=imu_topic,
-                                             temperature_topic=temp_topic, frame_id=frame_id),
-                        threaded=threads == 2) as writes:
-            first, last, written, temp_written, jumps, configs = _convert(
-                reader, writes, assumed=assumed, gyro_fs_dps=gyro_fs_dps, accel_fs_g=accel_fs_g,
-                epoch=epoch, anchor=anchor, temp_topic=temp_topic,
-                temperature_rate_hz=temperature_rate_hz, temperature_variance=temperature_variance,
-                av_cov=av_cov, la_cov=la_cov)
-        rep = reader.report
-        if written == 0:
-            raise InputDataError(f'no valid samples in {len(reader.files)} log file(s) '
-                                 f'({rep.stats.bytes_discarded} bytes discarded)')
-    st = rep.stats
-    return ImportReport(bag=out, storage=storage, files=rep.files, samples_written=written,
-                        temperature_written=temp_written, samples_lost=st.samples_lost,
-                        samples_flagged_lost=st.samples_flagged_lost, crc_errors=st.crc_errors,
-                        resyncs=st.resyncs, bytes_discarded=st.bytes_discarded,
-                        frames_truncated=st.frames_truncated, corrupt_regions=rep.corrupt_regions,
-                        corrupt_region_count=rep.corrupt_region_count,
-                        missing_file_indices=rep.missing_file_indices, sequence_id=rep.sequence_id,
-                        first_stamp_ns=first, last_stamp_ns=last, time_jumps=jumps,
-                        configurations=tuple(configs), epoch=epoch)
-
-
-def _convert(reader, writes, *, assumed, gyro_fs_dps, accel_fs_g, epoch, anchor, temp_topic,
-             temperature_rate_hz, temperature_variance, av_cov, la_cov):
-    """
-    Stream the log blocks through the scaling into the bag writes.
-
-    Returns (first stamp, last stamp, Imu written, Temperature written, time jumps,
-    configurations).
-    """
-    unwrap = Unwrapper()
-    offset_ns = None
-    first = last = None
-    jumps = 0
-    prev_t = None
-    temp_acc = 0.0
-    configs = []
-    written = temp_written = 0
-    for block in reader:
-        if block.samples.size == 0:
-            continue
-        odr = block.odr_hz if block.odr_hz is not None else assumed[0]
-        gfs = gyro_fs_dps if gyro_fs_dps is not None else (block.gyro_fs_dps or assumed[1])
-        afs = accel_fs_g if accel_fs_g is not None else (block.accel_fs_g or assumed[2])
-        if (gfs, afs, odr) not in configs:
-            configs.append((gfs, afs, odr))
-        t = unwrap.unwrap(block.samples['t_us'])
-        if offset_ns is None:
-            if epoch == 'rtc':
-                # rtc_unix_s is the host time of the header's t_us; unwrap that t_us next to
-                # ours
-                d = (int(anchor.t_us) - int(block.samples['t_us'][0])) % (1 << 32)
-                if d >= 1 << 31:
-                    d -= 1 << 32
-                offset_ns = anchor.rtc_unix_s * 1_000_000_000 - (int(t[0]) + d) * 1000
-            elif epoch == 'zero':
-                offset_ns = -int(t[0]) * 1000
-            else:
-                offset_ns = int(round(anchor * 1e9)) - int(t[0]) * 1000
-        stamps = t * 1000 + offset_ns
-        steps = np.diff(t, prepend=t[0] if prev_t is None else prev_t)
-        if prev_t is None:
-            steps[0] = 1
-        jumps += int(np.count_nonzero(steps <= 0))
-        prev_t = int(t[-1])
-        si = lsm.to_si(block.samples, gyro_fs_dps=gfs, accel_fs_g=afs)
-        writes.call('write_imu', stamps, si.gyro_rad_s, si.accel_m_s2,
-                    angular_velocity_covariance=av_cov, linear_acceleration_covariance=la_cov)
-        written += block.samples.size
-        if temp_topic is not None and odr:
-            # a running phase keeps the decimation even across blocks and ODR changes
-            phase = temp_acc + np.arange(
-                1, block.samples.size + 1) * (temperature_rate_hz / odr)
-            pick = np.flatnonzero(
-                np.floor(phase) > np.floor(np.concatenate(([temp_acc], phase[:-1]))))
-            temp_acc = float(phase[-1]) % 1.0
-            if pick.size:
-                writes.call('write_temperature', stamps[pick], si.temperature_c[pick],
-                            variance=temperature_variance)
-                temp_written += pick.size
-        if first is None:
-            first = int(stamps[0])
-        last = int(stamps[-1])
-    return first, last, written, temp_written, jumps, configs
-
-
-#: Blocks (``chunk_bytes`` of log each, about 2.4 MB of arrays per MB of log) that may wait for the
-#: writer thread.
-WRITE_QUEUE_BLOCKS = 4
-
-
-def _usable_cpus():
-    """Return the number of CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
-
-
-class _BagWrites:
-    """
-    The bag writer and its writes, in a second thread (``threaded``) or in the caller's.
-
-    ``open_writer()`` creates the writer; in the threaded mode it is created, used and closed in
-    the writer thread only (rosbags' sqlite3 connection may only be used by the thread that made
-    it), and :meth:`call` queues the writes in order. The first exception of the writer thread
-    (creating the bag, a write, finishing it) is raised again in the caller: at its next
-    :meth:`call` or when the ``with`` block ends; the writes queued after a failed one are
-    dropped, as the single thread would never have made them. Leaving the block waits for every
-    queued write and finishes the bag, also when the caller failed (the bag then holds what was
-    written, as in the single-threaded path).
-    """
-
-    def __init__(self, open_writer, threaded):
-        self._open = open_writer
-        self._queue = queue.Queue(WRITE_QUEUE_BLOCKS) if threaded else None
-        self._writer = None
-        self._error = None
-        self._thread = None
-        self._ready = threading.Event()
-
-    def __enter__(self):
-        if self._queue is None:
-            self._writer = self._open()
-            return self
-        self._thread = threading.Thread(target=self._work, name='gyro_noise_import writer',
-                                        daemon=True)
-        self._thread.start()
-        self._ready.wait()
-        if self._error is not None:  # the bag could not be created
-            self._thread.join()
-            raise self._error
-        return self
-
-    def _work(self):
-        try:
-            writer = self._open()
-        except BaseException as err:  # noqa: B036 - raised in the caller
-            self._error = err
-            return
-        finally:
-            self._ready.set()
-        try:
-            while (item := self._queue.get()) is not None:
-                if self._error is None:
-                    try:
-                        getattr(writer, item[0])(*item[1], **item[2])
-                    except BaseException as err:  # noqa: B036 - raised in the caller
-                        self._error = err
-        finally:
-            try:
-                writer.close()
-            except BaseException as err:  # noqa: B036 - raised in the caller
-                if self._error is None:
-                    self._error = err
-
-    def call(self, method, *args, **kwargs):
-        """Call the writer's ``method(*args, **kwargs)`` now, or queue it for the writer thread."""
-        if self._queue is None:
-            getattr(self._writer, method)(*args, **kwargs)
-            return
-        if self._error is not None:
-            raise self._error
-        self._queue.put((method, args, kwargs))
-
-    def __exit__(self, exc_type, exc, tb):
-        if self._queue is None:
-            return self._writer.__exit__(exc_type, exc, tb)
-        self._queue.put(None)  # the thread drains the queue, also after an error
-        self._thread.join()
-        if self._error is not None and exc is None:
-            raise self._error
-        return False
-
-
-def format_report(rep, *, max_regions=20):
+def format_report(rep: ImportReport, *, max_regions: int = 20) -> str:
     """
     Return the human-readable import report.
 
@@ -487,7 +101,7 @@ def format_report(rep, *, max_regions=20):
     return '\n'.join(lines)
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of gyro_noise_import.
 
@@ -523,7 +137,7 @@ def build_parser():
     return p
 
 
-def _body(argv):
+def _body(argv: List[str]) -> int:
     args = build_parser().parse_args(argv)
     rep = import_logs(args.logs, args.out, storage=args.storage, topic=args.topic,
                       temperature_topic=args.temperature_topic, frame_id=args.frame_id,
@@ -537,7 +151,7 @@ def _body(argv):
     return 0
 
 
-def main(argv=None):
+def main(argv: Optional[List[str]] = None) -> int:
     """
     Run gyro_noise_import.
 

@@ -41,8 +41,8 @@ from .. import __version__
 from ..app import thermal as app
 from ..thermal import methods as registry
 from ..thermal.bag_io import DEFAULT_MAX_GAP_S
-from ..thermal.metrics import (DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ,
-                               RAD2DEG)
+from ..thermal.metrics import DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ
+from ..units import RAD_TO_DEG
 
 PROG = app.PROG
 #: Profile shapes of ``simulate`` (``thermal.simulate.SHAPES``; listed here so the parser does
@@ -77,7 +77,7 @@ def _add_output_options(p):
 
 
 def _add_score_options(p):
-    p.add_argument('--amplitude-deg-s', type=float, default=DEFAULT_AMPLITUDE_RAD_S * RAD2DEG,
+    p.add_argument('--amplitude-deg-s', type=float, default=DEFAULT_AMPLITUDE_RAD_S * RAD_TO_DEG,
                    help='height of the injected chirp and steps, deg/s (1)')
     p.add_argument('--f-lo-hz', type=float, default=DEFAULT_F_LO_HZ,
                    help=f'lowest frequency of the injected chirp, Hz ({DEFAULT_F_LO_HZ:g}; '

@@ -17,17 +17,13 @@ numba kernels of the core (private).
 
 Every kernel here is called only through a public wrapper that validates its input (finite values,
 shapes, dtypes); each has a plain-numpy twin in ``test/`` it is checked against. All kernels share
-one set of compilation flags, :data:`JIT_OPTIONS`.
+one set of compilation flags, :data:`gyro_noise_ros.core.jit.JIT_OPTIONS`.
 """
 
 import numba
 import numpy as np
 
-#: Compilation flags of every kernel in the package. ``fastmath`` is left off: the kernels feed
-#: estimators that are compared to references at 1e-9 relative, and re-association of long sums
-#: would make results depend on the vector width of the machine. ``cache`` avoids re-JIT on
-#: start-up.
-JIT_OPTIONS = {'cache': True, 'nogil': True, 'fastmath': False}
+from .jit import JIT_OPTIONS
 
 
 @numba.njit(**JIT_OPTIONS)

@@ -27,7 +27,7 @@ same arithmetic, operation for operation; ``fastmath`` stays off (``JIT_OPTIONS`
 re-associates nor contracts into FMAs.
 """
 
-from gyro_noise_ros.core._kernels import JIT_OPTIONS
+from gyro_noise_ros.core.jit import JIT_OPTIONS
 import numba
 
 #: Terms per fold of the four partial sums into the compensated total. A power of two and a

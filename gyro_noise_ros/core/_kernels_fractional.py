@@ -19,14 +19,14 @@ Each fuses a few vector passes of :class:`.fractional._FastPlan` over a block of
 loop, so the block is read once instead of once per numpy operation. They are called only by
 ``_FastPlan`` (inputs validated there) and checked through it against the per-order
 ``numpy.convolve`` oracle of ``test/_fractional_reference.py``. Flags:
-:data:`._kernels.JIT_OPTIONS` (no fastmath; sums use partial accumulators, which changes rounding,
+:data:`.jit.JIT_OPTIONS` (no fastmath; sums use partial accumulators, which changes rounding,
 not accuracy).
 """
 
 import numba
 import numpy as np
 
-from ._kernels import JIT_OPTIONS
+from .jit import JIT_OPTIONS
 
 
 @numba.njit(**JIT_OPTIONS)

@@ -61,10 +61,11 @@ import scipy.stats
 
 from . import _kernels_allan as _k
 from ..errors import InputDataError, ParameterError
+from ..units import RAD_TO_DEG, S_PER_H
 
 __all__ = ['AllanAccumulator', 'AllanResult', 'NoiseTerms', 'NoiseTermsCustomary',
-           'allan_deviation', 'confidence_bounds', 'dense_factors', 'edf_greenhall',
-           'fit_noise_terms', 'octave_factors',
+           'allan_deviation', 'allan_deviation_values', 'confidence_bounds', 'dense_factors',
+           'edf_greenhall', 'fit_noise_terms', 'octave_factors',
            'DEFAULT_CONFIDENCE', 'DEFAULT_MAX_EXACT_M', 'NOISE_TYPE_NAMES']
 
 #: Default two-sided confidence of the ADEV bounds (Stable32's "Confidence Factor = 0.683", 1
@@ -97,7 +98,6 @@ NOISE_TYPE_NAMES = {
 _TERM_NAMES = ('quantization', 'angle_random_walk', 'bias_instability', 'rate_random_walk',
                'rate_ramp')
 _B_FACTOR = 2.0 * math.log(2.0) / math.pi   # AVAR of flicker FM plateau per B^2 (IEEE 952 C.3)
-_RAD2DEG = 180.0 / math.pi
 
 
 @dataclass(frozen=True)
@@ -323,6 +323,58 @@ def allan_deviation(data, rate_hz, *, taus='octave', data_type='rate', overlappi
     """
     rate = _check_rate(rate_hz)
     conf = _check_confidence(confidence)
+    ms, strides, n_terms, sums, x, n = _avar_core(data, rate, taus, data_type, overlapping,
+                                                  offset_rad_per_s)
+    acf = np.zeros((ms.size, _k.N_ACF))
+    _k._acf_sums(x, ms, acf)
+    del x
+    return _assemble(ms, strides, n_terms, sums, acf, n, rate, conf)
+
+
+def allan_deviation_values(data, rate_hz, *, taus='octave', overlapping=True,
+                           offset_rad_per_s=None):
+    """
+    Return the Allan deviation of :func:`allan_deviation` alone, without intervals.
+
+    The same validation, integration and kernel as :func:`allan_deviation` (its ``adev``, bit for
+    bit), without the noise identification, the EDF and the confidence bounds, which cost several
+    times the estimate itself on short records: for callers that evaluate the deviation of many
+    simulated records (the ensemble members of ``gyro_noise_explain``).
+
+    Parameters
+    ----------
+    data : array_like
+        1-D angular rate samples (rad/s).
+    rate_hz : float
+        Sample rate (Hz).
+    taus : {'octave', 'dense'} or array_like of int
+        As in :func:`allan_deviation`.
+    overlapping : bool
+        As in :func:`allan_deviation`.
+    offset_rad_per_s : float, optional
+        As in :func:`allan_deviation`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Allan deviation (rad/s) at the averaging factors ``taus`` resolves to (sorted, unique).
+
+    Raises
+    ------
+    InputDataError
+        Not 1-D, NaN/Inf, or too few samples for any tau.
+    ParameterError
+        Bad ``rate_hz``, ``taus`` or ``offset_rad_per_s``.
+
+    """
+    rate = _check_rate(rate_hz)
+    ms, _, n_terms, sums, _, _ = _avar_core(data, rate, taus, 'rate', overlapping,
+                                            offset_rad_per_s)
+    return np.sqrt(sums / (2.0 * ms.astype(np.float64) ** 2 * n_terms))
+
+
+def _avar_core(data, rate, taus, data_type, overlapping, offset_rad_per_s):
+    """Validate, integrate to the phase and sum the squared second differences per tau."""
     if data_type not in ('rate', 'phase'):
         raise ParameterError(f"data_type must be 'rate' or 'phase', got {data_type!r}")
     arr = _as_samples(data, 'data')
@@ -371,10 +423,7 @@ def allan_deviation(data, rate_hz, *, taus='octave', data_type='rate', overlappi
     counts = np.zeros(n_tau, dtype=np.int64)
     _k._avar_sums(x, ms, strides, n_terms, lanes, tot, counts)
     sums = np.array([_k._finish(lanes, tot, j) for j in range(n_tau)])
-    acf = np.zeros((n_tau, _k.N_ACF))
-    _k._acf_sums(x, ms, acf)
-    del x
-    return _assemble(ms, strides, n_terms, sums, acf, n, rate, conf)
+    return ms, strides, n_terms, sums, x, n
 
 
 def _check_offset(offset):
@@ -807,16 +856,16 @@ class NoiseTerms:
 
         """
         return NoiseTermsCustomary(
-            quantization_deg=self.quantization_rad * _RAD2DEG,
+            quantization_deg=self.quantization_rad * RAD_TO_DEG,
             # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
             angle_random_walk_deg_per_sqrt_h=self.angle_random_walk_rad_per_sqrt_s
-            * _RAD2DEG
+            * RAD_TO_DEG
             * 60.0,
-            bias_instability_deg_per_h=self.bias_instability_rad_per_s * _RAD2DEG * 3600.0,
+            bias_instability_deg_per_h=self.bias_instability_rad_per_s * RAD_TO_DEG * S_PER_H,
             rate_random_walk_deg_per_h_sqrt_h=(
-                self.rate_random_walk_rad_per_s_sqrt_s * _RAD2DEG * 3600.0 * 60.0
+                self.rate_random_walk_rad_per_s_sqrt_s * RAD_TO_DEG * S_PER_H * 60.0
             ),
-            rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * _RAD2DEG * 3600.0**2,
+            rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * RAD_TO_DEG * S_PER_H**2,
         )
 
     def kalibr(self):

@@ -72,6 +72,10 @@ class Chunker:
     """
     Cut a stream of samples into fixed-length chunks; nothing is dropped silently.
 
+    The one chunker of the package: the offline scripts cut plain sample arrays with
+    :meth:`push`, and :class:`.engine.NoiseEngine` cuts its stamps, per-sample losses,
+    temperatures and rates together with :meth:`push_columns`.
+
     Parameters
     ----------
     size : int
@@ -85,18 +89,18 @@ class Chunker:
 
     """
 
-    def __init__(self, size=DEFAULT_CHUNK_SIZE):
+    def __init__(self, size: int = DEFAULT_CHUNK_SIZE) -> None:
         size_i = int(size)
         if size_i != size or size_i < 2:
             raise ParameterError(f'chunk size must be an integer >= 2, got {size!r}')
         self.size = size_i
-        self._parts = []
+        self._parts = []  # tuples of aligned column arrays
         self._shape = None
         self._buffered = 0
         self.samples_in = 0
         self.chunks_out = 0
 
-    def push(self, samples):
+    def push(self, samples) -> list:
         """
         Add samples; return the list of chunks completed by them (possibly empty).
 
@@ -113,37 +117,80 @@ class Chunker:
         samples = np.asarray(samples, dtype=np.float64)
         if samples.ndim not in (1, 2):
             raise InputDataError(f'samples must be 1-D or 2-D, got shape {samples.shape}')
+        return [c[0] for c in self.push_columns(samples)]
+
+    def push_columns(self, *columns: np.ndarray) -> list:
+        """
+        Add aligned arrays (one row per sample); return the chunks they complete, cut alike.
+
+        Parameters
+        ----------
+        *columns : numpy.ndarray
+            Arrays of equal first dimension (any dtype, kept); the shape of each after the first
+            dimension must not change between calls.
+
+        Returns
+        -------
+        list of tuple of numpy.ndarray
+            One tuple per completed chunk, the columns in the order given, each a new array of
+            ``size`` rows.
+
+        """
+        n = columns[0].shape[0]
+        shape = tuple(c.shape[1:] for c in columns)
+        if any(c.shape[0] != n for c in columns):
+            raise InputDataError(
+                f'columns must have equal lengths, got {[c.shape[0] for c in columns]}')
         if self._shape is None:
-            self._shape = samples.shape[1:]
-        elif samples.shape[1:] != self._shape:
-            raise InputDataError(f'sample shape changed from {self._shape} to {samples.shape[1:]}')
-        self.samples_in += samples.shape[0]
+            self._shape = shape
+        elif shape != self._shape:
+            old, new = (s[0] if len(s) == 1 else s for s in (self._shape, shape))
+            raise InputDataError(f'sample shape changed from {old} to {new}')
+        self.samples_in += n
         out = []
-        if samples.shape[0] == 0:
+        if n == 0:
             return out
-        self._parts.append(samples)
-        self._buffered += samples.shape[0]
+        self._parts.append(columns)
+        self._buffered += n
         if self._buffered < self.size:
             return out
-        joined = np.concatenate(self._parts) if len(self._parts) > 1 else samples
-        whole = (joined.shape[0] // self.size) * self.size
+        joined = (tuple(np.concatenate(c) for c in zip(*self._parts)) if len(self._parts) > 1
+                  else columns)
+        n_all = joined[0].shape[0]
+        whole = (n_all // self.size) * self.size
         for start in range(0, whole, self.size):
-            out.append(np.array(joined[start:start + self.size]))
-        rest = np.array(joined[whole:])
-        self._parts = [rest] if rest.shape[0] else []
-        self._buffered = rest.shape[0]
+            out.append(tuple(np.array(c[start:start + self.size]) for c in joined))
+        rest = tuple(np.array(c[whole:]) for c in joined)
+        self._parts = [rest] if n_all > whole else []
+        self._buffered = n_all - whole
         self.chunks_out += len(out)
         return out
+
+    def discard(self) -> int:
+        """
+        Throw the incomplete tail away (a gap under the 'split' policy); return its length.
+
+        Returns
+        -------
+        int
+            Samples discarded.
+
+        """
+        dropped = self._buffered
+        self._parts = []
+        self._buffered = 0
+        return dropped
 
     @property
     def tail(self):
         """Copy the incomplete tail into a new array (fewer than ``size`` samples)."""
         if not self._parts:
             return np.empty(0)
-        return np.concatenate(self._parts)
+        tails = tuple(np.concatenate(c) for c in zip(*self._parts))
+        return tails[0] if len(tails) == 1 else tails
 
     @property
-    def tail_samples(self):
+    def tail_samples(self) -> int:
         """Count the samples in the incomplete tail."""
         return self._buffered
 

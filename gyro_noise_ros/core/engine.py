@@ -15,8 +15,6 @@
 """
 Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
-Issue 4.
-
 One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional
 temperature)`` and cuts every selected axis into fixed-length chunks (10,000 samples by default, as
 in the paper). The work is split in three steps so that the caller decides where the heavy part
@@ -30,6 +28,18 @@ runs:
 3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence
    statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
    :meth:`NoiseEngine.health` are computed.
+
+The engine only composes pieces with one job each, which the live node (through
+:mod:`.live`) and the offline tool share by sharing the engine:
+
+* stamp and gap accounting: :class:`.stamps.StampAccountant` (rate, gaps, lost samples, stamp
+  order; the counters of :class:`.stamps.StreamCounts`);
+* chunking: :class:`.chunks.Chunker` (the package's one chunker; it cuts the stamps, per-sample
+  losses, temperatures and rates together) and the 'split' policy's discarding;
+* per-chunk moments: :func:`chunk_jobs` (:func:`.chunks.chunk_moments` per axis);
+* the Allan feed: :class:`AllanFeed`;
+* the summary: :class:`SequenceBook` (chunk results by status, the rows of Tables 3-6) and
+  :func:`.chunks.summarise_sequence`; the verdicts: :func:`.health.evaluate_health`.
 
 Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming,
 the period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the
@@ -72,9 +82,9 @@ NaN/Inf samples never stop the stream: they are counted, the chunk holding them 
 out of the statistics. The incomplete tail at the end is counted (``tail_samples``), never silently
 dropped.
 
-Allan deviation. When ``allan`` is on and :mod:`.allan` provides an incremental accumulator, every
-finite sample of every axis goes into it (gaps are ignored: Allan deviation assumes uniform
-sampling, so heavy loss biases it; the loss is reported beside it).
+Allan deviation. When ``allan`` is on, every finite sample of every axis goes into it (gaps are
+ignored: Allan deviation assumes uniform sampling, so heavy loss biases it; the loss is reported
+beside it).
 """
 
 from collections import deque
@@ -83,74 +93,32 @@ from functools import lru_cache
 
 import numpy as np
 
-from .chunks import DEFAULT_CHUNK_SIZE, noise_colour, SequenceSummary, summarise_sequence
+from .allan import AllanAccumulator
+from .chunks import (chunk_moments, Chunker, ChunkMoments, DEFAULT_CHUNK_SIZE, noise_colour,
+                     SequenceSummary, summarise_sequence)
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
+from .health import evaluate_health, HealthThresholds, reference_per_axis
 from .readout import fit_noise_terms_band_limited, read_allan
-from .timebase import rescale_allan, TimebaseTracker
+from .stamps import (MAX_GAP_EVENTS, RATE_ESTIMATE_SAMPLES, StampAccountant, StampedBatch,
+                     StreamCounts)
+from .timebase import RateEstimate, rescale_allan
 from ..errors import InputDataError, ParameterError
+
+__all__ = ['analyze_chunk', 'AllanFeed', 'AXES', 'AxisSummary', 'chunk_jobs', 'ChunkJob',
+           'ChunkResult', 'EngineConfig', 'GAP_POLICIES', 'identifier_for', 'MAX_GAP_EVENTS',
+           'NoiseEngine', 'rad_s2_to_deg_s_per_h', 'RATE_ESTIMATE_SAMPLES', 'SequenceBook',
+           'STATUSES', 'StreamCounts', 'warm_up']
 
 #: Axis names in column order of the gyro array.
 AXES = ('x', 'y', 'z')
 #: Valid gap policies (see module doc).
 GAP_POLICIES = ('flag', 'split', 'drop')
-#: Stamps used to estimate the sample rate when it is not configured (16 timebase blocks).
-RATE_ESTIMATE_SAMPLES = 16 * 64 + 1
 #: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the
 #: caller, or failing identification (e.g. a constant chunk).
 STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
-#: Gaps kept (the longest, by missing samples) for the reports; all are counted.
-MAX_GAP_EVENTS = 5
-
 _NS = 1_000_000_000
-_EARLY_CHECK = 101
-
-
-def _packet_loss(steps, at, apparent, credit):
-    """
-    Subtract the samples of equal-stamp groups next to long steps from their apparent loss.
-
-    A packet of samples stamped once shows as zero steps right after a long step (stamped with
-    its last sample's time) or right before one (its first sample's time): those samples are the
-    ones the long step seemed to skip. Each zero step pays for one missing sample of the long step
-    it touches (before it first, then after it), once.
-
-    Parameters
-    ----------
-    steps : numpy.ndarray of int64
-        Steps of the batch from the latest earlier stamp (ns).
-    at : numpy.ndarray of int
-        Indices of the long steps, increasing.
-    apparent : numpy.ndarray of int64
-        ``round(step / period) - 1`` at those indices.
-    credit : int
-        Zero steps at the end of the previous batch not yet paid to a long step.
-
-    Returns
-    -------
-    lost : numpy.ndarray of int64
-        Samples missing at each long step.
-    credit : int
-        Zero steps at the end of this batch not paid to a long step.
-
-    """
-    nonzero = np.flatnonzero(steps != 0)
-    lost = np.array(apparent, dtype=np.int64)
-    used_after = {}
-    for n, i in enumerate(at.tolist()):
-        k = int(np.searchsorted(nonzero, i)) - 1
-        prev = int(nonzero[k]) if k >= 0 else -1
-        before = i - prev - 1 - used_after.get(prev, 0) + (credit if prev < 0 else 0)
-        nxt = int(nonzero[k + 2]) if k + 2 < nonzero.size else steps.size
-        after = nxt - i - 1
-        take = min(int(lost[n]), before)
-        lost[n] -= take
-        take = min(int(lost[n]), after)
-        lost[n] -= take
-        used_after[i] = take
-    last = int(nonzero[-1]) if nonzero.size else -1
-    trailing = steps.size - last - 1 - used_after.get(last, 0) + (credit if last < 0 else 0)
-    return lost, int(trailing)
+_NAN = float('nan')
 
 
 @dataclass(frozen=True)
@@ -201,7 +169,7 @@ class EngineConfig:
     allan_taus: str = 'dense'
     history_chunks: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         axes = tuple(self.axes) if not isinstance(self.axes, str) else (self.axes,)
         if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
             raise ParameterError(
@@ -230,12 +198,12 @@ class EngineConfig:
         identifier_for(self.chunk_size, tuple(alphas.tolist()), int(self.memory),
                        bool(self.demean), self.max_lag)
 
-    def identifier_key(self):
+    def identifier_key(self) -> tuple:
         """Return the hashable arguments of :func:`identifier_for` for this configuration."""
         return (int(self.chunk_size), tuple(self.alphas.tolist()), int(self.memory),
                 bool(self.demean), None if self.max_lag is None else int(self.max_lag))
 
-    def as_dict(self):
+    def as_dict(self) -> dict:
         """Return the options as plain JSON-able values (the grid as start/stop/step/count)."""
         a = self.alphas
         return {
@@ -251,7 +219,8 @@ class EngineConfig:
 
 
 @lru_cache(maxsize=8)
-def identifier_for(chunk_size, alphas, memory, demean, max_lag):
+def identifier_for(chunk_size: int, alphas: tuple, memory: int, demean: bool,
+                   max_lag: int | None) -> OrderIdentifier:
     """
     Return a cached :class:`.fractional.OrderIdentifier`.
 
@@ -328,7 +297,7 @@ class ChunkJob:
     identifier_key: tuple = field(repr=False)
 
 
-def _same(a, b):
+def _same(a: object, b: object) -> bool:
     """Equality that treats NaN as equal to NaN (results carry NaN for 'not identified')."""
     if isinstance(a, float) and isinstance(b, float):
         return a == b or (a != a and b != b)
@@ -402,7 +371,7 @@ class ChunkResult:
     var_curve: np.ndarray = field(default=None, repr=False, compare=False)
     j_curve: np.ndarray = field(default=None, repr=False, compare=False)
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         """Compare field by field, NaN equal to NaN (curves are not compared)."""
         if not isinstance(other, ChunkResult):
             return NotImplemented
@@ -412,10 +381,8 @@ class ChunkResult:
     __hash__ = None
 
 
-_NAN = float('nan')
-
-
-def analyze_chunk(job, identifier=None, *, curves=False):
+def analyze_chunk(job: ChunkJob, identifier: OrderIdentifier | None = None, *,
+                  curves: bool = False) -> ChunkResult:
     """
     Identify the fractional order of one chunk by both methods (the heavy, pure step).
 
@@ -467,73 +434,6 @@ def analyze_chunk(job, identifier=None, *, curves=False):
 
 
 @dataclass(frozen=True)
-class StreamCounts:
-    """
-    Counters of the input stream, shared by all axes (stamps are common).
-
-    Attributes
-    ----------
-    samples : int
-        Samples ingested (including the tail and samples still held for rate estimation).
-    samples_lost : int
-        Samples missing according to the stamps (sum over gaps of ``round(step / period) - 1``).
-    gaps : int
-        Stamp steps above ``gap_factor`` nominal periods.
-    out_of_order : int
-        Stamps earlier than the latest stamp before them (step < 0).
-    chunks : int
-        Complete chunks cut so far (per axis).
-    tail_samples : int
-        Samples after the last complete chunk (not analysed).
-    discarded_samples, discarded_partials : int
-        Samples and partial chunks thrown away by the 'split' policy.
-    rate_hz : float
-        Sample rate (Hz): configured, else the :mod:`.timebase` estimate over everything so far;
-        NaN while still unknown.
-    duration_s : float
-        Last minus first stamp (s).
-    rate_method : str
-        How ``rate_hz`` was obtained (:class:`.timebase.RateEstimate` ``method``).
-    bursty : bool
-        The stamps are bursty: loss is read from the deficit against elapsed time, not from steps.
-    jitter_s : float
-        RMS stamp jitter (s, :mod:`.timebase`).
-    timebase : timebase.RateEstimate or None
-        The full estimate (estimators, irregularity, warnings).
-    clock_steps : int
-        Long steps (regular stamps) that were not a whole number of periods: corrections of the
-        stamping clock, paid back by other steps, not lost samples.
-    equal_stamps : int
-        Stamps equal to the one before (samples of one packet): a normal time base, neither out of
-        order nor a gap.
-    longest_gaps : tuple of (float, float, int)
-        The longest gaps (at most :data:`MAX_GAP_EVENTS`, most missing samples first) as (start
-        after the first sample in s, length of the stamp step in s, missing samples); with
-        bursty stamps the start and length are those of the longest step of the chunk whose
-        deficit showed the loss.
-
-    """
-
-    samples: int
-    samples_lost: int
-    gaps: int
-    out_of_order: int
-    chunks: int
-    tail_samples: int
-    discarded_samples: int
-    discarded_partials: int
-    rate_hz: float
-    duration_s: float
-    rate_method: str = ''
-    bursty: bool = False
-    jitter_s: float = float('nan')
-    timebase: object = None
-    clock_steps: int = 0
-    equal_stamps: int = 0
-    longest_gaps: tuple = ()
-
-
-@dataclass(frozen=True)
 class AxisSummary:
     """
     Everything known about one axis of the run: paper Tables 3-6, Allan deviation, counts.
@@ -576,12 +476,12 @@ class AxisSummary:
     readout: object = None
 
     @property
-    def offset_drift_deg_s_per_h(self):
+    def offset_drift_deg_s_per_h(self) -> float:
         """Signed offset drift (Table 3) in (deg/s)/h."""
         return rad_s2_to_deg_s_per_h(self.sequence.drift.slope)
 
 
-def rad_s2_to_deg_s_per_h(value):
+def rad_s2_to_deg_s_per_h(value: float) -> float:
     """
     Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
 
@@ -601,23 +501,218 @@ def rad_s2_to_deg_s_per_h(value):
     return float(np.degrees(value) * 3600.0)
 
 
-class _AxisState:
-    """Per-axis sequence statistics (bounded by ``history_chunks`` when > 0)."""
+def chunk_jobs(index: int, rel_ns: np.ndarray, lost: int, gaps: int, temperature_c: np.ndarray,
+               gyro: np.ndarray, *, axes: tuple, first_ns: int, dropped: bool,
+               identifier_key: tuple) -> list[ChunkJob]:
+    """
+    Return the jobs of one complete chunk: per axis its samples, moments and bookkeeping.
 
-    def __init__(self, history):
-        maxlen = history or None
-        # (t_mid, bias, variance, alpha_var, alpha_corr, tie_v, tie_c, temp, noise colour)
-        self.rows = deque(maxlen=maxlen)
-        self.nan_samples = 0
-        self.by_status = dict.fromkeys(STATUSES, 0)
-        self.last = None
+    Parameters
+    ----------
+    index : int
+        Index of the chunk in the run.
+    rel_ns : numpy.ndarray of int64
+        Its stamps relative to the first stamp of the run (ns).
+    lost, gaps : int
+        Samples lost inside the chunk and the gaps they fell in.
+    temperature_c : numpy.ndarray
+        Per-sample temperatures (degC, NaN unknown).
+    gyro : numpy.ndarray, shape (n, len(axes))
+        Angular rates (rad/s), one column per axis.
+    axes : tuple of str, keyword-only
+        Axis names of the columns.
+    first_ns : int, keyword-only
+        Stamp of the run's first sample (ns).
+    dropped : bool, keyword-only
+        The gap policy leaves this chunk out of the statistics.
+    identifier_key : tuple, keyword-only
+        Arguments of :func:`identifier_for`.
+
+    Returns
+    -------
+    list of ChunkJob
+        One per axis; the moments are :func:`.chunks.chunk_moments` (NaN for a 'nan' chunk).
+
+    """
+    finite_t = temperature_c[np.isfinite(temperature_c)]
+    temperature = float(finite_t.mean()) if finite_t.size else _NAN
+    t_start = rel_ns[0] / 1e9
+    t_mid = (rel_ns[0] + rel_ns[-1]) / 2e9
+    jobs = []
+    for k, axis in enumerate(axes):
+        col = np.ascontiguousarray(gyro[:, k])
+        nan = int(col.shape[0] - np.count_nonzero(np.isfinite(col)))
+        if nan:
+            status, moments = 'nan', ChunkMoments(_NAN, _NAN)
+        else:
+            status, moments = 'dropped' if dropped else 'ok', chunk_moments(col)
+        jobs.append(ChunkJob(
+            axis=axis, chunk=index, samples=col, stamp_start_ns=int(rel_ns[0]) + first_ns,
+            t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=lost, gaps=gaps,
+            nan_samples=nan, temperature_c=temperature, status=status, bias_rad_s=moments.bias,
+            variance_rad2_s2=moments.variance, identifier_key=identifier_key))
+    return jobs
+
+
+class AllanFeed:
+    """
+    The Allan deviation of the whole run, per axis: fed every finite sample, read on demand.
+
+    Gaps are ignored (Allan deviation assumes uniform sampling, so heavy loss biases it; the loss
+    is reported beside it).
+
+    Parameters
+    ----------
+    axes : tuple of str
+        Axis names, in the column order of the rates fed.
+    taus : {'octave', 'dense'}
+        Averaging times of the accumulators.
+
+    """
+
+    def __init__(self, axes: tuple, taus: str) -> None:
+        self.axes = axes
+        self.taus = taus
+        self._acc = None
+        self.error = ''  # why the Allan deviation is unavailable
+
+    def feed(self, gyro: np.ndarray, rate_hz: float) -> None:
+        """
+        Add rates (rad/s, one column per axis); the first call builds the accumulators.
+
+        Parameters
+        ----------
+        gyro : numpy.ndarray, shape (n, len(axes))
+            Angular rates; NaN/Inf samples are left out.
+        rate_hz : float
+            Nominal sample rate (Hz) of the accumulators.
+
+        """
+        if self.error:
+            return
+        if self._acc is None:
+            try:
+                self._acc = {a: AllanAccumulator(rate_hz, taus=self.taus) for a in self.axes}
+            except TypeError as err:
+                self.error = f'Allan deviation unavailable: {err}'
+                return
+        for k, axis in enumerate(self.axes):
+            col = gyro[:, k]
+            finite = np.isfinite(col)
+            self._acc[axis].update(col if finite.all() else col[finite])
+
+    def result(self, axis: str, rate_hz: float | None) -> tuple:
+        """
+        Return the axis' (Allan result, fitted noise terms); (None, None) when unavailable.
+
+        Parameters
+        ----------
+        axis : str
+            The axis.
+        rate_hz : float or None
+            Rate the taus are rescaled to (the estimate over the run); None: not rescaled.
+
+        Returns
+        -------
+        tuple
+            (:class:`.allan.AllanResult` or None, noise terms or None).
+
+        """
+        if self._acc is None:
+            return None, None
+        try:
+            result = self._acc[axis].result()
+            if rate_hz is not None:
+                result = rescale_allan(result, rate_hz)
+        except (InputDataError, ParameterError, ValueError):
+            return None, None
+        try:
+            terms = fit_noise_terms_band_limited(result)
+        except (InputDataError, ParameterError, ValueError):
+            terms = None    # too few taus for the fit; the readout still reads the curve
+        return result, terms
+
+
+class SequenceBook:
+    """
+    Per-axis record of chunk results: counts by status and the rows of the sequence statistics.
+
+    Parameters
+    ----------
+    axes : tuple of str
+        Axis names.
+    history : int
+        Chunks kept per axis for the statistics; 0 = all.
+
+    """
+
+    #: Columns of a row (one 'ok' chunk).
+    COLUMNS = ('t_mid', 'bias', 'variance', 'alpha_var', 'alpha_corr', 'tie_var', 'tie_corr',
+               'temperature', 'noise_colour')
+
+    def __init__(self, axes: tuple, history: int) -> None:
+        self._rows = {a: deque(maxlen=history or None) for a in axes}
+        self.nan_samples = dict.fromkeys(axes, 0)
+        self.by_status = {a: dict.fromkeys(STATUSES, 0) for a in axes}
+        self.last = dict.fromkeys(axes)
+
+    def record(self, result: ChunkResult) -> None:
+        """
+        Count a chunk result; an 'ok' one enters the statistics (Tables 3-6).
+
+        Parameters
+        ----------
+        result : ChunkResult
+            An analysed chunk of one of the axes.
+
+        """
+        if result.axis not in self._rows:
+            raise ParameterError(
+                f'axis {result.axis!r} is not analysed by this engine ({tuple(self._rows)})')
+        counts = self.by_status[result.axis]
+        counts[result.status] = counts.get(result.status, 0) + 1
+        self.last[result.axis] = result
+        if result.status == 'ok':
+            self._rows[result.axis].append(
+                (result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2, result.alpha_var,
+                 result.alpha_corr, result.tie_var, result.tie_corr, result.temperature_c,
+                 result.noise_colour))
+
+    def sequence(self, axis: str, *, tail_samples: int,
+                 order_step: float) -> tuple[SequenceSummary, float]:
+        """
+        Return the axis' sequence statistics and the mean of its chunk temperatures (degC).
+
+        Parameters
+        ----------
+        axis : str
+            The axis.
+        tail_samples : int, keyword-only
+            Carried into the summary.
+        order_step : float, keyword-only
+            Step of the order grid (floor of the orders' robust spread).
+
+        Returns
+        -------
+        (SequenceSummary, float)
+
+        """
+        rows = np.array(list(self._rows[axis]), dtype=np.float64).reshape(-1, 9)
+        seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
+                                 tail_samples=tail_samples, ties_var=int(rows[:, 5].sum()),
+                                 ties_corr=int(rows[:, 6].sum()), order_step=order_step,
+                                 noise_colour=rows[:, 8])
+        temps = rows[:, 7][np.isfinite(rows[:, 7])]
+        return seq, float(temps.mean()) if temps.size else _NAN
 
 
 class NoiseEngine:
     """
     Streaming chunk analysis of a 3-axis gyro: ingest, analyze, record, summarise, judge.
 
-    The module doc describes the steps.
+    Composes the pieces the module doc lists: a :class:`.stamps.StampAccountant`, a
+    :class:`.chunks.Chunker`, :func:`chunk_jobs`, an :class:`AllanFeed` and a
+    :class:`SequenceBook`.
 
     Parameters
     ----------
@@ -632,57 +727,27 @@ class NoiseEngine:
 
     """
 
-    def __init__(self, config=None, *, reference=None, thresholds=None):
-        from . import health as _health
-
+    def __init__(self, config: EngineConfig | None = None, *, reference=None,
+                 thresholds: HealthThresholds | None = None) -> None:
         self.config = config if config is not None else EngineConfig()
-        self.thresholds = thresholds if thresholds is not None else _health.HealthThresholds()
-        self.reference = _health.reference_per_axis(reference, self.config.axes)
+        self.thresholds = thresholds if thresholds is not None else HealthThresholds()
+        self.reference = reference_per_axis(reference, self.config.axes)
         self._cols = [AXES.index(a) for a in self.config.axes]
         self._key = self.config.identifier_key()
         grid = self.config.alphas
         # the grid's step (its mean step if uneven): the floor of the orders' chunk spread
         self._order_step = float((grid[-1] - grid[0]) / (grid.size - 1)) if grid.size > 1 else 0.0
-        self._period_ns = None if self.config.rate_hz is None else _NS / float(self.config.rate_hz)
-        self._pending = []  # batches held until the rate is known
-        self._timebase = TimebaseTracker()
-        self._classified = False
-        self._bursty = False
-        self._allowance = 0.0  # per-chunk deficit allowance under bursty stamps (samples)
-        # How far from a whole number of periods a long step may be and still be loss (regular
-        # stamps), and how many long steps were clock corrections instead.
-        self._step_tol = 0.45
-        self._clock_steps = 0
-        self._chunk_loss_events = 0
-        self._estimate_cache = (None, None)
-        self._first_ns = None
-        self._last_ns = None
-        self._max_ns = None
-        self._chunk_index = 0
-        self._reset_buffer()
-        self._samples = 0
-        self._lost = 0
-        self._gaps = 0
-        self._out_of_order = 0
-        self._equal = 0
-        self._credit = 0  # zero steps at the end of the last batch not paid to a long step
-        self._hold = None  # (stamps, gyro, temperature) of an equal-stamp group after a gap
-        self._gap_events = []  # (t_s, length_s, missing samples), the longest MAX_GAP_EVENTS
+        self._stamps = StampAccountant(self.config.rate_hz, self.config.gap_factor,
+                                       self.config.chunk_size)
+        self._chunker = Chunker(self.config.chunk_size)
         self._discarded = 0
         self._discarded_partials = 0
-        self._axis = {a: _AxisState(int(self.config.history_chunks)) for a in self.config.axes}
-        self._allan = None
-        self._allan_error = None
+        self._allan = AllanFeed(self.config.axes, self.config.allan_taus)
+        self._book = SequenceBook(self.config.axes, int(self.config.history_chunks))
 
-    # ---- ingestion
-    # -------------------------------------------------------------------------------
+    # ---- ingestion ---------------------------------------------------------------------------
 
-    def _reset_buffer(self):
-        # list of (rel_ns int64, lost_before int64, temp float64, gyro (n, k) float64)
-        self._buf = []
-        self._buffered = 0
-
-    def ingest(self, stamp_ns, gyro, temperature_c=None):
+    def ingest(self, stamp_ns, gyro, temperature_c=None) -> list[ChunkJob]:
         """
         Add a batch of samples; return the jobs of the chunks it completes.
 
@@ -717,227 +782,10 @@ class NoiseEngine:
                                    (n,)).astype(np.float64)
         if n == 0:
             return []
-        self._samples += n
-        self._timebase.update(stamps)
         g = np.ascontiguousarray(g[:, self._cols])
-        if not self._classified:
-            # Held even with a configured rate: the stamp pattern (regular or bursty) decides how
-            # loss is read.
-            self._pending.append((stamps, g, temp))
-            held = sum(p[0].shape[0] for p in self._pending)
-            if held < RATE_ESTIMATE_SAMPLES:
-                if held >= _EARLY_CHECK and len(
-                        self._pending) == 1 or held - n < _EARLY_CHECK <= held:
-                    self._early_check()
-                return []
-            return self._release_pending()
-        return self._process(stamps, g, temp)
+        return self._cut(self._stamps.add(stamps, (temp, g)))
 
-    def _early_check(self):
-        # Refuse obviously broken (shuffled) stamps after ~100 samples instead of 1025. Equal
-        # stamps are not broken: a packet of samples shares one stamp.
-        held = np.concatenate([p[0] for p in self._pending])
-        bad = int(np.count_nonzero(np.diff(held) < 0))
-        if bad > 0.1 * (held.shape[0] - 1):
-            self._pending = []
-            raise InputDataError(
-                f'cannot estimate the sample rate: {bad} of the first {held.shape[0] - 1} '
-                'stamp steps go backwards (a stamp earlier than its predecessor)')
-
-    def _release_pending(self):
-        stamps = np.concatenate([p[0] for p in self._pending])
-        g = np.concatenate([p[1] for p in self._pending])
-        temp = np.concatenate([p[2] for p in self._pending])
-        self._pending = []
-        tracker = TimebaseTracker()
-        tracker.update(stamps)
-        try:
-            est = tracker.estimate(self.config.rate_hz)
-        except InputDataError as err:
-            raise InputDataError(f'cannot estimate the sample rate: {err}') from err
-        if not est.usable:
-            raise InputDataError(f'cannot estimate the sample rate: {est.warnings[0]} (first '
-                                 f'{stamps.shape[0]} samples)')
-        self._period_ns = _NS / est.rate_hz
-        self._classified = True
-        self._set_mode(est)
-        # Tolerance of the whole-period test for regular stamps: 6 robust sigmas of the step
-        # scatter (a median absolute deviation, so the clock corrections themselves do not widen
-        # it), at least 0.1 and at most 0.45 of a period.
-        ratio = np.diff(stamps) / self._period_ns
-        ratio = ratio[ratio > 0]
-        if ratio.size:
-            mad = 1.4826 * float(np.median(np.abs(ratio - 1.0)))
-            self._step_tol = min(0.45, max(0.1, 6.0 * mad))
-        return self._process(stamps, g, temp)
-
-    def _set_mode(self, est):
-        self._bursty = bool(est.bursty)
-        if self._bursty:
-            rate = _NS / self._period_ns
-            rel_se = est.stamp_rate_se_hz / est.stamp_rate_hz if np.isfinite(
-                est.stamp_rate_se_hz) else 0.0
-            self._allowance = (2.0 * est.burst_step_s * rate + 6.0 * est.jitter_s * rate
-                               + 3.0 * rel_se * self.config.chunk_size + 1.0)
-
-    def _process(self, stamps, g, temp, *, final=False):
-        if self._hold is not None:
-            hs, hg, ht = self._hold
-            self._hold = None
-            stamps, g, temp = (np.concatenate((hs, stamps)), np.concatenate((hg, g)),
-                               np.concatenate((ht, temp)))
-        first = self._first_ns is None
-        if first:
-            self._first_ns = int(stamps[0])
-            self._max_ns = int(stamps[0])
-        # Steps are taken from the latest stamp seen so far, so one late stamp is one out-of-order
-        # count and does not also make the next step look like a gap.
-        run_max = np.maximum.accumulate(np.concatenate(([np.int64(self._max_ns)], stamps)))
-        steps = stamps - run_max[:-1]
-        if first:
-            steps[0] = max(1, int(round(self._period_ns)))  # the first sample has no step
-        if not self._bursty and not final:
-            # A long step whose equal-stamp group reaches the end of the batch may be followed
-            # by more samples of the same stamp in the next batch: they fill the hole, so the
-            # group waits for that batch (or flush) before its loss is decided.
-            moved = np.flatnonzero(steps != 0)
-            j = int(moved[-1]) if moved.size else -1
-            if j >= 0:
-                if steps[j] > self.config.gap_factor * self._period_ns:
-                    self._hold = (stamps[j:].copy(), g[j:].copy(), temp[j:].copy())
-                    stamps, g, temp, steps = stamps[:j], g[:j], temp[:j], steps[:j]
-                    run_max = run_max[:j + 1]
-                    if stamps.shape[0] == 0:
-                        return []
-        self._max_ns = int(run_max[-1])
-        self._last_ns = int(stamps[-1])
-        # A stamp equal to the latest one is a sample of the same packet (a normal time base);
-        # only a stamp earlier than the latest is out of order.
-        self._out_of_order += int(np.count_nonzero(steps < 0))
-        self._equal += int(np.count_nonzero(steps == 0))
-        if self._bursty:
-            gap = np.zeros(stamps.shape[0], dtype=bool)  # loss is read per chunk from the deficit
-        else:
-            ratio = steps / self._period_ns
-            long_step = ratio > self.config.gap_factor
-            # A correction of the stamping clock (the driver re-anchoring its device-clock map,
-            # a host clock slewing) is one step of a non-whole number of periods, paid back by
-            # other steps: every later stamp stays on the grid. A lost sample shifts the grid by
-            # a whole period. Steps of 2.5 periods and more are loss whatever their fraction.
-            near_whole = np.abs(ratio - np.rint(ratio)) <= self._step_tol
-            gap = long_step & (near_whole | (ratio >= 2.5))
-            self._clock_steps += int(np.count_nonzero(long_step & ~gap))
-        lost = np.zeros(stamps.shape[0], dtype=np.int64)
-        at = np.flatnonzero(gap)
-        # Samples sharing a stamp next to a long step (one packet stamped once) are the ones it
-        # seemed to skip: a packet-stamped record shows no phantom loss.
-        lost[at], self._credit = _packet_loss(
-            steps, at, np.maximum(np.rint(steps[at] / self._period_ns).astype(np.int64) - 1, 0),
-            self._credit)
-        gap[at] = lost[at] > 0
-        if gap.any():
-            self._gaps += int(gap.sum())
-            self._lost += int(lost.sum())
-            for i in np.flatnonzero(gap):
-                self._log_gap((int(run_max[i]) - self._first_ns) / 1e9, steps[i] / 1e9,
-                              int(lost[i]))
-        self._feed_allan(g)
-        rel = stamps - self._first_ns
-        jobs = []
-        if self.config.gap_policy == 'split' and gap.any():
-            bounds = [0, *np.flatnonzero(gap).tolist(), stamps.shape[0]]
-            for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
-                if i > 0:
-                    self._discard_partial()
-                    lost_a = lost[a:b].copy()
-                    lost_a[0] = 0  # the gap lies before the new chunk, not inside it
-                else:
-                    lost_a = lost[a:b]
-                jobs += self._push(rel[a:b], lost_a, temp[a:b], g[a:b])
-            return jobs
-        return self._push(rel, lost, temp, g)
-
-    def _log_gap(self, t_s, length_s, missing):
-        self._gap_events.append((float(t_s), float(length_s), int(missing)))
-        if len(self._gap_events) > 4 * MAX_GAP_EVENTS:
-            self._gap_events = sorted(self._gap_events, key=lambda e: -e[2])[:MAX_GAP_EVENTS]
-
-    def _discard_partial(self):
-        if self._buffered:
-            self._discarded += self._buffered
-            self._discarded_partials += 1
-        self._reset_buffer()
-
-    def _push(self, rel, lost, temp, g):
-        if rel.shape[0] == 0:
-            return []
-        if self._buffered == 0 and lost.shape[0]:
-            # A gap before the first sample of a chunk is not inside it.
-            lost = lost.copy()
-            lost[0] = 0
-        self._buf.append((rel, lost, temp, g))
-        self._buffered += rel.shape[0]
-        size = int(self.config.chunk_size)
-        if self._buffered < size:
-            return []
-        rel = np.concatenate([b[0] for b in self._buf])
-        lost = np.concatenate([b[1] for b in self._buf])
-        temp = np.concatenate([b[2] for b in self._buf])
-        g = np.concatenate([b[3] for b in self._buf])
-        whole = (rel.shape[0] // size) * size
-        jobs = []
-        for start in range(0, whole, size):
-            sl = slice(start, start + size)
-            chunk_lost = lost[sl].copy()
-            chunk_lost[0] = 0
-            jobs += self._make_jobs(rel[sl], chunk_lost, temp[sl], g[sl])
-        self._reset_buffer()
-        if whole < rel.shape[0]:
-            self._buf.append((rel[whole:].copy(), lost[whole:].copy(),
-                             temp[whole:].copy(), g[whole:].copy()))
-            self._buffered = rel.shape[0] - whole
-        return jobs
-
-    def _make_jobs(self, rel, lost, temp, g):
-        index = self._chunk_index
-        self._chunk_index += 1
-        samples_lost = int(lost.sum())
-        gaps = int(np.count_nonzero(lost))
-        if self._bursty:
-            deficit = (rel[-1] - rel[0]) / self._period_ns + 1.0 - rel.shape[0]
-            if deficit > self._allowance:
-                samples_lost, gaps = int(round(deficit)), 1
-                self._chunk_loss_events += 1
-                longest = int(np.argmax(np.diff(rel)))
-                self._log_gap(rel[longest] / 1e9, (rel[longest + 1] - rel[longest]) / 1e9,
-                              samples_lost)
-        finite_t = temp[np.isfinite(temp)]
-        temperature = float(finite_t.mean()) if finite_t.size else _NAN
-        t_start = rel[0] / 1e9
-        t_mid = (rel[0] + rel[-1]) / 2e9
-        dropped = gaps > 0 and (self.config.gap_policy == 'drop'
-                                or (self._bursty and self.config.gap_policy == 'split'))
-        jobs = []
-        for k, axis in enumerate(self.config.axes):
-            col = np.ascontiguousarray(g[:, k])
-            finite = np.isfinite(col)
-            nan = int(col.shape[0] - np.count_nonzero(finite))
-            self._axis[axis].nan_samples += nan
-            if nan:
-                status, bias, var = 'nan', _NAN, _NAN
-            else:
-                status = 'dropped' if dropped else 'ok'
-                bias = float(col.mean())
-                var = float(col.var(ddof=1))
-            jobs.append(ChunkJob(
-                axis=axis, chunk=index, samples=col, stamp_start_ns=int(rel[0]) + self._first_ns,
-                t_start_s=float(t_start), t_mid_s=float(t_mid), samples_lost=samples_lost,
-                gaps=gaps,
-                nan_samples=nan, temperature_c=temperature, status=status, bias_rad_s=bias,
-                variance_rad2_s2=var, identifier_key=self._key))
-        return jobs
-
-    def flush(self):
+    def flush(self) -> list[ChunkJob]:
         """
         Finish ingestion: release samples held for rate estimation.
 
@@ -949,57 +797,57 @@ class NoiseEngine:
             Jobs completed by the released samples.
 
         """
+        return self._cut(self._stamps.flush())
+
+    def _cut(self, batches: list[StampedBatch]) -> list[ChunkJob]:
+        """Feed released samples to the Allan deviation and the chunker; return the jobs."""
         jobs = []
-        if self._pending:
-            held = sum(p[0].shape[0] for p in self._pending)
-            if held >= 2:
-                jobs = self._release_pending()
-        if self._hold is not None:
-            empty = np.empty(0, dtype=np.int64)
-            jobs += self._process(empty, np.empty((0, len(self.config.axes))), np.empty(0),
-                                  final=True)
+        for batch in batches:
+            temp, g = batch.payload
+            if self.config.allan:
+                self._allan.feed(g, _NS / self._stamps.period_ns)
+            if self.config.gap_policy == 'split' and batch.gap.any():
+                # A new chunk starts at the first sample after each gap; the partial chunk
+                # before it is discarded, so every analysed chunk is gap-free.
+                bounds = [0, *np.flatnonzero(batch.gap).tolist(), batch.rel_ns.shape[0]]
+                for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+                    if i > 0:
+                        self._discard_partial()
+                    jobs += self._push(batch.rel_ns[a:b], batch.lost[a:b], temp[a:b], g[a:b])
+            else:
+                jobs += self._push(batch.rel_ns, batch.lost, temp, g)
         return jobs
 
-    # ---- Allan
-    # -------------------------------------------------------------------------------------
+    def _discard_partial(self) -> None:
+        dropped = self._chunker.discard()
+        if dropped:
+            self._discarded += dropped
+            self._discarded_partials += 1
 
-    def _feed_allan(self, g):
-        if not self.config.allan or self._allan_error is not None:
-            return
-        if self._allan is None:
-            try:
-                from . import allan as _allan_mod
-                acc = getattr(_allan_mod, 'AllanAccumulator')
-                rate = _NS / self._period_ns
-                self._allan = {a: acc(rate, taus=self.config.allan_taus) for a in self.config.axes}
-            except (ImportError, AttributeError, TypeError) as err:
-                self._allan_error = f'Allan deviation unavailable: {err}'
-                return
-        for k, axis in enumerate(self.config.axes):
-            col = g[:, k]
-            finite = np.isfinite(col)
-            self._allan[axis].update(col if finite.all() else col[finite])
+    def _push(self, rel: np.ndarray, lost: np.ndarray, temp: np.ndarray,
+              g: np.ndarray) -> list[ChunkJob]:
+        jobs = []
+        chunks = self._chunker.push_columns(rel, lost, temp, g)
+        first_index = self._chunker.chunks_out - len(chunks)
+        for index, (rel_c, lost_c, temp_c, g_c) in enumerate(chunks, first_index):
+            lost_c[0] = 0  # a gap before the first sample of a chunk is not inside it
+            samples_lost, gaps = self._stamps.chunk_loss(rel_c, int(lost_c.sum()),
+                                                         int(np.count_nonzero(lost_c)))
+            bursty = self._stamps.bursty
+            dropped = gaps > 0 and (self.config.gap_policy == 'drop'
+                                    or (bursty and self.config.gap_policy == 'split'))
+            chunk = chunk_jobs(index, rel_c, samples_lost, gaps, temp_c,
+                               g_c, axes=self.config.axes, first_ns=self._stamps.first_ns,
+                               dropped=dropped, identifier_key=self._key)
+            for job in chunk:
+                self._book.nan_samples[job.axis] += job.nan_samples
+            jobs += chunk
+        return jobs
 
-    def _allan_result(self, axis):
-        if self._allan is None:
-            return None, None
-        try:
-            result = self._allan[axis].result()
-            if self.config.rate_hz is None:
-                result = rescale_allan(result, self.counts().rate_hz)
-        except (InputDataError, ParameterError, ValueError):
-            return None, None
-        try:
-            terms = fit_noise_terms_band_limited(result)
-        except (InputDataError, ParameterError, ValueError):
-            terms = None    # too few taus for the fit; the readout still reads the curve
-        return result, terms
-
-    # ---- analysis and bookkeeping
-    # --------------------------------------------------------------------
+    # ---- analysis and bookkeeping ------------------------------------------------------------
 
     @staticmethod
-    def analyze(job, *, curves=False):
+    def analyze(job: ChunkJob, *, curves: bool = False) -> ChunkResult:
         """
         Identify one chunk; see :func:`analyze_chunk` (pure, safe in a worker thread or process).
 
@@ -1017,7 +865,7 @@ class NoiseEngine:
         """
         return analyze_chunk(job, curves=curves)
 
-    def record(self, result):
+    def record(self, result: ChunkResult) -> None:
         """
         Add a chunk result to its axis' sequence statistics (only 'ok' chunks enter Tables 3-6).
 
@@ -1027,18 +875,9 @@ class NoiseEngine:
             An analysed chunk of this engine.
 
         """
-        state = self._axis.get(result.axis)
-        if state is None:
-            raise ParameterError(
-                f'axis {result.axis!r} is not analysed by this engine ({self.config.axes})')
-        state.by_status[result.status] = state.by_status.get(result.status, 0) + 1
-        state.last = result
-        if result.status == 'ok':
-            state.rows.append((result.t_mid_s, result.bias_rad_s, result.variance_rad2_s2,
-                               result.alpha_var, result.alpha_corr, result.tie_var,
-                               result.tie_corr, result.temperature_c, result.noise_colour))
+        self._book.record(result)
 
-    def skip(self, job, reason=''):
+    def skip(self, job: ChunkJob, reason: str = '') -> ChunkResult:
         """
         Count a chunk the caller did not analyse (e.g. the node fell behind); shown in diagnostics.
 
@@ -1060,7 +899,7 @@ class NoiseEngine:
         self.record(result)
         return result
 
-    def counts(self):
+    def counts(self) -> StreamCounts:
         """
         Return the stream counters.
 
@@ -1069,28 +908,12 @@ class NoiseEngine:
         StreamCounts
 
         """
-        held = sum(p[0].shape[0] for p in self._pending)
-        est = self.timebase()
-        rate = _NS / self._period_ns if self._period_ns else _NAN
-        if est is not None and self._period_ns:
-            rate = est.rate_hz
-        lost, gaps = self._lost, self._gaps
-        if self._bursty:
-            lost = est.loss_samples if est is not None else 0
-            gaps = self._chunk_loss_events
-        return StreamCounts(samples=self._samples, samples_lost=lost, gaps=gaps,
-                            out_of_order=self._out_of_order, chunks=self._chunk_index,
-                            tail_samples=self._buffered + held, discarded_samples=self._discarded,
-                            discarded_partials=self._discarded_partials, rate_hz=rate,
-                            duration_s=(self._last_ns - self._first_ns) / 1e9
-                            if self._first_ns is not None else 0.0, rate_method=est.method
-                            if est is not None else '', bursty=self._bursty, jitter_s=est.jitter_s
-                            if est is not None else _NAN, timebase=est,
-                            clock_steps=self._clock_steps, equal_stamps=self._equal,
-                            longest_gaps=tuple(sorted(self._gap_events,
-                                                      key=lambda e: -e[2])[:MAX_GAP_EVENTS]))
+        return self._stamps.counts(chunks=self._chunker.chunks_out,
+                                   tail_samples=self._chunker.tail_samples,
+                                   discarded_samples=self._discarded,
+                                   discarded_partials=self._discarded_partials)
 
-    def timebase(self):
+    def timebase(self) -> RateEstimate | None:
         """
         Return the :mod:`.timebase` estimate over every stamp so far (None before 2 stamps).
 
@@ -1099,17 +922,9 @@ class NoiseEngine:
         timebase.RateEstimate or None
 
         """
-        n = self._timebase.samples
-        if self._estimate_cache[0] == n:
-            return self._estimate_cache[1]
-        try:
-            est = self._timebase.estimate(self.config.rate_hz)
-        except InputDataError:
-            est = None
-        self._estimate_cache = (n, est)
-        return est
+        return self._stamps.timebase()
 
-    def summary(self, *, allan=True):
+    def summary(self, *, allan: bool = True) -> dict:
         """
         Summarise every axis (paper Tables 3-6, Allan deviation, counts).
 
@@ -1126,32 +941,31 @@ class NoiseEngine:
 
         """
         counts = self.counts()
+        book = self._book
         out = {}
-        for axis, state in self._axis.items():
-            rows = np.array(list(state.rows), dtype=np.float64).reshape(-1, 9)
-            seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
-                                     tail_samples=counts.tail_samples,
-                                     ties_var=int(rows[:, 5].sum()),
-                                     ties_corr=int(rows[:, 6].sum()),
-                                     order_step=self._order_step, noise_colour=rows[:, 8])
-            temps = rows[:, 7][np.isfinite(rows[:, 7])]
-            result, terms = self._allan_result(axis) if allan else (None, None)
+        for axis in self.config.axes:
+            seq, temperature = book.sequence(axis, tail_samples=counts.tail_samples,
+                                             order_step=self._order_step)
+            result, terms = (self._allan.result(
+                axis, counts.rate_hz if self.config.rate_hz is None else None)
+                if allan else (None, None))
             sheet = None
             if result is not None:
                 try:
                     sheet = read_allan(result, terms)
                 except (InputDataError, ParameterError):
                     sheet = None
+            status = book.by_status[axis]
             out[axis] = AxisSummary(
-                axis=axis, sequence=seq, stream=counts, nan_samples=state.nan_samples,
-                chunks_ok=state.by_status['ok'], chunks_nan=state.by_status['nan'],
-                chunks_dropped=state.by_status['dropped'], chunks_failed=state.by_status['failed'],
-                chunks_skipped=state.by_status['skipped'],
-                temperature_mean_c=float(temps.mean()) if temps.size else _NAN,
+                axis=axis, sequence=seq, stream=counts, nan_samples=book.nan_samples[axis],
+                chunks_ok=status['ok'], chunks_nan=status['nan'],
+                chunks_dropped=status['dropped'], chunks_failed=status['failed'],
+                chunks_skipped=status['skipped'], temperature_mean_c=temperature,
                 allan=result, noise_terms=terms, readout=sheet)
         return out
 
-    def health(self, *, seconds_since_data=None, summaries=None):
+    def health(self, *, seconds_since_data: float | None = None,
+               summaries: dict | None = None) -> dict:
         """
         Judge every axis against the reference and the thresholds (see :mod:`.health`).
 
@@ -1169,8 +983,6 @@ class NoiseEngine:
             ``{axis: HealthVerdict}``.
 
         """
-        from .health import evaluate_health
-
         summaries = summaries if summaries is not None else self.summary(allan=False)
         return {axis: evaluate_health(s, reference=self.reference.get(axis),
                                       thresholds=self.thresholds,
@@ -1178,12 +990,12 @@ class NoiseEngine:
                 for axis, s in summaries.items()}
 
     @property
-    def allan_status(self):
+    def allan_status(self) -> str:
         """Why the Allan deviation is unavailable (empty string when it is available or off)."""
-        return self._allan_error or ''
+        return self._allan.error
 
 
-def warm_up(config):
+def warm_up(config: EngineConfig) -> None:
     """
     Run the analysis path once on synthetic data so the first real chunk does not stall.
 

@@ -224,9 +224,9 @@ class OrderIdentification:
     tied_alphas_corr: tuple
     bias: float
     alphas: np.ndarray
-    var_curve: np.ndarray = None
-    j_curve: np.ndarray = None
-    f_curve: np.ndarray = None
+    var_curve: np.ndarray | None = None
+    j_curve: np.ndarray | None = None
+    f_curve: np.ndarray | None = None
 
 
 #: Algorithms of :class:`OrderIdentifier`: see its doc.

@@ -15,7 +15,7 @@
 """
 Health verdicts of one gyro axis.
 
-The same logic in the analyzer node and the offline tool (issue 4).
+The same logic in the analyzer node and the offline tool.
 
 A verdict compares a run's sequence statistics (paper 000 Tables 3-6) with a *reference
 characterisation* (the offline tool's ``summary.json`` of a reference recording, like the paper's
@@ -85,13 +85,10 @@ from pathlib import Path
 from scipy.special import stdtrit
 
 from .chunks import NOISE_COLOUR_FACTORS, RobustLocation
-from .items import DEG as _DEG
 from .items import fmt as _fmt
+from .items import LEVEL_BYTE, LEVELS, TaskStatus
 from ..errors import InputDataError, ParameterError
-
-#: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
-LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
-LEVEL_BYTE = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
+from ..units import RAD_TO_DEG
 
 
 def _threshold(default, description, unit=''):
@@ -322,7 +319,9 @@ def drift_t_threshold(min_sigma, chunks):
     return float(-stdtrit(chunks - 2, p_two_sided / 2.0))
 
 
-def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_data=None):
+def evaluate_health(summary, *, reference: ReferenceStats | None = None,
+                    thresholds: HealthThresholds | None = None,
+                    seconds_since_data: float | None = None) -> HealthVerdict:
     """
     Judge one axis summary against a reference and the thresholds (module doc).
 
@@ -345,15 +344,28 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     """
     th = thresholds if thresholds is not None else HealthThresholds()
     seq = summary.sequence
-    stream = summary.stream
-    items = []  # (key, value, level, sentence)
+    # (key, value, level, sentence) of every check, in a stable order
+    items = [*_drift_items(seq, reference, th), *_sequence_items(seq, reference, th),
+             *_data_items(summary, th)]
+    items += _chunk_items(summary, th, seconds_since_data)
+    worst_level = 'OK'
+    for item in items:
+        worst_level = _worse(item[2], worst_level)
+    if worst_level == 'OK':
+        basis = 'the reference' if reference is not None else 'the absolute limits'
+        message = f'All checks within thresholds against {basis} ({seq.chunks} chunks).'
+    else:
+        sentence = next(i[3] for i in items if i[2] == worst_level)
+        message = sentence[0].upper() + sentence[1:] + '.'
+    return HealthVerdict(worst_level, message, tuple((k, v, lvl) for k, v, lvl, _ in items))
 
-    def add(key, value, level, sentence):
-        items.append((key, value, level, sentence))
 
+def _drift_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
+    """Return the offset drift items: absolute limits, or the comparison with the reference."""
+    items = []
     judged = seq.chunks >= th.min_chunks
     drift = seq.drift
-    drift_dph = drift.slope * _DEG * 3600.0
+    drift_dph = drift.slope * RAD_TO_DEG * 3600.0
     sigma = abs(drift.slope) / drift.stderr if drift.stderr and math.isfinite(
         drift.stderr) else float('nan')
     significant = judged and math.isfinite(drift.slope) and (
@@ -366,43 +378,57 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
         limit = (
             th.drift_abs_error_deg_s_per_h if level == 'ERROR' else th.drift_abs_warn_deg_s_per_h
         )
-        add('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
-            f'offset drift {abs(drift_dph):.4g} (deg/s)/h is '
-            f'{"above" if level != "OK" else "within"} the limit {limit:g} (deg/s)/h')
+        items.append(('Offset drift ((deg/s)/h)', _fmt(drift_dph), level,
+                      f'offset drift {abs(drift_dph):.4g} (deg/s)/h is '
+                      f'{"above" if level != "OK" else "within"} the limit {limit:g} (deg/s)/h'))
     else:
-        add('Offset drift ((deg/s)/h)', _fmt(drift_dph), 'OK', '')
-        add(*_drift_ratio(drift, reference, th))
-        add(*_compare_drift(seq, reference, th))
-    add('Offset drift significance (sigma)', _fmt(sigma, 3), 'OK', '')
+        items.append(('Offset drift ((deg/s)/h)', _fmt(drift_dph), 'OK', ''))
+        items.append(_drift_ratio(drift, reference, th))
+        items.append(_compare_drift(seq, reference, th))
+    items.append(('Offset drift significance (sigma)', _fmt(sigma, 3), 'OK', ''))
+    return items
 
-    add('Fractional order, variance method', _fmt(seq.alpha_var_mean, 4), 'OK', '')
-    add('Fractional order, correlation method', _fmt(seq.alpha_corr_mean, 4), 'OK', '')
-    var_deg = seq.mean_variance * _DEG ** 2
-    add('Mean variance ((deg/s)^2)', _fmt(var_deg), 'OK', '')
+
+def _sequence_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
+    """Return the orders, variance and colour of the run and their comparisons (reference)."""
+    items = [('Fractional order, variance method', _fmt(seq.alpha_var_mean, 4), 'OK', ''),
+             ('Fractional order, correlation method', _fmt(seq.alpha_corr_mean, 4), 'OK', ''),
+             ('Mean variance ((deg/s)^2)', _fmt(seq.mean_variance * RAD_TO_DEG ** 2), 'OK', '')]
     colour = getattr(seq, 'noise_colour_robust', None)
     if colour is not None:
-        add(COLOUR_NAME, _fmt(colour.location, 4), 'OK', '')
+        items.append((COLOUR_NAME, _fmt(colour.location, 4), 'OK', ''))
     if reference is not None:
-        for spec in _COMPARISONS:
-            add(*_compare(spec, getattr(seq, spec[1], None), getattr(reference, spec[2], None),
-                          th))
+        items += [_compare(spec, getattr(seq, spec[1], None), getattr(reference, spec[2], None),
+                           th) for spec in _COMPARISONS]
+    return items
 
+
+def _data_items(summary, th) -> list[tuple[str, str, str, str]]:
+    """Return the items of the samples: lost (from stamps), NaN, stamp order."""
+    stream = summary.stream
     expected = stream.samples + stream.samples_lost
     lost_frac = stream.samples_lost / expected if expected else 0.0
-    level = ('ERROR' if lost_frac > th.lost_fraction_error else
-             'WARN' if lost_frac > th.lost_fraction_warn else 'OK')
-    add('Samples lost', f'{stream.samples_lost} ({lost_frac:.3g})', level,
-        f'{stream.samples_lost} samples lost in {stream.gaps} gap(s) ({lost_frac:.3g} of '
-        'expected)')
+    lost_level = ('ERROR' if lost_frac > th.lost_fraction_error else
+                  'WARN' if lost_frac > th.lost_fraction_warn else 'OK')
     nan_frac = summary.nan_samples / stream.samples if stream.samples else 0.0
-    level = (
+    nan_level = (
         'ERROR' if nan_frac > th.lost_fraction_error else 'WARN' if summary.nan_samples else 'OK'
     )
-    add('NaN samples', str(summary.nan_samples), level,
-        f'{summary.nan_samples} NaN/Inf samples ({summary.chunks_nan} chunk(s) not analysed)')
-    add('Out-of-order stamps', str(stream.out_of_order), 'WARN' if stream.out_of_order else 'OK',
-        f'{stream.out_of_order} stamps earlier than the latest stamp before them')
-    add('Equal stamps', str(getattr(stream, 'equal_stamps', 0)), 'OK', '')
+    return [
+        ('Samples lost', f'{stream.samples_lost} ({lost_frac:.3g})', lost_level,
+         f'{stream.samples_lost} samples lost in {stream.gaps} gap(s) ({lost_frac:.3g} of '
+         'expected)'),
+        ('NaN samples', str(summary.nan_samples), nan_level,
+         f'{summary.nan_samples} NaN/Inf samples ({summary.chunks_nan} chunk(s) not analysed)'),
+        ('Out-of-order stamps', str(stream.out_of_order),
+         'WARN' if stream.out_of_order else 'OK',
+         f'{stream.out_of_order} stamps earlier than the latest stamp before them'),
+        ('Equal stamps', str(getattr(stream, 'equal_stamps', 0)), 'OK', ''),
+    ]
+
+
+def _chunk_items(summary, th, seconds_since_data) -> list[tuple[str, str, str, str]]:
+    """Return the items of the chunks (skipped, analysed) and of staleness."""
     total = (
         summary.chunks_ok
         + summary.chunks_nan
@@ -413,27 +439,70 @@ def evaluate_health(summary, *, reference=None, thresholds=None, seconds_since_d
     skip_frac = summary.chunks_skipped / total if total else 0.0
     level = ('ERROR' if skip_frac > th.skipped_fraction_error else
              'WARN' if skip_frac > th.skipped_fraction_warn else 'OK')
-    add('Chunks skipped', f'{summary.chunks_skipped} of {total}', level,
-        f'{summary.chunks_skipped} of {total} chunks skipped because analysis fell behind')
-    add('Chunks analysed', str(summary.chunks_ok), 'OK', '')
-
+    items = [('Chunks skipped', f'{summary.chunks_skipped} of {total}', level,
+              f'{summary.chunks_skipped} of {total} chunks skipped because analysis fell behind'),
+             ('Chunks analysed', str(summary.chunks_ok), 'OK', '')]
     if seconds_since_data is not None and seconds_since_data > th.stale_after_s:
-        add('Seconds since data', _fmt(seconds_since_data, 3), 'STALE',
-            f'no data for {seconds_since_data:.1f} s')
-    elif seq.chunks == 0 and total == 0:
-        add('Complete chunks', '0', 'STALE',
-            f'no complete chunk yet ({stream.samples} samples received)')
+        items.append(('Seconds since data', _fmt(seconds_since_data, 3), 'STALE',
+                      f'no data for {seconds_since_data:.1f} s'))
+    elif summary.sequence.chunks == 0 and total == 0:
+        items.append(('Complete chunks', '0', 'STALE',
+                      f'no complete chunk yet ({summary.stream.samples} samples received)'))
+    return items
 
-    worst = 'OK'
-    for item in items:
-        worst = _worse(item[2], worst)
-    if worst == 'OK':
-        basis = 'the reference' if reference is not None else 'the absolute limits'
-        message = f'All checks within thresholds against {basis} ({seq.chunks} chunks).'
-    else:
-        sentence = next(i[3] for i in items if i[2] == worst)
-        message = sentence[0].upper() + sentence[1:] + '.'
-    return HealthVerdict(worst, message, tuple((k, v, lvl) for k, v, lvl, _ in items))
+
+def axis_status(verdict: HealthVerdict, values: list, *, rejected_batches: int = 0,
+                last_rejection: str = '', rejecting: bool = False,
+                seconds_since_data: float | None = None,
+                thresholds: HealthThresholds | None = None, publishers: int = 1) -> TaskStatus:
+    """
+    Return the analyzer's status of one axis: the verdict, the publishers, the refused batches.
+
+    The analyzer's diagnostics task on its timer: the engine's counters (ticked while ingesting)
+    are judged by :func:`evaluate_health`. More than one publisher of the data means a second
+    sensor's samples are mixed into the chunks and every number is suspect: an OK or WARN verdict
+    becomes WARN, and an OK one's message names the publishers (a worse verdict's message
+    leads). Refused batches add their count and reason to the values, and while data arrives but
+    is refused the level is ERROR (rather than STALE for 'no chunk yet'); once batches are
+    accepted again only the count stays.
+
+    Parameters
+    ----------
+    verdict : HealthVerdict
+        The axis' verdict.
+    values : list of (str, str)
+        The key/values of the status (the verdict's items first), in order.
+    rejected_batches : int, keyword-only
+        Batches the engine refused so far.
+    last_rejection : str, keyword-only
+        Why the last one was refused.
+    rejecting : bool, keyword-only
+        The latest batch was refused.
+    seconds_since_data : float, optional, keyword-only
+        Time since the last message arrived (s); None before any.
+    thresholds : HealthThresholds, optional, keyword-only
+        Their ``stale_after_s``: no data for longer is silence, not refusal.
+    publishers : int, keyword-only
+        Publishers of the data that delivered recently (the node's count).
+
+    Returns
+    -------
+    TaskStatus
+
+    """
+    th = thresholds if thresholds is not None else HealthThresholds()
+    values = list(values)
+    level, message = verdict.level, verdict.message
+    if publishers > 1 and level in ('OK', 'WARN'):
+        if level == 'OK':
+            message = f'{publishers} publishers of the data: their samples are mixed.'
+        level = 'WARN'
+    if rejected_batches:
+        values += [('Batches rejected', str(rejected_batches)), ('Last rejection', last_rejection)]
+        silent = seconds_since_data is not None and seconds_since_data > th.stale_after_s
+        if rejecting and not silent:
+            level, message = 'ERROR', f'Samples rejected: {last_rejection}.'
+    return TaskStatus(level, message, tuple(values))
 
 
 #: Item key of the run's noise colour (robust location of the chunk values, informative).
@@ -502,7 +571,7 @@ def _compare_drift(seq, reference, th):
     error = th.reference_error_sigma * inflation
     level = 'ERROR' if z > error else 'WARN' if z > warn else 'OK'
     limit = error if level == 'ERROR' else warn
-    per_h = _DEG * 3600.0
+    per_h = RAD_TO_DEG * 3600.0
     return (key, _fmt(z, 3), level,
             f'offset drift {drift.slope * per_h:+.4g} (deg/s)/h differs from the reference '
             f'{ref * per_h:+.4g} (deg/s)/h by {z:.3g} standard errors of both '
@@ -513,9 +582,9 @@ def _compare_drift(seq, reference, th):
 
 def _describe(loc, kind):
     if kind == 'rate':
-        value = f'{loc.location * _DEG:.4g} deg/s'
+        value = f'{loc.location * RAD_TO_DEG:.4g} deg/s'
     elif kind == 'log':
-        value = f'{math.exp(loc.location) * _DEG ** 2:.4g} (deg/s)^2'
+        value = f'{math.exp(loc.location) * RAD_TO_DEG ** 2:.4g} (deg/s)^2'
     else:
         value = f'{loc.location:.3f}'
     if loc.population == 'dominant mode':
@@ -570,7 +639,7 @@ def _compare(spec, mine, ref, th):
         return key, 'n/a', 'OK', f'{name}: no finite chunk values'
     diff = mine.location - ref.location
     if kind == 'rate':
-        value, by = f'{diff * _DEG:+.4g}', f'{abs(diff) * _DEG:.3g} deg/s'
+        value, by = f'{diff * RAD_TO_DEG:+.4g}', f'{abs(diff) * RAD_TO_DEG:.3g} deg/s'
     elif kind == 'log':
         value, by = f'{math.exp(diff):.4g}', f'a factor {math.exp(diff):.3g}'
     else:

@@ -21,13 +21,73 @@ parentheses as diagnostic_msgs conventions want (``'Bias (deg/s)'``); missing nu
 ``'nan'`` or ``'n/a'`` so dashboards keep a stable set of keys.
 """
 
+from dataclasses import dataclass
 import math
 
-#: Degrees per radian: SI inside, degrees only at the edges (keys say which).
-DEG = 180.0 / math.pi
+from ..units import RAD_TO_DEG
+
+#: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
+LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
+LEVEL_BYTE = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
 
 
-def fmt(value, digits=4):
+@dataclass(frozen=True)
+class TaskStatus:
+    """
+    What one diagnostic task reports per period: the shape every node's status is built from.
+
+    Each node keeps cumulative counters it bumps cheaply on the hot path; on the diagnostics
+    timer a pure function or task object (``link.health.LinkTask``, ``core.health.axis_status``,
+    ``diagnostics.compensation.CompensationTask``) takes their differences, picks the level
+    from explicit limits held in a thresholds dataclass and returns this; the node only wraps it
+    in a ``diagnostic_msgs/DiagnosticStatus`` (ros/diagnostics' diagnostic_updater tasks).
+
+    Attributes
+    ----------
+    level : str
+        One of :data:`LEVELS`.
+    message : str
+        One sentence naming the worst item.
+    values : tuple of (str, str)
+        Readable keys with the unit in parentheses and their formatted values, in a stable order.
+
+    """
+
+    level: str
+    message: str
+    values: tuple
+
+    @property
+    def level_byte(self) -> int:
+        """int: The level as a DiagnosticStatus byte value (0 OK ... 3 STALE)."""
+        return LEVEL_BYTE[self.level]
+
+
+def worst(checks, ok_message: str) -> tuple[str, str]:
+    """
+    Pick the level and message of the worst failed check (the first one among equals).
+
+    Parameters
+    ----------
+    checks : iterable of (str, str)
+        Level (one of :data:`LEVELS`) and one-sentence message of each check that did not pass.
+    ok_message : str
+        Message when no check is worse than OK.
+
+    Returns
+    -------
+    (str, str)
+        Level and message.
+
+    """
+    level, message = 'OK', ok_message
+    for check_level, check_message in checks:
+        if LEVELS.index(check_level) > LEVELS.index(level):
+            level, message = check_level, check_message
+    return level, message
+
+
+def fmt(value: float | int | None, digits: int = 4) -> str:
     """
     Format a number with ``digits`` significant digits; ``'nan'`` for None, NaN or infinity.
 
@@ -48,7 +108,7 @@ def fmt(value, digits=4):
     return f'{value:.{digits}g}'
 
 
-def last_chunk_items(result):
+def last_chunk_items(result) -> list[tuple[str, str]]:
     """
     Return the items of the latest chunk of one axis.
 
@@ -66,8 +126,8 @@ def last_chunk_items(result):
     """
     return [
         ('Last chunk', f'{result.chunk} ({result.status})'),
-        ('Bias (deg/s)', fmt(result.bias_rad_s * DEG)),
-        ('Variance ((deg/s)^2)', fmt(result.variance_rad2_s2 * DEG ** 2)),
+        ('Bias (deg/s)', fmt(result.bias_rad_s * RAD_TO_DEG)),
+        ('Variance ((deg/s)^2)', fmt(result.variance_rad2_s2 * RAD_TO_DEG ** 2)),
         ('Last chunk fractional order, variance method', fmt(result.alpha_var, 3)),
         ('Last chunk fractional order, correlation method', fmt(result.alpha_corr, 3)),
         ('Last chunk f, variance method', fmt(result.f_var)),
@@ -82,7 +142,7 @@ ALLAN_KEYS = ('ADEV at 1 s (deg/s)', 'Bias stability (deg/s)', 'Bias stability t
               'Angle random walk (deg/sqrt(h))', 'Bias instability (deg/h)')
 
 
-def allan_items(summary):
+def allan_items(summary) -> list[tuple[str, str]]:
     """
     Return an axis' Allan deviation items, all read by :func:`.readout.read_allan`.
 
@@ -104,17 +164,19 @@ def allan_items(summary):
     out = dict.fromkeys(ALLAN_KEYS, 'n/a')
     r = None if summary is None else getattr(summary, 'readout', None)
     if r is not None:
-        out['ADEV at 1 s (deg/s)'] = fmt(r.adev_1s_rad_s * DEG)
+        out['ADEV at 1 s (deg/s)'] = fmt(r.adev_1s_rad_s * RAD_TO_DEG)
         bound = '<=' if r.bias_stability_upper_bound else ''
-        out['Bias stability (deg/s)'] = bound + fmt(r.bias_stability_rad_s * DEG)
+        out['Bias stability (deg/s)'] = bound + fmt(r.bias_stability_rad_s * RAD_TO_DEG)
         out['Bias stability tau (s)'] = fmt(r.bias_stability_tau_s)
         # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
-        out['Angle random walk (deg/sqrt(h))'] = fmt(r.arw_rad_per_sqrt_s * DEG * 60.0)
-        out['Bias instability (deg/h)'] = bound + fmt(r.bias_instability_rad_s * DEG * 3600.0)
+        out['Angle random walk (deg/sqrt(h))'] = fmt(r.arw_rad_per_sqrt_s * RAD_TO_DEG * 60.0)
+        out['Bias instability (deg/h)'] = bound + fmt(
+            r.bias_instability_rad_s * RAD_TO_DEG * 3600.0)
     return list(out.items())
 
 
-def stream_items(counts, *, chunk_size, mean_temperature_c):
+def stream_items(counts, *, chunk_size: int,
+                 mean_temperature_c: float) -> list[tuple[str, str]]:
     """
     Return the stream counters of one axis.
 

@@ -30,6 +30,7 @@ and leaves its chunk out, ``gyro_noise_explain`` refuses the record (exit code 4
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 #: Largest angular rate magnitude (rad/s) taken as a measurement.
 MAX_RATE_RAD_S = 1e6
@@ -37,7 +38,7 @@ MAX_RATE_RAD_S = 1e6
 MAX_SPECIFIC_FORCE_M_S2 = 1e8
 
 
-def non_physical(values, limit):
+def non_physical(values: ArrayLike, limit: float) -> np.ndarray:
     """
     Mark finite values whose magnitude exceeds ``limit``.
 
@@ -59,7 +60,7 @@ def non_physical(values, limit):
         return np.isfinite(v) & (np.abs(v) > limit)
 
 
-def mask_non_physical(values, limit):
+def mask_non_physical(values: ArrayLike, limit: float) -> tuple[np.ndarray, int]:
     """
     Replace values beyond ``limit`` by NaN (so they count as unusable samples).
 

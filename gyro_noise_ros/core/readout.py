@@ -80,12 +80,15 @@ each key. The rules, and why:
 
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 import scipy.stats
 
-from .allan import fit_noise_terms
+from .allan import AllanResult, fit_noise_terms, NoiseTerms
 from ..errors import InputDataError, ParameterError
+from ..units import RAD_TO_DEG, S_PER_H
 
 __all__ = ['AdevFloor', 'AllanReadout', 'B_FACTOR', 'BAND_LIMITED_SLOPE', 'MAX_TAU_FRACTION',
            'QUANTIZATION_SLOPE', 'SIGNIFICANCE', 'WHITE_SLOPE_TOLERANCE', 'adev_at', 'adev_floor',
@@ -110,10 +113,8 @@ B_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 POOR_MAX_ERROR = 0.25
 POOR_RMS = 0.20
 
-_DEG = 180.0 / math.pi
 
-
-def _num(v):
+def _num(v: float | None) -> float | None:
     return None if v is None or not math.isfinite(v) else float(v)
 
 
@@ -198,7 +199,7 @@ class AllanReadout:
     fit_max_relative_error: float
     record_s: float
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return SI and customary values with units in the keys (NaN as None).
 
@@ -218,22 +219,22 @@ class AllanReadout:
         out['arw_tau_range_s'] = [_num(v) for v in self.arw_tau_range_s]
         for key in ('bias_stability', 'bias_stability_ci_low', 'bias_stability_ci_high'):
             v = getattr(self, f'{key}_rad_s')
-            out[f'{key}_deg_s'] = _num(v * _DEG)
-            out[f'{key}_deg_h'] = _num(v * _DEG * 3600.0)
-        out['bias_instability_deg_h'] = _num(self.bias_instability_rad_s * _DEG * 3600.0)
+            out[f'{key}_deg_s'] = _num(v * RAD_TO_DEG)
+            out[f'{key}_deg_h'] = _num(v * RAD_TO_DEG * S_PER_H)
+        out['bias_instability_deg_h'] = _num(self.bias_instability_rad_s * RAD_TO_DEG * S_PER_H)
         for key in ('arw', 'arw_ci_low', 'arw_ci_high'):
             # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s) = 60 sqrt(s) per sqrt(h)
-            out[f'{key}_deg_per_sqrt_h'] = _num(getattr(self, f'{key}_rad_per_sqrt_s') * _DEG
-                                                * 60.0)
-        out['adev_1s_deg_s'] = _num(self.adev_1s_rad_s * _DEG)
+            out[f'{key}_deg_per_sqrt_h'] = _num(getattr(self, f'{key}_rad_per_sqrt_s')
+                                                * RAD_TO_DEG * 60.0)
+        out['adev_1s_deg_s'] = _num(self.adev_1s_rad_s * RAD_TO_DEG)
         for key in ('rate_random_walk', 'rate_random_walk_bound'):
             # rad/s/sqrt(s) -> deg/h/sqrt(h): 3600 per (s -> h) and 60 per sqrt(s) -> sqrt(h)
             out[f'{key}_deg_per_h_sqrt_h'] = _num(getattr(self, f'{key}_rad_per_s_sqrt_s')
-                                                  * _DEG * 3600.0 * 60.0)
-        out['quantization_deg'] = _num(self.quantization_rad * _DEG)
+                                                  * RAD_TO_DEG * S_PER_H * 60.0)
+        out['quantization_deg'] = _num(self.quantization_rad * RAD_TO_DEG)
         return out
 
-    def kalibr(self):
+    def kalibr(self) -> dict[str, float | bool]:
         """
         Return the Kalibr / OpenVINS noise parameters of this axis (continuous time, SI).
 
@@ -284,12 +285,12 @@ class AdevFloor:
     reason: str = ''
 
 
-def _slopes(tau, adev):
+def _slopes(tau: np.ndarray, adev: np.ndarray) -> np.ndarray:
     with np.errstate(divide='ignore', invalid='ignore'):
         return np.diff(np.log(adev)) / np.diff(np.log(tau))
 
 
-def usable_start(tau_s, adev):
+def usable_start(tau_s: ArrayLike, adev: ArrayLike) -> int:
     """
     Return the index of the first usable tau: after leading band-limited or quantization taus.
 
@@ -313,7 +314,7 @@ def usable_start(tau_s, adev):
     return int(white[0]) if white.size else 0
 
 
-def band_limited_below(result):
+def band_limited_below(result: AllanResult) -> float:
     """
     Return the first tau not flattened by band limiting (module doc); 0.0 when none is.
 
@@ -340,7 +341,7 @@ def band_limited_below(result):
     return float(tau[k]) if k else 0.0
 
 
-def fit_noise_terms_band_limited(result, **kwargs):
+def fit_noise_terms_band_limited(result: AllanResult, **kwargs: Any) -> NoiseTerms:
     """
     Fit the IEEE 952 terms (:func:`allan.fit_noise_terms`) without the band-limited short taus.
 
@@ -363,7 +364,7 @@ def fit_noise_terms_band_limited(result, **kwargs):
     return fit_noise_terms(result, tau_range_s=(lo, hi), **kwargs)
 
 
-def _f_upper(edf_num, edf_den):
+def _f_upper(edf_num: float, edf_den: float) -> float:
     """Critical ratio of two variance estimates at :data:`SIGNIFICANCE` (inf EDF: 1)."""
     if not (math.isfinite(edf_num) or math.isfinite(edf_den)):
         return 1.0
@@ -374,7 +375,8 @@ def _f_upper(edf_num, edf_den):
     return float(scipy.stats.f.ppf(1.0 - SIGNIFICANCE, edf_num, edf_den))
 
 
-def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0, max_tau_s=math.inf):
+def adev_floor(tau_s: ArrayLike, adev: ArrayLike, *, edf: ArrayLike | None = None,
+               min_edf: float = 0.0, max_tau_s: float = math.inf) -> 'AdevFloor':
     """
     Find where an Allan deviation stops falling: the bias-stability rule of the module doc.
 
@@ -444,7 +446,7 @@ def adev_floor(tau_s, adev, *, edf=None, min_edf=0.0, max_tau_s=math.inf):
     return AdevFloor(int(j), float(tau[j]), float(sig[j]), not real or deeper, start)
 
 
-def adev_at(result, tau_s):
+def adev_at(result: AllanResult, tau_s: float) -> float:
     """
     Return the Allan deviation at ``tau_s``, interpolated in log-log between neighbouring taus.
 
@@ -472,7 +474,8 @@ def adev_at(result, tau_s):
     return float(np.exp(np.interp(math.log(t), np.log(tau), np.log(adev))))
 
 
-def _arw(tau, adev, lo, hi, start, stop, result):
+def _arw(tau: np.ndarray, adev: np.ndarray, lo: np.ndarray, hi: np.ndarray, start: int,
+         stop: int, result: AllanResult) -> tuple[Any, ...]:
     """Return (N, low, high, (tau_a, tau_b), from_region) (module doc)."""
     slopes = _slopes(tau, adev)
     white = np.abs(slopes + 0.5) <= WHITE_SLOPE_TOLERANCE
@@ -503,7 +506,7 @@ def _arw(tau, adev, lo, hi, start, stop, result):
     return a1, a1 * lo[near] / adev[near], a1 * hi[near] / adev[near], (1.0, 1.0), False
 
 
-def _quantization(tau, adev):
+def _quantization(tau: np.ndarray, adev: np.ndarray) -> float:
     slopes = _slopes(tau, adev)
     e = 0
     while e < slopes.size and abs(slopes[e] + 1.0) <= QUANTIZATION_SLOPE_TOLERANCE:
@@ -514,7 +517,7 @@ def _quantization(tau, adev):
     return float(np.exp(np.mean(np.log(adev[pts] * tau[pts] / math.sqrt(3.0)))))
 
 
-def read_allan(result, terms=None):
+def read_allan(result: AllanResult, terms: NoiseTerms | None = None) -> 'AllanReadout':
     """
     Read bias stability, B, ARW, K (and its bound) and Q off an Allan deviation (module doc).
 
@@ -591,7 +594,7 @@ def read_allan(result, terms=None):
         record_s=float(result.n_samples) / float(result.rate_hz))
 
 
-def random_walk_bound(result):
+def random_walk_bound(result: AllanResult) -> float:
     """
     Return a conservative upper bound of the rate random walk K a record cannot resolve.
 

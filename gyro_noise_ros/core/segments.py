@@ -124,6 +124,11 @@ class WindowStats:
             row[1] += g[sel].sum(axis=0)
             row[2] += (g[sel] ** 2).sum(axis=0)
 
+    @property
+    def windows(self) -> int:
+        """int: the windows that have received at least one sample so far."""
+        return len(self._rows)
+
     def segment(self):
         """
         Choose the static part of the record (see the module doc); None below 3 windows.

@@ -41,6 +41,7 @@ from functools import lru_cache
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.signal import lfilter
 
 from ._kernels import _fractional_recursion
@@ -77,7 +78,7 @@ class StabilityReport:
 
 
 @lru_cache(maxsize=256)
-def check_stability(alpha, f, memory=DEFAULT_MEMORY):
+def check_stability(alpha: float, f: float, memory: int = DEFAULT_MEMORY) -> 'StabilityReport':
     """
     Decide whether the recursion of eq. (2) with these parameters is stable.
 
@@ -112,7 +113,8 @@ def check_stability(alpha, f, memory=DEFAULT_MEMORY):
     return StabilityReport(stable, a1, am1, rel_min, winding)
 
 
-def require_stable(alpha, f, memory=DEFAULT_MEMORY):
+def require_stable(alpha: float, f: float,
+                   memory: int = DEFAULT_MEMORY) -> 'StabilityReport':
     """
     Raise UnstableModelError unless (alpha, f, L) gives a stable recursion.
 
@@ -158,7 +160,8 @@ class FractionalNoise:
 
     """
 
-    def __init__(self, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0, bias=0.0):
+    def __init__(self, alpha: float, f: float, sigma_w: float, *, rng: np.random.Generator,
+                 memory: int = DEFAULT_MEMORY, sigma_nu: float = 0.0, bias: float = 0.0) -> None:
         if not isinstance(rng, np.random.Generator):
             raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
         for name, value in (('sigma_w', sigma_w), ('sigma_nu', sigma_nu)):
@@ -175,7 +178,7 @@ class FractionalNoise:
         self._history = np.zeros(self.memory)
         self.samples_generated = 0
 
-    def generate(self, n):
+    def generate(self, n: int) -> np.ndarray:
         """
         Return the next ``n`` output samples (state carries over between calls).
 
@@ -209,8 +212,9 @@ class FractionalNoise:
         return out
 
 
-def simulate_fractional_noise(n, alpha, f, sigma_w, *, rng, memory=DEFAULT_MEMORY, sigma_nu=0.0,
-                              bias=0.0):
+def simulate_fractional_noise(n: int, alpha: float, f: float, sigma_w: float, *,
+                              rng: np.random.Generator, memory: int = DEFAULT_MEMORY,
+                              sigma_nu: float = 0.0, bias: float = 0.0) -> np.ndarray:
     """
     Return ``n`` samples of the fractional-order noise of eq. (2) (with eqs. 10-11 and a bias).
 
@@ -241,7 +245,7 @@ GM_SERIES_BELOW = 0.1
 _GM_SERIES = tuple((-1.0) ** k * (4.0 - 2.0 ** k) / math.factorial(k) for k in range(3, 13))
 
 
-def gauss_markov_avar(tau_s, std, corr_time_s):
+def gauss_markov_avar(tau_s: ArrayLike, std: float, corr_time_s: float) -> np.ndarray:
     """
     Allan variance of a stationary first-order Gauss-Markov process (closed form).
 
@@ -310,7 +314,8 @@ class GaussMarkov:
 
     """
 
-    def __init__(self, std, corr_time_s, rate_hz, *, rng, shape=()):
+    def __init__(self, std: float, corr_time_s: float, rate_hz: float, *,
+                 rng: np.random.Generator, shape: tuple[int, ...] = ()) -> None:
         if not isinstance(rng, np.random.Generator):
             raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
         if not math.isfinite(std) or std < 0:
@@ -329,7 +334,7 @@ class GaussMarkov:
         self._rng = rng
         self.state = rng.standard_normal(self.shape) * self.std
 
-    def generate(self, n):
+    def generate(self, n: int) -> np.ndarray:
         """
         Return the next ``n`` samples (the state carries over between calls).
 
@@ -356,7 +361,8 @@ class GaussMarkov:
         return out
 
 
-def gauss_markov(n, rate_hz, *, std, corr_time_s, rng, shape=()):
+def gauss_markov(n: int, rate_hz: float, *, std: float, corr_time_s: float,
+                 rng: np.random.Generator, shape: tuple[int, ...] = ()) -> np.ndarray:
     """
     Return ``n`` samples of a stationary first-order Gauss-Markov process (:class:`GaussMarkov`).
 

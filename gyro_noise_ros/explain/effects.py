@@ -66,9 +66,9 @@ it shrinks the gap.
 import numpy as np
 import scipy.interpolate
 import scipy.optimize
-import scipy.signal
 
 from .signatures import chunk_series, compare, temperature_edges, temperature_rate
+from ..core.simulate import gauss_markov, gauss_markov_avar
 
 
 #: Standard deviations above the members' mean statistic a detection must lie (and above the worst
@@ -621,13 +621,6 @@ def allan_template_from_psd(psd, tau_s, rate_hz, duration_s):
     return 4.0 * np.trapezoid(integrand, freq, axis=1)
 
 
-def gm_allan(sigma, tc, tau):
-    """Return the closed-form AVAR of a first-order Gauss-Markov process (sd sigma, time tc)."""
-    x = tau / tc
-    return 2.0 * sigma ** 2 * tc / tau * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x))
-                                          / (2.0 * x))
-
-
 class _AllanFitted(Effect):
     """
     Common part.
@@ -778,7 +771,7 @@ class GaussMarkov(_AllanFitted):
         tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, self.GRID_POINTS)
         tau = ctx.layout.tau_s
         return [{'correlation_time_s': float(c)} for c in tcs], np.array(
-            [gm_allan(1.0, c, tau) for c in tcs])
+            [gauss_markov_avar(tau, 1.0, c) for c in tcs])
 
     #: Geometric grid of the correlation time: 3 / fs .. T / 10 in this many points.
     GRID_POINTS = 30
@@ -796,11 +789,8 @@ class GaussMarkov(_AllanFitted):
         return index < count - 2
 
     def term(self, params, n, rate_hz, rng, ctx):
-        phi = np.exp(-1.0 / (rate_hz * params['correlation_time_s']))
-        sigma = params['sigma_rad_s']
-        drive = rng.standard_normal(n) * sigma * np.sqrt(1.0 - phi * phi)
-        drive[0] = rng.standard_normal() * sigma
-        return _zero_mean(scipy.signal.lfilter([1.0], [1.0, -phi], drive))
+        return _zero_mean(gauss_markov(n, rate_hz, std=params['sigma_rad_s'],
+                                       corr_time_s=params['correlation_time_s'], rng=rng))
 
 
 # --------------------------------------------------------------------------------------------------

@@ -15,45 +15,30 @@
 """
 Inputs of the discrepancy workflow: one gyro axis with stamps, optionally the sensor temperature.
 
-Two sources are read, both into a :class:`Measurement` (SI units):
+Every recording ``gyro_noise_analyze`` reads is read here, through the one input layer
+:mod:`gyro_noise_ros.bag.inputs` (rosbag2 folder / ``.db3`` / ``.mcap``, ROS 1 ``.bag``, CSV with
+the column spellings and units of :mod:`gyro_noise_ros.bag.tabular`, PX4 ``.ulg``), with the same
+refusals and exit codes; a bag's temperature is interpolated linearly onto the Imu stamps. A CSV
+needs only the gyro column of the axis analysed.
 
-* a rosbag2 directory / ``.db3`` / ``.mcap`` or a ROS 1 ``.bag`` with ``sensor_msgs/Imu`` (and
-  optionally ``sensor_msgs/Temperature``), through :class:`gyro_noise_ros.bag.ImuBagReader`; the
-  temperature is interpolated linearly onto the Imu stamps;
-* a CSV file with a header line. Documented columns (any order, extra columns ignored):
-
-  ====================================  ===========================================================
-  ``time_s`` (or ``t_s``)               sample time in s (optional when ``rate_hz`` is given)
-  ``gyro_x_rad_s``, ``gyro_y_rad_s``,   angular rate in rad/s; ``gyro_x_dps`` ... (deg/s) are
-  ``gyro_z_rad_s``                      accepted instead and converted (only the chosen axis is
-                                        needed)
-  ``temperature_c`` (or ``temp_c``)     sensor temperature in degC (optional)
-  ====================================  ===========================================================
-
-* a PX4 ULog ``.ulg`` (``sensor_combined`` or ``sensor_gyro``), through
-  :class:`gyro_noise_ros.bag.tabular.TableImuReader`.
-
-Stamps: the nominal rate is ``rate_hz`` if given, else the :mod:`gyro_noise_ros.core.timebase`
-estimate (the same estimator as ``gyro_noise_analyze``: step mean for device clocks, block median
-for bursty host stamps); the estimate, its method and its warnings are kept in
-``Measurement.timebase``.
+The result is a :class:`Measurement` (SI units). Stamps: the nominal rate is ``rate_hz`` if given,
+else the :mod:`gyro_noise_ros.core.timebase` estimate (the same estimator as
+``gyro_noise_analyze``: step mean for device clocks, block median for bursty host stamps); the
+estimate, its method and its warnings are kept in ``Measurement.timebase``.
 """
 
-import csv
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from ..bag.inputs import AXES, read_imu
 from ..core.plausible import MAX_RATE_RAD_S, non_physical
-from ..errors import BagError, InputDataError, nothing_left_error, ParameterError
+from ..errors import InputDataError, nothing_left_error, ParameterError
 
 #: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks
 #: and the order identification needs chunks longer than its memory; the layout scales with the
 #: record, so a minute at 250 Hz, 15,000 samples, is enough).
 MIN_SAMPLES = 8192
-
-AXES = ('x', 'y', 'z')
 
 
 @dataclass(frozen=True)
@@ -193,68 +178,50 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
                        source=source, timebase=timebase)
 
 
-def load_csv(path, *, axis='z', rate_hz=None, require_temperature=False):
+def from_record(record, *, axis='z', rate_hz=None, require_temperature=False):
     """
-    Read a CSV with the documented columns (module doc) into a :class:`Measurement`.
+    Build the :class:`Measurement` of one gyro axis of a recording read in memory.
 
     Parameters
     ----------
-    path : str or os.PathLike
-        CSV file with a header line.
+    record : gyro_noise_ros.bag.inputs.ImuRecord
+        The recording (:func:`gyro_noise_ros.bag.inputs.read_imu`).
     axis : {'x', 'y', 'z'}, keyword-only
         Gyro axis to analyse.
     rate_hz : float, keyword-only
-        Nominal rate (Hz); required when there is no time column, else overrides the mean rate.
+        Nominal rate (Hz); None means the :mod:`~gyro_noise_ros.core.timebase` estimate.
     require_temperature : bool, keyword-only
-        Raise InputDataError if there is no temperature column.
+        Raise InputDataError if the recording has no temperature.
 
     Returns
     -------
     Measurement
 
     """
-    from ..bag.tabular import missing_column_error, read_csv
-
-    _check_axis(axis)
-    path = Path(path)
-
-    def col(names, *choices):
-        return next((names.index(c) for c in choices if c in names), None)
-
-    def check(names):
-        if col(names, f'gyro_{axis}_rad_s', f'gyro_{axis}_dps') is None:
-            raise missing_column_error(path, f'gyro_{axis}_rad_s (or gyro_{axis}_dps)', names)
-        if col(names, 'time_s', 't_s') is None and rate_hz is None:
-            raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
-
-    names, data = read_csv(path, check_header=check)
-    i_t = col(names, 'time_s', 't_s')
-    i_rad = col(names, f'gyro_{axis}_rad_s')
-    i_dps = col(names, f'gyro_{axis}_dps')
-    i_temp = col(names, 'temperature_c', 'temp_c')
-    rate = data[:, i_rad] if i_rad is not None else np.deg2rad(data[:, i_dps])
-    return make_measurement(
-        rate, t_s=None if i_t is None else data[:, i_t], rate_hz=rate_hz,
-        temperature_c=None if i_temp is None else data[:, i_temp], axis=axis, source=str(path),
-        require_temperature=require_temperature)
+    index = _check_axis(axis)
+    t_s = (record.stamp_ns - record.stamp_ns[0]).astype(np.float64) * 1e-9
+    return make_measurement(record.gyro_rad_s[:, index], t_s=t_s, rate_hz=rate_hz,
+                            temperature_c=record.temperature_c, axis=axis, source=record.source,
+                            require_temperature=require_temperature)
 
 
-def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
-             require_temperature=False):
+def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
+               require_temperature=False):
     """
-    Read one gyro axis (and temperature) of a bag into a :class:`Measurement`.
+    Read one gyro axis (and the temperature) of any recording into a :class:`Measurement`.
 
     Parameters
     ----------
     path : str or os.PathLike
-        rosbag2 directory/file or ROS 1 bag.
+        Bag, CSV or ULog (:mod:`gyro_noise_ros.bag.inputs`).
     topic, temperature_topic : str, keyword-only
-        Imu and Temperature topics (auto-detected when None, see ImuBagReader). Naming a
-        temperature topic means temperature is required.
+        Imu and Temperature topics (auto-detected when None). Naming a temperature topic means
+        temperature is required.
     axis : {'x', 'y', 'z'}, keyword-only
         Gyro axis to analyse.
     rate_hz : float, keyword-only
-        Nominal rate (Hz); None means the mean rate of the header stamps.
+        Nominal rate (Hz); required for a CSV without a time column, else it overrides the
+        estimate from the stamps.
     require_temperature : bool, keyword-only
         Raise InputDataError if there is no temperature.
 
@@ -263,62 +230,12 @@ def load_bag(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None
     Measurement
 
     """
-    from ..bag import ImuBagReader
-    from ..bag.tabular import TableImuReader
-
-    index = _check_axis(axis)
+    _check_axis(axis)
     require_temperature = require_temperature or temperature_topic is not None
-    stamps, rates = [], []
-    if Path(path).suffix.lower() == '.ulg':
-        reader = TableImuReader(path, topic=topic, temperature_topic=temperature_topic)
-    else:
-        reader = ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
-    with reader:
-        for batch in reader.iter_batches():
-            stamps.append(batch.stamp_ns)
-            rates.append(batch.gyro[:, index])
-        temperature = reader.read_temperature()
-        imu_topic = reader.topic
-    stamp_ns = np.concatenate(stamps)
-    t_s = (stamp_ns - stamp_ns[0]).astype(np.float64) * 1e-9
-    temp = None
-    if temperature is not None and temperature[0].size:
-        ts = (temperature[0] - stamp_ns[0]).astype(np.float64) * 1e-9
-        order = np.argsort(ts, kind='stable')
-        temp = np.interp(t_s, ts[order], temperature[1][order])
-    elif require_temperature:
-        raise InputDataError(
-            f'temperature was asked for but bag {str(path)!r} has no temperature messages')
-    return make_measurement(np.concatenate(rates), t_s=t_s, rate_hz=rate_hz, temperature_c=temp,
-                            axis=axis, source=f'{path} ({imu_topic})',
-                            require_temperature=require_temperature)
-
-
-def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
-               require_temperature=False):
-    """
-    Read a bag or a CSV (chosen by the path) into a :class:`Measurement`.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        ``*.csv`` is read as CSV; anything else as a bag.
-    topic, temperature_topic, axis, rate_hz, require_temperature : keyword-only
-        See :func:`load_bag` and :func:`load_csv`.
-
-    Returns
-    -------
-    Measurement
-
-    """
-    path = Path(path)
-    if not path.exists():
-        raise BagError(f'input {str(path)!r} does not exist')
-    if path.suffix.lower() == '.csv':
-        return load_csv(path, axis=axis, rate_hz=rate_hz, require_temperature=require_temperature)
-    # .ulg is read by bag.tabular.TableImuReader inside load_bag.
-    return load_bag(path, topic=topic, temperature_topic=temperature_topic, axis=axis,
-                    rate_hz=rate_hz, require_temperature=require_temperature)
+    record = read_imu(path, topic=topic, temperature_topic=temperature_topic, rate_hz=rate_hz,
+                      gyro_axes=(axis,))
+    return from_record(record, axis=axis, rate_hz=rate_hz,
+                       require_temperature=require_temperature)
 
 
 def select(meas, *, start_s=None, end_s=None, static='auto'):
@@ -371,29 +288,3 @@ def select(meas, *, start_s=None, end_s=None, static='auto'):
     out = make_measurement(meas.rate[keep], t_s=t[keep], rate_hz=meas.rate_hz if fixed else None,
                            temperature_c=temp, axis=meas.axis, source=meas.source)
     return out, left
-
-
-def available_axes(path):
-    """
-    Return the gyro axes an input holds (a CSV may carry only some; bags and ULogs hold three).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Input file or bag.
-
-    Returns
-    -------
-    tuple of str
-
-    """
-    path = Path(path)
-    if path.suffix.lower() != '.csv' or not path.is_file():
-        return AXES
-    try:
-        with path.open(newline='') as fh:
-            header = [h.strip().lower() for h in next(csv.reader(fh), [])]
-    except (OSError, UnicodeDecodeError, csv.Error):
-        return AXES  # load_csv says what is wrong with the file
-    found = tuple(a for a in AXES if f'gyro_{a}_rad_s' in header or f'gyro_{a}_dps' in header)
-    return found or AXES

@@ -29,11 +29,11 @@ import numpy as np
 
 from . import signatures as sig
 from .effects import public_params
-from .uncertainty import format_value
+from .uncertainty import format_value, PARAMETERS
 from ..errors import OutputError
 from ..outputs import staged_output
+from ..units import RAD_TO_DEG
 
-DEG = 180.0 / np.pi
 _LOG_X = {'allan', 'psd', 'psd_peak'}
 _LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
 # One unit family per figure (deg/s), the unit in every axis label.
@@ -58,8 +58,8 @@ def _untransform(name, values):
 
 def _scale(name):
     if name in ('allan', 'chunk_bias'):
-        return DEG
-    return DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
+        return RAD_TO_DEG
+    return RAD_TO_DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
 
 
 def _plot_one(ax, layout, name, comparisons, labels, colours):
@@ -69,7 +69,7 @@ def _plot_one(ax, layout, name, comparisons, labels, colours):
         xs = np.arange(xs.size)
         xlabel = 'bin (value bins, then lattice phase) (1)'
     elif name == 'histogram':
-        xs = xs * DEG
+        xs = xs * RAD_TO_DEG
         xlabel = 'angular rate (deg/s)'
     else:
         xlabel = f'{label} ({unit or "1"})' if not unit.startswith('(') else f'{label} {unit}'
@@ -136,17 +136,55 @@ def plot_signatures(path, layout, names, comparisons, labels, colours, title):
     plt.close(fig)
 
 
-def _fmt_params(params):
-    return ', '.join(f'{k} = {v:.4g}' if isinstance(v, float) else f'{k} = {v}'
-                     for k, v in public_params(params).items())
+def _loud(note):
+    return 'UNRESOLVED' + note[len('unresolved'):] if note.startswith('unresolved') else note
+
+
+def bound_text(bound, unit):
+    """
+    Return an unresolved time scale as the bound the record gives (never as a value).
+
+    Parameters
+    ----------
+    bound : dict
+        ``{'lower': float or None, 'upper': float or None}`` in the parameter's unit.
+    unit : str
+        The parameter's unit.
+
+    Returns
+    -------
+    str
+        ``>= lower unit``, ``<= upper unit``, both, or ``not resolved``.
+
+    """
+    lo, hi = bound.get('lower'), bound.get('upper')
+    if lo is not None and hi is not None:
+        return f'{lo:.3g} to {hi:.3g} {unit}'
+    if lo is not None:
+        return f'>= {lo:.3g} {unit}'
+    if hi is not None:
+        return f'<= {hi:.3g} {unit}'
+    return 'not resolved'
+
+
+def _fmt_params(params, time_scales=None):
+    parts = []
+    for k, v in public_params(params).items():
+        check = (time_scales or {}).get(k)
+        if check is not None and not check['resolved']:
+            unit = PARAMETERS.get(k, ('', ''))[0]
+            parts.append(f'{k} {bound_text(check["bound"], unit)} [{_loud(check["note"])}]')
+        else:
+            parts.append(f'{k} = {v:.4g}' if isinstance(v, float) else f'{k} = {v}')
+    return ', '.join(parts)
 
 
 def _uncertainty_text(entry):
+    if entry.get('bound') is not None:
+        return f'{bound_text(entry["bound"], entry["unit"])} [{_loud(entry["note"])}]'
     text = format_value(entry)
     note = entry['note']
-    if note.startswith('unresolved'):
-        note = 'UNRESOLVED' + note[len('unresolved'):]
-    return f'{text} [{note}]' if note and not entry['resolved'] else text
+    return f'{text} [{_loud(note)}]' if note and not entry['resolved'] else text
 
 
 def parameter_lines(result):
@@ -160,9 +198,12 @@ def parameter_lines(result):
     for step in result.steps:
         entries = result.uncertainty.get(step.effect)
         if entries:
-            parts = [f'{name} = {_uncertainty_text(entry)}' for name, entry in entries.items()]
+            # a bound reads 'name >= 50 s', a value 'name = 1.2 ± 0.1 s'
+            parts = [f'{name}{" " if entry.get("bound") is not None else " = "}'
+                     f'{_uncertainty_text(entry)}' for name, entry in entries.items()]
         else:
-            parts = [_fmt_params(step.params) + ' (no uncertainty: bootstrap off)']
+            parts = [_fmt_params(step.params, step.time_scales)
+                     + ' (no uncertainty: bootstrap off)']
         lines.append(f'{step.effect}: ' + '; '.join(parts))
     return lines
 
@@ -170,18 +211,21 @@ def parameter_lines(result):
 def _uncertainty_table(step, result):
     entries = result.uncertainty.get(step.effect)
     if not entries:
-        return [f'Parameters: {_fmt_params(step.params)} (no uncertainty: the bootstrap was off).',
-                '']
+        return [f'Parameters: {_fmt_params(step.params, step.time_scales)} (no uncertainty: the '
+                'bootstrap was off).', '']
     lines = ['| parameter | value ± stderr | 95 % interval | method | note |',
              '|---|---|---|---|---|']
     for name, entry in entries.items():
         ci = entry['ci95']
         interval = '-' if ci is None else f'[{ci[0]:.6g}, {ci[1]:.6g}] {entry["unit"]}'
+        value = format_value(entry)
+        if entry.get('bound') is not None:
+            # a time scale the record does not resolve: the bound, not a value
+            value = interval = bound_text(entry['bound'], entry['unit'])
         note = entry['note'] if entry['note'] else 'resolved'
         if not entry['resolved'] and entry['note'].startswith('unresolved'):
             note = '**UNRESOLVED**' + entry['note'][len('unresolved'):]
-        lines.append(f'| {name} | {format_value(entry)} | {interval} | {entry["method"]} | '
-                     f'{note} |')
+        lines.append(f'| {name} | {value} | {interval} | {entry["method"]} | {note} |')
     return lines + ['']
 
 
@@ -230,7 +274,7 @@ def write_outputs(result, out_dir):
     return Path(out_dir)
 
 
-def write_files(result, folder):
+def write_files(result, folder, *, data=None):
     """
     Write explain.json, report.md and the figures into an existing (staging) folder.
 
@@ -240,6 +284,9 @@ def write_files(result, folder):
         The workflow's result.
     folder : pathlib.Path
         Where to write; a caller that stages several results (one per axis) publishes them.
+    data : dict, optional, keyword-only
+        The explain.json document (default ``result.to_dict()``; the application layer adds
+        what it knows about the input).
 
     Returns
     -------
@@ -253,14 +300,13 @@ def write_files(result, folder):
 
     """
     try:
-        return _write_files(result, Path(folder))
+        return _write_files(result, Path(folder), result.to_dict() if data is None else data)
     except OSError as err:  # disk full, quota, a folder removed under the run
         where = f' ({err.filename})' if err.filename else ''
         raise OutputError(f'cannot write the results: {err.strerror or err}{where}') from err
 
 
-def _write_files(result, folder):
-    data = result.to_dict()
+def _write_files(result, folder, data):
     (folder / 'explain.json').write_text(
         json.dumps(data, indent=2, default=_json_default) + '\n')
     layout = result.layout
@@ -313,7 +359,7 @@ def _markdown(result):
             if result.bootstrap else 'Point values only: the bootstrap was off.', '']
     lines += [
         '## Baseline model (paper 000 eqs. 2, 10, 11)', '', '| parameter | value |', '|---|---|',
-        f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * DEG:.5g} deg/s) |',
+        f'| bias | {base.bias_rad_s:.6g} rad/s ({base.bias_rad_s * RAD_TO_DEG:.5g} deg/s) |',
         f'| order alpha (variance method) | {base.alpha:.3f} |', f'| f | {base.f:.5g} |',
         f'| sigma_w | {base.sigma_w_rad_s:.4g} rad/s |',
         f'| sigma_nu (white measurement noise) | {base.sigma_nu_rad_s:.4g} rad/s |',

@@ -24,7 +24,8 @@ name               points                                   compared as     expo
 =================  =======================================  ==============  =======================
 ``allan``          overlapping Allan deviation at tau =     log10           RRW, flicker, GM,
                    m / rate_hz, m = 1, sqrt 2, 2, ... n/10                  ramp, sinusoid
-                   (paper 001 eq. 7)
+                   (paper 001 eq. 7, the estimator of
+                   :mod:`gyro_noise_ros.core.allan`)
 ``psd``            Welch PSD, Hann, 50 % overlap, averaged  log10           sinusoid, colour, GM
                    in up to 40 log-spaced frequency bands
 ``psd_peak``       largest Welch bin of each band over the  log10           spectral lines
@@ -66,6 +67,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.signal
+
+from ..core.allan import allan_deviation_values
 
 #: Transform and sd floor per signature (see module doc).
 TRANSFORM = {'allan': 'log10', 'psd': 'log10', 'psd_peak': 'log10', 'chunk_bias': 'linear',
@@ -257,46 +260,6 @@ def make_layout(x, rate_hz, *, temperature=False):
                   temperature=bool(temperature))
 
 
-def allan_deviation_octaves(x, rate_hz, m):
-    """
-    Return the overlapping Allan deviation at cluster sizes ``m`` (paper 001 eq. 7).
-
-    The overlapping sum is taken with a stride of max(1, m // 8, n // 2^20) samples: for m > 8 the
-    terms it skips are almost fully correlated with their neighbours, and for short tau more than
-    2^20 terms estimate the deviation to 0.1 %, far inside the 0.01 dex tolerance of the band; the
-    cost per tau drops from O(n) to O(min(8 n / m, 2^20)).
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Angular rate (rad/s).
-    rate_hz : float
-        Sample rate (Hz).
-    m : numpy.ndarray
-        Cluster sizes (samples).
-
-    Returns
-    -------
-    numpy.ndarray
-        Allan deviation (rad/s) per m.
-
-    """
-    theta = np.concatenate(([0.0], np.cumsum(x - x.mean())))
-    n = x.shape[0]
-    out = np.empty(m.shape[0])
-    for i, mi in enumerate(m):
-        mi = int(mi)
-        stride = max(1, mi // 8, n >> 20)
-        count = (n - 2 * mi) // stride + 1
-        # strided views, no index arrays: the terms theta[i + 2m] - 2 theta[i + m] + theta[i]
-        d = (theta[2 * mi:2 * mi + count * stride:stride] - 2.0
-             * theta[mi:mi + count * stride:stride] + theta[:count * stride:stride])
-        # einsum, not np.dot: OpenBLAS ddot wakes its thread pool, which on a loaded machine
-        # costs milliseconds per call (7 ms per tau at 20,000 samples measured, 150x einsum)
-        out[i] = np.sqrt(np.einsum('i,i->', d, d) / count / (2.0 * mi * mi))
-    return out
-
-
 def welch(x, rate_hz, nperseg):
     """
     Welch PSD estimate: Hann window, 50 % overlap, mean removed once, one-sided density.
@@ -402,7 +365,7 @@ def compute(layout, x, t_s, temperature_c=None):
 
     """
     out = {}
-    out['allan'] = allan_deviation_octaves(x, layout.rate_hz, layout.m)
+    out['allan'] = allan_deviation_values(x, layout.rate_hz, taus=layout.m)
     freq, pxx = welch(x, layout.rate_hz, layout.nperseg)
     bands = layout.band_edges.size - 1
     band = np.digitize(freq, layout.band_edges) - 1

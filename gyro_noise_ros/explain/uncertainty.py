@@ -57,8 +57,35 @@ A parameter is **unresolved** (``resolved`` false, with the reason in ``note``) 
 * the refits' mean lies more than :data:`BIAS_LIMIT` standard errors from the value: the model
   does not reproduce its own estimate (the estimator is biased under it, or the value comes from a
   feature the model does not simulate);
-* the Gauss-Markov correlation time sits at the shortest point of its grid (3 samples): only an
-  upper bound (:func:`grid_edge`; the longest points are refused by the fitter already).
+* a parameter with a time scale (see below) is not inside the range the record resolves.
+
+Time scales the record resolves (:func:`resolvable_range`, :func:`time_scale_check`). A time
+constant longer than the record shows, or shorter than its resolution, is not a measurement: the
+fit returns *a* number (the transient's search runs to 10 T), but other values fit as well. So a
+parameter with a time scale is resolved only when its 95 % interval (or, without a bootstrap, its
+value) lies inside
+
+==================================  ==================================  =========================
+parameter (time scale)              shortest                            longest
+==================================  ==================================  =========================
+``gauss_markov.correlation_time_s`` 3 samples (below: the baseline's    longest Allan tau / 1.89
+                                    own first-order dynamics, paper     (the Allan peak at 1.89 tc
+                                    000 eq. 1)                          must be among the taus;
+                                                                        beyond, only its rise is
+                                                                        seen, as for a random
+                                                                        walk)
+``bias_transient.time_constant_s``  one chunk (the fitter sees chunk    the record after the
+                                    means: a faster rise is a step)     onset, T - delay (at
+                                                                        least 63 % of the rise
+                                                                        inside the record)
+``sinusoid.frequency_hz`` (period   2 samples (Nyquist)                 the record, T (one whole
+1 / f)                                                                  cycle)
+==================================  ==================================  =========================
+
+Outside, the parameter is **unresolved** and reported as a bound: ``lower`` = the smaller of the
+interval's lower end and the longest resolvable time scale when the interval runs past it
+(longer than the record resolves), ``upper`` likewise at the short end; neither when it runs out
+at both ends. A frequency's bounds are those of its period, inverted.
 """
 
 from dataclasses import dataclass
@@ -68,7 +95,8 @@ import numpy as np
 import scipy.stats
 
 from .effects import Context, GaussMarkov, NAMES, Quantization
-from .signatures import allan_deviation_octaves, lattice_fit
+from .signatures import lattice_fit
+from ..core.allan import allan_deviation_values
 
 #: Replicate b uses member index REPLICATE_OFFSET + b in the seed sequence: never an ensemble
 #: member's index.
@@ -223,7 +251,7 @@ def replicate(model, index):
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             out[effect.name] = None
     if any(effect.kind == 'stochastic' for effect, _ in model.accepted):
-        out['_avar'] = allan_deviation_octaves(x, model.rate_hz, model.layout.m) ** 2
+        out['_avar'] = allan_deviation_values(x, model.rate_hz, taus=model.layout.m) ** 2
     return out
 
 
@@ -256,19 +284,120 @@ def grid_resolution(model, effect, params):
     return {}
 
 
-def grid_edge(model, effect, name, value):
-    """
-    Return why a grid-found value is only a bound ('' when it is not at the grid's edge).
+#: tau / tc at the peak of the Gauss-Markov Allan deviation
+#: (:func:`gyro_noise_ros.core.simulate.gauss_markov_avar`: 1.8926).
+GM_PEAK_TAU = 1.89
+#: Parameters with a time scale: name -> 'time' (the value is a time) or 'frequency' (1 / time).
+TIME_SCALES = {'correlation_time_s': 'time', 'time_constant_s': 'time',
+               'frequency_hz': 'frequency'}
 
-    The Gauss-Markov correlation time at the shortest grid point (3 samples) can be shorter still:
-    the baseline's own first-order dynamics (paper 000 eq. 1) overlap it there.
+
+def resolvable_range(effect_name, name, params, *, n, rate_hz, layout):
     """
-    if isinstance(effect, GaussMarkov) and name == 'correlation_time_s':
-        shortest = 3.0 / model.rate_hz
-        if value <= shortest * (1.0 + 1e-9):
-            return (f'at the shortest grid point ({shortest:.3g} s = 3 samples): an upper bound, '
-                    'not a measurement')
-    return ''
+    Return the time scales (s) a record resolves for one parameter (module doc table).
+
+    Parameters
+    ----------
+    effect_name, name : str
+        Effect and parameter names.
+    params : dict
+        The effect's fitted parameters (the transient's ``delay_s``).
+    n : int, keyword-only
+        Samples of the record.
+    rate_hz : float, keyword-only
+        Nominal rate (Hz).
+    layout : Layout
+        Signature layout of the record (Allan taus, chunk length).
+
+    Returns
+    -------
+    tuple or None
+        ``(shortest_s, longest_s, why_short, why_long)``; None for a parameter without a time
+        scale.
+
+    """
+    duration = n / rate_hz
+    if effect_name == 'gauss_markov' and name == 'correlation_time_s':
+        tau_max = float(layout.tau_s[-1])
+        return (3.0 / rate_hz, tau_max / GM_PEAK_TAU,
+                '3 samples: shorter is the own first-order dynamics of the baseline',
+                f'the longest Allan tau ({tau_max:.3g} s) / {GM_PEAK_TAU}: the Allan peak at '
+                f'{GM_PEAK_TAU} tc must be seen')
+    if effect_name == 'bias_transient' and name == 'time_constant_s':
+        after = duration - float(params['delay_s'])
+        return (layout.chunk / rate_hz, after,
+                'one chunk: a faster rise is a step in the chunk means',
+                f'the {after:.3g} s the record shows after the onset')
+    if effect_name == 'sinusoid' and name == 'frequency_hz':
+        return (2.0 / rate_hz, duration, 'a period of 2 samples (Nyquist)',
+                f'a period of the whole record ({duration:.3g} s)')
+    return None
+
+
+def time_scale_check(effect_name, name, params, interval=None, *, n, rate_hz, layout):
+    """
+    Tell whether the record resolves a time-scale parameter, and the bound when it does not.
+
+    Parameters
+    ----------
+    effect_name, name : str
+        Effect and parameter names.
+    params : dict
+        The effect's fitted parameters (``params[name]`` is the value).
+    interval : sequence of float, optional
+        The value's 95 % interval ``[lo, hi]`` in the parameter's unit (default: the value).
+    n, rate_hz, layout : keyword-only
+        As :func:`resolvable_range`.
+
+    Returns
+    -------
+    dict or None
+        None for a parameter without a time scale; else ``resolvable`` ([low, high] in the
+        parameter's unit), ``resolved``, ``bound`` ({'lower', 'upper'} in the parameter's unit,
+        None where open; None when resolved) and ``note`` ('' when resolved).
+
+    """
+    limits = resolvable_range(effect_name, name, params, n=n, rate_hz=rate_hz, layout=layout)
+    if limits is None:
+        return None
+    shortest, longest, why_short, why_long = limits
+    value = float(params[name])
+    lo, hi = (value, value) if interval is None else (float(interval[0]), float(interval[1]))
+    frequency = TIME_SCALES[name] == 'frequency'
+
+    def as_time(v):
+        return 1.0 / v if frequency else v
+
+    def as_param(t):
+        return None if t is None else (1.0 / t if frequency else t)
+
+    # the interval in time (a frequency interval reverses); 0 Hz is an infinite period
+    t_lo, t_hi = ((as_time(hi), as_time(lo) if lo > 0 else np.inf) if frequency else (lo, hi))
+    resolvable = sorted([as_param(shortest), as_param(longest)])
+    # at the limit itself counts as outside: a fit stopped by its search range
+    short = t_lo <= shortest * (1.0 + 1e-9)
+    long = t_hi >= longest * (1.0 - 1e-9)
+    out = {'resolvable': [float(resolvable[0]), float(resolvable[1])], 'resolved': True,
+           'bound': None, 'note': ''}
+    if not (short or long):
+        return out
+    if long and not short:
+        lower_t = min(max(t_lo, 0.0), longest)
+        bound = {'lower': lower_t, 'upper': None}
+        note = f'unresolved: longer than the record resolves ({why_long})'
+    elif short and not long:
+        upper_t = max(t_hi, shortest)
+        bound = {'lower': None, 'upper': upper_t}
+        note = f'unresolved: shorter than the record resolves ({why_short})'
+    else:
+        bound = {'lower': None, 'upper': None}
+        note = (f'unresolved: the interval runs past both ends of what the record resolves '
+                f'({shortest:.3g} to {longest:.3g} s)')
+    if frequency:
+        # a lower bound on the period is an upper bound on the frequency
+        bound = {'lower': as_param(bound['upper']), 'upper': as_param(bound['lower'])}
+    out.update(resolved=False, bound=bound, note=note)
+    return out
 
 
 def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
@@ -368,6 +497,21 @@ def lattice_uncertainty(x, step, offset):
     return out
 
 
+def _flag_transient_amplitude(entry):
+    """
+    Flag a transient's amplitude when its time constant is longer than the record resolves.
+
+    Over a record much shorter than tc the rise is A t / tc: only the initial slope A / tc is
+    measured, and A grows with the unresolved tc.
+    """
+    tc, amp = entry.get('time_constant_s'), entry.get('amplitude_rad_s')
+    if tc is None or amp is None or not amp['resolved']:
+        return
+    if tc.get('bound') is not None and tc['bound'].get('lower') is not None:
+        amp.update(resolved=False, note='unresolved: the time constant is longer than the record '
+                   'resolves, so only the initial slope amplitude / time constant is measured')
+
+
 def bootstrap(model, replicates, *, values=None, mapper=map):
     """
     Return standard errors and intervals of every accepted effect parameter (module doc).
@@ -414,9 +558,12 @@ def bootstrap(model, replicates, *, values=None, mapper=map):
             entry[name] = summarise(value, [None if r is None else r.get(name) for r in refits],
                                     unit=unit, kind=kind, floor=floors.get(name, 0.0),
                                     replicates=count)
-            edge = grid_edge(model, effect, name, value)
-            if edge and entry[name]['resolved']:
-                entry[name].update(resolved=False, note=f'unresolved: {edge}')
+            if entry[name]['resolved']:
+                check = time_scale_check(effect.name, name, public, entry[name]['ci95'],
+                                         n=model.n, rate_hz=model.rate_hz, layout=model.layout)
+                if check is not None and not check['resolved']:
+                    entry[name].update(resolved=False, note=check['note'], bound=check['bound'])
+        _flag_transient_amplitude(entry)
         out[effect.name] = entry
     return out
 
@@ -439,5 +586,6 @@ def format_value(entry, digits=4):
     return f'{value:.{places}g} ± {stderr:.2g}{unit}'
 
 
-__all__ = ['FinalModel', 'PARAMETERS', 'bootstrap', 'format_value', 'lattice_uncertainty',
-           'replicate', 'simulate', 'summarise']
+__all__ = ['FinalModel', 'PARAMETERS', 'TIME_SCALES', 'bootstrap', 'format_value',
+           'lattice_uncertainty', 'replicate', 'resolvable_range', 'simulate', 'summarise',
+           'time_scale_check']

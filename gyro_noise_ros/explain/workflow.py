@@ -59,7 +59,7 @@ import numpy as np
 from . import signatures as sig
 from .baseline import fit_baseline
 from .effects import CATALOGUE, Context, public_params, Quantization
-from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel
+from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel, time_scale_check
 from ..errors import ParameterError
 
 #: Candidates whose gap is within this of the best one count as tied; among them the smallest
@@ -95,6 +95,9 @@ class Step:
         Where it still leaves the band after it.
     candidates : dict
         Every candidate tried in this step -> its gap (the chosen one included).
+    time_scales : dict
+        Parameter -> :func:`.uncertainty.time_scale_check` of its value, for the parameters with
+        a time scale: the range the record resolves and whether the value lies inside it.
     before, after : dict
         Signature comparisons before and after (for figures; not serialised).
 
@@ -107,6 +110,7 @@ class Step:
     where: list
     where_after: list
     candidates: dict
+    time_scales: dict = field(default_factory=dict)
     before: dict = field(repr=False, default=None)
     after: dict = field(repr=False, default=None)
 
@@ -204,6 +208,7 @@ class ExplainResult:
                     'where': s.where,
                     'where_after': s.where_after,
                     'candidates': s.candidates,
+                    'time_scales': s.time_scales,
                 }
                 for s in self.steps
             ],
@@ -315,6 +320,38 @@ def member_signatures(layout, series, temperature_c):
     """
     x, t = series
     return sig.compute(layout, x, t, temperature_c)
+
+
+def time_scales(effect_name, params, meas, layout):
+    """
+    Check every parameter of an effect that has a time scale against what the record resolves.
+
+    Parameters
+    ----------
+    effect_name : str
+        The effect.
+    params : dict
+        Its fitted parameters.
+    meas : Measurement
+        The record.
+    layout : Layout
+        Its signature layout.
+
+    Returns
+    -------
+    dict
+        Parameter -> :func:`.uncertainty.time_scale_check` of the value (parameters without a
+        time scale left out).
+
+    """
+    public = public_params(params)
+    out = {}
+    for name in public:
+        check = time_scale_check(effect_name, name, public, n=meas.n, rate_hz=meas.rate_hz,
+                                 layout=layout)
+        if check is not None:
+            out[name] = check
+    return out
 
 
 def _changed(new, old):
@@ -458,6 +495,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         steps.append(Step(effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
                           where=where_outside(layout, comparisons),
                           where_after=where_outside(layout, trial_cmp), candidates=tried,
+                          time_scales=time_scales(effect.name, params, meas, layout),
                           before=comparisons, after=trial_cmp))
         say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
         member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap

@@ -23,7 +23,7 @@ variance and orders; the Allan results), never from summary.md. "In short" is
 from .figures import allan_figure, series_figure
 from .page import Key, Num, Page, pointer, Table, write_report_html
 from .. import report
-from ..core.items import DEG as _DEG
+from ..units import RAD_TO_DEG as _DEG, S_PER_H
 
 METHOD = """\
 Each record is cut into chunks; per chunk the bias (mean), the noise variance and the fractional
@@ -191,7 +191,7 @@ def _figures(doc, per_chunk, allan_store):
     series = [(f'{label} {axis}', r) for axis, v in per_chunk.items() for label, r in v
               if r.shape[0]]
     if series:
-        hours = [(name, r[:, 0] / 3600.0, r) for name, r in series]
+        hours = [(name, r[:, 0] / S_PER_H, r) for name, r in series]
         figures.append(('Chunk bias over time (one point per chunk; the least-squares slope of '
                         'these points is the offset drift of the tables).',
                         series_figure([(n, t, r[:, 1] * _DEG) for n, t, r in hours],

@@ -22,11 +22,7 @@ checked against the JSON value it came from. "In short" words the verdicts as ca
 
 from .figures import series_figure
 from .page import Num, Page, pointer, Table, write_report_html
-from ..calibration.sixpos import STANDARD_GRAVITY
-from ..core.items import DEG as _DEG
-
-#: One milli-g in m/s^2 (standard gravity, as calibration.md's mg).
-_MG = STANDARD_GRAVITY * 1e-3
+from ..units import MG_TO_M_S2 as _MG, RAD_TO_DEG as _DEG
 
 
 def _pm(p, sigma_p, fmt, scale):

@@ -24,7 +24,7 @@ import json
 
 from .figures import series_figure
 from .page import Key, Num, Page, pointer, Table, write_report_html
-from ..core.items import DEG as _DEG
+from ..units import RAD_TO_DEG as _DEG
 
 _BASELINE = (('Bias (deg/s)', 'bias_rad_s', '.5g', _DEG),
              ('Order alpha (variance method)', 'alpha', '.3f', 1.0),
@@ -38,7 +38,7 @@ _BASELINE = (('Bias (deg/s)', 'bias_rad_s', '.5g', _DEG),
              ('PSD misfit above a hundredth of the rate (rms dex)', 'psd_misfit', '.3f', 1.0))
 
 
-def explain_page(result, command=None):
+def explain_page(result, command=None, data=None):
     """
     Build the page of one explained axis.
 
@@ -48,6 +48,9 @@ def explain_page(result, command=None):
         The workflow's result.
     command : sequence of str, optional
         The command line.
+    data : dict, optional
+        The axis' explain.json document as the tool writes it (default:
+        ``result.to_dict()``); the page embeds exactly this.
 
     Returns
     -------
@@ -57,7 +60,8 @@ def explain_page(result, command=None):
     from ..explain.report import _json_default, parameter_lines, verdict
 
     # exactly the explain.json document (numpy values as explain/report.py writes them)
-    doc = json.loads(json.dumps(result.to_dict(), default=_json_default))
+    doc = json.loads(json.dumps(result.to_dict() if data is None else data,
+                                default=_json_default))
     short = ['## In short', '', f'**Verdict:** {verdict(result)}', '']
     if result.steps:
         short += ['Effects named (value ± standard error):', '']
@@ -111,7 +115,7 @@ def _version():
     return __version__
 
 
-def write_explain_html(result, folder, *, command=None):
+def write_explain_html(result, folder, *, command=None, data=None):
     """
     Write ``report.html`` of one explained axis into ``folder`` (beside its explain.json).
 
@@ -123,10 +127,12 @@ def write_explain_html(result, folder, *, command=None):
         The (staged) folder of that axis.
     command : sequence of str, optional, keyword-only
         The command line.
+    data : dict, optional, keyword-only
+        The axis' explain.json document (:func:`explain_page`).
 
     Returns
     -------
     pathlib.Path
 
     """
-    return write_report_html(explain_page(result, command), folder / 'report.html')
+    return write_report_html(explain_page(result, command, data), folder / 'report.html')

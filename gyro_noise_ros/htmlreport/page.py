@@ -35,6 +35,7 @@ from pathlib import Path
 import platform
 import re
 import shlex
+from typing import Optional
 
 from ..outputs import atomic_write_text
 
@@ -145,7 +146,7 @@ class Page:
     figures: tuple = ()
     tables: tuple = ()
     method_markdown: str = ''
-    command: tuple = None
+    command: Optional[tuple] = None
     inputs: tuple = ()
     version: str = ''
     extra_versions: tuple = field(default_factory=tuple)

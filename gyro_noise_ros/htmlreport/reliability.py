@@ -16,8 +16,9 @@
 The ``report.html`` of ``gyro_noise_reliability``.
 
 Built from reliability.json and the Allan results of the static records held in memory. "In
-short" gives each channel's verdict and, where undetermined, the JSON's reason, as
-reliability.md does.
+short" is the plain-language summary reliability.md opens with (the caller passes the lines of
+``app.reliability.in_short``), followed by each channel's verdict and, where undetermined, the
+JSON's reason.
 """
 
 import numpy as np
@@ -37,7 +38,7 @@ def _range(p, e, key):
         'open' if pair[k] is None else Num(f'{p}/{key}/{k}', '.3g')))
 
 
-def reliability_page(doc, statics, command=None):
+def reliability_page(doc, statics, command=None, in_short=()):
     """
     Build the page of one reliability run.
 
@@ -50,30 +51,44 @@ def reliability_page(doc, statics, command=None):
         curves are drawn).
     command : sequence of str, optional
         The command line.
+    in_short : sequence of str, optional
+        Plain-language sentences made from ``doc`` (``app.reliability.in_short``).
 
     Returns
     -------
     Page
 
     """
-    short = ['## In short', '',
-             f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
-             f'physiological within +/-{100 * doc["tolerance"]:.0f} % of the before width.', '']
+    short = ['## In short', '']
+    short += [f'* {line}' for line in in_short]
+    short += ['', f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
+              f'physiological within +/-{100 * doc["tolerance"]:.0f} % of the before width '
+              f'(one-sided tests at {100 * doc["confidence_one_sided"]:.0f} % confidence).', '']
     for ch, e in doc['bias_instability_interval'].items():
         why = f' ({e["reason"]})' if e['reason'] else ''
         short.append(f'* **{ch}**: {e["verdict"]}{why}')
     if doc['errors']:
         short += ['', 'Parts that could not be analysed:', '']
         short += [f'* {k}: {v}' for k, v in doc['errors'].items()]
+    overall = Table(
+        'Overall verdict per sensor (mean change over the three axes)',
+        ('Sensor', 'Verdict', 'Basis', 'Mean change (%)', 'Sigma (%)'),
+        tuple((sensor, Num(pointer('overall', sensor, 'verdict')),
+               Num(pointer('overall', sensor, 'basis')),
+               Num(pointer('overall', sensor, 'mean_change'), '+.0f', scale=100.0),
+               Num(pointer('overall', sensor, 'mean_change_sd'), '.0f', scale=100.0))
+              for sensor in doc['overall']))
     rows = []
     for ch, e in doc['bias_instability_interval'].items():
         p = pointer('bias_instability_interval', ch)
         rows.append((ch, _range(p, e, 'before_s'), _range(p, e, 'after_s'),
                      Num(p + '/width_before_s', '.4g'), Num(p + '/width_after_s', '.4g'),
-                     Num(p + '/change', '+.0f', scale=100.0), Num(p + '/verdict')))
-    tables = [Table('Bias-instability interval before and after (paper 001)',
-                    ('Channel', 'Before (s)', 'After (s)', 'Width before (s)',
-                     'Width after (s)', 'Change (%)', 'Verdict'), tuple(rows))]
+                     Num(p + '/change', '+.0f', scale=100.0),
+                     Num(p + '/change_sd', '.0f', scale=100.0), Num(p + '/verdict')))
+    tables = [overall, Table('Bias-instability interval before and after (paper 001)',
+                             ('Channel', 'Before (s)', 'After (s)', 'Width before (s)',
+                              'Width after (s)', 'Change (%)', 'Sigma (%)', 'Verdict'),
+                             tuple(rows))]
     tables.append(Table(
         'Mean width over the three axes', ('Sensor', 'Before (s)', 'After (s)', 'Change (%)'),
         tuple((sensor, Num(pointer('summary', sensor, 'mean_width_before_s'), '.4g'),
@@ -86,14 +101,15 @@ def reliability_page(doc, statics, command=None):
             if not e.get(side):
                 continue
             for key in e[side]:
-                if key.endswith('_ci'):
+                if key.endswith(('_sd_log', '_ci68')):
                     continue
                 p = pointer('noise_terms', ch, side, key)
                 terms.append((ch, side, Key(key), Num(p, '.4g'),
-                              (Num(p + '_ci/0', '.3g'), ' to ', Num(p + '_ci/1', '.3g'))))
+                              (Num(p + '_ci68/0', '.3g'), ' to ', Num(p + '_ci68/1', '.3g'))))
     if terms:
         tables.append(Table('Noise terms of the static records (unit in the name)',
-                            ('Channel', 'Record', 'Term', 'Value', 'Interval'), tuple(terms)))
+                            ('Channel', 'Record', 'Term', 'Value', 'Interval (68 %)'),
+                            tuple(terms)))
     figures = []
     for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
         curves = []
@@ -116,9 +132,10 @@ def reliability_page(doc, statics, command=None):
                                          unit=unit)))
     method = ("Each static record's Allan deviation gives the bias-instability interval: the "
               'averaging times where the deviation stays below c times its minimum (c in '
-              'reliability.json). A width change within the tolerance is physiological; beyond '
-              'it, not; a record too short to close the interval is undetermined '
-              '(docs/reliability.md).')
+              "reliability.json), with a width uncertainty from the record's equivalent degrees "
+              'of freedom. The width change is tested one-sided against the tolerance: beyond, '
+              'physiological, or undetermined with the record length that would decide; one '
+              'verdict per sensor from the mean over its three axes (docs/reliability.md).')
     inputs = [p for v in doc['sources'].values() if v
               for p in (v if isinstance(v, list) else [v])]
     return Page(title='gyro_noise_reliability: before / after', data=doc,
@@ -128,7 +145,7 @@ def reliability_page(doc, statics, command=None):
                 version=doc.get('version', ''))
 
 
-def write_reliability_html(doc, statics, out, *, command=None):
+def write_reliability_html(doc, statics, out, *, command=None, in_short=()):
     """
     Write ``report.html`` of a reliability run into the staged folder ``out``.
 
@@ -142,10 +159,13 @@ def write_reliability_html(doc, statics, out, *, command=None):
         The staged ``--out`` folder.
     command : sequence of str, optional, keyword-only
         The command line.
+    in_short : sequence of str, optional, keyword-only
+        As :func:`reliability_page`.
 
     Returns
     -------
     pathlib.Path
 
     """
-    return write_report_html(reliability_page(doc, statics, command), out / 'report.html')
+    return write_report_html(reliability_page(doc, statics, command, in_short),
+                             out / 'report.html')

@@ -25,10 +25,10 @@ import numpy as np
 
 from .figures import allan_figure, series_figure
 from .page import Num, Page, pointer, Table, write_report_html
-from ..core.items import DEG as _DEG
 from ..thermal.metrics import DRIFT_WINDOW_S
+from ..units import RAD_TO_DEG as _DEG, S_PER_H
 
-_DEG_H = _DEG * 3600.0
+_DEG_H = _DEG * S_PER_H
 AXES = ('x', 'y', 'z')
 
 
@@ -93,7 +93,7 @@ def _residual_figure(run, processed, label):
     _, proc = _window_means(run.t_s, processed, DRIFT_WINDOW_S)
     if tm.size < 2:
         return []
-    hours = (tm - run.t_s[0]) / 3600.0
+    hours = (tm - run.t_s[0]) / S_PER_H
     series = []
     for a, axis in enumerate(AXES):
         series.append((f'{axis} raw', hours, raw[:, a] * _DEG))

@@ -17,8 +17,8 @@ Pure model of the Portenta H7 + LSM6DSO32 board.
 
 Samples with ground truth, configuration commands, faults.
 
-No I/O and no threads: ``cli/emulator.py`` serves this model on a pseudo-terminal or TCP and writes
-SD logs.
+No I/O and no threads: :mod:`gyro_noise_ros.link.serve` serves this model on a pseudo-terminal or
+TCP and writes SD logs.
 
 Signal model of one gyro axis at sample k (time ``t_k``, seconds since power-on)::
 
@@ -71,8 +71,8 @@ from .protocol import (
 from ..core.fractional import DEFAULT_MEMORY, gl_coefficients
 from ..core.simulate import FractionalNoise, require_stable
 from ..errors import ParameterError
+from ..units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 
-DEG = np.pi / 180.0
 #: Paper 000 Table 4, reference sequence: mean noise variance 0.003414 (deg/s)^2.
 PAPER_NOISE_STD_DPS = float(np.sqrt(0.003414))
 DEFAULT_ALPHA = 1.4
@@ -267,14 +267,14 @@ class BoardModel:
                     raise ParameterError(
                         f'noise_std_dps must be finite and >= 0, got {noise_std_dps}')
                 sigma_w_dps = noise_std_dps / stationary_gain(alpha, f, memory)
-            self.sigma_w_rad_s = float(sigma_w_dps) * DEG
+            self.sigma_w_rad_s = float(sigma_w_dps) * DEG_TO_RAD
             noise = [FractionalNoise(alpha, f, self.sigma_w_rad_s, rng=streams[i], memory=memory)
                      for i in range(3)]
         elif len(noise) != 3:
             raise ParameterError(f'noise must hold 3 generators, got {len(noise)}')
         self._noise = list(noise)
-        self.bias_rad_s = _vec3('bias_dps', bias_dps) * DEG
-        self.accel_m_s2 = _vec3('accel_g', accel_g) * lsm.STANDARD_GRAVITY
+        self.bias_rad_s = _vec3('bias_dps', bias_dps) * DEG_TO_RAD
+        self.accel_m_s2 = _vec3('accel_g', accel_g) * STANDARD_GRAVITY_M_S2
         if not (np.isfinite(accel_noise_ug_rthz) and accel_noise_ug_rthz >= 0):
             raise ParameterError(
                 f'accel_noise_ug_rthz must be finite and >= 0, got {accel_noise_ug_rthz}')
@@ -282,7 +282,7 @@ class BoardModel:
         self.temperature0_c = float(temperature_c)
         self.temp_drift_c_per_s = float(temp_drift_c_per_h) / 3600.0
         self.temp_sens_rad_s_per_c = _vec3('temp_sensitivity_dps_per_c',
-                                           temp_sensitivity_dps_per_c) * DEG
+                                           temp_sensitivity_dps_per_c) * DEG_TO_RAD
         self.helium = helium
         self.vibration = vibration
         self.thermal = thermal
@@ -440,7 +440,7 @@ class BoardModel:
             gyro += th.bias_rad_s
             temp_read = self.thermal.measure_c(temp, self._temp_rng)
         accel = np.broadcast_to(self.accel_m_s2, (n, 3)).copy()
-        accel_std = self.accel_noise_ug_rthz * 1e-6 * lsm.STANDARD_GRAVITY * np.sqrt(
+        accel_std = self.accel_noise_ug_rthz * 1e-6 * STANDARD_GRAVITY_M_S2 * np.sqrt(
             self.odr_hz / 2.0)
         accel += self._accel_rng.standard_normal((n, 3)) * accel_std
         if self.thermal is not None:
@@ -449,13 +449,13 @@ class BoardModel:
             h = self.helium
             rise = np.where(t > h.delay_s, -np.expm1(-(np.maximum(t - h.delay_s, 0.0)) / h.tau_s),
                             0.0)
-            gyro += np.outer(rise, _vec3('helium amplitude_dps', h.amplitude_dps) * DEG)
+            gyro += np.outer(rise, _vec3('helium amplitude_dps', h.amplitude_dps) * DEG_TO_RAD)
         if self.vibration is not None:
             v = self.vibration
             s = np.sin(2.0 * np.pi * v.frequency_hz * t + v.phase_rad)
-            gyro += np.outer(s, _vec3('vibration amplitude_dps', v.amplitude_dps) * DEG)
+            gyro += np.outer(s, _vec3('vibration amplitude_dps', v.amplitude_dps) * DEG_TO_RAD)
             accel += np.outer(s, _vec3('vibration accel_amplitude_g', v.accel_amplitude_g)
-                              * lsm.STANDARD_GRAVITY)
+                              * STANDARD_GRAVITY_M_S2)
         if self.scenario is not None:
             gyro, accel = self.scenario.apply(t, gyro, accel)
         out = np.zeros(n, dtype=SAMPLE_DTYPE)

@@ -14,10 +14,10 @@
 """
 Verdict of the board link over one diagnostics period (pure, no ROS).
 
-The driver keeps cumulative counters (tick on the hot path); once per diagnostics period it takes
-their differences into a :class:`LinkWindow` and :func:`judge_link` picks the level from the
-explicit limits in :class:`LinkThresholds` (run on the timer), the shape of
-:class:`gyro_noise_ros.core.health.HealthVerdict`:
+The driver keeps cumulative counters (tick on the hot path); once per diagnostics period its
+:class:`LinkTask` takes their differences into a :class:`LinkWindow`, :func:`judge_link` picks
+the level from the explicit limits in :class:`LinkThresholds` and :func:`link_items` gives the
+key/values (run on the timer), returned as a :class:`gyro_noise_ros.core.items.TaskStatus`:
 
 - OK without checks: the node is ``unconfigured`` or ``inactive`` (lifecycle states).
 - ERROR: the port is not streaming (the message names the last error); no sample for
@@ -28,17 +28,18 @@ explicit limits in :class:`LinkThresholds` (run on the timer), the shape of
 """
 
 from dataclasses import dataclass, field, fields
+from typing import Any, Mapping
 
 from .session import frame_interval_s
+from ..core.items import TaskStatus, worst
 from ..errors import ParameterError
 
-_RANK = {'OK': 0, 'WARN': 1, 'ERROR': 2, 'STALE': 3}
 # Lifecycle states in which not streaming is what was asked for (a manager drives the node).
 _IDLE = {'unconfigured': 'Unconfigured (lifecycle): the port is closed.',
          'inactive': 'Inactive (lifecycle): the link is up, samples are not published.'}
 
 
-def _limit(default, description, unit=''):
+def _limit(default: float, description: str, unit: str = '') -> Any:
     return field(default=default, metadata={'description': description, 'unit': unit,
                                             'min': 0.0, 'max': 1.0})
 
@@ -65,7 +66,7 @@ class LinkThresholds:
     loss_error_ratio: float = _limit(
         0.01, 'ERROR when the fraction of samples lost in one diagnostics period exceeds this')
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
             if not 0.0 <= value <= 1.0:
@@ -112,12 +113,12 @@ class LinkWindow:
     frames_ok: int = 0
     samples_ok: int = 0
     restarted: bool = False
-    odr_hz: float = None
+    odr_hz: float | None = None
     seconds_since_sample: float = 0.0
     silence_limit_s: float = float('inf')
 
     @property
-    def rate_hz(self):
+    def rate_hz(self) -> float:
         """float: Published samples per second in the window (NaN for an empty window)."""
         return self.published / self.window_s if self.window_s > 0 else float('nan')
 
@@ -143,7 +144,8 @@ class LinkVerdict:
     checks: tuple
 
 
-def judge_link(window, thresholds=None):
+def judge_link(window: 'LinkWindow',
+               thresholds: 'LinkThresholds | None' = None) -> 'LinkVerdict':
     """
     Judge one window of the link (module doc lists the checks).
 
@@ -195,13 +197,8 @@ def judge_link(window, thresholds=None):
                                    f'configured {w.odr_hz:g} Hz.'))
         if w.restarted:
             checks.append(('WARN', 'The board restarted its sample counter.'))
-    if w.state == 'streaming':
-        level, message = 'OK', f'Streaming at {w.rate_hz:.0f} Hz, no loss.'
-    else:
-        level, message = 'OK', 'Link idle.'
-    for check_level, check_message in checks:
-        if _RANK[check_level] > _RANK[level]:
-            level, message = check_level, check_message
+    level, message = worst(checks, f'Streaming at {w.rate_hz:.0f} Hz, no loss.'
+                           if w.state == 'streaming' else 'Link idle.')
     return LinkVerdict(level, message, tuple(checks))
 
 
@@ -210,7 +207,7 @@ _NODE_COUNTERS = ('published', 'lost', 'restarts')
 _LINK_COUNTERS = ('crc_errors', 'fifo_overruns', 'frames_ok', 'samples_ok')
 
 
-def counters(snapshot):
+def counters(snapshot: Mapping[str, Any]) -> dict[str, int]:
     """
     Return the cumulative counters a window is the difference of.
 
@@ -229,7 +226,8 @@ def counters(snapshot):
                                                            for k in _LINK_COUNTERS}}
 
 
-def window_between(prev, snapshot, *, now, since, period_s):
+def window_between(prev: Mapping[str, Any], snapshot: Mapping[str, Any], *, now: float,
+                   since: float, period_s: float) -> 'LinkWindow':
     """
     Build the :class:`LinkWindow` from one diagnostics report to the next.
 
@@ -264,7 +262,8 @@ def window_between(prev, snapshot, *, now, since, period_s):
         **{k: cur[k] - prev[k] for k in ('published', 'lost', *_LINK_COUNTERS)})
 
 
-def link_items(snapshot, window, *, port, drift_ppm):
+def link_items(snapshot: Mapping[str, Any], window: 'LinkWindow', *, port: str,
+               drift_ppm: float | None) -> list[tuple[str, str]]:
     """
     Return the key/values of the ``'<node>: link'`` status (``docs/diagnostics.md``).
 
@@ -286,7 +285,7 @@ def link_items(snapshot, window, *, port, drift_ppm):
     """
     s, link, config = snapshot, snapshot['link'], snapshot['config']
 
-    def fmt(x):
+    def fmt(x: float | None) -> str:
         return '-' if x is None else format(x, 'g')
 
     return [
@@ -313,3 +312,65 @@ def link_items(snapshot, window, *, port, drift_ppm):
         ('Temperature messages', s['temperatures']),
         ('Last error', s['last_error']),
     ]
+
+
+class LinkTask:
+    """
+    The driver's ``'<node>: link'`` diagnostics task: the counters' differences, judged.
+
+    Parameters
+    ----------
+    thresholds : LinkThresholds
+        The limits; replace the attribute to change them at runtime (one swap).
+    port : str, keyword-only
+        The port parameter (reported).
+    period_s : float, keyword-only
+        Diagnostics period (s); no sample for a period (and three full frames) is an ERROR.
+    now : float, keyword-only
+        ``time.monotonic()`` at the start (s).
+    snapshot : dict, keyword-only
+        The driver's ``link_snapshot()`` at the start: the first window's counters.
+
+    """
+
+    def __init__(self, thresholds: LinkThresholds, *, port: str, period_s: float, now: float,
+                 snapshot: dict) -> None:
+        self.thresholds = thresholds
+        self.port = port
+        self.period_s = period_s
+        self._prev = (now, counters(snapshot))
+
+    def run(self, snapshot: dict, now: float, *, drift_ppm: float) -> TaskStatus:
+        """
+        Judge the window since the previous run and return the status.
+
+        The lifecycle state decides what is reported: ``unconfigured`` whatever the link does,
+        ``inactive`` for a streaming link the lifecycle has not activated. The window starts at
+        the latest of the previous run, the stream start and the activation.
+
+        Parameters
+        ----------
+        snapshot : dict
+            The driver's ``link_snapshot()`` now (not modified).
+        now : float
+            ``time.monotonic()`` now (s).
+        drift_ppm : float, keyword-only
+            Board clock rate against the host clock (ppm, reported).
+
+        Returns
+        -------
+        TaskStatus
+
+        """
+        (prev_time, prev), self._prev = self._prev, (now, counters(snapshot))
+        s = dict(snapshot)
+        if s['lifecycle'] == 'unconfigured':
+            s['state'] = 'unconfigured'
+        elif s['lifecycle'] == 'inactive' and s['state'] == 'streaming':
+            s['state'] = 'inactive'
+        since = max(prev_time, s['streaming_since'] or prev_time, s['activated_at'])
+        window = window_between(prev, s, now=now, since=since, period_s=self.period_s)
+        verdict = judge_link(window, self.thresholds)
+        values = link_items(s, window, port=self.port, drift_ppm=drift_ppm)
+        return TaskStatus(verdict.level, verdict.message,
+                          tuple((k, v if isinstance(v, str) else str(v)) for k, v in values))

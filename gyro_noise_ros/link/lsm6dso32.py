@@ -38,12 +38,13 @@ of the ODR and FS"); ``emulator.BoardModel`` derives its default noise level fro
 """
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ParameterError
-
-STANDARD_GRAVITY = 9.80665
+from ..units import STANDARD_GRAVITY_M_S2
 
 GYRO_FULL_SCALES_DPS = (125, 250, 500, 1000, 2000)
 ACCEL_FULL_SCALES_G = (4, 8, 16, 32)
@@ -63,7 +64,7 @@ GYRO_NOISE_DENSITY_MDPS_RTHZ = 3.8
 ODR_REL_TOL = 0.005
 
 
-def _as_int_choice(name, value, choices):
+def _as_int_choice(name: str, value: Any, choices: tuple[int, ...]) -> int:
     try:
         as_float = float(value)
     except (TypeError, ValueError) as err:
@@ -73,7 +74,7 @@ def _as_int_choice(name, value, choices):
     return int(as_float)
 
 
-def check_gyro_fs(fs_dps):
+def check_gyro_fs(fs_dps: Any) -> int:
     """
     Validate a gyro full scale.
 
@@ -90,7 +91,7 @@ def check_gyro_fs(fs_dps):
     return _as_int_choice('gyro_fs_dps', fs_dps, GYRO_FULL_SCALES_DPS)
 
 
-def check_accel_fs(fs_g):
+def check_accel_fs(fs_g: Any) -> int:
     """
     Validate an accelerometer full scale.
 
@@ -107,7 +108,7 @@ def check_accel_fs(fs_g):
     return _as_int_choice('accel_fs_g', fs_g, ACCEL_FULL_SCALES_G)
 
 
-def check_odr(odr_hz):
+def check_odr(odr_hz: Any) -> float:
     """
     Match an output data rate to the datasheet table.
 
@@ -132,7 +133,7 @@ def check_odr(odr_hz):
     raise ParameterError(f'odr_hz must be one of {ODRS_HZ} (within 0.5 %), got {odr_hz!r}')
 
 
-def gyro_sensitivity_rad_s_per_lsb(fs_dps):
+def gyro_sensitivity_rad_s_per_lsb(fs_dps: int) -> float:
     """
     Return the gyro sensitivity of a full scale.
 
@@ -150,7 +151,7 @@ def gyro_sensitivity_rad_s_per_lsb(fs_dps):
     return _GYRO_MDPS_PER_LSB[check_gyro_fs(fs_dps)] * 1e-3 * np.pi / 180.0
 
 
-def accel_sensitivity_m_s2_per_lsb(fs_g):
+def accel_sensitivity_m_s2_per_lsb(fs_g: int) -> float:
     """
     Return the accelerometer sensitivity of a full scale.
 
@@ -165,10 +166,10 @@ def accel_sensitivity_m_s2_per_lsb(fs_g):
         m/s^2 per LSB (datasheet mg/LSB times 9.80665e-3).
 
     """
-    return _ACCEL_MG_PER_LSB[check_accel_fs(fs_g)] * 1e-3 * STANDARD_GRAVITY
+    return _ACCEL_MG_PER_LSB[check_accel_fs(fs_g)] * 1e-3 * STANDARD_GRAVITY_M_S2
 
 
-def temperature_c(raw):
+def temperature_c(raw: ArrayLike) -> np.ndarray:
     """
     Convert raw OUT_TEMP words to degrees Celsius.
 
@@ -207,7 +208,7 @@ class Scaled:
     temperature_c: np.ndarray
 
 
-def to_si(samples, *, gyro_fs_dps, accel_fs_g):
+def to_si(samples: np.ndarray, *, gyro_fs_dps: int, accel_fs_g: int) -> 'Scaled':
     """
     Scale raw samples to SI units.
 
@@ -240,7 +241,7 @@ def to_si(samples, *, gyro_fs_dps, accel_fs_g):
     return Scaled(gyro.reshape(-1, 3), accel.reshape(-1, 3), temp.reshape(-1))
 
 
-def quantise(values, lsb):
+def quantise(values: ArrayLike, lsb: float) -> np.ndarray:
     """
     Quantise physical values to int16 output words, clipped to the full scale.
 

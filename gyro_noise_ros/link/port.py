@@ -31,7 +31,7 @@ from ..errors import ParameterError
 _NETWORK_SCHEMES = ('socket', 'rfc2217')
 
 
-def validate_port(port):
+def validate_port(port: str) -> str:
     """
     Check that a port name can be opened by pyserial (without opening it).
 
@@ -70,7 +70,7 @@ def validate_port(port):
     return port
 
 
-def usb_serial_number(port):
+def usb_serial_number(port: str) -> str | None:
     """
     Return the USB serial number of the device behind a port path, if there is one.
 
@@ -94,7 +94,7 @@ def usb_serial_number(port):
     return None
 
 
-def hardware_id_for(port, frame_id):
+def hardware_id_for(port: str, frame_id: str) -> str:
     """
     Return a stable ``hardware_id`` for the diagnostics of the sensor on a port.
 

@@ -16,7 +16,7 @@ Sample and message counters: the board's wrapping uint32 sample counter and DDS 
 
 Pure numpy, no ROS. :class:`SequenceTracker` is the driver's publish-once filter and loss counter;
 :class:`SequenceGapCounter` counts messages missing from a stream of DDS publication sequence
-numbers (analyzer, recorder).
+numbers (compensator); :class:`PublisherCounts` does it per publisher (analyzer, recorder).
 """
 
 from dataclasses import dataclass
@@ -150,8 +150,8 @@ class SequenceGapCounter:
 
     A sequence number that does not increase starts a new run (a restarted publisher); a
     sequence number of 0 means the middleware gave none and is ignored. The count assumes one
-    publisher per topic (``MessageInfo`` does not name the writer): with several, their numbers
-    interleave and the count is meaningless (the stamps-based ``Samples lost`` stays right).
+    publisher: with several, their numbers interleave and the count is meaningless; keep one
+    counter per publisher (:class:`PublisherCounts`).
     """
 
     def __init__(self):
@@ -184,3 +184,76 @@ class SequenceGapCounter:
         self.last = int(seq[-1])
         self.missing += new
         return new
+
+
+class PublisherCounts:
+    """
+    Messages and DDS sequence gaps per publisher of one topic.
+
+    Each publisher (writer GID) numbers its messages on its own; a :class:`SequenceGapCounter` per
+    publisher keeps two interleaved streams from looking like millions of drops. A GID of None
+    (the middleware or the client library gave none) is one more publisher, unknown.
+    """
+
+    def __init__(self):
+        self._by_gid = {}  # gid -> [messages, SequenceGapCounter], in order of first message
+
+    def update(self, gids, sequence):
+        """
+        Count one batch.
+
+        Parameters
+        ----------
+        gids : numpy.ndarray or sequence of bytes or None
+            The writer of each message (a ``V16`` array or 16-byte strings; None for the whole
+            batch: unknown).
+        sequence : array_like of int
+            Publication sequence numbers in arrival order (0: none given).
+
+        Returns
+        -------
+        list
+            The batch's writers (bytes, or None), in order of their first message in it.
+
+        """
+        seq = np.asarray(sequence, dtype=np.int64)
+        if seq.size == 0:
+            return []
+        if gids is None:
+            groups = {None: seq}
+        else:
+            keys = np.asarray(gids)
+            if keys.dtype.kind != 'V':
+                keys = np.array([bytes(g) for g in gids], dtype='V16')
+            if np.all(keys == keys[0]):  # the usual case: one publisher
+                groups = {bytes(keys[0]): seq}
+            else:
+                _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+                inverse = inverse.reshape(-1)
+                groups = {bytes(keys[first[k]]): seq[inverse == k]
+                          for k in np.argsort(first, kind='stable')}
+        for gid, part in groups.items():
+            entry = self._by_gid.get(gid)
+            if entry is None:
+                entry = self._by_gid[gid] = [0, SequenceGapCounter()]
+            entry[0] += int(part.size)
+            entry[1].update(part)
+        return list(groups)
+
+    def publishers(self):
+        """Return the GIDs seen, in order of their first message."""
+        return list(self._by_gid)
+
+    def table(self):
+        """Return ``[(gid, messages, missing), ...]`` in order of first message."""
+        return [(gid, n, gaps.missing) for gid, (n, gaps) in self._by_gid.items()]
+
+    @property
+    def messages(self):
+        """int: Messages counted, all publishers."""
+        return sum(n for n, _ in self._by_gid.values())
+
+    @property
+    def missing(self):
+        """int: Messages missing from the publishers' sequences, all publishers."""
+        return sum(gaps.missing for _, gaps in self._by_gid.values())

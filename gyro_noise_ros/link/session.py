@@ -20,7 +20,11 @@ they may carry the previous configuration's scaling; the sample counter's gap co
 """
 
 from dataclasses import dataclass
+import threading
 import time
+from typing import Any, Callable
+
+import numpy as np
 
 from .protocol import encode_configure, MAX_SAMPLES_PER_FRAME
 from ..errors import LinkError
@@ -53,7 +57,7 @@ class LinkConfig:
     accel_fs_g: int
 
 
-def frame_interval_s(config):
+def frame_interval_s(config: 'LinkConfig') -> float:
     """
     Return the longest normal silence of a link: three full frames (the firmware batches <= 128).
 
@@ -71,8 +75,10 @@ def frame_interval_s(config):
     return 3.0 * MAX_SAMPLES_PER_FRAME / config.odr_hz
 
 
-def handshake(ser, decoder, *, command_id, odr_hz, gyro_fs_dps, accel_fs_g, ack_timeout_s,
-              stop=None, now_ns=time.time_ns):
+def handshake(ser: Any, decoder: Any, *, command_id: int, odr_hz: float, gyro_fs_dps: int,
+              accel_fs_g: int, ack_timeout_s: float, stop: threading.Event | None = None,
+              now_ns: Callable[[], int] = time.time_ns
+              ) -> tuple['LinkConfig', np.ndarray, int] | None:
     """
     Send CONFIGURE on an open port and wait for its ACK.
 

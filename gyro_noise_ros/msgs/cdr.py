@@ -34,6 +34,8 @@ Wire layouts (XCDR1; CDR alignment counts from the byte after the 4-byte encapsu
 
 from __future__ import annotations
 
+from typing import Any, Sequence
+
 import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
@@ -42,10 +44,13 @@ from ..errors import BagError, ParameterError
 
 _CDR_LE = b'\x00\x01\x00\x00'
 
-_TYPESTORES = {}
+_TYPESTORES: dict[str, Any] = {}
+
+#: ``(first float64 index, count)`` of each tail field to read.
+Fields = Sequence[tuple[int, int]]
 
 
-def typestore(ros1=False):
+def typestore(ros1: bool = False) -> Any:
     """
     Return rosbags' typestore, built once per flavour (it costs ~50 ms).
 
@@ -64,46 +69,47 @@ def typestore(ros1=False):
 # Decoding
 
 
-def _align8(value):
+def _align8(value: Any) -> Any:
+    # an int or an integer array: the next multiple of 8
     return (value + 7) & ~7
 
 
 class _Group:
     """``m`` messages of one byte length ``size`` inside ``buf``, read column by column."""
 
-    def __init__(self, buf, starts, size):
+    def __init__(self, buf: np.ndarray, starts: np.ndarray, size: int) -> None:
         self.buf = buf
         self.starts = starts
         self.size = size
         m = starts.shape[0]
         stride = int(starts[1] - starts[0]) if m > 1 else size
-        self.view = None
+        self.view: np.ndarray | None = None
         if stride >= size and (m < 3 or (np.diff(starts) == stride).all()):
             # Evenly spaced messages (a joined list, or one topic's run of records in an MCAP
             # chunk) are one strided 2-D view: column reads then copy only the bytes they need.
             self.view = as_strided(buf[int(starts[0]):], shape=(m, size), strides=(stride, 1),
                                    writeable=False)
 
-    def cols(self, first, width):
+    def cols(self, first: int, width: int) -> np.ndarray:
         """Return bytes ``[first, first + width)`` of every message as a contiguous uint8 array."""
         if self.view is not None:
             return np.ascontiguousarray(self.view[:, first:first + width])
         return self.buf[self.starts[:, None] + np.arange(first, first + width)]
 
-    def u32(self, first, order):
+    def u32(self, first: int, order: str) -> np.ndarray:
         return self.cols(first, 4).view(order + 'u4')[:, 0].astype(np.int64)
 
-    def i32(self, first, order):
+    def i32(self, first: int, order: str) -> np.ndarray:
         return self.cols(first, 4).view(order + 'i4')[:, 0].astype(np.int64)
 
-    def f8(self, first, count, order):
+    def f8(self, first: int, count: int, order: str) -> np.ndarray:
         return self.cols(first, 8 * count).view(order + 'f8').astype(np.float64)
 
-    def subset(self, idx):
+    def subset(self, idx: np.ndarray) -> _Group:
         return _Group(self.buf, self.starts[idx], self.size)
 
 
-def _ascii(group, first, stop):
+def _ascii(group: _Group, first: int, stop: int) -> np.ndarray:
     """
     Messages whose bytes ``[first, stop)`` (frame_id and its padding) are all ASCII.
 
@@ -112,10 +118,11 @@ def _ascii(group, first, stop):
     """
     if stop <= first:
         return np.ones(group.starts.shape[0], bool)
-    return (group.cols(first, stop - first) < 0x80).all(axis=1)
+    return np.asarray((group.cols(first, stop - first) < 0x80).all(axis=1))
 
 
-def _decode_group(group, tail_f8, fields, ros1):
+def _decode_group(group: _Group, tail_f8: int, fields: Fields,
+                  ros1: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     Decode one length group.
 
@@ -134,6 +141,7 @@ def _decode_group(group, tail_f8, fields, ros1):
     stamp_ns = np.zeros(m, np.int64)
     values = np.zeros((m, width))
     off = size - 8 * tail_f8
+    idx: slice | np.ndarray
     if ros1:
         if off < 16:
             return ok, stamp_ns, values
@@ -176,7 +184,8 @@ def _decode_group(group, tail_f8, fields, ros1):
     return ok, stamp_ns, values
 
 
-def decode_spans(buf, starts, lengths, tail_f8, fields, ros1):
+def decode_spans(buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray, tail_f8: int,
+                 fields: Fields, ros1: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     Bulk-decode messages located by spans in one buffer.
 
@@ -223,7 +232,7 @@ def decode_spans(buf, starts, lengths, tail_f8, fields, ros1):
     return ok, stamp_ns, values
 
 
-def join_raws(raws):
+def join_raws(raws: Sequence[bytes]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Concatenate raw messages into one buffer; return (buf uint8, starts, lengths)."""
     n = len(raws)
     lengths = np.fromiter(map(len, raws), np.int64, n)
@@ -233,7 +242,7 @@ def join_raws(raws):
     return np.frombuffer(b''.join(raws), np.uint8), starts, lengths
 
 
-def slow_decode(raw, msgtype, ros1):
+def slow_decode(raw: bytes, msgtype: str, ros1: bool) -> Any:
     """Decode one message with rosbags; raise BagError if rosbags cannot."""
     store = typestore(ros1)
     try:
@@ -245,7 +254,7 @@ def slow_decode(raw, msgtype, ros1):
                        f'({type(err).__name__}: {err})') from err
 
 
-def frame_id_of(raw, ros1):
+def frame_id_of(raw: bytes | np.ndarray, ros1: bool) -> str | None:
     """``header.frame_id`` of one raw message, or None if its header does not parse."""
     raw = bytes(raw)
     if len(raw) < 16:
@@ -263,7 +272,8 @@ def frame_id_of(raw, ros1):
 # Encoding
 
 
-def encode_cdr(sec, nsec, frame_id, tail):
+def encode_cdr(sec: np.ndarray, nsec: np.ndarray, frame_id: str,
+               tail: np.ndarray) -> list[bytes]:
     """
     Serialise n messages (header + float64 tail) as little-endian CDR; one bytes object each.
 
@@ -284,7 +294,8 @@ def encode_cdr(sec, nsec, frame_id, tail):
     return [blob[i:i + size] for i in range(0, len(blob), size)]
 
 
-def encode_cdr_rows(sec, nsec, frame_id, tail):
+def encode_cdr_rows(sec: np.ndarray, nsec: np.ndarray, frame_id: str,
+                    tail: np.ndarray) -> np.ndarray:
     """
     Serialise n messages (header + float64 tail) as little-endian CDR; one uint8 row each.
 

@@ -23,10 +23,13 @@ linear_acceleration_covariance[9]. Hence ``len = 4 + align8(12 + L) + 296`` in R
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .cdr import decode_spans, encode_cdr, encode_cdr_rows, slow_decode, typestore
-from .stamps import split_stamps, stamp_ns_of
+from .stamps import Parts, split_stamps, stamp_ns_of
 from ..errors import BagError, ParameterError
 
 IMU_MSGTYPE = 'sensor_msgs/msg/Imu'
@@ -36,7 +39,9 @@ IMU_TAIL_F8 = 37
 IMU_FIELDS = ((13, 3), (25, 3))
 
 
-def decode_imu_spans(buf, starts, lengths, ros1, skip_undecodable):
+def decode_imu_spans(buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray, ros1: bool,
+                     skip_undecodable: bool
+                     ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, np.ndarray]:
     """
     Decode Imu messages located by spans; slow path for the ones the bulk path refuses.
 
@@ -69,7 +74,7 @@ def decode_imu_spans(buf, starts, lengths, ros1, skip_undecodable):
     return keep, stamp_ns, values[:, 0:3].copy(), values[:, 3:6].copy()
 
 
-def imu_covariances(raws):
+def imu_covariances(raws: Sequence[bytes]) -> tuple[np.ndarray, np.ndarray]:
     """
     Return the angular-velocity and linear-acceleration covariances of raw ROS 2 CDR Imu messages.
 
@@ -105,7 +110,7 @@ def imu_covariances(raws):
 # Encoding
 
 
-def _vector3(values, n, name):
+def _vector3(values: ArrayLike, n: int, name: str) -> np.ndarray:
     arr = np.asarray(values, dtype=np.float64)
     if arr.shape == (3,) and n == 1:
         arr = arr.reshape(1, 3)
@@ -115,7 +120,7 @@ def _vector3(values, n, name):
     return arr
 
 
-def _covariance(values, n, name):
+def _covariance(values: ArrayLike | None, n: int, name: str) -> np.ndarray:
     if values is None:
         return np.zeros((n, 9))
     arr = np.asarray(values, dtype=np.float64)
@@ -127,8 +132,10 @@ def _covariance(values, n, name):
         f'{name} must have 9 values (row-major 3x3) or shape ({n}, 9), got {arr.shape}')
 
 
-def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
-                   angular_velocity_covariance=None, linear_acceleration_covariance=None):
+def encode_imu_cdr(stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, *,
+                   frame_id: str = 'imu_link',
+                   angular_velocity_covariance: ArrayLike | None = None,
+                   linear_acceleration_covariance: ArrayLike | None = None) -> list[bytes]:
     """
     Serialise ``sensor_msgs/Imu`` messages to little-endian CDR in bulk.
 
@@ -159,8 +166,10 @@ def encode_imu_cdr(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
                                   angular_velocity_covariance, linear_acceleration_covariance))
 
 
-def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
-                    angular_velocity_covariance=None, linear_acceleration_covariance=None):
+def encode_imu_rows(stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, *,
+                    frame_id: str = 'imu_link',
+                    angular_velocity_covariance: ArrayLike | None = None,
+                    linear_acceleration_covariance: ArrayLike | None = None) -> np.ndarray:
     """
     Serialise ``sensor_msgs/Imu`` messages to little-endian CDR, one row of a byte matrix each.
 
@@ -185,8 +194,9 @@ def encode_imu_rows(stamp_ns, gyro_rad_s, accel_m_s2, *, frame_id='imu_link',
         linear_acceleration_covariance))
 
 
-def _imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_covariance,
-               linear_acceleration_covariance):
+def _imu_parts(stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, frame_id: str,
+               angular_velocity_covariance: ArrayLike | None,
+               linear_acceleration_covariance: ArrayLike | None) -> Parts:
     """Return (sec, nsec, frame_id, tail) of Imu messages."""
     _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
     n = sec.shape[0]
@@ -201,7 +211,8 @@ def _imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id, angular_velocity_cova
     return sec, nsec, frame_id, tail
 
 
-def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):
+def patch_imu_spans(buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
+                    gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike) -> list[bytes]:
     """
     Re-serialise CDR ``sensor_msgs/Imu`` messages with a new angular velocity and acceleration.
 
@@ -264,6 +275,6 @@ def patch_imu_spans(buf, starts, lengths, gyro_rad_s, accel_m_s2):
     return result
 
 
-def _packed(starts, lengths):
+def _packed(starts: np.ndarray, lengths: np.ndarray) -> bool:
     """Tell whether the spans are back to back in order (a joined list)."""
     return starts.shape[0] < 2 or bool((starts[1:] == starts[:-1] + lengths[:-1]).all())

@@ -21,14 +21,20 @@ only on the wire (ROS 2 keeps ``nanosec`` in [0, 1e9) also for negative times).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ParameterError
 
 NS_PER_S = 1_000_000_000
 
+#: ``(sec, nsec, frame_id, tail)`` of messages to encode (:func:`.cdr.encode_cdr`).
+Parts = tuple[np.ndarray, np.ndarray, str, np.ndarray]
 
-def split_stamps(stamp_ns, name):
+
+def split_stamps(stamp_ns: ArrayLike, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Validate integer ns stamps; return (stamps int64 (n,), sec, nanosec), ROS 2 semantics."""
     stamps = np.asarray(stamp_ns)
     if stamps.dtype.kind not in 'iu':
@@ -48,12 +54,12 @@ def split_stamps(stamp_ns, name):
     return stamps, sec, nsec
 
 
-def stamp_ns_of(msg):
+def stamp_ns_of(msg: Any) -> int:
     """Return ``header.stamp`` of a deserialised message in ns."""
     return int(msg.header.stamp.sec) * NS_PER_S + int(msg.header.stamp.nanosec)
 
 
-def count_stamp_regressions(stamp_ns, *, previous_ns=None):
+def count_stamp_regressions(stamp_ns: ArrayLike, *, previous_ns: int | None = None) -> int:
     """
     Count stamps that go backwards (strictly earlier than the stamp before them).
 

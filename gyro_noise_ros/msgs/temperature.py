@@ -20,10 +20,13 @@ After the header (see :mod:`.cdr`) come two float64: ``temperature`` (degC) and 
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .cdr import decode_spans, encode_cdr, encode_cdr_rows, slow_decode
-from .stamps import split_stamps, stamp_ns_of
+from .stamps import Parts, split_stamps, stamp_ns_of
 from ..errors import ParameterError
 
 TEMPERATURE_MSGTYPE = 'sensor_msgs/msg/Temperature'
@@ -33,7 +36,8 @@ TEMPERATURE_TAIL_F8 = 2
 TEMPERATURE_FIELDS = ((0, 1),)
 
 
-def decode_temperature_spans(buf, starts, lengths, ros1):
+def decode_temperature_spans(buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
+                             ros1: bool) -> tuple[np.ndarray, np.ndarray]:
     """Decode Temperature messages located by spans; return (stamp_ns, temperature_c)."""
     ok, stamp_ns, values = decode_spans(
         buf, starts, lengths, TEMPERATURE_TAIL_F8, TEMPERATURE_FIELDS, ros1)
@@ -45,7 +49,7 @@ def decode_temperature_spans(buf, starts, lengths, ros1):
     return stamp_ns, values[:, 0].copy()
 
 
-def temperature_variances(raws):
+def temperature_variances(raws: Sequence[bytes]) -> np.ndarray:
     """
     Return the ``variance`` field of raw ROS 2 CDR ``sensor_msgs/Temperature`` messages.
 
@@ -69,7 +73,8 @@ def temperature_variances(raws):
 # Encoding
 
 
-def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', variance=0.0):
+def encode_temperature_cdr(stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
+                           frame_id: str = 'imu_link', variance: ArrayLike = 0.0) -> list[bytes]:
     """
     Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR in bulk.
 
@@ -93,7 +98,8 @@ def encode_temperature_cdr(stamp_ns, temperature_c, *, frame_id='imu_link', vari
     return encode_cdr(*_temperature_parts(stamp_ns, temperature_c, frame_id, variance))
 
 
-def encode_temperature_rows(stamp_ns, temperature_c, *, frame_id='imu_link', variance=0.0):
+def encode_temperature_rows(stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
+                            frame_id: str = 'imu_link', variance: ArrayLike = 0.0) -> np.ndarray:
     """
     Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR, one byte-matrix row each.
 
@@ -111,7 +117,8 @@ def encode_temperature_rows(stamp_ns, temperature_c, *, frame_id='imu_link', var
     return encode_cdr_rows(*_temperature_parts(stamp_ns, temperature_c, frame_id, variance))
 
 
-def _temperature_parts(stamp_ns, temperature_c, frame_id, variance):
+def _temperature_parts(stamp_ns: ArrayLike, temperature_c: ArrayLike, frame_id: str,
+                       variance: ArrayLike) -> Parts:
     """Return (sec, nsec, frame_id, tail) of Temperature messages."""
     _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
     n = sec.shape[0]

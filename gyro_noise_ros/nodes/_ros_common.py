@@ -27,8 +27,8 @@ Conventions every node module follows (``test/test_node_params.py`` relies on th
 
 What diagnostic_updater would give (it is not installable from PyPI) is written here in its shape:
 :func:`diagnostic_status` builds a ``DiagnosticStatus`` named ``'<node>: <task>'`` with string
-values; the levels come from the pure verdicts (``core.health``, ``link.health``) or from
-:func:`worst` over explicit checks.
+values; the levels come from the pure diagnostics (``core.health``, ``link.health``,
+``diagnostics/``).
 """
 
 import sys
@@ -47,15 +47,13 @@ from ..link.sequence import SequenceGapCounter
 __all__ = ['declare_parameter_table', 'diagnostic_array', 'diagnostic_status',
            'diagnostics_publisher', 'driver_qos', 'ERROR', 'OK', 'ParamSpec', 'PolledGroup',
            'run_node', 'sensor_data_qos', 'SequenceGapCounter', 'specs_from_dataclass', 'STALE',
-           'take_all', 'unused_callback', 'wall_timer', 'WARN', 'worst']
+           'take_all', 'unused_callback', 'wall_timer', 'WARN']
 
 #: ``DiagnosticStatus`` levels, as the ``bytes`` rclpy uses for the ``byte`` field.
 OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN
 ERROR = DiagnosticStatus.ERROR
 STALE = DiagnosticStatus.STALE
-
-_LEVEL_RANK = {OK: 0, WARN: 1, ERROR: 2, STALE: 3}
 
 
 def sensor_data_qos(depth, reliable=False):
@@ -153,30 +151,6 @@ def diagnostics_publisher(node):
 
     """
     return node.create_publisher(DiagnosticArray, '/diagnostics', 10)
-
-
-def worst(checks, ok_message):
-    """
-    Pick the level and message of the worst failed check (the first one among equals).
-
-    Parameters
-    ----------
-    checks : iterable of (level, str)
-        Level and one-sentence message of each check that did not pass.
-    ok_message : str
-        Message when the iterable is empty.
-
-    Returns
-    -------
-    (bytes, str)
-        Level and message for :func:`diagnostic_status`.
-
-    """
-    level, message = OK, ok_message
-    for check_level, check_message in checks:
-        if _LEVEL_RANK[check_level] > _LEVEL_RANK[level]:
-            level, message = check_level, check_message
-    return level, message
 
 
 def diagnostic_status(name, hardware_id, level, message, values):

@@ -43,6 +43,12 @@ Outputs (``docs/diagnostics.md``, ``docs/demo.md``):
   ``history_chunks``): ``geometry_msgs/Vector3Stamped`` per chunk, x, y, z = axes (NaN for an axis
   not analysed or not ``ok``), stamped with the chunk's first sample, ``frame_id`` of the IMU.
 
+Messages are counted per publisher (the writer GID of each message, :mod:`._publishers`). A second
+publisher on ``imu/data_raw`` (another driver, a replayed bag, another robot's graph) mixes two
+sensors' samples into one analysis: the node warns once in its log, naming the publishers, and the
+statuses turn WARN while more than one publisher has been seen (``Publishers``, ``Messages per
+publisher``).
+
 ``gyro_noise_monitor`` (:mod:`gyro_noise_ros.nodes.monitor`) prints the diagnostics as lines.
 """
 
@@ -56,17 +62,18 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, Temperature
 
+from ._publishers import PublisherWatch, RawTaker
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           specs_from_dataclass, take_all, unused_callback, wall_timer)
+from ..app.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
-from ..core.health import HealthThresholds, LEVEL_BYTE
-from ..core.items import allan_items, DEG, fmt, last_chunk_items, stream_items
-from ..core.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
+from ..core.health import axis_status, HealthThresholds
+from ..core.items import allan_items, fmt, last_chunk_items, stream_items
 from ..errors import GyroNoiseError
-from ..link.sequence import SequenceGapCounter
+from ..units import RAD_TO_DEG
 
 
 NODE_NAME = 'noise_analyzer'
@@ -136,10 +143,6 @@ PARAMETERS = (
 )
 
 
-def _level_byte(level):
-    return bytes([LEVEL_BYTE[level]])
-
-
 class NoiseAnalyzerNode(Node):
     """
     Live noise characterisation node (see the module docstring).
@@ -181,7 +184,6 @@ class NoiseAnalyzerNode(Node):
         self._frame_id = ''
         self.messages_received = 0
         self.messages_undecodable = 0
-        self._transport = SequenceGapCounter()
         self._last_data = None
         self._allan_keys = {}
         self._allan_due = 0.0
@@ -195,6 +197,11 @@ class NoiseAnalyzerNode(Node):
             self._temperature_sub = self.create_subscription(
                 Temperature, 'imu/temperature', unused_callback, qos, raw=True,
                 callback_group=group)
+        self._imu_watch = PublisherWatch(
+            self._imu_sub.topic_name, 'the analysis mixes their samples (remap or namespace one '
+            'of them)')
+        self._imu_taker = RawTaker(self._imu_sub, Imu, self.get_logger())
+        wall_timer(self, 1.0, self._check_publishers)
         self._diag_pub = diagnostics_publisher(self)
         topic_qos = QoSProfile(depth=100)
         self._chunk_pubs = {name: self.create_publisher(Vector3Stamped, '~/' + name, topic_qos)
@@ -216,9 +223,10 @@ class NoiseAnalyzerNode(Node):
             raws, _, _ = take_all(self._temperature_sub, Temperature)
             if raws:
                 self.live.temperature.add(*decode_temperature(raws))
-        raws, _, sequence = take_all(self._imu_sub, Imu)
+        raws, _, sequence, gids = self._imu_taker.take()
         if raws:
-            self._ingest(raws, sequence)
+            self._imu_watch.update(gids, sequence, time.monotonic())
+            self._ingest(raws)
         results, chunks = self.live.collect()
         for result in results:
             if result.status != 'ok' and result.message.startswith('analysis failed'):
@@ -227,15 +235,22 @@ class NoiseAnalyzerNode(Node):
             elif self._params['log_chunks']:
                 self.get_logger().info(
                     f'chunk {result.chunk} axis {result.axis}: {result.status}, bias '
-                    f'{fmt(result.bias_rad_s * DEG)} deg/s, alpha {fmt(result.alpha_var)} (var) '
+                    f'{fmt(result.bias_rad_s * RAD_TO_DEG)} deg/s, '
+                    f'alpha {fmt(result.alpha_var)} (var) '
                     f'{fmt(result.alpha_corr)} (corr)')
         for per_axis in chunks:
             self._publish_chunk(per_axis)
             self.publish_diagnostics()
 
-    def _ingest(self, raws, sequence):
+    def _check_publishers(self):
+        for severity, line in self._imu_watch.check(self):
+            if severity == 'warn':  # rclpy refuses two severities from one call site
+                self.get_logger().warn(line)
+            else:
+                self.get_logger().info(line)
+
+    def _ingest(self, raws):
         self.messages_received += len(raws)
-        self._transport.update(sequence)
         self._last_data = time.monotonic()
         batch = decode_imu(raws, skip_undecodable=True)
         self.messages_undecodable += len(raws) - len(batch)
@@ -300,6 +315,7 @@ class NoiseAnalyzerNode(Node):
         verdicts = self.engine.health(seconds_since_data=since, summaries=summaries)
         counts = next(iter(summaries.values())).stream
         hardware_id = self._hardware_id or self._frame_id or 'unknown'
+        active = self._imu_watch.active(time.monotonic())
         statuses = []
         for axis, verdict in verdicts.items():
             s = summaries[axis]
@@ -312,21 +328,19 @@ class NoiseAnalyzerNode(Node):
                                    mean_temperature_c=s.temperature_mean_c)
             values += [
                 ('Analysis queue (chunks)', str(self.live.queue_size)),
-                ('Messages dropped before the node', str(self._transport.missing)),
+                ('Messages dropped before the node', str(self._imu_watch.counts.missing)),
                 ('Messages undecodable', str(self.messages_undecodable)),
+                ('Publishers', str(len(active))),
+                ('Messages per publisher', self._imu_watch.summary()),
             ]
-            level, message = verdict.level, verdict.message
             live = self.live
-            if live.rejected_batches:
-                values.append(('Batches rejected', str(live.rejected_batches)))
-                values.append(('Last rejection', live.last_rejection))
-                # ERROR while data arrives but is rejected (rather than STALE for 'no chunk yet');
-                # once batches are accepted again only the count stays.
-                silent = since is not None and since > self.thresholds.stale_after_s
-                if live.last_batch_rejected and not silent:
-                    level, message = 'ERROR', f'Samples rejected: {live.last_rejection}.'
+            status = axis_status(verdict, values, rejected_batches=live.rejected_batches,
+                                 last_rejection=live.last_rejection,
+                                 rejecting=live.last_batch_rejected, seconds_since_data=since,
+                                 thresholds=self.thresholds, publishers=len(active))
             statuses.append(diagnostic_status(f'{self.get_name()}: axis {axis}', hardware_id,
-                                              _level_byte(level), message, values))
+                                              bytes([status.level_byte]), status.message,
+                                              status.values))
         return diagnostic_array(self.get_clock().now().to_msg(), statuses)
 
     def publish_diagnostics(self):
@@ -336,6 +350,7 @@ class NoiseAnalyzerNode(Node):
     def destroy_node(self):
         """Stop the worker thread, then destroy the node."""
         self.live.stop()
+        self._imu_taker.close()
         return super().destroy_node()
 
 

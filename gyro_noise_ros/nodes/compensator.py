@@ -26,6 +26,13 @@ the header stamp, frame_id, orientation and covariances of each input message un
 ``/diagnostics`` status ``'<node>: compensation'``. Ingestion as in the analyzer: raw
 subscriptions drained every ``drain_period_s`` and decoded and re-encoded in bulk. See
 ``docs/compensation.md``.
+
+With a thermal model, a gyro sample is published once a temperature at or after its stamp is known,
+so its offset is interpolated between two temperature messages, never held from an older one
+(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): over a reliable subscription a lost
+temperature message stalls the newer ones until it is resent, and a held offset on a temperature
+ramp is wrong by the drift rate times the stall. The wait is bounded by ``max_temperature_wait_s``;
+a sample that waited that long is compensated with the newest offset and counted.
 """
 
 import math
@@ -38,19 +45,17 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
-                          diagnostics_publisher, ERROR, ParamSpec, PolledGroup, run_node,
-                          sensor_data_qos, SequenceGapCounter, take_all, unused_callback, WARN,
-                          worst)
+                          diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
+                          SequenceGapCounter, take_all, unused_callback)
 from ..bag import decode_temperature
 from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
+from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
-from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, RANGE_MARGIN,
-                            RANGE_NAMES, RANGE_OUTSIDE)
+from ..thermal.live import BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TemperatureGate
 from ..thermal.run import DEFAULT_RATE_WINDOW_S
 
 NODE_NAME = 'imu_compensator'
-_DEG = 180.0 / math.pi
 
 
 class ArrayParamSpec(ParamSpec):
@@ -106,6 +111,16 @@ PARAMETERS = (
               'which needs its window filled) for it, then are dropped and counted: they are '
               'never published uncorrected on the compensated topic', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
+    # 4 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
+    # Fast DDS's default period 3 s (the 6.66 kHz Imu stream is repaired sooner, by heartbeats
+    # piggybacked on its data), plus the NACK response and the drain period. Runs at load 13 with
+    # a 1 s bound held 2,000-15,000 samples per run past it (test_compensator_e2e). The normal
+    # wait is one temperature period (19 ms at 52 Hz) plus the drain period.
+    ParamSpec('max_temperature_wait_s', 4.0, 'With a thermal model, a gyro sample newer than the '
+              'latest temperature waits up to this long for the next one, so its offset is '
+              'interpolated, never held from an older temperature; past it the sample gets the '
+              'latest offset and is counted (0: never wait, the latest offset at once)', unit='s',
+              read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
               'change when model.json has one', read_only=True),
     ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
@@ -144,18 +159,6 @@ def calibration_from(p):
     return load_calibration(p['calibration_file']), f"file {p['calibration_file']}"
 
 
-def _vec(values, scale=1.0):
-    return ', '.join(f'{v * scale:.6g}' for v in values)
-
-
-def _share(ev):
-    """Share (%) of evaluated temperature messages outside the trained range of T or dT."""
-    evaluated = sum(ev.knots_by_status.values())
-    if not evaluated:
-        return 'n/a'
-    return f'{100.0 * ev.knots_outside / evaluated:.3g}'
-
-
 class ImuCompensatorNode(Node):
     """
     Calibration and thermal compensation node (see the module docstring).
@@ -192,16 +195,24 @@ class ImuCompensatorNode(Node):
             accel_model, range_c=range_c, margin_c=margin, beyond=p['out_of_range_action'])
         for note in notes:
             self.get_logger().warning(note)
-        self.counts = dict.fromkeys(('received', 'published', 'undecodable', 'uncorrected',
-                                     'temperatures'), 0)
-        # Batches waiting for the first temperature, and since when (monotonic s).
-        self._held, self._held_since = [], None
+        # Diagnostics: counters ticked on the hot path, judged on the timer.
+        self._diag = CompensationTask(
+            CompensationThresholds(stale_after_s=p['stale_after_s'],
+                                   temperature_timeout_s=p['temperature_timeout_s'],
+                                   temperature_wait_s=p['temperature_wait_s'],
+                                   max_temperature_wait_s=p['max_temperature_wait_s']),
+            calibration=self.calibration, calibration_source=self._cal_source,
+            out_of_range_action=p['out_of_range_action'], now=time.monotonic())
+        self.counts = self._diag.counts
+        # Samples wait for an offset at or after their stamp (bounded). Before the first offset
+        # (the first temperature, plus the rate window for a model using dT) they are dropped.
+        start_up_s = 0.0 if self.thermal is None else self.thermal.start_up_s
+        self._gate = TemperatureGate(p['max_temperature_wait_s'],
+                                     p['temperature_wait_s'] + start_up_s)
         self._transport = SequenceGapCounter()
         self._frame_id = ''
-        self._last_data = self._last_temp = None
         self._offset = None
         self._accel_offset = None
-        self._rate = (time.monotonic(), 0, math.nan)  # time, published count, Hz
         group = PolledGroup()
         qos = sensor_data_qos(p['queue_depth'], p['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
@@ -232,20 +243,20 @@ class ImuCompensatorNode(Node):
                                         throttle_duration_sec=5.0)
                 stamp_ns, temperature_c = (), ()
             if self.thermal.add_temperature(stamp_ns, temperature_c):
-                self._last_temp = time.monotonic()
+                self._diag.tick_temperature(time.monotonic())
             if self.thermal_accel is not None:
                 self.thermal_accel.add_temperature(stamp_ns, temperature_c)
-        if self._held:
-            self._release_held()
         raws, _, sequence = take_all(self._imu_sub, Imu)
         if raws:
             self.compensate(raws, sequence)
+        elif self.thermal is not None:
+            self._release()  # a new temperature or a timeout lets held samples go
 
     def compensate(self, raws, sequence=()):
         """Decode a batch of raw Imu messages, correct them, publish the results."""
         self.counts['received'] += len(raws)
         self._transport.update(sequence)
-        self._last_data = time.monotonic()
+        self._diag.tick_data(time.monotonic())
         buf, starts, lengths = join_raws(raws)
         keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
         if keep is not None:
@@ -257,25 +268,19 @@ class ImuCompensatorNode(Node):
         if not self._frame_id:
             self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
         batch = (buf, starts, lengths, stamp_ns, gyro, accel)
-        if self.thermal is not None and (self._held
-                                         or self.thermal.drift_at(stamp_ns[:0]) is None):
-            # Before the first temperature there is no offset: publishing these uncorrected on
-            # a topic named compensated would be a wrong number given calmly. Wait, then drop.
-            self._held.append(batch)
-            self._held_since = self._held_since or time.monotonic()
-            self._release_held()
+        if self.thermal is None:
+            self._emit(*batch)
             return
-        self._emit(*batch)
+        # Before the first temperature there is no offset: publishing these uncorrected on a
+        # topic named compensated would be a wrong number given calmly (the gate drops them after
+        # temperature_wait_s); after it, samples wait for a temperature at or after their stamp.
+        self._gate.push(batch, stamp_ns, time.monotonic())
+        self._release()
 
-    def _release_held(self):
-        if self.thermal.drift_at(self._held[0][3][:0]) is not None:
-            held, self._held, self._held_since = self._held, [], None
-            for batch in held:
-                self._emit(*batch)
-        elif time.monotonic() - self._held_since > (self._p['temperature_wait_s']
-                                                    + self.thermal.start_up_s):
-            self.counts['uncorrected'] += sum(b[3].size for b in self._held)
-            self._held, self._held_since = [], None
+    def _release(self):
+        for batch, i, j, _ in self._gate.release(self.thermal.offset_stamp_ns, time.monotonic()):
+            buf, starts, lengths, stamp_ns, gyro, accel = batch
+            self._emit(buf, starts[i:j], lengths[i:j], stamp_ns[i:j], gyro[i:j], accel[i:j])
 
     def _emit(self, buf, starts, lengths, stamp_ns, gyro, accel):
         if self.thermal is not None:
@@ -292,85 +297,25 @@ class ImuCompensatorNode(Node):
             publish(raw)
         self.counts['published'] += stamp_ns.size
 
-    def diagnostics(self):
-        """Build the ``DiagnosticArray`` of the current state (one status)."""
-        now = time.monotonic()
-        t0, n0, _ = self._rate
-        if now - t0 >= 0.5:
-            n1 = self.counts['published']
-            self._rate = (now, n1, (n1 - n0) / (now - t0))
-        c, checks = self.counts, []
-        since = None if self._last_data is None else now - self._last_data
-        if since is None or since > self._p['stale_after_s']:
-            checks.append((ERROR, 'No imu/data_raw ' + ('yet.' if since is None else
-                                                        f'for {since:.1f} s.')))
-        cal = self.calibration
-        values = [('Calibration source', self._cal_source),
-                  ('Gyro bias (deg/s)', _vec(cal.gyro.bias, _DEG)),
-                  ('Gyro scale factor (%)', _vec(cal.gyro.scale_factor, 100.0)),
-                  ('Accelerometer bias (m/s^2)', _vec(cal.accel.bias)),
-                  ('Accelerometer scale factor (%)', _vec(cal.accel.scale_factor, 100.0)),
-                  ('Calibration gravity (m/s^2)', f'{cal.gravity_m_s2:.6g}')]
-        ev = self.thermal
-        if ev is None:
-            values.append(('Thermal model', 'none'))
-        else:
-            age = None if self._last_temp is None else now - self._last_temp
-            range_name = 'n/a' if ev.status is None else RANGE_NAMES[ev.status]
-            values += [
-                ('Thermal model', ev.name),
-                ('Thermal model range (degC)', f'{ev.range_lo_c:.4g} to {ev.range_hi_c:.4g}, '
-                 f'margin {ev.margin_c:.3g}'),
-                ('Temperature (degC)', f'{ev.temperature_c:.4g}'),
-                ('Temperature rate (degC/s)', f'{ev.rate_c_s:.4g}'),
-                ('Temperature age (s)', 'n/a' if age is None else f'{age:.2f}'),
-                ('Temperature range status', range_name),
-                ('Thermal offset (deg/s)', 'n/a' if self._offset is None else
-                 _vec(self._offset, _DEG)),
-                ('Temperature messages', str(c['temperatures'])),
-                ('Temperature messages rejected', str(ev.rejected)),
-                ('Temperature messages beyond range + margin',
-                 str(ev.knots_by_status[RANGE_OUTSIDE])),
-                ('Thermal model rate range (degC/s)', 'unknown' if ev.rate_range_c_s is None
-                 else f'{ev.rate_range_c_s[0]:.4g} to {ev.rate_range_c_s[1]:.4g}'),
-                ('Temperature messages outside the trained rate range',
-                 str(ev.knots_rate_outside)),
-                ('Share outside the trained range of T or dT (%)', _share(ev)),
-                ('Temperature messages waiting for the rate window', str(ev.pending)),
-                ('Accelerometer thermal offset (mg)',
-                 'none' if self.thermal_accel is None else 'n/a' if self._accel_offset is None
-                 else _vec(self._accel_offset, 1e3 / 9.80665)),
-                ('Messages dropped waiting for the first temperature', str(c['uncorrected'])),
-                ('Messages waiting for the first temperature',
-                 str(sum(b[3].size for b in self._held))),
-            ]
-            if ev.status == RANGE_OUTSIDE:
-                checks.append((ERROR, f'Temperature {ev.temperature_c:.1f} degC is beyond the '
-                               f'model range + margin: offset not extrapolated '
-                               f"({self._p['out_of_range_action']})."))
-            elif ev.status == RANGE_MARGIN:
-                checks.append((WARN, f'Temperature {ev.temperature_c:.1f} degC is outside the '
-                               'trained range (within the margin).'))
-            if c['uncorrected']:
-                checks.append((WARN, f"{c['uncorrected']} messages dropped: no temperature "
-                               f"within {self._p['temperature_wait_s']:g} s of them."))
-            if age is None:
-                checks.append((WARN, 'No imu/temperature yet: Imu messages held, then dropped.'))
-            elif age > self._p['temperature_timeout_s']:
-                checks.append((WARN, f'Temperature is {age:.1f} s old: offset held.'))
-        values += [('Messages received', str(c['received'])),
-                   ('Messages published', str(c['published'])),
-                   ('Output rate (Hz)', f'{self._rate[2]:.1f}'),
-                   ('Messages undecodable', str(c['undecodable'])),
-                   ('Messages dropped before the node', str(self._transport.missing))]
-        level, message = worst(checks, 'Compensating.')
+    def diagnostics(self, record=False):
+        """
+        Build the ``DiagnosticArray`` of the current state (one status, see the task).
+
+        ``record``: this status is published, so the late samples it reports are not reported
+        again (the periodic timer passes True).
+        """
+        status = self._diag.run(
+            time.monotonic(), thermal=self.thermal, thermal_accel=self.thermal_accel,
+            offset=self._offset, accel_offset=self._accel_offset, hold=self._gate,
+            transport_missing=self._transport.missing, record=record)
         hardware_id = self._p['hardware_id'] or self._frame_id or 'unknown'
         return diagnostic_array(self.get_clock().now().to_msg(), [diagnostic_status(
-            self._status_name, hardware_id, level, message, values)])
+            self._status_name, hardware_id, bytes([status.level_byte]), status.message,
+            status.values)])
 
     def publish_diagnostics(self):
         """Publish :meth:`diagnostics` on ``/diagnostics``."""
-        self._diag_pub.publish(self.diagnostics())
+        self._diag_pub.publish(self.diagnostics(record=True))
 
 
 def main(args=None):

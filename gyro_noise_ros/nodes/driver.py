@@ -52,11 +52,10 @@ from sensor_msgs.msg import Imu, Temperature
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, driver_qos, ParamSpec, run_node,
                           specs_from_dataclass, wall_timer)
-from ..core.health import LEVEL_BYTE
 from ..errors import ParameterError
 from ..link import lsm6dso32
 from ..link.clock import DeviceClock
-from ..link.health import counters, judge_link, link_items, LinkThresholds, window_between
+from ..link.health import LinkTask, LinkThresholds
 from ..link.port import hardware_id_for, validate_port
 from ..link.reader import LinkReader
 from ..link.sequence import SequenceTracker
@@ -154,7 +153,6 @@ class Lsm6dso32Driver(LifecycleNode):
         p = declare_parameter_table(self, PARAMETERS, on_change=self._on_parameters_changed)
         self._params = p
         self._port = validate_port(p['port'])
-        self._thresholds = LinkThresholds(**{k: p[k] for k in _THRESHOLD_NAMES})
         self._hardware_id = p['hardware_id'] or hardware_id_for(self._port, p['frame_id'])
         self._status_name = f'{self.get_name()}: link'
         self._message_fields = self._make_message_fields(p)
@@ -173,7 +171,10 @@ class Lsm6dso32Driver(LifecycleNode):
         self._activated_at = time.monotonic()
         self._counts = dict.fromkeys(('published', 'temperatures', 'lost', 'duplicates',
                                       'restarts', 'discarded'), 0)
-        self._diag_prev = (time.monotonic(), counters(self.link_snapshot()))
+        # Diagnostics: counters ticked by the reader thread, judged on the timer.
+        self._link_task = LinkTask(LinkThresholds(**{k: p[k] for k in _THRESHOLD_NAMES}),
+                                   port=self._port, period_s=p['diagnostics_period_s'],
+                                   now=time.monotonic(), snapshot=self.link_snapshot())
         wall_timer(self, p['diagnostics_period_s'], self._publish_diagnostics)
         if p['autostart']:
             self.trigger_configure()
@@ -193,7 +194,8 @@ class Lsm6dso32Driver(LifecycleNode):
         # One attribute swap: the reader thread sees either the old or the new set, never a mix.
         self._message_fields = self._make_message_fields(self._params)
         try:
-            self._thresholds = LinkThresholds(**{k: self._params[k] for k in _THRESHOLD_NAMES})
+            self._link_task.thresholds = LinkThresholds(
+                **{k: self._params[k] for k in _THRESHOLD_NAMES})
         except ParameterError as err:
             self.get_logger().error(f'link thresholds unchanged: {err}')
 
@@ -354,29 +356,18 @@ class Lsm6dso32Driver(LifecycleNode):
         """
         Build the ``'<node>: link'`` status from the counters since the previous call.
 
-        The level is :func:`gyro_noise_ros.link.health.judge_link` of the window with the
-        thresholds of the parameters; the keys are listed in ``docs/diagnostics.md``.
+        The node only wraps :meth:`gyro_noise_ros.link.health.LinkTask.run` (the window judged
+        with the thresholds of the parameters); the keys are listed in ``docs/diagnostics.md``.
 
         Returns
         -------
         diagnostic_msgs.msg.DiagnosticStatus
 
         """
-        s = self.link_snapshot()
-        now = time.monotonic()
-        (prev_time, prev), self._diag_prev = self._diag_prev, (now, counters(s))
-        if s['lifecycle'] == 'unconfigured':
-            s['state'] = 'unconfigured'
-        elif s['lifecycle'] == 'inactive' and s['state'] == 'streaming':
-            s['state'] = 'inactive'
-        since = max(prev_time, s['streaming_since'] or prev_time, s['activated_at'])
-        window = window_between(prev, s, now=now, since=since,
-                                period_s=self._params['diagnostics_period_s'])
-        verdict = judge_link(window, self._thresholds)
-        values = link_items(s, window, port=self._port,
-                            drift_ppm=self._device_clock.state.drift_ppm)
+        status = self._link_task.run(self.link_snapshot(), time.monotonic(),
+                                     drift_ppm=self._device_clock.state.drift_ppm)
         return diagnostic_status(self._status_name, self._hardware_id,
-                                 bytes([LEVEL_BYTE[verdict.level]]), verdict.message, values)
+                                 bytes([status.level_byte]), status.message, status.values)
 
     def destroy_node(self):
         """Stop and join the reader thread (it closes the port), then destroy the node."""

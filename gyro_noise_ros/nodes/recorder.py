@@ -27,8 +27,11 @@ lists and decodes and writes each batch in bulk. The QoS history (``queue_depth`
 6.66 kHz) holds far more than 10 ms of data, so nothing is overwritten between drains even when a
 sqlite3 commit or a busy CPU delays one.
 
-Messages received and written are counted; DDS publication sequence numbers reveal messages the
-transport dropped before they reached this node, counted as ``dropped``. On SIGINT or SIGTERM the
+Messages received and written are counted per publisher (the writer GID of each message,
+:mod:`._publishers`); each publisher's DDS publication sequence numbers reveal messages the
+transport dropped before they reached this node, counted as ``dropped``. When a second publisher
+appears on a recorded topic (another driver, a replayed bag, another robot's graph) the recorder
+warns once, naming the publishers: the bag then mixes their streams. On SIGINT or SIGTERM the
 queues are drained once more and the bag is closed cleanly (its ``metadata.yaml`` written), then
 one summary line is printed.
 
@@ -44,16 +47,17 @@ recording as it is and ``gyro_noise_record repair`` writes a complete bag from i
 from datetime import datetime, timezone
 from pathlib import Path
 import sys
+import time
 
 import numpy as np
 from rclpy.node import Node
 from sensor_msgs.msg import Imu, Temperature
 
+from ._publishers import PublisherWatch, RawTaker
 from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_node,
-                          sensor_data_qos, take_all, unused_callback, wall_timer)
+                          sensor_data_qos, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
 from ..errors import OutputError
-from ..link.sequence import SequenceGapCounter
 from ..msgs import frame_id_of, imu_covariances, temperature_variances
 
 NODE_NAME = 'gyro_noise_record'
@@ -116,8 +120,6 @@ class RecorderNode(Node):
         self.received_temperature = 0
         self.written_imu = 0
         self.written_temperature = 0
-        self._imu_gaps = SequenceGapCounter()
-        self._temperature_gaps = SequenceGapCounter()
         self._writer = None
         self._closed = False
         if Path(self.output).exists():
@@ -133,6 +135,7 @@ class RecorderNode(Node):
             self._temperature_sub = self.create_subscription(
                 Temperature, 'imu/temperature', unused_callback, qos, raw=True,
                 callback_group=group)
+        self._watch_publishers_setup()
         wall_timer(self, params['drain_period_s'], self.drain)
         if params['flush_period_s'] > 0:
             wall_timer(self, params['flush_period_s'], self._flush)
@@ -145,8 +148,41 @@ class RecorderNode(Node):
 
     @property
     def dropped(self):
-        """int: Messages the transport dropped before this node (publication sequence gaps)."""
-        return self._imu_gaps.missing + self._temperature_gaps.missing
+        """int: Messages the transport dropped before this node (per-publisher sequence gaps)."""
+        return sum(w.counts.missing for w, _ in self._watches)
+
+    # ---- who publishes (counts per publisher, the second-publisher warning) ----------------
+
+    def _watch_publishers_setup(self):
+        consequence = 'the bag mixes their messages (counts are kept per publisher)'
+        self._imu_watch = PublisherWatch(self._imu_sub.topic_name, consequence)
+        self._imu_taker = RawTaker(self._imu_sub, Imu, self.get_logger())
+        self._watches = [(self._imu_watch, self._imu_taker)]
+        if self._temperature_sub is not None:
+            self._temperature_watch = PublisherWatch(self._temperature_sub.topic_name,
+                                                     consequence)
+            self._temperature_taker = RawTaker(self._temperature_sub, Temperature,
+                                               self.get_logger())
+            self._watches.append((self._temperature_watch, self._temperature_taker))
+        wall_timer(self, 1.0, self._check_publishers)
+
+    def _take(self, watch, taker):
+        raws, received, sequence, gids = taker.take()
+        if raws:
+            watch.update(gids, sequence, time.monotonic())
+        return raws, received
+
+    def _check_publishers(self):
+        for watch, _ in self._watches:
+            for severity, line in watch.check(self):
+                if severity == 'warn':  # rclpy refuses two severities from one call site
+                    self.get_logger().warn(line)
+                else:
+                    self.get_logger().info(line)
+
+    def publisher_summary(self):
+        """Return ``'publishers of <topic>: <name> <count> (<dropped> dropped); ...'``."""
+        return '; '.join(f'publishers of {w.topic}: {w.summary()}' for w, _ in self._watches)
 
     def _open(self, frame_id):
         self._writer = ImuBagWriter(
@@ -159,15 +195,14 @@ class RecorderNode(Node):
         """Take every queued message and write it (called by the timer and at shutdown)."""
         if self._closed:
             return
-        raws, received, sequence = take_all(self._imu_sub, Imu)
-        t_raws, t_received, t_sequence = ([], [], []) if self._temperature_sub is None else \
-            take_all(self._temperature_sub, Temperature)
+        raws, received = self._take(self._imu_watch, self._imu_taker)
+        t_raws, t_received = ([], []) if self._temperature_sub is None else \
+            self._take(self._temperature_watch, self._temperature_taker)
         if self._writer is None and (raws or t_raws):
             # The bag is created on the first message so it carries the sensor's frame_id.
             self._open(frame_id_of((raws or t_raws)[0], False))
         if raws:
             self.received_imu += len(raws)
-            self._imu_gaps.update(sequence)
             batch = decode_imu(raws, log_ns=_log_times(received, None))
             av_cov, la_cov = imu_covariances(raws)
             self._writer.write_imu(batch.stamp_ns, batch.gyro, batch.accel,
@@ -176,7 +211,6 @@ class RecorderNode(Node):
             self.written_imu += len(raws)
         if t_raws:
             self.received_temperature += len(t_raws)
-            self._temperature_gaps.update(t_sequence)
             stamp_ns, temperature_c = decode_temperature(t_raws)
             self._writer.write_temperature(stamp_ns, temperature_c,
                                            variance=temperature_variances(t_raws),
@@ -189,7 +223,8 @@ class RecorderNode(Node):
 
     def _report(self):
         self.get_logger().info(f'{self.written_imu} Imu, {self.written_temperature} Temperature '
-                               f'written; {self.dropped} dropped in transport')
+                               f'written; {self.dropped} dropped in transport; '
+                               f'{self.publisher_summary()}')
 
     def close(self):
         """Drain once more, close the bag and return the summary line (idempotent)."""
@@ -205,11 +240,13 @@ class RecorderNode(Node):
         return (f'{NODE_NAME}: received {self.received_imu} Imu and {self.received_temperature} '
                 f'Temperature messages, wrote {self.written_imu} and {self.written_temperature} '
                 f'to '
-                f'{where}; {self.dropped} dropped in transport')
+                f'{where}; {self.dropped} dropped in transport; {self.publisher_summary()}')
 
     def destroy_node(self):
         summary = self.close()
         print(summary, file=sys.stderr, flush=True)
+        for _, taker in self._watches:
+            taker.close()
         return super().destroy_node()
 
 

@@ -305,6 +305,15 @@ class LiveDriftEvaluator:
         return self.rate_window_s if self.uses_rate else 0.0
 
     @property
+    def offset_stamp_ns(self):
+        """Stamp of the newest knot (ns, int); None before the first offset exists."""
+        # Knots are added in stamp order and, once the rate window has filled, every accepted
+        # message becomes one at once: the newest knot is the newest message.
+        if self._knot_t.size == 0 or self._pending_t.size:
+            return None
+        return self.stamp_ns
+
+    @property
     def pending(self):
         """int: temperature messages waiting for the rate window to fill."""
         return int(self._pending_t.size)
@@ -438,4 +447,107 @@ class LiveDriftEvaluator:
             if first:
                 self._knot_t = self._knot_t[first:]
                 self._knot_drift = self._knot_drift[first:]
+        return out
+
+
+class TemperatureGate:
+    """
+    Hold gyro samples until a temperature at or after their stamp is known, for a bounded time.
+
+    The offset of a sample between two temperature knots is interpolated; one newer than the
+    newest knot could only get the newest offset, held. Over a reliable subscription a lost
+    temperature message stalls every newer one until it is resent (in-order delivery), and the
+    held offset of a ramp is then wrong by the drift rate times the stall. So samples newer than
+    the newest temperature wait for the next one, in arrival order; a sample that has waited
+    ``max_wait_s`` is released with the newest offset anyway and counted in :attr:`late`.
+    Before the first temperature there is no offset at all: samples that waited ``first_wait_s``
+    are dropped and counted in :attr:`dropped`.
+
+    Batches are opaque to the gate (the node keeps the message bytes in them); it returns index
+    ranges of each batch to publish.
+
+    Parameters
+    ----------
+    max_wait_s : float
+        Longest wait for a newer temperature once one is known (s); 0: never wait.
+    first_wait_s : float
+        Longest wait for the first temperature (s).
+
+    """
+
+    def __init__(self, max_wait_s, first_wait_s):
+        if not (max_wait_s >= 0 and first_wait_s >= 0):
+            raise ParameterError(f'waits must be >= 0 s, got {max_wait_s!r}, {first_wait_s!r}')
+        self.max_wait_s, self.first_wait_s = float(max_wait_s), float(first_wait_s)
+        self._queue = []   # [batch, stamp_ns (int64 array), next index, arrival time (s)]
+        self.late = 0      # samples released after max_wait_s with the newest offset
+        self.dropped = 0   # samples dropped waiting for the first temperature
+        self.longest_wait_s = 0.0  # of a sample released on time (interpolated)
+
+    @property
+    def waiting(self):
+        """int: Samples held now."""
+        return sum(len(stamps) - start for _, stamps, start, _ in self._queue)
+
+    def push(self, batch, stamp_ns, now_s):
+        """
+        Queue a batch of samples.
+
+        Parameters
+        ----------
+        batch : object
+            Returned with each released range.
+        stamp_ns : array_like of int
+            (n,) gyro stamps of the batch, ns.
+        now_s : float
+            Monotonic arrival time (s).
+
+        """
+        stamps = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
+        if stamps.size:
+            self._queue.append([batch, stamps, 0, float(now_s)])
+
+    def release(self, newest_temperature_ns, now_s):
+        """
+        Return what may be published now, in arrival order.
+
+        Parameters
+        ----------
+        newest_temperature_ns : int or None
+            Stamp of the newest temperature knot (ns); None before the first one.
+        now_s : float
+            Monotonic time (s).
+
+        Returns
+        -------
+        list of (batch, int, int, bool)
+            ``(batch, start, stop, late)``: publish samples ``start:stop`` of ``batch``; ``late``
+            when they waited ``max_wait_s`` for a newer temperature and get the newest offset.
+
+        """
+        out = []
+        while self._queue:
+            entry = self._queue[0]
+            batch, stamps, start, arrived = entry
+            waited = now_s - arrived
+            if newest_temperature_ns is None:
+                if waited <= self.first_wait_s:
+                    break
+                self.dropped += len(stamps) - start
+                self._queue.pop(0)
+                continue
+            beyond = np.flatnonzero(stamps[start:] > newest_temperature_ns)
+            stop = len(stamps) if beyond.size == 0 else start + int(beyond[0])
+            if stop > start:
+                out.append((batch, start, stop, False))
+                self.longest_wait_s = max(self.longest_wait_s, waited)
+                entry[2] = start = stop
+            if start == len(stamps):
+                self._queue.pop(0)
+                continue
+            if waited < self.max_wait_s:
+                break  # later batches are newer still: they wait behind this one
+            out.append((batch, start, len(stamps), True))
+            self.late += len(stamps) - start
+            self._queue.pop(0)
         return out

@@ -85,7 +85,7 @@ MODEL_FORMAT_VERSION = 2
 #: The format versions :func:`load_model` reads (1: no ``accel``, no ``rate_window_s``).
 READABLE_FORMAT_VERSIONS = (1, 2)
 
-_registered = {}
+_registered: dict[str, type] = {}
 
 
 class MethodUnavailableError(GyroNoiseError):

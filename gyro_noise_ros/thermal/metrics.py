@@ -53,13 +53,13 @@ import scipy.signal
 from ..core.allan import allan_deviation
 from ..core.readout import read_allan
 from ..errors import InputDataError, ParameterError
+from ..units import RAD_TO_DEG
 
 __all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
            'noise_metrics', 'noise_path_gain', 'step_response', 'verdict', 'white_noise_sigma']
 
-RAD2DEG = 180.0 / math.pi
 #: Window of the residual-drift means (s).
 DRIFT_WINDOW_S = 60.0
 #: Default amplitude of the injected chirp and steps (rad/s): 1 deg/s.
@@ -179,18 +179,18 @@ def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
     drift = math.nan
     if k >= 2:
         means = x[:k * window].reshape(k, window).mean(axis=1)
-        drift = float(np.std(means, ddof=1) * RAD2DEG)
+        drift = float(np.std(means, ddof=1) * RAD_TO_DEG)
     return NoiseMetrics(
         # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
-        arw_deg_sqrt_h=r.arw_rad_per_sqrt_s * RAD2DEG * 60.0 if r else nan,
+        arw_deg_sqrt_h=r.arw_rad_per_sqrt_s * RAD_TO_DEG * 60.0 if r else nan,
         arw_slope=slope,
         arw_on_slope=bool(r and r.arw_from_region),
-        bias_stability_deg_h=r.bias_stability_rad_s * RAD2DEG * 3600.0 if r else nan,
+        bias_stability_deg_h=r.bias_stability_rad_s * RAD_TO_DEG * 3600.0 if r else nan,
         bias_stability_tau_s=r.bias_stability_tau_s if r else nan,
         bias_stability_upper_bound=bool(r and r.bias_stability_upper_bound),
         band_limited_below_s=r.band_limited_below_s if r else nan,
         residual_drift_deg_s=drift, drift_windows=int(k),
-        mean_deg_s=float(np.mean(x) * RAD2DEG)), (tau, adev)
+        mean_deg_s=float(np.mean(x) * RAD_TO_DEG)), (tau, adev)
 
 
 @dataclass(frozen=True)
@@ -630,7 +630,7 @@ def verdict(raw, processed, fr, st, *, causal, small=None, noise_gain=None):
         s_fr, s_st, s_amp = small
         small_gain = _low_gain(s_fr)
         if small_gain < 0.9 or s_st.settled_gain < 0.9:
-            cut.append(f'motion of {s_amp * RAD2DEG:.3g} deg/s (the size of the noise) passed '
+            cut.append(f'motion of {s_amp * RAD_TO_DEG:.3g} deg/s (the size of the noise) passed '
                        f'with gain down to {min(small_gain, s_st.settled_gain):.3g} '
                        f'({_band_text(s_fr)}): small motion goes with the noise')
     from_bw = bool(arw_ratio < 0.9 and cut)
@@ -762,19 +762,19 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
             small = (s_fr, s_st, small_amp)
             curves[name].update(frequency_small=s_fr, step_small=s_st)
             axes[name]['bandwidth_small_signal'] = dict(
-                _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD2DEG)
+                _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD_TO_DEG)
         gain = None
         if noise_path:
             gain = noise_path_gain(noise_in[:, a], noise_diff[:, a], run.rate_hz)
             axes[name]['noise_path'] = {'arw_gain': _num(gain),
                                         'amplitude_deg_s': _num(np.std(noise_in[:, a])
-                                                                * RAD2DEG)}
+                                                                * RAD_TO_DEG)}
         axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
                                         small=small, noise_gain=gain)
     doc = {
         'method': method.name, 'causal': bool(method.causal),
-        'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD2DEG,
-                      'small_signal_amplitude_deg_s': (small_amp * RAD2DEG if small_signal
+        'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD_TO_DEG,
+                      'small_signal_amplitude_deg_s': (small_amp * RAD_TO_DEG if small_signal
                                                        else None),
                       'f_lo_hz': inj.f_lo_hz, 'f_hi_hz': inj.f_hi_hz,
                       'noise_path_seed': NOISE_PATH_SEED if noise_path else None,

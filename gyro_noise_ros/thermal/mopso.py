@@ -129,7 +129,7 @@ class MopsoResult:
     requested: int
     history: list = field(repr=False, default_factory=list)
     reference_evaluations: int = 0
-    search_pick: tuple = None
+    search_pick: tuple | None = None
 
 
 def dominates(a, b, *, margin=0.0):

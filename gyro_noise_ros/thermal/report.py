@@ -39,26 +39,19 @@ import re
 
 import numpy as np
 
+from ..plotting import pyplot, save_figure
+from ..units import RAD_TO_DEG
+
 __all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
            'plot_allan', 'plot_bandwidth', 'plot_before_after', 'plot_drift', 'plot_mode_classes',
            'plot_modes', 'plot_mopso', 'plot_network', 'plot_output', 'plot_run', 'plot_steps',
            'parallel_figures', 'table_markdown', 'bias_stability_cell']
 
-DEG = 180.0 / math.pi
 AXES = 'xyz'
 #: Points per trace in time plots (longer runs are reduced to min/max envelopes of blocks).
 _MAX_POINTS = 4000
 #: Points per trace of the narrower panels of the method figures (two per pixel column).
 PANEL_POINTS = 1600
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use('Agg', force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def envelope(t, y, max_points=_MAX_POINTS):
@@ -102,14 +95,6 @@ def _window_means(t, y, window_s):
             y[:k * n].reshape(k, n, *y.shape[1:]).mean(axis=1))
 
 
-def _save(fig, plt, path, *, tight=True):
-    if tight:
-        fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return Path(path)
-
-
 def plot_run(path, run):
     """
     Plot temperature and raw angular rate against time (paper Figure 10).
@@ -126,20 +111,20 @@ def plot_run(path, run):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(4, 1, figsize=(9, 8), sharex=True)
     h = run.t_s / 3600.0
     panels[0].plot(*_thin(h, run.temperature_c), color='tab:red', lw=0.8)
     panels[0].set_ylabel('temperature (degC)')
     for a, panel in enumerate(panels[1:]):
-        panel.plot(*_thin(h, run.gyro_rad_s[:, a] * DEG), lw=0.4, color='0.5')
+        panel.plot(*_thin(h, run.gyro_rad_s[:, a] * RAD_TO_DEG), lw=0.4, color='0.5')
         tm, ym = _window_means(run.t_s, run.gyro_rad_s[:, a], 60.0)
-        panel.plot(tm / 3600.0, ym * DEG, color='k', lw=1.0, label='60-s means')
+        panel.plot(tm / 3600.0, ym * RAD_TO_DEG, color='k', lw=1.0, label='60-s means')
         panel.set_ylabel(f'{AXES[a]} (deg/s)')
         panel.legend(fontsize=7, loc='upper right')
     panels[-1].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: temperature and raw gyro output (cf. paper Fig. 10)', fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_output(path, run, processed, *, label):
@@ -162,23 +147,23 @@ def plot_output(path, run, processed, *, label):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 2, figsize=(11, 8), gridspec_kw={'width_ratios': [3, 1]})
     h = run.t_s / 3600.0
     mid = run.t_s.size // 2
     zoom = slice(mid, min(mid + int(10 * run.rate_hz), run.t_s.size))
     for a in range(3):
         left, right = panels[a]
-        left.plot(*_thin(h, run.gyro_rad_s[:, a] * DEG), lw=0.4, color='0.6', label='raw')
-        left.plot(*_thin(h, processed[:, a] * DEG), lw=0.4, color='tab:blue', label=label)
+        left.plot(*_thin(h, run.gyro_rad_s[:, a] * RAD_TO_DEG), lw=0.4, color='0.6', label='raw')
+        left.plot(*_thin(h, processed[:, a] * RAD_TO_DEG), lw=0.4, color='tab:blue', label=label)
         left.set_ylabel(f'{AXES[a]} (deg/s)')
-        right.plot(run.t_s[zoom], run.gyro_rad_s[zoom, a] * DEG, lw=0.6, color='0.6')
-        right.plot(run.t_s[zoom], processed[zoom, a] * DEG, lw=0.8, color='tab:blue')
+        right.plot(run.t_s[zoom], run.gyro_rad_s[zoom, a] * RAD_TO_DEG, lw=0.6, color='0.6')
+        right.plot(run.t_s[zoom], processed[zoom, a] * RAD_TO_DEG, lw=0.8, color='tab:blue')
         right.set_xlabel('time (s), 10-s zoom')
     panels[0][0].legend(fontsize=7, loc='upper right')
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: raw and {label} output (cf. paper Fig. 18)', fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_drift(path, run, processed, *, label):
@@ -201,7 +186,7 @@ def plot_drift(path, run, processed, *, label):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 2, figsize=(11, 8))
     tm, raw_m = _window_means(run.t_s, run.gyro_rad_s, 60.0)
     _, rem_m = _window_means(run.t_s, run.gyro_rad_s - processed, 60.0)
@@ -209,17 +194,17 @@ def plot_drift(path, run, processed, *, label):
     _, temp_m = _window_means(run.t_s, run.temperature_c, 60.0)
     for a in range(3):
         left, right = panels[a]
-        left.plot(tm / 3600, raw_m[:, a] * DEG, color='0.4', lw=1.0, label='raw')
-        left.plot(tm / 3600, rem_m[:, a] * DEG, color='tab:red', lw=1.0, label='removed')
-        left.plot(tm / 3600, proc_m[:, a] * DEG, color='tab:blue', lw=1.0, label='residual')
+        left.plot(tm / 3600, raw_m[:, a] * RAD_TO_DEG, color='0.4', lw=1.0, label='raw')
+        left.plot(tm / 3600, rem_m[:, a] * RAD_TO_DEG, color='tab:red', lw=1.0, label='removed')
+        left.plot(tm / 3600, proc_m[:, a] * RAD_TO_DEG, color='tab:blue', lw=1.0, label='residual')
         left.set_ylabel(f'{AXES[a]} 60-s mean (deg/s)')
-        right.plot(temp_m, raw_m[:, a] * DEG, '.', ms=2, color='0.4')
-        right.plot(temp_m, rem_m[:, a] * DEG, '.', ms=2, color='tab:red')
+        right.plot(temp_m, raw_m[:, a] * RAD_TO_DEG, '.', ms=2, color='0.4')
+        right.plot(temp_m, rem_m[:, a] * RAD_TO_DEG, '.', ms=2, color='tab:red')
         right.set_xlabel('temperature (degC)')
     panels[0][0].legend(fontsize=7)
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(f'{run.name}: drift removed by {label} (cf. paper Fig. 17)', fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_allan(path, curves, *, title):
@@ -240,19 +225,19 @@ def plot_allan(path, curves, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 3, figsize=(14, 4.6))
     for a, panel in enumerate(panels):
         for label, per_axis in curves.items():
             tau, adev = per_axis[AXES[a]]
-            panel.loglog(tau, np.asarray(adev) * DEG * 3600.0, lw=1.1, label=label)
+            panel.loglog(tau, np.asarray(adev) * RAD_TO_DEG * 3600.0, lw=1.1, label=label)
         panel.axvline(1.0, color='0.7', lw=0.6, ls=':')
         panel.set_xlabel('tau (s)')
         panel.set_ylabel(f'Allan deviation {AXES[a]} (deg/h)')
         panel.grid(True, which='both', alpha=0.3)
     panels[0].legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_bandwidth(path, responses, *, title, small=None):
@@ -277,7 +262,7 @@ def plot_bandwidth(path, responses, *, title, small=None):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
     small = small or {}
 
@@ -313,7 +298,7 @@ def plot_bandwidth(path, responses, *, title, small=None):
         p.grid(True, which='both', alpha=0.3)
     panels[0].legend(fontsize=7, ncol=2)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_steps(path, steps, *, title):
@@ -334,7 +319,7 @@ def plot_steps(path, steps, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 2, figsize=(12, 4.5))
     zoom = 0.5
     for label, per_axis in steps.items():
@@ -352,7 +337,7 @@ def plot_steps(path, steps, *, title):
     panels[0].set_ylabel('response / step (ratio)')
     panels[0].legend(fontsize=7, ncol=2)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 _CLASS_COLOURS = {'drift': 'tab:red', 'mixed': 'tab:orange', 'noise': 'tab:gray'}
@@ -385,7 +370,7 @@ def plot_mode_classes(path, info, *, title):
         return None
     if len(rows) != 3 or any(e.size != len(c) for e, c, _ in rows):
         return None
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 3, figsize=(14, 4.2))
     for a, (panel, (ent, classes, freqs)) in enumerate(zip(panels, rows)):
         idx = np.arange(1, ent.size + 1)
@@ -400,7 +385,7 @@ def plot_mode_classes(path, info, *, title):
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in _CLASS_COLOURS.values()]
     panels[0].legend(handles, list(_CLASS_COLOURS), fontsize=7)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_mopso(path, axes, *, title):
@@ -423,7 +408,7 @@ def plot_mopso(path, axes, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.ticker import MaxNLocator
 
     fig, panels = plt.subplots(2, 3, figsize=(14, 7.5))
@@ -456,7 +441,7 @@ def plot_mopso(path, axes, *, title):
         for panel in (front, space):
             panel.grid(True, alpha=0.3)
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_modes(path, axes, *, title):
@@ -479,19 +464,19 @@ def plot_modes(path, axes, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     rows = 1 + max(len(ax['modes']) for ax in axes)
     fig, panels = plt.subplots(rows, 3, figsize=(14, 1.6 + 0.95 * rows), sharex='col',
                                squeeze=False)
     for a, ax in enumerate(axes):
         col = panels[:, a]
-        col[0].plot(ax['t_h'], np.asarray(ax['input']) * DEG, lw=0.4, color='k')
+        col[0].plot(ax['t_h'], np.asarray(ax['input']) * RAD_TO_DEG, lw=0.4, color='k')
         col[0].set_ylabel(f'{AXES[a]} input (deg/s)', fontsize=7)
         col[0].set_title(f'axis {AXES[a]}', fontsize=9)
         labelled = zip(ax['modes'], ax['center_freqs_hz'], ax['classes'])
         for i, (mode, f_hz, cls) in enumerate(labelled):
             panel = col[i + 1]
-            panel.plot(ax['t_h'], np.asarray(mode) * DEG, lw=0.4,
+            panel.plot(ax['t_h'], np.asarray(mode) * RAD_TO_DEG, lw=0.4,
                        color=_CLASS_COLOURS.get(cls, 'tab:blue'))
             panel.set_ylabel(f'IMF{i + 1} (deg/s)', fontsize=7)
             panel.text(0.01, 0.95, f'{cls}, centre {f_hz:.3g} Hz', transform=panel.transAxes,
@@ -510,7 +495,7 @@ def plot_modes(path, axes, *, title):
     top = 1.0 - 0.75 / fig.get_figheight()
     fig.subplots_adjust(left=0.06, right=0.99, bottom=0.55 / fig.get_figheight(), top=top,
                         wspace=0.25, hspace=0.35)
-    return _save(fig, plt, path, tight=False)
+    return save_figure(fig, path, dpi=100)
 
 
 def plot_before_after(path, axes, *, title, before, after):
@@ -535,24 +520,25 @@ def plot_before_after(path, axes, *, title, before, after):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(3, 2, figsize=(12, 8), gridspec_kw={'width_ratios': [3, 2]})
     for a, ax in enumerate(axes):
         left, right = panels[a]
-        left.plot(ax['t_h'], np.asarray(ax['before']) * DEG, lw=0.4, color='0.6', label=before)
-        left.plot(ax['t_h'], np.asarray(ax['after']) * DEG, lw=0.4, color='tab:blue',
+        left.plot(ax['t_h'], np.asarray(ax['before']) * RAD_TO_DEG, lw=0.4, color='0.6',
+                  label=before)
+        left.plot(ax['t_h'], np.asarray(ax['after']) * RAD_TO_DEG, lw=0.4, color='tab:blue',
                   label=after)
         left.set_ylabel(f'{AXES[a]} {ax["name"]} (deg/s)', fontsize=8)
         zt = np.asarray(ax['zoom_t_s'])
-        right.plot(zt, np.asarray(ax['zoom_before']) * DEG, lw=0.6, color='0.6')
-        right.plot(zt, np.asarray(ax['zoom_after']) * DEG, lw=0.9, color='tab:blue')
+        right.plot(zt, np.asarray(ax['zoom_before']) * RAD_TO_DEG, lw=0.6, color='0.6')
+        right.plot(zt, np.asarray(ax['zoom_after']) * RAD_TO_DEG, lw=0.9, color='tab:blue')
         span = zt[-1] - zt[0] if zt.size > 1 else 0.0
         right.set_xlabel(f'time (s), {span:.3g}-s zoom')
         right.set_ylabel(f'{AXES[a]} (deg/s)', fontsize=8)
     panels[0][0].legend(fontsize=7, loc='upper right')
     panels[-1][0].set_xlabel('time (h)')
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def plot_network(path, axes, *, title):
@@ -574,7 +560,7 @@ def plot_network(path, axes, *, title):
     pathlib.Path
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     cols = max(len(row) for row in axes)
     fig, panels = plt.subplots(3, cols, figsize=(6 * cols + 1, 8), squeeze=False,
                                sharex=True)
@@ -582,7 +568,7 @@ def plot_network(path, axes, *, title):
         for c, cell in enumerate(row):
             panel = panels[a][c]
             for label, values, colour in cell['lines']:
-                panel.plot(cell['t_h'], np.asarray(values) * DEG, lw=1.0, color=colour,
+                panel.plot(cell['t_h'], np.asarray(values) * RAD_TO_DEG, lw=1.0, color=colour,
                            label=label)
             panel.set_ylabel(f'{AXES[a]} (deg/s)')
             panel.set_title(cell['title'], fontsize=8)
@@ -591,7 +577,7 @@ def plot_network(path, axes, *, title):
     for panel in panels[-1]:
         panel.set_xlabel('time (h)')
     fig.suptitle(title, fontsize=10)
-    return _save(fig, plt, path)
+    return save_figure(fig, path, dpi=100, tight=True)
 
 
 def _rms_deg_s(x):

@@ -64,14 +64,11 @@ import numba
 import numpy as np
 
 from .run import ThermalRun
-from ..core._kernels import JIT_OPTIONS
+from ..core.jit import JIT_OPTIONS
 from ..core.simulate import gauss_markov_avar, GaussMarkov
 from ..errors import ParameterError
+from ..units import DEG_TO_RAD, MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
-DEG = np.pi / 180.0
-#: Standard gravity (m/s^2), for mg.
-STANDARD_GRAVITY = 9.80665
-MG = 1e-3 * STANDARD_GRAVITY
 #: LSM6DSO32 temperature output sensitivity, 256 LSB/degC (datasheet), i.e. one LSB in degC.
 TEMPERATURE_LSB_C = 1.0 / 256.0
 #: Output rate of the LSM6DSO32 temperature sensor (datasheet: 52 Hz); the driver publishes
@@ -562,7 +559,7 @@ class ThermalModel:
 
         """
         terms = self.bias_terms(die_c, die_rate_nat_c_s, played_c)
-        return (terms @ self.bias_coefficients_dps()) * DEG
+        return (terms @ self.bias_coefficients_dps()) * DEG_TO_RAD
 
     def accel_bias_m_s2(self, die_c):
         """
@@ -582,7 +579,7 @@ class ThermalModel:
         d = np.asarray(die_c, dtype=float).reshape(-1)[:, None] - self.t_ref_c
         mg = (self.vec('accel_bias_mg') + d * (self.vec('accel_lin_mg_per_c') + d * (
             self.vec('accel_quad_mg_per_c2') + d * self.vec('accel_cubic_mg_per_c3'))))
-        return mg * MG
+        return mg * MG_TO_M_S2
 
     def gauss_markov_std_dps(self):
         """
@@ -833,7 +830,7 @@ def gyro_noise_rad_s(n, rate_hz, model, rng):
     if q > 0 and n:
         for corr_time, sub in zip(model.bi_corr_times_s, gm_rng.spawn(len(model.bi_corr_times_s))):
             noise += GaussMarkov(q, corr_time, rate_hz, rng=sub, shape=(3,)).generate(n)
-    return noise * DEG
+    return noise * DEG_TO_RAD
 
 
 @dataclass(frozen=True)
@@ -974,7 +971,7 @@ def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, p
         raise ParameterError(f'run of {duration_s} s at {rate_hz} Hz has fewer than 2 samples')
     run_rng, noise_rng, temp_rng = rng.spawn(3)
     profile = profile.shifted(run_rng.uniform(-1.0, 1.0) * model.room_spread_c)
-    turn_on = run_rng.standard_normal(3) * model.turn_on_bias_dps * DEG
+    turn_on = run_rng.standard_normal(3) * model.turn_on_bias_dps * DEG_TO_RAD
     accel_rng = run_rng.spawn(1)[0]
     t = np.arange(n) / rate_hz
     stream = ThermalStream(model, profile, compress=compress)
@@ -982,11 +979,11 @@ def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, p
     drift = th.bias_rad_s + turn_on
     noise = gyro_noise_rad_s(n, rate_hz, model, noise_rng)
     accel_noise = accel_rng.standard_normal((n, 3)) * (
-        model.accel_noise_ug_rthz * 1e-6 * STANDARD_GRAVITY * np.sqrt(rate_hz / 2.0))
+        model.accel_noise_ug_rthz * 1e-6 * STANDARD_GRAVITY_M_S2 * np.sqrt(rate_hz / 2.0))
     m = max(1, int(round(rate_hz / temperature_rate_hz)))
     idx = np.arange(0, n, m)
     reading = stream.measure_c(th.die_c[idx], temp_rng)
-    gravity = np.array([0.0, 0.0, STANDARD_GRAVITY])
+    gravity = np.array([0.0, 0.0, STANDARD_GRAVITY_M_S2])
     run = ThermalRun(t_s=t, gyro_rad_s=drift + noise,
                      temperature_c=np.interp(t, t[idx], reading), rate_hz=float(rate_hz),
                      name=name, accel_m_s2=gravity + th.accel_bias_m_s2 + accel_noise)
@@ -1040,7 +1037,7 @@ def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START
     stamps = start_ns + np.round(run.t_s * 1e9).astype(np.int64)
     accel = run.accel_m_s2
     if accel is None:
-        accel = np.broadcast_to(np.array([0.0, 0.0, STANDARD_GRAVITY]), (stamps.size, 3))
+        accel = np.broadcast_to(np.array([0.0, 0.0, STANDARD_GRAVITY_M_S2]), (stamps.size, 3))
     chunk = 200_000
     with ImuBagWriter(path, storage=storage, imu_topic=imu_topic,
                       temperature_topic=temperature_topic, frame_id=frame_id) as writer:

@@ -12,25 +12,27 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Pure pieces of the live analyzer (``noise_analyzer``): configuration, temperature, the worker.
+The live analysis (``noise_analyzer``): configuration, temperature, the worker.
 
-The node (:mod:`gyro_noise_ros.nodes.analyzer`) only adapts ROS to these; everything here runs
-and is tested without ROS. :class:`LiveAnalysis` is the image_pipeline pattern "pure library, thin
-node, bounded hand-off": the caller's thread ingests (cheap) and collects results, one worker
-thread runs the heavy identification from a bounded queue, and only the caller's thread mutates
-the engine.
+The live twin of :mod:`gyro_noise_ros.app.analyze`: both feed the same
+:class:`~gyro_noise_ros.core.engine.NoiseEngine`. The node (:mod:`gyro_noise_ros.nodes.analyzer`)
+only adapts ROS to these; everything here runs and is tested without ROS. :class:`LiveAnalysis`
+is the image_pipeline pattern "pure library, thin node, bounded hand-off": the caller's thread
+ingests (cheap) and collects results, one worker thread runs the heavy identification from a
+bounded queue, and only the caller's thread mutates the engine.
 """
 
 from collections import deque
 from dataclasses import fields
 import queue
 import threading
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
-from .engine import AXES, EngineConfig, NoiseEngine
-from .fractional import make_grid
-from .health import HealthThresholds
+from ..core.engine import AXES, ChunkResult, EngineConfig, NoiseEngine
+from ..core.fractional import make_grid
+from ..core.health import HealthThresholds
 from ..errors import GyroNoiseError, ParameterError
 
 #: Numeric per-chunk topics of the analyzer: name -> (ChunkResult field, unit).
@@ -44,7 +46,7 @@ CHUNK_TOPICS = {
 }
 
 
-def parse_axes(text):
+def parse_axes(text: str) -> Tuple[str, ...]:
     """
     Parse the ``axes`` parameter (``'x,y,z'``, ``'z'``, ``'xyz'``) into a tuple of axis names.
 
@@ -72,7 +74,7 @@ def parse_axes(text):
     return tuple(names)
 
 
-def engine_config_from(params):
+def engine_config_from(params: Mapping[str, Any]) -> EngineConfig:
     """
     Build the :class:`EngineConfig` from the analyzer's parameter values.
 
@@ -106,7 +108,7 @@ def engine_config_from(params):
         raise ParameterError(f'parameters chunk_size/memory/max_lag/order grid: {err}') from err
 
 
-def thresholds_from(params):
+def thresholds_from(params: Mapping[str, Any]) -> HealthThresholds:
     """
     Build :class:`HealthThresholds` from the parameter values (same names).
 
@@ -131,11 +133,11 @@ class TemperatureTrack:
     whole bag, interpolates towards the next one there instead).
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.stamp_ns = None
         self.temperature_c = None
 
-    def add(self, stamp_ns, temperature_c):
+    def add(self, stamp_ns: np.ndarray, temperature_c: np.ndarray) -> None:
         """
         Add a batch of temperature messages (any order).
 
@@ -158,7 +160,7 @@ class TemperatureTrack:
         order = np.argsort(stamp_ns, kind='stable')
         self.stamp_ns, self.temperature_c = stamp_ns[order], temperature_c[order]
 
-    def at(self, stamp_ns):
+    def at(self, stamp_ns: np.ndarray) -> Union[np.ndarray, float, None]:
         """
         Return the temperature at sample stamps.
 
@@ -200,8 +202,9 @@ class LiveAnalysis:
 
     """
 
-    def __init__(self, config, *, reference=None, thresholds=None, queue_chunks=4,
-                 on_worker_start=lambda: None):
+    def __init__(self, config: EngineConfig, *, reference: Optional[str] = None,
+                 thresholds: Optional[HealthThresholds] = None, queue_chunks: int = 4,
+                 on_worker_start: Callable[[], None] = lambda: None) -> None:
         self.config = config
         self.engine = NoiseEngine(config, reference=reference, thresholds=thresholds)
         self.temperature = TemperatureTrack()
@@ -221,11 +224,11 @@ class LiveAnalysis:
         self._worker.start()
 
     @property
-    def queue_size(self):
+    def queue_size(self) -> int:
         """int: Chunk jobs waiting for the worker."""
         return self._jobs.qsize()
 
-    def stop(self, timeout_s=5.0):
+    def stop(self, timeout_s: float = 5.0) -> None:
         """
         Stop and join the worker thread.
 
@@ -238,7 +241,7 @@ class LiveAnalysis:
         self._stop.set()
         self._worker.join(timeout=timeout_s)
 
-    def _work(self):
+    def _work(self) -> None:
         self._on_worker_start()
         while not self._stop.is_set():
             try:
@@ -250,7 +253,7 @@ class LiveAnalysis:
             except Exception as err:  # noqa: BLE001 - reported as a skipped chunk, work goes on
                 self._done.put((job, None, err))
 
-    def ingest(self, stamp_ns, gyro):
+    def ingest(self, stamp_ns: np.ndarray, gyro: np.ndarray) -> str:
         """
         Feed samples (caller's thread); complete chunks become jobs, or are skipped when full.
 
@@ -282,7 +285,7 @@ class LiveAnalysis:
                 self._finish(self.engine.skip(job, 'analysis fell behind'))
         return ''
 
-    def collect(self):
+    def collect(self) -> Tuple[List[ChunkResult], List[Dict[str, ChunkResult]]]:
         """
         Record the worker's results (caller's thread) and return what finished.
 
@@ -313,7 +316,7 @@ class LiveAnalysis:
                 chunks.append(self._chunks.pop(result.chunk))
         return finished, chunks
 
-    def _finish(self, result):
+    def _finish(self, result: ChunkResult) -> None:
         self.results.append(result)
         self.last[result.axis] = result
         self._finished.append(result)

@@ -50,6 +50,9 @@ setup(
         'EMD-signal>=1.5',
         # one BLAS thread in gyro_noise_analyze and its worker processes (cli/analyze.py)
         'threadpoolctl',
+        # report.html of every tool (htmlreport/): interactive figures with BokehJS embedded
+        # once in the page, offline; pip-only here (rosdep key python3-bokeh-pip).
+        'bokeh>=3',
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI (see README); a colcon build inside a ROS install
@@ -76,6 +79,9 @@ setup(
             # Independent check of thermal/entropy.py (test-only: its import pulls
             # scikit-learn, 6 s, for two functions we implement in a few lines).
             'antropy>=0.2',
+            # The browser tests of report.html drive the system's Chromium (apt package
+            # chromium, .ci/run installs it); never `playwright install` (no browser download).
+            'playwright',
         ],
     },
     zip_safe=True,

@@ -21,6 +21,7 @@ afterwards, also after a Ctrl-C in the middle. The demo leases its own private g
 the domain it prints is free, not the one this test holds, and its processes are found by it.
 """
 
+import json
 from pathlib import Path
 import re
 import signal
@@ -29,6 +30,7 @@ import sys
 import threading
 import time
 
+from _html_report import check_in_browser, check_static
 import pytest
 
 pytestmark = pytest.mark.ros
@@ -73,10 +75,14 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path, ros_graph):
     assert any(line.strip().split('] ', 1)[-1].startswith('WARN')
                for line in done.stdout.splitlines())
     report = out / 'report'
-    for name in ('summary.md', 'summary.json', 'chunks.csv', 'allan.csv', 'imu.yaml', 'bias.png',
-                 'allan.png'):
+    for name in ('report.html', 'summary.md', 'summary.json', 'chunks.csv', 'allan.csv',
+                 'imu.yaml', 'bias.png', 'allan.png'):
         assert (report / name).is_file(), name
         assert str(report / name) in done.stdout  # the demo ends by saying where they are
+    # the one page to open: the summary's numbers, under 5 MB, drawn in a browser
+    assert (report / 'report.html').stat().st_size <= 5 * 1024 * 1024
+    check_static(report / 'report.html', json.loads((report / 'summary.json').read_text()))
+    check_in_browser(report / 'report.html', tmp_path, figures=4)
     assert (out / 'recording' / 'metadata.yaml').is_file()
     assert 'finished: the report is complete' in (out / 'GYRO_NOISE_DEMO.txt').read_text()
     assert _our_processes(domain) == []

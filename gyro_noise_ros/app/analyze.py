@@ -22,9 +22,9 @@ chunk), runs :class:`gyro_noise_ros.core.engine.NoiseEngine` with the chunk iden
 spread over ``jobs`` worker processes (at most ``4 x jobs`` plus one decoded batch of chunks in
 flight) or a Dask cluster, and returns an :class:`AnalyzeResult` whose
 :meth:`~AnalyzeResult.as_dict` is summary.json. The files (chunks.csv, summary.json,
-summary.md, allan.csv, imu.yaml, curves.npz, PNG figures) are written into a staging folder
-during the run and published in ``out_dir`` only when the whole run succeeded. Formats:
-``docs/offline_tool.md``.
+summary.md, allan.csv, imu.yaml, curves.npz, PNG figures, report.html) are written into a
+staging folder during the run and published in ``out_dir`` only when the whole run succeeded.
+Formats: ``docs/offline_tool.md``.
 
 The workflow, step by step: check every input (:func:`_open_inputs`), analyse each bag in one
 read when it is static throughout, else in a prepass and a pass over its longest static segment
@@ -60,6 +60,7 @@ from ..core.readout import read_allan
 from ..core.segments import StaticSegment, WindowStats
 from ..core.timebase import rescale_allan
 from ..errors import InputDataError, nothing_left_error, OutputError, ParameterError
+from ..htmlreport.analyze import write_analyze_html
 from ..outputs import staged_output
 
 #: The tool named in summary.json and in the warnings.
@@ -112,6 +113,8 @@ class AnalyzeParams:
         Health thresholds.
     figures : bool
         Write PNG figures.
+    html : bool
+        Write report.html (:mod:`..htmlreport.analyze`).
     curves : int
         Chunks per bag and axis whose curves are kept.
     batch_size : int
@@ -146,6 +149,7 @@ class AnalyzeParams:
     reference_bag: Optional[str] = None
     thresholds: HealthThresholds = field(default_factory=HealthThresholds)
     figures: bool = True
+    html: bool = True
     curves: int = DEFAULT_CURVES
     batch_size: int = DEFAULT_BATCH
     progress: bool = False
@@ -211,9 +215,10 @@ class AnalyzeResult:
     alphas : numpy.ndarray
         The order grid (for curves.npz and the curve figures).
     per_chunk, curves, allan, accelerometer : dict
-        What the figures, curves.npz, allan.csv and imu.yaml are drawn from: per-chunk
-        (t, bias, variance) rows per axis, kept var/J curves per (label, axis), Allan results
-        per (label, axis) and the accelerometer readouts per label.
+        What the figures, report.html, curves.npz, allan.csv and imu.yaml are drawn from:
+        per-chunk (t, bias, variance, alpha_var, alpha_corr) rows per axis, kept var/J curves
+        per (label, axis), Allan results per (label, axis) and the accelerometer readouts per
+        label.
 
     """
 
@@ -459,7 +464,7 @@ def analyze_bags(params: AnalyzeParams) -> AnalyzeResult:
         finally:
             if first_reader is not None:
                 first_reader.close()  # idempotent; open here only when the run failed before it
-        files = _write_results(out, result, figures=params.figures)
+        files = _write_results(out, result, figures=params.figures, html=params.html)
         result = dataclasses.replace(
             result, timing={'total_s': time.perf_counter() - started, **result.timing})
     # the files under their published names
@@ -568,7 +573,8 @@ def _check_analysed(bag_docs: List[Dict[str, Any]], config: EngineConfig) -> Non
             raise InputDataError(f"{b['label']}: no chunk could be analysed ({why})")
 
 
-def _write_results(out: Path, result: AnalyzeResult, *, figures: bool) -> List[Path]:
+def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
+                   html: bool = True) -> List[Path]:
     """Write summary.json and everything drawn from the result into ``out``; return the files."""
     doc = result.as_dict()
     with _writing():
@@ -587,6 +593,8 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool) -> List[P
             files.append(out / 'curves.npz')
         if figures:
             files += _write_figures(out, result.alphas, result.per_chunk, result.curves)
+        if html:
+            files.append(write_analyze_html(out, doc, result.per_chunk, result.allan))
     return files
 
 
@@ -778,7 +786,8 @@ class _ChunkFeed:
         self.engine.record(result)
         stores.csv.write(self.label, result)
         self.rows[result.axis].append((result.t_mid_s, result.bias_rad_s,
-                                       result.variance_rad2_s2))
+                                       result.variance_rad2_s2, result.alpha_var,
+                                       result.alpha_corr))
         if result.var_curve is not None:
             stores.curves.setdefault((self.label, result.axis), []).append(
                 (result.chunk, result.var_curve, result.j_curve))
@@ -997,7 +1006,7 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
     warnings, left_out = _bag_warnings(bag, state, segment, config)
     for axis, s in summaries.items():
         stores.per_chunk.setdefault(axis, []).append(
-            (label, np.array(state.rows[axis]).reshape(-1, 3)))
+            (label, np.array(state.rows[axis]).reshape(-1, 5)))
         if s.allan is not None:
             stores.allan[(label, axis)] = (s.allan, s.noise_terms, s.readout)
     return {

@@ -49,6 +49,7 @@ from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EAR
 from ..calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS, select_poses,
                                   select_six, WindowAccumulator)
 from ..errors import InputDataError, ParameterError
+from ..htmlreport.calibrate import write_calibrate_html
 from ..outputs import atomic_write_text, staged_output
 from ..units import MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
@@ -763,9 +764,9 @@ def calibration_files(result):
             'calibration.md': markdown(result)}
 
 
-def write_calibration(result, out_dir):
+def write_calibration(result, out_dir, *, html=True, command=None):
     """
-    Write calibration.json, calibration.yaml and calibration.md (published together or not at all).
+    Write calibration.json, .yaml, .md and report.html (published together or not at all).
 
     Parameters
     ----------
@@ -773,6 +774,10 @@ def write_calibration(result, out_dir):
         The calibration.
     out_dir : str or os.PathLike
         Output folder (created).
+    html : bool, keyword-only
+        Write report.html (:mod:`..htmlreport.calibrate`).
+    command : sequence of str, optional, keyword-only
+        The command line, shown on report.html.
 
     Returns
     -------
@@ -783,4 +788,7 @@ def write_calibration(result, out_dir):
     with staged_output(out_dir) as stage:
         for name, text in calibration_files(result).items():
             atomic_write_text(stage / name, text)
-    return [os.path.join(str(out_dir), name) for name in FILES]
+        if html:
+            write_calibrate_html(result, stage, command=command)
+    return [os.path.join(str(out_dir), name)
+            for name in FILES + (('report.html',) if html else ())]

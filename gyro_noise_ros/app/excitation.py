@@ -37,6 +37,7 @@ from ..calibration import records
 from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
                                       sine_dwell, sine_sweep)
 from ..errors import InputDataError, ParameterError
+from ..htmlreport.excitation import write_excitation_html
 from ..outputs import atomic_write_text, staged_output
 from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
@@ -483,9 +484,9 @@ def plot(path, params, label, side):
     save_figure(fig, path, dpi=110, tight=True)
 
 
-def write_excitation(result, out_dir):
+def write_excitation(result, out_dir, *, html=True, command=None):
     """
-    Write excitation.json, excitation.md and the figures (published together or not at all).
+    Write excitation.json, .md, report.html and the figures (published together or not at all).
 
     Parameters
     ----------
@@ -493,6 +494,10 @@ def write_excitation(result, out_dir):
         The check.
     out_dir : str or os.PathLike
         Output folder (created).
+    html : bool, keyword-only
+        Write report.html (:mod:`..htmlreport.excitation`).
+    command : sequence of str, optional, keyword-only
+        The command line, shown on report.html.
 
     Returns
     -------
@@ -505,6 +510,9 @@ def write_excitation(result, out_dir):
         atomic_write_text(stage / 'excitation.json',
                           json.dumps(result.as_dict(), indent=2) + '\n')
         atomic_write_text(stage / 'excitation.md', markdown(result))
+        if html:
+            write_excitation_html(result, stage, command=command)
+            names.append('report.html')
         if result.params.figures:
             for side, res in result.sides.items():
                 plot(stage / f'excitation_{side}.png', result.params, side, res)

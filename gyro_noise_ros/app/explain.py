@@ -23,8 +23,8 @@ Three steps, each usable on its own (the command line runs them in order, docs/d
    before any long work;
 2. :func:`run_explain` runs :func:`gyro_noise_ros.explain.workflow.explain` on each axis and
    returns an :class:`ExplainRun` carrying every number, verdict and line the tool reports;
-3. :func:`write_explain` writes ``explain.json``, ``report.md`` and the figures, one folder per
-   axis plus an index when there are several, all or nothing
+3. :func:`write_explain` writes ``explain.json``, ``report.md``, ``report.html`` and the
+   figures, one folder per axis plus an index when there are several, all or nothing
    (:func:`gyro_noise_ros.outputs.staged_output`).
 
 ``ExplainRun.as_dict()`` is exactly the top ``explain.json`` (the index of a multi-axis run, the
@@ -37,12 +37,13 @@ from dataclasses import dataclass, field
 import json
 import math
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
 from ..bag.inputs import read_imu, recorded_axes
 from ..errors import OutputError, ParameterError
 from ..explain import report, workflow
 from ..explain.inputs import from_record, select
+from ..htmlreport.explain import write_explain_html
 from ..outputs import staged_output, StrPath
 
 __all__ = ['AxisExplained', 'ExplainInput', 'ExplainParams', 'ExplainRun', 'MAX_RECORDS',
@@ -349,9 +350,10 @@ def check_output(out_dir: StrPath) -> None:
         pass
 
 
-def write_explain(run: ExplainRun, out_dir: StrPath) -> list:
+def write_explain(run: ExplainRun, out_dir: StrPath, *, html: bool = True,
+                  command: Optional[Sequence[str]] = None) -> list:
     """
-    Write every axis' explain.json, report.md and figures, and the index (module doc, step 3).
+    Write every axis' explain.json, report.md, report.html and figures, and the index (step 3).
 
     Parameters
     ----------
@@ -359,6 +361,10 @@ def write_explain(run: ExplainRun, out_dir: StrPath) -> list:
         From :func:`run_explain`.
     out_dir : str or os.PathLike
         Output folder (created); the files appear there together, or not at all.
+    html : bool, keyword-only
+        Write each axis' report.html beside its explain.json (:mod:`..htmlreport.explain`).
+    command : sequence of str, optional, keyword-only
+        The command line, shown in report.html.
 
     Returns
     -------
@@ -380,7 +386,11 @@ def write_explain(run: ExplainRun, out_dir: StrPath) -> list:
             except OSError as err:
                 raise OutputError(
                     f'cannot create {str(folder)!r}: {err.strerror or err}') from err
-            written = report.write_files(axis.result, folder, data=axis.as_dict())
+            data = axis.as_dict()
+            written = report.write_files(axis.result, folder, data=data)
+            if html:
+                written = [*written, write_explain_html(axis.result, folder, command=command,
+                                                        data=data).name]
             files += [str(Path(axis.folder) / name) if axis.folder else name for name in written]
         if run.indexed:
             files += _write_index(stage, run)

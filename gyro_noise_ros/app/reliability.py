@@ -40,6 +40,7 @@ import io
 import json
 import math
 import os
+from typing import List, Optional, Sequence, Union
 
 import numpy as np
 
@@ -52,6 +53,7 @@ from ..calibration.interval import (compare, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_M
 from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, TERMS, unit_of
 from ..errors import BagError, InputDataError, ParameterError
+from ..htmlreport.reliability import write_reliability_html
 from ..outputs import atomic_write_text, staged_output
 from ..units import RAD_TO_DEG
 
@@ -1149,7 +1151,9 @@ def plot_fig6(path, sensor, before, after, c):
     plt.close(fig)
 
 
-def write_reliability(result, out_dir):
+def write_reliability(result: ReliabilityResult, out_dir: Union[str, 'os.PathLike[str]'], *,
+                      html: bool = True,
+                      command: Optional[Sequence[str]] = None) -> List[str]:
     """
     Write every file of a comparison (published together or not at all).
 
@@ -1159,6 +1163,10 @@ def write_reliability(result, out_dir):
         The comparison.
     out_dir : str or os.PathLike
         Output folder (created).
+    html : bool, keyword-only
+        Write report.html (:mod:`..htmlreport.reliability`).
+    command : sequence of str, optional, keyword-only
+        The command line, shown in report.html.
 
     Returns
     -------
@@ -1180,6 +1188,12 @@ def write_reliability(result, out_dir):
         atomic_write_text(stage / 'reliability.json', json.dumps(doc, indent=2) + '\n')
         atomic_write_text(stage / 'reliability.md', markdown(doc))
         names += ['reliability.json', 'reliability.md']
+        if html:
+            write_reliability_html(
+                doc, {side: (st.channels if st is not None else None)
+                      for side, st in result.statics.items()},
+                stage, command=command, in_short=in_short(doc))
+            names.append('report.html')
         for side in SIDES:
             st = result.statics[side]
             if st is not None:

@@ -39,6 +39,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
+from ..htmlreport.thermal import write_apply_html, write_compare_html
 from ..outputs import staged_output
 from ..thermal import methods as registry
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,
@@ -792,9 +793,9 @@ def _apply_md(doc, figs, out):
             + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
-def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None):
+def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None, html=True):
     """
-    Write OUT/compensated/ (rosbag2), metrics.json, report.md and the figures (staged).
+    Write OUT/compensated/ (rosbag2), metrics.json, report.md, report.html, figures (staged).
 
     Parameters
     ----------
@@ -808,6 +809,8 @@ def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None):
         Write the compensated bag.
     storage : {'sqlite3', 'mcap'}, optional, keyword-only
         Its storage (default: the input's).
+    html : bool, keyword-only
+        Write report.html (:mod:`..htmlreport.thermal`).
 
     Returns
     -------
@@ -829,6 +832,8 @@ def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None):
                                   _put_method_figures(result.method_figures, stage))
         files.append(_write(stage / 'metrics.json', _json(doc)))
         files.append(_write(stage / 'report.md', _apply_md(doc, figs, stage)))
+        if html:
+            files.append(write_apply_html(result, stage))
         files.extend(p for _, p in figs if p is not None)
         names = [p.relative_to(stage) for p in files]
     return [Path(out_dir) / n for n in names]
@@ -1302,9 +1307,9 @@ def _compare_figures(out, test, curves):
     ]
 
 
-def write_compare(result, out_dir, *, figures=True):
+def write_compare(result, out_dir, *, figures=True, html=True):
     """
-    Write compare.json, compare.csv, compare.md and the figures (staged).
+    Write compare.json, compare.csv, compare.md, report.html and the figures (staged).
 
     Parameters
     ----------
@@ -1314,6 +1319,8 @@ def write_compare(result, out_dir, *, figures=True):
         The ``--out`` folder.
     figures : bool, keyword-only
         Write PNG figures.
+    html : bool, keyword-only
+        Write report.html (:mod:`..htmlreport.thermal`).
 
     Returns
     -------
@@ -1326,6 +1333,8 @@ def write_compare(result, out_dir, *, figures=True):
                  _write(stage / 'compare.csv', _csv(result.rows)),
                  _write(stage / 'compare.md', _compare_md(result.summary, result.rows, figs,
                                                           stage))]
+        if html:
+            files.append(write_compare_html(result, stage))
         files.extend(p for _, p in figs)
         names = [p.relative_to(stage) for p in files]
     return [Path(out_dir) / n for n in names]

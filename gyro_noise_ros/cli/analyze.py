@@ -26,7 +26,8 @@ Usage::
 The workflow is :func:`gyro_noise_ros.app.analyze.analyze_bags`: it reads rosbag2 (sqlite3,
 MCAP), ROS 1 bags, CSV tables and PX4 ULogs in batches, identifies the chunks on ``--jobs``
 worker processes (or a Dask cluster) and writes chunks.csv, summary.json, summary.md, allan.csv,
-imu.yaml, curves.npz and PNG figures into DIR. Formats and exit codes: ``docs/offline_tool.md``.
+imu.yaml, curves.npz, PNG figures and report.html into DIR. Formats and exit codes:
+``docs/offline_tool.md``.
 """
 
 import argparse
@@ -115,6 +116,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
                         f'({DEFAULT_CURVES}; 0 = none)')
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
+    p.add_argument('--no-html', action='store_true',
+                   help='write no report.html (the interactive one-file report)')
     p.add_argument('--no-allan', action='store_true', help='skip the Allan deviation')
     p.add_argument(
         '--allan-taus', default='dense', choices=('octave', 'dense'),
@@ -144,7 +147,7 @@ def _body(argv: List[str]) -> int:
         reference=args.reference, reference_bag=args.reference_bag,
         figures=not args.no_figures, curves=args.curves, batch_size=args.batch_size,
         progress=not args.quiet, command=(PROG, *argv), start_s=args.start, end_s=args.end,
-        static=args.static, scheduler=args.scheduler)
+        static=args.static, scheduler=args.scheduler, html=not args.no_html)
     result = analyze_bags(params)
     if not args.quiet:
         _print_summary(result)

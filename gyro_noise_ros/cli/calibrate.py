@@ -69,6 +69,7 @@ def build_parser():
                    help='one recording with every dwell and the turns between them, or one '
                         'recording per dwell (rosbag2 or ROS 1)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
+    p.add_argument('--no-html', action='store_true', help='write no report.html')
     p.add_argument('--mode', choices=MODES, default='six-position',
                    help='six aligned dwells, or >= 9 static poses in any attitude')
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic)')
@@ -132,7 +133,7 @@ def _body(argv):
         settings=settings_from_args(args), alpha=args.alpha, gyro_turns=args.gyro_turns)
     make_out_dir(args.out)            # a file in the way fails now, not after the computation
     result = run_calibration(params)
-    write_calibration(result, args.out)
+    write_calibration(result, args.out, html=not args.no_html, command=[PROG, *argv])
     for line in result.warnings():
         print(f'{PROG}: warning: {line}', file=sys.stderr)
     doc = result.as_dict()

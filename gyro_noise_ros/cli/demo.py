@@ -107,7 +107,7 @@ def _body(argv: List[str]) -> int:
 
 
 def _print_outputs(report: Path, elapsed_s: float) -> None:
-    names = ['summary.md', 'summary.json', 'chunks.csv', 'allan.csv', 'imu.yaml']
+    names = ['report.html', 'summary.md', 'summary.json', 'chunks.csv', 'allan.csv', 'imu.yaml']
     print(f'\n{PROG}: done in {elapsed_s:.0f} s. Tables and figures:', flush=True)
     for name in names:
         path = report / name
@@ -115,7 +115,7 @@ def _print_outputs(report: Path, elapsed_s: float) -> None:
             print(f'  {path}')
     for path in sorted(report.glob('*.png')):
         print(f'  {path}')
-    print(f'  (read {report / "summary.md"} first; docs/demo.md explains every number)',
+    print(f'  (open {report / "report.html"} first; docs/demo.md explains every number)',
           flush=True)
 
 

@@ -81,6 +81,7 @@ def build_parser():
     p.add_argument('--rate-hz', type=float, help='nominal sample rate (default: from the stamps)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
+    p.add_argument('--no-html', action='store_true', help='write no report.html')
     return p
 
 
@@ -93,7 +94,7 @@ def _body(argv):
         alpha=args.alpha, figures=not args.no_figures)
     make_out_dir(args.out)            # a file in the way fails now, not after the computation
     result = run_excitation(params)
-    write_excitation(result, args.out)
+    write_excitation(result, args.out, html=not args.no_html, command=[PROG, *argv])
     k, unit = params.display
     for side, res in result.sides.items():
         r = res.analysis

@@ -78,6 +78,8 @@ def build_parser():
                    help='Dask scheduler (tcp://host:8786): evaluate the ensemble members on that '
                    'cluster (same result; pip extra dask; docs/scale.md)')
     p.add_argument('--quiet', action='store_true', help='print only the verdict')
+    p.add_argument('--no-html', action='store_true',
+                   help='write no report.html (one per axis, beside its explain.json)')
     return p
 
 
@@ -110,7 +112,7 @@ def _body(argv):
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
-    write_explain(run, args.out)
+    write_explain(run, args.out, html=not args.no_html, command=(PROG, *argv))
     for axis in run.axes:
         print(f'{PROG}: axis {axis.axis}: {axis.verdict} '
               f'({Path(args.out) / axis.folder / "explain.json"})')

@@ -20,7 +20,7 @@ Usage::
     gyro_noise_reliability [--before-calibration BAG [BAG ...]] [--before-static BAG]
         [--after-calibration BAG [BAG ...]] [--after-static BAG] [--c 2] [--tolerance 0.5]
         [--alpha 0.05] [--min-edf 0] [--topic T] [--gravity M_S2 | --latitude DEG [--height M]]
-        [--min-static-s S] [--rate-hz HZ] [--no-figures] --out DIR
+        [--min-static-s S] [--rate-hz HZ] [--no-figures] [--no-html] --out DIR
 
 Any part may be absent; the report covers what was given. The workflow is
 :mod:`gyro_noise_ros.app.reliability`: per channel of the static records the bias-instability
@@ -93,6 +93,7 @@ def build_parser():
     p.add_argument('--min-static-s', type=float, default=10.0,
                    help='shortest usable calibration dwell (s)')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
+    p.add_argument('--no-html', action='store_true', help='write no report.html')
     return p
 
 
@@ -112,7 +113,7 @@ def _body(argv):
     result = run_reliability(params)
     for line in result.warnings():
         print(f'{PROG}: warning: {line}', file=sys.stderr)
-    write_reliability(result, args.out)
+    write_reliability(result, args.out, html=not args.no_html, command=(PROG, *argv))
     doc = result.as_dict()
     if any(result.statics.values()):
         for ch, e in doc['bias_instability_interval'].items():

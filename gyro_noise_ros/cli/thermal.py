@@ -131,6 +131,7 @@ def build_parser():
     _add_bag_options(a)
     _add_score_options(a)
     _add_output_options(a)
+    a.add_argument('--no-html', action='store_true', help='write no report.html')
 
     c = sub.add_parser('compare', help='train every method on one run, score on another')
     c.add_argument('train', metavar='TRAIN_BAG', help='training recording')
@@ -148,6 +149,7 @@ def build_parser():
     _add_bag_options(c)
     _add_score_options(c)
     _add_output_options(c)
+    c.add_argument('--no-html', action='store_true', help='write no report.html')
 
     s = sub.add_parser('simulate', help='write a seeded train/test pair of thermal bags')
     s.add_argument('--seed', type=int, default=0, help='seed of the train/test pair')
@@ -238,7 +240,8 @@ def _cmd_apply(args, argv):
                              score=_score_options(args), figures=not args.no_figures,
                              command=argv)
     files = app.write_apply(result, args.out, figures=not args.no_figures,
-                            write_bag=not args.no_bag, storage=args.storage)
+                            write_bag=not args.no_bag, storage=args.storage,
+                            html=not args.no_html)
     _print_notes(result.notes, args)
     if not args.quiet:
         for axis, v in result.doc['axes'].items():
@@ -262,7 +265,8 @@ def _cmd_compare(args, argv):
                          bag_options=_bag_options(args), score=_score_options(args),
                          scheduler=args.scheduler, warn=_warn(args), progress=say,
                          command=argv)
-    files = app.write_compare(result, args.out, figures=not args.no_figures)
+    files = app.write_compare(result, args.out, figures=not args.no_figures,
+                              html=not args.no_html)
     if not args.quiet:
         from ..thermal import report
 

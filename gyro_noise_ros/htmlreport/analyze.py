@@ -1,0 +1,271 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The ``report.html`` of gyro_noise_analyze (and so of ``make demo``).
+
+Built from the summary.json document and the arrays the tool holds in memory (per-chunk bias,
+variance and orders; the Allan results), never from summary.md. "In short" is
+:func:`..report.in_short_markdown` of the same document.
+"""
+
+from .figures import allan_figure, series_figure
+from .page import Key, Num, Page, pointer, Table, write_report_html
+from .. import report
+from ..units import RAD_TO_DEG as _DEG, S_PER_H
+
+METHOD = """\
+Each record is cut into chunks; per chunk the bias (mean), the noise variance and the fractional
+order alpha of the model of paper 000 (Sierociuk et al., Sensors 2025), `Delta^alpha v = f v + w`,
+are identified by two methods (variance and correlation) over the order grid. Across chunks:
+offset drift = least-squares slope of the chunk bias over time (Table 3; its standard error is
+valid for correlated chunk biases), variances over chunks with ddof = 1 (Tables 4-6). The
+overlapping Allan deviation of the whole record is read by the one datasheet readout
+(core/readout.py, docs/allan.md) and fitted by the five-term IEEE 952 model; intervals are
+68.3 % (1 sigma).
+Every option of the run (chunk size, order grid, memory L, gap policy, ...) is in the Options
+table; docs/offline_tool.md explains every column.
+"""
+
+
+def _axes(doc):
+    axes = []
+    for b in doc['bags']:
+        for a in b['axes']:
+            if a not in axes:
+                axes.append(a)
+    return axes
+
+
+def _tables(doc):
+    tables = []
+    bags = doc['bags']
+    for axis in _axes(doc):
+        rows = [(i, pointer('bags', i, 'axes', axis)) for i, b in enumerate(bags)
+                if axis in b['axes']]
+
+        def lab(i):
+            return Num(pointer('bags', i, 'label'))
+
+        tables.append(Table(
+            f'Axis {axis}: how fast the bias moves, offset drift of the chunk bias '
+            '(paper 000 Table 3)',
+            ('Sequence', 'Offset drift, magnitude ((deg/s)/h)', 'Signed slope ((deg/s)/h)',
+             'Std. error ((deg/s)/h)', 'Mean bias (deg/s)', 'Chunks'),
+            tuple((lab(i), Num(p + '/offset_drift_abs_deg_s_per_h', '.6f'),
+                   Num(p + '/offset_drift_deg_s_per_h', '+.6f'),
+                   Num(p + '/offset_drift_stderr_deg_s_per_h', '.6f'),
+                   Num(p + '/bias_mean_deg_s', '.6f'), Num(p + '/chunks', 'd'))
+                  for i, p in rows)))
+        tables.append(Table(
+            f'Axis {axis}: how large the noise is, variance within chunks (paper 000 Table 4)',
+            ('Sequence', 'Mean noise variance ((deg/s)^2)',
+             'Variance of noise variance ((deg/s)^4)'),
+            tuple((lab(i), Num(p + '/mean_variance_deg2_s2'),
+                   Num(p + '/variance_of_variances_deg4_s4')) for i, p in rows)))
+        for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
+                                      (6, 'correlation', 'alpha_corr', 'ties_corr')):
+            out = []
+            for i, p in rows:
+                a = bags[i]['axes'][axis]
+                if a.get(key + '_multimodal'):
+                    # a mean between separate basins is where no chunk is: the modes instead
+                    order = ('modes: ',)
+                    for k in range(len(a[key + '_modes'])):
+                        m = f'{p}/{key}_modes/{k}'
+                        order += (('; ' if k else ''), Num(m + '/order', '.3f'), ' (',
+                                  Num(m + '/chunks', 'd'), ' chunks)')
+                else:
+                    order = Num(f'{p}/{key}_mean', '.6f')
+                out.append((lab(i), order, Num(f'{p}/{key}_variance', '.6f'),
+                            Num(f'{p}/{tie}', 'd')))
+            tables.append(Table(
+                f'Axis {axis}: how much memory the noise has, fractional order, {method} method '
+                f'(paper 000 Table {num})',
+                ('Sequence', 'Estimated order', 'Variance of estimated order', 'Ties'),
+                tuple(out)))
+        sheet_rows = []
+        for i, p in rows:
+            d = bags[i]['axes'][axis].get('allan_datasheet')
+            if not d:
+                continue
+            q = p + '/allan_datasheet'
+            bound = '<= ' if d.get('bias_stability_upper_bound') else ''
+            where = ((Num(q + '/arw_tau_range_s/0', '.3g'), ' to ',
+                      Num(q + '/arw_tau_range_s/1', '.3g'))
+                     if d.get('arw_from_region') and d.get('arw_tau_range_s')
+                     else 'ADEV read at one second: no white-noise region')
+            k_fit = Num(q + '/rate_random_walk_deg_per_h_sqrt_h', '.3g')
+            if not d.get('rate_random_walk_resolved'):
+                k_fit = (k_fit, ' (not resolved)')
+            sheet_rows.append((
+                lab(i),
+                (Num(q + '/bias_stability_deg_h', '.4g', bound), ' (',
+                 Num(q + '/bias_stability_ci_low_deg_h', '.3g'), ' to ',
+                 Num(q + '/bias_stability_ci_high_deg_h', '.3g'), ')'),
+                Num(q + '/bias_stability_tau_s', '.4g'),
+                Num(q + '/bias_instability_deg_h', '.4g', bound),
+                (Num(q + '/arw_deg_per_sqrt_h', '.4g'), ' (',
+                 Num(q + '/arw_ci_low_deg_per_sqrt_h', '.3g'), ' to ',
+                 Num(q + '/arw_ci_high_deg_per_sqrt_h', '.3g'), ')'),
+                where, k_fit, Num(q + '/rate_random_walk_bound_deg_per_h_sqrt_h', '.3g'),
+                Num(q + '/usable_from_s', '.3g')))
+        if sheet_rows:
+            tables.append(Table(
+                f'Axis {axis}: Allan deviation, the datasheet numbers (customary units)',
+                ('Sequence', 'Bias stability (deg/h)', 'at tau (s)',
+                 'B = bias stability / 0.664 (deg/h)', 'ARW (deg/sqrt(h))',
+                 'ARW read over taus (s)', 'K fit (deg/h/sqrt(h))', 'K bound (deg/h/sqrt(h))',
+                 'Usable from tau (s)'),
+                tuple(sheet_rows),
+                note='Read off the curve by the one readout (core/readout.py): intervals 68.3 %; '
+                '"<=" marks an upper bound.'))
+        terms = [(i, p) for i, p in rows if bags[i]['axes'][axis].get('allan')]
+        if terms:
+            keys = []
+            for i, _ in terms:
+                for k, v in bags[i]['axes'][axis]['allan'].items():
+                    if k not in keys and not isinstance(v, (dict, list, str, bool)):
+                        keys.append(k)
+            tables.append(Table(
+                f'Axis {axis}: Allan deviation, IEEE 952 model fit (unit in the name)',
+                ('Sequence', *keys),
+                tuple((lab(i), *(Num(f'{p}/allan/{k}', '.4g')
+                                 if k in bags[i]['axes'][axis]['allan'] else 'n/a'
+                                 for k in keys)) for i, p in terms),
+                note='The five-term model fitted to the whole usable curve: a model for '
+                'simulation and filters, not the datasheet numbers.'))
+        health = [(i, p) for i, p in rows if 'health' in bags[i]['axes'][axis]]
+        if health:
+            tables.append(Table(
+                f'Axis {axis}: health verdict against the reference',
+                ('Sequence', 'Level', 'Message'),
+                tuple((lab(i), Num(p + '/health/level'), Num(p + '/health/message'))
+                      for i, p in health)))
+    tables.append(Table(
+        'Input counts',
+        ('Sequence', 'Topic', 'Rate (Hz)', 'Rate method', 'Stamp jitter (s)', 'Duration (s)',
+         'Samples', 'Lost', 'Gaps', 'Out-of-order stamps', 'Tail samples'),
+        tuple((Num(pointer('bags', i, 'label')), Num(pointer('bags', i, 'topic')),
+               Num(pointer('bags', i, 'rate_hz'), '.6g'),
+               Num(pointer('bags', i, 'rate_method')),
+               Num(pointer('bags', i, 'stamp_jitter_s'), '.3g'),
+               Num(pointer('bags', i, 'duration_s'), '.1f'),
+               *(Num(pointer('bags', i, k), 'd') for k in (
+                   'samples', 'samples_lost', 'gaps', 'out_of_order_stamps', 'tail_samples')))
+              for i in range(len(bags)))))
+    opts = doc['options']
+    tables.append(Table(
+        'Options', ('Option', 'Value'),
+        tuple((Key(k), Num(pointer('options', k), 'g')) for k, v in opts.items()
+              if v is None or isinstance(v, (bool, int, float, str)))))
+    return tables
+
+
+def _figures(doc, per_chunk, allan_store):
+    figures = []
+    if allan_store:
+        curves = []
+        for (label, axis), (result, terms, _) in allan_store.items():
+            tau, adev, lo, hi, n = report.allan_curve(result)
+            fit = [(name, t, v * _DEG) for name, t, v in report.allan_fit_lines(terms, tau)]
+            curves.append({'name': f'{label} {axis}', 'tau_s': tau, 'adev': adev * _DEG,
+                           'ci_low': lo * _DEG, 'ci_high': hi * _DEG, 'n': n, 'fit': fit})
+        figures.append((
+            'Allan deviation of the angular rate per bag and axis (overlapping estimator; band: '
+            '68.3 % interval; dashed: IEEE 952 model fit where it was fitted). Hover a point '
+            'for tau, the deviation and its interval.',
+            allan_figure(curves, title='Allan deviation', unit='deg/s')))
+    # per_chunk rows: (t_mid_s, bias_rad_s, variance_rad2_s2, alpha_var, alpha_corr)
+    series = [(f'{label} {axis}', r) for axis, v in per_chunk.items() for label, r in v
+              if r.shape[0]]
+    if series:
+        hours = [(name, r[:, 0] / S_PER_H, r) for name, r in series]
+        figures.append(('Chunk bias over time (one point per chunk; the least-squares slope of '
+                        'these points is the offset drift of the tables).',
+                        series_figure([(n, t, r[:, 1] * _DEG) for n, t, r in hours],
+                                      title='Bias per chunk',
+                                      x_label='time from the first sample (h)',
+                                      y_label='bias (deg/s)')))
+        figures.append(('Noise variance within each chunk.',
+                        series_figure([(n, t, r[:, 2] * _DEG ** 2) for n, t, r in hours],
+                                      title='Noise variance per chunk',
+                                      x_label='time from the first sample (h)',
+                                      y_label='variance ((deg/s)^2)')))
+        if series[0][1].shape[1] >= 5:
+            orders = [(f'{n}, {m}', t, r[:, c]) for n, t, r in hours
+                      for m, c in (('variance method', 3), ('correlation method', 4))]
+            figures.append(('Fractional order alpha per chunk by both methods (0: white noise, '
+                            '1: random walk; dimensionless).',
+                            series_figure(orders, title='Fractional order per chunk',
+                                          x_label='time from the first sample (h)',
+                                          y_label='order alpha (dimensionless)')))
+    return figures
+
+
+def analyze_page(doc, *, per_chunk, allan_store):
+    """
+    Build the page of one gyro_noise_analyze run.
+
+    Parameters
+    ----------
+    doc : dict
+        The summary.json document (as written).
+    per_chunk : dict
+        ``{axis: [(label, rows)]}`` with rows ``(t_mid_s, bias_rad_s, variance_rad2_s2,
+        alpha_var, alpha_corr)`` per analysed chunk.
+    allan_store : dict
+        ``{(label, axis): (AllanResult, noise terms, readout)}``.
+
+    Returns
+    -------
+    Page
+
+    """
+    import numba
+    import scipy
+
+    return Page(
+        title='gyro_noise_analyze report: ' + ', '.join(b['label'] for b in doc['bags']),
+        data=doc, in_short_markdown=report.in_short_markdown(doc),
+        figures=tuple(_figures(doc, per_chunk, allan_store)), tables=tuple(_tables(doc)),
+        method_markdown=METHOD, command=doc.get('command'),
+        inputs=tuple(b['path'] for b in doc['bags']), version=doc.get('version', ''),
+        extra_versions=(('scipy', scipy.__version__), ('numba', numba.__version__)))
+
+
+def write_analyze_html(out, doc, per_chunk, allan_store):
+    """
+    Write ``report.html`` of a gyro_noise_analyze run into its (staged) output folder.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The staged ``--out`` folder.
+    doc : dict
+        The summary.json document.
+    per_chunk, allan_store : dict
+        As :func:`analyze_page`.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    """
+    return write_report_html(analyze_page(doc, per_chunk=per_chunk, allan_store=allan_store),
+                             out / 'report.html')
+
+
+__all__ = ['analyze_page', 'write_analyze_html']

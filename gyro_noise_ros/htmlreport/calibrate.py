@@ -1,0 +1,165 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The ``report.html`` of ``gyro_noise_calibrate``.
+
+Built from calibration.json (``CalibrationResult.as_dict()``): the JSON is SI, the tables show
+calibration.md's units (mg, %, deg/s) through :class:`.page.Num`'s ``scale``, so each cell is still
+checked against the JSON value it came from. "In short" words the verdicts as calibration.md does.
+"""
+
+from .figures import series_figure
+from .page import Num, Page, pointer, Table, write_report_html
+from ..units import MG_TO_M_S2 as _MG, RAD_TO_DEG as _DEG
+
+
+def _pm(p, sigma_p, fmt, scale):
+    return (Num(p, fmt, scale=scale), ' +/- ', Num(sigma_p, fmt, scale=scale))
+
+
+def calibrate_page(result):
+    """
+    Build the page of one calibration.
+
+    Parameters
+    ----------
+    result : app.calibrate.CalibrationResult
+        The calibration (``as_dict()`` is calibration.json).
+
+    Returns
+    -------
+    Page
+
+    """
+    doc = result.as_dict()
+    gc, cons = doc['gravity_check'], doc['consistency']
+    title = ('Six-position calibration (paper 001 Table 6 layout)'
+             if doc['mode'] == 'six-position' else 'Multi-pose calibration (|a| = g, imu_tk)')
+    short = ['## In short', '',
+             f'* Gravity check (leave-one-out): '
+             f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.']
+    if cons['pairs']:
+        short.append('* Consistency of opposite dwells (a tilt cannot pass silently): '
+                     f'{"consistent" if cons["consistent"] else "inconsistent"}.')
+    if doc['gyro']['note']:
+        short.append(f'* Gyro: {doc["gyro"]["note"]}.')
+    short += ['', 'Uncertainties: one standard uncertainty, against the value during the '
+              'calibration, from the variogram of the dwells (white noise and bias wander '
+              'between dwells).']
+    tables = []
+    rows = [(f'b{ax}', _pm(pointer('accel', 'bias_m_s2', i),
+                           pointer('accel', 'bias_sigma_m_s2', i), '.4f', 1.0 / _MG), 'mg')
+            for i, ax in enumerate('xyz')]
+    rows += [(f'S{ax}', _pm(pointer('accel', 'scale_factor', i),
+                            pointer('accel', 'scale_factor_sigma', i), '.4f', 100.0), '%')
+             for i, ax in enumerate('xyz')]
+    tables.append(Table('Accelerometer (paper 001 Table 6 layout)',
+                        ('Parameter', 'Value +/- std. uncertainty', 'Unit'), tuple(rows)))
+    mis = []
+    for j, ax in enumerate('xyz'):
+        mis.append((ax, *('-' if i == j else _pm(
+            pointer('accel', 'misalignment', j, i), pointer('accel', 'misalignment_sigma', j, i),
+            '.4f', 100.0) for i in range(3))))
+    tables.append(Table('Accelerometer cross-axis terms (%)', ('Measured axis', 'x', 'y', 'z'),
+                        tuple(mis), note='Row = measured axis, column = true axis.'))
+    gyro = doc['gyro']
+    est = gyro.get('estimated') or [[False] * 3] * 3
+    grows = []
+    for i, ax in enumerate('xyz'):
+        scale = (_pm(pointer('gyro', 'scale_factor', i), pointer('gyro', 'scale_factor_sigma', i),
+                     '.4f', 100.0) if est[i][i] else 'not estimated')
+        grows.append((ax, _pm(pointer('gyro', 'bias_rad_s', i),
+                              pointer('gyro', 'bias_sigma_rad_s', i), '.5f', _DEG), scale))
+    tables.append(Table('Gyro', ('Axis', 'Bias (deg/s)', 'Scale factor (%)'), tuple(grows)))
+    tables.append(Table('Indicators (paper 001 section 6)', ('Indicator', 'Value', 'Unit'), (
+        ('Uniformity of the biases (std, ddof = one)',
+         Num('/uniformity/accel_bias_std_m_s2', '.4f', scale=1.0 / _MG), 'mg'),
+        ('Uniformity of the scale factors (std, ddof = one)',
+         Num('/uniformity/accel_scale_factor_std', '.4f', scale=100.0), '%'))))
+    tables.append(Table(
+        'Gravity check (leave-one-out)',
+        ('Dwell', 'abs(a) - g (mg)', 'Sigma (mg)', 'z', 'Consistent'),
+        tuple((Num(pointer('gravity_check', 'dwells', k, 'dwell')),
+               Num(pointer('gravity_check', 'dwells', k, 'residual_m_s2'), '+.4f',
+                   scale=1.0 / _MG),
+               Num(pointer('gravity_check', 'dwells', k, 'sigma_m_s2'), '.4f', scale=1.0 / _MG),
+               Num(pointer('gravity_check', 'dwells', k, 'z'), '+.2f'),
+               Num(pointer('gravity_check', 'dwells', k, 'consistent')))
+              for k in range(len(gc['dwells']))),
+        note='Each dwell calibrated by the others; |a| - g against its standard deviation.'))
+    if cons['pairs']:
+        tables.append(Table(
+            'Consistency of opposite dwells',
+            ('Pair', 'Sigma (mg)', 'p', 'Consistent'),
+            tuple((Num(pointer('consistency', 'pairs', k, 'axis'), prefix='+/-'),
+                   Num(pointer('consistency', 'pairs', k, 'sigma_m_s2'), '.4f', scale=1.0 / _MG),
+                   Num(pointer('consistency', 'pairs', k, 'p_value'), '.3g'),
+                   Num(pointer('consistency', 'pairs', k, 'consistent')))
+                  for k in range(len(cons['pairs'])))))
+    tables.append(Table(
+        'Dwells', ('Dwell', 'Start (s)', 'Duration (s)', 'Samples', 'NaN/Inf dropped',
+                   'Tilt (deg)', 'Recording'),
+        tuple((Num(pointer('dwells', k, 'orientation')),
+               Num(pointer('dwells', k, 't_start_s'), '.2f'),
+               Num(pointer('dwells', k, 'duration_s'), '.2f'),
+               Num(pointer('dwells', k, 'samples'), 'd'),
+               Num(pointer('dwells', k, 'non_finite_samples'), 'd'),
+               Num(pointer('dwells', k, 'tilt_deg'), '.2f'),
+               Num(pointer('dwells', k, 'source'))) for k in range(len(doc['dwells'])))))
+    figures = []
+    if gc['dwells']:
+        k = list(range(len(gc['dwells'])))
+        figures.append((
+            'Leave-one-out gravity check per dwell: |a| - g of each dwell calibrated by the '
+            'others, and its standard deviation (the check fails where the residual leaves '
+            'a few sigma).',
+            series_figure([('abs(a) - g', k, [d['residual_m_s2'] / _MG for d in gc['dwells']]),
+                           ('sigma', k, [d['sigma_m_s2'] / _MG for d in gc['dwells']])],
+                          title='Gravity check per dwell', x_label='dwell number (in order)',
+                          y_label='acceleration (mg)')))
+    method = (f'{title}. Model: `{doc["model"]}`; frame: {doc["frame"]}. Gravity used: '
+              f'{doc["gravity_source"]} (the value is in calibration.json). Dwells are found by '
+              'the static detector (its settings are in calibration.json); the gyro scale factor '
+              'and misalignment come from integrating the turns between static poses.')
+    return Page(title=f'gyro_noise_calibrate: {title}', data=doc,
+                in_short_markdown='\n'.join(short), figures=tuple(figures),
+                tables=tuple(tables), method_markdown=method, command=None,
+                inputs=tuple(doc['sources']), version=doc.get('version', ''))
+
+
+def write_calibrate_html(result, out, *, command=None):
+    """
+    Write ``report.html`` of a calibration into the staged folder ``out``.
+
+    Parameters
+    ----------
+    result : app.calibrate.CalibrationResult
+        The calibration.
+    out : pathlib.Path
+        The staged ``--out`` folder.
+    command : sequence of str, optional, keyword-only
+        The command line (calibration.json does not record it).
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    from dataclasses import replace
+
+    page = calibrate_page(result)
+    if command is not None:
+        page = replace(page, command=tuple(command))
+    return write_report_html(page, out / 'report.html')

@@ -1,0 +1,168 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The ``report.html`` of ``gyro_noise_excitation``.
+
+Built from excitation.json (``ExcitationResult.as_dict()``, SI) and the records held in memory;
+the tables show excitation.md's units (g or deg/s, %) through :class:`.page.Num`'s ``scale``.
+"In short" words the verdicts as excitation.md does.
+"""
+
+from .figures import series_figure
+from .page import Num, Page, pointer, Table, write_report_html
+
+
+def _verdict(entry, key, yes, no, p_key):
+    ok = entry.get(key)
+    if ok is None:
+        return 'n/a'
+    return f'{yes if ok else no} (p = {entry[p_key]:.2g})'
+
+
+def excitation_page(result, command=None):
+    """
+    Build the page of one excitation check.
+
+    Parameters
+    ----------
+    result : app.excitation.ExcitationResult
+        The check (``as_dict()`` is excitation.json).
+    command : sequence of str, optional
+        The command line.
+
+    Returns
+    -------
+    Page
+
+    """
+    doc = result.as_dict()
+    params = result.params
+    k, unit = params.display
+    u = doc['unit']
+    sides = list(result.sides)
+    what = (f'sine dwell at {params.dwell_hz:g} Hz' if params.mode == 'dwell' else
+            f'sine sweep {params.sweep[0]:g}-{params.sweep[1]:g} Hz at {params.sweep[2]:g} Hz/s')
+    short = ['## In short', '',
+             "Verdicts are statistical tests against each record's own noise, false-alarm "
+             f'probability {params.alpha:g} each (docs/reliability.md).', '']
+    checks = ((('steady', 'steady', 'UNSTEADY', 'stability_p', 'stability verdict'),
+               ('clean', 'clean', 'DISTORTED', 'distortion_p', 'distortion verdict'))
+              if params.mode == 'dwell' else
+              (('matches_reference', 'matches the reference', 'GAIN DIFFERS', 'gain_p',
+                'gain verdict'),
+               ('flat', 'flat', 'FREQUENCY-DEPENDENT', 'flatness_p', 'flatness verdict')))
+    for s in sides:
+        for key, yes, no, p_key, name in checks:
+            short.append(f'* **{s}**, {name}: {_verdict(doc[s], key, yes, no, p_key)}')
+    tables = []
+    if params.mode == 'dwell':
+        rows = [
+            ('Frequency (Hz)', 'frequency_hz', '.5f', 1.0),
+            ('Frequency sigma (Hz)', 'frequency_sigma_hz', '.1e', 1.0),
+            (f'Amplitude ({unit})', f'amplitude_{u}', '.5g', k),
+            (f'Amplitude sigma ({unit})', f'amplitude_sigma_{u}', '.2g', k),
+            (f'Offset ({unit})', f'offset_{u}', '.5g', k),
+            (f'Per-cycle amplitude mean ({unit})', f'cycle_amplitude_mean_{u}', '.5g', k),
+            (f'Per-cycle amplitude min ({unit})', f'cycle_amplitude_min_{u}', '.5g', k),
+            (f'Per-cycle amplitude max ({unit})', f'cycle_amplitude_max_{u}', '.5g', k),
+            ('Amplitude stability (std / mean of the cycles, %)', 'amplitude_stability', '.3f',
+             100.0),
+            ('Stability from noise alone (%)', 'amplitude_stability_noise', '.3f', 100.0),
+            ('Stability test p', 'stability_p', '.2g', 1.0),
+            ('THD, harmonics over the fundamental (%)', 'thd', '.3f', 100.0),
+            ('THD from noise alone (%)', 'thd_noise', '.3f', 100.0),
+            ('Distortion test p', 'distortion_p', '.2g', 1.0),
+            ('Excited span start (s)', 'start_s', '.2f', 1.0),
+            ('Excited span duration (s)', 'duration_s', '.2f', 1.0),
+            ('Cycles', 'cycles', 'd', 1.0)]
+        tables.append(Table(f'Excitation check: {what}, {params.sensor} {params.axis}',
+                            ('Quantity', *sides),
+                            tuple((label, *(Num(pointer(s, key), fmt, scale=scale)
+                                            for s in sides))
+                                  for label, key, fmt, scale in rows)))
+        if 'change' in doc:
+            tables.append(Table('After / before', ('Quantity', 'Change'), (
+                ('Amplitude (%)', (Num('/change/amplitude_relative', '.3f', scale=100.0),
+                                   ' +/- ', Num('/change/amplitude_relative_sigma', '.3f',
+                                                scale=100.0))),
+                ('Amplitude change p', Num('/change/amplitude_change_p', '.2g')),
+                ('Amplitude change significant', Num('/change/amplitude_change_significant')),
+                ('Frequency (Hz)', Num('/change/frequency_hz', '+.5f')),
+                ('Amplitude stability (percentage points)',
+                 Num('/change/amplitude_stability', '+.3f', scale=100.0)),
+                ('THD (percentage points)', Num('/change/thd', '+.3f', scale=100.0)))))
+    else:
+        for s in sides:
+            cols = [('Rising', f'amplitude_up_{u}', k, '.5g'),
+                    ('Falling', f'amplitude_down_{u}', k, '.5g')]
+            if doc[s].get(f'reference_up_{u}') is not None:
+                cols += [('Reference rising', f'reference_up_{u}', k, '.5g'),
+                         ('Reference falling', f'reference_down_{u}', k, '.5g'),
+                         ('Deviation rising (%)', 'deviation_up', 100.0, '.3f'),
+                         ('Deviation falling (%)', 'deviation_down', 100.0, '.3f')]
+            tables.append(Table(
+                f'{s}: amplitude per frequency bin ({unit})',
+                ('f (Hz)', *(c[0] for c in cols)),
+                tuple((Num(pointer(s, 'bin_hz', i), '.3f'),
+                       *(Num(pointer(s, key, i), fmt, scale=scale)
+                         for _, key, scale, fmt in cols))
+                      for i in range(len(doc[s]['bin_hz'])))))
+    figures = []
+    series = [(s, result.sides[s].t_s, result.sides[s].x * k) for s in sides]
+    figures.append((f'The whole acquisition of {params.sensor} {params.axis} (min/max envelope '
+                    'for display; zoom in for the wave form).',
+                    series_figure(series, title='Whole acquisition', x_label='time (s)',
+                                  y_label=f'{params.sensor} {params.axis} ({unit})')))
+    if params.mode != 'dwell':
+        amp = []
+        for s in sides:
+            r = result.sides[s].analysis
+            amp += [(f'{s} rising', r.bin_hz, r.amplitude_up * k),
+                    (f'{s} falling', r.bin_hz, r.amplitude_down * k)]
+            if r.reference_up is not None:
+                amp.append((f'{s} reference', r.bin_hz, r.reference_up * k))
+        figures.append(('Amplitude against the instantaneous frequency.',
+                        series_figure(amp, title='Amplitude against frequency',
+                                      x_label='frequency (Hz)', y_label=f'amplitude ({unit})')))
+    method = (f'Excitation check (paper 001 section 5.3): {what}. A dwell is fitted cycle by '
+              'cycle (frequency, amplitude, offset, harmonics); a sweep is binned by the '
+              'instantaneous frequency and compared with the reference record when one is '
+              'given (docs/reliability.md).')
+    return Page(title=f'gyro_noise_excitation: {what}', data=doc,
+                in_short_markdown='\n'.join(short), figures=tuple(figures),
+                tables=tuple(tables), method_markdown=method,
+                command=None if command is None else tuple(command),
+                inputs=tuple(doc[s]['source'] for s in sides), version=doc.get('version', ''))
+
+
+def write_excitation_html(result, out, *, command=None):
+    """
+    Write ``report.html`` of an excitation check into the staged folder ``out``.
+
+    Parameters
+    ----------
+    result : app.excitation.ExcitationResult
+        The check.
+    out : pathlib.Path
+        The staged ``--out`` folder.
+    command : sequence of str, optional, keyword-only
+        The command line.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    return write_report_html(excitation_page(result, command), out / 'report.html')

@@ -1,0 +1,171 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The ``report.html`` of ``gyro_noise_reliability``.
+
+Built from reliability.json and the Allan results of the static records held in memory. "In
+short" is the plain-language summary reliability.md opens with (the caller passes the lines of
+``app.reliability.in_short``), followed by each channel's verdict and, where undetermined, the
+JSON's reason.
+"""
+
+import numpy as np
+
+from .figures import allan_figure
+from .page import Key, Num, Page, pointer, Table, write_report_html
+
+CHANNELS = tuple(f'{s}_{a}' for s in ('accel', 'gyro') for a in 'xyz')
+
+
+def _range(p, e, key):
+    pair = e[key]
+    if pair is None:
+        return 'not given'
+    return tuple(part for k in range(2) for part in (
+        (' - ' if k else ''),
+        'open' if pair[k] is None else Num(f'{p}/{key}/{k}', '.3g')))
+
+
+def reliability_page(doc, statics, command=None, in_short=()):
+    """
+    Build the page of one reliability run.
+
+    Parameters
+    ----------
+    doc : dict
+        The reliability.json document.
+    statics : dict
+        ``{'before'|'after': {channel: ChannelResult}}`` of the static records (their ``allan``
+        curves are drawn).
+    command : sequence of str, optional
+        The command line.
+    in_short : sequence of str, optional
+        Plain-language sentences made from ``doc`` (``app.reliability.in_short``).
+
+    Returns
+    -------
+    Page
+
+    """
+    short = ['## In short', '']
+    short += [f'* {line}' for line in in_short]
+    short += ['', f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
+              f'physiological within +/-{100 * doc["tolerance"]:.0f} % of the before width '
+              f'(one-sided tests at {100 * doc["confidence_one_sided"]:.0f} % confidence).', '']
+    for ch, e in doc['bias_instability_interval'].items():
+        why = f' ({e["reason"]})' if e['reason'] else ''
+        short.append(f'* **{ch}**: {e["verdict"]}{why}')
+    if doc['errors']:
+        short += ['', 'Parts that could not be analysed:', '']
+        short += [f'* {k}: {v}' for k, v in doc['errors'].items()]
+    overall = Table(
+        'Overall verdict per sensor (mean change over the three axes)',
+        ('Sensor', 'Verdict', 'Basis', 'Mean change (%)', 'Sigma (%)'),
+        tuple((sensor, Num(pointer('overall', sensor, 'verdict')),
+               Num(pointer('overall', sensor, 'basis')),
+               Num(pointer('overall', sensor, 'mean_change'), '+.0f', scale=100.0),
+               Num(pointer('overall', sensor, 'mean_change_sd'), '.0f', scale=100.0))
+              for sensor in doc['overall']))
+    rows = []
+    for ch, e in doc['bias_instability_interval'].items():
+        p = pointer('bias_instability_interval', ch)
+        rows.append((ch, _range(p, e, 'before_s'), _range(p, e, 'after_s'),
+                     Num(p + '/width_before_s', '.4g'), Num(p + '/width_after_s', '.4g'),
+                     Num(p + '/change', '+.0f', scale=100.0),
+                     Num(p + '/change_sd', '.0f', scale=100.0), Num(p + '/verdict')))
+    tables = [overall, Table('Bias-instability interval before and after (paper 001)',
+                             ('Channel', 'Before (s)', 'After (s)', 'Width before (s)',
+                              'Width after (s)', 'Change (%)', 'Sigma (%)', 'Verdict'),
+                             tuple(rows))]
+    tables.append(Table(
+        'Mean width over the three axes', ('Sensor', 'Before (s)', 'After (s)', 'Change (%)'),
+        tuple((sensor, Num(pointer('summary', sensor, 'mean_width_before_s'), '.4g'),
+               Num(pointer('summary', sensor, 'mean_width_after_s'), '.4g'),
+               Num(pointer('summary', sensor, 'mean_change'), '+.0f', scale=100.0))
+              for sensor in doc['summary'])))
+    terms = []
+    for ch, e in doc['noise_terms'].items():
+        for side in ('before', 'after'):
+            if not e.get(side):
+                continue
+            for key in e[side]:
+                if key.endswith(('_sd_log', '_ci68')):
+                    continue
+                p = pointer('noise_terms', ch, side, key)
+                terms.append((ch, side, Key(key), Num(p, '.4g'),
+                              (Num(p + '_ci68/0', '.3g'), ' to ', Num(p + '_ci68/1', '.3g'))))
+    if terms:
+        tables.append(Table('Noise terms of the static records (unit in the name)',
+                            ('Channel', 'Record', 'Term', 'Value', 'Interval (68 %)'),
+                            tuple(terms)))
+    figures = []
+    for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
+        curves = []
+        for side in ('before', 'after'):
+            for a in 'xyz':
+                r = (statics.get(side) or {}).get(f'{sensor}_{a}')
+                if r is None or r.allan is None:
+                    continue
+                tau = np.asarray(r.allan.tau_s, dtype=np.float64)
+                adev = np.asarray(r.allan.adev, dtype=np.float64)
+                lo = np.asarray(getattr(r.allan, 'ci_low', np.full_like(adev, np.nan)))
+                hi = np.asarray(getattr(r.allan, 'ci_high', np.full_like(adev, np.nan)))
+                ok = np.isfinite(adev) & (adev > 0)
+                curves.append({'name': f'{side} {a}', 'tau_s': tau[ok], 'adev': adev[ok],
+                               'ci_low': lo[ok], 'ci_high': hi[ok]})
+        if curves:
+            figures.append((f'{sensor}: Allan deviation of the static records before and after '
+                            '(cf. paper 001 Fig. 6); the interval bounds are in the table.',
+                            allan_figure(curves, title=f'{sensor}: Allan deviation',
+                                         unit=unit)))
+    method = ("Each static record's Allan deviation gives the bias-instability interval: the "
+              'averaging times where the deviation stays below c times its minimum (c in '
+              "reliability.json), with a width uncertainty from the record's equivalent degrees "
+              'of freedom. The width change is tested one-sided against the tolerance: beyond, '
+              'physiological, or undetermined with the record length that would decide; one '
+              'verdict per sensor from the mean over its three axes (docs/reliability.md).')
+    inputs = [p for v in doc['sources'].values() if v
+              for p in (v if isinstance(v, list) else [v])]
+    return Page(title='gyro_noise_reliability: before / after', data=doc,
+                in_short_markdown='\n'.join(short), figures=tuple(figures),
+                tables=tuple(tables), method_markdown=method,
+                command=None if command is None else tuple(command), inputs=tuple(inputs),
+                version=doc.get('version', ''))
+
+
+def write_reliability_html(doc, statics, out, *, command=None, in_short=()):
+    """
+    Write ``report.html`` of a reliability run into the staged folder ``out``.
+
+    Parameters
+    ----------
+    doc : dict
+        The reliability.json document.
+    statics : dict
+        As :func:`reliability_page`.
+    out : pathlib.Path
+        The staged ``--out`` folder.
+    command : sequence of str, optional, keyword-only
+        The command line.
+    in_short : sequence of str, optional, keyword-only
+        As :func:`reliability_page`.
+
+    Returns
+    -------
+    pathlib.Path
+
+    """
+    return write_report_html(reliability_page(doc, statics, command, in_short),
+                             out / 'report.html')

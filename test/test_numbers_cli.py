@@ -101,10 +101,11 @@ IMU_FOLDERS = ('adis16405_static', 'mpu6050_static_sunsided', 'px4_ulog_sample_s
 
 def _analyze_reads(path):
     """Return (stamps, gyro) as gyro_noise_analyze's reader yields them, or the error raised."""
+    from gyro_noise_ros.app import analyze as analyze_app
     from gyro_noise_ros.errors import GyroNoiseError
 
     try:
-        with analyze._open(path, None, None, None) as reader:
+        with analyze_app._open(path, None, None, None) as reader:
             batches = list(reader.iter_batches())
     except GyroNoiseError as err:
         return err

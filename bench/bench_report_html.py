@@ -46,7 +46,7 @@ import time
 import types
 
 from gyro_noise_ros.bag import ImuBagWriter
-from gyro_noise_ros.cli.analyze import analyze_bags
+from gyro_noise_ros.app.analyze import analyze_bags, AnalyzeParams
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.htmlreport.analyze import analyze_page
@@ -70,11 +70,10 @@ def _small_doc(tmp):
                     rng.normal(0.0, 1e-3, (n, 3)),
                     np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0.0, 0.01, (n, 3)))
     config = EngineConfig(chunk_size=600, memory=50, alphas=make_grid(0.0, 2.0, 0.1))
-    doc = analyze_bags([tmp / 'bag'], out_dir=tmp / 'out', labels=['run'], config=config,
-                       figures=False, html=False)
-    doc.pop('_timing')
-    doc.pop('_files')
-    return json.loads(json.dumps(doc))
+    result = analyze_bags(AnalyzeParams(paths=(str(tmp / 'bag'),), out_dir=str(tmp / 'out'),
+                                        labels=('run',), config=config, figures=False,
+                                        html=False))
+    return json.loads(json.dumps(result.as_dict()))
 
 
 def _arrays(duration_s, rng):

@@ -28,7 +28,7 @@ import numpy as np
 #: Largest number of averaging times drawn per Allan curve.
 MAX_ALLAN_POINTS = 200
 #: Largest number of points drawn per time series.
-MAX_SERIES_POINTS = 2000
+MAX_SERIES_POINTS = 1000
 _TOOLS = 'pan,box_zoom,wheel_zoom,reset,save'
 _WIDTH, _HEIGHT = 1000, 380
 

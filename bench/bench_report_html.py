@@ -45,8 +45,8 @@ import tempfile
 import time
 import types
 
-from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.app.analyze import analyze_bags, AnalyzeParams
+from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.htmlreport.analyze import analyze_page

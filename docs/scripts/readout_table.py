@@ -55,11 +55,11 @@ from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.readout import read_allan
 from gyro_noise_ros.core.segments import WindowStats
 from gyro_noise_ros.core.timebase import estimate_rate
+from gyro_noise_ros.units import RAD_TO_DEG
 import numpy as np
 
 DEFAULT_DATA = os.path.join(os.path.dirname(__file__), '..', '..', '..', 'shared', 'data', 'real')
 DEFAULT_OUT = os.path.join(os.path.dirname(__file__), '..', 'readout.md')
-DEG = 180.0 / math.pi
 #: ADIS16405 datasheet: in-run bias stability 0.007 deg/s, angle random walk 2.0 deg/sqrt(h).
 ADIS_BIAS_STABILITY_DEG_S = 0.007
 ADIS_ARW_DEG_SQRT_H = 2.0
@@ -304,14 +304,15 @@ def markdown(results, sim, args, elapsed):
         else:
             verdict = '**fail**'
             fails.append((name, axis))
-        sheet = (_f(r.bias_stability_rad_s * DEG / ADIS_BIAS_STABILITY_DEG_S, '.2f')
+        sheet = (_f(r.bias_stability_rad_s * RAD_TO_DEG / ADIS_BIAS_STABILITY_DEG_S, '.2f')
                  if name.startswith('ADIS') else '')
+        deg = RAD_TO_DEG
         out.append(
             f"| {name} | {axis} | {v['record_s']:.0f} | {bound}"
-            f'{r.bias_stability_rad_s * DEG:.5f} | {r.bias_stability_ci_low_rad_s * DEG:.5f}-'
-            f'{r.bias_stability_ci_high_rad_s * DEG:.5f} | {r.bias_stability_tau_s:.3g} | '
-            f"{r.bias_stability_edf:.3g} | {v['ind_min'] * DEG:.5f} | {v['ind_tau']:.3g} | "
-            f"{v['bias_ratio']:.3f} | {verdict} | {v['old_bias'] * DEG:.5f} | "
+            f'{r.bias_stability_rad_s * deg:.5f} | {r.bias_stability_ci_low_rad_s * deg:.5f}-'
+            f'{r.bias_stability_ci_high_rad_s * deg:.5f} | {r.bias_stability_tau_s:.3g} | '
+            f"{r.bias_stability_edf:.3g} | {v['ind_min'] * deg:.5f} | {v['ind_tau']:.3g} | "
+            f"{v['bias_ratio']:.3f} | {verdict} | {v['old_bias'] * deg:.5f} | "
             f"{v['old_tau']:.3g} | {sheet} |")
     n_ok = sum(v['bias_ok'] for _, v in results)
     out += ['', f'{n_ok} of {len(results)} rows meet the criterion.']
@@ -333,7 +334,7 @@ def markdown(results, sim, args, elapsed):
             '|---|---|---:|---|---|---:|---|---:|---|---:|---:|']
     for (name, axis, note), v in results:
         r = v['readout']
-        k = DEG * 60.0
+        k = RAD_TO_DEG * 60.0
         lo, hi = r.arw_tau_range_s
         region = f'{lo:.3g}-{hi:.3g}' if r.arw_from_region else 'ADEV(1 s)'
         sheet = (_f(r.arw_rad_per_sqrt_s * k / ADIS_ARW_DEG_SQRT_H, '.2f')
@@ -392,7 +393,8 @@ def main(argv=None):
             v = evaluate(gyro[:, k], rate)
             v['rate_hz'] = rate
             results.append(((name, axis, note), v))
-            print(f"{name} {axis}: bias stability {v['readout'].bias_stability_rad_s * DEG:.5f} "
+            bias_deg_s = v['readout'].bias_stability_rad_s * RAD_TO_DEG
+            print(f"{name} {axis}: bias stability {bias_deg_s:.5f} "
                   f"deg/s (x{v['bias_ratio']:.3f}), ARW x{v['arw_ratio']:.3f}", file=sys.stderr)
     sim = simulate(args.reps, args.seed)
     text = markdown(results, sim, args, time.time() - t0)

@@ -32,6 +32,9 @@ written, only the disk I/O is skipped). Parts::
     long      4 + 4 pairs of 48 h records at 12.5 Hz (same model, a rate the machine can afford
               at that length): where the verdicts get their power
 
+With the sigma part, a table of what record length the verdict needs (a normal model of the
+verdict fed with the measured 4-h spread; the default and long parts check it).
+
 Run (seeded: the same numbers every time; per-record results are cached in --cache)::
 
     nice python docs/scripts/reliability_verdicts.py --part all --cache /tmp/relcache
@@ -58,10 +61,9 @@ from gyro_noise_ros.cli.emulator import board_from_args, build_parser
 from gyro_noise_ros.core.simulate import gauss_markov_avar
 from gyro_noise_ros.link import lsm6dso32 as lsm
 from gyro_noise_ros.link.emulator import ACCEL_NOISE_DENSITY_UG_RTHZ
+from gyro_noise_ros.units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 import numpy as np
 import scipy.stats
-
-DEG = math.pi / 180.0
 
 
 def emulator_argv(seed, odr_hz, hours, stress):
@@ -126,8 +128,8 @@ def truth():
     for stress in (False, True):
         args = build_parser().parse_args(emulator_argv(0, 104.0, 4, stress))
         e = scenario_from_args(args).errors
-        n_acc = ACCEL_NOISE_DENSITY_UG_RTHZ * 1e-6 * lsm.STANDARD_GRAVITY / math.sqrt(2.0)
-        n_gyr = args.noise_std_dps * DEG / math.sqrt(args.odr_hz)
+        n_acc = ACCEL_NOISE_DENSITY_UG_RTHZ * 1e-6 * STANDARD_GRAVITY_M_S2 / math.sqrt(2.0)
+        n_gyr = args.noise_std_dps * DEG_TO_RAD / math.sqrt(args.odr_hz)
         for sensor, n, b, k in (
                 ('accel', n_acc, e.accel_bias_instability_m_s2, e.accel_random_walk_m_s2_sqrt_s),
                 ('gyro', n_gyr, e.gyro_bias_instability_rad_s, e.gyro_random_walk_rad_s_sqrt_s)):
@@ -182,6 +184,7 @@ def part_sigma(n, cache):
           'within +/-1 stated sd | within +/-1.645 stated sd |')
     print('|---|---|---|---|---|---|---|---|')
     rows = [('interval width', None)] + [(t.replace('_', ' '), t) for t in TERMS]
+    spreads = {}
     for label, term in rows:
         for sensor in ('accel', 'gyro'):
             z, v, sds = [], [], []
@@ -210,8 +213,41 @@ def part_sigma(n, cache):
             v, sds, z = np.array(v), np.array(sds), np.abs(np.array(z))
             spread = float(np.sqrt(np.sum(v ** 2) / (v.size - 3)))
             stated = float(np.sqrt(np.mean(sds ** 2)))
+            spreads[(label, sensor)] = spread
             print(f'| {label} | {sensor} | {v.size} | {spread:.4f} | {stated:.4f} | '
                   f'{spread / stated:.2f} | {np.mean(z <= 1):.0%} | {np.mean(z <= 1.645):.0%} |')
+    return spreads
+
+
+def part_power(spreads, alpha=0.05, tolerance=0.5, hours=(4, 12, 24, 48, 96, 168)):
+    """
+    Print what record length the interval verdict needs, from the measured 4-h spread.
+
+    The verdict tests log(W_after / W_before) against log(1 + tolerance) one-sided at ``alpha``.
+    With the spread s4 of log(width) of one 4-h record (part sigma) and sd falling as
+    1/sqrt(length) (EDF at a fixed tau grows with the record), a pair of L-hour records has
+    ``s = sqrt(2) s4 sqrt(4 / L)`` and a channel whose true ratio is r is called beyond with
+    probability ``Phi((log r - log(1 + tol)) / s - z)``; the sensor's three-axis mean has s /
+    sqrt(3). A normal approximation of the verdict (it ignores open ends and ambiguous crossings,
+    which make short records undetermined more often): the measured tables are the check.
+    """
+    z = float(scipy.stats.norm.ppf(1 - alpha))
+    band = math.log(1.0 + tolerance)
+    print('\n### Record length against power (normal model from the measured 4-h spread)\n')
+    ratio = _truth_ratio('gyro_x')
+    print('| record (h) | sensor | sd of log ratio, pair | channel false alarm (unchanged) | '
+          f'channel detection (x{ratio:.2f}) | all 30 channels of 10 stressed sensors beyond | '
+          'sensor (3-axis mean) detection |')
+    print('|---|---|---|---|---|---|---|')
+    for h in hours:
+        for sensor in ('accel', 'gyro'):
+            s = math.sqrt(2.0) * spreads[('interval width', sensor)] * math.sqrt(4.0 / h)
+            mu = math.log(_truth_ratio(sensor + '_x'))
+            fa = scipy.stats.norm.cdf(-band / s - z)
+            det = scipy.stats.norm.cdf((mu - band) / s - z)
+            sen = scipy.stats.norm.cdf((mu - band) / (s / math.sqrt(3.0)) - z)
+            print(f'| {h:g} | {sensor} | {s:.3f} | {fa:.1e} | {det:.1%} | {det ** 30:.1%} | '
+                  f'{sen:.1%} |')
 
 
 def _pairs(pairs, cache, odr, hours, seeds, stress_pairs=None):
@@ -338,7 +374,8 @@ def _run(parts, args):
     if 'truth' in parts:
         part_truth()
     if 'sigma' in parts:
-        part_sigma(args.sigma_records, args.cache)
+        spreads = part_sigma(args.sigma_records, args.cache)
+        part_power(spreads)
     if 'default' in parts:
         part_pairs('Default length', args.pairs, args.cache, 104.0, 4, (1000, 2000, 3000),
                    args.stress_pairs)

@@ -71,7 +71,7 @@ import time
 
 import numpy as np
 
-ODR_HZ = 6667.0
+ODR_HZ = 6667.0  # the default --odr-hz: the LSM6DSO32's highest rate
 BATCH = 16  # samples per frame (the emulator's --batch default)
 RECONNECT_PERIOD_S = 1.0  # the driver's default
 FLUSH_PERIOD_S = 0.5  # the recorder's default flush_period_s (sqlite3 commit)
@@ -496,10 +496,11 @@ def run(args):
     os.environ['PYTHONUNBUFFERED'] = '1'
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix='soak_'))
     out.mkdir(parents=True, exist_ok=True)
-    print(f'soak: {args.minutes:g} min at {ODR_HZ:g} Hz; ROS_DOMAIN_ID={lease.domain_id} '
+    print(f'soak: {args.minutes:g} min at {args.odr_hz:g} Hz; ROS_DOMAIN_ID={lease.domain_id} '
           f'(localhost only); output in {out}', flush=True)
     chain = Chain(out)
-    report = {'minutes': args.minutes, 'domain_id': lease.domain_id, 'faults': [],
+    report = {'minutes': args.minutes, 'odr_hz': args.odr_hz, 'domain_id': lease.domain_id,
+              'faults': [],
               'cores': os.cpu_count(), 'load_start': os.getloadavg()}
     diag = proxy = None
     try:
@@ -519,7 +520,8 @@ def run(args):
                                    f'output:={bags[0]}', *reliable])
         chain.start('lsm6dso32_driver', ['-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
                                          '-p', f'port:=socket://127.0.0.1:{proxy.port}', '-p',
-                                         f'qos_depth:={args.driver_qos_depth}'])
+                                         f'qos_depth:={args.driver_qos_depth}', '-p',
+                                         f'odr_hz:={float(args.odr_hz)!r}'])
         chain.wait_for_log('noise_analyzer', r'analysing ', 180)
         chain.wait_for_log('imu_compensator', r'compensating ', 180)
         chain.wait_for_log('recorder_1', r'recording ', 180)
@@ -527,6 +529,9 @@ def run(args):
         deadline = time.monotonic() + 120
         while not (diag.values('lsm6dso32_driver: link') and diag.values(
                 'imu_compensator: compensation') and diag.values('noise_analyzer: axis x')):
+            dead = [n for n, p in chain.procs.items() if p.poll() is not None]
+            if dead:
+                raise RuntimeError(f'{dead[0]} exited: {chain.log_text(dead[0])[-1500:]}')
             if time.monotonic() > deadline:
                 raise RuntimeError('no /diagnostics from the nodes after 120 s (discovery?)')
             time.sleep(0.2)
@@ -558,7 +563,7 @@ def run(args):
                          'held_before': _held(diag)}
                 if kind == 'unplug':
                     proxy.unplug(args.unplug_s)
-                    fault['bound'] = int(ODR_HZ * (args.unplug_s + RECONNECT_PERIOD_S + 1.0))
+                    fault['bound'] = int(args.odr_hz * (args.unplug_s + RECONNECT_PERIOD_S + 1.0))
                 elif kind == 'garbage':
                     proxy.inject(args.garbage_bytes)
                     fault['bound'] = BATCH
@@ -676,14 +681,14 @@ def _judge(args, chain, report, bags):
         check('both bags readable', True, f'{stamps[0].size} + {stamps[1].size} Imu messages')
     recorded = sum(s.size for s in stamps if s is not None)
     published = report.get('published') or 0
-    period_ns = 1e9 / ODR_HZ
+    period_ns = 1e9 / args.odr_hz
     kill = next(f for f in report['faults'] if f['kind'] == 'recorder killed')
     if all(s is not None and s.size for s in stamps):
         gap = int(round((stamps[1][0] - stamps[0][-1]) / period_ns)) - 1
         uncommitted_s = (kill['kill_wall_ns'] - stamps[0][-1]) / 1e9
         down_s = (stamps[1][0] - kill['kill_wall_ns']) / 1e9
         kill.update(lost=gap, uncommitted_s=round(uncommitted_s, 2), restart_s=round(down_s, 2),
-                    bound=int(ODR_HZ * (FLUSH_PERIOD_S + 0.5 + max(down_s, 0.0))))
+                    bound=int(args.odr_hz * (FLUSH_PERIOD_S + 0.5 + max(down_s, 0.0))))
         # The stamps say how much was lost around the kill; the counts must agree with them to a
         # few samples (stamp jitter of the driver's device-to-host clock mapping).
         check('published = recorded + lost at the kill', abs(published - recorded - gap) <= 3,
@@ -752,6 +757,8 @@ def _judge(args, chain, report, bags):
     check('no loss outside the faults', total_lost - fault_lost == 0,
           f'{total_lost} lost in all, {fault_lost} at the faults')
     report['rss'] = {}
+    report['rss_series_mb'] = {name: [[round(t, 1), round(mb, 1)] for t, mb in series]
+                               for name, series in chain.rss.items()}
     for name, series in chain.rss.items():
         slope, se = _slope_mb_h(series)
         span = chain.cpu.get(name)
@@ -771,7 +778,8 @@ def _judge(args, chain, report, bags):
 def _print(report, passed):
     load = ', '.join(f'{report[k][0]:.1f}' for k in ('load_start', 'load_end') if k in report)
     # A starved chain (load well above the cores) fails the checks by lag, not by a fault: say so.
-    print(f"\n{report['minutes']:g} min, {report['cores']} cores, 1-min load average at the "
+    print(f"\n{report['minutes']:g} min at {report['odr_hz']:g} Hz, {report['cores']} cores, "
+          "1-min load average at the "
           f'start and the end: {load}')
     print('\nprocess             RSS first  RSS last  slope (MB/h)       CPU %  samples')
     for name, r in report['rss'].items():
@@ -794,6 +802,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--minutes', type=float, default=30.0, help='length of the run (min)')
     parser.add_argument('--out', help='directory for logs, bags, soak.json (default: a temp dir)')
+    parser.add_argument('--odr-hz', type=float, default=ODR_HZ,
+                        help='output data rate the driver requests (Hz; an LSM6DSO32 rate)')
     parser.add_argument('--seed', type=int, default=8, help='seed of the board and the garbage')
     parser.add_argument('--unplug-s', type=float, default=2.0, help='length of the unplug (s)')
     parser.add_argument('--garbage-bytes', type=int, default=4096, help='size of the burst')

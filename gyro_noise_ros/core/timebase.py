@@ -275,7 +275,7 @@ class TimebaseTracker:
         idx = np.arange(nb)[:, None] * k + np.arange(k + 1)[None, :]
         blk = body[idx].astype(np.float64)
         blk -= blk[:, :1]
-        dur = blk[:, -1]
+        dur = blk[:, -1].copy()  # a view would keep the whole (nb, k + 1) block matrix alive
         st = np.diff(blk, axis=1)
         period = dur / k
         with np.errstate(invalid='ignore', divide='ignore'):

@@ -17,12 +17,14 @@ The ``report.html`` of gyro_noise_analyze (and so of ``make demo``).
 
 Built from the summary.json document and the arrays the tool holds in memory (per-chunk bias,
 variance and orders; the Allan results), never from summary.md. "In short" is
-:func:`..report.in_short_markdown` of the same document.
+:func:`..analysis.summary_md.in_short_markdown` of the same document.
 """
 
 from .figures import allan_figure, series_figure
 from .page import Key, Num, Page, pointer, Table, write_report_html
-from .. import report
+from ..analysis.csv_tables import allan_curve
+from ..analysis.figures import allan_fit_lines
+from ..analysis.summary_md import in_short_markdown
 from ..units import RAD_TO_DEG as _DEG, S_PER_H
 
 METHOD = """\
@@ -178,8 +180,8 @@ def _figures(doc, per_chunk, allan_store):
     if allan_store:
         curves = []
         for (label, axis), (result, terms, _) in allan_store.items():
-            tau, adev, lo, hi, n = report.allan_curve(result)
-            fit = [(name, t, v * _DEG) for name, t, v in report.allan_fit_lines(terms, tau)]
+            tau, adev, lo, hi, n = allan_curve(result)
+            fit = [(name, t, v * _DEG) for name, t, v in allan_fit_lines(terms, tau)]
             curves.append({'name': f'{label} {axis}', 'tau_s': tau, 'adev': adev * _DEG,
                            'ci_low': lo * _DEG, 'ci_high': hi * _DEG, 'n': n, 'fit': fit})
         figures.append((
@@ -238,7 +240,7 @@ def analyze_page(doc, *, per_chunk, allan_store):
 
     return Page(
         title='gyro_noise_analyze report: ' + ', '.join(b['label'] for b in doc['bags']),
-        data=doc, in_short_markdown=report.in_short_markdown(doc),
+        data=doc, in_short_markdown=in_short_markdown(doc),
         figures=tuple(_figures(doc, per_chunk, allan_store)), tables=tuple(_tables(doc)),
         method_markdown=METHOD, command=doc.get('command'),
         inputs=tuple(b['path'] for b in doc['bags']), version=doc.get('version', ''),

@@ -15,26 +15,18 @@
 """
 The PNG figures of an analysis: bias and variance per chunk, var(alpha) and J(alpha), Allan.
 
-The analogues of paper 000's Figures 2-10, converted to deg/s at this edge; matplotlib runs on
-the Agg backend (no display) and is imported only when a figure is drawn.
+The analogues of paper 000's Figures 2-10, converted to deg/s at this edge; matplotlib is set up
+by :mod:`..plotting` (Agg backend, no display) and imported only when a figure is drawn.
 """
 
 import numpy as np
 
+from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG
 
 __all__ = ['allan_fit_lines', 'plot_allan', 'plot_curves', 'plot_per_chunk']
 
 _DEG2 = RAD_TO_DEG ** 2
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use('Agg', force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def plot_per_chunk(path, series, *, quantity):
@@ -69,7 +61,7 @@ def plot_per_chunk(path, series, *, quantity):
     axes = list(series)
     if not any(finite(t, v)[0].size >= 2 for a in axes for _, t, v in series[a]):
         return False
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(len(axes), 1, figsize=(10, 2.8 * len(axes) + 0.8), squeeze=False,
                                sharex=True)
     scale, unit = (RAD_TO_DEG, 'deg/s') if quantity == 'bias' else (_DEG2, '(deg/s)$^2$')
@@ -96,9 +88,7 @@ def plot_per_chunk(path, series, *, quantity):
     if skipped:
         title += f"\nnot plotted (fewer than 2 chunks): {', '.join(sorted(skipped))}"
     fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110, tight=True)
     return True
 
 
@@ -124,7 +114,7 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
         Figure title.
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, panels = plt.subplots(1, 2, figsize=(11, 4.2), squeeze=False)
     for panel, curves, name in ((panels[0, 0], var_curves, 'var(w)'),
                                 (panels[0, 1], j_curves, 'J')):
@@ -143,9 +133,7 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
         fig.colorbar(im, ax=panel)
     panels[0, 0].legend(fontsize=7, loc='lower right')
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110, tight=True)
 
 
 def plot_allan(path, series, *, confidence=0.683):
@@ -163,7 +151,7 @@ def plot_allan(path, series, *, confidence=0.683):
         Two-sided confidence of the bands (named in the legend).
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     axes = list(series)
     fig, panels = plt.subplots(1, len(axes), figsize=(max(7.0, 5.5 * len(axes)), 4.8),
                                squeeze=False)
@@ -184,9 +172,7 @@ def plot_allan(path, series, *, confidence=0.683):
         panel.legend(fontsize=7)
     fig.suptitle(f'Allan deviation (markers: measured; bands: {100 * confidence:.1f} % confidence '
                  'interval; dashed: fitted IEEE 952 noise terms)', fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110, tight=True)
 
 
 def allan_fit_lines(terms, tau):

@@ -36,6 +36,7 @@ import datetime
 import json
 import math
 import os
+from typing import Any, Dict, List
 
 import numpy as np
 
@@ -664,8 +665,17 @@ def markdown(result):
            f'Gravity used: {doc["gravity_m_s2"]:.5f} m/s^2 ({doc["gravity_source"]}). '
            'mg = 9.80665e-3 m/s^2. Frame: ' + doc['frame'] + '.', '',
            'Uncertainties: one standard uncertainty, against the value during the calibration, '
-           'from the variogram of the dwells (white noise and bias wander between dwells).', '',
-           '| parameter | value | std. uncertainty |', '|---|---|---|']
+           'from the variogram of the dwells (white noise and bias wander between dwells).', '']
+    out += _accelerometer_lines(doc)
+    out += _gyro_lines(doc, turns=result.gyro is not None)
+    out += _check_lines(doc)
+    out += _dwell_lines(doc)
+    return '\n'.join(out) + '\n'
+
+
+def _accelerometer_lines(doc: Dict[str, Any]) -> List[str]:
+    """Return the Table 6 rows and the cross-axis terms of the accelerometer (calibration.md)."""
+    out = ['| parameter | value | std. uncertainty |', '|---|---|---|']
     for name, value, sig in table6_rows(doc):
         unit = 'mg' if name.startswith('b') else '%'
         out.append(f'| {name} | {value:.4f} {unit} | {sig:.4f} {unit} |')
@@ -678,11 +688,16 @@ def markdown(result):
         out.append(f'| {ax} | ' + ' | '.join(
             '-' if i == j else _pm(100 * m[j, i], 100 * ms[j, i], '.4f') for i in range(3))
             + ' |')
+    return out
+
+
+def _gyro_lines(doc: Dict[str, Any], *, turns: bool) -> List[str]:
+    """Return the gyro section: biases, scale factors and, from ``turns``, cross-axis terms."""
     gyro = doc['gyro']
     gb = np.degrees(np.asarray(gyro['bias_rad_s']))
     gs = np.degrees(np.asarray(gyro['bias_sigma_rad_s']))
-    out += ['', '## Gyro', '',
-            '| axis | bias (deg/s) | scale factor (%) |', '|---|---|---|']
+    out = ['', '## Gyro', '',
+           '| axis | bias (deg/s) | scale factor (%) |', '|---|---|---|']
     est = np.asarray(gyro.get('estimated', np.zeros((3, 3), bool)))
     for i, ax in enumerate('xyz'):
         if est[i, i]:
@@ -690,7 +705,7 @@ def markdown(result):
         else:
             scale = 'not estimated'
         out.append(f'| {ax} | {gb[i]:.5f} +/- {gs[i]:.5f} | {scale} |')
-    if result.gyro is not None:
+    if turns:
         gm = np.asarray(gyro['misalignment'])
         gms = np.asarray([[np.nan if v is None else v for v in row]
                           for row in gyro['misalignment_sigma']], dtype=float)
@@ -709,12 +724,17 @@ def markdown(result):
             out.append(f'| {ax} | ' + ' | '.join(cells) + ' |')
     if gyro['note']:
         out += ['', f'Gyro: {gyro["note"]}.']
+    return out
+
+
+def _check_lines(doc: Dict[str, Any]) -> List[str]:
+    """Return the indicators, the gravity check and the consistency of opposite dwells."""
     u = doc['uniformity']
-    out += ['', '## Indicators (paper 001 section 6)', '',
-            '- uniformity of the biases (std, ddof=1): '
-            f'{u["accel_bias_std_m_s2"] / MG_TO_M_S2:.4f} mg',
-            f'- uniformity of the scale factors (std, ddof=1): '
-            f'{100 * u["accel_scale_factor_std"]:.4f} %']
+    out = ['', '## Indicators (paper 001 section 6)', '',
+           '- uniformity of the biases (std, ddof=1): '
+           f'{u["accel_bias_std_m_s2"] / MG_TO_M_S2:.4f} mg',
+           f'- uniformity of the scale factors (std, ddof=1): '
+           f'{100 * u["accel_scale_factor_std"]:.4f} %']
     gc = doc['gravity_check']
     out += ['', '## Gravity check (leave-one-out)', '',
             f'Each dwell calibrated by the others; |a| - g against its standard deviation, '
@@ -736,13 +756,17 @@ def markdown(result):
             out.append(f'| +/-{c["axis"]} | {dis:.4f} | {c["sigma_m_s2"] / MG_TO_M_S2:.4f} | '
                        f'{c["p_value"]:.3g} | '
                        f'{"consistent" if c["consistent"] else "inconsistent"} |')
-    out += ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
-            '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
+    return out
+
+
+def _dwell_lines(doc: Dict[str, Any]) -> List[str]:
+    out = ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
+           '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
     for d in doc['dwells']:
         out.append(f'| {d["orientation"]} | {d["t_start_s"]:.2f} | {d["duration_s"]:.2f} | '
                    f'{d["samples"]} | {d["non_finite_samples"]} | {d["tilt_deg"]:.2f} | '
                    f'{d["source"]} |')
-    return '\n'.join(out) + '\n'
+    return out
 
 
 def calibration_files(result):

@@ -15,9 +15,9 @@
 """
 summary.md of an analysis: "In short" in plain words, the paper's Tables 3-6, the Allan tables.
 
-Rendered from the summary.json document (:mod:`.summary_json`), never from the engine's objects, so the
-Markdown cannot say a number the JSON does not hold. :func:`in_short_markdown` is reused by the
-HTML report; :func:`readout_text` is the tool's printed one-line readout.
+Rendered from the summary.json document (:mod:`.summary_json`), never from the engine's
+objects, so the Markdown cannot say a number the JSON does not hold. :func:`in_short_markdown` is
+reused by the HTML report; :func:`readout_text` is the tool's printed one-line readout.
 """
 
 from ..core.health import drift_t_threshold
@@ -203,9 +203,27 @@ def summary_markdown(doc):
         for a in b['axes']:
             if a not in axes:
                 axes.append(a)
-    opts = doc['options']
     lines = ['# gyro_noise_analyze summary', '', in_short_markdown(doc)]
-    lines += [
+    lines += _method_lines(doc)
+    for axis in axes:
+        rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
+        lines += [f'## Axis {axis}', '']
+        lines += _drift_lines(rows)
+        lines += _variance_lines(rows)
+        for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
+            lines += _order_lines(rows, num=num, method=method, key=key)
+        if any(a.get('allan') or a.get('allan_datasheet') for _, a in rows):
+            lines += _datasheet_lines(rows)
+            lines += _model_fit_lines(rows)
+        lines += _health_lines(rows)
+        lines.append('')
+    lines += _counts_lines(bags)
+    return '\n'.join(lines)
+
+
+def _method_lines(doc):
+    opts = doc['options']
+    return [
         '## Method',
         '',
         f"Tool {doc['tool']} {doc['version']}; chunk size {opts['chunk_size']} samples; order "
@@ -219,111 +237,134 @@ def summary_markdown(doc):
         'ddof = 1. Confidence intervals are 68.3 % (1 sigma).',
         '',
     ]
-    for axis in axes:
-        rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
-        lines += [f'## Axis {axis}', '',
-                  '### How fast the bias moves: offset drift of the chunk bias '
-                  '(paper 000 Table 3)', '',
-                  # The paper tabulates magnitudes; the sign is kept beside them so a
-                  # reader never has to guess which way the bias moved.
-                  '| Sequence | Offset drift, magnitude ((deg/s)/h) | Signed slope ((deg/s)/h) '
-                  '| Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
-                  '|---|---:|---:|---:|---:|---:|']
-        for label, a in rows:
-            lines.append(f"| {label} | {fmt(a['offset_drift_abs_deg_s_per_h'], '.6f')} | "
-                         f"{fmt(a['offset_drift_deg_s_per_h'], '+.6f')} | "
-                         f"{fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
-                         f"{fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
-        lines += ['', '### How large the noise is: variance within chunks (paper 000 Table 4)',
-                  '',
-                  '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance '
-                  '((deg/s)^4) |', '|---|---:|---:|']
-        for label, a in rows:
-            lines.append(f"| {label} | {fmt(a['mean_variance_deg2_s2'], '.6g')} | "
-                         f"{fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
-        for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
-            lines += ['', f'### How much memory the noise has: fractional order, {method} '
-                      f'method (paper 000 Table {num})', '',
-                      '| Sequence | Estimated order | Variance of estimated order | Ties |',
-                      '|---|---:|---:|---:|']
-            tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
-            for label, a in rows:
-                if a.get(key + '_multimodal'):
-                    # A mean between separate basins is where no chunk is: give the modes instead.
-                    lines.append(f"| {label} | modes: {modes_text(a[key + '_modes'])} | "
-                                 f"{fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
-                else:
-                    lines.append(f"| {label} | {fmt(a[key + '_mean'], '.6f')} | "
-                                 f"{fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
-        if any(a.get('allan') or a.get('allan_datasheet') for _, a in rows):
-            lines += [
-                '', '### Allan deviation: the datasheet numbers (customary units)', '',
-                'Read off the curve by the one readout (core/readout.py, docs/allan.md): '
-                'intervals at the stated confidence; "<=" an upper bound.', '',
-                '| Sequence | Bias stability (deg/h) | at tau (s) | B = bias stability / 0.664 '
-                '(deg/h) | ARW (deg/sqrt(h)) | ARW read over taus (s) | K fit (deg/h/sqrt(h)) '
-                '| K bound (deg/h/sqrt(h)) | Usable from tau (s) |',
-                '|---|---:|---:|---:|---:|---|---:|---:|---:|']
-            for label, a in rows:
-                d = a.get('allan_datasheet') or {}
-                bound = '<= ' if d.get('bias_stability_upper_bound') else ''
-                bs = (f"{bound}{fmt(d.get('bias_stability_deg_h'), '.4g')} "
-                      f"({fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
-                      f"-{fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
-                arw = (f"{fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} "
-                       f"({fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
-                       f"-{fmt(d.get('arw_ci_high_deg_per_sqrt_h'), '.3g')})")
-                span = d.get('arw_tau_range_s') or [None, None]
-                where = (f"{fmt(span[0], '.3g')}-{fmt(span[1], '.3g')}"
-                         if d.get('arw_from_region') else 'ADEV(1 s): no -1/2 region')
-                k_fit = fmt(d.get('rate_random_walk_deg_per_h_sqrt_h'), '.3g')
-                if d and not d.get('rate_random_walk_resolved'):
-                    k_fit += ' (not resolved)'
-                lines.append(
-                    f"| {label} | {bs} | {fmt(d.get('bias_stability_tau_s'), '.4g')} | "
-                    f"{bound}{fmt(d.get('bias_instability_deg_h'), '.4g')} | {arw} | {where} | "
-                    f"{k_fit} | {fmt(d.get('rate_random_walk_bound_deg_per_h_sqrt_h'), '.3g')} "
-                    f"| {fmt(d.get('usable_from_s'), '.3g')} |")
-            lines += [
-                '', '### Allan deviation: IEEE 952 model fit (customary units)', '',
-                'The five-term model fitted to the whole usable curve (band-limited short taus '
-                'left out): a model for simulation and filters, not the datasheet numbers above.',
-                '', '| Sequence | ' + ' | '.join(name for _, name in _CUSTOMARY)
-                + ' | Fit | Short taus excluded below (s) |',
-                '|---|' + '---:|' * len(_CUSTOMARY) + '---|---:|']
-            for label, a in rows:
-                t = a.get('allan') or {}
-                d = a.get('allan_datasheet') or {}
-                fit = d.get('fit_quality', '')
-                if fit:
-                    fit += f" (max error {100 * (d.get('fit_max_relative_error') or 0):.0f} %)"
-                lines.append(f'| {label} | '
-                             + ' | '.join(fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
-                             + f" | {fit} | {fmt(d.get('band_limited_below_s'), '.3g')} |")
-            keys = []
-            for _, a in rows:
-                for k, v in (a.get('allan') or {}).items():
-                    if (k not in keys and not isinstance(v, (dict, str))
-                            and not any(k == c for c, _ in _CUSTOMARY)):
-                        keys.append(k)
-            lines += ['', '### Allan deviation: IEEE 952 model fit (SI, unit in the name)', '',
-                      '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
-            for label, a in rows:
-                terms = a.get('allan') or {}
-                lines.append(f'| {label} | ' + ' | '.join(fmt(terms.get(k), '.4g') for k in keys)
-                             + ' |')
-        if any('health' in a for _, a in rows):
-            lines += ['', '### Health verdict against the reference', '',
-                      '| Sequence | Level | Message |', '|---|---|---|']
-            for label, a in rows:
-                h = a.get('health')
-                if h:
-                    lines.append(f"| {label} | {h['level']} | {h['message']} |")
-        lines.append('')
-    lines += ['## Input counts', '',
-              '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | '
-              'Samples | Lost | ' 'Gaps | Out-of-order stamps | NaN samples | Tail samples |',
-              '|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+
+
+def _drift_lines(rows):
+    lines = ['### How fast the bias moves: offset drift of the chunk bias '
+             '(paper 000 Table 3)', '',
+             # The paper tabulates magnitudes; the sign is kept beside them so a
+             # reader never has to guess which way the bias moved.
+             '| Sequence | Offset drift, magnitude ((deg/s)/h) | Signed slope ((deg/s)/h) '
+             '| Std. error ((deg/s)/h) | Mean bias (deg/s) | Chunks |',
+             '|---|---:|---:|---:|---:|---:|']
+    for label, a in rows:
+        lines.append(f"| {label} | {fmt(a['offset_drift_abs_deg_s_per_h'], '.6f')} | "
+                     f"{fmt(a['offset_drift_deg_s_per_h'], '+.6f')} | "
+                     f"{fmt(a['offset_drift_stderr_deg_s_per_h'], '.6f')} | "
+                     f"{fmt(a['bias_mean_deg_s'], '.6f')} | {a['chunks']} |")
+    return lines
+
+
+def _variance_lines(rows):
+    lines = ['', '### How large the noise is: variance within chunks (paper 000 Table 4)',
+             '',
+             '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance '
+             '((deg/s)^4) |', '|---|---:|---:|']
+    for label, a in rows:
+        lines.append(f"| {label} | {fmt(a['mean_variance_deg2_s2'], '.6g')} | "
+                     f"{fmt(a['variance_of_variances_deg4_s4'], '.6g')} |")
+    return lines
+
+
+def _order_lines(rows, *, num, method, key):
+    lines = ['', f'### How much memory the noise has: fractional order, {method} '
+             f'method (paper 000 Table {num})', '',
+             '| Sequence | Estimated order | Variance of estimated order | Ties |',
+             '|---|---:|---:|---:|']
+    tie = 'ties_var' if key == 'alpha_var' else 'ties_corr'
+    for label, a in rows:
+        if a.get(key + '_multimodal'):
+            # A mean between separate basins is where no chunk is: give the modes instead.
+            lines.append(f"| {label} | modes: {modes_text(a[key + '_modes'])} | "
+                         f"{fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
+        else:
+            lines.append(f"| {label} | {fmt(a[key + '_mean'], '.6f')} | "
+                         f"{fmt(a[key + '_variance'], '.6f')} | {a[tie]} |")
+    return lines
+
+
+def _datasheet_lines(rows):
+    lines = [
+        '', '### Allan deviation: the datasheet numbers (customary units)', '',
+        'Read off the curve by the one readout (core/readout.py, docs/allan.md): '
+        'intervals at the stated confidence; "<=" an upper bound.', '',
+        '| Sequence | Bias stability (deg/h) | at tau (s) | B = bias stability / 0.664 '
+        '(deg/h) | ARW (deg/sqrt(h)) | ARW read over taus (s) | K fit (deg/h/sqrt(h)) '
+        '| K bound (deg/h/sqrt(h)) | Usable from tau (s) |',
+        '|---|---:|---:|---:|---:|---|---:|---:|---:|']
+    for label, a in rows:
+        d = a.get('allan_datasheet') or {}
+        bound = '<= ' if d.get('bias_stability_upper_bound') else ''
+        bs = (f"{bound}{fmt(d.get('bias_stability_deg_h'), '.4g')} "
+              f"({fmt(d.get('bias_stability_ci_low_deg_h'), '.3g')}"
+              f"-{fmt(d.get('bias_stability_ci_high_deg_h'), '.3g')})")
+        arw = (f"{fmt(d.get('arw_deg_per_sqrt_h'), '.4g')} "
+               f"({fmt(d.get('arw_ci_low_deg_per_sqrt_h'), '.3g')}"
+               f"-{fmt(d.get('arw_ci_high_deg_per_sqrt_h'), '.3g')})")
+        span = d.get('arw_tau_range_s') or [None, None]
+        where = (f"{fmt(span[0], '.3g')}-{fmt(span[1], '.3g')}"
+                 if d.get('arw_from_region') else 'ADEV(1 s): no -1/2 region')
+        k_fit = fmt(d.get('rate_random_walk_deg_per_h_sqrt_h'), '.3g')
+        if d and not d.get('rate_random_walk_resolved'):
+            k_fit += ' (not resolved)'
+        lines.append(
+            f"| {label} | {bs} | {fmt(d.get('bias_stability_tau_s'), '.4g')} | "
+            f"{bound}{fmt(d.get('bias_instability_deg_h'), '.4g')} | {arw} | {where} | "
+            f"{k_fit} | {fmt(d.get('rate_random_walk_bound_deg_per_h_sqrt_h'), '.3g')} "
+            f"| {fmt(d.get('usable_from_s'), '.3g')} |")
+    return lines
+
+
+def _model_fit_lines(rows):
+    """Return the IEEE 952 model fit in customary units, then its every term in SI."""
+    lines = [
+        '', '### Allan deviation: IEEE 952 model fit (customary units)', '',
+        'The five-term model fitted to the whole usable curve (band-limited short taus '
+        'left out): a model for simulation and filters, not the datasheet numbers above.',
+        '', '| Sequence | ' + ' | '.join(name for _, name in _CUSTOMARY)
+        + ' | Fit | Short taus excluded below (s) |',
+        '|---|' + '---:|' * len(_CUSTOMARY) + '---|---:|']
+    for label, a in rows:
+        t = a.get('allan') or {}
+        d = a.get('allan_datasheet') or {}
+        fit = d.get('fit_quality', '')
+        if fit:
+            fit += f" (max error {100 * (d.get('fit_max_relative_error') or 0):.0f} %)"
+        lines.append(f'| {label} | '
+                     + ' | '.join(fmt(t.get(k), '.4g') for k, _ in _CUSTOMARY)
+                     + f" | {fit} | {fmt(d.get('band_limited_below_s'), '.3g')} |")
+    keys = []
+    for _, a in rows:
+        for k, v in (a.get('allan') or {}).items():
+            if (k not in keys and not isinstance(v, (dict, str))
+                    and not any(k == c for c, _ in _CUSTOMARY)):
+                keys.append(k)
+    lines += ['', '### Allan deviation: IEEE 952 model fit (SI, unit in the name)', '',
+              '| Sequence | ' + ' | '.join(keys) + ' |', '|---|' + '---:|' * len(keys)]
+    for label, a in rows:
+        terms = a.get('allan') or {}
+        lines.append(f'| {label} | ' + ' | '.join(fmt(terms.get(k), '.4g') for k in keys)
+                     + ' |')
+    return lines
+
+
+def _health_lines(rows):
+    if not any('health' in a for _, a in rows):
+        return []
+    lines = ['', '### Health verdict against the reference', '',
+             '| Sequence | Level | Message |', '|---|---|---|']
+    for label, a in rows:
+        h = a.get('health')
+        if h:
+            lines.append(f"| {label} | {h['level']} | {h['message']} |")
+    return lines
+
+
+def _counts_lines(bags):
+    lines = ['## Input counts', '',
+             '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | '
+             'Samples | Lost | ' 'Gaps | Out-of-order stamps | NaN samples | Tail samples |',
+             '|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|']
     for b in bags:
         nan = sum(a['nan_samples'] for a in b['axes'].values())
         jitter = b.get('stamp_jitter_s')
@@ -334,4 +375,4 @@ def summary_markdown(doc):
                      f"{b['gaps']} | "
                      f"{b['out_of_order_stamps']} | {nan} | {b['tail_samples']} |")
     lines.append('')
-    return '\n'.join(lines)
+    return lines

@@ -28,7 +28,7 @@ import pytest
 
 
 def _write_csv(make_record, path, t, rate, *, temperature=None, unit='rad_s'):
-    """A CSV through the factory: ``rate`` (rad/s) on z, half of it on x, a quarter on y."""
+    """Write a CSV through the factory: ``rate`` (rad/s) on z, half of it on x, a quarter on y."""
     return make_record(path, np.column_stack((rate * 0.5, rate * 0.25, rate)), t_s=t,
                        temperature_c=temperature, storage='csv', csv_gyro_unit=unit)
 

@@ -176,10 +176,16 @@ def _write_ros1(path, stamps, gyro, accel, temp_stamps, temperature_c, *, imu_to
             writer.write(imu, stamp, store.serialize_ros1(msg, imu_type))
 
 
-def _write_csv(path, stamps, gyro, accel, temperature_c, *, t0_ns, with_accel):
-    """CSV with the documented columns: time_s (from t0_ns), gyro, [accel], [temperature]."""
-    names = ['time_s', 'gyro_x_rad_s', 'gyro_y_rad_s', 'gyro_z_rad_s']
-    cols = [(stamps - t0_ns) / 1e9, gyro]
+def _write_csv(path, stamps, gyro, accel, temperature_c, *, t0_ns, with_accel, time_column,
+               gyro_unit):
+    """CSV with the documented columns: [time_s (from t0_ns)], gyro, [accel], [temperature]."""
+    if gyro_unit not in ('rad_s', 'dps'):
+        raise ValueError(f"csv_gyro_unit must be 'rad_s' or 'dps', got {gyro_unit!r}")
+    names = [f'gyro_{a}_{gyro_unit}' for a in 'xyz']
+    cols = [gyro if gyro_unit == 'rad_s' else np.rad2deg(gyro)]
+    if time_column:
+        names.insert(0, 'time_s')
+        cols.insert(0, (stamps - t0_ns) / 1e9)
     if with_accel:
         names += ['accel_x_m_s2', 'accel_y_m_s2', 'accel_z_m_s2']
         cols.append(accel)
@@ -194,7 +200,7 @@ def write_record(path, gyro_rad_s, *, stamps_ns=None, t_s=None, rate_hz=None, ac
                  temperature_c=None, temperature_stamps_ns=None, temperature_t_s=None,
                  temperature_variance=0.0, storage='sqlite3', imu_topic='/imu/data_raw',
                  temperature_topic='/imu/temperature', frame_id='imu_link', log_ns=None,
-                 extra_imu=None, t0_ns=T0_NS):
+                 extra_imu=None, t0_ns=T0_NS, csv_time=True, csv_gyro_unit='rad_s'):
     """
     Write one tiny recording and return its path.
 
@@ -203,7 +209,7 @@ def write_record(path, gyro_rad_s, *, stamps_ns=None, t_s=None, rate_hz=None, ac
     path : pathlib.Path
         Bag folder (rosbag2), ``.bag`` file (ROS 1) or ``.csv`` file to create.
     gyro_rad_s : array_like, shape (n, 3)
-        Angular rate samples.
+        Angular rate samples; n = 0 gives a bag with its Imu topic and no message.
     stamps_ns, t_s, rate_hz : keyword-only
         The Imu header stamps: given in ns, or in seconds from ``t0_ns``, or evenly at
         ``rate_hz`` from ``t0_ns`` (at most one of the three; default 100 Hz).
@@ -222,9 +228,14 @@ def write_record(path, gyro_rad_s, *, stamps_ns=None, t_s=None, rate_hz=None, ac
     log_ns : array_like, keyword-only
         Receive (log) times of the Imu messages in rosbag2 (default: the stamps).
     extra_imu : dict, keyword-only
-        rosbag2 only: ``{topic: (gyro, accel)}`` further Imu topics on the same stamps.
+        rosbag2 only: ``{topic: (gyro, accel)}`` further Imu topics on the same stamps and
+        receive times.
     t0_ns : int, keyword-only
         Origin of ``t_s`` and ``rate_hz`` stamps and of the CSV time column.
+    csv_time : bool, keyword-only
+        CSV only: write the ``time_s`` column (False: none, a reader then needs the rate).
+    csv_gyro_unit : {'rad_s', 'dps'}, keyword-only
+        CSV only: unit of the gyro columns (``gyro_x_dps``: the samples converted to deg/s).
 
     Returns
     -------
@@ -251,7 +262,8 @@ def write_record(path, gyro_rad_s, *, stamps_ns=None, t_s=None, rate_hz=None, ac
     if storage == 'csv':
         if temp_stamps is not None and temp_stamps is not stamps:
             raise ValueError('a CSV holds one temperature per gyro sample')
-        _write_csv(path, stamps, gyro, accel, temperature_c, t0_ns=t0_ns, with_accel=with_accel)
+        _write_csv(path, stamps, gyro, accel, temperature_c, t0_ns=t0_ns, with_accel=with_accel,
+                   time_column=csv_time, gyro_unit=csv_gyro_unit)
         return path
     if storage == 'ros1':
         _write_ros1(path, stamps, gyro, accel, temp_stamps, temperature_c, imu_topic=imu_topic,
@@ -261,9 +273,10 @@ def write_record(path, gyro_rad_s, *, stamps_ns=None, t_s=None, rate_hz=None, ac
 
     with ImuBagWriter(path, storage=storage, imu_topic=imu_topic,
                       temperature_topic=temperature_topic, frame_id=frame_id) as writer:
-        writer.write_imu(stamps, gyro, accel, log_ns=log_ns)
+        if n:
+            writer.write_imu(stamps, gyro, accel, log_ns=log_ns)
         for topic, (g, a) in (extra_imu or {}).items():
-            writer.write_imu(stamps, g, a, topic=topic)
+            writer.write_imu(stamps, g, a, topic=topic, log_ns=log_ns)
         if temperature_c is not None:
             writer.write_temperature(temp_stamps, temperature_c, variance=temperature_variance)
     return path

@@ -15,7 +15,8 @@
 """
 Tests of gyro_noise_analyze.
 
-Tiny rosbags written with rosbags itself, every output file, every exit code.
+Tiny recordings from the conftest factory (rosbag2 sqlite3 and MCAP, ROS 1), every output file,
+every exit code.
 """
 
 import csv
@@ -29,15 +30,8 @@ from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 import numpy as np
 import pytest
-from rosbags.rosbag1 import Writer as Ros1Writer
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import get_typestore, Stores
 import yaml
 
-ROS2 = get_typestore(Stores.ROS2_JAZZY)
-ROS1 = get_typestore(Stores.ROS1_NOETIC)
-IMU = 'sensor_msgs/msg/Imu'
-TEMP = 'sensor_msgs/msg/Temperature'
 SIZE, MEMORY, GRID = 600, 50, '0:2:0.1'
 FAST = ['--chunk-size', str(SIZE), '--memory', str(MEMORY), '--order-grid', GRID, '--quiet']
 PERIOD_NS = 150_150
@@ -56,67 +50,20 @@ def sim(n, seed=0, drift_rad_s2=0.0):
     return stamps, gyro, accel
 
 
-def imu_msg(store, stamp, gyro, accel, seq=None):
-    t = store.types
-    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp)
-                                                 % 10**9)
-    header = (
-        t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
-        else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
-    v3 = t['geometry_msgs/msg/Vector3']
-    return t[IMU](
-        header=header,
-        orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
-        orientation_covariance=np.array([-1.0] + [0.0] * 8),
-        angular_velocity=v3(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
-        angular_velocity_covariance=np.zeros(9),
-        linear_acceleration=v3(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
-        linear_acceleration_covariance=np.zeros(9),
-    )
+def write_ros2(make_record, path, stamps, gyro, accel, *, storage='sqlite3',
+               topics=('/imu/data_raw',), temperature=None):
+    """
+    Write a rosbag2 record through the factory, received at the nominal period.
 
-
-def temp_msg(store, stamp, value, seq=None):
-    t = store.types
-    stamp_msg = t['builtin_interfaces/msg/Time'](sec=int(stamp) // 10**9, nanosec=int(stamp)
-                                                 % 10**9)
-    header = (
-        t['std_msgs/msg/Header'](seq=seq, stamp=stamp_msg, frame_id='imu_link') if seq is not None
-        else t['std_msgs/msg/Header'](stamp=stamp_msg, frame_id='imu_link'))
-    return t[TEMP](header=header, temperature=float(value), variance=0.0)
-
-
-def write_ros2(path, stamps, gyro, accel, *, storage='sqlite3', topics=('/imu/data_raw',),
-               temperature=None):
-    plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
-    with Writer(path, version=9, storage_plugin=plugin) as writer:
-        conns = [writer.add_connection(t, IMU, typestore=ROS2) for t in topics]
-        tconn = writer.add_connection('/imu/temperature', TEMP,
-                                      typestore=ROS2) if temperature is not None else None
-        for i in range(len(stamps)):
-            raw = ROS2.serialize_cdr(imu_msg(ROS2, stamps[i], gyro[i], accel[i]), IMU)
-            # Receive times always increase (readers deliver in receive-time order); header stamps
-            # may not.
-            for c in conns:
-                writer.write(c, T0 + i * PERIOD_NS, raw)
-            if tconn is not None and i % 100 == 0:
-                writer.write(
-                    tconn,
-                    int(stamps[i]),
-                    ROS2.serialize_cdr(temp_msg(ROS2, stamps[i], temperature[i]), TEMP),
-                )
-    return path
-
-
-def write_ros1(path, stamps, gyro, accel):
-    with Ros1Writer(path) as writer:
-        conn = writer.add_connection('/imu/data_raw', IMU, typestore=ROS1)
-        for i in range(len(stamps)):
-            writer.write(
-                conn,
-                int(stamps[i]),
-                ROS1.serialize_ros1(imu_msg(ROS1, stamps[i], gyro[i], accel[i], seq=i), IMU),
-            )
-    return path
+    Receive times always increase (readers deliver in receive-time order); the header stamps may
+    not. One Temperature message every 100 Imu samples, stamped like that sample.
+    """
+    kw = {}
+    if temperature is not None:
+        kw = {'temperature_c': temperature[::100], 'temperature_stamps_ns': stamps[::100]}
+    return make_record(path, gyro, stamps_ns=stamps, accel_m_s2=accel, storage=storage,
+                       imu_topic=topics[0], extra_imu={t: (gyro, accel) for t in topics[1:]},
+                       log_ns=T0 + np.arange(len(stamps), dtype=np.int64) * PERIOD_NS, **kw)
 
 
 def read_csv(path):
@@ -134,12 +81,12 @@ def engine_results(stamps, gyro, temperature=None, **kw):
 
 
 @pytest.fixture(scope='module')
-def sqlite_bag(tmp_path_factory):
+def sqlite_bag(tmp_path_factory, make_record):
     n = 3 * SIZE + 77
     stamps, gyro, accel = sim(n, seed=1)
     temperature = 22.0 + 0.001 * np.arange(n)
-    path = write_ros2(tmp_path_factory.mktemp('bags') / 'seq_ref', stamps, gyro, accel,
-                      temperature=temperature)
+    path = write_ros2(make_record, tmp_path_factory.mktemp('bags') / 'seq_ref', stamps, gyro,
+                      accel, temperature=temperature)
     return path, stamps, gyro, temperature
 
 
@@ -230,10 +177,12 @@ def test_every_output_file_of_one_bag(sqlite_bag, tmp_path, capsys):
         assert (out / png).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
 
 
-def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path):
+def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path, make_record):
     sq, stamps, gyro, _ = sqlite_bag
-    mc = write_ros2(tmp_path / 'mc', stamps, gyro, np.zeros_like(gyro), storage='mcap')
-    r1 = write_ros1(tmp_path / 'old.bag', stamps, gyro, np.zeros_like(gyro))
+    mc = write_ros2(make_record, tmp_path / 'mc', stamps, gyro, np.zeros_like(gyro),
+                    storage='mcap')
+    r1 = make_record(tmp_path / 'old.bag', gyro, stamps_ns=stamps, accel_m_s2=np.zeros_like(gyro),
+                     storage='ros1')
     out = tmp_path / 'out'
     assert main([str(r1), str(mc), str(sq), '--label', 'ROS1', 'MCAP', 'SQL', '--jobs', '2',
                  '--axis', 'y', '--no-figures', '--out', str(out), *FAST]) == 0
@@ -253,13 +202,13 @@ def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path):
     assert not list(out.glob('*.png'))
 
 
-def test_reference_adds_health_verdicts(tmp_path):
+def test_reference_adds_health_verdicts(tmp_path, make_record):
     n = 8 * SIZE
     stamps, gyro, accel = sim(n, seed=3)
-    ref = write_ros2(tmp_path / 'ref', stamps, gyro, accel)
+    ref = write_ros2(make_record, tmp_path / 'ref', stamps, gyro, accel)
     # A strong bias ramp on every axis: 2 (deg/s) per second, far above the chunk-mean noise.
     stamps2, gyro2, accel2 = sim(n, seed=4, drift_rad_s2=math.radians(2.0))
-    h1 = write_ros2(tmp_path / 'h1', stamps2, gyro2, accel2, storage='mcap')
+    h1 = write_ros2(make_record, tmp_path / 'h1', stamps2, gyro2, accel2, storage='mcap')
     assert main([str(ref), '--out', str(tmp_path / 'r'), '--jobs', '1', '--no-figures',
                  *FAST]) == 0
     out = tmp_path / 'o'
@@ -289,13 +238,13 @@ def test_reference_adds_health_verdicts(tmp_path):
     assert again['level'] == 'OK'  # h1 judged against itself
 
 
-def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path, capsys):
+def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path, capsys, make_record):
     stamps, gyro, accel = sim(3 * SIZE + 20, seed=5)
     gyro[SIZE + 3, 0] = np.nan
     stamps = np.delete(stamps, np.arange(2 * SIZE + 10, 2 * SIZE + 15))  # 5 samples lost
     gyro, accel = np.delete(gyro, np.arange(2 * SIZE + 10, 2 * SIZE + 15), 0), accel[:len(stamps)]
     stamps[50], stamps[51] = stamps[51], stamps[50]
-    bag = write_ros2(tmp_path / 'bad', stamps, gyro, accel)
+    bag = write_ros2(make_record, tmp_path / 'bad', stamps, gyro, accel)
     out = tmp_path / 'o'
     assert main([str(bag), '--out', str(out), '--gap-policy', 'drop', '--jobs', '1',
                  '--no-figures', *FAST]) == 0
@@ -315,15 +264,14 @@ def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path, capsys):
 
 
 @pytest.fixture(scope='module')
-def odd_bags(tmp_path_factory):
+def odd_bags(tmp_path_factory, make_record):
     d = tmp_path_factory.mktemp('odd')
     stamps, gyro, accel = sim(200, seed=6)
-    write_ros2(d / 'two', stamps, gyro, accel, topics=('/a/imu', '/b/imu'))
-    write_ros2(d / 'short', stamps, gyro, accel, temperature=np.full(200, 20.0))
-    with Writer(d / 'empty', version=9) as writer:
-        writer.add_connection('/imu/data_raw', IMU, typestore=ROS2)
+    write_ros2(make_record, d / 'two', stamps, gyro, accel, topics=('/a/imu', '/b/imu'))
+    write_ros2(make_record, d / 'short', stamps, gyro, accel, temperature=np.full(200, 20.0))
+    make_record(d / 'empty', np.zeros((0, 3)))  # the Imu topic, no message
     stamps, gyro, accel = sim(3000, seed=7)
-    write_ros2(d / 'cut', stamps, gyro, accel, storage='mcap')
+    write_ros2(make_record, d / 'cut', stamps, gyro, accel, storage='mcap')
     (mcap,) = (d / 'cut').glob('*.mcap')
     mcap.write_bytes(mcap.read_bytes()[:mcap.stat().st_size // 2])
     (d / 'notabag.txt').write_text('hello')

@@ -323,7 +323,7 @@ def _visible(folder):
 
 def test_analyze_interrupted_while_writing_leaves_nothing_and_a_retry_works(
         inputs, tmp_path, capsys, monkeypatch):
-    from gyro_noise_ros import report
+    from gyro_noise_ros.app import analyze as app_analyze
     from gyro_noise_ros.cli.analyze import main
 
     out = tmp_path / 'out'
@@ -332,7 +332,7 @@ def test_analyze_interrupted_while_writing_leaves_nothing_and_a_retry_works(
         raise KeyboardInterrupt
 
     # chunks.csv and summary.json are written (in the staging folder) before imu.yaml
-    monkeypatch.setattr(report, 'write_imu_yaml', interrupted)
+    monkeypatch.setattr(app_analyze, 'write_imu_yaml', interrupted)
     assert main([str(inputs / 'bag'), *FAST, '--out', str(out)]) == 130
     assert capsys.readouterr().err == 'gyro_noise_analyze: interrupted\n'
     assert _visible(out) == []
@@ -344,7 +344,7 @@ def test_analyze_interrupted_while_writing_leaves_nothing_and_a_retry_works(
 
 def test_analyze_disk_full_is_an_output_error_and_keeps_the_previous_result(
         inputs, tmp_path, capsys, monkeypatch):
-    from gyro_noise_ros import report
+    from gyro_noise_ros.app import analyze as app_analyze
     from gyro_noise_ros.cli.analyze import main
 
     out = tmp_path / 'out'
@@ -354,7 +354,7 @@ def test_analyze_disk_full_is_an_output_error_and_keeps_the_previous_result(
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(out / 'summary.json'))
 
-    monkeypatch.setattr(report, 'write_json', full)
+    monkeypatch.setattr(app_analyze, 'write_json', full)
     assert main([str(inputs / 'bag'), *FAST, '--out', str(out)]) == 6
     check_error_lines('gyro_noise_analyze', capsys.readouterr().err,
                       'cannot write the results: No space left on device')

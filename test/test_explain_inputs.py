@@ -18,24 +18,19 @@ import json
 import subprocess
 import sys
 
-from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.cli.explain import main
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.explain.effects import NAMES
 from gyro_noise_ros.explain.inputs import load_input, make_measurement, MIN_SAMPLES
-from gyro_noise_ros.explain.synthetic import make_record
+from gyro_noise_ros.explain.synthetic import make_record as synthetic_record
 import numpy as np
 import pytest
 
 
-def _write_csv(path, t, rate, *, temperature=None, unit='rad_s'):
-    cols = ['time_s', f'gyro_x_{unit}', f'gyro_y_{unit}', f'gyro_z_{unit}']
-    data = [t, rate * 0.5, rate * 0.25, rate]
-    if temperature is not None:
-        cols.append('temperature_c')
-        data.append(temperature)
-    np.savetxt(path, np.column_stack(data), delimiter=',', header=','.join(cols), comments='',
-               fmt='%.12g')
+def _write_csv(make_record, path, t, rate, *, temperature=None, unit='rad_s'):
+    """Write a CSV through the factory: ``rate`` (rad/s) on z, half of it on x, a quarter on y."""
+    return make_record(path, np.column_stack((rate * 0.5, rate * 0.25, rate)), t_s=t,
+                       temperature_c=temperature, storage='csv', csv_gyro_unit=unit)
 
 
 def _record(n=MIN_SAMPLES + 100, seed=0):
@@ -43,25 +38,25 @@ def _record(n=MIN_SAMPLES + 100, seed=0):
     return np.arange(n) / 200.0, rng.standard_normal(n) * 1e-3 + 0.01
 
 
-def test_csv_columns_and_units(tmp_path):
+def test_csv_columns_and_units(tmp_path, make_record):
     t, rate = _record()
     path = tmp_path / 'a.csv'
-    _write_csv(path, t, rate, temperature=np.full(t.size, 25.0))
+    _write_csv(make_record, path, t, rate, temperature=np.full(t.size, 25.0))
     meas = load_input(path, axis='z')
     np.testing.assert_allclose(meas.rate, rate, rtol=1e-11)
     assert meas.rate_hz == pytest.approx(200.0, rel=1e-9)
     assert meas.temperature_c is not None and meas.axis == 'z'
     # deg/s columns are converted to rad/s
     path2 = tmp_path / 'b.csv'
-    _write_csv(path2, t, np.rad2deg(rate), unit='dps')
+    _write_csv(make_record, path2, t, rate, unit='dps')  # written in deg/s
     np.testing.assert_allclose(load_input(path2, axis='z').rate, rate, rtol=1e-10)
     assert load_input(path2, axis='x').rate[0] == pytest.approx(rate[0] * 0.5, rel=1e-10)
 
 
-def test_csv_without_time_needs_rate(tmp_path):
+def test_csv_without_time_needs_rate(tmp_path, make_record):
     _, rate = _record()
     path = tmp_path / 'c.csv'
-    np.savetxt(path, rate[:, None], delimiter=',', header='gyro_z_rad_s', comments='')
+    make_record(path, np.column_stack((rate * 0, rate * 0, rate)), storage='csv', csv_time=False)
     with pytest.raises(ParameterError, match='rate-hz'):
         load_input(path)
     assert load_input(path, rate_hz=100.0).rate_hz == 100.0
@@ -83,14 +78,12 @@ def test_bad_input_errors(tmp_path):
         make_measurement(rate, t_s=t, axis='w')
 
 
-def test_bag_with_temperature(tmp_path):
+def test_bag_with_temperature(tmp_path, make_record):
     t, rate = _record()
-    stamp_ns = (1_700_000_000 * 10 ** 9 + np.round(t * 1e9)).astype(np.int64)
     gyro = np.column_stack((rate * 0, rate * 0, rate))
-    bag = tmp_path / 'bag'
-    with ImuBagWriter(bag) as writer:
-        writer.write_imu(stamp_ns, gyro, np.tile([0.0, 0.0, 9.81], (t.size, 1)))
-        writer.write_temperature(stamp_ns[::200], 25.0 + t[::200] * 0.01)
+    # stamps 1_700_000_000 s + t; accel (0, 0, 9.81); one temperature message a second
+    bag = make_record(tmp_path / 'bag', gyro, t_s=t, temperature_c=25.0 + t[::200] * 0.01,
+                      temperature_t_s=t[::200])
     meas = load_input(bag, axis='z', require_temperature=True)
     np.testing.assert_array_equal(meas.rate, rate)
     assert meas.rate_hz == pytest.approx(200.0, rel=1e-6)
@@ -98,27 +91,25 @@ def test_bag_with_temperature(tmp_path):
     # span
     inner = t <= t[::200][-1]
     np.testing.assert_allclose(meas.temperature_c[inner], 25.0 + t[inner] * 0.01, rtol=1e-9)
-    bag2 = tmp_path / 'bag2'
-    with ImuBagWriter(bag2) as writer:
-        writer.write_imu(stamp_ns, gyro, np.tile([0.0, 0.0, 9.81], (t.size, 1)))
+    bag2 = make_record(tmp_path / 'bag2', gyro, t_s=t)
     with pytest.raises(InputDataError, match='temperature was asked for'):
         load_input(bag2, require_temperature=True)
 
 
-def test_cli_bad_input_exit_codes(tmp_path, capsys):
+def test_cli_bad_input_exit_codes(tmp_path, capsys, make_record):
     t, rate = _record()
     short = tmp_path / 'short.csv'
-    _write_csv(short, t[:500], rate[:500])
+    _write_csv(make_record, short, t[:500], rate[:500])
     assert main([str(short), '--out', str(tmp_path / 'o1')]) == InputDataError.exit_code
     assert 'too short' in capsys.readouterr().err
     nan = tmp_path / 'nan.csv'
     bad = rate.copy()
     bad[7] = np.nan
-    _write_csv(nan, t, bad)
+    _write_csv(make_record, nan, t, bad)
     assert main([str(nan), '--out', str(tmp_path / 'o2')]) == InputDataError.exit_code
     assert 'NaN' in capsys.readouterr().err
     ok = tmp_path / 'ok.csv'
-    _write_csv(ok, t, rate)
+    _write_csv(make_record, ok, t, rate)
     assert main([str(ok), '--out', str(tmp_path / 'o3'),
                  '--require-temperature']) == InputDataError.exit_code
     assert 'temperature was asked for' in capsys.readouterr().err
@@ -127,10 +118,10 @@ def test_cli_bad_input_exit_codes(tmp_path, capsys):
                  '2']) == ParameterError.exit_code
 
 
-def test_cli_end_to_end(tmp_path, capsys):
-    meas, _ = make_record(('quantization',), np.random.default_rng([0, 7]), n=MIN_SAMPLES)
+def test_cli_end_to_end(tmp_path, capsys, make_record):
+    meas, _ = synthetic_record(('quantization',), np.random.default_rng([0, 7]), n=MIN_SAMPLES)
     path = tmp_path / 'q.csv'
-    _write_csv(path, meas.t_s, meas.rate)
+    _write_csv(make_record, path, meas.t_s, meas.rate)
     out = tmp_path / 'out'
     assert main([str(path), '--out', str(out), '--ensemble', '6', '--seed', '3', '--quiet',
                  '--axis', 'z']) == 0
@@ -154,13 +145,10 @@ def test_module_runs_as_script():
     assert proc.returncode == 0 and '--temperature-topic' in proc.stdout
 
 
-def test_cli_bag_without_asked_temperature(tmp_path, capsys):
+def test_cli_bag_without_asked_temperature(tmp_path, capsys, make_record):
     t, rate = _record()
-    stamp_ns = (10 ** 9 + np.round(t * 1e9)).astype(np.int64)
-    bag = tmp_path / 'bag'
-    with ImuBagWriter(bag) as writer:
-        writer.write_imu(stamp_ns, np.column_stack((rate, rate, rate)),
-                         np.tile([0.0, 0.0, 9.81], (t.size, 1)))
+    bag = make_record(tmp_path / 'bag', np.column_stack((rate, rate, rate)), t_s=t,
+                      t0_ns=10 ** 9)
     code = main([str(bag), '--temperature-topic', '/imu/temperature', '--out',
                  str(tmp_path / 'o')])
     err = capsys.readouterr().err

@@ -17,7 +17,6 @@
 import json
 
 from _realdata import real_data
-from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.cli import analyze, explain, importer
 from gyro_noise_ros.explain.inputs import load_input
 from gyro_noise_ros.link import protocol as p
@@ -29,17 +28,13 @@ MPU = ('mpu6050_static_sunsided', 'mpu6050_static_10min.csv')
 ULOG = ('px4_ulog_sample_static', 'sample.ulg')
 
 
-def _bag(path, gyro, rate_hz=1000.0):
-    n = gyro.shape[0]
-    stamps = 10 ** 18 + np.arange(n, dtype=np.int64) * int(1e9 / rate_hz)
-    with ImuBagWriter(path, storage='mcap') as writer:
-        writer.write_imu(stamps, gyro, np.zeros((n, 3)))
-    return path
-
-
 @pytest.mark.parametrize('fill', [np.nan, 0.25])
-def test_analyze_refuses_all_nan_or_constant_angular_velocity(tmp_path, fill, capsys):
-    bag = _bag(tmp_path / 'b.mcap', np.full((4000, 3), fill))
+def test_analyze_refuses_all_nan_or_constant_angular_velocity(
+        tmp_path, fill, capsys, make_record):
+    n = 4000
+    bag = make_record(tmp_path / 'b.mcap', np.full((n, 3), fill), storage='mcap',
+                      stamps_ns=10 ** 18 + np.arange(n, dtype=np.int64) * 1_000_000,
+                      accel_m_s2=np.zeros((n, 3)))
     rc = analyze.main([str(bag), '--out', str(tmp_path / 'o'), '--chunk-size', '1000', '--memory',
                        '50', '--order-grid', '0:2:0.1', '--jobs', '1', '--no-figures', '--quiet'])
     assert rc == 4  # README: 4 = the data cannot be analysed
@@ -53,13 +48,14 @@ def test_analyze_refuses_degenerate_or_out_of_domain_order_grids(tmp_path, grid,
     assert rc == 2 and '--order-grid' in capsys.readouterr().err
 
 
-def test_analyze_falls_back_to_log_time_on_shuffled_header_stamps(tmp_path, capsys):
+def test_analyze_falls_back_to_log_time_on_shuffled_header_stamps(
+        tmp_path, capsys, make_record):
     rng = np.random.default_rng(0)
     n = 6000
     log = 10 ** 18 + np.arange(n, dtype=np.int64) * 1_000_000  # 1 kHz receive times
     header = rng.permutation(log)
-    with ImuBagWriter(tmp_path / 'b.mcap', storage='mcap') as writer:
-        writer.write_imu(header, rng.normal(0, 1e-3, (n, 3)), np.zeros((n, 3)), log_ns=log)
+    make_record(tmp_path / 'b.mcap', rng.normal(0, 1e-3, (n, 3)), stamps_ns=header, log_ns=log,
+                accel_m_s2=np.zeros((n, 3)), storage='mcap')
     rc = analyze.main([str(tmp_path / 'b.mcap'), '--out', str(tmp_path / 'o'), '--chunk-size',
                        '1000', '--memory', '50', '--order-grid', '0:2:0.1', '--jobs', '1',
                        '--no-figures', '--quiet', '--no-allan'])

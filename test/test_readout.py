@@ -362,16 +362,16 @@ def test_imu_yaml_of_a_csv_names_the_usual_topic_and_says_why(tmp_path):
 
 
 def test_kalibr_never_writes_a_missing_or_zero_density(tmp_path):
-    from gyro_noise_ros import report
+    from gyro_noise_ros.analysis.imu_yaml import kalibr_noise, write_imu_yaml
 
     tau = _octaves(0.0625, 0.5)     # taus stop before 1 s, and the curve has no -1/2 region
     res = _curve(tau, b=1e-4, k=1e-3)
     r = read_allan(res)
     assert math.isnan(r.arw_rad_per_sqrt_s)
-    noise = report.kalibr_noise([r, None])
+    noise = kalibr_noise([r, None])
     assert noise['noise_density'] is None and 'not measured' in noise['noise_density_note']
-    report.write_imu_yaml(tmp_path / 'imu.yaml', rostopic='/imu', update_rate_hz=100.0,
-                          gyroscope=noise)
+    write_imu_yaml(tmp_path / 'imu.yaml', rostopic='/imu', update_rate_hz=100.0,
+                   gyroscope=noise)
     text = (tmp_path / 'imu.yaml').read_text()
     assert yaml.safe_load(text)['gyroscope_noise_density'] is None
     assert '# gyroscope_noise_density: not measured' in text

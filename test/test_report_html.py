@@ -22,7 +22,7 @@ import hashlib
 import json
 
 from _html_report import check_static, parse_report
-from gyro_noise_ros import report
+from gyro_noise_ros.analysis.summary_md import in_short_markdown
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.cli.analyze import main as analyze_main
 from gyro_noise_ros.htmlreport.figures import (envelope_decimate, log_decimate,
@@ -83,7 +83,7 @@ def test_every_number_on_the_page_is_the_json(analyzed):
 def test_in_short_is_the_markdown_s(analyzed):
     out, _ = analyzed
     doc = json.loads((out / 'summary.json').read_text())
-    md = report.in_short_markdown(doc)
+    md = in_short_markdown(doc)
     assert md in (out / 'summary.md').read_text()
     text = (out / 'report.html').read_text()
     assert markdown_to_html(md) in text

@@ -27,7 +27,7 @@ import json
 import math
 
 from _realdata import real_data
-from gyro_noise_ros import report
+from gyro_noise_ros.analysis.summary_json import axis_summary_dict
 from gyro_noise_ros.core.chunks import noise_colour, summarise_sequence
 from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
 from gyro_noise_ros.core.fractional import gl_difference, make_grid, OrderIdentifier
@@ -66,7 +66,7 @@ def _chunk_rows(x, ident):
 def _through_summary_json(tmp_path, summary):
     """Write the reference's summary.json entry as gyro_noise_analyze does and load it back."""
     path = tmp_path / 'reference.json'
-    axis = report.axis_summary_dict(summary)
+    axis = axis_summary_dict(summary)
     path.write_text(json.dumps({'bags': [{'label': 'ref', 'path': 'ref', 'axes': {'x': axis}}]}))
     return load_reference(path, axis='x')
 

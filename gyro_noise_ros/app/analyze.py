@@ -47,7 +47,13 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 import numpy as np
 import threadpoolctl
 
-from .. import __version__, report
+from .. import __version__
+from ..analysis.csv_tables import allan_curve, ChunkCsvWriter, write_allan_csv
+from ..analysis.figures import allan_fit_lines, plot_allan, plot_curves, plot_per_chunk
+from ..analysis.imu_yaml import DEFAULT_IMU_TOPIC, kalibr_noise, write_imu_yaml
+from ..analysis.summary_json import (accelerometer_readout_dict, axis_summary_dict, json_num,
+                                     write_json)
+from ..analysis.summary_md import summary_markdown
 from ..bag import find_imu_topic, ImuBagReader
 from ..bag.inputs import is_table, open_imu
 from ..cluster import make_executor
@@ -358,7 +364,7 @@ def _writing() -> Iterator[None]:
         raise OutputError(f'cannot write the results: {err.strerror or err}{where}') from err
 
 
-class _ChunkRows(report.ChunkCsvWriter):
+class _ChunkRows(ChunkCsvWriter):
     """chunks.csv that can take back the rows of a bag (a speculative pass that was not kept)."""
 
     def write(self, *args: Any, **kwargs: Any) -> None:
@@ -579,8 +585,8 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
     doc = result.as_dict()
     with _writing():
         files = [out / 'chunks.csv']
-        report.write_json(out / 'summary.json', doc)
-        (out / 'summary.md').write_text(report.summary_markdown(doc))
+        write_json(out / 'summary.json', doc)
+        (out / 'summary.md').write_text(summary_markdown(doc))
         files += [out / 'summary.json', out / 'summary.md']
         files += _write_allan_outputs(out, doc, result.allan, result.accelerometer, figures)
         if result.curves:
@@ -1019,11 +1025,11 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
         'messages': state.done,
         'undecodable_messages': state.undecodable,
         'non_physical_values': dict(state.non_physical),
-        'rate_hz': report._json_num(counts.rate_hz),
+        'rate_hz': json_num(counts.rate_hz),
         'rate_method': counts.rate_method,
         'time_source': state.time_source,
         'stamps_bursty': counts.bursty,
-        'stamp_jitter_s': report._json_num(counts.jitter_s),
+        'stamp_jitter_s': json_num(counts.jitter_s),
         'timebase': tb.as_dict() if tb is not None else None,
         'warnings': warnings,
         'left_out': left_out,
@@ -1043,11 +1049,11 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
         'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
         'allan_status': engine.allan_status,
-        'accelerometer_allan': {a: report.accelerometer_readout_dict(r)
+        'accelerometer_allan': {a: accelerometer_readout_dict(r)
                                 for a, r in accel_readouts.items()},
         '_accelerometer_readouts': accel_readouts,
         'axes': {
-            axis: report.axis_summary_dict(s, verdict=verdicts.get(axis))
+            axis: axis_summary_dict(s, verdict=verdicts.get(axis))
             for axis, s in summaries.items()
         },
     }
@@ -1103,35 +1109,35 @@ def _write_allan_outputs(out: Path, doc: Dict[str, Any], allan_store: Dict[tuple
     entries: List[tuple] = []
     fig_series: Dict[str, list] = {}
     for (label, axis), (result, terms, _) in allan_store.items():
-        tau, adev, lo, hi, n = report.allan_curve(result)
+        tau, adev, lo, hi, n = allan_curve(result)
         entries.append((label, axis, tau, adev, lo, hi, n))
         fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi,
-                                                report.allan_fit_lines(terms, tau)))
-    report.write_allan_csv(out / 'allan.csv', entries)
+                                                allan_fit_lines(terms, tau)))
+    write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
     gyro = [allan_store[(first['label'], a)][2] for a in first['axes']
             if (first['label'], a) in allan_store]
     record_s = first['duration_s']
     accel = accel_readouts.get(first['label']) or {}
-    accel_noise = (report.kalibr_noise(list(accel.values()), record_s=record_s)
+    accel_noise = (kalibr_noise(list(accel.values()), record_s=record_s)
                    if any(r is not None for r in accel.values()) else None)
     topic, note = first['topic'], ''
     if first['storage'] in ('csv', 'ulog'):
         # a table or a ULog has no ROS topic: name the usual raw IMU topic and say so
-        topic = report.DEFAULT_IMU_TOPIC
+        topic = DEFAULT_IMU_TOPIC
         what = (f"a {first['storage']} file" if first['topic'] == first['storage']
                 else f"a {first['storage']} file ({first['topic']})")
         note = f'the input was {what}, not a bag: set the topic your IMU driver publishes'
-    report.write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
-                          update_rate_hz=first['rate_hz'] or float('nan'),
-                          gyroscope=report.kalibr_noise(gyro, record_s=record_s),
-                          accelerometer=accel_noise,
-                          source=f"from bag {first['label']} ({first['path']}), largest over axes "
-                          f"{', '.join(first['axes'])}")
+    write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
+                   update_rate_hz=first['rate_hz'] or float('nan'),
+                   gyroscope=kalibr_noise(gyro, record_s=record_s),
+                   accelerometer=accel_noise,
+                   source=f"from bag {first['label']} ({first['path']}), largest over axes "
+                   f"{', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
     if figures and fig_series:
-        report.plot_allan(out / 'allan.png', fig_series)
+        plot_allan(out / 'allan.png', fig_series)
         files.append(out / 'allan.png')
     return files
 
@@ -1146,12 +1152,12 @@ def _write_figures(out: Path, alphas: Optional[np.ndarray], per_chunk: Dict[str,
     bias = {a: [(label, r[:, 0], r[:, 1]) for label, r in v] for a, v in per_chunk.items()}
     var = {a: [(label, r[:, 0], r[:, 2]) for label, r in v] for a, v in per_chunk.items()}
     for name, data, quantity in (('bias.png', bias, 'bias'), ('variance.png', var, 'variance')):
-        if report.plot_per_chunk(out / name, data, quantity=quantity):
+        if plot_per_chunk(out / name, data, quantity=quantity):
             files.append(out / name)
     for (label, axis), rows in curve_store.items():
         path = out / f'curves_{_safe(label)}_{axis}.png'
-        report.plot_curves(path, alphas, np.array([r[0] for r in rows]),
-                           np.array([r[1] for r in rows]), np.array([r[2] for r in rows]),
-                           title=f'{label}, axis {axis}: var(alpha) and J(alpha) over chunks')
+        plot_curves(path, alphas, np.array([r[0] for r in rows]),
+                    np.array([r[1] for r in rows]), np.array([r[2] for r in rows]),
+                    title=f'{label}, axis {axis}: var(alpha) and J(alpha) over chunks')
         files.append(path)
     return files

@@ -36,13 +36,14 @@ import datetime
 import json
 import math
 import os
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .. import __version__
 from ..calibration import records
 from ..calibration.dwell_noise import fit_dwell_noise
-from ..calibration.gyro_turns import fit_gyro_turns, Turn
+from ..calibration.gyro_turns import fit_gyro_turns, GyroTurnResult, Turn
 from ..calibration.multipose import calibrate_poses
 from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EARTH_RATE_RAD_S,
                                   mean_norm, normal_gravity, uniformity)
@@ -50,7 +51,7 @@ from ..calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS, s
                                   select_six, WindowAccumulator)
 from ..errors import InputDataError, ParameterError
 from ..htmlreport.calibrate import write_calibrate_html
-from ..outputs import atomic_write_text, staged_output
+from ..outputs import atomic_write_text, staged_output, StrPath
 from ..units import MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
 MODEL = 'measured = (I + diag(scale_factor) + misalignment) @ true + bias'
@@ -87,11 +88,12 @@ class Gravity:
 
     value_m_s2: float = STANDARD_GRAVITY_M_S2
     source: str = 'standard gravity 9.80665 (no local value given)'
-    warning: object = None
-    latitude_deg: object = None
+    warning: Optional[str] = None
+    latitude_deg: Optional[float] = None
 
 
-def resolve_gravity(gravity=None, latitude=None, height=0.0):
+def resolve_gravity(gravity: Optional[float] = None, latitude: Optional[float] = None,
+                    height: float = 0.0) -> Gravity:
     """
     Return the gravity to use and how it was obtained.
 
@@ -151,16 +153,16 @@ class CalibrateParams:
 
     """
 
-    paths: tuple
+    paths: Tuple[str, ...]
     gravity: Gravity = field(default_factory=Gravity)
     mode: str = 'six-position'
-    topic: object = None
-    rate_hz: object = None
+    topic: Optional[str] = None
+    rate_hz: Optional[float] = None
     settings: DetectorSettings = field(default_factory=DetectorSettings)
     alpha: float = DEFAULT_ALPHA
     gyro_turns: str = 'auto'
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, 'paths', tuple(str(p) for p in self.paths))
         if not self.paths:
             raise ParameterError('give at least one recording')
@@ -175,11 +177,11 @@ class CalibrateParams:
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
 
 
-def _arr(v):
+def _arr(v: Any) -> List[Optional[float]]:
     return [None if not math.isfinite(float(x)) else float(x) for x in np.ravel(v)]
 
 
-def _mat(v):
+def _mat(v: Any) -> List[List[Optional[float]]]:
     a = np.asarray(v, dtype=np.float64)
     return [[None if not math.isfinite(float(x)) else float(x) for x in row] for row in a]
 
@@ -227,8 +229,8 @@ class CalibrationResult:
     """
 
     params: CalibrateParams
-    dwells: tuple
-    short_dwells: tuple
+    dwells: Tuple[Any, ...]
+    short_dwells: Tuple[Any, ...]
     accel_bias_m_s2: np.ndarray
     accel_bias_sigma_m_s2: np.ndarray
     accel_scale_factor: np.ndarray
@@ -238,37 +240,37 @@ class CalibrationResult:
     accel_residual_rms_m_s2: float
     gyro_bias_rad_s: np.ndarray
     gyro_bias_sigma_rad_s: np.ndarray
-    gyro: object
+    gyro: Optional[GyroTurnResult]
     gyro_note: str
-    consistency: tuple
-    gravity_check: tuple
+    consistency: Tuple[Any, ...]
+    gravity_check: Tuple[Any, ...]
     mean_norm_raw_m_s2: float
-    noise: dict
+    noise: Dict[str, Any]
     non_finite_samples: int
-    left_out: tuple = ()
+    left_out: Tuple[str, ...] = ()
     version: str = __version__
 
     @property
-    def gravity_m_s2(self):
+    def gravity_m_s2(self) -> float:
         """float: the gravity used (m/s^2)."""
         return self.params.gravity.value_m_s2
 
     @property
-    def gyro_scale_factor(self):
+    def gyro_scale_factor(self) -> np.ndarray:
         """numpy.ndarray: (3,) gyro scale factors (0 where not estimated)."""
         return np.zeros(3) if self.gyro is None else self.gyro.scale_factor
 
     @property
-    def gyro_misalignment(self):
+    def gyro_misalignment(self) -> np.ndarray:
         """numpy.ndarray: (3, 3) gyro cross-axis terms (0 where not estimated)."""
         return np.zeros((3, 3)) if self.gyro is None else self.gyro.misalignment
 
     @property
-    def gravity_check_consistent(self):
+    def gravity_check_consistent(self) -> bool:
         """bool: every held-out dwell used agrees with g (rejected poses are left out)."""
         return all(c.consistent for c in self.gravity_check if c.label not in self.left_out)
 
-    def warnings(self):
+    def warnings(self) -> List[str]:
         """
         Return the lines a tool prints on stderr (standard gravity, NaN dropped, failed check).
 
@@ -277,7 +279,7 @@ class CalibrationResult:
         list of str
 
         """
-        out = []
+        out: List[str] = []
         if self.params.gravity.warning:
             out.append(self.params.gravity.warning)
         for d in self.dwells:
@@ -299,7 +301,7 @@ class CalibrationResult:
             out.append(f'gyro: {self.gyro_note}')
         return out
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return the ``calibration.json`` document (SI, units in the keys).
 
@@ -310,7 +312,7 @@ class CalibrationResult:
         """
         p = self.params
         gyro = self.gyro
-        gyro_doc = {
+        gyro_doc: Dict[str, Any] = {
             'bias_rad_s': _arr(self.gyro_bias_rad_s),
             'bias_sigma_rad_s': _arr(self.gyro_bias_sigma_rad_s),
             'scale_factor': _arr(self.gyro_scale_factor),
@@ -381,7 +383,7 @@ class CalibrationResult:
         }
 
 
-def _detect(params):
+def _detect(params: CalibrateParams) -> List[Any]:
     out = []
     for path in params.paths:
         acc = None
@@ -404,7 +406,7 @@ def _detect(params):
     return out
 
 
-def _refuse_inconsistent(pairs, chosen, alpha):
+def _refuse_inconsistent(pairs: Sequence[Any], chosen: Dict[str, Any], alpha: float) -> None:
     bad = [c for c in pairs if not c.consistent]
     if not bad:
         return
@@ -420,8 +422,8 @@ def _refuse_inconsistent(pairs, chosen, alpha):
                          're-seat and re-record it, or record >= 9 poses for --mode multi-pose')
 
 
-def _turn_spans(dwells):
-    spans = {}
+def _turn_spans(dwells: Sequence[Any]) -> Dict[str, List[Tuple[int, float, float]]]:
+    spans: Dict[str, List[Tuple[int, float, float]]] = {}
     for k in range(len(dwells) - 1):
         a, b = dwells[k], dwells[k + 1]
         if a.source == b.source:
@@ -429,10 +431,11 @@ def _turn_spans(dwells):
     return spans
 
 
-def _read_turns(params, dwells):
+def _read_turns(params: CalibrateParams, dwells: Sequence[Any]) -> List[Turn]:
     out = []
     for path, spans in _turn_spans(dwells).items():
-        parts = {k: ([], []) for k, _, _ in spans}
+        parts: Dict[int, Tuple[List[np.ndarray], List[np.ndarray]]] = {
+            k: ([], []) for k, _, _ in spans}
         for _, t, _, gyro in records.iter_imu(path, topic=params.topic, rate_hz=params.rate_hz):
             for k, lo, hi in spans:
                 if t.size and (t[-1] < lo or t[0] > hi):
@@ -450,7 +453,9 @@ def _read_turns(params, dwells):
     return out
 
 
-def _gyro_from_turns(params, dwells, directions, accel_noise, accel_index, gyro_noise):
+def _gyro_from_turns(params: CalibrateParams, dwells: Sequence[Any], directions: np.ndarray,
+                     accel_noise: Any, accel_index: Sequence[int],
+                     gyro_noise: Any) -> Tuple[Optional[GyroTurnResult], str]:
     if params.gyro_turns == 'off':
         return None, 'not estimated (--gyro-turns off)'
     turns = _read_turns(params, dwells)
@@ -475,12 +480,13 @@ def _gyro_from_turns(params, dwells, directions, accel_noise, accel_index, gyro_
     return res, note
 
 
-def _time_order(dwells, params):
+def _time_order(dwells: Iterable[Any], params: CalibrateParams) -> List[Any]:
     rank = {p: k for k, p in enumerate(params.paths)}
     return sorted(dwells, key=lambda d: (rank.get(d.source, 0), d.t_start_s))
 
 
-def _multi_pose_gyro_bias(dwells, directions, latitude_deg):
+def _multi_pose_gyro_bias(dwells: Sequence[Any], directions: np.ndarray,
+                          latitude_deg: Optional[float]) -> Tuple[np.ndarray, np.ndarray]:
     w = np.array([d.samples for d in dwells], dtype=np.float64)
     w /= w.sum()
     gm = np.array([d.gyro_mean_rad_s for d in dwells])
@@ -498,7 +504,7 @@ def _multi_pose_gyro_bias(dwells, directions, latitude_deg):
     return bias, np.sqrt(var)
 
 
-def run_calibration(params):
+def run_calibration(params: CalibrateParams) -> CalibrationResult:
     """
     Run the whole calibration on recordings (module docstring).
 
@@ -567,11 +573,11 @@ def run_calibration(params):
                              {'accel': accel_noise, 'gyro': gyro_noise}, nonfinite, left_out)
 
 
-def _fmt(values):
+def _fmt(values: Any) -> str:
     return '[' + ', '.join(repr(float(v)) for v in np.ravel(values)) + ']'
 
 
-def yaml_text(result):
+def yaml_text(result: CalibrationResult) -> str:
     """
     Return the ``calibration.yaml`` ROS 2 parameter file of a calibration.
 
@@ -612,7 +618,7 @@ def yaml_text(result):
     return '\n'.join(lines) + '\n'
 
 
-def table6_rows(doc):
+def table6_rows(doc: Dict[str, Any]) -> List[Tuple[str, float, float]]:
     """
     Return the paper Table 6 rows (bias in mg, scale factor in %) of a calibration document.
 
@@ -635,7 +641,7 @@ def table6_rows(doc):
     return rows
 
 
-def _pm(value, sigma, spec):
+def _pm(value: Optional[float], sigma: Optional[float], spec: str) -> str:
     if value is None:
         return 'n/a'
     if sigma is None:
@@ -643,7 +649,7 @@ def _pm(value, sigma, spec):
     return f'{format(value, spec)} +/- {format(sigma, spec)}'
 
 
-def markdown(result):
+def markdown(result: CalibrationResult) -> str:
     """
     Return ``calibration.md``: Table 6 layout, cross-axis terms, gyro, checks, dwells.
 
@@ -664,8 +670,17 @@ def markdown(result):
            f'Gravity used: {doc["gravity_m_s2"]:.5f} m/s^2 ({doc["gravity_source"]}). '
            'mg = 9.80665e-3 m/s^2. Frame: ' + doc['frame'] + '.', '',
            'Uncertainties: one standard uncertainty, against the value during the calibration, '
-           'from the variogram of the dwells (white noise and bias wander between dwells).', '',
-           '| parameter | value | std. uncertainty |', '|---|---|---|']
+           'from the variogram of the dwells (white noise and bias wander between dwells).', '']
+    out += _accelerometer_lines(doc)
+    out += _gyro_lines(doc, turns=result.gyro is not None)
+    out += _check_lines(doc)
+    out += _dwell_lines(doc)
+    return '\n'.join(out) + '\n'
+
+
+def _accelerometer_lines(doc: Dict[str, Any]) -> List[str]:
+    """Return the Table 6 rows and the cross-axis terms of the accelerometer (calibration.md)."""
+    out = ['| parameter | value | std. uncertainty |', '|---|---|---|']
     for name, value, sig in table6_rows(doc):
         unit = 'mg' if name.startswith('b') else '%'
         out.append(f'| {name} | {value:.4f} {unit} | {sig:.4f} {unit} |')
@@ -678,11 +693,16 @@ def markdown(result):
         out.append(f'| {ax} | ' + ' | '.join(
             '-' if i == j else _pm(100 * m[j, i], 100 * ms[j, i], '.4f') for i in range(3))
             + ' |')
+    return out
+
+
+def _gyro_lines(doc: Dict[str, Any], *, turns: bool) -> List[str]:
+    """Return the gyro section: biases, scale factors and, from ``turns``, cross-axis terms."""
     gyro = doc['gyro']
     gb = np.degrees(np.asarray(gyro['bias_rad_s']))
     gs = np.degrees(np.asarray(gyro['bias_sigma_rad_s']))
-    out += ['', '## Gyro', '',
-            '| axis | bias (deg/s) | scale factor (%) |', '|---|---|---|']
+    out = ['', '## Gyro', '',
+           '| axis | bias (deg/s) | scale factor (%) |', '|---|---|---|']
     est = np.asarray(gyro.get('estimated', np.zeros((3, 3), bool)))
     for i, ax in enumerate('xyz'):
         if est[i, i]:
@@ -690,7 +710,7 @@ def markdown(result):
         else:
             scale = 'not estimated'
         out.append(f'| {ax} | {gb[i]:.5f} +/- {gs[i]:.5f} | {scale} |')
-    if result.gyro is not None:
+    if turns:
         gm = np.asarray(gyro['misalignment'])
         gms = np.asarray([[np.nan if v is None else v for v in row]
                           for row in gyro['misalignment_sigma']], dtype=float)
@@ -709,12 +729,17 @@ def markdown(result):
             out.append(f'| {ax} | ' + ' | '.join(cells) + ' |')
     if gyro['note']:
         out += ['', f'Gyro: {gyro["note"]}.']
+    return out
+
+
+def _check_lines(doc: Dict[str, Any]) -> List[str]:
+    """Return the indicators, the gravity check and the consistency of opposite dwells."""
     u = doc['uniformity']
-    out += ['', '## Indicators (paper 001 section 6)', '',
-            '- uniformity of the biases (std, ddof=1): '
-            f'{u["accel_bias_std_m_s2"] / MG_TO_M_S2:.4f} mg',
-            f'- uniformity of the scale factors (std, ddof=1): '
-            f'{100 * u["accel_scale_factor_std"]:.4f} %']
+    out = ['', '## Indicators (paper 001 section 6)', '',
+           '- uniformity of the biases (std, ddof=1): '
+           f'{u["accel_bias_std_m_s2"] / MG_TO_M_S2:.4f} mg',
+           f'- uniformity of the scale factors (std, ddof=1): '
+           f'{100 * u["accel_scale_factor_std"]:.4f} %']
     gc = doc['gravity_check']
     out += ['', '## Gravity check (leave-one-out)', '',
             f'Each dwell calibrated by the others; |a| - g against its standard deviation, '
@@ -736,16 +761,20 @@ def markdown(result):
             out.append(f'| +/-{c["axis"]} | {dis:.4f} | {c["sigma_m_s2"] / MG_TO_M_S2:.4f} | '
                        f'{c["p_value"]:.3g} | '
                        f'{"consistent" if c["consistent"] else "inconsistent"} |')
-    out += ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
-            '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
+    return out
+
+
+def _dwell_lines(doc: Dict[str, Any]) -> List[str]:
+    out = ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
+           '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
     for d in doc['dwells']:
         out.append(f'| {d["orientation"]} | {d["t_start_s"]:.2f} | {d["duration_s"]:.2f} | '
                    f'{d["samples"]} | {d["non_finite_samples"]} | {d["tilt_deg"]:.2f} | '
                    f'{d["source"]} |')
-    return '\n'.join(out) + '\n'
+    return out
 
 
-def calibration_files(result):
+def calibration_files(result: CalibrationResult) -> Dict[str, str]:
     """
     Return the files of a calibration: name -> text.
 
@@ -764,7 +793,8 @@ def calibration_files(result):
             'calibration.md': markdown(result)}
 
 
-def write_calibration(result, out_dir, *, html=True, command=None):
+def write_calibration(result: CalibrationResult, out_dir: StrPath, *, html: bool = True,
+                      command: Optional[Sequence[str]] = None) -> List[str]:
     """
     Write calibration.json, .yaml, .md and report.html (published together or not at all).
 

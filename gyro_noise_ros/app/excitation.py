@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import json
 import math
 import os
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 from scipy.stats import norm
@@ -38,7 +39,7 @@ from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFA
                                       sine_dwell, sine_sweep)
 from ..errors import InputDataError, ParameterError
 from ..htmlreport.excitation import write_excitation_html
-from ..outputs import atomic_write_text, staged_output
+from ..outputs import atomic_write_text, staged_output, StrPath
 from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
 
@@ -79,20 +80,22 @@ class ExcitationParams:
 
     """
 
-    paths: tuple
+    paths: Tuple[str, ...]
     sensor: str
     axis: str
-    dwell_hz: object = None
-    sweep: object = None
-    reference_topic: object = None
-    topic: object = None
+    dwell_hz: Optional[float] = None
+    # (f0_hz, f1_hz, rate_hz_s) in sweep mode, None in dwell mode: read only where the mode is
+    # known, so typed Any rather than Optional
+    sweep: Any = None
+    reference_topic: Optional[str] = None
+    topic: Optional[str] = None
     harmonics: int = DEFAULT_HARMONICS
-    rate_hz: object = None
+    rate_hz: Optional[float] = None
     frequency_tol: float = DEFAULT_FREQUENCY_TOL
     alpha: float = DEFAULT_ALPHA
     figures: bool = True
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, 'paths', tuple(str(p) for p in self.paths))
         if not 1 <= len(self.paths) <= 2:
             raise ParameterError(f'give one recording, or two (before and after); got '
@@ -115,17 +118,17 @@ class ExcitationParams:
             raise ParameterError(f'--alpha must be in (0, 0.5), got {self.alpha!r}')
 
     @property
-    def mode(self):
+    def mode(self) -> str:
         """str: ``'dwell'`` or ``'sweep'``."""
         return 'dwell' if self.dwell_hz is not None else 'sweep'
 
     @property
-    def unit(self):
+    def unit(self) -> str:
         """str: SI unit suffix of the excited channel (``m_s2`` or ``rad_s``)."""
         return 'm_s2' if self.sensor == 'accel' else 'rad_s'
 
     @property
-    def display(self):
+    def display(self) -> Tuple[float, str]:
         """(float, str): factor from SI to the printed unit and its name (g or deg/s)."""
         return ((1.0 / STANDARD_GRAVITY_M_S2, 'g') if self.sensor == 'accel' else
                 (RAD_TO_DEG, 'deg/s'))
@@ -154,17 +157,17 @@ class SideResult:
     source: str
     rate_hz: float
     samples: int
-    analysis: object
+    analysis: Any
     t_s: np.ndarray = field(repr=False)
     x: np.ndarray = field(repr=False)
 
 
-def _lst(a):
+def _lst(a: Any) -> Optional[List[Optional[float]]]:
     return None if a is None else [None if not math.isfinite(float(v)) else float(v)
                                    for v in np.ravel(a)]
 
 
-def _num(v):
+def _num(v: Any) -> Optional[float]:
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
@@ -185,10 +188,10 @@ class ExcitationResult:
     """
 
     params: ExcitationParams
-    sides: dict
+    sides: Dict[str, SideResult]
     version: str = __version__
 
-    def change(self):
+    def change(self) -> Optional[Dict[str, Any]]:
         """
         Return the after/before changes of a dwell with their significance (None otherwise).
 
@@ -211,7 +214,7 @@ class ExcitationResult:
                 'amplitude_stability': a.amplitude_stability - b.amplitude_stability,
                 'thd': a.thd - b.thd}
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return the ``excitation.json`` document (SI, units in the keys, ratios not %).
 
@@ -222,15 +225,16 @@ class ExcitationResult:
         """
         p = self.params
         u = p.unit
-        doc = {'sensor': p.sensor, 'axis': p.axis, 'mode': p.mode, 'unit': u,
-               'alpha': p.alpha,
-               'nominal': ({'frequency_hz': p.dwell_hz, 'frequency_tol': p.frequency_tol}
-                           if p.mode == 'dwell' else
-                           dict(zip(('f0_hz', 'f1_hz', 'rate_hz_s'), p.sweep))),
-               'version': self.version}
+        doc: Dict[str, Any] = {
+            'sensor': p.sensor, 'axis': p.axis, 'mode': p.mode, 'unit': u, 'alpha': p.alpha,
+            'nominal': ({'frequency_hz': p.dwell_hz, 'frequency_tol': p.frequency_tol}
+                        if p.mode == 'dwell' else
+                        dict(zip(('f0_hz', 'f1_hz', 'rate_hz_s'), p.sweep))),
+            'version': self.version}
         for side, res in self.sides.items():
             r = res.analysis
-            entry = {'source': res.source, 'rate_hz': res.rate_hz, 'samples': res.samples}
+            entry: Dict[str, Any] = {'source': res.source, 'rate_hz': res.rate_hz,
+                                     'samples': res.samples}
             if p.mode == 'dwell':
                 entry.update({
                     'frequency_hz': r.frequency_hz,
@@ -274,12 +278,12 @@ class ExcitationResult:
         return doc
 
 
-def _channel(params, accel, gyro):
+def _channel(params: ExcitationParams, accel: np.ndarray, gyro: np.ndarray) -> np.ndarray:
     i = 'xyz'.index(params.axis)
     return (accel if params.sensor == 'accel' else gyro)[:, i]
 
 
-def _analyse(path, params):
+def _analyse(path: str, params: ExcitationParams) -> SideResult:
     try:
         rate, t, accel, gyro = records.read_imu(path, topic=params.topic, rate_hz=params.rate_hz)
     except IndexError as err:
@@ -301,7 +305,7 @@ def _analyse(path, params):
     return SideResult(str(path), rate, int(x.size), r, t, x)
 
 
-def run_excitation(params):
+def run_excitation(params: ExcitationParams) -> ExcitationResult:
     """
     Analyse the record(s) (module docstring).
 
@@ -322,7 +326,7 @@ def run_excitation(params):
         A recording cannot be read.
 
     """
-    sides = {}
+    sides: Dict[str, SideResult] = {}
     for side, path in zip(SIDES, params.paths):
         try:
             sides[side] = _analyse(path, params)
@@ -331,21 +335,21 @@ def run_excitation(params):
     return ExcitationResult(params, sides)
 
 
-def _pct(v, spec='.3f'):
+def _pct(v: Optional[float], spec: str = '.3f') -> str:
     return 'n/a' if v is None or not math.isfinite(v) else f'{format(100.0 * v, spec)} %'
 
 
-def _significance(change):
+def _significance(change: Dict[str, Any]) -> str:
     return 'significant' if change['amplitude_change_significant'] else 'within noise'
 
 
-def _verdict(ok, yes, no, p):
+def _verdict(ok: Optional[bool], yes: str, no: str, p: float) -> str:
     if ok is None:
         return 'n/a'
     return f'{yes if ok else no} (p = {p:.2g})'
 
 
-def markdown(result):
+def markdown(result: ExcitationResult) -> str:
     """
     Return ``excitation.md``: quantities with units, percentages and verdicts.
 
@@ -369,7 +373,7 @@ def markdown(result):
            f'probability {p.alpha:g} each (docs/reliability.md).', '',
            '| quantity | ' + ' | '.join(sides) + ' |', '|---|' + '---|' * len(sides)]
 
-    def row(label, fn):
+    def row(label: str, fn: Callable[[Any], str]) -> None:
         out.append(f'| {label} | ' + ' | '.join(fn(result.sides[s].analysis) for s in sides)
                    + ' |')
 
@@ -425,7 +429,7 @@ def markdown(result):
                 '| f (Hz) | rising | falling | reference rising | reference falling | '
                 'deviation rising | deviation falling |', '|---|---|---|---|---|---|---|']
 
-        def cell(arr, i, scale=k):
+        def cell(arr: Optional[np.ndarray], i: int, scale: float = k) -> str:
             if arr is None or not math.isfinite(arr[i]):
                 return 'n/a'
             return f'{arr[i] * scale:.5g}'
@@ -438,7 +442,7 @@ def markdown(result):
     return '\n'.join(out) + '\n'
 
 
-def plot(path, params, label, side):
+def plot(path: StrPath, params: ExcitationParams, label: str, side: SideResult) -> None:
     """
     Draw the whole acquisition and the waveform detail (paper 001 Figures 7-12).
 
@@ -484,7 +488,8 @@ def plot(path, params, label, side):
     save_figure(fig, path, dpi=110, tight=True)
 
 
-def write_excitation(result, out_dir, *, html=True, command=None):
+def write_excitation(result: ExcitationResult, out_dir: StrPath, *, html: bool = True,
+                     command: Optional[Sequence[str]] = None) -> List[str]:
     """
     Write excitation.json, .md, report.html and the figures (published together or not at all).
 

@@ -40,12 +40,12 @@ import io
 import json
 import math
 import os
-from typing import List, Optional, Sequence, Union
+from typing import Any, Callable, cast, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from .calibrate import (CalibrateParams, calibration_files, Gravity, MG, run_calibration,
-                        table6_rows)
+from .calibrate import (CalibrateParams, calibration_files, CalibrationResult, Gravity, MG,
+                        run_calibration, table6_rows)
 from .. import __version__
 from ..calibration import records
 from ..calibration.interval import (compare, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
@@ -69,7 +69,7 @@ TERM_UNITS = {
 }
 
 
-def _num(v):
+def _num(v: Any) -> Optional[float]:
     if v is None:
         return None
     v = float(v)
@@ -108,21 +108,21 @@ class ReliabilityParams:
 
     """
 
-    before_calibration: tuple = ()
-    before_static: object = None
-    after_calibration: tuple = ()
-    after_static: object = None
+    before_calibration: Tuple[str, ...] = ()
+    before_static: Optional[str] = None
+    after_calibration: Tuple[str, ...] = ()
+    after_static: Optional[str] = None
     c: float = DEFAULT_C
     tolerance: float = DEFAULT_TOLERANCE
     alpha: float = DEFAULT_ALPHA
     min_edf: float = DEFAULT_MIN_EDF
-    topic: object = None
+    topic: Optional[str] = None
     gravity: Gravity = field(default_factory=Gravity)
-    rate_hz: object = None
+    rate_hz: Optional[float] = None
     settings: DetectorSettings = field(default_factory=DetectorSettings)
     figures: bool = True
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ('before_calibration', 'after_calibration'):
             object.__setattr__(self, name, tuple(str(p) for p in (getattr(self, name) or ())))
         for name in ('before_static', 'after_static'):
@@ -142,7 +142,7 @@ class ReliabilityParams:
         if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
 
-    def given(self):
+    def given(self) -> Dict[str, Any]:
         """
         Return the parts given, name -> path(s).
 
@@ -183,11 +183,11 @@ class StaticAnalysis:
     rate_hz: float
     samples: int
     duration_s: float
-    check: dict
-    channels: dict
-    temperature: object = None
+    check: Dict[str, Any]
+    channels: Dict[str, Any]
+    temperature: Optional[Dict[str, Any]] = None
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return the record's entry of ``static_records`` in ``reliability.json``.
 
@@ -200,7 +200,7 @@ class StaticAnalysis:
                 'duration_s': self.duration_s, **self.check, 'temperature': self.temperature}
 
 
-def _temperature(path, topic, t0_ns=None):
+def _temperature(path: str, topic: Optional[str], t0_ns: Optional[int] = None) -> Any:
     try:
         return records.read_temperature(path, topic=topic, t0_ns=t0_ns)
     except (BagError, InputDataError):
@@ -208,8 +208,12 @@ def _temperature(path, topic, t0_ns=None):
         return None
 
 
-def static_from_batches(batches, *, source, c=DEFAULT_C, settings=None,
-                        min_edf=DEFAULT_MIN_EDF, alpha=DEFAULT_ALPHA, temperature=None):
+def static_from_batches(batches: Iterable[Tuple[float, np.ndarray, np.ndarray, np.ndarray]], *,
+                        source: str, c: float = DEFAULT_C,
+                        settings: Optional[DetectorSettings] = None,
+                        min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
+                        temperature: Optional[Tuple[np.ndarray, np.ndarray]] = None
+                        ) -> StaticAnalysis:
     """
     Analyse a static record given as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
 
@@ -239,7 +243,7 @@ def static_from_batches(batches, *, source, c=DEFAULT_C, settings=None,
     rec = None
     for rate, t, accel, gyro in batches:
         if rec is None:
-            kw = {} if settings is None else {'settings': settings}
+            kw: Dict[str, Any] = {} if settings is None else {'settings': settings}
             rec = StaticRecord(rate, c=c, source=source, min_edf=min_edf, alpha=alpha, **kw)
         rec.update(t, accel, gyro)
     if rec is None:
@@ -265,8 +269,10 @@ def static_from_batches(batches, *, source, c=DEFAULT_C, settings=None,
                           records.temperature_stats(temperature))
 
 
-def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None,
-                   min_edf=DEFAULT_MIN_EDF, alpha=DEFAULT_ALPHA):
+def analyze_static(path: str, *, topic: Optional[str] = None, rate_hz: Optional[float] = None,
+                   c: float = DEFAULT_C, settings: Optional[DetectorSettings] = None,
+                   min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA
+                   ) -> StaticAnalysis:
     """
     Stream a static recording through :class:`..calibration.static_record.StaticRecord`.
 
@@ -303,7 +309,9 @@ def analyze_static(path, *, topic=None, rate_hz=None, c=DEFAULT_C, settings=None
     return replace(st, temperature=records.temperature_stats(_temperature(path, topic)))
 
 
-def verdicts_of(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
+def verdicts_of(before: Optional[StaticAnalysis], after: Optional[StaticAnalysis], *,
+                tolerance: float = DEFAULT_TOLERANCE,
+                alpha: float = DEFAULT_ALPHA) -> Tuple[Dict[str, Any], Dict[str, Any]]:
     """
     Return the per-channel and per-sensor verdicts of two static records.
 
@@ -320,7 +328,7 @@ def verdicts_of(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALP
         ``{channel: Verdict}`` and ``{'accel': SensorVerdict, 'gyro': SensorVerdict}``.
 
     """
-    verdicts = {}
+    verdicts: Dict[str, Any] = {}
     for ch in CHANNELS:
         ivs = [st.channels[ch].interval if st else None for st in (before, after)]
         verdicts[ch] = compare(*ivs, tolerance=tolerance, alpha=alpha)
@@ -329,9 +337,9 @@ def verdicts_of(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALP
     return verdicts, sensors
 
 
-def _dwell_temperatures(cal, topic):
+def _dwell_temperatures(cal: CalibrationResult, topic: Optional[str]) -> List[Dict[str, Any]]:
     out = []
-    cache = {}
+    cache: Dict[str, Any] = {}
     for d in cal.dwells:
         if d.source not in cache:
             cache[d.source] = _temperature(d.source, topic)
@@ -367,15 +375,15 @@ class ReliabilityResult:
     """
 
     params: ReliabilityParams
-    statics: dict
-    calibrations: dict
-    verdicts: dict
-    sensors: dict
-    dwell_temperatures: dict
-    errors: dict
+    statics: Dict[str, Any]
+    calibrations: Dict[str, Any]
+    verdicts: Dict[str, Any]
+    sensors: Dict[str, Any]
+    dwell_temperatures: Dict[str, Optional[List[Dict[str, Any]]]]
+    errors: Dict[str, str]
     version: str = __version__
 
-    def warnings(self):
+    def warnings(self) -> List[str]:
         """
         Return the lines a tool prints on stderr (failed parts).
 
@@ -386,7 +394,7 @@ class ReliabilityResult:
         """
         return [f'{k.replace("_", " ")}: {v}' for k, v in self.errors.items()]
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return the ``reliability.json`` document (SI, units in the keys).
 
@@ -396,8 +404,8 @@ class ReliabilityResult:
 
         """
         p = self.params
-        cals = {s: (self.calibrations[s].as_dict() if self.calibrations[s] else None)
-                for s in SIDES}
+        cals: Dict[str, Any] = {
+            s: (self.calibrations[s].as_dict() if self.calibrations[s] else None) for s in SIDES}
         intervals = {ch: _interval_entry(ch, self.statics, self.verdicts[ch]) for ch in CHANNELS}
         return {
             'c': p.c, 'tolerance': p.tolerance, 'alpha': p.alpha,
@@ -422,7 +430,7 @@ class ReliabilityResult:
         }
 
 
-def run_reliability(params):
+def run_reliability(params: ReliabilityParams) -> ReliabilityResult:
     """
     Run the whole comparison (module docstring).
 
@@ -444,7 +452,10 @@ def run_reliability(params):
 
     """
     given = params.given()
-    errors, cals, statics, temps = {}, {}, {}, {}
+    errors: Dict[str, str] = {}
+    cals: Dict[str, Any] = {}
+    statics: Dict[str, Any] = {}
+    temps: Dict[str, Optional[List[Dict[str, Any]]]] = {}
     for side in SIDES:
         bags = getattr(params, f'{side}_calibration')
         cals[side] = temps[side] = None
@@ -473,13 +484,13 @@ def run_reliability(params):
 
 # ---- the JSON document ---------------------------------------------------------------------
 
-def _record_lengths(statics):
+def _record_lengths(statics: Dict[str, Any]) -> List[Optional[float]]:
     return [statics[s].duration_s if statics[s] else None for s in SIDES]
 
 
-def _interval_entry(ch, statics, v):
+def _interval_entry(ch: str, statics: Dict[str, Any], v: Any) -> Dict[str, Any]:
     u = unit_of(ch)
-    out = {}
+    out: Dict[str, Any] = {}
     for side in SIDES:
         st = statics[side]
         iv = st.channels[ch].interval if st else None
@@ -506,7 +517,7 @@ def _interval_entry(ch, statics, v):
     return out
 
 
-def _sensor_entry(sv, statics):
+def _sensor_entry(sv: Any, statics: Dict[str, Any]) -> Dict[str, Any]:
     lengths = _record_lengths(statics)
     decide = ([sv.decide_factor * t if t else None for t in lengths]
               if sv.decide_factor is not None else None)
@@ -516,8 +527,8 @@ def _sensor_entry(sv, statics):
             'axes_beyond': list(sv.axes_beyond), 'decide_record_s': decide}
 
 
-def _summary(intervals):
-    out = {}
+def _summary(intervals: Dict[str, Dict[str, Any]]) -> Dict[str, Any]:
+    out: Dict[str, Any] = {}
     for sensor in SENSORS:
         rows = [intervals[f'{sensor}_{a}'] for a in 'xyz']
         wb = [r['width_before_s'] for r in rows if r['width_before_s'] is not None]
@@ -531,14 +542,14 @@ def _summary(intervals):
     return out
 
 
-def _term_keys(ch):
+def _term_keys(ch: str) -> Dict[str, str]:
     u = unit_of(ch)
     return {t: TERM_UNITS[t][0].format(u=f'{t}_{u}') for t in TERMS}
 
 
-def _terms_entry(ch, statics):
+def _terms_entry(ch: str, statics: Dict[str, Any]) -> Dict[str, Any]:
     keys = _term_keys(ch)
-    out = {}
+    out: Dict[str, Any] = {}
     for side in SIDES:
         st = statics[side]
         res = st.channels[ch] if st else None
@@ -553,7 +564,7 @@ def _terms_entry(ch, statics):
             out[side][key + '_sd_log'] = _num(term.sd_log)
             out[side][key + '_ci68'] = [_num(lo), _num(hi)]
     if out['before'] and out['after']:
-        ratio = {}
+        ratio: Dict[str, Any] = {}
         for t, key in keys.items():
             b = statics['before'].channels[ch].terms[t]
             a = statics['after'].channels[ch].terms[t]
@@ -567,16 +578,18 @@ def _terms_entry(ch, statics):
     return out
 
 
-def _table6(cb, ca):
+def _table6(cb: Optional[Dict[str, Any]],
+            ca: Optional[Dict[str, Any]]) -> Optional[List[Dict[str, Any]]]:
     if not (cb or ca):
         return None
     rows_b = table6_rows(cb) if cb else None
     rows_a = table6_rows(ca) if ca else None
     out = []
     for k in range(6):
-        name = (rows_b or rows_a)[k][0]
+        # cb or ca is given, so one of the two is
+        name = cast(List[Tuple[str, float, float]], rows_b or rows_a)[k][0]
         unit = 'mg' if name.startswith('b') else '%'
-        row = {'parameter': name, 'unit': unit}
+        row: Dict[str, Any] = {'parameter': name, 'unit': unit}
         for side, rows in (('before', rows_b), ('after', rows_a)):
             row[side] = rows[k][1] if rows else None
             row[f'{side}_sigma'] = rows[k][2] if rows else None
@@ -589,13 +602,13 @@ def _table6(cb, ca):
     return out
 
 
-def _pair(cb, ca, get):
+def _pair(cb: Any, ca: Any, get: Callable[[Any], Any]) -> Tuple[Any, Any]:
     vb = get(cb) if cb else None
     va = get(ca) if ca else None
     return vb, va
 
 
-def _vec_change(vb, sb, va, sa):
+def _vec_change(vb: Any, sb: Any, va: Any, sa: Any) -> Tuple[Any, Any]:
     if vb is None or va is None:
         return None, None
     ch = [(a - b) if (a is not None and b is not None) else None for a, b in zip(va, vb)]
@@ -604,10 +617,11 @@ def _vec_change(vb, sb, va, sa):
     return ch, sd
 
 
-def _gyro_entry(cb, ca):
+def _gyro_entry(cb: Optional[Dict[str, Any]],
+                ca: Optional[Dict[str, Any]]) -> Optional[Dict[str, Any]]:
     if not (cb or ca):
         return None
-    out = {}
+    out: Dict[str, Any] = {}
     for side, doc in (('before', cb), ('after', ca)):
         if doc is None:
             out[side] = None
@@ -627,10 +641,11 @@ def _gyro_entry(cb, ca):
     return out
 
 
-def _cross_axis(cb, ca, sensor):
+def _cross_axis(cb: Optional[Dict[str, Any]], ca: Optional[Dict[str, Any]],
+                sensor: str) -> Optional[Dict[str, Any]]:
     if not (cb or ca):
         return None
-    out = {}
+    out: Dict[str, Any] = {}
     for side, doc in (('before', cb), ('after', ca)):
         out[side] = None if doc is None else {
             'misalignment': doc[sensor]['misalignment'],
@@ -638,15 +653,17 @@ def _cross_axis(cb, ca, sensor):
     return out
 
 
-def _calibration_entry(doc):
+def _calibration_entry(doc: Optional[Dict[str, Any]]) -> Optional[Dict[str, Any]]:
     if doc is None:
         return None
     keep = ('gravity_m_s2', 'accel', 'gyro', 'uniformity', 'gravity_check', 'dwells', 'sources')
     return {k: doc[k] for k in keep}
 
 
-def _uniformity(cb, ca):
-    out = {'before': cb['uniformity'] if cb else None, 'after': ca['uniformity'] if ca else None}
+def _uniformity(cb: Optional[Dict[str, Any]],
+                ca: Optional[Dict[str, Any]]) -> Dict[str, Any]:
+    out: Dict[str, Any] = {'before': cb['uniformity'] if cb else None,
+                           'after': ca['uniformity'] if ca else None}
     if cb and ca:
         out['ratio_after_before'] = {
             k: (ca['uniformity'][k] / cb['uniformity'][k] if cb['uniformity'][k] > 0 else None)
@@ -659,20 +676,20 @@ def _uniformity(cb, ca):
 NAMES = {'accel': 'accelerometer', 'gyro': 'gyroscope'}
 
 
-def _pct(v, spec='+.0f'):
+def _pct(v: Optional[float], spec: str = '+.0f') -> str:
     return 'n/a' if v is None else f'{format(100 * v, spec)} %'
 
 
-def _hours(seconds):
+def _hours(seconds: Optional[float]) -> str:
     return 'n/a' if seconds is None else f'{seconds / 3600:.3g} h'
 
 
-def _longest(values):
+def _longest(values: Optional[Iterable[Optional[float]]]) -> Optional[float]:
     vals = [v for v in (values or []) if v is not None]
     return max(vals) if vals else None
 
 
-def _sensor_sentence(name, e, doc):
+def _sensor_sentence(name: str, e: Dict[str, Any], doc: Dict[str, Any]) -> str:
     tol = f'+/-{100 * doc["tolerance"]:.0f} %'
     conf = f'{100 * doc["confidence_one_sided"]:.0f} %'
     m, sd = e['mean_change'], e['mean_change_sd']
@@ -694,8 +711,9 @@ def _sensor_sentence(name, e, doc):
     decide = _longest(e['decide_record_s'])
     longer = (f'; static records of about {_hours(decide)} each would decide it'
               if decide is not None else '')
-    now = _longest([(r or {}).get('duration_s') for r in doc['static_records'].values()])
-    now = f' (these are {_hours(now)})' if now is not None and decide is not None else ''
+    record_s = _longest([(r or {}).get('duration_s') for r in doc['static_records'].values()])
+    now = (f' (these are {_hours(record_s)})' if record_s is not None and decide is not None
+           else '')
     ci = e['ci']
     if m is not None and ci:
         return (f'These records cannot tell whether the {name} changed beyond the '
@@ -704,10 +722,11 @@ def _sensor_sentence(name, e, doc):
     return f'These records cannot tell whether the {name} changed: {e["basis"]}.'
 
 
-def _floor_sentences(doc):
+def _floor_sentences(doc: Dict[str, Any]) -> List[str]:
     out = []
     for s in SENSORS:
-        logs, var = [], 0.0
+        logs: List[float] = []
+        var = 0.0
         for a in 'xyz':
             ch = f'{s}_{a}'
             r = (doc['noise_terms'][ch].get('ratio_after_before') or {}).get(
@@ -724,7 +743,7 @@ def _floor_sentences(doc):
     return out
 
 
-def in_short(doc):
+def in_short(doc: Dict[str, Any]) -> List[str]:
     """
     Return the plain-language summary of a reliability document, one sentence per item.
 
@@ -790,11 +809,11 @@ def in_short(doc):
     return out
 
 
-def _fmt(v, spec):
+def _fmt(v: Optional[float], spec: str) -> str:
     return 'n/a' if v is None else format(v, spec)
 
 
-def _pm(v, sd, spec, scale=1.0):
+def _pm(v: Optional[float], sd: Optional[float], spec: str, scale: float = 1.0) -> str:
     if v is None:
         return 'n/a'
     if sd is None:
@@ -802,12 +821,12 @@ def _pm(v, sd, spec, scale=1.0):
     return f'{format(v * scale, spec)} +/- {format(sd * scale, spec.lstrip("+"))}'
 
 
-def _interval_rows(doc):
+def _interval_rows(doc: Dict[str, Any]) -> List[str]:
     out = ['| channel | interval before (s) | interval after (s) | width before (s) | '
            'width after (s) | change | ' f'{100 * (1 - 2 * doc["alpha"]):.0f} % interval | '
            'verdict |', '|---|---|---|---|---|---|---|---|']
 
-    def rng(pair):
+    def rng(pair: Optional[Sequence[Optional[float]]]) -> str:
         if pair is None:
             return 'not given'
         return ' - '.join('open' if v is None else f'{v:.3g}' for v in pair)
@@ -824,7 +843,7 @@ def _interval_rows(doc):
     return out
 
 
-def _term_rows(doc):
+def _term_rows(doc: Dict[str, Any]) -> List[str]:
     out = ['| channel | term | unit | before (68 % interval) | after (68 % interval) | '
            'after / before |', '|---|---|---|---|---|---|']
     labels = {'white_noise': 'white noise (N)', 'bias_stability': 'bias stability',
@@ -834,7 +853,7 @@ def _term_rows(doc):
         for t, key in _term_keys(ch).items():
             unit = TERM_UNITS[t][1].format(p=printed)
 
-            def cell(side):
+            def cell(side: str) -> str:
                 d = e[side]
                 if d is None or d[key] is None:
                     return 'n/a'
@@ -849,8 +868,8 @@ def _term_rows(doc):
     return out
 
 
-def _calibration_rows(doc):
-    out = []
+def _calibration_rows(doc: Dict[str, Any]) -> List[str]:
+    out: List[str] = []
     rows = doc['table6']
     if rows:
         out += ['', '## Six-position calibration (paper 001 Table 6)', '',
@@ -868,7 +887,7 @@ def _calibration_rows(doc):
                 '| axis | bias before (deg/s) | bias after (deg/s) | change (deg/s) | '
                 'scale factor before (%) | scale factor after (%) |', '|---|---|---|---|---|---|']
         for i, ax in enumerate('xyz'):
-            cells = []
+            cells: List[str] = []
             for side in SIDES:
                 d = g[side]
                 cells.append('not given' if d is None else
@@ -893,7 +912,7 @@ def _calibration_rows(doc):
             for i in range(3):
                 if i == j:
                     continue
-                vals = []
+                vals: List[Optional[Tuple[Any, Any]]] = []
                 for side in SIDES:
                     d = src[side]
                     if d is None or (sensor == 'gyro' and not (d['estimated'] or [[0] * 3] * 3)
@@ -914,17 +933,17 @@ def _calibration_rows(doc):
     return out
 
 
-def _indicator_rows(doc):
+def _indicator_rows(doc: Dict[str, Any]) -> List[str]:
     ub, ua = doc['uniformity']['before'], doc['uniformity']['after']
     if not (ub or ua):
         return []
 
-    def u(d, key, scale, spec):
+    def u(d: Optional[Dict[str, Any]], key: str, scale: float, spec: str) -> str:
         return 'not given' if d is None else format(d[key] * scale, spec)
 
     gb, ga = doc['gravity_check']['before'], doc['gravity_check']['after']
 
-    def verdict(gc):
+    def verdict(gc: Optional[Dict[str, Any]]) -> str:
         return 'not given' if gc is None else ('consistent' if gc['consistent']
                                                else 'inconsistent')
 
@@ -946,13 +965,13 @@ def _indicator_rows(doc):
             f'| gravity check verdict | {verdict(gb)} | {verdict(ga)} |']
 
 
-def _temp(t):
+def _temp(t: Optional[Dict[str, Any]]) -> str:
     if not t:
         return 'not recorded'
     return f'{t["mean_degc"]:.2f} ({t["min_degc"]:.2f} .. {t["max_degc"]:.2f})'
 
 
-def _record_rows(doc):
+def _record_rows(doc: Dict[str, Any]) -> List[str]:
     out = ['', '## Records and temperatures', '',
            '| record | side | length (h) | rate (Hz) | samples | static fraction | orientation '
            '| temperature (degC): mean (min .. max) |', '|---|---|---|---|---|---|---|---|']
@@ -974,7 +993,7 @@ def _record_rows(doc):
     return out
 
 
-def markdown(doc):
+def markdown(doc: Dict[str, Any]) -> str:
     """
     Return ``reliability.md`` of a reliability document: the verdict first, then the evidence.
 
@@ -1052,7 +1071,7 @@ def markdown(doc):
     return '\n'.join(out) + '\n'
 
 
-def adev_csv(static):
+def adev_csv(static: StaticAnalysis) -> str:
     """
     Return the Allan deviation curves of a static record as CSV text (Figure 6 data).
 
@@ -1092,7 +1111,9 @@ def adev_csv(static):
     return buf.getvalue()
 
 
-def plot_fig6(path, sensor, before, after, c):
+def plot_fig6(path: Union[str, 'os.PathLike[str]'], sensor: str,
+              before: Optional[StaticAnalysis], after: Optional[StaticAnalysis],
+              c: float) -> None:
     """
     Draw paper 001 Figure 6 for one sensor: ADEV per axis before and after, level and interval.
 
@@ -1175,7 +1196,7 @@ def write_reliability(result: ReliabilityResult, out_dir: Union[str, 'os.PathLik
 
     """
     doc = result.as_dict()
-    names = []
+    names: List[str] = []
     with staged_output(out_dir) as stage:
         for side in SIDES:
             cal = result.calibrations[side]

@@ -33,14 +33,14 @@ import math
 from pathlib import Path
 import tempfile
 import time
-from typing import Optional
+from typing import Any, Callable, cast, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .. import __version__
 from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
 from ..htmlreport.thermal import write_apply_html, write_compare_html
-from ..outputs import staged_output
+from ..outputs import staged_output, StrPath
 from ..thermal import methods as registry
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,
                               write_compensated)
@@ -57,6 +57,11 @@ __all__ = ['ApplyResult', 'BagOptions', 'COMPARE_HEADER', 'CompareResult', 'DEFI
            'write_simulate']
 
 PROG = 'gyro_noise_thermal'
+#: Figures of a report: (caption, PNG file, or None when the method has no such figure).
+_Figures = List[Tuple[str, Optional[Path]]]
+#: A method's own figures, drawn before the output folder exists: (caption, file name or None,
+#: PNG bytes or None).
+_MethodFigures = Tuple[Tuple[str, Optional[str], Optional[bytes]], ...]
 
 #: Definitions written into metrics.json and the reports (docs/thermal.md says the same).
 DEFINITIONS = {
@@ -112,7 +117,7 @@ class BagOptions:
     temperature_topic: Optional[str] = None
     max_gap_s: float = DEFAULT_MAX_GAP_S
 
-    def read(self, path):
+    def read(self, path: StrPath) -> Tuple[Any, Any]:
         """Read one bag: ``(ThermalRun, ThermalBag)``."""
         return read_thermal_run(path, topic=self.topic, temperature_topic=self.temperature_topic,
                                 max_gap_s=self.max_gap_s)
@@ -143,23 +148,23 @@ class ScoreOptions:
     range_margin_c: float = registry.DEFAULT_RANGE_MARGIN_C
 
 
-def _num(v):
+def _num(v: Any) -> Optional[float]:
     if v is None:
         return None
     v = float(v)
     return v if math.isfinite(v) else None
 
 
-def _json(doc):
+def _json(doc: Dict[str, Any]) -> str:
     return json.dumps(registry.to_jsonable(doc), indent=1, allow_nan=False) + '\n'
 
 
-def _write(path, text):
+def _write(path: StrPath, text: str) -> Path:
     Path(path).write_text(text)
     return Path(path)
 
 
-def _residual_drift(x, rate_hz):
+def _residual_drift(x: Any, rate_hz: float) -> List[Optional[float]]:
     """Std (ddof 1) of consecutive 60-s window means per axis, in x's unit (None if < 2)."""
     x = np.asarray(x, dtype=float)
     window = int(round(DRIFT_WINDOW_S * rate_hz))
@@ -170,8 +175,9 @@ def _residual_drift(x, rate_hz):
     return [float(v) for v in np.std(means, axis=0, ddof=1)]
 
 
-def _read_runs(paths, options):
-    runs, bags = [], []
+def _read_runs(paths: Sequence[str], options: BagOptions) -> Tuple[List[Any], List[Any]]:
+    runs: List[Any] = []
+    bags: List[Any] = []
     for path in paths:
         run, bag = options.read(path)
         runs.append(run)
@@ -179,12 +185,12 @@ def _read_runs(paths, options):
     return runs, bags
 
 
-def _join(runs):
+def _join(runs: List[Any]) -> Any:
     # The gap keeps the trailing temperature-rate window from straddling two recordings.
     return join_runs(runs, gap_s=DEFAULT_RATE_WINDOW_S + 1.0 / runs[0].rate_hz)
 
 
-def _method_figures(method, run):
+def _method_figures(method: Any, run: Any) -> _MethodFigures:
     """Draw the method's own figures now (its last apply is ``run``); keep them in memory."""
     from ..thermal import report
 
@@ -196,27 +202,28 @@ def _method_figures(method, run):
     return tuple(out)
 
 
-def _put_method_figures(figures, out):
+def _put_method_figures(figures: _MethodFigures, out: Path) -> _Figures:
     """Write in-memory method figures into ``out``; return (caption, path or None) entries."""
-    entries = []
+    entries: _Figures = []
     for caption, name, data in figures:
         if name is None:
             entries.append((caption, None))
             continue
         path = out / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(data)
+        path.write_bytes(cast(bytes, data))  # a figure with a name has its bytes
         entries.append((caption, path))
     return entries
 
 
-def _executor(scheduler, names, warn):
+def _executor(scheduler: Optional[str], names: Sequence[str],
+              warn: Optional[Callable[[str], None]]) -> Any:
     """Connect to a Dask scheduler (None without one); say so when no method distributes."""
     if scheduler is None:
         return None
     from ..cluster import make_executor
 
-    def distributes(name):
+    def distributes(name: str) -> bool:
         try:
             return hasattr(registry.method_class(name), 'executor')
         except GyroNoiseError:  # reported by the fit itself
@@ -229,13 +236,14 @@ def _executor(scheduler, names, warn):
     return pool
 
 
-def _fit_model(name, run, *, seed, sources, executor=None):
+def _fit_model(name: str, run: Any, *, seed: int, sources: Sequence[str],
+               executor: Any = None) -> Any:
     return registry.fit_method(name, run, rng=np.random.default_rng(seed), sources=sources,
                                executor=executor)
 
 
-def _in_sample(run, processed):
-    out = {}
+def _in_sample(run: Any, processed: np.ndarray) -> Dict[str, Any]:
+    out: Dict[str, Any] = {}
     for a, axis in enumerate('xyz'):
         raw_m = noise_metrics(run.gyro_rad_s[:, a], run.rate_hz)
         proc_m = noise_metrics(processed[:, a], run.rate_hz)
@@ -246,7 +254,7 @@ def _in_sample(run, processed):
     return out
 
 
-def _accel_block(accel_poly, run, processed_accel):
+def _accel_block(accel_poly: Any, run: Any, processed_accel: np.ndarray) -> Dict[str, Any]:
     """Per-axis residual drift (60-s means) of the accelerometer, raw and processed (mg)."""
     mg = 1e3 / STANDARD_GRAVITY_M_S2
     raw = _residual_drift(run.accel_m_s2, run.rate_hz)
@@ -257,12 +265,12 @@ def _accel_block(accel_poly, run, processed_accel):
                      for axis, r, p in zip('xyz', raw, proc)}}
 
 
-def _rate(run, method):
+def _rate(run: Any, method: Any) -> np.ndarray:
     window = float(getattr(method, 'rate_window_s', DEFAULT_RATE_WINDOW_S))
     return temperature_rate_c_s(run.t_s, run.temperature_c, window_s=window, start='nan')
 
 
-def _range(model, run):
+def _range(model: Any, run: Any) -> Any:
     method = model.method
     return registry.range_report(model.training, run.temperature_c, _rate(run, method),
                                  treatment=getattr(method, 'out_of_range',
@@ -303,18 +311,18 @@ class FitResult:
 
     """
 
-    model: object
-    run: object
-    bags: tuple
+    model: Any
+    run: Any
+    bags: Tuple[Dict[str, Any], ...]
     processed: np.ndarray
     fit_time_s: float
     seed: int
-    in_sample: dict
-    accel: Optional[dict]
-    method_figures: tuple = ()
-    command: tuple = ()
+    in_sample: Dict[str, Any]
+    accel: Optional[Dict[str, Any]]
+    method_figures: _MethodFigures = ()
+    command: Tuple[str, ...] = ()
 
-    def model_dict(self):
+    def model_dict(self) -> Dict[str, Any]:
         """
         Return the model.json document.
 
@@ -326,7 +334,7 @@ class FitResult:
         return registry.model_document(self.model.method, training=self.model.training,
                                        accel=self.model.accel)
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return training.json.
 
@@ -347,9 +355,11 @@ class FitResult:
                     'score on another run with apply or compare'})
 
 
-def fit(*, bags, method=registry.DEFAULT_METHOD, seed=0, min_range_c=registry.DEFAULT_MIN_RANGE_C,
-        bag_options=BagOptions(), accel=True, scheduler=None, warn=None, figures=True,
-        command=()):
+def fit(*, bags: Sequence[str], method: str = registry.DEFAULT_METHOD, seed: int = 0,
+        min_range_c: float = registry.DEFAULT_MIN_RANGE_C, bag_options: BagOptions = BagOptions(),
+        accel: bool = True, scheduler: Optional[str] = None,
+        warn: Optional[Callable[[str], None]] = None, figures: bool = True,
+        command: Sequence[str] = ()) -> FitResult:
     """
     Fit one method on one or more recordings (``gyro_noise_thermal fit``).
 
@@ -411,7 +421,7 @@ def fit(*, bags, method=registry.DEFAULT_METHOD, seed=0, min_range_c=registry.DE
                      accel=accel_doc, method_figures=method_figs, command=tuple(command))
 
 
-def _training_md(doc, figs, out):
+def _training_md(doc: Dict[str, Any], figs: _Figures, out: Path) -> str:
     from ..thermal import report
 
     t = doc['training']
@@ -447,7 +457,7 @@ def _training_md(doc, figs, out):
             + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
-def write_fit(result, out_dir, *, figures=True):
+def write_fit(result: FitResult, out_dir: StrPath, *, figures: bool = True) -> List[Path]:
     """
     Write model.json, training.json, training.md and the figures (staged).
 
@@ -473,7 +483,7 @@ def write_fit(result, out_dir, *, figures=True):
     with staged_output(out_dir) as stage:
         files = [_write(stage / 'model.json', json.dumps(result.model_dict(), indent=1,
                                                          allow_nan=False) + '\n')]
-        figs = []
+        figs: _Figures = []
         if figures:
             figs.append(('Temperature and raw output (cf. Fig. 10)',
                          report.plot_run(stage / 'training_fig10_run.png', run)))
@@ -502,7 +512,7 @@ def write_fit(result, out_dir, *, figures=True):
 # apply
 
 
-def _check_injection_length(run, score):
+def _check_injection_length(run: Any, score: ScoreOptions) -> None:
     """Refuse a run too short for the injected chirp: unusable input (exit 4), one line."""
     duration = float(run.t_s.size / run.rate_hz)
     # metrics.make_injection: the chirp takes at most 30 % of the run and needs 20 periods of
@@ -514,7 +524,7 @@ def _check_injection_length(run, score):
                              'to score a shorter run)')
 
 
-def _score(method, run, score, processed):
+def _score(method: Any, run: Any, score: ScoreOptions, processed: np.ndarray) -> Any:
     return evaluate_method(method, run, amplitude_rad_s=score.amplitude_deg_s / RAD_TO_DEG,
                            f_lo_hz=score.f_lo_hz, f_hi_hz=score.f_hi_hz, processed=processed,
                            small_signal=score.small_signal)
@@ -548,17 +558,17 @@ class ApplyResult:
 
     """
 
-    doc: dict
-    run: object
-    bag: object
+    doc: Dict[str, Any]
+    run: Any
+    bag: Any
     processed: np.ndarray
     processed_accel: Optional[np.ndarray]
-    curves: dict
-    info: object = None
-    method_figures: tuple = ()
-    notes: tuple = ()
+    curves: Dict[str, Any]
+    info: Any = None
+    method_figures: _MethodFigures = ()
+    notes: Tuple[str, ...] = ()
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return metrics.json.
 
@@ -570,8 +580,9 @@ class ApplyResult:
         return self.doc
 
 
-def apply_model(*, bag, model_path, bag_options=BagOptions(), score=ScoreOptions(),
-                figures=True, command=()):
+def apply_model(*, bag: str, model_path: str, bag_options: BagOptions = BagOptions(),
+                score: ScoreOptions = ScoreOptions(), figures: bool = True,
+                command: Sequence[str] = ()) -> ApplyResult:
     """
     Apply a model.json to a recording and score it (``gyro_noise_thermal apply``).
 
@@ -640,7 +651,8 @@ def apply_model(*, bag, model_path, bag_options=BagOptions(), score=ScoreOptions
                        info=info, method_figures=method_figs, notes=tuple(notes))
 
 
-def _apply_figures(out, run, processed, method, curves, info, method_figs):
+def _apply_figures(out: Path, run: Any, processed: np.ndarray, method: str,
+                   curves: Dict[str, Any], info: Any, method_figs: _Figures) -> _Figures:
     from ..thermal import report
 
     name = method
@@ -676,7 +688,7 @@ def _apply_figures(out, run, processed, method, curves, info, method_figs):
     return figs
 
 
-def bandwidth_cell(bw):
+def bandwidth_cell(bw: Optional[Dict[str, Any]]) -> str:
     """
     Return the -3 dB cell of a table: the frequency, ``< band`` or ``> band``.
 
@@ -707,7 +719,7 @@ AXIS_HEADER = ['axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
 AXIS_SPECS = ['', '.4g', '.4g', '.3g', '', '', '.4g', '.4g', '', '', '.3g', '.3g', '.3g', '']
 
 
-def axis_rows(axes):
+def axis_rows(axes: Dict[str, Any]) -> List[Tuple[Any, ...]]:
     """
     Return the per-axis rows of the apply report (:data:`AXIS_HEADER`).
 
@@ -737,12 +749,12 @@ def axis_rows(axes):
     return rows
 
 
-def _small_text(inj):
+def _small_text(inj: Dict[str, Any]) -> str:
     amp = inj.get('small_signal_amplitude_deg_s')
     return '' if amp is None else f', and again at {amp:.3g} deg/s (the size of the noise)'
 
 
-def _apply_md(doc, figs, out):
+def _apply_md(doc: Dict[str, Any], figs: _Figures, out: Path) -> str:
     from ..thermal import report
 
     inj = doc['injection']
@@ -793,7 +805,9 @@ def _apply_md(doc, figs, out):
             + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
-def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None, html=True):
+def write_apply(result: ApplyResult, out_dir: StrPath, *, figures: bool = True,
+                write_bag: bool = True, storage: Optional[str] = None,
+                html: bool = True) -> List[Path]:
     """
     Write OUT/compensated/ (rosbag2), metrics.json, report.md, report.html, figures (staged).
 
@@ -820,12 +834,12 @@ def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None, 
     """
     doc = result.doc
     with staged_output(out_dir) as stage:
-        files = []
+        files: List[Path] = []
         if write_bag:
             write_compensated(result.bag, result.processed, stage / 'compensated',
                               storage=storage, accel_m_s2=result.processed_accel)
             files.append(stage / 'compensated')
-        figs = []
+        figs: _Figures = []
         if figures:
             figs = _apply_figures(stage, result.run, result.processed, doc['method'],
                                   result.curves, result.info,
@@ -843,13 +857,13 @@ def write_apply(result, out_dir, *, figures=True, write_bag=True, storage=None, 
 # compare
 
 
-def _same_run(a, b):
+def _same_run(a: Any, b: Any) -> bool:
     if a.t_s.size != b.t_s.size:
         return False
     return bool(np.array_equal(a.gyro_rad_s, b.gyro_rad_s))
 
 
-def split_run(run, fraction):
+def split_run(run: Any, fraction: float) -> Tuple[Any, Any, float]:
     """
     Split one run in time: the first ``fraction`` of its duration, and the rest.
 
@@ -879,7 +893,7 @@ def split_run(run, fraction):
                              'samples on one side')
     accel = run.accel_m_s2
 
-    def part(sl, t_part, name):
+    def part(sl: slice, t_part: np.ndarray, name: str) -> Any:
         return replace(run, t_s=t_part, gyro_rad_s=run.gyro_rad_s[sl],
                        temperature_c=run.temperature_c[sl],
                        accel_m_s2=None if accel is None else accel[sl], name=name)
@@ -889,7 +903,8 @@ def split_run(run, fraction):
     return first, rest, cut_s
 
 
-def _compare_runs(train, test, split_at, options):
+def _compare_runs(train: str, test: Optional[str], split_at: Optional[float],
+                  options: BagOptions) -> Tuple[Any, Any, str, str, Optional[Dict[str, Any]]]:
     """Read TRAIN_BAG and TEST_BAG, or split TRAIN_BAG in time (--split-at)."""
     if split_at is not None:
         if test is not None:
@@ -916,7 +931,7 @@ def _compare_runs(train, test, split_at, options):
     return a, b, str(a_bag.path), str(b_bag.path), None
 
 
-def _simulated_truth(bag_path):
+def _simulated_truth(bag_path: StrPath) -> Optional[Tuple[Any, Any]]:
     """Return the simulation's truth beside a bag of ``simulate`` (``<label>_truth.npz``)."""
     from ..thermal.simulate import load_truth, model_from_settings
 
@@ -932,7 +947,8 @@ def _simulated_truth(bag_path):
         return None
 
 
-def oracle_scores(train, train_truth, test, test_truth, model):
+def oracle_scores(train: Any, train_truth: Any, test: Any, test_truth: Any,
+                  model: Any) -> Dict[str, Any]:
     """
     Score the least-squares oracles on a simulated pair (residual drift per axis, deg/s).
 
@@ -953,7 +969,7 @@ def oracle_scores(train, train_truth, test, test_truth, model):
     """
     from ..thermal.oracle import oracle_residual
 
-    out = {}
+    out: Dict[str, Any] = {}
     for key, measured in (('true_terms', False), ('measured_terms', True)):
         res = oracle_residual(train, train_truth, test, test_truth, model, measured=measured)
         axes = {axis: _num(noise_metrics(res[:, a], test.rate_hz).residual_drift_deg_s)
@@ -986,13 +1002,13 @@ class CompareResult:
 
     """
 
-    summary: dict
-    rows: list
-    curves: dict
-    test: object
-    errors: dict = field(default_factory=dict)
+    summary: Dict[str, Any]
+    rows: List[Tuple[Any, ...]]
+    curves: Dict[str, Any]
+    test: Any
+    errors: Dict[str, str] = field(default_factory=dict)
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return compare.json.
 
@@ -1004,7 +1020,7 @@ class CompareResult:
         return self.summary
 
 
-def check_method_names(names):
+def check_method_names(names: Sequence[str]) -> List[str]:
     """
     Refuse an empty list or an unknown name before any work (one line, exit 2).
 
@@ -1029,9 +1045,13 @@ def check_method_names(names):
     return list(names)
 
 
-def compare(*, train, test=None, split_at=None, methods=None, seed=0,
-            min_range_c=registry.DEFAULT_MIN_RANGE_C, bag_options=BagOptions(),
-            score=ScoreOptions(), scheduler=None, warn=None, progress=None, command=()):
+def compare(*, train: str, test: Optional[str] = None, split_at: Optional[float] = None,
+            methods: Optional[Sequence[str]] = None, seed: int = 0,
+            min_range_c: float = registry.DEFAULT_MIN_RANGE_C,
+            bag_options: BagOptions = BagOptions(), score: ScoreOptions = ScoreOptions(),
+            scheduler: Optional[str] = None, warn: Optional[Callable[[str], None]] = None,
+            progress: Optional[Callable[[str], None]] = None,
+            command: Sequence[str] = ()) -> CompareResult:
     """
     Train every method on one run and score it on another (``gyro_noise_thermal compare``).
 
@@ -1072,7 +1092,9 @@ def compare(*, train, test=None, split_at=None, methods=None, seed=0,
     registry.check_trainable(run_a, min_range_c=min_range_c)
     _check_injection_length(run_b, score)
     say = progress or (lambda text: None)
-    results, errors, curves = {}, {}, {}
+    results: Dict[str, Dict[str, Any]] = {}
+    errors: Dict[str, str] = {}
+    curves: Dict[str, Any] = {}
     pool = _executor(scheduler, names, warn)
     try:
         for name in names:
@@ -1109,7 +1131,8 @@ def compare(*, train, test=None, split_at=None, methods=None, seed=0,
                              + '; '.join(f'{k}: {v}' for k, v in errors.items()))
     oracle = None
     if split is None:
-        a_truth, b_truth = _simulated_truth(train), _simulated_truth(test)
+        # without --split-at, _compare_runs has refused a missing TEST_BAG
+        a_truth, b_truth = _simulated_truth(train), _simulated_truth(cast(str, test))
         if a_truth is not None and b_truth is not None:
             oracle = oracle_scores(run_a, a_truth[0], run_b, b_truth[0], b_truth[1])
             base = oracle['true_terms']['mean_residual_drift_deg_s']
@@ -1131,9 +1154,10 @@ def compare(*, train, test=None, split_at=None, methods=None, seed=0,
                          test=run_b, errors=errors)
 
 
-def _best(results):
+def _best(results: Dict[str, Dict[str, Any]]) -> Dict[str, Any]:
     """Pick the lowest mean residual drift among live-capable full-bandwidth methods."""
-    best, score = None, math.inf
+    best: Optional[str] = None
+    score = math.inf
     for name, doc in results.items():
         axes = doc['axes'].values()
         live = all(v['verdict']['live_capable'] for v in axes)
@@ -1166,16 +1190,16 @@ _CSV_KEYS = ['method', 'axis', 'arw_deg_sqrt_h', 'arw_gain_noise_path', 'bias_st
              'live_capable', 'arw_from_bandwidth', 'bias_stability_upper_bound']
 
 
-def _compare_rows(summary):
-    rows = []
+def _compare_rows(summary: Dict[str, Any]) -> List[Tuple[Any, ...]]:
+    rows: List[Tuple[Any, ...]] = []
     results = summary['methods']
     oracle = summary.get('oracle')
-    base = {}
+    base: Dict[str, Any] = {}
     if oracle:
         base = oracle['true_terms']['axes']
     first = next(iter(results.values()))
 
-    def ratio(value, axis):
+    def ratio(value: Optional[float], axis: str) -> Optional[float]:
         b = base.get(axis)
         return None if value is None or not b else value / b
 
@@ -1206,7 +1230,7 @@ def _compare_rows(summary):
     return rows
 
 
-def table_cells(rows):
+def table_cells(rows: Sequence[Tuple[Any, ...]]) -> List[Tuple[Any, ...]]:
     """
     Return compare rows as the Markdown table shows them (an upper bound of bias stability '<=').
 
@@ -1231,7 +1255,7 @@ def table_cells(rows):
     return cells
 
 
-def _csv(rows):
+def _csv(rows: Sequence[Tuple[Any, ...]]) -> str:
     import csv
     import io
 
@@ -1243,7 +1267,8 @@ def _csv(rows):
     return buf.getvalue()
 
 
-def _compare_md(summary, rows, figs, out):
+def _compare_md(summary: Dict[str, Any], rows: Sequence[Tuple[Any, ...]],
+                figs: List[Tuple[str, Path]], out: Path) -> str:
     from ..thermal import report
 
     errs = ''.join(f'- {k}: {v}\n' for k, v in summary['errors'].items())
@@ -1282,7 +1307,7 @@ def _compare_md(summary, rows, figs, out):
             + ''.join(f'\n![{cap}]({Path(p).relative_to(out)})\n\n*{cap}*\n' for cap, p in figs))
 
 
-def _compare_figures(out, test, curves):
+def _compare_figures(out: Path, test: Any, curves: Dict[str, Any]) -> List[Tuple[str, Path]]:
     from ..thermal import report
 
     first = next(iter(curves.values()))
@@ -1307,7 +1332,8 @@ def _compare_figures(out, test, curves):
     ]
 
 
-def write_compare(result, out_dir, *, figures=True, html=True):
+def write_compare(result: CompareResult, out_dir: StrPath, *, figures: bool = True,
+                  html: bool = True) -> List[Path]:
     """
     Write compare.json, compare.csv, compare.md, report.html and the figures (staged).
 
@@ -1358,10 +1384,10 @@ class SimulateResult:
 
     """
 
-    pair: list
-    settings: dict
+    pair: List[Tuple[str, Any, Any]]
+    settings: Dict[str, Any]
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return simulation.json.
 
@@ -1373,8 +1399,11 @@ class SimulateResult:
         return self.settings
 
 
-def simulate(*, seed=0, hours=None, rate_hz=100.0, compress=None, shape='oven', test_shape=None,
-             hysteresis=True, storage='sqlite3', temperature_rate_hz=None):
+def simulate(*, seed: int = 0, hours: Optional[float] = None, rate_hz: float = 100.0,
+             compress: Optional[float] = None, shape: str = 'oven',
+             test_shape: Optional[str] = None, hysteresis: bool = True,
+             storage: str = 'sqlite3',
+             temperature_rate_hz: Optional[float] = None) -> SimulateResult:
     """
     Simulate a seeded train/test pair (``gyro_noise_thermal simulate``).
 
@@ -1422,7 +1451,7 @@ def simulate(*, seed=0, hours=None, rate_hz=100.0, compress=None, shape='oven', 
     return SimulateResult(pair=pair, settings=settings)
 
 
-def write_simulate(result, out_dir):
+def write_simulate(result: SimulateResult, out_dir: StrPath) -> Tuple[Path, Path]:
     """
     Write train/, test/ (rosbag2), their truth and simulation.json (staged).
 
@@ -1471,12 +1500,12 @@ class ExportResult:
     """
 
     model_path: str
-    px4: list
-    ardupilot: list
-    notes: tuple = ()
+    px4: List[Tuple[str, Any, int]]
+    ardupilot: List[Tuple[str, Any]]
+    notes: Tuple[str, ...] = ()
     accel: bool = False
 
-    def as_dict(self):
+    def as_dict(self) -> Dict[str, Any]:
         """
         Return export.json.
 
@@ -1496,8 +1525,9 @@ class ExportResult:
                 'ardupilot': 'https://ardupilot.org/copter/docs/common-imutempcal.html'}})
 
 
-def export(*, model_path, px4_instance=0, gyro_device_id=0, accel_device_id=0,
-           ardupilot_imu=1, gyro_offsets=True, cal_temp_c=None):
+def export(*, model_path: str, px4_instance: int = 0, gyro_device_id: int = 0,
+           accel_device_id: int = 0, ardupilot_imu: int = 1, gyro_offsets: bool = True,
+           cal_temp_c: Optional[float] = None) -> ExportResult:
     """
     Turn a poly3 model.json into PX4 and ArduPilot parameters (``gyro_noise_thermal export``).
 
@@ -1534,7 +1564,7 @@ def export(*, model_path, px4_instance=0, gyro_device_id=0, accel_device_id=0,
                         notes=model.notes, accel=accel is not None)
 
 
-def write_export(result, out_dir):
+def write_export(result: ExportResult, out_dir: StrPath) -> List[Path]:
     """
     Write thermal_px4.params, thermal_ardupilot.parm and export.json (staged).
 
@@ -1575,8 +1605,11 @@ HELDOUT_METHODS: tuple[tuple[str, str, dict[str, object]], ...] = (
     ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
 
 
-def heldout_scores(*, pairs=HELDOUT_PAIRS, methods=HELDOUT_METHODS, seeds=(1, 2, 3, 4, 5),
-                   rate_hz=20.0, hours=1.0, progress=None):
+def heldout_scores(*, pairs: Sequence[Tuple[str, str]] = HELDOUT_PAIRS,
+                   methods: Sequence[Tuple[str, str, Dict[str, Any]]] = HELDOUT_METHODS,
+                   seeds: Sequence[int] = (1, 2, 3, 4, 5), rate_hz: float = 20.0,
+                   hours: float = 1.0,
+                   progress: Optional[Callable[[str], None]] = None) -> List[Dict[str, Any]]:
     """
     Score methods on simulated held-out pairs against the least-squares oracle.
 
@@ -1614,14 +1647,16 @@ def heldout_scores(*, pairs=HELDOUT_PAIRS, methods=HELDOUT_METHODS, seeds=(1, 2,
     model = ThermalModel()
     rows = []
     for train_shape, test_shape in pairs:
-        scores, outside = {}, {}
+        scores: Dict[str, List[Any]] = {}
+        outside: Dict[str, List[Dict[str, Any]]] = {}
         for seed in seeds:
             (_, train, ta), (_, test, tb) = simulate_pair(
                 seed=seed, rate_hz=rate_hz, hours=hours, model=model,
                 profile=make_profile(train_shape), test_profile=make_profile(test_shape))
             oracle = oracle_scores(train, ta, test, tb, model)
-            raw = [_num(noise_metrics(test.gyro_rad_s[:, a], rate_hz).residual_drift_deg_s)
-                   for a in range(3)]
+            raw: List[Any] = [
+                _num(noise_metrics(test.gyro_rad_s[:, a], rate_hz).residual_drift_deg_s)
+                for a in range(3)]
             scores.setdefault('raw', []).append(float(np.mean(raw)))
             scores.setdefault('oracle: true terms', []).append(
                 oracle['true_terms']['mean_residual_drift_deg_s'])
@@ -1638,8 +1673,8 @@ def heldout_scores(*, pairs=HELDOUT_PAIRS, methods=HELDOUT_METHODS, seeds=(1, 2,
             if progress is not None:
                 progress(f'{train_shape} -> {test_shape}, seed {seed}: done')
         base = np.asarray(scores['oracle: true terms'])
-        for label, values in scores.items():
-            values = np.asarray(values)
+        for label, per_seed in scores.items():
+            values = np.asarray(per_seed)
             reps = outside.get(label)
             rows.append({
                 'train': train_shape, 'test': test_shape, 'method': label,

@@ -24,9 +24,9 @@ Two storages, two ways a killed writer (``kill -9``, power loss) leaves its file
   index entry, with its per-channel message counts from the MessageIndex records that follow it.
   The last complete chunk, and any chunk without an index or with channels not seen yet, is
   decompressed and walked (its Schema and Channel records define the topics; a chunk that does
-  not decompress or parse ends the readable part). :class:`RecoveringMcapReader` is rosbags'
-  ``McapReader`` with that walk in place of the summary, so rosbags' iterator and the block reader
-  of :mod:`.storage` read it unchanged.
+  not decompress or parse ends the readable part). ``RecoveringMcapReader``
+  (:mod:`._recovering_mcap`) is rosbags' ``McapReader`` with that walk in place of the summary,
+  so rosbags' iterator and the block reader of :mod:`.storage` read it unchanged.
 * **sqlite3 with a hot rollback journal** (rosbags keeps a transaction open between commits).
   rosbags opens the database immutable and would read the half-written pages of the unfinished
   transaction. :func:`rolled_back_copy` copies the ``.db3`` and its ``-journal`` to a temporary
@@ -47,7 +47,7 @@ import shutil
 import struct
 import sys
 import tempfile
-from typing import Any
+from typing import Any, Callable, Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
@@ -184,6 +184,117 @@ def _walk_chunk(raw):
     return schemas, channels, counts, start, end
 
 
+class _RecordWalk(NamedTuple):
+    """
+    What :func:`_walk_records` found.
+
+    Attributes
+    ----------
+    heads : list of (dict, bool)
+        Each complete Chunk record's head (times, offsets, compression, sizes, crc, per-channel
+        counts and MessageIndex offsets) and whether its MessageIndex records are complete
+        (another record follows them).
+    stop : int
+        Offset of the first record not read.
+    reason : str
+        Why the walk stopped (:class:`McapTruncation` ``stop_reason``).
+    top_messages : int
+        Message records outside chunks.
+
+    """
+
+    heads: List[Tuple[Dict[str, Any], bool]]
+    stop: int
+    reason: str
+    top_messages: int
+
+
+def _chunk_head(bio, pos, length):
+    """Return the head of the Chunk record at ``pos`` (``length``: its body), None if malformed."""
+    if length < 40:
+        return None
+    fields = bio.read(min(length, 40 + 255))
+    start_t, end_t, usize, crc = _CHUNK_HEAD.unpack_from(fields)
+    (clen,) = struct.unpack_from('<I', fields, 28)
+    if 40 + clen > len(fields):
+        return None
+    compression = fields[32:32 + clen].decode('utf-8', 'replace')
+    (csize,) = struct.unpack_from('<Q', fields, 32 + clen)
+    if 40 + clen + csize > length:
+        return None
+    return {'start': start_t, 'end': end_t, 'offset': pos, 'length': 9 + length,
+            'data_offset': pos + 9 + 40 + clen, 'compression': compression,
+            'compressed_size': csize, 'uncompressed_size': usize, 'crc': crc,
+            'counts': {}, 'index_offsets': {}, 'index_length': 0}
+
+
+def _walk_records(bio, pos: int, size: int, *, on_schema: Callable[[bytes], None],
+                  on_channel: Callable[[bytes], None]) -> _RecordWalk:
+    """
+    Walk the data section's records by their length fields, from ``pos`` up to the first cut.
+
+    Parameters
+    ----------
+    bio : file
+        The MCAP file, opened for binary reading.
+    pos : int
+        Offset of the first data record (after the header).
+    size : int
+        Size of the file (bytes).
+    on_schema, on_channel : callable, keyword-only
+        Called with the body of each Schema and Channel record outside chunks, in file order.
+
+    Returns
+    -------
+    _RecordWalk
+
+    """
+    heads: List[Tuple[Dict[str, Any], bool]] = []
+    head: Optional[Dict[str, Any]] = None
+    reason, top_messages = 'end of file', 0
+    while True:
+        if pos + 9 > size:
+            reason = 'record cut by the end of the file' if pos < size else reason
+            break
+        bio.seek(pos)
+        op, length = _RECORD_HEAD.unpack(bio.read(9))
+        end = pos + 9 + length
+        if op == 0:
+            reason = 'zero-filled tail'
+            break
+        if end > size:
+            reason = 'record cut by the end of the file'
+            break
+        if op == _OP_MESSAGE_INDEX and head is not None and length >= 6:
+            cid, nbytes = struct.unpack('<HI', bio.read(6))
+            head['counts'][cid] = nbytes // 16
+            head['index_offsets'][cid] = pos
+            head['index_length'] += 9 + length
+            pos = end
+            continue
+        if head is not None:
+            heads.append((head, True))
+            head = None
+        if op in (_OP_DATA_END, _OP_FOOTER):
+            reason = 'end of data section'
+            break
+        if op == _OP_CHUNK:
+            head = _chunk_head(bio, pos, length)
+            if head is None:
+                reason = f'malformed chunk record at byte {pos}'
+                break
+        elif op == _OP_SCHEMA:
+            on_schema(bio.read(length))
+        elif op == _OP_CHANNEL:
+            on_channel(bio.read(length))
+        elif op == _OP_MESSAGE:
+            top_messages += 1
+        pos = end
+    if head is not None:
+        heads.append((head, False))  # the last chunk: its index may be cut
+    return _RecordWalk(heads, pos, reason, top_messages)
+
+
 @functools.lru_cache(maxsize=None)
 def recovering_mcap_reader_class():
     """
@@ -197,186 +308,8 @@ def recovering_mcap_reader_class():
         by walking the file (module docstring).
 
     """
-    from io import BytesIO
-
-    from rosbags.interfaces import Connection, ConnectionExtRosbag2
-    from rosbags.rosbag2.errors import ReaderError
-    from rosbags.rosbag2.storage_mcap import (ChunkInfo, decompress, get_msgdef, get_qos,
-                                              McapReader, read_bytes, read_sized, read_string,
-                                              Schema, Statistics)
-    from rosbags.rosbag2.storage_mcap import Channel as McapChannel
-
-    class RecoveringMcapReader(McapReader):
-        """rosbags' MCAP reader that also reads a file cut before its summary (see module)."""
-
-        truncation = None
-
-        def _open(self):
-            if mcap_has_footer(self.path):
-                super()._open()
-                return
-            self._open_truncated()
-
-        def _add_schema(self, body):
-            rec = BytesIO(body)
-            (key,) = struct.unpack('<H', rec.read(2))
-            self.schemas[key] = Schema(key, read_string(rec), read_string(rec), read_string(rec))
-
-        def _add_channel(self, body):
-            rec = BytesIO(body)
-            key, schema_id = struct.unpack('<HH', rec.read(4))
-            schema = self.schemas.get(schema_id)
-            name = schema.name if schema is not None else '__schemaless__'
-            channel = McapChannel(key, name, read_string(rec), read_string(rec), read_bytes(rec))
-            self.channels[key] = channel
-            if all(c.id != key for c in self.connections):
-                self.connections.append(Connection(
-                    key, channel.topic, channel.schema, get_msgdef(schema), '', 0,
-                    ConnectionExtRosbag2(channel.message_encoding, get_qos(channel.metadata)),
-                    self))
-
-        def _read_chunk(self, head):
-            """Decompress one chunk found by the walk; return its walk or None if unreadable."""
-            bio = self.bio
-            bio.seek(head['data_offset'])
-            data = bio.read(head['compressed_size'])
-            try:
-                raw = decompress(data, head['compression'], head['uncompressed_size'],
-                                 head['crc'])
-                return _walk_chunk(raw)
-            except Exception:  # noqa: BLE001 - rosbags, lz4 and zstd raise many types on garbage
-                return None
-
-        def _finish(self, head, trusted):
-            """
-            Turn a walked chunk into a ChunkInfo (or None: unreadable, ends the walk).
-
-            ``trusted``: its MessageIndex records are complete (another record follows them).
-            """
-            known = all(cid in self.channels for cid in head['counts'])
-            if trusted and head['counts'] and known:
-                counts = head['counts']
-            else:
-                walked = self._read_chunk(head)
-                if walked is None:
-                    return None
-                schemas, channels, counts, start, end = walked
-                for body in schemas.values():
-                    self._add_schema(body)
-                for body in channels.values():
-                    self._add_channel(body)
-                if counts and (start < head['start'] or end > head['end']):
-                    return None  # the chunk header disagrees with its messages: not believed
-            return ChunkInfo(head['start'], head['end'], head['offset'], head['length'],
-                             head['index_offsets'], head['index_length'], head['compression'],
-                             head['compressed_size'], head['uncompressed_size'], dict(counts))
-
-        def _open_truncated(self):
-            bio = self.bio
-            bio.seek(0)
-            if bio.read(8) != MCAP_MAGIC:
-                raise ReaderError('File magic is invalid.')
-            if bio.read(1) != b'\x01':
-                raise ReaderError('Unexpected record.')
-            if read_string(BytesIO(read_sized(bio))) != 'ros2':
-                raise ReaderError('Profile is not ros2.')
-            self.data_start = pos = bio.tell()
-            size = bio.seek(0, 2)
-            heads, head, reason, top_messages = [], None, 'end of file', 0
-            while True:
-                if pos + 9 > size:
-                    reason = 'record cut by the end of the file' if pos < size else reason
-                    break
-                bio.seek(pos)
-                op, length = _RECORD_HEAD.unpack(bio.read(9))
-                end = pos + 9 + length
-                if op == 0:
-                    reason = 'zero-filled tail'
-                    break
-                if end > size:
-                    reason = 'record cut by the end of the file'
-                    break
-                if op == _OP_MESSAGE_INDEX and head is not None and length >= 6:
-                    cid, nbytes = struct.unpack('<HI', bio.read(6))
-                    head['counts'][cid] = nbytes // 16
-                    head['index_offsets'][cid] = pos
-                    head['index_length'] += 9 + length
-                    pos = end
-                    continue
-                if head is not None:
-                    heads.append((head, True))
-                    head = None
-                if op in (_OP_DATA_END, _OP_FOOTER):
-                    reason = 'end of data section'
-                    break
-                if op == _OP_CHUNK:
-                    if length < 40:
-                        reason = f'malformed chunk record at byte {pos}'
-                        break
-                    fields = bio.read(min(length, 40 + 255))
-                    start_t, end_t, usize, crc = _CHUNK_HEAD.unpack_from(fields)
-                    (clen,) = struct.unpack_from('<I', fields, 28)
-                    if 40 + clen > len(fields):
-                        reason = f'malformed chunk record at byte {pos}'
-                        break
-                    compression = fields[32:32 + clen].decode('utf-8', 'replace')
-                    (csize,) = struct.unpack_from('<Q', fields, 32 + clen)
-                    if 40 + clen + csize > length:
-                        reason = f'malformed chunk record at byte {pos}'
-                        break
-                    head = {'start': start_t, 'end': end_t, 'offset': pos, 'length': 9 + length,
-                            'data_offset': pos + 9 + 40 + clen, 'compression': compression,
-                            'compressed_size': csize, 'uncompressed_size': usize, 'crc': crc,
-                            'counts': {}, 'index_offsets': {}, 'index_length': 0}
-                elif op == _OP_SCHEMA:
-                    self._add_schema(bio.read(length))
-                elif op == _OP_CHANNEL:
-                    self._add_channel(bio.read(length))
-                elif op == _OP_MESSAGE:
-                    top_messages += 1
-                pos = end
-            if head is not None:
-                heads.append((head, False))  # the last chunk: its index may be cut
-            readable = pos
-            chunks = []
-            for i, (chunk_head, trusted) in enumerate(heads):
-                info = self._finish(chunk_head, trusted)
-                if info is None:
-                    readable = chunk_head['offset']
-                    reason = f'chunk at byte {readable} does not decompress or parse'
-                    break
-                chunks.append(info)
-            self.data_end = readable
-            if top_messages:
-                # Messages outside chunks: rosbags' own scan of the readable part reads them.
-                self.chunks.clear()
-                self.meta_scan()
-            else:
-                self.chunks[:] = [c for c in chunks if sum(c.channel_count.values())]
-                self._statistics_from_chunks()
-            stats = self.statistics
-            count = stats.message_count
-            self.connections = [c._replace(msgcount=stats.channel_message_counts.get(c.id, 0))
-                                for c in self.connections]
-            self.metadata = self.metadata._replace(
-                duration=stats.end_time - stats.start_time + 1 if count else 0,
-                start_time=stats.start_time if count else 2**63 - 1,
-                end_time=stats.end_time + 1 if count else 0, message_count=count)
-            self.truncation = McapTruncation(
-                messages=count, chunks=stats.chunk_count, readable_bytes=readable,
-                file_bytes=size, start_ns=stats.start_time if count else 0,
-                end_ns=stats.end_time if count else 0, stop_reason=reason)
-
-        def _statistics_from_chunks(self):
-            cstats = {}
-            for chunk in self.chunks:
-                for cid, k in chunk.channel_count.items():
-                    cstats[cid] = cstats.get(cid, 0) + k
-            total = sum(cstats.values())
-            self.statistics = Statistics(
-                total, len(self.schemas), len(self.channels), 0, 0, len(self.chunks),
-                min((c.message_start_time for c in self.chunks), default=2**63 - 1),
-                max((c.message_end_time for c in self.chunks), default=0), cstats)
+    # rosbags is imported when a bag is read, not when the package is
+    from ._recovering_mcap import RecoveringMcapReader
 
     return RecoveringMcapReader
 

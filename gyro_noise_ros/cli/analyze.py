@@ -37,7 +37,8 @@ import sys
 from typing import List, Optional
 
 from ._common import run_cli
-from .. import __version__, report
+from .. import __version__
+from ..analysis.summary_md import fmt, modes_text, readout_text
 from ..app.analyze import (analyze_bags, AnalyzeParams, AnalyzeResult, DEFAULT_BATCH,
                            DEFAULT_CURVES, parse_order_grid, TOOL)
 from ..core.engine import AXES, EngineConfig, GAP_POLICIES
@@ -157,8 +158,8 @@ def _body(argv: List[str]) -> int:
 def _order_text(axis_doc: dict, key: str) -> str:
     # A mean over two separate basins (the model's 0/1 alias) is a number no chunk is near.
     if axis_doc.get(key + '_multimodal'):
-        return 'modes ' + report._modes_text(axis_doc[key + '_modes'])
-    return report._fmt(axis_doc[key + '_mean'], '.3f')
+        return 'modes ' + modes_text(axis_doc[key + '_modes'])
+    return fmt(axis_doc[key + '_mean'], '.3f')
 
 
 def _print_summary(result: AnalyzeResult) -> None:
@@ -174,13 +175,13 @@ def _print_summary(result: AnalyzeResult) -> None:
             f"{b['tail_samples']} tail sample(s) not analysed")
         for axis, a in b['axes'].items():
             line = (f"  {axis}: {a['chunks']} chunks, drift "
-                    f"{report._fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
-                    f"(deg/s)/h, variance {report._fmt(a['mean_variance_deg2_s2'], '.5g')} "
+                    f"{fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
+                    f"(deg/s)/h, variance {fmt(a['mean_variance_deg2_s2'], '.5g')} "
                     '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "
                     f"{_order_text(a, 'alpha_corr')}")
             sheet = a.get('allan_datasheet')
             if sheet:
-                line += ', ' + report.readout_text(sheet)
+                line += ', ' + readout_text(sheet)
             if a['nan_samples']:
                 line += f", {a['nan_samples']} NaN sample(s)"
             if 'health' in a:

@@ -91,6 +91,17 @@ def build_parser() -> argparse.ArgumentParser:
     """
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    _add_output_arguments(p)
+    _add_run_arguments(p)
+    _add_configuration_arguments(p)
+    _add_sensor_arguments(p)
+    _add_fault_arguments(p)
+    add_scenario_arguments(p)
+    return p
+
+
+def _add_output_arguments(p: argparse.ArgumentParser) -> None:
+    """Add where the board writes: a pseudo-terminal, TCP or SD files."""
     out = p.add_argument_group('output (default: a pseudo-terminal)')
     out.add_argument('--tcp', metavar='HOST:PORT',
                      help='serve on a loopback TCP port instead (port 0: any)')
@@ -107,6 +118,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help='append the ground truth of every sample (TRUTH_DTYPE)')
     out.add_argument('--stats-out', metavar='FILE',
                      help='write the fault/traffic counters as JSON at exit')
+
+
+def _add_run_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the seed, the pace and the length of the run."""
     run = p.add_argument_group('run')
     run.add_argument('--seed', type=int, default=0,
                      help='seed of the sample streams (faults use seed+1)')
@@ -116,6 +131,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument('--batch', type=int, default=16, help='samples per frame (FIFO watermark)')
     run.add_argument('--tx-buffer-bytes', type=int, default=TX_BUFFER_BYTES,
                      help='board transmit buffer; samples that do not fit are dropped and flagged')
+
+
+def _add_configuration_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the board's power-on configuration."""
     cfg = p.add_argument_group('power-on configuration')
     cfg.add_argument('--odr-hz', type=float, default=6667.0, help=f'one of {lsm.ODRS_HZ}')
     cfg.add_argument('--gyro-fs-dps', type=int, default=2000,
@@ -125,6 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     cfg.add_argument('--t0-us', type=int, default=0,
                      help='device time at power-on (us, wrap tests)')
     cfg.add_argument('--clock-ppm', type=float, default=0.0, help='board clock error (ppm)')
+
+
+def _add_sensor_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the sensor model: noise, bias, temperature, vibration."""
     noise = p.add_argument_group('sensor model')
     noise.add_argument('--alpha', type=float, default=DEFAULT_ALPHA,
                        help='fractional order (paper 000 eq. 2)')
@@ -162,6 +185,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help='vibration rate amplitude (deg/s)')
     noise.add_argument('--vibration-g', type=_float_list, default=0.0,
                        help='vibration accel amplitude (g)')
+
+
+def _add_fault_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the faults injected into the link and the samples."""
     fault = p.add_argument_group('fault injection')
     fault.add_argument('--corrupt-rate', type=float, default=0.0,
                        help='probability per byte sent/written')
@@ -178,8 +205,6 @@ def build_parser() -> argparse.ArgumentParser:
     fault.add_argument('--disconnect-every-s', type=float,
                        help='unplug after every this many seconds connected')
     fault.add_argument('--unplug-s', type=float, default=1.0, help='how long an unplug lasts (s)')
-    add_scenario_arguments(p)
-    return p
 
 
 def board_from_args(args: 'argparse.Namespace | List[str]') -> BoardModel:

@@ -107,7 +107,16 @@ def build_parser():
         'simulate held-out runs of other shapes, export PX4/ArduPilot parameters.')
     p.add_argument('--version', action='version', version=f'%(prog)s {__version__}')
     sub = p.add_subparsers(dest='command', required=True, metavar='COMMAND')
+    _add_fit_command(sub)
+    _add_apply_command(sub)
+    _add_compare_command(sub)
+    _add_simulate_command(sub)
+    _add_export_command(sub)
+    return p
 
+
+def _add_fit_command(sub):
+    """Add ``fit``: a method fitted on training bags, written as model.json."""
     f = sub.add_parser('fit', help='fit a method on one or more bags, write model.json')
     f.add_argument('bags', nargs='+', metavar='BAG', help='training recording(s)')
     f.add_argument('--out', required=True, metavar='DIR', help='output directory')
@@ -121,6 +130,9 @@ def build_parser():
     _add_bag_options(f)
     _add_output_options(f)
 
+
+def _add_apply_command(sub):
+    """Add ``apply``: a model applied to a held-out bag, with metrics and a report."""
     a = sub.add_parser('apply', help='apply a model to a bag: compensated bag, metrics, report')
     a.add_argument('bag', metavar='BAG', help='recording to process (held out from training)')
     a.add_argument('--model', required=True, metavar='MODEL_JSON', help='model.json from fit')
@@ -133,6 +145,9 @@ def build_parser():
     _add_output_options(a)
     a.add_argument('--no-html', action='store_true', help='write no report.html')
 
+
+def _add_compare_command(sub):
+    """Add ``compare``: every method trained on one run and scored on another."""
     c = sub.add_parser('compare', help='train every method on one run, score on another')
     c.add_argument('train', metavar='TRAIN_BAG', help='training recording')
     c.add_argument('test', metavar='TEST_BAG', nargs='?',
@@ -151,6 +166,9 @@ def build_parser():
     _add_output_options(c)
     c.add_argument('--no-html', action='store_true', help='write no report.html')
 
+
+def _add_simulate_command(sub):
+    """Add ``simulate``: a seeded train/test pair of thermal bags."""
     s = sub.add_parser('simulate', help='write a seeded train/test pair of thermal bags')
     s.add_argument('--seed', type=int, default=0, help='seed of the train/test pair')
     s.add_argument('--out', required=True, metavar='DIR',
@@ -170,6 +188,9 @@ def build_parser():
     s.add_argument('--no-hysteresis', action='store_true',
                    help='switch the bias hysteresis off')
 
+
+def _add_export_command(sub):
+    """Add ``export``: a poly3 model as PX4 and ArduPilot parameters."""
     e = sub.add_parser('export', help='a poly3 model as PX4 TC_* and ArduPilot INS_TCAL* '
                                       'parameters')
     e.add_argument('--model', required=True, metavar='MODEL_JSON', help='model.json of fit '
@@ -188,7 +209,6 @@ def build_parser():
                    help="ArduPilot CALTEMP of the exported gyro offsets (default: the model's "
                         'T_ref)')
     _add_output_options(e)
-    return p
 
 
 def _warn(args):

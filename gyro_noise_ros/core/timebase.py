@@ -341,96 +341,29 @@ class TimebaseTracker:
             raise InputDataError(f'{n} stamp(s): at least 2 are needed to estimate a sample rate')
         span_ns = float(self._last - self._first)
         steps = n - 1
-        warnings = []
-        usable = self._out_of_order <= UNUSABLE_FRACTION * steps and span_ns > 0
-        if self._out_of_order > UNUSABLE_FRACTION * steps:
-            warnings.append(f'{self._out_of_order} of {steps} stamp steps go backwards (a stamp '
-                            'earlier than its predecessor): the stamps are not a time base')
-        elif span_ns == 0:
-            warnings.append(f'all {n} stamps are equal (they never advance): the stamps are not a '
-                            'time base')
-        elif span_ns < 0:
-            warnings.append('the last stamp is earlier than the first: the stamps are not a time '
-                            'base')
+        usable, warnings = self._time_base(span_ns)
         mean_rate = steps / span_ns * _NS if span_ns > 0 else math.nan
         dur = np.concatenate(self._dur) if self._dur else np.empty(0)
         mx = np.concatenate(self._maxstep) if self._maxstep else np.empty(0)
         md = np.concatenate(self._medstep) if self._medstep else np.empty(0)
         med_step = float(np.median(md)) if md.size else (span_ns / steps)
         median_step_rate = _NS / med_step if med_step > 0 else math.nan
-        k = self._samples_per_block
-        block_rate = se = math.nan
-        if dur.size >= MIN_BLOCKS:
-            typical_max = float(np.median(mx))
-            g = 1
-            while (dur.size // (2 * g) >= MIN_BLOCKS
-                   and float(np.median(_group(dur, g))) < BLOCK_SPAN_STEPS * typical_max):
-                g *= 2
-            d = _group(dur, g)
-            d = d[d > 0]
-            if d.size >= MIN_BLOCKS // 2:
-                rates = k * g / d * _NS
-                block_rate = float(np.median(rates))
-                mad = float(np.median(np.abs(rates - block_rate)))
-                se = 1.2533 * 1.4826 * mad / math.sqrt(rates.size)
-                k = k * g
+        block_rate, block_se, k = _block_rate(dur, mx, self._samples_per_block)
         short = self._short / self._steps_in_blocks if self._steps_in_blocks else 0.0
         long_ = self._long / self._steps_in_blocks if self._steps_in_blocks else 0.0
         bursty = short > BURSTY_FRACTION
-        if self._seq_n == n and self._seq_last is not None and span_ns > 0:
-            method = 'sequence'
-            stamp_rate = (self._seq_last - self._seq_first) / span_ns * _NS
-            se = math.nan
-        elif not bursty and self._reg_n >= MIN_BLOCKS * BASE_BLOCK // 2 and self._reg_sum > 0:
-            method = 'step_mean'
-            mean_step = self._reg_sum / self._reg_n
-            var_step = max(self._reg_ss / self._reg_n - mean_step ** 2, 0.0)
-            stamp_rate = _NS / mean_step
-            # Steps of a device clock are nearly independent; the jitter of one stamp enters two
-            # steps with opposite signs, so this is conservative.
-            se = stamp_rate * math.sqrt(var_step / self._reg_n) / mean_step
-        elif math.isfinite(block_rate):
-            method, stamp_rate = 'block_median', block_rate
-        else:
-            method, stamp_rate = 'mean', mean_rate
-        if rate_hz is not None:
-            rate = float(rate_hz)
-            if not (math.isfinite(rate) and rate > 0):
-                raise ParameterError(f'rate_hz must be a positive number, got {rate_hz!r}')
-            if math.isfinite(stamp_rate) and abs(stamp_rate / rate - 1.0) > DISAGREE and usable:
-                off = 100 * (stamp_rate / rate - 1)
-                warnings.append(f'the configured rate {rate:.6g} Hz differs from the rate of the '
-                                f'stamps, {stamp_rate:.6g} Hz ({method}), by {off:+.2f} %')
-            used_method = 'configured'
-        else:
-            if not math.isfinite(stamp_rate):
-                raise InputDataError(warnings[0] if not usable else
-                                     'the stamps do not increase: cannot estimate a sample rate; '
-                                     'give the rate explicitly')
-            rate, used_method = stamp_rate, method
-        jitter, burst_step = math.nan, self._max_step / _NS
-        if mx.size:
-            # A block holding a gap (a step of 10 typical block maxima and more) would make the
-            # gap's length look like jitter, and a burst wait like hours: both leave it out.
-            calm = mx <= GAP_STEPS * float(np.median(mx))
-            jss, jn = np.concatenate(self._jss)[calm], np.concatenate(self._jn)[calm]
-            if jn.sum():
-                jitter = math.sqrt(float(jss.sum()) / float(jn.sum())) / _NS
-                burst_step = float(mx[calm].max()) / _NS
+        method, stamp_rate, se = self._stamp_rate(span_ns, bursty=bursty, block_rate=block_rate,
+                                                  block_se=block_se, mean_rate=mean_rate)
+        rate, used_method = _chosen_rate(rate_hz, stamp_rate, method, usable, warnings)
+        jitter, burst_step = self._jitter(mx)
         if usable and math.isfinite(median_step_rate) and math.isfinite(stamp_rate) \
                 and abs(median_step_rate / stamp_rate - 1.0) > 2 * DISAGREE:
             hint = ' (bursty stamps: host receive times or packets?)' if bursty else ''
             warnings.append(f'the median stamp step gives {median_step_rate:.6g} Hz but the '
                             f'{method} rate is {stamp_rate:.6g} Hz{hint}')
-        if method == 'sequence':
-            deficit = float((self._seq_last - self._seq_first) + 1 - n)
-            resolution = 0.5
-        else:
-            deficit = span_ns / _NS * rate + 1.0 - n
-            rate_rel = (se / stamp_rate) if math.isfinite(se) and stamp_rate > 0 else 0.0
-            jit = jitter if math.isfinite(jitter) else 0.0
-            resolution = (n * rate_rel * 3.0 + 3.0 * jit * rate
-                          + 2.0 * burst_step * rate * bursty + 1.0)
+        deficit, resolution = self._deficit(
+            method, span_ns, rate=rate, stamp_rate=stamp_rate, se=se, jitter=jitter,
+            burst_step=burst_step, bursty=bursty)
         loss = int(round(deficit)) if usable and deficit > resolution else 0
         if loss:
             warnings.append(f'{loss} sample(s) missing against elapsed time '
@@ -449,6 +382,111 @@ class TimebaseTracker:
             loss_resolution_samples=float(resolution), deficit_samples=float(deficit),
             warnings=tuple(warnings), equal_steps=int(self._equal),
             burst_step_s=float(burst_step))
+
+    def _time_base(self, span_ns):
+        """Return whether the stamps are a time base, and the warnings that say why not."""
+        n = self._n
+        steps = n - 1
+        warnings = []
+        usable = self._out_of_order <= UNUSABLE_FRACTION * steps and span_ns > 0
+        if self._out_of_order > UNUSABLE_FRACTION * steps:
+            warnings.append(f'{self._out_of_order} of {steps} stamp steps go backwards (a stamp '
+                            'earlier than its predecessor): the stamps are not a time base')
+        elif span_ns == 0:
+            warnings.append(f'all {n} stamps are equal (they never advance): the stamps are not a '
+                            'time base')
+        elif span_ns < 0:
+            warnings.append('the last stamp is earlier than the first: the stamps are not a time '
+                            'base')
+        return usable, warnings
+
+    def _stamp_rate(self, span_ns, *, bursty, block_rate, block_se, mean_rate):
+        """Return the best rate of the stamps: (method, rate in Hz, its standard error in Hz)."""
+        if self._seq_n == self._n and self._seq_last is not None and span_ns > 0:
+            return 'sequence', (self._seq_last - self._seq_first) / span_ns * _NS, math.nan
+        if not bursty and self._reg_n >= MIN_BLOCKS * BASE_BLOCK // 2 and self._reg_sum > 0:
+            mean_step = self._reg_sum / self._reg_n
+            var_step = max(self._reg_ss / self._reg_n - mean_step ** 2, 0.0)
+            stamp_rate = _NS / mean_step
+            # Steps of a device clock are nearly independent; the jitter of one stamp enters two
+            # steps with opposite signs, so this is conservative.
+            se = stamp_rate * math.sqrt(var_step / self._reg_n) / mean_step
+            return 'step_mean', stamp_rate, se
+        if math.isfinite(block_rate):
+            return 'block_median', block_rate, block_se
+        return 'mean', mean_rate, block_se
+
+    def _jitter(self, mx):
+        """Return the stamp jitter (s) and the longest step of a burst (s) over calm blocks."""
+        jitter, burst_step = math.nan, self._max_step / _NS
+        if mx.size:
+            # A block holding a gap (a step of 10 typical block maxima and more) would make the
+            # gap's length look like jitter, and a burst wait like hours: both leave it out.
+            calm = mx <= GAP_STEPS * float(np.median(mx))
+            jss, jn = np.concatenate(self._jss)[calm], np.concatenate(self._jn)[calm]
+            if jn.sum():
+                jitter = math.sqrt(float(jss.sum()) / float(jn.sum())) / _NS
+                burst_step = float(mx[calm].max()) / _NS
+        return jitter, burst_step
+
+    def _deficit(self, method, span_ns, *, rate, stamp_rate, se, jitter, burst_step, bursty):
+        """Return the samples missing against elapsed time, and the resolution of that count."""
+        n = self._n
+        if method == 'sequence':
+            return float((self._seq_last - self._seq_first) + 1 - n), 0.5
+        deficit = span_ns / _NS * rate + 1.0 - n
+        rate_rel = (se / stamp_rate) if math.isfinite(se) and stamp_rate > 0 else 0.0
+        jit = jitter if math.isfinite(jitter) else 0.0
+        resolution = (n * rate_rel * 3.0 + 3.0 * jit * rate
+                      + 2.0 * burst_step * rate * bursty + 1.0)
+        return deficit, resolution
+
+
+def _block_rate(dur, mx, k):
+    """
+    Return the median rate of groups of blocks, its standard error (Hz) and samples per group.
+
+    Blocks of ``k`` samples (durations ``dur``, longest steps ``mx``, ns) are grouped in powers of
+    two until a group spans many typical longest steps; (NaN, NaN, ``k``) with too few blocks.
+    """
+    block_rate = se = math.nan
+    if dur.size >= MIN_BLOCKS:
+        typical_max = float(np.median(mx))
+        g = 1
+        while (dur.size // (2 * g) >= MIN_BLOCKS
+               and float(np.median(_group(dur, g))) < BLOCK_SPAN_STEPS * typical_max):
+            g *= 2
+        d = _group(dur, g)
+        d = d[d > 0]
+        if d.size >= MIN_BLOCKS // 2:
+            rates = k * g / d * _NS
+            block_rate = float(np.median(rates))
+            mad = float(np.median(np.abs(rates - block_rate)))
+            se = 1.2533 * 1.4826 * mad / math.sqrt(rates.size)
+            k = k * g
+    return block_rate, se, k
+
+
+def _chosen_rate(rate_hz, stamp_rate, method, usable, warnings):
+    """
+    Return the rate the analysis uses and how it was chosen: the configured one, else the stamps'.
+
+    Appends to ``warnings`` when a configured rate disagrees with the stamps.
+    """
+    if rate_hz is not None:
+        rate = float(rate_hz)
+        if not (math.isfinite(rate) and rate > 0):
+            raise ParameterError(f'rate_hz must be a positive number, got {rate_hz!r}')
+        if math.isfinite(stamp_rate) and abs(stamp_rate / rate - 1.0) > DISAGREE and usable:
+            off = 100 * (stamp_rate / rate - 1)
+            warnings.append(f'the configured rate {rate:.6g} Hz differs from the rate of the '
+                            f'stamps, {stamp_rate:.6g} Hz ({method}), by {off:+.2f} %')
+        return rate, 'configured'
+    if not math.isfinite(stamp_rate):
+        raise InputDataError(warnings[0] if not usable else
+                             'the stamps do not increase: cannot estimate a sample rate; '
+                             'give the rate explicitly')
+    return stamp_rate, method
 
 
 def _group(dur, g):

@@ -407,16 +407,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     ExplainResult
 
     """
-    ensemble, max_steps, seed = int(ensemble), int(max_steps), int(seed)
-    if ensemble < 4:
-        raise ParameterError(f'ensemble must be >= 4 members, got {ensemble}')
-    if max_steps < 0:
-        raise ParameterError(f'max_steps must be >= 0, got {max_steps}')
-    if seed < 0:
-        raise ParameterError(f'seed must be >= 0, got {seed}')
-    bootstrap = int(bootstrap)
-    if bootstrap != 0 and bootstrap < 5:
-        raise ParameterError(f'bootstrap must be 0 (off) or >= 5 records, got {bootstrap}')
+    ensemble, max_steps, seed, bootstrap = _checked(ensemble, max_steps, seed, bootstrap)
     say = progress or (lambda text: None)
     seconds = {}
     t0 = time.perf_counter()
@@ -442,28 +433,12 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     say(f'gap {gap:.3f}')
     while gap > INSIDE_GAP and len(steps) < max_steps:
         ctx = Context(meas, residual, layout, meas_sig, member_sig, model.accepted)
-        trials = []
-        for effect in effects:
-            if effect.name in model.accepted:
-                continue
-            params = effect.fit(ctx)
-            if params is None:
-                continue
-            det = effect.term(params, meas.n, meas.rate_hz, None,
-                              ctx) if effect.kind == 'additive' else None
-            trial_sig = model.signatures((effect, params, det), ctx)
-            trial_cmp = compare_all(layout, meas_sig, trial_sig)
-            trial_gap = sig.total_gap(trial_cmp)
-            say(f'  candidate {effect.name}: gap {trial_gap:.3f}')
-            trials.append((trial_gap, effect, params, det, trial_sig, trial_cmp))
+        trials = _trials(model, ctx, effects, say)
         tried = {t[1].name: t[0] for t in trials}
         if not trials:
             tried_last = {}
             break
-        best_gap = min(t[0] for t in trials)
-        tied = [t for t in trials if t[0] <= best_gap + TIE_GAP]
-        choice = min(tied, key=lambda t: sig.mean_log_score(t[5]) + PARAM_PENALTY * t[1].n_params)
-        trial_gap, effect, params, det, trial_sig, trial_cmp = choice
+        trial_gap, effect, params, det, trial_sig, trial_cmp = _choose(trials)
         if trial_gap > gap - INSIDE_GAP:
             tried_last = tried
             break
@@ -471,27 +446,8 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
         if det is not None:
             det_terms[effect.name] = det
             residual = residual - det
-            refit = fit_baseline(residual, meas.rate_hz)
-            if _changed(refit, baseline):
-                # the deterministic term distorted the first fit (a strong line or ramp shifts the
-                # identified order): refit the baseline on the residual and regenerate the members;
-                # kept only if it does not widen the gap
-                previous = (baseline, list(model.members))
-                model.rebase(refit, meas.rate - residual, ctx)
-                refit_sig = model.signatures(None, ctx)
-                refit_cmp = compare_all(layout, meas_sig, refit_sig)
-                refit_gap = sig.total_gap(refit_cmp)
-                if refit_gap <= trial_gap:
-                    baseline, trial_sig, trial_cmp, trial_gap = (
-                        refit,
-                        refit_sig,
-                        refit_cmp,
-                        refit_gap,
-                    )
-                    say(f'  baseline refitted on the residual: alpha={baseline.alpha:.2f} '
-                        f'f={baseline.f:.3f}')
-                else:
-                    model.members = previous[1]
+            baseline, trial_sig, trial_cmp, trial_gap = _rebased(
+                model, ctx, residual, baseline, (trial_sig, trial_cmp, trial_gap), say)
         steps.append(Step(effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
                           where=where_outside(layout, comparisons),
                           where_after=where_outside(layout, trial_cmp), candidates=tried,
@@ -503,11 +459,7 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     uncertainty = {}
     if bootstrap and steps:
         t3 = time.perf_counter()
-        by_name = {effect.name: effect for effect in effects}
-        final = FinalModel(n=meas.n, rate_hz=meas.rate_hz, temperature_c=meas.temperature_c,
-                           layout=layout, baseline=baseline,
-                           accepted=tuple((by_name[s.effect], s.params) for s in steps),
-                           det_terms=det_terms, seed=seed)
+        final = _final_model(meas, layout, baseline, steps, effects, det_terms, seed)
         uncertainty = bootstrap_uncertainty(final, bootstrap, values=meas.rate, mapper=mapper)
         seconds['bootstrap'] = time.perf_counter() - t3
         say(f'uncertainties: parametric bootstrap of the final model, {bootstrap} records')
@@ -519,3 +471,85 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
                          comparisons_initial=initial, comparisons_final=comparisons,
                          tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds,
                          uncertainty=uncertainty, bootstrap=bootstrap if steps else 0)
+
+
+def _checked(ensemble, max_steps, seed, bootstrap):
+    """Return the integer settings of :func:`explain`; ParameterError names a bad one."""
+    ensemble, max_steps, seed = int(ensemble), int(max_steps), int(seed)
+    if ensemble < 4:
+        raise ParameterError(f'ensemble must be >= 4 members, got {ensemble}')
+    if max_steps < 0:
+        raise ParameterError(f'max_steps must be >= 0, got {max_steps}')
+    if seed < 0:
+        raise ParameterError(f'seed must be >= 0, got {seed}')
+    bootstrap = int(bootstrap)
+    if bootstrap != 0 and bootstrap < 5:
+        raise ParameterError(f'bootstrap must be 0 (off) or >= 5 records, got {bootstrap}')
+    return ensemble, max_steps, seed, bootstrap
+
+
+def _trials(model, ctx, effects, say):
+    """
+    Fit every candidate not yet in the model and simulate the model with it.
+
+    Returns ``[(gap, effect, params, deterministic term or None, signatures, comparisons)]`` of
+    the candidates whose fit found parameters, in catalogue order.
+    """
+    meas, layout = ctx.meas, ctx.layout
+    trials = []
+    for effect in effects:
+        if effect.name in model.accepted:
+            continue
+        params = effect.fit(ctx)
+        if params is None:
+            continue
+        det = effect.term(params, meas.n, meas.rate_hz, None,
+                          ctx) if effect.kind == 'additive' else None
+        trial_sig = model.signatures((effect, params, det), ctx)
+        trial_cmp = compare_all(layout, ctx.meas_sig, trial_sig)
+        trial_gap = sig.total_gap(trial_cmp)
+        say(f'  candidate {effect.name}: gap {trial_gap:.3f}')
+        trials.append((trial_gap, effect, params, det, trial_sig, trial_cmp))
+    return trials
+
+
+def _choose(trials):
+    """Return the trial of smallest gap; among those within TIE_GAP, the best-scoring simplest."""
+    best_gap = min(t[0] for t in trials)
+    tied = [t for t in trials if t[0] <= best_gap + TIE_GAP]
+    return min(tied, key=lambda t: sig.mean_log_score(t[5]) + PARAM_PENALTY * t[1].n_params)
+
+
+def _rebased(model, ctx, residual, baseline, trial, say):
+    """
+    Refit the baseline on the residual once a deterministic term is accepted, if it changed.
+
+    The deterministic term distorted the first fit (a strong line or ramp shifts the identified
+    order): refit the baseline on the residual and regenerate the members; kept only if it does
+    not widen the gap. Returns ``(baseline, signatures, comparisons, gap)``: the refitted model's,
+    or ``baseline`` and ``trial`` (signatures, comparisons, gap) as they were.
+    """
+    meas = ctx.meas
+    trial_sig, trial_cmp, trial_gap = trial
+    refit = fit_baseline(residual, meas.rate_hz)
+    if not _changed(refit, baseline):
+        return baseline, trial_sig, trial_cmp, trial_gap
+    members = list(model.members)
+    model.rebase(refit, meas.rate - residual, ctx)
+    refit_sig = model.signatures(None, ctx)
+    refit_cmp = compare_all(ctx.layout, ctx.meas_sig, refit_sig)
+    refit_gap = sig.total_gap(refit_cmp)
+    if refit_gap <= trial_gap:
+        say(f'  baseline refitted on the residual: alpha={refit.alpha:.2f} f={refit.f:.3f}')
+        return refit, refit_sig, refit_cmp, refit_gap
+    model.members = members
+    return baseline, trial_sig, trial_cmp, trial_gap
+
+
+def _final_model(meas, layout, baseline, steps, effects, det_terms, seed):
+    """Return the model the workflow ended with, for the parametric bootstrap."""
+    by_name = {effect.name: effect for effect in effects}
+    return FinalModel(n=meas.n, rate_hz=meas.rate_hz, temperature_c=meas.temperature_c,
+                      layout=layout, baseline=baseline,
+                      accepted=tuple((by_name[s.effect], s.params) for s in steps),
+                      det_terms=det_terms, seed=seed)

@@ -17,12 +17,14 @@ The ``report.html`` of gyro_noise_analyze (and so of ``make demo``).
 
 Built from the summary.json document and the arrays the tool holds in memory (per-chunk bias,
 variance and orders; the Allan results), never from summary.md. "In short" is
-:func:`..report.in_short_markdown` of the same document.
+:func:`..analysis.summary_md.in_short_markdown` of the same document.
 """
 
 from .figures import allan_figure, series_figure
 from .page import Key, Num, Page, pointer, Table, write_report_html
-from .. import report
+from ..analysis.csv_tables import allan_curve
+from ..analysis.figures import allan_fit_lines
+from ..analysis.summary_md import in_short_markdown
 from ..units import RAD_TO_DEG as _DEG, S_PER_H
 
 METHOD = """\
@@ -49,111 +51,142 @@ def _axes(doc):
 
 
 def _tables(doc):
-    tables = []
+    """Return the page's tables: per axis the paper's Tables 3-6, Allan and health; then counts."""
     bags = doc['bags']
+    tables = []
     for axis in _axes(doc):
+        # (bag index, JSON pointer of the bag's axis entry) of the bags that have the axis
         rows = [(i, pointer('bags', i, 'axes', axis)) for i, b in enumerate(bags)
                 if axis in b['axes']]
+        tables += [_drift_table(axis, rows), _variance_table(axis, rows)]
+        tables += [_order_table(bags, axis, rows, num=num, method=method, key=key, tie=tie)
+                   for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
+                                                 (6, 'correlation', 'alpha_corr', 'ties_corr'))]
+        tables += _allan_tables(bags, axis, rows)
+        tables += _health_tables(bags, axis, rows)
+    tables += [_counts_table(bags), _options_table(doc['options'])]
+    return tables
 
-        def lab(i):
-            return Num(pointer('bags', i, 'label'))
 
+def _label(i):
+    return Num(pointer('bags', i, 'label'))
+
+
+def _drift_table(axis, rows):
+    return Table(
+        f'Axis {axis}: how fast the bias moves, offset drift of the chunk bias '
+        '(paper 000 Table 3)',
+        ('Sequence', 'Offset drift, magnitude ((deg/s)/h)', 'Signed slope ((deg/s)/h)',
+         'Std. error ((deg/s)/h)', 'Mean bias (deg/s)', 'Chunks'),
+        tuple((_label(i), Num(p + '/offset_drift_abs_deg_s_per_h', '.6f'),
+               Num(p + '/offset_drift_deg_s_per_h', '+.6f'),
+               Num(p + '/offset_drift_stderr_deg_s_per_h', '.6f'),
+               Num(p + '/bias_mean_deg_s', '.6f'), Num(p + '/chunks', 'd'))
+              for i, p in rows))
+
+
+def _variance_table(axis, rows):
+    return Table(
+        f'Axis {axis}: how large the noise is, variance within chunks (paper 000 Table 4)',
+        ('Sequence', 'Mean noise variance ((deg/s)^2)',
+         'Variance of noise variance ((deg/s)^4)'),
+        tuple((_label(i), Num(p + '/mean_variance_deg2_s2'),
+               Num(p + '/variance_of_variances_deg4_s4')) for i, p in rows))
+
+
+def _order_table(bags, axis, rows, *, num, method, key, tie):
+    out = []
+    for i, p in rows:
+        a = bags[i]['axes'][axis]
+        if a.get(key + '_multimodal'):
+            # a mean between separate basins is where no chunk is: the modes instead
+            order = ('modes: ',)
+            for k in range(len(a[key + '_modes'])):
+                m = f'{p}/{key}_modes/{k}'
+                order += (('; ' if k else ''), Num(m + '/order', '.3f'), ' (',
+                          Num(m + '/chunks', 'd'), ' chunks)')
+        else:
+            order = Num(f'{p}/{key}_mean', '.6f')
+        out.append((_label(i), order, Num(f'{p}/{key}_variance', '.6f'),
+                    Num(f'{p}/{tie}', 'd')))
+    return Table(
+        f'Axis {axis}: how much memory the noise has, fractional order, {method} method '
+        f'(paper 000 Table {num})',
+        ('Sequence', 'Estimated order', 'Variance of estimated order', 'Ties'),
+        tuple(out))
+
+
+def _allan_tables(bags, axis, rows):
+    """Return the datasheet table and the model-fit table of the bags that have them (0-2)."""
+    tables = []
+    sheet_rows = [_datasheet_row(i, p, bags[i]['axes'][axis].get('allan_datasheet'))
+                  for i, p in rows if bags[i]['axes'][axis].get('allan_datasheet')]
+    if sheet_rows:
         tables.append(Table(
-            f'Axis {axis}: how fast the bias moves, offset drift of the chunk bias '
-            '(paper 000 Table 3)',
-            ('Sequence', 'Offset drift, magnitude ((deg/s)/h)', 'Signed slope ((deg/s)/h)',
-             'Std. error ((deg/s)/h)', 'Mean bias (deg/s)', 'Chunks'),
-            tuple((lab(i), Num(p + '/offset_drift_abs_deg_s_per_h', '.6f'),
-                   Num(p + '/offset_drift_deg_s_per_h', '+.6f'),
-                   Num(p + '/offset_drift_stderr_deg_s_per_h', '.6f'),
-                   Num(p + '/bias_mean_deg_s', '.6f'), Num(p + '/chunks', 'd'))
-                  for i, p in rows)))
+            f'Axis {axis}: Allan deviation, the datasheet numbers (customary units)',
+            ('Sequence', 'Bias stability (deg/h)', 'at tau (s)',
+             'B = bias stability / 0.664 (deg/h)', 'ARW (deg/sqrt(h))',
+             'ARW read over taus (s)', 'K fit (deg/h/sqrt(h))', 'K bound (deg/h/sqrt(h))',
+             'Usable from tau (s)'),
+            tuple(sheet_rows),
+            note='Read off the curve by the one readout (core/readout.py): intervals 68.3 %; '
+            '"<=" marks an upper bound.'))
+    terms = [(i, p) for i, p in rows if bags[i]['axes'][axis].get('allan')]
+    if terms:
+        keys = []
+        for i, _ in terms:
+            for k, v in bags[i]['axes'][axis]['allan'].items():
+                if k not in keys and not isinstance(v, (dict, list, str, bool)):
+                    keys.append(k)
         tables.append(Table(
-            f'Axis {axis}: how large the noise is, variance within chunks (paper 000 Table 4)',
-            ('Sequence', 'Mean noise variance ((deg/s)^2)',
-             'Variance of noise variance ((deg/s)^4)'),
-            tuple((lab(i), Num(p + '/mean_variance_deg2_s2'),
-                   Num(p + '/variance_of_variances_deg4_s4')) for i, p in rows)))
-        for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
-                                      (6, 'correlation', 'alpha_corr', 'ties_corr')):
-            out = []
-            for i, p in rows:
-                a = bags[i]['axes'][axis]
-                if a.get(key + '_multimodal'):
-                    # a mean between separate basins is where no chunk is: the modes instead
-                    order = ('modes: ',)
-                    for k in range(len(a[key + '_modes'])):
-                        m = f'{p}/{key}_modes/{k}'
-                        order += (('; ' if k else ''), Num(m + '/order', '.3f'), ' (',
-                                  Num(m + '/chunks', 'd'), ' chunks)')
-                else:
-                    order = Num(f'{p}/{key}_mean', '.6f')
-                out.append((lab(i), order, Num(f'{p}/{key}_variance', '.6f'),
-                            Num(f'{p}/{tie}', 'd')))
-            tables.append(Table(
-                f'Axis {axis}: how much memory the noise has, fractional order, {method} method '
-                f'(paper 000 Table {num})',
-                ('Sequence', 'Estimated order', 'Variance of estimated order', 'Ties'),
-                tuple(out)))
-        sheet_rows = []
-        for i, p in rows:
-            d = bags[i]['axes'][axis].get('allan_datasheet')
-            if not d:
-                continue
-            q = p + '/allan_datasheet'
-            bound = '<= ' if d.get('bias_stability_upper_bound') else ''
-            where = ((Num(q + '/arw_tau_range_s/0', '.3g'), ' to ',
-                      Num(q + '/arw_tau_range_s/1', '.3g'))
-                     if d.get('arw_from_region') and d.get('arw_tau_range_s')
-                     else 'ADEV read at one second: no white-noise region')
-            k_fit = Num(q + '/rate_random_walk_deg_per_h_sqrt_h', '.3g')
-            if not d.get('rate_random_walk_resolved'):
-                k_fit = (k_fit, ' (not resolved)')
-            sheet_rows.append((
-                lab(i),
-                (Num(q + '/bias_stability_deg_h', '.4g', bound), ' (',
-                 Num(q + '/bias_stability_ci_low_deg_h', '.3g'), ' to ',
-                 Num(q + '/bias_stability_ci_high_deg_h', '.3g'), ')'),
-                Num(q + '/bias_stability_tau_s', '.4g'),
-                Num(q + '/bias_instability_deg_h', '.4g', bound),
-                (Num(q + '/arw_deg_per_sqrt_h', '.4g'), ' (',
-                 Num(q + '/arw_ci_low_deg_per_sqrt_h', '.3g'), ' to ',
-                 Num(q + '/arw_ci_high_deg_per_sqrt_h', '.3g'), ')'),
-                where, k_fit, Num(q + '/rate_random_walk_bound_deg_per_h_sqrt_h', '.3g'),
-                Num(q + '/usable_from_s', '.3g')))
-        if sheet_rows:
-            tables.append(Table(
-                f'Axis {axis}: Allan deviation, the datasheet numbers (customary units)',
-                ('Sequence', 'Bias stability (deg/h)', 'at tau (s)',
-                 'B = bias stability / 0.664 (deg/h)', 'ARW (deg/sqrt(h))',
-                 'ARW read over taus (s)', 'K fit (deg/h/sqrt(h))', 'K bound (deg/h/sqrt(h))',
-                 'Usable from tau (s)'),
-                tuple(sheet_rows),
-                note='Read off the curve by the one readout (core/readout.py): intervals 68.3 %; '
-                '"<=" marks an upper bound.'))
-        terms = [(i, p) for i, p in rows if bags[i]['axes'][axis].get('allan')]
-        if terms:
-            keys = []
-            for i, _ in terms:
-                for k, v in bags[i]['axes'][axis]['allan'].items():
-                    if k not in keys and not isinstance(v, (dict, list, str, bool)):
-                        keys.append(k)
-            tables.append(Table(
-                f'Axis {axis}: Allan deviation, IEEE 952 model fit (unit in the name)',
-                ('Sequence', *keys),
-                tuple((lab(i), *(Num(f'{p}/allan/{k}', '.4g')
-                                 if k in bags[i]['axes'][axis]['allan'] else 'n/a'
-                                 for k in keys)) for i, p in terms),
-                note='The five-term model fitted to the whole usable curve: a model for '
-                'simulation and filters, not the datasheet numbers.'))
-        health = [(i, p) for i, p in rows if 'health' in bags[i]['axes'][axis]]
-        if health:
-            tables.append(Table(
-                f'Axis {axis}: health verdict against the reference',
-                ('Sequence', 'Level', 'Message'),
-                tuple((lab(i), Num(p + '/health/level'), Num(p + '/health/message'))
-                      for i, p in health)))
-    tables.append(Table(
+            f'Axis {axis}: Allan deviation, IEEE 952 model fit (unit in the name)',
+            ('Sequence', *keys),
+            tuple((_label(i), *(Num(f'{p}/allan/{k}', '.4g')
+                                if k in bags[i]['axes'][axis]['allan'] else 'n/a'
+                                for k in keys)) for i, p in terms),
+            note='The five-term model fitted to the whole usable curve: a model for '
+            'simulation and filters, not the datasheet numbers.'))
+    return tables
+
+
+def _datasheet_row(i, p, d):
+    """Return one bag's row of the datasheet table (``d``: its ``allan_datasheet`` entry)."""
+    q = p + '/allan_datasheet'
+    bound = '<= ' if d.get('bias_stability_upper_bound') else ''
+    where = ((Num(q + '/arw_tau_range_s/0', '.3g'), ' to ',
+              Num(q + '/arw_tau_range_s/1', '.3g'))
+             if d.get('arw_from_region') and d.get('arw_tau_range_s')
+             else 'ADEV read at one second: no white-noise region')
+    k_fit = Num(q + '/rate_random_walk_deg_per_h_sqrt_h', '.3g')
+    if not d.get('rate_random_walk_resolved'):
+        k_fit = (k_fit, ' (not resolved)')
+    return (
+        _label(i),
+        (Num(q + '/bias_stability_deg_h', '.4g', bound), ' (',
+         Num(q + '/bias_stability_ci_low_deg_h', '.3g'), ' to ',
+         Num(q + '/bias_stability_ci_high_deg_h', '.3g'), ')'),
+        Num(q + '/bias_stability_tau_s', '.4g'),
+        Num(q + '/bias_instability_deg_h', '.4g', bound),
+        (Num(q + '/arw_deg_per_sqrt_h', '.4g'), ' (',
+         Num(q + '/arw_ci_low_deg_per_sqrt_h', '.3g'), ' to ',
+         Num(q + '/arw_ci_high_deg_per_sqrt_h', '.3g'), ')'),
+        where, k_fit, Num(q + '/rate_random_walk_bound_deg_per_h_sqrt_h', '.3g'),
+        Num(q + '/usable_from_s', '.3g'))
+
+
+def _health_tables(bags, axis, rows):
+    health = [(i, p) for i, p in rows if 'health' in bags[i]['axes'][axis]]
+    if not health:
+        return []
+    return [Table(
+        f'Axis {axis}: health verdict against the reference',
+        ('Sequence', 'Level', 'Message'),
+        tuple((_label(i), Num(p + '/health/level'), Num(p + '/health/message'))
+              for i, p in health))]
+
+
+def _counts_table(bags):
+    return Table(
         'Input counts',
         ('Sequence', 'Topic', 'Rate (Hz)', 'Rate method', 'Stamp jitter (s)', 'Duration (s)',
          'Samples', 'Lost', 'Gaps', 'Out-of-order stamps', 'Tail samples'),
@@ -164,13 +197,14 @@ def _tables(doc):
                Num(pointer('bags', i, 'duration_s'), '.1f'),
                *(Num(pointer('bags', i, k), 'd') for k in (
                    'samples', 'samples_lost', 'gaps', 'out_of_order_stamps', 'tail_samples')))
-              for i in range(len(bags)))))
-    opts = doc['options']
-    tables.append(Table(
+              for i in range(len(bags))))
+
+
+def _options_table(opts):
+    return Table(
         'Options', ('Option', 'Value'),
         tuple((Key(k), Num(pointer('options', k), 'g')) for k, v in opts.items()
-              if v is None or isinstance(v, (bool, int, float, str)))))
-    return tables
+              if v is None or isinstance(v, (bool, int, float, str))))
 
 
 def _figures(doc, per_chunk, allan_store):
@@ -178,8 +212,8 @@ def _figures(doc, per_chunk, allan_store):
     if allan_store:
         curves = []
         for (label, axis), (result, terms, _) in allan_store.items():
-            tau, adev, lo, hi, n = report.allan_curve(result)
-            fit = [(name, t, v * _DEG) for name, t, v in report.allan_fit_lines(terms, tau)]
+            tau, adev, lo, hi, n = allan_curve(result)
+            fit = [(name, t, v * _DEG) for name, t, v in allan_fit_lines(terms, tau)]
             curves.append({'name': f'{label} {axis}', 'tau_s': tau, 'adev': adev * _DEG,
                            'ci_low': lo * _DEG, 'ci_high': hi * _DEG, 'n': n, 'fit': fit})
         figures.append((
@@ -238,7 +272,7 @@ def analyze_page(doc, *, per_chunk, allan_store):
 
     return Page(
         title='gyro_noise_analyze report: ' + ', '.join(b['label'] for b in doc['bags']),
-        data=doc, in_short_markdown=report.in_short_markdown(doc),
+        data=doc, in_short_markdown=in_short_markdown(doc),
         figures=tuple(_figures(doc, per_chunk, allan_store)), tables=tuple(_tables(doc)),
         method_markdown=METHOD, command=doc.get('command'),
         inputs=tuple(b['path'] for b in doc['bags']), version=doc.get('version', ''),

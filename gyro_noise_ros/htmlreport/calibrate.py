@@ -44,9 +44,23 @@ def calibrate_page(result):
 
     """
     doc = result.as_dict()
-    gc, cons = doc['gravity_check'], doc['consistency']
     title = ('Six-position calibration (paper 001 Table 6 layout)'
              if doc['mode'] == 'six-position' else 'Multi-pose calibration (|a| = g, imu_tk)')
+    tables = (_accelerometer_tables() + [_gyro_table(doc)] + _check_tables(doc)
+              + [_dwell_table(doc)])
+    method = (f'{title}. Model: `{doc["model"]}`; frame: {doc["frame"]}. Gravity used: '
+              f'{doc["gravity_source"]} (the value is in calibration.json). Dwells are found by '
+              'the static detector (its settings are in calibration.json); the gyro scale factor '
+              'and misalignment come from integrating the turns between static poses.')
+    return Page(title=f'gyro_noise_calibrate: {title}', data=doc,
+                in_short_markdown=_in_short(doc), figures=tuple(_figures(doc)),
+                tables=tuple(tables), method_markdown=method, command=None,
+                inputs=tuple(doc['sources']), version=doc.get('version', ''))
+
+
+def _in_short(doc):
+    """Return "In short": the two checks and the gyro note, worded as calibration.md words them."""
+    gc, cons = doc['gravity_check'], doc['consistency']
     short = ['## In short', '',
              f'* Gravity check (leave-one-out): '
              f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.']
@@ -58,22 +72,29 @@ def calibrate_page(result):
     short += ['', 'Uncertainties: one standard uncertainty, against the value during the '
               'calibration, from the variogram of the dwells (white noise and bias wander '
               'between dwells).']
-    tables = []
+    return '\n'.join(short)
+
+
+def _accelerometer_tables():
+    """Return the accelerometer's biases and scale factors, and its cross-axis terms."""
     rows = [(f'b{ax}', _pm(pointer('accel', 'bias_m_s2', i),
                            pointer('accel', 'bias_sigma_m_s2', i), '.4f', 1.0 / _MG), 'mg')
             for i, ax in enumerate('xyz')]
     rows += [(f'S{ax}', _pm(pointer('accel', 'scale_factor', i),
                             pointer('accel', 'scale_factor_sigma', i), '.4f', 100.0), '%')
              for i, ax in enumerate('xyz')]
-    tables.append(Table('Accelerometer (paper 001 Table 6 layout)',
-                        ('Parameter', 'Value +/- std. uncertainty', 'Unit'), tuple(rows)))
     mis = []
     for j, ax in enumerate('xyz'):
         mis.append((ax, *('-' if i == j else _pm(
             pointer('accel', 'misalignment', j, i), pointer('accel', 'misalignment_sigma', j, i),
             '.4f', 100.0) for i in range(3))))
-    tables.append(Table('Accelerometer cross-axis terms (%)', ('Measured axis', 'x', 'y', 'z'),
-                        tuple(mis), note='Row = measured axis, column = true axis.'))
+    return [Table('Accelerometer (paper 001 Table 6 layout)',
+                  ('Parameter', 'Value +/- std. uncertainty', 'Unit'), tuple(rows)),
+            Table('Accelerometer cross-axis terms (%)', ('Measured axis', 'x', 'y', 'z'),
+                  tuple(mis), note='Row = measured axis, column = true axis.')]
+
+
+def _gyro_table(doc):
     gyro = doc['gyro']
     est = gyro.get('estimated') or [[False] * 3] * 3
     grows = []
@@ -82,12 +103,17 @@ def calibrate_page(result):
                      '.4f', 100.0) if est[i][i] else 'not estimated')
         grows.append((ax, _pm(pointer('gyro', 'bias_rad_s', i),
                               pointer('gyro', 'bias_sigma_rad_s', i), '.5f', _DEG), scale))
-    tables.append(Table('Gyro', ('Axis', 'Bias (deg/s)', 'Scale factor (%)'), tuple(grows)))
-    tables.append(Table('Indicators (paper 001 section 6)', ('Indicator', 'Value', 'Unit'), (
+    return Table('Gyro', ('Axis', 'Bias (deg/s)', 'Scale factor (%)'), tuple(grows))
+
+
+def _check_tables(doc):
+    """Return the indicators, the gravity check and, when there are pairs, the consistency."""
+    gc, cons = doc['gravity_check'], doc['consistency']
+    tables = [Table('Indicators (paper 001 section 6)', ('Indicator', 'Value', 'Unit'), (
         ('Uniformity of the biases (std, ddof = one)',
          Num('/uniformity/accel_bias_std_m_s2', '.4f', scale=1.0 / _MG), 'mg'),
         ('Uniformity of the scale factors (std, ddof = one)',
-         Num('/uniformity/accel_scale_factor_std', '.4f', scale=100.0), '%'))))
+         Num('/uniformity/accel_scale_factor_std', '.4f', scale=100.0), '%')))]
     tables.append(Table(
         'Gravity check (leave-one-out)',
         ('Dwell', 'abs(a) - g (mg)', 'Sigma (mg)', 'z', 'Consistent'),
@@ -108,7 +134,11 @@ def calibrate_page(result):
                    Num(pointer('consistency', 'pairs', k, 'p_value'), '.3g'),
                    Num(pointer('consistency', 'pairs', k, 'consistent')))
                   for k in range(len(cons['pairs'])))))
-    tables.append(Table(
+    return tables
+
+
+def _dwell_table(doc):
+    return Table(
         'Dwells', ('Dwell', 'Start (s)', 'Duration (s)', 'Samples', 'NaN/Inf dropped',
                    'Tilt (deg)', 'Recording'),
         tuple((Num(pointer('dwells', k, 'orientation')),
@@ -117,7 +147,12 @@ def calibrate_page(result):
                Num(pointer('dwells', k, 'samples'), 'd'),
                Num(pointer('dwells', k, 'non_finite_samples'), 'd'),
                Num(pointer('dwells', k, 'tilt_deg'), '.2f'),
-               Num(pointer('dwells', k, 'source'))) for k in range(len(doc['dwells'])))))
+               Num(pointer('dwells', k, 'source'))) for k in range(len(doc['dwells']))))
+
+
+def _figures(doc):
+    """Return the leave-one-out gravity check per dwell (none without dwells)."""
+    gc = doc['gravity_check']
     figures = []
     if gc['dwells']:
         k = list(range(len(gc['dwells'])))
@@ -129,14 +164,7 @@ def calibrate_page(result):
                            ('sigma', k, [d['sigma_m_s2'] / _MG for d in gc['dwells']])],
                           title='Gravity check per dwell', x_label='dwell number (in order)',
                           y_label='acceleration (mg)')))
-    method = (f'{title}. Model: `{doc["model"]}`; frame: {doc["frame"]}. Gravity used: '
-              f'{doc["gravity_source"]} (the value is in calibration.json). Dwells are found by '
-              'the static detector (its settings are in calibration.json); the gyro scale factor '
-              'and misalignment come from integrating the turns between static poses.')
-    return Page(title=f'gyro_noise_calibrate: {title}', data=doc,
-                in_short_markdown='\n'.join(short), figures=tuple(figures),
-                tables=tuple(tables), method_markdown=method, command=None,
-                inputs=tuple(doc['sources']), version=doc.get('version', ''))
+    return figures
 
 
 def write_calibrate_html(result, out, *, command=None):

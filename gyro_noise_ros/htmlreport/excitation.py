@@ -49,11 +49,25 @@ def excitation_page(result, command=None):
     """
     doc = result.as_dict()
     params = result.params
-    k, unit = params.display
-    u = doc['unit']
     sides = list(result.sides)
     what = (f'sine dwell at {params.dwell_hz:g} Hz' if params.mode == 'dwell' else
             f'sine sweep {params.sweep[0]:g}-{params.sweep[1]:g} Hz at {params.sweep[2]:g} Hz/s')
+    tables = (_dwell_tables(doc, params, sides, what) if params.mode == 'dwell'
+              else _sweep_tables(doc, params, sides))
+    method = (f'Excitation check (paper 001 section 5.3): {what}. A dwell is fitted cycle by '
+              'cycle (frequency, amplitude, offset, harmonics); a sweep is binned by the '
+              'instantaneous frequency and compared with the reference record when one is '
+              'given (docs/reliability.md).')
+    return Page(title=f'gyro_noise_excitation: {what}', data=doc,
+                in_short_markdown=_in_short(doc, params, sides),
+                figures=tuple(_figures(result, params, sides)),
+                tables=tuple(tables), method_markdown=method,
+                command=None if command is None else tuple(command),
+                inputs=tuple(doc[s]['source'] for s in sides), version=doc.get('version', ''))
+
+
+def _in_short(doc, params, sides):
+    """Return "In short": each side's two verdicts, worded as excitation.md words them."""
     short = ['## In short', '',
              "Verdicts are statistical tests against each record's own noise, false-alarm "
              f'probability {params.alpha:g} each (docs/reliability.md).', '']
@@ -66,59 +80,77 @@ def excitation_page(result, command=None):
     for s in sides:
         for key, yes, no, p_key, name in checks:
             short.append(f'* **{s}**, {name}: {_verdict(doc[s], key, yes, no, p_key)}')
+    return '\n'.join(short)
+
+
+def _dwell_tables(doc, params, sides, what):
+    """Return the dwell's quantities per side and, with two sides, the change after / before."""
+    k, unit = params.display
+    u = doc['unit']
+    rows = [
+        ('Frequency (Hz)', 'frequency_hz', '.5f', 1.0),
+        ('Frequency sigma (Hz)', 'frequency_sigma_hz', '.1e', 1.0),
+        (f'Amplitude ({unit})', f'amplitude_{u}', '.5g', k),
+        (f'Amplitude sigma ({unit})', f'amplitude_sigma_{u}', '.2g', k),
+        (f'Offset ({unit})', f'offset_{u}', '.5g', k),
+        (f'Per-cycle amplitude mean ({unit})', f'cycle_amplitude_mean_{u}', '.5g', k),
+        (f'Per-cycle amplitude min ({unit})', f'cycle_amplitude_min_{u}', '.5g', k),
+        (f'Per-cycle amplitude max ({unit})', f'cycle_amplitude_max_{u}', '.5g', k),
+        ('Amplitude stability (std / mean of the cycles, %)', 'amplitude_stability', '.3f',
+         100.0),
+        ('Stability from noise alone (%)', 'amplitude_stability_noise', '.3f', 100.0),
+        ('Stability test p', 'stability_p', '.2g', 1.0),
+        ('THD, harmonics over the fundamental (%)', 'thd', '.3f', 100.0),
+        ('THD from noise alone (%)', 'thd_noise', '.3f', 100.0),
+        ('Distortion test p', 'distortion_p', '.2g', 1.0),
+        ('Excited span start (s)', 'start_s', '.2f', 1.0),
+        ('Excited span duration (s)', 'duration_s', '.2f', 1.0),
+        ('Cycles', 'cycles', 'd', 1.0)]
+    tables = [Table(f'Excitation check: {what}, {params.sensor} {params.axis}',
+                    ('Quantity', *sides),
+                    tuple((label, *(Num(pointer(s, key), fmt, scale=scale)
+                                    for s in sides))
+                          for label, key, fmt, scale in rows))]
+    if 'change' in doc:
+        tables.append(Table('After / before', ('Quantity', 'Change'), (
+            ('Amplitude (%)', (Num('/change/amplitude_relative', '.3f', scale=100.0),
+                               ' +/- ', Num('/change/amplitude_relative_sigma', '.3f',
+                                            scale=100.0))),
+            ('Amplitude change p', Num('/change/amplitude_change_p', '.2g')),
+            ('Amplitude change significant', Num('/change/amplitude_change_significant')),
+            ('Frequency (Hz)', Num('/change/frequency_hz', '+.5f')),
+            ('Amplitude stability (percentage points)',
+             Num('/change/amplitude_stability', '+.3f', scale=100.0)),
+            ('THD (percentage points)', Num('/change/thd', '+.3f', scale=100.0)))))
+    return tables
+
+
+def _sweep_tables(doc, params, sides):
+    """Return each side's amplitude per frequency bin (with the reference when there is one)."""
+    k, unit = params.display
+    u = doc['unit']
     tables = []
-    if params.mode == 'dwell':
-        rows = [
-            ('Frequency (Hz)', 'frequency_hz', '.5f', 1.0),
-            ('Frequency sigma (Hz)', 'frequency_sigma_hz', '.1e', 1.0),
-            (f'Amplitude ({unit})', f'amplitude_{u}', '.5g', k),
-            (f'Amplitude sigma ({unit})', f'amplitude_sigma_{u}', '.2g', k),
-            (f'Offset ({unit})', f'offset_{u}', '.5g', k),
-            (f'Per-cycle amplitude mean ({unit})', f'cycle_amplitude_mean_{u}', '.5g', k),
-            (f'Per-cycle amplitude min ({unit})', f'cycle_amplitude_min_{u}', '.5g', k),
-            (f'Per-cycle amplitude max ({unit})', f'cycle_amplitude_max_{u}', '.5g', k),
-            ('Amplitude stability (std / mean of the cycles, %)', 'amplitude_stability', '.3f',
-             100.0),
-            ('Stability from noise alone (%)', 'amplitude_stability_noise', '.3f', 100.0),
-            ('Stability test p', 'stability_p', '.2g', 1.0),
-            ('THD, harmonics over the fundamental (%)', 'thd', '.3f', 100.0),
-            ('THD from noise alone (%)', 'thd_noise', '.3f', 100.0),
-            ('Distortion test p', 'distortion_p', '.2g', 1.0),
-            ('Excited span start (s)', 'start_s', '.2f', 1.0),
-            ('Excited span duration (s)', 'duration_s', '.2f', 1.0),
-            ('Cycles', 'cycles', 'd', 1.0)]
-        tables.append(Table(f'Excitation check: {what}, {params.sensor} {params.axis}',
-                            ('Quantity', *sides),
-                            tuple((label, *(Num(pointer(s, key), fmt, scale=scale)
-                                            for s in sides))
-                                  for label, key, fmt, scale in rows)))
-        if 'change' in doc:
-            tables.append(Table('After / before', ('Quantity', 'Change'), (
-                ('Amplitude (%)', (Num('/change/amplitude_relative', '.3f', scale=100.0),
-                                   ' +/- ', Num('/change/amplitude_relative_sigma', '.3f',
-                                                scale=100.0))),
-                ('Amplitude change p', Num('/change/amplitude_change_p', '.2g')),
-                ('Amplitude change significant', Num('/change/amplitude_change_significant')),
-                ('Frequency (Hz)', Num('/change/frequency_hz', '+.5f')),
-                ('Amplitude stability (percentage points)',
-                 Num('/change/amplitude_stability', '+.3f', scale=100.0)),
-                ('THD (percentage points)', Num('/change/thd', '+.3f', scale=100.0)))))
-    else:
-        for s in sides:
-            cols = [('Rising', f'amplitude_up_{u}', k, '.5g'),
-                    ('Falling', f'amplitude_down_{u}', k, '.5g')]
-            if doc[s].get(f'reference_up_{u}') is not None:
-                cols += [('Reference rising', f'reference_up_{u}', k, '.5g'),
-                         ('Reference falling', f'reference_down_{u}', k, '.5g'),
-                         ('Deviation rising (%)', 'deviation_up', 100.0, '.3f'),
-                         ('Deviation falling (%)', 'deviation_down', 100.0, '.3f')]
-            tables.append(Table(
-                f'{s}: amplitude per frequency bin ({unit})',
-                ('f (Hz)', *(c[0] for c in cols)),
-                tuple((Num(pointer(s, 'bin_hz', i), '.3f'),
-                       *(Num(pointer(s, key, i), fmt, scale=scale)
-                         for _, key, scale, fmt in cols))
-                      for i in range(len(doc[s]['bin_hz'])))))
+    for s in sides:
+        cols = [('Rising', f'amplitude_up_{u}', k, '.5g'),
+                ('Falling', f'amplitude_down_{u}', k, '.5g')]
+        if doc[s].get(f'reference_up_{u}') is not None:
+            cols += [('Reference rising', f'reference_up_{u}', k, '.5g'),
+                     ('Reference falling', f'reference_down_{u}', k, '.5g'),
+                     ('Deviation rising (%)', 'deviation_up', 100.0, '.3f'),
+                     ('Deviation falling (%)', 'deviation_down', 100.0, '.3f')]
+        tables.append(Table(
+            f'{s}: amplitude per frequency bin ({unit})',
+            ('f (Hz)', *(c[0] for c in cols)),
+            tuple((Num(pointer(s, 'bin_hz', i), '.3f'),
+                   *(Num(pointer(s, key, i), fmt, scale=scale)
+                     for _, key, scale, fmt in cols))
+                  for i in range(len(doc[s]['bin_hz'])))))
+    return tables
+
+
+def _figures(result, params, sides):
+    """Return the whole acquisition and, for a sweep, the amplitude against frequency."""
+    k, unit = params.display
     figures = []
     series = [(s, result.sides[s].t_s, result.sides[s].x * k) for s in sides]
     figures.append((f'The whole acquisition of {params.sensor} {params.axis} (min/max envelope '
@@ -136,15 +168,7 @@ def excitation_page(result, command=None):
         figures.append(('Amplitude against the instantaneous frequency.',
                         series_figure(amp, title='Amplitude against frequency',
                                       x_label='frequency (Hz)', y_label=f'amplitude ({unit})')))
-    method = (f'Excitation check (paper 001 section 5.3): {what}. A dwell is fitted cycle by '
-              'cycle (frequency, amplitude, offset, harmonics); a sweep is binned by the '
-              'instantaneous frequency and compared with the reference record when one is '
-              'given (docs/reliability.md).')
-    return Page(title=f'gyro_noise_excitation: {what}', data=doc,
-                in_short_markdown='\n'.join(short), figures=tuple(figures),
-                tables=tuple(tables), method_markdown=method,
-                command=None if command is None else tuple(command),
-                inputs=tuple(doc[s]['source'] for s in sides), version=doc.get('version', ''))
+    return figures
 
 
 def write_excitation_html(result, out, *, command=None):

@@ -59,6 +59,24 @@ def reliability_page(doc, statics, command=None, in_short=()):
     Page
 
     """
+    method = ("Each static record's Allan deviation gives the bias-instability interval: the "
+              'averaging times where the deviation stays below c times its minimum (c in '
+              "reliability.json), with a width uncertainty from the record's equivalent degrees "
+              'of freedom. The width change is tested one-sided against the tolerance: beyond, '
+              'physiological, or undetermined with the record length that would decide; one '
+              'verdict per sensor from the mean over its three axes (docs/reliability.md).')
+    inputs = [p for v in doc['sources'].values() if v
+              for p in (v if isinstance(v, list) else [v])]
+    return Page(title='gyro_noise_reliability: before / after', data=doc,
+                in_short_markdown=_in_short(doc, in_short), figures=tuple(_figures(statics)),
+                tables=tuple(_verdict_tables(doc) + _noise_term_tables(doc)),
+                method_markdown=method,
+                command=None if command is None else tuple(command), inputs=tuple(inputs),
+                version=doc.get('version', ''))
+
+
+def _in_short(doc, in_short):
+    """Return "In short": the caller's sentences, each channel's verdict, what failed."""
     short = ['## In short', '']
     short += [f'* {line}' for line in in_short]
     short += ['', f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
@@ -70,6 +88,11 @@ def reliability_page(doc, statics, command=None, in_short=()):
     if doc['errors']:
         short += ['', 'Parts that could not be analysed:', '']
         short += [f'* {k}: {v}' for k, v in doc['errors'].items()]
+    return '\n'.join(short)
+
+
+def _verdict_tables(doc):
+    """Return the verdict per sensor, the interval per channel and the mean widths."""
     overall = Table(
         'Overall verdict per sensor (mean change over the three axes)',
         ('Sensor', 'Verdict', 'Basis', 'Mean change (%)', 'Sigma (%)'),
@@ -95,6 +118,11 @@ def reliability_page(doc, statics, command=None, in_short=()):
                Num(pointer('summary', sensor, 'mean_width_after_s'), '.4g'),
                Num(pointer('summary', sensor, 'mean_change'), '+.0f', scale=100.0))
               for sensor in doc['summary'])))
+    return tables
+
+
+def _noise_term_tables(doc):
+    """Return the noise terms of the static records with their intervals (none without)."""
     terms = []
     for ch, e in doc['noise_terms'].items():
         for side in ('before', 'after'):
@@ -106,10 +134,15 @@ def reliability_page(doc, statics, command=None, in_short=()):
                 p = pointer('noise_terms', ch, side, key)
                 terms.append((ch, side, Key(key), Num(p, '.4g'),
                               (Num(p + '_ci68/0', '.3g'), ' to ', Num(p + '_ci68/1', '.3g'))))
-    if terms:
-        tables.append(Table('Noise terms of the static records (unit in the name)',
-                            ('Channel', 'Record', 'Term', 'Value', 'Interval (68 %)'),
-                            tuple(terms)))
+    if not terms:
+        return []
+    return [Table('Noise terms of the static records (unit in the name)',
+                  ('Channel', 'Record', 'Term', 'Value', 'Interval (68 %)'),
+                  tuple(terms))]
+
+
+def _figures(statics):
+    """Return per sensor the Allan deviations of the static records before and after."""
     figures = []
     for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
         curves = []
@@ -130,19 +163,7 @@ def reliability_page(doc, statics, command=None, in_short=()):
                             '(cf. paper 001 Fig. 6); the interval bounds are in the table.',
                             allan_figure(curves, title=f'{sensor}: Allan deviation',
                                          unit=unit)))
-    method = ("Each static record's Allan deviation gives the bias-instability interval: the "
-              'averaging times where the deviation stays below c times its minimum (c in '
-              "reliability.json), with a width uncertainty from the record's equivalent degrees "
-              'of freedom. The width change is tested one-sided against the tolerance: beyond, '
-              'physiological, or undetermined with the record length that would decide; one '
-              'verdict per sensor from the mean over its three axes (docs/reliability.md).')
-    inputs = [p for v in doc['sources'].values() if v
-              for p in (v if isinstance(v, list) else [v])]
-    return Page(title='gyro_noise_reliability: before / after', data=doc,
-                in_short_markdown='\n'.join(short), figures=tuple(figures),
-                tables=tuple(tables), method_markdown=method,
-                command=None if command is None else tuple(command), inputs=tuple(inputs),
-                version=doc.get('version', ''))
+    return figures
 
 
 def write_reliability_html(doc, statics, out, *, command=None, in_short=()):

@@ -579,7 +579,6 @@ class Decoder:
         pos = 0
         res = _Collector()
         c = self._c
-        find = buf.find
         unpack_header = _HEADER.unpack_from
         crc_unpack = _CRC.unpack_from
         rules = _LENGTH_RULES
@@ -593,12 +592,7 @@ class Decoder:
                         pos = n
                     break
                 if buf[pos] != 0xA5 or buf[pos + 1] != 0x5A:
-                    nxt = find(SYNC, pos + 1)
-                    if nxt < 0:
-                        # keep a trailing A5: it may be the first half of the next sync marker
-                        nxt = n - 1 if (buf[n - 1] == 0xA5 and not final) else n
-                    self._discard_to(pos, nxt)
-                    pos = nxt
+                    pos = self._resync(buf, pos, n, final=final)
                     continue
                 if run is not None and self._disc_start is None:
                     # a subclass's bulk path at each sync marker; a frame that ends a discarded
@@ -643,24 +637,25 @@ class Decoder:
                 if self._disc_start is not None:
                     self._close_region(res, self._base + pos)
                 c['frames_ok'] += 1
-                payload_start = pos + HEADER_SIZE
                 if ftype == FRAME_SAMPLES:
                     pos = self._samples_frame(run, mv, pos, end, n, res)
                     continue
-                elif ftype == FRAME_ACK:
-                    res.acks.append(_decode_ack(mv[payload_start:end]))
-                    res.ack_positions.append(res.nsamples)
-                elif ftype == FRAME_CONFIGURE:
-                    res.commands.append(_decode_configure(mv[payload_start:end]))
-                elif ftype == FRAME_LOG_HEADER:
-                    res.headers.append(_decode_log_header(mv[payload_start:end]))
-                    res.header_positions.append(res.nsamples)
+                _control_frame(res, ftype, mv[pos + HEADER_SIZE:end])
                 pos = end + CRC_SIZE
         finally:
             mv.release()
         if final:
             self._close_region(res, self._base + pos)
         return self._finish_run(run, buf, pos, res)
+
+    def _resync(self, buf, pos, n, *, final):
+        """Discard from ``pos`` to the next sync marker (or the end); return where it starts."""
+        nxt = buf.find(SYNC, pos + 1)
+        if nxt < 0:
+            # keep a trailing A5: it may be the first half of the next sync marker
+            nxt = n - 1 if (buf[n - 1] == 0xA5 and not final) else n
+        self._discard_to(pos, nxt)
+        return nxt
 
     # Hooks of _run: this class decodes frame by frame; link.scan.ScanDecoder overrides them to
     # consume runs of SAMPLES frames in a compiled loop, with the byte-wise rules above unchanged.
@@ -808,6 +803,18 @@ class _Collector:
                             ack_positions=ack_pos, commands=tuple(self.commands),
                             headers=tuple(self.headers), header_positions=head_pos,
                             discarded=tuple(self.discarded))
+
+
+def _control_frame(res, ftype, payload):
+    """Decode a valid frame other than SAMPLES (ACK, CONFIGURE, LOG_HEADER) into ``res``."""
+    if ftype == FRAME_ACK:
+        res.acks.append(_decode_ack(payload))
+        res.ack_positions.append(res.nsamples)
+    elif ftype == FRAME_CONFIGURE:
+        res.commands.append(_decode_configure(payload))
+    elif ftype == FRAME_LOG_HEADER:
+        res.headers.append(_decode_log_header(payload))
+        res.header_positions.append(res.nsamples)
 
 
 def _decode_ack(payload):

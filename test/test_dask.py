@@ -21,7 +21,8 @@ path every other test checks): gyro_noise_analyze's chunks.csv must be byte-iden
 numbers of summary.json equal; a worker killed in the middle of a run changes nothing and every
 chunk is written exactly once; the explain ensemble and the thermal MOPSO give the same result.
 Without ``distributed`` (or under ``CI=true`` with it missing: a failure) the cluster tests skip
-with the reason; the missing-dependency test runs everywhere.
+with the reason; the missing-dependency test runs everywhere. The cluster tests are marked slow
+(``make test-slow``, which CI runs after ``make test``).
 """
 
 import csv
@@ -47,6 +48,12 @@ if not HAVE_DASK and os.environ.get('CI') == 'true':
                        'extra; test/test_dask.py must run in CI')
 needs_dask = pytest.mark.skipif(not HAVE_DASK,
                                 reason="distributed not installed (pip install -e '.[dask]')")
+#: The tests on the module's LocalCluster (started once, 2 worker processes): ``make test-slow``
+#: runs them. Each ships its work to the worker processes and compares it with the local run, so
+#: together they cost minutes of CPU on 2 cores (the thermal MOPSO one alone 40-80 s); the
+#: cluster-free tests of ``--scheduler`` (unreachable scheduler, distributed missing) stay in
+#: ``make test``.
+on_the_cluster = pytest.mark.slow
 
 RATE_HZ = 6660.0
 #: Small chunks and a coarse grid keep one chunk at a few ms; 14 chunks per axis, 3 axes.
@@ -109,6 +116,7 @@ def _same_as_local(local, out):
 
 
 @needs_dask
+@on_the_cluster
 def test_analyze_on_the_cluster_is_identical_to_the_local_run(dask_cluster, table, local_run,
                                                               tmp_path):
     out = tmp_path / 'dask'
@@ -120,6 +128,7 @@ def test_analyze_on_the_cluster_is_identical_to_the_local_run(dask_cluster, tabl
 
 
 @needs_dask
+@on_the_cluster
 def test_executor_map_keeps_order_with_a_small_window(dask_cluster):
     pool = cluster.make_executor(scheduler=dask_cluster)
     try:
@@ -136,6 +145,7 @@ def alignment(x):
 
 
 @needs_dask
+@on_the_cluster
 def test_work_units_get_aligned_arrays_and_full_size_chunks_match(dask_cluster):
     from gyro_noise_ros.core.engine import analyze_chunk, EngineConfig, NoiseEngine
 
@@ -164,6 +174,7 @@ def test_work_units_get_aligned_arrays_and_full_size_chunks_match(dask_cluster):
 
 
 @needs_dask
+@on_the_cluster
 @pytest.mark.filterwarnings('ignore:Port .* is already in use')  # another user's dashboard
 def test_workers_are_checked_on_connecting(dask_cluster, monkeypatch):
     from distributed import LocalCluster
@@ -188,6 +199,7 @@ def test_workers_are_checked_on_connecting(dask_cluster, monkeypatch):
 
 
 @needs_dask
+@on_the_cluster
 def test_a_task_error_is_the_task_error(dask_cluster):
     # A bug inside a work unit is not a cluster failure: its own exception comes back.
     pool = cluster.make_executor(scheduler=dask_cluster.scheduler_address)
@@ -199,6 +211,7 @@ def test_a_task_error_is_the_task_error(dask_cluster):
 
 
 @needs_dask
+@on_the_cluster
 def test_explain_ensemble_on_the_cluster_is_identical(dask_cluster):
     from gyro_noise_ros.explain.synthetic import make_record
     from gyro_noise_ros.explain.workflow import explain
@@ -221,6 +234,7 @@ def test_explain_ensemble_on_the_cluster_is_identical(dask_cluster):
 
 
 @needs_dask
+@on_the_cluster
 def test_explain_cli_with_scheduler_writes_the_local_explain_json(dask_cluster, table, tmp_path):
     # The CLI wiring: --scheduler reaches explain() (no step needed here: the initial ensemble
     # is already evaluated through the cluster).
@@ -253,6 +267,7 @@ def _thermal_bag(path, seed):
 
 
 @needs_dask
+@on_the_cluster
 def test_thermal_mopso_particles_on_the_cluster_give_the_same_model(dask_cluster, tmp_path):
     from gyro_noise_ros.thermal import methods
     from gyro_noise_ros.thermal.bag_io import read_thermal_run
@@ -302,6 +317,9 @@ def test_unreachable_scheduler_is_one_line_and_exit_5(tool, table, tmp_path, cap
 
 
 @needs_dask
+# slow: a fresh interpreter that imports distributed and the analyzer (10-20 s); the same line
+# in-process is test_unreachable_scheduler_is_one_line_and_exit_5
+@pytest.mark.slow
 def test_unreachable_scheduler_whole_process_stderr_is_one_line(table, tmp_path):
     # In a process of its own: nothing may print after the error line (e.g. a half-started
     # Client's traceback when it is collected at exit).
@@ -357,6 +375,7 @@ def die_once(marker, chunk, job, **kwargs):
 
 
 @needs_dask
+@on_the_cluster
 def test_a_worker_killed_mid_run_loses_and_duplicates_nothing(dask_cluster, table, local_run,
                                                               tmp_path, monkeypatch):
     # The worker process running chunk 5 of axis y dies in the middle of the run (SIGKILL, as

@@ -88,6 +88,8 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path, ros_graph):
     assert _our_processes(domain) == []
 
 
+# slow: the live chain of the demo in real time until its first chunk (20-30 s)
+@pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path, ros_graph):
     out = tmp_path / 'demo'

@@ -484,6 +484,8 @@ def _interrupt_subprocess(argv, ready, cwd):
     return proc.returncode, ''.join(seen) + rest
 
 
+# slow: a subprocess analysing 100,000 samples until its first tenth, then SIGINT (10-20 s)
+@pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_a_real_sigint_to_analyze_leaves_nothing(tmp_path, make_record):
     bag = tmp_path / 'long'
@@ -499,6 +501,8 @@ def test_a_real_sigint_to_analyze_leaves_nothing(tmp_path, make_record):
     assert _visible(out) == []
 
 
+# slow: a subprocess explaining a record until its first axis, then SIGINT (10 s)
+@pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_a_real_sigint_to_explain_leaves_nothing(inputs, tmp_path):
     out = tmp_path / 'out'

@@ -377,6 +377,7 @@ def test_drift_significance_uses_student_t_quantile():
     assert 10.0 < drift_t_threshold(10.0, 100) < 20.0
 
 
+@pytest.mark.slow  # 20,000 Monte Carlo fits, one at a time (7-15 s)
 def test_no_drift_false_alarm_on_white_noise_with_few_chunks():
     """Monte Carlo of the significance rule alone: white chunk biases, 4 chunks, 3-sigma level."""
     from gyro_noise_ros.core.chunks import offset_drift

@@ -137,6 +137,7 @@ def test_explain_reads_every_real_record_that_analyze_reads():
     assert read == 4, [p.name for p in files]
 
 
+@pytest.mark.slow  # explain on all three axes of a real record (5-10 s)
 def test_explain_on_the_xio_csv_exits_as_analyze_does(tmp_path, capsys):
     path = real_data('xio_fusion_sensor_data', 'sensor_data.csv')
     # the longest static segment is 17 s (1,733 samples): too short for both tools (4)
@@ -247,6 +248,7 @@ def test_start_end_window_on_mpu6050(tmp_path, capsys):
     assert analyze.main([str(path), '--out', str(tmp_path / 'x'), *bad]) == 2
 
 
+@pytest.mark.slow  # explain on three axes of a minute at 250 Hz (10-20 s)
 def test_explain_runs_all_axes_in_one_report_on_a_minute_at_250_hz(tmp_path, capsys):
     # A minute of the real PX4 log at rest (the handling before is skipped automatically):
     # 15,246 samples, under the old 16,384-sample floor. The whole loop runs on every axis (6

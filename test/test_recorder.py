@@ -287,6 +287,8 @@ def test_killed_recorder_keeps_all_but_the_last_second(tmp_path, storage, ros_gr
     assert counts['/imu/data_raw'] == kept and fixed.messages == sum(counts.values())
 
 
+# slow: two publisher processes and the recorder in real time (10 s)
+@pytest.mark.slow
 @pytest.mark.timeout(180)
 def test_two_publishers_are_counted_apart_and_named(tmp_path):
     # Two replayers (two writers of imu/data_raw, as a second driver or another robot's graph

@@ -73,6 +73,7 @@ def bags(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # the whole before/after procedure with figures and report.html (5-10 s)
 def test_full_procedure(tmp_path, bags, capsys):
     out = tmp_path / 'rep'
     assert main(['--before-calibration', bags['cal_before'], '--before-static', bags['before'],

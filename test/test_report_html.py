@@ -194,6 +194,8 @@ def test_demo_length_report_is_small(tmp_path):
 
 # --- gyro_noise_thermal compare | apply ------------------------------------------------------
 
+# slow (both tests on it): compare of two methods, a fit and two applies with figures and pages
+# (10-20 s); the browser checks the same pages in test_report_html_browser.py.
 @pytest.fixture(scope='module')
 def thermal_outputs(tmp_path_factory):
     """Compare two toy methods and apply one (figures and pages written)."""
@@ -237,6 +239,7 @@ def make_thermal_outputs(tmp):
     return tmp, bags
 
 
+@pytest.mark.slow
 def test_thermal_compare_page_is_compare_json(thermal_outputs):
     tmp, bags = thermal_outputs
     doc = json.loads((tmp / 'c' / 'compare.json').read_text())
@@ -254,6 +257,7 @@ def test_thermal_compare_page_is_compare_json(thermal_outputs):
         assert bag in page.sections['method']
 
 
+@pytest.mark.slow
 def test_thermal_apply_page_is_metrics_json(thermal_outputs):
     tmp, _ = thermal_outputs
     doc = json.loads((tmp / 'a' / 'metrics.json').read_text())

@@ -26,6 +26,11 @@ import pytest
 from test_report_html import (FAST, make_calibration, make_excitation, make_explain,
                               make_reliability, make_thermal_outputs, write_bag)
 
+# slow: a headless Chromium per page (3-8 s each) on top of the tool run that writes it
+# (the thermal pair 15-30 s); the same pages' numbers are checked without a browser in
+# test_report_html.py, which make test runs.
+pytestmark = pytest.mark.slow
+
 
 @pytest.mark.timeout(300)
 def test_analyze_report_renders(tmp_path):

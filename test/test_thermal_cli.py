@@ -53,6 +53,7 @@ def _bag(path, seed, *, lo=10.0, hi=40.0, n=N, gyro_nan=False, temp_shift_s=0.0,
     return str(path), gyro, temp_at_gyro
 
 
+@pytest.mark.slow  # fit, apply with every figure and the compensated bag (10-16 s)
 def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     train, _, _ = _bag(tmp_path / 'train', 1)
     test, gyro, temp = _bag(tmp_path / 'test', 2, storage='mcap')
@@ -95,6 +96,7 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     assert '| axis |' in (out / 'report.md').read_text()
 
 
+@pytest.mark.slow  # fit and apply with every figure drawn (8-14 s)
 def test_apply_with_figures_and_in_sample_warning(tmp_path):
     train, _, _ = _bag(tmp_path / 'train', 1)
     assert main(['fit', train, '--method', 'toy_lowpass', '--out', str(tmp_path / 'm'),

@@ -52,6 +52,9 @@ def test_sample_matches_loop(seed, m):
     assert sample_entropy(x, m=m) == pytest.approx(sample_entropy_loop(x, m=m), rel=1e-12)
 
 
+# slow: importing antropy pulls scikit-learn and compiles its numba kernels (10-25 s); the loop
+# twins above check the same functions in make test
+@pytest.mark.slow
 def test_against_antropy():
     ant = pytest.importorskip('antropy')
     x = _series(5, 2000)

@@ -67,6 +67,7 @@ def _check_pngs(out, text, names):
         assert f']({name})' in text, name
 
 
+@pytest.mark.slow  # a parallel-model fit and an apply drawing every paper figure (15-25 s)
 def test_apply_parallel_report_has_every_paper_figure(pair):
     d, test = pair
     out = d / 'a'
@@ -88,6 +89,7 @@ def test_apply_parallel_report_has_every_paper_figure(pair):
     assert sorted(p.name for p in out.glob('*.png')) == sorted(names)
 
 
+@pytest.mark.slow  # fit and apply with every figure (7-11 s)
 def test_baseline_report_says_which_analogues_it_lacks(tmp_path):
     train, _, _ = _bag(tmp_path / 'train', 1)
     test, _, _ = _bag(tmp_path / 'test', 2)
@@ -112,6 +114,7 @@ def test_baseline_report_says_which_analogues_it_lacks(tmp_path):
                             'fig19_allan.png'])
 
 
+@pytest.mark.slow  # apply, then the figures redrawn from it (12-15 s)
 def test_report_figures_reuse_the_last_apply(tmp_path, monkeypatch):
     train, _ = thermal_run(1, n=3000)
     test, _ = thermal_run(2, n=3000)

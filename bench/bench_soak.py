@@ -439,7 +439,7 @@ def _count(values, key):
 
 
 def _held(diag):
-    """The compensator's cumulative count of samples released with a held offset."""
+    """Return the compensator's cumulative count of samples released with a held offset."""
     return _count(diag.values('imu_compensator: compensation'),
                   'Messages compensated with a held offset')
 
@@ -778,9 +778,9 @@ def _judge(args, chain, report, bags):
 def _print(report, passed):
     load = ', '.join(f'{report[k][0]:.1f}' for k in ('load_start', 'load_end') if k in report)
     # A starved chain (load well above the cores) fails the checks by lag, not by a fault: say so.
-    print(f"\n{report['minutes']:g} min at {report['odr_hz']:g} Hz, {report['cores']} cores, "
-          "1-min load average at the "
-          f'start and the end: {load}')
+    minutes, odr, cores = report['minutes'], report['odr_hz'], report['cores']
+    print(f'\n{minutes:g} min at {odr:g} Hz, {cores} cores, 1-min load average at the start and '
+          f'the end: {load}')
     print('\nprocess             RSS first  RSS last  slope (MB/h)       CPU %  samples')
     for name, r in report['rss'].items():
         first = '-' if r['first_mb'] is None else f"{r['first_mb']:.0f}"

@@ -26,6 +26,7 @@ from pathlib import Path
 from _realdata import real_data
 from gyro_noise_ros.bag.tabular import TableImuReader
 from gyro_noise_ros.cli import analyze
+from gyro_noise_ros.units import RAD_TO_DEG
 import numpy as np
 import pytest
 
@@ -84,8 +85,8 @@ def test_adis16405_against_its_datasheet(table):
         r = v['readout']
         # typical values (0.007 deg/s, 2.0 deg/sqrt(h)); one unit of the six runs: a factor 1.5
         # either way is what "typical" allows, and what a band-limited bump (x50) breaks
-        bs = r.bias_stability_rad_s * t.DEG / t.ADIS_BIAS_STABILITY_DEG_S
-        arw = r.arw_rad_per_sqrt_s * t.DEG * 60.0 / t.ADIS_ARW_DEG_SQRT_H
+        bs = r.bias_stability_rad_s * RAD_TO_DEG / t.ADIS_BIAS_STABILITY_DEG_S
+        arw = r.arw_rad_per_sqrt_s * RAD_TO_DEG * 60.0 / t.ADIS_ARW_DEG_SQRT_H
         assert 1 / 1.5 < bs < 1.5 and 1 / 1.5 < arw < 1.5, (name, axis, bs, arw)
         assert r.arw_from_region
 

@@ -394,7 +394,7 @@ def main(argv=None):
             v['rate_hz'] = rate
             results.append(((name, axis, note), v))
             bias_deg_s = v['readout'].bias_stability_rad_s * RAD_TO_DEG
-            print(f"{name} {axis}: bias stability {bias_deg_s:.5f} "
+            print(f'{name} {axis}: bias stability {bias_deg_s:.5f} '
                   f"deg/s (x{v['bias_ratio']:.3f}), ARW x{v['arw_ratio']:.3f}", file=sys.stderr)
     sim = simulate(args.reps, args.seed)
     text = markdown(results, sim, args, time.time() - t0)

@@ -89,12 +89,18 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path, ros_graph):
 
 
 # slow: the live chain of the demo in real time until its first chunk (20-30 s)
+def _sigint_default():
+    """Give the child the default SIGINT (a shell's background job starts with it ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_ctrl_c_stops_every_process_and_keeps_the_recording(tmp_path, ros_graph):
     out = tmp_path / 'demo'
     proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.demo', '--quick', '--out',
-                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_sigint_default)
     lines = []
     reader = threading.Thread(target=lambda: lines.extend(iter(proc.stdout.readline, '')),
                               daemon=True)

@@ -463,10 +463,16 @@ def test_explain_disk_full_is_an_output_error(inputs, explain_result, tmp_path, 
     assert _visible(out) == []
 
 
+def _sigint_default():
+    """Give the child the default SIGINT (a shell's background job starts with it ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt_subprocess(argv, ready, cwd):
     """Start a tool, SIGINT it once stderr shows ``ready``; return (code, stderr)."""
     proc = subprocess.Popen([sys.executable, '-m', *argv], stderr=subprocess.PIPE,
-                            stdout=subprocess.DEVNULL, text=True, cwd=cwd)
+                            stdout=subprocess.DEVNULL, text=True, cwd=cwd,
+                            preexec_fn=_sigint_default)
     try:
         seen = []
         for line in proc.stderr:

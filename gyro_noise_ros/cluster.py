@@ -42,14 +42,18 @@ extra. A scheduler that cannot be reached, or is lost during the run, gives
 
 import asyncio
 import collections
+from collections.abc import Callable, Iterable, Iterator
 import concurrent.futures as cf
 import itertools
 import logging
 import os
 import pickle
+from typing import Any, TypeVar
 
 from . import __version__
 from .errors import ClusterError, ParameterError
+
+_T = TypeVar('_T')
 
 #: pip extra that installs Dask distributed.
 EXTRA = 'dask'
@@ -59,7 +63,7 @@ MISSING = ('--scheduler needs Dask distributed, which is not installed: pip inst
            'python3-distributed')
 
 
-def dask_available():
+def dask_available() -> bool:
     """
     Tell whether ``distributed`` can be imported.
 
@@ -75,7 +79,8 @@ def dask_available():
     return True
 
 
-def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
+def make_executor(jobs: int = 1, scheduler: Any = None, *, timeout_s: float | None = None,
+                  warn: Callable[[str], None] | None = None) -> cf.Executor | None:
     """
     Return the executor for the work units: local processes, or a Dask cluster.
 
@@ -140,7 +145,7 @@ def make_executor(jobs=1, scheduler=None, *, timeout_s=None, warn=None):
     return DaskExecutor(client, restore=restore)
 
 
-def _mute_dask_logs():
+def _mute_dask_logs() -> Callable[[], None]:
     """
     Keep Dask's own log handlers (stderr) to CRITICAL while the tool's client is open.
 
@@ -152,14 +157,14 @@ def _mute_dask_logs():
     for handler, _ in saved:
         handler.setLevel(max(handler.level, logging.CRITICAL))
 
-    def restore():
+    def restore() -> None:
         for handler, level in saved:
             handler.setLevel(level)
 
     return restore
 
 
-async def _probe(address, timeout_s):
+async def _probe(address: str, timeout_s: float) -> None:
     from distributed.comm import connect
     from distributed.security import Security
 
@@ -169,12 +174,12 @@ async def _probe(address, timeout_s):
     await comm.close()
 
 
-def _reason(err):
+def _reason(err: BaseException) -> str:
     text = ' '.join(str(err).split())
     return f'{type(err).__name__}: {text}' if text else type(err).__name__
 
 
-def worker_facts():
+def worker_facts() -> dict[str, str | None]:
     """
     Return what the client checks on every worker (runs on the worker).
 
@@ -189,7 +194,7 @@ def worker_facts():
             'malloc_trim_threshold': os.environ.get('MALLOC_TRIM_THRESHOLD_')}
 
 
-def _small_trim(value):
+def _small_trim(value: str | None) -> bool:
     """Tell whether a MALLOC_TRIM_THRESHOLD_ value makes glibc return freed memory too eagerly."""
     if value is None:
         return False
@@ -207,7 +212,7 @@ MALLOC_ADVICE = ('set distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_
                  "workers' Dask configuration for about twice the speed (docs/scale.md)")
 
 
-def _check_workers(client, address, warn):
+def _check_workers(client: Any, address: str, warn: Callable[[str], None] | None) -> None:
     """Refuse workers without this version of gyro_noise_ros; warn about a slow set-up."""
     try:
         found = client.run(worker_facts, on_error='return')
@@ -254,19 +259,19 @@ class DaskExecutor(cf.Executor):
 
     """
 
-    def __init__(self, client, *, restore=None):
+    def __init__(self, client: Any, *, restore: Callable[[], None] | None = None) -> None:
         self.client = client
         self._restore = restore
-        self.address = client.scheduler.address
-        self._pending = set()
+        self.address: str = client.scheduler.address
+        self._pending: set[Any] = set()
         self._closed = False
 
     @property
-    def nthreads(self):
+    def nthreads(self) -> int:
         """Return the worker threads in the cluster now (>= 1)."""
         return max(1, sum(self.client.nthreads().values()))
 
-    def submit(self, fn, /, *args, **kwargs):
+    def submit(self, fn: Callable[..., _T], /, *args: Any, **kwargs: Any) -> 'cf.Future[_T]':
         """
         Submit ``fn(*args, **kwargs)`` as a pure Dask task.
 
@@ -288,15 +293,15 @@ class DaskExecutor(cf.Executor):
 
         payload = cloudpickle.dumps((fn, args, kwargs), protocol=_PROTOCOL)
         task = self.client.submit(run_pickled, payload, pure=True)
-        out = cf.Future()
+        out: cf.Future[_T] = cf.Future()
         self._pending.add(task)
         address = self.address
 
-        def cancelled(out):
+        def cancelled(out: 'cf.Future[_T]') -> None:
             if out.cancelled():  # the caller gave up on it: so does the cluster
                 task.cancel()
 
-        def done(task):
+        def done(task: Any) -> None:
             self._pending.discard(task)
             if out.done():
                 return
@@ -316,7 +321,9 @@ class DaskExecutor(cf.Executor):
         task.add_done_callback(done)
         return out
 
-    def map(self, fn, *iterables, timeout=None, chunksize=1, window=None):  # noqa: A003
+    def map(self, fn: Callable[..., _T], *iterables: Iterable[Any],  # noqa: A003
+            timeout: float | None = None, chunksize: int = 1,
+            window: int | None = None) -> Iterator[_T]:
         """
         Return an iterator of ``fn(*args)`` over ``zip(*iterables)``, in order.
 
@@ -341,7 +348,7 @@ class DaskExecutor(cf.Executor):
         window = int(window) if window else 2 * self.nthreads
         args = zip(*iterables)
 
-        def results():
+        def results() -> Iterator[_T]:
             inflight = collections.deque(self.submit(fn, *a)
                                          for a in itertools.islice(args, window))
             try:
@@ -355,7 +362,7 @@ class DaskExecutor(cf.Executor):
 
         return results()
 
-    def shutdown(self, wait=True, *, cancel_futures=False):
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """
         Cancel what is left if asked, and close the client (the cluster keeps running).
 
@@ -391,7 +398,7 @@ class DaskExecutor(cf.Executor):
 _PROTOCOL = 4
 
 
-def run_pickled(payload):
+def run_pickled(payload: bytes) -> bytes:
     """
     Run one work unit on a Dask worker: unpickle ``(fn, args, kwargs)``, call, pickle the result.
 
@@ -410,7 +417,7 @@ def run_pickled(payload):
     return pickle.dumps(fn(*args, **kwargs), protocol=_PROTOCOL)
 
 
-def _translate(err, address):
+def _translate(err: BaseException, address: str) -> BaseException:
     """Turn Dask's failures of the cluster (not of the task) into ClusterError."""
     name = type(err).__name__
     if isinstance(err, cf.CancelledError) or name in ('CancelledError', 'FutureCancelledError'):

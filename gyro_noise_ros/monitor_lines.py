@@ -22,7 +22,9 @@ A status is anything shaped like ``diagnostic_msgs/DiagnosticStatus``: ``name``,
 or one byte), ``message`` and ``values`` (items with ``key`` and ``value``).
 """
 
+from collections.abc import Iterable, Sequence
 import re
+from typing import Any
 
 LEVEL_NAMES = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 
@@ -35,7 +37,7 @@ _ECHO_KEYS = (('Bias (deg/s)', 'bias'), ('Fractional order, variance method', 'a
 AXIS_PART = re.compile(r'\b([xyz]) (OK|WARN|ERROR|STALE) bias \S+ drift (\S+)')
 
 
-def level_of(status):
+def level_of(status: Any) -> int:
     """
     Return the level of a status as an int (0 OK, 1 WARN, 2 ERROR, 3 STALE).
 
@@ -53,7 +55,7 @@ def level_of(status):
     return level[0] if isinstance(level, (bytes, bytearray)) else int(level)
 
 
-def values_of(status):
+def values_of(status: Any) -> dict[str, str]:
     """
     Return the key/values of a status as a dict.
 
@@ -70,7 +72,7 @@ def values_of(status):
     return {kv.key: kv.value for kv in status.values}
 
 
-def format_status(status):
+def format_status(status: Any) -> str:
     """
     Return the compact one-line form of one analyzer status (level, name, key numbers, message).
 
@@ -90,7 +92,7 @@ def format_status(status):
     return f'{level:<5} {status.name}: {numbers} | {status.message}'
 
 
-def format_array(statuses):
+def format_array(statuses: Sequence[Any]) -> str:
     """
     Return one line for all axes of one analyzer (the ``--compact`` form ``make demo`` prints).
 
@@ -107,7 +109,7 @@ def format_array(statuses):
     """
     levels = [level_of(status) for status in statuses]
     worst_i = max(range(len(statuses)), key=lambda i: (levels[i], -i))
-    parts = []
+    parts: list[str] = []
     chunk = lost = '?'
     for status, level in zip(statuses, levels):
         v = values_of(status)
@@ -126,7 +128,7 @@ def format_array(statuses):
     return ' | '.join([head, *parts, tail])
 
 
-def progress_state(status):
+def progress_state(status: Any) -> tuple[int, str | None, str | None]:
     """
     Return what makes a status worth printing again: level and chunk counts.
 
@@ -145,7 +147,7 @@ def progress_state(status):
     return (level_of(status), values.get('Chunks analysed'), values.get('Chunks skipped'))
 
 
-def chunks_done(states):
+def chunks_done(states: Iterable[tuple[int, str | None, str | None]]) -> int:
     """
     Return the chunks every axis has finished (analysed plus skipped), from progress states.
 
@@ -162,7 +164,7 @@ def chunks_done(states):
     return min(int(a or 0) + int(str(b or '0').split(' ')[0]) for _, a, b in states)
 
 
-def parse_axis_parts(line):
+def parse_axis_parts(line: str) -> list[tuple[str, str, float]]:
     """
     Read the axis parts back from a :func:`format_array` line.
 
@@ -177,7 +179,7 @@ def parse_axis_parts(line):
         (axis, level, drift in (deg/s)/h; NaN where not a number) for each axis in the line.
 
     """
-    out = []
+    out: list[tuple[str, str, float]] = []
     for axis, level, drift in AXIS_PART.findall(line):
         try:
             value = float(drift)

@@ -44,6 +44,7 @@ out ports to any process and a participant's port could be taken.
 No ROS is imported here: the tests, ``cli/demo.py`` and ``bench/`` call it before any rclpy.
 """
 
+from collections.abc import Callable, Iterable, Mapping, MutableMapping, Sequence
 import errno
 import fcntl
 import os
@@ -81,7 +82,7 @@ class DomainUnavailableError(GyroNoiseError):
     """No ROS domain in the candidate range is free on this host (all bound or held)."""
 
 
-def domain_ports(domain_id):
+def domain_ports(domain_id: int) -> range:
     """
     Return the block of UDP ports RTPS assigns to a domain.
 
@@ -100,14 +101,15 @@ def domain_ports(domain_id):
     return range(start, start + DOMAIN_GAIN)
 
 
-def participant_ports(domain_id, participant_id):
+def participant_ports(domain_id: int, participant_id: int) -> tuple[int, int]:
     """Return the discovery and user unicast ports of one participant of a domain."""
     port = (PORT_BASE + DOMAIN_GAIN * int(domain_id) + DISCOVERY_UNICAST_OFFSET
             + PARTICIPANT_GAIN * int(participant_id))
     return port, port + 1
 
 
-def ephemeral_low(path='/proc/sys/net/ipv4/ip_local_port_range'):
+def ephemeral_low(path: str | os.PathLike[str] = '/proc/sys/net/ipv4/ip_local_port_range'
+                  ) -> int:
     """Return the first port of the Linux ephemeral range (32768 when it cannot be read)."""
     try:
         return int(Path(path).read_text().split()[0])
@@ -115,7 +117,7 @@ def ephemeral_low(path='/proc/sys/net/ipv4/ip_local_port_range'):
         return DEFAULT_EPHEMERAL_LOW
 
 
-def candidate_domains(low=None):
+def candidate_domains(low: int | None = None) -> list[int]:
     """
     Return the domain IDs a private graph may use, in increasing order.
 
@@ -135,7 +137,7 @@ def candidate_domains(low=None):
     return [d for d in DOMAIN_IDS if participant_ports(d, MAX_PARTICIPANTS)[1] < low]
 
 
-def udp_ports_in_use(paths=_PROC_NET_UDP):
+def udp_ports_in_use(paths: Iterable[str] = _PROC_NET_UDP) -> set[int] | None:
     """
     Return the local ports of every UDP socket of this network namespace.
 
@@ -150,7 +152,8 @@ def udp_ports_in_use(paths=_PROC_NET_UDP):
         Bound ports; None when no table can be read (not Linux).
 
     """
-    ports, read_any = set(), False
+    ports: set[int] = set()
+    read_any = False
     for path in paths:
         try:
             lines = Path(path).read_text().splitlines()[1:]
@@ -164,7 +167,7 @@ def udp_ports_in_use(paths=_PROC_NET_UDP):
     return ports if read_any else None
 
 
-def _bind_probe(port):
+def _bind_probe(port: int) -> bool:
     """Return True when a UDP socket can bind ``port`` on every interface right now."""
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         try:
@@ -174,7 +177,7 @@ def _bind_probe(port):
     return True
 
 
-def domain_in_use(domain_id, ports=None):
+def domain_in_use(domain_id: int, ports: set[int] | None = None) -> bool:
     """
     Tell whether any process of this host has a socket in the domain's port block.
 
@@ -198,12 +201,12 @@ def domain_in_use(domain_id, ports=None):
     return not all(_bind_probe(p) for p in participant_ports(domain_id, 0))
 
 
-def default_lock_dir():
+def default_lock_dir() -> Path:
     """Return the directory of the domain lock files (shared by every user of the host)."""
     return Path(tempfile.gettempdir()) / 'gyro_noise_ros_domains'
 
 
-def _open_lock(lock_dir, domain_id):
+def _open_lock(lock_dir: Path, domain_id: int) -> int:
     lock_dir.mkdir(mode=0o777, parents=True, exist_ok=True)
     try:
         # Sticky and world-writable like /tmp, so every user of the host shares the locks.
@@ -222,7 +225,7 @@ def _open_lock(lock_dir, domain_id):
     return fd
 
 
-def isolated_env(domain_id, base=None):
+def isolated_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
     """
     Return the environment of a process in a private graph.
 
@@ -263,28 +266,28 @@ class DomainLease:
 
     """
 
-    def __init__(self, domain_id, fd, lock_path):
+    def __init__(self, domain_id: int, fd: int, lock_path: Path) -> None:
         self.domain_id = int(domain_id)
         self.lock_path = lock_path
-        self._fd = fd
+        self._fd: int | None = fd
 
     @property
-    def held(self):
+    def held(self) -> bool:
         """bool: The lock is still held."""
         return self._fd is not None
 
-    def env(self, base=None):
+    def env(self, base: Mapping[str, str] | None = None) -> dict[str, str]:
         """Return :func:`isolated_env` for this domain."""
         return isolated_env(self.domain_id, base)
 
-    def export(self, environ=None):
+    def export(self, environ: MutableMapping[str, str] | None = None) -> None:
         """Make ``environ`` (default ``os.environ``) this graph's environment, in place."""
         environ = os.environ if environ is None else environ
         for name in UNSET_VARIABLES:
             environ.pop(name, None)
         environ.update(self.env(environ))
 
-    def release(self):
+    def release(self) -> None:
         """Release the lock (idempotent)."""
         if self._fd is not None:
             try:
@@ -293,20 +296,22 @@ class DomainLease:
                 os.close(self._fd)
                 self._fd = None
 
-    def __enter__(self):
+    def __enter__(self) -> 'DomainLease':
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.release()
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f'DomainLease(domain_id={self.domain_id}, held={self.held})'
 
 
 _next_start = [os.getpid()]
 
 
-def lease_domain(*, candidates=None, lock_dir=None, in_use=None):
+def lease_domain(*, candidates: Sequence[int] | None = None,
+                 lock_dir: str | os.PathLike[str] | None = None,
+                 in_use: Callable[[int], bool] | None = None) -> DomainLease:
     """
     Find a domain nobody on this host uses and hold it.
 
@@ -342,7 +347,7 @@ def lease_domain(*, candidates=None, lock_dir=None, in_use=None):
     if in_use is None:
         ports = udp_ports_in_use()
 
-        def in_use(domain_id):
+        def in_use(domain_id: int) -> bool:
             return domain_in_use(domain_id, ports)
 
     start = _next_start[0] % len(candidates)

@@ -35,6 +35,7 @@ or a non-numeric value is unreadable (3); a CSV with a header and no rows is rea
 nothing to analyse (4).
 """
 
+from collections.abc import Callable, Sequence
 import os
 from pathlib import Path
 import sys
@@ -47,7 +48,7 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 
 
-def check_out_option(path, *, option='--out'):
+def check_out_option(path: str | os.PathLike[str], *, option: str = '--out') -> None:
     """
     Refuse an output folder that cannot be made, before any long work (nothing is created).
 
@@ -82,7 +83,8 @@ def check_out_option(path, *, option='--out'):
         raise OutputError(f'{option} {str(out)!r} {what}: permission denied')
 
 
-def run_cli(prog, body, argv):
+def run_cli(prog: str, body: Callable[[list[str]], int | None],
+            argv: Sequence[str] | None) -> int:
     """
     Run ``body(argv)`` and turn deliberate errors into one line on stderr and an exit code.
 

@@ -31,7 +31,10 @@ its own set-points, compressed ``--thermal-compress`` times. See ``docs/thermal_
 """
 
 import argparse
+from collections.abc import Callable
 import os
+from pathlib import Path
+from typing import Any, BinaryIO, TYPE_CHECKING
 
 import numpy as np
 
@@ -45,6 +48,10 @@ from ..errors import OutputError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..outputs import staged_new_dir
 from ..units import DEG_TO_RAD, MG_TO_M_S2, STANDARD_GRAVITY_M_S2
+
+if TYPE_CHECKING:
+    from ..link.emulator import BoardModel
+    from ..thermal.simulate import ThermalStream
 
 #: Default cross-axis terms (%), xy, xz, yx, yz, zx, zy (a few tenths of a degree).
 DEFAULT_MISALIGNMENT_PCT = (0.10, -0.05, 0.08, 0.03, -0.10, 0.05)
@@ -61,7 +68,7 @@ THERMAL_CHOICES = ('off', 'oven', 'heating', 'cooling', 'staircase', 'staircase_
                    'cool_reheat', 'soak', 'sine')
 
 
-def thermal_from_args(args):
+def thermal_from_args(args: argparse.Namespace) -> 'ThermalStream | None':
     """
     Build the board's thermal stream of ``--thermal`` (None for ``off``).
 
@@ -90,8 +97,8 @@ def thermal_from_args(args):
                          compress=args.thermal_compress, room_c=room)
 
 
-def _floats(count):
-    def parse(text):
+def _floats(count: int) -> Callable[[str], tuple[float, ...]]:
+    def parse(text: str) -> tuple[float, ...]:
         try:
             vals = tuple(float(v) for v in text.split(','))
         except ValueError as err:
@@ -103,7 +110,7 @@ def _floats(count):
     return parse
 
 
-def _tilt(text):
+def _tilt(text: str) -> tuple[str, float]:
     orientation, sep, deg = text.partition(':')
     try:
         value = float(deg)
@@ -114,7 +121,7 @@ def _tilt(text):
     return orientation.strip(), value
 
 
-def add_scenario_arguments(parser):
+def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     """
     Add the reliability-scenario options to the emulator's parser.
 
@@ -187,7 +194,7 @@ def add_scenario_arguments(parser):
                    help='--write-bag: Imu topic of the ideal reference sensor (sine/sweep)')
 
 
-def scenario_from_args(args):
+def scenario_from_args(args: argparse.Namespace) -> Scenario | None:
     """
     Build the scenario of parsed emulator arguments (None without ``--scenario``).
 
@@ -213,6 +220,7 @@ def scenario_from_args(args):
                                  f'--odr-hz {args.odr_hz:g})')
     if args.tilt and args.scenario != 'six-position':
         raise ParameterError('--tilt applies to --scenario six-position')
+    motion: SixPosition | MultiPose | Static | Excitation
     if args.scenario == 'six-position':
         motion = SixPosition(order=tuple(o.strip() for o in args.order.split(',')),
                              dwell_s=args.dwell_s, move_s=args.move_s, lead_s=args.lead_s,
@@ -222,15 +230,15 @@ def scenario_from_args(args):
         motion = MultiPose(poses=args.poses, dwell_s=args.dwell_s, move_s=args.move_s,
                            lead_s=args.lead_s, gravity_m_s2=g, latitude_deg=args.latitude)
     else:
-        motion = Static(orientation=args.orientation, gravity_m_s2=g,
-                        latitude_deg=args.latitude)
+        static = motion = Static(orientation=args.orientation, gravity_m_s2=g,
+                                 latitude_deg=args.latitude)
         if args.scenario in ('sine', 'sweep'):
             unit = MG_TO_M_S2 * 1e3 if args.excite_sensor == 'accel' else DEG_TO_RAD
             motion = Excitation(
                 sensor=args.excite_sensor, axis=args.excite_axis,
                 amplitude=args.excite_amplitude * unit, frequency_hz=args.excite_hz,
                 sweep_to_hz=args.sweep_to_hz if args.scenario == 'sweep' else None,
-                sweep_rate_hz_s=args.sweep_rate_hz_s, start_s=args.excite_start_s, base=motion)
+                sweep_rate_hz_s=args.sweep_rate_hz_s, start_s=args.excite_start_s, base=static)
     # white-noise ADEV at 1 s: accel density / sqrt(2) (one-sided density over ODR/2); gyro
     # std / sqrt(ODR) (the board's fractional noise is nearly white)
     from ..link.emulator import ACCEL_NOISE_DENSITY_UG_RTHZ
@@ -266,7 +274,7 @@ def scenario_from_args(args):
     return Scenario(motion, errors, args.odr_hz, rng)
 
 
-def scenario_length_s(scenario):
+def scenario_length_s(scenario: Scenario) -> float | None:
     """
     Return the natural length of a scenario (s), or None when it has none.
 
@@ -286,7 +294,8 @@ def scenario_length_s(scenario):
     return None
 
 
-def write_bag(args, board, truth_fh=None, counters=None):
+def write_bag(args: argparse.Namespace, board: 'BoardModel', truth_fh: BinaryIO | None = None,
+              counters: Any = None) -> int:
     """
     Write the board's samples straight into a rosbag2 (``--write-bag``).
 
@@ -330,11 +339,11 @@ def write_bag(args, board, truth_fh=None, counters=None):
     return 0
 
 
-def _write_samples(args, board, path, total, truth_fh, counters):
+def _write_samples(args: argparse.Namespace, board: 'BoardModel', path: Path, total: int,
+                   truth_fh: BinaryIO | None, counters: Any) -> None:
     from ..link.emulator import truth_records
 
     motion = board.scenario.motion if board.scenario is not None else None
-    reference = isinstance(motion, Excitation)
     gyro_lsb = lsm.gyro_sensitivity_rad_s_per_lsb(board.gyro_fs_dps)
     accel_lsb = lsm.accel_sensitivity_m_s2_per_lsb(board.accel_fs_g)
     every = args.bag_temperature_decimation or max(1, int(round(board.odr_hz)))
@@ -350,7 +359,7 @@ def _write_samples(args, board, path, total, truth_fh, counters):
             w.write_imu(stamps, s['gyro'] * gyro_lsb, s['accel'] * accel_lsb)
             first = (-done) % every
             w.write_temperature(stamps[first::every], lsm.temperature_c(s['temp'][first::every]))
-            if reference:
+            if isinstance(motion, Excitation):
                 ref = motion.reference(truth.time_s)
                 zero = np.zeros_like(ref)
                 acc, gyr = (ref, zero) if motion.sensor == 'accel' else (zero, ref)

@@ -49,7 +49,7 @@ from ..units import MG_TO_M_S2
 PROG = 'gyro_noise_calibrate'
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of gyro_noise_calibrate.
 
@@ -105,7 +105,7 @@ def build_parser():
     return p
 
 
-def settings_from_args(args):
+def settings_from_args(args: argparse.Namespace) -> DetectorSettings:
     """
     Return the detector settings of parsed arguments.
 
@@ -125,7 +125,7 @@ def settings_from_args(args):
                             max_tilt_deg=args.max_tilt_deg)
 
 
-def _body(argv):
+def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     params = CalibrateParams(
         paths=tuple(args.bags), mode=args.mode, topic=args.topic, rate_hz=args.rate_hz,
@@ -155,7 +155,7 @@ def _body(argv):
     return 0
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """
     Run gyro_noise_calibrate.
 

@@ -48,7 +48,7 @@ from ..outputs import make_out_dir
 PROG = 'gyro_noise_excitation'
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of gyro_noise_excitation.
 
@@ -85,7 +85,7 @@ def build_parser():
     return p
 
 
-def _body(argv):
+def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     params = ExcitationParams(
         paths=tuple(args.bags), sensor=args.sensor, axis=args.axis, dwell_hz=args.dwell,
@@ -115,7 +115,7 @@ def _body(argv):
     return 0
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """
     Run gyro_noise_excitation.
 

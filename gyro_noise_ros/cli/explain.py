@@ -44,7 +44,7 @@ from ..app.explain import (check_output, ExplainParams, MAX_RECORDS, prepare_exp
 PROG = 'gyro_noise_explain'
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser."""
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.split('\n\n')[0].strip())
     p.add_argument('input', metavar='INPUT',
@@ -83,11 +83,11 @@ def build_parser():
     return p
 
 
-def _say(text):
+def _say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-def _body(argv):
+def _body(argv: list[str]) -> int:
     from ..cluster import make_executor
 
     args = build_parser().parse_args(argv)
@@ -121,7 +121,7 @@ def _body(argv):
     return 0
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """Entry point of ``gyro_noise_explain``; returns the exit code."""
     return run_cli(PROG, _body, argv)
 

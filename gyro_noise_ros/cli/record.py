@@ -35,7 +35,7 @@ from ._common import run_cli
 PROG = 'gyro_noise_record repair'
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of ``gyro_noise_record repair``.
 
@@ -55,7 +55,7 @@ def build_parser():
     return p
 
 
-def _repair(argv):
+def _repair(argv: list[str]) -> int:
     from ..bag.repair import repair_bag
 
     args = build_parser().parse_args(argv)
@@ -68,7 +68,7 @@ def _repair(argv):
     return 0
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """
     Run the recorder node, or ``repair`` when it is the first argument.
 

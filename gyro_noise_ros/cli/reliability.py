@@ -53,7 +53,7 @@ from ..outputs import make_out_dir
 PROG = 'gyro_noise_reliability'
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of gyro_noise_reliability.
 
@@ -97,7 +97,7 @@ def build_parser():
     return p
 
 
-def _body(argv):
+def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     gravity = resolve_gravity(args.gravity, args.latitude, args.height)
     params = ReliabilityParams(
@@ -127,7 +127,7 @@ def _body(argv):
     return 0
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """
     Run gyro_noise_reliability.
 

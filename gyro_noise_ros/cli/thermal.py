@@ -34,7 +34,9 @@ the exit code. Formats, metric definitions and exit codes: ``docs/thermal.md``.
 """
 
 import argparse
+from collections.abc import Callable, Iterable
 import sys
+from typing import TypeAlias
 
 from ._common import run_cli
 from .. import __version__
@@ -51,7 +53,11 @@ SHAPES = ('oven', 'heating', 'cooling', 'staircase', 'staircase_down', 'cycle', 
           'soak', 'sine')
 
 
-def _add_bag_options(p):
+#: argparse's sub-command handle (``add_subparsers()``).
+_Subparsers: TypeAlias = 'argparse._SubParsersAction[argparse.ArgumentParser]'
+
+
+def _add_bag_options(p: argparse.ArgumentParser) -> None:
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic)')
     p.add_argument('--temperature-topic',
                    help='sensor_msgs/Temperature topic (default: the single one, or the one in '
@@ -61,7 +67,7 @@ def _add_bag_options(p):
                         f'({DEFAULT_MAX_GAP_S:g})')
 
 
-def _add_fit_options(p):
+def _add_fit_options(p: argparse.ArgumentParser) -> None:
     p.add_argument('--seed', type=int, default=0, help='seed of stochastic training (0)')
     p.add_argument('--min-range-c', type=float, default=registry.DEFAULT_MIN_RANGE_C,
                    help='smallest training temperature span, degC, finite and >= 0 '
@@ -71,12 +77,12 @@ def _add_fit_options(p):
                    'parallel model on that cluster (same model; pip extra dask; docs/scale.md)')
 
 
-def _add_output_options(p):
+def _add_output_options(p: argparse.ArgumentParser) -> None:
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--quiet', action='store_true', help='print only errors')
 
 
-def _add_score_options(p):
+def _add_score_options(p: argparse.ArgumentParser) -> None:
     p.add_argument('--amplitude-deg-s', type=float, default=DEFAULT_AMPLITUDE_RAD_S * RAD_TO_DEG,
                    help='height of the injected chirp and steps, deg/s (1)')
     p.add_argument('--f-lo-hz', type=float, default=DEFAULT_F_LO_HZ,
@@ -92,7 +98,7 @@ def _add_score_options(p):
                         f'degC ({registry.DEFAULT_RANGE_MARGIN_C:g}; inf disables)')
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     """
     Return the argument parser of gyro_noise_thermal.
 
@@ -115,7 +121,7 @@ def build_parser():
     return p
 
 
-def _add_fit_command(sub):
+def _add_fit_command(sub: _Subparsers) -> None:
     """Add ``fit``: a method fitted on training bags, written as model.json."""
     f = sub.add_parser('fit', help='fit a method on one or more bags, write model.json')
     f.add_argument('bags', nargs='+', metavar='BAG', help='training recording(s)')
@@ -131,7 +137,7 @@ def _add_fit_command(sub):
     _add_output_options(f)
 
 
-def _add_apply_command(sub):
+def _add_apply_command(sub: _Subparsers) -> None:
     """Add ``apply``: a model applied to a held-out bag, with metrics and a report."""
     a = sub.add_parser('apply', help='apply a model to a bag: compensated bag, metrics, report')
     a.add_argument('bag', metavar='BAG', help='recording to process (held out from training)')
@@ -146,7 +152,7 @@ def _add_apply_command(sub):
     a.add_argument('--no-html', action='store_true', help='write no report.html')
 
 
-def _add_compare_command(sub):
+def _add_compare_command(sub: _Subparsers) -> None:
     """Add ``compare``: every method trained on one run and scored on another."""
     c = sub.add_parser('compare', help='train every method on one run, score on another')
     c.add_argument('train', metavar='TRAIN_BAG', help='training recording')
@@ -167,7 +173,7 @@ def _add_compare_command(sub):
     c.add_argument('--no-html', action='store_true', help='write no report.html')
 
 
-def _add_simulate_command(sub):
+def _add_simulate_command(sub: _Subparsers) -> None:
     """Add ``simulate``: a seeded train/test pair of thermal bags."""
     s = sub.add_parser('simulate', help='write a seeded train/test pair of thermal bags')
     s.add_argument('--seed', type=int, default=0, help='seed of the train/test pair')
@@ -189,7 +195,7 @@ def _add_simulate_command(sub):
                    help='switch the bias hysteresis off')
 
 
-def _add_export_command(sub):
+def _add_export_command(sub: _Subparsers) -> None:
     """Add ``export``: a poly3 model as PX4 and ArduPilot parameters."""
     e = sub.add_parser('export', help='a poly3 model as PX4 TC_* and ArduPilot INS_TCAL* '
                                       'parameters')
@@ -211,30 +217,30 @@ def _add_export_command(sub):
     _add_output_options(e)
 
 
-def _warn(args):
+def _warn(args: argparse.Namespace) -> Callable[[str], None] | None:
     if args.quiet:
         return None
     return lambda text: print(f'{PROG}: warning: {text}', file=sys.stderr, flush=True)
 
 
-def _bag_options(args):
+def _bag_options(args: argparse.Namespace) -> app.BagOptions:
     return app.BagOptions(topic=args.topic, temperature_topic=args.temperature_topic,
                           max_gap_s=args.max_gap_s)
 
 
-def _score_options(args):
+def _score_options(args: argparse.Namespace) -> app.ScoreOptions:
     return app.ScoreOptions(amplitude_deg_s=args.amplitude_deg_s, f_lo_hz=args.f_lo_hz,
                             f_hi_hz=args.f_hi_hz, small_signal=not args.no_small_signal,
                             range_margin_c=args.range_margin_c)
 
 
-def _print_notes(notes, args):
+def _print_notes(notes: Iterable[str], args: argparse.Namespace) -> None:
     if not args.quiet:
         for note in notes:
             print(f'{PROG}: note: {note}', file=sys.stderr)
 
 
-def _cmd_fit(args, argv):
+def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
     result = app.fit(bags=args.bags, method=args.method, seed=args.seed,
                      min_range_c=args.min_range_c, bag_options=_bag_options(args),
                      accel=not args.no_accel, scheduler=args.scheduler, warn=_warn(args),
@@ -251,11 +257,11 @@ def _cmd_fit(args, argv):
     return 0
 
 
-def _f(v):
+def _f(v: float | None) -> str:
     return 'n/a' if v is None else f'{v:.4g}'
 
 
-def _cmd_apply(args, argv):
+def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
     result = app.apply_model(bag=args.bag, model_path=args.model, bag_options=_bag_options(args),
                              score=_score_options(args), figures=not args.no_figures,
                              command=argv)
@@ -275,7 +281,7 @@ def _cmd_apply(args, argv):
     return 0
 
 
-def _cmd_compare(args, argv):
+def _cmd_compare(args: argparse.Namespace, argv: list[str]) -> int:
     names = None
     if args.methods is not None:
         names = [m.strip() for m in args.methods.split(',') if m.strip()]
@@ -296,7 +302,7 @@ def _cmd_compare(args, argv):
     return 0
 
 
-def _cmd_simulate(args, argv):
+def _cmd_simulate(args: argparse.Namespace, argv: list[str]) -> int:
     try:
         import gyro_noise_ros.thermal.simulate  # noqa: F401 - the simulator is optional
     except ImportError as err:
@@ -312,7 +318,7 @@ def _cmd_simulate(args, argv):
     return 0
 
 
-def _cmd_export(args, argv):
+def _cmd_export(args: argparse.Namespace, argv: list[str]) -> int:
     result = app.export(model_path=args.model, px4_instance=args.px4_instance,
                         gyro_device_id=args.px4_gyro_id, accel_device_id=args.px4_accel_id,
                         ardupilot_imu=args.ardupilot_imu,
@@ -328,7 +334,7 @@ _COMMANDS = {'fit': _cmd_fit, 'apply': _cmd_apply, 'compare': _cmd_compare,
              'simulate': _cmd_simulate, 'export': _cmd_export}
 
 
-def _body(argv):
+def _body(argv: list[str]) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
@@ -336,7 +342,7 @@ def _body(argv):
     return _COMMANDS[args.command](args, argv)
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """
     Run gyro_noise_thermal.
 

@@ -22,13 +22,16 @@ in a pure dataclass give their rows through :func:`specs_from_dataclass`, so the
 unit are written once.
 """
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, MISSING
 import math
 import re
+from typing import Any
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 ParameterType, SetParametersResult)
 from rclpy.exceptions import ParameterException
+from rclpy.node import Node
 
 from ..errors import ParameterError
 
@@ -76,21 +79,21 @@ class ParamSpec:
     """
 
     name: str
-    default: object
+    default: Any
     description: str
     unit: str = ''
     read_only: bool = False
-    min_value: object = None
-    max_value: object = None
+    min_value: float | None = None
+    max_value: float | None = None
     choices: tuple = ()
     pattern: str = ''
 
     @property
-    def ros_type(self):
+    def ros_type(self) -> int:
         """Return the ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
         return _PYTHON_TO_ROS_TYPE[type(self.default)]
 
-    def descriptor(self):
+    def descriptor(self) -> ParameterDescriptor:
         """
         Build the ``ParameterDescriptor`` of this row.
 
@@ -108,6 +111,7 @@ class ParamSpec:
         elif self.pattern:
             desc.additional_constraints = f'matches {self.pattern}'
         if self.min_value is not None:
+            assert self.max_value is not None  # both or neither (see the class docstring)
             if self.ros_type == ParameterType.PARAMETER_INTEGER:
                 desc.integer_range = [IntegerRange(from_value=int(self.min_value),
                                                    to_value=int(self.max_value), step=0)]
@@ -117,7 +121,7 @@ class ParamSpec:
                                                                 step=0.0)]
         return desc
 
-    def check(self, value):
+    def check(self, value: Any) -> None:
         """
         Validate a value against the range and the choices of this row.
 
@@ -146,7 +150,9 @@ class ParamSpec:
             raise ParameterError(f"parameter '{self.name}' = {value!r} is not finite")
 
 
-def declare_parameter_table(node, table, *, on_change=None):
+def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
+                            on_change: Callable[[dict[str, Any]], None] | None = None
+                            ) -> dict[str, Any]:
     """
     Declare every row of a parameter table on a node and return the values.
 
@@ -176,7 +182,7 @@ def declare_parameter_table(node, table, *, on_change=None):
 
     """
     by_name = {spec.name: spec for spec in table}
-    values = {}
+    values: dict[str, Any] = {}
     for spec in table:
         try:
             value = node.declare_parameter(spec.name, spec.default, spec.descriptor()).value
@@ -185,7 +191,7 @@ def declare_parameter_table(node, table, *, on_change=None):
         spec.check(value)
         values[spec.name] = value
 
-    def _validate(params):
+    def _validate(params: Sequence[Any]) -> SetParametersResult:
         for param in params:
             spec = by_name.get(param.name)
             if spec is None:
@@ -203,7 +209,7 @@ def declare_parameter_table(node, table, *, on_change=None):
     return values
 
 
-def _explain_parameter_exception(spec, err):
+def _explain_parameter_exception(spec: ParamSpec, err: Exception) -> str:
     text = str(err)
     if 'expecting type' in text:
         return (f"parameter '{spec.name}' must be {_ROS_TYPE_NAME[spec.ros_type]}: "
@@ -214,7 +220,9 @@ def _explain_parameter_exception(spec, err):
     return f"parameter '{spec.name}': {text}"
 
 
-def specs_from_dataclass(cls, *, read_only, float_range=(0.0, 1.0e9), int_range=(0, 1_000_000)):
+def specs_from_dataclass(cls: type[Any], *, read_only: bool,
+                         float_range: tuple[float, float] = (0.0, 1.0e9),
+                         int_range: tuple[int, int] = (0, 1_000_000)) -> tuple[ParamSpec, ...]:
     """
     Return one :class:`ParamSpec` per field of a frozen dataclass of limits, from its metadata.
 
@@ -236,7 +244,7 @@ def specs_from_dataclass(cls, *, read_only, float_range=(0.0, 1.0e9), int_range=
     tuple of ParamSpec
 
     """
-    rows = []
+    rows: list[ParamSpec] = []
     for f in fields(cls):
         if f.default is MISSING:
             raise TypeError(f'{cls.__name__}.{f.name} has no default')

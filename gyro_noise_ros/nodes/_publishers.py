@@ -34,10 +34,15 @@ judges from the messages, not from the graph: a killed driver stays in the graph
 the analyzer use both.
 """
 
+from collections.abc import Sequence
 import ctypes
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
+from rclpy.impl.rcutils_logger import RcutilsLogger
+from rclpy.node import Node
+from rclpy.subscription import Subscription
 
 from ._ros_common import take_all
 from ..link.sequence import PublisherCounts
@@ -53,6 +58,8 @@ _INFO_DTYPE = np.dtype([('source_ns', '<i8'), ('received_ns', '<i8'), ('publicat
 _INFO_BUFFER_BYTES = 512
 _RCL_RET_OK = 0
 _RCL_RET_SUBSCRIPTION_TAKE_FAILED = 401
+#: The writers of a batch: GIDs (dtype ``V16``), 16-byte strings, or None when unknown.
+_Gids = NDArray[np.void] | Sequence[bytes] | None
 
 
 class _Allocator(ctypes.Structure):
@@ -71,7 +78,7 @@ class _Uint8Array(ctypes.Structure):
 _LIB: dict[str, Any] = {}
 
 
-def _libraries():
+def _libraries() -> dict[str, Any]:
     """Load (once) the rcl and rcutils libraries rclpy has already loaded."""
     if not _LIB:
         rcl = ctypes.CDLL('librcl.so')
@@ -90,7 +97,7 @@ def _libraries():
     return _LIB
 
 
-def _rmw_identifier(lib, sub):
+def _rmw_identifier(lib: dict[str, Any], sub: Subscription) -> int:
     """
     Return the address of the rmw implementation identifier, as the subscription carries it.
 
@@ -124,9 +131,10 @@ class RawTaker:
 
     """
 
-    def __init__(self, sub, msg_type, logger=None):
+    def __init__(self, sub: Subscription, msg_type: type,
+                 logger: RcutilsLogger | None = None) -> None:
         self.sub, self.msg_type, self._logger = sub, msg_type, logger
-        self._array = None
+        self._array: _Uint8Array | None = None
         self.with_gid = False
         try:
             lib = _libraries()
@@ -143,13 +151,13 @@ class RawTaker:
         self._info = ctypes.create_string_buffer(_INFO_BUFFER_BYTES)
         self.with_gid = True
 
-    def _fall_back(self, why):
+    def _fall_back(self, why: str) -> None:
         self.with_gid = False
         if self._logger is not None:
             self._logger.warn(f'{self.sub.topic_name}: messages are taken without their '
                               f'publisher ({why}); per-publisher counts are not available')
 
-    def take(self):
+    def take(self) -> tuple[list[bytes], list[int], list[int], _Gids]:
         """
         Take every queued message.
 
@@ -161,13 +169,15 @@ class RawTaker:
             Receive time of each (system clock, ns; 0 where the middleware gave none).
         sequence : list of int
             DDS publication sequence number of each (0: none given).
-        gids : numpy.ndarray or None
-            The writer GID of each (dtype ``V16``: 16 bytes), or None when not available.
+        gids : numpy.ndarray or list or None
+            The writer GID of each (dtype ``V16``: 16 bytes), an empty list when nothing was
+            taken, or None when not available.
 
         """
         if not self.with_gid:
             return self._take_rclpy()
         take, array, info = self._lib['take'], self._array, self._info
+        assert array is not None  # with_gid: the buffer exists until close()
         a_array, a_info = ctypes.addressof(array), ctypes.addressof(info)
         size, string_at = _INFO_DTYPE.itemsize, ctypes.string_at
         raws, infos = [], []
@@ -193,10 +203,10 @@ class RawTaker:
             return raws, [0] * len(raws), [0] * len(raws), None
         return raws, rec['received_ns'].tolist(), rec['publication'].tolist(), rec['gid'].copy()
 
-    def _take_rclpy(self):
+    def _take_rclpy(self) -> tuple[list[bytes], list[int], list[int], None]:
         return (*take_all(self.sub, self.msg_type), None)
 
-    def close(self):
+    def close(self) -> None:
         """Free the serialisation buffer (idempotent)."""
         if self._array is not None:
             self._lib['rcutils'].rcutils_uint8_array_fini(ctypes.byref(self._array))
@@ -204,7 +214,7 @@ class RawTaker:
             self.with_gid = False
 
 
-def publisher_names(node, topic):
+def publisher_names(node: Node, topic: str) -> dict[bytes, str]:
     """
     Name the publishers of a topic from the graph.
 
@@ -221,7 +231,7 @@ def publisher_names(node, topic):
         ``{gid (16 bytes): '/namespace/node'}``.
 
     """
-    names = {}
+    names: dict[bytes, str] = {}
     for info in node.get_publishers_info_by_topic(topic):
         ns = info.node_namespace.rstrip('/')
         names[bytes(info.endpoint_gid)[:16]] = f'{ns}/{info.node_name}'
@@ -247,14 +257,16 @@ class PublisherWatch:
 
     """
 
-    def __init__(self, topic, consequence, overlap_s=2.0):
+    def __init__(self, topic: str, consequence: str, overlap_s: float = 2.0) -> None:
         self.topic, self.consequence, self.overlap_s = topic, consequence, float(overlap_s)
         self.counts = PublisherCounts()
-        self.names = {}      # gid -> '/ns/node' (from the graph, kept after it leaves)
-        self.last_seen = {}  # gid -> monotonic s of its latest message
-        self._news = []      # (gid, [gids present when it started]) not yet reported
+        # gid -> '/ns/node' (from the graph, kept after it leaves)
+        self.names: dict[bytes, str] = {}
+        self.last_seen: dict[bytes | None, float] = {}  # gid -> monotonic s of its latest message
+        # (gid, [gids present when it started]) not yet reported
+        self._news: list[tuple[bytes | None, list[bytes | None]]] = []
 
-    def update(self, gids, sequence, now_s):
+    def update(self, gids: _Gids, sequence: Sequence[int], now_s: float) -> None:
         """
         Count one batch.
 
@@ -278,11 +290,11 @@ class PublisherWatch:
             if gid not in present:
                 present.append(gid)
 
-    def active(self, now_s):
+    def active(self, now_s: float) -> list[bytes | None]:
         """Return the publishers that delivered within ``overlap_s`` of ``now_s``."""
         return [g for g, t in self.last_seen.items() if now_s - t <= self.overlap_s]
 
-    def name(self, gid):
+    def name(self, gid: bytes | None) -> str:
         """Return the publisher's name, with a short GID where two share one."""
         if gid is None:
             return 'unknown publisher'
@@ -293,7 +305,7 @@ class PublisherWatch:
             return f'{name} ({gid.hex()[:12]})'
         return name
 
-    def check(self, node):
+    def check(self, node: Node) -> list[tuple[str, str]]:
         """
         Name the publishers that appeared since the last call; return the lines to log.
 
@@ -312,7 +324,7 @@ class PublisherWatch:
         if not self._news:
             return []
         self.names.update(publisher_names(node, self.topic))
-        lines = []
+        lines: list[tuple[str, str]] = []
         for gid, present in self._news:
             if present:
                 lines.append(('warn', f'another publisher on {self.topic}: {self.name(gid)} '
@@ -326,7 +338,7 @@ class PublisherWatch:
         self._news = []
         return lines
 
-    def summary(self):
+    def summary(self) -> str:
         """Return ``'/ns/node 1234 (0 dropped); ...'`` over the publishers that sent messages."""
         parts = [f'{self.name(g)} {n} ({d} dropped)' for g, n, d in self.counts.table()]
         return '; '.join(parts) if parts else 'none'

@@ -31,14 +31,20 @@ values; the levels come from the pure diagnostics (``core.health``, ``link.healt
 ``diagnostics/``).
 """
 
+from collections.abc import Callable, Iterable
 import sys
+from typing import Any, NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 import rclpy
 from rclpy.callback_groups import CallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
 
 from ._params import declare_parameter_table, ParamSpec, specs_from_dataclass
 from ..errors import GyroNoiseError, ParameterError
@@ -56,7 +62,7 @@ ERROR = DiagnosticStatus.ERROR
 STALE = DiagnosticStatus.STALE
 
 
-def sensor_data_qos(depth, reliable=False):
+def sensor_data_qos(depth: int, reliable: bool = False) -> QoSProfile:
     """
     Return the sensor-data QoS (best effort, volatile, keep last) with a chosen depth.
 
@@ -86,7 +92,7 @@ def sensor_data_qos(depth, reliable=False):
                       durability=DurabilityPolicy.VOLATILE)
 
 
-def driver_qos(depth):
+def driver_qos(depth: int) -> QoSProfile:
     """
     Return the QoS a driver publishes with (REP-2003): reliable, volatile, keep last ``depth``.
 
@@ -109,7 +115,7 @@ def driver_qos(depth):
                       durability=DurabilityPolicy.VOLATILE)
 
 
-def wall_timer(node, period_s, callback):
+def wall_timer(node: Node, period_s: float, callback: Callable[[], Any]) -> Timer:
     """
     Create a timer on the steady (wall) clock, whatever ``use_sim_time`` says.
 
@@ -135,7 +141,7 @@ def wall_timer(node, period_s, callback):
     return node.create_timer(period_s, callback, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
-def diagnostics_publisher(node):
+def diagnostics_publisher(node: Node) -> Publisher:
     """
     Create the ``/diagnostics`` publisher as diagnostic_updater does (absolute topic, reliable).
 
@@ -153,7 +159,8 @@ def diagnostics_publisher(node):
     return node.create_publisher(DiagnosticArray, '/diagnostics', 10)
 
 
-def diagnostic_status(name, hardware_id, level, message, values):
+def diagnostic_status(name: str, hardware_id: str, level: bytes, message: str,
+                      values: Iterable[tuple[str, object]]) -> DiagnosticStatus:
     """
     Build one ``DiagnosticStatus`` in diagnostic_updater's shape.
 
@@ -181,7 +188,7 @@ def diagnostic_status(name, hardware_id, level, message, values):
                                     for k, v in values])
 
 
-def diagnostic_array(stamp, statuses):
+def diagnostic_array(stamp: Any, statuses: Iterable[DiagnosticStatus]) -> DiagnosticArray:
     """
     Wrap statuses into a stamped ``DiagnosticArray``.
 
@@ -202,7 +209,8 @@ def diagnostic_array(stamp, statuses):
     return msg
 
 
-def run_node(node_factory, args=None, *, prog):
+def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
+             prog: str) -> int:
     """
     Run a node with the Jazzy ``main()`` pattern; start-up errors give one line and an exit code.
 
@@ -269,17 +277,17 @@ class PolledGroup(CallbackGroup):
     message.
     """
 
-    def can_execute(self, entity):
+    def can_execute(self, entity: Any) -> bool:
         return False
 
-    def beginning_execution(self, entity):
+    def beginning_execution(self, entity: Any) -> bool:
         return False
 
-    def ending_execution(self, entity):
+    def ending_execution(self, entity: Any) -> None:
         pass
 
 
-def take_all(sub, msg_type):
+def take_all(sub: Subscription, msg_type: type) -> tuple[list[bytes], list[int], list[int]]:
     """
     Take every message queued on a raw subscription.
 
@@ -300,7 +308,9 @@ def take_all(sub, msg_type):
         DDS publication sequence number of each (0 if the middleware does not give one).
 
     """
-    raws, received, sequence = [], [], []
+    raws: list[bytes] = []
+    received: list[int] = []
+    sequence: list[int] = []
     handle = sub.handle
     with handle:
         take = handle.take_message
@@ -315,6 +325,7 @@ def take_all(sub, msg_type):
     return raws, received, sequence
 
 
-def unused_callback(_msg):  # pragma: no cover - PolledGroup keeps the executor from calling it
+# Never called: PolledGroup keeps the executor from calling it (hence no coverage).
+def unused_callback(_msg: Any) -> NoReturn:  # pragma: no cover
     """Refuse to run: the callback rclpy requires of a polled subscription (see PolledGroup)."""
     raise AssertionError('polled subscriptions are drained by the node, not by the executor')

@@ -52,11 +52,15 @@ publisher``).
 ``gyro_noise_monitor`` (:mod:`gyro_noise_ros.nodes.monitor`) prints the diagnostics as lines.
 """
 
+from collections.abc import Callable, Mapping
 import math
+import operator
 import sys
 import threading
 import time
+from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
@@ -68,7 +72,7 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
                           specs_from_dataclass, take_all, unused_callback, wall_timer)
 from ..app.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..bag import decode_imu, decode_temperature
-from ..core.engine import AXES, GAP_POLICIES, warm_up
+from ..core.engine import AXES, AxisSummary, ChunkResult, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import axis_status, HealthThresholds
 from ..core.items import allan_items, fmt, last_chunk_items, stream_items
@@ -159,7 +163,7 @@ class NoiseAnalyzerNode(Node):
 
     """
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameter_table(self, PARAMETERS)
         self._params = p
@@ -171,7 +175,7 @@ class NoiseAnalyzerNode(Node):
 
         # The OS thread id lets a profiler (bench/bench_analyzer_node.py) split the node's CPU
         # time between ingestion (executor thread) and analysis (the worker).
-        def worker_started():
+        def worker_started() -> None:
             self.get_logger().info(
                 f'analysis worker started (native thread id {threading.get_native_id()})')
 
@@ -184,8 +188,8 @@ class NoiseAnalyzerNode(Node):
         self._frame_id = ''
         self.messages_received = 0
         self.messages_undecodable = 0
-        self._last_data = None
-        self._allan_keys = {}
+        self._last_data: float | None = None
+        self._allan_keys: dict[str, list[tuple[str, str]]] = {}
         self._allan_due = 0.0
 
         group = PolledGroup()
@@ -208,16 +212,18 @@ class NoiseAnalyzerNode(Node):
                             for name in (*CHUNK_TOPICS, 'offset_drift')}
         wall_timer(self, p['drain_period_s'], self.drain)
         wall_timer(self, p['diagnostics_period_s'], self.publish_diagnostics)
+        alphas = self.config.alphas
+        assert alphas is not None  # EngineConfig fills the default grid
         self.get_logger().info(
             f'analysing {self._imu_sub.topic_name} axes {",".join(self.config.axes)}, chunks of '
-            f'{self.config.chunk_size} samples, orders {self.config.alphas[0]:g}:'
-            f'{self.config.alphas[-1]:g} ({self.config.alphas.size} points), '
+            f'{self.config.chunk_size} samples, orders {alphas[0]:g}:'
+            f'{alphas[-1]:g} ({alphas.size} points), '
             + ('reference ' + p['reference_summary'] if p['reference_summary'] else
                'absolute drift limits'))
 
     # ---- ingestion (executor thread) ---------------------------------------
 
-    def drain(self):
+    def drain(self) -> None:
         """Take the queued messages, feed the engine, queue the chunks, publish finished ones."""
         if self._temperature_sub is not None:
             raws, _, _ = take_all(self._temperature_sub, Temperature)
@@ -242,14 +248,14 @@ class NoiseAnalyzerNode(Node):
             self._publish_chunk(per_axis)
             self.publish_diagnostics()
 
-    def _check_publishers(self):
+    def _check_publishers(self) -> None:
         for severity, line in self._imu_watch.check(self):
             if severity == 'warn':  # rclpy refuses two severities from one call site
                 self.get_logger().warn(line)
             else:
                 self.get_logger().info(line)
 
-    def _ingest(self, raws):
+    def _ingest(self, raws: list[bytes]) -> None:
         self.messages_received += len(raws)
         self._last_data = time.monotonic()
         batch = decode_imu(raws, skip_undecodable=True)
@@ -265,28 +271,28 @@ class NoiseAnalyzerNode(Node):
 
     # ---- outputs -----------------------------------------------------------
 
-    def _publish_chunk(self, per_axis):
+    def _publish_chunk(self, per_axis: Mapping[str, ChunkResult]) -> None:
         first = next(iter(per_axis.values()))
         msg = Vector3Stamped()
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(first.stamp_start_ns), _NS)
         msg.header.frame_id = self._frame_id
 
-        def values(get):
-            out = []
+        def values(get: Callable[[ChunkResult], float]) -> list[float]:
+            out: list[float] = []
             for axis in AXES:
                 r = per_axis.get(axis)
                 out.append(float(get(r)) if r is not None and r.status == 'ok' else math.nan)
             return out
 
         for name, (field, _) in CHUNK_TOPICS.items():
-            msg.vector.x, msg.vector.y, msg.vector.z = values(lambda r, f=field: getattr(r, f))
+            msg.vector.x, msg.vector.y, msg.vector.z = values(operator.attrgetter(field))
             self._chunk_pubs[name].publish(msg)
         summaries = self.engine.summary(allan=False)
         msg.vector.x, msg.vector.y, msg.vector.z = values(
             lambda r: summaries[r.axis].sequence.drift.slope)
         self._chunk_pubs['offset_drift'].publish(msg)
 
-    def _update_allan(self, summaries):
+    def _update_allan(self, summaries: Mapping[str, AxisSummary]) -> None:
         now = time.monotonic()
         if not self.config.allan or now < self._allan_due:
             return
@@ -300,7 +306,7 @@ class NoiseAnalyzerNode(Node):
         for axis, s in with_allan.items():
             self._allan_keys[axis] = allan_items(s)
 
-    def diagnostics(self):
+    def diagnostics(self) -> DiagnosticArray:
         """
         Build the ``DiagnosticArray`` of the current state (one status per analysed axis).
 
@@ -343,18 +349,18 @@ class NoiseAnalyzerNode(Node):
                                               status.values))
         return diagnostic_array(self.get_clock().now().to_msg(), statuses)
 
-    def publish_diagnostics(self):
+    def publish_diagnostics(self) -> None:
         """Publish :meth:`diagnostics` on ``/diagnostics``."""
         self._diag_pub.publish(self.diagnostics())
 
-    def destroy_node(self):
+    def destroy_node(self) -> None:
         """Stop the worker thread, then destroy the node."""
         self.live.stop()
         self._imu_taker.close()
         return super().destroy_node()
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     """
     Run the analyzer node until Ctrl-C or SIGTERM.
 

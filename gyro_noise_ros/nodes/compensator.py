@@ -35,10 +35,14 @@ ramp is wrong by the drift rate times the stall. The wait is bounded by ``max_te
 a sample that waited that long is compensated with the newest offset and counted.
 """
 
+from collections.abc import Mapping, Sequence
 import math
 import sys
 import time
+from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
+import numpy as np
 from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -48,12 +52,13 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           SequenceGapCounter, take_all, unused_callback)
 from ..bag import decode_temperature
-from ..calibration.apply import calibration_from_parameters, KEYS, load_calibration
+from ..calibration.apply import (Calibration, calibration_from_parameters, KEYS,
+                                 load_calibration)
 from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
 from ..thermal.live import BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TemperatureGate
-from ..thermal.run import DEFAULT_RATE_WINDOW_S
+from ..thermal.run import DEFAULT_RATE_WINDOW_S, ThermalMethod
 
 NODE_NAME = 'imu_compensator'
 
@@ -62,11 +67,11 @@ class ArrayParamSpec(ParamSpec):
     """A table row whose value is a fixed-length array of doubles (``default`` a list)."""
 
     @property
-    def ros_type(self):
+    def ros_type(self) -> int:
         """``PARAMETER_DOUBLE_ARRAY``."""
         return ParameterType.PARAMETER_DOUBLE_ARRAY
 
-    def check(self, value):
+    def check(self, value: Any) -> None:
         """Refuse a wrong length or a non-finite element, naming the parameter."""
         values = list(value)
         if len(values) != len(self.default) or not all(math.isfinite(v) for v in values):
@@ -146,7 +151,7 @@ PARAMETERS = (
 )
 
 
-def calibration_from(p):
+def calibration_from(p: Mapping[str, Any]) -> tuple[Calibration, str]:
     """Build the calibration from the parameter values: the file, or the parameters (not both)."""
     if not p['calibration_file']:
         values = {key: p[key] if key == 'calibration_gravity_m_s2' else list(p[key])
@@ -172,7 +177,7 @@ class ImuCompensatorNode(Node):
 
     """
 
-    def __init__(self, *, thermal_model=None, **kwargs):
+    def __init__(self, *, thermal_model: ThermalMethod | None = None, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameter_table(self, PARAMETERS)
         self._p = p
@@ -180,7 +185,7 @@ class ImuCompensatorNode(Node):
         self.calibration, self._cal_source = calibration_from(p)
         margin = None if p['temperature_margin_c'] < 0 else p['temperature_margin_c']
         range_c = rate_range = accel_model = None
-        notes = ()
+        notes: Sequence[str] = ()
         if thermal_model is None and p['thermal_model_file']:
             live = load_live(p['thermal_model_file'])
             thermal_model, range_c, rate_range = live.method, live.range_c, live.rate_range_c_s
@@ -230,12 +235,14 @@ class ImuCompensatorNode(Node):
                                f'{self._pub.topic_name}: calibration from {self._cal_source}, '
                                f'thermal model {model}')
 
-    def drain(self):
+    def drain(self) -> None:
         """Take queued temperatures and Imu messages, compensate them, publish."""
         raws, _, _ = take_all(self._temp_sub, Temperature)
         if raws and self.thermal is not None:
             self.counts['temperatures'] += len(raws)
             try:
+                stamp_ns: np.ndarray | tuple[()]
+                temperature_c: np.ndarray | tuple[()]
                 stamp_ns, temperature_c = decode_temperature(raws)
             except BagError as err:  # a corrupt message: drop the batch, count it, go on
                 self.thermal.rejected += len(raws)
@@ -252,7 +259,7 @@ class ImuCompensatorNode(Node):
         elif self.thermal is not None:
             self._release()  # a new temperature or a timeout lets held samples go
 
-    def compensate(self, raws, sequence=()):
+    def compensate(self, raws: Sequence[bytes], sequence: Sequence[int] = ()) -> None:
         """Decode a batch of raw Imu messages, correct them, publish the results."""
         self.counts['received'] += len(raws)
         self._transport.update(sequence)
@@ -277,12 +284,14 @@ class ImuCompensatorNode(Node):
         self._gate.push(batch, stamp_ns, time.monotonic())
         self._release()
 
-    def _release(self):
+    def _release(self) -> None:
+        assert self.thermal is not None  # called only with a thermal model
         for batch, i, j, _ in self._gate.release(self.thermal.offset_stamp_ns, time.monotonic()):
             buf, starts, lengths, stamp_ns, gyro, accel = batch
             self._emit(buf, starts[i:j], lengths[i:j], stamp_ns[i:j], gyro[i:j], accel[i:j])
 
-    def _emit(self, buf, starts, lengths, stamp_ns, gyro, accel):
+    def _emit(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
+              stamp_ns: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> None:
         if self.thermal is not None:
             offset = self.thermal.drift_at(stamp_ns)
             gyro -= offset
@@ -297,7 +306,7 @@ class ImuCompensatorNode(Node):
             publish(raw)
         self.counts['published'] += stamp_ns.size
 
-    def diagnostics(self, record=False):
+    def diagnostics(self, record: bool = False) -> DiagnosticArray:
         """
         Build the ``DiagnosticArray`` of the current state (one status, see the task).
 
@@ -313,12 +322,12 @@ class ImuCompensatorNode(Node):
             self._status_name, hardware_id, bytes([status.level_byte]), status.message,
             status.values)])
 
-    def publish_diagnostics(self):
+    def publish_diagnostics(self) -> None:
         """Publish :meth:`diagnostics` on ``/diagnostics``."""
         self._diag_pub.publish(self.diagnostics(record=True))
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     """Run the node until Ctrl-C or SIGTERM; exit code 2 for a bad parameter (one line)."""
     return run_node(ImuCompensatorNode, args, prog=NODE_NAME)
 

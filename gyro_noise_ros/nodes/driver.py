@@ -40,13 +40,17 @@ read/write error or ``data_timeout_s`` of silence closes the port, reports ERROR
 node never exits for it.
 """
 
+from collections.abc import Mapping
 from dataclasses import fields
 import sys
 import threading
 import time
+from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+from numpy.typing import NDArray
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import Imu, Temperature
 
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
@@ -126,7 +130,7 @@ _THRESHOLD_NAMES = tuple(f.name for f in fields(LinkThresholds))
 _OK = TransitionCallbackReturn.SUCCESS
 
 
-def _diag_cov(variance):
+def _diag_cov(variance: float) -> NDArray[np.float64]:
     return np.diag([variance] * 3).reshape(9)
 
 
@@ -148,7 +152,7 @@ class Lsm6dso32Driver(LifecycleNode):
 
     """
 
-    def __init__(self, node_name=NODE_NAME, **kwargs):
+    def __init__(self, node_name: str = NODE_NAME, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         p = declare_parameter_table(self, PARAMETERS, on_change=self._on_parameters_changed)
         self._params = p
@@ -180,7 +184,7 @@ class Lsm6dso32Driver(LifecycleNode):
             self.trigger_configure()
             self.trigger_activate()
 
-    def _make_message_fields(self, p):
+    def _make_message_fields(self, p: Mapping[str, Any]) -> dict[str, Any]:
         return {
             'frame_id': p['frame_id'],
             'gyro_cov': _diag_cov(p['angular_velocity_variance_rad2_s2']),
@@ -189,7 +193,7 @@ class Lsm6dso32Driver(LifecycleNode):
             'decimation': p['temperature_decimation'],
         }
 
-    def _on_parameters_changed(self, changed):
+    def _on_parameters_changed(self, changed: dict[str, Any]) -> None:
         self._params = {**self._params, **changed}
         # One attribute swap: the reader thread sees either the old or the new set, never a mix.
         self._message_fields = self._make_message_fields(self._params)
@@ -201,37 +205,37 @@ class Lsm6dso32Driver(LifecycleNode):
 
     # ------------------------------------------------------------------ lifecycle
 
-    def on_configure(self, state):
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Start the link: open the port and configure the board (retried until it works)."""
         self._set_lifecycle('inactive')
         self._reader.start()
         return _OK
 
-    def on_activate(self, state):
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Publish the samples from now on."""
         self._set_lifecycle('active')
         return _OK
 
-    def on_deactivate(self, state):
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Stop publishing; the link stays up and its samples are counted and dropped."""
         self._set_lifecycle('inactive')
         return _OK
 
-    def on_cleanup(self, state):
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Stop the reader thread, which closes the port."""
         self._reader.stop()
         self._set_lifecycle('unconfigured')
         return _OK
 
-    def on_shutdown(self, state):
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Close the port, from any state."""
         return self.on_cleanup(state)
 
-    def on_error(self, state):
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Close the port after a failed transition."""
         return self.on_cleanup(state)
 
-    def _set_lifecycle(self, name):
+    def _set_lifecycle(self, name: str) -> None:
         with self._lock:
             self._lifecycle = name
             if name == 'active':
@@ -239,16 +243,16 @@ class Lsm6dso32Driver(LifecycleNode):
 
     # ------------------------------------------------------------------ reader callbacks
 
-    def _link_up(self, config):
+    def _link_up(self, config: LinkConfig) -> None:
         self.get_logger().info(f'streaming from {self._port}: {config.odr_hz:g} Hz, '
                                f'+/-{config.gyro_fs_dps} dps, +/-{config.accel_fs_g} g')
 
-    def _link_failed(self, reason, first):
+    def _link_failed(self, reason: str, first: bool) -> None:
         if first:
             self.get_logger().error(f'link to {self._port}: {reason}; retrying every '
                                     f'{self._params["reconnect_period_s"]} s')
 
-    def _handle(self, samples, host_ns, config):
+    def _handle(self, samples: np.ndarray, host_ns: int, config: LinkConfig) -> None:
         if self._lifecycle == 'active':
             self.publish_samples(samples, host_ns, config)
             return
@@ -263,7 +267,8 @@ class Lsm6dso32Driver(LifecycleNode):
 
     # ------------------------------------------------------------------ publishing
 
-    def publish_samples(self, samples, host_receive_ns, config):
+    def publish_samples(self, samples: np.ndarray, host_receive_ns: int,
+                        config: LinkConfig) -> int:
         """
         Publish decoded samples: drop already published counters, stamp, scale, serialise.
 
@@ -303,7 +308,7 @@ class Lsm6dso32Driver(LifecycleNode):
                 self.get_logger().warning(f'sample counter restarted at {int(samples["seq"][0])}')
         return published
 
-    def _publish_part(self, part, host_receive_ns, config):
+    def _publish_part(self, part: np.ndarray, host_receive_ns: int, config: LinkConfig) -> int:
         n = len(part)
         if n == 0:
             return 0
@@ -330,7 +335,7 @@ class Lsm6dso32Driver(LifecycleNode):
 
     # ------------------------------------------------------------------ diagnostics
 
-    def link_snapshot(self):
+    def link_snapshot(self) -> dict[str, Any]:
         """
         Copy the link's state and counters (for diagnostics and tests).
 
@@ -348,11 +353,11 @@ class Lsm6dso32Driver(LifecycleNode):
             return {**link, 'lifecycle': self._lifecycle, **self._counts,
                     'activated_at': self._activated_at}
 
-    def _publish_diagnostics(self):
+    def _publish_diagnostics(self) -> None:
         self._diag_pub.publish(diagnostic_array(self.get_clock().now().to_msg(),
                                                 [self.link_status()]))
 
-    def link_status(self):
+    def link_status(self) -> DiagnosticStatus:
         """
         Build the ``'<node>: link'`` status from the counters since the previous call.
 
@@ -369,13 +374,13 @@ class Lsm6dso32Driver(LifecycleNode):
         return diagnostic_status(self._status_name, self._hardware_id,
                                  bytes([status.level_byte]), status.message, status.values)
 
-    def destroy_node(self):
+    def destroy_node(self) -> None:
         """Stop and join the reader thread (it closes the port), then destroy the node."""
         self._reader.stop()
         return super().destroy_node()
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     """
     Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p``/``--params-file``.
 

@@ -22,7 +22,9 @@ format is :mod:`gyro_noise_ros.monitor_lines`.
 """
 
 import argparse
+from collections.abc import Sequence
 import sys
+from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
@@ -49,28 +51,29 @@ class DiagnosticsMonitor(Node):
 
     """
 
-    def __init__(self, name_filter, *, only_changes=False, compact=False):
+    def __init__(self, name_filter: str, *, only_changes: bool = False,
+                 compact: bool = False) -> None:
         super().__init__(NODE_NAME)
         self._filter = name_filter
         self._only_changes = only_changes or compact
         self._compact = compact
-        self._last = {}
+        self._last: dict[str, object] = {}
         self.create_subscription(DiagnosticArray, '/diagnostics', self._on_array, 100)
 
-    def _changed(self, key, state):
+    def _changed(self, key: str, state: object) -> bool:
         if self._only_changes and self._last.get(key) == state:
             return False
         self._last[key] = state
         return True
 
-    def _on_array(self, msg):
+    def _on_array(self, msg: DiagnosticArray) -> None:
         mine = [s for s in msg.status if self._filter in s.name]
         if not self._compact:
             for status in mine:
                 if self._changed(status.name, progress_state(status)):
                     print(format_status(status), flush=True)
             return
-        by_node = {}
+        by_node: dict[str, list[Any]] = {}
         for status in mine:
             by_node.setdefault(status.name.split(': ', 1)[0], []).append(status)
         for node_name, statuses in by_node.items():
@@ -81,7 +84,7 @@ class DiagnosticsMonitor(Node):
                 print(format_array(statuses), flush=True)
 
 
-def parse_args(argv):
+def parse_args(argv: Sequence[str]) -> argparse.Namespace:
     """
     Parse the monitor's own options (ROS arguments removed).
 
@@ -106,7 +109,7 @@ def parse_args(argv):
     return p.parse_args(argv)
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     """
     Run the monitor until Ctrl-C.
 

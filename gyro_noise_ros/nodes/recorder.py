@@ -44,12 +44,15 @@ recording as it is and ``gyro_noise_record repair`` writes a complete bag from i
 (``docs/bags.md``).
 """
 
+from collections.abc import Sequence
 from datetime import datetime, timezone
 from pathlib import Path
 import sys
 import time
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from rclpy.node import Node
 from sensor_msgs.msg import Imu, Temperature
 
@@ -87,7 +90,7 @@ PARAMETERS = (
 )
 
 
-def default_bag_name(now=None):
+def default_bag_name(now: datetime | None = None) -> str:
     """Return ``gyro_noise_<YYYYmmdd>_<HHMMSS>`` for the current UTC time (or ``now``)."""
     now = now or datetime.now(timezone.utc)
     return now.strftime('gyro_noise_%Y%m%d_%H%M%S')
@@ -111,7 +114,7 @@ class RecorderNode(Node):
 
     """
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         params = declare_parameter_table(self, PARAMETERS)
         self.output = params['output'] or default_bag_name()
@@ -120,7 +123,7 @@ class RecorderNode(Node):
         self.received_temperature = 0
         self.written_imu = 0
         self.written_temperature = 0
-        self._writer = None
+        self._writer: ImuBagWriter | None = None
         self._closed = False
         if Path(self.output).exists():
             raise OutputError(f"parameter 'output' = {self.output!r}: the path exists; "
@@ -147,13 +150,13 @@ class RecorderNode(Node):
                                + f' into {self.output} ({self.storage})')
 
     @property
-    def dropped(self):
+    def dropped(self) -> int:
         """int: Messages the transport dropped before this node (per-publisher sequence gaps)."""
         return sum(w.counts.missing for w, _ in self._watches)
 
     # ---- who publishes (counts per publisher, the second-publisher warning) ----------------
 
-    def _watch_publishers_setup(self):
+    def _watch_publishers_setup(self) -> None:
         consequence = 'the bag mixes their messages (counts are kept per publisher)'
         self._imu_watch = PublisherWatch(self._imu_sub.topic_name, consequence)
         self._imu_taker = RawTaker(self._imu_sub, Imu, self.get_logger())
@@ -166,13 +169,13 @@ class RecorderNode(Node):
             self._watches.append((self._temperature_watch, self._temperature_taker))
         wall_timer(self, 1.0, self._check_publishers)
 
-    def _take(self, watch, taker):
+    def _take(self, watch: PublisherWatch, taker: RawTaker) -> tuple[list[bytes], list[int]]:
         raws, received, sequence, gids = taker.take()
         if raws:
             watch.update(gids, sequence, time.monotonic())
         return raws, received
 
-    def _check_publishers(self):
+    def _check_publishers(self) -> None:
         for watch, _ in self._watches:
             for severity, line in watch.check(self):
                 if severity == 'warn':  # rclpy refuses two severities from one call site
@@ -180,18 +183,18 @@ class RecorderNode(Node):
                 else:
                     self.get_logger().info(line)
 
-    def publisher_summary(self):
+    def publisher_summary(self) -> str:
         """Return ``'publishers of <topic>: <name> <count> (<dropped> dropped); ...'``."""
         return '; '.join(f'publishers of {w.topic}: {w.summary()}' for w, _ in self._watches)
 
-    def _open(self, frame_id):
+    def _open(self, frame_id: str | None) -> None:
         self._writer = ImuBagWriter(
             self.output, storage=self.storage, imu_topic=self._imu_sub.topic_name,
             temperature_topic=(self._temperature_sub.topic_name if self._temperature_sub
                                else None),
             frame_id=frame_id or 'imu_link')
 
-    def drain(self):
+    def drain(self) -> None:
         """Take every queued message and write it (called by the timer and at shutdown)."""
         if self._closed:
             return
@@ -202,6 +205,7 @@ class RecorderNode(Node):
             # The bag is created on the first message so it carries the sensor's frame_id.
             self._open(frame_id_of((raws or t_raws)[0], False))
         if raws:
+            assert self._writer is not None  # opened above
             self.received_imu += len(raws)
             batch = decode_imu(raws, log_ns=_log_times(received, None))
             av_cov, la_cov = imu_covariances(raws)
@@ -210,6 +214,7 @@ class RecorderNode(Node):
                                    linear_acceleration_covariance=la_cov, log_ns=batch.log_ns)
             self.written_imu += len(raws)
         if t_raws:
+            assert self._writer is not None  # opened above
             self.received_temperature += len(t_raws)
             stamp_ns, temperature_c = decode_temperature(t_raws)
             self._writer.write_temperature(stamp_ns, temperature_c,
@@ -217,16 +222,16 @@ class RecorderNode(Node):
                                            log_ns=_log_times(t_received, stamp_ns))
             self.written_temperature += len(t_raws)
 
-    def _flush(self):
+    def _flush(self) -> None:
         if self._writer is not None and not self._closed:
             self._writer.flush()
 
-    def _report(self):
+    def _report(self) -> None:
         self.get_logger().info(f'{self.written_imu} Imu, {self.written_temperature} Temperature '
                                f'written; {self.dropped} dropped in transport; '
                                f'{self.publisher_summary()}')
 
-    def close(self):
+    def close(self) -> str:
         """Drain once more, close the bag and return the summary line (idempotent)."""
         if not self._closed:
             try:
@@ -242,7 +247,7 @@ class RecorderNode(Node):
                 f'to '
                 f'{where}; {self.dropped} dropped in transport; {self.publisher_summary()}')
 
-    def destroy_node(self):
+    def destroy_node(self) -> None:
         summary = self.close()
         print(summary, file=sys.stderr, flush=True)
         for _, taker in self._watches:
@@ -250,7 +255,8 @@ class RecorderNode(Node):
         return super().destroy_node()
 
 
-def _log_times(received, fallback_ns):
+def _log_times(received: Sequence[int], fallback_ns: np.ndarray | None
+               ) -> NDArray[np.int64] | None:
     """Receive times as int64 ns; the header stamps (``fallback_ns``) where the RMW gave none."""
     log = np.asarray(received, dtype=np.int64)
     if fallback_ns is not None and np.any(log == 0):
@@ -260,7 +266,7 @@ def _log_times(received, fallback_ns):
     return log
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     """
     Run the recorder until Ctrl-C or SIGTERM.
 

@@ -56,7 +56,7 @@ from ..analysis.summary_json import (accelerometer_readout_dict, axis_summary_di
 from ..analysis.summary_md import summary_markdown
 from ..bag import find_imu_topic, ImuBagReader
 from ..bag.inputs import is_table, open_imu
-from ..cluster import make_executor
+from ..cluster import DaskExecutor, make_executor
 from ..core.allan import AllanAccumulator
 from ..core.engine import (analyze_chunk, AXES, EngineConfig, identifier_for, NoiseEngine)
 from ..core.fractional import parse_grid
@@ -515,6 +515,7 @@ def _run_bags(params: AnalyzeParams, ref: Dict[str, Any], topics: List[str], out
         _warm_identifier(params.config)
     pool = make_executor(jobs, params.scheduler, warn=warn)
     if params.scheduler is not None:
+        assert isinstance(pool, DaskExecutor)  # make_executor's executor for a scheduler
         jobs = max(jobs, pool.nthreads)
     with _writing():
         stores = _Stores(csv=_ChunkRows(out / 'chunks.csv'))

@@ -91,7 +91,7 @@ class Story:
 FULL = Story(quiet_s=40.0, tau_s=60.0, amplitude_dps=0.1, live_s=100.0, history_chunks=20)
 QUICK = Story(quiet_s=14.0, tau_s=10.0, amplitude_dps=0.1, live_s=32.0, history_chunks=8)
 
-DEMO_ANALYZER_PARAMS = {
+DEMO_ANALYZER_PARAMS: Dict[str, Any] = {
     'drift_abs_warn_deg_s_per_h': 1.0,
     'drift_abs_error_deg_s_per_h': 100.0,
     'lost_fraction_warn': 0.05,

@@ -48,12 +48,13 @@ import itertools
 import logging
 import os
 import pickle
-from typing import Any, TypeVar
+from typing import Any, ParamSpec, TypeVar
 
 from . import __version__
 from .errors import ClusterError, ParameterError
 
 _T = TypeVar('_T')
+_P = ParamSpec('_P')
 
 #: pip extra that installs Dask distributed.
 EXTRA = 'dask'
@@ -271,7 +272,8 @@ class DaskExecutor(cf.Executor):
         """Return the worker threads in the cluster now (>= 1)."""
         return max(1, sum(self.client.nthreads().values()))
 
-    def submit(self, fn: Callable[..., _T], /, *args: Any, **kwargs: Any) -> 'cf.Future[_T]':
+    def submit(self, fn: Callable[_P, _T], /, *args: _P.args,
+               **kwargs: _P.kwargs) -> 'cf.Future[_T]':
         """
         Submit ``fn(*args, **kwargs)`` as a pure Dask task.
 

@@ -387,6 +387,7 @@ class BagSource:
         self.ros1 = self.storage == 'ros1'
         #: rosbags' rosbag2 Reader, or its ROS 1 Reader (``ros1``); None once closed.
         self.reader: Rosbag2Reader | Ros1Reader | None = None
+        Reader: type[Rosbag2Reader | Ros1Reader]
         try:
             if self.ros1:
                 # rosbags' reader keeps an index entry per message (about 150 B each); the block

@@ -392,7 +392,8 @@ def _emit_chunk(storage: McapWriter, start_time: int, end_time: int, data: memor
     head = struct.pack('<QQQI', start_time, end_time, size, 0)
     body = head + _mcap_string(storage.compression) + struct.pack('<Q', compressed_size)
     chunk_start = storage.bio.tell()
-    parts: list[bytes | memoryview] = [b'\x06' + struct.pack('<Q', len(body) + compressed_size) + body, compressed]
+    parts: list[bytes | memoryview] = [
+        b'\x06' + struct.pack('<Q', len(body) + compressed_size) + body, compressed]
     chunk_end = chunk_start + len(parts[0]) + compressed_size
     offsets = []
     end = chunk_end

@@ -24,7 +24,9 @@ the readable part, and recount the messages and times from what was read.
 """
 
 from io import BytesIO
+from pathlib import Path
 import struct
+from typing import Any, cast
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag2
 from rosbags.rosbag2.errors import ReaderError
@@ -32,7 +34,8 @@ from rosbags.rosbag2.storage_mcap import Channel as McapChannel
 from rosbags.rosbag2.storage_mcap import (ChunkInfo, decompress, get_msgdef, get_qos, McapReader,
                                           read_bytes, read_sized, read_string, Schema, Statistics)
 
-from .recover import _walk_chunk, _walk_records, mcap_has_footer, MCAP_MAGIC, McapTruncation
+from .recover import _RecordWalk, _walk_chunk, _walk_records, ChunkWalk, mcap_has_footer
+from .recover import MCAP_MAGIC, McapTruncation
 
 __all__ = ['RecoveringMcapReader']
 
@@ -40,20 +43,20 @@ __all__ = ['RecoveringMcapReader']
 class RecoveringMcapReader(McapReader):
     """rosbags' MCAP reader that also reads a file cut before its summary (see module)."""
 
-    truncation = None
+    truncation: McapTruncation | None = None
 
-    def _open(self):
-        if mcap_has_footer(self.path):
+    def _open(self) -> None:
+        if mcap_has_footer(cast(Path, self.path)):  # BagSource hands rosbags a Path
             super()._open()
             return
         self._open_truncated()
 
-    def _add_schema(self, body):
+    def _add_schema(self, body: bytes) -> None:
         rec = BytesIO(body)
         (key,) = struct.unpack('<H', rec.read(2))
         self.schemas[key] = Schema(key, read_string(rec), read_string(rec), read_string(rec))
 
-    def _add_channel(self, body):
+    def _add_channel(self, body: bytes) -> None:
         rec = BytesIO(body)
         key, schema_id = struct.unpack('<HH', rec.read(4))
         schema = self.schemas.get(schema_id)
@@ -66,9 +69,10 @@ class RecoveringMcapReader(McapReader):
                 ConnectionExtRosbag2(channel.message_encoding, get_qos(channel.metadata)),
                 self))
 
-    def _read_chunk(self, head):
+    def _read_chunk(self, head: dict[str, Any]) -> ChunkWalk | None:
         """Decompress one chunk found by the walk; return its walk or None if unreadable."""
         bio = self.bio
+        assert bio is not None  # an open reader
         bio.seek(head['data_offset'])
         data = bio.read(head['compressed_size'])
         try:
@@ -78,7 +82,7 @@ class RecoveringMcapReader(McapReader):
         except Exception:  # noqa: BLE001 - rosbags, lz4 and zstd raise many types on garbage
             return None
 
-    def _finish(self, head, trusted):
+    def _finish(self, head: dict[str, Any], trusted: bool) -> ChunkInfo | None:
         """
         Turn a walked chunk into a ChunkInfo (or None: unreadable, ends the walk).
 
@@ -102,8 +106,9 @@ class RecoveringMcapReader(McapReader):
                          head['index_offsets'], head['index_length'], head['compression'],
                          head['compressed_size'], head['uncompressed_size'], dict(counts))
 
-    def _open_truncated(self):
+    def _open_truncated(self) -> None:
         self.data_start = self._read_header()
+        assert self.bio is not None  # _read_header read it
         size = self.bio.seek(0, 2)
         walk = _walk_records(self.bio, self.data_start, size, on_schema=self._add_schema,
                              on_channel=self._add_channel)
@@ -112,9 +117,10 @@ class RecoveringMcapReader(McapReader):
         self._index(chunks, walk.top_messages)
         self._recount(readable=readable, size=size, reason=reason)
 
-    def _read_header(self):
+    def _read_header(self) -> int:
         """Check the magic, the Header record and the ros2 profile; return the data's offset."""
         bio = self.bio
+        assert bio is not None  # an open reader
         bio.seek(0)
         if bio.read(8) != MCAP_MAGIC:
             raise ReaderError('File magic is invalid.')
@@ -124,7 +130,7 @@ class RecoveringMcapReader(McapReader):
             raise ReaderError('Profile is not ros2.')
         return bio.tell()
 
-    def _chunk_index(self, walk):
+    def _chunk_index(self, walk: _RecordWalk) -> tuple[list[ChunkInfo], int, str]:
         """Return the walk's chunks up to the first unreadable one, where reading stops, why."""
         readable, reason = walk.stop, walk.reason
         chunks = []
@@ -137,7 +143,7 @@ class RecoveringMcapReader(McapReader):
             chunks.append(info)
         return chunks, readable, reason
 
-    def _index(self, chunks, top_messages):
+    def _index(self, chunks: list[ChunkInfo], top_messages: int) -> None:
         """Index the readable part by its chunks, or by rosbags' scan if messages are outside."""
         if top_messages:
             # Messages outside chunks: rosbags' own scan of the readable part reads them.
@@ -147,9 +153,10 @@ class RecoveringMcapReader(McapReader):
             self.chunks[:] = [c for c in chunks if sum(c.channel_count.values())]
             self._statistics_from_chunks()
 
-    def _recount(self, *, readable, size, reason):
+    def _recount(self, *, readable: int, size: int, reason: str) -> None:
         """Set the counts and times of the connections and metadata, and the truncation."""
         stats = self.statistics
+        assert stats is not None  # set by _index
         count = stats.message_count
         self.connections = [c._replace(msgcount=stats.channel_message_counts.get(c.id, 0))
                             for c in self.connections]
@@ -162,8 +169,8 @@ class RecoveringMcapReader(McapReader):
             file_bytes=size, start_ns=stats.start_time if count else 0,
             end_ns=stats.end_time if count else 0, stop_reason=reason)
 
-    def _statistics_from_chunks(self):
-        cstats = {}
+    def _statistics_from_chunks(self) -> None:
+        cstats: dict[int, int] = {}
         for chunk in self.chunks:
             for cid, k in chunk.channel_count.items():
                 cstats[cid] = cstats.get(cid, 0) + k

@@ -37,11 +37,15 @@ See ``docs/scale.md``.
 from __future__ import annotations
 
 from collections import defaultdict
+from collections.abc import Callable, Mapping, Sequence
 import functools
 import io
+import sqlite3
 import struct
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .storage import describe
 from .writer import ImuBagWriter
@@ -54,6 +58,13 @@ from ..msgs import (
     TEMPERATURE_MSGTYPE,
     typestore,
 )
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection
+    from rosbags.rosbag2.storage_mcap import McapWriter
+
+#: ``build(a, b)``: the records of messages a to b - 1 as a C-contiguous (b - a, record) matrix.
+RecordBuilder = Callable[[int, int], np.ndarray]
 
 #: Messages per ``INSERT ... SELECT`` statement (blocks of a few MB; measured best near 10k).
 SQL_BLOCK = 8192
@@ -71,23 +82,23 @@ class BulkImuBagWriter(ImuBagWriter):
     path of :class:`ImuBagWriter`.
     """
 
-    def _bulk_cursor(self, conn):
+    def _bulk_cursor(self, conn: Connection) -> sqlite3.Cursor | None:
         """Return the sqlite3 cursor if the rosbags layout allows the block insert, else None."""
         writer = self._writer
         if writer is None:
             raise BagError(f'bag {str(self.path)!r} is closed')
-        storage = writer.storage
+        storage: Any = writer.storage  # rosbags' storage writer, probed by name and attribute
         if (type(storage).__name__ == 'Sqlite3Writer' and hasattr(storage, 'cursor')
                 and conn.id in getattr(writer, 'counts', {}) and hasattr(writer, 'min_timestamp')):
             return storage.cursor
         return None
 
-    def _mcap_storage(self, conn):
+    def _mcap_storage(self, conn: Connection) -> McapWriter | None:
         """Return rosbags' McapWriter if its layout allows the block write, else None."""
         writer = self._writer
         if writer is None:
             raise BagError(f'bag {str(self.path)!r} is closed')
-        storage = writer.storage
+        storage: Any = writer.storage  # rosbags' storage writer, probed by name and attribute
         chunk = getattr(storage, 'chunk', None)
         if (type(storage).__name__ != 'McapWriter' or getattr(storage, 'compression', None) != ''
                 or not all(hasattr(chunk, name) for name in ('bio', 'msgs', 'message_start_time'))
@@ -101,7 +112,7 @@ class BulkImuBagWriter(ImuBagWriter):
             storage._gyro_noise_bulk = True
         return storage
 
-    def _write_mcap_rows(self, conn, log_ns, rows):
+    def _write_mcap_rows(self, conn: Connection, log_ns: np.ndarray, rows: np.ndarray) -> None:
         n, size = rows.shape
         times = np.ascontiguousarray(log_ns, dtype='<u8')
         records = np.empty((n, _MCAP_MESSAGE_HEAD + size), np.uint8)
@@ -111,7 +122,8 @@ class BulkImuBagWriter(ImuBagWriter):
         records[:, _MCAP_MESSAGE_HEAD:] = rows
         self._write_mcap_records(conn, times, records.shape[1], lambda a, b: records[a:b])
 
-    def _write_mcap_records(self, conn, times, rec, build):
+    def _write_mcap_records(self, conn: Connection, times: np.ndarray, rec: int,
+                            build: RecordBuilder) -> None:
         """
         Append MCAP message records to the chunks.
 
@@ -122,7 +134,10 @@ class BulkImuBagWriter(ImuBagWriter):
         rosbags' pending chunk closed by :class:`_McapChunkCloser`); the rest goes through
         rosbags' pending chunk as rosbags' ``write`` would.
         """
-        storage = self._writer.storage
+        writer = self._writer
+        assert writer is not None  # _mcap_storage found it open
+        # rosbags' McapWriter, its pending chunk's index lists holding numpy arrays too
+        storage: Any = writer.storage
         n = times.shape[0]
         full = MCAP_CHUNK_BYTES // rec + 1  # messages that close a chunk begun empty
         done = 0
@@ -135,7 +150,7 @@ class BulkImuBagWriter(ImuBagWriter):
                     index = np.empty((full, 2), '<u8')
                     index[:, 0] = part
                     index[:, 1] = _offsets(rec, full)
-                    data = memoryview(build(done, done + full)).cast('B')
+                    data = build(done, done + full).data.cast('B')
                     _emit_chunk(storage, int(part.min()), int(part.max()), data,
                                 {conn.id: [index]})
                     done += full
@@ -143,7 +158,7 @@ class BulkImuBagWriter(ImuBagWriter):
                 # rosbags closes the chunk after the first message that ends past the limit
                 take = min(n - done, max(0, (MCAP_CHUNK_BYTES - pos) // rec) + 1)
                 part = times[done:done + take]
-                chunk.bio.write(memoryview(build(done, done + take)).cast('B'))
+                chunk.bio.write(build(done, done + take).data.cast('B'))
                 index = np.empty((take, 2), '<u8')
                 index[:, 0] = part
                 index[:, 1] = pos + rec * np.arange(take, dtype=np.uint64)
@@ -159,12 +174,11 @@ class BulkImuBagWriter(ImuBagWriter):
         storage.message_start_time = min(storage.message_start_time, first)
         storage.message_end_time = max(storage.message_end_time, last)
         storage.channel_stats[conn.id] += n
-        writer = self._writer
         writer.counts[conn.id] += n
         writer.min_timestamp = min(writer.min_timestamp, first)
         writer.max_timestamp = max(writer.max_timestamp, last)
 
-    def _write_rows(self, conn, log_ns, rows):
+    def _write_rows(self, conn: Connection, log_ns: np.ndarray, rows: np.ndarray) -> None:
         if rows.shape[0] == 0:
             return
         if self._mcap_storage(conn) is not None:
@@ -177,10 +191,11 @@ class BulkImuBagWriter(ImuBagWriter):
             self._write(conn, log_ns, [blob[i:i + size] for i in range(0, len(blob), size)])
             return
         writer = self._writer
+        assert writer is not None  # _bulk_cursor found it open
         size = int(rows.shape[1])
         sql = (f'INSERT INTO messages (topic_id, timestamp, data) SELECT {int(conn.id)}, value, '
                f'substr(?1, key * {size} + 1, {size}) FROM json_each(?2)')
-        flat = memoryview(np.ascontiguousarray(rows)).cast('B')
+        flat = np.ascontiguousarray(rows).data.cast('B')
         times = log_ns.tolist()
         try:
             for start in range(0, rows.shape[0], SQL_BLOCK):
@@ -193,8 +208,10 @@ class BulkImuBagWriter(ImuBagWriter):
         writer.min_timestamp = min(writer.min_timestamp, int(log_ns.min()))
         writer.max_timestamp = max(writer.max_timestamp, int(log_ns.max()))
 
-    def write_imu(self, stamp_ns, gyro_rad_s, accel_m_s2, *, angular_velocity_covariance=None,
-                  linear_acceleration_covariance=None, log_ns=None, topic=None):
+    def write_imu(self, stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, *,
+                  angular_velocity_covariance: ArrayLike | None = None,
+                  linear_acceleration_covariance: ArrayLike | None = None,
+                  log_ns: ArrayLike | None = None, topic: str | None = None) -> None:
         """
         Append Imu messages (see :meth:`ImuBagWriter.write_imu`).
 
@@ -227,7 +244,8 @@ class BulkImuBagWriter(ImuBagWriter):
         if conn is self._imu_conn:
             self.imu_count += stamps.shape[0]
 
-    def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
+    def write_temperature(self, stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
+                          variance: ArrayLike = 0.0, log_ns: ArrayLike | None = None) -> None:
         """
         Append Temperature messages (see :meth:`ImuBagWriter.write_temperature`).
 
@@ -256,7 +274,8 @@ class BulkImuBagWriter(ImuBagWriter):
         self.temperature_count += rows.shape[0]
 
 
-def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
+def _imu_rows(stamps: np.ndarray, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, frame_id: str,
+              av_cov: ArrayLike | None, la_cov: ArrayLike | None) -> np.ndarray:
     """
     Return :func:`encode_imu_rows` of the messages, faster when the covariances are shared.
 
@@ -287,21 +306,23 @@ def _imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id, av_cov, la_cov):
 
 
 @functools.lru_cache(maxsize=8)
-def _offsets(rec, count):
+def _offsets(rec: int, count: int) -> np.ndarray:
     """Return the chunk offsets of ``count`` records of ``rec`` bytes (uint64, read-only)."""
     out = rec * np.arange(count, dtype=np.uint64)
     out.flags.writeable = False
     return out
 
 
-def _mcap_record_head(channel_id, size):
+def _mcap_record_head(channel_id: int, size: int) -> np.ndarray:
     """Return the first 31 bytes of an MCAP message record (times zero) for a message size."""
     return np.frombuffer(struct.pack('<BQHIQQ', 0x05, _MCAP_MESSAGE_HEAD - 9 + size, channel_id,
                                      0, 0, 0), np.uint8)
 
 
-def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, frame_id, av_cov,
-                 la_cov):
+def _imu_records(channel_id: int, stamps: np.ndarray, sec: np.ndarray, nsec: np.ndarray,
+                 log_ns: np.ndarray, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike,
+                 frame_id: str, av_cov: ArrayLike | None,
+                 la_cov: ArrayLike | None) -> tuple[int, RecordBuilder] | None:
     """
     Return (record size, ``build``) for the MCAP message records of Imu messages, or None.
 
@@ -335,9 +356,9 @@ def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, 
                        'formats': ['<i8', '<i8', '<i4', '<u4', ('<f8', (3,)), ('<f8', (3,))],
                        'offsets': [15, 23, at_stamp, at_stamp + 4, at_gyro, at_accel],
                        'itemsize': template.size})
-    reused = []
+    reused: list[np.ndarray] = []
 
-    def build(a, b):
+    def build(a: int, b: int) -> np.ndarray:
         if not reused or reused[0].shape[0] < b - a:
             reused[:] = [np.empty((b - a, template.size), np.uint8)]
             reused[0][...] = template
@@ -354,7 +375,8 @@ def _imu_records(channel_id, stamps, sec, nsec, log_ns, gyro_rad_s, accel_m_s2, 
     return template.size, build
 
 
-def _emit_chunk(storage, start_time, end_time, data, msgs):
+def _emit_chunk(storage: McapWriter, start_time: int, end_time: int, data: memoryview,
+                msgs: Mapping[int, Sequence[ArrayLike]]) -> None:
     """
     Write one MCAP chunk (uncompressed) with its message indexes; record its chunk index.
 
@@ -363,20 +385,23 @@ def _emit_chunk(storage, start_time, end_time, data, msgs):
     order), and the chunk index entry appended to ``storage.chunks``.
     """
     size = len(data)
-    compressed = storage.compressor(data)
+    # rosbags declares its compressor bytes -> bytes; the one this writer runs with (no
+    # compression, checked by _mcap_storage) hands back the buffer it is given
+    compressed: bytes | memoryview = storage.compressor(data)  # type: ignore[arg-type]
     compressed_size = len(compressed)
     head = struct.pack('<QQQI', start_time, end_time, size, 0)
     body = head + _mcap_string(storage.compression) + struct.pack('<Q', compressed_size)
     chunk_start = storage.bio.tell()
-    parts = [b'\x06' + struct.pack('<Q', len(body) + compressed_size) + body, compressed]
+    parts: list[bytes | memoryview] = [
+        b'\x06' + struct.pack('<Q', len(body) + compressed_size) + body, compressed]
     chunk_end = chunk_start + len(parts[0]) + compressed_size
     offsets = []
     end = chunk_end
     for cid, entries in msgs.items():
         offsets.append((cid, end))
         pairs = [np.ascontiguousarray(e, dtype='<u8').reshape(-1, 2) for e in entries]
-        index = memoryview(pairs[0] if len(pairs) == 1 else np.concatenate(
-            pairs or [np.zeros((0, 2), '<u8')])).cast('B')
+        index = (pairs[0] if len(pairs) == 1 else np.concatenate(
+            pairs or [np.zeros((0, 2), '<u8')])).data.cast('B')
         parts.append(b'\x07' + struct.pack('<QHI', len(index) + 6, cid, len(index)))
         parts.append(index)
         end += len(parts[-2]) + len(index)
@@ -402,10 +427,10 @@ class _McapChunkCloser:
     tuples from rosbags' own ``write``.
     """
 
-    def __init__(self, storage):
+    def __init__(self, storage: McapWriter) -> None:
         self.storage = storage
 
-    def __call__(self):
+    def __call__(self) -> None:
         """Close the pending chunk: chunk record, message indexes, chunk index entry."""
         from rosbags.rosbag2.storage_mcap import PendingChunk
 
@@ -420,6 +445,6 @@ class _McapChunkCloser:
         storage.chunk = PendingChunk(2**63 - 1, 0, io.BytesIO(), defaultdict(list))
 
 
-def _mcap_string(text):
+def _mcap_string(text: str) -> bytes:
     data = text.encode()
     return struct.pack('<I', len(data)) + data

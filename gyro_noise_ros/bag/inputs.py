@@ -41,6 +41,7 @@ the three gyro axes in rad/s and the temperature on the Imu stamps) for the tool
 memory.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,6 +50,7 @@ import numpy as np
 from .reader import ImuBagReader
 from .tabular import csv_gyro_axes, is_table, TableImuReader
 from ..errors import BagError, InputDataError
+from ..outputs import StrPath
 
 __all__ = ['AXES', 'ImuRecord', 'input_kind', 'is_table', 'open_imu', 'read_imu', 'recorded_axes']
 
@@ -56,7 +58,7 @@ __all__ = ['AXES', 'ImuRecord', 'input_kind', 'is_table', 'open_imu', 'read_imu'
 AXES = ('x', 'y', 'z')
 
 
-def input_kind(path):
+def input_kind(path: StrPath) -> str:
     """
     Tell what kind of recording a path names (by its name; the bag reader checks the content).
 
@@ -83,14 +85,16 @@ def input_kind(path):
     return 'rosbag2'
 
 
-def _check_exists(path):
+def _check_exists(path: StrPath) -> Path:
     path = Path(path)
     if not path.exists():
         raise BagError(f'cannot read {str(path)!r}: no such file or folder')
     return path
 
 
-def open_imu(path, *, topic=None, temperature_topic=None, rate_hz=None, gyro_axes=AXES):
+def open_imu(path: StrPath, *, topic: str | None = None, temperature_topic: str | None = None,
+             rate_hz: float | None = None,
+             gyro_axes: Iterable[str] = AXES) -> ImuBagReader | TableImuReader:
     """
     Open a recording as a stream of :class:`~gyro_noise_ros.bag.ImuBatch` es (module doc).
 
@@ -131,7 +135,7 @@ def open_imu(path, *, topic=None, temperature_topic=None, rate_hz=None, gyro_axe
     return ImuBagReader(path, topic=topic, temperature_topic=temperature_topic)
 
 
-def recorded_axes(path):
+def recorded_axes(path: StrPath) -> tuple[str, ...]:
     """
     Return the gyro axes a recording holds (a CSV may carry only some; bags and ULogs hold three).
 
@@ -185,18 +189,19 @@ class ImuRecord:
 
     stamp_ns: np.ndarray
     gyro_rad_s: np.ndarray
-    temperature_c: object
+    temperature_c: np.ndarray | None
     topic: str
     storage: str
     source: str
 
     @property
-    def n(self):
+    def n(self) -> int:
         """Count the samples."""
         return int(self.stamp_ns.shape[0])
 
 
-def read_imu(path, *, topic=None, temperature_topic=None, rate_hz=None, gyro_axes=AXES):
+def read_imu(path: StrPath, *, topic: str | None = None, temperature_topic: str | None = None,
+             rate_hz: float | None = None, gyro_axes: Iterable[str] = AXES) -> ImuRecord:
     """
     Read a whole recording into an :class:`ImuRecord` (module doc; arguments as :func:`open_imu`).
 

@@ -21,7 +21,9 @@ decoded in bulk (:mod:`gyro_noise_ros.msgs`), so memory stays constant in the ba
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Literal, Self
 
 import numpy as np
 
@@ -31,6 +33,11 @@ from .topics import _norm, _select_topic
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, decode_temperature_spans, frame_id_of, IMU_MSGTYPE
 from ..msgs import TEMPERATURE_MSGTYPE
+from ..outputs import StrPath
+
+#: A decoded block: (stamp_ns, log_ns, gyro, accel, (buf, starts, lengths) for frame ids).
+_Decoded = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                 tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 class ImuBagReader:
@@ -80,9 +87,10 @@ class ImuBagReader:
 
     """
 
-    def __init__(self, path, *, topic=None, temperature_topic=None, skip_undecodable=False):
+    def __init__(self, path: StrPath, *, topic: str | None = None,
+                 temperature_topic: str | None = None, skip_undecodable: bool = False) -> None:
         self.path = Path(path)
-        self._source = BagSource(path)
+        self._source: BagSource | None = BagSource(path)
         try:
             topics = self._source.topics()
             self.topic = _select_topic(topics, topic, IMU_MSGTYPE, path)
@@ -98,7 +106,8 @@ class ImuBagReader:
         self.skip_undecodable = bool(skip_undecodable)
         self.undecodable_count = 0
 
-    def _pick_temperature(self, topics, requested):
+    def _pick_temperature(self, topics: dict[str, tuple[str | None, int]],
+                          requested: str | None) -> str | None:
         if requested is not None:
             return _select_topic(topics, requested, TEMPERATURE_MSGTYPE, self.path)
         names = sorted(name for name, (kind, _) in topics.items() if kind == TEMPERATURE_MSGTYPE)
@@ -108,25 +117,25 @@ class ImuBagReader:
         same = [name for name in names if _norm(name).rpartition('/')[0] == namespace]
         return same[0] if len(same) == 1 else None
 
-    def __enter__(self):
+    def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> Literal[False]:
         self.close()
         return False
 
-    def close(self):
+    def close(self) -> None:
         """Close the bag (idempotent)."""
         if self._source is not None:
             self._source.close()
             self._source = None
 
-    def _open_source(self):
+    def _open_source(self) -> BagSource:
         if self._source is None:
             raise BagError(f'bag {str(self.path)!r} was closed')
         return self._source
 
-    def _decoded_blocks(self, source):
+    def _decoded_blocks(self, source: BagSource) -> Iterator[_Decoded]:
         """
         Yield decoded blocks.
 
@@ -144,7 +153,7 @@ class ImuBagReader:
             if stamp_ns.shape[0]:
                 yield stamp_ns, log_ns, gyro, accel, (buf, starts, lengths)
 
-    def iter_batches(self, batch_size=65536):
+    def iter_batches(self, batch_size: int = 65536) -> Iterator[ImuBatch]:
         """
         Yield the Imu messages in bag order as :class:`ImuBatch` es of ``batch_size`` messages.
 
@@ -189,7 +198,7 @@ class ImuBagReader:
                                f'be recovered: {self.recovery}')
             raise BagError(f'bag {str(self.path)!r} has no messages on topic {self.topic!r}')
 
-    def read_temperature(self):
+    def read_temperature(self) -> tuple[np.ndarray, np.ndarray] | None:
         """
         Read the whole temperature topic.
 
@@ -220,7 +229,7 @@ class ImuBagReader:
         return np.concatenate(stamps), np.concatenate(temps)
 
 
-def _take(pending, size, ros1):
+def _take(pending: list[_Decoded], size: int, ros1: bool) -> tuple[ImuBatch, list[_Decoded]]:
     """Cut the first ``size`` messages off the pending decoded blocks; return (batch, rest)."""
     parts, rest, need = [], list(pending), size
     while need:

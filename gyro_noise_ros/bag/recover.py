@@ -47,11 +47,16 @@ import shutil
 import struct
 import sys
 import tempfile
-from typing import Any, Callable, Dict, List, NamedTuple, Optional, Tuple
+from typing import Any, BinaryIO, Callable, Dict, List, NamedTuple, Optional, Tuple, TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import BagError
+from ..outputs import StrPath
+
+if TYPE_CHECKING:
+    from rosbags.rosbag2 import Reader
+    from rosbags.rosbag2.storage_mcap import McapReader
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 _OP_FOOTER = 0x02
@@ -71,7 +76,7 @@ COPY_MARGIN_BYTES = 64 << 20
 _announced: set[str] = set()
 
 
-def announce(text):
+def announce(text: str) -> None:
     """
     Say ``text`` once per process on stderr, as ``<program>: warning: <text>``.
 
@@ -88,7 +93,7 @@ def announce(text):
     print(f'{prog}: warning: {text}', file=sys.stderr, flush=True)
 
 
-def mcap_has_footer(path):
+def mcap_has_footer(path: StrPath) -> bool:
     """
     Tell whether an MCAP file ends with its footer and closing magic (a writer closed it).
 
@@ -146,17 +151,21 @@ class McapTruncation:
     stop_reason: str
 
     @property
-    def lost_bytes(self):
+    def lost_bytes(self) -> int:
         """int: Bytes after the readable part (an unfinished chunk, a cut summary)."""
         return self.file_bytes - self.readable_bytes
 
     @property
-    def span_s(self):
+    def span_s(self) -> float:
         """float: Log time from the first to the last readable message (s)."""
         return (self.end_ns - self.start_ns) / 1e9 if self.messages else 0.0
 
 
-def _walk_chunk(raw):
+#: What :func:`_walk_chunk` finds: (schemas, channels, counts, start_ns, end_ns).
+ChunkWalk = Tuple[Dict[int, bytes], Dict[int, bytes], Dict[int, int], Optional[int], Optional[int]]
+
+
+def _walk_chunk(raw: bytes) -> ChunkWalk:
     """
     Return (schemas, channels, counts, start_ns, end_ns) of one decompressed chunk.
 
@@ -169,7 +178,8 @@ def _walk_chunk(raw):
     counts = {int(c): int(k) for c, k in zip(*np.unique(channel, return_counts=True))}
     start = int(log_ns.min()) if log_ns.size else None
     end = int(log_ns.max()) if log_ns.size else None
-    schemas, channels = {}, {}
+    schemas: dict[int, bytes] = {}
+    channels: dict[int, bytes] = {}
     if int(lengths.sum()) + 31 * lengths.shape[0] != len(raw):
         # Not only Message records: find the Schema and Channel records (walk already validated).
         pos, size = 0, len(raw)
@@ -209,7 +219,7 @@ class _RecordWalk(NamedTuple):
     top_messages: int
 
 
-def _chunk_head(bio, pos, length):
+def _chunk_head(bio: BinaryIO, pos: int, length: int) -> dict[str, Any] | None:
     """Return the head of the Chunk record at ``pos`` (``length``: its body), None if malformed."""
     if length < 40:
         return None
@@ -228,14 +238,14 @@ def _chunk_head(bio, pos, length):
             'counts': {}, 'index_offsets': {}, 'index_length': 0}
 
 
-def _walk_records(bio, pos: int, size: int, *, on_schema: Callable[[bytes], None],
+def _walk_records(bio: BinaryIO, pos: int, size: int, *, on_schema: Callable[[bytes], None],
                   on_channel: Callable[[bytes], None]) -> _RecordWalk:
     """
     Walk the data section's records by their length fields, from ``pos`` up to the first cut.
 
     Parameters
     ----------
-    bio : file
+    bio : BinaryIO
         The MCAP file, opened for binary reading.
     pos : int
         Offset of the first data record (after the header).
@@ -296,7 +306,7 @@ def _walk_records(bio, pos: int, size: int, *, on_schema: Callable[[bytes], None
 
 
 @functools.lru_cache(maxsize=None)
-def recovering_mcap_reader_class():
+def recovering_mcap_reader_class() -> type[McapReader]:
     """
     Return rosbags' ``McapReader`` extended to read a file without summary and footer.
 
@@ -315,7 +325,7 @@ def recovering_mcap_reader_class():
 
 
 @functools.lru_cache(maxsize=None)
-def recovering_reader_class():
+def recovering_reader_class() -> type[Reader]:
     """
     Return rosbags' unified ``Reader`` with :func:`recovering_mcap_reader_class` for bare files.
 
@@ -338,12 +348,13 @@ def recovering_reader_class():
         """
 
         STORAGE_PLUGINS = {**DirectoryReader.STORAGE_PLUGINS, 'mcap': mcap_reader}
-        truncation = None
+        truncation: McapTruncation | None = None
 
-        def open(self):  # noqa: A003 - overrides rosbags DirectoryReader.open
+        def open(self) -> None:  # noqa: A003 - overrides rosbags DirectoryReader.open
             """Open the bag; recount from the storages if an MCAP file was cut."""
             super().open()
-            cut = [s.truncation for s in self.storages if getattr(s, 'truncation', None)]
+            found = (getattr(s, 'truncation', None) for s in self.storages)
+            cut: list[McapTruncation] = [t for t in found if t]
             if not cut:
                 return
             self.truncation = cut[0] if len(cut) == 1 else McapTruncation(
@@ -352,7 +363,7 @@ def recovering_reader_class():
                 file_bytes=sum(c.file_bytes for c in cut),
                 start_ns=min(c.start_ns for c in cut), end_ns=max(c.end_ns for c in cut),
                 stop_reason=cut[0].stop_reason)
-            counts = {}
+            counts: dict[tuple[str, str], int] = {}
             for storage in self.storages:
                 for conn in storage.connections:
                     key = (conn.topic, conn.msgtype)
@@ -376,7 +387,7 @@ def recovering_reader_class():
     return RecoveringReader
 
 
-def truncation_note(path, truncation):
+def truncation_note(path: StrPath, truncation: McapTruncation) -> str:
     """
     Return the one-line note on a truncated MCAP file.
 
@@ -402,10 +413,10 @@ def truncation_note(path, truncation):
 # ---------------------------------------------------------------------------------------------
 # sqlite3: a hot rollback journal, rolled back in a copy
 
-_COPIES: dict[str, Any] = {}
+_COPIES: dict[tuple[tuple[int, int, int, int], tuple[int, int, int, int]], Path] = {}
 
 
-def journal_is_hot(db3):
+def journal_is_hot(db3: Path) -> bool:
     """
     Tell whether a ``.db3`` has a non-empty rollback journal beside it (a writer died mid-way).
 
@@ -426,12 +437,12 @@ def journal_is_hot(db3):
         return False
 
 
-def _identity(path):
+def _identity(path: Path) -> tuple[int, int, int, int]:
     st = path.stat()
     return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
 
 
-def rolled_back_copy(db3):
+def rolled_back_copy(db3: StrPath) -> Path:
     """
     Copy an sqlite3 file and its hot journal to a temporary folder and roll the journal back there.
 
@@ -440,7 +451,7 @@ def rolled_back_copy(db3):
 
     Parameters
     ----------
-    db3 : pathlib.Path
+    db3 : str or os.PathLike
         The sqlite3 file; ``<name>-journal`` beside it is the journal.
 
     Returns
@@ -498,7 +509,7 @@ def rolled_back_copy(db3):
     return copy
 
 
-def rollback_note(path, db3):
+def rollback_note(path: StrPath, db3: Path) -> str:
     """
     Return the one-line note on an sqlite3 file read through a rolled-back copy.
 

@@ -26,9 +26,11 @@ the new bag holds exactly the messages read, per topic.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 import itertools
 from pathlib import Path
+from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
 
@@ -36,7 +38,12 @@ from .storage import BagSource, describe, mcap_message_records, read_mcap_chunk,
 from .writer import write_raw
 from ..errors import BagError, OutputError, ParameterError
 from ..msgs import typestore
-from ..outputs import staged_new_dir
+from ..outputs import staged_new_dir, StrPath
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection
+    from rosbags.rosbag2.storage_mcap import McapReader
+    from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
 #: Messages handed to the writer at once.
 BLOCK = 16384
@@ -69,13 +76,13 @@ class RepairResult:
     source: str
     out: str
     storage: str
-    topics: tuple
+    topics: tuple[tuple[str, str, int], ...]
     messages: int
-    start_ns: object
-    end_ns: object
-    recovery: object
+    start_ns: int | None
+    end_ns: int | None
+    recovery: str | None
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """Return the result as plain JSON-able types."""
         return {'source': self.source, 'out': self.out, 'storage': self.storage,
                 'topics': [{'topic': t, 'msgtype': m, 'messages': n} for t, m, n in self.topics],
@@ -83,7 +90,7 @@ class RepairResult:
                 'recovery': self.recovery}
 
 
-def default_repaired_path(path):
+def default_repaired_path(path: StrPath) -> Path:
     """
     Return where ``repair`` writes by default: ``<bag>_repaired`` beside the input.
 
@@ -104,7 +111,7 @@ def default_repaired_path(path):
     return path.parent / f'{name}_repaired'
 
 
-def _connection_args(conn):
+def _connection_args(conn: Connection) -> dict[str, Any]:
     """Keyword arguments of rosbags' ``Writer.add_connection`` reproducing ``conn``."""
     qos = list(getattr(conn.ext, 'offered_qos_profiles', []) or [])
     data = getattr(conn.msgdef, 'data', '') or ''
@@ -123,7 +130,9 @@ def _connection_args(conn):
     return {'typestore': store, 'offered_qos_profiles': qos}
 
 
-def _storage_order_blocks(source):
+def _storage_order_blocks(
+        source: BagSource,
+) -> Iterator[tuple[Connection, np.ndarray, Sequence[bytes | memoryview]]]:
     """
     Yield ``(storage connection id, log_ns, blobs)`` runs in recording order.
 
@@ -132,33 +141,37 @@ def _storage_order_blocks(source):
     """
     storages = source._storages() if source.fast and not source.ros1 else None
     if storages is None:
-        stream = source.reader.messages(connections=source.connections)
+        stream = source._open_reader().messages(connections=source.connections)
         while block := list(itertools.islice(stream, BLOCK)):
-            for _, run in itertools.groupby(block, key=lambda m: id(m[0])):
-                run = list(run)
+            for _, group in itertools.groupby(block, key=lambda m: id(m[0])):
+                run = list(group)
                 yield run[0][0], np.array([m[1] for m in run], np.int64), [m[2] for m in run]
         return
     for storage in storages:
         conns = {c.id: c for c in storage.connections}
+        # the storage kind names the rosbags storage reader class
         if source.storage == 'sqlite3':
-            cursor = storage.dbconn.execute(
+            dbconn = cast('Sqlite3Reader', storage).dbconn
+            assert dbconn is not None  # an open storage
+            cursor = dbconn.execute(
                 'SELECT topic_id, timestamp, data FROM messages ORDER BY id')
             while rows := list(itertools.islice(cursor, BLOCK)):
-                for cid, run in itertools.groupby(rows, key=lambda r: r[0]):
-                    run = list(run)
+                for cid, group in itertools.groupby(rows, key=lambda r: r[0]):
+                    run = list(group)
                     if cid in conns:
                         yield (conns[cid], np.array([r[1] for r in run], np.int64),
                                [r[2] for r in run])
             continue
-        chunks = sorted(storage.chunks, key=lambda c: c.chunk_start_offset)
-        if not chunks and storage.statistics and storage.statistics.message_count:
-            stream = storage.messages(list(conns.values()))
+        mcap = cast('McapReader', storage)
+        chunks = sorted(mcap.chunks, key=lambda c: c.chunk_start_offset)
+        if not chunks and mcap.statistics and mcap.statistics.message_count:
+            stream = mcap.messages(list(conns.values()))
             while block := list(itertools.islice(stream, BLOCK)):
-                for _, run in itertools.groupby(block, key=lambda m: id(m[0])):
-                    run = list(run)
+                for _, group in itertools.groupby(block, key=lambda m: id(m[0])):
+                    run = list(group)
                     yield run[0][0], np.array([m[1] for m in run], np.int64), [m[2] for m in run]
             continue
-        with open(storage.path, 'rb') as fh:
+        with open(cast(Path, mcap.path), 'rb') as fh:
             for info in chunks:
                 raw = read_mcap_chunk(fh, info)
                 starts, lengths, channel, log_ns = mcap_message_records(raw)
@@ -174,7 +187,8 @@ def _storage_order_blocks(source):
                                                           lengths[a:b].tolist())]
 
 
-def repair_bag(path, out=None, *, storage=None):
+def repair_bag(path: StrPath, out: StrPath | None = None, *,
+               storage: str | None = None) -> RepairResult:
     """
     Write a complete rosbag2 from a killed (or any readable rosbag2) recording.
 
@@ -216,7 +230,9 @@ def repair_bag(path, out=None, *, storage=None):
                                  'metadata to repair')
         kind = storage or source.storage
         plugin = StoragePlugin.SQLITE3 if kind == 'sqlite3' else StoragePlugin.MCAP
-        written, first, last = {}, None, None
+        written: dict[tuple[str, str], int] = {}
+        first: int | None = None
+        last: int | None = None
         with staged_new_dir(out, option='--out') as stage:
             writer = Writer(stage, version=9, storage_plugin=plugin)
             try:

@@ -25,10 +25,12 @@ MCAP file without chunk index, per-message compression), rosbags' own iterator i
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 import itertools
 import operator
 from pathlib import Path
 import struct
+from typing import Any, BinaryIO, cast, NoReturn, TYPE_CHECKING, Union
 
 import numpy as np
 
@@ -36,6 +38,21 @@ from .recover import (announce, journal_is_hot, recovering_reader_class, rollbac
                       rolled_back_copy, truncation_note)
 from ..errors import BagError
 from ..msgs import join_raws
+from ..outputs import StrPath
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection
+    from rosbags.rosbag1 import Reader as Ros1Reader
+    from rosbags.rosbag1.reader import IndexData
+    from rosbags.rosbag2 import Reader as Rosbag2Reader
+    from rosbags.rosbag2.reader import ReaderProtocol
+    from rosbags.rosbag2.storage_mcap import ChunkInfo, McapReader
+    from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+
+#: One block of a topic's messages: (buf, starts, lengths, log_ns), see :meth:`BagSource.blocks`.
+Block = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+#: A reader whose ``messages(connections)`` yields (connection, log time, raw) in bag order.
+MessageReader = Union['Rosbag2Reader', 'Ros1Reader', 'ReaderProtocol']
 
 STORAGES = ('sqlite3', 'mcap')
 BLOCK = 16384
@@ -52,7 +69,7 @@ _MCAP_MESSAGE = 0x05
 _MCAP_MSG_HEAD = 1 + 8 + 2 + 4 + 8 + 8
 
 
-def _sniff(path):
+def _sniff(path: Path) -> str | None:
     try:
         with open(path, 'rb') as fh:
             head = fh.read(16)
@@ -64,13 +81,13 @@ def _sniff(path):
     return None
 
 
-def describe(err):
+def describe(err: BaseException) -> str:
     """First line of an exception's message, without a trailing period."""
     text = str(err).strip().rstrip('.') or type(err).__name__
     return text.splitlines()[0]
 
 
-def _metadata_storage(meta):
+def _metadata_storage(meta: Path) -> str:
     """``storage_identifier`` of a rosbag2 ``metadata.yaml`` ('rosbag2' if it cannot be read)."""
     import yaml
 
@@ -82,7 +99,7 @@ def _metadata_storage(meta):
     return kind if kind in STORAGES else 'rosbag2'
 
 
-def _resolve(path):
+def _resolve(path: Path) -> tuple[Path, str, list[str]]:
     """
     Return (path to hand to rosbags, storage kind, notes) or raise BagError.
 
@@ -107,11 +124,12 @@ def _resolve(path):
         raise BagError(f'directory {str(path)!r} is not a rosbag2 bag (no metadata.yaml{detail})')
     if path.name == 'metadata.yaml':
         return _resolve(path.parent)
-    kind = _sniff(path)
-    if kind is None:
+    sniffed = _sniff(path)
+    if sniffed is None:
         raise BagError(
             f'file {str(path)!r} is not a bag (expected a rosbag2 directory, a .db3 or .mcap '
             'file, or a ROS 1 .bag file)')
+    kind = sniffed
     if _SUFFIX.get(path.suffix) != kind:
         raise BagError(f'file {str(path)!r} holds {kind} data but its suffix is {path.suffix!r}; '
                        f'rename it to end in {dict(zip(_SUFFIX.values(), _SUFFIX))[kind]}')
@@ -122,7 +140,7 @@ def _resolve(path):
     return path, kind, []
 
 
-def _bag_name(path):
+def _bag_name(path: Path) -> Path:
     """Name the bag as a user does: its folder when the file is its only storage file."""
     parent = path.parent
     if not (parent / 'metadata.yaml').exists() and [
@@ -131,7 +149,8 @@ def _bag_name(path):
     return path
 
 
-def mcap_message_records(chunk):
+def mcap_message_records(
+        chunk: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
     Locate the Message records of one decompressed MCAP chunk.
 
@@ -162,13 +181,16 @@ def mcap_message_records(chunk):
             if (rec[:, 0] == _MCAP_MESSAGE).all() and (
                     np.ascontiguousarray(rec[:, 1:9]).view('<u8')[:, 0] == stride - 9).all():
                 n = rec.shape[0]
-                starts = np.arange(n, dtype=np.int64) * stride + _MCAP_MSG_HEAD
-                channel = np.ascontiguousarray(rec[:, 9:11]).view('<u2')[:, 0].astype(np.int64)
-                log_ns = np.ascontiguousarray(rec[:, 15:23]).view('<u8')[:, 0].astype(np.int64)
-                return starts, np.full(n, stride - _MCAP_MSG_HEAD, np.int64), channel, log_ns
+                at = np.arange(n, dtype=np.int64) * stride + _MCAP_MSG_HEAD
+                cid = np.ascontiguousarray(rec[:, 9:11]).view('<u2')[:, 0].astype(np.int64)
+                log = np.ascontiguousarray(rec[:, 15:23]).view('<u8')[:, 0].astype(np.int64)
+                return at, np.full(n, stride - _MCAP_MSG_HEAD, np.int64), cid, log
     head = struct.Struct('<BQ').unpack_from
     msg_head = struct.Struct('<HIQ').unpack_from
-    starts, lengths, channel, log_ns = [], [], [], []
+    starts: list[int] = []
+    lengths: list[int] = []
+    channel: list[int] = []
+    log_ns: list[int] = []
     pos = 0
     while pos < size:
         if pos + 9 > size:
@@ -191,13 +213,13 @@ def mcap_message_records(chunk):
             np.array(log_ns, np.uint64).astype(np.int64))
 
 
-def read_mcap_chunk(fh, info):
+def read_mcap_chunk(fh: BinaryIO, info: ChunkInfo) -> bytes:
     """
     Read, decompress and CRC-check one MCAP chunk with rosbags' ``decompress``.
 
     Parameters
     ----------
-    fh : file object
+    fh : BinaryIO
         The MCAP file, opened for binary reading.
     info : rosbags.rosbag2.storage_mcap.ChunkInfo
         The chunk's index entry.
@@ -227,9 +249,9 @@ def read_mcap_chunk(fh, info):
     return decompress(data, info.compression, info.uncompressed_size, crc)
 
 
-def _ros1_header(chunk, start, stop):
+def _ros1_header(chunk: bytes, start: int, stop: int) -> dict[bytes, tuple[int, bytes]]:
     """Fields of a ROS 1 record header as {name: (value offset, value bytes)}."""
-    fields = {}
+    fields: dict[bytes, tuple[int, bytes]] = {}
     pos = start
     while pos < stop:
         if pos + 4 > stop:
@@ -244,7 +266,7 @@ def _ros1_header(chunk, start, stop):
     return fields
 
 
-def ros1_message_records(chunk):
+def ros1_message_records(chunk: bytes) -> tuple[np.ndarray, ...]:
     """
     Locate the message data records (op 0x02) of one decompressed ROS 1 chunk.
 
@@ -269,7 +291,10 @@ def ros1_message_records(chunk):
 
     """
     size = len(chunk)
-    starts, lengths, conns, times = [], [], [], []
+    starts: list[int] = []
+    lengths: list[int] = []
+    conns: list[int] = []
+    times: list[int] = []
     tail = None
     pos = 0
     tries = 3  # the layout check costs a pass over the rest of the chunk: bounded per chunk
@@ -311,7 +336,8 @@ def ros1_message_records(chunk):
     return out
 
 
-def _ros1_uniform_tail(chunk, pos, stride, head, c_at, t_at):
+def _ros1_uniform_tail(chunk: bytes, pos: int, stride: int, head: int, c_at: int,
+                       t_at: int) -> Block | None:
     """
     Columns of the records from ``pos`` to the chunk's end if they all share one layout, else None.
 
@@ -352,14 +378,16 @@ class BagSource:
 
     """
 
-    def __init__(self, path, *, fast=True):
+    def __init__(self, path: StrPath, *, fast: bool = True) -> None:
         self.path = Path(path)
         self.fast = fast
         if not self.path.exists():
             raise BagError(f'bag path {str(self.path)!r} does not exist')
         target, self.storage, notes = _resolve(self.path)
         self.ros1 = self.storage == 'ros1'
-        self.reader = None
+        #: rosbags' rosbag2 Reader, or its ROS 1 Reader (``ros1``); None once closed.
+        self.reader: Rosbag2Reader | Ros1Reader | None = None
+        Reader: type[Rosbag2Reader | Ros1Reader]
         try:
             if self.ros1:
                 # rosbags' reader keeps an index entry per message (about 150 B each); the block
@@ -393,13 +421,13 @@ class BagSource:
         if self.recovery:
             announce(self.recovery)
 
-    def topics(self):
+    def topics(self) -> dict[str, tuple[str | None, int]]:
         """Return ``{name: (msgtype or None, count)}`` merged over connections."""
-        out = {}
+        out: dict[str, tuple[str | None, int]] = {}
         for conn in self.connections:
             if self.ros1:
                 count = sum(int(c.connection_counts.get(conn.id, 0))
-                            for c in self.reader.chunk_infos)
+                            for c in self._ros1_reader().chunk_infos)
             else:
                 count = int(conn.msgcount or 0)
             if conn.topic in out:
@@ -409,17 +437,17 @@ class BagSource:
                 out[conn.topic] = (conn.msgtype, count)
         return out
 
-    def duration_s(self):
+    def duration_s(self) -> float:
         """Span of the whole bag in s, first to last message (receive time)."""
         try:
-            duration = int(self.reader.duration)
+            duration = int(self._open_reader().duration)
         except Exception:  # noqa: BLE001 - an empty bag has no meaningful duration
             return 0.0
         if duration > 0:
             duration -= 1  # rosbags reports the end time as last message + 1 ns, in every format
         return max(duration, 0) / 1e9
 
-    def blocks(self, topic, block=BLOCK):
+    def blocks(self, topic: str, block: int = BLOCK) -> Iterator[Block]:
         """
         Yield one topic's messages as ``(buf, starts, lengths, log_ns)`` blocks in bag order.
 
@@ -443,37 +471,60 @@ class BagSource:
                 f'bag {str(self.path)!r} is corrupt or truncated after {delivered} messages on '
                 f'{topic!r}: {describe(err)}') from err
 
-    def _storages(self):
+    def _open_reader(self) -> Rosbag2Reader | Ros1Reader:
+        """Return the rosbags reader, open until :meth:`close`."""
+        assert self.reader is not None, f'bag {str(self.path)!r} was closed'
+        return self.reader
+
+    def _rosbag2_reader(self) -> Rosbag2Reader:
+        """Return the open rosbags rosbag2 reader (``ros1`` False)."""
+        from rosbags.rosbag2 import Reader
+
+        reader = self._open_reader()
+        assert isinstance(reader, Reader), 'a ROS 1 bag has no rosbag2 storage'
+        return reader
+
+    def _ros1_reader(self) -> Ros1Reader:
+        """Return the open rosbags ROS 1 reader (``ros1`` True)."""
+        from rosbags.rosbag1 import Reader
+
+        reader = self._open_reader()
+        assert isinstance(reader, Reader), 'not a ROS 1 bag'
+        return reader
+
+    def _storages(self) -> list[ReaderProtocol] | None:
         """rosbag2 storage readers in reading order, or None when the fast paths do not apply."""
         from rosbags.rosbag2.reader import DirectoryReader
 
-        inner = self.reader.storage
+        inner = self._rosbag2_reader().storage
         if isinstance(inner, DirectoryReader):
             if inner.metadata.compression_mode == 'message':
                 return None
             return list(inner.storages)
         return [inner]
 
-    def _blocks(self, topic, block):
+    def _blocks(self, topic: str, block: int) -> Iterator[Block]:
         conns = [c for c in self.connections if c.topic == topic]
         if self.ros1 and self.fast:
             yield from self._ros1_blocks(conns, block)
             return
         storages = None if (self.ros1 or not self.fast) else self._storages()
         if storages is None:
-            yield from self._generic_blocks(self.reader, conns, block)
+            yield from self._generic_blocks(self._open_reader(), conns, block)
             return
         for storage in storages:
             conns = [c for c in storage.connections if c.topic == topic]
             if not conns:
                 continue
+            # the storage kind names the rosbags storage reader class
             if self.storage == 'sqlite3':
-                yield from self._sqlite_blocks(storage, conns, block)
+                yield from self._sqlite_blocks(cast('Sqlite3Reader', storage), conns, block)
             else:
-                yield from self._mcap_blocks(storage, conns, block)
+                yield from self._mcap_blocks(cast('McapReader', storage), conns, block)
 
     @staticmethod
-    def _generic_blocks(reader, conns, block):
+    def _generic_blocks(reader: MessageReader, conns: Sequence[Connection],
+                        block: int) -> Iterator[Block]:
         stream = reader.messages(connections=conns)
         while chunk := list(itertools.islice(stream, block)):
             _, log_ns, raws = zip(*chunk)
@@ -482,14 +533,17 @@ class BagSource:
             yield buf, starts, lengths, np.fromiter(log_ns, np.int64, len(log_ns))
 
     @staticmethod
-    def _sqlite_blocks(storage, conns, block):
+    def _sqlite_blocks(storage: Sqlite3Reader, conns: Sequence[Connection],
+                       block: int) -> Iterator[Block]:
         ids = sorted({c.id for c in conns})
         # Same rows and order as rosbags' Sqlite3Reader.messages (timestamp order, served by the
         # timestamp index); rowid breaks ties in recording order.
         query = (
             f'SELECT timestamp, data FROM messages WHERE topic_id IN ({",".join("?" * len(ids))}) '
             'ORDER BY timestamp, id')
-        cursor = storage.dbconn.execute(query, ids)
+        dbconn = storage.dbconn
+        assert dbconn is not None  # an open storage
+        cursor = dbconn.execute(query, ids)
         stamp_of, data_of = operator.itemgetter(0), operator.itemgetter(1)
         while rows := list(itertools.islice(cursor, block)):
             # itemgetter maps: a third less CPU than zip(*rows) on millions of rows
@@ -499,7 +553,8 @@ class BagSource:
             buf, starts, lengths = join_raws(raws)
             yield buf, starts, lengths, log_ns
 
-    def _mcap_blocks(self, storage, conns, block):
+    def _mcap_blocks(self, storage: McapReader, conns: Sequence[Connection],
+                     block: int) -> Iterator[Block]:
         ids = np.array(sorted({c.id for c in conns}), np.int64)
         chunks = sorted(
             (c for c in storage.chunks if any(c.channel_count.get(int(i), 0) for i in ids)),
@@ -512,7 +567,7 @@ class BagSource:
             # message.
             yield from self._generic_blocks(storage, conns, block)
             return
-        with open(storage.path, 'rb') as fh:
+        with open(cast(Path, storage.path), 'rb') as fh:
             for info in chunks:
                 raw = read_mcap_chunk(fh, info)
                 starts, lengths, channel, log_ns = mcap_message_records(raw)
@@ -526,8 +581,8 @@ class BagSource:
                     part = sel[i:i + block]
                     yield buf, starts[part], lengths[part], log_ns[part]
 
-    def _ros1_blocks(self, conns, block):
-        reader = self.reader
+    def _ros1_blocks(self, conns: Sequence[Connection], block: int) -> Iterator[Block]:
+        reader = self._ros1_reader()
         ids = np.array(sorted({c.id for c in conns}), np.int64)
         infos = sorted(
             (
@@ -550,7 +605,7 @@ class BagSource:
             finally:
                 full.close()
             return
-        with open(self.reader.path, 'rb') as fh:
+        with open(cast(Path, reader.path), 'rb') as fh:
             for info in infos:
                 chunk = reader.chunks[info.pos]
                 fh.seek(chunk.datapos)
@@ -572,15 +627,16 @@ class BagSource:
                     part = sel[i:i + block]
                     yield buf, starts[part], lengths[part], time_ns[part]
 
-    def _full_ros1_reader(self):
+    def _full_ros1_reader(self) -> Ros1Reader:
         """Open rosbags' indexing ROS 1 reader, or raise BagError if its index would not fit."""
-        count = sum(sum(c.connection_counts.values()) for c in self.reader.chunk_infos)
+        lean = self._ros1_reader()
+        count = sum(sum(c.connection_counts.values()) for c in lean.chunk_infos)
         check_ros1_index_fits(self.path, count)
-        reader = _full_ros1_reader_class()(self.reader.path)
+        reader = _full_ros1_reader_class()(lean.path)
         reader.open()
         return reader
 
-    def close(self):
+    def close(self) -> None:
         """Close the reader (idempotent; never raises)."""
         reader, self.reader = self.reader, None
         if reader is not None:
@@ -596,7 +652,7 @@ class BagSource:
 ROS1_INDEX_BYTES_PER_MESSAGE = 180
 
 
-def available_memory_bytes():
+def available_memory_bytes() -> int | None:
     """
     Memory the system can give without swapping (``MemAvailable`` of ``/proc/meminfo``).
 
@@ -616,7 +672,7 @@ def available_memory_bytes():
     return None
 
 
-def check_ros1_index_fits(path, messages, *, available=None):
+def check_ros1_index_fits(path: StrPath, messages: int, *, available: int | None = None) -> None:
     """
     Raise BagError if rosbags' per-message index of a ROS 1 bag would not fit in memory.
 
@@ -647,13 +703,13 @@ def check_ros1_index_fits(path, messages, *, available=None):
                        'larger machine')
 
 
-def _full_ros1_reader_class():
+def _full_ros1_reader_class() -> type[Ros1Reader]:
     from rosbags.rosbag1 import Reader
 
     return Reader
 
 
-def _lean_ros1_reader_class():
+def _lean_ros1_reader_class() -> type[Ros1Reader]:
     """Return rosbags' ROS 1 Reader class without the per-message index (chunk list, counts)."""
     from rosbags.rosbag1 import Reader
 
@@ -666,24 +722,26 @@ def _lean_ros1_reader_class():
         counts come from the chunk infos.
         """
 
-        def read_index_data(self, pos, indexes):
+        def read_index_data(self, pos: int, indexes: dict[int, list[IndexData]]) -> None:
             """Skip one index data record (fixed 47-byte header, then 12 bytes per message)."""
-            head = self.bio.read(55)
+            bio = self.bio
+            assert bio is not None  # an open reader
+            head = bio.read(55)
             if len(head) != 55 or int.from_bytes(head[0:4], 'little') != 47:
                 raise BagError(f'ROS 1 index data record after chunk at byte {pos} is malformed')
-            self.bio.seek(int.from_bytes(head[51:55], 'little'), 1)
+            bio.seek(int.from_bytes(head[51:55], 'little'), 1)
 
-        def open(self):  # noqa: A003 - overrides rosbags Reader.open
+        def open(self) -> None:  # noqa: A003 - overrides rosbags Reader.open
             """Open the bag; connection message counts from the chunk infos."""
             super().open()
-            counts = {}
+            counts: dict[int, int] = {}
             for info in self.chunk_infos:
                 for cid, k in info.connection_counts.items():
                     counts[cid] = counts.get(cid, 0) + k
             self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in self.connections]
             self.indexes = {}
 
-        def messages(self, *args, **kwargs):
+        def messages(self, *args: Any, **kwargs: Any) -> NoReturn:
             """Refuse: the lean reader has no per-message index."""
             raise BagError('the lean ROS 1 reader streams chunks only (no per-message index)')
 

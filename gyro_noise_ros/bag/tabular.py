@@ -35,12 +35,15 @@ ULog (PX4, read with ``pyulog``): topic ``sensor_combined`` (``gyro_rad[0..2]``,
 instance 0); stamps are the ``timestamp`` field (us, the autopilot's monotonic clock).
 """
 
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
+from typing import Any, Literal, Self
 
 import numpy as np
 
 from .batch import ImuBatch
 from ..errors import BagError, InputDataError, ParameterError
+from ..outputs import StrPath
 from ..units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 
 #: Suffixes read by :class:`TableImuReader`.
@@ -50,8 +53,12 @@ ULOG_TOPICS = ('sensor_combined', 'sensor_gyro')
 
 _AXES = 'xyz'
 
+#: A loaded record: (stamp_ns, gyro_rad_s, accel_m_s2, temperature_c or None, seq or None,
+#: topic).
+_Loaded = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None, str]
 
-def is_table(path):
+
+def is_table(path: StrPath) -> bool:
     """
     Tell whether ``path`` is a CSV or ULog file (by suffix).
 
@@ -68,7 +75,8 @@ def is_table(path):
     return Path(path).suffix.lower() in TABLE_SUFFIXES
 
 
-def read_csv(path, *, check_header=None):
+def read_csv(path: StrPath, *, check_header: Callable[[list[str]], object] | None = None
+             ) -> tuple[list[str], np.ndarray]:
     """
     Read a CSV table of numbers with one header line (the reading every tool shares).
 
@@ -129,7 +137,7 @@ def read_csv(path, *, check_header=None):
     return names, data
 
 
-def missing_column_error(path, wanted, names):
+def missing_column_error(path: StrPath, wanted: str, names: Sequence[str]) -> BagError:
     """
     Return the error of a CSV without a required column (exit code 3: a wrong format).
 
@@ -150,23 +158,25 @@ def missing_column_error(path, wanted, names):
     return BagError(f'CSV {str(path)!r} has no column {wanted}; columns: {", ".join(names)}')
 
 
-def _col(names, *choices):
+def _col(names: Sequence[str], *choices: str) -> int | None:
     for c in choices:
         if c in names:
             return names.index(c)
     return None
 
 
-def _gyro_column(names, axis):
+def _gyro_column(names: Sequence[str], axis: str) -> tuple[int, float] | None:
     """Return (column index, factor to rad/s) of one gyro axis, or None when it is missing."""
     rad = _col(names, f'gyro_{axis}_rad_s')
     dps = _col(names, f'gyro_{axis}_dps', f'gyroscope {axis} (deg/s)')
-    if rad is None and dps is None:
-        return None
-    return (rad, 1.0) if rad is not None else (dps, DEG_TO_RAD)
+    if rad is not None:
+        return rad, 1.0
+    if dps is not None:
+        return dps, DEG_TO_RAD
+    return None
 
 
-def csv_gyro_axes(names):
+def csv_gyro_axes(names: Sequence[str]) -> tuple[str, ...]:
     """
     Return the gyro axes a CSV header holds, in the order x, y, z.
 
@@ -183,12 +193,15 @@ def csv_gyro_axes(names):
     return tuple(a for a in _AXES if _gyro_column(names, a) is not None)
 
 
-def _csv_columns(names, path, gyro_axes=_AXES):
-    def col(*choices):
+def _csv_columns(names: Sequence[str], path: StrPath,
+                 gyro_axes: Sequence[str] = _AXES) -> dict[str, Any]:
+    """Return the column index (or (index, factor to SI)) of each quantity, None if absent."""
+    def col(*choices: str) -> int | None:
         return _col(names, *choices)
 
-    cols = {'t_s': col('time_s', 't_s', 'time (s)'), 't_us': col('timestamp_us'),
-            'seq': col('seq', 'sequence'), 'temp': col('temperature_c', 'temp_c')}
+    cols: dict[str, Any] = {
+        't_s': col('time_s', 't_s', 'time (s)'), 't_us': col('timestamp_us'),
+        'seq': col('seq', 'sequence'), 'temp': col('temperature_c', 'temp_c')}
     for a in _AXES:
         gyro = _gyro_column(names, a)
         if gyro is None and a in gyro_axes:
@@ -202,7 +215,7 @@ def _csv_columns(names, path, gyro_axes=_AXES):
     return cols
 
 
-def _load_csv(path, rate_hz, gyro_axes):
+def _load_csv(path: Path, rate_hz: float | None, gyro_axes: Sequence[str]) -> _Loaded:
     names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path, gyro_axes))
     cols = _csv_columns(names, path, gyro_axes)
     if cols['t_s'] is None and cols['t_us'] is None and rate_hz is None:
@@ -217,6 +230,7 @@ def _load_csv(path, rate_hz, gyro_axes):
     elif cols['t_us'] is not None:
         stamp = np.rint((data[:, cols['t_us']] - data[0, cols['t_us']]) * 1e3).astype(np.int64)
     else:
+        assert rate_hz is not None  # refused above without a time column
         stamp = np.rint(np.arange(n) * (1e9 / float(rate_hz))).astype(np.int64)
     gyro = np.column_stack([data[:, cols[f'g{a}'][0]] * cols[f'g{a}'][1]
                             if cols[f'g{a}'][0] is not None else np.full(n, np.nan)
@@ -229,7 +243,7 @@ def _load_csv(path, rate_hz, gyro_axes):
     return stamp, gyro, accel, temp, seq, 'csv'
 
 
-def _load_ulog(path, topic):
+def _load_ulog(path: Path, topic: str | None) -> _Loaded:
     try:
         from pyulog import ULog
     except ImportError as err:  # pragma: no cover - pyulog is a dependency
@@ -291,8 +305,9 @@ class TableImuReader:
 
     """
 
-    def __init__(self, path, *, topic=None, temperature_topic=None, rate_hz=None,
-                 gyro_axes=_AXES):
+    def __init__(self, path: StrPath, *, topic: str | None = None,
+                 temperature_topic: str | None = None, rate_hz: float | None = None,
+                 gyro_axes: Iterable[str] = _AXES) -> None:
         self.path = Path(path)
         if not self.path.is_file():
             raise BagError(f'cannot read {str(self.path)!r}: no such file')
@@ -309,16 +324,16 @@ class TableImuReader:
             raise BagError(f'{str(self.path)!r} has no temperature')
         self.undecodable_count = 0
 
-    def __enter__(self):
+    def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> Literal[False]:
         return False
 
-    def close(self):
+    def close(self) -> None:
         """Nothing to release (the record is in memory)."""
 
-    def iter_batches(self, batch_size=65536):
+    def iter_batches(self, batch_size: int = 65536) -> Iterator[ImuBatch]:
         """
         Yield the samples as :class:`ImuBatch` es of ``batch_size``.
 
@@ -341,7 +356,7 @@ class TableImuReader:
             yield ImuBatch(stamp_ns=stamp_ns, log_ns=stamp_ns, gyro=self._gyro[sl],
                            accel=self._accel[sl], frame_id='imu_link')
 
-    def read_temperature(self):
+    def read_temperature(self) -> tuple[np.ndarray, np.ndarray] | None:
         """
         Return ``(stamp_ns, temperature_c)`` or None.
 

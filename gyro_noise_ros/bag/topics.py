@@ -56,7 +56,7 @@ def _norm(name: str) -> str:
     return name.lstrip('/')
 
 
-def _select_topic(topics: dict[str, tuple[str, int]], topic: str | None, msgtype: str,
+def _select_topic(topics: dict[str, tuple[str | None, int]], topic: str | None, msgtype: str,
                   path: StrPath) -> str:
     """Pick the topic of ``msgtype`` (the single one if ``topic`` is None); raise BagError."""
     if topic is not None:

@@ -22,16 +22,27 @@ blocks.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 import itertools
 from pathlib import Path
+from typing import Any, Literal, Self, TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
 
 from .storage import describe, STORAGES
 from ..errors import BagError, OutputError, ParameterError
 from ..msgs import encode_imu_cdr, encode_temperature_cdr, IMU_MSGTYPE, split_stamps
 from ..msgs import TEMPERATURE_MSGTYPE, typestore
+from ..outputs import StrPath
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection
+    from rosbags.rosbag2 import Writer
 
 
-def write_raw(writer, conn, log_ns, blobs, path):
+def write_raw(writer: Writer, conn: Connection, log_ns: np.ndarray,
+              blobs: Sequence[bytes | memoryview], path: StrPath) -> None:
     """
     Append serialised messages of one connection to an open rosbags ``Writer``.
 
@@ -57,7 +68,8 @@ def write_raw(writer, conn, log_ns, blobs, path):
     if not len(blobs):
         return
     try:
-        storage = writer.storage
+        # rosbags' storage writer, its layout probed by name and attributes
+        storage: Any = writer.storage
         if (
             type(storage).__name__ == 'Sqlite3Writer'
             and hasattr(storage, 'cursor')
@@ -118,8 +130,10 @@ class ImuBagWriter:
 
     """
 
-    def __init__(self, path, *, storage='sqlite3', imu_topic='/imu/data_raw',
-                 temperature_topic='/imu/temperature', frame_id='imu_link', fsync=False):
+    def __init__(self, path: StrPath, *, storage: str = 'sqlite3',
+                 imu_topic: str = '/imu/data_raw',
+                 temperature_topic: str | None = '/imu/temperature', frame_id: str = 'imu_link',
+                 fsync: bool = False) -> None:
         from rosbags.rosbag2 import StoragePlugin, Writer
 
         if storage not in STORAGES:
@@ -134,7 +148,7 @@ class ImuBagWriter:
         self.imu_count = 0
         self.temperature_count = 0
         plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
-        self._writer = None
+        self._writer: Writer | None = None
         try:
             writer = Writer(self.path, version=9, storage_plugin=plugin)
             writer.open()
@@ -147,23 +161,25 @@ class ImuBagWriter:
         except Exception as err:  # noqa: BLE001 - rosbags WriterError, OSError, sqlite errors
             raise OutputError(
                 f'bag {str(self.path)!r} cannot be created: {describe(err)}') from err
-        self._temperature_conn = None
+        self._temperature_conn: Connection | None = None
 
-    def __enter__(self):
+    def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> Literal[False]:
         self.close()
         return False
 
-    def _write(self, conn, log_ns, blobs):
+    def _write(self, conn: Connection | None, log_ns: np.ndarray,
+               blobs: Sequence[bytes | memoryview]) -> None:
         writer = self._writer
         if writer is None:
             raise BagError(f'bag {str(self.path)!r} is closed')
+        assert conn is not None  # an open writer has made the topic's connection
         write_raw(writer, conn, log_ns, blobs, self.path)
 
     @staticmethod
-    def _log_times(stamps, log_ns):
+    def _log_times(stamps: np.ndarray, log_ns: ArrayLike | None) -> np.ndarray:
         if log_ns is None:
             return stamps
         logs = split_stamps(log_ns, 'log_ns')[0]
@@ -171,8 +187,10 @@ class ImuBagWriter:
             raise ParameterError(f'log_ns has {logs.shape[0]} values for {stamps.shape[0]} stamps')
         return logs
 
-    def write_imu(self, stamp_ns, gyro_rad_s, accel_m_s2, *, angular_velocity_covariance=None,
-                  linear_acceleration_covariance=None, log_ns=None, topic=None):
+    def write_imu(self, stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, *,
+                  angular_velocity_covariance: ArrayLike | None = None,
+                  linear_acceleration_covariance: ArrayLike | None = None,
+                  log_ns: ArrayLike | None = None, topic: str | None = None) -> None:
         """
         Append Imu messages.
 
@@ -205,7 +223,7 @@ class ImuBagWriter:
         if conn is self._imu_conn:
             self.imu_count += len(blobs)
 
-    def _extra_imu(self, topic):
+    def _extra_imu(self, topic: str) -> Connection:
         extra = self.__dict__.setdefault('_extra_imu_conns', {})
         if topic not in extra:
             if self._writer is None:
@@ -218,7 +236,8 @@ class ImuBagWriter:
                                   f'{describe(err)}') from err
         return extra[topic]
 
-    def write_temperature(self, stamp_ns, temperature_c, *, variance=0.0, log_ns=None):
+    def write_temperature(self, stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
+                          variance: ArrayLike = 0.0, log_ns: ArrayLike | None = None) -> None:
         """
         Append Temperature messages.
 
@@ -252,7 +271,7 @@ class ImuBagWriter:
         self._write(self._temperature_conn, logs, blobs)
         self.temperature_count += len(blobs)
 
-    def flush(self):
+    def flush(self) -> None:
         """
         Make what was written so far survive a crash of this process (both storages).
 
@@ -267,7 +286,7 @@ class ImuBagWriter:
         writer = self._writer
         if writer is None:
             raise BagError(f'bag {str(self.path)!r} is closed')
-        storage = writer.storage
+        storage: Any = writer.storage  # rosbags' storage writer, probed by attribute
         try:
             if self.storage == 'sqlite3':
                 conn = getattr(storage, 'conn', None)
@@ -283,7 +302,7 @@ class ImuBagWriter:
         except Exception as err:  # noqa: BLE001
             raise OutputError(f'bag {str(self.path)!r}: flush failed: {describe(err)}') from err
 
-    def close(self):
+    def close(self) -> None:
         """Finish the bag: write its index and ``metadata.yaml`` (idempotent)."""
         writer, self._writer = self._writer, None
         if writer is not None:

@@ -634,6 +634,7 @@ def parallel_figures(model: 'ParallelModel', run: ThermalRun, parts: Sequence[Ma
         figure it mirrors ('Fig. N').
 
     """
+    assert model.axes is not None  # fitted
     out_dir = Path(out_dir)
     name = run.name or 'run'
     figs = [_mopso_figure(model, out_dir, name)]
@@ -688,13 +689,14 @@ def parallel_figures(model: 'ParallelModel', run: ThermalRun, parts: Sequence[Ma
 
 def _mopso_figure(model: 'ParallelModel', out_dir: Path, name: str) -> tuple[str | None, str]:
     info = model.fit_info or []
-    archives = [ax.get('mopso') for ax in info]
+    archives: list[Any] = [ax.get('mopso') for ax in info]
     keys = ('archive_fuzzy_entropy', 'archive_permutation_entropy', 'archive_k',
             'archive_alpha')
     if len(archives) != 3 or not all(a and all(k in a for k in keys) for a in archives):
         return (None, 'the MOPSO archive (Fig. 11) is drawn by `fit` beside model.json '
                       '(fig11_mopso.png of the training report); model.json keeps only '
                       'the picked K and alpha')
+    assert model.axes is not None  # fitted
     axes = []
     for arch, ax in zip(archives, model.axes):
         fit = ax.get('fitness', {})
@@ -719,6 +721,7 @@ def _network_panels(model: 'ParallelModel', run: ThermalRun,
     # the distribution fit_elman draws BAS's start from (it is not stored with the model)
     scale = inspect.signature(fit_elman).parameters['init_scale'].default
     rows16, rows17 = [], []
+    assert model.axes is not None  # fitted
     for ax, p in zip(model.axes, parts):
         drift_model = DriftModel.from_dict(ax['elman'])
         grid, t_h = model.network_grid(run, p['q'])

@@ -158,7 +158,7 @@ def load_live_model(path: StrPath) -> tuple[Any, tuple[float, float] | None, flo
 
     Parameters
     ----------
-    path : str
+    path : str or os.PathLike
         ``model.json`` written by ``gyro_noise_thermal fit``.
 
     Returns
@@ -216,7 +216,7 @@ def load_live(path: StrPath) -> LiveModel:
 
     Parameters
     ----------
-    path : str
+    path : str or os.PathLike
         ``model.json`` written by ``gyro_noise_thermal fit``.
 
     Returns

@@ -30,10 +30,13 @@ for bit) and every other topic, the temperature included, is copied unchanged (R
 converted to ROS 2 CDR).
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .run import ThermalRun
 from ..bag import ImuBagReader, ImuBagWriter
@@ -41,6 +44,7 @@ from ..bag.storage import BagSource, describe
 from ..core.timebase import estimate_rate
 from ..errors import BagError, InputDataError, ParameterError
 from ..msgs import join_raws, TEMPERATURE_MSGTYPE, typestore
+from ..outputs import StrPath
 
 __all__ = ['DEFAULT_MAX_GAP_S', 'MAX_EDGE_S', 'ThermalBag', 'join_runs', 'read_thermal_run',
            'write_compensated']
@@ -90,12 +94,12 @@ class ThermalBag:
     temperature_samples: int
 
 
-def _label(path):
+def _label(path: StrPath) -> str:
     p = Path(path)
     return p.stem if p.suffix in ('.bag', '.mcap', '.db3') else p.name
 
 
-def _pick_temperature_topic(reader, requested):
+def _pick_temperature_topic(reader: ImuBagReader, requested: str | None) -> str:
     if requested is not None or reader.temperature_topic is not None:
         return reader.temperature_topic
     src = reader._open_source()
@@ -107,8 +111,9 @@ def _pick_temperature_topic(reader, requested):
                    f'({", ".join(names)}); choose one with --temperature-topic')
 
 
-def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFAULT_MAX_GAP_S,
-                     name=None):
+def read_thermal_run(path: StrPath, *, topic: str | None = None,
+                     temperature_topic: str | None = None, max_gap_s: float = DEFAULT_MAX_GAP_S,
+                     name: str | None = None) -> tuple[ThermalRun, ThermalBag]:
     """
     Read one bag's Imu and Temperature topics into a :class:`ThermalRun`.
 
@@ -156,6 +161,7 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
     where = f'bag {str(path)!r}'
     stamp = np.concatenate(stamps)
     gyro = np.concatenate(gyros)
+    accel: NDArray[Any] | None
     accel = np.concatenate(accels)
     if stamp.size < 3:
         raise InputDataError(f'{where}: {stamp.size} Imu message(s) on {imu_topic!r}; at least 3 '
@@ -201,7 +207,8 @@ def read_thermal_run(path, *, topic=None, temperature_topic=None, max_gap_s=DEFA
     return run, info
 
 
-def _check_coverage(where, stamp, temp_stamp, temp_topic, imu_topic, max_gap_s):
+def _check_coverage(where: str, stamp: NDArray[np.int64], temp_stamp: NDArray[np.int64],
+                    temp_topic: str, imu_topic: str, max_gap_s: float) -> None:
     """Refuse temperature stamps that do not cover the Imu stamps."""
     i0, i1 = int(stamp[0]), int(stamp[-1])
     t0, t1 = int(temp_stamp[0]), int(temp_stamp[-1])
@@ -225,7 +232,7 @@ def _check_coverage(where, stamp, temp_stamp, temp_topic, imu_topic, max_gap_s):
                              f'{max_gap_s:g} s)')
 
 
-def join_runs(runs, *, gap_s):
+def join_runs(runs: Iterable[ThermalRun], *, gap_s: float) -> ThermalRun:
     """
     Join runs end to end into one training run.
 
@@ -268,7 +275,9 @@ def join_runs(runs, *, gap_s):
                       rate_hz=rate, name='+'.join(r.name for r in runs), accel_m_s2=accel)
 
 
-def write_compensated(bag, processed_rad_s, out_dir, *, storage=None, accel_m_s2=None):
+def write_compensated(bag: ThermalBag, processed_rad_s: ArrayLike, out_dir: StrPath, *,
+                      storage: str | None = None,
+                      accel_m_s2: ArrayLike | None = None) -> dict[str, int]:
     """
     Write a rosbag2 copy of ``bag.path`` with the Imu angular velocity (and acceleration) replaced.
 
@@ -338,7 +347,8 @@ def write_compensated(bag, processed_rad_s, out_dir, *, storage=None, accel_m_s2
     return counts
 
 
-def _add_connection(writer, source, topic, msgtype, store):
+def _add_connection(writer: Any, source: BagSource, topic: str, msgtype: str | None,
+                    store: Any) -> Any:
     if msgtype is None:
         raise BagError(f'bag {str(source.path)!r}: topic {topic!r} mixes message types')
     conn = next(c for c in source.connections if c.topic == topic)
@@ -354,7 +364,9 @@ def _add_connection(writer, source, topic, msgtype, store):
         raise BagError(f'cannot copy topic {topic!r} ({msgtype}): {describe(err)}') from err
 
 
-def _copy_topic(source, writer, conn, topic, msgtype, store, gyro, accel=None):
+def _copy_topic(source: BagSource, writer: ImuBagWriter, conn: Any, topic: str,
+                msgtype: str | None, store: Any, gyro: NDArray[np.float64] | None,
+                accel: NDArray[np.float64] | None = None) -> int:
     """Copy one topic; patch angular_velocity / linear_acceleration (bag order) if given."""
     done = 0
     for buf, starts, lengths, log_ns in source.blocks(topic):
@@ -378,7 +390,9 @@ def _copy_topic(source, writer, conn, topic, msgtype, store, gyro, accel=None):
     return done
 
 
-def _patch_angular_velocity(buf, starts, lengths, xyz, *, from_end=_AV_FROM_END):
+def _patch_angular_velocity(buf: NDArray[np.uint8], starts: NDArray[np.int64],
+                            lengths: NDArray[np.int64], xyz: NDArray[np.float64], *,
+                            from_end: int = _AV_FROM_END) -> NDArray[np.uint8]:
     """Return a copy of ``buf`` with each CDR Imu message's vector ``from_end`` set to ``xyz``."""
     out = np.array(buf, dtype=np.uint8, copy=True)
     at = (starts + lengths - from_end)[:, None] + np.arange(24)

@@ -42,9 +42,13 @@ continue their network linearly from the nearest trained point along its gradien
 and constants: ``docs/thermal_data.md``.
 """
 
-import numpy as np
+from collections.abc import Callable, Mapping
+from typing import Any
 
-from .run import DEFAULT_RATE_WINDOW_S, RateWindowError, temperature_rate_c_s
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .run import DEFAULT_RATE_WINDOW_S, RateWindowError, temperature_rate_c_s, ThermalRun
 from ..errors import InputDataError, ParameterError
 
 #: A temperature model needs at least this temperature span in its training run (degC).
@@ -54,12 +58,23 @@ MIN_TEMPERATURE_SPAN_C = 1.0
 #: once gave coefficients of several rad/s).
 MIN_TRAINING_WINDOWS = 2.0
 
+# Two, three and four float arrays: (t, gyro, temperature) of a run, a network's weights
+# unpacked (W1, b1, W2, b2) or its scalers (x mean, x std, y mean, y std).
+_Pair = tuple[NDArray[np.float64], NDArray[np.float64]]
+_Triple = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+_Quad = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+# A network's linear shortcut: its basis and coefficients (k, 3).
+_Shortcut = tuple['_PolyBasis', NDArray[np.floating[Any]]]
+# A decomposition: denoised (n, 3), drift (n, 3), IMF classes per axis and segment.
+_Decomposition = tuple[NDArray[np.float64], NDArray[np.float64], list[list[list[str]]]]
+
 
 # -------------------------------------------------------------------------------------------
 # shared pieces
 
 
-def _check_run(run, *, need_temperature):
+def _check_run(run: ThermalRun, *,
+               need_temperature: bool) -> _Triple:
     """Validate a ThermalRun; return (t, gyro, temperature) as float arrays."""
     t = np.asarray(run.t_s, dtype=float)
     gyro = np.asarray(run.gyro_rad_s, dtype=float)
@@ -77,7 +92,7 @@ def _check_run(run, *, need_temperature):
     return t, gyro, temp
 
 
-def check_rate_training(t, window_s, name):
+def check_rate_training(t: NDArray[np.float64], window_s: float, name: str) -> None:
     """
     Refuse a training run too short for a method that uses dT (:data:`MIN_TRAINING_WINDOWS`).
 
@@ -105,25 +120,26 @@ def check_rate_training(t, window_s, name):
                               'rest to fit)')
 
 
-def _check_span(temp, name):
+def _check_span(temp: NDArray[np.float64], name: str) -> None:
     span = float(np.ptp(temp))
     if span < MIN_TEMPERATURE_SPAN_C:
         raise InputDataError(f'run {name!r} spans {span:.3f} degC of temperature; a temperature '
                              f'model needs at least {MIN_TEMPERATURE_SPAN_C} degC')
 
 
-def _require_fitted(method, attribute):
+def _require_fitted(method: Any, attribute: str) -> None:
     if getattr(method, attribute) is None:
         raise ParameterError(f'method {method.name!r} is not fitted: call fit() or from_dict()')
 
 
-def _as_pair(temperature_c, dtemp_c_s):
+def _as_pair(temperature_c: ArrayLike,
+             dtemp_c_s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     temp = np.asarray(temperature_c, dtype=float).reshape(-1)
     rate = np.broadcast_to(np.asarray(dtemp_c_s, dtype=float), temp.shape)
     return temp, rate
 
 
-def _block_means(values, max_points):
+def _block_means(values: NDArray[np.float64], max_points: int) -> NDArray[np.float64]:
     """Average consecutive blocks so at most ``max_points`` rows remain (last block partial)."""
     n = values.shape[0]
     size = max(1, int(np.ceil(n / max_points)))
@@ -135,7 +151,8 @@ def _block_means(values, max_points):
     return sums / counts
 
 
-def wavelet_denoise(x, *, wavelet='db4', level=6, mode='symmetric', sigma='finest'):
+def wavelet_denoise(x: ArrayLike, *, wavelet: str = 'db4', level: int = 6, mode: str = 'symmetric',
+                    sigma: str = 'finest') -> NDArray[np.float64]:
     """
     Wavelet-threshold denoising with the universal threshold and soft thresholding.
 
@@ -180,8 +197,10 @@ def wavelet_denoise(x, *, wavelet='db4', level=6, mode='symmetric', sigma='fines
     return pywt.waverec(out, w, mode=mode)[:x.size]
 
 
-def simulated_annealing(fun, x0, rng, *, iterations=3000, step=0.3, t0_ratio=0.1,
-                        t_end_ratio=1e-4):
+def simulated_annealing(fun: Callable[[NDArray[np.float64]], float], x0: ArrayLike,
+                        rng: np.random.Generator, *, iterations: int = 3000, step: float = 0.3,
+                        t0_ratio: float = 0.1,
+                        t_end_ratio: float = 1e-4) -> tuple[NDArray[np.float64], float]:
     """
     Minimise ``fun`` by simulated annealing (Metropolis acceptance, geometric cooling).
 
@@ -230,11 +249,11 @@ def simulated_annealing(fun, x0, rng, *, iterations=3000, step=0.3, t0_ratio=0.1
 class _Mlp:
     """One hidden layer of logistic sigmoids (paper 002 eq. 34), linear output; flat weights."""
 
-    def __init__(self, n_in, n_hidden, n_out):
+    def __init__(self, n_in: int, n_hidden: int, n_out: int) -> None:
         self.shape = (int(n_in), int(n_hidden), int(n_out))
         self.size = n_in * n_hidden + n_hidden + n_hidden * n_out + n_out
 
-    def unpack(self, theta):
+    def unpack(self, theta: NDArray[np.float64]) -> _Quad:
         n_in, h, n_out = self.shape
         i = 0
         w1 = theta[i:i + n_in * h].reshape(n_in, h)
@@ -245,7 +264,7 @@ class _Mlp:
         i += h * n_out
         return w1, b1, w2, theta[i:i + n_out]
 
-    def init(self, rng):
+    def init(self, rng: np.random.Generator) -> NDArray[np.float64]:
         """Xavier-uniform weights, zero biases."""
         n_in, h, n_out = self.shape
         theta = np.zeros(self.size)
@@ -254,14 +273,16 @@ class _Mlp:
         w2[...] = rng.uniform(-1, 1, w2.shape) * np.sqrt(6.0 / (h + n_out))
         return theta
 
-    def forward(self, theta, x):
+    def forward(self, theta: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float64]:
         w1, b1, w2, b2 = self.unpack(theta)
         return 1.0 / (1.0 + np.exp(-(x @ w1 + b1))) @ w2 + b2
 
-    def mse(self, theta, x, y):
+    def mse(self, theta: NDArray[np.float64], x: NDArray[np.float64],
+            y: NDArray[np.float64]) -> float:
         return float(np.mean((self.forward(theta, x) - y) ** 2))
 
-    def mse_and_grad(self, theta, x, y):
+    def mse_and_grad(self, theta: NDArray[np.float64], x: NDArray[np.float64],
+                     y: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
         w1, b1, w2, b2 = self.unpack(theta)
         hid = 1.0 / (1.0 + np.exp(-(x @ w1 + b1)))
         err = hid @ w2 + b2 - y
@@ -273,7 +294,9 @@ class _Mlp:
         return float(np.mean(err ** 2)), grad
 
 
-def train_gradient_descent(mlp, theta, x, y, *, epochs, learning_rate):
+def train_gradient_descent(mlp: _Mlp, theta: NDArray[np.float64], x: NDArray[np.float64],
+                           y: NDArray[np.float64], *, epochs: int,
+                           learning_rate: float) -> NDArray[np.float64]:
     """
     Back-propagation: full-batch gradient descent on the MSE with Adam steps.
 
@@ -327,8 +350,9 @@ class _DriftNet:
     saturate, so the raw network would hold its edge value, which is clipping by another name.
     """
 
-    def __init__(self, hidden, theta, x_mean, x_std, y_mean, y_std, x_min, x_max, *,
-                 shortcut=None):
+    def __init__(self, hidden: int, theta: ArrayLike, x_mean: ArrayLike, x_std: ArrayLike,
+                 y_mean: ArrayLike, y_std: ArrayLike, x_min: ArrayLike, x_max: ArrayLike, *,
+                 shortcut: _Shortcut | None = None) -> None:
         self.mlp = _Mlp(2, hidden, 3)
         self.hidden = int(hidden)
         self.theta = np.asarray(theta, dtype=float)
@@ -338,12 +362,14 @@ class _DriftNet:
         self.shortcut = shortcut   # None or (_PolyBasis, coef (k, 3))
 
     @classmethod
-    def standardise(cls, x, y):
+    def standardise(cls, x: NDArray[np.float64],
+                    y: NDArray[np.float64]) -> _Quad:
         x_std = np.where(x.std(0) > 0, x.std(0), 1.0)
         y_std = np.where(y.std(0) > 0, y.std(0), 1.0)
         return x.mean(0), x_std, y.mean(0), y_std
 
-    def _value_and_jacobian(self, x):
+    def _value_and_jacobian(self,
+                            x: NDArray[np.float64]) -> _Pair:
         """Network output (n, 3) and d output / d input (n, 2, 3) in physical units."""
         w1, b1, w2, b2 = self.mlp.unpack(self.theta)
         xs = (x - self.x_mean) / self.x_std
@@ -353,7 +379,7 @@ class _DriftNet:
         jac = np.einsum('ih,nh,ho->nio', w1, slope, w2)
         return value, jac * self.y_std[None, None, :] / self.x_std[None, :, None]
 
-    def network(self, x):
+    def network(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """Return the network part N at inputs x (n, 2), continued linearly outside the box."""
         edge = np.clip(x, self.x_min, self.x_max)
         value, jac = self._value_and_jacobian(edge)
@@ -362,7 +388,7 @@ class _DriftNet:
             value[rows] += np.einsum('ni,nio->no', (x - edge)[rows], jac[rows])
         return value
 
-    def predict(self, temperature_c, dtemp_c_s):
+    def predict(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         temp, rate = _as_pair(temperature_c, dtemp_c_s)
         value = self.network(np.column_stack([temp, rate]))
         if self.shortcut is not None:
@@ -370,7 +396,7 @@ class _DriftNet:
             value += basis(temp, rate) @ coef
         return value
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         d = {'hidden': self.hidden, 'weights': self.theta.tolist(),
              'input_mean': self.x_mean.tolist(), 'input_std': self.x_std.tolist(),
              'output_mean_rad_s': self.y_mean.tolist(), 'output_std_rad_s': self.y_std.tolist(),
@@ -386,7 +412,7 @@ class _DriftNet:
         return d
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> '_DriftNet':
         shortcut = None
         sc = d.get('shortcut')
         if sc:
@@ -397,7 +423,9 @@ class _DriftNet:
                    shortcut=shortcut)
 
 
-def _training_pairs(t, temp, target, *, rate_window_s, max_points):
+def _training_pairs(t: NDArray[np.float64], temp: NDArray[np.float64], target: NDArray[np.float64],
+                    *, rate_window_s: float,
+                    max_points: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """[T, dT] and target (n, 3), block-averaged to at most ``max_points`` rows."""
     rate = temperature_rate_c_s(t, temp, window_s=rate_window_s)
     rows = _block_means(np.column_stack([temp, rate, target]), max_points)
@@ -426,31 +454,31 @@ class RawMethod:
     uses_rate = False
     out_of_range = 'nothing is learnt, nothing is extrapolated'
 
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Learn nothing (the run is still checked)."""
         _check_run(run, need_temperature=False)
 
-    def drift_rad_s(self, temperature_c, dtemp_c_s):
+    def drift_rad_s(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         """Return zeros (n, 3), rad/s."""
         temp, _ = _as_pair(temperature_c, dtemp_c_s)
         return np.zeros((temp.size, 3))
 
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return a copy of the angular rate (n, 3), rad/s."""
         return _check_run(run, need_temperature=False)[1].copy()
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return ``{'method': 'raw', 'temperature_range_c': None}``."""
         return {'method': self.name, 'temperature_range_c': None}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'RawMethod':
         """Rebuild from :meth:`to_dict`."""
         _check_method(cls, d)
         return cls()
 
 
-def _check_method(cls, d):
+def _check_method(cls: type[Any], d: Any) -> None:
     if not isinstance(d, dict) or d.get('method') != cls.name:
         got = d.get('method') if isinstance(d, dict) else type(d).__name__
         raise ParameterError(f'{cls.__name__}.from_dict needs method {cls.name!r}, got {got!r}')
@@ -490,15 +518,18 @@ class TemperaturePolynomial:
     out_of_range = ('T beyond the trained range: the offset is held at its value at the nearest '
                     "end (PX4's and ArduPilot's formula); dT is not an input")
 
-    def __init__(self, *, order=3, relative=False):
+    def __init__(self, *, order: int = 3, relative: bool = False) -> None:
         if not (isinstance(order, (int, np.integer)) and 0 <= order <= 8):
             raise ParameterError(f'order must be an integer in 0..8, got {order!r}')
         self.order = int(order)
         self.relative = bool(relative)
-        self.coef = None          # (3, order + 1), rad/s per degC^i, lowest power first
-        self.t_ref_c = self.t_min_c = self.t_max_c = None
+        # (3, order + 1), rad/s per degC^i, lowest power first
+        self.coef: NDArray[np.floating[Any]] | None = None
+        self.t_ref_c: float | None = None
+        self.t_min_c: float | None = None
+        self.t_max_c: float | None = None
 
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Least-squares fit of the polynomial per axis (``rng`` unused: deterministic)."""
         _, gyro, temp = _check_run(run, need_temperature=True)
         _check_span(temp, run.name)
@@ -509,32 +540,34 @@ class TemperaturePolynomial:
         if self.relative:
             self.coef[:, 0] = 0.0
 
-    def drift_rad_s(self, temperature_c, dtemp_c_s):
+    def drift_rad_s(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         """
         Return the offset (n, 3), rad/s, at temperatures ``temperature_c`` (degC).
 
         ``dtemp_c_s`` is accepted for the common signature and not used.
         """
         _require_fitted(self, 'coef')
+        assert self.coef is not None and self.t_ref_c is not None
         temp, _ = _as_pair(temperature_c, dtemp_c_s)
         d = np.clip(temp, self.t_min_c, self.t_max_c) - self.t_ref_c
         return np.polynomial.polynomial.polyval(d, self.coef.T).T.reshape(temp.size, 3)
 
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return ``gyro - drift_rad_s(T, dT)`` (n, 3), rad/s."""
         t, gyro, temp = _check_run(run, need_temperature=True)
         return gyro - self.drift_rad_s(temp, np.zeros_like(temp))
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return the order, T_ref/T_min/T_max (degC) and the coefficients per axis (rad/s)."""
         _require_fitted(self, 'coef')
+        assert self.coef is not None
         return {'method': self.name, 'order': self.order, 'relative': self.relative,
                 't_ref_c': self.t_ref_c, 't_min_c': self.t_min_c, 't_max_c': self.t_max_c,
                 'coef_rad_s': self.coef.tolist(),
                 'temperature_range_c': [self.t_min_c, self.t_max_c]}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'TemperaturePolynomial':
         """Rebuild a fitted model from :meth:`to_dict`."""
         _check_method(cls, d)
         m = cls(order=int(d['order']), relative=bool(d.get('relative', False)))
@@ -543,7 +576,7 @@ class TemperaturePolynomial:
         return m
 
 
-def _monomials(degree, rate_degree=None):
+def _monomials(degree: int, rate_degree: int | None = None) -> list[tuple[int, int]]:
     """Exponent pairs (p, q) of T^p dT^q with p + q <= degree and q <= rate_degree."""
     rate_degree = degree if rate_degree is None else rate_degree
     return [(p, total - p) for total in range(degree + 1) for p in range(total, -1, -1)
@@ -557,24 +590,24 @@ class _PolyBasis:
     Evaluated as they are anywhere: beyond the range they extrapolate the polynomial.
     """
 
-    def __init__(self, degree, rate_degree, centre, scale):
+    def __init__(self, degree: int, rate_degree: int, centre: ArrayLike, scale: ArrayLike) -> None:
         self.degree, self.rate_degree = int(degree), int(rate_degree)
         self.centre = np.asarray(centre, dtype=float)
         self.scale = np.asarray(scale, dtype=float)
         self.terms = _monomials(self.degree, self.rate_degree)
 
     @classmethod
-    def spanning(cls, degree, rate_degree, lo, hi):
+    def spanning(cls, degree: int, rate_degree: int, lo: ArrayLike, hi: ArrayLike) -> '_PolyBasis':
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
         return cls(degree, rate_degree, 0.5 * (lo + hi),
                    np.where(hi > lo, 0.5 * (hi - lo), 1.0))
 
-    def __call__(self, temp, rate):
+    def __call__(self, temp: ArrayLike, rate: ArrayLike) -> NDArray[np.float64]:
         x = (np.asarray(temp, dtype=float) - self.centre[0]) / self.scale[0]
         r = (np.asarray(rate, dtype=float) - self.centre[1]) / self.scale[1]
         return np.column_stack([x ** p * r ** q for p, q in self.terms])
 
-    def names(self):
+    def names(self) -> list[str]:
         return [f'x^{p} r^{q}' for p, q in self.terms]
 
 
@@ -609,7 +642,8 @@ class LinearTdT:
     uses_rate = True
     out_of_range = 'T and dT beyond the trained range: the fitted polynomial is extrapolated'
 
-    def __init__(self, *, degree=3, rate_degree=1, rate_window_s=DEFAULT_RATE_WINDOW_S):
+    def __init__(self, *, degree: int = 3, rate_degree: int = 1,
+                 rate_window_s: float = DEFAULT_RATE_WINDOW_S) -> None:
         if not (isinstance(degree, (int, np.integer)) and 1 <= degree <= 5):
             raise ParameterError(f'degree must be an integer in 1..5, got {degree!r}')
         if not (isinstance(rate_degree, (int, np.integer)) and 0 <= rate_degree <= degree):
@@ -620,16 +654,18 @@ class LinearTdT:
         self.degree = int(degree)
         self.rate_degree = int(rate_degree)
         self.rate_window_s = float(rate_window_s)
-        self.coef = None   # (3, n_terms)
-        self.basis = None
-        self.lo = self.hi = None   # each (2,): T, dT
+        self.coef: NDArray[np.floating[Any]] | None = None   # (3, n_terms)
+        self.basis: _PolyBasis | None = None
+        # each (2,): T, dT
+        self.lo: NDArray[np.float64] | None = None
+        self.hi: NDArray[np.float64] | None = None
 
     @property
-    def n_terms(self):
+    def n_terms(self) -> int:
         """int: number of monomials."""
         return len(_monomials(self.degree, self.rate_degree))
 
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Least squares over every sample (``rng`` unused: deterministic)."""
         t, gyro, temp = _check_run(run, need_temperature=True)
         _check_span(temp, run.name)
@@ -651,21 +687,24 @@ class LinearTdT:
                                  f'{n_terms} terms (rank {rank})')
         self.coef = sol.T
 
-    def drift_rad_s(self, temperature_c, dtemp_c_s):
+    def drift_rad_s(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         """Return the offset (n, 3), rad/s, at temperatures (degC) and rates (degC/s)."""
         _require_fitted(self, 'coef')
+        assert self.coef is not None and self.basis is not None
         temp, rate = _as_pair(temperature_c, dtemp_c_s)
         return self.basis(temp, rate) @ self.coef.T
 
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return ``gyro - drift_rad_s(T, temperature_rate_c_s(t, T))`` (n, 3), rad/s."""
         t, gyro, temp = _check_run(run, need_temperature=True)
         return gyro - self.drift_rad_s(
             temp, temperature_rate_c_s(t, temp, window_s=self.rate_window_s))
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return the degrees, window, scaling, ranges and coefficients per axis (rad/s)."""
         _require_fitted(self, 'coef')
+        assert self.coef is not None and self.basis is not None
+        assert self.lo is not None and self.hi is not None
         return {'method': self.name, 'degree': self.degree, 'rate_degree': self.rate_degree,
                 'rate_window_s': self.rate_window_s, 'terms': self.basis.names(),
                 'centre': self.basis.centre.tolist(), 'scale': self.basis.scale.tolist(),
@@ -674,7 +713,7 @@ class LinearTdT:
                 'temperature_range_c': [float(self.lo[0]), float(self.hi[0])]}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'LinearTdT':
         """Rebuild a fitted model from :meth:`to_dict` (no ``rate_degree``: the full basis)."""
         _check_method(cls, d)
         degree = int(d['degree'])
@@ -712,7 +751,8 @@ class WaveletThreshold:
     uses_rate = False
     out_of_range = 'temperature is not an input'
 
-    def __init__(self, *, wavelet='db4', level=6, mode='symmetric', sigma='finest'):
+    def __init__(self, *, wavelet: str = 'db4', level: int = 6, mode: str = 'symmetric',
+                 sigma: str = 'finest') -> None:
         import pywt
 
         if wavelet not in pywt.wavelist(kind='discrete'):
@@ -725,25 +765,25 @@ class WaveletThreshold:
             raise ParameterError(f"sigma must be 'finest' or 'level', got {sigma!r}")
         self.wavelet, self.level, self.mode, self.sigma = wavelet, int(level), mode, sigma
 
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Learn nothing (WTD is defined on the record it denoises); the run is checked."""
         _check_run(run, need_temperature=False)
 
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return the denoised angular rate (n, 3), rad/s."""
         gyro = _check_run(run, need_temperature=False)[1]
         return np.column_stack([wavelet_denoise(gyro[:, i], wavelet=self.wavelet,
                                                 level=self.level, mode=self.mode,
                                                 sigma=self.sigma) for i in range(3)])
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return the wavelet settings."""
         return {'method': self.name, 'wavelet': self.wavelet, 'level': self.level,
                 'mode': self.mode, 'sigma': self.sigma, 'threshold': 'universal, soft',
                 'temperature_range_c': None}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'WaveletThreshold':
         """Rebuild from :meth:`to_dict`."""
         _check_method(cls, d)
         return cls(wavelet=d['wavelet'], level=int(d['level']), mode=d['mode'],
@@ -789,17 +829,18 @@ class BPNetwork:
     out_of_range = ('T and dT beyond the trained range: the network at the nearest trained point '
                     'plus its gradient there times the step out (linear continuation)')
 
-    def __init__(self, *, hidden=12, epochs=2000, learning_rate=0.01, max_points=2000,
-                 rate_window_s=DEFAULT_RATE_WINDOW_S, shortcut=True):
+    def __init__(self, *, hidden: int = 12, epochs: int = 2000, learning_rate: float = 0.01,
+                 max_points: int = 2000, rate_window_s: float = DEFAULT_RATE_WINDOW_S,
+                 shortcut: bool = True) -> None:
         _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s)
         self.hidden, self.epochs = int(hidden), int(epochs)
         self.learning_rate, self.max_points = float(learning_rate), int(max_points)
         self.rate_window_s = float(rate_window_s)
         self.shortcut = bool(shortcut)
-        self.net = None
-        self.train_mse = None
+        self.net: _DriftNet | None = None
+        self.train_mse: float | None = None
 
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Fit the shortcut and train the network on the run's block means (``rng``: weights)."""
         t, gyro, temp = _check_run(run, need_temperature=True)
         _check_span(temp, run.name)
@@ -810,20 +851,22 @@ class BPNetwork:
                                             epochs=self.epochs, learning_rate=self.learning_rate,
                                             shortcut=self.shortcut)
 
-    def drift_rad_s(self, temperature_c, dtemp_c_s):
+    def drift_rad_s(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         """Return the offset (n, 3), rad/s, at temperatures (degC) and rates (degC/s)."""
         _require_fitted(self, 'net')
+        assert self.net is not None
         return self.net.predict(temperature_c, dtemp_c_s)
 
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return ``gyro - drift_rad_s(T, temperature_rate_c_s(t, T))`` (n, 3), rad/s."""
         t, gyro, temp = _check_run(run, need_temperature=True)
         return gyro - self.drift_rad_s(
             temp, temperature_rate_c_s(t, temp, window_s=self.rate_window_s))
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return the options, the weights, the scaling and the training MSE."""
         _require_fitted(self, 'net')
+        assert self.net is not None
         return {'method': self.name, 'epochs': self.epochs, 'learning_rate': self.learning_rate,
                 'max_points': self.max_points, 'rate_window_s': self.rate_window_s,
                 'shortcut': self.shortcut,
@@ -831,7 +874,7 @@ class BPNetwork:
                 'temperature_range_c': [float(self.net.x_min[0]), float(self.net.x_max[0])]}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'BPNetwork':
         """Rebuild a fitted model from :meth:`to_dict`."""
         _check_method(cls, d)
         m = cls(hidden=int(d['network']['hidden']), epochs=int(d['epochs']),
@@ -843,7 +886,8 @@ class BPNetwork:
         return m
 
 
-def _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s):
+def _check_net_options(hidden: int, epochs: int, learning_rate: float, max_points: int,
+                       rate_window_s: float) -> None:
     for label, value in (('hidden', hidden), ('max_points', max_points)):
         if not (isinstance(value, (int, np.integer)) and value >= 1):
             raise ParameterError(f'{label} must be an integer >= 1, got {value!r}')
@@ -855,7 +899,9 @@ def _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s)
         raise ParameterError(f'rate_window_s must be > 0, got {rate_window_s!r}')
 
 
-def _fit_net(x, y, hidden, rng, *, sa_iterations, epochs, learning_rate, shortcut=True):
+def _fit_net(x: NDArray[np.float64], y: NDArray[np.float64], hidden: int, rng: np.random.Generator,
+             *, sa_iterations: int, epochs: int, learning_rate: float,
+             shortcut: bool = True) -> tuple[_DriftNet, float]:
     """
     Fit the shortcut (least squares), then the network on what it leaves; return (net, mse).
 
@@ -886,7 +932,7 @@ def _fit_net(x, y, hidden, rng, *, sa_iterations, epochs, learning_rate, shortcu
     return net, mlp.mse(theta, xs, ys)
 
 
-def _segments(n, size):
+def _segments(n: int, size: int | None) -> list[tuple[int, int]]:
     """[lo, hi) bounds covering 0..n, consecutive ones overlapping by size // 8."""
     if size is None or n <= size:
         return [(0, n)]
@@ -899,7 +945,7 @@ def _segments(n, size):
     return bounds
 
 
-def zero_crossing_hz(imf, duration_s):
+def zero_crossing_hz(imf: ArrayLike, duration_s: float) -> float:
     """
     Return the mean frequency of an oscillation from its zero crossings (Hz).
 
@@ -961,10 +1007,11 @@ class EmdWtdSaBp:
     uses_rate = True
     out_of_range = BPNetwork.out_of_range
 
-    def __init__(self, *, split_hz=None, max_imf=10, segment_samples=65536, wavelet='db4',
-                 wtd_level=6, hidden=8,
-                 sa_iterations=3000, epochs=500, learning_rate=0.01, max_points=2000,
-                 rate_window_s=DEFAULT_RATE_WINDOW_S, shortcut=True):
+    def __init__(self, *, split_hz: float | None = None, max_imf: int = 10,
+                 segment_samples: int | None = 65536, wavelet: str = 'db4', wtd_level: int = 6,
+                 hidden: int = 8, sa_iterations: int = 3000, epochs: int = 500,
+                 learning_rate: float = 0.01, max_points: int = 2000,
+                 rate_window_s: float = DEFAULT_RATE_WINDOW_S, shortcut: bool = True) -> None:
         _check_net_options(hidden, epochs, learning_rate, max_points, rate_window_s)
         self.shortcut = bool(shortcut)
         if split_hz is not None and not split_hz > 0:
@@ -983,11 +1030,13 @@ class EmdWtdSaBp:
         self.hidden, self.sa_iterations, self.epochs = int(hidden), int(sa_iterations), int(epochs)
         self.learning_rate, self.max_points = float(learning_rate), int(max_points)
         self.rate_window_s = float(rate_window_s)
-        self.net = None
-        self.train_mse = None
-        self.imf_classes = None   # per axis: list of 'noise' / 'drift' of the training run
+        self.net: _DriftNet | None = None
+        self.train_mse: float | None = None
+        # per axis: list of 'noise' / 'drift' of the training run
+        self.imf_classes: list[list[list[str]]] | None = None
 
-    def decompose(self, t, gyro, split_hz):
+    def decompose(self, t: NDArray[np.float64], gyro: NDArray[np.float64],
+                  split_hz: float) -> _Decomposition:
         """
         Split each axis into its WTD-denoised noisy part and its drift part.
 
@@ -1014,7 +1063,7 @@ class EmdWtdSaBp:
 
         denoised = np.zeros_like(gyro)
         drift = np.zeros_like(gyro)
-        classes = [[] for _ in range(3)]
+        classes: list[list[list[str]]] = [[] for _ in range(3)]
         bounds = _segments(t.size, self.segment_samples)
         overlap = bounds[0][1] - bounds[1][0] if len(bounds) > 1 else 0
         ramp = (np.arange(overlap) + 0.5) / max(overlap, 1)
@@ -1045,7 +1094,7 @@ class EmdWtdSaBp:
                 classes[i].append(labels)
         return denoised, drift, classes
 
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Decompose the run, then anneal and train the network on its drift part."""
         t, gyro, temp = _check_run(run, need_temperature=True)
         _check_span(temp, run.name)
@@ -1061,17 +1110,19 @@ class EmdWtdSaBp:
         self.split_hz = split
         self.imf_classes = classes
 
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return denoised noisy part + drift part - predicted drift (n, 3), rad/s."""
         _require_fitted(self, 'net')
+        assert self.net is not None and self.split_hz is not None
         t, gyro, temp = _check_run(run, need_temperature=True)
         denoised, drift, _ = self.decompose(t, gyro, self.split_hz)
         rate = temperature_rate_c_s(t, temp, window_s=self.rate_window_s)
         return denoised + drift - self.net.predict(temp, rate)
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return the options, the split, the training IMF classes and the network."""
         _require_fitted(self, 'net')
+        assert self.net is not None
         return {'method': self.name, 'split_hz': self.split_hz, 'max_imf': self.max_imf,
                 'segment_samples': self.segment_samples,
                 'wavelet': self.wavelet, 'wtd_level': self.wtd_level,
@@ -1083,7 +1134,7 @@ class EmdWtdSaBp:
                 'temperature_range_c': [float(self.net.x_min[0]), float(self.net.x_max[0])]}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'EmdWtdSaBp':
         """Rebuild a fitted model from :meth:`to_dict`."""
         _check_method(cls, d)
         seg = d.get('segment_samples')

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.thermal.entropy import sample_entropy, sample_entropy_counts
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: Class names, slow to fast.
 CLASSES = ('drift', 'mixed', 'noise')
@@ -68,19 +69,20 @@ class ModeClasses:
     drift_max: float
     noise_min: float
 
-    def mask(self, name):
+    def mask(self, name: str) -> NDArray[np.bool_]:
         """Select the modes of one class: a boolean array (k,)."""
         return np.array([c == name for c in self.classes], dtype=bool)
 
 
-def coarse_grain(x, scale):
+def coarse_grain(x: ArrayLike, scale: int) -> NDArray[np.float64]:
     """Return the means of consecutive non-overlapping blocks of ``scale`` samples."""
     x = np.asarray(x, dtype=float)
     n = (x.size // scale) * scale
     return x[:n].reshape(-1, scale).mean(axis=1)
 
 
-def pooled_sample_entropy(x, *, m=2, r=0.2, window=2000):
+def pooled_sample_entropy(x: ArrayLike, *, m: int = 2, r: float = 0.2,
+                          window: int = 2000) -> float:
     """
     Sample entropy with the template counts of consecutive windows pooled (bounded cost).
 
@@ -119,8 +121,9 @@ def pooled_sample_entropy(x, *, m=2, r=0.2, window=2000):
     return float(-np.log(a_sum / b_sum))
 
 
-def classify_modes(modes, center_freqs, *, m=2, r=0.2, drift_max=0.5, noise_min=1.5,
-                   max_samples=2000, scale=None):
+def classify_modes(modes: ArrayLike, center_freqs: ArrayLike, *, m: int = 2, r: float = 0.2,
+                   drift_max: float = 0.5, noise_min: float = 1.5, max_samples: int = 2000,
+                   scale: int | None = None) -> ModeClasses:
     """
     Classify modes into drift, mixed and noise by sample entropy (rule in the module docstring).
 

@@ -51,16 +51,23 @@ temperature) stays 0: a heating-only training run has no negative rate, and min-
 would put "no change" at -1 and every cooling rate beyond it.
 """
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from gyro_noise_ros.errors import InputDataError, ParameterError
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 import scipy.optimize
+
+# (best weights, their fitness, per step (d, step, fitness)) of bas_minimize.
+_BasResult = tuple[NDArray[np.float64], float, list[tuple[float, float, float]]]
 
 
 @numba.njit(cache=True)
-def _offsets(n_in, n1, n2):  # pragma: no cover - JIT
+def _offsets(n_in: int, n1: int,
+             n2: int) -> tuple[int, int, int, int, int, int, int, int]:  # pragma: no cover - JIT
     """Return where W1, W2, a_i, W3, W4, a_j, W5 and a_k start in the weight vector."""
     o_w2 = n1 * n1
     o_ai = o_w2 + n1 * n_in
@@ -72,7 +79,8 @@ def _offsets(n_in, n1, n2):  # pragma: no cover - JIT
 
 
 @numba.njit(cache=True)
-def _unpack(theta, n_in, n1, n2):  # pragma: no cover - JIT
+def _unpack(theta: NDArray[np.float64], n_in: int, n1: int,
+            n2: int) -> tuple[Any, ...]:  # pragma: no cover - JIT
     """Return views of W1, W2, a_i, W3, W4, a_j, W5 and the scalar a_k (eq. 33)."""
     o_w1, o_w2, o_ai, o_w3, o_w4, o_aj, o_w5, o_ak = _offsets(n_in, n1, n2)
     return (theta[o_w1:o_w2].reshape(n1, n1), theta[o_w2:o_ai].reshape(n1, n_in),
@@ -81,7 +89,8 @@ def _unpack(theta, n_in, n1, n2):  # pragma: no cover - JIT
 
 
 @numba.njit(cache=True)
-def _forward(theta, x, n1, n2):  # pragma: no cover - JIT
+def _forward(theta: NDArray[np.float64], x: NDArray[np.float64], n1: int,
+             n2: int) -> NDArray[np.float64]:  # pragma: no cover - JIT
     """Run the Elman recurrence of eq. 33 over inputs x (n, n_in); return y (n,)."""
     n, n_in = x.shape
     w1, w2, ai, w3, w4, aj, w5, ak = _unpack(theta, n_in, n1, n2)
@@ -115,7 +124,8 @@ def _forward(theta, x, n1, n2):  # pragma: no cover - JIT
 
 
 @numba.njit(cache=True)
-def _mse_grad(theta, x, y, n1, n2):  # pragma: no cover - JIT
+def _mse_grad(theta: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64], n1: int,
+              n2: int) -> tuple[float, NDArray[np.float64]]:  # pragma: no cover - JIT
     """Return (mean squared error of eq. 34, its gradient) by back-propagation through time."""
     n, n_in = x.shape
     w1, w2, ai, w3, w4, aj, w5, ak = _unpack(theta, n_in, n1, n2)
@@ -195,13 +205,15 @@ def _mse_grad(theta, x, y, n1, n2):  # pragma: no cover - JIT
     return mse, g
 
 
-def n_weights(n_in, hidden):
+def n_weights(n_in: int, hidden: Sequence[int]) -> int:
     """Return the length of the weight vector of an Elman network (eq. 33)."""
     n1, n2 = hidden
     return int(_offsets(int(n_in), int(n1), int(n2))[-1]) + 1
 
 
-def bas_minimize(fun, x0, *, rng, iterations=100, epochs=1, d0=1.0, step0=1.0):
+def bas_minimize(fun: Callable[[NDArray[np.float64]], float], x0: ArrayLike, *,
+                 rng: np.random.Generator, iterations: int = 100, epochs: int = 1, d0: float = 1.0,
+                 step0: float = 1.0) -> _BasResult:
     """
     Minimise ``fun`` by beetle antennae search (eqs. 30-32, the paper's decay rules).
 
@@ -283,10 +295,10 @@ class ElmanModel:
     y_hi: float
     dt_s: float
     train_mse: float
-    bas_mse: object = None
-    theta_bas: object = None
+    bas_mse: float | None = None
+    theta_bas: NDArray[np.float64] | None = None
 
-    def predict(self, inputs, *, theta=None):
+    def predict(self, inputs: ArrayLike, *, theta: ArrayLike | None = None) -> NDArray[np.float64]:
         """
         Return the output (n,) for inputs (n, n_in) sampled every ``dt_s`` seconds.
 
@@ -299,7 +311,7 @@ class ElmanModel:
         yn = _forward(weights, np.ascontiguousarray(xn), self.hidden[0], self.hidden[1])
         return self.y_lo + (yn + 1.0) * 0.5 * (self.y_hi - self.y_lo)
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return every parameter as JSON-able values."""
         d = {'theta': self.theta.tolist(), 'hidden': list(self.hidden),
              'x_lo': self.x_lo.tolist(), 'x_hi': self.x_hi.tolist(),
@@ -312,7 +324,7 @@ class ElmanModel:
         return d
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'ElmanModel':
         """Rebuild a model from :meth:`to_dict` output (older files lack the BAS stage)."""
         bas = d.get('theta_bas')
         return cls(theta=np.asarray(d['theta'], dtype=float), hidden=tuple(d['hidden']),
@@ -324,9 +336,11 @@ class ElmanModel:
                    theta_bas=None if bas is None else np.asarray(bas, dtype=float))
 
 
-def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epochs=20,
-              d0=1.0, step0=1.0, init_scale=0.5, refine_iterations=300, symmetric=(),
-              weight_decay=0.0):
+def fit_elman(inputs: ArrayLike, target: ArrayLike, *, dt_s: float, rng: np.random.Generator,
+              hidden: Sequence[int] = (6, 6), iterations: int = 100, epochs: int = 20,
+              d0: float = 1.0, step0: float = 1.0, init_scale: float = 0.5,
+              refine_iterations: int = 300, symmetric: Sequence[int] = (),
+              weight_decay: float = 0.0) -> ElmanModel:
     """
     Fit an Elman network to a target series: beetle antennae search, then a local refinement.
 
@@ -393,11 +407,11 @@ def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epoch
 
     wd = float(weight_decay)
 
-    def mse(theta):
+    def mse(theta: NDArray[np.float64]) -> float:
         return float(np.mean((_forward(theta, xn, hidden[0], hidden[1]) - yn) ** 2)
                      + wd * np.dot(theta, theta))
 
-    def mse_grad(theta):
+    def mse_grad(theta: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
         value, grad = _mse_grad(theta, xn, yn, hidden[0], hidden[1])
         return value + wd * np.dot(theta, theta), grad + 2.0 * wd * theta
 
@@ -422,7 +436,7 @@ def fit_elman(inputs, target, *, dt_s, rng, hidden=(6, 6), iterations=100, epoch
 DRIFT_BASES = ('cubic_rate', 'none')
 
 
-def drift_basis(inputs, t_ref_c, base):
+def drift_basis(inputs: ArrayLike, t_ref_c: float, base: str) -> NDArray[np.float64]:
     """
     Return the design matrix of a stated drift basis at inputs (n, 2) = [T, dT].
 
@@ -487,33 +501,33 @@ class DriftModel:
     range_hi: np.ndarray
 
     @property
-    def dt_s(self):
+    def dt_s(self) -> float:
         """float: step of the grid the model runs on (s)."""
         return self.network.dt_s
 
-    def outside(self, inputs):
+    def outside(self, inputs: ArrayLike) -> NDArray[np.bool_]:
         """Return a boolean (n,) marking input rows outside the trained range."""
         x = np.asarray(inputs, dtype=float)
         return np.any((x < self.range_lo) | (x > self.range_hi), axis=1)
 
-    def base_part(self, inputs):
+    def base_part(self, inputs: ArrayLike) -> NDArray[np.float64]:
         """Return the basis part of the prediction (n,)."""
         return drift_basis(inputs, self.t_ref_c, self.base) @ self.coef
 
-    def predict(self, inputs, *, theta=None):
+    def predict(self, inputs: ArrayLike, *, theta: ArrayLike | None = None) -> NDArray[np.float64]:
         """Return the drift (n,) at inputs (n, 2) on the grid (``theta``: see ElmanModel)."""
         x = np.asarray(inputs, dtype=float)
         held = np.clip(x, self.range_lo, self.range_hi)
         return self.base_part(x) + self.network.predict(held, theta=theta)
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return every parameter as JSON-able values."""
         return {'base': self.base, 't_ref_c': self.t_ref_c, 'coef': self.coef.tolist(),
                 'range_lo': self.range_lo.tolist(), 'range_hi': self.range_hi.tolist(),
                 'network': self.network.to_dict()}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'DriftModel':
         """
         Rebuild from :meth:`to_dict` output, or from an older model's bare network dict.
 
@@ -532,7 +546,8 @@ class DriftModel:
                    range_hi=np.asarray(d['range_hi'], dtype=float))
 
 
-def fit_drift(inputs, target, *, dt_s, rng, base='cubic_rate', **network_options):
+def fit_drift(inputs: ArrayLike, target: ArrayLike, *, dt_s: float, rng: np.random.Generator,
+              base: str = 'cubic_rate', **network_options: Any) -> DriftModel:
     """
     Fit a :class:`DriftModel`: least squares on the stated basis, then the network on the rest.
 

@@ -37,9 +37,10 @@ from math import factorial
 from gyro_noise_ros.errors import InputDataError, ParameterError
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 
-def _series(x, min_len, what):
+def _series(x: ArrayLike, min_len: int, what: str) -> NDArray[np.float64]:
     a = np.asarray(x, dtype=float)
     if a.ndim != 1 or a.size < min_len:
         raise InputDataError(f'{what} needs a 1-D series of at least {min_len} samples, '
@@ -50,7 +51,8 @@ def _series(x, min_len, what):
 
 
 @numba.njit(cache=True)
-def _fuzzy_phi(x, m, n_vec, width, theta):  # pragma: no cover - JIT
+def _fuzzy_phi(x: NDArray[np.float64], m: int, n_vec: int, width: float,
+               theta: float) -> tuple[float, float]:  # pragma: no cover - JIT
     """Return (Phi^m, Phi^(m+1)) of eqs. 12-13 over the first n_vec vectors."""
     # the vectors minus their own means (eqs. 8-9), once, instead of per pair
     ym = np.empty((n_vec, m))
@@ -93,7 +95,7 @@ def _fuzzy_phi(x, m, n_vec, width, theta):  # pragma: no cover - JIT
     return sum_m / pairs, sum_m1 / pairs
 
 
-def fuzzy_entropy(x, *, m=2, r=0.2, theta=2.0):
+def fuzzy_entropy(x: ArrayLike, *, m: int = 2, r: float = 0.2, theta: float = 2.0) -> float:
     """
     Fuzzy entropy of a series (eqs. 8-15).
 
@@ -127,7 +129,8 @@ def fuzzy_entropy(x, *, m=2, r=0.2, theta=2.0):
     return float(np.log(phi_m) - np.log(phi_m1))
 
 
-def permutation_entropy(x, *, order=3, delay=1, normalize=True):
+def permutation_entropy(x: ArrayLike, *, order: int = 3, delay: int = 1,
+                        normalize: bool = True) -> float:
     """
     Permutation entropy of a series (eqs. 16-22).
 
@@ -163,7 +166,8 @@ def permutation_entropy(x, *, order=3, delay=1, normalize=True):
 
 
 @numba.njit(cache=True)
-def _sample_counts(x, m, r):  # pragma: no cover - JIT
+def _sample_counts(x: NDArray[np.float64], m: int,
+                   r: float) -> tuple[int, int]:  # pragma: no cover - JIT
     """Return (A, B): template pairs matching at length m + 1 and m (first n - m templates)."""
     n_vec = x.size - m
     a_count = 0
@@ -182,7 +186,7 @@ def _sample_counts(x, m, r):  # pragma: no cover - JIT
     return a_count, b_count
 
 
-def sample_entropy_counts(x, *, m=2, tolerance):
+def sample_entropy_counts(x: ArrayLike, *, m: int = 2, tolerance: float) -> tuple[int, int]:
     """
     Return (A, B) of the sample entropy: template pairs matching at lengths m + 1 and m.
 
@@ -210,7 +214,7 @@ def sample_entropy_counts(x, *, m=2, tolerance):
     return int(a_count), int(b_count)
 
 
-def sample_entropy(x, *, m=2, r=0.2):
+def sample_entropy(x: ArrayLike, *, m: int = 2, r: float = 0.2) -> float:
     """
     Sample entropy of a series (Richman and Moorman 2000; the paper's ref. [41]).
 

@@ -53,13 +53,16 @@ The file is an ArduPilot ``.parm`` file: ``NAME VALUE`` per line (``#`` comments
 Planner and MAVProxy load.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ParameterError
-from ..outputs import atomic_write_text
+from ..outputs import atomic_write_text, StrPath
 
 __all__ = ['ARDUPILOT_SCALE', 'ARDUPILOT_TREF_C', 'CubicCalibration', 'ardupilot_parameters',
            'calibration_of', 'px4_parameters', 'write_ardupilot_parm', 'write_px4_params']
@@ -96,7 +99,7 @@ class CubicCalibration:
     t_max_c: float
     unit: str = 'rad/s'
 
-    def offset(self, temperature_c):
+    def offset(self, temperature_c: ArrayLike) -> NDArray[np.float64]:
         """
         Return the offset at temperatures (degC), the temperature held within the range.
 
@@ -115,7 +118,7 @@ class CubicCalibration:
                     self.t_max_c) - self.t_ref_c
         return np.polynomial.polynomial.polyval(d, self.coef.T).T.reshape(-1, 3)
 
-    def about(self, t_ref_c):
+    def about(self, t_ref_c: float) -> NDArray[np.float64]:
         """
         Return the coefficients re-expanded about another reference temperature.
 
@@ -141,7 +144,7 @@ class CubicCalibration:
         return out
 
 
-def calibration_of(poly, *, unit='rad/s'):
+def calibration_of(poly: Any, *, unit: str = 'rad/s') -> CubicCalibration:
     """
     Turn a fitted ``poly3`` (order <= 3) into a :class:`CubicCalibration`.
 
@@ -176,13 +179,15 @@ def calibration_of(poly, *, unit='rad/s'):
                             t_max_c=float(poly.t_max_c), unit=unit)
 
 
-def _check_range(cal, low, high, who):
+def _check_range(cal: CubicCalibration, low: float, high: float, who: str) -> None:
     if not (low <= cal.t_min_c and cal.t_max_c <= high):
         raise ParameterError(f'{who} accepts {low:g}..{high:g} degC; the calibration spans '
                              f'{cal.t_min_c:.2f}..{cal.t_max_c:.2f} degC')
 
 
-def px4_parameters(gyro, accel=None, *, instance=0, gyro_device_id=0, accel_device_id=0):
+def px4_parameters(gyro: CubicCalibration | None, accel: CubicCalibration | None = None, *,
+                   instance: int = 0, gyro_device_id: int = 0,
+                   accel_device_id: int = 0) -> list[tuple[str, float, int]]:
     """
     Return the PX4 thermal-compensation parameters of a gyro (and accelerometer) calibration.
 
@@ -206,7 +211,7 @@ def px4_parameters(gyro, accel=None, *, instance=0, gyro_device_id=0, accel_devi
     """
     if not (isinstance(instance, (int, np.integer)) and 0 <= instance <= 2):
         raise ParameterError(f'PX4 sensor instance must be 0, 1 or 2, got {instance!r}')
-    out = []
+    out: list[tuple[str, float, int]] = []
     for letter, cal, dev in (('G', gyro, gyro_device_id), ('A', accel, accel_device_id)):
         if cal is None:
             continue
@@ -222,7 +227,8 @@ def px4_parameters(gyro, accel=None, *, instance=0, gyro_device_id=0, accel_devi
     return out
 
 
-def write_px4_params(path, parameters, *, comment=''):
+def write_px4_params(path: StrPath, parameters: Iterable[tuple[str, float, int]], *,
+                     comment: str = '') -> str:
     """
     Write PX4 parameters as a QGroundControl ``.params`` file (atomically).
 
@@ -252,7 +258,9 @@ def write_px4_params(path, parameters, *, comment=''):
     return text
 
 
-def ardupilot_parameters(gyro, accel=None, *, imu=1, cal_temp_c=None, gyro_offsets=True):
+def ardupilot_parameters(gyro: CubicCalibration | None, accel: CubicCalibration | None = None, *,
+                         imu: int = 1, cal_temp_c: float | None = None,
+                         gyro_offsets: bool = True) -> list[tuple[str, float]]:
     """
     Return the ArduPilot ``INS_TCAL<imu>_*`` parameters of a gyro (and accelerometer) calibration.
 
@@ -283,6 +291,7 @@ def ardupilot_parameters(gyro, accel=None, *, imu=1, cal_temp_c=None, gyro_offse
     if not cals:
         raise ParameterError('nothing to export: no gyro and no accelerometer calibration')
     t_min, t_max = cals[0].t_min_c, cals[0].t_max_c
+    cal: CubicCalibration | None
     for cal in cals:
         _check_range(cal, -70.0, 80.0, 'ArduPilot INS_TCAL')
         if (cal.t_min_c, cal.t_max_c) != (t_min, t_max):
@@ -307,7 +316,8 @@ def ardupilot_parameters(gyro, accel=None, *, imu=1, cal_temp_c=None, gyro_offse
     return out
 
 
-def write_ardupilot_parm(path, parameters, *, comment=''):
+def write_ardupilot_parm(path: StrPath, parameters: Iterable[tuple[str, float]], *,
+                         comment: str = '') -> str:
     """
     Write ArduPilot parameters as a ``.parm`` file (``NAME VALUE`` lines, atomically).
 

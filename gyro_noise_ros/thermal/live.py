@@ -45,14 +45,17 @@ EMD, wavelet-threshold denoising of the full signal) and are refused with a mess
 offline-only steps. No ROS is imported here.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 import math
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 from ..errors import ParameterError
+from ..outputs import StrPath
 
 #: Methods that need the whole record, with the offline-only steps they rely on.
 NON_CAUSAL_METHODS = {
@@ -73,7 +76,7 @@ BEYOND_ACTIONS = ('hold', 'none')
 _NS = 1_000_000_000
 
 
-def _model_value(method, key):
+def _model_value(method: Any, key: str) -> Any:
     value = getattr(method, key, None)
     if value is None and hasattr(method, 'to_dict'):
         try:
@@ -83,7 +86,8 @@ def _model_value(method, key):
     return value
 
 
-def check_live_model(method, *, range_c=None, margin_c=None):
+def check_live_model(method: Any, *, range_c: Sequence[float] | None = None,
+                     margin_c: float | None = None) -> tuple[float, float, float]:
     """
     Check that a thermal model can run live and return its trusted temperature span.
 
@@ -144,7 +148,7 @@ def check_live_model(method, *, range_c=None, margin_c=None):
     return lo, hi, margin_c
 
 
-def load_live_model(path):
+def load_live_model(path: StrPath) -> tuple[Any, tuple[float, float] | None, float | None]:
     """
     Load a ``model.json`` with the thermal registry (``thermal.methods.load_model``).
 
@@ -154,7 +158,7 @@ def load_live_model(path):
 
     Parameters
     ----------
-    path : str
+    path : str or os.PathLike
         ``model.json`` written by ``gyro_noise_thermal fit``.
 
     Returns
@@ -206,13 +210,13 @@ class LiveModel:
     notes: tuple = field(default_factory=tuple)
 
 
-def load_live(path):
+def load_live(path: StrPath) -> LiveModel:
     """
     Load a ``model.json`` with everything the live node uses (:class:`LiveModel`).
 
     Parameters
     ----------
-    path : str
+    path : str or os.PathLike
         ``model.json`` written by ``gyro_noise_thermal fit``.
 
     Returns
@@ -263,8 +267,9 @@ class LiveDriftEvaluator:
 
     """
 
-    def __init__(self, method, *, range_c=None, rate_window_s=None, margin_c=None,
-                 beyond='hold', rate_range_c_s=None):
+    def __init__(self, method: Any, *, range_c: Sequence[float] | None = None,
+                 rate_window_s: float | None = None, margin_c: float | None = None,
+                 beyond: str = 'hold', rate_range_c_s: Sequence[float] | None = None) -> None:
         lo, hi, margin = check_live_model(method, range_c=range_c, margin_c=margin_c)
         self.range_lo_c, self.range_hi_c, self.margin_c = lo, hi, margin
         if beyond not in BEYOND_ACTIONS:
@@ -279,20 +284,21 @@ class LiveDriftEvaluator:
         self.beyond = beyond
         # a model that does not declare it is assumed to use dT (and to wait for its window)
         self.uses_rate = bool(getattr(method, 'uses_rate', True))
-        self.rate_range_c_s = None if rate_range_c_s is None else tuple(
+        self.rate_range_c_s: tuple[float, ...] | None = None if rate_range_c_s is None else tuple(
             float(v) for v in rate_range_c_s)
         self._pending_t = np.zeros(0)   # messages waiting for the first filled rate window
         self._pending_temp = np.zeros(0)
-        self._t0_ns = None
+        self._t0_ns: int | None = None
         self._buf_t = np.zeros(0)  # trailing temperature history, s since _t0_ns
         self._buf_temp = np.zeros(0)
         self._knot_t = np.zeros(0)  # knots: s since _t0_ns, offsets (k, 3)
         self._knot_drift = np.zeros((0, 3))
-        self._trusted = None  # last offset evaluated inside range + margin
+        # last offset evaluated inside range + margin
+        self._trusted: NDArray[np.float64] | None = None
         self.temperature_c = math.nan  # newest temperature, its rate and range status
         self.rate_c_s = math.nan
-        self.status = None
-        self.stamp_ns = None
+        self.status: int | None = None
+        self.stamp_ns: int | None = None
         self.knots = 0
         self.knots_by_status = {RANGE_OK: 0, RANGE_MARGIN: 0, RANGE_OUTSIDE: 0}
         self.knots_rate_outside = 0  # knots whose rate is outside the trained rate range
@@ -300,12 +306,12 @@ class LiveDriftEvaluator:
         self.rejected = 0  # non-finite or not newer than the previous message
 
     @property
-    def start_up_s(self):
+    def start_up_s(self) -> float:
         """float: how long after the first temperature the first offset exists (s)."""
         return self.rate_window_s if self.uses_rate else 0.0
 
     @property
-    def offset_stamp_ns(self):
+    def offset_stamp_ns(self) -> int | None:
         """Stamp of the newest knot (ns, int); None before the first offset exists."""
         # Knots are added in stamp order and, once the rate window has filled, every accepted
         # message becomes one at once: the newest knot is the newest message.
@@ -314,11 +320,11 @@ class LiveDriftEvaluator:
         return self.stamp_ns
 
     @property
-    def pending(self):
+    def pending(self) -> int:
         """int: temperature messages waiting for the rate window to fill."""
         return int(self._pending_t.size)
 
-    def range_status(self, temperature_c):
+    def range_status(self, temperature_c: ArrayLike) -> NDArray[np.int8]:
         """Return the range status (RANGE_*) of each temperature, as an int array."""
         temp = np.asarray(temperature_c, dtype=np.float64)
         lo, hi, m = self.range_lo_c, self.range_hi_c, self.margin_c
@@ -327,7 +333,7 @@ class LiveDriftEvaluator:
         status[(temp >= lo) & (temp <= hi)] = RANGE_OK
         return status
 
-    def add_temperature(self, stamp_ns, temperature_c):
+    def add_temperature(self, stamp_ns: ArrayLike, temperature_c: ArrayLike) -> int:
         """
         Add temperature messages: each one newer than the last becomes a knot.
 
@@ -386,7 +392,8 @@ class LiveDriftEvaluator:
         self._add_knots(t, temp, rate)
         return k
 
-    def _add_knots(self, t, temp, rate):
+    def _add_knots(self, t: NDArray[np.float64], temp: NDArray[np.float64],
+                   rate: NDArray[np.float64]) -> None:
         k = t.size
         status = self.range_status(temp)
         drift = np.asarray(self.method.drift_rad_s(temp, rate), dtype=np.float64).reshape(k, 3)
@@ -415,11 +422,12 @@ class LiveDriftEvaluator:
             self.knots_rate_outside += int(np.count_nonzero(rate_out))
         self.knots_outside += int(np.count_nonzero(rate_out | (status != RANGE_OK)))
 
-    def _trailing(self, t, values, t_last):
+    def _trailing(self, t: NDArray[np.float64], values: NDArray[np.float64],
+                  t_last: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         first = np.searchsorted(t, t_last - self.rate_window_s, side='left')
         return t[first:], values[first:]
 
-    def drift_at(self, stamp_ns):
+    def drift_at(self, stamp_ns: ArrayLike) -> NDArray[np.float64] | None:
         """
         Offset to subtract at each gyro stamp, linear in time between temperature knots.
 
@@ -436,6 +444,7 @@ class LiveDriftEvaluator:
         """
         if self._knot_t.size == 0:
             return None
+        assert self._t0_ns is not None  # set with the first knot
         x = (np.asarray(stamp_ns, dtype=np.int64) - self._t0_ns) / _NS
         out = np.empty((x.size, 3))
         for axis in range(3):
@@ -475,21 +484,22 @@ class TemperatureGate:
 
     """
 
-    def __init__(self, max_wait_s, first_wait_s):
+    def __init__(self, max_wait_s: float, first_wait_s: float) -> None:
         if not (max_wait_s >= 0 and first_wait_s >= 0):
             raise ParameterError(f'waits must be >= 0 s, got {max_wait_s!r}, {first_wait_s!r}')
         self.max_wait_s, self.first_wait_s = float(max_wait_s), float(first_wait_s)
-        self._queue = []   # [batch, stamp_ns (int64 array), next index, arrival time (s)]
+        # [batch, stamp_ns (int64 array), next index, arrival time (s)]
+        self._queue: list[list[Any]] = []
         self.late = 0      # samples released after max_wait_s with the newest offset
         self.dropped = 0   # samples dropped waiting for the first temperature
         self.longest_wait_s = 0.0  # of a sample released on time (interpolated)
 
     @property
-    def waiting(self):
+    def waiting(self) -> int:
         """int: Samples held now."""
         return sum(len(stamps) - start for _, stamps, start, _ in self._queue)
 
-    def push(self, batch, stamp_ns, now_s):
+    def push(self, batch: Any, stamp_ns: ArrayLike, now_s: float) -> None:
         """
         Queue a batch of samples.
 
@@ -507,7 +517,8 @@ class TemperatureGate:
         if stamps.size:
             self._queue.append([batch, stamps, 0, float(now_s)])
 
-    def release(self, newest_temperature_ns, now_s):
+    def release(self, newest_temperature_ns: int | None,
+                now_s: float) -> list[tuple[Any, int, int, bool]]:
         """
         Return what may be published now, in arrival order.
 

@@ -33,20 +33,26 @@ every data-driven drift model extrapolates badly, a third-order polynomial worst
 method treats as its ``out_of_range`` attribute says.
 """
 
+from collections.abc import Sequence
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 import datetime
 import importlib
 import json
 import math
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional, TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalMethod, ThermalRun
 from .. import __version__
 from ..errors import GyroNoiseError, InputDataError, ParameterError
-from ..outputs import atomic_write_text
+from ..outputs import atomic_write_text, StrPath
+
+if TYPE_CHECKING:
+    from .baselines import TemperaturePolynomial
 
 __all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_RANGE_MARGIN_C',
            'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
@@ -104,7 +110,7 @@ class TemperatureRangeError(InputDataError):
     """The data's temperature lies outside the model's trained range plus margin (exit code 4)."""
 
 
-def register_method(name, cls):
+def register_method(name: str, cls: type[Any]) -> None:
     """
     Register (or replace) a method class under a ``--method`` name.
 
@@ -131,7 +137,7 @@ def register_method(name, cls):
     _registered[name] = cls
 
 
-def method_names():
+def method_names() -> list[str]:
     """
     List every known method name: the built-ins, then those registered.
 
@@ -143,7 +149,7 @@ def method_names():
     return list(BUILTIN_METHODS) + [n for n in _registered if n not in BUILTIN_METHODS]
 
 
-def method_class(name):
+def method_class(name: str) -> type[Any]:
     """
     Return the class of a method, importing its module on first use.
 
@@ -180,7 +186,7 @@ def method_class(name):
     return cls
 
 
-def get_method(name, **options):
+def get_method(name: str, **options: Any) -> ThermalMethod:
     """
     Build an unfitted method.
 
@@ -251,7 +257,7 @@ class TrainingInfo:
     sources: tuple
     rate_window_s: float = DEFAULT_RATE_WINDOW_S
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the JSON form.
 
@@ -265,7 +271,8 @@ class TrainingInfo:
         return out
 
 
-def training_info(run, *, sources=None, rate_window_s=DEFAULT_RATE_WINDOW_S):
+def training_info(run: ThermalRun, *, sources: Sequence[str] | None = None,
+                  rate_window_s: float = DEFAULT_RATE_WINDOW_S) -> TrainingInfo:
     """
     Summarise a training run.
 
@@ -335,11 +342,11 @@ class RangeReport:
     treatment: str
 
     @property
-    def fraction_outside(self):
+    def fraction_outside(self) -> float:
         """float: ``outside / samples``."""
         return self.outside / self.samples if self.samples else 0.0
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the JSON form (the attributes and ``fraction_outside``).
 
@@ -352,7 +359,7 @@ class RangeReport:
         out['fraction_outside'] = self.fraction_outside
         return out
 
-    def text(self):
+    def text(self) -> str:
         """
         Return one sentence for reports and logs.
 
@@ -369,7 +376,8 @@ class RangeReport:
                 f'below {self.rate_below}, above {self.rate_above}): {self.treatment}')
 
 
-def range_report(training, temperature_c, rate_c_s, *, treatment=''):
+def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: ArrayLike, *,
+                 treatment: str = '') -> RangeReport:
     """
     Count the samples outside the trained range of T and of dT.
 
@@ -432,14 +440,16 @@ class ThermalModel:
 
     """
 
-    method: object
+    # Any, not ThermalMethod: callers also use members outside the protocol (drift_rad_s,
+    # out_of_range) that only some methods have.
+    method: Any
     training: TrainingInfo
     package_version: str = __version__
-    accel: object = None
-    notes: tuple = field(default_factory=tuple)
+    accel: 'TemperaturePolynomial | None' = None
+    notes: tuple[str, ...] = field(default_factory=tuple)
 
 
-def to_jsonable(value):
+def to_jsonable(value: Any) -> Any:
     """
     Turn numpy scalars and arrays into JSON types, non-finite floats into None (recursively).
 
@@ -469,7 +479,8 @@ def to_jsonable(value):
     return value
 
 
-def model_document(method, *, training, accel=None):
+def model_document(method: ThermalMethod, *, training: TrainingInfo,
+                   accel: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
     """
     Return the model.json document of a fitted method (what :func:`save_model` writes).
 
@@ -503,7 +514,8 @@ def model_document(method, *, training, accel=None):
     return to_jsonable(doc)
 
 
-def save_model(method, path, *, training, accel=None):
+def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
+               accel: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
     """
     Write a fitted method to model.json (atomically: a half-written file is never left).
 
@@ -529,7 +541,7 @@ def save_model(method, path, *, training, accel=None):
     return doc
 
 
-def load_model(path):
+def load_model(path: StrPath) -> ThermalModel:
     """
     Read model.json and rebuild the fitted method through its class's ``from_dict``.
 
@@ -566,7 +578,7 @@ def load_model(path):
                              f'{doc.get("format_version")!r}; this version reads '
                              f'{", ".join(str(v) for v in READABLE_FORMAT_VERSIONS)}')
 
-    def rate(value):
+    def rate(value: Any) -> float | None:
         return None if value is None else float(value)
 
     try:
@@ -595,7 +607,7 @@ def load_model(path):
         accel = _from_dict(TemperaturePolynomial, (doc['accel'] or {}).get('parameters'),
                            f'model file {str(path)!r}: accelerometer parameters')
     version = str(doc.get('package_version', ''))
-    notes = ()
+    notes: tuple[str, ...] = ()
     if version != __version__:
         notes = (f'model file {str(path)!r} was written by gyro_noise_ros {version or "?"}, '
                  f'this is {__version__}; it loads, but refit if the methods changed since',)
@@ -603,7 +615,7 @@ def load_model(path):
                         accel=accel, notes=notes)
 
 
-def _from_dict(cls, params, where):
+def _from_dict(cls: type[Any], params: Any, where: str) -> Any:
     if not isinstance(params, dict) or not params:
         raise ModelFileError(f'{where} are empty')
     try:
@@ -614,7 +626,8 @@ def _from_dict(cls, params, where):
         raise ModelFileError(f'{where} are invalid ({type(err).__name__}: {err})') from err
 
 
-def check_temperature_range(model, temperature_c, *, margin_c=DEFAULT_RANGE_MARGIN_C):
+def check_temperature_range(model: ThermalModel, temperature_c: ArrayLike, *,
+                            margin_c: float = DEFAULT_RANGE_MARGIN_C) -> tuple[float, float]:
     """
     Refuse data whose temperature leaves the trained range by more than ``margin_c``.
 
@@ -655,7 +668,9 @@ def check_temperature_range(model, temperature_c, *, margin_c=DEFAULT_RANGE_MARG
     return lo, hi
 
 
-def fit_method(name, run, *, rng, sources=None, executor=None, accel=True, **options):
+def fit_method(name: str, run: ThermalRun, *, rng: np.random.Generator,
+               sources: Sequence[str] | None = None, executor: Executor | None = None,
+               accel: bool = True, **options: Any) -> ThermalModel:
     """
     Build, fit and wrap a method with its training summary.
 
@@ -695,6 +710,7 @@ def fit_method(name, run, *, rng, sources=None, executor=None, accel=True, **opt
             method.executor = None
     else:
         method.fit(run, rng=rng)
+    notes: tuple[str, ...]
     accel_poly, notes = None, ()
     if accel and run.accel_m_s2 is not None:
         try:
@@ -707,7 +723,7 @@ def fit_method(name, run, *, rng, sources=None, executor=None, accel=True, **opt
                         training=training_info(run, sources=sources, rate_window_s=window))
 
 
-def accel_view(run):
+def accel_view(run: ThermalRun) -> ThermalRun:
     """
     Return the run with its accelerometer samples in place of the gyro's.
 
@@ -732,7 +748,7 @@ def accel_view(run):
                       name=f'{run.name} (accelerometer)')
 
 
-def fit_accel(run):
+def fit_accel(run: ThermalRun) -> 'TemperaturePolynomial':
     """
     Fit the accelerometer's temperature polynomial (PX4 ``TC_A0_*`` form).
 
@@ -761,7 +777,7 @@ def fit_accel(run):
     return poly
 
 
-def check_min_range(min_range_c):
+def check_min_range(min_range_c: float) -> float:
     """
     Validate ``--min-range-c``: a finite number of degC, >= 0.
 
@@ -791,7 +807,8 @@ def check_min_range(min_range_c):
     return value
 
 
-def check_trainable(run, *, min_range_c=DEFAULT_MIN_RANGE_C, method=None):
+def check_trainable(run: ThermalRun, *, min_range_c: float = DEFAULT_MIN_RANGE_C,
+                    method: str | None = None) -> None:
     """
     Refuse training data a temperature model cannot be fitted on.
 

@@ -43,12 +43,17 @@ Definitions (docs/thermal.md states the same):
   offline, non-causal method can do).
 """
 
+from collections.abc import Sequence
 import dataclasses
 from dataclasses import dataclass
 import math
+from typing import Any, SupportsFloat
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 import scipy.signal
+
+from .run import ThermalMethod, ThermalRun
 
 from ..core.allan import allan_deviation
 from ..core.readout import read_allan
@@ -73,6 +78,10 @@ PRECURSOR_LIMIT = 0.05
 BANDS_PER_DECADE = 20
 #: Seed of the white noise of the noise path (the same noise for every method).
 NOISE_PATH_SEED = 20211021
+
+# (tau_s, adev_rad_s) of one axis; (doc, processed, curves) of evaluate_method.
+_Adev = tuple[NDArray[np.float64], NDArray[np.float64]]
+_Evaluation = tuple[dict[str, Any], NDArray[np.float64], dict[str, dict[str, Any]]]
 
 
 @dataclass(frozen=True)
@@ -118,7 +127,7 @@ class NoiseMetrics:
     drift_windows: int
     mean_deg_s: float
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the JSON form (keys as the attribute names).
 
@@ -130,7 +139,8 @@ class NoiseMetrics:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
-def noise_metrics(rate_rad_s, rate_hz, *, drift_window_s=DRIFT_WINDOW_S):
+def noise_metrics(rate_rad_s: ArrayLike, rate_hz: float, *,
+                  drift_window_s: float = DRIFT_WINDOW_S) -> NoiseMetrics:
     """
     Compute ARW, bias stability and residual drift of one axis.
 
@@ -156,7 +166,8 @@ def noise_metrics(rate_rad_s, rate_hz, *, drift_window_s=DRIFT_WINDOW_S):
     return _noise_metrics(rate_rad_s, rate_hz, drift_window_s)[0]
 
 
-def _noise_metrics(rate_rad_s, rate_hz, drift_window_s):
+def _noise_metrics(rate_rad_s: ArrayLike, rate_hz: float,
+                   drift_window_s: float) -> tuple[NoiseMetrics, _Adev]:
     """Return (NoiseMetrics, (tau_s, adev_rad_s))."""
     x = np.asarray(rate_rad_s, dtype=np.float64)
     if x.ndim != 1 or x.size < 8:
@@ -227,9 +238,9 @@ class Injection:
     amplitude_rad_s: float
 
 
-def make_injection(n, rate_hz, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
-                   f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, chirp_s=300.0, hold_s=20.0,
-                   steps=6):
+def make_injection(n: int, rate_hz: float, *, amplitude_rad_s: float = DEFAULT_AMPLITUDE_RAD_S,
+                   f_lo_hz: float = DEFAULT_F_LO_HZ, f_hi_hz: float = DEFAULT_F_HI_HZ,
+                   chirp_s: float = 300.0, hold_s: float = 20.0, steps: int = 6) -> Injection:
     """
     Build the injected rate: a logarithmic chirp, then a train of steps 0 -> A -> 0 -> ...
 
@@ -334,7 +345,7 @@ class FrequencyResponse:
     minus_3db_hz: object
     minus_3db_bound: str
 
-    def gain_at(self, f_hz):
+    def gain_at(self, f_hz: float) -> float:
         """
         Interpolate the gain at ``f_hz`` (log frequency).
 
@@ -351,8 +362,9 @@ class FrequencyResponse:
         return float(np.interp(np.log(f_hz), np.log(self.frequency_hz), self.gain))
 
 
-def frequency_response(injected, response, rate_hz, *, f_lo_hz, f_hi_hz,
-                       bands_per_decade=BANDS_PER_DECADE):
+def frequency_response(injected: ArrayLike, response: ArrayLike, rate_hz: float, *, f_lo_hz: float,
+                       f_hi_hz: float,
+                       bands_per_decade: int = BANDS_PER_DECADE) -> FrequencyResponse:
     """
     Estimate H(f) = response / injected from one record by band-averaged cross spectra.
 
@@ -386,7 +398,7 @@ def frequency_response(injected, response, rate_hz, *, f_lo_hz, f_hi_hz,
     yf = yf * turn
     n_b = max(int(math.ceil(math.log10(f_hi_hz / f_lo_hz) * bands_per_decade)), 1)
     edges = f_lo_hz * (f_hi_hz / f_lo_hz) ** (np.arange(n_b + 1) / n_b)
-    centres, h, coh = [], [], []
+    centres, hs, coh = [], [], []
     sxy_all = yf * np.conj(xf)
     sxx_all = np.abs(xf) ** 2
     syy_all = np.abs(yf) ** 2
@@ -400,10 +412,10 @@ def frequency_response(injected, response, rate_hz, *, f_lo_hz, f_hi_hz,
         sxy = sxy_all[sel].sum()
         syy = syy_all[sel].sum()
         centres.append(math.sqrt(lo * hi))
-        h.append(sxy / sxx * np.exp(-2j * np.pi * centres[-1] * lag / rate_hz))
+        hs.append(sxy / sxx * np.exp(-2j * np.pi * centres[-1] * lag / rate_hz))
         coh.append(float(abs(sxy) ** 2 / (sxx * syy)) if syy > 0 else 0.0)
     freq = np.array(centres)
-    h = np.array(h, dtype=complex)
+    h = np.array(hs, dtype=complex)
     gain = np.abs(h)
     phase = np.unwrap(np.angle(h))
     delay = (-np.gradient(phase, 2 * np.pi * freq) if freq.size > 1
@@ -466,7 +478,8 @@ class StepResponse:
     lead_s: float = 0.0
 
 
-def _first_crossing(t, r, level):
+def _first_crossing(t: NDArray[np.floating[Any]], r: NDArray[np.floating[Any]],
+                    level: float) -> float:
     idx = np.flatnonzero(r >= level)
     if idx.size == 0:
         return math.nan
@@ -476,7 +489,9 @@ def _first_crossing(t, r, level):
     return float(t[j - 1] + (level - r[j - 1]) / (r[j] - r[j - 1]) * (t[j] - t[j - 1]))
 
 
-def step_response(response, rate_hz, edges, deltas, window):
+def step_response(response: ArrayLike, rate_hz: float, edges: NDArray[np.int64] | Sequence[int],
+                  deltas: NDArray[np.float64] | Sequence[float],
+                  window: int) -> StepResponse:
     """
     Average the response around each step edge, normalised by the step.
 
@@ -535,7 +550,8 @@ def step_response(response, rate_hz, edges, deltas, window):
                         precursor=float(np.abs(pre).max()) if pre.size else 0.0, lead_s=lead)
 
 
-def _axis_bandwidth(injection, diff, rate_hz):
+def _axis_bandwidth(injection: Injection, diff: NDArray[np.float64],
+                    rate_hz: float) -> tuple[FrequencyResponse, StepResponse]:
     sl = injection.chirp
     fr = frequency_response(injection.signal_rad_s[sl], diff[sl], rate_hz,
                             f_lo_hz=injection.f_lo_hz, f_hi_hz=injection.f_hi_hz)
@@ -544,7 +560,7 @@ def _axis_bandwidth(injection, diff, rate_hz):
     return fr, st
 
 
-def _band_text(fr):
+def _band_text(fr: FrequencyResponse) -> str:
     if fr.frequency_hz.size == 0:
         return 'no band measured'
     if fr.minus_3db_bound == 'measured':
@@ -553,14 +569,14 @@ def _band_text(fr):
             f'{fr.frequency_hz[-1]:.3g} Hz')
 
 
-def _low_gain(fr):
+def _low_gain(fr: FrequencyResponse) -> float:
     # ADEV at tau = 1 s is most sensitive to motion between ~0.1 and ~1 Hz (its transfer function
     # peaks near 0.37 / tau); attenuation there shows up as lower "ARW".
     band = (fr.frequency_hz >= 0.1) & (fr.frequency_hz <= 1.0)
     return float(fr.gain[band].min()) if band.any() else math.nan
 
 
-def noise_path_gain(injected_rad_s, response_rad_s, rate_hz):
+def noise_path_gain(injected_rad_s: ArrayLike, response_rad_s: ArrayLike, rate_hz: float) -> float:
     """
     Return the ARW gain of a method on its noise path: ARW of its response over ARW of the input.
 
@@ -587,7 +603,9 @@ def noise_path_gain(injected_rad_s, response_rad_s, rate_hz):
     return a_out / a_in
 
 
-def verdict(raw, processed, fr, st, *, causal, small=None, noise_gain=None):
+def verdict(raw: NoiseMetrics, processed: NoiseMetrics, fr: FrequencyResponse, st: StepResponse, *,
+            causal: bool, small: tuple[FrequencyResponse, StepResponse, float] | None = None,
+            noise_gain: float | None = None) -> dict[str, Any]:
     """
     Say in plain words what a method did to the noise, to the drift and to motion.
 
@@ -670,22 +688,24 @@ def verdict(raw, processed, fr, st, *, causal, small=None, noise_gain=None):
             'text': ' '.join(text)}
 
 
-def _num(v):
+def _num(v: SupportsFloat) -> float | None:
     v = float(v)
     return v if math.isfinite(v) else None
 
 
-def _curve(values):
+def _curve(values: ArrayLike) -> list[float | None]:
     return [_num(v) for v in np.asarray(values, dtype=float)]
 
 
-def _run_with(run, gyro):
+def _run_with(run: ThermalRun, gyro: NDArray[np.float64]) -> ThermalRun:
     return dataclasses.replace(run, gyro_rad_s=gyro)
 
 
-def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
-                    f_lo_hz=DEFAULT_F_LO_HZ, f_hi_hz=DEFAULT_F_HI_HZ, processed=None,
-                    small_signal=True, noise_path=True):
+def evaluate_method(method: ThermalMethod, run: ThermalRun, *,
+                    amplitude_rad_s: float = DEFAULT_AMPLITUDE_RAD_S,
+                    f_lo_hz: float = DEFAULT_F_LO_HZ, f_hi_hz: float = DEFAULT_F_HI_HZ,
+                    processed: NDArray[np.float64] | None = None, small_signal: bool = True,
+                    noise_path: bool = True) -> _Evaluation:
     """
     Score a fitted method on a held-out run: noise, drift and bandwidth per axis.
 
@@ -755,6 +775,7 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
         axes[name] = {'raw': _metrics_dict(raw_m), 'processed': _metrics_dict(proc_m),
                       'bandwidth': _bandwidth_dict(fr, st)}
         if small_signal:
+            assert small_diff is not None and small_amp is not None
             # The same injection scaled to the noise's size: nonlinear methods (thresholds,
             # decompositions) pass a large motion and remove a small one.
             s_fr, s_st = _axis_bandwidth(inj, small_diff[:, a] * (inj.amplitude_rad_s
@@ -765,6 +786,7 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
                 _bandwidth_dict(s_fr, s_st), amplitude_deg_s=small_amp * RAD_TO_DEG)
         gain = None
         if noise_path:
+            assert noise_in is not None and noise_diff is not None
             gain = noise_path_gain(noise_in[:, a], noise_diff[:, a], run.rate_hz)
             axes[name]['noise_path'] = {'arw_gain': _num(gain),
                                         'amplitude_deg_s': _num(np.std(noise_in[:, a])
@@ -774,8 +796,8 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
     doc = {
         'method': method.name, 'causal': bool(method.causal),
         'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD_TO_DEG,
-                      'small_signal_amplitude_deg_s': (small_amp * RAD_TO_DEG if small_signal
-                                                       else None),
+                      'small_signal_amplitude_deg_s': (small_amp * RAD_TO_DEG
+                                                       if small_amp is not None else None),
                       'f_lo_hz': inj.f_lo_hz, 'f_hi_hz': inj.f_hi_hz,
                       'noise_path_seed': NOISE_PATH_SEED if noise_path else None,
                       'chirp_start_s': inj.chirp.start / run.rate_hz,
@@ -786,23 +808,24 @@ def evaluate_method(method, run, *, amplitude_rad_s=DEFAULT_AMPLITUDE_RAD_S,
     return doc, processed, curves
 
 
-def _response(method, run, gyro, processed, signal):
+def _response(method: ThermalMethod, run: ThermalRun, gyro: NDArray[np.float64],
+              processed: NDArray[np.float64], signal: NDArray[np.float64]) -> NDArray[np.float64]:
     add = signal if signal.ndim == 2 else signal[:, None]
     out = np.asarray(method.apply(_run_with(run, gyro + add)), dtype=float)
     _check_output(method, out, gyro.shape[0])
     return out - processed
 
 
-def _metrics_dict(m):
+def _metrics_dict(m: NoiseMetrics) -> dict[str, Any]:
     return {k: _num(v) if isinstance(v, float) else v for k, v in m.as_dict().items()}
 
 
-def _delay(v):
+def _delay(v: float) -> float | None:
     # a pass-through's 50 % crossing lands on the step time up to rounding (1e-18 s): snap to ns
     return _num(round(v, 9) + 0.0) if math.isfinite(v) else None  # + 0.0: no '-0'
 
 
-def _bandwidth_dict(fr, st):
+def _bandwidth_dict(fr: FrequencyResponse, st: StepResponse) -> dict[str, Any]:
     return {
         'minus_3db_hz': fr.minus_3db_hz, 'minus_3db_bound': fr.minus_3db_bound,
         'gain_at_1hz': _num(fr.gain_at(1.0)) if fr.frequency_hz.size else None,
@@ -816,7 +839,7 @@ def _bandwidth_dict(fr, st):
     }
 
 
-def white_noise_sigma(gyro_rad_s):
+def white_noise_sigma(gyro_rad_s: ArrayLike) -> float:
     """
     Estimate the per-sample white-noise standard deviation, median over axes.
 
@@ -837,7 +860,7 @@ def white_noise_sigma(gyro_rad_s):
     return max(float(np.median(np.std(d, axis=0))) / math.sqrt(2.0), 1e-9)
 
 
-def _check_output(method, out, n):
+def _check_output(method: ThermalMethod, out: NDArray[np.float64], n: int) -> None:
     if out.shape != (n, 3):
         raise InputDataError(f'method {method.name!r} returned shape {out.shape}, expected '
                              f'({n}, 3)')

@@ -48,15 +48,24 @@ function of the seed. Fitness functions are plain picklable callables, evaluated
 ``map_fn`` (the built-in ``map`` by default; a process pool's ``map`` distributes them).
 """
 
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.thermal.entropy import fuzzy_entropy, permutation_entropy
 from gyro_noise_ros.thermal.vmd import vmd
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: The paper's search box: K in [4, 12], alpha in [1000, 10000].
 PAPER_BOUNDS = ((4.0, 12.0), (1000.0, 10000.0))
+
+# A fitness: (k, alpha) -> (f1, f2); the map-like function that evaluates it over points;
+# the search box ((k_min, k_max), (alpha_min, alpha_max)).
+Fitness = Callable[[tuple[int, float]], Iterable[float]]
+MapFn = Callable[..., Iterable[Any]]
+Bounds = Sequence[Sequence[float]]
 
 
 @dataclass(frozen=True)
@@ -78,7 +87,7 @@ class VmdFitness:
     tol: float = 1e-7
     max_iter: int = 500
 
-    def __call__(self, key):
+    def __call__(self, key: tuple[int, float]) -> tuple[float, float]:
         """Return (FE, PE) for ``key = (k, alpha)``."""
         k, alpha = key
         modes = np.concatenate([
@@ -132,7 +141,7 @@ class MopsoResult:
     search_pick: tuple | None = None
 
 
-def dominates(a, b, *, margin=0.0):
+def dominates(a: ArrayLike, b: ArrayLike, *, margin: float = 0.0) -> bool:
     """
     Return True when fitness ``a`` Pareto-dominates ``b`` (minimisation).
 
@@ -143,12 +152,12 @@ def dominates(a, b, *, margin=0.0):
     return bool(np.all(a <= b) and np.any(a < b - margin * np.abs(b)))
 
 
-def _key(p):
+def _key(p: Sequence[float] | NDArray[np.float64]) -> tuple[int, float]:
     """Return the cache key of a position: K rounded to an integer, alpha to 1."""
     return int(round(p[0])), float(round(p[1]))
 
 
-def _cells(fit, n_grid):
+def _cells(fit: NDArray[np.float64], n_grid: int) -> NDArray[np.int_]:
     lo = fit.min(axis=0)
     hi = fit.max(axis=0)
     span = np.where(hi > lo, hi - lo, 1.0)
@@ -157,8 +166,9 @@ def _cells(fit, n_grid):
     return idx[:, 0] * n_grid + idx[:, 1]
 
 
-def _non_dominated(params, fit):
-    keep = []
+def _non_dominated(params: NDArray[np.float64],
+                   fit: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    keep: list[int] = []
     for i in range(len(fit)):
         if not any(dominates(fit[j], fit[i]) for j in range(len(fit)) if j != i):
             # Drop exact duplicates of a point already kept.
@@ -167,13 +177,14 @@ def _non_dominated(params, fit):
     return params[keep], fit[keep]
 
 
-def _truncate(params, fit, size, n_grid, gen):
+def _truncate(params: NDArray[np.float64], fit: NDArray[np.float64], size: int, n_grid: int,
+              gen: np.random.Generator) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Shrink the archive to ``size`` by eq. 23, then from the most crowded cell."""
     if len(fit) <= size:
         return params, fit
     cells = _cells(fit, n_grid)
     n_a = len(fit)
-    drop = []
+    drop: list[Any] = []
     for c in np.unique(cells):
         members = np.flatnonzero(cells == c)
         if members.size > 1:
@@ -193,14 +204,15 @@ def _truncate(params, fit, size, n_grid, gen):
     return params, fit
 
 
-def _leader(params, fit, n_grid, gen):
+def _leader(params: NDArray[np.float64], fit: NDArray[np.float64], n_grid: int,
+            gen: np.random.Generator) -> NDArray[np.float64]:
     cells = _cells(fit, n_grid)
     _, inverse, counts = np.unique(cells, return_inverse=True, return_counts=True)
     weight = 1.0 / counts[inverse]
     return params[gen.choice(len(fit), p=weight / weight.sum())]
 
 
-def pick_compromise(params, fit):
+def pick_compromise(params: NDArray[np.float64], fit: ArrayLike) -> int:
     """
     Pick one point of a Pareto set: nearest to the ideal point after min-max normalisation.
 
@@ -214,8 +226,10 @@ def pick_compromise(params, fit):
     return int(order[0])
 
 
-def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40, iterations=10,
-          w=0.4, c1=1.5, c2=1.5, chi=1.0, n_grid=7, map_fn=map):
+def mopso(fitness: Fitness, *, rng: np.random.Generator, bounds: Bounds = PAPER_BOUNDS,
+          n_particles: int = 40, archive_size: int = 40, iterations: int = 10, w: float = 0.4,
+          c1: float = 1.5, c2: float = 1.5, chi: float = 1.0, n_grid: int = 7,
+          map_fn: MapFn = map) -> MopsoResult:
     """
     Search (K, alpha) minimising two fitness values with a multi-objective particle swarm.
 
@@ -255,7 +269,7 @@ def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40,
     cache = {}
     requested = 0
 
-    def evaluate(pos):
+    def evaluate(pos: NDArray[np.float64]) -> NDArray[np.float64]:
         nonlocal requested
         keys = [_key(p) for p in pos]
         requested += len(keys)
@@ -298,7 +312,7 @@ def mopso(fitness, *, rng, bounds=PAPER_BOUNDS, n_particles=40, archive_size=40,
                        history=history)
 
 
-def pareto_ranks(fit):
+def pareto_ranks(fit: ArrayLike) -> NDArray[np.int_]:
     """
     Return the non-dominated sorting rank of each point (0 for the first front).
 
@@ -321,9 +335,9 @@ def pareto_ranks(fit):
     return ranks
 
 
-def evaluated_points(result):
+def evaluated_points(result: MopsoResult) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Return the distinct (K, alpha) keys a search evaluated and their fitness, (m, 2) each."""
-    seen = {}
+    seen: dict[tuple[int, float], tuple[float, ...]] = {}
     for pos, fit in result.history:
         for p, f in zip(pos, fit):
             seen.setdefault(_key(p), tuple(float(v) for v in f))
@@ -331,7 +345,8 @@ def evaluated_points(result):
     return keys, np.array(list(seen.values()), dtype=float).reshape(-1, 2)
 
 
-def refine(result, fitness, *, points=10, polish=16, bounds=PAPER_BOUNDS, map_fn=map):
+def refine(result: MopsoResult, fitness: Fitness, *, points: int = 10, polish: int = 16,
+           bounds: Bounds = PAPER_BOUNDS, map_fn: MapFn = map) -> MopsoResult:
     """
     Re-evaluate a search's most promising points with a reference fitness and pick again.
 
@@ -393,11 +408,11 @@ def refine(result, fitness, *, points=10, polish=16, bounds=PAPER_BOUNDS, map_fn
     order = np.concatenate([order[first], order[~first]])[:int(points)]
     done = {}
 
-    def evaluate(todo):
+    def evaluate(todo: Sequence[tuple[int, float]]) -> None:
         for key, f in zip(todo, map_fn(fitness, todo)):
             done[key] = tuple(float(v) for v in f)
 
-    def pick():
+    def pick() -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
         p, f = _non_dominated(np.array(list(done), dtype=float),
                               np.array(list(done.values()), dtype=float))
         return p, f, pick_compromise(p, f)

@@ -40,16 +40,17 @@ real data have no truth.
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
-from .simulate import play_operator
+from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalRun
+from .simulate import play_operator, ThermalModel, ThermalTruth
 from ..errors import ParameterError
 
 __all__ = ['LeastSquaresOracle', 'fit_oracle', 'measured_terms', 'oracle_residual',
            'true_terms']
 
 
-def true_terms(truth, model):
+def true_terms(truth: ThermalTruth, model: ThermalModel) -> NDArray[np.float64]:
     """
     Return the drift-law terms of a simulated run from its truth.
 
@@ -70,7 +71,8 @@ def true_terms(truth, model):
                             truth.played_c)
 
 
-def measured_terms(run, model, *, compress, rate_window_s=DEFAULT_RATE_WINDOW_S):
+def measured_terms(run: ThermalRun, model: ThermalModel, *, compress: float,
+                   rate_window_s: float = DEFAULT_RATE_WINDOW_S) -> NDArray[np.float64]:
     """
     Return the drift-law terms computed from the measured temperature only.
 
@@ -123,7 +125,7 @@ class LeastSquaresOracle:
     scale: np.ndarray
     rank: int
 
-    def predict(self, terms):
+    def predict(self, terms: ArrayLike) -> NDArray[np.float64]:
         """
         Return the fitted drift at the rows of ``terms``.
 
@@ -141,7 +143,7 @@ class LeastSquaresOracle:
         return np.asarray(terms, dtype=float) @ self.coef
 
 
-def fit_oracle(terms, output):
+def fit_oracle(terms: ArrayLike, output: ArrayLike) -> LeastSquaresOracle:
     """
     Fit :class:`LeastSquaresOracle` (ordinary least squares per axis, columns scaled to rms 1).
 
@@ -168,8 +170,9 @@ def fit_oracle(terms, output):
     return LeastSquaresOracle(coef=sol / scale[:, None], scale=scale, rank=int(rank))
 
 
-def oracle_residual(train_run, train_truth, test_run, test_truth, model, *, measured=False,
-                    rate_window_s=DEFAULT_RATE_WINDOW_S):
+def oracle_residual(train_run: ThermalRun, train_truth: ThermalTruth, test_run: ThermalRun,
+                    test_truth: ThermalTruth, model: ThermalModel, *, measured: bool = False,
+                    rate_window_s: float = DEFAULT_RATE_WINDOW_S) -> NDArray[np.float64]:
     """
     Fit the oracle on the training run and return the test run's gyro minus its prediction.
 

@@ -57,18 +57,27 @@ modes and parts, the drift part on the network's grid), so the report costs no s
 it follows ``apply`` on the same run object.
 """
 
+from collections.abc import Callable, Mapping
+from concurrent.futures import Executor
 from pathlib import Path
+from typing import Any
 import weakref
 
 from gyro_noise_ros.cluster import make_executor
 from gyro_noise_ros.errors import InputDataError, ParameterError
-from gyro_noise_ros.thermal.classify import classify_modes
+from gyro_noise_ros.outputs import StrPath
+from gyro_noise_ros.thermal.classify import classify_modes, ModeClasses
 from gyro_noise_ros.thermal.elman import DriftModel, fit_drift
 from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, refine, VmdFitness
-from gyro_noise_ros.thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from gyro_noise_ros.thermal.run import (DEFAULT_RATE_WINDOW_S, temperature_rate_c_s,
+                                        ThermalRun)
 from gyro_noise_ros.thermal.tfpf import tfpf
-from gyro_noise_ros.thermal.vmd import vmd
+from gyro_noise_ros.thermal.vmd import vmd, VmdResult
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+# (gyro (n, 3) rad/s, temperature (n,) degC, its rate (n,) degC/s) of a run.
+_Inputs = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
 
 #: Options of :class:`ParallelModel` and their defaults (the paper's MOPSO settings).
 DEFAULT_OPTIONS = {
@@ -106,7 +115,7 @@ DEFAULT_OPTIONS = {
 }
 
 
-def fitness_windows(x, n, count):
+def fitness_windows(x: NDArray[np.float64], n: int | None, count: int) -> NDArray[np.float64]:
     """
     Return ``count`` windows (count, n) spread evenly over ``x`` (``x`` itself if too short).
 
@@ -121,7 +130,7 @@ def fitness_windows(x, n, count):
     return np.stack([x[s:s + n] for s in starts])
 
 
-def block_means(x, q):
+def block_means(x: ArrayLike, q: int) -> NDArray[np.float64]:
     """Return the means of consecutive blocks of ``q`` samples (the last block may be short)."""
     x = np.asarray(x, dtype=float)
     idx = np.arange(0, x.shape[0], q)
@@ -145,9 +154,9 @@ class ParallelModel:
     #: :func:`gyro_noise_ros.cluster.make_executor`), set by the caller, who shuts it down; None:
     #: ``workers`` local processes. Where the work runs, not what it computes: not an option,
     #: not in :meth:`to_dict` (the fit is the same either way).
-    executor = None
+    executor: Executor | None = None
 
-    def __init__(self, **options):
+    def __init__(self, **options: Any) -> None:
         unknown = set(options) - set(DEFAULT_OPTIONS)
         if unknown:
             raise ParameterError(f'unknown ParallelModel options: {sorted(unknown)}')
@@ -158,18 +167,20 @@ class ParallelModel:
                 raise ParameterError(f'{name} must be >= 64 or None, got {fs!r}')
         if int(self.options['refine_points']) < 0 or int(self.options['refine_polish']) < 0:
             raise ParameterError('refine_points and refine_polish must be >= 0')
-        self.axes = None
-        self.rate_hz = None
-        self.temperature_range_c = None
-        self.fit_info = None
-        self.last_info = None
-        self._report_parts = None
+        self.axes: list[dict[str, Any]] | None = None
+        self.rate_hz: float | None = None
+        self.temperature_range_c: list[float] | None = None
+        self.fit_info: list[dict[str, Any]] | None = None
+        self.last_info: list[dict[str, Any]] | None = None
+        self._report_parts: tuple[Callable[[], Any], list[dict[str, Any]]] | None = None
 
     # -- fitting ---------------------------------------------------------------------------
-    def fit(self, run, *, rng):
+    def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Learn K, alpha, the mode classes and the drift network per axis from one run."""
         x_all, temp, rate = self._inputs(run)
         o = self.options
+        axes: list[dict[str, Any]]
+        info: list[dict[str, Any]]
         axes, info = [], []
         own = None if self.executor is not None else make_executor(int(o['workers']))
         pool = self.executor if self.executor is not None else own
@@ -185,7 +196,9 @@ class ParallelModel:
         self.temperature_range_c = [float(temp.min()), float(temp.max())]
         self.fit_info = info
 
-    def _fit_axis(self, x, temp, rate, rate_hz, rng, pool, info):
+    def _fit_axis(self, x: NDArray[np.float64], temp: NDArray[np.float64],
+                  rate: NDArray[np.float64], rate_hz: float, rng: np.random.Generator,
+                  pool: Executor | None, info: list[dict[str, Any]]) -> dict[str, Any]:
         o = self.options
         # Independent streams: the network's start does not depend on how many draws the
         # swarm made, so options that change the search leave the network's seed alone.
@@ -249,7 +262,7 @@ class ParallelModel:
                 'elman': elman.to_dict()}
 
     # -- applying --------------------------------------------------------------------------
-    def apply(self, run):
+    def apply(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return the denoised, drift-compensated angular rate (n, 3), rad/s."""
         if self.axes is None:
             raise ParameterError('ParallelModel.apply called before fit (or from_dict)')
@@ -275,15 +288,16 @@ class ParallelModel:
             info[-1]['outside_trained_range_fraction'] = self._outside(elman, run, temp, rate)
             parts.append(self._plot_parts(run, a, dec, info[-1], mixed_in, mixed, drift, elman))
         self.last_info = info
+        key: Callable[[], ThermalRun | None]
         try:
             key = weakref.ref(run)
         except TypeError:  # a run type without weak references: hold it until the next apply
-            def key():
+            def key() -> ThermalRun:
                 return run
         self._report_parts = (key, parts)
         return out
 
-    def drift_prediction_rad_s(self, run):
+    def drift_prediction_rad_s(self, run: ThermalRun) -> NDArray[np.float64]:
         """Return the Elman networks' drift (n, 3), rad/s, on a run's [T, dT]."""
         if self.axes is None:
             raise ParameterError('ParallelModel used before fit (or from_dict)')
@@ -293,20 +307,22 @@ class ParallelModel:
             for ax in self.axes])
 
     @staticmethod
-    def _outside(elman, run, temp, rate):
+    def _outside(elman: DriftModel, run: ThermalRun, temp: NDArray[np.float64],
+                 rate: NDArray[np.float64]) -> float:
         """Fraction of the network's grid points outside the trained [T, dT] range."""
         q = max(1, int(round(elman.dt_s * run.rate_hz)))
         return float(np.mean(elman.outside(block_means(np.c_[temp, rate], q))))
 
     @staticmethod
-    def _drift_prediction(elman, run, temp, rate):
+    def _drift_prediction(elman: DriftModel, run: ThermalRun, temp: NDArray[np.float64],
+                          rate: NDArray[np.float64]) -> NDArray[np.float64]:
         q = max(1, int(round(elman.dt_s * run.rate_hz)))
         pred = elman.predict(block_means(np.c_[temp, rate], q))
         centres = np.arange(pred.size) * q + 0.5 * (min(q, temp.size) - 1)
         return np.interp(np.arange(temp.size), centres, pred)
 
     # -- report ----------------------------------------------------------------------------
-    def report_figures(self, run, out_dir):
+    def report_figures(self, run: ThermalRun, out_dir: StrPath) -> list[tuple[str | None, str]]:
         """
         Draw the paper's Figures 11, 12 and 14-17 for a run; return (file name, caption) each.
 
@@ -335,17 +351,20 @@ class ParallelModel:
             raise ParameterError('ParallelModel used before fit (or from_dict)')
         return report.parallel_figures(self, run, self._parts_for(run), Path(out_dir))
 
-    def _parts_for(self, run):
+    def _parts_for(self, run: ThermalRun) -> list[dict[str, Any]]:
         kept = self._report_parts
         if kept is None or kept[0]() is not run:
             self.apply(run)
+        assert self._report_parts is not None  # set by apply
         return self._report_parts[1]
 
-    def _plot_parts(self, run, a, dec, info, mixed_in, mixed_out, drift, elman):
+    def _plot_parts(self, run: ThermalRun, a: int, dec: VmdResult, info: Mapping[str, Any],
+                    mixed_in: NDArray[np.float64], mixed_out: NDArray[np.float64],
+                    drift: NDArray[np.float64], elman: DriftModel) -> dict[str, Any]:
         """Keep what the report figures need of one axis of an apply, at plot size."""
         from gyro_noise_ros.thermal.report import envelope as full_envelope, PANEL_POINTS
 
-        def envelope(t, y):
+        def envelope(t: NDArray[Any], y: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any]]:
             return full_envelope(t, y, PANEL_POINTS)
 
         t_h = np.asarray(run.t_s, dtype=float) / 3600.0
@@ -366,7 +385,8 @@ class ParallelModel:
                 'zoom_mixed_out': mixed_out[zoom].copy(), 'zoom_denoised': denoised[zoom].copy(),
                 'drift_blocks': block_means(drift, q), 'q': q}
 
-    def network_grid(self, run, q):
+    def network_grid(self, run: ThermalRun,
+                     q: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """
         Return the drift model's inputs on a run's grid of ``q`` samples, and the grid's times.
 
@@ -392,7 +412,7 @@ class ParallelModel:
         return grid, np.interp(centres, np.arange(t.size), t) / 3600.0
 
     # -- helpers ---------------------------------------------------------------------------
-    def _classify(self, dec):
+    def _classify(self, dec: VmdResult) -> ModeClasses:
         o = self.options
         return classify_modes(dec.modes, dec.center_freqs, drift_max=o['drift_max'],
                               noise_min=o['noise_min'], max_samples=int(o['entropy_samples']),
@@ -400,7 +420,7 @@ class ParallelModel:
                                      else int(o['entropy_scale'])))
 
     @staticmethod
-    def _axis_info(dec, cls, rate_hz):
+    def _axis_info(dec: VmdResult, cls: ModeClasses, rate_hz: float) -> dict[str, Any]:
         return {'center_freqs_hz': (dec.center_freqs * rate_hz).tolist(),
                 'center_freqs_cyc_per_sample': dec.center_freqs.tolist(),
                 'classes': list(cls.classes),
@@ -409,7 +429,8 @@ class ParallelModel:
                 'mode_rms_rad_s': np.sqrt(np.mean(dec.modes ** 2, axis=1)).tolist(),
                 'vmd_iterations': dec.iterations}
 
-    def _inputs(self, run):
+    def _inputs(self,
+                run: ThermalRun) -> _Inputs:
         x = np.asarray(run.gyro_rad_s, dtype=float)
         temp = np.asarray(run.temperature_c, dtype=float)
         t = np.asarray(run.t_s, dtype=float)
@@ -424,7 +445,7 @@ class ParallelModel:
         return x, temp, rate
 
     # -- serialisation ---------------------------------------------------------------------
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return every fitted parameter as a JSON-serialisable dict."""
         if self.axes is None:
             raise ParameterError('ParallelModel.to_dict called before fit')
@@ -433,7 +454,7 @@ class ParallelModel:
                 'axes': self.axes}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'ParallelModel':
         """Rebuild a fitted model from :meth:`to_dict` output."""
         if d.get('method') != 'parallel':
             raise ParameterError(f"not a parallel model: method = {d.get('method')!r}")

@@ -32,15 +32,24 @@ line why the method has none. Everything is converted to deg/s at this edge; lon
 reduced to min/max envelopes (:func:`envelope`); matplotlib runs on the Agg backend.
 """
 
+from collections.abc import Iterable, Mapping, Sequence
 import inspect
 import math
 from pathlib import Path
 import re
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from .metrics import FrequencyResponse, StepResponse
+from .run import ThermalRun
+from ..outputs import StrPath
 from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG
+
+if TYPE_CHECKING:
+    from .parallel import ParallelModel
 
 __all__ = ['PAPER_FIGURES', 'envelope', 'figure_numbers', 'figures_markdown', 'method_figures',
            'plot_allan', 'plot_bandwidth', 'plot_before_after', 'plot_drift', 'plot_mode_classes',
@@ -53,8 +62,12 @@ _MAX_POINTS = 4000
 #: Points per trace of the narrower panels of the method figures (two per pixel column).
 PANEL_POINTS = 1600
 
+# The panel rows of plot_network: per axis, the panels of its row.
+_PanelRows = list[list[dict[str, Any]]]
 
-def envelope(t, y, max_points=_MAX_POINTS):
+
+def envelope(t: NDArray[Any], y: NDArray[Any],
+             max_points: int = _MAX_POINTS) -> tuple[NDArray[Any], NDArray[Any]]:
     """
     Reduce a long trace to a min/max envelope of at most about ``max_points`` points.
 
@@ -86,7 +99,8 @@ def envelope(t, y, max_points=_MAX_POINTS):
 _thin = envelope
 
 
-def _window_means(t, y, window_s):
+def _window_means(t: NDArray[Any], y: NDArray[Any],
+                  window_s: float) -> tuple[NDArray[Any], NDArray[Any]]:
     n = int(round(window_s / np.median(np.diff(t)))) if t.size > 1 else 1
     k = t.size // max(n, 1)
     if k < 1:
@@ -95,7 +109,7 @@ def _window_means(t, y, window_s):
             y[:k * n].reshape(k, n, *y.shape[1:]).mean(axis=1))
 
 
-def plot_run(path, run):
+def plot_run(path: StrPath, run: ThermalRun) -> Path:
     """
     Plot temperature and raw angular rate against time (paper Figure 10).
 
@@ -127,7 +141,7 @@ def plot_run(path, run):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_output(path, run, processed, *, label):
+def plot_output(path: StrPath, run: ThermalRun, processed: NDArray[Any], *, label: str) -> Path:
     """
     Overlay raw and processed output, whole run and a 10-s zoom (paper Figure 18).
 
@@ -166,7 +180,7 @@ def plot_output(path, run, processed, *, label):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_drift(path, run, processed, *, label):
+def plot_drift(path: StrPath, run: ThermalRun, processed: NDArray[Any], *, label: str) -> Path:
     """
     Plot the drift the method removed against time and temperature, 60-s means (paper Fig. 17).
 
@@ -207,7 +221,8 @@ def plot_drift(path, run, processed, *, label):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_allan(path, curves, *, title):
+def plot_allan(path: StrPath, curves: Mapping[str, Mapping[str, tuple[ArrayLike, ArrayLike]]], *,
+               title: str) -> Path:
     """
     Overlay Allan deviations per axis (paper Figure 19).
 
@@ -240,7 +255,9 @@ def plot_allan(path, curves, *, title):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_bandwidth(path, responses, *, title, small=None):
+def plot_bandwidth(path: StrPath, responses: Mapping[str, Mapping[str, FrequencyResponse]], *,
+                   title: str,
+                   small: Mapping[str, Mapping[str, FrequencyResponse]] | None = None) -> Path:
     """
     Plot gain, phase and group delay against frequency, one line per label and axis.
 
@@ -266,7 +283,7 @@ def plot_bandwidth(path, responses, *, title, small=None):
     fig, panels = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
     small = small or {}
 
-    def gain_line(fr, name, style, colour=None):
+    def gain_line(fr: FrequencyResponse, name: str, style: str, colour: Any = None) -> Any:
         line, = panels[0].semilogx(fr.frequency_hz, 20 * np.log10(np.maximum(fr.gain, 1e-6)),
                                    lw=1.0, ls=style, label=name, color=colour)
         if fr.minus_3db_bound == 'measured':
@@ -301,7 +318,8 @@ def plot_bandwidth(path, responses, *, title, small=None):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_steps(path, steps, *, title):
+def plot_steps(path: StrPath, steps: Mapping[str, Mapping[str, StepResponse]], *,
+               title: str) -> Path:
     """
     Plot the mean normalised step responses.
 
@@ -343,7 +361,7 @@ def plot_steps(path, steps, *, title):
 _CLASS_COLOURS = {'drift': 'tab:red', 'mixed': 'tab:orange', 'noise': 'tab:gray'}
 
 
-def plot_mode_classes(path, info, *, title):
+def plot_mode_classes(path: StrPath, info: Any, *, title: str) -> Path | None:
     """
     Plot each mode's sample entropy coloured by its class, per axis (paper Figure 13).
 
@@ -351,9 +369,10 @@ def plot_mode_classes(path, info, *, title):
     ----------
     path : str or os.PathLike
         PNG file.
-    info : list of dict
+    info : list of dict or None
         Per axis: ``sample_entropy`` and ``classes`` (one per mode), optionally
-        ``center_freqs_hz``, as the parallel model's ``fit_info`` / ``last_info``.
+        ``center_freqs_hz``, as the parallel model's ``fit_info`` / ``last_info``; anything
+        else (None included) draws nothing.
     title : str
         Figure title.
 
@@ -388,7 +407,7 @@ def plot_mode_classes(path, info, *, title):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_mopso(path, axes, *, title):
+def plot_mopso(path: StrPath, axes: Sequence[Mapping[str, Any] | None], *, title: str) -> Path:
     """
     Plot the final MOPSO archive and the picked point per axis (paper Figure 11).
 
@@ -444,7 +463,7 @@ def plot_mopso(path, axes, *, title):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_modes(path, axes, *, title):
+def plot_modes(path: StrPath, axes: Sequence[Mapping[str, Any]], *, title: str) -> Path:
     """
     Plot the input and each VMD mode against time, per axis, coloured by class (paper Fig. 12).
 
@@ -498,7 +517,8 @@ def plot_modes(path, axes, *, title):
     return save_figure(fig, path, dpi=100)
 
 
-def plot_before_after(path, axes, *, title, before, after):
+def plot_before_after(path: StrPath, axes: Sequence[Mapping[str, Any]], *, title: str, before: str,
+                      after: str) -> Path:
     """
     Overlay a signal before and after a processing step: whole run and a zoom (Figs. 14, 15).
 
@@ -541,7 +561,8 @@ def plot_before_after(path, axes, *, title, before, after):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def plot_network(path, axes, *, title):
+def plot_network(path: StrPath, axes: Sequence[Sequence[Mapping[str, Any]]], *,
+                 title: str) -> Path:
     """
     Plot rows of panels of slow series against time, one row per axis (paper Figs. 16, 17).
 
@@ -580,11 +601,12 @@ def plot_network(path, axes, *, title):
     return save_figure(fig, path, dpi=100, tight=True)
 
 
-def _rms_deg_s(x):
+def _rms_deg_s(x: ArrayLike) -> float:
     return float(np.degrees(np.sqrt(np.mean(np.square(x))))) if np.size(x) else float('nan')
 
 
-def parallel_figures(model, run, parts, out_dir):
+def parallel_figures(model: 'ParallelModel', run: ThermalRun, parts: Sequence[Mapping[str, Any]],
+                     out_dir: StrPath) -> list[tuple[str | None, str]]:
     """
     Draw the parallel model's own figures (paper Figures 11, 12 and 14-17) for a run.
 
@@ -612,6 +634,7 @@ def parallel_figures(model, run, parts, out_dir):
         figure it mirrors ('Fig. N').
 
     """
+    assert model.axes is not None  # fitted
     out_dir = Path(out_dir)
     name = run.name or 'run'
     figs = [_mopso_figure(model, out_dir, name)]
@@ -664,15 +687,16 @@ def parallel_figures(model, run, parts, out_dir):
     return figs
 
 
-def _mopso_figure(model, out_dir, name):
+def _mopso_figure(model: 'ParallelModel', out_dir: Path, name: str) -> tuple[str | None, str]:
     info = model.fit_info or []
-    archives = [ax.get('mopso') for ax in info]
+    archives: list[Any] = [ax.get('mopso') for ax in info]
     keys = ('archive_fuzzy_entropy', 'archive_permutation_entropy', 'archive_k',
             'archive_alpha')
     if len(archives) != 3 or not all(a and all(k in a for k in keys) for a in archives):
         return (None, 'the MOPSO archive (Fig. 11) is drawn by `fit` beside model.json '
                       '(fig11_mopso.png of the training report); model.json keeps only '
                       'the picked K and alpha')
+    assert model.axes is not None  # fitted
     axes = []
     for arch, ax in zip(archives, model.axes):
         fit = ax.get('fitness', {})
@@ -689,13 +713,15 @@ def _mopso_figure(model, out_dir, name):
             '(cf. Fig. 11; the paper also shows the swarm per iteration)')
 
 
-def _network_panels(model, run, parts):
+def _network_panels(model: 'ParallelModel', run: ThermalRun,
+                    parts: Sequence[Mapping[str, Any]]) -> tuple[_PanelRows, _PanelRows]:
     """Return the panel rows of Figures 16 and 17 (the drift part on the network's grid)."""
     from .elman import DriftModel, fit_elman
 
     # the distribution fit_elman draws BAS's start from (it is not stored with the model)
     scale = inspect.signature(fit_elman).parameters['init_scale'].default
     rows16, rows17 = [], []
+    assert model.axes is not None  # fitted
     for ax, p in zip(model.axes, parts):
         drift_model = DriftModel.from_dict(ax['elman'])
         grid, t_h = model.network_grid(run, p['q'])
@@ -743,7 +769,7 @@ PAPER_FIGURES = {
 _FIG_REF = re.compile(r'\bFigs?\.\s*(\d+(?:\s*(?:,|-|and)\s*\d+)*)')
 
 
-def figure_numbers(caption):
+def figure_numbers(caption: str) -> list[int]:
     """
     Return the paper figure numbers a caption cites ('Fig. 12', 'Figs. 15, 18', 'Figs. 12-14').
 
@@ -758,7 +784,7 @@ def figure_numbers(caption):
         Sorted, without repeats.
 
     """
-    found = set()
+    found: set[int] = set()
     for group in _FIG_REF.findall(caption):
         for part in re.split(r'\s*(?:,|and)\s*', group):
             ends = [int(v) for v in re.split(r'\s*-\s*', part) if v]
@@ -766,7 +792,7 @@ def figure_numbers(caption):
     return sorted(found)
 
 
-def figures_markdown(figs, out, *, method):
+def figures_markdown(figs: Iterable[tuple[str, StrPath | None]], out: Path, *, method: str) -> str:
     """
     Write a report's figure section: paper figures 10-19 and their analogues, then the images.
 
@@ -813,7 +839,7 @@ def figures_markdown(figs, out, *, method):
             + images)
 
 
-def method_figures(method, run, out_dir):
+def method_figures(method: Any, run: ThermalRun, out_dir: StrPath) -> list[tuple[str | None, str]]:
     """
     Ask the method for its own figures (paper Figures 11, 12, 14-17), if it offers any.
 
@@ -840,7 +866,7 @@ def method_figures(method, run, out_dir):
             for name, caption in hook(run, Path(out_dir))]
 
 
-def bias_stability_cell(metrics, spec='.4g'):
+def bias_stability_cell(metrics: Mapping[str, Any], spec: str = '.4g') -> str:
     """
     Format a bias stability: the value, or '<= value' when the readout gives an upper bound.
 
@@ -862,7 +888,7 @@ def bias_stability_cell(metrics, spec='.4g'):
     return ('<= ' if metrics.get('bias_stability_upper_bound') else '') + format(value, spec)
 
 
-def _cell(value, spec):
+def _cell(value: Any, spec: str) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return 'n/a'
     if isinstance(value, bool):
@@ -872,7 +898,8 @@ def _cell(value, spec):
     return format(value, spec)
 
 
-def table_markdown(header, rows, specs):
+def table_markdown(header: Sequence[str], rows: Iterable[Sequence[Any]],
+                   specs: Sequence[str]) -> str:
     """
     Format a Markdown table.
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from typing import Optional, Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputDataError
 
@@ -108,7 +109,7 @@ class RateWindowError(InputDataError):
     """A record is shorter than the temperature-rate window, so it has no rate (exit code 4)."""
 
 
-def rate_window_filled(t_s, window_s):
+def rate_window_filled(t_s: ArrayLike, window_s: float) -> NDArray[np.bool_]:
     """
     Return which samples have a filled trailing rate window.
 
@@ -135,8 +136,9 @@ def rate_window_filled(t_s, window_s):
     return (t - t[0]) >= window_s * (1.0 - 1e-9)
 
 
-def temperature_rate_c_s(t_s, temperature_c, *, window_s=DEFAULT_RATE_WINDOW_S,
-                         start='backfill'):
+def temperature_rate_c_s(t_s: ArrayLike, temperature_c: ArrayLike, *,
+                         window_s: float = DEFAULT_RATE_WINDOW_S,
+                         start: str = 'backfill') -> NDArray[np.float64]:
     """
     Estimate the temperature rate causally: least-squares slope over a trailing window.
 

@@ -55,18 +55,22 @@ compressed. A train/test pair shares one compression (the same device in real ti
 constant is documented on :class:`ThermalModel` and in ``docs/thermal_data.md``.
 """
 
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .run import ThermalRun
 from ..core.jit import JIT_OPTIONS
 from ..core.simulate import gauss_markov_avar, GaussMarkov
 from ..errors import ParameterError
+from ..outputs import StrPath
 from ..units import DEG_TO_RAD, MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
 #: LSM6DSO32 temperature output sensitivity, 256 LSB/degC (datasheet), i.e. one LSB in degC.
@@ -87,15 +91,23 @@ SINE_POINTS_PER_PERIOD = 64
 SOAK_SPEED_UP = 20.0
 
 
+# The corners (times_s, temperatures_c) of a piecewise-linear oven profile.
+_Corners = tuple[NDArray[np.floating[Any]], NDArray[np.floating[Any]]]
+
+
 class _PiecewiseProfile:
     """What every oven profile offers on top of its ``breakpoints()``."""
 
+    def breakpoints(self) -> _Corners:
+        """Return the corners ``(times_s, temperatures_c)``; every profile class defines them."""
+        raise NotImplementedError
+
     @property
-    def duration_s(self):
+    def duration_s(self) -> float:
         """float: length of the whole profile (s); 50250 s (13.96 h) for the paper's oven."""
         return float(self.breakpoints()[0][-1])
 
-    def temperature_c(self, t_s):
+    def temperature_c(self, t_s: ArrayLike) -> NDArray[np.float64]:
         """
         Oven temperature (degC) at times ``t_s`` (s); held at the ends outside the profile.
 
@@ -151,11 +163,11 @@ class OvenProfile(_PiecewiseProfile):
     cool_rate_c_s: float = 1.0 / 60.0
 
     @property
-    def shape(self):
+    def shape(self) -> str:
         """str: ``'oven'``."""
         return 'oven'
 
-    def breakpoints(self):
+    def breakpoints(self) -> _Corners:
         """
         Return the corners of the profile.
 
@@ -187,7 +199,7 @@ class OvenProfile(_PiecewiseProfile):
             temps.append(level)
         return np.asarray(times), np.asarray(temps)
 
-    def shifted(self, delta_c):
+    def shifted(self, delta_c: float) -> 'OvenProfile':
         """
         Return the profile of a run whose room is ``delta_c`` warmer (the set-points stay).
 
@@ -203,7 +215,7 @@ class OvenProfile(_PiecewiseProfile):
         """
         return replace(self, room_c=self.room_c + float(delta_c))
 
-    def starting_at(self, start_c):
+    def starting_at(self, start_c: float) -> 'OvenProfile':
         """Return the profile with the room (its first temperature) at ``start_c`` (degC)."""
         return replace(self, room_c=float(start_c))
 
@@ -262,7 +274,7 @@ class ShapeProfile(_PiecewiseProfile):
     period_s: float = 5400.0
     offset_c: float = 0.0
 
-    def _check(self):
+    def _check(self) -> None:
         if self.shape not in SHAPES or self.shape == 'oven':
             raise ParameterError(f'shape must be one of {", ".join(SHAPES[1:])}, got '
                                  f'{self.shape!r}')
@@ -278,7 +290,7 @@ class ShapeProfile(_PiecewiseProfile):
             if not (isinstance(value, (int, np.integer)) and value >= 1):
                 raise ParameterError(f'{name} must be an integer >= 1, got {value!r}')
 
-    def breakpoints(self):
+    def breakpoints(self) -> _Corners:
         """
         Return the corners of the profile.
 
@@ -296,7 +308,7 @@ class ShapeProfile(_PiecewiseProfile):
         ramp = span / self.rate_c_s
         times, temps = [0.0], []
 
-        def go(level, duration):
+        def go(level: float, duration: float) -> None:
             times.append(times[-1] + duration)
             temps.append(level)
 
@@ -331,7 +343,7 @@ class ShapeProfile(_PiecewiseProfile):
                 go(start, h)
         return np.asarray(times), np.asarray(temps) + self.offset_c
 
-    def shifted(self, delta_c):
+    def shifted(self, delta_c: float) -> 'ShapeProfile':
         """
         Return the profile with every set-point ``delta_c`` warmer (degC).
 
@@ -347,12 +359,12 @@ class ShapeProfile(_PiecewiseProfile):
         """
         return replace(self, offset_c=self.offset_c + float(delta_c))
 
-    def starting_at(self, start_c):
+    def starting_at(self, start_c: float) -> 'ShapeProfile':
         """Return the profile shifted so that it starts at ``start_c`` (degC)."""
         return self.shifted(float(start_c) - float(self.breakpoints()[1][0]))
 
 
-def make_profile(shape, **options):
+def make_profile(shape: str, **options: Any) -> OvenProfile | ShapeProfile:
     """
     Build a profile by name: ``'oven'`` (:class:`OvenProfile`) or a :class:`ShapeProfile` shape.
 
@@ -473,14 +485,14 @@ class ThermalModel:
     #: Names of the columns of :meth:`bias_terms`.
     TERMS = ('1', 'd', 'd^2', 'd^3', 'knee', 'dT/dt_nat', 'z - T')
 
-    def vec(self, name):
+    def vec(self, name: str) -> NDArray[np.float64]:
         """Return per-axis attribute ``name`` as a float array (3,)."""
         arr = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (3,)).copy()
         if not np.all(np.isfinite(arr)):
             raise ParameterError(f'{name} must be finite, got {getattr(self, name)!r}')
         return arr
 
-    def check(self):
+    def check(self) -> None:
         """Raise ParameterError naming the first bad constant."""
         for name in ('tau_die_s', 'knee_width_c'):
             if not getattr(self, name) > 0:
@@ -494,7 +506,7 @@ class ThermalModel:
         if not all(tc > 0 for tc in self.bi_corr_times_s):
             raise ParameterError(f'bi_corr_times_s must be > 0, got {self.bi_corr_times_s!r}')
 
-    def bias_coefficients_dps(self):
+    def bias_coefficients_dps(self) -> NDArray[np.float64]:
         """
         Return the gyro drift law's coefficient of every term of :meth:`bias_terms`.
 
@@ -508,7 +520,8 @@ class ThermalModel:
             'bias_dps', 'lin_dps_per_c', 'quad_dps_per_c2', 'cubic_dps_per_c3', 'knee_dps',
             'gradient_dps_per_c_s', 'hysteresis_dps_per_c')])
 
-    def bias_terms(self, die_c, die_rate_nat_c_s, played_c):
+    def bias_terms(self, die_c: ArrayLike, die_rate_nat_c_s: ArrayLike,
+                   played_c: ArrayLike) -> NDArray[np.float64]:
         """
         Return the seven terms of the gyro drift law, one column each (:attr:`TERMS`).
 
@@ -539,7 +552,8 @@ class ThermalModel:
             np.asarray(die_rate_nat_c_s, dtype=float).reshape(-1),
             np.asarray(played_c, dtype=float).reshape(-1) - temp])
 
-    def bias_rad_s(self, die_c, die_rate_nat_c_s, played_c):
+    def bias_rad_s(self, die_c: ArrayLike, die_rate_nat_c_s: ArrayLike,
+                   played_c: ArrayLike) -> NDArray[np.float64]:
         """
         Evaluate the gyro drift law of the module docstring.
 
@@ -561,7 +575,7 @@ class ThermalModel:
         terms = self.bias_terms(die_c, die_rate_nat_c_s, played_c)
         return (terms @ self.bias_coefficients_dps()) * DEG_TO_RAD
 
-    def accel_bias_m_s2(self, die_c):
+    def accel_bias_m_s2(self, die_c: ArrayLike) -> NDArray[np.float64]:
         """
         Evaluate the accelerometer offset law: a cubic in ``d = T - t_ref_c``.
 
@@ -581,7 +595,7 @@ class ThermalModel:
             self.vec('accel_quad_mg_per_c2') + d * self.vec('accel_cubic_mg_per_c3'))))
         return mg * MG_TO_M_S2
 
-    def gauss_markov_std_dps(self):
+    def gauss_markov_std_dps(self) -> float:
         """
         Return the standard deviation q of each Gauss-Markov process (deg/s).
 
@@ -598,11 +612,14 @@ class ThermalModel:
             return 0.0
         taus = np.logspace(-1, 5, 600)
         unit = sum(gauss_markov_avar(taus, 1.0, tc) for tc in self.bi_corr_times_s)
+        assert isinstance(unit, np.ndarray)  # a sum of at least one array
         return float(0.664 * self.bias_instability_dps / np.sqrt(unit.max()))
 
 
 @numba.njit(**JIT_OPTIONS)
-def _lag_play(t, u, tau, r, t0, u0, y0, z0, y_out, z_out):  # pragma: no cover - compiled
+def _lag_play(t: NDArray[np.float64], u: NDArray[np.float64], tau: float, r: float,
+              t0: float, u0: float, y0: float, z0: float, y_out: NDArray[np.float64],
+              z_out: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
     """
     First-order lag of a piecewise-linear input (exact), then the play operator of half-width r.
 
@@ -628,7 +645,8 @@ def _lag_play(t, u, tau, r, t0, u0, y0, z0, y_out, z_out):  # pragma: no cover -
 
 
 @numba.njit(**JIT_OPTIONS)
-def _play(x, r, z0, z_out):  # pragma: no cover - compiled
+def _play(x: NDArray[np.float64], r: float, z0: float,
+          z_out: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
     """Run the play operator of half-width r: z = min(max(z_prev, x - r), x + r), from z0."""
     zp = z0
     for k in range(x.shape[0]):
@@ -636,7 +654,8 @@ def _play(x, r, z0, z_out):  # pragma: no cover - compiled
         z_out[k] = zp
 
 
-def play_operator(x, half_width, *, start=None):
+def play_operator(x: ArrayLike, half_width: float, *,
+                  start: float | None = None) -> NDArray[np.float64]:
     """
     Apply the play (backlash) operator of half-width ``half_width`` to a sequence.
 
@@ -719,7 +738,9 @@ class ThermalStream:
 
     """
 
-    def __init__(self, model=None, profile=None, *, compress=1.0, room_c=None):
+    def __init__(self, model: ThermalModel | None = None,
+                 profile: OvenProfile | ShapeProfile | None = None, *, compress: float = 1.0,
+                 room_c: float | None = None) -> None:
         self.model = ThermalModel() if model is None else model
         self.model.check()
         profile = OvenProfile() if profile is None else profile
@@ -731,18 +752,18 @@ class ThermalStream:
             raise ParameterError(f'compress must be finite and > 0, got {compress!r}')
         self.compress = float(compress)
         self.tau_s = self.model.tau_die_s / self.compress
-        self._state = None
+        self._state: tuple[float, float, float, float] | None = None
 
     @property
-    def duration_s(self):
+    def duration_s(self) -> float:
         """float: length of the compressed profile (s)."""
         return float(self._times[-1]) / self.compress
 
-    def oven_c(self, t_s):
+    def oven_c(self, t_s: ArrayLike) -> NDArray[np.float64]:
         """Oven temperature (degC) at real times ``t_s`` (s), self-heating not included."""
         return np.interp(np.asarray(t_s, dtype=float) * self.compress, self._times, self._temps)
 
-    def step(self, t_s):
+    def step(self, t_s: ArrayLike) -> ThermalSamples:
         """
         Advance to the times ``t_s`` and return the thermal state there.
 
@@ -775,7 +796,7 @@ class ThermalStream:
                               played_c=z, bias_rad_s=bias,
                               accel_bias_m_s2=self.model.accel_bias_m_s2(y))
 
-    def measure_c(self, die_c, rng):
+    def measure_c(self, die_c: ArrayLike, rng: np.random.Generator) -> NDArray[np.float64]:
         """
         Temperature sensor reading: die temperature plus noise, rounded to the LSB.
 
@@ -798,7 +819,8 @@ class ThermalStream:
         return np.round(reading / lsb) * lsb if lsb > 0 else reading
 
 
-def gyro_noise_rad_s(n, rate_hz, model, rng):
+def gyro_noise_rad_s(n: int, rate_hz: float, model: ThermalModel,
+                     rng: np.random.Generator) -> NDArray[np.float64]:
     """
     White rate noise plus the Gauss-Markov sum of the bias-instability floor.
 
@@ -884,7 +906,12 @@ class ThermalTruth:
     shape: str = 'oven'
 
 
-def resolve_timing(profile, *, hours=None, compress=None):
+#: A simulated train/test pair: ``[('train', run, truth), ('test', run, truth)]``.
+Pair = list[tuple[str, ThermalRun, ThermalTruth]]
+
+
+def resolve_timing(profile: OvenProfile | ShapeProfile, *, hours: float | None = None,
+                   compress: float | None = None) -> tuple[float, float]:
     """
     Turn ``hours`` and ``compress`` into (duration_s, compress).
 
@@ -915,14 +942,18 @@ def resolve_timing(profile, *, hours=None, compress=None):
     if hours is None and compress is None:
         return natural, 1.0
     if compress is None:
+        assert hours is not None
         return hours * 3600.0, natural / (hours * 3600.0)
     if hours is None:
         return natural / compress, float(compress)
     return hours * 3600.0, float(compress)
 
 
-def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, profile=None,
-                 temperature_rate_hz=TEMPERATURE_RATE_HZ, name=''):
+def simulate_run(*, rng: np.random.Generator, rate_hz: float = 100.0, hours: float | None = None,
+                 compress: float | None = None, model: ThermalModel | None = None,
+                 profile: OvenProfile | ShapeProfile | None = None,
+                 temperature_rate_hz: float = TEMPERATURE_RATE_HZ,
+                 name: str = '') -> tuple[ThermalRun, ThermalTruth]:
     """
     Simulate one static run: the ThermalRun a recording would give, and the truth.
 
@@ -996,9 +1027,9 @@ def simulate_run(*, rng, rate_hz=100.0, hours=None, compress=None, model=None, p
     return run, truth
 
 
-def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START_NS,
-                  imu_topic='/imu/data_raw', temperature_topic='/imu/temperature',
-                  frame_id='imu_link'):
+def write_run_bag(path: StrPath, run: ThermalRun, truth: ThermalTruth, *, storage: str = 'sqlite3',
+                  start_ns: int = DEFAULT_START_NS, imu_topic: str = '/imu/data_raw',
+                  temperature_topic: str = '/imu/temperature', frame_id: str = 'imu_link') -> Path:
     """
     Write a simulated run as a rosbag2: ``sensor_msgs/Imu`` and ``sensor_msgs/Temperature``.
 
@@ -1052,7 +1083,7 @@ def write_run_bag(path, run, truth, *, storage='sqlite3', start_ns=DEFAULT_START
     return Path(path)
 
 
-def truth_arrays(run, truth):
+def truth_arrays(run: ThermalRun, truth: ThermalTruth) -> dict[str, Any]:
     """
     Return the arrays of a run's truth as saved in ``<label>_truth.npz``.
 
@@ -1080,8 +1111,11 @@ def truth_arrays(run, truth):
             'shape': truth.shape}
 
 
-def simulate_pair(*, seed, rate_hz=100.0, hours=None, compress=None, model=None, profile=None,
-                  test_profile=None, temperature_rate_hz=TEMPERATURE_RATE_HZ):
+def simulate_pair(*, seed: int, rate_hz: float = 100.0, hours: float | None = None,
+                  compress: float | None = None, model: ThermalModel | None = None,
+                  profile: OvenProfile | ShapeProfile | None = None,
+                  test_profile: OvenProfile | ShapeProfile | None = None,
+                  temperature_rate_hz: float = TEMPERATURE_RATE_HZ) -> Pair:
     """
     Simulate two runs of one device in one time compression: train and (held-out) test.
 
@@ -1134,8 +1168,10 @@ def simulate_pair(*, seed, rate_hz=100.0, hours=None, compress=None, model=None,
     return out
 
 
-def pair_settings(pair, *, seed, rate_hz, hours, storage, model, profile, test_profile,
-                  temperature_rate_hz):
+def pair_settings(pair: Pair, *, seed: int, rate_hz: float, hours: float | None, storage: str,
+                  model: ThermalModel, profile: OvenProfile | ShapeProfile,
+                  test_profile: OvenProfile | ShapeProfile | None,
+                  temperature_rate_hz: float) -> dict[str, Any]:
     """
     Return the settings of a simulated pair as written to ``simulation.json``.
 
@@ -1165,7 +1201,8 @@ def pair_settings(pair, *, seed, rate_hz, hours, storage, model, profile, test_p
             'test_profile': dict(asdict(test), shape=test.shape)}
 
 
-def write_pair(out_dir, pair, settings, *, storage='sqlite3'):
+def write_pair(out_dir: StrPath, pair: Pair, settings: Mapping[str, Any], *,
+               storage: str = 'sqlite3') -> tuple[Path, ...]:
     """
     Write a simulated pair: ``train/``, ``test/`` bags, their truth and ``simulation.json``.
 
@@ -1195,7 +1232,7 @@ def write_pair(out_dir, pair, settings, *, storage='sqlite3'):
     return tuple(paths)
 
 
-def load_truth(path):
+def load_truth(path: StrPath) -> ThermalTruth:
     """
     Read a ``<label>_truth.npz`` back into a :class:`ThermalTruth`.
 
@@ -1217,7 +1254,7 @@ def load_truth(path):
     return ThermalTruth(**kw)
 
 
-def model_from_settings(settings):
+def model_from_settings(settings: Mapping[str, Any]) -> ThermalModel:
     """
     Rebuild the :class:`ThermalModel` of a ``simulation.json`` document.
 
@@ -1232,14 +1269,17 @@ def model_from_settings(settings):
 
     """
     fields = ThermalModel.__dataclass_fields__
-    kw = {k: tuple(v) if isinstance(v, list) else v
-          for k, v in settings['model'].items() if k in fields}
+    kw: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v
+                          for k, v in settings['model'].items() if k in fields}
     return ThermalModel(**kw)
 
 
-def write_train_test(out_dir, *, seed, hours=None, rate_hz=100.0, compress=None,
-                     storage='sqlite3', model=None, profile=None, test_profile=None,
-                     temperature_rate_hz=TEMPERATURE_RATE_HZ):
+def write_train_test(out_dir: StrPath, *, seed: int, hours: float | None = None,
+                     rate_hz: float = 100.0, compress: float | None = None,
+                     storage: str = 'sqlite3', model: ThermalModel | None = None,
+                     profile: OvenProfile | ShapeProfile | None = None,
+                     test_profile: OvenProfile | ShapeProfile | None = None,
+                     temperature_rate_hz: float = TEMPERATURE_RATE_HZ) -> tuple[Path, ...]:
     """
     Simulate a train/test pair (:func:`simulate_pair`) and write them (:func:`write_pair`).
 

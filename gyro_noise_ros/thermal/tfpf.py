@@ -31,13 +31,16 @@ mirrored by ``window // 2`` samples at both ends.
 from gyro_noise_ros.errors import InputDataError, ParameterError
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: Samples per FFT batch (bounds memory: batch x nfft complex values).
 _BATCH = 8192
 
 
 @numba.njit(cache=True)
-def _fill_kernel(phase, start, count, half, h, kernel):  # pragma: no cover - JIT
+def _fill_kernel(phase: NDArray[np.float64], start: int, count: int, half: int,
+                 h: NDArray[np.float64],
+                 kernel: NDArray[np.complex128]) -> None:  # pragma: no cover - JIT
     """Write h(tau) z(n + tau) z*(n - tau) for ``count`` centres from ``start`` into rows."""
     nfft = kernel.shape[1]
     for r in range(count):
@@ -50,7 +53,8 @@ def _fill_kernel(phase, start, count, half, h, kernel):  # pragma: no cover - JI
 
 
 @numba.njit(cache=True)
-def _peaks(spec, count, out):  # pragma: no cover - JIT
+def _peaks(spec: NDArray[np.float64], count: int,
+           out: NDArray[np.float64]) -> None:  # pragma: no cover - JIT
     """Write the refined peak bin of each of the first ``count`` rows of ``spec`` into out."""
     nfft = spec.shape[1]
     for r in range(count):
@@ -65,7 +69,8 @@ def _peaks(spec, count, out):  # pragma: no cover - JIT
         out[r] = best + (0.5 * (y0 - y2) / den if den < 0.0 else 0.0)
 
 
-def tfpf(signal, *, window=31, band=(0.05, 0.45), nfft=None):
+def tfpf(signal: ArrayLike, *, window: int = 31, band: tuple[float, float] = (0.05, 0.45),
+         nfft: int | None = None) -> NDArray[np.float64]:
     """
     Denoise a signal by time-frequency peak filtering.
 

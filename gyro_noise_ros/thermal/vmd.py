@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from gyro_noise_ros.errors import InputDataError, ParameterError
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 import scipy.fft
 
 #: Accepted values of ``init``.
@@ -66,7 +67,9 @@ class VmdResult:
 
 
 @numba.njit(cache=True, fastmath=False)
-def _update_centres(omega, num, den, diff, old_norm, fix_dc):  # pragma: no cover - JIT
+def _update_centres(omega: NDArray[np.float64], num: NDArray[np.float64], den: NDArray[np.float64],
+                    diff: NDArray[np.float64], old_norm: NDArray[np.float64],
+                    fix_dc: bool) -> float:  # pragma: no cover - JIT
     """Set each centre frequency to its mode's spectral centroid (eq. 6); return eq. 7's sum."""
     total = 0.0
     for k in range(omega.size):
@@ -79,7 +82,9 @@ def _update_centres(omega, num, den, diff, old_norm, fix_dc):  # pragma: no cove
 
 
 @numba.njit(cache=True, fastmath=False)
-def _admm_sweep(f_hat, freqs, u, lam, omega, alpha, tau, fix_dc):  # pragma: no cover - JIT
+def _admm_sweep(f_hat: NDArray[np.complex128], freqs: NDArray[np.float64],
+                u: NDArray[np.complex128], lam: NDArray[np.complex128], omega: NDArray[np.float64],
+                alpha: float, tau: float, fix_dc: bool) -> float:  # pragma: no cover - JIT
     """Run one ADMM iteration in place; return sum_k ||du_k||^2 / ||u_k||^2 (eq. 7)."""
     nbins, k_modes = u.shape
     num = np.zeros(k_modes)
@@ -112,7 +117,9 @@ def _admm_sweep(f_hat, freqs, u, lam, omega, alpha, tau, fix_dc):  # pragma: no 
 
 
 @numba.njit(cache=True, fastmath=False)
-def _exact_sweep(f_hat, freqs, u, omega, alpha, fix_dc):  # pragma: no cover - JIT
+def _exact_sweep(f_hat: NDArray[np.complex128], freqs: NDArray[np.float64],
+                 u: NDArray[np.complex128], omega: NDArray[np.float64], alpha: float,
+                 fix_dc: bool) -> float:  # pragma: no cover - JIT
     """Solve the modes exactly for the current centre frequencies (tau = 0), then update them."""
     nbins, k_modes = u.shape
     num = np.zeros(k_modes)
@@ -142,7 +149,7 @@ def _exact_sweep(f_hat, freqs, u, omega, alpha, fix_dc):  # pragma: no cover - J
     return _update_centres(omega, num, den, diff, old_norm, fix_dc)
 
 
-def mirror_extend(signal):
+def mirror_extend(signal: ArrayLike) -> tuple[NDArray[np.float64], int]:
     """
     Mirror a signal at both ends as the VMD reference code does; return (extended, start).
 
@@ -154,7 +161,8 @@ def mirror_extend(signal):
     return np.concatenate([x[:half][::-1], x, x[half:][::-1]]), half
 
 
-def initial_center_freqs(k, init, n_ext, *, dc=False, rng=None):
+def initial_center_freqs(k: int, init: str, n_ext: int, *, dc: bool = False,
+                         rng: np.random.Generator | int | None = None) -> NDArray[np.float64]:
     """
     Return the starting centre frequencies (cycles/sample) of :func:`vmd`.
 
@@ -176,8 +184,10 @@ def initial_center_freqs(k, init, n_ext, *, dc=False, rng=None):
     return omega
 
 
-def vmd(signal, *, k, alpha, tau=0.0, tol=1e-7, init='uniform', max_iter=500, dc=False,
-        rng=None, center_freqs=None, solver='admm', workers=1):
+def vmd(signal: ArrayLike, *, k: int, alpha: float, tau: float = 0.0, tol: float = 1e-7,
+        init: str = 'uniform', max_iter: int = 500, dc: bool = False,
+        rng: np.random.Generator | int | None = None, center_freqs: ArrayLike | None = None,
+        solver: str = 'admm', workers: int = 1) -> VmdResult:
     """
     Decompose a signal into ``k`` band-limited modes by variational mode decomposition.
 

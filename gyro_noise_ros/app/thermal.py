@@ -656,8 +656,8 @@ def _apply_figures(out: Path, run: Any, processed: np.ndarray, method: str,
     from ..thermal import report
 
     name = method
-    figs = [('Temperature and raw output (cf. Fig. 10)',
-             report.plot_run(out / 'fig10_run.png', run))]
+    figs: _Figures = [('Temperature and raw output (cf. Fig. 10)',
+                       report.plot_run(out / 'fig10_run.png', run))]
     fig13 = report.plot_mode_classes(out / 'fig13_classes.png', info,
                                      title=f'{run.name}: sample entropy and class of each mode')
     if fig13 is not None:

@@ -62,7 +62,8 @@ def _repair(argv: list[str]) -> int:
     res = repair_bag(args.bag, args.out, storage=args.storage)
     for topic, msgtype, count in res.topics:
         print(f'{topic}  {msgtype}  {count} messages')
-    span = ((res.end_ns - res.start_ns) / 1e9) if res.messages else 0.0
+    span = ((res.end_ns - res.start_ns) / 1e9
+            if res.start_ns is not None and res.end_ns is not None else 0.0)
     print(f'{PROG}: wrote {res.messages} messages ({span:.3f} s) to {res.out} ({res.storage})',
           flush=True)
     return 0

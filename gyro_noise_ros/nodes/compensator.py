@@ -294,6 +294,7 @@ class ImuCompensatorNode(Node):
               stamp_ns: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> None:
         if self.thermal is not None:
             offset = self.thermal.drift_at(stamp_ns)
+            assert offset is not None  # the gate releases samples only after a temperature
             gyro -= offset
             self._offset = offset[-1]
         if self.thermal_accel is not None:

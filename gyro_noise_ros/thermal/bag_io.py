@@ -100,7 +100,7 @@ def _label(path: StrPath) -> str:
 
 
 def _pick_temperature_topic(reader: ImuBagReader, requested: str | None) -> str:
-    if requested is not None or reader.temperature_topic is not None:
+    if reader.temperature_topic is not None:  # always so when one was requested
         return reader.temperature_topic
     src = reader._open_source()
     names = sorted(n for n, (kind, _) in src.topics().items() if kind == TEMPERATURE_MSGTYPE)
@@ -156,7 +156,9 @@ def read_thermal_run(path: StrPath, *, topic: str | None = None,
             stamps.append(batch.stamp_ns)
             gyros.append(batch.gyro)
             accels.append(batch.accel)
-        temp_stamp, temp = reader.read_temperature()
+        temperatures = reader.read_temperature()
+        assert temperatures is not None  # the reader has the topic picked above
+        temp_stamp, temp = temperatures
         storage, imu_topic = reader.storage, reader.topic
     where = f'bag {str(path)!r}'
     stamp = np.concatenate(stamps)

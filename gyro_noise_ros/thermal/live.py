@@ -202,11 +202,11 @@ class LiveModel:
 
     """
 
-    method: object
+    method: Any  # a ThermalMethod; the node also calls members outside that protocol
     range_c: Optional[tuple] = None
     margin_c: Optional[float] = None
     rate_range_c_s: Optional[tuple] = None
-    accel: object = None
+    accel: Any = None  # a TemperaturePolynomial or None
     notes: tuple = field(default_factory=tuple)
 
 

@@ -351,7 +351,8 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
                 residual = meas.rate - sum(det.values()) if det else meas.rate
                 ctx = Context(m, residual, layout, None, None, {})
                 params = effect.estimate(ctx)
-                det[name] = effect.term(params, n, rate_hz, None, ctx)
+                if params is not None:
+                    det[name] = effect.term(params, n, rate_hz, None, ctx)
             if params is None:
                 break
             accepted.append((effect, params))

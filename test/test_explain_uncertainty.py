@@ -171,6 +171,16 @@ def test_stderr_shrinks_with_the_record_length():
     assert 5.3 <= ratio[('sinusoid', 'frequency_hz')] <= 12.0, ratio
 
 
+def test_coverage_counts_a_deterministic_effect_without_an_estimate_as_not_fitted(monkeypatch):
+    # an estimator that finds nothing (Sinusoid.estimate returns None without a usable peak) must
+    # count the record as not fitted, not hand None to the effect's simulation term
+    from gyro_noise_ros.explain import synthetic
+
+    monkeypatch.setattr(BiasDrift, 'estimate', lambda self, ctx, near=None: None)
+    out = synthetic.coverage(('bias_drift',), [1, 2], n=8192, replicates=5)
+    assert out == {'_not_fitted': 2}
+
+
 def test_summarise_flags_what_the_bootstrap_cannot_resolve():
     rng = np.random.default_rng(0)
     good = unc.summarise(1.0, 1.0 + 0.1 * rng.standard_normal(20), unit='s', kind='scale')

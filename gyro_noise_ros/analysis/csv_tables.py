@@ -20,12 +20,20 @@ edge and its unit is in the column name (``bias_deg_s``, ``variance_deg2_s2``, `
 floats are written losslessly (``repr``). The columns are documented in ``docs/offline_tool.md``.
 """
 
+from collections.abc import Iterable
 import csv
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
+from ..outputs import StrPath
 from ..units import RAD_TO_DEG
+
+if TYPE_CHECKING:  # annotations only: a renderer needs no engine at run time
+    from ..core.allan import AllanResult
+    from ..core.engine import ChunkResult
 
 __all__ = ['ALLAN_COLUMNS', 'CHUNK_COLUMNS', 'ChunkCsvWriter', 'allan_curve', 'write_allan_csv']
 
@@ -41,8 +49,11 @@ CHUNK_COLUMNS = ('bag', 'axis', 'chunk', 'status', 't_start_s', 't_mid_s', 'stam
 #: Columns of allan.csv, in order.
 ALLAN_COLUMNS = ('bag', 'axis', 'tau_s', 'adev_deg_s', 'ci_low_deg_s', 'ci_high_deg_s', 'n')
 
+#: One Allan curve of allan.csv: bag, axis, tau (s), deviation and its interval (rad/s), terms.
+AllanEntry = tuple[str, str, NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any]]
 
-def _num(value):
+
+def _num(value: float) -> str:
     """Format a float losslessly (repr), NaN as 'nan'."""
     value = float(value)
     return repr(value) if math.isfinite(value) else 'nan'
@@ -59,13 +70,13 @@ class ChunkCsvWriter:
 
     """
 
-    def __init__(self, path):
+    def __init__(self, path: StrPath) -> None:
         self._fh = open(path, 'w', newline='')  # noqa: SIM115 - closed in close()
         self._csv = csv.writer(self._fh)
         self._csv.writerow(CHUNK_COLUMNS)
         self.rows = 0
 
-    def write(self, bag, result):
+    def write(self, bag: str, result: 'ChunkResult') -> None:
         """
         Append one :class:`..core.engine.ChunkResult` of bag ``bag``.
 
@@ -87,12 +98,12 @@ class ChunkCsvWriter:
                             _num(r.temperature_c), r.message))
         self.rows += 1
 
-    def close(self):
+    def close(self) -> None:
         """Close the file."""
         self._fh.close()
 
 
-def write_allan_csv(path, entries):
+def write_allan_csv(path: StrPath, entries: Iterable[AllanEntry]) -> None:
     """
     Write allan.csv.
 
@@ -113,7 +124,9 @@ def write_allan_csv(path, entries):
                             _num(lo[i] * RAD_TO_DEG), _num(hi[i] * RAD_TO_DEG), int(n[i])))
 
 
-def allan_curve(result):
+def allan_curve(result: 'AllanResult') -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                NDArray[np.float64], NDArray[np.float64],
+                                                NDArray[np.int64]]:
     """
     Return (tau_s, adev, ci_low, ci_high, n) arrays of an Allan result (rad/s), NaN-free rows only.
 

@@ -19,8 +19,13 @@ The analogues of paper 000's Figures 2-10, converted to deg/s at this edge; matp
 by :mod:`..plotting` (Agg backend, no display) and imported only when a figure is drawn.
 """
 
-import numpy as np
+from collections.abc import Mapping, Sequence
+from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..outputs import StrPath
 from ..plotting import pyplot, save_figure
 from ..units import RAD_TO_DEG
 
@@ -29,7 +34,8 @@ __all__ = ['allan_fit_lines', 'plot_allan', 'plot_curves', 'plot_per_chunk']
 _DEG2 = RAD_TO_DEG ** 2
 
 
-def plot_per_chunk(path, series, *, quantity):
+def plot_per_chunk(path: StrPath, series: Mapping[str, Sequence[tuple[str, ArrayLike, ArrayLike]]],
+                   *, quantity: str) -> bool:
     """
     Plot bias or variance per chunk over time, one panel per axis, bags overlaid (paper Figs. 2-5).
 
@@ -53,7 +59,8 @@ def plot_per_chunk(path, series, *, quantity):
         True when the figure was written.
 
     """
-    def finite(t, v):
+    def finite(t: ArrayLike,
+               v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
         ok = np.isfinite(t) & np.isfinite(v)
         return t[ok], v[ok]
@@ -92,7 +99,8 @@ def plot_per_chunk(path, series, *, quantity):
     return True
 
 
-def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
+def plot_curves(path: StrPath, alphas: NDArray[np.floating[Any]], chunks: NDArray[Any],
+                var_curves: ArrayLike, j_curves: ArrayLike, *, title: str) -> None:
     """
     Plot var(alpha) and J(alpha) stacked over chunks as heat maps (paper Figs. 6-9).
 
@@ -136,7 +144,10 @@ def plot_curves(path, alphas, chunks, var_curves, j_curves, *, title):
     save_figure(fig, path, dpi=110, tight=True)
 
 
-def plot_allan(path, series, *, confidence=0.683):
+def plot_allan(path: StrPath,
+               series: Mapping[str, Sequence[tuple[str, ArrayLike, ArrayLike, ArrayLike, ArrayLike,
+                                                   Sequence[tuple[str, ArrayLike, ArrayLike]]]]],
+               *, confidence: float = 0.683) -> None:
     """
     Overlay every bag's Allan deviation with confidence bands and fitted terms (paper Fig. 10).
 
@@ -175,7 +186,8 @@ def plot_allan(path, series, *, confidence=0.683):
     save_figure(fig, path, dpi=110, tight=True)
 
 
-def allan_fit_lines(terms, tau):
+def allan_fit_lines(terms: object,
+                    tau: NDArray[Any]) -> list[tuple[str, NDArray[Any], NDArray[np.float64]]]:
     """
     Return ``[(name, tau_s, adev_rad_s)]`` curves of the fitted noise terms (Allan figure).
 

@@ -19,8 +19,15 @@ imu.yaml of an analysis: one sensor's noise parameters as Kalibr takes them (SI)
 the record could not resolve; :func:`write_imu_yaml` writes them with the notes as YAML comments.
 """
 
+from collections.abc import Iterable, Mapping
 import math
 from pathlib import Path
+from typing import Any, TYPE_CHECKING
+
+from ..outputs import StrPath
+
+if TYPE_CHECKING:  # annotations only: a renderer needs no readout code at run time
+    from ..core.readout import AllanReadout
 
 __all__ = ['DEFAULT_IMU_TOPIC', 'kalibr_noise', 'write_imu_yaml']
 
@@ -28,7 +35,8 @@ __all__ = ['DEFAULT_IMU_TOPIC', 'kalibr_noise', 'write_imu_yaml']
 DEFAULT_IMU_TOPIC = '/imu/data_raw'
 
 
-def kalibr_noise(readouts, *, record_s=None):
+def kalibr_noise(readouts: Iterable['AllanReadout | None'], *,
+                 record_s: float | None = None) -> dict[str, Any]:
     """
     Return one sensor's Kalibr noise parameters from its axes' readouts, with the notes to say.
 
@@ -55,8 +63,8 @@ def kalibr_noise(readouts, *, record_s=None):
     dens = [r for r in rs if math.isfinite(r.arw_rad_per_sqrt_s) and r.arw_rad_per_sqrt_s > 0]
     walks = [(r.kalibr(), r) for r in rs]
     walks = [(k, r) for k, r in walks if math.isfinite(k['random_walk']) and k['random_walk'] > 0]
-    out = {'noise_density': None, 'random_walk': None, 'noise_density_note': '',
-           'random_walk_note': ''}
+    out: dict[str, Any] = {'noise_density': None, 'random_walk': None, 'noise_density_note': '',
+                           'random_walk_note': ''}
     if dens:
         best = max(dens, key=lambda r: r.arw_rad_per_sqrt_s)
         out['noise_density'] = best.arw_rad_per_sqrt_s
@@ -71,8 +79,8 @@ def kalibr_noise(readouts, *, record_s=None):
         out['random_walk'] = k['random_walk']
         length = f' ({record_s:.4g} s)' if record_s is not None and math.isfinite(record_s) else ''
         bound = 'K <= upper ADEV bound at the longest tau x sqrt(3 / tau)'
-        fitted = r.rate_random_walk_rad_per_s_sqrt_s
-        fitted = (f'the fitted K, {fitted:.3g}, is smaller' if math.isfinite(fitted) and fitted > 0
+        k_fit = r.rate_random_walk_rad_per_s_sqrt_s
+        fitted = (f'the fitted K, {k_fit:.3g}, is smaller' if math.isfinite(k_fit) and k_fit > 0
                   else 'the fit finds none')
         short = [rr for kk, rr in walks if kk['too_short']]
         if short:
@@ -86,8 +94,9 @@ def kalibr_noise(readouts, *, record_s=None):
     return out
 
 
-def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope, accelerometer=None,
-                   rostopic_note='', source=''):
+def write_imu_yaml(path: StrPath, *, rostopic: str, update_rate_hz: float,
+                   gyroscope: Mapping[str, Any], accelerometer: Mapping[str, Any] | None = None,
+                   rostopic_note: str = '', source: str = '') -> None:
     """
     Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units), notes as YAML comments.
 
@@ -109,10 +118,10 @@ def write_imu_yaml(path, *, rostopic, update_rate_hz, gyroscope, accelerometer=N
         Comment line saying which bag and axes the numbers come from.
 
     """
-    def val(v):
+    def val(v: float | None) -> str:
         return 'null' if v is None or not math.isfinite(float(v)) else repr(float(v))
 
-    def entry(key, value, unit, note):
+    def entry(key: str, value: float | None, unit: str, note: str) -> list[str]:
         return ([f'# {key}: {note}'] if note else []) + [f'{key}: {val(value)}  # {unit}']
 
     lines = [

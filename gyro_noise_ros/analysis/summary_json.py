@@ -20,14 +20,18 @@ this edge and named with their unit (``bias_mean_deg_s``, ``offset_drift_deg_s_p
 are documented in ``docs/offline_tool.md``.
 """
 
+from collections.abc import Mapping
 import json
 import math
 from pathlib import Path
+from typing import Any, SupportsFloat
 
 import numpy as np
 
-from ..core.engine import rad_s2_to_deg_s_per_h
-from ..core.health import reference_dict, ROBUST_JSON_KEY
+from ..core.engine import AxisSummary, rad_s2_to_deg_s_per_h
+from ..core.health import HealthVerdict, reference_dict, ROBUST_JSON_KEY
+from ..core.readout import AllanReadout
+from ..outputs import StrPath
 from ..units import RAD_TO_DEG
 
 __all__ = ['accelerometer_readout_dict', 'allan_terms_dict', 'axis_summary_dict', 'json_num',
@@ -36,13 +40,14 @@ __all__ = ['accelerometer_readout_dict', 'allan_terms_dict', 'axis_summary_dict'
 _DEG2 = RAD_TO_DEG ** 2
 
 
-def json_num(value):
+def json_num(value: SupportsFloat) -> float | None:
     """Return ``value`` as a float for JSON, NaN and infinities as None."""
     value = float(value)
     return value if math.isfinite(value) else None
 
 
-def axis_summary_dict(summary, *, verdict=None):
+def axis_summary_dict(summary: AxisSummary, *,
+                      verdict: HealthVerdict | None = None) -> dict[str, Any]:
     """
     Turn an :class:`..core.engine.AxisSummary` into the per-axis entry of summary.json.
 
@@ -61,6 +66,7 @@ def axis_summary_dict(summary, *, verdict=None):
     """
     seq = summary.sequence
     d = seq.drift
+    readout = getattr(summary, 'readout', None)
     out = {
         'chunks': seq.chunks,
         'chunks_nan': summary.chunks_nan,
@@ -97,8 +103,8 @@ def axis_summary_dict(summary, *, verdict=None):
         'temperature_mean_c': json_num(summary.temperature_mean_c),
         'allan': allan_terms_dict(summary.noise_terms),
         'allan_datasheet': (
-            summary.readout.as_dict()
-            if getattr(summary, 'readout', None) is not None
+            readout.as_dict()
+            if readout is not None
             else None
         ),
     }
@@ -111,7 +117,7 @@ def axis_summary_dict(summary, *, verdict=None):
     return out
 
 
-def accelerometer_readout_dict(readout):
+def accelerometer_readout_dict(readout: AllanReadout | None) -> dict[str, Any] | None:
     """
     Return the accelerometer entry of summary.json from an axis' readout (SI, units in keys).
 
@@ -150,7 +156,7 @@ def accelerometer_readout_dict(readout):
     }.items()}
 
 
-def allan_terms_dict(terms):
+def allan_terms_dict(terms: Any) -> dict[str, Any] | None:
     """
     Return the fitted Allan noise terms as a JSON dict (SI values, units in the keys), or None.
 
@@ -173,7 +179,7 @@ def allan_terms_dict(terms):
         raw = terms
     else:
         raw = {k: getattr(terms, k) for k in dir(terms) if not k.startswith('_')}
-    out = {}
+    out: dict[str, Any] = {}
     for key, value in raw.items():
         if callable(value):
             continue
@@ -187,7 +193,7 @@ def allan_terms_dict(terms):
     return out
 
 
-def write_json(path, doc):
+def write_json(path: StrPath, doc: Mapping[str, Any]) -> None:
     """
     Write ``doc`` as indented JSON (NaN must already be None).
 

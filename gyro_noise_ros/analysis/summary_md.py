@@ -20,13 +20,19 @@ objects, so the Markdown cannot say a number the JSON does not hold. :func:`in_s
 reused by the HTML report; :func:`readout_text` is the tool's printed one-line readout.
 """
 
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
 from ..core.health import drift_t_threshold
+
+#: The rows of one axis' tables: (bag label, that axis' entry of summary.json).
+Rows = Sequence[tuple[str, Mapping[str, Any]]]
 
 __all__ = ['IN_SHORT_DEFINITIONS', 'fmt', 'in_short_markdown', 'modes_text', 'readout_text',
            'summary_markdown']
 
 
-def readout_text(sheet):
+def readout_text(sheet: Mapping[str, Any]) -> str:
     """
     Return the readout's datasheet numbers in one line (the tool's printed summary).
 
@@ -48,14 +54,14 @@ def readout_text(sheet):
             f"{fmt(sheet.get('arw_deg_per_sqrt_h'), '.3g')} deg/sqrt(h)")
 
 
-def fmt(value, spec):
+def fmt(value: object, spec: str) -> str:
     """Format ``value`` with ``spec``, None as 'n/a' (a table cell or a printed number)."""
     if value is None:
         return 'n/a'
     return format(value, spec)
 
 
-def modes_text(modes):
+def modes_text(modes: Iterable[Mapping[str, Any]]) -> str:
     """Return separate modes of the fractional order as ``0.123 (4 chunks), ...``."""
     return ', '.join(f"{m['order']:.3f} ({m['chunks']} chunks)" for m in modes)
 
@@ -84,7 +90,7 @@ IN_SHORT_DEFINITIONS = (
 )
 
 
-def _drift_text(a):
+def _drift_text(a: Mapping[str, Any]) -> str | None:
     drift, se = a.get('offset_drift_deg_s_per_h'), a.get('offset_drift_stderr_deg_s_per_h')
     if drift is None:
         return None
@@ -99,7 +105,7 @@ def _drift_text(a):
             'false-alarm rate)')
 
 
-def _plain_summary(b, axis, a):
+def _plain_summary(b: Mapping[str, Any], axis: str, a: Mapping[str, Any]) -> str:
     """One plain-language paragraph for one bag and axis (people first, tables after)."""
     rate = b.get('rate_hz')
     parts = [f"**{b['label']}, axis {axis}:** {b['samples']} samples over "
@@ -142,7 +148,7 @@ def _plain_summary(b, axis, a):
     return '; '.join(parts) + '.'
 
 
-def in_short_markdown(doc):
+def in_short_markdown(doc: Mapping[str, Any]) -> str:
     """
     Return the plain-language "In short" section of a summary.json document, as Markdown.
 
@@ -183,7 +189,7 @@ _CUSTOMARY = (
 )
 
 
-def summary_markdown(doc):
+def summary_markdown(doc: Mapping[str, Any]) -> str:
     """
     Render a plain-language summary, the paper's Tables 3-6 and the counts as Markdown.
 
@@ -221,7 +227,7 @@ def summary_markdown(doc):
     return '\n'.join(lines)
 
 
-def _method_lines(doc):
+def _method_lines(doc: Mapping[str, Any]) -> list[str]:
     opts = doc['options']
     return [
         '## Method',
@@ -239,7 +245,7 @@ def _method_lines(doc):
     ]
 
 
-def _drift_lines(rows):
+def _drift_lines(rows: Rows) -> list[str]:
     lines = ['### How fast the bias moves: offset drift of the chunk bias '
              '(paper 000 Table 3)', '',
              # The paper tabulates magnitudes; the sign is kept beside them so a
@@ -255,7 +261,7 @@ def _drift_lines(rows):
     return lines
 
 
-def _variance_lines(rows):
+def _variance_lines(rows: Rows) -> list[str]:
     lines = ['', '### How large the noise is: variance within chunks (paper 000 Table 4)',
              '',
              '| Sequence | Mean noise variance ((deg/s)^2) | Variance of noise variance '
@@ -266,7 +272,7 @@ def _variance_lines(rows):
     return lines
 
 
-def _order_lines(rows, *, num, method, key):
+def _order_lines(rows: Rows, *, num: int, method: str, key: str) -> list[str]:
     lines = ['', f'### How much memory the noise has: fractional order, {method} '
              f'method (paper 000 Table {num})', '',
              '| Sequence | Estimated order | Variance of estimated order | Ties |',
@@ -283,7 +289,7 @@ def _order_lines(rows, *, num, method, key):
     return lines
 
 
-def _datasheet_lines(rows):
+def _datasheet_lines(rows: Rows) -> list[str]:
     lines = [
         '', '### Allan deviation: the datasheet numbers (customary units)', '',
         'Read off the curve by the one readout (core/readout.py, docs/allan.md): '
@@ -315,7 +321,7 @@ def _datasheet_lines(rows):
     return lines
 
 
-def _model_fit_lines(rows):
+def _model_fit_lines(rows: Rows) -> list[str]:
     """Return the IEEE 952 model fit in customary units, then its every term in SI."""
     lines = [
         '', '### Allan deviation: IEEE 952 model fit (customary units)', '',
@@ -348,7 +354,7 @@ def _model_fit_lines(rows):
     return lines
 
 
-def _health_lines(rows):
+def _health_lines(rows: Rows) -> list[str]:
     if not any('health' in a for _, a in rows):
         return []
     lines = ['', '### Health verdict against the reference', '',
@@ -360,7 +366,7 @@ def _health_lines(rows):
     return lines
 
 
-def _counts_lines(bags):
+def _counts_lines(bags: Sequence[Mapping[str, Any]]) -> list[str]:
     lines = ['## Input counts', '',
              '| Sequence | Topic | Rate (Hz) | Rate method | Stamp jitter (ms) | Duration (s) | '
              'Samples | Lost | ' 'Gaps | Out-of-order stamps | NaN samples | Tail samples |',

@@ -1157,6 +1157,7 @@ def _write_figures(out: Path, alphas: Optional[np.ndarray], per_chunk: Dict[str,
             files.append(out / name)
     for (label, axis), rows in curve_store.items():
         path = out / f'curves_{_safe(label)}_{axis}.png'
+        assert alphas is not None  # curves are computed on the order grid
         plot_curves(path, alphas, np.array([r[0] for r in rows]),
                     np.array([r[1] for r in rows]), np.array([r[2] for r in rows]),
                     title=f'{label}, axis {axis}: var(alpha) and J(alpha) over chunks')

@@ -55,11 +55,13 @@ than with L = 1000.
 
 from dataclasses import asdict, dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 import scipy.optimize
 
-from .signatures import welch
+from .signatures import FloatArray, welch
 from ..core.fractional import DEFAULT_MEMORY, gl_coefficients, OrderIdentifier
 from ..core.simulate import check_stability, FractionalNoise
 
@@ -111,11 +113,11 @@ class BaselineModel:
     chunks_identified: int
     psd_misfit: float
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Plain dict for explain.json."""
         return {k: (float(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
 
-    def generator(self, rng):
+    def generator(self, rng: np.random.Generator) -> FractionalNoise:
         """Return a :class:`~gyro_noise_ros.core.simulate.FractionalNoise` for this model."""
         return FractionalNoise(self.alpha, self.f, self.sigma_w_rad_s, rng=rng,
                                memory=self.memory_sim, sigma_nu=self.sigma_nu_rad_s,
@@ -130,7 +132,7 @@ STABLE_SUM = 1.0 - 1e-3
 
 
 @lru_cache(maxsize=1)
-def _unit_delay():
+def _unit_delay() -> NDArray[np.complex128]:
     """Return e^{-i w} on the rfft grid of :data:`GAIN_GRID` points (read-only)."""
     out = np.exp(-2j * np.pi * np.arange(GAIN_GRID // 2 + 1) / GAIN_GRID)
     out.flags.writeable = False
@@ -138,14 +140,15 @@ def _unit_delay():
 
 
 @lru_cache(maxsize=32)
-def _gl_spectrum(alpha, memory):
+def _gl_spectrum(alpha: float, memory: int) -> NDArray[np.complex128]:
     """Return the rfft of the GL coefficients c_0..c_L on the grid (read-only, 1 MiB)."""
     out = np.fft.rfft(gl_coefficients(alpha, memory), GAIN_GRID)
     out.flags.writeable = False
     return out
 
 
-def model_gain(alpha, f, memory, freq_hz, rate_hz):
+def model_gain(alpha: float, f: float, memory: int, freq_hz: FloatArray,
+               rate_hz: float) -> FloatArray:
     """
     Return ``1 / |A(e^{i w})|^2`` of the recursion of eq. (2) at the given frequencies.
 
@@ -175,7 +178,7 @@ def model_gain(alpha, f, memory, freq_hz, rate_hz):
     return 1.0 / np.interp(freq_hz, grid, power)
 
 
-def stable(alpha, f, memory):
+def stable(alpha: float, f: float, memory: int) -> bool:
     """
     Return ``core.simulate.check_stability(alpha, f, memory).stable``; cheap when a bound decides.
 
@@ -205,7 +208,8 @@ def stable(alpha, f, memory):
     return check_stability(alpha, f, memory).stable
 
 
-def simulation_memory(alpha, f, rate_hz, *, memory_fit=DEFAULT_MEMORY, tolerance=0.01):
+def simulation_memory(alpha: float, f: float, rate_hz: float, *, memory_fit: int = DEFAULT_MEMORY,
+                      tolerance: float = 0.01) -> int:
     """
     Return the smallest L_sim whose model PSD is within ``tolerance`` of L = ``memory_fit``.
 
@@ -237,7 +241,8 @@ def simulation_memory(alpha, f, rate_hz, *, memory_fit=DEFAULT_MEMORY, tolerance
     return int(memory_fit)
 
 
-def _fit_variances(freq, pxx, gain, rate_hz):
+def _fit_variances(freq: FloatArray, pxx: FloatArray, gain: FloatArray,
+                   rate_hz: float) -> tuple[FloatArray, float]:
     band = freq >= rate_hz / 100.0
     keep = band
     weight = pxx
@@ -253,13 +258,14 @@ def _fit_variances(freq, pxx, gain, rate_hz):
     return coef * rate_hz / 2.0, misfit
 
 
-def _refine_f(alpha, f, memory, freq, pxx, rate_hz):
+def _refine_f(alpha: float, f: float, memory: int, freq: FloatArray, pxx: FloatArray,
+              rate_hz: float) -> float:
     """
     Refine f by the PSD misfit above fs / 100 within +/-0.3.
 
     Keep the identified f if unstable.
     """
-    def misfit(value):
+    def misfit(value: float) -> float:
         return _fit_variances(freq, pxx, model_gain(alpha, value, memory, freq, rate_hz),
                               rate_hz)[1]
 
@@ -271,7 +277,7 @@ def _refine_f(alpha, f, memory, freq, pxx, rate_hz):
     return f
 
 
-def fit_baseline(x, rate_hz):
+def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
     """
     Fit the baseline model to one axis (module doc).
 

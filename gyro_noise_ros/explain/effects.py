@@ -63,11 +63,18 @@ members' mean + 5 sd (:func:`null_exceeded`); the workflow then keeps the candid
 it shrinks the gap.
 """
 
+from collections.abc import Callable, Mapping, Sequence
+from types import SimpleNamespace
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 import scipy.interpolate
 import scipy.optimize
 
-from .signatures import chunk_series, compare, temperature_edges, temperature_rate
+from .inputs import Measurement
+from .signatures import (chunk_series, compare, FloatArray, Layout, Signatures, temperature_edges,
+                         temperature_rate)
 from ..core.simulate import gauss_markov, gauss_markov_avar
 
 
@@ -76,9 +83,12 @@ from ..core.simulate import gauss_markov, gauss_markov_avar
 #: log-normal rule of the bands does not apply; for a chi-square with 1 dof, mean + 5 sd = 8.1 has
 #: a tail of 0.4 %.
 NULL_K = 5.0
+#: An effect's parameters: SI values named with their unit, and private (underscore) entries the
+#: simulation or the bootstrap needs (arrays of measured gaps or intervals, Allan weights).
+Params = dict[str, Any]
 
 
-def null_exceeded(stat, null):
+def null_exceeded(stat: float, null: ArrayLike) -> bool:
     """
     Return True when ``stat`` exceeds the members' values ``null`` (module doc).
 
@@ -86,7 +96,7 @@ def null_exceeded(stat, null):
     ----------
     stat : float
         Statistic of the measurement (>= 0).
-    null : numpy.ndarray
+    null : array_like
         The same statistic on each ensemble member (>= 0).
 
     Returns
@@ -108,7 +118,9 @@ class Context:
 
     Attributes
     ----------
-    meas : Measurement
+    meas : Measurement or types.SimpleNamespace
+        The measurement, or an object with its ``n``, ``rate_hz``, ``t_s``, ``temperature_c``
+        and ``rate`` (a simulated record of :mod:`.uncertainty`).
     residual : numpy.ndarray
         Measurement minus the accepted deterministic terms (rad/s).
     layout : Layout
@@ -119,22 +131,45 @@ class Context:
     accepted : dict
         name -> params of the effects already in the model.
 
+    A context made only to simulate terms and stamps may have None for ``residual``,
+    ``meas_sig`` and ``member_sig``; reading one of them is then a programming error.
+
     """
 
-    def __init__(self, meas, residual, layout, meas_sig, member_sig, accepted):
+    def __init__(self, meas: Measurement | SimpleNamespace, residual: FloatArray | None,
+                 layout: Layout, meas_sig: Signatures | None,
+                 member_sig: Sequence[Signatures] | None, accepted: Mapping[str, Params]) -> None:
         self.meas = meas
-        self.residual = residual
+        self._residual = residual
         self.layout = layout
-        self.meas_sig = meas_sig
-        self.member_sig = member_sig
+        self._meas_sig = meas_sig
+        self._member_sig = member_sig
         self.accepted = accepted
 
     @property
-    def t_nominal(self):
+    def residual(self) -> FloatArray:
+        """Measurement minus the accepted deterministic terms (rad/s)."""
+        assert self._residual is not None, 'this context has no residual'
+        return self._residual
+
+    @property
+    def meas_sig(self) -> Signatures:
+        """Signatures of the measurement."""
+        assert self._meas_sig is not None, 'this context has no measurement signatures'
+        return self._meas_sig
+
+    @property
+    def member_sig(self) -> Sequence[Signatures]:
+        """Signatures of each member of the current model."""
+        assert self._member_sig is not None, 'this context has no ensemble signatures'
+        return self._member_sig
+
+    @property
+    def t_nominal(self) -> FloatArray:
         """Nominal sample times k / rate_hz (s)."""
         return np.arange(self.meas.n) / self.meas.rate_hz
 
-    def members(self, name):
+    def members(self, name: str) -> FloatArray:
         """Member values of signature ``name``, shape (N, points)."""
         return np.array([s[name] for s in self.member_sig])
 
@@ -150,10 +185,10 @@ class Effect:
     n_params = 1
     kind = 'additive'
 
-    def fit(self, ctx):  # pragma: no cover - interface
+    def fit(self, ctx: Context) -> Params | None:  # pragma: no cover - interface
         raise NotImplementedError
 
-    def estimate(self, ctx, near=None):
+    def estimate(self, ctx: Context, near: Params | None = None) -> Params | None:
         """
         Return the parameters the fitter would report, without its detection test.
 
@@ -163,11 +198,18 @@ class Effect:
         """
         return self.fit(ctx)
 
-    def term(self, params, n, rate_hz, rng, ctx):  # pragma: no cover - interface
+    def term(self, params: Params, n: int, rate_hz: float,  # pragma: no cover - interface
+             rng: np.random.Generator | None, ctx: Context) -> FloatArray:
+        """Return the additive term in rad/s, ``n`` samples; stochastic ones draw from ``rng``."""
+        raise NotImplementedError
+
+    def stamps(self, params: Params, n: int, rate_hz: float,  # pragma: no cover - interface
+               rng: np.random.Generator, ctx: Context) -> FloatArray:
+        """Return a member's stamps in s, ``n`` samples (the effects of kind 'stamps')."""
         raise NotImplementedError
 
 
-def _zero_mean(x):
+def _zero_mean(x: FloatArray) -> FloatArray:
     return x - x.mean()
 
 
@@ -186,14 +228,14 @@ class Quantization(Effect):
     n_params = 2
     kind = 'quantization'
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         if ctx.layout.lattice is None:
             return None
         step, offset = ctx.layout.lattice
         return {'step_rad_s': step, 'offset_rad_s': offset}
 
     @staticmethod
-    def apply(params, x):
+    def apply(params: Mapping[str, Any], x: FloatArray) -> FloatArray:
         """Round ``x`` onto the lattice."""
         step, offset = params['step_rad_s'], params['offset_rad_s']
         return offset + step * np.round((x - offset) / step)
@@ -217,7 +259,7 @@ class Sinusoid(Effect):
     n_params = 3
 
     @staticmethod
-    def _line_ratio(x):
+    def _line_ratio(x: FloatArray) -> tuple[NDArray[np.complex128], FloatArray]:
         coef = np.fft.rfft(x - x.mean())
         spec = coef.real ** 2 + coef.imag ** 2
         # local background: median of blocks of 64 bins (a line occupies 1-3 bins), interpolated
@@ -232,7 +274,8 @@ class Sinusoid(Effect):
         return coef, ratio
 
     @staticmethod
-    def line(x, rate_hz, k, coef, start_hz=None):
+    def line(x: FloatArray, rate_hz: float, k: int | None, coef: NDArray[np.complex128] | None,
+             start_hz: float | None = None) -> dict[str, float] | None:
         """
         Fit the sine whose periodogram peak is bin ``k`` (class doc).
 
@@ -260,6 +303,7 @@ class Sinusoid(Effect):
         n = x.shape[0]
         bin_w = 2.0 * np.pi * rate_hz / n
         if start_hz is None:
+            assert k is not None and coef is not None  # needed without start_hz (docstring)
             lo, mid, hi = coef[k - 1], coef[k], coef[k + 1]
             den = 2.0 * mid - lo - hi
             delta = float(np.real((lo - hi) / den)) if den != 0 else 0.0
@@ -290,7 +334,7 @@ class Sinusoid(Effect):
         return {'amplitude_rad_s': float(np.hypot(a, b)),
                 'frequency_hz': float(omega / (2 * np.pi)), 'phase_rad': float(np.arctan2(b, a))}
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         x = ctx.residual
         coef, ratio = self._line_ratio(x)
         k = int(np.argmax(ratio))
@@ -299,6 +343,7 @@ class Sinusoid(Effect):
         if ratio[k] < np.log(ratio.shape[0]) + np.log(1e3) or k + 1 >= coef.shape[0]:
             return None
         params = self.line(x, ctx.meas.rate_hz, k, coef)
+        assert params is not None  # only a refinement from start_hz returns None
         freq = params['frequency_hz']
         # the line must also be where the measurement leaves the psd or psd_peak band: a steep
         # background (random walk, flicker) fools the local-median test at low frequency, but the
@@ -319,7 +364,7 @@ class Sinusoid(Effect):
                 return None
         return params
 
-    def estimate(self, ctx, near=None):
+    def estimate(self, ctx: Context, near: Params | None = None) -> Params | None:
         """
         Return the parameters of the strongest line without the detection test (or None).
 
@@ -335,13 +380,14 @@ class Sinusoid(Effect):
             return None
         return self.line(x, ctx.meas.rate_hz, k, coef)
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
         t = np.arange(n) / rate_hz
         return _zero_mean(params['amplitude_rad_s']
                           * np.sin(2 * np.pi * params['frequency_hz'] * t + params['phase_rad']))
 
 
-def _dot(a, b):
+def _dot(a: FloatArray, b: FloatArray) -> float:
     """
     Return the dot product of two 1-D arrays without BLAS.
 
@@ -351,7 +397,8 @@ def _dot(a, b):
     return float(np.einsum('i,i->', a, b))
 
 
-def _sine_gauss_newton(y, ty, t, tc, tc2, omega):
+def _sine_gauss_newton(y: FloatArray, ty: FloatArray, t: FloatArray, tc: FloatArray,
+                       tc2: FloatArray, omega: float) -> tuple[float, float, float]:
     """
     Least-squares sine at ``omega`` and one Gauss-Newton step of its frequency.
 
@@ -401,7 +448,7 @@ def _sine_gauss_newton(y, ty, t, tc, tc2, omega):
     return float(a), float(b), step
 
 
-def _centred_fit_stat(basis, y):
+def _centred_fit_stat(basis: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
     """
     RSS reductions of one-regressor fits.
 
@@ -420,7 +467,7 @@ class BiasDrift(Effect):
     name = 'bias_drift'
     n_params = 1
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         t = ctx.layout.chunk_t_s
         basis = t[None, :]
         y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
@@ -430,12 +477,13 @@ class BiasDrift(Effect):
             return None
         return {'slope_rad_s2': float(amp[0])}
 
-    def estimate(self, ctx, near=None):
+    def estimate(self, ctx: Context, near: Params | None = None) -> Params | None:
         y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
         _, amp = _centred_fit_stat(ctx.layout.chunk_t_s[None, :], y)
         return {'slope_rad_s2': float(amp[0])}
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
         t = np.arange(n) / rate_hz
         return _zero_mean(params['slope_rad_s2'] * t)
 
@@ -452,12 +500,12 @@ class BiasTransient(Effect):
     n_params = 3
 
     @staticmethod
-    def shape(t, delay, tc):
+    def shape(t: FloatArray, delay: float, tc: float) -> FloatArray:
         """Return the unit transient 1 - exp(-(t - delay) / tc) for t >= delay, else 0."""
         return np.where(t >= delay, -np.expm1(-np.maximum(t - delay, 0.0) / tc), 0.0)
 
     @staticmethod
-    def chunk_shape(edges, delay, tc):
+    def chunk_shape(edges: FloatArray, delay: float, tc: float) -> FloatArray:
         """
         Return the mean of the unit transient over each interval of ``edges`` (s), in closed form.
 
@@ -475,18 +523,19 @@ class BiasTransient(Effect):
     DELAY_GRID = np.linspace(0.0, 0.8, 17)
     TC_GRID = np.geomspace(1.0 / 300.0, 1.0, 20)
 
-    def _grid(self, t, duration):
+    def _grid(self, t: FloatArray,
+              duration: float) -> tuple[list[tuple[float, float]], FloatArray]:
         pairs = [(d * duration, c * duration) for d in self.DELAY_GRID for c in self.TC_GRID]
         return pairs, np.array([self.shape(t, d, c) for d, c in pairs])
 
-    def _refine(self, ctx, y, delay, tc):
+    def _refine(self, ctx: Context, y: FloatArray, delay: float, tc: float) -> Params:
         """Least-squares (amplitude, delay, tc) on the chunk means ``y``, from a start point."""
         chunk, rate_hz = ctx.layout.chunk, ctx.meas.rate_hz
         duration = ctx.meas.n / rate_hz
         edges = np.arange(y.shape[0] + 1) * chunk / rate_hz
         yc = y - y.mean()
 
-        def fit(p):
+        def fit(p: FloatArray) -> tuple[float, float]:
             d, c = p[0] * duration, np.exp(p[1]) * duration
             basis = self.chunk_shape(edges, d, c)
             basis = basis - basis.mean()
@@ -494,7 +543,7 @@ class BiasTransient(Effect):
             amp = (basis @ yc) / norm if norm > 0 else 0.0
             return amp, float(((yc - amp * basis) ** 2).sum())
 
-        def rss(p):
+        def rss(p: FloatArray) -> float:
             if not (0.0 <= p[0] <= 0.95 and np.log(1e-3) <= p[1] <= np.log(10.0)):
                 return float('inf')
             return fit(p)[1]
@@ -509,18 +558,19 @@ class BiasTransient(Effect):
         return {'amplitude_rad_s': float(amp), 'delay_s': float(best[0] * duration),
                 'time_constant_s': float(np.exp(best[1]) * duration)}
 
-    def _grid_best(self, ctx, y):
+    def _grid_best(self, ctx: Context,
+                   y: FloatArray) -> tuple[list[tuple[float, float]], FloatArray, FloatArray, int]:
         pairs, basis = self._grid(ctx.layout.chunk_t_s, ctx.meas.n / ctx.meas.rate_hz)
         stat, _ = _centred_fit_stat(basis, y)
         best = int(np.argmax(stat))
         return pairs, basis, stat, best
 
-    def estimate(self, ctx, near=None):
+    def estimate(self, ctx: Context, near: Params | None = None) -> Params | None:
         y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
         pairs, _, _, best = self._grid_best(ctx, y)
         return self._refine(ctx, y, *pairs[best])
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
         pairs, basis, stat, best = self._grid_best(ctx, y)
         null, _ = _centred_fit_stat(basis, ctx.members('chunk_bias'))
@@ -528,7 +578,8 @@ class BiasTransient(Effect):
             return None
         return self._refine(ctx, y, *pairs[best])
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
         t = np.arange(n) / rate_hz
         return _zero_mean(params['amplitude_rad_s']
                           * self.shape(t, params['delay_s'], params['time_constant_s']))
@@ -544,10 +595,12 @@ class TemperatureSensitivity(Effect):
     name = 'temperature_sensitivity'
     n_params = 2
 
-    def _regressors(self, ctx):
-        return temperature_rate(ctx.meas.temperature_c, ctx.meas.rate_hz, ctx.layout.chunk)
+    def _regressors(self, ctx: Context) -> tuple[FloatArray, FloatArray]:
+        temp = ctx.meas.temperature_c
+        assert temp is not None  # the callers return None without a temperature
+        return temperature_rate(temp, ctx.meas.rate_hz, ctx.layout.chunk)
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         if ctx.meas.temperature_c is None:
             return None
         t_mean, t_rate = self._regressors(ctx)
@@ -555,7 +608,7 @@ class TemperatureSensitivity(Effect):
         y = chunk_series(ctx.residual, ctx.layout.chunk)[0]
         members = ctx.members('chunk_bias')
 
-        def reduction(values):
+        def reduction(values: FloatArray) -> tuple[FloatArray, FloatArray]:
             coef, *_ = np.linalg.lstsq(design, values.T, rcond=None)
             fitted = design @ coef
             yc = values.T - values.T.mean(axis=0)
@@ -568,7 +621,7 @@ class TemperatureSensitivity(Effect):
         return {'coefficient_rad_s_per_degc': float(coef[1, 0]),
                 'rate_coefficient_rad_s_per_degc_per_s': float(coef[2, 0])}
 
-    def estimate(self, ctx, near=None):
+    def estimate(self, ctx: Context, near: Params | None = None) -> Params | None:
         if ctx.meas.temperature_c is None:
             return None
         t_mean, t_rate = self._regressors(ctx)
@@ -578,8 +631,10 @@ class TemperatureSensitivity(Effect):
         return {'coefficient_rad_s_per_degc': float(coef[1]),
                 'rate_coefficient_rad_s_per_degc_per_s': float(coef[2])}
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
         temp = ctx.meas.temperature_c
+        assert temp is not None  # fitted only on a record with temperature
         chunk = ctx.layout.chunk
         # dT/dt at every sample: the derivative of the cubic spline through the chunk-boundary
         # temperatures, whose mean over each chunk is the fitted regressor exactly
@@ -594,7 +649,8 @@ class TemperatureSensitivity(Effect):
 # stochastic additive terms, fitted on the Allan variance in excess of the current model
 
 
-def allan_template_from_psd(psd, tau_s, rate_hz, duration_s):
+def allan_template_from_psd(psd: Callable[[FloatArray], FloatArray], tau_s: FloatArray,
+                            rate_hz: float, duration_s: float) -> FloatArray:
     """
     Allan variance of a process with PSD ``psd(f)`` (paper 001 eq. 8), integrated numerically.
 
@@ -630,12 +686,13 @@ class _AllanFitted(Effect):
 
     kind = 'stochastic'
 
-    def templates(self, ctx):  # pragma: no cover - interface
+    def templates(self, ctx: Context,  # pragma: no cover - interface
+                  ) -> tuple[list[dict[str, float]], FloatArray]:
         """Return (list of extra-params dicts, array (R, taus) of unit-amplitude templates)."""
         raise NotImplementedError
 
     @staticmethod
-    def weights(members):
+    def weights(members: FloatArray) -> FloatArray:
         """Return the inverse-variance weights of the Allan variances ``members`` (N, taus)."""
         mean = members.mean(axis=0)
         # the sd floor keeps a 5 % model tolerance at short tau, where the members agree very
@@ -643,7 +700,8 @@ class _AllanFitted(Effect):
         return 1.0 / np.maximum(members.std(axis=0, ddof=1), 0.05 * mean) ** 2
 
     @staticmethod
-    def best(templ, w, excess):
+    def best(templ: FloatArray, w: FloatArray,
+             excess: FloatArray) -> tuple[FloatArray, FloatArray]:
         """
         Weighted LS amplitude of each template on each excess Allan variance.
 
@@ -667,18 +725,22 @@ class _AllanFitted(Effect):
         amp = np.maximum(num, 0.0) / den[:, None]
         return amp ** 2 * den[:, None], amp
 
-    def amplitude(self, params):
+    def amplitude(self, params: Mapping[str, Any]) -> float:
         """Return the template amplitude of ``params`` (Allan variance scale, (rad/s)^2)."""
         raise NotImplementedError  # pragma: no cover - interface
 
-    def fit(self, ctx):
+    def params(self, amp: float, extra: Mapping[str, float]) -> Params:
+        """Return the parameters of template amplitude ``amp`` and its extra parameters."""
+        raise NotImplementedError  # pragma: no cover - interface
+
+    def fit(self, ctx: Context) -> Params | None:
         avar_m = ctx.meas_sig['allan'] ** 2
         members = ctx.members('allan') ** 2
         mean = members.mean(axis=0)
         extras, templ = self.templates(ctx)
         w = self.weights(members)
 
-        def best(excess):
+        def best(excess: FloatArray) -> tuple[FloatArray, FloatArray]:
             return self.best(templ, w, excess)
 
         stat, amp = best((avar_m - mean)[None, :])
@@ -694,7 +756,7 @@ class _AllanFitted(Effect):
         # estimator
         return {**self.params(float(amp[r, 0]), extras[r]), '_allan_weights': w}
 
-    def resolved(self, index, count):
+    def resolved(self, index: int, count: int) -> bool:
         """Tell whether the record tells the best template (of ``count``) from its neighbours."""
         return True
 
@@ -705,21 +767,23 @@ class RateRandomWalk(_AllanFitted):
     name = 'rate_random_walk'
     n_params = 1
 
-    def templates(self, ctx):
+    def templates(self, ctx: Context) -> tuple[list[dict[str, float]], FloatArray]:
         return [{}], (ctx.layout.tau_s / 3.0)[None, :]
 
-    def params(self, amp, extra):
+    def params(self, amp: float, extra: Mapping[str, float]) -> Params:
         return {'k_rad_s_per_sqrt_s': float(np.sqrt(amp))}
 
-    def amplitude(self, params):
+    def amplitude(self, params: Mapping[str, Any]) -> float:
         return params['k_rad_s_per_sqrt_s'] ** 2
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
+        assert rng is not None  # a stochastic term draws from the member's generator
         steps = rng.standard_normal(n) * params['k_rad_s_per_sqrt_s'] / np.sqrt(rate_hz)
         return _zero_mean(np.cumsum(steps))
 
 
-def flicker_noise(n, rate_hz, b_rad_s, rng):
+def flicker_noise(n: int, rate_hz: float, b_rad_s: float, rng: np.random.Generator) -> FloatArray:
     """
     Flicker bias with PSD B^2 / (2 pi f) (IEEE 952 convention) from 1 / T to fs / 2.
 
@@ -740,19 +804,21 @@ class BiasInstability(_AllanFitted):
     name = 'bias_instability'
     n_params = 1
 
-    def templates(self, ctx):
+    def templates(self, ctx: Context) -> tuple[list[dict[str, float]], FloatArray]:
         duration = ctx.meas.n / ctx.meas.rate_hz
         t = allan_template_from_psd(lambda f: 1.0 / (2 * np.pi * f), ctx.layout.tau_s,
                                     ctx.meas.rate_hz, duration)
         return [{}], t[None, :]
 
-    def params(self, amp, extra):
+    def params(self, amp: float, extra: Mapping[str, float]) -> Params:
         return {'b_rad_s': float(np.sqrt(amp))}
 
-    def amplitude(self, params):
+    def amplitude(self, params: Mapping[str, Any]) -> float:
         return params['b_rad_s'] ** 2
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
+        assert rng is not None  # a stochastic term draws from the member's generator
         return _zero_mean(flicker_noise(n, rate_hz, params['b_rad_s'], rng))
 
 
@@ -766,7 +832,7 @@ class GaussMarkov(_AllanFitted):
     name = 'gauss_markov'
     n_params = 2
 
-    def templates(self, ctx):
+    def templates(self, ctx: Context) -> tuple[list[dict[str, float]], FloatArray]:
         duration = ctx.meas.n / ctx.meas.rate_hz
         tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, self.GRID_POINTS)
         tau = ctx.layout.tau_s
@@ -776,19 +842,21 @@ class GaussMarkov(_AllanFitted):
     #: Geometric grid of the correlation time: 3 / fs .. T / 10 in this many points.
     GRID_POINTS = 30
 
-    def params(self, amp, extra):
+    def params(self, amp: float, extra: Mapping[str, float]) -> Params:
         return {'sigma_rad_s': float(np.sqrt(amp)), **extra}
 
-    def amplitude(self, params):
+    def amplitude(self, params: Mapping[str, Any]) -> float:
         return params['sigma_rad_s'] ** 2
 
-    def resolved(self, index, count):
+    def resolved(self, index: int, count: int) -> bool:
         # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the
         # Allan peak at 1.89 tc is not inside the tau range: a random walk or flicker bias looks
         # the same there, and those one-parameter effects are the answer
         return index < count - 2
 
-    def term(self, params, n, rate_hz, rng, ctx):
+    def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
+             ctx: Context) -> FloatArray:
+        assert rng is not None  # a stochastic term draws from the member's generator
         return _zero_mean(gauss_markov(n, rate_hz, std=params['sigma_rad_s'],
                                        corr_time_s=params['correlation_time_s'], rng=rng))
 
@@ -797,11 +865,11 @@ class GaussMarkov(_AllanFitted):
 # stamps
 
 
-def _intervals(ctx):
+def _intervals(ctx: Context) -> FloatArray:
     return np.diff(ctx.meas.t_s) * ctx.meas.rate_hz
 
 
-def jittery(intervals):
+def jittery(intervals: FloatArray) -> bool:
     """Tell whether over 1 % of the stamp intervals are below half a period (bursty delivery)."""
     return bool(np.mean(intervals < 0.5) > 0.01)
 
@@ -817,7 +885,7 @@ class SampleLoss(Effect):
     n_params = 2
     kind = 'stamps'
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         d = _intervals(ctx)
         if jittery(d):
             return None
@@ -829,7 +897,8 @@ class SampleLoss(Effect):
                 'mean_lost_samples': float(lost.mean()), 'max_lost_samples': int(lost.max()),
                 '_lost': lost}
 
-    def stamps(self, params, n, rate_hz, rng, ctx):
+    def stamps(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator,
+               ctx: Context) -> FloatArray:
         """Ideal stamps with gaps inserted (s)."""
         events = rng.poisson(params['gap_rate_per_s'] * n / rate_hz)
         extra = np.zeros(n)
@@ -850,32 +919,33 @@ class StampJitter(Effect):
     n_params = 2
     kind = 'stamps'
 
-    def fit(self, ctx):
+    def fit(self, ctx: Context) -> Params | None:
         d = _intervals(ctx)
         if not jittery(d):
             return None
         return self.estimate(ctx)
 
-    def estimate(self, ctx, near=None):
+    def estimate(self, ctx: Context, near: Params | None = None) -> Params | None:
         d = _intervals(ctx)
         k = np.arange(ctx.meas.n)
         line = np.polyval(np.polyfit(k, ctx.meas.t_s, 1), k)
         return {'jitter_rms_s': float(np.sqrt(np.mean((ctx.meas.t_s - line) ** 2))),
                 'short_interval_fraction': float(np.mean(d < 0.5)), '_intervals': d}
 
-    def stamps(self, params, n, rate_hz, rng, ctx):
+    def stamps(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator,
+               ctx: Context) -> FloatArray:
         """Stamps from resampled measured intervals (s)."""
         d = rng.choice(params['_intervals'], size=n - 1)
         return np.concatenate(([0.0], np.cumsum(d))) / rate_hz
 
 
 #: The catalogue in the order candidates are listed in reports.
-CATALOGUE = (Quantization(), Sinusoid(), BiasDrift(), BiasTransient(), RateRandomWalk(),
-             BiasInstability(), GaussMarkov(), TemperatureSensitivity(), SampleLoss(),
-             StampJitter())
+CATALOGUE: tuple[Effect, ...] = (
+    Quantization(), Sinusoid(), BiasDrift(), BiasTransient(), RateRandomWalk(), BiasInstability(),
+    GaussMarkov(), TemperatureSensitivity(), SampleLoss(), StampJitter())
 NAMES = tuple(e.name for e in CATALOGUE)
 
 
-def public_params(params):
+def public_params(params: Mapping[str, Any]) -> dict[str, Any]:
     """Parameters without the private (underscore) entries, for explain.json."""
     return {k: v for k, v in params.items() if not k.startswith('_')}

@@ -28,12 +28,16 @@ estimate, its method and its warnings are kept in ``Measurement.timebase``.
 """
 
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from ..bag.inputs import AXES, read_imu
+from ..bag.inputs import AXES, ImuRecord, read_imu
 from ..core.plausible import MAX_RATE_RAD_S, non_physical
+from ..core.timebase import RateEstimate
 from ..errors import InputDataError, nothing_left_error, ParameterError
+from ..outputs import StrPath
 
 #: Fewest samples the workflow accepts: 16 chunks of 512 samples (the signatures need a few chunks
 #: and the order identification needs chunks longer than its memory; the layout scales with the
@@ -65,33 +69,35 @@ class Measurement:
 
     """
 
-    rate: np.ndarray
-    t_s: np.ndarray
+    rate: NDArray[np.float64]
+    t_s: NDArray[np.float64]
     rate_hz: float
-    temperature_c: np.ndarray | None = None
+    temperature_c: NDArray[np.float64] | None = None
     axis: str = 'z'
     source: str = ''
-    timebase: object = None
+    timebase: RateEstimate | None = None
 
     @property
-    def n(self):
+    def n(self) -> int:
         """Count the samples."""
         return int(self.rate.shape[0])
 
     @property
-    def duration_s(self):
+    def duration_s(self) -> float:
         """Nominal duration n / rate_hz (s)."""
         return self.n / self.rate_hz
 
 
-def _check_axis(axis):
+def _check_axis(axis: str) -> int:
     if axis not in AXES:
         raise ParameterError(f"axis must be 'x', 'y' or 'z', got {axis!r}")
     return AXES.index(axis)
 
 
-def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='z', source='',
-                     require_temperature=False):
+def make_measurement(rate: ArrayLike, *, t_s: ArrayLike | None = None,
+                     rate_hz: float | None = None, temperature_c: ArrayLike | None = None,
+                     axis: str = 'z', source: str = '',
+                     require_temperature: bool = False) -> Measurement:
     """
     Validate arrays and build a :class:`Measurement`.
 
@@ -159,6 +165,7 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
 
         timebase = estimate_rate(t, unit='s', rate_hz=rate_hz)
         rate_hz = timebase.rate_hz
+    assert rate_hz is not None  # without stamps rate_hz was required above
     rate_hz = float(rate_hz)
     if not np.isfinite(rate_hz) or rate_hz <= 0:
         raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz}')
@@ -178,7 +185,8 @@ def make_measurement(rate, *, t_s=None, rate_hz=None, temperature_c=None, axis='
                        source=source, timebase=timebase)
 
 
-def from_record(record, *, axis='z', rate_hz=None, require_temperature=False):
+def from_record(record: ImuRecord, *, axis: str = 'z', rate_hz: float | None = None,
+                require_temperature: bool = False) -> Measurement:
     """
     Build the :class:`Measurement` of one gyro axis of a recording read in memory.
 
@@ -201,12 +209,16 @@ def from_record(record, *, axis='z', rate_hz=None, require_temperature=False):
     index = _check_axis(axis)
     t_s = (record.stamp_ns - record.stamp_ns[0]).astype(np.float64) * 1e-9
     return make_measurement(record.gyro_rad_s[:, index], t_s=t_s, rate_hz=rate_hz,
-                            temperature_c=record.temperature_c, axis=axis, source=record.source,
+                            # ImuRecord types it as object: an array or None
+                            temperature_c=cast('NDArray[np.float64] | None',
+                                               record.temperature_c),
+                            axis=axis, source=record.source,
                             require_temperature=require_temperature)
 
 
-def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=None,
-               require_temperature=False):
+def load_input(path: StrPath, *, topic: str | None = None,
+               temperature_topic: str | None = None, axis: str = 'z',
+               rate_hz: float | None = None, require_temperature: bool = False) -> Measurement:
     """
     Read one gyro axis (and the temperature) of any recording into a :class:`Measurement`.
 
@@ -238,7 +250,8 @@ def load_input(path, *, topic=None, temperature_topic=None, axis='z', rate_hz=No
                        require_temperature=require_temperature)
 
 
-def select(meas, *, start_s=None, end_s=None, static='auto'):
+def select(meas: Measurement, *, start_s: float | None = None, end_s: float | None = None,
+           static: str = 'auto') -> tuple[Measurement, dict[str, Any]]:
     """
     Keep the part of a measurement to analyse: a time window, then its longest static segment.
 
@@ -262,7 +275,7 @@ def select(meas, *, start_s=None, end_s=None, static='auto'):
 
     t = meas.t_s
     keep = np.ones(meas.n, dtype=bool)
-    left = {'before_start': 0, 'after_end': 0, 'motion': 0}
+    left: dict[str, Any] = {'before_start': 0, 'after_end': 0, 'motion': 0}
     if start_s is not None:
         left['before_start'] = int((t < start_s).sum())
         keep &= t >= start_s

@@ -22,16 +22,21 @@ Figures show each signature in its natural units: the measurement (black) agains
 comparison domain of :mod:`.signatures`.
 """
 
+from collections.abc import Mapping, Sequence
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from . import signatures as sig
 from .effects import public_params
+from .signatures import Comparison, FloatArray, Layout
 from .uncertainty import format_value, PARAMETERS
+from .workflow import ExplainResult, Step
 from ..errors import OutputError
-from ..outputs import staged_output
+from ..outputs import staged_output, StrPath
 from ..units import RAD_TO_DEG
 
 _LOG_X = {'allan', 'psd', 'psd_peak'}
@@ -47,7 +52,7 @@ _YLABELS = {'allan': 'ADEV (deg/s)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'p
             'temperature': 'correlation (1)'}
 
 
-def _untransform(name, values):
+def _untransform(name: str, values: FloatArray) -> FloatArray:
     kind = sig.TRANSFORM[name]
     if kind == 'log10':
         return 10.0 ** values
@@ -56,13 +61,15 @@ def _untransform(name, values):
     return values
 
 
-def _scale(name):
+def _scale(name: str) -> float:
     if name in ('allan', 'chunk_bias'):
         return RAD_TO_DEG
     return RAD_TO_DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
 
 
-def _plot_one(ax, layout, name, comparisons, labels, colours):
+def _plot_one(ax: Any, layout: Layout, name: str, comparisons: Sequence[Comparison | None],
+              labels: Sequence[str], colours: Sequence[str]) -> None:
+    xs: NDArray[Any]  # bin numbers on a lattice histogram, else the signature's points
     label, unit, xs = sig.points(layout, name)
     scale = _scale(name)
     if name == 'histogram' and layout.lattice is not None:
@@ -81,6 +88,7 @@ def _plot_one(ax, layout, name, comparisons, labels, colours):
         hi = _untransform(name, comp.mu + comp.threshold * comp.sd) * scale
         ax.fill_between(xs, lo, hi, color=colour, alpha=0.35, lw=0, label=f'{label} band')
         first = comp
+    assert first is not None  # the first band (the model before) is always there
     y = _untransform(name, first.y) * scale
     out = np.zeros(xs.size, dtype=bool) if comparisons[-1] is None else comparisons[-1].outside
     ax.plot(xs, y, 'k.-', ms=3, lw=0.8, label='measurement')
@@ -96,20 +104,23 @@ def _plot_one(ax, layout, name, comparisons, labels, colours):
     ax.tick_params(labelsize=8)
 
 
-def plot_signatures(path, layout, names, comparisons, labels, colours, title):
+def plot_signatures(path: StrPath, layout: Layout, names: Sequence[str],
+                    comparisons: Sequence[Mapping[str, Comparison] | None], labels: Sequence[str],
+                    colours: Sequence[str], title: str) -> None:
     """
     Write one PNG with a panel per signature.
 
     Parameters
     ----------
-    path : pathlib.Path
+    path : str or os.PathLike
         PNG file to write.
     layout : Layout
         Where each signature is evaluated.
     names : list of str
         Signatures to draw.
-    comparisons : list of dict
-        One dict (name -> Comparison) per band to draw; the last one marks the outside points.
+    comparisons : list of dict or None
+        One dict (name -> Comparison) per band to draw (None: no band); the last one marks the
+        outside points.
     labels, colours : list of str
         Legend label and colour per band.
     title : str
@@ -136,11 +147,11 @@ def plot_signatures(path, layout, names, comparisons, labels, colours, title):
     plt.close(fig)
 
 
-def _loud(note):
+def _loud(note: str) -> str:
     return 'UNRESOLVED' + note[len('unresolved'):] if note.startswith('unresolved') else note
 
 
-def bound_text(bound, unit):
+def bound_text(bound: Mapping[str, float | None], unit: str) -> str:
     """
     Return an unresolved time scale as the bound the record gives (never as a value).
 
@@ -167,7 +178,8 @@ def bound_text(bound, unit):
     return 'not resolved'
 
 
-def _fmt_params(params, time_scales=None):
+def _fmt_params(params: Mapping[str, Any],
+                time_scales: Mapping[str, Mapping[str, Any]] | None = None) -> str:
     parts = []
     for k, v in public_params(params).items():
         check = (time_scales or {}).get(k)
@@ -179,7 +191,7 @@ def _fmt_params(params, time_scales=None):
     return ', '.join(parts)
 
 
-def _uncertainty_text(entry):
+def _uncertainty_text(entry: Mapping[str, Any]) -> str:
     if entry.get('bound') is not None:
         return f'{bound_text(entry["bound"], entry["unit"])} [{_loud(entry["note"])}]'
     text = format_value(entry)
@@ -187,7 +199,7 @@ def _uncertainty_text(entry):
     return f'{text} [{_loud(note)}]' if note and not entry['resolved'] else text
 
 
-def parameter_lines(result):
+def parameter_lines(result: ExplainResult) -> list[str]:
     """
     One line per accepted effect: its parameters as ``value ± stderr unit``.
 
@@ -208,7 +220,7 @@ def parameter_lines(result):
     return lines
 
 
-def _uncertainty_table(step, result):
+def _uncertainty_table(step: Step, result: ExplainResult) -> list[str]:
     entries = result.uncertainty.get(step.effect)
     if not entries:
         return [f'Parameters: {_fmt_params(step.params, step.time_scales)} (no uncertainty: the '
@@ -229,7 +241,7 @@ def _uncertainty_table(step, result):
     return lines + ['']
 
 
-def verdict(result):
+def verdict(result: ExplainResult) -> str:
     """One-paragraph verdict printed by the command line tool."""
     if not result.steps and not result.unexplained:
         return ('consistent with the baseline model (fractional noise '
@@ -244,7 +256,7 @@ def verdict(result):
     return text
 
 
-def write_outputs(result, out_dir):
+def write_outputs(result: ExplainResult, out_dir: StrPath) -> Path:
     """
     Write explain.json, report.md and the figures to ``out_dir``, all or nothing.
 
@@ -274,7 +286,8 @@ def write_outputs(result, out_dir):
     return Path(out_dir)
 
 
-def write_files(result, folder, *, data=None):
+def write_files(result: ExplainResult, folder: StrPath, *,
+                data: dict[str, Any] | None = None) -> list[str]:
     """
     Write explain.json, report.md and the figures into an existing (staging) folder.
 
@@ -306,7 +319,8 @@ def write_files(result, folder, *, data=None):
         raise OutputError(f'cannot write the results: {err.strerror or err}{where}') from err
 
 
-def _write_files(result, folder, data):
+def _write_files(result: ExplainResult, folder: Path,
+                 data: dict[str, Any]) -> list[str]:
     (folder / 'explain.json').write_text(
         json.dumps(data, indent=2, default=_json_default) + '\n')
     layout = result.layout
@@ -319,6 +333,7 @@ def _write_files(result, folder, data):
                     f'{result.gap_initial:.3f} -> {result.gap_final:.3f}')
     files.append('overview.png')
     for i, step in enumerate(result.steps, 1):
+        assert step.before is not None and step.after is not None  # the workflow sets both
         changed = [n for n in names if step.before[n].g > 1 or step.after[n].g > 1] or names[:4]
         name = f'step{i}_{step.effect}.png'
         plot_signatures(folder / name, layout, changed[:4], [step.before, step.after],
@@ -331,7 +346,7 @@ def _write_files(result, folder, data):
     return files
 
 
-def _json_default(value):
+def _json_default(value: object) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, np.ndarray):
@@ -339,7 +354,7 @@ def _json_default(value):
     raise TypeError(f'not JSON serialisable: {type(value).__name__}')
 
 
-def _markdown(result):
+def _markdown(result: ExplainResult) -> str:
     meas, base = result.measurement, result.baseline
     lines = [
         '# Discrepancy report', '',

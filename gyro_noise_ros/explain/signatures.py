@@ -63,9 +63,12 @@ between models because every model is judged by its own ensemble, with the same 
 rule.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 import scipy.signal
 
 from ..core.allan import allan_deviation_values
@@ -86,6 +89,11 @@ N_CHUNKS = 100
 N_BANDS = 40
 N_HIST = 32
 N_PHASE = 10
+#: A float array: float64 at run time; numpy's stubs widen many float64 results to ``floating``.
+FloatArray = NDArray[np.floating[Any]]
+#: Untransformed signature values of one series: name -> values at the layout's points
+#: (:func:`compute`).
+Signatures = dict[str, FloatArray]
 
 
 @dataclass(frozen=True)
@@ -118,32 +126,32 @@ class Layout:
 
     rate_hz: float
     n: int
-    m: np.ndarray
+    m: NDArray[np.int64]
     nperseg: int
-    band_edges: np.ndarray
+    band_edges: FloatArray
     chunk: int
-    hist_edges: np.ndarray
-    lattice: tuple | None = None
+    hist_edges: FloatArray
+    lattice: tuple[float, float] | None = None
     temperature: bool = False
 
     @property
-    def tau_s(self):
+    def tau_s(self) -> FloatArray:
         """Allan cluster times (s)."""
         return self.m / self.rate_hz
 
     @property
-    def chunk_t_s(self):
+    def chunk_t_s(self) -> FloatArray:
         """Mid-times of the chunks (s, nominal)."""
         k = self.n // self.chunk
         return (np.arange(k) + 0.5) * self.chunk / self.rate_hz
 
     @property
-    def band_centers_hz(self):
+    def band_centers_hz(self) -> FloatArray:
         """Geometric centres of the PSD bands (Hz)."""
         return np.sqrt(self.band_edges[:-1] * self.band_edges[1:])
 
 
-def find_lattice(x):
+def find_lattice(x: FloatArray) -> tuple[float, float] | None:
     """
     Find the value lattice of quantised samples, ``x = offset + k * step`` with integer k.
 
@@ -184,7 +192,8 @@ def find_lattice(x):
     return step, offset
 
 
-def lattice_fit(levels, step, offset):
+def lattice_fit(levels: FloatArray, step: float,
+                offset: float) -> tuple[float, float, FloatArray | None]:
     """
     Least-squares lattice through the distinct values: ``level = offset + k step``, k integer.
 
@@ -226,7 +235,7 @@ def lattice_fit(levels, step, offset):
     return float(coef[0]), float(coef[1]), cov
 
 
-def make_layout(x, rate_hz, *, temperature=False):
+def make_layout(x: FloatArray, rate_hz: float, *, temperature: bool = False) -> Layout:
     """
     Fix the signature points from the measurement.
 
@@ -260,7 +269,8 @@ def make_layout(x, rate_hz, *, temperature=False):
                   temperature=bool(temperature))
 
 
-def welch(x, rate_hz, nperseg):
+def welch(x: FloatArray, rate_hz: float,
+          nperseg: int) -> tuple[FloatArray, FloatArray]:
     """
     Welch PSD estimate: Hann window, 50 % overlap, mean removed once, one-sided density.
 
@@ -290,14 +300,15 @@ def welch(x, rate_hz, nperseg):
     return np.fft.rfftfreq(nperseg, 1.0 / rate_hz), pxx
 
 
-def chunk_series(values, chunk):
+def chunk_series(values: FloatArray, chunk: int) -> tuple[FloatArray, FloatArray]:
     """Return per-chunk means and variances (ddof 1) of the complete chunks of ``values``."""
     k = values.shape[0] // chunk
     blocks = values[:k * chunk].reshape(k, chunk)
     return blocks.mean(axis=1), blocks.var(axis=1, ddof=1)
 
 
-def temperature_edges(temperature_c, rate_hz, chunk):
+def temperature_edges(temperature_c: FloatArray, rate_hz: float,
+                      chunk: int) -> tuple[FloatArray, FloatArray]:
     """
     Return the times (s) of the chunk boundaries and the temperature (degC) there.
 
@@ -329,7 +340,8 @@ def temperature_edges(temperature_c, rate_hz, chunk):
     return edge / rate_hz, value
 
 
-def temperature_rate(temperature_c, rate_hz, chunk):
+def temperature_rate(temperature_c: FloatArray, rate_hz: float,
+                     chunk: int) -> tuple[FloatArray, FloatArray]:
     """
     Return chunk-mean temperature (degC) and the chunk mean of its rate dT/dt (degC/s).
 
@@ -343,7 +355,8 @@ def temperature_rate(temperature_c, rate_hz, chunk):
     return t_mean, np.diff(edge) * rate_hz / chunk
 
 
-def compute(layout, x, t_s, temperature_c=None):
+def compute(layout: Layout, x: FloatArray, t_s: FloatArray | None,
+            temperature_c: FloatArray | None = None) -> Signatures:
     """
     Evaluate every signature of one series on the layout (untransformed values).
 
@@ -364,7 +377,7 @@ def compute(layout, x, t_s, temperature_c=None):
         name -> 1-D numpy.ndarray.
 
     """
-    out = {}
+    out: Signatures = {}
     out['allan'] = allan_deviation_values(x, layout.rate_hz, taus=layout.m)
     freq, pxx = welch(x, layout.rate_hz, layout.nperseg)
     bands = layout.band_edges.size - 1
@@ -393,12 +406,13 @@ def compute(layout, x, t_s, temperature_c=None):
         out['stamps'] = np.histogram(np.diff(t_s) * layout.rate_hz,
                                      bins=STAMP_EDGES)[0].astype(np.float64)
     if layout.temperature:
+        assert temperature_c is not None  # a layout with temperature is made for a record with it
         t_mean, t_rate = temperature_rate(temperature_c, layout.rate_hz, layout.chunk)
         out['temperature'] = np.array([_corr(bias, t_mean), _corr(bias, t_rate)])
     return out
 
 
-def _uniform_counts(x, lo, hi, bins):
+def _uniform_counts(x: FloatArray, lo: float, hi: float, bins: int) -> FloatArray:
     """
     Count as np.histogram(x, bins, range=(lo, hi)), via bincount.
 
@@ -410,14 +424,14 @@ def _uniform_counts(x, lo, hi, bins):
     return np.bincount(idx, minlength=bins).astype(np.float64)
 
 
-def _corr(a, b):
+def _corr(a: FloatArray, b: FloatArray) -> float:
     a = a - a.mean()
     b = b - b.mean()
     den = np.sqrt((a @ a) * (b @ b))
     return float(a @ b / den) if den > 0 else 0.0
 
 
-def transform(name, values):
+def transform(name: str, values: ArrayLike) -> FloatArray:
     """Apply the comparison transform of signature ``name`` (module doc)."""
     kind = TRANSFORM[name]
     if kind == 'log10':
@@ -427,7 +441,7 @@ def transform(name, values):
     return np.asarray(values, dtype=np.float64)
 
 
-def points(layout, name):
+def points(layout: Layout, name: str) -> tuple[str, str, FloatArray]:
     """
     Return the x-axis of signature ``name`` (label and values) for plots and the ``where`` text.
 
@@ -482,21 +496,21 @@ class Comparison:
     """
 
     name: str
-    y: np.ndarray
-    mu: np.ndarray
-    sd: np.ndarray
-    z: np.ndarray
+    y: FloatArray
+    mu: FloatArray
+    sd: FloatArray
+    z: FloatArray
     threshold: float
     g: float
-    outside: np.ndarray
+    outside: NDArray[np.bool_]
 
     @property
-    def gap(self):
+    def gap(self) -> float:
         """Return this signature's share of the scalar gap, ln(max(g, 1))."""
         return float(np.log(max(self.g, 1.0)))
 
 
-def compare(name, measured, members):
+def compare(name: str, measured: ArrayLike, members: ArrayLike) -> Comparison:
     """
     Compare one signature of the measurement with the ensemble (module doc).
 
@@ -504,9 +518,9 @@ def compare(name, measured, members):
     ----------
     name : str
         Signature name (a key of the layout).
-    measured : numpy.ndarray
+    measured : array_like
         Untransformed measurement values.
-    members : numpy.ndarray
+    members : array_like
         Untransformed member values, shape (N, points).
 
     Returns
@@ -539,12 +553,12 @@ def compare(name, measured, members):
                       outside=np.abs(z) > threshold)
 
 
-def total_gap(comparisons):
+def total_gap(comparisons: Mapping[str, Comparison]) -> float:
     """Return the scalar gap G = sum_s ln(max(g_s, 1)) (module doc)."""
     return float(sum(c.gap for c in comparisons.values()))
 
 
-def mean_log_score(comparisons):
+def mean_log_score(comparisons: Mapping[str, Comparison]) -> float:
     """
     Return sum_s mean_i (z_i^2 / 2 + ln sd_i): a Gaussian negative log-likelihood per point.
 
@@ -556,7 +570,7 @@ def mean_log_score(comparisons):
     return float(sum(np.mean(0.5 * c.z ** 2 + np.log(c.sd)) for c in comparisons.values()))
 
 
-def describe_where(layout, comparison):
+def describe_where(layout: Layout, comparison: Comparison) -> str:
     """
     Return a short text naming where the measurement leaves the band of one signature.
 

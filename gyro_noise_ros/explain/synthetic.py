@@ -58,12 +58,15 @@ sample_loss                U[5, 30] gap events per record, geometric(p = 0.5, me
 =========================  ========================================================================
 """
 
+from collections.abc import Callable, Iterable, Mapping, Sequence
 import sys
+from typing import Any
 
 import numpy as np
 
-from .effects import BiasTransient, flicker_noise
-from .inputs import make_measurement
+from .effects import BiasTransient, Effect, flicker_noise, Params
+from .inputs import make_measurement, Measurement
+from .signatures import FloatArray
 from ..core.simulate import (check_stability, gauss_markov, gauss_markov_avar,
                              simulate_fractional_noise)
 
@@ -72,7 +75,7 @@ EFFECTS = ('quantization', 'sinusoid', 'bias_drift', 'bias_transient', 'rate_ran
            'bias_instability', 'gauss_markov', 'temperature_sensitivity', 'sample_loss')
 
 
-def draw_baseline(rng):
+def draw_baseline(rng: np.random.Generator) -> dict[str, float]:
     """Draw baseline parameters from the module-doc ranges; returns a dict."""
     while True:
         alpha = rng.uniform(0.8, 1.2)
@@ -84,11 +87,12 @@ def draw_baseline(rng):
             'sigma_nu': sigma_w * rng.uniform(0.0, 0.5), 'bias': rng.uniform(-0.02, 0.02)}
 
 
-def _sign(rng):
+def _sign(rng: np.random.Generator) -> float:
     return 1.0 if rng.random() < 0.5 else -1.0
 
 
-def draw_effect(name, rng, *, sigma, rate_hz, n):
+def draw_effect(name: str, rng: np.random.Generator, *, sigma: float, rate_hz: float,
+                n: int) -> dict[str, Any]:
     """
     Draw the parameters of effect ``name`` from the module-doc ranges.
 
@@ -155,7 +159,9 @@ def draw_effect(name, rng, *, sigma, rate_hz, n):
     raise ValueError(f'unknown effect {name!r}')
 
 
-def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
+def make_record(effects: Sequence[str], rng: np.random.Generator, *, n: int = 60000,
+                rate_hz: float = 100.0, baseline: Mapping[str, float] | None = None,
+                ) -> tuple[Measurement, dict[str, Any]]:
     """
     Build a measurement with the given effects hidden in baseline noise.
 
@@ -229,7 +235,9 @@ def make_record(effects, rng, *, n=60000, rate_hz=100.0, baseline=None):
     return meas, truth
 
 
-def sweep(effects, seeds, *, n=60000, rate_hz=100.0, ensemble=16, progress=None):
+def sweep(effects: Sequence[Sequence[str]], seeds: Iterable[int], *, n: int = 60000,
+          rate_hz: float = 100.0, ensemble: int = 16,
+          progress: Callable[[str], None] | None = None) -> dict[str, dict[str, int]]:
     """
     Run the workflow on ``seeds`` records per entry of ``effects`` and count the outcomes.
 
@@ -280,7 +288,8 @@ def sweep(effects, seeds, *, n=60000, rate_hz=100.0, ensemble=16, progress=None)
     return table
 
 
-def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
+def coverage(case: Sequence[str], seeds: Iterable[int], *, n: int = 20000,
+             rate_hz: float = 100.0, replicates: int = 20, members: int = 8) -> dict[str, Any]:
     """
     Count how often the 95 % interval of each effect parameter holds the hidden value.
 
@@ -323,7 +332,8 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
     for name in case:
         if name not in supported:
             raise ValueError(f'coverage: {name!r} is not one of {", ".join(supported)}')
-    rows, missed = {}, 0
+    rows: dict[str, dict[str, Any]] = {}
+    missed = 0
     for seed in seeds:
         meas, truth = make_record(case, np.random.default_rng([seed, 17]), n=n, rate_hz=rate_hz)
         b = truth['baseline']
@@ -335,7 +345,8 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
         layout = make_layout(meas.rate, rate_hz, temperature=meas.temperature_c is not None)
         m = SimpleNamespace(n=meas.n, rate_hz=rate_hz, t_s=meas.t_s,
                             temperature_c=meas.temperature_c, rate=meas.rate)
-        accepted, det = [], {}
+        accepted: list[tuple[Effect, Params]] = []
+        det: dict[str, FloatArray] = {}
         for name in case:
             effect = by_name[name]
             if effect.kind == 'stochastic':
@@ -351,7 +362,8 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
                 residual = meas.rate - sum(det.values()) if det else meas.rate
                 ctx = Context(m, residual, layout, None, None, {})
                 params = effect.estimate(ctx)
-                det[name] = effect.term(params, n, rate_hz, None, ctx)
+                if params is not None:
+                    det[name] = effect.term(params, n, rate_hz, None, ctx)
             if params is None:
                 break
             accepted.append((effect, params))
@@ -374,13 +386,14 @@ def coverage(case, seeds, *, n=20000, rate_hz=100.0, replicates=20, members=8):
                                       if entry['unit'] == 'rad'
                                       else entry['ci95'][0] <= true <= entry['ci95'][1])
                 row['z'].append(diff / entry['stderr'])
-    out = {k: {'runs': r['runs'], 'inside': r['inside'], 'z_sd': float(np.std(r['z']))}
-           for k, r in rows.items()}
+    out: dict[str, Any] = {
+        k: {'runs': r['runs'], 'inside': r['inside'], 'z_sd': float(np.std(r['z']))}
+        for k, r in rows.items()}
     out['_not_fitted'] = missed
     return out
 
 
-def main(argv=None):
+def main(argv: Sequence[str] | None = None) -> int:
     """
     ``python -m gyro_noise_ros.explain.synthetic``.
 

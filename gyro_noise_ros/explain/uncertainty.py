@@ -88,14 +88,17 @@ interval's lower end and the longest resolvable time scale when the interval run
 at both ends. A frequency's bounds are those of its period, inverted.
 """
 
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from types import SimpleNamespace
+from typing import Any, overload
 
 import numpy as np
 import scipy.stats
 
-from .effects import Context, GaussMarkov, NAMES, Quantization
-from .signatures import lattice_fit
+from .baseline import BaselineModel
+from .effects import _AllanFitted, Context, Effect, GaussMarkov, NAMES, Params, Quantization
+from .signatures import FloatArray, lattice_fit, Layout
 from ..core.allan import allan_deviation_values
 
 #: Replicate b uses member index REPLICATE_OFFSET + b in the seed sequence: never an ensemble
@@ -161,24 +164,25 @@ class FinalModel:
 
     n: int
     rate_hz: float
-    temperature_c: object
-    layout: object
-    baseline: object
-    accepted: tuple
-    det_terms: dict
+    temperature_c: FloatArray | None
+    layout: Layout
+    baseline: BaselineModel
+    accepted: tuple[tuple[Effect, Params], ...]
+    det_terms: dict[str, FloatArray]
     seed: int
 
-    def meas(self, rate=None, t_s=None):
+    def meas(self, rate: FloatArray | None = None,
+             t_s: FloatArray | None = None) -> SimpleNamespace:
         """Return the measurement-like object the fitters read."""
         return SimpleNamespace(n=self.n, rate_hz=self.rate_hz, temperature_c=self.temperature_c,
                                rate=rate, t_s=t_s)
 
 
-def _rng(model, index, stream):
+def _rng(model: FinalModel, index: int, stream: int) -> np.random.Generator:
     return np.random.default_rng([model.seed, REPLICATE_OFFSET + int(index), stream])
 
 
-def simulate(model, index):
+def simulate(model: FinalModel, index: int) -> tuple[FloatArray, FloatArray | None]:
     """
     Simulate replicate ``index`` of the final model.
 
@@ -210,7 +214,7 @@ def simulate(model, index):
     return x, t
 
 
-def replicate(model, index):
+def replicate(model: FinalModel, index: int) -> dict[str, Any]:
     """
     Simulate replicate ``index`` and refit every accepted effect on it (pure; picklable).
 
@@ -234,7 +238,7 @@ def replicate(model, index):
     t_s = t if t is not None else np.arange(model.n) / model.rate_hz
     meas = model.meas(rate=x, t_s=t_s)
     out = {}
-    earlier = []
+    earlier: list[str] = []
     for effect, params in model.accepted:
         # the fitter saw the record minus the deterministic terms accepted before it: so does the
         # refit (the later ones stay in, as they were in the measurement)
@@ -255,7 +259,8 @@ def replicate(model, index):
     return out
 
 
-def _allan_refits(model, effect, params, avar):
+def _allan_refits(model: FinalModel, effect: _AllanFitted, params: Params,
+                  avar: FloatArray) -> list[Params]:
     """Refit a stochastic effect on each replicate's leave-one-out excess (module doc)."""
     count = avar.shape[0]
     ctx = Context(model.meas(), None, model.layout, None, None, {})
@@ -273,7 +278,8 @@ def _allan_refits(model, effect, params, avar):
     return [effect.params(float(amp[r, b]), extras[r]) for b, r in enumerate(best)]
 
 
-def grid_resolution(model, effect, params):
+def grid_resolution(model: FinalModel, effect: Effect,
+                    params: Mapping[str, Any]) -> dict[str, float]:
     """Return parameter -> rounding sd (spacing / sqrt 12) of the grid it was found on."""
     root12 = np.sqrt(12.0)
     duration = model.n / model.rate_hz
@@ -292,7 +298,8 @@ TIME_SCALES = {'correlation_time_s': 'time', 'time_constant_s': 'time',
                'frequency_hz': 'frequency'}
 
 
-def resolvable_range(effect_name, name, params, *, n, rate_hz, layout):
+def resolvable_range(effect_name: str, name: str, params: Mapping[str, Any], *, n: int,
+                     rate_hz: float, layout: Layout) -> tuple[float, float, str, str] | None:
     """
     Return the time scales (s) a record resolves for one parameter (module doc table).
 
@@ -334,7 +341,9 @@ def resolvable_range(effect_name, name, params, *, n, rate_hz, layout):
     return None
 
 
-def time_scale_check(effect_name, name, params, interval=None, *, n, rate_hz, layout):
+def time_scale_check(effect_name: str, name: str, params: Mapping[str, Any],
+                     interval: Sequence[float] | None = None, *, n: int, rate_hz: float,
+                     layout: Layout) -> dict[str, Any] | None:
     """
     Tell whether the record resolves a time-scale parameter, and the bound when it does not.
 
@@ -365,10 +374,16 @@ def time_scale_check(effect_name, name, params, interval=None, *, n, rate_hz, la
     lo, hi = (value, value) if interval is None else (float(interval[0]), float(interval[1]))
     frequency = TIME_SCALES[name] == 'frequency'
 
-    def as_time(v):
+    def as_time(v: float) -> float:
         return 1.0 / v if frequency else v
 
-    def as_param(t):
+    @overload
+    def as_param(t: float) -> float: ...
+
+    @overload
+    def as_param(t: None) -> None: ...
+
+    def as_param(t: float | None) -> float | None:
         return None if t is None else (1.0 / t if frequency else t)
 
     # the interval in time (a frequency interval reverses); 0 Hz is an infinite period
@@ -377,8 +392,9 @@ def time_scale_check(effect_name, name, params, interval=None, *, n, rate_hz, la
     # at the limit itself counts as outside: a fit stopped by its search range
     short = t_lo <= shortest * (1.0 + 1e-9)
     long = t_hi >= longest * (1.0 - 1e-9)
-    out = {'resolvable': [float(resolvable[0]), float(resolvable[1])], 'resolved': True,
-           'bound': None, 'note': ''}
+    out: dict[str, Any] = {
+        'resolvable': [float(resolvable[0]), float(resolvable[1])], 'resolved': True,
+        'bound': None, 'note': ''}
     if not (short or long):
         return out
     if long and not short:
@@ -400,7 +416,8 @@ def time_scale_check(effect_name, name, params, interval=None, *, n, rate_hz, la
     return out
 
 
-def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
+def summarise(value: float, refits: Sequence[float | None], *, unit: str, kind: str,
+              floor: float = 0.0, replicates: int | None = None) -> dict[str, Any]:
     """
     Return the standard error, interval and resolution of one parameter (module doc).
 
@@ -424,8 +441,9 @@ def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
 
     """
     count = len(refits) if replicates is None else int(replicates)
-    out = {'value': float(value), 'stderr': None, 'ci95': None, 'unit': unit,
-           'method': f'{METHOD_BOOTSTRAP} ({count} replicates)', 'resolved': False, 'note': ''}
+    out: dict[str, Any] = {
+        'value': float(value), 'stderr': None, 'ci95': None, 'unit': unit,
+        'method': f'{METHOD_BOOTSTRAP} ({count} replicates)', 'resolved': False, 'note': ''}
     if kind == 'count':
         out['method'] = 'none'
         out['note'] = 'a count (the largest measured gap), no standard error'
@@ -460,7 +478,8 @@ def summarise(value, refits, *, unit, kind, floor=0.0, replicates=None):
     return out
 
 
-def lattice_uncertainty(x, step, offset):
+def lattice_uncertainty(x: FloatArray, step: float,
+                        offset: float) -> dict[str, dict[str, Any]]:
     """
     Return the standard errors of a value lattice's step and offset (module doc).
 
@@ -484,9 +503,10 @@ def lattice_uncertainty(x, step, offset):
     _, _, cov = lattice_fit(levels, step, offset)
     out = {}
     for i, (name, value) in enumerate((('step_rad_s', step), ('offset_rad_s', offset))):
-        entry = {'value': float(value), 'stderr': None, 'ci95': None, 'unit': 'rad/s',
-                 'method': METHOD_LATTICE, 'resolved': False,
-                 'note': 'unresolved: fewer than 3 levels on the lattice'}
+        entry: dict[str, Any] = {
+            'value': float(value), 'stderr': None, 'ci95': None, 'unit': 'rad/s',
+            'method': METHOD_LATTICE, 'resolved': False,
+            'note': 'unresolved: fewer than 3 levels on the lattice'}
         if cov is not None:
             stderr = float(np.sqrt(cov[i, i]))
             # the levels' scatter is round-off, not Gaussian noise: the normal quantile
@@ -497,7 +517,7 @@ def lattice_uncertainty(x, step, offset):
     return out
 
 
-def _flag_transient_amplitude(entry):
+def _flag_transient_amplitude(entry: Mapping[str, dict[str, Any]]) -> None:
     """
     Flag a transient's amplitude when its time constant is longer than the record resolves.
 
@@ -512,7 +532,8 @@ def _flag_transient_amplitude(entry):
                    'resolves, so only the initial slope amplitude / time constant is measured')
 
 
-def bootstrap(model, replicates, *, values=None, mapper=map):
+def bootstrap(model: FinalModel, replicates: int, *, values: FloatArray | None = None,
+              mapper: Callable[..., Iterable[Any]] = map) -> dict[str, dict[str, dict[str, Any]]]:
     """
     Return standard errors and intervals of every accepted effect parameter (module doc).
 
@@ -544,10 +565,13 @@ def bootstrap(model, replicates, *, values=None, mapper=map):
     for effect, params in model.accepted:
         public = {k: v for k, v in params.items() if not k.startswith('_')}
         if effect.kind == 'quantization':
+            assert values is not None  # the measured samples come with a quantization effect
             lattice = lattice_uncertainty(values, public['step_rad_s'], public['offset_rad_s'])
             out[effect.name] = lattice
             continue
         if effect.kind == 'stochastic':
+            # the stochastic effects are the Allan-fitted ones, and their replicates hold '_avar'
+            assert isinstance(effect, _AllanFitted) and avar is not None
             refits = _allan_refits(model, effect, params, avar)
         else:
             refits = [r[effect.name] for r in results]
@@ -568,7 +592,7 @@ def bootstrap(model, replicates, *, values=None, mapper=map):
     return out
 
 
-def format_value(entry, digits=4):
+def format_value(entry: Mapping[str, Any], digits: int = 4) -> str:
     """
     Return ``value +/- stderr unit`` (or the reason there is none) for reports.
 

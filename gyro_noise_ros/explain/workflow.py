@@ -50,15 +50,19 @@ interval from a parametric bootstrap of the final model (:mod:`.uncertainty`, ``
 records, default :data:`DEFAULT_BOOTSTRAP`; 0 switches it off).
 """
 
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 import itertools
 import time
+from typing import Any
 
 import numpy as np
 
 from . import signatures as sig
-from .baseline import fit_baseline
-from .effects import CATALOGUE, Context, public_params, Quantization
+from .baseline import BaselineModel, fit_baseline
+from .effects import CATALOGUE, Context, Effect, Params, public_params, Quantization
+from .inputs import Measurement
+from .signatures import Comparison, FloatArray, Layout, Signatures
 from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel, time_scale_check
 from ..errors import ParameterError
 
@@ -75,6 +79,10 @@ INSIDE_GAP = 0.1
 #: itself uncertain by about 1 / sqrt(2 (B - 1)) = 16 % at B = 20, which Student's t in the
 #: interval accounts for; each record costs about one ensemble member.
 DEFAULT_BOOTSTRAP = 20
+
+#: One candidate tried in a step: (gap, effect, params, deterministic term or None, the members'
+#: signatures, the comparisons).
+Trial = tuple[float, Effect, Params, FloatArray | None, list[Signatures], dict[str, Comparison]]
 
 
 @dataclass(frozen=True)
@@ -104,15 +112,15 @@ class Step:
     """
 
     effect: str
-    params: dict
+    params: Params
     gap_before: float
     gap_after: float
-    where: list
-    where_after: list
-    candidates: dict
-    time_scales: dict = field(default_factory=dict)
-    before: dict | None = field(repr=False, default=None)
-    after: dict | None = field(repr=False, default=None)
+    where: list[str]
+    where_after: list[str]
+    candidates: dict[str, float]
+    time_scales: dict[str, dict[str, Any]] = field(default_factory=dict)
+    before: dict[str, Comparison] | None = field(repr=False, default=None)
+    after: dict[str, Comparison] | None = field(repr=False, default=None)
 
 
 @dataclass(frozen=True)
@@ -149,30 +157,30 @@ class ExplainResult:
 
     """
 
-    measurement: object
-    layout: object
-    baseline: object
-    final_baseline: object
-    steps: list
+    measurement: Measurement
+    layout: Layout
+    baseline: BaselineModel
+    final_baseline: BaselineModel
+    steps: list[Step]
     gap_initial: float
     gap_final: float
     unexplained: bool
-    where_final: list
-    comparisons_initial: dict
-    comparisons_final: dict
-    tried_last: dict
+    where_final: list[str]
+    comparisons_initial: dict[str, Comparison]
+    comparisons_final: dict[str, Comparison]
+    tried_last: dict[str, float]
     ensemble: int
     seed: int
-    seconds: dict
-    uncertainty: dict = field(default_factory=dict)
+    seconds: dict[str, float]
+    uncertainty: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     bootstrap: int = 0
 
     @property
-    def named(self):
+    def named(self) -> list[str]:
         """Names of the accepted effects, in order."""
         return [s.effect for s in self.steps]
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """Return the explain.json layout (see docs/discrepancy.md)."""
         meas = self.measurement
         return {
@@ -185,7 +193,7 @@ class ExplainResult:
                 'temperature': meas.temperature_c is not None,
                 'timebase': (
                     meas.timebase.as_dict()
-                    if getattr(meas, 'timebase', None) is not None
+                    if meas.timebase is not None
                     else None
                 ),
             },
@@ -232,19 +240,21 @@ class _Model:
     Members with the accepted additive terms already added.
     """
 
-    def __init__(self, meas, layout, baseline, ensemble, seed, mapper=map):
+    def __init__(self, meas: Measurement, layout: Layout, baseline: BaselineModel, ensemble: int,
+                 seed: int, mapper: Callable[..., Iterable[Any]] = map) -> None:
         self.meas, self.layout, self.seed, self.mapper = meas, layout, seed, mapper
         self.members = [baseline.generator(np.random.default_rng([seed, j, 0])).generate(meas.n)
                         for j in range(ensemble)]
-        self.quantization = None
-        self.stamp_effect = None
-        self.accepted = {}
-        self.stochastic = []
+        self.quantization: Params | None = None
+        self.stamp_effect: tuple[Effect, Params] | None = None
+        self.accepted: dict[str, Params] = {}
+        self.stochastic: list[tuple[Effect, Params]] = []
 
-    def rng(self, member, effect):
+    def rng(self, member: int, effect: Effect) -> np.random.Generator:
         return np.random.default_rng([self.seed, member, 1 + CATALOGUE.index(effect)])
 
-    def _series(self, j, trial, ctx):
+    def _series(self, j: int, trial: tuple[Effect, Params, FloatArray | None] | None,
+                ctx: Context | None) -> tuple[FloatArray, FloatArray | None]:
         meas = self.meas
         x = self.members[j]
         quant, stamp_effect = self.quantization, self.stamp_effect
@@ -253,6 +263,7 @@ class _Model:
             if effect.kind == 'additive':
                 x = x + det
             elif effect.kind == 'stochastic':
+                assert ctx is not None  # a trial comes with the context it was fitted in
                 x = x + effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
             elif effect.kind == 'quantization':
                 quant = params
@@ -264,16 +275,18 @@ class _Model:
             t = None
         else:
             effect, params = stamp_effect
+            assert ctx is not None  # only the first call, before any effect, has no context
             t = effect.stamps(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
         return x, t
 
-    def signatures(self, trial=None, ctx=None):
+    def signatures(self, trial: tuple[Effect, Params, FloatArray | None] | None = None,
+                   ctx: Context | None = None) -> list[Signatures]:
         # One pure work unit per member, in member order (mapper: local or a Dask cluster's).
         series = (self._series(j, trial, ctx) for j in range(len(self.members)))
         return list(self.mapper(member_signatures, itertools.repeat(self.layout), series,
                                 itertools.repeat(self.meas.temperature_c)))
 
-    def rebase(self, baseline, det_sum, ctx):
+    def rebase(self, baseline: BaselineModel, det_sum: FloatArray, ctx: Context) -> None:
         """Regenerate the members from a refitted baseline, keeping the accepted additive terms."""
         meas = self.meas
         for j in range(len(self.members)):
@@ -283,7 +296,8 @@ class _Model:
                 x += effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
             self.members[j] = x
 
-    def accept(self, effect, params, det, ctx):
+    def accept(self, effect: Effect, params: Params, det: FloatArray | None,
+               ctx: Context) -> None:
         meas = self.meas
         if effect.kind == 'additive':
             for x in self.members:
@@ -299,7 +313,8 @@ class _Model:
         self.accepted[effect.name] = params
 
 
-def member_signatures(layout, series, temperature_c):
+def member_signatures(layout: Layout, series: tuple[FloatArray, FloatArray | None],
+                      temperature_c: FloatArray | None) -> Signatures:
     """
     Evaluate one ensemble member's signatures (the pure work unit shipped to ``mapper``).
 
@@ -322,7 +337,8 @@ def member_signatures(layout, series, temperature_c):
     return sig.compute(layout, x, t, temperature_c)
 
 
-def time_scales(effect_name, params, meas, layout):
+def time_scales(effect_name: str, params: Mapping[str, Any], meas: Measurement,
+                layout: Layout) -> dict[str, dict[str, Any]]:
     """
     Check every parameter of an effect that has a time scale against what the record resolves.
 
@@ -354,7 +370,7 @@ def time_scales(effect_name, params, meas, layout):
     return out
 
 
-def _changed(new, old):
+def _changed(new: BaselineModel, old: BaselineModel) -> bool:
     """Tell whether a refitted baseline differs materially (order, f, or a level by over 2 %)."""
     level = np.hypot(new.sigma_w_rad_s, new.sigma_nu_rad_s) / max(
         np.hypot(old.sigma_w_rad_s, old.sigma_nu_rad_s), 1e-300)
@@ -362,20 +378,23 @@ def _changed(new, old):
             or new.memory_sim != old.memory_sim)
 
 
-def compare_all(layout, meas_sig, member_sig):
+def compare_all(layout: Layout, meas_sig: Signatures,
+                member_sig: Sequence[Signatures]) -> dict[str, Comparison]:
     """Compare every signature; returns name -> Comparison."""
     return {name: sig.compare(name, meas_sig[name], np.array([s[name] for s in member_sig]))
             for name in meas_sig}
 
 
-def where_outside(layout, comparisons):
+def where_outside(layout: Layout, comparisons: Mapping[str, Comparison]) -> list[str]:
     """Texts naming where the measurement leaves each band, worst signature first."""
     worst = sorted(comparisons.values(), key=lambda c: -c.g)
     return [sig.describe_where(layout, c) for c in worst if c.outside.any()]
 
 
-def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progress=None,
-            bootstrap=DEFAULT_BOOTSTRAP, mapper=map):
+def explain(meas: Measurement, *, seed: int = 0, ensemble: int = 16, max_steps: int = 6,
+            effects: Sequence[Effect] = CATALOGUE, progress: Callable[[str], None] | None = None,
+            bootstrap: int = DEFAULT_BOOTSTRAP,
+            mapper: Callable[..., Iterable[Any]] = map) -> ExplainResult:
     """
     Run the discrepancy workflow on one measured axis (module doc).
 
@@ -427,9 +446,9 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
     gap = sig.total_gap(comparisons)
     initial, gap_initial = comparisons, gap
     residual = meas.rate.copy()
-    det_terms = {}
-    steps = []
-    tried_last = {}
+    det_terms: dict[str, FloatArray] = {}
+    steps: list[Step] = []
+    tried_last: dict[str, float] = {}
     say(f'gap {gap:.3f}')
     while gap > INSIDE_GAP and len(steps) < max_steps:
         ctx = Context(meas, residual, layout, meas_sig, member_sig, model.accepted)
@@ -473,7 +492,8 @@ def explain(meas, *, seed=0, ensemble=16, max_steps=6, effects=CATALOGUE, progre
                          uncertainty=uncertainty, bootstrap=bootstrap if steps else 0)
 
 
-def _checked(ensemble, max_steps, seed, bootstrap):
+def _checked(ensemble: int, max_steps: int, seed: int,
+             bootstrap: int) -> tuple[int, int, int, int]:
     """Return the integer settings of :func:`explain`; ParameterError names a bad one."""
     ensemble, max_steps, seed = int(ensemble), int(max_steps), int(seed)
     if ensemble < 4:
@@ -488,7 +508,8 @@ def _checked(ensemble, max_steps, seed, bootstrap):
     return ensemble, max_steps, seed, bootstrap
 
 
-def _trials(model, ctx, effects, say):
+def _trials(model: _Model, ctx: Context, effects: Sequence[Effect],
+            say: Callable[[str], None]) -> list[Trial]:
     """
     Fit every candidate not yet in the model and simulate the model with it.
 
@@ -513,14 +534,17 @@ def _trials(model, ctx, effects, say):
     return trials
 
 
-def _choose(trials):
+def _choose(trials: Sequence[Trial]) -> Trial:
     """Return the trial of smallest gap; among those within TIE_GAP, the best-scoring simplest."""
     best_gap = min(t[0] for t in trials)
     tied = [t for t in trials if t[0] <= best_gap + TIE_GAP]
     return min(tied, key=lambda t: sig.mean_log_score(t[5]) + PARAM_PENALTY * t[1].n_params)
 
 
-def _rebased(model, ctx, residual, baseline, trial, say):
+def _rebased(model: _Model, ctx: Context, residual: FloatArray, baseline: BaselineModel,
+             trial: tuple[list[Signatures], dict[str, Comparison], float],
+             say: Callable[[str], None]) -> tuple[BaselineModel, list[Signatures],
+                                                  dict[str, Comparison], float]:
     """
     Refit the baseline on the residual once a deterministic term is accepted, if it changed.
 
@@ -546,7 +570,9 @@ def _rebased(model, ctx, residual, baseline, trial, say):
     return baseline, trial_sig, trial_cmp, trial_gap
 
 
-def _final_model(meas, layout, baseline, steps, effects, det_terms, seed):
+def _final_model(meas: Measurement, layout: Layout, baseline: BaselineModel,
+                 steps: Sequence[Step], effects: Sequence[Effect],
+                 det_terms: dict[str, FloatArray], seed: int) -> FinalModel:
     """Return the model the workflow ended with, for the parametric bootstrap."""
     by_name = {effect.name: effect for effect in effects}
     return FinalModel(n=meas.n, rate_hz=meas.rate_hz, temperature_c=meas.temperature_c,

@@ -27,8 +27,12 @@ same arithmetic, operation for operation; ``fastmath`` stays off (``JIT_OPTIONS`
 re-associates nor contracts into FMAs.
 """
 
+from typing import Any
+
 from gyro_noise_ros.core.jit import JIT_OPTIONS
 import numba
+import numpy as np
+from numpy.typing import NDArray
 
 #: Terms per fold of the four partial sums into the compensated total. A power of two and a
 #: multiple of 4, so a 4-term group never straddles a fold point.
@@ -66,7 +70,8 @@ _NV = 18        # number of v
 
 
 @numba.njit(**JIT_OPTIONS)
-def _integrate(y, offset, state, out):  # pragma: no cover - compiled
+def _integrate(y: NDArray[np.floating[Any]], offset: float, state: NDArray[np.float64],
+               out: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
     """
     Neumaier-compensated running sum of ``y - offset`` into ``out`` (len(y)).
 
@@ -90,7 +95,8 @@ def _integrate(y, offset, state, out):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _fold(lanes, tot, j):  # pragma: no cover - compiled
+def _fold(  # pragma: no cover - compiled
+        lanes: NDArray[np.float64], tot: NDArray[np.float64], j: int) -> None:
     """Add the four lanes of tau ``j`` into its compensated total and clear them."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
@@ -107,7 +113,8 @@ def _fold(lanes, tot, j):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _finish(lanes, tot, j):  # pragma: no cover - compiled
+def _finish(  # pragma: no cover - compiled
+        lanes: NDArray[np.float64], tot: NDArray[np.float64], j: int) -> float:
     """Return the sum of squares of tau ``j`` so far (lanes folded into a copy of the total)."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
@@ -121,7 +128,8 @@ def _finish(lanes, tot, j):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _add_term(lanes, tot, counts, j, d):  # pragma: no cover - compiled
+def _add_term(lanes: NDArray[np.float64], tot: NDArray[np.float64], counts: NDArray[np.int64],
+              j: int, d: float) -> None:  # pragma: no cover - compiled
     """Add one second difference ``d`` to tau ``j`` (same arithmetic as the batch loop)."""
     t = counts[j]
     lanes[j, t & 3] += d * d
@@ -132,7 +140,9 @@ def _add_term(lanes, tot, counts, j, d):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover - compiled
+def _avar_sums(x: NDArray[np.float64], ms: NDArray[np.int64], strides: NDArray[np.int64],
+               n_terms: NDArray[np.int64], lanes: NDArray[np.float64], tot: NDArray[np.float64],
+               counts: NDArray[np.int64]) -> None:  # pragma: no cover - compiled
     """
     Sum the squared second differences of the phase ``x`` for every tau.
 
@@ -224,7 +234,7 @@ def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover
 
 
 @numba.njit(**JIT_OPTIONS)
-def _acf_push(acf, j, z):  # pragma: no cover - compiled
+def _acf_push(acf: NDArray[np.float64], j: int, z: float) -> None:  # pragma: no cover - compiled
     """
     Append the m-average ``z`` to the lag-1 ACF running sums of tau ``j``.
 
@@ -267,7 +277,8 @@ def _acf_push(acf, j, z):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _acf_sums(x, ms, acf):  # pragma: no cover - compiled
+def _acf_sums(  # pragma: no cover - compiled
+        x: NDArray[np.float64], ms: NDArray[np.int64], acf: NDArray[np.float64]) -> None:
     """Feed each m-average z_j = (x[(j+1)m] - x[jm]) / m of the phase ``x`` to _acf_push."""
     n_x = x.shape[0]
     for j in range(ms.shape[0]):
@@ -279,8 +290,12 @@ def _acf_sums(x, ms, acf):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _accumulate(y, offset, integ, k0, ring, level_pos, n_levels_active, ms, level_of, level_end,
-                next_push, lanes, tot, counts, acf):  # pragma: no cover - compiled
+def _accumulate(y: NDArray[np.floating[Any]], offset: float, integ: NDArray[np.float64], k0: int,
+                ring: NDArray[np.float64], level_pos: NDArray[np.int64], n_levels_active: int,
+                ms: NDArray[np.int64], level_of: NDArray[np.int64], level_end: NDArray[np.int64],
+                next_push: NDArray[np.int64], lanes: NDArray[np.float64],
+                tot: NDArray[np.float64], counts: NDArray[np.int64],
+                acf: NDArray[np.float64]) -> tuple[int, int]:  # pragma: no cover - compiled
     """
     Incremental twin of ``_integrate`` + ``_avar_sums`` + ``_acf_sums`` for the accumulator.
 

@@ -471,11 +471,11 @@ class SequenceSummary:
     ties_corr: int
     alpha_var_modes: tuple = ()
     alpha_corr_modes: tuple = ()
-    bias_robust: object = None
-    log_variance_robust: object = None
-    alpha_var_robust: object = None
-    alpha_corr_robust: object = None
-    noise_colour_robust: object = None
+    bias_robust: 'RobustLocation | None' = None
+    log_variance_robust: 'RobustLocation | None' = None
+    alpha_var_robust: 'RobustLocation | None' = None
+    alpha_corr_robust: 'RobustLocation | None' = None
+    noise_colour_robust: 'RobustLocation | None' = None
 
 
 def summarise_sequence(t_mid_s: npt.ArrayLike, bias: npt.ArrayLike, variance: npt.ArrayLike,

@@ -90,15 +90,17 @@ beside it).
 from collections import deque
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .allan import AllanAccumulator
 from .chunks import (chunk_moments, Chunker, ChunkMoments, DEFAULT_CHUNK_SIZE, noise_colour,
                      SequenceSummary, summarise_sequence)
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
-from .health import evaluate_health, HealthThresholds, reference_per_axis
+from .health import evaluate_health, HealthThresholds, reference_per_axis, ReferenceStats
 from .readout import fit_noise_terms_band_limited, read_allan
 from .stamps import (MAX_GAP_EVENTS, RATE_ESTIMATE_SAMPLES, StampAccountant, StampedBatch,
                      StreamCounts)
@@ -736,7 +738,8 @@ class NoiseEngine:
 
     """
 
-    def __init__(self, config: EngineConfig | None = None, *, reference=None,
+    def __init__(self, config: EngineConfig | None = None, *,
+                 reference: str | Path | ReferenceStats | dict[str, ReferenceStats] | None = None,
                  thresholds: HealthThresholds | None = None) -> None:
         self.config = config if config is not None else EngineConfig()
         self.thresholds = thresholds if thresholds is not None else HealthThresholds()
@@ -756,7 +759,8 @@ class NoiseEngine:
 
     # ---- ingestion ---------------------------------------------------------------------------
 
-    def ingest(self, stamp_ns, gyro, temperature_c=None) -> list[ChunkJob]:
+    def ingest(self, stamp_ns: npt.ArrayLike, gyro: npt.ArrayLike,
+               temperature_c: npt.ArrayLike | None = None) -> list[ChunkJob]:
         """
         Add a batch of samples; return the jobs of the chunks it completes.
 

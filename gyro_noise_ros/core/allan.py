@@ -152,7 +152,7 @@ class AllanResult:
     ci_low: np.ndarray
     ci_high: np.ndarray
     noise_alpha: np.ndarray
-    noise_type: tuple
+    noise_type: tuple[str, ...]
     confidence: float
     rate_hz: float
     n_samples: int
@@ -797,7 +797,7 @@ class NoiseTerms:
     bias_instability_rad_per_s: float
     rate_random_walk_rad_per_s_sqrt_s: float
     rate_ramp_rad_per_s2: float
-    terms: tuple
+    terms: tuple[str, ...]
     tau_min_s: float
     tau_max_s: float
     rms_relative_residual: float

@@ -469,8 +469,8 @@ class SequenceSummary:
     alpha_corr_variance: float
     ties_var: int
     ties_corr: int
-    alpha_var_modes: tuple = ()
-    alpha_corr_modes: tuple = ()
+    alpha_var_modes: tuple[tuple[float, int], ...] = ()
+    alpha_corr_modes: tuple[tuple[float, int], ...] = ()
     bias_robust: 'RobustLocation | None' = None
     log_variance_robust: 'RobustLocation | None' = None
     alpha_var_robust: 'RobustLocation | None' = None
@@ -634,7 +634,7 @@ class RobustLocation:
     count: int
     total: int
     population: str = 'all chunks'
-    modes: tuple = ()
+    modes: tuple[tuple[float, int], ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         """

@@ -223,8 +223,8 @@ class OrderIdentification:
     alpha_corr: float
     f_corr: float
     j_min: float
-    tied_alphas_var: tuple
-    tied_alphas_corr: tuple
+    tied_alphas_var: tuple[float, ...]
+    tied_alphas_corr: tuple[float, ...]
     bias: float
     alphas: np.ndarray
     var_curve: np.ndarray | None = None

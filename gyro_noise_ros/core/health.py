@@ -278,7 +278,7 @@ class HealthVerdict:
 
     level: str
     message: str
-    items: tuple
+    items: tuple[tuple[str, str, str], ...]
 
     @property
     def level_byte(self) -> int:

@@ -171,7 +171,7 @@ class RateEstimate:
     loss_samples: int
     loss_resolution_samples: float
     deficit_samples: float
-    warnings: tuple = ()
+    warnings: tuple[str, ...] = ()
     equal_steps: int = 0
     burst_step_s: float = math.nan
 

@@ -300,13 +300,13 @@ class DecodeResult:
     """
 
     samples: np.ndarray = field(default_factory=lambda: _EMPTY_SAMPLES)
-    acks: tuple = ()
+    acks: tuple[Ack, ...] = ()
     lost_before: np.ndarray = field(default_factory=lambda: _EMPTY_LOST)
-    ack_positions: tuple = ()
-    commands: tuple = ()
-    headers: tuple = ()
-    header_positions: tuple = ()
-    discarded: tuple = ()
+    ack_positions: tuple[int, ...] = ()
+    commands: tuple[Configure, ...] = ()
+    headers: tuple[LogHeader, ...] = ()
+    header_positions: tuple[int, ...] = ()
+    discarded: tuple[tuple[int, int], ...] = ()
 
 
 def _frame(frame_type: int, payload: bytes) -> bytes:

@@ -299,14 +299,14 @@ class LogReport:
 
     """
 
-    files: tuple
+    files: tuple[LogFileInfo, ...]
     stats: LinkStats
-    corrupt_regions: tuple
+    corrupt_regions: tuple[CorruptRegion, ...]
     corrupt_region_count: int
-    missing_file_indices: tuple
+    missing_file_indices: tuple[int, ...]
     sequence_id: int | None
     samples_without_config: int = 0
-    warnings: tuple = field(default=())
+    warnings: tuple[str, ...] = field(default=())
 
 
 def read_header(path: str | os.PathLike[str]) -> LogHeader | None:

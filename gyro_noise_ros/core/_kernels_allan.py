@@ -34,6 +34,10 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+#: Annotations of the kernels' arrays: float64 and int64 (short, so signatures stay one line).
+_F = NDArray[np.float64]
+_I = NDArray[np.int64]
+
 #: Terms per fold of the four partial sums into the compensated total. A power of two and a
 #: multiple of 4, so a 4-term group never straddles a fold point.
 FOLD_TERMS = 4096
@@ -70,8 +74,8 @@ _NV = 18        # number of v
 
 
 @numba.njit(**JIT_OPTIONS)
-def _integrate(y: NDArray[np.floating[Any]], offset: float, state: NDArray[np.float64],
-               out: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
+def _integrate(  # pragma: no cover - compiled
+        y: NDArray[np.floating[Any]], offset: float, state: _F, out: _F) -> None:
     """
     Neumaier-compensated running sum of ``y - offset`` into ``out`` (len(y)).
 
@@ -95,8 +99,7 @@ def _integrate(y: NDArray[np.floating[Any]], offset: float, state: NDArray[np.fl
 
 
 @numba.njit(**JIT_OPTIONS)
-def _fold(  # pragma: no cover - compiled
-        lanes: NDArray[np.float64], tot: NDArray[np.float64], j: int) -> None:
+def _fold(lanes: _F, tot: _F, j: int) -> None:  # pragma: no cover - compiled
     """Add the four lanes of tau ``j`` into its compensated total and clear them."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
@@ -113,8 +116,7 @@ def _fold(  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _finish(  # pragma: no cover - compiled
-        lanes: NDArray[np.float64], tot: NDArray[np.float64], j: int) -> float:
+def _finish(lanes: _F, tot: _F, j: int) -> float:  # pragma: no cover - compiled
     """Return the sum of squares of tau ``j`` so far (lanes folded into a copy of the total)."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
@@ -128,8 +130,8 @@ def _finish(  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _add_term(lanes: NDArray[np.float64], tot: NDArray[np.float64], counts: NDArray[np.int64],
-              j: int, d: float) -> None:  # pragma: no cover - compiled
+def _add_term(  # pragma: no cover - compiled
+        lanes: _F, tot: _F, counts: _I, j: int, d: float) -> None:
     """Add one second difference ``d`` to tau ``j`` (same arithmetic as the batch loop)."""
     t = counts[j]
     lanes[j, t & 3] += d * d
@@ -139,10 +141,8 @@ def _add_term(lanes: NDArray[np.float64], tot: NDArray[np.float64], counts: NDAr
         _fold(lanes, tot, j)
 
 
-@numba.njit(**JIT_OPTIONS)
-def _avar_sums(x: NDArray[np.float64], ms: NDArray[np.int64], strides: NDArray[np.int64],
-               n_terms: NDArray[np.int64], lanes: NDArray[np.float64], tot: NDArray[np.float64],
-               counts: NDArray[np.int64]) -> None:  # pragma: no cover - compiled
+@numba.njit(**JIT_OPTIONS)  # pragma: no cover - compiled (on the decorator: the def is full)
+def _avar_sums(x: _F, ms: _I, strides: _I, n_terms: _I, lanes: _F, tot: _F, counts: _I) -> None:
     """
     Sum the squared second differences of the phase ``x`` for every tau.
 
@@ -234,7 +234,7 @@ def _avar_sums(x: NDArray[np.float64], ms: NDArray[np.int64], strides: NDArray[n
 
 
 @numba.njit(**JIT_OPTIONS)
-def _acf_push(acf: NDArray[np.float64], j: int, z: float) -> None:  # pragma: no cover - compiled
+def _acf_push(acf: _F, j: int, z: float) -> None:  # pragma: no cover - compiled
     """
     Append the m-average ``z`` to the lag-1 ACF running sums of tau ``j``.
 
@@ -277,8 +277,7 @@ def _acf_push(acf: NDArray[np.float64], j: int, z: float) -> None:  # pragma: no
 
 
 @numba.njit(**JIT_OPTIONS)
-def _acf_sums(  # pragma: no cover - compiled
-        x: NDArray[np.float64], ms: NDArray[np.int64], acf: NDArray[np.float64]) -> None:
+def _acf_sums(x: _F, ms: _I, acf: _F) -> None:  # pragma: no cover - compiled
     """Feed each m-average z_j = (x[(j+1)m] - x[jm]) / m of the phase ``x`` to _acf_push."""
     n_x = x.shape[0]
     for j in range(ms.shape[0]):
@@ -290,12 +289,10 @@ def _acf_sums(  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _accumulate(y: NDArray[np.floating[Any]], offset: float, integ: NDArray[np.float64], k0: int,
-                ring: NDArray[np.float64], level_pos: NDArray[np.int64], n_levels_active: int,
-                ms: NDArray[np.int64], level_of: NDArray[np.int64], level_end: NDArray[np.int64],
-                next_push: NDArray[np.int64], lanes: NDArray[np.float64],
-                tot: NDArray[np.float64], counts: NDArray[np.int64],
-                acf: NDArray[np.float64]) -> tuple[int, int]:  # pragma: no cover - compiled
+def _accumulate(  # pragma: no cover - compiled
+        y: NDArray[np.floating[Any]], offset: float, integ: _F, k0: int, ring: _F, level_pos: _I,
+        n_levels_active: int, ms: _I, level_of: _I, level_end: _I, next_push: _I, lanes: _F,
+        tot: _F, counts: _I, acf: _F) -> tuple[int, int]:
     """
     Incremental twin of ``_integrate`` + ``_avar_sums`` + ``_acf_sums`` for the accumulator.
 

@@ -259,6 +259,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
                 temperature_rate_hz=temperature_rate_hz, temperature_variance=temperature_variance,
                 av_cov=av_cov, la_cov=la_cov)
         rep = reader.report
+        assert rep is not None  # the iteration ran to its end
         if written == 0:
             raise InputDataError(f'no valid samples in {len(reader.files)} log file(s) '
                                  f'({rep.stats.bytes_discarded} bytes discarded)')

@@ -22,12 +22,15 @@ one set of compilation flags, :data:`gyro_noise_ros.core.jit.JIT_OPTIONS`.
 
 import numba
 import numpy as np
+from numpy.typing import NDArray
 
 from .jit import JIT_OPTIONS
 
 
 @numba.njit(**JIT_OPTIONS)
-def _fractional_recursion(w, history, c_rev, f, out):  # pragma: no cover - compiled
+def _fractional_recursion(  # pragma: no cover - compiled
+        w: NDArray[np.float64], history: NDArray[np.float64], c_rev: NDArray[np.float64], f: float,
+        out: NDArray[np.float64]) -> NDArray[np.float64]:
     """
     Run the recursion of paper 000 eq. (2) for ``len(w)`` steps.
 

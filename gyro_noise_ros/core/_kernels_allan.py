@@ -27,8 +27,16 @@ same arithmetic, operation for operation; ``fastmath`` stays off (``JIT_OPTIONS`
 re-associates nor contracts into FMAs.
 """
 
+from typing import Any
+
 from gyro_noise_ros.core.jit import JIT_OPTIONS
 import numba
+import numpy as np
+from numpy.typing import NDArray
+
+#: Annotations of the kernels' arrays: float64 and int64 (short, so signatures stay one line).
+_F = NDArray[np.float64]
+_I = NDArray[np.int64]
 
 #: Terms per fold of the four partial sums into the compensated total. A power of two and a
 #: multiple of 4, so a 4-term group never straddles a fold point.
@@ -66,7 +74,8 @@ _NV = 18        # number of v
 
 
 @numba.njit(**JIT_OPTIONS)
-def _integrate(y, offset, state, out):  # pragma: no cover - compiled
+def _integrate(  # pragma: no cover - compiled
+        y: NDArray[np.floating[Any]], offset: float, state: _F, out: _F) -> None:
     """
     Neumaier-compensated running sum of ``y - offset`` into ``out`` (len(y)).
 
@@ -90,7 +99,7 @@ def _integrate(y, offset, state, out):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _fold(lanes, tot, j):  # pragma: no cover - compiled
+def _fold(lanes: _F, tot: _F, j: int) -> None:  # pragma: no cover - compiled
     """Add the four lanes of tau ``j`` into its compensated total and clear them."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
@@ -107,7 +116,7 @@ def _fold(lanes, tot, j):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _finish(lanes, tot, j):  # pragma: no cover - compiled
+def _finish(lanes: _F, tot: _F, j: int) -> float:  # pragma: no cover - compiled
     """Return the sum of squares of tau ``j`` so far (lanes folded into a copy of the total)."""
     b = (lanes[j, 0] + lanes[j, 1]) + (lanes[j, 2] + lanes[j, 3])
     s = tot[j, 0]
@@ -121,7 +130,8 @@ def _finish(lanes, tot, j):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _add_term(lanes, tot, counts, j, d):  # pragma: no cover - compiled
+def _add_term(  # pragma: no cover - compiled
+        lanes: _F, tot: _F, counts: _I, j: int, d: float) -> None:
     """Add one second difference ``d`` to tau ``j`` (same arithmetic as the batch loop)."""
     t = counts[j]
     lanes[j, t & 3] += d * d
@@ -131,8 +141,8 @@ def _add_term(lanes, tot, counts, j, d):  # pragma: no cover - compiled
         _fold(lanes, tot, j)
 
 
-@numba.njit(**JIT_OPTIONS)
-def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover - compiled
+@numba.njit(**JIT_OPTIONS)  # pragma: no cover - compiled (on the decorator: the def is full)
+def _avar_sums(x: _F, ms: _I, strides: _I, n_terms: _I, lanes: _F, tot: _F, counts: _I) -> None:
     """
     Sum the squared second differences of the phase ``x`` for every tau.
 
@@ -224,7 +234,7 @@ def _avar_sums(x, ms, strides, n_terms, lanes, tot, counts):  # pragma: no cover
 
 
 @numba.njit(**JIT_OPTIONS)
-def _acf_push(acf, j, z):  # pragma: no cover - compiled
+def _acf_push(acf: _F, j: int, z: float) -> None:  # pragma: no cover - compiled
     """
     Append the m-average ``z`` to the lag-1 ACF running sums of tau ``j``.
 
@@ -267,7 +277,7 @@ def _acf_push(acf, j, z):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _acf_sums(x, ms, acf):  # pragma: no cover - compiled
+def _acf_sums(x: _F, ms: _I, acf: _F) -> None:  # pragma: no cover - compiled
     """Feed each m-average z_j = (x[(j+1)m] - x[jm]) / m of the phase ``x`` to _acf_push."""
     n_x = x.shape[0]
     for j in range(ms.shape[0]):
@@ -279,8 +289,10 @@ def _acf_sums(x, ms, acf):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def _accumulate(y, offset, integ, k0, ring, level_pos, n_levels_active, ms, level_of, level_end,
-                next_push, lanes, tot, counts, acf):  # pragma: no cover - compiled
+def _accumulate(  # pragma: no cover - compiled
+        y: NDArray[np.floating[Any]], offset: float, integ: _F, k0: int, ring: _F, level_pos: _I,
+        n_levels_active: int, ms: _I, level_of: _I, level_end: _I, next_push: _I, lanes: _F,
+        tot: _F, counts: _I, acf: _F) -> tuple[int, int]:
     """
     Incremental twin of ``_integrate`` + ``_avar_sums`` + ``_acf_sums`` for the accumulator.
 

@@ -25,12 +25,13 @@ not accuracy).
 
 import numba
 import numpy as np
+from numpy.typing import NDArray
 
 from .jit import JIT_OPTIONS
 
 
 @numba.njit(**JIT_OPTIONS)
-def _sum4(x, n):  # pragma: no cover - compiled
+def _sum4(x: NDArray[np.float64], n: int) -> float:  # pragma: no cover - compiled
     s0 = 0.0
     s1 = 0.0
     s2 = 0.0
@@ -49,7 +50,9 @@ def _sum4(x, n):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def residual_moments(d, w_reg, ww, f_out, var_out):  # pragma: no cover - compiled
+def residual_moments(  # pragma: no cover - compiled
+        d: NDArray[np.float64], w_reg: NDArray[np.float64], ww: float, f_out: NDArray[np.float64],
+        var_out: NDArray[np.float64]) -> None:
     """
     Per row of ``d``: ``f = d . w_reg / ww`` (eq. 8) and the population variance of the residual.
 
@@ -94,7 +97,9 @@ def residual_moments(d, w_reg, ww, f_out, var_out):  # pragma: no cover - compil
 
 
 @numba.njit(**JIT_OPTIONS)
-def residual_power(spec, f, reg_hat, out):  # pragma: no cover - compiled
+def residual_power(  # pragma: no cover - compiled
+        spec: NDArray[np.complex128], f: NDArray[np.float64], reg_hat: NDArray[np.complex128],
+        out: NDArray[np.complex128]) -> None:
     """
     ``out[r] = |spec[r] - f[r] reg_hat|^2`` as a complex array with zero imaginary part.
 
@@ -109,7 +114,8 @@ def residual_power(spec, f, reg_hat, out):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def abs_sum(corr, count, out, scale):  # pragma: no cover - compiled
+def abs_sum(corr: NDArray[np.float64], count: int, out: NDArray[np.float64],
+            scale: float) -> None:  # pragma: no cover - compiled
     """``out[r] = scale * sum_{m < count} |corr[r, m]|`` (eq. 13 with the 1/n of eq. 14)."""
     rows = corr.shape[0]
     for r in range(rows):
@@ -131,8 +137,11 @@ def abs_sum(corr, count, out, scale):  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
-def next_order(d, spec, parents, v, c_last, memory, one_minus_e, e_n, shifted_hat, d_out,
-               spec_out):  # pragma: no cover - compiled
+def next_order(d: NDArray[np.float64], spec: NDArray[np.complex128], parents: NDArray[np.int64],
+               v: NDArray[np.float64], c_last: NDArray[np.float64], memory: int,
+               one_minus_e: NDArray[np.complex128], e_n: NDArray[np.complex128],
+               shifted_hat: NDArray[np.complex128], d_out: NDArray[np.float64],
+               spec_out: NDArray[np.complex128]) -> None:  # pragma: no cover - compiled
     """
     Difference of order ``a + 1`` from that of order ``a``, in time and frequency.
 
@@ -158,7 +167,10 @@ def next_order(d, spec, parents, v, c_last, memory, one_minus_e, e_n, shifted_ha
 
 
 @numba.njit(**JIT_OPTIONS)
-def cosine_prep(spec, f, reg_hat, sin_t, cos_t, y, odd):  # pragma: no cover - compiled
+def cosine_prep(spec: NDArray[np.complex128], f: NDArray[np.float64],
+                reg_hat: NDArray[np.complex128], sin_t: NDArray[np.float64],
+                cos_t: NDArray[np.float64], y: NDArray[np.float64],
+                odd: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
     """
     Fold a power spectrum for its inverse transform by a half-length real FFT (DCT-I, cosft1).
 
@@ -207,7 +219,8 @@ def cosine_prep(spec, f, reg_hat, sin_t, cos_t, y, odd):  # pragma: no cover - c
 
 
 @numba.njit(**JIT_OPTIONS)
-def cosine_abs_sum(y_hat, odd, count, scale, out):  # pragma: no cover - compiled
+def cosine_abs_sum(y_hat: NDArray[np.complex128], odd: NDArray[np.float64], count: int,
+                   scale: float, out: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
     """
     Second half of :func:`cosine_prep`: ``out[r] = scale * sum_{m < count} |N R[m]|``.
 

@@ -52,10 +52,14 @@ fitted by non-negative weighted least squares in the squared coefficients
 (:func:`fit_noise_terms`).
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 import scipy.optimize
 import scipy.stats
 
@@ -148,7 +152,7 @@ class AllanResult:
     ci_low: np.ndarray
     ci_high: np.ndarray
     noise_alpha: np.ndarray
-    noise_type: tuple
+    noise_type: tuple[str, ...]
     confidence: float
     rate_hz: float
     n_samples: int
@@ -157,7 +161,7 @@ class AllanResult:
 # ----------------------------------------------------------------------------------------------
 # averaging factors
 
-def octave_factors(n_samples):
+def octave_factors(n_samples: int) -> NDArray[np.int64]:
     """
     Return the octave averaging factors m = 1, 2, 4, ... with m <= n_samples / 4.
 
@@ -179,7 +183,7 @@ def octave_factors(n_samples):
     return 2 ** np.arange(top.bit_length(), dtype=np.int64)
 
 
-def dense_factors(n_samples, *, per_decade=10):
+def dense_factors(n_samples: int, *, per_decade: int = 10) -> NDArray[np.int64]:
     """
     Return log-spaced unique integer averaging factors with m <= n_samples / 4.
 
@@ -206,7 +210,7 @@ def dense_factors(n_samples, *, per_decade=10):
     return ms[ms <= top]
 
 
-def _explicit_factors(taus):
+def _explicit_factors(taus: npt.ArrayLike) -> NDArray[np.int64]:
     arr = np.asarray(taus)
     if arr.ndim != 1 or arr.size == 0:
         raise ParameterError(
@@ -220,7 +224,7 @@ def _explicit_factors(taus):
     return np.unique(arr.astype(np.int64))
 
 
-def _resolve_factors(taus, n_samples):
+def _resolve_factors(taus: str | npt.ArrayLike, n_samples: int) -> tuple[NDArray[np.int64], str]:
     if isinstance(taus, str):
         if taus == 'octave':
             return octave_factors(n_samples), 'octave'
@@ -234,7 +238,7 @@ def _resolve_factors(taus, n_samples):
 # ----------------------------------------------------------------------------------------------
 # validation
 
-def _check_rate(rate_hz):
+def _check_rate(rate_hz: float) -> float:
     try:
         r = float(rate_hz)
     except (TypeError, ValueError) as err:
@@ -244,7 +248,7 @@ def _check_rate(rate_hz):
     return r
 
 
-def _check_confidence(confidence):
+def _check_confidence(confidence: float) -> float:
     try:
         c = float(confidence)
     except (TypeError, ValueError) as err:
@@ -254,7 +258,7 @@ def _check_confidence(confidence):
     return c
 
 
-def _as_samples(data, name):
+def _as_samples(data: npt.ArrayLike, name: str) -> NDArray[np.floating[Any]]:
     arr = np.asarray(data)
     if arr.ndim != 1:
         raise InputDataError(f'{name} must be a 1-D array of samples, got shape {arr.shape}')
@@ -266,7 +270,7 @@ def _as_samples(data, name):
     return arr
 
 
-def _non_finite_error(arr, name):
+def _non_finite_error(arr: NDArray[np.floating[Any]], name: str) -> InputDataError:
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         return InputDataError(f'{name} contains {bad.size} NaN/Inf value(s), first at index '
@@ -278,8 +282,10 @@ def _non_finite_error(arr, name):
 # ----------------------------------------------------------------------------------------------
 # batch estimator
 
-def allan_deviation(data, rate_hz, *, taus='octave', data_type='rate', overlapping=True,
-                    confidence=DEFAULT_CONFIDENCE, offset_rad_per_s=None):
+def allan_deviation(data: npt.ArrayLike, rate_hz: float, *, taus: str | npt.ArrayLike = 'octave',
+                    data_type: str = 'rate', overlapping: bool = True,
+                    confidence: float = DEFAULT_CONFIDENCE,
+                    offset_rad_per_s: float | None = None) -> AllanResult:
     """
     Compute the (fully overlapping) Allan deviation of gyro rate samples.
 
@@ -331,8 +337,9 @@ def allan_deviation(data, rate_hz, *, taus='octave', data_type='rate', overlappi
     return _assemble(ms, strides, n_terms, sums, acf, n, rate, conf)
 
 
-def allan_deviation_values(data, rate_hz, *, taus='octave', overlapping=True,
-                           offset_rad_per_s=None):
+def allan_deviation_values(data: npt.ArrayLike, rate_hz: float, *,
+                           taus: str | npt.ArrayLike = 'octave', overlapping: bool = True,
+                           offset_rad_per_s: float | None = None) -> NDArray[np.float64]:
     """
     Return the Allan deviation of :func:`allan_deviation` alone, without intervals.
 
@@ -373,7 +380,10 @@ def allan_deviation_values(data, rate_hz, *, taus='octave', overlapping=True,
     return np.sqrt(sums / (2.0 * ms.astype(np.float64) ** 2 * n_terms))
 
 
-def _avar_core(data, rate, taus, data_type, overlapping, offset_rad_per_s):
+def _avar_core(data: npt.ArrayLike, rate: float, taus: str | npt.ArrayLike, data_type: str,
+               overlapping: bool, offset_rad_per_s: float | None
+               ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64],
+                          NDArray[np.float64], NDArray[np.float64], int]:
     """Validate, integrate to the phase and sum the squared second differences per tau."""
     if data_type not in ('rate', 'phase'):
         raise ParameterError(f"data_type must be 'rate' or 'phase', got {data_type!r}")
@@ -426,7 +436,7 @@ def _avar_core(data, rate, taus, data_type, overlapping, offset_rad_per_s):
     return ms, strides, n_terms, sums, x, n
 
 
-def _check_offset(offset):
+def _check_offset(offset: float) -> float:
     try:
         o = float(offset)
     except (TypeError, ValueError) as err:
@@ -437,7 +447,9 @@ def _check_offset(offset):
     return o
 
 
-def _assemble(ms, strides, n_terms, sums, acf, n, rate, conf):
+def _assemble(ms: NDArray[np.int64], strides: NDArray[np.int64], n_terms: NDArray[np.int64],
+              sums: NDArray[np.float64], acf: NDArray[np.float64], n: int, rate: float,
+              conf: float) -> AllanResult:
     # x is in (rate x samples), so d / m is a difference of m-averages of the rate: no tau0 factor.
     avar = sums / (2.0 * ms.astype(np.float64) ** 2 * n_terms)
     alpha = np.empty(ms.size, dtype=np.int64)
@@ -452,7 +464,7 @@ def _assemble(ms, strides, n_terms, sums, acf, n, rate, conf):
                                   stride=int(strides[j])) for j in range(ms.size)])
     lo, hi = confidence_bounds(avar, edf, conf)
     adev = np.sqrt(avar)
-    names = tuple(NOISE_TYPE_NAMES[int(max(-3, min(2, a)))] for a in alpha)
+    names = tuple(NOISE_TYPE_NAMES[max(-3, min(2, int(a)))] for a in alpha)
     fields = {'tau_s': ms / rate, 'm': ms.copy(), 'adev': adev, 'avar': avar,
               'n_terms': n_terms.copy(), 'stride': strides.copy(), 'edf': edf,
               'ci_low': np.sqrt(lo), 'ci_high': np.sqrt(hi), 'noise_alpha': alpha}
@@ -464,7 +476,8 @@ def _assemble(ms, strides, n_terms, sums, acf, n, rate, conf):
 # ----------------------------------------------------------------------------------------------
 # noise identification
 
-def _lag1_from_sums(n, s, ss, s1, first, last):
+def _lag1_from_sums(n: float, s: float, ss: float, s1: float, first: float,
+                    last: float) -> float | None:
     """Lag-1 autocorrelation of a series (mean removed) from its running sums."""
     mean = s / n
     den = ss - s * mean
@@ -474,7 +487,7 @@ def _lag1_from_sums(n, s, ss, s1, first, last):
     return num / den
 
 
-def _lag1_detrended(row):
+def _lag1_detrended(row: NDArray[np.float64]) -> float | None:
     """Lag-1 autocorrelation of the m-averages z_j after removing a least-squares line."""
     n = row[_k._N]
     sz, sjz, szz, szz1 = row[_k._SZ], row[_k._SJZ], row[_k._SZZ], row[_k._SZZ1]
@@ -497,7 +510,7 @@ def _lag1_detrended(row):
     return num / den
 
 
-def _identify_alpha(row):
+def _identify_alpha(row: NDArray[np.float64]) -> int | None:
     """
     Power-law exponent alpha of the rate at one tau from the running sums of its m-averages.
 
@@ -527,13 +540,13 @@ def _identify_alpha(row):
     return None
 
 
-def _b1_theory(n, mu):
+def _b1_theory(n: float, mu: int) -> float:
     if mu == 0:
         return n * math.log(n) / (2.0 * (n - 1.0) * math.log(2.0))
     return n * (1.0 - n ** mu) / (2.0 * (n - 1.0) * (1.0 - 2.0 ** mu))
 
 
-def _b1_alpha(row):
+def _b1_alpha(row: NDArray[np.float64]) -> int | None:
     """
     B1 ratio (Barnes): sample variance of the n m-averages over their non-overlapping AVAR.
 
@@ -565,7 +578,7 @@ _TABLE3_D2 = (15.23, 12.0)
 _JMAX = 100
 
 
-def _sw(t, alpha):
+def _sw(t: float, alpha: int) -> float:
     """Generalized autocovariance of the phase for noise alpha (eq. 7)."""
     at = abs(t)
     if alpha == 2:
@@ -583,7 +596,7 @@ def _sw(t, alpha):
     raise ParameterError(f'alpha must be in -2..2 for the Allan variance EDF, got {alpha!r}')
 
 
-def _sx(t, f, alpha):
+def _sx(t: float, f: float, alpha: int) -> float:
     """Eq. 8: the averaging filter of F samples applied to sw (F = inf: its limit)."""
     if f == math.inf:
         return _sw(t, alpha + 2)
@@ -595,13 +608,14 @@ def _sx(t, f, alpha):
     return f * f * (2.0 * _sw(t, alpha) - _sw(t - h, alpha) - _sw(t + h, alpha))
 
 
-def _sz(t, f, alpha):
+def _sz(t: float, f: float, alpha: int) -> float:
     """Eq. 9 with d = 2: the second difference at lag 1 applied to sx."""
     return (6.0 * _sx(t, f, alpha) - 4.0 * _sx(t - 1.0, f, alpha) - 4.0 * _sx(t + 1.0, f, alpha)
             + _sx(t - 2.0, f, alpha) + _sx(t + 2.0, f, alpha))
 
 
-def _basic_sum(jj, mm, s, f, alpha, only_multiples=False):
+def _basic_sum(jj: float, mm: float, s: float, f: float, alpha: int,
+               only_multiples: bool = False) -> float:
     """Eq. 10."""
     total = _sz(0.0, f, alpha) ** 2 + (1.0 - jj / mm) * _sz(jj / s, f, alpha) ** 2
     step = int(s) if only_multiples else 1
@@ -610,7 +624,8 @@ def _basic_sum(jj, mm, s, f, alpha, only_multiples=False):
     return total
 
 
-def edf_greenhall(alpha, m, n_phase, *, stride=1, stable32=False):
+def edf_greenhall(alpha: int, m: int, n_phase: int, *, stride: int = 1,
+                  stable32: bool = False) -> float:
     """
     Equivalent degrees of freedom of the Allan variance at averaging factor m.
 
@@ -688,7 +703,9 @@ def edf_greenhall(alpha, m, n_phase, *, stride=1, stable32=False):
     return 1.0 / inv
 
 
-def confidence_bounds(avar, edf, confidence=DEFAULT_CONFIDENCE):
+def confidence_bounds(avar: npt.ArrayLike, edf: npt.ArrayLike,
+                      confidence: float = DEFAULT_CONFIDENCE
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """
     Chi-squared confidence bounds of an Allan variance (NIST SP 1065 eq. 45).
 
@@ -780,12 +797,12 @@ class NoiseTerms:
     bias_instability_rad_per_s: float
     rate_random_walk_rad_per_s_sqrt_s: float
     rate_ramp_rad_per_s2: float
-    terms: tuple
+    terms: tuple[str, ...]
     tau_min_s: float
     tau_max_s: float
     rms_relative_residual: float
 
-    def avar_model(self, tau_s):
+    def avar_model(self, tau_s: npt.ArrayLike) -> NDArray[np.float64]:
         """
         Evaluate the fitted IEEE 952 Allan variance.
 
@@ -804,7 +821,7 @@ class NoiseTerms:
         coef = np.nan_to_num(np.array(self._coefficients()), nan=0.0)
         return _design(tau) @ coef
 
-    def model_adev(self, tau_s):
+    def model_adev(self, tau_s: npt.ArrayLike) -> NDArray[np.float64]:
         """
         Evaluate the fitted Allan deviation, ``sqrt(avar_model(tau_s))``.
 
@@ -821,7 +838,7 @@ class NoiseTerms:
         """
         return np.sqrt(self.avar_model(tau_s))
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the terms as a flat dict.
 
@@ -841,12 +858,12 @@ class NoiseTerms:
         out['terms'] = ','.join(self.terms)
         return out
 
-    def _coefficients(self):
+    def _coefficients(self) -> tuple[float, float, float, float, float]:
         return (self.quantization_rad ** 2, self.angle_random_walk_rad_per_sqrt_s ** 2,
                 self.bias_instability_rad_per_s ** 2, self.rate_random_walk_rad_per_s_sqrt_s ** 2,
                 self.rate_ramp_rad_per_s2 ** 2)
 
-    def customary(self):
+    def customary(self) -> NoiseTermsCustomary:
         """
         Return the terms in deg, deg/sqrt(h), deg/h, deg/h/sqrt(h) and deg/h^2.
 
@@ -868,7 +885,7 @@ class NoiseTerms:
             rate_ramp_deg_per_h2=self.rate_ramp_rad_per_s2 * RAD_TO_DEG * S_PER_H**2,
         )
 
-    def kalibr(self):
+    def kalibr(self) -> dict[str, float]:
         """
         Return the Kalibr / OpenVINS IMU noise parameters of the gyroscope (continuous time).
 
@@ -884,13 +901,15 @@ class NoiseTerms:
                 'gyroscope_random_walk': float(self.rate_random_walk_rad_per_s_sqrt_s)}
 
 
-def _design(tau):
+def _design(tau: npt.ArrayLike) -> NDArray[np.float64]:
     tau = np.asarray(tau, dtype=np.float64)
     return np.column_stack([3.0 / tau ** 2, 1.0 / tau, np.full_like(tau, _B_FACTOR), tau / 3.0,
                             tau ** 2 / 2.0])
 
 
-def fit_noise_terms(result, *, terms=_TERM_NAMES, tau_range_s=None, weighting='relative'):
+def fit_noise_terms(result: AllanResult, *, terms: Sequence[str] = _TERM_NAMES,
+                    tau_range_s: tuple[float, float] | None = None,
+                    weighting: str = 'relative') -> NoiseTerms:
     """
     Fit the IEEE Std 952 gyro noise terms to an Allan variance by non-negative least squares.
 
@@ -1001,8 +1020,9 @@ class AllanAccumulator:
 
     """
 
-    def __init__(self, rate_hz, *, taus='octave', max_exact_m=DEFAULT_MAX_EXACT_M,
-                 confidence=DEFAULT_CONFIDENCE, offset_rad_per_s=None):
+    def __init__(self, rate_hz: float, *, taus: str | npt.ArrayLike = 'octave',
+                 max_exact_m: int = DEFAULT_MAX_EXACT_M, confidence: float = DEFAULT_CONFIDENCE,
+                 offset_rad_per_s: float | None = None) -> None:
         self._rate = _check_rate(rate_hz)
         self._conf = _check_confidence(confidence)
         if isinstance(
@@ -1054,23 +1074,23 @@ class AllanAccumulator:
         self._acf = np.zeros((n_tau, _k.N_ACF))
 
     @property
-    def n_samples(self):
+    def n_samples(self) -> int:
         """Count the rate samples ingested so far."""
         return self._k
 
     @property
-    def offset_rad_per_s(self):
+    def offset_rad_per_s(self) -> float | None:
         """Return the constant removed before integration (rad/s), None before the first batch."""
         return self._offset
 
     @property
-    def nbytes(self):
+    def nbytes(self) -> int:
         """Bytes held by the accumulator's arrays (phase history + per-tau state)."""
         return int(self._ring.nbytes + self._lanes.nbytes + self._tot.nbytes + self._counts.nbytes
                    + self._acf.nbytes + self._ms.nbytes * 4 + self._level_end.nbytes
                    + self._level_pos.nbytes)
 
-    def update(self, rate):
+    def update(self, rate: npt.ArrayLike) -> None:
         """
         Ingest a batch of rate samples.
 
@@ -1102,7 +1122,7 @@ class AllanAccumulator:
             self._ms, self._levels, self._level_end, self._next_push, self._lanes, self._tot,
             self._counts, self._acf)
 
-    def result(self):
+    def result(self) -> AllanResult:
         """
         Return the Allan deviation of everything ingested so far.
 

@@ -49,10 +49,14 @@ follows the filter. Its chunk-to-chunk spread (~0.0125 with 10,000 samples) is e
 six runs of that sensor agree to 0.005 (docs/verdicts.md).
 """
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 from scipy.special import ndtri
 
 from .allan import allan_deviation
@@ -100,7 +104,7 @@ class Chunker:
         self.samples_in = 0
         self.chunks_out = 0
 
-    def push(self, samples) -> list:
+    def push(self, samples: npt.ArrayLike) -> list[NDArray[np.float64]]:
         """
         Add samples; return the list of chunks completed by them (possibly empty).
 
@@ -182,7 +186,7 @@ class Chunker:
         return dropped
 
     @property
-    def tail(self):
+    def tail(self) -> NDArray[Any] | tuple[NDArray[Any], ...]:
         """Copy the incomplete tail into a new array (fewer than ``size`` samples)."""
         if not self._parts:
             return np.empty(0)
@@ -213,7 +217,7 @@ class ChunkMoments:
     variance: float
 
 
-def chunk_moments(chunk):
+def chunk_moments(chunk: npt.ArrayLike) -> ChunkMoments:
     """
     Return the bias (mean) and variance of one chunk.
 
@@ -236,7 +240,7 @@ def chunk_moments(chunk):
     return ChunkMoments(float(v.mean()), float(v.var(ddof=1)))
 
 
-def noise_colour(chunk, *, factors=NOISE_COLOUR_FACTORS):
+def noise_colour(chunk: npt.ArrayLike, *, factors: Sequence[int] = NOISE_COLOUR_FACTORS) -> float:
     """
     Return the noise colour of one chunk: the log-log slope of its Allan deviation.
 
@@ -314,12 +318,12 @@ class DriftEstimate:
     stderr_ols: float = float('nan')
 
     @property
-    def magnitude(self):
+    def magnitude(self) -> float:
         """|slope|, the paper's 'offset drift' (input unit per second)."""
         return abs(self.slope)
 
 
-def offset_drift(t_s, bias):
+def offset_drift(t_s: npt.ArrayLike, bias: npt.ArrayLike) -> DriftEstimate:
     """
     Fit the chunk bias against time by least squares (offset drift, paper 000 Table 3).
 
@@ -359,7 +363,7 @@ def offset_drift(t_s, bias):
     return DriftEstimate(slope, stderr, intercept, float(np.ptp(t)), stderr_ols)
 
 
-def drift_stderr(t_s, bias):
+def drift_stderr(t_s: npt.ArrayLike, bias: npt.ArrayLike) -> float:
     """
     Return a standard error of the drift slope that holds for correlated chunk biases.
 
@@ -465,17 +469,20 @@ class SequenceSummary:
     alpha_corr_variance: float
     ties_var: int
     ties_corr: int
-    alpha_var_modes: tuple = ()
-    alpha_corr_modes: tuple = ()
-    bias_robust: object = None
-    log_variance_robust: object = None
-    alpha_var_robust: object = None
-    alpha_corr_robust: object = None
-    noise_colour_robust: object = None
+    alpha_var_modes: tuple[tuple[float, int], ...] = ()
+    alpha_corr_modes: tuple[tuple[float, int], ...] = ()
+    bias_robust: 'RobustLocation | None' = None
+    log_variance_robust: 'RobustLocation | None' = None
+    alpha_var_robust: 'RobustLocation | None' = None
+    alpha_corr_robust: 'RobustLocation | None' = None
+    noise_colour_robust: 'RobustLocation | None' = None
 
 
-def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_samples=0,
-                       ties_var=0, ties_corr=0, order_step=0.0, noise_colour=None):
+def summarise_sequence(t_mid_s: npt.ArrayLike, bias: npt.ArrayLike, variance: npt.ArrayLike,
+                       alpha_var: npt.ArrayLike, alpha_corr: npt.ArrayLike, *,
+                       tail_samples: int = 0, ties_var: int = 0, ties_corr: int = 0,
+                       order_step: float = 0.0,
+                       noise_colour: npt.ArrayLike | None = None) -> SequenceSummary:
     """
     Summarise per-chunk results of one sequence and axis (paper 000 Tables 3-6).
 
@@ -502,8 +509,8 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
     bias = np.asarray(bias, dtype=np.float64)
     variance = np.asarray(variance, dtype=np.float64)
 
-    def mean_var(x):
-        x = np.asarray(x, dtype=np.float64)
+    def mean_var(values: npt.ArrayLike) -> tuple[float, float]:
+        x = np.asarray(values, dtype=np.float64)
         x = x[np.isfinite(x)]
         if x.size == 0:
             return float('nan'), float('nan')
@@ -538,7 +545,7 @@ def summarise_sequence(t_mid_s, bias, variance, alpha_var, alpha_corr, *, tail_s
 MODE_GAP = 0.3
 
 
-def _mode_pieces(orders, gap):
+def _mode_pieces(orders: npt.ArrayLike, gap: float) -> list[NDArray[np.float64]]:
     x = np.sort(np.asarray(orders, dtype=np.float64))
     x = x[np.isfinite(x)]
     if x.size < 4:
@@ -556,7 +563,8 @@ def _mode_pieces(orders, gap):
     return pieces
 
 
-def order_modes(orders, *, gap=MODE_GAP):
+def order_modes(orders: npt.ArrayLike, *,
+                gap: float = MODE_GAP) -> tuple[tuple[float, int], ...]:
     """
     Split chunk orders into modes when they fall in separate basins.
 
@@ -587,7 +595,7 @@ def order_modes(orders, *, gap=MODE_GAP):
 SPREAD_TRIM = 0.05
 
 
-def _truncated_sd(kept):
+def _truncated_sd(kept: float) -> float:
     """Return the SD of a standard normal truncated to its central ``kept`` fraction."""
     if kept >= 1.0:
         return 1.0
@@ -626,9 +634,9 @@ class RobustLocation:
     count: int
     total: int
     population: str = 'all chunks'
-    modes: tuple = ()
+    modes: tuple[tuple[float, int], ...] = ()
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the fields as JSON-able values (NaN as None, modes as lists).
 
@@ -637,7 +645,7 @@ class RobustLocation:
         dict
 
         """
-        def num(v):
+        def num(v: float) -> float | None:
             return float(v) if np.isfinite(v) else None
 
         return {'location': num(self.location), 'spread': num(self.spread),
@@ -646,7 +654,7 @@ class RobustLocation:
                 'modes': [[float(m), int(c)] for m, c in self.modes]}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> 'RobustLocation':
         """
         Build from :meth:`as_dict` output (a reference summary.json).
 
@@ -660,7 +668,7 @@ class RobustLocation:
         RobustLocation
 
         """
-        def num(v):
+        def num(v: float | None) -> float:
             return float('nan') if v is None else float(v)
 
         return cls(location=num(d['location']), spread=num(d['spread']), count=int(d['count']),
@@ -668,7 +676,8 @@ class RobustLocation:
                    modes=tuple((float(m), int(c)) for m, c in d.get('modes', ())))
 
 
-def robust_location(values, *, resolution=0.0, modes=False, gap=MODE_GAP):
+def robust_location(values: npt.ArrayLike, *, resolution: float = 0.0, modes: bool = False,
+                    gap: float = MODE_GAP) -> RobustLocation:
     """
     Return the robust location and spread of per-chunk values (module doc).
 
@@ -693,7 +702,7 @@ def robust_location(values, *, resolution=0.0, modes=False, gap=MODE_GAP):
     x = np.asarray(values, dtype=np.float64).ravel()
     x = x[np.isfinite(x)]
     total = int(x.size)
-    found = ()
+    found: tuple[tuple[float, int], ...] = ()
     population = 'all chunks'
     if modes:
         pieces = _mode_pieces(x, gap)

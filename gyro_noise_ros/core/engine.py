@@ -90,16 +90,18 @@ beside it).
 from collections import deque
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
-from .allan import AllanAccumulator
+from .allan import AllanAccumulator, AllanResult, NoiseTerms
 from .chunks import (chunk_moments, Chunker, ChunkMoments, DEFAULT_CHUNK_SIZE, noise_colour,
                      SequenceSummary, summarise_sequence)
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
-from .health import evaluate_health, HealthThresholds, reference_per_axis
-from .readout import fit_noise_terms_band_limited, read_allan
+from .health import evaluate_health, HealthThresholds, reference_per_axis, ReferenceStats
+from .readout import AllanReadout, fit_noise_terms_band_limited, read_allan
 from .stamps import (MAX_GAP_EVENTS, RATE_ESTIMATE_SAMPLES, StampAccountant, StampedBatch,
                      StreamCounts)
 from .timebase import RateEstimate, rescale_allan
@@ -158,7 +160,7 @@ class EngineConfig:
     """
 
     chunk_size: int = DEFAULT_CHUNK_SIZE
-    axes: tuple = AXES
+    axes: tuple[str, ...] = AXES
     alphas: np.ndarray | None = None
     memory: int = DEFAULT_MEMORY
     demean: bool = True
@@ -459,9 +461,9 @@ class AxisSummary:
         Chunks by status.
     temperature_mean_c : float
         Mean of the chunk temperatures (degC), NaN if none.
-    allan : object or None
+    allan : allan.AllanResult or None
         The Allan deviation result of :mod:`.allan` (None if unavailable or off).
-    noise_terms : object or None
+    noise_terms : allan.NoiseTerms or None
         The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
         band-limited short taus left out (:mod:`.readout`).
     readout : readout.AllanReadout or None
@@ -480,9 +482,9 @@ class AxisSummary:
     chunks_failed: int
     chunks_skipped: int
     temperature_mean_c: float
-    allan: object = None
-    noise_terms: object = None
-    readout: object = None
+    allan: AllanResult | None = None
+    noise_terms: NoiseTerms | None = None
+    readout: AllanReadout | None = None
 
     @property
     def offset_drift_deg_s_per_h(self) -> float:
@@ -736,7 +738,8 @@ class NoiseEngine:
 
     """
 
-    def __init__(self, config: EngineConfig | None = None, *, reference=None,
+    def __init__(self, config: EngineConfig | None = None, *,
+                 reference: str | Path | ReferenceStats | dict[str, ReferenceStats] | None = None,
                  thresholds: HealthThresholds | None = None) -> None:
         self.config = config if config is not None else EngineConfig()
         self.thresholds = thresholds if thresholds is not None else HealthThresholds()
@@ -756,7 +759,8 @@ class NoiseEngine:
 
     # ---- ingestion ---------------------------------------------------------------------------
 
-    def ingest(self, stamp_ns, gyro, temperature_c=None) -> list[ChunkJob]:
+    def ingest(self, stamp_ns: npt.ArrayLike, gyro: npt.ArrayLike,
+               temperature_c: npt.ArrayLike | None = None) -> list[ChunkJob]:
         """
         Add a batch of samples; return the jobs of the chunks it completes.
 

@@ -47,6 +47,8 @@ from dataclasses import dataclass
 import os
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 import scipy.fft
 
 from . import _kernels_fractional as _kf
@@ -61,7 +63,7 @@ DEFAULT_MEMORY = 1000
 TIE_RTOL = 1e-9
 
 
-def default_grid():
+def default_grid() -> NDArray[np.float64]:
     """
     Return the default order grid, 0.00 to 2.00 in steps of 0.01, both ends included.
 
@@ -74,7 +76,7 @@ def default_grid():
     return np.round(np.arange(201) * 0.01, 10)
 
 
-def make_grid(start, stop, step):
+def make_grid(start: float, stop: float, step: float) -> NDArray[np.float64]:
     """
     Return an order grid from ``start`` to ``stop`` inclusive in steps of ``step``.
 
@@ -104,7 +106,7 @@ def make_grid(start, stop, step):
     return np.round(start + step * np.arange(count), 10)
 
 
-def parse_grid(text):
+def parse_grid(text: str) -> NDArray[np.float64]:
     """
     Parse ``'START:STOP:STEP'`` (the ``--order-grid`` syntax) into a grid.
 
@@ -128,7 +130,7 @@ def parse_grid(text):
     return make_grid(*values)
 
 
-def gl_coefficients(alpha, memory=DEFAULT_MEMORY):
+def gl_coefficients(alpha: float, memory: int = DEFAULT_MEMORY) -> NDArray[np.float64]:
     """
     Return the Grunwald-Letnikov coefficients c_j = (-1)^j binom(alpha, j), j = 0..L.
 
@@ -159,7 +161,8 @@ def gl_coefficients(alpha, memory=DEFAULT_MEMORY):
     return c
 
 
-def gl_difference(x, alpha, *, memory=DEFAULT_MEMORY):
+def gl_difference(x: npt.ArrayLike, alpha: float, *,
+                  memory: int = DEFAULT_MEMORY) -> NDArray[np.float64]:
     """
     Return the truncated GL difference Delta^alpha x[k] for k = 0 .. len(x) - 1.
 
@@ -220,8 +223,8 @@ class OrderIdentification:
     alpha_corr: float
     f_corr: float
     j_min: float
-    tied_alphas_var: tuple
-    tied_alphas_corr: tuple
+    tied_alphas_var: tuple[float, ...]
+    tied_alphas_corr: tuple[float, ...]
     bias: float
     alphas: np.ndarray
     var_curve: np.ndarray | None = None
@@ -297,8 +300,9 @@ class OrderIdentifier:
 
     """
 
-    def __init__(self, chunk_size, *, alphas=None, memory=DEFAULT_MEMORY, demean=True,
-                 max_lag=None, block=8, algorithm='auto'):
+    def __init__(self, chunk_size: int, *, alphas: npt.ArrayLike | None = None,
+                 memory: int = DEFAULT_MEMORY, demean: bool = True, max_lag: int | None = None,
+                 block: int = 8, algorithm: str = 'auto') -> None:
         self.memory = _check_memory(memory)
         self.alphas = default_grid() if alphas is None else np.asarray(
             alphas, dtype=np.float64).ravel()
@@ -330,9 +334,9 @@ class OrderIdentifier:
         self._corr_size = scipy.fft.next_fast_len(self.n + self.max_lag + 1, real=True)
         self._coeffs = np.stack([gl_coefficients(a, self.memory) for a in self.alphas])
         self._coeff_hat = scipy.fft.rfft(self._coeffs, self._conv_size, axis=1)
-        self._fast = None  # _FastPlan, built on first use
+        self._fast: '_FastPlan | None' = None  # _FastPlan, built on first use
 
-    def __call__(self, chunk, *, curves=False):
+    def __call__(self, chunk: npt.ArrayLike, *, curves: bool = False) -> OrderIdentification:
         """
         Identify one chunk.
 
@@ -379,7 +383,8 @@ class OrderIdentifier:
         return dataclasses.replace(result, var_curve=spliced[0], j_curve=spliced[1],
                                    f_curve=spliced[2])
 
-    def _curves(self, v):
+    def _curves(self, v: NDArray[np.float64]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Return the criterion curves by the 'exact' algorithm (every order, in blocks)."""
         n, size = self.n, self._conv_size
         w_reg, ww = _regressor(v)
@@ -410,7 +415,8 @@ class OrderIdentifier:
             f_curve[start:stop] = f
         return var_curve, j_curve, f_curve
 
-    def _exact_rows(self, v, rows):
+    def _exact_rows(self, v: NDArray[np.float64],
+                    rows: NDArray[np.intp]) -> NDArray[np.float64]:
         """
         Return var, J and f of the grid orders ``rows`` exactly as :meth:`_curves` computes them.
 
@@ -445,7 +451,9 @@ class OrderIdentifier:
                 out[2, pos] = f[r]
         return out
 
-    def _locate(self, v, var_fast, j_fast, f_fast):
+    def _locate(self, v: NDArray[np.float64], var_fast: NDArray[np.float64],
+                j_fast: NDArray[np.float64], f_fast: NDArray[np.float64]
+                ) -> tuple[NDArray[np.intp], NDArray[np.float64]] | None:
         """
         Return the grid orders where a minimum can be, and their exact values.
 
@@ -467,7 +475,7 @@ class OrderIdentifier:
         return rows, exact
 
 
-def _regressor(v):
+def _regressor(v: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
     """Return ``(v[:-1], v[:-1] @ v[:-1])`` (eq. 7's regressor and its energy), or raise."""
     w_reg = v[:-1]
     ww = float(w_reg @ w_reg)
@@ -477,7 +485,7 @@ def _regressor(v):
     return w_reg, ww
 
 
-def _candidates(curve):
+def _candidates(curve: NDArray[np.float64]) -> NDArray[np.intp]:
     """
     Return the grid indices whose exact value may be the minimum or tie with it.
 
@@ -505,7 +513,7 @@ class _FastPlan:
     the regressor ``v[0 .. n - 1]``), and ``J`` comes from one inverse transform of ``|W|^2``.
     """
 
-    def __init__(self, ident):
+    def __init__(self, ident: OrderIdentifier) -> None:
         self.ident = ident
         a = ident.alphas
         k = a.shape[0]
@@ -522,9 +530,9 @@ class _FastPlan:
                     break
         self.parent = parent
         self.base = np.flatnonzero(parent < 0)
-        self.children = {}
-        for i in np.flatnonzero(parent >= 0):
-            self.children.setdefault(int(parent[i]), []).append(int(i))
+        self.children: dict[int, list[int]] = {}
+        for child in np.flatnonzero(parent >= 0):
+            self.children.setdefault(int(parent[child]), []).append(int(child))
         size = ident.chunk_size + ident.memory
         self.conv_size = scipy.fft.next_fast_len(size, real=True)
         self.coeff_hat = np.fft.rfft(ident._coeffs[self.base], self.conv_size, axis=1)
@@ -532,19 +540,20 @@ class _FastPlan:
         s = ident._corr_size
         q = np.arange(s // 2 + 1)
 
-        def twiddle(m):
+        def twiddle(m: int) -> NDArray[np.complex128]:
             return np.exp(-2j * np.pi * ((q * m) % s) / s)
 
         self.one_minus_e = 1.0 - twiddle(1)
         # The autocorrelation by a half-length FFT needs S = 2N with N even.
-        self.cosine = None
+        self.cosine: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         if s % 4 == 0:
             half = np.arange(s // 2) * (2.0 * np.pi / s)
             self.cosine = (np.sin(half), np.cos(half))
         self.e_n = twiddle(ident.n)
         self.e_l = twiddle(ident.memory)
 
-    def curves(self, v):
+    def curves(self, v: NDArray[np.float64]
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Return (var_curve, j_curve, f_curve) of the demeaned chunk ``v`` (fast algorithm)."""
         ident = self.ident
         n, big_n, s, big_l = ident.n, ident.chunk_size, ident._corr_size, ident.memory
@@ -564,7 +573,10 @@ class _FastPlan:
             self._emit(idx, d, np.fft.rfft(padded[:idx.shape[0]], axis=1), ctx, out)
         return out[0], out[1], out[2]
 
-    def _emit(self, idx, d, spec, ctx, out):
+    def _emit(self, idx: NDArray[np.intp], d: NDArray[np.float64], spec: NDArray[np.complex128],
+              ctx: tuple[NDArray[np.float64], NDArray[np.float64], float,
+                         NDArray[np.complex128], NDArray[np.complex128]],
+              out: NDArray[np.float64]) -> None:
         """Fill var, J and f of the orders ``idx`` from their differences; recurse to a + 1."""
         ident = self.ident
         v, w_reg, ww, reg_hat, shifted_hat = ctx
@@ -597,14 +609,15 @@ class _FastPlan:
             return
         dc = np.empty((len(kids), d.shape[1]))
         sc = np.empty((len(kids), spec.shape[1]), dtype=np.complex128)
-        parents = np.asarray(parents)
-        _kf.next_order(d, spec, parents, v, self.c_last[idx[parents]], ident.memory,
+        parent_rows = np.asarray(parents)
+        _kf.next_order(d, spec, parent_rows, v, self.c_last[idx[parent_rows]], ident.memory,
                        self.one_minus_e, self.e_n, shifted_hat, dc, sc)
         self._emit(np.asarray(kids), dc, sc, ctx, out)
 
 
-def identify_order(chunk, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, max_lag=None,
-                   curves=False):
+def identify_order(chunk: npt.ArrayLike, *, alphas: npt.ArrayLike | None = None,
+                   memory: int = DEFAULT_MEMORY, demean: bool = True, max_lag: int | None = None,
+                   curves: bool = False) -> OrderIdentification:
     """
     Identify the fractional order of one chunk (convenience wrapper of :class:`OrderIdentifier`).
 
@@ -630,7 +643,7 @@ def identify_order(chunk, *, alphas=None, memory=DEFAULT_MEMORY, demean=True, ma
     return ident(chunk, curves=curves)
 
 
-def validate_chunk(chunk, size):
+def validate_chunk(chunk: npt.ArrayLike, size: int) -> NDArray[np.float64]:
     """
     Return ``chunk`` as a float64 vector of ``size`` finite samples, or raise InputDataError.
 
@@ -661,7 +674,8 @@ def validate_chunk(chunk, size):
     return v
 
 
-def select_minimum(alphas, curve):
+def select_minimum(alphas: NDArray[np.float64],
+                   curve: NDArray[np.float64]) -> tuple[int, NDArray[np.intp]]:
     """
     Return (index, tied indices) of the minimum of ``curve`` under the tie rule of the module doc.
 
@@ -688,7 +702,9 @@ def select_minimum(alphas, curve):
     return int(best), tied
 
 
-def _summarise(alphas, var_curve, j_curve, f_curve, bias, curves):
+def _summarise(alphas: NDArray[np.float64], var_curve: NDArray[np.float64],
+               j_curve: NDArray[np.float64], f_curve: NDArray[np.float64], bias: float,
+               curves: bool) -> OrderIdentification:
     iv, tv = select_minimum(alphas, var_curve)
     ij, tj = select_minimum(alphas, j_curve)
     return OrderIdentification(
@@ -702,7 +718,7 @@ def _summarise(alphas, var_curve, j_curve, f_curve, bias, curves):
         f_curve=f_curve if curves else None)
 
 
-def physical_memory_bytes():
+def physical_memory_bytes() -> int | None:
     """
     Return the machine's physical memory in bytes, or None where the OS does not say.
 
@@ -718,7 +734,7 @@ def physical_memory_bytes():
     return pages * page if pages > 0 and page > 0 else None
 
 
-def table_bytes(orders, chunk_size, memory):
+def table_bytes(orders: int, chunk_size: int, memory: int) -> int:
     """
     Estimate the bytes of the spectra an :class:`OrderIdentifier` keeps (its largest tables).
 
@@ -741,7 +757,7 @@ def table_bytes(orders, chunk_size, memory):
     return 16 * int(orders) * (int(chunk_size) + int(memory))
 
 
-def _check_table_memory(orders, chunk_size, memory):
+def _check_table_memory(orders: int, chunk_size: int, memory: int) -> None:
     # Refuse before allocating: a chunk size beyond the machine otherwise ends in a MemoryError
     # (or an OverflowError in the FFT planner) deep inside numpy/scipy. Half of the physical
     # memory leaves room for the data, the worker processes and the rest of the system.
@@ -754,7 +770,7 @@ def _check_table_memory(orders, chunk_size, memory):
             f"of this machine's {total / 2**30:.3g} GiB; the paper uses 10000 samples per chunk")
 
 
-def _check_memory(memory):
+def _check_memory(memory: int) -> int:
     try:
         memory_i = int(memory)
     except (TypeError, ValueError) as err:

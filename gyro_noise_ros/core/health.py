@@ -77,21 +77,27 @@ Levels are ordered OK < WARN < ERROR < STALE (as diagnostic_msgs: 0, 1, 2, 3); t
 worst item and its message is one sentence naming that item.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 import json
 import math
+import os
 from pathlib import Path
+from typing import Any, TYPE_CHECKING
 
 from scipy.special import stdtrit
 
-from .chunks import NOISE_COLOUR_FACTORS, RobustLocation
+from .chunks import DriftEstimate, NOISE_COLOUR_FACTORS, RobustLocation, SequenceSummary
 from .items import fmt as _fmt
 from .items import LEVEL_BYTE, LEVELS, TaskStatus
 from ..errors import InputDataError, ParameterError
 from ..units import RAD_TO_DEG
 
+if TYPE_CHECKING:  # the engine imports this module
+    from .engine import AxisSummary
 
-def _threshold(default, description, unit=''):
+
+def _threshold(default: float, description: str, unit: str = '') -> Any:
     # One source for the node's parameter table, its YAML file and the docs (field metadata).
     return field(default=default, metadata={'description': description, 'unit': unit})
 
@@ -161,7 +167,7 @@ class HealthThresholds:
         0.5, 'ERROR above this fraction of chunks skipped (analysis behind)')
     stale_after_s: float = _threshold(5.0, 'STALE after this long without data', 's')
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
@@ -228,7 +234,7 @@ class ReferenceStats:
     noise_colour: RobustLocation | None = None
 
     @classmethod
-    def from_sequence(cls, sequence, *, source=''):
+    def from_sequence(cls, sequence: SequenceSummary, *, source: str = '') -> 'ReferenceStats':
         """
         Build the reference of a sequence summary (what its summary.json entry would load as).
 
@@ -272,19 +278,19 @@ class HealthVerdict:
 
     level: str
     message: str
-    items: tuple
+    items: tuple[tuple[str, str, str], ...]
 
     @property
-    def level_byte(self):
+    def level_byte(self) -> int:
         """Return the level as a DiagnosticStatus byte (0 OK, 1 WARN, 2 ERROR, 3 STALE)."""
         return LEVEL_BYTE[self.level]
 
 
-def _worse(a, b):
+def _worse(a: str, b: str) -> str:
     return a if LEVELS.index(a) >= LEVELS.index(b) else b
 
 
-def _band(deviation, tolerance):
+def _band(deviation: float, tolerance: float) -> str:
     if not math.isfinite(deviation):
         return 'OK'
     if deviation > 2.0 * tolerance:
@@ -294,7 +300,7 @@ def _band(deviation, tolerance):
     return 'OK'
 
 
-def drift_t_threshold(min_sigma, chunks):
+def drift_t_threshold(min_sigma: float, chunks: int) -> float:
     """
     Return the |t| a drift slope over ``chunks`` chunks must exceed to be significant.
 
@@ -319,7 +325,7 @@ def drift_t_threshold(min_sigma, chunks):
     return float(-stdtrit(chunks - 2, p_two_sided / 2.0))
 
 
-def evaluate_health(summary, *, reference: ReferenceStats | None = None,
+def evaluate_health(summary: 'AxisSummary', *, reference: ReferenceStats | None = None,
                     thresholds: HealthThresholds | None = None,
                     seconds_since_data: float | None = None) -> HealthVerdict:
     """
@@ -360,7 +366,8 @@ def evaluate_health(summary, *, reference: ReferenceStats | None = None,
     return HealthVerdict(worst_level, message, tuple((k, v, lvl) for k, v, lvl, _ in items))
 
 
-def _drift_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
+def _drift_items(seq: SequenceSummary, reference: ReferenceStats | None,
+                 th: HealthThresholds) -> list[tuple[str, str, str, str]]:
     """Return the offset drift items: absolute limits, or the comparison with the reference."""
     items = []
     judged = seq.chunks >= th.min_chunks
@@ -389,7 +396,8 @@ def _drift_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
     return items
 
 
-def _sequence_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
+def _sequence_items(seq: SequenceSummary, reference: ReferenceStats | None,
+                    th: HealthThresholds) -> list[tuple[str, str, str, str]]:
     """Return the orders, variance and colour of the run and their comparisons (reference)."""
     items = [('Fractional order, variance method', _fmt(seq.alpha_var_mean, 4), 'OK', ''),
              ('Fractional order, correlation method', _fmt(seq.alpha_corr_mean, 4), 'OK', ''),
@@ -403,7 +411,8 @@ def _sequence_items(seq, reference, th) -> list[tuple[str, str, str, str]]:
     return items
 
 
-def _data_items(summary, th) -> list[tuple[str, str, str, str]]:
+def _data_items(summary: 'AxisSummary',
+                th: HealthThresholds) -> list[tuple[str, str, str, str]]:
     """Return the items of the samples: lost (from stamps), NaN, stamp order."""
     stream = summary.stream
     expected = stream.samples + stream.samples_lost
@@ -427,7 +436,8 @@ def _data_items(summary, th) -> list[tuple[str, str, str, str]]:
     ]
 
 
-def _chunk_items(summary, th, seconds_since_data) -> list[tuple[str, str, str, str]]:
+def _chunk_items(summary: 'AxisSummary', th: HealthThresholds,
+                 seconds_since_data: float | None) -> list[tuple[str, str, str, str]]:
     """Return the items of the chunks (skipped, analysed) and of staleness."""
     total = (
         summary.chunks_ok
@@ -521,14 +531,15 @@ _COMPARISONS = (
 )
 
 
-def _limits(kind, th):
+def _limits(kind: str, th: HealthThresholds) -> tuple[float, float]:
     """Return the (WARN, ERROR) multipliers of a comparison of ``kind`` (module doc)."""
     if kind == 'colour':
         return th.reference_colour_warn_sigma, th.reference_colour_error_sigma
     return th.reference_warn_sigma, th.reference_error_sigma
 
 
-def _drift_ratio(drift, reference, th):
+def _drift_ratio(drift: DriftEstimate, reference: ReferenceStats,
+                 th: HealthThresholds) -> tuple[str, str, str, str]:
     """Return the informative item |drift| / |reference drift| (n/a when that is zero)."""
     ref = reference.offset_drift_rad_s2
     ref_se = reference.offset_drift_stderr_rad_s2
@@ -541,7 +552,8 @@ def _drift_ratio(drift, reference, th):
     return 'Offset drift / reference', _fmt(abs(drift.slope) / abs(ref), 3), 'OK', ''
 
 
-def _compare_drift(seq, reference, th):
+def _compare_drift(seq: SequenceSummary, reference: ReferenceStats,
+                   th: HealthThresholds) -> tuple[str, str, str, str]:
     """
     Return the item comparing the drift with the reference's, like with like (module doc).
 
@@ -580,7 +592,7 @@ def _compare_drift(seq, reference, th):
             f'sigma x {inflation:.3g} for {chunks} chunks)')
 
 
-def _describe(loc, kind):
+def _describe(loc: RobustLocation, kind: str) -> str:
     if kind == 'rate':
         value = f'{loc.location * RAD_TO_DEG:.4g} deg/s'
     elif kind == 'log':
@@ -593,7 +605,7 @@ def _describe(loc, kind):
     return f'{value} (median of {loc.count} chunks)'
 
 
-def spread_distance(mine, ref):
+def spread_distance(mine: RobustLocation, ref: RobustLocation) -> float:
     """
     Return the distance of two robust locations in pooled chunk spreads (module doc).
 
@@ -618,7 +630,8 @@ def spread_distance(mine, ref):
     return abs(diff) / scale
 
 
-def _compare(spec, mine, ref, th):
+def _compare(spec: tuple[str, str, str, str, str], mine: RobustLocation | None,
+             ref: RobustLocation | None, th: HealthThresholds) -> tuple[str, str, str, str]:
     """Return the item (key, value, level, sentence) of one like-with-like comparison."""
     key, _, _, name, kind = spec
     if mine is None or ref is None:
@@ -653,7 +666,7 @@ def _compare(spec, mine, ref, th):
             f'{limit:g})')
 
 
-def reference_dict(sequence):
+def reference_dict(sequence: SequenceSummary) -> dict[str, dict[str, Any] | None]:
     """
     Return what a reference needs from one axis' sequence statistics, for its summary.json.
 
@@ -686,7 +699,8 @@ ROBUST_KEYS = (('bias_rad_s', 'bias_robust'), ('log_variance_rad2_s2', 'log_vari
 ROBUST_JSON_KEY = 'reference_statistics'
 
 
-def load_reference(summary_json_path, *, bag=None, axis='z'):
+def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None = None,
+                   axis: str = 'z') -> ReferenceStats:
     """
     Read one bag's and axis' reference from a ``summary.json`` of gyro_noise_analyze.
 
@@ -762,13 +776,15 @@ def load_reference(summary_json_path, *, bag=None, axis='z'):
             f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 
 
-def reference_per_axis(reference, axes, *, bag=None):
+def reference_per_axis(reference: str | Path | ReferenceStats | dict[str, ReferenceStats] | None,
+                       axes: Sequence[str], *,
+                       bag: str | None = None) -> dict[str, ReferenceStats]:
     """
     Normalise the ``reference`` argument of the engine to ``{axis: ReferenceStats}``.
 
     Parameters
     ----------
-    reference : None, str, os.PathLike, ReferenceStats or dict
+    reference : None, str, pathlib.Path, ReferenceStats or dict
         A summary.json path (loaded per axis; its single bag), one ReferenceStats for all axes, or
         a dict.
     axes : tuple of str

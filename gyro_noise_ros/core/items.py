@@ -21,10 +21,16 @@ parentheses as diagnostic_msgs conventions want (``'Bias (deg/s)'``); missing nu
 ``'nan'`` or ``'n/a'`` so dashboards keep a stable set of keys.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 import math
+from typing import TYPE_CHECKING
 
 from ..units import RAD_TO_DEG
+
+if TYPE_CHECKING:  # the engine imports this module
+    from .engine import AxisSummary, ChunkResult
+    from .stamps import StreamCounts
 
 #: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
 LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
@@ -63,7 +69,7 @@ class TaskStatus:
         return LEVEL_BYTE[self.level]
 
 
-def worst(checks, ok_message: str) -> tuple[str, str]:
+def worst(checks: Iterable[tuple[str, str]], ok_message: str) -> tuple[str, str]:
     """
     Pick the level and message of the worst failed check (the first one among equals).
 
@@ -108,7 +114,7 @@ def fmt(value: float | int | None, digits: int = 4) -> str:
     return f'{value:.{digits}g}'
 
 
-def last_chunk_items(result) -> list[tuple[str, str]]:
+def last_chunk_items(result: 'ChunkResult') -> list[tuple[str, str]]:
     """
     Return the items of the latest chunk of one axis.
 
@@ -142,7 +148,7 @@ ALLAN_KEYS = ('ADEV at 1 s (deg/s)', 'Bias stability (deg/s)', 'Bias stability t
               'Angle random walk (deg/sqrt(h))', 'Bias instability (deg/h)')
 
 
-def allan_items(summary) -> list[tuple[str, str]]:
+def allan_items(summary: 'AxisSummary | None') -> list[tuple[str, str]]:
     """
     Return an axis' Allan deviation items, all read by :func:`.readout.read_allan`.
 
@@ -175,7 +181,7 @@ def allan_items(summary) -> list[tuple[str, str]]:
     return list(out.items())
 
 
-def stream_items(counts, *, chunk_size: int,
+def stream_items(counts: 'StreamCounts', *, chunk_size: int,
                  mean_temperature_c: float) -> list[tuple[str, str]]:
     """
     Return the stream counters of one axis.

@@ -32,8 +32,10 @@ reported by the engine as a gap (its length and the samples missing), never as m
 """
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 
@@ -88,14 +90,14 @@ class WindowStats:
 
     """
 
-    def __init__(self, *, window_s=WINDOW_S):
+    def __init__(self, *, window_s: float = WINDOW_S) -> None:
         if not window_s > 0:
             raise ParameterError(f'window_s must be > 0 s, got {window_s!r}')
         self._w = int(round(window_s * 1e9))
-        self._t0 = None
-        self._rows = {}  # window index -> [n, sum(3), sumsq(3)]
+        self._t0: int | None = None
+        self._rows: dict[int, list[Any]] = {}  # window index -> [n, sum(3), sumsq(3)]
 
-    def update(self, stamp_ns, gyro):
+    def update(self, stamp_ns: npt.ArrayLike, gyro: npt.ArrayLike) -> None:
         """
         Add samples.
 
@@ -129,7 +131,7 @@ class WindowStats:
         """int: the windows that have received at least one sample so far."""
         return len(self._rows)
 
-    def segment(self):
+    def segment(self) -> StaticSegment | None:
         """
         Choose the static part of the record (see the module doc); None below 3 windows.
 
@@ -141,6 +143,7 @@ class WindowStats:
         keys = sorted(k for k, r in self._rows.items() if r[0] >= 2)
         if len(keys) < 3:
             return None
+        assert self._t0 is not None  # set by the update that filled the windows
         n = np.array([self._rows[k][0] for k in keys], dtype=np.float64)[:, None]
         mean = np.array([self._rows[k][1] for k in keys]) / n
         var = np.maximum(np.array([self._rows[k][2] for k in keys]) / n - mean ** 2, 0.0)
@@ -151,7 +154,6 @@ class WindowStats:
         ref = np.median(mean[quiet], axis=0) if quiet.any() else np.median(mean, axis=0)
         limit = MOTION_FACTOR * noise
         moving = np.any((std > limit) | (np.abs(mean - ref) > limit), axis=1)
-        keys = np.array(keys)
         runs, start = [], None
         for i, still in enumerate(~moving):
             # windows without data (a stamp gap) are skipped, not motion: only motion ends a run

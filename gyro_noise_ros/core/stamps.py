@@ -37,6 +37,7 @@ knows nothing of chunks or axes: :class:`.engine.NoiseEngine` cuts what it relea
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .timebase import RateEstimate, TimebaseTracker
 from ..errors import InputDataError
@@ -52,7 +53,8 @@ _NAN = float('nan')
 _EARLY_CHECK = 101
 
 
-def _packet_loss(steps, at, apparent, credit):
+def _packet_loss(steps: NDArray[np.int64], at: NDArray[np.intp], apparent: NDArray[np.int64],
+                 credit: int) -> tuple[NDArray[np.int64], int]:
     """
     Subtract the samples of equal-stamp groups next to long steps from their apparent loss.
 
@@ -82,7 +84,7 @@ def _packet_loss(steps, at, apparent, credit):
     """
     nonzero = np.flatnonzero(steps != 0)
     lost = np.array(apparent, dtype=np.int64)
-    used_after = {}
+    used_after: dict[int, int] = {}
     for n, i in enumerate(at.tolist()):
         k = int(np.searchsorted(nonzero, i)) - 1
         prev = int(nonzero[k]) if k >= 0 else -1
@@ -356,13 +358,16 @@ class StampAccountant:
             steps[0] = max(1, int(round(self.period_ns)))  # the first sample has no step
         return run_max, steps
 
-    def _hold_last_group(self, stamps, payload, steps, run_max):
+    def _hold_last_group(self, stamps: np.ndarray, payload: tuple[np.ndarray, ...],
+                         steps: np.ndarray, run_max: np.ndarray
+                         ) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
         """
         Hold back a long step's equal-stamp group that reaches the end of the batch.
 
         More samples of the same stamp may follow in the next batch: they fill the hole, so the
         group waits for that batch (or flush) before its loss is decided.
         """
+        assert self.period_ns is not None  # _steps ran on this batch: the rate is known
         moved = np.flatnonzero(steps != 0)
         j = int(moved[-1]) if moved.size else -1
         if j >= 0 and steps[j] > self.gap_factor * self.period_ns:
@@ -394,7 +399,8 @@ class StampAccountant:
         gap[at] = lost[at] > 0
         return lost, gap
 
-    def _process(self, stamps, payload, *, final=False) -> list[StampedBatch]:
+    def _process(self, stamps: np.ndarray, payload: tuple[np.ndarray, ...], *,
+                 final: bool = False) -> list[StampedBatch]:
         if self._hold is not None:
             hs, hp = self._hold
             self._hold = None

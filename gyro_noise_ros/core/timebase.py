@@ -55,10 +55,19 @@ pairs when more than :data:`MAX_BLOCKS` are held, so it runs for days in a live 
 
 from dataclasses import dataclass
 import math
+from typing import Any, TYPE_CHECKING, TypeVar
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 
 from ..errors import InputDataError, ParameterError
+
+if TYPE_CHECKING:  # not imported at run time: this module does not need the estimator
+    from .allan import AllanResult
+
+#: An Allan result, or None (passed through by :func:`rescale_allan`).
+_R = TypeVar('_R', 'AllanResult', None)
 
 #: Samples per base block.
 BASE_BLOCK = 64
@@ -162,11 +171,11 @@ class RateEstimate:
     loss_samples: int
     loss_resolution_samples: float
     deficit_samples: float
-    warnings: tuple = ()
+    warnings: tuple[str, ...] = ()
     equal_steps: int = 0
     burst_step_s: float = math.nan
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the fields as JSON-able values (units in the keys).
 
@@ -197,7 +206,7 @@ class TimebaseTracker:
 
     """
 
-    def __init__(self, *, base_block=BASE_BLOCK, max_blocks=MAX_BLOCKS):
+    def __init__(self, *, base_block: int = BASE_BLOCK, max_blocks: int = MAX_BLOCKS) -> None:
         if int(base_block) < 4 or int(max_blocks) < 2 * MIN_BLOCKS:
             raise ParameterError(f'base_block must be >= 4 and max_blocks >= {2 * MIN_BLOCKS}, '
                                  f'got {base_block!r}, {max_blocks!r}')
@@ -205,33 +214,34 @@ class TimebaseTracker:
         self._max_blocks = int(max_blocks)
         self._carry = np.empty(0, dtype=np.int64)
         self._n = 0
-        self._first = None
-        self._last = None
+        self._first: int | None = None
+        self._last: int | None = None
         self._out_of_order = 0
         self._equal = 0
         self._max_step = 0
         self._short = 0
         self._long = 0
         self._steps_in_blocks = 0
-        self._jss = []  # sum of squared residuals about the block's line (ns^2), per block
-        self._jn = []  # residuals per block
+        # sum of squared residuals about the block's line (ns^2), per block
+        self._jss: list[NDArray[np.float64]] = []
+        self._jn: list[NDArray[np.int64]] = []  # residuals per block
         self._reg_n = 0
         self._reg_sum = 0.0
         self._reg_ss = 0.0
         self._samples_per_block = self._k
-        self._dur = []  # ns per block
-        self._maxstep = []  # ns per block
-        self._medstep = []  # ns per block
-        self._seq_first = None
-        self._seq_last = None
+        self._dur: list[NDArray[np.float64]] = []  # ns per block
+        self._maxstep: list[NDArray[np.float64]] = []  # ns per block
+        self._medstep: list[NDArray[np.float64]] = []  # ns per block
+        self._seq_first: int | None = None
+        self._seq_last: int | None = None
         self._seq_n = 0
 
     @property
-    def samples(self):
+    def samples(self) -> int:
         """Stamps seen so far."""
         return self._n
 
-    def update(self, stamp_ns, sequence=None):
+    def update(self, stamp_ns: npt.ArrayLike, sequence: npt.ArrayLike | None = None) -> None:
         """
         Add stamps in delivery order.
 
@@ -259,6 +269,7 @@ class TimebaseTracker:
             self._first = int(s[0])
             steps = np.diff(s)
         else:
+            assert self._last is not None  # set with self._first
             steps = np.diff(np.concatenate(([np.int64(self._last)], s)))
         self._last = int(s[-1])
         self._n += s.size
@@ -301,7 +312,7 @@ class TimebaseTracker:
         if sum(d.size for d in self._dur) > self._max_blocks:
             self._merge()
 
-    def _merge(self):
+    def _merge(self) -> None:
         dur = np.concatenate(self._dur)
         mx = np.concatenate(self._maxstep)
         md = np.concatenate(self._medstep)
@@ -317,7 +328,7 @@ class TimebaseTracker:
         self._k *= 2
         self._samples_per_block = self._k
 
-    def estimate(self, rate_hz=None):
+    def estimate(self, rate_hz: float | None = None) -> RateEstimate:
         """
         Return the rate estimate of everything seen so far.
 
@@ -339,6 +350,7 @@ class TimebaseTracker:
         n = self._n
         if n < 2:
             raise InputDataError(f'{n} stamp(s): at least 2 are needed to estimate a sample rate')
+        assert self._first is not None and self._last is not None  # set by the first stamp
         span_ns = float(self._last - self._first)
         steps = n - 1
         usable, warnings = self._time_base(span_ns)
@@ -383,7 +395,7 @@ class TimebaseTracker:
             warnings=tuple(warnings), equal_steps=int(self._equal),
             burst_step_s=float(burst_step))
 
-    def _time_base(self, span_ns):
+    def _time_base(self, span_ns: float) -> tuple[bool, list[str]]:
         """Return whether the stamps are a time base, and the warnings that say why not."""
         n = self._n
         steps = n - 1
@@ -400,9 +412,11 @@ class TimebaseTracker:
                             'base')
         return usable, warnings
 
-    def _stamp_rate(self, span_ns, *, bursty, block_rate, block_se, mean_rate):
+    def _stamp_rate(self, span_ns: float, *, bursty: bool, block_rate: float, block_se: float,
+                    mean_rate: float) -> tuple[str, float, float]:
         """Return the best rate of the stamps: (method, rate in Hz, its standard error in Hz)."""
         if self._seq_n == self._n and self._seq_last is not None and span_ns > 0:
+            assert self._seq_first is not None  # set with self._seq_last
             return 'sequence', (self._seq_last - self._seq_first) / span_ns * _NS, math.nan
         if not bursty and self._reg_n >= MIN_BLOCKS * BASE_BLOCK // 2 and self._reg_sum > 0:
             mean_step = self._reg_sum / self._reg_n
@@ -416,7 +430,7 @@ class TimebaseTracker:
             return 'block_median', block_rate, block_se
         return 'mean', mean_rate, block_se
 
-    def _jitter(self, mx):
+    def _jitter(self, mx: NDArray[np.float64]) -> tuple[float, float]:
         """Return the stamp jitter (s) and the longest step of a burst (s) over calm blocks."""
         jitter, burst_step = math.nan, self._max_step / _NS
         if mx.size:
@@ -429,10 +443,13 @@ class TimebaseTracker:
                 burst_step = float(mx[calm].max()) / _NS
         return jitter, burst_step
 
-    def _deficit(self, method, span_ns, *, rate, stamp_rate, se, jitter, burst_step, bursty):
+    def _deficit(self, method: str, span_ns: float, *, rate: float, stamp_rate: float,
+                 se: float, jitter: float, burst_step: float,
+                 bursty: bool) -> tuple[float, float]:
         """Return the samples missing against elapsed time, and the resolution of that count."""
         n = self._n
         if method == 'sequence':
+            assert self._seq_first is not None and self._seq_last is not None  # as method says
             return float((self._seq_last - self._seq_first) + 1 - n), 0.5
         deficit = span_ns / _NS * rate + 1.0 - n
         rate_rel = (se / stamp_rate) if math.isfinite(se) and stamp_rate > 0 else 0.0
@@ -442,7 +459,8 @@ class TimebaseTracker:
         return deficit, resolution
 
 
-def _block_rate(dur, mx, k):
+def _block_rate(dur: NDArray[np.float64], mx: NDArray[np.float64],
+                k: int) -> tuple[float, float, int]:
     """
     Return the median rate of groups of blocks, its standard error (Hz) and samples per group.
 
@@ -467,7 +485,8 @@ def _block_rate(dur, mx, k):
     return block_rate, se, k
 
 
-def _chosen_rate(rate_hz, stamp_rate, method, usable, warnings):
+def _chosen_rate(rate_hz: float | None, stamp_rate: float, method: str, usable: bool,
+                 warnings: list[str]) -> tuple[float, str]:
     """
     Return the rate the analysis uses and how it was chosen: the configured one, else the stamps'.
 
@@ -489,14 +508,15 @@ def _chosen_rate(rate_hz, stamp_rate, method, usable, warnings):
     return stamp_rate, method
 
 
-def _group(dur, g):
+def _group(dur: NDArray[np.float64], g: int) -> NDArray[np.float64]:
     if g == 1:
         return dur
     m = dur.size // g * g
     return dur[:m].reshape(-1, g).sum(axis=1)
 
 
-def estimate_rate(t, *, unit='ns', rate_hz=None, sequence=None):
+def estimate_rate(t: npt.ArrayLike, *, unit: str = 'ns', rate_hz: float | None = None,
+                  sequence: npt.ArrayLike | None = None) -> RateEstimate:
     """
     Estimate the sample rate, stamp irregularity and loss of a whole record (module doc).
 
@@ -531,7 +551,7 @@ def estimate_rate(t, *, unit='ns', rate_hz=None, sequence=None):
     return tracker.estimate(rate_hz)
 
 
-def rescale_allan(result, rate_hz):
+def rescale_allan(result: _R, rate_hz: float) -> _R:
     """
     Return an Allan result with its taus recomputed for another sample rate.
 
@@ -540,14 +560,14 @@ def rescale_allan(result, rate_hz):
 
     Parameters
     ----------
-    result : allan.AllanResult
-        Allan deviation computed at another rate.
+    result : allan.AllanResult or None
+        Allan deviation computed at another rate (None is returned as it is).
     rate_hz : float
         The rate (Hz).
 
     Returns
     -------
-    allan.AllanResult
+    allan.AllanResult or None
 
     """
     from dataclasses import replace

@@ -50,6 +50,8 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 
 from ..errors import ParameterError
 
@@ -66,14 +68,14 @@ class Unwrapper:
     the elapsed count (from another clock) picks the number of wraps for long gaps instead.
     """
 
-    def __init__(self):
-        self.last = None   # last unwrapped value (int)
+    def __init__(self) -> None:
+        self.last: int | None = None   # last unwrapped value (int)
 
-    def reset(self):
+    def reset(self) -> None:
         """Forget the history: the next value starts a new epoch."""
         self.last = None
 
-    def unwrap(self, values, *, hint=None):
+    def unwrap(self, values: npt.ArrayLike, *, hint: float | None = None) -> NDArray[np.int64]:
         """
         Unwrap a batch of counter values.
 
@@ -164,8 +166,9 @@ class DeviceClock:
 
     """
 
-    def __init__(self, *, nominal_rate_hz=None, block_s=1.0, window_blocks=60, latency_ns=0,
-                 reset_threshold_s=0.5, max_drift_ppm=2000.0):
+    def __init__(self, *, nominal_rate_hz: float | None = None, block_s: float = 1.0,
+                 window_blocks: int = 60, latency_ns: int = 0, reset_threshold_s: float = 0.5,
+                 max_drift_ppm: float = 2000.0) -> None:
         if nominal_rate_hz is not None and not (np.isfinite(nominal_rate_hz) and nominal_rate_hz
                                                 > 0):
             raise ParameterError(f'nominal_rate_hz must be > 0, got {nominal_rate_hz}')
@@ -184,47 +187,51 @@ class DeviceClock:
         self.latency_ns = int(latency_ns)
         self._reset_ns = float(reset_threshold_s) * 1e9
         self._max_drift = float(max_drift_ppm) * 1e-6
-        self._last_stamp = None
+        self._last_stamp: int | None = None
         self._resets = 0
         self._samples = 0
         self._unwrap = Unwrapper()
         self._start_epoch()
 
-    def _start_epoch(self):
+    def _start_epoch(self) -> None:
         self._unwrap.reset()
-        self._blocks = deque(maxlen=self._window)  # (d_us, h_ns - d_us*1000) of closed blocks
-        self._cur_block = None                      # block index of the open block
-        self._cur_min = None                        # (d_us, y_ns) of the open block
-        self._last_d = None
-        self._last_h = None
-        self._first_d = None
-        self._h_ref = None
-        self._d_ref = None
-        self._a = None  # y = a + s * (d - d0)  with y = h - 1000 d
+        # (d_us, h_ns - d_us*1000) of closed blocks
+        self._blocks: deque[tuple[int, float]] = deque(maxlen=self._window)
+        self._cur_block: int | None = None                # block index of the open block
+        self._cur_min: tuple[int, float] | None = None    # (d_us, y_ns) of the open block
+        self._last_d: int | None = None
+        self._last_h: int | None = None
+        self._first_d: int | None = None
+        self._h_ref: int | None = None
+        self._d_ref: int | None = None
+        self._a: float | None = None  # y = a + s * (d - d0)  with y = h - 1000 d
         self._s = 0.0
         self._d0 = 0.0
 
-    def reset(self):
+    def reset(self) -> None:
         """Forget all but the monotonic floor (stamps never go back, even after a reset)."""
         self._start_epoch()
         self._resets += 1
 
     @property
-    def state(self):
+    def state(self) -> ClockState:
         """ClockState: the current estimate."""
-        a = (float('nan') if self._a is None else
-             self._h_ref - 1000.0 * self._d_ref + self._a - self._s * (self._d0 + self._d_ref))
+        if self._a is None:
+            a = float('nan')
+        else:
+            assert self._h_ref is not None and self._d_ref is not None  # set before the first fit
+            a = self._h_ref - 1000.0 * self._d_ref + self._a - self._s * (self._d0 + self._d_ref)
         return ClockState(offset_ns=a, drift_ppm=self._s / 1000.0 * 1e6, blocks=len(self._blocks),
                           resets=self._resets, samples=self._samples)
 
     @property
-    def measured_rate_hz(self):
+    def measured_rate_hz(self) -> float | None:
         """Return the sample rate seen in host time, or None without a nominal rate."""
         if self.nominal_rate_hz is None:
             return None
         return self.nominal_rate_hz / (1.0 + self._s / 1000.0)
 
-    def update(self, t_us, host_receive_ns):
+    def update(self, t_us: npt.ArrayLike, host_receive_ns: int) -> NDArray[np.int64]:
         """
         Stamp one received batch.
 
@@ -250,6 +257,7 @@ class DeviceClock:
             hint = (h - self._last_h) / 1000.0
         d = self._unwrap.unwrap(raw, hint=hint)
         if self._last_d is not None:
+            assert self._last_h is not None  # set with self._last_d
             dd = int(d[0]) - self._last_d
             dh = h - self._last_h
             if dd < 0 or abs(dd * 1000.0 * (1.0 + self._s / 1000.0)
@@ -259,7 +267,9 @@ class DeviceClock:
         d_last = int(d[-1])
         if self._h_ref is None:
             self._h_ref, self._d_ref = h, d_last
+        assert self._d_ref is not None  # set with self._h_ref
         self._observe(d_last - self._d_ref, h - self._h_ref)
+        assert self._a is not None  # _observe fitted the line
         rel = d - self._d_ref
         # exact integer part plus a small float correction: float64 cannot hold ns since 1970
         # exactly
@@ -280,7 +290,7 @@ class DeviceClock:
         self._samples += n
         return stamps
 
-    def _observe(self, d_us, h_ns):
+    def _observe(self, d_us: int, h_ns: int) -> None:
         # both relative to the epoch's first batch, so y stays small and exact in float64
         y = float(h_ns - 1000 * d_us)
         if self._first_d is None:
@@ -301,7 +311,7 @@ class DeviceClock:
         if closed or len(self._blocks) < 2 or self._a is None:
             self._fit()
 
-    def _fit(self):
+    def _fit(self) -> None:
         pts = list(self._blocks)
         if len(self._blocks) < 2:
             # the open block's running minimum is used only while there is nothing better: right

@@ -51,9 +51,14 @@ overruns (:meth:`BoardModel.sensor_overrun`) consume sample slots without a ``se
 the truth must be matched by ``seq`` (``--truth-out``), not by position.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+import os
+from typing import Any, Protocol, TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 
 from . import lsm6dso32 as lsm
 from .protocol import (
@@ -63,6 +68,7 @@ from .protocol import (
     encode_ack,
     FLAG_FIFO_OVERRUN,
     FLAG_SAMPLE_LOST,
+    LinkStats,
     NAK_BAD_ACCEL_FS,
     NAK_BAD_GYRO_FS,
     NAK_BAD_ODR,
@@ -73,6 +79,19 @@ from ..core.simulate import FractionalNoise, require_stable
 from ..errors import ParameterError
 from ..units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 
+if TYPE_CHECKING:  # for annotations only: the link does not import these at run time
+    from ..calibration.emulate import Scenario
+    from ..thermal.simulate import ThermalStream
+
+
+class _NoiseSource(Protocol):
+    """A streaming noise generator, e.g. :class:`.core.simulate.FractionalNoise` (rad/s)."""
+
+    def generate(self, n: int) -> np.ndarray:
+        """Return the next ``n`` samples."""
+        ...
+
+
 #: Paper 000 Table 4, reference sequence: mean noise variance 0.003414 (deg/s)^2.
 PAPER_NOISE_STD_DPS = float(np.sqrt(0.003414))
 DEFAULT_ALPHA = 1.4
@@ -82,7 +101,7 @@ DEFAULT_BIAS_DPS = (0.775, -0.35, 0.25)
 ACCEL_NOISE_DENSITY_UG_RTHZ = 70.0
 
 
-def stationary_gain(alpha, f, memory=DEFAULT_MEMORY):
+def stationary_gain(alpha: float, f: float, memory: int = DEFAULT_MEMORY) -> float:
     """
     Return the output standard deviation of eq. (2) per unit source-noise standard deviation.
 
@@ -128,7 +147,7 @@ class HeliumTransient:
 
     """
 
-    amplitude_dps: object = 3.5
+    amplitude_dps: float | tuple[float, float, float] = 3.5
     delay_s: float = 5400.0
     tau_s: float = 7200.0
 
@@ -152,8 +171,8 @@ class Vibration:
     """
 
     frequency_hz: float = 50.0
-    amplitude_dps: object = 1.0
-    accel_amplitude_g: object = 0.0
+    amplitude_dps: float | tuple[float, float, float] = 1.0
+    accel_amplitude_g: float | tuple[float, float, float] = 0.0
     phase_rad: float = 0.0
 
 
@@ -188,7 +207,7 @@ class Truth:
     accel_fs_g: int
 
 
-def _vec3(name, value):
+def _vec3(name: str, value: npt.ArrayLike) -> NDArray[np.float64]:
     arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,)).copy()
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f'{name} must be finite, got {value!r}')
@@ -247,13 +266,19 @@ class BoardModel:
 
     """
 
-    def __init__(self, *, rng, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4, alpha=DEFAULT_ALPHA,
-                 f=DEFAULT_F, noise_std_dps=PAPER_NOISE_STD_DPS, sigma_w_dps=None,
-                 memory=DEFAULT_MEMORY, bias_dps=DEFAULT_BIAS_DPS, accel_g=(0.0, 0.0, 1.0),
-                 accel_noise_ug_rthz=ACCEL_NOISE_DENSITY_UG_RTHZ, temperature_c=25.0,
-                 temp_drift_c_per_h=0.0, temp_sensitivity_dps_per_c=0.0, helium=None,
-                 vibration=None, clock_ppm=0.0, seq0=0, t0_us=0, noise=None, scenario=None,
-                 thermal=None):
+    def __init__(self, *, rng: np.random.Generator, odr_hz: float = 6667.0,
+                 gyro_fs_dps: int = 2000, accel_fs_g: int = 4, alpha: float = DEFAULT_ALPHA,
+                 f: float = DEFAULT_F, noise_std_dps: float = PAPER_NOISE_STD_DPS,
+                 sigma_w_dps: float | None = None, memory: int = DEFAULT_MEMORY,
+                 bias_dps: npt.ArrayLike = DEFAULT_BIAS_DPS,
+                 accel_g: npt.ArrayLike = (0.0, 0.0, 1.0),
+                 accel_noise_ug_rthz: float = ACCEL_NOISE_DENSITY_UG_RTHZ,
+                 temperature_c: float = 25.0, temp_drift_c_per_h: float = 0.0,
+                 temp_sensitivity_dps_per_c: npt.ArrayLike = 0.0,
+                 helium: HeliumTransient | None = None, vibration: Vibration | None = None,
+                 clock_ppm: float = 0.0, seq0: int = 0, t0_us: int = 0,
+                 noise: Sequence[_NoiseSource] | None = None, scenario: 'Scenario | None' = None,
+                 thermal: 'ThermalStream | None' = None) -> None:
         if not isinstance(rng, np.random.Generator):
             raise ParameterError(f'rng must be a numpy.random.Generator, got {type(rng).__name__}')
         self.odr_hz = lsm.check_odr(odr_hz)
@@ -301,18 +326,20 @@ class BoardModel:
         self._seg_start_s = 0.0    # true time of the first sample since the last ODR change
         self._seg_index = 0        # samples since the last ODR change
         self._decoder = Decoder()
-        self.last_truth = None
-        self.config_changes = []   # (samples_generated at the change, Ack)
+        self.last_truth: Truth | None = None
+        # (samples_generated at the change, Ack)
+        self.config_changes: list[tuple[int, Ack]] = []
         self.samples_overrun = 0
         self._fifo_overrun = False
         self.scenario = scenario
 
     @property
-    def time_s(self):
+    def time_s(self) -> float:
         """float: true time of the next sample (s since power-on)."""
         return self._seg_start_s + self._seg_index / self.odr_hz
 
-    def configure(self, *, command_id, odr_hz, gyro_fs_dps, accel_fs_g):
+    def configure(self, *, command_id: int, odr_hz: float, gyro_fs_dps: int,
+                  accel_fs_g: int) -> Ack:
         """
         Apply a configuration as the firmware would, or refuse it.
 
@@ -334,7 +361,7 @@ class BoardModel:
         checks = ((NAK_BAD_ODR, lsm.check_odr, odr_hz),
                   (NAK_BAD_GYRO_FS, lsm.check_gyro_fs, gyro_fs_dps),
                   (NAK_BAD_ACCEL_FS, lsm.check_accel_fs, accel_fs_g))
-        values = []
+        values: list[Any] = []
         for code, check, value in checks:
             try:
                 values.append(check(value))
@@ -352,7 +379,7 @@ class BoardModel:
         self.config_changes.append((self.samples_generated, ack))
         return ack
 
-    def handle_bytes(self, data):
+    def handle_bytes(self, data: bytes) -> bytes:
         """
         Feed bytes received from the host; answer every CONFIGURE command.
 
@@ -376,11 +403,11 @@ class BoardModel:
         return b''.join(out)
 
     @property
-    def command_stats(self):
+    def command_stats(self) -> LinkStats:
         """LinkStats: counters of the board's command decoder."""
         return self._decoder.stats
 
-    def sensor_overrun(self, k):
+    def sensor_overrun(self, k: int) -> None:
         """
         Let the sensor FIFO overrun: ``k`` samples are produced but never read by the board.
 
@@ -410,7 +437,7 @@ class BoardModel:
         self.samples_overrun += k
         self._fifo_overrun = True
 
-    def next_samples(self, n):
+    def next_samples(self, n: int) -> NDArray[np.void]:
         """
         Produce the next ``n`` samples; their ground truth is left in :attr:`last_truth`.
 
@@ -539,8 +566,9 @@ class FaultInjector:
 
     """
 
-    def __init__(self, rng, *, drop_flagged_rate=0.0, drop_unflagged_rate=0.0, corrupt_rate=0.0,
-                 fifo_overrun_rate=0.0):
+    def __init__(self, rng: np.random.Generator, *, drop_flagged_rate: float = 0.0,
+                 drop_unflagged_rate: float = 0.0, corrupt_rate: float = 0.0,
+                 fifo_overrun_rate: float = 0.0) -> None:
         for name, value in (
             ('drop_flagged_rate', drop_flagged_rate),
             ('drop_unflagged_rate', drop_unflagged_rate),
@@ -565,11 +593,11 @@ class FaultInjector:
         self._seen_kept = False
 
     @property
-    def counts(self):
+    def counts(self) -> FaultCounts:
         """FaultCounts: what has been injected so far."""
         return FaultCounts(**self._c)
 
-    def overrun(self, n):
+    def overrun(self, n: int) -> int:
         """
         Decide whether the sensor FIFO overruns before the next ``n`` sample slots.
 
@@ -589,12 +617,12 @@ class FaultInjector:
             return 0
         if self.rng.random() >= 1.0 - (1.0 - self.fifo_overrun_rate) ** n:
             return 0
-        k = int(min(n - 1, self.rng.integers(1, 33)))
+        k = int(min(n - 1, int(self.rng.integers(1, 33))))
         self._c['fifo_overruns'] += 1
         self._c['fifo_overrun_samples'] += k
         return k
 
-    def note_lost(self, n, *, flagged=True, carry_flags=0):
+    def note_lost(self, n: int, *, flagged: bool = True, carry_flags: int = 0) -> None:
         """
         Record ``n`` samples lost outside the injector (e.g. transmit buffer full).
 
@@ -618,7 +646,7 @@ class FaultInjector:
             self._pending_run += n
             self._pending_carry |= int(carry_flags) & FLAG_FIFO_OVERRUN
 
-    def drop(self, samples):
+    def drop(self, samples: NDArray[np.void]) -> NDArray[np.void]:
         """
         Drop samples at the configured rates and flag the sample after each flagged loss.
 
@@ -684,7 +712,7 @@ class FaultInjector:
                 self._pending_carry = FLAG_FIFO_OVERRUN
         return kept
 
-    def corrupt(self, data):
+    def corrupt(self, data: bytes) -> bytes:
         """
         Corrupt bytes at the configured rate.
 
@@ -721,7 +749,7 @@ TRUTH_DTYPE = np.dtype([
 ])
 
 
-def truth_records(truth):
+def truth_records(truth: Truth) -> NDArray[np.void]:
     """
     Pack a :class:`Truth` into TRUTH_DTYPE records (temperature, exact in the raw word, left out).
 
@@ -745,7 +773,7 @@ def truth_records(truth):
     return rec
 
 
-def read_truth(path):
+def read_truth(path: str | os.PathLike[str]) -> NDArray[np.void]:
     """
     Read a ``--truth-out`` file (complete records only, so it can be read while the emulator runs).
 

@@ -37,9 +37,12 @@ searches for the next sync marker. Counters (:class:`LinkStats`) say what happen
 
 from dataclasses import dataclass, field
 import struct
+from typing import Any
 import zlib
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 
 from ..errors import ParameterError
 
@@ -106,7 +109,7 @@ MAX_FRAME_SIZE = FRAME_OVERHEAD + max(rule[1] for rule in _LENGTH_RULES.values()
 _BULK_MAX_FRAME = FRAME_OVERHEAD + 32 * SAMPLE_SIZE
 
 
-def _mhz(odr_hz):
+def _mhz(odr_hz: float) -> int:
     return int(round(float(odr_hz) * 1000.0))
 
 
@@ -297,22 +300,22 @@ class DecodeResult:
     """
 
     samples: np.ndarray = field(default_factory=lambda: _EMPTY_SAMPLES)
-    acks: tuple = ()
+    acks: tuple[Ack, ...] = ()
     lost_before: np.ndarray = field(default_factory=lambda: _EMPTY_LOST)
-    ack_positions: tuple = ()
-    commands: tuple = ()
-    headers: tuple = ()
-    header_positions: tuple = ()
-    discarded: tuple = ()
+    ack_positions: tuple[int, ...] = ()
+    commands: tuple[Configure, ...] = ()
+    headers: tuple[LogHeader, ...] = ()
+    header_positions: tuple[int, ...] = ()
+    discarded: tuple[tuple[int, int], ...] = ()
 
 
-def _frame(frame_type, payload):
+def _frame(frame_type: int, payload: bytes) -> bytes:
     head = _HEADER.pack(SYNC, PROTOCOL_VERSION, frame_type, len(payload))
     body = head + payload
     return body + _CRC.pack(zlib.crc32(body))
 
 
-def encode_samples(samples):
+def encode_samples(samples: npt.ArrayLike) -> bytes:
     """
     Encode samples as SAMPLES frames.
 
@@ -334,7 +337,7 @@ def encode_samples(samples):
     if arr.dtype != SAMPLE_DTYPE:
         try:
             conv = np.zeros(arr.shape, dtype=SAMPLE_DTYPE)
-            for name in SAMPLE_DTYPE.names:
+            for name in SAMPLE_DTYPE.names or ():  # a structured dtype: never None
                 if name in (arr.dtype.names or ()):
                     conv[name] = arr[name]
         except (TypeError, ValueError) as err:
@@ -347,14 +350,15 @@ def encode_samples(samples):
     return b''.join(out)
 
 
-def _check_u32(name, value):
+def _check_u32(name: str, value: int) -> int:
     value = int(value)
     if not 0 <= value < 2 ** 32:
         raise ParameterError(f'{name} must fit in uint32, got {value}')
     return value
 
 
-def encode_configure(*, command_id, odr_hz, gyro_fs_dps, accel_fs_g):
+def encode_configure(*, command_id: int, odr_hz: float, gyro_fs_dps: int,
+                     accel_fs_g: int) -> bytes:
     """
     Encode a host-to-board CONFIGURE frame.
 
@@ -384,7 +388,7 @@ def encode_configure(*, command_id, odr_hz, gyro_fs_dps, accel_fs_g):
                                                    int(accel_fs_g), 0))
 
 
-def encode_ack(ack):
+def encode_ack(ack: Ack) -> bytes:
     """
     Encode a board-to-host ACK (``ack.ok``) or NAK frame.
 
@@ -406,7 +410,7 @@ def encode_ack(ack):
     return _frame(FRAME_ACK, payload + msg)
 
 
-def encode_log_header(header):
+def encode_log_header(header: LogHeader) -> bytes:
     """
     Encode the LOG_HEADER frame that starts every SD log file.
 
@@ -428,7 +432,7 @@ def encode_log_header(header):
     return _frame(FRAME_LOG_HEADER, payload)
 
 
-def crc32(data):
+def crc32(data: bytes | bytearray | memoryview) -> int:
     """
     Return the frame CRC of ``data`` (CRC-32/IEEE, see the module docstring).
 
@@ -464,29 +468,30 @@ class Decoder:
     is dropped.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._buf = bytearray()
         self._base = 0          # stream offset of self._buf[0]
-        self._disc_start = None  # stream offset where the current discarded region began
-        self._last_seq = None
+        # stream offset where the current discarded region began
+        self._disc_start: int | None = None
+        self._last_seq: int | None = None
         self._c = dict.fromkeys(_STAT_FIELDS, 0)
 
     @property
-    def stats(self):
+    def stats(self) -> LinkStats:
         """LinkStats: frozen snapshot of the cumulative counters."""
         return LinkStats(**self._c)
 
     @property
-    def last_seq(self):
+    def last_seq(self) -> int | None:
         """Return the seq of the last delivered sample, or None."""
         return self._last_seq
 
     @property
-    def buffered(self):
+    def buffered(self) -> int:
         """int: bytes held waiting for the rest of a frame."""
         return len(self._buf)
 
-    def reset_stream(self):
+    def reset_stream(self) -> DecodeResult:
         """
         Drop buffered bytes (new connection) but keep the counters and the sequence continuity.
 
@@ -502,7 +507,7 @@ class Decoder:
             self._buf = bytearray()
             return DecodeResult()
 
-    def flush(self):
+    def flush(self) -> DecodeResult:
         """
         Declare the end of the input: decode what can be decoded and discard the rest.
 
@@ -517,7 +522,7 @@ class Decoder:
             self._buf = bytearray()
             return DecodeResult()
 
-    def feed(self, data):
+    def feed(self, data: bytes | bytearray | memoryview | None) -> DecodeResult:
         """
         Add received bytes and decode every complete frame.
 
@@ -550,7 +555,7 @@ class Decoder:
             self._buf = bytearray()
             return DecodeResult()
 
-    def _finish(self, *, truncate, drop_all):
+    def _finish(self, *, truncate: bool, drop_all: bool) -> DecodeResult:
         if drop_all:
             res = _Collector()
             n = len(self._buf)
@@ -562,18 +567,18 @@ class Decoder:
             return res.result(self)
         return self._run(final=truncate)
 
-    def _discard_to(self, pos, new_pos):
+    def _discard_to(self, pos: int, new_pos: int) -> None:
         if self._disc_start is None:
             self._disc_start = self._base + pos
         self._c['bytes_discarded'] += new_pos - pos
 
-    def _close_region(self, res, end_offset):
+    def _close_region(self, res: '_Collector', end_offset: int) -> None:
         if self._disc_start is not None:
             res.discarded.append((self._disc_start, end_offset - self._disc_start))
             self._c['resyncs'] += 1
             self._disc_start = None
 
-    def _run(self, *, final):
+    def _run(self, *, final: bool) -> DecodeResult:
         buf = self._buf
         n = len(buf)
         pos = 0
@@ -648,7 +653,7 @@ class Decoder:
             self._close_region(res, self._base + pos)
         return self._finish_run(run, buf, pos, res)
 
-    def _resync(self, buf, pos, n, *, final):
+    def _resync(self, buf: bytearray, pos: int, n: int, *, final: bool) -> int:
         """Discard from ``pos`` to the next sync marker (or the end); return where it starts."""
         nxt = buf.find(SYNC, pos + 1)
         if nxt < 0:
@@ -660,15 +665,16 @@ class Decoder:
     # Hooks of _run: this class decodes frame by frame; link.scan.ScanDecoder overrides them to
     # consume runs of SAMPLES frames in a compiled loop, with the byte-wise rules above unchanged.
 
-    def _start_run(self, buf, n):
+    def _start_run(self, buf: bytearray, n: int) -> Any:
         """Return the state of a bulk path for one ``_run`` over ``buf[:n]``; None: none."""
         return None
 
-    def _run_frames(self, run, pos, n, res):
+    def _run_frames(self, run: Any, pos: int, n: int, res: '_Collector') -> int:
         """Consume complete valid frames from the sync marker at ``pos``; return the new pos."""
         return pos
 
-    def _samples_frame(self, run, mv, pos, end, n, res):
+    def _samples_frame(self, run: Any, mv: memoryview, pos: int, end: int, n: int,
+                       res: '_Collector') -> int:
         """Take the valid SAMPLES frame at ``pos`` (payload up to ``end``); return the next pos."""
         length = end - pos - HEADER_SIZE
         res.payloads.append(bytes(mv[pos + HEADER_SIZE:end]))
@@ -683,7 +689,7 @@ class Decoder:
             pos += good * size
         return pos
 
-    def _finish_run(self, run, buf, pos, res):
+    def _finish_run(self, run: Any, buf: bytearray, pos: int, res: '_Collector') -> DecodeResult:
         """Drop the consumed bytes from the buffer; return the DecodeResult of the run."""
         if pos:
             del buf[:pos]
@@ -691,7 +697,7 @@ class Decoder:
         return res.result(self)
 
     @staticmethod
-    def _same_size_run(mv, pos, n, size, res):
+    def _same_size_run(mv: memoryview, pos: int, n: int, size: int, res: '_Collector') -> int:
         """
         Accept in bulk the valid SAMPLES frames at ``pos`` with the header just accepted.
 
@@ -718,7 +724,10 @@ class Decoder:
             res.nsamples += good * ((size - FRAME_OVERHEAD) // SAMPLE_SIZE)
         return good
 
-    def _account_samples(self, samples, ack_positions, header_positions):
+    def _account_samples(self, samples: NDArray[np.void], ack_positions: tuple[int, ...],
+                         header_positions: tuple[int, ...]
+                         ) -> tuple[NDArray[np.void], NDArray[np.int64], tuple[int, ...],
+                                    tuple[int, ...]]:
         """
         Counter bookkeeping over the decoded samples.
 
@@ -766,17 +775,17 @@ class _Collector:
     __slots__ = ('payloads', 'nsamples', 'acks', 'ack_positions', 'commands', 'headers',
                  'header_positions', 'discarded')
 
-    def __init__(self):
-        self.payloads = []
+    def __init__(self) -> None:
+        self.payloads: list[bytes] = []
         self.nsamples = 0
-        self.acks = []
-        self.ack_positions = []
-        self.commands = []
-        self.headers = []
-        self.header_positions = []
-        self.discarded = []
+        self.acks: list[Ack] = []
+        self.ack_positions: list[int] = []
+        self.commands: list[Configure] = []
+        self.headers: list[LogHeader] = []
+        self.header_positions: list[int] = []
+        self.discarded: list[tuple[int, int]] = []
 
-    def result(self, dec, payload=None):
+    def result(self, dec: Decoder, payload: NDArray[np.uint8] | None = None) -> DecodeResult:
         """
         Count, account and return the DecodeResult.
 
@@ -805,7 +814,7 @@ class _Collector:
                             discarded=tuple(self.discarded))
 
 
-def _control_frame(res, ftype, payload):
+def _control_frame(res: _Collector, ftype: int, payload: memoryview) -> None:
     """Decode a valid frame other than SAMPLES (ACK, CONFIGURE, LOG_HEADER) into ``res``."""
     if ftype == FRAME_ACK:
         res.acks.append(_decode_ack(payload))
@@ -817,20 +826,20 @@ def _control_frame(res, ftype, payload):
         res.header_positions.append(res.nsamples)
 
 
-def _decode_ack(payload):
+def _decode_ack(payload: memoryview) -> Ack:
     command_id, status, accel_fs, gyro_fs, odr_mhz = _ACK.unpack_from(payload, 0)
     message = bytes(payload[_ACK.size:]).decode('ascii', 'replace')
     return Ack(command_id=command_id, ok=status == ACK_OK, odr_hz=odr_mhz / 1000.0,
                gyro_fs_dps=gyro_fs, accel_fs_g=accel_fs, message=message, status=status)
 
 
-def _decode_configure(payload):
+def _decode_configure(payload: memoryview) -> Configure:
     command_id, odr_mhz, gyro_fs, accel_fs, _ = _CONFIGURE.unpack_from(payload, 0)
     return Configure(command_id=command_id, odr_hz=odr_mhz / 1000.0, gyro_fs_dps=gyro_fs,
                      accel_fs_g=accel_fs)
 
 
-def _decode_log_header(payload):
+def _decode_log_header(payload: memoryview) -> LogHeader:
     (sequence_id, file_index, odr_mhz, gyro_fs, accel_fs, _, first_seq, t_us,
      rtc) = _LOG_HEADER.unpack_from(payload, 0)
     return LogHeader(sequence_id=sequence_id, file_index=file_index, odr_hz=odr_mhz / 1000.0,

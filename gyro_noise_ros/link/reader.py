@@ -22,20 +22,23 @@ NAK, no ACK, ``data_timeout_s`` of silence) closes the port and retries every
 node adapts it to ROS (``gyro_noise_ros.nodes.driver``).
 """
 
+from collections.abc import Callable, Mapping
 from dataclasses import fields
 import threading
 import time
+from typing import Any
 
+import numpy as np
 import serial
 
-from .protocol import Decoder
-from .session import frame_interval_s, handshake
+from .protocol import Decoder, LinkStats
+from .session import frame_interval_s, handshake, LinkConfig
 from ..errors import LinkError
 
 _READ_SIZE = 1 << 16
 
 
-def _stats_dict(stats):
+def _stats_dict(stats: LinkStats) -> dict[str, int]:
     return {f.name: getattr(stats, f.name) for f in fields(stats)}
 
 
@@ -62,8 +65,11 @@ class LinkReader:
 
     """
 
-    def __init__(self, port, settings, on_samples, *, now_ns=time.time_ns,
-                 on_error=lambda message, first: None, on_streaming=lambda config: None):
+    def __init__(self, port: str, settings: Callable[[], Mapping[str, Any]],
+                 on_samples: Callable[[np.ndarray, int, LinkConfig], object], *,
+                 now_ns: Callable[[], int] = time.time_ns,
+                 on_error: Callable[[str, bool], object] = lambda message, first: None,
+                 on_streaming: Callable[[LinkConfig], object] = lambda config: None) -> None:
         self.port = port
         self._settings = settings
         self._on_samples = on_samples
@@ -76,16 +82,16 @@ class LinkReader:
         self._lock = threading.Lock()
         self._state = 'stopped'
         self._last_error = 'none'
-        self._last_logged_error = None
-        self._config = None
+        self._last_logged_error: str | None = None
+        self._config: LinkConfig | None = None
         self._connections = 0
-        self._streaming_since = None
-        self._last_sample_monotonic = None
-        self._link_stats = {}
+        self._streaming_since: float | None = None
+        self._last_sample_monotonic: float | None = None
+        self._link_stats: dict[str, int] = {}
         self._stop = threading.Event()
-        self._thread = None
+        self._thread: threading.Thread | None = None
 
-    def start(self):
+    def start(self) -> None:
         """Start the reader thread (no-op if running)."""
         if self._thread is not None and self._thread.is_alive():
             return
@@ -93,7 +99,7 @@ class LinkReader:
         self._thread = threading.Thread(target=self._loop, name='lsm6dso32_reader', daemon=True)
         self._thread.start()
 
-    def stop(self, timeout_s=5.0):
+    def stop(self, timeout_s: float = 5.0) -> None:
         """
         Stop and join the reader thread; it closes the port.
 
@@ -109,7 +115,7 @@ class LinkReader:
         self._thread = None
         self._set_state('stopped')
 
-    def snapshot(self):
+    def snapshot(self) -> dict[str, Any]:
         """
         Copy the link's state and counters.
 
@@ -129,7 +135,7 @@ class LinkReader:
                     'last_sample_monotonic': self._last_sample_monotonic,
                     'link': dict(self._link_stats)}
 
-    def _loop(self):
+    def _loop(self) -> None:
         while not self._stop.is_set():
             self._set_state('connecting')
             s = self._settings()
@@ -160,7 +166,7 @@ class LinkReader:
             if not self._stop.is_set():
                 self._stop.wait(s['reconnect_period_s'])
 
-    def _session(self, ser, s):
+    def _session(self, ser: Any, s: Mapping[str, Any]) -> None:
         self._set_state('configuring')
         with self._lock:
             self._connections += 1
@@ -200,13 +206,13 @@ class LinkReader:
                 if len(result.samples):
                     self._last_sample_monotonic = now
 
-    def _set_state(self, state):
+    def _set_state(self, state: str) -> None:
         with self._lock:
             self._state = state
             if state != 'streaming':
                 self._streaming_since = None
 
-    def _failed(self, reason):
+    def _failed(self, reason: str) -> None:
         with self._lock:
             first = self._last_logged_error != reason
             self._last_logged_error = reason

@@ -37,11 +37,14 @@ change of the rules applies to both (``test/test_link_scan.py`` checks them call
 
 import numba
 import numpy as np
+from numpy.typing import NDArray
 
 from .protocol import (
+    _Collector,
     _LENGTH_RULES,
     CRC_SIZE,
     Decoder,
+    DecodeResult,
     FRAME_SAMPLES,
     HEADER_SIZE,
     PROTOCOL_VERSION,
@@ -49,7 +52,7 @@ from .protocol import (
 )
 
 
-def _crc_tables():
+def _crc_tables() -> NDArray[np.uint32]:
     """Slicing-by-8 tables of the reflected CRC-32 polynomial 0xEDB88320, shape (8, 256)."""
     table = np.zeros((8, 256), np.uint32)
     for i in range(256):
@@ -67,7 +70,8 @@ CRC_TABLES = _crc_tables()
 
 
 @numba.njit(cache=True, nogil=True)
-def _crc32(buf, start, stop, t):  # pragma: no cover - compiled; tested through crc32_numba
+def _crc32(  # pragma: no cover - compiled; tested through crc32_numba
+        buf: NDArray[np.uint8], start: int, stop: int, t: NDArray[np.uint32]) -> np.uint32:
     crc = np.uint32(0xFFFFFFFF)
     p = start
     while p + 8 <= stop:
@@ -85,8 +89,10 @@ def _crc32(buf, start, stop, t):  # pragma: no cover - compiled; tested through 
 
 
 @numba.njit(cache=True, nogil=True)
-def _scan_samples(buf, pos, n, out, out_pos, t, version, ftype, min_len, max_len,
-                  step):  # pragma: no cover - compiled; tested through ScanDecoder
+def _scan_samples(  # pragma: no cover - compiled; tested through ScanDecoder
+        buf: NDArray[np.uint8], pos: int, n: int, out: NDArray[np.uint8], out_pos: int,
+        t: NDArray[np.uint32], version: int, ftype: int, min_len: int, max_len: int,
+        step: int) -> tuple[int, int, int]:
     """
     Consume the complete valid SAMPLES frames that follow each other from ``pos``.
 
@@ -106,16 +112,17 @@ def _scan_samples(buf, pos, n, out, out_pos, t, version, ftype, min_len, max_len
         stored = (np.uint32(buf[end]) | (np.uint32(buf[end + 1]) << np.uint32(8))
                   | (np.uint32(buf[end + 2]) << np.uint32(16))
                   | (np.uint32(buf[end + 3]) << np.uint32(24)))
-        if _crc32(buf, pos, end, t) != stored:
+        # numba types these int64 (the np.int64 of ``length``) and boxes them as int on return
+        if _crc32(buf, pos, end, t) != stored:  # type: ignore[arg-type]
             break
         out[out_pos:out_pos + length] = buf[pos + HEADER_SIZE:end]
-        out_pos += length
-        pos = end + CRC_SIZE
+        out_pos += length  # type: ignore[assignment]
+        pos = end + CRC_SIZE  # type: ignore[assignment]
         frames += 1
     return pos, out_pos, frames
 
 
-def crc32_numba(data):
+def crc32_numba(data: bytes | bytearray | memoryview) -> int:
     """
     Return the frame CRC of ``data`` computed by the compiled table CRC (equals ``zlib.crc32``).
 
@@ -145,13 +152,14 @@ class ScanDecoder(Decoder):
     microseconds, negligible for blocks of kilobytes.
     """
 
-    def _start_run(self, buf, n):
+    def _start_run(self, buf: bytearray, n: int) -> '_ScanRun':
         # the samples of the run are copied into one array (no more bytes than the buffer holds)
         return _ScanRun(np.frombuffer(buf, np.uint8) if n else np.zeros(0, np.uint8),
                         np.empty(n, np.uint8))
 
-    def _run_frames(self, run, pos, n, res):
+    def _run_frames(self, run: '_ScanRun', pos: int, n: int, res: _Collector) -> int:
         lo, hi, step = _SAMPLES_RULE
+        assert run.arr is not None  # released only when the run ends
         new_pos, new_out, frames = _scan_samples(
             run.arr, pos, n, run.out, run.out_pos, CRC_TABLES, PROTOCOL_VERSION, FRAME_SAMPLES,
             lo, hi, step)
@@ -161,14 +169,17 @@ class ScanDecoder(Decoder):
             run.out_pos = new_out
         return new_pos
 
-    def _samples_frame(self, run, mv, pos, end, n, res):
+    def _samples_frame(self, run: '_ScanRun', mv: memoryview, pos: int, end: int, n: int,
+                       res: _Collector) -> int:
         start = pos + HEADER_SIZE
+        assert run.arr is not None  # released only when the run ends
         run.out[run.out_pos:run.out_pos + end - start] = run.arr[start:end]
         run.out_pos += end - start
         res.nsamples += (end - start) // SAMPLE_SIZE
         return end + CRC_SIZE
 
-    def _finish_run(self, run, buf, pos, res):
+    def _finish_run(self, run: '_ScanRun', buf: bytearray, pos: int,
+                    res: _Collector) -> DecodeResult:
         # the carry-over (at most one partial frame) goes to a new buffer: ``buf`` may still be
         # exported (numba holds its arguments while it compiles), so it cannot be resized
         run.arr = None
@@ -182,5 +193,7 @@ class _ScanRun:
 
     __slots__ = ('arr', 'out', 'out_pos')
 
-    def __init__(self, arr, out):
-        self.arr, self.out, self.out_pos = arr, out, 0
+    def __init__(self, arr: NDArray[np.uint8], out: NDArray[np.uint8]) -> None:
+        self.arr: NDArray[np.uint8] | None = arr
+        self.out = out
+        self.out_pos = 0

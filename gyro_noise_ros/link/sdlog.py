@@ -30,14 +30,19 @@ a file is discarded, not glued to the next file), and reports every corrupt regi
 offset.
 """
 
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 import os
 import re
+from typing import BinaryIO
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .protocol import (
+    Ack,
     Decoder,
+    DecodeResult,
     encode_ack,
     encode_log_header,
     encode_samples,
@@ -61,8 +66,11 @@ MAX_REPORTED_REGIONS = 1000
 #: is refused up front instead of failing half-way with a memory error.
 MAX_CHUNK_BYTES = 64 << 20
 
+#: (odr_hz, gyro_fs_dps, accel_fs_g) in force, None before the first header or ACK.
+_Config = tuple[float | None, int | None, int | None]
 
-def log_file_name(sequence_id, file_index):
+
+def log_file_name(sequence_id: int, file_index: int) -> str:
     """
     Return the 8.3 file name of one log file.
 
@@ -108,8 +116,10 @@ class SdLogWriter:
 
     """
 
-    def __init__(self, directory, *, sequence_id, odr_hz, gyro_fs_dps, accel_fs_g,
-                 max_file_bytes=FAT32_MAX_FILE_BYTES, batch=16, rtc_unix_s=0, corrupt=None):
+    def __init__(self, directory: str | os.PathLike[str], *, sequence_id: int, odr_hz: float,
+                 gyro_fs_dps: int, accel_fs_g: int, max_file_bytes: int = FAT32_MAX_FILE_BYTES,
+                 batch: int = 16, rtc_unix_s: int = 0,
+                 corrupt: Callable[[bytes], bytes] | None = None) -> None:
         self.directory = os.fspath(directory)
         if not os.path.isdir(self.directory):
             raise ParameterError(f'directory must exist, got {self.directory!r}')
@@ -123,19 +133,19 @@ class SdLogWriter:
         self.max_file_bytes = int(max_file_bytes)
         self.batch = int(batch)
         self.rtc_unix_s = int(rtc_unix_s)
-        self._t_origin_us = None
+        self._t_origin_us: int | None = None
         self._corrupt = corrupt
-        self._file = None
+        self._file: BinaryIO | None = None
         self._size = 0
-        self.paths = []
+        self.paths: list[str] = []
 
-    def __enter__(self):
+    def __enter__(self) -> 'SdLogWriter':
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def _open_next(self, first_seq, t_us):
+    def _open_next(self, first_seq: int, t_us: int) -> None:
         if self._file is not None:
             self._file.close()
         index = len(self.paths)
@@ -153,18 +163,19 @@ class SdLogWriter:
                                                 odr_hz=odr, gyro_fs_dps=gfs, accel_fs_g=afs,
                                                 first_seq=first_seq, t_us=t_us, rtc_unix_s=rtc)))
 
-    def _write(self, data):
+    def _write(self, data: bytes) -> None:
         if self._corrupt is not None:
             data = self._corrupt(data)
+        assert self._file is not None  # _frame_out opened it
         self._file.write(data)
         self._size += len(data)
 
-    def _frame_out(self, frame, first_seq, t_us):
+    def _frame_out(self, frame: bytes, first_seq: int, t_us: int) -> None:
         if self._file is None or self._size + len(frame) > self.max_file_bytes:
             self._open_next(first_seq, t_us)
         self._write(frame)
 
-    def write_samples(self, samples):
+    def write_samples(self, samples: NDArray[np.void]) -> None:
         """
         Append samples (SAMPLES frames of ``batch`` samples).
 
@@ -178,7 +189,7 @@ class SdLogWriter:
             part = samples[start:start + self.batch]
             self._frame_out(encode_samples(part), int(part['seq'][0]), int(part['t_us'][0]))
 
-    def write_ack(self, ack, *, next_seq=0, t_us=0):
+    def write_ack(self, ack: Ack, *, next_seq: int = 0, t_us: int = 0) -> None:
         """
         Record a configuration change (an ACK frame) before the samples that follow it.
 
@@ -194,7 +205,7 @@ class SdLogWriter:
             self.config = (float(ack.odr_hz), int(ack.gyro_fs_dps), int(ack.accel_fs_g))
         self._frame_out(encode_ack(ack), int(next_seq), int(t_us))
 
-    def close(self):
+    def close(self) -> None:
         """Close the current file."""
         if self._file is not None:
             self._file.close()
@@ -222,9 +233,9 @@ class LogBlock:
     path: str
     samples: np.ndarray
     lost_before: np.ndarray
-    odr_hz: object
-    gyro_fs_dps: object
-    accel_fs_g: object
+    odr_hz: float | None
+    gyro_fs_dps: int | None
+    accel_fs_g: int | None
 
 
 @dataclass(frozen=True)
@@ -262,7 +273,7 @@ class LogFileInfo:
 
     path: str
     size_bytes: int
-    header: object
+    header: LogHeader | None
 
 
 @dataclass(frozen=True)
@@ -288,17 +299,17 @@ class LogReport:
 
     """
 
-    files: tuple
+    files: tuple[LogFileInfo, ...]
     stats: LinkStats
-    corrupt_regions: tuple
+    corrupt_regions: tuple[CorruptRegion, ...]
     corrupt_region_count: int
-    missing_file_indices: tuple
-    sequence_id: object
+    missing_file_indices: tuple[int, ...]
+    sequence_id: int | None
     samples_without_config: int = 0
-    warnings: tuple = field(default=())
+    warnings: tuple[str, ...] = field(default=())
 
 
-def read_header(path):
+def read_header(path: str | os.PathLike[str]) -> LogHeader | None:
     """
     Return the LOG_HEADER of a log file, or None when its start is unreadable.
 
@@ -323,7 +334,7 @@ def read_header(path):
     return None
 
 
-def sample_span(path):
+def sample_span(path: str | os.PathLike[str]) -> tuple[int, int] | None:
     """
     Return the sample counters at the start and at the end of a log file.
 
@@ -354,9 +365,9 @@ def sample_span(path):
     return int(first['seq'][0]), int(last['seq'][-1])
 
 
-def _check_distinct(infos):
+def _check_distinct(infos: Sequence['LogFileInfo']) -> None:
     """Refuse a file named twice (ParameterError), two files of the same data (InputDataError)."""
-    seen = {}
+    seen: dict[str, tuple[str, tuple[int, int]]] = {}
     for info in infos:
         try:
             key = os.path.realpath(info.path)
@@ -369,19 +380,19 @@ def _check_distinct(infos):
                 raise ParameterError(f'log file {info.path!r} is given twice (also as '
                                      f'{other!r}); give each file once')
         seen[info.path] = (key, ident)
-    heads = {}
+    heads: dict[tuple[int, int], str] = {}
     for info in infos:
         if info.header is None:
             continue
-        key = (info.header.sequence_id, info.header.file_index)
-        if key in heads:
+        file_key = (info.header.sequence_id, info.header.file_index)
+        if file_key in heads:
             raise InputDataError(
-                f'log files {heads[key]!r} and {info.path!r} both hold file {key[1]} of '
-                f'sequence {key[0]} (the same log twice?); give each file once')
-        heads[key] = info.path
+                f'log files {heads[file_key]!r} and {info.path!r} both hold file {file_key[1]} of '
+                f'sequence {file_key[0]} (the same log twice?); give each file once')
+        heads[file_key] = info.path
 
 
-def _check_overlaps(files):
+def _check_overlaps(files: Iterable['LogFileInfo']) -> None:
     """Refuse consecutive files whose sample counters overlap (InputDataError naming both)."""
     previous = None
     for info in files:
@@ -399,7 +410,7 @@ def _check_overlaps(files):
         previous = (info.path, span)
 
 
-def _name_key(path):
+def _name_key(path: str) -> tuple[int, int] | None:
     m = FILE_NAME_RE.match(os.path.basename(path))
     return (int(m.group(1)), int(m.group(2))) if m else None
 
@@ -430,9 +441,10 @@ class SdLogReader:
 
     """
 
-    def __init__(self, paths, *, chunk_bytes=1 << 20, scan=True):
-        paths = [os.fspath(p) for p in paths]
-        if not paths:
+    def __init__(self, paths: Iterable[str | os.PathLike[str]], *, chunk_bytes: int = 1 << 20,
+                 scan: bool = True) -> None:
+        names = [os.fspath(p) for p in paths]
+        if not names:
             raise ParameterError('paths must name at least one log file')
         if not 1 <= int(chunk_bytes) <= MAX_CHUNK_BYTES:
             raise ParameterError(f'chunk_bytes must be in 1..{MAX_CHUNK_BYTES} (64 MiB), got '
@@ -440,7 +452,7 @@ class SdLogReader:
         self.chunk_bytes = int(chunk_bytes)
         self._decoder_class = ScanDecoder if scan else Decoder
         infos = []
-        for path in paths:
+        for path in names:
             try:
                 size = os.path.getsize(path)
                 header = read_header(path)
@@ -454,7 +466,7 @@ class SdLogReader:
                 'at a time')
         self.sequence_id = seqs.pop() if seqs else None
 
-        def key(item):
+        def key(item: tuple[int, LogFileInfo]) -> tuple[int, int, int]:
             pos, info = item
             if info.header is not None:
                 return (0, info.header.file_index, pos)
@@ -469,18 +481,18 @@ class SdLogReader:
         if indices:
             missing = sorted(set(range(indices[0], indices[-1] + 1)) - set(indices))
         self.missing_file_indices = tuple(missing)
-        self._report = None
-        self._warnings = []
+        self._report: LogReport | None = None
+        self._warnings: list[str] = []
 
     @property
-    def report(self):
+    def report(self) -> LogReport | None:
         """Return the LogReport once the iteration has finished, else None."""
         return self._report
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[LogBlock]:
         dec = self._decoder_class()
-        config = (None, None, None)
-        regions = []
+        config: _Config = (None, None, None)
+        regions: list[CorruptRegion] = []
         region_count = 0
         no_config = 0
         file_starts = []
@@ -513,7 +525,7 @@ class SdLogReader:
                                  warnings=tuple(self._warnings))
 
     @staticmethod
-    def _split(path, res, config):
+    def _split(path: str, res: DecodeResult, config: _Config) -> tuple[list[LogBlock], _Config]:
         """
         Cut a DecodeResult at configuration changes.
 

@@ -19,14 +19,18 @@ Pure numpy, no ROS. :class:`SequenceTracker` is the driver's publish-once filter
 numbers (compensator); :class:`PublisherCounts` does it per publisher (analyzer, recorder).
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
 
 _UINT32 = 1 << 32
 
 
-def wrapped_delta(a, b):
+def wrapped_delta(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.int64]:
     """
     Return the signed distance ``a - b`` of wrapping uint32 counters.
 
@@ -80,15 +84,15 @@ class SequenceTracker:
 
     """
 
-    def __init__(self, restart_window):
+    def __init__(self, restart_window: int) -> None:
         self.restart_window = int(restart_window)
-        self.last = None
+        self.last: int | None = None
 
-    def reset(self):
+    def reset(self) -> None:
         """Forget the last published counter (new epoch: the next sample is accepted as is)."""
         self.last = None
 
-    def accept(self, seq):
+    def accept(self, seq: NDArray[np.integer[Any]]) -> Accepted:
         """
         Decide which samples of a batch to publish.
 
@@ -154,11 +158,11 @@ class SequenceGapCounter:
     counter per publisher (:class:`PublisherCounts`).
     """
 
-    def __init__(self):
-        self.last = None
+    def __init__(self) -> None:
+        self.last: int | None = None
         self.missing = 0
 
-    def update(self, sequence):
+    def update(self, sequence: npt.ArrayLike) -> int:
         """
         Add the sequence numbers of one batch and return the new misses.
 
@@ -195,10 +199,12 @@ class PublisherCounts:
     (the middleware or the client library gave none) is one more publisher, unknown.
     """
 
-    def __init__(self):
-        self._by_gid = {}  # gid -> [messages, SequenceGapCounter], in order of first message
+    def __init__(self) -> None:
+        # gid -> [messages, SequenceGapCounter], in order of first message
+        self._by_gid: dict[bytes | None, list[Any]] = {}
 
-    def update(self, gids, sequence):
+    def update(self, gids: NDArray[np.void] | Sequence[bytes] | None,
+               sequence: npt.ArrayLike) -> list[bytes | None]:
         """
         Count one batch.
 
@@ -220,7 +226,7 @@ class PublisherCounts:
         if seq.size == 0:
             return []
         if gids is None:
-            groups = {None: seq}
+            groups: dict[bytes | None, NDArray[np.int64]] = {None: seq}
         else:
             keys = np.asarray(gids)
             if keys.dtype.kind != 'V':
@@ -240,20 +246,20 @@ class PublisherCounts:
             entry[1].update(part)
         return list(groups)
 
-    def publishers(self):
+    def publishers(self) -> list[bytes | None]:
         """Return the GIDs seen, in order of their first message."""
         return list(self._by_gid)
 
-    def table(self):
+    def table(self) -> list[tuple[bytes | None, int, int]]:
         """Return ``[(gid, messages, missing), ...]`` in order of first message."""
         return [(gid, n, gaps.missing) for gid, (n, gaps) in self._by_gid.items()]
 
     @property
-    def messages(self):
+    def messages(self) -> int:
         """int: Messages counted, all publishers."""
         return sum(n for n, _ in self._by_gid.values())
 
     @property
-    def missing(self):
+    def missing(self) -> int:
         """int: Messages missing from the publishers' sequences, all publishers."""
         return sum(gaps.missing for _, gaps in self._by_gid.values())

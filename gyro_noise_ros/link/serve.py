@@ -218,6 +218,7 @@ def produce(board: BoardModel, faults: FaultInjector, counters: Counters, n: int
     samples = board.next_samples(n)
     counters.samples_generated += n
     if truth_fh is not None:
+        assert board.last_truth is not None  # next_samples left it
         truth_fh.write(truth_records(board.last_truth).tobytes())
         truth_fh.flush()
     return samples

@@ -86,6 +86,12 @@ class Key:
     name: str
 
 
+#: One part of a table cell: plain text, a value of the JSON document or a key name.
+CellPart = str | Num | Key
+#: A table cell: one part, or a tuple of them (e.g. a value and its interval).
+Cell = CellPart | tuple[CellPart, ...]
+
+
 @dataclass(frozen=True)
 class Table:
     """
@@ -342,7 +348,7 @@ def _versions(page: Page) -> list[tuple[str, str]]:
             *page.extra_versions]
 
 
-def _cell(doc: dict[str, Any] | list[Any], cell: object) -> str:
+def _cell(doc: dict[str, Any] | list[Any], cell: Cell) -> str:
     parts = cell if isinstance(cell, tuple) else (cell,)
     out = []
     for part in parts:

@@ -40,7 +40,7 @@ Only window sums are kept (and, per dwell, its window means for the noise model 
 memory.
 """
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -372,6 +372,30 @@ class Dwell:
                 'accel_sem_m_s2': self.accel_sem_m_s2.tolist(),
                 'gyro_mean_rad_s': self.gyro_mean_rad_s.tolist(),
                 'gyro_sem_rad_s': self.gyro_sem_rad_s.tolist()}
+
+
+def dwell_windows(values: Iterable[np.ndarray | None]) -> list[np.ndarray]:
+    """
+    Return the per-window arrays of dwells (``Dwell.window_t_s``, ...) as a list.
+
+    :func:`find_dwells` fills them; only a dwell built by hand lacks them, and no noise model
+    can be fitted to it.
+
+    Parameters
+    ----------
+    values : iterable of numpy.ndarray
+        One window array per dwell.
+
+    Returns
+    -------
+    list of numpy.ndarray
+
+    """
+    out = []
+    for v in values:
+        assert v is not None, 'a dwell without its window means (find_dwells gives them)'
+        out.append(v)
+    return out
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ stamps too; a record with no two distinct stamps cannot be analysed), or a nomin
 """
 
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,10 +31,11 @@ from ..core.timebase import estimate_rate
 from ..errors import InputDataError, ParameterError
 from ..outputs import StrPath
 
-#: ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)``: one batch of a recording (:func:`iter_imu`).
-_ImuBatch = tuple[float, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+#: ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)``: one batch of a recording (:func:`iter_imu`). The
+#: stamps are float64 (integer nanoseconds times 1e-9), which numpy's stubs call floating.
+_ImuBatch = tuple[float, NDArray[np.floating[Any]], NDArray[np.float64], NDArray[np.float64]]
 #: ``(t_s, temperature_degc)`` of a recording (:func:`read_temperature`).
-_Temperature = tuple[NDArray[np.float64], NDArray[np.float64]]
+_Temperature = tuple[NDArray[np.floating[Any]], NDArray[np.float64]]
 
 #: Messages decoded per batch (~0.4 KB each).
 BATCH = 65536

@@ -234,7 +234,7 @@ class StaticRecord:
         self.samples = 0
         self.duration_s = 0.0
 
-    def update(self, t_s: NDArray[np.float64] | Sequence[float], accel_m_s2: ArrayLike,
+    def update(self, t_s: NDArray[np.floating[Any]] | Sequence[float], accel_m_s2: ArrayLike,
                gyro_rad_s: ArrayLike) -> None:
         """
         Ingest a batch.

@@ -54,9 +54,11 @@ moves after the calibration is its instability, read from the Allan deviation of
 record (``gyro_noise_reliability``), not from a calibration.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import nnls
 
 from ..errors import InputDataError
@@ -65,7 +67,7 @@ from ..errors import InputDataError
 FIT_PASSES = 3
 
 
-def _basis(lag_s, window_s):
+def _basis(lag_s: ArrayLike, window_s: float) -> NDArray[np.float64]:
     lag = np.asarray(lag_s, dtype=np.float64)
     on = lag > 0.5 * window_s
     x = np.where(on, lag / window_s, 1.0)
@@ -102,11 +104,11 @@ class DwellNoise:
     white_factor: np.ndarray
 
     @property
-    def gamma(self):
+    def gamma(self) -> NDArray[np.float64]:
         """numpy.ndarray: (m, m) ``G[d, e]`` of the module docstring (all three terms)."""
         return np.tensordot(self.coef, self.gamma_basis, axes=1)
 
-    def variogram(self, lag_s):
+    def variogram(self, lag_s: ArrayLike) -> NDArray[np.float64]:
         """
         Return the modelled variogram of window means at the given lags.
 
@@ -122,7 +124,7 @@ class DwellNoise:
         """
         return _basis(lag_s, self.window_s) @ self.coef
 
-    def covariance(self, loading):
+    def covariance(self, loading: ArrayLike) -> NDArray[np.float64]:
         """
         Return the covariance of ``theta_p = sum_dj L[p, d, j] m_dj`` against its truth.
 
@@ -155,7 +157,7 @@ class DwellNoise:
         wander = np.tensordot(self.coef[1:], self.gamma_basis[1:], axes=1)
         return white - np.einsum('pdj,de,qej->pq', contrast, wander, contrast)
 
-    def variance(self, c):
+    def variance(self, c: ArrayLike) -> float | NDArray[np.float64]:
         """
         Return the variance of ``sum_d c_d m_d`` on one axis against its truth (``covariance``).
 
@@ -174,7 +176,7 @@ class DwellNoise:
         return float(cov[0, 0]) if c.ndim == 1 else np.diag(cov)
 
 
-def _empirical(values, lmax):
+def _empirical(values: Sequence[NDArray[np.float64]], lmax: int) -> list[tuple[int, float, int]]:
     """Pooled empirical variogram of window means at lags 1..lmax: [(lag, gamma, pairs)]."""
     out = []
     for lag in range(1, lmax + 1):
@@ -189,7 +191,8 @@ def _empirical(values, lmax):
     return out
 
 
-def _gamma_basis(times, counts, window_s):
+def _gamma_basis(times: Sequence[NDArray[np.float64]], counts: Sequence[NDArray[np.float64]],
+                 window_s: float) -> NDArray[np.float64]:
     m = len(times)
     out = np.zeros((3, m, m))
     for d in range(m):
@@ -227,21 +230,23 @@ class DwellNoiseFitter:
 
     """
 
-    def __init__(self, times, counts, values):
-        times = [np.asarray(t, dtype=np.float64) for t in times]
-        counts = [np.asarray(c, dtype=np.float64) for c in counts]
-        values = [np.asarray(v, dtype=np.float64) for v in values]
-        spacing = [np.diff(t) for t in times if t.size > 1]
+    def __init__(self, times: Sequence[ArrayLike], counts: Sequence[ArrayLike],
+                 values: Sequence[ArrayLike]) -> None:
+        times_s = [np.asarray(t, dtype=np.float64) for t in times]
+        samples = [np.asarray(c, dtype=np.float64) for c in counts]
+        means = [np.asarray(v, dtype=np.float64) for v in values]
+        spacing = [np.diff(t) for t in times_s if t.size > 1]
         if not spacing:
             raise InputDataError('the noise model needs dwells of at least two windows')
         self.window_s = float(np.median(np.concatenate(spacing)))
-        lmax = max(1, min(v.shape[0] for v in values) // 2)
-        self._emp = _empirical(values, lmax)
-        self.basis = _gamma_basis(times, counts, self.window_s)
-        self.weights = np.array([c.sum() for c in counts])
-        self.white_factor = np.array([np.sum(c * c) / c.sum() ** 2 for c in counts])
+        lmax = max(1, min(v.shape[0] for v in means) // 2)
+        self._emp = _empirical(means, lmax)
+        self.basis = _gamma_basis(times_s, samples, self.window_s)
+        self.weights = np.array([c.sum() for c in samples])
+        self.white_factor = np.array([np.sum(c * c) / c.sum() ** 2 for c in samples])
 
-    def fit(self, *, residual_loading=None, residuals=None):
+    def fit(self, *, residual_loading: ArrayLike | None = None,
+            residuals: ArrayLike | None = None) -> DwellNoise:
         """
         Fit the model, with the residual sum of squares as one more equation when given.
 
@@ -259,7 +264,7 @@ class DwellNoiseFitter:
 
         """
         gb, window_s = self.basis, self.window_s
-        extra = None
+        extra: tuple[NDArray[np.float64], float, float] | None = None
         if residual_loading is not None and residuals is not None:
             H = np.asarray(residual_loading, dtype=np.float64)
             rss = float(np.sum(np.asarray(residuals, dtype=np.float64) ** 2))
@@ -267,9 +272,11 @@ class DwellNoiseFitter:
             row = np.array([-np.einsum('rdj,de,rej->', H, gb[q], H) for q in range(3)])
             dof = max(1.0, float(np.linalg.matrix_rank(H.reshape(H.shape[0], -1))))
             extra = (row, rss, dof)
-        coef = None
+        coef: NDArray[np.float64] | None = None
         for _ in range(FIT_PASSES):
-            rows, rhs, wts = [], [], []
+            rows: list[NDArray[np.float64]] = []
+            rhs: list[float] = []
+            wts: list[float] = []
             for lag, g, n in self._emp:
                 f = _basis(lag * window_s, window_s)
                 model = g if coef is None else max(float(f @ coef), 1e-300)
@@ -291,10 +298,13 @@ class DwellNoiseFitter:
                 break
             a = np.asarray(rows) * np.asarray(wts)[:, None]
             coef, _ = nnls(a, np.asarray(rhs) * np.asarray(wts))
+        assert coef is not None  # FIT_PASSES >= 1
         return DwellNoise(window_s, coef, gb, self.weights, self.white_factor)
 
 
-def fit_dwell_noise(times, counts, values, *, residual_loading=None, residuals=None):
+def fit_dwell_noise(times: Sequence[ArrayLike], counts: Sequence[ArrayLike],
+                    values: Sequence[ArrayLike], *, residual_loading: ArrayLike | None = None,
+                    residuals: ArrayLike | None = None) -> DwellNoise:
     """
     Fit the variogram model of one sensor to its dwells once (:class:`DwellNoiseFitter`).
 

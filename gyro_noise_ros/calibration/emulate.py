@@ -48,9 +48,12 @@ The stress (:meth:`SensorErrors.stressed`) moves the errors to the paper's "afte
 x2.25, the paper's +125 %.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
@@ -69,6 +72,9 @@ PAPER_AFTER_SCALE_PCT = (-0.14, 0.01, -0.14)
 FLICKER_TAU_S = (0.05, 20000.0)
 FLICKER_PER_DECADE = 3
 
+#: Two float64 arrays returned together: (rate, force), (phase, frequency), (phi, q).
+_TwoArrays = tuple[NDArray[np.float64], NDArray[np.float64]]
+
 _ATTITUDE = {'+z': Rotation.identity(), '-z': Rotation.from_euler('x', 180, degrees=True),
              '+x': Rotation.from_euler('y', -90, degrees=True),
              '-x': Rotation.from_euler('y', 90, degrees=True),
@@ -76,7 +82,7 @@ _ATTITUDE = {'+z': Rotation.identity(), '-z': Rotation.from_euler('x', 180, degr
              '-y': Rotation.from_euler('x', -90, degrees=True)}
 
 
-def attitude(orientation):
+def attitude(orientation: str) -> Rotation:
     """
     Return the sensor-to-world rotation of an orientation (its axis pointing up).
 
@@ -95,7 +101,7 @@ def attitude(orientation):
     return _ATTITUDE[orientation]
 
 
-def _matrix(value, name):
+def _matrix(value: ArrayLike | None, name: str) -> NDArray[np.float64]:
     m = np.zeros((3, 3)) if value is None else np.array(value, dtype=np.float64)
     if m.shape == (6,):
         full = np.zeros((3, 3))
@@ -108,7 +114,7 @@ def _matrix(value, name):
     return m
 
 
-def _vec(value, name):
+def _vec(value: ArrayLike, name: str) -> NDArray[np.float64]:
     arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,)).copy()
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f'{name} must be finite, got {value!r}')
@@ -141,18 +147,19 @@ class SensorErrors:
 
     """
 
-    accel_bias_m_s2: object = tuple(b * MG_TO_M_S2 for b in PAPER_BEFORE_BIAS_MG)
-    accel_scale_factor: object = tuple(s / 100.0 for s in PAPER_BEFORE_SCALE_PCT)
-    accel_misalignment: object = None
-    gyro_bias_rad_s: object = (0.0, 0.0, 0.0)
-    gyro_scale_factor: object = (0.0, 0.0, 0.0)
-    gyro_misalignment: object = None
+    # given as sequences (or None), held as numpy arrays after __post_init__: Any covers both
+    accel_bias_m_s2: Any = tuple(b * MG_TO_M_S2 for b in PAPER_BEFORE_BIAS_MG)
+    accel_scale_factor: Any = tuple(s / 100.0 for s in PAPER_BEFORE_SCALE_PCT)
+    accel_misalignment: Any = None
+    gyro_bias_rad_s: Any = (0.0, 0.0, 0.0)
+    gyro_scale_factor: Any = (0.0, 0.0, 0.0)
+    gyro_misalignment: Any = None
     accel_bias_instability_m_s2: float = 0.0
     gyro_bias_instability_rad_s: float = 0.0
     accel_random_walk_m_s2_sqrt_s: float = 0.0
     gyro_random_walk_rad_s_sqrt_s: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ('accel_bias_m_s2', 'accel_scale_factor', 'gyro_bias_rad_s',
                      'gyro_scale_factor'):
             object.__setattr__(self, name, _vec(getattr(self, name), name))
@@ -166,17 +173,19 @@ class SensorErrors:
             object.__setattr__(self, name, value)
 
     @property
-    def accel_matrix(self):
+    def accel_matrix(self) -> NDArray[np.float64]:
         """numpy.ndarray: ``I + diag(accel_scale_factor) + accel_misalignment``."""
         return np.eye(3) + np.diag(self.accel_scale_factor) + self.accel_misalignment
 
     @property
-    def gyro_matrix(self):
+    def gyro_matrix(self) -> NDArray[np.float64]:
         """numpy.ndarray: ``I + diag(gyro_scale_factor) + gyro_misalignment``."""
         return np.eye(3) + np.diag(self.gyro_scale_factor) + self.gyro_misalignment
 
-    def stressed(self, *, instability_factor=1.5, misalignment_factor=2.0,
-                 accel_bias_m_s2=None, accel_scale_factor=None, gyro_bias_change_rad_s=0.0):
+    def stressed(self, *, instability_factor: float = 1.5, misalignment_factor: float = 2.0,
+                 accel_bias_m_s2: ArrayLike | None = None,
+                 accel_scale_factor: ArrayLike | None = None,
+                 gyro_bias_change_rad_s: ArrayLike = 0.0) -> 'SensorErrors':
         """
         Return the errors after a stress (paper 001 Table 6 "after" values by default).
 
@@ -209,8 +218,9 @@ class SensorErrors:
             gyro_bias_instability_rad_s=self.gyro_bias_instability_rad_s * instability_factor)
 
 
-def flicker_components(bias_instability, rate_hz, tau_s=FLICKER_TAU_S,
-                       per_decade=FLICKER_PER_DECADE):
+def flicker_components(bias_instability: float, rate_hz: float,
+                       tau_s: tuple[float, float] = FLICKER_TAU_S,
+                       per_decade: int = FLICKER_PER_DECADE) -> _TwoArrays:
     """
     Return the AR(1) coefficients and innovation scales of the flicker-like sum.
 
@@ -263,7 +273,8 @@ class BiasVariation:
 
     """
 
-    def __init__(self, bias_instability, random_walk, rate_hz, rng):
+    def __init__(self, bias_instability: float, random_walk: float, rate_hz: float,
+                 rng: np.random.Generator) -> None:
         self.rate_hz = float(rate_hz)
         self._rng = rng
         self._k = float(random_walk) / np.sqrt(self.rate_hz)
@@ -274,7 +285,7 @@ class BiasVariation:
         self._state = rng.standard_normal((self._phi.size, 3)) * sd[:, None]
         self._walk = np.zeros(3)
 
-    def generate(self, n):
+    def generate(self, n: int) -> NDArray[np.float64]:
         """
         Return the next ``n`` samples.
 
@@ -328,10 +339,10 @@ class Static:
     latitude_deg: float = 45.0
     heading_deg: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         attitude(self.orientation)      # a bad orientation fails here, before any output
 
-    def true(self, t_s):
+    def true(self, t_s: ArrayLike) -> _TwoArrays:
         """
         Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
 
@@ -351,7 +362,8 @@ class Static:
         return _earth_and_gravity(r, np.zeros((n, 3)), self.gravity_m_s2, self.latitude_deg)
 
 
-def _earth_and_gravity(rot, rate_body, g, lat):
+def _earth_and_gravity(rot: Rotation, rate_body: NDArray[np.float64], g: float,
+                       lat: float) -> _TwoArrays:
     lat = np.radians(lat)
     earth = EARTH_RATE_RAD_S * np.array([0.0, np.cos(lat), np.sin(lat)])
     inv = rot.inv()
@@ -360,7 +372,8 @@ def _earth_and_gravity(rot, rate_body, g, lat):
             np.broadcast_to(inv.apply(np.array([0.0, 0.0, g])), shape).copy())
 
 
-def _sequence_true(atts, t_s, dwell_s, move_s, lead_s, g, lat):
+def _sequence_true(atts: Sequence[Rotation], t_s: ArrayLike, dwell_s: float, move_s: float,
+                   lead_s: float, g: float, lat: float) -> _TwoArrays:
     """Dwell in each attitude, turn to the next about a fixed body axis, (1 - cos) profile."""
     t = np.asarray(t_s, dtype=np.float64)
     period = dwell_s + move_s
@@ -386,7 +399,8 @@ def _sequence_true(atts, t_s, dwell_s, move_s, lead_s, g, lat):
     return _earth_and_gravity(Rotation.from_quat(quats), rate, g, lat)
 
 
-def _schedule(labels, dwell_s, move_s, lead_s):
+def _schedule(labels: Sequence[str], dwell_s: float, move_s: float,
+              lead_s: float) -> list[tuple[str, float, float]]:
     out = []
     t = lead_s
     for o in labels:
@@ -398,13 +412,28 @@ def _schedule(labels, dwell_s, move_s, lead_s):
 class _PoseSequence:
     """Dwells in a list of attitudes joined by turns (``labels()`` and ``attitudes()``)."""
 
+    # fields of the dataclasses built on it
+    dwell_s: float
+    move_s: float
+    lead_s: float
+    gravity_m_s2: float
+    latitude_deg: float
+
+    def labels(self) -> list[str]:
+        """Return the dwells' labels in the order visited (each subclass says)."""
+        raise NotImplementedError
+
+    def attitudes(self) -> list[Rotation]:
+        """Return the sensor-to-world rotation of each dwell (each subclass says)."""
+        raise NotImplementedError
+
     @property
-    def duration_s(self):
+    def duration_s(self) -> float:
         """float: time until the end of the last dwell (s)."""
         k = len(self.labels())
         return self.lead_s + k * self.dwell_s + (k - 1) * self.move_s
 
-    def schedule(self):
+    def schedule(self) -> list[tuple[str, float, float]]:
         """
         Return the dwells as (label, start, end) in scenario time (s).
 
@@ -415,7 +444,7 @@ class _PoseSequence:
         """
         return _schedule(self.labels(), self.dwell_s, self.move_s, self.lead_s)
 
-    def true(self, t_s):
+    def true(self, t_s: ArrayLike) -> _TwoArrays:
         """
         Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
 
@@ -458,15 +487,15 @@ class SixPosition(_PoseSequence):
 
     """
 
-    order: tuple = ('+z', '-z', '+x', '-x', '+y', '-y')
+    order: tuple[str, ...] = ('+z', '-z', '+x', '-x', '+y', '-y')
     dwell_s: float = 60.0
     move_s: float = 5.0
     lead_s: float = 0.0
     gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
-    tilts: tuple = ()
+    tilts: tuple[tuple[str, float], ...] = ()
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for o in self.order:
             attitude(o)
         for o, deg in self.tilts:
@@ -476,7 +505,7 @@ class SixPosition(_PoseSequence):
         if not (self.dwell_s > 0 and self.move_s > 0 and self.lead_s >= 0):
             raise ParameterError(f'dwell_s and move_s must be > 0, lead_s >= 0, got {self}')
 
-    def attitudes(self):
+    def attitudes(self) -> list[Rotation]:
         """
         Return the sensor-to-world rotation of each dwell, tilts included.
 
@@ -489,12 +518,12 @@ class SixPosition(_PoseSequence):
         return [Rotation.from_euler('x', tilt.get(o, 0.0), degrees=True) * attitude(o)
                 for o in self.order]
 
-    def labels(self):
+    def labels(self) -> list[str]:
         """Return the orientations in the order visited (the schedule's labels)."""
         return list(self.order)
 
 
-def pose_attitudes(n):
+def pose_attitudes(n: int) -> list[Rotation]:
     """
     Return ``n`` static attitudes whose "up" directions cover the sensor's sphere evenly.
 
@@ -557,13 +586,13 @@ class MultiPose(_PoseSequence):
     gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if int(self.poses) != self.poses or self.poses < 2:
             raise ParameterError(f'poses must be an integer >= 2, got {self.poses!r}')
         if not (self.dwell_s > 0 and self.move_s > 0 and self.lead_s >= 0):
             raise ParameterError(f'dwell_s and move_s must be > 0, lead_s >= 0, got {self}')
 
-    def attitudes(self):
+    def attitudes(self) -> list[Rotation]:
         """
         Return the sensor-to-world rotation of each pose.
 
@@ -574,7 +603,7 @@ class MultiPose(_PoseSequence):
         """
         return pose_attitudes(self.poses)
 
-    def labels(self):
+    def labels(self) -> list[str]:
         """Return the pose names in the order visited (the schedule's labels)."""
         return [f'pose {k + 1}' for k in range(int(self.poses))]
 
@@ -614,7 +643,7 @@ class Excitation:
     start_s: float = 0.0
     base: Static = field(default_factory=Static)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.sensor not in ('accel', 'gyro') or self.axis not in ('x', 'y', 'z'):
             raise ParameterError(f'sensor must be accel|gyro and axis x|y|z, got {self.sensor!r}, '
                                  f'{self.axis!r}')
@@ -624,7 +653,7 @@ class Excitation:
                                                  and self.sweep_to_hz != self.frequency_hz):
             raise ParameterError('a sweep needs sweep_to_hz > 0, != frequency_hz, and a rate > 0')
 
-    def phase_and_frequency(self, t_s):
+    def phase_and_frequency(self, t_s: ArrayLike) -> _TwoArrays:
         """
         Return the phase (rad) and the instantaneous frequency (Hz) of the drive.
 
@@ -654,7 +683,7 @@ class Excitation:
         freq = np.where(up, f0 + r * x, f1 - r * y)
         return 2.0 * np.pi * (cycles + cyc * (f0 + f1) * half), freq
 
-    def drive(self, t_s):
+    def drive(self, t_s: ArrayLike) -> NDArray[np.float64]:
         """
         Return the excitation on the driven axis (m/s^2 or rad/s), 0 before ``start_s``.
 
@@ -672,7 +701,7 @@ class Excitation:
         phase, _ = self.phase_and_frequency(t)
         return np.where(t >= self.start_s, self.amplitude * np.sin(phase), 0.0)
 
-    def true(self, t_s):
+    def true(self, t_s: ArrayLike) -> _TwoArrays:
         """
         Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
 
@@ -691,7 +720,7 @@ class Excitation:
         (force if self.sensor == 'accel' else rate)[:, i] += self.drive(t_s)
         return rate, force
 
-    def reference(self, t_s):
+    def reference(self, t_s: ArrayLike) -> NDArray[np.float64]:
         """
         Return what an ideal reference sensor on the shaker reads (the drive alone, 3 axes).
 
@@ -728,7 +757,8 @@ class Scenario:
 
     """
 
-    def __init__(self, motion, errors, rate_hz, rng):
+    def __init__(self, motion: Static | SixPosition | MultiPose | Excitation,
+                 errors: SensorErrors, rate_hz: float, rng: np.random.Generator) -> None:
         self.motion = motion
         self.errors = errors
         acc_rng, gyr_rng = rng.spawn(2)
@@ -737,7 +767,7 @@ class Scenario:
         self._gyro_u = BiasVariation(errors.gyro_bias_instability_rad_s,
                                      errors.gyro_random_walk_rad_s_sqrt_s, rate_hz, gyr_rng)
 
-    def measured(self, t_s):
+    def measured(self, t_s: ArrayLike) -> _TwoArrays:
         """
         Return the noise-free measurement plus the bias variation for the next samples.
 
@@ -761,7 +791,7 @@ class Scenario:
         accel = force @ e.accel_matrix.T + e.accel_bias_m_s2 + self._accel_u.generate(t.size)
         return gyro, accel
 
-    def skip(self, n):
+    def skip(self, n: int) -> None:
         """
         Advance the bias-variation streams by ``n`` samples (samples lost inside the sensor).
 
@@ -774,7 +804,8 @@ class Scenario:
         self._accel_u.generate(int(n))
         self._gyro_u.generate(int(n))
 
-    def apply(self, t_s, gyro_rad_s, accel_m_s2):
+    def apply(self, t_s: ArrayLike, gyro_rad_s: NDArray[np.float64],
+              accel_m_s2: NDArray[np.float64]) -> _TwoArrays:
         """
         Add the scenario to samples that hold only noise (the emulator hook).
 
@@ -794,7 +825,10 @@ class Scenario:
         return gyro_rad_s + gyro, accel_m_s2 + accel
 
 
-def simulate(scenario, n, rate_hz, *, rng, accel_noise_m_s2=0.0, gyro_noise_rad_s=0.0, t0_s=0.0):
+def simulate(scenario: Scenario, n: int, rate_hz: float, *, rng: np.random.Generator,
+             accel_noise_m_s2: float = 0.0, gyro_noise_rad_s: float = 0.0,
+             t0_s: float = 0.0
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """
     Run a scenario with white noise: stamps, specific force and angular rate.
 

@@ -52,10 +52,12 @@ measured in ``docs/reliability.md`` by ``docs/scripts/excitation_verdicts.py``):
   *frequency-dependent*.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.signal import butter, hilbert, sosfiltfilt
 from scipy.stats import chi2, f as f_dist, t as t_dist
 
@@ -70,7 +72,7 @@ MIN_SWEEP_COVERAGE = 0.8
 DEFAULT_ALPHA = 1e-3
 
 
-def _check(x, rate_hz, name='samples'):
+def _check(x: ArrayLike, rate_hz: float, name: str = 'samples') -> NDArray[np.float64]:
     arr = np.asarray(x, dtype=np.float64).reshape(-1)
     if not (math.isfinite(rate_hz) and rate_hz > 0):
         raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz!r}')
@@ -82,7 +84,7 @@ def _check(x, rate_hz, name='samples'):
     return arr
 
 
-def _design(t, freqs):
+def _design(t: NDArray[np.float64], freqs: Sequence[float]) -> NDArray[np.float64]:
     cols = [np.ones_like(t)]
     for f in freqs:
         w = 2.0 * np.pi * f * t
@@ -90,7 +92,8 @@ def _design(t, freqs):
     return np.column_stack(cols)
 
 
-def sine_fit4(x, rate_hz, frequency_hz, *, iterations=30):
+def sine_fit4(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
+              iterations: int = 30) -> tuple[float, float, float, float]:
     """
     Fit ``x = C + A cos(2 pi f t) + B sin(2 pi f t)`` with f free (IEEE Std 1057 4-parameter fit).
 
@@ -133,7 +136,7 @@ def sine_fit4(x, rate_hz, frequency_hz, *, iterations=30):
     return f, float(math.hypot(a, b)), float(math.atan2(a, b)), float(offset)
 
 
-def _fft_peak(x, rate_hz, near_hz):
+def _fft_peak(x: NDArray[np.float64], rate_hz: float, near_hz: float) -> float:
     n = x.size
     spec = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(n)))
     freqs = np.fft.rfftfreq(n, 1.0 / rate_hz)
@@ -216,17 +219,18 @@ class DwellResult:
     alpha: float = DEFAULT_ALPHA
 
     @property
-    def steady(self):
+    def steady(self) -> bool:
         """bool: the per-cycle amplitude scatters no more than noise explains."""
         return not self.stability_p < self.alpha
 
     @property
-    def clean(self):
+    def clean(self) -> bool:
         """bool: no harmonic stands out of the noise."""
         return not self.distortion_p < self.alpha
 
 
-def _cycle_amplitudes(x, rate_hz, f):
+def _cycle_amplitudes(x: NDArray[np.float64], rate_hz: float,
+                      f: float) -> tuple[NDArray[np.float64], NDArray[np.int64], float]:
     per = rate_hz / f
     n_cyc = int(x.size // per)
     amps = np.empty(n_cyc)
@@ -241,8 +245,9 @@ def _cycle_amplitudes(x, rate_hz, f):
     return amps, starts, per
 
 
-def sine_dwell(x, rate_hz, frequency_hz, *, harmonics=DEFAULT_HARMONICS,
-               frequency_tol=DEFAULT_FREQUENCY_TOL, alpha=DEFAULT_ALPHA):
+def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
+               harmonics: int = DEFAULT_HARMONICS, frequency_tol: float = DEFAULT_FREQUENCY_TOL,
+               alpha: float = DEFAULT_ALPHA) -> DwellResult:
     """
     Analyse a sine-dwell record (paper 001 section 5.3, Figures 7, 8, 10, 11).
 
@@ -369,14 +374,14 @@ class SweepResult:
     bin_hz: np.ndarray
     amplitude_up: np.ndarray
     amplitude_down: np.ndarray
-    reference_up: object
-    reference_down: object
-    deviation_up: object
-    deviation_down: object
+    reference_up: np.ndarray | None
+    reference_down: np.ndarray | None
+    deviation_up: np.ndarray | None
+    deviation_down: np.ndarray | None
     t_s: np.ndarray
     inst_frequency_hz: np.ndarray
     inst_amplitude: np.ndarray
-    frequency_range_hz: tuple = (float('nan'), float('nan'))
+    frequency_range_hz: tuple[float, float] = (float('nan'), float('nan'))
     mean_deviation: float = float('nan')
     mean_deviation_sigma: float = float('nan')
     bin_deviation_sigma: float = float('nan')
@@ -385,17 +390,18 @@ class SweepResult:
     alpha: float = DEFAULT_ALPHA
 
     @property
-    def matches_reference(self):
+    def matches_reference(self) -> bool | None:
         """Whether the mean deviation is within noise (None without a reference)."""
         return None if math.isnan(self.gain_p) else not self.gain_p < self.alpha
 
     @property
-    def flat(self):
+    def flat(self) -> bool | None:
         """Whether the deviation stays flat with frequency within noise (None: no reference)."""
         return None if math.isnan(self.flatness_p) else not self.flatness_p < self.alpha
 
 
-def _instantaneous(x, rate_hz, f_lo, f_hi):
+def _instantaneous(x: NDArray[np.float64], rate_hz: float, f_lo: float,
+                   f_hi: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     nyq = rate_hz / 2.0
     lo = max(f_lo / 2.0, 1e-3)
     hi = min(f_hi * 2.0, 0.95 * nyq)
@@ -408,15 +414,16 @@ def _instantaneous(x, rate_hz, f_lo, f_hi):
     return amp, freq
 
 
-def _smooth(v, n):
+def _smooth(v: NDArray[np.float64], n: int) -> NDArray[np.float64]:
     if n <= 1:
         return v
     k = np.ones(n) / n
     return np.convolve(v, k, mode='same')
 
 
-def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bins=None,
-               alpha=DEFAULT_ALPHA):
+def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_rate_hz_s: float,
+               *, reference: ArrayLike | None = None, bins: int | None = None,
+               alpha: float = DEFAULT_ALPHA) -> SweepResult:
     """
     Analyse a sine-sweep record (paper 001 section 5.3, Figures 9 and 12).
 
@@ -479,7 +486,7 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
     valid[inner] = True                   # Hilbert / filter edge effects
     valid &= (fs >= lo) & (fs <= hi)
 
-    def binned(a, sel):
+    def binned(a: NDArray[np.float64], sel: NDArray[np.bool_]) -> NDArray[np.float64]:
         idx = np.digitize(fs[sel], edges) - 1
         out = np.full(nb, np.nan)
         vals = a[sel]
@@ -492,9 +499,12 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
     up = valid & (direction > 0)
     down = valid & (direction < 0)
     res = {'amplitude_up': binned(amp, up), 'amplitude_down': binned(amp, down)}
-    ref_up = ref_down = dev_up = dev_down = None
+    ref_up: NDArray[np.float64] | None = None
+    ref_down: NDArray[np.float64] | None = None
+    dev_up: NDArray[np.float64] | None = None
+    dev_down: NDArray[np.float64] | None = None
     nan = float('nan')
-    stats = (nan, nan, nan, nan, nan)
+    stats: tuple[float, float, float, float, float] = (nan, nan, nan, nan, nan)
     if reference is not None:
         r = _check(reference, rate_hz, 'reference')
         if r.size != x.size:
@@ -511,7 +521,8 @@ def sine_sweep(x, rate_hz, f0_hz, f1_hz, sweep_rate_hz_s, *, reference=None, bin
                        amp[::step], (f_lo, f_hi), *stats, float(alpha))
 
 
-def _deviation_tests(dev_up, dev_down):
+def _deviation_tests(dev_up: NDArray[np.float64],
+                     dev_down: NDArray[np.float64]) -> tuple[float, float, float, float, float]:
     """Mean deviation, its standard error, one bin's noise, gain and flatness p-values."""
     nan = float('nan')
     both = np.isfinite(dev_up) & np.isfinite(dev_down)

@@ -52,13 +52,17 @@ Details that matter at the 0.01 % level:
   when it exceeds 1 (the turns disagree more than the noise says).
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from .dwell_noise import DwellNoise
+from .static import Dwell
 from ..errors import InputDataError
 
 #: A parameter whose standard uncertainty would exceed this (0.5 %) is not determined by the
@@ -71,7 +75,7 @@ MIN_TURN_S = 0.05
 MIN_TURN_DEG = 5.0
 
 
-def _quat(rotvecs):
+def _quat(rotvecs: ArrayLike) -> NDArray[np.float64]:
     """Return the unit quaternions (w, x, y, z) of rotation vectors (..., 3)."""
     v = np.asarray(rotvecs, dtype=np.float64)
     angle = np.linalg.norm(v, axis=-1)
@@ -82,7 +86,7 @@ def _quat(rotvecs):
     return np.concatenate([np.cos(half)[..., None], v * k[..., None]], axis=-1)
 
 
-def _qmul(p, q):
+def _qmul(p: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
     """Hamilton product p q of quaternion arrays (..., 4): the rotation matrix of p times q's."""
     pw, pv = p[..., :1], p[..., 1:]
     qw, qv = q[..., :1], q[..., 1:]
@@ -90,7 +94,7 @@ def _qmul(p, q):
                            pw * qv + qw * pv + np.cross(pv, qv)], axis=-1)
 
 
-def compose_quat(rotvecs):
+def compose_quat(rotvecs: ArrayLike) -> NDArray[np.float64]:
     """
     Return ``exp(v_0) exp(v_1) ... exp(v_{n-1})`` along the second-to-last axis, as quaternions.
 
@@ -118,14 +122,14 @@ def compose_quat(rotvecs):
     return q[..., 0, :]
 
 
-def rotate_back(q, v):
+def rotate_back(q: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
     """Apply the inverse of the rotations ``q`` (..., 4) to vectors ``v`` (..., 3)."""
     w, u = q[..., :1], -q[..., 1:]
     t = 2.0 * np.cross(u, v)
     return v + w * t + np.cross(u, t)
 
 
-def compose(rotvecs):
+def compose(rotvecs: ArrayLike) -> Rotation:
     """
     Return the product of body-frame rotation increments as a scipy Rotation.
 
@@ -168,12 +172,12 @@ class Turn:
     gyro_rad_s: np.ndarray
 
     @property
-    def duration_s(self):
+    def duration_s(self) -> float:
         """float: last minus first stamp (s)."""
         return float(self.t_s[-1] - self.t_s[0]) if self.t_s.size > 1 else 0.0
 
 
-def _matrix(theta, free):
+def _matrix(theta: NDArray[np.float64], free: NDArray[np.intp]) -> NDArray[np.float64]:
     full = np.zeros(9)
     full[free] = theta
     a = np.eye(3) + np.diag(full[:3])
@@ -182,7 +186,8 @@ def _matrix(theta, free):
     return a
 
 
-def _increments(turn, t_b0, t_b1, bias0, bias1):
+def _increments(turn: Turn, t_b0: float, t_b1: float, bias0: NDArray[np.float64],
+                bias1: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     t, w = turn.t_s, turn.gyro_rad_s
     tm = (t[1:] + t[:-1]) / 2.0
     frac = np.clip((tm - t_b0) / max(t_b1 - t_b0, 1e-12), 0.0, 1.0)
@@ -190,12 +195,14 @@ def _increments(turn, t_b0, t_b1, bias0, bias1):
     return (w[1:] + w[:-1]) / 2.0 - bias, np.diff(t)
 
 
-def _mean_gamma(noise, ta, tb):
+def _mean_gamma(noise: DwellNoise, ta: NDArray[np.float64], tb: NDArray[np.float64]) -> float:
     return float(noise.variogram(np.abs(ta[:, None] - tb[None, :])).mean())
 
 
-def _angle_variance(noise, turn, before, after):
+def _angle_variance(noise: DwellNoise, turn: Turn, before: Dwell, after: Dwell) -> float:
     """Variance (rad^2) of the turn's integrated angle per axis from the gyro's variogram."""
+    # the poses come from find_dwells, which keeps their windows
+    assert before.window_t_s is not None and after.window_t_s is not None
     w = noise.window_s
     span = turn.duration_s
     tt = turn.t_s[0] + (np.arange(max(1, int(math.ceil(span / w)))) + 0.5) * min(w, span)
@@ -246,20 +253,22 @@ class GyroTurnResult:
     rotation_deg: np.ndarray
 
     @property
-    def matrix(self):
+    def matrix(self) -> NDArray[np.float64]:
         """numpy.ndarray: (3, 3) ``I + diag(S) + M``."""
         return np.eye(3) + np.diag(self.scale_factor) + self.misalignment
 
     @property
-    def not_estimated(self):
+    def not_estimated(self) -> list[str]:
         """Names of the terms the turns do not determine (``S_x``, ``M_xy``, ...): list of str."""
         out = [f'S_{a}' for i, a in enumerate('xyz') if not self.estimated[i, i]]
         out += [f'M_{"xyz"[j]}{"xyz"[i]}' for j, i in OFF_DIAGONAL if not self.estimated[j, i]]
         return out
 
 
-def fit_gyro_turns(turns, directions, poses, gyro_noise, *, direction_variance=None,
-                   max_sigma=MAX_SIGMA):
+def fit_gyro_turns(turns: Sequence[Turn], directions: ArrayLike, poses: Sequence[Dwell],
+                   gyro_noise: DwellNoise, *,
+                   direction_variance: NDArray[np.float64] | Sequence[float] | None = None,
+                   max_sigma: float = MAX_SIGMA) -> GyroTurnResult:
     """
     Fit the gyro's scale factors and misalignment to the turns between static poses.
 
@@ -275,7 +284,7 @@ def fit_gyro_turns(turns, directions, poses, gyro_noise, *, direction_variance=N
         place them in time for the noise model).
     gyro_noise : DwellNoise
         The gyro's variogram (fitted on the same poses).
-    direction_variance : array_like, optional, keyword-only
+    direction_variance : numpy.ndarray or sequence of float, optional, keyword-only
         (len(turns),) variance (rad^2) of the gravity directions' disagreement across each turn
         per component (accelerometer noise); 0 when not given.
     max_sigma : float, keyword-only
@@ -324,11 +333,11 @@ def fit_gyro_turns(turns, directions, poses, gyro_noise, *, direction_variance=N
     f1 = np.array([p[3] for p in prepared])
     sigma = np.array([p[4] for p in prepared])[:, None]
 
-    def predict(theta, free):
+    def predict(theta: NDArray[np.float64], free: NDArray[np.intp]) -> NDArray[np.float64]:
         ainv = np.linalg.inv(_matrix(theta, free))
         return rotate_back(compose_quat((rates @ ainv.T) * dts[..., None]), f0)
 
-    def residual(theta, free):
+    def residual(theta: NDArray[np.float64], free: NDArray[np.intp]) -> NDArray[np.float64]:
         return ((f1 - predict(theta, free)) / sigma).reshape(-1)
 
     free = np.ones(9, dtype=bool)

@@ -67,10 +67,12 @@ with the record length that would decide at the present estimate. :func:`overall
 verdict per sensor from its three axes.
 """
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 import scipy.special
 import scipy.stats
 
@@ -93,8 +95,11 @@ MIN_CROSSING_SLOPE = 0.05
 #: Taus on each side for the least-squares slope when no model is given.
 SLOPE_HALF_WIDTH = 3
 
+#: ``model_adev(tau_s) -> ADEV`` of a fitted model (``NoiseTerms.model_adev``).
+_ModelAdev = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
-def log_adev_sd(edf):
+
+def log_adev_sd(edf: ArrayLike) -> float | NDArray[np.float64]:
     """
     Return the standard deviation of log ADEV of an Allan variance with ``edf`` degrees of freedom.
 
@@ -159,8 +164,8 @@ class Interval:
 
     """
 
-    lo_s: object
-    hi_s: object
+    lo_s: float | None
+    hi_s: float | None
     tau_min_s: float
     sigma_min: float
     level: float
@@ -172,26 +177,28 @@ class Interval:
     slope_lo: float = math.nan
     slope_hi: float = math.nan
     record_s: float = math.nan
-    fallback_s: object = None
+    fallback_s: tuple[float, float] | None = None
     fallback_significant: bool = False
-    hi_last_s: object = None
+    hi_last_s: float | None = None
 
     @property
-    def closed(self):
+    def closed(self) -> bool:
         """Both ends found."""
         return self.lo_s is not None and self.hi_s is not None
 
     @property
-    def width_s(self):
+    def width_s(self) -> float | None:
         """Width ``hi_s - lo_s`` (s) when closed, else None."""
-        return self.hi_s - self.lo_s if self.closed else None
+        if self.lo_s is None or self.hi_s is None:  # not closed
+            return None
+        return self.hi_s - self.lo_s
 
     @property
-    def ambiguous(self):
+    def ambiguous(self) -> bool:
         """bool: the curve falls back below the level after the upper crossing."""
         return self.fallback_s is not None
 
-    def fallback_note(self):
+    def fallback_note(self) -> str:
         """
         Return one sentence on an ambiguous upper crossing ('' when there is none).
 
@@ -212,7 +219,7 @@ class Interval:
                 f'would end at {end}')
 
 
-def _cross(t0, s0, t1, s1, level):
+def _cross(t0: float, s0: float, t1: float, s1: float, level: float) -> float:
     # linear in log-log between (t0, s0) and (t1, s1)
     l0, l1 = math.log(s0), math.log(s1)
     if l1 == l0:
@@ -221,7 +228,7 @@ def _cross(t0, s0, t1, s1, level):
     return math.exp(math.log(t0) + frac * (math.log(t1) - math.log(t0)))
 
 
-def _interp_log(tau, values, t):
+def _interp_log(tau: NDArray[np.float64], values: NDArray[np.float64], t: float) -> float:
     """Interpolate ``values`` (positive, inf allowed) at ``t`` in log-log."""
     with np.errstate(divide='ignore'):
         lv = np.log(values)
@@ -233,7 +240,8 @@ def _interp_log(tau, values, t):
     return float(np.exp(np.interp(math.log(t), np.log(tau), lv)))
 
 
-def _slope(tau, sig, t, sign, model_adev):
+def _slope(tau: NDArray[np.float64], sig: NDArray[np.float64], t: float, sign: float,
+           model_adev: _ModelAdev | None) -> float:
     """Log-log slope at ``t`` on the side ``sign`` (+1 rising, -1 falling); NaN when unusable."""
     if model_adev is not None:
         h = 0.05
@@ -253,9 +261,11 @@ def _slope(tau, sig, t, sign, model_adev):
     return s if sign * s >= MIN_CROSSING_SLOPE else math.nan
 
 
-def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEFAULT_MIN_EDF,
-                              max_tau_s=math.inf, model_adev=None, record_s=math.nan,
-                              alpha=DEFAULT_ALPHA):
+def bias_instability_interval(tau_s: ArrayLike, adev: ArrayLike, *, c: float = DEFAULT_C,
+                              edf: ArrayLike | None = None, min_edf: float = DEFAULT_MIN_EDF,
+                              max_tau_s: float = math.inf,
+                              model_adev: _ModelAdev | None = None, record_s: float = math.nan,
+                              alpha: float = DEFAULT_ALPHA) -> Interval:
     """
     Return the tau interval where the Allan deviation stays below ``c * sigma_min``.
 
@@ -322,8 +332,9 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
     i = floor.index
     smin = float(sig[i])
     level = c * smin
-    lo = hi = None
-    k = None
+    lo: float | None = None
+    hi: float | None = None
+    k: int | None = None
     above = np.flatnonzero(sig[:i] >= level)
     if above.size:
         j = int(above[-1])
@@ -339,7 +350,9 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
     if hi is None:
         reasons.append(f'upper end open: the curve does not come back above {c:g} sigma_min '
                        f'up to the longest tau {tau[-1]:.3g} s')
-    fallback, significant, hi_last = None, False, None
+    fallback: tuple[float, float] | None = None
+    significant = False
+    hi_last: float | None = None
     if k is not None:
         below = k + np.flatnonzero(sig[k:] < level)
         if below.size:
@@ -359,12 +372,15 @@ def bias_instability_interval(tau_s, adev, *, c=DEFAULT_C, edf=None, min_edf=DEF
                     hi_last_s=hi_last)
 
 
-def _uncertainty(tau, sig, edf, i, lo, hi, model_adev):
+def _uncertainty(tau: NDArray[np.float64], sig: NDArray[np.float64],
+                 edf: NDArray[np.float64] | None, i: int, lo: float | None, hi: float | None,
+                 model_adev: _ModelAdev | None) -> tuple[float, float, float, float, float]:
     """Return (width_sd_log, lo_sd_log, hi_sd_log, slope_lo, slope_hi) (module doc)."""
     nan = math.nan
     if edf is None:
         return nan, nan, nan, nan, nan
     e = log_adev_sd(edf)
+    assert isinstance(e, np.ndarray)  # edf is the 1-D array of the taus
     e_min = float(e[i])
     out_lo = out_hi = (nan, nan)
     if lo is not None:
@@ -389,7 +405,7 @@ def _uncertainty(tau, sig, edf, i, lo, hi, model_adev):
     return width_sd, out_lo[0], out_hi[0], out_lo[1], out_hi[1]
 
 
-def undetermined(reason, c=DEFAULT_C):
+def undetermined(reason: str, c: float = DEFAULT_C) -> Interval:
     """
     Return an interval that could not be computed at all.
 
@@ -409,7 +425,7 @@ def undetermined(reason, c=DEFAULT_C):
     return Interval(None, None, nan, nan, nan, float(c), reason)
 
 
-def _check_tolerance(tolerance, alpha):
+def _check_tolerance(tolerance: float, alpha: float) -> tuple[float, float, float, float]:
     tol = float(tolerance)
     if not (math.isfinite(tol) and tol >= 0):
         raise ParameterError(f'tolerance must be finite and >= 0, got {tolerance!r}')
@@ -445,11 +461,12 @@ class BandTest:
     verdict: str
     log_ratio: float
     log_ratio_sd: float
-    ci: tuple
-    decide_factor: object
+    ci: tuple[float, float]
+    decide_factor: float | None
 
 
-def band_test(log_ratio, log_ratio_sd, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
+def band_test(log_ratio: float, log_ratio_sd: float, *, tolerance: float = DEFAULT_TOLERANCE,
+              alpha: float = DEFAULT_ALPHA) -> BandTest:
     """
     Test a change ``log(after / before)`` with its standard deviation against the band.
 
@@ -515,18 +532,19 @@ class Verdict:
 
     """
 
-    change: object
+    change: float | None
     verdict: str
     reason: str = ''
-    change_sd: object = None
-    log_ratio: object = None
-    log_ratio_sd: object = None
-    ci: object = None
-    decide_record_s: object = None
-    notes: tuple = ()
+    change_sd: float | None = None
+    log_ratio: float | None = None
+    log_ratio_sd: float | None = None
+    ci: tuple[float, float] | None = None
+    decide_record_s: tuple[float, float] | None = None
+    notes: tuple[str, ...] = ()
 
 
-def compare(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
+def compare(before: Interval | None, after: Interval | None, *,
+            tolerance: float = DEFAULT_TOLERANCE, alpha: float = DEFAULT_ALPHA) -> Verdict:
     """
     Compare two bias-instability intervals (paper 001 section 6: +/-50 % is physiological).
 
@@ -559,9 +577,13 @@ def compare(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
                 notes.append(f'{name}: {iv.fallback_note()}')
     if reasons:
         return Verdict(None, 'undetermined', '; '.join(reasons), notes=tuple(notes))
-    if before.width_s <= 0:
+    # no reason: both records given and their intervals closed
+    assert before is not None and after is not None
+    width_before, width_after = before.width_s, after.width_s
+    assert width_before is not None and width_after is not None
+    if width_before <= 0:
         return Verdict(None, 'undetermined', 'before: zero-width interval')
-    change = after.width_s / before.width_s - 1.0
+    change = width_after / width_before - 1.0
     sd = math.hypot(before.width_sd_log, after.width_sd_log)
     if not math.isfinite(sd):
         why = ('a crossing lies on a flat part of the curve' if math.isinf(sd)
@@ -569,7 +591,7 @@ def compare(before, after, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
         return Verdict(change, 'undetermined', f'the width has no uncertainty: {why}',
                        notes=tuple(notes))
     t = band_test(math.log1p(change), sd, tolerance=tolerance, alpha=alpha)
-    decide = None
+    decide: tuple[float, float] | None = None
     reason = ''
     if t.verdict == 'undetermined':
         if t.decide_factor is None:
@@ -609,14 +631,15 @@ class SensorVerdict:
 
     verdict: str
     basis: str
-    mean_change: object = None
-    mean_change_sd: object = None
-    ci: object = None
-    axes_beyond: tuple = ()
-    decide_factor: object = None
+    mean_change: float | None = None
+    mean_change_sd: float | None = None
+    ci: tuple[float, float] | None = None
+    axes_beyond: tuple[str, ...] = ()
+    decide_factor: float | None = None
 
 
-def overall(verdicts, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
+def overall(verdicts: Mapping[str, Verdict], *, tolerance: float = DEFAULT_TOLERANCE,
+            alpha: float = DEFAULT_ALPHA) -> SensorVerdict:
     """
     Return one sensor's verdict from the verdicts of its axes.
 
@@ -644,15 +667,16 @@ def overall(verdicts, *, tolerance=DEFAULT_TOLERANCE, alpha=DEFAULT_ALPHA):
     """
     _check_tolerance(tolerance, alpha)
     n = len(verdicts)
-    usable = {k: v for k, v in verdicts.items()
+    # {axis: (log_ratio, log_ratio_sd)} of the axes with a width change
+    usable = {k: (v.log_ratio, v.log_ratio_sd) for k, v in verdicts.items()
               if v.log_ratio is not None and v.log_ratio_sd is not None
               and math.isfinite(v.log_ratio_sd)}
-    beyond = tuple(k for k, v in usable.items() if band_test(
-        v.log_ratio, v.log_ratio_sd, tolerance=tolerance, alpha=alpha / n).verdict == 'beyond')
+    beyond = tuple(k for k, (lr, sd) in usable.items() if band_test(
+        lr, sd, tolerance=tolerance, alpha=alpha / n).verdict == 'beyond')
     mean = None
     if n and len(usable) == n:
-        m = sum(v.log_ratio for v in usable.values()) / n
-        s = math.sqrt(sum(v.log_ratio_sd ** 2 for v in usable.values())) / n
+        m = sum(lr for lr, _ in usable.values()) / n
+        s = math.sqrt(sum(sd ** 2 for _, sd in usable.values())) / n
         mean = band_test(m, s, tolerance=tolerance, alpha=alpha)
     pct = f'{100 * tolerance:.0f} %'
     conf = f'{100 * (1 - alpha):.0f} %'

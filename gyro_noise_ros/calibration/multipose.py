@@ -38,17 +38,19 @@ during the calibration. Gravity check that can fail: each pose left out in turn,
 of the others predicts its norm (:func:`leave_one_out`).
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 from scipy.stats import t as t_dist
 
 from .apply import SensorCalibration
-from .dwell_noise import DwellNoiseFitter
+from .dwell_noise import DwellNoise, DwellNoiseFitter
 from .sixpos import DEFAULT_ALPHA, LeaveOneOut
-from .static import MIN_POSES
+from .static import Dwell, dwell_windows, MIN_POSES
 from ..errors import InputDataError, ParameterError
 
 #: Parameters: b (3), S (3), then the lower cross-axis terms M[1, 0], M[2, 0], M[2, 1].
@@ -58,7 +60,7 @@ LOWER = ((1, 0), (2, 0), (2, 1))
 MAX_CONDITION = 1e6
 
 
-def triangular(matrix):
+def triangular(matrix: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """
     Return the lower-triangular form of a sensor matrix and the rotation into its frame.
 
@@ -86,7 +88,7 @@ def triangular(matrix):
     return lower, rot
 
 
-def _unpack(theta):
+def _unpack(theta: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     b = theta[:3]
     a = np.eye(3) + np.diag(theta[3:6])
     for k, (j, i) in enumerate(LOWER):
@@ -94,13 +96,15 @@ def _unpack(theta):
     return a, b
 
 
-def _residual(theta, means, g):
+def _residual(theta: NDArray[np.float64], means: NDArray[np.float64],
+              g: float) -> NDArray[np.float64]:
     a, b = _unpack(theta)
     u = np.linalg.solve(a, (means - b).T).T
     return np.linalg.norm(u, axis=1) - g
 
 
-def _jacobian(theta, means, g):
+def _jacobian(theta: NDArray[np.float64], means: NDArray[np.float64],
+              g: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     a, b = _unpack(theta)
     ainv = np.linalg.inv(a)
     u = (means - b) @ ainv.T
@@ -115,7 +119,8 @@ def _jacobian(theta, means, g):
     return jac, v
 
 
-def _solve(means, g, theta0=None):
+def _solve(means: NDArray[np.float64], g: float,
+           theta0: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     x0 = np.zeros(9) if theta0 is None else theta0
     sol = least_squares(_residual, x0, jac=lambda t, m, gg: _jacobian(t, m, gg)[0],
                         args=(means, g), method='lm', xtol=1e-15, ftol=1e-15, gtol=1e-15,
@@ -160,14 +165,14 @@ class MultiPoseResult:
     residual_m_s2: np.ndarray
     rms_residual_m_s2: float
     covariance: np.ndarray
-    left_out: tuple = ()
+    left_out: tuple[str, ...] = ()
 
     @property
-    def matrix(self):
+    def matrix(self) -> NDArray[np.float64]:
         """numpy.ndarray: (3, 3) ``I + diag(S) + M``."""
         return np.eye(3) + np.diag(self.scale_factor) + self.misalignment
 
-    def compensate(self, measured_m_s2):
+    def compensate(self, measured_m_s2: ArrayLike) -> np.ndarray:
         """
         Apply the calibration: ``inv(I + diag(S) + M) @ (measured - bias)``.
 
@@ -185,7 +190,7 @@ class MultiPoseResult:
                                  self.misalignment).apply(measured_m_s2)
 
 
-def _check_means(means, g):
+def _check_means(means: ArrayLike, g: float) -> tuple[NDArray[np.float64], float]:
     a = np.asarray(means, dtype=np.float64)
     if a.ndim != 2 or a.shape[1] != 3:
         raise ParameterError(f'pose means must be (n, 3), got shape {a.shape}')
@@ -200,7 +205,7 @@ def _check_means(means, g):
     return a, g
 
 
-def multi_pose(means_m_s2, gravity_m_s2):
+def multi_pose(means_m_s2: ArrayLike, gravity_m_s2: float) -> NDArray[np.float64]:
     """
     Fit bias, scale factors and non-orthogonality to pose means by |a| = g (no uncertainties).
 
@@ -233,14 +238,16 @@ def multi_pose(means_m_s2, gravity_m_s2):
     return theta
 
 
-def _loading(theta, means, g):
+def _loading(theta: NDArray[np.float64], means: NDArray[np.float64],
+             g: float) -> NDArray[np.float64]:
     """(9, n, 3) first-order loading of theta on the pose means."""
     jac, v = _jacobian(theta, means, g)
     core = -np.linalg.solve(jac.T @ jac, jac.T)          # (9, n)
     return core[:, :, None] * v[None, :, :]
 
 
-def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
+def calibrate_poses(dwells: Sequence[Dwell], gravity_m_s2: float, *, alpha: float = DEFAULT_ALPHA
+                    ) -> tuple[MultiPoseResult, tuple[LeaveOneOut, ...], DwellNoise]:
     """
     Run the multi-pose fit on dwells, with uncertainties and the leave-one-out gravity check.
 
@@ -273,9 +280,10 @@ def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     means, g = _check_means([d.accel_mean_m_s2 for d in dwells], gravity_m_s2)
     n = len(dwells)
     theta = multi_pose(means, g)
-    fitter = DwellNoiseFitter([d.window_t_s for d in dwells], [d.window_n for d in dwells],
-                              [d.window_accel_m_s2 for d in dwells])
-    out = []
+    fitter = DwellNoiseFitter(dwell_windows(d.window_t_s for d in dwells),
+                              dwell_windows(d.window_n for d in dwells),
+                              dwell_windows(d.window_accel_m_s2 for d in dwells))
+    out: list[int] = []
     while True:
         checks = leave_one_out(dwells, g, theta, fitter, alpha=alpha, exclude=out)
         bad = [k for k in range(n) if k not in out and not checks[k].consistent]
@@ -291,8 +299,9 @@ def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     kept = [dwells[k] for k in keep]
     means = means[keep]
     theta = multi_pose(means, g)
-    fitter = DwellNoiseFitter([d.window_t_s for d in kept], [d.window_n for d in kept],
-                              [d.window_accel_m_s2 for d in kept])
+    fitter = DwellNoiseFitter(dwell_windows(d.window_t_s for d in kept),
+                              dwell_windows(d.window_n for d in kept),
+                              dwell_windows(d.window_accel_m_s2 for d in kept))
     resid = _residual(theta, means, g)
     jac, v = _jacobian(theta, means, g)
     proj = np.eye(len(kept)) - jac @ np.linalg.solve(jac.T @ jac, jac.T)
@@ -311,11 +320,13 @@ def calibrate_poses(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     return result, checks, noise
 
 
-def _label(k, d):
+def _label(k: int, d: Dwell) -> str:
     return f'pose {k + 1} ({d.orientation} at t={d.t_start_s:.1f} s)'
 
 
-def leave_one_out(dwells, gravity_m_s2, theta, fitter, *, alpha=DEFAULT_ALPHA, exclude=()):
+def leave_one_out(dwells: Sequence[Dwell], gravity_m_s2: float, theta: NDArray[np.float64],
+                  fitter: DwellNoiseFitter, *, alpha: float = DEFAULT_ALPHA,
+                  exclude: Sequence[int] = ()) -> tuple[LeaveOneOut, ...]:
     """
     Refit without each pose in turn and compare its calibrated norm with g.
 

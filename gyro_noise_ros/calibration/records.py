@@ -20,17 +20,28 @@ first batch's stamps by the package's one estimator (``core.timebase``, right on
 stamps too; a record with no two distinct stamps cannot be analysed), or a nominal rate when given.
 """
 
+from collections.abc import Iterator
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..bag import ImuBagReader
 from ..core.timebase import estimate_rate
 from ..errors import InputDataError, ParameterError
+from ..outputs import StrPath
+
+#: ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)``: one batch of a recording (:func:`iter_imu`). The
+#: stamps are float64 (integer nanoseconds times 1e-9), which numpy's stubs call floating.
+_ImuBatch = tuple[float, NDArray[np.floating[Any]], NDArray[np.float64], NDArray[np.float64]]
+#: ``(t_s, temperature_degc)`` of a recording (:func:`read_temperature`).
+_Temperature = tuple[NDArray[np.floating[Any]], NDArray[np.float64]]
 
 #: Messages decoded per batch (~0.4 KB each).
 BATCH = 65536
 
 
-def rate_from_stamps(stamp_ns, source=''):
+def rate_from_stamps(stamp_ns: ArrayLike, source: str = '') -> float:
     """
     Return the sample rate of the stamps by the package's estimator (``core.timebase``).
 
@@ -68,7 +79,8 @@ def rate_from_stamps(stamp_ns, source=''):
     return float(est.rate_hz)
 
 
-def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH, t0_ns=None):
+def iter_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None = None,
+             batch: int = BATCH, t0_ns: int | None = None) -> Iterator[_ImuBatch]:
     """
     Yield the recording as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
 
@@ -106,7 +118,7 @@ def iter_imu(path, *, topic=None, rate_hz=None, batch=BATCH, t0_ns=None):
             yield float(rate), t, np.asarray(b.accel, np.float64), np.asarray(b.gyro, np.float64)
 
 
-def first_stamp_ns(path, *, topic=None):
+def first_stamp_ns(path: StrPath, *, topic: str | None = None) -> int | None:
     """
     Return the stamp of a recording's first Imu sample (ns), None when it holds none.
 
@@ -129,7 +141,8 @@ def first_stamp_ns(path, *, topic=None):
     return None
 
 
-def read_imu(path, *, topic=None, rate_hz=None, t0_ns=None):
+def read_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None = None,
+             t0_ns: int | None = None) -> _ImuBatch:
     """
     Read a whole recording into memory (for records of a few million samples).
 
@@ -156,7 +169,8 @@ def read_imu(path, *, topic=None, rate_hz=None, t0_ns=None):
             np.concatenate([p[3] for p in parts]))
 
 
-def read_temperature(path, *, topic=None, t0_ns=None):
+def read_temperature(path: StrPath, *, topic: str | None = None,
+                     t0_ns: int | None = None) -> _Temperature | None:
     """
     Read a recording's ``sensor_msgs/Temperature`` samples, stamps relative to ``t0_ns``.
 
@@ -189,7 +203,8 @@ def read_temperature(path, *, topic=None, t0_ns=None):
     return (stamps.astype(np.int64) - int(t0_ns)) * 1e-9, np.asarray(temp, np.float64)
 
 
-def temperature_stats(temperature, start_s=-np.inf, end_s=np.inf):
+def temperature_stats(temperature: _Temperature | None, start_s: float = -np.inf,
+                      end_s: float = np.inf) -> dict[str, float | int] | None:
     """
     Return mean, min and max temperature over ``[start_s, end_s]`` (degC), None when none.
 

@@ -70,15 +70,18 @@ misalignment; both are far below a MEMS bias (~1e-3 rad/s). The gyro scale facto
 need rotations: :mod:`~gyro_noise_ros.calibration.gyro_turns`.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2, f as f_dist, t as t_dist
 
 from .apply import SensorCalibration
-from .dwell_noise import DwellNoiseFitter, fit_dwell_noise
-from .static import ORIENTATIONS
+from .dwell_noise import DwellNoise, DwellNoiseFitter, fit_dwell_noise
+from .static import Dwell, dwell_windows, ORIENTATIONS
 from ..errors import InputDataError, ParameterError
 
 #: WGS-84 (NIMA TR8350.2, 3rd ed., ch. 4): equatorial normal gravity (m/s^2), Somigliana constant
@@ -99,7 +102,7 @@ DEFAULT_ALPHA = 1e-3
 CHECK_DOF = 6
 
 
-def normal_gravity(latitude_deg, height_m=0.0):
+def normal_gravity(latitude_deg: float, height_m: float = 0.0) -> float:
     """
     Return WGS-84 normal gravity at a geodetic latitude and ellipsoidal height.
 
@@ -136,7 +139,7 @@ def normal_gravity(latitude_deg, height_m=0.0):
                  + 3.0 * h * h / WGS84_A ** 2)
 
 
-def _table(values, name):
+def _table(values: Mapping[str, ArrayLike] | ArrayLike, name: str) -> NDArray[np.float64]:
     if isinstance(values, dict):
         values = [values[o] for o in ORIENTATIONS]
     arr = np.asarray(values, dtype=np.float64)
@@ -145,12 +148,12 @@ def _table(values, name):
     return arr
 
 
-def _nominal(g):
+def _nominal(g: float) -> NDArray[np.float64]:
     """(6, 3) true specific force of each dwell, in :data:`ORIENTATIONS` order (m/s^2)."""
     return np.repeat(np.eye(3), 2, axis=0) * np.tile([g, -g], 3)[:, None]
 
 
-def residual_projector():
+def residual_projector() -> NDArray[np.float64]:
     """
     Return the 6x6 projector onto the residuals of the 18 equations (6 dwells, 4 unknowns).
 
@@ -164,7 +167,7 @@ def residual_projector():
     return np.eye(6) - x @ np.linalg.pinv(x)
 
 
-def _per_axis(c, j):
+def _per_axis(c: NDArray[np.float64], j: int) -> NDArray[np.float64]:
     """(m, 3) loading that applies the dwell weights ``c`` to axis j only."""
     out = np.zeros((len(c), 3))
     out[:, j] = c
@@ -210,11 +213,11 @@ class SixPositionResult:
     accel_residual_m_s2: float = float('nan')
 
     @property
-    def accel_matrix(self):
+    def accel_matrix(self) -> NDArray[np.float64]:
         """numpy.ndarray: (3, 3) ``I + diag(scale_factor) + misalignment``."""
         return np.eye(3) + np.diag(self.accel_scale_factor) + self.accel_misalignment
 
-    def compensate_accel(self, measured_m_s2):
+    def compensate_accel(self, measured_m_s2: ArrayLike) -> np.ndarray:
         """
         Apply the calibration: ``inv(I + diag(S) + M) @ (measured - bias)``.
 
@@ -233,8 +236,10 @@ class SixPositionResult:
                                  self.accel_misalignment).apply(measured_m_s2)
 
 
-def six_position(accel_means_m_s2, gravity_m_s2, *, gyro_means_rad_s=None, accel_noise=None,
-                 gyro_noise=None):
+def six_position(accel_means_m_s2: Mapping[str, ArrayLike] | ArrayLike, gravity_m_s2: float, *,
+                 gyro_means_rad_s: Mapping[str, ArrayLike] | ArrayLike | None = None,
+                 accel_noise: DwellNoise | None = None,
+                 gyro_noise: DwellNoise | None = None) -> SixPositionResult:
     """
     Estimate bias, scale factor and cross-axis terms from the six dwell means.
 
@@ -293,7 +298,7 @@ def six_position(accel_means_m_s2, gravity_m_s2, *, gyro_means_rad_s=None, accel
                              scatter)
 
 
-def noise_models(dwells):
+def noise_models(dwells: Mapping[str, Dwell]) -> tuple[DwellNoise, DwellNoise]:
     """
     Fit the accelerometer and gyro noise models of six dwells (module docstring).
 
@@ -310,15 +315,15 @@ def noise_models(dwells):
 
     """
     dw = [dwells[o] for o in ORIENTATIONS]
-    times = [d.window_t_s for d in dw]
-    counts = [d.window_n for d in dw]
+    times = dwell_windows(d.window_t_s for d in dw)
+    counts = dwell_windows(d.window_n for d in dw)
     a = np.array([d.accel_mean_m_s2 for d in dw])
     p = residual_projector()
     loading = np.concatenate([np.stack([_per_axis(p[r], j) for r in range(6)]) for j in range(3)])
     resid = (p @ a).T.reshape(-1)
-    accel = fit_dwell_noise(times, counts, [d.window_accel_m_s2 for d in dw],
+    accel = fit_dwell_noise(times, counts, dwell_windows(d.window_accel_m_s2 for d in dw),
                             residual_loading=loading, residuals=resid)
-    gyro = fit_dwell_noise(times, counts, [d.window_gyro_rad_s for d in dw])
+    gyro = fit_dwell_noise(times, counts, dwell_windows(d.window_gyro_rad_s for d in dw))
     return accel, gyro
 
 
@@ -356,10 +361,10 @@ class PairCheck:
     chi2: float
     p_value: float
     consistent: bool
-    suspect: object = None
+    suspect: str | None = None
     suspect_tilt_deg: float = float('nan')
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """Return JSON-ready values (units in the keys)."""
         return {'axis': self.axis, 'disagreement_m_s2': self.disagreement_m_s2.tolist(),
                 'sigma_m_s2': self.sigma_m_s2, 'chi2': self.chi2, 'p_value': self.p_value,
@@ -397,14 +402,14 @@ class LeaveOneOut:
     p_value: float
     consistent: bool
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """Return JSON-ready values (units in the keys)."""
         return {'dwell': self.label, 'residual_m_s2': self.residual_m_s2,
                 'sigma_m_s2': self.sigma_m_s2, 'z': self.z, 'p_value': self.p_value,
                 'consistent': self.consistent}
 
 
-def _pair_weights(i):
+def _pair_weights(i: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     k, l_ = [a for a in range(3) if a != i]
     d = np.zeros(6)
     d[[2 * i, 2 * i + 1]] = 1.0
@@ -415,7 +420,8 @@ def _pair_weights(i):
     return d, e
 
 
-def _loo_matrix(a, g, out):
+def _loo_matrix(a: NDArray[np.float64], g: float,
+                out: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Calibration (A, b) of the six dwells in ``a`` without dwell index ``out``."""
     i = out // 2
     others = [k for k in range(3) if k != i]
@@ -428,14 +434,14 @@ def _loo_matrix(a, g, out):
     return cols, b
 
 
-def _standardise(vector, var):
+def _standardise(vector: NDArray[np.float64], var: float) -> tuple[float, float]:
     """Return the standard deviation and ``|vector|^2 / var`` (inf without a variance)."""
     if not var > 0:
         return float('nan'), float('inf')
     return math.sqrt(var), float(vector @ vector / var)
 
 
-def _suspect(a, g, i):
+def _suspect(a: NDArray[np.float64], g: float, i: int) -> tuple[str, float]:
     """Name the dwell of pair i that does not fit, and its tilt (deg) from the prediction."""
     # the bad dwell is the one whose removal leaves the smaller cross-axis column
     off = [k for k in range(3) if k != i]
@@ -452,7 +458,8 @@ def _suspect(a, g, i):
     return ORIENTATIONS[out], float(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))
 
 
-def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
+def consistency(dwells: Mapping[str, Dwell], gravity_m_s2: float, *, alpha: float = DEFAULT_ALPHA
+                ) -> tuple[tuple[PairCheck, ...], tuple[LeaveOneOut, ...]]:
     """
     Test the six dwells against the model and run the leave-one-out gravity check.
 
@@ -476,15 +483,18 @@ def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     g = float(gravity_m_s2)
     dw = [dwells[o] for o in ORIENTATIONS]
     a = np.array([d.accel_mean_m_s2 for d in dw])
-    times = [d.window_t_s for d in dw]
-    fitter = DwellNoiseFitter(times, [d.window_n for d in dw], [d.window_accel_m_s2 for d in dw])
-    tests, loo = [], []
+    times = dwell_windows(d.window_t_s for d in dw)
+    fitter = DwellNoiseFitter(times, dwell_windows(d.window_n for d in dw),
+                              dwell_windows(d.window_accel_m_s2 for d in dw))
+    tests: list[tuple[NDArray[np.float64], float, float, float]] = []
+    loo: list[tuple[int, LeaveOneOut]] = []
     for i in range(3):
         dvec, evec = _pair_weights(i)
         disagreement = dvec @ a
         loading = np.stack([_per_axis(evec, j) for j in range(3)])
         noise = fitter.fit(residual_loading=loading, residuals=evec @ a)
-        sigma, stat = _standardise(disagreement, noise.variance(dvec))
+        # one weight vector: variance() returns a float
+        sigma, stat = _standardise(disagreement, float(noise.variance(dvec)))
         tests.append((disagreement, sigma, stat, float(f_dist.sf(stat / 3.0, 3, CHECK_DOF))))
         for out in (2 * i, 2 * i + 1):
             cols, b = _loo_matrix(a, g, out)
@@ -509,7 +519,7 @@ def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
             cvec[[2 * i, 2 * i + 1]] = 1.0
             cvec[[2 * other, 2 * other + 1]] = -1.0
             disagreement = cvec @ a
-            sigma, stat = _standardise(disagreement, fitter.fit().variance(cvec))
+            sigma, stat = _standardise(disagreement, float(fitter.fit().variance(cvec)))
             p = float(chi2.sf(stat, 3))
             ok = p >= alpha / 3.0
         suspect, tilt = (None, float('nan')) if ok else _suspect(a, g, i)
@@ -518,7 +528,8 @@ def consistency(dwells, gravity_m_s2, *, alpha=DEFAULT_ALPHA):
     return tuple(pairs), tuple(item[1] for item in loo)
 
 
-def calibrate_six(dwells, gravity_m_s2):
+def calibrate_six(dwells: Mapping[str, Dwell],
+                  gravity_m_s2: float) -> tuple[SixPositionResult, DwellNoise, DwellNoise]:
     """
     Run the six-position estimator with the noise models of its dwells.
 
@@ -543,7 +554,7 @@ def calibrate_six(dwells, gravity_m_s2):
     return res, accel_noise, gyro_noise
 
 
-def uniformity(values):
+def uniformity(values: ArrayLike) -> float:
     """
     Return the paper 001 section 6 uniformity indicator: the sample standard deviation (ddof = 1).
 
@@ -561,7 +572,7 @@ def uniformity(values):
     return float(np.std(np.asarray(values, dtype=np.float64), ddof=1))
 
 
-def mean_norm(accel_means_m_s2):
+def mean_norm(accel_means_m_s2: ArrayLike) -> float:
     """
     Return the mean |a| over dwells, raw (paper 001 section 6: 9.848 m/s^2 before calibration).
 

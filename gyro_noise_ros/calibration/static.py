@@ -40,9 +40,12 @@ Only window sums are kept (and, per dwell, its window means for the noise model 
 memory.
 """
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputDataError, ParameterError
 
@@ -104,7 +107,7 @@ class DetectorSettings:
     min_static_s: float = DEFAULT_MIN_STATIC_S
     max_tilt_deg: float = DEFAULT_MAX_TILT_DEG
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ('window_s', 'accel_std_max_m_s2', 'gyro_rate_max_rad_s', 'merge_tol_m_s2',
                      'max_tilt_deg'):
             value = getattr(self, name)
@@ -162,22 +165,24 @@ class Windows:
     n_good: np.ndarray | None = None
     window_samples: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.n_good is None:
             object.__setattr__(self, 'n_good', np.where(self.finite, self.n, 0))
 
     @property
-    def usable(self):
+    def usable(self) -> NDArray[np.bool_]:
         """numpy.ndarray: bool, the window keeps enough finite samples (else it is a gap)."""
+        assert self.n_good is not None  # filled by __post_init__
         return (self.n_good >= 2) & (self.n_good >= MIN_FINITE_FRACTION * self.n)
 
     @property
-    def non_finite_samples(self):
+    def non_finite_samples(self) -> int:
         """int: samples dropped because one of their channels is NaN/Inf."""
+        assert self.n_good is not None  # filled by __post_init__
         return int((self.n - self.n_good).sum())
 
     @property
-    def duration_s(self):
+    def duration_s(self) -> float:
         """float: first to last stamp plus one sample period (s); 0 without windows."""
         if self.n.size == 0:
             return 0.0
@@ -199,17 +204,18 @@ class WindowAccumulator:
 
     """
 
-    def __init__(self, rate_hz, *, window_s=DEFAULT_WINDOW_S, source=''):
+    def __init__(self, rate_hz: float, *, window_s: float = DEFAULT_WINDOW_S,
+                 source: str = '') -> None:
         if not (np.isfinite(rate_hz) and rate_hz > 0):
             raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz!r}')
         self.rate_hz = float(rate_hz)
         self.size = max(2, int(round(window_s * rate_hz)))
         self.source = source
-        self._rows = []
+        self._rows: list[tuple[NDArray[Any], ...]] = []
         self._pend_t = np.empty(0)
         self._pend = np.empty((0, 6))
 
-    def update(self, t_s, accel_m_s2, gyro_rad_s):
+    def update(self, t_s: ArrayLike, accel_m_s2: ArrayLike, gyro_rad_s: ArrayLike) -> None:
         """
         Ingest a batch.
 
@@ -235,7 +241,7 @@ class WindowAccumulator:
             self._rows.append(_window_stats(t[:full], data[:full], self.size))
         self._pend_t, self._pend = t[full:], data[full:]
 
-    def result(self):
+    def result(self) -> Windows:
         """
         Return the windows so far (a trailing partial window of >= 2 samples is included).
 
@@ -259,7 +265,8 @@ class WindowAccumulator:
                        cols[6].astype(np.int64), self.size)
 
 
-def _window_stats(t, data, size):
+def _window_stats(t: NDArray[np.float64], data: NDArray[np.float64],
+                  size: int) -> tuple[NDArray[Any], ...]:
     """Per-window first/last stamp, count, mean and std over the rows finite in every channel."""
     w = t.shape[0] // size
     blocks = data[:w * size].reshape(w, size, 6)
@@ -329,11 +336,11 @@ class Dwell:
     window_gyro_rad_s: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
-    def t_end_s(self):
+    def t_end_s(self) -> float:
         """float: end of the span used (s), one sample period after its last stamp."""
         return self.t_start_s + self.duration_s
 
-    def describe(self):
+    def describe(self) -> str:
         """
         Return a one-phrase description (orientation, start, duration, recording, NaN dropped).
 
@@ -348,7 +355,7 @@ class Dwell:
         return (f'{self.orientation} at t={self.t_start_s:.1f} s for {self.duration_s:.1f} s'
                 f'{where} (tilt {self.tilt_deg:.1f} deg{nan})')
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the dwell as JSON-ready values (units in the keys).
 
@@ -365,6 +372,30 @@ class Dwell:
                 'accel_sem_m_s2': self.accel_sem_m_s2.tolist(),
                 'gyro_mean_rad_s': self.gyro_mean_rad_s.tolist(),
                 'gyro_sem_rad_s': self.gyro_sem_rad_s.tolist()}
+
+
+def dwell_windows(values: Iterable[np.ndarray | None]) -> list[np.ndarray]:
+    """
+    Return the per-window arrays of dwells (``Dwell.window_t_s``, ...) as a list.
+
+    :func:`find_dwells` fills them; only a dwell built by hand lacks them, and no noise model
+    can be fitted to it.
+
+    Parameters
+    ----------
+    values : iterable of numpy.ndarray
+        One window array per dwell.
+
+    Returns
+    -------
+    list of numpy.ndarray
+
+    """
+    out = []
+    for v in values:
+        assert v is not None, 'a dwell without its window means (find_dwells gives them)'
+        out.append(v)
+    return out
 
 
 @dataclass(frozen=True)
@@ -391,15 +422,15 @@ class Detection:
 
     """
 
-    dwells: tuple
-    short: tuple
+    dwells: tuple[Dwell, ...]
+    short: tuple[Dwell, ...]
     static_fraction: float
     non_finite_samples: int
     reference_gyro_rad_s: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-    gaps: tuple = ()
+    gaps: tuple[tuple[float, float, int], ...] = ()
     source: str = ''
 
-    def describe_gaps(self, min_s=0.0):
+    def describe_gaps(self, min_s: float = 0.0) -> str:
         """
         Return the NaN/Inf gaps at least ``min_s`` long as one phrase ('' without any).
 
@@ -418,7 +449,7 @@ class Detection:
                          for t0, length, _ in self.gaps if length >= min_s)
 
 
-def classify(accel_mean_m_s2):
+def classify(accel_mean_m_s2: ArrayLike) -> tuple[str, float]:
     """
     Return the orientation and tilt of a mean specific force.
 
@@ -441,8 +472,9 @@ def classify(accel_mean_m_s2):
     return sign + 'xyz'[i], tilt
 
 
-def _dwell(win, idx):
+def _dwell(win: Windows, idx: NDArray[np.intp]) -> Dwell:
     """Build a Dwell from the usable window indices ``idx`` (increasing) of ``win``."""
+    assert win.n_good is not None  # filled by Windows.__post_init__
     n = win.n_good[idx].astype(np.float64)
     total = n.sum()
     w = n / total
@@ -471,7 +503,7 @@ def _dwell(win, idx):
                  win.gyro_mean_rad_s[idx].copy())
 
 
-def _gaps(win, usable):
+def _gaps(win: Windows, usable: NDArray[np.bool_]) -> tuple[tuple[float, float, int], ...]:
     out = []
     i, w = 0, usable.size
     while i < w:
@@ -487,7 +519,7 @@ def _gaps(win, usable):
     return tuple(out)
 
 
-def find_dwells(windows, settings=DetectorSettings()):
+def find_dwells(windows: Windows, settings: DetectorSettings = DetectorSettings()) -> Detection:
     """
     Find and classify the static dwells of one recording.
 
@@ -529,7 +561,8 @@ def find_dwells(windows, settings=DetectorSettings()):
         quiet = np.all(win.accel_std_m_s2 < settings.accel_std_max_m_s2, axis=1)
         still = np.all(np.abs(win.gyro_mean_rad_s - ref) < settings.gyro_rate_max_rad_s, axis=1)
     static = usable & quiet & still
-    dwells, short = [], []
+    dwells: list[Dwell] = []
+    short: list[Dwell] = []
     trim = int(settings.trim_windows)
     i, w = 0, win.n.size
     while i < w:
@@ -558,7 +591,7 @@ def find_dwells(windows, settings=DetectorSettings()):
                      win.non_finite_samples, ref, _gaps(win, usable), win.source)
 
 
-def _no_dwell(short, settings):
+def _no_dwell(short: Sequence[Dwell], settings: DetectorSettings) -> InputDataError:
     if short:
         return InputDataError(
             f'no static dwell of at least --min-static-s {settings.min_static_s:g} s; shorter '
@@ -569,7 +602,8 @@ def _no_dwell(short, settings):
         f'{settings.gyro_rate_max_rad_s:g} rad/s in every {settings.window_s:g} s window)')
 
 
-def select_six(detections, settings=DetectorSettings()):
+def select_six(detections: Sequence[Detection],
+               settings: DetectorSettings = DetectorSettings()) -> dict[str, Dwell]:
     """
     Pick exactly one dwell per orientation out of one or more recordings.
 
@@ -625,7 +659,8 @@ def select_six(detections, settings=DetectorSettings()):
     return chosen
 
 
-def select_poses(detections, settings=DetectorSettings(), *, min_poses=MIN_POSES):
+def select_poses(detections: Sequence[Detection], settings: DetectorSettings = DetectorSettings(),
+                 *, min_poses: int = MIN_POSES) -> list[Dwell]:
     """
     Return every static dwell of the recordings as a pose of the multi-pose calibration.
 

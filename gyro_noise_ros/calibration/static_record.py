@@ -32,16 +32,20 @@ uncertainties (:func:`noise_terms`), or the reason why not:
 * too few samples for five taus: undetermined ("record too short").
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .interval import (bias_instability_interval, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
-                       log_adev_sd, undetermined)
+                       Interval, log_adev_sd, undetermined)
 from .static import classify, DetectorSettings, find_dwells, WindowAccumulator
-from ..core.allan import AllanAccumulator
-from ..core.readout import fit_noise_terms_band_limited, MAX_TAU_FRACTION, read_allan
+from ..core.allan import AllanAccumulator, AllanResult
+from ..core.readout import (AllanReadout, fit_noise_terms_band_limited, MAX_TAU_FRACTION,
+                            read_allan)
 from ..errors import GyroNoiseError
 
 CHANNELS = ('accel_x', 'accel_y', 'accel_z', 'gyro_x', 'gyro_y', 'gyro_z')
@@ -54,7 +58,7 @@ SLOPE_TERMS = ('angle_random_walk', 'bias_instability', 'rate_random_walk')
 TERMS = ('white_noise', 'bias_stability', 'random_walk')
 
 
-def unit_of(channel):
+def unit_of(channel: str) -> str:
     """
     Return the unit suffix of a channel (``m_s2`` for accel, ``rad_s`` for gyro).
 
@@ -92,14 +96,14 @@ class Term:
     how: str = ''
 
     @property
-    def bracket(self):
+    def bracket(self) -> tuple[float, float]:
         """(float, float): ``value * exp(-+sd_log)``, a 68 % interval that holds the value."""
         if not math.isfinite(self.sd_log):
             return (0.0, math.inf)
         return (self.value * math.exp(-self.sd_log), self.value * math.exp(self.sd_log))
 
 
-def _white_sd(allan, readout):
+def _white_sd(allan: AllanResult, readout: AllanReadout) -> float:
     """Return the sd of log N: the least-determined tau of the readout's -1/2 region."""
     tau = np.asarray(allan.tau_s, dtype=np.float64)
     edf = np.asarray(allan.edf, dtype=np.float64)
@@ -114,7 +118,7 @@ def _white_sd(allan, readout):
     return float(np.max(log_adev_sd(edf[sel]))) if np.any(sel) else math.inf
 
 
-def _random_walk_sd(allan, k):
+def _random_walk_sd(allan: AllanResult, k: float) -> float:
     """Return the sd of log K, read at the longest readable tau (a tenth of the record)."""
     if not (math.isfinite(k) and k > 0):
         return math.inf
@@ -130,7 +134,7 @@ def _random_walk_sd(allan, k):
     return float(log_adev_sd(np.asarray(allan.edf)[j])) * max(1.0, avar / walk)
 
 
-def noise_terms(allan, readout):
+def noise_terms(allan: AllanResult, readout: AllanReadout) -> dict[str, Term]:
     """
     Return the three noise terms of one channel with their uncertainties.
 
@@ -188,10 +192,10 @@ class ChannelResult:
     """
 
     channel: str
-    allan: object
-    interval: object
-    terms: object = None
-    readout: object = None
+    allan: AllanResult | None
+    interval: Interval
+    terms: dict[str, Term] | None = None
+    readout: AllanReadout | None = None
 
 
 class StaticRecord:
@@ -215,8 +219,9 @@ class StaticRecord:
 
     """
 
-    def __init__(self, rate_hz, *, c=DEFAULT_C, settings=DetectorSettings(), source='',
-                 min_edf=DEFAULT_MIN_EDF, alpha=DEFAULT_ALPHA):
+    def __init__(self, rate_hz: float, *, c: float = DEFAULT_C,
+                 settings: DetectorSettings = DetectorSettings(), source: str = '',
+                 min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA) -> None:
         self.rate_hz = float(rate_hz)
         self.c = c
         self.min_edf = min_edf
@@ -229,13 +234,14 @@ class StaticRecord:
         self.samples = 0
         self.duration_s = 0.0
 
-    def update(self, t_s, accel_m_s2, gyro_rad_s):
+    def update(self, t_s: NDArray[np.floating[Any]] | Sequence[float], accel_m_s2: ArrayLike,
+               gyro_rad_s: ArrayLike) -> None:
         """
         Ingest a batch.
 
         Parameters
         ----------
-        t_s : array_like
+        t_s : numpy.ndarray or sequence of float
             (n,) stamps (s).
         accel_m_s2, gyro_rad_s : array_like
             (n, 3) specific force (m/s^2) and angular rate (rad/s).
@@ -258,7 +264,7 @@ class StaticRecord:
         if len(t_s):
             self.duration_s = float(t_s[-1])
 
-    def static_check(self):
+    def static_check(self) -> dict[str, Any]:
         """
         Return why the record is not a static record, or '' when it is.
 
@@ -270,8 +276,8 @@ class StaticRecord:
 
         """
         win = self._win.result()
-        out = {'static_fraction': float('nan'), 'orientation': None, 'problem': '',
-               'accel_problem': ''}
+        out: dict[str, Any] = {'static_fraction': float('nan'), 'orientation': None,
+                               'problem': '', 'accel_problem': ''}
         try:
             det = find_dwells(win, self.settings)
         except GyroNoiseError as err:
@@ -297,7 +303,7 @@ class StaticRecord:
                               f'orientations ({", ".join(sorted(kinds))})')
         return out
 
-    def finish(self):
+    def finish(self) -> tuple[dict[str, ChannelResult], dict[str, Any]]:
         """
         Return the per-channel results and the static check.
 
@@ -308,7 +314,7 @@ class StaticRecord:
 
         """
         check = self.static_check()
-        out = {}
+        out: dict[str, ChannelResult] = {}
         for k, ch in enumerate(CHANNELS):
             reason = self._bad[k] or check['problem']
             if not reason and ch.startswith('accel'):
@@ -326,6 +332,8 @@ class StaticRecord:
                                                                 'Allan deviation)', self.c))
                 continue
             record_s = float(allan.n_samples) / float(allan.rate_hz)
+            readout: AllanReadout | None
+            terms: dict[str, Term] | None
             try:
                 readout = read_allan(allan)
                 terms = noise_terms(allan, readout)

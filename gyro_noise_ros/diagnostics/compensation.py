@@ -36,12 +36,18 @@ The message is the sentence of the worst check (the first among equals), else
 ``'Compensating.'``.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass, fields
 import math
 
+import numpy as np
+from numpy.typing import NDArray
+
+from ..calibration.apply import Calibration
 from ..core.items import TaskStatus, worst
 from ..errors import ParameterError
-from ..thermal.live import RANGE_MARGIN, RANGE_NAMES, RANGE_OUTSIDE
+from ..thermal.live import (LiveDriftEvaluator, RANGE_MARGIN, RANGE_NAMES, RANGE_OUTSIDE,
+                            TemperatureGate)
 from ..units import RAD_TO_DEG
 
 #: Degrees per radian (the diagnostics show deg/s; SI inside).
@@ -87,7 +93,7 @@ class CompensationThresholds:
                 raise ParameterError(f'{f.name} must be a finite number >= 0, got {value!r}')
 
 
-def vector_text(values, scale: float = 1.0) -> str:
+def vector_text(values: Iterable[float], scale: float = 1.0) -> str:
     """
     Format a vector for a diagnostic value: ``'x, y, z'`` with 6 significant digits.
 
@@ -106,7 +112,7 @@ def vector_text(values, scale: float = 1.0) -> str:
     return ', '.join(f'{v * scale:.6g}' for v in values)
 
 
-def outside_share(ev) -> str:
+def outside_share(ev: LiveDriftEvaluator) -> str:
     """
     Return the share (%) of evaluated temperature messages outside the trained range of T or dT.
 
@@ -127,13 +133,13 @@ def outside_share(ev) -> str:
     return f'{100.0 * ev.knots_outside / evaluated:.3g}'
 
 
-def calibration_items(calibration, source: str) -> list[tuple[str, str]]:
+def calibration_items(calibration: Calibration, source: str) -> list[tuple[str, str]]:
     """
     Return the key/values of the calibration in use.
 
     Parameters
     ----------
-    calibration : calibration.apply.ImuCalibration
+    calibration : calibration.apply.Calibration
         Gyro and accelerometer bias and scale factor, gravity.
     source : str
         ``'parameters'`` or ``'file <path>'``.
@@ -160,7 +166,7 @@ class CompensationTask:
     ----------
     thresholds : CompensationThresholds
         The limits.
-    calibration : calibration.apply.ImuCalibration, keyword-only
+    calibration : calibration.apply.Calibration, keyword-only
         The calibration in use (reported).
     calibration_source : str, keyword-only
         Where it came from (reported).
@@ -177,7 +183,7 @@ class CompensationTask:
 
     """
 
-    def __init__(self, thresholds: CompensationThresholds, *, calibration,
+    def __init__(self, thresholds: CompensationThresholds, *, calibration: Calibration,
                  calibration_source: str, out_of_range_action: str, now: float) -> None:
         self.thresholds = thresholds
         self.calibration = calibration
@@ -218,9 +224,12 @@ class CompensationTask:
             self._rate = (now, n1, (n1 - n0) / (now - t0))
         return self._rate[2]
 
-    def run(self, now: float, *, thermal=None, thermal_accel=None, offset=None,
-            accel_offset=None, hold=None, transport_missing: int = 0,
-            record: bool = False) -> TaskStatus:
+    def run(self, now: float, *, thermal: LiveDriftEvaluator | None = None,
+            thermal_accel: LiveDriftEvaluator | None = None,
+            offset: NDArray[np.float64] | None = None,
+            accel_offset: NDArray[np.float64] | None = None,
+            hold: TemperatureGate | None = None,
+            transport_missing: int = 0, record: bool = False) -> TaskStatus:
         """
         Judge the period ending at ``now`` and return the status (module doc lists the checks).
 
@@ -247,7 +256,7 @@ class CompensationTask:
 
         """
         rate_hz = self.output_rate_hz(now)
-        checks = []
+        checks: list[tuple[str, str]] = []
         since = None if self.last_data_s is None else now - self.last_data_s
         if since is None or since > self.thresholds.stale_after_s:
             checks.append(('ERROR', 'No imu/data_raw ' + ('yet.' if since is None else
@@ -270,8 +279,11 @@ class CompensationTask:
         level, message = worst(checks, 'Compensating.')
         return TaskStatus(level, message, tuple(values))
 
-    def _thermal_items(self, ev, accel_ev, offset, accel_offset, age,
-                       hold) -> list[tuple[str, str]]:
+    def _thermal_items(self, ev: LiveDriftEvaluator, accel_ev: LiveDriftEvaluator | None,
+                       offset: NDArray[np.float64] | None,
+                       accel_offset: NDArray[np.float64] | None,
+                       age: float | None,
+                       hold: TemperatureGate | None) -> list[tuple[str, str]]:
         """Return the key/values of the thermal model, its inputs and its counts."""
         return [
             ('Thermal model', ev.name),
@@ -302,9 +314,11 @@ class CompensationTask:
             ('Messages compensated with a held offset', str(0 if hold is None else hold.late)),
         ]
 
-    def _thermal_checks(self, ev, age, hold, record) -> list[tuple[str, str]]:
+    def _thermal_checks(self, ev: LiveDriftEvaluator, age: float | None,
+                        hold: TemperatureGate | None, record: bool) -> list[tuple[str, str]]:
         """Return the failed checks of the thermal model's range, its input and the hold."""
-        th, checks = self.thresholds, []
+        th = self.thresholds
+        checks: list[tuple[str, str]] = []
         if ev.status == RANGE_OUTSIDE:
             checks.append(('ERROR', f'Temperature {ev.temperature_c:.1f} degC is beyond the '
                            'model range + margin: offset not extrapolated '

@@ -20,12 +20,28 @@ variance and orders; the Allan results), never from summary.md. "In short" is
 :func:`..analysis.summary_md.in_short_markdown` of the same document.
 """
 
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
 from .figures import allan_figure, series_figure
-from .page import Key, Num, Page, pointer, Table, write_report_html
+from .page import Cell, Key, Num, Page, pointer, Table, write_report_html
 from ..analysis.csv_tables import allan_curve
 from ..analysis.figures import allan_fit_lines
 from ..analysis.summary_md import in_short_markdown
+from ..core.allan import AllanResult
 from ..units import RAD_TO_DEG as _DEG, S_PER_H
+
+if TYPE_CHECKING:
+    from bokeh.plotting import figure
+
+#: ``{axis: [(label, rows)]}``: per-chunk rows of each bag (see :func:`analyze_page`).
+_PerChunk = Mapping[str, Sequence[tuple[str, NDArray[np.float64]]]]
+#: ``{(label, axis): (AllanResult, noise terms, readout)}``.
+_AllanStore = Mapping[tuple[str, str], tuple[AllanResult, Any, Any]]
 
 METHOD = """\
 Each record is cut into chunks; per chunk the bias (mean), the noise variance and the fractional
@@ -41,8 +57,8 @@ table; docs/offline_tool.md explains every column.
 """
 
 
-def _axes(doc):
-    axes = []
+def _axes(doc: dict[str, Any]) -> list[str]:
+    axes: list[str] = []
     for b in doc['bags']:
         for a in b['axes']:
             if a not in axes:
@@ -50,10 +66,10 @@ def _axes(doc):
     return axes
 
 
-def _tables(doc):
+def _tables(doc: dict[str, Any]) -> list[Table]:
     """Return the page's tables: per axis the paper's Tables 3-6, Allan and health; then counts."""
     bags = doc['bags']
-    tables = []
+    tables: list[Table] = []
     for axis in _axes(doc):
         # (bag index, JSON pointer of the bag's axis entry) of the bags that have the axis
         rows = [(i, pointer('bags', i, 'axes', axis)) for i, b in enumerate(bags)
@@ -68,11 +84,11 @@ def _tables(doc):
     return tables
 
 
-def _label(i):
+def _label(i: int) -> Num:
     return Num(pointer('bags', i, 'label'))
 
 
-def _drift_table(axis, rows):
+def _drift_table(axis: str, rows: list[tuple[int, str]]) -> Table:
     return Table(
         f'Axis {axis}: how fast the bias moves, offset drift of the chunk bias '
         '(paper 000 Table 3)',
@@ -85,7 +101,7 @@ def _drift_table(axis, rows):
               for i, p in rows))
 
 
-def _variance_table(axis, rows):
+def _variance_table(axis: str, rows: list[tuple[int, str]]) -> Table:
     return Table(
         f'Axis {axis}: how large the noise is, variance within chunks (paper 000 Table 4)',
         ('Sequence', 'Mean noise variance ((deg/s)^2)',
@@ -94,10 +110,12 @@ def _variance_table(axis, rows):
                Num(p + '/variance_of_variances_deg4_s4')) for i, p in rows))
 
 
-def _order_table(bags, axis, rows, *, num, method, key, tie):
+def _order_table(bags: list[dict[str, Any]], axis: str, rows: list[tuple[int, str]], *,
+                 num: int, method: str, key: str, tie: str) -> Table:
     out = []
     for i, p in rows:
         a = bags[i]['axes'][axis]
+        order: Cell
         if a.get(key + '_multimodal'):
             # a mean between separate basins is where no chunk is: the modes instead
             order = ('modes: ',)
@@ -116,9 +134,10 @@ def _order_table(bags, axis, rows, *, num, method, key, tie):
         tuple(out))
 
 
-def _allan_tables(bags, axis, rows):
+def _allan_tables(bags: list[dict[str, Any]], axis: str,
+                  rows: list[tuple[int, str]]) -> list[Table]:
     """Return the datasheet table and the model-fit table of the bags that have them (0-2)."""
-    tables = []
+    tables: list[Table] = []
     sheet_rows = [_datasheet_row(i, p, bags[i]['axes'][axis].get('allan_datasheet'))
                   for i, p in rows if bags[i]['axes'][axis].get('allan_datasheet')]
     if sheet_rows:
@@ -133,7 +152,7 @@ def _allan_tables(bags, axis, rows):
             '"<=" marks an upper bound.'))
     terms = [(i, p) for i, p in rows if bags[i]['axes'][axis].get('allan')]
     if terms:
-        keys = []
+        keys: list[str] = []
         for i, _ in terms:
             for k, v in bags[i]['axes'][axis]['allan'].items():
                 if k not in keys and not isinstance(v, (dict, list, str, bool)):
@@ -149,7 +168,7 @@ def _allan_tables(bags, axis, rows):
     return tables
 
 
-def _datasheet_row(i, p, d):
+def _datasheet_row(i: int, p: str, d: dict[str, Any]) -> tuple[Cell, ...]:
     """Return one bag's row of the datasheet table (``d``: its ``allan_datasheet`` entry)."""
     q = p + '/allan_datasheet'
     bound = '<= ' if d.get('bias_stability_upper_bound') else ''
@@ -157,6 +176,7 @@ def _datasheet_row(i, p, d):
               Num(q + '/arw_tau_range_s/1', '.3g'))
              if d.get('arw_from_region') and d.get('arw_tau_range_s')
              else 'ADEV read at one second: no white-noise region')
+    k_fit: Cell
     k_fit = Num(q + '/rate_random_walk_deg_per_h_sqrt_h', '.3g')
     if not d.get('rate_random_walk_resolved'):
         k_fit = (k_fit, ' (not resolved)')
@@ -174,7 +194,8 @@ def _datasheet_row(i, p, d):
         Num(q + '/usable_from_s', '.3g'))
 
 
-def _health_tables(bags, axis, rows):
+def _health_tables(bags: list[dict[str, Any]], axis: str,
+                   rows: list[tuple[int, str]]) -> list[Table]:
     health = [(i, p) for i, p in rows if 'health' in bags[i]['axes'][axis]]
     if not health:
         return []
@@ -185,7 +206,7 @@ def _health_tables(bags, axis, rows):
               for i, p in health))]
 
 
-def _counts_table(bags):
+def _counts_table(bags: list[dict[str, Any]]) -> Table:
     return Table(
         'Input counts',
         ('Sequence', 'Topic', 'Rate (Hz)', 'Rate method', 'Stamp jitter (s)', 'Duration (s)',
@@ -200,15 +221,16 @@ def _counts_table(bags):
               for i in range(len(bags))))
 
 
-def _options_table(opts):
+def _options_table(opts: dict[str, Any]) -> Table:
     return Table(
         'Options', ('Option', 'Value'),
         tuple((Key(k), Num(pointer('options', k), 'g')) for k, v in opts.items()
               if v is None or isinstance(v, (bool, int, float, str))))
 
 
-def _figures(doc, per_chunk, allan_store):
-    figures = []
+def _figures(doc: dict[str, Any], per_chunk: _PerChunk,
+             allan_store: _AllanStore) -> list[tuple[str, 'figure']]:
+    figures: list[tuple[str, 'figure']] = []
     if allan_store:
         curves = []
         for (label, axis), (result, terms, _) in allan_store.items():
@@ -248,7 +270,7 @@ def _figures(doc, per_chunk, allan_store):
     return figures
 
 
-def analyze_page(doc, *, per_chunk, allan_store):
+def analyze_page(doc: dict[str, Any], *, per_chunk: _PerChunk, allan_store: _AllanStore) -> Page:
     """
     Build the page of one gyro_noise_analyze run.
 
@@ -279,7 +301,8 @@ def analyze_page(doc, *, per_chunk, allan_store):
         extra_versions=(('scipy', scipy.__version__), ('numba', numba.__version__)))
 
 
-def write_analyze_html(out, doc, per_chunk, allan_store):
+def write_analyze_html(out: Path, doc: dict[str, Any], per_chunk: _PerChunk,
+                       allan_store: _AllanStore) -> Path:
     """
     Write ``report.html`` of a gyro_noise_analyze run into its (staged) output folder.
 

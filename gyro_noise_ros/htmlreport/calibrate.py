@@ -20,16 +20,25 @@ calibration.md's units (mg, %, deg/s) through :class:`.page.Num`'s ``scale``, so
 checked against the JSON value it came from. "In short" words the verdicts as calibration.md does.
 """
 
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
+
 from .figures import series_figure
-from .page import Num, Page, pointer, Table, write_report_html
+from .page import Cell, Num, Page, pointer, Table, write_report_html
 from ..units import MG_TO_M_S2 as _MG, RAD_TO_DEG as _DEG
 
+if TYPE_CHECKING:
+    from bokeh.plotting import figure
 
-def _pm(p, sigma_p, fmt, scale):
+    from ..app.calibrate import CalibrationResult
+
+
+def _pm(p: str, sigma_p: str, fmt: str, scale: float) -> tuple[Num, str, Num]:
     return (Num(p, fmt, scale=scale), ' +/- ', Num(sigma_p, fmt, scale=scale))
 
 
-def calibrate_page(result):
+def calibrate_page(result: 'CalibrationResult') -> Page:
     """
     Build the page of one calibration.
 
@@ -58,7 +67,7 @@ def calibrate_page(result):
                 inputs=tuple(doc['sources']), version=doc.get('version', ''))
 
 
-def _in_short(doc):
+def _in_short(doc: dict[str, Any]) -> str:
     """Return "In short": the two checks and the gyro note, worded as calibration.md words them."""
     gc, cons = doc['gravity_check'], doc['consistency']
     short = ['## In short', '',
@@ -75,8 +84,9 @@ def _in_short(doc):
     return '\n'.join(short)
 
 
-def _accelerometer_tables():
+def _accelerometer_tables() -> list[Table]:
     """Return the accelerometer's biases and scale factors, and its cross-axis terms."""
+    rows: list[tuple[Cell, ...]]
     rows = [(f'b{ax}', _pm(pointer('accel', 'bias_m_s2', i),
                            pointer('accel', 'bias_sigma_m_s2', i), '.4f', 1.0 / _MG), 'mg')
             for i, ax in enumerate('xyz')]
@@ -94,11 +104,12 @@ def _accelerometer_tables():
                   tuple(mis), note='Row = measured axis, column = true axis.')]
 
 
-def _gyro_table(doc):
+def _gyro_table(doc: dict[str, Any]) -> Table:
     gyro = doc['gyro']
     est = gyro.get('estimated') or [[False] * 3] * 3
     grows = []
     for i, ax in enumerate('xyz'):
+        scale: Cell
         scale = (_pm(pointer('gyro', 'scale_factor', i), pointer('gyro', 'scale_factor_sigma', i),
                      '.4f', 100.0) if est[i][i] else 'not estimated')
         grows.append((ax, _pm(pointer('gyro', 'bias_rad_s', i),
@@ -106,7 +117,7 @@ def _gyro_table(doc):
     return Table('Gyro', ('Axis', 'Bias (deg/s)', 'Scale factor (%)'), tuple(grows))
 
 
-def _check_tables(doc):
+def _check_tables(doc: dict[str, Any]) -> list[Table]:
     """Return the indicators, the gravity check and, when there are pairs, the consistency."""
     gc, cons = doc['gravity_check'], doc['consistency']
     tables = [Table('Indicators (paper 001 section 6)', ('Indicator', 'Value', 'Unit'), (
@@ -137,7 +148,7 @@ def _check_tables(doc):
     return tables
 
 
-def _dwell_table(doc):
+def _dwell_table(doc: dict[str, Any]) -> Table:
     return Table(
         'Dwells', ('Dwell', 'Start (s)', 'Duration (s)', 'Samples', 'NaN/Inf dropped',
                    'Tilt (deg)', 'Recording'),
@@ -150,10 +161,10 @@ def _dwell_table(doc):
                Num(pointer('dwells', k, 'source'))) for k in range(len(doc['dwells']))))
 
 
-def _figures(doc):
+def _figures(doc: dict[str, Any]) -> list[tuple[str, 'figure']]:
     """Return the leave-one-out gravity check per dwell (none without dwells)."""
     gc = doc['gravity_check']
-    figures = []
+    figures: list[tuple[str, 'figure']] = []
     if gc['dwells']:
         k = list(range(len(gc['dwells'])))
         figures.append((
@@ -167,7 +178,8 @@ def _figures(doc):
     return figures
 
 
-def write_calibrate_html(result, out, *, command=None):
+def write_calibrate_html(result: 'CalibrationResult', out: Path, *,
+                         command: Sequence[str] | None = None) -> Path:
     """
     Write ``report.html`` of a calibration into the staged folder ``out``.
 

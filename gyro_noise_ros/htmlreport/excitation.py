@@ -20,18 +20,28 @@ the tables show excitation.md's units (g or deg/s, %) through :class:`.page.Num`
 "In short" words the verdicts as excitation.md does.
 """
 
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
+
 from .figures import series_figure
 from .page import Num, Page, pointer, Table, write_report_html
 
+if TYPE_CHECKING:
+    from bokeh.plotting import figure
 
-def _verdict(entry, key, yes, no, p_key):
+    from ..app.excitation import ExcitationParams, ExcitationResult
+
+
+def _verdict(entry: dict[str, Any], key: str, yes: str, no: str, p_key: str) -> str:
     ok = entry.get(key)
     if ok is None:
         return 'n/a'
     return f'{yes if ok else no} (p = {entry[p_key]:.2g})'
 
 
-def excitation_page(result, command=None):
+def excitation_page(result: 'ExcitationResult',
+                    command: Sequence[str] | None = None) -> Page:
     """
     Build the page of one excitation check.
 
@@ -66,7 +76,7 @@ def excitation_page(result, command=None):
                 inputs=tuple(doc[s]['source'] for s in sides), version=doc.get('version', ''))
 
 
-def _in_short(doc, params, sides):
+def _in_short(doc: dict[str, Any], params: 'ExcitationParams', sides: list[str]) -> str:
     """Return "In short": each side's two verdicts, worded as excitation.md words them."""
     short = ['## In short', '',
              "Verdicts are statistical tests against each record's own noise, false-alarm "
@@ -83,7 +93,8 @@ def _in_short(doc, params, sides):
     return '\n'.join(short)
 
 
-def _dwell_tables(doc, params, sides, what):
+def _dwell_tables(doc: dict[str, Any], params: 'ExcitationParams', sides: list[str],
+                  what: str) -> list[Table]:
     """Return the dwell's quantities per side and, with two sides, the change after / before."""
     k, unit = params.display
     u = doc['unit']
@@ -125,11 +136,12 @@ def _dwell_tables(doc, params, sides, what):
     return tables
 
 
-def _sweep_tables(doc, params, sides):
+def _sweep_tables(doc: dict[str, Any], params: 'ExcitationParams',
+                  sides: list[str]) -> list[Table]:
     """Return each side's amplitude per frequency bin (with the reference when there is one)."""
     k, unit = params.display
     u = doc['unit']
-    tables = []
+    tables: list[Table] = []
     for s in sides:
         cols = [('Rising', f'amplitude_up_{u}', k, '.5g'),
                 ('Falling', f'amplitude_down_{u}', k, '.5g')]
@@ -148,10 +160,11 @@ def _sweep_tables(doc, params, sides):
     return tables
 
 
-def _figures(result, params, sides):
+def _figures(result: 'ExcitationResult', params: 'ExcitationParams',
+             sides: list[str]) -> list[tuple[str, 'figure']]:
     """Return the whole acquisition and, for a sweep, the amplitude against frequency."""
     k, unit = params.display
-    figures = []
+    figures: list[tuple[str, 'figure']] = []
     series = [(s, result.sides[s].t_s, result.sides[s].x * k) for s in sides]
     figures.append((f'The whole acquisition of {params.sensor} {params.axis} (min/max envelope '
                     'for display; zoom in for the wave form).',
@@ -171,7 +184,8 @@ def _figures(result, params, sides):
     return figures
 
 
-def write_excitation_html(result, out, *, command=None):
+def write_excitation_html(result: 'ExcitationResult', out: Path, *,
+                          command: Sequence[str] | None = None) -> Path:
     """
     Write ``report.html`` of an excitation check into the staged folder ``out``.
 

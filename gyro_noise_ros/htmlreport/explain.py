@@ -20,11 +20,19 @@ Built from explain.json (``ExplainResult.to_dict()`` as written) and the result 
 (:func:`..explain.report.verdict`, :func:`..explain.report.parameter_lines`).
 """
 
+from collections.abc import Sequence
 import json
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
 
 from .figures import series_figure
 from .page import Key, Num, Page, pointer, Table, write_report_html
 from ..units import RAD_TO_DEG as _DEG
+
+if TYPE_CHECKING:
+    from bokeh.plotting import figure
+
+    from ..explain.workflow import ExplainResult
 
 _BASELINE = (('Bias (deg/s)', 'bias_rad_s', '.5g', _DEG),
              ('Order alpha (variance method)', 'alpha', '.3f', 1.0),
@@ -38,7 +46,8 @@ _BASELINE = (('Bias (deg/s)', 'bias_rad_s', '.5g', _DEG),
              ('PSD misfit above a hundredth of the rate (rms dex)', 'psd_misfit', '.3f', 1.0))
 
 
-def explain_page(result, command=None, data=None):
+def explain_page(result: 'ExplainResult', command: Sequence[str] | None = None,
+                 data: dict[str, Any] | None = None) -> Page:
     """
     Build the page of one explained axis.
 
@@ -86,7 +95,7 @@ def explain_page(result, command=None, data=None):
                         tuple((Key(name), Num(pointer('signatures_final', name, 'g'), '.3f'),
                                Num(pointer('signatures_final', name, 'threshold_z'), '.2f'))
                               for name in sig)))
-    figures = []
+    figures: list[tuple[str, 'figure']] = []
     if sig:
         k = list(range(len(sig)))
         figures.append((
@@ -109,13 +118,15 @@ def explain_page(result, command=None, data=None):
                 version=_version())
 
 
-def _version():
+def _version() -> str:
     from .. import __version__
 
     return __version__
 
 
-def write_explain_html(result, folder, *, command=None, data=None):
+def write_explain_html(result: 'ExplainResult', folder: Path, *,
+                       command: Sequence[str] | None = None,
+                       data: dict[str, Any] | None = None) -> Path:
     """
     Write ``report.html`` of one explained axis into ``folder`` (beside its explain.json).
 

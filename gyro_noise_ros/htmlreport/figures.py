@@ -23,7 +23,15 @@ point, so spikes and steps stay visible). The full data are in the CSV files the
 beside the page. The decimation functions are pure numpy; Bokeh is imported inside the builders.
 """
 
+from collections.abc import Mapping, Sequence
+from typing import Any, TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:
+    from bokeh.models.renderers import DataRenderer
+    from bokeh.plotting import figure
 
 #: Largest number of averaging times drawn per Allan curve.
 MAX_ALLAN_POINTS = 200
@@ -33,7 +41,7 @@ _TOOLS = 'pan,box_zoom,wheel_zoom,reset,save'
 _WIDTH, _HEIGHT = 1000, 380
 
 
-def log_decimate(tau, max_points=MAX_ALLAN_POINTS):
+def log_decimate(tau: ArrayLike, max_points: int = MAX_ALLAN_POINTS) -> NDArray[np.int64]:
     """
     Return indices of at most ``max_points`` entries of ``tau`` spread evenly in log(tau).
 
@@ -64,7 +72,7 @@ def log_decimate(tau, max_points=MAX_ALLAN_POINTS):
     return np.unique(np.concatenate(([0], idx, [n - 1])))
 
 
-def envelope_decimate(y, max_points=MAX_SERIES_POINTS):
+def envelope_decimate(y: ArrayLike, max_points: int = MAX_SERIES_POINTS) -> NDArray[np.int64]:
     """
     Return indices of a min/max envelope of ``y``: at most ``max_points`` points.
 
@@ -110,13 +118,14 @@ def envelope_decimate(y, max_points=MAX_SERIES_POINTS):
     return np.asarray(keep, dtype=np.int64)
 
 
-def _palette(n):
+def _palette(n: int) -> list[str]:
     from bokeh.palettes import Category10_10
 
     return [Category10_10[i % 10] for i in range(n)]
 
 
-def _figure(title, x_label, y_label, *, x_log=False, y_log=False):
+def _figure(title: str, x_label: str, y_label: str, *, x_log: bool = False,
+            y_log: bool = False) -> 'figure':
     from bokeh.plotting import figure
 
     fig = figure(title=title, width=_WIDTH, height=_HEIGHT, tools=_TOOLS,
@@ -128,7 +137,7 @@ def _figure(title, x_label, y_label, *, x_log=False, y_log=False):
     return fig
 
 
-def allan_figure(curves, *, title, unit):
+def allan_figure(curves: Sequence[Mapping[str, Any]], *, title: str, unit: str) -> 'figure':
     """
     Log-log Allan deviation with its interval band, the fit lines and a hover at each tau.
 
@@ -152,12 +161,12 @@ def allan_figure(curves, *, title, unit):
 
     fig = _figure(title, 'averaging time tau (s)', f'Allan deviation ({unit})', x_log=True,
                   y_log=True)
-    hover_renderers = []
+    hover_renderers: list['DataRenderer'] = []
     for colour, c in zip(_palette(len(curves)), curves):
         tau = np.asarray(c['tau_s'], dtype=np.float64)
         keep = log_decimate(tau)
-        cols = {k: np.asarray(c[k], dtype=np.float64)[keep]
-                for k in ('tau_s', 'adev', 'ci_low', 'ci_high')}
+        cols: dict[str, Any] = {k: np.asarray(c[k], dtype=np.float64)[keep]
+                                for k in ('tau_s', 'adev', 'ci_low', 'ci_high')}
         cols['n'] = (np.asarray(c['n'])[keep] if c.get('n') is not None
                      else np.zeros(keep.size, dtype=np.int64))
         cols['name'] = [c['name']] * keep.size
@@ -182,7 +191,8 @@ def allan_figure(curves, *, title, unit):
     return fig
 
 
-def series_figure(series, *, title, x_label, y_label, y_log=False):
+def series_figure(series: Sequence[tuple[str, ArrayLike, ArrayLike]], *, title: str,
+                  x_label: str, y_label: str, y_log: bool = False) -> 'figure':
     """
     Values over time (or any ordered x), one line with markers per series, envelope-decimated.
 
@@ -203,7 +213,7 @@ def series_figure(series, *, title, x_label, y_label, y_log=False):
     from bokeh.models import ColumnDataSource, HoverTool
 
     fig = _figure(title, x_label, y_label, y_log=y_log)
-    renderers = []
+    renderers: list['DataRenderer'] = []
     for colour, (name, x, y) in zip(_palette(len(series)), series):
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         ok = np.isfinite(x) & np.isfinite(y) & ((y > 0) if y_log else True)

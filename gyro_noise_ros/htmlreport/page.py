@@ -26,6 +26,7 @@ hold; the cell carries the pointer and the format (``data-json``, ``data-fmt``) 
 every visible cell against the document.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 import hashlib
 import html
@@ -35,9 +36,9 @@ from pathlib import Path
 import platform
 import re
 import shlex
-from typing import Optional
+from typing import Any, Optional
 
-from ..outputs import atomic_write_text
+from ..outputs import atomic_write_text, StrPath
 
 #: id of the embedded JSON document.
 DATA_ID = 'gyro-noise-data'
@@ -83,6 +84,12 @@ class Key:
     """
 
     name: str
+
+
+#: One part of a table cell: plain text, a value of the JSON document or a key name.
+CellPart = str | Num | Key
+#: A table cell: one part, or a tuple of them (e.g. a value and its interval).
+Cell = CellPart | tuple[CellPart, ...]
 
 
 @dataclass(frozen=True)
@@ -152,7 +159,7 @@ class Page:
     extra_versions: tuple = field(default_factory=tuple)
 
 
-def resolve_pointer(doc, pointer):
+def resolve_pointer(doc: dict[str, Any] | list[Any], pointer: str) -> Any:
     """
     Return the value at a JSON Pointer (RFC 6901) in ``doc``.
 
@@ -194,7 +201,7 @@ def resolve_pointer(doc, pointer):
     return value
 
 
-def pointer(*parts):
+def pointer(*parts: str | int) -> str:
     """
     Build a JSON Pointer from keys and indices (escaping ``~`` and ``/``).
 
@@ -211,7 +218,7 @@ def pointer(*parts):
     return ''.join('/' + str(p).replace('~', '~0').replace('/', '~1') for p in parts)
 
 
-def format_value(value, fmt, scale=1.0):
+def format_value(value: object, fmt: str, scale: float = 1.0) -> str:
     """
     Format one JSON value for a table cell: None as ``n/a``, booleans as yes/no.
 
@@ -244,13 +251,13 @@ _BOLD = re.compile(r'\*\*(.+?)\*\*')
 _CODE = re.compile(r'`([^`]+)`')
 
 
-def _inline(text):
+def _inline(text: str) -> str:
     text = html.escape(text, quote=False)
     text = _CODE.sub(r'<code>\1</code>', text)
     return _BOLD.sub(r'<strong>\1</strong>', text)
 
 
-def markdown_to_html(text):
+def markdown_to_html(text: str) -> str:
     """
     Convert the Markdown subset of the tools' "In short" sections to HTML.
 
@@ -269,9 +276,11 @@ def markdown_to_html(text):
         HTML.
 
     """
-    out, para, items = [], [], []
+    out: list[str] = []
+    para: list[str] = []
+    items: list[str] = []
 
-    def flush():
+    def flush() -> None:
         if para:
             out.append('<p>' + _inline(' '.join(para)) + '</p>')
             para.clear()
@@ -300,7 +309,7 @@ def markdown_to_html(text):
     return '\n'.join(out)
 
 
-def input_files(paths):
+def input_files(paths: Iterable[StrPath]) -> list[tuple[str, int | None, str | None]]:
     """
     Return ``[(path, size_bytes, sha256_hex)]`` of the input files (folders: every file inside).
 
@@ -314,9 +323,9 @@ def input_files(paths):
     list of tuple
 
     """
-    rows = []
-    for p in paths:
-        p = Path(p)
+    rows: list[tuple[str, int | None, str | None]] = []
+    for path in paths:
+        p = Path(path)
         files = sorted(f for f in p.rglob('*') if f.is_file()) if p.is_dir() else [p]
         for f in files:
             try:
@@ -330,7 +339,7 @@ def input_files(paths):
     return rows
 
 
-def _versions(page):
+def _versions(page: Page) -> list[tuple[str, str]]:
     import bokeh
     import numpy
 
@@ -339,7 +348,7 @@ def _versions(page):
             *page.extra_versions]
 
 
-def _cell(doc, cell):
+def _cell(doc: dict[str, Any] | list[Any], cell: Cell) -> str:
     parts = cell if isinstance(cell, tuple) else (cell,)
     out = []
     for part in parts:
@@ -357,7 +366,7 @@ def _cell(doc, cell):
     return '<td>' + ''.join(out) + '</td>'
 
 
-def _table(doc, table):
+def _table(doc: dict[str, Any] | list[Any], table: Table) -> str:
     lines = [f'<h3>{html.escape(table.title)}</h3>']
     if table.note:
         lines.append(f'<p class="note">{html.escape(table.note)}</p>')
@@ -383,7 +392,7 @@ pre { background: #f6f6f6; padding: 0.5em; overflow-x: auto; white-space: pre-wr
 """
 
 
-def render_html(page):
+def render_html(page: Page) -> str:
     """
     Return the whole ``report.html`` of a page as text.
 
@@ -450,7 +459,7 @@ def render_html(page):
     return '\n'.join(parts)
 
 
-def write_report_html(page, path):
+def write_report_html(page: Page, path: StrPath) -> Path:
     """
     Write ``page`` to ``path`` atomically (a temporary sibling renamed into place).
 

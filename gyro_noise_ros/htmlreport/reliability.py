@@ -21,15 +21,26 @@ short" is the plain-language summary reliability.md opens with (the caller passe
 JSON's reason.
 """
 
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
+
 import numpy as np
 
 from .figures import allan_figure
-from .page import Key, Num, Page, pointer, Table, write_report_html
+from .page import Cell, CellPart, Key, Num, Page, pointer, Table, write_report_html
+from ..calibration.static_record import ChannelResult
+
+if TYPE_CHECKING:
+    from bokeh.plotting import figure
+
+#: ``{'before'|'after': {channel: ChannelResult} or None}``: the static records' channels.
+_Statics = Mapping[str, Mapping[str, ChannelResult] | None]
 
 CHANNELS = tuple(f'{s}_{a}' for s in ('accel', 'gyro') for a in 'xyz')
 
 
-def _range(p, e, key):
+def _range(p: str, e: dict[str, Any], key: str) -> str | tuple[CellPart, ...]:
     pair = e[key]
     if pair is None:
         return 'not given'
@@ -38,7 +49,8 @@ def _range(p, e, key):
         'open' if pair[k] is None else Num(f'{p}/{key}/{k}', '.3g')))
 
 
-def reliability_page(doc, statics, command=None, in_short=()):
+def reliability_page(doc: dict[str, Any], statics: _Statics, command: Sequence[str] | None = None,
+                     in_short: Sequence[str] = ()) -> Page:
     """
     Build the page of one reliability run.
 
@@ -75,7 +87,7 @@ def reliability_page(doc, statics, command=None, in_short=()):
                 version=doc.get('version', ''))
 
 
-def _in_short(doc, in_short):
+def _in_short(doc: dict[str, Any], in_short: Sequence[str]) -> str:
     """Return "In short": the caller's sentences, each channel's verdict, what failed."""
     short = ['## In short', '']
     short += [f'* {line}' for line in in_short]
@@ -91,7 +103,7 @@ def _in_short(doc, in_short):
     return '\n'.join(short)
 
 
-def _verdict_tables(doc):
+def _verdict_tables(doc: dict[str, Any]) -> list[Table]:
     """Return the verdict per sensor, the interval per channel and the mean widths."""
     overall = Table(
         'Overall verdict per sensor (mean change over the three axes)',
@@ -101,7 +113,7 @@ def _verdict_tables(doc):
                Num(pointer('overall', sensor, 'mean_change'), '+.0f', scale=100.0),
                Num(pointer('overall', sensor, 'mean_change_sd'), '.0f', scale=100.0))
               for sensor in doc['overall']))
-    rows = []
+    rows: list[tuple[Cell, ...]] = []
     for ch, e in doc['bias_instability_interval'].items():
         p = pointer('bias_instability_interval', ch)
         rows.append((ch, _range(p, e, 'before_s'), _range(p, e, 'after_s'),
@@ -121,9 +133,9 @@ def _verdict_tables(doc):
     return tables
 
 
-def _noise_term_tables(doc):
+def _noise_term_tables(doc: dict[str, Any]) -> list[Table]:
     """Return the noise terms of the static records with their intervals (none without)."""
-    terms = []
+    terms: list[tuple[Cell, ...]] = []
     for ch, e in doc['noise_terms'].items():
         for side in ('before', 'after'):
             if not e.get(side):
@@ -141,11 +153,11 @@ def _noise_term_tables(doc):
                   tuple(terms))]
 
 
-def _figures(statics):
+def _figures(statics: _Statics) -> list[tuple[str, 'figure']]:
     """Return per sensor the Allan deviations of the static records before and after."""
-    figures = []
+    figures: list[tuple[str, 'figure']] = []
     for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
-        curves = []
+        curves: list[dict[str, Any]] = []
         for side in ('before', 'after'):
             for a in 'xyz':
                 r = (statics.get(side) or {}).get(f'{sensor}_{a}')
@@ -166,7 +178,9 @@ def _figures(statics):
     return figures
 
 
-def write_reliability_html(doc, statics, out, *, command=None, in_short=()):
+def write_reliability_html(doc: dict[str, Any], statics: _Statics, out: Path, *,
+                           command: Sequence[str] | None = None,
+                           in_short: Sequence[str] = ()) -> Path:
     """
     Write ``report.html`` of a reliability run into the staged folder ``out``.
 

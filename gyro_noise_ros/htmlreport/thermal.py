@@ -21,24 +21,34 @@ compare.md / report.md word them: each verdict text is the JSON's, and the best 
 uses the JSON's rule and method.
 """
 
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .figures import allan_figure, series_figure
-from .page import Num, Page, pointer, Table, write_report_html
+from .page import Cell, Num, Page, pointer, Table, write_report_html
 from ..thermal.metrics import DRIFT_WINDOW_S
 from ..units import RAD_TO_DEG as _DEG, S_PER_H
+
+if TYPE_CHECKING:
+    from bokeh.plotting import figure
+
+    from ..app.thermal import ApplyResult, CompareResult
 
 _DEG_H = _DEG * S_PER_H
 AXES = ('x', 'y', 'z')
 
 
-def _bias_stability(doc, p):
+def _bias_stability(doc: dict[str, Any], p: str) -> Num:
     """Cell of a bias stability: '<= ' before an upper bound."""
     bound = '<= ' if _lookup(doc, p + '/bias_stability_upper_bound') else ''
     return Num(p + '/bias_stability_deg_h', '.4g', bound)
 
 
-def _bandwidth(doc, p):
+def _bandwidth(doc: dict[str, Any], p: str) -> Cell:
     """-3 dB cell: the frequency when measured, else the bound in words."""
     bw = _lookup(doc, p)
     if bw is None:
@@ -48,7 +58,7 @@ def _bandwidth(doc, p):
     return '< band' if bw['minus_3db_bound'] == 'below' else '> band'
 
 
-def _lookup(doc, p):
+def _lookup(doc: dict[str, Any], p: str) -> Any:
     from .page import resolve_pointer
 
     try:
@@ -57,9 +67,10 @@ def _lookup(doc, p):
         return None
 
 
-def _allan_figures(curves_by_label, title):
+def _allan_figures(curves_by_label: Mapping[str, Mapping[str, Sequence[ArrayLike]]],
+                   title: str) -> list[tuple[str, 'figure']]:
     """One Allan figure per axis: ``{label: {axis: (tau_s, adev_rad_s)}}`` in deg/h."""
-    figures = []
+    figures: list[tuple[str, 'figure']] = []
     for axis in AXES:
         curves = []
         for label, per_axis in curves_by_label.items():
@@ -77,7 +88,8 @@ def _allan_figures(curves_by_label, title):
     return figures
 
 
-def _window_means(t_s, x, window_s):
+def _window_means(t_s: ArrayLike, x: ArrayLike,
+                  window_s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     t_s = np.asarray(t_s, dtype=np.float64)
     x = np.asarray(x, dtype=np.float64)
     n = int(round(window_s / np.median(np.diff(t_s)))) if t_s.size > 1 else 0
@@ -88,7 +100,8 @@ def _window_means(t_s, x, window_s):
     return tm, x[:k * n].reshape((k, n) + x.shape[1:]).mean(axis=1)
 
 
-def _residual_figure(run, processed, label):
+def _residual_figure(run: Any, processed: NDArray[np.float64],
+                     label: str) -> list[tuple[str, 'figure']]:
     tm, raw = _window_means(run.t_s, run.gyro_rad_s, DRIFT_WINDOW_S)
     _, proc = _window_means(run.t_s, processed, DRIFT_WINDOW_S)
     if tm.size < 2:
@@ -106,8 +119,8 @@ def _residual_figure(run, processed, label):
                            y_label='60-s mean of the angular rate (deg/s)'))]
 
 
-def _axis_rows(doc, base):
-    rows = []
+def _axis_rows(doc: dict[str, Any], base: str) -> list[tuple[Cell, ...]]:
+    rows: list[tuple[Cell, ...]] = []
     for axis in doc_axes(doc, base):
         p = f'{base}/axes/{axis}'
         rows.append((axis, Num(p + '/raw/arw_deg_sqrt_h', '.4g'),
@@ -123,7 +136,7 @@ def _axis_rows(doc, base):
     return rows
 
 
-def doc_axes(doc, base):
+def doc_axes(doc: dict[str, Any], base: str) -> list[str]:
     """Return the axes of the block at ``base`` (a JSON Pointer) of ``doc``."""
     return list((_lookup(doc, base + '/axes') or {}).keys())
 
@@ -135,11 +148,11 @@ _AXIS_COLUMNS = ('Axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
                  'Step delay 50 % (s)', 'Live-capable')
 
 
-def _definitions_md(doc):
+def _definitions_md(doc: dict[str, Any]) -> str:
     return '\n'.join(f'* `{k}`: {v}' for k, v in (doc.get('definitions') or {}).items())
 
 
-def compare_page(result):
+def compare_page(result: 'CompareResult') -> Page:
     """
     Build the page of ``gyro_noise_thermal compare``.
 
@@ -161,7 +174,7 @@ def compare_page(result):
               for name, m in doc['methods'].items() for axis, v in m['axes'].items()]
     if doc.get('errors'):
         short += ['', 'Not scored:', ''] + [f'* {k}: {v}' for k, v in doc['errors'].items()]
-    tables = []
+    tables: list[Table] = []
     first = next(iter(doc['methods']), None)
     if first is not None:
         raw = [(axis, Num(pointer('methods', first, 'axes', axis, 'raw', 'arw_deg_sqrt_h'),
@@ -189,7 +202,7 @@ def compare_page(result):
                                Num(pointer('methods', name, 'range', 'fraction_outside'),
                                    '.2%')) for name in doc['methods'])))
     curves = result.curves
-    allan = {}
+    allan: dict[str, dict[str, Any]] = {}
     if curves:
         firstc = next(iter(curves.values()))
         allan['raw'] = {axis: c['allan_raw'] for axis, c in firstc.items()}
@@ -208,7 +221,7 @@ def compare_page(result):
                 inputs=tuple(dict.fromkeys(inputs)), version=doc.get('package_version', ''))
 
 
-def apply_page(result):
+def apply_page(result: 'ApplyResult') -> Page:
     """
     Build the page of ``gyro_noise_thermal apply``.
 
@@ -260,7 +273,7 @@ def apply_page(result):
                 version=doc.get('package_version', ''))
 
 
-def write_compare_html(result, out):
+def write_compare_html(result: 'CompareResult', out: Path) -> Path:
     """
     Write ``report.html`` of a comparison into the staged folder ``out``.
 
@@ -279,7 +292,7 @@ def write_compare_html(result, out):
     return write_report_html(compare_page(result), out / 'report.html')
 
 
-def write_apply_html(result, out):
+def write_apply_html(result: 'ApplyResult', out: Path) -> Path:
     """
     Write ``report.html`` of an applied model into the staged folder ``out``.
 

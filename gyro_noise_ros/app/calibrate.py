@@ -47,8 +47,8 @@ from ..calibration.gyro_turns import fit_gyro_turns, GyroTurnResult, Turn
 from ..calibration.multipose import calibrate_poses
 from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EARTH_RATE_RAD_S,
                                   mean_norm, normal_gravity, uniformity)
-from ..calibration.static import (DetectorSettings, find_dwells, ORIENTATIONS, select_poses,
-                                  select_six, WindowAccumulator)
+from ..calibration.static import (DetectorSettings, Dwell, find_dwells, ORIENTATIONS,
+                                  select_poses, select_six, WindowAccumulator)
 from ..errors import InputDataError, ParameterError
 from ..htmlreport.calibrate import write_calibrate_html
 from ..outputs import atomic_write_text, staged_output, StrPath
@@ -383,6 +383,17 @@ class CalibrationResult:
         }
 
 
+def _first_stamp_ns(path: str, topic: Optional[str]) -> int:
+    stamp = records.first_stamp_ns(path, topic=topic)
+    assert stamp is not None  # _detect refused a recording without samples
+    return stamp
+
+
+def _shifted(dwell: Dwell, dt_s: float) -> Dwell:
+    assert dwell.window_t_s is not None  # find_dwells fills the windows
+    return replace(dwell, window_t_s=dwell.window_t_s + dt_s)
+
+
 def _detect(params: CalibrateParams) -> List[Any]:
     out = []
     for path in params.paths:
@@ -398,10 +409,9 @@ def _detect(params: CalibrateParams) -> List[Any]:
     if len(params.paths) > 1:
         # dwells of separate recordings: the noise model needs their real distance in time
         # (stamps; messages keep each recording's own t = 0)
-        first = [records.first_stamp_ns(p, topic=params.topic) for p in params.paths]
+        first = [_first_stamp_ns(p, params.topic) for p in params.paths]
         t0 = min(first)
-        out = [replace(det, dwells=tuple(replace(d, window_t_s=d.window_t_s + (f - t0) * 1e-9)
-                                         for d in det.dwells))
+        out = [replace(det, dwells=tuple(_shifted(d, (f - t0) * 1e-9) for d in det.dwells))
                for det, f in zip(out, first)]
     return out
 
@@ -545,7 +555,7 @@ def run_calibration(params: CalibrateParams) -> CalibrationResult:
                  res.accel_misalignment_sigma, res.accel_residual_m_s2)
         gyro_bias, gyro_sigma = res.gyro_bias_rad_s, res.gyro_bias_sigma_rad_s
         raw = mean_norm([d.accel_mean_m_s2 for d in chosen.values()])
-        left_out = ()
+        left_out: tuple[str, ...] = ()
     else:
         dwells = _time_order(select_poses(detections, params.settings), params)
         mp, loo, accel_noise = calibrate_poses(dwells, g, alpha=params.alpha)

@@ -290,9 +290,10 @@ def _analyse(path: str, params: ExcitationParams) -> SideResult:
         raise InputDataError(f'recording {path!r} holds no Imu samples') from err
     x = _channel(params, accel, gyro)
     if params.mode == 'dwell':
-        r = sine_dwell(x, rate, params.dwell_hz, harmonics=params.harmonics,
-                       frequency_tol=params.frequency_tol, alpha=params.alpha)
-        return SideResult(str(path), rate, int(x.size), r, t, x)
+        assert params.dwell_hz is not None  # dwell mode: required by the parameters
+        dwell = sine_dwell(x, rate, params.dwell_hz, harmonics=params.harmonics,
+                           frequency_tol=params.frequency_tol, alpha=params.alpha)
+        return SideResult(str(path), rate, int(x.size), dwell, t, x)
     ref = None
     if params.reference_topic:
         # both topics share the bag's clock: absolute stamps, reference put on the sensor's

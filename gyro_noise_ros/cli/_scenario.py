@@ -355,6 +355,7 @@ def _write_samples(args: argparse.Namespace, board: 'BoardModel', path: Path, to
             n = min(65536, total - done)
             s = board.next_samples(n)
             truth = board.last_truth
+            assert truth is not None  # next_samples left it
             stamps = BAG_EPOCH_NS + np.round(truth.time_s * 1e9).astype(np.int64)
             w.write_imu(stamps, s['gyro'] * gyro_lsb, s['accel'] * accel_lsb)
             first = (-done) % every

@@ -40,7 +40,7 @@ import argparse
 from pathlib import Path
 import signal
 import sys
-from typing import BinaryIO, List, Optional, Tuple, Union
+from typing import Any, BinaryIO, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -234,7 +234,8 @@ def board_from_args(args: 'argparse.Namespace | List[str]') -> BoardModel:
                               accel_amplitude_g=args.vibration_g)
     scenario = scenario_from_args(args)
     # with a scenario the specific force comes from its motion (gravity follows the attitude)
-    extra = {} if scenario is None else {'scenario': scenario, 'accel_g': (0.0, 0.0, 0.0)}
+    extra: dict[str, Any] = ({} if scenario is None else
+                             {'scenario': scenario, 'accel_g': (0.0, 0.0, 0.0)})
     return BoardModel(rng=np.random.default_rng(args.seed), odr_hz=args.odr_hz,
                       gyro_fs_dps=args.gyro_fs_dps, accel_fs_g=args.accel_fs_g, alpha=args.alpha,
                       f=args.f, noise_std_dps=args.noise_std_dps, bias_dps=args.bias_dps,

@@ -302,11 +302,12 @@ def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
     pairs = set()
     for s in starts:
         r = ident(x[s:s + chunk], curves=True)
-        v = r.var_curve
+        v, alphas, f_curve = r.var_curve, r.alphas, r.f_curve
+        assert v is not None and alphas is not None and f_curve is not None  # curves=True
         inner = np.flatnonzero((v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:])) + 1
         for i in [int(np.argmin(v)), *inner.tolist()]:
             if v[i] <= (1.0 + BRANCH_TOLERANCE) * v.min():
-                pairs.add((round(float(r.alphas[i]), 6), round(float(r.f_curve[i]), 9)))
+                pairs.add((round(float(alphas[i]), 6), round(float(f_curve[i]), 9)))
     nperseg = int(min(4096, 2 ** int(np.floor(np.log2(n // 16)))))
     freq, pxx = welch(x, rate_hz, nperseg)
     freq, pxx = freq[2:], pxx[2:]

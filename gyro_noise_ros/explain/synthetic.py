@@ -350,8 +350,10 @@ def coverage(case: Sequence[str], seeds: Iterable[int], *, n: int = 20000,
         for name in case:
             effect = by_name[name]
             if effect.kind == 'stochastic':
-                null = [{'allan': allan_deviation_values(base.generator(
-                    np.random.default_rng([seed, j, 99])).generate(n), rate_hz, taus=layout.m)}
+                null: list[dict[str, FloatArray]] = [
+                    {'allan': allan_deviation_values(base.generator(
+                        np.random.default_rng([seed, j, 99])).generate(n), rate_hz,
+                        taus=layout.m)}
                     for j in range(members)]
                 ctx = Context(m, meas.rate, layout,
                               {'allan': allan_deviation_values(meas.rate, rate_hz,

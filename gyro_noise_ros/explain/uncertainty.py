@@ -237,7 +237,7 @@ def replicate(model: FinalModel, index: int) -> dict[str, Any]:
     x, t = simulate(model, index)
     t_s = t if t is not None else np.arange(model.n) / model.rate_hz
     meas = model.meas(rate=x, t_s=t_s)
-    out = {}
+    out: dict[str, Any] = {}
     earlier: list[str] = []
     for effect, params in model.accepted:
         # the fitter saw the record minus the deterministic terms accepted before it: so does the

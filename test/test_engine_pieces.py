@@ -20,11 +20,12 @@ and the Chunker is shown to do both of its jobs (plain arrays for the scripts, t
 aligned stamp, loss, temperature and rate columns) exactly as slicing the whole stream would.
 """
 
+from collections import deque
 from dataclasses import replace
 
 from gyro_noise_ros.core.chunks import chunk_moments, Chunker
-from gyro_noise_ros.core.engine import (analyze_chunk, chunk_jobs, EngineConfig, NoiseEngine,
-                                        SequenceBook)
+from gyro_noise_ros.core.engine import (_RowStore, analyze_chunk, chunk_jobs, EngineConfig,
+                                        NoiseEngine, SequenceBook)
 from gyro_noise_ros.core.fractional import make_grid
 from gyro_noise_ros.core.stamps import StampAccountant
 from gyro_noise_ros.errors import InputDataError, ParameterError
@@ -123,3 +124,22 @@ def test_sequence_book_counts_every_status_and_keeps_only_ok_rows():
     assert seq.chunks == 1 and book.by_status['x']['skipped'] == 1
     with pytest.raises(ParameterError, match='not analysed'):
         book.record(replace(analyze_chunk(jobs[0]), axis='z'))
+
+
+@pytest.mark.parametrize('history', [0, 1, 5, 64, 100])
+def test_row_store_keeps_what_a_bounded_deque_of_tuples_keeps(history):
+    # The oracle: the deque of tuples the store replaced (rows oldest first, newest `history`).
+    rng = np.random.default_rng(history)
+    store, oracle = _RowStore(3, history), deque(maxlen=history or None)
+    assert store.rows().shape == (0, 3)
+    for n in range(1, 300):
+        row = tuple(rng.standard_normal(3))
+        store.append(row)
+        oracle.append(row)
+        if n % 7 == 0 or n < 10:
+            np.testing.assert_array_equal(store.rows(), np.array(list(oracle)).reshape(-1, 3))
+            assert len(store) == len(oracle)
+    # A copy: the caller may not change the store through it.
+    rows = store.rows()
+    rows[:] = 0.0
+    assert np.any(store.rows() != 0.0)

@@ -87,7 +87,6 @@ ignored: Allan deviation assumes uniform sampling, so heavy loss biases it; the 
 beside it).
 """
 
-from collections import deque
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
 from pathlib import Path
@@ -644,6 +643,43 @@ class AllanFeed:
         return result, terms
 
 
+class _RowStore:
+    """
+    Rows of floats in arrival order, the newest ``history`` of them (0: all), in one array.
+
+    Each row costs its 8-byte floats (a tuple of Python floats cost ~330 bytes for 9 columns); a
+    run kept whole grows by doubling, a bounded one is a ring. :meth:`rows` returns them oldest
+    first.
+    """
+
+    def __init__(self, columns: int, history: int) -> None:
+        self._history = int(history)
+        self._buf = np.empty((self._history or 64, columns))
+        self._n = 0  # rows appended so far
+
+    def __len__(self) -> int:
+        return min(self._n, self._history) if self._history else self._n
+
+    def append(self, row: tuple) -> None:
+        """Add a row (the oldest is dropped once ``history`` rows are kept)."""
+        if self._history:
+            self._buf[self._n % self._history] = row
+        else:
+            if self._n == len(self._buf):
+                grown = np.empty((2 * len(self._buf), self._buf.shape[1]))
+                grown[:self._n] = self._buf
+                self._buf = grown
+            self._buf[self._n] = row
+        self._n += 1
+
+    def rows(self) -> np.ndarray:
+        """Return a (n, columns) copy of the rows kept, oldest first."""
+        if not self._history or self._n <= self._history:
+            return self._buf[:len(self)].copy()
+        start = self._n % self._history
+        return np.concatenate((self._buf[start:], self._buf[:start]))
+
+
 class SequenceBook:
     """
     Per-axis record of chunk results: counts by status and the rows of the sequence statistics.
@@ -662,7 +698,7 @@ class SequenceBook:
                'temperature', 'noise_colour')
 
     def __init__(self, axes: tuple, history: int) -> None:
-        self._rows: dict[str, deque[tuple]] = {a: deque(maxlen=history or None) for a in axes}
+        self._rows = {a: _RowStore(len(self.COLUMNS), history) for a in axes}
         self.nan_samples = dict.fromkeys(axes, 0)
         self.by_status = {a: dict.fromkeys(STATUSES, 0) for a in axes}
         self.last = dict.fromkeys(axes)
@@ -708,7 +744,7 @@ class SequenceBook:
         (SequenceSummary, float)
 
         """
-        rows = np.array(list(self._rows[axis]), dtype=np.float64).reshape(-1, 9)
+        rows = self._rows[axis].rows()
         seq = summarise_sequence(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
                                  tail_samples=tail_samples, ties_var=int(rows[:, 5].sum()),
                                  ties_corr=int(rows[:, 6].sum()), order_step=order_step,

@@ -107,6 +107,7 @@ class Counters:
         self.samples_generated = 0
         self.samples_sent = 0
         self.samples_unsent = 0   # generated while no host was connected or the TX buffer was full
+        self.samples_overflowed = 0  # of those, lost to a full TX buffer (the host read too late)
         self.frames_sent = 0
         self.connections = 0
         self.disconnects = 0
@@ -565,6 +566,7 @@ class _Link:
                 faults.note_lost(kept.size - start,
                                  carry_flags=int(np.bitwise_or.reduce(kept['flags'][start:])))
                 counters.samples_unsent += kept.size - start
+                counters.samples_overflowed += kept.size - start
                 break
             self.outbuf += faults.corrupt(frame)
             counters.samples_sent += min(batch, kept.size - start)

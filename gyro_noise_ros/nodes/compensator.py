@@ -29,10 +29,12 @@ subscriptions drained every ``drain_period_s`` and decoded and re-encoded in bul
 
 With a thermal model, a gyro sample is published once a temperature at or after its stamp is known,
 so its offset is interpolated between two temperature messages, never held from an older one
-(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): over a reliable subscription a lost
-temperature message stalls the newer ones until it is resent, and a held offset on a temperature
-ramp is wrong by the drift rate times the stall. The wait is bounded by ``max_temperature_wait_s``;
-a sample that waited that long is compensated with the newest offset and counted.
+(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): a held offset on a temperature ramp is
+wrong by the drift rate times the wait. ``imu/temperature`` is subscribed best effort even with
+``reliable:=true``: a lost temperature message is interpolated across, whereas over a reliable
+subscription it would stall every newer one until resent. The wait is bounded by
+``max_temperature_wait_s``; a sample that waited that long is compensated with the newest offset
+and counted.
 """
 
 from collections.abc import Mapping, Sequence
@@ -128,10 +130,11 @@ PARAMETERS = (
               read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
               'change when model.json has one', read_only=True),
-    ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
-              'publisher such as the driver) instead of sensor-data best effort, so a busy host '
-              'drops no message that would leave a gap in the compensated stream',
-              read_only=True),
+    ParamSpec('reliable', False, 'Subscribe imu/data_raw reliable (retransmitted; matches only a '
+              'reliable publisher such as the driver) instead of sensor-data best effort, so a '
+              'busy host drops no message that would leave a gap in the compensated stream '
+              '(imu/temperature stays best effort: a resent temperature would stall the newer '
+              'ones)', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
@@ -219,11 +222,17 @@ class ImuCompensatorNode(Node):
         self._offset = None
         self._accel_offset = None
         group = PolledGroup()
-        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
-                                                 raw=True, callback_group=group)
-        self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,
-                                                  qos, raw=True, callback_group=group)
+        self._imu_sub = self.create_subscription(
+            Imu, 'imu/data_raw', unused_callback,
+            sensor_data_qos(p['queue_depth'], p['reliable']), raw=True, callback_group=group)
+        # Temperatures best effort, whatever `reliable` says: a lost knot costs nothing (the offset
+        # is interpolated across it), but a reliable stream stalls every newer knot behind it until
+        # it is resent (one heartbeat period or more; 4-5 s measured when a reliable peer of the
+        # driver was killed, bench/bench_soak.py), and the samples waiting for a knot would get a
+        # held offset.
+        self._temp_sub = self.create_subscription(
+            Temperature, 'imu/temperature', unused_callback,
+            sensor_data_qos(p['queue_depth'], False), raw=True, callback_group=group)
         out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
                              reliability=ReliabilityPolicy.RELIABLE)
         self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)

@@ -1,0 +1,64 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The soak's memory check tells a one-time step at a fault from a leak (bench/bench_soak.py)."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+_PATH = Path(__file__).resolve().parents[1] / 'bench' / 'bench_soak.py'
+_spec = importlib.util.spec_from_file_location('bench_soak', _PATH)
+assert _spec is not None and _spec.loader is not None
+soak = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(soak)
+
+FAULTS_S = (450.0, 900.0, 1350.0)  # a 30-minute run's faults
+
+
+def _series(mb_of_t, seed, noise_mb=0.3, minutes=30.0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 60.0 * minutes + 1.0, 5.0)
+    return [(float(a), float(mb_of_t(a) + rng.normal(0.0, noise_mb))) for a in t]
+
+
+@pytest.mark.parametrize('seed', range(5))
+def test_a_step_at_a_fault_is_not_a_leak(seed):
+    # The driver in the 30-minute soak: +34 MB when the recorder was killed, flat around it.
+    series = _series(lambda t: 78.0 + 34.0 * (t >= 905.0), seed)
+    slope, se = soak._slope_mb_h(series, FAULTS_S)
+    assert abs(slope) < 3.0 * se + 1.0, (slope, se)
+    # The whole-run line (no breaks) reads the step as growth: what the check used to do.
+    whole, _ = soak._slope_mb_h(series)
+    assert whole > 50.0
+
+
+@pytest.mark.parametrize('seed', range(5))
+@pytest.mark.parametrize('leak_mb_h', [10.0, 25.0])
+def test_a_leak_is_measured_between_the_faults_even_with_steps(seed, leak_mb_h):
+    series = _series(lambda t: 300.0 + leak_mb_h * t / 3600.0 + 20.0 * (t >= 905.0), seed)
+    slope, se = soak._slope_mb_h(series, FAULTS_S)
+    assert abs(slope - leak_mb_h) < 4.0 * se, (slope, se)
+    assert se < 1.5
+
+
+def test_a_short_run_still_has_points_and_too_few_gives_nan():
+    # --minutes 4: faults at 60, 120, 180 s; half their spacing left out after each.
+    series = _series(lambda t: 100.0, 0, minutes=4.0)
+    slope, se = soak._slope_mb_h(series, (60.0, 120.0, 180.0), settle_s=30.0)
+    assert np.isfinite(slope) and np.isfinite(se)
+    slope, _ = soak._slope_mb_h(series, (60.0, 120.0, 180.0), settle_s=60.0)
+    assert np.isnan(slope)

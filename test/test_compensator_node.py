@@ -373,7 +373,8 @@ def test_corrupt_temperature_is_counted_not_fatal(context):
 def test_imu_before_the_first_temperature_waits_then_is_dropped_never_published_raw(context):
     node = compensator.ImuCompensatorNode(
         context=context, thermal_model=LinearThermal(temperature_range_c=(0.0, 50.0)),
-        parameter_overrides=[Parameter('temperature_wait_s', value=0.3)])
+        parameter_overrides=[Parameter('temperature_wait_s', value=0.3),
+                             Parameter('max_temperature_wait_s', value=1.0)])
     _, _, _, raws = _imu_stream(400, seed=7)
     io = _Harness(context, node)
     try:

@@ -29,12 +29,10 @@ subscriptions drained every ``drain_period_s`` and decoded and re-encoded in bul
 
 With a thermal model, a gyro sample is published once a temperature at or after its stamp is known,
 so its offset is interpolated between two temperature messages, never held from an older one
-(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): a held offset on a temperature ramp is
-wrong by the drift rate times the wait. ``imu/temperature`` is subscribed best effort even with
-``reliable:=true``: a lost temperature message is interpolated across, whereas over a reliable
-subscription it would stall every newer one until resent. The wait is bounded by
-``max_temperature_wait_s``; a sample that waited that long is compensated with the newest offset
-and counted.
+(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): over a reliable subscription a lost
+temperature message stalls the newer ones until it is resent, and a held offset on a temperature
+ramp is wrong by the drift rate times the stall. The wait is bounded by ``max_temperature_wait_s``;
+a sample that waited that long is compensated with the newest offset and counted.
 """
 
 from collections.abc import Mapping, Sequence
@@ -118,23 +116,25 @@ PARAMETERS = (
               'which needs its window filled) for it, then are dropped and counted: they are '
               'never published uncorrected on the compensated topic', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
-    # 4 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
+    # 10 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
     # Fast DDS's default period 3 s (the 6.66 kHz Imu stream is repaired sooner, by heartbeats
-    # piggybacked on its data), plus the NACK response and the drain period. Runs at load 13 with
-    # a 1 s bound held 2,000-15,000 samples per run past it (test_compensator_e2e). The normal
-    # wait is one temperature period (19 ms at 52 Hz) plus the drain period.
-    ParamSpec('max_temperature_wait_s', 4.0, 'With a thermal model, a gyro sample newer than the '
+    # piggybacked on its data), plus the NACK response and the drain period; a lost repair costs
+    # another period. Runs at load 13 with a 1 s bound held 2,000-15,000 samples per run past it
+    # (test_compensator_e2e); with 4 s, every soak run (bench/bench_soak.py) held 222-2,434
+    # samples when a killed reliable subscriber's lease expired, and a run with 8 s waited 7.1 s
+    # on time there and held none. The normal wait is one temperature period (19 ms at 52 Hz)
+    # plus the drain period; the bound costs latency and memory only while temperatures stall.
+    ParamSpec('max_temperature_wait_s', 10.0, 'With a thermal model, a gyro sample newer than the '
               'latest temperature waits up to this long for the next one, so its offset is '
               'interpolated, never held from an older temperature; past it the sample gets the '
               'latest offset and is counted (0: never wait, the latest offset at once)', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
               'change when model.json has one', read_only=True),
-    ParamSpec('reliable', False, 'Subscribe imu/data_raw reliable (retransmitted; matches only a '
-              'reliable publisher such as the driver) instead of sensor-data best effort, so a '
-              'busy host drops no message that would leave a gap in the compensated stream '
-              '(imu/temperature stays best effort: a resent temperature would stall the newer '
-              'ones)', read_only=True),
+    ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
+              'publisher such as the driver) instead of sensor-data best effort, so a busy host '
+              'drops no message that would leave a gap in the compensated stream',
+              read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
@@ -222,17 +222,11 @@ class ImuCompensatorNode(Node):
         self._offset = None
         self._accel_offset = None
         group = PolledGroup()
-        self._imu_sub = self.create_subscription(
-            Imu, 'imu/data_raw', unused_callback,
-            sensor_data_qos(p['queue_depth'], p['reliable']), raw=True, callback_group=group)
-        # Temperatures best effort, whatever `reliable` says: a lost knot costs nothing (the offset
-        # is interpolated across it), but a reliable stream stalls every newer knot behind it until
-        # it is resent (one heartbeat period or more; 4-5 s measured when a reliable peer of the
-        # driver was killed, bench/bench_soak.py), and the samples waiting for a knot would get a
-        # held offset.
-        self._temp_sub = self.create_subscription(
-            Temperature, 'imu/temperature', unused_callback,
-            sensor_data_qos(p['queue_depth'], False), raw=True, callback_group=group)
+        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                 raw=True, callback_group=group)
+        self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,
+                                                  qos, raw=True, callback_group=group)
         out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
                              reliability=ReliabilityPolicy.RELIABLE)
         self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)

@@ -126,7 +126,7 @@ def test_sequence_book_counts_every_status_and_keeps_only_ok_rows():
         book.record(replace(analyze_chunk(jobs[0]), axis='z'))
 
 
-@pytest.mark.parametrize('history', [0, 1, 5, 64, 100])
+@pytest.mark.parametrize('history', [0, 1, 5, 64, 65, 100, 100_000_000])
 def test_row_store_keeps_what_a_bounded_deque_of_tuples_keeps(history):
     # The oracle: the deque of tuples the store replaced (rows oldest first, newest `history`).
     rng = np.random.default_rng(history)

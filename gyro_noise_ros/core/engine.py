@@ -654,7 +654,8 @@ class _RowStore:
 
     def __init__(self, columns: int, history: int) -> None:
         self._history = int(history)
-        self._buf = np.empty((self._history or 64, columns))
+        # grown by doubling up to `history` (a large history costs nothing until it fills)
+        self._buf = np.empty((min(self._history, 64) or 64, columns))
         self._n = 0  # rows appended so far
 
     def __len__(self) -> int:
@@ -662,14 +663,13 @@ class _RowStore:
 
     def append(self, row: tuple) -> None:
         """Add a row (the oldest is dropped once ``history`` rows are kept)."""
-        if self._history:
-            self._buf[self._n % self._history] = row
-        else:
-            if self._n == len(self._buf):
-                grown = np.empty((2 * len(self._buf), self._buf.shape[1]))
-                grown[:self._n] = self._buf
-                self._buf = grown
-            self._buf[self._n] = row
+        size = len(self._buf)
+        if self._n == size and (not self._history or size < self._history):
+            grown = np.empty((2 * size if not self._history else min(2 * size, self._history),
+                              self._buf.shape[1]))
+            grown[:self._n] = self._buf
+            self._buf = grown
+        self._buf[self._n % len(self._buf)] = row
         self._n += 1
 
     def rows(self) -> np.ndarray:

@@ -33,12 +33,13 @@ work. Three shapes cover every tool:
 Every OS error becomes :class:`~gyro_noise_ros.errors.OutputError` (exit code 6) naming the path.
 """
 
+from collections.abc import Iterator
 from contextlib import contextmanager
 import os
 from pathlib import Path
 import secrets
 import shutil
-from typing import Iterator, Union
+from typing import Union
 
 from .errors import OutputError
 

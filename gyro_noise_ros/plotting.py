@@ -20,13 +20,13 @@ when a figure is drawn: importing a tool stays fast, and ``--no-figures`` never 
 """
 
 from pathlib import Path
-from typing import Any, Dict, Optional
+from typing import Any
 
 __all__ = ['STYLE', 'pyplot', 'save_figure']
 
 #: rcParams every figure of the package is drawn with (on top of matplotlib's defaults): a white
 #: background in any viewer's dark mode, and legends that do not hide the traces.
-STYLE: Dict[str, Any] = {
+STYLE: dict[str, Any] = {
     'figure.facecolor': 'white',
     'savefig.facecolor': 'white',
     'legend.framealpha': 0.8,
@@ -60,7 +60,7 @@ def pyplot() -> Any:
 
 
 def save_figure(fig: Any, path: Any, *, dpi: float, tight: bool = False,
-                bbox_inches: Optional[str] = None) -> Path:
+                bbox_inches: str | None = None) -> Path:
     """
     Write ``fig`` to ``path`` and close it (also when writing fails, so no figure leaks).
 

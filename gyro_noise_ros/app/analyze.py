@@ -33,6 +33,7 @@ that analysed nothing (:func:`_check_analysed`), and write (:func:`_write_result
 """
 
 import collections
+from collections.abc import Callable, Iterator
 import contextlib
 import dataclasses
 from dataclasses import dataclass, field
@@ -42,7 +43,7 @@ import math
 from pathlib import Path
 import sys
 import time
-from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
+from typing import Any
 
 import numpy as np
 import threadpoolctl
@@ -77,7 +78,7 @@ DEFAULT_BATCH = 65536
 DEFAULT_CURVES = 200
 
 
-def _labels(paths: List[str], labels: Optional[Tuple[str, ...]]) -> List[str]:
+def _labels(paths: list[str], labels: tuple[str, ...] | None) -> list[str]:
     if labels is None:
         names = [Path(p).name[:-len(Path(p).suffix)] if Path(p).suffix in ('.bag', '.mcap', '.db3')
                  else Path(p).name for p in paths]
@@ -144,26 +145,26 @@ class AnalyzeParams:
 
     """
 
-    paths: Tuple[str, ...]
+    paths: tuple[str, ...]
     out_dir: str
-    labels: Optional[Tuple[str, ...]] = None
-    topic: Optional[str] = None
-    temperature_topic: Optional[str] = None
+    labels: tuple[str, ...] | None = None
+    topic: str | None = None
+    temperature_topic: str | None = None
     config: EngineConfig = field(default_factory=EngineConfig)
     jobs: int = 1
-    reference: Optional[str] = None
-    reference_bag: Optional[str] = None
+    reference: str | None = None
+    reference_bag: str | None = None
     thresholds: HealthThresholds = field(default_factory=HealthThresholds)
     figures: bool = True
     html: bool = True
     curves: int = DEFAULT_CURVES
     batch_size: int = DEFAULT_BATCH
     progress: bool = False
-    command: Optional[Tuple[str, ...]] = None
-    start_s: Optional[float] = None
-    end_s: Optional[float] = None
+    command: tuple[str, ...] | None = None
+    start_s: float | None = None
+    end_s: float | None = None
     static: str = 'auto'
-    scheduler: Optional[str] = None
+    scheduler: str | None = None
 
     def __post_init__(self) -> None:
         setattr_ = functools.partial(object.__setattr__, self)
@@ -193,7 +194,7 @@ class AnalyzeParams:
         self.names  # noqa: B018 (labels checked now, not after the first bag)
 
     @property
-    def names(self) -> List[str]:
+    def names(self) -> list[str]:
         """List of str: the bag labels (``labels``, else the bag names), unique."""
         return _labels(list(self.paths), self.labels)
 
@@ -231,18 +232,18 @@ class AnalyzeResult:
     tool: str
     version: str
     created_utc: str
-    command: Optional[List[str]]
-    options: Dict[str, Any]
-    bags: Tuple[Dict[str, Any], ...]
-    timing: Dict[str, float] = field(default_factory=dict)
-    files: Tuple[str, ...] = ()
-    alphas: Optional[np.ndarray] = field(default=None, repr=False)
-    per_chunk: Dict[str, list] = field(default_factory=dict, repr=False)
-    curves: Dict[tuple, list] = field(default_factory=dict, repr=False)
-    allan: Dict[tuple, tuple] = field(default_factory=dict, repr=False)
-    accelerometer: Dict[str, dict] = field(default_factory=dict, repr=False)
+    command: list[str] | None
+    options: dict[str, Any]
+    bags: tuple[dict[str, Any], ...]
+    timing: dict[str, float] = field(default_factory=dict)
+    files: tuple[str, ...] = ()
+    alphas: np.ndarray | None = field(default=None, repr=False)
+    per_chunk: dict[str, list] = field(default_factory=dict, repr=False)
+    curves: dict[tuple, list] = field(default_factory=dict, repr=False)
+    allan: dict[tuple, tuple] = field(default_factory=dict, repr=False)
+    accelerometer: dict[str, dict] = field(default_factory=dict, repr=False)
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """Return summary.json as a dict (bag entries shared, not copied)."""
         return {'tool': self.tool, 'version': self.version, 'created_utc': self.created_utc,
                 'command': self.command, 'options': self.options, 'bags': list(self.bags)}
@@ -371,11 +372,11 @@ class _ChunkRows(ChunkCsvWriter):
         with _writing():
             super().write(*args, **kwargs)
 
-    def mark(self) -> Tuple[int, int]:
+    def mark(self) -> tuple[int, int]:
         self._fh.flush()
         return self._fh.tell(), self.rows
 
-    def rollback(self, mark: Tuple[int, int]) -> None:
+    def rollback(self, mark: tuple[int, int]) -> None:
         self._fh.flush()
         self._fh.seek(mark[0])
         self._fh.truncate()
@@ -387,10 +388,10 @@ class _Stores:
     """Where the passes of one run put what they produce (fixed containers)."""
 
     csv: _ChunkRows
-    per_chunk: Dict[str, list] = field(default_factory=dict)
-    curves: Dict[tuple, list] = field(default_factory=dict)
-    allan: Dict[tuple, tuple] = field(default_factory=dict)
-    timing: Dict[str, float] = field(default_factory=lambda: {'decode_s': 0.0, 'wait_s': 0.0})
+    per_chunk: dict[str, list] = field(default_factory=dict)
+    curves: dict[tuple, list] = field(default_factory=dict)
+    allan: dict[tuple, tuple] = field(default_factory=dict)
+    timing: dict[str, float] = field(default_factory=lambda: {'decode_s': 0.0, 'wait_s': 0.0})
 
 
 @dataclass(frozen=True)
@@ -398,7 +399,7 @@ class _Run:
     """What every bag of one run shares: the options, the reference, the workers, the stores."""
 
     params: AnalyzeParams
-    ref: Dict[str, Any]
+    ref: dict[str, Any]
     pool: Any
     jobs: int
     stores: _Stores
@@ -418,19 +419,19 @@ class _PassState:
     """What one read of a bag leaves for its summary."""
 
     engine: NoiseEngine
-    warnings: List[str]
+    warnings: list[str]
     time_source: str
-    left: Dict[str, int]
-    first_ns: Optional[int]
+    left: dict[str, int]
+    first_ns: int | None
     last_ns: int
     accel: '_AccelAllan'
-    rows: Dict[str, list]
+    rows: dict[str, list]
     done: int
-    frame_id: Optional[str]
+    frame_id: str | None
     storage: str
     undecodable: int
-    temperature_topic: Optional[str]
-    non_physical: Dict[str, int]
+    temperature_topic: str | None
+    non_physical: dict[str, int]
 
 
 @_one_blas_thread
@@ -478,7 +479,7 @@ def analyze_bags(params: AnalyzeParams) -> AnalyzeResult:
         result, files=tuple(str(Path(params.out_dir) / Path(f).name) for f in files))
 
 
-def _open_inputs(params: AnalyzeParams) -> Tuple[List[str], Optional[ImuBagReader]]:
+def _open_inputs(params: AnalyzeParams) -> tuple[list[str], ImuBagReader | None]:
     """
     Resolve every bag's topic before any long work; return them and the first bag's reader.
 
@@ -505,8 +506,8 @@ def _open_inputs(params: AnalyzeParams) -> Tuple[List[str], Optional[ImuBagReade
     return topics, first_reader
 
 
-def _run_bags(params: AnalyzeParams, ref: Dict[str, Any], topics: List[str], out: Path,
-              first_reader: Optional[ImuBagReader]) -> AnalyzeResult:
+def _run_bags(params: AnalyzeParams, ref: dict[str, Any], topics: list[str], out: Path,
+              first_reader: ImuBagReader | None) -> AnalyzeResult:
     """Analyse every bag into the staging folder ``out`` (chunks.csv only); return the result."""
     jobs = params.jobs
     if jobs > 1 and params.scheduler is None:
@@ -542,7 +543,7 @@ def _run_bags(params: AnalyzeParams, ref: Dict[str, Any], topics: List[str], out
         curves=stores.curves, allan=stores.allan, accelerometer=accel_readouts)
 
 
-def _options(params: AnalyzeParams, ref: Dict[str, Any], jobs: int, pool: Any) -> Dict[str, Any]:
+def _options(params: AnalyzeParams, ref: dict[str, Any], jobs: int, pool: Any) -> dict[str, Any]:
     """Return the ``options`` entry of summary.json."""
     thresholds = params.thresholds
     return {
@@ -563,7 +564,7 @@ def _options(params: AnalyzeParams, ref: Dict[str, Any], jobs: int, pool: Any) -
     }
 
 
-def _check_analysed(bag_docs: List[Dict[str, Any]], config: EngineConfig) -> None:
+def _check_analysed(bag_docs: list[dict[str, Any]], config: EngineConfig) -> None:
     """Never succeed having analysed nothing: say why each bag or axis has no analysed chunk."""
     if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
                for b in bag_docs for a in b['axes'].values()):
@@ -581,7 +582,7 @@ def _check_analysed(bag_docs: List[Dict[str, Any]], config: EngineConfig) -> Non
 
 
 def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
-                   html: bool = True) -> List[Path]:
+                   html: bool = True) -> list[Path]:
     """Write summary.json and everything drawn from the result into ``out``; return the files."""
     doc = result.as_dict()
     with _writing():
@@ -591,7 +592,7 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
         files += [out / 'summary.json', out / 'summary.md']
         files += _write_allan_outputs(out, doc, result.allan, result.accelerometer, figures)
         if result.curves:
-            arrays: Dict[str, Any] = {'alphas': result.alphas}
+            arrays: dict[str, Any] = {'alphas': result.alphas}
             for (label, axis), rows in result.curves.items():
                 arrays[f'{label}/{axis}/chunk'] = np.array([r[0] for r in rows], dtype=np.int64)
                 arrays[f'{label}/{axis}/var'] = np.array([r[1] for r in rows])
@@ -611,14 +612,14 @@ def _warm_identifier(config: EngineConfig) -> None:
     ident(np.random.default_rng(0).standard_normal(config.chunk_size))
 
 
-def _open(path: str, topic: Optional[str], temperature_topic: Optional[str],
-          rate_hz: Optional[float]) -> Any:
+def _open(path: str, topic: str | None, temperature_topic: str | None,
+          rate_hz: float | None) -> Any:
     # the one input layer: what analyze reads, explain reads, with the same refusals
     return open_imu(path, topic=topic, temperature_topic=temperature_topic, rate_hz=rate_hz)
 
 
-def _select(stamps: np.ndarray, first_ns: int, start_s: Optional[float], end_s: Optional[float],
-            segment: Optional[StaticSegment], left: Dict[str, int]) -> np.ndarray:
+def _select(stamps: np.ndarray, first_ns: int, start_s: float | None, end_s: float | None,
+            segment: StaticSegment | None, left: dict[str, int]) -> np.ndarray:
     """Return the mask of samples inside --start/--end and the static segment; count the rest."""
     rel = stamps - first_ns
     keep = np.ones(stamps.shape[0], dtype=bool)
@@ -637,7 +638,7 @@ def _select(stamps: np.ndarray, first_ns: int, start_s: Optional[float], end_s: 
     return keep
 
 
-def _static_prepass(run: _Run, bag: _Bag) -> Optional[StaticSegment]:
+def _static_prepass(run: _Run, bag: _Bag) -> StaticSegment | None:
     """Read stamps and rates once to find the longest static segment (core/segments.py)."""
     params = run.params
     stats = WindowStats()
@@ -658,7 +659,7 @@ def _static_prepass(run: _Run, bag: _Bag) -> Optional[StaticSegment]:
     return stats.segment()
 
 
-def _plausible(batches: Iterator[Any], counts: Optional[Dict[str, int]]) -> Iterator[Any]:
+def _plausible(batches: Iterator[Any], counts: dict[str, int] | None) -> Iterator[Any]:
     """Yield the batches with non-physical values as NaN (core/plausible.py), counted."""
     for batch in batches:
         gyro, n_gyro = mask_non_physical(batch.gyro, MAX_RATE_RAD_S)
@@ -729,12 +730,12 @@ class _MotionWatch:
         seg = self.stats.segment()
         return seg is not None and not seg.static_throughout
 
-    def segment(self) -> Optional[StaticSegment]:
+    def segment(self) -> StaticSegment | None:
         return self.stats.segment()
 
 
 def _analyze_one(run: _Run, bag: _Bag, progress: _Progress, *,
-                 reader: Optional[ImuBagReader] = None) -> Dict[str, Any]:
+                 reader: ImuBagReader | None = None) -> dict[str, Any]:
     """Analyse one bag (``reader``: the bag already open, used by its first pass)."""
     if run.params.static != 'auto':
         state = _analysis_pass(run, bag, progress, segment=None, watch=None, say=warn,
@@ -782,7 +783,7 @@ class _ChunkFeed:
         self.inflight: collections.deque[Any] = collections.deque()  # futures
         self.max_inflight = (4 * run.jobs
                              + len(config.axes) * (params.batch_size // config.chunk_size + 1))
-        self.rows: Dict[str, list] = {a: [] for a in config.axes}
+        self.rows: dict[str, list] = {a: [] for a in config.axes}
 
     def _want_curves(self, job: Any) -> bool:
         return (bool(self.stride) and job.chunk % self.stride == 0
@@ -806,7 +807,7 @@ class _ChunkFeed:
         timing['wait_s'] += time.perf_counter() - w0
         self._finish(result)
 
-    def submit(self, jobs_list: List[Any]) -> None:
+    def submit(self, jobs_list: list[Any]) -> None:
         """Identify the chunks (here or on the workers), finishing the oldest beyond the room."""
         pool = self.run.pool
         for job in jobs_list:
@@ -831,7 +832,7 @@ class _ChunkFeed:
             fut.cancel()
 
 
-def _read_temperature(reader: Any) -> Tuple[Optional[np.ndarray], Optional[np.ndarray]]:
+def _read_temperature(reader: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Return the temperature stamps (float64, sorted) and values of the bag, or (None, None)."""
     temps = reader.read_temperature()
     if temps is not None and temps[0].size:
@@ -843,10 +844,10 @@ def _read_temperature(reader: Any) -> Tuple[Optional[np.ndarray], Optional[np.nd
 class _TimeBase:
     """The stamps of one pass: the header stamps, or the log time when those are unusable."""
 
-    def __init__(self, label: str, warnings: List[str], say: Callable[[str], None]) -> None:
+    def __init__(self, label: str, warnings: list[str], say: Callable[[str], None]) -> None:
         self.label, self.warnings, self.say = label, warnings, say
         self.source = 'header'
-        self.first_ns: Optional[int] = None
+        self.first_ns: int | None = None
         self.last_ns = -2 ** 63
 
     def stamps(self, batch: Any, first_batch: bool) -> np.ndarray:
@@ -871,9 +872,9 @@ class _TimeBase:
 
 
 def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
-                   segment: Optional[StaticSegment], watch: Optional[_MotionWatch],
+                   segment: StaticSegment | None, watch: _MotionWatch | None,
                    say: Callable[[str], None],
-                   reader: Optional[Any] = None) -> Optional[_PassState]:
+                   reader: Any | None = None) -> _PassState | None:
     """
     Read the bag once and analyse it; None when ``watch`` saw motion (pass abandoned).
 
@@ -882,7 +883,7 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
     params, config, timing = run.params, run.params.config, run.stores.timing
     label = bag.label
     engine = NoiseEngine(config, reference=run.ref or None, thresholds=params.thresholds)
-    warnings: List[str] = []
+    warnings: list[str] = []
     left = {'before_start': 0, 'after_end': 0, 'motion': 0}
     timebase = _TimeBase(label, warnings, say)
     if reader is None:
@@ -942,8 +943,8 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
             non_physical=non_physical)
 
 
-def _bag_warnings(bag: _Bag, state: _PassState, segment: Optional[StaticSegment],
-                  config: EngineConfig) -> Tuple[List[str], Dict[str, Any]]:
+def _bag_warnings(bag: _Bag, state: _PassState, segment: StaticSegment | None,
+                  config: EngineConfig) -> tuple[list[str], dict[str, Any]]:
     """Return one bag's warnings (each also printed) and its ``left_out`` entry."""
     warnings, left, first_ns = state.warnings, state.left, state.first_ns
     counts = state.engine.counts()
@@ -964,7 +965,7 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: Optional[StaticSegment]
         add(f'{counts.gaps} stamp gap(s), {counts.samples_lost} sample(s) missing; the '
             f'longest {length_s:.6g} s at t = {t_s:.3f} s after the first sample ({missing} '
             'samples missing)')
-    left_out: Dict[str, Any] = dict(left)
+    left_out: dict[str, Any] = dict(left)
     if segment is not None and not segment.static_throughout and first_ns is not None:
         # The segments end on window boundaries; a time range never runs past the last sample.
         end_ns = min(segment.end_ns, state.last_ns)
@@ -1000,7 +1001,7 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: Optional[StaticSegment]
 
 
 def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
-             segment: Optional[StaticSegment]) -> Dict[str, Any]:
+             segment: StaticSegment | None) -> dict[str, Any]:
     """Summarise one analysed bag: its entry in summary.json (and the per-axis stores)."""
     params, config, stores = run.params, run.params.config, run.stores
     engine, label = state.engine, bag.label
@@ -1073,10 +1074,10 @@ class _AccelAllan:
 
     def __init__(self, taus: Any) -> None:
         self.taus = taus or None
-        self.acc: Optional[List[AllanAccumulator]] = None
-        self.pending: List[np.ndarray] = []
+        self.acc: list[AllanAccumulator] | None = None
+        self.pending: list[np.ndarray] = []
 
-    def update(self, accel: Optional[np.ndarray], rate_hz: float) -> None:
+    def update(self, accel: np.ndarray | None, rate_hz: float) -> None:
         if self.taus is None:
             return
         if accel is not None:
@@ -1091,11 +1092,11 @@ class _AccelAllan:
                 acc.update(col[np.isfinite(col)])
         self.pending = []
 
-    def readouts(self, rate_hz: float) -> Dict[str, Any]:
+    def readouts(self, rate_hz: float) -> dict[str, Any]:
         """Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes."""
         if self.acc is None:
             return {}
-        out: Dict[str, Any] = {}
+        out: dict[str, Any] = {}
         for axis, acc in zip(AXES, self.acc):
             try:
                 out[axis] = read_allan(rescale_allan(acc.result(), rate_hz))
@@ -1104,11 +1105,11 @@ class _AccelAllan:
         return out
 
 
-def _write_allan_outputs(out: Path, doc: Dict[str, Any], allan_store: Dict[tuple, tuple],
-                         accel_readouts: Dict[str, dict], figures: bool) -> List[Path]:
+def _write_allan_outputs(out: Path, doc: dict[str, Any], allan_store: dict[tuple, tuple],
+                         accel_readouts: dict[str, dict], figures: bool) -> list[Path]:
     """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
-    entries: List[tuple] = []
-    fig_series: Dict[str, list] = {}
+    entries: list[tuple] = []
+    fig_series: dict[str, list] = {}
     for (label, axis), (result, terms, _) in allan_store.items():
         tau, adev, lo, hi, n = allan_curve(result)
         entries.append((label, axis, tau, adev, lo, hi, n))
@@ -1147,8 +1148,8 @@ def _safe(name: str) -> str:
     return ''.join(c if c.isalnum() or c in '-_.' else '_' for c in name)
 
 
-def _write_figures(out: Path, alphas: Optional[np.ndarray], per_chunk: Dict[str, list],
-                   curve_store: Dict[tuple, list]) -> List[Path]:
+def _write_figures(out: Path, alphas: np.ndarray | None, per_chunk: dict[str, list],
+                   curve_store: dict[tuple, list]) -> list[Path]:
     files = []
     bias = {a: [(label, r[:, 0], r[:, 1]) for label, r in v] for a, v in per_chunk.items()}
     var = {a: [(label, r[:, 0], r[:, 2]) for label, r in v] for a, v in per_chunk.items()}

@@ -31,12 +31,13 @@ Steps (``docs/reliability.md`` section 1):
 ``calibration.yaml`` (a ROS 2 parameter file ``imu_compensator`` loads) and ``calibration.md``.
 """
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 import datetime
 import json
 import math
 import os
-from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Any
 
 import numpy as np
 
@@ -88,11 +89,11 @@ class Gravity:
 
     value_m_s2: float = STANDARD_GRAVITY_M_S2
     source: str = 'standard gravity 9.80665 (no local value given)'
-    warning: Optional[str] = None
-    latitude_deg: Optional[float] = None
+    warning: str | None = None
+    latitude_deg: float | None = None
 
 
-def resolve_gravity(gravity: Optional[float] = None, latitude: Optional[float] = None,
+def resolve_gravity(gravity: float | None = None, latitude: float | None = None,
                     height: float = 0.0) -> Gravity:
     """
     Return the gravity to use and how it was obtained.
@@ -153,11 +154,11 @@ class CalibrateParams:
 
     """
 
-    paths: Tuple[str, ...]
+    paths: tuple[str, ...]
     gravity: Gravity = field(default_factory=Gravity)
     mode: str = 'six-position'
-    topic: Optional[str] = None
-    rate_hz: Optional[float] = None
+    topic: str | None = None
+    rate_hz: float | None = None
     settings: DetectorSettings = field(default_factory=DetectorSettings)
     alpha: float = DEFAULT_ALPHA
     gyro_turns: str = 'auto'
@@ -177,11 +178,11 @@ class CalibrateParams:
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
 
 
-def _arr(v: Any) -> List[Optional[float]]:
+def _arr(v: Any) -> list[float | None]:
     return [None if not math.isfinite(float(x)) else float(x) for x in np.ravel(v)]
 
 
-def _mat(v: Any) -> List[List[Optional[float]]]:
+def _mat(v: Any) -> list[list[float | None]]:
     a = np.asarray(v, dtype=np.float64)
     return [[None if not math.isfinite(float(x)) else float(x) for x in row] for row in a]
 
@@ -229,8 +230,8 @@ class CalibrationResult:
     """
 
     params: CalibrateParams
-    dwells: Tuple[Any, ...]
-    short_dwells: Tuple[Any, ...]
+    dwells: tuple[Any, ...]
+    short_dwells: tuple[Any, ...]
     accel_bias_m_s2: np.ndarray
     accel_bias_sigma_m_s2: np.ndarray
     accel_scale_factor: np.ndarray
@@ -240,14 +241,14 @@ class CalibrationResult:
     accel_residual_rms_m_s2: float
     gyro_bias_rad_s: np.ndarray
     gyro_bias_sigma_rad_s: np.ndarray
-    gyro: Optional[GyroTurnResult]
+    gyro: GyroTurnResult | None
     gyro_note: str
-    consistency: Tuple[Any, ...]
-    gravity_check: Tuple[Any, ...]
+    consistency: tuple[Any, ...]
+    gravity_check: tuple[Any, ...]
     mean_norm_raw_m_s2: float
-    noise: Dict[str, Any]
+    noise: dict[str, Any]
     non_finite_samples: int
-    left_out: Tuple[str, ...] = ()
+    left_out: tuple[str, ...] = ()
     version: str = __version__
 
     @property
@@ -270,7 +271,7 @@ class CalibrationResult:
         """bool: every held-out dwell used agrees with g (rejected poses are left out)."""
         return all(c.consistent for c in self.gravity_check if c.label not in self.left_out)
 
-    def warnings(self) -> List[str]:
+    def warnings(self) -> list[str]:
         """
         Return the lines a tool prints on stderr (standard gravity, NaN dropped, failed check).
 
@@ -279,7 +280,7 @@ class CalibrationResult:
         list of str
 
         """
-        out: List[str] = []
+        out: list[str] = []
         if self.params.gravity.warning:
             out.append(self.params.gravity.warning)
         for d in self.dwells:
@@ -301,7 +302,7 @@ class CalibrationResult:
             out.append(f'gyro: {self.gyro_note}')
         return out
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the ``calibration.json`` document (SI, units in the keys).
 
@@ -312,7 +313,7 @@ class CalibrationResult:
         """
         p = self.params
         gyro = self.gyro
-        gyro_doc: Dict[str, Any] = {
+        gyro_doc: dict[str, Any] = {
             'bias_rad_s': _arr(self.gyro_bias_rad_s),
             'bias_sigma_rad_s': _arr(self.gyro_bias_sigma_rad_s),
             'scale_factor': _arr(self.gyro_scale_factor),
@@ -383,7 +384,7 @@ class CalibrationResult:
         }
 
 
-def _first_stamp_ns(path: str, topic: Optional[str]) -> int:
+def _first_stamp_ns(path: str, topic: str | None) -> int:
     stamp = records.first_stamp_ns(path, topic=topic)
     assert stamp is not None  # _detect refused a recording without samples
     return stamp
@@ -394,7 +395,7 @@ def _shifted(dwell: Dwell, dt_s: float) -> Dwell:
     return replace(dwell, window_t_s=dwell.window_t_s + dt_s)
 
 
-def _detect(params: CalibrateParams) -> List[Any]:
+def _detect(params: CalibrateParams) -> list[Any]:
     out = []
     for path in params.paths:
         acc = None
@@ -416,7 +417,7 @@ def _detect(params: CalibrateParams) -> List[Any]:
     return out
 
 
-def _refuse_inconsistent(pairs: Sequence[Any], chosen: Dict[str, Any], alpha: float) -> None:
+def _refuse_inconsistent(pairs: Sequence[Any], chosen: dict[str, Any], alpha: float) -> None:
     bad = [c for c in pairs if not c.consistent]
     if not bad:
         return
@@ -432,8 +433,8 @@ def _refuse_inconsistent(pairs: Sequence[Any], chosen: Dict[str, Any], alpha: fl
                          're-seat and re-record it, or record >= 9 poses for --mode multi-pose')
 
 
-def _turn_spans(dwells: Sequence[Any]) -> Dict[str, List[Tuple[int, float, float]]]:
-    spans: Dict[str, List[Tuple[int, float, float]]] = {}
+def _turn_spans(dwells: Sequence[Any]) -> dict[str, list[tuple[int, float, float]]]:
+    spans: dict[str, list[tuple[int, float, float]]] = {}
     for k in range(len(dwells) - 1):
         a, b = dwells[k], dwells[k + 1]
         if a.source == b.source:
@@ -441,10 +442,10 @@ def _turn_spans(dwells: Sequence[Any]) -> Dict[str, List[Tuple[int, float, float
     return spans
 
 
-def _read_turns(params: CalibrateParams, dwells: Sequence[Any]) -> List[Turn]:
+def _read_turns(params: CalibrateParams, dwells: Sequence[Any]) -> list[Turn]:
     out = []
     for path, spans in _turn_spans(dwells).items():
-        parts: Dict[int, Tuple[List[np.ndarray], List[np.ndarray]]] = {
+        parts: dict[int, tuple[list[np.ndarray], list[np.ndarray]]] = {
             k: ([], []) for k, _, _ in spans}
         for _, t, _, gyro in records.iter_imu(path, topic=params.topic, rate_hz=params.rate_hz):
             for k, lo, hi in spans:
@@ -465,7 +466,7 @@ def _read_turns(params: CalibrateParams, dwells: Sequence[Any]) -> List[Turn]:
 
 def _gyro_from_turns(params: CalibrateParams, dwells: Sequence[Any], directions: np.ndarray,
                      accel_noise: Any, accel_index: Sequence[int],
-                     gyro_noise: Any) -> Tuple[Optional[GyroTurnResult], str]:
+                     gyro_noise: Any) -> tuple[GyroTurnResult | None, str]:
     if params.gyro_turns == 'off':
         return None, 'not estimated (--gyro-turns off)'
     turns = _read_turns(params, dwells)
@@ -490,13 +491,13 @@ def _gyro_from_turns(params: CalibrateParams, dwells: Sequence[Any], directions:
     return res, note
 
 
-def _time_order(dwells: Iterable[Any], params: CalibrateParams) -> List[Any]:
+def _time_order(dwells: Iterable[Any], params: CalibrateParams) -> list[Any]:
     rank = {p: k for k, p in enumerate(params.paths)}
     return sorted(dwells, key=lambda d: (rank.get(d.source, 0), d.t_start_s))
 
 
 def _multi_pose_gyro_bias(dwells: Sequence[Any], directions: np.ndarray,
-                          latitude_deg: Optional[float]) -> Tuple[np.ndarray, np.ndarray]:
+                          latitude_deg: float | None) -> tuple[np.ndarray, np.ndarray]:
     w = np.array([d.samples for d in dwells], dtype=np.float64)
     w /= w.sum()
     gm = np.array([d.gyro_mean_rad_s for d in dwells])
@@ -628,7 +629,7 @@ def yaml_text(result: CalibrationResult) -> str:
     return '\n'.join(lines) + '\n'
 
 
-def table6_rows(doc: Dict[str, Any]) -> List[Tuple[str, float, float]]:
+def table6_rows(doc: dict[str, Any]) -> list[tuple[str, float, float]]:
     """
     Return the paper Table 6 rows (bias in mg, scale factor in %) of a calibration document.
 
@@ -651,7 +652,7 @@ def table6_rows(doc: Dict[str, Any]) -> List[Tuple[str, float, float]]:
     return rows
 
 
-def _pm(value: Optional[float], sigma: Optional[float], spec: str) -> str:
+def _pm(value: float | None, sigma: float | None, spec: str) -> str:
     if value is None:
         return 'n/a'
     if sigma is None:
@@ -688,7 +689,7 @@ def markdown(result: CalibrationResult) -> str:
     return '\n'.join(out) + '\n'
 
 
-def _accelerometer_lines(doc: Dict[str, Any]) -> List[str]:
+def _accelerometer_lines(doc: dict[str, Any]) -> list[str]:
     """Return the Table 6 rows and the cross-axis terms of the accelerometer (calibration.md)."""
     out = ['| parameter | value | std. uncertainty |', '|---|---|---|']
     for name, value, sig in table6_rows(doc):
@@ -706,7 +707,7 @@ def _accelerometer_lines(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def _gyro_lines(doc: Dict[str, Any], *, turns: bool) -> List[str]:
+def _gyro_lines(doc: dict[str, Any], *, turns: bool) -> list[str]:
     """Return the gyro section: biases, scale factors and, from ``turns``, cross-axis terms."""
     gyro = doc['gyro']
     gb = np.degrees(np.asarray(gyro['bias_rad_s']))
@@ -742,7 +743,7 @@ def _gyro_lines(doc: Dict[str, Any], *, turns: bool) -> List[str]:
     return out
 
 
-def _check_lines(doc: Dict[str, Any]) -> List[str]:
+def _check_lines(doc: dict[str, Any]) -> list[str]:
     """Return the indicators, the gravity check and the consistency of opposite dwells."""
     u = doc['uniformity']
     out = ['', '## Indicators (paper 001 section 6)', '',
@@ -774,7 +775,7 @@ def _check_lines(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def _dwell_lines(doc: Dict[str, Any]) -> List[str]:
+def _dwell_lines(doc: dict[str, Any]) -> list[str]:
     out = ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
            '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
     for d in doc['dwells']:
@@ -784,7 +785,7 @@ def _dwell_lines(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def calibration_files(result: CalibrationResult) -> Dict[str, str]:
+def calibration_files(result: CalibrationResult) -> dict[str, str]:
     """
     Return the files of a calibration: name -> text.
 
@@ -804,7 +805,7 @@ def calibration_files(result: CalibrationResult) -> Dict[str, str]:
 
 
 def write_calibration(result: CalibrationResult, out_dir: StrPath, *, html: bool = True,
-                      command: Optional[Sequence[str]] = None) -> List[str]:
+                      command: Sequence[str] | None = None) -> list[str]:
     """
     Write calibration.json, .yaml, .md and report.html (published together or not at all).
 

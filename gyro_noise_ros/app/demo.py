@@ -36,7 +36,7 @@ import subprocess
 import sys
 import threading
 import time
-from typing import Any, Dict, IO, List, Optional, Set, Tuple
+from typing import Any, IO
 
 from .. import rosgraph
 from ..errors import GyroNoiseError, OutputError, ParameterError
@@ -91,7 +91,7 @@ class Story:
 FULL = Story(quiet_s=40.0, tau_s=60.0, amplitude_dps=0.1, live_s=100.0, history_chunks=20)
 QUICK = Story(quiet_s=14.0, tau_s=10.0, amplitude_dps=0.1, live_s=32.0, history_chunks=8)
 
-DEMO_ANALYZER_PARAMS: Dict[str, Any] = {
+DEMO_ANALYZER_PARAMS: dict[str, Any] = {
     'drift_abs_warn_deg_s_per_h': 1.0,
     'drift_abs_error_deg_s_per_h': 100.0,
     'lost_fraction_warn': 0.05,
@@ -137,7 +137,7 @@ class DemoParams:
     speed: float = 1.0
     storage: str = 'sqlite3'
     jobs: int = 2
-    domain_id: Optional[int] = None
+    domain_id: int | None = None
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.speed <= 100:
@@ -171,7 +171,7 @@ class DemoResult:
     """
 
     interrupted: bool
-    report: Optional[Path] = None
+    report: Path | None = None
     elapsed_s: float = 0.0
 
 
@@ -240,7 +240,7 @@ def _print_story(story: Story) -> None:
 
 
 def _live_part(params: DemoParams, procs: 'Processes', recording: Path,
-               t_start: float) -> Optional[List[Tuple[float, str]]]:
+               t_start: float) -> list[tuple[float, str]] | None:
     """Start the nodes and the emulator, print the diagnostics; None when interrupted."""
     story = params.story
     port = _free_port()
@@ -255,7 +255,7 @@ def _live_part(params: DemoParams, procs: 'Processes', recording: Path,
             {'output': str(recording), 'storage': params.storage})])
         echo = procs.start('monitor', ['gyro_noise_ros.nodes.monitor', '--compact'],
                            capture_stdout=True)
-        lines: queue.Queue[Optional[str]] = queue.Queue()  # None: the monitor's end
+        lines: queue.Queue[str | None] = queue.Queue()  # None: the monitor's end
         threading.Thread(target=_reader, args=(echo.stdout, lines), daemon=True).start()
         procs.start('lsm6dso32_driver', ['gyro_noise_ros.nodes.driver', *_ros_args({'port': url})])
         print(f'{TOOL}: starting the nodes ...', flush=True)
@@ -302,7 +302,7 @@ def _close_recording(procs: 'Processes', recording: Path) -> None:
         procs.stop_all(['noise_analyzer', 'monitor', 'portenta_emulator'])
 
 
-def _offline_report(params: DemoParams, env: Dict[str, str], recording: Path,
+def _offline_report(params: DemoParams, env: dict[str, str], recording: Path,
                     report: Path) -> None:
     """Run gyro_noise_analyze on the recording (the tool, as a user would)."""
     print(f'{TOOL}: offline analysis of the recording with gyro_noise_analyze ...', flush=True)
@@ -361,14 +361,14 @@ class Processes:
     then stops the children in a sensible order instead of all at once.
     """
 
-    def __init__(self, env: Dict[str, str], log_dir: 'os.PathLike[str] | str') -> None:
+    def __init__(self, env: dict[str, str], log_dir: 'os.PathLike[str] | str') -> None:
         self.env = env
         self.log_dir = Path(log_dir)
-        self.procs: Dict[str, Tuple[subprocess.Popen, IO[str]]] = {}  # name -> (process, log)
-        self.logs: Dict[str, Path] = {}
-        self.stopping: Set[str] = set()
+        self.procs: dict[str, tuple[subprocess.Popen, IO[str]]] = {}  # name -> (process, log)
+        self.logs: dict[str, Path] = {}
+        self.stopping: set[str] = set()
 
-    def start(self, name: str, args: List[str], *,
+    def start(self, name: str, args: list[str], *,
               capture_stdout: bool = False) -> subprocess.Popen:
         log = self.log_dir / f'{name}.log'
         fh = open(log, 'w')  # noqa: SIM115 - closed with the process in stop()
@@ -407,7 +407,7 @@ class Processes:
         raise DemoError(f'{name}: no sign of {what} after {timeout_s:.0f} s; log '
                         f'{self.logs[name]}: {self.last_lines(name)}')
 
-    def stop(self, name: str, timeout_s: float = 15.0) -> Optional[int]:
+    def stop(self, name: str, timeout_s: float = 15.0) -> int | None:
         """SIGINT one process and wait; SIGKILL if it does not stop. Return its exit code."""
         entry = self.procs.get(name)
         if entry is None:
@@ -426,7 +426,7 @@ class Processes:
         fh.close()
         return proc.returncode
 
-    def stop_all(self, order: List[str]) -> None:
+    def stop_all(self, order: list[str]) -> None:
         for name in [*order, *[n for n in self.procs if n not in order]]:
             try:
                 self.stop(name)
@@ -436,7 +436,7 @@ class Processes:
                     entry[0].kill()
 
 
-def _ros_args(params: Dict[str, Any]) -> List[str]:
+def _ros_args(params: dict[str, Any]) -> list[str]:
     out = ['--ros-args']
     for key, value in params.items():
         text = ('true' if value else 'false') if isinstance(value, bool) else str(value)
@@ -454,7 +454,7 @@ def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
-def _next_line(lines: queue.Queue, procs: 'Processes', deadline: float) -> Optional[str]:
+def _next_line(lines: queue.Queue, procs: 'Processes', deadline: float) -> str | None:
     """Return the monitor's next line, None at the deadline; raise if a process or it died."""
     while time.monotonic() < deadline:
         procs.check()
@@ -477,7 +477,7 @@ def _wait_line(lines: queue.Queue, procs: 'Processes', timeout_s: float) -> str:
 
 
 def _live(lines: queue.Queue, procs: 'Processes', story: Story, speed: float,
-          t_stream: float) -> List[Tuple[float, str]]:
+          t_stream: float) -> list[tuple[float, str]]:
     """Print the monitor's lines until the live part is over; return (elapsed_s, line) pairs."""
     seen = []
     end = t_stream + story.live_s / speed
@@ -492,7 +492,7 @@ def _live(lines: queue.Queue, procs: 'Processes', story: Story, speed: float,
     return seen
 
 
-def _check_story(seen: List[Tuple[float, str]], story: Story) -> None:
+def _check_story(seen: list[tuple[float, str]], story: Story) -> None:
     """Check that after the rise began some axis was WARN or ERROR with its drift above limit."""
     chunk_lines = [(t, ln) for t, ln in seen if ' chunk ' in ln]
     if not chunk_lines:

@@ -24,11 +24,12 @@ given), and compares before and after; :func:`write_excitation` writes ``excitat
 and the figures of paper 001 Figures 7-12.
 """
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 import json
 import math
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any
 
 import numpy as np
 from scipy.stats import norm
@@ -80,17 +81,17 @@ class ExcitationParams:
 
     """
 
-    paths: Tuple[str, ...]
+    paths: tuple[str, ...]
     sensor: str
     axis: str
-    dwell_hz: Optional[float] = None
+    dwell_hz: float | None = None
     # (f0_hz, f1_hz, rate_hz_s) in sweep mode, None in dwell mode: read only where the mode is
     # known, so typed Any rather than Optional
     sweep: Any = None
-    reference_topic: Optional[str] = None
-    topic: Optional[str] = None
+    reference_topic: str | None = None
+    topic: str | None = None
     harmonics: int = DEFAULT_HARMONICS
-    rate_hz: Optional[float] = None
+    rate_hz: float | None = None
     frequency_tol: float = DEFAULT_FREQUENCY_TOL
     alpha: float = DEFAULT_ALPHA
     figures: bool = True
@@ -128,7 +129,7 @@ class ExcitationParams:
         return 'm_s2' if self.sensor == 'accel' else 'rad_s'
 
     @property
-    def display(self) -> Tuple[float, str]:
+    def display(self) -> tuple[float, str]:
         """(float, str): factor from SI to the printed unit and its name (g or deg/s)."""
         return ((1.0 / STANDARD_GRAVITY_M_S2, 'g') if self.sensor == 'accel' else
                 (RAD_TO_DEG, 'deg/s'))
@@ -162,12 +163,12 @@ class SideResult:
     x: np.ndarray = field(repr=False)
 
 
-def _lst(a: Any) -> Optional[List[Optional[float]]]:
+def _lst(a: Any) -> list[float | None] | None:
     return None if a is None else [None if not math.isfinite(float(v)) else float(v)
                                    for v in np.ravel(a)]
 
 
-def _num(v: Any) -> Optional[float]:
+def _num(v: Any) -> float | None:
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
@@ -188,10 +189,10 @@ class ExcitationResult:
     """
 
     params: ExcitationParams
-    sides: Dict[str, SideResult]
+    sides: dict[str, SideResult]
     version: str = __version__
 
-    def change(self) -> Optional[Dict[str, Any]]:
+    def change(self) -> dict[str, Any] | None:
         """
         Return the after/before changes of a dwell with their significance (None otherwise).
 
@@ -214,7 +215,7 @@ class ExcitationResult:
                 'amplitude_stability': a.amplitude_stability - b.amplitude_stability,
                 'thd': a.thd - b.thd}
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the ``excitation.json`` document (SI, units in the keys, ratios not %).
 
@@ -225,7 +226,7 @@ class ExcitationResult:
         """
         p = self.params
         u = p.unit
-        doc: Dict[str, Any] = {
+        doc: dict[str, Any] = {
             'sensor': p.sensor, 'axis': p.axis, 'mode': p.mode, 'unit': u, 'alpha': p.alpha,
             'nominal': ({'frequency_hz': p.dwell_hz, 'frequency_tol': p.frequency_tol}
                         if p.mode == 'dwell' else
@@ -233,7 +234,7 @@ class ExcitationResult:
             'version': self.version}
         for side, res in self.sides.items():
             r = res.analysis
-            entry: Dict[str, Any] = {'source': res.source, 'rate_hz': res.rate_hz,
+            entry: dict[str, Any] = {'source': res.source, 'rate_hz': res.rate_hz,
                                      'samples': res.samples}
             if p.mode == 'dwell':
                 entry.update({
@@ -327,7 +328,7 @@ def run_excitation(params: ExcitationParams) -> ExcitationResult:
         A recording cannot be read.
 
     """
-    sides: Dict[str, SideResult] = {}
+    sides: dict[str, SideResult] = {}
     for side, path in zip(SIDES, params.paths):
         try:
             sides[side] = _analyse(path, params)
@@ -336,15 +337,15 @@ def run_excitation(params: ExcitationParams) -> ExcitationResult:
     return ExcitationResult(params, sides)
 
 
-def _pct(v: Optional[float], spec: str = '.3f') -> str:
+def _pct(v: float | None, spec: str = '.3f') -> str:
     return 'n/a' if v is None or not math.isfinite(v) else f'{format(100.0 * v, spec)} %'
 
 
-def _significance(change: Dict[str, Any]) -> str:
+def _significance(change: dict[str, Any]) -> str:
     return 'significant' if change['amplitude_change_significant'] else 'within noise'
 
 
-def _verdict(ok: Optional[bool], yes: str, no: str, p: float) -> str:
+def _verdict(ok: bool | None, yes: str, no: str, p: float) -> str:
     if ok is None:
         return 'n/a'
     return f'{yes if ok else no} (p = {p:.2g})'
@@ -430,7 +431,7 @@ def markdown(result: ExcitationResult) -> str:
                 '| f (Hz) | rising | falling | reference rising | reference falling | '
                 'deviation rising | deviation falling |', '|---|---|---|---|---|---|---|']
 
-        def cell(arr: Optional[np.ndarray], i: int, scale: float = k) -> str:
+        def cell(arr: np.ndarray | None, i: int, scale: float = k) -> str:
             if arr is None or not math.isfinite(arr[i]):
                 return 'n/a'
             return f'{arr[i] * scale:.5g}'
@@ -490,7 +491,7 @@ def plot(path: StrPath, params: ExcitationParams, label: str, side: SideResult) 
 
 
 def write_excitation(result: ExcitationResult, out_dir: StrPath, *, html: bool = True,
-                     command: Optional[Sequence[str]] = None) -> List[str]:
+                     command: Sequence[str] | None = None) -> list[str]:
     """
     Write excitation.json, .md, report.html and the figures (published together or not at all).
 

@@ -33,11 +33,11 @@ axis' own document otherwise); ``AxisExplained.as_dict()`` is exactly an axis' `
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 import json
 import math
 from pathlib import Path
-from typing import Callable, Optional, Sequence
 
 from ..bag.inputs import read_imu, recorded_axes
 from ..errors import OutputError, ParameterError
@@ -100,12 +100,12 @@ class ExplainParams:
 
     path: str
     axis: str = 'all'
-    topic: Optional[str] = None
-    temperature_topic: Optional[str] = None
-    rate_hz: Optional[float] = None
+    topic: str | None = None
+    temperature_topic: str | None = None
+    rate_hz: float | None = None
     require_temperature: bool = False
-    start_s: Optional[float] = None
-    end_s: Optional[float] = None
+    start_s: float | None = None
+    end_s: float | None = None
     static: str = 'auto'
     seed: int = 0
     ensemble: int = 16
@@ -296,7 +296,7 @@ def prepare_explain(params: ExplainParams) -> ExplainInput:
                         left_out=tuple(left_out), warnings=tuple(warnings))
 
 
-def run_explain(prepared: ExplainInput, *, progress: Optional[Callable[[str], None]] = None,
+def run_explain(prepared: ExplainInput, *, progress: Callable[[str], None] | None = None,
                 mapper: Callable = map) -> ExplainRun:
     """
     Run the discrepancy workflow on every axis of a prepared input (module doc, step 2).
@@ -351,7 +351,7 @@ def check_output(out_dir: StrPath) -> None:
 
 
 def write_explain(run: ExplainRun, out_dir: StrPath, *, html: bool = True,
-                  command: Optional[Sequence[str]] = None) -> list:
+                  command: Sequence[str] | None = None) -> list:
     """
     Write every axis' explain.json, report.md, report.html and figures, and the index (step 3).
 

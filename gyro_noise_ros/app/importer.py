@@ -26,11 +26,12 @@ device clock (the 32-bit microsecond counter, unwrapped), anchored by ``start_ti
 name beside ``out`` and renamed when it is complete.
 """
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 import os
 import queue
 import threading
-from typing import Any, Callable, Optional, Sequence, Tuple
+from typing import Any
 
 import numpy as np
 
@@ -94,9 +95,9 @@ class ImportReport:
     corrupt_regions: tuple
     corrupt_region_count: int
     missing_file_indices: tuple
-    sequence_id: Optional[int]
-    first_stamp_ns: Optional[int]
-    last_stamp_ns: Optional[int]
+    sequence_id: int | None
+    first_stamp_ns: int | None
+    last_stamp_ns: int | None
     time_jumps: int
     configurations: tuple
     epoch: str
@@ -109,7 +110,7 @@ def _topic(name: str) -> str:
     return name if name.startswith('/') else '/' + name
 
 
-def _anchor(start_time: str, reader: SdLogReader) -> Tuple[str, Any]:
+def _anchor(start_time: str, reader: SdLogReader) -> tuple[str, Any]:
     """Return (epoch description, function(first_t_us_unwrapped, headers) -> offset) pieces."""
     heads = [f.header for f in reader.files if f.header is not None]
     rtc_head = next((h for h in heads if h.rtc_unix_s), None)
@@ -134,7 +135,7 @@ def _anchor(start_time: str, reader: SdLogReader) -> Tuple[str, Any]:
 
 
 def _first_acked_config(paths: Sequence[str], chunk_bytes: int,
-                        scan: bool) -> Optional[Tuple[Any, int, int]]:
+                        scan: bool) -> tuple[Any, int, int] | None:
     """Return (odr_hz, gyro_fs_dps, accel_fs_g) of the first block that knows them, or None."""
     for block in SdLogReader(paths, chunk_bytes=chunk_bytes, scan=scan):
         if block.gyro_fs_dps and block.accel_fs_g:
@@ -144,13 +145,13 @@ def _first_acked_config(paths: Sequence[str], chunk_bytes: int,
 
 def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage: str = 'mcap',
                 topic: str = 'imu/data_raw', temperature_topic: str = 'imu/temperature',
-                frame_id: str = 'imu_link', gyro_fs_dps: Optional[int] = None,
-                accel_fs_g: Optional[int] = None, start_time: str = 'auto',
+                frame_id: str = 'imu_link', gyro_fs_dps: int | None = None,
+                accel_fs_g: int | None = None, start_time: str = 'auto',
                 temperature_rate_hz: float = TEMPERATURE_ODR_HZ,
                 angular_velocity_variance: float = 0.0,
                 linear_acceleration_variance: float = 0.0, temperature_variance: float = 0.0,
-                chunk_bytes: int = 1 << 20, bulk: bool = True, scan: Optional[bool] = None,
-                threads: Optional[int] = None) -> ImportReport:
+                chunk_bytes: int = 1 << 20, bulk: bool = True, scan: bool | None = None,
+                threads: int | None = None) -> ImportReport:
     """
     Convert SD log files of one sequence to a rosbag2.
 
@@ -229,7 +230,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
     # until a header or an ack says otherwise, the first readable header's configuration holds (the
     # device cannot change it without writing an ACK frame)
     # (odr_hz, gyro_fs_dps, accel_fs_g), None where unknown
-    assumed: Tuple[Any, Optional[int], Optional[int]] = (
+    assumed: tuple[Any, int | None, int | None] = (
         (heads[0].odr_hz, heads[0].gyro_fs_dps, heads[0].accel_fs_g) if heads
         else (None, None, None))
     if not heads and (gyro_fs_dps is None or accel_fs_g is None):
@@ -276,10 +277,10 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
 
 
 def _convert(reader: SdLogReader, writes: '_BagWrites', *,
-             assumed: Tuple[Any, Optional[int], Optional[int]], gyro_fs_dps: Optional[int],
-             accel_fs_g: Optional[int], epoch: str, anchor: Any, temp_topic: Optional[str],
+             assumed: tuple[Any, int | None, int | None], gyro_fs_dps: int | None,
+             accel_fs_g: int | None, epoch: str, anchor: Any, temp_topic: str | None,
              temperature_rate_hz: float, temperature_variance: float, av_cov: np.ndarray,
-             la_cov: np.ndarray) -> Tuple[Optional[int], Optional[int], int, int, int, list]:
+             la_cov: np.ndarray) -> tuple[int | None, int | None, int, int, int, list]:
     """
     Stream the log blocks through the scaling into the bag writes.
 
@@ -373,11 +374,11 @@ class _BagWrites:
     def __init__(self, open_writer: Callable[[], Any], threaded: bool) -> None:
         self._open = open_writer
         # (method name, args, kwargs) of the writer calls, None: the end
-        self._queue: Optional[queue.Queue[Optional[Tuple[str, tuple, dict]]]] = (
+        self._queue: queue.Queue[tuple[str, tuple, dict] | None] | None = (
             queue.Queue(WRITE_QUEUE_BLOCKS) if threaded else None)
         self._writer: Any = None  # the bag writer (unthreaded)
-        self._error: Optional[BaseException] = None
-        self._thread: Optional[threading.Thread] = None
+        self._error: BaseException | None = None
+        self._thread: threading.Thread | None = None
         self._ready = threading.Event()
 
     def __enter__(self) -> '_BagWrites':
@@ -425,7 +426,7 @@ class _BagWrites:
             raise self._error
         self._queue.put((method, args, kwargs))
 
-    def __exit__(self, exc_type: Any, exc: Optional[BaseException], tb: Any) -> Any:
+    def __exit__(self, exc_type: Any, exc: BaseException | None, tb: Any) -> Any:
         if self._queue is None:
             return self._writer.__exit__(exc_type, exc, tb)
         self._queue.put(None)  # the thread drains the queue, also after an error

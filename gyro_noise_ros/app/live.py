@@ -23,10 +23,11 @@ bounded queue, and only the caller's thread mutates the engine.
 """
 
 from collections import deque
+from collections.abc import Callable, Mapping
 from dataclasses import fields
 import queue
 import threading
-from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any
 
 import numpy as np
 
@@ -50,7 +51,7 @@ CHUNK_TOPICS = {
 }
 
 
-def parse_axes(text: str) -> Tuple[str, ...]:
+def parse_axes(text: str) -> tuple[str, ...]:
     """
     Parse the ``axes`` parameter (``'x,y,z'``, ``'z'``, ``'xyz'``) into a tuple of axis names.
 
@@ -138,8 +139,8 @@ class TemperatureTrack:
     """
 
     def __init__(self) -> None:
-        self.stamp_ns: Optional[np.ndarray] = None
-        self.temperature_c: Optional[np.ndarray] = None
+        self.stamp_ns: np.ndarray | None = None
+        self.temperature_c: np.ndarray | None = None
 
     def add(self, stamp_ns: np.ndarray, temperature_c: np.ndarray) -> None:
         """
@@ -164,7 +165,7 @@ class TemperatureTrack:
         order = np.argsort(stamp_ns, kind='stable')
         self.stamp_ns, self.temperature_c = stamp_ns[order], temperature_c[order]
 
-    def at(self, stamp_ns: np.ndarray) -> Union[np.ndarray, float, None]:
+    def at(self, stamp_ns: np.ndarray) -> np.ndarray | float | None:
         """
         Return the temperature at sample stamps.
 
@@ -206,8 +207,8 @@ class LiveAnalysis:
 
     """
 
-    def __init__(self, config: EngineConfig, *, reference: Optional[str] = None,
-                 thresholds: Optional[HealthThresholds] = None, queue_chunks: int = 4,
+    def __init__(self, config: EngineConfig, *, reference: str | None = None,
+                 thresholds: HealthThresholds | None = None, queue_chunks: int = 4,
                  on_worker_start: Callable[[], None] = lambda: None) -> None:
         self.config = config
         self.engine = NoiseEngine(config, reference=reference, thresholds=thresholds)
@@ -215,18 +216,18 @@ class LiveAnalysis:
         # recent ChunkResults in completion order (for embedding code and tests; the node's own
         # statistics are the engine's)
         self.results: deque[ChunkResult] = deque(maxlen=RECENT_RESULTS)
-        self.last: Dict[str, ChunkResult] = {}  # axis -> latest ChunkResult
+        self.last: dict[str, ChunkResult] = {}  # axis -> latest ChunkResult
         self.rejected_batches = 0
         self.last_rejection = ''
         self.last_batch_rejected = False
         # chunk index -> {axis: ChunkResult} until all axes are in
-        self._chunks: Dict[int, Dict[str, ChunkResult]] = {}
+        self._chunks: dict[int, dict[str, ChunkResult]] = {}
         self._jobs: queue.Queue[ChunkJob] = queue.Queue(
             maxsize=int(queue_chunks) * len(config.axes))
         # (job, result, None) or (job, None, the error the analysis raised)
         self._done: queue.SimpleQueue[
-            Tuple[ChunkJob, Optional[ChunkResult], Optional[Exception]]] = queue.SimpleQueue()
-        self._finished: List[ChunkResult] = []
+            tuple[ChunkJob, ChunkResult | None, Exception | None]] = queue.SimpleQueue()
+        self._finished: list[ChunkResult] = []
         self._stop = threading.Event()
         self._on_worker_start = on_worker_start
         self._worker = threading.Thread(target=self._work, name='noise_analyzer_worker',
@@ -295,7 +296,7 @@ class LiveAnalysis:
                 self._finish(self.engine.skip(job, 'analysis fell behind'))
         return ''
 
-    def collect(self) -> Tuple[List[ChunkResult], List[Dict[str, ChunkResult]]]:
+    def collect(self) -> tuple[list[ChunkResult], list[dict[str, ChunkResult]]]:
         """
         Record the worker's results (caller's thread) and return what finished.
 

@@ -35,12 +35,13 @@ a report generator needs only the JSON. :func:`write_reliability` writes every f
 :func:`..outputs.staged_output`.
 """
 
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 import io
 import json
 import math
 import os
-from typing import Any, Callable, cast, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, cast, Union
 
 import numpy as np
 
@@ -69,7 +70,7 @@ TERM_UNITS = {
 }
 
 
-def _num(v: Any) -> Optional[float]:
+def _num(v: Any) -> float | None:
     if v is None:
         return None
     v = float(v)
@@ -108,17 +109,17 @@ class ReliabilityParams:
 
     """
 
-    before_calibration: Tuple[str, ...] = ()
-    before_static: Optional[str] = None
-    after_calibration: Tuple[str, ...] = ()
-    after_static: Optional[str] = None
+    before_calibration: tuple[str, ...] = ()
+    before_static: str | None = None
+    after_calibration: tuple[str, ...] = ()
+    after_static: str | None = None
     c: float = DEFAULT_C
     tolerance: float = DEFAULT_TOLERANCE
     alpha: float = DEFAULT_ALPHA
     min_edf: float = DEFAULT_MIN_EDF
-    topic: Optional[str] = None
+    topic: str | None = None
     gravity: Gravity = field(default_factory=Gravity)
-    rate_hz: Optional[float] = None
+    rate_hz: float | None = None
     settings: DetectorSettings = field(default_factory=DetectorSettings)
     figures: bool = True
 
@@ -142,7 +143,7 @@ class ReliabilityParams:
         if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
 
-    def given(self) -> Dict[str, Any]:
+    def given(self) -> dict[str, Any]:
         """
         Return the parts given, name -> path(s).
 
@@ -183,11 +184,11 @@ class StaticAnalysis:
     rate_hz: float
     samples: int
     duration_s: float
-    check: Dict[str, Any]
-    channels: Dict[str, Any]
-    temperature: Optional[Dict[str, Any]] = None
+    check: dict[str, Any]
+    channels: dict[str, Any]
+    temperature: dict[str, Any] | None = None
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the record's entry of ``static_records`` in ``reliability.json``.
 
@@ -200,7 +201,7 @@ class StaticAnalysis:
                 'duration_s': self.duration_s, **self.check, 'temperature': self.temperature}
 
 
-def _temperature(path: str, topic: Optional[str], t0_ns: Optional[int] = None) -> Any:
+def _temperature(path: str, topic: str | None, t0_ns: int | None = None) -> Any:
     try:
         return records.read_temperature(path, topic=topic, t0_ns=t0_ns)
     except (BagError, InputDataError):
@@ -208,11 +209,11 @@ def _temperature(path: str, topic: Optional[str], t0_ns: Optional[int] = None) -
         return None
 
 
-def static_from_batches(batches: Iterable[Tuple[float, np.ndarray, np.ndarray, np.ndarray]], *,
+def static_from_batches(batches: Iterable[tuple[float, np.ndarray, np.ndarray, np.ndarray]], *,
                         source: str, c: float = DEFAULT_C,
-                        settings: Optional[DetectorSettings] = None,
+                        settings: DetectorSettings | None = None,
                         min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
-                        temperature: Optional[Tuple[np.ndarray, np.ndarray]] = None
+                        temperature: tuple[np.ndarray, np.ndarray] | None = None
                         ) -> StaticAnalysis:
     """
     Analyse a static record given as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
@@ -243,7 +244,7 @@ def static_from_batches(batches: Iterable[Tuple[float, np.ndarray, np.ndarray, n
     rec = None
     for rate, t, accel, gyro in batches:
         if rec is None:
-            kw: Dict[str, Any] = {} if settings is None else {'settings': settings}
+            kw: dict[str, Any] = {} if settings is None else {'settings': settings}
             rec = StaticRecord(rate, c=c, source=source, min_edf=min_edf, alpha=alpha, **kw)
         rec.update(t, accel, gyro)
     if rec is None:
@@ -269,8 +270,8 @@ def static_from_batches(batches: Iterable[Tuple[float, np.ndarray, np.ndarray, n
                           records.temperature_stats(temperature))
 
 
-def analyze_static(path: str, *, topic: Optional[str] = None, rate_hz: Optional[float] = None,
-                   c: float = DEFAULT_C, settings: Optional[DetectorSettings] = None,
+def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None = None,
+                   c: float = DEFAULT_C, settings: DetectorSettings | None = None,
                    min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA
                    ) -> StaticAnalysis:
     """
@@ -309,9 +310,9 @@ def analyze_static(path: str, *, topic: Optional[str] = None, rate_hz: Optional[
     return replace(st, temperature=records.temperature_stats(_temperature(path, topic)))
 
 
-def verdicts_of(before: Optional[StaticAnalysis], after: Optional[StaticAnalysis], *,
+def verdicts_of(before: StaticAnalysis | None, after: StaticAnalysis | None, *,
                 tolerance: float = DEFAULT_TOLERANCE,
-                alpha: float = DEFAULT_ALPHA) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+                alpha: float = DEFAULT_ALPHA) -> tuple[dict[str, Any], dict[str, Any]]:
     """
     Return the per-channel and per-sensor verdicts of two static records.
 
@@ -328,7 +329,7 @@ def verdicts_of(before: Optional[StaticAnalysis], after: Optional[StaticAnalysis
         ``{channel: Verdict}`` and ``{'accel': SensorVerdict, 'gyro': SensorVerdict}``.
 
     """
-    verdicts: Dict[str, Any] = {}
+    verdicts: dict[str, Any] = {}
     for ch in CHANNELS:
         ivs = [st.channels[ch].interval if st else None for st in (before, after)]
         verdicts[ch] = compare(*ivs, tolerance=tolerance, alpha=alpha)
@@ -337,9 +338,9 @@ def verdicts_of(before: Optional[StaticAnalysis], after: Optional[StaticAnalysis
     return verdicts, sensors
 
 
-def _dwell_temperatures(cal: CalibrationResult, topic: Optional[str]) -> List[Dict[str, Any]]:
+def _dwell_temperatures(cal: CalibrationResult, topic: str | None) -> list[dict[str, Any]]:
     out = []
-    cache: Dict[str, Any] = {}
+    cache: dict[str, Any] = {}
     for d in cal.dwells:
         if d.source not in cache:
             cache[d.source] = _temperature(d.source, topic)
@@ -375,15 +376,15 @@ class ReliabilityResult:
     """
 
     params: ReliabilityParams
-    statics: Dict[str, Any]
-    calibrations: Dict[str, Any]
-    verdicts: Dict[str, Any]
-    sensors: Dict[str, Any]
-    dwell_temperatures: Dict[str, Optional[List[Dict[str, Any]]]]
-    errors: Dict[str, str]
+    statics: dict[str, Any]
+    calibrations: dict[str, Any]
+    verdicts: dict[str, Any]
+    sensors: dict[str, Any]
+    dwell_temperatures: dict[str, list[dict[str, Any]] | None]
+    errors: dict[str, str]
     version: str = __version__
 
-    def warnings(self) -> List[str]:
+    def warnings(self) -> list[str]:
         """
         Return the lines a tool prints on stderr (failed parts).
 
@@ -394,7 +395,7 @@ class ReliabilityResult:
         """
         return [f'{k.replace("_", " ")}: {v}' for k, v in self.errors.items()]
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return the ``reliability.json`` document (SI, units in the keys).
 
@@ -404,7 +405,7 @@ class ReliabilityResult:
 
         """
         p = self.params
-        cals: Dict[str, Any] = {
+        cals: dict[str, Any] = {
             s: (self.calibrations[s].as_dict() if self.calibrations[s] else None) for s in SIDES}
         intervals = {ch: _interval_entry(ch, self.statics, self.verdicts[ch]) for ch in CHANNELS}
         return {
@@ -452,10 +453,10 @@ def run_reliability(params: ReliabilityParams) -> ReliabilityResult:
 
     """
     given = params.given()
-    errors: Dict[str, str] = {}
-    cals: Dict[str, Any] = {}
-    statics: Dict[str, Any] = {}
-    temps: Dict[str, Optional[List[Dict[str, Any]]]] = {}
+    errors: dict[str, str] = {}
+    cals: dict[str, Any] = {}
+    statics: dict[str, Any] = {}
+    temps: dict[str, list[dict[str, Any]] | None] = {}
     for side in SIDES:
         bags = getattr(params, f'{side}_calibration')
         cals[side] = temps[side] = None
@@ -484,13 +485,13 @@ def run_reliability(params: ReliabilityParams) -> ReliabilityResult:
 
 # ---- the JSON document ---------------------------------------------------------------------
 
-def _record_lengths(statics: Dict[str, Any]) -> List[Optional[float]]:
+def _record_lengths(statics: dict[str, Any]) -> list[float | None]:
     return [statics[s].duration_s if statics[s] else None for s in SIDES]
 
 
-def _interval_entry(ch: str, statics: Dict[str, Any], v: Any) -> Dict[str, Any]:
+def _interval_entry(ch: str, statics: dict[str, Any], v: Any) -> dict[str, Any]:
     u = unit_of(ch)
-    out: Dict[str, Any] = {}
+    out: dict[str, Any] = {}
     for side in SIDES:
         st = statics[side]
         iv = st.channels[ch].interval if st else None
@@ -517,7 +518,7 @@ def _interval_entry(ch: str, statics: Dict[str, Any], v: Any) -> Dict[str, Any]:
     return out
 
 
-def _sensor_entry(sv: Any, statics: Dict[str, Any]) -> Dict[str, Any]:
+def _sensor_entry(sv: Any, statics: dict[str, Any]) -> dict[str, Any]:
     lengths = _record_lengths(statics)
     decide = ([sv.decide_factor * t if t else None for t in lengths]
               if sv.decide_factor is not None else None)
@@ -527,8 +528,8 @@ def _sensor_entry(sv: Any, statics: Dict[str, Any]) -> Dict[str, Any]:
             'axes_beyond': list(sv.axes_beyond), 'decide_record_s': decide}
 
 
-def _summary(intervals: Dict[str, Dict[str, Any]]) -> Dict[str, Any]:
-    out: Dict[str, Any] = {}
+def _summary(intervals: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
     for sensor in SENSORS:
         rows = [intervals[f'{sensor}_{a}'] for a in 'xyz']
         wb = [r['width_before_s'] for r in rows if r['width_before_s'] is not None]
@@ -542,14 +543,14 @@ def _summary(intervals: Dict[str, Dict[str, Any]]) -> Dict[str, Any]:
     return out
 
 
-def _term_keys(ch: str) -> Dict[str, str]:
+def _term_keys(ch: str) -> dict[str, str]:
     u = unit_of(ch)
     return {t: TERM_UNITS[t][0].format(u=f'{t}_{u}') for t in TERMS}
 
 
-def _terms_entry(ch: str, statics: Dict[str, Any]) -> Dict[str, Any]:
+def _terms_entry(ch: str, statics: dict[str, Any]) -> dict[str, Any]:
     keys = _term_keys(ch)
-    out: Dict[str, Any] = {}
+    out: dict[str, Any] = {}
     for side in SIDES:
         st = statics[side]
         res = st.channels[ch] if st else None
@@ -564,7 +565,7 @@ def _terms_entry(ch: str, statics: Dict[str, Any]) -> Dict[str, Any]:
             out[side][key + '_sd_log'] = _num(term.sd_log)
             out[side][key + '_ci68'] = [_num(lo), _num(hi)]
     if out['before'] and out['after']:
-        ratio: Dict[str, Any] = {}
+        ratio: dict[str, Any] = {}
         for t, key in keys.items():
             b = statics['before'].channels[ch].terms[t]
             a = statics['after'].channels[ch].terms[t]
@@ -578,8 +579,8 @@ def _terms_entry(ch: str, statics: Dict[str, Any]) -> Dict[str, Any]:
     return out
 
 
-def _table6(cb: Optional[Dict[str, Any]],
-            ca: Optional[Dict[str, Any]]) -> Optional[List[Dict[str, Any]]]:
+def _table6(cb: dict[str, Any] | None,
+            ca: dict[str, Any] | None) -> list[dict[str, Any]] | None:
     if not (cb or ca):
         return None
     rows_b = table6_rows(cb) if cb else None
@@ -587,9 +588,9 @@ def _table6(cb: Optional[Dict[str, Any]],
     out = []
     for k in range(6):
         # cb or ca is given, so one of the two is
-        name = cast(List[Tuple[str, float, float]], rows_b or rows_a)[k][0]
+        name = cast(list[tuple[str, float, float]], rows_b or rows_a)[k][0]
         unit = 'mg' if name.startswith('b') else '%'
-        row: Dict[str, Any] = {'parameter': name, 'unit': unit}
+        row: dict[str, Any] = {'parameter': name, 'unit': unit}
         for side, rows in (('before', rows_b), ('after', rows_a)):
             row[side] = rows[k][1] if rows else None
             row[f'{side}_sigma'] = rows[k][2] if rows else None
@@ -602,13 +603,13 @@ def _table6(cb: Optional[Dict[str, Any]],
     return out
 
 
-def _pair(cb: Any, ca: Any, get: Callable[[Any], Any]) -> Tuple[Any, Any]:
+def _pair(cb: Any, ca: Any, get: Callable[[Any], Any]) -> tuple[Any, Any]:
     vb = get(cb) if cb else None
     va = get(ca) if ca else None
     return vb, va
 
 
-def _vec_change(vb: Any, sb: Any, va: Any, sa: Any) -> Tuple[Any, Any]:
+def _vec_change(vb: Any, sb: Any, va: Any, sa: Any) -> tuple[Any, Any]:
     if vb is None or va is None:
         return None, None
     ch = [(a - b) if (a is not None and b is not None) else None for a, b in zip(va, vb)]
@@ -617,11 +618,11 @@ def _vec_change(vb: Any, sb: Any, va: Any, sa: Any) -> Tuple[Any, Any]:
     return ch, sd
 
 
-def _gyro_entry(cb: Optional[Dict[str, Any]],
-                ca: Optional[Dict[str, Any]]) -> Optional[Dict[str, Any]]:
+def _gyro_entry(cb: dict[str, Any] | None,
+                ca: dict[str, Any] | None) -> dict[str, Any] | None:
     if not (cb or ca):
         return None
-    out: Dict[str, Any] = {}
+    out: dict[str, Any] = {}
     for side, doc in (('before', cb), ('after', ca)):
         if doc is None:
             out[side] = None
@@ -641,11 +642,11 @@ def _gyro_entry(cb: Optional[Dict[str, Any]],
     return out
 
 
-def _cross_axis(cb: Optional[Dict[str, Any]], ca: Optional[Dict[str, Any]],
-                sensor: str) -> Optional[Dict[str, Any]]:
+def _cross_axis(cb: dict[str, Any] | None, ca: dict[str, Any] | None,
+                sensor: str) -> dict[str, Any] | None:
     if not (cb or ca):
         return None
-    out: Dict[str, Any] = {}
+    out: dict[str, Any] = {}
     for side, doc in (('before', cb), ('after', ca)):
         out[side] = None if doc is None else {
             'misalignment': doc[sensor]['misalignment'],
@@ -653,16 +654,16 @@ def _cross_axis(cb: Optional[Dict[str, Any]], ca: Optional[Dict[str, Any]],
     return out
 
 
-def _calibration_entry(doc: Optional[Dict[str, Any]]) -> Optional[Dict[str, Any]]:
+def _calibration_entry(doc: dict[str, Any] | None) -> dict[str, Any] | None:
     if doc is None:
         return None
     keep = ('gravity_m_s2', 'accel', 'gyro', 'uniformity', 'gravity_check', 'dwells', 'sources')
     return {k: doc[k] for k in keep}
 
 
-def _uniformity(cb: Optional[Dict[str, Any]],
-                ca: Optional[Dict[str, Any]]) -> Dict[str, Any]:
-    out: Dict[str, Any] = {'before': cb['uniformity'] if cb else None,
+def _uniformity(cb: dict[str, Any] | None,
+                ca: dict[str, Any] | None) -> dict[str, Any]:
+    out: dict[str, Any] = {'before': cb['uniformity'] if cb else None,
                            'after': ca['uniformity'] if ca else None}
     if cb and ca:
         out['ratio_after_before'] = {
@@ -676,20 +677,20 @@ def _uniformity(cb: Optional[Dict[str, Any]],
 NAMES = {'accel': 'accelerometer', 'gyro': 'gyroscope'}
 
 
-def _pct(v: Optional[float], spec: str = '+.0f') -> str:
+def _pct(v: float | None, spec: str = '+.0f') -> str:
     return 'n/a' if v is None else f'{format(100 * v, spec)} %'
 
 
-def _hours(seconds: Optional[float]) -> str:
+def _hours(seconds: float | None) -> str:
     return 'n/a' if seconds is None else f'{seconds / 3600:.3g} h'
 
 
-def _longest(values: Optional[Iterable[Optional[float]]]) -> Optional[float]:
+def _longest(values: Iterable[float | None] | None) -> float | None:
     vals = [v for v in (values or []) if v is not None]
     return max(vals) if vals else None
 
 
-def _sensor_sentence(name: str, e: Dict[str, Any], doc: Dict[str, Any]) -> str:
+def _sensor_sentence(name: str, e: dict[str, Any], doc: dict[str, Any]) -> str:
     tol = f'+/-{100 * doc["tolerance"]:.0f} %'
     conf = f'{100 * doc["confidence_one_sided"]:.0f} %'
     m, sd = e['mean_change'], e['mean_change_sd']
@@ -722,10 +723,10 @@ def _sensor_sentence(name: str, e: Dict[str, Any], doc: Dict[str, Any]) -> str:
     return f'These records cannot tell whether the {name} changed: {e["basis"]}.'
 
 
-def _floor_sentences(doc: Dict[str, Any]) -> List[str]:
+def _floor_sentences(doc: dict[str, Any]) -> list[str]:
     out = []
     for s in SENSORS:
-        logs: List[float] = []
+        logs: list[float] = []
         var = 0.0
         for a in 'xyz':
             ch = f'{s}_{a}'
@@ -743,7 +744,7 @@ def _floor_sentences(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def in_short(doc: Dict[str, Any]) -> List[str]:
+def in_short(doc: dict[str, Any]) -> list[str]:
     """
     Return the plain-language summary of a reliability document, one sentence per item.
 
@@ -809,11 +810,11 @@ def in_short(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def _fmt(v: Optional[float], spec: str) -> str:
+def _fmt(v: float | None, spec: str) -> str:
     return 'n/a' if v is None else format(v, spec)
 
 
-def _pm(v: Optional[float], sd: Optional[float], spec: str, scale: float = 1.0) -> str:
+def _pm(v: float | None, sd: float | None, spec: str, scale: float = 1.0) -> str:
     if v is None:
         return 'n/a'
     if sd is None:
@@ -821,12 +822,12 @@ def _pm(v: Optional[float], sd: Optional[float], spec: str, scale: float = 1.0) 
     return f'{format(v * scale, spec)} +/- {format(sd * scale, spec.lstrip("+"))}'
 
 
-def _interval_rows(doc: Dict[str, Any]) -> List[str]:
+def _interval_rows(doc: dict[str, Any]) -> list[str]:
     out = ['| channel | interval before (s) | interval after (s) | width before (s) | '
            'width after (s) | change | ' f'{100 * (1 - 2 * doc["alpha"]):.0f} % interval | '
            'verdict |', '|---|---|---|---|---|---|---|---|']
 
-    def rng(pair: Optional[Sequence[Optional[float]]]) -> str:
+    def rng(pair: Sequence[float | None] | None) -> str:
         if pair is None:
             return 'not given'
         return ' - '.join('open' if v is None else f'{v:.3g}' for v in pair)
@@ -843,7 +844,7 @@ def _interval_rows(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def _term_rows(doc: Dict[str, Any]) -> List[str]:
+def _term_rows(doc: dict[str, Any]) -> list[str]:
     out = ['| channel | term | unit | before (68 % interval) | after (68 % interval) | '
            'after / before |', '|---|---|---|---|---|---|']
     labels = {'white_noise': 'white noise (N)', 'bias_stability': 'bias stability',
@@ -868,8 +869,8 @@ def _term_rows(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def _calibration_rows(doc: Dict[str, Any]) -> List[str]:
-    out: List[str] = []
+def _calibration_rows(doc: dict[str, Any]) -> list[str]:
+    out: list[str] = []
     rows = doc['table6']
     if rows:
         out += ['', '## Six-position calibration (paper 001 Table 6)', '',
@@ -887,7 +888,7 @@ def _calibration_rows(doc: Dict[str, Any]) -> List[str]:
                 '| axis | bias before (deg/s) | bias after (deg/s) | change (deg/s) | '
                 'scale factor before (%) | scale factor after (%) |', '|---|---|---|---|---|---|']
         for i, ax in enumerate('xyz'):
-            cells: List[str] = []
+            cells: list[str] = []
             for side in SIDES:
                 d = g[side]
                 cells.append('not given' if d is None else
@@ -912,7 +913,7 @@ def _calibration_rows(doc: Dict[str, Any]) -> List[str]:
             for i in range(3):
                 if i == j:
                     continue
-                vals: List[Optional[Tuple[Any, Any]]] = []
+                vals: list[tuple[Any, Any] | None] = []
                 for side in SIDES:
                     d = src[side]
                     if d is None or (sensor == 'gyro' and not (d['estimated'] or [[0] * 3] * 3)
@@ -933,17 +934,17 @@ def _calibration_rows(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def _indicator_rows(doc: Dict[str, Any]) -> List[str]:
+def _indicator_rows(doc: dict[str, Any]) -> list[str]:
     ub, ua = doc['uniformity']['before'], doc['uniformity']['after']
     if not (ub or ua):
         return []
 
-    def u(d: Optional[Dict[str, Any]], key: str, scale: float, spec: str) -> str:
+    def u(d: dict[str, Any] | None, key: str, scale: float, spec: str) -> str:
         return 'not given' if d is None else format(d[key] * scale, spec)
 
     gb, ga = doc['gravity_check']['before'], doc['gravity_check']['after']
 
-    def verdict(gc: Optional[Dict[str, Any]]) -> str:
+    def verdict(gc: dict[str, Any] | None) -> str:
         return 'not given' if gc is None else ('consistent' if gc['consistent']
                                                else 'inconsistent')
 
@@ -965,13 +966,13 @@ def _indicator_rows(doc: Dict[str, Any]) -> List[str]:
             f'| gravity check verdict | {verdict(gb)} | {verdict(ga)} |']
 
 
-def _temp(t: Optional[Dict[str, Any]]) -> str:
+def _temp(t: dict[str, Any] | None) -> str:
     if not t:
         return 'not recorded'
     return f'{t["mean_degc"]:.2f} ({t["min_degc"]:.2f} .. {t["max_degc"]:.2f})'
 
 
-def _record_rows(doc: Dict[str, Any]) -> List[str]:
+def _record_rows(doc: dict[str, Any]) -> list[str]:
     out = ['', '## Records and temperatures', '',
            '| record | side | length (h) | rate (Hz) | samples | static fraction | orientation '
            '| temperature (degC): mean (min .. max) |', '|---|---|---|---|---|---|---|---|']
@@ -993,7 +994,7 @@ def _record_rows(doc: Dict[str, Any]) -> List[str]:
     return out
 
 
-def markdown(doc: Dict[str, Any]) -> str:
+def markdown(doc: dict[str, Any]) -> str:
     """
     Return ``reliability.md`` of a reliability document: the verdict first, then the evidence.
 
@@ -1112,7 +1113,7 @@ def adev_csv(static: StaticAnalysis) -> str:
 
 
 def plot_fig6(path: Union[str, 'os.PathLike[str]'], sensor: str,
-              before: Optional[StaticAnalysis], after: Optional[StaticAnalysis],
+              before: StaticAnalysis | None, after: StaticAnalysis | None,
               c: float) -> None:
     """
     Draw paper 001 Figure 6 for one sensor: ADEV per axis before and after, level and interval.
@@ -1174,7 +1175,7 @@ def plot_fig6(path: Union[str, 'os.PathLike[str]'], sensor: str,
 
 def write_reliability(result: ReliabilityResult, out_dir: Union[str, 'os.PathLike[str]'], *,
                       html: bool = True,
-                      command: Optional[Sequence[str]] = None) -> List[str]:
+                      command: Sequence[str] | None = None) -> list[str]:
     """
     Write every file of a comparison (published together or not at all).
 
@@ -1196,7 +1197,7 @@ def write_reliability(result: ReliabilityResult, out_dir: Union[str, 'os.PathLik
 
     """
     doc = result.as_dict()
-    names: List[str] = []
+    names: list[str] = []
     with staged_output(out_dir) as stage:
         for side in SIDES:
             cal = result.calibrations[side]

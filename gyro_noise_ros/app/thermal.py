@@ -26,6 +26,7 @@ its final name, no ``model.json`` that looks finished). The command line
 the exit code. Definitions of every number: ``docs/thermal.md``.
 """
 
+from collections.abc import Callable, Sequence
 import copy
 from dataclasses import dataclass, field, replace
 import json
@@ -33,7 +34,7 @@ import math
 from pathlib import Path
 import tempfile
 import time
-from typing import Any, Callable, cast, Dict, List, Optional, Sequence, Tuple
+from typing import Any, cast
 
 import numpy as np
 
@@ -58,10 +59,10 @@ __all__ = ['ApplyResult', 'BagOptions', 'COMPARE_HEADER', 'CompareResult', 'DEFI
 
 PROG = 'gyro_noise_thermal'
 #: Figures of a report: (caption, PNG file, or None when the method has no such figure).
-_Figures = List[Tuple[str, Optional[Path]]]
+_Figures = list[tuple[str, Path | None]]
 #: A method's own figures, drawn before the output folder exists: (caption, file name or None,
 #: PNG bytes or None).
-_MethodFigures = Tuple[Tuple[str, Optional[str], Optional[bytes]], ...]
+_MethodFigures = tuple[tuple[str, str | None, bytes | None], ...]
 
 #: Definitions written into metrics.json and the reports (docs/thermal.md says the same).
 DEFINITIONS = {
@@ -113,11 +114,11 @@ class BagOptions:
 
     """
 
-    topic: Optional[str] = None
-    temperature_topic: Optional[str] = None
+    topic: str | None = None
+    temperature_topic: str | None = None
     max_gap_s: float = DEFAULT_MAX_GAP_S
 
-    def read(self, path: StrPath) -> Tuple[Any, Any]:
+    def read(self, path: StrPath) -> tuple[Any, Any]:
         """Read one bag: ``(ThermalRun, ThermalBag)``."""
         return read_thermal_run(path, topic=self.topic, temperature_topic=self.temperature_topic,
                                 max_gap_s=self.max_gap_s)
@@ -148,14 +149,14 @@ class ScoreOptions:
     range_margin_c: float = registry.DEFAULT_RANGE_MARGIN_C
 
 
-def _num(v: Any) -> Optional[float]:
+def _num(v: Any) -> float | None:
     if v is None:
         return None
     v = float(v)
     return v if math.isfinite(v) else None
 
 
-def _json(doc: Dict[str, Any]) -> str:
+def _json(doc: dict[str, Any]) -> str:
     return json.dumps(registry.to_jsonable(doc), indent=1, allow_nan=False) + '\n'
 
 
@@ -164,7 +165,7 @@ def _write(path: StrPath, text: str) -> Path:
     return Path(path)
 
 
-def _residual_drift(x: Any, rate_hz: float) -> List[Optional[float]]:
+def _residual_drift(x: Any, rate_hz: float) -> list[float | None]:
     """Std (ddof 1) of consecutive 60-s window means per axis, in x's unit (None if < 2)."""
     x = np.asarray(x, dtype=float)
     window = int(round(DRIFT_WINDOW_S * rate_hz))
@@ -175,9 +176,9 @@ def _residual_drift(x: Any, rate_hz: float) -> List[Optional[float]]:
     return [float(v) for v in np.std(means, axis=0, ddof=1)]
 
 
-def _read_runs(paths: Sequence[str], options: BagOptions) -> Tuple[List[Any], List[Any]]:
-    runs: List[Any] = []
-    bags: List[Any] = []
+def _read_runs(paths: Sequence[str], options: BagOptions) -> tuple[list[Any], list[Any]]:
+    runs: list[Any] = []
+    bags: list[Any] = []
     for path in paths:
         run, bag = options.read(path)
         runs.append(run)
@@ -185,7 +186,7 @@ def _read_runs(paths: Sequence[str], options: BagOptions) -> Tuple[List[Any], Li
     return runs, bags
 
 
-def _join(runs: List[Any]) -> Any:
+def _join(runs: list[Any]) -> Any:
     # The gap keeps the trailing temperature-rate window from straddling two recordings.
     return join_runs(runs, gap_s=DEFAULT_RATE_WINDOW_S + 1.0 / runs[0].rate_hz)
 
@@ -216,8 +217,8 @@ def _put_method_figures(figures: _MethodFigures, out: Path) -> _Figures:
     return entries
 
 
-def _executor(scheduler: Optional[str], names: Sequence[str],
-              warn: Optional[Callable[[str], None]]) -> Any:
+def _executor(scheduler: str | None, names: Sequence[str],
+              warn: Callable[[str], None] | None) -> Any:
     """Connect to a Dask scheduler (None without one); say so when no method distributes."""
     if scheduler is None:
         return None
@@ -242,8 +243,8 @@ def _fit_model(name: str, run: Any, *, seed: int, sources: Sequence[str],
                                executor=executor)
 
 
-def _in_sample(run: Any, processed: np.ndarray) -> Dict[str, Any]:
-    out: Dict[str, Any] = {}
+def _in_sample(run: Any, processed: np.ndarray) -> dict[str, Any]:
+    out: dict[str, Any] = {}
     for a, axis in enumerate('xyz'):
         raw_m = noise_metrics(run.gyro_rad_s[:, a], run.rate_hz)
         proc_m = noise_metrics(processed[:, a], run.rate_hz)
@@ -254,7 +255,7 @@ def _in_sample(run: Any, processed: np.ndarray) -> Dict[str, Any]:
     return out
 
 
-def _accel_block(accel_poly: Any, run: Any, processed_accel: np.ndarray) -> Dict[str, Any]:
+def _accel_block(accel_poly: Any, run: Any, processed_accel: np.ndarray) -> dict[str, Any]:
     """Per-axis residual drift (60-s means) of the accelerometer, raw and processed (mg)."""
     mg = 1e3 / STANDARD_GRAVITY_M_S2
     raw = _residual_drift(run.accel_m_s2, run.rate_hz)
@@ -313,16 +314,16 @@ class FitResult:
 
     model: Any
     run: Any
-    bags: Tuple[Dict[str, Any], ...]
+    bags: tuple[dict[str, Any], ...]
     processed: np.ndarray
     fit_time_s: float
     seed: int
-    in_sample: Dict[str, Any]
-    accel: Optional[Dict[str, Any]]
+    in_sample: dict[str, Any]
+    accel: dict[str, Any] | None
     method_figures: _MethodFigures = ()
-    command: Tuple[str, ...] = ()
+    command: tuple[str, ...] = ()
 
-    def model_dict(self) -> Dict[str, Any]:
+    def model_dict(self) -> dict[str, Any]:
         """
         Return the model.json document.
 
@@ -334,7 +335,7 @@ class FitResult:
         return registry.model_document(self.model.method, training=self.model.training,
                                        accel=self.model.accel)
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return training.json.
 
@@ -357,8 +358,8 @@ class FitResult:
 
 def fit(*, bags: Sequence[str], method: str = registry.DEFAULT_METHOD, seed: int = 0,
         min_range_c: float = registry.DEFAULT_MIN_RANGE_C, bag_options: BagOptions = BagOptions(),
-        accel: bool = True, scheduler: Optional[str] = None,
-        warn: Optional[Callable[[str], None]] = None, figures: bool = True,
+        accel: bool = True, scheduler: str | None = None,
+        warn: Callable[[str], None] | None = None, figures: bool = True,
         command: Sequence[str] = ()) -> FitResult:
     """
     Fit one method on one or more recordings (``gyro_noise_thermal fit``).
@@ -421,7 +422,7 @@ def fit(*, bags: Sequence[str], method: str = registry.DEFAULT_METHOD, seed: int
                      accel=accel_doc, method_figures=method_figs, command=tuple(command))
 
 
-def _training_md(doc: Dict[str, Any], figs: _Figures, out: Path) -> str:
+def _training_md(doc: dict[str, Any], figs: _Figures, out: Path) -> str:
     from ..thermal import report
 
     t = doc['training']
@@ -457,7 +458,7 @@ def _training_md(doc: Dict[str, Any], figs: _Figures, out: Path) -> str:
             + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
 
 
-def write_fit(result: FitResult, out_dir: StrPath, *, figures: bool = True) -> List[Path]:
+def write_fit(result: FitResult, out_dir: StrPath, *, figures: bool = True) -> list[Path]:
     """
     Write model.json, training.json, training.md and the figures (staged).
 
@@ -558,17 +559,17 @@ class ApplyResult:
 
     """
 
-    doc: Dict[str, Any]
+    doc: dict[str, Any]
     run: Any
     bag: Any
     processed: np.ndarray
-    processed_accel: Optional[np.ndarray]
-    curves: Dict[str, Any]
+    processed_accel: np.ndarray | None
+    curves: dict[str, Any]
     info: Any = None
     method_figures: _MethodFigures = ()
-    notes: Tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return metrics.json.
 
@@ -652,7 +653,7 @@ def apply_model(*, bag: str, model_path: str, bag_options: BagOptions = BagOptio
 
 
 def _apply_figures(out: Path, run: Any, processed: np.ndarray, method: str,
-                   curves: Dict[str, Any], info: Any, method_figs: _Figures) -> _Figures:
+                   curves: dict[str, Any], info: Any, method_figs: _Figures) -> _Figures:
     from ..thermal import report
 
     name = method
@@ -688,7 +689,7 @@ def _apply_figures(out: Path, run: Any, processed: np.ndarray, method: str,
     return figs
 
 
-def bandwidth_cell(bw: Optional[Dict[str, Any]]) -> str:
+def bandwidth_cell(bw: dict[str, Any] | None) -> str:
     """
     Return the -3 dB cell of a table: the frequency, ``< band`` or ``> band``.
 
@@ -719,7 +720,7 @@ AXIS_HEADER = ['axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
 AXIS_SPECS = ['', '.4g', '.4g', '.3g', '', '', '.4g', '.4g', '', '', '.3g', '.3g', '.3g', '']
 
 
-def axis_rows(axes: Dict[str, Any]) -> List[Tuple[Any, ...]]:
+def axis_rows(axes: dict[str, Any]) -> list[tuple[Any, ...]]:
     """
     Return the per-axis rows of the apply report (:data:`AXIS_HEADER`).
 
@@ -749,12 +750,12 @@ def axis_rows(axes: Dict[str, Any]) -> List[Tuple[Any, ...]]:
     return rows
 
 
-def _small_text(inj: Dict[str, Any]) -> str:
+def _small_text(inj: dict[str, Any]) -> str:
     amp = inj.get('small_signal_amplitude_deg_s')
     return '' if amp is None else f', and again at {amp:.3g} deg/s (the size of the noise)'
 
 
-def _apply_md(doc: Dict[str, Any], figs: _Figures, out: Path) -> str:
+def _apply_md(doc: dict[str, Any], figs: _Figures, out: Path) -> str:
     from ..thermal import report
 
     inj = doc['injection']
@@ -806,8 +807,8 @@ def _apply_md(doc: Dict[str, Any], figs: _Figures, out: Path) -> str:
 
 
 def write_apply(result: ApplyResult, out_dir: StrPath, *, figures: bool = True,
-                write_bag: bool = True, storage: Optional[str] = None,
-                html: bool = True) -> List[Path]:
+                write_bag: bool = True, storage: str | None = None,
+                html: bool = True) -> list[Path]:
     """
     Write OUT/compensated/ (rosbag2), metrics.json, report.md, report.html, figures (staged).
 
@@ -834,7 +835,7 @@ def write_apply(result: ApplyResult, out_dir: StrPath, *, figures: bool = True,
     """
     doc = result.doc
     with staged_output(out_dir) as stage:
-        files: List[Path] = []
+        files: list[Path] = []
         if write_bag:
             write_compensated(result.bag, result.processed, stage / 'compensated',
                               storage=storage, accel_m_s2=result.processed_accel)
@@ -863,7 +864,7 @@ def _same_run(a: Any, b: Any) -> bool:
     return bool(np.array_equal(a.gyro_rad_s, b.gyro_rad_s))
 
 
-def split_run(run: Any, fraction: float) -> Tuple[Any, Any, float]:
+def split_run(run: Any, fraction: float) -> tuple[Any, Any, float]:
     """
     Split one run in time: the first ``fraction`` of its duration, and the rest.
 
@@ -903,8 +904,8 @@ def split_run(run: Any, fraction: float) -> Tuple[Any, Any, float]:
     return first, rest, cut_s
 
 
-def _compare_runs(train: str, test: Optional[str], split_at: Optional[float],
-                  options: BagOptions) -> Tuple[Any, Any, str, str, Optional[Dict[str, Any]]]:
+def _compare_runs(train: str, test: str | None, split_at: float | None,
+                  options: BagOptions) -> tuple[Any, Any, str, str, dict[str, Any] | None]:
     """Read TRAIN_BAG and TEST_BAG, or split TRAIN_BAG in time (--split-at)."""
     if split_at is not None:
         if test is not None:
@@ -931,7 +932,7 @@ def _compare_runs(train: str, test: Optional[str], split_at: Optional[float],
     return a, b, str(a_bag.path), str(b_bag.path), None
 
 
-def _simulated_truth(bag_path: StrPath) -> Optional[Tuple[Any, Any]]:
+def _simulated_truth(bag_path: StrPath) -> tuple[Any, Any] | None:
     """Return the simulation's truth beside a bag of ``simulate`` (``<label>_truth.npz``)."""
     from ..thermal.simulate import load_truth, model_from_settings
 
@@ -948,7 +949,7 @@ def _simulated_truth(bag_path: StrPath) -> Optional[Tuple[Any, Any]]:
 
 
 def oracle_scores(train: Any, train_truth: Any, test: Any, test_truth: Any,
-                  model: Any) -> Dict[str, Any]:
+                  model: Any) -> dict[str, Any]:
     """
     Score the least-squares oracles on a simulated pair (residual drift per axis, deg/s).
 
@@ -969,7 +970,7 @@ def oracle_scores(train: Any, train_truth: Any, test: Any, test_truth: Any,
     """
     from ..thermal.oracle import oracle_residual
 
-    out: Dict[str, Any] = {}
+    out: dict[str, Any] = {}
     for key, measured in (('true_terms', False), ('measured_terms', True)):
         res = oracle_residual(train, train_truth, test, test_truth, model, measured=measured)
         axes = {axis: _num(noise_metrics(res[:, a], test.rate_hz).residual_drift_deg_s)
@@ -1002,13 +1003,13 @@ class CompareResult:
 
     """
 
-    summary: Dict[str, Any]
-    rows: List[Tuple[Any, ...]]
-    curves: Dict[str, Any]
+    summary: dict[str, Any]
+    rows: list[tuple[Any, ...]]
+    curves: dict[str, Any]
     test: Any
-    errors: Dict[str, str] = field(default_factory=dict)
+    errors: dict[str, str] = field(default_factory=dict)
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return compare.json.
 
@@ -1020,7 +1021,7 @@ class CompareResult:
         return self.summary
 
 
-def check_method_names(names: Sequence[str]) -> List[str]:
+def check_method_names(names: Sequence[str]) -> list[str]:
     """
     Refuse an empty list or an unknown name before any work (one line, exit 2).
 
@@ -1045,12 +1046,12 @@ def check_method_names(names: Sequence[str]) -> List[str]:
     return list(names)
 
 
-def compare(*, train: str, test: Optional[str] = None, split_at: Optional[float] = None,
-            methods: Optional[Sequence[str]] = None, seed: int = 0,
+def compare(*, train: str, test: str | None = None, split_at: float | None = None,
+            methods: Sequence[str] | None = None, seed: int = 0,
             min_range_c: float = registry.DEFAULT_MIN_RANGE_C,
             bag_options: BagOptions = BagOptions(), score: ScoreOptions = ScoreOptions(),
-            scheduler: Optional[str] = None, warn: Optional[Callable[[str], None]] = None,
-            progress: Optional[Callable[[str], None]] = None,
+            scheduler: str | None = None, warn: Callable[[str], None] | None = None,
+            progress: Callable[[str], None] | None = None,
             command: Sequence[str] = ()) -> CompareResult:
     """
     Train every method on one run and score it on another (``gyro_noise_thermal compare``).
@@ -1092,9 +1093,9 @@ def compare(*, train: str, test: Optional[str] = None, split_at: Optional[float]
     registry.check_trainable(run_a, min_range_c=min_range_c)
     _check_injection_length(run_b, score)
     say = progress or (lambda text: None)
-    results: Dict[str, Dict[str, Any]] = {}
-    errors: Dict[str, str] = {}
-    curves: Dict[str, Any] = {}
+    results: dict[str, dict[str, Any]] = {}
+    errors: dict[str, str] = {}
+    curves: dict[str, Any] = {}
     pool = _executor(scheduler, names, warn)
     try:
         for name in names:
@@ -1154,9 +1155,9 @@ def compare(*, train: str, test: Optional[str] = None, split_at: Optional[float]
                          test=run_b, errors=errors)
 
 
-def _best(results: Dict[str, Dict[str, Any]]) -> Dict[str, Any]:
+def _best(results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """Pick the lowest mean residual drift among live-capable full-bandwidth methods."""
-    best: Optional[str] = None
+    best: str | None = None
     score = math.inf
     for name, doc in results.items():
         axes = doc['axes'].values()
@@ -1190,16 +1191,16 @@ _CSV_KEYS = ['method', 'axis', 'arw_deg_sqrt_h', 'arw_gain_noise_path', 'bias_st
              'live_capable', 'arw_from_bandwidth', 'bias_stability_upper_bound']
 
 
-def _compare_rows(summary: Dict[str, Any]) -> List[Tuple[Any, ...]]:
-    rows: List[Tuple[Any, ...]] = []
+def _compare_rows(summary: dict[str, Any]) -> list[tuple[Any, ...]]:
+    rows: list[tuple[Any, ...]] = []
     results = summary['methods']
     oracle = summary.get('oracle')
-    base: Dict[str, Any] = {}
+    base: dict[str, Any] = {}
     if oracle:
         base = oracle['true_terms']['axes']
     first = next(iter(results.values()))
 
-    def ratio(value: Optional[float], axis: str) -> Optional[float]:
+    def ratio(value: float | None, axis: str) -> float | None:
         b = base.get(axis)
         return None if value is None or not b else value / b
 
@@ -1230,7 +1231,7 @@ def _compare_rows(summary: Dict[str, Any]) -> List[Tuple[Any, ...]]:
     return rows
 
 
-def table_cells(rows: Sequence[Tuple[Any, ...]]) -> List[Tuple[Any, ...]]:
+def table_cells(rows: Sequence[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
     """
     Return compare rows as the Markdown table shows them (an upper bound of bias stability '<=').
 
@@ -1255,7 +1256,7 @@ def table_cells(rows: Sequence[Tuple[Any, ...]]) -> List[Tuple[Any, ...]]:
     return cells
 
 
-def _csv(rows: Sequence[Tuple[Any, ...]]) -> str:
+def _csv(rows: Sequence[tuple[Any, ...]]) -> str:
     import csv
     import io
 
@@ -1267,8 +1268,8 @@ def _csv(rows: Sequence[Tuple[Any, ...]]) -> str:
     return buf.getvalue()
 
 
-def _compare_md(summary: Dict[str, Any], rows: Sequence[Tuple[Any, ...]],
-                figs: List[Tuple[str, Path]], out: Path) -> str:
+def _compare_md(summary: dict[str, Any], rows: Sequence[tuple[Any, ...]],
+                figs: list[tuple[str, Path]], out: Path) -> str:
     from ..thermal import report
 
     errs = ''.join(f'- {k}: {v}\n' for k, v in summary['errors'].items())
@@ -1307,7 +1308,7 @@ def _compare_md(summary: Dict[str, Any], rows: Sequence[Tuple[Any, ...]],
             + ''.join(f'\n![{cap}]({Path(p).relative_to(out)})\n\n*{cap}*\n' for cap, p in figs))
 
 
-def _compare_figures(out: Path, test: Any, curves: Dict[str, Any]) -> List[Tuple[str, Path]]:
+def _compare_figures(out: Path, test: Any, curves: dict[str, Any]) -> list[tuple[str, Path]]:
     from ..thermal import report
 
     first = next(iter(curves.values()))
@@ -1333,7 +1334,7 @@ def _compare_figures(out: Path, test: Any, curves: Dict[str, Any]) -> List[Tuple
 
 
 def write_compare(result: CompareResult, out_dir: StrPath, *, figures: bool = True,
-                  html: bool = True) -> List[Path]:
+                  html: bool = True) -> list[Path]:
     """
     Write compare.json, compare.csv, compare.md, report.html and the figures (staged).
 
@@ -1384,10 +1385,10 @@ class SimulateResult:
 
     """
 
-    pair: List[Tuple[str, Any, Any]]
-    settings: Dict[str, Any]
+    pair: list[tuple[str, Any, Any]]
+    settings: dict[str, Any]
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return simulation.json.
 
@@ -1399,11 +1400,11 @@ class SimulateResult:
         return self.settings
 
 
-def simulate(*, seed: int = 0, hours: Optional[float] = None, rate_hz: float = 100.0,
-             compress: Optional[float] = None, shape: str = 'oven',
-             test_shape: Optional[str] = None, hysteresis: bool = True,
+def simulate(*, seed: int = 0, hours: float | None = None, rate_hz: float = 100.0,
+             compress: float | None = None, shape: str = 'oven',
+             test_shape: str | None = None, hysteresis: bool = True,
              storage: str = 'sqlite3',
-             temperature_rate_hz: Optional[float] = None) -> SimulateResult:
+             temperature_rate_hz: float | None = None) -> SimulateResult:
     """
     Simulate a seeded train/test pair (``gyro_noise_thermal simulate``).
 
@@ -1451,7 +1452,7 @@ def simulate(*, seed: int = 0, hours: Optional[float] = None, rate_hz: float = 1
     return SimulateResult(pair=pair, settings=settings)
 
 
-def write_simulate(result: SimulateResult, out_dir: StrPath) -> Tuple[Path, Path]:
+def write_simulate(result: SimulateResult, out_dir: StrPath) -> tuple[Path, Path]:
     """
     Write train/, test/ (rosbag2), their truth and simulation.json (staged).
 
@@ -1500,12 +1501,12 @@ class ExportResult:
     """
 
     model_path: str
-    px4: List[Tuple[str, Any, int]]
-    ardupilot: List[Tuple[str, Any]]
-    notes: Tuple[str, ...] = ()
+    px4: list[tuple[str, Any, int]]
+    ardupilot: list[tuple[str, Any]]
+    notes: tuple[str, ...] = ()
     accel: bool = False
 
-    def as_dict(self) -> Dict[str, Any]:
+    def as_dict(self) -> dict[str, Any]:
         """
         Return export.json.
 
@@ -1527,7 +1528,7 @@ class ExportResult:
 
 def export(*, model_path: str, px4_instance: int = 0, gyro_device_id: int = 0,
            accel_device_id: int = 0, ardupilot_imu: int = 1, gyro_offsets: bool = True,
-           cal_temp_c: Optional[float] = None) -> ExportResult:
+           cal_temp_c: float | None = None) -> ExportResult:
     """
     Turn a poly3 model.json into PX4 and ArduPilot parameters (``gyro_noise_thermal export``).
 
@@ -1564,7 +1565,7 @@ def export(*, model_path: str, px4_instance: int = 0, gyro_device_id: int = 0,
                         notes=model.notes, accel=accel is not None)
 
 
-def write_export(result: ExportResult, out_dir: StrPath) -> List[Path]:
+def write_export(result: ExportResult, out_dir: StrPath) -> list[Path]:
     """
     Write thermal_px4.params, thermal_ardupilot.parm and export.json (staged).
 
@@ -1605,11 +1606,11 @@ HELDOUT_METHODS: tuple[tuple[str, str, dict[str, object]], ...] = (
     ('bp', 'bp', {}), ('bp shortcut=False', 'bp', {'shortcut': False}))
 
 
-def heldout_scores(*, pairs: Sequence[Tuple[str, str]] = HELDOUT_PAIRS,
-                   methods: Sequence[Tuple[str, str, Dict[str, Any]]] = HELDOUT_METHODS,
+def heldout_scores(*, pairs: Sequence[tuple[str, str]] = HELDOUT_PAIRS,
+                   methods: Sequence[tuple[str, str, dict[str, Any]]] = HELDOUT_METHODS,
                    seeds: Sequence[int] = (1, 2, 3, 4, 5), rate_hz: float = 20.0,
                    hours: float = 1.0,
-                   progress: Optional[Callable[[str], None]] = None) -> List[Dict[str, Any]]:
+                   progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
     """
     Score methods on simulated held-out pairs against the least-squares oracle.
 
@@ -1647,14 +1648,14 @@ def heldout_scores(*, pairs: Sequence[Tuple[str, str]] = HELDOUT_PAIRS,
     model = ThermalModel()
     rows = []
     for train_shape, test_shape in pairs:
-        scores: Dict[str, List[Any]] = {}
-        outside: Dict[str, List[Dict[str, Any]]] = {}
+        scores: dict[str, list[Any]] = {}
+        outside: dict[str, list[dict[str, Any]]] = {}
         for seed in seeds:
             (_, train, ta), (_, test, tb) = simulate_pair(
                 seed=seed, rate_hz=rate_hz, hours=hours, model=model,
                 profile=make_profile(train_shape), test_profile=make_profile(test_shape))
             oracle = oracle_scores(train, ta, test, tb, model)
-            raw: List[Any] = [
+            raw: list[Any] = [
                 _num(noise_metrics(test.gyro_rad_s[:, a], rate_hz).residual_drift_deg_s)
                 for a in range(3)]
             scores.setdefault('raw', []).append(float(np.mean(raw)))

@@ -21,8 +21,8 @@ table reader serve the same :class:`ImuBatch`. The bytes are read by :mod:`gyro_
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike

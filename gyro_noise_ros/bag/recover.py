@@ -39,6 +39,7 @@ Each case is said once per process in one line on stderr (:func:`announce`).
 from __future__ import annotations
 
 import atexit
+from collections.abc import Callable
 from dataclasses import dataclass
 import functools
 import os
@@ -47,7 +48,7 @@ import shutil
 import struct
 import sys
 import tempfile
-from typing import Any, BinaryIO, Callable, Dict, List, NamedTuple, Optional, Tuple, TYPE_CHECKING
+from typing import Any, BinaryIO, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
@@ -162,7 +163,7 @@ class McapTruncation:
 
 
 #: What :func:`_walk_chunk` finds: (schemas, channels, counts, start_ns, end_ns).
-ChunkWalk = Tuple[Dict[int, bytes], Dict[int, bytes], Dict[int, int], Optional[int], Optional[int]]
+ChunkWalk = tuple[dict[int, bytes], dict[int, bytes], dict[int, int], int | None, int | None]
 
 
 def _walk_chunk(raw: bytes) -> ChunkWalk:
@@ -213,7 +214,7 @@ class _RecordWalk(NamedTuple):
 
     """
 
-    heads: List[Tuple[Dict[str, Any], bool]]
+    heads: list[tuple[dict[str, Any], bool]]
     stop: int
     reason: str
     top_messages: int
@@ -259,8 +260,8 @@ def _walk_records(bio: BinaryIO, pos: int, size: int, *, on_schema: Callable[[by
     _RecordWalk
 
     """
-    heads: List[Tuple[Dict[str, Any], bool]] = []
-    head: Optional[Dict[str, Any]] = None
+    heads: list[tuple[dict[str, Any], bool]] = []
+    head: dict[str, Any] | None = None
     reason, top_messages = 'end of file', 0
     while True:
         if pos + 9 > size:

@@ -30,10 +30,11 @@ writes, a ROS parameter file (``/**: ros__parameters:``) with the keys of :data:
 dict of the same keys (the node's parameters). No ROS is imported here.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike

@@ -34,7 +34,6 @@ import argparse
 import os
 from pathlib import Path
 import sys
-from typing import List, Optional
 
 from ._common import run_cli
 from .. import __version__
@@ -130,7 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _body(argv: List[str]) -> int:
+def _body(argv: list[str]) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
@@ -194,7 +193,7 @@ def _print_summary(result: AnalyzeResult) -> None:
           + ', '.join(Path(f).name for f in result.files))
 
 
-def main(argv: Optional[List[str]] = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """
     Run gyro_noise_analyze.
 

@@ -58,7 +58,6 @@ report folder appears only complete (``gyro_noise_analyze`` stages its files). T
 import argparse
 from pathlib import Path
 import sys
-from typing import List, Optional
 
 from ._common import check_out_option, run_cli
 from ..app.demo import DemoParams, run_demo, TOOL
@@ -93,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _body(argv: List[str]) -> int:
+def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     params = DemoParams(out=args.out, quick=args.quick, seed=args.seed, speed=args.speed,
                         storage=args.storage, jobs=args.jobs, domain_id=args.domain_id)
@@ -119,7 +118,7 @@ def _print_outputs(report: Path, elapsed_s: float) -> None:
           flush=True)
 
 
-def main(argv: Optional[List[str]] = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """
     Run the demo.
 

@@ -40,7 +40,7 @@ import argparse
 from pathlib import Path
 import signal
 import sys
-from typing import Any, BinaryIO, List, Optional, Tuple, Union
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -69,7 +69,7 @@ from ..outputs import atomic_write_text
 PROG = 'portenta_emulator'
 
 
-def _float_list(text: str) -> Union[float, Tuple[float, ...]]:
+def _float_list(text: str) -> float | tuple[float, ...]:
     try:
         values = [float(v) for v in text.split(',')]
     except ValueError as err:
@@ -207,7 +207,7 @@ def _add_fault_arguments(p: argparse.ArgumentParser) -> None:
     fault.add_argument('--unplug-s', type=float, default=1.0, help='how long an unplug lasts (s)')
 
 
-def board_from_args(args: 'argparse.Namespace | List[str]') -> BoardModel:
+def board_from_args(args: 'argparse.Namespace | list[str]') -> BoardModel:
     """
     Build the BoardModel that ``portenta_emulator`` with these arguments runs.
 
@@ -282,7 +282,7 @@ def _check_args(args: argparse.Namespace) -> None:
 
 
 def _write_sd(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
-              truth_fh: Optional[BinaryIO], counters: Counters) -> int:
+              truth_fh: BinaryIO | None, counters: Counters) -> int:
     total = total_samples(args.samples, args.duration_s, board.odr_hz)
     assert total is not None  # _check_args: --write-sd needs --samples or --duration-s
     options = SdOptions(out_dir=args.write_sd, total=total,
@@ -295,7 +295,7 @@ def _write_sd(args: argparse.Namespace, board: BoardModel, faults: FaultInjector
 
 
 def _serve(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
-           truth_fh: Optional[BinaryIO], counters: Counters, stopper: Stopper) -> int:
+           truth_fh: BinaryIO | None, counters: Counters, stopper: Stopper) -> int:
     options = ServeOptions(
         tcp=args.tcp, link=args.link, speed=args.speed, batch=args.batch,
         tx_buffer_bytes=args.tx_buffer_bytes,
@@ -308,7 +308,7 @@ def _serve(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
                  warm=board_from_args(args))
 
 
-def _body(argv: List[str]) -> int:
+def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     _check_args(args)
     board = board_from_args(args)
@@ -351,7 +351,7 @@ def _body(argv: List[str]) -> int:
     return code
 
 
-def main(argv: Optional[List[str]] = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """
     Run portenta_emulator.
 

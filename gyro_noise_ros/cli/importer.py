@@ -45,7 +45,6 @@ Example::
 import argparse
 import os
 import sys
-from typing import List, Optional
 
 from ._common import run_cli
 from ..app.importer import import_logs, ImportReport, TEMPERATURE_ODR_HZ
@@ -139,7 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _body(argv: List[str]) -> int:
+def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     rep = import_logs(args.logs, args.out, storage=args.storage, topic=args.topic,
                       temperature_topic=args.temperature_topic, frame_id=args.frame_id,
@@ -153,7 +152,7 @@ def _body(argv: List[str]) -> int:
     return 0
 
 
-def main(argv: Optional[List[str]] = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """
     Run gyro_noise_import.
 

@@ -334,7 +334,7 @@ class OrderIdentifier:
         self._corr_size = scipy.fft.next_fast_len(self.n + self.max_lag + 1, real=True)
         self._coeffs = np.stack([gl_coefficients(a, self.memory) for a in self.alphas])
         self._coeff_hat = scipy.fft.rfft(self._coeffs, self._conv_size, axis=1)
-        self._fast: '_FastPlan | None' = None  # _FastPlan, built on first use
+        self._fast: _FastPlan | None = None  # _FastPlan, built on first use
 
     def __call__(self, chunk: npt.ArrayLike, *, curves: bool = False) -> OrderIdentification:
         """

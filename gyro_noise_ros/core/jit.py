@@ -19,8 +19,9 @@ The kernels themselves are private (``core/_kernels*.py``, each with a plain-num
 ``@numba.njit(**JIT_OPTIONS)`` so every kernel is compiled the same way.
 """
 
+from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
 __all__ = ['JIT_OPTIONS']
 

@@ -230,7 +230,7 @@ def _options_table(opts: dict[str, Any]) -> Table:
 
 def _figures(doc: dict[str, Any], per_chunk: _PerChunk,
              allan_store: _AllanStore) -> list[tuple[str, 'figure']]:
-    figures: list[tuple[str, 'figure']] = []
+    figures: list[tuple[str, figure]] = []
     if allan_store:
         curves = []
         for (label, axis), (result, terms, _) in allan_store.items():

@@ -164,7 +164,7 @@ def _dwell_table(doc: dict[str, Any]) -> Table:
 def _figures(doc: dict[str, Any]) -> list[tuple[str, 'figure']]:
     """Return the leave-one-out gravity check per dwell (none without dwells)."""
     gc = doc['gravity_check']
-    figures: list[tuple[str, 'figure']] = []
+    figures: list[tuple[str, figure]] = []
     if gc['dwells']:
         k = list(range(len(gc['dwells'])))
         figures.append((

@@ -164,7 +164,7 @@ def _figures(result: 'ExcitationResult', params: 'ExcitationParams',
              sides: list[str]) -> list[tuple[str, 'figure']]:
     """Return the whole acquisition and, for a sweep, the amplitude against frequency."""
     k, unit = params.display
-    figures: list[tuple[str, 'figure']] = []
+    figures: list[tuple[str, figure]] = []
     series = [(s, result.sides[s].t_s, result.sides[s].x * k) for s in sides]
     figures.append((f'The whole acquisition of {params.sensor} {params.axis} (min/max envelope '
                     'for display; zoom in for the wave form).',

@@ -95,7 +95,7 @@ def explain_page(result: 'ExplainResult', command: Sequence[str] | None = None,
                         tuple((Key(name), Num(pointer('signatures_final', name, 'g'), '.3f'),
                                Num(pointer('signatures_final', name, 'threshold_z'), '.2f'))
                               for name in sig)))
-    figures: list[tuple[str, 'figure']] = []
+    figures: list[tuple[str, figure]] = []
     if sig:
         k = list(range(len(sig)))
         figures.append((

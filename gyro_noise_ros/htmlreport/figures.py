@@ -161,7 +161,7 @@ def allan_figure(curves: Sequence[Mapping[str, Any]], *, title: str, unit: str) 
 
     fig = _figure(title, 'averaging time tau (s)', f'Allan deviation ({unit})', x_log=True,
                   y_log=True)
-    hover_renderers: list['DataRenderer'] = []
+    hover_renderers: list[DataRenderer] = []
     for colour, c in zip(_palette(len(curves)), curves):
         tau = np.asarray(c['tau_s'], dtype=np.float64)
         keep = log_decimate(tau)
@@ -213,7 +213,7 @@ def series_figure(series: Sequence[tuple[str, ArrayLike, ArrayLike]], *, title: 
     from bokeh.models import ColumnDataSource, HoverTool
 
     fig = _figure(title, x_label, y_label, y_log=y_log)
-    renderers: list['DataRenderer'] = []
+    renderers: list[DataRenderer] = []
     for colour, (name, x, y) in zip(_palette(len(series)), series):
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         ok = np.isfinite(x) & np.isfinite(y) & ((y > 0) if y_log else True)

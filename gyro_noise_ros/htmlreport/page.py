@@ -36,7 +36,7 @@ from pathlib import Path
 import platform
 import re
 import shlex
-from typing import Any, Optional
+from typing import Any
 
 from ..outputs import atomic_write_text, StrPath
 
@@ -153,7 +153,7 @@ class Page:
     figures: tuple = ()
     tables: tuple = ()
     method_markdown: str = ''
-    command: Optional[tuple] = None
+    command: tuple | None = None
     inputs: tuple = ()
     version: str = ''
     extra_versions: tuple = field(default_factory=tuple)

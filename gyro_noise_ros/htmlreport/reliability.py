@@ -155,7 +155,7 @@ def _noise_term_tables(doc: dict[str, Any]) -> list[Table]:
 
 def _figures(statics: _Statics) -> list[tuple[str, 'figure']]:
     """Return per sensor the Allan deviations of the static records before and after."""
-    figures: list[tuple[str, 'figure']] = []
+    figures: list[tuple[str, figure]] = []
     for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
         curves: list[dict[str, Any]] = []
         for side in ('before', 'after'):

@@ -70,7 +70,7 @@ def _lookup(doc: dict[str, Any], p: str) -> Any:
 def _allan_figures(curves_by_label: Mapping[str, Mapping[str, Sequence[ArrayLike]]],
                    title: str) -> list[tuple[str, 'figure']]:
     """One Allan figure per axis: ``{label: {axis: (tau_s, adev_rad_s)}}`` in deg/h."""
-    figures: list[tuple[str, 'figure']] = []
+    figures: list[tuple[str, figure]] = []
     for axis in AXES:
         curves = []
         for label, per_axis in curves_by_label.items():

@@ -27,8 +27,9 @@ key/values (run on the timer), returned as a :class:`gyro_noise_ros.core.items.T
   ``rate_tolerance_ratio`` plus two frames; a board counter restart.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any, Mapping
+from typing import Any
 
 from .session import frame_interval_s
 from ..core.items import TaskStatus, worst

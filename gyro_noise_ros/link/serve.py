@@ -35,7 +35,7 @@ import socket
 import termios
 import time
 import tty
-from typing import Any, BinaryIO, List, Optional, Union
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -79,14 +79,14 @@ class ServeOptions:
 
     """
 
-    tcp: Optional[str] = None
-    link: Optional[str] = None
+    tcp: str | None = None
+    link: str | None = None
     speed: float = 1.0
     batch: int = 1
     tx_buffer_bytes: int = TX_BUFFER_BYTES
-    total: Optional[int] = None
-    disconnect_after: Optional[int] = None
-    disconnect_every_s: Optional[float] = None
+    total: int | None = None
+    disconnect_after: int | None = None
+    disconnect_every_s: float | None = None
     unplug_s: float = 0.0
 
 
@@ -141,8 +141,8 @@ def stats_line(counters: Counters, faults: FaultInjector, board: BoardModel) -> 
     return json.dumps(data, sort_keys=True)
 
 
-def total_samples(samples: Optional[int], duration_s: Optional[float],
-                  odr_hz: float) -> Optional[int]:
+def total_samples(samples: int | None, duration_s: float | None,
+                  odr_hz: float) -> int | None:
     """
     Return the samples a run produces: the smaller of ``samples`` and ``duration_s`` at the ODR.
 
@@ -189,7 +189,7 @@ def encode_samples_batched(samples: np.ndarray, batch: int) -> bytes:
 
 
 def produce(board: BoardModel, faults: FaultInjector, counters: Counters, n: int,
-            truth_fh: Optional[BinaryIO]) -> np.ndarray:
+            truth_fh: BinaryIO | None) -> np.ndarray:
     """
     Lose the injected FIFO overrun out of ``n`` samples, produce the rest, log the truth.
 
@@ -262,7 +262,7 @@ class SdOptions:
 
 
 def write_sd_logs(board: BoardModel, faults: FaultInjector, counters: Counters,
-                  truth_fh: Optional[BinaryIO], options: SdOptions) -> List[str]:
+                  truth_fh: BinaryIO | None, options: SdOptions) -> list[str]:
     """
     Write the board's samples as SD log files, as fast as possible; return their paths.
 
@@ -309,11 +309,11 @@ class PtyPort:
     Unplug closes it, replug creates a new one (and moves the symlink).
     """
 
-    def __init__(self, link: Optional[str] = None) -> None:
+    def __init__(self, link: str | None = None) -> None:
         self.link = link
-        self.fd: Optional[int] = None
+        self.fd: int | None = None
         self.path = ''  # the pty's device, set by plug()
-        self._poll: Optional[select.poll] = None
+        self._poll: select.poll | None = None
         self.plug()
 
     def plug(self) -> None:
@@ -408,12 +408,12 @@ class TcpPort:
             raise LinkError(f'cannot listen on --tcp {spec!r}: {err}') from err
         self.listener.listen(4)
         self.listener.setblocking(False)
-        self.client: Optional[socket.socket] = None
+        self.client: socket.socket | None = None
         self.plugged = True
         self.name = f'socket://{host}:{self.listener.getsockname()[1]}'
 
     @property
-    def fd(self) -> Optional[int]:
+    def fd(self) -> int | None:
         return self.client.fileno() if self.client is not None else None
 
     def plug(self) -> None:
@@ -492,8 +492,8 @@ class _Link:
     """
 
     def __init__(self, board: BoardModel, faults: FaultInjector, options: ServeOptions,
-                 counters: Counters, truth_fh: Optional[BinaryIO],
-                 port: Union[PtyPort, TcpPort]) -> None:
+                 counters: Counters, truth_fh: BinaryIO | None,
+                 port: PtyPort | TcpPort) -> None:
         self.board, self.faults, self.options = board, faults, options
         self.counters, self.truth_fh, self.port = counters, truth_fh, port
         self.outbuf = bytearray()
@@ -502,10 +502,10 @@ class _Link:
         self.paced_odr = board.odr_hz
         self.period = 1.0 / (board.odr_hz * options.speed)
         self.was_connected = False
-        self.connected_since: Optional[float] = None
+        self.connected_since: float | None = None
         self.sent_this_connection = 0
         self.disconnect_after = options.disconnect_after
-        self.unplugged_until: Optional[float] = None
+        self.unplugged_until: float | None = None
 
     def track_connection(self, now: float) -> bool:
         """Replug when due, accept a TCP client, count (dis)connections; return connected."""
@@ -603,7 +603,7 @@ class _Link:
         wait = max(0.001, min(0.02, self.seg_t0 + (self.counters.samples_generated - self.seg_n0
                                                    + self.options.batch)
                               * self.period - time.monotonic()))
-        rlist: List[Union[int, socket.socket]] = (
+        rlist: list[int | socket.socket] = (
             [port.fd] if (connected and port.fd is not None) else [])
         if isinstance(port, TcpPort) and port.client is None:
             rlist.append(port.listener)
@@ -615,8 +615,8 @@ class _Link:
 
 
 def serve(board: BoardModel, faults: FaultInjector, options: ServeOptions, *,
-          counters: Counters, stopper: Stopper, truth_fh: Optional[BinaryIO] = None,
-          warm: Optional[BoardModel] = None) -> int:
+          counters: Counters, stopper: Stopper, truth_fh: BinaryIO | None = None,
+          warm: BoardModel | None = None) -> int:
     """
     Serve the board on a pseudo-terminal or TCP port until stopped or ``options.total`` is sent.
 

@@ -19,10 +19,11 @@ After every connect the host sends CONFIGURE and waits ``ack_timeout_s`` for the
 they may carry the previous configuration's scaling; the sample counter's gap counts them as lost.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 import threading
 import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 

@@ -34,7 +34,8 @@ Wire layouts (XCDR1; CDR alignment counts from the byte after the 4-byte encapsu
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.lib.stride_tricks import as_strided

@@ -23,7 +23,7 @@ linear_acceleration_covariance[9]. Hence ``len = 4 + align8(12 + L) + 296`` in R
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike

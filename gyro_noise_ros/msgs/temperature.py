@@ -20,7 +20,7 @@ After the header (see :mod:`.cdr`) come two float64: ``temperature`` (degC) and 
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike

@@ -48,7 +48,7 @@ offline-only steps. No ROS is imported here.
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 import math
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -203,9 +203,9 @@ class LiveModel:
     """
 
     method: Any  # a ThermalMethod; the node also calls members outside that protocol
-    range_c: Optional[tuple] = None
-    margin_c: Optional[float] = None
-    rate_range_c_s: Optional[tuple] = None
+    range_c: tuple | None = None
+    margin_c: float | None = None
+    rate_range_c_s: tuple | None = None
     accel: Any = None  # a TemperaturePolynomial or None
     notes: tuple = field(default_factory=tuple)
 

@@ -41,7 +41,7 @@ import importlib
 import json
 import math
 from pathlib import Path
-from typing import Any, Optional, TYPE_CHECKING
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -249,8 +249,8 @@ class TrainingInfo:
 
     temperature_min_c: float
     temperature_max_c: float
-    temperature_rate_min_c_s: Optional[float]
-    temperature_rate_max_c_s: Optional[float]
+    temperature_rate_min_c_s: float | None
+    temperature_rate_max_c_s: float | None
     rate_hz: float
     samples: int
     duration_s: float
@@ -336,7 +336,7 @@ class RangeReport:
     rate_above: int
     outside: int
     temperature_range_c: list
-    rate_range_c_s: Optional[list]
+    rate_range_c_s: list | None
     run_temperature_c: list
     run_rate_c_s: list
     treatment: str

@@ -24,7 +24,7 @@ compensation node evaluates.
 """
 
 from dataclasses import dataclass
-from typing import Optional, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -60,7 +60,7 @@ class ThermalRun:
     temperature_c: np.ndarray
     rate_hz: float
     name: str = ''
-    accel_m_s2: Optional[np.ndarray] = None
+    accel_m_s2: np.ndarray | None = None
 
 
 @runtime_checkable

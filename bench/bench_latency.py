@@ -61,11 +61,38 @@ import numpy as np  # noqa: E402
 ODR = 6667.0
 BUSY = 'while True: pass'
 
+# A deliberately slow reader of imu/data_raw: one rclpy callback per message (the default
+# executor), each busy for WORK_US, counting what it gets; prints the count on SIGINT.
+_SLOW_READER = r"""
+import signal, sys, time
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+work_s, reliable, depth = float(sys.argv[1]) * 1e-6, sys.argv[2] == 'reliable', int(sys.argv[3])
+rclpy.init()
+node = rclpy.create_node('slow_reader')
+count = [0]
+def on_msg(msg):
+    count[0] += 1
+    end = time.perf_counter() + work_s
+    while time.perf_counter() < end:
+        pass
+qos = QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE if reliable
+                 else ReliabilityPolicy.BEST_EFFORT)
+node.create_subscription(Imu, 'imu/data_raw', on_msg, qos)
+try:
+    rclpy.spin(node)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+print(count[0], flush=True)
+"""
+
 
 class Probe:
     """Raw subscriptions drained by a wait-set thread; rows of stamp, source, reception, take."""
 
-    def __init__(self, topics):
+    def __init__(self, topics, reliable=False):
         import rclpy
         from sensor_msgs.msg import Imu
 
@@ -78,7 +105,7 @@ class Probe:
         self.node = rclpy.create_node('bench_latency_probe', context=self.context)
         group = PolledGroup()
         self.subs = {t: self.node.create_subscription(Imu, t, unused_callback,
-                                                      sensor_data_qos(20000), raw=True,
+                                                      sensor_data_qos(20000, reliable), raw=True,
                                                       callback_group=group) for t in topics}
         self.rows = {t: [] for t in topics}
         self.dds_missing = dict.fromkeys(topics, 0)
@@ -103,7 +130,7 @@ class Probe:
                     raw, info = item
                     sec, nsec = unpack('<iI', raw, 4)
                     seq = info.get('publication_sequence_number') or 0
-                    if last is not None and seq > last + 1:
+                    if last is not None and seq > last + 1 and self.recording:
                         self.dds_missing[topic] += seq - last - 1
                     last = seq
                     if self.recording:
@@ -149,7 +176,7 @@ def stats_ms(values_ns):
 def run(args):
     """Start the chain, record the window; return a result dict."""
     topics = ['imu/data_raw'] + ([] if args.no_compensator else ['imu/data_compensated'])
-    probe = Probe(topics)
+    probe = Probe(topics, args.probe_reliable)
     port = free_port()
     procs = {'portenta_emulator': start_emulator(port, args.batch)}
     load = [subprocess.Popen([sys.executable, '-c', BUSY]) for _ in range(args.load)]
@@ -158,6 +185,11 @@ def run(args):
             [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p',
              f'port:=socket://127.0.0.1:{port}', '-p', 'reconnect_period_s:=0.2',
              *_ros_params(args.driver_param)], stderr=subprocess.DEVNULL)
+        if args.slow_reader is not None:
+            procs['slow reader'] = subprocess.Popen(
+                [sys.executable, '-c', _SLOW_READER, str(args.slow_reader), args.slow_qos,
+                 str(args.slow_depth)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                text=True)
         if not args.no_compensator:
             procs['imu_compensator'] = subprocess.Popen(
                 [sys.executable, '-c', _COMPENSATOR, 'thermal', '--ros-args',
@@ -178,12 +210,18 @@ def run(args):
         for proc in load:
             proc.kill()
             proc.wait()
-        for name in ('imu_compensator', 'lsm6dso32_driver', 'portenta_emulator'):
+        for name in ('slow reader', 'imu_compensator', 'lsm6dso32_driver', 'portenta_emulator'):
             if name in procs:
                 stop(procs[name])
         probe.close()
+    if 'slow reader' in procs:
+        out = procs['slow reader'].stdout.read().split()
+        slow_count = int(out[-1]) if out else None
     wall = t1 - t0
     result = {'load': args.load, 'batch': args.batch, 'seconds': wall,
+              'slow_reader': None if args.slow_reader is None else {
+                  'work_us': args.slow_reader, 'qos': args.slow_qos, 'depth': args.slow_depth,
+                  'received': slow_count},
               'cpu_pct': {n: 100 * (cpu1[n] - cpu0[n]) / wall for n in procs},
               'probe_cpu_pct': 100 * (probe_cpu1 - probe_cpu0) / wall,
               'probe_wakeups': probe.drain.wakeups, 'dds_missing': probe.dds_missing}
@@ -210,6 +248,12 @@ def run(args):
             c_received[hit] - received[order][idx[hit]])
         result['compensated_matched'] = int(hit.sum())
     result['latency_ms'] = {k: stats_ms(v) for k, v in lat.items()}
+    # Samples missing from what the probe received, by the stamps (more than 1.5 periods apart):
+    # lost by the transport to the probe, or, on the compensated topic, before the compensator.
+    period = 1e9 / ODR
+    result['missing_by_stamps'] = {
+        topic: int(np.sum(np.maximum(np.rint(d[d > 1.5 * period] / period) - 1, 0)))
+        for topic in probe.rows for d in [np.diff(np.sort(probe.arrays(topic)[:, 0]))]}
     return result
 
 
@@ -221,10 +265,15 @@ def print_result(result, argv):
     print(f'received imu/data_raw {result["raw_rate_hz"]:.0f} msg/s'
           + (f', imu/data_compensated {result["compensated_rate_hz"]:.0f} msg/s'
              if 'compensated_rate_hz' in result else '')
-          + f'; lost by the transport {result["dds_missing"]}')
+          + f'; lost by the transport to the probe {result["dds_missing"]}; samples missing '
+          f'by the stamps {result["missing_by_stamps"]}')
     print(f'{"latency (ms)":58s} {"p50":>7s} {"p99":>7s} {"max":>7s}')
     for name, (p50, p99, mx) in result['latency_ms'].items():
         print(f'{name:58s} {p50:7.2f} {p99:7.2f} {mx:7.2f}')
+    slow = result.get('slow_reader')
+    if slow:
+        print(f"slow reader ({slow['qos']}, depth {slow['depth']}, {slow['work_us']:g} us per "
+              f"callback): received {slow['received']} messages over the whole run")
     print(f'{"CPU (% of one core)":58s}')
     for name, pct in result['cpu_pct'].items():
         print(f'  {name:56s} {pct:7.1f}')
@@ -240,9 +289,18 @@ def main(argv=None):
     parser.add_argument('--load', type=int, default=0, help='busy loops beside the chain')
     parser.add_argument('--batch', type=int, default=16, help="the emulator's samples per frame")
     parser.add_argument('--no-compensator', action='store_true', help='driver only')
+    parser.add_argument('--slow-reader', type=float, metavar='WORK_US',
+                        help='add a reader of imu/data_raw with one callback per message, each '
+                             'busy for WORK_US (0: the callback alone)')
+    parser.add_argument('--slow-qos', choices=('reliable', 'best_effort'), default='reliable',
+                        help="the slow reader's reliability (default: rclpy's default QoS)")
+    parser.add_argument('--slow-depth', type=int, default=10,
+                        help="the slow reader's history depth (default: rclpy's usual 10)")
     parser.add_argument('--driver-param', action='append', default=[], metavar='NAME:=VALUE')
     parser.add_argument('--compensator-param', action='append', default=[],
                         metavar='NAME:=VALUE')
+    parser.add_argument('--probe-reliable', action='store_true',
+                        help='the probe subscribes reliable (default: sensor-data best effort)')
     parser.add_argument('--json', help='also write the result here')
     args = parser.parse_args(argv)
     from gyro_noise_ros.rosgraph import lease_domain

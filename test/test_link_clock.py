@@ -214,3 +214,23 @@ def test_settling_holds_the_first_samples_then_releases_them_in_order():
     assert flushed.size == BATCH and clock.state.held == 0
     with pytest.raises(ParameterError):
         DeviceClock(settle_s=-1.0)
+
+
+def test_a_late_read_is_not_a_clock_jump():
+    # The host stalls for 0.8 s (a loaded machine): the board's bytes wait in the port and arrive
+    # in one read at the end of the stall, 0.8 s after the previous read but only one period
+    # later in device time. Device time did not jump: no reset, no step in the stamps.
+    rng = np.random.default_rng(23)
+    clock = DeviceClock(nominal_rate_hz=ODR, settle_s=0.5)
+    before, _ = emulate(clock, seconds=5, ppm=30.0, rng=rng)
+    k0 = int(5 * ODR) // BATCH * BATCH
+    n = int(0.8 * ODR)
+    dev_us = np.floor((k0 + np.arange(n)) * 1e6 / ODR).astype(np.int64)
+    true_last = H0 + dev_us[-1] * 1000.0 / (1 + 30e-6)
+    late = clock.update(dev_us.astype(np.uint32), int(true_last + LATENCY_NS + 1e5))
+    after, err = emulate(clock, seconds=2, ppm=30.0, rng=rng, start_index=k0 + n)
+    assert clock.state.resets == 0
+    stamps = np.concatenate((before, late, after))
+    ratio = np.diff(stamps) / (1e9 / ODR)
+    assert 0.97 < ratio.min() and ratio.max() < 1.03
+    assert np.max(np.abs(err)) < 100_000

@@ -36,8 +36,9 @@ with the line; from then on the stamps follow their own line, continuous across 
 rate is the estimate's corrected by the offset to it over ``slew_time_s`` (at most
 ``max_slew_ppm``). A batch whose last stamp would lie after its receive time (a sample cannot be
 received before it exists) is compressed onto it, so no stamp step is longer than a period. Resets
-(a backward jump of device time, or a device gap that disagrees with the host gap by more than
-``reset_threshold_s``) restart the estimator and the settling; stamps stay strictly increasing.
+(a backward jump of device time, or a device gap longer than the host gap by more than
+``reset_threshold_s``; a host gap longer than the device gap is a late read, not a jump) restart
+the estimator and the settling; stamps stay strictly increasing.
 The measured error is in ``docs/portenta_link.md`` (``test/test_link_clock.py``).
 """
 
@@ -164,6 +165,9 @@ SLEW_TIME_S = 2.0
 MAX_SLEW_PPM = 500.0
 #: An offset to the estimate beyond this is removed at once, and counted (s).
 MAX_SLEW_OFFSET_S = 0.1
+#: A block minimum this far above the fitted line is left out of the fit (ns): its whole block was
+#: read late (a host stall longer than the block), while block minima scatter by microseconds.
+_LATE_BLOCK_NS = 1_000_000
 
 
 class DeviceClock:
@@ -182,8 +186,8 @@ class DeviceClock:
     latency_ns : int, keyword-only
         Constant transport latency to subtract (ns); not observable by the estimator.
     reset_threshold_s : float, keyword-only
-        Disagreement between device and host gaps between two batches that restarts the estimator
-        (s).
+        How much longer the device gap between two batches may be than the host gap before the
+        estimator restarts (s).
     max_drift_ppm : float, keyword-only
         Bound on the fitted drift (ppm); a fit beyond it falls back to slope 1 (bad data, not a
         clock).
@@ -310,8 +314,11 @@ class DeviceClock:
             assert self._last_h is not None  # set with self._last_d
             dd = int(d[0]) - self._last_d
             dh = h - self._last_h
-            if dd < 0 or abs(dd * 1000.0 * (1.0 + self._s / 1000.0)
-                             - dh) > self._reset_ns + 2e-3 * abs(dh):
+            # Device time that went back, or ran ahead of host time: a board restarted or set to
+            # another time. Host time ahead of device time is a late read (the host stalled and
+            # the bytes waited in the port), not a jump: the minimum-delay line ignores it.
+            if dd < 0 or (dd * 1000.0 * (1.0 + self._s / 1000.0) - dh
+                          > self._reset_ns + 2e-3 * abs(dh)):
                 flushed = self.flush()
                 self.reset()
                 d = self._unwrap.unwrap(raw)
@@ -438,12 +445,22 @@ class DeviceClock:
             return
         dx = np.array([p[0] for p in pts], dtype=np.float64)
         y = np.array([p[1] for p in pts], dtype=np.float64)
-        d0 = dx.mean()
-        x = dx - d0
-        sxx = float(x @ x)
-        slope = float(x @ (y - y.mean())) / sxx if sxx > 0 else 0.0
+        keep = np.ones(dx.size, dtype=bool)
+        for _ in range(3):
+            d0 = float(dx[keep].mean())
+            x = dx[keep] - d0
+            sxx = float(x @ x)
+            slope = float(x @ (y[keep] - y[keep].mean())) / sxx if sxx > 0 else 0.0
+            a = float(y[keep].mean())
+            # A block whose fastest batch still lies far above the line was read late as a whole
+            # (the host stalled for longer than a block): it says nothing about the clocks.
+            late = y - (a + slope * (dx - d0)) > _LATE_BLOCK_NS
+            if not (late & keep).any() or np.count_nonzero(keep & ~late) < 2:
+                break
+            keep &= ~late
         if abs(slope / 1000.0) > self._max_drift:
-            slope = 0.0
+            # not a clock: slope 0 (b = 1) through the lowest block, as before two blocks close
+            slope, d0, a = 0.0, 0.0, float(y.min())
         self._s = slope
         self._d0 = d0
-        self._a = float(y.mean())
+        self._a = a

@@ -61,7 +61,8 @@ from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_n
                           sensor_data_qos, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
 from ..errors import OutputError
-from ..msgs import frame_id_of, imu_covariances, temperature_variances
+from ..msgs import frame_id_of, imu_covariances, join_raws, temperature_variances
+from ..msgs.imu_rows import imu_rows, rows_stamps
 
 NODE_NAME = 'gyro_noise_record'
 
@@ -207,11 +208,7 @@ class RecorderNode(Node):
         if raws:
             assert self._writer is not None  # opened above
             self.received_imu += len(raws)
-            batch = decode_imu(raws, log_ns=_log_times(received, None))
-            av_cov, la_cov = imu_covariances(raws)
-            self._writer.write_imu(batch.stamp_ns, batch.gyro, batch.accel,
-                                   angular_velocity_covariance=av_cov,
-                                   linear_acceleration_covariance=la_cov, log_ns=batch.log_ns)
+            self._write_imu(raws, received)
             self.written_imu += len(raws)
         if t_raws:
             assert self._writer is not None  # opened above
@@ -221,6 +218,23 @@ class RecorderNode(Node):
                                            variance=temperature_variances(t_raws),
                                            log_ns=_log_times(t_received, stamp_ns))
             self.written_temperature += len(t_raws)
+
+    def _write_imu(self, raws: list[bytes], received: Sequence[int]) -> None:
+        buf, starts, lengths = join_raws(raws)
+        rows = imu_rows(buf, starts, lengths)
+        if rows is not None:
+            # One verified layout (one publisher's messages): stored byte for byte, as
+            # ros2 bag record stores them, with no decode and re-encode.
+            log_ns = _log_times(received, rows_stamps(rows))
+            assert self._writer is not None and log_ns is not None  # opened by drain; stamps
+            self._writer.write_imu_raw(raws, log_ns)
+            return
+        batch = decode_imu(raws, log_ns=_log_times(received, None))
+        av_cov, la_cov = imu_covariances(raws)
+        assert self._writer is not None  # opened by drain
+        self._writer.write_imu(batch.stamp_ns, batch.gyro, batch.accel,
+                               angular_velocity_covariance=av_cov,
+                               linear_acceleration_covariance=la_cov, log_ns=batch.log_ns)
 
     def _flush(self) -> None:
         if self._writer is not None and not self._closed:

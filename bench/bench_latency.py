@@ -31,9 +31,11 @@ the host's system clock (ROS time, Fast DDS's timestamps), so per message:
   budget is about; it includes the probe's own wake-up, stated separately);
 - ``stamp -> DDS reception``: the subscriber's DDS reception timestamp minus header.stamp (no
   probe cost in it);
-- its parts: ``stamp -> publish`` (the publisher's DDS source timestamp: the board's frame, the
-  port, the driver), ``DDS`` (reception minus source) and ``probe wake-up`` (callback minus
-  reception: the probe's cost, not the chain's);
+- its parts: ``stamp -> publish`` (the publisher's DDS source timestamp), itself the board's
+  frame (a sample waits in the board's FIFO for the frame's newest, up to 15 periods, 2.25 ms, at
+  16 samples a frame: the stamp of the newest sample of the driver's read minus the sample's) and
+  the port and driver (that newest sample's stamp to the publication); ``DDS`` (reception minus
+  source) and ``probe wake-up`` (callback minus reception: the probe's cost, not the chain's);
 - ``compensator added``: a compensated message's reception minus the reception of the raw
   message with the same stamp (the compensator's input arrives when the probe's does).
 
@@ -60,6 +62,8 @@ import numpy as np  # noqa: E402
 
 ODR = 6667.0
 BUSY = 'while True: pass'
+#: Publications this far apart (ns) belong to two reads of the driver (a frame is 2.4 ms).
+BATCH_GAP_NS = 500_000
 
 # A deliberately slow reader of imu/data_raw: one rclpy callback per message (the default
 # executor), each busy for WORK_US, counting what it gets; prints the count on SIGINT.
@@ -228,9 +232,17 @@ def run(args):
     raw = probe.arrays('imu/data_raw')
     result['raw_rate_hz'] = raw.shape[0] / wall
     stamp, source, received, take = raw.T
+    # A read batch: messages the driver published in one go (one board frame, or several read
+    # together); its newest sample is the one the board sent last.
+    order = np.argsort(stamp, kind='stable')
+    s_stamp, s_source = stamp[order], source[order]
+    batch = np.concatenate(([0], np.cumsum(np.diff(s_source) > BATCH_GAP_NS)))
+    newest = np.maximum.reduceat(s_stamp, np.flatnonzero(np.diff(batch, prepend=-1)))[batch]
     lat = {'raw: stamp -> callback': take - stamp,
            'raw: stamp -> DDS reception': received - stamp,
            'raw: stamp -> publish (board frame, port, driver)': source - stamp,
+           'raw:   the board frame (stamp -> newest sample of its read)': newest - s_stamp,
+           'raw:   port and driver (newest sample -> publish)': s_source - newest,
            'raw: DDS (reception - publish)': received - source,
            'raw: probe wake-up (callback - reception)': take - received}
     if not args.no_compensator:

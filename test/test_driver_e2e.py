@@ -469,7 +469,9 @@ def test_loss_is_what_the_board_lost_at_every_layer(procs, listener, tmp_path, d
     emu, _, stats_path = procs.emulator(*emu_args, tcp=f'127.0.0.1:{port}')
     assert emu.wait(60.0) == 0  # the board has sent its 40,000 samples
     stats = json.loads(stats_path.read_text())
-    # The board is gone: a status after the link went down counts everything the driver read.
+    # The board is gone: a status after the link went down counts everything the driver read
+    # (statuses queued before the board started said 'connecting': drained first).
+    listener.drain()
     n_before = len(listener.statuses)
     listener.run(lambda: any(listener.values(s)['Connection'] != 'streaming'
                              for s in listener.statuses[n_before:]), 60.0)

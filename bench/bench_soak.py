@@ -718,7 +718,7 @@ def _settle(diag, timeout_s=120.0):
 
 
 def _check_offset_age(args, report, check, slack_s):
-    """The newest offset is at most a temperature period old, except where the input stopped."""
+    """Check that the offset applied is at most a temperature period old away from the faults."""
     bound_ms = 1e3 * (TEMPERATURE_DECIMATION + BATCH) / args.odr_hz + OFFSET_AGE_SLACK_MS
     worst = {'elsewhere': 0.0, **{f['kind']: 0.0 for f in report['faults']}}
     for t, age in report.get('offset_ages', []):

@@ -165,7 +165,7 @@ TABLES = {
         Row('--write-sd under a file', ['--write-sd', '{afile}/sd', '--samples', '10'], 6,
             'cannot be created'),
         Row('--write-bag in the way', ['--write-bag', '{notademo}', '--samples', '10'], 6,
-            'exists; give a new directory'),
+            'already exists: give --overwrite'),
         # (--write-sd: were the refusal missing, the run would end instead of serving a pty)
         Row('--truth-out a folder', ['--truth-out', '{notademo}', '--write-sd', '{out}',
                                      '--samples', '10'], 6, 'is a folder'),
@@ -355,7 +355,7 @@ def test_analyze_disk_full_is_an_output_error_and_keeps_the_previous_result(
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(out / 'summary.json'))
 
     monkeypatch.setattr(app_analyze, 'write_json', full)
-    assert main([str(inputs / 'bag'), *FAST, '--out', str(out)]) == 6
+    assert main([str(inputs / 'bag'), *FAST, '--out', str(out), '--overwrite']) == 6
     check_error_lines('gyro_noise_analyze', capsys.readouterr().err,
                       'cannot write the results: No space left on device')
     assert {name: (out / name).read_bytes() for name in before} == before

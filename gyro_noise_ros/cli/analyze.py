@@ -35,13 +35,14 @@ import os
 from pathlib import Path
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from .. import __version__
 from ..analysis.summary_md import fmt, modes_text, readout_text
 from ..app.analyze import (analyze_bags, AnalyzeParams, AnalyzeResult, DEFAULT_BATCH,
                            DEFAULT_CURVES, parse_order_grid, TOOL)
 from ..core.engine import AXES, EngineConfig, GAP_POLICIES
 from ..core.fractional import DEFAULT_MEMORY
+from ..errors import ParameterError
 
 PROG = TOOL
 
@@ -66,6 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
         '(order kept in tables)')
     p.add_argument('--out', required=True, metavar='DIR',
                    help='output directory (created if missing)')
+    add_overwrite_argument(p)
     p.add_argument('--topic',
                    help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
     p.add_argument('--temperature-topic',
@@ -134,6 +136,10 @@ def _body(argv: list[str]) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
         return err.code if isinstance(err.code, int) else 2
+    if args.reference_bag is not None and args.reference is None:
+        raise ParameterError('--reference-bag names a bag of a --reference summary: give '
+                             '--reference SUMMARY too')
+    check_out_dir(args.out, overwrite=args.overwrite)
     alphas = parse_order_grid(args.order_grid)
     axes = AXES if args.axis == 'all' else (args.axis,)
     config = EngineConfig(chunk_size=args.chunk_size, axes=axes, alphas=alphas, memory=args.memory,

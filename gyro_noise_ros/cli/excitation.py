@@ -40,10 +40,9 @@ import argparse
 import os
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.excitation import ExcitationParams, run_excitation, write_excitation
 from ..calibration.excitation import DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS
-from ..outputs import make_out_dir
 
 PROG = 'gyro_noise_excitation'
 
@@ -80,6 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='false-alarm probability of each verdict')
     p.add_argument('--rate-hz', type=float, help='nominal sample rate (default: from the stamps)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
+    add_overwrite_argument(p)
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
     p.add_argument('--no-html', action='store_true', help='write no report.html')
     return p
@@ -92,7 +92,8 @@ def _body(argv: list[str]) -> int:
         sweep=args.sweep, reference_topic=args.reference_topic, topic=args.topic,
         harmonics=args.harmonics, rate_hz=args.rate_hz, frequency_tol=args.frequency_tol,
         alpha=args.alpha, figures=not args.no_figures)
-    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     result = run_excitation(params)
     write_excitation(result, args.out, html=not args.no_html, command=[PROG, *argv])
     k, unit = params.display

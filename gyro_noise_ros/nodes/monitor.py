@@ -126,7 +126,11 @@ def main(args: list[str] | None = None) -> int:
     """
     argv = sys.argv if args is None else list(args)
     try:
-        opts = parse_args(remove_ros_args(argv)[1:])
+        plain = remove_ros_args(argv)[1:]
+    except RuntimeError:  # malformed --ros-args: rclpy.init (run_node) says so in one line
+        plain = []
+    try:
+        opts = parse_args(plain)
     except SystemExit as err:
         return int(err.code or 0)
     return run_node(lambda: DiagnosticsMonitor(opts.filter, only_changes=opts.changes,

@@ -414,10 +414,11 @@ def render_html(page: Page) -> str:
     inline = Resources(mode='inline', components=['bokeh'])
 
     doc = page.data
-    # "</" inside the JSON would end the script element early: escape it as JSON allows. NaN is
-    # kept as the tools' own json.dumps writes it (the same tokens as their file): a page must
-    # never fail a run whose JSON file was written.
-    data = json.dumps(doc, indent=1).replace('</', '<\\/')
+    # "</script" or "<!--<script" inside the JSON would end the script element early or hide its
+    # end (the HTML parser's escaped states): every "<" is written as JSON's \u003c. NaN is kept
+    # as the tools' own json.dumps writes it (the same tokens as their file): a page must never
+    # fail a run whose JSON file was written.
+    data = json.dumps(doc, indent=1).replace('<', '\\u003c')
     figures = [m for _, m in page.figures]
     script, divs = components(figures) if figures else ('', ())
     parts = [

@@ -623,12 +623,14 @@ def _select(stamps: np.ndarray, first_ns: int, start_s: float | None, end_s: flo
     """Return the mask of samples inside --start/--end and the static segment; count the rest."""
     rel = stamps - first_ns
     keep = np.ones(stamps.shape[0], dtype=bool)
+    # a window bound past any int64 ns stamp (--start 1e308) is past every record's end
+    limit_s = 9.2e9  # s, below 2**63 ns
     if start_s is not None:
-        before = rel < int(round(start_s * 1e9))
+        before = rel < int(round(min(start_s, limit_s) * 1e9))
         left['before_start'] += int(before.sum())
         keep &= ~before
     if end_s is not None:
-        after = rel > int(round(end_s * 1e9))
+        after = rel > int(round(min(end_s, limit_s) * 1e9))
         left['after_end'] += int((after & keep).sum())
         keep &= ~after
     if segment is not None and not segment.static_throughout:

@@ -40,6 +40,7 @@ import math
 from pathlib import Path
 
 from ..bag.inputs import read_imu, recorded_axes
+from ..core.timebase import RATE_RANGE_HZ
 from ..errors import OutputError, ParameterError
 from ..explain import report, workflow
 from ..explain.inputs import from_record, select
@@ -52,9 +53,6 @@ __all__ = ['AxisExplained', 'ExplainInput', 'ExplainParams', 'ExplainRun', 'MAX_
 #: Most ensemble members or bootstrap records: each costs a simulated copy of the record (time
 #: and memory), 16 and 20 are the defaults; beyond this the number is a typo, not a wish.
 MAX_RECORDS = 10000
-#: Sample rates ``rate_hz`` accepts (Hz): every gyro samples inside; outside, the record's times
-#: overflow or vanish in floating point.
-RATE_RANGE_HZ = (1e-3, 1e9)
 AXIS_CHOICES = ('x', 'y', 'z', 'all')
 STATIC_CHOICES = ('auto', 'off')
 

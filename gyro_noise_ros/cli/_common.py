@@ -171,6 +171,8 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     except GyroNoiseError as err:
         print(f'{prog}: error: {err}', file=sys.stderr)
         return err.exit_code
+    except SystemExit as err:  # argparse: a usage error (2, said) or --help/--version (0)
+        return err.code if isinstance(err.code, int) else int(err.code is not None) * 2
     except KeyboardInterrupt as err:
         code = interrupted_exit_code(err)
         print(f'{prog}: interrupted' + ('' if code == EXIT_INTERRUPTED else

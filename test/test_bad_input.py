@@ -1,0 +1,709 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The bad-input sweep (issue 33): every tool and node against every class of bad input.
+
+Each case of :data:`CASES` is ``Case(tool, klass, args, code, text)``: the command line (with
+``{in}`` the shared inputs, ``{out}`` a new folder, ``{full}`` a folder holding a user's file,
+``{file}`` a file, ``{ro}`` a place nobody may write), the README's exit code and a piece of the
+one error line. Every case is run in-process and checked for: the code; stderr without a
+traceback or a numpy warning, ending in one ``<tool>: error:`` line (or ``interrupted``); nothing
+lost (every file that existed is byte-identical) and nothing new beside it (no empty folder, no
+hidden stage) unless the run succeeded. The ``signal`` cases send SIGINT or SIGTERM to this
+process from inside the tool's work: the code is 130 or 143 and nothing is left under a final
+name. Nodes run their ``main`` in-process in a private graph (a watchdog ends a node that would
+spin). The slow part sends real signals to tools and nodes in subprocesses and times the stop.
+``docs/scripts/bad_input_table.py`` counts the cases per class into ``docs/bad_input.md``.
+"""
+
+import hashlib
+import importlib
+import json
+import os
+from pathlib import Path
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from typing import NamedTuple
+
+from gyro_noise_ros.errors import EXIT_CODES
+import numpy as np
+import pytest
+
+#: The classes of bad input the issue lists, and --help (a node must not start for it).
+CLASSES = ('garbage bytes', 'bad parameter', 'missing topic', 'corrupt bag', 'NaN samples',
+           'unwritable output', 'existing output', 'signal', 'overflow number', 'CSV dialect',
+           'help')
+
+#: Where every tool and node lives (``main(argv)``; ``record repair`` is ``main(['repair', ..])``).
+PROGS = {
+    'gyro_noise_analyze': 'gyro_noise_ros.cli.analyze',
+    'gyro_noise_explain': 'gyro_noise_ros.cli.explain',
+    'gyro_noise_thermal': 'gyro_noise_ros.cli.thermal',
+    'gyro_noise_calibrate': 'gyro_noise_ros.cli.calibrate',
+    'gyro_noise_reliability': 'gyro_noise_ros.cli.reliability',
+    'gyro_noise_excitation': 'gyro_noise_ros.cli.excitation',
+    'gyro_noise_import': 'gyro_noise_ros.cli.importer',
+    'gyro_noise_record repair': 'gyro_noise_ros.cli.record',
+    'portenta_emulator': 'gyro_noise_ros.cli.emulator',
+    'gyro_noise_demo': 'gyro_noise_ros.cli.demo',
+    'lsm6dso32_driver': 'gyro_noise_ros.nodes.driver',
+    'noise_analyzer': 'gyro_noise_ros.nodes.analyzer',
+    'imu_compensator': 'gyro_noise_ros.nodes.compensator',
+    'gyro_noise_record': 'gyro_noise_ros.nodes.recorder',
+    'gyro_noise_monitor': 'gyro_noise_ros.nodes.monitor',
+}
+NODES = ('lsm6dso32_driver', 'noise_analyzer', 'imu_compensator', 'gyro_noise_record',
+         'gyro_noise_monitor')
+
+RATE_HZ = 200.0
+N = 9000  # 45 s at 200 Hz: explain's floor (8,192) and 15 analyze chunks of 600
+FAST = ['--chunk-size', '600', '--memory', '50', '--order-grid', '0:2:0.1', '--quiet',
+        '--jobs', '1', '--no-figures', '--no-html']
+UNWRITABLE = '/proc/gyro_noise_bad_input'  # mkdir fails there even as root
+
+
+class Case(NamedTuple):
+    """One bad input to one tool."""
+
+    tool: str
+    klass: str
+    args: tuple
+    code: int
+    text: str = ''
+    hook: str = ''  # 'module:attribute' that sends the signal of a signal case when called
+
+
+def _c(tool, klass, code, text, *args, hook=''):
+    return Case(tool, klass, tuple(args), code, text, hook)
+
+
+def _analyze_cases():
+    t = 'gyro_noise_analyze'
+    o = ('--out', '{out}')
+    sig = 'gyro_noise_ros.app.analyze:_run_bags'
+    return [
+        _c(t, 'garbage bytes', 3, 'is not a bag', '{in}/garbage.mcap', *FAST, *o),
+        _c(t, 'garbage bytes', 3, 'is not a bag', '{in}/garbage.db3', *FAST, *o),
+        _c(t, 'garbage bytes', 3, 'is not a bag', '{in}/garbage.bag', *FAST, *o),
+        _c(t, 'garbage bytes', 3, 'cannot read CSV', '{in}/garbage.csv', *FAST, *o),
+        _c(t, 'garbage bytes', 3, 'cannot read ULog', '{in}/garbage.ulg', *FAST, *o),
+        _c(t, 'garbage bytes', 3, 'garbage_meta', '{in}/garbage_meta', *FAST, *o),
+        _c(t, 'garbage bytes', 2, 'reference summary', '{in}/bag', *FAST, '--reference',
+           '{in}/garbage.json', *o),
+        _c(t, 'bad parameter', 2, '--jobs', '{in}/bag', *FAST, '--jobs', '0', *o),
+        _c(t, 'bad parameter', 2, 'order', '{in}/bag', *FAST, '--order-grid', 'abc', *o),
+        _c(t, 'bad parameter', 2, '--reference-bag names a bag', '{in}/bag', *FAST,
+           '--reference-bag', 'x', *o),
+        _c(t, 'bad parameter', 2, 'invalid choice', '{in}/bag', *FAST, '--axis', 'q', *o),
+        _c(t, 'bad parameter', 2, 'gap', '{in}/bag', *FAST, '--gap-factor', 'nan', *o),
+        _c(t, 'bad parameter', 2, '--label', '{in}/bag', *FAST, '--label', 'a', 'b', *o),
+        _c(t, 'missing topic', 3, "'/nope'", '{in}/bag', *FAST, '--topic', '/nope', *o),
+        _c(t, 'missing topic', 3, 'no such file', '{in}/missing.csv', *FAST, *o),
+        _c(t, 'missing topic', 3, '/nope', '{in}/bag', *FAST, '--temperature-topic', '/nope',
+           *o),
+        # a killed recording is read as far as it goes, said in a warning (docs/bags.md)
+        _c(t, 'corrupt bag', 0, '', '{in}/truncated_mcap', *FAST, *o),
+        _c(t, 'corrupt bag', 3, 'garbled_mcap', '{in}/garbled_mcap', *FAST, *o),
+        _c(t, 'corrupt bag', 3, 'garbled_db3', '{in}/garbled_db3', *FAST, *o),
+        _c(t, 'NaN samples', 4, 'no chunk could be analysed', '{in}/nan_bag', *FAST, *o),
+        _c(t, 'NaN samples', 4, 'NaN/Inf', '{in}/nan_time.csv', *FAST, *o),
+        _c(t, 'unwritable output', 6, 'not writable', '{in}/bag', *FAST, '--out', UNWRITABLE),
+        _c(t, 'unwritable output', 6, 'is an existing file', '{in}/bag', *FAST, '--out',
+           '{file}'),
+        _c(t, 'unwritable output', 6, 'cannot be created', '{in}/bag', *FAST, '--out',
+           '{file}/sub'),
+        _c(t, 'existing output', 6, 'is not empty', '{in}/bag', *FAST, '--out', '{full}'),
+        _c(t, 'overflow number', 2, 'GiB', '{in}/bag', *FAST, '--chunk-size',
+           '99999999999999999999999', *o),
+        _c(t, 'overflow number', 4, 'nothing left to analyse', '{in}/bag', *FAST, '--start',
+           '1e308', *o),
+        _c(t, 'overflow number', 4, 'beyond any record', '{in}/stamp_1e308.csv', *FAST, *o),
+        _c(t, 'overflow number', 2, 'rate_hz', '{in}/bag', *FAST, '--rate-hz', '1e-320', *o),
+        _c(t, 'CSV dialect', 0, '', '{in}/bom.csv', *FAST, *o),
+        _c(t, 'CSV dialect', 0, '', '{in}/crlf.csv', *FAST, *o),
+        _c(t, 'CSV dialect', 0, '', '{in}/semicolon.csv', *FAST, *o),
+        _c(t, 'CSV dialect', 3, 'decimal commas', '{in}/decimal_comma.csv', *FAST, *o),
+        _c(t, 'CSV dialect', 3, 'cannot read CSV', '{in}/utf16.csv', *FAST, *o),
+        _c(t, 'signal', 130, '', '{in}/bag', *FAST, *o, hook=sig),
+        _c(t, 'signal', 143, '', '{in}/bag', *FAST, *o, hook=sig),
+    ]
+
+
+def _explain_cases():
+    t = 'gyro_noise_explain'
+    o = ('--out', '{out}', '--quiet')
+    sig = 'gyro_noise_ros.cli.explain:run_explain'
+    return [
+        _c(t, 'garbage bytes', 3, 'is not a bag', '{in}/garbage.mcap', *o),
+        _c(t, 'garbage bytes', 3, 'cannot read CSV', '{in}/garbage.csv', *o),
+        _c(t, 'bad parameter', 2, '--ensemble', '{in}/ok.csv', '--ensemble', '2', *o),
+        _c(t, 'bad parameter', 2, '--bootstrap', '{in}/ok.csv', '--bootstrap', '-1', *o),
+        _c(t, 'missing topic', 3, "'/nope'", '{in}/bag', '--topic', '/nope', *o),
+        _c(t, 'corrupt bag', 4, 'too short', '{in}/truncated_mcap', *o),
+        _c(t, 'corrupt bag', 3, 'garbled_db3', '{in}/garbled_db3', *o),
+        _c(t, 'NaN samples', 4, 'NaN/Inf', '{in}/nan_bag', *o),
+        _c(t, 'unwritable output', 6, 'not writable', '{in}/ok.csv', '--out', UNWRITABLE),
+        _c(t, 'existing output', 6, 'is not empty', '{in}/ok.csv', '--out', '{full}'),
+        _c(t, 'overflow number', 2, '--rate-hz', '{in}/ok.csv', '--rate-hz', '1e-300', *o),
+        _c(t, 'overflow number', 2, '--ensemble', '{in}/ok.csv', '--ensemble',
+           '99999999999999999999999', *o),
+        # a window past the end proves the table was read (explain itself takes ~10 s)
+        _c(t, 'CSV dialect', 4, 'nothing left to analyse', '{in}/bom.csv', '--start', '1e9',
+           *o),
+        _c(t, 'CSV dialect', 4, 'nothing left to analyse', '{in}/semicolon.csv', '--start',
+           '1e9', *o),
+        _c(t, 'signal', 130, '', '{in}/ok.csv', '--axis', 'z', *o, hook=sig),
+        _c(t, 'signal', 143, '', '{in}/ok.csv', '--axis', 'z', *o, hook=sig),
+    ]
+
+
+def _thermal_cases():
+    t = 'gyro_noise_thermal'
+    o = ('--out', '{out}', '--quiet', '--no-figures')
+    sim = ('simulate', '--hours', '0.02', '--rate-hz', '10', '--out', '{out}')
+    apply = ('apply', '{in}/thermal_bag', '--model', '{in}/model/model.json')
+    sig = 'gyro_noise_ros.thermal.simulate:write_pair'
+    return [
+        _c(t, 'garbage bytes', 3, 'is not a bag', 'fit', '{in}/garbage.mcap', *o),
+        _c(t, 'garbage bytes', 3, 'garbage.json', *apply[:2], '--model', '{in}/garbage.json',
+           *o),
+        _c(t, 'garbage bytes', 3, 'garbage.json', 'export', '--model', '{in}/garbage.json',
+           '--out', '{out}'),
+        _c(t, 'bad parameter', 2, '--f-lo-hz', *apply, '--f-lo-hz', '0', *o),
+        _c(t, 'bad parameter', 2, '--f-hi-hz', *apply, '--f-hi-hz', '1e-9', *o),
+        _c(t, 'bad parameter', 2, '--range-margin-c', *apply, '--range-margin-c', 'nan', *o),
+        _c(t, 'bad parameter', 2, "unknown method 'nope'", 'fit', '{in}/thermal_bag',
+           '--method', 'nope', *o),
+        _c(t, 'bad parameter', 2, '--hours', *sim[:1], '--hours', '-1', '--out', '{out}'),
+        _c(t, 'bad parameter', 2, '--rate-hz', *sim[:1], '--rate-hz', 'nan', '--out', '{out}'),
+        _c(t, 'missing topic', 3, '/nope', 'fit', '{in}/thermal_bag', '--topic', '/nope', *o),
+        _c(t, 'missing topic', 3, 'Temperature', 'fit', '{in}/bag', *o),
+        _c(t, 'missing topic', 3, 'missing.json', *apply[:2], '--model', '{in}/missing.json',
+           *o),
+        _c(t, 'corrupt bag', 3, 'garbled_db3', 'fit', '{in}/garbled_db3', *o),
+        _c(t, 'NaN samples', 4, 'NaN', 'fit', '{in}/nan_thermal_bag', *o),
+        _c(t, 'unwritable output', 6, 'not writable', 'fit', '{in}/thermal_bag', '--out',
+           UNWRITABLE),
+        _c(t, 'unwritable output', 6, 'cannot be created', *sim[:-1], '{file}/sim'),
+        _c(t, 'existing output', 6, 'is not empty', *apply, '--out', '{full}'),
+        _c(t, 'existing output', 6, 'is not empty', *sim[:-1], '{full}'),
+        _c(t, 'existing output', 6, 'is not empty', 'export', '--model',
+           '{in}/model/model.json', '--out', '{full}'),
+        _c(t, 'overflow number', 2, 'GiB', 'simulate', '--hours', '1e6', '--out', '{out}'),
+        _c(t, 'overflow number', 2, 'GiB', 'simulate', '--rate-hz', '1e300', '--out',
+           '{out}'),
+        _c(t, 'overflow number', 2, '--f-lo-hz', *apply, '--f-lo-hz', 'inf', *o),
+        _c(t, 'signal', 130, '', *sim, hook=sig),
+        _c(t, 'signal', 143, '', *sim, hook=sig),
+    ]
+
+
+def _calibration_cases():
+    cal, rel, exc = 'gyro_noise_calibrate', 'gyro_noise_reliability', 'gyro_noise_excitation'
+    o = ('--out', '{out}')
+    rel_in = ('--before-calibration', '{in}/bag', '--after-calibration', '{in}/bag')
+    exc_in = ('--sensor', 'accel', '--axis', 'x', '--dwell', '8')
+    return [
+        _c(cal, 'garbage bytes', 3, 'is not a bag', '{in}/garbage.mcap', *o),
+        _c(cal, 'bad parameter', 2, '--gravity', '{in}/bag', '--gravity', '100', *o),
+        _c(cal, 'bad parameter', 2, '--alpha', '{in}/bag', '--alpha', '2', *o),
+        _c(cal, 'missing topic', 3, '/nope', '{in}/bag', '--topic', '/nope', *o),
+        _c(cal, 'corrupt bag', 3, 'garbled_db3', '{in}/garbled_db3', *o),
+        _c(cal, 'NaN samples', 4, 'NaN', '{in}/nan_bag', *o),
+        _c(cal, 'unwritable output', 6, 'not writable', '{in}/bag', '--out', UNWRITABLE),
+        _c(cal, 'existing output', 6, 'is not empty', '{in}/bag', '--out', '{full}'),
+        _c(cal, 'overflow number', 2, '--gravity', '{in}/bag', '--gravity', '1e308', *o),
+        _c(cal, 'signal', 130, '', '{in}/bag', *o,
+           hook='gyro_noise_ros.cli.calibrate:run_calibration'),
+        _c(cal, 'signal', 143, '', '{in}/bag', *o,
+           hook='gyro_noise_ros.cli.calibrate:run_calibration'),
+        _c(rel, 'garbage bytes', 3, 'is not a bag', '--before-calibration',
+           '{in}/garbage.mcap', '--after-calibration', '{in}/bag', *o),
+        _c(rel, 'bad parameter', 2, '--tolerance', *rel_in, '--tolerance', '-1', *o),
+        _c(rel, 'missing topic', 3, '/nope', *rel_in, '--topic', '/nope', *o),
+        _c(rel, 'corrupt bag', 3, 'garbled_db3', '--before-calibration',
+           '{in}/garbled_db3', '--after-calibration', '{in}/bag', *o),
+        _c(rel, 'NaN samples', 4, 'NaN', '--before-static', '{in}/nan_bag', '--after-static',
+           '{in}/bag', *o),
+        _c(rel, 'unwritable output', 6, 'cannot be created', *rel_in, '--out', '{file}/x'),
+        _c(rel, 'existing output', 6, 'is not empty', *rel_in, '--out', '{full}'),
+        _c(rel, 'overflow number', 2, '--gravity', *rel_in, '--gravity', '1e308', *o),
+        _c(exc, 'garbage bytes', 3, 'is not a bag', '{in}/garbage.mcap', *exc_in, *o),
+        _c(exc, 'bad parameter', 2, 'Nyquist', '{in}/bag', '--sensor', 'accel', '--axis', 'x',
+           '--dwell', '150', *o),
+        _c(exc, 'missing topic', 3, '/nope', '{in}/bag', *exc_in, '--topic', '/nope', *o),
+        _c(exc, 'corrupt bag', 3, 'garbled_db3', '{in}/garbled_db3', *exc_in, *o),
+        _c(exc, 'NaN samples', 4, 'NaN', '{in}/nan_bag', '--sensor', 'gyro', '--axis', 'x',
+           '--dwell', '8', *o),
+        _c(exc, 'unwritable output', 6, 'not writable', '{in}/bag', *exc_in, '--out',
+           UNWRITABLE),
+        _c(exc, 'existing output', 6, 'is not empty', '{in}/bag', *exc_in, '--out', '{full}'),
+        _c(exc, 'overflow number', 2, '--dwell', '{in}/bag', '--sensor', 'accel', '--axis', 'x',
+           '--dwell', '1e308', *o),
+    ]
+
+
+def _import_cases():
+    t, r = 'gyro_noise_import', 'gyro_noise_record repair'
+    logs = '{in}/sd/S001F000.GNL'
+    o = ('--out', '{out}')
+    return [
+        _c(t, 'garbage bytes', 4, 'no readable log header', '{in}/garbage.GNL', *o),
+        _c(t, 'bad parameter', 2, 'chunk_bytes', logs, '--chunk-bytes', '0', *o),
+        _c(t, 'bad parameter', 2, '--start-time', logs, '--start-time', 'yesterday', *o),
+        _c(t, 'bad parameter', 2, 'topic', logs, '--topic', 'a b', *o),
+        _c(t, 'bad parameter', 2, 'both', logs, '--topic', '/imu/temperature', *o),
+        _c(t, 'missing topic', 3, 'does not exist', '{in}/sd/S001F999.GNL', *o),
+        _c(t, 'corrupt bag', 0, '', '{in}/sd_corrupt/S001F000.GNL', *o),
+        _c(t, 'unwritable output', 6, 'cannot be created', logs, '--out', '{file}/bag'),
+        _c(t, 'unwritable output', 6, 'not writable', logs, '--out', UNWRITABLE + '/bag'),
+        _c(t, 'existing output', 6, 'already exists', logs, '--out', '{full}'),
+        _c(t, 'existing output', 6, 'is a folder that is not a bag', logs, '--out', '{full}',
+           '--overwrite'),
+        _c(t, 'overflow number', 2, '--start-time', logs, '--start-time', '1e30', *o),
+        _c(t, 'overflow number', 2, '--start-time', logs, '--start-time', 'inf', *o),
+        _c(t, 'overflow number', 2, 'temperature_rate_hz', logs, '--temperature-rate-hz',
+           'nan', *o),
+        _c(t, 'signal', 130, '', logs, *o, hook='gyro_noise_ros.app.importer:_convert'),
+        _c(t, 'signal', 143, '', logs, *o, hook='gyro_noise_ros.app.importer:_convert'),
+        _c(r, 'garbage bytes', 3, 'garbage.mcap', 'repair', '{in}/garbage.mcap', *o),
+        _c(r, 'garbage bytes', 3, 'garbage_meta', 'repair', '{in}/garbage_meta', *o),
+        _c(r, 'bad parameter', 2, 'invalid choice', 'repair', '{in}/bag', '--storage', 'zip',
+           *o),
+        _c(r, 'missing topic', 3, 'does not exist', 'repair', '{in}/nope', *o),
+        _c(r, 'corrupt bag', 3, 'garbled_db3', 'repair', '{in}/garbled_db3', *o),
+        _c(r, 'unwritable output', 6, 'cannot be created', 'repair', '{in}/bag', '--out',
+           '{file}/x'),
+        _c(r, 'existing output', 6, 'already exists', 'repair', '{in}/bag', '--out', '{full}'),
+        _c(r, 'existing output', 6, 'is the input', 'repair', '{in}/bag', '--out', '{in}/bag'),
+        _c(r, 'signal', 130, '', 'repair', '{in}/bag', *o,
+           hook='gyro_noise_ros.bag.repair:write_raw'),
+        _c(r, 'signal', 143, '', 'repair', '{in}/bag', *o,
+           hook='gyro_noise_ros.bag.repair:write_raw'),
+    ]
+
+
+def _emulator_cases():
+    t = 'portenta_emulator'
+    sd = ('--write-sd', '{out}')
+    bag = ('--write-bag', '{out}')
+    return [
+        _c(t, 'bad parameter', 2, '--samples must be >= 1', *sd, '--samples', '0'),
+        _c(t, 'bad parameter', 2, '--duration-s must be > 0', *bag, '--duration-s', '0'),
+        _c(t, 'bad parameter', 2, 'holds no sample', *bag, '--duration-s', '1e-9'),
+        _c(t, 'bad parameter', 2, '--samples must be >= 1', '--tcp', '127.0.0.1:0',
+           '--samples', '-5'),
+        _c(t, 'bad parameter', 2, '--temp-c', *sd, '--samples', '10', '--temp-c', 'nan'),
+        _c(t, 'bad parameter', 2, '--temp-c', *sd, '--samples', '10', '--temp-c', '1000'),
+        _c(t, 'bad parameter', 2, 'exclude each other', *sd, '--write-bag', '{out}2',
+           '--samples', '10'),
+        _c(t, 'bad parameter', 2, '--speed', '--speed', '0'),
+        _c(t, 'bad parameter', 2, '--bias-dps', *sd, '--samples', '10', '--bias-dps', '1,nan,2'),
+        _c(t, 'bad parameter', 2, '--tcp', '--tcp', 'nowhere', '--samples', '10'),
+        _c(t, 'unwritable output', 6, 'cannot be created', '--write-sd', '{file}/sd',
+           '--samples', '10'),
+        _c(t, 'unwritable output', 6, 'not writable', '--write-bag', UNWRITABLE,
+           '--samples', '10'),
+        _c(t, 'unwritable output', 6, 'is a folder', '--truth-out', '{full}', *sd, '--samples',
+           '10'),
+        _c(t, 'existing output', 6, 'is not empty', '--write-sd', '{full}', '--samples', '10'),
+        _c(t, 'existing output', 6, 'already exists', '--write-bag', '{full}', '--samples',
+           '10'),
+        _c(t, 'existing output', 6, 'already exists', '--stats-out', '{file}', *sd,
+           '--samples', '10'),
+        _c(t, 'overflow number', 2, 'GiB', *sd, '--samples', str(10**15)),
+        _c(t, 'overflow number', 2, 'GiB', *bag, '--duration-s', '1e12'),
+        _c(t, 'overflow number', 2, 'finite', *bag, '--duration-s', 'inf'),
+        _c(t, 'overflow number', 2, 'finite', *sd, '--samples', '10', '--speed', '1e400'),
+        _c(t, 'signal', 130, '', *bag, '--samples', '140000',
+           hook='gyro_noise_ros.bag.writer:ImuBagWriter.write_imu'),
+        _c(t, 'signal', 143, '', *bag, '--samples', '140000',
+           hook='gyro_noise_ros.bag.writer:ImuBagWriter.write_imu'),
+        _c(t, 'signal', 130, '', *sd, '--samples', '200000',
+           hook='gyro_noise_ros.link.sdlog:SdLogWriter.write_samples'),
+        _c(t, 'signal', 143, '', *sd, '--samples', '200000',
+           hook='gyro_noise_ros.link.sdlog:SdLogWriter.write_samples'),
+    ]
+
+
+def _demo_cases():
+    t = 'gyro_noise_demo'
+    return [
+        _c(t, 'bad parameter', 2, '--speed', '--speed', '0', '--out', '{out}'),
+        _c(t, 'bad parameter', 2, '--domain-id', '--domain-id', '1000', '--out', '{out}'),
+        _c(t, 'unwritable output', 6, 'is an existing file', '--out', '{file}'),
+        _c(t, 'unwritable output', 6, 'not writable', '--out', UNWRITABLE),
+        _c(t, 'existing output', 6, 'not a previous demo output', '--out', '{full}'),
+        _c(t, 'existing output', 6, 'not a previous demo output', '--out', '{full}',
+           '--overwrite'),
+        _c(t, 'existing output', 6, 'holds a previous demo output', '--out', '{in}/old_demo'),
+    ]
+
+
+def _node_cases():
+    d, a, c, r, m = NODES
+    ra = '--ros-args'
+    return [
+        *[_c(n, 'help', 0, '', flag) for n in NODES[:4] for flag in ('--help', '-h')],
+        _c(d, 'bad parameter', 2, "'odr_hz'", ra, '-p', 'odr_hz:=abc'),
+        _c(d, 'bad parameter', 2, "'odr_hz'", ra, '-p', 'odr_hz:=1.0'),
+        _c(d, 'bad parameter', 2, 'unknown parameter', ra, '-p', 'odr:=104.0'),
+        _c(d, 'bad parameter', 2, 'unknown argument', '--port', '/dev/ttyACM0'),
+        _c(d, 'bad parameter', 2, 'unknown ROS arguments', ra, '--bogus'),
+        _c(d, 'bad parameter', 2, 'bad ROS arguments', ra, '-p', 'port:='),
+        _c(a, 'bad parameter', 2, "'chunk_sise' (did you mean 'chunk_size'?)", ra, '-p',
+           'chunk_sise:=100'),
+        _c(a, 'bad parameter', 2, "'chunk_size'", ra, '-p', 'chunk_size:=1'),
+        _c(a, 'bad parameter', 2, "'axes'", ra, '-p', 'axes:=q'),
+        _c(a, 'overflow number', 2, "'chunk_size'", ra, '-p',
+           'chunk_size:=99999999999999999999999'),
+        _c(c, 'bad parameter', 2, 'array of floating-point numbers', ra, '-p',
+           'gyro_bias_rad_s:=abc'),
+        _c(c, 'bad parameter', 2, 'array of floating-point numbers', ra, '-p',
+           'gyro_bias_rad_s:=[1,2,3]'),
+        _c(c, 'bad parameter', 2, 'must be 3 finite', ra, '-p', 'gyro_bias_rad_s:=[1.0,2.0]'),
+        _c(c, 'bad parameter', 2, 'must be 3 finite', ra, '-p',
+           'gyro_bias_rad_s:=[1.0,.nan,2.0]'),
+        _c(c, 'garbage bytes', 3, 'cannot be read as YAML', ra, '-p',
+           'calibration_file:={in}/garbage.yaml'),
+        _c(c, 'garbage bytes', 3, 'garbage.json', ra, '-p',
+           'thermal_model_file:={in}/garbage.json'),
+        _c(c, 'missing topic', 3, 'does not exist', ra, '-p',
+           'calibration_file:={in}/missing.yaml'),
+        _c(c, 'missing topic', 3, 'missing.json', ra, '-p',
+           'thermal_model_file:={in}/missing.json'),
+        _c(c, 'garbage bytes', 2, 'bad ROS arguments', ra, '--params-file',
+           '{in}/garbage.yaml'),
+        _c(r, 'unwritable output', 6, "afile' is a file", ra, '-p', 'output:={file}/bag'),
+        _c(r, 'unwritable output', 6, 'not writable', ra, '-p', f'output:={UNWRITABLE}/bag'),
+        _c(r, 'existing output', 6, 'already exists: give -p overwrite:=true', ra, '-p',
+           'output:={full}'),
+        _c(r, 'existing output', 6, 'a folder that is not a bag', ra, '-p',
+           'output:={full}', '-p', 'overwrite:=true'),
+        _c(r, 'bad parameter', 2, "'storage'", ra, '-p', 'storage:=zip'),
+        _c(m, 'bad parameter', 2, "unknown parameter 'chunk_size'", ra, '-p',
+           'chunk_size:=100'),
+        _c(m, 'bad parameter', 2, 'unknown ROS arguments', ra, '--bogus'),
+    ]
+
+
+CASES = [*_analyze_cases(), *_explain_cases(), *_thermal_cases(), *_calibration_cases(),
+         *_import_cases(), *_emulator_cases(), *_demo_cases(), *_node_cases()]
+
+
+def _case_id(case):
+    return f'{case.tool}|{case.klass}|' + ' '.join(case.args)[:60]
+
+
+def _params(tools):
+    return [pytest.param(case, id=_case_id(case)) for case in CASES if case.tool in tools]
+
+
+# --- the inputs -----------------------------------------------------------------------------
+
+
+def _gyro(n, seed):
+    return np.random.default_rng(seed).standard_normal((n, 3)) * 1e-3
+
+
+def _write_tables(d, gyro):
+    t = np.arange(N) / RATE_HZ
+    header = 'time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s'
+    rows = [','.join(repr(float(v)) for v in (t[i], *g)) for i, g in enumerate(gyro)]
+    (d / 'bom.csv').write_bytes(('\ufeff' + '\n'.join([header, *rows]) + '\n').encode())
+    (d / 'crlf.csv').write_bytes(('\r\n'.join([header, *rows]) + '\r\n').encode())
+    (d / 'semicolon.csv').write_text('\n'.join([header.replace(',', ';'),
+                                                *(r.replace(',', ';') for r in rows)]) + '\n')
+    (d / 'decimal_comma.csv').write_text(
+        '\n'.join([header.replace(',', ';'),
+                   *(r.replace(',', ';').replace('.', ',') for r in rows)]) + '\n')
+    (d / 'utf16.csv').write_bytes('\n'.join([header, *rows[:50]]).encode('utf-16'))
+    (d / 'stamp_1e308.csv').write_text('\n'.join([header, *rows[:-1],
+                                                  '1e308,0.0,0.0,0.0']) + '\n')
+    (d / 'nan_time.csv').write_text('\n'.join([header, *rows[:-1], 'nan,0.0,0.0,0.0']) + '\n')
+
+
+def _write_garbage(d):
+    rng = np.random.default_rng(33)
+    for name in ('garbage.mcap', 'garbage.db3', 'garbage.bag', 'garbage.csv', 'garbage.ulg',
+                 'garbage.json', 'garbage.yaml', 'garbage.GNL'):
+        (d / name).write_bytes(rng.integers(0, 256, 4096, dtype=np.uint8).tobytes())
+    (d / 'garbage_meta').mkdir()
+    (d / 'garbage_meta' / 'metadata.yaml').write_bytes(rng.integers(0, 256, 512,
+                                                                    dtype=np.uint8).tobytes())
+
+
+def _write_corrupt_bags(d, make_record):
+    mcap = make_record(d / 'truncated_mcap', _gyro(N, 4), rate_hz=RATE_HZ, storage='mcap')
+    (storage,) = mcap.glob('*.mcap')
+    storage.write_bytes(storage.read_bytes()[:storage.stat().st_size // 3])
+    mcap = make_record(d / 'garbled_mcap', _gyro(N, 7), rate_hz=RATE_HZ, storage='mcap')
+    (storage,) = mcap.glob('*.mcap')
+    data = bytearray(storage.read_bytes())
+    middle = len(data) // 2
+    data[middle:middle + 4096] = np.random.default_rng(8).integers(
+        0, 256, 4096, dtype=np.uint8).tobytes()
+    storage.write_bytes(bytes(data))
+    db3 = make_record(d / 'garbled_db3', _gyro(N, 5), rate_hz=RATE_HZ)
+    (storage,) = db3.glob('*.db3')
+    data = bytearray(storage.read_bytes())
+    data[100:4196] = np.random.default_rng(6).integers(0, 256, 4096, dtype=np.uint8).tobytes()
+    storage.write_bytes(bytes(data))
+
+
+def _write_thermal(d):
+    """A bag with temperature from the emulator, a poly3 model fitted on it, a NaN copy."""
+    from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+    from gyro_noise_ros.cli import emulator, thermal
+
+    assert emulator.main(['--write-bag', str(d / 'thermal_bag'), '--odr-hz', '104',
+                          '--duration-s', '120', '--temp-c', '20', '--temp-drift-c-per-h',
+                          '600', '--temp-sensitivity-dps-per-c', '0.01',
+                          '--bag-temperature-decimation', '2']) == 0
+    assert thermal.main(['fit', str(d / 'thermal_bag'), '--method', 'poly3', '--quiet',
+                         '--no-figures', '--out', str(d / 'model')]) == 0
+    with ImuBagReader(d / 'thermal_bag') as reader, ImuBagWriter(d / 'nan_thermal_bag') as w:
+        t_stamp, t_value = reader.read_temperature()
+        for batch in reader.iter_batches(100_000):
+            gyro = batch.gyro.copy()
+            gyro[::7] = np.nan
+            w.write_imu(batch.stamp_ns, gyro, batch.accel)
+        w.write_temperature(t_stamp, t_value)
+
+
+@pytest.fixture(scope='module')
+def inputs(tmp_path_factory, make_record):
+    from gyro_noise_ros.cli import emulator
+
+    d = tmp_path_factory.mktemp('bad_inputs')
+    gyro = _gyro(N, 1)
+    make_record(d / 'ok.csv', gyro, rate_hz=RATE_HZ, storage='csv')
+    make_record(d / 'bag', gyro, rate_hz=RATE_HZ)
+    make_record(d / 'nan_bag', np.full((N, 3), np.nan), rate_hz=RATE_HZ)
+    _write_tables(d, gyro)
+    _write_garbage(d)
+    _write_corrupt_bags(d, make_record)
+    _write_thermal(d)
+    for name, extra in (('sd', []), ('sd_corrupt', ['--corrupt-rate', '1e-4'])):
+        assert emulator.main(['--write-sd', str(d / name), '--samples', '30000', '--seed', '3',
+                              *extra]) == 0
+    (d / 'old_demo').mkdir()
+    (d / 'old_demo' / 'GYRO_NOISE_DEMO.txt').write_text('Written by gyro_noise_ros.cli.demo\n')
+    return d
+
+
+# --- the checks -----------------------------------------------------------------------------
+
+
+def _snapshot(folder):
+    """Every entry under ``folder`` (hidden ones included): path -> sha256 or 'dir'."""
+    out = {}
+    for path in sorted(Path(folder).rglob('*')):
+        rel = str(path.relative_to(folder))
+        out[rel] = 'dir' if path.is_dir() else hashlib.sha256(path.read_bytes()).hexdigest()
+    return out
+
+
+def _stat_snapshot(folder):
+    return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime_ns)
+            for p in sorted(Path(folder).rglob('*')) if p.is_file()}
+
+
+def check_stderr(prog, err, code, text):
+    """One error (or interrupted) line last, no traceback, no numpy or Python warning."""
+    assert 'Traceback' not in err and 'Warning:' not in err, err
+    lines = [ln for ln in err.strip().splitlines()
+             if not ln.startswith(('[INFO]', '[WARN]', '[ERROR]'))]
+    if code == 0:
+        assert not any(': error:' in ln for ln in lines), err
+        return
+    assert lines, f'exit {code} without a word'
+    last = lines[-1]
+    if code in (130, 143):
+        want = f'{prog}: interrupted' + ('' if code == 130 else ' (SIGTERM)')
+        assert last == want, err
+        return
+    assert last.startswith(f'{prog}: error: '), err
+    assert text in last, err
+    # warnings may precede the error; a second error may not
+    assert not any(ln.startswith(f'{prog}: error: ') for ln in lines[:-1]), err
+
+
+def _hooked(monkeypatch, hook, sig):
+    """Make ``module:attr`` (or ``module:Class.method``) send ``sig`` to this process once."""
+    module_name, _, attr = hook.partition(':')
+    owner = importlib.import_module(module_name)
+    *path, name = attr.split('.')
+    for part in path:
+        owner = getattr(owner, part)
+    real = getattr(owner, name)
+    sent = []
+
+    def hooked(*args, **kwargs):
+        if not sent:
+            sent.append(sig)
+            os.kill(os.getpid(), sig)  # delivered to this thread before kill returns
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, hooked)
+    return sent
+
+
+def _prepare(tmp_path, inputs):
+    work = tmp_path / 'work'
+    work.mkdir()
+    (work / 'full').mkdir()
+    (work / 'full' / 'precious.txt').write_text('keep me\n')
+    (work / 'afile').write_text('a file, not a folder\n')
+    subs = {'in': str(inputs), 'out': str(work / 'out'), 'full': str(work / 'full'),
+            'file': str(work / 'afile'), 'ro': UNWRITABLE}
+    return work, subs
+
+
+def run_case(case, inputs, tmp_path, capsys, monkeypatch):
+    """Run one case in-process and check its code, its stderr and what it left (module doc)."""
+    work, subs = _prepare(tmp_path, inputs)
+    argv = [a.format(**subs) for a in case.args]
+    before, inputs_before = _snapshot(work), _stat_snapshot(inputs)
+    prog = case.tool
+    if prog == 'gyro_noise_record repair':
+        argv = ['repair', *argv[1:]] if argv[:1] == ['repair'] else argv
+    if case.hook:
+        sent = _hooked(monkeypatch, case.hook, signal.SIGINT if case.code == 130
+                       else signal.SIGTERM)
+    main = importlib.import_module(PROGS[prog]).main
+    monkeypatch.chdir(work)
+    if prog in NODES:
+        code = _run_node(main, prog, argv)
+    else:
+        code = main(argv)
+    captured = capsys.readouterr()
+    err = captured.err + (captured.out if prog in NODES and case.code == 2 else '')
+    assert code == case.code, f'{_case_id(case)}: exit {code}, expected {case.code}\n{err}'
+    if case.hook:
+        assert sent, 'the signal was never sent: the hook is not on the path'
+    check_stderr(prog, err, code, case.text)
+    if case.klass == 'help':
+        assert '--ros-args' in captured.out and ' = ' in captured.out
+    after = _snapshot(work)
+    assert {k: v for k, v in after.items() if k in before} == before  # nothing lost
+    if code != 0:
+        # a refusal, a failure or an interrupt leaves nothing new: no folder, no hidden stage
+        assert after == before, sorted(set(after) - set(before))
+    assert _stat_snapshot(inputs) == inputs_before  # the inputs are only read
+
+
+def _run_node(main, prog, argv):
+    """Run a node's main in-process; a watchdog shuts rclpy down if it starts spinning."""
+    import rclpy
+
+    stop = threading.Event()
+
+    def watchdog():
+        if not stop.wait(20.0):
+            rclpy.try_shutdown()  # a node that should have refused spins: end it, exit 0
+
+    thread = threading.Thread(target=watchdog, daemon=True)
+    thread.start()
+    try:
+        return main([prog, *argv])
+    finally:
+        stop.set()
+        thread.join()
+
+
+# --- the tests --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize('case', _params(['gyro_noise_analyze', 'gyro_noise_explain']))
+def test_analysis_tools(case, inputs, tmp_path, capsys, monkeypatch):
+    run_case(case, inputs, tmp_path, capsys, monkeypatch)
+
+
+@pytest.mark.parametrize('case', _params(['gyro_noise_thermal']))
+def test_thermal_tool(case, inputs, tmp_path, capsys, monkeypatch):
+    run_case(case, inputs, tmp_path, capsys, monkeypatch)
+
+
+@pytest.mark.parametrize('case', _params(['gyro_noise_calibrate', 'gyro_noise_reliability',
+                                          'gyro_noise_excitation']))
+def test_reliability_tools(case, inputs, tmp_path, capsys, monkeypatch):
+    run_case(case, inputs, tmp_path, capsys, monkeypatch)
+
+
+@pytest.mark.parametrize('case', _params(['gyro_noise_import', 'gyro_noise_record repair',
+                                          'portenta_emulator', 'gyro_noise_demo']))
+def test_recording_tools(case, inputs, tmp_path, capsys, monkeypatch):
+    run_case(case, inputs, tmp_path, capsys, monkeypatch)
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize('case', _params(NODES))
+def test_nodes(case, inputs, tmp_path, capsys, monkeypatch):
+    run_case(case, inputs, tmp_path, capsys, monkeypatch)
+
+
+def test_every_tool_and_node_meets_every_class_it_can():
+    by_tool = {}
+    for case in CASES:
+        by_tool.setdefault(case.tool, set()).add(case.klass)
+    assert set(by_tool) == set(PROGS), set(PROGS) - set(by_tool)
+    assert {case.klass for case in CASES} == set(CLASSES)
+    for tool in ('gyro_noise_analyze', 'gyro_noise_explain', 'gyro_noise_thermal',
+                 'gyro_noise_calibrate', 'gyro_noise_import', 'gyro_noise_record repair',
+                 'portenta_emulator'):
+        assert {'bad parameter', 'unwritable output', 'existing output'} <= by_tool[tool], tool
+    for tool in ('gyro_noise_analyze', 'gyro_noise_explain', 'gyro_noise_thermal',
+                 'gyro_noise_calibrate', 'gyro_noise_import', 'gyro_noise_record repair',
+                 'portenta_emulator'):
+        assert 'signal' in by_tool[tool], tool
+    assert all(case.code in EXIT_CODES for case in CASES)
+
+
+
+def test_readme_exit_table_is_errors_exit_codes():
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'tools'))
+    try:
+        exit_codes = importlib.import_module('exit_codes')
+    finally:
+        sys.path.pop(0)
+    assert exit_codes.readme_table(exit_codes.README.read_text()) == exit_codes.markdown_table()
+    assert set(EXIT_CODES) == {0, 1, 2, 3, 4, 5, 6, 130, 143}
+
+
+def test_every_error_class_has_a_documented_code():
+    import gyro_noise_ros
+    from gyro_noise_ros.errors import GyroNoiseError
+    import pkgutil
+
+    for info in pkgutil.walk_packages(gyro_noise_ros.__path__, 'gyro_noise_ros.'):
+        if '.nodes' in info.name:
+            continue  # they import rclpy; their errors are the package's
+        importlib.import_module(info.name)
+
+    def subclasses(cls):
+        for sub in cls.__subclasses__():
+            yield sub
+            yield from subclasses(sub)
+
+    found = list(subclasses(GyroNoiseError))
+    assert len(found) >= 10
+    assert all(cls.exit_code in EXIT_CODES for cls in found), [
+        (cls.__name__, cls.exit_code) for cls in found if cls.exit_code not in EXIT_CODES]

@@ -34,6 +34,7 @@ import sys
 import threading
 from typing import Any
 
+from .._startup import take_pending
 from ..errors import (EXIT_INTERNAL, EXIT_INTERRUPTED, GyroNoiseError, Interrupted,
                       interrupted_exit_code, ParameterError)
 from ..outputs import check_out_dir, free_bytes, OVERWRITE_OPTION
@@ -139,6 +140,9 @@ def stop_signals() -> Iterator[None]:
         if signal.getsignal(sig) is not signal.SIG_IGN:
             old[sig] = signal.signal(sig, _raise_interrupt)
     try:
+        early = take_pending()  # a signal while the program imported its libraries
+        if early is not None:
+            raise Interrupted(early)
         yield
     finally:
         for sig, handler in old.items():

@@ -52,6 +52,7 @@ from rclpy.utilities import remove_ros_args
 
 from ._params import (declare_parameter_table, parameter_help, ParamSpec, specs_from_dataclass,
                       unknown_parameter_error, unknown_parameters)
+from .._startup import take_pending
 from ..errors import GyroNoiseError, ParameterError
 from ..link.sequence import SequenceGapCounter
 
@@ -335,7 +336,12 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
             return code
     received: list[int] = []
     old = _remember_signals(received)
+    early = take_pending()  # a signal while the program imported its libraries
+    if early is not None:
+        received.append(early)
     try:
+        if received:
+            return _interrupted(prog, received[0])
         return _init_and_spin(node_factory, argv, prog, received)
     finally:
         for sig, handler in old.items():
@@ -385,13 +391,14 @@ def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
     if error is not None:
         print(f'{prog}: error: {error}', file=sys.stderr)
         return error.exit_code
-    if received:
-        signum = received[0]
-        print(f'{prog}: interrupted' + ('' if signum == signal.SIGINT else
-                                        f' ({signal.Signals(signum).name})'),
-              file=sys.stderr, flush=True)
-        return 128 + signum
-    return 0
+    return _interrupted(prog, received[0]) if received else 0
+
+
+def _interrupted(prog: str, signum: int) -> int:
+    print(f'{prog}: interrupted' + ('' if signum == signal.SIGINT else
+                                    f' ({signal.Signals(signum).name})'),
+          file=sys.stderr, flush=True)
+    return 128 + signum
 
 
 # Polled raw subscriptions (shared by the analyzer and the recorder): ROS_ON_PIP.md measured that

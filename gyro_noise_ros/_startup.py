@@ -1,0 +1,86 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Signals that reach a tool or node program before its ``main()`` runs, while it imports.
+
+Importing numpy, numba, scipy and rosbags takes one to three seconds; a SIGINT then would end the
+program with a ``KeyboardInterrupt`` traceback and a SIGTERM without a word. When the process was
+started as one of this package's programs (a console script of its distribution, or
+``python -m gyro_noise_ros...``), :func:`install` (called by ``cli/__init__.py`` and
+``nodes/__init__.py``) notes such a signal instead; ``cli/_common.run_cli`` and
+``nodes/_ros_common.run_node`` then stop at once with the one ``interrupted`` line and 130/143
+(:func:`take_pending`). Imported by another program (a test, a user's script) it does nothing.
+"""
+
+import os
+import signal
+import sys
+import threading
+
+__all__ = ['install', 'launched_as_program', 'take_pending']
+
+_pending: list[int] = []
+_installed: list[bool] = []
+
+
+def launched_as_program() -> bool:
+    """
+    Tell whether this process runs one of the package's programs.
+
+    Returns
+    -------
+    bool
+        ``python -m gyro_noise_ros.*``, or a console script of the gyro_noise_ros distribution.
+
+    """
+    argv = list(getattr(sys, 'orig_argv', []))
+    if '-m' in argv[:-1]:
+        return argv[argv.index('-m') + 1].startswith('gyro_noise_ros.')
+    name = os.path.basename(sys.argv[0]) if sys.argv else ''
+    if not name or name.endswith('.py'):
+        return False
+    from importlib.metadata import entry_points
+
+    return any(e.name == name and e.value.startswith('gyro_noise_ros.')
+               for e in entry_points(group='console_scripts'))
+
+
+def _note(signum: int, frame: object) -> None:
+    if not _pending:
+        _pending.append(signum)
+
+
+def install() -> None:
+    """Note SIGINT and SIGTERM until ``main()`` takes over, in a program of this package only."""
+    if _installed or threading.current_thread() is not threading.main_thread():
+        return
+    _installed.append(True)
+    if not launched_as_program():
+        return
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:  # a parent's "ignore" stays
+            signal.signal(sig, _note)
+
+
+def take_pending() -> int | None:
+    """
+    Return the signal that arrived before ``main()`` (and forget it), or None.
+
+    Returns
+    -------
+    int or None
+
+    """
+    return _pending.pop() if _pending else None

@@ -175,6 +175,8 @@ def test_cli_sweep_with_reference_and_exit_codes(tmp_path, capsys, make_record):
     doc = json.loads((tmp_path / 'out' / 'excitation.json').read_text())
     dev = np.array(doc['before']['deviation_up'] + doc['before']['deviation_down'], float)
     np.testing.assert_allclose(dev, 0.03, atol=0.005)
+    # the refusals below write nothing: a new folder each time (the first run's is not empty)
+    out = str(tmp_path / 'refused')
     base = [bag, '--topic', '/imu/data_raw', '--sensor', 'accel', '--axis', 'y', '--out', out]
     assert main(base + ['--dwell', '60']) == 2                       # above Nyquist
     assert main(base + ['--dwell', '8', '--reference-topic', '/shaker/imu']) == 2

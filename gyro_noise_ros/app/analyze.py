@@ -57,7 +57,7 @@ from ..analysis.summary_json import (accelerometer_readout_dict, axis_summary_di
 from ..analysis.summary_md import summary_markdown
 from ..bag import find_imu_topic, ImuBagReader
 from ..bag.inputs import is_table, open_imu
-from ..cluster import DaskExecutor, make_executor
+from ..cluster import check_jobs, DaskExecutor, make_executor
 from ..core.allan import AllanAccumulator
 from ..core.engine import (analyze_chunk, AXES, EngineConfig, identifier_for, NoiseEngine)
 from ..core.fractional import parse_grid
@@ -187,7 +187,9 @@ class AnalyzeParams:
             raise ParameterError(f'--end ({self.end_s:g} s) must be after --start '
                                  f'({self.start_s:g} s)')
         setattr_('jobs', int(self.jobs))
-        if self.jobs < 1:
+        if self.scheduler is None:
+            check_jobs(self.jobs)  # local processes: no more than the machine can run
+        elif self.jobs < 1:
             raise ParameterError(f'--jobs must be >= 1, got {self.jobs}')
         if self.curves < 0:
             raise ParameterError(f'--curves must be >= 0, got {self.curves}')

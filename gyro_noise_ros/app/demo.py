@@ -151,6 +151,8 @@ class DemoParams:
                                  f'{self.domain_id}')
         if self.jobs < 1:
             raise ParameterError(f'--jobs must be >= 1, got {self.jobs}')
+        if self.seed < 0:
+            raise ParameterError(f'--seed must be >= 0, got {self.seed}')
 
     @property
     def story(self) -> 'Story':

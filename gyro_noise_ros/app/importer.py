@@ -37,6 +37,7 @@ import numpy as np
 
 from ..bag import ImuBagWriter
 from ..bag.bulk import BulkImuBagWriter
+from ..cluster import usable_cpus
 from ..errors import BagError, InputDataError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.clock import Unwrapper
@@ -221,7 +222,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
         if not (np.isfinite(value) and value >= 0):
             raise ParameterError(f'{name} must be finite and >= 0, got {value}')
     if threads is None:
-        threads = 2 if bulk and _usable_cpus() >= 2 else 1
+        threads = 2 if bulk and usable_cpus() >= 2 else 1
     if threads not in (1, 2):
         raise ParameterError(f'threads must be 1 or 2, got {threads!r}')
     imu_topic = _topic(topic)
@@ -358,14 +359,6 @@ def _convert(reader: SdLogReader, writes: '_BagWrites', *,
 #: Blocks (``chunk_bytes`` of log each, about 2.4 MB of arrays per MB of log) that may wait for the
 #: writer thread.
 WRITE_QUEUE_BLOCKS = 4
-
-
-def _usable_cpus() -> int:
-    """Return the number of CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
 
 
 class _BagWrites:

@@ -334,6 +334,10 @@ def write_bag(args: argparse.Namespace, board: 'BoardModel', truth_fh: BinaryIO 
         total = None if length is None else int(round(length * board.odr_hz))
     if total is None or total <= 0:
         raise ParameterError('--write-bag needs --duration-s or --samples (a positive length)')
+    if isinstance(board.scenario.motion if board.scenario else None, Excitation) and (
+            '/' + args.reference_topic.lstrip('/') in ('/imu/data_raw', '/imu/temperature')):
+        raise ParameterError(f'--reference-topic {args.reference_topic!r} is a topic of the '
+                             'board itself: the reference needs a topic of its own')
     streams = 2 if isinstance(board.scenario.motion if board.scenario else None, Excitation) else 1
     size = (f'--samples {args.samples}' if args.samples is not None else
             f'--duration-s {args.duration_s:g}' if args.duration_s is not None else

@@ -31,7 +31,6 @@ imu.yaml, curves.npz, PNG figures and report.html into DIR. Formats and exit cod
 """
 
 import argparse
-import os
 from pathlib import Path
 import sys
 
@@ -40,6 +39,7 @@ from .. import __version__
 from ..analysis.summary_md import fmt, modes_text, readout_text
 from ..app.analyze import (analyze_bags, AnalyzeParams, AnalyzeResult, DEFAULT_BATCH,
                            DEFAULT_CURVES, parse_order_grid, TOOL)
+from ..cluster import usable_cpus
 from ..core.engine import AXES, EngineConfig, GAP_POLICIES
 from ..core.fractional import DEFAULT_MEMORY
 from ..errors import ParameterError
@@ -146,7 +146,7 @@ def _body(argv: list[str]) -> int:
                           demean=not args.no_demean, max_lag=args.max_lag, rate_hz=args.rate_hz,
                           gap_factor=args.gap_factor, gap_policy=args.gap_policy,
                           allan=not args.no_allan, allan_taus=args.allan_taus)
-    jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+    jobs = args.jobs if args.jobs is not None else usable_cpus()
     params = AnalyzeParams(
         paths=tuple(args.bags), out_dir=args.out, labels=args.label, topic=args.topic,
         temperature_topic=args.temperature_topic, config=config, jobs=jobs,

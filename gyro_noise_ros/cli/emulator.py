@@ -261,6 +261,7 @@ def board_from_args(args: 'argparse.Namespace | list[str]') -> BoardModel:
 def _check_args(args: argparse.Namespace) -> None:
     if args.speed <= 0:
         raise ParameterError(f'--speed must be > 0, got {args.speed}')
+    _check_integers(args)
     if not 1 <= args.batch <= MAX_SAMPLES_PER_FRAME:
         raise ParameterError(f'--batch must be in 1..{MAX_SAMPLES_PER_FRAME}, got {args.batch}')
     if args.samples is not None and args.samples < 1:
@@ -294,6 +295,18 @@ def _check_args(args: argparse.Namespace) -> None:
     if args.link and (args.tcp or args.write_sd):
         raise ParameterError('--link applies to the pseudo-terminal only')
     _check_outputs(args)
+
+
+def _check_integers(args: argparse.Namespace) -> None:
+    """Refuse integers outside what the seed, the wire and the SD file names can hold."""
+    for option, value, top in (('--seed', args.seed, None), ('--seq0', args.seq0, 2**32 - 1),
+                               ('--t0-us', args.t0_us, 2**32 - 1),
+                               # SD names are 8.3: S<sss>F<fff>.GNL holds three digits
+                               ('--sequence-id', args.sequence_id, 999),
+                               ('--disconnect-after', args.disconnect_after, None)):
+        if value is not None and not (value >= 0 and (top is None or value <= top)):
+            limit = f'0..{top}' if top is not None else '>= 0'
+            raise ParameterError(f'{option} must be {limit}, got {value}')
 
 
 def _check_outputs(args: argparse.Namespace) -> None:

@@ -260,7 +260,13 @@ def _print_notes(notes: Iterable[str], args: argparse.Namespace) -> None:
             print(f'{PROG}: note: {note}', file=sys.stderr)
 
 
+def _check_seed(args: argparse.Namespace) -> None:
+    if args.seed < 0:  # numpy's SeedSequence takes non-negative integers
+        raise ParameterError(f'--seed must be >= 0, got {args.seed}')
+
+
 def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
+    _check_seed(args)
     result = app.fit(bags=args.bags, method=args.method, seed=args.seed,
                      min_range_c=args.min_range_c, bag_options=_bag_options(args),
                      accel=not args.no_accel, scheduler=args.scheduler, warn=_warn(args),
@@ -302,6 +308,7 @@ def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace, argv: list[str]) -> int:
+    _check_seed(args)
     names = None
     if args.methods is not None:
         names = [m.strip() for m in args.methods.split(',') if m.strip()]
@@ -329,6 +336,7 @@ def _cmd_simulate(args: argparse.Namespace, argv: list[str]) -> int:
         raise registry.MethodUnavailableError(
             f'the thermal simulator is not available (gyro_noise_ros.thermal.simulate: '
             f'{err})') from err
+    _check_seed(args)
     _check_simulate_size(args)
     result = app.simulate(seed=args.seed, hours=args.hours, rate_hz=args.rate_hz,
                           compress=args.compress, shape=args.shape, test_shape=args.test_shape,
@@ -354,14 +362,16 @@ def _check_simulate_size(args: argparse.Namespace) -> None:
         sim.make_profile(args.test_shape), compress=comp)[0]
     need = (train_s + test_s) * args.rate_hz * SIMULATE_BYTES_PER_SAMPLE
     memory, free = physical_memory_bytes(), free_bytes(args.out)
+    run = (f'--hours {args.hours:g}' if args.hours is not None else
+           f'--compress {args.compress:g}' if args.compress is not None else
+           f'--shape {args.shape} (its whole profile)')
     for have, where in ((None if memory is None else memory / 2, "half of this machine's memory"),
                         (free, f'the free space of {args.out!r}')):
-        if have is not None and need > have:
+        if have is not None and not need <= have:
             raise ParameterError(
-                f'--hours {args.hours} at --rate-hz {args.rate_hz:g} makes '
-                f'{(train_s + test_s) * args.rate_hz:.3g} samples (train and test), about '
-                f'{need / 2**30:.3g} GiB: more than {where} ({have / 2**30:.3g} GiB); '
-                'shorten --hours or lower --rate-hz')
+                f'{run} at --rate-hz {args.rate_hz:g} makes {train_s + test_s:.3g} s of '
+                f'samples (train and test), about {need / 2**30:.3g} GiB: more than {where} '
+                f'({have / 2**30:.3g} GiB); shorten the run or lower --rate-hz')
 
 
 def _cmd_export(args: argparse.Namespace, argv: list[str]) -> int:

@@ -103,6 +103,8 @@ def check_stability(alpha: float, f: float, memory: int = DEFAULT_MEMORY) -> 'St
     # the circle, which the relative-minimum test below treats as marginal anyway.
     size = 1 << 17
     values = np.fft.fft(a, size)
+    if not np.all(np.isfinite(values)):  # an order so large its coefficients overflow
+        return StabilityReport(False, float(a.sum()), float('nan'), 0.0, 0)
     mag = np.abs(values)
     rel_min = float(mag.min() / mag.max())
     phase = np.unwrap(np.angle(np.append(values, values[0])))

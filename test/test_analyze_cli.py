@@ -290,7 +290,7 @@ def odd_bags(tmp_path_factory, make_record):
     (['short', '--order-grid', '0:2'], 2, 'START:STOP:STEP'),
     (['short', '--chunk-size', '40'], 2, 'chunk_size'),
     (['short', 'two', '--label', 'only-one'], 2, 'one name per bag'),
-    (['short', '--reference', 'nothing.json'], 2, 'cannot be read'),
+    (['short', '--reference', 'nothing.json'], 3, 'cannot be read'),
     (['short', '--jobs', '0'], 2, '--jobs'),
     (['short', '--axis', 'w'], 2, 'invalid choice'),
 ])

@@ -104,7 +104,7 @@ def _analyze_cases():
         _c(t, 'garbage bytes', 3, 'cannot read CSV', '{in}/garbage.csv', *FAST, *o),
         _c(t, 'garbage bytes', 3, 'cannot read ULog', '{in}/garbage.ulg', *FAST, *o),
         _c(t, 'garbage bytes', 3, 'garbage_meta', '{in}/garbage_meta', *FAST, *o),
-        _c(t, 'garbage bytes', 2, 'reference summary', '{in}/bag', *FAST, '--reference',
+        _c(t, 'garbage bytes', 3, 'reference summary', '{in}/bag', *FAST, '--reference',
            '{in}/garbage.json', *o),
         _c(t, 'bad parameter', 2, '--jobs', '{in}/bag', *FAST, '--jobs', '0', *o),
         _c(t, 'bad parameter', 2, 'order', '{in}/bag', *FAST, '--order-grid', 'abc', *o),

@@ -90,7 +90,7 @@ from scipy.special import stdtrit
 from .chunks import DriftEstimate, NOISE_COLOUR_FACTORS, RobustLocation, SequenceSummary
 from .items import fmt as _fmt
 from .items import LEVEL_BYTE, LEVELS, TaskStatus
-from ..errors import InputDataError, ParameterError
+from ..errors import InputDataError, InputError, ParameterError
 from ..units import RAD_TO_DEG
 
 if TYPE_CHECKING:  # the engine imports this module
@@ -719,21 +719,24 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
 
     Raises
     ------
+    InputError
+        Missing or unreadable file, not JSON, not a summary.json of this version (exit code 3,
+        as every unreadable input).
     ParameterError
-        Missing/unreadable file, unknown or ambiguous bag, missing axis.
+        Unknown or ambiguous bag, missing axis.
 
     """
     path = Path(summary_json_path)
     try:
         data = json.loads(path.read_text())
     except OSError as err:
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r} cannot be read: {err.strerror or err}') from err
     except ValueError as err:
-        raise ParameterError(f'reference summary {str(path)!r} is not JSON: {err}') from err
+        raise InputError(f'reference summary {str(path)!r} is not JSON: {err}') from err
     bags = data.get('bags') if isinstance(data, dict) else None
     if not isinstance(bags, list) or not bags:
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r} has no "bags" list (not a gyro_noise_analyze '
             'summary.json?)')
     if bag is None:
@@ -755,7 +758,7 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
     a = axes[axis]
     robust = a.get(ROBUST_JSON_KEY) if isinstance(a, dict) else None
     if not isinstance(robust, dict):
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r}, axis {axis!r}, has no "{ROBUST_JSON_KEY}" (written '
             'by an older gyro_noise_analyze): regenerate it with this version, '
             f'gyro_noise_analyze {entry.get("path") or "REFERENCE_BAG"} --out DIR')
@@ -772,7 +775,7 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
             alpha_var=stats['alpha_var_robust'], alpha_corr=stats['alpha_corr_robust'],
             noise_colour=stats['noise_colour_robust'])
     except (KeyError, TypeError, ValueError) as err:
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 
 

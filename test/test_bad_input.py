@@ -1037,3 +1037,27 @@ def test_a_real_signal_stops_every_node(node, sig, ros_graph, tmp_path):
     code, err, seconds = stop_when_ready([PROGS[node], '--ros-args', *args], _NODE_READY[node],
                                          sig, cwd=tmp_path, env=ros_graph.env(), what=node)
     check_stopped(node, code, err, seconds, sig)
+
+
+@pytest.mark.ros
+def test_rclpy_own_parameters_are_not_unknown(tmp_path):
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    from gyro_noise_ros.errors import ParameterError
+    from gyro_noise_ros.nodes.recorder import RecorderNode
+
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    try:
+        own = [Parameter('use_sim_time', value=True),
+               Parameter('start_type_description_service', value=False)]
+        node = RecorderNode(context=ctx, parameter_overrides=[
+            Parameter('output', value=str(tmp_path / 'bag')), *own])
+        node.destroy_node()
+        with pytest.raises(ParameterError, match=r"unknown parameter 'outptu' \(did you mean "
+                                                 r"'output'\?\)"):
+            RecorderNode(context=ctx, parameter_overrides=[
+                Parameter('outptu', value=str(tmp_path / 'bag')), *own])
+    finally:
+        rclpy.try_shutdown(context=ctx)

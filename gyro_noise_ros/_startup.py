@@ -24,7 +24,7 @@ started as one of this package's programs (a console script of its distribution,
 (:func:`take_pending`). Imported by another program (a test, a user's script) it does nothing.
 """
 
-import os
+import re
 import signal
 import sys
 import threading
@@ -33,6 +33,11 @@ __all__ = ['install', 'launched_as_program', 'take_pending']
 
 _pending: list[int] = []
 _installed: list[bool] = []
+#: A console script of the distribution: pip's stub imports ``main`` from a package module,
+#: setuptools' loads the entry point of the distribution by name.
+_STUB = re.compile(rb'from gyro_noise_ros\.[\w.]+ import main\b|'
+                   rb"load_entry_point\(\s*'gyro[-_]noise[-_]ros")
+_STUB_BYTES = 1024
 
 
 def launched_as_program() -> bool:
@@ -48,13 +53,17 @@ def launched_as_program() -> bool:
     argv = list(getattr(sys, 'orig_argv', []))
     if '-m' in argv[:-1]:
         return argv[argv.index('-m') + 1].startswith('gyro_noise_ros.')
-    name = os.path.basename(sys.argv[0]) if sys.argv else ''
-    if not name or name.endswith('.py'):
+    script = sys.argv[0] if sys.argv else ''
+    if not script or script.endswith('.py'):
         return False
-    from importlib.metadata import entry_points
-
-    return any(e.name == name and e.value.startswith('gyro_noise_ros.')
-               for e in entry_points(group='console_scripts'))
+    try:
+        with open(script, 'rb') as fh:
+            stub = fh.read(_STUB_BYTES + 1)
+    except OSError:
+        return False
+    # only the few lines pip or setuptools write for a console script: a user's own program that
+    # imports the package keeps its Ctrl-C
+    return len(stub) <= _STUB_BYTES and _STUB.search(stub) is not None
 
 
 def _note(signum: int, frame: object) -> None:

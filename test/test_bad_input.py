@@ -706,11 +706,21 @@ def test_readme_exit_table_is_errors_exit_codes():
     assert set(EXIT_CODES) == {0, 1, 2, 3, 4, 5, 6, 130, 143}
 
 
-def test_signals_are_noted_early_only_in_a_program_of_the_package():
+def test_signals_are_noted_early_only_in_a_program_of_the_package(tmp_path, monkeypatch):
     from gyro_noise_ros import _startup
 
     assert not _startup.launched_as_program()  # pytest imported the tools: hands off
     assert signal.getsignal(signal.SIGINT) is not getattr(_startup, '_note')
+    stub = tmp_path / 'noise_analyzer'  # what pip writes for a console script
+    stub.write_text('import sys\nfrom gyro_noise_ros.nodes.analyzer import main\n'
+                    "if __name__ == '__main__':\n    sys.exit(main())\n")
+    mine = tmp_path / 'my_tool'  # a user's program that uses the package keeps its Ctrl-C
+    mine.write_text(stub.read_text() + '# more of my own code\n' * 100)
+    for argv, program in (([str(stub)], True), ([str(mine)], False),
+                          (['-m', 'gyro_noise_ros.cli.analyze'], True), (['-m', 'pytest'], False)):
+        monkeypatch.setattr(sys, 'argv', argv[-1:])
+        monkeypatch.setattr(sys, 'orig_argv', [sys.executable, *argv])
+        assert _startup.launched_as_program() == program, argv
 
 
 def test_every_error_class_has_a_documented_code():

@@ -29,10 +29,11 @@ import signal
 import sys
 import threading
 
-__all__ = ['install', 'launched_as_program', 'take_pending']
+__all__ = ['install', 'launched_as_program', 'quiet_finalisers', 'take_pending']
 
 _pending: list[int] = []
 _installed: list[bool] = []
+_program: list[bool] = []  # install() found this process to be one of the package's programs
 #: A console script of the distribution: pip's stub imports ``main`` from a package module,
 #: setuptools' loads the entry point of the distribution by name.
 _STUB = re.compile(rb'from gyro_noise_ros\.[\w.]+ import main\b|'
@@ -78,9 +79,29 @@ def install() -> None:
     _installed.append(True)
     if not launched_as_program():
         return
+    _program.append(True)
     for sig in (signal.SIGINT, signal.SIGTERM):
         if signal.getsignal(sig) is not signal.SIG_IGN:  # a parent's "ignore" stays
             signal.signal(sig, _note)
+
+
+def _silent(unraisable: object) -> None:
+    """Drop an error raised while an object is finalised (``sys.unraisablehook``)."""
+
+
+def quiet_finalisers() -> None:
+    """
+    Keep half-built objects of an interrupted run from printing tracebacks at exit.
+
+    A signal that lands inside a library's constructor (llvmlite building a pass manager while
+    numba compiles) leaves an object whose ``__del__`` fails when the interpreter collects it;
+    Python would print ``Exception ignored in ...`` and a traceback after the one ``interrupted``
+    line. Called once a run is interrupted, never on a normal run; only in a program of the
+    package (a test or a user's program that calls ``main()`` keeps its hook).
+
+    """
+    if _program:
+        sys.unraisablehook = _silent
 
 
 def take_pending() -> int | None:

@@ -911,7 +911,8 @@ def _default_signals():
 
 def stop_when_ready(argv, ready, sig, *, cwd, env=None, what):
     """
-    Start ``python -m argv``, send ``sig`` once stderr holds ``ready`` (or after ``ready`` s).
+    Start ``python -m argv``; send ``sig`` once stderr holds ``ready`` (a str), the file ``ready``
+    (a Path) is not empty, or after ``ready`` s (a float).
 
     Returns (exit code, stderr, seconds from the signal to the exit).
     """
@@ -926,6 +927,8 @@ def stop_when_ready(argv, ready, sig, *, cwd, env=None, what):
         deadline = time.monotonic() + (ready if isinstance(ready, float) else 180.0)
         while time.monotonic() < deadline:
             if isinstance(ready, str) and any(ready in ln for ln in lines):
+                break
+            if isinstance(ready, Path) and ready.exists() and ready.stat().st_size:
                 break
             assert proc.poll() is None, f'{what} ended before the signal: ' + ''.join(lines)
             time.sleep(0.05)
@@ -985,8 +988,11 @@ def test_a_real_signal_stops_a_tool_leaving_nothing(tool, sig, inputs, long_inpu
                                                    '300'], 2.0),
         'write-sd': (PROGS['portenta_emulator'], ['--write-sd', str(out), '--samples',
                                                   '40000000'], 2.0),
+        # ready once it samples: the truth of every sample is appended while it serves
         'serve': (PROGS['portenta_emulator'], ['--tcp', '127.0.0.1:0', '--stats-out',
-                                               str(tmp_path / 'stats.json')], 3.0),
+                                               str(tmp_path / 'stats.json'), '--truth-out',
+                                               str(tmp_path / 'truth.bin')],
+                  tmp_path / 'truth.bin'),
         'simulate': (PROGS['gyro_noise_thermal'], ['simulate', '--hours', '3', '--out',
                                                    str(out)], 3.0),
         'repair': ('gyro_noise_ros.cli.record', ['repair', str(long_inputs / 'long_bag'),
@@ -1002,7 +1008,8 @@ def test_a_real_signal_stops_a_tool_leaving_nothing(tool, sig, inputs, long_inpu
                                          what=f'{prog} ({tool})')
     check_stopped(prog, code, err, seconds, sig)
     left = sorted(p.name for p in tmp_path.iterdir())
-    assert left == (['stats.json'] if tool == 'serve' else []), left  # no result, no stage
+    # no result, no stage; the board served: its statistics and truth are written
+    assert left == (['stats.json', 'truth.bin'] if tool == 'serve' else []), left
 
 
 # slow: a real kill -9 half-way through an import, then the retry (15 s)

@@ -34,7 +34,7 @@ import sys
 import threading
 from typing import Any
 
-from .._startup import take_pending
+from .._startup import quiet_finalisers, take_pending
 from ..errors import (EXIT_INTERNAL, EXIT_INTERRUPTED, GyroNoiseError, Interrupted,
                       interrupted_exit_code, ParameterError)
 from ..outputs import check_out_dir, free_bytes, OVERWRITE_OPTION
@@ -178,6 +178,7 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     except SystemExit as err:  # argparse: a usage error (2, said) or --help/--version (0)
         return err.code if isinstance(err.code, int) else int(err.code is not None) * 2
     except KeyboardInterrupt as err:
+        quiet_finalisers()
         code = interrupted_exit_code(err)
         print(f'{prog}: interrupted' + ('' if code == EXIT_INTERRUPTED else
                                         f' ({signal.Signals(code - 128).name})'),

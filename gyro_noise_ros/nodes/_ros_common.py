@@ -52,7 +52,7 @@ from rclpy.utilities import remove_ros_args
 
 from ._params import (declare_parameter_table, parameter_help, ParamSpec, specs_from_dataclass,
                       unknown_parameter_error, unknown_parameters)
-from .._startup import take_pending
+from .._startup import quiet_finalisers, take_pending
 from ..errors import GyroNoiseError, ParameterError
 from ..link.sequence import SequenceGapCounter
 
@@ -395,6 +395,7 @@ def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
 
 
 def _interrupted(prog: str, signum: int) -> int:
+    quiet_finalisers()
     print(f'{prog}: interrupted' + ('' if signum == signal.SIGINT else
                                     f' ({signal.Signals(signum).name})'),
           file=sys.stderr, flush=True)

@@ -116,11 +116,53 @@ def check_fits_disk(path: str | os.PathLike[str], need_bytes: float, what: str) 
                              f'than the {free / 2**30:.3g} GiB free for {str(path)!r}')
 
 
-def _raise_interrupt(signum: int, frame: Any) -> None:
-    # Later signals during the cleanup are remembered only: the cleanup must finish.
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, signal.SIG_IGN)
-    raise Interrupted(signum)
+#: Delay before a swallowed stop is delivered again (s).
+REDELIVER_S = 0.05
+
+
+class _StopRequest:
+    """
+    The signal handler of :func:`stop_signals`, and what it does when its exception is lost.
+
+    The handler raises :class:`~gyro_noise_ros.errors.Interrupted` in whatever Python code runs
+    at that moment. Where Python cannot propagate an exception (a ctypes callback such as
+    llvmlite's object-cache hook while numba compiles, a ``__del__``), it reports it to
+    ``sys.unraisablehook`` and goes on: the run would end normally, the signal ignored. The hook
+    here notices that and sends the signal again a moment later, outside such code. While the
+    cleanup of a raised stop runs, further signals are not raised again (the cleanup must end).
+    """
+
+    def __init__(self) -> None:
+        self.raised = False
+        self.signum: int = signal.SIGINT
+        self.active = True
+        self.lock = threading.Lock()
+        self.previous_hook = sys.unraisablehook
+
+    def handler(self, signum: int, frame: Any) -> None:
+        if self.raised:
+            return
+        self.raised, self.signum = True, signum
+        raise Interrupted(signum)
+
+    def unraisable(self, unraisable: Any) -> None:
+        if not isinstance(unraisable.exc_value, Interrupted):
+            self.previous_hook(unraisable)
+            return
+        self.raised = False
+        timer = threading.Timer(REDELIVER_S, self._redeliver)
+        timer.daemon = True
+        timer.start()
+
+    def _redeliver(self) -> None:
+        with self.lock:
+            if self.active:
+                os.kill(os.getpid(), self.signum)
+
+    def close(self) -> None:
+        with self.lock:
+            self.active = False
+        sys.unraisablehook = self.previous_hook
 
 
 @contextmanager
@@ -129,22 +171,26 @@ def stop_signals() -> Iterator[None]:
     Turn SIGINT and SIGTERM into :class:`~gyro_noise_ros.errors.Interrupted` while the block runs.
 
     In the main thread only (elsewhere Python cannot install handlers); a signal the parent set
-    to be ignored stays ignored. The previous handlers come back at the end.
+    to be ignored stays ignored. A stop whose exception Python had to drop is delivered again
+    (:class:`_StopRequest`). The previous handlers come back at the end.
 
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    request = _StopRequest()
     old = {}
     for sig in (signal.SIGINT, signal.SIGTERM):
         if signal.getsignal(sig) is not signal.SIG_IGN:
-            old[sig] = signal.signal(sig, _raise_interrupt)
+            old[sig] = signal.signal(sig, request.handler)
+    sys.unraisablehook = request.unraisable
     try:
         early = take_pending()  # a signal while the program imported its libraries
         if early is not None:
             raise Interrupted(early)
         yield
     finally:
+        request.close()
         for sig, handler in old.items():
             signal.signal(sig, handler)
 

@@ -19,11 +19,13 @@ Importing numpy, numba, scipy and rosbags takes one to three seconds; a SIGINT t
 program with a ``KeyboardInterrupt`` traceback and a SIGTERM without a word. When the process was
 started as one of this package's programs (a console script of its distribution, or
 ``python -m gyro_noise_ros...``), :func:`install` (called by ``cli/__init__.py`` and
-``nodes/__init__.py``) notes such a signal instead; ``cli/_common.run_cli`` and
-``nodes/_ros_common.run_node`` then stop at once with the one ``interrupted`` line and 130/143
-(:func:`take_pending`). Imported by another program (a test, a user's script) it does nothing.
+``nodes/__init__.py``) ends it at once on such a signal, with the one ``interrupted`` line and
+130/143 (nothing has been written yet). Once ``main()`` runs (``cli/_common.run_cli``,
+``nodes/_ros_common.run_node`` call :func:`take_pending`) their own handlers take over and a
+signal is only noted. Imported by another program (a test, a user's script) it does nothing.
 """
 
+import os
 import re
 import signal
 import sys
@@ -32,6 +34,7 @@ import threading
 __all__ = ['install', 'launched_as_program', 'quiet_finalisers', 'take_pending']
 
 _pending: list[int] = []
+_main_started: list[bool] = []  # take_pending() ran: main() has its own handlers
 _installed: list[bool] = []
 _program: list[bool] = []  # install() found this process to be one of the package's programs
 #: A console script of the distribution: pip's stub imports ``main`` from a package module,
@@ -67,9 +70,34 @@ def launched_as_program() -> bool:
     return len(stub) <= _STUB_BYTES and _STUB.search(stub) is not None
 
 
+def _program_name() -> str:
+    """Return the name the program's messages start with (its ``PROG``), from its command line."""
+    argv = list(getattr(sys, 'orig_argv', []))
+    rest = sys.argv[1:2]
+    if '-m' in argv[:-1]:
+        module = argv[argv.index('-m') + 1]
+        from importlib.metadata import entry_points
+
+        names = [e.name for e in entry_points(group='console_scripts')
+                 if e.value.split(':')[0] == module]
+        name = names[0] if names else 'gyro_noise_' + module.rsplit('.', 1)[-1]
+    else:
+        name = os.path.basename(sys.argv[0])
+    return name + (' repair' if name == 'gyro_noise_record' and rest == ['repair'] else '')
+
+
 def _note(signum: int, frame: object) -> None:
-    if not _pending:
-        _pending.append(signum)
+    if _main_started:
+        if not _pending:
+            _pending.append(signum)
+        return
+    # still importing: nothing is written yet, so end now rather than after the imports
+    suffix = '' if signum == signal.SIGINT else f' ({signal.Signals(signum).name})'
+    try:
+        sys.stderr.write(f'{_program_name()}: interrupted{suffix}\n')
+        sys.stderr.flush()
+    finally:
+        os._exit(128 + signum)
 
 
 def install() -> None:
@@ -113,4 +141,5 @@ def take_pending() -> int | None:
     int or None
 
     """
+    _main_started.append(True)
     return _pending.pop() if _pending else None

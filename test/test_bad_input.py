@@ -919,8 +919,9 @@ def stop_when_ready(argv, ready, sig, *, cwd, env=None, what):
     """
     Start ``python -m argv`` and send ``sig`` once it is ready; time the stop.
 
-    Ready: stderr holds ``ready`` (a str), the file ``ready`` (a Path) is not empty, or ``ready``
-    seconds passed (a float). Returns (exit code, stderr, seconds from the signal to the exit).
+    Ready: stderr holds ``ready`` (a str), the file ``ready`` (a Path) is not empty, ``ready()``
+    is true (a callable), or ``ready`` seconds passed (a float). Returns (exit code, stderr,
+    seconds from the signal to the exit).
     """
     proc = subprocess.Popen([sys.executable, '-m', *argv], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True, cwd=cwd, env=env,
@@ -935,6 +936,8 @@ def stop_when_ready(argv, ready, sig, *, cwd, env=None, what):
             if isinstance(ready, str) and any(ready in ln for ln in lines):
                 break
             if isinstance(ready, Path) and ready.exists() and ready.stat().st_size:
+                break
+            if callable(ready) and ready():
                 break
             assert proc.poll() is None, f'{what} ended before the signal: ' + ''.join(lines)
             time.sleep(0.05)
@@ -988,8 +991,10 @@ def test_a_real_signal_stops_a_tool_leaving_nothing(tool, sig, inputs, long_inpu
                                                   '--out', str(out)], '10%'),
         'explain': (PROGS['gyro_noise_explain'], [str(inputs / 'ok.csv'), '--out', str(out)],
                     'axis x'),
+        # ready once the bag's storage file is being written in its stage
         'import': (PROGS['gyro_noise_import'], [*map(str, sorted(
-            (long_inputs / 'sd').glob('*.GNL'))), '--out', str(out)], 1.5),
+            (long_inputs / 'sd').glob('*.GNL'))), '--out', str(out)],
+                   lambda: any(tmp_path.glob('.out.partial-*/out/*'))),
         'write-bag': (PROGS['portenta_emulator'], ['--write-bag', str(out), '--duration-s',
                                                    '300'], 2.0),
         'write-sd': (PROGS['portenta_emulator'], ['--write-sd', str(out), '--samples',
@@ -1002,7 +1007,8 @@ def test_a_real_signal_stops_a_tool_leaving_nothing(tool, sig, inputs, long_inpu
         'simulate': (PROGS['gyro_noise_thermal'], ['simulate', '--hours', '3', '--out',
                                                    str(out)], 3.0),
         'repair': ('gyro_noise_ros.cli.record', ['repair', str(long_inputs / 'long_bag'),
-                                                 '--out', str(out)], 1.0),
+                                                 '--out', str(out)],
+                   lambda: any(tmp_path.glob('.out.partial-*/out/*'))),
         # 0.8 s: past the interpreter's start (a signal before the package's first import ends
         # Python by its default action), numpy, numba and rosbags still being imported
         'while-importing': (PROGS['portenta_emulator'], ['--write-bag', str(out),

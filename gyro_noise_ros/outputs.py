@@ -147,6 +147,12 @@ def _check_creatable(target: Path, option: str, *, into: bool = False) -> None:
         raise OutputError(f'{option} {str(target)!r} {what}: {_reason(err)}') from err
 
 
+def _check_named(path: StrPath, option: str) -> None:
+    """Refuse an empty name: ``Path('')`` is the working folder, never what was meant."""
+    if not os.fspath(path).strip():
+        raise OutputError(f'{option} is empty: give a name')
+
+
 def _visible_entries(folder: Path) -> list[str]:
     try:
         return sorted(e.name for e in os.scandir(folder) if not e.name.startswith('.'))
@@ -178,6 +184,7 @@ def check_out_dir(path: StrPath, *, option: str = '--out', overwrite: bool = Fal
         writable: the staging step then finds the rest), or is not empty without ``overwrite``.
 
     """
+    _check_named(path, option)
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise OutputError(f'{option} {str(out)!r} is an existing file, not a folder')
@@ -243,6 +250,7 @@ def check_new_dir(path: StrPath, *, option: str = 'output', overwrite: bool = Fa
         created or written.
 
     """
+    _check_named(path, option)
     final = Path(path)
     if final.exists() or final.is_symlink():
         if not overwrite:
@@ -276,6 +284,7 @@ def check_new_file(path: StrPath, *, option: str, overwrite: bool = False) -> No
         writable.
 
     """
+    _check_named(path, option)
     target = Path(path)
     if target.is_dir():
         raise OutputError(f'{option} {str(target)!r} is a folder, not a file')

@@ -311,6 +311,10 @@ def _check_integers(args: argparse.Namespace) -> None:
 
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse outputs that cannot be written or hold data, before the first sample."""
+    for option, value in (('--write-sd', args.write_sd), ('--write-bag', args.write_bag),
+                          ('--truth-out', args.truth_out), ('--stats-out', args.stats_out)):
+        if value is not None and not value.strip():  # '' would read as "not given"
+            raise OutputError(f'{option} is empty: give a name')
     if args.truth_out is not None:
         # --truth-out appends (documented): an existing file is extended, never replaced
         if Path(args.truth_out).is_dir():

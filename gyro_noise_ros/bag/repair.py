@@ -34,7 +34,8 @@ from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
 
-from .storage import BagSource, describe, mcap_message_records, read_mcap_chunk, STORAGES
+from .mcap_records import mcap_message_records, read_mcap_chunk
+from .storage import BagSource, describe, STORAGES
 from .writer import write_raw
 from ..errors import BagError, OutputError, ParameterError
 from ..msgs import typestore

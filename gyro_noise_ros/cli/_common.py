@@ -36,6 +36,7 @@ nothing to analyse (4).
 """
 
 from collections.abc import Callable, Sequence
+import logging
 import os
 from pathlib import Path
 import sys
@@ -46,6 +47,33 @@ EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+
+
+class WarningLines(logging.Handler):
+    """
+    Say each warning the package logs (a killed recording read anyway) once, as one stderr line.
+
+    The line is ``<prog>: warning: <message>``, the tools' form; a message said before in the
+    same run is not repeated (a tool may open one bag several times).
+
+    Parameters
+    ----------
+    prog : str
+        Program name used as the line's prefix.
+
+    """
+
+    def __init__(self, prog: str) -> None:
+        super().__init__(logging.WARNING)
+        self.prog = prog
+        self.said: set[str] = set()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        """Print the record's message unless it was said already."""
+        text = record.getMessage()
+        if text not in self.said:
+            self.said.add(text)
+            print(f'{self.prog}: warning: {text}', file=sys.stderr, flush=True)
 
 
 def check_out_option(path: str | os.PathLike[str], *, option: str = '--out') -> None:
@@ -88,6 +116,8 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     """
     Run ``body(argv)`` and turn deliberate errors into one line on stderr and an exit code.
 
+    Meanwhile the warnings the package logs are said on stderr by a :class:`WarningLines`.
+
     Parameters
     ----------
     prog : str
@@ -103,6 +133,9 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
         The process exit code.
 
     """
+    package_log = logging.getLogger('gyro_noise_ros')
+    lines = WarningLines(prog)
+    package_log.addHandler(lines)
     try:
         return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
     except GyroNoiseError as err:
@@ -114,3 +147,5 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     except MemoryError as err:
         print(f'{prog}: error: out of memory ({err})', file=sys.stderr)
         return EXIT_INTERNAL
+    finally:
+        package_log.removeHandler(lines)

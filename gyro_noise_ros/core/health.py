@@ -83,18 +83,16 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any, TYPE_CHECKING
+from typing import Any
 
 from scipy.special import stdtrit
 
 from .chunks import DriftEstimate, NOISE_COLOUR_FACTORS, RobustLocation, SequenceSummary
 from .items import fmt as _fmt
 from .items import LEVEL_BYTE, LEVELS, TaskStatus
+from .results import AxisSummary
 from ..errors import InputDataError, ParameterError
 from ..units import RAD_TO_DEG
-
-if TYPE_CHECKING:  # the engine imports this module
-    from .engine import AxisSummary
 
 
 def _threshold(default: float, description: str, unit: str = '') -> Any:
@@ -325,7 +323,7 @@ def drift_t_threshold(min_sigma: float, chunks: int) -> float:
     return float(-stdtrit(chunks - 2, p_two_sided / 2.0))
 
 
-def evaluate_health(summary: 'AxisSummary', *, reference: ReferenceStats | None = None,
+def evaluate_health(summary: AxisSummary, *, reference: ReferenceStats | None = None,
                     thresholds: HealthThresholds | None = None,
                     seconds_since_data: float | None = None) -> HealthVerdict:
     """
@@ -333,7 +331,7 @@ def evaluate_health(summary: 'AxisSummary', *, reference: ReferenceStats | None 
 
     Parameters
     ----------
-    summary : engine.AxisSummary
+    summary : results.AxisSummary
         The axis' sequence statistics and counts.
     reference : ReferenceStats, optional, keyword-only
         Reference characterisation; without it drift is judged by absolute limits and order and
@@ -411,7 +409,7 @@ def _sequence_items(seq: SequenceSummary, reference: ReferenceStats | None,
     return items
 
 
-def _data_items(summary: 'AxisSummary',
+def _data_items(summary: AxisSummary,
                 th: HealthThresholds) -> list[tuple[str, str, str, str]]:
     """Return the items of the samples: lost (from stamps), NaN, stamp order."""
     stream = summary.stream
@@ -436,7 +434,7 @@ def _data_items(summary: 'AxisSummary',
     ]
 
 
-def _chunk_items(summary: 'AxisSummary', th: HealthThresholds,
+def _chunk_items(summary: AxisSummary, th: HealthThresholds,
                  seconds_since_data: float | None) -> list[tuple[str, str, str, str]]:
     """Return the items of the chunks (skipped, analysed) and of staleness."""
     total = (

@@ -288,16 +288,6 @@ def _worse(a: str, b: str) -> str:
     return a if LEVELS.index(a) >= LEVELS.index(b) else b
 
 
-def _band(deviation: float, tolerance: float) -> str:
-    if not math.isfinite(deviation):
-        return 'OK'
-    if deviation > 2.0 * tolerance:
-        return 'ERROR'
-    if deviation > tolerance:
-        return 'WARN'
-    return 'OK'
-
-
 def drift_t_threshold(min_sigma: float, chunks: int) -> float:
     """
     Return the |t| a drift slope over ``chunks`` chunks must exceed to be significant.

@@ -169,25 +169,6 @@ def total_samples(samples: int | None, duration_s: float | None,
     return min(limits) if limits else None
 
 
-def encode_samples_batched(samples: np.ndarray, batch: int) -> bytes:
-    """
-    Encode samples as consecutive SAMPLES frames of at most ``batch`` samples.
-
-    Parameters
-    ----------
-    samples : numpy.ndarray
-        SAMPLE_DTYPE records.
-    batch : int
-        Samples per frame.
-
-    Returns
-    -------
-    bytes
-
-    """
-    return b''.join(encode_samples(samples[i:i + batch]) for i in range(0, samples.size, batch))
-
-
 def produce(board: BoardModel, faults: FaultInjector, counters: Counters, n: int,
             truth_fh: BinaryIO | None) -> np.ndarray:
     """

@@ -72,7 +72,7 @@ def _coverage_table(cases: list[tuple[str, ...]], seeds: range, args: argparse.N
 
 def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
-    cases = [(e,) for e in EFFECTS] if args.effects == 'all' else \
+    cases: list[tuple[str, ...]] = [(e,) for e in EFFECTS] if args.effects == 'all' else \
         [tuple(c.split('+')) if c != 'none' else () for c in args.effects.split(',')]
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     if args.coverage:

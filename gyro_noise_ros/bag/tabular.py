@@ -219,7 +219,8 @@ def _load_csv(path: Path, rate_hz: float | None, gyro_axes: Sequence[str]) -> _L
     names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path, gyro_axes))
     cols = _csv_columns(names, path, gyro_axes)
     if cols['t_s'] is None and cols['t_us'] is None and rate_hz is None:
-        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
+        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give {{rate_hz}}',
+                             parameters=('rate_hz',))
     n = data.shape[0]
     if cols['t_s'] is not None:
         t = data[:, cols['t_s']]

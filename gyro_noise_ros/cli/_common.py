@@ -35,7 +35,7 @@ or a non-numeric value is unreadable (3); a CSV with a header and no rows is rea
 nothing to analyse (4).
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 import logging
 import os
 from pathlib import Path
@@ -111,12 +111,35 @@ def check_out_option(path: str | os.PathLike[str], *, option: str = '--out') -> 
         raise OutputError(f'{option} {str(out)!r} {what}: permission denied')
 
 
+def option_of(parameter: str, renamed: Mapping[str, str] | None = None) -> str:
+    """
+    Return the command-line option of a parameter an error names.
+
+    Parameters
+    ----------
+    parameter : str
+        The parameter's name in the package (``min_range_c``).
+    renamed : mapping, optional
+        The tool's options whose name is not the parameter's (``{'start_s': '--start'}``).
+
+    Returns
+    -------
+    str
+        ``renamed[parameter]``, else ``--`` and the name with dashes (``--min-range-c``).
+
+    """
+    if renamed and parameter in renamed:
+        return renamed[parameter]
+    return '--' + parameter.replace('_', '-')
+
+
 def run_cli(prog: str, body: Callable[[list[str]], int | None],
-            argv: Sequence[str] | None) -> int:
+            argv: Sequence[str] | None, *, renamed: Mapping[str, str] | None = None) -> int:
     """
     Run ``body(argv)`` and turn deliberate errors into one line on stderr and an exit code.
 
-    Meanwhile the warnings the package logs are said on stderr by a :class:`WarningLines`.
+    An error's parameters are spelled as the tool's options (:func:`option_of`). Meanwhile the
+    warnings the package logs are said on stderr by a :class:`WarningLines`.
 
     Parameters
     ----------
@@ -126,6 +149,8 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
         ``body(argv) -> int``; may raise :class:`GyroNoiseError`.
     argv : list of str or None
         Arguments without the program name; ``None`` means ``sys.argv[1:]``.
+    renamed : mapping, optional, keyword-only
+        Passed to :func:`option_of`.
 
     Returns
     -------
@@ -139,7 +164,8 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     try:
         return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
     except GyroNoiseError as err:
-        print(f'{prog}: error: {err}', file=sys.stderr)
+        print(f'{prog}: error: {err.spelled(lambda name: option_of(name, renamed))}',
+              file=sys.stderr)
         return err.exit_code
     except KeyboardInterrupt:
         print(f'{prog}: interrupted', file=sys.stderr)

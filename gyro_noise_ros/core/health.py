@@ -745,8 +745,8 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
     if not isinstance(robust, dict):
         raise ParameterError(
             f'reference summary {str(path)!r}, axis {axis!r}, has no "{ROBUST_JSON_KEY}" (written '
-            'by an older gyro_noise_analyze): regenerate it with this version, '
-            f'gyro_noise_analyze {entry.get("path") or "REFERENCE_BAG"} --out DIR')
+            'by an older gyro_noise_analyze): analyse '
+            f'{entry.get("path") or "the reference recording"} again with this version')
     try:
         stats = {field_name: RobustLocation.from_dict(robust[key])
                  if robust.get(key) is not None else None for key, field_name in ROBUST_KEYS}

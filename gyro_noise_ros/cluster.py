@@ -15,29 +15,23 @@
 """
 Where the pure work units run: local worker processes, or a Dask distributed cluster.
 
-The command-line tools hand their heavy, pure work units (one chunk of one axis in
-gyro_noise_analyze, one ensemble member's signatures in gyro_noise_explain, one MOPSO particle in
-gyro_noise_thermal) to a :class:`concurrent.futures.Executor` and take the results back in
-submission order. :func:`make_executor` returns that executor:
+The tools hand their heavy, pure work units (one chunk of one axis in gyro_noise_analyze, one
+ensemble member's signatures in gyro_noise_explain, one MOPSO particle in gyro_noise_thermal) to a
+:class:`concurrent.futures.Executor` and take the results back in submission order.
+:func:`make_executor` returns that executor:
 
 * no scheduler: a :class:`~concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes, or
-  ``None`` for ``jobs <= 1`` (the caller then runs in-process), exactly as before;
-* ``scheduler='tcp://host:8786'``: a :class:`DaskExecutor` on a ``distributed.Client`` connected to
-  that scheduler. Tasks are submitted with ``pure=True``: their key is a hash of the function and
-  its arguments, and since the work units are pure (same inputs, same outputs) a task that Dask
-  runs again after losing a worker gives the same result, so nothing is lost or duplicated.
+  ``None`` for ``jobs <= 1`` (the caller then runs in-process);
+* ``scheduler='tcp://host:8786'``: a :class:`DaskExecutor` on a ``distributed.Client``, tasks
+  submitted ``pure=True`` (a task Dask runs again after losing a worker gives the same result).
 
-Bit-identical results. Dask hands a worker its numpy arguments as views into the received
-message, at any byte offset: even not a multiple of 8 (a float64 array at an odd address), where
-numpy's vectorised loops fall back to scalar ones and a sum comes out different in the last bit
-(measured: one chunk's var_min of 10,000 differed by 1 ulp). So a task travels as one pickle
-(protocol 4, arrays in-band) that the worker unpickles into freshly allocated, aligned arrays, as
-a local worker process does, and the result travels back the same way.
-
-``distributed`` is optional (pip extra ``dask``): it is imported only when a scheduler is named,
-and its absence then gives :class:`~gyro_noise_ros.errors.ParameterError` (exit 2) naming the
-extra. A scheduler that cannot be reached, or is lost during the run, gives
-:class:`~gyro_noise_ros.errors.ClusterError` (exit 5). See docs/scale.md.
+Results are bit-identical to a local run: a task travels as one pickle (protocol 4, arrays
+in-band) that the worker unpickles into aligned arrays, as a local worker process does (Dask's own
+views may sit at odd addresses, where numpy sums differ in the last bit), and back the same way.
+``distributed`` is optional (pip extra ``dask``), imported only when a scheduler is named; without
+it a scheduler gives :class:`~gyro_noise_ros.errors.ParameterError` (exit 2) naming the extra. A
+scheduler that cannot be reached, or is lost during the run, gives
+:class:`~gyro_noise_ros.errors.ClusterError` (exit 5). Measurements: docs/scale.md.
 """
 
 import asyncio

@@ -89,20 +89,7 @@ def _body(argv: list[str]) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """
-    Run the sweep and print its table.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name (default ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        The exit code.
-
-    """
+    """Run the sweep on ``argv`` (default ``sys.argv[1:]``); return the exit code."""
     return run_cli(PROG, _body, argv)
 
 

@@ -16,75 +16,25 @@
 Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
 One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional
-temperature)`` and cuts every selected axis into fixed-length chunks (10,000 samples by default, as
-in the paper). The work is split in three steps so that the caller decides where the heavy part
-runs:
+temperature in degC)`` and cuts every selected axis into fixed-length chunks (10,000 samples by
+default, as in the paper), in three steps so that the caller decides where the heavy part runs:
 
-1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order
-   counting, chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete
-   chunk and axis.
-2. :func:`analyze_chunk` (heavy, pure, picklable): fractional-order identification by both methods
+1. :meth:`NoiseEngine.ingest` (cheap, the caller's thread): validation, stamp and gap accounting
+   (:class:`.stamps.StampAccountant`), chunking (:class:`.chunks.Chunker`), per-chunk bias and
+   variance (:func:`chunk_jobs`); returns one :class:`ChunkJob` per complete chunk and axis.
+2. :func:`analyze_chunk` (heavy, pure, picklable): both fractional-order identifications
    (:class:`.fractional.OrderIdentifier`); safe in a worker thread or process.
 3. :meth:`NoiseEngine.record` (cheap): adds the :class:`.results.ChunkResult` to the per-axis
-   sequence statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
-   :meth:`NoiseEngine.health` are computed.
+   sequence statistics (paper Tables 3-6, :class:`SequenceBook`) from which
+   :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
 
-The engine only composes pieces with one job each, which the live node (through
-:mod:`.live`) and the offline tool share by sharing the engine:
-
-* stamp and gap accounting: :class:`.stamps.StampAccountant` (rate, gaps, lost samples, stamp
-  order; the counters of :class:`.stamps.StreamCounts`);
-* chunking: :class:`.chunks.Chunker` (the package's one chunker; it cuts the stamps, per-sample
-  losses, temperatures and rates together) and the 'split' policy's discarding;
-* per-chunk moments: :func:`chunk_jobs` (:func:`.chunks.chunk_moments` per axis);
-* the Allan feed: :class:`AllanFeed`;
-* the summary: :class:`SequenceBook` (chunk results by status, the rows of Tables 3-6) and
-  :func:`.chunks.summarise_sequence`; the verdicts: :func:`.health.evaluate_health`.
-
-Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming,
-the period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the
-first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). At the end
-(:meth:`NoiseEngine.counts`, :meth:`NoiseEngine.summary`) the estimate over the whole run replaces
-it: the Allan taus are rescaled to it (tau = m / rate), and the counts report the method, the stamp
-jitter and the disagreement warnings.
-
-*Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger
-than ``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples when it
-is a whole number of periods (within 6 robust sigmas of the step scatter, 0.1-0.45 of a period) or
-2.5 periods and more. A long step of a fractional number of periods below that is a correction of
-the stamping clock (a driver re-anchoring its device-clock map, a host clock slewing: every later
-stamp stays on the grid), counted as a clock step (``StreamCounts.clock_steps``), not as loss.
-Samples that share the stamp right after a long step (a packet stamped once) are the samples the
-step seemed to skip: they are subtracted from its loss (a group reaching the end of a batch waits
-for the next batch), so a packet-stamped record shows no phantom loss. Every gap is kept as (start,
-length, missing samples) and the longest are reported (``StreamCounts.longest_gaps``).
-*Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps
-shorter than half a period): a long step followed by a burst is jitter, not loss, so single steps
-are not read. Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate)
-+ 1 - n`` when it exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the
-run (the timebase estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single
-step to split at). A step of zero (a stamp equal to the latest one: one packet) is a normal time
-base, counted in ``equal_stamps`` and nothing else. A step < 0 is an out-of-order stamp: counted,
-never reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one
-one-sample gap (the hole is seen before the late sample arrives; the engine does not look back to
-fill it). The
-``gap_policy`` decides what a gap does to the chunk it falls in:
-
-* ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
-* ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
-  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every
-  analysed chunk is gap-free.
-* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the
-  sequence statistics.
-
-NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status
-``'nan'`` (per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left
-out of the statistics. The incomplete tail at the end is counted (``tail_samples``), never silently
-dropped.
-
-Allan deviation. When ``allan`` is on, every finite sample of every axis goes into it (gaps are
-ignored: Allan deviation assumes uniform sampling, so heavy loss biases it; the loss is reported
-beside it).
+The period is ``1 / rate_hz``, or the :mod:`.timebase` estimate of the first
+:data:`RATE_ESTIMATE_SAMPLES` stamps while streaming; at the end the estimate over the whole run
+replaces it (the Allan taus rescaled to it). ``gap_policy`` says what a gap does to its chunk:
+``'flag'`` keeps it, ``'split'`` discards the partial chunk before the gap, ``'drop'`` reports the
+chunk as ``'dropped'``. A NaN/Inf sample gives its chunk status ``'nan'`` on its axis only; the
+incomplete tail is counted, never dropped silently. The Allan deviation (:class:`AllanFeed`) takes
+every finite sample, gaps ignored. The rules of stamps, gaps and loss: docs/offline_tool.md.
 """
 
 from dataclasses import dataclass, field, replace
@@ -681,15 +631,9 @@ class NoiseEngine:
 
     def flush(self) -> list[ChunkJob]:
         """
-        Finish ingestion: release samples held for rate estimation.
+        Finish ingestion: release the samples held for the rate estimate; return the jobs they end.
 
-        The tail stays counted, unanalysed.
-
-        Returns
-        -------
-        list of ChunkJob
-            Jobs completed by the released samples.
-
+        The incomplete tail stays counted, unanalysed.
         """
         return self._cut(self._stamps.flush())
 
@@ -745,21 +689,7 @@ class NoiseEngine:
 
     @staticmethod
     def analyze(job: ChunkJob, *, curves: bool = False) -> ChunkResult:
-        """
-        Identify one chunk; see :func:`analyze_chunk` (pure, safe in a worker thread or process).
-
-        Parameters
-        ----------
-        job : ChunkJob
-            The chunk to analyse.
-        curves : bool, keyword-only
-            Keep the criterion curves in the result.
-
-        Returns
-        -------
-        ChunkResult
-
-        """
+        """Identify one chunk (:func:`analyze_chunk`; ``curves``: keep the criterion curves)."""
         return analyze_chunk(job, curves=curves)
 
     def record(self, result: ChunkResult) -> None:

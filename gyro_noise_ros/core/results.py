@@ -170,20 +170,5 @@ class AxisSummary:
 
 
 def rad_s2_to_deg_s_per_h(value: float) -> float:
-    """
-    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
-
-    See chunks.py.
-
-    Parameters
-    ----------
-    value : float
-        Drift in rad/s per s.
-
-    Returns
-    -------
-    float
-        Drift in deg/s per hour.
-
-    """
+    """Convert a rate drift from rad/s per s to (deg/s)/h, the unit of the paper's Table 3."""
     return float(np.degrees(value) * 3600.0)

@@ -354,18 +354,16 @@ def drift_stderr(t_s: npt.ArrayLike, bias: npt.ArrayLike) -> float:
     """
     Return a standard error of the drift slope that holds for correlated chunk biases.
 
-    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias: 0.5-0.9 on
-    the ADIS16405 runs), and the ordinary least-squares error then falls 5x short of the real
-    spread of the slope across runs. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k - mean t) /
-    Sxx`` and ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random walk
-    included) ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} - b_k)^2]``
-    the variogram of the chunk biases (Cressie 1993, eq. 2.4.5). ``D`` is estimated from the
-    detrended biases (lags up to half the run, held constant beyond); detrending keeps a real drift
-    from inflating its own error but removes some long-lag variance, so on the ADIS16405 runs this
-    error is still 1-3x below the spread of slopes across runs (docs/analysis.md). The Newey-West
-    (Bartlett, ``ceil(n^(1/3))`` lags) error is
-    computed too and the larger of the two returned (the variogram estimate can come out
-    negative or tiny on short records). Chunks are taken as equally spaced.
+    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias), where the
+    ordinary least-squares error falls short. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k -
+    mean t) / Sxx`` and ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random
+    walk included) ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} -
+    b_k)^2]`` the variogram of the chunk biases (Cressie 1993, eq. 2.4.5), estimated from the
+    detrended biases (lags up to half the run, held constant beyond: detrending keeps a real drift
+    from inflating its own error). The Newey-West (Bartlett, ``ceil(n^(1/3))`` lags) error is
+    computed too and the larger of the two returned (the variogram estimate can come out negative
+    or tiny on short records). Chunks are taken as equally spaced. How both compare with the
+    spread of slopes across real runs: docs/analysis.md.
 
     Parameters
     ----------

@@ -28,7 +28,8 @@ from gyro_noise_ros.errors import (BagError, GyroNoiseError, InputDataError, not
 
 def test_a_parameter_is_its_name_for_a_library_caller_and_an_option_for_a_tool():
     err = nothing_left_error(start_s=1000.0, record_end_s=44.995, label='run1')
-    assert str(err) == 'run1: nothing left to analyse: start_s 1000 s is past the record end 44.995 s'
+    assert str(err) == ('run1: nothing left to analyse: start_s 1000 s is past the record end '
+                        '44.995 s')
     assert err.spelled(lambda name: option_of(name, {'start_s': '--start'})) == (
         'run1: nothing left to analyse: --start 1000 s is past the record end 44.995 s')
     window = nothing_left_error(start_s=5.0, end_s=6.0, record_end_s=10.0)

@@ -30,7 +30,7 @@ import itertools
 import logging
 import operator
 from pathlib import Path
-from typing import Any, cast, NoReturn, TYPE_CHECKING, Union
+from typing import cast, TYPE_CHECKING, Union
 
 import numpy as np
 
@@ -44,7 +44,6 @@ from ..outputs import StrPath
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection
     from rosbags.rosbag1 import Reader as Ros1Reader
-    from rosbags.rosbag1.reader import IndexData
     from rosbags.rosbag2 import Reader as Rosbag2Reader
     from rosbags.rosbag2.reader import ReaderProtocol
     from rosbags.rosbag2.storage_mcap import McapReader
@@ -611,38 +610,7 @@ def _full_ros1_reader_class() -> type[Ros1Reader]:
 
 def _lean_ros1_reader_class() -> type[Ros1Reader]:
     """Return rosbags' ROS 1 Reader class without the per-message index (chunk list, counts)."""
-    from rosbags.rosbag1 import Reader
-
-    class LeanRos1Reader(Reader):
-        """
-        Open a ROS 1 bag reading its connections, chunk infos and chunk headers only.
-
-        The index data records after each chunk (one entry per message) are skipped, so memory
-        does not grow with the bag; ``messages()`` is therefore unavailable (empty), and message
-        counts come from the chunk infos.
-        """
-
-        def read_index_data(self, pos: int, indexes: dict[int, list[IndexData]]) -> None:
-            """Skip one index data record (fixed 47-byte header, then 12 bytes per message)."""
-            bio = self.bio
-            assert bio is not None  # an open reader
-            head = bio.read(55)
-            if len(head) != 55 or int.from_bytes(head[0:4], 'little') != 47:
-                raise BagError(f'ROS 1 index data record after chunk at byte {pos} is malformed')
-            bio.seek(int.from_bytes(head[51:55], 'little'), 1)
-
-        def open(self) -> None:  # noqa: A003 - overrides rosbags Reader.open
-            """Open the bag; connection message counts from the chunk infos."""
-            super().open()
-            counts: dict[int, int] = {}
-            for info in self.chunk_infos:
-                for cid, k in info.connection_counts.items():
-                    counts[cid] = counts.get(cid, 0) + k
-            self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in self.connections]
-            self.indexes = {}
-
-        def messages(self, *args: Any, **kwargs: Any) -> NoReturn:
-            """Refuse: the lean reader has no per-message index."""
-            raise BagError('the lean ROS 1 reader streams chunks only (no per-message index)')
+    # rosbags is imported when a bag is read, not when the package is
+    from ._lean_ros1 import LeanRos1Reader
 
     return LeanRos1Reader

@@ -333,7 +333,7 @@ def run_excitation(params: ExcitationParams) -> ExcitationResult:
         try:
             sides[side] = _analyse(path, params)
         except InputDataError as err:
-            raise InputDataError(f'{side} record {path!r}: {err}') from err
+            raise err.prefixed(f'{side} record {path!r}: ') from err
     return ExcitationResult(params, sides)
 
 

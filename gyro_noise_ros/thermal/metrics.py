@@ -289,7 +289,8 @@ def make_injection(n: int, rate_hz: float, *, amplitude_rad_s: float = DEFAULT_A
     if c_s * f_lo_hz < 20:
         raise ParameterError(f'the run ({duration:.4g} s) is too short to measure the response '
                              f'down to {f_lo_hz:g} Hz: the chirp needs at least '
-                             f'{20 / f_lo_hz / 0.3:.4g} s of run; raise --f-lo-hz')
+                             f'{20 / f_lo_hz / 0.3:.4g} s of run; raise {{f_lo_hz}}',
+                             parameters=('f_lo_hz',))
     sig = np.zeros(n)
     c0 = int(0.25 * n)
     c_n = int(round(c_s * rate_hz))

@@ -54,6 +54,7 @@ from ..calibration.interval import (compare, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_M
 from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, TERMS, unit_of
 from ..errors import BagError, InputDataError, ParameterError
+from ..formatting import finite_or_none as _num
 from ..htmlreport.reliability import write_reliability_html
 from ..outputs import atomic_write_text, staged_output
 from ..units import RAD_TO_DEG
@@ -68,13 +69,6 @@ TERM_UNITS = {
     'bias_stability': ('{u}', '{p}'),
     'random_walk': ('{u}_per_sqrt_s', '{p}/sqrt(s)'),
 }
-
-
-def _num(v: Any) -> float | None:
-    if v is None:
-        return None
-    v = float(v)
-    return v if math.isfinite(v) else None
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
+from ..formatting import finite_or_none as _num
 from ..htmlreport.thermal import write_apply_html, write_compare_html
 from ..outputs import staged_output, StrPath
 from ..thermal import methods as registry
@@ -147,13 +148,6 @@ class ScoreOptions:
     f_hi_hz: float = DEFAULT_F_HI_HZ
     small_signal: bool = True
     range_margin_c: float = registry.DEFAULT_RANGE_MARGIN_C
-
-
-def _num(v: Any) -> float | None:
-    if v is None:
-        return None
-    v = float(v)
-    return v if math.isfinite(v) else None
 
 
 def _json(doc: dict[str, Any]) -> str:

@@ -45,10 +45,11 @@ from typing import Any, cast, Union
 
 import numpy as np
 
-from .calibrate import (CalibrateParams, calibration_files, CalibrationResult, Gravity, MG,
-                        run_calibration, table6_rows)
+from .calibrate import (CalibrateParams, calibration_files, CalibrationResult, Gravity,
+                        run_calibration)
 from .. import __version__
 from ..calibration import records
+from ..calibration.calibrate_report import table6_rows
 from ..calibration.interval import (compare, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
                                     DEFAULT_TOLERANCE, overall)
 from ..calibration.static import DetectorSettings
@@ -57,7 +58,7 @@ from ..errors import BagError, InputDataError, ParameterError
 from ..formatting import finite_or_none as _num
 from ..htmlreport.reliability import write_reliability_html
 from ..outputs import atomic_write_text, staged_output
-from ..units import RAD_TO_DEG
+from ..units import MG_TO_M_S2, RAD_TO_DEG
 
 PARTS = ('before_calibration', 'before_static', 'after_calibration', 'after_static')
 SIDES = ('before', 'after')
@@ -764,8 +765,8 @@ def in_short(doc: dict[str, Any]) -> list[str]:
         out += _floor_sentences(doc)
     u = doc['uniformity']
     if u['before'] and u['after']:
-        b = u['before']['accel_bias_std_m_s2'] / MG
-        a = u['after']['accel_bias_std_m_s2'] / MG
+        b = u['before']['accel_bias_std_m_s2'] / MG_TO_M_S2
+        a = u['after']['accel_bias_std_m_s2'] / MG_TO_M_S2
         out.append(f'Calibration: the spread of the accelerometer biases across the axes went '
                    f'from {b:.2f} mg to {a:.2f} mg (x{a / b:.1f}); paper 001 reads a loss of '
                    'uniformity as damage (0.25 -> 2.96 mg in its IMU).' if b > 0 else
@@ -945,8 +946,8 @@ def _indicator_rows(doc: dict[str, Any]) -> list[str]:
     return ['', '## Indicators (paper 001 section 6)', '',
             '| indicator | before | after |', '|---|---|---|',
             f'| std of the accelerometer biases across axes (mg) | '
-            f'{u(ub, "accel_bias_std_m_s2", 1 / MG, ".3f")} | '
-            f'{u(ua, "accel_bias_std_m_s2", 1 / MG, ".3f")} |',
+            f'{u(ub, "accel_bias_std_m_s2", 1 / MG_TO_M_S2, ".3f")} | '
+            f'{u(ua, "accel_bias_std_m_s2", 1 / MG_TO_M_S2, ".3f")} |',
             f'| std of the accelerometer scale factors (%) | '
             f'{u(ub, "accel_scale_factor_std", 100, ".3f")} | '
             f'{u(ua, "accel_scale_factor_std", 100, ".3f")} |',

@@ -37,7 +37,7 @@ __all__ = ['calibration_markdown', 'calibration_yaml', 'table6_rows']
 
 
 def _yaml_list(values: Iterable[Any]) -> str:
-    """A YAML flow list of doubles, repr() each (lossless); a null of the document is nan."""
+    """Return a YAML flow list of doubles, repr() each (lossless); a null is written nan."""
     return '[' + ', '.join(repr(math.nan if v is None else float(v))
                            for v in np.ravel(np.asarray(values, dtype=object))) + ']'
 

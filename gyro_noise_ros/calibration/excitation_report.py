@@ -75,7 +75,7 @@ def what_of(doc: dict[str, Any]) -> str:
 
 
 def _f(v: float | None) -> float:
-    """A number of the document for a format spec: a null (not finite) prints as nan."""
+    """Return a number of the document for a format spec: a null (not finite) is nan."""
     return math.nan if v is None else v
 
 
@@ -175,7 +175,7 @@ def _dwell_rows(doc: dict[str, Any], row: _Row) -> None:
         lambda e: verdict_text(e['clean'], 'clean', 'DISTORTED', e['distortion_p']))
 
     def harmonics(e: dict[str, Any]) -> str:
-        h = _array(e[f'harmonics_{u}'])
+        h = np.asarray(e[f'harmonics_{u}'], dtype=float)
         with np.errstate(divide='ignore', invalid='ignore'):
             ratios = h[1:] / h[0]
         return ', '.join(percent(r, '.3f') for r in ratios) or 'none below Nyquist'
@@ -229,11 +229,6 @@ def _bin_table(doc: dict[str, Any], side: str) -> list[str]:
     return out
 
 
-def _array(values: list[float | None]) -> NDArray[np.float64]:
-    """A list of the document as an array, a null as NaN."""
-    return np.asarray([math.nan if v is None else v for v in values], dtype=np.float64)
-
-
 def plot_excitation(path: StrPath, doc: dict[str, Any], side: str, t_s: NDArray[np.float64],
                     x: NDArray[np.float64]) -> None:
     """
@@ -268,11 +263,14 @@ def plot_excitation(path: StrPath, doc: dict[str, Any], side: str, t_s: NDArray[
                      f'{e[f"amplitude_{u}"] * scale:.4g} {unit}, THD {100 * e["thd"]:.2f} %',
                      fontsize=9)
     else:
-        f = _array(e['bin_hz'])
-        pb.plot(f, _array(e[f'amplitude_up_{u}']) * scale, 'o-', label='rising frequency')
-        pb.plot(f, _array(e[f'amplitude_down_{u}']) * scale, 's-', label='falling frequency')
+        # a null of the document (a value that was not finite) is NaN again
+        f, up, down = (np.asarray(e[k], dtype=float)
+                       for k in ('bin_hz', f'amplitude_up_{u}', f'amplitude_down_{u}'))
+        pb.plot(f, up * scale, 'o-', label='rising frequency')
+        pb.plot(f, down * scale, 's-', label='falling frequency')
         if f'reference_up_{u}' in e:
-            pb.plot(f, _array(e[f'reference_up_{u}']) * scale, 'k--', lw=1, label='reference')
+            ref = np.asarray(e[f'reference_up_{u}'], dtype=float)
+            pb.plot(f, ref * scale, 'k--', lw=1, label='reference')
         pb.set_xlabel('instantaneous frequency (Hz)')
         pb.set_ylabel(f'amplitude ({unit})')
         pb.set_title('(b) amplitude against frequency', fontsize=9)

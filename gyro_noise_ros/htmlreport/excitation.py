@@ -156,10 +156,6 @@ def _sweep_tables(doc: dict[str, Any], sides: list[str]) -> list[Table]:
     return tables
 
 
-def _array(values: list[float | None]) -> NDArray[np.float64]:
-    return np.asarray([np.nan if v is None else v for v in values], dtype=np.float64)
-
-
 def _figures(doc: dict[str, Any], records: _Records,
              sides: list[str]) -> list[tuple[str, 'figure']]:
     """Return the whole acquisition and, for a sweep, the amplitude against frequency."""
@@ -176,11 +172,13 @@ def _figures(doc: dict[str, Any], records: _Records,
         amp = []
         for s in sides:
             e = doc[s]
-            f = _array(e['bin_hz'])
-            amp += [(f'{s} rising', f, _array(e[f'amplitude_up_{u}']) * k),
-                    (f'{s} falling', f, _array(e[f'amplitude_down_{u}']) * k)]
+            # a null of the document (a value that was not finite) is NaN again
+            f, up, down = (np.asarray(e[key], dtype=float)
+                           for key in ('bin_hz', f'amplitude_up_{u}', f'amplitude_down_{u}'))
+            amp += [(f'{s} rising', f, up * k), (f'{s} falling', f, down * k)]
             if f'reference_up_{u}' in e:
-                amp.append((f'{s} reference', f, _array(e[f'reference_up_{u}']) * k))
+                ref = np.asarray(e[f'reference_up_{u}'], dtype=float)
+                amp.append((f'{s} reference', f, ref * k))
         figures.append(('Amplitude against the instantaneous frequency.',
                         series_figure(amp, title='Amplitude against frequency',
                                       x_label='frequency (Hz)', y_label=f'amplitude ({unit})')))

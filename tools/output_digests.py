@@ -16,10 +16,10 @@
 SHA-256 of every output file of every tool on fixed inputs: the check that a change moved code.
 
 Writes seeded inputs once (the emulator's scenario model, the fractional-noise and thermal
-simulators), then runs every tool on them in one fresh process (``PYTHONPATH`` = the checkout):
-analyze, explain, calibrate six-position and multi-pose, excitation (a dwell before/after, a sweep
-with a reference), reliability, thermal fit/apply/compare/export. What each tool prints is kept
-as ``<run>/stdout.txt`` and ``<run>/stderr.txt``.
+simulators), then runs every tool on them as a program, each in a fresh process (``PYTHONPATH``
+= the checkout): analyze, explain, calibrate six-position and multi-pose, excitation (a dwell
+before/after, a sweep with a reference), reliability, thermal fit/apply/compare/export. What each
+tool prints is kept as ``<run>/stdout.txt`` and ``<run>/stderr.txt``.
 
 * without ``--baseline``: prints ``sha256  path`` per output file;
 * with ``--baseline CHECKOUT`` (e.g. ``git worktree add /tmp/base <commit>``): runs the same
@@ -43,11 +43,10 @@ import argparse
 from collections.abc import Callable, Iterator, Sequence
 import contextlib
 import hashlib
-import io
-import json
 import os
 from pathlib import Path
 import re
+import runpy
 import shutil
 import subprocess
 import sys
@@ -61,8 +60,6 @@ ROOT = Path(__file__).resolve().parent.parent
 #: Stamps of the first sample of every input recording (ns).
 T0_NS = 1_700_000_000 * 10**9
 G = 9.80665
-#: Marks the JSON line the run process hands back to the controller.
-_MARK = 'OUTPUT_DIGESTS '
 
 #: (file name pattern, regular expression, replacement) applied before hashing.
 NORMALISE: tuple[tuple[str, str, str], ...] = (
@@ -127,12 +124,17 @@ def _noise_inputs(folder: Path) -> None:
     _write_bag(folder / 'noise', t, accel, gyro, temperature=_ramp(t, 25.0, 0.01))
 
 
-def _calibration_inputs(folder: Path) -> None:
-    from gyro_noise_ros.calibration.emulate import MultiPose, SixPosition
+def _six_inputs(folder: Path) -> None:
+    from gyro_noise_ros.calibration.emulate import SixPosition
 
     six = SixPosition(dwell_s=20.0, move_s=4.0)
     rec = _scenario_record(six, six.duration_s, 4)
     _write_bag(folder / 'six', *rec, temperature=_ramp(rec[0], 30.0, 0.01))
+
+
+def _multi_inputs(folder: Path) -> None:
+    from gyro_noise_ros.calibration.emulate import MultiPose
+
     multi = MultiPose(poses=12, dwell_s=20.0, move_s=5.0, lead_s=5.0)
     _write_bag(folder / 'multi', *_scenario_record(multi, multi.duration_s, 6))
 
@@ -174,18 +176,17 @@ def _reliability_inputs(folder: Path) -> None:
 
 
 def _thermal_inputs(folder: Path) -> None:
-    from gyro_noise_ros.cli.thermal import main
+    from gyro_noise_ros.app.thermal import simulate, write_simulate
 
-    with contextlib.redirect_stdout(io.StringIO()):
-        code = main(['simulate', '--seed', '2', '--out', str(folder / 'thermal'), '--shape',
-                     'heating', '--test-shape', 'cooling', '--hours', '0.25', '--rate-hz', '10'])
-    if code != 0:
-        raise SystemExit(f'gyro_noise_thermal simulate: exit {code}')
+    # as ``gyro_noise_thermal simulate --seed 2 --shape heating --test-shape cooling
+    # --hours 0.25 --rate-hz 10``: train/ and test/ with the truth beside them (the oracle rows)
+    write_simulate(simulate(seed=2, hours=0.25, rate_hz=10.0, shape='heating',
+                            test_shape='cooling'), folder / 'thermal')
 
 
 #: Input makers, by the tools that read what they write.
 _INPUTS: dict[str, Callable[[Path], None]] = {
-    'noise': _noise_inputs, 'calibration': _calibration_inputs,
+    'noise': _noise_inputs, 'six': _six_inputs, 'multi': _multi_inputs,
     'excitation': _excitation_inputs, 'reliability': _reliability_inputs,
     'thermal': _thermal_inputs}
 
@@ -199,9 +200,9 @@ TOOLS: tuple[tuple[str, str, tuple[str, ...], tuple[str, ...]], ...] = (
     ('analyze', 'analyze', ('{in}/noise', '--out', 'analyze', '--quiet'), ('noise',)),
     ('explain', 'explain', ('{in}/noise', '--out', 'explain', '--ensemble', '4',
                             '--max-steps', '1', '--bootstrap', '5', '--quiet'), ('noise',)),
-    ('calibrate_six', 'calibrate', ('{in}/six', '--out', 'calibrate_six'), ('calibration',)),
+    ('calibrate_six', 'calibrate', ('{in}/six', '--out', 'calibrate_six'), ('six',)),
     ('calibrate_multi', 'calibrate', ('{in}/multi', '--mode', 'multi-pose', '--latitude', '45',
-                                      '--out', 'calibrate_multi'), ('calibration',)),
+                                      '--out', 'calibrate_multi'), ('multi',)),
     ('excitation_dwell', 'excitation', ('{in}/dwell_before', '{in}/dwell_after', '--sensor',
                                         'accel', '--axis', 'x', '--dwell', '8', '--out',
                                         'excitation_dwell'), ('excitation',)),
@@ -212,7 +213,7 @@ TOOLS: tuple[tuple[str, str, tuple[str, ...], tuple[str, ...]], ...] = (
     ('reliability', 'reliability', ('--before-calibration', '{in}/six', '--before-static',
                                     '{in}/static_before', '--after-calibration',
                                     '{in}/six_after', '--after-static', '{in}/static_after',
-                                    '--out', 'reliability'), ('calibration', 'reliability')),
+                                    '--out', 'reliability'), ('six', 'reliability')),
     ('thermal_fit', 'thermal', ('fit', '{in}/thermal/train', '--method', 'parallel_small',
                                 '--out', 'thermal_fit'), ('thermal',)),
     ('thermal_fit_poly3', 'thermal', ('fit', '{in}/thermal/train', '--method', 'poly3',
@@ -311,24 +312,24 @@ def _cwd(path: Path) -> Iterator[None]:
         os.chdir(old)
 
 
-def run_tools(inputs: Path, out: Path, tools: Sequence[str]) -> None:
-    """Run the ``tools`` of the imported package on ``inputs``, each into ``out/<name>``."""
-    import importlib
+def run_one(name: str, inputs: Path, out: Path) -> int:
+    """
+    Run one tool as its program would (``python -m gyro_noise_ros.cli.X ARGS``) in this process.
 
-    out.mkdir(parents=True, exist_ok=True)
-    with _harness():
-        for name, module, argv, _ in TOOLS:
-            if name not in tools:
-                continue
-            main = importlib.import_module(f'gyro_noise_ros.cli.{module}').main
-            args = [a.replace('{in}', str(inputs)) for a in argv]
-            printed, said = io.StringIO(), io.StringIO()
-            with _cwd(out), contextlib.redirect_stdout(printed), contextlib.redirect_stderr(said):
-                code = main(args)
-            if code != 0:
-                raise SystemExit(f'{name}: exit {code}:\n{printed.getvalue()}{said.getvalue()}')
-            (out / name / 'stdout.txt').write_text(printed.getvalue())
-            (out / name / 'stderr.txt').write_text(said.getvalue())
+    The run's cwd is ``out`` and its outputs go to ``out/<name>``; return its exit code.
+    """
+    _, module, argv, _ = next(t for t in TOOLS if t[0] == name)
+    prog = f'gyro_noise_ros.cli.{module}'
+    old = sys.argv
+    sys.argv = [prog, *(a.replace('{in}', str(inputs)) for a in argv)]
+    try:
+        with _harness(), _cwd(out):
+            runpy.run_module(prog, run_name='__main__', alter_sys=True)
+    except SystemExit as done:
+        return done.code if isinstance(done.code, int) else 1
+    finally:
+        sys.argv = old
+    return 0
 
 
 # ---- digests ---------------------------------------------------------------------------------
@@ -364,22 +365,39 @@ def digests(out: Path) -> dict[str, str]:
 
 # ---- the controller ----------------------------------------------------------------------------
 
-def _run_checkout(root: Path, inputs: Path, out: Path, tools: Sequence[str],
-                  workdir: Path) -> dict[str, str]:
-    """Run the tools of the checkout ``root`` in a fresh process; return its digests."""
-    env = dict(os.environ, PYTHONPATH=str(root), MPLBACKEND='Agg')
-    cmd = [sys.executable, str(Path(__file__).resolve()), '--run', str(inputs), str(out),
-           '--tools', ','.join(tools)]
-    # cwd outside both checkouts, so that PYTHONPATH decides which code is imported
-    proc = subprocess.run(cmd, cwd=workdir, env=env, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise SystemExit(f'{root}: exit {proc.returncode}:\n{proc.stdout[-2000:]}'
-                         f'{proc.stderr[-4000:]}')
-    line = [x for x in proc.stdout.splitlines() if x.startswith(_MARK)][-1]
-    doc = json.loads(line[len(_MARK):])
-    if Path(doc['package']).resolve() != (root / 'gyro_noise_ros').resolve():
-        raise SystemExit(f'PYTHONPATH={root} imported gyro_noise_ros from {doc["package"]}')
-    return doc['digests']
+def _imported_from(root: Path, workdir: Path) -> Path:
+    """Return the folder of the ``gyro_noise_ros`` that ``PYTHONPATH=root`` imports."""
+    out = subprocess.run(
+        [sys.executable, '-c', 'import gyro_noise_ros; print(gyro_noise_ros.__file__)'],
+        cwd=workdir, env=dict(os.environ, PYTHONPATH=str(root)), capture_output=True, text=True,
+        check=True).stdout.strip()
+    return Path(out).resolve().parent
+
+
+def run_checkout(root: Path, inputs: Path, out: Path, tools: Sequence[str],
+                 workdir: Path) -> dict[str, str]:
+    """
+    Run the ``tools`` of the checkout ``root`` on ``inputs``, each in a fresh process.
+
+    What each prints goes to ``out/<name>/stdout.txt`` and ``stderr.txt``. Returns
+    :func:`digests` of ``out``.
+    """
+    got = _imported_from(root, workdir)
+    if got != (root / 'gyro_noise_ros').resolve():
+        raise SystemExit(f'PYTHONPATH={root} imports gyro_noise_ros from {got}')
+    env = dict(os.environ, PYTHONPATH=str(root))
+    out.mkdir(parents=True, exist_ok=True)
+    for name in tools:
+        cmd = [sys.executable, str(Path(__file__).resolve()), '--run-one', name, str(inputs),
+               str(out)]
+        # cwd outside both checkouts, so that PYTHONPATH decides which code is imported
+        proc = subprocess.run(cmd, cwd=workdir, env=env, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise SystemExit(f'{root}: {name}: exit {proc.returncode}:\n{proc.stdout[-2000:]}'
+                             f'{proc.stderr[-4000:]}')
+        (out / name / 'stdout.txt').write_text(proc.stdout)
+        (out / name / 'stderr.txt').write_text(proc.stderr)
+    return digests(out)
 
 
 def compare(new: dict[str, str], base: dict[str, str]) -> list[tuple[str, str]]:
@@ -409,7 +427,7 @@ def _controller(args: argparse.Namespace, tmp: Path) -> int:
     make_inputs(tmp / 'inputs', tools)
     print(f'inputs written in {time.perf_counter() - started:.1f} s: {tmp / "inputs"}')
     started = time.perf_counter()
-    new = _run_checkout(ROOT, tmp / 'inputs', tmp / 'new', tools, tmp)
+    new = run_checkout(ROOT, tmp / 'inputs', tmp / 'new', tools, tmp)
     print(f'{len(tools)} tool runs of {ROOT} (git {_git_head(ROOT)}): {len(new)} files in '
           f'{time.perf_counter() - started:.1f} s (load {os.getloadavg()[0]:.1f})')
     if not args.baseline:
@@ -418,7 +436,7 @@ def _controller(args: argparse.Namespace, tmp: Path) -> int:
         return 0
     base_root = Path(args.baseline).resolve()
     started = time.perf_counter()
-    base = _run_checkout(base_root, tmp / 'inputs', tmp / 'baseline', tools, tmp)
+    base = run_checkout(base_root, tmp / 'inputs', tmp / 'baseline', tools, tmp)
     print(f'the same of {base_root} (git {_git_head(base_root)}): {len(base)} files in '
           f'{time.perf_counter() - started:.1f} s (load {os.getloadavg()[0]:.1f})')
     rows = compare(new, base)
@@ -438,16 +456,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help='checkout of the code to compare with, on the same inputs')
     p.add_argument('--workdir', type=Path, help='where the temporary folder goes')
     p.add_argument('--keep', action='store_true', help='keep the inputs and outputs')
-    p.add_argument('--run', nargs=2, metavar=('INPUTS', 'OUT'), help=argparse.SUPPRESS)
+    p.add_argument('--run-one', nargs=3, metavar=('NAME', 'INPUTS', 'OUT'),
+                   help=argparse.SUPPRESS)
     args = p.parse_args(argv)
-    if args.run:
-        import gyro_noise_ros
-
-        inputs, out = (Path(v) for v in args.run)
-        run_tools(inputs, out, _selected(args.tools.split(',') if args.tools else None))
-        print(_MARK + json.dumps({'package': str(Path(gyro_noise_ros.__file__).parent),
-                                  'digests': digests(out)}))
-        return 0
+    if args.run_one:
+        name, inputs, out = args.run_one
+        return run_one(name, Path(inputs), Path(out))
     tmp = Path(tempfile.mkdtemp(prefix='output_digests_', dir=args.workdir))
     try:
         return _controller(args, tmp)

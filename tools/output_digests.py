@@ -53,6 +53,7 @@ import sys
 import tempfile
 import time
 from typing import Any
+import warnings
 
 import numpy as np
 
@@ -323,7 +324,9 @@ def run_one(name: str, inputs: Path, out: Path) -> int:
     old = sys.argv
     sys.argv = [prog, *(a.replace('{in}', str(inputs)) for a in argv)]
     try:
-        with _harness(), _cwd(out):
+        with _harness(), _cwd(out), warnings.catch_warnings():
+            # in a process that imported the module already (a test): it runs again as __main__
+            warnings.filterwarnings('ignore', '.* found in sys.modules', RuntimeWarning)
             runpy.run_module(prog, run_name='__main__', alter_sys=True)
     except SystemExit as done:
         return done.code if isinstance(done.code, int) else 1

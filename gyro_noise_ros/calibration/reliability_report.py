@@ -157,7 +157,7 @@ def in_short(doc: dict[str, Any]) -> list[str]:
     Parameters
     ----------
     doc : dict
-        The ``reliability.json`` document .
+        The ``reliability.json`` document.
 
     Returns
     -------
@@ -398,7 +398,7 @@ def reliability_markdown(doc: dict[str, Any]) -> str:
     Parameters
     ----------
     doc : dict
-        The ``reliability.json`` document .
+        The ``reliability.json`` document.
 
     Returns
     -------

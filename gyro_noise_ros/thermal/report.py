@@ -319,10 +319,8 @@ def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
     ----------
     doc : dict
         The metrics.json document.
-    figs : Figures
-        The report's figures, in ``out`` (empty: no figure section).
-    out : pathlib.Path
-        The report folder (image links are relative to it).
+    figs, out
+        As :func:`training_markdown`.
 
     Returns
     -------

@@ -47,7 +47,7 @@ from collections.abc import Sequence
 import dataclasses
 from dataclasses import dataclass
 import math
-from typing import Any, SupportsFloat
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,6 +58,7 @@ from .run import ThermalMethod, ThermalRun
 from ..core.allan import allan_deviation
 from ..core.readout import read_allan
 from ..errors import InputDataError, ParameterError
+from ..formatting import finite_list as _curve, finite_or_none as _num
 from ..units import RAD_TO_DEG
 
 __all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
@@ -687,15 +688,6 @@ def verdict(raw: NoiseMetrics, processed: NoiseMetrics, fr: FrequencyResponse, s
             'small_signal_low_band_min_gain': _num(small_gain), 'arw_from_bandwidth': from_bw,
             'measured_causal': measured_causal, 'live_capable': bool(causal and measured_causal),
             'text': ' '.join(text)}
-
-
-def _num(v: SupportsFloat) -> float | None:
-    v = float(v)
-    return v if math.isfinite(v) else None
-
-
-def _curve(values: ArrayLike) -> list[float | None]:
-    return [_num(v) for v in np.asarray(values, dtype=float)]
 
 
 def _run_with(run: ThermalRun, gyro: NDArray[np.float64]) -> ThermalRun:

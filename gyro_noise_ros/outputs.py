@@ -16,8 +16,8 @@
 Outputs that are either finished or visibly unfinished, and never replace what a user has.
 
 A tool killed or failing half-way must leave nothing that looks like a result, a retry must work,
-and no run replaces existing data unless the user said ``--overwrite``
-(:data:`OVERWRITE_OPTION`, the one spelling of every tool). The shapes:
+and no run replaces existing data unless its caller says ``overwrite`` (every tool's
+``--overwrite``, a node's ``overwrite`` parameter). The shapes:
 
 * :func:`staged_output` -- a tool's ``--out`` folder (reports, tables, figures, models, SD logs).
   Files are written into a hidden ``.partial-<pid>-<token>`` folder inside it and moved into
@@ -51,7 +51,7 @@ from .errors import OutputError
 
 __all__ = ['atomic_write_bytes', 'atomic_write_text', 'check_new_dir', 'check_new_file',
            'check_out_dir', 'free_bytes', 'is_bag_dir', 'is_disk_full', 'make_out_dir',
-           'OVERWRITE_OPTION', 'PARTIAL_PREFIX', 'remove_stale_partials', 'removed_if_unused',
+           'PARTIAL_PREFIX', 'remove_stale_partials', 'removed_if_unused',
            'staged_new_dir',
            'staged_output']
 
@@ -60,8 +60,8 @@ StrPath = Union[str, 'os.PathLike[str]']
 
 #: Name prefix of staging folders inside an output folder.
 PARTIAL_PREFIX = '.partial-'
-#: The option (and, without dashes, the node parameter) that lets a run replace existing data.
-OVERWRITE_OPTION = '--overwrite'
+#: The parameter that lets a run replace existing data, as messages name it (errors.py).
+OVERWRITE = 'overwrite'
 #: Files a rosbag2 folder holds (what ``--overwrite`` may replace as a bag).
 _BAG_SUFFIXES = ('.db3', '.db3-journal', '.db3-wal', '.db3-shm', '.mcap', '.mcap.zstd',
                  '.db3.zstd')
@@ -70,6 +70,11 @@ _FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 def _reason(err: OSError) -> str:
     return err.strerror or str(err)
+
+
+def _refused(parameter: str, text: str) -> OutputError:
+    """Return ``OutputError('{parameter} text')``; ``text`` may name :data:`OVERWRITE` too."""
+    return OutputError(f'{{{parameter}}} {text}', parameters=(parameter, OVERWRITE))
 
 
 def is_disk_full(err: BaseException) -> bool:
@@ -126,31 +131,31 @@ def free_bytes(path: StrPath) -> int | None:
     return usage.f_bavail * usage.f_frsize
 
 
-def _check_creatable(target: Path, option: str, *, into: bool = False) -> None:
+def _check_creatable(target: Path, parameter: str, *, into: bool = False) -> None:
     """Refuse ``target`` under a file or an unwritable folder (``into``: a folder written into)."""
     ancestor = _existing_ancestor(target if into else target.parent)
     if not ancestor.exists():
         return
     if not ancestor.is_dir():
-        raise OutputError(f'{option} {str(target)!r} cannot be created: {str(ancestor)!r} is a '
-                          'file')
+        raise _refused(parameter, f'{str(target)!r} cannot be created: {str(ancestor)!r} is a '
+                       'file')
     what = 'is not writable' if ancestor == target else (
         f'cannot be created: {str(ancestor)!r} is not writable')
     if not os.access(ancestor, os.W_OK | os.X_OK):
-        raise OutputError(f'{option} {str(target)!r} {what}: permission denied')
+        raise _refused(parameter, f'{str(target)!r} {what}: permission denied')
     # os.access trusts the mode bits: a read-only mount, /proc or an ACL say no only when tried
     probe = ancestor / f'.gyro_noise_probe-{os.getpid()}-{secrets.token_hex(4)}'
     try:
         probe.mkdir()
         probe.rmdir()
     except OSError as err:
-        raise OutputError(f'{option} {str(target)!r} {what}: {_reason(err)}') from err
+        raise _refused(parameter, f'{str(target)!r} {what}: {_reason(err)}') from err
 
 
-def _check_named(path: StrPath, option: str) -> None:
+def _check_named(path: StrPath, parameter: str) -> None:
     """Refuse an empty name: ``Path('')`` is the working folder, never what was meant."""
     if not os.fspath(path).strip():
-        raise OutputError(f'{option} is empty: give a name')
+        raise _refused(parameter, 'is empty: give a name')
 
 
 def _visible_entries(folder: Path) -> list[str]:
@@ -160,7 +165,7 @@ def _visible_entries(folder: Path) -> list[str]:
         raise OutputError(f'{str(folder)!r} cannot be listed: {_reason(err)}') from err
 
 
-def check_out_dir(path: StrPath, *, option: str = '--out', overwrite: bool = False) -> None:
+def check_out_dir(path: StrPath, *, parameter: str = 'out', overwrite: bool = False) -> None:
     """
     Refuse an output folder before any work, creating nothing (the ``--out`` rule of every tool).
 
@@ -172,8 +177,8 @@ def check_out_dir(path: StrPath, *, option: str = '--out', overwrite: bool = Fal
     ----------
     path : str or os.PathLike
         The folder named by the user (may not exist yet).
-    option : str, keyword-only
-        How the user named it, for the message.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
     overwrite : bool, keyword-only
         ``--overwrite`` was given.
 
@@ -184,18 +189,18 @@ def check_out_dir(path: StrPath, *, option: str = '--out', overwrite: bool = Fal
         writable: the staging step then finds the rest), or is not empty without ``overwrite``.
 
     """
-    _check_named(path, option)
+    _check_named(path, parameter)
     out = Path(path)
     if out.exists() and not out.is_dir():
-        raise OutputError(f'{option} {str(out)!r} is an existing file, not a folder')
-    _check_creatable(out, option, into=True)
+        raise _refused(parameter, f'{str(out)!r} is an existing file, not a folder')
+    _check_creatable(out, parameter, into=True)
     if out.is_dir() and not overwrite:
         names = _visible_entries(out)
         if names:
             more = f' and {len(names) - 1} more' if len(names) > 1 else ''
-            raise OutputError(
-                f'{option} {str(out)!r} is not empty (it holds {names[0]!r}{more}): give '
-                f'{OVERWRITE_OPTION} to write into it (files of the same names are replaced, '
+            raise _refused(
+                parameter, f'{str(out)!r} is not empty (it holds {names[0]!r}{more}): give '
+                f'{{overwrite}} to write into it (files of the same names are replaced, '
                 'the others kept), or a new folder')
 
 
@@ -227,8 +232,7 @@ def is_bag_dir(path: StrPath) -> bool:
                for e in entries)
 
 
-def check_new_dir(path: StrPath, *, option: str = 'output', overwrite: bool = False,
-                  overwrite_hint: str = OVERWRITE_OPTION) -> None:
+def check_new_dir(path: StrPath, *, parameter: str = 'out', overwrite: bool = False) -> None:
     """
     Refuse the target of a new bag folder before any work, creating nothing.
 
@@ -236,12 +240,10 @@ def check_new_dir(path: StrPath, *, option: str = 'output', overwrite: bool = Fa
     ----------
     path : str or os.PathLike
         The bag folder to create.
-    option : str, keyword-only
-        How the user named it, for the message.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
     overwrite : bool, keyword-only
         An existing bag folder may be replaced (never a file or another kind of folder).
-    overwrite_hint : str, keyword-only
-        How the user says ``overwrite`` (``-p overwrite:=true`` for a node).
 
     Raises
     ------
@@ -250,21 +252,21 @@ def check_new_dir(path: StrPath, *, option: str = 'output', overwrite: bool = Fa
         created or written.
 
     """
-    _check_named(path, option)
+    _check_named(path, parameter)
     final = Path(path)
     if final.exists() or final.is_symlink():
         if not overwrite:
-            raise OutputError(f'{option} {str(final)!r} already exists: give {overwrite_hint} '
-                              'to replace it, or a new name')
+            raise _refused(parameter, f'{str(final)!r} already exists: give {{overwrite}} '
+                           'to replace it, or a new name')
         if not is_bag_dir(final):
             kind = 'a file' if not final.is_dir() or final.is_symlink() else (
                 'a folder that is not a bag')
-            raise OutputError(f'{option} {str(final)!r} is {kind}: {overwrite_hint} replaces '
-                              'only a bag folder; give a new name')
-    _check_creatable(final, option)
+            raise _refused(parameter, f'{str(final)!r} is {kind}: {{overwrite}} replaces '
+                           'only a bag folder; give a new name')
+    _check_creatable(final, parameter)
 
 
-def check_new_file(path: StrPath, *, option: str, overwrite: bool = False) -> None:
+def check_new_file(path: StrPath, *, parameter: str, overwrite: bool = False) -> None:
     """
     Refuse the target of an output file before any work, creating nothing.
 
@@ -272,8 +274,8 @@ def check_new_file(path: StrPath, *, option: str, overwrite: bool = False) -> No
     ----------
     path : str or os.PathLike
         The file to write.
-    option : str, keyword-only
-        How the user named it, for the message.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
     overwrite : bool, keyword-only
         An existing file may be replaced.
 
@@ -284,19 +286,19 @@ def check_new_file(path: StrPath, *, option: str, overwrite: bool = False) -> No
         writable.
 
     """
-    _check_named(path, option)
+    _check_named(path, parameter)
     target = Path(path)
     if target.is_dir():
-        raise OutputError(f'{option} {str(target)!r} is a folder, not a file')
+        raise _refused(parameter, f'{str(target)!r} is a folder, not a file')
     if not target.parent.is_dir():
-        raise OutputError(f'{option} {str(target)!r}: its folder does not exist')
+        raise _refused(parameter, f'{str(target)!r}: its folder does not exist')
     if target.exists() and not overwrite:
-        raise OutputError(f'{option} {str(target)!r} already exists: give {OVERWRITE_OPTION} to '
-                          'replace it, or a new name')
-    _check_creatable(target, option)
+        raise _refused(parameter, f'{str(target)!r} already exists: give {{overwrite}} to '
+                       'replace it, or a new name')
+    _check_creatable(target, parameter)
 
 
-def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
+def make_out_dir(path: StrPath, *, parameter: str = 'out') -> Path:
     """
     Create the output folder ``path`` (and its parents) of a tool and check it can be written.
 
@@ -304,8 +306,8 @@ def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
     ----------
     path : str or os.PathLike
         The folder.
-    option : str, keyword-only
-        How the user named it, for the message.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
 
     Returns
     -------
@@ -319,13 +321,13 @@ def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
     """
     out = Path(path)
     if out.exists() and not out.is_dir():
-        raise OutputError(f'{option} {str(out)!r} is an existing file, not a folder')
+        raise _refused(parameter, f'{str(out)!r} is an existing file, not a folder')
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise OutputError(f'{option} {str(out)!r} cannot be created: {_reason(err)}') from err
+        raise _refused(parameter, f'{str(out)!r} cannot be created: {_reason(err)}') from err
     if not os.access(out, os.W_OK | os.X_OK):
-        raise OutputError(f'{option} {str(out)!r} is not writable: permission denied')
+        raise _refused(parameter, f'{str(out)!r} is not writable: permission denied')
     return out
 
 
@@ -452,7 +454,7 @@ def _publish(stage: Path, out: Path) -> None:
 
 
 @contextmanager
-def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
+def staged_output(path: StrPath, *, parameter: str = 'out') -> Iterator[Path]:
     """
     Stage a tool's outputs and publish them in ``path`` only if the body finishes (module doc).
 
@@ -463,8 +465,8 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
     ----------
     path : str or os.PathLike
         The tool's output folder (created if missing).
-    option : str, keyword-only
-        How the user named it, for messages.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
 
     Yields
     ------
@@ -478,7 +480,7 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
 
     """
     created = _missing_folders(Path(path))
-    out = make_out_dir(path, option=option)
+    out = make_out_dir(path, parameter=parameter)
     remove_stale_partials(out, PARTIAL_PREFIX + '*')
     stage = out / f'{PARTIAL_PREFIX}{os.getpid()}-{secrets.token_hex(4)}'
     lock = None
@@ -489,7 +491,7 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
         _release(lock)
         shutil.rmtree(stage, ignore_errors=True)
         _remove_if_empty(created)
-        raise OutputError(f'{option} {str(out)!r} is not writable: {_reason(err)}') from err
+        raise _refused(parameter, f'{str(out)!r} is not writable: {_reason(err)}') from err
     try:
         try:
             yield stage
@@ -501,9 +503,9 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
             _publish(stage, out)
             stage.rmdir()
         except OSError as err:
-            raise OutputError(f'cannot move the results into {option} {str(out)!r}: '
-                              f'{_reason(err)} (the finished files are in {str(stage)!r})'
-                              ) from err
+            raise OutputError(f'cannot move the results into {{{parameter}}} {str(out)!r}: '
+                              f'{_reason(err)} (the finished files are in {str(stage)!r})',
+                              parameters=(parameter,)) from err
     finally:
         _release(lock)
 
@@ -523,7 +525,7 @@ def _swap_in(stage: Path, final: Path, holder: Path) -> None:
 
 
 @contextmanager
-def staged_new_dir(path: StrPath, *, option: str = 'output',
+def staged_new_dir(path: StrPath, *, parameter: str = 'out',
                    overwrite: bool = False) -> Iterator[Path]:
     """
     Build a folder that must not exist yet under a hidden sibling name; rename it on success.
@@ -532,8 +534,8 @@ def staged_new_dir(path: StrPath, *, option: str = 'output',
     ----------
     path : str or os.PathLike
         The final folder (for example a rosbag2 bag).
-    option : str, keyword-only
-        How the user named it, for messages.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
     overwrite : bool, keyword-only
         An existing bag folder at ``path`` is replaced at the end (:func:`check_new_dir`).
 
@@ -550,14 +552,14 @@ def staged_new_dir(path: StrPath, *, option: str = 'output',
 
     """
     final = Path(path)
-    check_new_dir(final, option=option, overwrite=overwrite)
+    check_new_dir(final, parameter=parameter, overwrite=overwrite)
     parent = final.parent
     created = _missing_folders(parent)
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise OutputError(f'{option} {str(final)!r}: its folder cannot be created: '
-                          f'{_reason(err)}') from err
+        raise _refused(parameter, f'{str(final)!r}: its folder cannot be created: '
+                       f'{_reason(err)}') from err
     remove_stale_partials(parent, f'.{final.name}.partial-*')
     # The stage carries the final name inside a hidden holder folder: rosbags (like ros2 bag)
     # names a bag's storage file after its folder, and that name must survive the rename.
@@ -570,8 +572,8 @@ def staged_new_dir(path: StrPath, *, option: str = 'output',
         _release(lock)
         shutil.rmtree(holder, ignore_errors=True)
         _remove_if_empty(created)
-        raise OutputError(f'{option} {str(final)!r}: its folder is not writable: '
-                          f'{_reason(err)}') from err
+        raise _refused(parameter, f'{str(final)!r}: its folder is not writable: '
+                       f'{_reason(err)}') from err
     try:
         try:
             yield holder / final.name
@@ -582,8 +584,8 @@ def staged_new_dir(path: StrPath, *, option: str = 'output',
         try:
             _swap_in(holder / final.name, final, holder)
         except OSError as err:
-            raise OutputError(f'cannot rename {str(holder / final.name)!r} to {option} '
-                              f'{str(final)!r}: {_reason(err)}') from err
+            raise OutputError(f'cannot rename {str(holder / final.name)!r} to {{{parameter}}} '
+                              f'{str(final)!r}: {_reason(err)}', parameters=(parameter,)) from err
         shutil.rmtree(holder, ignore_errors=True)
     finally:
         _release(lock)

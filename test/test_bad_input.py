@@ -718,7 +718,7 @@ def test_readme_exit_table_is_errors_exit_codes():
 
 
 def test_signals_are_noted_early_only_in_a_program_of_the_package(tmp_path, monkeypatch):
-    from gyro_noise_ros import _startup
+    from gyro_noise_ros.cli import _startup
 
     assert not _startup.launched_as_program()  # pytest imported the tools: hands off
     assert signal.getsignal(signal.SIGINT) is not getattr(_startup, '_note')

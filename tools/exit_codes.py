@@ -27,8 +27,11 @@ a meaning changes in ``errors.py`` and the README follows with ``--write``.
 
 import argparse
 from pathlib import Path
+import re
 import sys
 
+from gyro_noise_ros.cli._common import option_of
+from gyro_noise_ros.cli.analyze import RENAMED
 from gyro_noise_ros.errors import EXIT_CODES
 
 README = Path(__file__).resolve().parents[1] / 'README.md'
@@ -38,7 +41,7 @@ HEADING = '## Exit codes of the command-line tools and nodes'
 
 def markdown_table() -> str:
     """
-    Return the exit codes as a Markdown table, one row per code.
+    Return the exit codes as a Markdown table, one row per code, the options spelled.
 
     Returns
     -------
@@ -46,8 +49,25 @@ def markdown_table() -> str:
 
     """
     rows = ['| code | meaning |', '|---|---|']
-    rows += [f'| {code} | {meaning} |' for code, meaning in sorted(EXIT_CODES.items())]
+    rows += [f'| {code} | {spelled(meaning)} |' for code, meaning in sorted(EXIT_CODES.items())]
     return '\n'.join(rows) + '\n'
+
+
+def spelled(meaning: str) -> str:
+    """
+    Return a meaning with each ``{parameter}`` spelled as the tools' option (``{start_s}``: --start).
+
+    Parameters
+    ----------
+    meaning : str
+        A value of :data:`~gyro_noise_ros.errors.EXIT_CODES`.
+
+    Returns
+    -------
+    str
+
+    """
+    return re.sub(r'\{(\w+)\}', lambda m: option_of(m.group(1), RENAMED), meaning)
 
 
 def readme_table(text: str) -> str:

@@ -42,7 +42,7 @@ from .. import rosgraph
 from ..errors import (EXIT_INTERRUPTED, EXIT_TERMINATED, GyroNoiseError, Interrupted, OutputError,
                       ParameterError)
 from ..monitor_lines import parse_axis_parts
-from ..outputs import atomic_write_text, OVERWRITE_OPTION
+from ..outputs import atomic_write_text
 
 #: The tool named in the printed lines.
 TOOL = 'gyro_noise_demo'
@@ -330,10 +330,12 @@ def _prepare_out(out: Path, *, overwrite: bool) -> Path:
     if out.exists() and any(out.iterdir()):
         if not (out / MARKER).exists():
             raise OutputError(
-                f'--out {str(out)!r} exists and is not a previous demo output; choose another')
+                f'{{out}} {str(out)!r} exists and is not a previous demo output; choose another',
+                parameters=('out',))
         if not overwrite:
-            raise OutputError(f'--out {str(out)!r} holds a previous demo output: give '
-                              f'{OVERWRITE_OPTION} to replace it, or another folder')
+            raise OutputError(f'{{out}} {str(out)!r} holds a previous demo output: give '
+                              '{overwrite} to replace it, or another folder',
+                              parameters=('out', 'overwrite'))
     try:
         for name in ('recording', 'report', 'logs'):
             if (out / name).is_dir():
@@ -343,7 +345,8 @@ def _prepare_out(out: Path, *, overwrite: bool) -> Path:
         (out / 'logs').mkdir(parents=True, exist_ok=True)
         _mark(out, finished=False)
     except OSError as err:
-        raise OutputError(f'--out {str(out)!r} cannot be prepared: {err.strerror or err}') from err
+        raise OutputError(f'{{out}} {str(out)!r} cannot be prepared: {err.strerror or err}',
+                          parameters=('out',)) from err
     return out
 
 

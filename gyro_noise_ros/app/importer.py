@@ -231,7 +231,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
         raise ParameterError(f'--topic and --temperature-topic are both {imu_topic!r}: Imu and '
                              'Temperature messages need topics of their own')
     out = os.fspath(out)
-    check_new_dir(out, option='--out', overwrite=overwrite)
+    check_new_dir(out, parameter='out', overwrite=overwrite)
     missing = [str(p_) for p_ in paths if not os.path.isfile(p_)]
     if missing:
         raise BagError(f'log file {missing[0]!r} does not exist' + (
@@ -262,7 +262,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
 
     # The bag is built under a hidden name and renamed when finished: an interrupted or failed
     # import leaves nothing that looks like a bag, and a retry with the same --out works.
-    with staged_new_dir(out, option='--out', overwrite=overwrite) as stage:
+    with staged_new_dir(out, parameter='out', overwrite=overwrite) as stage:
         with _BagWrites(lambda: writer_class(stage, storage=storage, imu_topic=imu_topic,
                                              temperature_topic=temp_topic, frame_id=frame_id),
                         threaded=threads == 2) as writes:

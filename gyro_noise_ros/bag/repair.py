@@ -35,7 +35,8 @@ from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
 
-from .storage import BagSource, describe, mcap_message_records, read_mcap_chunk, STORAGES
+from .mcap_records import mcap_message_records, read_mcap_chunk
+from .storage import BagSource, describe, STORAGES
 from .writer import write_raw
 from ..errors import BagError, OutputError, ParameterError
 from ..msgs import typestore
@@ -193,7 +194,8 @@ def _copy_error(path: StrPath, out: Path, err: BaseException) -> BagError | Outp
     # an OS error on the stage (named .<out>.partial-...) is the output's, whatever its errno
     if is_disk_full(err) or (isinstance(err, OSError) and err.filename is not None
                              and f'.{out.name}.partial-' in str(err.filename)):
-        return OutputError(f'--out {str(out)!r} cannot be written: {describe(err)}')
+        return OutputError(f'{{out}} {str(out)!r} cannot be written: {describe(err)}',
+                           parameters=('out',))
     return BagError(f'bag {str(path)!r} cannot be copied: {describe(err)}')
 
 
@@ -232,11 +234,13 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     if storage is not None and storage not in STORAGES:
-        raise ParameterError(f"--storage must be 'sqlite3' or 'mcap', got {storage!r}")
+        raise ParameterError(f"{{storage}} must be 'sqlite3' or 'mcap', got {storage!r}",
+                             parameters=('storage',))
     out = Path(out) if out is not None else default_repaired_path(path)
     if out.resolve() == Path(path).resolve():
-        raise OutputError(f'--out {str(out)!r} is the input: the recording is never replaced')
-    check_new_dir(out, option='--out', overwrite=overwrite)
+        raise OutputError(f'{{out}} {str(out)!r} is the input: the recording is never replaced',
+                          parameters=('out',))
+    check_new_dir(out, parameter='out', overwrite=overwrite)
     source = BagSource(path)
     try:
         if source.ros1:
@@ -247,7 +251,7 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
         written: dict[tuple[str, str], int] = {}
         first: int | None = None
         last: int | None = None
-        with staged_new_dir(out, option='--out', overwrite=overwrite) as stage:
+        with staged_new_dir(out, parameter='out', overwrite=overwrite) as stage:
             writer = Writer(stage, version=9, storage_plugin=plugin)
             try:
                 writer.open()

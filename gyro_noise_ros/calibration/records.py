@@ -75,7 +75,8 @@ def rate_from_stamps(stamp_ns: ArrayLike, source: str = '') -> float:
         raise InputDataError(f'recording {source!r}: {err}') from err
     if not est.usable:
         raise InputDataError(f'recording {source!r}: no usable sample rate from the stamps: '
-                             f'{"; ".join(est.warnings)} (give --rate-hz)')
+                             f'{"; ".join(est.warnings)} (give {{rate_hz}})',
+                             parameters=('rate_hz',))
     return float(est.rate_hz)
 
 
@@ -105,8 +106,8 @@ def iter_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None =
 
     """
     if rate_hz is not None and not RATE_RANGE_HZ[0] <= rate_hz <= RATE_RANGE_HZ[1]:
-        raise ParameterError(f'--rate-hz must be {RATE_RANGE_HZ[0]:g} to {RATE_RANGE_HZ[1]:g} '
-                             f'Hz, got {rate_hz!r}')
+        raise ParameterError(f'{{rate_hz}} must be {RATE_RANGE_HZ[0]:g} to '
+                             f'{RATE_RANGE_HZ[1]:g} Hz, got {rate_hz!r}', parameters=('rate_hz',))
     t0 = t0_ns
     rate = rate_hz
     with ImuBagReader(path, topic=topic) as reader:

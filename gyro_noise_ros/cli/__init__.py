@@ -14,6 +14,6 @@
 
 """Command-line tools: one module per tool, each exposing ``main(argv=None) -> int``."""
 
-from .._startup import install
+from ._startup import install
 
 install()  # a Ctrl-C while the tool imports its libraries ends it in one line (_startup)

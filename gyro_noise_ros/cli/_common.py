@@ -25,8 +25,9 @@ nothing to analyse (4).
 """
 
 import argparse
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+import logging
 import math
 import os
 import signal
@@ -34,16 +35,45 @@ import sys
 import threading
 from typing import Any
 
-from .._startup import quiet_finalisers, take_pending
+from ._startup import quiet_finalisers, take_pending
 from ..errors import (EXIT_INTERNAL, EXIT_INTERRUPTED, GyroNoiseError, Interrupted,
                       interrupted_exit_code, ParameterError)
-from ..outputs import check_out_dir, free_bytes, OVERWRITE_OPTION
+from ..outputs import check_out_dir, free_bytes, OVERWRITE
 
 __all__ = ['add_overwrite_argument', 'check_fits_disk', 'check_out_dir', 'EXIT_INTERRUPTED',
-           'finite_float',
-           'OVERWRITE_BAG_HELP', 'OVERWRITE_FOLDER_HELP', 'run_cli', 'stop_signals']
+           'finite_float', 'option_of', 'OVERWRITE_BAG_HELP', 'OVERWRITE_FOLDER_HELP',
+           'OVERWRITE_OPTION', 'run_cli', 'stop_signals', 'WarningLines']
 
 
+class WarningLines(logging.Handler):
+    """
+    Say each warning the package logs (a killed recording read anyway) once, as one stderr line.
+
+    The line is ``<prog>: warning: <message>``, the tools' form; a message said before in the
+    same run is not repeated (a tool may open one bag several times).
+
+    Parameters
+    ----------
+    prog : str
+        Program name used as the line's prefix.
+
+    """
+
+    def __init__(self, prog: str) -> None:
+        super().__init__(logging.WARNING)
+        self.prog = prog
+        self.said: set[str] = set()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        """Print the record's message unless it was said already."""
+        text = record.getMessage()
+        if text not in self.said:
+            self.said.add(text)
+            print(f'{self.prog}: warning: {text}', file=sys.stderr, flush=True)
+
+
+#: The option that lets a run replace existing data (``outputs.OVERWRITE``), in every tool.
+OVERWRITE_OPTION = '--' + OVERWRITE
 #: ``--overwrite`` help of a tool's output folder and of a new bag.
 OVERWRITE_FOLDER_HELP = ('write into an --out folder that is not empty: files of the same names '
                          'are replaced, the others kept (without it such a folder is refused, '
@@ -195,10 +225,35 @@ def stop_signals() -> Iterator[None]:
             signal.signal(sig, handler)
 
 
+def option_of(parameter: str, renamed: Mapping[str, str] | None = None) -> str:
+    """
+    Return the command-line option of a parameter an error names.
+
+    Parameters
+    ----------
+    parameter : str
+        The parameter's name in the package (``min_range_c``).
+    renamed : mapping, optional
+        The tool's options whose name is not the parameter's (``{'start_s': '--start'}``).
+
+    Returns
+    -------
+    str
+        ``renamed[parameter]``, else ``--`` and the name with dashes (``--min-range-c``).
+
+    """
+    if renamed and parameter in renamed:
+        return renamed[parameter]
+    return '--' + parameter.replace('_', '-')
+
+
 def run_cli(prog: str, body: Callable[[list[str]], int | None],
-            argv: Sequence[str] | None) -> int:
+            argv: Sequence[str] | None, *, renamed: Mapping[str, str] | None = None) -> int:
     """
     Run ``body(argv)`` and turn deliberate errors into one line on stderr and an exit code.
+
+    An error's parameters are spelled as the tool's options (:func:`option_of`). Meanwhile the
+    warnings the package logs are said on stderr by a :class:`WarningLines`.
 
     Parameters
     ----------
@@ -208,6 +263,8 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
         ``body(argv) -> int``; may raise :class:`GyroNoiseError`.
     argv : list of str or None
         Arguments without the program name; ``None`` means ``sys.argv[1:]``.
+    renamed : mapping, optional, keyword-only
+        Passed to :func:`option_of`.
 
     Returns
     -------
@@ -215,11 +272,15 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
         The process exit code (``errors.EXIT_CODES``).
 
     """
+    package_log = logging.getLogger('gyro_noise_ros')
+    lines = WarningLines(prog)
+    package_log.addHandler(lines)
     try:
         with stop_signals():
             return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
     except GyroNoiseError as err:
-        print(f'{prog}: error: {err}', file=sys.stderr)
+        print(f'{prog}: error: {err.spelled(lambda name: option_of(name, renamed))}',
+              file=sys.stderr)
         return err.exit_code
     except SystemExit as err:  # argparse: a usage error (2, said) or --help/--version (0)
         return err.code if isinstance(err.code, int) else int(err.code is not None) * 2
@@ -233,3 +294,5 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     except MemoryError as err:
         print(f'{prog}: error: out of memory ({err})', file=sys.stderr)
         return EXIT_INTERNAL
+    finally:
+        package_log.removeHandler(lines)

@@ -343,7 +343,7 @@ def write_bag(args: argparse.Namespace, board: 'BoardModel', truth_fh: BinaryIO 
             f'--duration-s {args.duration_s:g}' if args.duration_s is not None else
             f'--scenario {args.scenario}')
     check_fits_disk(args.write_bag, total * streams * BAG_BYTES_PER_SAMPLE, size)
-    with staged_new_dir(args.write_bag, option='--write-bag',
+    with staged_new_dir(args.write_bag, parameter='write_bag',
                         overwrite=getattr(args, 'overwrite', False)) as stage:
         # built under a hidden holder and renamed when complete: an error or Ctrl-C leaves no
         # bag folder behind to block the retry (the stage already carries the bag's name, which

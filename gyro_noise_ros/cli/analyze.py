@@ -45,6 +45,8 @@ from ..core.fractional import DEFAULT_MEMORY
 from ..errors import ParameterError
 
 PROG = TOOL
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'start_s': '--start', 'end_s': '--end'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -214,7 +216,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit code (docs/offline_tool.md).
 
     """
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 if __name__ == '__main__':

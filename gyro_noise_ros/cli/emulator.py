@@ -74,6 +74,8 @@ PROG = 'portenta_emulator'
 #: report (degC); --temp-c outside would be clipped to a false value.
 TEMP_RANGE_C = (lsm.TEMPERATURE_OFFSET_C - 32768 / lsm.TEMPERATURE_LSB_PER_C,
                 lsm.TEMPERATURE_OFFSET_C + 32767 / lsm.TEMPERATURE_LSB_PER_C)
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'out_dir': '--write-sd'}
 
 
 def _float_list(text: str) -> float | tuple[float, ...]:
@@ -322,11 +324,11 @@ def _check_outputs(args: argparse.Namespace) -> None:
         if not Path(args.truth_out).parent.is_dir():
             raise OutputError(f'--truth-out {args.truth_out!r}: its folder does not exist')
     if args.stats_out is not None:
-        check_new_file(args.stats_out, option='--stats-out', overwrite=args.overwrite)
+        check_new_file(args.stats_out, parameter='stats_out', overwrite=args.overwrite)
     if args.write_sd:
-        check_out_dir(args.write_sd, option='--write-sd', overwrite=args.overwrite)
+        check_out_dir(args.write_sd, parameter='write_sd', overwrite=args.overwrite)
     if args.write_bag:
-        check_new_dir(args.write_bag, option='--write-bag', overwrite=args.overwrite)
+        check_new_dir(args.write_bag, parameter='write_bag', overwrite=args.overwrite)
 
 
 def _write_sd(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
@@ -360,7 +362,7 @@ def _serve(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
     # a twin board warms the numba kernels up before the pacing clock starts: a JIT stall would
     # come out as a burst
     return serve(board, faults, options, counters=counters, stopper=stopper, truth_fh=truth_fh,
-                 warm=board_from_args(args))
+                 warm=board_from_args(args), on_port=lambda name: print(name, flush=True))
 
 
 def _body(argv: list[str]) -> int:
@@ -423,7 +425,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit status.
 
     """
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 __all__ = ['main', 'build_parser', 'board_from_args', 'TRUTH_DTYPE']

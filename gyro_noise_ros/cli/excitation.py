@@ -45,6 +45,8 @@ from ..app.excitation import ExcitationParams, run_excitation, write_excitation
 from ..calibration.excitation import DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS
 
 PROG = 'gyro_noise_excitation'
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'frequency_hz': '--dwell'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -131,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit status.
 
     """
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 if __name__ == '__main__':

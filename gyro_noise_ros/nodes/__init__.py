@@ -14,6 +14,6 @@
 
 """The ROS 2 nodes: the only modules of the package that import rclpy."""
 
-from .._startup import install
+from ..cli._startup import install
 
 install()  # a signal while the node imports its libraries ends it in one line (_startup)

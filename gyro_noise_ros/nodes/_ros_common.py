@@ -52,7 +52,7 @@ from rclpy.utilities import remove_ros_args
 
 from ._params import (declare_parameter_table, parameter_help, ParamSpec, specs_from_dataclass,
                       unknown_parameter_error, unknown_parameters)
-from .._startup import quiet_finalisers, take_pending
+from ..cli._startup import quiet_finalisers, take_pending
 from ..errors import GyroNoiseError, ParameterError
 from ..link.sequence import SequenceGapCounter
 

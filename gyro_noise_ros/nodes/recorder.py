@@ -97,6 +97,33 @@ PARAMETERS = (
 )
 
 
+#: How a user of the node gives the parameters an output error names (errors.GyroNoiseError).
+SPELLING = {'output': "parameter 'output' =", 'overwrite': '-p overwrite:=true'}
+
+
+def check_output(output: str, *, overwrite: bool) -> None:
+    """
+    Refuse the bag folder ``output`` before recording (:func:`..outputs.check_new_dir`).
+
+    Parameters
+    ----------
+    output : str
+        The ``output`` parameter.
+    overwrite : bool, keyword-only
+        The ``overwrite`` parameter.
+
+    Raises
+    ------
+    OutputError
+        As ``check_new_dir``, its message naming the parameters as ``-p`` gives them.
+
+    """
+    try:
+        check_new_dir(output, parameter='output', overwrite=overwrite)
+    except OutputError as err:
+        raise OutputError(err.spelled(lambda name: SPELLING.get(name, name))) from err
+
+
 def default_bag_name(now: datetime | None = None) -> str:
     """Return ``gyro_noise_<YYYYmmdd>_<HHMMSS>`` for the current UTC time (or ``now``)."""
     now = now or datetime.now(timezone.utc)
@@ -136,8 +163,7 @@ class RecorderNode(Node):
         self._closed = False
         self._overwrite = params['overwrite']
         # before spinning: a refused output fails now, not when the first message arrives
-        check_new_dir(self.output, option="parameter 'output' =", overwrite=self._overwrite,
-                      overwrite_hint='-p overwrite:=true')
+        check_output(self.output, overwrite=self._overwrite)
         group = PolledGroup()
         qos = sensor_data_qos(params['queue_depth'], params['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
@@ -199,7 +225,7 @@ class RecorderNode(Node):
 
     def _open(self, frame_id: str | None) -> None:
         if self._overwrite and Path(self.output).exists():
-            check_new_dir(self.output, option="parameter 'output' =", overwrite=True)
+            check_output(self.output, overwrite=True)
             shutil.rmtree(self.output)  # a bag folder (checked): what overwrite:=true asked
         self._writer = ImuBagWriter(
             self.output, storage=self.storage, imu_topic=self._imu_sub.topic_name,

@@ -23,6 +23,7 @@ started as one of this package's programs (a console script of its distribution,
 130/143 (nothing has been written yet). Once ``main()`` runs (``cli/_common.run_cli``,
 ``nodes/_ros_common.run_node`` call :func:`take_pending`) their own handlers take over and a
 signal is only noted. Imported by another program (a test, a user's script) it does nothing.
+It writes to stderr, so it lives with the adapters (cli/); the nodes import it from here.
 """
 
 import os

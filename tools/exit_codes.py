@@ -55,7 +55,7 @@ def markdown_table() -> str:
 
 def spelled(meaning: str) -> str:
     """
-    Return a meaning with each ``{parameter}`` spelled as the tools' option (``{start_s}``: --start).
+    Return a meaning with each ``{parameter}`` spelled as the tools spell it (``--start``).
 
     Parameters
     ----------

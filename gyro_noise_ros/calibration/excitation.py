@@ -282,8 +282,8 @@ def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
     x = _check(x, rate_hz)
     f0 = float(frequency_hz)
     if not (math.isfinite(f0) and 0 < f0 < rate_hz / 2.0):
-        raise ParameterError(f'dwell frequency must be in (0, {rate_hz / 2:g}) Hz (Nyquist), '
-                             f'got {frequency_hz!r}')
+        raise ParameterError(f'{{frequency_hz}} frequency must be in (0, {rate_hz / 2:g}) Hz '
+                             f'(Nyquist), got {frequency_hz!r}', parameters=('frequency_hz',))
     if not (math.isfinite(frequency_tol) and frequency_tol > 0):
         raise ParameterError(f'frequency tolerance must be > 0, got {frequency_tol!r}')
     if x.size < 3 * rate_hz / f0:

@@ -31,12 +31,11 @@ Examples::
         --disconnect-every-s 10
     portenta_emulator --write-sd logs/ --duration-s 60 --sd-file-bytes 1000000 --helium-delay-s 10
 
-Exit status 0 at the end of ``--samples``/``--duration-s``; 130 on SIGINT and 143 on SIGTERM
-(the statistics line, then ``portenta_emulator: interrupted``; ``--write-sd`` and ``--write-bag``
-stop within a block of 65,536 samples and leave nothing under their final names); 2 for a bad
-option (a length of no sample, or one whose output cannot fit on the disk); 5 when the link
-cannot be served; 6 when an output (``--write-sd``, ``--write-bag``, ``--truth-out``,
-``--stats-out``) cannot be written or exists (``--overwrite``; ``errors.EXIT_CODES``).
+Exit status (``errors.EXIT_CODES``): 0 at the end of ``--samples``/``--duration-s``; 130/143 on
+SIGINT/SIGTERM (the statistics line, then ``interrupted``; the SD logs and the bag stop within a
+block of 65,536 samples and leave nothing under their final names); 2 a bad option (a length of
+no sample, or one that cannot fit on the disk); 5 the link cannot be served; 6 an output cannot
+be written, or exists without ``--overwrite``.
 """
 
 import argparse

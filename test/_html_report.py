@@ -44,7 +44,7 @@ class _Parser(HTMLParser):
         super().__init__(convert_charrefs=True)
         self.data = None
         self.nums = []        # (pointer, fmt, text, scale)
-        self.cells = []       # text of each <td> of section#tables outside the number spans
+        self.cells = []       # text of each <td> of section#tables and #card outside number spans
         self.refs = []        # (tag, attribute, value)
         self.sections = {}    # id -> text
         self._stack = []
@@ -65,9 +65,10 @@ class _Parser(HTMLParser):
         if tag == 'section':
             self._section = attrs.get('id')
             self.sections.setdefault(self._section, '')
-        if tag == 'td' and self._section == 'tables':
+        if tag == 'td' and self._section in ('tables', 'card'):
             self._cell = []
-        if tag == 'code' and attrs.get('class') == 'key' and self._cell is not None:
+        if ((tag == 'code' and attrs.get('class') == 'key')
+                or (tag == 'span' and attrs.get('class') == 'unit')) and self._cell is not None:
             self._key = True
         if tag == 'span' and attrs.get('class') == 'num':
             self._num = [attrs['data-json'], attrs['data-fmt'], '',
@@ -80,7 +81,7 @@ class _Parser(HTMLParser):
         if tag == 'span' and self._num is not None:
             self.nums.append(tuple(self._num))
             self._num = None
-        if tag == 'code':
+        if tag == 'code' or (tag == 'span' and self._key):
             self._key = False
         if tag == 'td' and self._cell is not None:
             self.cells.append(''.join(self._cell))
@@ -94,7 +95,8 @@ class _Parser(HTMLParser):
         elif self._num is not None:
             self._num[2] += data
         elif self._cell is not None and not self._key:
-            # a JSON key name (code.key) may hold a unit's digits (m_s2): not a number
+            # a JSON key name (code.key) or a unit (span.unit) may hold a unit's digits (m_s2,
+            # m/s^2): not a number
             self._cell.append(data)
         if self._section is not None:
             self.sections[self._section] += data

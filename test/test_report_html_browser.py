@@ -38,7 +38,7 @@ def test_analyze_report_renders(tmp_path):
             write_bag(tmp_path / 'bag_b', 3 * 600, 200.0, seed=2)]
     out = tmp_path / 'out'
     assert analyze_main([*map(str, bags), '--out', str(out), *FAST]) == 0
-    shot = check_in_browser(out / 'report.html', tmp_path, figures=4)
+    shot = check_in_browser(out / 'report.html', tmp_path, figures=5)
     assert shot.stat().st_size > 10_000
 
 

@@ -50,7 +50,7 @@ import threadpoolctl
 
 from .. import __version__
 from ..analysis.csv_tables import allan_curve, ChunkCsvWriter, write_allan_csv
-from ..analysis.figures import allan_fit_lines, plot_allan, plot_curves, plot_per_chunk
+from ..analysis.figures import allan_curves, plot_allan, plot_curves, plot_per_chunk
 from ..analysis.imu_yaml import DEFAULT_IMU_TOPIC, kalibr_noise, write_imu_yaml
 from ..analysis.summary_json import (accelerometer_readout_dict, axis_summary_dict, json_num,
                                      write_json)
@@ -221,11 +221,11 @@ class AnalyzeResult:
         The files written, under their published names.
     alphas : numpy.ndarray
         The order grid (for curves.npz and the curve figures).
-    per_chunk, curves, allan, accelerometer : dict
+    per_chunk, curves, allan, accelerometer, accel_allan : dict
         What the figures, report.html, curves.npz, allan.csv and imu.yaml are drawn from:
         per-chunk (t, bias, variance, alpha_var, alpha_corr) rows per axis, kept var/J curves
-        per (label, axis), Allan results per (label, axis) and the accelerometer readouts per
-        label.
+        per (label, axis), Allan results per (label, axis), the accelerometer readouts per
+        label and the accelerometer's Allan results per (label, axis).
 
     """
 
@@ -242,6 +242,7 @@ class AnalyzeResult:
     curves: dict[tuple, list] = field(default_factory=dict, repr=False)
     allan: dict[tuple, tuple] = field(default_factory=dict, repr=False)
     accelerometer: dict[str, dict] = field(default_factory=dict, repr=False)
+    accel_allan: dict[tuple, Any] = field(default_factory=dict, repr=False)
 
     def as_dict(self) -> dict[str, Any]:
         """Return summary.json as a dict (bag entries shared, not copied)."""
@@ -391,6 +392,7 @@ class _Stores:
     per_chunk: dict[str, list] = field(default_factory=dict)
     curves: dict[tuple, list] = field(default_factory=dict)
     allan: dict[tuple, tuple] = field(default_factory=dict)
+    accel_allan: dict[tuple, Any] = field(default_factory=dict)
     timing: dict[str, float] = field(default_factory=lambda: {'decode_s': 0.0, 'wait_s': 0.0})
 
 
@@ -540,7 +542,8 @@ def _run_bags(params: AnalyzeParams, ref: dict[str, Any], topics: list[str], out
         command=list(params.command) if params.command is not None else None,
         options=_options(params, ref, jobs, pool), bags=tuple(bag_docs),
         timing=stores.timing, alphas=params.config.alphas, per_chunk=stores.per_chunk,
-        curves=stores.curves, allan=stores.allan, accelerometer=accel_readouts)
+        curves=stores.curves, allan=stores.allan, accelerometer=accel_readouts,
+        accel_allan=stores.accel_allan)
 
 
 def _options(params: AnalyzeParams, ref: dict[str, Any], jobs: int, pool: Any) -> dict[str, Any]:
@@ -590,7 +593,8 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
         write_json(out / 'summary.json', doc)
         (out / 'summary.md').write_text(summary_markdown(doc))
         files += [out / 'summary.json', out / 'summary.md']
-        files += _write_allan_outputs(out, doc, result.allan, result.accelerometer, figures)
+        allan_files, imu_yaml = _write_allan_outputs(out, doc, result, figures)
+        files += allan_files
         if result.curves:
             arrays: dict[str, Any] = {'alphas': result.alphas}
             for (label, axis), rows in result.curves.items():
@@ -602,7 +606,8 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
         if figures:
             files += _write_figures(out, result.alphas, result.per_chunk, result.curves)
         if html:
-            files.append(write_analyze_html(out, doc, result.per_chunk, result.allan))
+            files.append(write_analyze_html(out, doc, result.per_chunk, result.allan,
+                                            accel_allan=result.accel_allan, imu_yaml=imu_yaml))
     return files
 
 
@@ -1017,6 +1022,8 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
             (label, np.array(state.rows[axis]).reshape(-1, 5)))
         if s.allan is not None:
             stores.allan[(label, axis)] = (s.allan, s.noise_terms, s.readout)
+    for axis, curve in getattr(state.accel, 'curves', {}).items():
+        stores.accel_allan[(label, axis)] = curve
     return {
         'label': label,
         'path': str(bag.path),
@@ -1093,28 +1100,33 @@ class _AccelAllan:
         self.pending = []
 
     def readouts(self, rate_hz: float) -> dict[str, Any]:
-        """Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes."""
+        """
+        Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes.
+
+        Each axis' Allan curve (``core.allan.AllanResult``, m/s^2) is kept in :attr:`curves`
+        for the report's figure.
+        """
+        self.curves: dict[str, Any] = {}
         if self.acc is None:
             return {}
         out: dict[str, Any] = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                out[axis] = read_allan(rescale_allan(acc.result(), rate_hz))
+                result = rescale_allan(acc.result(), rate_hz)
+                out[axis] = read_allan(result)
+                self.curves[axis] = result
             except (InputDataError, ParameterError, ValueError):
                 out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to read
         return out
 
 
-def _write_allan_outputs(out: Path, doc: dict[str, Any], allan_store: dict[tuple, tuple],
-                         accel_readouts: dict[str, dict], figures: bool) -> list[Path]:
+def _write_allan_outputs(out: Path, doc: dict[str, Any], result: AnalyzeResult,
+                         figures: bool) -> tuple[list[Path], str]:
     """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
+    allan_store, accel_readouts = result.allan, result.accelerometer
     entries: list[tuple] = []
-    fig_series: dict[str, list] = {}
-    for (label, axis), (result, terms, _) in allan_store.items():
-        tau, adev, lo, hi, n = allan_curve(result)
-        entries.append((label, axis, tau, adev, lo, hi, n))
-        fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi,
-                                                allan_fit_lines(terms, tau)))
+    for (label, axis), (res, _, _) in allan_store.items():
+        entries.append((label, axis, *allan_curve(res)))
     write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
@@ -1131,17 +1143,17 @@ def _write_allan_outputs(out: Path, doc: dict[str, Any], allan_store: dict[tuple
         what = (f"a {first['storage']} file" if first['topic'] == first['storage']
                 else f"a {first['storage']} file ({first['topic']})")
         note = f'the input was {what}, not a bag: set the topic your IMU driver publishes'
-    write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
-                   update_rate_hz=first['rate_hz'] or float('nan'),
-                   gyroscope=kalibr_noise(gyro, record_s=record_s),
-                   accelerometer=accel_noise,
-                   source=f"from bag {first['label']} ({first['path']}), largest over axes "
-                   f"{', '.join(first['axes'])}")
+    imu_yaml = write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
+                              update_rate_hz=first['rate_hz'] or float('nan'),
+                              gyroscope=kalibr_noise(gyro, record_s=record_s),
+                              accelerometer=accel_noise,
+                              source=f"from bag {first['label']} ({first['path']}), largest over "
+                              f"axes {', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
-    if figures and fig_series:
-        plot_allan(out / 'allan.png', fig_series)
+    if figures and allan_store:
+        plot_allan(out / 'allan.png', allan_curves(doc, allan_store, result.accel_allan))
         files.append(out / 'allan.png')
-    return files
+    return files, imu_yaml
 
 
 def _safe(name: str) -> str:

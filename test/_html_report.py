@@ -172,12 +172,42 @@ def _pixels(png):
     return np.round(np.asarray(img)[..., :3] * 255).astype(np.int16)
 
 
-def check_in_browser(html_path, tmp_path, *, figures):
-    """
-    Load a report.html in headless Chromium and check it.
+#: The window a new user opens the page in (a laptop screen).
+VIEWPORT = {'width': 1280, 'height': 800}
 
-    Asserts no console error, no request leaving the file and every figure drawn (its curves'
-    colours on screen); keeps a full-page screenshot under ``tmp_path``, returns its path.
+#: Geometry of the page in the window: its width, and the verdict line and first card table.
+_GEOMETRY = """() => {
+  const box = sel => { const e = document.querySelector(sel);
+                       if (!e) return null;
+                       const r = e.getBoundingClientRect();
+                       return {top: r.top, bottom: r.bottom, height: r.height}; };
+  return {width: document.documentElement.scrollWidth,
+          verdict: box('#verdict'), card: box('#card table'),
+          images: Array.from(document.querySelectorAll('img.png')).map(i => i.naturalWidth)};
+}"""
+
+
+def check_first_screen(geometry, viewport=VIEWPORT):
+    """Assert the answer is on the first screen and nothing is wider than the window."""
+    assert geometry['width'] <= viewport['width'], (
+        f"page {geometry['width']} px wide in a {viewport['width']} px window")
+    verdict, card = geometry['verdict'], geometry['card']
+    assert verdict is not None, 'no verdict line'
+    assert 0 <= verdict['top'] and verdict['bottom'] <= viewport['height'], verdict
+    assert card is not None, 'no card'
+    assert card['bottom'] <= viewport['height'], f'card ends at {card["bottom"]} px: {card}'
+    assert all(w > 0 for w in geometry['images']), geometry['images']
+
+
+def check_in_browser(html_path, tmp_path, *, figures, first_screen=True):
+    """
+    Load a report.html in headless Chromium (a 1280x800 window) and check it.
+
+    Asserts no console error, no request leaving the file, every figure drawn (its curves'
+    colours on screen) and every embedded image decoded; with ``first_screen`` the verdict line
+    and the first card table inside the first 800 px and the page no wider than the window.
+    Keeps the first screen (``first_screen.png``) and a full-page screenshot
+    (``report_screenshot.png``) under ``tmp_path``; returns the full page's path.
     """
     try:
         from playwright.sync_api import sync_playwright
@@ -191,7 +221,7 @@ def check_in_browser(html_path, tmp_path, *, figures):
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=exe, args=CHROMIUM_ARGS)
         try:
-            page = browser.new_page(viewport={'width': 1200, 'height': 900})
+            page = browser.new_page(viewport=VIEWPORT)
             page.on('console', lambda m: errors.append(m.text) if m.type == 'error' else None)
             page.on('pageerror', lambda e: errors.append(str(e)))
 
@@ -212,6 +242,8 @@ def check_in_browser(html_path, tmp_path, *, figures):
                     "document.querySelectorAll('div.figure > div').length === n && "
                     'Bokeh.documents.every(d => d.is_idle)', arg=figures, timeout=60_000)
             tmp_path.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=str(tmp_path / 'first_screen.png'))
+            geometry = page.evaluate(_GEOMETRY)
             shot = tmp_path / 'report_screenshot.png'
             page.screenshot(path=str(shot), full_page=True)
             for k in range(figures):
@@ -230,4 +262,6 @@ def check_in_browser(html_path, tmp_path, *, figures):
     assert not errors, errors
     outside = [u for u in requests if not u.startswith(('file:', 'data:', 'blob:', 'about:'))]
     assert not outside, outside
+    if first_screen:
+        check_first_screen(geometry)
     return shot

@@ -405,10 +405,15 @@ def test_excitation_page_is_excitation_json(tmp_path):
     doc = json.loads((out / 'excitation.json').read_text())
     page = check_static(out / 'report.html', doc, min_numbers=30)
     shown = {n[0]: n for n in page.nums}
-    # SI in the JSON, g on the page (excitation.md's unit), checked through the scale
-    assert shown['/before/amplitude_m_s2'][3] == pytest.approx(1 / 9.80665)
+    # SI in the JSON, mg on the page (the unit policy, excitation.md's unit), checked through
+    # the scale
+    assert shown['/before/amplitude_m_s2'][3] == pytest.approx(1 / 9.80665e-3)
     assert '/change/amplitude_relative' in shown
-    assert 'after, distortion verdict: DISTORTED' in page.sections['in-short']
+    # the first screen: a 5 % second harmonic after the stress is a defect beyond the tolerance
+    html = (out / 'report.html').read_text()
+    assert '<span class="level">ERROR</span>' in html and 'after: DISTORTED' in html
+    card = page.sections['card']
+    assert 'DISTORTED' in card and 'beyond the' in card and '/after/thd' in shown
     assert not (tmp_path / 'exc_nohtml' / 'report.html').exists()
 
 
@@ -463,6 +468,10 @@ def test_explain_page_is_explain_json(tmp_path):
     page = check_static(out / 'report.html', doc, min_numbers=12)
     shown = {n[0] for n in page.nums}
     assert {'/gap_initial', '/gap_final', '/baseline/alpha'} <= shown
-    assert 'Verdict:' in page.sections['in-short']
+    # the verdict line is report.md's verdict; the figures report.md shows are embedded
+    html = (out / 'report.html').read_text()
+    assert '<div id="verdict" class="verdict verdict-ok"' in html
+    assert 'consistent with the baseline model' in html.split('<section id="card">')[0]
+    assert html.count('<img class="png"') == 1 and 'src="data:image/png;base64,' in html
     assert 'gyro_noise_explain' in page.sections['method']
     assert not (tmp_path / 'exp_nohtml' / 'report.html').exists()

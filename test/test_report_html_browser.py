@@ -15,9 +15,11 @@
 """
 report.html in a real browser: headless Chromium loads each tool's page.
 
-Each test asserts no console error, no request leaving the file, every figure drawn (its first
-curve's colour on screen) and keeps a full-page screenshot under its tmp_path. Without Chromium
-or playwright the tests skip with one line (fail under ``CI=true``): see test/_html_report.py.
+Each test opens the page in a 1280x800 window, as a new user would, and asserts the verdict line
+and the first card table on the first screen, the page no wider than the window, no console
+error, no request leaving the file and every figure drawn (its first curve's colour on screen);
+it keeps the first screen and a full-page screenshot under its tmp_path. Without Chromium or
+playwright the tests skip with one line (fail under ``CI=true``): see test/_html_report.py.
 """
 
 from _html_report import check_in_browser
@@ -81,6 +83,27 @@ def test_a_figure_with_nothing_drawn_is_caught(tmp_path):
                                   figures=(('nothing drawn', empty),)), tmp_path / 'blank.html')
     with pytest.raises(AssertionError, match='looks blank'):
         check_in_browser(page, tmp_path, figures=1)
+
+
+@pytest.mark.timeout(300)
+def test_a_page_without_the_answer_first_is_caught(tmp_path):
+    """The first-screen check can fail: no verdict, a card below the fold, a too wide table."""
+    from gyro_noise_ros.htmlreport.page import Page, Table, Verdict, write_report_html
+
+    wide = Table('wide', tuple(f'column_with_a_long_snake_case_name_{k}' for k in range(12)),
+                 (tuple('x' * 12),))
+    tall = Table('tall', ('a',), tuple(('x',) for _ in range(60)))
+    for name, page, why in (
+            ('none', Page(title='no verdict', data={}, in_short_markdown='## In short',
+                          card=(wide,)), 'no verdict line'),
+            ('tall', Page(title='tall card', data={}, in_short_markdown='## In short',
+                          verdict=Verdict('OK', 'fine'), card=(tall,)), 'card ends at'),
+            ('wide', Page(title='wide', data={}, in_short_markdown='## In short\n\n' + 'x' * 400,
+                          verdict=Verdict('OK', 'fine'), card=(Table('', ('a',), (('x',),)),)),
+             'px wide in a 1280 px window')):
+        path = write_report_html(page, tmp_path / f'{name}.html')
+        with pytest.raises(AssertionError, match=why):
+            check_in_browser(path, tmp_path / name, figures=0)
 
 
 @pytest.mark.timeout(300)

@@ -67,15 +67,22 @@ def _bag_problems(b: Mapping[str, Any]) -> tuple[list[str], list[str]]:
 
 
 def _notes(doc: Mapping[str, Any]) -> list[str]:
-    """Return what limits the numbers without being a fault (said after an OK)."""
+    """Return what limits the numbers without being a fault (said after the level)."""
     notes = []
+    bound = {b['label']: [axis for axis, a in b['axes'].items()
+                          if (a.get('allan_datasheet') or {}).get('bias_stability_upper_bound')]
+             for b in doc['bags']}
+    lengths = ', '.join(f"{fmt_or_na(b.get('duration_s'), '.4g')} s" for b in doc['bags']
+                        if bound[b['label']])
+    every = all(len(v) == len(b['axes']) for v, b in zip(bound.values(), doc['bags']))
+    if every and all(bound.values()):
+        notes.append('bias stability is only an upper bound on every axis: the Allan curve had '
+                     f'not turned up by the end of the record ({lengths})')
+    elif any(bound.values()):
+        where = '; '.join(f"{label} {', '.join(axes)}" for label, axes in bound.items() if axes)
+        notes.append(f'bias stability is only an upper bound on {where}: the Allan curve had '
+                     f'not turned up by the end of the record ({lengths})')
     for b in doc['bags']:
-        bound = [axis for axis, a in b['axes'].items()
-                 if (a.get('allan_datasheet') or {}).get('bias_stability_upper_bound')]
-        if bound:
-            notes.append(f"{b['label']}: bias stability is an upper bound on {', '.join(bound)} "
-                         '(the Allan curve had not turned up by the end of '
-                         f"{fmt_or_na(b.get('duration_s'), '.4g')} s)")
         if b.get('allan_only'):
             notes.append(f"{b['label']}: Allan deviation only ({b['allan_only']})")
     return notes
@@ -122,7 +129,9 @@ def verdict(doc: Mapping[str, Any]) -> tuple[str, str]:
                                else [])
         text = f"{head}; {'; '.join(shown)}."
     else:
-        text = f'{head}; no sample lost, no reference differs.'
+        reference = any('health' in a for b in bags for a in b['axes'].values())
+        text = (f'{head}; no sample lost'
+                + ('; no axis differs from the reference.' if reference else '.'))
     notes = _notes(doc)
     if notes:
         text += ' Note: ' + '; '.join(notes) + '.'

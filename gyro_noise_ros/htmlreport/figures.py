@@ -39,6 +39,8 @@ MAX_ALLAN_POINTS = 200
 #: Largest number of points drawn per time series.
 MAX_SERIES_POINTS = 1000
 _TOOLS = 'pan,box_zoom,wheel_zoom,reset,save'
+#: Largest number of points of a series drawn with markers (more: the line alone).
+_MARKED_POINTS = 250
 _WIDTH, _HEIGHT = 1000, 380
 
 
@@ -336,7 +338,9 @@ def series_figure(series: Sequence[tuple[str, ArrayLike, ArrayLike]], *, title: 
         keep = envelope_decimate(y)
         src = ColumnDataSource({'x': x[keep], 'y': y[keep], 'name': [name] * keep.size})
         line = fig.line('x', 'y', source=src, color=colour, line_width=1)
-        dots = fig.scatter('x', 'y', source=src, color=colour, size=4)
+        # markers where points are few (one per chunk); a dense trace is its line, hover on it
+        dots = fig.scatter('x', 'y', source=src, color=colour, size=4,
+                           alpha=1.0 if keep.size <= _MARKED_POINTS else 0.0)
         renderers.append(dots)
         items.append(_item(name, [line, dots]))
     fig.add_tools(HoverTool(renderers=renderers, tooltips=[

@@ -371,7 +371,7 @@ h3 { margin: 1em 0 0.3em; }
 .scroll { max-width: 100%; overflow-x: auto; }
 table { border-collapse: collapse; margin: 0.3em 0 1em; font-size: 0.9em; }
 th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; vertical-align: top; }
-th { background: #f3f3f3; overflow-wrap: anywhere; } td:first-child { text-align: left; }
+th { background: #f3f3f3; overflow-wrap: break-word; } td:first-child { text-align: left; }
 td code, #inputs td { overflow-wrap: anywhere; word-break: break-all; }
 .note { color: #555; font-size: 0.9em; margin: 0.2em 0; }
 .units { color: #555; font-size: 0.85em; margin: 0.2em 0 0.6em; }
@@ -382,8 +382,9 @@ pre { background: #f6f6f6; padding: 0.5em; overflow-x: auto; white-space: pre-wr
 .verdict .level { font-weight: bold; margin-right: 0.5em; }
 .aside { display: block; color: #666; font-size: 0.85em; }
 #card table { font-size: 0.92em; } #card h2 { margin-top: 0.6em; }
-#card td { white-space: nowrap; } #card .aside { white-space: normal; }
+.num { white-space: nowrap; }
 #card pre { font-size: 0.82em; margin: 0.3em 0; }
+.card-item { display: inline-block; vertical-align: top; margin-right: 2em; max-width: 100%; }
 details summary { cursor: pointer; color: #333; }
 """
 
@@ -403,7 +404,8 @@ def _card_html(page: Page) -> list[str]:
     if not page.card and not page.card_blocks:
         return []
     parts = ['<section id="card">', f'<h2>{html.escape(page.card_title)}</h2>']
-    parts += [_table(page.data, t, level=3) for t in page.card]
+    # small tables side by side, a wide one alone on its line
+    parts += [f'<div class="card-item">{_table(page.data, t, level=3)}</div>' for t in page.card]
     for title, text in page.card_blocks:
         parts.append(f'<h3>{html.escape(title)}</h3><pre class="block">{html.escape(text)}</pre>')
     parts.append('</section>')

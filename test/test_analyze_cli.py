@@ -202,7 +202,19 @@ def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path, 
     assert not list(out.glob('*.png'))
 
 
-def test_reference_adds_health_verdicts(tmp_path, make_record):
+def test_labels_one_at_a_time_as_the_readme_gives_them(sqlite_bag, tmp_path, make_record):
+    # README: --label ref --label H1 (appended), the same as --label ref H1
+    sq, stamps, gyro, _ = sqlite_bag
+    mc = write_ros2(make_record, tmp_path / 'mc', stamps, gyro, np.zeros_like(gyro),
+                    storage='mcap')
+    out = tmp_path / 'out'
+    assert main([str(sq), str(mc), '--label', 'ref', '--label', 'H1', '--axis', 'z', '--jobs',
+                 '1', '--no-figures', '--no-html', '--out', str(out), *FAST]) == 0
+    assert [b['label'] for b in json.loads((out / 'summary.json').read_text())['bags']] == [
+        'ref', 'H1']
+
+
+def test_reference_adds_health_verdicts(tmp_path, make_record, capsys):
     n = 8 * SIZE
     stamps, gyro, accel = sim(n, seed=3)
     ref = write_ros2(make_record, tmp_path / 'ref', stamps, gyro, accel)
@@ -228,9 +240,11 @@ def test_reference_adds_health_verdicts(tmp_path, make_record):
     assert items['Order deviation, variance method'] == 'undetermined'
     assert doc['options']['thresholds']['reference_warn_sigma'] == 5.0
     assert '### Health verdict against the reference' in (out / 'summary.md').read_text()
-    # A two-bag summary as reference needs the bag named.
+    # A two-bag summary as reference needs the bag named, and the message names the option.
+    capsys.readouterr()
     assert main([str(h1), '--reference', str(out / 'summary.json'), '--out', str(tmp_path / 'x'),
                  *FAST]) == 2
+    assert 'choose one with --reference-bag' in capsys.readouterr().err
     assert main([str(h1), '--reference', str(out / 'summary.json'), '--reference-bag', 'h1',
                  '--jobs', '1', '--no-figures', '--out', str(tmp_path / 'x'), *FAST]) == 0
     again = json.loads((tmp_path / 'x'

@@ -45,7 +45,7 @@ from ..core.fractional import DEFAULT_MEMORY
 
 PROG = TOOL
 #: Options not named after the parameter they set (errors name parameters: cli/_common).
-RENAMED = {'start_s': '--start', 'end_s': '--end'}
+RENAMED = {'start_s': '--start', 'end_s': '--end', 'bag': '--reference-bag'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -111,9 +111,11 @@ def build_parser() -> argparse.ArgumentParser:
         '--reference', metavar='SUMMARY',
         help='summary.json of a reference recording: adds health verdicts per bag and axis')
     p.add_argument('--reference-bag', metavar='LABEL',
-                   help='bag label inside a --reference summary that holds several bags')
-    p.add_argument('--label', nargs='+', metavar='NAME',
-                   help='one label per bag for tables and figures')
+                   help='the bag (its label) of a --reference summary that holds several bags')
+    # extend: --label a b c and --label a --label b --label c both give one label per bag
+    p.add_argument('--label', nargs='+', action='extend', metavar='NAME',
+                   help='one label per bag for tables and figures (--label a b or '
+                   '--label a --label b)')
     p.add_argument('--curves', type=int, default=DEFAULT_CURVES, metavar='N',
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
                         f'({DEFAULT_CURVES}; 0 = none)')

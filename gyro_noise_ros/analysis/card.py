@@ -84,7 +84,8 @@ def _notes(doc: Mapping[str, Any]) -> list[str]:
                      f'not turned up by the end of the record ({lengths})')
     for b in doc['bags']:
         if b.get('allan_only'):
-            notes.append(f"{b['label']}: Allan deviation only ({b['allan_only']})")
+            notes.append(f"{b['label']}: Allan deviation only (shorter than one chunk: no "
+                         'fractional order, no chunk statistics)')
     return notes
 
 

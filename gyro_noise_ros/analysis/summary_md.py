@@ -119,6 +119,8 @@ def _plain_summary(b: Mapping[str, Any], axis: str, a: Mapping[str, Any]) -> str
              + (', bursty stamps' if b.get('stamps_bursty') else '') + ')']
     lost = b['samples_lost']
     parts.append(f'{lost} sample(s) lost' if lost else 'no sample lost')
+    if b.get('allan_only'):
+        parts.append(f"**Allan deviation only**: {b['allan_only']}")
     left = sum(v for k, v in (b.get('left_out') or {}).items() if isinstance(v, int))
     if left:
         parts.append(f'{left} sample(s) left out (window or motion)')
@@ -243,11 +245,16 @@ def summary_markdown(doc: Mapping[str, Any]) -> str:
     lines += _method_lines(doc)
     for axis in axes:
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
+        # an Allan-only bag (shorter than one chunk) has no row in the chunk tables
+        chunked = [(b['label'], b['axes'][axis]) for b in bags
+                   if axis in b['axes'] and not b.get('allan_only')]
         lines += [f'## Axis {axis}', '']
-        lines += _drift_lines(rows)
-        lines += _variance_lines(rows)
-        for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
-            lines += _order_lines(rows, num=num, method=method, key=key)
+        if chunked:
+            lines += _drift_lines(chunked)
+            lines += _variance_lines(chunked)
+            for num, method, key in ((5, 'variance', 'alpha_var'),
+                                     (6, 'correlation', 'alpha_corr')):
+                lines += _order_lines(chunked, num=num, method=method, key=key)
         if any(a.get('allan') or a.get('allan_datasheet') for _, a in rows):
             lines += _datasheet_lines(rows)
             lines += _model_fit_lines(rows)

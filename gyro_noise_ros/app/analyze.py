@@ -28,8 +28,10 @@ Formats: ``docs/offline_tool.md``.
 
 The workflow, step by step: check every input (:func:`_open_inputs`), analyse each bag in one
 read when it is static throughout, else in a prepass and a pass over its longest static segment
-(:func:`_analyze_one`, :func:`_analysis_pass`), summarise it (:func:`_bag_doc`), refuse a run
-that analysed nothing (:func:`_check_analysed`), and write (:func:`_write_results`).
+(:func:`_analyze_one`, :func:`_analysis_pass`), summarise it (:func:`_bag_doc`; a record shorter
+than one chunk gets its Allan deviation and readout only, ``allan_only`` saying what is not
+computed), refuse a run that analysed nothing (:func:`_check_analysed`), and write
+(:func:`_write_results`).
 """
 
 import collections
@@ -568,14 +570,22 @@ def _options(params: AnalyzeParams, ref: dict[str, Any], jobs: int, pool: Any) -
 
 
 def _check_analysed(bag_docs: list[dict[str, Any]], config: EngineConfig) -> None:
-    """Never succeed having analysed nothing: say why each bag or axis has no analysed chunk."""
-    if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
-               for b in bag_docs for a in b['axes'].values()):
-        counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
-        raise InputDataError(
-            f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
-            'lower --chunk-size (>= memory + 2)')
+    """
+    Never succeed having analysed nothing: say why a bag has no analysed chunk.
+
+    A bag shorter than one chunk is analysed by its Allan deviation alone (``allan_only``); it
+    is refused only when that has no readout either (too short for any averaging time, or
+    ``--no-allan``).
+    """
     for b in bag_docs:
+        if b.get('allan_only'):
+            if not any(a.get('allan_datasheet') for a in b['axes'].values()):
+                raise InputDataError(
+                    f"{b['label']}: too short to analyse: {b['samples']} samples, no complete "
+                    f'chunk of {config.chunk_size} and '
+                    + ('no Allan deviation (--no-allan)' if not config.allan else
+                       'too few for an Allan deviation to read'))
+            continue
         if not any(a['chunks'] for a in b['axes'].values()):
             why = '; '.join(
                 f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf or non-physical values, "
@@ -675,21 +685,6 @@ def _plausible(batches: Iterator[Any], counts: dict[str, int] | None) -> Iterato
                 counts['accel'] += n_accel
             batch = dataclasses.replace(batch, gyro=gyro, accel=accel)
         yield batch
-
-
-def _check_chunk_fits(count: int, label: str, config: EngineConfig) -> None:
-    """Refuse a record shorter than one chunk before reading it (``count``: 0 = unknown)."""
-    if not count:
-        return
-    shortest = config.memory + 2
-    if count < shortest:
-        raise InputDataError(
-            f'{label}: too short to analyse: {count} samples; the shortest chunk the order '
-            f'identification takes is memory L + 2 = {shortest} samples')
-    if count < config.chunk_size:
-        raise ParameterError(
-            f'--chunk-size {config.chunk_size} is larger than the record {label} ({count} '
-            f'samples): give at most {count} (and at least memory L + 2 = {shortest})')
 
 
 def _stamps_unusable(stamps: np.ndarray) -> bool:
@@ -894,7 +889,6 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
     if reader is None:
         reader = _open(bag.path, bag.topic, params.temperature_topic, config.rate_hz)
     with reader:
-        _check_chunk_fits(reader.message_count, label, config)
         t_stamp, t_value = _read_temperature(reader)
         feed = _ChunkFeed(run, bag, engine, reader.message_count)
         done = 0
@@ -994,6 +988,9 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: StaticSegment | None,
             f'({100.0 * counts.tail_samples / counts.samples:.0f} %) after the last complete '
             'chunk of '
             f'{size} are not in the chunk tables (they are in the Allan deviation){hint}')
+    only = _allan_only(counts, config)
+    if only:
+        add(f'Allan deviation only: {only}')
     if any(left.values()):
         parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
         parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
@@ -1054,6 +1051,7 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
         'longest_gaps': [{'start_s': t, 'length_s': d, 'missing_samples': m}
                          for t, d, m in counts.longest_gaps],
         'chunks_cut': counts.chunks,
+        'allan_only': _allan_only(counts, config),
         'tail_samples': counts.tail_samples,
         'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
@@ -1066,6 +1064,19 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
             for axis, s in summaries.items()
         },
     }
+
+
+def _allan_only(counts: Any, config: EngineConfig) -> str | None:
+    """Return why a bag is analysed by its Allan deviation alone (no complete chunk), or None."""
+    if counts.chunks:
+        return None
+    shortest = config.memory + 2
+    fits = (f'--chunk-size {counts.samples} or less (at least memory L + 2 = {shortest}) would '
+            'identify one chunk' if counts.samples >= shortest else
+            f'the order identification needs at least memory L + 2 = {shortest} samples')
+    return (f'{counts.samples} samples, shorter than one chunk of {config.chunk_size}: the '
+            'fractional order and the chunk statistics (paper Tables 3-6, offset drift) are not '
+            f'computed; {fits}')
 
 
 class _AccelAllan:

@@ -175,9 +175,11 @@ def _print_summary(result: AnalyzeResult) -> None:
             f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
             f"{b['out_of_order_stamps']} out-of-order stamp(s), "
             f"{b['equal_stamps']} equal to the one before, "
-            f"{b['tail_samples']} tail sample(s) not analysed")
+            + ('Allan deviation only (shorter than one chunk)' if b.get('allan_only') else
+               f"{b['tail_samples']} tail sample(s) not in a chunk"))
         for axis, a in b['axes'].items():
-            line = (f"  {axis}: {a['chunks']} chunks, drift "
+            line = (f'  {axis}: Allan deviation only' if b.get('allan_only') else
+                    f"  {axis}: {a['chunks']} chunks, drift "
                     f"{fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
                     f"(deg/s)/h, variance {fmt(a['mean_variance_deg2_s2'], '.5g')} "
                     '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "

@@ -76,10 +76,15 @@ def _tables(doc: dict[str, Any]) -> list[Table]:
         # (bag index, JSON pointer of the bag's axis entry) of the bags that have the axis
         rows = [(i, pointer('bags', i, 'axes', axis)) for i, b in enumerate(bags)
                 if axis in b['axes']]
-        tables += [_drift_table(axis, rows), _variance_table(axis, rows)]
-        tables += [_order_table(bags, axis, rows, num=num, method=method, key=key, tie=tie)
-                   for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
-                                                 (6, 'correlation', 'alpha_corr', 'ties_corr'))]
+        # an Allan-only bag (shorter than one chunk) has no row in the chunk tables
+        chunked = [(i, p) for i, p in rows if not bags[i].get('allan_only')]
+        if chunked:
+            tables += [_drift_table(axis, chunked), _variance_table(axis, chunked)]
+            tables += [_order_table(bags, axis, chunked, num=num, method=method, key=key,
+                                    tie=tie)
+                       for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
+                                                     (6, 'correlation', 'alpha_corr',
+                                                      'ties_corr'))]
         tables += _allan_tables(bags, axis, rows)
         tables += _health_tables(bags, axis, rows)
     tables += [_counts_table(bags), _options_table(doc['options'])]

@@ -186,10 +186,15 @@ def excitation_markdown(doc: dict[str, Any]) -> str:
         change = doc.get('change')
         if change:
             sig = 'significant' if change['amplitude_change_significant'] else 'within noise'
+            if change['amplitude_change_significant'] and doc.get('tolerance') is not None:
+                beyond = abs(change['amplitude_relative']) > doc['tolerance']
+                sig += (f", {'beyond' if beyond else 'within'} the "
+                        f"{100 * doc['tolerance']:g} % tolerance")
             out += ['', '## After / before', '',
                     f'- amplitude: {percent(change["amplitude_relative"], ".3f")} +/- '
                     f'{percent(change["amplitude_relative_sigma"], ".3f")} '
-                    f'({sig}, p = {change["amplitude_change_p"]:.2g})',
+                    f'({sig}; p {"~" if change["amplitude_change_p"] == 0 else "="} '
+                    f'{change["amplitude_change_p"]:.2g})',
                     f'- frequency: {change["frequency_hz"]:+.5f} Hz',
                     f'- amplitude stability: {100 * change["amplitude_stability"]:+.3f} '
                     f'percentage points',

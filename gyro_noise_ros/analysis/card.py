@@ -79,7 +79,9 @@ def _notes(doc: Mapping[str, Any]) -> list[str]:
         notes.append('bias stability is only an upper bound on every axis: the Allan curve had '
                      f'not turned up by the end of the record ({lengths})')
     elif any(bound.values()):
-        where = '; '.join(f"{label} {', '.join(axes)}" for label, axes in bound.items() if axes)
+        several = len(bound) > 1
+        where = '; '.join((f'{label} ' if several else '') + ', '.join(axes)
+                          for label, axes in bound.items() if axes)
         notes.append(f'bias stability is only an upper bound on {where}: the Allan curve had '
                      f'not turned up by the end of the record ({lengths})')
     for b in doc['bags']:
@@ -241,7 +243,8 @@ def card_tables(doc: Mapping[str, Any]) -> list[CardTable]:
         rows += [_accel_row(axis, pointer('bags', i, 'accelerometer_allan', axis), e)
                  for axis, e in (b.get('accelerometer_allan') or {}).items() if e]
         if rows:
-            out.append((f"{b['label']}: datasheet numbers", CARD_COLUMNS, rows))
+            out.append((f"{b['label']}, {fmt_or_na(b.get('duration_s'), '.4g')} s at "
+                        f"{fmt_or_na(b.get('rate_hz'), '.5g')} Hz", CARD_COLUMNS, rows))
     return out
 
 

@@ -201,7 +201,8 @@ def plot_allan(path: StrPath, curves: Mapping[str, Sequence[Mapping[str, Any]]])
     fig.legend(handles=_legend_handles(labels, colours), loc='lower center',
                ncol=min(8, len(labels) + 4), fontsize=8, frameon=False)
     fig.suptitle('Allan deviation (band: 68.3 % interval; the readout: N on the -1/2 line at '
-                 'tau = 1 s, B the flat floor, K on the +1/2 line at tau = 3 s)', fontsize=10)
+                 'tau = 1 s, B the flat floor, K the +1/2 line, its value at tau = 3 s)',
+                 fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     save_figure(fig, path, dpi=110)
     return True
@@ -308,7 +309,8 @@ def _point_texts(numbers: Mapping[str, Any], unit: Display,
     if numbers['k'] is not None:
         what = 'a bound' if numbers['k_bound'] else 'fitted'
         texts['K'] = (f"{'<= ' if numbers['k_bound'] else ''}{numbers['k'] * walk.per_si:.3g} "
-                      f'{walk.unit}, the +1/2 line ({what}; read at tau = {K_TAU_S:g} s)')
+                      f'{walk.unit}, the +1/2 line ({what}; K is its value at tau = '
+                      f'{K_TAU_S:g} s)')
     return texts
 
 
@@ -404,8 +406,9 @@ def readout_lines(numbers: Mapping[str, Any] | None, tau: ArrayLike,
     the bias-stability tau, the flat line at the bias stability (``0.664 B``, eq. C.27) a decade
     either side of its tau, and the +1/2 line ``K sqrt(tau / 3)`` (eq. C.29) from a third of
     the earlier of 3 s and that tau; each kept over the curve's taus and within a factor of 3 of
-    its values. The points: N at tau = 1 s, the bias stability at its tau, K at tau = 3 s (at
-    the longest tau when 3 s is past the curve).
+    its values. The points: N at tau = 1 s, the bias stability at its tau, K at the longest tau,
+    where the +1/2 line meets the curve (its bound is read there; K is the line's value at
+    tau = 3 s, which a point at 3 s would show far below a curve still falling there).
 
     Parameters
     ----------
@@ -431,7 +434,7 @@ def readout_lines(numbers: Mapping[str, Any] | None, tau: ArrayLike,
     tau_b = float(tau_b) if tau_b is not None and np.isfinite(tau_b) else float(t[-1])
     spans = {'N': (0.0, 3.0 * max(N_TAU_S, tau_b)), 'B': (tau_b / 10.0, tau_b * 10.0),
              'K': (min(K_TAU_S, tau_b) / 3.0, np.inf)}
-    at = {'N': N_TAU_S, 'B': tau_b, 'K': min(K_TAU_S, float(t[-1]))}
+    at = {'N': N_TAU_S, 'B': tau_b, 'K': float(t[-1])}
     lines, points = [], []
     for kind, value in (('N', numbers.get('n')), ('B', numbers.get('bias')),
                         ('K', numbers.get('k'))):

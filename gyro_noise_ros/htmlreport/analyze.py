@@ -262,8 +262,8 @@ def _allan_figures(doc: dict[str, Any], allan_store: _AllanStore,
     curves = allan_curves(doc, allan_store, accel_allan)
     figures: list[tuple[str, figure]] = []
     readout = ('dashed: N, the -1/2 line, read at 1 s; dotted: the bias-stability floor, B = '
-               'floor / 0.664; dash-dot: K, the +1/2 line, read at 3 s; diamonds: the readout '
-               'points, hover them for the numbers')
+               'floor / 0.664; dash-dot: K, the +1/2 line (K is its value at 3 s); diamonds: the '
+               'readout points, hover them for the numbers')
     for sensor, unit, what in (('gyro', GYRO_ADEV.unit, 'angular rate'),
                                ('accelerometer', ACCEL_ADEV.unit, 'specific force')):
         if curves[sensor]:

@@ -346,7 +346,12 @@ def _part(doc: dict[str, Any] | list[Any], part: CellPart) -> str:
 
 def _cell(doc: dict[str, Any] | list[Any], cell: Cell) -> str:
     parts = cell if isinstance(cell, tuple) else (cell,)
-    return '<td>' + ''.join(_part(doc, p) for p in parts) + '</td>'
+    if not any(isinstance(p, Aside) for p in parts):
+        return '<td>' + ''.join(_part(doc, p) for p in parts) + '</td>'
+    # a value with an aside: the value on one unbroken line, the aside wrapping under it
+    main = ''.join(_part(doc, p) for p in parts if not isinstance(p, Aside))
+    aside = ''.join(_part(doc, p) for p in parts if isinstance(p, Aside))
+    return f'<td><span class="main">{main}</span>{aside}</td>'
 
 
 def _table(doc: dict[str, Any] | list[Any], table: Table, level: int = 3) -> str:
@@ -382,7 +387,7 @@ pre { background: #f6f6f6; padding: 0.5em; overflow-x: auto; white-space: pre-wr
 .verdict .level { font-weight: bold; margin-right: 0.5em; }
 .aside { display: block; color: #666; font-size: 0.85em; }
 #card table { font-size: 0.92em; } #card h2 { margin-top: 0.6em; }
-.num { white-space: nowrap; }
+.num, .unit, .main { white-space: nowrap; }
 #card pre { font-size: 0.82em; margin: 0.3em 0; }
 .card-item { display: inline-block; vertical-align: top; margin-right: 2em; max-width: 100%; }
 details summary { cursor: pointer; color: #333; }

@@ -110,3 +110,19 @@ def test_a_page_without_the_answer_first_is_caught(tmp_path):
 def test_explain_report_renders(tmp_path):
     out, _ = make_explain(tmp_path)
     check_in_browser(out / 'report.html', tmp_path / 'shot', figures=1)
+
+
+@pytest.mark.timeout(600)
+@pytest.mark.parametrize('data, figures', [
+    (('px4_ulog_sample_static', 'sample.ulg'), 5),        # motion, loss, accelerometer
+    (('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'), 5),   # bursty host stamps
+    (('xio_fusion_sensor_data', 'sensor_data.csv'), 2),   # 17 s static: Allan deviation only
+])
+def test_analyze_report_of_a_real_recording(tmp_path, data, figures):
+    """A real recording's page, as a new user opens it: the answer in the first screen."""
+    from _realdata import real_data
+
+    out = tmp_path / 'out'
+    assert analyze_main([str(real_data(*data)), '--out', str(out), '--jobs', '1', '--quiet',
+                        '--no-figures']) == 0
+    check_in_browser(out / 'report.html', tmp_path, figures=figures)

@@ -42,6 +42,14 @@ _QUALITY = (('samples_lost', '{} sample(s) lost in {} gap(s)'),
             ('undecodable_messages', '{} undecodable message(s)'))
 
 
+def _duration(seconds: float | None) -> str:
+    """Return a record's length: ``655.1 s``, ``10000 s (2.78 h)``, never ``1e+04 s``."""
+    if seconds is None:
+        return 'n/a s'
+    text = f'{seconds:.4g} s' if seconds < 1000 else f'{seconds:.0f} s'
+    return text + (f' ({seconds / 3600:.3g} h)' if seconds >= 3600 else '')
+
+
 def _bag_problems(b: Mapping[str, Any]) -> tuple[list[str], list[str]]:
     """Return one bag's (errors, warnings) as sentences."""
     errors: list[str] = []
@@ -72,7 +80,7 @@ def _notes(doc: Mapping[str, Any]) -> list[str]:
     bound = {b['label']: [axis for axis, a in b['axes'].items()
                           if (a.get('allan_datasheet') or {}).get('bias_stability_upper_bound')]
              for b in doc['bags']}
-    lengths = ', '.join(f"{fmt_or_na(b.get('duration_s'), '.4g')} s" for b in doc['bags']
+    lengths = ', '.join(_duration(b.get('duration_s')) for b in doc['bags']
                         if bound[b['label']])
     every = all(len(v) == len(b['axes']) for v, b in zip(bound.values(), doc['bags']))
     if every and all(bound.values()):
@@ -120,7 +128,7 @@ def verdict(doc: Mapping[str, Any]) -> tuple[str, str]:
     level = 'ERROR' if errors else 'WARN' if warns else 'OK'
     bags = doc['bags']
     what = (f'{len(bags)} recordings' if len(bags) > 1 else
-            f"{bags[0]['label']}, {fmt_or_na(bags[0].get('duration_s'), '.4g')} s at "
+            f"{bags[0]['label']}, {_duration(bags[0].get('duration_s'))} at "
             f"{fmt_or_na(bags[0].get('rate_hz'), '.5g')} Hz")
     axes = sorted({a for b in bags for a in b['axes']})
     accel = any(b.get('accelerometer_allan') for b in bags)
@@ -160,7 +168,7 @@ def _gyro_row(axis: str, q: str, d: Mapping[str, Any]) -> tuple[Any, ...]:
              '' if d.get('arw_from_region') else '; read at one second: no white-noise region'))
     stab = (Num(q + '/bias_stability_deg_h', '.3g', bound), *_interval(lo, hi),
             Unit(GYRO_ADEV.unit),
-            _si('at ', Num(q + '/bias_stability_tau_s', '.3g'), ' s; ',
+            _si('at ', Num(q + '/bias_stability_tau_s', '.4g'), ' s; ',
                 Num(q + '/bias_stability_rad_s', '.3g', bound), ' ', Unit('rad/s')))
     b = (Num(q + '/bias_instability_deg_h', '.3g', bound), *_interval(lo, hi, 1.0 / B_FACTOR),
          Unit(GYRO_ADEV.unit),
@@ -202,7 +210,7 @@ def _accel_row(axis: str, r: str, e: Mapping[str, Any]) -> tuple[Any, ...]:
           if 'bias_stability_ci_low_m_s2' in e else None)
     stab = (Num(r + '/bias_stability_m_s2', '.3g', bound, ACCEL_ADEV.per_si),
             *(_interval(*ci, ACCEL_ADEV.per_si) if ci else (' ',)), Unit(ACCEL_ADEV.unit),
-            _si('at ', Num(r + '/bias_stability_tau_s', '.3g'), ' s; ',
+            _si('at ', Num(r + '/bias_stability_tau_s', '.4g'), ' s; ',
                 Num(r + '/bias_stability_m_s2', '.3g', bound), ' ', Unit('m/s^2')))
     b = (Num(r + '/bias_instability_m_s2', '.3g', bound, ACCEL.per_si),
          *(_interval(*ci, ACCEL_ADEV.per_si / B_FACTOR) if ci else (' ',)), Unit(ACCEL.unit),
@@ -243,7 +251,7 @@ def card_tables(doc: Mapping[str, Any]) -> list[CardTable]:
         rows += [_accel_row(axis, pointer('bags', i, 'accelerometer_allan', axis), e)
                  for axis, e in (b.get('accelerometer_allan') or {}).items() if e]
         if rows:
-            out.append((f"{b['label']}, {fmt_or_na(b.get('duration_s'), '.4g')} s at "
+            out.append((f"{b['label']}, {_duration(b.get('duration_s'))} at "
                         f"{fmt_or_na(b.get('rate_hz'), '.5g')} Hz", CARD_COLUMNS, rows))
     return out
 

@@ -28,8 +28,9 @@ than ``--tolerance`` (1 % of the amplitude). Sine sweep: amplitude against insta
 frequency, rising and falling, and its deviation from the reference channel
 (``--reference-topic``: a second ``sensor_msgs/Imu`` topic of the bag, e.g. the shaker's
 feedback accelerometer) when recorded, with gain and flatness verdicts. A record that is not the
-excitation asked for is refused. With BAG_AFTER, before and after side by side. The workflow is :mod:`gyro_noise_ros.app.excitation`; writes
-``excitation.json``, ``excitation.md`` and ``excitation_before.png`` (``excitation_after.png``).
+excitation asked for is refused. With BAG_AFTER, before and after side by side. The workflow
+is :mod:`gyro_noise_ros.app.excitation`; writes ``excitation.json``, ``excitation.md``,
+``excitation_before.png`` (``excitation_after.png``) and ``report.html``.
 
 Exit codes: 0 ok, 2 bad option (frequency at or above Nyquist), 3 unreadable recording, 4 data
 cannot be analysed (NaN/Inf samples, fewer than 3 cycles, no sine above the noise, not the

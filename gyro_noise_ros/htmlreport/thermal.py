@@ -277,9 +277,9 @@ def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
               + _definitions_md(doc))
     return Page(title=f'gyro_noise_thermal apply: {doc["method"]} on {doc["bag"]}', data=doc,
                 in_short_markdown='\n'.join(short), figures=tuple(figures),
-                verdict=Verdict('INFO', f'{doc["method"]} applied: '
-                                                + '; '.join(f'{axis}: {v["verdict"]["text"].rstrip(".")}'
-                                            for axis, v in doc['axes'].items()) + '.'),
+                verdict=Verdict('INFO', f'{doc["method"]} applied: ' + '; '.join(
+                    f'{axis}: {v["verdict"]["text"].rstrip(".")}'
+                    for axis, v in doc['axes'].items()) + '.'),
                 card=tuple(tables[:1]), card_title='The method on this run',
                 tables=tuple(tables[1:]), method_markdown=method, command=doc.get('command'),
                 inputs=(doc['bag'], doc['model']['path']),

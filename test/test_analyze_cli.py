@@ -256,7 +256,13 @@ def test_reference_adds_health_verdicts(tmp_path, make_record, capsys):
     # 8 chunks: too few for the robust chunk statistics (10), said, not judged
     assert items['Order deviation, variance method'] == 'undetermined'
     assert doc['options']['thresholds']['reference_warn_sigma'] == 5.0
-    assert '### Health verdict against the reference' in (out / 'summary.md').read_text()
+    md = (out / 'summary.md').read_text()
+    assert '### Health verdict against the reference' in md
+    # the verdict line opens summary.md: ERROR, naming the bag and axis; the card shows each
+    # gyro axis' level against the reference
+    assert md.startswith('# gyro_noise_analyze summary\n\n**Verdict: ERROR**. ')
+    assert 'h1 z against the reference: ' in md.split('\n')[2]
+    assert '| Against the reference |' in md and '| ERROR |' in md
     # A two-bag summary as reference needs the bag named, and the message names the option.
     capsys.readouterr()
     assert main([str(h1), '--reference', str(out / 'summary.json'), '--out', str(tmp_path / 'x'),
@@ -292,6 +298,9 @@ def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path, capsys, make_
     statuses = {(r['axis'], r['chunk']): r['status'] for r in read_csv(out / 'chunks.csv')}
     assert statuses[('x', '1')] == 'nan' and statuses[('y', '1')] == 'ok'
     assert statuses[('y', '0')] == statuses[('y', '2')] == 'dropped'
+    # the verdict line says the loss first: WARN
+    first = (out / 'summary.md').read_text().split('\n')[2]
+    assert first.startswith('**Verdict: WARN**. ') and '6 sample(s) lost in 2 gap(s)' in first
 
 
 @pytest.fixture(scope='module')

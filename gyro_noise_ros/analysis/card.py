@@ -70,7 +70,7 @@ def _bag_problems(b: Mapping[str, Any]) -> tuple[list[str], list[str]]:
         health = a.get('health')
         if health and health['level'] in ('ERROR', 'WARN'):
             (errors if health['level'] == 'ERROR' else warns).append(
-                f"{label} {axis} against the reference: {health['message']}")
+                f"{label} {axis} against the reference: {health['message'].rstrip('.')}")
     return errors, warns
 
 
@@ -88,8 +88,10 @@ def _notes(doc: Mapping[str, Any]) -> list[str]:
                      f'not turned up by the end of the record ({lengths})')
     elif any(bound.values()):
         several = len(bound) > 1
-        where = '; '.join((f'{label} ' if several else '') + ', '.join(axes)
-                          for label, axes in bound.items() if axes)
+        places = [(label + ('' if len(axes) == len(b['axes']) else f" ({', '.join(axes)})"))
+                  if several else ', '.join(axes)
+                  for (label, axes), b in zip(bound.items(), doc['bags']) if axes]
+        where = ' and '.join(places) if len(places) <= 2 else ', '.join(places)
         notes.append(f'bias stability is only an upper bound on {where}: the Allan curve had '
                      f'not turned up by the end of the record ({lengths})')
     for b in doc['bags']:
@@ -244,15 +246,23 @@ def card_tables(doc: Mapping[str, Any]) -> list[CardTable]:
 
     """
     out: list[CardTable] = []
+    reference = any('health' in a for b in doc['bags'] for a in b['axes'].values())
     for i, b in enumerate(doc['bags']):
         rows = [_gyro_row(axis, pointer('bags', i, 'axes', axis, 'allan_datasheet'),
                           a['allan_datasheet'])
                 for axis, a in b['axes'].items() if a.get('allan_datasheet')]
         rows += [_accel_row(axis, pointer('bags', i, 'accelerometer_allan', axis), e)
                  for axis, e in (b.get('accelerometer_allan') or {}).items() if e]
+        columns: tuple[str, ...] = CARD_COLUMNS
+        if reference:
+            # the health verdict of each gyro axis against --reference beside its numbers
+            columns += ('Against the reference',)
+            rows = [(*row, Num(pointer('bags', i, 'axes', row[0].split()[1], 'health', 'level'))
+                     if row[0].startswith('gyro') and 'health' in b['axes'][row[0].split()[1]]
+                     else '-') for row in rows]
         if rows:
             out.append((f"{b['label']}, {_duration(b.get('duration_s'))} at "
-                        f"{fmt_or_na(b.get('rate_hz'), '.5g')} Hz", CARD_COLUMNS, rows))
+                        f"{fmt_or_na(b.get('rate_hz'), '.5g')} Hz", columns, rows))
     return out
 
 

@@ -334,7 +334,8 @@ def plot_excitation(path: StrPath, doc: dict[str, Any], side: str, t_s: NDArray[
         pb.set_xlabel('instantaneous frequency (Hz)')
         pb.set_ylabel(f'amplitude ({unit})')
         pb.set_title('(b) amplitude against frequency', fontsize=9)
-        pb.legend(fontsize=8)
+        # below the panel: the reference runs along the top, where a legend would cover it
+        pb.legend(fontsize=8, loc='upper center', bbox_to_anchor=(0.5, -0.16), ncol=3)
     for panel in (pa, pb):
         panel.grid(True, alpha=0.3)
     save_figure(fig, path, dpi=110, tight=True)

@@ -32,15 +32,16 @@ from typing import Self
 EXIT_CODES = {
     0: 'success (never when nothing was analysed)',
     1: 'unexpected internal error (a bug: please report the message)',
-    2: 'bad command line or parameter value, or an unknown node parameter (also a '
-       '`{chunk_size}` longer than the record, a size or rate whose data cannot fit in memory or '
-       'on the disk)',
+    2: 'bad command line or parameter value, or an unknown node parameter (also a size or rate '
+       'whose data cannot fit in memory or on the disk, a `{chunk_size}` whose order tables would '
+       "need more than half of the machine's memory)",
     3: 'an input cannot be read (missing, corrupt, wrong format: an empty CSV, wrong CSV headers, '
        'a non-numeric value, a binary calibration or model file; no or ambiguous topic, wrong '
        'message type)',
     4: 'the data cannot be analysed (NaN/Inf or non-physical values such as 1e300 rad/s or a '
-       'time stamp of 1e308 s, too short, constant, a CSV with a header and no rows, nothing '
-       'left after `{start_s}`/`{end_s}`)',
+       'time stamp of 1e308 s, too short for any Allan deviation, constant, a CSV with a header '
+       'and no rows, nothing left after `{start_s}`/`{end_s}`); `gyro_noise_analyze` analyses a '
+       'record shorter than one chunk by its Allan deviation alone, saying so (exit 0)',
     5: 'the Portenta link cannot be used, or the Dask scheduler of `{scheduler}` cannot be '
        'reached or failed',
     6: 'an output cannot be written (not writable, under a file, disk full) or would replace '

@@ -354,6 +354,12 @@ def test_load_reference(tmp_path):
         'chunks': 1, 'reference_statistics': AXIS['reference_statistics']}}}])
     with pytest.raises(InputError, match='missing or bad field'):
         load_reference(broken)
+    # one chunk has no offset drift: not a reference, and the message says what to change
+    short = write_summary(tmp_path / 'v.json', [{'label': 'a', 'axes': {'z': {
+        **AXIS, 'chunks': 1, 'offset_drift_rad_s2': None}}}])
+    with pytest.raises(ParameterError, match=r'1 chunk\(s\), too few') as err:
+        load_reference(short)
+    assert err.value.parameters == ('chunk_size',)
 
 
 def test_older_reference_summary_is_refused_with_one_line(tmp_path):

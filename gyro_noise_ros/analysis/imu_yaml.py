@@ -29,7 +29,7 @@ from ..outputs import StrPath
 if TYPE_CHECKING:  # annotations only: a renderer needs no readout code at run time
     from ..core.readout import AllanReadout
 
-__all__ = ['DEFAULT_IMU_TOPIC', 'kalibr_noise', 'write_imu_yaml']
+__all__ = ['DEFAULT_IMU_TOPIC', 'imu_yaml_text', 'kalibr_noise', 'write_imu_yaml']
 
 #: Topic written into imu.yaml for inputs that have none (CSV tables, PX4 ULogs).
 DEFAULT_IMU_TOPIC = '/imu/data_raw'
@@ -94,16 +94,16 @@ def kalibr_noise(readouts: Iterable['AllanReadout | None'], *,
     return out
 
 
-def write_imu_yaml(path: StrPath, *, rostopic: str, update_rate_hz: float,
-                   gyroscope: Mapping[str, Any], accelerometer: Mapping[str, Any] | None = None,
-                   rostopic_note: str = '', source: str = '') -> None:
+def imu_yaml_text(*, rostopic: str, update_rate_hz: float, gyroscope: Mapping[str, Any],
+                  accelerometer: Mapping[str, Any] | None = None, rostopic_note: str = '',
+                  source: str = '') -> str:
     """
-    Write a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units), notes as YAML comments.
+    Return a Kalibr-style imu.yaml (kalibr ``imu.yaml`` keys, SI units), notes as YAML comments.
+
+    The text of the file :func:`write_imu_yaml` writes (report.html shows it, ready to copy).
 
     Parameters
     ----------
-    path : str or os.PathLike
-        YAML file to write.
     rostopic : str
         IMU topic.
     update_rate_hz : float
@@ -116,6 +116,10 @@ def write_imu_yaml(path: StrPath, *, rostopic: str, update_rate_hz: float,
         Comment above ``rostopic`` (e.g. that the input had no topic).
     source : str
         Comment line saying which bag and axes the numbers come from.
+
+    Returns
+    -------
+    str
 
     """
     def val(v: float | None) -> str:
@@ -139,4 +143,26 @@ def write_imu_yaml(path: StrPath, *, rostopic: str, update_rate_hz: float,
                        noise['noise_density_note'])
         lines += entry(f'{name}_random_walk', noise['random_walk'], u_walk,
                        noise['random_walk_note'])
-    Path(path).write_text('\n'.join(lines) + '\n')
+    return '\n'.join(lines) + '\n'
+
+
+def write_imu_yaml(path: StrPath, **kwargs: Any) -> str:
+    """
+    Write :func:`imu_yaml_text` to ``path``; return the text.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        YAML file to write.
+    **kwargs
+        The keyword arguments of :func:`imu_yaml_text`.
+
+    Returns
+    -------
+    str
+        What was written.
+
+    """
+    text = imu_yaml_text(**kwargs)
+    Path(path).write_text(text)
+    return text

@@ -46,7 +46,7 @@ from ..errors import ParameterError
 
 PROG = TOOL
 #: Options not named after the parameter they set (errors name parameters: cli/_common).
-RENAMED = {'start_s': '--start', 'end_s': '--end'}
+RENAMED = {'start_s': '--start', 'end_s': '--end', 'bag': '--reference-bag'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -113,9 +113,11 @@ def build_parser() -> argparse.ArgumentParser:
         '--reference', metavar='SUMMARY',
         help='summary.json of a reference recording: adds health verdicts per bag and axis')
     p.add_argument('--reference-bag', metavar='LABEL',
-                   help='bag label inside a --reference summary that holds several bags')
-    p.add_argument('--label', nargs='+', metavar='NAME',
-                   help='one label per bag for tables and figures')
+                   help='the bag (its label) of a --reference summary that holds several bags')
+    # extend: --label a b c and --label a --label b --label c both give one label per bag
+    p.add_argument('--label', nargs='+', action='extend', metavar='NAME',
+                   help='one label per bag for tables and figures (--label a b or '
+                   '--label a --label b)')
     p.add_argument('--curves', type=int, default=DEFAULT_CURVES, metavar='N',
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
                         f'({DEFAULT_CURVES}; 0 = none)')
@@ -179,9 +181,11 @@ def _print_summary(result: AnalyzeResult) -> None:
             f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
             f"{b['out_of_order_stamps']} out-of-order stamp(s), "
             f"{b['equal_stamps']} equal to the one before, "
-            f"{b['tail_samples']} tail sample(s) not analysed")
+            + ('Allan deviation only (shorter than one chunk)' if b.get('allan_only') else
+               f"{b['tail_samples']} tail sample(s) not in a chunk"))
         for axis, a in b['axes'].items():
-            line = (f"  {axis}: {a['chunks']} chunks, drift "
+            line = (f'  {axis}: Allan deviation only' if b.get('allan_only') else
+                    f"  {axis}: {a['chunks']} chunks, drift "
                     f"{fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
                     f"(deg/s)/h, variance {fmt(a['mean_variance_deg2_s2'], '.5g')} "
                     '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "

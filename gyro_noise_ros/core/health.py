@@ -690,19 +690,29 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
         if len(bags) != 1:
             names = ', '.join(str(b.get('label')) for b in bags)
             raise ParameterError(
-                f'reference summary {str(path)!r} holds {len(bags)} bags ({names}); ' 'choose one')
+                f'reference summary {str(path)!r} holds {len(bags)} bags ({names}): choose '
+                'one with {bag}', parameters=('bag',))
         entry = bags[0]
     else:
         matches = [b for b in bags if bag in (b.get('label'), b.get('path'),
                                               Path(str(b.get('path'))).name)]
         if not matches:
-            raise ParameterError(f'bag {bag!r} is not in reference summary {str(path)!r}')
+            names = ', '.join(str(b.get('label')) for b in bags)
+            raise ParameterError(f'{{bag}} {bag!r} is not in reference summary {str(path)!r} '
+                                 f'(its bags: {names})', parameters=('bag',))
         entry = matches[0]
     axes = entry.get('axes', {})
     if axis not in axes:
         raise ParameterError(f'axis {axis!r} is not in reference summary {str(path)!r} '
                              f'(axes: {", ".join(axes) or "none"})')
     a = axes[axis]
+    if isinstance(a, dict) and 'offset_drift_rad_s2' in a and (
+            a['offset_drift_rad_s2'] is None or a.get('chunks', 0) < 2):
+        raise ParameterError(
+            f"reference summary {str(path)!r}, bag {entry.get('label')!r}, axis {axis!r}: "
+            f"{a.get('chunks', 0)} chunk(s), too few for a reference (its offset drift needs 2 "
+            'or more): analyse the reference record again with a smaller {chunk_size}, or '
+            'record it longer', parameters=('chunk_size',))
     robust = a.get(ROBUST_JSON_KEY) if isinstance(a, dict) else None
     if not isinstance(robust, dict):
         raise InputError(

@@ -37,16 +37,17 @@ from .uncertainty import format_value, PARAMETERS
 from .workflow import ExplainResult, Step
 from ..errors import OutputError
 from ..outputs import StrPath
-from ..units import RAD_TO_DEG
+from ..units import GYRO_ADEV, RAD_TO_DEG
 
 _LOG_X = {'allan', 'psd', 'psd_peak'}
 _LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
-# One unit family per figure (deg/s), the unit in every axis label.
+# The units of every report (units.py): the angular rate in deg/s, its Allan deviation in deg/h;
+# the unit in every axis label.
 _TITLES = {'allan': 'Allan deviation', 'psd': 'power spectral density',
            'psd_peak': 'band peak / band mean', 'chunk_bias': 'chunk bias',
            'chunk_variance': 'chunk variance', 'histogram': 'value histogram',
            'stamps': 'stamp intervals', 'temperature': 'corr(bias, T), corr(bias, dT/dt)'}
-_YLABELS = {'allan': 'ADEV (deg/s)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'peak / mean (1)',
+_YLABELS = {'allan': 'ADEV (deg/h)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'peak / mean (1)',
             'chunk_bias': 'bias (deg/s)', 'chunk_variance': 'variance ((deg/s)^2)',
             'histogram': 'samples (count)', 'stamps': 'intervals (count)',
             'temperature': 'correlation (1)'}
@@ -62,7 +63,9 @@ def _untransform(name: str, values: FloatArray) -> FloatArray:
 
 
 def _scale(name: str) -> float:
-    if name in ('allan', 'chunk_bias'):
+    if name == 'allan':
+        return GYRO_ADEV.per_si
+    if name == 'chunk_bias':
         return RAD_TO_DEG
     return RAD_TO_DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
 

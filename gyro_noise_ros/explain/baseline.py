@@ -53,7 +53,7 @@ coefficients decay like j^(-1-alpha), so L_sim is typically 25-200 and the simul
 than with L = 1000.
 """
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -242,16 +242,17 @@ def simulation_memory(alpha: float, f: float, rate_hz: float, *, memory_fit: int
 
 
 def _fit_variances(freq: FloatArray, pxx: FloatArray, gain: FloatArray,
-                   rate_hz: float) -> tuple[FloatArray, float]:
+                   rate_hz: float, known_white_var: float = 0.0) -> tuple[FloatArray, float]:
     band = freq >= rate_hz / 100.0
     keep = band
     weight = pxx
+    known = 2.0 * known_white_var / rate_hz   # one-sided density of a known white variance
     for _ in range(3):
         # relative weights from the previous model, not from the noisy estimate itself: 1 / pxx
         # weights would favour bins that happen to come out low and bias the fit down by several %
         design = np.column_stack((gain, np.ones_like(gain)))[keep] / weight[keep, None]
-        coef, _ = scipy.optimize.nnls(design, pxx[keep] / weight[keep])
-        model = gain * coef[0] + coef[1]
+        coef, _ = scipy.optimize.nnls(design, (pxx[keep] - known) / weight[keep])
+        model = gain * coef[0] + coef[1] + known
         keep = band & (pxx < 3.0 * model)
         weight = np.maximum(model, 1e-300)
     misfit = float(np.sqrt(np.mean(np.log10(pxx[keep] / model[keep]) ** 2)))
@@ -275,6 +276,13 @@ def _refine_f(alpha: float, f: float, memory: int, freq: FloatArray, pxx: FloatA
     if res.fun < misfit(f) and stable(alpha, refined, memory):
         return refined
     return f
+
+
+def _spectrum(x: FloatArray, rate_hz: float) -> tuple[FloatArray, FloatArray]:
+    """Return the Welch PSD the levels are fitted to (without the two lowest bins)."""
+    nperseg = int(min(4096, 2 ** int(np.floor(np.log2(x.shape[0] // 16)))))
+    freq, pxx = welch(x, rate_hz, nperseg)
+    return freq[2:], pxx[2:]
 
 
 def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
@@ -308,9 +316,7 @@ def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
         for i in [int(np.argmin(v)), *inner.tolist()]:
             if v[i] <= (1.0 + BRANCH_TOLERANCE) * v.min():
                 pairs.add((round(float(alphas[i]), 6), round(float(f_curve[i]), 9)))
-    nperseg = int(min(4096, 2 ** int(np.floor(np.log2(n // 16)))))
-    freq, pxx = welch(x, rate_hz, nperseg)
-    freq, pxx = freq[2:], pxx[2:]
+    freq, pxx = _spectrum(x, rate_hz)
     fits = []
     for alpha, f in sorted(pairs):
         if not stable(alpha, f, memory_fit):
@@ -338,3 +344,38 @@ def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
                          sigma_nu_rad_s=float(np.sqrt(var_nu)), memory_fit=memory_fit,
                          memory_sim=int(memory_sim), chunk_size=chunk, chunks_identified=count,
                          psd_misfit=misfit)
+
+
+def without_white(baseline: BaselineModel, x: FloatArray, rate_hz: float,
+                  white_var: float) -> BaselineModel:
+    """
+    Refit a baseline's noise levels with a known white noise taken out of the measurement.
+
+    A record on a lattice of step q carries rounding noise of variance q^2 / 12 (white for a
+    step below about two noise sd; Sheppard's correction). A baseline fitted to it holds that
+    noise in sigma_w and sigma_nu already; once the lattice is in the model (which rounds its
+    members again), the levels must leave it out or the model is louder than the record.
+
+    Parameters
+    ----------
+    baseline : BaselineModel
+        The fitted baseline (alpha, f and the memories are kept).
+    x : numpy.ndarray
+        The record it was fitted to (rad/s).
+    rate_hz : float
+        Sample rate (Hz).
+    white_var : float
+        Variance of the known white noise ((rad/s)^2).
+
+    Returns
+    -------
+    BaselineModel
+        The same model with sigma_w and sigma_nu refitted (module doc, step 4) to the PSD minus
+        the known white density ``2 white_var / fs``.
+
+    """
+    freq, pxx = _spectrum(x, rate_hz)
+    gain = model_gain(baseline.alpha, baseline.f, baseline.memory_sim, freq, rate_hz)
+    (var_w, var_nu), misfit = _fit_variances(freq, pxx, gain, rate_hz, float(white_var))
+    return replace(baseline, sigma_w_rad_s=float(np.sqrt(var_w)),
+                   sigma_nu_rad_s=float(np.sqrt(var_nu)), psd_misfit=misfit)

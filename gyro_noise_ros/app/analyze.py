@@ -1114,11 +1114,11 @@ def _write_allan_outputs(out: Path, doc: dict[str, Any], allan_store: dict[tuple
     write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
-    gyro = [allan_store[(first['label'], a)][2] for a in first['axes']
-            if (first['label'], a) in allan_store]
+    gyro = {a: allan_store[(first['label'], a)][2] for a in first['axes']
+            if (first['label'], a) in allan_store}
     record_s = first['duration_s']
     accel = accel_readouts.get(first['label']) or {}
-    accel_noise = (kalibr_noise(list(accel.values()), record_s=record_s)
+    accel_noise = (kalibr_noise(accel, record_s=record_s)
                    if any(r is not None for r in accel.values()) else None)
     topic, note = first['topic'], ''
     if first['storage'] in ('csv', 'ulog'):

@@ -13,44 +13,26 @@
 # limitations under the License.
 
 """
-Baseline model of the discrepancy workflow.
-
-Bias + fractional-order noise + white measurement noise.
+Baseline model of the discrepancy workflow: bias, fractional-order noise, white measurement noise.
 
 Paper 000 eqs. (2), (10), (11): ``Delta^alpha x[k+1] = f x[k] + w[k]``, ``v[k] = x[k] + nu[k]``
-plus a constant bias. Fitting:
+plus a constant bias. :func:`fit_baseline` returns a :class:`BaselineModel`:
 
-1. bias = the record mean (rad/s); the effects' terms are zero-mean over the record, so the bias
-   never competes with them;
+1. bias = the record mean (every effect term is zero-mean over the record);
 2. (alpha, f): the paper's variance method
-   (:class:`~gyro_noise_ros.core.fractional.OrderIdentifier`, memory L = 1000 or less for short
-   chunks) on up to 16 chunks spread over the record. Near-white data makes the branches (alpha ~
-   0, f) and (alpha ~ 1, f - 1) nearly tie (the exact {0, 1} tie of the module doc of
-   :mod:`~gyro_noise_ros.core.fractional`): the var(alpha) curve has two local minima within a few
-   0.1 %, and low-frequency effects (Gauss-Markov, flicker) tip the balance to the long-memory
-   alpha ~ 0 branch, which then soaks them up. So every local minimum within 1 % of a chunk's
-   minimum gives a candidate pair (alpha, f(alpha)), and the one whose model spectrum fits the
-   record's Welch PSD best is kept (pairs that fail the stability check of
-   :func:`~gyro_noise_ros.core.simulate.check_stability` at the simulation memory are skipped). The
-   fit is judged above fs / 100 only, where the baseline dominates (below, the bias effects of the
-   catalogue compete with it, and a long-memory pair would otherwise soak them up); among pairs
-   within 10 % of the best misfit the one with the shortest simulation memory is kept (least
-   structure, fastest);
-3. f is refined by the same PSD misfit (a bounded 1-D search within +/-0.3 of the identified value,
-   kept only if stable): the least-squares f of eqs. (6)-(8) is biased by the measurement noise
-   (eq. 12 shows nu entering the equation error), which leaves the model spectrum a few % off near
-   fs / 100;
-4. sigma_w, sigma_nu: with (alpha, f) fixed the model PSD is linear in the two variances,
-   ``S(f) = (2 / fs) (sigma_w^2 / |A(e^{i 2 pi f / fs})|^2 + sigma_nu^2)`` (one-sided,
-   rad^2/s^2/Hz), so they are a non-negative least-squares fit on the Welch bins above fs / 100,
-   iteratively reweighted by the previous model (relative errors without the downward bias of
-   weighting by the estimate itself); bins more than 3x above the fit (spectral lines) are dropped.
+   (:class:`~gyro_noise_ros.core.fractional.OrderIdentifier`) on up to :data:`MAX_ID_CHUNKS`
+   chunks; every local minimum within :data:`BRANCH_TOLERANCE` of a chunk's minimum is a
+   candidate pair (near-white data nearly tie the alpha ~ 0 and alpha ~ 1 branches); unstable
+   pairs are skipped (:func:`stable`) and f is refined by the PSD misfit above fs / 100;
+3. sigma_w, sigma_nu: non-negative least squares of the one-sided model PSD
+   ``(2 / fs) (sigma_w^2 / |A(e^{i w})|^2 + sigma_nu^2)`` on the Welch bins above fs / 100,
+   reweighted by the previous model, spectral lines dropped; among the pairs within 10 % of the
+   best misfit the shortest simulation memory wins.
 
-Simulation memory. The ensemble uses the smallest L_sim in (25, 50, 100, 200, 500, 1000) whose
-model PSD is within 1 % of the L = 1000 model at every frequency (:func:`simulation_memory`): 1 %
-is below the 0.01 dex (2.3 %) tolerance of the PSD and Allan bands, and near order 1 the GL
-coefficients decay like j^(-1-alpha), so L_sim is typically 25-200 and the simulation 5-40x faster
-than with L = 1000.
+:func:`without_white` refits the levels with a known white noise taken out (the rounding noise of
+a lattice: Sheppard's correction). The ensemble runs at the shortest memory
+(:func:`simulation_memory`) whose model PSD is within 1 % of the L = 1000 model everywhere.
+Reasons and measurements: docs/discrepancy.md section 1.
 """
 
 from dataclasses import asdict, dataclass, replace

@@ -48,11 +48,8 @@ from .signatures import Comparison, FloatArray, Layout, Signatures
 from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel, time_scale_check
 from ..errors import ParameterError
 
-#: Passing candidates whose gap is within this of the smallest passing gap count as tied (the
-#: scatter of the band edges between two models); among them the smallest :func:`criterion` wins.
-TIE_GAP = 0.05
-#: Penalty per parameter of :func:`criterion`: so a one-parameter ramp beats a three-parameter
-#: transient that mimics it equally well.
+#: Penalty per parameter of :func:`criterion` (in units of the mean log score): a one-parameter
+#: ramp beats a three-parameter transient that mimics it equally well.
 PARAM_PENALTY = 0.25
 #: The measurement counts as inside the band when G <= INSIDE_GAP (its worst points lie at most ~10
 #: % of a band half-width beyond the edge on one signature), and an effect must shrink G by at
@@ -674,10 +671,12 @@ def choose(gaps: Sequence[float], scores: Sequence[float], n_params: Sequence[in
     Choose the next effect among candidates: only those that meet the acceptance rule compete.
 
     Rule (docs/discrepancy.md section 5): the candidates that shrink the gap by at least
-    :data:`INSIDE_GAP` (:func:`accepts`) form the passing set; among the passing candidates
-    within :data:`TIE_GAP` of the smallest passing gap, the one of smallest :func:`criterion`
-    wins (ties of the criterion: the smaller gap, then the first given). A candidate that fails
-    the rule never wins, so the workflow never stops while one passes.
+    :data:`INSIDE_GAP` (:func:`accepts`) pass; among them the smallest :func:`criterion` (the
+    proper log score of the model with the candidate plus :data:`PARAM_PENALTY` per parameter)
+    wins; ties of the criterion go to the smaller gap, then to the first given. A candidate that
+    fails the rule never wins, so the workflow never stops while one passes; and a model that
+    passes by widening its band (a random walk covering a ramp) loses to one that puts its
+    ensemble where the measurement is.
 
     Parameters
     ----------
@@ -699,9 +698,7 @@ def choose(gaps: Sequence[float], scores: Sequence[float], n_params: Sequence[in
     passing = [i for i, g in enumerate(gaps) if accepts(g, gap)]
     if not passing:
         return None
-    best = min(gaps[i] for i in passing)
-    tied = [i for i in passing if gaps[i] <= best + TIE_GAP]
-    return min(tied, key=lambda i: (criterion(scores[i], n_params[i]), gaps[i], i))
+    return min(passing, key=lambda i: (criterion(scores[i], n_params[i]), gaps[i], i))
 
 
 def _rebased(model: _Model, ctx: Context, residual: FloatArray, baseline: BaselineModel,

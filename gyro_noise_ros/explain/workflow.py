@@ -48,6 +48,13 @@ from .signatures import Comparison, FloatArray, Layout, Signatures
 from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel, time_scale_check
 from ..errors import ParameterError
 
+#: Passing deterministic candidates a stochastic pick is checked against, two steps ahead
+#: (:func:`_look_ahead`): the best by :func:`criterion`.
+LOOK_AHEAD = 2
+#: How much smaller the two-step criterion must be: a transient fitted to a random walk's own
+#: realisation gains 0.4-1.3 on single random-walk records, a ramp or transient hidden with a
+#: Gauss-Markov bias 4.9-6.6 (docs/discrepancy.md section 5).
+LOOK_AHEAD_MARGIN = 3.0
 #: Penalty per parameter of :func:`criterion` (in units of the mean log score): a one-parameter
 #: ramp beats a three-parameter transient that mimics it equally well.
 PARAM_PENALTY = 0.25
@@ -297,6 +304,15 @@ class _Model:
             for effect, params in self.stochastic:
                 x += effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
             self.members[j] = x
+
+    def with_additive(self, effect: Effect, params: Params, det: FloatArray) -> '_Model':
+        """Return a copy of this model with a deterministic term accepted (for a look ahead)."""
+        other = object.__new__(_Model)
+        other.__dict__.update(self.__dict__)
+        other.members = [x + det for x in self.members]
+        other.accepted = {**self.accepted, effect.name: params}
+        other.stochastic = list(self.stochastic)
+        return other
 
     def accept(self, effect: Effect, params: Params, det: FloatArray | None,
                ctx: Context) -> None:
@@ -562,6 +578,7 @@ def _iterate(state: _State, model: _Model, meas_sig: Signatures, effects: Sequen
         if pick is None:
             state.tried_last = tried
             break
+        pick = _look_ahead(model, ctx, trials, pick, effects, gap, say)
         trial_gap, effect, params, det, trial_sig, trial_cmp = trials[pick]
         model.accept(effect, params, det, ctx)
         if det is not None:
@@ -581,6 +598,44 @@ def _iterate(state: _State, model: _Model, meas_sig: Signatures, effects: Sequen
                     for t in trials}))
         say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
         state.member_sig, state.comparisons = trial_sig, trial_cmp
+
+
+def _look_ahead(model: _Model, ctx: Context, trials: Sequence[Trial], pick: int,
+                effects: Sequence[Effect], gap: float, say: Callable[[str], None]) -> int:
+    """
+    Check a stochastic pick against the deterministic candidates that pass, two steps ahead.
+
+    A random walk (or any stochastic bias term) can cover a ramp or a transient by widening its
+    band, together with a second stochastic process beside it. So when the pick is stochastic,
+    each of the :data:`LOOK_AHEAD` best passing deterministic candidates D is accepted on trial
+    and the stochastic effects are tried after it; when a model D + E has a :func:`criterion`
+    (its score plus the penalty of both effects' parameters) smaller than the pick's by more
+    than :data:`LOOK_AHEAD_MARGIN`, D is chosen instead (the next round will try E). Returns the
+    index chosen.
+    """
+    if trials[pick][1].kind != 'stochastic':
+        return pick
+    crit = [criterion(sig.mean_log_score(t[5]), t[1].n_params) for t in trials]
+    alts = sorted((i for i, t in enumerate(trials)
+                   if t[1].kind == 'additive' and t[3] is not None and accepts(t[0], gap)),
+                  key=crit.__getitem__)[:LOOK_AHEAD]
+    stochastic = [e for e in effects if e.kind == 'stochastic']
+    best, best_crit = pick, crit[pick] - LOOK_AHEAD_MARGIN
+    for i in alts:
+        _, effect, params, det, trial_sig, _ = trials[i]
+        assert det is not None  # an additive candidate carries its term
+        ahead = model.with_additive(effect, params, det)
+        ctx_ahead = Context(ctx.meas, ctx.residual - det, ctx.layout, ctx.meas_sig, trial_sig,
+                            ahead.accepted)
+        for t in _trials(ahead, ctx_ahead, stochastic, lambda text: None):
+            c = criterion(sig.mean_log_score(t[5]), effect.n_params + t[1].n_params)
+            if c < best_crit:
+                best, best_crit = i, c
+    if best != pick:
+        say(f'  {trials[best][1].name} then a stochastic effect scores {best_crit:.3f}, '
+            f'{trials[pick][1].name} alone {crit[pick]:.3f} (margin {LOOK_AHEAD_MARGIN:g}): '
+            f'{trials[best][1].name} first')
+    return best
 
 
 def _checked(ensemble: int, max_steps: int, seed: int,

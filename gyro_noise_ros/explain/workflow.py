@@ -19,10 +19,11 @@ The discrepancy workflow: name the effects that bring a measurement inside its m
 measurement with it on every signature (:mod:`.signatures`). While the part of the gap G that an
 added effect could explain (:func:`unexplained_gap`) exceeds :data:`INSIDE_GAP`, every catalogue
 effect (:mod:`.effects`) not yet in the model is fitted and tried, and :func:`choose` picks one:
-only candidates that shrink G by at least INSIDE_GAP (:func:`accepts`) compete, ties of the gap
-are broken by :func:`criterion`; when none passes, the loop stops. After a deterministic effect
-the baseline is refitted on the residual (kept if it does not widen the gap). A parametric
-bootstrap of the final model then gives every parameter a standard error (:mod:`.uncertainty`).
+only candidates that shrink G by at least INSIDE_GAP (:func:`accepts`) compete, the smallest
+:func:`criterion` wins (a stochastic pick is checked two steps ahead, :func:`_look_ahead`); when
+none passes, the loop stops. After a deterministic effect or the lattice the baseline is refitted
+(kept if it does not widen the gap). A parametric bootstrap of the final model then gives every
+parameter a standard error (:mod:`.uncertainty`).
 
 The result is an :class:`ExplainResult` (``to_dict()`` is the explain.json layout): the steps,
 the gaps, ``unexplained``, ``quieter`` (where the measurement is quieter than the model: the
@@ -95,7 +96,7 @@ class Step:
         Every candidate tried in this step -> its gap (the chosen one included).
     scores : dict
         Every candidate -> its :func:`criterion` (smaller is better; it ranks the passing
-        candidates whose gaps tie).
+        candidates).
     time_scales : dict
         Parameter -> :func:`.uncertainty.time_scale_check` of its value, for the parameters with
         a time scale: the range the record resolves and whether the value lies inside it.

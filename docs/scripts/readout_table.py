@@ -322,13 +322,13 @@ def simulate_walk(reps, seed):
 def random_walk_section(results, walk, args):
     """Return the Markdown lines of the rate random walk: real records, then simulated ones."""
     out = ['', '## Rate random walk: resolved only where the curve shows it', '',
-           "Rule (issue 30, `core.readout.random_walk_region`): K is `resolved` when the curve "
+           'Rule (issue 30, `core.readout.random_walk_region`): K is `resolved` when the curve '
            'has a +1/2 region after the bias-stability tau: at least two octaves of tau whose '
            'log-log LS slope is within 0.15 of +1/2 and whose rise excludes a flat curve (the '
            '95 % interval of AVAR(end) / AVAR(start), F with the EDFs of `core.allan`, lies '
-           'above 1), and the IEEE 952 fit\'s K term dominates at its longest tau (the rule '
-           'before, "Before" below). Independent rise: this script\'s plain ADEV at the '
-           "region's end over its start.", '',
+           'above 1), and the K term of the IEEE 952 fit dominates at its longest tau (the rule '
+           'before, "Before" below). Independent rise: the plain ADEV of this script at the '
+           'end of the region over that at its start.', '',
            '| Record | Axis | K (deg/h/sqrt(h)) | Resolved | +1/2 region (s) | Independent rise '
            '| Before |', '|---|---|---:|---|---|---:|---|']
     for (name, axis, _), v in results:

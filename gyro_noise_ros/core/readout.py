@@ -25,7 +25,7 @@ walk):
 
 * the usable part (:func:`usable_start`) leaves out leading band-limited or quantization-like taus;
 * bias stability (:func:`adev_floor`): the lowest usable ADEV at taus up to a tenth of the record,
-  flagged an upper bound unless an F test with the EDFs shows the curve turned there; B = it / 0.6643;
+  an upper bound unless an F test with the EDFs shows the curve turned there; B = it / 0.6643;
 * ARW N: the -1/2 line through one contiguous region, read at 1 s, with its interval;
 * rate random walk K: the IEEE 952 fit's K, *resolved* only over a +1/2 region of two octaves or
   more whose rise excludes a flat curve (:func:`random_walk_region`); beside it the bound

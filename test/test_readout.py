@@ -246,9 +246,9 @@ def _walk_records(kind, count, n=30_000, rate=10.0):
 
 def test_random_walk_resolved_only_where_a_plus_half_region_shows_it():
     # docs/readout.md (200 records each, 3000 s at 10 Hz): resolved on 0 of 400 records without
-    # a random walk (white; white into a flicker floor), on 82 % with K crossing the white noise
+    # a random walk (white; white into a flicker floor), on 80 % with K crossing the white noise
     # at T/300. Here 40 of each: with a 2 % false rate P(more than 2 of 40) = 4.6 %; with the
-    # measured 82 % detection P(fewer than 26 of 40) = 1 % (binomial)
+    # measured 80 % detection P(fewer than 26 of 40) = 1 % (binomial)
     false = sum(read_allan(r).rate_random_walk_resolved for r in _walk_records('flicker', 40))
     found = [read_allan(r) for r in _walk_records('walk', 40)]
     assert false <= 2

@@ -66,7 +66,8 @@ from ..core.fractional import parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
 from ..core.plausible import mask_non_physical, MAX_RATE_RAD_S, MAX_SPECIFIC_FORCE_M_S2
 from ..core.readout import read_allan
-from ..core.segments import StaticSegment, WindowStats
+from ..core.segments import (Cut, left_out_sentence, segment_left_out, StaticSegment,
+                             WindowStats)
 from ..core.timebase import rescale_allan
 from ..errors import InputDataError, nothing_left_error, OutputError, ParameterError
 from ..htmlreport.analyze import write_analyze_html
@@ -969,14 +970,11 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: StaticSegment | None,
             f'longest {length_s:.6g} s at t = {t_s:.3f} s after the first sample ({missing} '
             'samples missing)')
     left_out: dict[str, Any] = dict(left)
+    cuts: tuple[Cut, ...] = ()
     if segment is not None and not segment.static_throughout and first_ns is not None:
-        # The segments end on window boundaries; a time range never runs past the last sample.
-        end_ns = min(segment.end_ns, state.last_ns)
-        left_out['static_segment_s'] = [(segment.start_ns - first_ns) / 1e9,
-                                        (end_ns - first_ns) / 1e9]
-        left_out['static_segments_s'] = [[(a - first_ns) / 1e9,
-                                          (min(b, state.last_ns) - first_ns) / 1e9]
-                                         for a, b in segment.segments]
+        # the one owner of the rule says what was cut (core/segments.py), as explain does
+        left_out.update(segment_left_out(segment, first_ns, state.last_ns))
+        cuts = segment.cuts(first_ns, state.last_ns)
     non_physical = state.non_physical
     if any(non_physical.values()):
         add(f"{non_physical['gyro']} angular rate value(s) beyond {MAX_RATE_RAD_S:g} rad/s "
@@ -996,13 +994,11 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: StaticSegment | None,
     if only:
         add(f'Allan deviation only: {only}')
     if any(left.values()):
-        parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
-        parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
-        if left['motion']:
-            a, b = left_out['static_segment_s']
-            parts.append(f'{left["motion"]} in motion (analysing the longest static segment, '
-                         f't = {a:.1f}-{b:.1f} s after the first sample)')
-        add(f'{sum(left.values())} of {state.done} samples left out: ' + ', '.join(parts))
+        span = left_out.get('static_segment_s')
+        add(left_out_sentence(state.done, before_start=left['before_start'],
+                              after_end=left['after_end'], motion=left['motion'],
+                              segment_s=None if span is None else (span[0], span[1]), cuts=cuts,
+                              window_names=('--start', '--end')))
     return warnings, left_out
 
 
@@ -1145,11 +1141,11 @@ def _write_allan_outputs(out: Path, doc: dict[str, Any], result: AnalyzeResult,
     write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
-    gyro = [allan_store[(first['label'], a)][2] for a in first['axes']
-            if (first['label'], a) in allan_store]
+    gyro = {a: allan_store[(first['label'], a)][2] for a in first['axes']
+            if (first['label'], a) in allan_store}
     record_s = first['duration_s']
     accel = accel_readouts.get(first['label']) or {}
-    accel_noise = (kalibr_noise(list(accel.values()), record_s=record_s)
+    accel_noise = (kalibr_noise(accel, record_s=record_s)
                    if any(r is not None for r in accel.values()) else None)
     topic, note = first['topic'], ''
     if first['storage'] in ('csv', 'ulog'):

@@ -246,17 +246,26 @@ def _uncertainty_table(step: Step, result: ExplainResult) -> list[str]:
 
 def verdict(result: ExplainResult) -> str:
     """One-paragraph verdict printed by the command line tool."""
+    over = ''
+    if result.quieter:
+        over = ('; the baseline over-estimates the noise (the measurement is quieter than the '
+                'model, which no added effect can explain): ' + '; '.join(result.quieter[:3]))
     if not result.steps and not result.unexplained:
         return ('consistent with the baseline model (fractional noise '
                 f'alpha={result.baseline.alpha:.2f}): '
-                f'gap {result.gap_final:.3f}, nothing named')
+                f'gap {result.gap_final:.3f}, nothing named' + over)
     named = ', '.join(s.effect for s in result.steps) or 'nothing'
     text = f'added {named}; gap {result.gap_initial:.3f} -> {result.gap_final:.3f}'
     if result.unexplained:
-        text += '; UNEXPLAINED: ' + ('; '.join(result.where_final[:3]) or 'outside the band')
+        limit = (f' (stopped at the limit of {len(result.steps)} effects)'
+                 if result.stopped_at_limit else '')
+        louder = [w for w in result.where_final if w not in result.quieter]
+        text += f'; UNEXPLAINED{limit}: ' + ('; '.join(louder[:3]) or 'outside the band')
+    elif result.quieter:
+        text += '; inside the ensemble band where an effect could show'
     else:
         text += '; the measurement is inside the ensemble band'
-    return text
+    return text + over
 
 
 def write_files(result: ExplainResult, folder: StrPath, *,
@@ -371,15 +380,22 @@ def _markdown(result: ExplainResult) -> str:
         lines += [f'![step {i}](step{i}_{step.effect}.png)', '']
     lines += ['## Result', '']
     if result.unexplained:
-        lines += ['**Unexplained**: no catalogue effect brings the measurement inside the band. '
-                  'Still outside:', '']
-        lines += [f'- {w}' for w in result.where_final] + ['']
+        lines += ['**Unexplained**: ' + (
+            'the loop stopped at its limit of effects.' if result.stopped_at_limit else
+            'no catalogue effect shrinks the gap by the 0.1 the rule asks for.')
+            + ' Still outside:', '']
+        lines += [f'- {w}' for w in result.where_final if w not in result.quieter] + ['']
         if result.tried_last:
             lines += ['Rejected candidates of the last round (gap after): '
                       + ', '.join(f'{k} {v:.3f}' for k, v in result.tried_last.items()) + '.', '']
     else:
-        lines += [f'Inside the ensemble band (gap {result.gap_final:.3f} <= 0.1, the tolerance).',
-                  '']
+        lines += ['Inside the ensemble band wherever an added effect could show (gap '
+                  f'{result.gap_unexplained:.3f} <= 0.1, the tolerance).', '']
+    if result.quieter:
+        lines += ['**The baseline over-estimates the noise** here: the measurement is quieter '
+                  'than the model (below the band only; no effect of the catalogue removes '
+                  'noise, so this is not a missing effect):', '']
+        lines += [f'- {w}' for w in result.quieter] + ['']
     lines += ['| signature | g (worst point / band edge) | band half-width (z) |', '|---|---|---|']
     for name, comp in result.comparisons_final.items():
         lines.append(f'| {name} | {comp.g:.3f} | {comp.threshold:.2f} |')

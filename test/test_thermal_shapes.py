@@ -18,10 +18,11 @@
 from dataclasses import replace
 
 from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.thermal.hysteresis import play_operator
 from gyro_noise_ros.thermal.oracle import (fit_oracle, measured_terms, oracle_residual,
                                            true_terms)
-from gyro_noise_ros.thermal.simulate import (make_profile, play_operator, ShapeProfile, SHAPES,
-                                             simulate_pair, ThermalModel)
+from gyro_noise_ros.thermal.simulate import (make_profile, ShapeProfile, SHAPES, simulate_pair,
+                                             ThermalModel)
 from gyro_noise_ros.units import DEG_TO_RAD
 import numpy as np
 import pytest

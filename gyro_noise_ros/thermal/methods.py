@@ -46,7 +46,8 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalMethod, ThermalRun
+from .run import (check_temperature_readings, DEFAULT_RATE_WINDOW_S, temperature_rate_c_s,
+                  ThermalMethod, ThermalRun)
 from .. import __version__
 from ..errors import GyroNoiseError, InputDataError, ParameterError
 from ..outputs import atomic_write_text, StrPath
@@ -66,18 +67,18 @@ BUILTIN_METHODS = {
     'raw': ('gyro_noise_ros.thermal.baselines', 'RawMethod'),
     'poly3': ('gyro_noise_ros.thermal.baselines', 'TemperaturePolynomial'),
     'linear_tdt': ('gyro_noise_ros.thermal.baselines', 'LinearTdT'),
+    'lsq_cv': ('gyro_noise_ros.thermal.lsq', 'LeastSquaresCV'),
     'wtd': ('gyro_noise_ros.thermal.baselines', 'WaveletThreshold'),
     'bp': ('gyro_noise_ros.thermal.baselines', 'BPNetwork'),
     'emd_wtd_sabp': ('gyro_noise_ros.thermal.baselines', 'EmdWtdSaBp'),
     'parallel': ('gyro_noise_ros.thermal.parallel', 'ParallelModel'),
 }
 
-#: Default ``--method`` of ``gyro_noise_thermal fit``: the held-out winner among the methods that
-#: keep the full bandwidth and run causally, on runs shaped differently from their training run
-#: (docs/scripts/thermal_heldout.py, 5 seeds x 5 shape pairs: mean ratio to the least-squares
-#: oracle 1.18 for linear_tdt, 1.30 for bp, lower on 4 of the 5 pairs); docs/thermal.md,
-#: "The default method".
-DEFAULT_METHOD = 'linear_tdt'
+#: Default ``--method`` of ``gyro_noise_thermal fit``: least squares on a drift basis of the
+#: measured T and its 10-s slope, terms by blocked cross-validation on the training run
+#: (thermal/lsq.py); the best of the causal, full-bandwidth methods on runs shaped unlike their
+#: training run (docs/scripts/thermal_heldout.py; docs/thermal.md, "The default method").
+DEFAULT_METHOD = 'lsq_cv'
 
 #: How far (degC) outside the trained temperature range a model may still be applied.
 DEFAULT_RANGE_MARGIN_C = 5.0
@@ -710,14 +711,14 @@ def fit_method(name: str, run: ThermalRun, *, rng: np.random.Generator,
             method.executor = None
     else:
         method.fit(run, rng=rng)
-    notes: tuple[str, ...]
-    accel_poly, notes = None, ()
+    notes: tuple[str, ...] = tuple(getattr(method, 'notes', ()))
+    accel_poly = None
     if accel and run.accel_m_s2 is not None:
         try:
             accel_poly = fit_accel(run)
         except InputDataError as err:
             # the gyro model stands on its own; say why the accelerometer has none
-            notes = (f'accelerometer not compensated: {err}',)
+            notes += (f'accelerometer not compensated: {err}',)
     window = float(getattr(method, 'rate_window_s', DEFAULT_RATE_WINDOW_S))
     return ThermalModel(method=method, accel=accel_poly, notes=notes,
                         training=training_info(run, sources=sources, rate_window_s=window))
@@ -820,15 +821,16 @@ def check_trainable(run: ThermalRun, *, min_range_c: float = DEFAULT_MIN_RANGE_C
         Smallest accepted temperature span, max - min (degC, finite, >= 0).
     method : str, optional, keyword-only
         ``--method`` about to be fitted: a method that uses dT also needs a run at least
-        ``baselines.MIN_TRAINING_WINDOWS`` rate windows long.
+        ``baselines.MIN_TRAINING_WINDOWS`` rate windows long, with temperature readings at
+        least every ``run.MIN_READINGS_PER_WINDOW``-th of a window.
 
     Raises
     ------
     ParameterError
         ``min_range_c`` NaN, infinite or negative.
     InputDataError
-        Constant temperature, a span below ``min_range_c``, non-finite samples, or a run too
-        short for the method's rate window.
+        Constant temperature, a span below ``min_range_c``, non-finite samples, a run too short
+        for the method's rate window or its temperature read too sparsely for it.
 
     """
     min_range_c = check_min_range(min_range_c)
@@ -852,3 +854,4 @@ def check_trainable(run: ThermalRun, *, min_range_c: float = DEFAULT_MIN_RANGE_C
 
             check_rate_training(np.asarray(run.t_s, dtype=float), DEFAULT_RATE_WINDOW_S,
                                 run.name)
+            check_temperature_readings(run, DEFAULT_RATE_WINDOW_S)

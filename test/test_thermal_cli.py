@@ -60,7 +60,7 @@ def test_fit_apply_writes_model_metrics_report_and_compensated_bag(tmp_path):
     assert main(['fit', train, '--method', 'toy_linear', '--out', str(tmp_path / 'm'),
                  '--quiet']) == 0
     model = json.loads((tmp_path / 'm' / 'model.json').read_text())
-    assert model['method'] == 'toy_linear' and model['format_version'] == 2
+    assert model['method'] == 'toy_linear' and model['format_version'] == 3
     assert set(model['training']) == {'temperature_min_c', 'temperature_max_c',
                                       'temperature_rate_min_c_s', 'temperature_rate_max_c_s',
                                       'rate_hz', 'samples', 'duration_s', 'sources',

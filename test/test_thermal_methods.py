@@ -168,7 +168,17 @@ def test_range_report_counts_t_and_dt():
     # 0 and -0.1 are below the trained rate, which is one value
     assert (rep.rate_below, rep.rate_above) == (2, 0)
     assert rep.outside == 3 and rep.fraction_outside == pytest.approx(0.6)
-    assert '3 of 5 samples (60 %)' in rep.text() and rep.text().endswith('held')
+    # counts are named as counts, next to the ranges they refer to
+    text = rep.text()
+    assert text.startswith('3 of 5 samples (60 %) lie outside the trained range (T 10.00..40.00 '
+                           'degC, dT 0.1..0.1 degC/s; this run T 5.00..45.00 degC, dT -0.1..0.1 '
+                           'degC/s): 1 with T below it, 1 above, 2 with dT below it, 0 above.')
+    assert text.endswith('There the method: held')
+    assert '60 % of the run lies outside' in rep.warning()
+    # up to MAX_OUTSIDE_SHARE (5 %) there is no warning
+    trained = info.temperature_rate_min_c_s
+    inside = methods.range_report(info, np.full(100, 20.0), np.r_[np.full(95, trained), [0.0] * 5])
+    assert inside.fraction_outside == methods.MAX_OUTSIDE_SHARE and inside.warning() is None
     assert rep.as_dict()['fraction_outside'] == pytest.approx(0.6)
     # a run shorter than the rate window has no rate range: dT is not checked
     short = training_info(_run(np.linspace(10.0, 40.0, 50)))
@@ -226,3 +236,19 @@ def test_accelerometer_polynomial_is_fitted_and_saved(tmp_path):
     np.testing.assert_array_equal(again.accel.coef, poly.coef)
     assert methods.fit_method('poly3', run, rng=np.random.default_rng(0), accel=False).accel \
         is None
+
+
+def test_a_method_of_another_form_carries_its_autopilot_poly3(tmp_path):
+    # the poly3 fitted on the same run, saved and loaded with the model; a poly3 model is its own
+    temp = np.linspace(10.0, 40.0, 3000)
+    run = _run(temp)
+    model = methods.fit_method('toy_linear', run, rng=np.random.default_rng(0))
+    alone = methods.fit_method('poly3', run, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(model.autopilot.coef, alone.method.coef)
+    assert model.poly3() is model.autopilot and alone.poly3() is alone.method
+    assert alone.autopilot is None
+    save_model(model.method, tmp_path / 'm.json', training=model.training,
+               autopilot=model.autopilot)
+    doc = json.loads((tmp_path / 'm.json').read_text())
+    assert doc['format_version'] == 3 and 'PX4 and ArduPilot' in doc['autopilot']['note']
+    np.testing.assert_array_equal(load_model(tmp_path / 'm.json').poly3().coef, alone.method.coef)

@@ -56,8 +56,9 @@ if TYPE_CHECKING:
     from .baselines import TemperaturePolynomial
 
 __all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_RANGE_MARGIN_C',
-           'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
-           'RangeReport', 'TemperatureRangeError', 'ThermalModel', 'TrainingInfo',
+           'MAX_OUTSIDE_SHARE', 'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError',
+           'ModelFileError', 'RangeReport', 'TemperatureRangeError', 'ThermalModel',
+           'TrainingInfo',
            'accel_view', 'check_temperature_range', 'check_trainable', 'fit_accel',
            'fit_method', 'get_method', 'load_model', 'method_class', 'method_names',
            'range_report', 'register_method', 'save_model', 'to_jsonable', 'training_info']
@@ -86,11 +87,16 @@ DEFAULT_RANGE_MARGIN_C = 5.0
 #: Smallest temperature span (degC) a drift model is fitted on (``fit`` refuses less).
 DEFAULT_MIN_RANGE_C = 2.0
 
+#: Largest share of a run outside the trained range of T or dT applied without a warning
+#: (``apply``, ``compare``; above it ``--strict`` makes ``apply`` refuse, exit code 4).
+MAX_OUTSIDE_SHARE = 0.05
+
 #: ``format`` and ``format_version`` of model.json.
 MODEL_FORMAT = 'gyro_noise_ros.thermal.model'
-MODEL_FORMAT_VERSION = 2
-#: The format versions :func:`load_model` reads (1: no ``accel``, no ``rate_window_s``).
-READABLE_FORMAT_VERSIONS = (1, 2)
+MODEL_FORMAT_VERSION = 3
+#: The format versions :func:`load_model` reads (1: no ``accel``, no ``rate_window_s``; 2: no
+#: ``autopilot``).
+READABLE_FORMAT_VERSIONS = (1, 2, 3)
 
 _registered: dict[str, type] = {}
 
@@ -372,9 +378,35 @@ class RangeReport:
         if not self.outside:
             return 'the whole run is inside the trained range of T and dT'
         pct = 100.0 * self.fraction_outside
-        return (f'{self.outside} of {self.samples} samples ({pct:.3g} %) outside the trained '
-                f'range (T below {self.temperature_below}, above {self.temperature_above}; dT '
-                f'below {self.rate_below}, above {self.rate_above}): {self.treatment}')
+        lo, hi = self.temperature_range_c
+        trained = f'T {lo:.2f}..{hi:.2f} degC'
+        here = f'T {_span(self.run_temperature_c, ".2f")} degC'
+        if self.rate_range_c_s is not None:
+            trained += f', dT {self.rate_range_c_s[0]:.3g}..{self.rate_range_c_s[1]:.3g} degC/s'
+            here += f', dT {_span(self.run_rate_c_s, ".3g")} degC/s'
+        return (f'{self.outside} of {self.samples} samples ({pct:.3g} %) lie outside the trained '
+                f'range ({trained}; this run {here}): {self.temperature_below} with T below it, '
+                f'{self.temperature_above} above, {self.rate_below} with dT below it, '
+                f'{self.rate_above} above. There the method: {self.treatment}')
+
+    def warning(self) -> str | None:
+        """
+        Return a warning when more than :data:`MAX_OUTSIDE_SHARE` of the run lies outside.
+
+        Returns
+        -------
+        str or None
+
+        """
+        if self.fraction_outside <= MAX_OUTSIDE_SHARE:
+            return None
+        return (f'{100.0 * self.fraction_outside:.3g} % of the run lies outside the trained '
+                f'range of T or dT, more than {100.0 * MAX_OUTSIDE_SHARE:g} %: the model '
+                'extrapolates there; retrain on a run covering it (apply --strict refuses)')
+
+
+def _span(values: Sequence[float], spec: str) -> str:
+    return f'{values[0]:{spec}}..{values[1]:{spec}}' if len(values) == 2 else 'n/a'
 
 
 def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: ArrayLike, *,
@@ -437,7 +469,11 @@ class ThermalModel:
         The accelerometer's polynomial (offset change relative to its ``t_ref_c``, m/s^2), when
         the training data had accelerometer samples.
     notes : tuple of str
-        What :func:`load_model` noticed and let pass (e.g. written by another package version).
+        What the fit or :func:`load_model` noticed and let pass (a method fitted without its dT
+        term, a file written by another package version).
+    autopilot : TemperaturePolynomial or None
+        For a method other than ``poly3``: the ``poly3`` fitted on the same training run, the
+        form PX4 and ArduPilot evaluate (what ``export`` writes, and the yardstick "x poly3").
 
     """
 
@@ -448,6 +484,16 @@ class ThermalModel:
     package_version: str = __version__
     accel: 'TemperaturePolynomial | None' = None
     notes: tuple[str, ...] = field(default_factory=tuple)
+    autopilot: 'TemperaturePolynomial | None' = None
+
+    def poly3(self) -> 'TemperaturePolynomial | None':
+        """Return the model's poly3: the method itself when it is one, else :attr:`autopilot`."""
+        from .baselines import TemperaturePolynomial
+
+        method = self.method
+        if isinstance(method, TemperaturePolynomial) and not method.relative:
+            return method
+        return self.autopilot
 
 
 def to_jsonable(value: Any) -> Any:
@@ -481,7 +527,8 @@ def to_jsonable(value: Any) -> Any:
 
 
 def model_document(method: ThermalMethod, *, training: TrainingInfo,
-                   accel: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
+                   accel: 'TemperaturePolynomial | None' = None,
+                   autopilot: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
     """
     Return the model.json document of a fitted method (what :func:`save_model` writes).
 
@@ -493,6 +540,8 @@ def model_document(method: ThermalMethod, *, training: TrainingInfo,
         What it was trained on (:func:`training_info`).
     accel : TemperaturePolynomial, optional, keyword-only
         The accelerometer's fitted polynomial.
+    autopilot : TemperaturePolynomial, optional, keyword-only
+        The poly3 fitted beside a method of another form (:attr:`ThermalModel.autopilot`).
 
     Returns
     -------
@@ -511,12 +560,17 @@ def model_document(method: ThermalMethod, *, training: TrainingInfo,
         'parameters': method.to_dict(),
         'accel': None if accel is None else {
             'unit': 'm/s^2', 'relative_to_t_ref': True, 'parameters': accel.to_dict()},
+        'autopilot': None if autopilot is None else {
+            'note': 'poly3 fitted on the same training run: the form PX4 and ArduPilot '
+                    'evaluate (gyro_noise_thermal export writes it)',
+            'parameters': autopilot.to_dict()},
     }
     return to_jsonable(doc)
 
 
 def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
-               accel: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
+               accel: 'TemperaturePolynomial | None' = None,
+               autopilot: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
     """
     Write a fitted method to model.json (atomically: a half-written file is never left).
 
@@ -530,6 +584,8 @@ def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
         What it was trained on (:func:`training_info`).
     accel : TemperaturePolynomial, optional, keyword-only
         The accelerometer's fitted polynomial.
+    autopilot : TemperaturePolynomial, optional, keyword-only
+        The poly3 fitted beside a method of another form.
 
     Returns
     -------
@@ -537,7 +593,7 @@ def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
         The document written.
 
     """
-    doc = model_document(method, training=training, accel=accel)
+    doc = model_document(method, training=training, accel=accel, autopilot=autopilot)
     atomic_write_text(path, json.dumps(doc, indent=1, allow_nan=False) + '\n')
     return doc
 
@@ -601,19 +657,21 @@ def load_model(path: StrPath) -> ThermalModel:
                              f'("parameters": {json.dumps(params)}); fit the model again')
     cls = method_class(name)
     method = _from_dict(cls, params, f'model file {str(path)!r}: parameters of method {name!r}')
-    accel = None
-    if doc.get('accel'):
-        from .baselines import TemperaturePolynomial
+    from .baselines import TemperaturePolynomial
 
-        accel = _from_dict(TemperaturePolynomial, (doc['accel'] or {}).get('parameters'),
-                           f'model file {str(path)!r}: accelerometer parameters')
+    polys = {}
+    for key, label in (('accel', 'accelerometer'), ('autopilot', 'autopilot poly3')):
+        part = doc.get(key)
+        polys[key] = None if not part else _from_dict(
+            TemperaturePolynomial, part.get('parameters') if isinstance(part, dict) else None,
+            f'model file {str(path)!r}: {label} parameters')
     version = str(doc.get('package_version', ''))
     notes: tuple[str, ...] = ()
     if version != __version__:
         notes = (f'model file {str(path)!r} was written by gyro_noise_ros {version or "?"}, '
                  f'this is {__version__}; it loads, but refit if the methods changed since',)
     return ThermalModel(method=method, training=training, package_version=version,
-                        accel=accel, notes=notes)
+                        accel=polys['accel'], notes=notes, autopilot=polys['autopilot'])
 
 
 def _from_dict(cls: type[Any], params: Any, where: str) -> Any:
@@ -721,7 +779,22 @@ def fit_method(name: str, run: ThermalRun, *, rng: np.random.Generator,
             notes += (f'accelerometer not compensated: {err}',)
     window = float(getattr(method, 'rate_window_s', DEFAULT_RATE_WINDOW_S))
     return ThermalModel(method=method, accel=accel_poly, notes=notes,
-                        training=training_info(run, sources=sources, rate_window_s=window))
+                        training=training_info(run, sources=sources, rate_window_s=window),
+                        autopilot=_autopilot_poly3(method, run))
+
+
+def _autopilot_poly3(method: Any, run: ThermalRun) -> 'TemperaturePolynomial | None':
+    """Fit the poly3 a method of another form is exported as (None when it cannot be)."""
+    from .baselines import TemperaturePolynomial
+
+    if isinstance(method, TemperaturePolynomial):
+        return None
+    poly = TemperaturePolynomial()
+    try:
+        poly.fit(run, rng=np.random.default_rng(0))
+    except InputDataError:
+        return None   # a span too narrow for any temperature model: the method says so itself
+    return poly
 
 
 def accel_view(run: ThermalRun) -> ThermalRun:

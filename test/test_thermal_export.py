@@ -194,7 +194,7 @@ def test_px4_device_ids_and_instances():
 
 
 def _px4_twin(cal, t, temp):
-    """The module's loop, one tick at a time: every second, publish when |T - last| > 1."""
+    """Run the module's loop one tick at a time: each second, publish if T moved > 1 degC."""
     out = np.zeros((t.size, 3))
     last, current, tick = -100.0, None, t[0]
     for k in range(t.size):

@@ -252,3 +252,22 @@ def test_a_method_of_another_form_carries_its_autopilot_poly3(tmp_path):
     doc = json.loads((tmp_path / 'm.json').read_text())
     assert doc['format_version'] == 3 and 'PX4 and ArduPilot' in doc['autopilot']['note']
     np.testing.assert_array_equal(load_model(tmp_path / 'm.json').poly3().coef, alone.method.coef)
+
+
+def test_a_model_of_another_sensor_is_refused():
+    # the same sensor, another run: its offset from the model is its turn-on difference (here
+    # the noise's median, ~1e-5 deg/s); another part: its zero-rate level differs by 0.5 deg/s
+    model = methods.fit_method('lsq_cv', _run(np.linspace(10.0, 40.0, 3000)),
+                               rng=np.random.default_rng(0))
+    again = _run(np.linspace(40.0, 12.0, 3000), seed=1)
+    offsets = methods.check_same_sensor(model, again)
+    assert max(abs(v) for v in offsets) < 0.01
+    other = ThermalRun(t_s=again.t_s, gyro_rad_s=again.gyro_rad_s + np.radians([0.5, 0.0, -0.3]),
+                       temperature_c=again.temperature_c, rate_hz=again.rate_hz, name='other')
+    with pytest.raises(methods.SensorMismatchError, match=r'x \+0\.50\d, z -0\.30\d deg/s .*more '
+                                                          r'than 0\.25 deg/s.*another sensor'):
+        methods.check_same_sensor(model, other)
+    assert methods.check_same_sensor(model, other, max_offset_deg_s=float('inf'))[0] == \
+        pytest.approx(0.5, abs=0.01)
+    with pytest.raises(ParameterError, match='max-offset-deg-s'):
+        methods.check_same_sensor(model, other, max_offset_deg_s=float('nan'))

@@ -56,10 +56,10 @@ if TYPE_CHECKING:
     from .baselines import TemperaturePolynomial
 
 __all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_RANGE_MARGIN_C',
-           'MAX_OUTSIDE_SHARE', 'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError',
-           'ModelFileError', 'RangeReport', 'TemperatureRangeError', 'ThermalModel',
-           'TrainingInfo',
-           'accel_view', 'check_temperature_range', 'check_trainable', 'fit_accel',
+           'MAX_OUTSIDE_SHARE', 'MAX_SENSOR_OFFSET_DEG_S', 'MODEL_FORMAT', 'MODEL_FORMAT_VERSION',
+           'MethodUnavailableError', 'ModelFileError', 'RangeReport', 'SensorMismatchError',
+           'TemperatureRangeError', 'ThermalModel', 'TrainingInfo', 'accel_view',
+           'check_same_sensor', 'check_temperature_range', 'check_trainable', 'fit_accel',
            'fit_method', 'get_method', 'load_model', 'method_class', 'method_names',
            'range_report', 'register_method', 'save_model', 'to_jsonable', 'training_info']
 
@@ -86,6 +86,12 @@ DEFAULT_RANGE_MARGIN_C = 5.0
 
 #: Smallest temperature span (degC) a drift model is fitted on (``fit`` refuses less).
 DEFAULT_MIN_RANGE_C = 2.0
+
+#: Largest offset (deg/s, any axis) between a run's gyro and the model's drift at its temperatures
+#: before the model is taken for another sensor's: a quarter of the LSM6DSO32's typical zero-rate
+#: level (+-1 deg/s), far above a part's turn-on repeatability, so two parts of that type agree
+#: within it on all three axes about once in a hundred (uniform levels).
+MAX_SENSOR_OFFSET_DEG_S = 0.25
 
 #: Largest share of a run outside the trained range of T or dT applied without a warning
 #: (``apply``, ``compare``; above it ``--strict`` makes ``apply`` refuse, exit code 4).
@@ -115,6 +121,10 @@ class ModelFileError(GyroNoiseError):
 
 class TemperatureRangeError(InputDataError):
     """The data's temperature lies outside the model's trained range plus margin (exit code 4)."""
+
+
+class SensorMismatchError(InputDataError):
+    """The run's gyro sits far from the model's drift: a model of another sensor (exit code 4)."""
 
 
 def register_method(name: str, cls: type[Any]) -> None:
@@ -683,6 +693,59 @@ def _from_dict(cls: type[Any], params: Any, where: str) -> Any:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as err:
         raise ModelFileError(f'{where} are invalid ({type(err).__name__}: {err})') from err
+
+
+def check_same_sensor(model: ThermalModel, run: ThermalRun, *,
+                      max_offset_deg_s: float = MAX_SENSOR_OFFSET_DEG_S) -> list[float]:
+    """
+    Refuse a run whose gyro sits far from what the model predicts at its temperatures.
+
+    The offset per axis is the median over the (static) run of the gyro minus the model's drift
+    at the run's temperatures (its poly3, :meth:`ThermalModel.poly3`, else the method's own
+    ``drift_rad_s``): a turn-on difference for the sensor the model was fitted on, the
+    difference of two parts' zero-rate levels for a model of another sensor.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model.
+    run : ThermalRun
+        The run it is about to be applied to.
+    max_offset_deg_s : float, keyword-only
+        Largest accepted offset on any axis (deg/s, >= 0; ``inf`` disables the check).
+
+    Returns
+    -------
+    list of float
+        The offsets per axis (deg/s); empty when the model gives no drift function.
+
+    Raises
+    ------
+    SensorMismatchError
+        An axis beyond ``max_offset_deg_s``.
+    ParameterError
+        A NaN or negative limit.
+
+    """
+    limit = float(max_offset_deg_s)
+    if not limit >= 0.0:
+        raise ParameterError(f'--max-offset-deg-s must be >= 0 deg/s (inf: off), got '
+                             f'{max_offset_deg_s!r}')
+    poly = model.poly3()
+    drift = getattr(poly if poly is not None else model.method, 'drift_rad_s', None)
+    if drift is None:
+        return []
+    temp = np.asarray(run.temperature_c, dtype=float)
+    rate = temperature_rate_c_s(run.t_s, temp, window_s=model.training.rate_window_s)
+    offsets = np.degrees(np.median(np.asarray(run.gyro_rad_s, dtype=float)
+                                   - np.asarray(drift(temp, rate), dtype=float), axis=0))
+    far = [f'{axis} {v:+.3g}' for axis, v in zip('xyz', offsets) if abs(v) > limit]
+    if far:
+        raise SensorMismatchError(
+            f'run {run.name!r}: its gyro sits {", ".join(far)} deg/s from the model drift at '
+            f'its temperatures (more than {limit:g} deg/s): is the model of another sensor? '
+            '(--max-offset-deg-s inf applies it anyway)')
+    return [float(v) for v in offsets]
 
 
 def check_temperature_range(model: ThermalModel, temperature_c: ArrayLike, *,

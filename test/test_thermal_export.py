@@ -19,8 +19,10 @@ from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.thermal.baselines import LinearTdT, TemperaturePolynomial
 from gyro_noise_ros.thermal.export import (ardupilot_applied_offset, ardupilot_notes,
                                            ardupilot_parameters, calibration_of,
-                                           px4_applied_offset, px4_device_id, px4_parameters,
-                                           write_ardupilot_parm, write_px4_params)
+                                           firmware_residuals, px4_applied_offset, px4_device_id,
+                                           px4_parameters, remap_axes, write_ardupilot_parm,
+                                           write_px4_params)
+from gyro_noise_ros.thermal.metrics import residual_drift_deg_s
 from gyro_noise_ros.thermal.methods import fit_accel
 from gyro_noise_ros.thermal.run import ThermalRun
 import numpy as np
@@ -247,3 +249,35 @@ def test_reexpansion_is_exact(fitted):
         b = cal.about(ref)
         got = np.column_stack([np.polyval(b[a, ::-1], x - ref) for a in range(3)])
         np.testing.assert_allclose(got, cal.offset(x), rtol=0, atol=1e-14)
+
+
+def test_axes_are_remapped_to_the_autopilots(fitted):
+    poly, _, _ = fitted
+    cal = calibration_of(poly)
+    probe = np.linspace(0.0, 60.0, 7)
+    turned = remap_axes(cal, '-y, x ,+z')   # the chip turned 90 degrees about z on the board
+    np.testing.assert_array_equal(turned.offset(probe),
+                                  np.column_stack([-cal.offset(probe)[:, 1],
+                                                   cal.offset(probe)[:, 0],
+                                                   cal.offset(probe)[:, 2]]))
+    np.testing.assert_array_equal(remap_axes(cal, 'x,y,z').coef, cal.coef)
+    for bad in ('x,x,z', 'x,y', 'x,y,w', '--x,y,z', ''):
+        with pytest.raises(ParameterError, match='--axes'):
+            remap_axes(cal, bad)
+
+
+def test_firmware_residuals_on_a_run(fitted):
+    poly, _, _ = fitted
+    cal = calibration_of(poly)
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 1800.0, 0.1)
+    temp = 30.0 + 10.0 * np.sin(2.0 * np.pi * t / 900.0)
+    gyro = cal.offset(temp) + rng.normal(0.0, 1e-3, (t.size, 3))
+    got = firmware_residuals(cal, t, gyro, temp)
+    np.testing.assert_allclose(got['raw'], residual_drift_deg_s(gyro, 10.0), rtol=1e-6)
+    np.testing.assert_allclose(got['model'], residual_drift_deg_s(gyro - cal.offset(temp), 10.0),
+                               rtol=1e-6)
+    # ArduPilot evaluates the cubic at every sample: the model's residual to float32 rounding;
+    # PX4's 1 degC steps leave more on a run sweeping 20 degC every 15 minutes
+    np.testing.assert_allclose(got['ardupilot'], got['model'], rtol=1e-3)
+    assert all(p > m for p, m in zip(got['px4'], got['model']))

@@ -261,6 +261,13 @@ def _f(v: float | None) -> str:
     return 'n/a' if v is None else f'{v:.4g}'
 
 
+def _corner(bandwidth: dict) -> str:
+    """Say where the -3 dB corner is: at a frequency, or beyond the measured band."""
+    cell = app.bandwidth_cell(bandwidth)
+    return {'> band': 'above the measured band', '< band': 'below the measured band'}.get(
+        cell, f'at {cell} Hz')
+
+
 def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
     result = app.apply_model(bag=args.bag, model_path=args.model, bag_options=_bag_options(args),
                              score=_score_options(args), figures=not args.no_figures,
@@ -276,7 +283,7 @@ def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
                   f"deg/sqrt(h), bias stability {_f(raw['bias_stability_deg_h'])} -> "
                   f"{_f(proc['bias_stability_deg_h'])} deg/h, residual drift "
                   f"{_f(raw['residual_drift_deg_s'])} -> {_f(proc['residual_drift_deg_s'])} "
-                  f"deg/s, -3 dB {app.bandwidth_cell(v['bandwidth'])} Hz")
+                  f"deg/s, -3 dB {_corner(v['bandwidth'])}")
         print(f'wrote {len(files)} files to {args.out}')
     return 0
 

@@ -36,7 +36,7 @@ ArduPilot".
 """
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import Any
 
@@ -47,8 +47,9 @@ from ..errors import ParameterError
 from ..outputs import atomic_write_text, StrPath
 
 __all__ = ['ARDUPILOT_SCALE', 'ARDUPILOT_TREF_C', 'CubicCalibration', 'ardupilot_applied_offset',
-           'ardupilot_notes', 'ardupilot_parameters', 'calibration_of', 'px4_applied_offset',
-           'px4_device_id', 'px4_parameters', 'write_ardupilot_parm', 'write_px4_params']
+           'ardupilot_notes', 'ardupilot_parameters', 'calibration_of', 'firmware_residuals',
+           'px4_applied_offset', 'px4_device_id', 'px4_parameters', 'remap_axes',
+           'write_ardupilot_parm', 'write_px4_params']
 
 #: ArduPilot's fixed reference temperature of INS_TCAL (degC).
 ARDUPILOT_TREF_C = 35.0
@@ -170,6 +171,78 @@ def calibration_of(poly: Any, *, unit: str = 'rad/s') -> CubicCalibration:
     coef[:, :poly.order + 1] = poly.coef
     return CubicCalibration(coef=coef, t_ref_c=float(poly.t_ref_c), t_min_c=float(poly.t_min_c),
                             t_max_c=float(poly.t_max_c), unit=unit)
+
+
+def remap_axes(cal: CubicCalibration, spec: str) -> CubicCalibration:
+    """
+    Express a calibration in the autopilot's sensor axes.
+
+    Both autopilots subtract the offsets after their driver has turned the chip's axes into the
+    flight controller's (the IMU's orientation on the board; an external sensor's own rotation):
+    ``spec`` says, for the autopilot's X, Y and Z in turn, which of the recording's axes it is,
+    with its sign, e.g. ``'-y,x,z'`` (X = -y, Y = x, Z = z: the chip turned 90 degrees about z).
+
+    Parameters
+    ----------
+    cal : CubicCalibration
+        In the recording's axes.
+    spec : str
+        Three comma-separated entries, a signed permutation of ``x``, ``y``, ``z``.
+
+    Returns
+    -------
+    CubicCalibration
+
+    Raises
+    ------
+    ParameterError
+        Not a signed permutation.
+
+    """
+    parts = [p.strip().lower() for p in str(spec).split(',')]
+    axes = [p.lstrip('+-') for p in parts]
+    if len(parts) != 3 or sorted(axes) != ['x', 'y', 'z'] or any(
+            len(p) - len(a) > 1 for p, a in zip(parts, axes)):
+        raise ParameterError(f'--axes must name x, y and z once each, signed, e.g. -y,x,z; '
+                             f'got {spec!r}')
+    sign = np.array([-1.0 if p.startswith('-') else 1.0 for p in parts])
+    coef = cal.coef[['xyz'.index(a) for a in axes]] * sign[:, None]
+    return replace(cal, coef=coef)
+
+
+def firmware_residuals(cal: CubicCalibration, t_s: ArrayLike, gyro_rad_s: ArrayLike,
+                       temperature_c: ArrayLike, *,
+                       cal_temp_c: float | None = None) -> dict[str, list[float]]:
+    """
+    Return the residual drift each firmware would leave on a run, per axis (deg/s).
+
+    Parameters
+    ----------
+    cal : CubicCalibration
+        The exported gyro calibration (rad/s), in the run's axes.
+    t_s, gyro_rad_s, temperature_c : array_like
+        The run: times (n,) s, gyro (n, 3) rad/s, temperature (n,) degC.
+    cal_temp_c : float, optional, keyword-only
+        ArduPilot's CALTEMP (default the calibration's T_ref).
+
+    Returns
+    -------
+    dict
+        ``raw``, ``model`` (the cubic evaluated at every sample), ``px4``
+        (:func:`px4_applied_offset`), ``ardupilot`` (:func:`ardupilot_applied_offset`): the std
+        of 60-s means per axis, deg/s (NaN with fewer than two windows).
+
+    """
+    from .metrics import residual_drift_deg_s
+
+    t = np.asarray(t_s, dtype=float)
+    gyro = np.asarray(gyro_rad_s, dtype=float)
+    temp = np.asarray(temperature_c, dtype=float)
+    rate_hz = (t.size - 1) / (t[-1] - t[0]) if t.size > 1 and t[-1] > t[0] else 1.0
+    runs = {'raw': gyro, 'model': gyro - cal.offset(temp),
+            'px4': gyro - px4_applied_offset(cal, t, temp),
+            'ardupilot': gyro - ardupilot_applied_offset(cal, temp, cal_temp_c=cal_temp_c)}
+    return {k: [float(v) for v in residual_drift_deg_s(x, rate_hz)] for k, x in runs.items()}
 
 
 def px4_device_id(value: Any, option: str = '--px4-gyro-id') -> dict[str, Any]:

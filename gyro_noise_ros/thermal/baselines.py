@@ -48,8 +48,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .run import (DEFAULT_RATE_WINDOW_S, rate_support, RateWindowError, temperature_rate_c_s,
-                  ThermalRun)
+from .run import (DEFAULT_RATE_WINDOW_S, rate_support, RateSupport, RateWindowError,
+                  temperature_rate_c_s, ThermalRun)
 from ..errors import InputDataError, ParameterError
 
 #: A temperature model needs at least this temperature span in its training run (degC).
@@ -119,6 +119,43 @@ def check_rate_training(t: NDArray[np.float64], window_s: float, name: str) -> N
                               f'needs at least {need:g} s ({MIN_TRAINING_WINDOWS:g} windows of '
                               f'the {float(window_s):g}-s temperature rate: one to fill it, the '
                               'rest to fit)')
+
+
+def rate_fit_inputs(run: ThermalRun, rate_window_s: float,
+                    method: str) -> tuple[_Triple, RateSupport, tuple[str, ...]]:
+    """
+    Check a training run for a temperature model with a dT term; say whether dT can be fitted.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        The training run.
+    rate_window_s : float
+        The method's rate window (s).
+    method : str
+        Its name, for the note.
+
+    Returns
+    -------
+    (t, gyro, temperature) : tuple of numpy.ndarray
+        The checked arrays.
+    support : RateSupport
+        :func:`~gyro_noise_ros.thermal.run.rate_support` of the run.
+    notes : tuple of str
+        The note of a method fitted without its dT term (empty when dT is supported).
+
+    Raises
+    ------
+    InputDataError
+        A malformed run, a temperature span under :data:`MIN_TEMPERATURE_SPAN_C`, or a run
+        shorter than :data:`MIN_TRAINING_WINDOWS` rate windows.
+
+    """
+    t, gyro, temp = _check_run(run, need_temperature=True)
+    _check_span(temp, run.name)
+    check_rate_training(t, rate_window_s, run.name)
+    support = rate_support(t, temp, window_s=rate_window_s)
+    return (t, gyro, temp), support, support.notes(method)
 
 
 def _check_span(temp: NDArray[np.float64], name: str) -> None:
@@ -675,11 +712,8 @@ class LinearTdT:
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Least squares over every sample (``rng`` unused: deterministic)."""
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
-        support = rate_support(t, temp, window_s=self.rate_window_s)
-        self.notes = support.notes(self.name)
+        (t, gyro, temp), support, notes = rate_fit_inputs(run, self.rate_window_s, self.name)
+        self.notes = notes
         if not support.supported:
             # a dT column whose spread is its noise would be scaled by a vanishing range
             self.rate_degree = 0
@@ -858,11 +892,8 @@ class BPNetwork:
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Fit the shortcut and train the network on the run's block means (``rng``: weights)."""
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
-        support = rate_support(t, temp, window_s=self.rate_window_s)
-        self.notes, self.uses_rate = support.notes(self.name), support.supported
+        (t, gyro, temp), support, notes = rate_fit_inputs(run, self.rate_window_s, self.name)
+        self.notes, self.uses_rate = notes, support.supported
         x, y = _training_pairs(t, temp, gyro, rate_window_s=self.rate_window_s,
                                max_points=self.max_points, use_rate=self.uses_rate)
         self.net, self.train_mse = _fit_net(x, y, self.hidden, rng, sa_iterations=0,
@@ -1117,11 +1148,8 @@ class EmdWtdSaBp:
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Decompose the run, then anneal and train the network on its drift part."""
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
-        support = rate_support(t, temp, window_s=self.rate_window_s)
-        self.notes, self.uses_rate = support.notes(self.name), support.supported
+        (t, gyro, temp), support, notes = rate_fit_inputs(run, self.rate_window_s, self.name)
+        self.notes, self.uses_rate = notes, support.supported
         split = self.split_hz if self.split_hz is not None else 100.0 / float(t[-1] - t[0])
         _, drift, classes = self.decompose(t, gyro, split)
         x, y = _training_pairs(t, temp, drift, rate_window_s=self.rate_window_s,

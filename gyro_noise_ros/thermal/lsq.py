@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .hysteresis import play_operator
-from .run import (DEFAULT_RATE_WINDOW_S, rate_support, temperature_rate_c_s, ThermalRun)
+from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalRun
 from ..errors import InputDataError, ParameterError
 
 __all__ = ['LeastSquaresCV', 'candidate_terms', 'select_terms']
@@ -188,13 +188,10 @@ class LeastSquaresCV:
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Choose the terms by blocked CV, then fit them on the whole run (``rng`` unused)."""
-        from .baselines import _check_run, _check_span, check_rate_training
+        from .baselines import rate_fit_inputs
 
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
-        support = rate_support(t, temp, window_s=self.rate_window_s)
-        self.notes = support.notes(self.name)
+        (t, gyro, temp), support, self.notes = rate_fit_inputs(run, self.rate_window_s,
+                                                               self.name)
         rate = temperature_rate_c_s(t, temp, window_s=self.rate_window_s)
         self.lo = np.array([temp.min(), rate.min()])
         self.hi = np.array([temp.max(), rate.max()])

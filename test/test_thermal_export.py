@@ -22,8 +22,8 @@ from gyro_noise_ros.thermal.export import (ardupilot_applied_offset, ardupilot_n
                                            firmware_residuals, px4_applied_offset, px4_device_id,
                                            px4_parameters, remap_axes, write_ardupilot_parm,
                                            write_px4_params)
-from gyro_noise_ros.thermal.metrics import residual_drift_deg_s
 from gyro_noise_ros.thermal.methods import fit_accel
+from gyro_noise_ros.thermal.metrics import residual_drift_deg_s
 from gyro_noise_ros.thermal.run import ThermalRun
 import numpy as np
 import pytest

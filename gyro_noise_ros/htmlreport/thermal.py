@@ -56,6 +56,21 @@ def _bandwidth(doc: dict[str, Any], p: str) -> Cell:
     return '< band' if bw['minus_3db_bound'] == 'below' else '> band'
 
 
+def _yardstick_table(doc: dict[str, Any], parts: tuple[str, ...], title: str) -> Table:
+    """Per axis: the noise floor, the residual drift over it and over poly3's."""
+    yard = _lookup(doc, pointer(*parts)) or {}
+    kind = ("the test run's own noise" if yard.get('floor') == 'noise' else
+            "white noise of the run's size, a lower bound")
+    rows = []
+    for a, axis in enumerate(AXES):
+        poly3: Cell = (Num(pointer(*parts, 'over_poly3', a), '.3g')
+                       if yard.get('over_poly3') else 'n/a')
+        rows.append((axis, Num(pointer(*parts, 'floor_deg_s', a), '.4g'),
+                     Num(pointer(*parts, 'over_floor', a), '.3g'), poly3))
+    return Table(f'{title}: residual drift against the noise floor ({kind}) and poly3',
+                 ('Axis', 'Noise floor (deg/s)', 'x noise floor', 'x poly3'), tuple(rows))
+
+
 def _lookup(doc: dict[str, Any], p: str) -> Any:
     from .page import resolve_pointer
 
@@ -170,6 +185,12 @@ def compare_page(doc: dict[str, Any], curves: Mapping[str, Any]) -> Page:
     best = doc['best_held_out']
     short = ['## In short', '',
              f'Best held-out ({best["rule"]}): **{best["method"]}**.', '']
+    if doc.get('ranking'):
+        short += ['Ranked by the mean residual drift over the noise floor: '
+                  + ', '.join(f'{i + 1}. {r["method"]}' for i, r in enumerate(doc['ranking']))
+                  + '.', '']
+    short += [f'* **Warning: {w}.**' for w in doc.get('warnings') or ()]
+    short += [f'* **Note: {n}.**' for n in doc.get('notes') or ()]
     short += [f'* **{name}** {axis}: {v["verdict"]["text"]}'
               for name, m in doc['methods'].items() for axis, v in m['axes'].items()]
     if doc.get('errors'):
@@ -188,6 +209,8 @@ def compare_page(doc: dict[str, Any], curves: Mapping[str, Any]) -> Page:
     for name in doc['methods']:
         tables.append(Table(f'{name}, trained on the training run, scored on the test run',
                             _AXIS_COLUMNS, tuple(_axis_rows(doc, pointer('methods', name)))))
+        if doc['methods'][name].get('yardstick'):
+            tables.append(_yardstick_table(doc, ('methods', name, 'yardstick'), name))
     if doc.get('oracle'):
         tables.append(Table(
             "Oracle: least squares on the simulator's own drift terms",
@@ -245,9 +268,12 @@ def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
     if doc['in_sample']:
         short += ['**Warning: this bag is one the model was trained on; the numbers are '
                   'in-sample and flatter the method.**', '']
+    short += [f'* **Warning: {warning}.**' for warning in doc.get('warnings') or ()]
     short += [f'* **Note: {note}.**' for note in doc.get('notes') or ()]
     short += [f'* **{axis}**: {v["verdict"]["text"]}' for axis, v in doc['axes'].items()]
     tables = [Table(f'{doc["method"]} on the run', _AXIS_COLUMNS, tuple(_axis_rows(doc, '')))]
+    if doc.get('yardstick'):
+        tables.append(_yardstick_table(doc, ('yardstick',), doc['method']))
     tables.append(Table('Trained range and this run', ('Quantity', 'Value'), (
         ('Samples outside the trained range', Num('/range/outside', 'd')),
         ('Samples', Num('/range/samples', 'd')),

@@ -64,7 +64,8 @@ from ..units import RAD_TO_DEG
 __all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
-           'noise_metrics', 'noise_path_gain', 'residual_drift_deg_s', 'step_response',
+           'noise_metrics', 'noise_path_gain', 'residual_drift', 'residual_drift_deg_s',
+           'step_response',
            'verdict', 'white_floor_deg_s', 'white_noise_sigma', 'yardstick']
 
 #: Window of the residual-drift means (s).
@@ -203,10 +204,39 @@ def _noise_metrics(rate_rad_s: ArrayLike, rate_hz: float,
         mean_deg_s=float(np.mean(x) * RAD_TO_DEG)), (tau, adev)
 
 
+def residual_drift(values: ArrayLike, rate_hz: float, *,
+                   window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
+    """
+    Return the residual drift of each column: the std (ddof 1) of consecutive window means.
+
+    Parameters
+    ----------
+    values : array_like
+        Samples (n, m), any unit (the result is in it).
+    rate_hz : float
+        Sample rate (Hz).
+    window_s : float, keyword-only
+        Window of the means (s).
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,); NaN with fewer than two whole windows.
+
+    """
+    x = np.asarray(values, dtype=np.float64)
+    window = int(round(window_s * rate_hz))
+    k = x.shape[0] // window if window >= 1 else 0
+    if k < 2:
+        return np.full(x.shape[1], math.nan)
+    means = x[:k * window].reshape(k, window, -1).mean(axis=1)
+    return np.std(means, axis=0, ddof=1)
+
+
 def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
                          window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
     """
-    Return the residual drift of each axis: the std (ddof 1) of consecutive window means, deg/s.
+    Return the residual drift of each axis of an angular rate in deg/s (:func:`residual_drift`).
 
     Parameters
     ----------
@@ -223,13 +253,7 @@ def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
         (m,), deg/s; NaN with fewer than two whole windows.
 
     """
-    x = np.asarray(rate_rad_s, dtype=np.float64)
-    window = int(round(window_s * rate_hz))
-    k = x.shape[0] // window if window >= 1 else 0
-    if k < 2:
-        return np.full(x.shape[1], math.nan)
-    means = x[:k * window].reshape(k, window, -1).mean(axis=1)
-    return np.std(means, axis=0, ddof=1) * RAD_TO_DEG
+    return residual_drift(rate_rad_s, rate_hz, window_s=window_s) * RAD_TO_DEG
 
 
 def white_floor_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,

@@ -184,4 +184,5 @@ def test_kelvin_is_converted_with_a_note(tmp_path):
     path, _ = write_thermal_bag(tmp_path / 'k', t, gyro, temp_t, temp + 273.15)
     run, info = read_thermal_run(path)
     np.testing.assert_allclose(run.temperature_c, 15.0 + 0.5 * t, atol=1e-9)
-    assert any('kelvin' in n and '288.15..318.15' in n for n in info.notes)
+    (warning,) = info.warnings
+    assert 'kelvin' in warning and '288.15..318.15' in warning and not info.notes

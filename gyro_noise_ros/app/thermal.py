@@ -310,7 +310,9 @@ class FitResult:
     command : tuple of str
         The command line, for the record.
     input_notes : tuple of str
-        What reading the bags noticed (implausible temperatures dropped, kelvin converted).
+        What reading the bags noticed (implausible temperatures dropped).
+    warnings : tuple of str
+        What reading the bags changed and calls for a look (a temperature in kelvin, converted).
 
     """
 
@@ -325,6 +327,7 @@ class FitResult:
     method_figures: _MethodFigures = ()
     command: tuple[str, ...] = ()
     input_notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     @property
     def notes(self) -> tuple[str, ...]:
@@ -359,6 +362,7 @@ class FitResult:
             'causal': bool(m.method.causal), 'seed': self.seed, 'fit_time_s': self.fit_time_s,
             'training': m.training.as_dict(), 'bags': list(self.bags),
             'in_sample': self.in_sample, 'accel': self.accel, 'notes': list(self.notes),
+            'warnings': list(self.warnings),
             'terms': list(getattr(m.method, 'terms', None) or []) or None,
             'out_of_range': getattr(m.method, 'out_of_range', None),
             'note': 'in-sample numbers (the training data itself): they flatter every method; '
@@ -432,7 +436,8 @@ def fit(*, bags: Sequence[str], method: str = registry.DEFAULT_METHOD, seed: int
     return FitResult(model=model, run=run, bags=bag_docs, processed=processed,
                      fit_time_s=fit_s, seed=int(seed), in_sample=_in_sample(run, processed),
                      accel=accel_doc, method_figures=method_figs, command=tuple(command),
-                     input_notes=tuple(n for b in infos for n in b.notes))
+                     input_notes=tuple(n for b in infos for n in b.notes),
+                     warnings=tuple(w for b in infos for w in b.warnings))
 
 
 def write_fit(result: FitResult, out_dir: StrPath, *, figures: bool = True) -> list[Path]:
@@ -580,6 +585,7 @@ def apply_model(*, bag: str, model_path: str, bag_options: BagOptions = BagOptio
                                                   margin_c=score.range_margin_c)
     _check_injection_length(run, score)
     rng, offsets, warnings = _apply_checks(model, run, score)
+    warnings = list(info_bag.warnings) + warnings
     started = time.monotonic()
     processed = np.asarray(model.method.apply(run), dtype=float)
     apply_s = time.monotonic() - started
@@ -751,8 +757,8 @@ def split_run(run: Any, fraction: float) -> tuple[Any, Any, float]:
 
 def _compare_runs(train: str, test: str | None, split_at: float | None,
                   options: BagOptions) -> tuple[Any, Any, str, str, dict[str, Any] | None,
-                                                tuple[str, ...]]:
-    """Read TRAIN_BAG and TEST_BAG, or split TRAIN_BAG in time (--split-at); and their notes."""
+                                                tuple[Any, ...]]:
+    """Read TRAIN_BAG and TEST_BAG, or split TRAIN_BAG in time (--split-at); and their bags."""
     if split_at is not None:
         if test is not None:
             raise ParameterError('--split-at takes one recording (TRAIN_BAG only), got two')
@@ -765,7 +771,7 @@ def _compare_runs(train: str, test: str | None, split_at: float | None,
                          'temperature history): not independent runs'}
         end_s = split['duration_s']
         return (first, rest, f'{bag.path} [0, {cut_s:.1f}) s',
-                f'{bag.path} [{cut_s:.1f}, {end_s:.1f}] s', split, bag.notes)
+                f'{bag.path} [{cut_s:.1f}, {end_s:.1f}] s', split, (bag,))
     if test is None:
         raise ParameterError('compare needs TRAIN_BAG and TEST_BAG, or one bag and --split-at')
     if Path(train).resolve() == Path(test).resolve():
@@ -775,7 +781,7 @@ def _compare_runs(train: str, test: str | None, split_at: float | None,
     if _same_run(a, b):
         raise ParameterError('TRAIN_BAG and TEST_BAG hold the same samples; a method must be '
                              'scored on a run it was not trained on')
-    return a, b, str(a_bag.path), str(b_bag.path), None, a_bag.notes + b_bag.notes
+    return a, b, str(a_bag.path), str(b_bag.path), None, (a_bag, b_bag)
 
 
 def _simulated_truth(bag_path: StrPath) -> tuple[Any, Any] | None:
@@ -934,7 +940,7 @@ def compare(*, train: str, test: str | None = None, split_at: float | None = Non
     """
     names = check_method_names(registry.method_names() if methods is None else list(methods))
     min_range_c = registry.check_min_range(min_range_c)
-    run_a, run_b, train_label, test_label, split, notes = _compare_runs(train, test, split_at,
+    run_a, run_b, train_label, test_label, split, infos = _compare_runs(train, test, split_at,
                                                                         bag_options)
     registry.check_trainable(run_a, min_range_c=min_range_c)
     _check_injection_length(run_b, score)
@@ -987,8 +993,9 @@ def compare(*, train: str, test: str | None = None, split_at: float | None = Non
                                 float(run_a.temperature_c.max())],
         'test_temperature_c': [float(run_b.temperature_c.min()),
                                float(run_b.temperature_c.max())],
-        'definitions': DEFINITIONS, 'notes': list(notes), 'methods': results, 'errors': errors,
-        **_yardsticks(run_a, run_b, results, truth)})
+        'definitions': DEFINITIONS, 'notes': [n for b in infos for n in b.notes],
+        'methods': results, 'errors': errors, **_yardsticks(run_a, run_b, results, truth)})
+    summary['warnings'] = [w for b in infos for w in b.warnings] + summary['warnings']
     return CompareResult(summary=summary, rows=compare_rows(summary), curves=curves,
                          test=run_b, errors=errors)
 

@@ -272,6 +272,7 @@ def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
                      figures=not args.no_figures, command=argv)
     files = app.write_fit(result, args.out, figures=not args.no_figures)
     _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
         t = result.model.training
         accel = ' (+ accelerometer polynomial)' if result.model.accel is not None else ''

@@ -25,7 +25,7 @@ longer than ``max_gap_s`` (:class:`InputDataError`, exit 4). Implausible tempera
 (:func:`gyro_noise_ros.core.plausible.screen_temperature`: outside the sensor's operating range,
 saturated register words, jumps faster than a die moves) are dropped and counted, or the bag is
 refused when more than :data:`~gyro_noise_ros.core.plausible.MAX_IMPLAUSIBLE_SHARE` of them are,
-naming the first; a stream in kelvin is converted to degC with a note.
+naming the first; a stream in kelvin is converted to degC with a warning.
 
 :func:`write_compensated` writes a rosbag2 copy of the bag in which only the Imu
 ``angular_velocity`` (and, with an accelerometer model, ``linear_acceleration``) is replaced
@@ -93,7 +93,9 @@ class ThermalBag:
     temperature_period_s : float
         Median interval of the temperature readings kept (s; 0 with a single reading).
     notes : tuple of str
-        What reading the temperature noticed (readings dropped, a stream in kelvin converted).
+        What reading the temperature noticed (implausible readings dropped).
+    warnings : tuple of str
+        What was changed in the data and calls for a look (a stream in kelvin, converted).
 
     """
 
@@ -107,6 +109,7 @@ class ThermalBag:
     temperature_dropped: int = 0
     temperature_period_s: float = 0.0
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
 
 def _label(path: StrPath) -> str:
@@ -205,8 +208,8 @@ def read_thermal_run(path: StrPath, *, topic: str | None = None,
                              'each sample needs its own time')
     t_order = np.argsort(temp_stamp, kind='stable')
     read = int(temp.size)
-    temp_stamp, temp, notes = _plausible_temperature(where, temp_topic, temp_stamp[t_order],
-                                                     temp[t_order], int(stamp[0]))
+    temp_stamp, temp, notes, warnings = _plausible_temperature(
+        where, temp_topic, temp_stamp[t_order], temp[t_order], int(stamp[0]))
     _check_coverage(where, stamp, temp_stamp, temp_topic, imu_topic, max_gap_s)
     t0 = int(stamp[0])
     t_s = (stamp - t0) / 1e9
@@ -225,20 +228,20 @@ def read_thermal_run(path: StrPath, *, topic: str | None = None,
     info = ThermalBag(path=Path(path), topic=imu_topic, temperature_topic=temp_topic,
                       storage=storage, stamp_ns=stamp, order=order.astype(np.int64),
                       temperature_samples=read, temperature_dropped=read - int(temp.size),
-                      temperature_period_s=period, notes=notes)
+                      temperature_period_s=period, notes=notes, warnings=warnings)
     return run, info
 
 
 def _plausible_temperature(where: str, topic: str, stamp_ns: NDArray[np.int64],
                            temp: NDArray[np.float64],
                            t0_ns: int) -> tuple[NDArray[np.int64], NDArray[np.float64],
-                                                tuple[str, ...]]:
+                                                tuple[str, ...], tuple[str, ...]]:
     """Convert a kelvin stream, drop implausible readings, refuse a stream with too many."""
-    notes = []
+    notes, warnings = [], []
     if looks_like_kelvin(temp):
-        notes.append(f'temperature topic {topic!r} reads {np.min(temp):.2f}..'
-                     f'{np.max(temp):.2f}: kelvin, not degC (sensor_msgs/Temperature is degC); '
-                     f'converted by subtracting {KELVIN_OFFSET_C}')
+        warnings.append(f'temperature topic {topic!r} reads {np.min(temp):.2f}..'
+                        f'{np.max(temp):.2f}: kelvin, not degC (sensor_msgs/Temperature is '
+                        f'degC); converted by subtracting {KELVIN_OFFSET_C}')
         temp = temp - KELVIN_OFFSET_C
     t_s = (stamp_ns - t0_ns) / 1e9   # from the first Imu stamp, as the run's times
     screen = screen_temperature(t_s, temp)
@@ -249,7 +252,7 @@ def _plausible_temperature(where: str, topic: str, stamp_ns: NDArray[np.int64],
     if screen.dropped:
         notes.append(f'{topic!r}: {screen.text(t_s, temp)}; dropped, the temperature '
                      'interpolated over them')
-    return stamp_ns[screen.keep], temp[screen.keep], tuple(notes)
+    return stamp_ns[screen.keep], temp[screen.keep], tuple(notes), tuple(warnings)
 
 
 def _check_coverage(where: str, stamp: NDArray[np.int64], temp_stamp: NDArray[np.int64],

@@ -239,6 +239,7 @@ def training_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
             + (f'Terms chosen by cross-validation on the training run: '
                f'{", ".join(doc["terms"])} (model.json `parameters.cv`: every candidate).\n\n'
                if doc.get('terms') else '')
+            + ''.join(f'**Warning: {w}.**\n\n' for w in doc.get('warnings') or ())
             + ''.join(f'**Note: {n}.**\n\n' for n in doc['notes'])
             + f'**In-sample only** ({doc["note"]}).\n\n'
             + table_markdown(

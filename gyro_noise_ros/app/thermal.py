@@ -1406,9 +1406,12 @@ def write_export(result: ExportResult, out_dir: StrPath) -> list[Path]:
     """
     from ..thermal.export import write_ardupilot_parm, write_px4_params
 
-    comment = f'model {result.model_path}, gyro_noise_ros {__version__}'
+    head = f'model {result.model_path}, gyro_noise_ros {__version__}'
+    # the PX4 file says why a block is disabled; both say which poly3 they carry
+    px4_comment = '\n'.join([head, *(f'WARNING: {w}' for w in result.warnings), *result.notes])
+    comment = '\n'.join([head, *result.notes])
     with staged_output(out_dir) as stage:
-        write_px4_params(stage / 'thermal_px4.params', result.px4, comment=comment)
+        write_px4_params(stage / 'thermal_px4.params', result.px4, comment=px4_comment)
         write_ardupilot_parm(stage / 'thermal_ardupilot.parm', result.ardupilot,
                              comment=comment)
         _write(stage / 'export.json', _json(result.as_dict()))

@@ -74,7 +74,7 @@ def _score(pair, true_terms):
 
 
 def _oracle(pair, model):
-    """The least-squares oracle's test residual / floor per axis (thermal/oracle.py)."""
+    """Return the least-squares oracle's test residual / floor per axis (thermal/oracle.py)."""
     (_, train, train_truth), (_, test, test_truth) = pair
     residual = oracle_residual(train, train_truth, test, test_truth, model)
     return (residual_drift_deg_s(residual, RATE_HZ)

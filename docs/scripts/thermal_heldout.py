@@ -118,7 +118,10 @@ def main():
     args.load = os.getloadavg()[0]
     took = None
     if args.reuse:
-        scores = json.loads(Path(args.reuse).read_text())
+        saved = json.loads(Path(args.reuse).read_text())
+        scores = saved['scores'] if isinstance(saved, dict) else saved
+        if isinstance(saved, dict):
+            took, args.load = saved['took_s'], saved['load_average']
     else:
         methods = [m for m in HELDOUT_METHODS if not (args.fast and m.slow)]
         start = time.perf_counter()
@@ -131,7 +134,8 @@ def main():
                             hours=args.hours, device=T_ONLY_DEVICE, progress=say)
         took = time.perf_counter() - start
     if args.json:
-        Path(args.json).write_text(json.dumps(scores, indent=1))
+        Path(args.json).write_text(json.dumps({'scores': scores, 'took_s': took,
+                                               'load_average': args.load}, indent=1))
     block = _block(scores, args, took)
     print(block)
     if args.write:

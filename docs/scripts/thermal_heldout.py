@@ -139,14 +139,10 @@ def main():
     block = _block(scores, args, took)
     print(block)
     if args.write:
-        page = Path(args.write)
-        text = page.read_text()
-        if BEGIN not in text or END not in text:
-            print(f'thermal_heldout: {page} has no {BEGIN} ... {END} block', file=sys.stderr)
-            return 1
-        head, rest = text.split(BEGIN, 1)
-        page.write_text(head + block + rest.split(END, 1)[1])
-        print(f'updated {page}', file=sys.stderr)
+        sys.path.insert(0, str(Path(__file__).parent))
+        from doc_block import write_block
+
+        return write_block(args.write, BEGIN, END, block, 'thermal_heldout')
     return 0
 
 

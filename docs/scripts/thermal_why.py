@@ -133,13 +133,10 @@ def main():
                        f'(`python docs/scripts/thermal_why.py --seeds {args.seeds}`.)', END])
     print(block)
     if args.write:
-        page = Path(args.write)
-        text = page.read_text()
-        if BEGIN not in text or END not in text:
-            print(f'thermal_why: {page} has no {BEGIN} ... {END} block', file=sys.stderr)
-            return 1
-        head, rest = text.split(BEGIN, 1)
-        page.write_text(head + block + rest.split(END, 1)[1])
+        sys.path.insert(0, str(Path(__file__).parent))
+        from doc_block import write_block
+
+        return write_block(args.write, BEGIN, END, block, 'thermal_why')
     return 0
 
 

@@ -255,20 +255,23 @@ def test_noise_path_gain_of_a_low_pass_is_its_white_noise_gain():
 
 def test_white_floor_is_the_spread_of_window_means_of_white_noise():
     # 400 windows of white noise per axis: the std of their means has a relative standard error
-    # of 1/sqrt(2 * 399) = 3.5 %; 12 % is over three of those
+    # of 1/sqrt(2 * 399) = 3.5 %; the ARW read-out's own error is a few % (1 h at 20 Hz); 15 %
+    # is over three of the two together
     rng = np.random.default_rng(11)
     rate, sigma = 20.0, np.array([1e-3, 2e-3, 4e-3])
     x = rng.standard_normal((int(400 * 60 * rate), 3)) * sigma
-    floor = metrics.white_floor_deg_s(x, rate)
-    np.testing.assert_allclose(floor, np.degrees(sigma) / np.sqrt(60 * rate), rtol=0.01)
-    np.testing.assert_allclose(metrics.residual_drift_deg_s(x, rate), floor, rtol=0.12)
-    # a slow drift does not move the floor (first differences), it moves the residual
-    ramp = x + np.linspace(0.0, 0.05, x.shape[0])[:, None]
-    np.testing.assert_allclose(metrics.white_floor_deg_s(ramp, rate), floor, rtol=1e-3)
-    assert (metrics.residual_drift_deg_s(ramp, rate) > 10 * floor).all()
+    arw = [metrics.noise_metrics(x[:, a], rate).arw_deg_sqrt_h for a in range(3)]
+    floor = metrics.white_floor_deg_s(arw)
+    np.testing.assert_allclose(floor, np.degrees(sigma) / np.sqrt(60 * rate), rtol=0.05)
+    np.testing.assert_allclose(metrics.residual_drift_deg_s(x, rate), floor, rtol=0.15)
     # one owner: noise_metrics reads the same residual drift
     assert metrics.noise_metrics(x[:, 1], rate).residual_drift_deg_s == pytest.approx(
         metrics.residual_drift_deg_s(x, rate)[1], rel=1e-12)
+    # noise above the readout's taus (an alternating LSB pattern) does not raise the floor, as
+    # it does not raise the spread of 60-s means
+    wiggle = x + 0.01 * np.where(np.arange(x.shape[0]) % 2, 1.0, -1.0)[:, None]
+    arw_w = [metrics.noise_metrics(wiggle[:, a], rate).arw_deg_sqrt_h for a in range(3)]
+    np.testing.assert_allclose(metrics.white_floor_deg_s(arw_w), floor, rtol=0.05)
 
 
 def test_yardstick_ratios():

@@ -50,7 +50,7 @@ from ..thermal.figures import (apply_figures, compare_figures, Figures, method_f
                                training_figures)
 from ..thermal.metrics import (DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ,
                                evaluate_method, noise_metrics, residual_drift,
-                               residual_drift_deg_s, white_floor_deg_s, yardstick)
+                               residual_drift_deg_s, yardstick)
 # bandwidth_cell, COMPARE_HEADER, COMPARE_SPECS and table_cells are handed on for the command line
 from ..thermal.report import (apply_markdown, bandwidth_cell, compare_csv, COMPARE_HEADER,
                               compare_markdown, compare_rows, COMPARE_SPECS, table_cells,
@@ -652,8 +652,9 @@ def _apply_yardstick(model: Any, run: Any, scored: dict[str, Any]) -> dict[str, 
     if poly3 is not None:
         p3 = residual_drift_deg_s(run.gyro_rad_s - poly3.drift_rad_s(run.temperature_c, 0.0),
                                   run.rate_hz)
-    return yardstick([math.nan if v is None else v for v in residual],
-                     white_floor_deg_s(run.gyro_rad_s, run.rate_hz), poly3_deg_s=p3)
+    return dict(scored['yardstick'], **yardstick(
+        [math.nan if v is None else v for v in residual], scored['yardstick']['floor_deg_s'],
+        poly3_deg_s=p3))
 
 
 def write_apply(result: ApplyResult, out_dir: StrPath, *, figures: bool = True,
@@ -1003,7 +1004,8 @@ def compare(*, train: str, test: str | None = None, split_at: float | None = Non
 def _yardsticks(run_a: Any, run_b: Any, results: dict[str, dict[str, Any]],
                 truth: tuple[Any, Any] | None) -> dict[str, Any]:
     """Each method against the noise floor and poly3; the ranking; the oracle, the warnings."""
-    oracle, floor, kind = None, white_floor_deg_s(run_b.gyro_rad_s, run_b.rate_hz), 'white'
+    first = next(iter(results.values()))
+    oracle, floor, kind = None, np.array(first['yardstick']['floor_deg_s'], dtype=float), 'white'
     if truth is not None and truth[0] is not None and truth[1] is not None:
         (a_truth, _), (b_truth, device) = truth
         oracle = oracle_scores(run_a, a_truth, run_b, b_truth, device)
@@ -1036,9 +1038,9 @@ def _yardsticks(run_a: Any, run_b: Any, results: dict[str, dict[str, Any]],
 _FLOOR_DEFINITIONS = {
     'noise': "residual drift of the test run's own noise (the simulation's truth): what a "
              'perfect drift model would leave',
-    'white': "residual drift of white noise of the test run's size (std of first differences "
-             '/ sqrt 2, per axis): a lower bound of what a perfect drift model would leave '
-             '(slow noise is not in it)'}
+    'white': "the test run's white-noise level over the band of the 60-s means, ARW / "
+             'sqrt(60 s) per axis (the Allan readout of the raw run): what a perfect drift model '
+             'would leave if the noise were white; slow noise (bias instability) is not in it'}
 
 
 def _poly3_reference(run_a: Any, run_b: Any,

@@ -60,7 +60,7 @@ def _yardstick_table(doc: dict[str, Any], parts: tuple[str, ...], title: str) ->
     """Per axis: the noise floor, the residual drift over it and over poly3's."""
     yard = _lookup(doc, pointer(*parts)) or {}
     kind = ("the test run's own noise" if yard.get('floor') == 'noise' else
-            "white noise of the run's size, a lower bound")
+            "the run's white-noise level, ARW / sqrt(60 s)")
     rows = []
     for a, axis in enumerate(AXES):
         poly3: Cell = (Num(pointer(*parts, 'over_poly3', a), '.3g')

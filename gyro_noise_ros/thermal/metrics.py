@@ -256,35 +256,33 @@ def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
     return residual_drift(rate_rad_s, rate_hz, window_s=window_s) * RAD_TO_DEG
 
 
-def white_floor_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
+def white_floor_deg_s(arw_deg_sqrt_h: ArrayLike, *,
                       window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
     """
-    Return the noise floor of the residual drift from the run's white noise alone, per axis.
+    Return the noise floor of the residual drift from the run's angle random walk, per axis.
 
-    The residual a perfect drift model would leave if the run's noise were white: the standard
-    deviation of a ``window_s`` mean of white noise, ``sigma / sqrt(window_s rate_hz)`` with
-    ``sigma = std(diff(x)) / sqrt(2)`` per axis (first differences: a slow drift does not
-    inflate it). Slow noise (bias instability, 10-1000 s) is not in it: the true floor of a
-    run with such noise is higher, and a simulated run knows it exactly (its noise alone).
+    The residual drift a perfect drift model would leave if the run's noise were its white part:
+    the standard deviation of a ``window_s`` mean of white rate noise of Allan coefficient N
+    (the ARW of the one Allan readout, :func:`noise_metrics`), ``N / sqrt(window_s)``: the
+    white-noise level of the run over the band of the 60-s means. Read on the Allan deviation's
+    -1/2 region, it ignores both the slow noise (bias instability: the true floor is higher) and
+    noise above the readout's taus (quantization, aliasing), which 60-s means average away.
 
     Parameters
     ----------
-    rate_rad_s : array_like
-        Angular rate (n, m), rad/s.
-    rate_hz : float
-        Sample rate (Hz).
+    arw_deg_sqrt_h : array_like
+        ARW per axis (deg/sqrt(h)); NaN where none could be read.
     window_s : float, keyword-only
         Window of the residual drift's means (s).
 
     Returns
     -------
     numpy.ndarray
-        (m,), deg/s.
+        (m,), deg/s (NaN where the ARW is).
 
     """
-    x = np.asarray(rate_rad_s, dtype=np.float64)
-    sigma = np.std(np.diff(x, axis=0), axis=0) / math.sqrt(2.0)
-    return sigma / math.sqrt(max(window_s * rate_hz, 1.0)) * RAD_TO_DEG
+    # deg/sqrt(h) -> deg/sqrt(s): / sqrt(3600 s/h) = / 60
+    return np.asarray(arw_deg_sqrt_h, dtype=float) / 60.0 / math.sqrt(window_s)
 
 
 def yardstick(residual_deg_s: ArrayLike, floor_deg_s: ArrayLike, *,
@@ -297,8 +295,8 @@ def yardstick(residual_deg_s: ArrayLike, floor_deg_s: ArrayLike, *,
     residual_deg_s : array_like
         A method's residual drift per axis (deg/s).
     floor_deg_s : array_like
-        The noise floor per axis (deg/s): :func:`white_floor_deg_s`, or a simulated run's own
-        noise through :func:`residual_drift_deg_s`.
+        The noise floor per axis (deg/s): :func:`white_floor_deg_s` of the run's ARW, or a
+        simulated run's own noise through :func:`residual_drift_deg_s`.
     poly3_deg_s : array_like, optional, keyword-only
         poly3's residual drift on the same run per axis (deg/s).
     floor : str, keyword-only
@@ -308,7 +306,9 @@ def yardstick(residual_deg_s: ArrayLike, floor_deg_s: ArrayLike, *,
     Returns
     -------
     dict
-        ``floor`` (the kind), ``floor_deg_s``, ``over_floor`` (residual / floor), and with
+        ``floor`` (the kind), ``floor_deg_s``, ``over_floor`` (residual / floor; the std of k
+        window means scatters by about 1 / sqrt(2 (k - 1)) of itself, so a short run's ratio
+        can fall below 1), and with
         poly3 ``poly3_deg_s`` and ``over_poly3`` (residual / poly3's: 0.2 is 5 times better),
         lists per axis, None where not finite; ``mean_over_floor``, ``mean_over_poly3``.
 
@@ -912,10 +912,11 @@ def evaluate_method(method: ThermalMethod, run: ThermalRun, *,
         axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
                                         small=small, noise_gain=gain)
     residual = [axes[a]['processed']['residual_drift_deg_s'] for a in 'xyz']
+    arw = [axes[a]['raw']['arw_deg_sqrt_h'] for a in 'xyz']
     doc = {
         'method': method.name, 'causal': bool(method.causal),
         'yardstick': yardstick([math.nan if v is None else v for v in residual],
-                               white_floor_deg_s(gyro, run.rate_hz)),
+                               white_floor_deg_s([math.nan if v is None else v for v in arw])),
         'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD_TO_DEG,
                       'small_signal_amplitude_deg_s': (small_amp * RAD_TO_DEG
                                                        if small_amp is not None else None),

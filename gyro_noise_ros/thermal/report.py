@@ -332,7 +332,7 @@ def yardstick_markdown(yard: Mapping[str, Any] | None) -> str:
     if not yard:
         return ''
     kind = ("the test run's own noise" if yard['floor'] == 'noise' else
-            "white noise of the run's size, a lower bound: slow noise is not in it")
+            "the run's white-noise level, ARW / sqrt(60 s): slow noise is not in it")
     p3 = yard.get('over_poly3') or [None] * 3
     rows = [(axis, yard['floor_deg_s'][a], yard['over_floor'][a], p3[a])
             for a, axis in enumerate('xyz')]

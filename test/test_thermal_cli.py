@@ -389,15 +389,16 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
     (pred,) = doc['predicted']
     assert pred['role'] == 'training' and set(pred['residual_deg_s']) == {
         'raw', 'model', 'px4', 'ardupilot'}
-    # the default method exports the poly3 fitted beside it, and says so; without a device id
-    # the PX4 blocks are written disabled, with a warning each
+    # a method with a dT term exports the poly3 fitted beside it, and says so; without a device
+    # id the PX4 blocks are written disabled, with a warning each
     train, _, _ = _bag(tmp_path / 'train2', 1)
-    assert main(['fit', train, '--out', str(tmp_path / 'l'), '--quiet', '--no-figures']) == 0
+    assert main(['fit', train, '--method', 'linear_tdt', '--out', str(tmp_path / 'l'),
+                 '--quiet', '--no-figures']) == 0
     capsys.readouterr()
     assert main(['export', '--model', str(tmp_path / 'l' / 'model.json'), '--out',
                  str(tmp_path / 'f'), '--axes=-y,x,z', '--predict', train]) == 0
     out_err = capsys.readouterr()
-    assert 'exported: the poly3 fitted beside lsq_cv' in out_err.err
+    assert 'exported: the poly3 fitted beside linear_tdt' in out_err.err
     assert 'no --px4-gyro-id: the PX4 gyro block is written with TC_G_ENABLE 0' in out_err.err
     assert 'as PX4 applies it' in out_err.out and '(predict)' in out_err.out
     params = (tmp_path / 'f' / 'thermal_px4.params').read_text()
@@ -409,6 +410,11 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
         'coef_rad_s']
     assert doc['px4']['TC_G0_X1_0'] == pytest.approx(-coef[1][1], rel=1e-12)
     assert doc['px4']['TC_G0_X1_1'] == pytest.approx(coef[0][1], rel=1e-12)
+    # the default on a drift in T alone chooses a polynomial in T: exported as it is
+    assert main(['fit', train, '--out', str(tmp_path / 'd'), '--quiet', '--no-figures']) == 0
+    assert main(['export', '--model', str(tmp_path / 'd' / 'model.json'), '--out',
+                 str(tmp_path / 'g'), '--px4-gyro-id', '2359306']) == 0
+    assert 'exported: lsq_cv itself' in capsys.readouterr().err
 
 
 @pytest.mark.parametrize('option, value, message', [

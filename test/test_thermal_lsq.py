@@ -165,3 +165,22 @@ def test_a_run_that_cannot_support_dt_gets_no_dt_term(cls):
     cool = 35.0 - 0.01 * t
     out = m.apply(_run(cool, np.outer(1e-3 + 2e-4 * (cool - 25.0), [1.0, 1.0, 1.0])))
     assert np.abs(out).max() < 1e-4
+
+
+def test_a_polynomial_in_t_alone_is_its_own_poly3():
+    # a drift in T alone: lsq_cv chooses a polynomial in T, which is the PX4 form exactly inside
+    # the trained range; with a dT term there is none
+    t, temp = _cycle()
+    d = temp - 30.0
+    noise = np.random.default_rng(2).normal(0.0, 1e-5, (t.size, 3))
+    gyro = np.outer(1e-3 + 2e-4 * d + 3e-6 * d * d - 1e-7 * d ** 3, [1.0, -0.5, 0.8]) + noise
+    m = LeastSquaresCV()
+    m.fit(_run(temp, gyro), rng=np.random.default_rng(0))
+    assert m.terms == ('1', 'x1', 'x2', 'x3') and not m.uses_rate
+    poly = m.as_poly3()
+    probe = np.linspace(temp.min(), temp.max(), 50)
+    np.testing.assert_allclose(poly.drift_rad_s(probe, 0.0), m.drift_rad_s(probe, 0.0),
+                               rtol=0, atol=1e-15)
+    assert (poly.t_min_c, poly.t_max_c) == (temp.min(), temp.max())
+    m.fit(_run(temp, _law(temp, t)), rng=np.random.default_rng(0))
+    assert m.as_poly3() is None

@@ -1328,7 +1328,8 @@ def export(*, model_path: str, px4_instance: int = 0, gyro_device_id: int | None
                                   px4_device_id, px4_parameters, remap_axes)
 
     model = registry.load_model(model_path)
-    poly = model.poly3()
+    own = getattr(model.method, 'as_poly3', None)
+    poly = (own() if own is not None else None) or model.poly3()
     if poly is None:
         raise ParameterError(f'model {model_path!r} ({model.method.name}) carries no poly3 for '
                              'the autopilots (a model file written before format 3): fit it '
@@ -1344,9 +1345,13 @@ def export(*, model_path: str, px4_instance: int = 0, gyro_device_id: int | None
         ('gyro', gyro_device_id, '--px4-gyro-id'), ('accel', accel_device_id, '--px4-accel-id'))
         if dev}
     notes = list(model.notes) + list(ardupilot_notes(gyro))
+    itself = poly is model.method or poly is not model.poly3()
     exported = {'method': model.method.name, 'form': 'poly3', 'axes': axes,
-                'source': 'the model' if poly is model.method else 'the poly3 fitted beside it'}
-    if poly is not model.method:
+                'source': 'the model' if itself else 'the poly3 fitted beside it'}
+    if itself and poly is not model.method:
+        notes.append(f'exported: {model.method.name} itself (its terms are a polynomial in T '
+                     'alone, the form PX4 and ArduPilot evaluate)')
+    elif not itself:
         name = model.method.name
         notes.append(f'exported: the poly3 fitted beside {name} on the same training run (PX4 '
                      f'and ArduPilot evaluate a cubic in T only; what {name} models beyond it '

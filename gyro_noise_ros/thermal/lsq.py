@@ -279,6 +279,35 @@ class LeastSquaresCV:
         return gyro - self.drift_rad_s(
             temp, temperature_rate_c_s(t, temp, window_s=self.rate_window_s))
 
+    def as_poly3(self) -> Any:
+        """
+        Return the model as a ``poly3`` when its terms are a polynomial in T alone (else None).
+
+        ``sum_p c_p x^p`` with ``x = (T - T_c) / T_s`` is ``sum_p (c_p / T_s^p) (T - T_c)^p``:
+        the PX4 form with ``T_ref = T_c`` and the trained range as ``T_min``..``T_max`` (inside
+        it the two agree exactly; beyond it poly3 holds the ends, as the autopilots do).
+
+        Returns
+        -------
+        TemperaturePolynomial or None
+
+        """
+        from .baselines import TemperaturePolynomial
+
+        if self.coef is None or self.terms is None or self.lo is None or self.hi is None:
+            return None
+        powers = [int(t[1:]) if t.startswith('x') else 0 for t in self.terms]
+        if any(not (t == '1' or (t.startswith('x') and t[1:].isdigit())) for t in self.terms) \
+                or max(powers) > 3:
+            return None
+        poly = TemperaturePolynomial()
+        poly.coef = np.zeros((3, 4))
+        for row, p in zip(self.coef, powers):
+            poly.coef[:, p] += row / self.t_scale_c ** p
+        poly.t_ref_c = self.t_centre_c
+        poly.t_min_c, poly.t_max_c = float(self.lo[0]), float(self.hi[0])
+        return poly
+
     def to_dict(self) -> dict[str, Any]:
         """Return the chosen terms, scaling, coefficients (rad/s), ranges and the CV table."""
         if self.coef is None or self.terms is None or self.lo is None or self.hi is None:

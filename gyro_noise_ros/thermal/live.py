@@ -39,13 +39,10 @@ offset linearly in time onto the gyro stamps:
   carries no offset at all (``beyond='none'``). The rate is checked against the model's trained
   rate range (``rate_range_c_s``) too: knots outside it are counted (:attr:`knots_rate_outside`)
   and the model treats them as its ``out_of_range`` says (extrapolated, never clipped).
-- Implausible temperatures (``core.plausible``: outside the sensor's range, saturated words, jumps
-  a die cannot make) are rejected like non-finite ones; a model with a hysteresis term
-  (``lsq_cv``'s ``hysteresis_c``) gets its play-operator state carried from message to message.
 
-Non-causal methods need the whole record (VMD decomposition, time-frequency peak filtering,
-EMD, wavelet-threshold denoising of the full signal) and are refused with a message naming those
-offline-only steps. No ROS is imported here.
+Implausible temperatures (``core.plausible``) are rejected like non-finite ones; a hysteresis
+term (``lsq_cv``) gets its state carried over. Non-causal methods (VMD, TFPF, EMD, wavelet
+thresholding of the whole record) are refused, naming those offline-only steps. No ROS here.
 """
 
 from collections.abc import Sequence

@@ -236,21 +236,19 @@ def residual_drift(values: ArrayLike, rate_hz: float, *,
 def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
                          window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
     """
-    Return the residual drift of each axis of an angular rate in deg/s (:func:`residual_drift`).
+    Return :func:`residual_drift` of an angular rate (n, m) in rad/s as deg/s per axis (m,).
 
     Parameters
     ----------
     rate_rad_s : array_like
-        Angular rate (n, m), rad/s.
-    rate_hz : float
-        Sample rate (Hz).
-    window_s : float, keyword-only
-        Window of the means (s).
+        Angular rate (n, m), rad/s; ``rate_hz`` and ``window_s`` as :func:`residual_drift`.
+    rate_hz, window_s : float
+        See :func:`residual_drift`.
 
     Returns
     -------
     numpy.ndarray
-        (m,), deg/s; NaN with fewer than two whole windows.
+        (m,), deg/s.
 
     """
     return residual_drift(rate_rad_s, rate_hz, window_s=window_s) * RAD_TO_DEG

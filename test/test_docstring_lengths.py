@@ -42,7 +42,7 @@ ALLOWED = {
     'core/readout.py', 'explain/baseline.py', 'explain/effects.py', 'explain/signatures.py',
     'explain/synthetic.py', 'explain/uncertainty.py', 'explain/workflow.py', 'link/clock.py',
     'nodes/analyzer.py', 'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py',
-    'thermal/elman.py', 'thermal/export.py', 'thermal/live.py', 'thermal/metrics.py',
+    'thermal/elman.py', 'thermal/live.py', 'thermal/metrics.py',
     'thermal/mopso.py', 'thermal/parallel.py', 'thermal/simulate.py',
 }
 

@@ -419,7 +419,7 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
 
 @pytest.mark.parametrize('option, value, message', [
     ('--px4-gyro-id', '99999999999', '24 bits'), ('--px4-gyro-id', '-1', '24 bits'),
-    ('--px4-instance', '4', 'instance must be 0..3'), ('--axes', 'x,x,z', '--axes')])
+    ('--px4-instance', '4', 'instance must be 0..3'), ('--axes', 'x,x,z', 'error: --axes must name x, y and z')])
 def test_export_refuses_bad_ids_and_axes(tmp_path, capsys, option, value, message):
     model = _fit_poly3(tmp_path)
     assert main(['export', '--model', str(model), '--out', str(tmp_path / 'e'), option,
@@ -554,6 +554,7 @@ def test_apply_refuses_a_model_of_another_sensor_and_a_sparse_temperature(tmp_pa
     assert main(['apply', other, '--model', model, '--out', str(tmp_path / 'a'), *FAST]) == 4
     err = capsys.readouterr().err
     assert 'x +0.5' in err and 'another sensor' in err and len(err.strip().splitlines()) == 1
+    assert '(--max-offset-deg-s inf applies it anyway)' in err
     assert main(['apply', other, '--model', model, '--out', str(tmp_path / 'a'), '--no-bag',
                  '--max-offset-deg-s', 'inf', *FAST]) == 0
     # the temperature read every 5 s: too sparse for the 10-s rate window of a model using dT

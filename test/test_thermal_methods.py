@@ -269,5 +269,5 @@ def test_a_model_of_another_sensor_is_refused():
         methods.check_same_sensor(model, other)
     assert methods.check_same_sensor(model, other, max_offset_deg_s=float('inf'))[0] == \
         pytest.approx(0.5, abs=0.01)
-    with pytest.raises(ParameterError, match='max-offset-deg-s'):
+    with pytest.raises(ParameterError, match='max_offset_deg_s'):
         methods.check_same_sensor(model, other, max_offset_deg_s=float('nan'))

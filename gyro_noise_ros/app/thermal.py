@@ -1342,7 +1342,7 @@ def export(*, model_path: str, px4_instance: int = 0, gyro_device_id: int | None
     ardupilot = ardupilot_parameters(fw_gyro, fw_accel, imu=ardupilot_imu,
                                      cal_temp_c=cal_temp_c, gyro_offsets=gyro_offsets)
     devices = {label: px4_device_id(dev, option) for label, dev, option in (
-        ('gyro', gyro_device_id, '--px4-gyro-id'), ('accel', accel_device_id, '--px4-accel-id'))
+        ('gyro', gyro_device_id, 'px4_gyro_id'), ('accel', accel_device_id, 'px4_accel_id'))
         if dev}
     notes = list(model.notes) + list(ardupilot_notes(gyro))
     itself = poly is model.method or poly is not model.poly3()

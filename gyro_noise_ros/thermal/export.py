@@ -204,8 +204,8 @@ def remap_axes(cal: CubicCalibration, spec: str) -> CubicCalibration:
     axes = [p.lstrip('+-') for p in parts]
     if len(parts) != 3 or sorted(axes) != ['x', 'y', 'z'] or any(
             len(p) - len(a) > 1 for p, a in zip(parts, axes)):
-        raise ParameterError(f'--axes must name x, y and z once each, signed, e.g. -y,x,z; '
-                             f'got {spec!r}')
+        raise ParameterError(f'{{axes}} must name x, y and z once each, signed, e.g. -y,x,z; '
+                             f'got {spec!r}', parameters=('axes',))
     sign = np.array([-1.0 if p.startswith('-') else 1.0 for p in parts])
     coef = cal.coef[['xyz'.index(a) for a in axes]] * sign[:, None]
     return replace(cal, coef=coef)
@@ -246,7 +246,7 @@ def firmware_residuals(cal: CubicCalibration, t_s: ArrayLike, gyro_rad_s: ArrayL
     return {k: [float(v) for v in residual_drift_deg_s(x, rate_hz)] for k, x in runs.items()}
 
 
-def px4_device_id(value: Any, option: str = '--px4-gyro-id') -> dict[str, Any]:
+def px4_device_id(value: Any, parameter: str = 'px4_gyro_id') -> dict[str, Any]:
     """
     Check a PX4 device id and decode it.
 
@@ -258,8 +258,8 @@ def px4_device_id(value: Any, option: str = '--px4-gyro-id') -> dict[str, Any]:
     ----------
     value : int
         The id as given.
-    option : str
-        Option name for the message.
+    parameter : str
+        The parameter the id was given as (named in braces in the message).
 
     Returns
     -------
@@ -272,16 +272,20 @@ def px4_device_id(value: Any, option: str = '--px4-gyro-id') -> dict[str, Any]:
         Not an integer, outside 1..16777215, or an unknown bus type.
 
     """
+    name = '{' + parameter + '}'
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ParameterError(f'{option} must be an integer device id, got {value!r}')
+        raise ParameterError(f'{name} must be an integer device id, got {value!r}',
+                             parameters=(parameter,))
     dev = int(value)
     if not 1 <= dev <= 0xFFFFFF:
-        raise ParameterError(f'{option} {dev}: a PX4 device id is 24 bits (1..16777215, as '
-                             'CAL_GYRO0_ID shows it); this one matches no sensor')
+        raise ParameterError(f'{name} {dev}: a PX4 device id is 24 bits (1..16777215, as '
+                             'CAL_GYRO0_ID shows it); this one matches no sensor',
+                             parameters=(parameter,))
     bus_type = dev & 0x7
     if bus_type not in PX4_BUS_TYPES:
-        raise ParameterError(f"{option} {dev}: bus type {bus_type} (the id's low 3 bits) is "
-                             f"none of PX4's ({', '.join(PX4_BUS_TYPES.values())})")
+        raise ParameterError(f"{name} {dev}: bus type {bus_type} (the id's low 3 bits) is "
+                             f"none of PX4's ({', '.join(PX4_BUS_TYPES.values())})",
+                             parameters=(parameter,))
     return {'id': dev, 'bus_type': PX4_BUS_TYPES[bus_type], 'bus': (dev >> 3) & 0x1F,
             'address': (dev >> 8) & 0xFF, 'devtype': (dev >> 16) & 0xFF}
 
@@ -315,8 +319,8 @@ def px4_parameters(gyro: CubicCalibration | None, accel: CubicCalibration | None
         raise ParameterError(f'PX4 calibration instance must be 0..{PX4_INSTANCES - 1} '
                              f'(TC_G0..TC_G{PX4_INSTANCES - 1}), got {instance!r}')
     out: list[tuple[str, float, int]] = []
-    for letter, cal, dev, option in (('G', gyro, gyro_device_id, '--px4-gyro-id'),
-                                     ('A', accel, accel_device_id, '--px4-accel-id')):
+    for letter, cal, dev, option in (('G', gyro, gyro_device_id, 'px4_gyro_id'),
+                                     ('A', accel, accel_device_id, 'px4_accel_id')):
         if cal is None:
             continue
         ident = 0 if dev is None or dev == 0 else px4_device_id(dev, option)['id']

@@ -412,7 +412,7 @@ class RangeReport:
             return None
         return (f'{100.0 * self.fraction_outside:.3g} % of the run lies outside the trained '
                 f'range of T or dT, more than {100.0 * MAX_OUTSIDE_SHARE:g} %: the model '
-                'extrapolates there; retrain on a run covering it (apply --strict refuses)')
+                'extrapolates there; retrain on a run covering it (a strict apply refuses such a run)')
 
 
 def _span(values: Sequence[float], spec: str) -> str:
@@ -729,8 +729,8 @@ def check_same_sensor(model: ThermalModel, run: ThermalRun, *,
     """
     limit = float(max_offset_deg_s)
     if not limit >= 0.0:
-        raise ParameterError(f'--max-offset-deg-s must be >= 0 deg/s (inf: off), got '
-                             f'{max_offset_deg_s!r}')
+        raise ParameterError(f'{{max_offset_deg_s}} must be >= 0 deg/s (inf: off), got '
+                             f'{max_offset_deg_s!r}', parameters=('max_offset_deg_s',))
     poly = model.poly3()
     drift = getattr(poly if poly is not None else model.method, 'drift_rad_s', None)
     if drift is None:
@@ -744,7 +744,7 @@ def check_same_sensor(model: ThermalModel, run: ThermalRun, *,
         raise SensorMismatchError(
             f'run {run.name!r}: its gyro sits {", ".join(far)} deg/s from the model drift at '
             f'its temperatures (more than {limit:g} deg/s): is the model of another sensor? '
-            '(--max-offset-deg-s inf applies it anyway)')
+            '({max_offset_deg_s} inf applies it anyway)', parameters=('max_offset_deg_s',))
     return [float(v) for v in offsets]
 
 

@@ -419,7 +419,8 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
 
 @pytest.mark.parametrize('option, value, message', [
     ('--px4-gyro-id', '99999999999', '24 bits'), ('--px4-gyro-id', '-1', '24 bits'),
-    ('--px4-instance', '4', 'instance must be 0..3'), ('--axes', 'x,x,z', 'error: --axes must name x, y and z')])
+    ('--px4-instance', '4', 'instance must be 0..3'),
+    ('--axes', 'x,x,z', 'error: --axes must name x, y and z')])
 def test_export_refuses_bad_ids_and_axes(tmp_path, capsys, option, value, message):
     model = _fit_poly3(tmp_path)
     assert main(['export', '--model', str(model), '--out', str(tmp_path / 'e'), option,

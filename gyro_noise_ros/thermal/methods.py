@@ -412,7 +412,7 @@ class RangeReport:
             return None
         return (f'{100.0 * self.fraction_outside:.3g} % of the run lies outside the trained '
                 f'range of T or dT, more than {100.0 * MAX_OUTSIDE_SHARE:g} %: the model '
-                'extrapolates there; retrain on a run covering it (a strict apply refuses such a run)')
+                'extrapolates there; retrain on a run covering it (a strict apply refuses it)')
 
 
 def _span(values: Sequence[float], spec: str) -> str:

@@ -526,11 +526,18 @@ def test_implausible_temperatures_are_dropped_and_said(tmp_path, capsys):
 
 def test_apply_warns_above_the_share_outside_and_refuses_under_strict(tmp_path, capsys):
     # a test run twice as fast: the same temperatures, dT beyond the trained range most of the
-    # time, more than the 5 % applied without a warning
+    # time, more than the 5 % applied without a warning, for a model using dT (linear_tdt keeps
+    # its dT term on this run); poly3 evaluates T alone, which stays inside: no warning
     train, _, _ = _bag(tmp_path / 'train', 1)
     test, _, _ = _bag(tmp_path / 'test', 2, n=N // 2)
-    assert main(['fit', train, '--method', 'poly3', '--out', str(tmp_path / 'm'), '--quiet',
+    assert main(['fit', train, '--method', 'poly3', '--out', str(tmp_path / 'p'), '--quiet',
                  '--no-figures']) == 0
+    assert main(['apply', test, '--model', str(tmp_path / 'p' / 'model.json'), '--out',
+                 str(tmp_path / 'p3'), '--strict', '--no-bag', *FAST]) == 0
+    doc = json.loads((tmp_path / 'p3' / 'metrics.json').read_text())
+    assert doc['range']['rate_below'] + doc['range']['rate_above'] == 0 and not doc['warnings']
+    assert main(['fit', train, '--method', 'linear_tdt', '--out', str(tmp_path / 'm'),
+                 '--quiet', '--no-figures']) == 0
     model = str(tmp_path / 'm' / 'model.json')
     assert main(['apply', test, '--model', model, '--out', str(tmp_path / 'a'), '--no-bag',
                  '--f-lo-hz', '0.5', '--no-figures', '--no-html']) == 0

@@ -184,6 +184,13 @@ def test_range_report_counts_t_and_dt():
     short = training_info(_run(np.linspace(10.0, 40.0, 50)))
     assert short.temperature_rate_min_c_s is None
     assert methods.range_report(short, temp, rate).rate_below == 0
+    # only the inputs a method evaluates count: T alone for poly3, nothing for raw
+    t_only = methods.range_report(info, temp, rate, uses_rate=False)
+    assert (t_only.temperature_below, t_only.rate_below, t_only.outside) == (1, 0, 2)
+    assert methods.range_report(info, temp, rate, uses_temperature=False).outside == 0
+    for name in ('poly3', 'raw', 'wtd'):
+        assert not getattr(methods.method_class(name), 'uses_rate')
+    assert not methods.method_class('raw').uses_temperature
 
 
 def _saved(tmp_path):

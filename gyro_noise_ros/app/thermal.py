@@ -275,7 +275,9 @@ def _range(model: Any, run: Any) -> Any:
     method = model.method
     return registry.range_report(model.training, run.temperature_c, _rate(run, method),
                                  treatment=getattr(method, 'out_of_range',
-                                                   'not stated by the method'))
+                                                   'not stated by the method'),
+                                 uses_temperature=getattr(method, 'uses_temperature', True),
+                                 uses_rate=getattr(method, 'uses_rate', True))
 
 
 # ---------------------------------------------------------------------------------------------

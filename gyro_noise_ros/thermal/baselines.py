@@ -496,6 +496,7 @@ class RawMethod:
     name = 'raw'
     causal = True
     uses_rate = False
+    uses_temperature = False
     out_of_range = 'nothing is learnt, nothing is extrapolated'
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
@@ -798,6 +799,7 @@ class WaveletThreshold:
     name = 'wtd'
     causal = False
     uses_rate = False
+    uses_temperature = False
     out_of_range = 'temperature is not an input'
 
     def __init__(self, *, wavelet: str = 'db4', level: int = 6, mode: str = 'symmetric',

@@ -420,9 +420,14 @@ def _span(values: Sequence[float], spec: str) -> str:
 
 
 def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: ArrayLike, *,
-                 treatment: str = '') -> RangeReport:
+                 treatment: str = '', uses_temperature: bool = True,
+                 uses_rate: bool = True) -> RangeReport:
     """
-    Count the samples outside the trained range of T and of dT.
+    Count the samples outside the trained range of the method's inputs, T and dT.
+
+    Only the inputs a method evaluates count: a T-only method (``poly3``) is not extrapolating
+    where only dT leaves the trained range, a method without temperature input (``raw``,
+    ``wtd``) nowhere (as the live node, :mod:`.live`, checks them).
 
     Parameters
     ----------
@@ -434,6 +439,8 @@ def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: Arr
         Its temperature rate (n,), degC/s (the same estimator and window as in training).
     treatment : str, keyword-only
         What the method does outside (its ``out_of_range``).
+    uses_temperature, uses_rate : bool, keyword-only
+        Whether the method evaluates T, dT (its ``uses_temperature``, ``uses_rate``).
 
     Returns
     -------
@@ -444,8 +451,10 @@ def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: Arr
     rate = np.asarray(rate_c_s, dtype=float).reshape(-1)
     t_lo, t_hi = training.temperature_min_c, training.temperature_max_c
     below_t, above_t = temp < t_lo, temp > t_hi
+    if not uses_temperature:
+        below_t = above_t = np.zeros(temp.size, dtype=bool)
     r_lo, r_hi = training.temperature_rate_min_c_s, training.temperature_rate_max_c_s
-    if r_lo is None or r_hi is None:
+    if r_lo is None or r_hi is None or not (uses_rate and uses_temperature):
         below_r = above_r = np.zeros(temp.size, dtype=bool)
         rate_range = None
     else:

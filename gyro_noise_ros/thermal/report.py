@@ -35,11 +35,13 @@ import re
 from typing import Any
 
 from .figures import Figures
+from .methods import MAX_OUTSIDE_SHARE
 from ..outputs import StrPath
 
 __all__ = ['AXIS_HEADER', 'AXIS_SPECS', 'COMPARE_HEADER', 'COMPARE_SPECS', 'PAPER_FIGURES',
-           'apply_markdown', 'axis_rows', 'bandwidth_cell', 'bias_stability_cell',
-           'compare_csv', 'compare_markdown', 'compare_rows', 'figure_numbers',
+           'apply_markdown', 'apply_verdict', 'axis_rows', 'bandwidth_cell',
+           'bias_stability_cell', 'compare_csv', 'compare_markdown', 'compare_rows',
+           'compare_verdict', 'figure_numbers',
            'figures_markdown', 'table_cells', 'table_markdown', 'training_markdown']
 
 #: Paper 002's result figures: number -> (what it shows, why a method may have no analogue;
@@ -342,6 +344,104 @@ def yardstick_markdown(yard: Mapping[str, Any] | None) -> str:
                              ['', '.4g', '.3g', '.3g']))
 
 
+def _ratios(values: Sequence[float | None], spec: str) -> str:
+    """Format per-axis ratios as 'a, b, c' ('n/a' where missing)."""
+    return ', '.join('n/a' if v is None else format(v, spec) for v in values)
+
+
+def apply_verdict(doc: Mapping[str, Any]) -> tuple[str, str]:
+    """
+    Return the verdict line of an applied model: its level and its text.
+
+    The text gives each axis's residual drift over the noise floor and over poly3 (metrics.json
+    ``yardstick``), then what weakens the numbers. The level is ``'WARN'`` when the document
+    carries a warning (more than ``methods.MAX_OUTSIDE_SHARE`` of the run outside the trained
+    range; a kelvin stream), when the run is one the model was trained on (in-sample), when
+    its rate differs from the training rate, or when the residual drift exceeds the raw one on
+    an axis; else ``'OK'``.
+
+    Parameters
+    ----------
+    doc : dict
+        The metrics.json document.
+
+    Returns
+    -------
+    (str, str)
+        Level (``'OK'`` or ``'WARN'``) and text (Markdown: bold, code).
+
+    """
+    yard = doc.get('yardstick') or {}
+    text = f'`{doc["method"]}` applied'
+    if yard:
+        kind = 'its own noise' if yard.get('floor') == 'noise' else 'its white noise'
+        text += (f': residual drift **{_ratios(yard["over_floor"], ".2g")} x the noise floor**'
+                 f' ({kind}) on x, y, z')
+        if yard.get('over_poly3'):
+            text += f', {_ratios(yard["over_poly3"], ".2g")} x poly3'
+    worse = [axis for axis, v in doc['axes'].items()
+             if (v['verdict'].get('residual_drift_ratio') or 0.0) > 1.0]
+    cautions = [f'**{w}**' for w in doc.get('warnings') or ()]
+    if doc.get('in_sample'):
+        cautions.append('**in-sample**: the model was trained on this bag')
+    if doc.get('rate_mismatch'):
+        cautions.append('the sample rate differs from the training rate')
+    if worse:
+        cautions.append(f'residual drift above the raw one on {", ".join(worse)}')
+    return ('WARN' if cautions else 'OK'), text + ''.join(f'; {c}' for c in cautions) + '.'
+
+
+def compare_verdict(summary: Mapping[str, Any]) -> tuple[str, str]:
+    """
+    Return the verdict line of a held-out comparison: its level and its text.
+
+    The text names the best live-capable full-bandwidth method with its mean ratio to the noise
+    floor and to poly3, then the ranking by the mean ratio to the floor (compare.json
+    ``best_held_out``, ``ranking``). The level is ``'WARN'`` when the document carries a
+    warning (a method extrapolating over more than ``methods.MAX_OUTSIDE_SHARE`` of the test
+    run; a kelvin stream), a method was not scored, or no method qualifies as best; else
+    ``'INFO'`` (a ranking, not a pass or fail).
+
+    Parameters
+    ----------
+    summary : dict
+        The compare.json document.
+
+    Returns
+    -------
+    (str, str)
+        Level (``'INFO'`` or ``'WARN'``) and text (Markdown: bold, code).
+
+    """
+    best = summary['best_held_out']['method']
+    rank = {r['method']: r for r in summary.get('ranking') or ()}
+    if best is None:
+        text = 'no live-capable full-bandwidth method was scored'
+    else:
+        text = f'best on the held-out run: **`{best}`**'
+        if best in rank and rank[best]['mean_over_floor'] is not None:
+            text += f', {rank[best]["mean_over_floor"]:.2g} x the noise floor'
+            if rank[best].get('mean_over_poly3') is not None:
+                text += f', {rank[best]["mean_over_poly3"]:.2g} x poly3'
+            text += ' (mean over the axes)'
+    if rank:
+        text += '; ranked by x noise floor: ' + ', '.join(
+            f'{i + 1}. {r["method"]}' for i, r in enumerate(rank.values()))
+    far = {name: m['range']['fraction_outside'] for name, m in summary['methods'].items()
+           if m['range'].get('warning')}
+    ranged = {f'{name}: {summary["methods"][name]["range"]["warning"]}' for name in far}
+    cautions = [f'**{w}**' for w in summary.get('warnings') or () if w not in ranged]
+    if far:
+        cautions.append('**extrapolating** over more than '
+                        f'{100 * MAX_OUTSIDE_SHARE:g} % of the test run (outside the trained '
+                        'range of T or dT): ' + ', '.join(f'{name} {100 * share:.0f} %'
+                                                          for name, share in far.items()))
+    if summary.get('errors'):
+        cautions.append(f'not scored: {", ".join(summary["errors"])}')
+    level = 'WARN' if cautions or best is None else 'INFO'
+    return level, text + ''.join(f'; {c}' for c in cautions) + '.'
+
+
 def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
     """
     Return ``report.md`` of an applied model: warnings, trained range, per-axis table, verdicts.
@@ -390,7 +490,8 @@ def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
                  + _accel_table(doc['accel']))
     verdicts = ''.join(f'- **{axis}**: {v["verdict"]["text"]}\n'
                        for axis, v in doc['axes'].items())
-    return (f'# {doc["method"]} on {doc["bag"]}\n\n'
+    level, line = apply_verdict(doc)
+    return (f'# {doc["method"]} on {doc["bag"]}\n\n**{level}**: {line}\n\n'
             f'{doc["samples"]} samples at {doc["rate_hz"]:.6g} Hz '
             f'({doc["duration_s"] / 3600:.3g} h), temperature {doc["temperature_min_c"]:.2f}..'
             f'{doc["temperature_max_c"]:.2f} degC; model trained on '
@@ -592,7 +693,8 @@ def compare_markdown(summary: dict[str, Any], figs: Sequence[tuple[str, StrPath]
                   f'{o["measured_terms"]["mean_residual_drift_deg_s"]:.4g} deg/s), for scale; '
                   'they are no bound (their terms also absorb the slow noise of the training '
                   'run).\n\n')
-    return (f'# Held-out comparison\n\nTrained on {summary["train"]} '
+    level, line = compare_verdict(summary)
+    return (f'# Held-out comparison\n\n**{level}**: {line}\n\nTrained on {summary["train"]} '
             f'({summary["train_temperature_c"][0]:.2f}..{summary["train_temperature_c"][1]:.2f}'
             f' degC), scored on {summary["test"]} ({summary["test_temperature_c"][0]:.2f}..'
             f'{summary["test_temperature_c"][1]:.2f} degC), seed {summary["seed"]}.\n\n'

@@ -28,8 +28,8 @@ def _apply_doc(*, warnings=(), in_sample=False, drift_ratio=0.01):
 def test_apply_verdict_states_the_yardstick_and_warns_on_what_weakens_it():
     level, text = apply_verdict(_apply_doc())
     assert level == 'OK'
-    assert text == ('`lsq_cv` applied: residual drift **1.3, 2, n/a x the noise floor** (its '
-                    'white noise) on x, y, z, 0.06, 0.1, 0.2 x poly3.')
+    assert text == ('`lsq_cv` applied: residual drift **1.3, 2, n/a x the noise floor** (the '
+                    "run's white noise) on x, y, z, 0.06, 0.1, 0.2 x poly3.")
     level, text = apply_verdict(_apply_doc(warnings=['69 % of the run lies outside']))
     assert level == 'WARN' and text.endswith('; **69 % of the run lies outside**.')
     level, text = apply_verdict(_apply_doc(in_sample=True))

@@ -374,7 +374,7 @@ def apply_verdict(doc: Mapping[str, Any]) -> tuple[str, str]:
     yard = doc.get('yardstick') or {}
     text = f'`{doc["method"]}` applied'
     if yard:
-        kind = 'its own noise' if yard.get('floor') == 'noise' else 'its white noise'
+        kind = "the run's own noise" if yard.get('floor') == 'noise' else "the run's white noise"
         text += (f': residual drift **{_ratios(yard["over_floor"], ".2g")} x the noise floor**'
                  f' ({kind}) on x, y, z')
         if yard.get('over_poly3'):

@@ -411,8 +411,13 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
         'coef_rad_s']
     assert doc['px4']['TC_G0_X1_0'] == pytest.approx(-coef[1][1], rel=1e-12)
     assert doc['px4']['TC_G0_X1_1'] == pytest.approx(coef[0][1], rel=1e-12)
-    # the default on a drift in T alone chooses a polynomial in T: exported as it is
-    assert main(['fit', train, '--out', str(tmp_path / 'd'), '--quiet', '--no-figures']) == 0
+    # the default on a drift in T alone chooses a polynomial in T (fit says which terms):
+    # exported as it is
+    capsys.readouterr()
+    assert main(['fit', train, '--out', str(tmp_path / 'd'), '--no-figures']) == 0
+    terms = json.loads((tmp_path / 'd' / 'model.json').read_text())['parameters']['terms']
+    assert 'r' not in terms
+    assert f'lsq_cv [terms {" ".join(terms)}, by blocked CV]' in capsys.readouterr().out
     assert main(['export', '--model', str(tmp_path / 'd' / 'model.json'), '--out',
                  str(tmp_path / 'g'), '--px4-gyro-id', '2359306']) == 0
     assert 'exported: lsq_cv itself' in capsys.readouterr().err

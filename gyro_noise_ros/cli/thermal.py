@@ -302,7 +302,9 @@ def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
     if not args.quiet:
         t = result.model.training
         accel = ' (+ accelerometer polynomial)' if result.model.accel is not None else ''
-        print(f'{result.model.method.name}{accel}: fitted on {t.samples} samples '
+        terms = getattr(result.model.method, 'terms', None)
+        chosen = f' [terms {" ".join(terms)}, by blocked CV]' if terms else ''
+        print(f'{result.model.method.name}{chosen}{accel}: fitted on {t.samples} samples '
               f'({t.duration_s / 3600:.3g} h, {t.temperature_min_c:.2f}..'
               f'{t.temperature_max_c:.2f} degC) in {result.fit_time_s:.1f} s')
         print(f'wrote {len(files)} files to {args.out}')

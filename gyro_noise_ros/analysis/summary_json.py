@@ -28,9 +28,9 @@ from typing import Any, SupportsFloat
 
 import numpy as np
 
-from ..core.engine import AxisSummary, rad_s2_to_deg_s_per_h
 from ..core.health import HealthVerdict, reference_dict, ROBUST_JSON_KEY
 from ..core.readout import AllanReadout
+from ..core.results import AxisSummary, rad_s2_to_deg_s_per_h
 from ..outputs import StrPath
 from ..units import RAD_TO_DEG
 
@@ -49,7 +49,7 @@ def json_num(value: SupportsFloat) -> float | None:
 def axis_summary_dict(summary: AxisSummary, *,
                       verdict: HealthVerdict | None = None) -> dict[str, Any]:
     """
-    Turn an :class:`..core.engine.AxisSummary` into the per-axis entry of summary.json.
+    Turn an :class:`..core.results.AxisSummary` into the per-axis entry of summary.json.
 
     Parameters
     ----------
@@ -145,6 +145,8 @@ def accelerometer_readout_dict(readout: AllanReadout | None) -> dict[str, Any] |
         'velocity_random_walk_ci_high_m_s2_per_sqrt_hz': r.arw_ci_high_rad_per_sqrt_s,
         'velocity_random_walk_from_region': r.arw_from_region,
         'bias_stability_m_s2': r.bias_stability_rad_s,
+        'bias_stability_ci_low_m_s2': r.bias_stability_ci_low_rad_s,
+        'bias_stability_ci_high_m_s2': r.bias_stability_ci_high_rad_s,
         'bias_stability_tau_s': r.bias_stability_tau_s,
         'bias_stability_upper_bound': r.bias_stability_upper_bound,
         'bias_instability_m_s2': r.bias_instability_rad_s,

@@ -96,9 +96,12 @@ def check_stability(alpha: float, f: float, memory: int = DEFAULT_MEMORY) -> 'St
     StabilityReport
 
     """
-    c = gl_coefficients(alpha, memory)
+    with np.errstate(all='ignore'):  # an order so large its coefficients overflow: below
+        c = gl_coefficients(alpha, memory)
     a = c.copy()
     a[1] -= f
+    if not np.all(np.isfinite(a)):
+        return StabilityReport(False, float('nan'), float('nan'), 0.0, 0)
     # 2^17 points resolve the phase of a degree-1000 polynomial unless a root is within ~1e-4 of
     # the circle, which the relative-minimum test below treats as marginal anyway.
     size = 1 << 17
@@ -127,6 +130,9 @@ def require_stable(alpha: float, f: float,
 
     """
     report = check_stability(float(alpha), float(f), int(memory))
+    if not np.isfinite(report.a_at_one):
+        raise UnstableModelError(f'fractional noise model alpha={alpha:g}: its GL coefficients '
+                                 f'(L={memory}) overflow; the order must be a few units at most')
     if not report.stable:
         raise UnstableModelError(
             f'fractional noise model alpha={alpha}, f={f}, L={memory} is unstable or marginal '
@@ -366,23 +372,7 @@ def gauss_markov(n: int, rate_hz: float, *, std: float, corr_time_s: float,
     """
     Return ``n`` samples of a stationary first-order Gauss-Markov process (:class:`GaussMarkov`).
 
-    Parameters
-    ----------
-    n : int
-        Number of samples.
-    rate_hz : float
-        Sample rate (Hz).
-    std, corr_time_s : float, keyword-only
-        Standard deviation q (output unit) and correlation time T (s).
-    rng : numpy.random.Generator, keyword-only
-        Source of randomness.
-    shape : tuple of int, keyword-only
-        Shape of one sample.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape ``(n,) + shape``.
-
+    ``std`` is its standard deviation q (output unit), ``corr_time_s`` its correlation time T (s),
+    ``rate_hz`` the sample rate (Hz); the result has shape ``(n,) + shape``, drawn from ``rng``.
     """
     return GaussMarkov(std, corr_time_s, rate_hz, rng=rng, shape=shape).generate(n)

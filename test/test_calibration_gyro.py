@@ -167,8 +167,19 @@ def test_calibration_yaml_gyro_terms_are_applied_by_the_compensator(tmp_path):
     published = []
 
     class _Capture:
+        # the publisher's handle as the node uses it: a context holding publish_raw
 
-        def publish(self, raw):
+        @property
+        def handle(self):
+            return self
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def publish_raw(self, raw):
             published.append(raw)
 
     try:

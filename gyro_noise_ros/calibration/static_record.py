@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .interval import (bias_instability_interval, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
                        Interval, log_adev_sd, undetermined)
+from .noise_change import DEFAULT_TAUS_S, fixed_factors, fixed_taus, FixedTaus
 from .static import classify, DetectorSettings, find_dwells, WindowAccumulator
 from ..core.allan import AllanAccumulator, AllanResult
 from ..core.readout import (AllanReadout, fit_noise_terms_band_limited, MAX_TAU_FRACTION,
@@ -188,6 +189,8 @@ class ChannelResult:
     readout : AllanReadout or None
         The one datasheet readout of the curve (its bias stability is the interval's
         sigma_min).
+    fixed : FixedTaus or str
+        The Allan variance at the verdict's fixed taus (:mod:`.noise_change`), or why not.
 
     """
 
@@ -196,6 +199,7 @@ class ChannelResult:
     interval: Interval
     terms: dict[str, Term] | None = None
     readout: AllanReadout | None = None
+    fixed: FixedTaus | str = 'not computed'
 
 
 class StaticRecord:
@@ -216,12 +220,15 @@ class StaticRecord:
         Least EDF of a tau that may hold sigma_min (0: the readout's rule alone).
     alpha : float, keyword-only
         One-sided level of the test of a fall-back below the level (ambiguous crossing).
+    taus_s : sequence of float, keyword-only
+        The noise verdict's fixed averaging times (s).
 
     """
 
     def __init__(self, rate_hz: float, *, c: float = DEFAULT_C,
                  settings: DetectorSettings = DetectorSettings(), source: str = '',
-                 min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA) -> None:
+                 min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
+                 taus_s: Sequence[float] = DEFAULT_TAUS_S) -> None:
         self.rate_hz = float(rate_hz)
         self.c = c
         self.min_edf = min_edf
@@ -229,6 +236,8 @@ class StaticRecord:
         self.settings = settings
         self.source = source
         self._acc = [AllanAccumulator(self.rate_hz, taus='dense') for _ in CHANNELS]
+        fixed = fixed_factors(taus_s, self.rate_hz)
+        self._fixed = [AllanAccumulator(self.rate_hz, taus=fixed) for _ in CHANNELS]
         self._bad = [''] * len(CHANNELS)
         self._win = WindowAccumulator(self.rate_hz, window_s=settings.window_s, source=source)
         self.samples = 0
@@ -260,6 +269,7 @@ class StaticRecord:
                                 f'Allan deviation would be made up')
                 continue
             self._acc[k].update(col)
+            self._fixed[k].update(col)
         self.samples += data.shape[0]
         if len(t_s):
             self.duration_s = float(t_s[-1])
@@ -349,5 +359,11 @@ class StaticRecord:
                                            max_tau_s=MAX_TAU_FRACTION * record_s,
                                            model_adev=model, record_s=record_s,
                                            alpha=self.alpha)
-            out[ch] = ChannelResult(ch, allan, iv, terms, readout)
+            out[ch] = ChannelResult(ch, allan, iv, terms, readout, self._fixed_of(k, allan))
         return out, check
+
+    def _fixed_of(self, k: int, allan: AllanResult) -> FixedTaus | str:
+        try:
+            return fixed_taus(self._fixed[k].result(), allan)
+        except GyroNoiseError as err:
+            return str(err)

@@ -80,7 +80,17 @@ def test_full_procedure(tmp_path, bags, capsys):
                  '--after-calibration', bags['cal_after'], '--after-static', bags['after'],
                  '--gravity', '9.80665', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
-    assert doc['c'] == 2.0 and doc['tolerance'] == 0.5 and doc['alpha'] == 0.05
+    assert doc['c'] == 2.0 and doc['tolerance'] == 0.3 and doc['alpha'] == 0.05
+    assert doc['taus_s'] == [1.0, 10.0, 30.0, 100.0] and doc['interval_tolerance'] == 0.5
+    # the verdict: the flicker level x2 moves the ADEV at 10-100 s by x1.6-1.9 (closed form of
+    # this model), far beyond +/-30 % at 12,000 s; every test is in the document
+    for sensor in ('accel', 'gyro'):
+        o = doc['overall'][sensor]
+        assert o['verdict'] == 'beyond' and 'beyond +/-30 %' in o['sentence'], o
+        assert o['tests'] == 12 and o['decisive']['ratio'] > 1.3
+        assert o['decisive']['ci'][0] > 1.3
+    for ch in CHANNELS:
+        assert [t['tau_s'] for t in doc['noise_change'][ch]] == [1.0, 10.0, 30.0, 100.0]
     assert set(doc['bias_instability_interval']) == set(CHANNELS)
     for entry in doc['bias_instability_interval'].values():
         assert set(entry) >= KEYS
@@ -98,7 +108,7 @@ def test_full_procedure(tmp_path, bags, capsys):
     # stress x2 on the flicker level: closed form +135 %; the three-axis mean must be beyond 50 %
     for sensor in ('accel', 'gyro'):
         assert doc['summary'][sensor]['mean_change'] > 0.5
-        o = doc['overall'][sensor]
+        o = doc['interval_indicator'][sensor]
         # a widening: never called physiological; beyond or undetermined with its basis
         assert o['verdict'] in ('beyond', 'undetermined') and o['basis']
         assert o['mean_change'] > 0.5 and o['mean_change_sd'] > 0
@@ -151,11 +161,12 @@ def test_full_procedure(tmp_path, bags, capsys):
     assert row['gyro_x_ci_low_rad_s'] < row['gyro_x_adev_rad_s'] < row['gyro_x_ci_high_rad_s']
     md = (out / 'reliability.md').read_text()
     # the verdict first: the plain-language summary, then the overall verdict, then evidence
-    assert md.index('## In short') < md.index('## Overall verdict') < md.index(
-        '## Bias-instability interval') < md.index('Table 6')
+    assert md.index('## In short') < md.index('## Verdict: the noise at fixed') < md.index(
+        '## Indicator: the bias-instability interval') < md.index('Table 6')
+    assert '| gyro_z | 30 |' in md
     assert '| accel_x |' in md or '| accel_x (ambiguous) |' in md
     assert '(m/s^2) |' in md and 'degC' in md and '| by (mg) |' in md
-    assert in_short(doc)[0].startswith(('The accelerometer', 'These records'))
+    assert in_short(doc)[0].startswith('The accelerometer noise at')
     assert capsys.readouterr().out.count('accel:') == 1
 
 
@@ -166,6 +177,8 @@ def test_same_sensor_twice_is_never_beyond(tmp_path, bags):
     doc = json.loads((out / 'reliability.json').read_text())
     for sensor in ('accel', 'gyro'):
         assert doc['overall'][sensor]['verdict'] != 'beyond'
+    assert all(t['verdict'] != 'beyond' for tests in doc['noise_change'].values()
+               for t in tests)
     assert all(e['verdict'] != 'beyond' for e in doc['bias_instability_interval'].values())
     assert doc['calibration'] == {'before': None, 'after': None} and doc['table6'] is None
     md = (out / 'reliability.md').read_text()
@@ -173,7 +186,8 @@ def test_same_sensor_twice_is_never_beyond(tmp_path, bags):
 
 
 def test_bad_channels_are_undetermined_with_the_reason(tmp_path, bags, capsys):
-    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=600.0, seed=9)
+    # 1200 s: long enough for the verdict's longest tau (100 s x 10 averages)
+    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=1200.0, seed=9)
     accel_nan = accel.copy()
     accel_nan[100, 1] = np.nan
     nan_bag = write_bag(tmp_path / 'nan', t, accel_nan, gyro)
@@ -186,10 +200,15 @@ def test_bad_channels_are_undetermined_with_the_reason(tmp_path, bags, capsys):
     assert iv['accel_y']['verdict'] == 'undetermined' and 'NaN' in iv['accel_y']['reason']
     assert iv['accel_y']['change'] is None and iv['accel_y']['width_before_s'] is None
     assert 'accelerometer reads ~0' in iv['accel_x']['reason_after']
-    # the same gyro samples in both records: no change, but 600 s cannot decide +/-50 %
+    # the same gyro samples in both records: no change, but 1200 s cannot decide +/-50 % of
+    # the interval; the verdict at fixed taus: ratio 1 everywhere, within where the EDF allows
     g = iv['gyro_x']
     assert g['change'] == 0.0 and g['verdict'] == 'undetermined'
     assert 'open' in g['reason'] or 'times as long would decide' in g['reason']
+    assert all(t['ratio'] == 1.0 for t in doc['noise_change']['gyro_x'])
+    assert doc['overall']['gyro']['verdict'] in ('within', 'undetermined')
+    assert doc['overall']['accel']['verdict'] == 'undetermined'
+    assert 'accel_y: NaN/Inf' in doc['overall']['accel']['reason']
 
 
 def test_unusable_static_records_are_refused_with_one_line(tmp_path, bags, capsys):

@@ -142,6 +142,29 @@ def first_stamp_ns(path: StrPath, *, topic: str | None = None) -> int | None:
     return None
 
 
+def frame_id(path: StrPath, *, topic: str | None = None) -> str:
+    """
+    Return the ``header.frame_id`` of a recording's first Imu sample ('' when none is set).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Recording.
+    topic : str, optional, keyword-only
+        ``sensor_msgs/Imu`` topic.
+
+    Returns
+    -------
+    str
+
+    """
+    with ImuBagReader(path, topic=topic) as reader:
+        for b in reader.iter_batches(1024):
+            if b.stamp_ns.size:
+                return b.frame_id or ''
+    return ''
+
+
 def read_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None = None,
              t0_ns: int | None = None) -> _ImuBatch:
     """

@@ -330,16 +330,17 @@ class StaticRecord:
             if not reason and ch.startswith('accel'):
                 reason = check['accel_problem']
             if reason:
-                out[ch] = ChannelResult(ch, None, undetermined(reason, self.c))
+                out[ch] = ChannelResult(ch, None, undetermined(reason, self.c), fixed=reason)
                 continue
             try:
                 allan = self._acc[k].result()
             except GyroNoiseError as err:
-                out[ch] = ChannelResult(ch, None, undetermined(f'record too short: {err}', self.c))
+                why = f'record too short: {err}'
+                out[ch] = ChannelResult(ch, None, undetermined(why, self.c), fixed=why)
                 continue
             if not np.any(np.asarray(allan.adev) > 0):
-                out[ch] = ChannelResult(ch, allan, undetermined('constant signal (all-zero '
-                                                                'Allan deviation)', self.c))
+                why = 'constant signal (all-zero Allan deviation)'
+                out[ch] = ChannelResult(ch, allan, undetermined(why, self.c), fixed=why)
                 continue
             record_s = float(allan.n_samples) / float(allan.rate_hz)
             readout: AllanReadout | None

@@ -209,6 +209,10 @@ def test_bad_channels_are_undetermined_with_the_reason(tmp_path, bags, capsys):
     assert doc['overall']['gyro']['verdict'] in ('within', 'undetermined')
     assert doc['overall']['accel']['verdict'] == 'undetermined'
     assert 'accel_y: NaN/Inf' in doc['overall']['accel']['reason']
+    # said on stderr too, one line per channel that cannot be judged
+    err = capsys.readouterr().err
+    assert 'before static record, accel_y: NaN/Inf samples in the record (first at sample 100)' \
+        in err and 'Traceback' not in err
 
 
 def test_unusable_static_records_are_refused_with_one_line(tmp_path, bags, capsys):
@@ -228,6 +232,39 @@ def test_unusable_static_records_are_refused_with_one_line(tmp_path, bags, capsy
         err = capsys.readouterr().err
         assert err.count('\n') == 1 and why in err and str(bag) in err, err
         assert not (out / 'reliability.json').exists()
+
+
+def test_records_that_are_not_one_sensor_at_one_rate_are_refused(tmp_path, capsys):
+    # before at 10 Hz, after at 20 Hz; then the same rate from another sensor frame: one line,
+    # exit 4, nothing written
+    rec = static_record(errors=ERRORS, rate_hz=RATE, duration_s=1200.0, seed=21)
+    before = write_bag(tmp_path / 'before', *rec)
+    fast = write_bag(tmp_path / 'fast', *static_record(errors=ERRORS, rate_hz=2 * RATE,
+                                                       duration_s=1200.0, seed=22))
+    other = write_bag(tmp_path / 'other', *rec, frame_id='adis_link')
+    for bag, why in ((fast, 'differ in sample rate (10 Hz before, 20 Hz after)'),
+                     (other, "different sensor frames ('imu_link' before, 'adis_link' after)")):
+        out = tmp_path / f'rep_{bag.name}'
+        capsys.readouterr()
+        assert main(['--before-static', str(before), '--after-static', str(bag),
+                     '--no-figures', '--out', str(out)]) == 4
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and why in err, err
+        assert not any(out.iterdir())     # nothing written
+
+
+def test_a_record_too_short_for_the_longest_tau_is_refused_naming_its_length(tmp_path, capsys):
+    # 600 s at 10 Hz: the verdict's 100 s needs 10 averages, 1000 s; 60 s taus would do
+    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=600.0, seed=23)
+    bag = write_bag(tmp_path / 'short', t, accel, gyro)
+    out = tmp_path / 'rep'
+    assert main(['--before-static', str(bag), '--after-static', str(bag), '--no-figures',
+                 '--out', str(out)]) == 4
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'record too short for the noise verdict: 600 s' in err
+    assert 'needs 1000 s' in err and not any(out.iterdir())
+    assert main(['--before-static', str(bag), '--after-static', str(bag), '--taus', '1', '10',
+                 '30', '--no-figures', '--out', str(out)]) == 0
 
 
 @pytest.mark.parametrize('where', ['file', 'under_file'])

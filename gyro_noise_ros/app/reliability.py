@@ -437,14 +437,21 @@ class ReliabilityResult:
 
     def warnings(self) -> list[str]:
         """
-        Return the lines a tool prints on stderr (failed parts).
+        Return the lines a tool prints on stderr (failed parts, channels without a verdict).
 
         Returns
         -------
         list of str
 
         """
-        return [f'{k.replace("_", " ")}: {v}' for k, v in self.errors.items()]
+        out = [f'{k.replace("_", " ")}: {v}' for k, v in self.errors.items()]
+        for side in SIDES:
+            st = self.statics.get(side)
+            for ch, r in (st.channels.items() if st is not None else ()):
+                if isinstance(r.fixed, str):
+                    out.append(f'{side} static record, {ch}: {r.fixed} (its sensor cannot be '
+                               'judged)')
+        return out
 
     def as_dict(self) -> dict[str, Any]:
         """

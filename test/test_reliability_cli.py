@@ -81,16 +81,16 @@ def test_full_procedure(tmp_path, bags, capsys):
                  '--gravity', '9.80665', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
     assert doc['c'] == 2.0 and doc['tolerance'] == 0.3 and doc['alpha'] == 0.05
-    assert doc['taus_s'] == [1.0, 10.0, 30.0, 100.0] and doc['interval_tolerance'] == 0.5
+    assert doc['taus_s'] == [1.0, 10.0, 30.0] and doc['interval_tolerance'] == 0.5
     # the verdict: the flicker level x2 moves the ADEV at 10-100 s by x1.6-1.9 (closed form of
     # this model), far beyond +/-30 % at 12,000 s; every test is in the document
     for sensor in ('accel', 'gyro'):
         o = doc['overall'][sensor]
         assert o['verdict'] == 'beyond' and 'beyond +/-30 %' in o['sentence'], o
-        assert o['tests'] == 12 and o['decisive']['ratio'] > 1.3
+        assert o['tests'] == 9 and o['decisive']['ratio'] > 1.3
         assert o['decisive']['ci'][0] > 1.3
     for ch in CHANNELS:
-        assert [t['tau_s'] for t in doc['noise_change'][ch]] == [1.0, 10.0, 30.0, 100.0]
+        assert [t['tau_s'] for t in doc['noise_change'][ch]] == [1.0, 10.0, 30.0]
     assert set(doc['bias_instability_interval']) == set(CHANNELS)
     for entry in doc['bias_instability_interval'].values():
         assert set(entry) >= KEYS
@@ -254,17 +254,17 @@ def test_records_that_are_not_one_sensor_at_one_rate_are_refused(tmp_path, capsy
 
 
 def test_a_record_too_short_for_the_longest_tau_is_refused_naming_its_length(tmp_path, capsys):
-    # 600 s at 10 Hz: the verdict's 100 s needs 10 averages, 1000 s; 60 s taus would do
-    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=600.0, seed=23)
+    # 200 s at 10 Hz: the verdict's 30 s needs 10 averages, 300 s; taus up to 20 s would do
+    t, accel, gyro = static_record(errors=ERRORS, rate_hz=RATE, duration_s=200.0, seed=23)
     bag = write_bag(tmp_path / 'short', t, accel, gyro)
     out = tmp_path / 'rep'
     assert main(['--before-static', str(bag), '--after-static', str(bag), '--no-figures',
                  '--out', str(out)]) == 4
     err = capsys.readouterr().err
-    assert err.count('\n') == 1 and 'record too short for the noise verdict: 600 s' in err
-    assert 'needs 1000 s' in err and not any(out.iterdir())
+    assert err.count('\n') == 1 and 'record too short for the noise verdict: 200 s' in err
+    assert 'needs 300 s' in err and not any(out.iterdir())
     assert main(['--before-static', str(bag), '--after-static', str(bag), '--taus', '1', '10',
-                 '30', '--no-figures', '--out', str(out)]) == 0
+                 '20', '--no-figures', '--out', str(out)]) == 0
 
 
 @pytest.mark.parametrize('where', ['file', 'under_file'])

@@ -33,13 +33,12 @@ Usage (seeded: the same numbers every time)::
 """
 
 import argparse
-import contextlib
-import io
 import math
 import os
 import sys
 import time
 
+from _doc_tables import print_and_write
 from gyro_noise_ros.core.allan import allan_deviation, DEFAULT_CONFIDENCE, edf_greenhall
 from gyro_noise_ros.core.readout import random_walk_bound
 from gyro_noise_ros.core.simulate import power_law_rate, power_law_rate_avar
@@ -47,8 +46,6 @@ import numpy as np
 
 KINDS = ((0, 'white (angle random walk)'), (-1, 'flicker (bias instability)'),
          (-2, 'random walk (rate random walk)'))
-BEGIN = '<!-- allan_coverage.py: begin -->'
-END = '<!-- allan_coverage.py: end -->'
 
 
 def measure(alpha, records, n, rate_hz, seed):
@@ -83,11 +80,8 @@ def main(argv=None):
     p.add_argument('--write', action='store_true', help='update docs/allan.md')
     args = p.parse_args(argv)
     if args.write:
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
-            _run(args)
-        _write_doc(buf.getvalue(), argv if argv is not None else sys.argv[1:])
-        print(buf.getvalue())
+        print_and_write(lambda: _run(args), 'allan_coverage.py', 'allan.md',
+                        argv if argv is not None else sys.argv[1:])
         return 0
     _run(args)
     return 0
@@ -124,22 +118,6 @@ def _run(args):
 
 def _white_edf(res):
     return [edf_greenhall(0, int(m), res.n_samples + 1) for m in res.m[-3:]]
-
-
-def _write_doc(text, argv):
-    """Replace the tables between the markers of docs/allan.md."""
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'allan.md')
-    with open(path) as fh:
-        doc = fh.read()
-    if doc.count(BEGIN) != 1 or doc.count(END) != 1:
-        sys.exit(f'{path}: needs exactly one {BEGIN} and one {END}')
-    cmd = ' '.join(['nice python docs/scripts/allan_coverage.py'] + list(argv))
-    block = f'{BEGIN}\nMade by `{cmd}`.\n{text.rstrip()}\n{END}'
-    head, rest = doc.split(BEGIN)
-    doc = head + block + rest.split(END, 1)[1]
-    with open(path + '.tmp', 'w') as fh:
-        fh.write(doc)
-    os.replace(path + '.tmp', path)
 
 
 if __name__ == '__main__':

@@ -37,8 +37,6 @@ Run (seeded; per-record results cached in --cache; nice it, the emulator part ta
 """
 
 import argparse
-import contextlib
-import io
 import itertools
 import json
 import math
@@ -48,6 +46,7 @@ import sys
 import tempfile
 import time
 
+from _doc_tables import print_and_write
 from gyro_noise_ros.app.reliability import static_from_batches
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.calibration.noise_change import compare_sensor, FixedTaus, sentence
@@ -59,8 +58,6 @@ import numpy as np
 from reliability_verdicts import _batches, _lower95, _upper95, emulator_argv
 
 SENSORS = ('accel', 'gyro')
-BEGIN = '<!-- noise_verdicts.py: begin -->'
-END = '<!-- noise_verdicts.py: end -->'
 HERE = os.path.dirname(os.path.abspath(__file__))
 ADIS = os.path.join(os.environ.get('GYRO_NOISE_REAL_DATA', os.path.join(
     HERE, '..', '..', '..', 'shared', 'data', 'real')), 'adis16405_static')
@@ -289,21 +286,6 @@ def part_cli(cache):
                   f'{"yes" if same else "NO"} |')
 
 
-def _write_doc(text, argv):
-    """Replace the tables between the markers of docs/reliability.md."""
-    path = os.path.join(HERE, '..', 'reliability.md')
-    with open(path) as fh:
-        doc = fh.read()
-    if doc.count(BEGIN) != 1 or doc.count(END) != 1:
-        sys.exit(f'{path}: needs exactly one {BEGIN} and one {END}')
-    cmd = ' '.join(['nice python docs/scripts/noise_verdicts.py'] + list(argv))
-    block = f'{BEGIN}\nMade by `{cmd}`.\n{text.rstrip()}\n{END}'
-    head, rest = doc.split(BEGIN)
-    with open(path + '.tmp', 'w') as fh:
-        fh.write(head + block + rest.split(END, 1)[1])
-    os.replace(path + '.tmp', path)
-
-
 def _run(args):
     t0 = time.time()
     parts = ('emulator', 'lengths', 'real', 'cli') if args.part == 'all' else (args.part,)
@@ -332,11 +314,8 @@ def main(argv=None):
     if args.write and args.part != 'all':
         p.error('--write needs --part all')
     if args.write:
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
-            _run(args)
-        _write_doc(buf.getvalue(), argv if argv is not None else sys.argv[1:])
-        print(buf.getvalue())
+        print_and_write(lambda: _run(args), 'noise_verdicts.py', 'reliability.md',
+                        argv if argv is not None else sys.argv[1:])
         return 0
     _run(args)
     return 0

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..bag import ImuBagReader
+from ..bag import ImuBagReader, ImuBatch
 from ..core.timebase import estimate_rate
 from ..errors import InputDataError, ParameterError
 from ..outputs import StrPath
@@ -135,10 +135,16 @@ def first_stamp_ns(path: StrPath, *, topic: str | None = None) -> int | None:
     int or None
 
     """
+    b = _first_batch(path, topic)
+    return None if b is None else int(b.stamp_ns[0])
+
+
+def _first_batch(path: StrPath, topic: str | None) -> ImuBatch | None:
+    """Return the first non-empty batch of Imu samples of a recording, None when none."""
     with ImuBagReader(path, topic=topic) as reader:
         for b in reader.iter_batches(1024):
             if b.stamp_ns.size:
-                return int(b.stamp_ns[0])
+                return b
     return None
 
 
@@ -148,21 +154,16 @@ def frame_id(path: StrPath, *, topic: str | None = None) -> str:
 
     Parameters
     ----------
-    path : str or os.PathLike
-        Recording.
-    topic : str, optional, keyword-only
-        ``sensor_msgs/Imu`` topic.
+    path, topic
+        As :func:`first_stamp_ns`.
 
     Returns
     -------
     str
 
     """
-    with ImuBagReader(path, topic=topic) as reader:
-        for b in reader.iter_batches(1024):
-            if b.stamp_ns.size:
-                return b.frame_id or ''
-    return ''
+    b = _first_batch(path, topic)
+    return '' if b is None else (b.frame_id or '')
 
 
 def read_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None = None,

@@ -762,14 +762,10 @@ def avar_skewness(alpha: int, m: int, n_phase: int, *, stride: int = 1) -> float
 
     Parameters
     ----------
-    alpha : int
-        Power-law exponent of the rate PSD, -2..2.
-    m : int
-        Averaging factor (samples).
-    n_phase : int
-        Number of phase points (rate samples + 1).
+    alpha, m, n_phase : int
+        Noise type (-2..2), averaging factor and phase points, as :func:`edf_greenhall`.
     stride : int, keyword-only
-        Step between successive terms (samples); must divide ``m``.
+        As :func:`edf_greenhall`.
 
     Returns
     -------

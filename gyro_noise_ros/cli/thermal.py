@@ -35,12 +35,16 @@ the exit code. Formats, metric definitions and exit codes: ``docs/thermal.md``.
 
 import argparse
 from collections.abc import Callable, Iterable
+import math
 import sys
 from typing import TypeAlias
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from .. import __version__
 from ..app import thermal as app
+from ..core.fractional import physical_memory_bytes
+from ..errors import ParameterError
+from ..outputs import free_bytes
 from ..thermal import methods as registry
 from ..thermal.bag_io import DEFAULT_MAX_GAP_S
 from ..thermal.metrics import DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ
@@ -51,6 +55,10 @@ PROG = app.PROG
 #: not import the simulator).
 SHAPES = ('oven', 'heating', 'cooling', 'staircase', 'staircase_down', 'cycle', 'cool_reheat',
           'soak', 'sine')
+#: Memory and disk of ``simulate`` per gyro sample (train and test together), measured: 1 h
+#: against 0.25 h at 100 Hz (540,000 more samples) took 270 MB more peak RSS (/usr/bin/time) and
+#: 276 MB more output (sqlite3 bags and truth): about 500 B each, rounded up.
+SIMULATE_BYTES_PER_SAMPLE = 512
 
 
 #: argparse's sub-command handle (``add_subparsers()``).
@@ -78,6 +86,7 @@ def _add_fit_options(p: argparse.ArgumentParser) -> None:
 
 
 def _add_output_options(p: argparse.ArgumentParser) -> None:
+    add_overwrite_argument(p)
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--quiet', action='store_true', help='print only errors')
 
@@ -193,6 +202,7 @@ def _add_simulate_command(sub: _Subparsers) -> None:
                    help='rate of the Temperature messages (Hz)')
     s.add_argument('--no-hysteresis', action='store_true',
                    help='switch the bias hysteresis off')
+    add_overwrite_argument(s)
 
 
 def _add_export_command(sub: _Subparsers) -> None:
@@ -229,6 +239,16 @@ def _bag_options(args: argparse.Namespace) -> app.BagOptions:
 
 
 def _score_options(args: argparse.Namespace) -> app.ScoreOptions:
+    for option, value in (('--amplitude-deg-s', args.amplitude_deg_s),
+                          ('--f-lo-hz', args.f_lo_hz), ('--f-hi-hz', args.f_hi_hz)):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(f'{option} must be a finite number > 0, got {value!r}')
+    if not args.f_hi_hz > args.f_lo_hz:
+        raise ParameterError(f'--f-hi-hz {args.f_hi_hz:g} must be above --f-lo-hz '
+                             f'{args.f_lo_hz:g}')
+    if not args.range_margin_c >= 0:  # inf disables the refusal; NaN and < 0 are refused
+        raise ParameterError(f'--range-margin-c must be >= 0 (inf: off), got '
+                             f'{args.range_margin_c!r}')
     return app.ScoreOptions(amplitude_deg_s=args.amplitude_deg_s, f_lo_hz=args.f_lo_hz,
                             f_hi_hz=args.f_hi_hz, small_signal=not args.no_small_signal,
                             range_margin_c=args.range_margin_c)
@@ -240,7 +260,13 @@ def _print_notes(notes: Iterable[str], args: argparse.Namespace) -> None:
             print(f'{PROG}: note: {note}', file=sys.stderr)
 
 
+def _check_seed(args: argparse.Namespace) -> None:
+    if args.seed < 0:  # numpy's SeedSequence takes non-negative integers
+        raise ParameterError(f'--seed must be >= 0, got {args.seed}')
+
+
 def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
+    _check_seed(args)
     result = app.fit(bags=args.bags, method=args.method, seed=args.seed,
                      min_range_c=args.min_range_c, bag_options=_bag_options(args),
                      accel=not args.no_accel, scheduler=args.scheduler, warn=_warn(args),
@@ -282,6 +308,7 @@ def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace, argv: list[str]) -> int:
+    _check_seed(args)
     names = None
     if args.methods is not None:
         names = [m.strip() for m in args.methods.split(',') if m.strip()]
@@ -309,6 +336,8 @@ def _cmd_simulate(args: argparse.Namespace, argv: list[str]) -> int:
         raise registry.MethodUnavailableError(
             f'the thermal simulator is not available (gyro_noise_ros.thermal.simulate: '
             f'{err})') from err
+    _check_seed(args)
+    _check_simulate_size(args)
     result = app.simulate(seed=args.seed, hours=args.hours, rate_hz=args.rate_hz,
                           compress=args.compress, shape=args.shape, test_shape=args.test_shape,
                           hysteresis=not args.no_hysteresis, storage=args.storage,
@@ -316,6 +345,33 @@ def _cmd_simulate(args: argparse.Namespace, argv: list[str]) -> int:
     paths = app.write_simulate(result, args.out)
     print(f'wrote {", ".join(str(p) for p in paths)}')
     return 0
+
+
+def _check_simulate_size(args: argparse.Namespace) -> None:
+    """Refuse a run whose samples cannot fit in half the memory or on the disk (exit code 2)."""
+    from ..thermal import simulate as sim
+
+    for option, value in (('--hours', args.hours), ('--compress', args.compress),
+                          ('--rate-hz', args.rate_hz),
+                          ('--temperature-rate-hz', args.temperature_rate_hz)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ParameterError(f'{option} must be a finite number > 0, got {value!r}')
+    train_s, comp = sim.resolve_timing(sim.make_profile(args.shape), hours=args.hours,
+                                       compress=args.compress)
+    test_s = train_s if args.test_shape is None else sim.resolve_timing(
+        sim.make_profile(args.test_shape), compress=comp)[0]
+    need = (train_s + test_s) * args.rate_hz * SIMULATE_BYTES_PER_SAMPLE
+    memory, free = physical_memory_bytes(), free_bytes(args.out)
+    run = (f'--hours {args.hours:g}' if args.hours is not None else
+           f'--compress {args.compress:g}' if args.compress is not None else
+           f'--shape {args.shape} (its whole profile)')
+    for have, where in ((None if memory is None else memory / 2, "half of this machine's memory"),
+                        (free, f'the free space of {args.out!r}')):
+        if have is not None and not need <= have:
+            raise ParameterError(
+                f'{run} at --rate-hz {args.rate_hz:g} makes {train_s + test_s:.3g} s of '
+                f'samples (train and test), about {need / 2**30:.3g} GiB: more than {where} '
+                f'({have / 2**30:.3g} GiB); shorten the run or lower --rate-hz')
 
 
 def _cmd_export(args: argparse.Namespace, argv: list[str]) -> int:
@@ -339,6 +395,8 @@ def _body(argv: list[str]) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
         return err.code if isinstance(err.code, int) else 2
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     return _COMMANDS[args.command](args, argv)
 
 

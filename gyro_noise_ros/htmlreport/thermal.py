@@ -29,9 +29,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .figures import allan_figure, series_figure
-from .page import Cell, Num, Page, pointer, Table, write_report_html
+from .page import Cell, Num, Page, pointer, Table, Verdict, write_report_html
 from ..thermal.metrics import DRIFT_WINDOW_S
-from ..units import RAD_TO_DEG as _DEG, S_PER_H
+from ..units import RAD_TO_DEG as _DEG, S_PER_H, time_unit
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
@@ -104,16 +104,17 @@ def _residual_figure(run: Any, processed: NDArray[np.float64],
     _, proc = _window_means(run.t_s, processed, DRIFT_WINDOW_S)
     if tm.size < 2:
         return []
-    hours = (tm - run.t_s[0]) / S_PER_H
+    clock = time_unit(float(tm[-1] - run.t_s[0]))
+    when = (tm - run.t_s[0]) * clock.per_si
     series = []
     for a, axis in enumerate(AXES):
-        series.append((f'{axis} raw', hours, raw[:, a] * _DEG))
-        series.append((f'{axis} residual ({label})', hours, proc[:, a] * _DEG))
+        series.append((f'{axis} raw', when, raw[:, a] * _DEG))
+        series.append((f'{axis} residual ({label})', when, proc[:, a] * _DEG))
     return [(f'Thermal residuals: {DRIFT_WINDOW_S:g}-s means of the raw and of the processed '
              f'output ({label}); the residual drift of the tables is the standard deviation of '
              'the processed means.',
              series_figure(series, title='Raw output and residual after compensation',
-                           x_label='time from the first sample (h)',
+                           x_label=f'time from the first sample ({clock.unit})',
                            y_label='60-s mean of the angular rate (deg/s)'))]
 
 
@@ -216,7 +217,10 @@ def compare_page(doc: dict[str, Any], curves: Mapping[str, Any]) -> Page:
     inputs = [s.split(' [')[0] for s in (doc.get('train'), doc.get('test')) if s]
     return Page(title=f'gyro_noise_thermal compare: {doc["test"]}', data=doc,
                 in_short_markdown='\n'.join(short), figures=tuple(figures),
-                tables=tuple(tables), method_markdown=method, command=doc.get('command'),
+                verdict=Verdict('INFO', f'best on the held-out run ({best["rule"]}): '
+                                f'**{best["method"]}**.'),
+                card=tuple(tables[:2]), card_title='The raw run and the methods',
+                tables=tuple(tables[2:]), method_markdown=method, command=doc.get('command'),
                 inputs=tuple(dict.fromkeys(inputs)), version=doc.get('package_version', ''))
 
 
@@ -273,7 +277,11 @@ def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
               + _definitions_md(doc))
     return Page(title=f'gyro_noise_thermal apply: {doc["method"]} on {doc["bag"]}', data=doc,
                 in_short_markdown='\n'.join(short), figures=tuple(figures),
-                tables=tuple(tables), method_markdown=method, command=doc.get('command'),
+                verdict=Verdict('INFO', f'{doc["method"]} applied: ' + '; '.join(
+                    f'{axis}: {v["verdict"]["text"].rstrip(".")}'
+                    for axis, v in doc['axes'].items()) + '.'),
+                card=tuple(tables[:1]), card_title='The method on this run',
+                tables=tuple(tables[1:]), method_markdown=method, command=doc.get('command'),
                 inputs=(doc['bag'], doc['model']['path']),
                 version=doc.get('package_version', ''))
 

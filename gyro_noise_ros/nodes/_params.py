@@ -24,6 +24,7 @@ unit are written once.
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, MISSING
+import difflib
 import math
 import re
 from typing import Any
@@ -41,13 +42,30 @@ _PYTHON_TO_ROS_TYPE = {
     float: ParameterType.PARAMETER_DOUBLE,
     str: ParameterType.PARAMETER_STRING,
 }
+#: Array parameters by element type (a list default's first element).
+_PYTHON_TO_ROS_ARRAY_TYPE = {
+    bool: ParameterType.PARAMETER_BOOL_ARRAY,
+    int: ParameterType.PARAMETER_INTEGER_ARRAY,
+    float: ParameterType.PARAMETER_DOUBLE_ARRAY,
+    str: ParameterType.PARAMETER_STRING_ARRAY,
+}
 
 _ROS_TYPE_NAME = {
     ParameterType.PARAMETER_BOOL: 'a boolean (true/false)',
     ParameterType.PARAMETER_INTEGER: 'an integer',
     ParameterType.PARAMETER_DOUBLE: 'a floating-point number (write 1.0, not 1)',
     ParameterType.PARAMETER_STRING: 'a string',
+    ParameterType.PARAMETER_BYTE_ARRAY: 'an array of bytes',
+    ParameterType.PARAMETER_BOOL_ARRAY: 'an array of booleans ([true, false])',
+    ParameterType.PARAMETER_INTEGER_ARRAY: 'an array of integers ([1, 2])',
+    ParameterType.PARAMETER_DOUBLE_ARRAY: 'an array of floating-point numbers ([0.0, 1.0], not '
+                                          '[0, 1])',
+    ParameterType.PARAMETER_STRING_ARRAY: "an array of strings (['a', 'b'])",
 }
+
+
+def _type_name(ros_type: int) -> str:
+    return _ROS_TYPE_NAME.get(ros_type, f'of ROS parameter type {ros_type}')
 
 
 @dataclass(frozen=True)
@@ -91,6 +109,9 @@ class ParamSpec:
     @property
     def ros_type(self) -> int:
         """Return the ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
+        if isinstance(self.default, (list, tuple)):
+            element = type(self.default[0]) if self.default else float
+            return _PYTHON_TO_ROS_ARRAY_TYPE[element]
         return _PYTHON_TO_ROS_TYPE[type(self.default)]
 
     def descriptor(self) -> ParameterDescriptor:
@@ -136,6 +157,13 @@ class ParamSpec:
             Naming the parameter, the bad value and what is allowed.
 
         """
+        if isinstance(self.default, (list, tuple)):
+            values = list(value)
+            if len(values) != len(self.default) or not all(
+                    math.isfinite(v) for v in values if isinstance(v, float)):
+                raise ParameterError(f"parameter '{self.name}' = {values!r} must be "
+                                     f'{len(self.default)} finite values')
+            return
         if self.pattern and not re.fullmatch(self.pattern, value):
             raise ParameterError(
                 f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
@@ -178,7 +206,8 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
     Raises
     ------
     ParameterError
-        An override has the wrong type, is out of range, or is not one of the choices.
+        An override has the wrong type, is out of range, is not one of the choices, or names a
+        parameter the table lacks.
 
     """
     by_name = {spec.name: spec for spec in table}
@@ -190,6 +219,11 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
             raise ParameterError(_explain_parameter_exception(spec, err)) from err
         spec.check(value)
         values[spec.name] = value
+    # the node's one table is declared: a name given that it lacks is refused now, before the
+    # node's start-up work (run_node checks again once the node is built)
+    unknown = unknown_parameters(node)
+    if unknown:
+        raise unknown_parameter_error(node, unknown)
 
     def _validate(params: Sequence[Any]) -> SetParametersResult:
         for param in params:
@@ -212,12 +246,113 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
 def _explain_parameter_exception(spec: ParamSpec, err: Exception) -> str:
     text = str(err)
     if 'expecting type' in text:
-        return (f"parameter '{spec.name}' must be {_ROS_TYPE_NAME[spec.ros_type]}: "
+        return (f"parameter '{spec.name}' must be {_type_name(spec.ros_type)}: "
                 f'{text.split(": ")[0]}')
     if spec.min_value is not None:
         return (f"parameter '{spec.name}' is outside [{spec.min_value}, {spec.max_value}]"
                 + (f' {spec.unit}' if spec.unit else '') + f': {text}')
     return f"parameter '{spec.name}': {text}"
+
+
+def _default_text(spec: ParamSpec) -> str:
+    if isinstance(spec.default, bool):
+        return 'true' if spec.default else 'false'
+    if isinstance(spec.default, str):
+        return repr(spec.default)
+    if isinstance(spec.default, (list, tuple)):
+        return '[' + ', '.join(_default_text(ParamSpec('', v, '')) for v in spec.default) + ']'
+    return f'{spec.default!r}'
+
+
+def parameter_help(prog: str, table: Sequence[ParamSpec], summary: str = '') -> str:
+    """
+    Return the ``--help`` text of a node: usage, then every parameter of its one table.
+
+    Parameters
+    ----------
+    prog : str
+        The executable.
+    table : sequence of ParamSpec
+        The node's ``PARAMETERS``.
+    summary : str
+        One paragraph on what the node does (its module docstring's first).
+
+    Returns
+    -------
+    str
+        Each parameter with its default, unit, range or choices, read-only mark and description.
+
+    """
+    lines = [f'usage: {prog} [--help] [--ros-args [-p NAME:=VALUE ...] [--params-file FILE] '
+             '[-r __ns:=/NAMESPACE] ...]', '']
+    if summary:
+        lines += [' '.join(summary.strip().split('\n\n')[0].split()), '']
+    lines.append('parameters (default [unit]; config/' f'{prog}.yaml lists them too):')
+    for spec in table:
+        unit = f' [{spec.unit}]' if spec.unit else ''
+        limits = []
+        if spec.min_value is not None:
+            limits.append(f'{spec.min_value:g}..{spec.max_value:g}')
+        if spec.choices:
+            limits.append('one of ' + ', '.join(str(c) for c in spec.choices))
+        if spec.read_only:
+            limits.append('read-only')
+        extra = f" ({'; '.join(limits)})" if limits else ''
+        lines.append(f'  {spec.name} = {_default_text(spec)}{unit}{extra}')
+        lines.append(f'      {spec.description}')
+    lines += ['', "rclpy's own: use_sim_time = false (take time from /clock). Another name is "
+              'refused (exit code 2).', '']
+    return '\n'.join(lines)
+
+
+def unknown_parameters(node: Node) -> list[str]:
+    """
+    Return the parameters given to ``node`` (``-p``, ``--params-file``) that it never declared.
+
+    rclpy silently ignores an override whose name the node does not declare, so a misspelt
+    parameter would change nothing without a word; rclpy's own parameters (``use_sim_time``,
+    ``start_type_description_service``) are declared by rclpy and pass.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        A node whose parameters are all declared.
+
+    Returns
+    -------
+    list of str
+        The undeclared names, sorted.
+
+    """
+    # rclpy keeps the overrides addressed to this node (command line and parameter files) there
+    given = getattr(node, '_parameter_overrides', None) or {}
+    return sorted(name for name in given if not node.has_parameter(name))
+
+
+def unknown_parameter_error(node: Node, names: Sequence[str]) -> ParameterError:
+    """
+    Return the one-line refusal of unknown parameters, with the closest known name of each.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node (its declared parameters).
+    names : sequence of str
+        :func:`unknown_parameters`.
+
+    Returns
+    -------
+    ParameterError
+
+    """
+    known = sorted(node.list_parameters([], 0).names)  # depth 0: every declared name
+    parts = []
+    for name in names:
+        close = difflib.get_close_matches(name, known, n=1)
+        parts.append(repr(name) + (f' (did you mean {close[0]!r}?)' if close else ''))
+    what = 'parameter' if len(names) == 1 else 'parameters'
+    return ParameterError(f'unknown {what} {", ".join(parts)}: {node.get_name()} declares no '
+                          'such parameter (--help lists them)')
 
 
 def specs_from_dataclass(cls: type[Any], *, read_only: bool,

@@ -378,7 +378,8 @@ def main(args: list[str] | None = None) -> int:
         0, or 2 for a bad parameter.
 
     """
-    return run_node(NoiseAnalyzerNode, args, prog=NODE_NAME)
+    return run_node(NoiseAnalyzerNode, args, prog=NODE_NAME, parameters=PARAMETERS,
+                    summary=__doc__)
 
 
 if __name__ == '__main__':

@@ -79,7 +79,8 @@ def _summary(st):
             entry['curve'] = [np.asarray(r.allan.tau_s).tolist(),
                               np.asarray(r.allan.adev).tolist()]
         out[ch] = entry
-    return {'rate_hz': st.rate_hz, 'duration_s': st.duration_s, 'channels': out}
+    return {'rate_hz': st.rate_hz, 'duration_s': st.duration_s, 'samples': st.samples,
+            'left_out': st.left_out, 'cut': st.cut, 'channels': out}
 
 
 def _cached(key, cache, make):
@@ -104,8 +105,9 @@ def emulated(seed, hours, stress, cache, odr=104.0):
     key = 'noise_' + '_'.join(argv).replace('--', '')
 
     def make():
-        board = board_from_args(argv)
-        return _summary(static_from_batches(_batches(board, int(round(hours * 3600 * odr))),
+        # generated once and held (4 h: 72 MB), read twice by the tool's two passes
+        held = list(_batches(board_from_args(argv), int(round(hours * 3600 * odr))))
+        return _summary(static_from_batches(lambda: iter(held),
                                             source='portenta_emulator ' + ' '.join(argv)))
     return _cached(key, cache, make)
 
@@ -121,7 +123,7 @@ def _adis_batches(run):
 
 def adis(run, cache):
     return _cached(f'noise_adis_imu{run}', cache, lambda: _summary(
-        static_from_batches(_adis_batches(run), source=f'adis_16405_imu{run}')))
+        static_from_batches(lambda: _adis_batches(run), source=f'adis_16405_imu{run}')))
 
 
 def _fixed(entry):
@@ -152,16 +154,18 @@ def _count(pairs, tolerance=0.3):
     sens = {'beyond': 0, 'within': 0, 'undetermined': 0}
     decide = []
     quotes = []
+    widest = 1.0
     for b, a in pairs:
         for s in SENSORS:
             v = verdict(b, a, s, tolerance)
             sens[v.verdict] += 1
             ch_beyond += len({t.channel for t in v.tests if t.verdict == 'beyond'})
+            widest = max([widest] + [math.exp(abs(math.log(t.ratio))) for t in v.tests])
             if v.decide_record_s:
                 decide.append(v.decide_record_s / 3600)
             if v.decisive is not None and v.verdict == 'beyond':
                 quotes.append(v.decisive.ratio)
-    return ch_beyond, sens, decide, quotes
+    return ch_beyond, sens, decide, quotes, widest
 
 
 def part_emulator(cache, pairs, stress_pairs):
@@ -169,16 +173,17 @@ def part_emulator(cache, pairs, stress_pairs):
     print(f'\n### Emulator, 4-h records at 104 Hz: {pairs} unstressed pairs, {stress_pairs} '
           'unstressed -> --stress pairs\n')
     print('| pairs | channels | channels beyond | sensors beyond / within / undetermined | '
-          'records that would decide (median, h) | ratio quoted when beyond (median) |')
-    print('|---|---|---|---|---|---|')
+          'records that would decide (median, h) | ratio quoted when beyond (median) | largest '
+          'ratio either way |')
+    print('|---|---|---|---|---|---|---|')
     rows = {}
     for name, pl in (('unstressed -> unstressed', null), ('unstressed -> --stress', stress)):
-        ch, sens, decide, quotes = _count(pl)
+        ch, sens, decide, quotes, widest = _count(pl)
         rows[name] = (ch, sens, len(pl))
         med = f'{np.median(decide):.3g}' if decide else '-'
         q = f'x{np.median(quotes):.2f}' if quotes else '-'
         print(f'| {name} | {6 * len(pl)} | {ch} | {sens["beyond"]} / {sens["within"]} / '
-              f'{sens["undetermined"]} of {2 * len(pl)} | {med} | {q} |')
+              f'{sens["undetermined"]} of {2 * len(pl)} | {med} | {q} | x{widest:.2f} |')
     ch, sens, n = rows['unstressed -> unstressed']
     chs, senss, ns = rows['unstressed -> --stress']
     print(f'\nFalse alarms: {ch} of {6 * n} channels beyond (one-sided 95 % upper bound '
@@ -198,8 +203,8 @@ def part_lengths(cache, pairs, long_pairs):
     print('|---|---|---|---|---|---|---|')
     for hours, n in ((1.0, pairs), (4.0, pairs), (12.0, long_pairs)):
         null, stress = _pairs(hours, n, n, cache)
-        _, sn, _, _ = _count(null)
-        _, ss, _, _ = _count(stress)
+        _, sn, _, _, _ = _count(null)
+        _, ss, _, _, _ = _count(stress)
         print(f'| {hours:g} | {n} | {sn["beyond"]} of {2 * n} | {n} | {ss["beyond"]} of '
               f'{2 * n} ({100 * ss["beyond"] / (2 * n):.0f} %) | {ss["within"]} | '
               f'{ss["undetermined"]} |')
@@ -229,15 +234,16 @@ def part_real(cache):
     print('\n\nLargest ratio between two runs (either way) at each fixed tau, all 15 pairs: ' +
           '; '.join(f'{s} ' + ', '.join(f'{worst[(s, tau)]:.2f} at {tau:g} s'
                                         for tau in (1.0, 10.0, 30.0)) for s in SENSORS) + '.')
-    print('\n| run | gyro_x bias stability (deg/s) | at tau (s) | ADEV at 44 s (deg/s) |')
-    print('|---|---|---|---|')
+    print('\n| run | gyro_x bias stability (deg/s) | at tau (s) | ADEV at 44 s (deg/s) | '
+          'static-segment rule (core/segments) |')
+    print('|---|---|---|---|---|')
     for k, r in runs.items():
         e = r['channels']['gyro_x']
         tau, adev = (np.array(v) for v in e['curve'])
         at = float(np.exp(np.interp(math.log(44.0), np.log(tau), np.log(adev))))
         bound = ' (upper bound)' if e['floor'][2] else ''
         print(f'| imu{k} | {e["floor"][0] * RAD_TO_DEG:.5f}{bound} | {e["floor"][1]:.4g} | '
-              f'{at * RAD_TO_DEG:.5f} |')
+              f'{at * RAD_TO_DEG:.5f} | {r.get("cut") or "static throughout"} |')
 
 
 def _write_adis_bag(run, path):

@@ -90,9 +90,8 @@ def record(seed, odr_hz, hours, stress, cache):
         with open(path) as fh:
             return json.load(fh)
     t0 = time.time()
-    board = board_from_args(argv)
-    st = static_from_batches(_batches(board, int(round(hours * 3600 * odr_hz))),
-                             source='portenta_emulator ' + ' '.join(argv))
+    held = list(_batches(board_from_args(argv), int(round(hours * 3600 * odr_hz))))
+    st = static_from_batches(lambda: iter(held), source='portenta_emulator ' + ' '.join(argv))
     out = {'argv': argv, 'record_s': st.duration_s, 'cpu_s': time.time() - t0, 'channels': {}}
     for ch, r in st.channels.items():
         iv = dataclasses.asdict(r.interval)

@@ -55,6 +55,7 @@ from ..calibration.reliability_report import (adev_csv, plot_fig6, reliability_m
                                               SIDES, term_keys)
 from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, unit_of
+from ..core.segments import left_out_sentence, segment_left_out, StaticSegment, WindowStats
 from ..errors import BagError, InputDataError, ParameterError
 from ..formatting import finite_or_none as _num
 from ..htmlreport.reliability import write_reliability_html
@@ -63,6 +64,10 @@ from ..outputs import atomic_write_text, staged_output
 PARTS = ('before_calibration', 'before_static', 'after_calibration', 'after_static')
 #: Largest relative difference of the two static records' sample rates.
 RATE_MATCH = 0.01
+#: ``--static``: cut motion by the static-segment rule, or analyse every sample.
+STATIC_MODES = ('auto', 'off')
+#: Samples per update of the rule's window statistics (its cost grows with batch x windows).
+_SEGMENT_CHUNK = 4096
 
 
 @dataclass(frozen=True)
@@ -98,6 +103,9 @@ class ReliabilityParams:
         Static-dwell detector.
     figures : bool
         Draw the Figure 6 PNGs.
+    static : str
+        'auto': the static records' longest static segment is analysed, motion cut and said
+        (``core.segments``, the rule of ``gyro_noise_analyze``); 'off': every sample.
 
     """
 
@@ -115,6 +123,7 @@ class ReliabilityParams:
     rate_hz: float | None = None
     settings: DetectorSettings = field(default_factory=DetectorSettings)
     figures: bool = True
+    static: str = 'auto'
 
     def __post_init__(self) -> None:
         for name in ('before_calibration', 'after_calibration'):
@@ -140,6 +149,9 @@ class ReliabilityParams:
             raise ParameterError(f'--alpha must be in (0, 0.5), got {self.alpha}')
         if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
+        if self.static not in STATIC_MODES:
+            raise ParameterError(f"--static must be one of {', '.join(STATIC_MODES)}, "
+                                 f'got {self.static!r}')
 
     def given(self) -> dict[str, Any]:
         """
@@ -165,7 +177,7 @@ class StaticAnalysis:
     rate_hz : float
         Sample rate (Hz).
     samples : int
-        Imu samples.
+        Imu samples analysed (the static part: ``left_out`` says what was cut).
     duration_s : float
         Last stamp relative to the first (s).
     check : dict
@@ -177,6 +189,11 @@ class StaticAnalysis:
         :func:`..calibration.records.temperature_stats` of the whole record.
     frame_id : str
         The Imu messages' ``header.frame_id`` ('' when unknown).
+    left_out : dict
+        What the static-segment rule cut (``motion``: samples; ``static_segment_s``,
+        ``static_segments_s``, ``cut_s`` when it cut something: ``core.segments``).
+    cut : str
+        The sentence saying so ('' when nothing was cut).
 
     """
 
@@ -188,6 +205,8 @@ class StaticAnalysis:
     channels: dict[str, Any]
     temperature: dict[str, Any] | None = None
     frame_id: str = ''
+    left_out: dict[str, Any] = field(default_factory=dict)
+    cut: str = ''
 
     def as_dict(self) -> dict[str, Any]:
         """
@@ -200,7 +219,7 @@ class StaticAnalysis:
         """
         return {'source': self.source, 'rate_hz': self.rate_hz, 'samples': self.samples,
                 'duration_s': self.duration_s, 'frame_id': self.frame_id, **self.check,
-                'temperature': self.temperature}
+                'left_out': self.left_out, 'cut': self.cut, 'temperature': self.temperature}
 
 
 def _temperature(path: str, topic: str | None, t0_ns: int | None = None) -> Any:
@@ -211,24 +230,32 @@ def _temperature(path: str, topic: str | None, t0_ns: int | None = None) -> Any:
         return None
 
 
-def static_from_batches(batches: Iterable[tuple[float, np.ndarray, np.ndarray, np.ndarray]], *,
-                        source: str, c: float = DEFAULT_C,
+#: ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches of one record, as ``records.iter_imu``.
+Batches = Iterable[tuple[float, np.ndarray, np.ndarray, np.ndarray]]
+
+
+def static_from_batches(batches: Callable[[], Batches], *, source: str, c: float = DEFAULT_C,
                         settings: DetectorSettings | None = None,
                         min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
                         temperature: tuple[np.ndarray, np.ndarray] | None = None,
-                        taus_s: Sequence[float] = noise_change.DEFAULT_TAUS_S
-                        ) -> StaticAnalysis:
+                        taus_s: Sequence[float] = noise_change.DEFAULT_TAUS_S,
+                        static: str = 'auto') -> StaticAnalysis:
     """
     Analyse a static record given as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
 
+    Two passes: the static-segment rule of ``core.segments`` over the gyro columns (the one rule
+    of every tool, fed as ``gyro_noise_analyze`` feeds it, so both cut the same windows of a
+    record: a knock is cut, the longest static run analysed on all six channels, what was cut
+    said), then the analysis of that part.
+
     Parameters
     ----------
-    batches : iterable
-        Batches as :func:`..calibration.records.iter_imu` yields them (the rate of the first
-        one is the record's).
+    batches : callable
+        Returns the record's batches afresh at each call, as :func:`..calibration.records.
+        iter_imu` yields them (the rate of the first one is the record's).
     source : str, keyword-only
         Record name for messages.
-    c, settings, min_edf, alpha, taus_s
+    c, settings, min_edf, alpha, taus_s, static
         As :func:`analyze_static`.
     temperature : tuple, optional, keyword-only
         ``(t_s, temperature_degc)`` of the record (:func:`..calibration.records.read_temperature`).
@@ -240,35 +267,65 @@ def static_from_batches(batches: Iterable[tuple[float, np.ndarray, np.ndarray, n
     Raises
     ------
     InputDataError
-        No channel can give the noise verdict's fixed taus (too short for the longest, constant,
-        not static, no samples): one line naming the record and why.
+        No channel can give the noise verdict's fixed taus (too short for the longest, or its
+        static part is; constant; not static; no samples): one line naming the record and why.
 
     """
+    # 'off': one pass, every sample (total counted below)
+    seg, total, last_ns = _static_segment(batches()) if static == 'auto' else (None, -1, 0)
     rec = None
-    for rate, t, accel, gyro in batches:
+    for rate, t, accel, gyro in batches():
         if rec is None:
             kw: dict[str, Any] = {} if settings is None else {'settings': settings}
             rec = StaticRecord(rate, c=c, source=source, min_edf=min_edf, alpha=alpha,
                                taus_s=taus_s, **kw)
-        rec.update(t, accel, gyro)
+        keep = None
+        if seg is not None:
+            ns = np.round(np.asarray(t, dtype=np.float64) * 1e9).astype(np.int64)
+            keep = (ns >= seg.start_ns) & (ns < seg.end_ns)
+        rec.update(t, accel, gyro, keep=keep)
     if rec is None:
         raise InputDataError(f'static record {source!r} holds no Imu samples')
+    total = rec.samples if total < 0 else total
+    left_out: dict[str, Any] = {'motion': total - rec.samples}
+    said = ''
+    if seg is not None:
+        left_out.update(segment_left_out(seg, 0, last_ns))
+        a, b = left_out['static_segment_s']
+        said = left_out_sentence(total, motion=total - rec.samples, segment_s=(a, b),
+                                 cuts=seg.cuts(0, last_ns))
     results, check = rec.finish()
     if not any(isinstance(r.fixed, noise_change.FixedTaus) for r in results.values()):
         # not one channel gives the verdict's statistics: a 20 s record, a constant one, a
         # six-position record given as static... six "undetermined" and exit 0 would hide that
         # the record is not what the procedure needs
-        why = str(results[CHANNELS[-1]].fixed)
-        raise InputDataError(f'static record {source!r} ({rec.duration_s:.1f} s, '
-                             f'{rec.samples} samples) cannot be analysed: {why}')
+        why = str(results[CHANNELS[-1]].fixed) + (f' ({said})' if said else '')
+        raise InputDataError(f'static record {source!r} ({rec.duration_s:.1f} s, {total} '
+                             f'samples) cannot be analysed: {why}')
     return StaticAnalysis(source, rec.rate_hz, rec.samples, rec.duration_s, check, results,
-                          records.temperature_stats(temperature))
+                          records.temperature_stats(temperature), left_out=left_out, cut=said)
+
+
+def _static_segment(batches: Batches) -> tuple[StaticSegment | None, int, int]:
+    """Return the segment to analyse (None: all of it), the samples and the last stamp (ns)."""
+    stats = WindowStats()
+    total, last_ns = 0, 0
+    for _, t, _accel, gyro in batches:
+        ns = np.round(np.asarray(t, dtype=np.float64) * 1e9).astype(np.int64)
+        g = np.asarray(gyro, dtype=np.float64)
+        for k in range(0, ns.size, _SEGMENT_CHUNK):
+            stats.update(ns[k:k + _SEGMENT_CHUNK], g[k:k + _SEGMENT_CHUNK])
+        total += ns.size
+        last_ns = int(ns[-1]) if ns.size else last_ns
+    seg = stats.segment()
+    return (None if seg is None or seg.static_throughout else seg), total, last_ns
 
 
 def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None = None,
                    c: float = DEFAULT_C, settings: DetectorSettings | None = None,
                    min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
-                   taus_s: Sequence[float] = noise_change.DEFAULT_TAUS_S) -> StaticAnalysis:
+                   taus_s: Sequence[float] = noise_change.DEFAULT_TAUS_S,
+                   static: str = 'auto') -> StaticAnalysis:
     """
     Stream a static recording through :class:`..calibration.static_record.StaticRecord`.
 
@@ -290,6 +347,8 @@ def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None
         One-sided level of the fall-back test (ambiguous crossings).
     taus_s : sequence of float, keyword-only
         The noise verdict's fixed averaging times (s).
+    static : str, keyword-only
+        'auto': analyse the longest static segment (``core.segments``); 'off': every sample.
 
     Returns
     -------
@@ -301,9 +360,9 @@ def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None
         As :func:`static_from_batches`.
 
     """
-    batches = records.iter_imu(path, topic=topic, rate_hz=rate_hz)
-    st = static_from_batches(batches, source=str(path), c=c, settings=settings,
-                             min_edf=min_edf, alpha=alpha, taus_s=taus_s)
+    st = static_from_batches(lambda: records.iter_imu(path, topic=topic, rate_hz=rate_hz),
+                             source=str(path), c=c, settings=settings, min_edf=min_edf,
+                             alpha=alpha, taus_s=taus_s, static=static)
     return replace(st, temperature=records.temperature_stats(_temperature(path, topic)),
                    frame_id=records.frame_id(path, topic=topic))
 
@@ -538,7 +597,7 @@ def run_reliability(params: ReliabilityParams) -> ReliabilityResult:
         statics[side] = analyze_static(
             bag, topic=params.topic, rate_hz=params.rate_hz, c=params.c,
             settings=params.settings, min_edf=params.min_edf, alpha=params.alpha,
-            taus_s=params.taus_s) if bag else None
+            taus_s=params.taus_s, static=params.static) if bag else None
     if len(errors) == len(given):
         raise InputDataError('nothing could be analysed: ' + '; '.join(
             f'{k}: {v}' for k, v in errors.items()))

@@ -167,6 +167,9 @@ def in_short(doc: dict[str, Any]) -> list[str]:
     """
     out = []
     statics = doc['static_records']
+    for side in SIDES:
+        if statics[side] and statics[side].get('cut'):
+            out.append(f'The {side} static record: {statics[side]["cut"]}')
     if statics['before'] and statics['after']:
         for s in SENSORS:
             out.append(doc['overall'][s]['sentence'])

@@ -244,7 +244,7 @@ class StaticRecord:
         self.duration_s = 0.0
 
     def update(self, t_s: NDArray[np.floating[Any]] | Sequence[float], accel_m_s2: ArrayLike,
-               gyro_rad_s: ArrayLike) -> None:
+               gyro_rad_s: ArrayLike, *, keep: NDArray[np.bool_] | None = None) -> None:
         """
         Ingest a batch.
 
@@ -254,10 +254,16 @@ class StaticRecord:
             (n,) stamps (s).
         accel_m_s2, gyro_rad_s : array_like
             (n, 3) specific force (m/s^2) and angular rate (rad/s).
+        keep : numpy.ndarray of bool, optional, keyword-only
+            (n,) the samples of the static part (``core.segments``: one contiguous run over the
+            record); the others count in the static check only, never in the Allan deviation.
+            Default: all.
 
         """
         data = np.hstack([np.asarray(accel_m_s2, np.float64), np.asarray(gyro_rad_s, np.float64)])
         self._win.update(t_s, data[:, :3], data[:, 3:])
+        if keep is not None:
+            data = data[np.asarray(keep, dtype=bool)]
         for k in range(len(CHANNELS)):
             if self._bad[k]:
                 continue

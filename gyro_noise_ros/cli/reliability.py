@@ -45,7 +45,7 @@ import sys
 from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.calibrate import resolve_gravity
 from ..app.reliability import (PARTS, ReliabilityParams, run_reliability, SENSORS,
-                               write_reliability)
+                               STATIC_MODES, write_reliability)
 from ..calibration import noise_change
 from ..calibration.interval import DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF
 from ..calibration.static import DetectorSettings
@@ -95,6 +95,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--rate-hz', type=float, help='nominal sample rate (default: from the stamps)')
     p.add_argument('--min-static-s', type=float, default=10.0,
                    help='shortest usable calibration dwell (s)')
+    p.add_argument('--static', default='auto', choices=STATIC_MODES,
+                   help='static records: auto: analyse the longest static segment, cutting '
+                   'motion and saying so (the rule of gyro_noise_analyze; default); off: '
+                   'analyse every sample')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
     p.add_argument('--no-html', action='store_true', help='write no report.html')
     return p
@@ -110,7 +114,8 @@ def _body(argv: list[str]) -> int:
         c=args.c, tolerance=args.tolerance, alpha=args.alpha, taus_s=tuple(args.taus),
         min_edf=args.min_edf,
         topic=args.topic, gravity=gravity, rate_hz=args.rate_hz,
-        settings=DetectorSettings(min_static_s=args.min_static_s), figures=not args.no_figures)
+        settings=DetectorSettings(min_static_s=args.min_static_s), figures=not args.no_figures,
+        static=args.static)
     # refused now (a file in the way, a previous result), not after the computation
     check_out_dir(args.out, overwrite=args.overwrite)
     if (args.before_calibration or args.after_calibration) and gravity.warning:
@@ -120,6 +125,9 @@ def _body(argv: list[str]) -> int:
         print(f'{PROG}: warning: {line}', file=sys.stderr)
     write_reliability(result, args.out, html=not args.no_html, command=(PROG, *argv))
     doc = result.as_dict()
+    for side, st in result.statics.items():
+        if st is not None and st.cut:
+            print(f'{side} static record: {st.cut}')
     if any(result.statics.values()):
         for sensor in SENSORS:
             e = doc['overall'][sensor]

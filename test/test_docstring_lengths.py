@@ -40,7 +40,7 @@ ALLOWED = {
     'calibration/gyro_turns.py', 'calibration/interval.py', 'calibration/sixpos.py',
     'calibration/static.py', 'cli/demo.py', 'cli/importer.py', 'link/clock.py',
     'nodes/analyzer.py', 'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py',
-    'thermal/elman.py', 'thermal/export.py', 'thermal/live.py', 'thermal/metrics.py',
+    'thermal/elman.py', 'thermal/live.py', 'thermal/metrics.py',
     'thermal/mopso.py', 'thermal/parallel.py', 'thermal/simulate.py',
 }
 

@@ -294,6 +294,17 @@ def test_thermal_compare_page_is_compare_json(thermal_outputs):
             assert v['verdict']['text'] in text
     for bag in bags:
         assert bag in page.sections['method']
+    # the verdict line is compare.md's; the card ranks the methods by x noise floor
+    from gyro_noise_ros.thermal.report import compare_verdict
+
+    level, line = compare_verdict(doc)
+    assert (tmp / 'c' / 'compare.md').read_text().startswith(
+        f'# Held-out comparison\n\n**{level}**: {line}')
+    html = (tmp / 'c' / 'report.html').read_text()
+    assert f'<div id="verdict" class="verdict verdict-{level.lower()}"' in html
+    assert f'<span class="level">{level}</span>' in html
+    assert {f'/ranking/{i}/mean_over_floor' for i in range(2)} <= shown
+    assert all(r['method'] in page.sections['card'] for r in doc['ranking'])
 
 
 @pytest.mark.slow
@@ -304,6 +315,14 @@ def test_thermal_apply_page_is_metrics_json(thermal_outputs):
     assert {f'/axes/{a}/processed/residual_drift_deg_s' for a in 'xyz'} <= {
         n[0] for n in page.nums}
     assert (tmp / 'a' / 'report.html').read_text().count('<div class="figure">') == 4
+    # the verdict line is report.md's; the card holds the yardstick
+    from gyro_noise_ros.thermal.report import apply_verdict
+
+    level, line = apply_verdict(doc)
+    assert f'**{level}**: {line}' in (tmp / 'a' / 'report.md').read_text()
+    assert f'<span class="level">{level}</span>' in (tmp / 'a' / 'report.html').read_text()
+    assert {f'/yardstick/over_floor/{a}' for a in range(3)} <= {n[0] for n in page.nums}
+    assert 'x noise floor' in page.sections['card']
     assert not (tmp / 'a2' / 'report.html').exists() and (tmp / 'a2' / 'metrics.json').exists()
 
 

@@ -173,7 +173,7 @@ def test_stable32_values_and_term_counts(name, rel, overlapping):
 
 
 def _acf_types(data, rate, ms, kind='rate', overlapping=True):
-    """The lag-1 ACF identification alone (Stable32's method) at each of ``ms``."""
+    """Return the lag-1 ACF identification alone (Stable32's method) at each of ``ms``."""
     from gyro_noise_ros.core import allan as allan_mod
     ms, _, _, _, x, _ = allan_mod._avar_core(data, rate, ms, kind, overlapping, None)
     acf = np.zeros((ms.size, kern.N_ACF))
@@ -185,8 +185,8 @@ def test_stable32_noise_identification():
     # Stable32's Alpha column uses the lag-1 ACF when there are >= 30 averages (B1/R(n) below, with
     # its own decision boundaries, which we do not claim to reproduce). Over the 691 such rows of
     # the value files our lag-1 ACF agrees on 681 (ocxo AF 5, 113, 463 in both ADEV and OADEV
-    # files; pink AF 218, 280, 326: borderline delta next to a rounding or 0.25 boundary), so require
-    # >= 98 % agreement: a wrong sign convention, a missing detrend or a wrong differencing rule
+    # files; pink AF 218, 280, 326: borderline delta next to a rounding or 0.25 boundary), so
+    # require >= 98 % agreement: a wrong sign convention, a missing detrend or a wrong differencing rule
     # each break tens of rows.
     agree = total = 0
     for name, rel, overlapping in VALUE_FILES:

@@ -186,8 +186,8 @@ def test_stable32_noise_identification():
     # its own decision boundaries, which we do not claim to reproduce). Over the 691 such rows of
     # the value files our lag-1 ACF agrees on 681 (ocxo AF 5, 113, 463 in both ADEV and OADEV
     # files; pink AF 218, 280, 326: borderline delta next to a rounding or 0.25 boundary), so
-    # require >= 98 % agreement: a wrong sign convention, a missing detrend or a wrong differencing rule
-    # each break tens of rows.
+    # require >= 98 % agreement: a wrong sign convention, a missing detrend or a wrong
+    # differencing rule each break tens of rows.
     agree = total = 0
     for name, rel, overlapping in VALUE_FILES:
         data, kind, rate = _dataset(name)

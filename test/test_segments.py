@@ -20,6 +20,7 @@ rule (explain, and the tools that read a record whole) choose the same segment; 
 explain cut the same samples of one file and print the same sentence.
 """
 
+from dataclasses import replace
 import json
 
 from gyro_noise_ros.app.explain import ExplainParams, prepare_explain
@@ -119,3 +120,45 @@ def test_analyze_and_explain_cut_one_window_and_say_one_sentence(tmp_path, capsy
     sentence = [w for w in prepared.warnings if 'left out' in w]
     assert len(sentence) == 1 and sentence[0] in said
     assert [m.n for m in prepared.measurements] == [int(np.sum(t >= 189.0))] * 3
+
+
+def _feeds(seed):
+    """Yield (name, stamps, gyro, batch edges): records with knocks, gaps, NaN rows, shuffles."""
+    rng = np.random.default_rng(seed)
+    stamps, gyro, _ = _record(seconds=120.0, knock=(40.0, 42.0), axis=0, seed=seed)
+    gyro[rng.random(gyro.shape[0]) < 0.02, rng.integers(0, 3)] = np.nan   # NaN rows
+    gap = (stamps - T0_NS >= 60 * 10 ** 9) & (stamps - T0_NS < 75 * 10 ** 9)
+    stamps, gyro = stamps[~gap], gyro[~gap]                                   # a 15 s gap
+    n = stamps.size
+    uneven = np.unique(np.concatenate(([0, n], rng.integers(0, n, 40))))     # uneven splits
+    yield 'whole', stamps, gyro, np.array([0, n])
+    yield 'uneven batches', stamps, gyro, uneven
+    yield 'one sample per batch at the start', stamps, gyro, np.concatenate(
+        (np.arange(50), uneven[uneven > 50]))
+    # packets out of order (a driver that reorders): a batch reaching back into the record
+    order = np.concatenate([np.arange(a, b) for a, b in
+                            sorted(zip(uneven[:-1], uneven[1:]), key=lambda ab: rng.random())])
+    yield 'shuffled batches', stamps[order], gyro[order], uneven
+    yield 'shuffled samples', stamps[rng.permutation(n)], gyro, uneven
+
+
+@pytest.mark.parametrize('seed', [5, 6])
+def test_the_linear_accumulation_agrees_with_the_slow_oracle(seed):
+    from _segments_oracle import SlowWindowStats
+    for name, stamps, gyro, edges in _feeds(seed):
+        fast, slow = WindowStats(), SlowWindowStats()
+        for a, b in zip(edges[:-1], edges[1:]):
+            fast.update(stamps[a:b], gyro[a:b])
+            slow.update(stamps[a:b], gyro[a:b])
+        got, want = fast.table(), slow.table()
+        assert fast.windows == want[0].size, name
+        np.testing.assert_array_equal(got[0], want[0], err_msg=name)     # window indices
+        np.testing.assert_array_equal(got[1], want[1], err_msg=name)     # counts
+        # sums in another order: equal to rounding (~1e-16 relative per term, <= 43 terms)
+        np.testing.assert_allclose(got[2], want[2], rtol=1e-12, atol=1e-15, err_msg=name)
+        np.testing.assert_allclose(got[3], want[3], rtol=1e-12, atol=1e-18, err_msg=name)
+        mine, theirs = fast.segment(), slow.segment()
+        # the same decisions, every window; the noise levels equal to rounding
+        assert replace(mine, noise_rad_s=()) == replace(theirs, noise_rad_s=()), name
+        np.testing.assert_allclose(mine.noise_rad_s, theirs.noise_rad_s, rtol=1e-12)
+        assert mine.moving != (), name          # the knock is found: not a vacuous comparison

@@ -50,6 +50,19 @@ MOTION_FACTOR = 3.0
 NOISE_QUANTILE = 0.2
 #: The longest static run covering this fraction of the windows means: static throughout.
 STATIC_ALL = 0.95
+#: Neighbourhood of the local static rate (s): a window's mean is compared with
+#: the median mean of this many quiet windows around it, not with one rate for the record. Long
+#: enough that a knock of seconds, or a rotation step of 20 s, is a minority in it (it cannot
+#: move the median); short enough that a MEMS bias does not wander far within it: the mean of a
+#: window departs from the neighbourhood's level by about the Allan deviation of the bias at
+#: tau ~ half the span, sqrt(2) K sqrt(tau/3) for a rate random walk K (IEEE 952): ~6 K at
+#: 120 s, under 1.3 N for K = N/5 (the tests' strong walk) against the limit of 3 static noise
+#: levels (3 N sqrt(f_s), >= 3 N from 1 Hz). A constant rate held longer than half the span
+#: becomes the local level (read as a bias: static) unless its spread moves it.
+LOCAL_S = 120.0
+#: A window's mean moves only beyond this many robust sigmas of the window means about the
+#: local level too (two-sided 6e-7 for Gaussian scatter: ~0.02 false windows in 10 h of 3 axes).
+SCATTER_FACTOR = 5.0
 
 
 @dataclass(frozen=True)
@@ -311,9 +324,13 @@ def judge_windows(keys: npt.NDArray[np.int64], counts: npt.NDArray[np.int64],
     noise = np.quantile(std, NOISE_QUANTILE, axis=0)
     noise = np.where(noise > 0, noise, np.finfo(float).tiny)
     quiet = np.all(std <= np.quantile(std, NOISE_QUANTILE, axis=0) * 1.5 + 1e-300, axis=1)
-    ref = np.median(mean[quiet], axis=0) if quiet.any() else np.median(mean, axis=0)
+    ref = local_level(keys, mean, quiet, round(LOCAL_S * 1e9 / window_ns))
     limit = MOTION_FACTOR * noise
-    moving = np.any((std > limit) | (np.abs(mean - ref) > limit), axis=1)
+    off = np.abs(mean - ref)
+    # the window means' own scatter about the local level (robust sigma of the quiet windows):
+    # a strong flicker moves 1 s means by ~0.7 noise levels, where 3 levels is ~4 sigma
+    scatter = 1.4826 * np.median(off[quiet] if quiet.any() else off, axis=0)
+    moving = np.any((std > limit) | (off > np.maximum(limit, SCATTER_FACTOR * scatter)), axis=1)
     # windows without data (a stamp gap) are not in keys, not motion: only motion ends a run
     runs = _runs(~moving)
     edges = _edges(keys, runs, t0_ns, window_ns)
@@ -330,6 +347,45 @@ def judge_windows(keys: npt.NDArray[np.int64], counts: npt.NDArray[np.int64],
         start_ns, end_ns = t0_ns, t0_ns + (int(keys[-1]) + 1) * window_ns
     return StaticSegment(int(start_ns), int(end_ns), bool(throughout), int(keys.size),
                          int((~moving).sum()), edges, noise_t, motion)
+
+
+def local_level(keys: npt.NDArray[np.int64], mean: npt.NDArray[np.float64],
+                quiet: npt.NDArray[np.bool_], span: int) -> npt.NDArray[np.float64]:
+    """
+    Return each window's local static rate: the running median of the quiet windows' means.
+
+    Parameters
+    ----------
+    keys : numpy.ndarray of int, shape (w,)
+        Window indices, increasing (gaps allowed).
+    mean : numpy.ndarray, shape (w, columns)
+        Window means (rad/s).
+    quiet : numpy.ndarray of bool, shape (w,)
+        Windows whose spread is near the static noise level on every column; none: all count.
+    span : int
+        Neighbourhood (windows, :data:`LOCAL_S`): the median runs over the quiet windows
+        nearest in order, as many as ``span`` windows hold on average (centred; mirrored at
+        the record's ends; the whole record when it is shorter).
+
+    Returns
+    -------
+    numpy.ndarray, shape (w, columns)
+        Per window, the median of the neighbourhood around the quiet window nearest to it.
+
+    """
+    from scipy.ndimage import median_filter
+
+    pick = np.flatnonzero(quiet) if quiet.any() else np.arange(keys.size)
+    # as many quiet windows as ``span`` windows hold on average: the median spans ~span windows
+    count = int(round(span * pick.size / keys.size))
+    size = max(1, min(count | 1, (pick.size - 1) | 1))   # odd: centred; at most the record
+    level = median_filter(mean[pick], size=(size, 1), mode='mirror')
+    at = keys[pick]
+    if at.size == 1:
+        return np.repeat(level, keys.size, axis=0)
+    j = np.clip(np.searchsorted(at, keys), 1, at.size - 1)
+    return np.asarray(level[np.where(keys - at[j - 1] <= at[j] - keys, j - 1, j)],
+                      dtype=np.float64)
 
 
 def _edges(keys: npt.NDArray[np.int64], runs: list[tuple[int, int]], t0_ns: int,

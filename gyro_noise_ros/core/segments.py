@@ -22,16 +22,18 @@ batch (the streaming analyzer), and :func:`left_out_sentence` the one sentence e
 
 Rule: the record is cut into windows of :data:`WINDOW_S`; per window and column (axis) the mean
 and standard deviation are kept. A column's static noise level is the :data:`NOISE_QUANTILE`
-quantile of its window standard deviations, its static rate the median window mean of the quiet
-windows. A window **moves** when on any column its standard deviation exceeds
-:data:`MOTION_FACTOR` static noise levels, or its mean departs from the static rate by more. All
-axes are judged together: a knock on one axis cuts that time from every axis. The segment
-analysed is the **longest run of static windows**: the Allan deviation and the chunk statistics
-need contiguous data, and joining runs across a knock would put a step of unknown size into them;
-shorter static runs are cut too (reason ``'shorter static run'``) and listed. A run covering
-:data:`STATIC_ALL` of the windows means static throughout (nothing cut). Windows without samples
-(a stamp gap) do not end a run: a gap is a gap, never motion. Fewer than 3 windows: no judgement.
-Times are seconds after the record's first sample. Measurements: docs/offline_tool.md.
+quantile of its window standard deviations; its local static rate at a window is the running
+median of the quiet windows' means over :data:`LOCAL_S` around it (:func:`local_level`), so a
+wandering bias is not motion. A window **moves** when on any column its standard deviation
+exceeds :data:`MOTION_FACTOR` static noise levels, or its mean departs from the local rate by
+more and by over :data:`SCATTER_FACTOR` robust sigmas of the means about it. A rate held longer
+than half of :data:`LOCAL_S` becomes the local rate (a bias): a steady turn reads as static
+unless its spread moves it. All axes are judged together: a knock on one axis cuts that time
+from every axis. The segment analysed is the **longest run of static windows** (the Allan
+deviation needs contiguous data); shorter static runs are cut too (``'shorter static run'``).
+A run covering :data:`STATIC_ALL` of the windows means static throughout (nothing cut). Windows
+without samples (a stamp gap) never end a run. Fewer than 3 windows: no judgement.
+Times: s after the record's first sample. Cost O(n). Measurements: docs/offline_tool.md.
 """
 
 from dataclasses import dataclass

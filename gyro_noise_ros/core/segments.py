@@ -375,7 +375,7 @@ def local_level(keys: npt.NDArray[np.int64], mean: npt.NDArray[np.float64],
         Per window, the median of the neighbourhood around the quiet window nearest to it.
 
     """
-    from scipy.ndimage import median_filter
+    from scipy.ndimage import median_filter  # here: analyze's start does not pay for ndimage
 
     pick = np.flatnonzero(quiet) if quiet.any() else np.arange(keys.size)
     # as many quiet windows as ``span`` windows hold on average: the median spans ~span windows

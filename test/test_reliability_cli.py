@@ -40,10 +40,6 @@ ERRORS = SensorErrors(accel_bias_instability_m_s2=N_ACC / 2 / 0.664,
                       accel_random_walk_m_s2_sqrt_s=N_ACC / 5,
                       gyro_bias_instability_rad_s=N_GYR / 2 / 0.664,
                       gyro_random_walk_rad_s_sqrt_s=N_GYR / 5)
-#: These records' bias walks (K = N/5 at 10 Hz: ~15 N over 12,000 s) wander more than the
-#: static-segment rule's 3 window-noise levels, which cuts such a drift as motion (core/segments;
-#: docs/reliability.md, limitations): the tests of the analysis read every sample.
-WHOLE = ('--static', 'off')
 KEYS = {'before_s', 'after_s', 'width_before_s', 'width_after_s', 'change', 'verdict'}
 
 
@@ -82,7 +78,7 @@ def test_full_procedure(tmp_path, bags, capsys):
     out = tmp_path / 'rep'
     assert main(['--before-calibration', bags['cal_before'], '--before-static', bags['before'],
                  '--after-calibration', bags['cal_after'], '--after-static', bags['after'],
-                 '--gravity', '9.80665', *WHOLE, '--out', str(out)]) == 0
+                 '--gravity', '9.80665', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
     assert doc['c'] == 2.0 and doc['tolerance'] == 0.3 and doc['alpha'] == 0.05
     assert doc['taus_s'] == [1.0, 10.0, 30.0] and doc['interval_tolerance'] == 0.5
@@ -177,7 +173,7 @@ def test_full_procedure(tmp_path, bags, capsys):
 def test_same_sensor_twice_is_never_beyond(tmp_path, bags):
     out = tmp_path / 'rep'
     assert main(['--before-static', bags['before'], '--after-static', bags['same'],
-                 '--no-figures', *WHOLE, '--out', str(out)]) == 0
+                 '--no-figures', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
     for sensor in ('accel', 'gyro'):
         assert doc['overall'][sensor]['verdict'] != 'beyond'
@@ -198,7 +194,7 @@ def test_bad_channels_are_undetermined_with_the_reason(tmp_path, bags, capsys):
     zero_bag = write_bag(tmp_path / 'zero', t, np.zeros_like(accel), gyro)
     out = tmp_path / 'rep'
     assert main(['--before-static', str(nan_bag), '--after-static', str(zero_bag),
-                 '--no-figures', *WHOLE, '--out', str(out)]) == 0
+                 '--no-figures', '--out', str(out)]) == 0
     doc = json.loads((out / 'reliability.json').read_text())
     iv = doc['bias_instability_interval']
     assert iv['accel_y']['verdict'] == 'undetermined' and 'NaN' in iv['accel_y']['reason']
@@ -232,7 +228,7 @@ def test_unusable_static_records_are_refused_with_one_line(tmp_path, bags, capsy
         capsys.readouterr()
         out = tmp_path / f'rep_{bag.name}'
         assert main(['--before-static', bags['before'], '--after-static', str(bag),
-                     '--no-figures', *WHOLE, '--out', str(out)]) == 4, why
+                     '--no-figures', '--out', str(out)]) == 4, why
         err = capsys.readouterr().err
         assert err.count('\n') == 1 and why in err and str(bag) in err, err
         assert not (out / 'reliability.json').exists()
@@ -251,7 +247,7 @@ def test_records_that_are_not_one_sensor_at_one_rate_are_refused(tmp_path, capsy
         out = tmp_path / f'rep_{bag.name}'
         capsys.readouterr()
         assert main(['--before-static', str(before), '--after-static', str(bag),
-                     '--no-figures', *WHOLE, '--out', str(out)]) == 4
+                     '--no-figures', '--out', str(out)]) == 4
         err = capsys.readouterr().err
         assert err.count('\n') == 1 and why in err, err
         assert not out.exists() or not any(out.iterdir())     # nothing written
@@ -263,12 +259,12 @@ def test_a_record_too_short_for_the_longest_tau_is_refused_naming_its_length(tmp
     bag = write_bag(tmp_path / 'short', t, accel, gyro)
     out = tmp_path / 'rep'
     assert main(['--before-static', str(bag), '--after-static', str(bag), '--no-figures',
-                 *WHOLE, '--out', str(out)]) == 4
+                 '--out', str(out)]) == 4
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and 'record too short for the noise verdict: 200 s' in err
     assert 'needs 300 s' in err and not (out.exists() and any(out.iterdir()))
     assert main(['--before-static', str(bag), '--after-static', str(bag), '--taus', '1', '10',
-                 '20', '--no-figures', *WHOLE, '--out', str(out)]) == 0
+                 '20', '--no-figures', '--out', str(out)]) == 0
 
 
 def test_a_knock_is_cut_as_analyze_cuts_it_and_said(tmp_path, capsys):

@@ -377,10 +377,7 @@ def make_reliability(tmp):
                                                      seed=seed)))
             for name, e, seed in (('before', errors, 1),
                                   ('after', errors.stressed(instability_factor=2.0), 2))]
-    # --static off: this sensor's bias walk is cut as motion by the static-segment rule
-    # (test_reliability_cli.WHOLE)
-    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures', '--static',
-            'off']
+    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures']
     assert reliability_main([*args, '--out', str(tmp / 'rel')]) == 0
     assert reliability_main([*args, '--out', str(tmp / 'rel_nohtml'), '--no-html']) == 0
     return tmp / 'rel', bags

@@ -22,16 +22,18 @@ batch (the streaming analyzer), and :func:`left_out_sentence` the one sentence e
 
 Rule: the record is cut into windows of :data:`WINDOW_S`; per window and column (axis) the mean
 and standard deviation are kept. A column's static noise level is the :data:`NOISE_QUANTILE`
-quantile of its window standard deviations, its static rate the median window mean of the quiet
-windows. A window **moves** when on any column its standard deviation exceeds
-:data:`MOTION_FACTOR` static noise levels, or its mean departs from the static rate by more. All
-axes are judged together: a knock on one axis cuts that time from every axis. The segment
-analysed is the **longest run of static windows**: the Allan deviation and the chunk statistics
-need contiguous data, and joining runs across a knock would put a step of unknown size into them;
-shorter static runs are cut too (reason ``'shorter static run'``) and listed. A run covering
-:data:`STATIC_ALL` of the windows means static throughout (nothing cut). Windows without samples
-(a stamp gap) do not end a run: a gap is a gap, never motion. Fewer than 3 windows: no judgement.
-Times are seconds after the record's first sample. Measurements: docs/offline_tool.md.
+quantile of its window standard deviations; its local static rate at a window is the running
+median of the quiet windows' means over :data:`LOCAL_S` around it (:func:`local_level`), so a
+wandering bias is not motion. A window **moves** when on any column its standard deviation
+exceeds :data:`MOTION_FACTOR` static noise levels, or its mean departs from the local rate by
+more and by over :data:`SCATTER_FACTOR` robust sigmas of the means about it. A rate held longer
+than half of :data:`LOCAL_S` becomes the local rate (a bias): a steady turn reads as static
+unless its spread moves it. All axes are judged together: a knock on one axis cuts that time
+from every axis. The segment analysed is the **longest run of static windows** (the Allan
+deviation needs contiguous data); shorter static runs are cut too (``'shorter static run'``).
+A run covering :data:`STATIC_ALL` of the windows means static throughout (nothing cut). Windows
+without samples (a stamp gap) never end a run. Fewer than 3 windows: no judgement.
+Times: s after the record's first sample. Cost O(n). Measurements: docs/offline_tool.md.
 """
 
 from dataclasses import dataclass
@@ -50,6 +52,19 @@ MOTION_FACTOR = 3.0
 NOISE_QUANTILE = 0.2
 #: The longest static run covering this fraction of the windows means: static throughout.
 STATIC_ALL = 0.95
+#: Neighbourhood of the local static rate (s): a window's mean is compared with
+#: the median mean of this many quiet windows around it, not with one rate for the record. Long
+#: enough that a knock of seconds, or a rotation step of 20 s, is a minority in it (it cannot
+#: move the median); short enough that a MEMS bias does not wander far within it: the mean of a
+#: window departs from the neighbourhood's level by about the Allan deviation of the bias at
+#: tau ~ half the span, sqrt(2) K sqrt(tau/3) for a rate random walk K (IEEE 952): ~6 K at
+#: 120 s, under 1.3 N for K = N/5 (the tests' strong walk) against the limit of 3 static noise
+#: levels (3 N sqrt(f_s), >= 3 N from 1 Hz). A constant rate held longer than half the span
+#: becomes the local level (read as a bias: static) unless its spread moves it.
+LOCAL_S = 120.0
+#: A window's mean moves only beyond this many robust sigmas of the window means about the
+#: local level too (two-sided 6e-7 for Gaussian scatter: ~0.02 false windows in 10 h of 3 axes).
+SCATTER_FACTOR = 5.0
 
 
 @dataclass(frozen=True)
@@ -136,7 +151,11 @@ class Cut:
 
 class WindowStats:
     """
-    Per-window mean and standard deviation of the angular rate, fed in batches (module doc).
+    Per-window sample count, sums and sums of squares of the angular rate, fed in batches.
+
+    Each batch costs O(n) (O(n log n) when its stamps are out of order): the windows are
+    summed with :func:`numpy.add.reduceat` (or :func:`numpy.bincount`) and merged into arrays
+    sorted by window index (module doc).
 
     Parameters
     ----------
@@ -150,7 +169,11 @@ class WindowStats:
             raise ParameterError(f'window_s must be > 0 s, got {window_s!r}')
         self._w = int(round(window_s * 1e9))
         self._t0: int | None = None
-        self._rows: dict[int, list[Any]] = {}  # window index -> [n, sum(3), sumsq(3)]
+        self._size = 0
+        self._keys = np.zeros(0, dtype=np.int64)             # window index, increasing
+        self._n = np.zeros(0, dtype=np.int64)                # samples per window
+        self._sum = np.zeros((0, 0))                         # per window and column
+        self._sq = np.zeros((0, 0))
 
     def update(self, stamp_ns: npt.ArrayLike, gyro: npt.ArrayLike) -> None:
         """
@@ -173,18 +196,85 @@ class WindowStats:
             self._t0 = int(s[0])
         ok = np.all(np.isfinite(g), axis=1)
         s, g = s[ok], g[ok]
+        if s.size == 0:
+            return
         idx = (s - self._t0) // self._w
-        for k in np.unique(idx):
-            sel = idx == k
-            row = self._rows.setdefault(int(k), [0, np.zeros(g.shape[1]), np.zeros(g.shape[1])])
-            row[0] += int(sel.sum())
-            row[1] += g[sel].sum(axis=0)
-            row[2] += (g[sel] ** 2).sum(axis=0)
+        step = np.diff(idx)
+        if np.all(step >= 0):   # the usual batch: stamps in order, one slice per window
+            starts = np.flatnonzero(np.concatenate(([True], step != 0)))
+            keys = idx[starts]
+            counts = np.diff(np.append(starts, idx.size))
+            sums = np.add.reduceat(g, starts, axis=0)
+            sq = np.add.reduceat(g * g, starts, axis=0)
+        else:
+            keys, inv = np.unique(idx, return_inverse=True)
+            counts = np.bincount(inv, minlength=keys.size)
+            sums = np.column_stack([np.bincount(inv, weights=c, minlength=keys.size)
+                                    for c in g.T])
+            sq = np.column_stack([np.bincount(inv, weights=c * c, minlength=keys.size)
+                                  for c in g.T])
+        self._merge(keys, counts, sums, sq)
+
+    def _merge(self, keys: npt.NDArray[np.int64], counts: npt.NDArray[np.int64],
+               sums: npt.NDArray[np.float64], sq: npt.NDArray[np.float64]) -> None:
+        """Add per-window rows (``keys`` increasing) to the stored rows."""
+        size = self._size
+        if size == 0:
+            self._sum = np.zeros((0, sums.shape[1]))
+            self._sq = np.zeros((0, sums.shape[1]))
+        held = self._keys[:size]
+        pos = np.searchsorted(held, keys)
+        hit = pos < size
+        hit[hit] = held[pos[hit]] == keys[hit]
+        at = pos[hit]
+        self._n[at] += counts[hit]
+        self._sum[at] += sums[hit]
+        self._sq[at] += sq[hit]
+        new = ~hit
+        if not new.any():
+            return
+        keys, counts, sums, sq = keys[new], counts[new], sums[new], sq[new]
+        if size and keys[0] < held[-1]:
+            # a batch reaching back into the record (stamps out of order): re-sort, O(W log W)
+            order = np.argsort(np.concatenate((held, keys)), kind='stable')
+            keys = np.concatenate((held, keys))[order]
+            counts = np.concatenate((self._n[:size], counts))[order]
+            sums = np.concatenate((self._sum[:size], sums))[order]
+            sq = np.concatenate((self._sq[:size], sq))[order]
+            size = 0
+        end = size + keys.size
+        if end > self._keys.size:   # grow geometrically: appending costs O(1) per window
+            cap = max(2 * self._keys.size, end, 64)
+            self._keys = np.resize(self._keys, cap)
+            self._n = np.resize(self._n, cap)
+            self._sum = np.resize(self._sum, (cap, sums.shape[1]))
+            self._sq = np.resize(self._sq, (cap, sums.shape[1]))
+        self._keys[size:end] = keys
+        self._n[size:end] = counts
+        self._sum[size:end] = sums
+        self._sq[size:end] = sq
+        self._size = end
 
     @property
     def windows(self) -> int:
         """int: the windows that have received at least one sample so far."""
-        return len(self._rows)
+        return self._size
+
+    def table(self) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64],
+                             npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """
+        Return the rows so far: window indices (increasing), counts, sums and sums of squares.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``keys`` (window index since the first stamp), ``counts``, ``sums`` and ``sumsq``
+            (shape (windows, columns); rad/s and (rad/s)^2); copies.
+
+        """
+        n = self._size
+        return (self._keys[:n].copy(), self._n[:n].copy(), self._sum[:n].copy(),
+                self._sq[:n].copy())
 
     def segment(self) -> StaticSegment | None:
         """
@@ -195,44 +285,116 @@ class WindowStats:
         StaticSegment or None
 
         """
-        keys = sorted(k for k, r in self._rows.items() if r[0] >= 2)
-        if len(keys) < 3:
+        if self._t0 is None:
             return None
-        assert self._t0 is not None  # set by the update that filled the windows
-        n = np.array([self._rows[k][0] for k in keys], dtype=np.float64)[:, None]
-        mean = np.array([self._rows[k][1] for k in keys]) / n
-        var = np.maximum(np.array([self._rows[k][2] for k in keys]) / n - mean ** 2, 0.0)
-        std = np.sqrt(var * n / np.maximum(n - 1, 1))
-        noise = np.quantile(std, NOISE_QUANTILE, axis=0)
-        noise = np.where(noise > 0, noise, np.finfo(float).tiny)
-        quiet = np.all(std <= np.quantile(std, NOISE_QUANTILE, axis=0) * 1.5 + 1e-300, axis=1)
-        ref = np.median(mean[quiet], axis=0) if quiet.any() else np.median(mean, axis=0)
-        limit = MOTION_FACTOR * noise
-        moving = np.any((std > limit) | (np.abs(mean - ref) > limit), axis=1)
-        # windows without data (a stamp gap) are not in keys, not motion: only motion ends a run
-        runs = _runs(~moving)
-        edges = self._edges(keys, runs)
-        motion = self._edges(keys, _runs(moving))
-        if not runs:
-            # an empty segment at the record's start, never at stamp 0 (1970)
-            return StaticSegment(self._t0, self._t0, False, len(keys), 0, (),
-                                 tuple(float(v) for v in noise), motion)
-        best = max(range(len(runs)), key=lambda i: runs[i][1] - runs[i][0])
-        length = runs[best][1] - runs[best][0]
-        throughout = length >= STATIC_ALL * len(keys)
-        start_ns, end_ns = edges[best]
-        if throughout:
-            start_ns, end_ns = self._t0, self._t0 + (int(keys[-1]) + 1) * self._w
-        return StaticSegment(int(start_ns), int(end_ns), bool(throughout), len(keys),
-                             int((~moving).sum()), edges, tuple(float(v) for v in noise),
-                             motion)
+        return judge_windows(*self.table(), t0_ns=self._t0, window_ns=self._w)
 
-    def _edges(self, keys: list[int],
-               runs: list[tuple[int, int]]) -> tuple[tuple[int, int], ...]:
-        """Return the stamps (ns) of the window edges of runs of window positions ``[a, b)``."""
-        assert self._t0 is not None  # set by the update that filled the windows
-        w, t0 = self._w, self._t0
-        return tuple((t0 + int(keys[a]) * w, t0 + (int(keys[b - 1]) + 1) * w) for a, b in runs)
+
+def judge_windows(keys: npt.NDArray[np.int64], counts: npt.NDArray[np.int64],
+                  sums: npt.NDArray[np.float64], sumsq: npt.NDArray[np.float64], *,
+                  t0_ns: int, window_ns: int) -> StaticSegment | None:
+    """
+    Apply the rule (module doc) to per-window rows (:meth:`WindowStats.table`).
+
+    Parameters
+    ----------
+    keys : numpy.ndarray of int, shape (w,)
+        Window indices since ``t0_ns``, increasing.
+    counts : numpy.ndarray of int, shape (w,)
+        Samples per window.
+    sums, sumsq : numpy.ndarray, shape (w, columns)
+        Per window and column: sum and sum of squares of the rate (rad/s, (rad/s)^2).
+    t0_ns : int, keyword-only
+        Stamp of window 0's start (ns).
+    window_ns : int, keyword-only
+        Window length (ns).
+
+    Returns
+    -------
+    StaticSegment or None
+        None below 3 windows of at least 2 samples.
+
+    """
+    use = counts >= 2
+    keys = keys[use]
+    if keys.size < 3:
+        return None
+    n = counts[use].astype(np.float64)[:, None]
+    mean = sums[use] / n
+    var = np.maximum(sumsq[use] / n - mean ** 2, 0.0)
+    std = np.sqrt(var * n / np.maximum(n - 1, 1))
+    noise = np.quantile(std, NOISE_QUANTILE, axis=0)
+    noise = np.where(noise > 0, noise, np.finfo(float).tiny)
+    quiet = np.all(std <= np.quantile(std, NOISE_QUANTILE, axis=0) * 1.5 + 1e-300, axis=1)
+    ref = local_level(keys, mean, quiet, round(LOCAL_S * 1e9 / window_ns))
+    limit = MOTION_FACTOR * noise
+    off = np.abs(mean - ref)
+    # the window means' own scatter about the local level (robust sigma of the quiet windows):
+    # a strong flicker moves 1 s means by ~0.7 noise levels, where 3 levels is ~4 sigma
+    scatter = 1.4826 * np.median(off[quiet] if quiet.any() else off, axis=0)
+    moving = np.any((std > limit) | (off > np.maximum(limit, SCATTER_FACTOR * scatter)), axis=1)
+    # windows without data (a stamp gap) are not in keys, not motion: only motion ends a run
+    runs = _runs(~moving)
+    edges = _edges(keys, runs, t0_ns, window_ns)
+    motion = _edges(keys, _runs(moving), t0_ns, window_ns)
+    noise_t = tuple(float(v) for v in noise)
+    if not runs:
+        # an empty segment at the record's start, never at stamp 0 (1970)
+        return StaticSegment(t0_ns, t0_ns, False, int(keys.size), 0, (), noise_t, motion)
+    best = max(range(len(runs)), key=lambda i: runs[i][1] - runs[i][0])
+    length = runs[best][1] - runs[best][0]
+    throughout = length >= STATIC_ALL * keys.size
+    start_ns, end_ns = edges[best]
+    if throughout:
+        start_ns, end_ns = t0_ns, t0_ns + (int(keys[-1]) + 1) * window_ns
+    return StaticSegment(int(start_ns), int(end_ns), bool(throughout), int(keys.size),
+                         int((~moving).sum()), edges, noise_t, motion)
+
+
+def local_level(keys: npt.NDArray[np.int64], mean: npt.NDArray[np.float64],
+                quiet: npt.NDArray[np.bool_], span: int) -> npt.NDArray[np.float64]:
+    """
+    Return each window's local static rate: the running median of the quiet windows' means.
+
+    Parameters
+    ----------
+    keys : numpy.ndarray of int, shape (w,)
+        Window indices, increasing (gaps allowed).
+    mean : numpy.ndarray, shape (w, columns)
+        Window means (rad/s).
+    quiet : numpy.ndarray of bool, shape (w,)
+        Windows whose spread is near the static noise level on every column; none: all count.
+    span : int
+        Neighbourhood (windows, :data:`LOCAL_S`): the median runs over the quiet windows
+        nearest in order, as many as ``span`` windows hold on average (centred; mirrored at
+        the record's ends; the whole record when it is shorter).
+
+    Returns
+    -------
+    numpy.ndarray, shape (w, columns)
+        Per window, the median of the neighbourhood around the quiet window nearest to it.
+
+    """
+    from scipy.ndimage import median_filter  # here: analyze's start does not pay for ndimage
+
+    pick = np.flatnonzero(quiet) if quiet.any() else np.arange(keys.size)
+    # as many quiet windows as ``span`` windows hold on average: the median spans ~span windows
+    count = int(round(span * pick.size / keys.size))
+    size = max(1, min(count | 1, (pick.size - 1) | 1))   # odd: centred; at most the record
+    level = median_filter(mean[pick], size=(size, 1), mode='mirror')
+    at = keys[pick]
+    if at.size == 1:
+        return np.repeat(level, keys.size, axis=0)
+    j = np.clip(np.searchsorted(at, keys), 1, at.size - 1)
+    return np.asarray(level[np.where(keys - at[j - 1] <= at[j] - keys, j - 1, j)],
+                      dtype=np.float64)
+
+
+def _edges(keys: npt.NDArray[np.int64], runs: list[tuple[int, int]], t0_ns: int,
+           window_ns: int) -> tuple[tuple[int, int], ...]:
+    """Return the stamps (ns) of the window edges of runs of window positions ``[a, b)``."""
+    return tuple((t0_ns + int(keys[a]) * window_ns, t0_ns + (int(keys[b - 1]) + 1) * window_ns)
+                 for a, b in runs)
 
 
 def _runs(flags: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:

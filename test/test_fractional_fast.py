@@ -21,7 +21,8 @@ The fast identification algorithms of core/fractional.py.
   path, and even and odd sizes that do not), and the low-rank premise itself;
 * 'exact' against a twin of the blocked algorithm of every earlier release (below), bit for bit;
 * 'auto' (the default) against 'exact', bit for bit, including exact ties, every block position,
-  other block sizes, and the fallback when the fast curves are off.
+  other block sizes, and the fallback when the fast curves are off; the orders whose J it skips
+  (sign bounds) are never a minimum, and the bounds are lower bounds of J.
 """
 
 from _fractional_reference import curves_ref
@@ -164,6 +165,37 @@ def test_exact_rows_reproduce_the_blocks_bit_for_bit(block):
         np.testing.assert_array_equal(ident._exact_rows(v, rows), np.array(curves))
 
 
+@pytest.mark.parametrize('kind', ['0.3', '0.9', '1.4', '1.9', 'white', 'walk', 'tone'])
+def test_pruned_orders_can_be_no_minimum(kind, monkeypatch):
+    """'auto' without curves computes J only where the sign bounds allow a minimum: check them."""
+    alphas = make_grid(0.0, 2.0, 0.01)
+    ident = OrderIdentifier(2000, alphas=alphas, memory=400)
+    plan = fractional._FastPlan(ident)
+    real, bounds = fractional._kf.power_bound, []
+
+    def spy(*args):
+        real(*args)
+        bounds.append(args[-1].copy())
+
+    monkeypatch.setattr(fractional._kf, 'power_bound', spy)
+    v = chunk(kind, 2000, 11)
+    v = v - v.mean()
+    _, j_pruned, _ = plan.curves(v, prune=True)
+    _, j_full, _ = plan.curves(v)
+    _, j_exact, _ = ident._curves(v)
+    bound = np.full(alphas.size, -np.inf)
+    bound[plan.others] = np.concatenate(bounds)
+    # a lower bound of J: the two are sums over ~2000 lags by different transforms (1e-12 seen)
+    assert np.all(bound <= j_exact * (1 + 1e-9))
+    skipped = np.isinf(j_pruned)
+    # what was skipped lies above the band of the minimum and its exact ties
+    assert np.all(j_exact[skipped] > j_exact.min() * (1 + fractional.TIE_RTOL))
+    # and J where it was computed is the fast value
+    np.testing.assert_array_equal(j_pruned[~skipped], j_full[~skipped])
+    # the point of it: most orders need no transform (fewer than 40 of 201 computed here)
+    assert np.count_nonzero(~skipped) < 40
+
+
 def same_results(a, b):
     return {k: (getattr(a, k), getattr(b, k)) for k in RESULT_FIELDS
             if getattr(a, k) != getattr(b, k)}
@@ -209,8 +241,8 @@ def test_auto_falls_back_to_exact_when_the_fast_curves_are_off(monkeypatch):
     real = fractional._FastPlan.curves
     calls = []
 
-    def off(self, x):
-        var, j, f = real(self, x)
+    def off(self, x, **kwargs):
+        var, j, f = real(self, x, **kwargs)
         calls.append(1)
         # off by 1e-6 relative everywhere, 10x the check of the recomputed orders
         return var * (1 + 1e-6), j, f
@@ -227,8 +259,8 @@ def test_auto_falls_back_to_exact_when_the_fast_curves_are_off(monkeypatch):
     assert same_results(ident(v), exact(v)) == {}
     assert calls and len(spied) == 2  # the fallback of 'auto', and 'exact' itself
 
-    def not_finite(self, x):
-        var, j, f = real(self, x)
+    def not_finite(self, x, **kwargs):
+        var, j, f = real(self, x, **kwargs)
         j = j.copy()
         j[3] = np.nan
         return var, j, f

@@ -160,9 +160,14 @@ def test_exact_rows_reproduce_the_blocks_bit_for_bit(block):
     for kind in ('0.6', 'walk'):
         v = chunk(kind, 700, seed=block)
         v = v - v.mean()
-        curves = ident._curves(v)
+        curves = np.array(ident._curves(v))
         rows = np.arange(alphas.size)
-        np.testing.assert_array_equal(ident._exact_rows(v, rows), np.array(curves))
+        np.testing.assert_array_equal(ident._exact_rows(v, rows), curves)
+        # and alone, or a few of a block: the other rows of the block are not computed
+        for r in range(alphas.size):
+            np.testing.assert_array_equal(ident._exact_rows(v, np.array([r])), curves[:, [r]])
+        some = np.array([1, 2, 6, 11, 17, 23, 40])
+        np.testing.assert_array_equal(ident._exact_rows(v, some), curves[:, some])
 
 
 @pytest.mark.parametrize('kind', ['0.3', '0.9', '1.4', '1.9', 'white', 'walk', 'tone'])

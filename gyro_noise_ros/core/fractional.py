@@ -441,10 +441,11 @@ class OrderIdentifier:
         """
         Return var, J and f of the grid orders ``rows`` exactly as :meth:`_curves` computes them.
 
-        The difference and f are computed for the whole block of each order (f is a
-        matrix-vector product over the block, whose rounding depends on the block); everything
-        after f is per order, and numpy and pocketfft round a row alike whether it is alone or in
-        a block (``test/test_fractional_fast.py`` checks this against :meth:`_curves`).
+        f is a matrix-vector product over the block of each order, as in :meth:`_curves`: the
+        same product on a block whose other rows are zero (each row's dot product is its own,
+        rounded by its position in the block); everything else is per order, and numpy and
+        pocketfft round a row alike whether it is alone or in a block (``test/
+        test_fractional_fast.py`` checks this against :meth:`_curves`).
         """
         n, size, blk = self.n, self._conv_size, self.block
         w_reg, ww = _regressor(v)
@@ -456,7 +457,9 @@ class OrderIdentifier:
         for b in np.unique(rows // blk):
             start = int(b) * blk
             stop = min(k, start + blk)
-            diff = scipy.fft.irfft(self._coeff_hat[start:stop] * v_hat, size, axis=1)
+            wanted = np.unique(rows[(rows >= start) & (rows < stop)]) - start
+            diff = np.zeros((stop - start, size))
+            diff[wanted] = scipy.fft.irfft(self._coeff_hat[start + wanted] * v_hat, size, axis=1)
             d = diff[:, 1:n + 1]
             f = (d @ w_reg) / ww
             for pos in np.flatnonzero((rows >= start) & (rows < stop)):

@@ -15,29 +15,23 @@
 """
 Where the pure work units run: local worker processes, or a Dask distributed cluster.
 
-The command-line tools hand their heavy, pure work units (one chunk of one axis in
-gyro_noise_analyze, one ensemble member's signatures in gyro_noise_explain, one MOPSO particle in
-gyro_noise_thermal) to a :class:`concurrent.futures.Executor` and take the results back in
-submission order. :func:`make_executor` returns that executor:
+The tools hand their heavy, pure work units (one chunk of one axis in gyro_noise_analyze, one
+ensemble member's signatures in gyro_noise_explain, one MOPSO particle in gyro_noise_thermal) to a
+:class:`concurrent.futures.Executor` and take the results back in submission order.
+:func:`make_executor` returns that executor:
 
 * no scheduler: a :class:`~concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes, or
-  ``None`` for ``jobs <= 1`` (the caller then runs in-process), exactly as before;
-* ``scheduler='tcp://host:8786'``: a :class:`DaskExecutor` on a ``distributed.Client`` connected to
-  that scheduler. Tasks are submitted with ``pure=True``: their key is a hash of the function and
-  its arguments, and since the work units are pure (same inputs, same outputs) a task that Dask
-  runs again after losing a worker gives the same result, so nothing is lost or duplicated.
+  ``None`` for ``jobs <= 1`` (the caller then runs in-process);
+* ``scheduler='tcp://host:8786'``: a :class:`DaskExecutor` on a ``distributed.Client``, tasks
+  submitted ``pure=True`` (a task Dask runs again after losing a worker gives the same result).
 
-Bit-identical results. Dask hands a worker its numpy arguments as views into the received
-message, at any byte offset: even not a multiple of 8 (a float64 array at an odd address), where
-numpy's vectorised loops fall back to scalar ones and a sum comes out different in the last bit
-(measured: one chunk's var_min of 10,000 differed by 1 ulp). So a task travels as one pickle
-(protocol 4, arrays in-band) that the worker unpickles into freshly allocated, aligned arrays, as
-a local worker process does, and the result travels back the same way.
-
-``distributed`` is optional (pip extra ``dask``): it is imported only when a scheduler is named,
-and its absence then gives :class:`~gyro_noise_ros.errors.ParameterError` (exit 2) naming the
-extra. A scheduler that cannot be reached, or is lost during the run, gives
-:class:`~gyro_noise_ros.errors.ClusterError` (exit 5). See docs/scale.md.
+Results are bit-identical to a local run: a task travels as one pickle (protocol 4, arrays
+in-band) that the worker unpickles into aligned arrays, as a local worker process does (Dask's own
+views may sit at odd addresses, where numpy sums differ in the last bit), and back the same way.
+``distributed`` is optional (pip extra ``dask``), imported only when a scheduler is named; without
+it a scheduler gives :class:`~gyro_noise_ros.errors.ParameterError` (exit 2) naming the extra. A
+scheduler that cannot be reached, or is lost during the run, gives
+:class:`~gyro_noise_ros.errors.ClusterError` (exit 5). Measurements: docs/scale.md.
 """
 
 import asyncio
@@ -59,7 +53,7 @@ _P = ParamSpec('_P')
 #: pip extra that installs Dask distributed.
 EXTRA = 'dask'
 #: The one line shown when ``distributed`` is missing.
-MISSING = ('--scheduler needs Dask distributed, which is not installed: pip install '
+MISSING = ('{scheduler} needs Dask distributed, which is not installed: pip install '
            f"'gyro_noise_ros[{EXTRA}]', or pip install distributed, or apt install "
            'python3-distributed')
 
@@ -117,12 +111,12 @@ def make_executor(jobs: int = 1, scheduler: Any = None, *, timeout_s: float | No
         return cf.ProcessPoolExecutor(max_workers=int(jobs)) if int(jobs) > 1 else None
     address = getattr(scheduler, 'scheduler_address', scheduler)
     if not isinstance(address, str) or not address.strip():
-        raise ParameterError(f'--scheduler needs an address such as tcp://host:8786, got '
-                             f'{address!r}')
+        raise ParameterError(f'{{scheduler}} needs an address such as tcp://host:8786, got '
+                             f'{address!r}', parameters=('scheduler',))
     try:
         import distributed
     except ImportError:
-        raise ParameterError(MISSING) from None
+        raise ParameterError(MISSING, parameters=('scheduler',)) from None
     import dask.utils
 
     address = address.strip()
@@ -134,8 +128,8 @@ def make_executor(jobs: int = 1, scheduler: Any = None, *, timeout_s: float | No
         asyncio.run(_probe(address, float(timeout_s)))
         client = distributed.Client(address, set_as_default=False, timeout=float(timeout_s))
     except (OSError, TimeoutError, ValueError, TypeError) as err:
-        raise ClusterError(f'--scheduler {address}: cannot connect to a Dask scheduler there '
-                           f'({_reason(err)})') from None
+        raise _cluster_error(address, 'cannot connect to a Dask scheduler there '
+                             f'({_reason(err)})') from None
     restore = _mute_dask_logs()
     try:
         _check_workers(client, address, warn)
@@ -218,19 +212,19 @@ def _check_workers(client: Any, address: str, warn: Callable[[str], None] | None
     try:
         found = client.run(worker_facts, on_error='return')
     except (OSError, TimeoutError) as err:
-        raise ClusterError(f'--scheduler {address}: {_reason(err)}') from None
+        raise _cluster_error(address, _reason(err)) from None
     bad = {w: (f.get('version') if isinstance(f, dict) else 'not installed')
            for w, f in found.items()
            if not (isinstance(f, dict) and f.get('version') == __version__)}
     if bad:
         listed = ', '.join(f'{w} ({v})' for w, v in sorted(bad.items())[:3])
         more = f' and {len(bad) - 3} more' if len(bad) > 3 else ''
-        raise ClusterError(
-            f'--scheduler {address}: {len(bad)} worker(s) do not have gyro_noise_ros '
-            f'{__version__}: {listed}{more}; install the same version on every worker')
+        raise _cluster_error(
+            address, f'{len(bad)} worker(s) do not have gyro_noise_ros {__version__}: '
+            f'{listed}{more}; install the same version on every worker')
     trimmed = sum(1 for f in found.values() if _small_trim(f.get('malloc_trim_threshold')))
     if trimmed and warn is not None:
-        warn(f'--scheduler {address}: {trimmed} of {len(found)} worker(s) run with '
+        warn(f'Dask scheduler {address}: {trimmed} of {len(found)} worker(s) run with '
              f'a small MALLOC_TRIM_THRESHOLD_ (the Dask default); {MALLOC_ADVICE}')
 
 
@@ -423,16 +417,20 @@ def _translate(err: BaseException, address: str) -> BaseException:
     """Turn Dask's failures of the cluster (not of the task) into ClusterError."""
     name = type(err).__name__
     if isinstance(err, cf.CancelledError) or name in ('CancelledError', 'FutureCancelledError'):
-        return ClusterError(f'--scheduler {address}: a task was cancelled by Dask (scheduler '
-                            f'lost or restarted?): {_reason(err)}')
+        return _cluster_error(address, 'a task was cancelled by Dask (scheduler lost or '
+                              f'restarted?): {_reason(err)}')
     if name == 'KilledWorker':
-        return ClusterError(f'--scheduler {address}: Dask gave up on a task that was running on '
-                            f'workers that died ({_reason(err)}); see the logs of the workers '
-                            '(memory?)')
+        return _cluster_error(address, 'Dask gave up on a task that was running on workers '
+                              f'that died ({_reason(err)}); see the logs of the workers '
+                              '(memory?)')
     if isinstance(err, (ModuleNotFoundError, ImportError)):
-        return ClusterError(f'--scheduler {address}: a worker cannot import the work unit '
-                            f'({_reason(err)}); install gyro_noise_ros {__version__} on every '
-                            'worker')
+        return _cluster_error(address, f'a worker cannot import the work unit ({_reason(err)}); '
+                              f'install gyro_noise_ros {__version__} on every worker')
     if isinstance(err, (OSError, TimeoutError)) and not hasattr(err, 'exit_code'):
-        return ClusterError(f'--scheduler {address}: {_reason(err)}')
+        return _cluster_error(address, _reason(err))
     return err
+
+
+def _cluster_error(address: str, text: str) -> ClusterError:
+    """Return the ClusterError ``'<the scheduler parameter> <address>: <text>'``."""
+    return ClusterError(f'{{scheduler}} {address}: {text}', parameters=('scheduler',))

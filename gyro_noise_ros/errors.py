@@ -17,14 +17,62 @@ Error hierarchy shared by the core, the link, the bag I/O and the command-line t
 
 Every error the package raises on purpose derives from :class:`GyroNoiseError`; the command-line
 tools turn each class into one clear line and a documented exit code (see ``cli/_common.py``).
-Messages name the offending argument and its value.
+Messages name the offending argument and its value; an argument a caller chose is named by its
+parameter (``{start_s}``), which each adapter spells its own way (:meth:`GyroNoiseError.spelled`).
 """
+
+from collections.abc import Callable, Sequence
+from typing import Self
 
 
 class GyroNoiseError(Exception):
-    """Base class of every deliberate error in gyro_noise_ros."""
+    """
+    Base class of every deliberate error in gyro_noise_ros.
+
+    Parameters
+    ----------
+    message : str
+        One sentence. A parameter of the call that failed is written as its name in braces
+        (``'{start_s} 12 s is past the record end 10 s'``) and listed in ``parameters``; other
+        braces are kept as they are.
+    parameters : sequence of str, keyword-only
+        The parameter names the message holds in braces.
+
+    """
 
     exit_code = 1
+
+    def __init__(self, message: str = '', *, parameters: Sequence[str] = ()) -> None:
+        super().__init__(message)
+        self.parameters = tuple(parameters)
+
+    def spelled(self, spell: Callable[[str], str] | None = None) -> str:
+        """
+        Return the message with each parameter spelled by ``spell`` (default: its bare name).
+
+        Parameters
+        ----------
+        spell : callable, optional
+            Parameter name -> the caller's name for it (a tool: its option, ``--start``).
+
+        Returns
+        -------
+        str
+
+        """
+        text = str(self.args[0]) if self.args else ''
+        for name in self.parameters:
+            text = text.replace('{' + name + '}', spell(name) if spell else name)
+        return text
+
+    def prefixed(self, prefix: str) -> Self:
+        """Return the same error with ``prefix`` before its message (its parameters kept)."""
+        message = str(self.args[0]) if self.args else ''
+        return type(self)(prefix + message, parameters=self.parameters)
+
+    def __str__(self) -> str:
+        """Return the message with the bare parameter names."""
+        return self.spelled()
 
 
 class ParameterError(GyroNoiseError, ValueError):
@@ -56,13 +104,13 @@ class LinkError(GyroNoiseError):
 
 
 class OutputError(GyroNoiseError):
-    """An output cannot be written: ``--out`` not writable, a file in the way, disk full."""
+    """An output cannot be written: a folder not writable, a file in the way, disk full."""
 
     exit_code = 6
 
 
 class ClusterError(GyroNoiseError):
-    """A Dask scheduler (``--scheduler``) cannot be reached, or its cluster failed in the run."""
+    """A Dask scheduler cannot be reached, or its cluster failed in the run."""
 
     exit_code = 5
 
@@ -71,7 +119,7 @@ def nothing_left_error(*, start_s: float | None = None, end_s: float | None = No
                        record_end_s: float | None = None,
                        label: str | None = None) -> InputDataError:
     """
-    Return the error of a ``--start``/``--end`` window that selects no sample (exit code 4).
+    Return the error of a ``start_s``/``end_s`` window that selects no sample (exit code 4).
 
     Parameters
     ----------
@@ -89,11 +137,12 @@ def nothing_left_error(*, start_s: float | None = None, end_s: float | None = No
     """
     prefix = f'{label}: ' if label else ''
     if start_s is not None and record_end_s is not None and start_s > record_end_s:
-        why = f'--start {start_s:g} s is past the record end {record_end_s:.6g} s'
+        why = f'{{start_s}} {start_s:g} s is past the record end {record_end_s:.6g} s'
     else:
-        window = ' and '.join(f'{name} {value:g} s' for name, value in
-                              (('--start', start_s), ('--end', end_s)) if value is not None)
+        window = ' and '.join(f'{{{name}}} {value:g} s' for name, value in
+                              (('start_s', start_s), ('end_s', end_s)) if value is not None)
         why = f'no sample between {window or "the window bounds"}'
         if record_end_s is not None:
             why += f' (the record spans 0-{record_end_s:.6g} s)'
-    return InputDataError(f'{prefix}nothing left to analyse: {why}')
+    return InputDataError(f'{prefix}nothing left to analyse: {why}',
+                          parameters=('start_s', 'end_s'))

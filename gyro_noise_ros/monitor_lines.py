@@ -56,19 +56,7 @@ def level_of(status: Any) -> int:
 
 
 def values_of(status: Any) -> dict[str, str]:
-    """
-    Return the key/values of a status as a dict.
-
-    Parameters
-    ----------
-    status : DiagnosticStatus-like
-        One status.
-
-    Returns
-    -------
-    dict of str to str
-
-    """
+    """Return the key/values of a DiagnosticStatus-like ``status`` as a dict."""
     return {kv.key: kv.value for kv in status.values}
 
 
@@ -149,17 +137,9 @@ def progress_state(status: Any) -> tuple[int, str | None, str | None]:
 
 def chunks_done(states: Iterable[tuple[int, str | None, str | None]]) -> int:
     """
-    Return the chunks every axis has finished (analysed plus skipped), from progress states.
+    Return the chunks every axis has finished (analysed plus skipped).
 
-    Parameters
-    ----------
-    states : list of tuple
-        :func:`progress_state` of each axis.
-
-    Returns
-    -------
-    int
-
+    ``states`` are the :func:`progress_state` of each axis.
     """
     return min(int(a or 0) + int(str(b or '0').split(' ')[0]) for _, a, b in states)
 

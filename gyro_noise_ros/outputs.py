@@ -57,7 +57,7 @@ def _reason(err: OSError) -> str:
     return err.strerror or str(err)
 
 
-def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
+def make_out_dir(path: StrPath, *, parameter: str = 'out') -> Path:
     """
     Create the output folder ``path`` (and its parents) of a tool and check it can be written.
 
@@ -65,8 +65,8 @@ def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
     ----------
     path : str or os.PathLike
         The folder.
-    option : str, keyword-only
-        How the user named it, for the message.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
 
     Returns
     -------
@@ -80,13 +80,16 @@ def make_out_dir(path: StrPath, *, option: str = '--out') -> Path:
     """
     out = Path(path)
     if out.exists() and not out.is_dir():
-        raise OutputError(f'{option} {str(out)!r} is an existing file, not a folder')
+        raise OutputError(f'{{{parameter}}} {str(out)!r} is an existing file, not a folder',
+                          parameters=(parameter,))
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise OutputError(f'{option} {str(out)!r} cannot be created: {_reason(err)}') from err
+        raise OutputError(f'{{{parameter}}} {str(out)!r} cannot be created: {_reason(err)}',
+                          parameters=(parameter,)) from err
     if not os.access(out, os.W_OK | os.X_OK):
-        raise OutputError(f'{option} {str(out)!r} is not writable: permission denied')
+        raise OutputError(f'{{{parameter}}} {str(out)!r} is not writable: permission denied',
+                          parameters=(parameter,))
     return out
 
 
@@ -126,7 +129,7 @@ def _publish(stage: Path, out: Path) -> None:
 
 
 @contextmanager
-def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
+def staged_output(path: StrPath, *, parameter: str = 'out') -> Iterator[Path]:
     """
     Stage a tool's outputs and publish them in ``path`` only if the body finishes (module doc).
 
@@ -134,8 +137,8 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
     ----------
     path : str or os.PathLike
         The tool's output folder (created if missing).
-    option : str, keyword-only
-        How the user named it, for messages.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
 
     Yields
     ------
@@ -148,13 +151,14 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
         The folder cannot be created or written, or publishing failed.
 
     """
-    out = make_out_dir(path, option=option)
+    out = make_out_dir(path, parameter=parameter)
     _remove_stale_partials(out)
     stage = out / f'{PARTIAL_PREFIX}{os.getpid()}-{secrets.token_hex(4)}'
     try:
         stage.mkdir()
     except OSError as err:
-        raise OutputError(f'{option} {str(out)!r} is not writable: {_reason(err)}') from err
+        raise OutputError(f'{{{parameter}}} {str(out)!r} is not writable: {_reason(err)}',
+                          parameters=(parameter,)) from err
     try:
         yield stage
     except BaseException:
@@ -164,12 +168,13 @@ def staged_output(path: StrPath, *, option: str = '--out') -> Iterator[Path]:
         _publish(stage, out)
         stage.rmdir()
     except OSError as err:
-        raise OutputError(f'cannot move the results into {option} {str(out)!r}: '
-                          f'{_reason(err)} (the finished files are in {str(stage)!r})') from err
+        raise OutputError(f'cannot move the results into {{{parameter}}} {str(out)!r}: '
+                          f'{_reason(err)} (the finished files are in {str(stage)!r})',
+                          parameters=(parameter,)) from err
 
 
 @contextmanager
-def staged_new_dir(path: StrPath, *, option: str = 'output') -> Iterator[Path]:
+def staged_new_dir(path: StrPath, *, parameter: str = 'out') -> Iterator[Path]:
     """
     Build a folder that must not exist yet under a hidden sibling name; rename it on success.
 
@@ -177,8 +182,8 @@ def staged_new_dir(path: StrPath, *, option: str = 'output') -> Iterator[Path]:
     ----------
     path : str or os.PathLike
         The final folder (for example a rosbag2 bag); it must not exist.
-    option : str, keyword-only
-        How the user named it, for messages.
+    parameter : str, keyword-only
+        The caller's parameter that named it, for messages (:class:`..errors.GyroNoiseError`).
 
     Yields
     ------
@@ -193,15 +198,17 @@ def staged_new_dir(path: StrPath, *, option: str = 'output') -> Iterator[Path]:
     """
     final = Path(path)
     if final.exists() or final.is_symlink():
-        raise OutputError(f'{option} {str(final)!r} already exists')
+        raise OutputError(f'{{{parameter}}} {str(final)!r} already exists',
+                          parameters=(parameter,))
     parent = final.parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise OutputError(f'{option} {str(final)!r}: its folder cannot be created: '
-                          f'{_reason(err)}') from err
+        raise OutputError(f'{{{parameter}}} {str(final)!r}: its folder cannot be created: '
+                          f'{_reason(err)}', parameters=(parameter,)) from err
     if not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputError(f'{option} {str(final)!r}: its folder is not writable')
+        raise OutputError(f'{{{parameter}}} {str(final)!r}: its folder is not writable',
+                          parameters=(parameter,))
     # The stage carries the final name inside a hidden holder folder: rosbags (like ros2 bag)
     # names a bag's storage file after its folder, and that name must survive the rename.
     holder = parent / f'.{final.name}.partial-{os.getpid()}'
@@ -210,8 +217,8 @@ def staged_new_dir(path: StrPath, *, option: str = 'output') -> Iterator[Path]:
     try:
         holder.mkdir()
     except OSError as err:
-        raise OutputError(f'{option} {str(final)!r}: its folder is not writable: '
-                          f'{_reason(err)}') from err
+        raise OutputError(f'{{{parameter}}} {str(final)!r}: its folder is not writable: '
+                          f'{_reason(err)}', parameters=(parameter,)) from err
     stage = holder / final.name
     try:
         yield stage
@@ -222,8 +229,8 @@ def staged_new_dir(path: StrPath, *, option: str = 'output') -> Iterator[Path]:
         os.rename(stage, final)
         holder.rmdir()
     except OSError as err:
-        raise OutputError(f'cannot rename {str(stage)!r} to {option} {str(final)!r}: '
-                          f'{_reason(err)}') from err
+        raise OutputError(f'cannot rename {str(stage)!r} to {{{parameter}}} {str(final)!r}: '
+                          f'{_reason(err)}', parameters=(parameter,)) from err
 
 
 def atomic_write_bytes(path: StrPath, data: bytes) -> None:
@@ -260,17 +267,5 @@ def atomic_write_bytes(path: StrPath, data: bytes) -> None:
 
 
 def atomic_write_text(path: StrPath, text: str, encoding: str = 'utf-8') -> None:
-    """
-    Write ``text`` to ``path`` atomically (:func:`atomic_write_bytes`).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Target file.
-    text : str
-        Content.
-    encoding : str
-        Text encoding.
-
-    """
+    """Write ``text`` to ``path`` atomically, encoded (:func:`atomic_write_bytes`)."""
     atomic_write_bytes(path, text.encode(encoding))

@@ -16,13 +16,19 @@ The one matplotlib set-up of every module that draws: Agg backend, one style, sa
 
 The tools write PNG files and must run without a display (a robot, CI, a Dask worker), so the
 backend is Agg, chosen once here before pyplot is first imported. matplotlib is imported only
-when a figure is drawn: importing a tool stays fast, and ``--no-figures`` never loads it.
+when a figure is drawn: importing a tool stays fast, and ``--no-figures`` never loads it. A long
+trace is drawn as its min/max :func:`envelope` (numpy only; the parallel thermal model keeps its
+plot-sized parts with it).
 """
 
+import math
 from pathlib import Path
 from typing import Any
 
-__all__ = ['STYLE', 'pyplot', 'save_figure']
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ['ENVELOPE_POINTS', 'STYLE', 'envelope', 'pyplot', 'save_figure']
 
 #: rcParams every figure of the package is drawn with (on top of matplotlib's defaults): a white
 #: background in any viewer's dark mode, and legends that do not hide the traces.
@@ -31,6 +37,9 @@ STYLE: dict[str, Any] = {
     'savefig.facecolor': 'white',
     'legend.framealpha': 0.8,
 }
+
+#: Points per trace in time plots (longer runs are reduced to min/max envelopes of blocks).
+ENVELOPE_POINTS = 4000
 
 _ready = False
 
@@ -91,3 +100,33 @@ def save_figure(fig: Any, path: Any, *, dpi: float, tight: bool = False,
     finally:
         plt.close(fig)
     return Path(path)
+
+
+def envelope(t: NDArray[Any], y: NDArray[Any],
+             max_points: int = ENVELOPE_POINTS) -> tuple[NDArray[Any], NDArray[Any]]:
+    """
+    Reduce a long trace to a min/max envelope of at most about ``max_points`` points.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Abscissa (n,).
+    y : numpy.ndarray
+        Values (n,).
+    max_points : int
+        Points kept; shorter traces are returned as they are.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (t, y) of the envelope: each block's first abscissa twice, its minimum and maximum.
+
+    """
+    n = t.size
+    if n <= max_points:
+        return t, y
+    block = int(math.ceil(n / (max_points // 2)))
+    k = n // block
+    tb = t[:k * block].reshape(k, block)[:, 0]
+    yb = y[:k * block].reshape(k, block)
+    return np.repeat(tb, 2), np.column_stack([yb.min(axis=1), yb.max(axis=1)]).ravel()

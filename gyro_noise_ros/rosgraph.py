@@ -18,28 +18,19 @@ A private ROS 2 graph on one host: a ``ROS_DOMAIN_ID`` nobody uses, held, and lo
 What the tests, the demo and the soak bench start must neither hear another robot's graph nor
 publish into it. Two things keep them apart:
 
-- **A domain checked free and held.** RTPS maps a domain onto UDP ports (DDS-RTPS 2.2 section
-  9.6.1.1, the Fast DDS and Cyclone DDS defaults): port base PB = 7400, domain gain DG = 250,
-  participant gain PG = 2, offsets d0 = 0 (discovery multicast), d1 = 10 (discovery unicast),
-  d2 = 1 (user multicast), d3 = 11 (user unicast). Domain d owns the 250 ports from
-  ``7400 + 250 d``; participant p of it listens on ``7410 + 250 d + 2 p`` and the next port. A
-  domain is taken as in use when any UDP socket of this host (``/proc/net/udp`` and ``udp6``, which
-  list every socket of the network namespace, multicast listeners bound with ``SO_REUSEADDR``
-  included) is bound inside its block; where ``/proc`` cannot be read, binding the first
-  participant's two unicast ports decides. A free domain is then held with an exclusive
-  ``fcntl.flock`` on ``<lock dir>/domain_<d>.lock`` (released by the kernel when the holder dies),
-  so two test runs, two demos or a test run and a demo on one host never pick the same domain.
-- **Localhost-only discovery.** ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (Jazzy; honoured by
-  the PyPI rmw_fastrtps 8.4: it clears the multicast discovery locators and announces to
-  127.0.0.1 only, so a participant on another host never learns of ours). The deprecated
-  ``ROS_LOCALHOST_ONLY=1`` would also be honoured, with a deprecation warning, so it is removed
-  from the environment instead, together with what would add peers or replace the discovery
-  (``ROS_STATIC_PEERS``, ``ROS_DISCOVERY_SERVER``, a Fast DDS XML profile).
+- **A domain checked free and held.** RTPS maps domain d onto the 250 UDP ports from
+  ``7400 + 250 d`` (DDS-RTPS 2.2 section 9.6.1.1; participant p listens on ``7410 + 250 d + 2 p``
+  and the next port). A domain is in use when any UDP socket of this host (``/proc/net/udp`` and
+  ``udp6``) is bound inside its block; where ``/proc`` cannot be read, binding the first
+  participant's two unicast ports decides. A free domain is held with an exclusive ``fcntl.flock``
+  on ``<lock dir>/domain_<d>.lock`` (released by the kernel when the holder dies).
+- **Localhost-only discovery.** ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (Jazzy); what would
+  add peers or replace the discovery (``ROS_LOCALHOST_ONLY``, ``ROS_STATIC_PEERS``,
+  ``ROS_DISCOVERY_SERVER``, a Fast DDS XML profile) is removed from the environment.
 
-Candidate domains are 1..101: never 0 (the default, the one a robot uses unless told otherwise),
-and only those whose ports for :data:`MAX_PARTICIPANTS` participants stay below the Linux ephemeral
-port range (``/proc/sys/net/ipv4/ip_local_port_range``, 32768 by default), where the kernel hands
-out ports to any process and a participant's port could be taken.
+Candidate domains are 1..101: never 0 (the one a robot uses unless told otherwise), and only those
+whose ports for :data:`MAX_PARTICIPANTS` participants stay below the Linux ephemeral port range
+(``/proc/sys/net/ipv4/ip_local_port_range``). Why each rule, and the measurements: docs/testing.md.
 
 No ROS is imported here: the tests, ``cli/demo.py`` and ``bench/`` call it before any rclpy.
 """

@@ -29,6 +29,7 @@ from gyro_noise_ros.bag import (
     ImuBagReader,
     ImuBagWriter,
     list_topics,
+    mcap_records,
     storage,
     TopicInfo,
 )
@@ -571,7 +572,7 @@ def test_parameter_errors(tmp_path):
 
 
 def reference_mcap_records(chunk):
-    """Plain struct walk over an MCAP chunk: the twin of storage.mcap_message_records."""
+    """Plain struct walk over an MCAP chunk: the twin of mcap_records.mcap_message_records."""
     import struct
 
     out, pos = [], 0
@@ -596,11 +597,11 @@ def test_mcap_record_scan_matches_struct_walk():
     mixed = b''.join(mcap_record(1 + i % 3, 5 * i, bytes(i % 7 + 1)) for i in range(50))
     mixed += b'\x06' + (3).to_bytes(8, 'little') + b'abc'  # a non-message record is stepped over
     for chunk in (uniform, mixed):
-        got = storage.mcap_message_records(chunk)
+        got = mcap_records.mcap_message_records(chunk)
         for a, b in zip(got, reference_mcap_records(chunk)):
             np.testing.assert_array_equal(a, b)
     with pytest.raises(BagError, match='beyond the chunk'):
-        storage.mcap_message_records(mixed[:-2])
+        mcap_records.mcap_message_records(mixed[:-2])
 
 
 def ros1_record(fields, data):

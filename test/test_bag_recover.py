@@ -24,13 +24,14 @@ file: the messages readable after the cut are exactly those of the chunks that e
 
 import collections
 import hashlib
+import logging
 import shutil
 import sqlite3
 import subprocess
 import sys
 
 from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter, list_topics
-from gyro_noise_ros.bag.recover import mcap_has_footer
+from gyro_noise_ros.bag.mcap_records import mcap_has_footer
 from gyro_noise_ros.bag.repair import default_repaired_path, repair_bag
 from gyro_noise_ros.cli import record
 from gyro_noise_ros.errors import BagError, OutputError
@@ -92,7 +93,7 @@ def _chunk_index(mcap):
 
 
 @pytest.mark.parametrize('cut_fraction', [0.05, 0.2, 0.37, 0.5, 0.83, 0.97])
-def test_cut_mcap_reads_exactly_the_chunks_before_the_cut(tmp_path, cut_fraction, capsys):
+def test_cut_mcap_reads_exactly_the_chunks_before_the_cut(tmp_path, cut_fraction, caplog):
     stamps, gyro, temp_stamps = _write(tmp_path / 'full', 'mcap', 30_000, seed=1)
     (full,) = (tmp_path / 'full').glob('*.mcap')
     data = full.read_bytes()
@@ -116,9 +117,9 @@ def test_cut_mcap_reads_exactly_the_chunks_before_the_cut(tmp_path, cut_fraction
     assert note.startswith('truncated MCAP')
     assert f'read {expected + expected_temps} messages' in note
     assert 'gyro_noise_record repair' in note
-    # said once on stderr, as one line
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and 'warning: truncated MCAP' in err[0]
+    # said once, as one warning of the package's logger (a tool prints it: test_repair_...)
+    assert [r.getMessage() for r in caplog.records] == [note]
+    assert caplog.records[0].levelno == logging.WARNING
     assert {t.name: t.count for t in list_topics(killed)}['/imu/data_raw'] == expected
 
 
@@ -184,7 +185,7 @@ def _kill_mid_transaction(db3, rows=2000):
     return journal
 
 
-def test_hot_journal_is_rolled_back_in_a_copy_never_in_place(tmp_path, capsys):
+def test_hot_journal_is_rolled_back_in_a_copy_never_in_place(tmp_path, caplog):
     stamps, gyro, temp_stamps = _write(tmp_path / 'rec', 'sqlite3', 3000, seed=4)
     (db3,) = (tmp_path / 'rec').glob('*.db3')
     (tmp_path / 'rec' / 'metadata.yaml').unlink()  # killed: no metadata.yaml either
@@ -197,8 +198,9 @@ def test_hot_journal_is_rolled_back_in_a_copy_never_in_place(tmp_path, capsys):
         np.testing.assert_array_equal(temps[0], temp_stamps)
         assert 'unfinished transaction' in note and 'rolled-back copy' in note
     assert (_sha(db3), _sha(journal)) == before  # the user's files untouched
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and 'warning: sqlite3 bag' in err[0]
+    # said at each opening (the folder, its file), a warning of the package's logger
+    notes = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(notes) == 2 and all(n.startswith('sqlite3 bag') for n in notes)
     # read immutable, as rosbags does, the file is not what was committed (half-written pages)
     assert sqlite3.connect(f'file:{db3}?immutable=1', uri=True).execute(
         'SELECT count(*) FROM messages').fetchone() != (3000 + temp_stamps.size,)
@@ -232,7 +234,12 @@ def test_repair_writes_a_complete_bag_and_leaves_the_input(tmp_path, storage, ca
     assert record.main(['repair', str(killed)]) == 0
     out = default_repaired_path(killed)
     assert out == tmp_path / 'killed_repaired'
-    assert f'wrote {expected.size + exp_temps[0].size} messages' in capsys.readouterr().out
+    said = capsys.readouterr()
+    assert f'wrote {expected.size + exp_temps[0].size} messages' in said.out
+    # the tool says the recovery once, as one line with its name
+    kind = 'truncated MCAP' if storage == 'mcap' else 'sqlite3 bag'
+    assert said.err.startswith(f'gyro_noise_record repair: warning: {kind} ')
+    assert len(said.err.strip().splitlines()) == 1
     assert {p.name: _sha(p) for p in killed.iterdir()} == hashes
     names = sorted(p.name for p in out.iterdir())
     assert names == ['killed_repaired' + src.suffix, 'metadata.yaml']

@@ -178,7 +178,7 @@ def test_short_dwell_is_reported_as_such():
     t, accel, gyro = six_position_record(dwell_s=30.0, seed=1)
     det, s = _detect(t, accel, gyro, min_static_s=40.0)
     assert not det.dwells and len(det.short) == 6
-    with pytest.raises(InputDataError, match='no static dwell of at least --min-static-s 40 s'):
+    with pytest.raises(InputDataError, match='no static dwell of at least min_static_s 40 s'):
         select_six([det], s)
 
 
@@ -189,7 +189,7 @@ def test_tilted_dwell_is_refused():
     sel = t < 30.0                                 # the first dwell (+z) tilted by 20 deg
     accel[sel] = accel[sel] @ rot.T
     det, s = _detect(t, accel, gyro)
-    with pytest.raises(InputDataError, match=r'tilted more than --max-tilt-deg 5 deg.*\+z at t=1'):
+    with pytest.raises(InputDataError, match=r'tilted more than max_tilt_deg 5 deg.*\+z at t=1'):
         select_six([det], s)
 
 

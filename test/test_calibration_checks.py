@@ -133,7 +133,7 @@ def test_an_all_nan_dwell_is_said_as_nan():
 
 def test_a_window_longer_than_the_record_says_so():
     t, accel, gyro = six_position_record(dwell_s=30.0, seed=5)
-    with pytest.raises(InputDataError, match=r'shorter than one detector window \(--window-s '
+    with pytest.raises(InputDataError, match=r'shorter than one detector window \(window_s '
                                              r'1000 s\)'):
         _detect(t, accel, gyro, DetectorSettings(window_s=1000.0), rate=100.0)
 

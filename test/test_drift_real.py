@@ -18,8 +18,9 @@ import itertools
 
 from _realdata import real_data
 from gyro_noise_ros.core.chunks import summarise_sequence
-from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
+from gyro_noise_ros.core.engine import StreamCounts
 from gyro_noise_ros.core.health import evaluate_health, ReferenceStats
+from gyro_noise_ros.core.results import AxisSummary
 import numpy as np
 import pytest
 

@@ -23,16 +23,10 @@ import pickle
 
 from gyro_noise_ros.core.chunks import (chunk_moments, noise_colour, RobustLocation,
                                         summarise_sequence)
-from gyro_noise_ros.core.engine import (
-    analyze_chunk,
-    AxisSummary,
-    ChunkResult,
-    EngineConfig,
-    NoiseEngine,
-    rad_s2_to_deg_s_per_h,
-)
+from gyro_noise_ros.core.engine import analyze_chunk, EngineConfig, NoiseEngine
 from gyro_noise_ros.core.fractional import make_grid, OrderIdentifier
 from gyro_noise_ros.core.health import HealthThresholds, ReferenceStats
+from gyro_noise_ros.core.results import AxisSummary, ChunkResult, rad_s2_to_deg_s_per_h
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 from gyro_noise_ros.errors import InputDataError, ParameterError
 import numpy as np

@@ -57,7 +57,7 @@ def test_csv_without_time_needs_rate(tmp_path, make_record):
     _, rate = _record()
     path = tmp_path / 'c.csv'
     make_record(path, np.column_stack((rate * 0, rate * 0, rate)), storage='csv', csv_time=False)
-    with pytest.raises(ParameterError, match='rate-hz'):
+    with pytest.raises(ParameterError, match='rate_hz'):
         load_input(path)
     assert load_input(path, rate_hz=100.0).rate_hz == 100.0
 

@@ -24,7 +24,7 @@ import math
 
 from gyro_noise_ros.core.chunks import (DriftEstimate, RobustLocation, SequenceSummary,
                                         summarise_sequence)
-from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
+from gyro_noise_ros.core.engine import StreamCounts
 from gyro_noise_ros.core.health import (
     axis_status,
     drift_t_threshold,
@@ -36,6 +36,7 @@ from gyro_noise_ros.core.health import (
     reference_per_axis,
     ReferenceStats,
 )
+from gyro_noise_ros.core.results import AxisSummary
 from gyro_noise_ros.errors import ParameterError
 import numpy as np
 import pytest

@@ -17,7 +17,7 @@ Every Python source file starts with the Apache-2.0 header, exactly as in ``test
 
 The header is the first 13 lines of that file; a shebang line may stand before it. Checked
 without ament_copyright (not on PyPI) over the package, test/, bench/, tools/, docs/scripts/ and
-launch/ plus setup.py.
+launch/ plus setup.py. (The SPDX two-line form fails Jazzy's ament_copyright: README, Licence.)
 """
 
 from _lint_scope import PACKAGE_ROOT, SOURCE_DIRS

@@ -26,7 +26,6 @@ import pytest
 # there); each still selects the backend itself, to become a call to plotting.pyplot().
 _NOT_YET_MOVED = {
     'gyro_noise_ros/explain/report.py',
-    'gyro_noise_ros/app/reliability.py',
 }
 
 

@@ -24,8 +24,8 @@ axes, as the paper does (420 s -> 945 s "average among the three axes").
 import json
 
 from _reliability_common import six_position_record, static_record, write_bag
-from gyro_noise_ros.app.reliability import in_short
 from gyro_noise_ros.calibration.emulate import BiasVariation, SensorErrors
+from gyro_noise_ros.calibration.reliability_report import in_short
 from gyro_noise_ros.calibration.static_record import CHANNELS, StaticRecord
 from gyro_noise_ros.cli.reliability import main
 from gyro_noise_ros.core.allan import allan_deviation

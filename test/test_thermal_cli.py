@@ -197,7 +197,7 @@ def test_simulate_calls_the_simulator_lazily(tmp_path, monkeypatch, capsys):
 
 
 def test_mode_class_figure_from_method_diagnostics(tmp_path):
-    from gyro_noise_ros.thermal.report import plot_mode_classes
+    from gyro_noise_ros.thermal.figures import plot_mode_classes
 
     info = [{'sample_entropy': [0.1, 0.9, 2.0], 'classes': ['drift', 'mixed', 'noise'],
              'center_freqs_hz': [0.001, 0.5, 8.0]}] * 3
@@ -383,14 +383,14 @@ def test_export_writes_px4_and_ardupilot_files(tmp_path, capsys):
 
 
 def test_an_interrupted_fit_leaves_no_model(tmp_path, monkeypatch):
-    from gyro_noise_ros.thermal import report
+    from gyro_noise_ros.thermal import figures
 
     train, _, _ = _bag(tmp_path / 'train', 1)
 
     def stop(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(report, 'plot_run', stop)
+    monkeypatch.setattr(figures, 'plot_run', stop)
     assert main(['fit', train, '--method', 'poly3', '--out', str(tmp_path / 'm'),
                  '--quiet']) == 130
     assert not (tmp_path / 'm' / 'model.json').exists()

@@ -141,7 +141,7 @@ def test_trainable_refuses_constant_and_narrow_temperature():
 def test_min_range_must_be_a_finite_non_negative_span():
     run = _run(np.linspace(25.0, 30.0, 100))
     for bad in (float('nan'), -5.0, float('inf')):
-        with pytest.raises(ParameterError, match='--min-range-c'):
+        with pytest.raises(ParameterError, match='min_range_c'):
             check_trainable(run, min_range_c=bad)
     check_trainable(run, min_range_c=0.0)
 

@@ -29,9 +29,10 @@ import math
 from _realdata import real_data
 from gyro_noise_ros.analysis.summary_json import axis_summary_dict
 from gyro_noise_ros.core.chunks import noise_colour, summarise_sequence
-from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
+from gyro_noise_ros.core.engine import StreamCounts
 from gyro_noise_ros.core.fractional import gl_difference, make_grid, OrderIdentifier
 from gyro_noise_ros.core.health import evaluate_health, load_reference, ReferenceStats
+from gyro_noise_ros.core.results import AxisSummary
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
 import numpy as np
 import pytest

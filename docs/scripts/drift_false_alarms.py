@@ -31,8 +31,9 @@ import itertools
 import os
 
 from gyro_noise_ros.core.chunks import summarise_sequence
-from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
+from gyro_noise_ros.core.engine import StreamCounts
 from gyro_noise_ros.core.health import evaluate_health, ReferenceStats
+from gyro_noise_ros.core.results import AxisSummary
 import numpy as np
 
 DEFAULT_DATA = os.path.join(os.path.dirname(__file__), '..', '..', '..', 'shared', 'data', 'real',

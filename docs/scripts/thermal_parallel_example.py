@@ -53,9 +53,8 @@ import dataclasses
 import math
 from pathlib import Path
 
-from gyro_noise_ros.app.thermal import bandwidth_cell
 from gyro_noise_ros.plotting import pyplot, save_figure
-from gyro_noise_ros.thermal import report
+from gyro_noise_ros.thermal import figures as thermal_figures, report
 from gyro_noise_ros.thermal.elman import fit_drift
 from gyro_noise_ros.thermal.metrics import evaluate_method
 from gyro_noise_ros.thermal.parallel import block_means, ParallelModel
@@ -131,8 +130,8 @@ def part1(model, test, figures):
         ratios.append((arw_p / arw_r, bs_ratio, v['noise_path']['arw_gain']))
         print(f'| tool, axis {axis} | {arw_r:.4g} | {arw_p:.3g} | {arw_p / arw_r:.3g} | '
               f'{v["noise_path"]["arw_gain"]:.3g} | {_bs(raw)} | {_bs(proc)} | '
-              f'{bs_ratio:.3g} | {bandwidth_cell(bw)} / '
-              f'{bandwidth_cell(small)} | {bw["step_lead_s"]:.3g} |')
+              f'{bs_ratio:.3g} | {report.bandwidth_cell(bw)} / '
+              f'{report.bandwidth_cell(small)} | {bw["step_lead_s"]:.3g} |')
     print('\n(`<=`: the readout saw no minimum, an upper bound.)\n')
     if figures:
         plt = pyplot()
@@ -168,19 +167,19 @@ def part2(model, test, figures):
         v = doc['axes']['x']
         bw = v['bandwidth']
         print(f'| {method.name} | {v["noise_path"]["arw_gain"]:.3g} | '
-              f'{bandwidth_cell(bw)} / '
-              f'{bandwidth_cell(v.get("bandwidth_small_signal"))} | '
+              f'{report.bandwidth_cell(bw)} / '
+              f'{report.bandwidth_cell(v.get("bandwidth_small_signal"))} | '
               f'{bw["step_delay_50_s"]:.3g} | {bw["step_lead_s"]:.3g} | '
               f'{"yes" if v["verdict"]["live_capable"] else "no"} |')
         steps[method.name] = {'x': curves['x']['step']}
         responses[method.name] = {'x': curves['x']['frequency']}
     print()
     if figures:
-        report.plot_steps(Path(figures) / 'causal_steps.png', steps,
-                          title='step response, axis x: centred filters answer before the '
-                                'step, the trailing one after it')
-        report.plot_bandwidth(Path(figures) / 'causal_bandwidth.png', responses,
-                              title='response to injected motion, axis x')
+        thermal_figures.plot_steps(Path(figures) / 'causal_steps.png', steps,
+                                   title='step response, axis x: centred filters answer before '
+                                         'the step, the trailing one after it')
+        thermal_figures.plot_bandwidth(Path(figures) / 'causal_bandwidth.png', responses,
+                                       title='response to injected motion, axis x')
 
 
 def part3(model, figures):
@@ -239,8 +238,9 @@ def part3(model, figures):
         for name, caption in mixed.report_figures(run, out):
             if name is not None:
                 print(f'- `{out / name}`: {caption}')
-        report.plot_mode_classes(out / 'fig13_classes.png', mixed.last_info,
-                                 title='mixed-band example: sample entropy (scale 16) and class')
+        thermal_figures.plot_mode_classes(
+            out / 'fig13_classes.png', mixed.last_info,
+            title='mixed-band example: sample entropy (scale 16) and class')
         print()
 
 

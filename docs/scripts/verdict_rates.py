@@ -62,10 +62,11 @@ import time
 
 from gyro_noise_ros.core.allan import allan_deviation
 from gyro_noise_ros.core.chunks import noise_colour, robust_location, summarise_sequence
-from gyro_noise_ros.core.engine import AxisSummary, StreamCounts
+from gyro_noise_ros.core.engine import StreamCounts
 from gyro_noise_ros.core.fractional import gl_coefficients, gl_difference, OrderIdentifier
 from gyro_noise_ros.core.health import (evaluate_health, HealthThresholds, ReferenceStats,
                                         spread_distance)
+from gyro_noise_ros.core.results import AxisSummary
 import numpy as np
 
 # $GYRO_NOISE_REAL_DATA (as for the tests), else ../shared/data/real beside the repository

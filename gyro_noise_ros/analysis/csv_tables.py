@@ -33,7 +33,7 @@ from ..units import RAD_TO_DEG
 
 if TYPE_CHECKING:  # annotations only: a renderer needs no engine at run time
     from ..core.allan import AllanResult
-    from ..core.engine import ChunkResult
+    from ..core.results import ChunkResult
 
 __all__ = ['ALLAN_COLUMNS', 'CHUNK_COLUMNS', 'ChunkCsvWriter', 'allan_curve', 'write_allan_csv']
 
@@ -78,7 +78,7 @@ class ChunkCsvWriter:
 
     def write(self, bag: str, result: 'ChunkResult') -> None:
         """
-        Append one :class:`..core.engine.ChunkResult` of bag ``bag``.
+        Append one :class:`..core.results.ChunkResult` of bag ``bag``.
 
         Parameters
         ----------

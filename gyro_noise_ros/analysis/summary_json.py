@@ -28,9 +28,9 @@ from typing import Any, SupportsFloat
 
 import numpy as np
 
-from ..core.engine import AxisSummary, rad_s2_to_deg_s_per_h
 from ..core.health import HealthVerdict, reference_dict, ROBUST_JSON_KEY
 from ..core.readout import AllanReadout
+from ..core.results import AxisSummary, rad_s2_to_deg_s_per_h
 from ..outputs import StrPath
 from ..units import RAD_TO_DEG
 
@@ -49,7 +49,7 @@ def json_num(value: SupportsFloat) -> float | None:
 def axis_summary_dict(summary: AxisSummary, *,
                       verdict: HealthVerdict | None = None) -> dict[str, Any]:
     """
-    Turn an :class:`..core.engine.AxisSummary` into the per-axis entry of summary.json.
+    Turn an :class:`..core.results.AxisSummary` into the per-axis entry of summary.json.
 
     Parameters
     ----------

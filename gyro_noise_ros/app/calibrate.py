@@ -27,8 +27,10 @@ Steps (``docs/reliability.md`` section 1):
    recording (a second pass reads only the turns), when the turns determine them;
 4. the leave-one-out gravity check.
 
-:func:`write_calibration` writes ``calibration.json`` (:meth:`CalibrationResult.as_dict`),
-``calibration.yaml`` (a ROS 2 parameter file ``imu_compensator`` loads) and ``calibration.md``.
+:func:`write_calibration` writes ``calibration.json`` (:meth:`CalibrationResult.as_dict`) and,
+rendered from it by :mod:`..calibration.calibrate_report` and :mod:`..htmlreport.calibrate`,
+``calibration.yaml`` (a ROS 2 parameter file ``imu_compensator`` loads), ``calibration.md`` and
+``report.html``.
 """
 
 from collections.abc import Iterable, Sequence
@@ -43,6 +45,7 @@ import numpy as np
 
 from .. import __version__
 from ..calibration import records
+from ..calibration.calibrate_report import calibration_markdown, calibration_yaml
 from ..calibration.dwell_noise import fit_dwell_noise
 from ..calibration.gyro_turns import fit_gyro_turns, GyroTurnResult, Turn
 from ..calibration.multipose import calibrate_poses
@@ -51,14 +54,12 @@ from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EAR
 from ..calibration.static import (DetectorSettings, Dwell, find_dwells, ORIENTATIONS,
                                   select_poses, select_six, WindowAccumulator)
 from ..errors import InputDataError, ParameterError
+from ..formatting import finite_list
 from ..htmlreport.calibrate import write_calibrate_html
 from ..outputs import atomic_write_text, staged_output, StrPath
 from ..units import MG_TO_M_S2, STANDARD_GRAVITY_M_S2
 
 MODEL = 'measured = (I + diag(scale_factor) + misalignment) @ true + bias'
-#: One milli-g in m/s^2: the old name of :data:`gyro_noise_ros.units.MG_TO_M_S2`, kept while
-#: the reliability workflow still imports it from here.
-MG = MG_TO_M_S2
 MODES = ('six-position', 'multi-pose')
 GYRO_TURNS = ('auto', 'off')
 FILES = ('calibration.json', 'calibration.yaml', 'calibration.md')
@@ -178,13 +179,8 @@ class CalibrateParams:
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
 
 
-def _arr(v: Any) -> list[float | None]:
-    return [None if not math.isfinite(float(x)) else float(x) for x in np.ravel(v)]
-
-
 def _mat(v: Any) -> list[list[float | None]]:
-    a = np.asarray(v, dtype=np.float64)
-    return [[None if not math.isfinite(float(x)) else float(x) for x in row] for row in a]
+    return [finite_list(row) for row in np.asarray(v, dtype=np.float64)]
 
 
 @dataclass(frozen=True)
@@ -314,9 +310,9 @@ class CalibrationResult:
         p = self.params
         gyro = self.gyro
         gyro_doc: dict[str, Any] = {
-            'bias_rad_s': _arr(self.gyro_bias_rad_s),
-            'bias_sigma_rad_s': _arr(self.gyro_bias_sigma_rad_s),
-            'scale_factor': _arr(self.gyro_scale_factor),
+            'bias_rad_s': finite_list(self.gyro_bias_rad_s),
+            'bias_sigma_rad_s': finite_list(self.gyro_bias_sigma_rad_s),
+            'scale_factor': finite_list(self.gyro_scale_factor),
             'misalignment': _mat(self.gyro_misalignment),
             'scale_factor_estimated': bool(gyro is not None and gyro.estimated.diagonal().all()),
             'method': 'integration of the turns between static poses (imu_tk), bias '
@@ -325,12 +321,12 @@ class CalibrationResult:
         }
         if gyro is not None:
             gyro_doc.update({
-                'scale_factor_sigma': _arr(gyro.scale_factor_sigma),
+                'scale_factor_sigma': finite_list(gyro.scale_factor_sigma),
                 'misalignment_sigma': _mat(gyro.misalignment_sigma),
                 'estimated': gyro.estimated.tolist(),
                 'turns': gyro.turns, 'chi2': gyro.chi2, 'dof': gyro.dof,
-                'turn_residual_deg': _arr(gyro.residual_deg),
-                'turn_rotation_deg': _arr(gyro.rotation_deg)})
+                'turn_residual_deg': finite_list(gyro.residual_deg),
+                'turn_rotation_deg': finite_list(gyro.rotation_deg)})
         loo = self.gravity_check
         noise = {k: {'window_s': n.window_s, 'white': float(n.coef[0]),
                      'flicker': float(n.coef[1]), 'walk': float(n.coef[2]),
@@ -345,10 +341,10 @@ class CalibrationResult:
             'sources': list(p.paths),
             'dwells': [d.as_dict() for d in self.dwells],
             'accel': {
-                'bias_m_s2': _arr(self.accel_bias_m_s2),
-                'bias_sigma_m_s2': _arr(self.accel_bias_sigma_m_s2),
-                'scale_factor': _arr(self.accel_scale_factor),
-                'scale_factor_sigma': _arr(self.accel_scale_factor_sigma),
+                'bias_m_s2': finite_list(self.accel_bias_m_s2),
+                'bias_sigma_m_s2': finite_list(self.accel_bias_sigma_m_s2),
+                'scale_factor': finite_list(self.accel_scale_factor),
+                'scale_factor_sigma': finite_list(self.accel_scale_factor_sigma),
                 'misalignment': _mat(self.accel_misalignment),
                 'misalignment_sigma': _mat(self.accel_misalignment_sigma),
                 'residual_rms_m_s2': self.accel_residual_rms_m_s2,
@@ -584,210 +580,9 @@ def run_calibration(params: CalibrateParams) -> CalibrationResult:
                              {'accel': accel_noise, 'gyro': gyro_noise}, nonfinite, left_out)
 
 
-def _fmt(values: Any) -> str:
-    return '[' + ', '.join(repr(float(v)) for v in np.ravel(values)) + ']'
-
-
-def yaml_text(result: CalibrationResult) -> str:
-    """
-    Return the ``calibration.yaml`` ROS 2 parameter file of a calibration.
-
-    Parameters
-    ----------
-    result : CalibrationResult
-        The calibration.
-
-    Returns
-    -------
-    str
-
-    """
-    p = result.params
-    stamp = datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')
-    lines = [
-        f'# {p.mode} calibration written by gyro_noise_calibrate {result.version} on {stamp}',
-        '# Sources: ' + ', '.join(p.paths),
-        f'# Gravity used: {result.gravity_m_s2!r} m/s^2 ({p.gravity.source})',
-        f'# Model: {MODEL}; compensation: true = inv(I + diag(S) + M) @ (measured - bias)',
-        f'# Frame: {FRAMES[p.mode]}',
-        '# Units: accel bias m/s^2, gyro bias rad/s, scale factors dimensionless '
-        '(-0.0002 = -0.02 %), misalignment 3x3 row-major with zero diagonal',
-    ]
-    if result.gyro_note:
-        lines.append(f'# Gyro: {result.gyro_note}')
-    lines += [
-        '/**:',
-        '  ros__parameters:',
-        f'    accel_bias_m_s2: {_fmt(result.accel_bias_m_s2)}',
-        f'    accel_scale_factor: {_fmt(result.accel_scale_factor)}',
-        f'    accel_misalignment: {_fmt(result.accel_misalignment)}',
-        f'    gyro_bias_rad_s: {_fmt(result.gyro_bias_rad_s)}',
-        f'    gyro_scale_factor: {_fmt(result.gyro_scale_factor)}',
-        f'    gyro_misalignment: {_fmt(result.gyro_misalignment)}',
-        f'    calibration_gravity_m_s2: {float(result.gravity_m_s2)!r}',
-    ]
-    return '\n'.join(lines) + '\n'
-
-
-def table6_rows(doc: dict[str, Any]) -> list[tuple[str, float, float]]:
-    """
-    Return the paper Table 6 rows (bias in mg, scale factor in %) of a calibration document.
-
-    Parameters
-    ----------
-    doc : dict
-        The ``calibration.json`` document (:meth:`CalibrationResult.as_dict`).
-
-    Returns
-    -------
-    list of (str, float, float)
-        Name, value and standard uncertainty in the printed unit.
-
-    """
-    a = doc['accel']
-    rows = [(f'b{ax}', a['bias_m_s2'][i] / MG_TO_M_S2, a['bias_sigma_m_s2'][i] / MG_TO_M_S2)
-            for i, ax in enumerate('xyz')]
-    rows += [(f'S{ax}', a['scale_factor'][i] * 100.0, a['scale_factor_sigma'][i] * 100.0)
-             for i, ax in enumerate('xyz')]
-    return rows
-
-
-def _pm(value: float | None, sigma: float | None, spec: str) -> str:
-    if value is None:
-        return 'n/a'
-    if sigma is None:
-        return format(value, spec)
-    return f'{format(value, spec)} +/- {format(sigma, spec)}'
-
-
-def markdown(result: CalibrationResult) -> str:
-    """
-    Return ``calibration.md``: Table 6 layout, cross-axis terms, gyro, checks, dwells.
-
-    Parameters
-    ----------
-    result : CalibrationResult
-        The calibration.
-
-    Returns
-    -------
-    str
-
-    """
-    doc = result.as_dict()
-    title = ('Six-position calibration (paper 001 Table 6 layout)'
-             if doc['mode'] == 'six-position' else 'Multi-pose calibration (|a| = g, imu_tk)')
-    out = [f'# {title}', '',
-           f'Gravity used: {doc["gravity_m_s2"]:.5f} m/s^2 ({doc["gravity_source"]}). '
-           'mg = 9.80665e-3 m/s^2. Frame: ' + doc['frame'] + '.', '',
-           'Uncertainties: one standard uncertainty, against the value during the calibration, '
-           'from the variogram of the dwells (white noise and bias wander between dwells).', '']
-    out += _accelerometer_lines(doc)
-    out += _gyro_lines(doc, turns=result.gyro is not None)
-    out += _check_lines(doc)
-    out += _dwell_lines(doc)
-    return '\n'.join(out) + '\n'
-
-
-def _accelerometer_lines(doc: dict[str, Any]) -> list[str]:
-    """Return the Table 6 rows and the cross-axis terms of the accelerometer (calibration.md)."""
-    out = ['| parameter | value | std. uncertainty |', '|---|---|---|']
-    for name, value, sig in table6_rows(doc):
-        unit = 'mg' if name.startswith('b') else '%'
-        out.append(f'| {name} | {value:.4f} {unit} | {sig:.4f} {unit} |')
-    m = np.asarray(doc['accel']['misalignment'], dtype=float)
-    ms = np.asarray([[np.nan if v is None else v for v in row]
-                     for row in doc['accel']['misalignment_sigma']], dtype=float)
-    out += ['', 'Accelerometer cross-axis terms (row = measured axis, column = true axis, %, '
-            '+/- one standard uncertainty):', '', '| | x | y | z |', '|---|---|---|---|']
-    for j, ax in enumerate('xyz'):
-        out.append(f'| {ax} | ' + ' | '.join(
-            '-' if i == j else _pm(100 * m[j, i], 100 * ms[j, i], '.4f') for i in range(3))
-            + ' |')
-    return out
-
-
-def _gyro_lines(doc: dict[str, Any], *, turns: bool) -> list[str]:
-    """Return the gyro section: biases, scale factors and, from ``turns``, cross-axis terms."""
-    gyro = doc['gyro']
-    gb = np.degrees(np.asarray(gyro['bias_rad_s']))
-    gs = np.degrees(np.asarray(gyro['bias_sigma_rad_s']))
-    out = ['', '## Gyro', '',
-           '| axis | bias (deg/s) | scale factor (%) |', '|---|---|---|']
-    est = np.asarray(gyro.get('estimated', np.zeros((3, 3), bool)))
-    for i, ax in enumerate('xyz'):
-        if est[i, i]:
-            scale = _pm(100 * gyro['scale_factor'][i], 100 * gyro['scale_factor_sigma'][i], '.4f')
-        else:
-            scale = 'not estimated'
-        out.append(f'| {ax} | {gb[i]:.5f} +/- {gs[i]:.5f} | {scale} |')
-    if turns:
-        gm = np.asarray(gyro['misalignment'])
-        gms = np.asarray([[np.nan if v is None else v for v in row]
-                          for row in gyro['misalignment_sigma']], dtype=float)
-        out += ['', f'Gyro cross-axis terms (%), from {gyro["turns"]} turns between static '
-                f'poses (chi2 {gyro["chi2"]:.1f} for {gyro["dof"]} degrees of freedom):', '',
-                '| | x | y | z |', '|---|---|---|---|']
-        for j, ax in enumerate('xyz'):
-            cells = []
-            for i in range(3):
-                if i == j:
-                    cells.append('-')
-                elif est[j, i]:
-                    cells.append(_pm(100 * gm[j, i], 100 * gms[j, i], '.4f'))
-                else:
-                    cells.append('not estimated')
-            out.append(f'| {ax} | ' + ' | '.join(cells) + ' |')
-    if gyro['note']:
-        out += ['', f'Gyro: {gyro["note"]}.']
-    return out
-
-
-def _check_lines(doc: dict[str, Any]) -> list[str]:
-    """Return the indicators, the gravity check and the consistency of opposite dwells."""
-    u = doc['uniformity']
-    out = ['', '## Indicators (paper 001 section 6)', '',
-           '- uniformity of the biases (std, ddof=1): '
-           f'{u["accel_bias_std_m_s2"] / MG_TO_M_S2:.4f} mg',
-           f'- uniformity of the scale factors (std, ddof=1): '
-           f'{100 * u["accel_scale_factor_std"]:.4f} %']
-    gc = doc['gravity_check']
-    out += ['', '## Gravity check (leave-one-out)', '',
-            f'Each dwell calibrated by the others; |a| - g against its standard deviation, '
-            f'false-alarm {gc["alpha"]:g} over all dwells. Mean |a| raw '
-            f'{gc["mean_norm_raw_m_s2"]:.4f} m/s^2, held-out calibrated '
-            f'{gc["loo_mean_norm_m_s2"]:.5f} m/s^2; verdict: '
-            f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.', '',
-            '| dwell | abs(a) - g (mg) | sigma (mg) | z | verdict |', '|---|---|---|---|---|']
-    for c in gc['dwells']:
-        out.append(f'| {c["dwell"]} | {c["residual_m_s2"] / MG_TO_M_S2:+.4f} | '
-                   f'{c["sigma_m_s2"] / MG_TO_M_S2:.4f} | {c["z"]:+.2f} | '
-                   f'{"consistent" if c["consistent"] else "inconsistent"} |')
-    if doc['consistency']['pairs']:
-        out += ['', '## Consistency of opposite dwells (a tilt cannot pass silently)', '',
-                '| pair | disagreement (mg) | sigma (mg) | p | verdict |',
-                '|---|---|---|---|---|']
-        for c in doc['consistency']['pairs']:
-            dis = float(np.linalg.norm(c['disagreement_m_s2'])) / MG_TO_M_S2
-            out.append(f'| +/-{c["axis"]} | {dis:.4f} | {c["sigma_m_s2"] / MG_TO_M_S2:.4f} | '
-                       f'{c["p_value"]:.3g} | '
-                       f'{"consistent" if c["consistent"] else "inconsistent"} |')
-    return out
-
-
-def _dwell_lines(doc: dict[str, Any]) -> list[str]:
-    out = ['', '## Dwells', '', '| dwell | start (s) | duration (s) | samples | NaN/Inf dropped '
-           '| tilt (deg) | recording |', '|---|---|---|---|---|---|---|']
-    for d in doc['dwells']:
-        out.append(f'| {d["orientation"]} | {d["t_start_s"]:.2f} | {d["duration_s"]:.2f} | '
-                   f'{d["samples"]} | {d["non_finite_samples"]} | {d["tilt_deg"]:.2f} | '
-                   f'{d["source"]} |')
-    return out
-
-
 def calibration_files(result: CalibrationResult) -> dict[str, str]:
     """
-    Return the files of a calibration: name -> text.
+    Return the text files of a calibration, rendered from its document: name -> text.
 
     Parameters
     ----------
@@ -797,11 +592,14 @@ def calibration_files(result: CalibrationResult) -> dict[str, str]:
     Returns
     -------
     dict
+        calibration.json, calibration.yaml (stamped with the time now, UTC) and calibration.md.
 
     """
-    return {'calibration.json': json.dumps(result.as_dict(), indent=2) + '\n',
-            'calibration.yaml': yaml_text(result),
-            'calibration.md': markdown(result)}
+    doc = result.as_dict()
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')
+    return {'calibration.json': json.dumps(doc, indent=2) + '\n',
+            'calibration.yaml': calibration_yaml(doc, written_utc=stamp),
+            'calibration.md': calibration_markdown(doc)}
 
 
 def write_calibration(result: CalibrationResult, out_dir: StrPath, *, html: bool = True,
@@ -830,6 +628,6 @@ def write_calibration(result: CalibrationResult, out_dir: StrPath, *, html: bool
         for name, text in calibration_files(result).items():
             atomic_write_text(stage / name, text)
         if html:
-            write_calibrate_html(result, stage, command=command)
+            write_calibrate_html(result.as_dict(), stage, command=command)
     return [os.path.join(str(out_dir), name)
             for name in FILES + (('report.html',) if html else ())]

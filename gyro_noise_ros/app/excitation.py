@@ -20,11 +20,13 @@ record (before, and optionally after the stress), analyses the excited axis by
 :func:`~gyro_noise_ros.calibration.excitation.sine_dwell` or
 :func:`~gyro_noise_ros.calibration.excitation.sine_sweep` (with the reference channel when
 given), and compares before and after; :func:`write_excitation` writes ``excitation.json``
-(:meth:`ExcitationResult.as_dict`), ``excitation.md`` (labels and units, percentages, verdicts)
-and the figures of paper 001 Figures 7-12.
+(:meth:`ExcitationResult.as_dict`) and, rendered from it and the records by
+:mod:`..calibration.excitation_report` and :mod:`..htmlreport.excitation`, ``excitation.md``
+(labels and units, percentages, verdicts), ``report.html`` and the figures of paper 001
+Figures 7-12.
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 import json
 import math
@@ -38,11 +40,12 @@ from .. import __version__
 from ..calibration import records
 from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
                                       sine_dwell, sine_sweep)
+from ..calibration.excitation_report import display_unit, excitation_markdown, plot_excitation
 from ..errors import InputDataError, ParameterError
+from ..formatting import finite_list, finite_or_none
 from ..htmlreport.excitation import write_excitation_html
 from ..outputs import atomic_write_text, staged_output, StrPath
-from ..plotting import pyplot, save_figure
-from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
+from ..units import STANDARD_GRAVITY_M_S2
 
 SIDES = ('before', 'after')
 
@@ -131,8 +134,7 @@ class ExcitationParams:
     @property
     def display(self) -> tuple[float, str]:
         """(float, str): factor from SI to the printed unit and its name (g or deg/s)."""
-        return ((1.0 / STANDARD_GRAVITY_M_S2, 'g') if self.sensor == 'accel' else
-                (RAD_TO_DEG, 'deg/s'))
+        return display_unit(self.sensor)
 
 
 @dataclass(frozen=True)
@@ -164,12 +166,7 @@ class SideResult:
 
 
 def _lst(a: Any) -> list[float | None] | None:
-    return None if a is None else [None if not math.isfinite(float(v)) else float(v)
-                                   for v in np.ravel(a)]
-
-
-def _num(v: Any) -> float | None:
-    return None if v is None or not math.isfinite(float(v)) else float(v)
+    return None if a is None else finite_list(a)
 
 
 @dataclass(frozen=True)
@@ -239,17 +236,17 @@ class ExcitationResult:
             if p.mode == 'dwell':
                 entry.update({
                     'frequency_hz': r.frequency_hz,
-                    'frequency_sigma_hz': _num(r.frequency_sigma_hz),
+                    'frequency_sigma_hz': finite_or_none(r.frequency_sigma_hz),
                     f'amplitude_{u}': r.amplitude, f'amplitude_sigma_{u}': r.amplitude_sigma,
                     f'offset_{u}': r.offset, f'cycle_amplitude_mean_{u}': r.cycle_amplitude_mean,
-                    f'cycle_amplitude_std_{u}': _num(r.cycle_amplitude_std),
+                    f'cycle_amplitude_std_{u}': finite_or_none(r.cycle_amplitude_std),
                     f'cycle_amplitude_min_{u}': r.cycle_amplitude_min,
                     f'cycle_amplitude_max_{u}': r.cycle_amplitude_max,
-                    'amplitude_stability': _num(r.amplitude_stability),
-                    'amplitude_stability_noise': _num(r.stability_noise),
-                    'stability_p': _num(r.stability_p), 'steady': bool(r.steady),
-                    'thd': r.thd, 'thd_noise': _num(r.thd_noise),
-                    'distortion_p': _num(r.distortion_p), 'clean': bool(r.clean),
+                    'amplitude_stability': finite_or_none(r.amplitude_stability),
+                    'amplitude_stability_noise': finite_or_none(r.stability_noise),
+                    'stability_p': finite_or_none(r.stability_p), 'steady': bool(r.steady),
+                    'thd': r.thd, 'thd_noise': finite_or_none(r.thd_noise),
+                    'distortion_p': finite_or_none(r.distortion_p), 'clean': bool(r.clean),
                     f'harmonics_{u}': _lst(r.harmonics), f'residual_rms_{u}': r.residual_rms,
                     'start_s': r.start_s, 'duration_s': r.duration_s, 'cycles': r.cycles})
                 if p.sensor == 'accel':
@@ -267,11 +264,12 @@ class ExcitationResult:
                         'deviation_up': _lst(r.deviation_up),
                         'deviation_down': _lst(r.deviation_down),
                         'max_abs_deviation': float(np.max(np.abs(dev))) if dev.size else None,
-                        'mean_deviation': _num(r.mean_deviation),
-                        'mean_deviation_sigma': _num(r.mean_deviation_sigma),
-                        'bin_deviation_sigma': _num(r.bin_deviation_sigma),
-                        'gain_p': _num(r.gain_p), 'matches_reference': r.matches_reference,
-                        'flatness_p': _num(r.flatness_p), 'flat': r.flat})
+                        'mean_deviation': finite_or_none(r.mean_deviation),
+                        'mean_deviation_sigma': finite_or_none(r.mean_deviation_sigma),
+                        'bin_deviation_sigma': finite_or_none(r.bin_deviation_sigma),
+                        'gain_p': finite_or_none(r.gain_p),
+                        'matches_reference': r.matches_reference,
+                        'flatness_p': finite_or_none(r.flatness_p), 'flat': r.flat})
             doc[side] = entry
         change = self.change()
         if change is not None:
@@ -333,161 +331,8 @@ def run_excitation(params: ExcitationParams) -> ExcitationResult:
         try:
             sides[side] = _analyse(path, params)
         except InputDataError as err:
-            raise InputDataError(f'{side} record {path!r}: {err}') from err
+            raise err.prefixed(f'{side} record {path!r}: ') from err
     return ExcitationResult(params, sides)
-
-
-def _pct(v: float | None, spec: str = '.3f') -> str:
-    return 'n/a' if v is None or not math.isfinite(v) else f'{format(100.0 * v, spec)} %'
-
-
-def _significance(change: dict[str, Any]) -> str:
-    return 'significant' if change['amplitude_change_significant'] else 'within noise'
-
-
-def _verdict(ok: bool | None, yes: str, no: str, p: float) -> str:
-    if ok is None:
-        return 'n/a'
-    return f'{yes if ok else no} (p = {p:.2g})'
-
-
-def markdown(result: ExcitationResult) -> str:
-    """
-    Return ``excitation.md``: quantities with units, percentages and verdicts.
-
-    Parameters
-    ----------
-    result : ExcitationResult
-        The check.
-
-    Returns
-    -------
-    str
-
-    """
-    p = result.params
-    k, unit = p.display
-    sides = list(result.sides)
-    what = (f'sine dwell at {p.dwell_hz:g} Hz' if p.mode == 'dwell' else
-            f'sine sweep {p.sweep[0]:g}-{p.sweep[1]:g} Hz at {p.sweep[2]:g} Hz/s')
-    out = [f'# Excitation check: {what}, {p.sensor} {p.axis} (paper 001 section 5.3)', '',
-           "Verdicts are statistical tests against each record's own noise, false-alarm "
-           f'probability {p.alpha:g} each (docs/reliability.md).', '',
-           '| quantity | ' + ' | '.join(sides) + ' |', '|---|' + '---|' * len(sides)]
-
-    def row(label: str, fn: Callable[[Any], str]) -> None:
-        out.append(f'| {label} | ' + ' | '.join(fn(result.sides[s].analysis) for s in sides)
-                   + ' |')
-
-    row('record', lambda r: '')
-    out.pop()
-    out.append('| record | ' + ' | '.join(result.sides[s].source for s in sides) + ' |')
-    if p.mode == 'dwell':
-        row('frequency (Hz)', lambda r: f'{r.frequency_hz:.5f} +/- {r.frequency_sigma_hz:.1e}')
-        row(f'amplitude ({unit})', lambda r: f'{r.amplitude * k:.5g} +/- '
-            f'{r.amplitude_sigma * k:.2g}')
-        row(f'offset ({unit})', lambda r: f'{r.offset * k:.5g}')
-        row(f'per-cycle amplitude mean / min / max ({unit})',
-            lambda r: f'{r.cycle_amplitude_mean * k:.5g} / {r.cycle_amplitude_min * k:.5g} / '
-                      f'{r.cycle_amplitude_max * k:.5g}')
-        row('amplitude stability (std / mean of the cycles)',
-            lambda r: _pct(r.amplitude_stability))
-        row('stability from noise alone', lambda r: _pct(r.stability_noise))
-        row('stability verdict', lambda r: _verdict(r.steady, 'steady', 'UNSTEADY',
-                                                    r.stability_p))
-        row('THD (harmonics 2..H over the fundamental)', lambda r: _pct(r.thd))
-        row('THD from noise alone', lambda r: _pct(r.thd_noise))
-        row('distortion verdict', lambda r: _verdict(r.clean, 'clean', 'DISTORTED',
-                                                     r.distortion_p))
-        row('harmonics 2..H (of the fundamental)',
-            lambda r: ', '.join(_pct(h / r.harmonics[0], '.3f') for h in r.harmonics[1:])
-            or 'none below Nyquist')
-        row('excited span analysed (s)', lambda r: f'{r.start_s:.2f} + {r.duration_s:.2f} '
-            f'({r.cycles} cycles)')
-        change = result.change()
-        if change:
-            out += ['', '## After / before', '',
-                    f'- amplitude: {_pct(change["amplitude_relative"])} +/- '
-                    f'{_pct(change["amplitude_relative_sigma"])} '
-                    f'({_significance(change)}, p = {change["amplitude_change_p"]:.2g})',
-                    f'- frequency: {change["frequency_hz"]:+.5f} Hz',
-                    f'- amplitude stability: {100 * change["amplitude_stability"]:+.3f} '
-                    f'percentage points',
-                    f'- THD: {100 * change["thd"]:+.3f} percentage points']
-        return '\n'.join(out) + '\n'
-    row('frequency covered, 5th-95th percentile (Hz)',
-        lambda r: f'{r.frequency_range_hz[0]:.3f} - {r.frequency_range_hz[1]:.3f}')
-    row('mean deviation from the reference', lambda r: (
-        'no reference' if r.reference_up is None else
-        f'{_pct(r.mean_deviation)} +/- {_pct(r.mean_deviation_sigma)}'))
-    row('gain verdict', lambda r: _verdict(r.matches_reference, 'matches the reference',
-                                           'GAIN DIFFERS', r.gain_p))
-    row('deviation noise per bin', lambda r: _pct(r.bin_deviation_sigma))
-    row('flatness verdict', lambda r: _verdict(r.flat, 'flat', 'FREQUENCY-DEPENDENT',
-                                               r.flatness_p))
-    for s in sides:
-        r = result.sides[s].analysis
-        out += ['', f'## {s}: amplitude per frequency bin ({unit})', '',
-                '| f (Hz) | rising | falling | reference rising | reference falling | '
-                'deviation rising | deviation falling |', '|---|---|---|---|---|---|---|']
-
-        def cell(arr: np.ndarray | None, i: int, scale: float = k) -> str:
-            if arr is None or not math.isfinite(arr[i]):
-                return 'n/a'
-            return f'{arr[i] * scale:.5g}'
-
-        for i, f in enumerate(r.bin_hz):
-            out.append(f'| {f:.3f} | {cell(r.amplitude_up, i)} | {cell(r.amplitude_down, i)} | '
-                       f'{cell(r.reference_up, i)} | {cell(r.reference_down, i)} | '
-                       f'{_pct(None if r.deviation_up is None else r.deviation_up[i])} | '
-                       f'{_pct(None if r.deviation_down is None else r.deviation_down[i])} |')
-    return '\n'.join(out) + '\n'
-
-
-def plot(path: StrPath, params: ExcitationParams, label: str, side: SideResult) -> None:
-    """
-    Draw the whole acquisition and the waveform detail (paper 001 Figures 7-12).
-
-    Parameters
-    ----------
-    path : path
-        PNG file.
-    params : ExcitationParams
-        What was asked.
-    label : str
-        'before' or 'after'.
-    side : SideResult
-        The record and its analysis.
-
-    """
-    plt = pyplot()
-    scale, unit = params.display
-    t, x, result = side.t_s, side.x, side.analysis
-    fig, (pa, pb) = plt.subplots(1, 2, figsize=(11, 4.2))
-    pa.plot(t, x * scale, lw=0.5)
-    pa.set_xlabel('time (s)')
-    pa.set_ylabel(f'{params.sensor} {params.axis} ({unit})')
-    pa.set_title(f'(a) whole acquisition, {label}')
-    if params.mode == 'dwell':
-        lo = int(result.start_s * side.rate_hz)
-        n = int(4 * side.rate_hz / result.frequency_hz)
-        pb.plot(t[lo:lo + n], x[lo:lo + n] * scale, '.-', lw=0.8, ms=3)
-        pb.set_xlabel('time (s)')
-        pb.set_title(f'(b) wave form: {result.frequency_hz:.3f} Hz, amplitude '
-                     f'{result.amplitude * scale:.4g} {unit}, THD {100 * result.thd:.2f} %',
-                     fontsize=9)
-    else:
-        pb.plot(result.bin_hz, result.amplitude_up * scale, 'o-', label='rising frequency')
-        pb.plot(result.bin_hz, result.amplitude_down * scale, 's-', label='falling frequency')
-        if result.reference_up is not None:
-            pb.plot(result.bin_hz, result.reference_up * scale, 'k--', lw=1, label='reference')
-        pb.set_xlabel('instantaneous frequency (Hz)')
-        pb.set_ylabel(f'amplitude ({unit})')
-        pb.set_title('(b) amplitude against frequency', fontsize=9)
-        pb.legend(fontsize=8)
-    for panel in (pa, pb):
-        panel.grid(True, alpha=0.3)
-    save_figure(fig, path, dpi=110, tight=True)
 
 
 def write_excitation(result: ExcitationResult, out_dir: StrPath, *, html: bool = True,
@@ -513,15 +358,16 @@ def write_excitation(result: ExcitationResult, out_dir: StrPath, *, html: bool =
 
     """
     names = ['excitation.json', 'excitation.md']
+    doc = result.as_dict()
+    records = {side: (res.t_s, res.x) for side, res in result.sides.items()}
     with staged_output(out_dir) as stage:
-        atomic_write_text(stage / 'excitation.json',
-                          json.dumps(result.as_dict(), indent=2) + '\n')
-        atomic_write_text(stage / 'excitation.md', markdown(result))
+        atomic_write_text(stage / 'excitation.json', json.dumps(doc, indent=2) + '\n')
+        atomic_write_text(stage / 'excitation.md', excitation_markdown(doc))
         if html:
-            write_excitation_html(result, stage, command=command)
+            write_excitation_html(doc, records, stage, command=command)
             names.append('report.html')
         if result.params.figures:
-            for side, res in result.sides.items():
-                plot(stage / f'excitation_{side}.png', result.params, side, res)
+            for side, (t_s, x) in records.items():
+                plot_excitation(stage / f'excitation_{side}.png', doc, side, t_s, x)
                 names.append(f'excitation_{side}.png')
     return [os.path.join(str(out_dir), n) for n in names]

@@ -250,7 +250,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
 
     # The bag is built under a hidden name and renamed when finished: an interrupted or failed
     # import leaves nothing that looks like a bag, and a retry with the same --out works.
-    with staged_new_dir(out, option='--out') as stage:
+    with staged_new_dir(out, parameter='out') as stage:
         with _BagWrites(lambda: writer_class(stage, storage=storage, imu_topic=imu_topic,
                                              temperature_topic=temp_topic, frame_id=frame_id),
                         threaded=threads == 2) as writes:

@@ -31,9 +31,10 @@ from typing import Any
 
 import numpy as np
 
-from ..core.engine import AXES, ChunkJob, ChunkResult, EngineConfig, NoiseEngine
+from ..core.engine import AXES, ChunkJob, EngineConfig, NoiseEngine
 from ..core.fractional import make_grid
 from ..core.health import HealthThresholds
+from ..core.results import ChunkResult
 from ..errors import GyroNoiseError, ParameterError
 
 #: Chunk results kept in :attr:`LiveAnalysis.results` (about 0.9 kB each, tracemalloc: 1,000 of

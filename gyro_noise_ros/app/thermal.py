@@ -40,26 +40,31 @@ import numpy as np
 
 from .. import __version__
 from ..errors import ClusterError, GyroNoiseError, InputDataError, ParameterError
+from ..formatting import finite_or_none as _num
 from ..htmlreport.thermal import write_apply_html, write_compare_html
 from ..outputs import staged_output, StrPath
 from ..thermal import methods as registry
 from ..thermal.bag_io import (DEFAULT_MAX_GAP_S, join_runs, read_thermal_run,
                               write_compensated)
+from ..thermal.figures import (apply_figures, compare_figures, Figures, method_figures,
+                               training_figures)
 from ..thermal.metrics import (DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ,
                                DRIFT_WINDOW_S, evaluate_method, noise_metrics)
+# bandwidth_cell, COMPARE_HEADER, COMPARE_SPECS and table_cells are handed on for the command line
+from ..thermal.report import (apply_markdown, bandwidth_cell, compare_csv, COMPARE_HEADER,
+                              compare_markdown, compare_rows, COMPARE_SPECS, table_cells,
+                              training_markdown)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
 from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
 
-__all__ = ['ApplyResult', 'BagOptions', 'COMPARE_HEADER', 'CompareResult', 'DEFINITIONS',
-           'ExportResult', 'FitResult', 'HELDOUT_METHODS', 'HELDOUT_PAIRS', 'ScoreOptions',
-           'SimulateResult', 'apply_model', 'bandwidth_cell', 'check_method_names', 'compare',
-           'export', 'fit', 'heldout_scores', 'oracle_scores', 'simulate', 'split_run',
-           'table_cells', 'write_apply', 'write_compare', 'write_export', 'write_fit',
-           'write_simulate']
+__all__ = ['ApplyResult', 'BagOptions', 'COMPARE_HEADER', 'COMPARE_SPECS', 'CompareResult',
+           'DEFINITIONS', 'ExportResult', 'FitResult', 'HELDOUT_METHODS', 'HELDOUT_PAIRS',
+           'ScoreOptions', 'SimulateResult', 'apply_model', 'bandwidth_cell',
+           'check_method_names', 'compare', 'export', 'fit', 'heldout_scores', 'oracle_scores',
+           'simulate', 'split_run', 'table_cells', 'write_apply', 'write_compare',
+           'write_export', 'write_fit', 'write_simulate']
 
 PROG = 'gyro_noise_thermal'
-#: Figures of a report: (caption, PNG file, or None when the method has no such figure).
-_Figures = list[tuple[str, Path | None]]
 #: A method's own figures, drawn before the output folder exists: (caption, file name or None,
 #: PNG bytes or None).
 _MethodFigures = tuple[tuple[str, str | None, bytes | None], ...]
@@ -149,13 +154,6 @@ class ScoreOptions:
     range_margin_c: float = registry.DEFAULT_RANGE_MARGIN_C
 
 
-def _num(v: Any) -> float | None:
-    if v is None:
-        return None
-    v = float(v)
-    return v if math.isfinite(v) else None
-
-
 def _json(doc: dict[str, Any]) -> str:
     return json.dumps(registry.to_jsonable(doc), indent=1, allow_nan=False) + '\n'
 
@@ -193,19 +191,17 @@ def _join(runs: list[Any]) -> Any:
 
 def _method_figures(method: Any, run: Any) -> _MethodFigures:
     """Draw the method's own figures now (its last apply is ``run``); keep them in memory."""
-    from ..thermal import report
-
     with tempfile.TemporaryDirectory(prefix='gyro_noise_thermal_') as tmp:
         out = []
-        for name, caption in report.method_figures(method, run, Path(tmp)):
+        for name, caption in method_figures(method, run, Path(tmp)):
             data = None if name is None else (Path(tmp) / name).read_bytes()
             out.append((caption, name, data))
     return tuple(out)
 
 
-def _put_method_figures(figures: _MethodFigures, out: Path) -> _Figures:
+def _put_method_figures(figures: _MethodFigures, out: Path) -> Figures:
     """Write in-memory method figures into ``out``; return (caption, path or None) entries."""
-    entries: _Figures = []
+    entries: Figures = []
     for caption, name, data in figures:
         if name is None:
             entries.append((caption, None))
@@ -422,42 +418,6 @@ def fit(*, bags: Sequence[str], method: str = registry.DEFAULT_METHOD, seed: int
                      accel=accel_doc, method_figures=method_figs, command=tuple(command))
 
 
-def _training_md(doc: dict[str, Any], figs: _Figures, out: Path) -> str:
-    from ..thermal import report
-
-    t = doc['training']
-    rows = [(axis, v['raw_residual_drift_deg_s'], v['processed_residual_drift_deg_s'],
-             v['raw_arw_deg_sqrt_h'], v['processed_arw_deg_sqrt_h'])
-            for axis, v in doc['in_sample'].items()]
-    rate = ('not available (the run is shorter than the rate window)'
-            if t['temperature_rate_min_c_s'] is None else
-            f'{t["temperature_rate_min_c_s"]:.4g}..{t["temperature_rate_max_c_s"]:.4g} degC/s')
-    accel = ''
-    if doc.get('accel'):
-        arows = [(axis, v['raw_residual_drift_mg'], v['processed_residual_drift_mg'])
-                 for axis, v in doc['accel']['axes'].items()]
-        accel = ('\nAccelerometer: a cubic in T relative to T_ref = '
-                 f'{doc["accel"]["t_ref_c"]:.2f} degC (in-sample).\n\n'
-                 + report.table_markdown(['axis', 'raw residual drift (mg)',
-                                          'compensated residual drift (mg)'], arows,
-                                         ['', '.4g', '.4g']))
-    return (f'# Training report: {doc["method"]}\n\n'
-            f'Trained on {", ".join(t["sources"])}: {t["samples"]} samples at '
-            f'{t["rate_hz"]:.6g} Hz, temperature {t["temperature_min_c"]:.2f}..'
-            f'{t["temperature_max_c"]:.2f} degC, rate {rate} ({t["rate_window_s"]:g}-s '
-            f'window, filled windows only). Causal (live-capable): '
-            f'{"yes" if doc["causal"] else "no (offline only)"}. Fit time '
-            f'{doc["fit_time_s"]:.1f} s. Beyond the trained range: {doc["out_of_range"]}.\n\n'
-            + ''.join(f'**Note: {n}.**\n\n' for n in doc['notes'])
-            + f'**In-sample only** ({doc["note"]}).\n\n'
-            + report.table_markdown(
-                ['axis', 'raw residual drift (deg/s)', 'processed residual drift (deg/s)',
-                 'raw ARW (deg/sqrt(h))', 'processed ARW (deg/sqrt(h))'],
-                rows, ['', '.4g', '.4g', '.4g', '.4g'])
-            + accel
-            + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
-
-
 def write_fit(result: FitResult, out_dir: StrPath, *, figures: bool = True) -> list[Path]:
     """
     Write model.json, training.json, training.md and the figures (staged).
@@ -477,33 +437,18 @@ def write_fit(result: FitResult, out_dir: StrPath, *, figures: bool = True) -> l
         The files, under their final names.
 
     """
-    from ..thermal import report
-
     doc = result.as_dict()
-    run, processed, name = result.run, result.processed, result.model.method.name
+    method = result.model.method
     with staged_output(out_dir) as stage:
         files = [_write(stage / 'model.json', json.dumps(result.model_dict(), indent=1,
                                                          allow_nan=False) + '\n')]
-        figs: _Figures = []
+        figs: Figures = []
         if figures:
-            figs.append(('Temperature and raw output (cf. Fig. 10)',
-                         report.plot_run(stage / 'training_fig10_run.png', run)))
-            figs.append(('Raw and processed training output, whole run and a 10-s zoom '
-                         '(cf. Fig. 18)',
-                         report.plot_output(stage / 'training_fig18_output.png', run, processed,
-                                            label=name)))
-            figs.append(('Drift removed on the training data (cf. Fig. 17)',
-                         report.plot_drift(stage / 'training_fig17_drift.png', run, processed,
-                                           label=name)))
-            fig13 = report.plot_mode_classes(
-                stage / 'training_fig13_classes.png',
-                getattr(result.model.method, 'fit_info', None),
-                title=f'{run.name}: sample entropy and class of each mode (training)')
-            if fig13 is not None:
-                figs.append(('Sample entropy and class of each mode (cf. Fig. 13)', fig13))
+            figs = training_figures(stage, result.run, result.processed, method=method.name,
+                                    fit_info=getattr(method, 'fit_info', None))
             figs.extend(_put_method_figures(result.method_figures, stage))
         files.append(_write(stage / 'training.json', _json(doc)))
-        files.append(_write(stage / 'training.md', _training_md(doc, figs, stage)))
+        files.append(_write(stage / 'training.md', training_markdown(doc, figs, stage)))
         files.extend(p for _, p in figs if p is not None)
         names = [p.relative_to(stage) for p in files]
     return [Path(out_dir) / n for n in names]
@@ -652,160 +597,6 @@ def apply_model(*, bag: str, model_path: str, bag_options: BagOptions = BagOptio
                        info=info, method_figures=method_figs, notes=tuple(notes))
 
 
-def _apply_figures(out: Path, run: Any, processed: np.ndarray, method: str,
-                   curves: dict[str, Any], info: Any, method_figs: _Figures) -> _Figures:
-    from ..thermal import report
-
-    name = method
-    figs: _Figures = [('Temperature and raw output (cf. Fig. 10)',
-                       report.plot_run(out / 'fig10_run.png', run))]
-    fig13 = report.plot_mode_classes(out / 'fig13_classes.png', info,
-                                     title=f'{run.name}: sample entropy and class of each mode')
-    if fig13 is not None:
-        figs.append(('Sample entropy and class of each mode (cf. Fig. 13)', fig13))
-    figs.extend(method_figs)
-    figs.append(('Raw and processed output, whole run and a 10-s zoom (cf. Fig. 18)',
-                 report.plot_output(out / 'fig18_output.png', run, processed, label=name)))
-    figs.append(('Drift removed, 60-s means, against time and temperature (cf. Fig. 17)',
-                 report.plot_drift(out / 'fig17_drift.png', run, processed, label=name)))
-    allan = {label: {axis: c[key] for axis, c in curves.items()}
-             for label, key in (('raw', 'allan_raw'), (name, 'allan_processed'))}
-    figs.append(('Allan deviation raw and processed (cf. Fig. 19)',
-                 report.plot_allan(out / 'fig19_allan.png', allan,
-                                   title=f'{run.name}: Allan deviation, raw and {name}')))
-    responses = {name: {a: c['frequency'] for a, c in curves.items()}}
-    steps = {name: {a: c['step'] for a, c in curves.items()}}
-    if 'frequency_small' in curves['x']:
-        responses[f'{name} small'] = {a: c['frequency_small'] for a, c in curves.items()}
-        steps[f'{name} small'] = {a: c['step_small'] for a, c in curves.items()}
-    small = responses.pop(f'{name} small', None)
-    figs.append(('Response to injected motion (large and noise-sized): gain, phase, group delay',
-                 report.plot_bandwidth(out / 'bandwidth.png', responses,
-                                       small=None if small is None else {name: small},
-                                       title=f'{name}: response to an injected chirp')))
-    figs.append(('Mean normalised step response (t < 0: before the step)',
-                 report.plot_steps(out / 'steps.png', steps,
-                                   title=f'{name}: response to injected steps')))
-    return figs
-
-
-def bandwidth_cell(bw: dict[str, Any] | None) -> str:
-    """
-    Return the -3 dB cell of a table: the frequency, ``< band`` or ``> band``.
-
-    Parameters
-    ----------
-    bw : dict or None
-        A ``bandwidth`` block of metrics.json (None, e.g. no small-signal block: empty).
-
-    Returns
-    -------
-    str
-
-    """
-    if bw is None:
-        return ''
-    if bw['minus_3db_bound'] == 'measured':
-        return f'{bw["minus_3db_hz"]:.3g}'
-    return '< band' if bw['minus_3db_bound'] == 'below' else '> band'
-
-
-AXIS_HEADER = ['axis', 'ARW raw (deg/sqrt(h))', 'ARW processed (deg/sqrt(h))',
-               'ARW gain, noise path', 'bias stability raw (deg/h)',
-               'bias stability processed (deg/h)',
-               'residual drift raw (deg/s)', 'residual drift processed (deg/s)',
-               '-3 dB, 1 deg/s motion (Hz)', '-3 dB, noise-sized motion (Hz)',
-               'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
-               'look-ahead before a step (s)', 'live-capable']
-AXIS_SPECS = ['', '.4g', '.4g', '.3g', '', '', '.4g', '.4g', '', '', '.3g', '.3g', '.3g', '']
-
-
-def axis_rows(axes: dict[str, Any]) -> list[tuple[Any, ...]]:
-    """
-    Return the per-axis rows of the apply report (:data:`AXIS_HEADER`).
-
-    Parameters
-    ----------
-    axes : dict
-        ``axes`` of metrics.json.
-
-    Returns
-    -------
-    list of tuple
-
-    """
-    from ..thermal.report import bias_stability_cell
-
-    rows = []
-    for axis, v in axes.items():
-        raw, proc, bw = v['raw'], v['processed'], v['bandwidth']
-        rows.append((axis, raw['arw_deg_sqrt_h'], proc['arw_deg_sqrt_h'],
-                     (v.get('noise_path') or {}).get('arw_gain'),
-                     bias_stability_cell(raw), bias_stability_cell(proc),
-                     raw['residual_drift_deg_s'], proc['residual_drift_deg_s'],
-                     bandwidth_cell(bw), bandwidth_cell(v.get('bandwidth_small_signal')),
-                     v['verdict']['small_signal_low_band_min_gain'],
-                     bw['step_delay_50_s'], bw.get('step_lead_s'),
-                     v['verdict']['live_capable']))
-    return rows
-
-
-def _small_text(inj: dict[str, Any]) -> str:
-    amp = inj.get('small_signal_amplitude_deg_s')
-    return '' if amp is None else f', and again at {amp:.3g} deg/s (the size of the noise)'
-
-
-def _apply_md(doc: dict[str, Any], figs: _Figures, out: Path) -> str:
-    from ..thermal import report
-
-    inj = doc['injection']
-    warn = ''
-    if doc['in_sample']:
-        warn += ('\n**Warning: this bag is one the model was trained on; the numbers are '
-                 'in-sample and flatter the method.**\n')
-    if doc['rate_mismatch']:
-        warn += (f'\n**Warning: sample rate {doc["rate_hz"]:.6g} Hz differs from the training '
-                 f'rate {doc["model"]["training"]["rate_hz"]:.6g} Hz.**\n')
-    for note in doc['notes']:
-        warn += f'\n**Note: {note}.**\n'
-    rng = doc['range']
-    rate = ('(no trained dT range: the training run was shorter than the rate window)'
-            if rng['rate_range_c_s'] is None else
-            f'dT {rng["rate_range_c_s"][0]:.4g}..{rng["rate_range_c_s"][1]:.4g} degC/s')
-    range_text = (f'\nTrained range: T {rng["temperature_range_c"][0]:.2f}..'
-                  f'{rng["temperature_range_c"][1]:.2f} degC, {rate}. This run: '
-                  f'{rng["outside"]} of {rng["samples"]} samples '
-                  f'({100 * rng["fraction_outside"]:.3g} %) outside (T below '
-                  f'{rng["temperature_below"]}, above {rng["temperature_above"]}; dT below '
-                  f'{rng["rate_below"]}, above {rng["rate_above"]}). There the method: '
-                  f'{rng["treatment"]}.\n')
-    accel = ''
-    if doc.get('accel'):
-        arows = [(axis, v['raw_residual_drift_mg'], v['processed_residual_drift_mg'])
-                 for axis, v in doc['accel']['axes'].items()]
-        accel = ('\n## Accelerometer\n\nThe change of the offset from T_ref = '
-                 f'{doc["accel"]["t_ref_c"]:.2f} degC (a cubic in T) is subtracted; beyond the '
-                 f'trained range: {doc["accel"]["out_of_range"]}.\n\n'
-                 + report.table_markdown(['axis', 'raw residual drift (mg)',
-                                          'compensated residual drift (mg)'], arows,
-                                         ['', '.4g', '.4g']))
-    verdicts = ''.join(f'- **{axis}**: {v["verdict"]["text"]}\n'
-                       for axis, v in doc['axes'].items())
-    return (f'# {doc["method"]} on {doc["bag"]}\n\n'
-            f'{doc["samples"]} samples at {doc["rate_hz"]:.6g} Hz '
-            f'({doc["duration_s"] / 3600:.3g} h), temperature {doc["temperature_min_c"]:.2f}..'
-            f'{doc["temperature_max_c"]:.2f} degC; model trained on '
-            f'{", ".join(doc["model"]["training"]["sources"])}. Method causal (live-capable): '
-            f'{"yes" if doc["causal"] else "no (offline only)"}.\n{warn}{range_text}\n'
-            + report.table_markdown(AXIS_HEADER, axis_rows(doc['axes']), AXIS_SPECS)
-            + f'\nBandwidth cost measured with a chirp {inj["f_lo_hz"]:g}..'
-              f'{inj["f_hi_hz"]:.3g} Hz and steps of {inj["amplitude_deg_s"]:.3g} deg/s added '
-              f'to the run{_small_text(inj)}.\n'
-            + accel + '\n## Verdicts\n\n' + verdicts + '\n## Definitions\n\n'
-            + ''.join(f'- `{k}`: {v}\n' for k, v in doc['definitions'].items())
-            + (report.figures_markdown(figs, out, method=doc['method']) if figs else ''))
-
-
 def write_apply(result: ApplyResult, out_dir: StrPath, *, figures: bool = True,
                 write_bag: bool = True, storage: str | None = None,
                 html: bool = True) -> list[Path]:
@@ -840,15 +631,16 @@ def write_apply(result: ApplyResult, out_dir: StrPath, *, figures: bool = True,
             write_compensated(result.bag, result.processed, stage / 'compensated',
                               storage=storage, accel_m_s2=result.processed_accel)
             files.append(stage / 'compensated')
-        figs: _Figures = []
+        figs: Figures = []
         if figures:
-            figs = _apply_figures(stage, result.run, result.processed, doc['method'],
-                                  result.curves, result.info,
-                                  _put_method_figures(result.method_figures, stage))
+            figs = apply_figures(stage, result.run, result.processed, method=doc['method'],
+                                 curves=result.curves, info=result.info,
+                                 own=_put_method_figures(result.method_figures, stage))
         files.append(_write(stage / 'metrics.json', _json(doc)))
-        files.append(_write(stage / 'report.md', _apply_md(doc, figs, stage)))
+        files.append(_write(stage / 'report.md', apply_markdown(doc, figs, stage)))
         if html:
-            files.append(write_apply_html(result, stage))
+            files.append(write_apply_html(doc, result.run, result.processed, result.curves,
+                                          stage))
         files.extend(p for _, p in figs if p is not None)
         names = [p.relative_to(stage) for p in files]
     return [Path(out_dir) / n for n in names]
@@ -1151,7 +943,7 @@ def compare(*, train: str, test: str | None = None, split_at: float | None = Non
                                float(run_b.temperature_c.max())],
         'definitions': DEFINITIONS, 'methods': results, 'errors': errors, 'oracle': oracle,
         'best_held_out': _best(results)})
-    return CompareResult(summary=summary, rows=_compare_rows(summary), curves=curves,
+    return CompareResult(summary=summary, rows=compare_rows(summary), curves=curves,
                          test=run_b, errors=errors)
 
 
@@ -1172,165 +964,6 @@ def _best(results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     return {'method': best, 'mean_residual_drift_deg_s': _num(score),
             'rule': 'lowest mean residual drift on the test run among methods that are '
                     'live-capable and do not gain ARW by removing bandwidth'}
-
-
-COMPARE_HEADER = ['method', 'axis', 'ARW of the output (deg/sqrt(h))', 'ARW gain, noise path',
-                  'bias stability (deg/h; <= upper bound)', 'residual drift (deg/s)',
-                  'x oracle', '-3 dB, 1 deg/s motion (Hz)', '-3 dB, noise-sized motion (Hz)',
-                  'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
-                  'look-ahead before a step (s)', 'settled step gain',
-                  'outside trained range', 'live-capable', 'ARW from removed bandwidth']
-COMPARE_SPECS = ['', '', '.4g', '.3g', '', '.4g', '.3g', '', '', '.3g', '.3g', '.3g', '.3g',
-                 '.2%', '', '']
-#: compare.csv: the table's columns with numbers for numbers (the bias stability as a number
-#: and its upper-bound flag beside it).
-_CSV_KEYS = ['method', 'axis', 'arw_deg_sqrt_h', 'arw_gain_noise_path', 'bias_stability_deg_h',
-             'residual_drift_deg_s', 'residual_drift_over_oracle', 'minus_3db_hz',
-             'small_signal_minus_3db_hz', 'small_signal_low_band_min_gain', 'step_delay_50_s',
-             'step_lead_s', 'step_settled_gain', 'fraction_outside_trained_range',
-             'live_capable', 'arw_from_bandwidth', 'bias_stability_upper_bound']
-
-
-def _compare_rows(summary: dict[str, Any]) -> list[tuple[Any, ...]]:
-    rows: list[tuple[Any, ...]] = []
-    results = summary['methods']
-    oracle = summary.get('oracle')
-    base: dict[str, Any] = {}
-    if oracle:
-        base = oracle['true_terms']['axes']
-    first = next(iter(results.values()))
-
-    def ratio(value: float | None, axis: str) -> float | None:
-        b = base.get(axis)
-        return None if value is None or not b else value / b
-
-    for axis, v in first['axes'].items():
-        raw = v['raw']
-        rows.append(('(raw input)', axis, raw['arw_deg_sqrt_h'], None,
-                     raw['bias_stability_deg_h'], raw['residual_drift_deg_s'],
-                     ratio(raw['residual_drift_deg_s'], axis), '', '', None, None, None, None,
-                     None, None, None, raw.get('bias_stability_upper_bound')))
-    if oracle:
-        for key, label in (('true_terms', '(oracle: true terms)'),
-                           ('measured_terms', '(oracle: measured T, dT)')):
-            for axis, value in oracle[key]['axes'].items():
-                rows.append((label, axis, None, None, None, value, ratio(value, axis), '', '',
-                             None, None, None, None, None, None, None, None))
-    for name, doc in results.items():
-        for axis, v in doc['axes'].items():
-            proc, bw, vd = v['processed'], v['bandwidth'], v['verdict']
-            rows.append((name, axis, proc['arw_deg_sqrt_h'],
-                         (v.get('noise_path') or {}).get('arw_gain'),
-                         proc['bias_stability_deg_h'], proc['residual_drift_deg_s'],
-                         ratio(proc['residual_drift_deg_s'], axis), bandwidth_cell(bw),
-                         bandwidth_cell(v.get('bandwidth_small_signal')),
-                         vd['small_signal_low_band_min_gain'], bw['step_delay_50_s'],
-                         bw.get('step_lead_s'), bw['step_settled_gain'],
-                         doc['range']['fraction_outside'], vd['live_capable'],
-                         vd['arw_from_bandwidth'], proc.get('bias_stability_upper_bound')))
-    return rows
-
-
-def table_cells(rows: Sequence[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
-    """
-    Return compare rows as the Markdown table shows them (an upper bound of bias stability '<=').
-
-    Parameters
-    ----------
-    rows : list of tuple
-        :attr:`CompareResult.rows`.
-
-    Returns
-    -------
-    list of tuple
-        One cell per :data:`COMPARE_HEADER` column.
-
-    """
-    from ..thermal.report import bias_stability_cell
-
-    cells = []
-    for row in rows:
-        bs = '' if row[4] is None else bias_stability_cell(
-            {'bias_stability_deg_h': row[4], 'bias_stability_upper_bound': row[-1]})
-        cells.append(row[:4] + (bs,) + row[5:-1])
-    return cells
-
-
-def _csv(rows: Sequence[tuple[Any, ...]]) -> str:
-    import csv
-    import io
-
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator='\n')
-    w.writerow(_CSV_KEYS)
-    for row in rows:
-        w.writerow(['' if v is None else v for v in row])
-    return buf.getvalue()
-
-
-def _compare_md(summary: dict[str, Any], rows: Sequence[tuple[Any, ...]],
-                figs: list[tuple[str, Path]], out: Path) -> str:
-    from ..thermal import report
-
-    errs = ''.join(f'- {k}: {v}\n' for k, v in summary['errors'].items())
-    best = summary['best_held_out']
-    verdicts = ''.join(f'- **{name}** {axis}: {v["verdict"]["text"]}\n'
-                       for name, doc in summary['methods'].items()
-                       for axis, v in doc['axes'].items())
-    ranges = ''.join(f'- **{name}**: {doc["range"]["outside"]} of {doc["range"]["samples"]} '
-                     f'test samples ({100 * doc["range"]["fraction_outside"]:.3g} %) outside '
-                     f'the trained range of T or dT; there: {doc["range"]["treatment"]}\n'
-                     for name, doc in summary['methods'].items())
-    oracle = ''
-    if summary.get('oracle'):
-        o = summary['oracle']
-        oracle = ('\nThe bags come from `gyro_noise_thermal simulate`: the oracle rows are least '
-                  "squares on the simulator's own drift terms fitted on the training run "
-                  f'(true terms: mean {o["true_terms"]["mean_residual_drift_deg_s"]:.4g} deg/s; '
-                  'the same terms computed from the measured temperature and its 10-s slope: '
-                  f'{o["measured_terms"]["mean_residual_drift_deg_s"]:.4g} deg/s). '
-                  '"x oracle" is residual drift / the true-terms oracle\'s, per axis: what the '
-                  'data allow. A method of T only (poly3) cannot represent a drift that depends '
-                  'on dT.\n\n')
-    return (f'# Held-out comparison\n\nTrained on {summary["train"]} '
-            f'({summary["train_temperature_c"][0]:.2f}..{summary["train_temperature_c"][1]:.2f}'
-            f' degC), scored on {summary["test"]} ({summary["test_temperature_c"][0]:.2f}..'
-            f'{summary["test_temperature_c"][1]:.2f} degC), seed {summary["seed"]}.\n\n'
-            + (f'**One recording split in time at {summary["split"]["fraction"]:g} of its '
-               f'length: {summary["split"]["note"]}.**\n\n' if summary.get('split') else '')
-            + oracle
-            + report.table_markdown(COMPARE_HEADER, table_cells(rows), COMPARE_SPECS)
-            + f'\nBest held-out ({best["rule"]}): **{best["method"]}**.\n\n'
-            + (f'Not scored:\n\n{errs}\n' if errs else '')
-            + '## Outside the trained range\n\n' + ranges
-            + '\n## Verdicts\n\n' + verdicts + '\n## Definitions\n\n'
-            + ''.join(f'- `{k}`: {v}\n' for k, v in summary['definitions'].items())
-            + ''.join(f'\n![{cap}]({Path(p).relative_to(out)})\n\n*{cap}*\n' for cap, p in figs))
-
-
-def _compare_figures(out: Path, test: Any, curves: dict[str, Any]) -> list[tuple[str, Path]]:
-    from ..thermal import report
-
-    first = next(iter(curves.values()))
-    allan = {'raw': {axis: c['allan_raw'] for axis, c in first.items()}}
-    for name, cur in curves.items():
-        allan[name] = {axis: c['allan_processed'] for axis, c in cur.items()}
-    return [
-        ('Allan deviation of every method on the test run (cf. Fig. 19)',
-         report.plot_allan(out / 'compare_allan.png', allan,
-                           title=f'{test.name}: Allan deviation per method (held out)')),
-        ('Response to injected motion, axis x',
-         report.plot_bandwidth(out / 'compare_bandwidth.png',
-                               {n: {'x': c['x']['frequency']} for n, c in curves.items()},
-                               small={n: {'x': c['x']['frequency_small']}
-                                      for n, c in curves.items() if 'frequency_small' in c['x']},
-                               title='gain (1 deg/s motion solid, noise-sized dashed), phase, '
-                                     'group delay to an injected chirp (axis x)')),
-        ('Mean normalised step response, axis x',
-         report.plot_steps(out / 'compare_steps.png',
-                           {n: {'x': c['x']['step']} for n, c in curves.items()},
-                           title='response to injected steps (axis x)')),
-    ]
 
 
 def write_compare(result: CompareResult, out_dir: StrPath, *, figures: bool = True,
@@ -1354,14 +987,14 @@ def write_compare(result: CompareResult, out_dir: StrPath, *, figures: bool = Tr
     list of pathlib.Path
 
     """
+    doc = result.summary
     with staged_output(out_dir) as stage:
-        figs = _compare_figures(stage, result.test, result.curves) if figures else []
-        files = [_write(stage / 'compare.json', _json(result.summary)),
-                 _write(stage / 'compare.csv', _csv(result.rows)),
-                 _write(stage / 'compare.md', _compare_md(result.summary, result.rows, figs,
-                                                          stage))]
+        figs = compare_figures(stage, result.test, result.curves) if figures else []
+        files = [_write(stage / 'compare.json', _json(doc)),
+                 _write(stage / 'compare.csv', compare_csv(doc)),
+                 _write(stage / 'compare.md', compare_markdown(doc, figs, stage))]
         if html:
-            files.append(write_compare_html(result, stage))
+            files.append(write_compare_html(doc, result.curves, stage))
         files.extend(p for _, p in figs)
         names = [p.relative_to(stage) for p in files]
     return [Path(out_dir) / n for n in names]

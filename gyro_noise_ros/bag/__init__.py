@@ -32,8 +32,8 @@ This face only hands names on; each lives in one module:
 
 Beside them, not handed on: :mod:`.storage` (block reading), :mod:`.bulk` (block writing),
 :mod:`.tabular` (CSV and ULog read like bags), :mod:`.inputs` (the one input layer: a path of
-any of these kinds opened by the right reader), :mod:`.recover` and :mod:`.repair` (unfinished
-recordings).
+any of these kinds opened by the right reader), :mod:`.mcap_records` (the MCAP record layout
+and walks), :mod:`.recover` and :mod:`.repair` (unfinished recordings).
 """
 
 from .batch import decode_imu, decode_temperature, ImuBatch

@@ -13,14 +13,15 @@
 # limitations under the License.
 
 """
-rosbags' MCAP reader extended to read a file cut before its summary (a killed writer).
+rosbags' readers extended to read an MCAP file cut before its summary (a killed writer).
 
-The walk is described and done in :mod:`.recover`; this module holds only the rosbags subclass
-that uses it, apart from the rest so that rosbags is imported when a bag is read, not when the
-package is (:func:`.recover.recovering_mcap_reader_class`). A file without footer is opened in
-steps: check the header, walk the records (the chunks with the counts of their MessageIndex
-records, up to the first cut), believe or decompress each chunk into a chunk index entry, index
-the readable part, and recount the messages and times from what was read.
+The record walk is :mod:`.mcap_records`; this module holds only the rosbags subclasses that use
+it, apart from the rest so that rosbags is imported when a bag is read, not when the package is
+(:func:`.recover.recovering_reader_class`). :class:`RecoveringMcapReader` opens a file without
+footer in steps: check the header, walk the records (the chunks with the counts of their
+MessageIndex records, up to the first cut), believe or decompress each chunk into a chunk index
+entry, index the readable part, and recount the messages and times from what was read.
+:class:`RecoveringReader` is rosbags' unified ``Reader`` with it for MCAP files and bag folders.
 """
 
 from io import BytesIO
@@ -29,15 +30,17 @@ import struct
 from typing import Any, cast
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag2
+from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
+from rosbags.rosbag2.reader import DirectoryReader
 from rosbags.rosbag2.storage_mcap import Channel as McapChannel
 from rosbags.rosbag2.storage_mcap import (ChunkInfo, decompress, get_msgdef, get_qos, McapReader,
                                           read_bytes, read_sized, read_string, Schema, Statistics)
 
-from .recover import _RecordWalk, _walk_chunk, _walk_records, ChunkWalk, mcap_has_footer
-from .recover import MCAP_MAGIC, McapTruncation
+from .mcap_records import (ChunkWalk, mcap_has_footer, MCAP_MAGIC, McapTruncation, RecordWalk,
+                           walk_chunk, walk_records)
 
-__all__ = ['RecoveringMcapReader']
+__all__ = ['RecoveringDirectoryReader', 'RecoveringMcapReader', 'RecoveringReader']
 
 
 class RecoveringMcapReader(McapReader):
@@ -78,7 +81,7 @@ class RecoveringMcapReader(McapReader):
         try:
             raw = decompress(data, head['compression'], head['uncompressed_size'],
                              head['crc'])
-            return _walk_chunk(raw)
+            return walk_chunk(raw)
         except Exception:  # noqa: BLE001 - rosbags, lz4 and zstd raise many types on garbage
             return None
 
@@ -110,8 +113,8 @@ class RecoveringMcapReader(McapReader):
         self.data_start = self._read_header()
         assert self.bio is not None  # _read_header read it
         size = self.bio.seek(0, 2)
-        walk = _walk_records(self.bio, self.data_start, size, on_schema=self._add_schema,
-                             on_channel=self._add_channel)
+        walk = walk_records(self.bio, self.data_start, size, on_schema=self._add_schema,
+                            on_channel=self._add_channel)
         chunks, readable, reason = self._chunk_index(walk)
         self.data_end = readable
         self._index(chunks, walk.top_messages)
@@ -130,7 +133,7 @@ class RecoveringMcapReader(McapReader):
             raise ReaderError('Profile is not ros2.')
         return bio.tell()
 
-    def _chunk_index(self, walk: _RecordWalk) -> tuple[list[ChunkInfo], int, str]:
+    def _chunk_index(self, walk: RecordWalk) -> tuple[list[ChunkInfo], int, str]:
         """Return the walk's chunks up to the first unreadable one, where reading stops, why."""
         readable, reason = walk.stop, walk.reason
         chunks = []
@@ -179,3 +182,50 @@ class RecoveringMcapReader(McapReader):
             total, len(self.schemas), len(self.channels), 0, 0, len(self.chunks),
             min((c.message_start_time for c in self.chunks), default=2**63 - 1),
             max((c.message_end_time for c in self.chunks), default=0), cstats)
+
+
+class RecoveringDirectoryReader(DirectoryReader):
+    """
+    rosbags' reader of a bag folder whose MCAP files may lack their footer.
+
+    The counts and time range of ``metadata.yaml`` describe the finished files: when one was
+    cut, they are replaced by what its chunks hold.
+    """
+
+    STORAGE_PLUGINS = {**DirectoryReader.STORAGE_PLUGINS, 'mcap': RecoveringMcapReader}
+    truncation: McapTruncation | None = None
+
+    def open(self) -> None:  # noqa: A003 - overrides rosbags DirectoryReader.open
+        """Open the bag; recount from the storages if an MCAP file was cut."""
+        super().open()
+        found = (getattr(s, 'truncation', None) for s in self.storages)
+        cut: list[McapTruncation] = [t for t in found if t]
+        if not cut:
+            return
+        self.truncation = cut[0] if len(cut) == 1 else McapTruncation(
+            messages=sum(c.messages for c in cut), chunks=sum(c.chunks for c in cut),
+            readable_bytes=sum(c.readable_bytes for c in cut),
+            file_bytes=sum(c.file_bytes for c in cut),
+            start_ns=min(c.start_ns for c in cut), end_ns=max(c.end_ns for c in cut),
+            stop_reason=cut[0].stop_reason)
+        counts: dict[tuple[str, str], int] = {}
+        for storage in self.storages:
+            for conn in storage.connections:
+                key = (conn.topic, conn.msgtype)
+                counts[key] = counts.get(key, 0) + conn.msgcount
+        self.connections = [c._replace(msgcount=counts.get((c.topic, c.msgtype), 0))
+                            for c in self.connections]
+        metas = [s.metadata for s in self.storages if s.metadata.message_count]
+        start = min((m.start_time for m in metas), default=2**63 - 1)
+        end = max((m.end_time for m in metas), default=0)
+        total = sum(m.message_count for m in metas)
+        self.metadata = self.metadata._replace(
+            duration=end - start if total else 0, start_time=start, end_time=end,
+            message_count=total)
+
+
+class RecoveringReader(Reader):
+    """rosbags' Reader; an MCAP file without footer is read by its chunks."""
+
+    STORAGE_PLUGINS = {**Reader.STORAGE_PLUGINS, 'dir': RecoveringDirectoryReader,
+                       '.mcap': RecoveringMcapReader}

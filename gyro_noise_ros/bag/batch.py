@@ -105,26 +105,9 @@ def decode_imu(raws: Sequence[bytes], *, log_ns: ArrayLike | None = None, ros1: 
 def decode_temperature(raws: Sequence[bytes], *,
                        ros1: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """
-    Decode raw ``sensor_msgs/Temperature`` messages in bulk.
+    Decode raw ``sensor_msgs/Temperature`` messages in bulk (ROS 2 CDR, or ROS 1 with ``ros1``).
 
-    Parameters
-    ----------
-    raws : sequence of bytes-like
-        Serialised messages (ROS 2 CDR, or ROS 1 with ``ros1=True``).
-    ros1 : bool
-        Messages use the ROS 1 serialisation.
-
-    Returns
-    -------
-    stamp_ns : numpy.ndarray of int64, shape (n,)
-        Header stamps in ns.
-    temperature_c : numpy.ndarray of float64, shape (n,)
-        ``temperature`` in degC.
-
-    Raises
-    ------
-    BagError
-        A message cannot be decoded.
-
+    Returns ``(stamp_ns, temperature_c)``, shape (n,) each: the header stamps (int64 ns) and the
+    ``temperature`` fields (float64 degC). Raises BagError when a message cannot be decoded.
     """
     return decode_temperature_spans(*join_raws(raws), ros1)

@@ -25,20 +25,16 @@ path                                   read by
 rosbag2 folder, ``metadata.yaml``,     :class:`~gyro_noise_ros.bag.ImuBagReader` (``sensor_msgs/
 ``.db3`` or ``.mcap`` file; ROS 1      Imu``, optional ``sensor_msgs/Temperature``; the storage
 ``.bag`` file                          kind is read from the content, see ``docs/bags.md``)
-``.csv`` table                         :class:`~gyro_noise_ros.bag.tabular.TableImuReader`, with
-                                       the column spellings and units of
-                                       :mod:`gyro_noise_ros.bag.tabular` (``gyro_x_rad_s``,
-                                       ``gyro_x_dps``, x-io's ``gyroscope x (deg/s)``; ``time_s``,
-                                       ``t_s``, ``time (s)``, ``timestamp_us``; ``temperature_c``,
-                                       ``temp_c``)
-PX4 ULog ``.ulg``                      the same reader, with ``pyulog`` (``sensor_combined`` or
-                                       ``sensor_gyro``)
+``.csv`` table; PX4 ULog ``.ulg``      :class:`~gyro_noise_ros.bag.tabular.TableImuReader` (the
+                                       column spellings and units of :mod:`.tabular`; ULogs
+                                       with ``pyulog``)
 =====================================  ===========================================================
 
-:func:`open_imu` returns the reader (a context manager with ``iter_batches`` and
-``read_temperature``); :func:`read_imu` reads a whole record into an :class:`ImuRecord` (stamps,
-the three gyro axes in rad/s and the temperature on the Imu stamps) for the tools that need it in
-memory.
+:func:`input_kind` names the kind of a path; :func:`open_imu` returns the reader (a context
+manager with ``iter_batches`` and ``read_temperature``); :func:`read_imu` reads a whole record
+into an :class:`ImuRecord` (stamps, the three gyro axes in rad/s and the temperature on the Imu
+stamps) for the tools that need it in memory; :func:`recorded_axes` lists the gyro axes a record
+holds.
 """
 
 from collections.abc import Iterable

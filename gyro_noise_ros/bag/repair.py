@@ -34,7 +34,8 @@ from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
 
-from .storage import BagSource, describe, mcap_message_records, read_mcap_chunk, STORAGES
+from .mcap_records import mcap_message_records, read_mcap_chunk
+from .storage import BagSource, describe, STORAGES
 from .writer import write_raw
 from ..errors import BagError, OutputError, ParameterError
 from ..msgs import typestore
@@ -219,10 +220,11 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     if storage is not None and storage not in STORAGES:
-        raise ParameterError(f"--storage must be 'sqlite3' or 'mcap', got {storage!r}")
+        raise ParameterError(f"{{storage}} must be 'sqlite3' or 'mcap', got {storage!r}",
+                             parameters=('storage',))
     out = Path(out) if out is not None else default_repaired_path(path)
     if out.exists() or out.is_symlink():
-        raise OutputError(f'--out {str(out)!r} already exists')
+        raise OutputError(f'{{out}} {str(out)!r} already exists', parameters=('out',))
     source = BagSource(path)
     try:
         if source.ros1:
@@ -233,7 +235,7 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
         written: dict[tuple[str, str], int] = {}
         first: int | None = None
         last: int | None = None
-        with staged_new_dir(out, option='--out') as stage:
+        with staged_new_dir(out, parameter='out') as stage:
             writer = Writer(stage, version=9, storage_plugin=plugin)
             try:
                 writer.open()

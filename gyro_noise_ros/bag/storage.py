@@ -27,15 +27,16 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 import itertools
+import logging
 import operator
 from pathlib import Path
-import struct
-from typing import Any, BinaryIO, cast, NoReturn, TYPE_CHECKING, Union
+from typing import cast, TYPE_CHECKING, Union
 
 import numpy as np
 
-from .recover import (announce, journal_is_hot, recovering_reader_class, rollback_note,
-                      rolled_back_copy, truncation_note)
+from .mcap_records import mcap_message_records, read_mcap_chunk
+from .recover import (journal_is_hot, recovering_reader_class, rollback_note, rolled_back_copy,
+                      truncation_note)
 from ..errors import BagError
 from ..msgs import join_raws
 from ..outputs import StrPath
@@ -43,10 +44,9 @@ from ..outputs import StrPath
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection
     from rosbags.rosbag1 import Reader as Ros1Reader
-    from rosbags.rosbag1.reader import IndexData
     from rosbags.rosbag2 import Reader as Rosbag2Reader
     from rosbags.rosbag2.reader import ReaderProtocol
-    from rosbags.rosbag2.storage_mcap import ChunkInfo, McapReader
+    from rosbags.rosbag2.storage_mcap import McapReader
     from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
 #: One block of a topic's messages: (buf, starts, lengths, log_ns), see :meth:`BagSource.blocks`.
@@ -63,10 +63,7 @@ _MAGIC = {
     b'SQLite format 3\x00': 'sqlite3',
 }
 _SUFFIX = {'.bag': 'ros1', '.mcap': 'mcap', '.db3': 'sqlite3'}
-# MCAP Message record: opcode u8, record length u64, channel id u16, sequence u32, log time u64,
-# publish time u64, then the payload.
-_MCAP_MESSAGE = 0x05
-_MCAP_MSG_HEAD = 1 + 8 + 2 + 4 + 8 + 8
+_log = logging.getLogger(__name__)
 
 
 def _sniff(path: Path) -> str | None:
@@ -147,106 +144,6 @@ def _bag_name(path: Path) -> Path:
             p for p in parent.iterdir() if p.suffix in _SUFFIX] == [path]:
         return parent
     return path
-
-
-def mcap_message_records(
-        chunk: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """
-    Locate the Message records of one decompressed MCAP chunk.
-
-    Parameters
-    ----------
-    chunk : bytes
-        The chunk's records.
-
-    Returns
-    -------
-    starts, lengths, channel, log_ns : numpy.ndarray of int64, shape (n,)
-        Payload offset and length, channel id and log time of each message, in chunk order.
-
-    Raises
-    ------
-    BagError
-        A record runs past the end of the chunk or is too short for a Message.
-
-    """
-    size = len(chunk)
-    buf = np.frombuffer(chunk, np.uint8)
-    if size >= 9 and chunk[0] == _MCAP_MESSAGE:
-        stride = 9 + int.from_bytes(chunk[1:9], 'little')
-        if stride >= _MCAP_MSG_HEAD and size % stride == 0:
-            # A chunk of one topic with a fixed-size payload: every record is at a multiple of
-            # the first one's size; checked on all records before it is believed.
-            rec = buf.reshape(size // stride, stride)
-            if (rec[:, 0] == _MCAP_MESSAGE).all() and (
-                    np.ascontiguousarray(rec[:, 1:9]).view('<u8')[:, 0] == stride - 9).all():
-                n = rec.shape[0]
-                at = np.arange(n, dtype=np.int64) * stride + _MCAP_MSG_HEAD
-                cid = np.ascontiguousarray(rec[:, 9:11]).view('<u2')[:, 0].astype(np.int64)
-                log = np.ascontiguousarray(rec[:, 15:23]).view('<u8')[:, 0].astype(np.int64)
-                return at, np.full(n, stride - _MCAP_MSG_HEAD, np.int64), cid, log
-    head = struct.Struct('<BQ').unpack_from
-    msg_head = struct.Struct('<HIQ').unpack_from
-    starts: list[int] = []
-    lengths: list[int] = []
-    channel: list[int] = []
-    log_ns: list[int] = []
-    pos = 0
-    while pos < size:
-        if pos + 9 > size:
-            raise BagError(f'MCAP chunk record at byte {pos} is cut off')
-        op, length = head(chunk, pos)
-        end = pos + 9 + length
-        if end > size:
-            raise BagError(
-                f'MCAP chunk record at byte {pos} claims {length} bytes beyond the chunk')
-        if op == _MCAP_MESSAGE:
-            if length < _MCAP_MSG_HEAD - 9:
-                raise BagError(f'MCAP message record at byte {pos} is too short ({length} bytes)')
-            cid, _, log = msg_head(chunk, pos + 9)
-            starts.append(pos + _MCAP_MSG_HEAD)
-            lengths.append(length - (_MCAP_MSG_HEAD - 9))
-            channel.append(cid)
-            log_ns.append(log)
-        pos = end
-    return (np.array(starts, np.int64), np.array(lengths, np.int64), np.array(channel, np.int64),
-            np.array(log_ns, np.uint64).astype(np.int64))
-
-
-def read_mcap_chunk(fh: BinaryIO, info: ChunkInfo) -> bytes:
-    """
-    Read, decompress and CRC-check one MCAP chunk with rosbags' ``decompress``.
-
-    Parameters
-    ----------
-    fh : BinaryIO
-        The MCAP file, opened for binary reading.
-    info : rosbags.rosbag2.storage_mcap.ChunkInfo
-        The chunk's index entry.
-
-    Returns
-    -------
-    bytes
-        The chunk's records.
-
-    Raises
-    ------
-    BagError
-        The chunk is cut off by the end of the file (rosbags raises its own errors on a bad
-        compression or checksum).
-
-    """
-    from rosbags.rosbag2.storage_mcap import decompress
-
-    # Chunk record: opcode, length, start, end, uncompressed size (8 each), crc (4),
-    # compression string (4 + len), compressed size (8), records.
-    fh.seek(info.chunk_start_offset + 9 + 24)
-    crc = int.from_bytes(fh.read(4), 'little')
-    fh.seek(info.chunk_start_offset + 9 + 40 + len(info.compression))
-    data = fh.read(info.compressed_size)
-    if len(data) != info.compressed_size:
-        raise BagError(f'MCAP chunk at byte {info.chunk_start_offset} is cut off')
-    return decompress(data, info.compression, info.uncompressed_size, crc)
 
 
 def _ros1_header(chunk: bytes, start: int, stop: int) -> dict[bytes, tuple[int, bytes]]:
@@ -419,7 +316,9 @@ class BagSource:
         #: The one-line note on a recording read although its writer did not finish it, or None.
         self.recovery = notes[0] if notes else None
         if self.recovery:
-            announce(self.recovery)
+            # the caller's logging configuration decides where it goes (the tools: one line on
+            # stderr, once per run; cli/_common.py)
+            _log.warning(self.recovery)
 
     def topics(self) -> dict[str, tuple[str | None, int]]:
         """Return ``{name: (msgtype or None, count)}`` merged over connections."""
@@ -711,38 +610,7 @@ def _full_ros1_reader_class() -> type[Ros1Reader]:
 
 def _lean_ros1_reader_class() -> type[Ros1Reader]:
     """Return rosbags' ROS 1 Reader class without the per-message index (chunk list, counts)."""
-    from rosbags.rosbag1 import Reader
-
-    class LeanRos1Reader(Reader):
-        """
-        Open a ROS 1 bag reading its connections, chunk infos and chunk headers only.
-
-        The index data records after each chunk (one entry per message) are skipped, so memory
-        does not grow with the bag; ``messages()`` is therefore unavailable (empty), and message
-        counts come from the chunk infos.
-        """
-
-        def read_index_data(self, pos: int, indexes: dict[int, list[IndexData]]) -> None:
-            """Skip one index data record (fixed 47-byte header, then 12 bytes per message)."""
-            bio = self.bio
-            assert bio is not None  # an open reader
-            head = bio.read(55)
-            if len(head) != 55 or int.from_bytes(head[0:4], 'little') != 47:
-                raise BagError(f'ROS 1 index data record after chunk at byte {pos} is malformed')
-            bio.seek(int.from_bytes(head[51:55], 'little'), 1)
-
-        def open(self) -> None:  # noqa: A003 - overrides rosbags Reader.open
-            """Open the bag; connection message counts from the chunk infos."""
-            super().open()
-            counts: dict[int, int] = {}
-            for info in self.chunk_infos:
-                for cid, k in info.connection_counts.items():
-                    counts[cid] = counts.get(cid, 0) + k
-            self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in self.connections]
-            self.indexes = {}
-
-        def messages(self, *args: Any, **kwargs: Any) -> NoReturn:
-            """Refuse: the lean reader has no per-message index."""
-            raise BagError('the lean ROS 1 reader streams chunks only (no per-message index)')
+    # rosbags is imported when a bag is read, not when the package is
+    from ._lean_ros1 import LeanRos1Reader
 
     return LeanRos1Reader

@@ -59,19 +59,7 @@ _Loaded = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, np.ndarra
 
 
 def is_table(path: StrPath) -> bool:
-    """
-    Tell whether ``path`` is a CSV or ULog file (by suffix).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        File name.
-
-    Returns
-    -------
-    bool
-
-    """
+    """Tell whether ``path`` names a CSV or ULog file (by its suffix)."""
     return Path(path).suffix.lower() in TABLE_SUFFIXES
 
 
@@ -139,21 +127,9 @@ def read_csv(path: StrPath, *, check_header: Callable[[list[str]], object] | Non
 
 def missing_column_error(path: StrPath, wanted: str, names: Sequence[str]) -> BagError:
     """
-    Return the error of a CSV without a required column (exit code 3: a wrong format).
+    Return the BagError (exit code 3) of CSV ``path`` without the column(s) ``wanted``.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    wanted : str
-        The column(s) looked for, as said to the user.
-    names : list of str
-        The header names found.
-
-    Returns
-    -------
-    BagError
-
+    ``wanted`` is said as given; ``names`` are the header names found, listed in the message.
     """
     return BagError(f'CSV {str(path)!r} has no column {wanted}; columns: {", ".join(names)}')
 
@@ -180,15 +156,7 @@ def csv_gyro_axes(names: Sequence[str]) -> tuple[str, ...]:
     """
     Return the gyro axes a CSV header holds, in the order x, y, z.
 
-    Parameters
-    ----------
-    names : list of str
-        Header names, stripped and lower-case (as :func:`read_csv` returns them).
-
-    Returns
-    -------
-    tuple of str
-
+    ``names`` are the header names, stripped and lower-case (as :func:`read_csv` returns them).
     """
     return tuple(a for a in _AXES if _gyro_column(names, a) is not None)
 
@@ -219,7 +187,8 @@ def _load_csv(path: Path, rate_hz: float | None, gyro_axes: Sequence[str]) -> _L
     names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path, gyro_axes))
     cols = _csv_columns(names, path, gyro_axes)
     if cols['t_s'] is None and cols['t_us'] is None and rate_hz is None:
-        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give --rate-hz')
+        raise ParameterError(f'CSV {str(path)!r} has no time_s column: give {{rate_hz}}',
+                             parameters=('rate_hz',))
     n = data.shape[0]
     if cols['t_s'] is not None:
         t = data[:, cols['t_s']]

@@ -75,7 +75,7 @@ def _select_topic(topics: dict[str, tuple[str | None, int]], topic: str | None, 
     if len(candidates) > 1:
         raise BagError(
             f'bag {str(path)!r} has {len(candidates)} {msgtype} topics ({", ".join(candidates)}); '
-            'choose one with --topic')
+            'choose one with {topic}', parameters=('topic',))
     return candidates[0]
 
 

@@ -282,7 +282,7 @@ def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
     x = _check(x, rate_hz)
     f0 = float(frequency_hz)
     if not (math.isfinite(f0) and 0 < f0 < rate_hz / 2.0):
-        raise ParameterError(f'--dwell frequency must be in (0, {rate_hz / 2:g}) Hz (Nyquist), '
+        raise ParameterError(f'dwell frequency must be in (0, {rate_hz / 2:g}) Hz (Nyquist), '
                              f'got {frequency_hz!r}')
     if not (math.isfinite(frequency_tol) and frequency_tol > 0):
         raise ParameterError(f'frequency tolerance must be > 0, got {frequency_tol!r}')
@@ -317,8 +317,9 @@ def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
         f_sig = float('nan')
     if abs(f - f0) > max(frequency_tol * f0, 5.0 * f_sig):
         raise InputDataError(
-            f'the record holds a sine at {f:.4g} Hz, not the requested --dwell {f0:g} Hz '
-            f'(tolerance {100 * frequency_tol:g} %): another record, or another frequency?')
+            f'the record holds a sine at {f:.4g} Hz, not the requested {{frequency_hz}} {f0:g} Hz '
+            f'(tolerance {100 * frequency_tol:g} %): another record, or another frequency?',
+            parameters=('frequency_hz',))
     mean = float(cyc.mean())
     std = float(cyc.std(ddof=1)) if cyc.size > 1 else float('nan')
     sigma_c = rms * math.sqrt(2.0 / per)          # one cycle's amplitude from white noise
@@ -459,7 +460,7 @@ def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_r
     x = _check(x, rate_hz)
     lo, hi = sorted((float(f0_hz), float(f1_hz)))
     if not (lo > 0 and hi < rate_hz / 2.0 and hi > lo):
-        raise ParameterError(f'--sweep band must lie in (0, {rate_hz / 2:g}) Hz with F0 != F1, '
+        raise ParameterError(f'sweep band must lie in (0, {rate_hz / 2:g}) Hz with F0 != F1, '
                              f'got {f0_hz!r}..{f1_hz!r}')
     if not (math.isfinite(sweep_rate_hz_s) and sweep_rate_hz_s > 0):
         raise ParameterError(f'sweep rate must be > 0 Hz/s, got {sweep_rate_hz_s!r}')
@@ -477,10 +478,11 @@ def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_r
     f_lo, f_hi = (float(v) for v in np.percentile(fs[inner][excited], [5, 95]))
     covered = max(0.0, min(f_hi, hi) - max(f_lo, lo))
     if covered < MIN_SWEEP_COVERAGE * (hi - lo):
-        hint = (f'a sine dwell? (--dwell {np.median(fs[inner][excited]):.3g})'
+        hint = (f'a sine dwell? ({{frequency_hz}} {np.median(fs[inner][excited]):.3g})'
                 if f_hi - f_lo < 0.1 * (hi - lo) else 'another band?')
         raise InputDataError(f'the record does not sweep {lo:g}-{hi:g} Hz: its frequency stays '
-                             f'within {f_lo:.3g}-{f_hi:.3g} Hz, {hint}')
+                             f'within {f_lo:.3g}-{f_hi:.3g} Hz, {hint}',
+                             parameters=('frequency_hz',))
     direction = np.sign(np.gradient(_smooth(fs, max(1, int(rate_hz * 0.2 / sweep_rate_hz_s)))))
     valid = np.zeros(x.size, dtype=bool)
     valid[inner] = True                   # Hilbert / filter edge effects

@@ -75,7 +75,8 @@ def rate_from_stamps(stamp_ns: ArrayLike, source: str = '') -> float:
         raise InputDataError(f'recording {source!r}: {err}') from err
     if not est.usable:
         raise InputDataError(f'recording {source!r}: no usable sample rate from the stamps: '
-                             f'{"; ".join(est.warnings)} (give --rate-hz)')
+                             f'{"; ".join(est.warnings)} (give {{rate_hz}})',
+                             parameters=('rate_hz',))
     return float(est.rate_hz)
 
 

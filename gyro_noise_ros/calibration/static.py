@@ -548,7 +548,8 @@ def find_dwells(windows: Windows, settings: DetectorSettings = DetectorSettings(
     if win.window_samples and int(win.n.sum()) < win.window_samples:
         raise InputDataError(
             f'recording{name} lasts {win.duration_s:.3g} s, shorter than one detector window '
-            f'(--window-s {settings.window_s:g} s): give a shorter --window-s')
+            f'({{window_s}} {settings.window_s:g} s): give a shorter {{window_s}}',
+            parameters=('window_s',))
     usable = win.usable
     if not np.any(usable):
         raise InputDataError(f'recording{name} holds no finite samples (all NaN/Inf)')
@@ -594,8 +595,8 @@ def find_dwells(windows: Windows, settings: DetectorSettings = DetectorSettings(
 def _no_dwell(short: Sequence[Dwell], settings: DetectorSettings) -> InputDataError:
     if short:
         return InputDataError(
-            f'no static dwell of at least --min-static-s {settings.min_static_s:g} s; shorter '
-            f'ones: {"; ".join(d.describe() for d in short)}')
+            f'no static dwell of at least {{min_static_s}} {settings.min_static_s:g} s; shorter '
+            f'ones: {"; ".join(d.describe() for d in short)}', parameters=('min_static_s',))
     return InputDataError(
         'no static dwell found: the recording never stops moving (accelerometer std >= '
         f'{settings.accel_std_max_m_s2:g} m/s^2 or gyro away from its median by >= '
@@ -633,9 +634,10 @@ def select_six(detections: Sequence[Detection],
         raise _no_dwell(short, settings)
     tilted = [d for d in dwells if d.tilt_deg > settings.max_tilt_deg]
     if tilted:
-        raise InputDataError(f'dwell tilted more than --max-tilt-deg {settings.max_tilt_deg:g} '
+        raise InputDataError(f'dwell tilted more than {{max_tilt_deg}} {settings.max_tilt_deg:g} '
                              f'deg from any axis: '
-                             f'{"; ".join(d.describe() for d in tilted)}')
+                             f'{"; ".join(d.describe() for d in tilted)}',
+                             parameters=('max_tilt_deg',))
     chosen = {}
     for o in ORIENTATIONS:
         mine = [d for d in dwells if d.orientation == o]
@@ -652,10 +654,11 @@ def select_six(detections: Sequence[Detection],
                 f'{gaps} (an all-NaN dwell?)' if gaps else
                 f'orientation(s) {", ".join(missing)} missing')
         near = [d for d in short if d.orientation in missing]
-        extra = (f'; shorter than --min-static-s {settings.min_static_s:g} s: '
+        extra = (f'; shorter than {{min_static_s}} {settings.min_static_s:g} s: '
                  f'{"; ".join(d.describe() for d in near)}') if near else ''
         raise InputDataError(f'{lead}; found: '
-                             f'{"; ".join(d.describe() for d in chosen.values())}{extra}')
+                             f'{"; ".join(d.describe() for d in chosen.values())}{extra}',
+                             parameters=('min_static_s',))
     return chosen
 
 
@@ -689,10 +692,10 @@ def select_poses(detections: Sequence[Detection], settings: DetectorSettings = D
     if not dwells:
         raise _no_dwell(short, settings)
     if len(dwells) < min_poses:
-        extra = (f'; {len(short)} more shorter than --min-static-s '
+        extra = (f'; {len(short)} more shorter than {{min_static_s}} '
                  f'{settings.min_static_s:g} s' if short else '')
         gaps = '; '.join(g for g in (det.describe_gaps() for det in detections) if g)
         raise InputDataError(f'multi-pose calibration needs at least {min_poses} static poses, '
                              f'found {len(dwells)}{extra}'
-                             + (f' (and {gaps})' if gaps else ''))
+                             + (f' (and {gaps})' if gaps else ''), parameters=('min_static_s',))
     return dwells

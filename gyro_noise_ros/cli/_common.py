@@ -35,7 +35,8 @@ or a non-numeric value is unreadable (3); a CSV with a header and no rows is rea
 nothing to analyse (4).
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+import logging
 import os
 from pathlib import Path
 import sys
@@ -46,6 +47,33 @@ EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+
+
+class WarningLines(logging.Handler):
+    """
+    Say each warning the package logs (a killed recording read anyway) once, as one stderr line.
+
+    The line is ``<prog>: warning: <message>``, the tools' form; a message said before in the
+    same run is not repeated (a tool may open one bag several times).
+
+    Parameters
+    ----------
+    prog : str
+        Program name used as the line's prefix.
+
+    """
+
+    def __init__(self, prog: str) -> None:
+        super().__init__(logging.WARNING)
+        self.prog = prog
+        self.said: set[str] = set()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        """Print the record's message unless it was said already."""
+        text = record.getMessage()
+        if text not in self.said:
+            self.said.add(text)
+            print(f'{self.prog}: warning: {text}', file=sys.stderr, flush=True)
 
 
 def check_out_option(path: str | os.PathLike[str], *, option: str = '--out') -> None:
@@ -83,10 +111,35 @@ def check_out_option(path: str | os.PathLike[str], *, option: str = '--out') -> 
         raise OutputError(f'{option} {str(out)!r} {what}: permission denied')
 
 
+def option_of(parameter: str, renamed: Mapping[str, str] | None = None) -> str:
+    """
+    Return the command-line option of a parameter an error names.
+
+    Parameters
+    ----------
+    parameter : str
+        The parameter's name in the package (``min_range_c``).
+    renamed : mapping, optional
+        The tool's options whose name is not the parameter's (``{'start_s': '--start'}``).
+
+    Returns
+    -------
+    str
+        ``renamed[parameter]``, else ``--`` and the name with dashes (``--min-range-c``).
+
+    """
+    if renamed and parameter in renamed:
+        return renamed[parameter]
+    return '--' + parameter.replace('_', '-')
+
+
 def run_cli(prog: str, body: Callable[[list[str]], int | None],
-            argv: Sequence[str] | None) -> int:
+            argv: Sequence[str] | None, *, renamed: Mapping[str, str] | None = None) -> int:
     """
     Run ``body(argv)`` and turn deliberate errors into one line on stderr and an exit code.
+
+    An error's parameters are spelled as the tool's options (:func:`option_of`). Meanwhile the
+    warnings the package logs are said on stderr by a :class:`WarningLines`.
 
     Parameters
     ----------
@@ -96,6 +149,8 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
         ``body(argv) -> int``; may raise :class:`GyroNoiseError`.
     argv : list of str or None
         Arguments without the program name; ``None`` means ``sys.argv[1:]``.
+    renamed : mapping, optional, keyword-only
+        Passed to :func:`option_of`.
 
     Returns
     -------
@@ -103,10 +158,14 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
         The process exit code.
 
     """
+    package_log = logging.getLogger('gyro_noise_ros')
+    lines = WarningLines(prog)
+    package_log.addHandler(lines)
     try:
         return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
     except GyroNoiseError as err:
-        print(f'{prog}: error: {err}', file=sys.stderr)
+        print(f'{prog}: error: {err.spelled(lambda name: option_of(name, renamed))}',
+              file=sys.stderr)
         return err.exit_code
     except KeyboardInterrupt:
         print(f'{prog}: interrupted', file=sys.stderr)
@@ -114,3 +173,5 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     except MemoryError as err:
         print(f'{prog}: error: out of memory ({err})', file=sys.stderr)
         return EXIT_INTERNAL
+    finally:
+        package_log.removeHandler(lines)

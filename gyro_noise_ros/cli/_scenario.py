@@ -330,7 +330,7 @@ def write_bag(args: argparse.Namespace, board: 'BoardModel', truth_fh: BinaryIO 
         raise ParameterError('--write-bag needs --duration-s or --samples (a positive length)')
     if os.path.exists(args.write_bag):
         raise OutputError(f'--write-bag {args.write_bag!r} exists; give a new directory')
-    with staged_new_dir(args.write_bag, option='--write-bag') as stage:
+    with staged_new_dir(args.write_bag, parameter='write_bag') as stage:
         # built under a hidden holder and renamed when complete: an error or Ctrl-C leaves no
         # bag folder behind to block the retry (the stage already carries the bag's name, which
         # the writer gives its storage file)

@@ -44,6 +44,8 @@ from ..core.engine import AXES, EngineConfig, GAP_POLICIES
 from ..core.fractional import DEFAULT_MEMORY
 
 PROG = TOOL
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'start_s': '--start', 'end_s': '--end'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -208,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit code (docs/offline_tool.md).
 
     """
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 if __name__ == '__main__':

@@ -40,7 +40,8 @@ import sys
 
 from ._common import run_cli
 from ..app.calibrate import (CalibrateParams, GYRO_TURNS, MODES, resolve_gravity,
-                             run_calibration, table6_rows, write_calibration)
+                             run_calibration, write_calibration)
+from ..calibration.calibrate_report import table6_rows
 from ..calibration.sixpos import DEFAULT_ALPHA
 from ..calibration.static import DetectorSettings
 from ..outputs import make_out_dir

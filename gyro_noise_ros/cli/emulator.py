@@ -67,6 +67,8 @@ from ..link.serve import (Counters, SdOptions, serve, ServeOptions, stats_line, 
 from ..outputs import atomic_write_text
 
 PROG = 'portenta_emulator'
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'out_dir': '--write-sd'}
 
 
 def _float_list(text: str) -> float | tuple[float, ...]:
@@ -305,7 +307,7 @@ def _serve(args: argparse.Namespace, board: BoardModel, faults: FaultInjector,
     # a twin board warms the numba kernels up before the pacing clock starts: a JIT stall would
     # come out as a burst
     return serve(board, faults, options, counters=counters, stopper=stopper, truth_fh=truth_fh,
-                 warm=board_from_args(args))
+                 warm=board_from_args(args), on_port=lambda name: print(name, flush=True))
 
 
 def _body(argv: list[str]) -> int:
@@ -366,7 +368,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit status.
 
     """
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 __all__ = ['main', 'build_parser', 'board_from_args', 'TRUTH_DTYPE']

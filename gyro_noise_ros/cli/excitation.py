@@ -46,6 +46,8 @@ from ..calibration.excitation import DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAU
 from ..outputs import make_out_dir
 
 PROG = 'gyro_noise_excitation'
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'frequency_hz': '--dwell'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -130,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit status.
 
     """
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 if __name__ == '__main__':

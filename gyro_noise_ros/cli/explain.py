@@ -42,6 +42,8 @@ from ..app.explain import (check_output, ExplainParams, MAX_RECORDS, prepare_exp
                            run_explain, write_explain)
 
 PROG = 'gyro_noise_explain'
+#: Options not named after the parameter they set (errors name parameters: cli/_common).
+RENAMED = {'start_s': '--start', 'end_s': '--end'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -123,7 +125,7 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``gyro_noise_explain``; returns the exit code."""
-    return run_cli(PROG, _body, argv)
+    return run_cli(PROG, _body, argv, renamed=RENAMED)
 
 
 if __name__ == '__main__':

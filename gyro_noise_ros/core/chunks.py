@@ -15,38 +15,25 @@
 """
 Streaming chunker, per-chunk statistics and per-sequence summaries (paper 000 sections 3.2-3.5).
 
-A sequence of angular-rate samples is cut into fixed-length chunks (10,000 by default, as in the
-paper); per chunk the bias (mean) and variance are taken, and the fractional order is identified by
-both methods (:mod:`.fractional`). Per sequence the paper tabulates:
+A sequence of angular-rate samples (rad/s) is cut into fixed-length chunks (:class:`Chunker`,
+10,000 samples by default, as in the paper); per chunk the bias (mean) and the variance (``ddof =
+1``) are taken (:func:`chunk_moments`), and the fractional order is identified by both methods
+(:mod:`.fractional`). Per sequence (:func:`summarise_sequence` -> :class:`SequenceSummary`):
 
-* Table 3, offset drift: defined here as the least-squares slope of the chunk bias against the
-  chunk mid time, in rate per time (rad/s per s inside; (deg/s)/h in reports). The paper gives it
-  in "deg/h" without a definition; with the bias in deg/s, its numbers read as (deg/s) per hour:
-  integrating Table 3 over the ten ~12 h sequences gives a bias change of ~3.5 deg/s, which matches
-  the paper's "offset increased from 0.775 to 4.242". A slope (not the mean absolute chunk-to-chunk
-  change) is used because chunk-to-chunk differences are dominated by the chunk-mean noise, ~1000x
-  the drift (see docs/analysis.md).
+* Table 3, the offset drift: the least-squares slope of the chunk bias against the chunk mid time
+  (rad/s per s; (deg/s)/h in reports), with a standard error that holds for correlated chunk biases
+  (:func:`offset_drift`, :func:`drift_stderr`);
 * Table 4, the mean of the chunk variances and the variance of the chunk variances;
-* Tables 5 and 6, the mean and the variance of the chunk orders of each method.
+* Tables 5 and 6, the mean and the variance of the chunk orders of each method;
 
-Variances across chunks use ``ddof = 1`` (unbiased over chunks); the variance inside a chunk uses
-``ddof = 1`` as well.
-
-Beside the paper's means, every per-chunk quantity (bias, log variance, both orders, the noise
-colour) gets a robust location and spread (:func:`robust_location`), which the reference check of
-:mod:`.health` compares like with like: the median of the chunks, or of the dominant mode when the
-chunk orders fall in separate basins (:func:`order_modes`), and the normal-consistent standard
-deviation of those chunks without the 5 % lowest and highest.
-
-The *noise colour* of a chunk (:func:`noise_colour`) is the least-squares log-log slope of its
-overlapping Allan deviation over the averaging factors m = 2, 4, ..., 64 samples: -0.5 for white
-rate noise (angle random walk), 0 for flicker, +0.5 for a random walk, -1 for white angle noise. A
-fractional difference of order d (a GL filter) multiplies the rate PSD by ``|2 sin(pi f)|^(2d)``
-and so moves the slope by about -0.9 d over this band (closed form for white noise: -0.089 for d =
-0.1; -0.088 on the ADIS16405, whose Bartlett filter bends m = 1-2, hence m = 1 left out). Unlike
-the paper's identified orders, which a 0.1 filter moves by only 0.02-0.08 on that sensor, it
-follows the filter. Its chunk-to-chunk spread (~0.0125 with 10,000 samples) is estimation noise:
-six runs of that sensor agree to 0.005 (docs/verdicts.md).
+variances across chunks with ``ddof = 1``. Every per-chunk quantity (bias, log variance, both
+orders, the noise colour) also gets a robust location and spread (:func:`robust_location`: the
+median of the chunks, or of the dominant mode when the orders fall in separate basins,
+:func:`order_modes`; the normal-consistent standard deviation without the 5 % lowest and highest),
+which :mod:`.health` compares like with like. The noise colour of a chunk (:func:`noise_colour`) is
+the least-squares log-log slope of its overlapping Allan deviation over m = 2, 4, ..., 64 samples
+(-0.5 white rate noise, 0 flicker, +0.5 random walk). Why a slope for the drift, and how the
+paper's units read: docs/analysis.md; what the colour detects: docs/verdicts.md.
 """
 
 from collections.abc import Mapping, Sequence
@@ -369,18 +356,16 @@ def drift_stderr(t_s: npt.ArrayLike, bias: npt.ArrayLike) -> float:
     """
     Return a standard error of the drift slope that holds for correlated chunk biases.
 
-    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias: 0.5-0.9 on
-    the ADIS16405 runs), and the ordinary least-squares error then falls 5x short of the real
-    spread of the slope across runs. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k - mean t) /
-    Sxx`` and ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random walk
-    included) ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} - b_k)^2]``
-    the variogram of the chunk biases (Cressie 1993, eq. 2.4.5). ``D`` is estimated from the
-    detrended biases (lags up to half the run, held constant beyond); detrending keeps a real drift
-    from inflating its own error but removes some long-lag variance, so on the ADIS16405 runs this
-    error is still 1-3x below the spread of slopes across runs (docs/analysis.md). The Newey-West
-    (Bartlett, ``ceil(n^(1/3))`` lags) error is
-    computed too and the larger of the two returned (the variogram estimate can come out
-    negative or tiny on short records). Chunks are taken as equally spaced.
+    Neighbouring chunk biases of a real gyro correlate (flicker and random-walk bias), where the
+    ordinary least-squares error falls short. The slope is ``sum(w_k b_k)`` with ``w_k = (t_k -
+    mean t) / Sxx`` and ``sum(w_k) = 0``, so for any intrinsically stationary bias process (random
+    walk included) ``Var(slope) = -1/2 sum_jk w_j w_k D(|j - k|)`` with ``D(m) = E[(b_{k+m} -
+    b_k)^2]`` the variogram of the chunk biases (Cressie 1993, eq. 2.4.5), estimated from the
+    detrended biases (lags up to half the run, held constant beyond: detrending keeps a real drift
+    from inflating its own error). The Newey-West (Bartlett, ``ceil(n^(1/3))`` lags) error is
+    computed too and the larger of the two returned (the variogram estimate can come out negative
+    or tiny on short records). Chunks are taken as equally spaced. How both compare with the
+    spread of slopes across real runs: docs/analysis.md.
 
     Parameters
     ----------
@@ -568,26 +553,11 @@ def _mode_pieces(orders: npt.ArrayLike, gap: float) -> list[NDArray[np.float64]]
 def order_modes(orders: npt.ArrayLike, *,
                 gap: float = MODE_GAP) -> tuple[tuple[float, int], ...]:
     """
-    Split chunk orders into modes when they fall in separate basins.
+    Split chunk orders into modes: ``(mean order, chunk count)`` per mode, ascending; () unimodal.
 
-    The mean of three chunks at 0.02 and three at 1.02 is 0.52, where no chunk is (issue 11).
-
-    Sorted finite orders are cut at every gap wider than ``gap`` and wider than 3x the pooled
-    standard deviation inside the pieces; with at least two pieces of 2 or more chunks the
-    distribution is multi-modal.
-
-    Parameters
-    ----------
-    orders : array_like
-        Chunk orders (NaN ignored).
-    gap : float, keyword-only
-        Smallest separating gap (order units).
-
-    Returns
-    -------
-    tuple of (float, int)
-        (mean order, chunk count) per mode, in increasing order; empty when unimodal.
-
+    The sorted finite orders (NaN ignored) are cut at every gap wider than ``gap`` (order units)
+    and than 3x the pooled standard deviation inside the pieces; two or more pieces of >= 2 chunks
+    are modes (three chunks at 0.02 and three at 1.02 are two modes, not one at 0.52).
     """
     return tuple((float(p.mean()), int(p.size)) for p in _mode_pieces(orders, gap))
 

@@ -16,78 +16,28 @@
 Streaming analysis engine shared by the analyzer node and the offline tool (paper 000 3.2-3.5).
 
 One :class:`NoiseEngine` consumes batches of ``(stamp_ns, angular rate xyz in rad/s, optional
-temperature)`` and cuts every selected axis into fixed-length chunks (10,000 samples by default, as
-in the paper). The work is split in three steps so that the caller decides where the heavy part
-runs:
+temperature in degC)`` and cuts every selected axis into fixed-length chunks (10,000 samples by
+default, as in the paper), in three steps so that the caller decides where the heavy part runs:
 
-1. :meth:`NoiseEngine.ingest` (cheap, in the caller's thread): validation, gap and stamp-order
-   counting, chunking, per-chunk bias and variance; returns one :class:`ChunkJob` per complete
-   chunk and axis.
-2. :func:`analyze_chunk` (heavy, pure, picklable): fractional-order identification by both methods
+1. :meth:`NoiseEngine.ingest` (cheap, the caller's thread): validation, stamp and gap accounting
+   (:class:`.stamps.StampAccountant`), chunking (:class:`.chunks.Chunker`), per-chunk bias and
+   variance (:func:`chunk_jobs`); returns one :class:`ChunkJob` per complete chunk and axis.
+2. :func:`analyze_chunk` (heavy, pure, picklable): both fractional-order identifications
    (:class:`.fractional.OrderIdentifier`); safe in a worker thread or process.
-3. :meth:`NoiseEngine.record` (cheap): adds the :class:`ChunkResult` to the per-axis sequence
-   statistics (paper Tables 3-6) from which :meth:`NoiseEngine.summary` and
-   :meth:`NoiseEngine.health` are computed.
+3. :meth:`NoiseEngine.record` (cheap): adds the :class:`.results.ChunkResult` to the per-axis
+   sequence statistics (paper Tables 3-6, :class:`SequenceBook`) from which
+   :meth:`NoiseEngine.summary` and :meth:`NoiseEngine.health` are computed.
 
-The engine only composes pieces with one job each, which the live node (through
-:mod:`.live`) and the offline tool share by sharing the engine:
-
-* stamp and gap accounting: :class:`.stamps.StampAccountant` (rate, gaps, lost samples, stamp
-  order; the counters of :class:`.stamps.StreamCounts`);
-* chunking: :class:`.chunks.Chunker` (the package's one chunker; it cuts the stamps, per-sample
-  losses, temperatures and rates together) and the 'split' policy's discarding;
-* per-chunk moments: :func:`chunk_jobs` (:func:`.chunks.chunk_moments` per axis);
-* the Allan feed: :class:`AllanFeed`;
-* the summary: :class:`SequenceBook` (chunk results by status, the rows of Tables 3-6) and
-  :func:`.chunks.summarise_sequence`; the verdicts: :func:`.health.evaluate_health`.
-
-Stamps and gaps. Rates come from :mod:`.timebase` (one estimator for every tool). While streaming,
-the period is ``1 / rate_hz``, or when ``rate_hz`` is None the :mod:`.timebase` estimate of the
-first :data:`RATE_ESTIMATE_SAMPLES` stamps (samples are held back until then). At the end
-(:meth:`NoiseEngine.counts`, :meth:`NoiseEngine.summary`) the estimate over the whole run replaces
-it: the Allan taus are rescaled to it (tau = m / rate), and the counts report the method, the stamp
-jitter and the disagreement warnings.
-
-*Regular* stamps (a device clock): steps are taken from the latest stamp seen so far; a step larger
-than ``gap_factor`` nominal periods is a gap that lost ``round(step / period) - 1`` samples when it
-is a whole number of periods (within 6 robust sigmas of the step scatter, 0.1-0.45 of a period) or
-2.5 periods and more. A long step of a fractional number of periods below that is a correction of
-the stamping clock (a driver re-anchoring its device-clock map, a host clock slewing: every later
-stamp stays on the grid), counted as a clock step (``StreamCounts.clock_steps``), not as loss.
-Samples that share the stamp right after a long step (a packet stamped once) are the samples the
-step seemed to skip: they are subtracted from its loss (a group reaching the end of a batch waits
-for the next batch), so a packet-stamped record shows no phantom loss. Every gap is kept as (start,
-length, missing samples) and the longest are reported (``StreamCounts.longest_gaps``).
-*Bursty* stamps (host receive times, USB packets; :mod:`.timebase`: more than 1 % of the steps
-shorter than half a period): a long step followed by a burst is jitter, not loss, so single steps
-are not read. Loss is the deficit of samples against elapsed time, per chunk (``round(span * rate)
-+ 1 - n`` when it exceeds the chunk's jitter allowance; such a chunk counts one gap) and over the
-run (the timebase estimate). Under 'split' or 'drop' such a chunk is dropped (there is no single
-step to split at). A step of zero (a stamp equal to the latest one: one packet) is a normal time
-base, counted in ``equal_stamps`` and nothing else. A step < 0 is an out-of-order stamp: counted,
-never reordered, never a gap. So two swapped samples count as one out-of-order stamp *and* one
-one-sample gap (the hole is seen before the late sample arrives; the engine does not look back to
-fill it). The
-``gap_policy`` decides what a gap does to the chunk it falls in:
-
-* ``'flag'`` (default): the chunk is kept and analysed; its ``samples_lost`` and ``gaps`` say so.
-* ``'split'``: the partial chunk before the gap is discarded (counted in ``discarded_samples`` and
-  ``discarded_partials``) and a new chunk starts at the first sample after the gap, so every
-  analysed chunk is gap-free.
-* ``'drop'``: a chunk containing a gap is reported with status ``'dropped'`` and left out of the
-  sequence statistics.
-
-NaN/Inf samples never stop the stream: they are counted, the chunk holding them gets status
-``'nan'`` (per axis: a NaN on x does not spoil y), its moments and orders are NaN and it is left
-out of the statistics. The incomplete tail at the end is counted (``tail_samples``), never silently
-dropped.
-
-Allan deviation. When ``allan`` is on, every finite sample of every axis goes into it (gaps are
-ignored: Allan deviation assumes uniform sampling, so heavy loss biases it; the loss is reported
-beside it).
+The period is ``1 / rate_hz``, or the :mod:`.timebase` estimate of the first
+:data:`RATE_ESTIMATE_SAMPLES` stamps while streaming; at the end the estimate over the whole run
+replaces it (the Allan taus rescaled to it). ``gap_policy`` says what a gap does to its chunk:
+``'flag'`` keeps it, ``'split'`` discards the partial chunk before the gap, ``'drop'`` reports the
+chunk as ``'dropped'``. A NaN/Inf sample gives its chunk status ``'nan'`` on its axis only; the
+incomplete tail is counted, never dropped silently. The Allan deviation (:class:`AllanFeed`) takes
+every finite sample, gaps ignored. The rules of stamps, gaps and loss: docs/offline_tool.md.
 """
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -95,29 +45,26 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .allan import AllanAccumulator, AllanResult, NoiseTerms
+from .allan import AllanAccumulator
 from .chunks import (chunk_moments, Chunker, ChunkMoments, DEFAULT_CHUNK_SIZE, noise_colour,
                      SequenceSummary, summarise_sequence)
 from .fractional import default_grid, DEFAULT_MEMORY, OrderIdentifier
 from .health import evaluate_health, HealthThresholds, reference_per_axis, ReferenceStats
-from .readout import AllanReadout, fit_noise_terms_band_limited, read_allan
+from .readout import fit_noise_terms_band_limited, read_allan
+from .results import AxisSummary, ChunkResult, STATUSES
 from .stamps import (MAX_GAP_EVENTS, RATE_ESTIMATE_SAMPLES, StampAccountant, StampedBatch,
                      StreamCounts)
 from .timebase import RateEstimate, rescale_allan
 from ..errors import InputDataError, ParameterError
 
-__all__ = ['analyze_chunk', 'AllanFeed', 'AXES', 'AxisSummary', 'chunk_jobs', 'ChunkJob',
-           'ChunkResult', 'EngineConfig', 'GAP_POLICIES', 'identifier_for', 'MAX_GAP_EVENTS',
-           'NoiseEngine', 'rad_s2_to_deg_s_per_h', 'RATE_ESTIMATE_SAMPLES', 'SequenceBook',
-           'STATUSES', 'StreamCounts', 'warm_up']
+__all__ = ['analyze_chunk', 'AllanFeed', 'AXES', 'chunk_jobs', 'ChunkJob', 'EngineConfig',
+           'GAP_POLICIES', 'identifier_for', 'MAX_GAP_EVENTS', 'NoiseEngine',
+           'RATE_ESTIMATE_SAMPLES', 'SequenceBook', 'StreamCounts', 'warm_up']
 
 #: Axis names in column order of the gyro array.
 AXES = ('x', 'y', 'z')
 #: Valid gap policies (see module doc).
 GAP_POLICIES = ('flag', 'split', 'drop')
-#: Chunk statuses: analysed, left out because of a gap ('drop'), holding NaN/Inf, skipped by the
-#: caller, or failing identification (e.g. a constant chunk).
-STATUSES = ('ok', 'dropped', 'nan', 'skipped', 'failed')
 
 _NS = 1_000_000_000
 _NAN = float('nan')
@@ -304,90 +251,6 @@ class ChunkJob:
     identifier_key: tuple = field(repr=False)
 
 
-def _same(a: object, b: object) -> bool:
-    """Equality that treats NaN as equal to NaN (results carry NaN for 'not identified')."""
-    if isinstance(a, float) and isinstance(b, float):
-        return a == b or (a != a and b != b)
-    return a == b
-
-
-@dataclass(frozen=True, eq=False)
-class ChunkResult:
-    """
-    Per-chunk results of one axis (identical from the node and the offline tool for the same data).
-
-    Equality compares every field except the curves and treats NaN as equal to NaN, so ``a == b``
-    is the "same numbers" test between two runs.
-
-    Attributes
-    ----------
-    axis, chunk, stamp_start_ns, t_start_s, t_mid_s, samples_lost, gaps, nan_samples, temperature_c
-        As in :class:`ChunkJob`.
-    samples : int
-        Samples in the chunk.
-    bias_rad_s : float
-        Chunk mean (rad/s), paper sec. 3.3.
-    variance_rad2_s2 : float
-        Chunk variance, ddof = 1 ((rad/s)^2), paper sec. 3.4.
-    alpha_var, f_var : float
-        Order and f of the variance method (paper eqs. 6-9, sec. 3.5).
-    var_min : float
-        Minimum source-noise variance ((rad/s)^2).
-    alpha_corr, f_corr : float
-        Order and f of the correlation method (eqs. 13-14).
-    j_min : float
-        Minimum of J ((rad/s)^2).
-    tie_var, tie_corr : bool
-        The minimum was an exact tie between grid orders (the largest is reported; see
-        fractional.py).
-    noise_colour : float
-        Log-log slope of the chunk's Allan deviation over m = 2-64 samples (dimensionless,
-        :func:`.chunks.noise_colour`); NaN when the chunk is too short or not analysed.
-    status : str
-        One of :data:`STATUSES`.
-    message : str
-        Why the status is not 'ok' (empty otherwise).
-    var_curve, j_curve : numpy.ndarray or None
-        var(w)(alpha) and J(alpha) over the grid when curves were requested (not compared).
-
-    """
-
-    axis: str
-    chunk: int
-    t_start_s: float
-    t_mid_s: float
-    stamp_start_ns: int
-    samples: int
-    samples_lost: int
-    gaps: int
-    nan_samples: int
-    bias_rad_s: float
-    variance_rad2_s2: float
-    alpha_var: float
-    f_var: float
-    var_min: float
-    alpha_corr: float
-    f_corr: float
-    j_min: float
-    tie_var: bool
-    tie_corr: bool
-    noise_colour: float
-    temperature_c: float
-    status: str
-    message: str = ''
-    var_curve: np.ndarray | None = field(default=None, repr=False, compare=False)
-    j_curve: np.ndarray | None = field(default=None, repr=False, compare=False)
-
-    def __eq__(self, other: object) -> bool:
-        """Compare field by field, NaN equal to NaN (curves are not compared)."""
-        if not isinstance(other, ChunkResult):
-            return NotImplemented
-        return all(_same(getattr(self, f.name), getattr(other, f.name))
-                   for f in fields(self) if f.compare)
-
-    # Defining __eq__ leaves the class unhashable (Python sets __hash__ to None).
-
-
 def analyze_chunk(job: ChunkJob, identifier: OrderIdentifier | None = None, *,
                   curves: bool = False) -> ChunkResult:
     """
@@ -441,74 +304,6 @@ def analyze_chunk(job: ChunkJob, identifier: OrderIdentifier | None = None, *,
         tie_var=len(ident.tied_alphas_var) > 1, tie_corr=len(ident.tied_alphas_corr) > 1,
         noise_colour=noise_colour(job.samples), status='ok', var_curve=ident.var_curve,
         j_curve=ident.j_curve)
-
-
-@dataclass(frozen=True)
-class AxisSummary:
-    """
-    Everything known about one axis of the run: paper Tables 3-6, Allan deviation, counts.
-
-    Attributes
-    ----------
-    axis : str
-    sequence : SequenceSummary
-        Tables 3-6 over the 'ok' chunks (rad/s units inside).
-    stream : StreamCounts
-    nan_samples : int
-        NaN/Inf samples on this axis.
-    chunks_ok, chunks_nan, chunks_dropped, chunks_failed, chunks_skipped : int
-        Chunks by status.
-    temperature_mean_c : float
-        Mean of the chunk temperatures (degC), NaN if none.
-    allan : allan.AllanResult or None
-        The Allan deviation result of :mod:`.allan` (None if unavailable or off).
-    noise_terms : allan.NoiseTerms or None
-        The fitted Allan noise terms of :mod:`.allan` (None if unavailable, off or not fittable),
-        band-limited short taus left out (:mod:`.readout`).
-    readout : readout.AllanReadout or None
-        The datasheet numbers of the Allan deviation (:func:`.readout.read_allan`: bias
-        stability, B, ARW, K and its bound, Q, fit quality).
-
-    """
-
-    axis: str
-    sequence: SequenceSummary
-    stream: StreamCounts
-    nan_samples: int
-    chunks_ok: int
-    chunks_nan: int
-    chunks_dropped: int
-    chunks_failed: int
-    chunks_skipped: int
-    temperature_mean_c: float
-    allan: AllanResult | None = None
-    noise_terms: NoiseTerms | None = None
-    readout: AllanReadout | None = None
-
-    @property
-    def offset_drift_deg_s_per_h(self) -> float:
-        """Signed offset drift (Table 3) in (deg/s)/h."""
-        return rad_s2_to_deg_s_per_h(self.sequence.drift.slope)
-
-
-def rad_s2_to_deg_s_per_h(value: float) -> float:
-    """
-    Convert a rate drift from rad/s^2 to (deg/s)/h (the unit of the paper's Table 3).
-
-    See chunks.py.
-
-    Parameters
-    ----------
-    value : float
-        Drift in rad/s per s.
-
-    Returns
-    -------
-    float
-        Drift in deg/s per hour.
-
-    """
-    return float(np.degrees(value) * 3600.0)
 
 
 def chunk_jobs(index: int, rel_ns: np.ndarray, lost: int, gaps: int, temperature_c: np.ndarray,
@@ -836,15 +631,9 @@ class NoiseEngine:
 
     def flush(self) -> list[ChunkJob]:
         """
-        Finish ingestion: release samples held for rate estimation.
+        Finish ingestion: release the samples held for the rate estimate; return the jobs they end.
 
-        The tail stays counted, unanalysed.
-
-        Returns
-        -------
-        list of ChunkJob
-            Jobs completed by the released samples.
-
+        The incomplete tail stays counted, unanalysed.
         """
         return self._cut(self._stamps.flush())
 
@@ -900,21 +689,7 @@ class NoiseEngine:
 
     @staticmethod
     def analyze(job: ChunkJob, *, curves: bool = False) -> ChunkResult:
-        """
-        Identify one chunk; see :func:`analyze_chunk` (pure, safe in a worker thread or process).
-
-        Parameters
-        ----------
-        job : ChunkJob
-            The chunk to analyse.
-        curves : bool, keyword-only
-            Keep the criterion curves in the result.
-
-        Returns
-        -------
-        ChunkResult
-
-        """
+        """Identify one chunk (:func:`analyze_chunk`; ``curves``: keep the criterion curves)."""
         return analyze_chunk(job, curves=curves)
 
     def record(self, result: ChunkResult) -> None:

@@ -21,25 +21,20 @@ difference (eqs. 3-5)::
     Delta^alpha x[k] = sum_{j=0}^{L(k)} c_j(alpha) x[k-j],   c_j(alpha) = (-1)^j binom(alpha, j),
     L(k) = min(k, L)
 
-where ``k`` counts samples from the start of the analysed chunk (the chunk is the paper's unit of
-identification, so each chunk starts a fresh memory). For each order on a grid, ``f`` is the
-least-squares solution of eqs. (6)-(8) and the source noise is the equation error of eq. (9),
-``w[k] = Delta^alpha v[k+1] - f v[k]`` for ``k = 0 .. N-2`` (``n = N - 1`` values).
-
-Two order estimates (section 2, last part):
+where ``k`` counts samples from the start of the analysed chunk (each chunk starts a fresh memory).
+For each order on a grid, ``f`` is the least-squares solution of eqs. (6)-(8) and the source noise
+is the equation error of eq. (9), ``w[k] = Delta^alpha v[k+1] - f v[k]`` for ``k = 0 .. N-2``
+(``n = N - 1`` values). Two order estimates (section 2, last part):
 
 * variance method: the order minimising ``var(w)`` (population variance, mean of ``w`` removed);
 * correlation method: the order minimising ``J = sum_{m=0}^{M} |R_w(m)|`` (eq. 13) with the biased
-  autocorrelation estimate ``R_w(m) = (1/n) sum_{k=0}^{n-1-m} w[k+m] w[k]`` (eq. 14); by default
-  every lag, ``M = n - 1``.
+  autocorrelation ``R_w(m) = (1/n) sum_{k=0}^{n-1-m} w[k+m] w[k]`` (eq. 14); by default every lag,
+  ``M = n - 1``.
 
-Exact ties. For any data, order 0 and order 1 give the *same* residual: ``c_j`` vanishes for ``j >=
-2`` at both orders and the ``c_1 v[k]`` term is absorbed by ``f`` (``f_0 = f_1 + 1``). The same
-holds for any two orders whose coefficients differ only in ``c_0, c_1``, which on a grid means
-exactly {0, 1}. When the minimum of a curve is attained (within a relative 1e-9, far above rounding
-and far below any real difference) at several grid orders, the **largest** tied order is reported,
-because the paper reads order 1 as the integer-order (first-order colour) model of eq. (1); the tie
-is reported in ``tied_alphas_*`` and never hidden.
+Orders 0 and 1 give the same residual for any data (``f_0 = f_1 + 1``): when a curve's minimum is
+attained at several grid orders (within a relative 1e-9), the **largest** is reported (order 1 is
+the paper's integer-order model of eq. 1) and the tie is listed in ``tied_alphas_*``
+(docs/analysis.md). :class:`OrderIdentifier` does it for chunks of one size.
 """
 
 import dataclasses
@@ -837,21 +832,8 @@ def table_bytes(orders: int, chunk_size: int, memory: int) -> int:
     """
     Estimate the bytes of the spectra an :class:`OrderIdentifier` keeps (its largest tables).
 
-    Per grid order, the half spectrum (complex128) of the GL coefficients zero-padded to about
-    ``chunk_size + memory`` points, once for the exact and once for the fast algorithm: 8 bytes
-    per padded point each.
-
-    Parameters
-    ----------
-    orders : int
-        Grid orders.
-    chunk_size, memory : int
-        Samples per chunk and memory L.
-
-    Returns
-    -------
-    int
-
+    Per grid order (``orders`` of them), the complex128 half spectrum of the GL coefficients padded
+    to about ``chunk_size + memory`` points, for the exact and the fast algorithm: 16 B a point.
     """
     return 16 * int(orders) * (int(chunk_size) + int(memory))
 

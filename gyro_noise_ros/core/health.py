@@ -13,68 +13,27 @@
 # limitations under the License.
 
 """
-Health verdicts of one gyro axis.
+Health verdicts of one gyro axis: the same logic in the analyzer node and the offline tool.
 
-The same logic in the analyzer node and the offline tool.
+:func:`evaluate_health` compares a run's sequence statistics (paper 000 Tables 3-6, an
+:class:`.results.AxisSummary`) with a reference characterisation (:class:`ReferenceStats`, read by
+:func:`load_reference` from the offline tool's ``summary.json`` of a reference recording, like the
+paper's "sequence ref") and with absolute limits, each a field of :class:`HealthThresholds`:
 
-A verdict compares a run's sequence statistics (paper 000 Tables 3-6) with a *reference
-characterisation* (the offline tool's ``summary.json`` of a reference recording, like the paper's
-"sequence ref") and with absolute limits. Every limit is a field of :class:`HealthThresholds`; the
-defaults are read off the paper or measured on repeat runs of one sensor:
+* offset drift (Table 3): without a reference against absolute limits in (deg/s)/h, judged only
+  once significant (the Student-t quantile of :func:`drift_t_threshold`); with one, as
+  ``|slope - reference slope|`` in standard errors of both, with the Student-t inflation;
+* bias, variance (log scale), both orders and the noise colour against a reference: the distance
+  of robust locations (:func:`.chunks.robust_location`) in pooled chunk spreads
+  (:func:`spread_distance`), "undetermined" below ``reference_min_chunks`` chunks;
+* samples lost, NaN/Inf samples, out-of-order stamps, chunks skipped by a node behind the stream;
+* STALE: no complete chunk yet, or no data for ``stale_after_s`` when the caller says so.
 
-* offset drift (Table 3) without a reference: absolute limits in (deg/s)/h, WARN above 0.02, ERROR
-  above 0.05 (the paper's reference is 0.0036, H1 0.065, H5 0.022; helium raised it ~20x). A drift
-  is only judged once ``min_chunks`` chunks are in and when it is significant: the t statistic
-  |slope| / standard error must exceed the Student-t quantile (n - 2 degrees of freedom for n
-  chunks) at the same two-sided level as ``drift_min_sigma`` standard deviations of a normal (3
-  sigma: p = 0.0027), because a short run's slope is mostly chunk-mean noise and with few chunks
-  the t statistic has heavy tails (a plain 3-sigma test fires on ~20 % of 3-chunk white-noise runs,
-  ~10 % of 4-chunk runs).
-* offset drift against a reference, like with like: ``z = |slope - reference slope| /
-  hypot(stderr, reference stderr)``, both errors robust to correlated chunk biases
-  (:func:`.chunks.drift_stderr`), WARN above ``reference_warn_sigma``, ERROR above
-  ``reference_error_sigma``, both times the Student-t inflation at the WARN level (the Student-t
-  quantile with the fewer chunks of the two minus 2 degrees of freedom at the two-sided level of
-  ``reference_warn_sigma`` sigma, over ``reference_warn_sigma``: 1.07 with 100 chunks, 4.4 with 8),
-  because a standard error from few chunks is itself uncertain. The ratio |drift| / |reference
-  drift| is reported for information ("n/a" when the reference drift is statistically zero), never
-  judged: a ratio to a slope that is noise means nothing.
-* bias, variance and both orders against a reference compare like with like: the robust location
-  of this run's chunk values with the reference's (:func:`.chunks.robust_location`: the median of
-  the chunks, or of the dominant mode when the chunk orders fall in separate basins, as the 0/1
-  alias of the model makes them; the text says which), the variance on a log scale (a ratio). The
-  difference is measured in *chunk spreads*: the robust standard deviations of the chunk values of
-  both records added in quadrature, ``d = |location - reference location| / hypot(spread,
-  reference spread)``. WARN above ``reference_warn_sigma`` (5), ERROR above
-  ``reference_error_sigma`` (10). A spread, not a standard error: six runs of one ADIS16405
-  differ from each other by more than their within-run scatter predicts (turn-on to turn-on), and
-  that difference does not shrink with a longer record, while a standard error does (a 12-h
-  record of the paper has ~18,700 chunks). The multipliers (shared with the drift) were fitted on
-  the 30 ordered pairs of the six ADIS16405 runs, 3 axes: the smallest multiple of 0.5 without a
-  false alarm, 4.5, plus 0.5; measured false-alarm and detection rates and a leave-one-run-out
-  check in ``docs/verdicts.md`` (``docs/scripts/verdict_rates.py``). With fewer than
-  ``reference_min_chunks`` (10) chunks in either record the comparison is "undetermined".
-* the noise colour against a reference (the log-log slope of each chunk's Allan deviation over m
-  = 2-64 samples, :func:`.chunks.noise_colour`): the same robust locations in pooled chunk
-  spreads, with its own multipliers, WARN above ``reference_colour_warn_sigma`` (2.5), ERROR above
-  ``reference_colour_error_sigma`` (5). Its own, because its chunk spread is estimation noise
-  (~0.012 from 10,000 samples) and not a difference between runs: the six ADIS16405 runs differ
-  by at most 1.0 pooled spread (1.6 on 10-chunk records), so the shared multiplier 5 would let a
-  colour change of ~0.09 (a GL filter of order 0.1, the detection target) pass half the time.
-  Chosen by the same rule on every record length of ``docs/verdicts.md`` (the smallest multiple
-  of 0.5 without a false alarm, 2.0, plus 0.5). It catches a filtering of the noise that the
-  identified orders miss (a GL filter of order 0.1 moves them by 0.02-0.08 on that sensor).
-* samples lost (from stamps) as a fraction of expected samples: WARN above ``lost_fraction_warn``
-  (1e-4), ERROR above ``lost_fraction_error`` (1e-2). NaN/Inf samples: WARN if any, ERROR above
-  ``lost_fraction_error`` as a fraction. Out-of-order (decreasing) stamps: WARN if any; equal
-  stamps (samples of one packet) are counted and never judged.
-* chunks skipped by a node that fell behind: WARN above ``skipped_fraction_warn`` (0.1) of the
-  chunks, ERROR above ``skipped_fraction_error`` (0.5).
-* STALE: no complete chunk yet, or no data for more than ``stale_after_s`` (5 s) when the caller
-  says so.
-
-Levels are ordered OK < WARN < ERROR < STALE (as diagnostic_msgs: 0, 1, 2, 3); the verdict is the
-worst item and its message is one sentence naming that item.
+Levels are ordered OK < WARN < ERROR < STALE (diagnostic_msgs 0-3); the verdict
+(:class:`HealthVerdict`) is the worst item, its message one sentence naming it;
+:func:`axis_status` makes the node's :class:`.items.TaskStatus` of it. The defaults, how the
+multipliers were chosen and their false-alarm and detection rates: docs/verdicts.md and
+docs/offline_tool.md ("Health verdicts").
 """
 
 from collections.abc import Sequence
@@ -83,18 +42,16 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any, TYPE_CHECKING
+from typing import Any
 
 from scipy.special import stdtrit
 
 from .chunks import DriftEstimate, NOISE_COLOUR_FACTORS, RobustLocation, SequenceSummary
 from .items import fmt as _fmt
 from .items import LEVEL_BYTE, LEVELS, TaskStatus
+from .results import AxisSummary
 from ..errors import InputDataError, ParameterError
 from ..units import RAD_TO_DEG
-
-if TYPE_CHECKING:  # the engine imports this module
-    from .engine import AxisSummary
 
 
 def _threshold(default: float, description: str, unit: str = '') -> Any:
@@ -290,16 +247,6 @@ def _worse(a: str, b: str) -> str:
     return a if LEVELS.index(a) >= LEVELS.index(b) else b
 
 
-def _band(deviation: float, tolerance: float) -> str:
-    if not math.isfinite(deviation):
-        return 'OK'
-    if deviation > 2.0 * tolerance:
-        return 'ERROR'
-    if deviation > tolerance:
-        return 'WARN'
-    return 'OK'
-
-
 def drift_t_threshold(min_sigma: float, chunks: int) -> float:
     """
     Return the |t| a drift slope over ``chunks`` chunks must exceed to be significant.
@@ -325,7 +272,7 @@ def drift_t_threshold(min_sigma: float, chunks: int) -> float:
     return float(-stdtrit(chunks - 2, p_two_sided / 2.0))
 
 
-def evaluate_health(summary: 'AxisSummary', *, reference: ReferenceStats | None = None,
+def evaluate_health(summary: AxisSummary, *, reference: ReferenceStats | None = None,
                     thresholds: HealthThresholds | None = None,
                     seconds_since_data: float | None = None) -> HealthVerdict:
     """
@@ -333,7 +280,7 @@ def evaluate_health(summary: 'AxisSummary', *, reference: ReferenceStats | None 
 
     Parameters
     ----------
-    summary : engine.AxisSummary
+    summary : results.AxisSummary
         The axis' sequence statistics and counts.
     reference : ReferenceStats, optional, keyword-only
         Reference characterisation; without it drift is judged by absolute limits and order and
@@ -411,7 +358,7 @@ def _sequence_items(seq: SequenceSummary, reference: ReferenceStats | None,
     return items
 
 
-def _data_items(summary: 'AxisSummary',
+def _data_items(summary: AxisSummary,
                 th: HealthThresholds) -> list[tuple[str, str, str, str]]:
     """Return the items of the samples: lost (from stamps), NaN, stamp order."""
     stream = summary.stream
@@ -436,7 +383,7 @@ def _data_items(summary: 'AxisSummary',
     ]
 
 
-def _chunk_items(summary: 'AxisSummary', th: HealthThresholds,
+def _chunk_items(summary: AxisSummary, th: HealthThresholds,
                  seconds_since_data: float | None) -> list[tuple[str, str, str, str]]:
     """Return the items of the chunks (skipped, analysed) and of staleness."""
     total = (
@@ -757,8 +704,8 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
     if not isinstance(robust, dict):
         raise ParameterError(
             f'reference summary {str(path)!r}, axis {axis!r}, has no "{ROBUST_JSON_KEY}" (written '
-            'by an older gyro_noise_analyze): regenerate it with this version, '
-            f'gyro_noise_analyze {entry.get("path") or "REFERENCE_BAG"} --out DIR')
+            'by an older gyro_noise_analyze): regenerate it with this version from '
+            f'{entry.get("path") or "the reference recording"}')
     try:
         stats = {field_name: RobustLocation.from_dict(robust[key])
                  if robust.get(key) is not None else None for key, field_name in ROBUST_KEYS}

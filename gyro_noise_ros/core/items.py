@@ -28,8 +28,8 @@ from typing import TYPE_CHECKING
 
 from ..units import RAD_TO_DEG
 
-if TYPE_CHECKING:  # the engine imports this module
-    from .engine import AxisSummary, ChunkResult
+if TYPE_CHECKING:  # for the hints only: the driver and compensator import this module lightly
+    from .results import AxisSummary, ChunkResult
     from .stamps import StreamCounts
 
 #: Levels in increasing severity, with diagnostic_msgs/DiagnosticStatus byte values.
@@ -120,7 +120,7 @@ def last_chunk_items(result: 'ChunkResult') -> list[tuple[str, str]]:
 
     Parameters
     ----------
-    result : engine.ChunkResult
+    result : results.ChunkResult
         The chunk's numbers (SI).
 
     Returns
@@ -154,7 +154,7 @@ def allan_items(summary: 'AxisSummary | None') -> list[tuple[str, str]]:
 
     Parameters
     ----------
-    summary : engine.AxisSummary or None
+    summary : results.AxisSummary or None
         With ``readout`` filled in; None or no readout gives ``'n/a'`` values (the keys stay,
         so dashboards see a stable set).
 
@@ -188,7 +188,7 @@ def stream_items(counts: 'StreamCounts', *, chunk_size: int,
 
     Parameters
     ----------
-    counts : engine.StreamCounts
+    counts : stamps.StreamCounts
         Samples, rate and gaps of the stream.
     chunk_size : int
         Samples per chunk.

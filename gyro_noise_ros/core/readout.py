@@ -88,6 +88,7 @@ import scipy.stats
 
 from .allan import AllanResult, fit_noise_terms, NoiseTerms
 from ..errors import InputDataError, ParameterError
+from ..formatting import finite_or_none as _num
 from ..units import RAD_TO_DEG, S_PER_H
 
 __all__ = ['AdevFloor', 'AllanReadout', 'B_FACTOR', 'BAND_LIMITED_SLOPE', 'MAX_TAU_FRACTION',
@@ -112,10 +113,6 @@ B_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 #: Fit-quality limits (relative ADEV error).
 POOR_MAX_ERROR = 0.25
 POOR_RMS = 0.20
-
-
-def _num(v: float | None) -> float | None:
-    return None if v is None or not math.isfinite(v) else float(v)
 
 
 @dataclass(frozen=True)

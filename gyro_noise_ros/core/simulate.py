@@ -366,23 +366,7 @@ def gauss_markov(n: int, rate_hz: float, *, std: float, corr_time_s: float,
     """
     Return ``n`` samples of a stationary first-order Gauss-Markov process (:class:`GaussMarkov`).
 
-    Parameters
-    ----------
-    n : int
-        Number of samples.
-    rate_hz : float
-        Sample rate (Hz).
-    std, corr_time_s : float, keyword-only
-        Standard deviation q (output unit) and correlation time T (s).
-    rng : numpy.random.Generator, keyword-only
-        Source of randomness.
-    shape : tuple of int, keyword-only
-        Shape of one sample.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape ``(n,) + shape``.
-
+    ``std`` is its standard deviation q (output unit), ``corr_time_s`` its correlation time T (s),
+    ``rate_hz`` the sample rate (Hz); the result has shape ``(n,) + shape``, drawn from ``rng``.
     """
     return GaussMarkov(std, corr_time_s, rate_hz, rng=rng, shape=shape).generate(n)

@@ -15,42 +15,26 @@
 """
 Sample rate, stamp irregularity and sample loss from stamps: one estimator for every tool.
 
-Stamps come in many patterns: a device clock (one stamp per sample, regular, a few holes where
-samples were lost), host-receive times (bursts: a long wait, then many samples a few microseconds
-apart), USB packets (many samples sharing almost one stamp), two clocks drifting slowly apart. The
-median step is right for the first and wrong by any factor for the others (the MPU6050 recording:
-median step 2 ms, true mean rate 99.32 Hz). The mean rate ``(n - 1) / span`` is right for all of
-them until a sample is lost, which makes it too low.
+Stamps come as a device clock (regular, a few holes where samples were lost), host-receive times
+(bursts), USB packets (samples sharing one stamp) or two clocks drifting apart; the median step is
+wrong for all but the first, the mean rate ``(n - 1) / span`` once a sample is lost. So:
 
-For regular stamps (no step shorter than half the local period) the rate is the **step mean**: the
-mean of the steps between 0.5 and 1.5 times the median step of their block, so a hole (a lost
-sample) is left out and uneven integration windows (PX4: 4.0 and 4.8 ms) are averaged as the sensor
-integrates them. For bursty stamps the estimator is the **block rate**: stamps are cut into
-consecutive blocks of ``k`` samples (``k`` grows until a block spans 50 typical largest steps, so
-one burst cannot dominate a block), each block gives ``k / duration``, and the median over blocks
-is the rate. Bursts only move a block boundary (the error shrinks as 1 / duration); a lost sample
-lengthens one block, which the median ignores; slow clock drift is averaged. Its standard error is
-``1.2533 * 1.4826 MAD / sqrt(blocks)`` (the median of near-normal block rates). When a per-sample
-sequence counter exists, ``(last - first) / span`` is used and loss is exact.
+* regular stamps (no step shorter than :data:`SHORT_STEP` of the local period): the **step mean**,
+  the mean of the steps within 0.5-1.5 times their block's median step (holes left out, uneven
+  integration windows averaged);
+* bursty stamps (more than :data:`BURSTY_FRACTION` of such steps): the **block rate**, the median
+  of ``k / duration`` over blocks of ``k`` samples spanning :data:`BLOCK_SPAN_STEPS` typical
+  largest steps, standard error ``1.2533 * 1.4826 MAD / sqrt(blocks)``;
+* a per-sample sequence counter: ``(last - first) / span``, loss exact.
 
-**Loss is a deficit of samples against elapsed time**: ``span * rate + 1 - n`` over the run (or a
-window), reported only when it exceeds its resolution (the rate uncertainty times the span plus the
-stamp jitter), never a long step followed by a burst. Steps shorter than half the local period
-exist only when stamps are bursty (a lost sample never makes a step *shorter*); above 1 % of such
-steps the stamps are called **bursty** and callers must not read loss from single steps.
-
-**Jitter** is the RMS of the stamps about a straight line through each block of 64 samples (s);
-blocks holding a gap (a step of :data:`GAP_STEPS` typical block maxima or more) are left out, so a
-one-hour hole is loss, not jitter.
-
-**Equal consecutive stamps are a normal time base**: a host-stamped driver gives every sample of
-one USB packet its packet's stamp. Such steps (exactly zero) are counted (``equal_steps``) and
-make the stamps bursty when they exceed 1 % of the steps; they never make the stamps unusable. Only
-**decreasing** stamps (a step < 0: shuffled or re-sent messages) do, above
-:data:`UNUSABLE_FRACTION` of the steps, and so does a record whose stamps never advance (span 0).
-
-Memory is bounded: the tracker keeps one small row per block and merges neighbouring blocks in
-pairs when more than :data:`MAX_BLOCKS` are held, so it runs for days in a live node.
+**Loss** is the deficit ``span * rate + 1 - n`` (a run or a window), reported only above its
+resolution (rate uncertainty times span plus stamp jitter), never read from single steps of bursty
+stamps. **Jitter** is the RMS of the stamps about a line through each block of :data:`BASE_BLOCK`
+samples (s), blocks with a gap of :data:`GAP_STEPS` typical block maxima left out. Equal stamps
+(one packet) are counted, never unusable; decreasing stamps above :data:`UNUSABLE_FRACTION` of the
+steps, or stamps that never advance, are. :func:`estimate_rate` gives a :class:`RateEstimate` of a
+whole record; :class:`TimebaseTracker` the same while streaming, in memory bounded by
+:data:`MAX_BLOCKS` block rows (neighbours merged in pairs). Measurements: docs/offline_tool.md.
 """
 
 from dataclasses import dataclass

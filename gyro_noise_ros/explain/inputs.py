@@ -155,10 +155,12 @@ def make_measurement(rate: ArrayLike, *, t_s: ArrayLike | None = None,
         if np.any(np.diff(t) < 0):
             raise InputDataError(
                 f'sample times go backwards {int((np.diff(t) < 0).sum())} time(s); '
-                'sort the recording or give --rate-hz and no time column')
+                'sort the recording or give {rate_hz} and no time column',
+                parameters=('rate_hz',))
         t = t - t[0]
         if t[-1] <= 0:
-            raise InputDataError('all sample times are equal: give --rate-hz')
+            raise InputDataError('all sample times are equal: give {rate_hz}',
+                                 parameters=('rate_hz',))
     timebase = None
     if t_s is not None:
         from ..core.timebase import estimate_rate

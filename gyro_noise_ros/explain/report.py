@@ -36,7 +36,7 @@ from .signatures import Comparison, FloatArray, Layout
 from .uncertainty import format_value, PARAMETERS
 from .workflow import ExplainResult, Step
 from ..errors import OutputError
-from ..outputs import staged_output, StrPath
+from ..outputs import StrPath
 from ..units import RAD_TO_DEG
 
 _LOG_X = {'allan', 'psd', 'psd_peak'}
@@ -254,36 +254,6 @@ def verdict(result: ExplainResult) -> str:
     else:
         text += '; the measurement is inside the ensemble band'
     return text
-
-
-def write_outputs(result: ExplainResult, out_dir: StrPath) -> Path:
-    """
-    Write explain.json, report.md and the figures to ``out_dir``, all or nothing.
-
-    The files are staged and published together (:func:`gyro_noise_ros.outputs.staged_output`):
-    an error or an interrupt leaves no explain.json without its report.
-
-    Parameters
-    ----------
-    result : ExplainResult
-        The workflow's result.
-    out_dir : str or os.PathLike
-        Output directory (created).
-
-    Returns
-    -------
-    pathlib.Path
-        The directory.
-
-    Raises
-    ------
-    OutputError
-        The directory cannot be created or written.
-
-    """
-    with staged_output(out_dir) as stage:
-        write_files(result, stage)
-    return Path(out_dir)
 
 
 def write_files(result: ExplainResult, folder: StrPath, *,

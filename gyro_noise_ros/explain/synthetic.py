@@ -59,7 +59,6 @@ sample_loss                U[5, 30] gap events per record, geometric(p = 0.5, me
 """
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-import sys
 from typing import Any
 
 import numpy as np
@@ -393,55 +392,3 @@ def coverage(case: Sequence[str], seeds: Iterable[int], *, n: int = 20000,
         for k, r in rows.items()}
     out['_not_fitted'] = missed
     return out
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """
-    ``python -m gyro_noise_ros.explain.synthetic``.
-
-    Detection and false-alarm rates over seeds; with ``--coverage``, the coverage of the
-    parameters' 95 % intervals.
-    """
-    import argparse
-
-    p = argparse.ArgumentParser(description='hidden-effect sweep of the discrepancy workflow')
-    p.add_argument('--effects', default='all',
-                   help="comma list of cases, '+' joins effects of one case, "
-                   "'none' is effect-free; 'all' = every catalogue effect alone")
-    p.add_argument('--seeds', type=int, default=20)
-    p.add_argument('--first-seed', type=int, default=100)
-    p.add_argument('--samples', type=int, default=60000)
-    p.add_argument('--ensemble', type=int, default=16)
-    p.add_argument('--verbose', action='store_true')
-    p.add_argument('--coverage', action='store_true',
-                   help='coverage of the 95 %% intervals of the effect parameters instead '
-                   '(effects: sinusoid, bias_drift, bias_transient, temperature_sensitivity, '
-                   'rate_random_walk, bias_instability, gauss_markov)')
-    p.add_argument('--bootstrap', type=int, default=20, help='bootstrap records (--coverage)')
-    args = p.parse_args(argv)
-    cases = [(e,) for e in EFFECTS] if args.effects == 'all' else \
-        [tuple(c.split('+')) if c != 'none' else () for c in args.effects.split(',')]
-    seeds = range(args.first_seed, args.first_seed + args.seeds)
-    say = (lambda text: print(text, file=sys.stderr, flush=True)) if args.verbose else None
-    if args.coverage:
-        print(f'{"parameter":<58} {"runs":>5} {"inside 95 %":>11} {"sd of z":>8}')
-        for case in cases:
-            table = coverage(case, seeds, n=args.samples, replicates=args.bootstrap)
-            for key, row in table.items():
-                if key != '_not_fitted':
-                    print(f'{"+".join(case) + ": " + key:<58} {row["runs"]:>5} '
-                          f'{row["inside"]:>11} {row["z_sd"]:>8.2f}')
-            if table['_not_fitted']:
-                print(f'{"+".join(case)}: not detected on {table["_not_fitted"]} records')
-        return 0
-    table = sweep(cases, seeds, n=args.samples, ensemble=args.ensemble, progress=say)
-    print(f'{"case":<40} {"runs":>5} {"first ok":>9} {"all found":>9} {"inside":>7} '
-          f'{"explained":>9} {"extra":>6}')
-    for key, row in table.items():
-        print(f'{key:<40} {row["runs"]:>5} {row["first_correct"]:>9} {row["all_found"]:>9} '
-              f'{row["inside"]:>7} {row["explained"]:>9} {row["extra"]:>6}')
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -15,9 +15,9 @@
 """
 The ``report.html`` of ``gyro_noise_calibrate``.
 
-Built from calibration.json (``CalibrationResult.as_dict()``): the JSON is SI, the tables show
-calibration.md's units (mg, %, deg/s) through :class:`.page.Num`'s ``scale``, so each cell is still
-checked against the JSON value it came from. "In short" words the verdicts as calibration.md does.
+Built from the calibration.json document alone: the JSON is SI, the tables show calibration.md's
+units (mg, %, deg/s) through :class:`.page.Num`'s ``scale``, so each cell is still checked
+against the JSON value it came from. "In short" words the verdicts as calibration.md does.
 """
 
 from collections.abc import Sequence
@@ -25,34 +25,27 @@ from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
 from .figures import series_figure
-from .page import Cell, Num, Page, pointer, Table, write_report_html
+from .page import Cell, Num, Page, plus_minus_cell, pointer, Table, write_report_html
 from ..units import MG_TO_M_S2 as _MG, RAD_TO_DEG as _DEG
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
 
-    from ..app.calibrate import CalibrationResult
 
-
-def _pm(p: str, sigma_p: str, fmt: str, scale: float) -> tuple[Num, str, Num]:
-    return (Num(p, fmt, scale=scale), ' +/- ', Num(sigma_p, fmt, scale=scale))
-
-
-def calibrate_page(result: 'CalibrationResult') -> Page:
+def calibrate_page(doc: dict[str, Any]) -> Page:
     """
     Build the page of one calibration.
 
     Parameters
     ----------
-    result : app.calibrate.CalibrationResult
-        The calibration (``as_dict()`` is calibration.json).
+    doc : dict
+        The calibration.json document.
 
     Returns
     -------
     Page
 
     """
-    doc = result.as_dict()
     title = ('Six-position calibration (paper 001 Table 6 layout)'
              if doc['mode'] == 'six-position' else 'Multi-pose calibration (|a| = g, imu_tk)')
     tables = (_accelerometer_tables() + [_gyro_table(doc)] + _check_tables(doc)
@@ -87,15 +80,17 @@ def _in_short(doc: dict[str, Any]) -> str:
 def _accelerometer_tables() -> list[Table]:
     """Return the accelerometer's biases and scale factors, and its cross-axis terms."""
     rows: list[tuple[Cell, ...]]
-    rows = [(f'b{ax}', _pm(pointer('accel', 'bias_m_s2', i),
-                           pointer('accel', 'bias_sigma_m_s2', i), '.4f', 1.0 / _MG), 'mg')
+    rows = [(f'b{ax}', plus_minus_cell(pointer('accel', 'bias_m_s2', i),
+                                       pointer('accel', 'bias_sigma_m_s2', i), '.4f',
+                                       1.0 / _MG), 'mg')
             for i, ax in enumerate('xyz')]
-    rows += [(f'S{ax}', _pm(pointer('accel', 'scale_factor', i),
-                            pointer('accel', 'scale_factor_sigma', i), '.4f', 100.0), '%')
+    rows += [(f'S{ax}', plus_minus_cell(pointer('accel', 'scale_factor', i),
+                                        pointer('accel', 'scale_factor_sigma', i), '.4f',
+                                        100.0), '%')
              for i, ax in enumerate('xyz')]
     mis = []
     for j, ax in enumerate('xyz'):
-        mis.append((ax, *('-' if i == j else _pm(
+        mis.append((ax, *('-' if i == j else plus_minus_cell(
             pointer('accel', 'misalignment', j, i), pointer('accel', 'misalignment_sigma', j, i),
             '.4f', 100.0) for i in range(3))))
     return [Table('Accelerometer (paper 001 Table 6 layout)',
@@ -110,10 +105,12 @@ def _gyro_table(doc: dict[str, Any]) -> Table:
     grows = []
     for i, ax in enumerate('xyz'):
         scale: Cell
-        scale = (_pm(pointer('gyro', 'scale_factor', i), pointer('gyro', 'scale_factor_sigma', i),
-                     '.4f', 100.0) if est[i][i] else 'not estimated')
-        grows.append((ax, _pm(pointer('gyro', 'bias_rad_s', i),
-                              pointer('gyro', 'bias_sigma_rad_s', i), '.5f', _DEG), scale))
+        scale = (plus_minus_cell(pointer('gyro', 'scale_factor', i),
+                                 pointer('gyro', 'scale_factor_sigma', i), '.4f', 100.0)
+                 if est[i][i] else 'not estimated')
+        bias = plus_minus_cell(pointer('gyro', 'bias_rad_s', i),
+                               pointer('gyro', 'bias_sigma_rad_s', i), '.5f', _DEG)
+        grows.append((ax, bias, scale))
     return Table('Gyro', ('Axis', 'Bias (deg/s)', 'Scale factor (%)'), tuple(grows))
 
 
@@ -178,15 +175,15 @@ def _figures(doc: dict[str, Any]) -> list[tuple[str, 'figure']]:
     return figures
 
 
-def write_calibrate_html(result: 'CalibrationResult', out: Path, *,
+def write_calibrate_html(doc: dict[str, Any], out: Path, *,
                          command: Sequence[str] | None = None) -> Path:
     """
     Write ``report.html`` of a calibration into the staged folder ``out``.
 
     Parameters
     ----------
-    result : app.calibrate.CalibrationResult
-        The calibration.
+    doc : dict
+        The calibration.json document.
     out : pathlib.Path
         The staged ``--out`` folder.
     command : sequence of str, optional, keyword-only
@@ -199,7 +196,7 @@ def write_calibrate_html(result: 'CalibrationResult', out: Path, *,
     """
     from dataclasses import replace
 
-    page = calibrate_page(result)
+    page = calibrate_page(doc)
     if command is not None:
         page = replace(page, command=tuple(command))
     return write_report_html(page, out / 'report.html')

@@ -15,40 +15,41 @@
 """
 The ``report.html`` of ``gyro_noise_excitation``.
 
-Built from excitation.json (``ExcitationResult.as_dict()``, SI) and the records held in memory;
-the tables show excitation.md's units (g or deg/s, %) through :class:`.page.Num`'s ``scale``.
-"In short" words the verdicts as excitation.md does.
+Built from the excitation.json document (SI) and the records held in memory (time and excited
+channel of each side); the tables show excitation.md's units (g or deg/s, %) through
+:class:`.page.Num`'s ``scale``. "In short" words the verdicts as excitation.md does
+(:func:`..calibration.excitation_report.verdict_text`).
 """
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
+import numpy as np
+from numpy.typing import NDArray
+
 from .figures import series_figure
-from .page import Num, Page, pointer, Table, write_report_html
+from .page import Num, Page, plus_minus_cell, pointer, Table, write_report_html
+from ..calibration.excitation_report import display_unit, sides_of, verdict_text, what_of
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
 
-    from ..app.excitation import ExcitationParams, ExcitationResult
+#: ``{side: (t_s, x)}``: each record's time (s) and excited channel (SI).
+_Records = Mapping[str, tuple[NDArray[np.float64], NDArray[np.float64]]]
 
 
-def _verdict(entry: dict[str, Any], key: str, yes: str, no: str, p_key: str) -> str:
-    ok = entry.get(key)
-    if ok is None:
-        return 'n/a'
-    return f'{yes if ok else no} (p = {entry[p_key]:.2g})'
-
-
-def excitation_page(result: 'ExcitationResult',
+def excitation_page(doc: dict[str, Any], records: _Records,
                     command: Sequence[str] | None = None) -> Page:
     """
     Build the page of one excitation check.
 
     Parameters
     ----------
-    result : app.excitation.ExcitationResult
-        The check (``as_dict()`` is excitation.json).
+    doc : dict
+        The excitation.json document.
+    records : dict
+        ``{side: (t_s, x)}`` of each record (s, SI), for the figures.
     command : sequence of str, optional
         The command line.
 
@@ -57,46 +58,43 @@ def excitation_page(result: 'ExcitationResult',
     Page
 
     """
-    doc = result.as_dict()
-    params = result.params
-    sides = list(result.sides)
-    what = (f'sine dwell at {params.dwell_hz:g} Hz' if params.mode == 'dwell' else
-            f'sine sweep {params.sweep[0]:g}-{params.sweep[1]:g} Hz at {params.sweep[2]:g} Hz/s')
-    tables = (_dwell_tables(doc, params, sides, what) if params.mode == 'dwell'
-              else _sweep_tables(doc, params, sides))
+    sides = sides_of(doc)
+    what = what_of(doc)
+    tables = (_dwell_tables(doc, sides, what) if doc['mode'] == 'dwell'
+              else _sweep_tables(doc, sides))
     method = (f'Excitation check (paper 001 section 5.3): {what}. A dwell is fitted cycle by '
               'cycle (frequency, amplitude, offset, harmonics); a sweep is binned by the '
               'instantaneous frequency and compared with the reference record when one is '
               'given (docs/reliability.md).')
     return Page(title=f'gyro_noise_excitation: {what}', data=doc,
-                in_short_markdown=_in_short(doc, params, sides),
-                figures=tuple(_figures(result, params, sides)),
+                in_short_markdown=_in_short(doc, sides),
+                figures=tuple(_figures(doc, records, sides)),
                 tables=tuple(tables), method_markdown=method,
                 command=None if command is None else tuple(command),
                 inputs=tuple(doc[s]['source'] for s in sides), version=doc.get('version', ''))
 
 
-def _in_short(doc: dict[str, Any], params: 'ExcitationParams', sides: list[str]) -> str:
+def _in_short(doc: dict[str, Any], sides: list[str]) -> str:
     """Return "In short": each side's two verdicts, worded as excitation.md words them."""
     short = ['## In short', '',
              "Verdicts are statistical tests against each record's own noise, false-alarm "
-             f'probability {params.alpha:g} each (docs/reliability.md).', '']
+             f'probability {doc["alpha"]:g} each (docs/reliability.md).', '']
     checks = ((('steady', 'steady', 'UNSTEADY', 'stability_p', 'stability verdict'),
                ('clean', 'clean', 'DISTORTED', 'distortion_p', 'distortion verdict'))
-              if params.mode == 'dwell' else
+              if doc['mode'] == 'dwell' else
               (('matches_reference', 'matches the reference', 'GAIN DIFFERS', 'gain_p',
                 'gain verdict'),
                ('flat', 'flat', 'FREQUENCY-DEPENDENT', 'flatness_p', 'flatness verdict')))
     for s in sides:
         for key, yes, no, p_key, name in checks:
-            short.append(f'* **{s}**, {name}: {_verdict(doc[s], key, yes, no, p_key)}')
+            text = verdict_text(doc[s].get(key), yes, no, doc[s].get(p_key))
+            short.append(f'* **{s}**, {name}: {text}')
     return '\n'.join(short)
 
 
-def _dwell_tables(doc: dict[str, Any], params: 'ExcitationParams', sides: list[str],
-                  what: str) -> list[Table]:
+def _dwell_tables(doc: dict[str, Any], sides: list[str], what: str) -> list[Table]:
     """Return the dwell's quantities per side and, with two sides, the change after / before."""
-    k, unit = params.display
+    k, unit = display_unit(doc['sensor'])
     u = doc['unit']
     rows = [
         ('Frequency (Hz)', 'frequency_hz', '.5f', 1.0),
@@ -117,16 +115,15 @@ def _dwell_tables(doc: dict[str, Any], params: 'ExcitationParams', sides: list[s
         ('Excited span start (s)', 'start_s', '.2f', 1.0),
         ('Excited span duration (s)', 'duration_s', '.2f', 1.0),
         ('Cycles', 'cycles', 'd', 1.0)]
-    tables = [Table(f'Excitation check: {what}, {params.sensor} {params.axis}',
+    tables = [Table(f'Excitation check: {what}, {doc["sensor"]} {doc["axis"]}',
                     ('Quantity', *sides),
                     tuple((label, *(Num(pointer(s, key), fmt, scale=scale)
                                     for s in sides))
                           for label, key, fmt, scale in rows))]
     if 'change' in doc:
         tables.append(Table('After / before', ('Quantity', 'Change'), (
-            ('Amplitude (%)', (Num('/change/amplitude_relative', '.3f', scale=100.0),
-                               ' +/- ', Num('/change/amplitude_relative_sigma', '.3f',
-                                            scale=100.0))),
+            ('Amplitude (%)', plus_minus_cell('/change/amplitude_relative',
+                                              '/change/amplitude_relative_sigma', '.3f', 100.0)),
             ('Amplitude change p', Num('/change/amplitude_change_p', '.2g')),
             ('Amplitude change significant', Num('/change/amplitude_change_significant')),
             ('Frequency (Hz)', Num('/change/frequency_hz', '+.5f')),
@@ -136,10 +133,9 @@ def _dwell_tables(doc: dict[str, Any], params: 'ExcitationParams', sides: list[s
     return tables
 
 
-def _sweep_tables(doc: dict[str, Any], params: 'ExcitationParams',
-                  sides: list[str]) -> list[Table]:
+def _sweep_tables(doc: dict[str, Any], sides: list[str]) -> list[Table]:
     """Return each side's amplitude per frequency bin (with the reference when there is one)."""
-    k, unit = params.display
+    k, unit = display_unit(doc['sensor'])
     u = doc['unit']
     tables: list[Table] = []
     for s in sides:
@@ -160,39 +156,46 @@ def _sweep_tables(doc: dict[str, Any], params: 'ExcitationParams',
     return tables
 
 
-def _figures(result: 'ExcitationResult', params: 'ExcitationParams',
+def _figures(doc: dict[str, Any], records: _Records,
              sides: list[str]) -> list[tuple[str, 'figure']]:
     """Return the whole acquisition and, for a sweep, the amplitude against frequency."""
-    k, unit = params.display
+    k, unit = display_unit(doc['sensor'])
+    what = f'{doc["sensor"]} {doc["axis"]}'
     figures: list[tuple[str, figure]] = []
-    series = [(s, result.sides[s].t_s, result.sides[s].x * k) for s in sides]
-    figures.append((f'The whole acquisition of {params.sensor} {params.axis} (min/max envelope '
-                    'for display; zoom in for the wave form).',
+    series = [(s, records[s][0], records[s][1] * k) for s in sides]
+    figures.append((f'The whole acquisition of {what} (min/max envelope for display; zoom in '
+                    'for the wave form).',
                     series_figure(series, title='Whole acquisition', x_label='time (s)',
-                                  y_label=f'{params.sensor} {params.axis} ({unit})')))
-    if params.mode != 'dwell':
+                                  y_label=f'{what} ({unit})')))
+    if doc['mode'] != 'dwell':
+        u = doc['unit']
         amp = []
         for s in sides:
-            r = result.sides[s].analysis
-            amp += [(f'{s} rising', r.bin_hz, r.amplitude_up * k),
-                    (f'{s} falling', r.bin_hz, r.amplitude_down * k)]
-            if r.reference_up is not None:
-                amp.append((f'{s} reference', r.bin_hz, r.reference_up * k))
+            e = doc[s]
+            # a null of the document (a value that was not finite) is NaN again
+            f, up, down = (np.asarray(e[key], dtype=float)
+                           for key in ('bin_hz', f'amplitude_up_{u}', f'amplitude_down_{u}'))
+            amp += [(f'{s} rising', f, up * k), (f'{s} falling', f, down * k)]
+            if f'reference_up_{u}' in e:
+                ref = np.asarray(e[f'reference_up_{u}'], dtype=float)
+                amp.append((f'{s} reference', f, ref * k))
         figures.append(('Amplitude against the instantaneous frequency.',
                         series_figure(amp, title='Amplitude against frequency',
                                       x_label='frequency (Hz)', y_label=f'amplitude ({unit})')))
     return figures
 
 
-def write_excitation_html(result: 'ExcitationResult', out: Path, *,
+def write_excitation_html(doc: dict[str, Any], records: _Records, out: Path, *,
                           command: Sequence[str] | None = None) -> Path:
     """
     Write ``report.html`` of an excitation check into the staged folder ``out``.
 
     Parameters
     ----------
-    result : app.excitation.ExcitationResult
-        The check.
+    doc : dict
+        The excitation.json document.
+    records : dict
+        ``{side: (t_s, x)}`` of each record (s, SI).
     out : pathlib.Path
         The staged ``--out`` folder.
     command : sequence of str, optional, keyword-only
@@ -203,4 +206,4 @@ def write_excitation_html(result: 'ExcitationResult', out: Path, *,
     pathlib.Path
 
     """
-    return write_report_html(excitation_page(result, command), out / 'report.html')
+    return write_report_html(excitation_page(doc, records, command), out / 'report.html')

@@ -218,6 +218,28 @@ def pointer(*parts: str | int) -> str:
     return ''.join('/' + str(p).replace('~', '~0').replace('/', '~1') for p in parts)
 
 
+def plus_minus_cell(value: str, sigma: str, fmt: str, scale: float = 1.0) -> tuple[Num, str, Num]:
+    """
+    Return the cell ``value +/- sigma`` of two values of the document, in one unit.
+
+    Parameters
+    ----------
+    value, sigma : str
+        JSON Pointers of the value and of its standard uncertainty.
+    fmt : str
+        ``format()`` spec of both.
+    scale : float
+        Unit factor of both (:attr:`Num.scale`).
+
+    Returns
+    -------
+    tuple
+        A :data:`Cell` of three parts.
+
+    """
+    return (Num(value, fmt, scale=scale), ' +/- ', Num(sigma, fmt, scale=scale))
+
+
 def format_value(value: object, fmt: str, scale: float = 1.0) -> str:
     """
     Format one JSON value for a table cell: None as ``n/a``, booleans as yes/no.

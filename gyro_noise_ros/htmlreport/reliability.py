@@ -15,10 +15,10 @@
 """
 The ``report.html`` of ``gyro_noise_reliability``.
 
-Built from reliability.json and the Allan results of the static records held in memory. "In
-short" is the plain-language summary reliability.md opens with (the caller passes the lines of
-``app.reliability.in_short``), followed by each channel's verdict and, where undetermined, the
-JSON's reason.
+Built from the reliability.json document and the Allan curves of the static records held in
+memory. "In short" is the plain-language summary reliability.md opens with
+(:func:`..calibration.reliability_report.in_short`), followed by each channel's verdict and,
+where undetermined, the JSON's reason.
 """
 
 from collections.abc import Mapping, Sequence
@@ -29,15 +29,13 @@ import numpy as np
 
 from .figures import allan_figure
 from .page import Cell, CellPart, Key, Num, Page, pointer, Table, write_report_html
-from ..calibration.static_record import ChannelResult
+from ..calibration.reliability_report import in_short
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
 
-#: ``{'before'|'after': {channel: ChannelResult} or None}``: the static records' channels.
-_Statics = Mapping[str, Mapping[str, ChannelResult] | None]
-
-CHANNELS = tuple(f'{s}_{a}' for s in ('accel', 'gyro') for a in 'xyz')
+#: ``{'before'|'after': {channel: AllanResult or None} or None}``: the static records' curves.
+_Curves = Mapping[str, Mapping[str, Any] | None]
 
 
 def _range(p: str, e: dict[str, Any], key: str) -> str | tuple[CellPart, ...]:
@@ -49,8 +47,8 @@ def _range(p: str, e: dict[str, Any], key: str) -> str | tuple[CellPart, ...]:
         'open' if pair[k] is None else Num(f'{p}/{key}/{k}', '.3g')))
 
 
-def reliability_page(doc: dict[str, Any], statics: _Statics, command: Sequence[str] | None = None,
-                     in_short: Sequence[str] = ()) -> Page:
+def reliability_page(doc: dict[str, Any], curves: _Curves,
+                     command: Sequence[str] | None = None) -> Page:
     """
     Build the page of one reliability run.
 
@@ -58,13 +56,10 @@ def reliability_page(doc: dict[str, Any], statics: _Statics, command: Sequence[s
     ----------
     doc : dict
         The reliability.json document.
-    statics : dict
-        ``{'before'|'after': {channel: ChannelResult}}`` of the static records (their ``allan``
-        curves are drawn).
+    curves : dict
+        ``{'before'|'after': {channel: AllanResult or None}}`` of the static records (drawn).
     command : sequence of str, optional
         The command line.
-    in_short : sequence of str, optional
-        Plain-language sentences made from ``doc`` (``app.reliability.in_short``).
 
     Returns
     -------
@@ -80,17 +75,17 @@ def reliability_page(doc: dict[str, Any], statics: _Statics, command: Sequence[s
     inputs = [p for v in doc['sources'].values() if v
               for p in (v if isinstance(v, list) else [v])]
     return Page(title='gyro_noise_reliability: before / after', data=doc,
-                in_short_markdown=_in_short(doc, in_short), figures=tuple(_figures(statics)),
+                in_short_markdown=_in_short(doc), figures=tuple(_figures(curves)),
                 tables=tuple(_verdict_tables(doc) + _noise_term_tables(doc)),
                 method_markdown=method,
                 command=None if command is None else tuple(command), inputs=tuple(inputs),
                 version=doc.get('version', ''))
 
 
-def _in_short(doc: dict[str, Any], in_short: Sequence[str]) -> str:
-    """Return "In short": the caller's sentences, each channel's verdict, what failed."""
+def _in_short(doc: dict[str, Any]) -> str:
+    """Return "In short": reliability.md's sentences, each channel's verdict, what failed."""
     short = ['## In short', '']
-    short += [f'* {line}' for line in in_short]
+    short += [f'* {line}' for line in in_short(doc)]
     short += ['', f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
               f'physiological within +/-{100 * doc["tolerance"]:.0f} % of the before width '
               f'(one-sided tests at {100 * doc["confidence_one_sided"]:.0f} % confidence).', '']
@@ -153,20 +148,20 @@ def _noise_term_tables(doc: dict[str, Any]) -> list[Table]:
                   tuple(terms))]
 
 
-def _figures(statics: _Statics) -> list[tuple[str, 'figure']]:
+def _figures(records: _Curves) -> list[tuple[str, 'figure']]:
     """Return per sensor the Allan deviations of the static records before and after."""
     figures: list[tuple[str, figure]] = []
     for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
         curves: list[dict[str, Any]] = []
         for side in ('before', 'after'):
             for a in 'xyz':
-                r = (statics.get(side) or {}).get(f'{sensor}_{a}')
-                if r is None or r.allan is None:
+                allan = (records.get(side) or {}).get(f'{sensor}_{a}')
+                if allan is None:
                     continue
-                tau = np.asarray(r.allan.tau_s, dtype=np.float64)
-                adev = np.asarray(r.allan.adev, dtype=np.float64)
-                lo = np.asarray(getattr(r.allan, 'ci_low', np.full_like(adev, np.nan)))
-                hi = np.asarray(getattr(r.allan, 'ci_high', np.full_like(adev, np.nan)))
+                tau = np.asarray(allan.tau_s, dtype=np.float64)
+                adev = np.asarray(allan.adev, dtype=np.float64)
+                lo = np.asarray(getattr(allan, 'ci_low', np.full_like(adev, np.nan)))
+                hi = np.asarray(getattr(allan, 'ci_high', np.full_like(adev, np.nan)))
                 ok = np.isfinite(adev) & (adev > 0)
                 curves.append({'name': f'{side} {a}', 'tau_s': tau[ok], 'adev': adev[ok],
                                'ci_low': lo[ok], 'ci_high': hi[ok]})
@@ -178,9 +173,8 @@ def _figures(statics: _Statics) -> list[tuple[str, 'figure']]:
     return figures
 
 
-def write_reliability_html(doc: dict[str, Any], statics: _Statics, out: Path, *,
-                           command: Sequence[str] | None = None,
-                           in_short: Sequence[str] = ()) -> Path:
+def write_reliability_html(doc: dict[str, Any], curves: _Curves, out: Path, *,
+                           command: Sequence[str] | None = None) -> Path:
     """
     Write ``report.html`` of a reliability run into the staged folder ``out``.
 
@@ -188,19 +182,16 @@ def write_reliability_html(doc: dict[str, Any], statics: _Statics, out: Path, *,
     ----------
     doc : dict
         The reliability.json document.
-    statics : dict
+    curves : dict
         As :func:`reliability_page`.
     out : pathlib.Path
         The staged ``--out`` folder.
     command : sequence of str, optional, keyword-only
         The command line.
-    in_short : sequence of str, optional, keyword-only
-        As :func:`reliability_page`.
 
     Returns
     -------
     pathlib.Path
 
     """
-    return write_report_html(reliability_page(doc, statics, command, in_short),
-                             out / 'report.html')
+    return write_report_html(reliability_page(doc, curves, command), out / 'report.html')

@@ -15,10 +15,10 @@
 """
 The ``report.html`` of ``gyro_noise_thermal compare`` and ``gyro_noise_thermal apply``.
 
-Built from compare.json / metrics.json (the result's ``as_dict()``) and the arrays the result
-holds (the test run, the processed output, the Allan curves). "In short" is the verdicts as
-compare.md / report.md word them: each verdict text is the JSON's, and the best held-out line
-uses the JSON's rule and method.
+Built from the compare.json / metrics.json document and the arrays the workflow's result holds
+(the Allan curves of the scoring; for apply, the run and the processed output, rad/s). "In
+short" is the verdicts as compare.md / report.md word them: each verdict text is the JSON's, and
+the best held-out line uses the JSON's rule and method.
 """
 
 from collections.abc import Mapping, Sequence
@@ -35,8 +35,6 @@ from ..units import RAD_TO_DEG as _DEG, S_PER_H
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
-
-    from ..app.thermal import ApplyResult, CompareResult
 
 _DEG_H = _DEG * S_PER_H
 AXES = ('x', 'y', 'z')
@@ -152,21 +150,23 @@ def _definitions_md(doc: dict[str, Any]) -> str:
     return '\n'.join(f'* `{k}`: {v}' for k, v in (doc.get('definitions') or {}).items())
 
 
-def compare_page(result: 'CompareResult') -> Page:
+def compare_page(doc: dict[str, Any], curves: Mapping[str, Any]) -> Page:
     """
     Build the page of ``gyro_noise_thermal compare``.
 
     Parameters
     ----------
-    result : app.thermal.CompareResult
-        The comparison (``as_dict()`` is compare.json).
+    doc : dict
+        The compare.json document.
+    curves : dict
+        Per method, per axis the scoring's Allan curves (``allan_raw``, ``allan_processed``:
+        tau_s, adev_rad_s).
 
     Returns
     -------
     Page
 
     """
-    doc = result.as_dict()
     best = doc['best_held_out']
     short = ['## In short', '',
              f'Best held-out ({best["rule"]}): **{best["method"]}**.', '']
@@ -201,7 +201,6 @@ def compare_page(result: 'CompareResult') -> Page:
                                Num(pointer('methods', name, 'range', 'samples'), 'd'),
                                Num(pointer('methods', name, 'range', 'fraction_outside'),
                                    '.2%')) for name in doc['methods'])))
-    curves = result.curves
     allan: dict[str, dict[str, Any]] = {}
     if curves:
         firstc = next(iter(curves.values()))
@@ -221,21 +220,27 @@ def compare_page(result: 'CompareResult') -> Page:
                 inputs=tuple(dict.fromkeys(inputs)), version=doc.get('package_version', ''))
 
 
-def apply_page(result: 'ApplyResult') -> Page:
+def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
+               curves: Mapping[str, Any] | None) -> Page:
     """
     Build the page of ``gyro_noise_thermal apply``.
 
     Parameters
     ----------
-    result : app.thermal.ApplyResult
-        The applied model (``as_dict()`` is metrics.json).
+    doc : dict
+        The metrics.json document.
+    run : ThermalRun
+        The run the model was applied to (``t_s``, ``gyro_rad_s``).
+    processed : numpy.ndarray
+        The method's output (n, 3), rad/s.
+    curves : dict or None
+        Per axis the scoring's Allan curves (``allan_raw``, ``allan_processed``).
 
     Returns
     -------
     Page
 
     """
-    doc = result.as_dict()
     short = ['## In short', '']
     if doc['in_sample']:
         short += ['**Warning: this bag is one the model was trained on; the numbers are '
@@ -256,8 +261,8 @@ def apply_page(result: 'ApplyResult') -> Page:
                                    Num(pointer('accel', 'axes', axis,
                                                'processed_residual_drift_mg'), '.4g'))
                                   for axis in doc['accel']['axes'])))
-    figures = _residual_figure(result.run, result.processed, doc['method'])
-    curves = result.curves or {}
+    figures = _residual_figure(run, processed, doc['method'])
+    curves = curves or {}
     allan = {'raw': {a: c['allan_raw'] for a, c in curves.items()},
              doc['method']: {a: c['allan_processed'] for a, c in curves.items()}}
     figures += _allan_figures(allan, f'raw and {doc["method"]}') if curves else []
@@ -273,14 +278,16 @@ def apply_page(result: 'ApplyResult') -> Page:
                 version=doc.get('package_version', ''))
 
 
-def write_compare_html(result: 'CompareResult', out: Path) -> Path:
+def write_compare_html(doc: dict[str, Any], curves: Mapping[str, Any], out: Path) -> Path:
     """
     Write ``report.html`` of a comparison into the staged folder ``out``.
 
     Parameters
     ----------
-    result : app.thermal.CompareResult
-        The comparison.
+    doc : dict
+        The compare.json document.
+    curves : dict
+        As :func:`compare_page`.
     out : pathlib.Path
         The staged ``--out`` folder.
 
@@ -289,17 +296,20 @@ def write_compare_html(result: 'CompareResult', out: Path) -> Path:
     pathlib.Path
 
     """
-    return write_report_html(compare_page(result), out / 'report.html')
+    return write_report_html(compare_page(doc, curves), out / 'report.html')
 
 
-def write_apply_html(result: 'ApplyResult', out: Path) -> Path:
+def write_apply_html(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
+                     curves: Mapping[str, Any] | None, out: Path) -> Path:
     """
     Write ``report.html`` of an applied model into the staged folder ``out``.
 
     Parameters
     ----------
-    result : app.thermal.ApplyResult
-        The applied model.
+    doc : dict
+        The metrics.json document.
+    run, processed, curves
+        As :func:`apply_page`.
     out : pathlib.Path
         The staged ``--out`` folder.
 
@@ -308,4 +318,4 @@ def write_apply_html(result: 'ApplyResult', out: Path) -> Path:
     pathlib.Path
 
     """
-    return write_report_html(apply_page(result), out / 'report.html')
+    return write_report_html(apply_page(doc, run, processed, curves), out / 'report.html')

@@ -13,42 +13,29 @@
 # limitations under the License.
 
 """
-Pure model of the Portenta H7 + LSM6DSO32 board.
-
-Samples with ground truth, configuration commands, faults.
+Pure model of the Portenta H7 + LSM6DSO32 board: samples with ground truth, commands, faults.
 
 No I/O and no threads: :mod:`gyro_noise_ros.link.serve` serves this model on a pseudo-terminal or
-TCP and writes SD logs.
-
-Signal model of one gyro axis at sample k (time ``t_k``, seconds since power-on)::
+TCP and writes SD logs. One gyro axis at sample k (time ``t_k``, s since power-on)::
 
     rate_k = bias + v_k + helium(t_k) + temp_sens * (T(t_k) - T(0))
              + vib_amp * sin(2 pi vib_hz t_k + phase)
     raw_k  = clip(round(rate_k / LSB(gyro_fs)), -32768, 32767)
 
-With ``thermal`` (``portenta_emulator --thermal oven``) the temperature and its effect on the bias
-come from :mod:`gyro_noise_ros.thermal.simulate` instead (``docs/thermal_data.md``).
+``v_k`` is the fractional-order noise of paper 000 eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]``
+(:class:`gyro_noise_ros.core.simulate.FractionalNoise`, truncated GL difference, L = 1000), one
+generator per axis, ``sigma_w`` set so the stationary output has the configured standard
+deviation (:func:`stationary_gain`); the defaults (the paper's order, variance and initial bias)
+are in docs/portenta_link.md. The helium effect (:class:`HeliumTransient`) is a delayed
+first-order bias rise ``A (1 - exp(-(t - delay) / tau))`` for ``t > delay`` (paper 000 Fig. 3);
+the temperature moves linearly and leaks into the bias, or with ``thermal`` comes from
+:mod:`gyro_noise_ros.thermal.simulate` (docs/thermal_data.md).
 
-``v_k`` is the fractional-order noise of paper 000 eq. (2), ``Delta^alpha v[k+1] = f v[k] + w[k]``,
-run by :class:`gyro_noise_ros.core.simulate.FractionalNoise` (truncated GL difference, eqs. 3-5, L
-= 1000), one independent generator per axis. The default noise level is the paper's own measurement
-(Table 4, reference sequence: noise variance 0.0034 (deg/s)^2, i.e. a standard deviation of 0.058
-deg/s), which is the LSM6DSO-family rate noise density of 3.8 mdps/sqrt(Hz) over a ~235 Hz noise
-bandwidth; ``sigma_w`` is set so the stationary output has that standard deviation. The default
-order is the paper's variance-method estimate, alpha = 1.4 (Table 5); the paper gives no f, we take
-f = -1.2 (stable, and nearly white like the measured noise). The default bias is the paper's
-initial offset, ~0.8 deg/s (section 4: "the offset increased from a value of 0.775 to 4.242").
-
-The helium effect is a delayed first-order rise of the bias, ``A (1 - exp(-(t - delay)/tau))`` for
-``t > delay`` (paper 000 Fig. 3: the offset starts to rise after ~1.5 h of exposure). Temperature
-moves linearly at ``temp_drift_c_per_h`` and leaks into the bias with
-``temp_sensitivity_dps_per_c``.
-
-Determinism: every random stream (one per gyro axis, accelerometer, temperature) is a child of the
-``rng`` given, consumed one draw per sample, so sample k is the same whatever the batch sizes, the
-pacing, the connection state or the fault injection (which uses its own generator). Sensor FIFO
-overruns (:meth:`BoardModel.sensor_overrun`) consume sample slots without a ``seq``, so with them
-the truth must be matched by ``seq`` (``--truth-out``), not by position.
+Determinism: every random stream (per gyro axis, accelerometer, temperature) is a child of the
+``rng`` given, one draw per sample, so sample k does not depend on batch sizes, pacing, the
+connection or the faults (:class:`FaultInjector` has its own generator). Sensor FIFO overruns
+(:meth:`BoardModel.sensor_overrun`) consume sample slots without a ``seq``: the truth
+(:class:`Truth`, :func:`truth_records`) is then matched by ``seq``, not by position.
 """
 
 from collections.abc import Sequence

@@ -75,36 +75,12 @@ def _as_int_choice(name: str, value: Any, choices: tuple[int, ...]) -> int:
 
 
 def check_gyro_fs(fs_dps: Any) -> int:
-    """
-    Validate a gyro full scale.
-
-    Parameters
-    ----------
-    fs_dps : int
-        Full scale (deg/s).
-
-    Returns
-    -------
-    int
-
-    """
+    """Return gyro full scale ``fs_dps`` (deg/s) as an int; ParameterError if not offered."""
     return _as_int_choice('gyro_fs_dps', fs_dps, GYRO_FULL_SCALES_DPS)
 
 
 def check_accel_fs(fs_g: Any) -> int:
-    """
-    Validate an accelerometer full scale.
-
-    Parameters
-    ----------
-    fs_g : int
-        Full scale (g).
-
-    Returns
-    -------
-    int
-
-    """
+    """Return accelerometer full scale ``fs_g`` (g) as an int; ParameterError if not offered."""
     return _as_int_choice('accel_fs_g', fs_g, ACCEL_FULL_SCALES_G)
 
 
@@ -135,55 +111,24 @@ def check_odr(odr_hz: Any) -> float:
 
 def gyro_sensitivity_rad_s_per_lsb(fs_dps: int) -> float:
     """
-    Return the gyro sensitivity of a full scale.
+    Return the gyro sensitivity (rad/s per LSB) of full scale ``fs_dps`` (125-2000 deg/s).
 
-    Parameters
-    ----------
-    fs_dps : int
-        Full scale (deg/s): 125, 250, 500, 1000 or 2000.
-
-    Returns
-    -------
-    float
-        rad/s per LSB (datasheet mdps/LSB times pi/180000).
-
+    The datasheet's mdps/LSB times pi/180000.
     """
     return _GYRO_MDPS_PER_LSB[check_gyro_fs(fs_dps)] * 1e-3 * np.pi / 180.0
 
 
 def accel_sensitivity_m_s2_per_lsb(fs_g: int) -> float:
     """
-    Return the accelerometer sensitivity of a full scale.
+    Return the accelerometer sensitivity (m/s^2 per LSB) of full scale ``fs_g`` (4, 8, 16 or 32 g).
 
-    Parameters
-    ----------
-    fs_g : int
-        Full scale (g): 4, 8, 16 or 32.
-
-    Returns
-    -------
-    float
-        m/s^2 per LSB (datasheet mg/LSB times 9.80665e-3).
-
+    The datasheet's mg/LSB times 9.80665e-3.
     """
     return _ACCEL_MG_PER_LSB[check_accel_fs(fs_g)] * 1e-3 * STANDARD_GRAVITY_M_S2
 
 
 def temperature_c(raw: ArrayLike) -> np.ndarray:
-    """
-    Convert raw OUT_TEMP words to degrees Celsius.
-
-    Parameters
-    ----------
-    raw : array_like of int16
-        Raw temperature register values.
-
-    Returns
-    -------
-    numpy.ndarray
-        float64 degC (25 + raw / 256).
-
-    """
+    """Convert raw OUT_TEMP words (int16) to degC, float64: 25 + raw / 256."""
     return TEMPERATURE_OFFSET_C + np.asarray(raw, dtype=np.float64) / TEMPERATURE_LSB_PER_C
 
 

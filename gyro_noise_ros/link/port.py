@@ -96,22 +96,10 @@ def usb_serial_number(port: str) -> str | None:
 
 def hardware_id_for(port: str, frame_id: str) -> str:
     """
-    Return a stable ``hardware_id`` for the diagnostics of the sensor on a port.
+    Return a stable ``hardware_id`` for the diagnostics of the sensor on ``port`` (path or URL).
 
     The sensor and board identity, never the port path (``/dev/ttyACM0`` changes with the plug
     order): ``lsm6dso32/portenta_h7/<USB serial number>`` when the device reports one, otherwise
     ``lsm6dso32/portenta_h7/<frame_id>`` (the frame names the sensor on the robot).
-
-    Parameters
-    ----------
-    port : str
-        Device path or pyserial URL.
-    frame_id : str
-        The frame of the sensor's messages.
-
-    Returns
-    -------
-    str
-
     """
     return f'lsm6dso32/portenta_h7/{usb_serial_number(port) or frame_id}'

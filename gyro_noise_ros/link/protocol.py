@@ -433,19 +433,7 @@ def encode_log_header(header: LogHeader) -> bytes:
 
 
 def crc32(data: bytes | bytearray | memoryview) -> int:
-    """
-    Return the frame CRC of ``data`` (CRC-32/IEEE, see the module docstring).
-
-    Parameters
-    ----------
-    data : bytes-like
-        Bytes to checksum.
-
-    Returns
-    -------
-    int
-
-    """
+    """Return the frame CRC of ``data`` (CRC-32/IEEE, see the module docstring)."""
     return zlib.crc32(data) & 0xFFFFFFFF
 
 

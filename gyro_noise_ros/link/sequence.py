@@ -31,20 +31,7 @@ _UINT32 = 1 << 32
 
 
 def wrapped_delta(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.int64]:
-    """
-    Return the signed distance ``a - b`` of wrapping uint32 counters.
-
-    Parameters
-    ----------
-    a, b : int or array_like of int
-        Counter values in [0, 2**32).
-
-    Returns
-    -------
-    numpy.ndarray of int64
-        ``a - b`` modulo 2**32, mapped into [-2**31, 2**31).
-
-    """
+    """Return the signed distance ``a - b`` of uint32 counters (int64, -2**31..2**31-1)."""
     return ((np.asarray(a, np.int64) - np.asarray(b, np.int64) + (1 << 31)) % _UINT32) - (1 << 31)
 
 

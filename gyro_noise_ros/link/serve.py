@@ -25,6 +25,7 @@ TX buffer model a real USB link. :func:`write_sd_logs` writes SD log files as fa
 instead. No argparse here: the command line builds :class:`ServeOptions` and the board.
 """
 
+from collections.abc import Callable
 import dataclasses
 from dataclasses import dataclass
 import json
@@ -169,25 +170,6 @@ def total_samples(samples: int | None, duration_s: float | None,
     return min(limits) if limits else None
 
 
-def encode_samples_batched(samples: np.ndarray, batch: int) -> bytes:
-    """
-    Encode samples as consecutive SAMPLES frames of at most ``batch`` samples.
-
-    Parameters
-    ----------
-    samples : numpy.ndarray
-        SAMPLE_DTYPE records.
-    batch : int
-        Samples per frame.
-
-    Returns
-    -------
-    bytes
-
-    """
-    return b''.join(encode_samples(samples[i:i + batch]) for i in range(0, samples.size, batch))
-
-
 def produce(board: BoardModel, faults: FaultInjector, counters: Counters, n: int,
             truth_fh: BinaryIO | None) -> np.ndarray:
     """
@@ -284,7 +266,7 @@ def write_sd_logs(board: BoardModel, faults: FaultInjector, counters: Counters,
     list of str
 
     """
-    make_out_dir(options.out_dir, option='--write-sd')
+    make_out_dir(options.out_dir, parameter='out_dir')
     corrupt = faults.corrupt if options.corrupt else None
     with SdLogWriter(options.out_dir, sequence_id=options.sequence_id, odr_hz=board.odr_hz,
                      gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g,
@@ -397,7 +379,8 @@ class TcpPort:
         try:
             port = int(port_text)
         except ValueError as err:
-            raise ParameterError(f'--tcp must be HOST:PORT, got {spec!r}') from err
+            raise ParameterError(f'{{tcp}} must be HOST:PORT, got {spec!r}',
+                                 parameters=('tcp',)) from err
         host = host or '127.0.0.1'
         self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -405,7 +388,8 @@ class TcpPort:
             self.listener.bind((host, port))
         except OSError as err:
             self.listener.close()
-            raise LinkError(f'cannot listen on --tcp {spec!r}: {err}') from err
+            raise LinkError(f'cannot listen on {{tcp}} {spec!r}: {err}',
+                            parameters=('tcp',)) from err
         self.listener.listen(4)
         self.listener.setblocking(False)
         self.client: socket.socket | None = None
@@ -616,12 +600,9 @@ class _Link:
 
 def serve(board: BoardModel, faults: FaultInjector, options: ServeOptions, *,
           counters: Counters, stopper: Stopper, truth_fh: BinaryIO | None = None,
-          warm: BoardModel | None = None) -> int:
+          warm: BoardModel | None = None, on_port: Callable[[str], None] | None = None) -> int:
     """
     Serve the board on a pseudo-terminal or TCP port until stopped or ``options.total`` is sent.
-
-    The port's name (the pty path or its symlink, or ``socket://HOST:PORT``) is printed on
-    stdout, one line, flushed.
 
     Parameters
     ----------
@@ -640,6 +621,9 @@ def serve(board: BoardModel, faults: FaultInjector, options: ServeOptions, *,
     warm : BoardModel, optional, keyword-only
         A twin of the board whose first frame is drawn before the pacing clock starts, so that
         compiling the numba kernels does not come out as a burst.
+    on_port : callable, optional, keyword-only
+        Called once with the port's name (the pty path or its symlink, or
+        ``socket://HOST:PORT``) when it is open (the emulator prints it).
 
     Returns
     -------
@@ -650,7 +634,8 @@ def serve(board: BoardModel, faults: FaultInjector, options: ServeOptions, *,
     if warm is not None:
         warm.next_samples(options.batch)
     port = TcpPort(options.tcp) if options.tcp else PtyPort(options.link)
-    print(port.name, flush=True)
+    if on_port is not None:
+        on_port(port.name)
     link = _Link(board, faults, options, counters, truth_fh, port)
     try:
         while not stopper.stop:

@@ -59,20 +59,7 @@ class LinkConfig:
 
 
 def frame_interval_s(config: 'LinkConfig') -> float:
-    """
-    Return the longest normal silence of a link: three full frames (the firmware batches <= 128).
-
-    Parameters
-    ----------
-    config : LinkConfig
-        The acknowledged configuration.
-
-    Returns
-    -------
-    float
-        Seconds.
-
-    """
+    """Return a link's longest normal silence (s): three full frames (a frame holds <= 128)."""
     return 3.0 * MAX_SAMPLES_PER_FRAME / config.odr_hz
 
 

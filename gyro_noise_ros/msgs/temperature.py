@@ -51,20 +51,10 @@ def decode_temperature_spans(buf: np.ndarray, starts: np.ndarray, lengths: np.nd
 
 def temperature_variances(raws: Sequence[bytes]) -> np.ndarray:
     """
-    Return the ``variance`` field of raw ROS 2 CDR ``sensor_msgs/Temperature`` messages.
+    Return the ``variance`` fields (degC^2) of raw ROS 2 CDR ``sensor_msgs/Temperature`` messages.
 
-    It is the last float64 of the message (``temperature``, ``variance`` follow the header).
-
-    Parameters
-    ----------
-    raws : list of bytes
-        Serialised ``sensor_msgs/Temperature`` (ROS 2 CDR, either endianness).
-
-    Returns
-    -------
-    numpy.ndarray
-        Variances in degC^2.
-
+    It is the last float64 of a message (``temperature``, ``variance`` follow the header); either
+    endianness.
     """
     return np.array([np.frombuffer(raw[-8:], '<f8' if raw[1] == 1 else '>f8')[0] for raw in raws])
 
@@ -76,24 +66,10 @@ def temperature_variances(raws: Sequence[bytes]) -> np.ndarray:
 def encode_temperature_cdr(stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
                            frame_id: str = 'imu_link', variance: ArrayLike = 0.0) -> list[bytes]:
     """
-    Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR in bulk.
+    Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR in bulk: one per stamp.
 
-    Parameters
-    ----------
-    stamp_ns : array_like of int, shape (n,)
-        Header stamps in ns.
-    temperature_c : array_like of float, shape (n,)
-        Temperature in degC.
-    frame_id : str
-        ``header.frame_id``.
-    variance : float or array_like, shape (n,)
-        Temperature variance in degC^2 (0 = unknown).
-
-    Returns
-    -------
-    list of bytes
-        One serialised message per stamp.
-
+    ``stamp_ns`` are the header stamps (int ns, shape (n,)), ``temperature_c`` the temperatures
+    (degC), ``variance`` their variance (degC^2, scalar or per message; 0 = unknown).
     """
     return encode_cdr(*_temperature_parts(stamp_ns, temperature_c, frame_id, variance))
 
@@ -101,18 +77,9 @@ def encode_temperature_cdr(stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
 def encode_temperature_rows(stamp_ns: ArrayLike, temperature_c: ArrayLike, *,
                             frame_id: str = 'imu_link', variance: ArrayLike = 0.0) -> np.ndarray:
     """
-    Serialise ``sensor_msgs/Temperature`` messages to little-endian CDR, one byte-matrix row each.
+    Serialise like :func:`encode_temperature_cdr`, as a uint8 matrix of one message per row.
 
-    Parameters
-    ----------
-    stamp_ns, temperature_c, frame_id, variance
-        As in :func:`encode_temperature_cdr`.
-
-    Returns
-    -------
-    numpy.ndarray of uint8, shape (n, message size)
-        ``rows[i].tobytes() == encode_temperature_cdr(...)[i]``.
-
+    ``rows[i].tobytes() == encode_temperature_cdr(...)[i]``; shape (n, message size).
     """
     return encode_cdr_rows(*_temperature_parts(stamp_ns, temperature_c, frame_id, variance))
 

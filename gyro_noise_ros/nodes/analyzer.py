@@ -72,10 +72,11 @@ from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_
                           specs_from_dataclass, take_all, unused_callback, wall_timer)
 from ..app.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, thresholds_from
 from ..bag import decode_imu, decode_temperature
-from ..core.engine import AXES, AxisSummary, ChunkResult, GAP_POLICIES, warm_up
+from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
 from ..core.health import axis_status, HealthThresholds
 from ..core.items import allan_items, fmt, last_chunk_items, stream_items
+from ..core.results import AxisSummary, ChunkResult
 from ..errors import GyroNoiseError
 from ..units import RAD_TO_DEG
 

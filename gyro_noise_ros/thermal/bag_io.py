@@ -108,7 +108,8 @@ def _pick_temperature_topic(reader: ImuBagReader, requested: str | None) -> str:
         raise BagError(f'bag {str(reader.path)!r} has no {TEMPERATURE_MSGTYPE} topic: the thermal '
                        'methods need the die temperature')
     raise BagError(f'bag {str(reader.path)!r} has {len(names)} {TEMPERATURE_MSGTYPE} topics '
-                   f'({", ".join(names)}); choose one with --temperature-topic')
+                   f'({", ".join(names)}); choose one with {{temperature_topic}}',
+                   parameters=('temperature_topic',))
 
 
 def read_thermal_run(path: StrPath, *, topic: str | None = None,

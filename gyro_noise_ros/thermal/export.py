@@ -169,7 +169,8 @@ def calibration_of(poly: Any, *, unit: str = 'rad/s') -> CubicCalibration:
     name = getattr(poly, 'name', type(poly).__name__)
     if name != 'poly3' or getattr(poly, 'coef', None) is None:
         raise ParameterError(f"method '{name}' cannot be exported to PX4 or ArduPilot: they "
-                             'evaluate a cubic in temperature only; fit --method poly3')
+                             'evaluate a cubic in temperature only; fit with {method} poly3',
+                             parameters=('method',))
     if poly.order > 3:
         raise ParameterError(f'a polynomial of order {poly.order} cannot be exported (PX4 and '
                              'ArduPilot evaluate order 3)')

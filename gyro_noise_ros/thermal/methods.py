@@ -664,7 +664,7 @@ def check_temperature_range(model: ThermalModel, temperature_c: ArrayLike, *,
         raise TemperatureRangeError(
             f"data temperature {lo:.2f}..{hi:.2f} degC leaves the model's trained range "
             f'{t_lo:.2f}..{t_hi:.2f} degC by more than the {margin:g} degC margin; retrain on '
-            f'data covering it or widen --range-margin-c')
+            'data covering it or widen {range_margin_c}', parameters=('range_margin_c',))
     return lo, hi
 
 
@@ -799,11 +799,11 @@ def check_min_range(min_range_c: float) -> float:
     try:
         value = float(min_range_c)
     except (TypeError, ValueError):
-        raise ParameterError(f'--min-range-c must be a number of degC, got {min_range_c!r}') \
-            from None
+        raise ParameterError(f'{{min_range_c}} must be a number of degC, got {min_range_c!r}',
+                             parameters=('min_range_c',)) from None
     if not (math.isfinite(value) and value >= 0.0):
-        raise ParameterError(f'--min-range-c must be a finite temperature span >= 0 degC, got '
-                             f'{min_range_c!r}')
+        raise ParameterError(f'{{min_range_c}} must be a finite temperature span >= 0 degC, got '
+                             f'{min_range_c!r}', parameters=('min_range_c',))
     return value
 
 
@@ -844,7 +844,7 @@ def check_trainable(run: ThermalRun, *, min_range_c: float = DEFAULT_MIN_RANGE_C
         raise InputDataError(f'training run {run.name!r}: the temperature spans only '
                              f'{hi - lo:.3g} degC ({lo:.2f}..{hi:.2f}), less than the '
                              f'{min_range_c:g} degC needed to fit a drift model '
-                             '(--min-range-c)')
+                             '({min_range_c})', parameters=('min_range_c',))
     if method is not None:
         cls = method_class(method)
         if getattr(cls, 'uses_rate', False):

@@ -47,7 +47,7 @@ from collections.abc import Sequence
 import dataclasses
 from dataclasses import dataclass
 import math
-from typing import Any, SupportsFloat
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,6 +58,7 @@ from .run import ThermalMethod, ThermalRun
 from ..core.allan import allan_deviation
 from ..core.readout import read_allan
 from ..errors import InputDataError, ParameterError
+from ..formatting import finite_list as _curve, finite_or_none as _num
 from ..units import RAD_TO_DEG
 
 __all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
@@ -289,7 +290,8 @@ def make_injection(n: int, rate_hz: float, *, amplitude_rad_s: float = DEFAULT_A
     if c_s * f_lo_hz < 20:
         raise ParameterError(f'the run ({duration:.4g} s) is too short to measure the response '
                              f'down to {f_lo_hz:g} Hz: the chirp needs at least '
-                             f'{20 / f_lo_hz / 0.3:.4g} s of run; raise --f-lo-hz')
+                             f'{20 / f_lo_hz / 0.3:.4g} s of run; raise {{f_lo_hz}}',
+                             parameters=('f_lo_hz',))
     sig = np.zeros(n)
     c0 = int(0.25 * n)
     c_n = int(round(c_s * rate_hz))
@@ -686,15 +688,6 @@ def verdict(raw: NoiseMetrics, processed: NoiseMetrics, fr: FrequencyResponse, s
             'small_signal_low_band_min_gain': _num(small_gain), 'arw_from_bandwidth': from_bw,
             'measured_causal': measured_causal, 'live_capable': bool(causal and measured_causal),
             'text': ' '.join(text)}
-
-
-def _num(v: SupportsFloat) -> float | None:
-    v = float(v)
-    return v if math.isfinite(v) else None
-
-
-def _curve(values: ArrayLike) -> list[float | None]:
-    return [_num(v) for v in np.asarray(values, dtype=float)]
 
 
 def _run_with(run: ThermalRun, gyro: NDArray[np.float64]) -> ThermalRun:

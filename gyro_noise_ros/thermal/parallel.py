@@ -51,10 +51,10 @@ drift modes, and the two parts added. VMD and TFPF need the whole
 record: the model is offline only (``causal = False``); the live node refuses it.
 
 Report: :meth:`ParallelModel.report_figures` (the hook; the drawing is
-:func:`..report.parallel_figures`) gives the paper's Figures 11, 12 and 14-17 for a run from what
-:meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the
-modes and parts, the drift part on the network's grid), so the report costs no second VMD when
-it follows ``apply`` on the same run object.
+:func:`.parallel_figures.parallel_figures`) gives the paper's Figures 11, 12 and 14-17 for a run
+from what :meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the modes
+and parts, the drift part on the network's grid), so the report costs no second VMD when it
+follows ``apply`` on the same run object.
 """
 
 from collections.abc import Callable, Mapping
@@ -66,9 +66,11 @@ import weakref
 from gyro_noise_ros.cluster import make_executor
 from gyro_noise_ros.errors import InputDataError, ParameterError
 from gyro_noise_ros.outputs import StrPath
+from gyro_noise_ros.plotting import envelope as full_envelope
 from gyro_noise_ros.thermal.classify import classify_modes, ModeClasses
 from gyro_noise_ros.thermal.elman import DriftModel, fit_drift
 from gyro_noise_ros.thermal.mopso import mopso, PAPER_BOUNDS, refine, VmdFitness
+from gyro_noise_ros.thermal.parallel_figures import PANEL_POINTS, parallel_figures
 from gyro_noise_ros.thermal.run import (DEFAULT_RATE_WINDOW_S, temperature_rate_c_s,
                                         ThermalRun)
 from gyro_noise_ros.thermal.tfpf import tfpf
@@ -326,7 +328,7 @@ class ParallelModel:
         """
         Draw the paper's Figures 11, 12 and 14-17 for a run; return (file name, caption) each.
 
-        The drawing is :func:`..report.parallel_figures` (the report module's); this is the
+        The drawing is :func:`.parallel_figures.parallel_figures`; this is the
         method hook of ``ThermalMethod``. The run's decomposition comes from the last
         :meth:`apply` if it was called on this same run object, else ``apply(run)`` is run
         once (which also replaces :attr:`last_info`).
@@ -345,11 +347,9 @@ class ParallelModel:
             figure it mirrors ('Fig. N').
 
         """
-        from gyro_noise_ros.thermal import report
-
         if self.axes is None:
             raise ParameterError('ParallelModel used before fit (or from_dict)')
-        return report.parallel_figures(self, run, self._parts_for(run), Path(out_dir))
+        return parallel_figures(self, run, self._parts_for(run), Path(out_dir))
 
     def _parts_for(self, run: ThermalRun) -> list[dict[str, Any]]:
         kept = self._report_parts
@@ -362,8 +362,6 @@ class ParallelModel:
                     mixed_in: NDArray[np.float64], mixed_out: NDArray[np.float64],
                     drift: NDArray[np.float64], elman: DriftModel) -> dict[str, Any]:
         """Keep what the report figures need of one axis of an apply, at plot size."""
-        from gyro_noise_ros.thermal.report import envelope as full_envelope, PANEL_POINTS
-
         def envelope(t: NDArray[Any], y: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any]]:
             return full_envelope(t, y, PANEL_POINTS)
 

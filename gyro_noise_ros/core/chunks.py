@@ -402,8 +402,13 @@ def drift_stderr(t_s: npt.ArrayLike, bias: npt.ArrayLike) -> float:
     d[0] = 0.0
     for m in range(1, n):
         d[m] = np.mean((centred[m:] - centred[:-m]) ** 2) if m <= half else d[half]
-    idx = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
-    var = -0.5 * float(w @ d[idx] @ w)
+    # -1/2 sum_jk w_j w_k D(|j - k|) = -sum_{m >= 1} D(m) sum_j w_j w_{j+m} (D(0) = 0): the
+    # autocorrelation of w by FFT, O(n log n), where the n x n matrix of D took 5.6 GB and 14 s
+    # for the 18,715 chunks of the paper's sequence
+    size = 2 * n
+    spec = np.fft.rfft(w, size)
+    auto = np.fft.irfft(spec.real ** 2 + spec.imag ** 2, size)[1:n]
+    var = -float(d[1:] @ auto)
     vario = np.sqrt(var) if var > 0 else 0.0
     return float(max(nw, vario))
 

@@ -357,102 +357,69 @@ def _terms(x: _F, i: int, step: int, m: int, count: int, t: int, lanes: _F, tot:
 
     ``t`` is the index of the first of them in its tau's sequence: term t goes to lane t % 4, and
     the lanes are folded into the total after every FOLD_TERMS-th term (:func:`_add_term` adding
-    them one by one gives the same bits).
+    them one by one gives the same bits). Between the odd terms at either end of a segment, rows
+    of four terms (one per lane) go through :func:`_lane_rows`.
     """
     t1 = t + count
     acc = np.empty(4)
-    l0 = lanes[j, 0]
-    l1 = lanes[j, 1]
-    l2 = lanes[j, 2]
-    l3 = lanes[j, 3]
+    for u in range(4):
+        acc[u] = lanes[j, u]
     while t < t1:
-        # one segment = up to the next fold point, so the 4-term loop needs no fold test
-        seg = (t // FOLD_TERMS + 1) * FOLD_TERMS
-        if seg > t1:
-            seg = t1
-        while t < seg and (t & 3) != 0:
-            d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-            k = t & 3
-            if k == 1:
-                l1 += d * d
-            elif k == 2:
-                l2 += d * d
-            else:
-                l3 += d * d
-            t += 1
-            i += step
+        # one segment = up to the next fold point, so the rows need no fold test
+        seg = min(t1, (t // FOLD_TERMS + 1) * FOLD_TERMS)
+        head = min(seg, (t + 3) & ~3)
+        i = _single_terms(x, i, step, m, t, head, acc)
+        t = head
         groups = (seg - t) >> 2
-        if groups > 0 and step == 1:
-            acc[0] = l0
-            acc[1] = l1
-            acc[2] = l2
-            acc[3] = l3
-            _lane_rows(x, i, m, groups, acc)
-            l0 = acc[0]
-            l1 = acc[1]
-            l2 = acc[2]
-            l3 = acc[3]
+        if groups > 0:
+            _lane_rows(x, i, step, m, groups, acc)
             t += 4 * groups
-            i += 4 * groups
-        while t + 4 <= seg:
-            d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-            i += step
-            d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-            i += step
-            d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-            i += step
-            d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-            i += step
-            l0 += d0 * d0
-            l1 += d1 * d1
-            l2 += d2 * d2
-            l3 += d3 * d3
-            t += 4
-        while t < seg:
-            d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-            k = t & 3
-            if k == 0:
-                l0 += d * d
-            elif k == 1:
-                l1 += d * d
-            elif k == 2:
-                l2 += d * d
-            else:
-                l3 += d * d
-            t += 1
-            i += step
+            i += 4 * groups * step
+        i = _single_terms(x, i, step, m, t, seg, acc)
+        t = seg
         if (t & _FOLD_MASK) == 0:
-            lanes[j, 0] = l0
-            lanes[j, 1] = l1
-            lanes[j, 2] = l2
-            lanes[j, 3] = l3
+            for u in range(4):
+                lanes[j, u] = acc[u]
             _fold(lanes, tot, j)
-            l0 = 0.0
-            l1 = 0.0
-            l2 = 0.0
-            l3 = 0.0
-    lanes[j, 0] = l0
-    lanes[j, 1] = l1
-    lanes[j, 2] = l2
-    lanes[j, 3] = l3
+            acc[:] = 0.0
+    for u in range(4):
+        lanes[j, u] = acc[u]
 
 
 @numba.njit(**JIT_OPTIONS)
-def _lane_rows(x: _F, i: int, m: int, groups: int,
+def _single_terms(x: _F, i: int, step: int, m: int, t0: int, t1: int,
+                  acc: _F) -> int:  # pragma: no cover - compiled
+    """Add the terms t0 .. t1 - 1 (from x[i] on) to their lanes ``acc[t % 4]``; return i after."""
+    for t in range(t0, t1):
+        d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+        acc[t & 3] += d * d
+        i += step
+    return i
+
+
+@numba.njit(**JIT_OPTIONS)
+def _lane_rows(x: _F, i: int, step: int, m: int, groups: int,
                acc: _F) -> None:  # pragma: no cover - compiled
     """
-    Add ``groups`` rows of four consecutive terms (from x[i] on) to the lanes ``acc[0 .. 3]``.
+    Add ``groups`` rows of four terms (from x[i] on, i advancing by ``step``) to ``acc[0 .. 3]``.
 
-    Term u of a row goes to lane u. The compiler packs each row into one vector: the same
-    operations per lane, no reassociation, so the bits of the scalar loop of :func:`_terms`.
+    Term u of a row goes to lane u. With ``step`` 1 the compiler packs each row into one vector:
+    the same operations per lane, no reassociation, so the bits of the scalar loop.
     """
-    far = x[i + 2 * m:i + 2 * m + 4 * groups].reshape(groups, 4)
-    mid = x[i + m:i + m + 4 * groups].reshape(groups, 4)
-    near = x[i:i + 4 * groups].reshape(groups, 4)
+    if step == 1:
+        far = x[i + 2 * m:i + 2 * m + 4 * groups].reshape(groups, 4)
+        mid = x[i + m:i + m + 4 * groups].reshape(groups, 4)
+        near = x[i:i + 4 * groups].reshape(groups, 4)
+        for g in range(groups):
+            for u in range(4):
+                d = (far[g, u] - 2.0 * mid[g, u]) + near[g, u]
+                acc[u] += d * d
+        return
     for g in range(groups):
         for u in range(4):
-            d = (far[g, u] - 2.0 * mid[g, u]) + near[g, u]
+            d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
             acc[u] += d * d
+            i += step
 
 
 @numba.njit(**JIT_OPTIONS)

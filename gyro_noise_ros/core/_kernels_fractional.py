@@ -59,26 +59,31 @@ def residual_power(  # pragma: no cover - compiled
 
 
 @numba.njit(**JIT_OPTIONS)
+def _sum_abs(x: NDArray[np.float64], count: int) -> float:  # pragma: no cover - compiled
+    """Return ``sum_{k < count} |x[k]|`` on four accumulators."""
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    k = 0
+    while k + 3 < count:
+        s0 += abs(x[k])
+        s1 += abs(x[k + 1])
+        s2 += abs(x[k + 2])
+        s3 += abs(x[k + 3])
+        k += 4
+    while k < count:
+        s0 += abs(x[k])
+        k += 1
+    return (s0 + s1) + (s2 + s3)
+
+
+@numba.njit(**JIT_OPTIONS)
 def abs_sum(corr: NDArray[np.float64], count: int, out: NDArray[np.float64],
             scale: float) -> None:  # pragma: no cover - compiled
     """``out[r] = scale * sum_{m < count} |corr[r, m]|`` (eq. 13 with the 1/n of eq. 14)."""
-    rows = corr.shape[0]
-    for r in range(rows):
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        s3 = 0.0
-        k = 0
-        while k + 3 < count:
-            s0 += abs(corr[r, k])
-            s1 += abs(corr[r, k + 1])
-            s2 += abs(corr[r, k + 2])
-            s3 += abs(corr[r, k + 3])
-            k += 4
-        while k < count:
-            s0 += abs(corr[r, k])
-            k += 1
-        out[r] = ((s0 + s1) + (s2 + s3)) * scale
+    for r in range(corr.shape[0]):
+        out[r] = _sum_abs(corr[r], count) * scale
 
 
 @numba.njit(**JIT_OPTIONS)
@@ -186,20 +191,7 @@ def cosine_abs_sum(y_hat: NDArray[np.complex128], odd: NDArray[np.float64], coun
     odds = min(m, count // 2)          # lags 2k + 1 < count
     keep = signs.shape[0] > 0
     for r in range(rows):
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        s3 = 0.0
-        k = 0
-        while k + 3 < evens:
-            s0 += abs(y_hat[r, k].real)
-            s1 += abs(y_hat[r, k + 1].real)
-            s2 += abs(y_hat[r, k + 2].real)
-            s3 += abs(y_hat[r, k + 3].real)
-            k += 4
-        while k < evens:
-            s0 += abs(y_hat[r, k].real)
-            k += 1
+        even = _sum_abs(y_hat[r].real, evens)
         run = odd[r]
         t0 = abs(run) if odds > 0 else 0.0
         t1 = 0.0
@@ -213,7 +205,7 @@ def cosine_abs_sum(y_hat: NDArray[np.complex128], odd: NDArray[np.float64], coun
             t1 += abs(run)
             if keep:
                 signs[r, 2 * k + 1] = np.sign(run)
-        out[r] = (((s0 + s1) + (s2 + s3)) + (t0 + t1)) * scale
+        out[r] = (even + (t0 + t1)) * scale
 
 
 @numba.njit(**JIT_OPTIONS)

@@ -20,7 +20,7 @@ $(STAMP): setup.py setup.cfg package.xml
 venv: $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m gyro_noise_ros.cli.demo --out demo_out
+	$(PY) -m gyro_noise_ros.cli.demo --out demo_out --overwrite
 
 # mypy and every test not marked slow (on $(TEST_JOBS) worker processes) side by side: mypy's
 # minute on a fresh clone (no .mypy_cache) fills the cores the tests leave idle. mypy's output is

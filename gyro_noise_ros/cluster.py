@@ -74,6 +74,48 @@ def dask_available() -> bool:
     return True
 
 
+#: Local worker processes allowed per usable CPU: beyond it a process pool only adds memory
+#: (each worker holds its own interpreter and kernels, ~150 MB) and contention; --jobs 99999
+#: once forked 4,500 processes on a 2-core machine.
+MAX_JOBS_PER_CPU = 4
+
+
+def usable_cpus() -> int:
+    """
+    Return the number of CPUs this process may run on.
+
+    Returns
+    -------
+    int
+
+    """
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def check_jobs(jobs: int) -> None:
+    """
+    Refuse a number of local worker processes this machine cannot run (exit code 2).
+
+    Parameters
+    ----------
+    jobs : int
+        ``--jobs``.
+
+    Raises
+    ------
+    ParameterError
+        Below 1, or above :data:`MAX_JOBS_PER_CPU` times :func:`usable_cpus`.
+
+    """
+    limit = MAX_JOBS_PER_CPU * usable_cpus()
+    if not 1 <= int(jobs) <= limit:
+        raise ParameterError(f'{{jobs}} must be 1 to {limit} ({MAX_JOBS_PER_CPU} per usable '
+                             f'CPU), got {jobs}', parameters=('jobs',))
+
+
 def make_executor(jobs: int = 1, scheduler: Any = None, *, timeout_s: float | None = None,
                   warn: Callable[[str], None] | None = None) -> cf.Executor | None:
     """
@@ -102,13 +144,17 @@ def make_executor(jobs: int = 1, scheduler: Any = None, *, timeout_s: float | No
     Raises
     ------
     ParameterError
-        ``distributed`` is not installed, or the address is empty.
+        ``distributed`` is not installed, the address is empty, or ``jobs`` is more than this
+        machine can run (:func:`check_jobs`).
     ClusterError
         The scheduler cannot be reached, or a worker lacks this version of gyro_noise_ros.
 
     """
     if scheduler is None:
-        return cf.ProcessPoolExecutor(max_workers=int(jobs)) if int(jobs) > 1 else None
+        if int(jobs) <= 1:
+            return None
+        check_jobs(jobs)
+        return cf.ProcessPoolExecutor(max_workers=int(jobs))
     address = getattr(scheduler, 'scheduler_address', scheduler)
     if not isinstance(address, str) or not address.strip():
         raise ParameterError(f'{{scheduler}} needs an address such as tcp://host:8786, got '

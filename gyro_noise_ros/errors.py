@@ -16,13 +16,45 @@
 Error hierarchy shared by the core, the link, the bag I/O and the command-line tools.
 
 Every error the package raises on purpose derives from :class:`GyroNoiseError`; the command-line
-tools turn each class into one clear line and a documented exit code (see ``cli/_common.py``).
-Messages name the offending argument and its value; an argument a caller chose is named by its
-parameter (``{start_s}``), which each adapter spells its own way (:meth:`GyroNoiseError.spelled`).
+tools and the nodes turn each class into one clear line and its exit code. Messages name the
+offending argument and its value; an argument a caller chose is named by its parameter
+(``{start_s}``), which each adapter spells its own way (:meth:`GyroNoiseError.spelled`). This
+module owns the exit codes: :data:`EXIT_CODES` is the README's table (``tools/exit_codes.py``
+prints it with the options spelled, ``test/test_bad_input.py`` compares them).
 """
 
 from collections.abc import Callable, Sequence
+import signal
 from typing import Self
+
+#: Exit codes of every tool and node, with the README's wording (the one owner of the codes); an
+#: option is written as its parameter in braces, which ``tools/exit_codes.py`` spells.
+EXIT_CODES = {
+    0: 'success (never when nothing was analysed)',
+    1: 'unexpected internal error (a bug: please report the message)',
+    2: 'bad command line or parameter value, or an unknown node parameter (also a size or rate '
+       'whose data cannot fit in memory or on the disk, a `{chunk_size}` whose order tables would '
+       "need more than half of the machine's memory)",
+    3: 'an input cannot be read (missing, corrupt, wrong format: an empty CSV, wrong CSV headers, '
+       'a non-numeric value, a binary calibration or model file; no or ambiguous topic, wrong '
+       'message type)',
+    4: 'the data cannot be analysed (NaN/Inf or non-physical values such as 1e300 rad/s or a '
+       'time stamp of 1e308 s, too short for any Allan deviation, constant, a CSV with a header '
+       'and no rows, nothing left after `{start_s}`/`{end_s}`); `gyro_noise_analyze` analyses a '
+       'record shorter than one chunk by its Allan deviation alone, saying so (exit 0)',
+    5: 'the Portenta link cannot be used, or the Dask scheduler of `{scheduler}` cannot be '
+       'reached or failed',
+    6: 'an output cannot be written (not writable, under a file, disk full) or would replace '
+       'existing data (an `{out}` folder that is not empty, an existing bag or file: give '
+       '`{overwrite}`)',
+    130: "interrupted by SIGINT (Ctrl-C): nothing under the outputs' final names (results are "
+         'staged and published at the end; a recorder closes its bag)',
+    143: 'interrupted by SIGTERM, as 130',
+}
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+EXIT_TERMINATED = 128 + signal.SIGTERM
 
 
 class GyroNoiseError(Exception):
@@ -91,10 +123,14 @@ class InputDataError(GyroNoiseError, ValueError):
     exit_code = 4
 
 
-class BagError(GyroNoiseError):
-    """A recording cannot be read: missing, corrupt, no/ambiguous topic, wrong message type."""
+class InputError(GyroNoiseError):
+    """An input file cannot be read: missing, corrupt, binary where text is expected."""
 
     exit_code = 3
+
+
+class BagError(InputError):
+    """A recording cannot be read: missing, corrupt, no/ambiguous topic, wrong message type."""
 
 
 class LinkError(GyroNoiseError):
@@ -107,6 +143,39 @@ class OutputError(GyroNoiseError):
     """An output cannot be written: a folder not writable, a file in the way, disk full."""
 
     exit_code = 6
+
+
+class Interrupted(KeyboardInterrupt):
+    """
+    A stop request by signal: a ``KeyboardInterrupt``, so every cleanup path runs for it.
+
+    Parameters
+    ----------
+    signum : int
+        The signal (``signal.SIGINT`` or ``signal.SIGTERM``).
+
+    """
+
+    def __init__(self, signum: int = signal.SIGINT) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+
+def interrupted_exit_code(err: BaseException | None = None) -> int:
+    """
+    Return the exit code of an interrupt: 128 + the signal (130 for Ctrl-C, 143 for SIGTERM).
+
+    Parameters
+    ----------
+    err : BaseException, optional
+        The ``KeyboardInterrupt`` caught (an :class:`Interrupted` carries its signal).
+
+    Returns
+    -------
+    int
+
+    """
+    return 128 + getattr(err, 'signum', signal.SIGINT)
 
 
 class ClusterError(GyroNoiseError):

@@ -44,7 +44,7 @@ class _Parser(HTMLParser):
         super().__init__(convert_charrefs=True)
         self.data = None
         self.nums = []        # (pointer, fmt, text, scale)
-        self.cells = []       # text of each <td> of section#tables outside the number spans
+        self.cells = []       # text of each <td> of section#tables and #card outside number spans
         self.refs = []        # (tag, attribute, value)
         self.sections = {}    # id -> text
         self._stack = []
@@ -65,9 +65,10 @@ class _Parser(HTMLParser):
         if tag == 'section':
             self._section = attrs.get('id')
             self.sections.setdefault(self._section, '')
-        if tag == 'td' and self._section == 'tables':
+        if tag == 'td' and self._section in ('tables', 'card'):
             self._cell = []
-        if tag == 'code' and attrs.get('class') == 'key' and self._cell is not None:
+        if ((tag == 'code' and attrs.get('class') == 'key')
+                or (tag == 'span' and attrs.get('class') == 'unit')) and self._cell is not None:
             self._key = True
         if tag == 'span' and attrs.get('class') == 'num':
             self._num = [attrs['data-json'], attrs['data-fmt'], '',
@@ -80,7 +81,7 @@ class _Parser(HTMLParser):
         if tag == 'span' and self._num is not None:
             self.nums.append(tuple(self._num))
             self._num = None
-        if tag == 'code':
+        if tag == 'code' or (tag == 'span' and self._key):
             self._key = False
         if tag == 'td' and self._cell is not None:
             self.cells.append(''.join(self._cell))
@@ -94,7 +95,8 @@ class _Parser(HTMLParser):
         elif self._num is not None:
             self._num[2] += data
         elif self._cell is not None and not self._key:
-            # a JSON key name (code.key) may hold a unit's digits (m_s2): not a number
+            # a JSON key name (code.key) or a unit (span.unit) may hold a unit's digits (m_s2,
+            # m/s^2): not a number
             self._cell.append(data)
         if self._section is not None:
             self.sections[self._section] += data
@@ -170,12 +172,42 @@ def _pixels(png):
     return np.round(np.asarray(img)[..., :3] * 255).astype(np.int16)
 
 
-def check_in_browser(html_path, tmp_path, *, figures):
-    """
-    Load a report.html in headless Chromium and check it.
+#: The window a new user opens the page in (a laptop screen).
+VIEWPORT = {'width': 1280, 'height': 800}
 
-    Asserts no console error, no request leaving the file and every figure drawn (its curves'
-    colours on screen); keeps a full-page screenshot under ``tmp_path``, returns its path.
+#: Geometry of the page in the window: its width, and the verdict line and first card table.
+_GEOMETRY = """() => {
+  const box = sel => { const e = document.querySelector(sel);
+                       if (!e) return null;
+                       const r = e.getBoundingClientRect();
+                       return {top: r.top, bottom: r.bottom, height: r.height}; };
+  return {width: document.documentElement.scrollWidth,
+          verdict: box('#verdict'), card: box('#card table'),
+          images: Array.from(document.querySelectorAll('img.png')).map(i => i.naturalWidth)};
+}"""
+
+
+def check_first_screen(geometry, viewport=VIEWPORT):
+    """Assert the answer is on the first screen and nothing is wider than the window."""
+    assert geometry['width'] <= viewport['width'], (
+        f"page {geometry['width']} px wide in a {viewport['width']} px window")
+    verdict, card = geometry['verdict'], geometry['card']
+    assert verdict is not None, 'no verdict line'
+    assert 0 <= verdict['top'] and verdict['bottom'] <= viewport['height'], verdict
+    assert card is not None, 'no card'
+    assert card['bottom'] <= viewport['height'], f'card ends at {card["bottom"]} px: {card}'
+    assert all(w > 0 for w in geometry['images']), geometry['images']
+
+
+def check_in_browser(html_path, tmp_path, *, figures, first_screen=True):
+    """
+    Load a report.html in headless Chromium (a 1280x800 window) and check it.
+
+    Asserts no console error, no request leaving the file, every figure drawn (its curves'
+    colours on screen) and every embedded image decoded; with ``first_screen`` the verdict line
+    and the first card table inside the first 800 px and the page no wider than the window.
+    Keeps the first screen (``first_screen.png``) and a full-page screenshot
+    (``report_screenshot.png``) under ``tmp_path``; returns the full page's path.
     """
     try:
         from playwright.sync_api import sync_playwright
@@ -189,7 +221,7 @@ def check_in_browser(html_path, tmp_path, *, figures):
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=exe, args=CHROMIUM_ARGS)
         try:
-            page = browser.new_page(viewport={'width': 1200, 'height': 900})
+            page = browser.new_page(viewport=VIEWPORT)
             page.on('console', lambda m: errors.append(m.text) if m.type == 'error' else None)
             page.on('pageerror', lambda e: errors.append(str(e)))
 
@@ -210,6 +242,8 @@ def check_in_browser(html_path, tmp_path, *, figures):
                     "document.querySelectorAll('div.figure > div').length === n && "
                     'Bokeh.documents.every(d => d.is_idle)', arg=figures, timeout=60_000)
             tmp_path.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=str(tmp_path / 'first_screen.png'))
+            geometry = page.evaluate(_GEOMETRY)
             shot = tmp_path / 'report_screenshot.png'
             page.screenshot(path=str(shot), full_page=True)
             for k in range(figures):
@@ -228,4 +262,6 @@ def check_in_browser(html_path, tmp_path, *, figures):
     assert not errors, errors
     outside = [u for u in requests if not u.startswith(('file:', 'data:', 'blob:', 'about:'))]
     assert not outside, outside
+    if first_screen:
+        check_first_screen(geometry)
     return shot

@@ -202,7 +202,36 @@ def test_three_storages_in_order_with_labels_and_two_jobs(sqlite_bag, tmp_path, 
     assert not list(out.glob('*.png'))
 
 
-def test_reference_adds_health_verdicts(tmp_path, make_record):
+def test_a_record_shorter_than_one_chunk_gets_its_allan_deviation_alone(odd_bags, tmp_path,
+                                                                        capsys):
+    # 200 samples against a 600-sample chunk: the Allan deviation and its readout, said so; the
+    # chunk tables leave the bag out (issue 29: the 17 s x-io record was refused)
+    out = tmp_path / 'o'
+    assert main([*FAST, str(odd_bags / 'short'), '--out', str(out)]) == 0
+    err = capsys.readouterr().err
+    assert 'Allan deviation only: 200 samples, shorter than one chunk of 600' in err
+    doc = json.loads((out / 'summary.json').read_text())
+    b = doc['bags'][0]
+    assert b['allan_only'].startswith('200 samples') and b['chunks_cut'] == 0
+    assert all(a['allan_datasheet']['arw_rad_per_sqrt_s'] > 0 for a in b['axes'].values())
+    md = (out / 'summary.md').read_text()
+    assert 'Allan deviation only' in md and 'offset drift of the chunk bias' not in md
+    assert (out / 'allan.csv').read_text().count('\n') > 10 and (out / 'imu.yaml').is_file()
+
+
+def test_labels_one_at_a_time_as_the_readme_gives_them(sqlite_bag, tmp_path, make_record):
+    # README: --label ref --label H1 (appended), the same as --label ref H1
+    sq, stamps, gyro, _ = sqlite_bag
+    mc = write_ros2(make_record, tmp_path / 'mc', stamps, gyro, np.zeros_like(gyro),
+                    storage='mcap')
+    out = tmp_path / 'out'
+    assert main([str(sq), str(mc), '--label', 'ref', '--label', 'H1', '--axis', 'z', '--jobs',
+                 '1', '--no-figures', '--no-html', '--out', str(out), *FAST]) == 0
+    assert [b['label'] for b in json.loads((out / 'summary.json').read_text())['bags']] == [
+        'ref', 'H1']
+
+
+def test_reference_adds_health_verdicts(tmp_path, make_record, capsys):
     n = 8 * SIZE
     stamps, gyro, accel = sim(n, seed=3)
     ref = write_ros2(make_record, tmp_path / 'ref', stamps, gyro, accel)
@@ -227,10 +256,18 @@ def test_reference_adds_health_verdicts(tmp_path, make_record):
     # 8 chunks: too few for the robust chunk statistics (10), said, not judged
     assert items['Order deviation, variance method'] == 'undetermined'
     assert doc['options']['thresholds']['reference_warn_sigma'] == 5.0
-    assert '### Health verdict against the reference' in (out / 'summary.md').read_text()
-    # A two-bag summary as reference needs the bag named.
+    md = (out / 'summary.md').read_text()
+    assert '### Health verdict against the reference' in md
+    # the verdict line opens summary.md: ERROR, naming the bag and axis; the card shows each
+    # gyro axis' level against the reference
+    assert md.startswith('# gyro_noise_analyze summary\n\n**Verdict: ERROR**. ')
+    assert 'h1 z against the reference: ' in md.split('\n')[2]
+    assert '| Against the reference |' in md and '| ERROR |' in md
+    # A two-bag summary as reference needs the bag named, and the message names the option.
+    capsys.readouterr()
     assert main([str(h1), '--reference', str(out / 'summary.json'), '--out', str(tmp_path / 'x'),
                  *FAST]) == 2
+    assert 'choose one with --reference-bag' in capsys.readouterr().err
     assert main([str(h1), '--reference', str(out / 'summary.json'), '--reference-bag', 'h1',
                  '--jobs', '1', '--no-figures', '--out', str(tmp_path / 'x'), *FAST]) == 0
     again = json.loads((tmp_path / 'x'
@@ -261,6 +298,9 @@ def test_nan_gaps_and_out_of_order_are_counted_not_fatal(tmp_path, capsys, make_
     statuses = {(r['axis'], r['chunk']): r['status'] for r in read_csv(out / 'chunks.csv')}
     assert statuses[('x', '1')] == 'nan' and statuses[('y', '1')] == 'ok'
     assert statuses[('y', '0')] == statuses[('y', '2')] == 'dropped'
+    # the verdict line says the loss first: WARN
+    first = (out / 'summary.md').read_text().split('\n')[2]
+    assert first.startswith('**Verdict: WARN**. ') and '6 sample(s) lost in 2 gap(s)' in first
 
 
 @pytest.fixture(scope='module')
@@ -286,11 +326,10 @@ def odd_bags(tmp_path_factory, make_record):
     (['short', '--topic', '/imu/temperature'], 3, 'not sensor_msgs/msg/Imu'),
     (['empty'], 3, 'no messages'),
     (['cut'], 3, 'truncated MCAP'),
-    (['short'], 2, '--chunk-size 600 is larger than the record short (200 samples)'),
     (['short', '--order-grid', '0:2'], 2, 'START:STOP:STEP'),
     (['short', '--chunk-size', '40'], 2, 'chunk_size'),
     (['short', 'two', '--label', 'only-one'], 2, 'one name per bag'),
-    (['short', '--reference', 'nothing.json'], 2, 'cannot be read'),
+    (['short', '--reference', 'nothing.json'], 3, 'cannot be read'),
     (['short', '--jobs', '0'], 2, '--jobs'),
     (['short', '--axis', 'w'], 2, 'invalid choice'),
 ])
@@ -323,7 +362,7 @@ def test_progress_only_on_a_terminal(sqlite_bag, tmp_path, capsys, monkeypatch):
     assert capsys.readouterr().err == ''
 
 
-def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
+def test_out_that_cannot_be_created_is_one_line_before_any_bag_is_opened(
         odd_bags, tmp_path, capsys, monkeypatch):
     from gyro_noise_ros.bag import inputs
 
@@ -342,4 +381,4 @@ def test_out_that_cannot_be_created_is_one_line_and_the_bag_is_closed(
     assert main([*FAST, str(odd_bags / 'short'), '--out', str(blocker / 'o')]) == 6
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'cannot be created' in err[0]
-    assert opened and all(r._source is None for r in opened)  # the topic check's reader closed
+    assert opened == []  # --out is refused before the (possibly long) opening of the inputs

@@ -36,7 +36,7 @@ from gyro_noise_ros.bag import ImuBagReader
 from gyro_noise_ros.cli import analyze as analyze_cli
 from gyro_noise_ros.core.engine import NoiseEngine
 from gyro_noise_ros.core.simulate import simulate_fractional_noise
-from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.errors import InputError, ParameterError
 from gyro_noise_ros.nodes import analyzer
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos
 import numpy as np
@@ -320,11 +320,14 @@ def test_a_second_publisher_is_counted_apart_named_and_warns(context):
 
 def test_bad_parameters_are_refused_in_process(context):
     for bad, words in (({'axes': 'x,w'}, "'axes'"), ({'chunk_size': 100}, 'chunk_size'),
-                       ({'reference_summary': '/nonexistent/summary.json'}, 'cannot be read'),
                        ({'order_grid_start': 1.0, 'order_grid_stop': 0.5}, 'stop'),
                        ({'reference_warn_sigma': 20.0}, 'reference_error_sigma')):
         with pytest.raises(ParameterError, match=words):
             analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(**bad))
+    # a reference that cannot be read is an unreadable input (exit code 3), as in every tool
+    with pytest.raises(InputError, match='cannot be read'):
+        analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+            reference_summary='/nonexistent/summary.json'))
 
 
 def test_bad_parameter_exits_2_with_one_line():
@@ -336,3 +339,24 @@ def test_bad_parameter_exits_2_with_one_line():
     assert lines[-1].startswith('noise_analyzer: error:'), done.stderr
     assert "'gap_policy'" in lines[-1], done.stderr
     assert 'Traceback' not in done.stderr
+
+
+def test_a_reference_of_several_bags_is_chosen_by_reference_bag(context, tmp_path):
+    from test_health import AXIS, write_summary
+
+    two = write_summary(tmp_path / 'ref.json', [
+        {'label': 'a', 'path': 'a', 'axes': {a: AXIS for a in 'xyz'}},
+        {'label': 'b', 'path': 'b', 'axes': {a: AXIS for a in 'xyz'}}])
+    # without it the node names its own parameter (was "choose one with bag")
+    with pytest.raises(ParameterError, match='choose one with reference_bag'):
+        analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+            reference_summary=str(two)))
+    with pytest.raises(ParameterError, match="reference_bag 'c' is not in reference summary"):
+        analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+            reference_summary=str(two), reference_bag='c'))
+    node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+        reference_summary=str(two), reference_bag='b'))
+    try:
+        assert {r.source.rsplit(':', 2)[1] for r in node.engine.reference.values()} == {'b'}
+    finally:
+        node.destroy_node()

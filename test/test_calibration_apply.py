@@ -21,7 +21,7 @@ The twin writes the model as the calibration file documents it, measured = (I + 
 
 from gyro_noise_ros.calibration.apply import (Calibration, calibration_from_parameters, identity,
                                               KEYS, load_calibration, SensorCalibration)
-from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.errors import InputError, ParameterError
 import numpy as np
 import pytest
 
@@ -126,14 +126,20 @@ def test_bad_values_name_the_key(key, value, words):
 
 
 def test_bad_files(tmp_path):
+    # an unreadable calibration file is an unreadable input (exit code 3), like a missing model
     missing = tmp_path / 'nope.yaml'
-    with pytest.raises(ParameterError, match='cannot be read'):
+    with pytest.raises(InputError, match='does not exist') as err:
         load_calibration(missing)
+    assert err.value.exit_code == 3
+    binary = tmp_path / 'binary.yaml'
+    binary.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(InputError, match='cannot be read as YAML'):
+        load_calibration(binary)
     flat = tmp_path / 'flat.yaml'
     flat.write_text('accel_bias_m_s2: [0.0, 0.0, 0.0]\n')
-    with pytest.raises(ParameterError, match='ros__parameters'):
+    with pytest.raises(InputError, match='ros__parameters'):
         load_calibration(flat)
     partial = tmp_path / 'partial.yaml'
     partial.write_text('/**:\n  ros__parameters:\n    gyro_bias_rad_s: [0.0, 0.0, 0.0]\n')
-    with pytest.raises(ParameterError, match='missing accel_bias_m_s2'):
+    with pytest.raises(InputError, match='missing accel_bias_m_s2'):
         load_calibration(partial)

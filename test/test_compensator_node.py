@@ -191,9 +191,10 @@ def test_thermal_offset_is_subtracted_and_range_drives_the_level(context):
         assert values['Temperature range status'] == 'inside'
         assert values['Thermal model'] == 'linear_test'
         # Within the margin (31 degC): WARN; beyond it (40 degC): ERROR, offset not extrapolated.
+        # Three seconds apart: a die cannot move 9 degC in 20 ms (core.plausible rejects that).
         late = t_stamps[-1] + NS // 50
         for temp, level, range_name in ((31.0, WARN, 'within margin'), (40.0, ERROR, 'outside')):
-            late += NS // 50
+            late += 3 * NS
             io.temp_pub.publish(encode_temperature_cdr([late], [temp], frame_id='imu_test')[0])
             assert _spin_until(io.executor, lambda: node.thermal.stamp_ns == late, 10)
             status = node.diagnostics().status[0]

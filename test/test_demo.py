@@ -82,7 +82,9 @@ def test_quick_demo_runs_the_story_and_writes_the_report(tmp_path, ros_graph):
     # the one page to open: the summary's numbers, under 5 MB, drawn in a browser
     assert (report / 'report.html').stat().st_size <= 5 * 1024 * 1024
     check_static(report / 'report.html', json.loads((report / 'summary.json').read_text()))
-    check_in_browser(report / 'report.html', tmp_path, figures=4)
+    # five figures: the Allan deviation of the gyro and of the accelerometer, bias, variance,
+    # orders; the verdict line and the datasheet card on the first 1280x800 screen
+    check_in_browser(report / 'report.html', tmp_path, figures=5)
     assert (out / 'recording' / 'metadata.yaml').is_file()
     assert 'finished: the report is complete' in (out / 'GYRO_NOISE_DEMO.txt').read_text()
     assert _our_processes(domain) == []

@@ -38,11 +38,9 @@ LIMIT = 25
 ALLOWED = {
     'calibration/dwell_noise.py', 'calibration/emulate.py', 'calibration/excitation.py',
     'calibration/gyro_turns.py', 'calibration/interval.py', 'calibration/sixpos.py',
-    'calibration/static.py', 'cli/demo.py', 'cli/importer.py', 'core/allan.py',
-    'core/readout.py', 'explain/baseline.py', 'explain/effects.py', 'explain/signatures.py',
-    'explain/synthetic.py', 'explain/uncertainty.py', 'explain/workflow.py', 'link/clock.py',
+    'calibration/static.py', 'cli/demo.py', 'cli/importer.py', 'core/allan.py', 'link/clock.py',
     'nodes/analyzer.py', 'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py',
-    'thermal/elman.py', 'thermal/export.py', 'thermal/live.py', 'thermal/metrics.py',
+    'thermal/elman.py', 'thermal/live.py', 'thermal/metrics.py',
     'thermal/mopso.py', 'thermal/parallel.py', 'thermal/simulate.py',
 }
 

@@ -148,3 +148,54 @@ def test_same_seed_same_result(sweep):
     again = explain(meas, seed=0, ensemble=ENSEMBLE, bootstrap=0)
     assert again.to_dict()['steps'] == first.to_dict()['steps']
     assert again.gap_initial == first.gap_initial and again.gap_final == first.gap_final
+
+
+@pytest.mark.slow  # the emulator writes 240 s at 104 Hz, explain runs on one axis (~10 s)
+def test_the_emulators_own_record_is_explained(tmp_path, capsys):
+    # issue 30: on the emulator's record the injected transient was found exactly and the run
+    # ended "UNEXPLAINED ... below the band": the model was louder than the record, because the
+    # baseline fitted to the rounded values kept the rounding noise the lattice adds again
+    # (docs/discrepancy.md section 5, Sheppard's correction)
+    from gyro_noise_ros.cli import emulator
+    from gyro_noise_ros.cli import explain as explain_cli
+    from gyro_noise_ros.link.lsm6dso32 import gyro_sensitivity_rad_s_per_lsb
+    import json
+
+    bag = tmp_path / 'emu'
+    assert emulator.main(['--write-bag', str(bag), '--duration-s', '240', '--odr-hz', '104',
+                          '--helium-amplitude-dps', '0.1', '--helium-delay-s', '60',
+                          '--helium-tau-s', '60']) == 0
+    out = tmp_path / 'out'
+    assert explain_cli.main([str(bag), '--axis', 'z', '--out', str(out), '--ensemble', '8',
+                             '--bootstrap', '0', '--no-html', '--quiet']) == 0
+    capsys.readouterr()
+    doc = json.loads((out / 'explain.json').read_text())
+    steps = {s['effect']: s['params'] for s in doc['steps']}
+    assert set(steps) == {'quantization', 'bias_transient'}
+    assert not doc['unexplained'] and not doc['baseline_over_estimates']
+    # the emulator's 2000 dps LSB (70 mdps) and its helium rise: 0.1 deg/s, 60 s, 60 s. The
+    # transient is fitted on chunk means of noise 0.058 deg/s / sqrt(250): a few % on each
+    assert steps['quantization']['step_rad_s'] == pytest.approx(
+        gyro_sensitivity_rad_s_per_lsb(2000), rel=1e-6)
+    transient = steps['bias_transient']
+    assert transient['amplitude_rad_s'] == pytest.approx(np.deg2rad(0.1), rel=0.1)
+    assert transient['delay_s'] == pytest.approx(60.0, abs=6.0)
+    assert transient['time_constant_s'] == pytest.approx(60.0, rel=0.25)
+
+
+#: Pairs whose two effects leave different traces (docs/discrepancy.md section 6, "Two effects at
+#: once": these pairs named both with no false effect on 80 of 80 records, seeds 300-304), one
+#: record each at a seed outside the table's.
+PAIRS = (('quantization', 'temperature_sensitivity'), ('sinusoid', 'bias_transient'),
+         ('bias_drift', 'sample_loss'), ('rate_random_walk', 'sample_loss'),
+         ('gauss_markov', 'sample_loss'), ('sinusoid', 'bias_drift'))
+
+
+@pytest.mark.slow  # six records explained, ~5 s each on an idle core
+def test_two_effects_at_once_are_both_named_and_nothing_else():
+    from gyro_noise_ros.explain.synthetic import outcome
+
+    got = [outcome(pair, 400) for pair in PAIRS]
+    good = [g['hidden'] for g in got if g['all_found'] and not g['extra']]
+    # 80 of 80 in the table: a 95 % lower bound of 96 %; with 96 % P(fewer than 5 of 6) = 2 %
+    assert len(good) >= 5, [(g['hidden'], g['named']) for g in got]

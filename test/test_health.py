@@ -37,7 +37,7 @@ from gyro_noise_ros.core.health import (
     ReferenceStats,
 )
 from gyro_noise_ros.core.results import AxisSummary
-from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.errors import InputError, ParameterError
 import numpy as np
 import pytest
 
@@ -344,25 +344,32 @@ def test_load_reference(tmp_path):
     with pytest.raises(ParameterError, match='holds 2 bags'):
         load_reference(two)
     assert load_reference(two, bag='b').source.endswith(':b:z')
-    with pytest.raises(ParameterError, match='cannot be read'):
+    # a reference that cannot be read is an unreadable input (exit code 3), as in every tool
+    with pytest.raises(InputError, match='cannot be read'):
         load_reference(tmp_path / 'missing.json')
     (tmp_path / 'bad.json').write_text('{')
-    with pytest.raises(ParameterError, match='not JSON'):
+    with pytest.raises(InputError, match='not JSON'):
         load_reference(tmp_path / 'bad.json')
     broken = write_summary(tmp_path / 'u.json', [{'label': 'a', 'axes': {'z': {
         'chunks': 1, 'reference_statistics': AXIS['reference_statistics']}}}])
-    with pytest.raises(ParameterError, match='missing or bad field'):
+    with pytest.raises(InputError, match='missing or bad field'):
         load_reference(broken)
+    # one chunk has no offset drift: not a reference, and the message says what to change
+    short = write_summary(tmp_path / 'v.json', [{'label': 'a', 'axes': {'z': {
+        **AXIS, 'chunks': 1, 'offset_drift_rad_s2': None}}}])
+    with pytest.raises(ParameterError, match=r'1 chunk\(s\), too few') as err:
+        load_reference(short)
+    assert err.value.parameters == ('chunk_size',)
 
 
 def test_older_reference_summary_is_refused_with_one_line(tmp_path):
     old = {k: v for k, v in AXIS.items() if k != 'reference_statistics'}
     p = write_summary(tmp_path / 'old.json', [{'label': 'ref', 'path': '/b/ref',
                                                'axes': {'z': old}}])
-    with pytest.raises(ParameterError, match='regenerate it with this version') as err:
+    with pytest.raises(InputError, match='regenerate it with this version') as err:
         load_reference(p, axis='z')
     assert '\n' not in str(err.value) and '/b/ref' in str(err.value)
-    with pytest.raises(ParameterError, match='regenerate'):
+    with pytest.raises(InputError, match='regenerate'):
         reference_per_axis(str(p), ('x', 'y', 'z'))
 
 

@@ -29,6 +29,7 @@ from gyro_noise_ros.app import importer as import_app
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.bag.bulk import BulkImuBagWriter, MCAP_CHUNK_BYTES
 from gyro_noise_ros.cli import emulator as emu_cli
+from gyro_noise_ros.errors import OutputError
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Reader
@@ -140,10 +141,10 @@ def test_a_failed_write_in_the_writer_thread_is_raised_once_and_stops_the_import
     def failing(self, *args, **kwargs):
         calls.append(len(calls))
         if len(calls) == 3:
-            raise import_app.OutputError('bag: writing failed: No space left on device')
+            raise OutputError('bag: writing failed: No space left on device')
 
     monkeypatch.setattr(BulkImuBagWriter, 'write_imu', failing)
-    with pytest.raises(import_app.OutputError, match='No space left'):
+    with pytest.raises(OutputError, match='No space left'):
         import_app.import_logs(corrupt_logs, tmp_path / 'bag', threads=2, chunk_bytes=1 << 12)
     # the writes queued behind the failed one were dropped, not run
     assert len(calls) == 3
@@ -160,5 +161,5 @@ def test_threads_must_be_one_or_two(corrupt_logs, tmp_path):
 def test_a_bag_that_cannot_be_created_is_one_error(corrupt_logs, tmp_path, threads):
     blocker = tmp_path / 'file'
     blocker.write_text('x')
-    with pytest.raises(import_app.OutputError, match='cannot be created'):
+    with pytest.raises(OutputError, match='cannot be created'):
         import_app.import_logs(corrupt_logs, blocker / 'bag', threads=threads)

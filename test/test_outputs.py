@@ -56,7 +56,12 @@ def test_staged_output_leaves_nothing_on_error(tmp_path):
         with staged_output(out) as stage:
             (stage / 'summary.json').write_text('{}')
             raise KeyboardInterrupt
-    assert list(out.iterdir()) == []
+    assert not out.exists()  # the folder the run created went with it
+    out.mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        with staged_output(out) as stage:
+            raise KeyboardInterrupt
+    assert list(out.iterdir()) == []  # the user's folder stays
 
 
 def test_a_killed_run_leaves_a_hidden_partial_that_the_next_run_removes(tmp_path):

@@ -114,3 +114,63 @@ def test_the_static_part_is_the_one_the_analyzer_picks(table, tmp_path):
     end_s = (stamps[-1] - stamps[0]) / 1e9
     assert doc['left_out']['static_segment_s'][1] == pytest.approx(end_s, abs=1e-9)
     assert all(b <= end_s + 1e-9 for _, b in doc['left_out']['static_segments_s'])
+
+
+def test_a_random_walk_is_resolved_only_where_the_curve_rises_by_it(table):
+    # issue 30: K was 'resolved' on a curve that rose 29 % after its minimum (log slope 0.28).
+    # Now only over a +1/2 region of two octaves or more after the floor, and there the
+    # script's own plain-numpy ADEV rises too: a +1/2 slope (0.35 at least, by the rule's LS
+    # window) over two octaves is x1.6; 1.3 leaves room for the endpoint scatter of the LS fit
+    _, rows = table
+    for name, axis, v in rows:
+        r = v['readout']
+        lo, hi = r.rate_random_walk_tau_range_s
+        if r.rate_random_walk_resolved:
+            assert hi >= 4.0 * lo and lo >= r.bias_stability_tau_s, (name, axis)
+            assert v['ind_rrw_rise'] >= 1.3, (name, axis, v['ind_rrw_rise'])
+        else:
+            assert np.isnan(lo) and np.isnan(hi)
+        # a curve still falling at its floor (an upper bound) cannot show a random walk
+        assert not (r.bias_stability_upper_bound and r.rate_random_walk_resolved), (name, axis)
+
+
+def _comment(text, key):
+    return next(line for line in text.splitlines() if line.startswith(f'# {key}:'))
+
+
+@pytest.mark.parametrize('parts', [('mpu6050_static_sunsided', 'mpu6050_static_10min.csv'),
+                                   ('px4_ulog_sample_static', 'sample.ulg')],
+                         ids=['mpu6050', 'px4'])
+def test_imu_yaml_comments_name_the_axis_and_tau_of_their_value(tmp_path, parts):
+    # issue 30: the random-walk comment described axis x's bias-stability tau while the value
+    # came from axis y. Every comment now names the axis whose value is written and its taus.
+    import yaml
+
+    rc = analyze.main([str(real_data(*parts)), '--out', str(tmp_path), '--chunk-size', '5000',
+                       '--memory', '50', '--order-grid', '0:2:0.5', '--jobs', '1',
+                       '--no-figures', '--no-html', '--quiet'])
+    assert rc == 0
+    text = (tmp_path / 'imu.yaml').read_text()
+    doc = yaml.safe_load(text)
+    sheets = {a: d['allan_datasheet'] for a, d in json.loads(
+        (tmp_path / 'summary.json').read_text())['bags'][0]['axes'].items()}
+    # the density: the largest N, from its own -1/2 region
+    axis = max(sheets, key=lambda a: sheets[a]['arw_rad_per_sqrt_s'])
+    assert doc['gyroscope_noise_density'] == sheets[axis]['arw_rad_per_sqrt_s']
+    lo, hi = sheets[axis]['arw_tau_range_s']
+    assert (f'axis {axis}: the -1/2 line through its Allan curve at tau = {lo:.3g}-{hi:.3g} s'
+            in _comment(text, 'gyroscope_noise_density'))
+    # the random walk: the largest of each axis' fitted K and bound, with that axis' taus
+    walk = {a: max(d['rate_random_walk_rad_per_s_sqrt_s'] or 0.0,
+                   d['rate_random_walk_bound_rad_per_s_sqrt_s']) for a, d in sheets.items()}
+    axis = max(walk, key=walk.get)
+    assert doc['gyroscope_random_walk'] == pytest.approx(walk[axis], rel=1e-12)
+    note = _comment(text, 'gyroscope_random_walk')
+    assert note.startswith(f'# gyroscope_random_walk: axis {axis}:')
+    sheet = sheets[axis]
+    if walk[axis] == sheet['rate_random_walk_bound_rad_per_s_sqrt_s']:
+        assert f"longest tau ({sheet['rate_random_walk_bound_tau_s']:.3g} s)" in note
+        if sheet['bias_stability_upper_bound']:
+            assert f"floor at tau = {sheet['bias_stability_tau_s']:.3g} s" in note
+    for other in set(sheets) - {axis}:
+        assert f'axis {other}' not in note

@@ -22,7 +22,8 @@ import hashlib
 import json
 
 from _html_report import check_static, parse_report
-from gyro_noise_ros.analysis.summary_md import in_short_markdown
+from gyro_noise_ros.analysis.card import card_markdown, verdict
+from gyro_noise_ros.analysis.summary_md import glossary_markdown, in_short_markdown
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.cli.analyze import main as analyze_main
 from gyro_noise_ros.htmlreport.figures import (envelope_decimate, log_decimate,
@@ -86,11 +87,47 @@ def test_in_short_is_the_markdown_s(analyzed):
     md = in_short_markdown(doc)
     assert md in (out / 'summary.md').read_text()
     text = (out / 'report.html').read_text()
-    assert markdown_to_html(md) in text
-    # "In short" comes first, then figures, tables, method
-    order = [text.index(f'<section id="{s}">') for s in ('in-short', 'figures', 'tables',
-                                                         'method')]
+    # the page shows the same paragraphs, its glossary folded under them
+    assert markdown_to_html(in_short_markdown(doc, glossary=False)) in text
+    assert ('<details id="glossary"><summary>What the numbers mean</summary>\n'
+            + markdown_to_html(glossary_markdown())) in text
+    # the answer first: verdict, card, then "In short", figures, tables, method
+    order = [text.index('<div id="verdict"')] + [
+        text.index(f'<section id="{s}">') for s in ('card', 'in-short', 'figures', 'tables',
+                                                    'method')]
     assert order == sorted(order)
+
+
+def test_verdict_and_card_are_summary_md_s(analyzed):
+    """The page opens with summary.md's verdict and card: gyro and accelerometer, every axis."""
+    out, _ = analyzed
+    doc = json.loads((out / 'summary.json').read_text())
+    level, text = verdict(doc)
+    md = (out / 'summary.md').read_text()
+    assert md.startswith(f'# gyro_noise_analyze summary\n\n**Verdict: {level}**. {text}')
+    assert card_markdown(doc) in md
+    page = parse_report(out / 'report.html')
+    card = page.sections['card']
+    for i, b in enumerate(doc['bags']):
+        for axis in 'xyz':
+            assert f'gyro {axis}' in card and f'accel {axis}' in card
+    shown = {n[0] for n in page.nums}
+    for i, b in enumerate(doc['bags']):
+        for axis in 'xyz':
+            acc = f'/bags/{i}/accelerometer_allan/{axis}'
+            for key in ('velocity_random_walk_m_s2_per_sqrt_hz', 'bias_stability_m_s2',
+                        'bias_stability_ci_low_m_s2', 'bias_instability_m_s2'):
+                assert f'{acc}/{key}' in shown, key
+            gyro = f'/bags/{i}/axes/{axis}/allan_datasheet'
+            for key in ('arw_deg_per_sqrt_h', 'arw_rad_per_sqrt_s', 'bias_stability_deg_h',
+                        'bias_stability_ci_high_deg_h', 'bias_instability_deg_h'):
+                assert f'{gyro}/{key}' in shown, key
+    # the imu.yaml block is the file, character for character
+    assert (out / 'imu.yaml').read_text() in card
+    # the verdict's level is the first thing on the page after the title
+    assert page.sections.get('card') is not None
+    html = (out / 'report.html').read_text()
+    assert f'<span class="level">{level}</span>' in html
 
 
 def test_provenance_command_versions_inputs(analyzed):
@@ -109,8 +146,9 @@ def test_provenance_command_versions_inputs(analyzed):
 def test_figures_are_inline_bokeh(analyzed):
     out, _ = analyzed
     text = (out / 'report.html').read_text()
-    # BokehJS once, inline; four figures: Allan, bias, variance, orders
-    assert text.count('<div class="figure">') == 4
+    # BokehJS once, inline; five figures: Allan of the gyro and of the accelerometer, bias,
+    # variance, orders
+    assert text.count('<div class="figure">') == 5
     assert text.count('Bokeh=') + text.count('Bokeh =') >= 1
     assert '<script src=' not in text and '<link ' not in text
 
@@ -255,6 +293,17 @@ def test_thermal_compare_page_is_compare_json(thermal_outputs):
             assert v['verdict']['text'] in text
     for bag in bags:
         assert bag in page.sections['method']
+    # the verdict line is compare.md's; the card ranks the methods by x noise floor
+    from gyro_noise_ros.thermal.report import compare_verdict
+
+    level, line = compare_verdict(doc)
+    assert (tmp / 'c' / 'compare.md').read_text().startswith(
+        f'# Held-out comparison\n\n**{level}**: {line}')
+    html = (tmp / 'c' / 'report.html').read_text()
+    assert f'<div id="verdict" class="verdict verdict-{level.lower()}"' in html
+    assert f'<span class="level">{level}</span>' in html
+    assert {f'/ranking/{i}/mean_over_floor' for i in range(2)} <= shown
+    assert all(r['method'] in page.sections['card'] for r in doc['ranking'])
 
 
 @pytest.mark.slow
@@ -265,6 +314,14 @@ def test_thermal_apply_page_is_metrics_json(thermal_outputs):
     assert {f'/axes/{a}/processed/residual_drift_deg_s' for a in 'xyz'} <= {
         n[0] for n in page.nums}
     assert (tmp / 'a' / 'report.html').read_text().count('<div class="figure">') == 4
+    # the verdict line is report.md's; the card holds the yardstick
+    from gyro_noise_ros.thermal.report import apply_verdict
+
+    level, line = apply_verdict(doc)
+    assert f'**{level}**: {line}' in (tmp / 'a' / 'report.md').read_text()
+    assert f'<span class="level">{level}</span>' in (tmp / 'a' / 'report.html').read_text()
+    assert {f'/yardstick/over_floor/{a}' for a in range(3)} <= {n[0] for n in page.nums}
+    assert 'x noise floor' in page.sections['card']
     assert not (tmp / 'a2' / 'report.html').exists() and (tmp / 'a2' / 'metrics.json').exists()
 
 
@@ -367,10 +424,15 @@ def test_excitation_page_is_excitation_json(tmp_path):
     doc = json.loads((out / 'excitation.json').read_text())
     page = check_static(out / 'report.html', doc, min_numbers=30)
     shown = {n[0]: n for n in page.nums}
-    # SI in the JSON, g on the page (excitation.md's unit), checked through the scale
-    assert shown['/before/amplitude_m_s2'][3] == pytest.approx(1 / 9.80665)
+    # SI in the JSON, mg on the page (the unit policy, excitation.md's unit), checked through
+    # the scale
+    assert shown['/before/amplitude_m_s2'][3] == pytest.approx(1 / 9.80665e-3)
     assert '/change/amplitude_relative' in shown
-    assert 'after, distortion verdict: DISTORTED' in page.sections['in-short']
+    # the first screen: a 5 % second harmonic after the stress is a defect beyond the tolerance
+    html = (out / 'report.html').read_text()
+    assert '<span class="level">ERROR</span>' in html and 'after: DISTORTED' in html
+    card = page.sections['card']
+    assert 'DISTORTED' in card and 'beyond the' in card and '/after/thd' in shown
     assert not (tmp_path / 'exc_nohtml' / 'report.html').exists()
 
 
@@ -425,6 +487,10 @@ def test_explain_page_is_explain_json(tmp_path):
     page = check_static(out / 'report.html', doc, min_numbers=12)
     shown = {n[0] for n in page.nums}
     assert {'/gap_initial', '/gap_final', '/baseline/alpha'} <= shown
-    assert 'Verdict:' in page.sections['in-short']
+    # the verdict line is report.md's verdict; the figures report.md shows are embedded
+    html = (out / 'report.html').read_text()
+    assert '<div id="verdict" class="verdict verdict-ok"' in html
+    assert 'consistent with the baseline model' in html.split('<section id="card">')[0]
+    assert html.count('<img class="png"') == 1 and 'src="data:image/png;base64,' in html
     assert 'gyro_noise_explain' in page.sections['method']
     assert not (tmp_path / 'exp_nohtml' / 'report.html').exists()

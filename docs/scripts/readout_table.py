@@ -20,7 +20,7 @@ Usage: python docs/scripts/readout_table.py [--data DIR] [--out FILE] [--reps N]
 Records (``../shared/data/real``): the six ADIS16405 runs (npz, 100 Hz nominal), the MPU6050
 CSV, the PX4 ULog (``sample.ulg``, topic ``sensor_combined``) and the x-io CSV, the last three
 through the package's reader (``bag.tabular.TableImuReader``), cut to the longest static segment
-as ``gyro_noise_analyze --static auto`` cuts them (``core.segments.WindowStats``) at the rate
+as ``gyro_noise_analyze --static auto`` cuts them (``core.segments.static_part``) at the rate
 the time base estimates (``core.timebase.estimate_rate``). Ours: ``core.readout.read_allan`` of
 the dense Allan deviation (~10 taus per decade: the analyzer's default).
 
@@ -52,9 +52,10 @@ import time
 
 from gyro_noise_ros.bag.tabular import TableImuReader
 from gyro_noise_ros.core.allan import allan_deviation
-from gyro_noise_ros.core.readout import read_allan
-from gyro_noise_ros.core.segments import WindowStats
+from gyro_noise_ros.core.readout import fit_noise_terms_band_limited, read_allan
+from gyro_noise_ros.core.segments import static_part
 from gyro_noise_ros.core.timebase import estimate_rate
+from gyro_noise_ros.errors import InputDataError
 from gyro_noise_ros.units import RAD_TO_DEG
 import numpy as np
 
@@ -88,14 +89,11 @@ def table_record(path):
         batches = list(reader.iter_batches(1 << 30))
     stamps = np.concatenate([b.stamp_ns for b in batches])
     gyro = np.concatenate([b.gyro for b in batches])
-    stats = WindowStats()
-    stats.update(stamps, gyro)
-    seg = stats.segment()
+    part = static_part(stamps, gyro)
     first, last = int(stamps[0]), int(stamps[-1])
     note = f'static throughout ({(last - first) / 1e9:.1f} s)'
-    if seg is not None and not seg.static_throughout:
-        keep = (stamps >= seg.start_ns) & (stamps < seg.end_ns)
-        stamps, gyro = stamps[keep], gyro[keep]
+    if part.cut_samples:
+        stamps, gyro = stamps[part.keep], gyro[part.keep]
         note = (f'longest static segment, t = {(stamps[0] - first) / 1e9:.1f}-'
                 f'{(stamps[-1] - first) / 1e9:.1f} s of {(last - first) / 1e9:.1f} s')
     return gyro, float(estimate_rate(stamps).rate_hz), note
@@ -209,7 +207,34 @@ def evaluate(y, rate_hz):
         'arw_in_interval': bool(r.arw_ci_low_rad_per_sqrt_s <= ind_arw
                                 <= r.arw_ci_high_rad_per_sqrt_s),
         'old_bias': old_bs, 'old_tau': old_tau, 'old_arw': old_arw(result),
+        'old_rrw': old_rrw_resolved(result), 'ind_rrw_rise': independent_rise(
+            y, rate_hz, r.rate_random_walk_tau_range_s),
     }
+
+
+def old_rrw_resolved(result):
+    """Return the rule before issue 30: the K term dominates the IEEE 952 fit at its last tau."""
+    try:
+        terms = fit_noise_terms_band_limited(result)
+    except InputDataError:
+        return False
+    k = terms.rate_random_walk_rad_per_s_sqrt_s
+    k = k if math.isfinite(k) else 0.0
+    return bool(k > 0.0 and k * k * terms.tau_max_s / 3.0
+                > 0.5 * float(terms.avar_model([terms.tau_max_s])[0]))
+
+
+def independent_rise(y, rate_hz, span):
+    """Return the plain-numpy ADEV at the end of a tau range over that at its start (or NaN)."""
+    if not all(math.isfinite(v) for v in span):
+        return math.nan
+    x = np.concatenate([[0.0], np.cumsum(np.asarray(y, dtype=np.float64) - np.mean(y))])
+    adev = []
+    for tau in span:
+        m = int(round(tau * rate_hz))
+        d = x[2 * m:] - 2.0 * x[m:-m] + x[:-2 * m]
+        adev.append(math.sqrt(np.dot(d, d) / (2.0 * m * m * d.size)))
+    return adev[1] / adev[0]
 
 
 # ---- simulation -------------------------------------------------------------------------
@@ -263,13 +288,76 @@ def simulate(reps, seed):
     return rows
 
 
+def simulate_walk(reps, seed):
+    """
+    Return rows (case, records, resolved, old rule resolved) of the random-walk flag.
+
+    3000 s at 10 Hz, ARW 1e-3 rad/sqrt(s): white noise; white into a flicker floor met at T/100;
+    white plus a random walk whose +1/2 line crosses the white noise at T/300, T/100, T/30.
+    """
+    rng = np.random.default_rng(seed)
+    rate, n_arw, n = 10.0, 1e-3, 30_000
+    duration = n / rate
+    rows = []
+    for label, flick, cross in (('white noise', False, None),
+                                ('white into a flicker floor (met at T/100)', True, None),
+                                ('white + random walk crossing it at T/300', False, 300),
+                                ('white + random walk crossing it at T/100', False, 100),
+                                ('white + random walk crossing it at T/30', False, 30)):
+        new = old = 0
+        for _ in range(reps):
+            y = rng.normal(0.0, n_arw * math.sqrt(rate), n)
+            if flick:
+                y += flicker(n, rate, n_arw / (0.6643 * math.sqrt(duration / 100)), rng)
+            if cross:
+                k = math.sqrt(3.0) * n_arw / (duration / cross)
+                y += np.cumsum(rng.normal(0.0, k / math.sqrt(rate), n))
+            res = allan_deviation(y, rate, taus='dense')
+            new += read_allan(res).rate_random_walk_resolved
+            old += old_rrw_resolved(res)
+        rows.append((label, reps, new, old))
+    return rows
+
+
+def random_walk_section(results, walk, args):
+    """Return the Markdown lines of the rate random walk: real records, then simulated ones."""
+    out = ['', '## Rate random walk: resolved only where the curve shows it', '',
+           'Rule (issue 30, `core.readout.random_walk_region`): K is `resolved` when the curve '
+           'has a +1/2 region after the bias-stability tau: at least two octaves of tau whose '
+           'log-log LS slope is within 0.15 of +1/2 and whose rise excludes a flat curve (the '
+           '95 % interval of AVAR(end) / AVAR(start), F with the EDFs of `core.allan`, lies '
+           'above 1), and the K term of the IEEE 952 fit dominates at its longest tau (the rule '
+           'before, "Before" below). Independent rise: the plain ADEV of this script at the '
+           'end of the region over that at its start.', '',
+           '| Record | Axis | K (deg/h/sqrt(h)) | Resolved | +1/2 region (s) | Independent rise '
+           '| Before |', '|---|---|---:|---|---|---:|---|']
+    for (name, axis, _), v in results:
+        r = v['readout']
+        k = r.rate_random_walk_rad_per_s_sqrt_s * RAD_TO_DEG * 3600.0 * 60.0
+        lo, hi = r.rate_random_walk_tau_range_s
+        region = f'{lo:.3g}-{hi:.3g}' if r.rate_random_walk_resolved else ''
+        out.append(f"| {name} | {axis} | {_f(k, '.3g')} | "
+                   f"{'yes' if r.rate_random_walk_resolved else 'no'} | {region} | "
+                   f"{_f(v['ind_rrw_rise'], '.2f')} | {'yes' if v['old_rrw'] else 'no'} |")
+    now = sum(v['readout'].rate_random_walk_resolved for _, v in results)
+    before = sum(v['old_rrw'] for _, v in results)
+    out += ['', f'Resolved on {now} of {len(results)} axes (before: {before}).', '',
+            f'Simulated (seed {args.seed}, {walk[0][1]} records per row, 30,000 samples at '
+            '10 Hz, ARW 1e-3 rad/sqrt(s), dense taus): how often K is called resolved.', '',
+            '| Case | Records | Resolved | Before |', '|---|---:|---:|---:|']
+    for label, reps, new, old in walk:
+        out.append(f'| {label} | {reps} | {new} ({100.0 * new / reps:.0f} %) | '
+                   f'{old} ({100.0 * old / reps:.0f} %) |')
+    return out
+
+
 # ---- report -----------------------------------------------------------------------------
 
 def _f(v, spec):
     return 'n/a' if v is None or not math.isfinite(v) else format(v, spec)
 
 
-def markdown(results, sim, args, elapsed):
+def markdown(results, sim, args, elapsed, walk=None):
     """Return docs/readout.md."""
     try:
         commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True,
@@ -375,6 +463,8 @@ def markdown(results, sim, args, elapsed):
             return f'{p50:.3f} ({p5:.2f}-{p95:.2f})'
         out.append(f'| {label} | {length:.0f} | {reps} | {flagged:.1f} % | {q(ratio)} | '
                    f'{q(first)} | {q(glob)} |')
+    if walk is not None:
+        out += random_walk_section(results, walk, args)
     return '\n'.join(out) + '\n'
 
 
@@ -397,7 +487,8 @@ def main(argv=None):
             print(f'{name} {axis}: bias stability {bias_deg_s:.5f} '
                   f"deg/s (x{v['bias_ratio']:.3f}), ARW x{v['arw_ratio']:.3f}", file=sys.stderr)
     sim = simulate(args.reps, args.seed)
-    text = markdown(results, sim, args, time.time() - t0)
+    walk = simulate_walk(args.reps, args.seed)
+    text = markdown(results, sim, args, time.time() - t0, walk)
     with open(args.out, 'w') as fh:
         fh.write(text)
     print(text)

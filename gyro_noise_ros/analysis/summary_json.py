@@ -145,6 +145,8 @@ def accelerometer_readout_dict(readout: AllanReadout | None) -> dict[str, Any] |
         'velocity_random_walk_ci_high_m_s2_per_sqrt_hz': r.arw_ci_high_rad_per_sqrt_s,
         'velocity_random_walk_from_region': r.arw_from_region,
         'bias_stability_m_s2': r.bias_stability_rad_s,
+        'bias_stability_ci_low_m_s2': r.bias_stability_ci_low_rad_s,
+        'bias_stability_ci_high_m_s2': r.bias_stability_ci_high_rad_s,
         'bias_stability_tau_s': r.bias_stability_tau_s,
         'bias_stability_upper_bound': r.bias_stability_upper_bound,
         'bias_instability_m_s2': r.bias_instability_rad_s,

@@ -13,23 +13,28 @@
 # limitations under the License.
 
 """
-summary.md of an analysis: "In short" in plain words, the paper's Tables 3-6, the Allan tables.
+summary.md of an analysis: the verdict and the datasheet card first, then the rest.
+
+After them: "In short" in plain words, the paper's Tables 3-6 and the Allan tables.
 
 Rendered from the summary.json document (:mod:`.summary_json`), never from the engine's
-objects, so the Markdown cannot say a number the JSON does not hold. :func:`in_short_markdown` is
-reused by the HTML report; :func:`readout_text` is the tool's printed one-line readout.
+objects, so the Markdown cannot say a number the JSON does not hold. The verdict and the card are
+:mod:`.card`'s; :func:`in_short_markdown` and :func:`glossary_markdown` are reused by the HTML
+report; :func:`readout_text` is the tool's printed one-line readout.
 """
 
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
+from .card import card_markdown, verdict
 from ..core.health import drift_t_threshold
+from ..units import UNIT_POLICY
 
 #: The rows of one axis' tables: (bag label, that axis' entry of summary.json).
 Rows = Sequence[tuple[str, Mapping[str, Any]]]
 
-__all__ = ['IN_SHORT_DEFINITIONS', 'fmt', 'in_short_markdown', 'modes_text', 'readout_text',
-           'summary_markdown']
+__all__ = ['IN_SHORT_DEFINITIONS', 'fmt', 'glossary_markdown', 'in_short_markdown', 'modes_text',
+           'readout_text', 'summary_markdown']
 
 
 def readout_text(sheet: Mapping[str, Any]) -> str:
@@ -114,6 +119,8 @@ def _plain_summary(b: Mapping[str, Any], axis: str, a: Mapping[str, Any]) -> str
              + (', bursty stamps' if b.get('stamps_bursty') else '') + ')']
     lost = b['samples_lost']
     parts.append(f'{lost} sample(s) lost' if lost else 'no sample lost')
+    if b.get('allan_only'):
+        parts.append(f"**Allan deviation only**: {b['allan_only']}")
     left = sum(v for k, v in (b.get('left_out') or {}).items() if isinstance(v, int))
     if left:
         parts.append(f'{left} sample(s) left out (window or motion)')
@@ -144,22 +151,37 @@ def _plain_summary(b: Mapping[str, Any], axis: str, a: Mapping[str, Any]) -> str
         elif a.get(key + '_mean') is not None:
             parts.append(f"order ({name}) {a[key + '_mean']:.3f}")
     if 'health' in a:
-        parts.append(f"health {a['health']['level']}: {a['health']['message']}")
+        parts.append(f"**health {a['health']['level']}**: {a['health']['message']}")
     return '; '.join(parts) + '.'
 
 
-def in_short_markdown(doc: Mapping[str, Any]) -> str:
+def glossary_markdown() -> str:
+    """
+    Return the definitions of the numbers, one line each, as a Markdown list.
+
+    Returns
+    -------
+    str
+        What each number is and which to compare with a datasheet (:data:`IN_SHORT_DEFINITIONS`).
+
+    """
+    return '\n'.join(f'* **{name}**: {text}' for name, text in IN_SHORT_DEFINITIONS)
+
+
+def in_short_markdown(doc: Mapping[str, Any], *, glossary: bool = True) -> str:
     """
     Return the plain-language "In short" section of a summary.json document, as Markdown.
 
-    One line defines each number (bias stability, B, ARW, N, K, offset drift, the two orders)
-    and says which to compare with a datasheet; then one paragraph per bag and axis, and the
-    bags' warnings.
+    One paragraph per bag and axis, and the bags' warnings; then (``glossary``) one line
+    defining each number (bias stability, B, ARW, N, K, offset drift, the two orders) that says
+    which to compare with a datasheet.
 
     Parameters
     ----------
     doc : dict
         The summary.json document.
+    glossary : bool, keyword-only
+        Add the definitions (:func:`glossary_markdown`); the HTML page folds them instead.
 
     Returns
     -------
@@ -168,8 +190,6 @@ def in_short_markdown(doc: Mapping[str, Any]) -> str:
 
     """
     lines = ['## In short', '']
-    lines += [f'* **{name}**: {text}' for name, text in IN_SHORT_DEFINITIONS]
-    lines.append('')
     for b in doc['bags']:
         for axis, a in b['axes'].items():
             lines += [_plain_summary(b, axis, a), '']
@@ -177,6 +197,8 @@ def in_short_markdown(doc: Mapping[str, Any]) -> str:
             lines += [f"* warning ({b['label']}): {text}"]
         if b.get('warnings'):
             lines.append('')
+    if glossary:
+        lines += ['What the numbers mean:', '', glossary_markdown(), '']
     return '\n'.join(lines)
 
 
@@ -209,15 +231,30 @@ def summary_markdown(doc: Mapping[str, Any]) -> str:
         for a in b['axes']:
             if a not in axes:
                 axes.append(a)
-    lines = ['# gyro_noise_analyze summary', '', in_short_markdown(doc)]
+    level, text = verdict(doc)
+    lines = ['# gyro_noise_analyze summary', '', f'**Verdict: {level}**. {text}', '',
+             UNIT_POLICY, '']
+    card = card_markdown(doc)
+    if card:
+        lines += ['## Datasheet numbers', '',
+                  'Read off the Allan deviation by the one readout (core/readout.py): '
+                  'value (68.3 % interval) in the customary unit, then where it was read and SI; '
+                  '"<=" marks an upper bound. Kalibr\'s values are in imu.yaml beside this '
+                  'file.', '', card]
+    lines.append(in_short_markdown(doc))
     lines += _method_lines(doc)
     for axis in axes:
         rows = [(b['label'], b['axes'][axis]) for b in bags if axis in b['axes']]
+        # an Allan-only bag (shorter than one chunk) has no row in the chunk tables
+        chunked = [(b['label'], b['axes'][axis]) for b in bags
+                   if axis in b['axes'] and not b.get('allan_only')]
         lines += [f'## Axis {axis}', '']
-        lines += _drift_lines(rows)
-        lines += _variance_lines(rows)
-        for num, method, key in ((5, 'variance', 'alpha_var'), (6, 'correlation', 'alpha_corr')):
-            lines += _order_lines(rows, num=num, method=method, key=key)
+        if chunked:
+            lines += _drift_lines(chunked)
+            lines += _variance_lines(chunked)
+            for num, method, key in ((5, 'variance', 'alpha_var'),
+                                     (6, 'correlation', 'alpha_corr')):
+                lines += _order_lines(chunked, num=num, method=method, key=key)
         if any(a.get('allan') or a.get('allan_datasheet') for _, a in rows):
             lines += _datasheet_lines(rows)
             lines += _model_fit_lines(rows)

@@ -28,8 +28,10 @@ Formats: ``docs/offline_tool.md``.
 
 The workflow, step by step: check every input (:func:`_open_inputs`), analyse each bag in one
 read when it is static throughout, else in a prepass and a pass over its longest static segment
-(:func:`_analyze_one`, :func:`_analysis_pass`), summarise it (:func:`_bag_doc`), refuse a run
-that analysed nothing (:func:`_check_analysed`), and write (:func:`_write_results`).
+(:func:`_analyze_one`, :func:`_analysis_pass`), summarise it (:func:`_bag_doc`; a record shorter
+than one chunk gets its Allan deviation and readout only, ``allan_only`` saying what is not
+computed), refuse a run that analysed nothing (:func:`_check_analysed`), and write
+(:func:`_write_results`).
 """
 
 import collections
@@ -50,21 +52,22 @@ import threadpoolctl
 
 from .. import __version__
 from ..analysis.csv_tables import allan_curve, ChunkCsvWriter, write_allan_csv
-from ..analysis.figures import allan_fit_lines, plot_allan, plot_curves, plot_per_chunk
+from ..analysis.figures import allan_curves, plot_allan, plot_curves, plot_per_chunk
 from ..analysis.imu_yaml import DEFAULT_IMU_TOPIC, kalibr_noise, write_imu_yaml
 from ..analysis.summary_json import (accelerometer_readout_dict, axis_summary_dict, json_num,
                                      write_json)
 from ..analysis.summary_md import summary_markdown
 from ..bag import find_imu_topic, ImuBagReader
 from ..bag.inputs import is_table, open_imu
-from ..cluster import DaskExecutor, make_executor
+from ..cluster import check_jobs, DaskExecutor, make_executor
 from ..core.allan import AllanAccumulator
 from ..core.engine import (analyze_chunk, AXES, EngineConfig, identifier_for, NoiseEngine)
 from ..core.fractional import parse_grid
 from ..core.health import HealthThresholds, reference_per_axis
 from ..core.plausible import mask_non_physical, MAX_RATE_RAD_S, MAX_SPECIFIC_FORCE_M_S2
 from ..core.readout import read_allan
-from ..core.segments import StaticSegment, WindowStats
+from ..core.segments import (Cut, left_out_sentence, segment_left_out, StaticSegment,
+                             WindowStats)
 from ..core.timebase import rescale_allan
 from ..errors import InputDataError, nothing_left_error, OutputError, ParameterError
 from ..htmlreport.analyze import write_analyze_html
@@ -187,7 +190,9 @@ class AnalyzeParams:
             raise ParameterError(f'--end ({self.end_s:g} s) must be after --start '
                                  f'({self.start_s:g} s)')
         setattr_('jobs', int(self.jobs))
-        if self.jobs < 1:
+        if self.scheduler is None:
+            check_jobs(self.jobs)  # local processes: no more than the machine can run
+        elif self.jobs < 1:
             raise ParameterError(f'--jobs must be >= 1, got {self.jobs}')
         if self.curves < 0:
             raise ParameterError(f'--curves must be >= 0, got {self.curves}')
@@ -221,11 +226,11 @@ class AnalyzeResult:
         The files written, under their published names.
     alphas : numpy.ndarray
         The order grid (for curves.npz and the curve figures).
-    per_chunk, curves, allan, accelerometer : dict
+    per_chunk, curves, allan, accelerometer, accel_allan : dict
         What the figures, report.html, curves.npz, allan.csv and imu.yaml are drawn from:
         per-chunk (t, bias, variance, alpha_var, alpha_corr) rows per axis, kept var/J curves
-        per (label, axis), Allan results per (label, axis) and the accelerometer readouts per
-        label.
+        per (label, axis), Allan results per (label, axis), the accelerometer readouts per
+        label and the accelerometer's Allan results per (label, axis).
 
     """
 
@@ -242,6 +247,7 @@ class AnalyzeResult:
     curves: dict[tuple, list] = field(default_factory=dict, repr=False)
     allan: dict[tuple, tuple] = field(default_factory=dict, repr=False)
     accelerometer: dict[str, dict] = field(default_factory=dict, repr=False)
+    accel_allan: dict[tuple, Any] = field(default_factory=dict, repr=False)
 
     def as_dict(self) -> dict[str, Any]:
         """Return summary.json as a dict (bag entries shared, not copied)."""
@@ -391,6 +397,7 @@ class _Stores:
     per_chunk: dict[str, list] = field(default_factory=dict)
     curves: dict[tuple, list] = field(default_factory=dict)
     allan: dict[tuple, tuple] = field(default_factory=dict)
+    accel_allan: dict[tuple, Any] = field(default_factory=dict)
     timing: dict[str, float] = field(default_factory=lambda: {'decode_s': 0.0, 'wait_s': 0.0})
 
 
@@ -540,7 +547,8 @@ def _run_bags(params: AnalyzeParams, ref: dict[str, Any], topics: list[str], out
         command=list(params.command) if params.command is not None else None,
         options=_options(params, ref, jobs, pool), bags=tuple(bag_docs),
         timing=stores.timing, alphas=params.config.alphas, per_chunk=stores.per_chunk,
-        curves=stores.curves, allan=stores.allan, accelerometer=accel_readouts)
+        curves=stores.curves, allan=stores.allan, accelerometer=accel_readouts,
+        accel_allan=stores.accel_allan)
 
 
 def _options(params: AnalyzeParams, ref: dict[str, Any], jobs: int, pool: Any) -> dict[str, Any]:
@@ -565,14 +573,22 @@ def _options(params: AnalyzeParams, ref: dict[str, Any], jobs: int, pool: Any) -
 
 
 def _check_analysed(bag_docs: list[dict[str, Any]], config: EngineConfig) -> None:
-    """Never succeed having analysed nothing: say why each bag or axis has no analysed chunk."""
-    if not any(a['chunks'] + a['chunks_nan'] + a['chunks_dropped'] + a['chunks_failed']
-               for b in bag_docs for a in b['axes'].values()):
-        counts = ', '.join(f"{b['label']}: {b['samples']} samples" for b in bag_docs)
-        raise InputDataError(
-            f'no complete chunk of {config.chunk_size} samples in any bag ({counts}); '
-            'lower --chunk-size (>= memory + 2)')
+    """
+    Never succeed having analysed nothing: say why a bag has no analysed chunk.
+
+    A bag shorter than one chunk is analysed by its Allan deviation alone (``allan_only``); it
+    is refused only when that has no readout either (too short for any averaging time, or
+    ``--no-allan``).
+    """
     for b in bag_docs:
+        if b.get('allan_only'):
+            if not any(a.get('allan_datasheet') for a in b['axes'].values()):
+                raise InputDataError(
+                    f"{b['label']}: too short to analyse: {b['samples']} samples, no complete "
+                    f'chunk of {config.chunk_size} and '
+                    + ('no Allan deviation (--no-allan)' if not config.allan else
+                       'too few for an Allan deviation to read'))
+            continue
         if not any(a['chunks'] for a in b['axes'].values()):
             why = '; '.join(
                 f"{axis}: {a['chunks_nan']} chunk(s) with NaN/Inf or non-physical values, "
@@ -590,7 +606,8 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
         write_json(out / 'summary.json', doc)
         (out / 'summary.md').write_text(summary_markdown(doc))
         files += [out / 'summary.json', out / 'summary.md']
-        files += _write_allan_outputs(out, doc, result.allan, result.accelerometer, figures)
+        allan_files, imu_yaml = _write_allan_outputs(out, doc, result, figures)
+        files += allan_files
         if result.curves:
             arrays: dict[str, Any] = {'alphas': result.alphas}
             for (label, axis), rows in result.curves.items():
@@ -602,7 +619,8 @@ def _write_results(out: Path, result: AnalyzeResult, *, figures: bool,
         if figures:
             files += _write_figures(out, result.alphas, result.per_chunk, result.curves)
         if html:
-            files.append(write_analyze_html(out, doc, result.per_chunk, result.allan))
+            files.append(write_analyze_html(out, doc, result.per_chunk, result.allan,
+                                            accel_allan=result.accel_allan, imu_yaml=imu_yaml))
     return files
 
 
@@ -623,12 +641,14 @@ def _select(stamps: np.ndarray, first_ns: int, start_s: float | None, end_s: flo
     """Return the mask of samples inside --start/--end and the static segment; count the rest."""
     rel = stamps - first_ns
     keep = np.ones(stamps.shape[0], dtype=bool)
+    # a window bound past any int64 ns stamp (--start 1e308) is past every record's end
+    limit_s = 9.2e9  # s, below 2**63 ns
     if start_s is not None:
-        before = rel < int(round(start_s * 1e9))
+        before = rel < int(round(min(start_s, limit_s) * 1e9))
         left['before_start'] += int(before.sum())
         keep &= ~before
     if end_s is not None:
-        after = rel > int(round(end_s * 1e9))
+        after = rel > int(round(min(end_s, limit_s) * 1e9))
         left['after_end'] += int((after & keep).sum())
         keep &= ~after
     if segment is not None and not segment.static_throughout:
@@ -670,21 +690,6 @@ def _plausible(batches: Iterator[Any], counts: dict[str, int] | None) -> Iterato
                 counts['accel'] += n_accel
             batch = dataclasses.replace(batch, gyro=gyro, accel=accel)
         yield batch
-
-
-def _check_chunk_fits(count: int, label: str, config: EngineConfig) -> None:
-    """Refuse a record shorter than one chunk before reading it (``count``: 0 = unknown)."""
-    if not count:
-        return
-    shortest = config.memory + 2
-    if count < shortest:
-        raise InputDataError(
-            f'{label}: too short to analyse: {count} samples; the shortest chunk the order '
-            f'identification takes is memory L + 2 = {shortest} samples')
-    if count < config.chunk_size:
-        raise ParameterError(
-            f'--chunk-size {config.chunk_size} is larger than the record {label} ({count} '
-            f'samples): give at most {count} (and at least memory L + 2 = {shortest})')
 
 
 def _stamps_unusable(stamps: np.ndarray) -> bool:
@@ -889,7 +894,6 @@ def _analysis_pass(run: _Run, bag: _Bag, progress: _Progress, *,
     if reader is None:
         reader = _open(bag.path, bag.topic, params.temperature_topic, config.rate_hz)
     with reader:
-        _check_chunk_fits(reader.message_count, label, config)
         t_stamp, t_value = _read_temperature(reader)
         feed = _ChunkFeed(run, bag, engine, reader.message_count)
         done = 0
@@ -966,14 +970,11 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: StaticSegment | None,
             f'longest {length_s:.6g} s at t = {t_s:.3f} s after the first sample ({missing} '
             'samples missing)')
     left_out: dict[str, Any] = dict(left)
+    cuts: tuple[Cut, ...] = ()
     if segment is not None and not segment.static_throughout and first_ns is not None:
-        # The segments end on window boundaries; a time range never runs past the last sample.
-        end_ns = min(segment.end_ns, state.last_ns)
-        left_out['static_segment_s'] = [(segment.start_ns - first_ns) / 1e9,
-                                        (end_ns - first_ns) / 1e9]
-        left_out['static_segments_s'] = [[(a - first_ns) / 1e9,
-                                          (min(b, state.last_ns) - first_ns) / 1e9]
-                                         for a, b in segment.segments]
+        # the one owner of the rule says what was cut (core/segments.py), as explain does
+        left_out.update(segment_left_out(segment, first_ns, state.last_ns))
+        cuts = segment.cuts(first_ns, state.last_ns)
     non_physical = state.non_physical
     if any(non_physical.values()):
         add(f"{non_physical['gyro']} angular rate value(s) beyond {MAX_RATE_RAD_S:g} rad/s "
@@ -989,14 +990,15 @@ def _bag_warnings(bag: _Bag, state: _PassState, segment: StaticSegment | None,
             f'({100.0 * counts.tail_samples / counts.samples:.0f} %) after the last complete '
             'chunk of '
             f'{size} are not in the chunk tables (they are in the Allan deviation){hint}')
+    only = _allan_only(counts, config)
+    if only:
+        add(f'Allan deviation only: {only}')
     if any(left.values()):
-        parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
-        parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
-        if left['motion']:
-            a, b = left_out['static_segment_s']
-            parts.append(f'{left["motion"]} in motion (analysing the longest static segment, '
-                         f't = {a:.1f}-{b:.1f} s after the first sample)')
-        add(f'{sum(left.values())} of {state.done} samples left out: ' + ', '.join(parts))
+        span = left_out.get('static_segment_s')
+        add(left_out_sentence(state.done, before_start=left['before_start'],
+                              after_end=left['after_end'], motion=left['motion'],
+                              segment_s=None if span is None else (span[0], span[1]), cuts=cuts,
+                              window_names=('--start', '--end')))
     return warnings, left_out
 
 
@@ -1017,6 +1019,8 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
             (label, np.array(state.rows[axis]).reshape(-1, 5)))
         if s.allan is not None:
             stores.allan[(label, axis)] = (s.allan, s.noise_terms, s.readout)
+    for axis, curve in getattr(state.accel, 'curves', {}).items():
+        stores.accel_allan[(label, axis)] = curve
     return {
         'label': label,
         'path': str(bag.path),
@@ -1047,6 +1051,7 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
         'longest_gaps': [{'start_s': t, 'length_s': d, 'missing_samples': m}
                          for t, d, m in counts.longest_gaps],
         'chunks_cut': counts.chunks,
+        'allan_only': _allan_only(counts, config),
         'tail_samples': counts.tail_samples,
         'discarded_samples': counts.discarded_samples,
         'discarded_partials': counts.discarded_partials,
@@ -1059,6 +1064,19 @@ def _bag_doc(run: _Run, bag: _Bag, state: _PassState,
             for axis, s in summaries.items()
         },
     }
+
+
+def _allan_only(counts: Any, config: EngineConfig) -> str | None:
+    """Return why a bag is analysed by its Allan deviation alone (no complete chunk), or None."""
+    if counts.chunks:
+        return None
+    shortest = config.memory + 2
+    fits = (f'--chunk-size {counts.samples} or less (at least memory L + 2 = {shortest}) would '
+            'identify one chunk' if counts.samples >= shortest else
+            f'the order identification needs at least memory L + 2 = {shortest} samples')
+    return (f'{counts.samples} samples, shorter than one chunk of {config.chunk_size}: the '
+            'fractional order and the chunk statistics (paper Tables 3-6, offset drift) are not '
+            f'computed; {fits}')
 
 
 class _AccelAllan:
@@ -1093,36 +1111,41 @@ class _AccelAllan:
         self.pending = []
 
     def readouts(self, rate_hz: float) -> dict[str, Any]:
-        """Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes."""
+        """
+        Return ``{axis: core.readout.AllanReadout or None}`` of the accelerometer axes.
+
+        Each axis' Allan curve (``core.allan.AllanResult``, m/s^2) is kept in :attr:`curves`
+        for the report's figure.
+        """
+        self.curves: dict[str, Any] = {}
         if self.acc is None:
             return {}
         out: dict[str, Any] = {}
         for axis, acc in zip(AXES, self.acc):
             try:
-                out[axis] = read_allan(rescale_allan(acc.result(), rate_hz))
+                result = rescale_allan(acc.result(), rate_hz)
+                out[axis] = read_allan(result)
+                self.curves[axis] = result
             except (InputDataError, ParameterError, ValueError):
                 out[axis] = None  # e.g. a constant (all-zero) accelerometer: nothing to read
         return out
 
 
-def _write_allan_outputs(out: Path, doc: dict[str, Any], allan_store: dict[tuple, tuple],
-                         accel_readouts: dict[str, dict], figures: bool) -> list[Path]:
+def _write_allan_outputs(out: Path, doc: dict[str, Any], result: AnalyzeResult,
+                         figures: bool) -> tuple[list[Path], str]:
     """Write allan.csv (always, possibly header-only), imu.yaml and the Allan figure."""
+    allan_store, accel_readouts = result.allan, result.accelerometer
     entries: list[tuple] = []
-    fig_series: dict[str, list] = {}
-    for (label, axis), (result, terms, _) in allan_store.items():
-        tau, adev, lo, hi, n = allan_curve(result)
-        entries.append((label, axis, tau, adev, lo, hi, n))
-        fig_series.setdefault(axis, []).append((label, tau, adev, lo, hi,
-                                                allan_fit_lines(terms, tau)))
+    for (label, axis), (res, _, _) in allan_store.items():
+        entries.append((label, axis, *allan_curve(res)))
     write_allan_csv(out / 'allan.csv', entries)
     files = [out / 'allan.csv']
     first = doc['bags'][0]
-    gyro = [allan_store[(first['label'], a)][2] for a in first['axes']
-            if (first['label'], a) in allan_store]
+    gyro = {a: allan_store[(first['label'], a)][2] for a in first['axes']
+            if (first['label'], a) in allan_store}
     record_s = first['duration_s']
     accel = accel_readouts.get(first['label']) or {}
-    accel_noise = (kalibr_noise(list(accel.values()), record_s=record_s)
+    accel_noise = (kalibr_noise(accel, record_s=record_s)
                    if any(r is not None for r in accel.values()) else None)
     topic, note = first['topic'], ''
     if first['storage'] in ('csv', 'ulog'):
@@ -1131,17 +1154,17 @@ def _write_allan_outputs(out: Path, doc: dict[str, Any], allan_store: dict[tuple
         what = (f"a {first['storage']} file" if first['topic'] == first['storage']
                 else f"a {first['storage']} file ({first['topic']})")
         note = f'the input was {what}, not a bag: set the topic your IMU driver publishes'
-    write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
-                   update_rate_hz=first['rate_hz'] or float('nan'),
-                   gyroscope=kalibr_noise(gyro, record_s=record_s),
-                   accelerometer=accel_noise,
-                   source=f"from bag {first['label']} ({first['path']}), largest over axes "
-                   f"{', '.join(first['axes'])}")
+    imu_yaml = write_imu_yaml(out / 'imu.yaml', rostopic=topic, rostopic_note=note,
+                              update_rate_hz=first['rate_hz'] or float('nan'),
+                              gyroscope=kalibr_noise(gyro, record_s=record_s),
+                              accelerometer=accel_noise,
+                              source=f"from bag {first['label']} ({first['path']}), largest over "
+                              f"axes {', '.join(first['axes'])}")
     files.append(out / 'imu.yaml')
-    if figures and fig_series:
-        plot_allan(out / 'allan.png', fig_series)
+    if figures and allan_store:
+        plot_allan(out / 'allan.png', allan_curves(doc, allan_store, result.accel_allan))
         files.append(out / 'allan.png')
-    return files
+    return files, imu_yaml
 
 
 def _safe(name: str) -> str:

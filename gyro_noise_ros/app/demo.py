@@ -39,7 +39,8 @@ import time
 from typing import Any, IO
 
 from .. import rosgraph
-from ..errors import GyroNoiseError, OutputError, ParameterError
+from ..errors import (EXIT_INTERRUPTED, EXIT_TERMINATED, GyroNoiseError, Interrupted, OutputError,
+                      ParameterError)
 from ..monitor_lines import parse_axis_parts
 from ..outputs import atomic_write_text
 
@@ -109,7 +110,7 @@ class DemoParams:
     Attributes
     ----------
     out : str
-        Output folder (a previous demo output there is replaced).
+        Output folder (a previous demo output there is replaced only with ``overwrite``).
     quick : bool
         The short story (:data:`QUICK`) instead of :data:`FULL`.
     seed : int
@@ -123,6 +124,8 @@ class DemoParams:
     domain_id : int or None
         ``ROS_DOMAIN_ID`` (None: one in 1..101 checked free on this host and held while the
         demo runs).
+    overwrite : bool
+        Replace a previous demo output in ``out`` (``--overwrite``; ``make demo`` gives it).
 
     Raises
     ------
@@ -138,6 +141,7 @@ class DemoParams:
     storage: str = 'sqlite3'
     jobs: int = 2
     domain_id: int | None = None
+    overwrite: bool = False
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.speed <= 100:
@@ -147,6 +151,8 @@ class DemoParams:
                                  f'{self.domain_id}')
         if self.jobs < 1:
             raise ParameterError(f'--jobs must be >= 1, got {self.jobs}')
+        if self.seed < 0:
+            raise ParameterError(f'--seed must be >= 0, got {self.seed}')
 
     @property
     def story(self) -> 'Story':
@@ -161,17 +167,14 @@ class DemoResult:
 
     Attributes
     ----------
-    interrupted : bool
-        Stopped by Ctrl-C or SIGTERM during the live part (every process stopped; no report).
-    report : pathlib.Path or None
-        The offline report folder (None when interrupted).
+    report : pathlib.Path
+        The offline report folder.
     elapsed_s : float
         Wall time of the run (s).
 
     """
 
-    interrupted: bool
-    report: Path | None = None
+    report: Path
     elapsed_s: float = 0.0
 
 
@@ -195,7 +198,8 @@ def run_demo(params: DemoParams) -> DemoResult:
     OutputError
         The output folder cannot be prepared.
     KeyboardInterrupt
-        Interrupted during the offline analysis.
+        Interrupted (SIGINT; SIGTERM as :class:`~gyro_noise_ros.errors.Interrupted`): every
+        process was stopped first.
 
     """
     # Held until the demo ends: another demo, a test run or a bench on this host skips it.
@@ -211,7 +215,7 @@ def run_demo(params: DemoParams) -> DemoResult:
 
 def _run(params: DemoParams, domain: int) -> DemoResult:
     story = params.story
-    out = _prepare_out(Path(params.out))
+    out = _prepare_out(Path(params.out), overwrite=params.overwrite)
     env = rosgraph.isolated_env(domain, dict(os.environ, PYTHONUNBUFFERED='1'))
     procs = Processes(env, out / 'logs')
     t_start = time.monotonic()
@@ -219,14 +223,12 @@ def _run(params: DemoParams, domain: int) -> DemoResult:
     _print_story(story)
     recording = out / 'recording'
     seen = _live_part(params, procs, recording, t_start)
-    if seen is None:
-        return DemoResult(interrupted=True, elapsed_s=time.monotonic() - t_start)
     _close_recording(procs, recording)
     _check_story(seen, story)
     report = out / 'report'
     _offline_report(params, env, recording, report)
     _mark(out, finished=True)
-    return DemoResult(interrupted=False, report=report, elapsed_s=time.monotonic() - t_start)
+    return DemoResult(report=report, elapsed_s=time.monotonic() - t_start)
 
 
 def _print_story(story: Story) -> None:
@@ -240,8 +242,8 @@ def _print_story(story: Story) -> None:
 
 
 def _live_part(params: DemoParams, procs: 'Processes', recording: Path,
-               t_start: float) -> list[tuple[float, str]] | None:
-    """Start the nodes and the emulator, print the diagnostics; None when interrupted."""
+               t_start: float) -> list[tuple[float, str]]:
+    """Start the nodes and the emulator, print the diagnostics (an interrupt stops them all)."""
     story = params.story
     port = _free_port()
     url = f'socket://127.0.0.1:{port}'
@@ -274,10 +276,6 @@ def _live_part(params: DemoParams, procs: 'Processes', recording: Path,
         print(f'{TOOL}: the board is streaming ({time.monotonic() - t_start:.0f} s after start); '
               'diagnostics of noise_analyzer:', flush=True)
         return _live(lines, procs, story, params.speed, t_stream)
-    except KeyboardInterrupt:
-        print(f'\n{TOOL}: interrupted; stopping every process', file=sys.stderr, flush=True)
-        procs.stop_all(_STOP_ORDER)
-        return None
     except BaseException:
         procs.stop_all(_STOP_ORDER)
         raise
@@ -293,7 +291,7 @@ def _close_recording(procs: 'Processes', recording: Path) -> None:
         rc = procs.stop('gyro_noise_record', timeout_s=60)
         record_line = next((ln for ln in procs.log_text('gyro_noise_record').splitlines()
                             if ln.startswith('gyro_noise_record: received')), '')
-        if rc != 0 or not (recording / 'metadata.yaml').exists():
+        if rc != EXIT_INTERRUPTED or not (recording / 'metadata.yaml').exists():
             raise DemoError(f'gyro_noise_record did not close the bag cleanly (exit {rc}); log '
                             f'{procs.logs["gyro_noise_record"]}: '
                             f'{procs.last_lines("gyro_noise_record")}')
@@ -312,8 +310,8 @@ def _offline_report(params: DemoParams, env: dict[str, str], recording: Path,
         done = subprocess.run(cmd, env=env, stdin=subprocess.DEVNULL, timeout=900)
     except subprocess.TimeoutExpired as err:
         raise DemoError('gyro_noise_analyze took more than 15 minutes') from err
-    if done.returncode == 130:
-        raise KeyboardInterrupt
+    if done.returncode in (EXIT_INTERRUPTED, EXIT_TERMINATED):
+        raise Interrupted(done.returncode - 128)
     if done.returncode != 0:
         raise DemoError(
             f'gyro_noise_analyze failed with exit code {done.returncode}: {" ".join(cmd)}')
@@ -328,10 +326,16 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _prepare_out(out: Path) -> Path:
-    if out.exists() and any(out.iterdir()) and not (out / MARKER).exists():
-        raise OutputError(
-            f'--out {str(out)!r} exists and is not a previous demo output; choose another')
+def _prepare_out(out: Path, *, overwrite: bool) -> Path:
+    if out.exists() and any(out.iterdir()):
+        if not (out / MARKER).exists():
+            raise OutputError(
+                f'{{out}} {str(out)!r} exists and is not a previous demo output; choose another',
+                parameters=('out',))
+        if not overwrite:
+            raise OutputError(f'{{out}} {str(out)!r} holds a previous demo output: give '
+                              '{overwrite} to replace it, or another folder',
+                              parameters=('out', 'overwrite'))
     try:
         for name in ('recording', 'report', 'logs'):
             if (out / name).is_dir():
@@ -341,7 +345,8 @@ def _prepare_out(out: Path) -> Path:
         (out / 'logs').mkdir(parents=True, exist_ok=True)
         _mark(out, finished=False)
     except OSError as err:
-        raise OutputError(f'--out {str(out)!r} cannot be prepared: {err.strerror or err}') from err
+        raise OutputError(f'{{out}} {str(out)!r} cannot be prepared: {err.strerror or err}',
+                          parameters=('out',)) from err
     return out
 
 
@@ -451,7 +456,7 @@ def _reader(stream: IO[str], lines: queue.Queue) -> None:
 
 
 def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
+    raise Interrupted(signum)
 
 
 def _next_line(lines: queue.Queue, procs: 'Processes', deadline: float) -> str | None:

@@ -39,7 +39,7 @@ from scipy.stats import norm
 from .. import __version__
 from ..calibration import records
 from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
-                                      sine_dwell, sine_sweep)
+                                      DEFAULT_TOLERANCE, sine_dwell, sine_sweep)
 from ..calibration.excitation_report import display_unit, excitation_markdown, plot_excitation
 from ..errors import InputDataError, ParameterError
 from ..formatting import finite_list, finite_or_none
@@ -79,6 +79,9 @@ class ExcitationParams:
         Largest relative difference between the requested and the measured dwell frequency.
     alpha : float
         False-alarm probability of each verdict.
+    tolerance : float
+        Practical tolerance of each verdict (relative; a significant defect within it is no
+        defect: :mod:`..calibration.excitation`).
     figures : bool
         Draw the PNG figures.
 
@@ -97,6 +100,7 @@ class ExcitationParams:
     rate_hz: float | None = None
     frequency_tol: float = DEFAULT_FREQUENCY_TOL
     alpha: float = DEFAULT_ALPHA
+    tolerance: float = DEFAULT_TOLERANCE
     figures: bool = True
 
     def __post_init__(self) -> None:
@@ -120,6 +124,9 @@ class ExcitationParams:
                                  f'{self.frequency_tol!r}')
         if not (math.isfinite(self.alpha) and 0 < self.alpha < 0.5):
             raise ParameterError(f'--alpha must be in (0, 0.5), got {self.alpha!r}')
+        if not (math.isfinite(self.tolerance) and 0 <= self.tolerance < 1):
+            raise ParameterError(f'--tolerance must be a fraction in [0, 1), got '
+                                 f'{self.tolerance!r}')
 
     @property
     def mode(self) -> str:
@@ -225,6 +232,7 @@ class ExcitationResult:
         u = p.unit
         doc: dict[str, Any] = {
             'sensor': p.sensor, 'axis': p.axis, 'mode': p.mode, 'unit': u, 'alpha': p.alpha,
+            'tolerance': p.tolerance,
             'nominal': ({'frequency_hz': p.dwell_hz, 'frequency_tol': p.frequency_tol}
                         if p.mode == 'dwell' else
                         dict(zip(('f0_hz', 'f1_hz', 'rate_hz_s'), p.sweep))),
@@ -269,7 +277,8 @@ class ExcitationResult:
                         'bin_deviation_sigma': finite_or_none(r.bin_deviation_sigma),
                         'gain_p': finite_or_none(r.gain_p),
                         'matches_reference': r.matches_reference,
-                        'flatness_p': finite_or_none(r.flatness_p), 'flat': r.flat})
+                        'flatness_p': finite_or_none(r.flatness_p),
+                        'deviation_spread': finite_or_none(r.deviation_spread), 'flat': r.flat})
             doc[side] = entry
         change = self.change()
         if change is not None:
@@ -291,7 +300,8 @@ def _analyse(path: str, params: ExcitationParams) -> SideResult:
     if params.mode == 'dwell':
         assert params.dwell_hz is not None  # dwell mode: required by the parameters
         dwell = sine_dwell(x, rate, params.dwell_hz, harmonics=params.harmonics,
-                           frequency_tol=params.frequency_tol, alpha=params.alpha)
+                           frequency_tol=params.frequency_tol, alpha=params.alpha,
+                           tolerance=params.tolerance)
         return SideResult(str(path), rate, int(x.size), dwell, t, x)
     ref = None
     if params.reference_topic:
@@ -301,7 +311,8 @@ def _analyse(path: str, params: ExcitationParams) -> SideResult:
         _, rt, racc, rgyr = records.read_imu(path, topic=params.reference_topic, t0_ns=0)
         ref = np.interp(ta, rt, _channel(params, racc, rgyr))
     f0, f1, rate_hz_s = params.sweep
-    r = sine_sweep(x, rate, f0, f1, rate_hz_s, reference=ref, alpha=params.alpha)
+    r = sine_sweep(x, rate, f0, f1, rate_hz_s, reference=ref, alpha=params.alpha,
+                   tolerance=params.tolerance)
     return SideResult(str(path), rate, int(x.size), r, t, x)
 
 

@@ -40,9 +40,10 @@ import math
 from pathlib import Path
 
 from ..bag.inputs import read_imu, recorded_axes
+from ..core.timebase import RATE_RANGE_HZ
 from ..errors import OutputError, ParameterError
 from ..explain import report, workflow
-from ..explain.inputs import from_record, select
+from ..explain.inputs import cut_record, from_record
 from ..htmlreport.explain import write_explain_html
 from ..outputs import staged_output, StrPath
 
@@ -52,9 +53,6 @@ __all__ = ['AxisExplained', 'ExplainInput', 'ExplainParams', 'ExplainRun', 'MAX_
 #: Most ensemble members or bootstrap records: each costs a simulated copy of the record (time
 #: and memory), 16 and 20 are the defaults; beyond this the number is a typo, not a wish.
 MAX_RECORDS = 10000
-#: Sample rates ``rate_hz`` accepts (Hz): every gyro samples inside; outside, the record's times
-#: overflow or vanish in floating point.
-RATE_RANGE_HZ = (1e-3, 1e9)
 AXIS_CHOICES = ('x', 'y', 'z', 'all')
 STATIC_CHOICES = ('auto', 'off')
 
@@ -152,11 +150,13 @@ class ExplainInput:
     measurements : tuple of Measurement
         One per axis analysed, in x, y, z order.
     left_out : tuple of dict
-        Per axis, the samples left out: ``before_start``, ``after_end``, ``motion`` and, when
-        motion was cut, ``static_segment_s`` ([start, end] in s after the first sample).
+        Per axis (the same for every axis: one window for all), the samples left out:
+        ``before_start``, ``after_end``, ``motion`` and, when motion was cut,
+        ``static_segment_s``, ``static_segments_s`` and ``cut_s`` (s after the first sample;
+        :func:`gyro_noise_ros.explain.inputs.cut_record`).
     warnings : tuple of str
-        What the user must know about the input (samples left out, stamp warnings of the first
-        axis), one line each.
+        What the user must know about the input (the samples left out, in the sentence
+        ``gyro_noise_analyze`` prints, and the stamp warnings of the first axis), one line each.
 
     """
 
@@ -241,17 +241,6 @@ class ExplainRun:
                                   'report_md': f'{a.folder}/report.md'} for a in self.axes}}
 
 
-def _left_out_lines(left: dict) -> list:
-    parts = [f'{left["before_start"]} before --start'] if left['before_start'] else []
-    parts += [f'{left["after_end"]} after --end'] if left['after_end'] else []
-    if left['motion']:
-        a, b = left['static_segment_s']
-        parts.append(
-            f'{left["motion"]} in motion (the longest static segment, t = {a:.1f}-{b:.1f} s, '
-            'is analysed)')
-    return [f'samples left out: {", ".join(parts)}'] if parts else []
-
-
 def prepare_explain(params: ExplainParams) -> ExplainInput:
     """
     Read the recording once and cut each axis to what is analysed (module doc, step 1).
@@ -281,19 +270,20 @@ def prepare_explain(params: ExplainParams) -> ExplainInput:
     record = read_imu(params.path, topic=params.topic,
                       temperature_topic=params.temperature_topic, rate_hz=params.rate_hz,
                       gyro_axes=axes)
-    measurements, left_out = [], []
+    # every axis is checked whole first (NaN, non-physical, constant: exit 4 naming the sample)
     for axis in axes:
-        meas = from_record(record, axis=axis, rate_hz=params.rate_hz,
-                           require_temperature=require_temperature)
-        meas, left = select(meas, start_s=params.start_s, end_s=params.end_s,
-                            static=params.static)
-        measurements.append(meas)
-        left_out.append(left)
+        from_record(record, axis=axis, rate_hz=params.rate_hz,
+                    require_temperature=require_temperature)
+    # then one window for every axis, by the rule analyze uses (core/segments.py), said once
+    cut, left, sentence = cut_record(record, start_s=params.start_s, end_s=params.end_s,
+                                     static=params.static, window_names=('--start', '--end'))
+    measurements = tuple(from_record(cut, axis=axis, rate_hz=params.rate_hz,
+                                     require_temperature=require_temperature) for axis in axes)
     first = measurements[0]
-    warnings = _left_out_lines(left_out[0]) + list(first.timebase.warnings
-                                                   if first.timebase else ())
-    return ExplainInput(params=params, measurements=tuple(measurements),
-                        left_out=tuple(left_out), warnings=tuple(warnings))
+    warnings = ([sentence] if sentence else []) + list(first.timebase.warnings
+                                                       if first.timebase else ())
+    return ExplainInput(params=params, measurements=measurements,
+                        left_out=(left,) * len(measurements), warnings=tuple(warnings))
 
 
 def run_explain(prepared: ExplainInput, *, progress: Callable[[str], None] | None = None,

@@ -37,14 +37,18 @@ import numpy as np
 
 from ..bag import ImuBagWriter
 from ..bag.bulk import BulkImuBagWriter
-from ..errors import BagError, InputDataError, OutputError, ParameterError
+from ..cluster import usable_cpus
+from ..errors import BagError, InputDataError, ParameterError
 from ..link import lsm6dso32 as lsm
 from ..link.clock import Unwrapper
 from ..link.sdlog import SdLogReader
-from ..outputs import staged_new_dir
+from ..outputs import check_new_dir, staged_new_dir
 
 #: LSM6DSO32 temperature sensor output data rate (datasheet: 52 Hz).
 TEMPERATURE_ODR_HZ = 52.0
+#: The latest first-sample time ``--start-time`` accepts (UNIX s): a ROS stamp is int64
+#: nanoseconds (up to 2262-04-11, 9.22e9 s); a day is left for the record itself.
+MAX_START_TIME_S = (2**63 - 1) / 1e9 - 86400.0
 
 
 @dataclass(frozen=True)
@@ -131,6 +135,9 @@ def _anchor(start_time: str, reader: SdLogReader) -> tuple[str, Any]:
             f'--start-time must be auto, rtc, zero or UNIX seconds, got {start_time!r}') from err
     if not np.isfinite(value) or value < 0:
         raise ParameterError(f'--start-time must be >= 0 UNIX seconds, got {start_time!r}')
+    if value > MAX_START_TIME_S:
+        raise ParameterError(f'--start-time {start_time} s is beyond the latest ROS time stamp '
+                             f'(int64 ns: {MAX_START_TIME_S:.4g} s, the year 2262)')
     return f'unix:{value!r}', value
 
 
@@ -151,7 +158,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
                 angular_velocity_variance: float = 0.0,
                 linear_acceleration_variance: float = 0.0, temperature_variance: float = 0.0,
                 chunk_bytes: int = 1 << 20, bulk: bool = True, scan: bool | None = None,
-                threads: int | None = None) -> ImportReport:
+                threads: int | None = None, overwrite: bool = False) -> ImportReport:
     """
     Convert SD log files of one sequence to a rosbag2.
 
@@ -195,6 +202,9 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
         scales the next blocks (at most :data:`WRITE_QUEUE_BLOCKS` blocks wait between them, so
         memory stays constant); 1: one thread does both. None (default): 2 when this process
         may run on two or more CPUs and ``bulk`` is on, else 1. Same bag, byte for byte.
+    overwrite : bool, keyword-only
+        An existing bag at ``out`` is replaced when the new one is complete (``--overwrite``);
+        never a file or a folder that is not a bag.
 
     Returns
     -------
@@ -212,14 +222,16 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
         if not (np.isfinite(value) and value >= 0):
             raise ParameterError(f'{name} must be finite and >= 0, got {value}')
     if threads is None:
-        threads = 2 if bulk and _usable_cpus() >= 2 else 1
+        threads = 2 if bulk and usable_cpus() >= 2 else 1
     if threads not in (1, 2):
         raise ParameterError(f'threads must be 1 or 2, got {threads!r}')
     imu_topic = _topic(topic)
     temp_topic = _topic(temperature_topic) if temperature_rate_hz > 0 else None
+    if temp_topic == imu_topic:
+        raise ParameterError(f'--topic and --temperature-topic are both {imu_topic!r}: Imu and '
+                             'Temperature messages need topics of their own')
     out = os.fspath(out)
-    if os.path.lexists(out):
-        raise OutputError(f'--out {out!r} exists; choose a new bag directory')
+    check_new_dir(out, parameter='out', overwrite=overwrite)
     missing = [str(p_) for p_ in paths if not os.path.isfile(p_)]
     if missing:
         raise BagError(f'log file {missing[0]!r} does not exist' + (
@@ -250,7 +262,7 @@ def import_logs(paths: Sequence[str], out: 'os.PathLike[str] | str', *, storage:
 
     # The bag is built under a hidden name and renamed when finished: an interrupted or failed
     # import leaves nothing that looks like a bag, and a retry with the same --out works.
-    with staged_new_dir(out, parameter='out') as stage:
+    with staged_new_dir(out, parameter='out', overwrite=overwrite) as stage:
         with _BagWrites(lambda: writer_class(stage, storage=storage, imu_topic=imu_topic,
                                              temperature_topic=temp_topic, frame_id=frame_id),
                         threaded=threads == 2) as writes:
@@ -347,14 +359,6 @@ def _convert(reader: SdLogReader, writes: '_BagWrites', *,
 #: Blocks (``chunk_bytes`` of log each, about 2.4 MB of arrays per MB of log) that may wait for the
 #: writer thread.
 WRITE_QUEUE_BLOCKS = 4
-
-
-def _usable_cpus() -> int:
-    """Return the number of CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
 
 
 class _BagWrites:

@@ -30,6 +30,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 import itertools
 from pathlib import Path
+import sys
 from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
@@ -39,7 +40,7 @@ from .storage import BagSource, describe, STORAGES
 from .writer import write_raw
 from ..errors import BagError, OutputError, ParameterError
 from ..msgs import typestore
-from ..outputs import staged_new_dir, StrPath
+from ..outputs import check_new_dir, is_disk_full, staged_new_dir, StrPath
 
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection
@@ -188,8 +189,18 @@ def _storage_order_blocks(
                                                           lengths[a:b].tolist())]
 
 
+def _copy_error(path: StrPath, out: Path, err: BaseException) -> BagError | OutputError:
+    """Return the error of a failed copy: the output's when the disk is full, else the input's."""
+    # an OS error on the stage (named .<out>.partial-...) is the output's, whatever its errno
+    if is_disk_full(err) or (isinstance(err, OSError) and err.filename is not None
+                             and f'.{out.name}.partial-' in str(err.filename)):
+        return OutputError(f'{{out}} {str(out)!r} cannot be written: {describe(err)}',
+                           parameters=('out',))
+    return BagError(f'bag {str(path)!r} cannot be copied: {describe(err)}')
+
+
 def repair_bag(path: StrPath, out: StrPath | None = None, *,
-               storage: str | None = None) -> RepairResult:
+               storage: str | None = None, overwrite: bool = False) -> RepairResult:
     """
     Write a complete rosbag2 from a killed (or any readable rosbag2) recording.
 
@@ -202,6 +213,8 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
         The new bag folder (must not exist); :func:`default_repaired_path` if None.
     storage : {'sqlite3', 'mcap'}, optional, keyword-only
         Storage of the new bag; the input's if None.
+    overwrite : bool, keyword-only
+        An existing bag at ``out`` is replaced once the new one is complete.
 
     Returns
     -------
@@ -214,7 +227,8 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
     ParameterError
         Unknown storage, or a ROS 1 input (exit code 2).
     OutputError
-        ``out`` exists or cannot be written (exit code 6).
+        ``out`` exists (without ``overwrite``), cannot be written, or the disk is full (exit
+        code 6).
 
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
@@ -223,8 +237,10 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
         raise ParameterError(f"{{storage}} must be 'sqlite3' or 'mcap', got {storage!r}",
                              parameters=('storage',))
     out = Path(out) if out is not None else default_repaired_path(path)
-    if out.exists() or out.is_symlink():
-        raise OutputError(f'{{out}} {str(out)!r} already exists', parameters=('out',))
+    if out.resolve() == Path(path).resolve():
+        raise OutputError(f'{{out}} {str(out)!r} is the input: the recording is never replaced',
+                          parameters=('out',))
+    check_new_dir(out, parameter='out', overwrite=overwrite)
     source = BagSource(path)
     try:
         if source.ros1:
@@ -235,7 +251,7 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
         written: dict[tuple[str, str], int] = {}
         first: int | None = None
         last: int | None = None
-        with staged_new_dir(out, parameter='out') as stage:
+        with staged_new_dir(out, parameter='out', overwrite=overwrite) as stage:
             writer = Writer(stage, version=9, storage_plugin=plugin)
             try:
                 writer.open()
@@ -255,12 +271,13 @@ def repair_bag(path: StrPath, out: StrPath | None = None, *,
             except (BagError, ParameterError):
                 raise
             except Exception as err:  # noqa: BLE001 - rosbags, zstd and sqlite errors
-                raise BagError(f'bag {str(path)!r} cannot be copied: {describe(err)}') from err
+                raise _copy_error(path, out, err) from err
             finally:
                 try:
                     writer.close()
-                except Exception:  # noqa: BLE001, S110 - the first error is the one to report
-                    pass
+                except Exception as err:  # noqa: BLE001 - rosbags, zstd and sqlite errors
+                    if sys.exc_info()[0] is None:  # else the first error is the one to report
+                        raise _copy_error(path, out, err) from err
             expected = {}
             for name, (msgtype, count) in source.topics().items():
                 if msgtype is not None:

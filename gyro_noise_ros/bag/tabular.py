@@ -18,7 +18,8 @@ IMU records that are not bags: CSV tables and PX4 ULog files, read like :class:`
 Both kinds are loaded whole (minutes to hours of 100-1000 Hz data, tens of MB) and served in
 :class:`ImuBatch` es, so ``gyro_noise_analyze`` and ``gyro_noise_explain`` read them as bags.
 
-CSV (one header line, comma separated, names case-insensitive):
+CSV (one header line, names case-insensitive; comma, semicolon or tab separated, '.' decimals;
+a UTF-8 byte-order mark and CRLF line ends are read):
 
 =============================================  ===================================================
 ``time_s`` / ``t_s`` / ``time (s)``             sample time (s); or ``timestamp_us`` (us); optional
@@ -48,6 +49,11 @@ from ..units import DEG_TO_RAD, STANDARD_GRAVITY_M_S2
 
 #: Suffixes read by :class:`TableImuReader`.
 TABLE_SUFFIXES = ('.csv', '.ulg')
+#: Column separators of a CSV, in the order they are looked for in its header line (a
+#: spreadsheet in a locale with decimal commas writes ';').
+CSV_DELIMITERS = (',', ';', '\t')
+#: Largest time span of a record (s): its stamps are int64 nanoseconds (292 years).
+MAX_SPAN_S = (2**63 - 1) / 1e9
 #: ULog topics understood, in order of preference.
 ULOG_TOPICS = ('sensor_combined', 'sensor_gyro')
 
@@ -96,11 +102,17 @@ def read_csv(path: StrPath, *, check_header: Callable[[list[str]], object] | Non
 
     path = Path(path)
     try:
-        with path.open(newline='') as fh:
-            header = next(csv.reader(fh), None)
-    except (OSError, UnicodeDecodeError, csv.Error) as err:
+        # utf-8-sig: Excel's "CSV UTF-8" starts with a byte-order mark
+        with path.open(newline='', encoding='utf-8-sig') as fh:
+            line = fh.readline()
+    except (OSError, UnicodeDecodeError) as err:
         reason = getattr(err, 'strerror', None) or err
         raise BagError(f'cannot read CSV {str(path)!r}: {reason}') from err
+    delimiter = next((d for d in CSV_DELIMITERS if d in line), ',')
+    try:
+        header = next(csv.reader([line], delimiter=delimiter), None)
+    except csv.Error as err:
+        raise BagError(f'cannot read CSV {str(path)!r}: {err}') from err
     if not header or not any(h.strip() for h in header):
         raise BagError(f'CSV {str(path)!r} is empty (a header line is required)')
     names = [h.strip().lower() for h in header]
@@ -110,9 +122,12 @@ def read_csv(path: StrPath, *, check_header: Callable[[list[str]], object] | Non
         with warnings.catch_warnings():
             # numpy warns (UserWarning) on a header without rows: said below as one error line
             warnings.simplefilter('ignore', UserWarning)
-            data = np.loadtxt(path, delimiter=',', skiprows=1, ndmin=2, dtype=np.float64)
+            data = np.loadtxt(path, delimiter=delimiter, skiprows=1, ndmin=2, dtype=np.float64,
+                              encoding='utf-8-sig')
     except (ValueError, UnicodeDecodeError) as err:
-        raise BagError(f'CSV {str(path)!r} has a non-numeric value or a short row: '
+        comma = (' (decimal commas are not read: write 0.5, not 0,5)'
+                 if delimiter != ',' and ',' in str(err) else '')
+        raise BagError(f'CSV {str(path)!r} has a non-numeric value or a short row{comma}: '
                        f'{err}') from err
     except OSError as err:
         raise BagError(f'cannot read CSV {str(path)!r}: {err.strerror or err}') from err
@@ -183,6 +198,22 @@ def _csv_columns(names: Sequence[str], path: StrPath,
     return cols
 
 
+def _stamps_ns(t: np.ndarray, ns_per_unit: float, path: Path, name: str) -> np.ndarray:
+    """Return the int64 ns stamps of a time column after its first value; refuse what cannot be."""
+    if not np.all(np.isfinite(t)):
+        bad = int((~np.isfinite(t)).sum())
+        raise InputDataError(f'CSV {str(path)!r}: {bad} time value(s) are NaN/Inf')
+    with np.errstate(over='ignore', invalid='ignore'):
+        span_s = (t - t[0]) * (ns_per_unit / 1e9)
+    worst = float(np.max(np.abs(span_s))) if span_s.size else 0.0
+    if not worst < MAX_SPAN_S:
+        bad = int(np.argmax(~(np.abs(span_s) < MAX_SPAN_S)))
+        raise InputDataError(f'CSV {str(path)!r}: {name} = {t[bad]:g} in data row {bad + 1} is '
+                             f'{worst:.3g} s from the first row, beyond any record (a time '
+                             f'stamp reaches {MAX_SPAN_S:.3g} s)')
+    return np.rint((t - t[0]) * ns_per_unit).astype(np.int64)
+
+
 def _load_csv(path: Path, rate_hz: float | None, gyro_axes: Sequence[str]) -> _Loaded:
     names, data = read_csv(path, check_header=lambda names: _csv_columns(names, path, gyro_axes))
     cols = _csv_columns(names, path, gyro_axes)
@@ -191,13 +222,9 @@ def _load_csv(path: Path, rate_hz: float | None, gyro_axes: Sequence[str]) -> _L
                              parameters=('rate_hz',))
     n = data.shape[0]
     if cols['t_s'] is not None:
-        t = data[:, cols['t_s']]
-        if not np.all(np.isfinite(t)):
-            bad = int((~np.isfinite(t)).sum())
-            raise InputDataError(f'CSV {str(path)!r}: {bad} time value(s) are NaN/Inf')
-        stamp = np.rint((t - t[0]) * 1e9).astype(np.int64)
+        stamp = _stamps_ns(data[:, cols['t_s']], 1e9, path, names[cols['t_s']])
     elif cols['t_us'] is not None:
-        stamp = np.rint((data[:, cols['t_us']] - data[0, cols['t_us']]) * 1e3).astype(np.int64)
+        stamp = _stamps_ns(data[:, cols['t_us']], 1e3, path, names[cols['t_us']])
     else:
         assert rate_hz is not None  # refused above without a time column
         stamp = np.rint(np.arange(n) * (1e9 / float(rate_hz))).astype(np.int64)

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ParameterError
+from ..errors import InputError, ParameterError
 from ..outputs import StrPath
 from ..units import STANDARD_GRAVITY_M_S2
 
@@ -245,25 +245,31 @@ def load_calibration(path: StrPath) -> Calibration:
 
     Raises
     ------
+    InputError
+        A missing or unreadable file (binary, not YAML), not a parameter file, an unknown layout
+        or a missing key (exit code 3, as for every unreadable input).
     ParameterError
-        Unreadable file, not a parameter file, unknown layout, or bad values (naming the key).
+        Bad values (naming the key).
 
     """
     import yaml
 
     path = Path(path)
     try:
-        doc = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as err:
-        raise ParameterError(f'calibration file {path}: cannot be read ({err})') from err
+        doc = yaml.safe_load(path.read_text(encoding='utf-8'))
+    except FileNotFoundError as err:
+        raise InputError(f'calibration file {str(path)!r} does not exist') from err
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        why = getattr(err, 'strerror', None) or str(err).splitlines()[0]
+        raise InputError(f'calibration file {str(path)!r} cannot be read as YAML: {why}') from err
     blocks = [v['ros__parameters'] for v in (doc or {}).values()
               if isinstance(v, dict) and isinstance(v.get('ros__parameters'), dict)] \
         if isinstance(doc, dict) else []
     if len(blocks) != 1:
-        raise ParameterError(f'calibration file {path}: expected one node key (e.g. /**) with '
-                             f'ros__parameters, found {len(blocks)}')
+        raise InputError(f'calibration file {path}: expected one node key (e.g. /**) with '
+                         f'ros__parameters, found {len(blocks)}')
     params = blocks[0]
     missing = [k for k in KEYS if k != 'calibration_gravity_m_s2' and k not in params]
     if missing:
-        raise ParameterError(f'calibration file {path}: missing {", ".join(missing)}')
+        raise InputError(f'calibration file {path}: missing {", ".join(missing)}')
     return calibration_from_parameters(params, source=f'calibration file {path}')

@@ -37,7 +37,10 @@ smaller) of the requested one, and a sweep's instantaneous frequency must cover 
 the requested band (a dwell record analysed as a sweep stays at one frequency).
 
 **Verdicts** (statistical tests against the record's own noise, false-alarm ``alpha`` each; rates
-measured in ``docs/reliability.md`` by ``docs/scripts/excitation_verdicts.py``):
+measured in ``docs/reliability.md`` by ``docs/scripts/excitation_verdicts.py``). A verdict needs
+both: the test significant *and* the defect larger than the practical ``tolerance`` (relative,
+default :data:`DEFAULT_TOLERANCE`), so a long clean record never flags a difference nobody could
+act on (a -0.068 % gain that noise cannot explain is still a match):
 
 * *steady* / *unsteady*: the per-cycle amplitudes scatter no more than white noise of the fit's
   residual rms sigma explains, sigma sqrt(2 / samples per cycle): ``(n - 1) s^2 / sigma_c^2``
@@ -70,6 +73,11 @@ DEFAULT_FREQUENCY_TOL = 0.02
 MIN_SWEEP_COVERAGE = 0.8
 #: False-alarm probability of each verdict.
 DEFAULT_ALPHA = 1e-3
+#: Practical tolerance of each verdict, relative to the amplitude (amplitude stability, THD,
+#: gain deviation, spread of the deviation over frequency): 1 %, the uncertainty of a
+#: back-to-back comparison against a reference transducer at these frequencies (ISO 16063-21),
+#: below which a difference cannot be laid at the sensor's door.
+DEFAULT_TOLERANCE = 0.01
 
 
 def _check(x: ArrayLike, rate_hz: float, name: str = 'samples') -> NDArray[np.float64]:
@@ -192,6 +200,8 @@ class DwellResult:
         The THD white noise alone would show, on average (ratio).
     alpha : float
         False-alarm probability of the verdicts.
+    tolerance : float
+        Practical tolerance of the verdicts (relative: amplitude stability, THD).
 
     """
 
@@ -217,16 +227,17 @@ class DwellResult:
     distortion_p: float = float('nan')
     thd_noise: float = float('nan')
     alpha: float = DEFAULT_ALPHA
+    tolerance: float = DEFAULT_TOLERANCE
 
     @property
     def steady(self) -> bool:
-        """bool: the per-cycle amplitude scatters no more than noise explains."""
-        return not self.stability_p < self.alpha
+        """bool: the cycle amplitudes scatter within noise, or by no more than the tolerance."""
+        return not (self.stability_p < self.alpha and self.amplitude_stability > self.tolerance)
 
     @property
     def clean(self) -> bool:
-        """bool: no harmonic stands out of the noise."""
-        return not self.distortion_p < self.alpha
+        """bool: no harmonic stands out of the noise, or the THD is within the tolerance."""
+        return not (self.distortion_p < self.alpha and self.thd > self.tolerance)
 
 
 def _cycle_amplitudes(x: NDArray[np.float64], rate_hz: float,
@@ -247,7 +258,7 @@ def _cycle_amplitudes(x: NDArray[np.float64], rate_hz: float,
 
 def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
                harmonics: int = DEFAULT_HARMONICS, frequency_tol: float = DEFAULT_FREQUENCY_TOL,
-               alpha: float = DEFAULT_ALPHA) -> DwellResult:
+               alpha: float = DEFAULT_ALPHA, tolerance: float = DEFAULT_TOLERANCE) -> DwellResult:
     """
     Analyse a sine-dwell record (paper 001 section 5.3, Figures 7, 8, 10, 11).
 
@@ -265,6 +276,8 @@ def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
         Largest relative difference between ``frequency_hz`` and the fitted frequency.
     alpha : float, keyword-only
         False-alarm probability of the steadiness and distortion verdicts.
+    tolerance : float, keyword-only
+        Their practical tolerance (relative amplitude stability, THD).
 
     Returns
     -------
@@ -282,8 +295,8 @@ def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
     x = _check(x, rate_hz)
     f0 = float(frequency_hz)
     if not (math.isfinite(f0) and 0 < f0 < rate_hz / 2.0):
-        raise ParameterError(f'dwell frequency must be in (0, {rate_hz / 2:g}) Hz (Nyquist), '
-                             f'got {frequency_hz!r}')
+        raise ParameterError(f'{{frequency_hz}} frequency must be in (0, {rate_hz / 2:g}) Hz '
+                             f'(Nyquist), got {frequency_hz!r}', parameters=('frequency_hz',))
     if not (math.isfinite(frequency_tol) and frequency_tol > 0):
         raise ParameterError(f'frequency tolerance must be > 0, got {frequency_tol!r}')
     if x.size < 3 * rate_hz / f0:
@@ -338,7 +351,16 @@ def sine_dwell(x: ArrayLike, rate_hz: float, frequency_hz: float, *,
         start_s=lo / rate_hz, duration_s=seg.size / rate_hz, cycles=int(cyc.size),
         frequency_sigma_hz=f_sig, amplitude_sigma=math.sqrt(var_coef),
         stability_noise=sigma_c / mean if mean > 0 else float('nan'), stability_p=stab_p,
-        distortion_p=dist_p, thd_noise=math.sqrt(dof * var_coef) / h[0], alpha=float(alpha))
+        distortion_p=dist_p, thd_noise=math.sqrt(dof * var_coef) / h[0], alpha=float(alpha),
+        tolerance=_tolerance(tolerance))
+
+
+def _tolerance(value: float) -> float:
+    """Return a verdict's practical tolerance, checked (a fraction >= 0)."""
+    if not (math.isfinite(value) and value >= 0):
+        raise ParameterError(f'{{tolerance}} must be a fraction >= 0, got {value!r}',
+                             parameters=('tolerance',))
+    return float(value)
 
 
 @dataclass(frozen=True)
@@ -367,8 +389,12 @@ class SweepResult:
         Noise of one bin's deviation (rising minus falling scatter over sqrt 2).
     gain_p, flatness_p : float
         p-values of "matches the reference" and "flat" (module docstring).
+    deviation_spread : float
+        RMS of the per-bin deviations about their mean (relative; NaN without a reference).
     alpha : float
         False-alarm probability of the verdicts.
+    tolerance : float
+        Practical tolerance of the verdicts (relative gain deviation, spread).
 
     """
 
@@ -388,17 +414,23 @@ class SweepResult:
     bin_deviation_sigma: float = float('nan')
     gain_p: float = float('nan')
     flatness_p: float = float('nan')
+    deviation_spread: float = float('nan')
     alpha: float = DEFAULT_ALPHA
+    tolerance: float = DEFAULT_TOLERANCE
 
     @property
     def matches_reference(self) -> bool | None:
-        """Whether the mean deviation is within noise (None without a reference)."""
-        return None if math.isnan(self.gain_p) else not self.gain_p < self.alpha
+        """Whether the mean deviation is within noise or the tolerance (None: no reference)."""
+        if math.isnan(self.gain_p):
+            return None
+        return not (self.gain_p < self.alpha and abs(self.mean_deviation) > self.tolerance)
 
     @property
     def flat(self) -> bool | None:
-        """Whether the deviation stays flat with frequency within noise (None: no reference)."""
-        return None if math.isnan(self.flatness_p) else not self.flatness_p < self.alpha
+        """Whether the deviation stays flat within noise or the tolerance (None: no reference)."""
+        if math.isnan(self.flatness_p):
+            return None
+        return not (self.flatness_p < self.alpha and self.deviation_spread > self.tolerance)
 
 
 def _instantaneous(x: NDArray[np.float64], rate_hz: float, f_lo: float,
@@ -424,7 +456,7 @@ def _smooth(v: NDArray[np.float64], n: int) -> NDArray[np.float64]:
 
 def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_rate_hz_s: float,
                *, reference: ArrayLike | None = None, bins: int | None = None,
-               alpha: float = DEFAULT_ALPHA) -> SweepResult:
+               alpha: float = DEFAULT_ALPHA, tolerance: float = DEFAULT_TOLERANCE) -> SweepResult:
     """
     Analyse a sine-sweep record (paper 001 section 5.3, Figures 9 and 12).
 
@@ -444,6 +476,8 @@ def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_r
         Number of frequency bins across the band (default: one per 0.25 Hz, at least 4).
     alpha : float, keyword-only
         False-alarm probability of the verdicts against the reference.
+    tolerance : float, keyword-only
+        Their practical tolerance (relative gain deviation, spread over frequency).
 
     Returns
     -------
@@ -506,7 +540,8 @@ def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_r
     dev_up: NDArray[np.float64] | None = None
     dev_down: NDArray[np.float64] | None = None
     nan = float('nan')
-    stats: tuple[float, float, float, float, float] = (nan, nan, nan, nan, nan)
+    stats: tuple[float, ...] = (nan,) * 6
+    tol = _tolerance(tolerance)
     if reference is not None:
         r = _check(reference, rate_hz, 'reference')
         if r.size != x.size:
@@ -518,28 +553,31 @@ def sine_sweep(x: ArrayLike, rate_hz: float, f0_hz: float, f1_hz: float, sweep_r
             dev_down = res['amplitude_down'] / ref_down - 1.0
         stats = _deviation_tests(dev_up, dev_down)
     step = max(1, x.size // 4000)
+    mean, se, sigma, gain_p, flat_p, spread = stats
     return SweepResult(centres, res['amplitude_up'], res['amplitude_down'], ref_up, ref_down,
                        dev_up, dev_down, np.arange(0, x.size, step) / rate_hz, fs[::step],
-                       amp[::step], (f_lo, f_hi), *stats, float(alpha))
+                       amp[::step], (f_lo, f_hi), mean_deviation=mean, mean_deviation_sigma=se,
+                       bin_deviation_sigma=sigma, gain_p=gain_p, flatness_p=flat_p,
+                       deviation_spread=spread, alpha=float(alpha), tolerance=tol)
 
 
 def _deviation_tests(dev_up: NDArray[np.float64],
-                     dev_down: NDArray[np.float64]) -> tuple[float, float, float, float, float]:
-    """Mean deviation, its standard error, one bin's noise, gain and flatness p-values."""
+                     dev_down: NDArray[np.float64]) -> tuple[float, ...]:
+    """Return the deviation's mean, its std error, one bin's noise, gain p, flatness p, spread."""
     nan = float('nan')
     both = np.isfinite(dev_up) & np.isfinite(dev_down)
     values = np.concatenate([dev_up[np.isfinite(dev_up)], dev_down[np.isfinite(dev_down)]])
     if np.count_nonzero(both) < 3 or values.size < 2:
-        return nan, nan, nan, nan, nan
+        return nan, nan, nan, nan, nan, nan
     # a bin seen rising and falling measures the same gain twice: their difference is noise
     sigma = float(np.std(dev_up[both] - dev_down[both], ddof=1) / math.sqrt(2.0))
     mean = float(values.mean())
     se = sigma / math.sqrt(values.size)
+    spread = float(np.sum((values - mean) ** 2)) / (values.size - 1)
     if not sigma > 0:
-        return mean, se, sigma, nan, nan
+        return mean, se, sigma, nan, nan, math.sqrt(spread)
     # sigma comes from the m bins seen both ways: m - 1 degrees of freedom, hence t and F
     dof = int(np.count_nonzero(both)) - 1
     gain_p = float(2.0 * t_dist.sf(abs(mean) / se, dof))
-    spread = float(np.sum((values - mean) ** 2)) / (values.size - 1)
     flat_p = float(f_dist.sf(spread / sigma ** 2, values.size - 1, dof))
-    return mean, se, sigma, gain_p, flat_p
+    return mean, se, sigma, gain_p, flat_p, math.sqrt(spread)

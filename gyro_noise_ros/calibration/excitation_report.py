@@ -17,11 +17,11 @@ The files of ``gyro_noise_excitation``, rendered from its document (excitation.j
 
 Inputs: the dict ``ExcitationResult.as_dict()`` returns (SI, ratios not %; a null is a value that
 was not finite) and, for the figures, each record's time (s) and excited channel (m/s^2 or
-rad/s). Outputs: :func:`excitation_markdown` (excitation.md: quantities in g or deg/s,
+rad/s). Outputs: :func:`excitation_markdown` (excitation.md: quantities in mg or deg/s,
 percentages and the verdicts, paper 001 section 5.3) and :func:`plot_excitation`
 (excitation_<side>.png: the whole acquisition and the wave form or the amplitude against
 frequency, paper 001 Figures 7-12). :func:`display_unit` is the printed unit of a sensor and
-:func:`verdict_text` the wording of a verdict, which the HTML page (:mod:`..htmlreport.excitation`)
+:func:`check_parts` the wording of a verdict, which the HTML page (:mod:`..htmlreport.excitation`)
 shares. The workflow that computes the document and writes the files is :mod:`..app.excitation`.
 """
 
@@ -32,12 +32,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..formatting import percent
+from ..formatting import cell_text, Num, percent, pointer
 from ..outputs import StrPath
 from ..plotting import pyplot, save_figure
-from ..units import RAD_TO_DEG, STANDARD_GRAVITY_M_S2
+from ..units import ACCEL, GYRO_RATE
 
-__all__ = ['display_unit', 'excitation_markdown', 'plot_excitation', 'sides_of', 'verdict_text']
+__all__ = ['DWELL_CHECKS', 'SWEEP_CHECKS', 'check_parts', 'check_text', 'checks_of',
+           'display_unit', 'excitation_markdown', 'plot_excitation', 'sides_of', 'verdict_rule']
 
 #: The records of a check, in the order they are reported.
 SIDES = ('before', 'after')
@@ -55,10 +56,12 @@ def display_unit(sensor: str) -> tuple[float, str]:
     Returns
     -------
     (float, str)
-        ``(1 / 9.80665, 'g')`` for the accelerometer, ``(180 / pi, 'deg/s')`` for the gyro.
+        The policy of :mod:`..units`: ``(1000 / 9.80665, 'mg')`` for the accelerometer,
+        ``(180 / pi, 'deg/s')`` for the gyro.
 
     """
-    return ((1.0 / STANDARD_GRAVITY_M_S2, 'g') if sensor == 'accel' else (RAD_TO_DEG, 'deg/s'))
+    unit = ACCEL if sensor == 'accel' else GYRO_RATE
+    return unit.per_si, unit.unit
 
 
 def sides_of(doc: dict[str, Any]) -> list[str]:
@@ -79,27 +82,75 @@ def _f(v: float | None) -> float:
     return math.nan if v is None else v
 
 
-def verdict_text(ok: bool | None, yes: str, no: str, p: float | None) -> str:
+#: The verdicts of a record: (verdict key, word when True, word when False, p-value key, size
+#: key, name), for a dwell and for a sweep.
+DWELL_CHECKS = (('steady', 'steady', 'UNSTEADY', 'stability_p', 'amplitude_stability',
+                 'stability'),
+                ('clean', 'clean', 'DISTORTED', 'distortion_p', 'thd', 'distortion'))
+SWEEP_CHECKS = (('matches_reference', 'matches the reference', 'GAIN DIFFERS', 'gain_p',
+                 'mean_deviation', 'gain'),
+                ('flat', 'flat', 'FREQUENCY-DEPENDENT', 'flatness_p', 'deviation_spread',
+                 'flatness'))
+
+
+def checks_of(doc: dict[str, Any]) -> tuple[tuple[str, ...], ...]:
+    """Return the verdicts of an excitation document's mode (:data:`DWELL_CHECKS` or sweep)."""
+    return DWELL_CHECKS if doc['mode'] == 'dwell' else SWEEP_CHECKS
+
+
+def check_parts(doc: dict[str, Any], side: str, check: tuple[str, ...]) -> tuple[Any, ...]:
     """
-    Return a verdict with its p-value (``'clean (p = 0.42)'``), or ``'n/a'`` without one.
+    Return one verdict of one record: its word, p-value and, when significant, its size.
+
+    ``clean (p = 0.42)``; ``matches the reference (-0.068 %: significant, within the 1 %
+    tolerance; p = 1.3e-15)``; ``GAIN DIFFERS (-2.1 %, beyond the 1 % tolerance; p = 1e-15)``;
+    ``n/a`` without a test (no reference record). Numbers are :class:`..formatting.Num` parts
+    (pointers into ``doc``): the HTML page shows them as they are, :func:`check_text` as text.
 
     Parameters
     ----------
-    ok : bool or None
-        The verdict (None: no test, e.g. no reference record).
-    yes, no : str
-        The words for True and False.
-    p : float or None
-        The test's p-value.
+    doc : dict
+        The ``excitation.json`` document (its ``alpha`` and ``tolerance``).
+    side : str
+        ``'before'`` or ``'after'``.
+    check : tuple
+        One of :data:`DWELL_CHECKS` or :data:`SWEEP_CHECKS`.
 
     Returns
     -------
-    str
+    tuple
+        Text and :class:`..formatting.Num` parts.
 
     """
+    key, yes, no, p_key, size_key, _ = check
+    entry = doc[side]
+    ok = entry.get(key)
     if ok is None:
-        return 'n/a'
-    return f'{yes if ok else no} (p = {_f(p):.2g})'
+        return ('n/a',)
+    # a p-value that underflowed to 0 is below any number a double holds: "p ~ 0", not "p = 0"
+    p = Num(pointer(side, p_key), '.2g', '= ' if entry.get(p_key) != 0 else '~ ')
+    tol = doc.get('tolerance')
+    if tol is None or entry.get(size_key) is None or not _f(entry.get(p_key)) < doc['alpha']:
+        return (yes if ok else no, ' (p ', p, ')')
+    where = ': significant, within the ' if ok else ', beyond the '
+    return (yes if ok else no, ' (', Num(pointer(side, size_key), '+.3g' if key ==
+                                         'matches_reference' else '.3g', scale=100.0),
+            f' %{where}', Num('/tolerance', 'g', scale=100.0), ' % tolerance; p ', p, ')')
+
+
+def check_text(doc: dict[str, Any], side: str, check: tuple[str, ...]) -> str:
+    """Return :func:`check_parts` as text (excitation.md, the printed lines)."""
+    return cell_text(doc, check_parts(doc, side, check))
+
+
+def verdict_rule(doc: dict[str, Any]) -> str:
+    """Return the sentence that says how the verdicts of ``doc`` are made (false alarms, size)."""
+    rule = ("Verdicts are statistical tests against each record's own noise, false-alarm "
+            f'probability {doc["alpha"]:g} each')
+    if doc.get('tolerance') is not None:
+        rule += (', and flag a defect only when it is also larger than the practical tolerance, '
+                 f'{100 * doc["tolerance"]:g} % of the amplitude')
+    return rule + ' (docs/reliability.md).'
 
 
 def excitation_markdown(doc: dict[str, Any]) -> str:
@@ -119,29 +170,37 @@ def excitation_markdown(doc: dict[str, Any]) -> str:
     sides = sides_of(doc)
     out = [f'# Excitation check: {what_of(doc)}, {doc["sensor"]} {doc["axis"]} (paper 001 '
            'section 5.3)', '',
-           "Verdicts are statistical tests against each record's own noise, false-alarm "
-           f'probability {doc["alpha"]:g} each (docs/reliability.md).', '',
+           verdict_rule(doc), '',
            '| quantity | ' + ' | '.join(sides) + ' |', '|---|' + '---|' * len(sides),
            '| record | ' + ' | '.join(doc[s]['source'] for s in sides) + ' |']
 
     def row(label: str, fn: Callable[[dict[str, Any]], str]) -> None:
         out.append(f'| {label} | ' + ' | '.join(fn(doc[s]) for s in sides) + ' |')
 
+    def checks(label: str, check: tuple[str, ...]) -> None:
+        out.append(f'| {label} | ' + ' | '.join(check_text(doc, s, check) for s in sides)
+                   + ' |')
+
     if doc['mode'] == 'dwell':
-        _dwell_rows(doc, row)
+        _dwell_rows(doc, row, checks)
         change = doc.get('change')
         if change:
             sig = 'significant' if change['amplitude_change_significant'] else 'within noise'
+            if change['amplitude_change_significant'] and doc.get('tolerance') is not None:
+                beyond = abs(change['amplitude_relative']) > doc['tolerance']
+                sig += (f", {'beyond' if beyond else 'within'} the "
+                        f"{100 * doc['tolerance']:g} % tolerance")
             out += ['', '## After / before', '',
                     f'- amplitude: {percent(change["amplitude_relative"], ".3f")} +/- '
                     f'{percent(change["amplitude_relative_sigma"], ".3f")} '
-                    f'({sig}, p = {change["amplitude_change_p"]:.2g})',
+                    f'({sig}; p {"~" if change["amplitude_change_p"] == 0 else "="} '
+                    f'{change["amplitude_change_p"]:.2g})',
                     f'- frequency: {change["frequency_hz"]:+.5f} Hz',
                     f'- amplitude stability: {100 * change["amplitude_stability"]:+.3f} '
                     f'percentage points',
                     f'- THD: {100 * change["thd"]:+.3f} percentage points']
         return '\n'.join(out) + '\n'
-    _sweep_rows(doc, row)
+    _sweep_rows(doc, row, checks)
     for s in sides:
         out += _bin_table(doc, s)
     return '\n'.join(out) + '\n'
@@ -151,7 +210,11 @@ def excitation_markdown(doc: dict[str, Any]) -> str:
 _Row = Callable[[str, Callable[[dict[str, Any]], str]], None]
 
 
-def _dwell_rows(doc: dict[str, Any], row: _Row) -> None:
+#: Adds one row of verdicts to the table: a label and the check.
+_Checks = Callable[[str, tuple[str, ...]], None]
+
+
+def _dwell_rows(doc: dict[str, Any], row: _Row, checks: _Checks) -> None:
     """Add the rows of a sine dwell: frequency, amplitude, stability, THD, verdicts."""
     k, unit = display_unit(doc['sensor'])
     u = doc['unit']
@@ -167,12 +230,10 @@ def _dwell_rows(doc: dict[str, Any], row: _Row) -> None:
     row('amplitude stability (std / mean of the cycles)',
         lambda e: percent(e['amplitude_stability'], '.3f'))
     row('stability from noise alone', lambda e: percent(e['amplitude_stability_noise'], '.3f'))
-    row('stability verdict',
-        lambda e: verdict_text(e['steady'], 'steady', 'UNSTEADY', e['stability_p']))
+    checks('stability verdict', DWELL_CHECKS[0])
     row('THD (harmonics 2..H over the fundamental)', lambda e: percent(e['thd'], '.3f'))
     row('THD from noise alone', lambda e: percent(e['thd_noise'], '.3f'))
-    row('distortion verdict',
-        lambda e: verdict_text(e['clean'], 'clean', 'DISTORTED', e['distortion_p']))
+    checks('distortion verdict', DWELL_CHECKS[1])
 
     def harmonics(e: dict[str, Any]) -> str:
         h = np.asarray(e[f'harmonics_{u}'], dtype=float)
@@ -185,7 +246,7 @@ def _dwell_rows(doc: dict[str, Any], row: _Row) -> None:
         f'({e["cycles"]} cycles)')
 
 
-def _sweep_rows(doc: dict[str, Any], row: _Row) -> None:
+def _sweep_rows(doc: dict[str, Any], row: _Row, checks: _Checks) -> None:
     """Add the rows of a sine sweep: frequency span, deviation from the reference, verdicts."""
     u = doc['unit']
     row('frequency covered, 5th-95th percentile (Hz)',
@@ -194,12 +255,11 @@ def _sweep_rows(doc: dict[str, Any], row: _Row) -> None:
         'no reference' if f'reference_up_{u}' not in e else
         f'{percent(e["mean_deviation"], ".3f")} +/- '
         f'{percent(e["mean_deviation_sigma"], ".3f")}'))
-    row('gain verdict', lambda e: verdict_text(e.get('matches_reference'),
-                                               'matches the reference', 'GAIN DIFFERS',
-                                               e.get('gain_p')))
+    checks('gain verdict', SWEEP_CHECKS[0])
     row('deviation noise per bin', lambda e: percent(e.get('bin_deviation_sigma'), '.3f'))
-    row('flatness verdict', lambda e: verdict_text(e.get('flat'), 'flat', 'FREQUENCY-DEPENDENT',
-                                                   e.get('flatness_p')))
+    row('deviation spread over frequency (rms about the mean)',
+        lambda e: percent(e.get('deviation_spread'), '.3f'))
+    checks('flatness verdict', SWEEP_CHECKS[1])
 
 
 def _bin_table(doc: dict[str, Any], side: str) -> list[str]:
@@ -274,7 +334,8 @@ def plot_excitation(path: StrPath, doc: dict[str, Any], side: str, t_s: NDArray[
         pb.set_xlabel('instantaneous frequency (Hz)')
         pb.set_ylabel(f'amplitude ({unit})')
         pb.set_title('(b) amplitude against frequency', fontsize=9)
-        pb.legend(fontsize=8)
+        # below the panel: the reference runs along the top, where a legend would cover it
+        pb.legend(fontsize=8, loc='upper center', bbox_to_anchor=(0.5, -0.16), ncol=3)
     for panel in (pa, pb):
         panel.grid(True, alpha=0.3)
     save_figure(fig, path, dpi=110, tight=True)

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..bag import ImuBagReader
-from ..core.timebase import estimate_rate
+from ..core.timebase import estimate_rate, RATE_RANGE_HZ
 from ..errors import InputDataError, ParameterError
 from ..outputs import StrPath
 
@@ -105,8 +105,9 @@ def iter_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None =
         specific force (m/s^2), (n, 3) angular rate (rad/s).
 
     """
-    if rate_hz is not None and not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise ParameterError(f'rate_hz must be finite and > 0, got {rate_hz!r}')
+    if rate_hz is not None and not RATE_RANGE_HZ[0] <= rate_hz <= RATE_RANGE_HZ[1]:
+        raise ParameterError(f'{{rate_hz}} must be {RATE_RANGE_HZ[0]:g} to '
+                             f'{RATE_RANGE_HZ[1]:g} Hz, got {rate_hz!r}', parameters=('rate_hz',))
     t0 = t0_ns
     rate = rate_hz
     with ImuBagReader(path, topic=topic) as reader:

@@ -13,3 +13,7 @@
 # limitations under the License.
 
 """Command-line tools: one module per tool, each exposing ``main(argv=None) -> int``."""
+
+from ._startup import install
+
+install()  # a Ctrl-C while the tool imports its libraries ends it in one line (_startup)

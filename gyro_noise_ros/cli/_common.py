@@ -15,38 +15,34 @@
 """
 Shared plumbing of the command-line tools: one clear line and a documented exit code on error.
 
-Exit codes (documented in the README):
-
-====  ==========================================================================
-0     success
-1     unexpected internal error (a bug: please report the message)
-2     bad command line or parameter value (argparse uses 2 as well)
-3     a recording cannot be read (missing, corrupt, no or ambiguous topic, wrong type)
-4     the data cannot be analysed (NaN/Inf or non-physical values, too short, constant,
-      nothing left to analyse after ``--start``/``--end``)
-5     the Portenta link cannot be used, or the Dask cluster is lost
-6     an output cannot be written (``--out`` not writable, a file in the way, disk full)
-130   interrupted (Ctrl-C, SIGTERM where a tool turns it into an interrupt); nothing is left
-      under the outputs' final names
-====  ==========================================================================
-
-The same cause gives the same code in every tool: a CSV that is empty, has the wrong header
+The exit codes and their meanings are owned by :data:`gyro_noise_ros.errors.EXIT_CODES` (the
+README's table). :func:`run_cli` turns a :class:`~gyro_noise_ros.errors.GyroNoiseError` into its
+code and one line, and SIGINT (Ctrl-C) and SIGTERM into an interrupt: every cleanup path runs
+(staged outputs are removed), one ``<prog>: interrupted`` line is printed and the code is 130 or
+143. The same cause gives the same code in every tool: a CSV that is empty, has the wrong header
 or a non-numeric value is unreadable (3); a CSV with a header and no rows is readable but holds
 nothing to analyse (4).
 """
 
-from collections.abc import Callable, Mapping, Sequence
+import argparse
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 import logging
+import math
 import os
-from pathlib import Path
+import signal
 import sys
+import threading
+from typing import Any
 
-from ..errors import GyroNoiseError, OutputError
+from ._startup import quiet_finalisers, take_pending
+from ..errors import (EXIT_INTERNAL, EXIT_INTERRUPTED, GyroNoiseError, Interrupted,
+                      interrupted_exit_code, ParameterError)
+from ..outputs import check_out_dir, free_bytes, OVERWRITE
 
-EXIT_OK = 0
-EXIT_INTERNAL = 1
-EXIT_USAGE = 2
-EXIT_INTERRUPTED = 130
+__all__ = ['add_overwrite_argument', 'check_fits_disk', 'check_out_dir', 'EXIT_INTERRUPTED',
+           'finite_float', 'option_of', 'OVERWRITE_BAG_HELP', 'OVERWRITE_FOLDER_HELP',
+           'OVERWRITE_OPTION', 'run_cli', 'stop_signals', 'WarningLines']
 
 
 class WarningLines(logging.Handler):
@@ -76,39 +72,157 @@ class WarningLines(logging.Handler):
             print(f'{self.prog}: warning: {text}', file=sys.stderr, flush=True)
 
 
-def check_out_option(path: str | os.PathLike[str], *, option: str = '--out') -> None:
+#: The option that lets a run replace existing data (``outputs.OVERWRITE``), in every tool.
+OVERWRITE_OPTION = '--' + OVERWRITE
+#: ``--overwrite`` help of a tool's output folder and of a new bag.
+OVERWRITE_FOLDER_HELP = ('write into an --out folder that is not empty: files of the same names '
+                         'are replaced, the others kept (without it such a folder is refused, '
+                         'exit 6)')
+OVERWRITE_BAG_HELP = ('replace an existing bag at --out when the new one is complete (a bag '
+                      'folder only; without it an existing target is refused, exit 6)')
+
+
+def add_overwrite_argument(parser: argparse.ArgumentParser | Any,
+                           help_text: str = OVERWRITE_FOLDER_HELP) -> None:
     """
-    Refuse an output folder that cannot be made, before any long work (nothing is created).
+    Add ``--overwrite``, the one spelling every tool uses to let a run replace existing data.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser or argument group
+        Where to add it.
+    help_text : str
+        What it lets replace (:data:`OVERWRITE_FOLDER_HELP`, :data:`OVERWRITE_BAG_HELP`).
+
+    """
+    parser.add_argument(OVERWRITE_OPTION, action='store_true', help=help_text)
+
+
+def finite_float(text: str) -> float:
+    """
+    Parse a finite number (argparse ``type=``): ``nan`` and ``inf`` are refused by argparse.
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+
+    Returns
+    -------
+    float
+
+    """
+    try:
+        value = float(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from err
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f'expected a finite number, got {text!r}')
+    return value
+
+
+def check_fits_disk(path: str | os.PathLike[str], need_bytes: float, what: str) -> None:
+    """
+    Refuse (exit code 2) a run whose output would not fit on the disk that holds ``path``.
 
     Parameters
     ----------
     path : str or os.PathLike
-        The folder named by the user (may not exist yet).
-    option : str, keyword-only
-        How the user named it, for the message.
+        Where the output goes (need not exist yet).
+    need_bytes : float
+        Its estimated size (B).
+    what : str
+        The options that size it, for the message (e.g. ``'--samples 40000000'``).
 
     Raises
     ------
-    OutputError
-        ``path`` is an existing file, lies under a file, or its nearest existing folder cannot be
-        written (as root every folder is writable: the staging step then finds the rest).
+    ParameterError
+        More than the free space (as an unprivileged user sees it).
 
     """
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise OutputError(f'{option} {str(out)!r} is an existing file, not a folder')
-    ancestor = out
-    while not ancestor.exists() and ancestor != ancestor.parent:
-        ancestor = ancestor.parent
-    if not ancestor.exists():
+    free = free_bytes(path)
+    if free is not None and need_bytes > free:
+        raise ParameterError(f'{what} makes about {need_bytes / 2**30:.3g} GiB of output, more '
+                             f'than the {free / 2**30:.3g} GiB free for {str(path)!r}')
+
+
+#: Delay before a swallowed stop is delivered again (s).
+REDELIVER_S = 0.05
+
+
+class _StopRequest:
+    """
+    The signal handler of :func:`stop_signals`, and what it does when its exception is lost.
+
+    The handler raises :class:`~gyro_noise_ros.errors.Interrupted` in whatever Python code runs
+    at that moment. Where Python cannot propagate an exception (a ctypes callback such as
+    llvmlite's object-cache hook while numba compiles, a ``__del__``), it reports it to
+    ``sys.unraisablehook`` and goes on: the run would end normally, the signal ignored. The hook
+    here notices that and sends the signal again a moment later, outside such code. While the
+    cleanup of a raised stop runs, further signals are not raised again (the cleanup must end).
+    """
+
+    def __init__(self) -> None:
+        self.raised = False
+        self.signum: int = signal.SIGINT
+        self.active = True
+        self.lock = threading.Lock()
+        self.previous_hook = sys.unraisablehook
+
+    def handler(self, signum: int, frame: Any) -> None:
+        if self.raised:
+            return
+        self.raised, self.signum = True, signum
+        raise Interrupted(signum)
+
+    def unraisable(self, unraisable: Any) -> None:
+        if not isinstance(unraisable.exc_value, Interrupted):
+            self.previous_hook(unraisable)
+            return
+        self.raised = False
+        timer = threading.Timer(REDELIVER_S, self._redeliver)
+        timer.daemon = True
+        timer.start()
+
+    def _redeliver(self) -> None:
+        with self.lock:
+            if self.active:
+                os.kill(os.getpid(), self.signum)
+
+    def close(self) -> None:
+        with self.lock:
+            self.active = False
+        sys.unraisablehook = self.previous_hook
+
+
+@contextmanager
+def stop_signals() -> Iterator[None]:
+    """
+    Turn SIGINT and SIGTERM into :class:`~gyro_noise_ros.errors.Interrupted` while the block runs.
+
+    In the main thread only (elsewhere Python cannot install handlers); a signal the parent set
+    to be ignored stays ignored. A stop whose exception Python had to drop is delivered again
+    (:class:`_StopRequest`). The previous handlers come back at the end.
+
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
         return
-    if not ancestor.is_dir():
-        raise OutputError(f'{option} {str(out)!r} cannot be created: {str(ancestor)!r} is a '
-                          'file')
-    if not os.access(ancestor, os.W_OK | os.X_OK):
-        what = 'is not writable' if ancestor == out else (
-            f'cannot be created: {str(ancestor)!r} is not writable')
-        raise OutputError(f'{option} {str(out)!r} {what}: permission denied')
+    request = _StopRequest()
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:
+            old[sig] = signal.signal(sig, request.handler)
+    sys.unraisablehook = request.unraisable
+    try:
+        early = take_pending()  # a signal while the program imported its libraries
+        if early is not None:
+            raise Interrupted(early)
+        yield
+    finally:
+        request.close()
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
 
 
 def option_of(parameter: str, renamed: Mapping[str, str] | None = None) -> str:
@@ -155,21 +269,28 @@ def run_cli(prog: str, body: Callable[[list[str]], int | None],
     Returns
     -------
     int
-        The process exit code.
+        The process exit code (``errors.EXIT_CODES``).
 
     """
     package_log = logging.getLogger('gyro_noise_ros')
     lines = WarningLines(prog)
     package_log.addHandler(lines)
     try:
-        return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
+        with stop_signals():
+            return int(body(sys.argv[1:] if argv is None else list(argv)) or 0)
     except GyroNoiseError as err:
         print(f'{prog}: error: {err.spelled(lambda name: option_of(name, renamed))}',
               file=sys.stderr)
         return err.exit_code
-    except KeyboardInterrupt:
-        print(f'{prog}: interrupted', file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except SystemExit as err:  # argparse: a usage error (2, said) or --help/--version (0)
+        return err.code if isinstance(err.code, int) else int(err.code is not None) * 2
+    except KeyboardInterrupt as err:
+        quiet_finalisers()
+        code = interrupted_exit_code(err)
+        print(f'{prog}: interrupted' + ('' if code == EXIT_INTERRUPTED else
+                                        f' ({signal.Signals(code - 128).name})'),
+              file=sys.stderr)
+        return code
     except MemoryError as err:
         print(f'{prog}: error: out of memory ({err})', file=sys.stderr)
         return EXIT_INTERNAL

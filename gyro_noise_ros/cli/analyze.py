@@ -31,21 +31,22 @@ imu.yaml, curves.npz, PNG figures and report.html into DIR. Formats and exit cod
 """
 
 import argparse
-import os
 from pathlib import Path
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from .. import __version__
 from ..analysis.summary_md import fmt, modes_text, readout_text
 from ..app.analyze import (analyze_bags, AnalyzeParams, AnalyzeResult, DEFAULT_BATCH,
                            DEFAULT_CURVES, parse_order_grid, TOOL)
+from ..cluster import usable_cpus
 from ..core.engine import AXES, EngineConfig, GAP_POLICIES
 from ..core.fractional import DEFAULT_MEMORY
+from ..errors import ParameterError
 
 PROG = TOOL
 #: Options not named after the parameter they set (errors name parameters: cli/_common).
-RENAMED = {'start_s': '--start', 'end_s': '--end'}
+RENAMED = {'start_s': '--start', 'end_s': '--end', 'bag': '--reference-bag'}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -68,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
         '(order kept in tables)')
     p.add_argument('--out', required=True, metavar='DIR',
                    help='output directory (created if missing)')
+    add_overwrite_argument(p)
     p.add_argument('--topic',
                    help='sensor_msgs/Imu topic (default: the single Imu topic of each bag)')
     p.add_argument('--temperature-topic',
@@ -111,9 +113,11 @@ def build_parser() -> argparse.ArgumentParser:
         '--reference', metavar='SUMMARY',
         help='summary.json of a reference recording: adds health verdicts per bag and axis')
     p.add_argument('--reference-bag', metavar='LABEL',
-                   help='bag label inside a --reference summary that holds several bags')
-    p.add_argument('--label', nargs='+', metavar='NAME',
-                   help='one label per bag for tables and figures')
+                   help='the bag (its label) of a --reference summary that holds several bags')
+    # extend: --label a b c and --label a --label b --label c both give one label per bag
+    p.add_argument('--label', nargs='+', action='extend', metavar='NAME',
+                   help='one label per bag for tables and figures (--label a b or '
+                   '--label a --label b)')
     p.add_argument('--curves', type=int, default=DEFAULT_CURVES, metavar='N',
                    help=f'chunks per bag and axis whose var/J curves are kept for heat maps '
                         f'({DEFAULT_CURVES}; 0 = none)')
@@ -136,13 +140,17 @@ def _body(argv: list[str]) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
         return err.code if isinstance(err.code, int) else 2
+    if args.reference_bag is not None and args.reference is None:
+        raise ParameterError('--reference-bag names a bag of a --reference summary: give '
+                             '--reference SUMMARY too')
+    check_out_dir(args.out, overwrite=args.overwrite)
     alphas = parse_order_grid(args.order_grid)
     axes = AXES if args.axis == 'all' else (args.axis,)
     config = EngineConfig(chunk_size=args.chunk_size, axes=axes, alphas=alphas, memory=args.memory,
                           demean=not args.no_demean, max_lag=args.max_lag, rate_hz=args.rate_hz,
                           gap_factor=args.gap_factor, gap_policy=args.gap_policy,
                           allan=not args.no_allan, allan_taus=args.allan_taus)
-    jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+    jobs = args.jobs if args.jobs is not None else usable_cpus()
     params = AnalyzeParams(
         paths=tuple(args.bags), out_dir=args.out, labels=args.label, topic=args.topic,
         temperature_topic=args.temperature_topic, config=config, jobs=jobs,
@@ -173,9 +181,11 @@ def _print_summary(result: AnalyzeResult) -> None:
             f"{b['gaps']} gap(s), {b['clock_steps']} clock step(s), "
             f"{b['out_of_order_stamps']} out-of-order stamp(s), "
             f"{b['equal_stamps']} equal to the one before, "
-            f"{b['tail_samples']} tail sample(s) not analysed")
+            + ('Allan deviation only (shorter than one chunk)' if b.get('allan_only') else
+               f"{b['tail_samples']} tail sample(s) not in a chunk"))
         for axis, a in b['axes'].items():
-            line = (f"  {axis}: {a['chunks']} chunks, drift "
+            line = (f'  {axis}: Allan deviation only' if b.get('allan_only') else
+                    f"  {axis}: {a['chunks']} chunks, drift "
                     f"{fmt(a['offset_drift_deg_s_per_h'], '.5f')} "
                     f"(deg/s)/h, variance {fmt(a['mean_variance_deg2_s2'], '.5g')} "
                     '(deg/s)^2, ' f"order var {_order_text(a, 'alpha_var')}, corr "

@@ -38,13 +38,12 @@ import argparse
 import os
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.calibrate import (CalibrateParams, GYRO_TURNS, MODES, resolve_gravity,
                              run_calibration, write_calibration)
 from ..calibration.calibrate_report import table6_rows
 from ..calibration.sixpos import DEFAULT_ALPHA
 from ..calibration.static import DetectorSettings
-from ..outputs import make_out_dir
 from ..units import MG_TO_M_S2
 
 PROG = 'gyro_noise_calibrate'
@@ -70,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='one recording with every dwell and the turns between them, or one '
                         'recording per dwell (rosbag2 or ROS 1)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
+    add_overwrite_argument(p)
     p.add_argument('--no-html', action='store_true', help='write no report.html')
     p.add_argument('--mode', choices=MODES, default='six-position',
                    help='six aligned dwells, or >= 9 static poses in any attitude')
@@ -132,7 +132,8 @@ def _body(argv: list[str]) -> int:
         paths=tuple(args.bags), mode=args.mode, topic=args.topic, rate_hz=args.rate_hz,
         gravity=resolve_gravity(args.gravity, args.latitude, args.height),
         settings=settings_from_args(args), alpha=args.alpha, gyro_turns=args.gyro_turns)
-    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     result = run_calibration(params)
     write_calibration(result, args.out, html=not args.no_html, command=[PROG, *argv])
     for line in result.warnings():

@@ -49,8 +49,9 @@ Demo settings, and why (every one is an ordinary parameter of the tools):
 
 Exit status: 0 when the story ran and the report was written; 1 when a component failed (its log
 is named) or the drift was not detected; 2 for a bad option; 6 when ``--out`` cannot be used (a
-file, a folder that is not a previous demo output, not writable); 130 on Ctrl-C. Every subprocess
-is stopped on every path. ``GYRO_NOISE_DEMO.txt`` in ``--out`` says whether the run finished; the
+file, a folder that is not a previous demo output, a previous demo output without
+``--overwrite``, not writable); 130 on Ctrl-C, 143 on SIGTERM. Every subprocess is stopped on
+every path. ``GYRO_NOISE_DEMO.txt`` in ``--out`` says whether the run finished; the
 report folder appears only complete (``gyro_noise_analyze`` stages its files). The workflow is
 :func:`gyro_noise_ros.app.demo.run_demo`.
 """
@@ -59,7 +60,7 @@ import argparse
 from pathlib import Path
 import sys
 
-from ._common import check_out_option, run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.demo import DemoParams, run_demo, TOOL
 
 PROG = TOOL
@@ -78,7 +79,10 @@ def build_parser() -> argparse.ArgumentParser:
                                 'and recorder -> offline report, with a helium-like bias '
                                 'transient.')
     p.add_argument('--out', default='demo_out', metavar='DIR',
-                   help='output directory (created; a previous demo output there is replaced)')
+                   help='output directory (created; a previous demo output there is replaced '
+                        'with --overwrite)')
+    add_overwrite_argument(p, 'replace the previous demo output in --out (make demo gives it; '
+                              'a folder that is not a demo output is never replaced)')
     p.add_argument('--quick', action='store_true', help='short story (about 1 minute) for tests')
     p.add_argument('--seed', type=int, default=1, help='seed of the emulated sensor')
     p.add_argument('--speed', type=float, default=1.0,
@@ -95,12 +99,11 @@ def build_parser() -> argparse.ArgumentParser:
 def _body(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     params = DemoParams(out=args.out, quick=args.quick, seed=args.seed, speed=args.speed,
-                        storage=args.storage, jobs=args.jobs, domain_id=args.domain_id)
-    check_out_option(Path(params.out))
+                        storage=args.storage, jobs=args.jobs, domain_id=args.domain_id,
+                        overwrite=args.overwrite)
+    # a file in the way or an unwritable folder (whether it holds a demo output: run_demo)
+    check_out_dir(Path(params.out), overwrite=True)
     result = run_demo(params)
-    if result.interrupted:
-        return 130
-    assert result.report is not None  # a run not interrupted has its report
     _print_outputs(result.report, result.elapsed_s)
     return 0
 

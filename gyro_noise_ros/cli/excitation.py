@@ -19,17 +19,18 @@ Usage::
 
     gyro_noise_excitation BAG [BAG_AFTER] --sensor accel|gyro --axis x|y|z
         (--dwell FREQ_HZ | --sweep F0_HZ F1_HZ RATE_HZ_S) [--reference-topic T] [--topic T]
-        [--harmonics H] [--frequency-tol FRACTION] [--alpha P] --out DIR
+        [--harmonics H] [--frequency-tol FRACTION] [--alpha P] [--tolerance FRACTION] --out DIR
 
 Sine dwell: estimated frequency and amplitude, per-cycle amplitude statistics (the paper's
 "amplitude stability") and THD, each with the value noise alone would give and a verdict
-(steady, clean). Sine sweep: amplitude against instantaneous frequency, rising and falling, and
-its deviation from the reference channel (``--reference-topic``: a second ``sensor_msgs/Imu``
-topic in the same bag, e.g. the shaker's feedback accelerometer, same axis) when one is
-recorded, with gain and flatness verdicts. A record that is not the excitation asked for (a
-dwell at another frequency, a dwell record analysed as a sweep) is refused. With BAG_AFTER,
-before and after side by side. The workflow is :mod:`gyro_noise_ros.app.excitation`; writes
-``excitation.json``, ``excitation.md`` and ``excitation_before.png`` (``excitation_after.png``).
+(steady, clean); a verdict flags a defect only when significant at ``--alpha`` and larger
+than ``--tolerance`` (1 % of the amplitude). Sine sweep: amplitude against instantaneous
+frequency, rising and falling, and its deviation from the reference channel
+(``--reference-topic``: a second ``sensor_msgs/Imu`` topic of the bag, e.g. the shaker's
+feedback accelerometer) when recorded, with gain and flatness verdicts. A record that is not the
+excitation asked for is refused. With BAG_AFTER, before and after side by side. The workflow
+is :mod:`gyro_noise_ros.app.excitation`; writes ``excitation.json``, ``excitation.md``,
+``excitation_before.png`` (``excitation_after.png``) and ``report.html``.
 
 Exit codes: 0 ok, 2 bad option (frequency at or above Nyquist), 3 unreadable recording, 4 data
 cannot be analysed (NaN/Inf samples, fewer than 3 cycles, no sine above the noise, not the
@@ -40,10 +41,10 @@ import argparse
 import os
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.excitation import ExcitationParams, run_excitation, write_excitation
-from ..calibration.excitation import DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS
-from ..outputs import make_out_dir
+from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
+                                      DEFAULT_TOLERANCE)
 
 PROG = 'gyro_noise_excitation'
 #: Options not named after the parameter they set (errors name parameters: cli/_common).
@@ -80,8 +81,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help='largest relative difference between --dwell and the measured frequency')
     p.add_argument('--alpha', type=float, default=DEFAULT_ALPHA, metavar='P',
                    help='false-alarm probability of each verdict')
+    p.add_argument('--tolerance', type=float, default=DEFAULT_TOLERANCE, metavar='FRACTION',
+                   help='practical tolerance of each verdict, relative to the amplitude: a defect '
+                   '(amplitude stability, THD, gain deviation, its spread over frequency) is '
+                   'flagged only when significant at --alpha and larger than this')
     p.add_argument('--rate-hz', type=float, help='nominal sample rate (default: from the stamps)')
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
+    add_overwrite_argument(p)
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
     p.add_argument('--no-html', action='store_true', help='write no report.html')
     return p
@@ -93,8 +99,9 @@ def _body(argv: list[str]) -> int:
         paths=tuple(args.bags), sensor=args.sensor, axis=args.axis, dwell_hz=args.dwell,
         sweep=args.sweep, reference_topic=args.reference_topic, topic=args.topic,
         harmonics=args.harmonics, rate_hz=args.rate_hz, frequency_tol=args.frequency_tol,
-        alpha=args.alpha, figures=not args.no_figures)
-    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+        alpha=args.alpha, tolerance=args.tolerance, figures=not args.no_figures)
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     result = run_excitation(params)
     write_excitation(result, args.out, html=not args.no_html, command=[PROG, *argv])
     k, unit = params.display
@@ -112,7 +119,8 @@ def _body(argv: list[str]) -> int:
                   f'reference {100 * r.mean_deviation:+.3f} +/- '
                   f'{100 * r.mean_deviation_sigma:.3f} % '
                   f'({"matches" if r.matches_reference else "GAIN DIFFERS"}, '
-                  f'{"flat" if r.flat else "FREQUENCY-DEPENDENT"})')
+                  f'{"flat" if r.flat else "FREQUENCY-DEPENDENT"}; practical tolerance '
+                  f'{100 * params.tolerance:g} %)')
     print(f'wrote {os.path.join(args.out, "excitation.json")}, excitation.md')
     return 0
 

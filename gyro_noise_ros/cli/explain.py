@@ -37,9 +37,10 @@ import argparse
 from pathlib import Path
 import sys
 
-from ._common import check_out_option, run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.explain import (check_output, ExplainParams, MAX_RECORDS, prepare_explain,
                            run_explain, write_explain)
+from ..outputs import removed_if_unused
 
 PROG = 'gyro_noise_explain'
 #: Options not named after the parameter they set (errors name parameters: cli/_common).
@@ -60,6 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='gyro axis (default all: one run, one report, a subdirectory per axis)')
     p.add_argument('--seed', type=int, default=0, help='ensemble seed (default 0)')
     p.add_argument('--out', required=True, help='output directory')
+    add_overwrite_argument(p)
     p.add_argument('--ensemble', type=int, default=16, help='ensemble members (default 16, >= 4)')
     p.add_argument('--max-steps', type=int, default=6, help='most effects to add (default 6)')
     p.add_argument('--bootstrap', type=int, default=20, metavar='B',
@@ -90,8 +92,6 @@ def _say(text: str) -> None:
 
 
 def _body(argv: list[str]) -> int:
-    from ..cluster import make_executor
-
     args = build_parser().parse_args(argv)
     # bad options and an unusable --out are refused before the (possibly long) load of the input
     params = ExplainParams(path=args.input, axis=args.axis, topic=args.topic,
@@ -100,7 +100,14 @@ def _body(argv: list[str]) -> int:
                            end_s=args.end, static=args.static, seed=args.seed,
                            ensemble=args.ensemble, max_steps=args.max_steps,
                            bootstrap=args.bootstrap)
-    check_out_option(args.out)
+    check_out_dir(args.out, overwrite=args.overwrite)
+    with removed_if_unused(args.out):
+        return _explain(args, argv, params)
+
+
+def _explain(args: argparse.Namespace, argv: list[str], params: ExplainParams) -> int:
+    from ..cluster import make_executor
+
     prepared = prepare_explain(params)
     for text in prepared.warnings:
         _say(f'{PROG}: warning: {text}')

@@ -46,7 +46,7 @@ import argparse
 import os
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, OVERWRITE_BAG_HELP, run_cli
 from ..app.importer import import_logs, ImportReport, TEMPERATURE_ODR_HZ
 
 PROG = 'gyro_noise_import'
@@ -115,6 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument('logs', nargs='+', metavar='LOG', help='SD log files of one sequence')
     p.add_argument('--out', required=True, help='bag directory to create')
+    add_overwrite_argument(p, OVERWRITE_BAG_HELP)
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap',
                    help='rosbag2 storage (mcap: fastest, rosbag2 default; see docs/scale.md)')
     p.add_argument('--topic', default='imu/data_raw', help='Imu topic')
@@ -147,7 +148,8 @@ def _body(argv: list[str]) -> int:
                       angular_velocity_variance=args.angular_velocity_variance,
                       linear_acceleration_variance=args.linear_acceleration_variance,
                       temperature_variance=args.temperature_variance, chunk_bytes=args.chunk_bytes,
-                      threads=None if args.threads == 'auto' else int(args.threads))
+                      threads=None if args.threads == 'auto' else int(args.threads),
+                      overwrite=args.overwrite)
     print(format_report(rep), flush=True)
     return 0
 
@@ -167,8 +169,9 @@ def main(argv: list[str] | None = None) -> int:
         Exit status: 0 (also when corrupt regions were skipped); 2 bad option (``--chunk-bytes``
         outside 1..64 MiB included) or a log file named twice; 3 a log file missing; 4 logs that
         are not one sequence (different sequences, the same file twice, overlapping sample
-        counters) or hold no valid sample; 6 ``--out`` exists or the bag cannot be written; 130
-        interrupted. Whatever the failure, no bag is left under ``--out``.
+        counters) or hold no valid sample; 6 ``--out`` exists (without ``--overwrite``) or the
+        bag cannot be written; 130/143 interrupted (SIGINT/SIGTERM). Whatever the failure, no
+        bag is left under ``--out`` and an existing one is kept.
 
     """
     return run_cli(PROG, _body, argv)

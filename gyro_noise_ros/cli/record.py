@@ -30,7 +30,7 @@ Example::
 import argparse
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, OVERWRITE_BAG_HELP, run_cli
 
 PROG = 'gyro_noise_record repair'
 
@@ -49,7 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
         'recording whose recorder was killed; the input is only read.')
     p.add_argument('bag', metavar='BAG',
                    help='the recording: a bag folder, or its .db3 / .mcap file')
-    p.add_argument('--out', help='new bag folder (must not exist; default: BAG_repaired)')
+    p.add_argument('--out', help='new bag folder (default: BAG_repaired)')
+    add_overwrite_argument(p, OVERWRITE_BAG_HELP)
     p.add_argument('--storage', choices=('sqlite3', 'mcap'),
                    help="storage of the new bag (default: the input's)")
     return p
@@ -59,7 +60,7 @@ def _repair(argv: list[str]) -> int:
     from ..bag.repair import repair_bag
 
     args = build_parser().parse_args(argv)
-    res = repair_bag(args.bag, args.out, storage=args.storage)
+    res = repair_bag(args.bag, args.out, storage=args.storage, overwrite=args.overwrite)
     for topic, msgtype, count in res.topics:
         print(f'{topic}  {msgtype}  {count} messages')
     span = ((res.end_ns - res.start_ns) / 1e9
@@ -82,8 +83,8 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         repair: 0, 2 (bad command line, ROS 1 input), 3 (input unreadable), 6 (``--out``
-        exists or cannot be written), 130 (interrupted: nothing left under ``--out``). The node:
-        see :func:`gyro_noise_ros.nodes.recorder.main`.
+        exists without ``--overwrite``, cannot be written, disk full), 130/143 (interrupted:
+        nothing left under ``--out``). The node: see :func:`gyro_noise_ros.nodes.recorder.main`.
 
     """
     args = sys.argv[1:] if argv is None else list(argv)

@@ -42,13 +42,12 @@ import argparse
 import os
 import sys
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.calibrate import resolve_gravity
 from ..app.reliability import (PARTS, ReliabilityParams, run_reliability, SENSORS,
                                write_reliability)
 from ..calibration.interval import DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF, DEFAULT_TOLERANCE
 from ..calibration.static import DetectorSettings
-from ..outputs import make_out_dir
 
 PROG = 'gyro_noise_reliability'
 
@@ -84,6 +83,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='sigma_min only among taus with at least this many degrees of freedom, '
                         "on top of the Allan readout's rule (0: the readout's bias stability)")
     p.add_argument('--out', required=True, metavar='DIR', help='output directory (created)')
+    add_overwrite_argument(p)
     p.add_argument('--topic', help='sensor_msgs/Imu topic (default: the single Imu topic)')
     g = p.add_mutually_exclusive_group()
     g.add_argument('--gravity', type=float, metavar='M_S2', help='local gravity (m/s^2)')
@@ -107,7 +107,8 @@ def _body(argv: list[str]) -> int:
         c=args.c, tolerance=args.tolerance, alpha=args.alpha, min_edf=args.min_edf,
         topic=args.topic, gravity=gravity, rate_hz=args.rate_hz,
         settings=DetectorSettings(min_static_s=args.min_static_s), figures=not args.no_figures)
-    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     if (args.before_calibration or args.after_calibration) and gravity.warning:
         print(f'{PROG}: warning: {gravity.warning}', file=sys.stderr)
     result = run_reliability(params)

@@ -35,12 +35,17 @@ the exit code. Formats, metric definitions and exit codes: ``docs/thermal.md``.
 
 import argparse
 from collections.abc import Callable, Iterable
+from dataclasses import replace
+import math
 import sys
 from typing import TypeAlias
 
-from ._common import run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from .. import __version__
 from ..app import thermal as app
+from ..core.fractional import physical_memory_bytes
+from ..errors import ParameterError
+from ..outputs import free_bytes
 from ..thermal import methods as registry
 from ..thermal.bag_io import DEFAULT_MAX_GAP_S
 from ..thermal.metrics import DEFAULT_AMPLITUDE_RAD_S, DEFAULT_F_HI_HZ, DEFAULT_F_LO_HZ
@@ -51,6 +56,10 @@ PROG = app.PROG
 #: not import the simulator).
 SHAPES = ('oven', 'heating', 'cooling', 'staircase', 'staircase_down', 'cycle', 'cool_reheat',
           'soak', 'sine')
+#: Memory and disk of ``simulate`` per gyro sample (train and test together), measured: 1 h
+#: against 0.25 h at 100 Hz (540,000 more samples) took 270 MB more peak RSS (/usr/bin/time) and
+#: 276 MB more output (sqlite3 bags and truth): about 500 B each, rounded up.
+SIMULATE_BYTES_PER_SAMPLE = 512
 
 
 #: argparse's sub-command handle (``add_subparsers()``).
@@ -78,6 +87,7 @@ def _add_fit_options(p: argparse.ArgumentParser) -> None:
 
 
 def _add_output_options(p: argparse.ArgumentParser) -> None:
+    add_overwrite_argument(p)
     p.add_argument('--no-figures', action='store_true', help='write no PNG figures')
     p.add_argument('--quiet', action='store_true', help='print only errors')
 
@@ -146,6 +156,14 @@ def _add_apply_command(sub: _Subparsers) -> None:
     a.add_argument('--storage', choices=('sqlite3', 'mcap'),
                    help='storage of OUT/compensated (default: that of BAG; sqlite3 for ROS 1)')
     a.add_argument('--no-bag', action='store_true', help='do not write OUT/compensated')
+    a.add_argument('--strict', action='store_true',
+                   help='refuse (exit 4) a run more than '
+                        f'{100 * registry.MAX_OUTSIDE_SHARE:g} %% of which lies outside the '
+                        'trained range of T or dT (default: a warning)')
+    a.add_argument('--max-offset-deg-s', type=float, default=registry.MAX_SENSOR_OFFSET_DEG_S,
+                   help="refuse a run whose gyro sits further than this from the model's drift "
+                        'on an axis, a model of another sensor, deg/s '
+                        f'({registry.MAX_SENSOR_OFFSET_DEG_S:g}; inf disables)')
     _add_bag_options(a)
     _add_score_options(a)
     _add_output_options(a)
@@ -193,20 +211,30 @@ def _add_simulate_command(sub: _Subparsers) -> None:
                    help='rate of the Temperature messages (Hz)')
     s.add_argument('--no-hysteresis', action='store_true',
                    help='switch the bias hysteresis off')
+    add_overwrite_argument(s)
 
 
 def _add_export_command(sub: _Subparsers) -> None:
     """Add ``export``: a poly3 model as PX4 and ArduPilot parameters."""
-    e = sub.add_parser('export', help='a poly3 model as PX4 TC_* and ArduPilot INS_TCAL* '
-                                      'parameters')
-    e.add_argument('--model', required=True, metavar='MODEL_JSON', help='model.json of fit '
-                   '--method poly3')
+    e = sub.add_parser('export', help="a model's poly3 as PX4 TC_* and ArduPilot INS_TCAL* "
+                                      'parameters, with the residual each firmware leaves')
+    e.add_argument('--model', required=True, metavar='MODEL_JSON',
+                   help='model.json of fit (a poly3, or any method with the poly3 fit adds)')
     e.add_argument('--out', required=True, metavar='DIR', help='output directory')
-    e.add_argument('--px4-instance', type=int, default=0, help='PX4 sensor instance 0..2 (0)')
-    e.add_argument('--px4-gyro-id', type=int, default=0,
-                   help="PX4 TC_G<i>_ID: the gyro's device id (its CAL_GYRO<i>_ID; 0)")
-    e.add_argument('--px4-accel-id', type=int, default=0,
-                   help="PX4 TC_A<i>_ID: the accelerometer's device id (0)")
+    e.add_argument('--px4-instance', type=int, default=0,
+                   help='PX4 calibration instance 0..3 (TC_G0..TC_G3; 0)')
+    e.add_argument('--px4-gyro-id', type=int, default=None,
+                   help="PX4 TC_G<i>_ID: the gyro's 24-bit device id, as PX4 shows it in "
+                        'CAL_GYRO<i>_ID (without it the block is written with TC_G_ENABLE 0)')
+    e.add_argument('--px4-accel-id', type=int, default=None,
+                   help="PX4 TC_A<i>_ID: the accelerometer's device id (CAL_ACC<i>_ID; without "
+                        'it TC_A_ENABLE 0)')
+    e.add_argument('--axes', default='x,y,z',
+                   help="the autopilot's sensor X, Y, Z as signed axes of the recording, e.g. "
+                        '--axes=-y,x,z (x,y,z); docs/thermal.md, "On the vehicle"')
+    e.add_argument('--predict', nargs='+', default=[], metavar='BAG',
+                   help='recordings to predict the residual each firmware leaves on (besides '
+                        'the training sources named in model.json)')
     e.add_argument('--ardupilot-imu', type=int, default=1, help='ArduPilot IMU 1..3 (1)')
     e.add_argument('--no-gyro-offsets', action='store_true',
                    help='do not write INS_GYROFFS_*/INS_GYR<k>_CALTEMP (leave them to the '
@@ -214,6 +242,7 @@ def _add_export_command(sub: _Subparsers) -> None:
     e.add_argument('--cal-temp-c', type=float,
                    help="ArduPilot CALTEMP of the exported gyro offsets (default: the model's "
                         'T_ref)')
+    _add_bag_options(e)
     _add_output_options(e)
 
 
@@ -229,9 +258,25 @@ def _bag_options(args: argparse.Namespace) -> app.BagOptions:
 
 
 def _score_options(args: argparse.Namespace) -> app.ScoreOptions:
+    for option, value in (('--amplitude-deg-s', args.amplitude_deg_s),
+                          ('--f-lo-hz', args.f_lo_hz), ('--f-hi-hz', args.f_hi_hz)):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(f'{option} must be a finite number > 0, got {value!r}')
+    if not args.f_hi_hz > args.f_lo_hz:
+        raise ParameterError(f'--f-hi-hz {args.f_hi_hz:g} must be above --f-lo-hz '
+                             f'{args.f_lo_hz:g}')
+    if not args.range_margin_c >= 0:  # inf disables the refusal; NaN and < 0 are refused
+        raise ParameterError(f'--range-margin-c must be >= 0 (inf: off), got '
+                             f'{args.range_margin_c!r}')
     return app.ScoreOptions(amplitude_deg_s=args.amplitude_deg_s, f_lo_hz=args.f_lo_hz,
                             f_hi_hz=args.f_hi_hz, small_signal=not args.no_small_signal,
                             range_margin_c=args.range_margin_c)
+
+
+def _print_warnings(warnings: Iterable[str], args: argparse.Namespace) -> None:
+    if not args.quiet:
+        for text in warnings:
+            print(f'{PROG}: warning: {text}', file=sys.stderr)
 
 
 def _print_notes(notes: Iterable[str], args: argparse.Namespace) -> None:
@@ -240,17 +285,26 @@ def _print_notes(notes: Iterable[str], args: argparse.Namespace) -> None:
             print(f'{PROG}: note: {note}', file=sys.stderr)
 
 
+def _check_seed(args: argparse.Namespace) -> None:
+    if args.seed < 0:  # numpy's SeedSequence takes non-negative integers
+        raise ParameterError(f'--seed must be >= 0, got {args.seed}')
+
+
 def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
+    _check_seed(args)
     result = app.fit(bags=args.bags, method=args.method, seed=args.seed,
                      min_range_c=args.min_range_c, bag_options=_bag_options(args),
                      accel=not args.no_accel, scheduler=args.scheduler, warn=_warn(args),
                      figures=not args.no_figures, command=argv)
     files = app.write_fit(result, args.out, figures=not args.no_figures)
-    _print_notes(result.model.notes, args)
+    _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
         t = result.model.training
         accel = ' (+ accelerometer polynomial)' if result.model.accel is not None else ''
-        print(f'{result.model.method.name}{accel}: fitted on {t.samples} samples '
+        terms = getattr(result.model.method, 'terms', None)
+        chosen = f' [terms {" ".join(terms)}, by blocked CV]' if terms else ''
+        print(f'{result.model.method.name}{chosen}{accel}: fitted on {t.samples} samples '
               f'({t.duration_s / 3600:.3g} h, {t.temperature_min_c:.2f}..'
               f'{t.temperature_max_c:.2f} degC) in {result.fit_time_s:.1f} s')
         print(f'wrote {len(files)} files to {args.out}')
@@ -261,27 +315,40 @@ def _f(v: float | None) -> str:
     return 'n/a' if v is None else f'{v:.4g}'
 
 
+def _corner(bandwidth: dict) -> str:
+    """Say where the -3 dB corner is: at a frequency, or beyond the measured band."""
+    cell = app.bandwidth_cell(bandwidth)
+    return {'> band': 'above the measured band', '< band': 'below the measured band'}.get(
+        cell, f'at {cell} Hz')
+
+
 def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
+    score = replace(_score_options(args), strict=args.strict,
+                    max_offset_deg_s=args.max_offset_deg_s)
     result = app.apply_model(bag=args.bag, model_path=args.model, bag_options=_bag_options(args),
-                             score=_score_options(args), figures=not args.no_figures,
-                             command=argv)
+                             score=score, figures=not args.no_figures, command=argv)
     files = app.write_apply(result, args.out, figures=not args.no_figures,
                             write_bag=not args.no_bag, storage=args.storage,
                             html=not args.no_html)
     _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
-        for axis, v in result.doc['axes'].items():
+        yard = result.doc['yardstick']
+        for a, (axis, v) in enumerate(result.doc['axes'].items()):
             raw, proc = v['raw'], v['processed']
             print(f"{axis}: ARW {_f(raw['arw_deg_sqrt_h'])} -> {_f(proc['arw_deg_sqrt_h'])} "
                   f"deg/sqrt(h), bias stability {_f(raw['bias_stability_deg_h'])} -> "
                   f"{_f(proc['bias_stability_deg_h'])} deg/h, residual drift "
                   f"{_f(raw['residual_drift_deg_s'])} -> {_f(proc['residual_drift_deg_s'])} "
-                  f"deg/s, -3 dB {app.bandwidth_cell(v['bandwidth'])} Hz")
+                  f"deg/s ({_f(yard['over_floor'][a])} x the white-noise floor, "
+                  f"{_f((yard.get('over_poly3') or [None] * 3)[a])} x poly3), "
+                  f"-3 dB {_corner(v['bandwidth'])}")
         print(f'wrote {len(files)} files to {args.out}')
     return 0
 
 
 def _cmd_compare(args: argparse.Namespace, argv: list[str]) -> int:
+    _check_seed(args)
     names = None
     if args.methods is not None:
         names = [m.strip() for m in args.methods.split(',') if m.strip()]
@@ -293,6 +360,8 @@ def _cmd_compare(args: argparse.Namespace, argv: list[str]) -> int:
                          command=argv)
     files = app.write_compare(result, args.out, figures=not args.no_figures,
                               html=not args.no_html)
+    _print_notes(result.summary.get('notes') or (), args)
+    _print_warnings(result.summary.get('warnings') or (), args)
     if not args.quiet:
         from ..thermal import report
 
@@ -309,6 +378,8 @@ def _cmd_simulate(args: argparse.Namespace, argv: list[str]) -> int:
         raise registry.MethodUnavailableError(
             f'the thermal simulator is not available (gyro_noise_ros.thermal.simulate: '
             f'{err})') from err
+    _check_seed(args)
+    _check_simulate_size(args)
     result = app.simulate(seed=args.seed, hours=args.hours, rate_hz=args.rate_hz,
                           compress=args.compress, shape=args.shape, test_shape=args.test_shape,
                           hysteresis=not args.no_hysteresis, storage=args.storage,
@@ -318,16 +389,60 @@ def _cmd_simulate(args: argparse.Namespace, argv: list[str]) -> int:
     return 0
 
 
+def _check_simulate_size(args: argparse.Namespace) -> None:
+    """Refuse a run whose samples cannot fit in half the memory or on the disk (exit code 2)."""
+    from ..thermal import simulate as sim
+
+    for option, value in (('--hours', args.hours), ('--compress', args.compress),
+                          ('--rate-hz', args.rate_hz),
+                          ('--temperature-rate-hz', args.temperature_rate_hz)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ParameterError(f'{option} must be a finite number > 0, got {value!r}')
+    train_s, comp = sim.resolve_timing(sim.make_profile(args.shape), hours=args.hours,
+                                       compress=args.compress)
+    test_s = train_s if args.test_shape is None else sim.resolve_timing(
+        sim.make_profile(args.test_shape), compress=comp)[0]
+    need = (train_s + test_s) * args.rate_hz * SIMULATE_BYTES_PER_SAMPLE
+    memory, free = physical_memory_bytes(), free_bytes(args.out)
+    run = (f'--hours {args.hours:g}' if args.hours is not None else
+           f'--compress {args.compress:g}' if args.compress is not None else
+           f'--shape {args.shape} (its whole profile)')
+    for have, where in ((None if memory is None else memory / 2, "half of this machine's memory"),
+                        (free, f'the free space of {args.out!r}')):
+        if have is not None and not need <= have:
+            raise ParameterError(
+                f'{run} at --rate-hz {args.rate_hz:g} makes {train_s + test_s:.3g} s of '
+                f'samples (train and test), about {need / 2**30:.3g} GiB: more than {where} '
+                f'({have / 2**30:.3g} GiB); shorten the run or lower --rate-hz')
+
+
 def _cmd_export(args: argparse.Namespace, argv: list[str]) -> int:
     result = app.export(model_path=args.model, px4_instance=args.px4_instance,
                         gyro_device_id=args.px4_gyro_id, accel_device_id=args.px4_accel_id,
                         ardupilot_imu=args.ardupilot_imu,
-                        gyro_offsets=not args.no_gyro_offsets, cal_temp_c=args.cal_temp_c)
+                        gyro_offsets=not args.no_gyro_offsets, cal_temp_c=args.cal_temp_c,
+                        axes=args.axes, predict=args.predict, bag_options=_bag_options(args))
     files = app.write_export(result, args.out)
     _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
+        for p in result.predicted:
+            print(_prediction_line(p))
         print(f'wrote {", ".join(str(p) for p in files)}')
     return 0
+
+
+#: The rows of export's prediction, in print order: (key of residual_deg_s, label).
+_PREDICTION_ROWS = (('raw', 'raw'), ('method', 'the model itself'), ('model', 'the cubic'),
+                    ('px4', 'as PX4 applies it'), ('ardupilot', 'as ArduPilot applies it'))
+
+
+def _prediction_line(p: dict) -> str:
+    """Return one line of the residual drift each firmware leaves on one recording."""
+    r = p['residual_deg_s']
+    parts = ', '.join(f'{label} {" / ".join(_f(v) for v in r[key])}'
+                      for key, label in _PREDICTION_ROWS if key in r)
+    return f'{p["bag"]} ({p["role"]}): residual drift x / y / z (deg/s): {parts}'
 
 
 _COMMANDS = {'fit': _cmd_fit, 'apply': _cmd_apply, 'compare': _cmd_compare,
@@ -339,6 +454,8 @@ def _body(argv: list[str]) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as err:  # argparse: usage errors exit 2, --help/--version 0
         return err.code if isinstance(err.code, int) else 2
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     return _COMMANDS[args.command](args, argv)
 
 

@@ -54,7 +54,7 @@ from .readout import fit_noise_terms_band_limited, read_allan
 from .results import AxisSummary, ChunkResult, STATUSES
 from .stamps import (MAX_GAP_EVENTS, RATE_ESTIMATE_SAMPLES, StampAccountant, StampedBatch,
                      StreamCounts)
-from .timebase import RateEstimate, rescale_allan
+from .timebase import RATE_RANGE_HZ, RateEstimate, rescale_allan
 from ..errors import InputDataError, ParameterError
 
 __all__ = ['analyze_chunk', 'AllanFeed', 'AXES', 'chunk_jobs', 'ChunkJob', 'EngineConfig',
@@ -130,9 +130,9 @@ class EngineConfig:
         if not (np.isfinite(self.gap_factor) and self.gap_factor > 1.0):
             raise ParameterError(
                 f'gap_factor must be a finite number > 1, got {self.gap_factor!r}')
-        if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ParameterError(
-                f'rate_hz must be a positive number or None, got {self.rate_hz!r}')
+        if self.rate_hz is not None and not RATE_RANGE_HZ[0] <= self.rate_hz <= RATE_RANGE_HZ[1]:
+            raise ParameterError(f'rate_hz must be {RATE_RANGE_HZ[0]:g} to {RATE_RANGE_HZ[1]:g} '
+                                 f'Hz or None, got {self.rate_hz!r}')
         if self.allan_taus not in ('octave', 'dense'):
             raise ParameterError(
                 f"allan_taus must be 'octave' or 'dense', got {self.allan_taus!r}")

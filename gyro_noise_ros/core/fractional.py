@@ -96,10 +96,11 @@ def make_grid(start: float, stop: float, step: float) -> NDArray[np.float64]:
         raise ParameterError(f'order grid step must be > 0, got {step}')
     if stop < start:
         raise ParameterError(f'order grid stop ({stop}) must be >= start ({start})')
-    count = int(np.floor((stop - start) / step + 1e-9)) + 1
-    if count > 100000:
-        raise ParameterError(f'order grid {start}:{stop}:{step} has {count} points (max 100000)')
-    return np.round(start + step * np.arange(count), 10)
+    points = np.floor((stop - start) / step + 1e-9) + 1  # float: may be huge, or inf
+    if not points <= 100000:
+        raise ParameterError(f'order grid {start:g}:{stop:g}:{step:g} has {points:.3g} points '
+                             '(max 100000)')
+    return np.round(start + step * np.arange(int(points)), 10)
 
 
 def parse_grid(text: str) -> NDArray[np.float64]:

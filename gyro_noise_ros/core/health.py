@@ -50,7 +50,7 @@ from .chunks import DriftEstimate, NOISE_COLOUR_FACTORS, RobustLocation, Sequenc
 from .items import fmt as _fmt
 from .items import LEVEL_BYTE, LEVELS, TaskStatus
 from .results import AxisSummary
-from ..errors import InputDataError, ParameterError
+from ..errors import InputDataError, InputError, ParameterError
 from ..units import RAD_TO_DEG
 
 
@@ -666,43 +666,56 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
 
     Raises
     ------
+    InputError
+        Missing or unreadable file, not JSON, not a summary.json of this version (exit code 3,
+        as every unreadable input).
     ParameterError
-        Missing/unreadable file, unknown or ambiguous bag, missing axis.
+        Unknown or ambiguous bag, missing axis.
 
     """
     path = Path(summary_json_path)
     try:
         data = json.loads(path.read_text())
     except OSError as err:
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r} cannot be read: {err.strerror or err}') from err
     except ValueError as err:
-        raise ParameterError(f'reference summary {str(path)!r} is not JSON: {err}') from err
+        raise InputError(f'reference summary {str(path)!r} is not JSON: {err}') from err
     bags = data.get('bags') if isinstance(data, dict) else None
     if not isinstance(bags, list) or not bags:
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r} has no "bags" list (not a gyro_noise_analyze '
             'summary.json?)')
     if bag is None:
         if len(bags) != 1:
             names = ', '.join(str(b.get('label')) for b in bags)
             raise ParameterError(
-                f'reference summary {str(path)!r} holds {len(bags)} bags ({names}); ' 'choose one')
+                f'reference summary {str(path)!r} holds {len(bags)} bags ({names}): choose '
+                'one with {bag}', parameters=('bag',))
         entry = bags[0]
     else:
         matches = [b for b in bags if bag in (b.get('label'), b.get('path'),
                                               Path(str(b.get('path'))).name)]
         if not matches:
-            raise ParameterError(f'bag {bag!r} is not in reference summary {str(path)!r}')
+            names = ', '.join(str(b.get('label')) for b in bags)
+            raise ParameterError(f'{{bag}} {bag!r} is not in reference summary {str(path)!r} '
+                                 f'(its bags: {names})', parameters=('bag',))
         entry = matches[0]
     axes = entry.get('axes', {})
     if axis not in axes:
         raise ParameterError(f'axis {axis!r} is not in reference summary {str(path)!r} '
                              f'(axes: {", ".join(axes) or "none"})')
     a = axes[axis]
+    if isinstance(a, dict) and 'offset_drift_rad_s2' in a and (
+            a['offset_drift_rad_s2'] is None or a.get('chunks', 0) < 2):
+        raise ParameterError(
+            f"reference summary {str(path)!r}, bag {entry.get('label')!r}, axis {axis!r}: "
+            f"{a.get('chunks', 0)} chunk(s), too few for a reference (its offset drift needs 2 "
+            'or more): analyse the reference record again with a smaller {chunk_size}, or '
+            'record it longer', parameters=('chunk_size',))
     robust = a.get(ROBUST_JSON_KEY) if isinstance(a, dict) else None
     if not isinstance(robust, dict):
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r}, axis {axis!r}, has no "{ROBUST_JSON_KEY}" (written '
             'by an older gyro_noise_analyze): regenerate it with this version from '
             f'{entry.get("path") or "the reference recording"}')
@@ -719,7 +732,7 @@ def load_reference(summary_json_path: str | os.PathLike[str], *, bag: str | None
             alpha_var=stats['alpha_var_robust'], alpha_corr=stats['alpha_corr_robust'],
             noise_colour=stats['noise_colour_robust'])
     except (KeyError, TypeError, ValueError) as err:
-        raise ParameterError(
+        raise InputError(
             f'reference summary {str(path)!r}, axis {axis!r}: missing or bad field {err}') from err
 
 

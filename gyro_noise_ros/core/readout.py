@@ -16,66 +16,25 @@
 The one datasheet readout of an Allan deviation: bias stability, B, ARW, K and its bound, Q.
 
 Every tool that prints one of these numbers (the offline analyzer, the live analyzer's
-diagnostics, the thermal metrics, the bias-instability interval of the reliability procedure)
-calls :func:`read_allan` (or, on bare arrays, :func:`adev_floor`), so one curve gives one number
-whatever the tool. SI inside; :meth:`AllanReadout.as_dict` adds customary units with the unit in
-each key. The rules, and why:
+diagnostics, the thermal metrics, the reliability procedure's bias-instability interval) calls
+:func:`read_allan` (or, on bare arrays, :func:`adev_floor`), so one curve gives one number
+whatever the tool. SI inside; :meth:`AllanReadout.as_dict` adds customary units, the unit in
+each key. The curve is read through the log-log slopes of its segments (IEEE Std 952-1997 annex C,
+paper 001 eqs. 5-8: -1 quantization, -1/2 angle random walk, 0 flicker floor, +1/2 rate random
+walk):
 
-* **Segments.** The curve is read through the log-log slopes of its consecutive segments
-  (tau_i, tau_i+1). White rate noise (angle random walk) has slope -1/2, angle quantization -1,
-  the flicker floor 0, rate random walk +1/2 (IEEE Std 952-1997 annex C; paper 001 eqs. 5-8 and
-  Fig. 1).
-* **Usable part** (:func:`usable_start`). A sensor or driver that averages or low-passes (PX4
-  ``sensor_combined``: 4 ms integration; the ADIS16405's Bartlett filter) flattens the shortest
-  taus: slope above :data:`BAND_LIMITED_SLOPE` (-0.35) where white noise gives -1/2. Angle
-  quantization, or a periodic disturbance that cancels at a multiple of its period, makes them
-  fall faster: slope below :data:`QUANTIZATION_SLOPE` (-0.75, nearer -1 than -1/2). The leading run
-  of such segments, when a white-noise-like segment (slope between the two) follows it, is not
-  part of the usable curve: a bump there (ADIS16405 run 2, z: 0.384 deg/s at 0.01-0.02 s) is not
-  the bias floor. :func:`band_limited_below` reports the flattened part alone; the IEEE 952 fit
-  (:func:`fit_noise_terms_band_limited`) leaves only that out (it has a Q term for the rest).
-* **Bias stability** (:func:`adev_floor`): the lowest ADEV of the usable curve over the taus no
-  longer than a tenth of the record (:data:`MAX_TAU_FRACTION`). Past a tenth of the record the
-  overlapping estimator rests on about ten degrees of freedom or fewer (for flicker noise; SP 1065
-  Table 5), so a dip there is as likely noise as floor: ADIS16405 run 1, x falls to 0.0052 deg/s
-  at 1311 s on 9 EDF. Up to a tenth the minimum is what an independent reading of the same curve
-  gives (docs/readout.md); on ADIS16405 run 1, x the curve is still falling at 1000 s (0.0052 deg/s
-  against 0.00706 at 82 s, the datasheet's 0.007), and the reading says so with the flag below.
-  The floor is a *real* turning point when the curve around it has left the -1/2 line of white
-  noise: some earlier tau lies significantly below the -1/2 line through the floor (the curve
-  flattened into it) or some later tau significantly above (it stopped falling). "Significantly":
-  the one-sided F test of the two variances (``AVAR * tau``, constant on that line) with their
-  equivalent degrees of freedom (Greenhall & Riley EDF, ``AllanResult.edf``) at level
-  :data:`SIGNIFICANCE` (2.5 %, the upper end of a 95 % interval); the two variances overlap in data
-  and are positively correlated, so treating them as independent makes the test conservative.
-  Otherwise the curve was not seen to turn up within the record, and the value is flagged an
-  **upper bound** (``bias_stability_upper_bound``); so it is too when a longer tau, past the
-  readable tenth, lies lower still (the floor may lie lower). Reported with its tau, its EDF and
-  its confidence interval.
-* **B** = bias stability / 0.6643, the IEEE 952 bias-instability coefficient (the flicker floor of
-  the Allan deviation is ``sqrt(2 ln 2 / pi) B``, IEEE 952 eq. C.27; paper 001 Fig. 1).
-* **Angle random walk** N: the -1/2 line through ONE contiguous region, read at tau = 1 s
-  (``AVAR = N^2 / tau``, so N = ADEV(1 s) on the line; paper 001 eq. 6 with IEEE 952 C.3). The
-  region is the longest run of consecutive usable segments up to the bias-stability tau whose
-  slope is within :data:`WHITE_SLOPE_TOLERANCE` of -1/2 (ties: the first). The line's level is the
-  mean of ``log(ADEV_i sqrt(tau_i))`` over the region's taus. Its interval is the union of the
-  -1/2 lines through the confidence intervals of those taus (each from its own EDF): it carries
-  the statistical uncertainty of every point used and the region's departure from an exact -1/2
-  slope. Without such a region N is the -1/2 line through ADEV(1 s) (interpolated in log-log),
-  flagged (``arw_from_region`` false), with that point's interval; NaN when 1 s is outside the
-  curve.
-* **Rate random walk** K (``AVAR = K^2 tau / 3``, IEEE 952 eq. C.29): the IEEE 952 fit's K; it is
-  *resolved* when its term is the largest of the fitted model at the longest fitted tau. Always
-  reported beside it: the bound :func:`random_walk_bound`, the K that would lift the +1/2 line
-  through the upper confidence bound at the longest tau. Kalibr's random walk is the larger of
-  the two (:meth:`AllanReadout.kalibr`).
-* **Quantization** Q (``AVAR = 3 Q^2 / tau^2``, IEEE 952 eq. C.23): resolved only when the
-  shortest taus show a -1 region of at least two segments (slope within 0.15 of -1); then the
-  mean of ``ADEV_i tau_i / sqrt(3)`` over it. NaN otherwise (a rate sensor's LSB adds white rate
-  noise, not angle quantization).
-* **Fit quality** of the IEEE 952 fit: 'poor' when the fitted model misses the curve by more than
-  25 % at a fitted tau or by 20 % RMS (PX4 static segment fitted over all taus: the model is 0.66x
-  the curve), else 'good'.
+* the usable part (:func:`usable_start`) leaves out leading band-limited or quantization-like taus;
+* bias stability (:func:`adev_floor`): the lowest usable ADEV at taus up to a tenth of the record,
+  an upper bound unless an F test with the EDFs shows the curve turned there; B = it / 0.6643;
+* ARW N: the -1/2 line through one contiguous region, read at 1 s, with its interval;
+* rate random walk K: the IEEE 952 fit's K, *resolved* only over a +1/2 region of two octaves or
+  more whose rise excludes a flat curve (:func:`random_walk_region`); beside it the bound
+  :func:`random_walk_bound` at the longest tau;
+* Q only from a -1 region at the shortest taus; the fit quality of the IEEE 952 fit.
+
+Every rule, its reason and its constants: docs/allan.md ("The one datasheet readout"); their
+acceptance on every real record and on seeded simulations: docs/readout.md
+(``docs/scripts/readout_table.py``).
 """
 
 from dataclasses import dataclass
@@ -113,6 +72,12 @@ B_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 #: Fit-quality limits (relative ADEV error).
 POOR_MAX_ERROR = 0.25
 POOR_RMS = 0.20
+#: Half-width of the slope window of the +1/2 (rate random walk) region.
+RANDOM_WALK_SLOPE_TOLERANCE = 0.15
+#: Shortest +1/2 region that resolves K: two octaves of tau.
+RANDOM_WALK_MIN_SPAN = 4.0
+#: One-sided level at which the region's rise must exclude a flat curve (a 95 % interval).
+RANDOM_WALK_SIGNIFICANCE = 0.025
 
 
 @dataclass(frozen=True)
@@ -151,9 +116,15 @@ class AllanReadout:
         K of the IEEE 952 fit (rad/s/sqrt(s) = rad/s^2/sqrt(Hz)); 0.0 when the fit has none,
         NaN when there is no fit (too few taus).
     rate_random_walk_resolved : bool
-        The K term dominates the fitted model at the longest fitted tau.
+        The curve shows K: a +1/2 region of at least two octaves after the bias-stability tau
+        whose rise excludes a flat curve (:func:`random_walk_region`), and the K term dominates
+        the fitted model at the longest fitted tau.
+    rate_random_walk_tau_range_s : tuple of float
+        First and last tau of that +1/2 region (s); NaNs when there is none.
     rate_random_walk_bound_rad_per_s_sqrt_s : float
         :func:`random_walk_bound` (rad/s^2/sqrt(Hz)).
+    rate_random_walk_bound_tau_s : float
+        The tau the bound is read at, the longest of the curve (s).
     quantization_rad : float
         Q from a -1 region at the shortest taus (rad); NaN when not resolved.
     confidence : float
@@ -187,7 +158,9 @@ class AllanReadout:
     adev_1s_rad_s: float
     rate_random_walk_rad_per_s_sqrt_s: float
     rate_random_walk_resolved: bool
+    rate_random_walk_tau_range_s: tuple
     rate_random_walk_bound_rad_per_s_sqrt_s: float
+    rate_random_walk_bound_tau_s: float
     quantization_rad: float
     confidence: float
     usable_from_s: float
@@ -214,6 +187,7 @@ class AllanReadout:
             v = getattr(self, k)
             out[k] = _num(v) if isinstance(v, float) else v
         out['arw_tau_range_s'] = [_num(v) for v in self.arw_tau_range_s]
+        out['rate_random_walk_tau_range_s'] = [_num(v) for v in self.rate_random_walk_tau_range_s]
         for key in ('bias_stability', 'bias_stability_ci_low', 'bias_stability_ci_high'):
             v = getattr(self, f'{key}_rad_s')
             out[f'{key}_deg_s'] = _num(v * RAD_TO_DEG)
@@ -361,15 +335,15 @@ def fit_noise_terms_band_limited(result: AllanResult, **kwargs: Any) -> NoiseTer
     return fit_noise_terms(result, tau_range_s=(lo, hi), **kwargs)
 
 
-def _f_upper(edf_num: float, edf_den: float) -> float:
-    """Critical ratio of two variance estimates at :data:`SIGNIFICANCE` (inf EDF: 1)."""
+def _f_upper(edf_num: float, edf_den: float, level: float = SIGNIFICANCE) -> float:
+    """Critical ratio of two variance estimates at one-sided ``level`` (inf EDF: 1)."""
     if not (math.isfinite(edf_num) or math.isfinite(edf_den)):
         return 1.0
     if not math.isfinite(edf_den):
-        return float(scipy.stats.chi2.ppf(1.0 - SIGNIFICANCE, edf_num) / edf_num)
+        return float(scipy.stats.chi2.ppf(1.0 - level, edf_num) / edf_num)
     if not math.isfinite(edf_num):
-        return float(edf_den / scipy.stats.chi2.ppf(SIGNIFICANCE, edf_den))
-    return float(scipy.stats.f.ppf(1.0 - SIGNIFICANCE, edf_num, edf_den))
+        return float(edf_den / scipy.stats.chi2.ppf(level, edf_den))
+    return float(scipy.stats.f.ppf(1.0 - level, edf_num, edf_den))
 
 
 def adev_floor(tau_s: ArrayLike, adev: ArrayLike, *, edf: ArrayLike | None = None,
@@ -574,6 +548,10 @@ def read_allan(result: AllanResult, terms: NoiseTerms | None = None) -> 'AllanRe
         # resolved: the K term is the larger part of the fitted model at the longest fitted tau
         k_var = k_fit ** 2 * t_end / 3.0
         resolved = bool(k_fit > 0.0 and k_var > 0.5 * float(terms.avar_model([t_end])[0]))
+    # and only where the curve shows it: a +1/2 region after the floor (module doc)
+    region = random_walk_region(result, max(j, floor.usable_from)) if resolved else None
+    walk_span = ((float(tau[region[0]]), float(tau[region[1]])) if region is not None
+                 else (math.nan, math.nan))
     return AllanReadout(
         bias_stability_rad_s=float(adev[j]), bias_stability_ci_low_rad_s=float(lo[j]),
         bias_stability_ci_high_rad_s=float(hi[j]), bias_stability_tau_s=float(tau[j]),
@@ -582,13 +560,64 @@ def read_allan(result: AllanResult, terms: NoiseTerms | None = None) -> 'AllanRe
         arw_ci_low_rad_per_sqrt_s=float(arw_lo), arw_ci_high_rad_per_sqrt_s=float(arw_hi),
         arw_tau_range_s=span, arw_from_region=bool(from_region),
         adev_1s_rad_s=adev_at(result, 1.0), rate_random_walk_rad_per_s_sqrt_s=k_fit,
-        rate_random_walk_resolved=resolved,
+        rate_random_walk_resolved=region is not None, rate_random_walk_tau_range_s=walk_span,
         rate_random_walk_bound_rad_per_s_sqrt_s=random_walk_bound(result),
+        rate_random_walk_bound_tau_s=float(tau[-1]),
         quantization_rad=_quantization(tau, adev),
         confidence=float(result.confidence), usable_from_s=float(tau[floor.usable_from]),
         band_limited_below_s=band_limited_below(result), fit_quality=quality,
         fit_max_relative_error=max_err,
         record_s=float(result.n_samples) / float(result.rate_hz))
+
+
+def random_walk_region(result: AllanResult, start: int = 0) -> tuple[int, int] | None:
+    """
+    Find the +1/2 region that resolves a rate random walk (module doc), or None.
+
+    A region is a run of taus ``i..j`` (``start <= i < j``) spanning at least
+    :data:`RANDOM_WALK_MIN_SPAN` (two octaves) whose log-log least-squares slope lies within
+    :data:`RANDOM_WALK_SLOPE_TOLERANCE` of +1/2, and over which the curve's rise is beyond doubt:
+    the 95 % interval of the ratio ``AVAR_j / AVAR_i`` (F distribution with the two EDFs of
+    :class:`.allan.AllanResult`; the two estimates overlap in data and are positively
+    correlated, so treating them as independent widens the interval) lies above 1, i.e. the
+    interval of the region's slope excludes a flat curve. The longest such region (in octaves)
+    is returned.
+
+    Parameters
+    ----------
+    result : allan.AllanResult
+        Allan deviation of rate data.
+    start : int
+        First tau index the region may begin at (the bias-stability tau: the rise follows it).
+
+    Returns
+    -------
+    tuple of int or None
+        ``(i, j)``, indices of the region's first and last tau.
+
+    """
+    tau = np.asarray(result.tau_s, dtype=np.float64)
+    avar = np.asarray(result.avar, dtype=np.float64)
+    edf = np.nan_to_num(np.asarray(result.edf, dtype=np.float64), nan=0.0)
+    with np.errstate(invalid='ignore', divide='ignore'):
+        x, y = np.log(tau), 0.5 * np.log(avar)
+    # prefix sums: the LS slope of every run i..j in O(1)
+    c = [np.concatenate(([0.0], np.cumsum(v))) for v in (np.ones_like(x), x, y, x * x, x * y)]
+    best = None
+    for i in range(max(int(start), 0), tau.size):
+        j = np.arange(i + 1, tau.size)
+        j = j[tau[j] >= RANDOM_WALK_MIN_SPAN * tau[i]]
+        if not j.size:
+            break
+        n, sx, sy, sxx, sxy = (v[j + 1] - v[i] for v in c)
+        with np.errstate(invalid='ignore', divide='ignore'):
+            slope = (n * sxy - sx * sy) / (n * sxx - sx * sx)
+        rises = np.array([edf[i] > 0 and edf[k] > 0 and avar[k] > avar[i] * _f_upper(
+            edf[k], edf[i], RANDOM_WALK_SIGNIFICANCE) for k in j], dtype=bool)
+        ok = j[(np.abs(slope - 0.5) <= RANDOM_WALK_SLOPE_TOLERANCE) & rises]
+        if ok.size and (best is None or x[ok[-1]] - x[i] > x[best[1]] - x[best[0]]):
+            best = (i, int(ok[-1]))
+    return best
 
 
 def random_walk_bound(result: AllanResult) -> float:

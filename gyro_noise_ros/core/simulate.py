@@ -96,9 +96,12 @@ def check_stability(alpha: float, f: float, memory: int = DEFAULT_MEMORY) -> 'St
     StabilityReport
 
     """
-    c = gl_coefficients(alpha, memory)
+    with np.errstate(all='ignore'):  # an order so large its coefficients overflow: below
+        c = gl_coefficients(alpha, memory)
     a = c.copy()
     a[1] -= f
+    if not np.all(np.isfinite(a)):
+        return StabilityReport(False, float('nan'), float('nan'), 0.0, 0)
     # 2^17 points resolve the phase of a degree-1000 polynomial unless a root is within ~1e-4 of
     # the circle, which the relative-minimum test below treats as marginal anyway.
     size = 1 << 17
@@ -127,6 +130,9 @@ def require_stable(alpha: float, f: float,
 
     """
     report = check_stability(float(alpha), float(f), int(memory))
+    if not np.isfinite(report.a_at_one):
+        raise UnstableModelError(f'fractional noise model alpha={alpha:g}: its GL coefficients '
+                                 f'(L={memory}) overflow; the order must be a few units at most')
     if not report.stable:
         raise UnstableModelError(
             f'fractional noise model alpha={alpha}, f={f}, L={memory} is unstable or marginal '

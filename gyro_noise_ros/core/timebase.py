@@ -54,6 +54,9 @@ if TYPE_CHECKING:  # not imported at run time: this module does not need the est
 _R = TypeVar('_R', 'AllanResult', None)
 
 #: Samples per base block.
+#: Nominal sample rates a tool accepts (Hz): every gyro samples inside; outside, a record's times
+#: overflow or vanish in floating point (a period of 1e9 / 1e-320 ns is infinite).
+RATE_RANGE_HZ = (1e-3, 1e9)
 BASE_BLOCK = 64
 #: Blocks held before neighbours are merged in pairs.
 MAX_BLOCKS = 1 << 14

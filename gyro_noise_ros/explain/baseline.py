@@ -13,47 +13,29 @@
 # limitations under the License.
 
 """
-Baseline model of the discrepancy workflow.
-
-Bias + fractional-order noise + white measurement noise.
+Baseline model of the discrepancy workflow: bias, fractional-order noise, white measurement noise.
 
 Paper 000 eqs. (2), (10), (11): ``Delta^alpha x[k+1] = f x[k] + w[k]``, ``v[k] = x[k] + nu[k]``
-plus a constant bias. Fitting:
+plus a constant bias. :func:`fit_baseline` returns a :class:`BaselineModel`:
 
-1. bias = the record mean (rad/s); the effects' terms are zero-mean over the record, so the bias
-   never competes with them;
+1. bias = the record mean (every effect term is zero-mean over the record);
 2. (alpha, f): the paper's variance method
-   (:class:`~gyro_noise_ros.core.fractional.OrderIdentifier`, memory L = 1000 or less for short
-   chunks) on up to 16 chunks spread over the record. Near-white data makes the branches (alpha ~
-   0, f) and (alpha ~ 1, f - 1) nearly tie (the exact {0, 1} tie of the module doc of
-   :mod:`~gyro_noise_ros.core.fractional`): the var(alpha) curve has two local minima within a few
-   0.1 %, and low-frequency effects (Gauss-Markov, flicker) tip the balance to the long-memory
-   alpha ~ 0 branch, which then soaks them up. So every local minimum within 1 % of a chunk's
-   minimum gives a candidate pair (alpha, f(alpha)), and the one whose model spectrum fits the
-   record's Welch PSD best is kept (pairs that fail the stability check of
-   :func:`~gyro_noise_ros.core.simulate.check_stability` at the simulation memory are skipped). The
-   fit is judged above fs / 100 only, where the baseline dominates (below, the bias effects of the
-   catalogue compete with it, and a long-memory pair would otherwise soak them up); among pairs
-   within 10 % of the best misfit the one with the shortest simulation memory is kept (least
-   structure, fastest);
-3. f is refined by the same PSD misfit (a bounded 1-D search within +/-0.3 of the identified value,
-   kept only if stable): the least-squares f of eqs. (6)-(8) is biased by the measurement noise
-   (eq. 12 shows nu entering the equation error), which leaves the model spectrum a few % off near
-   fs / 100;
-4. sigma_w, sigma_nu: with (alpha, f) fixed the model PSD is linear in the two variances,
-   ``S(f) = (2 / fs) (sigma_w^2 / |A(e^{i 2 pi f / fs})|^2 + sigma_nu^2)`` (one-sided,
-   rad^2/s^2/Hz), so they are a non-negative least-squares fit on the Welch bins above fs / 100,
-   iteratively reweighted by the previous model (relative errors without the downward bias of
-   weighting by the estimate itself); bins more than 3x above the fit (spectral lines) are dropped.
+   (:class:`~gyro_noise_ros.core.fractional.OrderIdentifier`) on up to :data:`MAX_ID_CHUNKS`
+   chunks; every local minimum within :data:`BRANCH_TOLERANCE` of a chunk's minimum is a
+   candidate pair (near-white data nearly tie the alpha ~ 0 and alpha ~ 1 branches); unstable
+   pairs are skipped (:func:`stable`) and f is refined by the PSD misfit above fs / 100;
+3. sigma_w, sigma_nu: non-negative least squares of the one-sided model PSD
+   ``(2 / fs) (sigma_w^2 / |A(e^{i w})|^2 + sigma_nu^2)`` on the Welch bins above fs / 100,
+   reweighted by the previous model, spectral lines dropped; among the pairs within 10 % of the
+   best misfit the shortest simulation memory wins.
 
-Simulation memory. The ensemble uses the smallest L_sim in (25, 50, 100, 200, 500, 1000) whose
-model PSD is within 1 % of the L = 1000 model at every frequency (:func:`simulation_memory`): 1 %
-is below the 0.01 dex (2.3 %) tolerance of the PSD and Allan bands, and near order 1 the GL
-coefficients decay like j^(-1-alpha), so L_sim is typically 25-200 and the simulation 5-40x faster
-than with L = 1000.
+:func:`without_white` refits the levels with a known white noise taken out (the rounding noise of
+a lattice: Sheppard's correction). The ensemble runs at the shortest memory
+(:func:`simulation_memory`) whose model PSD is within 1 % of the L = 1000 model everywhere.
+Reasons and measurements: docs/discrepancy.md section 1.
 """
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -242,16 +224,17 @@ def simulation_memory(alpha: float, f: float, rate_hz: float, *, memory_fit: int
 
 
 def _fit_variances(freq: FloatArray, pxx: FloatArray, gain: FloatArray,
-                   rate_hz: float) -> tuple[FloatArray, float]:
+                   rate_hz: float, known_white_var: float = 0.0) -> tuple[FloatArray, float]:
     band = freq >= rate_hz / 100.0
     keep = band
     weight = pxx
+    known = 2.0 * known_white_var / rate_hz   # one-sided density of a known white variance
     for _ in range(3):
         # relative weights from the previous model, not from the noisy estimate itself: 1 / pxx
         # weights would favour bins that happen to come out low and bias the fit down by several %
         design = np.column_stack((gain, np.ones_like(gain)))[keep] / weight[keep, None]
-        coef, _ = scipy.optimize.nnls(design, pxx[keep] / weight[keep])
-        model = gain * coef[0] + coef[1]
+        coef, _ = scipy.optimize.nnls(design, (pxx[keep] - known) / weight[keep])
+        model = gain * coef[0] + coef[1] + known
         keep = band & (pxx < 3.0 * model)
         weight = np.maximum(model, 1e-300)
     misfit = float(np.sqrt(np.mean(np.log10(pxx[keep] / model[keep]) ** 2)))
@@ -275,6 +258,13 @@ def _refine_f(alpha: float, f: float, memory: int, freq: FloatArray, pxx: FloatA
     if res.fun < misfit(f) and stable(alpha, refined, memory):
         return refined
     return f
+
+
+def _spectrum(x: FloatArray, rate_hz: float) -> tuple[FloatArray, FloatArray]:
+    """Return the Welch PSD the levels are fitted to (without the two lowest bins)."""
+    nperseg = int(min(4096, 2 ** int(np.floor(np.log2(x.shape[0] // 16)))))
+    freq, pxx = welch(x, rate_hz, nperseg)
+    return freq[2:], pxx[2:]
 
 
 def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
@@ -308,9 +298,7 @@ def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
         for i in [int(np.argmin(v)), *inner.tolist()]:
             if v[i] <= (1.0 + BRANCH_TOLERANCE) * v.min():
                 pairs.add((round(float(alphas[i]), 6), round(float(f_curve[i]), 9)))
-    nperseg = int(min(4096, 2 ** int(np.floor(np.log2(n // 16)))))
-    freq, pxx = welch(x, rate_hz, nperseg)
-    freq, pxx = freq[2:], pxx[2:]
+    freq, pxx = _spectrum(x, rate_hz)
     fits = []
     for alpha, f in sorted(pairs):
         if not stable(alpha, f, memory_fit):
@@ -338,3 +326,38 @@ def fit_baseline(x: FloatArray, rate_hz: float) -> BaselineModel:
                          sigma_nu_rad_s=float(np.sqrt(var_nu)), memory_fit=memory_fit,
                          memory_sim=int(memory_sim), chunk_size=chunk, chunks_identified=count,
                          psd_misfit=misfit)
+
+
+def without_white(baseline: BaselineModel, x: FloatArray, rate_hz: float,
+                  white_var: float) -> BaselineModel:
+    """
+    Refit a baseline's noise levels with a known white noise taken out of the measurement.
+
+    A record on a lattice of step q carries rounding noise of variance q^2 / 12 (white for a
+    step below about two noise sd; Sheppard's correction). A baseline fitted to it holds that
+    noise in sigma_w and sigma_nu already; once the lattice is in the model (which rounds its
+    members again), the levels must leave it out or the model is louder than the record.
+
+    Parameters
+    ----------
+    baseline : BaselineModel
+        The fitted baseline (alpha, f and the memories are kept).
+    x : numpy.ndarray
+        The record it was fitted to (rad/s).
+    rate_hz : float
+        Sample rate (Hz).
+    white_var : float
+        Variance of the known white noise ((rad/s)^2).
+
+    Returns
+    -------
+    BaselineModel
+        The same model with sigma_w and sigma_nu refitted (module doc, step 4) to the PSD minus
+        the known white density ``2 white_var / fs``.
+
+    """
+    freq, pxx = _spectrum(x, rate_hz)
+    gain = model_gain(baseline.alpha, baseline.f, baseline.memory_sim, freq, rate_hz)
+    (var_w, var_nu), misfit = _fit_variances(freq, pxx, gain, rate_hz, float(white_var))
+    return replace(baseline, sigma_w_rad_s=float(np.sqrt(var_w)),
+                   sigma_nu_rad_s=float(np.sqrt(var_nu)), psd_misfit=misfit)

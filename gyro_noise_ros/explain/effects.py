@@ -13,54 +13,26 @@
 # limitations under the License.
 
 """
-Catalogue of effects the discrepancy workflow can add to the baseline.
+Catalogue of effects the discrepancy workflow can add to the baseline: one fitter, one term each.
 
-One fitter and one simulation term each.
+Every :class:`Effect` has a ``name`` (its key in explain.json), ``n_params``, a ``kind`` and
+``fit(ctx) -> dict | None`` (parameters in SI with the unit in the name, or None when the data
+show nothing of it; :meth:`Effect.estimate` is the same without the detection test). Its kind
+says how it enters the simulation:
 
-Every effect has a ``name`` (the key written to explain.json), ``fit(ctx) -> dict | None``
-(parameters in SI with the unit in the name, or None when the data show nothing of it) and a way to
-enter the simulation:
+* ``'additive'``: :meth:`Effect.term`, zero-mean over the record (the constant stays in the
+  baseline bias) and the same in every member (sinusoid, bias_drift, bias_transient,
+  temperature_sensitivity);
+* ``'stochastic'``: a term drawn per member from the member's own generator (rate_random_walk,
+  bias_instability, gauss_markov; fitted on the Allan variance in excess of the ensemble's);
+* ``'quantization'``: the member's values rounded onto the fitted lattice (applied last);
+* ``'stamps'``: :meth:`Effect.stamps`, the member's stamps (sample_loss, stamp_jitter).
 
-* additive terms (``term``) are zero-mean over the record (the constant stays in the baseline
-  bias); deterministic ones are the same in every member, stochastic ones are drawn per member from
-  the member's own generator;
-* ``quantization`` rounds the member's values onto the fitted lattice (applied last);
-* ``sample_loss`` and ``stamp_jitter`` change the member's stamps only.
-
-Time inside a term is the nominal sample time ``k / rate_hz``.
-
-=========================  ========================================================================
-effect                     parameters (SI) and model
-=========================  ========================================================================
-quantization               ``step_rad_s``, ``offset_rad_s``: v -> offset + step * round((v -
-                           offset) / step)
-sinusoid                   ``amplitude_rad_s``, ``frequency_hz``, ``phase_rad``: A sin(2 pi f t +
-                           phi)
-bias_drift                 ``slope_rad_s2``: R (t - T/2), the rate ramp (Allan: R tau / sqrt 2)
-bias_transient             ``amplitude_rad_s``, ``delay_s``, ``time_constant_s``: A (1 - exp(-(t -
-                           t0) / tc)) for t >= t0, else 0 (a delayed first-order rise, or decay for
-                           A < 0)
-rate_random_walk           ``k_rad_s_per_sqrt_s``: K, a random walk of the bias, PSD (K / 2 pi)^2 /
-                           f^2, Allan variance K^2 tau / 3 (IEEE 952 two-sided PSDs, paper 001 Fig.
-                           1, eq. 8)
-bias_instability           ``b_rad_s``: B, flicker bias, PSD B^2 / (2 pi f) between 1 / T and fs /
-                           2 (Allan floor 0.664 B)
-gauss_markov               ``sigma_rad_s``, ``correlation_time_s``: first-order Markov bias,
-                           stationary sd sigma, b[k+1] = phi b[k] + sqrt(1 - phi^2) sigma n[k], phi
-                           = exp(-1 / (fs tc))
-temperature_sensitivity    ``coefficient_rad_s_per_degc``,
-                           ``rate_coefficient_rad_s_per_degc_per_s``: bias = kT (T - mean T) + kdT
-                           dT/dt (paper 002 eq. 7: T and its rate as inputs)
-sample_loss                ``gap_rate_per_s``, ``mean_lost_samples``, ``max_lost_samples``: Poisson
-                           gap events, lost counts resampled from the measured gaps
-stamp_jitter               ``jitter_rms_s``, ``short_interval_fraction``: stamps built from the
-                           measured intervals resampled (bursty host-side stamps; an extra effect)
-=========================  ========================================================================
-
-Detection. A fitter reports an effect only when its statistic on the data exceeds the same
-statistic on the current model's ensemble members (the null): above the worst member and above the
-members' mean + 5 sd (:func:`null_exceeded`); the workflow then keeps the candidate only if
-it shrinks the gap.
+Time inside a term is the nominal sample time ``k / rate_hz``. A fitter reports an effect only
+when its statistic on the data exceeds the same statistic on every member of the current
+model's ensemble and their mean + :data:`NULL_K` sd (:func:`null_exceeded`). :data:`CATALOGUE`
+holds them in the order they are tried. Parameters, models and fitters: docs/discrepancy.md
+section 4.
 """
 
 from collections.abc import Callable, Mapping, Sequence
@@ -78,6 +50,9 @@ from .signatures import (chunk_series, compare, FloatArray, Layout, Signatures, 
 from ..core.simulate import gauss_markov, gauss_markov_avar
 
 
+#: The Allan deviation of a first-order Gauss-Markov process peaks at this many correlation times
+#: (:func:`gyro_noise_ros.core.simulate.gauss_markov_avar`).
+GM_PEAK_TAU = 1.89
 #: Standard deviations above the members' mean statistic a detection must lie (and above the worst
 #: member). The statistics are non-negative, often chi-square-like with an atom at 0, so the
 #: log-normal rule of the bands does not apply; for a chi-square with 1 dof, mean + 5 sd = 8.1 has
@@ -826,20 +801,22 @@ class GaussMarkov(_AllanFitted):
     """
     First-order Gauss-Markov bias.
 
-    Correlation time on a log grid (3 / fs .. T / 10), variance by LS.
+    Correlation time on a log grid (3 / fs .. the longest tau / 1.89), variance by LS.
     """
 
     name = 'gauss_markov'
     n_params = 2
 
     def templates(self, ctx: Context) -> tuple[list[dict[str, float]], FloatArray]:
-        duration = ctx.meas.n / ctx.meas.rate_hz
-        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, duration / 10.0, self.GRID_POINTS)
         tau = ctx.layout.tau_s
+        # the Allan deviation of a Gauss-Markov process peaks at 1.89 tc: a longer tc shows only
+        # its rise, which a random walk or a flicker bias gives as well (one parameter fewer)
+        tcs = np.geomspace(3.0 / ctx.meas.rate_hz, float(tau[-1]) / GM_PEAK_TAU,
+                           self.GRID_POINTS)
         return [{'correlation_time_s': float(c)} for c in tcs], np.array(
             [gauss_markov_avar(tau, 1.0, c) for c in tcs])
 
-    #: Geometric grid of the correlation time: 3 / fs .. T / 10 in this many points.
+    #: Geometric grid of the correlation time: 3 / fs .. longest tau / 1.89 in this many points.
     GRID_POINTS = 30
 
     def params(self, amp: float, extra: Mapping[str, float]) -> Params:
@@ -849,10 +826,9 @@ class GaussMarkov(_AllanFitted):
         return params['sigma_rad_s'] ** 2
 
     def resolved(self, index: int, count: int) -> bool:
-        # a best correlation time in the top two grid points (T / 10, T / 12.5 or so) means the
-        # Allan peak at 1.89 tc is not inside the tau range: a random walk or flicker bias looks
-        # the same there, and those one-parameter effects are the answer
-        return index < count - 2
+        # the best correlation time at the top of the grid wants a longer one still: the Allan
+        # peak is not seen, a random walk or a flicker bias looks the same
+        return index < count - 1
 
     def term(self, params: Params, n: int, rate_hz: float, rng: np.random.Generator | None,
              ctx: Context) -> FloatArray:

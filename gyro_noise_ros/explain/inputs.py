@@ -27,7 +27,7 @@ else the :mod:`gyro_noise_ros.core.timebase` estimate (the same estimator as
 estimate, its method and its warnings are kept in ``Measurement.timebase``.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, cast
 
 import numpy as np
@@ -252,10 +252,81 @@ def load_input(path: StrPath, *, topic: str | None = None,
                        require_temperature=require_temperature)
 
 
+def cut_record(record: ImuRecord, *, start_s: float | None = None, end_s: float | None = None,
+               static: str = 'auto', window_names: tuple[str, str] = ('the start', 'the end'),
+               ) -> tuple[ImuRecord, dict[str, Any], str]:
+    """
+    Keep the part of a recording to analyse, for all axes alike: a time window, then the segment.
+
+    The static segment is the one rule of :func:`gyro_noise_ros.core.segments.static_part`,
+    judged on every gyro axis the record holds (what ``gyro_noise_analyze`` cuts).
+
+    Parameters
+    ----------
+    record : gyro_noise_ros.bag.inputs.ImuRecord
+        The recording.
+    start_s, end_s : float, optional, keyword-only
+        Window in seconds after the first sample.
+    static : {'auto', 'off'}, keyword-only
+        'auto': keep the longest static segment.
+    window_names : tuple of str, keyword-only
+        How the sentence names the window's two ends (a tool: its options).
+
+    Returns
+    -------
+    tuple
+        ``(record, left_out, sentence)``: the samples kept (all columns), the ``left_out`` entry
+        of explain.json (sample counts ``before_start``, ``after_end``, ``motion``; with a cut,
+        the times of :meth:`gyro_noise_ros.core.segments.StaticPart.left_out`) and the line
+        that says it (:func:`gyro_noise_ros.core.segments.left_out_sentence`; '' when nothing
+        was left out).
+
+    Raises
+    ------
+    InputDataError
+        The window selects no sample (exit code 4).
+
+    """
+    from ..core.segments import Cut, left_out_sentence, static_part
+
+    t = (record.stamp_ns - record.stamp_ns[0]).astype(np.float64) * 1e-9
+    keep = np.ones(record.n, dtype=bool)
+    left: dict[str, Any] = {'before_start': 0, 'after_end': 0, 'motion': 0}
+    if start_s is not None:
+        left['before_start'] = int((t < start_s).sum())
+        keep &= t >= start_s
+    if end_s is not None:
+        left['after_end'] = int((keep & (t > end_s)).sum())
+        keep &= t <= end_s
+    if not keep.any():
+        raise nothing_left_error(start_s=start_s, end_s=end_s, record_end_s=float(t[-1]))
+    cuts: tuple[Cut, ...] = ()
+    if static == 'auto':
+        inside = np.flatnonzero(keep)
+        part = static_part(record.stamp_ns[inside], record.gyro_rad_s[inside],
+                           origin_ns=int(record.stamp_ns[0]))
+        keep[inside[~part.keep]] = False
+        left.update(part.left_out())
+        cuts = part.cuts
+    span = left.get('static_segment_s')
+    sentence = left_out_sentence(
+        record.n, before_start=left['before_start'], after_end=left['after_end'],
+        motion=left['motion'], segment_s=None if span is None else (span[0], span[1]),
+        cuts=cuts, window_names=window_names)
+    if keep.all():
+        return record, left, sentence
+    temp = record.temperature_c
+    return replace(record, stamp_ns=record.stamp_ns[keep], gyro_rad_s=record.gyro_rad_s[keep],
+                   temperature_c=None if temp is None else np.asarray(temp)[keep]), left, sentence
+
+
 def select(meas: Measurement, *, start_s: float | None = None, end_s: float | None = None,
            static: str = 'auto') -> tuple[Measurement, dict[str, Any]]:
     """
-    Keep the part of a measurement to analyse: a time window, then its longest static segment.
+    Keep the part of a lone axis to analyse: a time window, then its static segment.
+
+    The rule of :func:`cut_record` judged on this axis alone: for a recording, cut the record
+    (all its axes together) before building the measurements.
 
     Parameters
     ----------
@@ -269,37 +340,17 @@ def select(meas: Measurement, *, start_s: float | None = None, end_s: float | No
     Returns
     -------
     tuple
-        ``(Measurement, left_out)`` with ``left_out`` a dict of sample counts ('before_start',
-        'after_end', 'motion') and, when motion was cut, 'static_segment_s'.
+        ``(Measurement, left_out)`` (``left_out`` as :func:`cut_record`'s).
 
     """
-    from ..core.segments import WindowStats
-
-    t = meas.t_s
-    keep = np.ones(meas.n, dtype=bool)
-    left: dict[str, Any] = {'before_start': 0, 'after_end': 0, 'motion': 0}
-    if start_s is not None:
-        left['before_start'] = int((t < start_s).sum())
-        keep &= t >= start_s
-    if end_s is not None:
-        left['after_end'] = int((keep & (t > end_s)).sum())
-        keep &= t <= end_s
-    if not keep.any():
-        raise nothing_left_error(start_s=start_s, end_s=end_s, record_end_s=float(t[-1]))
-    if static == 'auto':
-        stamps = np.rint(t * 1e9).astype(np.int64)
-        stats = WindowStats()
-        stats.update(stamps[keep], meas.rate[keep, None])
-        seg = stats.segment()
-        if seg is not None and not seg.static_throughout:
-            moving = keep & ((stamps < seg.start_ns) | (stamps >= seg.end_ns))
-            left['motion'] = int(moving.sum())
-            keep &= ~moving
-            left['static_segment_s'] = [seg.start_ns / 1e9, seg.end_ns / 1e9]
-    if keep.all():
+    stamps = np.rint(meas.t_s * 1e9).astype(np.int64)
+    record = ImuRecord(stamp_ns=stamps, gyro_rad_s=meas.rate[:, None],
+                       temperature_c=meas.temperature_c, topic='', storage='', source=meas.source)
+    kept, left, _ = cut_record(record, start_s=start_s, end_s=end_s, static=static)
+    if kept is record:
         return meas, left
-    temp = None if meas.temperature_c is None else meas.temperature_c[keep]
     fixed = meas.timebase is not None and meas.timebase.method == 'configured'
-    out = make_measurement(meas.rate[keep], t_s=t[keep], rate_hz=meas.rate_hz if fixed else None,
-                           temperature_c=temp, axis=meas.axis, source=meas.source)
+    out = make_measurement(kept.gyro_rad_s[:, 0], t_s=kept.stamp_ns * 1e-9,
+                           rate_hz=meas.rate_hz if fixed else None,
+                           temperature_c=kept.temperature_c, axis=meas.axis, source=meas.source)
     return out, left

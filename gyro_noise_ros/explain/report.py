@@ -37,16 +37,17 @@ from .uncertainty import format_value, PARAMETERS
 from .workflow import ExplainResult, Step
 from ..errors import OutputError
 from ..outputs import StrPath
-from ..units import RAD_TO_DEG
+from ..units import GYRO_ADEV, RAD_TO_DEG
 
 _LOG_X = {'allan', 'psd', 'psd_peak'}
 _LOG_Y = {'allan', 'psd', 'psd_peak', 'chunk_variance'}
-# One unit family per figure (deg/s), the unit in every axis label.
+# The units of every report (units.py): the angular rate in deg/s, its Allan deviation in deg/h;
+# the unit in every axis label.
 _TITLES = {'allan': 'Allan deviation', 'psd': 'power spectral density',
            'psd_peak': 'band peak / band mean', 'chunk_bias': 'chunk bias',
            'chunk_variance': 'chunk variance', 'histogram': 'value histogram',
            'stamps': 'stamp intervals', 'temperature': 'corr(bias, T), corr(bias, dT/dt)'}
-_YLABELS = {'allan': 'ADEV (deg/s)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'peak / mean (1)',
+_YLABELS = {'allan': 'ADEV (deg/h)', 'psd': 'PSD ((deg/s)^2/Hz)', 'psd_peak': 'peak / mean (1)',
             'chunk_bias': 'bias (deg/s)', 'chunk_variance': 'variance ((deg/s)^2)',
             'histogram': 'samples (count)', 'stamps': 'intervals (count)',
             'temperature': 'correlation (1)'}
@@ -62,7 +63,9 @@ def _untransform(name: str, values: FloatArray) -> FloatArray:
 
 
 def _scale(name: str) -> float:
-    if name in ('allan', 'chunk_bias'):
+    if name == 'allan':
+        return GYRO_ADEV.per_si
+    if name == 'chunk_bias':
         return RAD_TO_DEG
     return RAD_TO_DEG ** 2 if name in ('psd', 'chunk_variance') else 1.0
 
@@ -243,17 +246,26 @@ def _uncertainty_table(step: Step, result: ExplainResult) -> list[str]:
 
 def verdict(result: ExplainResult) -> str:
     """One-paragraph verdict printed by the command line tool."""
+    over = ''
+    if result.quieter:
+        over = ('; the baseline over-estimates the noise (the measurement is quieter than the '
+                'model, which no added effect can explain): ' + '; '.join(result.quieter[:3]))
     if not result.steps and not result.unexplained:
         return ('consistent with the baseline model (fractional noise '
                 f'alpha={result.baseline.alpha:.2f}): '
-                f'gap {result.gap_final:.3f}, nothing named')
+                f'gap {result.gap_final:.3f}, nothing named' + over)
     named = ', '.join(s.effect for s in result.steps) or 'nothing'
     text = f'added {named}; gap {result.gap_initial:.3f} -> {result.gap_final:.3f}'
     if result.unexplained:
-        text += '; UNEXPLAINED: ' + ('; '.join(result.where_final[:3]) or 'outside the band')
+        limit = (f' (stopped at the limit of {len(result.steps)} effects)'
+                 if result.stopped_at_limit else '')
+        louder = [w for w in result.where_final if w not in result.quieter]
+        text += f'; UNEXPLAINED{limit}: ' + ('; '.join(louder[:3]) or 'outside the band')
+    elif result.quieter:
+        text += '; inside the ensemble band where an effect could show'
     else:
         text += '; the measurement is inside the ensemble band'
-    return text
+    return text + over
 
 
 def write_files(result: ExplainResult, folder: StrPath, *,
@@ -368,15 +380,22 @@ def _markdown(result: ExplainResult) -> str:
         lines += [f'![step {i}](step{i}_{step.effect}.png)', '']
     lines += ['## Result', '']
     if result.unexplained:
-        lines += ['**Unexplained**: no catalogue effect brings the measurement inside the band. '
-                  'Still outside:', '']
-        lines += [f'- {w}' for w in result.where_final] + ['']
+        lines += ['**Unexplained**: ' + (
+            'the loop stopped at its limit of effects.' if result.stopped_at_limit else
+            'no catalogue effect shrinks the gap by the 0.1 the rule asks for.')
+            + ' Still outside:', '']
+        lines += [f'- {w}' for w in result.where_final if w not in result.quieter] + ['']
         if result.tried_last:
             lines += ['Rejected candidates of the last round (gap after): '
                       + ', '.join(f'{k} {v:.3f}' for k, v in result.tried_last.items()) + '.', '']
     else:
-        lines += [f'Inside the ensemble band (gap {result.gap_final:.3f} <= 0.1, the tolerance).',
-                  '']
+        lines += ['Inside the ensemble band wherever an added effect could show (gap '
+                  f'{result.gap_unexplained:.3f} <= 0.1, the tolerance).', '']
+    if result.quieter:
+        lines += ['**The baseline over-estimates the noise** here: the measurement is quieter '
+                  'than the model (below the band only; no effect of the catalogue removes '
+                  'noise, so this is not a missing effect):', '']
+        lines += [f'- {w}' for w in result.quieter] + ['']
     lines += ['| signature | g (worst point / band edge) | band half-width (z) |', '|---|---|---|']
     for name, comp in result.comparisons_final.items():
         lines.append(f'| {name} | {comp.g:.3f} | {comp.threshold:.2f} |')

@@ -15,52 +15,22 @@
 """
 Signatures that compare a measurement with a simulated ensemble, the band and the scalar gap.
 
-Each signature is a vector of points on an axis fixed by the measurement (the :class:`Layout`), so
-the measurement and every ensemble member are evaluated at the same points. Each exposes different
-effects:
+Each signature is a vector of points on an axis fixed by the measurement (:class:`Layout`,
+:func:`make_layout`), so the measurement and every member are evaluated at the same points
+(:func:`compute`): ``allan`` (overlapping ADEV, :mod:`gyro_noise_ros.core.allan`), ``psd`` and
+``psd_peak`` (Welch, in log bands), ``chunk_bias`` and ``chunk_variance`` (~100 chunks),
+``histogram`` (values, plus the lattice phase when the values sit on a lattice), ``stamps``
+(classes of stamp intervals) and ``temperature`` (correlations of the chunk bias with T and
+dT/dt), each compared in the domain of :data:`TRANSFORM`.
 
-=================  =======================================  ==============  =======================
-name               points                                   compared as     exposes
-=================  =======================================  ==============  =======================
-``allan``          overlapping Allan deviation at tau =     log10           RRW, flicker, GM,
-                   m / rate_hz, m = 1, sqrt 2, 2, ... n/10                  ramp, sinusoid
-                   (paper 001 eq. 7, the estimator of
-                   :mod:`gyro_noise_ros.core.allan`)
-``psd``            Welch PSD, Hann, 50 % overlap, averaged  log10           sinusoid, colour, GM
-                   in up to 40 log-spaced frequency bands
-``psd_peak``       largest Welch bin of each band over the  log10           spectral lines
-                   band mean
-``chunk_bias``     mean of each of ~100 equal chunks        linear (rad/s)  ramp, transient, steps
-``chunk_variance`` variance of each chunk                   log10           non-stationary noise
-``histogram``      value histogram, 32 bins over mean +/-   sqrt(count)     quantisation, non-Gauss
-                   4 sd; plus 10 lattice-phase bins when
-                   the values sit on a lattice
-``stamps``         counts of stamp intervals dt / period    sqrt(count)     sample loss, jitter
-                   in [0, .5), [.5, 1.5), [1.5, 2.5),
-                   [2.5, 5.5), [5.5, 20.5), [20.5, inf)
-``temperature``    correlation of the chunk bias with       linear          temperature sensitivity
-                   chunk temperature and with its rate
-                   dT/dt
-=================  =======================================  ==============  =======================
-
-sqrt(count) stabilises the variance of Poisson counts; GM is the Gauss-Markov bias.
-
-Band and gap (the definitions the report and the tests use)
-----------------------------------------------------------
-For signature s with points i, let Y[j, i] be the transformed values of the N members and y[i] the
-measurement's. With mu_i, sd_i the ensemble mean and standard deviation (``sd_i`` floored, see
-:data:`SD_FLOOR`: a model tolerance of 0.01 dex for log quantities, half a count for sqrt counts),
-``z_i = (y_i - mu_i) / sd_i`` and ``D_s = max_i |z_i|``. The same statistic for each member against
-the other N - 1 (leave-one-out) gives ``D_s,j``; the band half-width in z units is ``T_s = max(3,
-max_j D_s,j, exp(mean(ln D_s,j) + 3 sd(ln D_s,j)))`` (a log-normal extrapolation of the members'
-own worst deviations to about the 99.9th percentile, never below the worst member nor 3). The
-measurement is **inside the band** of s iff ``g_s = D_s / T_s <= 1``; the **band** drawn in the
-figures is ``mu_i +/- T_s sd_i``.
-
-The scalar gap is ``G = sum_s ln(max(g_s, 1))``: zero iff the measurement is inside every band, and
-each signature adds the log of how many band half-widths its worst point lies out. It is comparable
-between models because every model is judged by its own ensemble, with the same layout and the same
-rule.
+Band (:func:`compare`): with mu_i, sd_i the ensemble mean and sd of the transformed values (sd
+floored by :data:`SD_FLOOR`), ``z_i = (y_i - mu_i) / sd_i`` and ``D_s = max_i |z_i|``; the same
+statistic of each member against the other N - 1 gives ``D_s,j``; the band half-width in z units
+is ``T_s = max(3, max_j D_s,j, exp(mean ln D_s,j + 3 sd ln D_s,j))``; the measurement is inside
+iff ``g_s = D_s / T_s <= 1``. Gap (:func:`total_gap`): ``G = sum_s ln(max(g_s, 1))``, 0 iff
+inside every band; every model is judged by its own ensemble. :func:`mean_log_score` is the
+proper score that ranks models whose gaps tie. Points, transforms, what each signature exposes:
+docs/discrepancy.md section 3.
 """
 
 from collections.abc import Mapping

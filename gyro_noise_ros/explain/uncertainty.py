@@ -13,79 +13,27 @@
 # limitations under the License.
 
 """
-Standard errors and 95 % intervals of the accepted effect parameters (docs/discrepancy.md).
+Standard errors and 95 % intervals of the accepted effect parameters: a parametric bootstrap.
 
-Method: **parametric bootstrap** of the final model. ``B`` records are simulated from the model
-the workflow ended with (the final baseline plus every accepted effect, exactly as the ensemble
-members are built, but with their own seeds ``numpy.random.default_rng([seed, REPLICATE_OFFSET +
-b, ...])``), each accepted effect is refitted on each record with the fitter's own estimator
-(:meth:`~.effects.Effect.estimate`: the same numbers without the detection test), and the spread
-of the refits is the standard error:
+:func:`bootstrap` simulates ``B`` records from the model the workflow ended with
+(:class:`FinalModel`: the final baseline and every accepted effect, built as the ensemble members
+are, seeded ``default_rng([seed, REPLICATE_OFFSET + b, ...])``; one record per :func:`replicate`,
+pure and picklable, so a scheduler can map it) and refits every accepted effect on each with its
+fitter's estimator (:meth:`~.effects.Effect.estimate`): deterministic effects on the record minus
+the deterministic terms accepted before them, Allan-fitted ones on the excess over the
+leave-one-out mean of the other records with the weights the fit used, stamp effects on the
+stamps. The lattice is not bootstrapped (a simulated record sits on it exactly): its step and
+offset are the LS line through the measured levels (:func:`lattice_uncertainty`).
 
-* deterministic effects (sinusoid, bias_drift, bias_transient, temperature_sensitivity) are
-  refitted on the record minus the deterministic terms accepted before them (what their fitter
-  saw on the measurement);
-* the Allan-fitted stochastic effects (rate_random_walk, bias_instability, gauss_markov) are
-  refitted on the excess of the record's Allan variance over the leave-one-out mean of the other
-  B - 1 records, plus the effect's own fitted Allan variance (Allan variances of independent
-  processes add, so this is the excess over the final model without the effect), with the weights
-  the fit used (the estimator must be the same: weights from records that include the effect
-  would make a more efficient estimator and an error 1.7x too small, measured on
-  rate_random_walk); the noise of the leave-one-out mean stands in for the noise of the ensemble
-  mean the fit subtracted;
-* the stamp effects (sample_loss, stamp_jitter) are refitted on the simulated stamps;
-* ``quantization`` is not bootstrapped (a simulated record sits exactly on the fitted lattice and
-  would return it exactly): its step and offset are the least-squares line through the measured
-  levels against their integer indices, the standard errors that line's (the scatter of the levels
-  about the lattice: text round-off, or values off the lattice).
-
-The bootstrap is conditional on the fitted baseline and the other accepted effects: it measures
-how far the estimator scatters when the record is as noisy as the model says, not how the
-baseline's own fit or the choice of effects would change.
-
-A parameter found on a grid (the correlation time of ``gauss_markov``) adds the grid's rounding
-error, spacing / sqrt(12), in quadrature. The
-interval is ``value +/- t_{0.975, m - 1} stderr`` with m the successful refits (Student's t
-accounts for the bootstrap's own noise in the standard error, about 1 / sqrt(2 (m - 1)) relative),
-clipped at 0 for parameters that cannot be negative.
-
-A parameter is **unresolved** (``resolved`` false, with the reason in ``note``) when
-
-* fewer than :data:`MIN_OK_FRACTION` of the refits give a finite number;
-* the interval reaches zero (``t stderr >= |value|``) for a scale or signed parameter, or spans
-  the whole circle for a phase: the record does not tell the value from 0;
-* the refits' mean lies more than :data:`BIAS_LIMIT` standard errors from the value: the model
-  does not reproduce its own estimate (the estimator is biased under it, or the value comes from a
-  feature the model does not simulate);
-* a parameter with a time scale (see below) is not inside the range the record resolves.
-
-Time scales the record resolves (:func:`resolvable_range`, :func:`time_scale_check`). A time
-constant longer than the record shows, or shorter than its resolution, is not a measurement: the
-fit returns *a* number (the transient's search runs to 10 T), but other values fit as well. So a
-parameter with a time scale is resolved only when its 95 % interval (or, without a bootstrap, its
-value) lies inside
-
-==================================  ==================================  =========================
-parameter (time scale)              shortest                            longest
-==================================  ==================================  =========================
-``gauss_markov.correlation_time_s`` 3 samples (below: the baseline's    longest Allan tau / 1.89
-                                    own first-order dynamics, paper     (the Allan peak at 1.89 tc
-                                    000 eq. 1)                          must be among the taus;
-                                                                        beyond, only its rise is
-                                                                        seen, as for a random
-                                                                        walk)
-``bias_transient.time_constant_s``  one chunk (the fitter sees chunk    the record after the
-                                    means: a faster rise is a step)     onset, T - delay (at
-                                                                        least 63 % of the rise
-                                                                        inside the record)
-``sinusoid.frequency_hz`` (period   2 samples (Nyquist)                 the record, T (one whole
-1 / f)                                                                  cycle)
-==================================  ==================================  =========================
-
-Outside, the parameter is **unresolved** and reported as a bound: ``lower`` = the smaller of the
-interval's lower end and the longest resolvable time scale when the interval runs past it
-(longer than the record resolves), ``upper`` likewise at the short end; neither when it runs out
-at both ends. A frequency's bounds are those of its period, inverted.
+Per parameter (:func:`summarise`): value, stderr (the refits' sd about the value; a grid
+parameter adds spacing / sqrt 12), ``ci95 = value +/- t(0.975, m - 1) stderr`` for m successful
+refits (clipped at 0 where a parameter cannot be negative), unit, method, ``resolved`` and
+``note``. Unresolved: fewer than :data:`MIN_OK_FRACTION` of the refits succeed, the interval
+reaches 0 (or spans the circle for a phase), the refits' mean lies more than :data:`BIAS_LIMIT`
+stderr from the value, or a time scale lies outside what the record resolves
+(:func:`resolvable_range`, :func:`time_scale_check`: then the bound the record gives, never a
+value). The bootstrap is conditional on the fitted baseline and on the choice of effects. Rules,
+reasons and the coverage measured: docs/discrepancy.md section 9.
 """
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -97,7 +45,8 @@ import numpy as np
 import scipy.stats
 
 from .baseline import BaselineModel
-from .effects import _AllanFitted, Context, Effect, GaussMarkov, NAMES, Params, Quantization
+from .effects import (_AllanFitted, Context, Effect, GaussMarkov, GM_PEAK_TAU, NAMES, Params,
+                      Quantization)
 from .signatures import FloatArray, lattice_fit, Layout
 from ..core.allan import allan_deviation_values
 
@@ -282,17 +231,14 @@ def grid_resolution(model: FinalModel, effect: Effect,
                     params: Mapping[str, Any]) -> dict[str, float]:
     """Return parameter -> rounding sd (spacing / sqrt 12) of the grid it was found on."""
     root12 = np.sqrt(12.0)
-    duration = model.n / model.rate_hz
     if isinstance(effect, GaussMarkov):
-        ratio = (duration / 10.0) / (3.0 / model.rate_hz)
+        # the grid of GaussMarkov.templates: 3 / fs .. longest tau / GM_PEAK_TAU
+        ratio = (float(model.layout.tau_s[-1]) / GM_PEAK_TAU) / (3.0 / model.rate_hz)
         return {'correlation_time_s': params['correlation_time_s'] * np.log(ratio)
                 / (effect.GRID_POINTS - 1) / root12}
     return {}
 
 
-#: tau / tc at the peak of the Gauss-Markov Allan deviation
-#: (:func:`gyro_noise_ros.core.simulate.gauss_markov_avar`: 1.8926).
-GM_PEAK_TAU = 1.89
 #: Parameters with a time scale: name -> 'time' (the value is a time) or 'frequency' (1 / time).
 TIME_SCALES = {'correlation_time_s': 'time', 'time_constant_s': 'time',
                'frequency_hz': 'frequency'}

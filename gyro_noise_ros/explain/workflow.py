@@ -13,41 +13,24 @@
 # limitations under the License.
 
 """
-The discrepancy workflow.
+The discrepancy workflow: name the effects that bring a measurement inside its model's band.
 
-Fit the baseline, simulate an ensemble, find where the measurement leaves the band, name the
-missing effect, add it, show the gap shrink (see docs/discrepancy.md).
+:func:`explain` fits the baseline (:mod:`.baseline`), simulates an ensemble of it and compares the
+measurement with it on every signature (:mod:`.signatures`). While the part of the gap G that an
+added effect could explain (:func:`unexplained_gap`) exceeds :data:`INSIDE_GAP`, every catalogue
+effect (:mod:`.effects`) not yet in the model is fitted and tried, and :func:`choose` picks one:
+only candidates that shrink G by at least INSIDE_GAP (:func:`accepts`) compete, the smallest
+:func:`criterion` wins (a stochastic pick is checked two steps ahead, :func:`_look_ahead`); when
+none passes, the loop stops. After a deterministic effect or the lattice the baseline is refitted
+(kept if it does not widen the gap). A parametric bootstrap of the final model then gives every
+parameter a standard error (:mod:`.uncertainty`).
 
-Loop (at most ``max_steps`` times):
-
-1. compare the measurement with the current model's ensemble on every signature
-   (:mod:`.signatures`); stop if the gap G is 0 (inside every band);
-2. every catalogue effect not yet in the model runs its fitter on the data (:mod:`.effects`); each
-   one that reports parameters is added to the model on trial, the ensemble re-simulated (same
-   member seeds:
-   common random numbers, so the trials differ only by the effect) and the gap recomputed;
-3. the candidate with the smallest gap wins; among candidates within :data:`TIE_GAP` of it
-   (typically several models that all bring the measurement inside the bands) the one with the
-   smallest :func:`~.signatures.mean_log_score` plus :data:`PARAM_PENALTY` per parameter (so a ramp
-   beats a three-parameter transient that mimics it equally well); it is accepted when it shrinks
-   the gap by at least :data:`INSIDE_GAP`, else the loop stops and the record is "unexplained" at
-   the places still outside the band;
-4. after a deterministic additive effect (sinusoid, ramp, transient, temperature) is accepted, the
-   baseline is refitted to the residual (measurement minus the accepted deterministic terms): a
-   strong line or ramp distorts the first identification. If the refit differs materially the
-   members are regenerated (same seeds) and, unless that widens the gap, the refitted baseline is
-   kept and the step's gap_after is the gap with it (memory: the previous members are held until
-   decided).
-
-Ensemble. ``ensemble`` members (default 16) of the baseline are generated once, each with its own
-seeded generator (``numpy.random.default_rng([seed, member, 0])``); an accepted additive effect is
-added into the members in place (its stochastic draws use ``default_rng([seed, member, 1 +
-catalogue index])``), the lattice and stamp effects are applied when a member is evaluated. Memory:
-``ensemble`` float64 copies of the record (16 x 3.6e6 samples = 460 MB for 1 h at 1 kHz).
-
-Uncertainties. After the loop every accepted effect parameter gets a standard error and a 95 %
-interval from a parametric bootstrap of the final model (:mod:`.uncertainty`, ``bootstrap``
-records, default :data:`DEFAULT_BOOTSTRAP`; 0 switches it off).
+The result is an :class:`ExplainResult` (``to_dict()`` is the explain.json layout): the steps,
+the gaps, ``unexplained``, ``quieter`` (where the measurement is quieter than the model: the
+baseline over-estimates the noise, :func:`quieter`) and ``stopped_at_limit``. It is reproducible
+for a seed: member j draws from ``numpy.random.default_rng([seed, j, 0])`` and an effect's
+stochastic term from ``[seed, j, 1 + catalogue index]`` (common random numbers: two candidate
+models differ only by their effect). Rules, reasons and measurements: docs/discrepancy.md.
 """
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -59,16 +42,22 @@ from typing import Any
 import numpy as np
 
 from . import signatures as sig
-from .baseline import BaselineModel, fit_baseline
+from .baseline import BaselineModel, fit_baseline, without_white
 from .effects import CATALOGUE, Context, Effect, Params, public_params, Quantization
 from .inputs import Measurement
 from .signatures import Comparison, FloatArray, Layout, Signatures
 from .uncertainty import bootstrap as bootstrap_uncertainty, FinalModel, time_scale_check
 from ..errors import ParameterError
 
-#: Candidates whose gap is within this of the best one count as tied; among them the smallest
-#: mean_log_score + PARAM_PENALTY * (number of parameters) wins.
-TIE_GAP = 0.05
+#: Passing deterministic candidates a stochastic pick is checked against, two steps ahead
+#: (:func:`_look_ahead`): the best by :func:`criterion`.
+LOOK_AHEAD = 2
+#: How much smaller the two-step criterion must be: a transient fitted to a random walk's own
+#: realisation gains 0.4-1.3 on single random-walk records, a ramp or transient hidden with a
+#: Gauss-Markov bias 4.9-6.6 (docs/discrepancy.md section 5).
+LOOK_AHEAD_MARGIN = 3.0
+#: Penalty per parameter of :func:`criterion` (in units of the mean log score): a one-parameter
+#: ramp beats a three-parameter transient that mimics it equally well.
 PARAM_PENALTY = 0.25
 #: The measurement counts as inside the band when G <= INSIDE_GAP (its worst points lie at most ~10
 #: % of a band half-width beyond the edge on one signature), and an effect must shrink G by at
@@ -79,6 +68,8 @@ INSIDE_GAP = 0.1
 #: itself uncertain by about 1 / sqrt(2 (B - 1)) = 16 % at B = 20, which Student's t in the
 #: interval accounts for; each record costs about one ensemble member.
 DEFAULT_BOOTSTRAP = 20
+#: Signatures of the noise level: a measurement below their band is quieter than the model.
+LEVEL_SIGNATURES = ('allan', 'psd', 'chunk_variance')
 
 #: One candidate tried in a step: (gap, effect, params, deterministic term or None, the members'
 #: signatures, the comparisons).
@@ -103,6 +94,9 @@ class Step:
         Where it still leaves the band after it.
     candidates : dict
         Every candidate tried in this step -> its gap (the chosen one included).
+    scores : dict
+        Every candidate -> its :func:`criterion` (smaller is better; it ranks the passing
+        candidates).
     time_scales : dict
         Parameter -> :func:`.uncertainty.time_scale_check` of its value, for the parameters with
         a time scale: the range the record resolves and whether the value lies inside it.
@@ -121,6 +115,7 @@ class Step:
     time_scales: dict[str, dict[str, Any]] = field(default_factory=dict)
     before: dict[str, Comparison] | None = field(repr=False, default=None)
     after: dict[str, Comparison] | None = field(repr=False, default=None)
+    scores: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -139,7 +134,8 @@ class ExplainResult:
     steps : list of Step
     gap_initial, gap_final : float
     unexplained : bool
-        True when the gap is still above :data:`INSIDE_GAP` after the last step.
+        True when the part of the final gap an effect could explain (:func:`unexplained_gap`)
+        is above :data:`INSIDE_GAP`.
     where_final : list of str
     comparisons_initial, comparisons_final : dict
         Signature comparisons of the baseline and of the final model.
@@ -154,6 +150,13 @@ class ExplainResult:
         (:mod:`.uncertainty`); empty when the bootstrap is off or nothing was named.
     bootstrap : int
         Replicates of the bootstrap (0: off).
+    gap_unexplained : float
+        :func:`unexplained_gap` of the final model.
+    quieter : list of str
+        Where the measurement is quieter than the final model (:func:`quieter`): the baseline
+        over-estimates the noise there; no effect is missing.
+    stopped_at_limit : bool
+        The loop stopped at ``max_steps`` with a gap still to explain.
 
     """
 
@@ -174,6 +177,9 @@ class ExplainResult:
     seconds: dict[str, float]
     uncertainty: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     bootstrap: int = 0
+    gap_unexplained: float = 0.0
+    quieter: list[str] = field(default_factory=list)
+    stopped_at_limit: bool = False
 
     @property
     def named(self) -> list[str]:
@@ -216,13 +222,17 @@ class ExplainResult:
                     'where': s.where,
                     'where_after': s.where_after,
                     'candidates': s.candidates,
+                    'candidate_scores': s.scores,
                     'time_scales': s.time_scales,
                 }
                 for s in self.steps
             ],
             'gap_initial': self.gap_initial,
             'gap_final': self.gap_final,
+            'gap_unexplained': self.gap_unexplained,
             'unexplained': self.unexplained,
+            'baseline_over_estimates': self.quieter,
+            'stopped_at_step_limit': self.stopped_at_limit,
             'where_final': self.where_final,
             'rejected_candidates': self.tried_last,
             'signatures_final': {
@@ -295,6 +305,15 @@ class _Model:
             for effect, params in self.stochastic:
                 x += effect.term(params, meas.n, meas.rate_hz, self.rng(j, effect), ctx)
             self.members[j] = x
+
+    def with_additive(self, effect: Effect, params: Params, det: FloatArray) -> '_Model':
+        """Return a copy of this model with a deterministic term accepted (for a look ahead)."""
+        other = object.__new__(_Model)
+        other.__dict__.update(self.__dict__)
+        other.members = [x + det for x in self.members]
+        other.accepted = {**self.accepted, effect.name: params}
+        other.stochastic = list(self.stochastic)
+        return other
 
     def accept(self, effect: Effect, params: Params, det: FloatArray | None,
                ctx: Context) -> None:
@@ -391,6 +410,53 @@ def where_outside(layout: Layout, comparisons: Mapping[str, Comparison]) -> list
     return [sig.describe_where(layout, c) for c in worst if c.outside.any()]
 
 
+def quieter(comparison: Comparison) -> bool:
+    """
+    Tell whether a signature shows the baseline over-estimating: left, and only ever below.
+
+    Only the noise-level signatures (:data:`LEVEL_SIGNATURES`) qualify: every point outside their
+    band lies below it, i.e. the measurement is quieter than the model there. No catalogue effect
+    can remove noise, so such a departure is the baseline's, not a missing effect's.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        One signature's comparison.
+
+    Returns
+    -------
+    bool
+
+    """
+    out = comparison.outside
+    return bool(comparison.name in LEVEL_SIGNATURES and out.any()
+                and np.all(comparison.z[out] < 0))
+
+
+def unexplained_gap(comparisons: Mapping[str, Comparison]) -> float:
+    """
+    Return the part of the gap G that an added effect could explain: G without :func:`quieter`.
+
+    Parameters
+    ----------
+    comparisons : dict
+        name -> Comparison of one model.
+
+    Returns
+    -------
+    float
+        sum of ln(max(g_s, 1)) over the signatures that are not :func:`quieter`.
+
+    """
+    return float(sum(c.gap for c in comparisons.values() if not quieter(c)))
+
+
+def where_quieter(layout: Layout, comparisons: Mapping[str, Comparison]) -> list[str]:
+    """Texts naming where the measurement is quieter than the model (:func:`quieter`)."""
+    worst = sorted(comparisons.values(), key=lambda c: -c.g)
+    return [sig.describe_where(layout, c) for c in worst if quieter(c)]
+
+
 def explain(meas: Measurement, *, seed: int = 0, ensemble: int = 16, max_steps: int = 6,
             effects: Sequence[Effect] = CATALOGUE, progress: Callable[[str], None] | None = None,
             bootstrap: int = DEFAULT_BOOTSTRAP,
@@ -443,53 +509,134 @@ def explain(meas: Measurement, *, seed: int = 0, ensemble: int = 16, max_steps: 
     t2 = time.perf_counter()
     member_sig = model.signatures()
     comparisons = compare_all(layout, meas_sig, member_sig)
-    gap = sig.total_gap(comparisons)
-    initial, gap_initial = comparisons, gap
-    residual = meas.rate.copy()
-    det_terms: dict[str, FloatArray] = {}
-    steps: list[Step] = []
-    tried_last: dict[str, float] = {}
-    say(f'gap {gap:.3f}')
-    while gap > INSIDE_GAP and len(steps) < max_steps:
-        ctx = Context(meas, residual, layout, meas_sig, member_sig, model.accepted)
-        trials = _trials(model, ctx, effects, say)
-        tried = {t[1].name: t[0] for t in trials}
-        if not trials:
-            tried_last = {}
-            break
-        trial_gap, effect, params, det, trial_sig, trial_cmp = _choose(trials)
-        if trial_gap > gap - INSIDE_GAP:
-            tried_last = tried
-            break
-        model.accept(effect, params, det, ctx)
-        if det is not None:
-            det_terms[effect.name] = det
-            residual = residual - det
-            baseline, trial_sig, trial_cmp, trial_gap = _rebased(
-                model, ctx, residual, baseline, (trial_sig, trial_cmp, trial_gap), say)
-        steps.append(Step(effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
-                          where=where_outside(layout, comparisons),
-                          where_after=where_outside(layout, trial_cmp), candidates=tried,
-                          time_scales=time_scales(effect.name, params, meas, layout),
-                          before=comparisons, after=trial_cmp))
-        say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
-        member_sig, comparisons, gap = trial_sig, trial_cmp, trial_gap
+    state = _State(baseline=baseline, member_sig=member_sig, comparisons=comparisons,
+                   residual=meas.rate.copy())
+    say(f'gap {state.gap:.3f}')
+    _iterate(state, model, meas_sig, effects, max_steps, say)
     seconds['iterate'] = time.perf_counter() - t2
     uncertainty = {}
+    steps = state.steps
     if bootstrap and steps:
         t3 = time.perf_counter()
-        final = _final_model(meas, layout, baseline, steps, effects, det_terms, seed)
+        final = _final_model(meas, layout, state.baseline, steps, effects, state.det_terms, seed)
         uncertainty = bootstrap_uncertainty(final, bootstrap, values=meas.rate, mapper=mapper)
         seconds['bootstrap'] = time.perf_counter() - t3
         say(f'uncertainties: parametric bootstrap of the final model, {bootstrap} records')
     seconds['total'] = time.perf_counter() - t0
+    final_cmp = state.comparisons
     return ExplainResult(measurement=meas, layout=layout, baseline=first_baseline,
-                         final_baseline=baseline, steps=steps, gap_initial=gap_initial,
-                         gap_final=gap, unexplained=gap > INSIDE_GAP,
-                         where_final=where_outside(layout, comparisons),
-                         comparisons_initial=initial, comparisons_final=comparisons,
-                         tried_last=tried_last, ensemble=ensemble, seed=seed, seconds=seconds,
-                         uncertainty=uncertainty, bootstrap=bootstrap if steps else 0)
+                         final_baseline=state.baseline, steps=steps,
+                         gap_initial=sig.total_gap(comparisons), gap_final=state.gap,
+                         unexplained=unexplained_gap(final_cmp) > INSIDE_GAP,
+                         where_final=where_outside(layout, final_cmp),
+                         comparisons_initial=comparisons, comparisons_final=final_cmp,
+                         tried_last=state.tried_last, ensemble=ensemble, seed=seed,
+                         seconds=seconds, uncertainty=uncertainty,
+                         bootstrap=bootstrap if steps else 0,
+                         gap_unexplained=unexplained_gap(final_cmp),
+                         quieter=where_quieter(layout, final_cmp),
+                         stopped_at_limit=state.stopped_at_limit)
+
+
+@dataclass
+class _State:
+    """The loop's current model: its baseline, signatures, comparisons and what was accepted."""
+
+    baseline: BaselineModel
+    member_sig: list[Signatures]
+    comparisons: dict[str, Comparison]
+    residual: FloatArray
+    det_terms: dict[str, FloatArray] = field(default_factory=dict)
+    steps: list[Step] = field(default_factory=list)
+    tried_last: dict[str, float] = field(default_factory=dict)
+    stopped_at_limit: bool = False
+
+    @property
+    def gap(self) -> float:
+        """Return the scalar gap G of the current model."""
+        return sig.total_gap(self.comparisons)
+
+
+def _iterate(state: _State, model: _Model, meas_sig: Signatures, effects: Sequence[Effect],
+             max_steps: int, say: Callable[[str], None]) -> None:
+    """
+    Run the loop of the module doc on ``state`` until nothing passes or nothing is left.
+
+    The loop goes on while the part of the gap an effect can explain (:func:`unexplained_gap`)
+    exceeds :data:`INSIDE_GAP`; every candidate is judged by the whole gap G.
+    """
+    meas, layout = model.meas, model.layout
+    while unexplained_gap(state.comparisons) > INSIDE_GAP:
+        if len(state.steps) >= max_steps:
+            state.stopped_at_limit = True
+            break
+        ctx = Context(meas, state.residual, layout, meas_sig, state.member_sig, model.accepted)
+        trials = _trials(model, ctx, effects, say)
+        tried = {t[1].name: t[0] for t in trials}
+        gap = state.gap
+        pick = choose([t[0] for t in trials], [sig.mean_log_score(t[5]) for t in trials],
+                      [t[1].n_params for t in trials], gap)
+        if pick is None:
+            state.tried_last = tried
+            break
+        pick = _look_ahead(model, ctx, trials, pick, effects, gap, say)
+        trial_gap, effect, params, det, trial_sig, trial_cmp = trials[pick]
+        model.accept(effect, params, det, ctx)
+        if det is not None:
+            state.det_terms[effect.name] = det
+            state.residual = state.residual - det
+        if det is not None or effect.kind == 'quantization':
+            state.baseline, trial_sig, trial_cmp, trial_gap = _rebased(
+                model, ctx, state.residual, state.baseline, (trial_sig, trial_cmp, trial_gap), say,
+                identify=det is not None)
+        state.steps.append(Step(
+            effect=effect.name, params=params, gap_before=gap, gap_after=trial_gap,
+            where=where_outside(layout, state.comparisons),
+            where_after=where_outside(layout, trial_cmp), candidates=tried,
+            time_scales=time_scales(effect.name, params, meas, layout), before=state.comparisons,
+            after=trial_cmp,
+            scores={t[1].name: criterion(sig.mean_log_score(t[5]), t[1].n_params)
+                    for t in trials}))
+        say(f'added {effect.name} {public_params(params)}: gap {gap:.3f} -> {trial_gap:.3f}')
+        state.member_sig, state.comparisons = trial_sig, trial_cmp
+
+
+def _look_ahead(model: _Model, ctx: Context, trials: Sequence[Trial], pick: int,
+                effects: Sequence[Effect], gap: float, say: Callable[[str], None]) -> int:
+    """
+    Check a stochastic pick against the deterministic candidates that pass, two steps ahead.
+
+    A random walk (or any stochastic bias term) can cover a ramp or a transient by widening its
+    band, together with a second stochastic process beside it. So when the pick is stochastic,
+    each of the :data:`LOOK_AHEAD` best passing deterministic candidates D is accepted on trial
+    and the stochastic effects are tried after it; when a model D + E has a :func:`criterion`
+    (its score plus the penalty of both effects' parameters) smaller than the pick's by more
+    than :data:`LOOK_AHEAD_MARGIN`, D is chosen instead (the next round will try E). Returns the
+    index chosen.
+    """
+    if trials[pick][1].kind != 'stochastic':
+        return pick
+    crit = [criterion(sig.mean_log_score(t[5]), t[1].n_params) for t in trials]
+    alts = sorted((i for i, t in enumerate(trials)
+                   if t[1].kind == 'additive' and t[3] is not None and accepts(t[0], gap)),
+                  key=crit.__getitem__)[:LOOK_AHEAD]
+    stochastic = [e for e in effects if e.kind == 'stochastic']
+    best, best_crit = pick, crit[pick] - LOOK_AHEAD_MARGIN
+    for i in alts:
+        _, effect, params, det, trial_sig, _ = trials[i]
+        assert det is not None  # an additive candidate carries its term
+        ahead = model.with_additive(effect, params, det)
+        ctx_ahead = Context(ctx.meas, ctx.residual - det, ctx.layout, ctx.meas_sig, trial_sig,
+                            ahead.accepted)
+        for t in _trials(ahead, ctx_ahead, stochastic, lambda text: None):
+            c = criterion(sig.mean_log_score(t[5]), effect.n_params + t[1].n_params)
+            if c < best_crit:
+                best, best_crit = i, c
+    if best != pick:
+        say(f'  {trials[best][1].name} then a stochastic effect scores {best_crit:.3f}, '
+            f'{trials[pick][1].name} alone {crit[pick]:.3f} (margin {LOOK_AHEAD_MARGIN:g}): '
+            f'{trials[best][1].name} first')
+    return best
 
 
 def _checked(ensemble: int, max_steps: int, seed: int,
@@ -534,28 +681,103 @@ def _trials(model: _Model, ctx: Context, effects: Sequence[Effect],
     return trials
 
 
-def _choose(trials: Sequence[Trial]) -> Trial:
-    """Return the trial of smallest gap; among those within TIE_GAP, the best-scoring simplest."""
-    best_gap = min(t[0] for t in trials)
-    tied = [t for t in trials if t[0] <= best_gap + TIE_GAP]
-    return min(tied, key=lambda t: sig.mean_log_score(t[5]) + PARAM_PENALTY * t[1].n_params)
+def accepts(trial_gap: float, gap: float) -> bool:
+    """
+    Tell whether a candidate meets the acceptance rule: it shrinks the gap by >= INSIDE_GAP.
+
+    Parameters
+    ----------
+    trial_gap : float
+        Gap G of the model with the candidate.
+    gap : float
+        Gap G of the current model.
+
+    Returns
+    -------
+    bool
+
+    """
+    return bool(trial_gap <= gap - INSIDE_GAP)
+
+
+def criterion(score: float, n_params: int) -> float:
+    """
+    Return the penalised score that ranks tied candidates: log score + PARAM_PENALTY per parameter.
+
+    Parameters
+    ----------
+    score : float
+        :func:`.signatures.mean_log_score` of the candidate model (a Gaussian negative
+        log-likelihood per point, summed over the signatures; smaller is better).
+    n_params : int
+        The candidate effect's parameter count.
+
+    Returns
+    -------
+    float
+        Smaller is better.
+
+    """
+    return float(score) + PARAM_PENALTY * int(n_params)
+
+
+def choose(gaps: Sequence[float], scores: Sequence[float], n_params: Sequence[int],
+           gap: float) -> int | None:
+    """
+    Choose the next effect among candidates: only those that meet the acceptance rule compete.
+
+    Rule (docs/discrepancy.md section 5): the candidates that shrink the gap by at least
+    :data:`INSIDE_GAP` (:func:`accepts`) pass; among them the smallest :func:`criterion` (the
+    proper log score of the model with the candidate plus :data:`PARAM_PENALTY` per parameter)
+    wins; ties of the criterion go to the smaller gap, then to the first given. A candidate that
+    fails the rule never wins, so the workflow never stops while one passes; and a model that
+    passes by widening its band (a random walk covering a ramp) loses to one that puts its
+    ensemble where the measurement is.
+
+    Parameters
+    ----------
+    gaps : sequence of float
+        Gap G of the model with each candidate.
+    scores : sequence of float
+        :func:`.signatures.mean_log_score` of each candidate model.
+    n_params : sequence of int
+        Parameter count of each candidate effect.
+    gap : float
+        Gap of the current model.
+
+    Returns
+    -------
+    int or None
+        Index of the chosen candidate; None when none passes.
+
+    """
+    passing = [i for i, g in enumerate(gaps) if accepts(g, gap)]
+    if not passing:
+        return None
+    return min(passing, key=lambda i: (criterion(scores[i], n_params[i]), gaps[i], i))
 
 
 def _rebased(model: _Model, ctx: Context, residual: FloatArray, baseline: BaselineModel,
              trial: tuple[list[Signatures], dict[str, Comparison], float],
-             say: Callable[[str], None]) -> tuple[BaselineModel, list[Signatures],
-                                                  dict[str, Comparison], float]:
+             say: Callable[[str], None], *, identify: bool = True,
+             ) -> tuple[BaselineModel, list[Signatures], dict[str, Comparison], float]:
     """
-    Refit the baseline on the residual once a deterministic term is accepted, if it changed.
+    Refit the baseline once a deterministic term or the lattice is accepted, if it changed.
 
-    The deterministic term distorted the first fit (a strong line or ramp shifts the identified
-    order): refit the baseline on the residual and regenerate the members; kept only if it does
-    not widen the gap. Returns ``(baseline, signatures, comparisons, gap)``: the refitted model's,
-    or ``baseline`` and ``trial`` (signatures, comparisons, gap) as they were.
+    A deterministic term distorted the first fit (a strong line or ramp shifts the identified
+    order): the baseline is identified again on the residual (``identify``). A lattice in the
+    model rounds the members, so the baseline's levels must leave out the rounding noise the
+    record already holds, q^2 / 12 (:func:`.baseline.without_white`). The members are
+    regenerated and the refit kept only if it does not widen the gap. Returns ``(baseline,
+    signatures, comparisons, gap)``: the refitted model's, or ``baseline`` and ``trial``
+    (signatures, comparisons, gap) as they were.
     """
     meas = ctx.meas
     trial_sig, trial_cmp, trial_gap = trial
-    refit = fit_baseline(residual, meas.rate_hz)
+    refit = fit_baseline(residual, meas.rate_hz) if identify else baseline
+    if model.quantization is not None:
+        step = float(model.quantization['step_rad_s'])
+        refit = without_white(refit, residual, meas.rate_hz, step * step / 12.0)
     if not _changed(refit, baseline):
         return baseline, trial_sig, trial_cmp, trial_gap
     members = list(model.members)
@@ -564,7 +786,8 @@ def _rebased(model: _Model, ctx: Context, residual: FloatArray, baseline: Baseli
     refit_cmp = compare_all(ctx.layout, ctx.meas_sig, refit_sig)
     refit_gap = sig.total_gap(refit_cmp)
     if refit_gap <= trial_gap:
-        say(f'  baseline refitted on the residual: alpha={refit.alpha:.2f} f={refit.f:.3f}')
+        say(f'  baseline refitted: alpha={refit.alpha:.2f} f={refit.f:.3f} '
+            f'sigma_w={refit.sigma_w_rad_s:.3g} rad/s sigma_nu={refit.sigma_nu_rad_s:.3g} rad/s')
         return refit, refit_sig, refit_cmp, refit_gap
     model.members = members
     return baseline, trial_sig, trial_cmp, trial_gap

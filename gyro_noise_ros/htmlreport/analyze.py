@@ -16,8 +16,10 @@
 The ``report.html`` of gyro_noise_analyze (and so of ``make demo``).
 
 Built from the summary.json document and the arrays the tool holds in memory (per-chunk bias,
-variance and orders; the Allan results), never from summary.md. "In short" is
-:func:`..analysis.summary_md.in_short_markdown` of the same document.
+variance and orders; the Allan results of the gyro and the accelerometer), never from
+summary.md. The verdict line and the datasheet card are :mod:`..analysis.card`'s (summary.md
+opens with the same), with the imu.yaml the tool wrote, ready to copy; "In short" is
+:func:`..analysis.summary_md.in_short_markdown` of the same document, its glossary folded.
 """
 
 from collections.abc import Mapping, Sequence
@@ -28,12 +30,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .figures import allan_figure, series_figure
-from .page import Cell, Key, Num, Page, pointer, Table, write_report_html
-from ..analysis.csv_tables import allan_curve
-from ..analysis.figures import allan_fit_lines
-from ..analysis.summary_md import in_short_markdown
+from .page import Cell, Key, Num, Page, pointer, Table, Unit, Verdict, write_report_html
+from ..analysis.card import card_tables, verdict
+from ..analysis.figures import allan_curves
+from ..analysis.summary_md import glossary_markdown, in_short_markdown
 from ..core.allan import AllanResult
-from ..units import RAD_TO_DEG as _DEG, S_PER_H
+from ..units import ACCEL_ADEV, GYRO_ADEV, RAD_TO_DEG as _DEG, time_unit
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
@@ -74,10 +76,15 @@ def _tables(doc: dict[str, Any]) -> list[Table]:
         # (bag index, JSON pointer of the bag's axis entry) of the bags that have the axis
         rows = [(i, pointer('bags', i, 'axes', axis)) for i, b in enumerate(bags)
                 if axis in b['axes']]
-        tables += [_drift_table(axis, rows), _variance_table(axis, rows)]
-        tables += [_order_table(bags, axis, rows, num=num, method=method, key=key, tie=tie)
-                   for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
-                                                 (6, 'correlation', 'alpha_corr', 'ties_corr'))]
+        # an Allan-only bag (shorter than one chunk) has no row in the chunk tables
+        chunked = [(i, p) for i, p in rows if not bags[i].get('allan_only')]
+        if chunked:
+            tables += [_drift_table(axis, chunked), _variance_table(axis, chunked)]
+            tables += [_order_table(bags, axis, chunked, num=num, method=method, key=key,
+                                    tie=tie)
+                       for num, method, key, tie in ((5, 'variance', 'alpha_var', 'ties_var'),
+                                                     (6, 'correlation', 'alpha_corr',
+                                                      'ties_corr'))]
         tables += _allan_tables(bags, axis, rows)
         tables += _health_tables(bags, axis, rows)
     tables += [_counts_table(bags), _options_table(doc['options'])]
@@ -157,15 +164,35 @@ def _allan_tables(bags: list[dict[str, Any]], axis: str,
             for k, v in bags[i]['axes'][axis]['allan'].items():
                 if k not in keys and not isinstance(v, (dict, list, str, bool)):
                     keys.append(k)
+        keys.sort(key=lambda k: list(_TERM_LABELS).index(k) if k in _TERM_LABELS else 99)
         tables.append(Table(
-            f'Axis {axis}: Allan deviation, IEEE 952 model fit (unit in the name)',
-            ('Sequence', *keys),
-            tuple((_label(i), *(Num(f'{p}/allan/{k}', '.4g')
-                                if k in bags[i]['axes'][axis]['allan'] else 'n/a'
-                                for k in keys)) for i, p in terms),
+            f'Axis {axis}: Allan deviation, IEEE 952 model fit',
+            ('Term', 'Unit', *(bags[i]['label'] for i, _ in terms)),
+            tuple((_TERM_LABELS.get(k, (k, ''))[0], Unit(_TERM_LABELS.get(k, (k, ''))[1]),
+                   *(Num(f'{p}/allan/{k}', '.4g') if k in bags[i]['axes'][axis]['allan']
+                     else 'n/a' for i, p in terms)) for k in keys),
             note='The five-term model fitted to the whole usable curve: a model for '
-            'simulation and filters, not the datasheet numbers.'))
+            'simulation and filters, not the datasheet numbers. SI rows give the values '
+            'summary.json holds under the same names.'))
     return tables
+
+
+#: Readable names and units of the IEEE 952 model's keys (summary.json ``allan``), in order.
+_TERM_LABELS = {
+    'quantization_deg': ('Q, angle quantization', 'deg'),
+    'angle_random_walk_deg_per_sqrt_h': ('N, angle random walk', 'deg/sqrt(h)'),
+    'bias_instability_deg_per_h': ('B, bias instability', 'deg/h'),
+    'rate_random_walk_deg_per_h_sqrt_h': ('K, rate random walk', 'deg/h/sqrt(h)'),
+    'rate_ramp_deg_per_h2': ('R, rate ramp', 'deg/h^2'),
+    'quantization_rad': ('Q (SI)', 'rad'),
+    'angle_random_walk_rad_per_sqrt_s': ('N (SI)', 'rad/s/sqrt(Hz)'),
+    'bias_instability_rad_per_s': ('B (SI)', 'rad/s'),
+    'rate_random_walk_rad_per_s_sqrt_s': ('K (SI)', 'rad/s^2/sqrt(Hz)'),
+    'rate_ramp_rad_per_s2': ('R (SI)', 'rad/s^2'),
+    'tau_min_s': ('Fitted from tau', 's'),
+    'tau_max_s': ('Fitted up to tau', 's'),
+    'rms_relative_residual': ('RMS relative misfit of the model', '1'),
+}
 
 
 def _datasheet_row(i: int, p: str, d: dict[str, Any]) -> tuple[Cell, ...]:
@@ -228,49 +255,59 @@ def _options_table(opts: dict[str, Any]) -> Table:
               if v is None or isinstance(v, (bool, int, float, str))))
 
 
-def _figures(doc: dict[str, Any], per_chunk: _PerChunk,
-             allan_store: _AllanStore) -> list[tuple[str, 'figure']]:
+def _allan_figures(doc: dict[str, Any], allan_store: _AllanStore,
+                   accel_allan: Mapping[tuple[str, str], AllanResult] | None
+                   ) -> list[tuple[str, 'figure']]:
+    """Return the Allan deviation of the angular rate (deg/h) and of the specific force (mg)."""
+    curves = allan_curves(doc, allan_store, accel_allan)
     figures: list[tuple[str, figure]] = []
-    if allan_store:
-        curves = []
-        for (label, axis), (result, terms, _) in allan_store.items():
-            tau, adev, lo, hi, n = allan_curve(result)
-            fit = [(name, t, v * _DEG) for name, t, v in allan_fit_lines(terms, tau)]
-            curves.append({'name': f'{label} {axis}', 'tau_s': tau, 'adev': adev * _DEG,
-                           'ci_low': lo * _DEG, 'ci_high': hi * _DEG, 'n': n, 'fit': fit})
-        figures.append((
-            'Allan deviation of the angular rate per bag and axis (overlapping estimator; band: '
-            '68.3 % interval; dashed: IEEE 952 model fit where it was fitted). Hover a point '
-            'for tau, the deviation and its interval.',
-            allan_figure(curves, title='Allan deviation', unit='deg/s')))
+    readout = ('dashed: N, the -1/2 line, read at 1 s; dotted: the bias-stability floor, B = '
+               'floor / 0.664; dash-dot: K, the +1/2 line (K is its value at 3 s); diamonds: the '
+               'readout points, hover them for the numbers')
+    for sensor, unit, what in (('gyro', GYRO_ADEV.unit, 'angular rate'),
+                               ('accelerometer', ACCEL_ADEV.unit, 'specific force')):
+        if curves[sensor]:
+            figures.append((
+                f'Allan deviation of the {what} (band: 68.3 % interval). {readout}. A click on '
+                'a legend entry shows or hides it (the IEEE 952 model starts hidden).',
+                allan_figure(curves[sensor], title=f'Allan deviation, {sensor}', unit=unit)))
+    return figures
+
+
+def _figures(doc: dict[str, Any], per_chunk: _PerChunk, allan_store: _AllanStore,
+             accel_allan: Mapping[tuple[str, str], AllanResult] | None
+             ) -> list[tuple[str, 'figure']]:
+    figures = _allan_figures(doc, allan_store, accel_allan)
     # per_chunk rows: (t_mid_s, bias_rad_s, variance_rad2_s2, alpha_var, alpha_corr)
-    series = [(f'{label} {axis}', r) for axis, v in per_chunk.items() for label, r in v
-              if r.shape[0]]
+    series = [(f'{label} {axis}' if len(doc['bags']) > 1 else axis, r)
+              for axis, v in per_chunk.items() for label, r in v if r.shape[0]]
     if series:
-        hours = [(name, r[:, 0] / S_PER_H, r) for name, r in series]
+        clock = time_unit(max(float(np.nanmax(r[:, 0])) for _, r in series))
+        when = [(name, r[:, 0] * clock.per_si, r) for name, r in series]
+        x_label = f'time from the first sample ({clock.unit})'
         figures.append(('Chunk bias over time (one point per chunk; the least-squares slope of '
                         'these points is the offset drift of the tables).',
-                        series_figure([(n, t, r[:, 1] * _DEG) for n, t, r in hours],
-                                      title='Bias per chunk',
-                                      x_label='time from the first sample (h)',
+                        series_figure([(n, t, r[:, 1] * _DEG) for n, t, r in when],
+                                      title='Bias per chunk', x_label=x_label,
                                       y_label='bias (deg/s)')))
         figures.append(('Noise variance within each chunk.',
-                        series_figure([(n, t, r[:, 2] * _DEG ** 2) for n, t, r in hours],
-                                      title='Noise variance per chunk',
-                                      x_label='time from the first sample (h)',
+                        series_figure([(n, t, r[:, 2] * _DEG ** 2) for n, t, r in when],
+                                      title='Noise variance per chunk', x_label=x_label,
                                       y_label='variance ((deg/s)^2)')))
         if series[0][1].shape[1] >= 5:
-            orders = [(f'{n}, {m}', t, r[:, c]) for n, t, r in hours
+            orders = [(f'{n}, {m}', t, r[:, c]) for n, t, r in when
                       for m, c in (('variance method', 3), ('correlation method', 4))]
             figures.append(('Fractional order alpha per chunk by both methods (0: white noise, '
                             '1: random walk; dimensionless).',
                             series_figure(orders, title='Fractional order per chunk',
-                                          x_label='time from the first sample (h)',
+                                          x_label=x_label,
                                           y_label='order alpha (dimensionless)')))
     return figures
 
 
-def analyze_page(doc: dict[str, Any], *, per_chunk: _PerChunk, allan_store: _AllanStore) -> Page:
+def analyze_page(doc: dict[str, Any], *, per_chunk: _PerChunk, allan_store: _AllanStore,
+                 accel_allan: Mapping[tuple[str, str], AllanResult] | None = None,
+                 imu_yaml: str | None = None) -> Page:
     """
     Build the page of one gyro_noise_analyze run.
 
@@ -283,6 +320,10 @@ def analyze_page(doc: dict[str, Any], *, per_chunk: _PerChunk, allan_store: _All
         alpha_var, alpha_corr)`` per analysed chunk.
     allan_store : dict
         ``{(label, axis): (AllanResult, noise terms, readout)}``.
+    accel_allan : dict, optional, keyword-only
+        ``{(label, axis): AllanResult}`` of the accelerometer (m/s^2).
+    imu_yaml : str, optional, keyword-only
+        The imu.yaml the tool wrote, shown with the card.
 
     Returns
     -------
@@ -292,17 +333,25 @@ def analyze_page(doc: dict[str, Any], *, per_chunk: _PerChunk, allan_store: _All
     import numba
     import scipy
 
+    level, text = verdict(doc)
+    card = tuple(Table(title, columns, tuple(rows)) for title, columns, rows in card_tables(doc))
+    blocks = (('imu.yaml (Kalibr, SI; written beside this page)', imu_yaml),) if imu_yaml else ()
     return Page(
         title='gyro_noise_analyze report: ' + ', '.join(b['label'] for b in doc['bags']),
-        data=doc, in_short_markdown=in_short_markdown(doc),
-        figures=tuple(_figures(doc, per_chunk, allan_store)), tables=tuple(_tables(doc)),
+        data=doc, in_short_markdown=in_short_markdown(doc, glossary=False),
+        verdict=Verdict(level, text), card=card, card_title='Datasheet numbers',
+        card_blocks=blocks, glossary_markdown=glossary_markdown(),
+        figures=tuple(_figures(doc, per_chunk, allan_store, accel_allan)),
+        tables=tuple(_tables(doc)),
         method_markdown=METHOD, command=doc.get('command'),
         inputs=tuple(b['path'] for b in doc['bags']), version=doc.get('version', ''),
         extra_versions=(('scipy', scipy.__version__), ('numba', numba.__version__)))
 
 
 def write_analyze_html(out: Path, doc: dict[str, Any], per_chunk: _PerChunk,
-                       allan_store: _AllanStore) -> Path:
+                       allan_store: _AllanStore, *,
+                       accel_allan: Mapping[tuple[str, str], AllanResult] | None = None,
+                       imu_yaml: str | None = None) -> Path:
     """
     Write ``report.html`` of a gyro_noise_analyze run into its (staged) output folder.
 
@@ -314,6 +363,10 @@ def write_analyze_html(out: Path, doc: dict[str, Any], per_chunk: _PerChunk,
         The summary.json document.
     per_chunk, allan_store : dict
         As :func:`analyze_page`.
+    accel_allan : dict, optional, keyword-only
+        As :func:`analyze_page`.
+    imu_yaml : str, optional, keyword-only
+        As :func:`analyze_page`.
 
     Returns
     -------
@@ -321,7 +374,8 @@ def write_analyze_html(out: Path, doc: dict[str, Any], per_chunk: _PerChunk,
         The written file.
 
     """
-    return write_report_html(analyze_page(doc, per_chunk=per_chunk, allan_store=allan_store),
+    return write_report_html(analyze_page(doc, per_chunk=per_chunk, allan_store=allan_store,
+                                          accel_allan=accel_allan, imu_yaml=imu_yaml),
                              out / 'report.html')
 
 

@@ -17,7 +17,9 @@ The ``report.html`` of ``gyro_noise_calibrate``.
 
 Built from the calibration.json document alone: the JSON is SI, the tables show calibration.md's
 units (mg, %, deg/s) through :class:`.page.Num`'s ``scale``, so each cell is still checked
-against the JSON value it came from. "In short" words the verdicts as calibration.md does.
+against the JSON value it came from. The verdict line is the two checks (OK when both hold,
+ERROR when one fails); the card holds the calibration (biases and scale factors of both sensors);
+the cross-axis terms of both follow in the tables. "In short" words the checks as calibration.md.
 """
 
 from collections.abc import Sequence
@@ -25,7 +27,7 @@ from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
 from .figures import series_figure
-from .page import Cell, Num, Page, plus_minus_cell, pointer, Table, write_report_html
+from .page import Cell, Num, Page, plus_minus_cell, pointer, Table, Verdict, write_report_html
 from ..units import MG_TO_M_S2 as _MG, RAD_TO_DEG as _DEG
 
 if TYPE_CHECKING:
@@ -48,14 +50,16 @@ def calibrate_page(doc: dict[str, Any]) -> Page:
     """
     title = ('Six-position calibration (paper 001 Table 6 layout)'
              if doc['mode'] == 'six-position' else 'Multi-pose calibration (|a| = g, imu_tk)')
-    tables = (_accelerometer_tables() + [_gyro_table(doc)] + _check_tables(doc)
-              + [_dwell_table(doc)])
+    accel, accel_cross = _accelerometer_tables()
+    card = (accel, _gyro_table(doc))
+    tables = [accel_cross, *_gyro_cross_table(doc), *_check_tables(doc), _dwell_table(doc)]
     method = (f'{title}. Model: `{doc["model"]}`; frame: {doc["frame"]}. Gravity used: '
               f'{doc["gravity_source"]} (the value is in calibration.json). Dwells are found by '
               'the static detector (its settings are in calibration.json); the gyro scale factor '
               'and misalignment come from integrating the turns between static poses.')
     return Page(title=f'gyro_noise_calibrate: {title}', data=doc,
-                in_short_markdown=_in_short(doc), figures=tuple(_figures(doc)),
+                in_short_markdown=_in_short(doc), verdict=_verdict(doc), card=card,
+                card_title='The calibration', figures=tuple(_figures(doc)),
                 tables=tuple(tables), method_markdown=method, command=None,
                 inputs=tuple(doc['sources']), version=doc.get('version', ''))
 
@@ -77,7 +81,25 @@ def _in_short(doc: dict[str, Any]) -> str:
     return '\n'.join(short)
 
 
-def _accelerometer_tables() -> list[Table]:
+def _verdict(doc: dict[str, Any]) -> Verdict:
+    """Return the verdict line: both checks hold (OK) or which fails (ERROR), and the gyro."""
+    gc, cons = doc['gravity_check'], doc['consistency']
+    failed = [d['dwell'] for d in gc['dwells'] if not d['consistent']]
+    bad = []
+    if not gc['consistent']:
+        bad.append('the leave-one-out gravity check fails at '
+                   + (', '.join(str(f) for f in failed) or 'a dwell'))
+    if cons['pairs'] and not cons['consistent']:
+        bad.append('opposite dwells disagree (a tilted fixture?)')
+    gyro = f' Gyro: {doc["gyro"]["note"]}.' if doc['gyro']['note'] else ''
+    if bad:
+        return Verdict('ERROR', 'calibration not trustworthy: ' + '; '.join(bad) + '.' + gyro)
+    checks = ('gravity check and opposite dwells consistent' if cons['pairs']
+              else 'gravity check consistent')
+    return Verdict('OK', f'calibrated from {len(doc["dwells"])} dwells: {checks}.' + gyro)
+
+
+def _accelerometer_tables() -> tuple[Table, Table]:
     """Return the accelerometer's biases and scale factors, and its cross-axis terms."""
     rows: list[tuple[Cell, ...]]
     rows = [(f'b{ax}', plus_minus_cell(pointer('accel', 'bias_m_s2', i),
@@ -93,10 +115,34 @@ def _accelerometer_tables() -> list[Table]:
         mis.append((ax, *('-' if i == j else plus_minus_cell(
             pointer('accel', 'misalignment', j, i), pointer('accel', 'misalignment_sigma', j, i),
             '.4f', 100.0) for i in range(3))))
-    return [Table('Accelerometer (paper 001 Table 6 layout)',
+    return (Table('Accelerometer (paper 001 Table 6 layout)',
                   ('Parameter', 'Value +/- std. uncertainty', 'Unit'), tuple(rows)),
             Table('Accelerometer cross-axis terms (%)', ('Measured axis', 'x', 'y', 'z'),
-                  tuple(mis), note='Row = measured axis, column = true axis.')]
+                  tuple(mis), note='Row = measured axis, column = true axis.'))
+
+
+def _gyro_cross_table(doc: dict[str, Any]) -> list[Table]:
+    """Return the gyro's cross-axis terms (%), each +/- its uncertainty where estimated."""
+    gyro = doc['gyro']
+    est = gyro.get('estimated') or [[False] * 3] * 3
+    rows = []
+    for j, ax in enumerate('xyz'):
+        cells: list[Cell] = []
+        for i in range(3):
+            if i == j:
+                cells.append('-')
+            elif not est[j][i]:
+                cells.append('not estimated')
+            else:
+                cells.append(plus_minus_cell(pointer('gyro', 'misalignment', j, i),
+                                             pointer('gyro', 'misalignment_sigma', j, i),
+                                             '.4f', 100.0))
+        rows.append((ax, *cells))
+    note = 'Row = measured axis, column = true axis; from the turns between the dwells.'
+    if gyro['note']:
+        note += f' {gyro["note"]}.'
+    return [Table('Gyro cross-axis terms (%)', ('Measured axis', 'x', 'y', 'z'), tuple(rows),
+                  note=note)]
 
 
 def _gyro_table(doc: dict[str, Any]) -> Table:

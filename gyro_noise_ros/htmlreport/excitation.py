@@ -16,9 +16,11 @@
 The ``report.html`` of ``gyro_noise_excitation``.
 
 Built from the excitation.json document (SI) and the records held in memory (time and excited
-channel of each side); the tables show excitation.md's units (g or deg/s, %) through
-:class:`.page.Num`'s ``scale``. "In short" words the verdicts as excitation.md does
-(:func:`..calibration.excitation_report.verdict_text`).
+channel of each side); the tables show excitation.md's units (mg or deg/s, %) through
+:class:`.page.Num`'s ``scale``. The verdict line says whether any check flags a defect (ERROR:
+significant and beyond the practical tolerance); the card holds each record's frequency,
+amplitude and verdicts worded as excitation.md words them
+(:func:`..calibration.excitation_report.check_parts`).
 """
 
 from collections.abc import Mapping, Sequence
@@ -29,8 +31,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .figures import series_figure
-from .page import Num, Page, plus_minus_cell, pointer, Table, write_report_html
-from ..calibration.excitation_report import display_unit, sides_of, verdict_text, what_of
+from .page import Num, Page, plus_minus_cell, pointer, Table, Verdict, write_report_html
+from ..calibration.excitation_report import (check_parts, checks_of, display_unit, sides_of,
+                                             verdict_rule, what_of)
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
@@ -67,7 +70,8 @@ def excitation_page(doc: dict[str, Any], records: _Records,
               'instantaneous frequency and compared with the reference record when one is '
               'given (docs/reliability.md).')
     return Page(title=f'gyro_noise_excitation: {what}', data=doc,
-                in_short_markdown=_in_short(doc, sides),
+                in_short_markdown=_in_short(doc, sides), verdict=_verdict(doc, sides),
+                card=(_card(doc, sides),), card_title='The checks',
                 figures=tuple(_figures(doc, records, sides)),
                 tables=tuple(tables), method_markdown=method,
                 command=None if command is None else tuple(command),
@@ -75,21 +79,52 @@ def excitation_page(doc: dict[str, Any], records: _Records,
 
 
 def _in_short(doc: dict[str, Any], sides: list[str]) -> str:
-    """Return "In short": each side's two verdicts, worded as excitation.md words them."""
-    short = ['## In short', '',
-             "Verdicts are statistical tests against each record's own noise, false-alarm "
-             f'probability {doc["alpha"]:g} each (docs/reliability.md).', '']
-    checks = ((('steady', 'steady', 'UNSTEADY', 'stability_p', 'stability verdict'),
-               ('clean', 'clean', 'DISTORTED', 'distortion_p', 'distortion verdict'))
-              if doc['mode'] == 'dwell' else
-              (('matches_reference', 'matches the reference', 'GAIN DIFFERS', 'gain_p',
-                'gain verdict'),
-               ('flat', 'flat', 'FREQUENCY-DEPENDENT', 'flatness_p', 'flatness verdict')))
+    """Return "In short": how the verdicts are made (the card above holds them)."""
+    return '\n'.join(['## In short', '', verdict_rule(doc)])
+
+
+def _verdict(doc: dict[str, Any], sides: list[str]) -> Verdict:
+    """Return the verdict line: ERROR when a check flags a defect, INFO when none could run."""
+    flagged, judged = [], 0
     for s in sides:
-        for key, yes, no, p_key, name in checks:
-            text = verdict_text(doc[s].get(key), yes, no, doc[s].get(p_key))
-            short.append(f'* **{s}**, {name}: {text}')
-    return '\n'.join(short)
+        for check in checks_of(doc):
+            ok = doc[s].get(check[0])
+            judged += ok is not None
+            if ok is False:
+                flagged.append(f'{s}: {check[2]}')
+    what = f'{doc["sensor"]} {doc["axis"]}, {what_of(doc)}'
+    if flagged:
+        return Verdict('ERROR', f'{what}: ' + '; '.join(flagged)
+                       + ' (significant and beyond the practical tolerance; the card says by how '
+                       'much).')
+    if not judged:
+        return Verdict('INFO', f'{what}: analysed, nothing to judge (a sweep needs the '
+                       "reference sensor's record for its verdicts).")
+    names = ' and '.join(c[1] for c in checks_of(doc))
+    return Verdict('OK', f'{what}: every record {names} (no defect both significant and '
+                   'beyond the practical tolerance).')
+
+
+def _card(doc: dict[str, Any], sides: list[str]) -> Table:
+    """Return each record's frequency, amplitude and verdicts: the first screen."""
+    k, unit = display_unit(doc['sensor'])
+    u = doc['unit']
+    checks = checks_of(doc)
+    cells: list[tuple[Any, ...]]
+    if doc['mode'] == 'dwell':
+        head = ('Frequency (Hz)', f'Amplitude ({unit})')
+        cells = [(Num(pointer(s, 'frequency_hz'), '.5f'),
+                  Num(pointer(s, f'amplitude_{u}'), '.5g', scale=k)) for s in sides]
+    else:
+        head = ('Frequency covered, 5th-95th percentile (Hz)', 'Mean deviation from the reference')
+        cells = [((Num(pointer(s, 'frequency_range_hz', 0), '.3f'), ' to ',
+                   Num(pointer(s, 'frequency_range_hz', 1), '.3f')),
+                  (Num(pointer(s, 'mean_deviation'), '+.3f', scale=100.0), ' %')
+                  if doc[s].get('mean_deviation') is not None else 'no reference')
+                 for s in sides]
+    return Table('', ('Record', *head, *(f'{c[5].capitalize()} verdict' for c in checks)),
+                 tuple((s, *cells[i], *(check_parts(doc, s, c) for c in checks))
+                       for i, s in enumerate(sides)))
 
 
 def _dwell_tables(doc: dict[str, Any], sides: list[str], what: str) -> list[Table]:

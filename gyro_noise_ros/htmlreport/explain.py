@@ -16,8 +16,11 @@
 The ``report.html`` of ``gyro_noise_explain``, one per analysed axis beside its explain.json.
 
 Built from explain.json (``ExplainResult.to_dict()`` as written) and the result in memory.
-"In short" is the verdict and the named effects made by the same functions as report.md
-(:func:`..explain.report.verdict`, :func:`..explain.report.parameter_lines`).
+The verdict line is :func:`..explain.report.verdict` (OK when the measurement ends inside the
+ensemble band, WARN when it stays outside: unexplained); the card holds the gap and the effects
+named; "In short" the named effects with their uncertainties, made by the same function as
+report.md (:func:`..explain.report.parameter_lines`). The PNG figures report.md shows
+(``overview.png``, one per step) are embedded in the page as data.
 """
 
 from collections.abc import Sequence
@@ -26,7 +29,7 @@ from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
 from .figures import series_figure
-from .page import Key, Num, Page, pointer, Table, write_report_html
+from .page import Key, Num, Page, pointer, Table, Verdict, write_report_html
 from ..units import RAD_TO_DEG as _DEG
 
 if TYPE_CHECKING:
@@ -37,8 +40,8 @@ if TYPE_CHECKING:
 _BASELINE = (('Bias (deg/s)', 'bias_rad_s', '.5g', _DEG),
              ('Order alpha (variance method)', 'alpha', '.3f', 1.0),
              ('f', 'f', '.5g', 1.0),
-             ('sigma_w (rad/s)', 'sigma_w_rad_s', '.4g', 1.0),
-             ('sigma_nu, white measurement noise (rad/s)', 'sigma_nu_rad_s', '.4g', 1.0),
+             ('sigma_w (deg/s)', 'sigma_w_rad_s', '.4g', _DEG),
+             ('sigma_nu, white measurement noise (deg/s)', 'sigma_nu_rad_s', '.4g', _DEG),
              ('Memory L, fit', 'memory_fit', 'd', 1.0),
              ('Memory L, simulation', 'memory_sim', 'd', 1.0),
              ('Chunks identified', 'chunks_identified', 'd', 1.0),
@@ -47,7 +50,8 @@ _BASELINE = (('Bias (deg/s)', 'bias_rad_s', '.5g', _DEG),
 
 
 def explain_page(result: 'ExplainResult', command: Sequence[str] | None = None,
-                 data: dict[str, Any] | None = None) -> Page:
+                 data: dict[str, Any] | None = None,
+                 images: Sequence[tuple[str, bytes]] = ()) -> Page:
     """
     Build the page of one explained axis.
 
@@ -60,6 +64,8 @@ def explain_page(result: 'ExplainResult', command: Sequence[str] | None = None,
     data : dict, optional
         The axis' explain.json document as the tool writes it (default:
         ``result.to_dict()``); the page embeds exactly this.
+    images : sequence of tuple
+        ``(caption, png bytes)`` of the tool's PNG figures, embedded in the page.
 
     Returns
     -------
@@ -71,23 +77,28 @@ def explain_page(result: 'ExplainResult', command: Sequence[str] | None = None,
     # exactly the explain.json document (numpy values as explain/report.py writes them)
     doc = json.loads(json.dumps(result.to_dict() if data is None else data,
                                 default=_json_default))
-    short = ['## In short', '', f'**Verdict:** {verdict(result)}', '']
+    text = verdict(result)
+    level = 'WARN' if result.unexplained else 'OK'
+    short = ['## In short', '']
     if result.steps:
         short += ['Effects named (value ± standard error):', '']
         short += [f'- {line}' for line in parameter_lines(result)]
+    else:
+        short += ['No effect named: the baseline model (bias, fractional noise, white noise) '
+                  'holds the measurement.']
+    card = [Table('Gap of the measurement to the ensemble band (0: inside every band)',
+                  ('Quantity', 'Gap'), (('Initial (baseline)', Num('/gap_initial', '.3f')),
+                                        ('Final model', Num('/gap_final', '.3f'))))]
+    if doc['steps']:
+        card.append(Table('Steps: the effects named, in order', ('Step effect', 'Gap before',
+                                                                 'Gap after'),
+                          tuple((Num(pointer('steps', i, 'effect')),
+                                 Num(pointer('steps', i, 'gap_before'), '.3f'),
+                                 Num(pointer('steps', i, 'gap_after'), '.3f'))
+                                for i in range(len(doc['steps'])))))
     tables = [Table('Baseline model (paper 000 eqs. 2, 10, 11)', ('Parameter', 'Value'),
                     tuple((label, Num(pointer('baseline', key), fmt, scale=scale))
                           for label, key, fmt, scale in _BASELINE))]
-    tables.append(Table('Gap of the measurement to the ensemble band', ('Quantity', 'Gap'), (
-        ('Initial (baseline)', Num('/gap_initial', '.3f')),
-        ('Final model', Num('/gap_final', '.3f')))))
-    if doc['steps']:
-        tables.append(Table('Steps: the effects named, in order', ('Step effect', 'Gap before',
-                                                                   'Gap after'),
-                            tuple((Num(pointer('steps', i, 'effect')),
-                                   Num(pointer('steps', i, 'gap_before'), '.3f'),
-                                   Num(pointer('steps', i, 'gap_after'), '.3f'))
-                                  for i in range(len(doc['steps'])))))
     sig = doc['signatures_final']
     tables.append(Table('Signatures of the final model', ('Signature',
                                                           'g (worst point / band edge)',
@@ -112,7 +123,9 @@ def explain_page(result: 'ExplainResult', command: Sequence[str] | None = None,
               'gap shrinks (docs/discrepancy.md).')
     inp = doc['input']
     return Page(title=f"gyro_noise_explain: {inp['source']}, axis {inp['axis']}", data=doc,
-                in_short_markdown='\n'.join(short), figures=tuple(figures),
+                in_short_markdown='\n'.join(short), verdict=Verdict(level, text),
+                card=tuple(card), card_title='The gap and the effects named',
+                figures=tuple(figures), images=tuple(images),
                 tables=tuple(tables), method_markdown=method,
                 command=None if command is None else tuple(command), inputs=(inp['source'],),
                 version=_version())
@@ -146,4 +159,12 @@ def write_explain_html(result: 'ExplainResult', folder: Path, *,
     pathlib.Path
 
     """
-    return write_report_html(explain_page(result, command, data), folder / 'report.html')
+    names = ['overview.png'] + [f'step{i}_{step.effect}.png'
+                                for i, step in enumerate(result.steps, 1)]
+    captions = ['Measurement against the ensemble band of every signature: the baseline '
+                '(grey) and the final model (blue); red circles: points outside the band.']
+    captions += [f'Step {i}: + {step.effect}, the signatures it changed, before (grey) and '
+                 'after (blue).' for i, step in enumerate(result.steps, 1)]
+    images = [(c, (folder / n).read_bytes()) for c, n in zip(captions, names)
+              if (folder / n).is_file()]
+    return write_report_html(explain_page(result, command, data, images), folder / 'report.html')

@@ -28,8 +28,9 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 
 from .figures import allan_figure
-from .page import Cell, CellPart, Key, Num, Page, pointer, Table, write_report_html
+from .page import Cell, CellPart, Key, Num, Page, pointer, Table, Verdict, write_report_html
 from ..calibration.reliability_report import in_short
+from ..units import ACCEL_ADEV, GYRO_ADEV
 
 if TYPE_CHECKING:
     from bokeh.plotting import figure
@@ -74,12 +75,29 @@ def reliability_page(doc: dict[str, Any], curves: _Curves,
               'verdict per sensor from the mean over its three axes (docs/reliability.md).')
     inputs = [p for v in doc['sources'].values() if v
               for p in (v if isinstance(v, list) else [v])]
+    tables = _verdict_tables(doc)
     return Page(title='gyro_noise_reliability: before / after', data=doc,
-                in_short_markdown=_in_short(doc), figures=tuple(_figures(curves)),
-                tables=tuple(_verdict_tables(doc) + _noise_term_tables(doc)),
+                in_short_markdown=_in_short(doc), verdict=_verdict(doc), card=tuple(tables[:1]),
+                card_title='The verdict per sensor', figures=tuple(_figures(curves)),
+                tables=tuple(tables[1:] + _noise_term_tables(doc)),
                 method_markdown=method,
                 command=None if command is None else tuple(command), inputs=tuple(inputs),
                 version=doc.get('version', ''))
+
+
+#: The verdict line's level of each sensor verdict (the worst sensor's is the page's).
+_LEVELS = {'physiological': 'OK', 'undetermined': 'INFO', 'beyond': 'ERROR'}
+
+
+def _verdict(doc: dict[str, Any]) -> Verdict:
+    """Return the verdict line: each sensor's verdict and its basis, the worst level first."""
+    order = ('ERROR', 'INFO', 'OK')
+    parts, levels = [], []
+    for sensor, e in doc['overall'].items():
+        levels.append(_LEVELS.get(e['verdict'], 'INFO'))
+        parts.append(f"{sensor}: **{e['verdict']}** ({e['basis']})")
+    level = min(levels, key=order.index) if levels else 'INFO'
+    return Verdict(level, '; '.join(parts) or 'no sensor could be judged.')
 
 
 def _in_short(doc: dict[str, Any]) -> str:
@@ -151,7 +169,7 @@ def _noise_term_tables(doc: dict[str, Any]) -> list[Table]:
 def _figures(records: _Curves) -> list[tuple[str, 'figure']]:
     """Return per sensor the Allan deviations of the static records before and after."""
     figures: list[tuple[str, figure]] = []
-    for sensor, unit in (('accel', 'm/s^2'), ('gyro', 'rad/s')):
+    for sensor, display in (('accel', ACCEL_ADEV), ('gyro', GYRO_ADEV)):
         curves: list[dict[str, Any]] = []
         for side in ('before', 'after'):
             for a in 'xyz':
@@ -163,13 +181,14 @@ def _figures(records: _Curves) -> list[tuple[str, 'figure']]:
                 lo = np.asarray(getattr(allan, 'ci_low', np.full_like(adev, np.nan)))
                 hi = np.asarray(getattr(allan, 'ci_high', np.full_like(adev, np.nan)))
                 ok = np.isfinite(adev) & (adev > 0)
-                curves.append({'name': f'{side} {a}', 'tau_s': tau[ok], 'adev': adev[ok],
-                               'ci_low': lo[ok], 'ci_high': hi[ok]})
+                k = display.per_si
+                curves.append({'name': f'{side} {a}', 'tau_s': tau[ok], 'adev': adev[ok] * k,
+                               'ci_low': lo[ok] * k, 'ci_high': hi[ok] * k})
         if curves:
             figures.append((f'{sensor}: Allan deviation of the static records before and after '
                             '(cf. paper 001 Fig. 6); the interval bounds are in the table.',
                             allan_figure(curves, title=f'{sensor}: Allan deviation',
-                                         unit=unit)))
+                                         unit=display.unit)))
     return figures
 
 

@@ -30,8 +30,10 @@ import dataclasses
 from dataclasses import dataclass
 import json
 import os
+from pathlib import Path
 import pty
 import select
+import signal
 import socket
 import termios
 import time
@@ -42,9 +44,9 @@ import numpy as np
 
 from .emulator import BoardModel, FaultInjector, truth_records
 from .protocol import encode_samples
-from .sdlog import SdLogWriter
-from ..errors import LinkError, ParameterError
-from ..outputs import make_out_dir
+from .sdlog import FILE_NAME_FORMAT, FILE_NAME_RE, SdLogWriter
+from ..errors import Interrupted, LinkError, ParameterError
+from ..outputs import staged_output
 
 #: Bytes the emulated board buffers for a slow host before it drops samples (firmware ring in
 #: SDRAM):
@@ -92,13 +94,26 @@ class ServeOptions:
 
 
 class Stopper:
-    """A signal handler that asks the serving loop to stop (SIGINT, SIGTERM)."""
+    """
+    A signal handler that asks the loops to stop (SIGINT, SIGTERM) and remembers the signal.
+
+    The serving loop ends its pass and returns; the SD and bag writers call :meth:`check` once
+    per block and stop with :class:`~gyro_noise_ros.errors.Interrupted` (their staged output is
+    then removed).
+    """
 
     def __init__(self) -> None:
         self.stop = False
+        self.signum: int | None = None
 
     def __call__(self, signum: int, frame: Any) -> None:
         self.stop = True
+        self.signum = signum
+
+    def check(self) -> None:
+        """Raise :class:`~gyro_noise_ros.errors.Interrupted` once a stop was asked."""
+        if self.stop:
+            raise Interrupted(self.signum or signal.SIGINT)
 
 
 class Counters:
@@ -230,6 +245,9 @@ class SdOptions:
         Corrupt frames as the fault injector draws.
     overruns : bool
         FIFO overruns are injected (then the samples go frame by frame).
+    overwrite : bool
+        ``out_dir`` was allowed to hold files (``--overwrite``): this sequence's old files there
+        are replaced, all of them (a sequence half old, half new would not import).
 
     """
 
@@ -241,12 +259,18 @@ class SdOptions:
     rtc_unix_s: int = 0
     corrupt: bool = False
     overruns: bool = False
+    overwrite: bool = False
 
 
 def write_sd_logs(board: BoardModel, faults: FaultInjector, counters: Counters,
-                  truth_fh: BinaryIO | None, options: SdOptions) -> list[str]:
+                  truth_fh: BinaryIO | None, options: SdOptions,
+                  stopper: Stopper | None = None) -> list[str]:
     """
     Write the board's samples as SD log files, as fast as possible; return their paths.
+
+    The files are staged (:func:`~gyro_noise_ros.outputs.staged_output`) and appear in
+    ``options.out_dir`` together when the last one is complete: an interrupted or failed run
+    leaves none under a final name.
 
     Parameters
     ----------
@@ -260,28 +284,39 @@ def write_sd_logs(board: BoardModel, faults: FaultInjector, counters: Counters,
         Ground-truth log.
     options : SdOptions
         Where and how.
+    stopper : Stopper, optional
+        Checked once per block (SIGINT, SIGTERM).
 
     Returns
     -------
     list of str
 
     """
-    make_out_dir(options.out_dir, parameter='out_dir')
     corrupt = faults.corrupt if options.corrupt else None
-    with SdLogWriter(options.out_dir, sequence_id=options.sequence_id, odr_hz=board.odr_hz,
-                     gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g,
-                     max_file_bytes=options.max_file_bytes, batch=options.batch,
-                     rtc_unix_s=options.rtc_unix_s, corrupt=corrupt) as writer:
-        # overruns are drawn at most once per chunk: go frame by frame when they are injected
-        batch = options.batch
-        chunk = batch if options.overruns else batch * max(1, 65536 // batch)
-        while counters.samples_generated < options.total:
-            samples = produce(board, faults, counters,
-                              min(chunk, options.total - counters.samples_generated), truth_fh)
-            kept = faults.drop(samples)
-            writer.write_samples(kept)
-            counters.samples_sent += kept.size
-    return list(writer.paths)
+    with staged_output(options.out_dir, parameter='out_dir') as stage:
+        with SdLogWriter(stage, sequence_id=options.sequence_id, odr_hz=board.odr_hz,
+                         gyro_fs_dps=board.gyro_fs_dps, accel_fs_g=board.accel_fs_g,
+                         max_file_bytes=options.max_file_bytes, batch=options.batch,
+                         rtc_unix_s=options.rtc_unix_s, corrupt=corrupt) as writer:
+            # overruns are drawn at most once per chunk: go frame by frame when they are injected
+            batch = options.batch
+            chunk = batch if options.overruns else batch * max(1, 65536 // batch)
+            while counters.samples_generated < options.total:
+                if stopper is not None:
+                    stopper.check()
+                samples = produce(board, faults, counters,
+                                  min(chunk, options.total - counters.samples_generated),
+                                  truth_fh)
+                kept = faults.drop(samples)
+                writer.write_samples(kept)
+                counters.samples_sent += kept.size
+        names = [os.path.basename(path) for path in writer.paths]
+        if options.overwrite:
+            pattern = FILE_NAME_FORMAT.format(sequence=options.sequence_id, index=0)[:5] + '*'
+            for old in Path(options.out_dir).glob(pattern):
+                if FILE_NAME_RE.match(old.name) and old.name not in names:
+                    old.unlink()
+    return [os.path.join(options.out_dir, name) for name in names]
 
 
 class PtyPort:

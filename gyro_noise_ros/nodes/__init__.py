@@ -11,3 +11,9 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
+
+"""The ROS 2 nodes: the only modules of the package that import rclpy."""
+
+from ..cli._startup import install
+
+install()  # a signal while the node imports its libraries ends it in one line (_startup)

@@ -24,14 +24,17 @@ unit are written once.
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, MISSING
+import difflib
 import math
 import re
+import sys
 from typing import Any
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 ParameterType, SetParametersResult)
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+import yaml
 
 from ..errors import ParameterError
 
@@ -41,13 +44,30 @@ _PYTHON_TO_ROS_TYPE = {
     float: ParameterType.PARAMETER_DOUBLE,
     str: ParameterType.PARAMETER_STRING,
 }
+#: Array parameters by element type (a list default's first element).
+_PYTHON_TO_ROS_ARRAY_TYPE = {
+    bool: ParameterType.PARAMETER_BOOL_ARRAY,
+    int: ParameterType.PARAMETER_INTEGER_ARRAY,
+    float: ParameterType.PARAMETER_DOUBLE_ARRAY,
+    str: ParameterType.PARAMETER_STRING_ARRAY,
+}
 
 _ROS_TYPE_NAME = {
     ParameterType.PARAMETER_BOOL: 'a boolean (true/false)',
     ParameterType.PARAMETER_INTEGER: 'an integer',
     ParameterType.PARAMETER_DOUBLE: 'a floating-point number (write 1.0, not 1)',
     ParameterType.PARAMETER_STRING: 'a string',
+    ParameterType.PARAMETER_BYTE_ARRAY: 'an array of bytes',
+    ParameterType.PARAMETER_BOOL_ARRAY: 'an array of booleans ([true, false])',
+    ParameterType.PARAMETER_INTEGER_ARRAY: 'an array of integers ([1, 2])',
+    ParameterType.PARAMETER_DOUBLE_ARRAY: 'an array of floating-point numbers ([0.0, 1.0], not '
+                                          '[0, 1])',
+    ParameterType.PARAMETER_STRING_ARRAY: "an array of strings (['a', 'b'])",
 }
+
+
+def _type_name(ros_type: int) -> str:
+    return _ROS_TYPE_NAME.get(ros_type, f'of ROS parameter type {ros_type}')
 
 
 @dataclass(frozen=True)
@@ -91,6 +111,9 @@ class ParamSpec:
     @property
     def ros_type(self) -> int:
         """Return the ``rcl_interfaces/ParameterType`` constant of :attr:`default`."""
+        if isinstance(self.default, (list, tuple)):
+            element = type(self.default[0]) if self.default else float
+            return _PYTHON_TO_ROS_ARRAY_TYPE[element]
         return _PYTHON_TO_ROS_TYPE[type(self.default)]
 
     def descriptor(self) -> ParameterDescriptor:
@@ -136,6 +159,13 @@ class ParamSpec:
             Naming the parameter, the bad value and what is allowed.
 
         """
+        if isinstance(self.default, (list, tuple)):
+            values = list(value)
+            if len(values) != len(self.default) or not all(
+                    math.isfinite(v) for v in values if isinstance(v, float)):
+                raise ParameterError(f"parameter '{self.name}' = {values!r} must be "
+                                     f'{len(self.default)} finite values')
+            return
         if self.pattern and not re.fullmatch(self.pattern, value):
             raise ParameterError(
                 f"parameter '{self.name}' = {value!r} does not match {self.pattern}")
@@ -178,7 +208,8 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
     Raises
     ------
     ParameterError
-        An override has the wrong type, is out of range, or is not one of the choices.
+        An override has the wrong type, is out of range, is not one of the choices, or names a
+        parameter the table lacks.
 
     """
     by_name = {spec.name: spec for spec in table}
@@ -190,6 +221,9 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
             raise ParameterError(_explain_parameter_exception(spec, err)) from err
         spec.check(value)
         values[spec.name] = value
+    # the node's one table is declared: a name given that it lacks is refused now, before the
+    # node's start-up work (run_node checks again once the node is built)
+    refuse_unknown_parameters(node)
 
     def _validate(params: Sequence[Any]) -> SetParametersResult:
         for param in params:
@@ -212,12 +246,237 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
 def _explain_parameter_exception(spec: ParamSpec, err: Exception) -> str:
     text = str(err)
     if 'expecting type' in text:
-        return (f"parameter '{spec.name}' must be {_ROS_TYPE_NAME[spec.ros_type]}: "
+        return (f"parameter '{spec.name}' must be {_type_name(spec.ros_type)}: "
                 f'{text.split(": ")[0]}')
     if spec.min_value is not None:
         return (f"parameter '{spec.name}' is outside [{spec.min_value}, {spec.max_value}]"
                 + (f' {spec.unit}' if spec.unit else '') + f': {text}')
     return f"parameter '{spec.name}': {text}"
+
+
+def _default_text(spec: ParamSpec) -> str:
+    if isinstance(spec.default, bool):
+        return 'true' if spec.default else 'false'
+    if isinstance(spec.default, str):
+        return repr(spec.default)
+    if isinstance(spec.default, (list, tuple)):
+        return '[' + ', '.join(_default_text(ParamSpec('', v, '')) for v in spec.default) + ']'
+    return f'{spec.default!r}'
+
+
+def parameter_help(prog: str, table: Sequence[ParamSpec], summary: str = '') -> str:
+    """
+    Return the ``--help`` text of a node: usage, then every parameter of its one table.
+
+    Parameters
+    ----------
+    prog : str
+        The executable.
+    table : sequence of ParamSpec
+        The node's ``PARAMETERS``.
+    summary : str
+        One paragraph on what the node does (its module docstring's first).
+
+    Returns
+    -------
+    str
+        Each parameter with its default, unit, range or choices, read-only mark and description.
+
+    """
+    lines = [f'usage: {prog} [--help] [--ros-args [-p NAME:=VALUE ...] [--params-file FILE] '
+             '[-r __ns:=/NAMESPACE] ...]', '']
+    if summary:
+        lines += [' '.join(summary.strip().split('\n\n')[0].split()), '']
+    lines.append('parameters (default [unit]; config/' f'{prog}.yaml lists them too):')
+    for spec in table:
+        unit = f' [{spec.unit}]' if spec.unit else ''
+        limits = []
+        if spec.min_value is not None:
+            limits.append(f'{spec.min_value:g}..{spec.max_value:g}')
+        if spec.choices:
+            limits.append('one of ' + ', '.join(str(c) for c in spec.choices))
+        if spec.read_only:
+            limits.append('read-only')
+        extra = f" ({'; '.join(limits)})" if limits else ''
+        lines.append(f'  {spec.name} = {_default_text(spec)}{unit}{extra}')
+        lines.append(f'      {spec.description}')
+    lines += ['', "rclpy's own: use_sim_time = false (take time from /clock). Another name is "
+              'refused (exit code 2).', '']
+    return '\n'.join(lines)
+
+
+def unknown_parameters(node: Node) -> list[str]:
+    """
+    Return the parameters given to ``node`` (``-p``, ``--params-file``) that it never declared.
+
+    rclpy silently ignores an override whose name the node does not declare, so a misspelt
+    parameter would change nothing without a word; rclpy's own parameters (``use_sim_time``,
+    ``start_type_description_service``) are declared by rclpy and pass.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        A node whose parameters are all declared.
+
+    Returns
+    -------
+    list of str
+        The undeclared names, sorted.
+
+    """
+    # rclpy keeps the overrides addressed to this node (command line and parameter files) there
+    given = getattr(node, '_parameter_overrides', None) or {}
+    return sorted(name for name in given if not node.has_parameter(name))
+
+
+def params_file_sections(argv: Sequence[str]) -> list[tuple[str, str, list[str]]]:
+    """
+    Return the parameter-file sections of a command line: ``(file, node key, names)`` each.
+
+    Every ``--params-file FILE`` of ``argv`` is read; a section is a key path ending in
+    ``ros__parameters`` (``/**``, ``noise_analyzer``, ``/robot1/noise_analyzer``), its names
+    flattened with dots as rclpy does. A file that cannot be read is left to rclpy (it refuses it).
+
+    Parameters
+    ----------
+    argv : sequence of str
+        The program's arguments.
+
+    Returns
+    -------
+    list of tuple
+
+    """
+    files = [argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == '--params-file']
+    sections: list[tuple[str, str, list[str]]] = []
+    for path in files:
+        try:
+            with open(path, encoding='utf-8') as f:
+                doc = yaml.safe_load(f)
+        except (OSError, UnicodeDecodeError, yaml.YAMLError):
+            continue
+
+        def walk(value: Any, keys: list[str], path: str = path) -> None:
+            if not isinstance(value, dict):
+                return
+            for key, sub in value.items():
+                if key == 'ros__parameters':
+                    sections.append((path, '/'.join(k.strip('/') for k in keys),
+                                     _flat_names(sub)))
+                else:
+                    walk(sub, [*keys, str(key)])
+        walk(doc, [])
+    return sections
+
+
+def _flat_names(value: Any, prefix: str = '') -> list[str]:
+    """Names of a ``ros__parameters`` mapping, nested keys joined by dots."""
+    if not isinstance(value, dict):
+        return [prefix] if prefix else []
+    return [name for key, sub in value.items()
+            for name in _flat_names(sub, f'{prefix}.{key}' if prefix else str(key))]
+
+
+def wildcard_only(names: Sequence[str], node: Node,
+                  argv: Sequence[str]) -> dict[str, str]:
+    """
+    Return the names that reach ``node`` only from a wildcard section of a parameter file.
+
+    A section keyed with ``*`` (``/**``, ``/robot1/*``) is meant for several nodes: a name in it
+    that this node lacks is another node's, not a typo. A name given with ``-p`` or in a section
+    ending in the node's own name (``lsm6dso32_driver``, ``/robot1/lsm6dso32_driver``,
+    ``/*/lsm6dso32_driver``) counts as addressed to this node.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Undeclared names (:func:`unknown_parameters`).
+    node : rclpy.node.Node
+        The node.
+    argv : sequence of str
+        The program's arguments (``--ros-args -p ... --params-file ...``).
+
+    Returns
+    -------
+    dict
+        Name -> the file of the wildcard section that holds it.
+
+    """
+    own_keys = {node.get_name(), node.get_fully_qualified_name().strip('/')}
+    own: set[str] = {argv[i + 1].split(':=', 1)[0] for i, arg in enumerate(argv[:-1])
+                     if arg in ('-p', '--param')}
+    wild: dict[str, str] = {}
+    for path, key, section in params_file_sections(argv):
+        if key in own_keys or key.split('/')[-1] == node.get_name():
+            own.update(section)
+        elif '*' in key:
+            for name in section:
+                wild.setdefault(name, path)
+    return {name: wild[name] for name in names if name in wild and name not in own}
+
+
+#: (node, parameter) pairs already warned about (a node checks at declaration and before spin).
+_WARNED: set[tuple[str, str]] = set()
+
+
+def refuse_unknown_parameters(node: Node, argv: Sequence[str] | None = None) -> None:
+    """
+    Refuse the undeclared parameters addressed to ``node``; warn about a shared file's others.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        A node whose parameters are all declared.
+    argv : sequence of str, optional
+        The program's arguments (default ``sys.argv``), to tell a wildcard section's names
+        (:func:`wildcard_only`: a warning naming the file) from names given to this node.
+
+    Raises
+    ------
+    ParameterError
+        A name given with ``-p`` or in the node's own section that it does not declare.
+
+    """
+    unknown = unknown_parameters(node)
+    if not unknown:
+        return
+    shared = wildcard_only(unknown, node, sys.argv if argv is None else argv)
+    for name, path in shared.items():
+        if (node.get_name(), name) in _WARNED:     # checked when declared and again at spin
+            continue
+        _WARNED.add((node.get_name(), name))
+        node.get_logger().warning(
+            f'parameter {name!r} of the shared (wildcard) section of {path} is not one of '
+            f"{node.get_name()}'s: ignored (--help lists them)")
+    refused = [name for name in unknown if name not in shared]
+    if refused:
+        raise unknown_parameter_error(node, refused)
+
+
+def unknown_parameter_error(node: Node, names: Sequence[str]) -> ParameterError:
+    """
+    Return the one-line refusal of unknown parameters, with the closest known name of each.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node (its declared parameters).
+    names : sequence of str
+        :func:`unknown_parameters`.
+
+    Returns
+    -------
+    ParameterError
+
+    """
+    known = sorted(node.list_parameters([], 0).names)  # depth 0: every declared name
+    parts = []
+    for name in names:
+        close = difflib.get_close_matches(name, known, n=1)
+        parts.append(repr(name) + (f' (did you mean {close[0]!r}?)' if close else ''))
+    what = 'parameter' if len(names) == 1 else 'parameters'
+    return ParameterError(f'unknown {what} {", ".join(parts)}: {node.get_name()} declares no '
+                          'such parameter (--help lists them)')
 
 
 def specs_from_dataclass(cls: type[Any], *, read_only: bool,

@@ -31,9 +31,11 @@ values; the levels come from the pure diagnostics (``core.health``, ``link.healt
 ``diagnostics/``).
 """
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 import ctypes
+import signal
 import sys
+import threading
 from typing import Any, NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -46,8 +48,11 @@ from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
+from rclpy.utilities import remove_ros_args
 
-from ._params import declare_parameter_table, ParamSpec, specs_from_dataclass
+from ._params import (declare_parameter_table, parameter_help, ParamSpec, refuse_unknown_parameters,
+                      specs_from_dataclass)
+from ..cli._startup import quiet_finalisers, take_pending
 from ..errors import GyroNoiseError, ParameterError
 from ..link.sequence import SequenceGapCounter
 
@@ -255,13 +260,52 @@ def diagnostic_array(stamp: Any, statuses: Iterable[DiagnosticStatus]) -> Diagno
     return msg
 
 
+def _refuse_plain_arguments(argv: list[str], prog: str,
+                            parameters: Sequence[ParamSpec], summary: str) -> int | None:
+    """``--help``: print the table and return 0; another argument outside --ros-args: 2."""
+    try:
+        plain = remove_ros_args(argv)[1:]
+    except RuntimeError:  # malformed --ros-args: rclpy.init says so, in one line (run_node)
+        return None
+    if '-h' in plain or '--help' in plain:
+        print(parameter_help(prog, parameters, summary), end='')
+        return 0
+    if plain:
+        print(f'{prog}: error: unknown argument {plain[0]!r}: parameters go after --ros-args '
+              f'(-p name:=value, --params-file FILE; {prog} --help lists them)',
+              file=sys.stderr)
+        return ParameterError.exit_code
+    return None
+
+
+def _remember_signals(received: list[int]) -> dict[int, Any]:
+    """
+    Note SIGINT and SIGTERM in ``received`` (Python handlers put under rclpy's).
+
+    rclpy's own handlers, installed by ``rclpy.init`` after these, shut the context down (the spin
+    ends) and then call these, so the exit code can say which signal it was.
+    """
+    def note(signum: int, frame: Any) -> None:
+        received.append(signum)
+
+    old: dict[int, Any] = {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                old[sig] = signal.signal(sig, note)
+    return old
+
+
 def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
-             prog: str) -> int:
+             prog: str, parameters: Sequence[ParamSpec] | None = None,
+             summary: str = '') -> int:
     """
     Run a node with the Jazzy ``main()`` pattern; start-up errors give one line and an exit code.
 
-    ``rclpy.init(args=args)``; build the node; ``rclpy.spin`` until Ctrl-C or an external shutdown;
-    always ``destroy_node()`` and ``rclpy.try_shutdown()``.
+    ``rclpy.init(args=args)``; build the node; refuse parameters it did not declare; ``rclpy.spin``
+    until SIGINT, SIGTERM or an external shutdown; always ``destroy_node()`` and
+    ``rclpy.try_shutdown()``. A node stopped by a signal says ``<prog>: interrupted`` and exits
+    with 128 + the signal (``errors.EXIT_CODES``).
 
     Parameters
     ----------
@@ -271,15 +315,43 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
         Command line for ``rclpy.init`` (None: ``sys.argv``).
     prog : str
         Program name used as the error-line prefix.
+    parameters : sequence of ParamSpec, optional, keyword-only
+        The node's table: then ``--help`` prints it (nothing starts) and any other argument
+        outside ``--ros-args`` is refused. None: the caller parses its own arguments.
+    summary : str, keyword-only
+        What the node does, for ``--help`` (its module docstring).
 
     Returns
     -------
     int
-        Exit code: 0, or the error class's code (2 for bad parameters or malformed ROS arguments).
+        Exit code: 0, 130/143 after SIGINT/SIGTERM, or the error class's code (2 for bad or
+        unknown parameters and malformed ROS arguments, 3 an unreadable input file, 6 an
+        unwritable output).
 
     """
+    argv = sys.argv if args is None else list(args)
+    if parameters is not None:
+        code = _refuse_plain_arguments(argv, prog, parameters, summary)
+        if code is not None:
+            return code
+    received: list[int] = []
+    old = _remember_signals(received)
+    early = take_pending()  # a signal while the program imported its libraries
+    if early is not None:
+        received.append(early)
     try:
-        rclpy.init(args=args)
+        if received:
+            return _interrupted(prog, received[0])
+        return _init_and_spin(node_factory, argv, prog, received)
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
+                   received: list[int]) -> int:
+    try:
+        rclpy.init(args=argv)
     except RuntimeError as err:
         # A malformed or unknown --ros-args (e.g. "-p name:=" with no value, "--bogus") fails here,
         # before any node exists. rclpy raises RCLInvalidROSArgsError or UnknownROSArgsError, which
@@ -290,26 +362,42 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
         print(f'{prog}: error: {what}: {str(err).split(", at ")[0]}', file=sys.stderr)
         return ParameterError.exit_code
     node = None
+    error: GyroNoiseError | None = None
     try:
         node = node_factory()
+        refuse_unknown_parameters(node, argv)
         heap_trim_timer(node)
         rclpy.spin(node)
     except GyroNoiseError as err:
-        print(f'{prog}: error: {err}', file=sys.stderr)
-        return err.exit_code
+        error = err
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:  # noqa: BLE001 - only the shutdown race below is swallowed
         # SIGINT/SIGTERM shut the context down from rclpy's signal handler; a spin caught
         # building its wait set at that moment raises RCLError ("the given context is not
         # valid"): that is the requested shutdown, not a failure.
-        if rclpy.ok():
+        if rclpy.ok() and not received:
             raise
     finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+        try:
+            if node is not None:
+                node.destroy_node()  # a recorder closes its bag: that may fail (disk full)
+        except GyroNoiseError as err:
+            error = error or err
+        finally:
+            rclpy.try_shutdown()
+    if error is not None:
+        print(f'{prog}: error: {error}', file=sys.stderr)
+        return error.exit_code
+    return _interrupted(prog, received[0]) if received else 0
+
+
+def _interrupted(prog: str, signum: int) -> int:
+    quiet_finalisers()
+    print(f'{prog}: interrupted' + ('' if signum == signal.SIGINT else
+                                    f' ({signal.Signals(signum).name})'),
+          file=sys.stderr, flush=True)
+    return 128 + signum
 
 
 # Polled raw subscriptions (shared by the analyzer and the recorder): ROS_ON_PIP.md measured that

@@ -74,7 +74,7 @@ from ..app.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, threshold
 from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
-from ..core.health import axis_status, HealthThresholds
+from ..core.health import axis_status, HealthThresholds, reference_per_axis, ReferenceStats
 from ..core.items import allan_items, fmt, last_chunk_items, stream_items
 from ..core.results import AxisSummary, ChunkResult
 from ..errors import GyroNoiseError
@@ -119,7 +119,9 @@ PARAMETERS = (
     ParamSpec('allan', True, 'Keep an incremental Allan deviation of the run (ADEV keys)',
               read_only=True),
     ParamSpec('reference_summary', '', 'summary.json of gyro_noise_analyze for a reference '
-              'recording (one bag); empty: absolute drift limits only', read_only=True),
+              'recording; empty: absolute drift limits only', read_only=True),
+    ParamSpec('reference_bag', '', 'The bag of reference_summary to compare with when it holds '
+              'several (its label, path or file name); empty: its only bag', read_only=True),
     *specs_from_dataclass(HealthThresholds, read_only=True),
     ParamSpec('use_temperature', True, 'Subscribe imu/temperature and report the chunk mean',
               read_only=True),
@@ -181,7 +183,7 @@ class NoiseAnalyzerNode(Node):
                 f'analysis worker started (native thread id {threading.get_native_id()})')
 
         self.live = LiveAnalysis(
-            self.config, reference=p['reference_summary'] or None, thresholds=self.thresholds,
+            self.config, reference=self._reference(p), thresholds=self.thresholds,
             queue_chunks=p['analysis_queue_chunks'], on_worker_start=worker_started)
         self.engine = self.live.engine
         self.results = self.live.results  # recent ChunkResults in completion order (tests)
@@ -223,6 +225,17 @@ class NoiseAnalyzerNode(Node):
                'absolute drift limits'))
 
     # ---- ingestion (executor thread) ---------------------------------------
+
+    def _reference(self, p: Mapping[str, Any]) -> dict[str, ReferenceStats] | None:
+        """The reference statistics per axis of ``reference_summary`` (its ``reference_bag``)."""
+        if not p['reference_summary']:
+            return None
+        try:
+            return reference_per_axis(p['reference_summary'], self.config.axes,
+                                      bag=p['reference_bag'] or None)
+        except GyroNoiseError as err:   # the summary's 'bag' is this node's reference_bag
+            raise type(err)(err.spelled(lambda name: {'bag': 'reference_bag'}.get(name, name))
+                            ) from err
 
     def drain(self) -> None:
         """Take the queued messages, feed the engine, queue the chunks, publish finished ones."""
@@ -378,7 +391,8 @@ def main(args: list[str] | None = None) -> int:
         0, or 2 for a bad parameter.
 
     """
-    return run_node(NoiseAnalyzerNode, args, prog=NODE_NAME)
+    return run_node(NoiseAnalyzerNode, args, prog=NODE_NAME, parameters=PARAMETERS,
+                    summary=__doc__)
 
 
 if __name__ == '__main__':

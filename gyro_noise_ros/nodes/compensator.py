@@ -333,7 +333,8 @@ class ImuCompensatorNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the node until Ctrl-C or SIGTERM; exit code 2 for a bad parameter (one line)."""
-    return run_node(ImuCompensatorNode, args, prog=NODE_NAME)
+    return run_node(ImuCompensatorNode, args, prog=NODE_NAME, parameters=PARAMETERS,
+                    summary=__doc__)
 
 
 if __name__ == '__main__':

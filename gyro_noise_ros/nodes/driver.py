@@ -396,7 +396,8 @@ def main(args: list[str] | None = None) -> int:
         unknown ROS argument.
 
     """
-    return run_node(Lsm6dso32Driver, args, prog=NODE_NAME)
+    return run_node(Lsm6dso32Driver, args, prog=NODE_NAME, parameters=PARAMETERS,
+                    summary=__doc__)
 
 
 if __name__ == '__main__':

@@ -98,6 +98,18 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
     argparse.Namespace
 
     """
+    return build_parser().parse_args(argv)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """
+    Return the parser of the monitor's own options (as the tools' ``build_parser``).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+
+    """
     p = argparse.ArgumentParser(prog=NODE_NAME,
                                 description="Print the analyzers' /diagnostics as compact lines.")
     p.add_argument('--filter', default=': axis ', metavar='TEXT',
@@ -106,7 +118,7 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
                    help='print a status again only when its level or chunk count changed')
     p.add_argument('--compact', action='store_true',
                    help='one line per analyzer and array (implies --changes)')
-    return p.parse_args(argv)
+    return p
 
 
 def main(args: list[str] | None = None) -> int:
@@ -126,7 +138,11 @@ def main(args: list[str] | None = None) -> int:
     """
     argv = sys.argv if args is None else list(args)
     try:
-        opts = parse_args(remove_ros_args(argv)[1:])
+        plain = remove_ros_args(argv)[1:]
+    except RuntimeError:  # malformed --ros-args: rclpy.init (run_node) says so in one line
+        plain = []
+    try:
+        opts = parse_args(plain)
     except SystemExit as err:
         return int(err.code or 0)
     return run_node(lambda: DiagnosticsMonitor(opts.filter, only_changes=opts.changes,

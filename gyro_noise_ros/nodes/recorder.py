@@ -44,9 +44,11 @@ recording as it is and ``gyro_noise_record repair`` writes a complete bag from i
 (``docs/bags.md``).
 """
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
+import shutil
 import sys
 import time
 from typing import Any
@@ -60,15 +62,20 @@ from ._publishers import PublisherWatch, RawTaker
 from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_node,
                           sensor_data_qos, unused_callback, wall_timer)
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
-from ..errors import OutputError
+from ..bag.storage import describe
+from ..errors import GyroNoiseError, OutputError
 from ..msgs import frame_id_of, imu_covariances, temperature_variances
+from ..outputs import check_new_dir
 
 NODE_NAME = 'gyro_noise_record'
 
 #: Parameter table (``config/gyro_noise_record.yaml`` lists every row).
 PARAMETERS = (
-    ParamSpec('output', '', 'Bag directory to create (must not exist); empty: '
-              'gyro_noise_<UTC date>_<time> in the working directory', read_only=True),
+    ParamSpec('output', '', 'Bag directory to create; empty: gyro_noise_<UTC date>_<time> in '
+              'the working directory', read_only=True),
+    ParamSpec('overwrite', False, 'Replace an existing bag at output (a bag folder only, when '
+              'the first message arrives); false: an existing output is refused at start',
+              read_only=True),
     ParamSpec('storage', 'sqlite3', 'rosbag2 storage plugin', read_only=True,
               choices=('sqlite3', 'mcap')),
     ParamSpec('record_temperature', True, 'Also record imu/temperature', read_only=True),
@@ -88,6 +95,33 @@ PARAMETERS = (
               unit='s',
               read_only=True, min_value=0.0, max_value=3600.0),
 )
+
+
+#: How a user of the node gives the parameters an output error names (errors.GyroNoiseError).
+SPELLING = {'output': "parameter 'output' =", 'overwrite': '-p overwrite:=true'}
+
+
+def check_output(output: str, *, overwrite: bool) -> None:
+    """
+    Refuse the bag folder ``output`` before recording (:func:`..outputs.check_new_dir`).
+
+    Parameters
+    ----------
+    output : str
+        The ``output`` parameter.
+    overwrite : bool, keyword-only
+        The ``overwrite`` parameter.
+
+    Raises
+    ------
+    OutputError
+        As ``check_new_dir``, its message naming the parameters as ``-p`` gives them.
+
+    """
+    try:
+        check_new_dir(output, parameter='output', overwrite=overwrite)
+    except OutputError as err:
+        raise OutputError(err.spelled(lambda name: SPELLING.get(name, name))) from err
 
 
 def default_bag_name(now: datetime | None = None) -> str:
@@ -110,7 +144,9 @@ class RecorderNode(Node):
     ParameterError
         A parameter is invalid.
     OutputError
-        The bag cannot be created (for example the output path exists).
+        The bag cannot be created: the output exists (without ``overwrite``, or is not a bag),
+        lies under a file or in a folder that cannot be written (a read-only file system),
+        checked at start; or writing it failed later (disk full).
 
     """
 
@@ -125,9 +161,9 @@ class RecorderNode(Node):
         self.written_temperature = 0
         self._writer: ImuBagWriter | None = None
         self._closed = False
-        if Path(self.output).exists():
-            raise OutputError(f"parameter 'output' = {self.output!r}: the path exists; "
-                              'choose a new bag directory')
+        self._overwrite = params['overwrite']
+        # before spinning: a refused output fails now, not when the first message arrives
+        check_output(self.output, overwrite=self._overwrite)
         group = PolledGroup()
         qos = sensor_data_qos(params['queue_depth'], params['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
@@ -188,16 +224,34 @@ class RecorderNode(Node):
         return '; '.join(f'publishers of {w.topic}: {w.summary()}' for w, _ in self._watches)
 
     def _open(self, frame_id: str | None) -> None:
+        if self._overwrite and Path(self.output).exists():
+            check_output(self.output, overwrite=True)
+            shutil.rmtree(self.output)  # a bag folder (checked): what overwrite:=true asked
         self._writer = ImuBagWriter(
             self.output, storage=self.storage, imu_topic=self._imu_sub.topic_name,
             temperature_topic=(self._temperature_sub.topic_name if self._temperature_sub
                                else None),
             frame_id=frame_id or 'imu_link')
 
+    @contextmanager
+    def _writing(self) -> Iterator[None]:
+        """Turn a failed write (disk full, the folder gone) into one OutputError (exit code 6)."""
+        try:
+            yield
+        except GyroNoiseError:
+            raise
+        except Exception as err:  # noqa: BLE001 - rosbags, sqlite3 and OS errors
+            self._closed = True  # nothing more can be written; the summary still says what was
+            raise OutputError(f'cannot write the bag {self.output!r}: {describe(err)}') from err
+
     def drain(self) -> None:
         """Take every queued message and write it (called by the timer and at shutdown)."""
         if self._closed:
             return
+        with self._writing():
+            self._drain()
+
+    def _drain(self) -> None:
         raws, received = self._take(self._imu_watch, self._imu_taker)
         t_raws, t_received = ([], []) if self._temperature_sub is None else \
             self._take(self._temperature_watch, self._temperature_taker)
@@ -224,7 +278,8 @@ class RecorderNode(Node):
 
     def _flush(self) -> None:
         if self._writer is not None and not self._closed:
-            self._writer.flush()
+            with self._writing():
+                self._writer.flush()
 
     def _report(self) -> None:
         self.get_logger().info(f'{self.written_imu} Imu, {self.written_temperature} Temperature '
@@ -239,7 +294,8 @@ class RecorderNode(Node):
             finally:
                 self._closed = True
                 if self._writer is not None:
-                    self._writer.close()
+                    with self._writing():
+                        self._writer.close()
         where = (self.output if self._writer is not None
                  else f'{self.output} (not created: nothing received)')
         return (f'{NODE_NAME}: received {self.received_imu} Imu and {self.received_temperature} '
@@ -248,11 +304,13 @@ class RecorderNode(Node):
                 f'{where}; {self.dropped} dropped in transport; {self.publisher_summary()}')
 
     def destroy_node(self) -> None:
-        summary = self.close()
-        print(summary, file=sys.stderr, flush=True)
-        for _, taker in self._watches:
-            taker.close()
-        return super().destroy_node()
+        try:
+            summary = self.close()
+            print(summary, file=sys.stderr, flush=True)
+        finally:
+            for _, taker in getattr(self, '_watches', ()):
+                taker.close()
+            super().destroy_node()
 
 
 def _log_times(received: Sequence[int], fallback_ns: np.ndarray | None
@@ -278,11 +336,13 @@ def main(args: list[str] | None = None) -> int:
     Returns
     -------
     int
-        0, or 2 for a bad parameter, 6 when the bag cannot be created (the path exists, not
-        writable) or written (disk full).
+        0, 130/143 after SIGINT/SIGTERM (the bag closed), 2 for a bad or unknown parameter, 6
+        when the bag cannot be created (checked at start: it exists without ``overwrite``, under
+        a file, a read-only folder) or written (disk full).
 
     """
-    return run_node(RecorderNode, args, prog=NODE_NAME)
+    return run_node(RecorderNode, args, prog=NODE_NAME, parameters=PARAMETERS,
+                    summary=__doc__)
 
 
 if __name__ == '__main__':

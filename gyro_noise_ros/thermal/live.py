@@ -40,9 +40,9 @@ offset linearly in time onto the gyro stamps:
   rate range (``rate_range_c_s``) too: knots outside it are counted (:attr:`knots_rate_outside`)
   and the model treats them as its ``out_of_range`` says (extrapolated, never clipped).
 
-Non-causal methods need the whole record (VMD decomposition, time-frequency peak filtering,
-EMD, wavelet-threshold denoising of the full signal) and are refused with a message naming those
-offline-only steps. No ROS is imported here.
+Implausible temperatures (``core.plausible``) are rejected like non-finite ones; a hysteresis
+term (``lsq_cv``) gets its state carried over. Non-causal methods (VMD, TFPF, EMD, wavelet
+thresholding of the whole record) are refused, naming those offline-only steps. No ROS here.
 """
 
 from collections.abc import Sequence
@@ -54,6 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from ..core.plausible import LiveTemperatureScreen
 from ..errors import ParameterError
 from ..outputs import StrPath
 
@@ -303,7 +304,9 @@ class LiveDriftEvaluator:
         self.knots_by_status = {RANGE_OK: 0, RANGE_MARGIN: 0, RANGE_OUTSIDE: 0}
         self.knots_rate_outside = 0  # knots whose rate is outside the trained rate range
         self.knots_outside = 0  # knots outside the trained range of T or of dT
-        self.rejected = 0  # non-finite or not newer than the previous message
+        self.rejected = 0  # non-finite, implausible or not newer than the previous message
+        self._screen = LiveTemperatureScreen()
+        self._played: float | None = None  # hysteresis state (lsq_cv's play operator) carried on
 
     @property
     def start_up_s(self) -> float:
@@ -359,6 +362,8 @@ class LiveDriftEvaluator:
             keep &= stamps > self.stamp_ns
         if keep.size > 1:
             keep[1:] &= stamps[1:] > stamps[:-1]
+        # core.plausible: out of range, saturated words, jumps a die cannot make
+        keep[keep] = self._screen.accept(stamps[keep] / _NS, temp[keep])
         self.rejected += int(keep.size - np.count_nonzero(keep))
         stamps, temp = stamps[keep], temp[keep]
         k = stamps.size
@@ -396,7 +401,13 @@ class LiveDriftEvaluator:
                    rate: NDArray[np.float64]) -> None:
         k = t.size
         status = self.range_status(temp)
-        drift = np.asarray(self.method.drift_rad_s(temp, rate), dtype=np.float64).reshape(k, 3)
+        if getattr(self.method, 'hysteresis_c', 0.0):
+            played = self.method.play(temp, start=self._played)
+            self._played = float(played[-1])
+            drift = self.method.drift_rad_s(temp, rate, played_c=played)
+        else:
+            drift = self.method.drift_rad_s(temp, rate)
+        drift = np.asarray(drift, dtype=np.float64).reshape(k, 3)
         outside = status == RANGE_OUTSIDE
         if outside.any():
             # Never extrapolate: a knot beyond the margin holds the last trusted offset (forward

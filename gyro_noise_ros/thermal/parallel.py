@@ -192,7 +192,8 @@ class ParallelModel:
                                            info))
         finally:
             if own is not None:
-                own.shutdown()
+                # an interrupt must not wait for the particles still queued (SIGINT/SIGTERM)
+                own.shutdown(cancel_futures=True)
         self.axes = axes
         self.rate_hz = float(run.rate_hz)
         self.temperature_range_c = [float(temp.min()), float(temp.max())]

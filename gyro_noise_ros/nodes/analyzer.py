@@ -83,6 +83,9 @@ from ..units import RAD_TO_DEG
 
 NODE_NAME = 'noise_analyzer'
 
+#: Messages ingested at a time (0.3 s at 6.66 kHz); a larger backlog goes in several batches.
+MAX_BATCH = 2000
+
 _NS = 1_000_000_000
 
 
@@ -137,11 +140,12 @@ PARAMETERS = (
               'drops no message that would count as a lost sample', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
-    # 20 ms, not 10: each executor wake-up costs a fixed few hundred microseconds in rclpy
+    # 50 ms, not 10 or 20: each executor wake-up costs a fixed few hundred microseconds in rclpy
     # (wait-set construction) and in the per-batch numpy calls; measured ingestion at 6.66 kHz fell
-    # from 24 % to 14 % of a core (bench/bench_analyzer_node.py), and the 20,000-message history
-    # covers 3 s.
-    ParamSpec('drain_period_s', 0.02, 'Period of the loop taking queued messages', unit='s',
+    # from 24 % to 14 % of a core from 10 to 20 ms (bench/bench_analyzer_node.py), and the decode
+    # and engine ingest of the same second from 3.3 % to 2.3 % from 20 to 50 ms (one thread, in
+    # process); the 20,000-message history covers 3 s, and the analysis has no latency budget.
+    ParamSpec('drain_period_s', 0.05, 'Period of the loop taking queued messages', unit='s',
               read_only=True, min_value=0.001, max_value=0.5),
     ParamSpec('analysis_queue_chunks', 4,
               'Chunks (of all axes) waiting for analysis before new ones '
@@ -243,10 +247,15 @@ class NoiseAnalyzerNode(Node):
             raws, _, _ = take_all(self._temperature_sub, Temperature)
             if raws:
                 self.live.temperature.add(*decode_temperature(raws))
-        raws, _, sequence, gids = self._imu_taker.take()
-        if raws:
-            self._imu_watch.update(gids, sequence, time.monotonic())
-            self._ingest(raws)
+        while True:
+            # A backlog (the host stalled) goes through in bounded batches: one large batch would
+            # grow the heap for good (its temporaries, freed later, leave holes).
+            raws, _, sequence, gids = self._imu_taker.take(MAX_BATCH)
+            if raws:
+                self._imu_watch.update(gids, sequence, time.monotonic())
+                self._ingest(raws)
+            if len(raws) < MAX_BATCH:
+                break
         results, chunks = self.live.collect()
         for result in results:
             if result.status != 'ok' and result.message.startswith('analysis failed'):

@@ -74,6 +74,10 @@ RANGE_NAMES = {RANGE_OK: 'inside', RANGE_MARGIN: 'within margin', RANGE_OUTSIDE:
 
 BEYOND_ACTIONS = ('hold', 'none')
 
+#: How a gyro sample gets its offset: the newest at once, or interpolated once a temperature at
+#: or after its stamp is known (:class:`TemperatureGate`).
+TEMPERATURE_SYNCS = ('latest', 'interpolate')
+
 _NS = 1_000_000_000
 
 
@@ -457,6 +461,11 @@ class LiveDriftEvaluator:
             return None
         assert self._t0_ns is not None  # set with the first knot
         x = (np.asarray(stamp_ns, dtype=np.int64) - self._t0_ns) / _NS
+        if x.size and x[0] >= self._knot_t[-1] and (x.size == 1 or x.min() >= self._knot_t[-1]):
+            # Every stamp at or after the newest knot (live, the usual batch): its offset, held,
+            # as np.interp gives it; the older knots are no longer needed.
+            self._knot_t, self._knot_drift = self._knot_t[-1:], self._knot_drift[-1:]
+            return np.repeat(self._knot_drift, x.size, axis=0)
         out = np.empty((x.size, 3))
         for axis in range(3):
             out[:, axis] = np.interp(x, self._knot_t, self._knot_drift[:, axis])
@@ -483,6 +492,11 @@ class TemperatureGate:
     Before the first temperature there is no offset at all: samples that waited ``first_wait_s``
     are dropped and counted in :attr:`dropped`.
 
+    With ``wait_for_newer=False`` (the node's default, ``temperature_sync: latest``) only the
+    wait for the first temperature remains: once an offset exists every sample is released at
+    once and gets the newest one (temperature moves over seconds; docs/compensation.md measures
+    what that costs), and :attr:`late` stays 0.
+
     Batches are opaque to the gate (the node keeps the message bytes in them); it returns index
     ranges of each batch to publish.
 
@@ -492,13 +506,17 @@ class TemperatureGate:
         Longest wait for a newer temperature once one is known (s); 0: never wait.
     first_wait_s : float
         Longest wait for the first temperature (s).
+    wait_for_newer : bool, keyword-only
+        Hold samples newer than the newest temperature (False: only until the first one).
 
     """
 
-    def __init__(self, max_wait_s: float, first_wait_s: float) -> None:
+    def __init__(self, max_wait_s: float, first_wait_s: float, *,
+                 wait_for_newer: bool = True) -> None:
         if not (max_wait_s >= 0 and first_wait_s >= 0):
             raise ParameterError(f'waits must be >= 0 s, got {max_wait_s!r}, {first_wait_s!r}')
         self.max_wait_s, self.first_wait_s = float(max_wait_s), float(first_wait_s)
+        self.wait_for_newer = bool(wait_for_newer)
         # [batch, stamp_ns (int64 array), next index, arrival time (s)]
         self._queue: list[list[Any]] = []
         self.late = 0      # samples released after max_wait_s with the newest offset
@@ -558,8 +576,11 @@ class TemperatureGate:
                 self.dropped += len(stamps) - start
                 self._queue.pop(0)
                 continue
-            beyond = np.flatnonzero(stamps[start:] > newest_temperature_ns)
-            stop = len(stamps) if beyond.size == 0 else start + int(beyond[0])
+            if self.wait_for_newer:
+                beyond = np.flatnonzero(stamps[start:] > newest_temperature_ns)
+                stop = len(stamps) if beyond.size == 0 else start + int(beyond[0])
+            else:
+                stop = len(stamps)
             if stop > start:
                 out.append((batch, start, stop, False))
                 self.longest_wait_s = max(self.longest_wait_s, waited)

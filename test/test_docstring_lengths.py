@@ -38,7 +38,7 @@ LIMIT = 25
 ALLOWED = {
     'calibration/dwell_noise.py', 'calibration/emulate.py', 'calibration/excitation.py',
     'calibration/gyro_turns.py', 'calibration/interval.py', 'calibration/sixpos.py',
-    'calibration/static.py', 'cli/demo.py', 'cli/importer.py', 'core/allan.py', 'link/clock.py',
+    'calibration/static.py', 'cli/demo.py', 'cli/importer.py', 'link/clock.py',
     'nodes/analyzer.py', 'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py',
     'thermal/elman.py', 'thermal/live.py', 'thermal/metrics.py',
     'thermal/mopso.py', 'thermal/parallel.py', 'thermal/simulate.py',

@@ -176,8 +176,8 @@ def test_an_unknown_name_of_a_shared_file_is_warned_and_one_given_to_the_node_re
     from gyro_noise_ros.nodes import _params
 
     path = tmp_path / 'shared.yaml'
-    path.write_text(yaml.safe_dump({key: {'ros__parameters': {'queue_depth': 5,
-                                                               'qos_depth': 77}}}))
+    section = {'ros__parameters': {'queue_depth': 5, 'qos_depth': 77}}
+    path.write_text(yaml.safe_dump({key: section}))
     argv = ['lsm6dso32_driver', '--ros-args', '-r', '__ns:=/robot1', '--params-file', str(path),
             *extra]
     monkeypatch.setattr('sys.argv', argv)

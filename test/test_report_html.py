@@ -19,6 +19,7 @@ The browser half (rendering, console errors, screenshots) is test_report_html_br
 """
 
 import hashlib
+import html
 import json
 
 from _html_report import check_static, parse_report
@@ -376,7 +377,10 @@ def make_reliability(tmp):
                                                      seed=seed)))
             for name, e, seed in (('before', errors, 1),
                                   ('after', errors.stressed(instability_factor=2.0), 2))]
-    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures']
+    # --static off: this sensor's bias walk is cut as motion by the static-segment rule
+    # (test_reliability_cli.WHOLE)
+    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures', '--static',
+            'off']
     assert reliability_main([*args, '--out', str(tmp / 'rel')]) == 0
     assert reliability_main([*args, '--out', str(tmp / 'rel_nohtml'), '--no-html']) == 0
     return tmp / 'rel', bags
@@ -392,6 +396,16 @@ def test_reliability_page_is_reliability_json(tmp_path):
         assert f'/bias_instability_interval/{ch}/verdict' in shown
     for ch, e in doc['bias_instability_interval'].items():
         assert f'{ch}: {e["verdict"]}' in page.sections['in-short']
+    # the verdict line is the fixed-tau verdict (overall): its level, each sensor's sentence
+    text = (out / 'report.html').read_text()
+    line = text[text.index('<div id="verdict"'):]
+    line = line[:line.index('</div>')]
+    levels = {'beyond': 'error', 'undetermined': 'info', 'within': 'ok'}
+    worst = min((levels[e['verdict']] for e in doc['overall'].values()),
+                key=('error', 'info', 'ok').index)
+    assert f'verdict-{worst}' in line
+    for sensor, e in doc['overall'].items():
+        assert html.escape(e['sentence'], quote=False) in line, (sensor, line)
     assert not (tmp_path / 'rel_nohtml' / 'report.html').exists()
 
 

@@ -50,8 +50,8 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from rclpy.utilities import remove_ros_args
 
-from ._params import (declare_parameter_table, parameter_help, ParamSpec, refuse_unknown_parameters,
-                      specs_from_dataclass)
+from ._params import (declare_parameter_table, parameter_help, ParamSpec,
+                      refuse_unknown_parameters, specs_from_dataclass)
 from ..cli._startup import quiet_finalisers, take_pending
 from ..errors import GyroNoiseError, ParameterError
 from ..link.sequence import SequenceGapCounter

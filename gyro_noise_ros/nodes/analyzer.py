@@ -231,7 +231,7 @@ class NoiseAnalyzerNode(Node):
     # ---- ingestion (executor thread) ---------------------------------------
 
     def _reference(self, p: Mapping[str, Any]) -> dict[str, ReferenceStats] | None:
-        """The reference statistics per axis of ``reference_summary`` (its ``reference_bag``)."""
+        """Return the reference statistics per axis of ``reference_summary`` (its bag)."""
         if not p['reference_summary']:
             return None
         try:

@@ -349,10 +349,11 @@ def _one_blas_thread(func: Callable) -> Callable:
     """
     Run ``func`` with one BLAS thread in this process (and so in the workers it forks).
 
-    The identification's only BLAS call is a matrix-vector product of 8 orders (``'exact'``);
-    OpenBLAS' own threads gain nothing there and spin after each call, taking a core from the
-    worker processes: measured 1.07x less CPU end to end with ``--jobs 2`` on 2 cores
-    (docs/scale.md). The results do not change (each dot product is one thread's either way).
+    The identification's BLAS calls are small matrix products (it holds them to one thread
+    itself, core/fractional.py); OpenBLAS' own threads gain nothing there and spin after each
+    call, taking a core from the worker processes: measured 1.07x less CPU end to end with
+    ``--jobs 2`` on 2 cores (docs/scale.md). The results do not change (each dot product is one
+    thread's either way).
     """
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:

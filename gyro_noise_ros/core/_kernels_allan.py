@@ -22,9 +22,11 @@ Bit-exactness contract: the batch estimator and the incremental accumulator must
 floating-point results for the same data, whatever the batch boundaries. So every sum below is
 sequential in a fixed index order, with a fixed lane structure (term ``t`` goes to lane ``t % 4``)
 and a fixed fold point (every :data:`FOLD_TERMS` terms the four lanes are added and folded into a
-Neumaier-compensated total). The batch kernel and the per-term accumulator kernel implement the
-same arithmetic, operation for operation; ``fastmath`` stays off (``JIT_OPTIONS``) so LLVM neither
-re-associates nor contracts into FMAs.
+Neumaier-compensated total). The batch kernel and the accumulator implement the same arithmetic,
+operation for operation: the fully overlapping taus by one streaming loop per tau over a batch
+(:func:`_terms`, :func:`_acf_run`, shared by both), the strided levels term by term;
+``fastmath`` stays off (``JIT_OPTIONS``) so LLVM neither re-associates nor contracts into FMAs
+(the four lanes of a row of terms go into one vector, lane by lane).
 """
 
 from typing import Any
@@ -169,68 +171,8 @@ def _avar_sums(x: _F, ms: _I, strides: _I, n_terms: _I, lanes: _F, tot: _F, coun
                 t1 = nt
             if t >= t1:
                 continue
-            l0 = lanes[j, 0]
-            l1 = lanes[j, 1]
-            l2 = lanes[j, 2]
-            l3 = lanes[j, 3]
-            while t < t1:
-                # one segment = up to the next fold point, so the 4-term loop needs no fold test
-                seg = (t // FOLD_TERMS + 1) * FOLD_TERMS
-                if seg > t1:
-                    seg = t1
-                while t < seg and (t & 3) != 0:
-                    i = t * s
-                    d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    k = t & 3
-                    if k == 1:
-                        l1 += d * d
-                    elif k == 2:
-                        l2 += d * d
-                    else:
-                        l3 += d * d
-                    t += 1
-                while t + 4 <= seg:
-                    i = t * s
-                    d0 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    i += s
-                    d1 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    i += s
-                    d2 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    i += s
-                    d3 = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    l0 += d0 * d0
-                    l1 += d1 * d1
-                    l2 += d2 * d2
-                    l3 += d3 * d3
-                    t += 4
-                while t < seg:
-                    i = t * s
-                    d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
-                    k = t & 3
-                    if k == 0:
-                        l0 += d * d
-                    elif k == 1:
-                        l1 += d * d
-                    elif k == 2:
-                        l2 += d * d
-                    else:
-                        l3 += d * d
-                    t += 1
-                if (t & _FOLD_MASK) == 0:
-                    lanes[j, 0] = l0
-                    lanes[j, 1] = l1
-                    lanes[j, 2] = l2
-                    lanes[j, 3] = l3
-                    _fold(lanes, tot, j)
-                    l0 = 0.0
-                    l1 = 0.0
-                    l2 = 0.0
-                    l3 = 0.0
-            lanes[j, 0] = l0
-            lanes[j, 1] = l1
-            lanes[j, 2] = l2
-            lanes[j, 3] = l3
-            counts[j] = t
+            _terms(x, t * s, s, m, t1 - t, t, lanes, tot, j)
+            counts[j] = t1
 
 
 @numba.njit(**JIT_OPTIONS)
@@ -283,33 +225,36 @@ def _acf_sums(x: _F, ms: _I, acf: _F) -> None:  # pragma: no cover - compiled
     for j in range(ms.shape[0]):
         m = ms[j]
         n_avg = (n_x - 1) // m
-        for q in range(n_avg):
-            z = (x[(q + 1) * m] - x[q * m]) / m
-            _acf_push(acf, j, z)
+        if n_avg > 0:
+            _acf_run(x, m, m, n_avg, acf, j)
 
 
 @numba.njit(**JIT_OPTIONS)
 def _accumulate(  # pragma: no cover - compiled
-        y: NDArray[np.floating[Any]], offset: float, integ: _F, k0: int, ring: _F, level_pos: _I,
-        n_levels_active: int, ms: _I, level_of: _I, level_end: _I, next_push: _I, lanes: _F,
-        tot: _F, counts: _I, acf: _F) -> tuple[int, int]:
+        y: NDArray[np.floating[Any]], offset: float, integ: _F, k0: int, buf: _F, ring: _F,
+        level_pos: _I, n_levels_active: int, ms: _I, level_of: _I, level_end: _I,
+        next_push: _I, lanes: _F, tot: _F, counts: _I, acf: _F) -> tuple[int, int]:
     """
-    Incremental twin of ``_integrate`` + ``_avar_sums`` + ``_acf_sums`` for the accumulator.
+    Incremental twin of ``_integrate`` + ``_avar_sums`` + ``_acf_sums``, levels >= 1.
 
     ``k0`` is the number of rate samples already seen (phase points x_0 .. x_k0 exist, x_0 = 0).
-    Row L of ``ring`` keeps x_k for k a multiple of 2**L, the last ring.shape[1] = 2 * half + 1 of
-    them; ``level_pos[L]`` is the row position of the newest one. Taus are sorted by m, their
-    levels (``level_of``) are non-decreasing, ``level_end[L]`` counts the taus of levels <= L. Taus
-    of level L use only that row, so their terms start at i = 0 and advance in steps of 2**L
-    (stride 1 for level 0: exact fully overlapping; m is a multiple of 2**L and m / 2**L <= half).
-    Row L + 1 is seeded from row L when row L holds x_0 .. x_{half * 2**L} (nothing overwritten
-    yet); the first tau of level L + 1 has m >= half * 2**L, so its first m-average and term come
-    no earlier. ``next_push[j]`` is the k of the next m-average of tau j. Returns (k,
-    n_levels_active).
+    Level 0 (every phase point) is the linear buffer ``buf``: ``buf[0 .. h - 1]`` holds x_{k0 - h
+    + 1} .. x_k0 on entry (``h = buf.shape[0] - y.shape[0]``, the points before x_0 unused) and
+    the points of this batch are written after them; the taus of level 0 are summed from it by
+    :func:`_level0` after this call. Row L - 1 of ``ring`` keeps x_k for k a multiple of 2**L
+    (L >= 1), the last ring.shape[1] = 2 * half + 1 of them; ``level_pos[L]`` is the row position
+    of the newest one. Taus are sorted by m, their levels (``level_of``) are non-decreasing,
+    ``level_end[L]`` counts the taus of levels <= L. Taus of level L use only that row, so their
+    terms start at i = 0 and advance in steps of 2**L (m is a multiple of 2**L and m / 2**L <=
+    half). Level L + 1 is seeded from level L when level L holds x_0 .. x_{half * 2**L} (nothing
+    overwritten yet); the first tau of level L + 1 has m >= half * 2**L, so its first m-average
+    and term come no earlier. ``next_push[j]`` is the k of the next m-average of tau j. Returns
+    (k, n_levels_active).
     """
     ring_len = ring.shape[1]
-    n_levels = ring.shape[0]
+    n_levels = ring.shape[0] + 1
     half = (ring_len - 1) // 2
+    hist = buf.shape[0] - y.shape[0]
     s = integ[0]
     c = integ[1]
     k = k0
@@ -323,29 +268,37 @@ def _accumulate(  # pragma: no cover - compiled
         s = t
         xk = s + c
         k += 1
-        top = -1
-        for lev in range(n_levels_active):
+        buf[hist + q] = xk
+        top = 0
+        active = n_levels_active
+        if active == 1 and n_levels > 1 and k == half:
+            # level 1 seeded from x_0, x_2, ..., x_half (buf[hist + q] is x_k = x_half)
+            for pp in range(0, half + 1, 2):
+                ring[0, pp >> 1] = buf[hist + q - half + pp]
+            level_pos[1] = half >> 1
+            n_levels_active = 2
+            if (k & 1) == 0:
+                top = 1   # x_k is also the newest point of level 1 (half even)
+        for lev in range(1, active):
             if (k & ((1 << lev) - 1)) != 0:
                 break
             p = level_pos[lev] + 1
             if p == ring_len:
                 p = 0
             level_pos[lev] = p
-            ring[lev, p] = xk
+            ring[lev - 1, p] = xk
             top = lev
             if (lev + 1 == n_levels_active and n_levels_active < n_levels
                     and (k >> lev) == half):
                 for pp in range(0, half + 1, 2):
-                    ring[lev + 1, pp >> 1] = ring[lev, pp]
+                    ring[lev, pp >> 1] = ring[lev - 1, pp]
                 level_pos[lev + 1] = half >> 1
                 n_levels_active += 1
                 if ((k >> lev) & 1) == 0:
                     # x_k is also the newest point of the new row (half even): a tau of that
                     # level with m == k has its first m-average now
                     top = lev + 1
-        if top < 0:
-            continue
-        for j in range(level_end[top]):
+        for j in range(level_end[0], level_end[top]):
             m = ms[j]
             if m > k:
                 break
@@ -355,12 +308,12 @@ def _accumulate(  # pragma: no cover - compiled
             i1 = p - qq
             if i1 < 0:
                 i1 += ring_len
-            x1 = ring[lev, i1]
+            x1 = ring[lev - 1, i1]
             if k >= 2 * m:
                 i0 = i1 - qq
                 if i0 < 0:
                     i0 += ring_len
-                d = (xk - 2.0 * x1) + ring[lev, i0]
+                d = (xk - 2.0 * x1) + ring[lev - 1, i0]
                 _add_term(lanes, tot, counts, j, d)
             if k == next_push[j]:
                 _acf_push(acf, j, (xk - x1) / m)
@@ -368,3 +321,183 @@ def _accumulate(  # pragma: no cover - compiled
     integ[0] = s
     integ[1] = c
     return k, n_levels_active
+
+
+@numba.njit(**JIT_OPTIONS)
+def _level0(buf: _F, base: int, k1: int, ms: _I, n0: int, lanes: _F, tot: _F, counts: _I,
+            next_push: _I, acf: _F) -> None:  # pragma: no cover - compiled
+    """
+    Add the terms and m-averages of the level-0 taus (fully overlapping) up to x_k1, by tau.
+
+    ``buf[i - base]`` is x_i for base <= i <= k1 (filled by :func:`_accumulate`); taus 0 ..
+    n0 - 1 are those of level 0. Each tau continues from its own state (``counts``: its next term
+    t, starting at i = t; ``next_push``: the k of its next m-average), with the arithmetic of
+    :func:`_terms` (lane t % 4, fold every FOLD_TERMS terms) and of the per-sample loop, so
+    the sums are those of the batch estimator bit for bit whatever the batch boundaries. Taus
+    are independent, so taking them one at a time over the whole batch changes no bit and lets
+    each run as one streaming loop.
+    """
+    for j in range(n0):
+        m = ms[j]
+        t = counts[j]
+        t1 = k1 - 2 * m + 1
+        if t1 > t:
+            _terms(buf, t - base, 1, m, t1 - t, t, lanes, tot, j)
+            counts[j] = t1
+        kk = next_push[j]
+        if kk <= k1:
+            next_push[j] = _acf_run(buf, kk - base, m, (k1 - kk) // m + 1, acf, j) + base
+
+
+@numba.njit(**JIT_OPTIONS)
+def _terms(x: _F, i: int, step: int, m: int, count: int, t: int, lanes: _F, tot: _F,
+           j: int) -> None:  # pragma: no cover - compiled
+    """
+    Add ``count`` terms ``(x[i + 2m] - 2 x[i + m]) + x[i]`` (i advancing by ``step``) to tau j.
+
+    ``t`` is the index of the first of them in its tau's sequence: term t goes to lane t % 4, and
+    the lanes are folded into the total after every FOLD_TERMS-th term (:func:`_add_term` adding
+    them one by one gives the same bits). Between the odd terms at either end of a segment, rows
+    of four terms (one per lane) go through :func:`_lane_rows`.
+    """
+    t1 = t + count
+    acc = np.empty(4)
+    for u in range(4):
+        acc[u] = lanes[j, u]
+    while t < t1:
+        # one segment = up to the next fold point, so the rows need no fold test
+        seg = min(t1, (t // FOLD_TERMS + 1) * FOLD_TERMS)
+        head = min(seg, (t + 3) & ~3)
+        i = _single_terms(x, i, step, m, t, head, acc)
+        t = head
+        groups = (seg - t) >> 2
+        if groups > 0:
+            _lane_rows(x, i, step, m, groups, acc)
+            t += 4 * groups
+            i += 4 * groups * step
+        i = _single_terms(x, i, step, m, t, seg, acc)
+        t = seg
+        if (t & _FOLD_MASK) == 0:
+            for u in range(4):
+                lanes[j, u] = acc[u]
+            _fold(lanes, tot, j)
+            acc[:] = 0.0
+    for u in range(4):
+        lanes[j, u] = acc[u]
+
+
+@numba.njit(**JIT_OPTIONS)
+def _single_terms(x: _F, i: int, step: int, m: int, t0: int, t1: int,
+                  acc: _F) -> int:  # pragma: no cover - compiled
+    """Add the terms t0 .. t1 - 1 (from x[i] on) to their lanes ``acc[t % 4]``; return i after."""
+    for t in range(t0, t1):
+        d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+        acc[t & 3] += d * d
+        i += step
+    return i
+
+
+@numba.njit(**JIT_OPTIONS)
+def _lane_rows(x: _F, i: int, step: int, m: int, groups: int,
+               acc: _F) -> None:  # pragma: no cover - compiled
+    """
+    Add ``groups`` rows of four terms (from x[i] on, i advancing by ``step``) to ``acc[0 .. 3]``.
+
+    Term u of a row goes to lane u. With ``step`` 1 the compiler packs each row into one vector:
+    the same operations per lane, no reassociation, so the bits of the scalar loop.
+    """
+    if step == 1:
+        far = x[i + 2 * m:i + 2 * m + 4 * groups].reshape(groups, 4)
+        mid = x[i + m:i + m + 4 * groups].reshape(groups, 4)
+        near = x[i:i + 4 * groups].reshape(groups, 4)
+        for g in range(groups):
+            for u in range(4):
+                d = (far[g, u] - 2.0 * mid[g, u]) + near[g, u]
+                acc[u] += d * d
+        return
+    for g in range(groups):
+        for u in range(4):
+            d = (x[i + 2 * m] - 2.0 * x[i + m]) + x[i]
+            acc[u] += d * d
+            i += step
+
+
+@numba.njit(**JIT_OPTIONS)
+def _acf_run(x: _F, i: int, m: int, count: int, acf: _F,
+             j: int) -> int:  # pragma: no cover - compiled
+    """
+    Push ``count`` m-averages ``(x[i] - x[i - m]) / m`` (i advancing by m) to tau ``j``.
+
+    The arithmetic of :func:`_acf_push`, push for push, with the running sums held in locals
+    between pushes instead of in ``acf`` (same operations, same order: same bits). Returns the
+    index after the last average.
+    """
+    n = acf[j, _N]
+    sz = acf[j, _SZ]
+    sjz = acf[j, _SJZ]
+    szz = acf[j, _SZZ]
+    szz1 = acf[j, _SZZ1]
+    z0 = acf[j, _Z0]
+    zl = acf[j, _ZL]
+    sw = acf[j, _SW]
+    sww = acf[j, _SWW]
+    sww1 = acf[j, _SWW1]
+    w0 = acf[j, _W0]
+    wl = acf[j, _WL]
+    sv = acf[j, _SV]
+    svv = acf[j, _SVV]
+    svv1 = acf[j, _SVV1]
+    v0 = acf[j, _V0]
+    vl = acf[j, _VL]
+    nw = acf[j, _NW]
+    nv = acf[j, _NV]
+    for _ in range(count):
+        z = (x[i] - x[i - m]) / m
+        i += m
+        if n == 0.0:
+            z0 = z
+        else:
+            szz1 += zl * z
+            w = z - zl
+            if nw == 0.0:
+                w0 = w
+            else:
+                sww1 += wl * w
+                v = w - wl
+                if nv == 0.0:
+                    v0 = v
+                else:
+                    svv1 += vl * v
+                sv += v
+                svv += v * v
+                vl = v
+                nv = nv + 1.0
+            sw += w
+            sww += w * w
+            wl = w
+            nw = nw + 1.0
+        sz += z
+        sjz += n * z
+        szz += z * z
+        zl = z
+        n = n + 1.0
+    acf[j, _N] = n
+    acf[j, _SZ] = sz
+    acf[j, _SJZ] = sjz
+    acf[j, _SZZ] = szz
+    acf[j, _SZZ1] = szz1
+    acf[j, _Z0] = z0
+    acf[j, _ZL] = zl
+    acf[j, _SW] = sw
+    acf[j, _SWW] = sww
+    acf[j, _SWW1] = sww1
+    acf[j, _W0] = w0
+    acf[j, _WL] = wl
+    acf[j, _SV] = sv
+    acf[j, _SVV] = svv
+    acf[j, _SVV1] = svv1
+    acf[j, _V0] = v0
+    acf[j, _VL] = vl
+    acf[j, _NW] = nw
+    acf[j, _NV] = nv
+    return i

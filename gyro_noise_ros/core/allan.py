@@ -1114,7 +1114,8 @@ class AllanAccumulator:
       (relative change <= 1 / max_exact_m); ``AllanResult.stride`` reports s.
     * Not thread-safe: call ``update`` and ``result`` from one thread, or under one lock.
     * Memory: (2 max_exact_m + 1) float64 per level, levels created as the record grows
-      (at most floor(log2(N / max_exact_m)) + 2), plus O(1) per tau. Nothing else grows with N.
+      (at most floor(log2(N / max_exact_m)) + 2), plus O(1) per tau. Nothing else grows with N;
+      ``update`` holds a transient copy of its batch (level 0 is summed tau by tau over it).
 
     Parameters
     ----------
@@ -1176,7 +1177,10 @@ class AllanAccumulator:
         self._level_pos = np.zeros(self._n_levels_taus, dtype=np.int64)
         self._next_push = self._ms.copy()
         self._ring_len = 2 * self._half + 1
-        self._ring = np.zeros((1, self._ring_len))
+        # level 0: the newest 2 * half + 1 phase points, in order (x_0 = 0 last at first);
+        # levels >= 1: one ring row each, created as the record reaches them
+        self._hist = np.zeros(self._ring_len)
+        self._ring = np.zeros((0, self._ring_len))
         self._n_active = 1
         self._k = 0
         self._integ = np.zeros(2)
@@ -1200,7 +1204,8 @@ class AllanAccumulator:
     @property
     def nbytes(self) -> int:
         """Bytes held by the accumulator's arrays (phase history + per-tau state)."""
-        return int(self._ring.nbytes + self._lanes.nbytes + self._tot.nbytes + self._counts.nbytes
+        return int(self._hist.nbytes + self._ring.nbytes + self._lanes.nbytes + self._tot.nbytes
+                   + self._counts.nbytes
                    + self._acf.nbytes + self._ms.nbytes * 4 + self._level_end.nbytes
                    + self._level_pos.nbytes)
 
@@ -1227,14 +1232,21 @@ class AllanAccumulator:
         need = 1
         while need < self._n_levels_taus and self._half * 2 ** (need - 1) <= k_end:
             need += 1
-        if need > self._ring.shape[0]:
-            grown = np.zeros((need, self._ring_len))
+        if need - 1 > self._ring.shape[0]:
+            grown = np.zeros((need - 1, self._ring_len))
             grown[:self._ring.shape[0]] = self._ring
             self._ring = grown
+        hist = self._hist.shape[0]
+        buf = np.empty(hist + arr.shape[0])
+        buf[:hist] = self._hist
+        k0 = self._k
         self._k, self._n_active = _k._accumulate(
-            arr, self._offset, self._integ, self._k, self._ring, self._level_pos, self._n_active,
+            arr, self._offset, self._integ, k0, buf, self._ring, self._level_pos, self._n_active,
             self._ms, self._levels, self._level_end, self._next_push, self._lanes, self._tot,
             self._counts, self._acf)
+        _k._level0(buf, k0 - hist + 1, self._k, self._ms, int(self._level_end[0]), self._lanes,
+                   self._tot, self._counts, self._next_push, self._acf)
+        self._hist[:] = buf[-hist:]
 
     def result(self) -> AllanResult:
         """

@@ -45,6 +45,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 import scipy.fft
+import threadpoolctl
 
 from . import _kernels_fractional as _kf
 from ..errors import InputDataError, ParameterError
@@ -238,6 +239,20 @@ ALGORITHMS = ('auto', 'exact', 'fast')
 #: orders it recomputes (10x tighter) before trusting the location.
 LOCATE_RTOL = 1e-6
 
+#: Singular values of the grid's coefficient matrix below this fraction of the largest are left
+#: out by the fast algorithm (:class:`_FastPlan`): the machine epsilon, so the low-rank
+#: coefficients equal the computed ones to their own rounding.
+RANK_RTOL = float(np.finfo(np.float64).eps)
+
+#: Orders per matrix product and transform batch of the fast algorithm.
+FAST_BLOCK = 16
+
+#: Every ANCHOR_STEP-th order (by value) has its J computed when the fast curves only locate the
+#: minimum; the others are bounded from their neighbouring anchors (:meth:`_FastPlan._pruned`).
+#: With 10, on the default grid: 21 anchors, and J at 1 to 8 other orders on fractional,
+#: white, random-walk and tone chunks, instead of 201.
+ANCHOR_STEP = 10
+
 
 class OrderIdentifier:
     """
@@ -251,15 +266,15 @@ class OrderIdentifier:
       one inverse FFT (the full autocorrelation of the source noise), in blocks of ``block``
       orders. Its values are the reference of the package: bit for bit those of every earlier
       release.
-    * ``'fast'``: per order only what the order needs (:class:`_FastPlan`). Where the grid holds
-      both ``alpha - 1`` and ``alpha`` (0..1 and 1..2 on the default grid), the difference of order
-      ``alpha`` follows from that of ``alpha - 1`` exactly, in time and in frequency
-      (``c_j(alpha) = c_j(alpha - 1) - c_{j-1}(alpha - 1)``, the truncation at L adding one known
-      term), so those orders cost one inverse FFT instead of three; the source-noise spectrum is
-      ``D - f V`` (one transform of the difference, none of the residual), and the power spectrum
-      is formed without a complex product. Equal to the direct per-order convolution to rounding,
-      not to the bit of ``'exact'``.
-    * ``'auto'`` (default): the fast curves locate the minimum of each criterion; the orders whose
+    * ``'fast'``: the coefficient matrix of the grid is of low numerical rank (:class:`_FastPlan`):
+      r basis filters (18 for the default grid and memory) are convolved with the chunk and
+      transformed, and the difference spectra of all orders are one matrix product; per order
+      then only the residual spectrum ``D - f V``, its variance by Parseval, and one inverse
+      transform of its power spectrum for J. Equal to the direct per-order convolution to
+      rounding (about 1e-14), not to the bit of ``'exact'``.
+    * ``'auto'`` (default): the fast curves locate the minimum of each criterion (without
+      ``curves``, J only where a lower bound of it allows a minimum: about 25 of 201 orders,
+      :meth:`_FastPlan._pruned`); the orders whose
       fast value lies within :data:`LOCATE_RTOL` of the tie band are recomputed by ``'exact'``
       (their whole ``block``, as ``'exact'`` computes it) and the minimum, its ties, f and the
       reported values are taken from those exact values. The results are therefore bit for bit
@@ -353,12 +368,18 @@ class OrderIdentifier:
         if self.demean:
             v = v - bias
         _regressor(v)
+        with _blas_threads().limit(limits=1):
+            return self._identify(v, bias, curves)
+
+    def _identify(self, v: NDArray[np.float64], bias: float,
+                  curves: bool) -> OrderIdentification:
+        """Identify the (demeaned) chunk ``v`` by :attr:`algorithm`; see :meth:`__call__`."""
         if self.algorithm == 'exact':
             var_curve, j_curve, f_curve = self._curves(v)
             return _summarise(self.alphas, var_curve, j_curve, f_curve, bias, curves)
         if self._fast is None:
             self._fast = _FastPlan(self)
-        fast = self._fast.curves(v)
+        fast = self._fast.curves(v, prune=self.algorithm == 'auto' and not curves)
         if self.algorithm == 'fast':
             return _summarise(self.alphas, *fast, bias, curves)
         located = self._locate(v, *fast)
@@ -416,10 +437,11 @@ class OrderIdentifier:
         """
         Return var, J and f of the grid orders ``rows`` exactly as :meth:`_curves` computes them.
 
-        The difference and f are computed for the whole block of each order (f is a
-        matrix-vector product over the block, whose rounding depends on the block); everything
-        after f is per order, and numpy and pocketfft round a row alike whether it is alone or in
-        a block (``test/test_fractional_fast.py`` checks this against :meth:`_curves`).
+        f is a matrix-vector product over the block of each order, as in :meth:`_curves`: the
+        same product on a block whose other rows are zero (each row's dot product is its own,
+        rounded by its position in the block); everything else is per order, and numpy and
+        pocketfft round a row alike whether it is alone or in a block (``test/
+        test_fractional_fast.py`` checks this against :meth:`_curves`).
         """
         n, size, blk = self.n, self._conv_size, self.block
         w_reg, ww = _regressor(v)
@@ -431,7 +453,9 @@ class OrderIdentifier:
         for b in np.unique(rows // blk):
             start = int(b) * blk
             stop = min(k, start + blk)
-            diff = scipy.fft.irfft(self._coeff_hat[start:stop] * v_hat, size, axis=1)
+            wanted = np.unique(rows[(rows >= start) & (rows < stop)]) - start
+            diff = np.zeros((stop - start, size))
+            diff[wanted] = scipy.fft.irfft(self._coeff_hat[start + wanted] * v_hat, size, axis=1)
             d = diff[:, 1:n + 1]
             f = (d @ w_reg) / ww
             for pos in np.flatnonzero((rows >= start) & (rows < stop)):
@@ -458,7 +482,9 @@ class OrderIdentifier:
         None when the fast curves cannot be trusted for this chunk (not finite, or farther from
         the exact values than :data:`LOCATE_RTOL` / 10 on the recomputed orders).
         """
-        if not (np.all(np.isfinite(var_fast)) and np.all(np.isfinite(j_fast))):
+        # J is +inf where the sign bounds ruled a minimum out (_FastPlan._pruned)
+        if not (np.all(np.isfinite(var_fast)) and np.isfinite(j_fast.min())
+                and not np.isnan(j_fast).any()):
             return None
         if not (var_fast.min() > 0.0 and j_fast.min() > 0.0):
             return None  # a residual that vanishes: relative bounds say nothing there
@@ -469,6 +495,23 @@ class OrderIdentifier:
             if not (np.all(np.isfinite(ex)) and np.all(np.abs(fast - ex) <= guard * np.abs(ex))):
                 return None
         return rows, exact
+
+
+_BLAS: list[threadpoolctl.ThreadpoolController] = []
+
+
+def _blas_threads() -> threadpoolctl.ThreadpoolController:
+    """
+    Return the controller of numpy's BLAS thread pools (found once per process).
+
+    An identification runs its matrix products on one BLAS thread: they are a few million
+    operations each, and OpenBLAS' threads spin between them (measured on 2 cores under load:
+    96 instead of 21 ms of CPU per chunk). The results do not depend on it (each dot product is
+    one thread's either way); ``gyro_noise_analyze`` runs on one BLAS thread anyway.
+    """
+    if not _BLAS:
+        _BLAS.append(threadpoolctl.ThreadpoolController().select(user_api='blas'))
+    return _BLAS[0]
 
 
 def _regressor(v: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
@@ -490,125 +533,181 @@ def _candidates(curve: NDArray[np.float64]) -> NDArray[np.intp]:
     e*``, and ``e*`` is at most ``low / (1 - d)`` (``low`` the fast minimum; both criteria are
     non-negative).
     """
-    low = float(curve.min())
-    bound = low * (1.0 + TIE_RTOL) * (1.0 + LOCATE_RTOL) / (1.0 - LOCATE_RTOL)
-    return np.flatnonzero(curve <= bound)
+    return np.flatnonzero(curve <= _band(float(curve.min())))
+
+
+def _band(low: float) -> float:
+    """Return the largest fast value that may be a minimum or its tie, given the lowest one."""
+    return low * (1.0 + TIE_RTOL) * (1.0 + LOCATE_RTOL) / (1.0 - LOCATE_RTOL)
 
 
 class _FastPlan:
     """
     The set-up of the 'fast' algorithm for one :class:`OrderIdentifier` (see its doc).
 
-    With ``d_a[k] = Delta^a v[k + 1]`` (k = 0 .. n - 1) and ``c_j(a + 1) = c_j(a) - c_{j-1}(a)``,
-    the truncated sums (eq. 5) give ``d_{a+1}[k] = d_a[k] - d_a[k-1] + [k >= L] c_L(a) v[k - L]``
-    with ``d_a[-1] = v[0]``; on the correlation transform size S (> n) that is
-    ``D_{a+1} = (1 - e) D_a + d_a[n-1] e^n - v[0] + c_L(a) e^L V_L`` with ``e = exp(-2 pi i q /
-    S)`` and ``V_L`` the transform of ``v[0 .. n - L - 1]``. Orders whose ``a - 1`` is on the grid
-    are derived so (chains included: 2.00 from 1.00 from 0.00); the others ("base" orders) are
-    computed by FFT convolution. The residual transform is ``W = D - f V`` (V the transform of
-    the regressor ``v[0 .. n - 1]``), and ``J`` comes from one inverse transform of ``|W|^2``.
+    The truncated difference (eq. 5) is linear in the coefficients, and the (K, L + 1) matrix C of
+    the grid's coefficients is of low numerical rank: its singular values fall about tenfold per
+    index (default grid, L = 1000: 21.2, 6.5, 1.8, ..., 3e-15 at the 18th, 2e-16 at the 19th). So
+    ``C = A B`` to rounding, with the r rows of B whose singular values exceed
+    :data:`RANK_RTOL` of the largest (r = 18 of 201 on the default grid) and ``A = U S``; the
+    difference of every order is ``d_a = sum_r A[a, r] e_r``, ``e_r`` the truncated difference with
+    the coefficients ``B[r]``. A chunk costs r FFT convolutions and r transforms of the ``e_r`` on
+    the correlation size S (spectra X); the spectra of all K differences are one matrix product
+    ``D = A X``. Per order: ``f = A (E v[:-1]) / ww`` (eq. 8); the residual spectrum ``W = D - f
+    V`` (V the transform of the regressor ``v[0 .. n - 1]``); its variance by Parseval, less the
+    squared mean ``W(0) / n``; J from one inverse transform of ``|W|^2`` (a DCT-I done as a
+    half-length real FFT when S is a multiple of 4).
     """
 
     def __init__(self, ident: OrderIdentifier) -> None:
         self.ident = ident
-        a = ident.alphas
-        k = a.shape[0]
-        order = np.argsort(a, kind='stable')
-        sorted_a = a[order]
-        parent = np.full(k, -1)
-        target = a - 1.0
-        pos = np.clip(np.searchsorted(sorted_a, target), 0, k - 1)
-        for i in range(k):
-            for p in (pos[i] - 1, pos[i]):
-                if 0 <= p < k and abs(sorted_a[p] - target[i]) <= 1e-12 * max(1.0, abs(a[i])):
-                    if order[p] != i:
-                        parent[i] = order[p]
-                    break
-        self.parent = parent
-        self.base = np.flatnonzero(parent < 0)
-        self.children: dict[int, list[int]] = {}
-        for child in np.flatnonzero(parent >= 0):
-            self.children.setdefault(int(parent[child]), []).append(int(child))
-        size = ident.chunk_size + ident.memory
-        self.conv_size = scipy.fft.next_fast_len(size, real=True)
-        self.coeff_hat = np.fft.rfft(ident._coeffs[self.base], self.conv_size, axis=1)
-        self.c_last = ident._coeffs[:, ident.memory].copy()
+        u, sing, basis = np.linalg.svd(ident._coeffs, full_matrices=False)
+        rank = max(1, int(np.count_nonzero(sing > RANK_RTOL * sing[0])))
+        self.rank = rank
+        self.weights = np.ascontiguousarray(u[:, :rank] * sing[:rank])
+        self.conv_size = scipy.fft.next_fast_len(ident.chunk_size + ident.memory, real=True)
+        self.basis_hat = np.fft.rfft(basis[:rank], self.conv_size, axis=1)
         s = ident._corr_size
-        q = np.arange(s // 2 + 1)
-
-        def twiddle(m: int) -> NDArray[np.complex128]:
-            return np.exp(-2j * np.pi * ((q * m) % s) / s)
-
-        self.one_minus_e = 1.0 - twiddle(1)
+        self.nyquist = s // 2 if s % 2 == 0 else -1
         # The autocorrelation by a half-length FFT needs S = 2N with N even.
         self.cosine: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         if s % 4 == 0:
             half = np.arange(s // 2) * (2.0 * np.pi / s)
             self.cosine = (np.sin(half), np.cos(half))
-        self.e_n = twiddle(ident.n)
-        self.e_l = twiddle(ident.memory)
+        # the anchors of the sign bounds (:meth:`_pruned`): every ANCHOR_STEP-th order by value
+        # and the last; each other order between the two anchors around it
+        self.anchors: NDArray[np.intp] | None = None
+        order = np.argsort(ident.alphas, kind='stable')
+        if self.cosine is not None and order.size > 2 * ANCHOR_STEP:
+            at = np.unique(np.append(np.arange(0, order.size, ANCHOR_STEP), order.size - 1))
+            rest = np.setdiff1d(np.arange(order.size), at)
+            self.anchors, self.others = order[at], order[rest]
+            self.upper = np.searchsorted(at, rest).astype(np.int64)
+            self.lower = self.upper - 1
+            self.anchor_weights = self.weights[self.anchors]
+            self.other_weights = self.weights[self.others]
 
-    def curves(self, v: NDArray[np.float64]
+    def curves(self, v: NDArray[np.float64], *, prune: bool = False
                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """Return (var_curve, j_curve, f_curve) of the demeaned chunk ``v`` (fast algorithm)."""
+        """
+        Return (var_curve, j_curve, f_curve) of the demeaned chunk ``v`` (fast algorithm).
+
+        ``prune``: J only where a minimum can be (:meth:`_pruned`); +inf at the other orders.
+        """
         ident = self.ident
-        n, big_n, s, big_l = ident.n, ident.chunk_size, ident._corr_size, ident.memory
+        s = ident._corr_size
         w_reg, ww = _regressor(v)
         k = ident.alphas.shape[0]
+        e = np.fft.irfft(self.basis_hat * np.fft.rfft(v, self.conv_size), self.conv_size,
+                         axis=1)[:, 1:ident.chunk_size]
+        f_all = (self.weights @ (e @ w_reg)) / ww
+        spectra = np.fft.rfft(e, s, axis=1).view(np.float64)
+        reg_hat = np.fft.rfft(w_reg, s)
+        if prune and self.anchors is not None:
+            return self._pruned(spectra, f_all, reg_hat)
         out = np.empty((3, k))
-        ctx = (v, w_reg, ww, np.fft.rfft(w_reg, s),
-               self.e_l * np.fft.rfft(v[:n - big_l], s))
-        v_hat = np.fft.rfft(v, self.conv_size)
-        padded = np.zeros((ident.block, s))
-        for start in range(0, self.base.shape[0], ident.block):
-            idx = self.base[start:start + ident.block]
-            diff = np.fft.irfft(self.coeff_hat[start:start + ident.block] * v_hat,
-                                self.conv_size, axis=1)
-            d = padded[:idx.shape[0], :n]
-            d[...] = diff[:, 1:big_n]
-            self._emit(idx, d, np.fft.rfft(padded[:idx.shape[0]], axis=1), ctx, out)
+        out[2] = f_all
+        rows = min(k, FAST_BLOCK)
+        d = np.empty((rows, spectra.shape[1]))
+        for start in range(0, k, FAST_BLOCK):
+            stop = min(k, start + FAST_BLOCK)
+            spec = d[:stop - start].view(np.complex128)
+            np.matmul(self.weights[start:stop], spectra, out=d[:stop - start])
+            f = f_all[start:stop]
+            energy = self._criteria(spec, f, reg_hat, out[1, start:stop])
+            out[0, start:stop] = self._variance(spec, f, reg_hat, energy)
         return out[0], out[1], out[2]
 
-    def _emit(self, idx: NDArray[np.intp], d: NDArray[np.float64], spec: NDArray[np.complex128],
-              ctx: tuple[NDArray[np.float64], NDArray[np.float64], float,
-                         NDArray[np.complex128], NDArray[np.complex128]],
-              out: NDArray[np.float64]) -> None:
-        """Fill var, J and f of the orders ``idx`` from their differences; recurse to a + 1."""
+    def _variance(self, spec: NDArray[np.complex128], f: NDArray[np.float64],
+                  reg_hat: NDArray[np.complex128],
+                  energy: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return the residual variances of a block from its spectra and Parseval sums."""
+        n = self.ident.n
+        # var = mean(w^2) - mean(w)^2: the LS residual is orthogonal to the regressor, which
+        # holds the chunk's level, so its mean stays small against its spread (mean^2 / var
+        # <= 0.03 on white, walk, tone and fractional chunks with and without demean)
+        mean = (spec[:, 0].real - f * reg_hat[0].real) / n
+        return energy / (self.ident._corr_size * n) - mean * mean
+
+    def _criteria(self, spec: NDArray[np.complex128], f: NDArray[np.float64],
+                  reg_hat: NDArray[np.complex128], j: NDArray[np.float64],
+                  signs: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        """Fill J of a block of orders from their difference spectra; return their energies."""
         ident = self.ident
-        v, w_reg, ww, reg_hat, shifted_hat = ctx
-        rows = idx.shape[0]
-        f = np.empty(rows)
-        var = np.empty(rows)
-        _kf.residual_moments(d, w_reg, ww, f, var)
-        j = np.empty(rows)
+        rows = spec.shape[0]
+        energy = np.empty(rows)
         if self.cosine is not None:
             sin_t, cos_t = self.cosine
             folded = np.empty((rows, sin_t.shape[0]))
             odd = np.empty(rows)
-            _kf.cosine_prep(spec, f, reg_hat, sin_t, cos_t, folded, odd)
+            _kf.cosine_prep(spec, f, reg_hat, sin_t, cos_t, folded, odd, energy)
             _kf.cosine_abs_sum(np.fft.rfft(folded, axis=1), odd, ident.max_lag + 1,
-                               1.0 / (sin_t.shape[0] * ident.n), j)
+                               1.0 / (sin_t.shape[0] * ident.n), j,
+                               np.empty((0, 0)) if signs is None else signs)
         else:
             power = np.empty(spec.shape, dtype=np.complex128)
-            _kf.residual_power(spec, f, reg_hat, power)
+            _kf.residual_power(spec, f, reg_hat, self.nyquist, power, energy)
             corr = np.fft.irfft(power, ident._corr_size, axis=1)
             _kf.abs_sum(corr, ident.max_lag + 1, j, 1.0 / ident.n)
-        out[0, idx] = var
-        out[1, idx] = j
-        out[2, idx] = f
-        parents, kids = [], []
-        for row, i in enumerate(idx):
-            for child in self.children.get(int(i), ()):
-                parents.append(row)
-                kids.append(child)
-        if not kids:
-            return
-        dc = np.empty((len(kids), d.shape[1]))
-        sc = np.empty((len(kids), spec.shape[1]), dtype=np.complex128)
-        parent_rows = np.asarray(parents)
-        _kf.next_order(d, spec, parent_rows, v, self.c_last[idx[parent_rows]], ident.memory,
-                       self.one_minus_e, self.e_n, shifted_hat, dc, sc)
-        self._emit(np.asarray(kids), dc, sc, ctx, out)
+        return energy
+
+    def _pruned(self, spectra: NDArray[np.float64], f_all: NDArray[np.float64],
+                reg_hat: NDArray[np.complex128]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """
+        Return the curves with J only at the anchors and where the sign bounds allow a minimum.
+
+        For any signs s_m, ``J >= sum_m s_m R(m) / n`` (eq. 13), and that sum is linear in the
+        power spectrum: ``P . c_s`` with ``c_s`` a cosine transform of s. J is computed at every
+        :data:`ANCHOR_STEP`-th order (by sorted order) with the signs of its lags; every other
+        order gets the larger of the bounds with the signs of the anchors on either side (no
+        transform), and its J only when that bound, less :data:`LOCATE_RTOL`, does not exceed
+        the band where the minimum and its ties can be (:func:`_candidates` of the anchors'
+        lowest J, a bound that can only be larger than the final one). Elsewhere J is +inf.
+        """
+        ident = self.ident
+        assert self.cosine is not None and self.anchors is not None  # by the caller
+        sin_t, cos_t = self.cosine
+        big_n, k = sin_t.shape[0], ident.alphas.shape[0]
+        out = np.empty((3, k))
+        out[2] = f_all
+        out[1] = np.inf
+        anchors, others = self.anchors, self.others
+        signs = np.zeros((anchors.size, big_n + 1))
+        for start in range(0, anchors.size, FAST_BLOCK):
+            rows = anchors[start:start + FAST_BLOCK]
+            spec = (self.anchor_weights[start:start + FAST_BLOCK] @ spectra).view(np.complex128)
+            j = np.empty(rows.size)
+            energy = self._criteria(spec, f_all[rows], reg_hat, j,
+                                    signs[start:start + FAST_BLOCK])
+            out[0, rows] = self._variance(spec, f_all[rows], reg_hat, energy)
+            out[1, rows] = j
+        folded = np.empty((anchors.size, big_n))
+        odd = np.empty(anchors.size)
+        _kf.cosine_fold(signs, sin_t, cos_t, folded, odd)
+        weights = np.empty_like(signs)
+        _kf.cosine_values(np.fft.rfft(folded, axis=1), odd, weights)
+        # the transform counts lag 0 half (DCT-I) and the sum wants it whole; the end bins of
+        # the half spectrum count half in the inverse transform
+        weights += 0.5 * signs[:, :1]
+        weights[:, 0] *= 0.5
+        weights[:, -1] *= 0.5
+        limit = _band(float(out[1, anchors].min())) / (1.0 - LOCATE_RTOL)
+        scale = 1.0 / (big_n * ident.n)
+        for start in range(0, others.size, FAST_BLOCK):
+            rows = others[start:start + FAST_BLOCK]
+            spec = (self.other_weights[start:start + FAST_BLOCK] @ spectra).view(np.complex128)
+            f = f_all[rows]
+            energy, bound = np.empty(rows.size), np.empty(rows.size)
+            _kf.power_bound(spec, f, reg_hat, weights, self.lower[start:start + FAST_BLOCK],
+                            self.upper[start:start + FAST_BLOCK], scale, energy, bound)
+            out[0, rows] = self._variance(spec, f, reg_hat, energy)
+            keep = ~(bound > limit)   # NaN bounds kept: they prove nothing
+            if keep.any():
+                j = np.empty(int(keep.sum()))
+                self._criteria(np.ascontiguousarray(spec[keep]), f[keep], reg_hat, j)
+                out[1, rows[keep]] = j
+        return out[0], out[1], out[2]
 
 
 def identify_order(chunk: npt.ArrayLike, *, alphas: npt.ArrayLike | None = None,

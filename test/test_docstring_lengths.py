@@ -38,8 +38,7 @@ LIMIT = 25
 ALLOWED = {
     'calibration/emulate.py', 'calibration/gyro_turns.py', 'core/allan.py', 'link/clock.py',
     'nodes/analyzer.py', 'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py',
-    'thermal/elman.py', 'thermal/export.py', 'thermal/live.py', 'thermal/metrics.py',
-    'thermal/mopso.py', 'thermal/parallel.py', 'thermal/simulate.py',
+    'thermal/export.py', 'thermal/live.py', 'thermal/metrics.py', 'thermal/simulate.py',
 }
 
 SNIPPET = '''\

@@ -16,11 +16,12 @@
 """
 Count the wrappers whose docstrings outweigh them: one-statement functions with long docstrings.
 
-A wrapper is a function whose body after its docstring is a single statement, on one line or
-several (``return f(x, scale=2)`` spread over three lines is still one statement). Its contract
-is what it adds to the function it wraps: a summary line, the parameters that differ and a
-pointer such as ``:func:`f```. A wrapper whose docstring runs to ``--limit`` lines (10) or more is
-listed (issue 34; ``tools/docstring_lengths.py`` lists the one-line subset beside the modules).
+A wrapper is a function whose body after its docstring is a single simple statement, on one
+line or several (``return f(x, scale=2)`` over three lines; not an ``if``, ``with`` or ``try``
+block). Its contract is what it adds to the function it wraps: a summary line, the parameters
+that differ and a pointer such as ``:func:`f```. A wrapper whose docstring runs to ``--limit``
+lines (10) or more is listed (issue 34; ``tools/docstring_lengths.py`` lists the one-line subset
+beside the modules).
 
 Usage::
 
@@ -38,9 +39,14 @@ from pathlib import Path
 import sys
 
 
+#: Statements that hold a block: a function made of one of them is not a wrapper.
+_COMPOUND = (ast.If, ast.For, ast.AsyncFor, ast.While, ast.With, ast.AsyncWith, ast.Try,
+             ast.Match, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+
+
 def wrappers(source: str, limit: int = 10) -> list[tuple[int, str, int]]:
     """
-    Return the one-statement functions of ``source`` whose docstrings have ``limit`` lines or more.
+    Return the one-simple-statement functions of ``source`` with docstrings of ``limit``+ lines.
 
     Parameters
     ----------
@@ -64,7 +70,8 @@ def wrappers(source: str, limit: int = 10) -> list[tuple[int, str, int]]:
                 body = child.body
                 if (len(body) == 2 and isinstance(body[0], ast.Expr)
                         and isinstance(body[0].value, ast.Constant)
-                        and isinstance(body[0].value.value, str)):
+                        and isinstance(body[0].value.value, str)
+                        and not isinstance(body[1], _COMPOUND)):
                     lines = (body[0].end_lineno or body[0].lineno) - body[0].lineno + 1
                     if lines >= limit:
                         found.append((lines, prefix + child.name, child.lineno))

@@ -94,16 +94,9 @@ class DwellNoise:
 
     def variogram(self, lag_s: ArrayLike) -> NDArray[np.float64]:
         """
-        Return the modelled variogram of window means at the given lags.
+        Return the modelled variogram of window means at the lags ``lag_s`` (s).
 
-        Parameters
-        ----------
-        lag_s : array_like
-            Lags (s).
-
-        Returns
-        -------
-        numpy.ndarray
+        In the dwell values' unit squared: ``a + b ln(lag / w) + c lag / w`` (module docstring).
 
         """
         return _basis(lag_s, self.window_s) @ self.coef
@@ -290,18 +283,10 @@ def fit_dwell_noise(times: Sequence[ArrayLike], counts: Sequence[ArrayLike],
                     values: Sequence[ArrayLike], *, residual_loading: ArrayLike | None = None,
                     residuals: ArrayLike | None = None) -> DwellNoise:
     """
-    Fit the variogram model of one sensor to its dwells once (:class:`DwellNoiseFitter`).
+    Fit the variogram model of one sensor to its dwells once: :meth:`DwellNoiseFitter.fit`.
 
-    Parameters
-    ----------
-    times, counts, values : sequence of numpy.ndarray
-        As :class:`DwellNoiseFitter`.
-    residual_loading, residuals : array_like, optional, keyword-only
-        As :meth:`DwellNoiseFitter.fit`.
-
-    Returns
-    -------
-    DwellNoise
+    ``times``, ``counts`` and ``values`` are as in :class:`DwellNoiseFitter`, the keywords as in
+    :meth:`DwellNoiseFitter.fit`.
 
     """
     return DwellNoiseFitter(times, counts, values).fit(residual_loading=residual_loading,

@@ -186,17 +186,10 @@ class SixPositionResult:
 
     def compensate_accel(self, measured_m_s2: ArrayLike) -> np.ndarray:
         """
-        Apply the calibration: ``inv(I + diag(S) + M) @ (measured - bias)``.
+        Apply the calibration to (..., 3) specific forces: ``inv(I + diag(S) + M) @ (l - b)``.
 
-        Parameters
-        ----------
-        measured_m_s2 : array_like
-            (..., 3) measured specific force (m/s^2).
-
-        Returns
-        -------
-        numpy.ndarray
-            (..., 3) compensated specific force (m/s^2).
+        :meth:`.apply.SensorCalibration.apply` with this result's accelerometer terms; in and out
+        in m/s^2.
 
         """
         return SensorCalibration(self.accel_bias_m_s2, self.accel_scale_factor,
@@ -525,15 +518,7 @@ def uniformity(values: ArrayLike) -> float:
     """
     Return the paper 001 section 6 uniformity indicator: the sample standard deviation (ddof = 1).
 
-    Parameters
-    ----------
-    values : array_like
-        (3,) per-axis biases or scale factors.
-
-    Returns
-    -------
-    float
-        std(values, ddof=1), in the unit of ``values``.
+    ``values`` are the (3,) per-axis biases or scale factors; the result is in their unit.
 
     """
     return float(np.std(np.asarray(values, dtype=np.float64), ddof=1))

@@ -21,7 +21,7 @@ localhost-only discovery: :func:`gyro_noise_ros.rosgraph.lease_domain`, as the t
 
 1. ``noise_analyzer``, ``gyro_noise_record``, ``gyro_noise_monitor`` and ``lsm6dso32_driver``;
 2. ``portenta_emulator`` on a loopback TCP port, seeded, in real time (``--speed 1``), with a
-   scripted helium-like bias transient: a quiet phase, then a first-order rise of every axis's bias;
+   scripted helium-like bias transient: a quiet phase, then a first-order rise of each bias;
 
 prints the analyzer's diagnostics as they arrive (one line per chunk), and checks the story: OK in
 the quiet phase, WARN (offset drift above its limit) when the bias rises. It then stops the live
@@ -104,17 +104,9 @@ def _print_outputs(report: Path, elapsed_s: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run the demo.
+    Run the demo; return its exit code (module docstring).
 
-    Parameters
-    ----------
-    argv : list of str or None
-        Arguments without the program name (None: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit code (module doc).
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv)

@@ -151,22 +151,12 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run gyro_noise_import.
+    Run gyro_noise_import on ``argv`` (without the program name); return the exit status.
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name.
-
-    Returns
-    -------
-    int
-        Exit status: 0 (also when corrupt regions were skipped); 2 bad option (``--chunk-bytes``
-        outside 1..64 MiB included) or a log file named twice; 3 a log file missing; 4 logs that
-        are not one sequence (different sequences, the same file twice, overlapping sample
-        counters) or hold no valid sample; 6 ``--out`` exists (without ``--overwrite``) or the
-        bag cannot be written; 130/143 interrupted (SIGINT/SIGTERM). Whatever the failure, no
-        bag is left under ``--out`` and an existing one is kept.
+    0 (also with corrupt regions skipped); 2 a bad option or a log file named twice; 3 a log file
+    missing; 4 logs that are not one sequence or hold no valid sample; 6 ``--out`` exists (without
+    ``--overwrite``) or the bag cannot be written; 130/143 interrupted. Whatever the failure, no
+    bag is left under ``--out`` and an existing one is kept.
 
     """
     return run_cli(PROG, _body, argv)

@@ -28,7 +28,7 @@ stime) over the publishing window:
    counts;
 3. the real ``noise_analyzer`` (default parameters: chunks of 10,000, full 0:2:0.01 grid, both
    methods, Allan deviation), its CPU split into the analysis worker thread
-   (``/proc/<pid>/task/<tid>``) and the rest (ingestion: take every ``drain_period_s`` = 20 ms,
+   (``/proc/<pid>/task/<tid>``) and the rest (ingestion: take every ``drain_period_s`` = 50 ms,
    bulk decode, gap detection, chunking, diagnostics; DDS receive threads are counted here, as in
    the baselines).
 

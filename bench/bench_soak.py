@@ -46,7 +46,10 @@ compensator = recorded (both bags) + the recorder's bound, with no message dropp
 (per-publisher sequence gaps); held offsets only where the compensator's input stopped (the unplug,
 the end of the stream, the killed recorder's lease expiring: at most one decimation period, a frame
 and a drain period each; ``soak.json`` keeps the compensator's counters every ``--rss-period-s``
-and says when held offsets happened); each fault's loss within its bound; every process's RSS
+and says when held offsets happened); with ``temperature_sync: latest`` (the compensator's
+default) the age of the offset it applies within one temperature period and a frame (+10 ms)
+away from the faults (every compensator status is read; ``soak.json`` ``offset_ages``); each
+fault's loss within its bound; every process's RSS
 sampled every ``--rss-period-s`` and its growth, plus two standard errors, under ``--rss-slope-
 limit-mb-h`` (10 MB/h: 120 MB over 12 h). The growth is a least-squares slope shared by the
 stretches between the faults, each with its own level, after a warm-up (the first fifth of the
@@ -89,7 +92,12 @@ DRIVER_QOS_DEPTH = 60000
 SERIES_KEYS = ('Messages received', 'Messages published', 'Messages waiting for a temperature',
                'Messages compensated with a held offset')
 TEMPERATURE_DECIMATION = 128  # the driver's default: one temperature per 128 samples
-COMPENSATOR_DRAIN_S = 0.05  # the compensator's default drain_period_s
+COMPENSATOR_DRAIN_S = 0.05  # the timer drain of temperature_sync interpolate runs (the bound)
+#: The compensator's age of the offset it applies (temperature_sync latest, the default): at most
+#: one temperature period after the newest temperature message, unless imu/temperature stalls.
+OFFSET_AGE_KEY = 'Newest sample past its offset (ms)'
+#: Slack over one temperature period and a frame (ms): the frames of one read, a late wake-up.
+OFFSET_AGE_SLACK_MS = 10.0
 LEASE_S = 20.0  # Fast DDS's default participant lease duration
 
 
@@ -334,6 +342,7 @@ class Diagnostics:
         rclpy.init(context=self.context)
         self.node = rclpy.create_node('soak_diagnostics', context=self.context)
         self.latest = {}
+        self.offset_ages = []  # (monotonic s, the compensator's newest offset age in ms)
         self._lock = threading.Lock()
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on, 100)
         self.executor = SingleThreadedExecutor(context=self.context)
@@ -344,8 +353,15 @@ class Diagnostics:
     def _on(self, msg):
         with self._lock:
             for s in msg.status:
-                self.latest[s.name] = ({kv.key: kv.value for kv in s.values}, s.level[0],
-                                       s.message, time.monotonic())
+                values = {kv.key: kv.value for kv in s.values}
+                self.latest[s.name] = (values, s.level[0], s.message, time.monotonic())
+                if s.name == 'imu_compensator: compensation' and OFFSET_AGE_KEY in values:
+                    # Every status, not the latest only: the age is the maximum of its period.
+                    try:
+                        age = float(values[OFFSET_AGE_KEY])
+                    except ValueError:
+                        continue
+                    self.offset_ages.append((time.monotonic(), age))
 
     def _spin(self):
         while self._rclpy.ok(context=self.context):
@@ -542,6 +558,8 @@ def run(args):
                                        *reliable])
         wait = ([] if args.max_temperature_wait_s is None else
                 ['-p', f'max_temperature_wait_s:={float(args.max_temperature_wait_s)!r}'])
+        if args.temperature_sync is not None:
+            wait += ['-p', f'temperature_sync:={args.temperature_sync}']
         chain.start('imu_compensator', ['-m', 'gyro_noise_ros.nodes.compensator', '--ros-args',
                                         '-p', f'thermal_model_file:={model}', *reliable, *wait])
         bags = [out / 'bag_1', out / 'bag_2']
@@ -620,6 +638,8 @@ def run(args):
             if now - t0 >= duration and not pending:
                 break
             time.sleep(0.05)
+        report['offset_ages'] = [[round(t - t0, 1), age] for t, age in diag.offset_ages
+                                 if t >= t0]
         # The end: the board stops; everything published must reach every consumer. The
         # compensator's last samples, newer than the last temperature, are released with a held
         # offset after max_temperature_wait_s: counted apart.
@@ -695,6 +715,24 @@ def _settle(diag, timeout_s=120.0):
             return counts
         time.sleep(0.5)
     return last or {}
+
+
+def _check_offset_age(args, report, check, slack_s):
+    """Check that the offset applied is at most a temperature period old away from the faults."""
+    bound_ms = 1e3 * (TEMPERATURE_DECIMATION + BATCH) / args.odr_hz + OFFSET_AGE_SLACK_MS
+    worst = {'elsewhere': 0.0, **{f['kind']: 0.0 for f in report['faults']}}
+    for t, age in report.get('offset_ages', []):
+        if t > args.minutes * 60.0:
+            continue  # the end of the stream
+        fault = next((f for f in report['faults'] if f['at_s'] < t <= f['at_s'] + args.settle_s
+                      + (LEASE_S if f['kind'] == 'recorder killed' else 0.0) + slack_s), None)
+        key = fault['kind'] if fault else 'elsewhere'
+        worst[key] = max(worst[key], age)
+    report['offset_age_ms'] = worst
+    check('offset age within a temperature period', worst['elsewhere'] <= bound_ms,
+          f"largest age of the applied offset {worst['elsewhere']:.1f} ms away from the faults "
+          f'(bound {bound_ms:.1f} ms); at the faults '
+          + ', '.join(f"{f['kind']} {worst[f['kind']]:.0f} ms" for f in report['faults']))
 
 
 def _judge(args, chain, report, bags):
@@ -798,6 +836,7 @@ def _judge(args, chain, report, bags):
           + f', {held_end} at the end, {held_elsewhere} elsewhere (bound {per_stop} per stop, 0 '
           f"elsewhere); longest on-time wait {report.get('compensator_longest_wait_s')} s"
           + ''.join(f'; +{n} by {t:.0f} s' for t, n in rises[:5]))
+    _check_offset_age(args, report, check, slack_s)
     fault_lost = 0
     for fault in report['faults']:
         if fault['kind'] == 'recorder killed':
@@ -889,6 +928,8 @@ def main(argv=None):
                         help="the driver's qos_depth (messages of reliable history)")
     parser.add_argument('--max-temperature-wait-s', type=float, default=None,
                         help="the compensator's max_temperature_wait_s (default: the node's)")
+    parser.add_argument('--temperature-sync', choices=('latest', 'interpolate'),
+                        help="the compensator's temperature_sync (default: the node's, latest)")
     parser.add_argument('--rss-slope-limit-mb-h', type=float, default=10.0,
                         help='largest RSS slope called flat (MB/h)')
     parser.add_argument('--domain-id', type=int, default=None,

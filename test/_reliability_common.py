@@ -33,11 +33,13 @@ def six_position_record(*, errors=None, rate_hz=100.0, dwell_s=30.0, move_s=4.0,
                     gyro_noise_rad_s=gyro_noise)
 
 
-def write_bag(path, t, accel, gyro, *, topic='/imu/data_raw', temperature_degc=None):
+def write_bag(path, t, accel, gyro, *, topic='/imu/data_raw', temperature_degc=None,
+              frame_id='imu_link'):
     """Write an Imu bag (stamps T0 + t), with sensor_msgs/Temperature at 1 Hz when given."""
     stamps = T0_NS + np.round(np.asarray(t) * 1e9).astype(np.int64)
     temp_topic = None if temperature_degc is None else '/imu/temperature'
-    with ImuBagWriter(path, imu_topic=topic, temperature_topic=temp_topic) as w:
+    with ImuBagWriter(path, imu_topic=topic, temperature_topic=temp_topic,
+                      frame_id=frame_id) as w:
         w.write_imu(stamps, gyro, accel)
         if temperature_degc is not None:
             # temperature_degc: a constant or a function of t (s)

@@ -123,6 +123,8 @@ def _publish_main(argv):
                         help='wait for this many Imu subscribers')
     parser.add_argument('--temperature-every', type=int, default=128)
     parser.add_argument('--linger-s', type=float, default=1.0)
+    parser.add_argument('--match-timeout-s', type=float, default=60.0,
+                        help='wait this long for the subscribers, then publish anyway (saying so)')
     args = parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
 
     rng = np.random.default_rng(args.seed)
@@ -150,9 +152,12 @@ def _publish_main(argv):
     # the gap scenario's count would include (a CI run saw 630 with best effort).
     pub = node.create_publisher(Imu, 'imu/data_raw', driver_qos(20000))
     t_pub = node.create_publisher(Temperature, 'imu/temperature', driver_qos(20000))
-    deadline = time.monotonic() + 60.0
+    deadline = time.monotonic() + args.match_timeout_s
     while pub.get_subscription_count() < args.subscribers and time.monotonic() < deadline:
         time.sleep(0.05)
+    if pub.get_subscription_count() < args.subscribers:
+        print(f'replayer: {pub.get_subscription_count()} of {args.subscribers} subscribers after '
+              f'{args.match_timeout_s} s; publishing anyway', file=sys.stderr, flush=True)
     # Discovery is done once matched, but give the subscriber's reader a moment to be fully set up.
     time.sleep(0.5)
     t0 = time.monotonic()

@@ -339,3 +339,24 @@ def test_bad_parameter_exits_2_with_one_line():
     assert lines[-1].startswith('noise_analyzer: error:'), done.stderr
     assert "'gap_policy'" in lines[-1], done.stderr
     assert 'Traceback' not in done.stderr
+
+
+def test_a_reference_of_several_bags_is_chosen_by_reference_bag(context, tmp_path):
+    from test_health import AXIS, write_summary
+
+    two = write_summary(tmp_path / 'ref.json', [
+        {'label': 'a', 'path': 'a', 'axes': {a: AXIS for a in 'xyz'}},
+        {'label': 'b', 'path': 'b', 'axes': {a: AXIS for a in 'xyz'}}])
+    # without it the node names its own parameter (was "choose one with bag")
+    with pytest.raises(ParameterError, match='choose one with reference_bag'):
+        analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+            reference_summary=str(two)))
+    with pytest.raises(ParameterError, match="reference_bag 'c' is not in reference summary"):
+        analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+            reference_summary=str(two), reference_bag='c'))
+    node = analyzer.NoiseAnalyzerNode(context=context, parameter_overrides=_overrides(
+        reference_summary=str(two), reference_bag='b'))
+    try:
+        assert {r.source.rsplit(':', 2)[1] for r in node.engine.reference.values()} == {'b'}
+    finally:
+        node.destroy_node()

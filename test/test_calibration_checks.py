@@ -19,6 +19,8 @@ Oracles: the scenario model's known errors (tilts, sensor matrices, the wander i
 an explicit covariance matrix as the twin of the variogram algebra, and closed forms.
 """
 
+import dataclasses
+
 from _reliability_common import six_position_record
 from gyro_noise_ros.calibration.dwell_noise import DwellNoise, DwellNoiseFitter
 from gyro_noise_ros.calibration.emulate import (BiasVariation, MultiPose, Scenario,
@@ -262,6 +264,38 @@ def test_multi_pose_gravity_check_names_a_bumped_pose():
     assert res.left_out == (loo[4].label,)
     assert np.all(np.abs(res.bias_m_s2 - errors.accel_bias_m_s2) < 4 * res.bias_sigma_m_s2)
     assert np.all(np.abs(res.scale_factor - (np.diag(lower) - 1.0)) < 4 * res.scale_factor_sigma)
+
+
+def test_nine_poses_calibrate_without_a_gravity_check_and_ten_check_sanely():
+    # 9 poses: 9 equations for 9 numbers, an exact fit. It used to end in a traceback (the
+    # leave-one-out refit of 8); now the calibration comes with uncertainties from the windows
+    # inside the dwells and no gravity check, which is said. 10 poses: each check refits 9
+    # (exact) and predicts the tenth; it used to rest on the rounding residuals of that exact
+    # fit (sigma ~1e-14 m/s^2 -> INCONSISTENT). Sane: sigma of the order of the pose means' noise
+    # with wander (0.05-1 mg here, measured 0.24 mg median), no false alarm on a clean record,
+    # a pose 3 mg off flagged (it is 10-60 sigma off).
+    errors = SensorErrors(accel_misalignment=MIS, **WANDER)
+    lower, _ = triangular(errors.accel_matrix)
+    for poses in (9, 10):
+        motion = MultiPose(poses=poses, dwell_s=30.0, move_s=5.0, lead_s=5.0)
+        t, accel, gyro = _record(motion, errors, seed=40 + poses)
+        dwells = select_poses([_detect(t, accel, gyro)])
+        assert len(dwells) == poses
+        res, loo, _ = calibrate_poses(dwells, G)
+        assert np.all((res.scale_factor_sigma > 1e-7) & (res.bias_sigma_m_s2 > 1e-6))
+        assert np.all(np.abs(res.scale_factor - (np.diag(lower) - 1.0))
+                      < 4 * res.scale_factor_sigma)
+        if poses == 9:
+            assert loo == ()
+            continue
+        sig = np.array([c.sigma_m_s2 for c in loo]) / (1e-3 * G)
+        assert len(loo) == 10 and np.all((sig > 0.05) & (sig < 1.0)), sig
+        assert all(c.consistent for c in loo)
+        up = dwells[3].accel_mean_m_s2 / np.linalg.norm(dwells[3].accel_mean_m_s2)
+        dwells[3] = dataclasses.replace(dwells[3], accel_mean_m_s2=dwells[3].accel_mean_m_s2
+                                        + 3e-3 * G * up)
+        _, loo, _ = calibrate_poses(dwells, G)
+        assert not all(c.consistent for c in loo)
 
 
 def test_multi_pose_needs_nine_poses_and_says_how_many():

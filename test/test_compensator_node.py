@@ -191,9 +191,10 @@ def test_thermal_offset_is_subtracted_and_range_drives_the_level(context):
         assert values['Temperature range status'] == 'inside'
         assert values['Thermal model'] == 'linear_test'
         # Within the margin (31 degC): WARN; beyond it (40 degC): ERROR, offset not extrapolated.
+        # Three seconds apart: a die cannot move 9 degC in 20 ms (core.plausible rejects that).
         late = t_stamps[-1] + NS // 50
         for temp, level, range_name in ((31.0, WARN, 'within margin'), (40.0, ERROR, 'outside')):
-            late += NS // 50
+            late += 3 * NS
             io.temp_pub.publish(encode_temperature_cdr([late], [temp], frame_id='imu_test')[0])
             assert _spin_until(io.executor, lambda: node.thermal.stamp_ns == late, 10)
             status = node.diagnostics().status[0]
@@ -213,15 +214,48 @@ def test_thermal_offset_is_subtracted_and_range_drives_the_level(context):
 
 
 @pytest.mark.timeout(120)
+def test_by_default_samples_newer_than_the_latest_temperature_get_its_offset_at_once(context):
+    # temperature_sync latest (the default, drained as messages arrive): nothing waits for a
+    # newer temperature; a sample past the newest one gets its offset, held, and is not counted.
+    model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), temperature_range_c=(20.0, 30.0))
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                          parameter_overrides=_overrides(
+                                              temperature_rate_window_s=1.0))
+    n = int(RATE_HZ)  # 1 s of samples, all after the two temperatures but the first
+    stamps, gyro, _, raws = _imu_stream(n, seed=9)
+    t_stamps = T0_NS + np.array([-NS // 2, 0])
+    temps = np.array([25.0, 26.0])
+    io = _Harness(context, node)
+    try:
+        io.play(raws, temperatures=encode_temperature_cdr(t_stamps, temps, frame_id='imu_test'))
+        status = node.diagnostics().status[0]
+        values = {kv.key: kv.value for kv in status.values}
+    finally:
+        io.close()
+    assert values['Temperature sync'] == 'latest'
+    assert values['Messages compensated with a held offset'] == '0'
+    assert values['Messages waiting for a temperature'] == '0'
+    assert status.level == OK, status.message
+    # The last sample is (n - 1) periods past the newest temperature.
+    assert float(values['Newest sample past its offset (ms)']) == pytest.approx(
+        (stamps[-1] - t_stamps[-1]) / 1e6, abs=0.05)
+    twin = LiveDriftEvaluator(model, rate_window_s=1.0)
+    twin.add_temperature(t_stamps, temps)
+    newest = twin.drift_at(t_stamps[-1:])[0]
+    np.testing.assert_allclose(decode_imu(io.out).gyro, gyro - newest, rtol=0, atol=1e-13)
+
+
+@pytest.mark.timeout(120)
 def test_samples_newer_than_the_latest_temperature_wait_for_the_next_one(context):
-    # A reliable imu/temperature stalled behind a resent message: the gyro samples after the
-    # newest temperature must not get its offset, held; they wait (max_temperature_wait_s) and
-    # get the interpolated one when the next temperature comes, or, past the bound, the newest
-    # one and a count.
+    # temperature_sync interpolate: a reliable imu/temperature stalled behind a resent message;
+    # the gyro samples after the newest temperature do not get its offset, held; they wait
+    # (max_temperature_wait_s) and get the interpolated one when the next temperature comes, or,
+    # past the bound, the newest one and a count. Drained on a timer, the other drain.
     model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), temperature_range_c=(20.0, 30.0))
     node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
                                           parameter_overrides=_overrides(
                                               temperature_rate_window_s=1.0,
+                                              temperature_sync='interpolate',
                                               max_temperature_wait_s=0.5,
                                               drain_period_s=0.01))
     n = int(RATE_HZ)  # 1 s of samples

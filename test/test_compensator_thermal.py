@@ -30,10 +30,11 @@ pytestmark = pytest.mark.ros
 
 
 def _model_file(tmp_path, method):
-    """Fit ``method`` and the accelerometer polynomial on a 20-min heating ramp, save it."""
+    """Fit ``method`` and the accelerometer polynomial on a 20-min warm-up, save it."""
     rng = np.random.default_rng(8)
     t = np.arange(0.0, 1200.0, 0.2)
-    temp = 15.0 + 20.0 * t / t[-1]
+    # holds around the ramp: a constant rate alone cannot support a dT term
+    temp = np.interp(t, [0.0, 200.0, 1000.0, t[-1]], [15.0, 15.0, 35.0, 35.0])
     d = temp - 25.0
     gyro = np.column_stack([1e-3 * d, -5e-4 * d, 2e-4 * d]) + rng.normal(0, 1e-4, (t.size, 3))
     accel = (np.column_stack([2e-3 * d, -1e-3 * d + 2e-5 * d ** 2, 9.81 + 3e-3 * d])

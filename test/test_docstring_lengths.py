@@ -41,9 +41,9 @@ LIMIT = 25
 #: 30). A shrinking list: remove a module once its docstring is within the limit (the test says
 #: which), never add one; the final sweep of issue 34 empties it.
 ALLOWED = {
-    'calibration/emulate.py', 'calibration/gyro_turns.py', 'core/allan.py', 'link/clock.py',
-    'nodes/analyzer.py', 'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py',
-    'thermal/export.py', 'thermal/live.py', 'thermal/metrics.py', 'thermal/simulate.py',
+    'calibration/emulate.py', 'calibration/gyro_turns.py', 'link/clock.py', 'nodes/analyzer.py',
+    'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py', 'thermal/live.py',
+    'thermal/metrics.py', 'thermal/simulate.py',
 }
 
 SNIPPET = '''\

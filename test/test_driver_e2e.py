@@ -39,6 +39,7 @@ monotonic stamps under a device clock that runs 4x fast.
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -47,6 +48,7 @@ import time
 from _e2e import free_port, readline
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from gyro_noise_ros.bag import decode_imu, decode_temperature
+from gyro_noise_ros.cli.analyze import main as analyze_main
 from gyro_noise_ros.cli.emulator import board_from_args
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos
 import numpy as np
@@ -151,6 +153,7 @@ class Listener:
         self.raw = {'imu': [], 'temp': []}
         self.dds_seq = []
         self.statuses = []
+        self.others = {}  # status name -> the latest status of the other nodes
 
     def wait_for_publisher(self, timeout_s):
         sub = self.subs['imu'][0]
@@ -168,6 +171,7 @@ class Listener:
                     if key == 'diag':
                         self.statuses += [s for s in msg.status
                                           if s.name == 'lsm6dso32_driver: link']
+                        self.others.update((s.name, s) for s in msg.status)
                     else:
                         self.raw[key].append(msg)
                         if key == 'imu':
@@ -433,3 +437,71 @@ def test_accelerated_emulator(procs, listener):
              if listener.values(s)['Connection'] == 'streaming']
     # Published at 4 x 1667 Hz (median of 0.5 s windows; 5 % covers partial windows and load).
     assert abs(np.median(rates) / (4 * 1667.0) - 1) < 0.05
+
+
+# The analyzer's chunks short enough for a few seconds (the node's logic does not depend on it).
+_SMALL_ANALYSIS = ['chunk_size:=2000', 'memory:=200', 'order_grid_step:=0.05',
+                   'diagnostics_period_s:=0.5', 'allan:=false', 'reliable:=true']
+
+
+@pytest.mark.parametrize('drop_rate', [0.0, 5e-4], ids=['no_drops', 'drops'])
+def test_loss_is_what_the_board_lost_at_every_layer(procs, listener, tmp_path, drop_rate):
+    # Issue 29: the driver's stamp mapping once stepped and the analyzer, the live lines and the
+    # offline report read "3 sample(s) lost" where the board had dropped none. The board's own
+    # count of the drops a receiver can see (emulator stats 'visible_lost') must be the driver's
+    # (sequence counter), the analyzer's (stamps) and the offline report's (timebase) count.
+    port = free_port()
+    url = f'socket://127.0.0.1:{port}'
+    driver = procs.driver(url)
+    bag = tmp_path / 'bag'
+    for name, argv in (('noise_analyzer', ['-m', 'gyro_noise_ros.nodes.analyzer', '--ros-args',
+                                           *(a for p in _SMALL_ANALYSIS for a in ('-p', p))]),
+                       ('recorder', ['-m', 'gyro_noise_ros.nodes.recorder', '--ros-args',
+                                     '-p', f'output:={bag}', '-p', 'reliable:=true',
+                                     '-p', 'report_period_s:=0.5'])):
+        procs.procs.append(subprocess.Popen([sys.executable, *argv], env=dict(os.environ),
+                                            stderr=open(tmp_path / f'{name}.log', 'w')))
+    consumers = procs.procs[-2:]
+    listener.wait_for_publisher(60.0)
+    time.sleep(3.0)  # the analyzer and the recorder match the driver too
+    emu_args = ['--seed', '31', *SIGNAL, '--samples', '40000', '--drop-flagged-rate',
+                str(drop_rate), '--drop-unflagged-rate', str(drop_rate)]
+    emu, _, stats_path = procs.emulator(*emu_args, tcp=f'127.0.0.1:{port}')
+    assert emu.wait(60.0) == 0  # the board has sent its 40,000 samples
+    stats = json.loads(stats_path.read_text())
+    # The board is gone: a status after the link went down counts everything the driver read
+    # (statuses queued before the board started said 'connecting': drained first).
+    listener.drain()
+    n_before = len(listener.statuses)
+    listener.run(lambda: any(listener.values(s)['Connection'] != 'streaming'
+                             for s in listener.statuses[n_before:]), 60.0)
+    driver_final = listener.values(listener.statuses[-1])
+    published = int(driver_final['Samples published'])
+
+    def analyzed():
+        status = listener.others.get('noise_analyzer: axis x')
+        return 0 if status is None else int(listener.values(status)['Samples received'])
+    listener.run(lambda: analyzed() >= published, 60.0)
+    analyzer_final = listener.values(listener.others['noise_analyzer: axis x'])
+
+    def recorded():  # the recorder's latest report line: 'N Imu, M Temperature written; ...'
+        counts = re.findall(r'(\d+) Imu, \d+ Temperature written',
+                            (tmp_path / 'recorder.log').read_text())
+        return int(counts[-1]) if counts else 0
+    listener.run(lambda: recorded() >= published, 60.0)
+    for proc in (*consumers, driver):
+        assert procs.stop(proc) == 130  # interrupted by SIGINT
+    visible = stats['visible_lost']
+    assert (visible > 0) == (drop_rate > 0)
+    assert int(driver_final['Samples lost']) == visible
+    assert int(analyzer_final['Samples lost'].split()[0]) == visible
+    assert int(analyzer_final['Samples received']) == published
+    out = tmp_path / 'report'
+    # --static off: the loss is counted over the whole recording (auto keeps a static segment)
+    assert analyze_main([str(bag), '--out', str(out), '--chunk-size', '2000', '--memory', '200',
+                         '--order-grid', '0:2:0.05', '--no-html', '--no-figures',
+                         '--static', 'off']) == 0
+    summary = json.loads((out / 'summary.json').read_text())
+    assert [b['samples'] for b in summary['bags']] == [published]
+    assert [b['samples_lost'] for b in summary['bags']] == [visible]
+    assert [b['clock_steps'] for b in summary['bags']] == [0]

@@ -70,6 +70,8 @@ class Harness:
     def __init__(self, context, listen=True, **overrides):
         overrides.setdefault('port', closed_port_url())
         overrides.setdefault('reconnect_period_s', 60.0)
+        # Published at once: the tests feed a few frames; the settling has its own test.
+        overrides.setdefault('clock_settle_s', 0.0)
         self.driver = Lsm6dso32Driver(context=context, parameter_overrides=[
             Parameter(name, value=value) for name, value in overrides.items()])
         self.sub_node = rclpy.create_node('test_listener', context=context)
@@ -240,6 +242,29 @@ def test_publish_once_and_loss_count(harness):
     assert got == list(range(15)) + list(range(20, 25))
     snap = h.driver.link_snapshot()
     assert (snap['published'], snap['duplicates'], snap['lost']) == (20, 5, 5)
+
+
+def test_the_first_samples_wait_for_the_clock_to_settle_then_all_go_in_order(harness):
+    # clock_settle_s: the start of a board epoch is held while the clock mapping converges, then
+    # published in order with stamps that never step; a restarted board settles again.
+    h = harness(clock_settle_s=0.05)
+    cfg = LinkConfig(6667.0, 2000, 32)
+    now = h.driver.get_clock().now().nanoseconds
+    counts = []
+    for b in range(40):  # 16-sample frames, 2.4 ms of device time each
+        seq = 10_000 + np.arange(16 * b, 16 * (b + 1))
+        counts.append(h.driver.publish_samples(make_samples(seq), now + b * 2_400_000, cfg))
+    first = next(i for i, c in enumerate(counts) if c)
+    assert 0 < first < 39 and counts[first] == 16 * (first + 1)  # 0.05 s = 20.8 frames
+    assert sum(counts) == 640
+    h.spin_until(lambda: len(h.imu) == 640, 10.0)
+    got = [round(m.angular_velocity.x / gyro_lsb(2000)) for m in h.imu]
+    assert got == list(range(10_000, 10_640))
+    stamps = np.array([stamp_ns(m) for m in h.imu])
+    assert np.all(np.abs(np.diff(stamps) - 150_000) < 1500)  # within 1 % of a period
+    # The board restarts (its counter falls back): the new epoch is held while it settles.
+    assert h.driver.publish_samples(make_samples(np.arange(16)), now + 10**9, cfg) == 0
+    assert h.driver.link_snapshot()['restarts'] == 1
 
 
 # --------------------------------------------------------------------------- link lifecycle

@@ -36,9 +36,10 @@ H0 = 1_763_000_000_000_000_000  # a 2025 UNIX time in ns: the float64 trap is re
 
 def emulate(clock, *, seconds, ppm, rng, t0_us=0, jitter_mean_ns=2e6, start_index=0,
             host_offset_ns=0):
-    """Run the clock over an emulated link; return (stamps, errors) in ns."""
+    """Run the clock over an emulated link; return the released (stamps, errors) in ns."""
     nbatch = int(seconds * ODR / BATCH)
     stamps, errors = [], []
+    waiting = np.zeros(0)  # true times of samples the clock holds while its epoch settles
     for b in range(nbatch):
         k = start_index + b * BATCH + np.arange(BATCH)
         dev_us = np.floor(k * 1e6 / ODR)           # device microseconds since its t0
@@ -47,8 +48,10 @@ def emulate(clock, *, seconds, ppm, rng, t0_us=0, jitter_mean_ns=2e6, start_inde
         true_ns = H0 + host_offset_ns + dev_us * 1000.0 / (1.0 + ppm * 1e-6)
         recv = int(true_ns[-1] + LATENCY_NS + rng.exponential(jitter_mean_ns))
         st = clock.update(t_us, recv)
+        waiting = np.concatenate((waiting, true_ns))
         stamps.append(st)
-        errors.append(st - true_ns - LATENCY_NS)
+        errors.append(st - waiting[:st.size] - LATENCY_NS)
+        waiting = waiting[st.size:]
     return np.concatenate(stamps), np.concatenate(errors)
 
 
@@ -136,3 +139,98 @@ def test_reset_keeps_monotonic_floor_and_bad_parameters_raise():
                    {'reset_threshold_s': 0}):
         with pytest.raises(ParameterError):
             DeviceClock(**kwargs)
+
+
+def _loss_read_downstream(stamps):
+    """Return the samples lost and clock steps the analyzer reads in the stamps (core.stamps)."""
+    from gyro_noise_ros.core.stamps import StampAccountant
+
+    accountant = StampAccountant(None, 1.5, 10000)
+    for i in range(0, stamps.size, 700):
+        accountant.add(stamps[i:i + 700], ())
+    accountant.flush()
+    counts = accountant.counts(chunks=0, tail_samples=0, discarded_samples=0,
+                               discarded_partials=0)
+    return counts.samples_lost, counts.clock_steps
+
+
+@pytest.mark.parametrize('ppm', [50.0, -50.0])
+def test_stamps_never_step_so_no_loss_is_invented(ppm):
+    # Issue 29: the estimate's corrections once made the stamps step by fractions of a period,
+    # read downstream as lost samples. Held while the offset settles, then slewed: every step is
+    # a period within the slew (500 ppm) and the compression of a late batch.
+    rng = np.random.default_rng(21)
+    clock = DeviceClock(nominal_rate_hz=ODR, settle_s=0.5)
+    stamps, err = emulate(clock, seconds=40, ppm=ppm, rng=rng)
+    assert stamps.size == int(40 * ODR) // BATCH * BATCH  # nothing held back at the end
+    ratio = np.diff(stamps) / (1e9 / ODR)
+    # 149/150 us device steps (integer microseconds) are +-0.5 % of a period; the rest is
+    # drift, slew and compressions of at most a few tens of microseconds per batch.
+    assert 0.97 < ratio.min() and ratio.max() < 1.03
+    # settled before the first stamp: within the jitter's block minimum from the start
+    assert np.max(np.abs(err)) < 100_000
+    assert _loss_read_downstream(stamps) == (0, 0)
+    assert clock.state.settled and clock.state.held == 0 and clock.state.steps == 0
+
+
+def test_dropped_samples_are_counted_exactly_downstream():
+    # The board drops samples (its counter and clock run on): the stamps keep the gaps whole.
+    rng = np.random.default_rng(22)
+    clock = DeviceClock(nominal_rate_hz=ODR, settle_s=0.5)
+    keep = np.ones(int(30 * ODR) // BATCH * BATCH, bool)
+    dropped = rng.choice(np.arange(int(2 * ODR), keep.size - 100), size=40, replace=False)
+    keep[dropped] = False
+    stamps = []
+    for b in range(keep.size // BATCH):
+        k = b * BATCH + np.arange(BATCH)
+        k = k[keep[k]]
+        if k.size == 0:
+            continue
+        dev_us = np.floor(k * 1e6 / ODR).astype(np.int64)
+        recv = int(H0 + (b + 1) * BATCH * 1e9 / ODR + LATENCY_NS + rng.exponential(2e6))
+        stamps.append(clock.update(dev_us.astype(np.uint32), recv))
+    stamps = np.concatenate(stamps)
+    assert stamps.size == keep.sum()
+    assert _loss_read_downstream(stamps) == (40, 0)
+
+
+def test_settling_holds_the_first_samples_then_releases_them_in_order():
+    clock = DeviceClock(nominal_rate_hz=ODR, settle_s=0.1)
+    released = []
+    for b in range(60):
+        t = ((np.arange(BATCH) + b * BATCH) * 150).astype(np.uint32)
+        out = clock.update(t, H0 + int(t[-1]) * 1000 + 300_000)
+        released.append(out.size)
+        if b * BATCH * 150 < 100_000 - BATCH * 150:
+            assert out.size == 0 and clock.state.held == (b + 1) * BATCH
+    first = next(i for i, n in enumerate(released) if n)
+    assert released[first] == (first + 1) * BATCH  # all held samples, then one batch at a time
+    assert set(released[first + 1:]) == {BATCH}
+    # a reset releases nothing by itself: flush stamps the held ones first
+    clock.reset()
+    t = np.arange(BATCH, dtype=np.uint32) * 150
+    assert clock.update(t, H0 + 10**10).size == 0
+    flushed = clock.flush()
+    assert flushed.size == BATCH and clock.state.held == 0
+    with pytest.raises(ParameterError):
+        DeviceClock(settle_s=-1.0)
+
+
+def test_a_late_read_is_not_a_clock_jump():
+    # The host stalls for 0.8 s (a loaded machine): the board's bytes wait in the port and arrive
+    # in one read at the end of the stall, 0.8 s after the previous read but only one period
+    # later in device time. Device time did not jump: no reset, no step in the stamps.
+    rng = np.random.default_rng(23)
+    clock = DeviceClock(nominal_rate_hz=ODR, settle_s=0.5)
+    before, _ = emulate(clock, seconds=5, ppm=30.0, rng=rng)
+    k0 = int(5 * ODR) // BATCH * BATCH
+    n = int(0.8 * ODR)
+    dev_us = np.floor((k0 + np.arange(n)) * 1e6 / ODR).astype(np.int64)
+    true_last = H0 + dev_us[-1] * 1000.0 / (1 + 30e-6)
+    late = clock.update(dev_us.astype(np.uint32), int(true_last + LATENCY_NS + 1e5))
+    after, err = emulate(clock, seconds=2, ppm=30.0, rng=rng, start_index=k0 + n)
+    assert clock.state.resets == 0
+    stamps = np.concatenate((before, late, after))
+    ratio = np.diff(stamps) / (1e9 / ODR)
+    assert 0.97 < ratio.min() and ratio.max() < 1.03
+    assert np.max(np.abs(err)) < 100_000

@@ -136,6 +136,20 @@ def test_sequence_gap_counter():
     assert c.missing == 7
 
 
+def test_sequence_gap_counter_short_lists_count_as_arrays():
+    # Short lists take a plain loop, arrays the vectorised path: the same counts, batch by batch.
+    rng = np.random.default_rng(5)
+    seq = np.cumsum(rng.choice([1, 1, 1, 2, 5, -40], size=3000)) + 50
+    seq[rng.random(seq.size) < 0.02] = 0
+    loop, vector = SequenceGapCounter(), SequenceGapCounter()
+    start = 0
+    while start < seq.size:
+        stop = start + int(rng.integers(1, 40))
+        assert loop.update(seq[start:stop].tolist()) == vector.update(seq[start:stop])
+        start = stop
+    assert loop.missing == vector.missing > 0 and loop.last == vector.last
+
+
 def test_imu_covariances_read_back_what_was_encoded():
     from gyro_noise_ros.msgs import encode_imu_cdr
 

@@ -153,3 +153,57 @@ def test_shipped_file_applies_under_a_namespace(name, tmp_path):
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown(context=ctx)
+
+
+def _driver(ctx, args):
+    from gyro_noise_ros.nodes.driver import Lsm6dso32Driver
+
+    return Lsm6dso32Driver(context=ctx, parameter_overrides=[Parameter('autostart', value=False)])
+
+
+@pytest.mark.parametrize('key, extra, refused', [
+    ('/**', [], False),                           # a file shared by several nodes: warned
+    ('/*/lsm6dso32_driver', [], True),            # a pattern ending in this node's name
+    ('/robot1/*', [], False),                     # every node of the namespace: warned
+    ('/robot1/lsm6dso32_driver', [], True),       # the node's own section: refused
+    ('/**', ['-p', 'queue_depth:=5'], True),      # given on the command line as well: refused
+])
+def test_an_unknown_name_of_a_shared_file_is_warned_and_one_given_to_the_node_refused(
+        key, extra, refused, tmp_path, monkeypatch, ros_graph, caplog):
+    # queue_depth is the recorder's, not the driver's: in a '/**' section meant for every node
+    # it is another node's parameter; anywhere addressed to the driver it is a mistake
+    from gyro_noise_ros.errors import ParameterError
+    from gyro_noise_ros.nodes import _params
+
+    path = tmp_path / 'shared.yaml'
+    section = {'ros__parameters': {'queue_depth': 5, 'qos_depth': 77}}
+    path.write_text(yaml.safe_dump({key: section}))
+    argv = ['lsm6dso32_driver', '--ros-args', '-r', '__ns:=/robot1', '--params-file', str(path),
+            *extra]
+    monkeypatch.setattr('sys.argv', argv)
+    monkeypatch.setattr(_params, '_WARNED', set())
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, args=argv)
+    try:
+        if refused:
+            with pytest.raises(ParameterError, match="unknown parameter 'queue_depth'"):
+                _driver(ctx, argv)
+            return
+        node = _driver(ctx, argv)
+        try:
+            assert node.get_parameter('qos_depth').value == 77      # the file did apply
+        finally:
+            node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
+def test_the_sections_of_a_parameter_file_are_read_with_nested_names(tmp_path):
+    from gyro_noise_ros.nodes._params import params_file_sections
+
+    path = tmp_path / 'p.yaml'
+    path.write_text('/**:\n  ros__parameters:\n    a: 1\n    grp:\n      b: 2\n'
+                    'robot1:\n  noise_analyzer:\n    ros__parameters:\n      c: [1, 2]\n')
+    assert params_file_sections(['x', '--params-file', str(path), '--params-file',
+                                 str(tmp_path / 'missing.yaml')]) == [
+        (str(path), '**', ['a', 'grp.b']), (str(path), 'robot1/noise_analyzer', ['c'])]

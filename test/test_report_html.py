@@ -19,6 +19,7 @@ The browser half (rendering, console errors, screenshots) is test_report_html_br
 """
 
 import hashlib
+import html
 import json
 
 from _html_report import check_static, parse_report
@@ -293,6 +294,17 @@ def test_thermal_compare_page_is_compare_json(thermal_outputs):
             assert v['verdict']['text'] in text
     for bag in bags:
         assert bag in page.sections['method']
+    # the verdict line is compare.md's; the card ranks the methods by x noise floor
+    from gyro_noise_ros.thermal.report import compare_verdict
+
+    level, line = compare_verdict(doc)
+    assert (tmp / 'c' / 'compare.md').read_text().startswith(
+        f'# Held-out comparison\n\n**{level}**: {line}')
+    html = (tmp / 'c' / 'report.html').read_text()
+    assert f'<div id="verdict" class="verdict verdict-{level.lower()}"' in html
+    assert f'<span class="level">{level}</span>' in html
+    assert {f'/ranking/{i}/mean_over_floor' for i in range(2)} <= shown
+    assert all(r['method'] in page.sections['card'] for r in doc['ranking'])
 
 
 @pytest.mark.slow
@@ -303,6 +315,14 @@ def test_thermal_apply_page_is_metrics_json(thermal_outputs):
     assert {f'/axes/{a}/processed/residual_drift_deg_s' for a in 'xyz'} <= {
         n[0] for n in page.nums}
     assert (tmp / 'a' / 'report.html').read_text().count('<div class="figure">') == 4
+    # the verdict line is report.md's; the card holds the yardstick
+    from gyro_noise_ros.thermal.report import apply_verdict
+
+    level, line = apply_verdict(doc)
+    assert f'**{level}**: {line}' in (tmp / 'a' / 'report.md').read_text()
+    assert f'<span class="level">{level}</span>' in (tmp / 'a' / 'report.html').read_text()
+    assert {f'/yardstick/over_floor/{a}' for a in range(3)} <= {n[0] for n in page.nums}
+    assert 'x noise floor' in page.sections['card']
     assert not (tmp / 'a2' / 'report.html').exists() and (tmp / 'a2' / 'metrics.json').exists()
 
 
@@ -357,7 +377,10 @@ def make_reliability(tmp):
                                                      seed=seed)))
             for name, e, seed in (('before', errors, 1),
                                   ('after', errors.stressed(instability_factor=2.0), 2))]
-    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures']
+    # --static off: this sensor's bias walk is cut as motion by the static-segment rule
+    # (test_reliability_cli.WHOLE)
+    args = ['--before-static', bags[0], '--after-static', bags[1], '--no-figures', '--static',
+            'off']
     assert reliability_main([*args, '--out', str(tmp / 'rel')]) == 0
     assert reliability_main([*args, '--out', str(tmp / 'rel_nohtml'), '--no-html']) == 0
     return tmp / 'rel', bags
@@ -373,6 +396,16 @@ def test_reliability_page_is_reliability_json(tmp_path):
         assert f'/bias_instability_interval/{ch}/verdict' in shown
     for ch, e in doc['bias_instability_interval'].items():
         assert f'{ch}: {e["verdict"]}' in page.sections['in-short']
+    # the verdict line is the fixed-tau verdict (overall): its level, each sensor's sentence
+    text = (out / 'report.html').read_text()
+    line = text[text.index('<div id="verdict"'):]
+    line = line[:line.index('</div>')]
+    levels = {'beyond': 'error', 'undetermined': 'info', 'within': 'ok'}
+    worst = min((levels[e['verdict']] for e in doc['overall'].values()),
+                key=('error', 'info', 'ok').index)
+    assert f'verdict-{worst}' in line
+    for sensor, e in doc['overall'].items():
+        assert html.escape(e['sentence'], quote=False) in line, (sensor, line)
     assert not (tmp_path / 'rel_nohtml' / 'report.html').exists()
 
 

@@ -142,3 +142,47 @@ def test_ros1_input_gives_a_ros2_copy(tmp_path, make_record):
         assert r.storage == 'sqlite3'
         np.testing.assert_array_equal(next(r.iter_batches()).gyro, -gyro)
         np.testing.assert_array_equal(r.read_temperature()[1], temp)
+
+
+def _dense(n=3000, seed=0):
+    """Return 60 s at 50 Hz, temperature at 10 Hz: 601 readings of a 15 -> 45 degC ramp."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / RATE
+    temp_t = np.arange(0.0, t[-1] + 0.1, 0.1)
+    return t, rng.normal(0.0, 1e-3, (n, 3)), temp_t, 15.0 + 0.5 * temp_t
+
+
+def test_implausible_temperatures_are_dropped_and_counted(tmp_path):
+    # the issue's cases: a 0x7FFF word (153 degC) and a 1e6 degC reading in a 15..45 degC run
+    t, gyro, temp_t, temp = _dense()
+    bad = temp.copy()
+    bad[[100, 300]] = (25.0 + 32767.0 / 256.0, 1e6)
+    path, _ = write_thermal_bag(tmp_path / 'b', t, gyro, temp_t, bad)
+    run, info = read_thermal_run(path)
+    assert info.temperature_samples == temp_t.size and info.temperature_dropped == 2
+    # interpolated over the dropped readings: the ramp itself
+    np.testing.assert_allclose(run.temperature_c, 15.0 + 0.5 * t, atol=1e-9)
+    assert run.temperature_c.max() < 45.0
+    assert info.temperature_period_s == pytest.approx(0.1) == run.temperature_period_s
+    (note,) = info.notes
+    assert '2 of 601 temperature readings' in note and 'first at 10.000 s' in note
+    assert '1 saturated register words' in note and 'dropped' in note
+
+
+def test_a_stream_with_many_implausible_readings_is_refused_naming_the_first(tmp_path):
+    t, gyro, temp_t, temp = _dense()
+    bad = temp.copy()
+    bad[250::50] = 100.0    # 8 of 601 readings outside -40..85 degC: over 1 %
+    path, _ = write_thermal_bag(tmp_path / 'b', t, gyro, temp_t, bad)
+    with pytest.raises(InputDataError, match=r'8 of 601 .*first at 25\.000 s \(100 degC\); '
+                                             r'more than 1 %'):
+        read_thermal_run(path)
+
+
+def test_kelvin_is_converted_with_a_note(tmp_path):
+    t, gyro, temp_t, temp = _dense()
+    path, _ = write_thermal_bag(tmp_path / 'k', t, gyro, temp_t, temp + 273.15)
+    run, info = read_thermal_run(path)
+    np.testing.assert_allclose(run.temperature_c, 15.0 + 0.5 * t, atol=1e-9)
+    (warning,) = info.warnings
+    assert 'kelvin' in warning and '288.15..318.15' in warning and not info.notes

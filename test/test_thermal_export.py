@@ -17,10 +17,13 @@
 
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.thermal.baselines import LinearTdT, TemperaturePolynomial
-from gyro_noise_ros.thermal.export import (ardupilot_parameters, calibration_of,
-                                           px4_parameters, write_ardupilot_parm,
+from gyro_noise_ros.thermal.export import (ardupilot_applied_offset, ardupilot_notes,
+                                           ardupilot_parameters, calibration_of,
+                                           firmware_residuals, px4_applied_offset, px4_device_id,
+                                           px4_parameters, remap_axes, write_ardupilot_parm,
                                            write_px4_params)
 from gyro_noise_ros.thermal.methods import fit_accel
+from gyro_noise_ros.thermal.metrics import residual_drift_deg_s
 from gyro_noise_ros.thermal.run import ThermalRun
 import numpy as np
 import pytest
@@ -94,7 +97,8 @@ def test_px4_parameters_reproduce_the_model(fitted, tmp_path):
     poly, accel_poly, temp = fitted
     gyro, accel = calibration_of(poly), calibration_of(accel_poly, unit='m/s^2')
     text = write_px4_params(tmp_path / 'tc.params',
-                            px4_parameters(gyro, accel, gyro_device_id=2359306),
+                            px4_parameters(gyro, accel, gyro_device_id=2359306,
+                                           accel_device_id=2359562),
                             comment='from test')
     assert (tmp_path / 'tc.params').read_text() == text
     p = _read_px4(text)
@@ -154,16 +158,87 @@ def test_export_refusals(fitted):
         wide = TemperaturePolynomial(order=5)
         wide.coef, wide.t_ref_c, wide.t_min_c, wide.t_max_c = np.zeros((3, 6)), 20.0, 0.0, 40.0
         calibration_of(wide)
-    with pytest.raises(ParameterError, match='instance'):
-        px4_parameters(calibration_of(poly), instance=3)
+    with pytest.raises(ParameterError, match='instance must be 0..3'):
+        px4_parameters(calibration_of(poly), instance=4)
     with pytest.raises(ParameterError, match='IMU number'):
         ardupilot_parameters(calibration_of(poly), imu=4)
     with pytest.raises(ParameterError, match='nothing to export'):
         px4_parameters(None)
+    for bad in (99999999999, -1, 2 ** 24, 7, 1.5):
+        with pytest.raises(ParameterError, match='px4_gyro_id'):
+            px4_parameters(calibration_of(poly), gyro_device_id=bad)
+
+
+def test_ardupilot_range_is_a_note_not_a_refusal():
+    # the documented -70..80 degC of TMIN/TMAX is not enforced by the firmware: a calibration up
+    # to 82 degC is written, with a note; one inside the range has none
     hot = TemperaturePolynomial()
-    hot.coef, hot.t_ref_c, hot.t_min_c, hot.t_max_c = np.zeros((3, 4)), 90.0, 70.0, 110.0
-    with pytest.raises(ParameterError, match='-70..80 degC'):
-        ardupilot_parameters(calibration_of(hot))
+    hot.coef, hot.t_ref_c, hot.t_min_c, hot.t_max_c = np.zeros((3, 4)), 50.0, 18.0, 82.0
+    p = dict(ardupilot_parameters(calibration_of(hot)))
+    assert p['INS_TCAL1_TMAX'] == 82.0
+    (note,) = ardupilot_notes(calibration_of(hot))
+    assert '18.00..82.00 degC leave the documented -70..80' in note
+    hot.t_max_c = 80.0
+    assert ardupilot_notes(calibration_of(hot)) == ()
+
+
+def test_px4_device_ids_and_instances():
+    # 2359306 = 0x24000A: bus type 2 (SPI), bus 1, address 0, device type 0x24
+    assert px4_device_id(2359306) == {'id': 2359306, 'bus_type': 'SPI', 'bus': 1, 'address': 0,
+                                      'devtype': 0x24}
+    cal = TemperaturePolynomial()
+    cal.coef, cal.t_ref_c, cal.t_min_c, cal.t_max_c = np.ones((3, 4)), 30.0, 10.0, 50.0
+    p = {n: v for n, v, _ in px4_parameters(calibration_of(cal), calibration_of(cal),
+                                            instance=3, gyro_device_id=2359306)}
+    # the gyro enabled and matched; the accelerometer without an id written disabled
+    assert (p['TC_G_ENABLE'], p['TC_G3_ID'], p['TC_A_ENABLE'], p['TC_A3_ID']) == (1, 2359306, 0, 0)
+    assert p['TC_G3_X1_2'] == 1.0
+
+
+def _px4_twin(cal, t, temp):
+    """Run the module's loop one tick at a time: each second, publish if T moved > 1 degC."""
+    out = np.zeros((t.size, 3))
+    last, current, tick = -100.0, None, t[0]
+    for k in range(t.size):
+        while tick <= t[k] + 1e-12:
+            reading = np.float32(temp[np.searchsorted(t, tick, side='right') - 1])
+            if abs(reading - np.float32(last)) > 1.0:
+                last = float(reading)
+                current = cal.offset([last])[0]
+            tick += 1.0
+        out[k] = 0.0 if current is None else current
+    return out
+
+
+def test_px4_update_rule_against_a_step_by_step_twin(fitted):
+    poly, _, _ = fitted
+    cal = calibration_of(poly)
+    t = np.arange(0.0, 600.0, 0.05)
+    temp = 30.0 + 20.0 * np.sin(2.0 * np.pi * t / 400.0)
+    got = px4_applied_offset(cal, t, temp)
+    # float32 evaluation against float64: 1e-6 of the offset's span
+    span = np.ptp(cal.offset(temp), axis=0).max()
+    np.testing.assert_allclose(got, _px4_twin(cal, t, temp), rtol=0, atol=1e-6 * span)
+    # held between publications: the offset only changes where the temperature moved > 1 degC
+    changes = np.flatnonzero(np.any(np.diff(got, axis=0) != 0.0, axis=1)) + 1
+    published = temp[changes]
+    assert (np.abs(np.diff(published)) > 1.0).all()
+    # a constant temperature: published once, at the first tick, then held
+    still = px4_applied_offset(cal, t, np.full(t.size, 33.3))
+    np.testing.assert_allclose(still, np.broadcast_to(cal.offset([33.3]), still.shape),
+                               rtol=0, atol=1e-6 * span)
+
+
+def test_ardupilot_rule_is_the_model_in_float32(fitted):
+    poly, _, temp = fitted
+    cal = calibration_of(poly)
+    probe = np.linspace(-20.0, 80.0, 1001)
+    span = np.ptp(cal.offset(probe), axis=0).max()
+    np.testing.assert_allclose(ardupilot_applied_offset(cal, probe), cal.offset(probe), rtol=0,
+                               atol=1e-6 * span)
+    # another CALTEMP: the same offsets (OFFS is the model's offset there)
+    np.testing.assert_allclose(ardupilot_applied_offset(cal, probe, cal_temp_c=12.0),
+                               cal.offset(probe), rtol=0, atol=1e-6 * span)
 
 
 def test_reexpansion_is_exact(fitted):
@@ -174,3 +249,35 @@ def test_reexpansion_is_exact(fitted):
         b = cal.about(ref)
         got = np.column_stack([np.polyval(b[a, ::-1], x - ref) for a in range(3)])
         np.testing.assert_allclose(got, cal.offset(x), rtol=0, atol=1e-14)
+
+
+def test_axes_are_remapped_to_the_autopilots(fitted):
+    poly, _, _ = fitted
+    cal = calibration_of(poly)
+    probe = np.linspace(0.0, 60.0, 7)
+    turned = remap_axes(cal, '-y, x ,+z')   # the chip turned 90 degrees about z on the board
+    np.testing.assert_array_equal(turned.offset(probe),
+                                  np.column_stack([-cal.offset(probe)[:, 1],
+                                                   cal.offset(probe)[:, 0],
+                                                   cal.offset(probe)[:, 2]]))
+    np.testing.assert_array_equal(remap_axes(cal, 'x,y,z').coef, cal.coef)
+    for bad in ('x,x,z', 'x,y', 'x,y,w', '--x,y,z', ''):
+        with pytest.raises(ParameterError, match='axes must name'):
+            remap_axes(cal, bad)
+
+
+def test_firmware_residuals_on_a_run(fitted):
+    poly, _, _ = fitted
+    cal = calibration_of(poly)
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 1800.0, 0.1)
+    temp = 30.0 + 10.0 * np.sin(2.0 * np.pi * t / 900.0)
+    gyro = cal.offset(temp) + rng.normal(0.0, 1e-3, (t.size, 3))
+    got = firmware_residuals(cal, t, gyro, temp)
+    np.testing.assert_allclose(got['raw'], residual_drift_deg_s(gyro, 10.0), rtol=1e-6)
+    np.testing.assert_allclose(got['model'], residual_drift_deg_s(gyro - cal.offset(temp), 10.0),
+                               rtol=1e-6)
+    # ArduPilot evaluates the cubic at every sample: the model's residual to float32 rounding;
+    # PX4's 1 degC steps leave more on a run sweeping 20 degC every 15 minutes
+    np.testing.assert_allclose(got['ardupilot'], got['model'], rtol=1e-3)
+    assert all(p > m for p, m in zip(got['px4'], got['model']))

@@ -152,7 +152,7 @@ def test_range_status_and_never_extrapolated():
     lo, hi, margin = check_live_model(model)
     assert (lo, hi, margin) == (20.0, 30.0, 2.0)
     ev = LiveDriftEvaluator(model, rate_window_s=0.5)
-    temps = [25.0, 31.0, 33.0, 40.0, 29.0]
+    temps = [25.0, 31.0, 33.0, 37.0, 29.0]   # at most 4 degC/s: a die can move so
     stamps = NS * np.arange(1, 6)
     ev.add_temperature(stamps, temps)
     np.testing.assert_array_equal(ev.range_status(temps), [RANGE_OK, RANGE_MARGIN, RANGE_OUTSIDE,
@@ -223,3 +223,46 @@ def test_model_file_range_comes_from_the_training_record(monkeypatch):
     assert got is method and range_c == (10.0, 40.0) and margin == 3.0
     ev = LiveDriftEvaluator(got, range_c=range_c, margin_c=margin)
     assert (ev.range_lo_c, ev.range_hi_c, ev.margin_c) == (10.0, 40.0, 3.0)
+
+
+def test_implausible_temperatures_are_rejected_live():
+    # a 0x7FFF word and an in-range jump of 30 degC in 19 ms: rejected and counted like NaN,
+    # the offsets come from the plausible messages only
+    model = LinearThermal(sensitivity=(1.0, 1.0, 1.0), temperature_range_c=(10.0, 60.0))
+    t_ns = NS * (1.0 + np.arange(200) / 52.0)
+    temps = 20.0 + 0.01 * np.arange(200)
+    bad = temps.copy()
+    bad[[50, 120]] = (25.0 + 32767.0 / 256.0, temps[120] + 30.0)
+    ev = LiveDriftEvaluator(model, rate_window_s=0.5)
+    clean = LiveDriftEvaluator(model, rate_window_s=0.5)
+    ev.add_temperature(t_ns.astype(np.int64), bad)
+    keep = np.ones(200, dtype=bool)
+    keep[[50, 120]] = False
+    clean.add_temperature(t_ns.astype(np.int64)[keep], temps[keep])
+    assert ev.rejected == 2 and ev.knots == 198
+    gyro_ns = np.linspace(t_ns[0], t_ns[-1], 1000).astype(np.int64)
+    np.testing.assert_array_equal(ev.drift_at(gyro_ns), clean.drift_at(gyro_ns))
+
+
+def test_hysteresis_state_is_carried_from_message_to_message():
+    # an lsq_cv model with a hysteresis term, fed the temperature in batches, gives the offsets
+    # of its offline apply on the whole history (the play operator's state carried over)
+    from gyro_noise_ros.thermal.hysteresis import play_operator
+    from gyro_noise_ros.thermal.lsq import LeastSquaresCV
+    from gyro_noise_ros.thermal.run import ThermalRun
+
+    rate_hz = 5.0
+    t = np.arange(30000) / rate_hz
+    temp = 30.0 - 10.0 * np.cos(2.0 * np.pi * t / 4000.0)
+    drift = 1e-4 * (temp - 30.0) + 0.004 * (play_operator(temp, 1.0) - temp)
+    gyro = np.outer(drift, [1.0, -1.0, 0.5])
+    model = LeastSquaresCV()
+    model.fit(ThermalRun(t_s=t, gyro_rad_s=gyro, temperature_c=temp, rate_hz=rate_hz),
+              rng=np.random.default_rng(0))
+    assert model.hysteresis_c == 1.0
+    ev = LiveDriftEvaluator(model)
+    t_ns = (NS * (1.0 + t)).astype(np.int64)
+    for lo in range(0, t.size, 777):
+        ev.add_temperature(t_ns[lo:lo + 777], temp[lo:lo + 777])
+    offline = model.drift_rad_s(temp, temperature_rate_c_s(t, temp))
+    np.testing.assert_allclose(ev.drift_at(t_ns), offline, atol=1e-15)

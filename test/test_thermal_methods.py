@@ -168,12 +168,29 @@ def test_range_report_counts_t_and_dt():
     # 0 and -0.1 are below the trained rate, which is one value
     assert (rep.rate_below, rep.rate_above) == (2, 0)
     assert rep.outside == 3 and rep.fraction_outside == pytest.approx(0.6)
-    assert '3 of 5 samples (60 %)' in rep.text() and rep.text().endswith('held')
+    # counts are named as counts, next to the ranges they refer to
+    text = rep.text()
+    assert text.startswith('3 of 5 samples (60 %) lie outside the trained range (T 10.00..40.00 '
+                           'degC, dT 0.1..0.1 degC/s; this run T 5.00..45.00 degC, dT -0.1..0.1 '
+                           'degC/s): 1 with T below it, 1 above, 2 with dT below it, 0 above.')
+    assert text.endswith('There the method: held')
+    assert '60 % of the run lies outside' in rep.warning()
+    # up to MAX_OUTSIDE_SHARE (5 %) there is no warning
+    trained = info.temperature_rate_min_c_s
+    inside = methods.range_report(info, np.full(100, 20.0), np.r_[np.full(95, trained), [0.0] * 5])
+    assert inside.fraction_outside == methods.MAX_OUTSIDE_SHARE and inside.warning() is None
     assert rep.as_dict()['fraction_outside'] == pytest.approx(0.6)
     # a run shorter than the rate window has no rate range: dT is not checked
     short = training_info(_run(np.linspace(10.0, 40.0, 50)))
     assert short.temperature_rate_min_c_s is None
     assert methods.range_report(short, temp, rate).rate_below == 0
+    # only the inputs a method evaluates count: T alone for poly3, nothing for raw
+    t_only = methods.range_report(info, temp, rate, uses_rate=False)
+    assert (t_only.temperature_below, t_only.rate_below, t_only.outside) == (1, 0, 2)
+    assert methods.range_report(info, temp, rate, uses_temperature=False).outside == 0
+    for name in ('poly3', 'raw', 'wtd'):
+        assert not getattr(methods.method_class(name), 'uses_rate')
+    assert not methods.method_class('raw').uses_temperature
 
 
 def _saved(tmp_path):
@@ -226,3 +243,38 @@ def test_accelerometer_polynomial_is_fitted_and_saved(tmp_path):
     np.testing.assert_array_equal(again.accel.coef, poly.coef)
     assert methods.fit_method('poly3', run, rng=np.random.default_rng(0), accel=False).accel \
         is None
+
+
+def test_a_method_of_another_form_carries_its_autopilot_poly3(tmp_path):
+    # the poly3 fitted on the same run, saved and loaded with the model; a poly3 model is its own
+    temp = np.linspace(10.0, 40.0, 3000)
+    run = _run(temp)
+    model = methods.fit_method('toy_linear', run, rng=np.random.default_rng(0))
+    alone = methods.fit_method('poly3', run, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(model.autopilot.coef, alone.method.coef)
+    assert model.poly3() is model.autopilot and alone.poly3() is alone.method
+    assert alone.autopilot is None
+    save_model(model.method, tmp_path / 'm.json', training=model.training,
+               autopilot=model.autopilot)
+    doc = json.loads((tmp_path / 'm.json').read_text())
+    assert doc['format_version'] == 3 and 'PX4 and ArduPilot' in doc['autopilot']['note']
+    np.testing.assert_array_equal(load_model(tmp_path / 'm.json').poly3().coef, alone.method.coef)
+
+
+def test_a_model_of_another_sensor_is_refused():
+    # the same sensor, another run: its offset from the model is its turn-on difference (here
+    # the noise's median, ~1e-5 deg/s); another part: its zero-rate level differs by 0.5 deg/s
+    model = methods.fit_method('lsq_cv', _run(np.linspace(10.0, 40.0, 3000)),
+                               rng=np.random.default_rng(0))
+    again = _run(np.linspace(40.0, 12.0, 3000), seed=1)
+    offsets = methods.check_same_sensor(model, again)
+    assert max(abs(v) for v in offsets) < 0.01
+    other = ThermalRun(t_s=again.t_s, gyro_rad_s=again.gyro_rad_s + np.radians([0.5, 0.0, -0.3]),
+                       temperature_c=again.temperature_c, rate_hz=again.rate_hz, name='other')
+    with pytest.raises(methods.SensorMismatchError, match=r'x \+0\.50\d, z -0\.30\d deg/s .*more '
+                                                          r'than 0\.25 deg/s.*another sensor'):
+        methods.check_same_sensor(model, other)
+    assert methods.check_same_sensor(model, other, max_offset_deg_s=float('inf'))[0] == \
+        pytest.approx(0.5, abs=0.01)
+    with pytest.raises(ParameterError, match='max_offset_deg_s'):
+        methods.check_same_sensor(model, other, max_offset_deg_s=float('nan'))

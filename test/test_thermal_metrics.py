@@ -18,6 +18,7 @@ import math
 
 from _thermal_toy import FirstOrderLowPass, HardThreshold, Identity, LinearInT
 from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.thermal import metrics
 from gyro_noise_ros.thermal.metrics import (evaluate_method, frequency_response, make_injection,
                                             noise_metrics, step_response)
 from gyro_noise_ros.thermal.run import ThermalRun
@@ -250,3 +251,33 @@ def test_noise_path_gain_of_a_low_pass_is_its_white_noise_gain():
     for axis in 'xyz':
         v = doc['axes'][axis]['verdict']
         assert v['arw_ratio'] == pytest.approx(v['output_arw_ratio'], rel=0.08)
+
+
+def test_white_floor_is_the_spread_of_window_means_of_white_noise():
+    # 400 windows of white noise per axis: the std of their means has a relative standard error
+    # of 1/sqrt(2 * 399) = 3.5 %; the ARW read-out's own error is a few % (1 h at 20 Hz); 15 %
+    # is over three of the two together
+    rng = np.random.default_rng(11)
+    rate, sigma = 20.0, np.array([1e-3, 2e-3, 4e-3])
+    x = rng.standard_normal((int(400 * 60 * rate), 3)) * sigma
+    arw = [metrics.noise_metrics(x[:, a], rate).arw_deg_sqrt_h for a in range(3)]
+    floor = metrics.white_floor_deg_s(arw)
+    np.testing.assert_allclose(floor, np.degrees(sigma) / np.sqrt(60 * rate), rtol=0.05)
+    np.testing.assert_allclose(metrics.residual_drift_deg_s(x, rate), floor, rtol=0.15)
+    # one owner: noise_metrics reads the same residual drift
+    assert metrics.noise_metrics(x[:, 1], rate).residual_drift_deg_s == pytest.approx(
+        metrics.residual_drift_deg_s(x, rate)[1], rel=1e-12)
+    # noise above the readout's taus (an alternating LSB pattern) does not raise the floor, as
+    # it does not raise the spread of 60-s means
+    wiggle = x + 0.01 * np.where(np.arange(x.shape[0]) % 2, 1.0, -1.0)[:, None]
+    arw_w = [metrics.noise_metrics(wiggle[:, a], rate).arw_deg_sqrt_h for a in range(3)]
+    np.testing.assert_allclose(metrics.white_floor_deg_s(arw_w), floor, rtol=0.05)
+
+
+def test_yardstick_ratios():
+    y = metrics.yardstick([2.0, 3.0, np.nan], [1.0, 1.5, 1.0], poly3_deg_s=[20.0, 6.0, 1.0],
+                          floor='noise')
+    assert y['floor'] == 'noise' and y['over_floor'] == [2.0, 2.0, None]
+    assert y['over_poly3'] == [0.1, 0.5, None]
+    assert y['mean_over_floor'] is None   # an axis without a number makes no mean
+    assert metrics.yardstick([2.0], [1.0])['mean_over_floor'] == 2.0

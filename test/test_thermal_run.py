@@ -12,8 +12,12 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Causal temperature-rate estimate against a slow per-sample polyfit twin."""
+"""Causal temperature-rate estimate (against a slow twin), whether it can support a dT term."""
 
+from dataclasses import replace
+
+from gyro_noise_ros.errors import InputDataError
+from gyro_noise_ros.thermal import run
 from gyro_noise_ros.thermal.run import (rate_window_filled, RateWindowError,
                                         temperature_rate_c_s)
 import numpy as np
@@ -86,3 +90,52 @@ def test_record_shorter_than_the_window():
 def test_refuses_bad_window(window):
     with pytest.raises(ValueError, match='window_s'):
         temperature_rate_c_s([0.0, 1.0], [1.0, 2.0], window_s=window)
+
+
+def _ramp(seconds, rate_hz=20.0):
+    t = np.arange(int(seconds * rate_hz)) / rate_hz
+    return t
+
+
+def test_rate_support_refuses_a_constant_rate_and_accepts_holds_and_ramps():
+    rng = np.random.default_rng(0)
+    t = _ramp(3600.0)
+    lsb = 1.0 / 256.0
+    cases = {
+        # one rate all along: dT's spread is its noise (or nothing without noise)
+        'noise-free ramp': (10.0 + t / 60.0, False),
+        'noisy ramp': (np.round((10.0 + t / 60.0 + rng.normal(0, 0.02, t.size)) / lsb) * lsb,
+                       False),
+        'constant': (np.full(t.size, 20.0), False),
+        # a hold, a ramp at 1 degC/min, a hold: dT spreads 0..0.0167 degC/s
+        'heating': (np.interp(t, [0, 1000, 2400, 3600], [10, 10, 33.3, 33.3]), True),
+    }
+    for label, (temp, supported) in cases.items():
+        s = run.rate_support(t, temp)
+        assert s.supported is supported, (label, s.text())
+        assert not s.both_signs
+    cycle = run.rate_support(t, 30.0 - 10.0 * np.cos(2 * np.pi * t / 1800.0))
+    assert cycle.supported and cycle.both_signs
+    assert 'cannot support a dT term' in run.rate_support(t, cases['constant'][0]).text()
+
+
+def test_rate_support_noise_estimate_matches_the_slope_noise():
+    # white reading noise sigma on a ramp: the slope's standard error over a 10-s window of
+    # n readings is sigma sqrt(12 / (n W^2)) (least squares); the MAD estimate agrees to 20 %
+    # (it is read from ~7000 second differences)
+    rng = np.random.default_rng(1)
+    t = _ramp(3600.0)
+    sigma = 0.05
+    s = run.rate_support(t, 10.0 + t / 600.0 + rng.normal(0.0, sigma, t.size))
+    expected = sigma * np.sqrt(12.0 / (200 * 10.0 ** 2))
+    assert s.noise_c_s == pytest.approx(expected, rel=0.2)
+
+
+def test_temperature_read_too_sparsely_for_the_rate_window():
+    t = _ramp(100.0)
+    r = run.ThermalRun(t_s=t, gyro_rad_s=np.zeros((t.size, 3)), temperature_c=20 + t / 100,
+                       rate_hz=20.0, name='slow', temperature_period_s=5.0)
+    with pytest.raises(InputDataError, match=r'read every 5 s \(0\.2 Hz\).*at least 4 readings'):
+        run.check_temperature_readings(r)
+    run.check_temperature_readings(replace(r, temperature_period_s=2.5))   # 4 per window: ok
+    run.check_temperature_readings(replace(r, temperature_period_s=None))  # unknown: not checked

@@ -163,6 +163,23 @@ def test_streaming_tracker_with_merges_matches_the_batch_estimate():
     assert a.loss_samples == b.loss_samples == 20
 
 
+def test_a_live_feed_of_small_batches_holds_bounded_block_rows():
+    # A live analyzer feeds a batch per drain (133 stamps at 6.66 kHz every 20 ms): the tracker
+    # keeps its blocks in arrays of bounded size, not one object per batch (the analyzer's RSS
+    # once crawled with them, and summed their sizes at every update), and estimates as the
+    # whole record does.
+    rng = np.random.default_rng(7)
+    stamps, _ = _device_clock(100_000, 6660.0, rng, drop=20, jitter_s=2e-6)
+    live = TimebaseTracker(max_blocks=64)
+    for i in range(0, stamps.size, 133):
+        live.update(stamps[i:i + 133])
+    a, b = live.estimate(), estimate_rate(stamps)
+    assert a.rate_hz == pytest.approx(b.rate_hz, rel=1e-6)
+    assert a.loss_samples == b.loss_samples == 20
+    assert live._nb <= 64 and live._blocks.shape[0] <= 2 * 64 + 133
+    assert all(not isinstance(v, list) for v in vars(live).values())
+
+
 def test_engine_counts_use_the_whole_run_estimate_and_rescale_allan():
     rng = np.random.default_rng(8)
     stamps = _host_bursts(30_000, 100.0, rng)

@@ -43,15 +43,14 @@ Run (seeded: the same numbers every time; per-record results are cached in --cac
 """
 
 import argparse
-import contextlib
 import dataclasses
-import io
 import json
 import math
 import os
 import sys
 import time
 
+from _doc_tables import print_and_write
 from gyro_noise_ros.app.reliability import static_from_batches, verdicts_of
 from gyro_noise_ros.calibration.emulate import FLICKER_PER_DECADE, FLICKER_TAU_S
 from gyro_noise_ros.calibration.interval import bias_instability_interval, Interval
@@ -91,9 +90,8 @@ def record(seed, odr_hz, hours, stress, cache):
         with open(path) as fh:
             return json.load(fh)
     t0 = time.time()
-    board = board_from_args(argv)
-    st = static_from_batches(_batches(board, int(round(hours * 3600 * odr_hz))),
-                             source='portenta_emulator ' + ' '.join(argv))
+    held = list(_batches(board_from_args(argv), int(round(hours * 3600 * odr_hz))))
+    st = static_from_batches(lambda: iter(held), source='portenta_emulator ' + ' '.join(argv))
     out = {'argv': argv, 'record_s': st.duration_s, 'cpu_s': time.time() - t0, 'channels': {}}
     for ch, r in st.channels.items():
         iv = dataclasses.asdict(r.interval)
@@ -340,34 +338,11 @@ def main(argv=None):
         p.error('--write needs --part all')
     parts = ('truth', 'sigma', 'default', 'long') if args.part == 'all' else (args.part,)
     if args.write:
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
-            _run(parts, args)
-        _write_doc(buf.getvalue(), argv if argv is not None else sys.argv[1:])
-        print(buf.getvalue())
+        print_and_write(lambda: _run(parts, args), 'reliability_verdicts.py', 'reliability.md',
+                        argv if argv is not None else sys.argv[1:])
         return 0
     _run(parts, args)
     return 0
-
-
-BEGIN = '<!-- reliability_verdicts.py: begin -->'
-END = '<!-- reliability_verdicts.py: end -->'
-
-
-def _write_doc(text, argv):
-    """Replace the tables between the markers of docs/reliability.md."""
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'reliability.md')
-    with open(path) as fh:
-        doc = fh.read()
-    if doc.count(BEGIN) != 1 or doc.count(END) != 1:
-        sys.exit(f'{path}: needs exactly one {BEGIN} and one {END}')
-    cmd = ' '.join(['nice python docs/scripts/reliability_verdicts.py'] + list(argv))
-    block = f'{BEGIN}\nMade by `{cmd}`.\n{text.rstrip()}\n{END}'
-    head, rest = doc.split(BEGIN)
-    doc = head + block + rest.split(END, 1)[1]
-    with open(path + '.tmp', 'w') as fh:
-        fh.write(doc)
-    os.replace(path + '.tmp', path)
 
 
 def _run(parts, args):

@@ -61,6 +61,7 @@ def main():
               file=sys.stderr)
         return 1
     sys.path.insert(0, str(Path(__file__).parent))
+    from doc_block import write_block
     from table_to_thermal_bag import convert
 
     work = Path(args.work or tempfile.mkdtemp(prefix='thermal_real_'))
@@ -90,14 +91,7 @@ def main():
              f'(`docs/scripts/thermal_real_table.py`{when}.)\n{END}')
     print(block)
     if args.write:
-        page = Path(args.write)
-        text = page.read_text()
-        if BEGIN not in text or END not in text:
-            print(f'thermal_real_table: {page} has no {BEGIN} ... {END} block', file=sys.stderr)
-            return 1
-        head, rest = text.split(BEGIN, 1)
-        page.write_text(head + block + rest.split(END, 1)[1])
-        print(f'updated {page}')
+        return write_block(args.write, BEGIN, END, block, 'thermal_real_table')
     return 0
 
 

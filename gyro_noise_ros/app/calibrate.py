@@ -47,8 +47,9 @@ from .. import __version__
 from ..calibration import records
 from ..calibration.calibrate_report import calibration_markdown, calibration_yaml
 from ..calibration.dwell_noise import fit_dwell_noise
-from ..calibration.gyro_turns import fit_gyro_turns, GyroTurnResult, Turn
-from ..calibration.multipose import calibrate_poses
+from ..calibration.gyro_turns import (direction_variances, fit_gyro_turns, GyroTurnResult,
+                                      Turn)
+from ..calibration.multipose import calibrate_poses, NO_GRAVITY_CHECK
 from ..calibration.sixpos import (calibrate_six, consistency, DEFAULT_ALPHA, EARTH_RATE_RAD_S,
                                   mean_norm, normal_gravity, uniformity)
 from ..calibration.static import (DetectorSettings, Dwell, find_dwells, ORIENTATIONS,
@@ -263,8 +264,10 @@ class CalibrationResult:
         return np.zeros((3, 3)) if self.gyro is None else self.gyro.misalignment
 
     @property
-    def gravity_check_consistent(self) -> bool:
-        """bool: every held-out dwell used agrees with g (rejected poses are left out)."""
+    def gravity_check_consistent(self) -> bool | None:
+        """Every held-out dwell used agrees with g: bool; None when no check could run."""
+        if not self.gravity_check:
+            return None
         return all(c.consistent for c in self.gravity_check if c.label not in self.left_out)
 
     def warnings(self) -> list[str]:
@@ -369,6 +372,7 @@ class CalibrationResult:
                 'loo_mean_norm_m_s2': float(np.mean([self.gravity_m_s2 + c.residual_m_s2
                                                      for c in loo])) if loo else None,
                 'consistent': self.gravity_check_consistent,
+                'note': '' if loo else NO_GRAVITY_CHECK,
                 'left_out': list(self.left_out),
                 'dwells': [c.as_dict() for c in loo],
             },
@@ -469,16 +473,10 @@ def _gyro_from_turns(params: CalibrateParams, dwells: Sequence[Any], directions:
     if not turns:
         return None, ('not estimated: the dwells come from separate recordings, so no turn '
                       'between them was recorded')
-    g = params.gravity.value_m_s2
-    dvar = []
-    for turn in turns:
-        c = np.zeros(len(accel_noise.weights))
-        c[accel_index[turn.before]] += 1.0
-        c[accel_index[turn.after]] -= 1.0
-        # each transverse component: the two directions' disagreement from accelerometer noise
-        dvar.append(accel_noise.variance(c) / g ** 2)
+    dvar = direction_variances(turns, accel_noise, accel_index, params.gravity.value_m_s2)
     try:
-        res = fit_gyro_turns(turns, directions, dwells, gyro_noise, direction_variance=dvar)
+        res = fit_gyro_turns(turns, directions, dwells, gyro_noise, direction_variance=dvar,
+                             latitude_deg=params.gravity.latitude_deg)
     except InputDataError as err:
         return None, f'not estimated: {err}'
     missing = res.not_estimated

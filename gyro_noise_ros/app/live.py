@@ -33,7 +33,7 @@ import numpy as np
 
 from ..core.engine import AXES, ChunkJob, EngineConfig, NoiseEngine
 from ..core.fractional import make_grid
-from ..core.health import HealthThresholds
+from ..core.health import HealthThresholds, ReferenceStats
 from ..core.results import ChunkResult
 from ..errors import GyroNoiseError, ParameterError
 
@@ -190,8 +190,9 @@ class LiveAnalysis:
     ----------
     config : EngineConfig
         The analysis configuration.
-    reference : str or None, keyword-only
-        ``summary.json`` of a reference recording (see :class:`NoiseEngine`).
+    reference : str, dict of ReferenceStats or None, keyword-only
+        ``summary.json`` of a reference recording, or its statistics per axis (see
+        :class:`NoiseEngine`).
     thresholds : HealthThresholds or None, keyword-only
         Health thresholds.
     queue_chunks : int, keyword-only
@@ -201,7 +202,8 @@ class LiveAnalysis:
 
     """
 
-    def __init__(self, config: EngineConfig, *, reference: str | None = None,
+    def __init__(self, config: EngineConfig, *,
+                 reference: str | dict[str, ReferenceStats] | None = None,
                  thresholds: HealthThresholds | None = None, queue_chunks: int = 4,
                  on_worker_start: Callable[[], None] = lambda: None) -> None:
         self.config = config

@@ -48,20 +48,26 @@ import numpy as np
 from .calibrate import (CalibrateParams, calibration_files, CalibrationResult, Gravity,
                         run_calibration)
 from .. import __version__
-from ..calibration import records
+from ..calibration import noise_change, records
 from ..calibration.calibrate_report import table6_rows
-from ..calibration.interval import (compare, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
-                                    DEFAULT_TOLERANCE, overall)
+from ..calibration.interval import compare, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF, overall
 from ..calibration.reliability_report import (adev_csv, plot_fig6, reliability_markdown, SENSORS,
                                               SIDES, term_keys)
 from ..calibration.static import DetectorSettings
 from ..calibration.static_record import CHANNELS, StaticRecord, unit_of
+from ..core.segments import left_out_sentence, segment_left_out, StaticSegment, WindowStats
 from ..errors import BagError, InputDataError, ParameterError
 from ..formatting import finite_or_none as _num
 from ..htmlreport.reliability import write_reliability_html
 from ..outputs import atomic_write_text, staged_output
 
 PARTS = ('before_calibration', 'before_static', 'after_calibration', 'after_static')
+#: Largest relative difference of the two static records' sample rates.
+RATE_MATCH = 0.01
+#: ``--static``: cut motion by the static-segment rule, or analyse every sample.
+STATIC_MODES = ('auto', 'off')
+#: Samples per update of the rule's window statistics (its cost grows with batch x windows).
+_SEGMENT_CHUNK = 4096
 
 
 @dataclass(frozen=True)
@@ -78,9 +84,13 @@ class ReliabilityParams:
     c : float
         Level factor of the interval (paper 001: 2).
     tolerance : float
-        Half-width of the physiological band of the width change (paper 001: 0.5).
+        Half-width of the band of the noise verdict's ADEV ratio (default 0.30; paper 001's
+        +/-50 % is 0.5). The bias-instability interval, an indicator, keeps the paper's 0.5.
     alpha : float
-        One-sided level of each test of a verdict (0.05: 95 % one-sided bounds).
+        Family-wise one-sided level of the noise verdict per sensor, and the one-sided level of
+        the interval indicator's tests (0.05).
+    taus_s : tuple of float
+        The noise verdict's averaging times (s), fixed before the data.
     min_edf : float
         Least EDF of a tau that may hold sigma_min on top of the readout's rule (0: none).
     topic : str or None
@@ -93,6 +103,9 @@ class ReliabilityParams:
         Static-dwell detector.
     figures : bool
         Draw the Figure 6 PNGs.
+    static : str
+        'auto': the static records' longest static segment is analysed, motion cut and said
+        (``core.segments``, the rule of ``gyro_noise_analyze``); 'off': every sample.
 
     """
 
@@ -101,14 +114,16 @@ class ReliabilityParams:
     after_calibration: tuple[str, ...] = ()
     after_static: str | None = None
     c: float = DEFAULT_C
-    tolerance: float = DEFAULT_TOLERANCE
+    tolerance: float = noise_change.DEFAULT_TOLERANCE
     alpha: float = DEFAULT_ALPHA
+    taus_s: tuple[float, ...] = noise_change.DEFAULT_TAUS_S
     min_edf: float = DEFAULT_MIN_EDF
     topic: str | None = None
     gravity: Gravity = field(default_factory=Gravity)
     rate_hz: float | None = None
     settings: DetectorSettings = field(default_factory=DetectorSettings)
     figures: bool = True
+    static: str = 'auto'
 
     def __post_init__(self) -> None:
         for name in ('before_calibration', 'after_calibration'):
@@ -123,12 +138,20 @@ class ReliabilityParams:
             raise ParameterError(f'--c must be > 1, got {self.c}')
         if not (math.isfinite(self.min_edf) and self.min_edf >= 0):
             raise ParameterError(f'--min-edf must be >= 0, got {self.min_edf}')
-        if not (math.isfinite(self.tolerance) and self.tolerance >= 0):
-            raise ParameterError(f'--tolerance must be >= 0, got {self.tolerance}')
+        if not (math.isfinite(self.tolerance) and 0 < self.tolerance < 1):
+            raise ParameterError(f'--tolerance must be in (0, 1), got {self.tolerance}')
+        object.__setattr__(self, 'taus_s', tuple(float(t) for t in self.taus_s))
+        try:
+            noise_change.fixed_factors(self.taus_s, 1.0)
+        except ParameterError as err:
+            raise ParameterError(f'--taus: {err}') from err
         if not (math.isfinite(self.alpha) and 0 < self.alpha < 0.5):
             raise ParameterError(f'--alpha must be in (0, 0.5), got {self.alpha}')
         if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ParameterError(f'--rate-hz must be > 0, got {self.rate_hz!r}')
+        if self.static not in STATIC_MODES:
+            raise ParameterError(f"--static must be one of {', '.join(STATIC_MODES)}, "
+                                 f'got {self.static!r}')
 
     def given(self) -> dict[str, Any]:
         """
@@ -154,7 +177,7 @@ class StaticAnalysis:
     rate_hz : float
         Sample rate (Hz).
     samples : int
-        Imu samples.
+        Imu samples analysed (the static part: ``left_out`` says what was cut).
     duration_s : float
         Last stamp relative to the first (s).
     check : dict
@@ -164,6 +187,13 @@ class StaticAnalysis:
         ``{channel: ChannelResult}``.
     temperature : dict or None
         :func:`..calibration.records.temperature_stats` of the whole record.
+    frame_id : str
+        The Imu messages' ``header.frame_id`` ('' when unknown).
+    left_out : dict
+        What the static-segment rule cut (``motion``: samples; ``static_segment_s``,
+        ``static_segments_s``, ``cut_s`` when it cut something: ``core.segments``).
+    cut : str
+        The sentence saying so ('' when nothing was cut).
 
     """
 
@@ -174,6 +204,9 @@ class StaticAnalysis:
     check: dict[str, Any]
     channels: dict[str, Any]
     temperature: dict[str, Any] | None = None
+    frame_id: str = ''
+    left_out: dict[str, Any] = field(default_factory=dict)
+    cut: str = ''
 
     def as_dict(self) -> dict[str, Any]:
         """
@@ -185,7 +218,8 @@ class StaticAnalysis:
 
         """
         return {'source': self.source, 'rate_hz': self.rate_hz, 'samples': self.samples,
-                'duration_s': self.duration_s, **self.check, 'temperature': self.temperature}
+                'duration_s': self.duration_s, 'frame_id': self.frame_id, **self.check,
+                'left_out': self.left_out, 'cut': self.cut, 'temperature': self.temperature}
 
 
 def _temperature(path: str, topic: str | None, t0_ns: int | None = None) -> Any:
@@ -196,23 +230,32 @@ def _temperature(path: str, topic: str | None, t0_ns: int | None = None) -> Any:
         return None
 
 
-def static_from_batches(batches: Iterable[tuple[float, np.ndarray, np.ndarray, np.ndarray]], *,
-                        source: str, c: float = DEFAULT_C,
+#: ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches of one record, as ``records.iter_imu``.
+Batches = Iterable[tuple[float, np.ndarray, np.ndarray, np.ndarray]]
+
+
+def static_from_batches(batches: Callable[[], Batches], *, source: str, c: float = DEFAULT_C,
                         settings: DetectorSettings | None = None,
                         min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
-                        temperature: tuple[np.ndarray, np.ndarray] | None = None
-                        ) -> StaticAnalysis:
+                        temperature: tuple[np.ndarray, np.ndarray] | None = None,
+                        taus_s: Sequence[float] = noise_change.DEFAULT_TAUS_S,
+                        static: str = 'auto') -> StaticAnalysis:
     """
     Analyse a static record given as ``(rate_hz, t_s, accel_m_s2, gyro_rad_s)`` batches.
 
+    Two passes: the static-segment rule of ``core.segments`` over the gyro columns (the one rule
+    of every tool, fed as ``gyro_noise_analyze`` feeds it, so both cut the same windows of a
+    record: a knock is cut, the longest static run analysed on all six channels, what was cut
+    said), then the analysis of that part.
+
     Parameters
     ----------
-    batches : iterable
-        Batches as :func:`..calibration.records.iter_imu` yields them (the rate of the first
-        one is the record's).
+    batches : callable
+        Returns the record's batches afresh at each call, as :func:`..calibration.records.
+        iter_imu` yields them (the rate of the first one is the record's).
     source : str, keyword-only
         Record name for messages.
-    c, settings, min_edf, alpha
+    c, settings, min_edf, alpha, taus_s, static
         As :func:`analyze_static`.
     temperature : tuple, optional, keyword-only
         ``(t_s, temperature_degc)`` of the record (:func:`..calibration.records.read_temperature`).
@@ -224,43 +267,65 @@ def static_from_batches(batches: Iterable[tuple[float, np.ndarray, np.ndarray, n
     Raises
     ------
     InputDataError
-        No channel can give its interval (too short, constant, not static, no samples): one
-        line naming the record.
+        No channel can give the noise verdict's fixed taus (too short for the longest, or its
+        static part is; constant; not static; no samples): one line naming the record and why.
 
     """
+    # 'off': one pass, every sample (total counted below)
+    seg, total, last_ns = _static_segment(batches()) if static == 'auto' else (None, -1, 0)
     rec = None
-    for rate, t, accel, gyro in batches:
+    for rate, t, accel, gyro in batches():
         if rec is None:
             kw: dict[str, Any] = {} if settings is None else {'settings': settings}
-            rec = StaticRecord(rate, c=c, source=source, min_edf=min_edf, alpha=alpha, **kw)
-        rec.update(t, accel, gyro)
+            rec = StaticRecord(rate, c=c, source=source, min_edf=min_edf, alpha=alpha,
+                               taus_s=taus_s, **kw)
+        keep = None
+        if seg is not None:
+            ns = np.round(np.asarray(t, dtype=np.float64) * 1e9).astype(np.int64)
+            keep = (ns >= seg.start_ns) & (ns < seg.end_ns)
+        rec.update(t, accel, gyro, keep=keep)
     if rec is None:
         raise InputDataError(f'static record {source!r} holds no Imu samples')
+    total = rec.samples if total < 0 else total
+    left_out: dict[str, Any] = {'motion': total - rec.samples}
+    said = ''
+    if seg is not None:
+        left_out.update(segment_left_out(seg, 0, last_ns))
+        a, b = left_out['static_segment_s']
+        said = left_out_sentence(total, motion=total - rec.samples, segment_s=(a, b),
+                                 cuts=seg.cuts(0, last_ns))
     results, check = rec.finish()
-    if not any(r.interval.closed for r in results.values()):
-        # not one channel can give its bias-instability interval: a 20 s record, a constant
-        # one, a six-position record given as static... six "undetermined" and exit 0 would
-        # hide that the record is not what the procedure needs
-        reasons = [r.interval.reason for r in results.values()
-                   if not math.isfinite(r.interval.sigma_min) and r.interval.reason]
-        if reasons:
-            why = reasons[0]
-        else:
-            longest = max(float(np.asarray(r.allan.tau_s)[-1]) for r in results.values()
-                          if r.allan is not None)
-            why = ('record too short: no channel has a bias-instability interval that closes '
-                   f'inside it (longest tau {longest:.3g} s); a static record must be several '
-                   'times longer than the interval (hours for a MEMS sensor)')
-        raise InputDataError(f'static record {source!r} ({rec.duration_s:.1f} s, '
-                             f'{rec.samples} samples) cannot be analysed: {why}')
+    if not any(isinstance(r.fixed, noise_change.FixedTaus) for r in results.values()):
+        # not one channel gives the verdict's statistics: a 20 s record, a constant one, a
+        # six-position record given as static... six "undetermined" and exit 0 would hide that
+        # the record is not what the procedure needs
+        why = str(results[CHANNELS[-1]].fixed) + (f' ({said})' if said else '')
+        raise InputDataError(f'static record {source!r} ({rec.duration_s:.1f} s, {total} '
+                             f'samples) cannot be analysed: {why}')
     return StaticAnalysis(source, rec.rate_hz, rec.samples, rec.duration_s, check, results,
-                          records.temperature_stats(temperature))
+                          records.temperature_stats(temperature), left_out=left_out, cut=said)
+
+
+def _static_segment(batches: Batches) -> tuple[StaticSegment | None, int, int]:
+    """Return the segment to analyse (None: all of it), the samples and the last stamp (ns)."""
+    stats = WindowStats()
+    total, last_ns = 0, 0
+    for _, t, _accel, gyro in batches:
+        ns = np.round(np.asarray(t, dtype=np.float64) * 1e9).astype(np.int64)
+        g = np.asarray(gyro, dtype=np.float64)
+        for k in range(0, ns.size, _SEGMENT_CHUNK):
+            stats.update(ns[k:k + _SEGMENT_CHUNK], g[k:k + _SEGMENT_CHUNK])
+        total += ns.size
+        last_ns = int(ns[-1]) if ns.size else last_ns
+    seg = stats.segment()
+    return (None if seg is None or seg.static_throughout else seg), total, last_ns
 
 
 def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None = None,
                    c: float = DEFAULT_C, settings: DetectorSettings | None = None,
-                   min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA
-                   ) -> StaticAnalysis:
+                   min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
+                   taus_s: Sequence[float] = noise_change.DEFAULT_TAUS_S,
+                   static: str = 'auto') -> StaticAnalysis:
     """
     Stream a static recording through :class:`..calibration.static_record.StaticRecord`.
 
@@ -280,6 +345,10 @@ def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None
         Least EDF of a tau that may hold sigma_min.
     alpha : float, keyword-only
         One-sided level of the fall-back test (ambiguous crossings).
+    taus_s : sequence of float, keyword-only
+        The noise verdict's fixed averaging times (s).
+    static : str, keyword-only
+        'auto': analyse the longest static segment (``core.segments``); 'off': every sample.
 
     Returns
     -------
@@ -291,17 +360,18 @@ def analyze_static(path: str, *, topic: str | None = None, rate_hz: float | None
         As :func:`static_from_batches`.
 
     """
-    batches = records.iter_imu(path, topic=topic, rate_hz=rate_hz)
-    st = static_from_batches(batches, source=str(path), c=c, settings=settings,
-                             min_edf=min_edf, alpha=alpha)
-    return replace(st, temperature=records.temperature_stats(_temperature(path, topic)))
+    st = static_from_batches(lambda: records.iter_imu(path, topic=topic, rate_hz=rate_hz),
+                             source=str(path), c=c, settings=settings, min_edf=min_edf,
+                             alpha=alpha, taus_s=taus_s, static=static)
+    return replace(st, temperature=records.temperature_stats(_temperature(path, topic)),
+                   frame_id=records.frame_id(path, topic=topic))
 
 
 def verdicts_of(before: StaticAnalysis | None, after: StaticAnalysis | None, *,
-                tolerance: float = DEFAULT_TOLERANCE,
+                tolerance: float = noise_change.PAPER_TOLERANCE,
                 alpha: float = DEFAULT_ALPHA) -> tuple[dict[str, Any], dict[str, Any]]:
     """
-    Return the per-channel and per-sensor verdicts of two static records.
+    Return the bias-instability interval indicator of two static records, per channel and sensor.
 
     Parameters
     ----------
@@ -323,6 +393,55 @@ def verdicts_of(before: StaticAnalysis | None, after: StaticAnalysis | None, *,
     sensors = {s: overall({ch: verdicts[ch] for ch in CHANNELS if ch.startswith(s)},
                           tolerance=tolerance, alpha=alpha) for s in SENSORS}
     return verdicts, sensors
+
+
+def noise_verdicts_of(before: StaticAnalysis | None, after: StaticAnalysis | None, *,
+                      tolerance: float = noise_change.DEFAULT_TOLERANCE,
+                      alpha: float = DEFAULT_ALPHA) -> dict[str, Any]:
+    """
+    Return the noise verdict of each sensor (:func:`..calibration.noise_change.compare_sensor`).
+
+    Parameters
+    ----------
+    before, after : StaticAnalysis or None
+        The records (None: not given).
+    tolerance, alpha : float, keyword-only
+        Band half-width and family-wise one-sided level.
+
+    Returns
+    -------
+    dict
+        ``{'accel': SensorChange, 'gyro': SensorChange}``; without both records, each
+        undetermined with that reason.
+
+    Raises
+    ------
+    InputDataError
+        The two records cannot be compared: different sample rates or sensor frames.
+
+    """
+    if before is None or after is None:
+        missing = 'the verdict needs a static record before and one after'
+        return {s: noise_change.SensorChange(s, 'undetermined', reason=missing) for s in SENSORS}
+    _check_pair(before, after)
+    return {s: noise_change.compare_sensor(
+        s, {ch: before.channels[ch].fixed for ch in CHANNELS if ch.startswith(s)},
+        {ch: after.channels[ch].fixed for ch in CHANNELS if ch.startswith(s)},
+        tolerance=tolerance, alpha=alpha) for s in SENSORS}
+
+
+def _check_pair(before: StaticAnalysis, after: StaticAnalysis) -> None:
+    """Refuse two static records that are not one sensor in one configuration."""
+    if abs(after.rate_hz / before.rate_hz - 1.0) > RATE_MATCH:
+        raise InputDataError(
+            f'the static records differ in sample rate ({before.rate_hz:.4g} Hz before, '
+            f'{after.rate_hz:.4g} Hz after): the noise of one sensor configuration is compared, '
+            'record both at one rate')
+    fb, fa = before.frame_id, after.frame_id
+    if fb and fa and fb != fa:
+        raise InputDataError(
+            f"the static records come from different sensor frames ('{fb}' before, '{fa}' "
+            "after): give the same sensor's records (or --topic)")
 
 
 def _dwell_temperatures(cal: CalibrationResult, topic: str | None) -> list[dict[str, Any]]:
@@ -352,9 +471,12 @@ class ReliabilityResult:
     calibrations : dict
         ``{'before': CalibrationResult or None, 'after': ...}``.
     verdicts : dict
-        ``{channel: Verdict}`` of the width change.
+        ``{channel: Verdict}`` of the width change (the interval indicator).
     sensors : dict
-        ``{'accel': SensorVerdict, 'gyro': SensorVerdict}``.
+        ``{'accel': SensorVerdict, 'gyro': SensorVerdict}`` of the interval indicator.
+    noise : dict
+        ``{'accel': SensorChange, 'gyro': SensorChange}``: the verdict
+        (:func:`noise_verdicts_of`).
     dwell_temperatures : dict
         ``{'before': list or None, 'after': ...}``: each dwell with its temperature.
     errors : dict
@@ -369,18 +491,26 @@ class ReliabilityResult:
     sensors: dict[str, Any]
     dwell_temperatures: dict[str, list[dict[str, Any]] | None]
     errors: dict[str, str]
+    noise: dict[str, Any] = field(default_factory=dict)
     version: str = __version__
 
     def warnings(self) -> list[str]:
         """
-        Return the lines a tool prints on stderr (failed parts).
+        Return the lines a tool prints on stderr (failed parts, channels without a verdict).
 
         Returns
         -------
         list of str
 
         """
-        return [f'{k.replace("_", " ")}: {v}' for k, v in self.errors.items()]
+        out = [f'{k.replace("_", " ")}: {v}' for k, v in self.errors.items()]
+        for side in SIDES:
+            st = self.statics.get(side)
+            for ch, r in (st.channels.items() if st is not None else ()):
+                if isinstance(r.fixed, str):
+                    out.append(f'{side} static record, {ch}: {r.fixed} (its sensor cannot be '
+                               'judged)')
+        return out
 
     def as_dict(self) -> dict[str, Any]:
         """
@@ -398,9 +528,15 @@ class ReliabilityResult:
         return {
             'c': p.c, 'tolerance': p.tolerance, 'alpha': p.alpha,
             'confidence_one_sided': 1.0 - p.alpha, 'min_edf': p.min_edf,
+            'taus_s': list(p.taus_s), 'power': noise_change.POWER,
+            'interval_tolerance': noise_change.PAPER_TOLERANCE,
             'sources': {k: (list(v) if isinstance(v, tuple) else v)
                         for k, v in ((q, getattr(p, q) or None) for q in PARTS)},
-            'overall': {s: _sensor_entry(self.sensors[s], self.statics) for s in SENSORS},
+            'overall': {s: _noise_entry(self.noise[s], p) for s in SENSORS},
+            'noise_change': {ch: [t.as_dict() for s in SENSORS for t in self.noise[s].tests
+                                  if t.channel == ch] for ch in CHANNELS},
+            'interval_indicator': {s: _sensor_entry(self.sensors[s], self.statics)
+                                   for s in SENSORS},
             'bias_instability_interval': intervals,
             'summary': _summary(intervals),
             'noise_terms': {ch: _terms_entry(ch, self.statics) for ch in CHANNELS},
@@ -460,14 +596,15 @@ def run_reliability(params: ReliabilityParams) -> ReliabilityResult:
         # a static record that cannot be analysed at all is refused (one line, exit 4)
         statics[side] = analyze_static(
             bag, topic=params.topic, rate_hz=params.rate_hz, c=params.c,
-            settings=params.settings, min_edf=params.min_edf,
-            alpha=params.alpha) if bag else None
+            settings=params.settings, min_edf=params.min_edf, alpha=params.alpha,
+            taus_s=params.taus_s, static=params.static) if bag else None
     if len(errors) == len(given):
         raise InputDataError('nothing could be analysed: ' + '; '.join(
             f'{k}: {v}' for k, v in errors.items()))
-    verdicts, sensors = verdicts_of(statics['before'], statics['after'],
-                                    tolerance=params.tolerance, alpha=params.alpha)
-    return ReliabilityResult(params, statics, cals, verdicts, sensors, temps, errors)
+    noise = noise_verdicts_of(statics['before'], statics['after'],
+                              tolerance=params.tolerance, alpha=params.alpha)
+    verdicts, sensors = verdicts_of(statics['before'], statics['after'], alpha=params.alpha)
+    return ReliabilityResult(params, statics, cals, verdicts, sensors, temps, errors, noise)
 
 
 # ---- the JSON document ---------------------------------------------------------------------
@@ -503,6 +640,15 @@ def _interval_entry(ch: str, statics: dict[str, Any], v: Any) -> dict[str, Any]:
         'decide_record_s': list(v.decide_record_s) if v.decide_record_s else None,
         'notes': list(v.notes)})
     return out
+
+
+def _noise_entry(sc: Any, p: ReliabilityParams) -> dict[str, Any]:
+    return {'verdict': sc.verdict,
+            'sentence': noise_change.sentence(sc, tolerance=p.tolerance, alpha=p.alpha),
+            'decide_record_s': _num(sc.decide_record_s), 'reason': sc.reason,
+            'tests': len(sc.tests),
+            'tests_beyond': [[t.channel, t.tau_s] for t in sc.tests if t.verdict == 'beyond'],
+            'decisive': sc.decisive.as_dict() if sc.decisive is not None else None}
 
 
 def _sensor_entry(sv: Any, statics: dict[str, Any]) -> dict[str, Any]:

@@ -223,6 +223,27 @@ class ImuBagWriter:
         if conn is self._imu_conn:
             self.imu_count += len(blobs)
 
+    def write_imu_raw(self, blobs: Sequence[bytes], log_ns: ArrayLike) -> None:
+        """
+        Append serialised ROS 2 CDR Imu messages as they are (what ``ros2 bag record`` stores).
+
+        The caller has checked them (e.g. :func:`gyro_noise_ros.msgs.imu_rows.imu_rows`): they
+        are written byte for byte, without a decode and re-encode.
+
+        Parameters
+        ----------
+        blobs : sequence of bytes
+            The messages.
+        log_ns : array_like of int, shape (n,)
+            Bag (receive) time of each in ns.
+
+        """
+        logs = split_stamps(log_ns, 'log_ns')[0]
+        if logs.shape[0] != len(blobs):
+            raise ParameterError(f'log_ns has {logs.shape[0]} values for {len(blobs)} messages')
+        self._write(self._imu_conn, logs, blobs)
+        self.imu_count += len(blobs)
+
     def _extra_imu(self, topic: str) -> Connection:
         extra = self.__dict__.setdefault('_extra_imu_conns', {})
         if topic not in extra:

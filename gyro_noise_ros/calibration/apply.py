@@ -32,6 +32,7 @@ dict of the same keys (the node's parameters). No ROS is imported here.
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 import math
 from pathlib import Path
 from typing import Any
@@ -85,12 +86,12 @@ class SensorCalibration:
         """``I + diag(S) + M``: true -> measured (before the bias)."""
         return np.eye(3) + np.diag(self.scale_factor) + self.misalignment
 
-    @property
+    @cached_property
     def inverse(self) -> np.ndarray:
-        """``inv(I + diag(S) + M)``: measured - bias -> true."""
+        """``inv(I + diag(S) + M)``: measured - bias -> true (computed once)."""
         return np.linalg.inv(self.matrix)
 
-    @property
+    @cached_property
     def is_identity(self) -> bool:
         """Tell whether applying the calibration changes nothing (all zeros)."""
         return not (self.bias.any() or self.scale_factor.any() or self.misalignment.any())

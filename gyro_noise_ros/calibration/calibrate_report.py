@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .multipose import gravity_check_words
 from ..formatting import plus_minus
 from ..units import MG_TO_M_S2
 
@@ -204,13 +205,16 @@ def _check_lines(doc: dict[str, Any]) -> list[str]:
            f'- uniformity of the scale factors (std, ddof=1): '
            f'{100 * u["accel_scale_factor_std"]:.4f} %']
     gc = doc['gravity_check']
-    out += ['', '## Gravity check (leave-one-out)', '',
-            f'Each dwell calibrated by the others; |a| - g against its standard deviation, '
-            f'false-alarm {gc["alpha"]:g} over all dwells. Mean |a| raw '
-            f'{gc["mean_norm_raw_m_s2"]:.4f} m/s^2, held-out calibrated '
-            f'{gc["loo_mean_norm_m_s2"]:.5f} m/s^2; verdict: '
-            f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.', '',
-            '| dwell | abs(a) - g (mg) | sigma (mg) | z | verdict |', '|---|---|---|---|---|']
+    out += ['', '## Gravity check (leave-one-out)', '']
+    if gc['consistent'] is None:
+        out.append(f'{gravity_check_words(gc)}.')
+    else:
+        out += [f'Each dwell calibrated by the others; |a| - g against its standard deviation, '
+                f'false-alarm {gc["alpha"]:g} over all dwells. Mean |a| raw '
+                f'{gc["mean_norm_raw_m_s2"]:.4f} m/s^2, held-out calibrated '
+                f'{gc["loo_mean_norm_m_s2"]:.5f} m/s^2; verdict: {gravity_check_words(gc)}.',
+                '', '| dwell | abs(a) - g (mg) | sigma (mg) | z | verdict |',
+                '|---|---|---|---|---|']
     for c in gc['dwells']:
         out.append(f'| {c["dwell"]} | {c["residual_m_s2"] / MG_TO_M_S2:+.4f} | '
                    f'{c["sigma_m_s2"] / MG_TO_M_S2:.4f} | {c["z"]:+.2f} | '

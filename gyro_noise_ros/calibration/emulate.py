@@ -418,6 +418,7 @@ class _PoseSequence:
     lead_s: float
     gravity_m_s2: float
     latitude_deg: float
+    heading_deg: float
 
     def labels(self) -> list[str]:
         """Return the dwells' labels in the order visited (each subclass says)."""
@@ -460,8 +461,9 @@ class _PoseSequence:
             (n, 3) each.
 
         """
-        return _sequence_true(self.attitudes(), t_s, self.dwell_s, self.move_s, self.lead_s,
-                              self.gravity_m_s2, self.latitude_deg)
+        yaw = Rotation.from_euler('z', self.heading_deg, degrees=True)
+        return _sequence_true([yaw * a for a in self.attitudes()], t_s, self.dwell_s,
+                              self.move_s, self.lead_s, self.gravity_m_s2, self.latitude_deg)
 
 
 @dataclass(frozen=True)
@@ -484,6 +486,9 @@ class SixPosition(_PoseSequence):
     tilts : tuple of (str, float)
         ``(orientation, degrees)``: that dwell's fixture is tilted by so many degrees about the
         horizontal world x axis (a badly seated fixture; the turns into and out of it follow).
+    heading_deg : float
+        The whole sequence turned about the vertical (deg; where the Earth rate's horizontal
+        part points in the sensor frame).
 
     """
 
@@ -494,6 +499,7 @@ class SixPosition(_PoseSequence):
     gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
     tilts: tuple[tuple[str, float], ...] = ()
+    heading_deg: float = 0.0
 
     def __post_init__(self) -> None:
         for o in self.order:
@@ -576,6 +582,8 @@ class MultiPose(_PoseSequence):
         Rest in the first pose before its dwell counts (s).
     gravity_m_s2, latitude_deg : float
         Local gravity (m/s^2), latitude (deg).
+    heading_deg : float
+        The whole sequence turned about the vertical (deg).
 
     """
 
@@ -585,6 +593,7 @@ class MultiPose(_PoseSequence):
     lead_s: float = 0.0
     gravity_m_s2: float = STANDARD_GRAVITY_M_S2
     latitude_deg: float = 45.0
+    heading_deg: float = 0.0
 
     def __post_init__(self) -> None:
         if int(self.poses) != self.poses or self.poses < 2:

@@ -41,10 +41,12 @@ of the others predicts its norm (:func:`leave_one_out`).
 from collections.abc import Sequence
 from dataclasses import dataclass
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
+from scipy.stats import norm
 from scipy.stats import t as t_dist
 
 from .apply import SensorCalibration
@@ -55,9 +57,39 @@ from ..errors import InputDataError, ParameterError
 
 #: Parameters: b (3), S (3), then the lower cross-axis terms M[1, 0], M[2, 0], M[2, 1].
 LOWER = ((1, 0), (2, 0), (2, 1))
+PARAMETERS = 9
+#: The noise model is tied to the fit's residuals from this many residual degrees of freedom
+#: on; with fewer it rests on the windows inside the dwells (a sum of squares of 1-5 degrees of
+#: freedom scatters by a factor 1.6-4, and a bad pose among them inflates it).
+MIN_RESIDUAL_DOF = 6
 #: Largest accepted 2-norm condition number of the fit's Jacobian: the poses must point in
 #: enough directions (all upright or all on one side leaves a scale factor undetermined).
 MAX_CONDITION = 1e6
+
+
+#: The gravity check of a multi-pose calibration of exactly 9 poses.
+NO_GRAVITY_CHECK = ('not possible: the 9 poses determine the 9 calibration numbers exactly, none '
+                    'is left over to be predicted by the others (record 10 or more poses)')
+
+
+def gravity_check_words(gc: dict[str, Any]) -> str:
+    """
+    Return the gravity check's verdict in words from its ``calibration.json`` entry.
+
+    Parameters
+    ----------
+    gc : dict
+        ``calibration.json['gravity_check']``.
+
+    Returns
+    -------
+    str
+        ``'consistent'``, ``'INCONSISTENT'`` or the note why no check was possible.
+
+    """
+    if gc['consistent'] is None:
+        return gc.get('note') or 'not possible'
+    return 'consistent' if gc['consistent'] else 'INCONSISTENT'
 
 
 def triangular(matrix: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -286,7 +318,7 @@ def calibrate_poses(dwells: Sequence[Dwell], gravity_m_s2: float, *, alpha: floa
     out: list[int] = []
     while True:
         checks = leave_one_out(dwells, g, theta, fitter, alpha=alpha, exclude=out)
-        bad = [k for k in range(n) if k not in out and not checks[k].consistent]
+        bad = [k for k in range(len(checks)) if k not in out and not checks[k].consistent]
         if not bad or n - len(out) - 1 < MIN_POSES + 1:
             break
         out.append(max(bad, key=lambda k: abs(checks[k].z)))
@@ -303,10 +335,7 @@ def calibrate_poses(dwells: Sequence[Dwell], gravity_m_s2: float, *, alpha: floa
                               dwell_windows(d.window_n for d in kept),
                               dwell_windows(d.window_accel_m_s2 for d in kept))
     resid = _residual(theta, means, g)
-    jac, v = _jacobian(theta, means, g)
-    proj = np.eye(len(kept)) - jac @ np.linalg.solve(jac.T @ jac, jac.T)
-    noise = fitter.fit(residual_loading=proj[:, :, None] * v[None, :, :],
-                       residuals=proj @ resid)
+    noise = _noise_of_fit(fitter, theta, means, g)
     cov = noise.covariance(_loading(theta, means, g))
     sig = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     a, b = _unpack(theta)
@@ -318,6 +347,28 @@ def calibrate_poses(dwells: Sequence[Dwell], gravity_m_s2: float, *, alpha: floa
                              float(np.sqrt(np.sum(resid ** 2) / max(len(kept) - 9, 1))), cov,
                              tuple(checks[k].label for k in sorted(out)))
     return result, checks, noise
+
+
+def _noise_of_fit(fitter: DwellNoiseFitter, theta: NDArray[np.float64],
+                  means: NDArray[np.float64], g: float, *,
+                  columns: NDArray[np.intp] | None = None, n_all: int = 0) -> DwellNoise:
+    """
+    Fit the variogram to the dwells' windows, tied to the fit's residuals when it has any.
+
+    With exactly 9 poses the fit has no residual (9 equations, 9 numbers); its projector is zero
+    to rounding, and tying the model to those rounding residuals made every uncertainty ~1e-14.
+    ``columns``/``n_all``: the poses of ``means`` among ``n_all`` dwells of the fitter.
+    """
+    if means.shape[0] - PARAMETERS < MIN_RESIDUAL_DOF:
+        return fitter.fit()
+    jac, v = _jacobian(theta, means, g)
+    proj = np.eye(means.shape[0]) - jac @ np.linalg.solve(jac.T @ jac, jac.T)
+    loading = proj[:, :, None] * v[None, :, :]
+    if columns is not None:
+        full = np.zeros((means.shape[0], n_all, 3))
+        full[:, columns, :] = loading
+        loading = full
+    return fitter.fit(residual_loading=loading, residuals=proj @ _residual(theta, means, g))
 
 
 def _label(k: int, d: Dwell) -> str:
@@ -357,10 +408,13 @@ def leave_one_out(dwells: Sequence[Dwell], gravity_m_s2: float, theta: NDArray[n
     means = np.array([d.accel_mean_m_s2 for d in dwells])
     g = float(gravity_m_s2)
     n = means.shape[0]
+    if n - len(set(exclude)) <= PARAMETERS:
+        # each check refits the other poses: with 9 poses in all that leaves 8 for 9 numbers
+        return ()
     out = []
     for k in range(n):
         keep = np.flatnonzero((np.arange(n) != k) & ~np.isin(np.arange(n), list(exclude)))
-        dof = max(1, keep.size - 9)       # the noise model leans on the other poses' residuals
+        dof = keep.size - PARAMETERS if keep.size - PARAMETERS >= MIN_RESIDUAL_DOF else 0
         th = _solve(means[keep], g, theta)
         resid_k = float(_residual(th, means[k:k + 1], g)[0])
         jac, v = _jacobian(th, means[keep], g)
@@ -370,14 +424,13 @@ def leave_one_out(dwells: Sequence[Dwell], gravity_m_s2: float, theta: NDArray[n
         load = np.zeros((n, 3))
         load[k] = vk[0]
         load[keep] += (jk[0] @ core)[:, None] * v
-        proj = np.eye(keep.size) - jac @ np.linalg.solve(jac.T @ jac, jac.T)
-        rl = np.zeros((keep.size, n, 3))
-        rl[:, keep, :] = proj[:, :, None] * v[None, :, :]
-        noise = fitter.fit(residual_loading=rl,
-                           residuals=proj @ _residual(th, means[keep], g))
+        noise = _noise_of_fit(fitter, th, means[keep], g, columns=keep, n_all=n)
         var = float(noise.covariance(load[None])[0, 0])
         sigma = math.sqrt(var) if var > 0 else float('nan')
         z = resid_k / sigma if sigma > 0 else float('inf')
-        p = float(2.0 * t_dist.sf(abs(z), dof))
+        # the noise model leans on the other poses' residuals (Student's t with their n - 9
+        # degrees of freedom) when they have MIN_RESIDUAL_DOF or more; otherwise it rests on
+        # the windows inside the dwells alone, read as normal (rates: docs/reliability.md)
+        p = float(2.0 * (t_dist.sf(abs(z), dof) if dof else norm.sf(abs(z))))
         out.append(LeaveOneOut(_label(k, dwells[k]), resid_k, sigma, z, p, p >= alpha / n))
     return tuple(out)

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..bag import ImuBagReader
+from ..bag import ImuBagReader, ImuBatch
 from ..core.timebase import estimate_rate, RATE_RANGE_HZ
 from ..errors import InputDataError, ParameterError
 from ..outputs import StrPath
@@ -136,11 +136,35 @@ def first_stamp_ns(path: StrPath, *, topic: str | None = None) -> int | None:
     int or None
 
     """
+    b = _first_batch(path, topic)
+    return None if b is None else int(b.stamp_ns[0])
+
+
+def _first_batch(path: StrPath, topic: str | None) -> ImuBatch | None:
+    """Return the first non-empty batch of Imu samples of a recording, None when none."""
     with ImuBagReader(path, topic=topic) as reader:
         for b in reader.iter_batches(1024):
             if b.stamp_ns.size:
-                return int(b.stamp_ns[0])
+                return b
     return None
+
+
+def frame_id(path: StrPath, *, topic: str | None = None) -> str:
+    """
+    Return the ``header.frame_id`` of a recording's first Imu sample ('' when none is set).
+
+    Parameters
+    ----------
+    path, topic
+        As :func:`first_stamp_ns`.
+
+    Returns
+    -------
+    str
+
+    """
+    b = _first_batch(path, topic)
+    return '' if b is None else (b.frame_id or '')
 
 
 def read_imu(path: StrPath, *, topic: str | None = None, rate_hz: float | None = None,

@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .interval import (bias_instability_interval, DEFAULT_ALPHA, DEFAULT_C, DEFAULT_MIN_EDF,
                        Interval, log_adev_sd, undetermined)
+from .noise_change import DEFAULT_TAUS_S, fixed_factors, fixed_taus, FixedTaus
 from .static import classify, DetectorSettings, find_dwells, WindowAccumulator
 from ..core.allan import AllanAccumulator, AllanResult
 from ..core.readout import (AllanReadout, fit_noise_terms_band_limited, MAX_TAU_FRACTION,
@@ -188,6 +189,8 @@ class ChannelResult:
     readout : AllanReadout or None
         The one datasheet readout of the curve (its bias stability is the interval's
         sigma_min).
+    fixed : FixedTaus or str
+        The Allan variance at the verdict's fixed taus (:mod:`.noise_change`), or why not.
 
     """
 
@@ -196,6 +199,7 @@ class ChannelResult:
     interval: Interval
     terms: dict[str, Term] | None = None
     readout: AllanReadout | None = None
+    fixed: FixedTaus | str = 'not computed'
 
 
 class StaticRecord:
@@ -216,12 +220,15 @@ class StaticRecord:
         Least EDF of a tau that may hold sigma_min (0: the readout's rule alone).
     alpha : float, keyword-only
         One-sided level of the test of a fall-back below the level (ambiguous crossing).
+    taus_s : sequence of float, keyword-only
+        The noise verdict's fixed averaging times (s).
 
     """
 
     def __init__(self, rate_hz: float, *, c: float = DEFAULT_C,
                  settings: DetectorSettings = DetectorSettings(), source: str = '',
-                 min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA) -> None:
+                 min_edf: float = DEFAULT_MIN_EDF, alpha: float = DEFAULT_ALPHA,
+                 taus_s: Sequence[float] = DEFAULT_TAUS_S) -> None:
         self.rate_hz = float(rate_hz)
         self.c = c
         self.min_edf = min_edf
@@ -229,13 +236,15 @@ class StaticRecord:
         self.settings = settings
         self.source = source
         self._acc = [AllanAccumulator(self.rate_hz, taus='dense') for _ in CHANNELS]
+        fixed = fixed_factors(taus_s, self.rate_hz)
+        self._fixed = [AllanAccumulator(self.rate_hz, taus=fixed) for _ in CHANNELS]
         self._bad = [''] * len(CHANNELS)
         self._win = WindowAccumulator(self.rate_hz, window_s=settings.window_s, source=source)
         self.samples = 0
         self.duration_s = 0.0
 
     def update(self, t_s: NDArray[np.floating[Any]] | Sequence[float], accel_m_s2: ArrayLike,
-               gyro_rad_s: ArrayLike) -> None:
+               gyro_rad_s: ArrayLike, *, keep: NDArray[np.bool_] | None = None) -> None:
         """
         Ingest a batch.
 
@@ -245,10 +254,16 @@ class StaticRecord:
             (n,) stamps (s).
         accel_m_s2, gyro_rad_s : array_like
             (n, 3) specific force (m/s^2) and angular rate (rad/s).
+        keep : numpy.ndarray of bool, optional, keyword-only
+            (n,) the samples of the static part (``core.segments``: one contiguous run over the
+            record); the others count in the static check only, never in the Allan deviation.
+            Default: all.
 
         """
         data = np.hstack([np.asarray(accel_m_s2, np.float64), np.asarray(gyro_rad_s, np.float64)])
         self._win.update(t_s, data[:, :3], data[:, 3:])
+        if keep is not None:
+            data = data[np.asarray(keep, dtype=bool)]
         for k in range(len(CHANNELS)):
             if self._bad[k]:
                 continue
@@ -260,6 +275,7 @@ class StaticRecord:
                                 f'Allan deviation would be made up')
                 continue
             self._acc[k].update(col)
+            self._fixed[k].update(col)
         self.samples += data.shape[0]
         if len(t_s):
             self.duration_s = float(t_s[-1])
@@ -320,16 +336,17 @@ class StaticRecord:
             if not reason and ch.startswith('accel'):
                 reason = check['accel_problem']
             if reason:
-                out[ch] = ChannelResult(ch, None, undetermined(reason, self.c))
+                out[ch] = ChannelResult(ch, None, undetermined(reason, self.c), fixed=reason)
                 continue
             try:
                 allan = self._acc[k].result()
             except GyroNoiseError as err:
-                out[ch] = ChannelResult(ch, None, undetermined(f'record too short: {err}', self.c))
+                why = f'record too short: {err}'
+                out[ch] = ChannelResult(ch, None, undetermined(why, self.c), fixed=why)
                 continue
             if not np.any(np.asarray(allan.adev) > 0):
-                out[ch] = ChannelResult(ch, allan, undetermined('constant signal (all-zero '
-                                                                'Allan deviation)', self.c))
+                why = 'constant signal (all-zero Allan deviation)'
+                out[ch] = ChannelResult(ch, allan, undetermined(why, self.c), fixed=why)
                 continue
             record_s = float(allan.n_samples) / float(allan.rate_hz)
             readout: AllanReadout | None
@@ -349,5 +366,11 @@ class StaticRecord:
                                            max_tau_s=MAX_TAU_FRACTION * record_s,
                                            model_adev=model, record_s=record_s,
                                            alpha=self.alpha)
-            out[ch] = ChannelResult(ch, allan, iv, terms, readout)
+            out[ch] = ChannelResult(ch, allan, iv, terms, readout, self._fixed_of(k, allan))
         return out, check
+
+    def _fixed_of(self, k: int, allan: AllanResult) -> FixedTaus | str:
+        try:
+            return fixed_taus(self._fixed[k].result(), allan)
+        except GyroNoiseError as err:
+            return str(err)

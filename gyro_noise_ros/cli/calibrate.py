@@ -42,6 +42,7 @@ from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.calibrate import (CalibrateParams, GYRO_TURNS, MODES, resolve_gravity,
                              run_calibration, write_calibration)
 from ..calibration.calibrate_report import table6_rows
+from ..calibration.multipose import gravity_check_words
 from ..calibration.sixpos import DEFAULT_ALPHA
 from ..calibration.static import DetectorSettings
 from ..units import MG_TO_M_S2
@@ -149,10 +150,12 @@ def _body(argv: list[str]) -> int:
             if result.gyro.estimated[i, i]:
                 print(f'gyro S{ax} = {100 * result.gyro.scale_factor[i]:.4f} +/- '
                       f'{100 * result.gyro.scale_factor_sigma[i]:.4f} %')
-    verdict = 'consistent' if result.gravity_check_consistent else 'INCONSISTENT'
-    worst = max(result.gravity_check, key=lambda c: abs(c.z))
-    print(f'gravity check (leave-one-out): {verdict}, largest |a| - g '
-          f'{worst.residual_m_s2 / MG_TO_M_S2:+.4f} mg ({worst.z:+.1f} sigma, {worst.label})')
+    verdict = gravity_check_words(doc['gravity_check'])
+    if result.gravity_check:
+        worst = max(result.gravity_check, key=lambda c: abs(c.z))
+        verdict += (f', largest |a| - g {worst.residual_m_s2 / MG_TO_M_S2:+.4f} mg '
+                    f'({worst.z:+.1f} sigma, {worst.label})')
+    print(f'gravity check (leave-one-out): {verdict}')
     print(f'wrote {os.path.join(args.out, "calibration.json")}, calibration.yaml, calibration.md')
     return 0
 

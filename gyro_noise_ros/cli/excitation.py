@@ -45,7 +45,6 @@ from ._common import add_overwrite_argument, run_cli
 from ..app.excitation import ExcitationParams, run_excitation, write_excitation
 from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
                                       DEFAULT_TOLERANCE)
-from ..outputs import make_out_dir
 
 PROG = 'gyro_noise_excitation'
 #: Options not named after the parameter they set (errors name parameters: cli/_common).
@@ -101,7 +100,8 @@ def _body(argv: list[str]) -> int:
         sweep=args.sweep, reference_topic=args.reference_topic, topic=args.topic,
         harmonics=args.harmonics, rate_hz=args.rate_hz, frequency_tol=args.frequency_tol,
         alpha=args.alpha, tolerance=args.tolerance, figures=not args.no_figures)
-    make_out_dir(args.out)            # a file in the way fails now, not after the computation
+    # refused now (a file in the way, a previous result), not after the computation
+    check_out_dir(args.out, overwrite=args.overwrite)
     result = run_excitation(params)
     write_excitation(result, args.out, html=not args.no_html, command=[PROG, *argv])
     k, unit = params.display

@@ -35,6 +35,7 @@ the exit code. Formats, metric definitions and exit codes: ``docs/thermal.md``.
 
 import argparse
 from collections.abc import Callable, Iterable
+from dataclasses import replace
 import math
 import sys
 from typing import TypeAlias
@@ -155,6 +156,14 @@ def _add_apply_command(sub: _Subparsers) -> None:
     a.add_argument('--storage', choices=('sqlite3', 'mcap'),
                    help='storage of OUT/compensated (default: that of BAG; sqlite3 for ROS 1)')
     a.add_argument('--no-bag', action='store_true', help='do not write OUT/compensated')
+    a.add_argument('--strict', action='store_true',
+                   help='refuse (exit 4) a run more than '
+                        f'{100 * registry.MAX_OUTSIDE_SHARE:g} %% of which lies outside the '
+                        'trained range of T or dT (default: a warning)')
+    a.add_argument('--max-offset-deg-s', type=float, default=registry.MAX_SENSOR_OFFSET_DEG_S,
+                   help="refuse a run whose gyro sits further than this from the model's drift "
+                        'on an axis, a model of another sensor, deg/s '
+                        f'({registry.MAX_SENSOR_OFFSET_DEG_S:g}; inf disables)')
     _add_bag_options(a)
     _add_score_options(a)
     _add_output_options(a)
@@ -207,16 +216,25 @@ def _add_simulate_command(sub: _Subparsers) -> None:
 
 def _add_export_command(sub: _Subparsers) -> None:
     """Add ``export``: a poly3 model as PX4 and ArduPilot parameters."""
-    e = sub.add_parser('export', help='a poly3 model as PX4 TC_* and ArduPilot INS_TCAL* '
-                                      'parameters')
-    e.add_argument('--model', required=True, metavar='MODEL_JSON', help='model.json of fit '
-                   '--method poly3')
+    e = sub.add_parser('export', help="a model's poly3 as PX4 TC_* and ArduPilot INS_TCAL* "
+                                      'parameters, with the residual each firmware leaves')
+    e.add_argument('--model', required=True, metavar='MODEL_JSON',
+                   help='model.json of fit (a poly3, or any method with the poly3 fit adds)')
     e.add_argument('--out', required=True, metavar='DIR', help='output directory')
-    e.add_argument('--px4-instance', type=int, default=0, help='PX4 sensor instance 0..2 (0)')
-    e.add_argument('--px4-gyro-id', type=int, default=0,
-                   help="PX4 TC_G<i>_ID: the gyro's device id (its CAL_GYRO<i>_ID; 0)")
-    e.add_argument('--px4-accel-id', type=int, default=0,
-                   help="PX4 TC_A<i>_ID: the accelerometer's device id (0)")
+    e.add_argument('--px4-instance', type=int, default=0,
+                   help='PX4 calibration instance 0..3 (TC_G0..TC_G3; 0)')
+    e.add_argument('--px4-gyro-id', type=int, default=None,
+                   help="PX4 TC_G<i>_ID: the gyro's 24-bit device id, as PX4 shows it in "
+                        'CAL_GYRO<i>_ID (without it the block is written with TC_G_ENABLE 0)')
+    e.add_argument('--px4-accel-id', type=int, default=None,
+                   help="PX4 TC_A<i>_ID: the accelerometer's device id (CAL_ACC<i>_ID; without "
+                        'it TC_A_ENABLE 0)')
+    e.add_argument('--axes', default='x,y,z',
+                   help="the autopilot's sensor X, Y, Z as signed axes of the recording, e.g. "
+                        '--axes=-y,x,z (x,y,z); docs/thermal.md, "On the vehicle"')
+    e.add_argument('--predict', nargs='+', default=[], metavar='BAG',
+                   help='recordings to predict the residual each firmware leaves on (besides '
+                        'the training sources named in model.json)')
     e.add_argument('--ardupilot-imu', type=int, default=1, help='ArduPilot IMU 1..3 (1)')
     e.add_argument('--no-gyro-offsets', action='store_true',
                    help='do not write INS_GYROFFS_*/INS_GYR<k>_CALTEMP (leave them to the '
@@ -224,6 +242,7 @@ def _add_export_command(sub: _Subparsers) -> None:
     e.add_argument('--cal-temp-c', type=float,
                    help="ArduPilot CALTEMP of the exported gyro offsets (default: the model's "
                         'T_ref)')
+    _add_bag_options(e)
     _add_output_options(e)
 
 
@@ -254,6 +273,12 @@ def _score_options(args: argparse.Namespace) -> app.ScoreOptions:
                             range_margin_c=args.range_margin_c)
 
 
+def _print_warnings(warnings: Iterable[str], args: argparse.Namespace) -> None:
+    if not args.quiet:
+        for text in warnings:
+            print(f'{PROG}: warning: {text}', file=sys.stderr)
+
+
 def _print_notes(notes: Iterable[str], args: argparse.Namespace) -> None:
     if not args.quiet:
         for note in notes:
@@ -272,11 +297,14 @@ def _cmd_fit(args: argparse.Namespace, argv: list[str]) -> int:
                      accel=not args.no_accel, scheduler=args.scheduler, warn=_warn(args),
                      figures=not args.no_figures, command=argv)
     files = app.write_fit(result, args.out, figures=not args.no_figures)
-    _print_notes(result.model.notes, args)
+    _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
         t = result.model.training
         accel = ' (+ accelerometer polynomial)' if result.model.accel is not None else ''
-        print(f'{result.model.method.name}{accel}: fitted on {t.samples} samples '
+        terms = getattr(result.model.method, 'terms', None)
+        chosen = f' [terms {" ".join(terms)}, by blocked CV]' if terms else ''
+        print(f'{result.model.method.name}{chosen}{accel}: fitted on {t.samples} samples '
               f'({t.duration_s / 3600:.3g} h, {t.temperature_min_c:.2f}..'
               f'{t.temperature_max_c:.2f} degC) in {result.fit_time_s:.1f} s')
         print(f'wrote {len(files)} files to {args.out}')
@@ -287,22 +315,34 @@ def _f(v: float | None) -> str:
     return 'n/a' if v is None else f'{v:.4g}'
 
 
+def _corner(bandwidth: dict) -> str:
+    """Say where the -3 dB corner is: at a frequency, or beyond the measured band."""
+    cell = app.bandwidth_cell(bandwidth)
+    return {'> band': 'above the measured band', '< band': 'below the measured band'}.get(
+        cell, f'at {cell} Hz')
+
+
 def _cmd_apply(args: argparse.Namespace, argv: list[str]) -> int:
+    score = replace(_score_options(args), strict=args.strict,
+                    max_offset_deg_s=args.max_offset_deg_s)
     result = app.apply_model(bag=args.bag, model_path=args.model, bag_options=_bag_options(args),
-                             score=_score_options(args), figures=not args.no_figures,
-                             command=argv)
+                             score=score, figures=not args.no_figures, command=argv)
     files = app.write_apply(result, args.out, figures=not args.no_figures,
                             write_bag=not args.no_bag, storage=args.storage,
                             html=not args.no_html)
     _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
-        for axis, v in result.doc['axes'].items():
+        yard = result.doc['yardstick']
+        for a, (axis, v) in enumerate(result.doc['axes'].items()):
             raw, proc = v['raw'], v['processed']
             print(f"{axis}: ARW {_f(raw['arw_deg_sqrt_h'])} -> {_f(proc['arw_deg_sqrt_h'])} "
                   f"deg/sqrt(h), bias stability {_f(raw['bias_stability_deg_h'])} -> "
                   f"{_f(proc['bias_stability_deg_h'])} deg/h, residual drift "
                   f"{_f(raw['residual_drift_deg_s'])} -> {_f(proc['residual_drift_deg_s'])} "
-                  f"deg/s, -3 dB {app.bandwidth_cell(v['bandwidth'])} Hz")
+                  f"deg/s ({_f(yard['over_floor'][a])} x the white-noise floor, "
+                  f"{_f((yard.get('over_poly3') or [None] * 3)[a])} x poly3), "
+                  f"-3 dB {_corner(v['bandwidth'])}")
         print(f'wrote {len(files)} files to {args.out}')
     return 0
 
@@ -320,6 +360,8 @@ def _cmd_compare(args: argparse.Namespace, argv: list[str]) -> int:
                          command=argv)
     files = app.write_compare(result, args.out, figures=not args.no_figures,
                               html=not args.no_html)
+    _print_notes(result.summary.get('notes') or (), args)
+    _print_warnings(result.summary.get('warnings') or (), args)
     if not args.quiet:
         from ..thermal import report
 
@@ -378,12 +420,29 @@ def _cmd_export(args: argparse.Namespace, argv: list[str]) -> int:
     result = app.export(model_path=args.model, px4_instance=args.px4_instance,
                         gyro_device_id=args.px4_gyro_id, accel_device_id=args.px4_accel_id,
                         ardupilot_imu=args.ardupilot_imu,
-                        gyro_offsets=not args.no_gyro_offsets, cal_temp_c=args.cal_temp_c)
+                        gyro_offsets=not args.no_gyro_offsets, cal_temp_c=args.cal_temp_c,
+                        axes=args.axes, predict=args.predict, bag_options=_bag_options(args))
     files = app.write_export(result, args.out)
     _print_notes(result.notes, args)
+    _print_warnings(result.warnings, args)
     if not args.quiet:
+        for p in result.predicted:
+            print(_prediction_line(p))
         print(f'wrote {", ".join(str(p) for p in files)}')
     return 0
+
+
+#: The rows of export's prediction, in print order: (key of residual_deg_s, label).
+_PREDICTION_ROWS = (('raw', 'raw'), ('method', 'the model itself'), ('model', 'the cubic'),
+                    ('px4', 'as PX4 applies it'), ('ardupilot', 'as ArduPilot applies it'))
+
+
+def _prediction_line(p: dict) -> str:
+    """Return one line of the residual drift each firmware leaves on one recording."""
+    r = p['residual_deg_s']
+    parts = ', '.join(f'{label} {" / ".join(_f(v) for v in r[key])}'
+                      for key, label in _PREDICTION_ROWS if key in r)
+    return f'{p["bag"]} ({p["role"]}): residual drift x / y / z (deg/s): {parts}'
 
 
 _COMMANDS = {'fit': _cmd_fit, 'apply': _cmd_apply, 'compare': _cmd_compare,

@@ -376,3 +376,105 @@ def gauss_markov(n: int, rate_hz: float, *, std: float, corr_time_s: float,
     ``rate_hz`` the sample rate (Hz); the result has shape ``(n,) + shape``, drawn from ``rng``.
     """
     return GaussMarkov(std, corr_time_s, rate_hz, rng=rng, shape=shape).generate(n)
+
+
+#: Power-law rate noises with an exact expected Allan variance (:func:`power_law_rate`).
+POWER_LAW_ALPHAS = (0, -1, -2)
+
+
+def power_law_rate(n: int, alpha: int, *, rng: np.random.Generator,
+                   oversample: int = 8) -> np.ndarray:
+    """
+    Return ``n`` samples of power-law rate noise, S_y(f) ~ f^alpha, whose AVAR is known exactly.
+
+    * alpha = 0 (white FM, angle random walk): iid standard normal; AVAR(m) = 1 / m.
+    * alpha = -2 (random-walk FM, rate random walk): each sample is the mean over its interval
+      of a continuous Brownian rate of unit diffusion (``r(k + 1) = r(k) + w_k``; the sample is
+      ``r(k) + w_k / 2 + z_k / sqrt(12)``), so the angle is the point-sampled integral and
+      AVAR(m) = m / 3 exactly (IEEE 952: K^2 tau / 3).
+    * alpha = -1 (flicker FM, bias instability): the first n points of a circular Gaussian
+      process of ``oversample * n`` points with one-sided PSD ``1 / (ln 2 f)`` (f in cycles per
+      sample, zero at f = 0), so the AVAR tends to 1 over the middle taus; its exact value at
+      every m is :func:`power_law_rate_avar`.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples (>= 1).
+    alpha : {0, -1, -2}
+        Exponent of the rate PSD.
+    rng : numpy.random.Generator, keyword-only
+        Source of randomness.
+    oversample : int, keyword-only
+        Period of the flicker process in records (its lowest frequency is 1 / (oversample n)).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) float64 rate samples (unit rate; the time step is one sample).
+
+    """
+    n, alpha = int(n), int(alpha)
+    if n < 1 or alpha not in POWER_LAW_ALPHAS or int(oversample) < 1:
+        raise ParameterError(f'need n >= 1, alpha in {POWER_LAW_ALPHAS}, oversample >= 1; got '
+                             f'n = {n}, alpha = {alpha}, oversample = {oversample}')
+    if alpha == 0:
+        return rng.standard_normal(n)
+    if alpha == -2:
+        w = rng.standard_normal(n)
+        rate = np.concatenate(([0.0], np.cumsum(w)[:-1]))
+        return rate + 0.5 * w + rng.standard_normal(n) / math.sqrt(12.0)
+    size = int(oversample) * n
+    coef = rng.standard_normal(size // 2 + 1) + 1j * rng.standard_normal(size // 2 + 1)
+    return np.fft.irfft(coef * _flicker_gain(size), size)[:n]
+
+
+def _flicker_gain(size: int) -> np.ndarray:
+    f = np.fft.rfftfreq(size)
+    gain = np.zeros(f.size)
+    gain[1:] = np.sqrt(size / (8.0 * math.log(2.0) * f[1:]))
+    return gain
+
+
+def power_law_rate_avar(m: ArrayLike, alpha: int, n: int, *, oversample: int = 8) -> np.ndarray:
+    """
+    Return the exact expected Allan variance of :func:`power_law_rate` at averaging factors m.
+
+    Flicker: ``AVAR(m) = 1/2 sum_k P_k 4 sin^2(pi f_k m) (sin(pi f_k m) / (m sin(pi f_k)))^2``
+    over the bins of the circular process (``P_k`` the variance each contributes), the
+    transfer function of the difference of two adjacent m-averages.
+
+    Parameters
+    ----------
+    m : array_like of int
+        Averaging factors (samples).
+    alpha : {0, -1, -2}
+        As :func:`power_law_rate`.
+    n : int
+        Record length of :func:`power_law_rate` (sets the flicker process's period).
+    oversample : int, keyword-only
+        As :func:`power_law_rate`.
+
+    Returns
+    -------
+    numpy.ndarray
+        AVAR at each m (unit rate squared).
+
+    """
+    mm = np.asarray(m, dtype=np.float64)
+    if int(alpha) == 0:
+        return 1.0 / mm
+    if int(alpha) == -2:
+        return mm / 3.0
+    if int(alpha) != -1:
+        raise ParameterError(f'alpha must be in {POWER_LAW_ALPHAS}, got {alpha!r}')
+    size = int(oversample) * int(n)
+    f = np.fft.rfftfreq(size)[1:]
+    var = 2.0 * _flicker_gain(size)[1:] ** 2 / size ** 2
+    if size % 2 == 0:
+        var[:-1] *= 2.0   # every bin but Nyquist stands for +f and -f
+    else:
+        var *= 2.0
+    s = np.sin(np.pi * np.outer(mm.ravel(), f))
+    h2 = 4.0 * s ** 2 * (s / (mm.ravel()[:, None] * np.sin(np.pi * f))) ** 2
+    return (0.5 * h2 @ var).reshape(mm.shape)

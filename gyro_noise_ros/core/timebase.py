@@ -60,6 +60,10 @@ RATE_RANGE_HZ = (1e-3, 1e9)
 BASE_BLOCK = 64
 #: Blocks held before neighbours are merged in pairs.
 MAX_BLOCKS = 1 << 14
+# The columns of TimebaseTracker's block rows: duration, longest step, median step (ns), sum of
+# squared residuals about the block's line (ns^2).
+_DUR, _MAX, _MED, _JSS = range(4)
+_COLUMNS = 4
 #: A step shorter than this fraction of the local period only happens with bursty stamps.
 SHORT_STEP = 0.5
 #: Fraction of short steps above which stamps are called bursty.
@@ -209,16 +213,17 @@ class TimebaseTracker:
         self._short = 0
         self._long = 0
         self._steps_in_blocks = 0
-        # sum of squared residuals about the block's line (ns^2), per block
-        self._jss: list[NDArray[np.float64]] = []
-        self._jn: list[NDArray[np.int64]] = []  # residuals per block
         self._reg_n = 0
         self._reg_sum = 0.0
         self._reg_ss = 0.0
         self._samples_per_block = self._k
-        self._dur: list[NDArray[np.float64]] = []  # ns per block
-        self._maxstep: list[NDArray[np.float64]] = []  # ns per block
-        self._medstep: list[NDArray[np.float64]] = []  # ns per block
+        # Per block, in rows [0, _nb) of arrays that grow by doubling (a live stream adds a block
+        # or two per batch; one small array per batch would be objects without number): the
+        # duration, the longest and the median step (ns), the sum of squared residuals about the
+        # block's line (ns^2), and the residuals counted (_jn).
+        self._blocks = np.empty((0, _COLUMNS))
+        self._jn_rows = np.empty(0, dtype=np.int64)
+        self._nb = 0
         self._seq_first: int | None = None
         self._seq_last: int | None = None
         self._seq_n = 0
@@ -290,28 +295,41 @@ class TimebaseTracker:
         xc = x - x.mean()
         slope = (blk @ xc) / (xc @ xc)
         resid = blk - blk.mean(axis=1, keepdims=True) - slope[:, None] * xc[None, :]
-        self._jss.append(np.sum(resid ** 2, axis=1))
-        self._jn.append(np.full(nb, k + 1, dtype=np.int64))
-        self._dur.append(dur)
-        self._maxstep.append(st.max(axis=1))
-        self._medstep.append(med)
+        self._add_blocks(dur, st.max(axis=1), med, np.sum(resid ** 2, axis=1), k + 1)
         self._carry = self._carry[nb * k:].copy()
-        if sum(d.size for d in self._dur) > self._max_blocks:
+        if self._nb > self._max_blocks:
             self._merge()
 
+    def _add_blocks(self, dur: NDArray[np.float64], maxstep: NDArray[np.float64],
+                    medstep: NDArray[np.float64], jss: NDArray[np.float64], jn: int) -> None:
+        """Append the rows of new blocks (growing the arrays by doubling)."""
+        nb, stop = dur.size, self._nb + dur.size
+        if stop > self._blocks.shape[0]:
+            cap = max(stop, 2 * self._blocks.shape[0], 64)
+            blocks = np.empty((cap, _COLUMNS))
+            blocks[:self._nb] = self._blocks[:self._nb]
+            jn_rows = np.empty(cap, dtype=np.int64)
+            jn_rows[:self._nb] = self._jn_rows[:self._nb]
+            self._blocks, self._jn_rows = blocks, jn_rows
+        rows = self._blocks[self._nb:stop]
+        rows[:, _DUR], rows[:, _MAX], rows[:, _MED], rows[:, _JSS] = dur, maxstep, medstep, jss
+        self._jn_rows[self._nb:stop] = jn
+        self._nb += nb
+
     def _merge(self) -> None:
-        dur = np.concatenate(self._dur)
-        mx = np.concatenate(self._maxstep)
-        md = np.concatenate(self._medstep)
-        m = dur.size // 2 * 2
+        m = self._nb // 2 * 2
         # An odd last block cannot be merged: it leaves the rows (its samples stay counted in n and
         # span). New blocks are cut at the doubled size from now on.
-        self._dur = [dur[:m:2] + dur[1:m:2]]
-        self._maxstep = [np.maximum(mx[:m:2], mx[1:m:2])]
-        self._medstep = [0.5 * (md[:m:2] + md[1:m:2])]
-        jss, jn = np.concatenate(self._jss), np.concatenate(self._jn)
-        self._jss = [jss[:m:2] + jss[1:m:2]]
-        self._jn = [jn[:m:2] + jn[1:m:2]]
+        b = self._blocks[:m]
+        merged = np.empty((m // 2, _COLUMNS))
+        merged[:, _DUR] = b[0::2, _DUR] + b[1::2, _DUR]
+        merged[:, _MAX] = np.maximum(b[0::2, _MAX], b[1::2, _MAX])
+        merged[:, _MED] = 0.5 * (b[0::2, _MED] + b[1::2, _MED])
+        merged[:, _JSS] = b[0::2, _JSS] + b[1::2, _JSS]
+        jn = self._jn_rows[:m]
+        self._blocks[:m // 2] = merged
+        self._jn_rows[:m // 2] = jn[0::2] + jn[1::2]
+        self._nb = m // 2
         self._k *= 2
         self._samples_per_block = self._k
 
@@ -342,9 +360,8 @@ class TimebaseTracker:
         steps = n - 1
         usable, warnings = self._time_base(span_ns)
         mean_rate = steps / span_ns * _NS if span_ns > 0 else math.nan
-        dur = np.concatenate(self._dur) if self._dur else np.empty(0)
-        mx = np.concatenate(self._maxstep) if self._maxstep else np.empty(0)
-        md = np.concatenate(self._medstep) if self._medstep else np.empty(0)
+        blocks = self._blocks[:self._nb]
+        dur, mx, md = blocks[:, _DUR].copy(), blocks[:, _MAX].copy(), blocks[:, _MED].copy()
         med_step = float(np.median(md)) if md.size else (span_ns / steps)
         median_step_rate = _NS / med_step if med_step > 0 else math.nan
         block_rate, block_se, k = _block_rate(dur, mx, self._samples_per_block)
@@ -424,7 +441,8 @@ class TimebaseTracker:
             # A block holding a gap (a step of 10 typical block maxima and more) would make the
             # gap's length look like jitter, and a burst wait like hours: both leave it out.
             calm = mx <= GAP_STEPS * float(np.median(mx))
-            jss, jn = np.concatenate(self._jss)[calm], np.concatenate(self._jn)[calm]
+            jss = self._blocks[:self._nb, _JSS][calm]
+            jn = self._jn_rows[:self._nb][calm]
             if jn.sum():
                 jitter = math.sqrt(float(jss.sum()) / float(jn.sum())) / _NS
                 burst_step = float(mx[calm].max()) / _NS

@@ -174,6 +174,8 @@ class CompensationTask:
         What the model does beyond its range + margin (named in the ERROR).
     now : float, keyword-only
         Monotonic time of the start (s): the output rate's first interval starts there.
+    temperature_sync : str, keyword-only
+        How samples get their thermal offset (reported): ``'latest'`` or ``'interpolate'``.
 
     Attributes
     ----------
@@ -184,8 +186,10 @@ class CompensationTask:
     """
 
     def __init__(self, thresholds: CompensationThresholds, *, calibration: Calibration,
-                 calibration_source: str, out_of_range_action: str, now: float) -> None:
+                 calibration_source: str, out_of_range_action: str, now: float,
+                 temperature_sync: str = 'latest') -> None:
         self.thresholds = thresholds
+        self.temperature_sync = temperature_sync
         self.calibration = calibration
         self.calibration_source = calibration_source
         self.out_of_range_action = out_of_range_action
@@ -193,6 +197,9 @@ class CompensationTask:
         self.last_data_s: float | None = None
         self.last_temperature_s: float | None = None
         self._late_reported = 0  # the hold's late count up to the previous published status
+        # Largest stamp of a compensated sample minus the stamp of the offset it got (ns), since
+        # the previous published status: the age of a held offset.
+        self._offset_age_ns = 0
         self._rate = (now, 0, math.nan)  # time, published count, Hz
 
     def tick_data(self, now: float) -> None:
@@ -202,6 +209,11 @@ class CompensationTask:
     def tick_temperature(self, now: float) -> None:
         """Note that the thermal evaluator took a temperature at monotonic time ``now`` (s)."""
         self.last_temperature_s = now
+
+    def tick_offset_age(self, age_ns: int) -> None:
+        """Note a compensated sample ``age_ns`` newer than the temperature of its offset (ns)."""
+        if age_ns > self._offset_age_ns:
+            self._offset_age_ns = age_ns
 
     def output_rate_hz(self, now: float) -> float:
         """
@@ -270,6 +282,8 @@ class CompensationTask:
             values += self._thermal_items(thermal, thermal_accel, offset, accel_offset, age,
                                           hold)
             checks += self._thermal_checks(thermal, age, hold, record)
+            if record:
+                self._offset_age_ns = 0
         c = self.counts
         values += [('Messages received', str(c['received'])),
                    ('Messages published', str(c['published'])),
@@ -287,6 +301,8 @@ class CompensationTask:
         """Return the key/values of the thermal model, its inputs and its counts."""
         return [
             ('Thermal model', ev.name),
+            ('Temperature sync', self.temperature_sync),
+            ('Newest sample past its offset (ms)', f'{self._offset_age_ns / 1e6:.1f}'),
             ('Thermal model range (degC)', f'{ev.range_lo_c:.4g} to {ev.range_hi_c:.4g}, '
              f'margin {ev.margin_c:.3g}'),
             ('Temperature (degC)', f'{ev.temperature_c:.4g}'),

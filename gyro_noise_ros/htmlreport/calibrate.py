@@ -28,6 +28,7 @@ from typing import Any, TYPE_CHECKING
 
 from .figures import series_figure
 from .page import Cell, Num, Page, plus_minus_cell, pointer, Table, Verdict, write_report_html
+from ..calibration.multipose import gravity_check_words
 from ..units import MG_TO_M_S2 as _MG, RAD_TO_DEG as _DEG
 
 if TYPE_CHECKING:
@@ -68,8 +69,7 @@ def _in_short(doc: dict[str, Any]) -> str:
     """Return "In short": the two checks and the gyro note, worded as calibration.md words them."""
     gc, cons = doc['gravity_check'], doc['consistency']
     short = ['## In short', '',
-             f'* Gravity check (leave-one-out): '
-             f'{"consistent" if gc["consistent"] else "INCONSISTENT"}.']
+             f'* Gravity check (leave-one-out): {gravity_check_words(gc)}.']
     if cons['pairs']:
         short.append('* Consistency of opposite dwells (a tilt cannot pass silently): '
                      f'{"consistent" if cons["consistent"] else "inconsistent"}.')

@@ -67,12 +67,14 @@ def reliability_page(doc: dict[str, Any], curves: _Curves,
     Page
 
     """
-    method = ("Each static record's Allan deviation gives the bias-instability interval: the "
-              'averaging times where the deviation stays below c times its minimum (c in '
-              "reliability.json), with a width uncertainty from the record's equivalent degrees "
-              'of freedom. The width change is tested one-sided against the tolerance: beyond, '
-              'physiological, or undetermined with the record length that would decide; one '
-              'verdict per sensor from the mean over its three axes (docs/reliability.md).')
+    method = ("The verdict: each static record's Allan deviation at averaging times fixed "
+              'before the data (taus_s in reliability.json) with its equivalent degrees of '
+              'freedom; the ratio after/before has an exact F interval and is tested one-sided '
+              'against the band (tolerance) with Holm over the tests of a sensor: beyond, '
+              'within, or undetermined with the record length that would detect a change at '
+              "the band edge. The indicator: paper 001's bias-instability interval (the "
+              'averaging times where the deviation stays below c times its minimum), its width '
+              'change tested against +/-50 % (docs/reliability.md).')
     inputs = [p for v in doc['sources'].values() if v
               for p in (v if isinstance(v, list) else [v])]
     tables = _verdict_tables(doc)
@@ -86,27 +88,28 @@ def reliability_page(doc: dict[str, Any], curves: _Curves,
 
 
 #: The verdict line's level of each sensor verdict (the worst sensor's is the page's).
-_LEVELS = {'physiological': 'OK', 'undetermined': 'INFO', 'beyond': 'ERROR'}
+_LEVELS = {'within': 'OK', 'undetermined': 'INFO', 'beyond': 'ERROR'}
 
 
 def _verdict(doc: dict[str, Any]) -> Verdict:
-    """Return the verdict line: each sensor's verdict and its basis, the worst level first."""
+    """Return the verdict line: each sensor's fixed-tau verdict in words, the worst level first."""
     order = ('ERROR', 'INFO', 'OK')
     parts, levels = [], []
     for sensor, e in doc['overall'].items():
         levels.append(_LEVELS.get(e['verdict'], 'INFO'))
-        parts.append(f"{sensor}: **{e['verdict']}** ({e['basis']})")
+        parts.append(f"{sensor}: **{e['verdict']}**. {e['sentence']}")
     level = min(levels, key=order.index) if levels else 'INFO'
-    return Verdict(level, '; '.join(parts) or 'no sensor could be judged.')
+    return Verdict(level, ' '.join(parts) or 'no sensor could be judged.')
 
 
 def _in_short(doc: dict[str, Any]) -> str:
     """Return "In short": reliability.md's sentences, each channel's verdict, what failed."""
     short = ['## In short', '']
     short += [f'* {line}' for line in in_short(doc)]
-    short += ['', f'Bias-instability interval: tau range where ADEV < {doc["c"]:g} sigma_min; '
-              f'physiological within +/-{100 * doc["tolerance"]:.0f} % of the before width '
-              f'(one-sided tests at {100 * doc["confidence_one_sided"]:.0f} % confidence).', '']
+    short += ['', f'Indicator, bias-instability interval: tau range where ADEV < {doc["c"]:g} '
+              f'sigma_min; physiological within +/-{100 * doc["interval_tolerance"]:.0f} % of '
+              'the before width (one-sided tests at '
+              f'{100 * doc["confidence_one_sided"]:.0f} % confidence).', '']
     for ch, e in doc['bias_instability_interval'].items():
         why = f' ({e["reason"]})' if e['reason'] else ''
         short.append(f'* **{ch}**: {e["verdict"]}{why}')
@@ -119,13 +122,20 @@ def _in_short(doc: dict[str, Any]) -> str:
 def _verdict_tables(doc: dict[str, Any]) -> list[Table]:
     """Return the verdict per sensor, the interval per channel and the mean widths."""
     overall = Table(
-        'Overall verdict per sensor (mean change over the three axes)',
-        ('Sensor', 'Verdict', 'Basis', 'Mean change (%)', 'Sigma (%)'),
+        'Verdict per sensor: the noise at fixed averaging times',
+        ('Sensor', 'Verdict', 'In words', 'Records that would decide (s)'),
         tuple((sensor, Num(pointer('overall', sensor, 'verdict')),
-               Num(pointer('overall', sensor, 'basis')),
-               Num(pointer('overall', sensor, 'mean_change'), '+.0f', scale=100.0),
-               Num(pointer('overall', sensor, 'mean_change_sd'), '.0f', scale=100.0))
+               Num(pointer('overall', sensor, 'sentence')),
+               Num(pointer('overall', sensor, 'decide_record_s'), '.3g'))
               for sensor in doc['overall']))
+    indicator = Table(
+        'Indicator per sensor: bias-instability interval (mean change over the three axes)',
+        ('Sensor', 'Indicator', 'Basis', 'Mean change (%)', 'Sigma (%)'),
+        tuple((sensor, Num(pointer('interval_indicator', sensor, 'verdict')),
+               Num(pointer('interval_indicator', sensor, 'basis')),
+               Num(pointer('interval_indicator', sensor, 'mean_change'), '+.0f', scale=100.0),
+               Num(pointer('interval_indicator', sensor, 'mean_change_sd'), '.0f', scale=100.0))
+              for sensor in doc['interval_indicator']))
     rows: list[tuple[Cell, ...]] = []
     for ch, e in doc['bias_instability_interval'].items():
         p = pointer('bias_instability_interval', ch)
@@ -133,10 +143,11 @@ def _verdict_tables(doc: dict[str, Any]) -> list[Table]:
                      Num(p + '/width_before_s', '.4g'), Num(p + '/width_after_s', '.4g'),
                      Num(p + '/change', '+.0f', scale=100.0),
                      Num(p + '/change_sd', '.0f', scale=100.0), Num(p + '/verdict')))
-    tables = [overall, Table('Bias-instability interval before and after (paper 001)',
-                             ('Channel', 'Before (s)', 'After (s)', 'Width before (s)',
-                              'Width after (s)', 'Change (%)', 'Sigma (%)', 'Verdict'),
-                             tuple(rows))]
+    tables = [overall] + _fixed_tau_tables(doc)
+    tables += [indicator, Table('Bias-instability interval before and after (paper 001)',
+                                ('Channel', 'Before (s)', 'After (s)', 'Width before (s)',
+                                 'Width after (s)', 'Change (%)', 'Sigma (%)', 'Verdict'),
+                                tuple(rows))]
     tables.append(Table(
         'Mean width over the three axes', ('Sensor', 'Before (s)', 'After (s)', 'Change (%)'),
         tuple((sensor, Num(pointer('summary', sensor, 'mean_width_before_s'), '.4g'),
@@ -144,6 +155,23 @@ def _verdict_tables(doc: dict[str, Any]) -> list[Table]:
                Num(pointer('summary', sensor, 'mean_change'), '+.0f', scale=100.0))
               for sensor in doc['summary'])))
     return tables
+
+
+def _fixed_tau_tables(doc: dict[str, Any]) -> list[Table]:
+    """Return the Allan deviation at the fixed taus before/after with its test (none without)."""
+    fixed: list[tuple[Cell, ...]] = []
+    for ch, tests in doc['noise_change'].items():
+        for k in range(len(tests)):
+            p = pointer('noise_change', ch, k)
+            fixed.append((ch, Num(p + '/tau_s', 'g'), Num(p + '/adev_before', '.4g'),
+                          Num(p + '/adev_after', '.4g'), Num(p + '/ratio', '.3f'),
+                          (Num(p + '/ci/0', '.3f'), ' - ', Num(p + '/ci/1', '.3f')),
+                          Num(p + '/verdict')))
+    if not fixed:
+        return []
+    return [Table('Allan deviation at the fixed taus (SI: m/s^2, rad/s)',
+                  ('Channel', 'Tau (s)', 'Before', 'After', 'Ratio',
+                   f'{100 * (1 - 2 * doc["alpha"]):.0f} % interval', 'Verdict'), tuple(fixed))]
 
 
 def _noise_term_tables(doc: dict[str, Any]) -> list[Table]:

@@ -18,7 +18,10 @@ The ``report.html`` of ``gyro_noise_thermal compare`` and ``gyro_noise_thermal a
 Built from the compare.json / metrics.json document and the arrays the workflow's result holds
 (the Allan curves of the scoring; for apply, the run and the processed output, rad/s). "In
 short" is the verdicts as compare.md / report.md word them: each verdict text is the JSON's, and
-the best held-out line uses the JSON's rule and method.
+the best held-out line uses the JSON's rule and method. The verdict line is the one compare.md /
+report.md open with (``thermal.report.compare_verdict``, ``apply_verdict``); the card, the
+methods ranked by their residual drift over the noise floor (compare) or the method's numbers
+with that yardstick (apply).
 """
 
 from collections.abc import Mapping, Sequence
@@ -31,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from .figures import allan_figure, series_figure
 from .page import Cell, Num, Page, pointer, Table, Verdict, write_report_html
 from ..thermal.metrics import DRIFT_WINDOW_S
+from ..thermal.report import apply_verdict, compare_verdict
 from ..units import RAD_TO_DEG as _DEG, S_PER_H, time_unit
 
 if TYPE_CHECKING:
@@ -54,6 +58,50 @@ def _bandwidth(doc: dict[str, Any], p: str) -> Cell:
     if bw['minus_3db_bound'] == 'measured':
         return Num(p + '/minus_3db_hz', '.3g')
     return '< band' if bw['minus_3db_bound'] == 'below' else '> band'
+
+
+def _yardstick_table(doc: dict[str, Any], parts: tuple[str, ...], title: str) -> Table:
+    """Per axis: the noise floor, the residual drift over it and over poly3's."""
+    yard = _lookup(doc, pointer(*parts)) or {}
+    kind = ("the test run's own noise" if yard.get('floor') == 'noise' else
+            "the run's white-noise level, ARW / sqrt(60 s)")
+    rows = []
+    for a, axis in enumerate(AXES):
+        poly3: Cell = (Num(pointer(*parts, 'over_poly3', a), '.3g')
+                       if yard.get('over_poly3') else 'n/a')
+        rows.append((axis, Num(pointer(*parts, 'floor_deg_s', a), '.4g'),
+                     Num(pointer(*parts, 'over_floor', a), '.3g'), poly3))
+    return Table(f'{title}: residual drift against the noise floor ({kind}) and poly3',
+                 ('Axis', 'Noise floor (deg/s)', 'x noise floor', 'x poly3'), tuple(rows))
+
+
+def _ranking_table(doc: dict[str, Any]) -> list[Table]:
+    """Rank the methods by their mean residual drift over the noise floor (compare.json)."""
+    if not doc.get('ranking'):
+        return []
+    rows = tuple((r['method'], Num(pointer('ranking', i, 'mean_over_floor'), '.3g'),
+                  Num(pointer('ranking', i, 'mean_over_poly3'), '.3g')
+                  if r.get('mean_over_poly3') is not None else 'n/a',
+                  'yes' if r['live_capable'] else 'no')
+                 for i, r in enumerate(doc['ranking']))
+    return [Table('The methods, best first: residual drift over the noise floor (mean over the '
+                  'axes; 1 is what a perfect drift model would leave) and over poly3',
+                  ('Method', 'x noise floor', 'x poly3', 'Live-capable'), rows)]
+
+
+def _raw_table(doc: dict[str, Any]) -> list[Table]:
+    """Tabulate the test run's own numbers, before any method (compare.json)."""
+    first = next(iter(doc['methods']), None)
+    if first is None:
+        return []
+    base = ('methods', first, 'axes')
+    raw = tuple((axis, Num(pointer(*base, axis, 'raw', 'arw_deg_sqrt_h'), '.4g'),
+                 _bias_stability(doc, pointer(*base, axis, 'raw')),
+                 Num(pointer(*base, axis, 'raw', 'residual_drift_deg_s'), '.4g'))
+                for axis in doc['methods'][first]['axes'])
+    return [Table('The test run before any method (raw input)',
+                  ('Axis', 'ARW (deg/sqrt(h))', 'Bias stability (deg/h)',
+                   'Residual drift (deg/s)'), raw)]
 
 
 def _lookup(doc: dict[str, Any], p: str) -> Any:
@@ -171,24 +219,23 @@ def compare_page(doc: dict[str, Any], curves: Mapping[str, Any]) -> Page:
     best = doc['best_held_out']
     short = ['## In short', '',
              f'Best held-out ({best["rule"]}): **{best["method"]}**.', '']
+    if doc.get('ranking'):
+        short += ['Ranked by the mean residual drift over the noise floor: '
+                  + ', '.join(f'{i + 1}. {r["method"]}' for i, r in enumerate(doc['ranking']))
+                  + '.', '']
+    short += [f'* **Warning: {w}.**' for w in doc.get('warnings') or ()]
+    short += [f'* **Note: {n}.**' for n in doc.get('notes') or ()]
     short += [f'* **{name}** {axis}: {v["verdict"]["text"]}'
               for name, m in doc['methods'].items() for axis, v in m['axes'].items()]
     if doc.get('errors'):
         short += ['', 'Not scored:', ''] + [f'* {k}: {v}' for k, v in doc['errors'].items()]
-    tables: list[Table] = []
-    first = next(iter(doc['methods']), None)
-    if first is not None:
-        raw = [(axis, Num(pointer('methods', first, 'axes', axis, 'raw', 'arw_deg_sqrt_h'),
-                          '.4g'),
-                _bias_stability(doc, pointer('methods', first, 'axes', axis, 'raw')),
-                Num(pointer('methods', first, 'axes', axis, 'raw', 'residual_drift_deg_s'),
-                    '.4g')) for axis in doc['methods'][first]['axes']]
-        tables.append(Table('The test run before any method (raw input)',
-                            ('Axis', 'ARW (deg/sqrt(h))', 'Bias stability (deg/h)',
-                             'Residual drift (deg/s)'), tuple(raw)))
+    tables = _ranking_table(doc) + _raw_table(doc)
+    card = len(tables)
     for name in doc['methods']:
         tables.append(Table(f'{name}, trained on the training run, scored on the test run',
                             _AXIS_COLUMNS, tuple(_axis_rows(doc, pointer('methods', name)))))
+        if doc['methods'][name].get('yardstick'):
+            tables.append(_yardstick_table(doc, ('methods', name, 'yardstick'), name))
     if doc.get('oracle'):
         tables.append(Table(
             "Oracle: least squares on the simulator's own drift terms",
@@ -217,10 +264,9 @@ def compare_page(doc: dict[str, Any], curves: Mapping[str, Any]) -> Page:
     inputs = [s.split(' [')[0] for s in (doc.get('train'), doc.get('test')) if s]
     return Page(title=f'gyro_noise_thermal compare: {doc["test"]}', data=doc,
                 in_short_markdown='\n'.join(short), figures=tuple(figures),
-                verdict=Verdict('INFO', f'best on the held-out run ({best["rule"]}): '
-                                f'**{best["method"]}**.'),
-                card=tuple(tables[:2]), card_title='The raw run and the methods',
-                tables=tuple(tables[2:]), method_markdown=method, command=doc.get('command'),
+                verdict=Verdict(*compare_verdict(doc)), card=tuple(tables[:card]),
+                card_title='The methods ranked, and the raw run',
+                tables=tuple(tables[card:]), method_markdown=method, command=doc.get('command'),
                 inputs=tuple(dict.fromkeys(inputs)), version=doc.get('package_version', ''))
 
 
@@ -249,9 +295,13 @@ def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
     if doc['in_sample']:
         short += ['**Warning: this bag is one the model was trained on; the numbers are '
                   'in-sample and flatter the method.**', '']
+    short += [f'* **Warning: {warning}.**' for warning in doc.get('warnings') or ()]
     short += [f'* **Note: {note}.**' for note in doc.get('notes') or ()]
     short += [f'* **{axis}**: {v["verdict"]["text"]}' for axis, v in doc['axes'].items()]
     tables = [Table(f'{doc["method"]} on the run', _AXIS_COLUMNS, tuple(_axis_rows(doc, '')))]
+    if doc.get('yardstick'):
+        tables.append(_yardstick_table(doc, ('yardstick',), doc['method']))
+    card = len(tables)
     tables.append(Table('Trained range and this run', ('Quantity', 'Value'), (
         ('Samples outside the trained range', Num('/range/outside', 'd')),
         ('Samples', Num('/range/samples', 'd')),
@@ -277,11 +327,9 @@ def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
               + _definitions_md(doc))
     return Page(title=f'gyro_noise_thermal apply: {doc["method"]} on {doc["bag"]}', data=doc,
                 in_short_markdown='\n'.join(short), figures=tuple(figures),
-                verdict=Verdict('INFO', f'{doc["method"]} applied: ' + '; '.join(
-                    f'{axis}: {v["verdict"]["text"].rstrip(".")}'
-                    for axis, v in doc['axes'].items()) + '.'),
-                card=tuple(tables[:1]), card_title='The method on this run',
-                tables=tuple(tables[1:]), method_markdown=method, command=doc.get('command'),
+                verdict=Verdict(*apply_verdict(doc)), card=tuple(tables[:card]),
+                card_title='The method on this run, against the noise floor and poly3',
+                tables=tuple(tables[card:]), method_markdown=method, command=doc.get('command'),
                 inputs=(doc['bag'], doc['model']['path']),
                 version=doc.get('package_version', ''))
 

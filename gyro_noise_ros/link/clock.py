@@ -26,24 +26,20 @@ rate ratio (a 50 ppm crystal gives b - 1 = 5e-5), ``L`` the smallest transport l
 Estimator (minimum-delay line fit). Jitter only ever *adds* delay, so the informative receive times
 are the earliest ones. Device time is cut into blocks of ``block_s`` (1 s); per block the host
 keeps the single point with the smallest ``h - d``; a least-squares line through the minima of the
-last ``window_blocks`` closed blocks (60) gives ``a`` and ``b`` (extrapolated over the open block).
-With F frames per block the block minimum exceeds ``L`` by about mean(e)/F (about 5 us for 2 ms
-mean jitter and 417 frames/s), so the line lies within a few microseconds of ``a + b d + L``,
-whatever the jitter. Each sample is stamped ``a + b d - latency_ns``; ``latency_ns`` (default 0) is
-the constant ``L``, which no receive-only method can observe. Stamps are then clamped to be at most
-the receive time (a sample cannot be received before it exists) and forced strictly increasing (1
-ns apart at least), so a correction of the line never moves time backwards.
+last ``window_blocks`` closed blocks (60) gives ``a`` and ``b``; before two blocks have closed the
+slope is 1 and the offset the smallest ``h - d`` so far. ``latency_ns`` (default 0) is the
+constant ``L``, which no receive-only method can observe.
 
-Until the first block closes the slope is taken as 1 and the offset as the smallest ``h - d`` seen
-so far: stamps of the first second can be late by up to the jitter of the earliest batches.
-
-Resets. A backward jump of device time (board restart), or a device-time gap that disagrees with
-the host-time gap by more than ``reset_threshold_s`` (long unplug across a wrap, a board reset to
-another time) restarts the estimator; the monotonic clamp still holds across the restart. A host
-gap longer than half a wrap period is used to pick the number of counter wraps.
-
-The measured error on an emulated clock (50 ppm drift, exponential receive delays with a 2 ms mean,
-417 frames/s) is recorded in ``docs/portenta_link.md`` and checked by ``test/test_link_clock.py``.
+Stamps never step (a step of a fraction of a period reads as a lost sample downstream). The first
+``settle_s`` of device time of an epoch is held back while the offset converges, then stamped
+with the line; from then on the stamps follow their own line, continuous across batches, whose
+rate is the estimate's corrected by the offset to it over ``slew_time_s`` (at most
+``max_slew_ppm``). A batch whose last stamp would lie after its receive time (a sample cannot be
+received before it exists) is compressed onto it, so no stamp step is longer than a period. Resets
+(a backward jump of device time, or a device gap longer than the host gap by more than
+``reset_threshold_s``; a host gap longer than the device gap is a late read, not a jump) restart
+the estimator and the settling; stamps stay strictly increasing.
+The measured error is in ``docs/portenta_link.md`` (``test/test_link_clock.py``).
 """
 
 from collections import deque
@@ -96,8 +92,6 @@ class Unwrapper:
         raw = np.asarray(values).astype(np.uint32, copy=False)
         if raw.size == 0:
             return np.zeros(0, dtype=np.int64)
-        steps = np.empty(raw.size, dtype=np.int64)
-        steps[1:] = np.diff(raw).astype(np.uint32).view(np.int32)
         if self.last is None:
             first = int(raw[0])
         else:
@@ -107,8 +101,15 @@ class Unwrapper:
             if hint is not None:
                 step0 += WRAP_US * int(round((float(hint) - step0) / WRAP_US))
             first = self.last + step0
-        steps[0] = 0
-        out = first + np.cumsum(steps)
+        rel = raw.astype(np.int64)
+        rel -= rel[0]
+        if raw.size > 1 and not (rel[-1] < _HALF_WRAP and np.all(rel[1:] >= rel[:-1])):
+            # A wrap or a backward jump inside the batch: signed 32-bit steps.
+            steps = np.empty(raw.size, dtype=np.int64)
+            steps[1:] = np.diff(raw).astype(np.uint32).view(np.int32)
+            steps[0] = 0
+            rel = np.cumsum(steps)
+        out = first + rel
         self.last = int(out[-1])
         return out
 
@@ -132,6 +133,17 @@ class ClockState:
         Estimator restarts (device clock jumps).
     samples : int
         Samples stamped.
+    settled : bool
+        The epoch's first ``settle_s`` are over: batches are stamped as they come.
+    held : int
+        Samples held while the epoch settles.
+    offset_error_ns : float
+        The stamps' line minus the estimate at the newest sample (ns): what the slew is removing.
+    compressed : int
+        Batches compressed onto their receive time (their stamps would have lain after it).
+    steps : int
+        Offsets beyond :data:`MAX_SLEW_OFFSET_S` removed by a step instead of a slew (a host clock
+        set by hand or NTP).
 
     """
 
@@ -140,11 +152,27 @@ class ClockState:
     blocks: int
     resets: int
     samples: int
+    settled: bool = False
+    held: int = 0
+    offset_error_ns: float = 0.0
+    compressed: int = 0
+    steps: int = 0
+
+
+#: Time constant of the slew that brings the stamps' line onto the estimate (s).
+SLEW_TIME_S = 2.0
+#: Largest rate correction of the slew (ppm): 0.05 % of a sample period per sample.
+MAX_SLEW_PPM = 500.0
+#: An offset to the estimate beyond this is removed at once, and counted (s).
+MAX_SLEW_OFFSET_S = 0.1
+#: A block minimum this far above the fitted line is left out of the fit (ns): its whole block was
+#: read late (a host stall longer than the block), while block minima scatter by microseconds.
+_LATE_BLOCK_NS = 1_000_000
 
 
 class DeviceClock:
     """
-    Map device sample times to host (node clock) time, free of receive jitter and monotonic.
+    Map device sample times to host (node clock) time, free of receive jitter, without steps.
 
     Parameters
     ----------
@@ -158,17 +186,20 @@ class DeviceClock:
     latency_ns : int, keyword-only
         Constant transport latency to subtract (ns); not observable by the estimator.
     reset_threshold_s : float, keyword-only
-        Disagreement between device and host gaps between two batches that restarts the estimator
-        (s).
+        How much longer the device gap between two batches may be than the host gap before the
+        estimator restarts (s).
     max_drift_ppm : float, keyword-only
         Bound on the fitted drift (ppm); a fit beyond it falls back to slope 1 (bad data, not a
         clock).
+    settle_s : float, keyword-only
+        Device time held back at the start of an epoch while the offset converges (s); 0: stamp
+        the first batch at once (later corrections are then slewed or compressed).
 
     """
 
     def __init__(self, *, nominal_rate_hz: float | None = None, block_s: float = 1.0,
                  window_blocks: int = 60, latency_ns: int = 0, reset_threshold_s: float = 0.5,
-                 max_drift_ppm: float = 2000.0) -> None:
+                 max_drift_ppm: float = 2000.0, settle_s: float = 0.0) -> None:
         if nominal_rate_hz is not None and not (np.isfinite(nominal_rate_hz) and nominal_rate_hz
                                                 > 0):
             raise ParameterError(f'nominal_rate_hz must be > 0, got {nominal_rate_hz}')
@@ -178,6 +209,8 @@ class DeviceClock:
             raise ParameterError(f'window_blocks must be >= 2, got {window_blocks}')
         if not (np.isfinite(reset_threshold_s) and reset_threshold_s > 0):
             raise ParameterError(f'reset_threshold_s must be > 0, got {reset_threshold_s}')
+        if not (np.isfinite(settle_s) and settle_s >= 0):
+            raise ParameterError(f'settle_s must be >= 0, got {settle_s}')
         self.nominal_rate_hz = None if nominal_rate_hz is None else float(nominal_rate_hz)
         block_us = float(block_s) * 1e6
         if self.nominal_rate_hz is not None:
@@ -187,9 +220,12 @@ class DeviceClock:
         self.latency_ns = int(latency_ns)
         self._reset_ns = float(reset_threshold_s) * 1e9
         self._max_drift = float(max_drift_ppm) * 1e-6
+        self._settle_us = float(settle_s) * 1e6
         self._last_stamp: int | None = None
         self._resets = 0
         self._samples = 0
+        self._compressed = 0
+        self._steps = 0
         self._unwrap = Unwrapper()
         self._start_epoch()
 
@@ -207,9 +243,20 @@ class DeviceClock:
         self._a: float | None = None  # y = a + s * (d - d0)  with y = h - 1000 d
         self._s = 0.0
         self._d0 = 0.0
+        # The stamps' own line: its newest point (device us relative to _d_ref, ns) and rate
+        # (ns per device us); None until the epoch has settled.
+        self._pub: tuple[int, int] | None = None
+        self._pub_rate = 1000.0
+        self._held: list[NDArray[np.int64]] = []  # device us relative to _d_ref, while settling
+        self._epoch_first_d: int | None = None
+        self._offset_error = 0.0
 
     def reset(self) -> None:
-        """Forget all but the monotonic floor (stamps never go back, even after a reset)."""
+        """
+        Forget all but the monotonic floor (stamps never go back, even after a reset).
+
+        Samples held while the epoch settled are dropped: :meth:`flush` them first.
+        """
         self._start_epoch()
         self._resets += 1
 
@@ -222,7 +269,10 @@ class DeviceClock:
             assert self._h_ref is not None and self._d_ref is not None  # set before the first fit
             a = self._h_ref - 1000.0 * self._d_ref + self._a - self._s * (self._d0 + self._d_ref)
         return ClockState(offset_ns=a, drift_ppm=self._s / 1000.0 * 1e6, blocks=len(self._blocks),
-                          resets=self._resets, samples=self._samples)
+                          resets=self._resets, samples=self._samples,
+                          settled=self._pub is not None, held=sum(h.size for h in self._held),
+                          offset_error_ns=self._offset_error, compressed=self._compressed,
+                          steps=self._steps)
 
     @property
     def measured_rate_hz(self) -> float | None:
@@ -233,7 +283,7 @@ class DeviceClock:
 
     def update(self, t_us: npt.ArrayLike, host_receive_ns: int) -> NDArray[np.int64]:
         """
-        Stamp one received batch.
+        Take one received batch; stamp what can be stamped.
 
         Parameters
         ----------
@@ -245,7 +295,10 @@ class DeviceClock:
         Returns
         -------
         numpy.ndarray
-            int64 host-time stamps (ns), one per sample, strictly increasing across all calls.
+            int64 host-time stamps (ns), strictly increasing across all calls, of the samples
+            released by this batch, oldest first: none while the epoch settles, then the held
+            samples and this batch's; when this batch starts a new epoch (a reset), the previous
+            epoch's held samples (this batch is then held).
 
         """
         raw = np.asarray(t_us)
@@ -256,39 +309,105 @@ class DeviceClock:
         if self._last_h is not None and h - self._last_h > _HALF_WRAP * 1000:
             hint = (h - self._last_h) / 1000.0
         d = self._unwrap.unwrap(raw, hint=hint)
+        flushed = np.zeros(0, dtype=np.int64)
         if self._last_d is not None:
             assert self._last_h is not None  # set with self._last_d
             dd = int(d[0]) - self._last_d
             dh = h - self._last_h
-            if dd < 0 or abs(dd * 1000.0 * (1.0 + self._s / 1000.0)
-                             - dh) > self._reset_ns + 2e-3 * abs(dh):
+            # Device time that went back, or ran ahead of host time: a board restarted or set to
+            # another time. Host time ahead of device time is a late read (the host stalled and
+            # the bytes waited in the port), not a jump: the minimum-delay line ignores it.
+            if dd < 0 or (dd * 1000.0 * (1.0 + self._s / 1000.0) - dh
+                          > self._reset_ns + 2e-3 * abs(dh)):
+                flushed = self.flush()
                 self.reset()
                 d = self._unwrap.unwrap(raw)
         d_last = int(d[-1])
         if self._h_ref is None:
-            self._h_ref, self._d_ref = h, d_last
-        assert self._d_ref is not None  # set with self._h_ref
+            self._h_ref, self._d_ref, self._epoch_first_d = h, d_last, int(d[0])
+        assert self._d_ref is not None and self._epoch_first_d is not None  # set with _h_ref
         self._observe(d_last - self._d_ref, h - self._h_ref)
-        assert self._a is not None  # _observe fitted the line
+        self._last_d, self._last_h = d_last, h
         rel = d - self._d_ref
+        if self._pub is None:
+            self._held.append(rel)
+            if d_last - self._epoch_first_d < self._settle_us:
+                return flushed
+            rel = np.concatenate(self._held)
+            self._held = []
+        stamps = self._stamp(rel, h - self.latency_ns)
+        return np.concatenate((flushed, stamps)) if flushed.size else stamps
+
+    def flush(self) -> NDArray[np.int64]:
+        """
+        Stamp the samples held while the epoch settles with the estimate so far.
+
+        Returns
+        -------
+        numpy.ndarray
+            int64 stamps of the held samples, oldest first (empty when none are held).
+
+        """
+        if not self._held:
+            return np.zeros(0, dtype=np.int64)
+        rel = np.concatenate(self._held)
+        self._held = []
+        assert self._h_ref is not None and self._last_h is not None  # set with the held batches
+        return self._stamp(rel, self._last_h - self.latency_ns)
+
+    def _line(self, rel: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Return the estimate's host times (ns) of device times relative to ``_d_ref`` (us)."""
+        assert self._a is not None and self._h_ref is not None  # _observe fitted the line
         # exact integer part plus a small float correction: float64 cannot hold ns since 1970
         # exactly
         correction = np.rint(self._a + self._s * (rel.astype(np.float64)
                                                   - self._d0)).astype(np.int64)
-        stamps = self._h_ref + 1000 * rel + correction - self.latency_ns
-        # causality: the newest sample existed before it was received
-        excess = int(stamps[-1]) - (h - self.latency_ns)
+        return self._h_ref + 1000 * rel + correction - self.latency_ns
+
+    def _stamp(self, rel: NDArray[np.int64], limit_ns: int) -> NDArray[np.int64]:
+        """Stamp device times on the stamps' own line (continuous), causal, strictly increasing."""
+        if self._pub is None:
+            stamps = self._line(rel)  # the epoch has settled: start on the estimate
+        else:
+            rel0, stamp0 = self._pub
+            stamps = stamp0 + np.rint((rel - rel0) * self._pub_rate).astype(np.int64)
+        excess = int(stamps[-1]) - limit_ns
         if excess > 0:
-            stamps -= excess
+            # The newest sample cannot have been received before it existed: the line is late.
+            # Compress the batch onto the receive time (a shorter period within one batch, never
+            # a step), or shift a first batch.
+            self._compressed += 1
+            if self._pub is None or limit_ns <= self._pub[1] or rel[-1] <= self._pub[0]:
+                stamps -= excess
+            else:
+                rel0, stamp0 = self._pub
+                rate = (limit_ns - stamp0) / float(rel[-1] - rel0)
+                stamps = stamp0 + np.rint((rel - rel0) * rate).astype(np.int64)
         n = stamps.size
         idx = np.arange(n, dtype=np.int64)
         floor = -np.iinfo(np.int64).max if self._last_stamp is None else self._last_stamp + 1
-        u = np.maximum.accumulate(np.maximum(stamps - idx, floor))
-        stamps = u + idx
+        stamps = np.maximum.accumulate(np.maximum(stamps - idx, floor)) + idx
         self._last_stamp = int(stamps[-1])
-        self._last_d, self._last_h = d_last, h
         self._samples += n
+        self._steer(int(rel[-1]), self._last_stamp)
         return stamps
+
+    def _steer(self, rel_last: int, stamp_last: int) -> None:
+        """Set the stamps' rate for the next batch: the estimate's, slewing the offset away."""
+        assert self._a is not None and self._h_ref is not None  # _observe fitted the line
+        line = (self._h_ref + 1000 * rel_last + round(self._a + self._s * (rel_last - self._d0))
+                - self.latency_ns)
+        error = float(stamp_last - line)
+        self._offset_error = error
+        if abs(error) > MAX_SLEW_OFFSET_S * 1e9:
+            # Too far to slew (a host clock set by hand): step onto the estimate, and count it.
+            self._steps += 1
+            stamp_last -= int(error)
+            error = 0.0
+        limit = MAX_SLEW_PPM * 1e-6
+        correction = min(max(error / (SLEW_TIME_S * 1e9), -limit), limit)
+        self._pub = (rel_last, stamp_last)
+        self._pub_rate = (1000.0 + self._s) * (1.0 - correction)
 
     def _observe(self, d_us: int, h_ns: int) -> None:
         # both relative to the epoch's first batch, so y stays small and exact in float64
@@ -326,12 +445,22 @@ class DeviceClock:
             return
         dx = np.array([p[0] for p in pts], dtype=np.float64)
         y = np.array([p[1] for p in pts], dtype=np.float64)
-        d0 = dx.mean()
-        x = dx - d0
-        sxx = float(x @ x)
-        slope = float(x @ (y - y.mean())) / sxx if sxx > 0 else 0.0
+        keep = np.ones(dx.size, dtype=bool)
+        for _ in range(3):
+            d0 = float(dx[keep].mean())
+            x = dx[keep] - d0
+            sxx = float(x @ x)
+            slope = float(x @ (y[keep] - y[keep].mean())) / sxx if sxx > 0 else 0.0
+            a = float(y[keep].mean())
+            # A block whose fastest batch still lies far above the line was read late as a whole
+            # (the host stalled for longer than a block): it says nothing about the clocks.
+            late = y - (a + slope * (dx - d0)) > _LATE_BLOCK_NS
+            if not (late & keep).any() or np.count_nonzero(keep & ~late) < 2:
+                break
+            keep &= ~late
         if abs(slope / 1000.0) > self._max_drift:
-            slope = 0.0
+            # not a clock: slope 0 (b = 1) through the lowest block, as before two blocks close
+            slope, d0, a = 0.0, 0.0, float(y.min())
         self._s = slope
         self._d0 = d0
-        self._a = float(y.mean())
+        self._a = a

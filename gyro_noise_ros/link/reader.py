@@ -24,6 +24,7 @@ node adapts it to ROS (``gyro_noise_ros.nodes.driver``).
 
 from collections.abc import Callable, Mapping
 from dataclasses import fields
+import select
 import threading
 import time
 from typing import Any
@@ -36,6 +37,51 @@ from .session import frame_interval_s, handshake, LinkConfig
 from ..errors import LinkError
 
 _READ_SIZE = 1 << 16
+
+
+def _selectable(ser: Any) -> int | None:
+    """Return the port's file descriptor for ``select``, or None (a port that has none)."""
+    try:
+        fd = ser.fileno()
+    except (AttributeError, NotImplementedError, OSError, ValueError, serial.SerialException):
+        return None
+    return fd if isinstance(fd, int) and fd >= 0 else None
+
+
+def read_available(ser: Any, fd: int | None, wait_s: float) -> bytes:
+    """
+    Return the bytes that have arrived, waiting at most ``wait_s`` for the first one.
+
+    pyserial's ``read(n)`` with a timeout returns only when ``n`` bytes or the whole timeout have
+    passed: a 10 ms timeout delayed every frame by up to 10 ms. With the port's timeout at 0 and
+    ``select`` on its descriptor the bytes are handed on as they arrive. A port without a
+    descriptor keeps pyserial's timed read (its ``timeout`` is then ``wait_s``).
+
+    Parameters
+    ----------
+    ser : serial.Serial
+        Open port; ``timeout`` 0 when ``fd`` is given.
+    fd : int or None
+        Its descriptor (:func:`_selectable`).
+    wait_s : float
+        Longest wait (s).
+
+    Returns
+    -------
+    bytes
+        Possibly empty.
+
+    """
+    if fd is None:
+        return bytes(ser.read(_READ_SIZE))
+    ready, _, _ = select.select([fd], [], [], wait_s)
+    if not ready:
+        return b''
+    data = ser.read(_READ_SIZE)
+    if not data:
+        # Readable but nothing to read: the peer closed (socket) or the device vanished.
+        raise serial.SerialException('the port reports data but returned none (disconnected?)')
+    return bytes(data)
 
 
 def _stats_dict(stats: LinkStats) -> dict[str, int]:
@@ -189,8 +235,11 @@ class LinkReader:
             self._on_samples(after, host_ns, config)
         last_data = now
         silence_s = max(s['data_timeout_s'], frame_interval_s(config))
+        fd = _selectable(ser)
+        if fd is not None:
+            ser.timeout = 0  # reads return what has arrived; select() waits
         while not self._stop.is_set():
-            data = ser.read(_READ_SIZE)
+            data = read_available(ser, fd, s['read_period_s'])
             now = time.monotonic()
             if not data:
                 if now - last_data > silence_s:

@@ -23,6 +23,8 @@ serialised publishers. One module per idea:
 - :mod:`.cdr`: the shared wire layer (header + float64 tail): column decoder over byte spans,
   encoder, rosbags' typestore and per-message fallback, ``frame_id``.
 - :mod:`.imu`: ``sensor_msgs/Imu`` decode, encode, covariances, in-place patching.
+- :mod:`.imu_rows`: a live batch of Imu messages of one layout as a byte matrix (the nodes' fast
+  path for small batches).
 - :mod:`.temperature`: ``sensor_msgs/Temperature`` decode, encode, variances.
 
 See ``docs/bags.md``.

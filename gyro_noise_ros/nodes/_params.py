@@ -27,12 +27,14 @@ from dataclasses import dataclass, fields, MISSING
 import difflib
 import math
 import re
+import sys
 from typing import Any
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 ParameterType, SetParametersResult)
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+import yaml
 
 from ..errors import ParameterError
 
@@ -221,9 +223,7 @@ def declare_parameter_table(node: Node, table: Sequence[ParamSpec], *,
         values[spec.name] = value
     # the node's one table is declared: a name given that it lacks is refused now, before the
     # node's start-up work (run_node checks again once the node is built)
-    unknown = unknown_parameters(node)
-    if unknown:
-        raise unknown_parameter_error(node, unknown)
+    refuse_unknown_parameters(node)
 
     def _validate(params: Sequence[Any]) -> SetParametersResult:
         for param in params:
@@ -327,6 +327,130 @@ def unknown_parameters(node: Node) -> list[str]:
     # rclpy keeps the overrides addressed to this node (command line and parameter files) there
     given = getattr(node, '_parameter_overrides', None) or {}
     return sorted(name for name in given if not node.has_parameter(name))
+
+
+def params_file_sections(argv: Sequence[str]) -> list[tuple[str, str, list[str]]]:
+    """
+    Return the parameter-file sections of a command line: ``(file, node key, names)`` each.
+
+    Every ``--params-file FILE`` of ``argv`` is read; a section is a key path ending in
+    ``ros__parameters`` (``/**``, ``noise_analyzer``, ``/robot1/noise_analyzer``), its names
+    flattened with dots as rclpy does. A file that cannot be read is left to rclpy (it refuses it).
+
+    Parameters
+    ----------
+    argv : sequence of str
+        The program's arguments.
+
+    Returns
+    -------
+    list of tuple
+
+    """
+    files = [argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == '--params-file']
+    sections: list[tuple[str, str, list[str]]] = []
+    for path in files:
+        try:
+            with open(path, encoding='utf-8') as f:
+                doc = yaml.safe_load(f)
+        except (OSError, UnicodeDecodeError, yaml.YAMLError):
+            continue
+
+        def walk(value: Any, keys: list[str], path: str = path) -> None:
+            if not isinstance(value, dict):
+                return
+            for key, sub in value.items():
+                if key == 'ros__parameters':
+                    sections.append((path, '/'.join(k.strip('/') for k in keys),
+                                     _flat_names(sub)))
+                else:
+                    walk(sub, [*keys, str(key)])
+        walk(doc, [])
+    return sections
+
+
+def _flat_names(value: Any, prefix: str = '') -> list[str]:
+    """Names of a ``ros__parameters`` mapping, nested keys joined by dots."""
+    if not isinstance(value, dict):
+        return [prefix] if prefix else []
+    return [name for key, sub in value.items()
+            for name in _flat_names(sub, f'{prefix}.{key}' if prefix else str(key))]
+
+
+def wildcard_only(names: Sequence[str], node: Node,
+                  argv: Sequence[str]) -> dict[str, str]:
+    """
+    Return the names that reach ``node`` only from a wildcard section of a parameter file.
+
+    A section keyed with ``*`` (``/**``, ``/robot1/*``) is meant for several nodes: a name in it
+    that this node lacks is another node's, not a typo. A name given with ``-p`` or in a section
+    ending in the node's own name (``lsm6dso32_driver``, ``/robot1/lsm6dso32_driver``,
+    ``/*/lsm6dso32_driver``) counts as addressed to this node.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Undeclared names (:func:`unknown_parameters`).
+    node : rclpy.node.Node
+        The node.
+    argv : sequence of str
+        The program's arguments (``--ros-args -p ... --params-file ...``).
+
+    Returns
+    -------
+    dict
+        Name -> the file of the wildcard section that holds it.
+
+    """
+    own_keys = {node.get_name(), node.get_fully_qualified_name().strip('/')}
+    own: set[str] = {argv[i + 1].split(':=', 1)[0] for i, arg in enumerate(argv[:-1])
+                     if arg in ('-p', '--param')}
+    wild: dict[str, str] = {}
+    for path, key, section in params_file_sections(argv):
+        if key in own_keys or key.split('/')[-1] == node.get_name():
+            own.update(section)
+        elif '*' in key:
+            for name in section:
+                wild.setdefault(name, path)
+    return {name: wild[name] for name in names if name in wild and name not in own}
+
+
+#: (node, parameter) pairs already warned about (a node checks at declaration and before spin).
+_WARNED: set[tuple[str, str]] = set()
+
+
+def refuse_unknown_parameters(node: Node, argv: Sequence[str] | None = None) -> None:
+    """
+    Refuse the undeclared parameters addressed to ``node``; warn about a shared file's others.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        A node whose parameters are all declared.
+    argv : sequence of str, optional
+        The program's arguments (default ``sys.argv``), to tell a wildcard section's names
+        (:func:`wildcard_only`: a warning naming the file) from names given to this node.
+
+    Raises
+    ------
+    ParameterError
+        A name given with ``-p`` or in the node's own section that it does not declare.
+
+    """
+    unknown = unknown_parameters(node)
+    if not unknown:
+        return
+    shared = wildcard_only(unknown, node, sys.argv if argv is None else argv)
+    for name, path in shared.items():
+        if (node.get_name(), name) in _WARNED:     # checked when declared and again at spin
+            continue
+        _WARNED.add((node.get_name(), name))
+        node.get_logger().warning(
+            f'parameter {name!r} of the shared (wildcard) section of {path} is not one of '
+            f"{node.get_name()}'s: ignored (--help lists them)")
+    refused = [name for name in unknown if name not in shared]
+    if refused:
+        raise unknown_parameter_error(node, refused)
 
 
 def unknown_parameter_error(node: Node, names: Sequence[str]) -> ParameterError:

@@ -157,9 +157,15 @@ class RawTaker:
             self._logger.warn(f'{self.sub.topic_name}: messages are taken without their '
                               f'publisher ({why}); per-publisher counts are not available')
 
-    def take(self) -> tuple[list[bytes], list[int], list[int], _Gids]:
+    def take(self, limit: int | None = None) -> tuple[list[bytes], list[int], list[int], _Gids]:
         """
-        Take every queued message.
+        Take every queued message, or the oldest ``limit`` of them.
+
+        Parameters
+        ----------
+        limit : int or None
+            Most messages to take (None: all): a caller that processes a backlog in bounded
+            batches keeps its temporaries small (a heap that grew for one large batch stays).
 
         Returns
         -------
@@ -175,8 +181,9 @@ class RawTaker:
 
         """
         if not self.with_gid:
-            return self._take_rclpy()
+            return self._take_rclpy(limit)
         take, array, info = self._lib['take'], self._array, self._info
+        left = -1 if limit is None else int(limit)
         assert array is not None  # with_gid: the buffer exists until close()
         a_array, a_info = ctypes.addressof(array), ctypes.addressof(info)
         size, string_at = _INFO_DTYPE.itemsize, ctypes.string_at
@@ -184,13 +191,15 @@ class RawTaker:
         handle = self.sub.handle
         with handle:
             pointer = handle.pointer
-            while True:
+            ret = _RCL_RET_SUBSCRIPTION_TAKE_FAILED
+            while left != 0:
                 ret = take(pointer, a_array, a_info, None)
                 if ret != _RCL_RET_OK:
                     break
                 raws.append(string_at(array.buffer, array.buffer_length))
                 infos.append(string_at(a_info, size))
-        if ret != _RCL_RET_SUBSCRIPTION_TAKE_FAILED:
+                left -= 1
+        if ret not in (_RCL_RET_OK, _RCL_RET_SUBSCRIPTION_TAKE_FAILED):
             self._lib['rcutils'].rcutils_reset_error()
             raise RuntimeError(f'{self.sub.topic_name}: rcl_take_serialized_message returned '
                                f'{ret}')
@@ -203,8 +212,21 @@ class RawTaker:
             return raws, [0] * len(raws), [0] * len(raws), None
         return raws, rec['received_ns'].tolist(), rec['publication'].tolist(), rec['gid'].copy()
 
-    def _take_rclpy(self) -> tuple[list[bytes], list[int], list[int], None]:
-        return (*take_all(self.sub, self.msg_type), None)
+    def _take_rclpy(self, limit: int | None) -> tuple[list[bytes], list[int], list[int], None]:
+        if limit is None:
+            return (*take_all(self.sub, self.msg_type), None)
+        raws: list[bytes] = []
+        received: list[int] = []
+        sequence: list[int] = []
+        with self.sub.handle:
+            while len(raws) < limit:
+                item = self.sub.handle.take_message(self.msg_type, True)
+                if item is None:
+                    break
+                raws.append(item[0])
+                received.append(item[1].get('received_timestamp') or 0)
+                sequence.append(item[1].get('publication_sequence_number') or 0)
+        return raws, received, sequence, None
 
     def close(self) -> None:
         """Free the serialisation buffer (idempotent)."""

@@ -50,8 +50,8 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from rclpy.utilities import remove_ros_args
 
-from ._params import (declare_parameter_table, parameter_help, ParamSpec, specs_from_dataclass,
-                      unknown_parameter_error, unknown_parameters)
+from ._params import (declare_parameter_table, parameter_help, ParamSpec,
+                      refuse_unknown_parameters, specs_from_dataclass)
 from ..cli._startup import quiet_finalisers, take_pending
 from ..errors import GyroNoiseError, ParameterError
 from ..link.sequence import SequenceGapCounter
@@ -322,9 +322,7 @@ def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
     error: GyroNoiseError | None = None
     try:
         node = node_factory()
-        unknown = unknown_parameters(node)
-        if unknown:
-            raise unknown_parameter_error(node, unknown)
+        refuse_unknown_parameters(node, argv)
         heap_trim_timer(node)
         rclpy.spin(node)
     except GyroNoiseError as err:

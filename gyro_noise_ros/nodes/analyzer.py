@@ -74,7 +74,7 @@ from ..app.live import CHUNK_TOPICS, engine_config_from, LiveAnalysis, threshold
 from ..bag import decode_imu, decode_temperature
 from ..core.engine import AXES, GAP_POLICIES, warm_up
 from ..core.fractional import DEFAULT_MEMORY
-from ..core.health import axis_status, HealthThresholds
+from ..core.health import axis_status, HealthThresholds, reference_per_axis, ReferenceStats
 from ..core.items import allan_items, fmt, last_chunk_items, stream_items
 from ..core.results import AxisSummary, ChunkResult
 from ..errors import GyroNoiseError
@@ -82,6 +82,9 @@ from ..units import RAD_TO_DEG
 
 
 NODE_NAME = 'noise_analyzer'
+
+#: Messages ingested at a time (0.3 s at 6.66 kHz); a larger backlog goes in several batches.
+MAX_BATCH = 2000
 
 _NS = 1_000_000_000
 
@@ -119,7 +122,9 @@ PARAMETERS = (
     ParamSpec('allan', True, 'Keep an incremental Allan deviation of the run (ADEV keys)',
               read_only=True),
     ParamSpec('reference_summary', '', 'summary.json of gyro_noise_analyze for a reference '
-              'recording (one bag); empty: absolute drift limits only', read_only=True),
+              'recording; empty: absolute drift limits only', read_only=True),
+    ParamSpec('reference_bag', '', 'The bag of reference_summary to compare with when it holds '
+              'several (its label, path or file name); empty: its only bag', read_only=True),
     *specs_from_dataclass(HealthThresholds, read_only=True),
     ParamSpec('use_temperature', True, 'Subscribe imu/temperature and report the chunk mean',
               read_only=True),
@@ -135,11 +140,12 @@ PARAMETERS = (
               'drops no message that would count as a lost sample', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
-    # 20 ms, not 10: each executor wake-up costs a fixed few hundred microseconds in rclpy
+    # 50 ms, not 10 or 20: each executor wake-up costs a fixed few hundred microseconds in rclpy
     # (wait-set construction) and in the per-batch numpy calls; measured ingestion at 6.66 kHz fell
-    # from 24 % to 14 % of a core (bench/bench_analyzer_node.py), and the 20,000-message history
-    # covers 3 s.
-    ParamSpec('drain_period_s', 0.02, 'Period of the loop taking queued messages', unit='s',
+    # from 24 % to 14 % of a core from 10 to 20 ms (bench/bench_analyzer_node.py), and the decode
+    # and engine ingest of the same second from 3.3 % to 2.3 % from 20 to 50 ms (one thread, in
+    # process); the 20,000-message history covers 3 s, and the analysis has no latency budget.
+    ParamSpec('drain_period_s', 0.05, 'Period of the loop taking queued messages', unit='s',
               read_only=True, min_value=0.001, max_value=0.5),
     ParamSpec('analysis_queue_chunks', 4,
               'Chunks (of all axes) waiting for analysis before new ones '
@@ -181,7 +187,7 @@ class NoiseAnalyzerNode(Node):
                 f'analysis worker started (native thread id {threading.get_native_id()})')
 
         self.live = LiveAnalysis(
-            self.config, reference=p['reference_summary'] or None, thresholds=self.thresholds,
+            self.config, reference=self._reference(p), thresholds=self.thresholds,
             queue_chunks=p['analysis_queue_chunks'], on_worker_start=worker_started)
         self.engine = self.live.engine
         self.results = self.live.results  # recent ChunkResults in completion order (tests)
@@ -224,16 +230,32 @@ class NoiseAnalyzerNode(Node):
 
     # ---- ingestion (executor thread) ---------------------------------------
 
+    def _reference(self, p: Mapping[str, Any]) -> dict[str, ReferenceStats] | None:
+        """Return the reference statistics per axis of ``reference_summary`` (its bag)."""
+        if not p['reference_summary']:
+            return None
+        try:
+            return reference_per_axis(p['reference_summary'], self.config.axes,
+                                      bag=p['reference_bag'] or None)
+        except GyroNoiseError as err:   # the summary's 'bag' is this node's reference_bag
+            raise type(err)(err.spelled(lambda name: {'bag': 'reference_bag'}.get(name, name))
+                            ) from err
+
     def drain(self) -> None:
         """Take the queued messages, feed the engine, queue the chunks, publish finished ones."""
         if self._temperature_sub is not None:
             raws, _, _ = take_all(self._temperature_sub, Temperature)
             if raws:
                 self.live.temperature.add(*decode_temperature(raws))
-        raws, _, sequence, gids = self._imu_taker.take()
-        if raws:
-            self._imu_watch.update(gids, sequence, time.monotonic())
-            self._ingest(raws)
+        while True:
+            # A backlog (the host stalled) goes through in bounded batches: one large batch would
+            # grow the heap for good (its temporaries, freed later, leave holes).
+            raws, _, sequence, gids = self._imu_taker.take(MAX_BATCH)
+            if raws:
+                self._imu_watch.update(gids, sequence, time.monotonic())
+                self._ingest(raws)
+            if len(raws) < MAX_BATCH:
+                break
         results, chunks = self.live.collect()
         for result in results:
             if result.status != 'ok' and result.message.startswith('analysis failed'):

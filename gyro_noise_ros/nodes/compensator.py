@@ -23,21 +23,24 @@ evaluated per ``imu/temperature`` message, interpolated onto the gyro stamps) an
 has one, the accelerometer's temperature-dependent offset change. It publishes
 ``imu/data_compensated`` (``sensor_msgs/Imu``, reliable keep-last deep queue per REP-2003) with
 the header stamp, frame_id, orientation and covariances of each input message unchanged, and
-``/diagnostics`` status ``'<node>: compensation'``. Ingestion as in the analyzer: raw
-subscriptions drained every ``drain_period_s`` and decoded and re-encoded in bulk. See
-``docs/compensation.md``.
+``/diagnostics`` status ``'<node>: compensation'``. Ingestion: raw subscriptions, decoded and
+re-encoded in bulk. See ``docs/compensation.md``.
 
-With a thermal model, a gyro sample is published once a temperature at or after its stamp is known,
-so its offset is interpolated between two temperature messages, never held from an older one
-(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`): over a reliable subscription a lost
-temperature message stalls the newer ones until it is resent, and a held offset on a temperature
-ramp is wrong by the drift rate times the stall. The wait is bounded by ``max_temperature_wait_s``;
-a sample that waited that long is compensated with the newest offset and counted.
+Latency is a budget (``docs/scale.md``): by default the subscriptions are drained as messages
+arrive, by a thread waiting on a wait set of its own (:class:`~._waitset.WaitSetDrain`), and each
+gyro sample gets the newest thermal offset at once (``temperature_sync: latest``; temperature
+moves over seconds, the cost in the thermal residual is measured in ``docs/compensation.md``).
+``temperature_sync: interpolate`` keeps the previous behaviour: a gyro sample waits for a
+temperature at or after its stamp, so its offset is interpolated between two temperature messages
+(:class:`~gyro_noise_ros.thermal.live.TemperatureGate`, bounded by ``max_temperature_wait_s``;
+past it the sample gets the newest offset and is counted), at the price of up to one temperature
+period (19 ms at 52 Hz) of latency; ``drain_period_s`` > 0 drains on a timer instead.
 """
 
 from collections.abc import Mapping, Sequence
 import math
 import sys
+import threading
 import time
 from typing import Any
 
@@ -48,19 +51,26 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 
+from ._publishers import RawTaker
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           SequenceGapCounter, take_all, unused_callback)
+from ._waitset import WaitSetDrain
 from ..bag import decode_temperature
 from ..calibration.apply import (Calibration, calibration_from_parameters, KEYS,
                                  load_calibration)
 from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
-from ..thermal.live import BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TemperatureGate
+from ..msgs.imu_rows import imu_rows, patch_rows, rows_stamps, rows_vectors
+from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TEMPERATURE_SYNCS,
+                            TemperatureGate)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, ThermalMethod
 
 NODE_NAME = 'imu_compensator'
+
+#: Imu messages compensated at a time (0.3 s at 6.66 kHz); a backlog goes in several batches.
+MAX_BATCH = 2000
 
 
 class ArrayParamSpec(ParamSpec):
@@ -116,6 +126,11 @@ PARAMETERS = (
               'which needs its window filled) for it, then are dropped and counted: they are '
               'never published uncorrected on the compensated topic', unit='s',
               read_only=True, min_value=0.0, max_value=60.0),
+    ParamSpec('temperature_sync', 'latest', 'With a thermal model: latest applies the newest '
+              'offset to each gyro sample as it arrives (lowest latency); interpolate holds a '
+              'sample until a temperature at or after its stamp is known and interpolates the '
+              'offset (up to one temperature period, 19 ms at 52 Hz, more latency)',
+              read_only=True, choices=TEMPERATURE_SYNCS),
     # 10 s: a lost imu/temperature message (52 Hz) is resent after the writer's next heartbeat,
     # Fast DDS's default period 3 s (the 6.66 kHz Imu stream is repaired sooner, by heartbeats
     # piggybacked on its data), plus the NACK response and the drain period; a lost repair costs
@@ -124,11 +139,11 @@ PARAMETERS = (
     # samples when a killed reliable subscriber's lease expired, and a run with 8 s waited 7.1 s
     # on time there and held none. The normal wait is one temperature period (19 ms at 52 Hz)
     # plus the drain period; the bound costs latency and memory only while temperatures stall.
-    ParamSpec('max_temperature_wait_s', 10.0, 'With a thermal model, a gyro sample newer than the '
-              'latest temperature waits up to this long for the next one, so its offset is '
-              'interpolated, never held from an older temperature; past it the sample gets the '
-              'latest offset and is counted (0: never wait, the latest offset at once)', unit='s',
-              read_only=True, min_value=0.0, max_value=60.0),
+    ParamSpec('max_temperature_wait_s', 10.0, 'With temperature_sync interpolate, a gyro sample '
+              'newer than the latest temperature waits up to this long for the next one, so its '
+              'offset is interpolated, never held from an older temperature; past it the sample '
+              'gets the latest offset and is counted (0: never wait, the latest offset at once)',
+              unit='s', read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
               'change when model.json has one', read_only=True),
     ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
@@ -139,12 +154,12 @@ PARAMETERS = (
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
               'publisher', unit='messages', read_only=True, min_value=10, max_value=1_000_000),
-    # 50 ms, not the analyzer's 20: the output latency grows by up to this much, but the fixed
-    # per-wake-up cost of rclpy and of the batch calls falls; measured CPU at 6.66 kHz with
-    # calibration + thermal 15-16 % of a core at 0.02 s, 11-12 % at 0.05 s (loaded 2-core machine,
-    # bench/bench_compensator.py). Lower it where latency matters more than CPU.
-    ParamSpec('drain_period_s', 0.05, 'Period of the loop taking queued messages; bounds the '
-              'added latency', unit='s', read_only=True, min_value=0.001, max_value=0.5),
+    # 0: a thread wakes on the subscriptions' wait set as messages arrive (bench/bench_latency.py:
+    # the compensator adds p99 < 1 ms). A period (the previous default, 0.05 s) drains on a timer
+    # instead: fewer wake-ups, up to the period of added latency.
+    ParamSpec('drain_period_s', 0.0, 'Period of the timer taking queued messages; 0: take them '
+              'as they arrive (a wait-set thread, lowest latency)', unit='s', read_only=True,
+              min_value=0.0, max_value=0.5),
     ParamSpec('diagnostics_period_s', 1.0, 'Period of /diagnostics', unit='s', read_only=True,
               min_value=0.05, max_value=3600.0),
     ParamSpec('stale_after_s', 5.0, 'ERROR after this long without imu/data_raw', unit='s',
@@ -186,6 +201,57 @@ class ImuCompensatorNode(Node):
         self._p = p
         self._status_name = f'{self.get_name()}: compensation'
         self.calibration, self._cal_source = calibration_from(p)
+        self._setup_thermal(p, thermal_model)
+        # Diagnostics: counters ticked on the hot path, judged on the timer.
+        self._diag = CompensationTask(
+            CompensationThresholds(stale_after_s=p['stale_after_s'],
+                                   temperature_timeout_s=p['temperature_timeout_s'],
+                                   temperature_wait_s=p['temperature_wait_s'],
+                                   max_temperature_wait_s=p['max_temperature_wait_s']),
+            calibration=self.calibration, calibration_source=self._cal_source,
+            out_of_range_action=p['out_of_range_action'], now=time.monotonic(),
+            temperature_sync=p['temperature_sync'])
+        self.counts = self._diag.counts
+        # Before the first offset (the first temperature, plus the rate window for a model using
+        # dT) samples wait, then are dropped; with temperature_sync interpolate they also wait
+        # for an offset at or after their stamp (bounded).
+        start_up_s = 0.0 if self.thermal is None else self.thermal.start_up_s
+        self._gate = TemperatureGate(p['max_temperature_wait_s'],
+                                     p['temperature_wait_s'] + start_up_s,
+                                     wait_for_newer=p['temperature_sync'] == 'interpolate')
+        self._transport = SequenceGapCounter()
+        self._frame_id = ''
+        self._offset = None
+        self._accel_offset = None
+        # The drain (its thread or the timer) and the diagnostics (the executor) share the state.
+        self._lock = threading.Lock()
+        group = PolledGroup()
+        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
+        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                 raw=True, callback_group=group)
+        self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,
+                                                  qos, raw=True, callback_group=group)
+        self._imu_taker = RawTaker(self._imu_sub, Imu, self.get_logger())
+        out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
+                             reliability=ReliabilityPolicy.RELIABLE)
+        self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)
+        self._diag_pub = diagnostics_publisher(self)
+        self._waiter: WaitSetDrain | None = None
+        if p['drain_period_s'] > 0:
+            self.create_timer(p['drain_period_s'], self.drain)
+        else:
+            # 50 ms without data: the gate's time-outs and the start-up drop still run.
+            self._waiter = WaitSetDrain(self.context, [self._temp_sub, self._imu_sub],
+                                        self.drain, timeout_s=0.05, name='imu_compensator_drain')
+            self._waiter.start()
+        self.create_timer(p['diagnostics_period_s'], self.publish_diagnostics)
+        model = 'none' if self.thermal is None else self.thermal.name
+        self.get_logger().info(f'compensating {self._imu_sub.topic_name} -> '
+                               f'{self._pub.topic_name}: calibration from {self._cal_source}, '
+                               f'thermal model {model}, temperature sync '
+                               f'{p["temperature_sync"]}')
+
+    def _setup_thermal(self, p: Mapping[str, Any], thermal_model: ThermalMethod | None) -> None:
         margin = None if p['temperature_margin_c'] < 0 else p['temperature_margin_c']
         range_c = rate_range = accel_model = None
         notes: Sequence[str] = ()
@@ -203,64 +269,40 @@ class ImuCompensatorNode(Node):
             accel_model, range_c=range_c, margin_c=margin, beyond=p['out_of_range_action'])
         for note in notes:
             self.get_logger().warning(note)
-        # Diagnostics: counters ticked on the hot path, judged on the timer.
-        self._diag = CompensationTask(
-            CompensationThresholds(stale_after_s=p['stale_after_s'],
-                                   temperature_timeout_s=p['temperature_timeout_s'],
-                                   temperature_wait_s=p['temperature_wait_s'],
-                                   max_temperature_wait_s=p['max_temperature_wait_s']),
-            calibration=self.calibration, calibration_source=self._cal_source,
-            out_of_range_action=p['out_of_range_action'], now=time.monotonic())
-        self.counts = self._diag.counts
-        # Samples wait for an offset at or after their stamp (bounded). Before the first offset
-        # (the first temperature, plus the rate window for a model using dT) they are dropped.
-        start_up_s = 0.0 if self.thermal is None else self.thermal.start_up_s
-        self._gate = TemperatureGate(p['max_temperature_wait_s'],
-                                     p['temperature_wait_s'] + start_up_s)
-        self._transport = SequenceGapCounter()
-        self._frame_id = ''
-        self._offset = None
-        self._accel_offset = None
-        group = PolledGroup()
-        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
-                                                 raw=True, callback_group=group)
-        self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,
-                                                  qos, raw=True, callback_group=group)
-        out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
-                             reliability=ReliabilityPolicy.RELIABLE)
-        self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)
-        self._diag_pub = diagnostics_publisher(self)
-        self.create_timer(p['drain_period_s'], self.drain)
-        self.create_timer(p['diagnostics_period_s'], self.publish_diagnostics)
-        model = 'none' if self.thermal is None else self.thermal.name
-        self.get_logger().info(f'compensating {self._imu_sub.topic_name} -> '
-                               f'{self._pub.topic_name}: calibration from {self._cal_source}, '
-                               f'thermal model {model}')
 
     def drain(self) -> None:
         """Take queued temperatures and Imu messages, compensate them, publish."""
+        with self._lock:
+            self._take_temperatures()
+            while True:
+                # A backlog (a stalled stream resuming) goes through in bounded batches: one
+                # large batch would grow the heap for good.
+                raws, _, sequence, _ = self._imu_taker.take(MAX_BATCH)
+                if raws:
+                    self.compensate(raws, sequence)
+                elif self.thermal is not None and self._gate.waiting:
+                    self._release()  # a new temperature or a timeout lets held samples go
+                if len(raws) < MAX_BATCH:
+                    break
+
+    def _take_temperatures(self) -> None:
         raws, _, _ = take_all(self._temp_sub, Temperature)
-        if raws and self.thermal is not None:
-            self.counts['temperatures'] += len(raws)
-            try:
-                stamp_ns: np.ndarray | tuple[()]
-                temperature_c: np.ndarray | tuple[()]
-                stamp_ns, temperature_c = decode_temperature(raws)
-            except BagError as err:  # a corrupt message: drop the batch, count it, go on
-                self.thermal.rejected += len(raws)
-                self.get_logger().error(f'temperature batch dropped: {err}',
-                                        throttle_duration_sec=5.0)
-                stamp_ns, temperature_c = (), ()
-            if self.thermal.add_temperature(stamp_ns, temperature_c):
-                self._diag.tick_temperature(time.monotonic())
-            if self.thermal_accel is not None:
-                self.thermal_accel.add_temperature(stamp_ns, temperature_c)
-        raws, _, sequence = take_all(self._imu_sub, Imu)
-        if raws:
-            self.compensate(raws, sequence)
-        elif self.thermal is not None:
-            self._release()  # a new temperature or a timeout lets held samples go
+        if not raws or self.thermal is None:
+            return
+        self.counts['temperatures'] += len(raws)
+        try:
+            stamp_ns: np.ndarray | tuple[()]
+            temperature_c: np.ndarray | tuple[()]
+            stamp_ns, temperature_c = decode_temperature(raws)
+        except BagError as err:  # a corrupt message: drop the batch, count it, go on
+            self.thermal.rejected += len(raws)
+            self.get_logger().error(f'temperature batch dropped: {err}',
+                                    throttle_duration_sec=5.0)
+            stamp_ns, temperature_c = (), ()
+        if self.thermal.add_temperature(stamp_ns, temperature_c):
+            self._diag.tick_temperature(time.monotonic())
+        if self.thermal_accel is not None:
+            self.thermal_accel.add_temperature(stamp_ns, temperature_c)
 
     def compensate(self, raws: Sequence[bytes], sequence: Sequence[int] = ()) -> None:
         """Decode a batch of raw Imu messages, correct them, publish the results."""
@@ -268,46 +310,66 @@ class ImuCompensatorNode(Node):
         self._transport.update(sequence)
         self._diag.tick_data(time.monotonic())
         buf, starts, lengths = join_raws(raws)
-        keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
-        if keep is not None:
-            self.counts['undecodable'] += len(raws) - keep.size
-            starts, lengths = starts[keep], lengths[keep]
+        rows = imu_rows(buf, starts, lengths)
+        keep = None
+        if rows is not None:  # one layout: a few numpy calls (the usual batch, a board frame)
+            stamp_ns = rows_stamps(rows)
+            gyro, accel = rows_vectors(rows)
+        else:
+            keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
+            if keep is not None:
+                self.counts['undecodable'] += len(raws) - keep.size
+                starts, lengths = starts[keep], lengths[keep]
         if not stamp_ns.size:
             return
         gyro, accel = self.calibration.apply(gyro, accel)
         if not self._frame_id:
             self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
-        batch = (buf, starts, lengths, stamp_ns, gyro, accel)
+        batch = (buf, starts, lengths, rows, stamp_ns, gyro, accel)
         if self.thermal is None:
             self._emit(*batch)
             return
+        if (not self._gate.wait_for_newer and not self._gate.waiting
+                and self.thermal.offset_stamp_ns is not None):
+            self._emit(*batch)  # temperature_sync latest, offsets known: at once
+            return
         # Before the first temperature there is no offset: publishing these uncorrected on a
         # topic named compensated would be a wrong number given calmly (the gate drops them after
-        # temperature_wait_s); after it, samples wait for a temperature at or after their stamp.
+        # temperature_wait_s); with temperature_sync interpolate, samples also wait for a
+        # temperature at or after their stamp.
         self._gate.push(batch, stamp_ns, time.monotonic())
         self._release()
 
     def _release(self) -> None:
         assert self.thermal is not None  # called only with a thermal model
         for batch, i, j, _ in self._gate.release(self.thermal.offset_stamp_ns, time.monotonic()):
-            buf, starts, lengths, stamp_ns, gyro, accel = batch
-            self._emit(buf, starts[i:j], lengths[i:j], stamp_ns[i:j], gyro[i:j], accel[i:j])
+            buf, starts, lengths, rows, stamp_ns, gyro, accel = batch
+            self._emit(buf, starts[i:j], lengths[i:j], None if rows is None else rows[i:j],
+                       stamp_ns[i:j], gyro[i:j], accel[i:j])
 
     def _emit(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-              stamp_ns: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> None:
+              rows: np.ndarray | None, stamp_ns: np.ndarray, gyro: np.ndarray,
+              accel: np.ndarray) -> None:
         if self.thermal is not None:
             offset = self.thermal.drift_at(stamp_ns)
             assert offset is not None  # the gate releases samples only after a temperature
             gyro -= offset
             self._offset = offset[-1]
+            newest = self.thermal.offset_stamp_ns
+            if newest is not None:  # how much newer the sample is than the offset it got
+                self._diag.tick_offset_age(int(stamp_ns[-1]) - newest)
         if self.thermal_accel is not None:
             accel_offset = self.thermal_accel.drift_at(stamp_ns)
             if accel_offset is not None:
                 accel -= accel_offset
                 self._accel_offset = accel_offset[-1]
-        publish = self._pub.publish
-        for raw in patch_imu_spans(buf, starts, lengths, gyro, accel):
-            publish(raw)
+        raws = (patch_imu_spans(buf, starts, lengths, gyro, accel) if rows is None
+                else patch_rows(rows, gyro, accel))
+        handle = self._pub.handle
+        with handle:  # what Publisher.publish does per message for bytes, once per batch
+            publish = handle.publish_raw
+            for raw in raws:
+                publish(raw)
         self.counts['published'] += stamp_ns.size
 
     def diagnostics(self, record: bool = False) -> DiagnosticArray:
@@ -317,10 +379,11 @@ class ImuCompensatorNode(Node):
         ``record``: this status is published, so the late samples it reports are not reported
         again (the periodic timer passes True).
         """
-        status = self._diag.run(
-            time.monotonic(), thermal=self.thermal, thermal_accel=self.thermal_accel,
-            offset=self._offset, accel_offset=self._accel_offset, hold=self._gate,
-            transport_missing=self._transport.missing, record=record)
+        with self._lock:
+            status = self._diag.run(
+                time.monotonic(), thermal=self.thermal, thermal_accel=self.thermal_accel,
+                offset=self._offset, accel_offset=self._accel_offset, hold=self._gate,
+                transport_missing=self._transport.missing, record=record)
         hardware_id = self._p['hardware_id'] or self._frame_id or 'unknown'
         return diagnostic_array(self.get_clock().now().to_msg(), [diagnostic_status(
             self._status_name, hardware_id, bytes([status.level_byte]), status.message,
@@ -329,6 +392,13 @@ class ImuCompensatorNode(Node):
     def publish_diagnostics(self) -> None:
         """Publish :meth:`diagnostics` on ``/diagnostics``."""
         self._diag_pub.publish(self.diagnostics(record=True))
+
+    def destroy_node(self) -> None:
+        """Stop the drain thread, then destroy the node."""
+        if self._waiter is not None:
+            self._waiter.stop()
+        self._imu_taker.close()
+        return super().destroy_node()
 
 
 def main(args: list[str] | None = None) -> int:

@@ -29,18 +29,20 @@ REP-2003):
   of ``temperature_decimation``, so the choice survives reconnections);
 - ``/diagnostics``: status ``'<node name>: link'`` (keys in ``docs/diagnostics.md``).
 
-One reader thread owns the port: it reads, decodes (``link.protocol.Decoder``), maps device time to
-the node clock (``link.clock.DeviceClock``), scales to SI, serialises in bulk
-(``bag.encode_imu_cdr``) and publishes the bytes itself (rclpy publishers are thread-safe), so no
-queue sits between threads and the executor only runs the diagnostics timer and the lifecycle
-services. A sample is published only if its wrapping uint32 counter is ahead of the last published
-one (``link.sequence.SequenceTracker``): nothing twice, every gap counted in ``Samples lost``; a
+One reader thread owns the port: it wakes when bytes arrive, decodes (``link.protocol.Decoder``),
+maps device time to the node clock without steps (``link.clock.DeviceClock``; the first
+``clock_settle_s`` of a board epoch are held while the mapping converges), scales to SI,
+serialises in bulk (``bag.encode_imu_cdr``) and publishes each board frame's messages at once
+(rclpy publishers are thread-safe), so no queue sits between threads and the executor only runs
+the diagnostics timer and the lifecycle services. A sample is published only if its wrapping
+uint32 counter is ahead of the last published one (``link.sequence.SequenceTracker``): nothing
+twice, every gap counted in ``Samples lost`` (the board's own count, never the stamps'); a
 counter falling back by more than one second of samples is a board restart (new epoch). Any
 read/write error or ``data_timeout_s`` of silence closes the port, reports ERROR and retries; the
 node never exits for it.
 """
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import fields
 import sys
 import threading
@@ -51,6 +53,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from numpy.typing import NDArray
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.publisher import Publisher
 from sensor_msgs.msg import Imu, Temperature
 
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
@@ -113,8 +116,18 @@ PARAMETERS = (
     ParamSpec('qos_depth', 5000, 'History depth of imu/data_raw and imu/temperature (reliable, '
               'keep last)', unit='messages', read_only=True, min_value=1, max_value=1_000_000),
     ParamSpec('read_period_s', 0.01,
-              'Longest wait of one port read; batches samples and bounds the publishing latency',
+              'Longest wait for bytes from the port before the reader checks for a stop or a '
+              'silent link (bytes are published as they arrive)',
               unit='s', read_only=True, min_value=0.0005, max_value=0.5),
+    # 0.5 s: the block minimum of ~200 frames is within ~mean jitter / 200 of the transport
+    # latency (docs/portenta_link.md), so the stamps start within tens of microseconds of the
+    # estimate and never need a correction a reader would take for a lost sample.
+    ParamSpec('clock_settle_s', 0.5,
+              'At the start of a board epoch (connection to a new board, restart) the samples of '
+              'the first clock_settle_s are held back while the board-to-host clock mapping '
+              'converges, then published; 0: publish at once (early stamps are then corrected '
+              'by compressing batches)', unit='s', read_only=True, min_value=0.0,
+              max_value=10.0),
     ParamSpec('ack_timeout_s', 1.0, 'Wait for the acknowledgement of the configuration command',
               unit='s', min_value=0.01, max_value=60.0),
     ParamSpec('data_timeout_s', 2.0, 'Silence on a configured link after which it is reopened',
@@ -132,6 +145,17 @@ _OK = TransitionCallbackReturn.SUCCESS
 
 def _diag_cov(variance: float) -> NDArray[np.float64]:
     return np.diag([variance] * 3).reshape(9)
+
+
+def _publish_raw(publisher: Publisher, blobs: Iterable[bytes]) -> None:
+    """Publish serialised messages: what ``Publisher.publish`` does for bytes, once per batch."""
+    if not getattr(publisher, 'is_activated', True):
+        return  # a lifecycle publisher publishes only while the node is active
+    handle = publisher.handle
+    with handle:
+        publish = handle.publish_raw
+        for blob in blobs:
+            publish(blob)
 
 
 class Lsm6dso32Driver(LifecycleNode):
@@ -164,7 +188,10 @@ class Lsm6dso32Driver(LifecycleNode):
         self._imu_pub = self.create_publisher(Imu, 'imu/data_raw', qos)
         self._temp_pub = self.create_publisher(Temperature, 'imu/temperature', qos)
         self._diag_pub = diagnostics_publisher(self)
-        self._device_clock = DeviceClock(nominal_rate_hz=float(p['odr_hz']))
+        self._device_clock = DeviceClock(nominal_rate_hz=float(p['odr_hz']),
+                                         settle_s=p['clock_settle_s'])
+        # Samples whose stamps the clock holds back while its epoch settles, with their scaling.
+        self._unstamped: list[tuple[np.ndarray, LinkConfig]] = []
         self._tracker = SequenceTracker(restart_window=max(1, int(round(p['odr_hz']))))
         self._reader = LinkReader(self._port, lambda: self._params, self._handle,
                                   now_ns=lambda: self.get_clock().now().nanoseconds,
@@ -272,8 +299,9 @@ class Lsm6dso32Driver(LifecycleNode):
         """
         Publish decoded samples: drop already published counters, stamp, scale, serialise.
 
-        Called by the reader thread for every decoded batch while active; tests call it with
-        known samples.
+        Called by the reader thread for every decoded batch while active, as it arrives; tests
+        call it with known samples. The first ``clock_settle_s`` of a board epoch are held until
+        the clock mapping has settled and published by a later call, in order.
 
         Parameters
         ----------
@@ -287,7 +315,7 @@ class Lsm6dso32Driver(LifecycleNode):
         Returns
         -------
         int
-            Number of ``imu/data_raw`` messages published.
+            Number of ``imu/data_raw`` messages published by this call.
 
         """
         published = 0
@@ -302,6 +330,7 @@ class Lsm6dso32Driver(LifecycleNode):
             if len(samples):
                 # The counter fell back by more than the restart window: a new board epoch.
                 self._tracker.reset()
+                published += self._publish_stamped(self._device_clock.flush())
                 self._device_clock.reset()
                 with self._lock:
                     self._counts['restarts'] += 1
@@ -309,29 +338,48 @@ class Lsm6dso32Driver(LifecycleNode):
         return published
 
     def _publish_part(self, part: np.ndarray, host_receive_ns: int, config: LinkConfig) -> int:
-        n = len(part)
-        if n == 0:
+        if len(part) == 0:
             return 0
-        # Strictly increasing across calls and clock resets (DeviceClock's monotonic floor).
+        # Strictly increasing across calls and clock resets, and without steps; none while a new
+        # epoch settles (those samples wait in _unstamped, in order).
         stamps = self._device_clock.update(part['t_us'], host_receive_ns)
+        self._unstamped.append((part, config))
+        return self._publish_stamped(stamps)
+
+    def _publish_stamped(self, stamps: np.ndarray) -> int:
+        """Publish the oldest held samples that ``stamps`` belong to, in order."""
+        done = 0
+        while done < stamps.size:
+            part, config = self._unstamped[0]
+            take = min(len(part), stamps.size - done)
+            if take < len(part):
+                self._unstamped[0] = (part[take:], config)
+                part = part[:take]
+            else:
+                self._unstamped.pop(0)
+            self._publish_messages(part, stamps[done:done + take], config)
+            done += take
+        return done
+
+    def _publish_messages(self, part: np.ndarray, stamps: np.ndarray, config: LinkConfig) -> None:
+        n = len(part)
         si = lsm6dso32.to_si(part, gyro_fs_dps=config.gyro_fs_dps, accel_fs_g=config.accel_fs_g)
         f = self._message_fields
-        publish = self._imu_pub.publish
-        for blob in encode_imu_cdr(stamps, si.gyro_rad_s, si.accel_m_s2, frame_id=f['frame_id'],
-                                   angular_velocity_covariance=f['gyro_cov'],
-                                   linear_acceleration_covariance=f['accel_cov']):
-            publish(blob)
         pick = (part['seq'] % f['decimation']) == 0
         n_temp = int(np.count_nonzero(pick))
         if n_temp:  # one batch in a few at the default decimation
-            publish = self._temp_pub.publish
-            for blob in encode_temperature_cdr(stamps[pick], np.asarray(si.temperature_c)[pick],
-                                               frame_id=f['frame_id'], variance=f['temp_var']):
-                publish(blob)
+            # Before the Imu messages of the frame: a consumer taking both at one wake-up has the
+            # newest temperature for them.
+            _publish_raw(self._temp_pub, encode_temperature_cdr(
+                stamps[pick], np.asarray(si.temperature_c)[pick], frame_id=f['frame_id'],
+                variance=f['temp_var']))
+        _publish_raw(self._imu_pub, encode_imu_cdr(
+            stamps, si.gyro_rad_s, si.accel_m_s2, frame_id=f['frame_id'],
+            angular_velocity_covariance=f['gyro_cov'],
+            linear_acceleration_covariance=f['accel_cov']))
         with self._lock:
             self._counts['published'] += n
             self._counts['temperatures'] += n_temp
-        return n
 
     # ------------------------------------------------------------------ diagnostics
 

@@ -21,7 +21,11 @@ stamp and interpolates the temperature linearly onto them. It refuses, with one 
 no or ambiguous temperature topic (:class:`BagError`, exit 3); NaN/Inf gyro or temperature
 samples, repeated Imu stamps, temperature stamps that do not cover the Imu stamps (beyond
 :data:`MAX_EDGE_S` plus two temperature periods at either end), or a hole in the temperature
-longer than ``max_gap_s`` (:class:`InputDataError`, exit 4).
+longer than ``max_gap_s`` (:class:`InputDataError`, exit 4). Implausible temperature readings
+(:func:`gyro_noise_ros.core.plausible.screen_temperature`: outside the sensor's operating range,
+saturated register words, jumps faster than a die moves) are dropped and counted, or the bag is
+refused when more than :data:`~gyro_noise_ros.core.plausible.MAX_IMPLAUSIBLE_SHARE` of them are,
+naming the first; a stream in kelvin is converted to degC with a warning.
 
 :func:`write_compensated` writes a rosbag2 copy of the bag in which only the Imu
 ``angular_velocity`` (and, with an accelerometer model, ``linear_acceleration``) is replaced
@@ -41,6 +45,8 @@ from numpy.typing import ArrayLike, NDArray
 from .run import ThermalRun
 from ..bag import ImuBagReader, ImuBagWriter
 from ..bag.storage import BagSource, describe
+from ..core.plausible import (KELVIN_OFFSET_C, looks_like_kelvin, MAX_IMPLAUSIBLE_SHARE,
+                              screen_temperature)
 from ..core.timebase import estimate_rate
 from ..errors import BagError, InputDataError, ParameterError
 from ..msgs import join_raws, TEMPERATURE_MSGTYPE, typestore
@@ -82,6 +88,14 @@ class ThermalBag:
         Bag-order index of each sorted sample (int64): sample k is message ``order[k]``.
     temperature_samples : int
         Temperature messages read.
+    temperature_dropped : int
+        Implausible temperature readings dropped (:func:`screen_temperature`).
+    temperature_period_s : float
+        Median interval of the temperature readings kept (s; 0 with a single reading).
+    notes : tuple of str
+        What reading the temperature noticed (implausible readings dropped).
+    warnings : tuple of str
+        What was changed in the data and calls for a look (a stream in kelvin, converted).
 
     """
 
@@ -92,6 +106,10 @@ class ThermalBag:
     stamp_ns: np.ndarray
     order: np.ndarray
     temperature_samples: int
+    temperature_dropped: int = 0
+    temperature_period_s: float = 0.0
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
 
 def _label(path: StrPath) -> str:
@@ -189,7 +207,9 @@ def read_thermal_run(path: StrPath, *, topic: str | None = None,
         raise InputDataError(f'{where}: Imu stamp {int(stamp[k])} ns repeats on {imu_topic!r}; '
                              'each sample needs its own time')
     t_order = np.argsort(temp_stamp, kind='stable')
-    temp_stamp, temp = temp_stamp[t_order], temp[t_order]
+    read = int(temp.size)
+    temp_stamp, temp, notes, warnings = _plausible_temperature(
+        where, temp_topic, temp_stamp[t_order], temp[t_order], int(stamp[0]))
     _check_coverage(where, stamp, temp_stamp, temp_topic, imu_topic, max_gap_s)
     t0 = int(stamp[0])
     t_s = (stamp - t0) / 1e9
@@ -202,12 +222,37 @@ def read_thermal_run(path: StrPath, *, topic: str | None = None,
     # 2 ms at a 100 Hz mean rate), where a median step would mislead, and not lowered by loss.
     est = estimate_rate(stamp, unit='ns')
     rate_hz = float(est.rate_hz) if est.usable else float((t_s.size - 1) / t_s[-1])
+    period = float(np.median(np.diff(t_temp))) if t_temp.size > 1 else 0.0
     run = ThermalRun(t_s=t_s, gyro_rad_s=gyro, temperature_c=temperature, rate_hz=rate_hz,
-                     name=name or _label(path), accel_m_s2=accel)
+                     name=name or _label(path), accel_m_s2=accel, temperature_period_s=period)
     info = ThermalBag(path=Path(path), topic=imu_topic, temperature_topic=temp_topic,
                       storage=storage, stamp_ns=stamp, order=order.astype(np.int64),
-                      temperature_samples=int(temp.size))
+                      temperature_samples=read, temperature_dropped=read - int(temp.size),
+                      temperature_period_s=period, notes=notes, warnings=warnings)
     return run, info
+
+
+def _plausible_temperature(where: str, topic: str, stamp_ns: NDArray[np.int64],
+                           temp: NDArray[np.float64],
+                           t0_ns: int) -> tuple[NDArray[np.int64], NDArray[np.float64],
+                                                tuple[str, ...], tuple[str, ...]]:
+    """Convert a kelvin stream, drop implausible readings, refuse a stream with too many."""
+    notes, warnings = [], []
+    if looks_like_kelvin(temp):
+        warnings.append(f'temperature topic {topic!r} reads {np.min(temp):.2f}..'
+                        f'{np.max(temp):.2f}: kelvin, not degC (sensor_msgs/Temperature is '
+                        f'degC); converted by subtracting {KELVIN_OFFSET_C}')
+        temp = temp - KELVIN_OFFSET_C
+    t_s = (stamp_ns - t0_ns) / 1e9   # from the first Imu stamp, as the run's times
+    screen = screen_temperature(t_s, temp)
+    if screen.dropped > MAX_IMPLAUSIBLE_SHARE * temp.size:
+        raise InputDataError(f'{where}, {topic!r}: {screen.text(t_s, temp)}; more than '
+                             f'{100 * MAX_IMPLAUSIBLE_SHARE:g} % of the stream is implausible: '
+                             'refused')
+    if screen.dropped:
+        notes.append(f'{topic!r}: {screen.text(t_s, temp)}; dropped, the temperature '
+                     'interpolated over them')
+    return stamp_ns[screen.keep], temp[screen.keep], tuple(notes), tuple(warnings)
 
 
 def _check_coverage(where: str, stamp: NDArray[np.int64], temp_stamp: NDArray[np.int64],
@@ -272,10 +317,12 @@ def join_runs(runs: Iterable[ThermalRun], *, gap_s: float) -> ThermalRun:
     accel = None
     if all(r.accel_m_s2 is not None for r in runs):
         accel = np.concatenate([r.accel_m_s2 for r in runs])
+    periods = [r.temperature_period_s for r in runs if r.temperature_period_s is not None]
     return ThermalRun(t_s=np.concatenate(ts),
                       gyro_rad_s=np.concatenate([r.gyro_rad_s for r in runs]),
                       temperature_c=np.concatenate([r.temperature_c for r in runs]),
-                      rate_hz=rate, name='+'.join(r.name for r in runs), accel_m_s2=accel)
+                      rate_hz=rate, name='+'.join(r.name for r in runs), accel_m_s2=accel,
+                      temperature_period_s=max(periods) if periods else None)
 
 
 def write_compensated(bag: ThermalBag, processed_rad_s: ArrayLike, out_dir: StrPath, *,

@@ -48,7 +48,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .run import DEFAULT_RATE_WINDOW_S, RateWindowError, temperature_rate_c_s, ThermalRun
+from .run import (DEFAULT_RATE_WINDOW_S, rate_support, RateSupport, RateWindowError,
+                  temperature_rate_c_s, ThermalRun)
 from ..errors import InputDataError, ParameterError
 
 #: A temperature model needs at least this temperature span in its training run (degC).
@@ -118,6 +119,43 @@ def check_rate_training(t: NDArray[np.float64], window_s: float, name: str) -> N
                               f'needs at least {need:g} s ({MIN_TRAINING_WINDOWS:g} windows of '
                               f'the {float(window_s):g}-s temperature rate: one to fill it, the '
                               'rest to fit)')
+
+
+def rate_fit_inputs(run: ThermalRun, rate_window_s: float,
+                    method: str) -> tuple[_Triple, RateSupport, tuple[str, ...]]:
+    """
+    Check a training run for a temperature model with a dT term; say whether dT can be fitted.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        The training run.
+    rate_window_s : float
+        The method's rate window (s).
+    method : str
+        Its name, for the note.
+
+    Returns
+    -------
+    (t, gyro, temperature) : tuple of numpy.ndarray
+        The checked arrays.
+    support : RateSupport
+        :func:`~gyro_noise_ros.thermal.run.rate_support` of the run.
+    notes : tuple of str
+        The note of a method fitted without its dT term (empty when dT is supported).
+
+    Raises
+    ------
+    InputDataError
+        A malformed run, a temperature span under :data:`MIN_TEMPERATURE_SPAN_C`, or a run
+        shorter than :data:`MIN_TRAINING_WINDOWS` rate windows.
+
+    """
+    t, gyro, temp = _check_run(run, need_temperature=True)
+    _check_span(temp, run.name)
+    check_rate_training(t, rate_window_s, run.name)
+    support = rate_support(t, temp, window_s=rate_window_s)
+    return (t, gyro, temp), support, support.notes(method)
 
 
 def _check_span(temp: NDArray[np.float64], name: str) -> None:
@@ -352,7 +390,7 @@ class _DriftNet:
 
     def __init__(self, hidden: int, theta: ArrayLike, x_mean: ArrayLike, x_std: ArrayLike,
                  y_mean: ArrayLike, y_std: ArrayLike, x_min: ArrayLike, x_max: ArrayLike, *,
-                 shortcut: _Shortcut | None = None) -> None:
+                 shortcut: _Shortcut | None = None, uses_rate: bool = True) -> None:
         self.mlp = _Mlp(2, hidden, 3)
         self.hidden = int(hidden)
         self.theta = np.asarray(theta, dtype=float)
@@ -360,6 +398,8 @@ class _DriftNet:
         self.y_mean, self.y_std = np.asarray(y_mean, float), np.asarray(y_std, float)
         self.x_min, self.x_max = np.asarray(x_min, float), np.asarray(x_max, float)
         self.shortcut = shortcut   # None or (_PolyBasis, coef (k, 3))
+        # False: dT is held at 0 (the training run could not support a dT term)
+        self.uses_rate = bool(uses_rate)
 
     @classmethod
     def standardise(cls, x: NDArray[np.float64],
@@ -390,6 +430,8 @@ class _DriftNet:
 
     def predict(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         temp, rate = _as_pair(temperature_c, dtemp_c_s)
+        if not self.uses_rate:
+            rate = np.zeros_like(temp)
         value = self.network(np.column_stack([temp, rate]))
         if self.shortcut is not None:
             basis, coef = self.shortcut
@@ -403,7 +445,7 @@ class _DriftNet:
              'input_min': self.x_min.tolist(), 'input_max': self.x_max.tolist(),
              'beyond_input_range': 'network: linear continuation along its gradient at the '
                                    'nearest trained point; shortcut: the polynomial',
-             'shortcut': None}
+             'shortcut': None, 'uses_rate': self.uses_rate}
         if self.shortcut is not None:
             basis, coef = self.shortcut
             d['shortcut'] = {'degree': basis.degree, 'rate_degree': basis.rate_degree,
@@ -420,14 +462,16 @@ class _DriftNet:
             shortcut = (basis, np.asarray(sc['coef_rad_s'], dtype=float).reshape(-1, 3))
         return cls(d['hidden'], d['weights'], d['input_mean'], d['input_std'],
                    d['output_mean_rad_s'], d['output_std_rad_s'], d['input_min'], d['input_max'],
-                   shortcut=shortcut)
+                   shortcut=shortcut, uses_rate=bool(d.get('uses_rate', True)))
 
 
 def _training_pairs(t: NDArray[np.float64], temp: NDArray[np.float64], target: NDArray[np.float64],
-                    *, rate_window_s: float,
-                    max_points: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """[T, dT] and target (n, 3), block-averaged to at most ``max_points`` rows."""
+                    *, rate_window_s: float, max_points: int,
+                    use_rate: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """[T, dT] (dT 0 without ``use_rate``) and target (n, 3), block-averaged to ``max_points``."""
     rate = temperature_rate_c_s(t, temp, window_s=rate_window_s)
+    if not use_rate:
+        rate = np.zeros_like(rate)
     rows = _block_means(np.column_stack([temp, rate, target]), max_points)
     return rows[:, :2], rows[:, 2:]
 
@@ -452,6 +496,7 @@ class RawMethod:
     name = 'raw'
     causal = True
     uses_rate = False
+    uses_temperature = False
     out_of_range = 'nothing is learnt, nothing is extrapolated'
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
@@ -659,6 +704,7 @@ class LinearTdT:
         # each (2,): T, dT
         self.lo: NDArray[np.float64] | None = None
         self.hi: NDArray[np.float64] | None = None
+        self.notes: tuple[str, ...] = ()
 
     @property
     def n_terms(self) -> int:
@@ -667,9 +713,12 @@ class LinearTdT:
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Least squares over every sample (``rng`` unused: deterministic)."""
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
+        (t, gyro, temp), support, notes = rate_fit_inputs(run, self.rate_window_s, self.name)
+        self.notes = notes
+        if not support.supported:
+            # a dT column whose spread is its noise would be scaled by a vanishing range
+            self.rate_degree = 0
+        self.uses_rate = self.rate_degree > 0
         rate = temperature_rate_c_s(t, temp, window_s=self.rate_window_s)
         both = np.column_stack([temp, rate])
         self.lo, self.hi = both.min(0), both.max(0)
@@ -709,7 +758,7 @@ class LinearTdT:
                 'rate_window_s': self.rate_window_s, 'terms': self.basis.names(),
                 'centre': self.basis.centre.tolist(), 'scale': self.basis.scale.tolist(),
                 'input_min': self.lo.tolist(), 'input_max': self.hi.tolist(),
-                'coef_rad_s': self.coef.tolist(),
+                'coef_rad_s': self.coef.tolist(), 'notes': list(self.notes),
                 'temperature_range_c': [float(self.lo[0]), float(self.hi[0])]}
 
     @classmethod
@@ -722,6 +771,7 @@ class LinearTdT:
         m.basis = _PolyBasis(m.degree, m.rate_degree, d['centre'], d['scale'])
         m.lo, m.hi = np.asarray(d['input_min'], float), np.asarray(d['input_max'], float)
         m.coef = np.asarray(d['coef_rad_s'], dtype=float).reshape(-1, m.n_terms)
+        m.uses_rate, m.notes = m.rate_degree > 0, tuple(d.get('notes', ()))
         return m
 
 
@@ -749,6 +799,7 @@ class WaveletThreshold:
     name = 'wtd'
     causal = False
     uses_rate = False
+    uses_temperature = False
     out_of_range = 'temperature is not an input'
 
     def __init__(self, *, wavelet: str = 'db4', level: int = 6, mode: str = 'symmetric',
@@ -839,17 +890,17 @@ class BPNetwork:
         self.shortcut = bool(shortcut)
         self.net: _DriftNet | None = None
         self.train_mse: float | None = None
+        self.notes: tuple[str, ...] = ()
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Fit the shortcut and train the network on the run's block means (``rng``: weights)."""
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
+        (t, gyro, temp), support, notes = rate_fit_inputs(run, self.rate_window_s, self.name)
+        self.notes, self.uses_rate = notes, support.supported
         x, y = _training_pairs(t, temp, gyro, rate_window_s=self.rate_window_s,
-                               max_points=self.max_points)
+                               max_points=self.max_points, use_rate=self.uses_rate)
         self.net, self.train_mse = _fit_net(x, y, self.hidden, rng, sa_iterations=0,
                                             epochs=self.epochs, learning_rate=self.learning_rate,
-                                            shortcut=self.shortcut)
+                                            shortcut=self.shortcut, use_rate=self.uses_rate)
 
     def drift_rad_s(self, temperature_c: ArrayLike, dtemp_c_s: ArrayLike) -> NDArray[np.float64]:
         """Return the offset (n, 3), rad/s, at temperatures (degC) and rates (degC/s)."""
@@ -869,7 +920,7 @@ class BPNetwork:
         assert self.net is not None
         return {'method': self.name, 'epochs': self.epochs, 'learning_rate': self.learning_rate,
                 'max_points': self.max_points, 'rate_window_s': self.rate_window_s,
-                'shortcut': self.shortcut,
+                'shortcut': self.shortcut, 'notes': list(self.notes),
                 'train_mse_standardised': self.train_mse, 'network': self.net.to_dict(),
                 'temperature_range_c': [float(self.net.x_min[0]), float(self.net.x_max[0])]}
 
@@ -883,6 +934,7 @@ class BPNetwork:
                 shortcut=bool(d['network'].get('shortcut')))
         m.net = _DriftNet.from_dict(d['network'])
         m.train_mse = d.get('train_mse_standardised')
+        m.uses_rate, m.notes = m.net.uses_rate, tuple(d.get('notes', ()))
         return m
 
 
@@ -901,7 +953,7 @@ def _check_net_options(hidden: int, epochs: int, learning_rate: float, max_point
 
 def _fit_net(x: NDArray[np.float64], y: NDArray[np.float64], hidden: int, rng: np.random.Generator,
              *, sa_iterations: int, epochs: int, learning_rate: float,
-             shortcut: bool = True) -> tuple[_DriftNet, float]:
+             shortcut: bool = True, use_rate: bool = True) -> tuple[_DriftNet, float]:
     """
     Fit the shortcut (least squares), then the network on what it leaves; return (net, mse).
 
@@ -910,7 +962,8 @@ def _fit_net(x: NDArray[np.float64], y: NDArray[np.float64], hidden: int, rng: n
     """
     basis = None
     if shortcut:
-        basis = _PolyBasis.spanning(SHORTCUT_DEGREE, SHORTCUT_RATE_DEGREE, x.min(0), x.max(0))
+        basis = _PolyBasis.spanning(SHORTCUT_DEGREE, SHORTCUT_RATE_DEGREE if use_rate else 0,
+                                    x.min(0), x.max(0))
         a = basis(x[:, 0], x[:, 1])
         coef, _, rank, _ = np.linalg.lstsq(a, y, rcond=None)
         if rank < a.shape[1]:
@@ -928,7 +981,7 @@ def _fit_net(x: NDArray[np.float64], y: NDArray[np.float64], hidden: int, rng: n
         theta = train_gradient_descent(mlp, theta, xs, ys, epochs=epochs,
                                        learning_rate=learning_rate)
     net = _DriftNet(hidden, theta, x_mean, x_std, y_mean, y_std, x.min(0), x.max(0),
-                    shortcut=None if basis is None else (basis, coef))
+                    shortcut=None if basis is None else (basis, coef), uses_rate=use_rate)
     return net, mlp.mse(theta, xs, ys)
 
 
@@ -1034,6 +1087,7 @@ class EmdWtdSaBp:
         self.train_mse: float | None = None
         # per axis: list of 'noise' / 'drift' of the training run
         self.imf_classes: list[list[list[str]]] | None = None
+        self.notes: tuple[str, ...] = ()
 
     def decompose(self, t: NDArray[np.float64], gyro: NDArray[np.float64],
                   split_hz: float) -> _Decomposition:
@@ -1096,17 +1150,16 @@ class EmdWtdSaBp:
 
     def fit(self, run: ThermalRun, *, rng: np.random.Generator) -> None:
         """Decompose the run, then anneal and train the network on its drift part."""
-        t, gyro, temp = _check_run(run, need_temperature=True)
-        _check_span(temp, run.name)
-        check_rate_training(t, self.rate_window_s, run.name)
+        (t, gyro, temp), support, notes = rate_fit_inputs(run, self.rate_window_s, self.name)
+        self.notes, self.uses_rate = notes, support.supported
         split = self.split_hz if self.split_hz is not None else 100.0 / float(t[-1] - t[0])
         _, drift, classes = self.decompose(t, gyro, split)
         x, y = _training_pairs(t, temp, drift, rate_window_s=self.rate_window_s,
-                               max_points=self.max_points)
+                               max_points=self.max_points, use_rate=self.uses_rate)
         self.net, self.train_mse = _fit_net(x, y, self.hidden, rng,
                                             sa_iterations=self.sa_iterations,
                                             epochs=self.epochs, learning_rate=self.learning_rate,
-                                            shortcut=self.shortcut)
+                                            shortcut=self.shortcut, use_rate=self.uses_rate)
         self.split_hz = split
         self.imf_classes = classes
 
@@ -1129,7 +1182,7 @@ class EmdWtdSaBp:
                 'sa_iterations': self.sa_iterations, 'epochs': self.epochs,
                 'learning_rate': self.learning_rate, 'max_points': self.max_points,
                 'rate_window_s': self.rate_window_s, 'shortcut': self.shortcut,
-                'imf_classes': self.imf_classes,
+                'imf_classes': self.imf_classes, 'notes': list(self.notes),
                 'train_mse_standardised': self.train_mse, 'network': self.net.to_dict(),
                 'temperature_range_c': [float(self.net.x_min[0]), float(self.net.x_max[0])]}
 
@@ -1148,6 +1201,7 @@ class EmdWtdSaBp:
         m.net = _DriftNet.from_dict(d['network'])
         m.train_mse = d.get('train_mse_standardised')
         m.imf_classes = d.get('imf_classes')
+        m.uses_rate, m.notes = m.net.uses_rate, tuple(d.get('notes', ()))
         return m
 
 

@@ -40,9 +40,9 @@ offset linearly in time onto the gyro stamps:
   rate range (``rate_range_c_s``) too: knots outside it are counted (:attr:`knots_rate_outside`)
   and the model treats them as its ``out_of_range`` says (extrapolated, never clipped).
 
-Non-causal methods need the whole record (VMD decomposition, time-frequency peak filtering,
-EMD, wavelet-threshold denoising of the full signal) and are refused with a message naming those
-offline-only steps. No ROS is imported here.
+Implausible temperatures (``core.plausible``) are rejected like non-finite ones; a hysteresis
+term (``lsq_cv``) gets its state carried over. Non-causal methods (VMD, TFPF, EMD, wavelet
+thresholding of the whole record) are refused, naming those offline-only steps. No ROS here.
 """
 
 from collections.abc import Sequence
@@ -54,6 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from ..core.plausible import LiveTemperatureScreen
 from ..errors import ParameterError
 from ..outputs import StrPath
 
@@ -72,6 +73,10 @@ RANGE_OK, RANGE_MARGIN, RANGE_OUTSIDE = 0, 1, 2
 RANGE_NAMES = {RANGE_OK: 'inside', RANGE_MARGIN: 'within margin', RANGE_OUTSIDE: 'outside'}
 
 BEYOND_ACTIONS = ('hold', 'none')
+
+#: How a gyro sample gets its offset: the newest at once, or interpolated once a temperature at
+#: or after its stamp is known (:class:`TemperatureGate`).
+TEMPERATURE_SYNCS = ('latest', 'interpolate')
 
 _NS = 1_000_000_000
 
@@ -303,7 +308,9 @@ class LiveDriftEvaluator:
         self.knots_by_status = {RANGE_OK: 0, RANGE_MARGIN: 0, RANGE_OUTSIDE: 0}
         self.knots_rate_outside = 0  # knots whose rate is outside the trained rate range
         self.knots_outside = 0  # knots outside the trained range of T or of dT
-        self.rejected = 0  # non-finite or not newer than the previous message
+        self.rejected = 0  # non-finite, implausible or not newer than the previous message
+        self._screen = LiveTemperatureScreen()
+        self._played: float | None = None  # hysteresis state (lsq_cv's play operator) carried on
 
     @property
     def start_up_s(self) -> float:
@@ -359,6 +366,8 @@ class LiveDriftEvaluator:
             keep &= stamps > self.stamp_ns
         if keep.size > 1:
             keep[1:] &= stamps[1:] > stamps[:-1]
+        # core.plausible: out of range, saturated words, jumps a die cannot make
+        keep[keep] = self._screen.accept(stamps[keep] / _NS, temp[keep])
         self.rejected += int(keep.size - np.count_nonzero(keep))
         stamps, temp = stamps[keep], temp[keep]
         k = stamps.size
@@ -396,7 +405,13 @@ class LiveDriftEvaluator:
                    rate: NDArray[np.float64]) -> None:
         k = t.size
         status = self.range_status(temp)
-        drift = np.asarray(self.method.drift_rad_s(temp, rate), dtype=np.float64).reshape(k, 3)
+        if getattr(self.method, 'hysteresis_c', 0.0):
+            played = self.method.play(temp, start=self._played)
+            self._played = float(played[-1])
+            drift = self.method.drift_rad_s(temp, rate, played_c=played)
+        else:
+            drift = self.method.drift_rad_s(temp, rate)
+        drift = np.asarray(drift, dtype=np.float64).reshape(k, 3)
         outside = status == RANGE_OUTSIDE
         if outside.any():
             # Never extrapolate: a knot beyond the margin holds the last trusted offset (forward
@@ -446,6 +461,11 @@ class LiveDriftEvaluator:
             return None
         assert self._t0_ns is not None  # set with the first knot
         x = (np.asarray(stamp_ns, dtype=np.int64) - self._t0_ns) / _NS
+        if x.size and x[0] >= self._knot_t[-1] and (x.size == 1 or x.min() >= self._knot_t[-1]):
+            # Every stamp at or after the newest knot (live, the usual batch): its offset, held,
+            # as np.interp gives it; the older knots are no longer needed.
+            self._knot_t, self._knot_drift = self._knot_t[-1:], self._knot_drift[-1:]
+            return np.repeat(self._knot_drift, x.size, axis=0)
         out = np.empty((x.size, 3))
         for axis in range(3):
             out[:, axis] = np.interp(x, self._knot_t, self._knot_drift[:, axis])
@@ -472,6 +492,11 @@ class TemperatureGate:
     Before the first temperature there is no offset at all: samples that waited ``first_wait_s``
     are dropped and counted in :attr:`dropped`.
 
+    With ``wait_for_newer=False`` (the node's default, ``temperature_sync: latest``) only the
+    wait for the first temperature remains: once an offset exists every sample is released at
+    once and gets the newest one (temperature moves over seconds; docs/compensation.md measures
+    what that costs), and :attr:`late` stays 0.
+
     Batches are opaque to the gate (the node keeps the message bytes in them); it returns index
     ranges of each batch to publish.
 
@@ -481,13 +506,17 @@ class TemperatureGate:
         Longest wait for a newer temperature once one is known (s); 0: never wait.
     first_wait_s : float
         Longest wait for the first temperature (s).
+    wait_for_newer : bool, keyword-only
+        Hold samples newer than the newest temperature (False: only until the first one).
 
     """
 
-    def __init__(self, max_wait_s: float, first_wait_s: float) -> None:
+    def __init__(self, max_wait_s: float, first_wait_s: float, *,
+                 wait_for_newer: bool = True) -> None:
         if not (max_wait_s >= 0 and first_wait_s >= 0):
             raise ParameterError(f'waits must be >= 0 s, got {max_wait_s!r}, {first_wait_s!r}')
         self.max_wait_s, self.first_wait_s = float(max_wait_s), float(first_wait_s)
+        self.wait_for_newer = bool(wait_for_newer)
         # [batch, stamp_ns (int64 array), next index, arrival time (s)]
         self._queue: list[list[Any]] = []
         self.late = 0      # samples released after max_wait_s with the newest offset
@@ -547,8 +576,11 @@ class TemperatureGate:
                 self.dropped += len(stamps) - start
                 self._queue.pop(0)
                 continue
-            beyond = np.flatnonzero(stamps[start:] > newest_temperature_ns)
-            stop = len(stamps) if beyond.size == 0 else start + int(beyond[0])
+            if self.wait_for_newer:
+                beyond = np.flatnonzero(stamps[start:] > newest_temperature_ns)
+                stop = len(stamps) if beyond.size == 0 else start + int(beyond[0])
+            else:
+                stop = len(stamps)
             if stop > start:
                 out.append((batch, start, stop, False))
                 self.longest_wait_s = max(self.longest_wait_s, waited)

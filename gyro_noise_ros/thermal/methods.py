@@ -46,7 +46,8 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalMethod, ThermalRun
+from .run import (check_temperature_readings, DEFAULT_RATE_WINDOW_S, temperature_rate_c_s,
+                  ThermalMethod, ThermalRun)
 from .. import __version__
 from ..errors import GyroNoiseError, InputDataError, ParameterError
 from ..outputs import atomic_write_text, StrPath
@@ -55,9 +56,10 @@ if TYPE_CHECKING:
     from .baselines import TemperaturePolynomial
 
 __all__ = ['BUILTIN_METHODS', 'DEFAULT_METHOD', 'DEFAULT_MIN_RANGE_C', 'DEFAULT_RANGE_MARGIN_C',
-           'MODEL_FORMAT', 'MODEL_FORMAT_VERSION', 'MethodUnavailableError', 'ModelFileError',
-           'RangeReport', 'TemperatureRangeError', 'ThermalModel', 'TrainingInfo',
-           'accel_view', 'check_temperature_range', 'check_trainable', 'fit_accel',
+           'MAX_OUTSIDE_SHARE', 'MAX_SENSOR_OFFSET_DEG_S', 'MODEL_FORMAT', 'MODEL_FORMAT_VERSION',
+           'MethodUnavailableError', 'ModelFileError', 'RangeReport', 'SensorMismatchError',
+           'TemperatureRangeError', 'ThermalModel', 'TrainingInfo', 'accel_view',
+           'check_same_sensor', 'check_temperature_range', 'check_trainable', 'fit_accel',
            'fit_method', 'get_method', 'load_model', 'method_class', 'method_names',
            'range_report', 'register_method', 'save_model', 'to_jsonable', 'training_info']
 
@@ -66,18 +68,18 @@ BUILTIN_METHODS = {
     'raw': ('gyro_noise_ros.thermal.baselines', 'RawMethod'),
     'poly3': ('gyro_noise_ros.thermal.baselines', 'TemperaturePolynomial'),
     'linear_tdt': ('gyro_noise_ros.thermal.baselines', 'LinearTdT'),
+    'lsq_cv': ('gyro_noise_ros.thermal.lsq', 'LeastSquaresCV'),
     'wtd': ('gyro_noise_ros.thermal.baselines', 'WaveletThreshold'),
     'bp': ('gyro_noise_ros.thermal.baselines', 'BPNetwork'),
     'emd_wtd_sabp': ('gyro_noise_ros.thermal.baselines', 'EmdWtdSaBp'),
     'parallel': ('gyro_noise_ros.thermal.parallel', 'ParallelModel'),
 }
 
-#: Default ``--method`` of ``gyro_noise_thermal fit``: the held-out winner among the methods that
-#: keep the full bandwidth and run causally, on runs shaped differently from their training run
-#: (docs/scripts/thermal_heldout.py, 5 seeds x 5 shape pairs: mean ratio to the least-squares
-#: oracle 1.18 for linear_tdt, 1.30 for bp, lower on 4 of the 5 pairs); docs/thermal.md,
-#: "The default method".
-DEFAULT_METHOD = 'linear_tdt'
+#: Default ``--method`` of ``gyro_noise_thermal fit``: least squares on a drift basis of the
+#: measured T and its 10-s slope, terms by blocked cross-validation on the training run
+#: (thermal/lsq.py); the best of the causal, full-bandwidth methods on runs shaped unlike their
+#: training run (docs/scripts/thermal_heldout.py; docs/thermal.md, "The default method").
+DEFAULT_METHOD = 'lsq_cv'
 
 #: How far (degC) outside the trained temperature range a model may still be applied.
 DEFAULT_RANGE_MARGIN_C = 5.0
@@ -85,11 +87,22 @@ DEFAULT_RANGE_MARGIN_C = 5.0
 #: Smallest temperature span (degC) a drift model is fitted on (``fit`` refuses less).
 DEFAULT_MIN_RANGE_C = 2.0
 
+#: Largest offset (deg/s, any axis) between a run's gyro and the model's drift at its temperatures
+#: before the model is taken for another sensor's: a quarter of the LSM6DSO32's typical zero-rate
+#: level (+-1 deg/s), far above a part's turn-on repeatability, so two parts of that type agree
+#: within it on all three axes about once in a hundred (uniform levels).
+MAX_SENSOR_OFFSET_DEG_S = 0.25
+
+#: Largest share of a run outside the trained range of T or dT applied without a warning
+#: (``apply``, ``compare``; above it ``--strict`` makes ``apply`` refuse, exit code 4).
+MAX_OUTSIDE_SHARE = 0.05
+
 #: ``format`` and ``format_version`` of model.json.
 MODEL_FORMAT = 'gyro_noise_ros.thermal.model'
-MODEL_FORMAT_VERSION = 2
-#: The format versions :func:`load_model` reads (1: no ``accel``, no ``rate_window_s``).
-READABLE_FORMAT_VERSIONS = (1, 2)
+MODEL_FORMAT_VERSION = 3
+#: The format versions :func:`load_model` reads (1: no ``accel``, no ``rate_window_s``; 2: no
+#: ``autopilot``).
+READABLE_FORMAT_VERSIONS = (1, 2, 3)
 
 _registered: dict[str, type] = {}
 
@@ -108,6 +121,10 @@ class ModelFileError(GyroNoiseError):
 
 class TemperatureRangeError(InputDataError):
     """The data's temperature lies outside the model's trained range plus margin (exit code 4)."""
+
+
+class SensorMismatchError(InputDataError):
+    """The run's gyro sits far from the model's drift: a model of another sensor (exit code 4)."""
 
 
 def register_method(name: str, cls: type[Any]) -> None:
@@ -371,15 +388,46 @@ class RangeReport:
         if not self.outside:
             return 'the whole run is inside the trained range of T and dT'
         pct = 100.0 * self.fraction_outside
-        return (f'{self.outside} of {self.samples} samples ({pct:.3g} %) outside the trained '
-                f'range (T below {self.temperature_below}, above {self.temperature_above}; dT '
-                f'below {self.rate_below}, above {self.rate_above}): {self.treatment}')
+        lo, hi = self.temperature_range_c
+        trained = f'T {lo:.2f}..{hi:.2f} degC'
+        here = f'T {_span(self.run_temperature_c, ".2f")} degC'
+        if self.rate_range_c_s is not None:
+            trained += f', dT {self.rate_range_c_s[0]:.3g}..{self.rate_range_c_s[1]:.3g} degC/s'
+            here += f', dT {_span(self.run_rate_c_s, ".3g")} degC/s'
+        return (f'{self.outside} of {self.samples} samples ({pct:.3g} %) lie outside the trained '
+                f'range ({trained}; this run {here}): {self.temperature_below} with T below it, '
+                f'{self.temperature_above} above, {self.rate_below} with dT below it, '
+                f'{self.rate_above} above. There the method: {self.treatment}')
+
+    def warning(self) -> str | None:
+        """
+        Return a warning when more than :data:`MAX_OUTSIDE_SHARE` of the run lies outside.
+
+        Returns
+        -------
+        str or None
+
+        """
+        if self.fraction_outside <= MAX_OUTSIDE_SHARE:
+            return None
+        return (f'{100.0 * self.fraction_outside:.3g} % of the run lies outside the trained '
+                f'range of T or dT, more than {100.0 * MAX_OUTSIDE_SHARE:g} %: the model '
+                'extrapolates there; retrain on a run covering it (a strict apply refuses it)')
+
+
+def _span(values: Sequence[float], spec: str) -> str:
+    return f'{values[0]:{spec}}..{values[1]:{spec}}' if len(values) == 2 else 'n/a'
 
 
 def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: ArrayLike, *,
-                 treatment: str = '') -> RangeReport:
+                 treatment: str = '', uses_temperature: bool = True,
+                 uses_rate: bool = True) -> RangeReport:
     """
-    Count the samples outside the trained range of T and of dT.
+    Count the samples outside the trained range of the method's inputs, T and dT.
+
+    Only the inputs a method evaluates count: a T-only method (``poly3``) is not extrapolating
+    where only dT leaves the trained range, a method without temperature input (``raw``,
+    ``wtd``) nowhere (as the live node, :mod:`.live`, checks them).
 
     Parameters
     ----------
@@ -391,6 +439,8 @@ def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: Arr
         Its temperature rate (n,), degC/s (the same estimator and window as in training).
     treatment : str, keyword-only
         What the method does outside (its ``out_of_range``).
+    uses_temperature, uses_rate : bool, keyword-only
+        Whether the method evaluates T, dT (its ``uses_temperature``, ``uses_rate``).
 
     Returns
     -------
@@ -401,8 +451,10 @@ def range_report(training: TrainingInfo, temperature_c: ArrayLike, rate_c_s: Arr
     rate = np.asarray(rate_c_s, dtype=float).reshape(-1)
     t_lo, t_hi = training.temperature_min_c, training.temperature_max_c
     below_t, above_t = temp < t_lo, temp > t_hi
+    if not uses_temperature:
+        below_t = above_t = np.zeros(temp.size, dtype=bool)
     r_lo, r_hi = training.temperature_rate_min_c_s, training.temperature_rate_max_c_s
-    if r_lo is None or r_hi is None:
+    if r_lo is None or r_hi is None or not (uses_rate and uses_temperature):
         below_r = above_r = np.zeros(temp.size, dtype=bool)
         rate_range = None
     else:
@@ -436,7 +488,11 @@ class ThermalModel:
         The accelerometer's polynomial (offset change relative to its ``t_ref_c``, m/s^2), when
         the training data had accelerometer samples.
     notes : tuple of str
-        What :func:`load_model` noticed and let pass (e.g. written by another package version).
+        What the fit or :func:`load_model` noticed and let pass (a method fitted without its dT
+        term, a file written by another package version).
+    autopilot : TemperaturePolynomial or None
+        For a method other than ``poly3``: the ``poly3`` fitted on the same training run, the
+        form PX4 and ArduPilot evaluate (what ``export`` writes, and the yardstick "x poly3").
 
     """
 
@@ -447,6 +503,16 @@ class ThermalModel:
     package_version: str = __version__
     accel: 'TemperaturePolynomial | None' = None
     notes: tuple[str, ...] = field(default_factory=tuple)
+    autopilot: 'TemperaturePolynomial | None' = None
+
+    def poly3(self) -> 'TemperaturePolynomial | None':
+        """Return the model's poly3: the method itself when it is one, else :attr:`autopilot`."""
+        from .baselines import TemperaturePolynomial
+
+        method = self.method
+        if isinstance(method, TemperaturePolynomial) and not method.relative:
+            return method
+        return self.autopilot
 
 
 def to_jsonable(value: Any) -> Any:
@@ -480,7 +546,8 @@ def to_jsonable(value: Any) -> Any:
 
 
 def model_document(method: ThermalMethod, *, training: TrainingInfo,
-                   accel: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
+                   accel: 'TemperaturePolynomial | None' = None,
+                   autopilot: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
     """
     Return the model.json document of a fitted method (what :func:`save_model` writes).
 
@@ -492,6 +559,8 @@ def model_document(method: ThermalMethod, *, training: TrainingInfo,
         What it was trained on (:func:`training_info`).
     accel : TemperaturePolynomial, optional, keyword-only
         The accelerometer's fitted polynomial.
+    autopilot : TemperaturePolynomial, optional, keyword-only
+        The poly3 fitted beside a method of another form (:attr:`ThermalModel.autopilot`).
 
     Returns
     -------
@@ -510,12 +579,17 @@ def model_document(method: ThermalMethod, *, training: TrainingInfo,
         'parameters': method.to_dict(),
         'accel': None if accel is None else {
             'unit': 'm/s^2', 'relative_to_t_ref': True, 'parameters': accel.to_dict()},
+        'autopilot': None if autopilot is None else {
+            'note': 'poly3 fitted on the same training run: the form PX4 and ArduPilot '
+                    'evaluate (gyro_noise_thermal export writes it)',
+            'parameters': autopilot.to_dict()},
     }
     return to_jsonable(doc)
 
 
 def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
-               accel: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
+               accel: 'TemperaturePolynomial | None' = None,
+               autopilot: 'TemperaturePolynomial | None' = None) -> dict[str, Any]:
     """
     Write a fitted method to model.json (atomically: a half-written file is never left).
 
@@ -529,6 +603,8 @@ def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
         What it was trained on (:func:`training_info`).
     accel : TemperaturePolynomial, optional, keyword-only
         The accelerometer's fitted polynomial.
+    autopilot : TemperaturePolynomial, optional, keyword-only
+        The poly3 fitted beside a method of another form.
 
     Returns
     -------
@@ -536,7 +612,7 @@ def save_model(method: ThermalMethod, path: StrPath, *, training: TrainingInfo,
         The document written.
 
     """
-    doc = model_document(method, training=training, accel=accel)
+    doc = model_document(method, training=training, accel=accel, autopilot=autopilot)
     atomic_write_text(path, json.dumps(doc, indent=1, allow_nan=False) + '\n')
     return doc
 
@@ -600,19 +676,21 @@ def load_model(path: StrPath) -> ThermalModel:
                              f'("parameters": {json.dumps(params)}); fit the model again')
     cls = method_class(name)
     method = _from_dict(cls, params, f'model file {str(path)!r}: parameters of method {name!r}')
-    accel = None
-    if doc.get('accel'):
-        from .baselines import TemperaturePolynomial
+    from .baselines import TemperaturePolynomial
 
-        accel = _from_dict(TemperaturePolynomial, (doc['accel'] or {}).get('parameters'),
-                           f'model file {str(path)!r}: accelerometer parameters')
+    polys = {}
+    for key, label in (('accel', 'accelerometer'), ('autopilot', 'autopilot poly3')):
+        part = doc.get(key)
+        polys[key] = None if not part else _from_dict(
+            TemperaturePolynomial, part.get('parameters') if isinstance(part, dict) else None,
+            f'model file {str(path)!r}: {label} parameters')
     version = str(doc.get('package_version', ''))
     notes: tuple[str, ...] = ()
     if version != __version__:
         notes = (f'model file {str(path)!r} was written by gyro_noise_ros {version or "?"}, '
                  f'this is {__version__}; it loads, but refit if the methods changed since',)
     return ThermalModel(method=method, training=training, package_version=version,
-                        accel=accel, notes=notes)
+                        accel=polys['accel'], notes=notes, autopilot=polys['autopilot'])
 
 
 def _from_dict(cls: type[Any], params: Any, where: str) -> Any:
@@ -624,6 +702,59 @@ def _from_dict(cls: type[Any], params: Any, where: str) -> Any:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as err:
         raise ModelFileError(f'{where} are invalid ({type(err).__name__}: {err})') from err
+
+
+def check_same_sensor(model: ThermalModel, run: ThermalRun, *,
+                      max_offset_deg_s: float = MAX_SENSOR_OFFSET_DEG_S) -> list[float]:
+    """
+    Refuse a run whose gyro sits far from what the model predicts at its temperatures.
+
+    The offset per axis is the median over the (static) run of the gyro minus the model's drift
+    at the run's temperatures (its poly3, :meth:`ThermalModel.poly3`, else the method's own
+    ``drift_rad_s``): a turn-on difference for the sensor the model was fitted on, the
+    difference of two parts' zero-rate levels for a model of another sensor.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model.
+    run : ThermalRun
+        The run it is about to be applied to.
+    max_offset_deg_s : float, keyword-only
+        Largest accepted offset on any axis (deg/s, >= 0; ``inf`` disables the check).
+
+    Returns
+    -------
+    list of float
+        The offsets per axis (deg/s); empty when the model gives no drift function.
+
+    Raises
+    ------
+    SensorMismatchError
+        An axis beyond ``max_offset_deg_s``.
+    ParameterError
+        A NaN or negative limit.
+
+    """
+    limit = float(max_offset_deg_s)
+    if not limit >= 0.0:
+        raise ParameterError(f'{{max_offset_deg_s}} must be >= 0 deg/s (inf: off), got '
+                             f'{max_offset_deg_s!r}', parameters=('max_offset_deg_s',))
+    poly = model.poly3()
+    drift = getattr(poly if poly is not None else model.method, 'drift_rad_s', None)
+    if drift is None:
+        return []
+    temp = np.asarray(run.temperature_c, dtype=float)
+    rate = temperature_rate_c_s(run.t_s, temp, window_s=model.training.rate_window_s)
+    offsets = np.degrees(np.median(np.asarray(run.gyro_rad_s, dtype=float)
+                                   - np.asarray(drift(temp, rate), dtype=float), axis=0))
+    far = [f'{axis} {v:+.3g}' for axis, v in zip('xyz', offsets) if abs(v) > limit]
+    if far:
+        raise SensorMismatchError(
+            f'run {run.name!r}: its gyro sits {", ".join(far)} deg/s from the model drift at '
+            f'its temperatures (more than {limit:g} deg/s): is the model of another sensor? '
+            '({max_offset_deg_s} inf applies it anyway)', parameters=('max_offset_deg_s',))
+    return [float(v) for v in offsets]
 
 
 def check_temperature_range(model: ThermalModel, temperature_c: ArrayLike, *,
@@ -710,17 +841,32 @@ def fit_method(name: str, run: ThermalRun, *, rng: np.random.Generator,
             method.executor = None
     else:
         method.fit(run, rng=rng)
-    notes: tuple[str, ...]
-    accel_poly, notes = None, ()
+    notes: tuple[str, ...] = tuple(getattr(method, 'notes', ()))
+    accel_poly = None
     if accel and run.accel_m_s2 is not None:
         try:
             accel_poly = fit_accel(run)
         except InputDataError as err:
             # the gyro model stands on its own; say why the accelerometer has none
-            notes = (f'accelerometer not compensated: {err}',)
+            notes += (f'accelerometer not compensated: {err}',)
     window = float(getattr(method, 'rate_window_s', DEFAULT_RATE_WINDOW_S))
     return ThermalModel(method=method, accel=accel_poly, notes=notes,
-                        training=training_info(run, sources=sources, rate_window_s=window))
+                        training=training_info(run, sources=sources, rate_window_s=window),
+                        autopilot=_autopilot_poly3(method, run))
+
+
+def _autopilot_poly3(method: Any, run: ThermalRun) -> 'TemperaturePolynomial | None':
+    """Fit the poly3 a method of another form is exported as (None when it cannot be)."""
+    from .baselines import TemperaturePolynomial
+
+    if isinstance(method, TemperaturePolynomial):
+        return None
+    poly = TemperaturePolynomial()
+    try:
+        poly.fit(run, rng=np.random.default_rng(0))
+    except InputDataError:
+        return None   # a span too narrow for any temperature model: the method says so itself
+    return poly
 
 
 def accel_view(run: ThermalRun) -> ThermalRun:
@@ -820,15 +966,16 @@ def check_trainable(run: ThermalRun, *, min_range_c: float = DEFAULT_MIN_RANGE_C
         Smallest accepted temperature span, max - min (degC, finite, >= 0).
     method : str, optional, keyword-only
         ``--method`` about to be fitted: a method that uses dT also needs a run at least
-        ``baselines.MIN_TRAINING_WINDOWS`` rate windows long.
+        ``baselines.MIN_TRAINING_WINDOWS`` rate windows long, with temperature readings at
+        least every ``run.MIN_READINGS_PER_WINDOW``-th of a window.
 
     Raises
     ------
     ParameterError
         ``min_range_c`` NaN, infinite or negative.
     InputDataError
-        Constant temperature, a span below ``min_range_c``, non-finite samples, or a run too
-        short for the method's rate window.
+        Constant temperature, a span below ``min_range_c``, non-finite samples, a run too short
+        for the method's rate window or its temperature read too sparsely for it.
 
     """
     min_range_c = check_min_range(min_range_c)
@@ -852,3 +999,4 @@ def check_trainable(run: ThermalRun, *, min_range_c: float = DEFAULT_MIN_RANGE_C
 
             check_rate_training(np.asarray(run.t_s, dtype=float), DEFAULT_RATE_WINDOW_S,
                                 run.name)
+            check_temperature_readings(run, DEFAULT_RATE_WINDOW_S)

@@ -64,7 +64,9 @@ from ..units import RAD_TO_DEG
 __all__ = ['DEFAULT_AMPLITUDE_RAD_S', 'DEFAULT_F_HI_HZ', 'DEFAULT_F_LO_HZ',
            'DRIFT_WINDOW_S', 'PRECURSOR_LIMIT', 'FrequencyResponse', 'Injection', 'NoiseMetrics',
            'StepResponse', 'evaluate_method', 'frequency_response', 'make_injection',
-           'noise_metrics', 'noise_path_gain', 'step_response', 'verdict', 'white_noise_sigma']
+           'noise_metrics', 'noise_path_gain', 'residual_drift', 'residual_drift_deg_s',
+           'step_response',
+           'verdict', 'white_floor_deg_s', 'white_noise_sigma', 'yardstick']
 
 #: Window of the residual-drift means (s).
 DRIFT_WINDOW_S = 60.0
@@ -186,12 +188,9 @@ def _noise_metrics(rate_rad_s: ArrayLike, rate_hz: float,
     if r is not None and r.arw_from_region:
         sel = (tau >= r.arw_tau_range_s[0]) & (tau <= r.arw_tau_range_s[1])
         slope = float(np.polyfit(np.log(tau[sel]), np.log(adev[sel]), 1)[0])
+    drift = float(residual_drift_deg_s(x[:, None], rate_hz, window_s=drift_window_s)[0])
     window = int(round(drift_window_s * rate_hz))
     k = x.size // window if window >= 1 else 0
-    drift = math.nan
-    if k >= 2:
-        means = x[:k * window].reshape(k, window).mean(axis=1)
-        drift = float(np.std(means, ddof=1) * RAD_TO_DEG)
     return NoiseMetrics(
         # rad/sqrt(s) -> deg/sqrt(h): sqrt(3600 s)
         arw_deg_sqrt_h=r.arw_rad_per_sqrt_s * RAD_TO_DEG * 60.0 if r else nan,
@@ -203,6 +202,127 @@ def _noise_metrics(rate_rad_s: ArrayLike, rate_hz: float,
         band_limited_below_s=r.band_limited_below_s if r else nan,
         residual_drift_deg_s=drift, drift_windows=int(k),
         mean_deg_s=float(np.mean(x) * RAD_TO_DEG)), (tau, adev)
+
+
+def residual_drift(values: ArrayLike, rate_hz: float, *,
+                   window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
+    """
+    Return the residual drift of each column: the std (ddof 1) of consecutive window means.
+
+    Parameters
+    ----------
+    values : array_like
+        Samples (n, m), any unit (the result is in it).
+    rate_hz : float
+        Sample rate (Hz).
+    window_s : float, keyword-only
+        Window of the means (s).
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,); NaN with fewer than two whole windows.
+
+    """
+    x = np.asarray(values, dtype=np.float64)
+    window = int(round(window_s * rate_hz))
+    k = x.shape[0] // window if window >= 1 else 0
+    if k < 2:
+        return np.full(x.shape[1], math.nan)
+    means = x[:k * window].reshape(k, window, -1).mean(axis=1)
+    return np.std(means, axis=0, ddof=1)
+
+
+def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
+                         window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
+    """
+    Return :func:`residual_drift` of an angular rate (n, m) in rad/s as deg/s per axis (m,).
+
+    Parameters
+    ----------
+    rate_rad_s : array_like
+        Angular rate (n, m), rad/s; ``rate_hz`` and ``window_s`` as :func:`residual_drift`.
+    rate_hz, window_s : float
+        See :func:`residual_drift`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,), deg/s.
+
+    """
+    return residual_drift(rate_rad_s, rate_hz, window_s=window_s) * RAD_TO_DEG
+
+
+def white_floor_deg_s(arw_deg_sqrt_h: ArrayLike, *,
+                      window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
+    """
+    Return the noise floor of the residual drift from the run's angle random walk, per axis.
+
+    The residual drift a perfect drift model would leave if the run's noise were its white part:
+    the standard deviation of a ``window_s`` mean of white rate noise of Allan coefficient N
+    (the ARW of the one Allan readout, :func:`noise_metrics`), ``N / sqrt(window_s)``: the
+    white-noise level of the run over the band of the 60-s means. Read on the Allan deviation's
+    -1/2 region, it ignores both the slow noise (bias instability: the true floor is higher) and
+    noise above the readout's taus (quantization, aliasing), which 60-s means average away.
+
+    Parameters
+    ----------
+    arw_deg_sqrt_h : array_like
+        ARW per axis (deg/sqrt(h)); NaN where none could be read.
+    window_s : float, keyword-only
+        Window of the residual drift's means (s).
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,), deg/s (NaN where the ARW is).
+
+    """
+    # deg/sqrt(h) -> deg/sqrt(s): / sqrt(3600 s/h) = / 60
+    return np.asarray(arw_deg_sqrt_h, dtype=float) / 60.0 / math.sqrt(window_s)
+
+
+def yardstick(residual_deg_s: ArrayLike, floor_deg_s: ArrayLike, *,
+              poly3_deg_s: ArrayLike | None = None, floor: str = 'white') -> dict[str, Any]:
+    """
+    Put residual drifts against the noise floor and against poly3's, per axis.
+
+    Parameters
+    ----------
+    residual_deg_s : array_like
+        A method's residual drift per axis (deg/s).
+    floor_deg_s : array_like
+        The noise floor per axis (deg/s): :func:`white_floor_deg_s` of the run's ARW, or a
+        simulated run's own noise through :func:`residual_drift_deg_s`.
+    poly3_deg_s : array_like, optional, keyword-only
+        poly3's residual drift on the same run per axis (deg/s).
+    floor : str, keyword-only
+        Which floor: ``'white'`` (white noise of the run, a lower bound) or ``'noise'`` (the
+        run's whole noise, known for a simulated run).
+
+    Returns
+    -------
+    dict
+        ``floor`` (the kind), ``floor_deg_s``, ``over_floor`` (residual / floor; the std of k
+        window means scatters by about 1 / sqrt(2 (k - 1)) of itself, so a short run's ratio
+        can fall below 1), and with
+        poly3 ``poly3_deg_s`` and ``over_poly3`` (residual / poly3's: 0.2 is 5 times better),
+        lists per axis, None where not finite; ``mean_over_floor``, ``mean_over_poly3``.
+
+    """
+    res = np.asarray(residual_deg_s, dtype=float)
+    flo = np.asarray(floor_deg_s, dtype=float)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        over = res / flo
+        out: dict[str, Any] = {'floor': floor, 'floor_deg_s': _curve(flo),
+                               'over_floor': _curve(over),
+                               'mean_over_floor': _num(np.mean(over))}
+        if poly3_deg_s is not None:
+            p3 = np.asarray(poly3_deg_s, dtype=float)
+            out.update(poly3_deg_s=_curve(p3), over_poly3=_curve(res / p3),
+                       mean_over_poly3=_num(np.mean(res / p3)))
+    return out
 
 
 @dataclass(frozen=True)
@@ -657,18 +777,19 @@ def verdict(raw: NoiseMetrics, processed: NoiseMetrics, fr: FrequencyResponse, s
     measured_causal = bool(st.precursor <= PRECURSOR_LIMIT)
     text = []
     if from_bw:
-        text.append(f'ARW x{arw_ratio:.3g} comes from removing bandwidth, not noise: '
-                    f'{"; ".join(cut)} ({_band_text(fr)}).')
+        text.append(f'ARW ratio {arw_ratio:.3g} ({source}) comes from removing bandwidth, not '
+                    f'noise: {"; ".join(cut)} ({_band_text(fr)}).')
     elif arw_ratio < 0.9:
-        text.append(f'ARW x{arw_ratio:.3g} while motion at 0.1-1 Hz keeps gain >= '
-                    f'{low_gain:.3g} ({_band_text(fr)}).')
+        text.append(f'ARW ratio {arw_ratio:.3g} ({source}) while motion at 0.1-1 Hz keeps gain '
+                    f'>= {low_gain:.3g} ({_band_text(fr)}).')
     elif math.isfinite(arw_ratio):
-        text.append(f'ARW x{arw_ratio:.3g}: no denoising ({_band_text(fr)}).')
+        text.append(f'ARW unchanged (ratio {arw_ratio:.3g}, {source}): no denoising '
+                    f'({_band_text(fr)}).')
     else:
         text.append(f'No ARW can be read off the processed Allan curve ({_band_text(fr)}).')
     if (noise_gain is not None and math.isfinite(output_ratio)
             and abs(output_ratio - arw_ratio) > 0.05):
-        text.append(f'(The ARW read-out of the output is x{output_ratio:.3g} of the input one: '
+        text.append(f"(The ARW read-out of the output is {output_ratio:.3g} times the input's: "
                     'the difference is drift in the ADEV of the input near 1 s, not noise.)')
     if not processed.arw_on_slope:
         text.append('The processed Allan curve has no -1/2 region: its ARW is only ADEV(1 s).')
@@ -676,7 +797,7 @@ def verdict(raw: NoiseMetrics, processed: NoiseMetrics, fr: FrequencyResponse, s
         text.append(f'Its output is smoothed: the Allan deviation is flattened below '
                     f'{processed.band_limited_below_s:.3g} s, so ARW and bias stability are read '
                     'above that, never off the smoothing.')
-    text.append(f'Residual drift x{drift_ratio:.3g}.')
+    text.append(f"Residual drift {drift_ratio:.3g} times the input's.")
     if not measured_causal:
         text.append(f'Responds {st.precursor:.0%} of a step before it happens: non-causal, '
                     'offline only.')
@@ -728,8 +849,10 @@ def evaluate_method(method: ThermalMethod, run: ThermalRun, *,
     Returns
     -------
     doc : dict
-        JSON-able: ``method``, ``causal``, ``injection`` and ``axes`` -> x/y/z -> ``raw``,
-        ``processed`` (:class:`NoiseMetrics` keys), ``bandwidth`` and ``verdict``.
+        JSON-able: ``method``, ``causal``, ``yardstick`` (the processed residual drift against
+        the run's white-noise floor, :func:`yardstick`; the caller may replace the floor and add
+        poly3), ``injection`` and ``axes`` -> x/y/z -> ``raw``, ``processed``
+        (:class:`NoiseMetrics` keys), ``bandwidth`` and ``verdict``.
     processed : numpy.ndarray
         The processed run (n, 3), rad/s.
     curves : dict
@@ -786,8 +909,12 @@ def evaluate_method(method: ThermalMethod, run: ThermalRun, *,
                                                                 * RAD_TO_DEG)}
         axes[name]['verdict'] = verdict(raw_m, proc_m, fr, st, causal=bool(method.causal),
                                         small=small, noise_gain=gain)
+    residual = [axes[a]['processed']['residual_drift_deg_s'] for a in 'xyz']
+    arw = [axes[a]['raw']['arw_deg_sqrt_h'] for a in 'xyz']
     doc = {
         'method': method.name, 'causal': bool(method.causal),
+        'yardstick': yardstick([math.nan if v is None else v for v in residual],
+                               white_floor_deg_s([math.nan if v is None else v for v in arw])),
         'injection': {'amplitude_deg_s': inj.amplitude_rad_s * RAD_TO_DEG,
                       'small_signal_amplitude_deg_s': (small_amp * RAD_TO_DEG
                                                        if small_amp is not None else None),

@@ -42,8 +42,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .hysteresis import play_operator
 from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, ThermalRun
-from .simulate import play_operator, ThermalModel, ThermalTruth
+from .simulate import ThermalModel, ThermalTruth
 from ..errors import ParameterError
 
 __all__ = ['LeastSquaresOracle', 'fit_oracle', 'measured_terms', 'oracle_residual',

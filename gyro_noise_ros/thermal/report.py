@@ -35,11 +35,13 @@ import re
 from typing import Any
 
 from .figures import Figures
+from .methods import MAX_OUTSIDE_SHARE
 from ..outputs import StrPath
 
 __all__ = ['AXIS_HEADER', 'AXIS_SPECS', 'COMPARE_HEADER', 'COMPARE_SPECS', 'PAPER_FIGURES',
-           'apply_markdown', 'axis_rows', 'bandwidth_cell', 'bias_stability_cell',
-           'compare_csv', 'compare_markdown', 'compare_rows', 'figure_numbers',
+           'apply_markdown', 'apply_verdict', 'axis_rows', 'bandwidth_cell',
+           'bias_stability_cell', 'compare_csv', 'compare_markdown', 'compare_rows',
+           'compare_verdict', 'figure_numbers',
            'figures_markdown', 'table_cells', 'table_markdown', 'training_markdown']
 
 #: Paper 002's result figures: number -> (what it shows, why a method may have no analogue;
@@ -236,6 +238,10 @@ def training_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
             f'window, filled windows only). Causal (live-capable): '
             f'{"yes" if doc["causal"] else "no (offline only)"}. Fit time '
             f'{doc["fit_time_s"]:.1f} s. Beyond the trained range: {doc["out_of_range"]}.\n\n'
+            + (f'Terms chosen by cross-validation on the training run: '
+               f'{", ".join(doc["terms"])} (model.json `parameters.cv`: every candidate).\n\n'
+               if doc.get('terms') else '')
+            + ''.join(f'**Warning: {w}.**\n\n' for w in doc.get('warnings') or ())
             + ''.join(f'**Note: {n}.**\n\n' for n in doc['notes'])
             + f'**In-sample only** ({doc["note"]}).\n\n'
             + table_markdown(
@@ -311,6 +317,131 @@ def _small_text(inj: dict[str, Any]) -> str:
     return '' if amp is None else f', and again at {amp:.3g} deg/s (the size of the noise)'
 
 
+def yardstick_markdown(yard: Mapping[str, Any] | None) -> str:
+    """
+    Return the per-axis table of the residual drift against the noise floor and poly3.
+
+    Parameters
+    ----------
+    yard : dict or None
+        A ``yardstick`` block (``thermal.metrics.yardstick``); None: ''.
+
+    Returns
+    -------
+    str
+
+    """
+    if not yard:
+        return ''
+    kind = ("the test run's own noise" if yard['floor'] == 'noise' else
+            "the run's white-noise level, ARW / sqrt(60 s): slow noise is not in it")
+    p3 = yard.get('over_poly3') or [None] * 3
+    rows = [(axis, yard['floor_deg_s'][a], yard['over_floor'][a], p3[a])
+            for a, axis in enumerate('xyz')]
+    return (f'Residual drift against the noise floor ({kind}) and against poly3 (the form PX4 '
+            'and ArduPilot evaluate; 0.2 is five times better):\n\n'
+            + table_markdown(['axis', 'noise floor (deg/s)', 'x noise floor', 'x poly3'], rows,
+                             ['', '.4g', '.3g', '.3g']))
+
+
+def _ratios(values: Sequence[float | None], spec: str) -> str:
+    """Format per-axis ratios as 'a, b, c' ('n/a' where missing)."""
+    return ', '.join('n/a' if v is None else format(v, spec) for v in values)
+
+
+def apply_verdict(doc: Mapping[str, Any]) -> tuple[str, str]:
+    """
+    Return the verdict line of an applied model: its level and its text.
+
+    The text gives each axis's residual drift over the noise floor and over poly3 (metrics.json
+    ``yardstick``), then what weakens the numbers. The level is ``'WARN'`` when the document
+    carries a warning (more than ``methods.MAX_OUTSIDE_SHARE`` of the run outside the trained
+    range; a kelvin stream), when the run is one the model was trained on (in-sample), when
+    its rate differs from the training rate, or when the residual drift exceeds the raw one on
+    an axis; else ``'OK'``.
+
+    Parameters
+    ----------
+    doc : dict
+        The metrics.json document.
+
+    Returns
+    -------
+    (str, str)
+        Level (``'OK'`` or ``'WARN'``) and text (Markdown: bold, code).
+
+    """
+    yard = doc.get('yardstick') or {}
+    text = f'`{doc["method"]}` applied'
+    if yard:
+        kind = "the run's own noise" if yard.get('floor') == 'noise' else "the run's white noise"
+        text += (f': residual drift **{_ratios(yard["over_floor"], ".2g")} x the noise floor**'
+                 f' ({kind}) on x, y, z')
+        if yard.get('over_poly3'):
+            text += f', {_ratios(yard["over_poly3"], ".2g")} x poly3'
+    worse = [axis for axis, v in doc['axes'].items()
+             if (v['verdict'].get('residual_drift_ratio') or 0.0) > 1.0]
+    cautions = [f'**{w}**' for w in doc.get('warnings') or ()]
+    if doc.get('in_sample'):
+        cautions.append('**in-sample**: the model was trained on this bag')
+    if doc.get('rate_mismatch'):
+        cautions.append('the sample rate differs from the training rate')
+    if worse:
+        cautions.append(f'residual drift above the raw one on {", ".join(worse)}')
+    return ('WARN' if cautions else 'OK'), text + ''.join(f'; {c}' for c in cautions) + '.'
+
+
+def compare_verdict(summary: Mapping[str, Any]) -> tuple[str, str]:
+    """
+    Return the verdict line of a held-out comparison: its level and its text.
+
+    The text names the best live-capable full-bandwidth method with its mean ratio to the noise
+    floor and to poly3, then the ranking by the mean ratio to the floor (compare.json
+    ``best_held_out``, ``ranking``). The level is ``'WARN'`` when the document carries a
+    warning (a method extrapolating over more than ``methods.MAX_OUTSIDE_SHARE`` of the test
+    run; a kelvin stream), a method was not scored, or no method qualifies as best; else
+    ``'INFO'`` (a ranking, not a pass or fail).
+
+    Parameters
+    ----------
+    summary : dict
+        The compare.json document.
+
+    Returns
+    -------
+    (str, str)
+        Level (``'INFO'`` or ``'WARN'``) and text (Markdown: bold, code).
+
+    """
+    best = summary['best_held_out']['method']
+    rank = {r['method']: r for r in summary.get('ranking') or ()}
+    if best is None:
+        text = 'no live-capable full-bandwidth method was scored'
+    else:
+        text = f'best on the held-out run: **`{best}`**'
+        if best in rank and rank[best]['mean_over_floor'] is not None:
+            text += f', {rank[best]["mean_over_floor"]:.2g} x the noise floor'
+            if rank[best].get('mean_over_poly3') is not None:
+                text += f', {rank[best]["mean_over_poly3"]:.2g} x poly3'
+            text += ' (mean over the axes)'
+    if rank:
+        text += '; ranked by x noise floor: ' + ', '.join(
+            f'{i + 1}. {r["method"]}' for i, r in enumerate(rank.values()))
+    far = {name: m['range']['fraction_outside'] for name, m in summary['methods'].items()
+           if m['range'].get('warning')}
+    ranged = {f'{name}: {summary["methods"][name]["range"]["warning"]}' for name in far}
+    cautions = [f'**{w}**' for w in summary.get('warnings') or () if w not in ranged]
+    if far:
+        cautions.append('**extrapolating** over more than '
+                        f'{100 * MAX_OUTSIDE_SHARE:g} % of the test run (outside the trained '
+                        'range of T or dT): ' + ', '.join(f'{name} {100 * share:.0f} %'
+                                                          for name, share in far.items()))
+    if summary.get('errors'):
+        cautions.append(f'not scored: {", ".join(summary["errors"])}')
+    level = 'WARN' if cautions or best is None else 'INFO'
+    return level, text + ''.join(f'; {c}' for c in cautions) + '.'
+
+
 def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
     """
     Return ``report.md`` of an applied model: warnings, trained range, per-axis table, verdicts.
@@ -337,6 +468,8 @@ def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
                  f'rate {doc["model"]["training"]["rate_hz"]:.6g} Hz.**\n')
     for note in doc['notes']:
         warn += f'\n**Note: {note}.**\n'
+    for warning in doc.get('warnings') or ():
+        warn += f'\n**Warning: {warning}.**\n'
     rng = doc['range']
     rate = ('(no trained dT range: the training run was shorter than the rate window)'
             if rng['rate_range_c_s'] is None else
@@ -344,10 +477,11 @@ def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
     range_text = (f'\nTrained range: T {rng["temperature_range_c"][0]:.2f}..'
                   f'{rng["temperature_range_c"][1]:.2f} degC, {rate}. This run: '
                   f'{rng["outside"]} of {rng["samples"]} samples '
-                  f'({100 * rng["fraction_outside"]:.3g} %) outside (T below '
-                  f'{rng["temperature_below"]}, above {rng["temperature_above"]}; dT below '
-                  f'{rng["rate_below"]}, above {rng["rate_above"]}). There the method: '
-                  f'{rng["treatment"]}.\n')
+                  f'({100 * rng["fraction_outside"]:.3g} %) lie outside it '
+                  f'({rng["temperature_below"]} samples with T below the range, '
+                  f'{rng["temperature_above"]} above; {rng["rate_below"]} with dT below, '
+                  f'{rng["rate_above"]} above). There the method: {rng["treatment"]}.\n')
+    range_text += '\n' + yardstick_markdown(doc.get('yardstick'))
     accel = ''
     if doc.get('accel'):
         accel = ('\n## Accelerometer\n\nThe change of the offset from T_ref = '
@@ -356,7 +490,8 @@ def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
                  + _accel_table(doc['accel']))
     verdicts = ''.join(f'- **{axis}**: {v["verdict"]["text"]}\n'
                        for axis, v in doc['axes'].items())
-    return (f'# {doc["method"]} on {doc["bag"]}\n\n'
+    level, line = apply_verdict(doc)
+    return (f'# {doc["method"]} on {doc["bag"]}\n\n**{level}**: {line}\n\n'
             f'{doc["samples"]} samples at {doc["rate_hz"]:.6g} Hz '
             f'({doc["duration_s"] / 3600:.3g} h), temperature {doc["temperature_min_c"]:.2f}..'
             f'{doc["temperature_max_c"]:.2f} degC; model trained on '
@@ -373,16 +508,17 @@ def apply_markdown(doc: dict[str, Any], figs: Figures, out: Path) -> str:
 
 COMPARE_HEADER = ['method', 'axis', 'ARW of the output (deg/sqrt(h))', 'ARW gain, noise path',
                   'bias stability (deg/h; <= upper bound)', 'residual drift (deg/s)',
-                  'x oracle', '-3 dB, 1 deg/s motion (Hz)', '-3 dB, noise-sized motion (Hz)',
-                  'small-signal min gain 0.1-1 Hz', 'step delay 50 % (s)',
-                  'look-ahead before a step (s)', 'settled step gain',
+                  'x noise floor', 'x poly3', '-3 dB, 1 deg/s motion (Hz)',
+                  '-3 dB, noise-sized motion (Hz)', 'small-signal min gain 0.1-1 Hz',
+                  'step delay 50 % (s)', 'look-ahead before a step (s)', 'settled step gain',
                   'outside trained range', 'live-capable', 'ARW from removed bandwidth']
-COMPARE_SPECS = ['', '', '.4g', '.3g', '', '.4g', '.3g', '', '', '.3g', '.3g', '.3g', '.3g',
-                 '.2%', '', '']
+COMPARE_SPECS = ['', '', '.4g', '.3g', '', '.4g', '.3g', '.3g', '', '', '.3g', '.3g', '.3g',
+                 '.3g', '.2%', '', '']
 #: compare.csv: the table's columns with numbers for numbers (the bias stability as a number
 #: and its upper-bound flag beside it).
 _CSV_KEYS = ['method', 'axis', 'arw_deg_sqrt_h', 'arw_gain_noise_path', 'bias_stability_deg_h',
-             'residual_drift_deg_s', 'residual_drift_over_oracle', 'minus_3db_hz',
+             'residual_drift_deg_s', 'residual_drift_over_floor', 'residual_drift_over_poly3',
+             'minus_3db_hz',
              'small_signal_minus_3db_hz', 'small_signal_low_band_min_gain', 'step_delay_50_s',
              'step_lead_s', 'step_settled_gain', 'fraction_outside_trained_range',
              'live_capable', 'arw_from_bandwidth', 'bias_stability_upper_bound']
@@ -408,39 +544,40 @@ def compare_rows(summary: dict[str, Any]) -> list[tuple[Any, ...]]:
     rows: list[tuple[Any, ...]] = []
     results = summary['methods']
     oracle = summary.get('oracle')
-    base: dict[str, Any] = {}
-    if oracle:
-        base = oracle['true_terms']['axes']
+    floor = dict(zip('xyz', (summary.get('floor') or {}).get('deg_s') or [None] * 3))
+    poly3 = dict(zip('xyz', summary.get('poly3_deg_s') or [None] * 3))
     first = next(iter(results.values()))
 
-    def ratio(value: float | None, axis: str) -> float | None:
+    def ratio(value: float | None, base: dict[str, float | None], axis: str) -> float | None:
         b = base.get(axis)
         return None if value is None or not b else value / b
 
+    def row(label: str, axis: str, value: float | None, *rest: Any) -> tuple[Any, ...]:
+        return (label, axis, *rest[:3], value, ratio(value, floor, axis),
+                ratio(value, poly3, axis), *rest[3:])
+
     for axis, v in first['axes'].items():
         raw = v['raw']
-        rows.append(('(raw input)', axis, raw['arw_deg_sqrt_h'], None,
-                     raw['bias_stability_deg_h'], raw['residual_drift_deg_s'],
-                     ratio(raw['residual_drift_deg_s'], axis), '', '', None, None, None, None,
-                     None, None, None, raw.get('bias_stability_upper_bound')))
+        rows.append(row('(raw input)', axis, raw['residual_drift_deg_s'],
+                        raw['arw_deg_sqrt_h'], None, raw['bias_stability_deg_h'], '', '', None,
+                        None, None, None, None, None, None, raw.get('bias_stability_upper_bound')))
     if oracle:
         for key, label in (('true_terms', '(oracle: true terms)'),
                            ('measured_terms', '(oracle: measured T, dT)')):
             for axis, value in oracle[key]['axes'].items():
-                rows.append((label, axis, None, None, None, value, ratio(value, axis), '', '',
-                             None, None, None, None, None, None, None, None))
+                rows.append(row(label, axis, value, None, None, None, '', '', None, None, None,
+                                None, None, None, None, None))
     for name, doc in results.items():
         for axis, v in doc['axes'].items():
             proc, bw, vd = v['processed'], v['bandwidth'], v['verdict']
-            rows.append((name, axis, proc['arw_deg_sqrt_h'],
-                         (v.get('noise_path') or {}).get('arw_gain'),
-                         proc['bias_stability_deg_h'], proc['residual_drift_deg_s'],
-                         ratio(proc['residual_drift_deg_s'], axis), bandwidth_cell(bw),
-                         bandwidth_cell(v.get('bandwidth_small_signal')),
-                         vd['small_signal_low_band_min_gain'], bw['step_delay_50_s'],
-                         bw.get('step_lead_s'), bw['step_settled_gain'],
-                         doc['range']['fraction_outside'], vd['live_capable'],
-                         vd['arw_from_bandwidth'], proc.get('bias_stability_upper_bound')))
+            rows.append(row(name, axis, proc['residual_drift_deg_s'], proc['arw_deg_sqrt_h'],
+                            (v.get('noise_path') or {}).get('arw_gain'),
+                            proc['bias_stability_deg_h'], bandwidth_cell(bw),
+                            bandwidth_cell(v.get('bandwidth_small_signal')),
+                            vd['small_signal_low_band_min_gain'], bw['step_delay_50_s'],
+                            bw.get('step_lead_s'), bw['step_settled_gain'],
+                            doc['range']['fraction_outside'], vd['live_capable'],
+                            vd['arw_from_bandwidth'], proc.get('bias_stability_upper_bound')))
     return rows
 
 
@@ -491,6 +628,32 @@ def compare_csv(summary: dict[str, Any]) -> str:
     return buf.getvalue()
 
 
+def _yardstick_text(summary: Mapping[str, Any]) -> str:
+    """Say what "x noise floor" and "x poly3" divide by."""
+    floor = summary.get('floor')
+    if not floor:
+        return ''
+    p3 = summary.get('poly3_deg_s')
+    poly3 = ('' if p3 is None else '; "x poly3" divides by the residual drift of poly3 (the form '
+             'PX4 and ArduPilot evaluate) on the same test run: 0.2 is five times better')
+    values = ', '.join('n/a' if v is None else f'{v:.4g}' for v in floor['deg_s'])
+    return (f'"x noise floor" divides each residual drift by the noise floor, the '
+            f'{floor["definition"]} ({values} deg/s on x, y, z){poly3}.\n\n')
+
+
+def _ranking_markdown(summary: Mapping[str, Any]) -> str:
+    """Rank the scored methods by their mean ratio to the noise floor."""
+    ranking = summary.get('ranking') or []
+    if not ranking:
+        return ''
+    rows = [(i + 1, r['method'], r['mean_over_floor'], r['mean_over_poly3'],
+             'yes' if r['live_capable'] else 'no') for i, r in enumerate(ranking)]
+    return ('## Ranking\n\nBy the mean over the axes of the residual drift over the noise floor '
+            '(1 is what a perfect drift model would leave):\n\n'
+            + table_markdown(['rank', 'method', 'x noise floor', 'x poly3', 'live-capable'],
+                             rows, ['', '', '.3g', '.3g', '']) + '\n')
+
+
 def compare_markdown(summary: dict[str, Any], figs: Sequence[tuple[str, StrPath]],
                      out: Path) -> str:
     """
@@ -523,23 +686,26 @@ def compare_markdown(summary: dict[str, Any], figs: Sequence[tuple[str, StrPath]
     oracle = ''
     if summary.get('oracle'):
         o = summary['oracle']
-        oracle = ('\nThe bags come from `gyro_noise_thermal simulate`: the oracle rows are least '
+        oracle = ('The bags come from `gyro_noise_thermal simulate`: the oracle rows are least '
                   "squares on the simulator's own drift terms fitted on the training run "
                   f'(true terms: mean {o["true_terms"]["mean_residual_drift_deg_s"]:.4g} deg/s; '
-                  'the same terms computed from the measured temperature and its 10-s slope: '
-                  f'{o["measured_terms"]["mean_residual_drift_deg_s"]:.4g} deg/s). '
-                  '"x oracle" is residual drift / the true-terms oracle\'s, per axis: what the '
-                  'data allow. A method of T only (poly3) cannot represent a drift that depends '
-                  'on dT.\n\n')
-    return (f'# Held-out comparison\n\nTrained on {summary["train"]} '
+                  'computed from the measured temperature and its 10-s slope: '
+                  f'{o["measured_terms"]["mean_residual_drift_deg_s"]:.4g} deg/s), for scale; '
+                  'they are no bound (their terms also absorb the slow noise of the training '
+                  'run).\n\n')
+    level, line = compare_verdict(summary)
+    return (f'# Held-out comparison\n\n**{level}**: {line}\n\nTrained on {summary["train"]} '
             f'({summary["train_temperature_c"][0]:.2f}..{summary["train_temperature_c"][1]:.2f}'
             f' degC), scored on {summary["test"]} ({summary["test_temperature_c"][0]:.2f}..'
             f'{summary["test_temperature_c"][1]:.2f} degC), seed {summary["seed"]}.\n\n'
             + (f'**One recording split in time at {summary["split"]["fraction"]:g} of its '
                f'length: {summary["split"]["note"]}.**\n\n' if summary.get('split') else '')
-            + oracle
+            + ''.join(f'**Note: {n}.**\n\n' for n in summary.get('notes') or ())
+            + ''.join(f'**Warning: {w}.**\n\n' for w in summary.get('warnings') or ())
+            + _yardstick_text(summary) + oracle
             + table_markdown(COMPARE_HEADER, table_cells(rows), COMPARE_SPECS)
             + f'\nBest held-out ({best["rule"]}): **{best["method"]}**.\n\n'
+            + _ranking_markdown(summary)
             + (f'Not scored:\n\n{errs}\n' if errs else '')
             + '## Outside the trained range\n\n' + ranges
             + '\n## Verdicts\n\n' + verdicts + '\n## Definitions\n\n'

@@ -24,6 +24,7 @@ compensation node evaluates.
 """
 
 from dataclasses import dataclass
+import math
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -52,6 +53,10 @@ class ThermalRun:
     accel_m_s2 : numpy.ndarray or None
         Specific force (n, 3), m/s^2, sensor frame, when the recording has it (the
         accelerometer's temperature compensation is fitted on it); None otherwise.
+    temperature_period_s : float or None
+        Median interval of the temperature readings behind ``temperature_c`` (s): the rate
+        window needs several of them (:func:`check_temperature_readings`); None: unknown (the
+        readings are taken as dense).
 
     """
 
@@ -61,6 +66,7 @@ class ThermalRun:
     rate_hz: float
     name: str = ''
     accel_m_s2: np.ndarray | None = None
+    temperature_period_s: float | None = None
 
 
 @runtime_checkable
@@ -222,3 +228,126 @@ def temperature_rate_c_s(t_s: ArrayLike, temperature_c: ArrayLike, *,
     k = int(np.argmax(filled))
     rate[:k] = rate[k] if start == 'backfill' else np.nan
     return rate
+
+
+#: A temperature-rate window needs at least this many temperature readings.
+MIN_READINGS_PER_WINDOW = 4
+#: A dT term needs the training run's dT to spread (5th to 95th percentile over filled windows)
+#: by at least this (degC/s; 0.06 degC/min: slower changes are a drifting room, not a signal) ...
+MIN_RATE_SPREAD_C_S = 1e-3
+#: ... and by this many times the noise of the rate estimate itself.
+MIN_RATE_SPREAD_SNR = 10.0
+
+
+def check_temperature_readings(run: ThermalRun, window_s: float = DEFAULT_RATE_WINDOW_S) -> None:
+    """
+    Refuse a run whose temperature readings are too sparse for the rate window.
+
+    Parameters
+    ----------
+    run : ThermalRun
+        Its ``temperature_period_s`` (None: not checked).
+    window_s : float
+        The rate window (s).
+
+    Raises
+    ------
+    InputDataError
+        Fewer than :data:`MIN_READINGS_PER_WINDOW` readings per window.
+
+    """
+    period = run.temperature_period_s
+    if period is not None and period > window_s / MIN_READINGS_PER_WINDOW:
+        raise InputDataError(
+            f'run {run.name!r}: the temperature is read every {period:.3g} s '
+            f"({1.0 / period:.3g} Hz) against the gyro's {run.rate_hz:.4g} Hz; the "
+            f'{window_s:g}-s window of dT needs at least {MIN_READINGS_PER_WINDOW} readings '
+            f'(a reading every {window_s / MIN_READINGS_PER_WINDOW:g} s or faster), or use a '
+            'method without dT (poly3)')
+
+
+@dataclass(frozen=True)
+class RateSupport:
+    """
+    Whether a training run's temperature rate can support a dT term (:func:`rate_support`).
+
+    Attributes
+    ----------
+    supported : bool
+        The spread of dT reaches both floors.
+    spread_c_s : float
+        5th to 95th percentile of dT over filled windows (degC/s).
+    noise_c_s : float
+        Standard deviation of the rate estimate's own noise (degC/s), from second differences
+        of dT three windows apart.
+    needed_c_s : float
+        The spread needed: ``max(MIN_RATE_SPREAD_C_S, MIN_RATE_SPREAD_SNR * noise_c_s)``.
+    low_c_s, high_c_s : float
+        The 5th and 95th percentiles of dT (degC/s).
+
+    """
+
+    supported: bool
+    spread_c_s: float
+    noise_c_s: float
+    needed_c_s: float
+    low_c_s: float = 0.0
+    high_c_s: float = 0.0
+
+    @property
+    def both_signs(self) -> bool:
+        """bool: the run both heated and cooled, each by half the needed spread or more."""
+        return bool(self.supported and self.low_c_s <= -0.5 * self.needed_c_s
+                    and self.high_c_s >= 0.5 * self.needed_c_s)
+
+    def text(self) -> str:
+        """Return one clause for notes and reports."""
+        verb = 'supports' if self.supported else 'cannot support'
+        return (f'the training dT spreads {self.spread_c_s:.3g} degC/s (5th-95th percentile; '
+                f"its estimate's noise {self.noise_c_s:.2g} degC/s), which {verb} a dT term "
+                f'(needed: {self.needed_c_s:.3g} degC/s)')
+
+    def notes(self, method: str) -> tuple[str, ...]:
+        """Return the note of a method fitted without its dT term (none when supported)."""
+        return () if self.supported else (f'{method} fitted without a dT term: {self.text()}',)
+
+
+def rate_support(t_s: ArrayLike, temperature_c: ArrayLike, *,
+                 window_s: float = DEFAULT_RATE_WINDOW_S) -> RateSupport:
+    """
+    Tell whether a run's dT varies enough, beyond its own noise, to fit a dT term.
+
+    A term in dT is fitted on how dT varies, not on its level: a run at one constant rate (a
+    ramp without holds, or no change at all) gives dT a spread of only its estimation noise, and
+    a coefficient fitted to it is noise, extrapolated wherever dT differs. The spread is the 5th
+    to 95th percentile of the causal rate over filled windows; the noise is
+    ``MAD(d2) / 0.6745 / sqrt(6)`` of the second differences ``d2`` of the rate at one window's
+    lag (three disjoint windows, independent noise, a slowly varying true rate cancelled).
+
+    Parameters
+    ----------
+    t_s, temperature_c : array_like
+        The run (n,), s and degC.
+    window_s : float, keyword-only
+        The rate window (s).
+
+    Returns
+    -------
+    RateSupport
+
+    """
+    t = np.asarray(t_s, dtype=float)
+    rate = temperature_rate_c_s(t, temperature_c, window_s=window_s, start='nan')
+    ok = np.isfinite(rate)
+    if ok.sum() < 3:
+        return RateSupport(False, 0.0, 0.0, MIN_RATE_SPREAD_C_S)
+    filled = rate[ok]
+    low, high = (float(v) for v in np.percentile(filled, [5, 95]))
+    spread = high - low
+    lag = int(np.searchsorted(t, t[0] + window_s)) or 1
+    noise = 0.0
+    if filled.size > 2 * lag:
+        d2 = filled[2 * lag:] - 2.0 * filled[lag:-lag] + filled[:-2 * lag]
+        noise = float(np.median(np.abs(d2 - np.median(d2))) / 0.6745 / math.sqrt(6.0))
+    needed = max(MIN_RATE_SPREAD_C_S, MIN_RATE_SPREAD_SNR * noise)
+    return RateSupport(bool(spread >= needed), spread, noise, needed, low, high)

@@ -644,49 +644,6 @@ def _lag_play(t: NDArray[np.float64], u: NDArray[np.float64], tau: float, r: flo
         up = u[k]
 
 
-@numba.njit(**JIT_OPTIONS)
-def _play(x: NDArray[np.float64], r: float, z0: float,
-          z_out: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
-    """Run the play operator of half-width r: z = min(max(z_prev, x - r), x + r), from z0."""
-    zp = z0
-    for k in range(x.shape[0]):
-        zp = min(max(zp, x[k] - r), x[k] + r)
-        z_out[k] = zp
-
-
-def play_operator(x: ArrayLike, half_width: float, *,
-                  start: float | None = None) -> NDArray[np.float64]:
-    """
-    Apply the play (backlash) operator of half-width ``half_width`` to a sequence.
-
-    ``z[k] = min(max(z[k-1], x[k] - r), x[k] + r)``, ``z[-1] = start`` (default ``x[0]``): the
-    hysteresis state of the drift law, here for a measured temperature (the oracle on measured
-    inputs).
-
-    Parameters
-    ----------
-    x : array_like
-        Input (n,), e.g. temperature in degC.
-    half_width : float
-        r (same unit, >= 0).
-    start : float, optional, keyword-only
-        State before the first sample.
-
-    Returns
-    -------
-    numpy.ndarray
-        z (n,).
-
-    """
-    x = np.ascontiguousarray(x, dtype=float).reshape(-1)
-    if not (math.isfinite(half_width) and half_width >= 0):
-        raise ParameterError(f'half_width must be finite and >= 0, got {half_width!r}')
-    out = np.empty_like(x)
-    if x.size:
-        _play(x, float(half_width), float(x[0] if start is None else start), out)
-    return out
-
-
 @dataclass(frozen=True)
 class ThermalSamples:
     """

@@ -1,0 +1,150 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A live batch of ``sensor_msgs/Imu`` of one layout as rows: decode and patch in a few numpy calls.
+
+One driver's messages all have the same length and header layout (little-endian ROS 2 CDR, one
+frame_id), so a joined batch is an ``(n, size)`` byte matrix. :func:`imu_rows` checks that once
+per batch (row 0 as :mod:`.cdr`'s bulk decoder checks every message, the other rows equal to it
+in the encapsulation and frame_id bytes) and returns the matrix, or None for anything else, which
+then goes through :func:`.imu.decode_imu_spans` / :func:`.imu.patch_imu_spans` (same results,
+tested). A 16-message batch costs a few microseconds here instead of ~200 us of fixed per-call
+work there (the compensator takes one board frame per wake-up).
+"""
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .imu import IMU_FIELDS, IMU_TAIL_F8
+from .stamps import NS_PER_S
+
+_TAIL_BYTES = 8 * IMU_TAIL_F8
+(_GYRO, _), (_ACCEL, _) = IMU_FIELDS
+
+
+def imu_rows(buf: NDArray[np.uint8], starts: NDArray[np.int64],
+             lengths: NDArray[np.int64]) -> NDArray[np.uint8] | None:
+    """
+    View a joined batch of Imu messages as rows when they share one verified layout.
+
+    Parameters
+    ----------
+    buf : numpy.ndarray of uint8
+        Buffer holding the messages (:func:`.cdr.join_raws`).
+    starts, lengths : numpy.ndarray of int64, shape (n,)
+        Byte offset and length of each message in ``buf``.
+
+    Returns
+    -------
+    numpy.ndarray of uint8, shape (n, size), or None
+        The rows (a view of ``buf``), or None when the batch is empty, not back to back, of
+        several lengths, not little-endian ROS 2 CDR, or its header bytes differ from row 0's
+        or fail the bulk decoder's checks (frame_id length, NUL, ASCII).
+
+    """
+    n = starts.shape[0]
+    if n == 0:
+        return None
+    size = int(lengths[0])
+    first = int(starts[0])
+    off = size - _TAIL_BYTES
+    if off < 20 or (off - 4) % 8 or first + n * size > buf.shape[0]:
+        return None
+    if n > 1 and not ((lengths == size).all() and (np.diff(starts) == size).all()):
+        return None
+    rows = buf[first:first + n * size].reshape(n, size)
+    head = rows[0]
+    length = int.from_bytes(head[12:16].tobytes(), 'little')
+    # Row 0 as .cdr's bulk decoder checks a message: CDR little-endian, a frame_id of at least
+    # its NUL ending where its length says, the float block 8-aligned right after it, ASCII.
+    if (head[0] != 0 or head[1] != 1 or length < 1 or 4 + 8 * ((12 + length + 7) // 8) != off
+            or head[15 + length] != 0 or max(head[16:off].tobytes(), default=0) >= 0x80):
+        return None
+    # The other rows: the same encapsulation and frame_id bytes (the stamps in 4:12 differ).
+    if n > 1 and not ((rows[1:, :2] == head[:2]).all()
+                      and (rows[1:, 12:off] == head[12:off]).all()):
+        return None
+    return rows
+
+
+def rows_stamps(rows: NDArray[np.uint8]) -> NDArray[np.int64]:
+    """
+    Return the header stamps of :func:`imu_rows`' rows.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray of uint8, shape (n, size)
+        Messages, one per row.
+
+    Returns
+    -------
+    numpy.ndarray of int64, shape (n,)
+        ``sec * 1e9 + nanosec`` (ns).
+
+    """
+    sec = np.ascontiguousarray(rows[:, 4:8]).view('<i4')[:, 0].astype(np.int64)
+    nsec = np.ascontiguousarray(rows[:, 8:12]).view('<u4')[:, 0].astype(np.int64)
+    return sec * NS_PER_S + nsec
+
+
+def rows_vectors(rows: NDArray[np.uint8]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """
+    Return ``angular_velocity`` and ``linear_acceleration`` of :func:`imu_rows`' rows.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray of uint8, shape (n, size)
+        Messages, one per row.
+
+    Returns
+    -------
+    gyro, accel : numpy.ndarray of float64, shape (n, 3)
+        rad/s and m/s^2, copies.
+
+    """
+    tail = np.ascontiguousarray(rows[:, rows.shape[1] - _TAIL_BYTES:]).view('<f8')
+    return tail[:, _GYRO:_GYRO + 3].astype(np.float64), tail[:, _ACCEL:_ACCEL + 3].astype(
+        np.float64)
+
+
+def patch_rows(rows: NDArray[np.uint8], gyro_rad_s: ArrayLike,
+               accel_m_s2: ArrayLike) -> list[bytes]:
+    """
+    Re-serialise :func:`imu_rows`' rows with a new angular velocity and linear acceleration.
+
+    Everything else stays byte for byte, as :func:`.imu.patch_imu_spans` does.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray of uint8, shape (n, size)
+        Messages, one per row (left unchanged).
+    gyro_rad_s : array_like of float, shape (n, 3)
+        New angular velocity (rad/s).
+    accel_m_s2 : array_like of float, shape (n, 3)
+        New linear acceleration (m/s^2).
+
+    Returns
+    -------
+    list of bytes
+        One message per row.
+
+    """
+    n, size = rows.shape
+    out = rows.copy()
+    tail = out[:, size - _TAIL_BYTES:].view('<f8')
+    tail[:, _GYRO:_GYRO + 3] = gyro_rad_s
+    tail[:, _ACCEL:_ACCEL + 3] = accel_m_s2
+    blob = out.tobytes()
+    return [blob[i:i + size] for i in range(0, n * size, size)]

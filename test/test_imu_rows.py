@@ -1,0 +1,74 @@
+# Copyright 2026 gyro_noise_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The row fast path of live Imu batches against the span codec it stands in for."""
+
+from gyro_noise_ros.msgs import (decode_imu_spans, decode_spans, encode_imu_cdr, IMU_FIELDS,
+                                 IMU_TAIL_F8, join_raws, patch_imu_spans)
+from gyro_noise_ros.msgs.imu_rows import imu_rows, patch_rows, rows_stamps, rows_vectors
+import numpy as np
+import pytest
+
+
+def _batch(n, frame_id='imu_link', seed=0):
+    rng = np.random.default_rng(seed)
+    stamps = 1_763_000_000_000_000_000 + np.cumsum(rng.integers(1, 10**6, n))
+    gyro, accel = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    raws = encode_imu_cdr(stamps, gyro, accel, frame_id=frame_id,
+                          angular_velocity_covariance=np.diag(rng.random(3)),
+                          linear_acceleration_covariance=np.diag(rng.random(3)))
+    return stamps, gyro, accel, raws
+
+
+@pytest.mark.parametrize('n, frame_id', [(1, 'imu_link'), (16, 'imu_link'), (133, 'a'),
+                                         (5, 'x' * 8), (7, 'frame/with_a_longer_name')])
+def test_rows_decode_and_patch_like_the_span_codec(n, frame_id):
+    stamps, gyro, accel, raws = _batch(n, frame_id)
+    buf, starts, lengths = join_raws(raws)
+    rows = imu_rows(buf, starts, lengths)
+    assert rows is not None and rows.shape == (n, len(raws[0]))
+    keep, stamp_ns, g, a = decode_imu_spans(buf, starts, lengths, False, True)
+    assert keep is None
+    np.testing.assert_array_equal(rows_stamps(rows), stamp_ns)
+    np.testing.assert_array_equal(rows_stamps(rows), stamps)
+    rg, ra = rows_vectors(rows)
+    np.testing.assert_array_equal(rg, g)
+    np.testing.assert_array_equal(ra, a)
+    new_g, new_a = g * 2.0 - 1.0, a + 0.5
+    assert patch_rows(rows, new_g, new_a) == patch_imu_spans(buf, starts, lengths, new_g, new_a)
+    assert bytes(buf) == b''.join(raws)  # the input is left alone
+
+
+def test_anything_else_is_left_to_the_span_codec():
+    _, _, _, raws = _batch(4)
+    assert imu_rows(*join_raws([])) is None
+    # two lengths (another frame_id in the batch)
+    assert imu_rows(*join_raws(raws[:2] + _batch(2, 'other_frame')[3])) is None
+    # same length, another frame_id: header bytes differ from row 0
+    assert imu_rows(*join_raws(raws[:2] + _batch(2, 'imu_lin2')[3])) is None
+    # big-endian CDR
+    big = [bytes([0, 0]) + r[2:] for r in raws]
+    assert imu_rows(*join_raws(big)) is None
+    # no NUL where the frame_id length says, in row 0 and in a later row
+    for i in (0, 2):
+        bad = list(raws)
+        bad[i] = bad[i][:24] + b'Z' + bad[i][25:]  # 'imu_link' + NUL: length 9, NUL at 16 + 8
+        assert imu_rows(*join_raws(bad)) is None
+        ok = decode_spans(*join_raws(bad), IMU_TAIL_F8, IMU_FIELDS, False)[0]
+        assert not ok[i] and ok.sum() == 3  # the bulk decoder refuses that message too
+    # non-ASCII frame_id: the span codec leaves it to rosbags, and so do the rows
+    assert imu_rows(*join_raws(_batch(3, 'imu_\u00e9')[3])) is None
+    # spans not back to back
+    buf, starts, lengths = join_raws(raws)
+    assert imu_rows(buf, starts[::-1].copy(), lengths) is None

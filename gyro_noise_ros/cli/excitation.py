@@ -41,7 +41,7 @@ import argparse
 import os
 import sys
 
-from ._common import add_overwrite_argument, run_cli
+from ._common import add_overwrite_argument, check_out_dir, run_cli
 from ..app.excitation import ExcitationParams, run_excitation, write_excitation
 from ..calibration.excitation import (DEFAULT_ALPHA, DEFAULT_FREQUENCY_TOL, DEFAULT_HARMONICS,
                                       DEFAULT_TOLERANCE)

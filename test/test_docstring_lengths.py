@@ -16,8 +16,8 @@
 No module docstring of the package is longer than 25 lines (docs/architecture.md, STYLE.md).
 
 The counter is ``tools/docstring_lengths.py``, checked here on a snippet counted by hand, as is
-``tools/wrapper_docstrings.py`` (one-statement functions with long docstrings). The modules still
-over the limit are listed in :data:`ALLOWED`, a list that only shrinks.
+``tools/wrapper_docstrings.py`` (one-statement functions with long docstrings). :data:`ALLOWED`,
+the modules once let over the limit, is empty.
 """
 
 import importlib.util
@@ -35,16 +35,9 @@ _spec.loader.exec_module(wrapper_docstrings)
 
 LIMIT = 25
 
-#: Modules whose docstrings still carry history or measurements, owned by the helpers working on
-#: them in this wave (explain/: issue 30; calibration/, core/allan.py: issue 28; thermal/: issue
-#: 32; nodes/, link/clock.py, thermal/live.py: issue 31; cli/: issue 33; core/readout.py: issue
-#: 30). A shrinking list: remove a module once its docstring is within the limit (the test says
-#: which), never add one; the final sweep of issue 34 empties it.
-ALLOWED = {
-    'calibration/emulate.py', 'calibration/gyro_turns.py', 'link/clock.py', 'nodes/analyzer.py',
-    'nodes/driver.py', 'nodes/recorder.py', 'thermal/baselines.py', 'thermal/live.py',
-    'thermal/metrics.py', 'thermal/simulate.py',
-}
+#: Modules allowed over the limit: none since the final sweep of issue 34. Never add one: move
+#: the measurements and history to docs/ instead (the test below says which module is over).
+ALLOWED: set[str] = set()
 
 SNIPPET = '''\
 """

@@ -15,32 +15,24 @@
 """
 Honest metrics of a thermal method on a held-out run: noise terms, residual drift, bandwidth cost.
 
-Definitions (docs/thermal.md states the same):
+Definitions (docs/thermal.md, "Metrics", states them in full, with the verdict's keys):
 
 * **Angle random walk** N (deg/sqrt(h)) and **bias stability** (deg/h): the one Allan readout
-  (:func:`..core.readout.read_allan`) of the overlapping Allan deviation at the ``'dense'`` taus
-  (~10 per decade up to a quarter of the record, as ``gyro_noise_analyze --allan-taus dense``), as
-  the offline and live analyzers read them: N is the -1/2 line of
-  one contiguous white-noise region read at tau = 1 s (``arw_on_slope`` False: the curve has no
-  such region and N is only ADEV(1 s)); bias stability is where the usable curve stops falling,
-  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B), with its tau
-  and ``bias_stability_upper_bound`` when the curve was not seen to turn up. Taus flattened by
-  smoothing (a low-pass or wavelet denoiser smooths sample to sample) are left out of both:
-  ``band_limited_below_s`` says up to where, so a denoiser cannot show a "bias stability" read
-  off its own smoothing.
+  (:func:`..core.readout.read_allan`) of the overlapping Allan deviation at the ``'dense'`` taus,
+  the numbers the offline and live analyzers print: N is the -1/2 line of one contiguous
+  white-noise region read at tau = 1 s; bias stability is where the usable curve stops falling
+  (*not* divided by 0.664, the IEEE 952 B). Taus flattened by smoothing are left out of both
+  (``band_limited_below_s``), so a denoiser cannot show a bias stability read off its smoothing.
 * **Residual drift** (deg/s): standard deviation (ddof = 1) of the means of consecutive,
   non-overlapping 60-s windows of the output.
 * **Bandwidth cost**: a known rate (a logarithmic chirp over ``f_lo_hz``..``f_hi_hz`` and a train
   of steps) is added to every axis of the held-out run; the method processes the run with and
-  without it; the difference is its response to the injected motion. Gain, phase and group delay
-  come from the band-averaged cross spectrum ``H = sum(Y conj(X)) / sum(|X|^2)`` over
-  log-spaced bands (20 per decade), with the bulk delay (cross-correlation peak) taken out
-  before averaging and put back after; the -3 dB bandwidth is the first band crossing of
-  ``|H| = 1/sqrt(2)`` going up in frequency (log-interpolated). The mean normalised step response
-  gives the 50 % delay, the 10-90 % rise time, the overshoot, the settled gain (< 1: slow motion
-  is removed) and the precursor, the largest change of the response in the last fifth of the
-  window before the step (> 5 %: the method responds to motion before it happens, which only an
-  offline, non-causal method can do).
+  without it; the difference is its response. Gain, phase and group delay come from the
+  band-averaged cross spectrum ``H = sum(Y conj(X)) / sum(|X|^2)`` over log-spaced bands (20 per
+  decade, the bulk delay taken out and put back); the -3 dB bandwidth is the first crossing of
+  ``|H| = 1/sqrt(2)`` going up in frequency. The mean normalised step response gives the 50 %
+  delay, the 10-90 % rise time, the overshoot, the settled gain and the precursor (> 5 % before
+  the step: the method is non-causal).
 """
 
 from collections.abc import Sequence

@@ -439,16 +439,8 @@ class _PoseSequence:
         """
         Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
 
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s); before the start and after the end the sensor rests in the first / last
-            attitude.
-
-        Returns
-        -------
-        (numpy.ndarray, numpy.ndarray)
-            (n, 3) each.
+        (n, 3) each at the times ``t_s`` (s); before the start and after the end the sensor rests
+        in the first and last attitude.
 
         """
         yaw = Rotation.from_euler('z', self.heading_deg, degrees=True)

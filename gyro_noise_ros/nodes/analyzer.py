@@ -371,19 +371,10 @@ class NoiseAnalyzerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """
-    Run the analyzer node until Ctrl-C or SIGTERM.
+    Run the analyzer node until Ctrl-C or SIGTERM; return 0, or 2 for a bad parameter.
 
-    Parameters
-    ----------
-    args : list of str or None
-        Command line (``--ros-args -p chunk_size:=10000 --params-file
-        config/noise_analyzer.yaml``);
-        None: ``sys.argv``.
-
-    Returns
-    -------
-    int
-        0, or 2 for a bad parameter.
+    ``args`` is the command line (``--ros-args -p chunk_size:=10000 --params-file ...``; None:
+    ``sys.argv``).
 
     """
     return run_node(NoiseAnalyzerNode, args, prog=NODE_NAME, parameters=PARAMETERS,

@@ -427,16 +427,8 @@ def main(args: list[str] | None = None) -> int:
     """
     Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p``/``--params-file``.
 
-    Parameters
-    ----------
-    args : list of str or None
-        Command line (None: ``sys.argv``).
-
-    Returns
-    -------
-    int
-        0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter or an
-        unknown ROS argument.
+    ``args`` is the command line (None: ``sys.argv``). Returns 0 on Ctrl-C or external shutdown; 2,
+    with one line on stderr, for a bad parameter or an unknown ROS argument.
 
     """
     return run_node(Lsm6dso32Driver, args, prog=NODE_NAME, parameters=PARAMETERS,

@@ -350,19 +350,11 @@ def _log_times(received: Sequence[int], fallback_ns: np.ndarray | None
 
 def main(args: list[str] | None = None) -> int:
     """
-    Run the recorder until Ctrl-C or SIGTERM.
+    Run the recorder until Ctrl-C or SIGTERM; ``args`` is the command line (None: ``sys.argv``).
 
-    Parameters
-    ----------
-    args : list of str or None
-        Command line (``--ros-args -p output:=my_bag -p storage:=mcap``); None: ``sys.argv``.
-
-    Returns
-    -------
-    int
-        0, 130/143 after SIGINT/SIGTERM (the bag closed), 2 for a bad or unknown parameter, 6
-        when the bag cannot be created (checked at start: it exists without ``overwrite``, under
-        a file, a read-only folder) or written (disk full).
+    Returns 0; 130/143 after SIGINT/SIGTERM (the bag closed); 2 for a bad or unknown parameter; 6
+    when the bag cannot be created (it exists without ``overwrite``, under a file, a read-only
+    folder) or written (disk full).
 
     """
     return run_node(RecorderNode, args, prog=NODE_NAME, parameters=PARAMETERS,

@@ -137,25 +137,11 @@ class NoiseMetrics:
 def noise_metrics(rate_rad_s: ArrayLike, rate_hz: float, *,
                   drift_window_s: float = DRIFT_WINDOW_S) -> NoiseMetrics:
     """
-    Compute ARW, bias stability and residual drift of one axis.
+    Compute ARW, bias stability and residual drift of one axis (module docstring).
 
-    Parameters
-    ----------
-    rate_rad_s : array_like
-        Angular rate (n,), rad/s, finite.
-    rate_hz : float
-        Sample rate (Hz).
-    drift_window_s : float, keyword-only
-        Window of the residual-drift means (s).
-
-    Returns
-    -------
-    NoiseMetrics
-
-    Raises
-    ------
-    InputDataError
-        Fewer than 8 samples or non-finite samples.
+    ``rate_rad_s`` (n,) is the finite angular rate in rad/s at ``rate_hz``; ``drift_window_s`` the
+    window of the residual-drift means (s). Raises InputDataError for fewer than 8 samples or
+    non-finite ones.
 
     """
     return _noise_metrics(rate_rad_s, rate_hz, drift_window_s)[0]
@@ -230,17 +216,7 @@ def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
     """
     Return :func:`residual_drift` of an angular rate (n, m) in rad/s as deg/s per axis (m,).
 
-    Parameters
-    ----------
-    rate_rad_s : array_like
-        Angular rate (n, m), rad/s; ``rate_hz`` and ``window_s`` as :func:`residual_drift`.
-    rate_hz, window_s : float
-        See :func:`residual_drift`.
-
-    Returns
-    -------
-    numpy.ndarray
-        (m,), deg/s.
+    ``rate_hz`` and ``window_s`` as in :func:`residual_drift`.
 
     """
     return residual_drift(rate_rad_s, rate_hz, window_s=window_s) * RAD_TO_DEG
@@ -249,26 +225,11 @@ def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
 def white_floor_deg_s(arw_deg_sqrt_h: ArrayLike, *,
                       window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
     """
-    Return the noise floor of the residual drift from the run's angle random walk, per axis.
+    Return the noise floor of the residual drift (deg/s per axis) from the run's angle random walk.
 
-    The residual drift a perfect drift model would leave if the run's noise were its white part:
-    the standard deviation of a ``window_s`` mean of white rate noise of Allan coefficient N
-    (the ARW of the one Allan readout, :func:`noise_metrics`), ``N / sqrt(window_s)``: the
-    white-noise level of the run over the band of the 60-s means. Read on the Allan deviation's
-    -1/2 region, it ignores both the slow noise (bias instability: the true floor is higher) and
-    noise above the readout's taus (quantization, aliasing), which 60-s means average away.
-
-    Parameters
-    ----------
-    arw_deg_sqrt_h : array_like
-        ARW per axis (deg/sqrt(h)); NaN where none could be read.
-    window_s : float, keyword-only
-        Window of the residual drift's means (s).
-
-    Returns
-    -------
-    numpy.ndarray
-        (m,), deg/s (NaN where the ARW is).
+    ``N / sqrt(window_s)``: the standard deviation of a ``window_s`` mean of white rate noise whose
+    Allan coefficient N is ``arw_deg_sqrt_h`` (deg/sqrt(h); NaN in, NaN out). It leaves out slow
+    noise and noise above the readout's taus (docs/thermal.md, the yardstick).
 
     """
     # deg/sqrt(h) -> deg/sqrt(s): / sqrt(3600 s/h) = / 60
@@ -460,19 +421,7 @@ class FrequencyResponse:
     minus_3db_bound: str
 
     def gain_at(self, f_hz: float) -> float:
-        """
-        Interpolate the gain at ``f_hz`` (log frequency).
-
-        Parameters
-        ----------
-        f_hz : float
-            Frequency (Hz).
-
-        Returns
-        -------
-        float
-
-        """
+        """Interpolate the gain at ``f_hz`` (Hz), linearly in log frequency."""
         return float(np.interp(np.log(f_hz), np.log(self.frequency_hz), self.gain))
 
 

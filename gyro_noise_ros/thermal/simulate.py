@@ -183,19 +183,7 @@ class OvenProfile(_PiecewiseProfile):
         return np.asarray(times), np.asarray(temps)
 
     def shifted(self, delta_c: float) -> 'OvenProfile':
-        """
-        Return the profile of a run whose room is ``delta_c`` warmer (the set-points stay).
-
-        Parameters
-        ----------
-        delta_c : float
-            Room temperature change (degC).
-
-        Returns
-        -------
-        OvenProfile
-
-        """
+        """Return the profile of a run whose room is ``delta_c`` (degC) warmer; set-points stay."""
         return replace(self, room_c=self.room_c + float(delta_c))
 
     def starting_at(self, start_c: float) -> 'OvenProfile':
@@ -327,19 +315,7 @@ class ShapeProfile(_PiecewiseProfile):
         return np.asarray(times), np.asarray(temps) + self.offset_c
 
     def shifted(self, delta_c: float) -> 'ShapeProfile':
-        """
-        Return the profile with every set-point ``delta_c`` warmer (degC).
-
-        Parameters
-        ----------
-        delta_c : float
-            Change (degC).
-
-        Returns
-        -------
-        ShapeProfile
-
-        """
+        """Return the profile with every set-point ``delta_c`` (degC) warmer."""
         return replace(self, offset_c=self.offset_c + float(delta_c))
 
     def starting_at(self, start_c: float) -> 'ShapeProfile':
@@ -1025,19 +1001,10 @@ def write_run_bag(path: StrPath, run: ThermalRun, truth: ThermalTruth, *, storag
 
 def truth_arrays(run: ThermalRun, truth: ThermalTruth) -> dict[str, Any]:
     """
-    Return the arrays of a run's truth as saved in ``<label>_truth.npz``.
+    Return the arrays of a run's truth as saved in ``<label>_truth.npz`` (name -> array or scalar).
 
-    Parameters
-    ----------
-    run : ThermalRun
-        The run (its stamps).
-    truth : ThermalTruth
-        Its truth.
-
-    Returns
-    -------
-    dict
-        Name -> array or scalar.
+    ``run`` gives the stamps, ``truth`` the rest (keys in docs/thermal_data.md, train and test
+    runs).
 
     """
     return {'t_s': run.t_s, 'oven_c': truth.oven_c, 'die_c': truth.die_c,

@@ -224,11 +224,8 @@ def worker_facts() -> dict[str, str | None]:
     """
     Return what the client checks on every worker (runs on the worker).
 
-    Returns
-    -------
-    dict
-        ``version``: gyro_noise_ros version; ``malloc_trim_threshold``: the glibc environment
-        variable ``MALLOC_TRIM_THRESHOLD_`` (None when unset).
+    ``version`` (gyro_noise_ros's) and ``malloc_trim_threshold`` (the glibc environment variable
+    ``MALLOC_TRIM_THRESHOLD_``, None when unset).
 
     """
     return {'version': __version__,

@@ -165,14 +165,7 @@ def interrupted_exit_code(err: BaseException | None = None) -> int:
     """
     Return the exit code of an interrupt: 128 + the signal (130 for Ctrl-C, 143 for SIGTERM).
 
-    Parameters
-    ----------
-    err : BaseException, optional
-        The ``KeyboardInterrupt`` caught (an :class:`Interrupted` carries its signal).
-
-    Returns
-    -------
-    int
+    ``err`` is the ``KeyboardInterrupt`` caught (an :class:`Interrupted` carries its signal).
 
     """
     return 128 + getattr(err, 'signum', signal.SIGINT)

@@ -58,38 +58,12 @@ def finite_or_none(value: Any) -> float | None:
 
 
 def finite_list(values: ArrayLike) -> list[float | None]:
-    """
-    Return the values of an array, flattened, as floats; None for NaN, infinite or None.
-
-    Parameters
-    ----------
-    values : array_like
-        Numbers (any shape; a None element counts as NaN).
-
-    Returns
-    -------
-    list of float or None
-
-    """
+    """Return an array's values (any shape, flattened) as floats; None for NaN, inf or None."""
     return [finite_or_none(v) for v in np.asarray(values, dtype=float).ravel()]
 
 
 def fmt_or_na(value: float | None, spec: str) -> str:
-    """
-    Return ``format(value, spec)``, or ``'n/a'`` for None.
-
-    Parameters
-    ----------
-    value : float or None
-        The number.
-    spec : str
-        ``format()`` spec.
-
-    Returns
-    -------
-    str
-
-    """
+    """Return ``format(value, spec)``, or ``'n/a'`` for None."""
     return 'n/a' if value is None else format(value, spec)
 
 
@@ -214,19 +188,7 @@ class Aside:
 
 
 def pointer(*parts: str | int) -> str:
-    """
-    Build a JSON Pointer from keys and indices (escaping ``~`` and ``/``).
-
-    Parameters
-    ----------
-    *parts : str or int
-        Keys and list indices, outermost first.
-
-    Returns
-    -------
-    str
-
-    """
+    """Build a JSON Pointer from keys and list indices, outermost first (escaping ~ and /)."""
     return ''.join('/' + str(p).replace('~', '~0').replace('/', '~1') for p in parts)
 
 

@@ -628,17 +628,5 @@ def atomic_write_bytes(path: StrPath, data: bytes) -> None:
 
 
 def atomic_write_text(path: StrPath, text: str, encoding: str = 'utf-8') -> None:
-    """
-    Write ``text`` to ``path`` atomically (:func:`atomic_write_bytes`).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Target file.
-    text : str
-        Content.
-    encoding : str
-        Text encoding.
-
-    """
+    """Write ``text`` to ``path`` atomically in ``encoding``: :func:`atomic_write_bytes`."""
     atomic_write_bytes(path, text.encode(encoding))

@@ -196,15 +196,5 @@ def allan_terms_dict(terms: Any) -> dict[str, Any] | None:
 
 
 def write_json(path: StrPath, doc: Mapping[str, Any]) -> None:
-    """
-    Write ``doc`` as indented JSON (NaN must already be None).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        File to write.
-    doc : dict
-        JSON-serialisable document.
-
-    """
+    """Write the JSON-serialisable ``doc`` to ``path``, indented (NaN must already be None)."""
     Path(path).write_text(json.dumps(doc, indent=2, allow_nan=False) + '\n')

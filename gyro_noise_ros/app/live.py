@@ -118,14 +118,7 @@ def thresholds_from(params: Mapping[str, Any]) -> HealthThresholds:
     """
     Build :class:`HealthThresholds` from the parameter values (same names).
 
-    Parameters
-    ----------
-    params : dict
-        Name to value, a superset of the threshold names.
-
-    Returns
-    -------
-    HealthThresholds
+    ``params`` maps names to values, a superset of the threshold names.
 
     """
     return HealthThresholds(**{f.name: params[f.name] for f in fields(HealthThresholds)})

@@ -74,16 +74,7 @@ def truncation_note(path: StrPath, truncation: McapTruncation) -> str:
     """
     Return the one-line note on a truncated MCAP file.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The bag as the user named it.
-    truncation : McapTruncation
-        What the walk found.
-
-    Returns
-    -------
-    str
+    ``path`` is the bag as the user named it, ``truncation`` what the record walk found.
 
     """
     return (f'truncated MCAP {str(path)!r} (no summary/footer: its writer was killed): read '
@@ -196,16 +187,7 @@ def rollback_note(path: StrPath, db3: Path) -> str:
     """
     Return the one-line note on an sqlite3 file read through a rolled-back copy.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The bag as the user named it.
-    db3 : pathlib.Path
-        Its sqlite3 file.
-
-    Returns
-    -------
-    str
+    ``path`` is the bag as the user named it, ``db3`` its sqlite3 file.
 
     """
     return (f'sqlite3 bag {str(path)!r} has an unfinished transaction ({db3.name}-journal: its '

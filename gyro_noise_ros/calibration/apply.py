@@ -138,17 +138,9 @@ class Calibration:
     def apply(self, gyro_rad_s: ArrayLike,
               accel_m_s2: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """
-        Correct a batch of gyro and accelerometer samples.
+        Correct a batch: (n, 3) angular rates (rad/s) and specific forces (m/s^2), same shapes out.
 
-        Parameters
-        ----------
-        gyro_rad_s, accel_m_s2 : array_like
-            (n, 3) measured angular rate (rad/s) and specific force (m/s^2).
-
-        Returns
-        -------
-        (numpy.ndarray, numpy.ndarray)
-            Corrected angular rate and specific force, (n, 3) each.
+        Each sensor's :meth:`SensorCalibration.apply`.
 
         """
         return self.gyro.apply(gyro_rad_s), self.accel.apply(accel_m_s2)

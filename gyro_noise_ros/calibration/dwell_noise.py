@@ -16,42 +16,26 @@
 Covariance of dwell means under bias wander: the Allan-type variogram of one sensor.
 
 Every number a static calibration gives is a linear combination ``sum_d c_d m_d`` of dwell means
-``m_d``. With white noise the dwells are independent and the variance is ``sum c_d^2 var(m_d)``.
-With bias wander (flicker, random walk) they are not: neighbouring dwells share the slow part of
-the bias, distant ones less, and the spread of the window means inside a dwell says nothing about
-it. What does describe it is the **variogram** of the window means,
-
-    gamma(lag) = E[(y(t + lag) - y(t))^2] / 2,
-
-the Allan variance generalised to any separation (at lag = tau between adjacent tau-averages it
-*is* the Allan variance). For a **contrast** (``sum_d c_d = 0``, which every calibration number
-is once its truth is the bias *during* the calibration: see below) the variance follows from it
-alone, whatever the process, with no "absolute" variance needed::
+``m_d``; under bias wander (flicker, random walk) the dwells are correlated, which the spread of
+the window means inside a dwell cannot show. The **variogram** of the window means does,
+``gamma(lag) = E[(y(t + lag) - y(t))^2] / 2`` (the Allan variance at lag = tau). For a
+**contrast** (``sum_d c_d = 0``) the variance follows from it alone, whatever the process (the
+variogram identity of intrinsically stationary processes; weights = samples per window)::
 
     var(sum_d c_d m_d) = - sum_d sum_e c_d c_e G[d, e],
     G[d, e] = mean of gamma(|t_i - t_k|) over the windows i of dwell d and k of dwell e
-
-(the variogram identity of intrinsically stationary processes; weights = samples per window).
 
 The variogram is modelled on window means of length w (lag >= w; 0 at lag 0) as::
 
     gamma(lag) = a + b ln(lag / w) + c lag / w,        a, b, c >= 0
 
-``a`` holds the white noise (and everything faster than a window), ``b`` a flicker floor (its
-Allan deviation is flat; its variogram grows as the logarithm), ``c`` a random walk (K^2 w / 2).
-It is fitted by non-negative least squares to (1) the empirical variogram of the window means
-inside the dwells, lags 1 .. k/2 windows, all axes of the sensor pooled (they share one noise
-model: the three accelerometer axes, the three gyro axes), relative weights sqrt(pairs / lag) /
-model, iterated; and, when the calibration gives them, (2) the residuals of the calibration fit:
-their expected sum of squares is linear in (a, b, c) too (a contrast again), which ties the model
-to the wander *between* dwells (minutes apart) that no single dwell can show.
-
-**What the uncertainty covers**: the calibration's estimate minus the value during the
-calibration, i.e. the sensor's constant error plus the mean of its bias wander over the samples
-used (white measurement noise is no part of that value: it enters in full). A flicker bias has
-no constant value to converge to (its variance grows with the span considered); how far the bias
-moves after the calibration is its instability, read from the Allan deviation of a long static
-record (``gyro_noise_reliability``), not from a calibration.
+(``a`` white noise, ``b`` a flicker floor, ``c`` a random walk, K^2 w / 2), fitted by non-negative
+least squares to the empirical variogram of the window means inside the dwells (all axes of one
+sensor pooled) and, when the calibration gives them, to the expected sum of squares of its
+residuals, which ties the model to the wander between dwells. Units: those of the samples
+(m/s^2 or rad/s), squared for variances; lags in s. The uncertainty covers the estimate minus the
+value *during* the calibration (docs/reliability.md section 1, "Uncertainties that hold with bias
+wander").
 """
 
 from collections.abc import Sequence
@@ -110,16 +94,9 @@ class DwellNoise:
 
     def variogram(self, lag_s: ArrayLike) -> NDArray[np.float64]:
         """
-        Return the modelled variogram of window means at the given lags.
+        Return the modelled variogram of window means at the lags ``lag_s`` (s).
 
-        Parameters
-        ----------
-        lag_s : array_like
-            Lags (s).
-
-        Returns
-        -------
-        numpy.ndarray
+        In the dwell values' unit squared: ``a + b ln(lag / w) + c lag / w`` (module docstring).
 
         """
         return _basis(lag_s, self.window_s) @ self.coef
@@ -306,18 +283,10 @@ def fit_dwell_noise(times: Sequence[ArrayLike], counts: Sequence[ArrayLike],
                     values: Sequence[ArrayLike], *, residual_loading: ArrayLike | None = None,
                     residuals: ArrayLike | None = None) -> DwellNoise:
     """
-    Fit the variogram model of one sensor to its dwells once (:class:`DwellNoiseFitter`).
+    Fit the variogram model of one sensor to its dwells once: :meth:`DwellNoiseFitter.fit`.
 
-    Parameters
-    ----------
-    times, counts, values : sequence of numpy.ndarray
-        As :class:`DwellNoiseFitter`.
-    residual_loading, residuals : array_like, optional, keyword-only
-        As :meth:`DwellNoiseFitter.fit`.
-
-    Returns
-    -------
-    DwellNoise
+    ``times``, ``counts`` and ``values`` are as in :class:`DwellNoiseFitter`, the keywords as in
+    :meth:`DwellNoiseFitter.fit`.
 
     """
     return DwellNoiseFitter(times, counts, values).fit(residual_loading=residual_loading,

@@ -17,35 +17,25 @@ Scenario model of the reliability procedure for the emulator: motion, sensor err
 
 Pure (numpy/scipy, no I/O). The emulator (``link/emulator.py``) adds what a :class:`Scenario`
 returns to its own noise; :func:`simulate` runs a scenario with white noise alone for tests.
-
-Sensor model, for the accelerometer and likewise the gyro (the calibration's own model)::
+Sensor model, accelerometer and gyro alike (the calibration's own model)::
 
     measured(t) = (I + diag(scale_factor) + misalignment) @ true(t) + bias + u(t) + noise(t)
 
-``true`` is the specific force (REP-103: +g on the axis pointing up) and the angular rate in the
-sensor frame. ``u`` is the slow bias variation that sets the Allan-deviation floor: a flicker-like
-part (a sum of first-order Gauss-Markov processes with time constants spread evenly in log over
-``FLICKER_TAU_S``, amplitude set so that the two-sided PSD is B^2 / (2 pi f) in between, i.e. an
-Allan plateau of 0.664 B, IEEE 952 bias instability B) plus a random walk of K per sqrt(s).
+``true`` is the specific force (m/s^2, REP-103: +g on the axis pointing up) and the angular rate
+(rad/s) in the sensor frame. ``u`` is the slow bias variation that sets the Allan floor: a sum of
+first-order Gauss-Markov processes with time constants spread evenly in log over
+``FLICKER_TAU_S``, scaled to a two-sided PSD of B^2 / (2 pi f) (an Allan plateau of 0.664 B,
+IEEE 952 bias instability B), plus a random walk of K per sqrt(s).
 
-Motions (what the sensor goes through, world frame ENU with z up, Earth rate at a latitude):
-
-* :class:`SixPosition`: a dwell in each of six orientations (any order), joined by rotations about
-  a fixed body axis with a smooth (1 - cos) angle profile; the specific force follows the
-  attitude (no lever arm: the sensor sits on the rotation axis). A dwell may be tilted
-  (``tilts``), as a badly seated fixture is.
-* :class:`MultiPose`: the same with any number of poses in arbitrary attitudes
-  (:func:`pose_attitudes`), the multi-pose |a| = g calibration's recording. The turns carry the
-  gyro's scale factor and misalignment like any rate.
-* :class:`Static`: one orientation.
-* :class:`Excitation`: static plus a sine dwell or a linear up-and-down sine sweep on one axis of
-  the accelerometer or the gyro (paper 001 section 5.3); :meth:`Excitation.reference` is what an
-  ideal reference sensor on the shaker sees.
-
-The stress (:meth:`SensorErrors.stressed`) moves the errors to the paper's "after" values
+Motions (ENU, z up; Earth rate at a latitude and heading): :class:`SixPosition` (a dwell per
+orientation, joined by (1 - cos) turns about a fixed body axis, no lever arm; a dwell may be
+tilted), :class:`MultiPose` (any number of poses in arbitrary attitudes,
+:func:`pose_attitudes`), :class:`Static`, and :class:`Excitation` (a sine dwell or up-and-down
+sweep on one axis, paper 001 section 5.3; :meth:`Excitation.reference` is an ideal reference on
+the shaker). :meth:`SensorErrors.stressed` moves the errors to the paper's "after" values
 (Table 6) and multiplies the bias instability, which widens the bias-instability interval
-(the plateau rises, the white and random-walk crossings move apart): factor 1.5 gives a width
-x2.25, the paper's +125 %.
+(factor 1.5: width x2.25, the paper's +125 % in the IEEE 952 model). Defaults and their
+reasons: docs/reliability.md section 4.
 """
 
 from collections.abc import Sequence
@@ -449,16 +439,8 @@ class _PoseSequence:
         """
         Return the true angular rate (rad/s) and specific force (m/s^2) in the sensor frame.
 
-        Parameters
-        ----------
-        t_s : array_like
-            Times (s); before the start and after the end the sensor rests in the first / last
-            attitude.
-
-        Returns
-        -------
-        (numpy.ndarray, numpy.ndarray)
-            (n, 3) each.
+        (n, 3) each at the times ``t_s`` (s); before the start and after the end the sensor rests
+        in the first and last attitude.
 
         """
         yaw = Rotation.from_euler('z', self.heading_deg, degrees=True)

@@ -15,44 +15,26 @@
 """
 Excitation signal checks of paper 001 section 5.3: sine dwell and sine sweep.
 
-Sine dwell (paper: 0.3/0.6 g at 6/8 Hz and 0.02 g at 1.5/2 Hz, 30 s): the frequency and amplitude
-by the IEEE Std 1057 four-parameter sine fit (start from the windowed FFT peak nearest the
-nominal frequency, Gauss-Newton on offset, in-phase, quadrature and frequency), then the
-per-cycle amplitude (a three-parameter fit at the estimated frequency over each whole cycle) and
-its statistics, the paper's "amplitude stability", and the total harmonic distortion
+**Sine dwell**: frequency (Hz) and amplitude (the samples' unit) by the IEEE Std 1057
+four-parameter sine fit from the FFT peak nearest the nominal frequency; the per-cycle amplitude
+(three-parameter fit over each whole cycle) and its spread, the paper's "amplitude stability";
 ``THD = sqrt(sum_{k=2..H} A_k^2) / A_1`` from a least-squares fit of the harmonics below Nyquist.
-Only the excited span is analysed: the cycles whose amplitude reaches half the 90th percentile
-of all cycle amplitudes, from the first to the last.
+Only the excited span is analysed (cycles reaching half the 90th percentile of the amplitudes).
 
-Sine sweep (paper: 5 -> 10 -> 5 Hz at 0.5 Hz/s): the signal is band-passed (zero-phase 4th-order
-Butterworth, an octave around the sweep band), its analytic signal (Hilbert transform) gives the
-instantaneous amplitude and frequency, and the amplitude is averaged in frequency bins, separately
-for rising and falling frequency. With a reference channel (the paper's piezoelectric feedback
-accelerometer) the same is done on it, and the deviation ``amplitude / reference - 1`` is given
-per bin.
+**Sine sweep**: band-pass (zero-phase Butterworth), analytic signal (Hilbert) for the
+instantaneous amplitude and frequency, amplitudes averaged in frequency bins, rising and falling
+apart; with a reference channel, the deviation ``amplitude / reference - 1`` per bin.
 
-**The record must be what was asked for** (one line, exit 4, otherwise): a dwell's fitted
-frequency within ``frequency_tol`` (relative, default 2 %, a shaker's setting error is far
-smaller) of the requested one, and a sweep's instantaneous frequency must cover at least 80 % of
-the requested band (a dwell record analysed as a sweep stays at one frequency).
+**The record must be what was asked for**: a dwell's fitted frequency within ``frequency_tol``
+(relative) of the request, a sweep covering >= 80 % of the requested band; otherwise a
+:class:`~gyro_noise_ros.errors.InputDataError` (exit 4).
 
-**Verdicts** (statistical tests against the record's own noise, false-alarm ``alpha`` each; rates
-measured in ``docs/reliability.md`` by ``docs/scripts/excitation_verdicts.py``). A verdict needs
-both: the test significant *and* the defect larger than the practical ``tolerance`` (relative,
-default :data:`DEFAULT_TOLERANCE`), so a long clean record never flags a difference nobody could
-act on (a -0.068 % gain that noise cannot explain is still a match):
-
-* *steady* / *unsteady*: the per-cycle amplitudes scatter no more than white noise of the fit's
-  residual rms sigma explains, sigma sqrt(2 / samples per cycle): ``(n - 1) s^2 / sigma_c^2``
-  against chi-square(n - 1);
-* *clean* / *distorted*: the harmonics 2..H are no larger than noise: each harmonic's two
-  coefficients have variance 2 sigma^2 / N, so ``sum A_k^2 N / (2 sigma^2)`` against
-  chi-square(2 (H - 1));
-* sweep against a reference: the mean deviation against its standard error (the scatter of the
-  rising-minus-falling deviation per bin over sqrt 2 is the noise of one bin, with the bins seen
-  both ways less one degrees of freedom), Student's t, *matches* / *gain differs*; and the
-  variance of the deviations about their mean over that noise, F, *flat* /
-  *frequency-dependent*.
+**Verdicts**, each a test against the record's own noise at false-alarm ``alpha`` *and* a defect
+larger than ``tolerance`` (relative, :data:`DEFAULT_TOLERANCE`): *steady* / *unsteady*
+(``(n - 1) s^2 / sigma_c^2`` against chi-square(n - 1)); *clean* / *distorted*
+(``sum A_k^2 N / (2 sigma^2)`` against chi-square(2 (H - 1))); against a reference, *matches* /
+*gain differs* (Student's t) and *flat* / *frequency-dependent* (F). Derivations and the measured
+rates: docs/reliability.md section 3 (``docs/scripts/excitation_verdicts.py``).
 """
 
 from collections.abc import Sequence

@@ -15,41 +15,27 @@
 """
 Gyro scale factor and misalignment from the turns between static poses (imu_tk's integration).
 
-Static dwells see only the Earth rate, so a static calibration cannot tell the gyro's scale factor
-(for a seeker's stabilisation loop the number that matters most). The turns between the dwells
-can: the accelerometer, already calibrated, gives the direction of gravity in the sensor frame
-before (``f_0``) and after (``f_1``) each turn, and the gyro, integrated over the turn, must turn
-one into the other::
+Static dwells see only the Earth rate; the turns between them carry the gyro's scale factor. The
+accelerometer, already calibrated, gives the direction of gravity in the sensor frame before
+(``f_0``) and after (``f_1``) each turn, and the gyro rate ``w_k`` (rad/s), integrated over the
+turn, must turn one into the other::
 
     f_1 = R(A_g)' f_0,    R = prod_k exp([inv(A_g) (w_k - b_k) dt_k]x)    (body-frame increments)
 
-with ``A_g = I + diag(S_g) + M_g`` the gyro's matrix (the package's model, paper 001 eq. 2) in
-the frame of the accelerometer calibration. ``A_g`` (9 numbers) is fitted by least squares over
-all turns (Tedaldi, Pretto, Menegatti, ICRA 2014, as imu_tk does; each turn gives 2 equations).
+with ``A_g = I + diag(S_g) + M_g`` the gyro's matrix (paper 001 eq. 2) in the frame of the
+accelerometer calibration. ``A_g`` (9 numbers) is fitted by least squares over all turns, 2
+equations each (Tedaldi, Pretto, Menegatti, ICRA 2014, as imu_tk does). The bias ``b_k`` during
+a turn is the straight line between the static means of the dwells before and after; the
+integration is the midpoint rule on the stamps, composed as rotations. Each turn's residual is
+whitened by its covariance from the gyro's variogram (:mod:`.dwell_noise`: white noise
+isotropic, a slow rate error integrated in the turning body frame) and the accelerometer noise
+of the two directions; the Earth rate's horizontal part (and, without the
+latitude, all of it) is one nuisance vector common to all turns, fitted under a prior of its
+known size. Uncertainties: ``inv(J'J)``, scaled up by the reduced chi-square when it exceeds 1.
 
-**Why this and not imucal's Ferraris 360-degree turns**: Ferraris needs turns of exactly known
-angle (a turntable or an indexed jig) about each axis, recorded separately; the integration
-between poses needs nothing but the recording the accelerometer calibration already has, with
-any turns, and the reference is gravity itself. Its limit: a turn about the vertical moves no
-gravity and tells nothing, and a 180-degree flip is blind to the part of the misalignment that
-tilts its axis in the plane perpendicular to gravity; the multi-pose sequence (tens of turns
-about varied axes) determines all nine numbers, the six-position one usually not (the fit says
-which terms the turns do not determine and leaves them at 0).
-
-Details that matter at the 0.01 % level:
-
-* the gyro bias during a turn is the straight line between the static means of the dwells
-  before and after, which removes the bias and its drift *and* the Earth rate as seen in each
-  pose (the Earth rate left is its change during the turn, < 1e-4 rad over a 5 s turn);
-* integration by the midpoint rule on the sample stamps, composed as rotations (exact for the
-  piecewise-constant rate), not as summed angles;
-* each turn's residual is weighed by its own standard deviation: the angle error
-  ``T * (turn-mean rate error)`` from the gyro's variogram
-  (:mod:`~gyro_noise_ros.calibration.dwell_noise`: white noise and bias wander between the
-  dwells' means and the turn, as one contrast), plus the noise of the two gravity directions
-  (accelerometer variogram);
-* uncertainties: the Gauss-Newton covariance ``inv(J'J)``, scaled up by the reduced chi-square
-  when it exceeds 1 (the turns disagree more than the noise says).
+A turn about the vertical moves no gravity and tells nothing: terms the turns do not determine
+are left at 0 and named. Why this and not imucal's Ferraris turns, and the measured coverage:
+docs/reliability.md section 1 (gyro scale factor and misalignment from the turns).
 """
 
 from collections.abc import Sequence

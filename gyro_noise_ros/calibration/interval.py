@@ -15,56 +15,27 @@
 """
 Bias-instability interval of paper 001 section 6, its uncertainty, and the before/after verdicts.
 
-Paper 001 section 6: take the Allan deviation curve, its minimum sigma_min, and the level
-``c * sigma_min`` (c = 2 in the paper); the **bias-instability interval** is the range of cluster
-times between the two crossings of the curve with that level around the minimum. The paper reads
-420 s before and 945 s after the vibration (+125 %) and calls +/-50 % physiological.
+**Interval** (paper 001 section 6): from the Allan deviation's minimum ``sigma_min`` (the bias
+stability of the one readout, :func:`..core.readout.adev_floor`) and the level ``c * sigma_min``
+(paper c = 2), the cluster times (s) where the curve crosses the level on either side of the
+minimum, interpolated in log(tau)-log(sigma); a side that never reaches the level is **open**
+(None, never extrapolated). An upward crossing the curve falls back under is flagged ambiguous,
+with whether the fall-back is significant (``fallback_s``).
 
-**sigma_min** is the bias stability of the one Allan readout (:func:`..core.readout.adev_floor`,
-read over taus up to a tenth of the record when ``max_tau_s`` is given): the number
-``gyro_noise_analyze`` prints for the same curve. The crossings are searched outwards from it: the
-lower one is the last tau below the minimum where the curve is at or above the level, the upper
-one the first above it; between the two bracketing points the crossing is interpolated linearly
-in log(tau)-log(sigma). A side where the curve never reaches the level inside the record is
-**open** (None, never extrapolated) and the width is undefined.
-
-**Uncertainty of the width** (:func:`bias_instability_interval` with ``edf``): propagated from the
-equivalent degrees of freedom of the Allan variance (Greenhall & Riley EDF, ``AllanResult.edf``),
-not bootstrapped. An Allan variance with EDF nu is distributed as ``AVAR chi2_nu / nu``, so the
-standard deviation of log ADEV is ``e(nu) = sqrt(trigamma(nu / 2)) / 2`` (exact for that law,
-``1 / sqrt(2 nu)`` for large nu). A crossing moves when the level or the curve moves:
-``d log tau_x = (d log sigma_min - d log ADEV(tau_x)) / s_x``, with ``s_x`` the log-log slope of
-the curve at the crossing. So::
+**Width uncertainty** (:func:`bias_instability_interval` with ``edf``), from the Greenhall-Riley
+EDF nu: ``sd(log ADEV) = e(nu) = sqrt(trigamma(nu / 2)) / 2`` and, with ``s`` the log-log slope
+of the fitted IEEE 952 model at each crossing::
 
     var(W) = e_min^2 (tau_hi / |s_hi| + tau_lo / |s_lo|)^2 + (tau_hi e_hi / s_hi)^2
              + (tau_lo e_lo / s_lo)^2
 
-with ``e_min`` at sigma_min's tau and ``e_hi``, ``e_lo`` interpolated at the crossings. The three
-errors are taken as independent (measured: correlation 0.03 between log sigma_min and log ADEV at
-the upper crossing on the emulator's model). The slope is that of a fitted IEEE 952 model at the
-crossing (``model_adev``), not of the two noisy bracketing points; without a model, the
-least-squares slope of the curve over three taus either side. Why not a block bootstrap: the
-upper crossing sits where random walk dominates, and resampling blocks shorter than the record
-destroys exactly that long-term structure. The stated sigma is checked against the spread of the
-width over 100 emulated records (``docs/scripts/reliability_verdicts.py``); it falls as the
-square root of the record length (EDF at a fixed tau is proportional to it), which is how
-:func:`compare` says how long a record would decide.
-
-**An ambiguous upper crossing**: after the curve has crossed the level upwards it may fall back
-below it at longer taus (a noisy tail, or a real second dip). Then the interval could also end at
-the last upward crossing (or stay open). The interval records where the curve falls back
-(``fallback_s``) and whether the fall-back is **significant** (the one-sided upper confidence
-bound of the ADEV at some tau of it, from its EDF at level ``alpha``, stays below the level): a
-significant fall-back makes the width undetermined; a non-significant one is flagged and kept.
-
-**Verdicts** (:func:`compare`): the change of the width is tested on log(W_after / W_before),
-whose standard deviation is the root sum of squares of the two relative width uncertainties.
-``beyond``: the one-sided test at level ``alpha`` (default 5 %) rejects "the change is within
-+/- tolerance", i.e. the lower (upper) one-sided 95 % bound of the ratio is above 1 + tolerance
-(below 1 - tolerance). ``physiological``: both one-sided tests reject "beyond" (the 90 % two-sided
-interval lies inside the band, the two one-sided tests procedure). ``undetermined`` otherwise,
-with the record length that would decide at the present estimate. :func:`overall` gives one
-verdict per sensor from its three axes.
+**Verdicts** (:func:`compare`): ``log(W_after / W_before)`` with ``sd = hypot(sd_b, sd_a)`` against
+the band ``1 +/- tolerance`` at the one-sided level ``alpha``: ``beyond`` (a one-sided bound
+outside the band), ``physiological`` (two one-sided tests: the 90 % interval inside it) or
+``undetermined`` with the record length that would decide (the sd falls as 1/sqrt(length)).
+:func:`overall` gives one verdict per sensor from its three axes. Derivation, why not a
+bootstrap, and the measured coverage and power: docs/reliability.md section 2
+(``docs/scripts/reliability_verdicts.py``).
 """
 
 from collections.abc import Callable, Mapping

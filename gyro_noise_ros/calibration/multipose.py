@@ -206,16 +206,9 @@ class MultiPoseResult:
 
     def compensate(self, measured_m_s2: ArrayLike) -> np.ndarray:
         """
-        Apply the calibration: ``inv(I + diag(S) + M) @ (measured - bias)``.
+        Apply the calibration to (..., 3) specific forces: ``inv(I + diag(S) + M) @ (l - b)``.
 
-        Parameters
-        ----------
-        measured_m_s2 : array_like
-            (..., 3) measured specific force (m/s^2).
-
-        Returns
-        -------
-        numpy.ndarray
+        :meth:`.apply.SensorCalibration.apply` with this result's terms; in and out in m/s^2.
 
         """
         return SensorCalibration(self.bias_m_s2, self.scale_factor,

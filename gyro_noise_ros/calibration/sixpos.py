@@ -15,59 +15,26 @@
 """
 Six-position static calibration (paper 001 eqs. 1-4), its consistency test and the local gravity.
 
-Error model (paper 001 eq. 1 with the cross-coupling written as a matrix), for the accelerometer
-and likewise for the gyro::
+Error model (paper 001 eq. 1, cross-coupling as a matrix), accelerometer and gyro alike::
 
     measured = (I + diag(scale_factor) + misalignment) @ true + bias + noise
 
-``scale_factor`` is dimensionless (-0.0002 = -0.02 %), ``misalignment`` is 3x3 with a zero
-diagonal (element [j, i]: how much of the true axis i leaks into measured axis j). A compensator
-inverts it: ``true = inv(I + diag(S) + M) @ (measured - bias)``.
+``scale_factor`` dimensionless (-0.0002 = -0.02 %), ``misalignment`` 3x3 with a zero diagonal
+(``[j, i]``: true axis i leaking into measured axis j); SI inside (m/s^2, rad/s). In dwell ``+i``
+axis i points up and reads ``+g e_i`` (REP-103). Per axis, paper eqs. 3-4, and the cross-axis
+terms from the least squares of all 18 equations (they decouple into differences)::
 
-In dwell ``+i`` axis i points up and the accelerometer reads ``true = +g e_i`` (REP-103); in ``-i``
-``true = -g e_i``. Per axis, paper eqs. 3-4::
+    b_i = (l_i(+i) + l_i(-i)) / 2,   S_i = (l_i(+i) - l_i(-i) - 2 g) / (2 g),
+    M[j, i] = (l_j(+i) - l_j(-i)) / (2 g)   (j != i)
 
-    b_i = (l_i(+i) + l_i(-i)) / 2,        S_i = (l_i(+i) - l_i(-i) - 2 g) / (2 g)
-
-and, beyond the paper, the least-squares solution of all 18 equations for the full matrix gives
-the cross-axis terms ``M[j, i] = (l_j(+i) - l_j(-i)) / (2 g)`` (j != i): the nominal gravity
-directions are orthogonal, so the least squares decouple into these differences.
-
-**Uncertainties** are those of linear combinations of dwell means under the sensor's own
-variogram (:mod:`~gyro_noise_ros.calibration.dwell_noise`: window means inside the dwells plus the
-6 residual degrees of freedom of the 18 equations), so bias wander between the dwells is in them.
-The bias uncertainty is against the bias during the calibration (that module's docstring).
-
-**Consistency (a tilt cannot pass silently).** The model says every pair of opposite dwells has
-the same sum ``s_i = l(+i) + l(-i) = 2 b`` (3 axes); cross-axis terms cannot change that. A dwell
-tilted by delta moves its pair's sum by about ``g sin(delta)`` across and ``g (1 - cos delta)``
-along its axis. For each pair ``D_i = s_i - (s_k + s_l) / 2`` is compared with its standard
-deviation under a noise model fitted with the *other* two pairs' disagreement ``s_k - s_l`` (so a
-bad pair cannot hide itself by inflating the noise). That disagreement is the only direct measure
-of the wander between dwells minutes apart (3 degrees of freedom); the window means inside the
-dwells add what the variogram's shape carries. So the statistic ``F = |D_i|^2 / (3 var)`` is read
-against F(3, NU) with ``NU = 6`` effective degrees of freedom for the variance, not against
-chi-square(3) (which false-alarmed in 4 % of emulated calibrations at a nominal 0.03 %), at
-``alpha / 3`` (Bonferroni over three pairs); the measured false-alarm rate is in the docs.
-A bad pair also shifts the mean the other two are compared with, so when the worst pair fails,
-each other pair is tested once more against the remaining one alone (window noise only,
-chi-square(3)). Which dwell of a failing pair is the bad one: the one whose removal leaves the
-smaller cross-axis column (a real cross-axis term is ~0.1-1 %, a tilt of a few degrees is
-5-9 %). The false-alarm and detection rates are measured in ``docs/reliability.md``
+Gyro bias ``b_g,i = (w_i(+i) + w_i(-i)) / 2`` (the vertical Earth rate cancels in the pair); the
+gyro scale factor and misalignment need the turns (:mod:`~gyro_noise_ros.calibration.gyro_turns`).
+Uncertainties come from the dwells' variogram (:mod:`~gyro_noise_ros.calibration.dwell_noise`).
+**Consistency test**: each pair's sum ``D_i = s_i - (s_k + s_l) / 2`` against F(3, 6) with the
+noise fitted on the other two pairs, at ``alpha / 3``; the bad dwell of a failing pair is named.
+**Gravity check**: each dwell left out, calibrated from the other five, its norm against g
+(Student's t, 6 dof). Derivations, false-alarm and detection rates: docs/reliability.md section 1
 (``docs/scripts/calibration_uncertainty.py``).
-
-**Gravity check that can fail** (replacing paper section 6's, which on the same dwells and the
-same g returns g by construction): leave one dwell out, calibrate from the other five (its axis's
-column from the opposite dwell alone, the bias from the other two pairs) and compare the norm of
-the held-out dwell, calibrated, with g. It is the along-axis part of ``D_i``: a tilt, a bias step
-between dwells, or a scale asymmetry between the + and - direction all show in it.
-
-Gyro bias: ``b_g,i = (w_i(+i) + w_i(-i)) / 2``. Turning axis i from up to down reverses its
-share of the vertical Earth rate (Omega_E sin(latitude)), which cancels in the sum. What remains:
-a dwell tilted by delta from vertical adds up to Omega_E * sin(delta) (7.3e-5 rad/s times delta in
-rad), and gyro cross-axis terms pick up the horizontal Earth rate (Omega_E cos(latitude)) times the
-misalignment; both are far below a MEMS bias (~1e-3 rad/s). The gyro scale factor and misalignment
-need rotations: :mod:`~gyro_noise_ros.calibration.gyro_turns`.
 """
 
 from collections.abc import Mapping
@@ -219,17 +186,10 @@ class SixPositionResult:
 
     def compensate_accel(self, measured_m_s2: ArrayLike) -> np.ndarray:
         """
-        Apply the calibration: ``inv(I + diag(S) + M) @ (measured - bias)``.
+        Apply the calibration to (..., 3) specific forces: ``inv(I + diag(S) + M) @ (l - b)``.
 
-        Parameters
-        ----------
-        measured_m_s2 : array_like
-            (..., 3) measured specific force (m/s^2).
-
-        Returns
-        -------
-        numpy.ndarray
-            (..., 3) compensated specific force (m/s^2).
+        :meth:`.apply.SensorCalibration.apply` with this result's accelerometer terms; in and out
+        in m/s^2.
 
         """
         return SensorCalibration(self.accel_bias_m_s2, self.accel_scale_factor,
@@ -558,15 +518,7 @@ def uniformity(values: ArrayLike) -> float:
     """
     Return the paper 001 section 6 uniformity indicator: the sample standard deviation (ddof = 1).
 
-    Parameters
-    ----------
-    values : array_like
-        (3,) per-axis biases or scale factors.
-
-    Returns
-    -------
-    float
-        std(values, ddof=1), in the unit of ``values``.
+    ``values`` are the (3,) per-axis biases or scale factors; the result is in their unit.
 
     """
     return float(np.std(np.asarray(values, dtype=np.float64), ddof=1))

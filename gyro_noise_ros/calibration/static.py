@@ -19,25 +19,21 @@ A recording is cut into consecutive windows of ``window_s`` seconds (by sample c
 recording's rate). A sample holding NaN/Inf in any channel is dropped (counted, never averaged);
 a window keeping fewer than half of its samples is a **gap**. A window is **static** when
 
-* every accelerometer axis has a standard deviation below ``accel_std_max_m_s2`` (a rotation or a
-  handling bump moves the specific force by far more than the sensor noise), and
+* every accelerometer axis has a standard deviation below ``accel_std_max_m_s2``, and
 * every gyro axis has a window mean within ``gyro_rate_max_rad_s`` of the recording's reference
-  rate (the median of the window means: the gyro bias, since a calibration recording is mostly
-  static), so a slow turn about the vertical axis, which leaves the accelerometer unchanged, is
-  not taken as static, and
+  rate (the median of the window means: the gyro bias), so a slow turn about the vertical axis,
+  which leaves the accelerometer unchanged, is not taken as static, and
 * it is not a gap.
 
 Consecutive static windows whose mean specific force differs by less than ``merge_tol_m_s2`` form
-one dwell; a gap between two such windows does not split it (its samples are counted as dropped),
-so a few NaN samples never turn one dwell into two. ``trim_windows`` windows are dropped at each
-end of a dwell so that the settling after a rotation does not leak into the mean. Each dwell is
-classified by the axis and sign of gravity: REP-103 accelerometers read +g on the axis pointing
-up, so a dwell whose mean is close to +g on x is orientation ``+x``. Its tilt is the angle between
-the mean vector and that axis.
+one dwell (a gap between them does not split it); ``trim_windows`` windows are dropped at each
+end so that the settling after a rotation does not leak into the mean. Each dwell is classified
+by the axis and sign of gravity (REP-103: +g on the axis pointing up, so a mean close to +g on x
+is orientation ``+x``); its tilt is the angle between the mean vector and that axis.
 
 Only window sums are kept (and, per dwell, its window means for the noise model of
 :mod:`~gyro_noise_ros.calibration.dwell_noise`), so a recording of any length streams in constant
-memory.
+memory. Defaults and their reasons: docs/reliability.md section 1.
 """
 
 from collections.abc import Iterable, Sequence

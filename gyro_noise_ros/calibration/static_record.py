@@ -60,19 +60,7 @@ TERMS = ('white_noise', 'bias_stability', 'random_walk')
 
 
 def unit_of(channel: str) -> str:
-    """
-    Return the unit suffix of a channel (``m_s2`` for accel, ``rad_s`` for gyro).
-
-    Parameters
-    ----------
-    channel : str
-        One of :data:`CHANNELS`.
-
-    Returns
-    -------
-    str
-
-    """
+    """Return the unit suffix of a channel of :data:`CHANNELS` (``m_s2`` accel, ``rad_s`` gyro)."""
     return 'm_s2' if channel.startswith('accel') else 'rad_s'
 
 

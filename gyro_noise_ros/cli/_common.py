@@ -87,12 +87,8 @@ def add_overwrite_argument(parser: argparse.ArgumentParser | Any,
     """
     Add ``--overwrite``, the one spelling every tool uses to let a run replace existing data.
 
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser or argument group
-        Where to add it.
-    help_text : str
-        What it lets replace (:data:`OVERWRITE_FOLDER_HELP`, :data:`OVERWRITE_BAG_HELP`).
+    ``parser`` is a parser or an argument group, ``help_text`` what it lets replace
+    (:data:`OVERWRITE_FOLDER_HELP`, :data:`OVERWRITE_BAG_HELP`).
 
     """
     parser.add_argument(OVERWRITE_OPTION, action='store_true', help=help_text)

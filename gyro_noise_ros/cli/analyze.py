@@ -207,17 +207,9 @@ def _print_summary(result: AnalyzeResult) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run gyro_noise_analyze.
+    Run gyro_noise_analyze; return its exit code (docs/offline_tool.md).
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name (default: sys.argv[1:]).
-
-    Returns
-    -------
-    int
-        Exit code (docs/offline_tool.md).
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv, renamed=RENAMED)

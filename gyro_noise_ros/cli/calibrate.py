@@ -108,19 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def settings_from_args(args: argparse.Namespace) -> DetectorSettings:
-    """
-    Return the detector settings of parsed arguments.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed arguments of gyro_noise_calibrate.
-
-    Returns
-    -------
-    DetectorSettings
-
-    """
+    """Return the :class:`DetectorSettings` of gyro_noise_calibrate's parsed arguments."""
     return DetectorSettings(window_s=args.window_s, accel_std_max_m_s2=args.accel_std_max,
                             gyro_rate_max_rad_s=args.gyro_rate_max, merge_tol_m_s2=args.merge_tol,
                             trim_windows=args.trim_windows, min_static_s=args.min_static_s,
@@ -162,17 +150,9 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run gyro_noise_calibrate.
+    Run gyro_noise_calibrate; return its exit status.
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status.
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv)

@@ -19,40 +19,21 @@
 ROS graph (a ``ROS_DOMAIN_ID`` checked free on this host and held while the demo runs,
 localhost-only discovery: :func:`gyro_noise_ros.rosgraph.lease_domain`, as the tests use):
 
-1. ``noise_analyzer`` (live analysis, diagnostics), ``gyro_noise_record`` (the bag), the
-   diagnostics monitor (``gyro_noise_monitor``) and ``lsm6dso32_driver`` (which retries its port
-   until the board is there);
-2. ``portenta_emulator`` on a loopback TCP port, seeded, with a scripted helium-like bias
-   transient: a quiet phase, then a first-order rise of the bias of every axis;
+1. ``noise_analyzer``, ``gyro_noise_record``, ``gyro_noise_monitor`` and ``lsm6dso32_driver``;
+2. ``portenta_emulator`` on a loopback TCP port, seeded, in real time (``--speed 1``), with a
+   scripted helium-like bias transient: a quiet phase, then a first-order rise of each bias;
 
-prints the analyzer's diagnostics as they arrive (one line per chunk: level, bias, drift and orders
-per axis; the message of any axis that is not OK), and checks the story: the verdict is OK in the
-quiet phase and turns WARN (offset drift above its limit) when the bias rises. It then stops the
-live part (driver first, so the recorder and analyzer take the last messages, then recorder,
-analyzer, monitor, emulator), runs ``gyro_noise_analyze`` on the recording, and ends by printing
-where the tables and figures are.
-
-Demo settings, and why (every one is an ordinary parameter of the tools):
-
-- The board runs at real time (``--speed 1``) and the transient is compressed instead (seconds, not
-  the paper's hours): the driver maps device time onto host time, so at ``--speed k`` the stamps
-  would run k times fast and every rate-dependent number would be off by k; and five processes at
-  6.66 kHz already take about one of the two cores. ``--speed`` is available for faster machines.
-- Drift is judged by absolute limits over the last ``history_chunks`` chunks (a sliding window, so
-  the verdict follows the transient): WARN above 1 (deg/s)/h, ERROR above 100 (deg/s)/h. The
-  emulated quiet bias drifts by a few hundredths of (deg/s)/h; the scripted rise starts at
-  ``amplitude / tau`` = 6 (deg/s)/h (36 in ``--quick``).
-- Samples lost: WARN above 5 %, ERROR above 25 % of the expected samples (the tools' defaults are
-  0.01 % and 1 %). On a busy shared machine the DDS transport drops some messages when a receiving
-  process is not scheduled for tens of milliseconds; the losses are still counted and printed, but
-  they should not hide the drift story. ``docs/demo.md`` explains how to read them.
+prints the analyzer's diagnostics as they arrive (one line per chunk), and checks the story: OK in
+the quiet phase, WARN (offset drift above its limit) when the bias rises. It then stops the live
+part (driver first), runs ``gyro_noise_analyze`` on the recording, and prints where the report is.
+The demo's thresholds are ordinary analyzer parameters; their values and reasons (absolute drift
+limits over a sliding window, a lost-sample allowance for a shared host, why not ``--speed k``)
+are in docs/demo.md.
 
 Exit status: 0 when the story ran and the report was written; 1 when a component failed (its log
-is named) or the drift was not detected; 2 for a bad option; 6 when ``--out`` cannot be used (a
-file, a folder that is not a previous demo output, a previous demo output without
-``--overwrite``, not writable); 130 on Ctrl-C, 143 on SIGTERM. Every subprocess is stopped on
-every path. ``GYRO_NOISE_DEMO.txt`` in ``--out`` says whether the run finished; the
-report folder appears only complete (``gyro_noise_analyze`` stages its files). The workflow is
+is named) or the drift was not detected; 2 for a bad option; 6 when ``--out`` cannot be used;
+130 on Ctrl-C, 143 on SIGTERM. Every subprocess is stopped on every path; ``GYRO_NOISE_DEMO.txt``
+in ``--out`` says whether the run finished. The workflow is
 :func:`gyro_noise_ros.app.demo.run_demo`.
 """
 
@@ -123,17 +104,9 @@ def _print_outputs(report: Path, elapsed_s: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run the demo.
+    Run the demo; return its exit code (module docstring).
 
-    Parameters
-    ----------
-    argv : list of str or None
-        Arguments without the program name (None: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit code (module doc).
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv)

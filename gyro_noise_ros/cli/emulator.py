@@ -411,17 +411,9 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run portenta_emulator.
+    Run portenta_emulator; return its exit status.
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status.
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv, renamed=RENAMED)

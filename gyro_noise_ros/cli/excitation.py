@@ -127,17 +127,9 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run gyro_noise_excitation.
+    Run gyro_noise_excitation; return its exit status.
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status.
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv, renamed=RENAMED)

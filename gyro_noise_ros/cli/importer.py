@@ -22,20 +22,15 @@ frames, or ``--gyro-fs-dps``/``--accel-fs-g`` which override both), and writes `
 workflow is :func:`gyro_noise_ros.app.importer.import_logs`. Corrupt regions are skipped and
 reported, never fatal.
 
-Time stamps come from the device clock (the 32-bit microsecond counter, unwrapped), anchored by
-``--start-time``:
-
-* ``auto`` (default): ``rtc`` when a header carries an RTC time, else ``zero``;
-* ``rtc``: the header's RTC time ``rtc_unix_s`` is the host time of the header's device time
-  ``t_us``;
-* ``zero``: the first sample is stamped 0 s;
-* a number: UNIX time (s) of the first sample.
-
-Bag time (the storage's receive time) equals the header stamp.
+Stamps are the unwrapped 32-bit microsecond device clock anchored by ``--start-time``: ``auto``
+(default: ``rtc`` when a header carries an RTC time, else ``zero``), ``rtc`` (the header's
+``rtc_unix_s`` is the host time of its ``t_us``), ``zero`` (first sample at 0 s) or a UNIX time
+(s) of the first sample. Bag time (the storage's receive time) equals the header stamp.
 
 The bag is built under a hidden name beside ``--out`` and renamed when it is complete, so an
-interrupted or failed import leaves nothing that looks like a bag and can simply be run again. A
-log file given twice, or files holding the same samples, are refused before anything is written.
+interrupted or failed import leaves nothing that looks like a bag. A log file given twice, or
+files holding the same samples, are refused before anything is written. Details:
+docs/portenta_link.md.
 
 Example::
 
@@ -156,22 +151,12 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run gyro_noise_import.
+    Run gyro_noise_import on ``argv`` (without the program name); return the exit status.
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name.
-
-    Returns
-    -------
-    int
-        Exit status: 0 (also when corrupt regions were skipped); 2 bad option (``--chunk-bytes``
-        outside 1..64 MiB included) or a log file named twice; 3 a log file missing; 4 logs that
-        are not one sequence (different sequences, the same file twice, overlapping sample
-        counters) or hold no valid sample; 6 ``--out`` exists (without ``--overwrite``) or the
-        bag cannot be written; 130/143 interrupted (SIGINT/SIGTERM). Whatever the failure, no
-        bag is left under ``--out`` and an existing one is kept.
+    0 (also with corrupt regions skipped); 2 a bad option or a log file named twice; 3 a log file
+    missing; 4 logs that are not one sequence or hold no valid sample; 6 ``--out`` exists (without
+    ``--overwrite``) or the bag cannot be written; 130/143 interrupted. Whatever the failure, no
+    bag is left under ``--out`` and an existing one is kept.
 
     """
     return run_cli(PROG, _body, argv)

@@ -461,17 +461,9 @@ def _body(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run gyro_noise_thermal.
+    Run gyro_noise_thermal; return its exit code (docs/thermal.md).
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments without the program name (default: sys.argv[1:]).
-
-    Returns
-    -------
-    int
-        Exit code (docs/thermal.md).
+    ``argv`` holds the arguments without the program name (None: ``sys.argv[1:]``).
 
     """
     return run_cli(PROG, _body, argv)

@@ -936,20 +936,7 @@ class NoiseTerms:
         return _design(tau) @ coef
 
     def model_adev(self, tau_s: npt.ArrayLike) -> NDArray[np.float64]:
-        """
-        Evaluate the fitted Allan deviation, ``sqrt(avar_model(tau_s))``.
-
-        Parameters
-        ----------
-        tau_s : array_like
-            Averaging times (s).
-
-        Returns
-        -------
-        numpy.ndarray
-            ADEV (rad/s).
-
-        """
+        """Evaluate the fitted Allan deviation ``sqrt(avar_model(tau_s))`` (rad/s), tau in s."""
         return np.sqrt(self.avar_model(tau_s))
 
     def as_dict(self) -> dict[str, Any]:
@@ -1003,12 +990,9 @@ class NoiseTerms:
         """
         Return the Kalibr / OpenVINS IMU noise parameters of the gyroscope (continuous time).
 
-        Returns
-        -------
-        dict
-            ``gyroscope_noise_density`` = N (rad/s/sqrt(Hz)) and ``gyroscope_random_walk`` = K
-            (rad/s^2/sqrt(Hz)). Kalibr's README advises inflating both (e.g. x10) for real use;
-            that choice is left to the user. NaN (unfitted) is reported as NaN.
+        ``gyroscope_noise_density`` = N (rad/s/sqrt(Hz)) and ``gyroscope_random_walk`` = K
+        (rad/s^2/sqrt(Hz)), NaN when unfitted. Kalibr's README advises inflating both (e.g. x10)
+        for real use; that choice is left to the user.
 
         """
         return {'gyroscope_noise_density': float(self.angle_random_walk_rad_per_sqrt_s),

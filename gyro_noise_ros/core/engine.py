@@ -176,26 +176,10 @@ class EngineConfig:
 def identifier_for(chunk_size: int, alphas: tuple, memory: int, demean: bool,
                    max_lag: int | None) -> OrderIdentifier:
     """
-    Return a cached :class:`.fractional.OrderIdentifier`.
+    Return a cached :class:`.fractional.OrderIdentifier` (its set-up transforms every grid filter).
 
-    Its set-up transforms every grid filter once, so one per configuration is kept.
-
-    Parameters
-    ----------
-    chunk_size : int
-        Samples per chunk.
-    alphas : tuple of float
-        Order grid.
-    memory : int
-        L.
-    demean : bool
-        Remove the chunk mean.
-    max_lag : int or None
-        Largest lag of J.
-
-    Returns
-    -------
-    OrderIdentifier
+    The arguments are the identifier's own (``memory`` is L, ``max_lag`` the largest lag of J),
+    with ``alphas`` a tuple so that the call can be cached.
 
     """
     return OrderIdentifier(chunk_size, alphas=np.asarray(alphas), memory=memory, demean=demean,

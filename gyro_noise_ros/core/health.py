@@ -195,16 +195,8 @@ class ReferenceStats:
         """
         Build the reference of a sequence summary (what its summary.json entry would load as).
 
-        Parameters
-        ----------
-        sequence : chunks.SequenceSummary
-            The reference's sequence statistics.
-        source : str, keyword-only
-            Where it came from, for messages.
-
-        Returns
-        -------
-        ReferenceStats
+        ``sequence`` holds the reference's statistics (:class:`.chunks.SequenceSummary`),
+        ``source`` where it came from, for messages.
 
         """
         return cls(offset_drift_rad_s2=sequence.drift.slope,

@@ -116,18 +116,10 @@ def fmt(value: float | int | None, digits: int = 4) -> str:
 
 def last_chunk_items(result: 'ChunkResult') -> list[tuple[str, str]]:
     """
-    Return the items of the latest chunk of one axis.
+    Return the items of the latest chunk of one axis, from its numbers in SI (``result``).
 
-    Parameters
-    ----------
-    result : results.ChunkResult
-        The chunk's numbers (SI).
-
-    Returns
-    -------
-    list of (str, str)
-        ``Last chunk``, bias and variance in deg/s, both orders and f values, samples lost in
-        the chunk and the chunk's mean temperature.
+    ``Last chunk``, bias and variance in deg/s, both orders and f values, samples lost in the chunk
+    and the chunk's mean temperature (degC), as (readable key, value) pairs.
 
     """
     return [
@@ -184,20 +176,10 @@ def allan_items(summary: 'AxisSummary | None') -> list[tuple[str, str]]:
 def stream_items(counts: 'StreamCounts', *, chunk_size: int,
                  mean_temperature_c: float) -> list[tuple[str, str]]:
     """
-    Return the stream counters of one axis.
+    Return the stream counters of one axis as (readable key, value) items.
 
-    Parameters
-    ----------
-    counts : stamps.StreamCounts
-        Samples, rate and gaps of the stream.
-    chunk_size : int
-        Samples per chunk.
-    mean_temperature_c : float
-        Mean temperature of the run (degC; NaN if unknown).
-
-    Returns
-    -------
-    list of (str, str)
+    ``counts`` holds the samples, rate (Hz) and gaps of the stream; ``chunk_size`` is in samples,
+    ``mean_temperature_c`` the run's mean temperature (degC; NaN if unknown).
 
     """
     return [

@@ -224,20 +224,8 @@ def simulate_fractional_noise(n: int, alpha: float, f: float, sigma_w: float, *,
     """
     Return ``n`` samples of the fractional-order noise of eq. (2) (with eqs. 10-11 and a bias).
 
-    Parameters
-    ----------
-    n : int
-        Number of samples.
-    alpha, f, sigma_w : float
-        Order, noise parameter, source-noise standard deviation (output unit).
-    rng : numpy.random.Generator, keyword-only
-        Random generator of the source noise.
-    memory, sigma_nu, bias : keyword-only
-        See :class:`FractionalNoise`.
-
-    Returns
-    -------
-    numpy.ndarray
+    ``FractionalNoise(alpha, f, sigma_w, ...).generate(n)``: order, noise parameter and
+    source-noise standard deviation (output unit), the keywords as in :class:`FractionalNoise`.
 
     """
     return FractionalNoise(alpha, f, sigma_w, rng=rng, memory=memory, sigma_nu=sigma_nu,

@@ -97,16 +97,7 @@ def vector_text(values: Iterable[float], scale: float = 1.0) -> str:
     """
     Format a vector for a diagnostic value: ``'x, y, z'`` with 6 significant digits.
 
-    Parameters
-    ----------
-    values : iterable of float
-        The components (SI).
-    scale : float
-        Unit conversion applied first (e.g. degrees per radian).
-
-    Returns
-    -------
-    str
+    ``values`` are the components (SI), multiplied by ``scale`` first (e.g. degrees per radian).
 
     """
     return ', '.join(f'{v * scale:.6g}' for v in values)

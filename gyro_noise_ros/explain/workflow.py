@@ -437,15 +437,8 @@ def unexplained_gap(comparisons: Mapping[str, Comparison]) -> float:
     """
     Return the part of the gap G that an added effect could explain: G without :func:`quieter`.
 
-    Parameters
-    ----------
-    comparisons : dict
-        name -> Comparison of one model.
-
-    Returns
-    -------
-    float
-        sum of ln(max(g_s, 1)) over the signatures that are not :func:`quieter`.
+    ``comparisons`` maps each signature's name to its Comparison under one model; the result is the
+    sum of ln(max(g_s, 1)) over the signatures that are not :func:`quieter`.
 
     """
     return float(sum(c.gap for c in comparisons.values() if not quieter(c)))
@@ -685,16 +678,7 @@ def accepts(trial_gap: float, gap: float) -> bool:
     """
     Tell whether a candidate meets the acceptance rule: it shrinks the gap by >= INSIDE_GAP.
 
-    Parameters
-    ----------
-    trial_gap : float
-        Gap G of the model with the candidate.
-    gap : float
-        Gap G of the current model.
-
-    Returns
-    -------
-    bool
+    ``trial_gap`` is the gap G of the model with the candidate, ``gap`` that of the current model.
 
     """
     return bool(trial_gap <= gap - INSIDE_GAP)
@@ -704,18 +688,9 @@ def criterion(score: float, n_params: int) -> float:
     """
     Return the penalised score that ranks tied candidates: log score + PARAM_PENALTY per parameter.
 
-    Parameters
-    ----------
-    score : float
-        :func:`.signatures.mean_log_score` of the candidate model (a Gaussian negative
-        log-likelihood per point, summed over the signatures; smaller is better).
-    n_params : int
-        The candidate effect's parameter count.
-
-    Returns
-    -------
-    float
-        Smaller is better.
+    ``score`` is :func:`.signatures.mean_log_score` of the candidate model (a Gaussian negative
+    log-likelihood per point, summed over the signatures), ``n_params`` the candidate effect's
+    parameter count; smaller is better.
 
     """
     return float(score) + PARAM_PENALTY * int(n_params)

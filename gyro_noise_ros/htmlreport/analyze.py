@@ -353,25 +353,9 @@ def write_analyze_html(out: Path, doc: dict[str, Any], per_chunk: _PerChunk,
                        accel_allan: Mapping[tuple[str, str], AllanResult] | None = None,
                        imu_yaml: str | None = None) -> Path:
     """
-    Write ``report.html`` of a gyro_noise_analyze run into its (staged) output folder.
+    Write ``report.html`` of a gyro_noise_analyze run into the staged folder ``out``; return it.
 
-    Parameters
-    ----------
-    out : pathlib.Path
-        The staged ``--out`` folder.
-    doc : dict
-        The summary.json document.
-    per_chunk, allan_store : dict
-        As :func:`analyze_page`.
-    accel_allan : dict, optional, keyword-only
-        As :func:`analyze_page`.
-    imu_yaml : str, optional, keyword-only
-        As :func:`analyze_page`.
-
-    Returns
-    -------
-    pathlib.Path
-        The written file.
+    ``doc`` is the summary.json document; the other arguments are those of :func:`analyze_page`.
 
     """
     return write_report_html(analyze_page(doc, per_chunk=per_chunk, allan_store=allan_store,

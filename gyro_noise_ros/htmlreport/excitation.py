@@ -223,22 +223,10 @@ def _figures(doc: dict[str, Any], records: _Records,
 def write_excitation_html(doc: dict[str, Any], records: _Records, out: Path, *,
                           command: Sequence[str] | None = None) -> Path:
     """
-    Write ``report.html`` of an excitation check into the staged folder ``out``.
+    Write ``report.html`` of an excitation check into the staged folder ``out``; return its path.
 
-    Parameters
-    ----------
-    doc : dict
-        The excitation.json document.
-    records : dict
-        ``{side: (t_s, x)}`` of each record (s, SI).
-    out : pathlib.Path
-        The staged ``--out`` folder.
-    command : sequence of str, optional, keyword-only
-        The command line.
-
-    Returns
-    -------
-    pathlib.Path
+    ``doc`` (the excitation.json document), ``records`` (``{side: (t_s, x)}``, s and SI) and
+    ``command`` (the command line) are those of :func:`excitation_page`.
 
     """
     return write_report_html(excitation_page(doc, records, command), out / 'report.html')

@@ -181,21 +181,10 @@ class Page:
 
 def plus_minus_cell(value: str, sigma: str, fmt: str, scale: float = 1.0) -> tuple[Num, str, Num]:
     """
-    Return the cell ``value +/- sigma`` of two values of the document, in one unit.
+    Return the :data:`Cell` ``value +/- sigma`` of two values of the document, in one unit.
 
-    Parameters
-    ----------
-    value, sigma : str
-        JSON Pointers of the value and of its standard uncertainty.
-    fmt : str
-        ``format()`` spec of both.
-    scale : float
-        Unit factor of both (:attr:`Num.scale`).
-
-    Returns
-    -------
-    tuple
-        A :data:`Cell` of three parts.
+    ``value`` and ``sigma`` are the JSON Pointers of the value and its standard uncertainty,
+    ``fmt`` the ``format()`` spec of both and ``scale`` their unit factor (:attr:`Num.scale`).
 
     """
     return (Num(value, fmt, scale=scale), ' +/- ', Num(sigma, fmt, scale=scale))

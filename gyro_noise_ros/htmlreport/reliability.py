@@ -223,22 +223,10 @@ def _figures(records: _Curves) -> list[tuple[str, 'figure']]:
 def write_reliability_html(doc: dict[str, Any], curves: _Curves, out: Path, *,
                            command: Sequence[str] | None = None) -> Path:
     """
-    Write ``report.html`` of a reliability run into the staged folder ``out``.
+    Write ``report.html`` of a reliability run into the staged folder ``out``; return its path.
 
-    Parameters
-    ----------
-    doc : dict
-        The reliability.json document.
-    curves : dict
-        As :func:`reliability_page`.
-    out : pathlib.Path
-        The staged ``--out`` folder.
-    command : sequence of str, optional, keyword-only
-        The command line.
-
-    Returns
-    -------
-    pathlib.Path
+    ``doc`` (the reliability.json document), ``curves`` and ``command`` (the command line) are
+    those of :func:`reliability_page`.
 
     """
     return write_report_html(reliability_page(doc, curves, command), out / 'report.html')

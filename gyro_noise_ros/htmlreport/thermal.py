@@ -336,20 +336,9 @@ def apply_page(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
 
 def write_compare_html(doc: dict[str, Any], curves: Mapping[str, Any], out: Path) -> Path:
     """
-    Write ``report.html`` of a comparison into the staged folder ``out``.
+    Write ``report.html`` of a comparison into the staged folder ``out``; return its path.
 
-    Parameters
-    ----------
-    doc : dict
-        The compare.json document.
-    curves : dict
-        As :func:`compare_page`.
-    out : pathlib.Path
-        The staged ``--out`` folder.
-
-    Returns
-    -------
-    pathlib.Path
+    ``doc`` (the compare.json document) and ``curves`` are those of :func:`compare_page`.
 
     """
     return write_report_html(compare_page(doc, curves), out / 'report.html')
@@ -358,20 +347,10 @@ def write_compare_html(doc: dict[str, Any], curves: Mapping[str, Any], out: Path
 def write_apply_html(doc: dict[str, Any], run: Any, processed: NDArray[np.float64],
                      curves: Mapping[str, Any] | None, out: Path) -> Path:
     """
-    Write ``report.html`` of an applied model into the staged folder ``out``.
+    Write ``report.html`` of an applied model into the staged folder ``out``; return its path.
 
-    Parameters
-    ----------
-    doc : dict
-        The metrics.json document.
-    run, processed, curves
-        As :func:`apply_page`.
-    out : pathlib.Path
-        The staged ``--out`` folder.
-
-    Returns
-    -------
-    pathlib.Path
+    ``doc`` (the metrics.json document), ``run``, ``processed`` and ``curves`` are those of
+    :func:`apply_page`.
 
     """
     return write_report_html(apply_page(doc, run, processed, curves), out / 'report.html')

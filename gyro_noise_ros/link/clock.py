@@ -13,33 +13,28 @@
 # limitations under the License.
 
 """
-Device time to host time.
-
-Unwrapping of the 32-bit microsecond counter and an offset-and-drift estimator.
+Device time to host time: unwrapping of the 32-bit microsecond counter, offset-and-drift fit.
 
 Model. The board stamps every sample with its own clock ``d`` (microseconds, uint32, wraps every
 2**32 us = 71.6 min). A batch whose newest sample has device time ``d_k`` is received by the host
-at ``h_k = a + b d_k + L + e_k`` (host ns), where ``a`` is the clock offset, ``b = 1 + drift`` the
-rate ratio (a 50 ppm crystal gives b - 1 = 5e-5), ``L`` the smallest transport latency and ``e_k >=
-0`` the USB/OS receive jitter (typically exponential-like, milliseconds).
+at ``h_k = a + b d_k + L + e_k`` (host ns): clock offset ``a``, rate ratio ``b = 1 + drift`` (a
+50 ppm crystal gives b - 1 = 5e-5), the smallest transport latency ``L`` and the receive jitter
+``e_k >= 0`` (USB/OS, milliseconds).
 
-Estimator (minimum-delay line fit). Jitter only ever *adds* delay, so the informative receive times
-are the earliest ones. Device time is cut into blocks of ``block_s`` (1 s); per block the host
-keeps the single point with the smallest ``h - d``; a least-squares line through the minima of the
-last ``window_blocks`` closed blocks (60) gives ``a`` and ``b``; before two blocks have closed the
-slope is 1 and the offset the smallest ``h - d`` so far. ``latency_ns`` (default 0) is the
-constant ``L``, which no receive-only method can observe.
+Estimator (minimum-delay line fit). Jitter only ever *adds* delay, so per block of ``block_s``
+(1 s) of device time the host keeps the point with the smallest ``h - d``; a least-squares line
+through the minima of the last ``window_blocks`` (60) closed blocks gives ``a`` and ``b``; before
+two blocks have closed the slope is 1 and the offset the smallest ``h - d`` so far.
+``latency_ns`` (default 0) is the constant ``L``, which no receive-only method can observe.
 
-Stamps never step (a step of a fraction of a period reads as a lost sample downstream). The first
-``settle_s`` of device time of an epoch is held back while the offset converges, then stamped
-with the line; from then on the stamps follow their own line, continuous across batches, whose
-rate is the estimate's corrected by the offset to it over ``slew_time_s`` (at most
-``max_slew_ppm``). A batch whose last stamp would lie after its receive time (a sample cannot be
-received before it exists) is compressed onto it, so no stamp step is longer than a period. Resets
-(a backward jump of device time, or a device gap longer than the host gap by more than
-``reset_threshold_s``; a host gap longer than the device gap is a late read, not a jump) restart
-the estimator and the settling; stamps stay strictly increasing.
-The measured error is in ``docs/portenta_link.md`` (``test/test_link_clock.py``).
+Stamps never step (a step of a fraction of a period reads as a lost sample downstream): the first
+``settle_s`` of an epoch are held back while the offset converges; then the stamps follow a line
+of their own, continuous across batches, at the estimate's rate corrected by the offset to it
+over :data:`SLEW_TIME_S` (at most :data:`MAX_SLEW_PPM`); a batch whose last stamp would lie
+after its receive time is compressed onto it. Resets (a backward jump of device time, or a device
+gap longer than the host gap by more than ``reset_threshold_s``; a longer host gap is a late
+read) restart the estimator and the settling; stamps stay strictly increasing. The measured
+stamp error: docs/portenta_link.md section 6 (``test/test_link_clock.py``).
 """
 
 from collections import deque

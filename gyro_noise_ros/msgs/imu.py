@@ -137,29 +137,12 @@ def encode_imu_cdr(stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: Array
                    angular_velocity_covariance: ArrayLike | None = None,
                    linear_acceleration_covariance: ArrayLike | None = None) -> list[bytes]:
     """
-    Serialise ``sensor_msgs/Imu`` messages to little-endian CDR in bulk.
+    Serialise ``sensor_msgs/Imu`` messages to little-endian CDR in bulk, one bytes object each.
 
-    Byte-identical to rosbags' ``typestore.serialize_cdr``. Orientation is not estimated (REP-145):
-    quaternion (0, 0, 0, 1) as in the message default and ``orientation_covariance[0] = -1``.
-    The result can be written to a bag or published as a serialised message.
-
-    Parameters
-    ----------
-    stamp_ns : array_like of int, shape (n,)
-        Header stamps in ns.
-    gyro_rad_s : array_like of float, shape (n, 3)
-        Angular velocity x, y, z in rad/s.
-    accel_m_s2 : array_like of float, shape (n, 3)
-        Linear acceleration x, y, z in m/s^2.
-    frame_id : str
-        ``header.frame_id``.
-    angular_velocity_covariance, linear_acceleration_covariance : array_like, shape (9,) or (n, 9)
-        Row-major covariance in (rad/s)^2 and (m/s^2)^2; zeros (unknown) if None.
-
-    Returns
-    -------
-    list of bytes
-        One serialised message per stamp.
+    Byte-identical to rosbags' ``typestore.serialize_cdr``; orientation is not estimated (REP-145:
+    quaternion (0, 0, 0, 1), ``orientation_covariance[0] = -1``). ``stamp_ns`` (n,) are the header
+    stamps in ns, ``gyro_rad_s`` and ``accel_m_s2`` (n, 3) in rad/s and m/s^2, the covariances (9,)
+    or (n, 9), row-major, in (rad/s)^2 and (m/s^2)^2 (zeros, unknown, if None).
 
     """
     return encode_cdr(*_imu_parts(stamp_ns, gyro_rad_s, accel_m_s2, frame_id,
@@ -171,22 +154,11 @@ def encode_imu_rows(stamp_ns: ArrayLike, gyro_rad_s: ArrayLike, accel_m_s2: Arra
                     angular_velocity_covariance: ArrayLike | None = None,
                     linear_acceleration_covariance: ArrayLike | None = None) -> np.ndarray:
     """
-    Serialise ``sensor_msgs/Imu`` messages to little-endian CDR, one row of a byte matrix each.
+    Serialise ``sensor_msgs/Imu`` messages to CDR as the rows of a C-contiguous uint8 matrix.
 
-    Same bytes as :func:`encode_imu_cdr` (``rows[i].tobytes() == encode_imu_cdr(...)[i]``), without
-    one Python object per message: for bulk writers.
-
-    Parameters
-    ----------
-    stamp_ns, gyro_rad_s, accel_m_s2, frame_id : array_like, str
-        As in :func:`encode_imu_cdr`.
-    angular_velocity_covariance, linear_acceleration_covariance : array_like, optional
-        As in :func:`encode_imu_cdr`.
-
-    Returns
-    -------
-    numpy.ndarray of uint8, shape (n, message size)
-        C-contiguous; every message of one frame_id has the same size.
+    Arguments and bytes as :func:`encode_imu_cdr` (``rows[i].tobytes() ==
+    encode_imu_cdr(...)[i]``), without one Python object per message: for bulk writers. Every
+    message of one ``frame_id`` has the same size, the row length.
 
     """
     return encode_cdr_rows(*_imu_parts(

@@ -102,18 +102,9 @@ def driver_qos(depth: int) -> QoSProfile:
     """
     Return the QoS a driver publishes with (REP-2003): reliable, volatile, keep last ``depth``.
 
-    A reliable publisher serves every subscriber, the default-QoS (reliable) ones such as RViz or a
-    user's node as well as best-effort sensor-data ones; a best-effort publisher silently starves
-    every reliable subscriber.
-
-    Parameters
-    ----------
-    depth : int
-        History depth in messages (deep enough for the bursts of a 6.66 kHz stream).
-
-    Returns
-    -------
-    rclpy.qos.QoSProfile
+    A reliable publisher serves every subscriber, default-QoS (reliable) ones such as RViz as well
+    as best-effort sensor-data ones; a best-effort one silently starves every reliable subscriber.
+    ``depth`` (messages) must hold the bursts of a 6.66 kHz stream.
 
     """
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth),
@@ -123,25 +114,12 @@ def driver_qos(depth: int) -> QoSProfile:
 
 def wall_timer(node: Node, period_s: float, callback: Callable[[], Any]) -> Timer:
     """
-    Create a timer on the steady (wall) clock, whatever ``use_sim_time`` says.
+    Create a timer of ``period_s`` s on the steady (wall) clock, whatever ``use_sim_time`` says.
 
     Draining subscriptions and periodic diagnostics must keep their cadence when ``/clock`` is
-    late, paused or absent (``ros2 bag play --clock`` under ``use_sim_time:=true``): on the ROS
-    clock such a timer stops, the subscription queues overflow and the analyzer reports samples
-    lost that were never lost. Stamps still come from the node clock.
-
-    Parameters
-    ----------
-    node : rclpy.node.Node
-        The node owning the timer.
-    period_s : float
-        Period (s of wall time).
-    callback : callable
-        Called without arguments.
-
-    Returns
-    -------
-    rclpy.timer.Timer
+    late, paused or absent (``ros2 bag play --clock``): on the ROS clock such a timer stops, the
+    queues overflow and samples never lost are reported lost. Stamps still come from the node
+    clock.
 
     """
     return node.create_timer(period_s, callback, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -196,15 +174,7 @@ def diagnostics_publisher(node: Node) -> Publisher:
     """
     Create the ``/diagnostics`` publisher as diagnostic_updater does (absolute topic, reliable).
 
-    Parameters
-    ----------
-    node : rclpy.node.Node
-        The publishing node.
-
-    Returns
-    -------
-    rclpy.publisher.Publisher
-        Publisher of ``diagnostic_msgs/DiagnosticArray``.
+    It publishes ``diagnostic_msgs/DiagnosticArray`` for ``node``, keeping the last 10.
 
     """
     return node.create_publisher(DiagnosticArray, '/diagnostics', 10)
@@ -215,23 +185,10 @@ def diagnostic_status(name: str, hardware_id: str, level: bytes, message: str,
     """
     Build one ``DiagnosticStatus`` in diagnostic_updater's shape.
 
-    Parameters
-    ----------
-    name : str
-        ``'<node name>: <task>'``.
-    hardware_id : str
-        Stable identifier of the device (e.g. ``'lsm6dso32@/dev/ttyACM0'``).
-    level : bytes
-        :data:`OK`, :data:`WARN`, :data:`ERROR` or :data:`STALE`.
-    message : str
-        One sentence naming the worst item.
-    values : sequence of (str, object)
-        Readable keys with the unit in parentheses and their values; values are formatted with
-        ``str`` unless already strings (format floats before passing them to control digits).
-
-    Returns
-    -------
-    diagnostic_msgs.msg.DiagnosticStatus
+    ``name`` is ``'<node name>: <task>'``, ``hardware_id`` a stable device identifier, ``level``
+    :data:`OK`, :data:`WARN`, :data:`ERROR` or :data:`STALE`, ``message`` one sentence naming the
+    worst item; ``values`` are (readable key with the unit in parentheses, value) pairs, a value
+    not yet a string formatted by ``str`` (format floats first to control the digits).
 
     """
     return DiagnosticStatus(level=level, name=name, message=message, hardware_id=hardware_id,

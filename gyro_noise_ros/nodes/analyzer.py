@@ -20,36 +20,22 @@ sensor-data QoS, and runs the streaming engine (:mod:`gyro_noise_ros.core.engine
 same chunks, per-chunk numbers, sequence statistics (paper 000 Tables 3-6) and health verdicts as
 ``gyro_noise_analyze`` gives for a recording of the same messages.
 
-Ingestion. A Python callback per message at 6.66 kHz costs half a core, so the subscriptions are
-``raw=True`` in a callback group the executor never runs (``PolledGroup``); a wall-clock timer
-takes every queued message each ``drain_period_s`` and decodes the batch in bulk
-(:func:`gyro_noise_ros.bag.decode_imu`). The QoS history (``queue_depth`` = 20,000 messages, 3 s at
-6.66 kHz) holds far more than one drain period (``bench/bench_analyzer_node.py``). The timers run
-on the wall clock, so a paused ``/clock`` under ``use_sim_time`` cannot stall the drain.
+Ingestion: ``raw=True`` subscriptions in a callback group the executor never runs
+(``PolledGroup``), drained every ``drain_period_s`` by a wall-clock timer and decoded in bulk
+(:func:`gyro_noise_ros.bag.decode_imu`); the QoS history (``queue_depth`` messages) holds far more
+than one drain period. Analysis: :meth:`NoiseEngine.ingest` runs in the executor thread; each
+complete chunk is a job in a bounded queue (``analysis_queue_chunks``) served by one worker
+thread; a full queue skips the chunk (counted); results come back to the executor thread, which
+alone mutates the engine.
 
-Analysis. :meth:`NoiseEngine.ingest` (cheap) runs in the executor thread; each complete chunk is a
-job in a bounded queue (``analysis_queue_chunks``) served by one worker thread (both methods on the
-full order grid; numpy FFTs release the GIL). A full queue skips the chunk
-(:meth:`NoiseEngine.skip`, counted in ``Chunks skipped``). Results come back to the executor
-thread, which alone mutates the engine.
-
-Outputs (``docs/diagnostics.md``, ``docs/demo.md``):
-
-- ``/diagnostics``: after every chunk and every ``diagnostics_period_s``, one status per axis
-  ``'<node name>: axis x'`` with the health verdict (:mod:`gyro_noise_ros.core.health`), its items
-  and the last chunk's numbers (:mod:`gyro_noise_ros.core.items`);
-- ``~/bias`` (rad/s), ``~/variance`` ((rad/s)^2), ``~/alpha_var``, ``~/alpha_corr``, ``~/f_var``,
-  ``~/f_corr`` (dimensionless), ``~/offset_drift`` (rad/s^2, the least-squares slope so far or over
-  ``history_chunks``): ``geometry_msgs/Vector3Stamped`` per chunk, x, y, z = axes (NaN for an axis
-  not analysed or not ``ok``), stamped with the chunk's first sample, ``frame_id`` of the IMU.
-
-Messages are counted per publisher (the writer GID of each message, :mod:`._publishers`). A second
-publisher on ``imu/data_raw`` (another driver, a replayed bag, another robot's graph) mixes two
-sensors' samples into one analysis: the node warns once in its log, naming the publishers, and the
-statuses turn WARN while more than one publisher has been seen (``Publishers``, ``Messages per
-publisher``).
-
-``gyro_noise_monitor`` (:mod:`gyro_noise_ros.nodes.monitor`) prints the diagnostics as lines.
+Outputs: ``/diagnostics``, one status ``'<node name>: axis x'`` per axis after every chunk and
+every ``diagnostics_period_s`` (:mod:`..core.health`, :mod:`..core.items`); per chunk,
+``geometry_msgs/Vector3Stamped`` (x, y, z = axes) on ``~/bias`` (rad/s), ``~/variance``
+((rad/s)^2), ``~/alpha_var``, ``~/alpha_corr``, ``~/f_var``, ``~/f_corr`` (dimensionless) and
+``~/offset_drift`` (rad/s^2). Messages are counted per publisher (:mod:`._publishers`); a second
+publisher of the data turns the statuses WARN. Keys, topics, costs and sim-time playback:
+docs/demo.md (the analyzer node) and docs/diagnostics.md; ``gyro_noise_monitor`` prints the
+statuses as lines.
 """
 
 from collections.abc import Callable, Mapping
@@ -385,19 +371,10 @@ class NoiseAnalyzerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """
-    Run the analyzer node until Ctrl-C or SIGTERM.
+    Run the analyzer node until Ctrl-C or SIGTERM; return 0, or 2 for a bad parameter.
 
-    Parameters
-    ----------
-    args : list of str or None
-        Command line (``--ros-args -p chunk_size:=10000 --params-file
-        config/noise_analyzer.yaml``);
-        None: ``sys.argv``.
-
-    Returns
-    -------
-    int
-        0, or 2 for a bad parameter.
+    ``args`` is the command line (``--ros-args -p chunk_size:=10000 --params-file ...``; None:
+    ``sys.argv``).
 
     """
     return run_node(NoiseAnalyzerNode, args, prog=NODE_NAME, parameters=PARAMETERS,

@@ -16,12 +16,10 @@ ROS 2 driver of the LSM6DSO32 read by an Arduino Portenta H7: ``lsm6dso32_driver
 
 A managed (lifecycle) node. *configure* starts the link: the board's serial port (a device path
 or a pyserial URL such as ``socket://127.0.0.1:PORT`` for the emulator) is opened and the board
-configured (CONFIGURE, then its ACK; ``link.session``), retried every ``reconnect_period_s`` until
-it succeeds; *activate* publishes the samples; *deactivate* stops publishing (the link stays up,
-samples are counted and dropped); *cleanup* and *shutdown* close the port. ``autostart`` (default
-true) walks the node to active at start, so ``lsm6dso32_driver --ros-args -p port:=...`` streams
-at once. Topics (REP-145, reliable keep-last ``qos_depth`` so every subscriber receives them,
-REP-2003):
+configured (``link.session``), retried every ``reconnect_period_s``; *activate* publishes;
+*deactivate* stops publishing (samples counted and dropped); *cleanup* and *shutdown* close the
+port. ``autostart`` (default true) walks the node to active at start. Topics (REP-145; reliable
+keep-last ``qos_depth``, REP-2003):
 
 - ``imu/data_raw`` (``sensor_msgs/Imu``, one message per sample: rad/s, m/s^2, orientation
   unknown so ``orientation_covariance[0] = -1``, diagonal covariances from parameters);
@@ -31,15 +29,12 @@ REP-2003):
 
 One reader thread owns the port: it wakes when bytes arrive, decodes (``link.protocol.Decoder``),
 maps device time to the node clock without steps (``link.clock.DeviceClock``; the first
-``clock_settle_s`` of a board epoch are held while the mapping converges), scales to SI,
-serialises in bulk (``bag.encode_imu_cdr``) and publishes each board frame's messages at once
-(rclpy publishers are thread-safe), so no queue sits between threads and the executor only runs
-the diagnostics timer and the lifecycle services. A sample is published only if its wrapping
-uint32 counter is ahead of the last published one (``link.sequence.SequenceTracker``): nothing
-twice, every gap counted in ``Samples lost`` (the board's own count, never the stamps'); a
-counter falling back by more than one second of samples is a board restart (new epoch). Any
-read/write error or ``data_timeout_s`` of silence closes the port, reports ERROR and retries; the
-node never exits for it.
+``clock_settle_s`` of an epoch held while it converges), scales to SI, serialises in bulk and
+publishes each board frame's messages itself, so no queue sits between threads. A sample is
+published only if its wrapping uint32 counter is ahead of the last one published
+(``link.sequence.SequenceTracker``): nothing twice, every gap counted in ``Samples lost`` (the
+board's count, never the stamps'). A read/write error or ``data_timeout_s`` of silence closes the
+port, reports ERROR and retries; the node never exits for it. Details: docs/diagnostics.md.
 """
 
 from collections.abc import Iterable, Mapping
@@ -432,16 +427,8 @@ def main(args: list[str] | None = None) -> int:
     """
     Run ``lsm6dso32_driver`` (console script); parameters via ``--ros-args -p``/``--params-file``.
 
-    Parameters
-    ----------
-    args : list of str or None
-        Command line (None: ``sys.argv``).
-
-    Returns
-    -------
-    int
-        0 on Ctrl-C or external shutdown; 2 with one line on stderr for a bad parameter or an
-        unknown ROS argument.
+    ``args`` is the command line (None: ``sys.argv``). Returns 0 on Ctrl-C or external shutdown; 2,
+    with one line on stderr, for a bad parameter or an unknown ROS argument.
 
     """
     return run_node(Lsm6dso32Driver, args, prog=NODE_NAME, parameters=PARAMETERS,

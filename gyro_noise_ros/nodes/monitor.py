@@ -85,19 +85,7 @@ class DiagnosticsMonitor(Node):
 
 
 def parse_args(argv: Sequence[str]) -> argparse.Namespace:
-    """
-    Parse the monitor's own options (ROS arguments removed).
-
-    Parameters
-    ----------
-    argv : list of str
-        Command line without the program name.
-
-    Returns
-    -------
-    argparse.Namespace
-
-    """
+    """Parse the monitor's own options from ``argv`` (no program name, no ROS arguments)."""
     return build_parser().parse_args(argv)
 
 

@@ -16,33 +16,25 @@
 ROS 2 node ``gyro_noise_record``: record ``imu/data_raw`` and ``imu/temperature`` into a rosbag2.
 
 ``ros2 bag`` is not installable from PyPI, so this small recorder writes rosbag2 (sqlite3 or MCAP)
-through :class:`gyro_noise_ros.bag.ImuBagWriter` (the rosbags library). With a full ROS install,
-``ros2 bag record /imu/data_raw /imu/temperature`` does the same job and the bags are
-interchangeable.
+through :class:`gyro_noise_ros.bag.ImuBagWriter` (the rosbags library); with a full ROS install
+``ros2 bag record /imu/data_raw /imu/temperature`` does the same job, its bags interchangeable.
 
-Loss-free at 6.66 kHz: the subscriptions are ``raw=True`` (serialised CDR, no Python message
-objects) and belong to a callback group the executor never runs (:class:`PolledGroup`), so the
-executor does not wake once per message; a 50 ms timer drains them with ``take_message`` into
-lists and writes each batch in bulk (a batch of one verified layout byte for byte, as received;
-anything else decoded and re-encoded). The QoS history (``queue_depth`` messages, 3 s at
-6.66 kHz) holds far more than 50 ms of data, so nothing is overwritten between drains even when a
-sqlite3 commit or a busy CPU delays one.
+Loss-free at 6.66 kHz: the subscriptions are ``raw=True`` (serialised CDR) in a callback group
+the executor never runs (:class:`PolledGroup`); a 50 ms timer drains them with ``take_message``
+and writes each batch in bulk (a batch of one verified layout byte for byte, as received; anything
+else decoded and re-encoded). The QoS history (``queue_depth`` messages) holds far more than
+50 ms of data, so nothing is overwritten between drains.
 
-Messages received and written are counted per publisher (the writer GID of each message,
-:mod:`._publishers`); each publisher's DDS publication sequence numbers reveal messages the
-transport dropped before they reached this node, counted as ``dropped``. When a second publisher
-appears on a recorded topic (another driver, a replayed bag, another robot's graph) the recorder
-warns once, naming the publishers: the bag then mixes their streams. On SIGINT or SIGTERM the
-queues are drained once more and the bag is closed cleanly (its ``metadata.yaml`` written), then
-one summary line is printed.
+Messages received and written are counted per publisher (:mod:`._publishers`); gaps in each
+publisher's DDS publication sequence numbers are counted as ``dropped``; a second publisher on a
+recorded topic is warned about once, naming the publishers. On SIGINT or SIGTERM the queues are
+drained once more, the bag is closed (its ``metadata.yaml`` written) and one summary line is
+printed.
 
-Crash safety: every ``flush_period_s`` (0.5 s) the bag is flushed (:meth:`ImuBagWriter.flush`:
-sqlite3 commits its transaction; MCAP closes its pending chunk, which rosbags also closes past
-1 MiB, about 0.44 s at 6.66 kHz, and hands it to the operating system). A recorder killed by
-SIGKILL therefore loses at most the messages of the last ``flush_period_s`` plus those still
-queued in DDS (a drain period, 50 ms, when the host keeps up); the tools read the killed
-recording as it is and ``gyro_noise_record repair`` writes a complete bag from it
-(``docs/bags.md``).
+Crash safety: every ``flush_period_s`` (0.5 s) the bag is flushed (:meth:`ImuBagWriter.flush`),
+so a recorder killed by SIGKILL loses at most that span plus what DDS still queues; the tools
+read the killed recording as it is and ``gyro_noise_record repair`` writes a complete bag from it
+(docs/bags.md, killed recordings; docs/demo.md, the recorder).
 """
 
 from collections.abc import Iterator, Sequence
@@ -358,19 +350,11 @@ def _log_times(received: Sequence[int], fallback_ns: np.ndarray | None
 
 def main(args: list[str] | None = None) -> int:
     """
-    Run the recorder until Ctrl-C or SIGTERM.
+    Run the recorder until Ctrl-C or SIGTERM; ``args`` is the command line (None: ``sys.argv``).
 
-    Parameters
-    ----------
-    args : list of str or None
-        Command line (``--ros-args -p output:=my_bag -p storage:=mcap``); None: ``sys.argv``.
-
-    Returns
-    -------
-    int
-        0, 130/143 after SIGINT/SIGTERM (the bag closed), 2 for a bad or unknown parameter, 6
-        when the bag cannot be created (checked at start: it exists without ``overwrite``, under
-        a file, a read-only folder) or written (disk full).
+    Returns 0; 130/143 after SIGINT/SIGTERM (the bag closed); 2 for a bad or unknown parameter; 6
+    when the bag cannot be created (it exists without ``overwrite``, under a file, a read-only
+    folder) or written (disk full).
 
     """
     return run_node(RecorderNode, args, prog=NODE_NAME, parameters=PARAMETERS,

@@ -21,25 +21,20 @@ The baselines the parallel model of paper 002 is measured against, as ThermalMet
 - ``bp``: a back-propagation network (one sigmoid hidden layer) from [T, dT] to the gyro
   offset, the paper's second comparison (causal).
 - ``emd_wtd_sabp``: EMD; the fast IMFs denoised by WTD; the slow IMFs and the residue (the
-  drift) compensated by a BP network whose weights are found by simulated annealing and then
-  refined by gradient descent, the paper's third comparison (non-causal).
-- ``poly3``: the PX4 / ArduPilot thermal calibration: per axis, a 3rd-order polynomial of the
-  gyro offset in (T - T_ref) (causal). It cannot represent a drift that depends on dT.
-- ``linear_tdt``: linear least squares on the monomials of T and dT up to total degree 3
-  (causal).
+  drift) compensated by a BP network found by simulated annealing and refined by gradient
+  descent, the paper's third comparison (non-causal).
+- ``poly3``: the PX4 / ArduPilot thermal calibration, per axis a cubic of the gyro offset in
+  (T - T_ref) (causal); it cannot represent a drift that depends on dT.
+- ``linear_tdt``: linear least squares on the monomials of T and dT up to total degree 3 (causal).
 
-dT is always :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` (causal trailing-window
-slope, the first window backfilled), so what is fitted offline is what the live node evaluates.
-Causal methods give ``drift_rad_s(temperature_c, dtemp_c_s)`` and ``apply(run)`` is exactly
-``gyro - drift_rad_s(T, dT)``.
-
-Outside the trained range of T and dT nothing is clipped silently; each method states what it
-does (its ``out_of_range`` attribute, counted by
-:func:`gyro_noise_ros.thermal.methods.range_report`): ``poly3`` holds the offset at the range's
-ends (PX4's and ArduPilot's documented formula, so an exported calibration does exactly what
-the model does), ``linear_tdt`` extrapolates its polynomial, ``bp`` and ``emd_wtd_sabp``
-continue their network linearly from the nearest trained point along its gradient. Equations
-and constants: ``docs/thermal_data.md``.
+T in degC, dT in degC/s, always :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` (causal
+trailing-window slope), so what is fitted offline is what the live node evaluates; rates in
+rad/s. Causal methods give ``drift_rad_s(temperature_c, dtemp_c_s)``, and ``apply(run)`` is
+exactly ``gyro - drift_rad_s(T, dT)``. Outside the trained range of T and dT each method states
+what it does (``out_of_range``, :func:`gyro_noise_ros.thermal.methods.range_report`): ``poly3``
+holds the offset at the range's ends (as PX4 and ArduPilot do), ``linear_tdt`` extrapolates its
+polynomial, ``bp`` and ``emd_wtd_sabp`` continue their network linearly along its gradient.
+Equations and constants: ``docs/thermal_data.md``.
 """
 
 from collections.abc import Callable, Mapping

@@ -15,40 +15,27 @@
 """
 Elman network trained by beetle antennae search (paper 002, eqs. 28-34).
 
-The network maps the temperature field M = [T, dT] (eq. 28) to the drift S (eq. 29) with two
-sigmoid hidden layers, each fed back through a context layer holding its previous output
-(eq. 33):
+The network maps the temperature field M = [T, dT] (degC, degC/s; eq. 28) to the drift S (the
+gyro's unit, rad/s; eq. 29) with two sigmoid hidden layers, each fed back through a context layer
+holding its previous output (eq. 33; the linear output layer is our reading of its open f)::
 
     OI(k) = sigmoid(W1 OI(k - 1) + W2 X(k) - a_i)
     OH(k) = sigmoid(W3 OI(k) + W4 OH(k - 1) - a_j)
     Y(k)  = W5 OH(k) - a_k
 
-The output layer is linear (eq. 33 writes an activation f without fixing it; a linear output
-reaches the whole normalised range). Inputs and output are scaled to [-1, 1] with the training
-ranges; the scalers are part of the model. The contexts start at 0.5 (sigmoid's midpoint). The
-recurrence runs at a fixed step ``dt_s``: the model is evaluated on a grid with the step it was
-trained on.
+Inputs and output are scaled to [-1, 1] with the training ranges (the scalers are part of the
+model), except ``symmetric`` columns (the rate), divided by their largest magnitude so that a
+steady temperature stays 0. Contexts start at 0.5; the recurrence runs at the fixed step ``dt_s``
+it was trained on.
 
-All weights and thresholds form one vector found by beetle antennae search (eqs. 30-32): a
-random unit direction b, antennae at ``x +- d b``, a step ``x <- x - lam b sign(f(x + d b) -
-f(x - d b))`` towards the antenna with the lower mean squared error (eq. 34; eq. 32 is written
-for a maximised intensity, we minimise), and the paper's decay ``d <- 0.95 d + 0.01``,
-``lam <- 0.95 lam``. Since lam vanishes after about a hundred steps, the search runs in
-``epochs``: each restarts d and lam from their initial values at the best point so far (one
-epoch is the paper's algorithm). The best point ever seen is kept.
-
-Ours, beyond the paper: a final local refinement. A random-direction search moves along one
-direction of the ~100-dimensional weight space per step; it finds a good basin but not its
-bottom (on the docs' example its in-sample drift error was 1-2x that of a cubic in T alone).
-From BAS's best point, L-BFGS (scipy) minimises the same fitness with its exact gradient
-(back-propagation through time, :func:`_mse_grad`, checked against finite differences in the
-tests); ``refine_iterations = 0`` is BAS alone. Both stages are kept in the model
-(``bas_mse``, ``theta_bas``), so the report can show what each did.
-
-Input scaling: min..max to [-1, 1] per input, except columns named ``symmetric`` (the
-temperature rate), which are divided by their largest magnitude so that 0 (a steady
-temperature) stays 0: a heating-only training run has no negative rate, and min-max scaling
-would put "no change" at -1 and every cooling rate beyond it.
+All weights and thresholds form one vector found by beetle antennae search (eqs. 30-32, 34):
+antennae at ``x +- d b`` along a random unit direction b, a step
+``x <- x - lam b sign(f(x + d b) - f(x - d b))`` towards the lower mean squared error, decay
+``d <- 0.95 d + 0.01``, ``lam <- 0.95 lam``, restarted in ``epochs`` (one epoch is the paper's
+algorithm). Ours, beyond the paper: L-BFGS from BAS's best point on the same fitness with its
+exact gradient (back-propagation through time, :func:`_mse_grad`; ``refine_iterations = 0`` is
+BAS alone), and :func:`fit_drift`, a stated basis (cubic in T, linear in dT) before the network.
+Why, and the measured errors of each stage: docs/thermal_model.md (Elman network section).
 """
 
 from collections.abc import Callable, Mapping, Sequence

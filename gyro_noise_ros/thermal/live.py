@@ -15,34 +15,27 @@
 """
 Live evaluation of a causal thermal drift model: what the ``imu_compensator`` node subtracts.
 
-A thermal model (``gyro_noise_thermal fit``'s ``model.json``, or any object following
+A causal thermal model (``model.json`` of ``gyro_noise_thermal fit``, or any
 :class:`~gyro_noise_ros.thermal.run.ThermalMethod` with ``causal = True``) gives the gyro offset
-``drift_rad_s(T, dT)`` as a function of the die temperature T (degC) and its rate dT (degC/s).
-:class:`LiveDriftEvaluator` evaluates it at the temperature message rate and interpolates the
-offset linearly in time onto the gyro stamps:
+``drift_rad_s(T, dT)`` (rad/s) of the die temperature T (degC) and its rate dT (degC/s);
+:class:`LiveDriftEvaluator` evaluates it per temperature message, interpolated onto gyro stamps:
 
-- dT is :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` on a trailing buffer holding the
-  last ``rate_window_s`` of temperatures: the same trailing-window slope the offline fit used, so a
-  model sees the same inputs live as in training. As offline, the first ``rate_window_s`` after
-  the first temperature message have no filled window: those messages wait (pending knots) and
-  get the rate of the first message whose window is filled (the offline backfill); a model that
-  does not use dT (``uses_rate = False``, e.g. ``poly3``) does not wait. :attr:`start_up_s` is
-  that wait; the node holds the gyro samples meanwhile.
-- Each temperature message becomes a knot (stamp, offset). Gyro stamps between two knots get the
-  linear interpolation of the two offsets; gyro stamps after the newest knot get the newest offset
-  (live, the next temperature is not known yet); stamps before the first knot get the first one.
-- Range: a model is trusted over its training temperature range widened by its margin
-  (``range_margin_c``, the model's own or :data:`DEFAULT_RANGE_MARGIN_C`). A temperature outside
-  the range but within the margin is evaluated and flagged :data:`RANGE_MARGIN` (the node: WARN);
-  one beyond the margin is never extrapolated and is flagged :data:`RANGE_OUTSIDE` (the node:
-  ERROR): its knot holds the last offset evaluated inside the trusted span (``beyond='hold'``) or
-  carries no offset at all (``beyond='none'``). The rate is checked against the model's trained
-  rate range (``rate_range_c_s``) too: knots outside it are counted (:attr:`knots_rate_outside`)
-  and the model treats them as its ``out_of_range`` says (extrapolated, never clipped).
+- dT is :func:`~gyro_noise_ros.thermal.run.temperature_rate_c_s` on a trailing buffer of the last
+  ``rate_window_s`` of temperatures, as offline; the messages of the first window wait and get
+  the rate of the first message whose window is filled (the offline backfill; :attr:`start_up_s`,
+  none for a model with ``uses_rate = False`` such as ``poly3``).
+- Each temperature message is a knot (stamp, offset); gyro stamps between two knots get the
+  linear interpolation, those after the newest knot its offset, those before the first the first.
+- Range: the model is trusted over its training range widened by ``range_margin_c`` (its own or
+  :data:`DEFAULT_RANGE_MARGIN_C`). Within the margin a knot is evaluated and flagged
+  :data:`RANGE_MARGIN`; beyond it, never extrapolated, flagged :data:`RANGE_OUTSIDE`, holding the
+  last offset evaluated inside (``beyond='hold'``) or none (``beyond='none'``). Rates outside the
+  trained ``rate_range_c_s`` are counted (:attr:`knots_rate_outside`) and left to the model.
 
 Implausible temperatures (``core.plausible``) are rejected like non-finite ones; a hysteresis
 term (``lsq_cv``) gets its state carried over. Non-causal methods (VMD, TFPF, EMD, wavelet
-thresholding of the whole record) are refused, naming those offline-only steps. No ROS here.
+thresholding of the whole record) are refused, naming those offline-only steps. No ROS here;
+the node and its diagnostics: docs/compensation.md.
 """
 
 from collections.abc import Sequence

@@ -15,32 +15,24 @@
 """
 Honest metrics of a thermal method on a held-out run: noise terms, residual drift, bandwidth cost.
 
-Definitions (docs/thermal.md states the same):
+Definitions (docs/thermal.md, "Metrics", states them in full, with the verdict's keys):
 
 * **Angle random walk** N (deg/sqrt(h)) and **bias stability** (deg/h): the one Allan readout
-  (:func:`..core.readout.read_allan`) of the overlapping Allan deviation at the ``'dense'`` taus
-  (~10 per decade up to a quarter of the record, as ``gyro_noise_analyze --allan-taus dense``), as
-  the offline and live analyzers read them: N is the -1/2 line of
-  one contiguous white-noise region read at tau = 1 s (``arw_on_slope`` False: the curve has no
-  such region and N is only ADEV(1 s)); bias stability is where the usable curve stops falling,
-  *not* divided by 0.664 (that would be the IEEE 952 bias-instability coefficient B), with its tau
-  and ``bias_stability_upper_bound`` when the curve was not seen to turn up. Taus flattened by
-  smoothing (a low-pass or wavelet denoiser smooths sample to sample) are left out of both:
-  ``band_limited_below_s`` says up to where, so a denoiser cannot show a "bias stability" read
-  off its own smoothing.
+  (:func:`..core.readout.read_allan`) of the overlapping Allan deviation at the ``'dense'`` taus,
+  the numbers the offline and live analyzers print: N is the -1/2 line of one contiguous
+  white-noise region read at tau = 1 s; bias stability is where the usable curve stops falling
+  (*not* divided by 0.664, the IEEE 952 B). Taus flattened by smoothing are left out of both
+  (``band_limited_below_s``), so a denoiser cannot show a bias stability read off its smoothing.
 * **Residual drift** (deg/s): standard deviation (ddof = 1) of the means of consecutive,
   non-overlapping 60-s windows of the output.
 * **Bandwidth cost**: a known rate (a logarithmic chirp over ``f_lo_hz``..``f_hi_hz`` and a train
   of steps) is added to every axis of the held-out run; the method processes the run with and
-  without it; the difference is its response to the injected motion. Gain, phase and group delay
-  come from the band-averaged cross spectrum ``H = sum(Y conj(X)) / sum(|X|^2)`` over
-  log-spaced bands (20 per decade), with the bulk delay (cross-correlation peak) taken out
-  before averaging and put back after; the -3 dB bandwidth is the first band crossing of
-  ``|H| = 1/sqrt(2)`` going up in frequency (log-interpolated). The mean normalised step response
-  gives the 50 % delay, the 10-90 % rise time, the overshoot, the settled gain (< 1: slow motion
-  is removed) and the precursor, the largest change of the response in the last fifth of the
-  window before the step (> 5 %: the method responds to motion before it happens, which only an
-  offline, non-causal method can do).
+  without it; the difference is its response. Gain, phase and group delay come from the
+  band-averaged cross spectrum ``H = sum(Y conj(X)) / sum(|X|^2)`` over log-spaced bands (20 per
+  decade, the bulk delay taken out and put back); the -3 dB bandwidth is the first crossing of
+  ``|H| = 1/sqrt(2)`` going up in frequency. The mean normalised step response gives the 50 %
+  delay, the 10-90 % rise time, the overshoot, the settled gain and the precursor (> 5 % before
+  the step: the method is non-causal).
 """
 
 from collections.abc import Sequence
@@ -145,25 +137,11 @@ class NoiseMetrics:
 def noise_metrics(rate_rad_s: ArrayLike, rate_hz: float, *,
                   drift_window_s: float = DRIFT_WINDOW_S) -> NoiseMetrics:
     """
-    Compute ARW, bias stability and residual drift of one axis.
+    Compute ARW, bias stability and residual drift of one axis (module docstring).
 
-    Parameters
-    ----------
-    rate_rad_s : array_like
-        Angular rate (n,), rad/s, finite.
-    rate_hz : float
-        Sample rate (Hz).
-    drift_window_s : float, keyword-only
-        Window of the residual-drift means (s).
-
-    Returns
-    -------
-    NoiseMetrics
-
-    Raises
-    ------
-    InputDataError
-        Fewer than 8 samples or non-finite samples.
+    ``rate_rad_s`` (n,) is the finite angular rate in rad/s at ``rate_hz``; ``drift_window_s`` the
+    window of the residual-drift means (s). Raises InputDataError for fewer than 8 samples or
+    non-finite ones.
 
     """
     return _noise_metrics(rate_rad_s, rate_hz, drift_window_s)[0]
@@ -238,17 +216,7 @@ def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
     """
     Return :func:`residual_drift` of an angular rate (n, m) in rad/s as deg/s per axis (m,).
 
-    Parameters
-    ----------
-    rate_rad_s : array_like
-        Angular rate (n, m), rad/s; ``rate_hz`` and ``window_s`` as :func:`residual_drift`.
-    rate_hz, window_s : float
-        See :func:`residual_drift`.
-
-    Returns
-    -------
-    numpy.ndarray
-        (m,), deg/s.
+    ``rate_hz`` and ``window_s`` as in :func:`residual_drift`.
 
     """
     return residual_drift(rate_rad_s, rate_hz, window_s=window_s) * RAD_TO_DEG
@@ -257,26 +225,11 @@ def residual_drift_deg_s(rate_rad_s: ArrayLike, rate_hz: float, *,
 def white_floor_deg_s(arw_deg_sqrt_h: ArrayLike, *,
                       window_s: float = DRIFT_WINDOW_S) -> NDArray[np.float64]:
     """
-    Return the noise floor of the residual drift from the run's angle random walk, per axis.
+    Return the noise floor of the residual drift (deg/s per axis) from the run's angle random walk.
 
-    The residual drift a perfect drift model would leave if the run's noise were its white part:
-    the standard deviation of a ``window_s`` mean of white rate noise of Allan coefficient N
-    (the ARW of the one Allan readout, :func:`noise_metrics`), ``N / sqrt(window_s)``: the
-    white-noise level of the run over the band of the 60-s means. Read on the Allan deviation's
-    -1/2 region, it ignores both the slow noise (bias instability: the true floor is higher) and
-    noise above the readout's taus (quantization, aliasing), which 60-s means average away.
-
-    Parameters
-    ----------
-    arw_deg_sqrt_h : array_like
-        ARW per axis (deg/sqrt(h)); NaN where none could be read.
-    window_s : float, keyword-only
-        Window of the residual drift's means (s).
-
-    Returns
-    -------
-    numpy.ndarray
-        (m,), deg/s (NaN where the ARW is).
+    ``N / sqrt(window_s)``: the standard deviation of a ``window_s`` mean of white rate noise whose
+    Allan coefficient N is ``arw_deg_sqrt_h`` (deg/sqrt(h); NaN in, NaN out). It leaves out slow
+    noise and noise above the readout's taus (docs/thermal.md, the yardstick).
 
     """
     # deg/sqrt(h) -> deg/sqrt(s): / sqrt(3600 s/h) = / 60
@@ -468,19 +421,7 @@ class FrequencyResponse:
     minus_3db_bound: str
 
     def gain_at(self, f_hz: float) -> float:
-        """
-        Interpolate the gain at ``f_hz`` (log frequency).
-
-        Parameters
-        ----------
-        f_hz : float
-            Frequency (Hz).
-
-        Returns
-        -------
-        float
-
-        """
+        """Interpolate the gain at ``f_hz`` (Hz), linearly in log frequency."""
         return float(np.interp(np.log(f_hz), np.log(self.frequency_hz), self.gain))
 
 

@@ -17,35 +17,25 @@ Multi-objective particle swarm optimisation of the VMD parameters (paper 002, se
 
 The swarm searches (K, alpha) in [4, 12] x [1000, 10000] with the paper's settings (Np = NR = 40
 particles and archive, M = 10 iterations, w = 0.4, c1 = c2 = 1.5) and minimises two fitness
-values of the decomposition: the mean fuzzy entropy and the mean normalised permutation entropy of
-its modes (the paper names the two entropies as the fitness functions without saying how the
-modes' values are combined; the mean is our reading). K is rounded to an integer and alpha to
-1 before evaluation, so evaluations are cached by that key.
+values of the decomposition (our reading: the mean fuzzy entropy and the mean normalised
+permutation entropy of its modes). K is rounded to an integer and alpha to 1 before evaluation,
+and evaluations are cached by that key; the budget is at most Np x M decompositions.
 
 * Velocity and position (step C3): ``v <- chi (w v + c1 R1 (pbest - x) + c2 R2 (gbest - x))``,
-  ``x <- x + v``, clipped to the bounds (the velocity component that hit a bound is zeroed).
-* Personal best: replaced when the new fitness dominates it, or with probability 1/2 when
-  neither dominates (Coello et al. 2004).
-* Archive (the "save set"): the non-dominated points found so far. Its objective space is cut
-  into ``n_grid`` x ``n_grid`` cells spanning the archive's range; the leader gbest is drawn by
-  roulette with probability proportional to 1 / (points in its cell) (step C2); when the archive
-  exceeds NR, each cell with more than one point loses
-  ``ND = Int((|A| - NR) / |A| * Grid[k] + 0.5)`` random points (eq. 23), then, if still too many,
-  random points of the most crowded cell.
-* Budget: the initial swarm is the first of ``iterations`` evaluations of all particles, so the
-  paper's settings cost at most 40 x 10 = 400 decompositions (fewer with cache hits).
-* The pick (the paper reports one [K_best, alpha_best] without its rule): normalise both
-  objectives to [0, 1] over the final archive and take the point nearest to the ideal point
-  (0, 0); ties go to the smaller K, then the smaller alpha.
+  ``x <- x + v``, clipped to the bounds (the clipped velocity component zeroed).
+* Personal best: replaced when dominated, or with probability 1/2 when neither dominates.
+* Archive (the "save set"): the non-dominated points so far on an ``n_grid`` x ``n_grid`` grid;
+  the leader drawn with probability 1 / (points in its cell) (step C2); above NR points each
+  cell with more than one point loses ``ND = Int((|A| - NR) / |A| * Grid[k] + 0.5)`` random
+  points (eq. 23), then the most crowded cell until NR remain.
+* The pick (the paper gives no rule): the archive point nearest the ideal point (0, 0) of the
+  objectives normalised to [0, 1]; ties to the smaller K, then the smaller alpha.
+* :func:`refine` (ours): re-evaluates the best points of a search made on a cheaper stand-in
+  fitness with a reference fitness, polishes alpha by a compass search, and picks on it.
 
-* Refinement (:func:`refine`, ours, not in the paper): when the search ran on a cheaper
-  stand-in of the fitness (windows of the record), its best points, stratified by K, are
-  re-evaluated with a reference fitness (the whole record) and the pick's alpha is polished by
-  a compass search; the pick is then made on the reference fitness.
-
-Everything random comes from one ``numpy.random.Generator``; the result is a deterministic
-function of the seed. Fitness functions are plain picklable callables, evaluated through
-``map_fn`` (the built-in ``map`` by default; a process pool's ``map`` distributes them).
+Everything random comes from one ``numpy.random.Generator`` (a deterministic function of the
+seed). Fitness functions are plain picklable callables evaluated through ``map_fn`` (``map`` by
+default; a process pool's distributes them). Detail: docs/thermal_model.md (MOPSO section).
 """
 
 from collections.abc import Callable, Iterable, Sequence

@@ -53,19 +53,10 @@ __all__ = ['LeastSquaresOracle', 'fit_oracle', 'measured_terms', 'oracle_residua
 
 def true_terms(truth: ThermalTruth, model: ThermalModel) -> NDArray[np.float64]:
     """
-    Return the drift-law terms of a simulated run from its truth.
+    Return the (n, 7) drift-law terms (:attr:`ThermalModel.TERMS`) of a simulated run's truth.
 
-    Parameters
-    ----------
-    truth : ThermalTruth
-        The run's truth (die temperature, real-time rate, hysteresis state, compression).
-    model : ThermalModel
-        The device (knee, reference temperature).
-
-    Returns
-    -------
-    numpy.ndarray
-        (n, 7), columns :attr:`ThermalModel.TERMS`.
+    :meth:`ThermalModel.bias_terms` of the die temperature, its natural-time rate and the
+    hysteresis state of ``truth``, for the device ``model``.
 
     """
     return model.bias_terms(truth.die_c, np.asarray(truth.die_rate_c_s) / truth.compress,
@@ -127,20 +118,7 @@ class LeastSquaresOracle:
     rank: int
 
     def predict(self, terms: ArrayLike) -> NDArray[np.float64]:
-        """
-        Return the fitted drift at the rows of ``terms``.
-
-        Parameters
-        ----------
-        terms : array_like
-            (n, k).
-
-        Returns
-        -------
-        numpy.ndarray
-            (n, 3).
-
-        """
+        """Return the fitted drift (n, 3) at the rows of ``terms`` (n, k)."""
         return np.asarray(terms, dtype=float) @ self.coef
 
 

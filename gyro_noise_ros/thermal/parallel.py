@@ -15,46 +15,27 @@
 """
 The paper's parallel processing model (paper 002, section 3.5, Figure 7), per gyro axis.
 
-Fit on a training run:
+:class:`ParallelModel` is a ``ThermalMethod`` of :mod:`.run` (rad/s, degC; ``causal = False``: VMD
+and TFPF need the whole record, the live node refuses it). **Fit** on a training run:
 
-1. MOPSO (:mod:`.mopso`) chooses (K, alpha) minimising the mean fuzzy and permutation entropy
-   of the modes of a VMD. Speed: the fitness is evaluated on ``fitness_windows`` windows of
-   ``fitness_samples`` consecutive samples spread evenly over the run (same sample rate, so
-   alpha and the centre frequencies mean the same as on the whole run; the O(n^2) fuzzy
-   entropy costs ``windows x samples^2`` instead of ``n^2``), evaluations are cached by
-   (K, alpha), and ``workers > 1`` spreads them over processes. The windowed fitness ranks
-   points unlike the whole-run one, so :func:`.mopso.refine` then re-evaluates
-   ``refine_points`` of the search's best points (each K's best first) and spends
-   ``refine_polish`` evaluations on a compass search around the pick, all with the reference
-   fitness: the whole run when it holds at most ``refine_windows x refine_samples`` samples,
-   that many longer windows otherwise; the pick is made on it (the archive in ``fit_info``
-   too). ``fitness_samples=None`` evaluates on the whole run (the naive path, no refinement).
-2. VMD of the whole run with (K, alpha), warm-started from the middle window's centre frequencies
-   (``solver='exact'``, at most ``full_vmd_iter`` iterations: each costs two passes over the
-   spectrum, so the 1.44 M-sample run stays within seconds).
-3. The modes are classified by sample entropy (:mod:`.classify`) into drift, mixed, noise.
-4. The drift model (:func:`.elman.fit_drift`) learns the drift part from [T, dT] (dT from
-   :func:`..run.temperature_rate_c_s`), on block means over ``dt = ceil(n / elman_samples)``
-   samples (the drift is slow; the recurrence runs on that grid, here and when applied):
-   least squares on the stated basis ``drift_base`` (a cubic in T and a term linear in dT),
-   then an Elman network trained by beetle antennae search and refined by L-BFGS
-   (``elman_refine``, weight decay ``elman_weight_decay``) on what the basis leaves.
-   ``drift_base='none'`` with no decay is the paper's drift model, the network alone.
+1. MOPSO (:mod:`.mopso`) chooses (K, alpha) minimising the mean fuzzy and permutation entropy of
+   the modes of a VMD, on ``fitness_windows`` windows of ``fitness_samples`` samples (cached,
+   over ``workers`` processes), then :func:`.mopso.refine` re-ranks the best points on a
+   reference fitness (the whole run, or longer windows); ``fitness_samples=None`` is the naive
+   whole-run search.
+2. VMD of the whole run with (K, alpha), warm-started (at most ``full_vmd_iter`` iterations);
+   the modes classified by sample entropy (:mod:`.classify`) into drift, mixed, noise.
+3. The drift model (:func:`.elman.fit_drift`) learns the drift part from [T, dT] on block means
+   (at most ``elman_samples`` points): the stated basis ``drift_base``, then an Elman network on
+   what it leaves (``drift_base='none'`` with no decay is the paper's network alone).
 
-Apply to another run: VMD with the trained K, alpha, warm-started from the trained centre
-frequencies (converted through Hz if the sample rate differs; at most ``apply_vmd_iter``
-iterations), classification of the new modes, the noise modes dropped, TFPF
-(:mod:`.tfpf`) on the sum of the mixed modes, the drift model's prediction (interpolated from
-its grid; beyond the trained [T, dT] range the basis extrapolates and the network's inputs are
-held at the range's edge, ``last_info`` counts the fraction) subtracted from the sum of the
-drift modes, and the two parts added. VMD and TFPF need the whole
-record: the model is offline only (``causal = False``); the live node refuses it.
-
-Report: :meth:`ParallelModel.report_figures` (the hook; the drawing is
-:func:`.parallel_figures.parallel_figures`) gives the paper's Figures 11, 12 and 14-17 for a run
-from what :meth:`ParallelModel.apply` kept of its last call (plot-sized envelopes of the modes
-and parts, the drift part on the network's grid), so the report costs no second VMD when it
-follows ``apply`` on the same run object.
+**Apply** to another run: VMD with the trained K, alpha (warm-started, centre frequencies through
+Hz), the new modes classified, noise modes dropped, TFPF (:mod:`.tfpf`) on the sum of the mixed
+modes, the drift model's prediction subtracted from the sum of the drift modes (inputs held at
+the trained range's edge beyond it, counted in ``last_info``), the two parts added.
+:meth:`ParallelModel.report_figures` draws the paper's Figures 11, 12 and 14-17 from what
+``apply`` kept (:func:`.parallel_figures.parallel_figures`). Options, file format, costs and
+measurements: docs/thermal_model.md (the parallel model section).
 """
 
 from collections.abc import Callable, Mapping

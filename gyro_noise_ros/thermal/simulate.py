@@ -15,44 +15,27 @@
 """
 Seeded thermal test data: oven profiles of several shapes, a lagging die, the drift it drives.
 
-**Profiles.** The oven air temperature ``u(t)`` is piecewise linear in (natural, uncompressed)
-time. :class:`OvenProfile` is the experiment of paper 002 (section 4.1): one hour at room
-temperature, a fast heat to 60 degC, one hour there, then down in 10 degC steps to -40 degC with
-one hour at every step. :class:`ShapeProfile` gives the runs a held-out test needs, shaped
-differently from a training run: ``heating`` (a cold-soaked board warmed, the usual warm-up
-calibration), ``cooling``, ``staircase`` (heating in steps) and ``staircase_down``, ``cycle``
-(heat then cool, repeated), ``cool_reheat`` (cool then heat), ``soak`` (a cold board put into a
-warm chamber: the oven jumps, the die follows exponentially) and ``sine`` (a slow sinusoidal
-set-point). :data:`SHAPES` lists the names; :func:`make_profile` builds one by name.
+**Profiles.** The oven air temperature ``u(t)`` (degC) is piecewise linear in natural time.
+:class:`OvenProfile` is the experiment of paper 002 (section 4.1): an hour at room temperature,
+a fast heat to 60 degC, an hour there, then down in 10 degC steps to -40 degC, an hour at each.
+:class:`ShapeProfile` gives held-out runs shaped unlike a training run (:data:`SHAPES`:
+``heating``, ``cooling``, ``staircase``, ``staircase_down``, ``cycle``, ``cool_reheat``, ``soak``,
+``sine``); :func:`make_profile` builds one by name.
 
-**Die.** One first-order thermal lag (a lumped board in oven air)::
+**Die.** One first-order lag ``tau dT/dt = u(t) + dT_self - T``, solved exactly between samples
+for piecewise-linear ``u`` (first-order hold), so the die rate is exact too.
 
-    tau dT/dt = u(t) + dT_self - T
+**Gyro drift** of axis i (deg/s), ``d = T - T_ref``::
 
-solved exactly for piecewise-linear ``u`` between samples (first-order hold), so the die rate is
-exact too: ``dT/dt = (u + dT_self - T) / tau``.
+    b_i = b0 + c1 d + c2 d^2 + c3 d^3 + k tanh((T - T_k) / w_k) + g dT/dt_nat + h (z - T)
 
-**Gyro drift** of axis i (deg/s)::
-
-    b_i = b0 + c1 d + c2 d^2 + c3 d^3 + k tanh((T - T_k) / w_k) + g dT/dt_nat + h (z - T),
-    d = T - T_ref,
-
-a cubic plus a smooth knee (so that no low-order polynomial is exactly right), a thermal-gradient
-term proportional to the die rate, and an optional hysteresis: ``z`` is the play (backlash)
-operator of half-width r applied to T, so ``z - T`` is -r while heating, +r while cooling, and the
-bias-versus-temperature curve is a loop of height 2 h r. The seven terms are
-:meth:`ThermalModel.bias_terms`, the basis of the least-squares oracle
-(:mod:`gyro_noise_ros.thermal.oracle`). **Accelerometer drift** (mg): a cubic in d, the
-zero-g level change of the datasheet. The temperature sensor reads ``T + N(0, s^2)`` rounded to its
-LSB (1/256 degC, LSM6DSO32). The gyro adds white rate noise (angle random walk N) and a
-bias-instability-like sum of Gauss-Markov processes (the package's one model,
-:class:`gyro_noise_ros.core.simulate.GaussMarkov`); the accelerometer white noise.
-
-Time compression ``X`` runs the whole thermal experiment X times faster: oven, lag (tau / X) and
-the gradient term (which uses the rate in uncompressed time, ``dT/dt_nat = dT/dt / X``), so the
-bias-versus-temperature trajectory is the uncompressed one, only faster; the noise is not
-compressed. A train/test pair shares one compression (the same device in real time). Every
-constant is documented on :class:`ThermalModel` and in ``docs/thermal_data.md``.
+a cubic, a smooth knee, a thermal-gradient term in the die rate and a hysteresis (``z``: the play
+operator of half-width r on T, a loop of height 2 h r); the seven terms are
+:meth:`ThermalModel.bias_terms`, the oracle's basis (:mod:`.oracle`). Accelerometer drift (mg): a
+cubic in d. The temperature sensor reads ``T + N(0, s^2)`` rounded to 1/256 degC; the gyro adds
+white noise and :class:`~gyro_noise_ros.core.simulate.GaussMarkov` bias instability. Time
+compression ``X`` runs the thermal experiment X times faster (noise not compressed). Every
+constant: :class:`ThermalModel` and docs/thermal_data.md.
 """
 
 from collections.abc import Mapping
@@ -200,19 +183,7 @@ class OvenProfile(_PiecewiseProfile):
         return np.asarray(times), np.asarray(temps)
 
     def shifted(self, delta_c: float) -> 'OvenProfile':
-        """
-        Return the profile of a run whose room is ``delta_c`` warmer (the set-points stay).
-
-        Parameters
-        ----------
-        delta_c : float
-            Room temperature change (degC).
-
-        Returns
-        -------
-        OvenProfile
-
-        """
+        """Return the profile of a run whose room is ``delta_c`` (degC) warmer; set-points stay."""
         return replace(self, room_c=self.room_c + float(delta_c))
 
     def starting_at(self, start_c: float) -> 'OvenProfile':
@@ -344,19 +315,7 @@ class ShapeProfile(_PiecewiseProfile):
         return np.asarray(times), np.asarray(temps) + self.offset_c
 
     def shifted(self, delta_c: float) -> 'ShapeProfile':
-        """
-        Return the profile with every set-point ``delta_c`` warmer (degC).
-
-        Parameters
-        ----------
-        delta_c : float
-            Change (degC).
-
-        Returns
-        -------
-        ShapeProfile
-
-        """
+        """Return the profile with every set-point ``delta_c`` (degC) warmer."""
         return replace(self, offset_c=self.offset_c + float(delta_c))
 
     def starting_at(self, start_c: float) -> 'ShapeProfile':
@@ -1042,19 +1001,10 @@ def write_run_bag(path: StrPath, run: ThermalRun, truth: ThermalTruth, *, storag
 
 def truth_arrays(run: ThermalRun, truth: ThermalTruth) -> dict[str, Any]:
     """
-    Return the arrays of a run's truth as saved in ``<label>_truth.npz``.
+    Return the arrays of a run's truth as saved in ``<label>_truth.npz`` (name -> array or scalar).
 
-    Parameters
-    ----------
-    run : ThermalRun
-        The run (its stamps).
-    truth : ThermalTruth
-        Its truth.
-
-    Returns
-    -------
-    dict
-        Name -> array or scalar.
+    ``run`` gives the stamps, ``truth`` the rest (keys in docs/thermal_data.md, train and test
+    runs).
 
     """
     return {'t_s': run.t_s, 'oven_c': truth.oven_c, 'die_c': truth.die_c,

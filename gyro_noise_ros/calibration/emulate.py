@@ -34,8 +34,8 @@ tilted), :class:`MultiPose` (any number of poses in arbitrary attitudes,
 sweep on one axis, paper 001 section 5.3; :meth:`Excitation.reference` is an ideal reference on
 the shaker). :meth:`SensorErrors.stressed` moves the errors to the paper's "after" values
 (Table 6) and multiplies the bias instability, which widens the bias-instability interval
-(factor 1.5: width x2.25, the paper's +125 % in the IEEE 952 model). Defaults and their
-reasons: docs/reliability.md section 4.
+(``portenta_emulator --stress`` uses 1.7: ~+125 % with its default noise levels, the paper's
+420 s -> 945 s). Defaults and their reasons: docs/reliability.md section 4.
 """
 
 from collections.abc import Sequence
@@ -182,7 +182,7 @@ class SensorErrors:
         Parameters
         ----------
         instability_factor : float, keyword-only
-            Factor on both bias-instability levels (1.5: interval width x2.25, paper +125 %).
+            Factor on both bias-instability levels (the emulator's ``--stress`` gives 1.7).
         misalignment_factor : float, keyword-only
             Factor on the cross-axis terms (the paper blames a deformed frame).
         accel_bias_m_s2, accel_scale_factor : 3 floats, optional, keyword-only

@@ -96,7 +96,7 @@ setup(
         'console_scripts': [
             'lsm6dso32_driver = gyro_noise_ros.nodes.driver:main',
             'noise_analyzer = gyro_noise_ros.nodes.analyzer:main',
-            'gyro_noise_record = gyro_noise_ros.cli.record:main',
+            'gyro_noise_record = gyro_noise_ros.nodes.record_main:main',
             'imu_compensator = gyro_noise_ros.nodes.compensator:main',
             'portenta_emulator = gyro_noise_ros.cli.emulator:main',
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',

@@ -172,7 +172,8 @@ def _tool(cmd):
     else:
         return None, None
     if words[0] == 'gyro_noise_record' and args[:1] == ['repair']:
-        return importlib.import_module(module).build_parser(), args[1:]
+        # the console script runs the node, or repair (gyro_noise_ros.cli.record) before it
+        return importlib.import_module('gyro_noise_ros.cli.record').build_parser(), args[1:]
     mod = importlib.import_module(module)
     return (mod.build_parser() if hasattr(mod, 'build_parser') else None), args
 

@@ -13,10 +13,10 @@
 # limitations under the License.
 
 """
-gyro_noise_record: the recorder node, and ``gyro_noise_record repair`` for a killed recording.
+``gyro_noise_record repair`` for a killed recording.
 
-``gyro_noise_record --ros-args ...`` runs the ROS 2 recorder node
-(:mod:`gyro_noise_ros.nodes.recorder`). ``gyro_noise_record repair BAG [--out FIXED]`` needs no
+``gyro_noise_record --ros-args ...`` runs the ROS 2 recorder node (the console script is
+:mod:`gyro_noise_ros.nodes.record_main`). ``gyro_noise_record repair BAG [--out FIXED]`` needs no
 ROS at all (rclpy is not even imported): it writes the complete rosbag2 (``metadata.yaml``
 included, counts consistent) that a recorder killed by ``kill -9`` or a power loss would have left
 at its last flush, from its MCAP or sqlite3 file, never modifying the input
@@ -72,7 +72,7 @@ def _repair(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """
-    Run the recorder node, or ``repair`` when it is the first argument.
+    Run ``repair`` (the first argument must be ``repair``; the node: ``nodes.record_main``).
 
     Parameters
     ----------
@@ -84,15 +84,16 @@ def main(argv: list[str] | None = None) -> int:
     int
         repair: 0, 2 (bad command line, ROS 1 input), 3 (input unreadable), 6 (``--out``
         exists without ``--overwrite``, cannot be written, disk full), 130/143 (interrupted:
-        nothing left under ``--out``). The node: see :func:`gyro_noise_ros.nodes.recorder.main`.
+        nothing left under ``--out``); 2 without ``repair``.
 
     """
     args = sys.argv[1:] if argv is None else list(argv)
     if args[:1] == ['repair']:
         return run_cli(PROG, _repair, args[1:])
-    from ..nodes.recorder import main as node_main
-
-    return node_main(None if argv is None else [sys.argv[0], *args])
+    # the node is gyro_noise_ros.nodes.record_main (the console script), above this layer
+    print(f'{PROG}: error: this module runs `{PROG} repair ...`; the recorder node is '
+          f'`{PROG} --ros-args ...` (python -m gyro_noise_ros.nodes.record_main)', file=sys.stderr)
+    return 2
 
 
 if __name__ == '__main__':

@@ -153,8 +153,14 @@ class Probe:
         self.rclpy.try_shutdown(context=self.context)
 
 
-def start_emulator(port, batch):
-    proc = subprocess.Popen([sys.executable, '-m', 'gyro_noise_ros.cli.emulator', '--tcp',
+def _rt(prio):
+    """Return the command prefix running a process under SCHED_FIFO ``prio`` (empty for 0)."""
+    return ['chrt', '-f', str(prio)] if prio else []
+
+
+def start_emulator(port, batch, prio=0):
+    proc = subprocess.Popen([*_rt(prio), sys.executable, '-m', 'gyro_noise_ros.cli.emulator',
+                             '--tcp',
                              f'127.0.0.1:{port}', '--seed', '1', '--accel-fs-g', '32',
                              '--batch', str(batch)],
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
@@ -180,15 +186,21 @@ def stats_ms(values_ns):
 def run(args):
     """Start the chain, record the window; return a result dict."""
     topics = ['imu/data_raw'] + ([] if args.no_compensator else ['imu/data_compensated'])
+    if args.rt:  # the probe (this process, its DDS and wait-set threads made below) too
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(args.rt))
     probe = Probe(topics, args.probe_reliable)
+    if args.rt:  # the busy loops and anything else this thread starts run at normal priority
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     port = free_port()
-    procs = {'portenta_emulator': start_emulator(port, args.batch)}
+    # The emulator stands in for the board (its own processor): chrt; the nodes: their parameter.
+    procs = {'portenta_emulator': start_emulator(port, args.batch, args.rt)}
+    rt_param = ['-p', f'realtime_priority:={args.rt}'] if args.rt else []
     load = [subprocess.Popen([sys.executable, '-c', BUSY]) for _ in range(args.load)]
     try:
         procs['lsm6dso32_driver'] = subprocess.Popen(
             [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p',
              f'port:=socket://127.0.0.1:{port}', '-p', 'reconnect_period_s:=0.2',
-             *_ros_params(args.driver_param)], stderr=subprocess.DEVNULL)
+             *rt_param, *_ros_params(args.driver_param)], stderr=subprocess.DEVNULL)
         if args.slow_reader is not None:
             procs['slow reader'] = subprocess.Popen(
                 [sys.executable, '-c', _SLOW_READER, str(args.slow_reader), args.slow_qos,
@@ -198,7 +210,7 @@ def run(args):
             procs['imu_compensator'] = subprocess.Popen(
                 [sys.executable, '-c', _COMPENSATOR, 'thermal', '--ros-args',
                  '-p', 'temperature_rate_window_s:=2.0', *_param_args(True),
-                 *_ros_params(args.compensator_param)], stderr=subprocess.DEVNULL)
+                 *rt_param, *_ros_params(args.compensator_param)], stderr=subprocess.DEVNULL)
         time.sleep(args.warmup)
         cpu0 = {n: cpu_seconds(p.pid) for n, p in procs.items()}
         probe_cpu0, t0 = time.process_time(), time.monotonic()
@@ -222,7 +234,7 @@ def run(args):
         out = procs['slow reader'].stdout.read().split()
         slow_count = int(out[-1]) if out else None
     wall = t1 - t0
-    result = {'load': args.load, 'batch': args.batch, 'seconds': wall,
+    result = {'load': args.load, 'rt': args.rt, 'batch': args.batch, 'seconds': wall,
               'slow_reader': None if args.slow_reader is None else {
                   'work_us': args.slow_reader, 'qos': args.slow_qos, 'depth': args.slow_depth,
                   'received': slow_count},
@@ -272,7 +284,9 @@ def run(args):
 def print_result(result, argv):
     print(f'command: {shlex.join([sys.executable] + argv)}')
     print(f'load average at the end: {os.getloadavg()[0]:.2f}; {os.cpu_count()} cores; '
-          f'{result["load"]} busy loop(s) beside the chain; emulator frames of '
+          f'{result["load"]} busy loop(s) beside the chain; '
+          + (f'chain under SCHED_FIFO {result["rt"]}; ' if result.get('rt') else '')
+          + 'emulator frames of '
           f'{result["batch"]} samples; window {result["seconds"]:.1f} s')
     print(f'received imu/data_raw {result["raw_rate_hz"]:.0f} msg/s'
           + (f', imu/data_compensated {result["compensated_rate_hz"]:.0f} msg/s'
@@ -313,6 +327,10 @@ def main(argv=None):
                         metavar='NAME:=VALUE')
     parser.add_argument('--probe-reliable', action='store_true',
                         help='the probe subscribes reliable (default: sensor-data best effort)')
+    parser.add_argument('--rt', type=int, default=0, metavar='PRIO',
+                        help='run the driver and compensator with realtime_priority:=PRIO, the '
+                             'emulator (the board) and the probe (the loop) under SCHED_FIFO PRIO '
+                             '(chrt -f); the busy loops stay at normal priority; 0: normal')
     parser.add_argument('--json', help='also write the result here')
     args = parser.parse_args(argv)
     from gyro_noise_ros.rosgraph import lease_domain

@@ -27,7 +27,10 @@ Arguments (``ros2 launch gyro_noise_ros gyro_noise.launch.py --show-args``):
 - ``record`` (default false): also ``gyro_noise_record`` into ``bag_output`` (empty: a dated
   directory in the working directory);
 - ``emulator`` (default false): also ``portenta_emulator`` on 127.0.0.1:5760 instead of a board;
-- ``compensate`` (default false): also ``imu_compensator`` (``config/imu_compensator.yaml``).
+- ``compensate`` (default false): also ``imu_compensator`` (``config/imu_compensator.yaml``);
+- ``realtime_priority`` (default 0): ``SCHED_FIFO`` priority of the driver and the compensator,
+  the stabilisation loop's path (their ``realtime_priority`` parameter; 0: the parameter files'
+  value, normal scheduling by default; docs/scale.md).
 """
 
 from launch import LaunchDescription
@@ -56,10 +59,12 @@ def _nodes(context):
         return [_config(name), *([params_file] if params_file else []), {**common, **extra}]
 
     record_output = value('bag_output').perform(context)
+    priority = int(value('realtime_priority').perform(context) or 0)
+    realtime = {'realtime_priority': priority} if priority else {}
     return [GroupAction([
         PushRosNamespace(value('namespace')),
         Node(package=PACKAGE, executable='lsm6dso32_driver', name='lsm6dso32_driver',
-             parameters=params('lsm6dso32_driver', port=port), output='screen'),
+             parameters=params('lsm6dso32_driver', port=port, **realtime), output='screen'),
         Node(package=PACKAGE, executable='noise_analyzer', name='noise_analyzer',
              parameters=params('noise_analyzer'), output='screen'),
         Node(package=PACKAGE, executable='gyro_noise_record', name='gyro_noise_record',
@@ -67,7 +72,7 @@ def _nodes(context):
                                                        if record_output else {})),
              output='screen', condition=IfCondition(value('record'))),
         Node(package=PACKAGE, executable='imu_compensator', name='imu_compensator',
-             parameters=params('imu_compensator'), output='screen',
+             parameters=params('imu_compensator', **realtime), output='screen',
              condition=IfCondition(value('compensate'))),
     ])]
 
@@ -98,6 +103,9 @@ def generate_launch_description():
                               description='Also run portenta_emulator on 127.0.0.1:5760'),
         DeclareLaunchArgument('compensate', default_value='false',
                               description='Also run the compensation node imu_compensator'),
+        DeclareLaunchArgument('realtime_priority', default_value='0',
+                              description='SCHED_FIFO priority (1-99) of the driver and the '
+                              'compensator; 0: as their parameter files say'),
     ]
     # The emulator is a plain program (no ROS arguments), started outside the namespace group.
     emulator = ExecuteProcess(

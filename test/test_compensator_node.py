@@ -310,6 +310,19 @@ def test_non_causal_model_is_refused(context):
                                        thermal_model=LinearThermal(name='parallel'))
 
 
+def test_reliable_applies_to_the_imu_stream_temperatures_stay_best_effort(context):
+    # A reliable temperature stream delivered in order would hold every newer temperature back
+    # behind a lost one until it is resent (Fast DDS: a heartbeat, 3 s): a 3-s-old offset in the
+    # 6.66 kHz soak. Only the newest temperature matters, so it is always best effort.
+    node = compensator.ImuCompensatorNode(context=context,
+                                          parameter_overrides=_overrides(reliable=True))
+    try:
+        assert node._imu_sub.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+        assert node._temp_sub.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+    finally:
+        node.destroy_node()
+
+
 def test_file_and_parameters_are_not_both_accepted(context, tmp_path):
     path = tmp_path / 'calibration.yaml'
     path.write_text('/**:\n  ros__parameters:\n' + ''.join(
@@ -327,6 +340,7 @@ def test_file_and_parameters_are_not_both_accepted(context, tmp_path):
 @pytest.mark.parametrize('args, words', [
     (['-p', 'gyro_scale_factor:=[-1.0, 0.0, 0.0]'], "'gyro_scale_factor'"),
     (['-p', 'accel_bias_m_s2:=[0.0, 0.0]'], "'accel_bias_m_s2'"),
+    (['-p', 'realtime_priority:=100'], "'realtime_priority'"),
 ])
 def test_bad_parameters_give_one_line_and_exit_2(args, words):
     proc = subprocess.run([sys.executable, '-m', 'gyro_noise_ros.nodes.compensator',

@@ -52,6 +52,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 
 from ._publishers import RawTaker
+from ._realtime import REALTIME_DOC, set_realtime_priority
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
                           SequenceGapCounter, take_all, unused_callback)
@@ -146,10 +147,11 @@ PARAMETERS = (
               unit='s', read_only=True, min_value=0.0, max_value=60.0),
     ParamSpec('accel_thermal', True, "Also subtract the thermal model's accelerometer offset "
               'change when model.json has one', read_only=True),
-    ParamSpec('reliable', False, 'Subscribe reliable (retransmitted; matches only a reliable '
-              'publisher such as the driver) instead of sensor-data best effort, so a busy host '
-              'drops no message that would leave a gap in the compensated stream',
-              read_only=True),
+    ParamSpec('reliable', False, 'Subscribe imu/data_raw reliable (retransmitted; matches only '
+              'a reliable publisher such as the driver) instead of sensor-data best effort, so a '
+              'busy host drops no message that would leave a gap in the compensated stream; '
+              'imu/temperature is always best effort (a lost one costs a period, a resent one '
+              'would hold the newer ones back)', read_only=True),
     ParamSpec('queue_depth', 20000, 'QoS history depth of the subscriptions', unit='messages',
               read_only=True, min_value=10, max_value=1_000_000),
     ParamSpec('output_queue_depth', 20000, 'History depth of the reliable imu/data_compensated '
@@ -166,6 +168,7 @@ PARAMETERS = (
               read_only=True, min_value=0.1, max_value=3600.0),
     ParamSpec('hardware_id', '', 'hardware_id of the diagnostics (empty: the frame_id of the '
               'data)', read_only=True),
+    ParamSpec('realtime_priority', 0, REALTIME_DOC, read_only=True, min_value=0, max_value=99),
 )
 
 
@@ -199,6 +202,8 @@ class ImuCompensatorNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameter_table(self, PARAMETERS)
         self._p = p
+        # Before the drain thread exists (it inherits the policy); rclpy's threads are set too.
+        set_realtime_priority(p['realtime_priority'])
         self._status_name = f'{self.get_name()}: compensation'
         self.calibration, self._cal_source = calibration_from(p)
         self._setup_thermal(p, thermal_model)
@@ -229,8 +234,12 @@ class ImuCompensatorNode(Node):
         qos = sensor_data_qos(p['queue_depth'], p['reliable'])
         self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
                                                  raw=True, callback_group=group)
-        self._temp_sub = self.create_subscription(Temperature, 'imu/temperature', unused_callback,
-                                                  qos, raw=True, callback_group=group)
+        # Temperatures best effort whatever `reliable` says: only the newest one counts, and a
+        # reliable stream delivered in order holds every newer temperature back until a lost one
+        # is repaired (Fast DDS: up to a heartbeat period, 3 s), a stale offset all that time.
+        self._temp_sub = self.create_subscription(
+            Temperature, 'imu/temperature', unused_callback,
+            sensor_data_qos(p['queue_depth'], False), raw=True, callback_group=group)
         self._imu_taker = RawTaker(self._imu_sub, Imu, self.get_logger())
         out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
                              reliability=ReliabilityPolicy.RELIABLE)

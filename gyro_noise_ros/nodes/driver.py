@@ -51,6 +51,7 @@ from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackRet
 from rclpy.publisher import Publisher
 from sensor_msgs.msg import Imu, Temperature
 
+from ._realtime import REALTIME_DOC, set_realtime_priority
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, driver_qos, ParamSpec, run_node,
                           specs_from_dataclass, wall_timer)
@@ -131,6 +132,8 @@ PARAMETERS = (
               unit='s', min_value=0.01, max_value=3600.0),
     ParamSpec('diagnostics_period_s', 1.0, 'Period of the link status on /diagnostics',
               unit='s', read_only=True, min_value=0.05, max_value=3600.0),
+    ParamSpec('realtime_priority', 0, REALTIME_DOC, read_only=True, min_value=0,
+              max_value=99),
     *specs_from_dataclass(LinkThresholds, read_only=False),
 )
 
@@ -175,6 +178,8 @@ class Lsm6dso32Driver(LifecycleNode):
         super().__init__(node_name, **kwargs)
         p = declare_parameter_table(self, PARAMETERS, on_change=self._on_parameters_changed)
         self._params = p
+        # Before the reader thread exists (it inherits the policy); rclpy's threads are set too.
+        set_realtime_priority(p['realtime_priority'])
         self._port = validate_port(p['port'])
         self._hardware_id = p['hardware_id'] or hardware_id_for(self._port, p['frame_id'])
         self._status_name = f'{self.get_name()}: link'

@@ -485,7 +485,9 @@ class OrderIdentifier:
         ``(rows, values)``: ``values`` is a (3, len(rows)) array of var, J and f.
 
         None when the fast curves cannot be trusted for this chunk (not finite, or farther from
-        the exact values than :data:`LOCATE_RTOL` / 10 on the recomputed orders).
+        the exact values than :data:`LOCATE_RTOL` / 10 on the recomputed orders). A candidate of
+        the variance whose J a sign bound ruled out (+inf, no fast value) has its exact J checked
+        against the exact minimum instead: above its tie band, as the bound proved.
         """
         # J is +inf where the sign bounds ruled a minimum out (_FastPlan._pruned)
         if not (np.all(np.isfinite(var_fast)) and np.isfinite(j_fast.min())
@@ -497,7 +499,13 @@ class OrderIdentifier:
         exact = self._exact_rows(v, rows)
         guard = 0.1 * LOCATE_RTOL
         for fast, ex in ((var_fast[rows], exact[0]), (j_fast[rows], exact[1])):
-            if not (np.all(np.isfinite(ex)) and np.all(np.abs(fast - ex) <= guard * np.abs(ex))):
+            # a candidate of the variance alone may have had its J ruled out by a bound (+inf):
+            # there is no fast value to compare; its exact J must then lie above the band
+            known = np.isfinite(fast)
+            if not (np.all(np.isfinite(ex)) and np.all(
+                    np.abs(fast[known] - ex[known]) <= guard * np.abs(ex[known]))):
+                return None
+            if not np.all(ex[~known] > ex[known].min() * (1.0 + TIE_RTOL)):
                 return None
         return rows, exact
 

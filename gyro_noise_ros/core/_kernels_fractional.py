@@ -231,6 +231,15 @@ def cosine_values(y_hat: NDArray[np.complex128], odd: NDArray[np.float64],
 
 
 @numba.njit(**JIT_OPTIONS)
+def _power_at(d: NDArray[np.complex128], r: int, i: int, f: float,
+              reg_hat: NDArray[np.complex128], q: int) -> float:  # pragma: no cover - compiled
+    """``|d[r, i] - f reg_hat[q]|^2``: one bin of the source noise's power spectrum (eq. 9)."""
+    x = d[r, i].real - f * reg_hat[q].real
+    y = d[r, i].imag - f * reg_hat[q].imag
+    return x * x + y * y
+
+
+@numba.njit(**JIT_OPTIONS)
 def power_bound_tile(d: NDArray[np.complex128], f: NDArray[np.float64],
                      reg_hat: NDArray[np.complex128], weights: NDArray[np.float64],
                      lower: NDArray[np.int64], upper: NDArray[np.int64], start: int,
@@ -262,12 +271,8 @@ def power_bound_tile(d: NDArray[np.complex128], f: NDArray[np.float64],
         b1 = 0.0
         q = lo_q
         while q + 1 < hi_q:
-            x0 = d[r, q - start].real - fr * reg_hat[q].real
-            y0 = d[r, q - start].imag - fr * reg_hat[q].imag
-            x1 = d[r, q + 1 - start].real - fr * reg_hat[q + 1].real
-            y1 = d[r, q + 1 - start].imag - fr * reg_hat[q + 1].imag
-            p0 = x0 * x0 + y0 * y0
-            p1 = x1 * x1 + y1 * y1
+            p0 = _power_at(d, r, q - start, fr, reg_hat, q)
+            p1 = _power_at(d, r, q + 1 - start, fr, reg_hat, q + 1)
             e0 += p0
             e1 += p1
             a0 += p0 * wa[q]
@@ -276,9 +281,7 @@ def power_bound_tile(d: NDArray[np.complex128], f: NDArray[np.float64],
             b1 += p1 * wb[q + 1]
             q += 2
         while q < hi_q:
-            x0 = d[r, q - start].real - fr * reg_hat[q].real
-            y0 = d[r, q - start].imag - fr * reg_hat[q].imag
-            p0 = x0 * x0 + y0 * y0
+            p0 = _power_at(d, r, q - start, fr, reg_hat, q)
             e0 += p0
             a0 += p0 * wa[q]
             b0 += p0 * wb[q]
@@ -286,9 +289,7 @@ def power_bound_tile(d: NDArray[np.complex128], f: NDArray[np.float64],
         edge = 0.0
         for q in (0, last):
             if start <= q < stop:
-                x0 = d[r, q - start].real - fr * reg_hat[q].real
-                y0 = d[r, q - start].imag - fr * reg_hat[q].imag
-                p0 = x0 * x0 + y0 * y0
+                p0 = _power_at(d, r, q - start, fr, reg_hat, q)
                 edge += p0
                 a0 += p0 * wa[q]
                 b0 += p0 * wb[q]

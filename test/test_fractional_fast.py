@@ -176,20 +176,21 @@ def test_pruned_orders_can_be_no_minimum(kind, monkeypatch):
     alphas = make_grid(0.0, 2.0, 0.01)
     ident = OrderIdentifier(2000, alphas=alphas, memory=400)
     plan = fractional._FastPlan(ident)
-    real, bounds = fractional._kf.power_bound, []
+    real, bounds = fractional._FastPlan._bounds, []
 
     def spy(*args):
-        real(*args)
-        bounds.append(args[-1].copy())
+        got = real(*args)
+        bounds.append(got[1].copy())
+        return got
 
-    monkeypatch.setattr(fractional._kf, 'power_bound', spy)
+    monkeypatch.setattr(fractional._FastPlan, '_bounds', spy)
     v = chunk(kind, 2000, 11)
     v = v - v.mean()
     _, j_pruned, _ = plan.curves(v, prune=True)
     _, j_full, _ = plan.curves(v)
     _, j_exact, _ = ident._curves(v)
     bound = np.full(alphas.size, -np.inf)
-    bound[plan.others] = np.concatenate(bounds)
+    bound[plan.others], = bounds
     # a lower bound of J: the two are sums over ~2000 lags by different transforms (1e-12 seen)
     assert np.all(bound <= j_exact * (1 + 1e-9))
     skipped = np.isinf(j_pruned)
@@ -273,6 +274,48 @@ def test_auto_falls_back_to_exact_when_the_fast_curves_are_off(monkeypatch):
     monkeypatch.setattr(fractional._FastPlan, 'curves', not_finite)
     assert same_results(ident(v), exact(v)) == {}
     assert len(spied) == 4
+
+
+@pytest.mark.parametrize('kind', ['1.9', 'tone'])
+def test_auto_needs_no_fallback_when_a_variance_candidate_has_no_fast_j(kind, monkeypatch):
+    """A candidate of the variance alone whose J a bound ruled out is no reason to fall back."""
+    alphas = make_grid(0.0, 2.0, 0.01)
+    auto = OrderIdentifier(2000, alphas=alphas, memory=400)
+    exact = OrderIdentifier(2000, alphas=alphas, memory=400, algorithm='exact')
+    spied, pruned = [], []
+    real_curves, real_locate = OrderIdentifier._curves, OrderIdentifier._locate
+
+    def spy(self, x):
+        spied.append(1)
+        return real_curves(self, x)
+
+    def locate(self, x, var, j, f):
+        rows = np.union1d(fractional._candidates(var), fractional._candidates(j))
+        pruned.append(int(np.isinf(j[rows]).sum()))
+        return real_locate(self, x, var, j, f)
+
+    monkeypatch.setattr(OrderIdentifier, '_curves', spy)
+    monkeypatch.setattr(OrderIdentifier, '_locate', locate)
+    for seed in range(3):
+        v = chunk(kind, 2000, seed)
+        assert same_results(auto(v), exact(v)) == {}
+    assert len(spied) == 3       # 'exact' itself, never the fallback of 'auto'
+    assert min(pruned) >= 1      # the case: the variance's minimum had its J pruned each time
+
+    # and should the exact J of such an order be in the band after all (a bound that failed),
+    # 'auto' does not trust its location: it falls back
+    real_rows = OrderIdentifier._exact_rows
+
+    def lower_pruned(self, x, rows):
+        out = real_rows(self, x, rows)
+        _, j, _ = self._fast.curves(x, prune=True)
+        out[1, np.isinf(j[rows])] = 0.5 * out[1].min()
+        return out
+
+    monkeypatch.setattr(OrderIdentifier, '_exact_rows', lower_pruned)
+    v = chunk(kind, 2000, 0)
+    assert same_results(auto(v), exact(v)) == {}
+    assert len(spied) == 5
 
 
 def test_unknown_algorithm_is_refused():

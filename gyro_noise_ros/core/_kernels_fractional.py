@@ -231,45 +231,69 @@ def cosine_values(y_hat: NDArray[np.complex128], odd: NDArray[np.float64],
 
 
 @numba.njit(**JIT_OPTIONS)
-def power_bound(spec: NDArray[np.complex128], f: NDArray[np.float64],
-                reg_hat: NDArray[np.complex128], weights: NDArray[np.float64],
-                lower: NDArray[np.int64], upper: NDArray[np.int64], scale: float,
-                energy: NDArray[np.float64],
-                bound: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
-    """
-    Per row: the Parseval sum of ``P = |spec - f reg_hat|^2`` and the larger of two bounds.
+def _power_at(d: NDArray[np.complex128], r: int, i: int, f: float,
+              reg_hat: NDArray[np.complex128], q: int) -> float:  # pragma: no cover - compiled
+    """``|d[r, i] - f reg_hat[q]|^2``: one bin of the source noise's power spectrum (eq. 9)."""
+    x = d[r, i].real - f * reg_hat[q].real
+    y = d[r, i].imag - f * reg_hat[q].imag
+    return x * x + y * y
 
-    ``bound[r] = scale * max(P . weights[lower[r]], P . weights[upper[r]])`` (the sign bounds of
-    :class:`.fractional._FastPlan`); ``energy[r]`` as in :func:`residual_power`.
+
+@numba.njit(**JIT_OPTIONS)
+def power_bound_tile(d: NDArray[np.complex128], f: NDArray[np.float64],
+                     reg_hat: NDArray[np.complex128], weights: NDArray[np.float64],
+                     lower: NDArray[np.int64], upper: NDArray[np.int64], start: int,
+                     acc: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
     """
-    rows, m = spec.shape
-    p = np.empty(m)
+    Add the Parseval and sign-bound sums of the bins ``start .. start + d.shape[1] - 1``.
+
+    ``d[r]`` holds those bins of row r's difference spectrum (``reg_hat`` and ``weights`` are
+    whole, ``m`` bins). With ``P = |d - f reg_hat|^2`` (the power spectrum of the source noise,
+    eq. 9), adds to ``acc[r]``: the sum of P over the tile's inner bins and over its end bins
+    (0 and ``m - 1``, which count once in Parseval's sum), ``P . weights[lower[r]]`` and
+    ``P . weights[upper[r]]`` (the sign bounds of :class:`.fractional._FastPlan`). Called tile by
+    tile, so that ``d`` is read while still in cache from the product that wrote it.
+    """
+    rows, width = d.shape
+    last = reg_hat.shape[0] - 1
+    stop = start + width
+    lo_q = max(start, 1)
+    hi_q = min(stop, last)
     for r in range(rows):
-        _power_row(spec, r, f[r], reg_hat, p)
+        fr = f[r]
+        wa = weights[lower[r]]
+        wb = weights[upper[r]]
         e0 = 0.0
         e1 = 0.0
         a0 = 0.0
         a1 = 0.0
         b0 = 0.0
         b1 = 0.0
-        wa = weights[lower[r]]
-        wb = weights[upper[r]]
-        q = 1
-        while q + 1 < m - 1:
-            e0 += p[q]
-            e1 += p[q + 1]
-            a0 += p[q] * wa[q]
-            a1 += p[q + 1] * wa[q + 1]
-            b0 += p[q] * wb[q]
-            b1 += p[q + 1] * wb[q + 1]
+        q = lo_q
+        while q + 1 < hi_q:
+            p0 = _power_at(d, r, q - start, fr, reg_hat, q)
+            p1 = _power_at(d, r, q + 1 - start, fr, reg_hat, q + 1)
+            e0 += p0
+            e1 += p1
+            a0 += p0 * wa[q]
+            a1 += p1 * wa[q + 1]
+            b0 += p0 * wb[q]
+            b1 += p1 * wb[q + 1]
             q += 2
-        while q < m - 1:
-            e0 += p[q]
-            a0 += p[q] * wa[q]
-            b0 += p[q] * wb[q]
+        while q < hi_q:
+            p0 = _power_at(d, r, q - start, fr, reg_hat, q)
+            e0 += p0
+            a0 += p0 * wa[q]
+            b0 += p0 * wb[q]
             q += 1
-        last = m - 1
-        energy[r] = (p[0] + p[last]) + 2.0 * (e0 + e1)
-        lo = (p[0] * wa[0] + p[last] * wa[last]) + (a0 + a1)
-        hi = (p[0] * wb[0] + p[last] * wb[last]) + (b0 + b1)
-        bound[r] = scale * max(lo, hi)
+        edge = 0.0
+        for q in (0, last):
+            if start <= q < stop:
+                p0 = _power_at(d, r, q - start, fr, reg_hat, q)
+                edge += p0
+                a0 += p0 * wa[q]
+                b0 += p0 * wb[q]
+        acc[r, 0] += e0 + e1
+        acc[r, 1] += edge
+        acc[r, 2] += a0 + a1
+        acc[r, 3] += b0 + b1

@@ -42,7 +42,9 @@ the host's system clock (ROS time, Fast DDS's timestamps), so per message:
 CPU of each process from ``/proc/<pid>/stat`` over the window. ``--load N`` starts N busy loops
 (``while True: pass``) at normal priority. Run: ``.venv/bin/python bench/bench_latency.py``;
 ``--load 2`` for the loaded row; ``--driver-param`` / ``--compensator-param name:=value`` to
-compare settings side by side.
+compare settings side by side; ``--rt PRIO`` runs the chain under ``SCHED_FIFO`` (the nodes'
+``realtime_priority``); ``--bare-relay`` puts a relay that only takes and republishes in the
+compensator's place (the floor of a Python node there).
 """
 
 import argparse
@@ -92,6 +94,41 @@ except (KeyboardInterrupt, ExternalShutdownException):
 print(count[0], flush=True)
 """
 
+
+# The floor of any Python node in the compensator's place: imu/data_raw taken as it arrives (the
+# compensator's wait-set thread and RawTaker) and published unchanged on imu/data_compensated
+# (reliable, the compensator's QoS): no decode, no calibration, no thermal model.
+_BARE_RELAY = r"""
+import sys
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+from gyro_noise_ros.nodes._publishers import RawTaker
+from gyro_noise_ros.nodes._realtime import set_realtime_priority
+from gyro_noise_ros.nodes._ros_common import PolledGroup, sensor_data_qos, unused_callback
+from gyro_noise_ros.nodes._waitset import WaitSetDrain
+rclpy.init()
+set_realtime_priority(int(sys.argv[1]))
+node = rclpy.create_node('bare_relay')
+sub = node.create_subscription(Imu, 'imu/data_raw', unused_callback, sensor_data_qos(20000),
+                               raw=True, callback_group=PolledGroup())
+pub = node.create_publisher(Imu, 'imu/data_compensated', QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=20000, reliability=ReliabilityPolicy.RELIABLE))
+taker = RawTaker(sub, Imu)
+def relay():
+    raws = taker.take(2000)[0]
+    with pub.handle:
+        for raw in raws:
+            pub.handle.publish_raw(raw)
+drain = WaitSetDrain(node.context, [sub], relay, timeout_s=0.05)
+drain.start()
+try:
+    rclpy.spin(node)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+drain.stop()
+"""
 
 class Probe:
     """Raw subscriptions drained by a wait-set thread; rows of stamp, source, reception, take."""
@@ -206,7 +243,10 @@ def run(args):
                 [sys.executable, '-c', _SLOW_READER, str(args.slow_reader), args.slow_qos,
                  str(args.slow_depth)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                 text=True)
-        if not args.no_compensator:
+        if args.bare_relay:
+            procs['bare relay'] = subprocess.Popen(
+                [sys.executable, '-c', _BARE_RELAY, str(args.rt)], stderr=subprocess.DEVNULL)
+        elif not args.no_compensator:
             procs['imu_compensator'] = subprocess.Popen(
                 [sys.executable, '-c', _COMPENSATOR, 'thermal', '--ros-args',
                  '-p', 'temperature_rate_window_s:=2.0', *_param_args(True),
@@ -226,7 +266,8 @@ def run(args):
         for proc in load:
             proc.kill()
             proc.wait()
-        for name in ('slow reader', 'imu_compensator', 'lsm6dso32_driver', 'portenta_emulator'):
+        for name in ('slow reader', 'bare relay', 'imu_compensator', 'lsm6dso32_driver',
+                     'portenta_emulator'):
             if name in procs:
                 stop(procs[name])
         probe.close()
@@ -315,6 +356,9 @@ def main(argv=None):
     parser.add_argument('--load', type=int, default=0, help='busy loops beside the chain')
     parser.add_argument('--batch', type=int, default=16, help="the emulator's samples per frame")
     parser.add_argument('--no-compensator', action='store_true', help='driver only')
+    parser.add_argument('--bare-relay', action='store_true',
+                        help="a bare relay in the compensator's place (take as it arrives, "
+                             'publish unchanged): the floor of a Python node there')
     parser.add_argument('--slow-reader', type=float, metavar='WORK_US',
                         help='add a reader of imu/data_raw with one callback per message, each '
                              'busy for WORK_US (0: the callback alone)')

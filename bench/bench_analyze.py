@@ -35,7 +35,8 @@ included) and the load average.
   ``options.jobs``; report.html apart from what it embeds of them; PNG files as decoded pixels).
 * With two or more bag sizes: a least-squares line of the CPU seconds (and of the wall times)
   against the sample count, and from it the paper's sequence, 187,159,392 samples x 3 axes:
-  CPU seconds, their half (the wall time on 2 cores at perfect use) and the fitted wall time.
+  CPU seconds, their half (the wall time on 2 cores at perfect use) and the fitted wall time;
+  for each code and, with ``--jobs-check``, for this code's ``--jobs 1`` runs.
 
 Usage::
 
@@ -341,6 +342,7 @@ def bench_bag(args, bag, n, tmp):
               f'CPU s; load average {res["load"][0]:.1f} -> {res["load"][1]:.1f}')
         ok &= _print_rows(compare_jobs(runs['new'][0]['out'], res['out']),
                           f'--jobs {args.jobs} and --jobs 1 bit-identical')
+        runs['new -j1'] = [res]  # fitted too (project)
     for v in runs.values():
         for x in v:
             shutil.rmtree(x['out'], ignore_errors=True)
@@ -355,8 +357,9 @@ def project(sizes, runs):
             y = np.array([min(x[what] for x in r[name]) for r in runs])
             slope, fixed = np.polyfit(n, y, 1)
             total = fixed + slope * PAPER_SAMPLES
+            # one process at --jobs 1: its CPU seconds are its wall time on an idle core
             extra = (f', at perfect use of 2 cores {total / 2 / 60:.1f} min of wall time'
-                     if what == 'cpu' else '')
+                     if what == 'cpu' and name != 'new -j1' else '')
             print(f'  {name:8s} {what:4s}: {fixed:6.1f} s + {slope * 1e6:6.3f} s per million '
                   f'samples -> {PAPER_SAMPLES:,} samples x 3 axes: {total:7.0f} s '
                   f'({total / 60:.1f} min){extra}')

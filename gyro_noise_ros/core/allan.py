@@ -791,13 +791,20 @@ def avar_skewness(alpha: int, m: int, n_phase: int, *, stride: int = 1) -> float
     return 2.0 * math.sqrt(2.0) * tr3 / tr2 ** 1.5
 
 
-@functools.lru_cache(maxsize=4096)
+#: Entries of the EDF and skewness caches: one record length's taus and noise types (a live
+#: accumulator read has a new length each time, so a larger cache only filled with dead keys:
+#: 4,096 + 1,024 entries held ~1.3 MB, ~250 bytes each, filled over the first half hour at
+#: 6.66 kHz; docs/scale.md, memory).
+EDF_CACHE_ENTRIES, SKEW_CACHE_ENTRIES = 512, 128
+
+
+@functools.lru_cache(maxsize=EDF_CACHE_ENTRIES)
 def _edf_cached(alpha: int, m: int, n_phase: int, stride: int) -> float:
-    # pure in its integer arguments; repeated records and accumulator reads reuse it
+    # pure in its integer arguments; the axes of one read and repeated reads of a record reuse it
     return edf_greenhall(alpha, m, n_phase, stride=stride)
 
 
-@functools.lru_cache(maxsize=1024)
+@functools.lru_cache(maxsize=SKEW_CACHE_ENTRIES)
 def _skewness_cached(alpha: int, m: int, n_phase: int, stride: int) -> float:
     return avar_skewness(alpha, m, n_phase, stride=stride)
 

@@ -15,10 +15,12 @@
 """The live analysis' Python objects level off within minutes (docs/scale.md, memory)."""
 
 import gc
+import pickle
 import sys
 import time
 
 from gyro_noise_ros.app.live import LiveAnalysis, RECENT_RESULTS
+from gyro_noise_ros.core import allan
 from gyro_noise_ros.core.engine import EngineConfig
 from gyro_noise_ros.core.fractional import make_grid
 import numpy as np
@@ -75,3 +77,22 @@ def test_python_objects_flat_once_the_caches_are_full():
     # has a new record length, so new keys) 4,566; now 461-499 (the small caches' last entries
     # and objects alive at the second count only: arrays, a job in flight).
     assert grown < 1000, grown
+
+
+def test_allan_rows_reserved_once_and_pickled_as_written():
+    # The accumulator reserves every level's ring row up front (untouched pages); a pickle holds
+    # only the rows in use, and the copy goes on bit for bit like the original.
+    rng = np.random.default_rng(11)
+    rate = rng.normal(0.0, 0.01, 300_000)
+    acc = allan.AllanAccumulator(100.0, taus='dense')  # rows of 2**16 + 1 points, 0.5 MB
+    ring = acc._ring
+    acc.update(rate[:200_000])
+    assert acc._ring is ring  # never reallocated as levels are added
+    blob = pickle.dumps(acc)
+    # 3 levels reached (from 2**15, 2**16 and 2**17 samples) of the 25 reserved
+    assert len(blob) < 5 * (2 ** 16 + 1) * 8 < ring.nbytes / 4
+    copy = pickle.loads(blob)
+    for a in (acc, copy):
+        a.update(rate[200_000:])
+    mine, theirs = acc.result(), copy.result()
+    assert np.array_equal(mine.adev, theirs.adev) and np.array_equal(mine.edf, theirs.edf)

@@ -37,9 +37,10 @@ from ..core.health import HealthThresholds, ReferenceStats
 from ..core.results import ChunkResult
 from ..errors import GyroNoiseError, ParameterError
 
-#: Chunk results kept in :attr:`LiveAnalysis.results` (about 0.9 kB each, tracemalloc: 1,000 of
-#: them ~1 MB; 10,000 grew the node's heap ~9 MB over its first 83 minutes at 6.66 kHz).
-RECENT_RESULTS = 1000
+#: Chunk results kept in :attr:`LiveAnalysis.results`, about 0.9 kB each (the last 100 chunks of
+#: 3 axes, 2.5 min at 6.66 kHz): full within minutes, so the node's memory levels off early
+#: (1,000 took 8.3 min and 10,000 83 min to fill; docs/scale.md, memory).
+RECENT_RESULTS = 300
 
 #: Numeric per-chunk topics of the analyzer: name -> (ChunkResult field, unit).
 CHUNK_TOPICS = {

@@ -38,6 +38,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 import functools
 import math
+import mmap
 from typing import Any
 
 import numpy as np
@@ -791,13 +792,20 @@ def avar_skewness(alpha: int, m: int, n_phase: int, *, stride: int = 1) -> float
     return 2.0 * math.sqrt(2.0) * tr3 / tr2 ** 1.5
 
 
-@functools.lru_cache(maxsize=4096)
+#: Entries of the EDF and skewness caches: one record length's taus and noise types (a live
+#: accumulator read has a new length each time, so a larger cache only filled with dead keys:
+#: 4,096 + 1,024 entries held ~1.3 MB, ~250 bytes each, filled over the first half hour at
+#: 6.66 kHz; docs/scale.md, memory).
+EDF_CACHE_ENTRIES, SKEW_CACHE_ENTRIES = 512, 128
+
+
+@functools.lru_cache(maxsize=EDF_CACHE_ENTRIES)
 def _edf_cached(alpha: int, m: int, n_phase: int, stride: int) -> float:
-    # pure in its integer arguments; repeated records and accumulator reads reuse it
+    # pure in its integer arguments; the axes of one read and repeated reads of a record reuse it
     return edf_greenhall(alpha, m, n_phase, stride=stride)
 
 
-@functools.lru_cache(maxsize=1024)
+@functools.lru_cache(maxsize=SKEW_CACHE_ENTRIES)
 def _skewness_cached(alpha: int, m: int, n_phase: int, stride: int) -> float:
     return avar_skewness(alpha, m, n_phase, stride=stride)
 
@@ -1080,6 +1088,19 @@ def fit_noise_terms(result: AllanResult, *, terms: Sequence[str] = _TERM_NAMES,
 # ----------------------------------------------------------------------------------------------
 # incremental accumulator
 
+def _untouched_zeros(rows: int, cols: int) -> NDArray[np.float64]:
+    """
+    Return a zero float64 array of shape (rows, cols) whose pages take memory once written.
+
+    An anonymous mapping: the kernel gives zero pages on first write, so rows reserved for levels
+    the record has not reached cost address space only (numpy's zeros may come from the heap,
+    cleared and resident, and could not grow in place).
+    """
+    if rows * cols == 0:
+        return np.zeros((rows, cols))
+    return np.frombuffer(mmap.mmap(-1, rows * cols * 8), dtype=np.float64).reshape(rows, cols)
+
+
 class AllanAccumulator:
     """
     Allan deviation of a rate stream fed in batches, in bounded memory.
@@ -1099,7 +1120,9 @@ class AllanAccumulator:
     * Not thread-safe: call ``update`` and ``result`` from one thread, or under one lock.
     * Memory: (2 max_exact_m + 1) float64 per level, levels created as the record grows
       (at most floor(log2(N / max_exact_m)) + 2), plus O(1) per tau. Nothing else grows with N;
-      ``update`` holds a transient copy of its batch (level 0 is summed tau by tau over it).
+      ``update`` holds a transient copy of its batch (level 0 is summed tau by tau over it). The
+      rows of every level are reserved at construction in untouched pages of an anonymous
+      mapping: address space only, until the record reaches them (never copied as it grows).
 
     Parameters
     ----------
@@ -1162,9 +1185,11 @@ class AllanAccumulator:
         self._next_push = self._ms.copy()
         self._ring_len = 2 * self._half + 1
         # level 0: the newest 2 * half + 1 phase points, in order (x_0 = 0 last at first);
-        # levels >= 1: one ring row each, created as the record reaches them
+        # levels >= 1: one ring row each, in pages that take memory as the record reaches them
+        # (regrowing one array per new level left freed holes of MBs in the heap)
         self._hist = np.zeros(self._ring_len)
-        self._ring = np.zeros((0, self._ring_len))
+        self._ring = _untouched_zeros(self._n_levels_taus - 1, self._ring_len)
+        self._rows_used = 0
         self._n_active = 1
         self._k = 0
         self._integ = np.zeros(2)
@@ -1174,6 +1199,19 @@ class AllanAccumulator:
         self._tot = np.zeros((n_tau, 2))
         self._counts = np.zeros(n_tau, dtype=np.int64)
         self._acf = np.zeros((n_tau, _k.N_ACF))
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Return the state with only the ring rows in use (a pickle holds what was written)."""
+        state = self.__dict__.copy()
+        state['_ring'] = np.array(self._ring[:self._rows_used])
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`__getstate__`'s state into a ring of untouched pages."""
+        used = state['_ring']
+        self.__dict__.update(state)
+        self._ring = _untouched_zeros(self._n_levels_taus - 1, self._ring_len)
+        self._ring[:used.shape[0]] = used
 
     @property
     def n_samples(self) -> int:
@@ -1188,7 +1226,8 @@ class AllanAccumulator:
     @property
     def nbytes(self) -> int:
         """Bytes held by the accumulator's arrays (phase history + per-tau state)."""
-        return int(self._hist.nbytes + self._ring.nbytes + self._lanes.nbytes + self._tot.nbytes
+        return int(self._hist.nbytes + self._rows_used * self._ring_len * 8
+                   + self._lanes.nbytes + self._tot.nbytes
                    + self._counts.nbytes
                    + self._acf.nbytes + self._ms.nbytes * 4 + self._level_end.nbytes
                    + self._level_pos.nbytes)
@@ -1216,16 +1255,14 @@ class AllanAccumulator:
         need = 1
         while need < self._n_levels_taus and self._half * 2 ** (need - 1) <= k_end:
             need += 1
-        if need - 1 > self._ring.shape[0]:
-            grown = np.zeros((need - 1, self._ring_len))
-            grown[:self._ring.shape[0]] = self._ring
-            self._ring = grown
+        self._rows_used = max(self._rows_used, need - 1)
         hist = self._hist.shape[0]
         buf = np.empty(hist + arr.shape[0])
         buf[:hist] = self._hist
         k0 = self._k
         self._k, self._n_active = _k._accumulate(
-            arr, self._offset, self._integ, k0, buf, self._ring, self._level_pos, self._n_active,
+            arr, self._offset, self._integ, k0, buf, self._ring[:self._rows_used], self._level_pos,
+            self._n_active,
             self._ms, self._levels, self._level_end, self._next_push, self._lanes, self._tot,
             self._counts, self._acf)
         _k._level0(buf, k0 - hist + 1, self._k, self._ms, int(self._level_end[0]), self._lanes,

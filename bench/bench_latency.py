@@ -229,8 +229,11 @@ def run(args):
     if args.rt:  # the busy loops and anything else this thread starts run at normal priority
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     port = free_port()
-    # The emulator stands in for the board (its own processor): chrt; the nodes: their parameter.
-    procs = {'portenta_emulator': start_emulator(port, args.batch, args.rt)}
+    # The emulator stands in for the board, which has a processor of its own: above the chain
+    # (chrt), so the host's scheduling of the chain never delays the board's frames; the nodes:
+    # their parameter.
+    procs = {'portenta_emulator': start_emulator(port, args.batch,
+                                                 min(args.rt + 10, 99) if args.rt else 0)}
     rt_param = ['-p', f'realtime_priority:={args.rt}'] if args.rt else []
     load = [subprocess.Popen([sys.executable, '-c', BUSY]) for _ in range(args.load)]
     try:
@@ -373,8 +376,9 @@ def main(argv=None):
                         help='the probe subscribes reliable (default: sensor-data best effort)')
     parser.add_argument('--rt', type=int, default=0, metavar='PRIO',
                         help='run the driver and compensator with realtime_priority:=PRIO, the '
-                             'emulator (the board) and the probe (the loop) under SCHED_FIFO PRIO '
-                             '(chrt -f); the busy loops stay at normal priority; 0: normal')
+                             'probe (the loop) under SCHED_FIFO PRIO and the emulator (the board) '
+                             'at PRIO + 10 (chrt -f); the busy loops stay at normal priority; 0: '
+                             'normal scheduling')
     parser.add_argument('--json', help='also write the result here')
     args = parser.parse_args(argv)
     from gyro_noise_ros.rosgraph import lease_domain

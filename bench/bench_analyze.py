@@ -19,10 +19,10 @@ Full-tool throughput of gyro_noise_analyze on multi-million-sample 3-axis bags.
 Writes simulated bags (the paper's model, 3 axes, 6660 Hz; ``--samples`` may list several sizes)
 or takes ``--bag``, then runs ``gyro_noise_analyze BAG --quiet --jobs J`` in fresh processes
 (imports, numba cache loads and all; each code first runs once, untimed, on a 60,000-sample bag
-so that a fresh checkout's numba compilation is not counted) with the tool's default outputs (figures and report.html;
-``--lean`` adds ``--no-figures --no-html``) and ``--tool-args`` passed alike to every run, and
-prints for each run the wall time, the CPU seconds of the process tree (user + sys, workers
-included) and the load average.
+so that a fresh checkout's numba compilation is not counted) with the tool's default outputs
+(figures and report.html; ``--lean`` adds ``--no-figures --no-html``) and ``--tool-args``
+passed alike to every run, and prints for each run the wall time, the CPU seconds of the
+process tree (user + sys, workers included) and the load average.
 
 * ``--baseline PATH`` (a checkout of other code, e.g. ``git archive COMMIT | tar -x -C PATH``):
   that code and this one run side by side on the same bag with the same options, alternating,

@@ -130,6 +130,7 @@ except (KeyboardInterrupt, ExternalShutdownException):
 drain.stop()
 """
 
+
 class Probe:
     """Raw subscriptions drained by a wait-set thread; rows of stamp, source, reception, take."""
 

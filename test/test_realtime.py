@@ -25,10 +25,9 @@ import os
 import subprocess
 import sys
 
-import pytest
-
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.nodes import _realtime
+import pytest
 
 pytestmark = pytest.mark.skipif(not hasattr(os, 'SCHED_FIFO'), reason='SCHED_FIFO is Linux only')
 

@@ -77,7 +77,7 @@ def set_realtime_priority(priority: int, *, parameter: str = 'realtime_priority'
             raise ParameterError(
                 f"parameter '{parameter}' = {priority}: SCHED_FIFO refused ({err.strerror}); "
                 'run with CAP_SYS_NICE (e.g. as root, or `setcap cap_sys_nice+ep` on the '
-                "interpreter) or an rtprio limit >= the priority (/etc/security/limits.conf), "
+                'interpreter) or an rtprio limit >= the priority (/etc/security/limits.conf), '
                 'or set it to 0') from err
         changed += 1
     return changed

@@ -27,9 +27,10 @@ import os
 from ..errors import ParameterError
 
 #: The parameter's documentation, shared by the nodes' tables.
-REALTIME_DOC = ('SCHED_FIFO priority of every thread of the node, 1-99 (as chrt -f); 0: normal '
-                'scheduling. Keeps the latency with busy processes beside the chain '
-                '(docs/scale.md); needs CAP_SYS_NICE or an rtprio limit (limits.conf)')
+REALTIME_DOC = ('SCHED_FIFO priority of every thread of the process running the node (a '
+                'container: all its nodes), 1-99 (as chrt -f); 0: normal scheduling. Keeps '
+                'the latency with busy processes beside the chain (docs/scale.md); needs '
+                'CAP_SYS_NICE or an rtprio limit (limits.conf)')
 
 
 def set_realtime_priority(priority: int, *, parameter: str = 'realtime_priority',

@@ -1009,8 +1009,10 @@ def test_a_real_signal_stops_a_tool_leaving_nothing(tool, sig, inputs, long_inpu
                                                str(tmp_path / 'stats.json'), '--truth-out',
                                                str(tmp_path / 'truth.bin')],
                   tmp_path / 'truth.bin'),
+        # ready once its stage exists (a fixed delay met it still importing under load)
         'simulate': (PROGS['gyro_noise_thermal'], ['simulate', '--hours', '3', '--out',
-                                                   str(out)], 3.0),
+                                                   str(out)],
+                     lambda: any(tmp_path.glob('out/.partial-*'))),
         'repair': ('gyro_noise_ros.cli.record', ['repair', str(long_inputs / 'long_bag'),
                                                  '--out', str(out)],
                    lambda: any(tmp_path.glob('.out.partial-*/out/*'))),

@@ -689,6 +689,28 @@ def test_accumulator_strided_levels_and_memory(half, taus):
     assert acc.nbytes <= ring_bytes + n_tau * 8 * (4 + 2 + 1 + kern.N_ACF + 6)
 
 
+@pytest.mark.parametrize('batches', [[5_000], [1, 777, 4_222], [100] * 50])
+def test_accumulator_nbytes_counts_the_ring_points_written(batches):
+    # nbytes is the resident share: of each ring row, the points written (reserved rows take
+    # memory as they are written). A constant rate above the offset makes every phase point
+    # x_k = k * 0.5 > 0 for k >= 1, so the written slots of a row are its nonzero ones, plus
+    # x_0 = 0 in slot 0 until the row wraps.
+    half = 8
+    acc = AllanAccumulator(1.0, taus='octave', max_exact_m=half, offset_rad_per_s=0.5)
+    fixed = acc.nbytes  # before any data: no ring point written
+    assert acc._rows_used == 0
+    for n in batches:
+        acc.update(np.ones(n))
+        ring = acc._ring[:acc._rows_used]
+        written = 0
+        for row in ring:
+            nonzero = int(np.count_nonzero(row))
+            written += nonzero + (1 if nonzero < row.size else 0) if nonzero else 0
+        assert acc.nbytes - fixed == written * 8
+    # several rows wrapped, one still filling: the growth is per row, not per reserved level
+    assert 0 < written < acc._ring.shape[0] * acc._ring.shape[1]
+
+
 def test_accumulator_dense_rounds_to_stride():
     acc = AllanAccumulator(10.0, taus=[3, 100, 1001, 5003], max_exact_m=100)
     acc.update(np.random.default_rng(25).standard_normal(20_000))

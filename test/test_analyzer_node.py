@@ -140,10 +140,19 @@ def test_bag_through_node_equals_offline_tool_and_engine(context, tmp_path, make
         assert _spin_until(executor, lambda: len(node.results) == 3 * chunks
                            and all(len(v) == chunks for v in received.values()), 60)
         node_results = sorted(node.results, key=lambda r: (r.chunk, r.axis))
+        diag = node.diagnostics()
+        storage = {a: node.engine.allan_nbytes(a) for a in 'xyz'}
     finally:
         if executor is not None:
             executor.shutdown()
         node.destroy_node()
+    # Each axis states its Allan accumulator's memory: at least the level-0 phase history
+    # (2 * 2**15 + 1 points), no ring row yet at this length.
+    for status in diag.status:
+        held = storage[status.name[-1]]
+        assert (2 * 2 ** 15 + 1) * 8 <= held < 2 ** 20
+        values = {kv.key: kv.value for kv in status.values}
+        assert values['Allan storage (MiB)'] == f'{held / 2 ** 20:.2f}'
 
     # The engine on the bag, with the node's configuration.
     engine = NoiseEngine(node.config)

@@ -62,3 +62,31 @@ def test_a_short_run_still_has_points_and_too_few_gives_nan():
     assert np.isfinite(slope) and np.isfinite(se)
     slope, _ = soak._slope_mb_h(series, (60.0, 120.0, 180.0), settle_s=60.0)
     assert np.isnan(slope)
+
+
+def _allan_mb(t):
+    # The analyzer's three accumulators at 6.66 kHz ('dense'): the level-0 history and, per level
+    # L >= 1 seeded at N = 2**15 * 2**(L-1), the points written (x_k for k a multiple of 2**L, at
+    # most 2**16 + 1), 8 bytes each: log2 growth, 9 MB/h at 15 minutes, 0.1 MB/h at 12 h.
+    n = int(6660 * t)
+    points = (2 ** 16 + 1) * (1 + sum(min(2 ** 16 + 1, (n >> lev) + 1) / (2 ** 16 + 1)
+                                      for lev in range(1, 30) if n >= 2 ** 15 * 2 ** (lev - 1)))
+    return 3 * 8 * points / 2 ** 20
+
+
+@pytest.mark.parametrize('seed', range(3))
+@pytest.mark.parametrize('leak_mb_h', [0.0, 12.0])
+def test_the_analyzer_is_judged_beyond_its_stated_allan_storage(seed, leak_mb_h):
+    # RSS = a level + the storage the analyzer states + a leak: the RSS slope alone reads the
+    # storage's log2 growth as a leak, the slope beyond it is the leak.
+    series = _series(lambda t: 280.0 + _allan_mb(t) + leak_mb_h * t / 3600.0
+                     + 4.0 * (t >= 905.0), seed)
+    allan = [(t, _allan_mb(t)) for t, _ in series]
+    raw, _ = soak._slope_mb_h(series, FAULTS_S)
+    assert raw > leak_mb_h + 4.0
+    beyond = soak._beyond_allan(series, allan)
+    assert len(beyond) == len(series)
+    slope, se = soak._slope_mb_h(beyond, FAULTS_S)
+    assert abs(slope - leak_mb_h) < 4.0 * se, (slope, se)
+    # samples without a stated storage (the analyzer not reporting yet) are left out
+    assert len(soak._beyond_allan(series, allan[10:])) == len(series) - 10

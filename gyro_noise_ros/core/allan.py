@@ -1225,8 +1225,18 @@ class AllanAccumulator:
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the accumulator's arrays (phase history + per-tau state)."""
-        return int(self._hist.nbytes + self._rows_used * self._ring_len * 8
+        """
+        Bytes of the accumulator's arrays the record has reached: the resident share.
+
+        The phase history, the per-tau state, and of each ring row the points written so far
+        (level L holds x_k for every multiple k of 2**L, at most 2 max_exact_m + 1 of them; the
+        rows are reserved untouched, so a row takes memory as its points are written). Grows
+        as log2(N) once the rows fill: (2 max_exact_m + 1) * 8 bytes (0.5 MiB by default) per
+        doubling of the record.
+        """
+        written = sum(min(self._ring_len, (self._k >> level) + 1)
+                      for level in range(1, self._n_active))
+        return int(self._hist.nbytes + written * 8
                    + self._lanes.nbytes + self._tot.nbytes
                    + self._counts.nbytes
                    + self._acf.nbytes + self._ms.nbytes * 4 + self._level_end.nbytes

@@ -390,6 +390,10 @@ class AllanFeed:
             finite = np.isfinite(col)
             self._acc[axis].update(col if finite.all() else col[finite])
 
+    def nbytes(self, axis: str) -> int:
+        """Bytes the axis' accumulator holds (:attr:`.allan.AllanAccumulator.nbytes`; 0 before)."""
+        return 0 if self._acc is None else self._acc[axis].nbytes
+
     def result(self, axis: str, rate_hz: float | None) -> tuple:
         """
         Return the axis' (Allan result, fitted noise terms); (None, None) when unavailable.
@@ -799,6 +803,15 @@ class NoiseEngine:
                                       thresholds=self.thresholds,
                                       seconds_since_data=seconds_since_data)
                 for axis, s in summaries.items()}
+
+    def allan_nbytes(self, axis: str) -> int:
+        """
+        Bytes the axis' Allan accumulator holds (0 before the first data or with ``allan`` off).
+
+        By design they grow as log2 of the record: 0.5 MiB per doubling once the accumulator's
+        rows fill, 6.9 MiB per axis at 12 h of 6.66 kHz ('dense' taus).
+        """
+        return self._allan.nbytes(axis)
 
     @property
     def allan_status(self) -> str:

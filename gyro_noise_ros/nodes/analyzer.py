@@ -343,6 +343,7 @@ class NoiseAnalyzerNode(Node):
                                    mean_temperature_c=s.temperature_mean_c)
             values += [
                 ('Analysis queue (chunks)', str(self.live.queue_size)),
+                ('Allan storage (MiB)', f'{self.engine.allan_nbytes(axis) / 2 ** 20:.2f}'),
                 ('Messages dropped before the node', str(self._imu_watch.counts.missing)),
                 ('Messages undecodable', str(self.messages_undecodable)),
                 ('Publishers', str(len(active))),

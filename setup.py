@@ -23,6 +23,8 @@ setup(
     name=PACKAGE,
     version='0.1.0',
     packages=find_packages(exclude=['test', 'bench']),
+    # the nodes' Fast DDS participant profile (nodes/_dds_profile.py)
+    package_data={'gyro_noise_ros.nodes': ['fastdds_participant.xml']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE]),
         ('share/' + PACKAGE, ['package.xml']),

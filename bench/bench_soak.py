@@ -81,6 +81,7 @@ import tempfile
 import threading
 import time
 
+from gyro_noise_ros.nodes import _dds_profile
 import numpy as np
 
 ODR_HZ = 6667.0  # the default --odr-hz: the LSM6DSO32's highest rate
@@ -101,7 +102,12 @@ COMPENSATOR_DRAIN_S = 0.05  # the timer drain of temperature_sync interpolate ru
 OFFSET_AGE_KEY = 'Newest sample past its offset (ms)'
 #: Slack over one temperature period and a frame (ms): the frames of one read, a late wake-up.
 OFFSET_AGE_SLACK_MS = 10.0
-LEASE_S = 20.0  # Fast DDS's default participant lease duration
+#: The lease the package's nodes announce (nodes/_dds_profile.py): a killed recorder is
+#: dropped by the driver's writers after it (Fast DDS's default, 20 s, stalled the stream).
+LEASE_S = _dds_profile.LEASE_S
+#: Smallest share of the board's rate the compensator must receive in every FLOW_WINDOW_S
+#: (outside the unplug): a live stream that stalls (a dead reader slowing the writers) fails.
+FLOW_SHARE, FLOW_WINDOW_S = 0.7, 10.0
 
 
 def free_port():
@@ -761,6 +767,29 @@ def _check_offset_age(args, report, check, slack_s):
           + ', '.join(f"{f['kind']} {worst[f['kind']]:.0f} ms" for f in report['faults']))
 
 
+def _check_flow(args, report, check):
+    """Check that the compensator received the stream at its rate in each window but the unplug."""
+    series = [(p[0], p[1]) for p in report.get('compensator_series', []) if p[1] is not None]
+    quiet = [(f['at_s'], f['at_s'] + args.unplug_s + RECONNECT_PERIOD_S + args.settle_s)
+             for f in report['faults'] if f['kind'] == 'unplug']
+    worst = None  # (share of the rate, window start)
+    for i, (t0, n0) in enumerate(series):
+        if t0 < args.settle_s:
+            continue  # the start: the driver's clock settling, the first matches
+        end = next(((t, n) for t, n in series[i + 1:] if t >= t0 + FLOW_WINDOW_S), None)
+        if end is None or any(a < end[0] and t0 < b for a, b in quiet):
+            continue
+        share = (end[1] - n0) / (args.odr_hz * (end[0] - t0))
+        if worst is None or share < worst[0]:
+            worst = (share, t0)
+    report['flow_worst'] = worst
+    check('the stream kept flowing', worst is not None and worst[0] >= FLOW_SHARE,
+          'no window to judge' if worst is None else
+          f"the compensator received at least {100 * worst[0]:.0f} % of the board's rate in "
+          f'every {FLOW_WINDOW_S:g}-s window (lowest from {worst[1]:.0f} s; bound '
+          f'{100 * FLOW_SHARE:.0f} %; the unplug left out)')
+
+
 def _judge(args, chain, report, bags):
     checks = []
 
@@ -827,8 +856,8 @@ def _judge(args, chain, report, bags):
     # A held offset is right only where the compensator's input stopped for longer than
     # max_temperature_wait_s: at the unplug, at the end of the stream, and when the killed
     # recorder's DDS lease expires (Fast DDS keeps a killed reader matched for its participant
-    # lease, 20 s by default, and the driver's reliable writers stalled every other reader for
-    # 4-5 s around its expiry, measured with SHM and with UDPv4 only). Each stop holds at most
+    # lease, LEASE_S as the package's nodes announce it; with Fast DDS's default 20 s the
+    # driver's reliable writers slowed every other reader for 25-60 s). Each stop holds at most
     # the samples newer than the last temperature the node took: one decimation period, a frame
     # and one drain period of Imu taken after it. Anywhere else it means a stalled temperature
     # stream alone. Attributed by time: the compensator's counters every --rss-period-s.
@@ -863,6 +892,7 @@ def _judge(args, chain, report, bags):
           f"elsewhere); longest on-time wait {report.get('compensator_longest_wait_s')} s"
           + ''.join(f'; +{n} by {t:.0f} s' for t, n in rises[:5]))
     _check_offset_age(args, report, check, slack_s)
+    _check_flow(args, report, check)
     fault_lost = 0
     for fault in report['faults']:
         if fault['kind'] == 'recorder killed':

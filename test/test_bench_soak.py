@@ -12,10 +12,11 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The soak's memory check tells a one-time step at a fault from a leak (bench/bench_soak.py)."""
+"""The soak's memory and flow checks: a step is not a leak, a stall fails (bench/bench_soak.py)."""
 
 import importlib.util
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -90,3 +91,30 @@ def test_the_analyzer_is_judged_beyond_its_stated_allan_storage(seed, leak_mb_h)
     assert abs(slope - leak_mb_h) < 4.0 * se, (slope, se)
     # samples without a stated storage (the analyzer not reporting yet) are left out
     assert len(soak._beyond_allan(series, allan[10:])) == len(series) - 10
+
+
+def _flow(points):
+    report = {'faults': [{'kind': 'unplug', 'at_s': 450.0}], 'compensator_series': points}
+    args = SimpleNamespace(settle_s=15.0, unplug_s=2.0, odr_hz=6667.0)
+    checks = []
+    soak._check_flow(args, report, lambda *c: checks.append(c))
+    return checks[0][1], report['flow_worst']
+
+
+def test_the_flow_check_fails_a_stall_and_leaves_the_unplug_out():
+    t = np.arange(0.0, 1800.0, 5.0)
+    steady = 6667.0 * t
+    # the unplug: nothing for 5 s, then the board's buffer arrives
+    unplugged = np.where((t > 450) & (t <= 455), 6667.0 * 450, steady)
+    ok, worst = _flow([[a, b, b, 0, 0] for a, b in zip(t, unplugged)])
+    assert ok and worst[0] > 0.99
+    # session 3's soaks: after the recorder kill the stream crawled for ~30 s, then caught up
+    rate = np.where((t > 900) & (t <= 930), 1500.0, 6667.0)
+    crawled = np.concatenate(([0.0], np.cumsum(rate[1:] * 5.0)))
+    lag = crawled - 6667.0 * t
+    caught = np.where(t > 930, np.minimum(0.0, lag + 20000.0 * (t - 930)), lag)
+    ok, worst = _flow([[a, b, b, 0, 0] for a, b in zip(t, 6667.0 * t + caught)])
+    assert not ok and 900 <= worst[1] <= 925 and worst[0] < 0.3
+    # an unknown count (None before the first status) is left out, not a stall
+    ok, _ = _flow([[a, None if a < 60 else b, b, 0, 0] for a, b in zip(t, steady)])
+    assert ok

@@ -50,6 +50,7 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from rclpy.utilities import remove_ros_args
 
+from ._dds_profile import use_package_profile
 from ._params import (declare_parameter_table, parameter_help, ParamSpec,
                       refuse_unknown_parameters, specs_from_dataclass)
 from ..cli._startup import quiet_finalisers, take_pending
@@ -307,6 +308,7 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
 
 def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
                    received: list[int]) -> int:
+    use_package_profile()  # a node killed -9 is dropped by the others in 3 s, not 20
     try:
         rclpy.init(args=argv)
     except RuntimeError as err:

@@ -30,7 +30,8 @@ writer is then unknown (key None).
 ``get_publishers_info_by_topic`` (namespace and node name), and returns a warning when a publisher
 starts delivering while another one still does. It
 judges from the messages, not from the graph: a killed driver stays in the graph for its lease
-(20 s in Fast DDS) while its restarted successor, a new writer, already publishes. The recorder and
+(3 s as the package's nodes announce it, ``_dds_profile``; 20 s, Fast DDS's default, for other
+nodes) while its restarted successor, a new writer, already publishes. The recorder and
 the analyzer use both.
 """
 

@@ -75,7 +75,10 @@ def _count_at(series, t):
 def test_the_profile_is_used_unless_the_user_chose(monkeypatch):
     for name in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
                  'RMW_IMPLEMENTATION'):
-        monkeypatch.delenv(name, raising=False)
+        # set, then removed: monkeypatch restores what was there before (nothing) afterwards,
+        # also for the variable use_package_profile() sets
+        monkeypatch.setenv(name, 'placeholder')
+        monkeypatch.delenv(name)
     assert _dds_profile.use_package_profile()
     assert os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] == str(_dds_profile.PROFILE)
     text = Path(_dds_profile.PROFILE).read_text()

@@ -21,7 +21,7 @@ leaves: the writer keeps it until its participant's lease expires, 20 s by defau
 and meanwhile each write costs time in proportion to the history depth. Measured on the 2-core
 test machine (a publisher at 6.66 kHz, a live reader beside a reliable one killed -9; docs/scale.md
 "A subscriber killed -9"): at depth 60,000 (the lab configuration) the live reader received
-1,000-2,000 messages/s for ~25 s, then nothing for 2 s, then the backlog; at depth 10,000
+1,000-2,000 messages/s for ~20 s, then nothing for 2-3 s, then the backlog; at depth 10,000
 4,600/s; at 5,000 (the driver's default) it kept up. With the dead reader's participant
 announcing a 3-s lease it is dropped within seconds and the live reader dips for a second.
 

@@ -83,6 +83,10 @@ def test_the_profile_is_used_unless_the_user_chose(monkeypatch):
     assert os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] == str(_dds_profile.PROFILE)
     text = Path(_dds_profile.PROFILE).read_text()
     assert f'<leaseDuration><sec>{_dds_profile.LEASE_S:g}</sec>' in text
+    # the constants the docs and bench_soak read are the file's values (the file is the owner)
+    announce_ns = round(_dds_profile.ANNOUNCE_S * 1e9)
+    assert (f'<leaseAnnouncement><sec>{int(_dds_profile.ANNOUNCE_S)}</sec><nanosec>'
+            f'{announce_ns % 10 ** 9}</nanosec>') in text
     # the user's own profile file, or another middleware: left as it is
     for name, value in (('FASTRTPS_DEFAULT_PROFILES_FILE', '/theirs.xml'),
                         ('FASTDDS_DEFAULT_PROFILES_FILE', '/theirs.xml'),

@@ -42,8 +42,8 @@ process tree (user + sys, workers included) and the load average.
 Usage::
 
     .venv/bin/python bench/bench_analyze.py [--samples 2000000[,20000000]] [--storage mcap]
-        [--baseline PATH] [--jobs 2] [--curves 200] [--rounds 1] [--bag BAG ...]
-        [--tool-args '--allan-taus octave'] [--lean] [--jobs-check] [--workdir DIR]
+        [--compression zstd] [--baseline PATH] [--jobs 2] [--curves 200] [--rounds 1]
+        [--bag BAG ...] [--tool-args '--allan-taus octave'] [--lean] [--jobs-check] [--workdir DIR]
 """
 
 import argparse
@@ -61,7 +61,8 @@ import sys
 import tempfile
 import time
 
-from gyro_noise_ros.bag import ImuBagReader, ImuBagWriter
+from gyro_noise_ros.bag import ImuBagReader
+from gyro_noise_ros.bag.bulk import BulkImuBagWriter
 from gyro_noise_ros.core.simulate import FractionalNoise
 import numpy as np
 import yaml
@@ -72,12 +73,12 @@ ROOT = Path(__file__).resolve().parent.parent
 PAPER_SAMPLES = 187_159_392
 
 
-def write_bag(path, n, storage, seed):
+def write_bag(path, n, storage, seed, compression='none'):
     rng = np.random.default_rng(seed)
     noises = [FractionalNoise(1.4, -1.0, 1e-3, rng=rng) for _ in range(3)]
     stamps = 1_760_000_000 * 10**9 + np.round(np.arange(n) * (1e9 / RATE_HZ)).astype(np.int64)
     block = 500_000
-    with ImuBagWriter(path, storage=storage) as writer:
+    with BulkImuBagWriter(path, storage=storage, compression=compression) as writer:
         for i in range(0, n, block):
             m = min(block, n - i)
             gyro = np.stack([nz.generate(m) for nz in noises], axis=1)
@@ -373,9 +374,10 @@ def _sizes_and_bags(args, tmp):
     for n in (int(s) for s in args.samples.split(',')):
         bag = tmp / f'bag_{n}'
         t = time.perf_counter()
-        write_bag(bag, n, args.storage, args.seed)
+        write_bag(bag, n, args.storage, args.seed, args.compression)
         size_mb = sum(f.stat().st_size for f in bag.iterdir()) / 1e6
-        print(f'wrote {n:,} samples ({args.storage}, {size_mb:.0f} MB) in '
+        print(f'wrote {n:,} samples ({args.storage}, compression {args.compression}, '
+              f'{size_mb:.0f} MB) in '
               f'{time.perf_counter() - t:.1f} s')
         out.append((bag, n))
     return out
@@ -386,6 +388,8 @@ def main(argv=None):
     p.add_argument('--samples', default='2000000',
                    help='bag sizes to write, comma separated (default 2000000)')
     p.add_argument('--storage', default='mcap', choices=('sqlite3', 'mcap'))
+    p.add_argument('--compression', default='none', choices=('none', 'zstd'),
+                   help='mcap: zstd chunk compression of the bags written (none)')
     p.add_argument('--seed', type=int, default=1)
     p.add_argument('--curves', type=int, default=200,
                    help='--curves of the tool (chunks per axis whose curves are kept; 200)')

@@ -29,7 +29,7 @@ from gyro_noise_ros.app import importer as import_app
 from gyro_noise_ros.bag import ImuBagWriter
 from gyro_noise_ros.bag.bulk import BulkImuBagWriter, MCAP_CHUNK_BYTES
 from gyro_noise_ros.cli import emulator as emu_cli
-from gyro_noise_ros.errors import OutputError
+from gyro_noise_ros.errors import OutputError, ParameterError
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Reader
@@ -98,8 +98,9 @@ def test_bulk_import_writes_the_old_paths_bytes(corrupt_logs, tmp_path, storage,
         assert rows[0] == rows[1]
 
 
-@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
-def test_bulk_writer_api_matches_imu_bag_writer(tmp_path, storage):
+@pytest.mark.parametrize(('storage', 'compression'),
+                         [('sqlite3', 'none'), ('mcap', 'none'), ('mcap', 'zstd')])
+def test_bulk_writer_api_matches_imu_bag_writer(tmp_path, storage, compression):
     rng = np.random.default_rng(8)
     calls = []
     t = 1_700_000_000 * 10 ** 9
@@ -117,7 +118,7 @@ def test_bulk_writer_api_matches_imu_bag_writer(tmp_path, storage):
     for cls in (ImuBagWriter, BulkImuBagWriter):
         bag = tmp_path / cls.__name__ / 'bag'
         bag.parent.mkdir()
-        with cls(bag, storage=storage, frame_id='gyro_frame') as writer:
+        with cls(bag, storage=storage, frame_id='gyro_frame', compression=compression) as writer:
             for i, (stamps, gyro, accel, cov, log) in enumerate(calls):
                 writer.write_imu(stamps, gyro, accel, angular_velocity_covariance=cov, log_ns=log)
                 writer.write_temperature(stamps[::5], 25.0 + gyro[::5, 0], variance=0.01)
@@ -129,6 +130,8 @@ def test_bulk_writer_api_matches_imu_bag_writer(tmp_path, storage):
         assert writer.imu_count == sum(c[0].shape[0] for c in calls)
         bags[cls] = bag
     assert bag_messages(bags[BulkImuBagWriter]) == bag_messages(bags[ImuBagWriter])
+    if compression != 'none':  # the chunks really are compressed, and read back
+        assert b'zstd' in open(storage_file(bags[ImuBagWriter]), 'rb').read()
     if storage == 'mcap':
         assert (open(storage_file(bags[BulkImuBagWriter]), 'rb').read()
                 == open(storage_file(bags[ImuBagWriter]), 'rb').read())
@@ -163,3 +166,10 @@ def test_a_bag_that_cannot_be_created_is_one_error(corrupt_logs, tmp_path, threa
     blocker.write_text('x')
     with pytest.raises(OutputError, match='cannot be created'):
         import_app.import_logs(corrupt_logs, blocker / 'bag', threads=threads)
+
+
+@pytest.mark.parametrize(('storage', 'compression'), [('mcap', 'lz4'), ('sqlite3', 'zstd')])
+def test_writer_refuses_a_compression_it_does_not_write(tmp_path, storage, compression):
+    with pytest.raises(ParameterError, match='compression'):
+        ImuBagWriter(tmp_path / 'bag', storage=storage, compression=compression)
+    assert not (tmp_path / 'bag').exists()

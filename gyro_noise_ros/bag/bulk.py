@@ -100,12 +100,16 @@ class BulkImuBagWriter(ImuBagWriter):
             raise BagError(f'bag {str(self.path)!r} is closed')
         storage: Any = writer.storage  # rosbags' storage writer, probed by name and attribute
         chunk = getattr(storage, 'chunk', None)
-        if (type(storage).__name__ != 'McapWriter' or getattr(storage, 'compression', None) != ''
+        # No compression, or chunk compression (rosbag2's 'storage' mode: the chunk closer runs
+        # the storage's compressor); per-message compression goes through rosbags' write.
+        if (type(storage).__name__ != 'McapWriter'
+                or getattr(storage, 'compression', None) not in ('', 'zstd', 'lz4')
+                or not callable(getattr(storage, 'compressor', None))
                 or not all(hasattr(chunk, name) for name in ('bio', 'msgs', 'message_start_time'))
                 or conn.id not in getattr(storage, 'channel_stats', {})
                 or conn.id not in getattr(writer, 'counts', {})
                 or getattr(writer, 'compression_mode', None) is None
-                or writer.compression_mode.name != 'NONE'):
+                or writer.compression_mode.name not in ('NONE', 'STORAGE')):
             return None
         if getattr(storage, '_gyro_noise_bulk', False) is False:
             storage.close_chunk = _McapChunkCloser(storage)
@@ -378,15 +382,15 @@ def _imu_records(channel_id: int, stamps: np.ndarray, sec: np.ndarray, nsec: np.
 def _emit_chunk(storage: McapWriter, start_time: int, end_time: int, data: memoryview,
                 msgs: Mapping[int, Sequence[ArrayLike]]) -> None:
     """
-    Write one MCAP chunk (uncompressed) with its message indexes; record its chunk index.
+    Write one MCAP chunk (compressed by the storage's compressor) with its message indexes.
 
     The bytes of rosbags' ``McapWriter.close_chunk``: chunk record, one message index record per
     channel (``msgs``: channel id -> list of (k, 2) (log time, offset) arrays or pairs, in write
     order), and the chunk index entry appended to ``storage.chunks``.
     """
     size = len(data)
-    # rosbags declares its compressor bytes -> bytes; the one this writer runs with (no
-    # compression, checked by _mcap_storage) hands back the buffer it is given
+    # rosbags declares its compressor bytes -> bytes; without compression it hands back the
+    # buffer it is given, zstd and lz4 take any buffer
     compressed: bytes | memoryview = storage.compressor(data)  # type: ignore[arg-type]
     compressed_size = len(compressed)
     head = struct.pack('<QQQI', start_time, end_time, size, 0)

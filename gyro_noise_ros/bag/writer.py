@@ -40,6 +40,9 @@ if TYPE_CHECKING:
     from rosbags.interfaces import Connection
     from rosbags.rosbag2 import Writer
 
+#: What :class:`ImuBagWriter` writes: no compression, or zstd MCAP chunks.
+COMPRESSIONS = ('none', 'zstd')
+
 
 def write_raw(writer: Writer, conn: Connection, log_ns: np.ndarray,
               blobs: Sequence[bytes | memoryview], path: StrPath) -> None:
@@ -119,11 +122,16 @@ class ImuBagWriter:
         default: a commit then costs microseconds instead of tens of milliseconds, and what was
         committed still survives the recorder process being killed (the data is in the operating
         system's cache); only an operating-system crash or power loss can lose or damage it.
+    compression : {'none', 'zstd'}
+        MCAP only: zstd chunk compression (what ``ros2 bag record --storage mcap
+        --storage-preset-profile zstd_fast`` writes; rosbag2's ``storage`` compression mode). A
+        gyro's noise does not compress, the rest of each message does: about a quarter of the
+        bytes, for a few CPU seconds per million messages.
 
     Raises
     ------
     ParameterError
-        Unknown storage or bad frame_id.
+        Unknown storage or compression, compression with sqlite3, or bad frame_id.
     OutputError
         The bag cannot be created (path exists, not writable); later, a write, flush or close
         fails (disk full). Exit code 6 in the tools, like every output that cannot be written.
@@ -133,11 +141,16 @@ class ImuBagWriter:
     def __init__(self, path: StrPath, *, storage: str = 'sqlite3',
                  imu_topic: str = '/imu/data_raw',
                  temperature_topic: str | None = '/imu/temperature', frame_id: str = 'imu_link',
-                 fsync: bool = False) -> None:
-        from rosbags.rosbag2 import StoragePlugin, Writer
+                 fsync: bool = False, compression: str = 'none') -> None:
+        from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
         if storage not in STORAGES:
             raise ParameterError(f"storage must be 'sqlite3' or 'mcap', got {storage!r}")
+        if compression not in COMPRESSIONS:
+            raise ParameterError(f"compression must be 'none' or 'zstd', got {compression!r}")
+        if compression != 'none' and storage != 'mcap':
+            raise ParameterError(f'compression {compression!r} needs mcap storage (chunk '
+                                 f'compression), got {storage!r}')
         if not isinstance(frame_id, str) or '\x00' in frame_id:
             raise ParameterError(f'frame_id must be a str without NUL, got {frame_id!r}')
         self.path = Path(path)
@@ -151,6 +164,8 @@ class ImuBagWriter:
         self._writer: Writer | None = None
         try:
             writer = Writer(self.path, version=9, storage_plugin=plugin)
+            if compression == 'zstd':
+                writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
             writer.open()
             self._writer = writer
             conn = getattr(writer.storage, 'conn', None)

@@ -443,3 +443,61 @@ def test_imu_before_the_first_temperature_waits_then_is_dropped_never_published_
     assert values['Messages dropped waiting for the first temperature'] == '400'
     assert level == WARN
     assert len(io.out) == 100 and node.counts['published'] == 100
+
+
+class _ScriptedTaker:
+    """Stands for the node's RawTaker: hands out the given batches, then nothing."""
+
+    def __init__(self, batches):
+        self.batches = list(batches)
+
+    def take(self, limit=None):
+        raws = self.batches.pop(0) if self.batches else []
+        return raws, [0] * len(raws), [], []
+
+    def close(self):
+        pass
+
+
+@pytest.mark.timeout(60)
+def test_temperatures_published_before_the_samples_taken_are_applied_to_them(context, monkeypatch):
+    # The driver publishes a read's temperature before its Imu messages. A temperature that
+    # reaches the node between the start of a drain and its Imu take must still be applied to
+    # those samples: the node takes temperatures after the Imu messages, not before.
+    model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), temperature_range_c=(20.0, 30.0))
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                          parameter_overrides=_overrides(
+                                              drain_period_s=0.5, temperature_rate_window_s=1.0))
+    t_stamps = T0_NS + np.array([-NS // 2, 0])
+    temps = np.array([25.0, 26.0])
+    queue = [encode_temperature_cdr(t_stamps[:1], temps[:1], frame_id='imu_test')]
+
+    def take_temperatures(sub, msg_type):
+        raws = [raw for batch in queue for raw in batch]
+        queue.clear()
+        return raws, [0] * len(raws), [0] * len(raws)
+
+    monkeypatch.setattr(compensator, 'take_all', take_temperatures)
+    node.drain()  # the first temperature: an offset exists
+    raws = _imu_stream(16, seed=3)[3]  # stamps from T0_NS: at and after the second temperature
+
+    class ArrivesWithTheSamples(_ScriptedTaker):
+
+        def take(self, limit=None):
+            if self.batches:  # the second temperature was published just before these samples
+                queue.append(encode_temperature_cdr(t_stamps[1:], temps[1:], frame_id='imu_test'))
+            return super().take(limit)
+
+    node._imu_taker.close()
+    node._imu_taker = ArrivesWithTheSamples([raws])
+    sent = []
+    monkeypatch.setattr(node, '_emit', lambda *batch: sent.append(batch))
+    try:
+        node.drain()
+    finally:
+        node.destroy_node()
+    assert node.thermal.stamp_ns == t_stamps[1]
+    _, _, _, _, stamp_ns, _, _ = sent[0]
+    twin = LiveDriftEvaluator(model, rate_window_s=1.0)
+    twin.add_temperature(t_stamps, temps)
+    np.testing.assert_array_equal(node.thermal.drift_at(stamp_ns), twin.drift_at(stamp_ns))

@@ -124,9 +124,10 @@ class ImuBagWriter:
         system's cache); only an operating-system crash or power loss can lose or damage it.
     compression : {'none', 'zstd'}
         MCAP only: zstd chunk compression (what ``ros2 bag record --storage mcap
-        --storage-preset-profile zstd_fast`` writes; rosbag2's ``storage`` compression mode). A
-        gyro's noise does not compress, the rest of each message does: about a quarter of the
-        bytes, for a few CPU seconds per million messages.
+        --storage-preset-profile zstd_fast`` writes; rosbag2's ``storage`` compression mode).
+        Measured on the bench's simulated gyro: 7x smaller (99 MB instead of 708 MB for 2 M
+        messages), about 0.4 s more per million messages to write, 0.1 us more per message to
+        read.
 
     Raises
     ------

@@ -445,20 +445,6 @@ def test_imu_before_the_first_temperature_waits_then_is_dropped_never_published_
     assert len(io.out) == 100 and node.counts['published'] == 100
 
 
-class _ScriptedTaker:
-    """Stands for the node's RawTaker: hands out the given batches, then nothing."""
-
-    def __init__(self, batches):
-        self.batches = list(batches)
-
-    def take(self, limit=None):
-        raws = self.batches.pop(0) if self.batches else []
-        return raws, [0] * len(raws), [], []
-
-    def close(self):
-        pass
-
-
 @pytest.mark.timeout(60)
 def test_temperatures_published_before_the_samples_taken_are_applied_to_them(context, monkeypatch):
     # The driver publishes a read's temperature before its Imu messages. A temperature that
@@ -481,15 +467,23 @@ def test_temperatures_published_before_the_samples_taken_are_applied_to_them(con
     node.drain()  # the first temperature: an offset exists
     raws = _imu_stream(16, seed=3)[3]  # stamps from T0_NS: at and after the second temperature
 
-    class ArrivesWithTheSamples(_ScriptedTaker):
+    class ArrivesWithTheSamples:
+        """Stands for the node's RawTaker: the samples once, then nothing."""
 
         def take(self, limit=None):
-            if self.batches:  # the second temperature was published just before these samples
-                queue.append(encode_temperature_cdr(t_stamps[1:], temps[1:], frame_id='imu_test'))
-            return super().take(limit)
+            if not raws:
+                return [], [], [], []
+            # the second temperature was published just before these samples
+            queue.append(encode_temperature_cdr(t_stamps[1:], temps[1:], frame_id='imu_test'))
+            taken = raws[:]
+            raws.clear()
+            return taken, [0] * len(taken), [], []
+
+        def close(self):
+            pass
 
     node._imu_taker.close()
-    node._imu_taker = ArrivesWithTheSamples([raws])
+    node._imu_taker = ArrivesWithTheSamples()
     sent = []
     monkeypatch.setattr(node, '_emit', lambda *batch: sent.append(batch))
     try:

@@ -103,7 +103,7 @@ class BulkImuBagWriter(ImuBagWriter):
         # No compression, or chunk compression (rosbag2's 'storage' mode: the chunk closer runs
         # the storage's compressor); per-message compression goes through rosbags' write.
         if (type(storage).__name__ != 'McapWriter'
-                or getattr(storage, 'compression', None) not in ('', 'zstd', 'lz4')
+                or getattr(storage, 'compression', None) not in ('', 'zstd')
                 or not callable(getattr(storage, 'compressor', None))
                 or not all(hasattr(chunk, name) for name in ('bio', 'msgs', 'message_start_time'))
                 or conn.id not in getattr(storage, 'channel_stats', {})
@@ -390,7 +390,7 @@ def _emit_chunk(storage: McapWriter, start_time: int, end_time: int, data: memor
     """
     size = len(data)
     # rosbags declares its compressor bytes -> bytes; without compression it hands back the
-    # buffer it is given, zstd and lz4 take any buffer
+    # buffer it is given, zstd takes any buffer
     compressed: bytes | memoryview = storage.compressor(data)  # type: ignore[arg-type]
     compressed_size = len(compressed)
     head = struct.pack('<QQQI', start_time, end_time, size, 0)

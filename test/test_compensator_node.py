@@ -491,7 +491,7 @@ def test_temperatures_published_before_the_samples_taken_are_applied_to_them(con
     finally:
         node.destroy_node()
     assert node.thermal.stamp_ns == t_stamps[1]
-    _, _, _, _, stamp_ns, _, _ = sent[0]
+    _, _, stamp_ns, _, _ = sent[0]
     twin = LiveDriftEvaluator(model, rate_window_s=1.0)
     twin.add_temperature(t_stamps, temps)
     np.testing.assert_array_equal(node.thermal.drift_at(stamp_ns), twin.drift_at(stamp_ns))

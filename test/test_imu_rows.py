@@ -16,7 +16,8 @@
 
 from gyro_noise_ros.msgs import (decode_imu_spans, decode_spans, encode_imu_cdr, IMU_FIELDS,
                                  IMU_TAIL_F8, join_raws, patch_imu_spans)
-from gyro_noise_ros.msgs.imu_rows import imu_rows, patch_rows, rows_stamps, rows_vectors
+from gyro_noise_ros.msgs.imu_rows import (imu_rows, patch_rows, RowLayout, rows_stamps,
+                                          rows_vectors)
 import numpy as np
 import pytest
 
@@ -72,3 +73,52 @@ def test_anything_else_is_left_to_the_span_codec():
     # spans not back to back
     buf, starts, lengths = join_raws(raws)
     assert imu_rows(buf, starts[::-1].copy(), lengths) is None
+
+
+def _same_answer(layout, raws):
+    got, want = layout.rows(raws), imu_rows(*join_raws(raws))
+    assert (got is None) == (want is None)
+    if want is not None:
+        np.testing.assert_array_equal(got, want)
+    return got is not None
+
+
+def test_the_remembered_layout_answers_as_imu_rows_does():
+    # RowLayout checks later batches of a learnt layout in Python; every batch, good or bad,
+    # before or after it learnt one, must get imu_rows' answer.
+    rng = np.random.default_rng(7)
+    layout = RowLayout()
+    assert layout.rows([]) is None
+    raws = _batch(40)[3]
+    others = {
+        'longer frame_id': _batch(3, 'other_frame')[3],
+        'same length, other frame_id': _batch(3, 'imu_lin2')[3],
+        'big-endian': [bytes([0, 0]) + r[2:] for r in raws[:3]],
+        'non-ASCII frame_id': _batch(3, 'imu_\u00e9')[3],
+    }
+    accepted = refused = 0
+    for trial in range(400):
+        i = int(rng.integers(0, 30))
+        batch = list(raws[i:i + int(rng.integers(1, 11))])
+        kind = trial % 4
+        if kind == 1:  # one byte of one message changed anywhere before the float block
+            j = int(rng.integers(0, len(batch)))
+            pos = int(rng.integers(0, len(batch[j]) - 8 * IMU_TAIL_F8))
+            raw = bytearray(batch[j])
+            raw[pos] ^= int(rng.integers(1, 256))
+            batch[j] = bytes(raw)
+        elif kind == 2:  # another layout's message in the batch
+            batch.insert(int(rng.integers(0, len(batch) + 1)),
+                         others[list(others)[trial % len(others)]][0])
+        elif kind == 3:  # a truncated or lengthened message
+            j = int(rng.integers(0, len(batch)))
+            batch[j] = batch[j][:-8] if trial % 8 == 3 else batch[j] + bytes(8)
+        if _same_answer(layout, batch):
+            accepted += 1
+        else:
+            refused += 1
+    # both answers came up many times (a changed stamp byte is still a good message)
+    assert accepted > 100 and refused > 100
+    for name, batch in others.items():
+        _same_answer(layout, batch)
+        _same_answer(layout, raws[:5])

@@ -22,11 +22,19 @@ in the encapsulation and frame_id bytes) and returns the matrix, or None for any
 then goes through :func:`.imu.decode_imu_spans` / :func:`.imu.patch_imu_spans` (same results,
 tested). A 16-message batch costs a few microseconds here instead of ~200 us of fixed per-call
 work there (the compensator takes one board frame per wake-up).
+
+A node takes ~650 batches a second at 6.66 kHz; :class:`RowLayout` remembers the layout of the
+last batch :func:`imu_rows` accepted, so the next batches of it are checked with byte comparisons
+in Python (the same bytes, the same rule) instead of a dozen numpy calls: ~3 us instead of ~14 us
+for 10 messages.
 """
+
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .cdr import join_raws
 from .imu import IMU_FIELDS, IMU_TAIL_F8
 from .stamps import NS_PER_S
 
@@ -77,6 +85,46 @@ def imu_rows(buf: NDArray[np.uint8], starts: NDArray[np.int64],
                       and (rows[1:, 12:off] == head[12:off]).all()):
         return None
     return rows
+
+
+class RowLayout:
+    """
+    The layout of the last batch :func:`imu_rows` accepted, to accept the next ones cheaply.
+
+    :meth:`rows` returns the same matrix as ``imu_rows(*join_raws(raws))``: a batch whose
+    messages all have the remembered length, encapsulation bytes and header bytes after the
+    stamp (frame_id, padding) is what :func:`imu_rows` accepts, since its checks read only those
+    bytes of row 0 and compare the other rows with them; anything else goes through
+    :func:`imu_rows` itself, whose answer (rows or None) is returned and, for rows, remembered.
+    """
+
+    def __init__(self) -> None:
+        self._size = 0
+        self._encapsulation = b''
+        self._header = b''
+
+    def rows(self, raws: Sequence[bytes]) -> NDArray[np.uint8] | None:
+        """
+        Return ``raws`` as an ``(n, size)`` read-only byte matrix, or None (see :func:`imu_rows`).
+
+        Parameters
+        ----------
+        raws : sequence of bytes
+            Serialised ``sensor_msgs/Imu`` messages.
+
+        """
+        n = len(raws)
+        size, enc, header = self._size, self._encapsulation, self._header
+        if n and size and all(len(raw) == size and raw.startswith(enc)
+                              and raw.startswith(header, 12) for raw in raws):
+            return np.frombuffer(b''.join(raws), np.uint8).reshape(n, size)
+        buf, starts, lengths = join_raws(raws)
+        rows = imu_rows(buf, starts, lengths)
+        if rows is not None:
+            head = rows[0].tobytes()
+            self._size = rows.shape[1]
+            self._encapsulation, self._header = head[:2], head[12:self._size - _TAIL_BYTES]
+        return rows
 
 
 def rows_stamps(rows: NDArray[np.uint8]) -> NDArray[np.int64]:

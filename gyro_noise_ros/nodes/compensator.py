@@ -63,7 +63,7 @@ from ..calibration.apply import (Calibration, calibration_from_parameters, KEYS,
 from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
-from ..msgs.imu_rows import imu_rows, patch_rows, rows_stamps, rows_vectors
+from ..msgs.imu_rows import patch_rows, RowLayout, rows_stamps, rows_vectors
 from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TEMPERATURE_SYNCS,
                             TemperatureGate)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, ThermalMethod
@@ -225,6 +225,7 @@ class ImuCompensatorNode(Node):
                                      p['temperature_wait_s'] + start_up_s,
                                      wait_for_newer=p['temperature_sync'] == 'interpolate')
         self._transport = SequenceGapCounter()
+        self._layout = RowLayout()
         self._frame_id = ''
         self._offset = None
         self._accel_offset = None
@@ -325,53 +326,57 @@ class ImuCompensatorNode(Node):
         self.counts['received'] += len(raws)
         self._transport.update(sequence)
         self._diag.tick_data(time.monotonic())
-        buf, starts, lengths = join_raws(raws)
-        rows = imu_rows(buf, starts, lengths)
+        rows = self._layout.rows(raws)
+        spans = None
         keep = None
         if rows is not None:  # one layout: a few numpy calls (the usual batch, a board frame)
             stamp_ns = rows_stamps(rows)
             gyro, accel = rows_vectors(rows)
         else:
+            buf, starts, lengths = join_raws(raws)
             keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
             if keep is not None:
                 self.counts['undecodable'] += len(raws) - keep.size
                 starts, lengths = starts[keep], lengths[keep]
+            spans = (buf, starts, lengths)
         if not stamp_ns.size:
             return
         gyro, accel = self.calibration.apply(gyro, accel)
         if not self._frame_id:
             self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
-        batch = (buf, starts, lengths, rows, stamp_ns, gyro, accel)
-        if self.thermal is None:
-            self._emit(*batch)
-            return
-        if (not self._gate.wait_for_newer and not self._gate.waiting
-                and self.thermal.offset_stamp_ns is not None):
-            self._emit(*batch)  # temperature_sync latest, offsets known: at once
+        if self.thermal is None or (not self._gate.wait_for_newer and not self._gate.waiting
+                                    and self.thermal.offset_stamp_ns is not None):
+            # no model, or temperature_sync latest with offsets known: at once
+            self._emit(spans, rows, stamp_ns, gyro, accel)
             return
         # Before the first temperature there is no offset: publishing these uncorrected on a
         # topic named compensated would be a wrong number given calmly (the gate drops them after
         # temperature_wait_s); with temperature_sync interpolate, samples also wait for a
         # temperature at or after their stamp.
-        self._gate.push(batch, stamp_ns, time.monotonic())
+        self._gate.push((spans, rows, stamp_ns, gyro, accel), stamp_ns, time.monotonic())
         self._release()
 
     def _release(self) -> None:
         assert self.thermal is not None  # called only with a thermal model
         for batch, i, j, _ in self._gate.release(self.thermal.offset_stamp_ns, time.monotonic()):
-            buf, starts, lengths, rows, stamp_ns, gyro, accel = batch
-            self._emit(buf, starts[i:j], lengths[i:j], None if rows is None else rows[i:j],
-                       stamp_ns[i:j], gyro[i:j], accel[i:j])
+            spans, rows, stamp_ns, gyro, accel = batch
+            if spans is not None:
+                buf, starts, lengths = spans
+                spans = (buf, starts[i:j], lengths[i:j])
+            self._emit(spans, None if rows is None else rows[i:j], stamp_ns[i:j], gyro[i:j],
+                       accel[i:j])
 
-    def _emit(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
+    def _emit(self, spans: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
               rows: np.ndarray | None, stamp_ns: np.ndarray, gyro: np.ndarray,
               accel: np.ndarray) -> None:
-        if self.thermal is not None:
-            offset = self.thermal.drift_at(stamp_ns)
+        """Subtract the thermal offsets, publish; ``spans`` (buf, starts, lengths) without rows."""
+        thermal = self.thermal
+        if thermal is not None:
+            offset = thermal.drift_at(stamp_ns)
             assert offset is not None  # the gate releases samples only after a temperature
             gyro -= offset
             self._offset = offset[-1]
-            newest = self.thermal.offset_stamp_ns
+            newest = thermal.offset_stamp_ns
             if newest is not None:  # how much newer the sample is than the offset it got
                 self._diag.tick_offset_age(int(stamp_ns[-1]) - newest)
         if self.thermal_accel is not None:
@@ -379,8 +384,11 @@ class ImuCompensatorNode(Node):
             if accel_offset is not None:
                 accel -= accel_offset
                 self._accel_offset = accel_offset[-1]
-        raws = (patch_imu_spans(buf, starts, lengths, gyro, accel) if rows is None
-                else patch_rows(rows, gyro, accel))
+        if rows is not None:
+            raws = patch_rows(rows, gyro, accel)
+        else:
+            assert spans is not None  # a batch has rows or spans
+            raws = patch_imu_spans(*spans, gyro, accel)
         handle = self._pub.handle
         with handle:  # what Publisher.publish does per message for bytes, once per batch
             publish = handle.publish_raw

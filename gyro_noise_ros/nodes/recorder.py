@@ -57,8 +57,8 @@ from ._ros_common import (declare_parameter_table, ParamSpec, PolledGroup, run_n
 from ..bag import decode_imu, decode_temperature, ImuBagWriter
 from ..bag.storage import describe
 from ..errors import GyroNoiseError, OutputError
-from ..msgs import frame_id_of, imu_covariances, join_raws, temperature_variances
-from ..msgs.imu_rows import imu_rows, rows_stamps
+from ..msgs import frame_id_of, imu_covariances, temperature_variances
+from ..msgs.imu_rows import RowLayout, rows_stamps
 from ..outputs import check_new_dir
 
 NODE_NAME = 'gyro_noise_record'
@@ -159,6 +159,7 @@ class RecorderNode(Node):
         self.written_imu = 0
         self.written_temperature = 0
         self._writer: ImuBagWriter | None = None
+        self._layout = RowLayout()
         self._closed = False
         self._overwrite = params['overwrite']
         # before spinning: a refused output fails now, not when the first message arrives
@@ -284,8 +285,7 @@ class RecorderNode(Node):
             self.written_temperature += len(t_raws)
 
     def _write_imu(self, raws: list[bytes], received: Sequence[int]) -> None:
-        buf, starts, lengths = join_raws(raws)
-        rows = imu_rows(buf, starts, lengths)
+        rows = self._layout.rows(raws)
         if rows is not None:
             # One verified layout (one publisher's messages): stored byte for byte, as
             # ros2 bag record stores them, with no decode and re-encode.

@@ -453,12 +453,15 @@ class LiveDriftEvaluator:
         if self._knot_t.size == 0:
             return None
         assert self._t0_ns is not None  # set with the first knot
-        x = (np.asarray(stamp_ns, dtype=np.int64) - self._t0_ns) / _NS
-        if x.size and x[0] >= self._knot_t[-1] and (x.size == 1 or x.min() >= self._knot_t[-1]):
+        stamps = np.asarray(stamp_ns, dtype=np.int64)
+        # (min - t0) / 1e9 is the min of x below (the map is non-decreasing, the rounding the same)
+        if stamps.size and (int(stamps.min()) - self._t0_ns) / _NS >= self._knot_t[-1]:
             # Every stamp at or after the newest knot (live, the usual batch): its offset, held,
             # as np.interp gives it; the older knots are no longer needed.
-            self._knot_t, self._knot_drift = self._knot_t[-1:], self._knot_drift[-1:]
-            return np.repeat(self._knot_drift, x.size, axis=0)
+            if self._knot_t.size > 1:
+                self._knot_t, self._knot_drift = self._knot_t[-1:], self._knot_drift[-1:]
+            return np.repeat(self._knot_drift, stamps.size, axis=0)
+        x = (stamps - self._t0_ns) / _NS
         out = np.empty((x.size, 3))
         for axis in range(3):
             out[:, axis] = np.interp(x, self._knot_t, self._knot_drift[:, axis])
@@ -512,6 +515,7 @@ class TemperatureGate:
         self.wait_for_newer = bool(wait_for_newer)
         # [batch, stamp_ns (int64 array), next index, arrival time (s)]
         self._queue: list[list[Any]] = []
+        self._held = 0     # samples in _queue not yet released (kept with it: read per batch)
         self.late = 0      # samples released after max_wait_s with the newest offset
         self.dropped = 0   # samples dropped waiting for the first temperature
         self.longest_wait_s = 0.0  # of a sample released on time (interpolated)
@@ -519,7 +523,7 @@ class TemperatureGate:
     @property
     def waiting(self) -> int:
         """int: Samples held now."""
-        return sum(len(stamps) - start for _, stamps, start, _ in self._queue)
+        return self._held
 
     def push(self, batch: Any, stamp_ns: ArrayLike, now_s: float) -> None:
         """
@@ -538,6 +542,7 @@ class TemperatureGate:
         stamps = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
         if stamps.size:
             self._queue.append([batch, stamps, 0, float(now_s)])
+            self._held += stamps.size
 
     def release(self, newest_temperature_ns: int | None,
                 now_s: float) -> list[tuple[Any, int, int, bool]]:
@@ -567,6 +572,7 @@ class TemperatureGate:
                 if waited <= self.first_wait_s:
                     break
                 self.dropped += len(stamps) - start
+                self._held -= len(stamps) - start
                 self._queue.pop(0)
                 continue
             if self.wait_for_newer:
@@ -577,6 +583,7 @@ class TemperatureGate:
             if stop > start:
                 out.append((batch, start, stop, False))
                 self.longest_wait_s = max(self.longest_wait_s, waited)
+                self._held -= stop - start
                 entry[2] = start = stop
             if start == len(stamps):
                 self._queue.pop(0)
@@ -585,5 +592,6 @@ class TemperatureGate:
                 break  # later batches are newer still: they wait behind this one
             out.append((batch, start, len(stamps), True))
             self.late += len(stamps) - start
+            self._held -= len(stamps) - start
             self._queue.pop(0)
         return out

@@ -457,33 +457,23 @@ def test_temperatures_published_before_the_samples_taken_are_applied_to_them(con
     t_stamps = T0_NS + np.array([-NS // 2, 0])
     temps = np.array([25.0, 26.0])
     queue = [encode_temperature_cdr(t_stamps[:1], temps[:1], frame_id='imu_test')]
+    samples = []
 
-    def take_temperatures(sub, msg_type):
-        raws = [raw for batch in queue for raw in batch]
-        queue.clear()
+    def take(sub, msg_type, limit=None):
+        """Stands for the node's takes: Imu messages once, the temperatures queued so far."""
+        if msg_type is Imu:
+            if samples:  # the second temperature was published just before these samples
+                queue.append(encode_temperature_cdr(t_stamps[1:], temps[1:], frame_id='imu_test'))
+            raws = samples[:]
+            samples.clear()
+        else:
+            raws = [raw for batch in queue for raw in batch]
+            queue.clear()
         return raws, [0] * len(raws), [0] * len(raws)
 
-    monkeypatch.setattr(compensator, 'take_all', take_temperatures)
+    monkeypatch.setattr(compensator, 'take_all', take)
     node.drain()  # the first temperature: an offset exists
-    raws = _imu_stream(16, seed=3)[3]  # stamps from T0_NS: at and after the second temperature
-
-    class ArrivesWithTheSamples:
-        """Stands for the node's RawTaker: the samples once, then nothing."""
-
-        def take(self, limit=None):
-            if not raws:
-                return [], [], [], []
-            # the second temperature was published just before these samples
-            queue.append(encode_temperature_cdr(t_stamps[1:], temps[1:], frame_id='imu_test'))
-            taken = raws[:]
-            raws.clear()
-            return taken, [0] * len(taken), [], []
-
-        def close(self):
-            pass
-
-    node._imu_taker.close()
-    node._imu_taker = ArrivesWithTheSamples()
+    samples += _imu_stream(16, seed=3)[3]  # stamps from T0_NS: at and after the second temperature
     sent = []
     monkeypatch.setattr(node, '_emit', lambda *batch: sent.append(batch))
     try:

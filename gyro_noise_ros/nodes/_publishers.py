@@ -214,20 +214,7 @@ class RawTaker:
         return raws, rec['received_ns'].tolist(), rec['publication'].tolist(), rec['gid'].copy()
 
     def _take_rclpy(self, limit: int | None) -> tuple[list[bytes], list[int], list[int], None]:
-        if limit is None:
-            return (*take_all(self.sub, self.msg_type), None)
-        raws: list[bytes] = []
-        received: list[int] = []
-        sequence: list[int] = []
-        with self.sub.handle:
-            while len(raws) < limit:
-                item = self.sub.handle.take_message(self.msg_type, True)
-                if item is None:
-                    break
-                raws.append(item[0])
-                received.append(item[1].get('received_timestamp') or 0)
-                sequence.append(item[1].get('publication_sequence_number') or 0)
-        return raws, received, sequence, None
+        return (*take_all(self.sub, self.msg_type, limit), None)
 
     def close(self) -> None:
         """Free the serialisation buffer (idempotent)."""

@@ -381,9 +381,10 @@ class PolledGroup(CallbackGroup):
         pass
 
 
-def take_all(sub: Subscription, msg_type: type) -> tuple[list[bytes], list[int], list[int]]:
+def take_all(sub: Subscription, msg_type: type,
+             limit: int | None = None) -> tuple[list[bytes], list[int], list[int]]:
     """
-    Take every message queued on a raw subscription.
+    Take every message queued on a raw subscription, or the oldest ``limit`` of them.
 
     Parameters
     ----------
@@ -391,6 +392,9 @@ def take_all(sub: Subscription, msg_type: type) -> tuple[list[bytes], list[int],
         Created with ``raw=True``.
     msg_type : type
         Its message class.
+    limit : int or None
+        Most messages to take (None: all): a caller that processes a backlog in bounded batches
+        keeps its temporaries small.
 
     Returns
     -------
@@ -405,10 +409,11 @@ def take_all(sub: Subscription, msg_type: type) -> tuple[list[bytes], list[int],
     raws: list[bytes] = []
     received: list[int] = []
     sequence: list[int] = []
+    left = -1 if limit is None else int(limit)
     handle = sub.handle
     with handle:
         take = handle.take_message
-        while True:
+        while left:
             item = take(msg_type, True)
             if item is None:
                 break
@@ -416,6 +421,7 @@ def take_all(sub: Subscription, msg_type: type) -> tuple[list[bytes], list[int],
             raws.append(raw)
             received.append(info.get('received_timestamp') or 0)
             sequence.append(info.get('publication_sequence_number') or 0)
+            left -= 1
     return raws, received, sequence
 
 

@@ -51,7 +51,6 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 
-from ._publishers import RawTaker
 from ._realtime import REALTIME_DOC, set_realtime_priority
 from ._ros_common import (declare_parameter_table, diagnostic_array, diagnostic_status,
                           diagnostics_publisher, ParamSpec, PolledGroup, run_node, sensor_data_qos,
@@ -241,7 +240,6 @@ class ImuCompensatorNode(Node):
         self._temp_sub = self.create_subscription(
             Temperature, 'imu/temperature', unused_callback,
             sensor_data_qos(p['queue_depth'], False), raw=True, callback_group=group)
-        self._imu_taker = RawTaker(self._imu_sub, Imu, self.get_logger())
         out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
                              reliability=ReliabilityPolicy.RELIABLE)
         self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)
@@ -286,7 +284,7 @@ class ImuCompensatorNode(Node):
             while True:
                 # A backlog (a stalled stream resuming) goes through in bounded batches: one
                 # large batch would grow the heap for good.
-                raws, _, sequence, _ = self._imu_taker.take(MAX_BATCH)
+                raws, _, sequence = take_all(self._imu_sub, Imu, MAX_BATCH)
                 # Temperatures after the Imu take: the driver publishes a read's temperature
                 # before its Imu messages, and one participant's messages reach this one in
                 # order, so every temperature published before the newest sample taken is then
@@ -421,7 +419,6 @@ class ImuCompensatorNode(Node):
         """Stop the drain thread, then destroy the node."""
         if self._waiter is not None:
             self._waiter.stop()
-        self._imu_taker.close()
         return super().destroy_node()
 
 

@@ -14,10 +14,11 @@
 
 """The row fast path of live Imu batches against the span codec it stands in for."""
 
-from gyro_noise_ros.msgs import (decode_imu_spans, decode_spans, encode_imu_cdr, IMU_FIELDS,
-                                 IMU_TAIL_F8, join_raws, patch_imu_spans)
-from gyro_noise_ros.msgs.imu_rows import (imu_rows, patch_rows, RowLayout, rows_stamps,
-                                          rows_vectors)
+from gyro_noise_ros.errors import ParameterError
+from gyro_noise_ros.msgs import (decode_imu_spans, decode_spans, encode_imu_cdr, encode_imu_rows,
+                                 IMU_FIELDS, IMU_TAIL_F8, join_raws, patch_imu_spans)
+from gyro_noise_ros.msgs.imu_rows import (imu_rows, patch_rows, row_messages, RowEncoder,
+                                          RowLayout, rows_stamps, rows_vectors)
 import numpy as np
 import pytest
 
@@ -122,3 +123,31 @@ def test_the_remembered_layout_answers_as_imu_rows_does():
     for name, batch in others.items():
         _same_answer(layout, batch)
         _same_answer(layout, raws[:5])
+
+
+@pytest.mark.parametrize('n, frame_id, av_cov, la_cov', [
+    (1, 'imu_link', None, None), (16, 'imu_link', np.arange(9.0), np.eye(3) * 2e-3),
+    (7, 'a', None, np.arange(9.0) * -1.5), (33, 'frame/with_a_longer_name', np.eye(3), None)])
+def test_the_template_encoder_writes_the_general_encoders_bytes(n, frame_id, av_cov, la_cov):
+    rng = np.random.default_rng(n)
+    # negative stamps too: ROS 2 keeps nanosec in [0, 1e9)
+    stamps = rng.integers(-2**60, 2**60, n)  # within int32 seconds
+    gyro, accel = rng.normal(size=(n, 3)), rng.normal(size=(n, 3)) * 1e3
+    kwargs = {'frame_id': frame_id, 'angular_velocity_covariance': av_cov,
+              'linear_acceleration_covariance': la_cov}
+    rows = RowEncoder(frame_id, av_cov, la_cov).rows(stamps, gyro, accel)
+    np.testing.assert_array_equal(rows, encode_imu_rows(stamps, gyro, accel, **kwargs))
+    assert row_messages(rows) == encode_imu_cdr(stamps, gyro, accel, **kwargs)
+
+
+def test_the_template_encoder_refuses_what_the_general_one_refuses():
+    enc = RowEncoder('imu_link')
+    with pytest.raises(ParameterError, match='gyro_rad_s must have shape'):
+        enc.rows([1, 2], np.zeros((3, 3)), np.zeros((2, 3)))
+    with pytest.raises(ParameterError, match='accel_m_s2 must have shape'):
+        enc.rows([1, 2], np.zeros((2, 3)), np.zeros(3))
+    with pytest.raises(ParameterError, match='integer nanoseconds'):
+        enc.rows([1.5], np.zeros((1, 3)), np.zeros((1, 3)))
+    with pytest.raises(ParameterError, match='must be shared'):
+        RowEncoder('imu_link', np.zeros((2, 9)))
+    assert enc.rows([], np.zeros((0, 3)), np.zeros((0, 3))).shape == (0, enc.template.size)

@@ -58,6 +58,7 @@ from ..msgs import (
     TEMPERATURE_MSGTYPE,
     typestore,
 )
+from ..msgs.imu_rows import RowEncoder
 
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection
@@ -283,8 +284,8 @@ def _imu_rows(stamps: np.ndarray, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, 
     """
     Return :func:`encode_imu_rows` of the messages, faster when the covariances are shared.
 
-    The first message is encoded in full; it is copied to every row, and only the stamps and the
-    two vectors are written per message (same bytes: they are the only fields that differ).
+    Shared covariances: :class:`~gyro_noise_ros.msgs.imu_rows.RowEncoder` (one message encoded in
+    full, copied to every row, the stamps and the two vectors written in).
     """
     n = stamps.shape[0]
     gyro = np.asarray(gyro_rad_s, dtype=np.float64)
@@ -294,19 +295,7 @@ def _imu_rows(stamps: np.ndarray, gyro_rad_s: ArrayLike, accel_m_s2: ArrayLike, 
         return encode_imu_rows(stamps, gyro_rad_s, accel_m_s2, frame_id=frame_id,
                                angular_velocity_covariance=av_cov,
                                linear_acceleration_covariance=la_cov)
-    first = encode_imu_rows(stamps[:1], gyro[:1], accel[:1], frame_id=frame_id,
-                            angular_velocity_covariance=av_cov,
-                            linear_acceleration_covariance=la_cov)
-    size = first.shape[1]
-    head = size - 8 * IMU_TAIL_F8
-    _, sec, nsec = split_stamps(stamps, 'stamp_ns')
-    rows = np.empty((n, size), np.uint8)
-    rows[:] = first[0]
-    rows[:, 4:8] = sec.astype('<i4').view(np.uint8).reshape(n, 4)
-    rows[:, 8:12] = nsec.astype('<u4').view(np.uint8).reshape(n, 4)
-    rows[:, head + 13 * 8:head + 16 * 8] = np.ascontiguousarray(gyro, '<f8').view(np.uint8)
-    rows[:, head + 25 * 8:head + 28 * 8] = np.ascontiguousarray(accel, '<f8').view(np.uint8)
-    return rows
+    return RowEncoder(frame_id, av_cov, la_cov).rows(stamps, gyro, accel)
 
 
 @functools.lru_cache(maxsize=8)
@@ -346,12 +335,10 @@ def _imu_records(channel_id: int, stamps: np.ndarray, sec: np.ndarray, nsec: np.
     shared = all(c is None or np.shape(c) in ((9,), (3, 3)) for c in (av_cov, la_cov))
     if not shared or gyro.shape != (n, 3) or accel.shape != (n, 3):
         return None
-    first = encode_imu_rows(stamps[:1], gyro[:1], accel[:1], frame_id=frame_id,
-                            angular_velocity_covariance=av_cov,
-                            linear_acceleration_covariance=la_cov)
-    size = first.shape[1]
+    first = RowEncoder(frame_id, av_cov, la_cov).template
+    size = first.shape[0]
     vec = _MCAP_MESSAGE_HEAD + size - 8 * IMU_TAIL_F8
-    template = np.concatenate((_mcap_record_head(channel_id, size), first[0]))
+    template = np.concatenate((_mcap_record_head(channel_id, size), first))
 
     # Where the per-message fields lie in a record (the rest is the template). sec and nanosec
     # were range-checked by split_stamps, so their int32 / uint32 casts are exact.

@@ -23,7 +23,7 @@ node adapts it to ROS (``gyro_noise_ros.nodes.driver``).
 """
 
 from collections.abc import Callable, Mapping
-from dataclasses import fields
+import os
 import select
 import threading
 import time
@@ -31,12 +31,20 @@ from typing import Any
 
 import numpy as np
 import serial
+from serial import serialposix
+from serial.urlhandler import protocol_socket
 
-from .protocol import Decoder, LinkStats
+from .protocol import Decoder
 from .session import frame_interval_s, handshake, LinkConfig
 from ..errors import LinkError
 
 _READ_SIZE = 1 << 16
+
+#: Port classes whose ``read`` is ``select`` and a read of the descriptor, with no buffer of
+#: their own (a serial device on POSIX, ``socket://``): :func:`read_available` reads the
+#: descriptor itself. Any other port (``loop://``, ``rfc2217://``, ``spy://``) goes through its
+#: ``read``.
+_UNBUFFERED = (serialposix.Serial, protocol_socket.Serial)
 
 
 def _selectable(ser: Any) -> int | None:
@@ -77,15 +85,18 @@ def read_available(ser: Any, fd: int | None, wait_s: float) -> bytes:
     ready, _, _ = select.select([fd], [], [], wait_s)
     if not ready:
         return b''
-    data = ser.read(_READ_SIZE)
+    if type(ser) in _UNBUFFERED:
+        # What their read does after its own select calls (two more per read), minus them.
+        try:
+            data = os.read(fd, _READ_SIZE)
+        except BlockingIOError:  # readiness without data (pyserial ignores EAGAIN too)
+            return b''
+    else:
+        data = ser.read(_READ_SIZE)
     if not data:
         # Readable but nothing to read: the peer closed (socket) or the device vanished.
         raise serial.SerialException('the port reports data but returned none (disconnected?)')
     return bytes(data)
-
-
-def _stats_dict(stats: LinkStats) -> dict[str, int]:
-    return {f.name: getattr(stats, f.name) for f in fields(stats)}
 
 
 class LinkReader:
@@ -208,7 +219,7 @@ class LinkReader:
                 except Exception:  # noqa: BLE001 - a vanished port may fail to close; it is gone
                     pass
                 with self._lock:
-                    self._link_stats = _stats_dict(self._decoder.stats)
+                    self._link_stats = self._decoder.counters()
             if not self._stop.is_set():
                 self._stop.wait(s['reconnect_period_s'])
 
@@ -251,7 +262,7 @@ class LinkReader:
             if len(result.samples):
                 self._on_samples(result.samples, host_ns, config)
             with self._lock:
-                self._link_stats = _stats_dict(self._decoder.stats)
+                self._link_stats = self._decoder.counters()
                 if len(result.samples):
                     self._last_sample_monotonic = now
 

@@ -63,7 +63,8 @@ from ..link.port import hardware_id_for, validate_port
 from ..link.reader import LinkReader
 from ..link.sequence import SequenceTracker
 from ..link.session import LinkConfig
-from ..msgs import encode_imu_cdr, encode_temperature_cdr
+from ..msgs import encode_temperature_cdr
+from ..msgs.imu_rows import row_messages, RowEncoder
 
 __all__ = ['LinkConfig', 'Lsm6dso32Driver', 'main', 'NODE_NAME', 'PARAMETERS']
 
@@ -214,8 +215,11 @@ class Lsm6dso32Driver(LifecycleNode):
     def _make_message_fields(self, p: Mapping[str, Any]) -> dict[str, Any]:
         return {
             'frame_id': p['frame_id'],
-            'gyro_cov': _diag_cov(p['angular_velocity_variance_rad2_s2']),
-            'accel_cov': _diag_cov(p['linear_acceleration_variance_m2_s4']),
+            # the Imu messages: a template with the frame_id and covariances, the stamps and
+            # vectors written in
+            'imu_rows': RowEncoder(p['frame_id'],
+                                   _diag_cov(p['angular_velocity_variance_rad2_s2']),
+                                   _diag_cov(p['linear_acceleration_variance_m2_s4'])),
             'temp_var': p['temperature_variance_c2'],
             'decimation': p['temperature_decimation'],
         }
@@ -373,10 +377,8 @@ class Lsm6dso32Driver(LifecycleNode):
             _publish_raw(self._temp_pub, encode_temperature_cdr(
                 stamps[pick], np.asarray(si.temperature_c)[pick], frame_id=f['frame_id'],
                 variance=f['temp_var']))
-        _publish_raw(self._imu_pub, encode_imu_cdr(
-            stamps, si.gyro_rad_s, si.accel_m_s2, frame_id=f['frame_id'],
-            angular_velocity_covariance=f['gyro_cov'],
-            linear_acceleration_covariance=f['accel_cov']))
+        _publish_raw(self._imu_pub, row_messages(
+            f['imu_rows'].rows(stamps, si.gyro_rad_s, si.accel_m_s2)))
         with self._lock:
             self._counts['published'] += n
             self._counts['temperatures'] += n_temp

@@ -245,3 +245,24 @@ def test_runs_of_equal_frames_with_one_flip_and_an_ack(per_frame, nframes, data)
     assert len(acks) == (0 if frames[victim][1] is None else 1)
     assert dec.stats.bytes_discarded == len(frame) and dec.stats.resyncs == 1
     assert dec.stats.frames_ok == len(frames) - 1
+
+
+@settings(**SETTINGS)
+@given(st.integers(0, 2 ** 32 - 1),
+       st.lists(st.tuples(st.integers(1, 20), st.sampled_from([1, 1, 1, 1, 0, 2, 3, -5, -10 ** 6]),
+                          st.sampled_from([0, 0, 0, p.FLAG_SAMPLE_LOST, p.FLAG_FIFO_OVERRUN])),
+                min_size=1, max_size=30))
+def test_the_in_order_fast_path_accounts_as_the_general_path(start, batches):
+    """Batches of in-order, repeated, skipped and restarted counters, flagged or not."""
+    fast, general = p.Decoder(), p.Decoder()
+    seq = start
+    for size, step, flag in batches:
+        s = np.zeros(size, p.SAMPLE_DTYPE)
+        s['seq'] = (seq + step + np.arange(size, dtype=np.int64)) % 2 ** 32
+        s['flags'][size // 2:size // 2 + 1] = flag
+        seq = (seq + step + size - 1) % 2 ** 32
+        got = fast._account_samples(s.copy(), (0, size), ())
+        want = general._account_general(s.copy(), (0, size), ())
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+        assert got[1].dtype == want[1].dtype and got[2:] == want[2:]
+        assert fast.counters() == general.counters() and fast.last_seq == general.last_seq

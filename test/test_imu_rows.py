@@ -14,11 +14,13 @@
 
 """The row fast path of live Imu batches against the span codec it stands in for."""
 
+from gyro_noise_ros.bag import decode_temperature
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.msgs import (decode_imu_spans, decode_spans, encode_imu_cdr, encode_imu_rows,
-                                 IMU_FIELDS, IMU_TAIL_F8, join_raws, patch_imu_spans)
+                                 encode_temperature_cdr, IMU_FIELDS, IMU_TAIL_F8, join_raws,
+                                 patch_imu_spans, TEMPERATURE_TAIL_F8)
 from gyro_noise_ros.msgs.imu_rows import (imu_rows, patch_rows, row_messages, RowEncoder,
-                                          RowLayout, rows_stamps, rows_vectors)
+                                          RowLayout, rows_stamps, rows_tail, rows_vectors)
 import numpy as np
 import pytest
 
@@ -151,3 +153,21 @@ def test_the_template_encoder_refuses_what_the_general_one_refuses():
     with pytest.raises(ParameterError, match='must be shared'):
         RowEncoder('imu_link', np.zeros((2, 9)))
     assert enc.rows([], np.zeros((0, 3)), np.zeros((0, 3))).shape == (0, enc.template.size)
+
+
+@pytest.mark.parametrize('frame_id', ['imu_link', 'a', 'x' * 8, 'frame/with_a_longer_name'])
+def test_temperature_rows_decode_as_the_temperature_decoder(frame_id):
+    rng = np.random.default_rng(len(frame_id))
+    stamps = rng.integers(-2**60, 2**60, 12)
+    temps = rng.normal(30.0, 20.0, 12)
+    raws = encode_temperature_cdr(stamps, temps, frame_id=frame_id, variance=0.01)
+    layout = RowLayout(TEMPERATURE_TAIL_F8)
+    for batch in (raws[:1], raws[1:5], raws[5:]):  # learnt, then the cached check
+        rows = layout.rows(batch)
+        assert rows is not None
+        want_stamps, want_temps = decode_temperature(batch)
+        np.testing.assert_array_equal(rows_stamps(rows), want_stamps)
+        np.testing.assert_array_equal(rows_tail(rows, TEMPERATURE_TAIL_F8)[:, 0], want_temps)
+    # an Imu message is not a Temperature of this layout, nor the other way round
+    assert layout.rows(_batch(2)[3]) is None
+    assert RowLayout().rows(raws[:2]) is None

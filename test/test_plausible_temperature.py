@@ -104,3 +104,15 @@ def test_live_screen_accepts_a_level_that_persists():
     keep = live.accept(t, temp)
     first = int(np.argmax(t >= 5.0))
     assert not keep[first:first + 10].any() and keep[first + 10:].all() and keep[:first].all()
+
+
+def test_the_live_screens_median_is_numpys():
+    # The live screen takes the median of its last one to three readings per message in plain
+    # Python; it must be np.median's number, bit for bit (ties, two values, any scale).
+    from gyro_noise_ros.core.plausible import _median_of_few
+    rng = np.random.default_rng(3)
+    for _ in range(20000):
+        values = list(rng.normal(30.0, 10.0, int(rng.integers(1, 4))) * rng.choice([1e-3, 1, 1e3]))
+        if rng.random() < 0.2:
+            values[-1] = values[0]
+        assert _median_of_few(values) == float(np.median(values))

@@ -311,6 +311,13 @@ def _jumps(t: np.ndarray, v: np.ndarray, limits: TemperatureLimits) -> np.ndarra
         return np.isfinite(v) & np.isfinite(ref) & (np.abs(v - ref) > allowed)
 
 
+def _median_of_few(values: list[float]) -> float:
+    """Return ``np.median`` of up to three floats, bit for bit, without numpy's per-call cost."""
+    ordered = sorted(values)
+    mid = len(ordered) // 2
+    return ordered[mid] if len(ordered) % 2 else (ordered[mid - 1] + ordered[mid]) / 2
+
+
 class LiveTemperatureScreen:
     """
     The same rule on a live stream, causally: each reading against the ones accepted before it.
@@ -363,7 +370,7 @@ class LiveTemperatureScreen:
             if self._rejected_run >= self.reset_after:
                 self._recent = []   # the new level persisted: anchor on it
             if self._recent:
-                ref = float(np.median([x for _, x in self._recent]))
+                ref = _median_of_few([x for _, x in self._recent])
                 allowed = lim.jump_c + lim.max_rate_c_s * (t[k] - self._recent[-1][0])
                 if abs(v[k] - ref) > allowed:
                     keep[k] = False

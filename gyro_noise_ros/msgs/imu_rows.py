@@ -46,7 +46,7 @@ _TAIL_BYTES = 8 * IMU_TAIL_F8
 
 
 def imu_rows(buf: NDArray[np.uint8], starts: NDArray[np.int64],
-             lengths: NDArray[np.int64]) -> NDArray[np.uint8] | None:
+             lengths: NDArray[np.int64], tail_f8: int = IMU_TAIL_F8) -> NDArray[np.uint8] | None:
     """
     View a joined batch of Imu messages as rows when they share one verified layout.
 
@@ -56,6 +56,9 @@ def imu_rows(buf: NDArray[np.uint8], starts: NDArray[np.int64],
         Buffer holding the messages (:func:`.cdr.join_raws`).
     starts, lengths : numpy.ndarray of int64, shape (n,)
         Byte offset and length of each message in ``buf``.
+    tail_f8 : int
+        float64 after the header: :data:`.imu.IMU_TAIL_F8`, or that of another message made of a
+        header and a float64 block (``sensor_msgs/Temperature``: ``TEMPERATURE_TAIL_F8``).
 
     Returns
     -------
@@ -70,7 +73,7 @@ def imu_rows(buf: NDArray[np.uint8], starts: NDArray[np.int64],
         return None
     size = int(lengths[0])
     first = int(starts[0])
-    off = size - _TAIL_BYTES
+    off = size - 8 * tail_f8
     if off < 20 or (off - 4) % 8 or first + n * size > buf.shape[0]:
         return None
     if n > 1 and not ((lengths == size).all() and (np.diff(starts) == size).all()):
@@ -94,6 +97,8 @@ class RowLayout:
     """
     The layout of the last batch :func:`imu_rows` accepted, to accept the next ones cheaply.
 
+    ``tail_f8``: as :func:`imu_rows` (Imu by default; ``TEMPERATURE_TAIL_F8`` for Temperature).
+
     :meth:`rows` returns the same matrix as ``imu_rows(*join_raws(raws))``: a batch whose
     messages all have the remembered length, encapsulation bytes and header bytes after the
     stamp (frame_id, padding) is what :func:`imu_rows` accepts, since its checks read only those
@@ -101,7 +106,8 @@ class RowLayout:
     :func:`imu_rows` itself, whose answer (rows or None) is returned and, for rows, remembered.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, tail_f8: int = IMU_TAIL_F8) -> None:
+        self._tail_f8 = int(tail_f8)
         self._size = 0
         self._encapsulation = b''
         self._header = b''
@@ -122,11 +128,11 @@ class RowLayout:
                               and raw.startswith(header, 12) for raw in raws):
             return np.frombuffer(b''.join(raws), np.uint8).reshape(n, size)
         buf, starts, lengths = join_raws(raws)
-        rows = imu_rows(buf, starts, lengths)
+        rows = imu_rows(buf, starts, lengths, self._tail_f8)
         if rows is not None:
             head = rows[0].tobytes()
             self._size = rows.shape[1]
-            self._encapsulation, self._header = head[:2], head[12:self._size - _TAIL_BYTES]
+            self._encapsulation, self._header = head[:2], head[12:self._size - 8 * self._tail_f8]
         return rows
 
 
@@ -217,6 +223,11 @@ def rows_stamps(rows: NDArray[np.uint8]) -> NDArray[np.int64]:
     sec = np.ascontiguousarray(rows[:, 4:8]).view('<i4')[:, 0].astype(np.int64)
     nsec = np.ascontiguousarray(rows[:, 8:12]).view('<u4')[:, 0].astype(np.int64)
     return sec * NS_PER_S + nsec
+
+
+def rows_tail(rows: NDArray[np.uint8], tail_f8: int) -> NDArray[np.float64]:
+    """Return the float64 block of :func:`imu_rows`' rows, ``(n, tail_f8)``, a copy."""
+    return np.ascontiguousarray(rows[:, rows.shape[1] - 8 * tail_f8:]).view('<f8').copy()
 
 
 def rows_vectors(rows: NDArray[np.uint8]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

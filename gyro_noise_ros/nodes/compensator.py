@@ -61,8 +61,9 @@ from ..calibration.apply import (Calibration, calibration_from_parameters, KEYS,
                                  load_calibration)
 from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
-from ..msgs import decode_imu_spans, frame_id_of, join_raws, patch_imu_spans
-from ..msgs.imu_rows import patch_rows, RowLayout, rows_stamps, rows_vectors
+from ..msgs import (decode_imu_spans, frame_id_of, join_raws, patch_imu_spans,
+                    TEMPERATURE_TAIL_F8)
+from ..msgs.imu_rows import patch_rows, RowLayout, rows_stamps, rows_tail, rows_vectors
 from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TEMPERATURE_SYNCS,
                             TemperatureGate)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, ThermalMethod
@@ -225,6 +226,7 @@ class ImuCompensatorNode(Node):
                                      wait_for_newer=p['temperature_sync'] == 'interpolate')
         self._transport = SequenceGapCounter()
         self._layout = RowLayout()
+        self._temp_layout = RowLayout(TEMPERATURE_TAIL_F8)
         self._frame_id = ''
         self._offset = None
         self._accel_offset = None
@@ -305,15 +307,20 @@ class ImuCompensatorNode(Node):
         if not raws or self.thermal is None:
             return
         self.counts['temperatures'] += len(raws)
-        try:
-            stamp_ns: np.ndarray | tuple[()]
-            temperature_c: np.ndarray | tuple[()]
-            stamp_ns, temperature_c = decode_temperature(raws)
-        except BagError as err:  # a corrupt message: drop the batch, count it, go on
-            self.thermal.rejected += len(raws)
-            self.get_logger().error(f'temperature batch dropped: {err}',
-                                    throttle_duration_sec=5.0)
-            stamp_ns, temperature_c = (), ()
+        stamp_ns: np.ndarray | tuple[()]
+        temperature_c: np.ndarray | tuple[()]
+        rows = self._temp_layout.rows(raws)
+        if rows is not None:  # one layout (the usual): a few numpy calls
+            stamp_ns = rows_stamps(rows)
+            temperature_c = rows_tail(rows, TEMPERATURE_TAIL_F8)[:, 0]
+        else:
+            try:
+                stamp_ns, temperature_c = decode_temperature(raws)
+            except BagError as err:  # a corrupt message: drop the batch, count it, go on
+                self.thermal.rejected += len(raws)
+                self.get_logger().error(f'temperature batch dropped: {err}',
+                                        throttle_duration_sec=5.0)
+                stamp_ns, temperature_c = (), ()
         if self.thermal.add_temperature(stamp_ns, temperature_c):
             self._diag.tick_temperature(time.monotonic())
         if self.thermal_accel is not None:

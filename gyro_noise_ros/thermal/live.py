@@ -352,8 +352,9 @@ class LiveDriftEvaluator:
         """
         stamps = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
         temp = np.asarray(temperature_c, dtype=np.float64).reshape(-1)
-        order = np.argsort(stamps, kind='stable')
-        stamps, temp = stamps[order], temp[order]
+        if stamps.size > 1:
+            order = np.argsort(stamps, kind='stable')
+            stamps, temp = stamps[order], temp[order]
         keep = np.isfinite(temp)
         if self.stamp_ns is not None:
             keep &= stamps > self.stamp_ns
@@ -379,7 +380,8 @@ class LiveDriftEvaluator:
         self.temperature_c, self.stamp_ns = float(temp[-1]), int(stamps[-1])
         self.status = int(self.range_status(temp[-1:])[0])
         self.knots += k
-        if self.uses_rate:
+        if self.uses_rate and (self._pending_t.size or t[0] < self.rate_window_s * (1.0 - 1e-9)):
+            # the rate window is still filling (or has just filled): hold, or backfill the held
             filled = t >= self.rate_window_s * (1.0 - 1e-9)
             t = np.concatenate((self._pending_t, t))
             temp = np.concatenate((self._pending_temp, temp))

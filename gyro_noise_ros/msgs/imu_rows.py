@@ -119,7 +119,7 @@ class RowLayout:
         Parameters
         ----------
         raws : sequence of bytes
-            Serialised ``sensor_msgs/Imu`` messages.
+            Serialised messages (``sensor_msgs/Imu``, or the type of ``tail_f8``).
 
         """
         n = len(raws)

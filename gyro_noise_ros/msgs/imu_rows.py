@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .cdr import join_raws
-from .imu import encode_imu_rows, IMU_FIELDS, IMU_TAIL_F8
+from .imu import _vector3, encode_imu_rows, IMU_FIELDS, IMU_TAIL_F8
 from .stamps import NS_PER_S, split_stamps
 from ..errors import ParameterError
 
@@ -181,20 +181,15 @@ class RowEncoder:
         """
         _, sec, nsec = split_stamps(stamp_ns, 'stamp_ns')
         n, size = sec.shape[0], self.template.shape[0]
-        vectors = []
-        for name, values in (('gyro_rad_s', gyro_rad_s), ('accel_m_s2', accel_m_s2)):
-            arr = np.asarray(values, dtype=np.float64)
-            if arr.shape != (n, 3) and not (n == 1 and arr.shape == (3,)):
-                raise ParameterError(f'{name} must have shape ({n}, 3) to match the stamps, '
-                                     f'got {arr.shape}')
-            vectors.append(arr.reshape(n, 3))
+        gyro = _vector3(gyro_rad_s, n, 'gyro_rad_s')  # the general encoder's check
+        accel = _vector3(accel_m_s2, n, 'accel_m_s2')
         rows = np.empty((n, size), np.uint8)
         rows[:] = self.template
         rows[:, 4:8] = sec.astype('<i4').view(np.uint8).reshape(n, 4)
         rows[:, 8:12] = nsec.astype('<u4').view(np.uint8).reshape(n, 4)
         tail = rows[:, size - _TAIL_BYTES:].view('<f8')
-        tail[:, _GYRO:_GYRO + 3] = vectors[0]
-        tail[:, _ACCEL:_ACCEL + 3] = vectors[1]
+        tail[:, _GYRO:_GYRO + 3] = gyro
+        tail[:, _ACCEL:_ACCEL + 3] = accel
         return rows
 
 

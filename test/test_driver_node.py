@@ -31,7 +31,8 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from gyro_noise_ros.errors import ParameterError
-from gyro_noise_ros.link import protocol as P
+from gyro_noise_ros.link import clock as clock_module, protocol as P
+from gyro_noise_ros.msgs import imu_rows
 from gyro_noise_ros.nodes._ros_common import sensor_data_qos
 from gyro_noise_ros.nodes.driver import LinkConfig, Lsm6dso32Driver
 import numpy as np
@@ -242,6 +243,20 @@ def test_publish_once_and_loss_count(harness):
     assert got == list(range(15)) + list(range(20, 25))
     snap = h.driver.link_snapshot()
     assert (snap['published'], snap['duplicates'], snap['lost']) == (20, 5, 5)
+
+
+def test_the_per_frame_kernels_are_ready_before_the_first_frame(harness):
+    """The driver compiles (or loads) them when it starts: frames then compile nothing."""
+    h = harness()
+    kernels = (clock_module._steady_stamps, imu_rows._fill_scaled)
+    before = [list(k.signatures) for k in kernels]
+    assert all(before)
+    cfg = LinkConfig(6667.0, 2000, 32)
+    now = h.driver.get_clock().now().nanoseconds
+    for b in range(6):  # 16-sample frames 2.4 ms apart: after the first, the clock's steady path
+        assert h.driver.publish_samples(make_samples(np.arange(16 * b, 16 * b + 16)),
+                                        now + b * 2_400_000 + 10**6, cfg) == 16
+    assert [list(k.signatures) for k in kernels] == before
 
 
 def test_the_first_samples_wait_for_the_clock_to_settle_then_all_go_in_order(harness):

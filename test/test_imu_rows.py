@@ -155,6 +155,32 @@ def test_the_template_encoder_refuses_what_the_general_one_refuses():
     assert enc.rows([], np.zeros((0, 3)), np.zeros((0, 3))).shape == (0, enc.template.size)
 
 
+@pytest.mark.parametrize('n, frame_id, strided', [
+    (0, 'imu_link', False), (1, 'a', True), (16, 'imu_link', True), (33, 'frame/x', False)])
+def test_scaled_rows_are_the_rows_of_the_scaled_values(n, frame_id, strided):
+    """The compiled pass against :meth:`RowEncoder.rows` of ``numpy.multiply``'s values."""
+    rng = np.random.default_rng(n)
+    stamps = rng.integers(-2**60, 2**60, n)
+    words = np.zeros(n, [('seq', '<u4'), ('g', '<i2', (3,)), ('a', '<i2', (3,))])
+    words['g'] = rng.integers(-32768, 32768, (n, 3))
+    words['a'] = rng.integers(-32768, 32768, (n, 3))
+    words['a'][:1] = [-32768, 32767, 0]
+    gyro, accel = (words['g'], words['a']) if strided else (words['g'].copy(), words['a'].copy())
+    enc = RowEncoder(frame_id, np.arange(9.0))
+    for gs, as_ in ((7.635e-4, 9.577e-3), (1.0, -3.3), (np.float32(0.1), 1e-300)):
+        want = enc.rows(stamps, np.multiply(gyro, gs, dtype=np.float64),
+                        np.multiply(accel, as_, dtype=np.float64))
+        np.testing.assert_array_equal(enc.rows_scaled(stamps, gyro, accel, gs, as_), want)
+    # other dtypes go the general way, with its answers and refusals
+    np.testing.assert_array_equal(enc.rows_scaled(stamps, gyro.astype(float), accel, 2.0, 3.0),
+                                  enc.rows(stamps, gyro * 2.0, accel * 3.0))
+    with pytest.raises(ParameterError, match='does not fit'):
+        enc.rows_scaled(np.array([2**62]), np.zeros((1, 3), np.int16), np.zeros((1, 3), np.int16),
+                        1.0, 1.0)
+    with pytest.raises(ParameterError, match='gyro_rad_s must have shape'):
+        enc.rows_scaled(stamps, np.zeros((n + 1, 3), np.int16), accel, 1.0, 1.0)
+
+
 @pytest.mark.parametrize('frame_id', ['imu_link', 'a', 'x' * 8, 'frame/with_a_longer_name'])
 def test_temperature_rows_decode_as_the_temperature_decoder(frame_id):
     rng = np.random.default_rng(len(frame_id))

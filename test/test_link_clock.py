@@ -25,6 +25,8 @@ constant latency is not observable and is documented as such).
 
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.link.clock import DeviceClock, Unwrapper
+from hypothesis import given, settings
+from hypothesis import strategies as st
 import numpy as np
 import pytest
 
@@ -234,3 +236,68 @@ def test_a_late_read_is_not_a_clock_jump():
     ratio = np.diff(stamps) / (1e9 / ODR)
     assert 0.97 < ratio.min() and ratio.max() < 1.03
     assert np.max(np.abs(err)) < 100_000
+
+
+class _GeneralClock(DeviceClock):
+    """The clock without its steady-batch path: every batch goes the general way."""
+
+    def _update_steady(self, raw, h):
+        return None
+
+
+def _clock_state(clock):
+    return (clock.state, clock._pub, clock._pub_rate, clock._last_stamp, clock._last_d,
+            clock._last_h, clock._unwrap.last, clock._cur_min, clock._cur_block,
+            list(clock._blocks), clock._a, clock._s, clock._d0, clock._compressed)
+
+
+@settings(deadline=None, max_examples=60, database=None)
+@given(st.integers(0, 2 ** 32 - 1), st.sampled_from([0.0, 0.003]), st.lists(st.tuples(
+    st.integers(1, 20),
+    st.sampled_from(['next'] * 12 + ['gap', 'back', 'restart', 'same', 'shuffle', 'jump']),
+    st.sampled_from(['jitter'] * 6 + ['late', 'early', 'stall', 'away'])),
+    min_size=40, max_size=150))
+def test_the_steady_path_stamps_and_steers_as_the_general_path(t0, settle_s, batches):
+    """Random device steps and receive delays: the same stamps and state after every batch."""
+    fast = DeviceClock(nominal_rate_hz=ODR, settle_s=settle_s, block_s=0.01, window_blocks=4)
+    general = _GeneralClock(nominal_rate_hz=ODR, settle_s=settle_s, block_s=0.01,
+                            window_blocks=4)
+    rng = np.random.default_rng(t0)
+    dev, host = t0, H0
+    for size, step, delay in batches:
+        gap = {'gap': 5000, 'back': -10 ** 6, 'restart': -(t0 % 10 ** 6) - 1, 'same': 0,
+               'jump': 2 ** 31 + 7}.get(step, 150)
+        times = dev + gap + 150 * np.arange(size)
+        if step == 'same':
+            times[:] = dev
+        if step == 'shuffle':
+            times = rng.permutation(times)
+        dev = int(times.max())
+        host += 150_000 * size + max(0, gap) * 1000 * (step == 'gap')
+        recv = host + {'jitter': int(rng.exponential(80_000)), 'late': 30_000_000,
+                       'early': -400_000, 'stall': 700_000_000,
+                       'away': 2 ** 31 * 1000 + 5}[delay]
+        if delay == 'away':
+            host += 2 ** 31 * 1000
+        words = np.zeros(size, [('seq', '<u4'), ('t_us', '<u4')])  # strided, as the driver's
+        words['t_us'] = np.asarray(times, np.int64) % 2 ** 32
+        got, want = fast.update(words['t_us'], recv), general.update(words['t_us'], recv)
+        assert got.dtype == want.dtype and np.array_equal(got, want)
+        assert _clock_state(fast) == _clock_state(general)
+
+
+def test_the_steady_path_takes_the_usual_batches():
+    """On a plain emulated link nearly every batch after the first takes it."""
+    clock = DeviceClock(nominal_rate_hz=ODR)
+    taken = [0]
+    steady = clock._update_steady
+
+    def counted(raw, h):
+        out = steady(raw, h)
+        taken[0] += out is not None
+        return out
+
+    clock._update_steady = counted
+    emulate(clock, seconds=2.0, ppm=50.0, rng=np.random.default_rng(1), jitter_mean_ns=1e5)
+    batches = int(2.0 * ODR / BATCH)
+    assert taken[0] >= 0.95 * batches

@@ -22,7 +22,7 @@ The expected counters come from a plain-Python twin of the counter rules (gap = 
 - 1, backward jumps and duplicates excluded), not from the decoder.
 """
 
-from gyro_noise_ros.link import protocol as p
+from gyro_noise_ros.link import protocol as p, scan
 from hypothesis import given, HealthCheck, settings
 from hypothesis import strategies as st
 import numpy as np
@@ -266,3 +266,58 @@ def test_the_in_order_fast_path_accounts_as_the_general_path(start, batches):
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
         assert got[1].dtype == want[1].dtype and got[2:] == want[2:]
         assert fast.counters() == general.counters() and fast.last_seq == general.last_seq
+
+
+class _GeneralOnly(p.Decoder):
+    """The decoder without its one-frame path: every read goes through ``_run``."""
+
+    def _one_frame(self, data):
+        return None
+
+
+def _same_result(got, want):
+    for name in ('samples', 'lost_before'):
+        a, b = getattr(got, name), getattr(want, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b)
+    for name in ('acks', 'ack_positions', 'commands', 'headers', 'header_positions', 'discarded'):
+        assert getattr(got, name) == getattr(want, name)
+
+
+@settings(**SETTINGS)
+@given(frame_streams(), st.data())
+def test_the_one_frame_path_decodes_as_the_general_path(frames, data):
+    """Reads of whole frames (the path's case), pieces, garbage and flipped bits, in any mix."""
+    stream = []
+    for frame, _ in frames:
+        how = data.draw(st.sampled_from(['whole', 'whole', 'whole', 'split', 'flip', 'junk']))
+        if how == 'split':
+            cut = data.draw(st.integers(1, len(frame) - 1))
+            stream += [frame[:cut], frame[cut:]]
+        elif how == 'flip':
+            i = data.draw(st.integers(0, len(frame) - 1))
+            stream.append(frame[:i] + bytes([frame[i] ^ 0x10]) + frame[i + 1:])
+        elif how == 'junk':
+            stream += [data.draw(st.binary(min_size=1, max_size=12)), frame]
+        else:
+            stream.append(frame)
+    for cls in (p.Decoder, scan.ScanDecoder):
+        fast, general = cls(), type('General', (_GeneralOnly, cls), {})()
+        for chunk in stream + [bytearray(frames[0][0]), memoryview(frames[0][0])]:
+            _same_result(fast.feed(chunk), general.feed(chunk))
+            assert fast.counters() == general.counters() and fast.buffered == general.buffered
+        _same_result(fast.flush(), general.flush())
+        assert fast.counters() == general.counters()
+
+
+def test_the_one_frame_path_takes_a_whole_frame_and_nothing_else():
+    """It decodes a lone valid frame; a frame after buffered bytes goes the general way."""
+    s = np.zeros(3, p.SAMPLE_DTYPE)
+    s['seq'] = [5, 6, 7]
+    frame = p.encode_samples(s)
+    dec = p.Decoder()
+    assert dec._one_frame(frame) is not None
+    assert dec._one_frame(frame[:-1]) is None and dec._one_frame(frame + b'\0') is None
+    assert dec._one_frame(frame[:-1] + bytes([frame[-1] ^ 1])) is None
+    ack = p.Ack(command_id=1, ok=True, odr_hz=6667.0, gyro_fs_dps=2000, accel_fs_g=4,
+                message='', status=0)
+    assert dec._one_frame(p.encode_ack(ack)) is None

@@ -81,6 +81,7 @@ def _reference_tracker(batches, window):
 
 def test_tracker_matches_its_per_sample_twin():
     rng = np.random.default_rng(7)
+    wholes = 0
     for _ in range(300):
         # Runs of consecutive counters near the wrap, joined by a step of +1, a gap, a re-send
         # (back by 0..39, or 99: within the window of 100) or a restart (back by 100 or 200..4999).
@@ -100,6 +101,9 @@ def test_tracker_matches_its_per_sample_twin():
         for batch in batches:
             while len(batch):
                 d = tracker.accept(batch)
+                # whole: the driver publishes the batch as it is (no indexing)
+                assert not d.whole or (d.stop == len(batch) and d.keep.all())
+                wholes += d.whole
                 part = ['keep' if k else 'dup' for k in d.keep]
                 if restart_next and part:
                     part[0], restart_next = 'restart', False
@@ -110,6 +114,7 @@ def test_tracker_matches_its_per_sample_twin():
                     tracker.reset()
                     restart_next = True
         assert (labels, lost) == _reference_tracker(batches, 100), seq
+    assert wholes > 100  # the usual batches are decided whole
 
 
 def test_tracker_drops_resent_samples_and_splits_at_restart():

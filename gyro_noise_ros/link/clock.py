@@ -40,6 +40,7 @@ stamp error: docs/portenta_link.md section 6 (``test/test_link_clock.py``).
 from collections import deque
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
@@ -163,6 +164,38 @@ MAX_SLEW_OFFSET_S = 0.1
 #: A block minimum this far above the fitted line is left out of the fit (ns): its whole block was
 #: read late (a host stall longer than the block), while block minima scatter by microseconds.
 _LATE_BLOCK_NS = 1_000_000
+
+
+@numba.njit(cache=True, nogil=True)
+def _steady_stamps(  # pragma: no cover - compiled; tested through DeviceClock.update
+        raw: NDArray[np.uint32], first_rel: int, rel0: int, stamp0: int, rate: float,
+        limit_ns: int, floor: int, out: NDArray[np.int64]) -> tuple[bool, int]:
+    """
+    Stamp a batch as :meth:`DeviceClock.update` does when nothing is unusual.
+
+    ``raw``'s device times unwrapped from ``first_rel`` (relative to the epoch's reference) onto
+    the stamps' line through ``(rel0, stamp0)`` at ``rate``, then strictly increasing above
+    ``floor`` (the general path's numpy steps, one sample at a time). Returns (False, 0), with
+    ``out`` meaningless, when the batch goes back in device time or spans half a wrap (the
+    general unwrap), or its newest stamp lies after ``limit_ns`` (the general compression);
+    else (True, the newest device time relative to the reference).
+    """
+    n = raw.shape[0]
+    r0 = np.int64(raw[0])
+    prev = np.int64(0)
+    for i in range(n):
+        step = np.int64(raw[i]) - r0
+        if step < prev:
+            return False, 0
+        prev = step
+        out[i] = stamp0 + np.int64(np.rint(np.float64(first_rel + step - rel0) * rate))
+    if prev >= _HALF_WRAP or out[n - 1] - limit_ns > 0:
+        return False, 0
+    high = np.int64(floor)
+    for i in range(n):
+        high = max(high, out[i] - i)
+        out[i] = high + i
+    return True, first_rel + prev  # type: ignore[return-value]  # numba boxes it as int
 
 
 class DeviceClock:
@@ -300,6 +333,10 @@ class DeviceClock:
         if raw.size == 0:
             return np.zeros(0, dtype=np.int64)
         h = int(host_receive_ns)
+        if self._pub is not None and raw.dtype == np.uint32 and raw.ndim == 1:
+            stamps = self._update_steady(raw, h)
+            if stamps is not None:
+                return stamps
         hint = None
         if self._last_h is not None and h - self._last_h > _HALF_WRAP * 1000:
             hint = (h - self._last_h) / 1000.0
@@ -332,6 +369,45 @@ class DeviceClock:
             self._held = []
         stamps = self._stamp(rel, h - self.latency_ns)
         return np.concatenate((flushed, stamps)) if flushed.size else stamps
+
+    def _update_steady(self, raw: NDArray[np.uint32], h: int) -> NDArray[np.int64] | None:
+        """
+        :meth:`update` of the usual batch of a settled epoch, or None for the general path.
+
+        The usual batch: device times that do not go back, no reset, no long host gap, a newest
+        stamp not after the receive time (nothing to compress). Its stamps come from one compiled
+        pass; the state changes as :meth:`update` changes it (tested on random streams against
+        the clock without this path). Nothing changes before it is known to apply.
+        """
+        last, last_h, last_d = self._unwrap.last, self._last_h, self._last_d
+        if last is None or last_h is None or last_d is None or self._last_stamp is None:
+            return None
+        dh = h - last_h
+        if dh > _HALF_WRAP * 1000:
+            return None  # the general path unwraps with the host gap as a hint
+        step0 = (int(raw[0]) - last) % WRAP_US
+        if step0 >= _HALF_WRAP:
+            step0 -= WRAP_US
+        first = last + step0
+        dd = first - last_d
+        if dd < 0 or (dd * 1000.0 * (1.0 + self._s / 1000.0) - dh
+                      > self._reset_ns + 2e-3 * abs(dh)):
+            return None  # a reset
+        assert self._d_ref is not None and self._h_ref is not None and self._pub is not None
+        rel0, stamp0 = self._pub
+        stamps = np.empty(raw.shape[0], np.int64)
+        ok, rel_last = _steady_stamps(raw, first - self._d_ref, rel0, stamp0, self._pub_rate,
+                                      h - self.latency_ns, self._last_stamp + 1, stamps)
+        if not ok:
+            return None
+        d_last = self._d_ref + rel_last
+        self._unwrap.last = d_last
+        self._observe(rel_last, h - self._h_ref)
+        self._last_d, self._last_h = d_last, h
+        self._last_stamp = int(stamps[-1])
+        self._samples += stamps.shape[0]
+        self._steer(rel_last, self._last_stamp)
+        return stamps
 
     def flush(self) -> NDArray[np.int64]:
         """

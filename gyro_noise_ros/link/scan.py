@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from .protocol import (
     _Collector,
-    _LENGTH_RULES,
+    _SAMPLES_RULE,
     CRC_SIZE,
     Decoder,
     DecodeResult,
@@ -138,9 +138,6 @@ def crc32_numba(data: bytes | bytearray | memoryview) -> int:
     """
     arr = np.frombuffer(data, np.uint8)
     return int(_crc32(arr, 0, arr.size, CRC_TABLES))
-
-
-_SAMPLES_RULE = _LENGTH_RULES[FRAME_SAMPLES]
 
 
 class ScanDecoder(Decoder):

@@ -35,6 +35,11 @@ def wrapped_delta(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.int64]:
     return ((np.asarray(a, np.int64) - np.asarray(b, np.int64) + (1 << 31)) % _UINT32) - (1 << 31)
 
 
+def _consecutive(seq: NDArray[np.uint32]) -> bool:
+    """Return whether each uint32 counter is the one before it plus 1 (modulo 2**32)."""
+    return bool((seq[1:] - seq[:-1] == 1).all())
+
+
 @dataclass(frozen=True)
 class Accepted:
     """
@@ -50,6 +55,8 @@ class Accepted:
         Counter gaps between the previous published sample and the kept ones.
     duplicates : int
         Samples dropped because their counter was already published.
+    whole : bool
+        True when the decision is the whole batch, every sample kept (``keep`` all True).
 
     """
 
@@ -57,6 +64,7 @@ class Accepted:
     stop: int
     lost: int
     duplicates: int
+    whole: bool = False
 
 
 class SequenceTracker:
@@ -105,16 +113,17 @@ class SequenceTracker:
         # A one-sample batch takes this path only when it is ahead (step0 > 0); a repeat of the
         # last counter (step0 == 0) falls through and is counted as a duplicate below.
         if step0 > 0 and (n == 1 or (last - first) % _UINT32 == n - 1
-                          and np.all(np.diff(np.asarray(seq, np.uint32)) == 1)):
+                          and _consecutive(np.asarray(seq, np.uint32))):
             # The common case, one call per read: consecutive after a gap of step0 - 1.
             self.last = last
-            return Accepted(np.ones(n, bool), n, step0 - 1, 0)
+            return Accepted(np.ones(n, bool), n, step0 - 1, 0, whole=True)
         seq64 = np.asarray(seq, np.int64)
         steps = wrapped_delta(seq64[1:], seq64[:-1])
         if step0 > 0 and np.all(steps > 0):
             # Strictly increasing with gaps inside the batch.
             self.last = last
-            return Accepted(np.ones(n, bool), n, step0 - 1 + int(np.sum(steps - 1)), 0)
+            return Accepted(np.ones(n, bool), n, step0 - 1 + int(np.sum(steps - 1)), 0,
+                            whole=True)
         keep = np.zeros(n, bool)
         lost = duplicates = 0
         for i in range(n):

@@ -33,6 +33,7 @@ into copies of it (~10 us for 16 messages instead of ~110 us through the general
 
 from collections.abc import Sequence
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -191,6 +192,62 @@ class RowEncoder:
         tail[:, _GYRO:_GYRO + 3] = gyro
         tail[:, _ACCEL:_ACCEL + 3] = accel
         return rows
+
+    def rows_scaled(self, stamp_ns: ArrayLike, gyro_counts: ArrayLike, accel_counts: ArrayLike,
+                    gyro_scale: float, accel_scale: float) -> NDArray[np.uint8]:
+        """
+        Return ``rows(stamp_ns, gyro_counts * gyro_scale, accel_counts * accel_scale)``.
+
+        A driver's raw int16 words and their sensitivities, scaled (float64, as
+        :func:`numpy.multiply` rounds) and written in one compiled pass: ~3 us for 16 messages
+        instead of ~20 us (tested byte for byte against :meth:`rows`). Other dtypes and shapes,
+        and stamps out of ``builtin_interfaces/Time``, go through :meth:`rows` (its refusals).
+
+        Parameters
+        ----------
+        stamp_ns : array_like of int
+            (n,) header stamps, ns (int64 for the compiled pass).
+        gyro_counts, accel_counts : array_like
+            (n, 3) raw words (int16 for the compiled pass).
+        gyro_scale, accel_scale : float
+            Value of one count: rad/s, m/s^2.
+
+        """
+        stamps, gyro, accel = (np.asarray(stamp_ns), np.asarray(gyro_counts),
+                               np.asarray(accel_counts))
+        n = stamps.shape[0] if stamps.ndim == 1 else -1
+        if (stamps.dtype == np.int64 and gyro.dtype == np.int16 and accel.dtype == np.int16
+                and gyro.shape == (n, 3) and accel.shape == (n, 3)):
+            out = np.empty((n, self.template.shape[0]), np.uint8)
+            if _fill_scaled(self.template, stamps, gyro, accel, float(gyro_scale),
+                            float(accel_scale), out):
+                return out
+        return self.rows(stamps, np.multiply(gyro, gyro_scale, dtype=np.float64),
+                         np.multiply(accel, accel_scale, dtype=np.float64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_scaled(  # pragma: no cover - compiled; tested through RowEncoder.rows_scaled
+        template: NDArray[np.uint8], stamps: NDArray[np.int64], gyro: NDArray[np.int16],
+        accel: NDArray[np.int16], gyro_scale: float, accel_scale: float,
+        out: NDArray[np.uint8]) -> bool:
+    """Write :meth:`RowEncoder.rows_scaled`' rows into ``out``; False: a stamp out of range."""
+    tail0 = template.shape[0] - _TAIL_BYTES
+    for i in range(stamps.shape[0]):
+        sec = stamps[i] // NS_PER_S
+        if sec < -(1 << 31) or sec >= (1 << 31):
+            return False
+        nsec = stamps[i] - sec * NS_PER_S
+        row = out[i]
+        row[:] = template
+        for b in range(4):
+            row[4 + b] = (sec >> (8 * b)) & 0xFF
+            row[8 + b] = (nsec >> (8 * b)) & 0xFF
+        tail = out[i, tail0:].view(np.float64)
+        for k in range(3):
+            tail[_GYRO + k] = np.float64(gyro[i, k]) * gyro_scale
+            tail[_ACCEL + k] = np.float64(accel[i, k]) * accel_scale
+    return True
 
 
 def row_messages(rows: NDArray[np.uint8]) -> list[bytes]:

@@ -251,17 +251,22 @@ def _clock_state(clock):
             list(clock._blocks), clock._a, clock._s, clock._d0, clock._compressed)
 
 
-@settings(deadline=None, max_examples=60, database=None)
-@given(st.integers(0, 2 ** 32 - 1), st.sampled_from([0.0, 0.003]), st.lists(st.tuples(
+_BATCHES = st.lists(st.tuples(
     st.integers(1, 20),
     st.sampled_from(['next'] * 12 + ['gap', 'back', 'restart', 'same', 'shuffle', 'jump']),
     st.sampled_from(['jitter'] * 6 + ['late', 'early', 'stall', 'away'])),
-    min_size=40, max_size=150))
-def test_the_steady_path_stamps_and_steers_as_the_general_path(t0, settle_s, batches):
+    min_size=40, max_size=150)
+
+
+@settings(deadline=None, max_examples=60, database=None)
+@given(st.integers(0, 2 ** 32 - 1), st.sampled_from([0.0, 0.003]), st.sampled_from([0, 150_000]),
+       _BATCHES)
+def test_the_steady_path_stamps_and_steers_as_the_general_path(t0, settle_s, latency_ns,
+                                                               batches):
     """Random device steps and receive delays: the same stamps and state after every batch."""
-    fast = DeviceClock(nominal_rate_hz=ODR, settle_s=settle_s, block_s=0.01, window_blocks=4)
-    general = _GeneralClock(nominal_rate_hz=ODR, settle_s=settle_s, block_s=0.01,
-                            window_blocks=4)
+    kwargs = {'nominal_rate_hz': ODR, 'settle_s': settle_s, 'block_s': 0.01, 'window_blocks': 4,
+              'latency_ns': latency_ns}
+    fast, general = DeviceClock(**kwargs), _GeneralClock(**kwargs)
     rng = np.random.default_rng(t0)
     dev, host = t0, H0
     for size, step, delay in batches:

@@ -45,6 +45,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from ..core.jit import JIT_OPTIONS
 from ..errors import ParameterError
 
 WRAP_US = 1 << 32
@@ -166,7 +167,7 @@ MAX_SLEW_OFFSET_S = 0.1
 _LATE_BLOCK_NS = 1_000_000
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**JIT_OPTIONS)
 def _steady_stamps(  # pragma: no cover - compiled; tested through DeviceClock.update
         raw: NDArray[np.uint32], first_rel: int, rel0: int, stamp0: int, rate: float,
         limit_ns: int, floor: int, out: NDArray[np.int64]) -> tuple[bool, int]:

@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from .cdr import join_raws
 from .imu import _vector3, encode_imu_rows, IMU_FIELDS, IMU_TAIL_F8
 from .stamps import NS_PER_S, split_stamps
+from ..core.jit import JIT_OPTIONS
 from ..errors import ParameterError
 
 _TAIL_BYTES = 8 * IMU_TAIL_F8
@@ -228,7 +229,7 @@ class RowEncoder:
                          np.multiply(accel, accel_scale, dtype=np.float64))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**JIT_OPTIONS)
 def _fill_scaled(  # pragma: no cover - compiled; tested through RowEncoder.rows_scaled
         template: NDArray[np.uint8], stamps: NDArray[np.int64], gyro: NDArray[np.int16],
         accel: NDArray[np.int16], gyro_scale: float, accel_scale: float,

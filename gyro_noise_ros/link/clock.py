@@ -68,6 +68,17 @@ class Unwrapper:
         """Forget the history: the next value starts a new epoch."""
         self.last = None
 
+    def first_of(self, value: int, *, hint: float | None = None) -> int:
+        """Return the unwrapped value of a batch's first raw ``value`` (changes nothing)."""
+        if self.last is None:
+            return value
+        step0 = (value - self.last) % WRAP_US
+        if step0 >= _HALF_WRAP:
+            step0 -= WRAP_US
+        if hint is not None:
+            step0 += WRAP_US * int(round((float(hint) - step0) / WRAP_US))
+        return self.last + step0
+
     def unwrap(self, values: npt.ArrayLike, *, hint: float | None = None) -> NDArray[np.int64]:
         """
         Unwrap a batch of counter values.
@@ -89,15 +100,7 @@ class Unwrapper:
         raw = np.asarray(values).astype(np.uint32, copy=False)
         if raw.size == 0:
             return np.zeros(0, dtype=np.int64)
-        if self.last is None:
-            first = int(raw[0])
-        else:
-            step0 = (int(raw[0]) - self.last) % WRAP_US
-            if step0 >= _HALF_WRAP:
-                step0 -= WRAP_US
-            if hint is not None:
-                step0 += WRAP_US * int(round((float(hint) - step0) / WRAP_US))
-            first = self.last + step0
+        first = self.first_of(int(raw[0]), hint=hint)
         rel = raw.astype(np.int64)
         rel -= rel[0]
         if raw.size > 1 and not (rel[-1] < _HALF_WRAP and np.all(rel[1:] >= rel[:-1])):
@@ -338,20 +341,10 @@ class DeviceClock:
             stamps = self._update_steady(raw, h)
             if stamps is not None:
                 return stamps
-        hint = None
-        if self._last_h is not None and h - self._last_h > _HALF_WRAP * 1000:
-            hint = (h - self._last_h) / 1000.0
-        d = self._unwrap.unwrap(raw, hint=hint)
+        d = self._unwrap.unwrap(raw, hint=self._hint(h))
         flushed = np.zeros(0, dtype=np.int64)
         if self._last_d is not None:
-            assert self._last_h is not None  # set with self._last_d
-            dd = int(d[0]) - self._last_d
-            dh = h - self._last_h
-            # Device time that went back, or ran ahead of host time: a board restarted or set to
-            # another time. Host time ahead of device time is a late read (the host stalled and
-            # the bytes waited in the port), not a jump: the minimum-delay line ignores it.
-            if dd < 0 or (dd * 1000.0 * (1.0 + self._s / 1000.0) - dh
-                          > self._reset_ns + 2e-3 * abs(dh)):
+            if self._is_reset(int(d[0]), h):
                 flushed = self.flush()
                 self.reset()
                 d = self._unwrap.unwrap(raw)
@@ -371,6 +364,26 @@ class DeviceClock:
         stamps = self._stamp(rel, h - self.latency_ns)
         return np.concatenate((flushed, stamps)) if flushed.size else stamps
 
+    def _hint(self, h: int) -> float | None:
+        """Return the host gap (us) to unwrap with, when it is longer than half a wrap."""
+        if self._last_h is not None and h - self._last_h > _HALF_WRAP * 1000:
+            return (h - self._last_h) / 1000.0
+        return None
+
+    def _is_reset(self, first_d: int, h: int) -> bool:
+        """
+        Return whether a batch starting at device time ``first_d``, received at ``h``, is a reset.
+
+        Device time that went back, or ran ahead of host time: a board restarted or set to
+        another time. Host time ahead of device time is a late read (the host stalled and the
+        bytes waited in the port), not a jump: the minimum-delay line ignores it.
+        """
+        assert self._last_d is not None and self._last_h is not None  # a batch came before
+        dd = first_d - self._last_d
+        dh = h - self._last_h
+        return dd < 0 or (dd * 1000.0 * (1.0 + self._s / 1000.0) - dh
+                          > self._reset_ns + 2e-3 * abs(dh))
+
     def _update_steady(self, raw: NDArray[np.uint32], h: int) -> NDArray[np.int64] | None:
         """
         :meth:`update` of the usual batch of a settled epoch, or None for the general path.
@@ -380,20 +393,12 @@ class DeviceClock:
         pass; the state changes as :meth:`update` changes it (tested on random streams against
         the clock without this path). Nothing changes before it is known to apply.
         """
-        last, last_h, last_d = self._unwrap.last, self._last_h, self._last_d
-        if last is None or last_h is None or last_d is None or self._last_stamp is None:
+        if (self._unwrap.last is None or self._last_d is None or self._last_stamp is None
+                or self._hint(h) is not None):
+            return None  # nothing to continue, or a host gap the general unwrap bridges
+        first = self._unwrap.first_of(int(raw[0]))
+        if self._is_reset(first, h):
             return None
-        dh = h - last_h
-        if dh > _HALF_WRAP * 1000:
-            return None  # the general path unwraps with the host gap as a hint
-        step0 = (int(raw[0]) - last) % WRAP_US
-        if step0 >= _HALF_WRAP:
-            step0 -= WRAP_US
-        first = last + step0
-        dd = first - last_d
-        if dd < 0 or (dd * 1000.0 * (1.0 + self._s / 1000.0) - dh
-                      > self._reset_ns + 2e-3 * abs(dh)):
-            return None  # a reset
         assert self._d_ref is not None and self._h_ref is not None and self._pub is not None
         rel0, stamp0 = self._pub
         stamps = np.empty(raw.shape[0], np.int64)

@@ -44,6 +44,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from .sequence import consecutive
 from ..errors import ParameterError
 
 SYNC = b'\xa5\x5a'
@@ -763,7 +764,7 @@ class Decoder:
         # general path below gives for it (tested on random batches).
         if (n and last is not None and (int(seq[0]) - last) % 2**32 == 1
                 and (int(seq[-1]) - int(seq[0])) % 2**32 == n - 1
-                and not samples['flags'].any() and (n == 1 or (seq[1:] - seq[:-1] == 1).all())):
+                and not samples['flags'].any() and consecutive(seq)):
             c['samples_ok'] += n
             self._last_seq = int(seq[-1])
             return samples, np.zeros(n, np.int64), ack_positions, header_positions

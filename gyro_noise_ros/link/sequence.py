@@ -35,7 +35,7 @@ def wrapped_delta(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.int64]:
     return ((np.asarray(a, np.int64) - np.asarray(b, np.int64) + (1 << 31)) % _UINT32) - (1 << 31)
 
 
-def _consecutive(seq: NDArray[np.uint32]) -> bool:
+def consecutive(seq: NDArray[np.uint32]) -> bool:
     """Return whether each uint32 counter is the one before it plus 1 (modulo 2**32)."""
     return bool((seq[1:] - seq[:-1] == 1).all())
 
@@ -113,7 +113,7 @@ class SequenceTracker:
         # A one-sample batch takes this path only when it is ahead (step0 > 0); a repeat of the
         # last counter (step0 == 0) falls through and is counted as a duplicate below.
         if step0 > 0 and (n == 1 or (last - first) % _UINT32 == n - 1
-                          and _consecutive(np.asarray(seq, np.uint32))):
+                          and consecutive(np.asarray(seq, np.uint32))):
             # The common case, one call per read: consecutive after a gap of step0 - 1.
             self.last = last
             return Accepted(np.ones(n, bool), n, step0 - 1, 0, whole=True)

@@ -485,3 +485,58 @@ def test_temperatures_published_before_the_samples_taken_are_applied_to_them(con
     twin = LiveDriftEvaluator(model, rate_window_s=1.0)
     twin.add_temperature(t_stamps, temps)
     np.testing.assert_array_equal(node.thermal.drift_at(stamp_ns), twin.drift_at(stamp_ns))
+
+
+@pytest.mark.timeout(120)
+def test_the_usual_batch_pass_publishes_the_general_paths_bytes(context):
+    """Rows corrected in one compiled pass against the span decoder, numpy calibration, patch."""
+    model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), temperature_range_c=(20.0, 30.0))
+    params = _calibration_params(11)
+    stamps, _, _, raws = _imu_stream(2000, seed=12)
+    t_stamps = T0_NS + np.arange(-NS, NS // 3, NS // 50)  # 50 Hz, the window filled
+    temps = encode_temperature_cdr(t_stamps, 25.0 + 0.5 * (t_stamps - T0_NS) / NS,
+                                   frame_id='imu_test')
+    outs, fast = [], []
+    for general in (False, True):
+        node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                              parameter_overrides=_overrides(
+                                                  temperature_rate_window_s=1.0, **params))
+        if general:  # every batch through the span decoder (the path of a mixed layout)
+            node._layout.rows = lambda raws: None
+        calls = []
+        node_emit = node._emit
+
+        def emit(spans, rows, stamp_ns, gyro, accel, calls=calls, node_emit=node_emit):
+            calls.append(gyro is None)
+            node_emit(spans, rows, stamp_ns, gyro, accel)
+        node._emit = emit
+        io = _Harness(context, node)
+        try:
+            io.play(raws, temperatures=temps, block=100)
+        finally:
+            io.close()
+        outs.append(io.out)
+        fast.append(sum(calls) / len(calls))
+    # the first run took the compiled pass (all of it, unless a batch beat the first
+    # temperature and waited at the gate), the second never
+    assert fast[0] > 0.5 and fast[1] == 0.0
+    assert len(outs[0]) == len(raws) and outs[0] == outs[1]
+    np.testing.assert_array_equal(decode_imu(outs[0]).stamp_ns, stamps)
+
+
+@pytest.mark.timeout(60)
+def test_the_usual_batch_pass_is_ready_before_the_first_batch(context):
+    """The node compiles (or loads) its kernel when it starts: batches then compile nothing."""
+    from gyro_noise_ros.msgs import imu_rows
+    for identity in (True, False):
+        overrides = _overrides() if identity else _overrides(**_calibration_params(2))
+        node = compensator.ImuCompensatorNode(context=context, parameter_overrides=overrides)
+        before = list(imu_rows._correct_rows.signatures)  # compiled by the constructor
+        try:
+            assert before
+            node.compensate(_imu_stream(16, seed=1)[3])
+            node.compensate(_imu_stream(3, seed=2)[3])
+        finally:
+            node.destroy_node()
+        assert list(imu_rows._correct_rows.signatures) == before
+        assert node.counts['published'] == 19

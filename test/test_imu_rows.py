@@ -15,12 +15,14 @@
 """The row fast path of live Imu batches against the span codec it stands in for."""
 
 from gyro_noise_ros.bag import decode_temperature
+from gyro_noise_ros.calibration.apply import SensorCalibration
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.msgs import (decode_imu_spans, decode_spans, encode_imu_cdr, encode_imu_rows,
                                  encode_temperature_cdr, IMU_FIELDS, IMU_TAIL_F8, join_raws,
                                  patch_imu_spans, TEMPERATURE_TAIL_F8)
-from gyro_noise_ros.msgs.imu_rows import (imu_rows, patch_rows, row_messages, RowEncoder,
-                                          RowLayout, rows_stamps, rows_tail, rows_vectors)
+from gyro_noise_ros.msgs.imu_rows import (imu_rows, patch_rows, row_messages, RowCorrector,
+                                          RowEncoder, RowLayout, rows_stamps, rows_tail,
+                                          rows_vectors)
 import numpy as np
 import pytest
 
@@ -179,6 +181,48 @@ def test_scaled_rows_are_the_rows_of_the_scaled_values(n, frame_id, strided):
                         1.0, 1.0)
     with pytest.raises(ParameterError, match='gyro_rad_s must have shape'):
         enc.rows_scaled(stamps, np.zeros((n + 1, 3), np.int16), accel, 1.0, 1.0)
+
+
+def _sensor(rng, identity):
+    if identity:
+        return SensorCalibration(np.zeros(3), np.zeros(3), np.zeros((3, 3)))
+    mis = rng.normal(0, 3e-3, (3, 3))
+    np.fill_diagonal(mis, 0.0)
+    return SensorCalibration(rng.normal(0, 0.05, 3), rng.normal(0, 2e-3, 3), mis)
+
+
+@pytest.mark.parametrize('n', [0, 1, 2, 16, 33])
+def test_corrected_rows_are_the_patched_rows_of_the_calibration_and_offsets(n):
+    """The compiled pass against SensorCalibration.apply, the offsets, patch_rows: same bytes."""
+    rng = np.random.default_rng(40 + n)
+    stamps, gyro, accel, raws = _batch(n, seed=n) if n else (None, None, None, [])
+    rows = RowLayout().rows(raws) if n else RowEncoder('imu_link').rows(
+        [], np.zeros((0, 3)), np.zeros((0, 3)))
+    if n > 2:  # values a correction must carry through as numpy does: signed zeros, non-finite
+        tail = rows.copy()
+        v = tail[:, tail.shape[1] - 8 * IMU_TAIL_F8:].view('<f8')
+        v[0, 4:7] = [-0.0, np.nan, np.inf]
+        v[1, 8:11] = [-np.inf, 1e308, -5e-324]
+        rows = tail  # writable rows: the kernel's other specialisation
+    for case in range(8):
+        gyro_cal, accel_cal = _sensor(rng, case & 1), _sensor(rng, case & 2)
+        offsets = [rng.normal(0, 1e-3, (n, 3)) if case & 4 else None for _ in range(2)]
+        g, a = rows_vectors(rows)
+        g, a = gyro_cal.apply(g), accel_cal.apply(a)
+        for vec, off in ((g, offsets[0]), (a, offsets[1])):
+            if off is not None:
+                vec -= off
+        want = patch_rows(rows, g, a)
+        corrector = RowCorrector(None if gyro_cal.is_identity else gyro_cal.inverse,
+                                 gyro_cal.bias, None if accel_cal.is_identity
+                                 else accel_cal.inverse, accel_cal.bias)
+        before = rows.tobytes()
+        assert row_messages(corrector.rows(rows, *offsets)) == want, case
+        assert rows.tobytes() == before  # a copy: the input rows are left as they were
+    with pytest.raises(ParameterError, match='offsets'):
+        corrector.rows(rows, np.zeros((n + 1, 3)))
+    with pytest.raises(ParameterError, match='matrix'):
+        RowCorrector(np.eye(2), np.zeros(3), None, np.zeros(3))
 
 
 @pytest.mark.parametrize('frame_id', ['imu_link', 'a', 'x' * 8, 'frame/with_a_longer_name'])

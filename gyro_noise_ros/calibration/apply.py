@@ -114,8 +114,11 @@ class SensorCalibration:
         x = np.asarray(measured, dtype=np.float64)
         if self.is_identity:
             return x.copy()
-        # (x - b) @ inv.T is inv @ (x - b) for every row at once.
-        return (x - self.bias) @ self.inverse.T
+        # inv @ (x - b) for every row at once, each element summed in column order: the same
+        # operations as the compensator's compiled pass (msgs.imu_rows.RowCorrector), so the
+        # two agree bit for bit (a BLAS matrix product may fuse or reorder them: 1-2 ulp apart).
+        d, inv = x - self.bias, self.inverse
+        return (d[..., 0:1] * inv[:, 0] + d[..., 1:2] * inv[:, 1]) + d[..., 2:3] * inv[:, 2]
 
 
 @dataclass(frozen=True)

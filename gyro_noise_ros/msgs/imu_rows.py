@@ -253,6 +253,82 @@ def _fill_scaled(  # pragma: no cover - compiled; tested through RowEncoder.rows
     return True
 
 
+class RowCorrector:
+    """
+    Replace each vector ``v`` of :func:`imu_rows`' rows by ``M (v - b) - o``, in one compiled pass.
+
+    A compensator's usual batch: the calibration (``M`` the inverse of the sensor matrix, ``b``
+    the bias; the arithmetic of
+    :meth:`~gyro_noise_ros.calibration.apply.SensorCalibration.apply` in the same order, so the
+    same bits), fixed here, and each message's thermal offset ``o``, given per batch; everything
+    else stays byte for byte, as :func:`patch_rows` of the numpy computation (tested).
+
+    Parameters
+    ----------
+    gyro_matrix, accel_matrix : array_like of float, shape (3, 3), or None
+        ``M`` (None: the identity, ``v - b`` only).
+    gyro_bias, accel_bias : array_like of float, shape (3,)
+        ``b``, rad/s and m/s^2.
+
+    """
+
+    def __init__(self, gyro_matrix: ArrayLike | None, gyro_bias: ArrayLike,
+                 accel_matrix: ArrayLike | None, accel_bias: ArrayLike) -> None:
+        matrices = [np.eye(3) if m is None else np.asarray(m, np.float64)
+                    for m in (gyro_matrix, accel_matrix)]
+        biases = [np.asarray(b, np.float64) for b in (gyro_bias, accel_bias)]
+        if any(m.shape != (3, 3) for m in matrices) or any(b.shape != (3,) for b in biases):
+            raise ParameterError('each matrix must be (3, 3) and each bias (3,)')
+        self._matrix = np.ascontiguousarray(np.stack(matrices))
+        self._bias = np.ascontiguousarray(np.stack(biases))
+        self._use_matrix = np.array([gyro_matrix is not None, accel_matrix is not None])
+
+    def rows(self, rows: NDArray[np.uint8], gyro_offset: NDArray[np.float64] | None = None,
+             accel_offset: NDArray[np.float64] | None = None) -> NDArray[np.uint8]:
+        """
+        Return the corrected copy of ``rows`` (``(n, size)`` uint8, left unchanged).
+
+        ``gyro_offset``, ``accel_offset``: ``o``, ``(n, 3)`` float64 per message, or None (none).
+        :func:`row_messages` makes the result bytes.
+        """
+        n = rows.shape[0]
+        offsets = [_NO_OFFSET if o is None else np.ascontiguousarray(o, np.float64)
+                   for o in (gyro_offset, accel_offset)]
+        for given, o in zip((gyro_offset, accel_offset), offsets):
+            if given is not None and o.shape != (n, 3):
+                raise ParameterError(f'offsets must be ({n}, 3), got {o.shape}')
+        out = np.empty(rows.shape, np.uint8)
+        _correct_rows(rows, self._matrix, self._bias, self._use_matrix, offsets[0], offsets[1],
+                      gyro_offset is not None, accel_offset is not None, out)
+        return out
+
+
+_NO_OFFSET = np.zeros((1, 3))
+
+
+@numba.njit(**JIT_OPTIONS)
+def _correct_rows(  # pragma: no cover - compiled; tested through RowCorrector.rows
+        rows: NDArray[np.uint8], matrix: NDArray[np.float64], bias: NDArray[np.float64],
+        use_matrix: NDArray[np.bool_], gyro_offset: NDArray[np.float64],
+        accel_offset: NDArray[np.float64], use_gyro_offset: bool, use_accel_offset: bool,
+        out: NDArray[np.uint8]) -> None:
+    """Write :meth:`RowCorrector.rows`' rows into ``out``."""
+    tail0 = rows.shape[1] - _TAIL_BYTES
+    for i in range(rows.shape[0]):
+        out[i] = rows[i]
+        src = rows[i, tail0:].view(np.float64)
+        dst = out[i, tail0:].view(np.float64)
+        for s, k, o, use_o in ((0, _GYRO, gyro_offset, use_gyro_offset),
+                               (1, _ACCEL, accel_offset, use_accel_offset)):
+            d0, d1, d2 = src[k] - bias[s, 0], src[k + 1] - bias[s, 1], src[k + 2] - bias[s, 2]
+            for r in range(3):
+                m = matrix[s]
+                # summed as SensorCalibration.apply sums it
+                y = (d0 * m[r, 0] + d1 * m[r, 1]) + d2 * m[r, 2] if use_matrix[s] else (
+                    d0, d1, d2)[r]
+                dst[k + r] = y - o[i, r] if use_o else y
+
+
 def row_messages(rows: NDArray[np.uint8]) -> list[bytes]:
     """Return the rows of a uint8 matrix as one bytes object per row (one message each)."""
     n, size = rows.shape

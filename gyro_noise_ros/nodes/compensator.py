@@ -63,7 +63,8 @@ from ..diagnostics.compensation import CompensationTask, CompensationThresholds
 from ..errors import BagError, ParameterError
 from ..msgs import (decode_imu_spans, frame_id_of, join_raws, patch_imu_spans,
                     TEMPERATURE_TAIL_F8)
-from ..msgs.imu_rows import patch_rows, RowLayout, rows_stamps, rows_tail, rows_vectors
+from ..msgs.imu_rows import (patch_rows, row_messages, RowCorrector, RowEncoder, RowLayout,
+                             rows_stamps, rows_tail, rows_vectors)
 from ..thermal.live import (BEYOND_ACTIONS, LiveDriftEvaluator, load_live, TEMPERATURE_SYNCS,
                             TemperatureGate)
 from ..thermal.run import DEFAULT_RATE_WINDOW_S, ThermalMethod
@@ -185,6 +186,24 @@ def calibration_from(p: Mapping[str, Any]) -> tuple[Calibration, str]:
     return load_calibration(p['calibration_file']), f"file {p['calibration_file']}"
 
 
+def row_corrector(calibration: Calibration) -> RowCorrector:
+    """
+    Return the compiled pass of the usual batch, ready (compiled or loaded from numba's cache).
+
+    Warmed with what a batch gives it: read-only rows of received messages, an offset per
+    message and none, so the first batch compiles nothing.
+    """
+    gyro, accel = calibration.gyro, calibration.accel
+    corrector = RowCorrector(None if gyro.is_identity else gyro.inverse, gyro.bias,
+                             None if accel.is_identity else accel.inverse, accel.bias)
+    rows = RowLayout().rows(row_messages(RowEncoder('').rows(np.zeros(2, np.int64),
+                                                             np.zeros((2, 3)), np.zeros((2, 3)))))
+    assert rows is not None  # one layout
+    for offset in (None, np.zeros((2, 3))):
+        corrector.rows(rows, offset, offset)
+    return corrector
+
+
 class ImuCompensatorNode(Node):
     """
     Calibration and thermal compensation node (see the module docstring).
@@ -226,6 +245,7 @@ class ImuCompensatorNode(Node):
                                      wait_for_newer=p['temperature_sync'] == 'interpolate')
         self._transport = SequenceGapCounter()
         self._layout = RowLayout()
+        self._corrector = row_corrector(self.calibration)
         self._temp_layout = RowLayout(TEMPERATURE_TAIL_F8)
         self._frame_id = ''
         self._offset = None
@@ -336,7 +356,6 @@ class ImuCompensatorNode(Node):
         keep = None
         if rows is not None:  # one layout: a few numpy calls (the usual batch, a board frame)
             stamp_ns = rows_stamps(rows)
-            gyro, accel = rows_vectors(rows)
         else:
             buf, starts, lengths = join_raws(raws)
             keep, stamp_ns, gyro, accel = decode_imu_spans(buf, starts, lengths, False, True)
@@ -346,12 +365,15 @@ class ImuCompensatorNode(Node):
             spans = (buf, starts, lengths)
         if not stamp_ns.size:
             return
-        gyro, accel = self.calibration.apply(gyro, accel)
         if not self._frame_id:
             self._frame_id = frame_id_of(raws[0 if keep is None else int(keep[0])], False) or ''
-        if self.thermal is None or (not self._gate.wait_for_newer and not self._gate.waiting
-                                    and self.thermal.offset_stamp_ns is not None):
-            # no model, or temperature_sync latest with offsets known: at once
+        if rows is not None:
+            if self._at_once():  # calibrated and corrected in one compiled pass (_emit)
+                self._emit(None, rows, stamp_ns, None, None)
+                return
+            gyro, accel = rows_vectors(rows)
+        gyro, accel = self.calibration.apply(gyro, accel)
+        if self._at_once():
             self._emit(spans, rows, stamp_ns, gyro, accel)
             return
         # Before the first temperature there is no offset: publishing these uncorrected on a
@@ -360,6 +382,11 @@ class ImuCompensatorNode(Node):
         # temperature at or after their stamp.
         self._gate.push((spans, rows, stamp_ns, gyro, accel), stamp_ns, time.monotonic())
         self._release()
+
+    def _at_once(self) -> bool:
+        """Tell whether a batch is published at once: no model, or offsets known and not held."""
+        return self.thermal is None or (not self._gate.wait_for_newer and not self._gate.waiting
+                                        and self.thermal.offset_stamp_ns is not None)
 
     def _release(self) -> None:
         assert self.thermal is not None  # called only with a thermal model
@@ -372,14 +399,19 @@ class ImuCompensatorNode(Node):
                        accel[i:j])
 
     def _emit(self, spans: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
-              rows: np.ndarray | None, stamp_ns: np.ndarray, gyro: np.ndarray,
-              accel: np.ndarray) -> None:
-        """Subtract the thermal offsets, publish; ``spans`` (buf, starts, lengths) without rows."""
+              rows: np.ndarray | None, stamp_ns: np.ndarray, gyro: np.ndarray | None,
+              accel: np.ndarray | None) -> None:
+        """
+        Subtract the thermal offsets, publish.
+
+        ``spans`` (buf, starts, lengths) without rows; ``gyro`` and ``accel`` calibrated, or
+        both None: the rows' own vectors, calibrated here in the same compiled pass.
+        """
+        offset = accel_offset = None
         thermal = self.thermal
         if thermal is not None:
             offset = thermal.drift_at(stamp_ns)
             assert offset is not None  # the gate releases samples only after a temperature
-            gyro -= offset
             self._offset = offset[-1]
             newest = thermal.offset_stamp_ns
             if newest is not None:  # how much newer the sample is than the offset it got
@@ -387,13 +419,20 @@ class ImuCompensatorNode(Node):
         if self.thermal_accel is not None:
             accel_offset = self.thermal_accel.drift_at(stamp_ns)
             if accel_offset is not None:
-                accel -= accel_offset
                 self._accel_offset = accel_offset[-1]
-        if rows is not None:
-            raws = patch_rows(rows, gyro, accel)
+        if gyro is None or accel is None:
+            assert rows is not None  # the usual batch: rows as received
+            raws = row_messages(self._corrector.rows(rows, offset, accel_offset))
         else:
-            assert spans is not None  # a batch has rows or spans
-            raws = patch_imu_spans(*spans, gyro, accel)
+            if offset is not None:
+                gyro -= offset
+            if accel_offset is not None:
+                accel -= accel_offset
+            if rows is not None:
+                raws = patch_rows(rows, gyro, accel)
+            else:
+                assert spans is not None  # a batch has rows or spans
+                raws = patch_imu_spans(*spans, gyro, accel)
         handle = self._pub.handle
         with handle:  # what Publisher.publish does per message for bytes, once per batch
             publish = handle.publish_raw

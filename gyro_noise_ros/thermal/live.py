@@ -304,6 +304,9 @@ class LiveDriftEvaluator:
         self.rejected = 0  # non-finite, implausible or not newer than the previous message
         self._screen = LiveTemperatureScreen()
         self._played: float | None = None  # hysteresis state (lsq_cv's play operator) carried on
+        # the rate's numba kernels load (or compile) now, not at a live stream's first messages
+        temperature_rate_c_s(np.zeros(2), np.zeros(2), window_s=1.0, start='partial')
+        temperature_rate_newest_c_s(np.zeros(2), np.zeros(2), window_s=1.0)
 
     @property
     def start_up_s(self) -> float:
@@ -333,7 +336,8 @@ class LiveDriftEvaluator:
         lo, hi, m = self.range_lo_c, self.range_hi_c, self.margin_c
         # margin >= 0 (check_live_model): inside the range is inside the margin too, so
         # OUTSIDE (2) minus one for each of the two spans a temperature lies in (NaN: none)
-        return RANGE_OUTSIDE - ((temp >= lo - m) & (temp <= hi + m)) - ((temp >= lo) & (temp <= hi))
+        return (RANGE_OUTSIDE - ((temp >= lo - m) & (temp <= hi + m))
+                - ((temp >= lo) & (temp <= hi)))
 
     def add_temperature(self, stamp_ns: ArrayLike, temperature_c: ArrayLike) -> int:
         """
@@ -417,10 +421,9 @@ class LiveDriftEvaluator:
         if not (stamp > self.stamp_ns and math.isfinite(temp)):
             return None
         assert self._t0_ns is not None  # set with stamp_ns
-        # float(int) rounds as numpy's int64 -> float64 does, and the division is the same
+        # float(int) rounds as numpy's int64 -> float64 does, and the division is the same; no
+        # message pending: the rate window filled at an older message (or is not waited for)
         t = float(stamp - self._t0_ns) / _NS
-        if self.uses_rate and t < self.rate_window_s * (1.0 - 1e-9):
-            return None
         if not self._screen.accept_one(float(stamp) / _NS, temp):
             self.rejected += 1
             return 0
@@ -449,8 +452,9 @@ class LiveDriftEvaluator:
         self.knots_outside += int(rate_out or status != RANGE_OK)
         return 1
 
-    def _evaluate(self, temp: NDArray[np.float64], rate: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The model's offsets (k, 3) at the knots' T and dT, its hysteresis state carried on."""
+    def _evaluate(self, temp: NDArray[np.float64],
+                  rate: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return the model's offsets (k, 3) at the knots' T and dT (hysteresis state carried)."""
         if getattr(self.method, 'hysteresis_c', 0.0):
             played = self.method.play(temp, start=self._played)
             self._played = float(played[-1])

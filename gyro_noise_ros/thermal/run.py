@@ -214,30 +214,14 @@ def temperature_rate_c_s(t_s: ArrayLike, temperature_c: ArrayLike, *,
     return rate
 
 
-
 def temperature_rate_newest_c_s(t_s: NDArray[np.float64], temperature_c: NDArray[np.float64], *,
                                 window_s: float) -> float:
     """
-    Return the rate of the newest sample alone, as :func:`temperature_rate_c_s` gives it.
+    Return :func:`temperature_rate_c_s`' ``start='partial'`` rate of the last sample alone.
 
-    The value is ``temperature_rate_c_s(t_s, temperature_c, window_s=window_s,
-    start='partial')[-1]`` bit for bit (the same running sums in the same order), for the live
-    compensator's one new message per call; the inputs are not checked.
-
-    Parameters
-    ----------
-    t_s : numpy.ndarray of float64
-        Sample times (n,), seconds, non-decreasing, n >= 1.
-    temperature_c : numpy.ndarray of float64
-        Temperature (n,), degC.
-    window_s : float, keyword-only
-        Length of the trailing window, seconds (> 0).
-
-    Returns
-    -------
-    float
-        dT/dt of the last sample, degC/s (0 with fewer than two distinct stamps in its window).
-
+    Bit for bit the array's last value (the same sums in the same order), for the live
+    compensator's one message per call. ``t_s`` (s, non-decreasing) and ``temperature_c`` (degC)
+    are 1-D float64 of one length >= 1, not checked; the result is in degC/s.
     """
     return float(_newest_slope(t_s, temperature_c, float(window_s)))
 

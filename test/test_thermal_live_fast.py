@@ -188,14 +188,17 @@ def test_a_plain_stream_takes_the_fast_path_once_the_window_is_filled():
 
 
 def test_newest_rate_is_the_array_functions_last_value_bit_for_bit():
-    # random stamps (repeated ones too), windows that hold one sample or all, signed zeros
+    # random stamps (repeated ones too), windows that hold one sample or all, signed zeros;
+    # every third record on an exact 1/64-s grid, where a window's edge falls on a stamp
     rng = np.random.default_rng(3)
     for trial in range(300):
         n = int(rng.integers(1, 200))
         steps = rng.uniform(0.0, 0.05, n) * (rng.random(n) > 0.1)
+        if trial % 3 == 0:
+            steps = rng.integers(0, 3, n) / 64.0
         t = float(rng.uniform(-1e3, 2e9)) + np.cumsum(steps)
         temp = rng.normal(20.0, 30.0, n) * rng.choice([1.0, -1.0, 0.0], n)
-        window = float(rng.choice([1e-9, 0.1, 0.5, 2.0, 1e3]))
+        window = float(rng.choice([1e-9, 0.125, 0.5, 2.0, 1e3]))
         want = temperature_rate_c_s(t, temp, window_s=window, start='partial')[-1]
         got = temperature_rate_newest_c_s(t, temp, window_s=window)
         assert type(got) is float

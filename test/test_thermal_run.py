@@ -42,6 +42,41 @@ def test_matches_trailing_polyfit_on_irregular_stamps():
     np.testing.assert_allclose(fast, _slow_rate(t, temp, 10.0), atol=1e-9)
 
 
+def _numpy_rate(t, temp, window_s):
+    """Return the rates by the numpy running sums temperature_rate_c_s used before its kernel."""
+    tc = t - t[0]
+    zero = np.zeros(1)
+    s_t, s_tt = (np.concatenate([zero, np.cumsum(x)]) for x in (tc, tc * tc))
+    s_y, s_ty = (np.concatenate([zero, np.cumsum(x)]) for x in (temp, tc * temp))
+    end = np.arange(1, t.size + 1)
+    first = np.searchsorted(t, t - window_s, side='left')
+    n = end - first
+    sum_t, sum_tt = s_t[end] - s_t[first], s_tt[end] - s_tt[first]
+    sum_y, sum_ty = s_y[end] - s_y[first], s_ty[end] - s_ty[first]
+    denom = n * sum_tt - sum_t * sum_t
+    rate = np.zeros(t.size)
+    ok = denom > 1e-12 * np.maximum(n * sum_tt, 1e-300)
+    rate[ok] = (n[ok] * sum_ty[ok] - sum_t[ok] * sum_y[ok]) / denom[ok]
+    return rate
+
+
+def test_kernel_gives_the_numpy_formulas_bits():
+    # offline numbers unchanged by the kernel: repeated and nearly equal stamps, NaN readings,
+    # signed zeros, windows holding one sample or all
+    rng = np.random.default_rng(5)
+    for trial in range(200):
+        n = int(rng.integers(1, 300))
+        steps = rng.uniform(0.0, 0.05, n) * (rng.random(n) > 0.1)
+        if trial % 3 == 1:
+            steps = rng.integers(0, 3, n) * 1e-9
+        t = float(rng.uniform(-1e3, 2e9)) + np.cumsum(steps)
+        temp = rng.normal(20.0, 30.0, n) * rng.choice([1.0, -1.0, 0.0], n)
+        temp[rng.random(n) < 0.02] = np.nan
+        window = float(rng.choice([1e-9, 0.1, 2.0, 1e3]))
+        got = temperature_rate_c_s(t, temp, window_s=window, start='partial')
+        assert got.tobytes() == _numpy_rate(t, temp, window).tobytes(), trial
+
+
 def test_is_causal_and_exact_on_a_ramp():
     t = np.arange(0, 100, 0.1)
     temp = 5.0 + 0.02 * t

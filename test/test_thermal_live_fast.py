@@ -24,7 +24,6 @@ from _thermal_linear import LinearThermal
 from gyro_noise_ros.core.plausible import LiveTemperatureScreen
 from gyro_noise_ros.thermal.live import LiveDriftEvaluator
 from gyro_noise_ros.thermal.lsq import LeastSquaresCV, RATE_SCALE_C_S
-from gyro_noise_ros.thermal.run import temperature_rate_c_s, temperature_rate_newest_c_s
 from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
@@ -185,24 +184,6 @@ def test_a_plain_stream_takes_the_fast_path_once_the_window_is_filled():
     filling = 2.0 * NS / (0.8 * PERIOD_NS) + 1   # at most this many within the first window
     assert ev.knots == n and ev.rejected == 0
     assert n - filling <= ev.fast < n
-
-
-def test_newest_rate_is_the_array_functions_last_value_bit_for_bit():
-    # random stamps (repeated ones too), windows that hold one sample or all, signed zeros;
-    # every third record on an exact 1/64-s grid, where a window's edge falls on a stamp
-    rng = np.random.default_rng(3)
-    for trial in range(300):
-        n = int(rng.integers(1, 200))
-        steps = rng.uniform(0.0, 0.05, n) * (rng.random(n) > 0.1)
-        if trial % 3 == 0:
-            steps = rng.integers(0, 3, n) / 64.0
-        t = float(rng.uniform(-1e3, 2e9)) + np.cumsum(steps)
-        temp = rng.normal(20.0, 30.0, n) * rng.choice([1.0, -1.0, 0.0], n)
-        window = float(rng.choice([1e-9, 0.125, 0.5, 2.0, 1e3]))
-        want = temperature_rate_c_s(t, temp, window_s=window, start='partial')[-1]
-        got = temperature_rate_newest_c_s(t, temp, window_s=window)
-        assert type(got) is float
-        assert np.float64(got).tobytes() == want.tobytes(), (trial, n, window)
 
 
 def test_screen_accept_one_is_accept_of_one():

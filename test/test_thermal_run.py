@@ -19,7 +19,7 @@ from dataclasses import replace
 from gyro_noise_ros.errors import InputDataError
 from gyro_noise_ros.thermal import run
 from gyro_noise_ros.thermal.run import (rate_window_filled, RateWindowError,
-                                        temperature_rate_c_s)
+                                        temperature_rate_c_s, temperature_rate_newest_c_s)
 import numpy as np
 import pytest
 
@@ -40,6 +40,59 @@ def test_matches_trailing_polyfit_on_irregular_stamps():
     fast = temperature_rate_c_s(t, temp, window_s=10.0, start='partial')
     # Both are the same least-squares slope; the running sums lose at most ~1e-10 degC/s here.
     np.testing.assert_allclose(fast, _slow_rate(t, temp, 10.0), atol=1e-9)
+
+
+def _numpy_rate(t, temp, window_s):
+    """Return the rates by the numpy running sums temperature_rate_c_s used before its kernel."""
+    tc = t - t[0]
+    zero = np.zeros(1)
+    s_t, s_tt = (np.concatenate([zero, np.cumsum(x)]) for x in (tc, tc * tc))
+    s_y, s_ty = (np.concatenate([zero, np.cumsum(x)]) for x in (temp, tc * temp))
+    end = np.arange(1, t.size + 1)
+    first = np.searchsorted(t, t - window_s, side='left')
+    n = end - first
+    sum_t, sum_tt = s_t[end] - s_t[first], s_tt[end] - s_tt[first]
+    sum_y, sum_ty = s_y[end] - s_y[first], s_ty[end] - s_ty[first]
+    denom = n * sum_tt - sum_t * sum_t
+    rate = np.zeros(t.size)
+    ok = denom > 1e-12 * np.maximum(n * sum_tt, 1e-300)
+    rate[ok] = (n[ok] * sum_ty[ok] - sum_t[ok] * sum_y[ok]) / denom[ok]
+    return rate
+
+
+def _records(seed, trials):
+    """
+    Yield (trial, t, temp, window) records that probe a running-sum slope's bits.
+
+    Repeated stamps, nearly equal ones (every third record from the second) and stamps on an
+    exact 1/64-s grid where a window's edge falls on a stamp (every third from the first);
+    readings with signed zeros and 2 % NaN; windows holding one sample or all.
+    """
+    rng = np.random.default_rng(seed)
+    for trial in range(trials):
+        n = int(rng.integers(1, 300))
+        steps = [rng.integers(0, 3, n) / 64.0, rng.integers(0, 3, n) * 1e-9,
+                 rng.uniform(0.0, 0.05, n) * (rng.random(n) > 0.1)][trial % 3]
+        t = float(rng.uniform(-1e3, 2e9)) + np.cumsum(steps)
+        temp = rng.normal(20.0, 30.0, n) * rng.choice([1.0, -1.0, 0.0], n)
+        temp[rng.random(n) < 0.02] = np.nan
+        yield trial, t, temp, float(rng.choice([1e-9, 0.125, 0.5, 2.0, 1e3]))
+
+
+def test_kernel_gives_the_numpy_formulas_bits():
+    # offline numbers unchanged by the kernel that replaced the numpy formula
+    for trial, t, temp, window in _records(5, 200):
+        got = temperature_rate_c_s(t, temp, window_s=window, start='partial')
+        assert got.tobytes() == _numpy_rate(t, temp, window).tobytes(), trial
+
+
+def test_newest_rate_is_the_array_functions_last_value_bit_for_bit():
+    # the live compensator's one-value rate (a wrong window edge fails on the grid records)
+    for trial, t, temp, window in _records(3, 300):
+        want = temperature_rate_c_s(t, temp, window_s=window, start='partial')[-1]
+        got = temperature_rate_newest_c_s(t, temp, window_s=window)
+        assert type(got) is float
+        assert np.float64(got).tobytes() == want.tobytes(), trial
 
 
 def test_is_causal_and_exact_on_a_ramp():

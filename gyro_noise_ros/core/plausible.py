@@ -37,6 +37,8 @@ the live compensator applies the same rule causally (:class:`LiveTemperatureScre
 """
 
 from dataclasses import dataclass
+import math
+from typing import Any
 import warnings
 
 import numpy as np
@@ -282,13 +284,17 @@ def screen_temperature(t_s: ArrayLike, temperature_c: ArrayLike,
                              first_index=first)
 
 
-def _range_marks(v: np.ndarray, limits: TemperatureLimits) -> tuple[np.ndarray, np.ndarray]:
-    """Return (outside the operating range, a saturated register word) of finite readings."""
-    saturated = np.zeros(v.size, dtype=bool)
-    for word in limits.saturated_c():
-        saturated |= np.abs(v - word) <= 0.5 / limits.lsb_per_c
-    with np.errstate(invalid='ignore'):
-        outside = ~saturated & np.isfinite(v) & ((v < limits.min_c) | (v > limits.max_c))
+def _range_marks(v: Any, limits: TemperatureLimits) -> tuple[Any, Any]:
+    """
+    Return (outside the operating range, a saturated register word) of finite readings.
+
+    ``v`` is an array (boolean arrays back) or one float (booleans back): the one rule of both.
+    """
+    half = 0.5 / limits.lsb_per_c
+    high, low = limits.saturated_c()
+    saturated = (abs(v - high) <= half) | (abs(v - low) <= half)
+    outside = (np.logical_not(saturated) & np.isfinite(v)
+               & ((v < limits.min_c) | (v > limits.max_c)))
     return outside, saturated
 
 
@@ -365,18 +371,45 @@ class LiveTemperatureScreen:
         v = np.asarray(temperature_c, dtype=np.float64).reshape(-1)
         outside, saturated = _range_marks(v, self.limits)
         keep = np.isfinite(v) & ~outside & ~saturated
-        lim = self.limits
         for k in np.flatnonzero(keep):
-            if self._rejected_run >= self.reset_after:
-                self._recent = []   # the new level persisted: anchor on it
-            if self._recent:
-                ref = _median_of_few([x for _, x in self._recent])
-                allowed = lim.jump_c + lim.max_rate_c_s * (t[k] - self._recent[-1][0])
-                if abs(v[k] - ref) > allowed:
-                    keep[k] = False
-                    self._rejected_run += 1
-                    continue
-            self._rejected_run = 0
-            self._recent = (self._recent + [(float(t[k]), float(v[k]))])[-3:]
+            keep[k] = self._level(float(t[k]), float(v[k]))
         self.rejected += int(np.count_nonzero(~keep))
         return keep
+
+    def accept_one(self, t_s: float, temperature_c: float) -> bool:
+        """
+        Screen one reading newer than the last: :meth:`accept` of one, without numpy's cost.
+
+        Parameters
+        ----------
+        t_s : float
+            Time, s.
+        temperature_c : float
+            Reading, degC.
+
+        Returns
+        -------
+        bool
+            Plausible; the state (and :attr:`rejected`) as :meth:`accept` leaves it.
+
+        """
+        outside, saturated = _range_marks(temperature_c, self.limits)
+        keep = (math.isfinite(temperature_c) and not (outside or saturated)
+                and self._level(t_s, temperature_c))
+        if not keep:
+            self.rejected += 1
+        return keep
+
+    def _level(self, t_s: float, temperature_c: float) -> bool:
+        """Judge one finite in-range reading against the accepted level; update the state."""
+        if self._rejected_run >= self.reset_after:
+            self._recent = []   # the new level persisted: anchor on it
+        if self._recent:
+            ref = _median_of_few([x for _, x in self._recent])
+            allowed = self.limits.jump_c + self.limits.max_rate_c_s * (t_s - self._recent[-1][0])
+            if abs(temperature_c - ref) > allowed:
+                self._rejected_run += 1
+                return False
+        self._rejected_run = 0
+        self._recent = (self._recent + [(t_s, temperature_c)])[-3:]
+        return True

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s
+from .run import DEFAULT_RATE_WINDOW_S, temperature_rate_c_s, temperature_rate_newest_c_s
 from ..core.plausible import LiveTemperatureScreen
 from ..errors import ParameterError
 from ..outputs import StrPath
@@ -304,6 +304,9 @@ class LiveDriftEvaluator:
         self.rejected = 0  # non-finite, implausible or not newer than the previous message
         self._screen = LiveTemperatureScreen()
         self._played: float | None = None  # hysteresis state (lsq_cv's play operator) carried on
+        # the rate's numba kernels load (or compile) now, not at a live stream's first messages
+        temperature_rate_c_s(np.zeros(2), np.zeros(2), window_s=1.0, start='partial')
+        temperature_rate_newest_c_s(np.zeros(2), np.zeros(2), window_s=1.0)
 
     @property
     def start_up_s(self) -> float:
@@ -326,12 +329,15 @@ class LiveDriftEvaluator:
 
     def range_status(self, temperature_c: ArrayLike) -> NDArray[np.int8]:
         """Return the range status (RANGE_*) of each temperature, as an int array."""
-        temp = np.asarray(temperature_c, dtype=np.float64)
+        return np.asarray(self._status(np.asarray(temperature_c, dtype=np.float64)), np.int8)
+
+    def _status(self, temp: Any) -> Any:
+        """Range status of an array of temperatures or of one float (the one rule of both)."""
         lo, hi, m = self.range_lo_c, self.range_hi_c, self.margin_c
-        status = np.full(temp.shape, RANGE_OUTSIDE, np.int8)
-        status[(temp >= lo - m) & (temp <= hi + m)] = RANGE_MARGIN
-        status[(temp >= lo) & (temp <= hi)] = RANGE_OK
-        return status
+        # margin >= 0 (check_live_model): inside the range is inside the margin too, so
+        # OUTSIDE (2) minus one for each of the two spans a temperature lies in (NaN: none)
+        return (RANGE_OUTSIDE - ((temp >= lo - m) & (temp <= hi + m))
+                - ((temp >= lo) & (temp <= hi)))
 
     def add_temperature(self, stamp_ns: ArrayLike, temperature_c: ArrayLike) -> int:
         """
@@ -350,6 +356,9 @@ class LiveDriftEvaluator:
             Knots added (non-finite or stale messages are counted in ``rejected``).
 
         """
+        added = self._add_one(stamp_ns, temperature_c)
+        if added is not None:
+            return added
         stamps = np.asarray(stamp_ns, dtype=np.int64).reshape(-1)
         temp = np.asarray(temperature_c, dtype=np.float64).reshape(-1)
         if stamps.size > 1:
@@ -396,17 +405,69 @@ class LiveDriftEvaluator:
         self._add_knots(t, temp, rate)
         return k
 
-    def _add_knots(self, t: NDArray[np.float64], temp: NDArray[np.float64],
-                   rate: NDArray[np.float64]) -> None:
-        k = t.size
-        status = self.range_status(temp)
+    def _add_one(self, stamp_ns: ArrayLike, temperature_c: ArrayLike) -> int | None:
+        """
+        :meth:`add_temperature` for the usual live call, in scalar Python; None: not that call.
+
+        The usual call is one message (int64 stamp, float64 temperature) newer than the last,
+        finite, with the rate window already filled; it leaves the state the general path
+        leaves, bit for bit. Any other call returns None before changing anything.
+        """
+        stamps, temps = np.asarray(stamp_ns), np.asarray(temperature_c)
+        if (self.stamp_ns is None or self._pending_t.size or stamps.size != 1
+                or temps.size != 1 or stamps.dtype != np.int64 or temps.dtype != np.float64):
+            return None
+        stamp, temp = int(stamps.item()), float(temps.item())
+        if not (stamp > self.stamp_ns and math.isfinite(temp)):
+            return None
+        assert self._t0_ns is not None  # set with stamp_ns
+        # float(int) rounds as numpy's int64 -> float64 does, and the division is the same; no
+        # message pending: the rate window filled at an older message (or is not waited for)
+        t = float(stamp - self._t0_ns) / _NS
+        if not self._screen.accept_one(float(stamp) / _NS, temp):
+            self.rejected += 1
+            return 0
+        buf_t = np.concatenate((self._buf_t, (t,)))
+        buf_temp = np.concatenate((self._buf_temp, (temp,)))
+        rate = temperature_rate_newest_c_s(buf_t, buf_temp, window_s=self.rate_window_s)
+        self._buf_t, self._buf_temp = self._trailing(buf_t, buf_temp, t)
+        self.temperature_c, self.stamp_ns = temp, stamp
+        self.status = status = int(self._status(temp))
+        self.knots += 1
+        drift = self._evaluate(np.array([temp]), np.array([rate]))
+        if status == RANGE_OUTSIDE:  # never extrapolated: the last trusted offset, or none
+            fill = np.zeros(3) if self._trusted is None or self.beyond == 'none' else self._trusted
+            drift = fill.reshape(1, 3).copy()
+        else:
+            self._trusted = drift[0].copy()
+        self._knot_t = np.concatenate((self._knot_t, (t,)))
+        self._knot_drift = np.concatenate((self._knot_drift, drift))
+        self.rate_c_s = rate
+        self.knots_by_status[status] += 1
+        rate_out = False
+        if self.uses_rate and self.rate_range_c_s is not None:
+            lo, hi = self.rate_range_c_s
+            rate_out = rate < lo or rate > hi
+            self.knots_rate_outside += int(rate_out)
+        self.knots_outside += int(rate_out or status != RANGE_OK)
+        return 1
+
+    def _evaluate(self, temp: NDArray[np.float64],
+                  rate: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return the model's offsets (k, 3) at the knots' T and dT (hysteresis state carried)."""
         if getattr(self.method, 'hysteresis_c', 0.0):
             played = self.method.play(temp, start=self._played)
             self._played = float(played[-1])
             drift = self.method.drift_rad_s(temp, rate, played_c=played)
         else:
             drift = self.method.drift_rad_s(temp, rate)
-        drift = np.asarray(drift, dtype=np.float64).reshape(k, 3)
+        return np.asarray(drift, dtype=np.float64).reshape(temp.size, 3)
+
+    def _add_knots(self, t: NDArray[np.float64], temp: NDArray[np.float64],
+                   rate: NDArray[np.float64]) -> None:
+        k = t.size
+        status = self.range_status(temp)
+        drift = self._evaluate(temp, rate)
         outside = status == RANGE_OUTSIDE
         if outside.any():
             # Never extrapolate: a knot beyond the margin holds the last trusted offset (forward

@@ -27,9 +27,11 @@ from dataclasses import dataclass
 import math
 from typing import Protocol, runtime_checkable
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core.jit import JIT_OPTIONS
 from ..errors import InputDataError
 
 
@@ -197,26 +199,8 @@ def temperature_rate_c_s(t_s: ArrayLike, temperature_c: ArrayLike, *,
         raise ValueError(f'start must be one of {RATE_START_MODES}, got {start!r}')
     if t.size == 0:
         return np.zeros(0)
-    # Centre the time axis on the run's start so the running sums keep their precision.
-    tc = t - t[0]
-    zero = np.zeros(1)
-    s_t = np.concatenate([zero, np.cumsum(tc)])
-    s_tt = np.concatenate([zero, np.cumsum(tc * tc)])
-    s_y = np.concatenate([zero, np.cumsum(temp)])
-    s_ty = np.concatenate([zero, np.cumsum(tc * temp)])
-    end = np.arange(1, t.size + 1)
     first = np.searchsorted(t, t - window_s, side='left')
-    n = end - first
-    sum_t = s_t[end] - s_t[first]
-    sum_tt = s_tt[end] - s_tt[first]
-    sum_y = s_y[end] - s_y[first]
-    sum_ty = s_ty[end] - s_ty[first]
-    denom = n * sum_tt - sum_t * sum_t
-    rate = np.zeros(t.size)
-    # denom > 0 exactly when the window holds two distinct stamps; a relative floor guards
-    # against cancellation when the stamps are nearly equal.
-    ok = denom > 1e-12 * np.maximum(n * sum_tt, 1e-300)
-    rate[ok] = (n[ok] * sum_ty[ok] - sum_t[ok] * sum_y[ok]) / denom[ok]
+    rate = _window_slopes(t, temp, first, 0)
     if start == 'partial':
         return rate
     filled = rate_window_filled(t, window_s)
@@ -227,6 +211,72 @@ def temperature_rate_c_s(t_s: ArrayLike, temperature_c: ArrayLike, *,
                               f'{window_s:g}-s window of the temperature rate dT')
     k = int(np.argmax(filled))
     rate[:k] = rate[k] if start == 'backfill' else np.nan
+    return rate
+
+
+def temperature_rate_newest_c_s(t_s: NDArray[np.float64], temperature_c: NDArray[np.float64], *,
+                                window_s: float) -> float:
+    """
+    Return :func:`temperature_rate_c_s`' ``start='partial'`` rate of the last sample alone.
+
+    Bit for bit the array's last value (the same sums in the same order), for the live
+    compensator's one message per call. ``t_s`` (s, non-decreasing) and ``temperature_c`` (degC)
+    are 1-D float64 of one length >= 1, not checked; the result is in degC/s.
+    """
+    return float(_newest_slope(t_s, temperature_c, float(window_s)))
+
+
+@numba.njit(**JIT_OPTIONS)
+def _newest_slope(t: NDArray[np.float64], temp: NDArray[np.float64],
+                  window_s: float) -> float:  # pragma: no cover - compiled
+    """:func:`_window_slopes` of the last sample only, its window found as the array's is."""
+    k = t.shape[0] - 1
+    first = np.empty(1, np.intp)
+    first[0] = np.searchsorted(t, t[k] - window_s, side='left')
+    return _window_slopes(t, temp, first, k)[0]
+
+
+@numba.njit(**JIT_OPTIONS)
+def _slope(n: int, sum_t: float, sum_tt: float, sum_y: float,
+           sum_ty: float) -> float:  # pragma: no cover - compiled
+    """Least-squares slope of n points from their sums; 0 without two distinct stamps."""
+    denom = n * sum_tt - sum_t * sum_t
+    # denom > 0 exactly when the window holds two distinct stamps; a relative floor guards
+    # against cancellation when the stamps are nearly equal (np.maximum: a NaN stays NaN).
+    scale = n * sum_tt
+    if scale < 1e-300:
+        scale = 1e-300
+    if denom > 1e-12 * scale:
+        return (n * sum_ty - sum_t * sum_y) / denom
+    return 0.0
+
+
+@numba.njit(**JIT_OPTIONS)
+def _window_slopes(t: NDArray[np.float64], temp: NDArray[np.float64], first: NDArray[np.intp],
+                   start: int) -> NDArray[np.float64]:  # pragma: no cover - compiled
+    """
+    Slopes of samples ``start..n-1``, sample k's window holding samples ``first[k - start]..k``.
+
+    Running sums from t[0] on, with the time axis centred on t[0] so they keep their precision;
+    a window's sums are differences of two running sums (one pass, O(n)).
+    """
+    n = t.shape[0]
+    s_t, s_tt = np.zeros(n + 1), np.zeros(n + 1)
+    s_y, s_ty = np.zeros(n + 1), np.zeros(n + 1)
+    # -0.0 + x is x for every x (+0.0 + -0.0 is not): the sums are np.cumsum's, bit for bit
+    a_t = a_tt = a_y = a_ty = -0.0
+    for i in range(n):
+        tc = t[i] - t[0]
+        a_t += tc
+        a_tt += tc * tc
+        a_y += temp[i]
+        a_ty += tc * temp[i]
+        s_t[i + 1], s_tt[i + 1], s_y[i + 1], s_ty[i + 1] = a_t, a_tt, a_y, a_ty
+    rate = np.empty(n - start)
+    for k in range(start, n):
+        f, e = first[k - start], k + 1
+        rate[k - start] = _slope(e - f, s_t[e] - s_t[f], s_tt[e] - s_tt[f], s_y[e] - s_y[f],
+                                 s_ty[e] - s_ty[f])
     return rate
 
 

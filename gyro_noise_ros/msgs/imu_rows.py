@@ -30,7 +30,8 @@ for 10 messages. :class:`RowEncoder` is the other direction, for a publisher who
 differ only in stamp and vectors (a driver): one template message, the stamps and vectors written
 into copies of it (~10 us for 16 messages instead of ~110 us through the general encoder);
 :meth:`RowEncoder.rows_scaled` takes raw words and their sensitivities and does the scaling and
-the writing in one compiled pass (numba), ~3 us.
+the writing in one compiled pass (numba), ~3 us. :class:`RowCorrector` is a compensator's: each
+row's two vectors calibrated and offset-corrected in one compiled pass, ~7 us for 16 messages.
 """
 
 from collections.abc import Sequence

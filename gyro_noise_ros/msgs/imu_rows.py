@@ -322,8 +322,8 @@ def _correct_rows(  # pragma: no cover - compiled; tested through RowCorrector.r
         for s, k, o, use_o in ((0, _GYRO, gyro_offset, use_gyro_offset),
                                (1, _ACCEL, accel_offset, use_accel_offset)):
             d0, d1, d2 = src[k] - bias[s, 0], src[k + 1] - bias[s, 1], src[k + 2] - bias[s, 2]
+            m = matrix[s]
             for r in range(3):
-                m = matrix[s]
                 # summed as SensorCalibration.apply sums it
                 y = (d0 * m[r, 0] + d1 * m[r, 1]) + d2 * m[r, 2] if use_matrix[s] else (
                     d0, d1, d2)[r]

@@ -144,12 +144,36 @@ def _check_creatable(target: Path, parameter: str, *, into: bool = False) -> Non
     if not os.access(ancestor, os.W_OK | os.X_OK):
         raise _refused(parameter, f'{str(target)!r} {what}: permission denied')
     # os.access trusts the mode bits: a read-only mount, /proc or an ACL say no only when tried
-    probe = ancestor / f'.gyro_noise_probe-{os.getpid()}-{secrets.token_hex(4)}'
     try:
-        probe.mkdir()
-        probe.rmdir()
+        _try_creating_in(ancestor)
     except OSError as err:
         raise _refused(parameter, f'{str(target)!r} {what}: {_reason(err)}') from err
+
+
+def _try_creating_in(folder: Path) -> None:
+    """
+    Raise OSError unless an entry can be created in ``folder``; leave nothing there, even stopped.
+
+    An unnamed file (``O_TMPFILE``) vanishes with its descriptor, so a signal between creating
+    and removing it leaves no name behind; where the file system lacks it, a uniquely named
+    folder is made and removed in a ``finally``.
+    """
+    tmpfile = getattr(os, 'O_TMPFILE', 0)
+    if tmpfile:
+        try:
+            os.close(os.open(folder, tmpfile | os.O_WRONLY, 0o600))
+            return
+        except OSError as err:
+            if err.errno not in (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL):
+                raise
+    probe = folder / f'.gyro_noise_probe-{os.getpid()}-{secrets.token_hex(4)}'
+    try:
+        probe.mkdir()
+    finally:
+        try:
+            probe.rmdir()
+        except OSError:
+            pass  # not made (the refusal is mkdir's error) or already gone
 
 
 def _check_named(path: StrPath, parameter: str) -> None:

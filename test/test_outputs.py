@@ -20,7 +20,8 @@ import sys
 
 from gyro_noise_ros.errors import OutputError
 from gyro_noise_ros.outputs import (
-    atomic_write_text, make_out_dir, PARTIAL_PREFIX, staged_new_dir, staged_output)
+    atomic_write_text, check_out_dir, make_out_dir, PARTIAL_PREFIX, staged_new_dir,
+    staged_output)
 import pytest
 
 
@@ -115,10 +116,44 @@ def test_unwritable_out_is_refused_as_root_too(tmp_path, monkeypatch):
             raise PermissionError(13, 'Permission denied')
         return real_mkdir(self, *args, **kwargs)
 
-    monkeypatch.setattr(type(out), 'mkdir', failing_mkdir)
-    with pytest.raises(OutputError, match='not writable: Permission denied'):
-        with staged_output(out):
-            pass
+    real_open = os.open
+
+    def failing_open(path, flags, *args, **kwargs):
+        if os.fspath(path) == os.fspath(out) and flags & getattr(os, 'O_TMPFILE', 0):
+            raise PermissionError(13, 'Permission denied')
+        return real_open(path, flags, *args, **kwargs)
+
+    for tmpfile in (True, False):  # the unnamed-file probe, and the folder one where it lacks
+        with monkeypatch.context() as m:
+            m.setattr(type(out), 'mkdir', failing_mkdir)
+            m.setattr(os, 'open', failing_open)
+            if not tmpfile:
+                m.delattr(os, 'O_TMPFILE', raising=False)
+            with pytest.raises(OutputError, match='not writable: Permission denied'):
+                with staged_output(out):
+                    pass
+
+
+@pytest.mark.parametrize('tmpfile', [True, False])
+def test_the_write_probe_leaves_nothing_when_a_signal_stops_it(tmp_path, monkeypatch, tmpfile):
+    # a SIGTERM between creating the probe and removing it left '.gyro_noise_probe-*' behind
+    real_close, real_mkdir = os.close, type(tmp_path).mkdir
+
+    def interrupted(real):
+        def call(*args, **kwargs):
+            real(*args, **kwargs)
+            raise KeyboardInterrupt  # what the tools' signal handlers raise, once it is made
+        return call
+
+    if tmpfile:
+        monkeypatch.setattr(os, 'close', interrupted(real_close))
+    else:
+        monkeypatch.delattr(os, 'O_TMPFILE', raising=False)
+        monkeypatch.setattr(type(tmp_path), 'mkdir', interrupted(real_mkdir))
+    with pytest.raises(KeyboardInterrupt):
+        check_out_dir(tmp_path / 'out')
+    monkeypatch.undo()
+    assert os.listdir(tmp_path) == []
 
 
 def test_staged_new_dir_renames_on_success_and_refuses_existing(tmp_path):

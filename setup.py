@@ -100,6 +100,7 @@ setup(
             'noise_analyzer = gyro_noise_ros.nodes.analyzer:main',
             'gyro_noise_record = gyro_noise_ros.nodes.record_main:main',
             'imu_compensator = gyro_noise_ros.nodes.compensator:main',
+            'imu_chain = gyro_noise_ros.nodes.chain:main',
             'portenta_emulator = gyro_noise_ros.cli.emulator:main',
             'gyro_noise_import = gyro_noise_ros.cli.importer:main',
             'gyro_noise_analyze = gyro_noise_ros.cli.analyze:main',

@@ -44,7 +44,8 @@ CPU of each process from ``/proc/<pid>/stat`` over the window. ``--load N`` star
 ``--load 2`` for the loaded row; ``--driver-param`` / ``--compensator-param name:=value`` to
 compare settings side by side; ``--rt PRIO`` runs the chain under ``SCHED_FIFO`` (the nodes'
 ``realtime_priority``); ``--bare-relay`` puts a relay that only takes and republishes in the
-compensator's place (the floor of a Python node there).
+compensator's place (the floor of a Python node there); ``--chain`` runs ``imu_chain`` instead of
+the two nodes (one process: the driver hands each read to the compensator, no second DDS trip).
 """
 
 import argparse
@@ -63,6 +64,16 @@ from bench_driver import cpu_seconds, free_port, stop  # noqa: E402
 import numpy as np  # noqa: E402
 
 ODR = 6667.0
+#: ``imu_chain`` with the compensator bench's thermal model (the same node code as
+#: ``_COMPENSATOR``'s): the driver and the compensator in one process (``--chain``).
+_CHAIN = _COMPENSATOR.split('model = ')[0] + r"""
+from gyro_noise_ros.nodes import chain
+from gyro_noise_ros.nodes._params import running_together
+model = Linear()
+argv = sys.argv[1:]
+with running_together((chain.driver.PARAMETERS, chain.compensator.PARAMETERS), argv):
+    sys.exit(run_node(lambda: chain.build(thermal_model=model), argv, prog='bench_chain'))
+"""
 BUSY = 'while True: pass'
 #: Publications this far apart (ns) belong to two reads of the driver (a frame is 2.4 ms).
 BATCH_GAP_NS = 500_000
@@ -238,10 +249,17 @@ def run(args):
     rt_param = ['-p', f'realtime_priority:={args.rt}'] if args.rt else []
     load = [subprocess.Popen([sys.executable, '-c', BUSY]) for _ in range(args.load)]
     try:
-        procs['lsm6dso32_driver'] = subprocess.Popen(
-            [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', '-p',
-             f'port:=socket://127.0.0.1:{port}', '-p', 'reconnect_period_s:=0.2',
-             *rt_param, *_ros_params(args.driver_param)], stderr=subprocess.DEVNULL)
+        link = ['-p', f'port:=socket://127.0.0.1:{port}', '-p', 'reconnect_period_s:=0.2']
+        compensation = ['-p', 'temperature_rate_window_s:=2.0', *_param_args(True)]
+        if args.chain:
+            procs['imu_chain'] = subprocess.Popen(
+                [sys.executable, '-c', _CHAIN, '--ros-args', *link, *compensation, *rt_param,
+                 *_ros_params(args.driver_param), *_ros_params(args.compensator_param)],
+                stderr=subprocess.DEVNULL)
+        else:
+            procs['lsm6dso32_driver'] = subprocess.Popen(
+                [sys.executable, '-m', 'gyro_noise_ros.nodes.driver', '--ros-args', *link,
+                 *rt_param, *_ros_params(args.driver_param)], stderr=subprocess.DEVNULL)
         if args.slow_reader is not None:
             procs['slow reader'] = subprocess.Popen(
                 [sys.executable, '-c', _SLOW_READER, str(args.slow_reader), args.slow_qos,
@@ -250,10 +268,9 @@ def run(args):
         if args.bare_relay:
             procs['bare relay'] = subprocess.Popen(
                 [sys.executable, '-c', _BARE_RELAY, str(args.rt)], stderr=subprocess.DEVNULL)
-        elif not args.no_compensator:
+        elif not (args.no_compensator or args.chain):
             procs['imu_compensator'] = subprocess.Popen(
-                [sys.executable, '-c', _COMPENSATOR, 'thermal', '--ros-args',
-                 '-p', 'temperature_rate_window_s:=2.0', *_param_args(True),
+                [sys.executable, '-c', _COMPENSATOR, 'thermal', '--ros-args', *compensation,
                  *rt_param, *_ros_params(args.compensator_param)], stderr=subprocess.DEVNULL)
         time.sleep(args.warmup)
         cpu0 = {n: cpu_seconds(p.pid) for n, p in procs.items()}
@@ -271,7 +288,7 @@ def run(args):
             proc.kill()
             proc.wait()
         for name in ('slow reader', 'bare relay', 'imu_compensator', 'lsm6dso32_driver',
-                     'portenta_emulator'):
+                     'imu_chain', 'portenta_emulator'):
             if name in procs:
                 stop(procs[name])
         probe.close()
@@ -363,6 +380,9 @@ def main(argv=None):
     parser.add_argument('--bare-relay', action='store_true',
                         help="a bare relay in the compensator's place (take as it arrives, "
                              'publish unchanged): the floor of a Python node there')
+    parser.add_argument('--chain', action='store_true',
+                        help='the driver and the compensator in one process (imu_chain): the '
+                             'compensator gets each read from the driver, not through DDS')
     parser.add_argument('--slow-reader', type=float, metavar='WORK_US',
                         help='add a reader of imu/data_raw with one callback per message, each '
                              'busy for WORK_US (0: the callback alone)')

@@ -27,7 +27,7 @@ import sys
 import time
 
 from _thermal_linear import LinearThermal
-from gyro_noise_ros.bag import decode_imu
+from gyro_noise_ros.bag import decode_imu, decode_temperature
 from gyro_noise_ros.calibration.apply import calibration_from_parameters
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.msgs import encode_imu_cdr, encode_temperature_cdr
@@ -540,3 +540,76 @@ def test_the_usual_batch_pass_is_ready_before_the_first_batch(context):
             node.destroy_node()
         assert list(imu_rows._correct_rows.signatures) == before
         assert node.counts['published'] == 19
+
+
+def _driver_reads(seed, n_reads=60, per_read=16, temperature_every=128):
+    """Return a driver's reads: (temperatures, imu) serialised, a temperature every 128th."""
+    stamps, _, _, raws = _imu_stream(n_reads * per_read, seed=seed)
+    rng = np.random.default_rng(seed)
+    reads = []
+    for r in range(n_reads):
+        i = np.arange(r * per_read, (r + 1) * per_read)
+        pick = i[i % temperature_every == 0]
+        temps = encode_temperature_cdr(stamps[pick], 25.0 + 0.01 * pick / 128.0
+                                       + rng.normal(0, 1e-3, pick.size), frame_id='imu_test')
+        reads.append((temps, [raws[k] for k in i]))
+    return reads
+
+
+@pytest.mark.timeout(180)
+@pytest.mark.parametrize('sync', ['latest', 'interpolate'])
+def test_in_process_reads_publish_the_bytes_of_the_dds_path(context, sync):
+    """imu_chain's compensator (accept, no subscriptions) against the node fed through DDS."""
+    model = LinearThermal(sensitivity=(1e-3, -2e-3, 5e-4), temperature_range_c=(20.0, 30.0))
+    params = dict(_calibration_params(21), temperature_rate_window_s=0.05,
+                  temperature_sync=sync, max_temperature_wait_s=5.0)
+    reads = _driver_reads(22)
+    # Through DDS, read by read as the driver publishes them: temperatures, then the samples.
+    node = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                          parameter_overrides=_overrides(**params))
+    io = _Harness(context, node)
+    try:
+        for temps, imu in reads:
+            for raw in temps:
+                io.temp_pub.publish(raw)
+            for raw in imu:
+                io.imu_pub.publish(raw)
+            sent = node.counts['received'] + len(imu)
+            assert _spin_until(io.executor, lambda: node.counts['received'] == sent, 20)
+        assert _spin_until(io.executor, lambda: len(io.out) == node.counts['published'], 10)
+        dds, dds_counts = io.out, dict(node.counts)
+    finally:
+        io.close()
+    # In process: the same reads handed over by accept(), as the driver's thread does.
+    chained = compensator.ImuCompensatorNode(context=context, thermal_model=model,
+                                             in_process=True,
+                                             parameter_overrides=_overrides(**params))
+    listener = rclpy.create_node('test_chain_listener', context=context)
+    sub = listener.create_subscription(Imu, 'imu/data_compensated', unused_callback,
+                                       QoSProfile(depth=50000,
+                                                  reliability=ReliabilityPolicy.RELIABLE),
+                                       raw=True, callback_group=PolledGroup())
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(listener)
+    executor.add_node(chained)
+    out = []
+    try:
+        assert not chained.get_subscriptions_info_by_topic('imu/data_raw')
+        assert _spin_until(executor, lambda: chained._pub.get_subscription_count() > 0, 20)
+        _spin_until(executor, lambda: False, 0.3)
+        for temps, imu in reads:
+            chained.accept(temps, imu)
+        assert _spin_until(executor, lambda: len(out) == chained.counts['published']
+                           or out.extend(take_all(sub, Imu)[0]), 20)
+        counts = dict(chained.counts)
+    finally:
+        executor.shutdown()
+        listener.destroy_node()
+        chained.destroy_node()
+    assert counts == dds_counts and counts['received'] == sum(len(i) for _, i in reads)
+    # latest publishes every sample at once; interpolate holds those after the last temperature
+    newest = decode_temperature([raw for temps, _ in reads for raw in temps])[0].max()
+    stamps = decode_imu([raw for _, imu in reads for raw in imu]).stamp_ns
+    assert counts['published'] == (counts['received'] if sync == 'latest'
+                                   else np.count_nonzero(stamps <= newest))
+    assert out == dds  # the same bytes

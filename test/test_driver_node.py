@@ -30,6 +30,7 @@ import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from gyro_noise_ros.bag import decode_imu, decode_temperature
 from gyro_noise_ros.errors import ParameterError
 from gyro_noise_ros.link import clock as clock_module, protocol as P
 from gyro_noise_ros.msgs import imu_rows
@@ -68,12 +69,12 @@ def closed_port_url():
 class Harness:
     """A driver and a subscriber node on one context, spun by one executor in this thread."""
 
-    def __init__(self, context, listen=True, **overrides):
+    def __init__(self, context, listen=True, listeners=(), **overrides):
         overrides.setdefault('port', closed_port_url())
         overrides.setdefault('reconnect_period_s', 60.0)
         # Published at once: the tests feed a few frames; the settling has its own test.
         overrides.setdefault('clock_settle_s', 0.0)
-        self.driver = Lsm6dso32Driver(context=context, parameter_overrides=[
+        self.driver = Lsm6dso32Driver(context=context, listeners=listeners, parameter_overrides=[
             Parameter(name, value=value) for name, value in overrides.items()])
         self.sub_node = rclpy.create_node('test_listener', context=context)
         self.imu, self.temps, self.diags = [], [], []
@@ -257,6 +258,34 @@ def test_the_per_frame_kernels_are_ready_before_the_first_frame(harness):
         assert h.driver.publish_samples(make_samples(np.arange(16 * b, 16 * b + 16)),
                                         now + b * 2_400_000 + 10**6, cfg) == 16
     assert [list(k.signatures) for k in kernels] == before
+
+
+def test_listeners_get_the_bytes_published_while_active_and_a_failing_one_is_counted(harness):
+    """In-process listeners (imu_chain): each read's serialised messages, temperatures first."""
+    got = []
+
+    def failing(temperatures, imu):
+        raise ValueError('a broken listener')
+
+    h = harness(listeners=[lambda t, i: got.append((list(t), list(i))), failing],
+                temperature_decimation=4)
+    cfg = LinkConfig(6667.0, 2000, 32)
+    now = h.driver.get_clock().now().nanoseconds
+    for b in range(3):
+        assert h.driver.publish_samples(make_samples(np.arange(16 * b, 16 * b + 16)),
+                                        now + b * 2_400_000, cfg) == 16
+    h.spin_until(lambda: len(h.imu) == 48 and len(h.temps) == 12, 10.0)
+    assert [len(i) for _, i in got] == [16, 16, 16] and [len(t) for t, _ in got] == [4, 4, 4]
+    listened = [decode for _, imu in got for decode in decode_imu(imu).stamp_ns]
+    assert listened == [stamp_ns(m) for m in h.imu]  # what the subscribers received, in order
+    temps = decode_temperature([raw for t, _ in got for raw in t])
+    assert temps[0].tolist() == [stamp_ns(m) for m in h.temps]
+    # the broken listener neither stopped the driver nor the other listener: counted, logged
+    assert h.driver.link_snapshot()['listener_errors'] == 3
+    h.driver.trigger_deactivate()
+    h.driver._handle(make_samples(np.arange(48, 64)), now + 10**8, cfg)  # the reader's call
+    assert len(got) == 3  # inactive: nothing published, nothing handed over
+    assert h.driver.link_snapshot()['discarded'] == 16
 
 
 def test_the_first_samples_wait_for_the_clock_to_settle_then_all_go_in_order(harness):

@@ -22,7 +22,8 @@ in a pure dataclass give their rows through :func:`specs_from_dataclass`, so the
 unit are written once.
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, fields, MISSING
 import difflib
 import math
@@ -419,6 +420,52 @@ def wildcard_only(names: Sequence[str], node: Node,
 _WARNED: set[tuple[str, str]] = set()
 
 
+#: Set by :func:`running_together`: the parameter names of the nodes of this process, and its
+#: command line.
+_TOGETHER: list[tuple[frozenset[str], tuple[str, ...]]] = []
+
+
+@contextmanager
+def running_together(tables: Sequence[Sequence[ParamSpec]],
+                     argv: Sequence[str]) -> Iterator[None]:
+    """
+    Build several nodes of one process in this block: a ``-p`` name one of them declares passes.
+
+    A ``-p NAME:=VALUE`` (or a name in a wildcard section of a parameter file) reaches every node
+    of the process; a node that lacks the name passes it over in silence when another node's
+    table, given here, declares it (:func:`refuse_unknown_parameters`). A name in a parameter
+    file's section of the node itself is still refused.
+
+    Parameters
+    ----------
+    tables : sequence of sequence of ParamSpec
+        The ``PARAMETERS`` of each node of the process.
+    argv : sequence of str
+        The program's command line (its ``-p`` names and ``--params-file`` files).
+
+    """
+    _TOGETHER.append((frozenset(spec.name for table in tables for spec in table), tuple(argv)))
+    try:
+        yield
+    finally:
+        _TOGETHER.pop()
+
+
+def _a_siblings(names: Sequence[str], node: Node) -> set[str]:
+    """
+    Return the ``names`` another node built together with ``node`` declares, given to all nodes.
+
+    Given with ``-p`` or in a wildcard section (``/**``); not those of the node's own section of
+    a parameter file (a name there that the node lacks is a mistake, whoever else declares it).
+    """
+    if not _TOGETHER:
+        return set()
+    declared, argv = _TOGETHER[-1]
+    own = {name for _, key, section in params_file_sections(argv)
+           if key.split('/')[-1] == node.get_name() for name in section}
+    return {name for name in names if name in declared and name not in own}
+
+
 def refuse_unknown_parameters(node: Node, argv: Sequence[str] | None = None) -> None:
     """
     Refuse the undeclared parameters addressed to ``node``; warn about a shared file's others.
@@ -438,6 +485,9 @@ def refuse_unknown_parameters(node: Node, argv: Sequence[str] | None = None) -> 
 
     """
     unknown = unknown_parameters(node)
+    if unknown:
+        sibling = _a_siblings(unknown, node)
+        unknown = [name for name in unknown if name not in sibling]
     if not unknown:
         return
     shared = wildcard_only(unknown, node, sys.argv if argv is None else argv)
@@ -475,8 +525,10 @@ def unknown_parameter_error(node: Node, names: Sequence[str]) -> ParameterError:
         close = difflib.get_close_matches(name, known, n=1)
         parts.append(repr(name) + (f' (did you mean {close[0]!r}?)' if close else ''))
     what = 'parameter' if len(names) == 1 else 'parameters'
+    others = (', nor does any other node of this process'
+              if _TOGETHER and not set(names) & _TOGETHER[-1][0] else '')
     return ParameterError(f'unknown {what} {", ".join(parts)}: {node.get_name()} declares no '
-                          'such parameter (--help lists them)')
+                          f'such parameter{others} (--help lists them)')
 
 
 def specs_from_dataclass(cls: type[Any], *, read_only: bool,

@@ -218,15 +218,14 @@ def diagnostic_array(stamp: Any, statuses: Iterable[DiagnosticStatus]) -> Diagno
     return msg
 
 
-def _refuse_plain_arguments(argv: list[str], prog: str,
-                            parameters: Sequence[ParamSpec], summary: str) -> int | None:
+def _refuse_plain_arguments(argv: list[str], prog: str, help_text: str) -> int | None:
     """``--help``: print the table and return 0; another argument outside --ros-args: 2."""
     try:
         plain = remove_ros_args(argv)[1:]
     except RuntimeError:  # malformed --ros-args: rclpy.init says so, in one line (run_node)
         return None
     if '-h' in plain or '--help' in plain:
-        print(parameter_help(prog, parameters, summary), end='')
+        print(help_text, end='')
         return 0
     if plain:
         print(f'{prog}: error: unknown argument {plain[0]!r}: parameters go after --ros-args '
@@ -254,9 +253,9 @@ def _remember_signals(received: list[int]) -> dict[int, Any]:
     return old
 
 
-def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
-             prog: str, parameters: Sequence[ParamSpec] | None = None,
-             summary: str = '') -> int:
+def run_node(node_factory: Callable[[], Node | Sequence[Node]], args: list[str] | None = None,
+             *, prog: str, parameters: Sequence[ParamSpec] | None = None,
+             summary: str = '', help_text: str | None = None) -> int:
     """
     Run a node with the Jazzy ``main()`` pattern; start-up errors give one line and an exit code.
 
@@ -268,7 +267,8 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
     Parameters
     ----------
     node_factory : callable
-        ``node_factory() -> rclpy.node.Node``; may raise :class:`GyroNoiseError` (bad parameters).
+        ``node_factory() -> rclpy.node.Node`` or a sequence of nodes (spun together in one
+        thread, destroyed in that order); may raise :class:`GyroNoiseError` (bad parameters).
     args : list of str or None
         Command line for ``rclpy.init`` (None: ``sys.argv``).
     prog : str
@@ -278,6 +278,8 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
         outside ``--ros-args`` is refused. None: the caller parses its own arguments.
     summary : str, keyword-only
         What the node does, for ``--help`` (its module docstring).
+    help_text : str or None, keyword-only
+        The whole ``--help`` text, instead of the one made of ``parameters`` and ``summary``.
 
     Returns
     -------
@@ -289,7 +291,8 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
     """
     argv = sys.argv if args is None else list(args)
     if parameters is not None:
-        code = _refuse_plain_arguments(argv, prog, parameters, summary)
+        code = _refuse_plain_arguments(argv, prog, help_text or parameter_help(
+            prog, parameters, summary))
         if code is not None:
             return code
     received: list[int] = []
@@ -306,8 +309,8 @@ def run_node(node_factory: Callable[[], Node], args: list[str] | None = None, *,
             signal.signal(sig, handler)
 
 
-def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
-                   received: list[int]) -> int:
+def _init_and_spin(node_factory: Callable[[], Node | Sequence[Node]], argv: list[str],
+                   prog: str, received: list[int]) -> int:
     use_package_profile()  # a node killed -9 is dropped by the others in 3 s, not 20
     try:
         rclpy.init(args=argv)
@@ -320,13 +323,15 @@ def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
         what = 'unknown ROS arguments' if kind == 'UnknownROSArgsError' else 'bad ROS arguments'
         print(f'{prog}: error: {what}: {str(err).split(", at ")[0]}', file=sys.stderr)
         return ParameterError.exit_code
-    node = None
+    nodes: tuple[Node, ...] = ()
     error: GyroNoiseError | None = None
     try:
-        node = node_factory()
-        refuse_unknown_parameters(node, argv)
-        heap_trim_timer(node)
-        rclpy.spin(node)
+        built = node_factory()
+        nodes = (built,) if isinstance(built, Node) else tuple(built)
+        for node in nodes:
+            refuse_unknown_parameters(node, argv)
+        heap_trim_timer(nodes[0])
+        _spin(nodes)
     except GyroNoiseError as err:
         error = err
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -339,7 +344,7 @@ def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
             raise
     finally:
         try:
-            if node is not None:
+            for node in nodes:  # in order: a driver stops its thread before its listener goes
                 node.destroy_node()  # a recorder closes its bag: that may fail (disk full)
         except GyroNoiseError as err:
             error = error or err
@@ -349,6 +354,22 @@ def _init_and_spin(node_factory: Callable[[], Node], argv: list[str], prog: str,
         print(f'{prog}: error: {error}', file=sys.stderr)
         return error.exit_code
     return _interrupted(prog, received[0]) if received else 0
+
+
+def _spin(nodes: Sequence[Node]) -> None:
+    """``rclpy.spin`` of one node, or of several in the global executor (one thread)."""
+    if len(nodes) == 1:
+        rclpy.spin(nodes[0])
+        return
+    executor = rclpy.get_global_executor()
+    try:
+        for node in nodes:
+            executor.add_node(node)
+        while executor.context.ok():
+            executor.spin_once()
+    finally:
+        for node in nodes:
+            executor.remove_node(node)
 
 
 def _interrupted(prog: str, signum: int) -> int:

@@ -49,6 +49,7 @@ import numpy as np
 from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
 from sensor_msgs.msg import Imu, Temperature
 
 from ._realtime import REALTIME_DOC, set_realtime_priority
@@ -212,12 +213,16 @@ class ImuCompensatorNode(Node):
     ----------
     thermal_model : ThermalMethod or None, keyword-only
         A causal model object used instead of ``thermal_model_file`` (embedding, tests).
+    in_process : bool, keyword-only
+        No subscriptions: the driver in the same process hands each read over (:meth:`accept`;
+        ``imu_chain``, :mod:`.chain`).
     **kwargs
         Passed to :class:`rclpy.node.Node` (e.g. ``parameter_overrides``).
 
     """
 
-    def __init__(self, *, thermal_model: ThermalMethod | None = None, **kwargs: Any) -> None:
+    def __init__(self, *, thermal_model: ThermalMethod | None = None, in_process: bool = False,
+                 **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameter_table(self, PARAMETERS)
         self._p = p
@@ -252,16 +257,20 @@ class ImuCompensatorNode(Node):
         self._accel_offset = None
         # The drain (its thread or the timer) and the diagnostics (the executor) share the state.
         self._lock = threading.Lock()
-        group = PolledGroup()
-        qos = sensor_data_qos(p['queue_depth'], p['reliable'])
-        self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
-                                                 raw=True, callback_group=group)
-        # Temperatures best effort whatever `reliable` says: only the newest one counts, and a
-        # reliable stream delivered in order holds every newer temperature back until a lost one
-        # is repaired (Fast DDS: up to a heartbeat period, 3 s), a stale offset all that time.
-        self._temp_sub = self.create_subscription(
-            Temperature, 'imu/temperature', unused_callback,
-            sensor_data_qos(p['queue_depth'], False), raw=True, callback_group=group)
+        self._imu_sub: Subscription | None = None
+        self._temp_sub: Subscription | None = None
+        if not in_process:
+            group = PolledGroup()
+            qos = sensor_data_qos(p['queue_depth'], p['reliable'])
+            self._imu_sub = self.create_subscription(Imu, 'imu/data_raw', unused_callback, qos,
+                                                     raw=True, callback_group=group)
+            # Temperatures best effort whatever `reliable` says: only the newest one counts, and
+            # a reliable stream delivered in order holds every newer temperature back until a
+            # lost one is repaired (Fast DDS: up to a heartbeat period, 3 s), a stale offset all
+            # that time.
+            self._temp_sub = self.create_subscription(
+                Temperature, 'imu/temperature', unused_callback,
+                sensor_data_qos(p['queue_depth'], False), raw=True, callback_group=group)
         out_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p['output_queue_depth'],
                              reliability=ReliabilityPolicy.RELIABLE)
         self._pub = self.create_publisher(Imu, 'imu/data_compensated', out_qos)
@@ -270,13 +279,17 @@ class ImuCompensatorNode(Node):
         if p['drain_period_s'] > 0:
             self.create_timer(p['drain_period_s'], self.drain)
         else:
-            # 50 ms without data: the gate's time-outs and the start-up drop still run.
-            self._waiter = WaitSetDrain(self.context, [self._temp_sub, self._imu_sub],
-                                        self.drain, timeout_s=0.05, name='imu_compensator_drain')
+            # 50 ms without data: the gate's time-outs and the start-up drop still run (in
+            # process, only they: the driver's thread brings the data).
+            subs = [sub for sub in (self._temp_sub, self._imu_sub) if sub is not None]
+            self._waiter = WaitSetDrain(self.context, subs, self.drain, timeout_s=0.05,
+                                        name='imu_compensator_drain')
             self._waiter.start()
         self.create_timer(p['diagnostics_period_s'], self.publish_diagnostics)
         model = 'none' if self.thermal is None else self.thermal.name
-        self.get_logger().info(f'compensating {self._imu_sub.topic_name} -> '
+        source = ("the driver's reads in this process" if self._imu_sub is None else
+                  self._imu_sub.topic_name)
+        self.get_logger().info(f'compensating {source} -> '
                                f'{self._pub.topic_name}: calibration from {self._cal_source}, '
                                f'thermal model {model}, temperature sync '
                                f'{p["temperature_sync"]}')
@@ -303,6 +316,9 @@ class ImuCompensatorNode(Node):
     def drain(self) -> None:
         """Take queued temperatures and Imu messages, compensate them, publish."""
         with self._lock:
+            if self._imu_sub is None:  # in process: the data come through accept()
+                self._step((), (), ())
+                return
             while True:
                 # A backlog (a stalled stream resuming) goes through in bounded batches: one
                 # large batch would grow the heap for good.
@@ -314,16 +330,34 @@ class ImuCompensatorNode(Node):
                 # samples newer than a temperature not yet taken through with the one before it,
                 # older than them by a period plus the pause (the likely cause of an offset
                 # 31.8 ms older than its sample in session 5's 60-minute soak; bound 31.6 ms).
-                self._take_temperatures()
-                if raws:
-                    self.compensate(raws, sequence)
-                elif self.thermal is not None and self._gate.waiting:
-                    self._release()  # a new temperature or a timeout lets held samples go
+                assert self._temp_sub is not None  # subscribed with imu/data_raw
+                self._step(raws, sequence, take_all(self._temp_sub, Temperature)[0])
                 if len(raws) < MAX_BATCH:
                     break
 
-    def _take_temperatures(self) -> None:
-        raws, _, _ = take_all(self._temp_sub, Temperature)
+    def accept(self, temperatures: Sequence[bytes], imu: Sequence[bytes]) -> None:
+        """
+        Compensate one read of the driver running in this process (``in_process``).
+
+        Called in the driver's reader thread right after it published ``temperatures`` (its
+        ``imu/temperature`` messages, serialised) and ``imu`` (its ``imu/data_raw`` messages),
+        in that order, as :meth:`drain` gets them from DDS: the same steps, without the second
+        trip through the middleware.
+        """
+        with self._lock:
+            for start in range(0, max(len(imu), 1), MAX_BATCH):
+                self._step(imu[start:start + MAX_BATCH], (), temperatures if start == 0 else ())
+
+    def _step(self, raws: Sequence[bytes], sequence: Sequence[int],
+              temperatures: Sequence[bytes]) -> None:
+        """Add the temperatures, then compensate and publish the Imu messages (lock held)."""
+        self._add_temperatures(temperatures)
+        if raws:
+            self.compensate(raws, sequence)
+        elif self.thermal is not None and self._gate.waiting:
+            self._release()  # a new temperature or a timeout lets held samples go
+
+    def _add_temperatures(self, raws: Sequence[bytes]) -> None:
         if not raws or self.thermal is None:
             return
         self.counts['temperatures'] += len(raws)

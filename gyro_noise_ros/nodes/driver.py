@@ -37,7 +37,7 @@ board's count, never the stamps'). A read/write error or ``data_timeout_s`` of s
 port, reports ERROR and retries; the node never exits for it. Details: docs/diagnostics.md.
 """
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import fields
 import sys
 import threading
@@ -70,6 +70,9 @@ from ..msgs.imu_rows import row_messages, RowEncoder
 __all__ = ['LinkConfig', 'Lsm6dso32Driver', 'main', 'NODE_NAME', 'PARAMETERS']
 
 NODE_NAME = 'lsm6dso32_driver'
+
+#: ``listener(temperatures, imu)``: a node in this process given each read's published messages.
+Listener = Callable[[list[bytes], list[bytes]], None]
 
 # The largest LSM6DSO32 rate (datasheet 6.66 kHz), the one the paper records at.
 _DEFAULT_ODR = max(lsm6dso32.ODRS_HZ)
@@ -181,6 +184,11 @@ class Lsm6dso32Driver(LifecycleNode):
     ----------
     node_name : str
         Node name (default :data:`NODE_NAME`).
+    listeners : sequence of callable, keyword-only
+        ``listener(temperatures, imu)``, called in the reader thread after each publication
+        with the serialised messages just published (lists of bytes; temperatures first, often
+        none): a node in the same process takes them without a trip through DDS (``imu_chain``,
+        :mod:`.chain`). Called only while the node publishes (active).
     **kwargs
         Passed to ``rclpy.lifecycle.LifecycleNode`` (``parameter_overrides``, ``context``).
 
@@ -191,8 +199,10 @@ class Lsm6dso32Driver(LifecycleNode):
 
     """
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs: Any) -> None:
+    def __init__(self, node_name: str = NODE_NAME, *, listeners: Sequence[Listener] = (),
+                 **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        self._listeners = tuple(listeners)
         p = declare_parameter_table(self, PARAMETERS, on_change=self._on_parameters_changed)
         self._params = p
         # Before the reader thread exists (it inherits the policy); rclpy's threads are set too.
@@ -220,7 +230,7 @@ class Lsm6dso32Driver(LifecycleNode):
         self._lifecycle = 'unconfigured'
         self._activated_at = time.monotonic()
         self._counts = dict.fromkeys(('published', 'temperatures', 'lost', 'duplicates',
-                                      'restarts', 'discarded'), 0)
+                                      'restarts', 'discarded', 'listener_errors'), 0)
         # Diagnostics: counters ticked by the reader thread, judged on the timer.
         self._link_task = LinkTask(LinkThresholds(**{k: p[k] for k in _THRESHOLD_NAMES}),
                                    port=self._port, period_s=p['diagnostics_period_s'],
@@ -396,18 +406,34 @@ class Lsm6dso32Driver(LifecycleNode):
         f = self._message_fields
         pick = (part['seq'] % f['decimation']) == 0
         n_temp = int(np.count_nonzero(pick))
+        temperatures: list[bytes] = []
         if n_temp:  # one batch in a few at the default decimation
             # Before the Imu messages of the frame: a consumer taking both at one wake-up has the
             # newest temperature for them.
-            _publish_raw(self._temp_pub, encode_temperature_cdr(
+            temperatures = encode_temperature_cdr(
                 stamps[pick], lsm6dso32.temperature_c(part['temp'][pick]), frame_id=f['frame_id'],
-                variance=f['temp_var']))
+                variance=f['temp_var'])
+            _publish_raw(self._temp_pub, temperatures)
         # lsm6dso32.to_si's values (the raw words times the sensitivities), written as messages
-        _publish_raw(self._imu_pub, row_messages(f['imu_rows'].rows_scaled(
-            stamps, part['gyro'], part['accel'], gyro_lsb, accel_lsb)))
+        imu = row_messages(f['imu_rows'].rows_scaled(stamps, part['gyro'], part['accel'],
+                                                     gyro_lsb, accel_lsb))
+        _publish_raw(self._imu_pub, imu)
+        if self._listeners:
+            self._hand_over(temperatures, imu)
         with self._lock:
             self._counts['published'] += n
             self._counts['temperatures'] += n_temp
+
+    def _hand_over(self, temperatures: list[bytes], imu: list[bytes]) -> None:
+        """Give the messages just published to the listeners; a failing one is logged."""
+        for listener in self._listeners:
+            try:
+                listener(temperatures, imu)
+            except Exception as err:  # noqa: BLE001 - the link and the other listeners go on
+                with self._lock:
+                    self._counts['listener_errors'] += 1
+                self.get_logger().error(f'an in-process listener failed: {err!r}',
+                                        throttle_duration_sec=5.0)
 
     # ------------------------------------------------------------------ diagnostics
 

@@ -68,9 +68,10 @@ PROGS = {
     'imu_compensator': 'gyro_noise_ros.nodes.compensator',
     'gyro_noise_record': 'gyro_noise_ros.nodes.recorder',
     'gyro_noise_monitor': 'gyro_noise_ros.nodes.monitor',
+    'imu_chain': 'gyro_noise_ros.nodes.chain',
 }
 NODES = ('lsm6dso32_driver', 'noise_analyzer', 'imu_compensator', 'gyro_noise_record',
-         'gyro_noise_monitor')
+         'gyro_noise_monitor', 'imu_chain')
 
 RATE_HZ = 200.0
 N = 9000  # 45 s at 200 Hz: explain's floor (8,192) and 15 analyze chunks of 600
@@ -383,10 +384,21 @@ def _demo_cases():
 
 
 def _node_cases():
-    d, a, c, r, m = NODES
+    d, a, c, r, m, chain = NODES
     ra = '--ros-args'
     return [
-        *[_c(n, 'help', 0, '', flag) for n in NODES[:4] for flag in ('--help', '-h')],
+        *[_c(n, 'help', 0, '', flag) for n in (d, a, c, r, chain) for flag in ('--help', '-h')],
+        # imu_chain: both nodes' parameters on one command line, the compensator built first
+        _c(chain, 'bad parameter', 2, 'nor does any other node', ra, '-p', 'odr:=104.0'),
+        _c(chain, 'bad parameter', 2, "'odr_hz'", ra, '-p', 'odr_hz:=1.0'),
+        _c(chain, 'bad parameter', 2, 'must be 3 finite', ra, '-p',
+           'gyro_bias_rad_s:=[1.0,2.0]'),
+        _c(chain, 'garbage bytes', 3, 'cannot be read as YAML', ra, '-p',
+           'calibration_file:={in}/garbage.yaml'),
+        _c(chain, 'missing topic', 3, 'missing.json', ra, '-p',
+           'thermal_model_file:={in}/missing.json'),
+        _c(chain, 'garbage bytes', 2, 'bad ROS arguments', ra, '--params-file',
+           '{in}/garbage.yaml'),
         _c(d, 'bad parameter', 2, "'odr_hz'", ra, '-p', 'odr_hz:=abc'),
         _c(d, 'bad parameter', 2, "'odr_hz'", ra, '-p', 'odr_hz:=1.0'),
         _c(d, 'bad parameter', 2, 'unknown parameter', ra, '-p', 'odr:=104.0'),
@@ -1059,7 +1071,7 @@ def test_a_killed_import_leaves_a_stage_that_the_retry_removes(long_inputs, tmp_
 
 _NODE_READY = {'lsm6dso32_driver': 'retrying', 'noise_analyzer': 'analysing',
                'imu_compensator': 'compensating', 'gyro_noise_record': 'recording',
-               'gyro_noise_monitor': 2.0}
+               'gyro_noise_monitor': 2.0, 'imu_chain': 'retrying'}
 
 
 # slow: every node started for real and stopped by a real signal (3-8 s each)
@@ -1070,6 +1082,7 @@ _NODE_READY = {'lsm6dso32_driver': 'retrying', 'noise_analyzer': 'analysing',
 @pytest.mark.parametrize('node', NODES)
 def test_a_real_signal_stops_every_node(node, sig, ros_graph, tmp_path):
     args = {'lsm6dso32_driver': ['-p', 'port:=socket://127.0.0.1:9'],
+            'imu_chain': ['-p', 'port:=socket://127.0.0.1:9'],
             'gyro_noise_record': ['-p', f'output:={tmp_path / "bag"}']}.get(node, [])
     code, err, seconds = stop_when_ready([PROGS[node], '--ros-args', *args], _NODE_READY[node],
                                          sig, cwd=tmp_path, env=ros_graph.env(), what=node)

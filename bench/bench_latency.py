@@ -55,6 +55,7 @@ import shlex
 import struct
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 
@@ -66,11 +67,28 @@ import numpy as np  # noqa: E402
 ODR = 6667.0
 #: ``imu_chain`` with the compensator bench's thermal model (the same node code as
 #: ``_COMPENSATOR``'s): the driver and the compensator in one process (``--chain``).
+#: The CPU the compensator's part takes in the reader thread (thread time inside ``accept``) is
+#: written every 0.2 s to the file given first (ns), so the window's share can be read apart.
 _CHAIN = _COMPENSATOR.split('model = ')[0] + r"""
+import os, threading, time
 from gyro_noise_ros.nodes import chain
 from gyro_noise_ros.nodes._params import running_together
+spent = [0]
+accept = chain.compensator.ImuCompensatorNode.accept
+def timed_accept(self, temperatures, imu):
+    start = time.thread_time_ns()
+    accept(self, temperatures, imu)
+    spent[0] += time.thread_time_ns() - start
+chain.compensator.ImuCompensatorNode.accept = timed_accept
+def report(path=sys.argv[1]):
+    while True:
+        with open(path + '.tmp', 'w') as f:
+            f.write(str(spent[0]))
+        os.replace(path + '.tmp', path)
+        time.sleep(0.2)
+threading.Thread(target=report, daemon=True).start()
 model = Linear()
-argv = sys.argv[1:]
+argv = sys.argv[2:]
 with running_together((chain.driver.PARAMETERS, chain.compensator.PARAMETERS), argv):
     sys.exit(run_node(lambda: chain.build(thermal_model=model), argv, prog='bench_chain'))
 """
@@ -232,6 +250,15 @@ def stats_ms(values_ns):
     return float(np.percentile(v, 50)), float(np.percentile(v, 99)), float(v.max())
 
 
+def _read_ns(path):
+    """Return the chain's compensator CPU so far (ns), or None (no chain, not written yet)."""
+    try:
+        with open(path) as f:
+            return int(f.read())
+    except (OSError, ValueError):
+        return None
+
+
 def run(args):
     """Start the chain, record the window; return a result dict."""
     topics = ['imu/data_raw'] + ([] if args.no_compensator else ['imu/data_compensated'])
@@ -241,6 +268,7 @@ def run(args):
     if args.rt:  # the busy loops and anything else this thread starts run at normal priority
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     port = free_port()
+    accept_file = os.path.join(tempfile.mkdtemp(prefix='bench_chain_'), 'accept_ns')
     # The emulator stands in for the board, which has a processor of its own: above the chain
     # (chrt), so the host's scheduling of the chain never delays the board's frames; the nodes:
     # their parameter.
@@ -253,7 +281,8 @@ def run(args):
         compensation = ['-p', 'temperature_rate_window_s:=2.0', *_param_args(True)]
         if args.chain:
             procs['imu_chain'] = subprocess.Popen(
-                [sys.executable, '-c', _CHAIN, '--ros-args', *link, *compensation, *rt_param,
+                [sys.executable, '-c', _CHAIN, accept_file, '--ros-args', *link, *compensation,
+                 *rt_param,
                  *_ros_params(args.driver_param), *_ros_params(args.compensator_param)],
                 stderr=subprocess.DEVNULL)
         else:
@@ -274,12 +303,14 @@ def run(args):
                  *rt_param, *_ros_params(args.compensator_param)], stderr=subprocess.DEVNULL)
         time.sleep(args.warmup)
         cpu0 = {n: cpu_seconds(p.pid) for n, p in procs.items()}
+        accept0 = _read_ns(accept_file)
         probe_cpu0, t0 = time.process_time(), time.monotonic()
         probe.recording = True
         time.sleep(args.seconds)
         probe.recording = False
         t1 = time.monotonic()
         cpu1 = {n: cpu_seconds(p.pid) for n, p in procs.items()}
+        accept1 = _read_ns(accept_file)
         probe_cpu1 = time.process_time()
         for name, proc in procs.items():
             assert proc.poll() is None, f'{name} exited early'
@@ -301,6 +332,8 @@ def run(args):
                   'work_us': args.slow_reader, 'qos': args.slow_qos, 'depth': args.slow_depth,
                   'received': slow_count},
               'cpu_pct': {n: 100 * (cpu1[n] - cpu0[n]) / wall for n in procs},
+              'chain_compensator_cpu_pct': (None if accept0 is None or accept1 is None
+                                            else 100 * (accept1 - accept0) / 1e9 / wall),
               'probe_cpu_pct': 100 * (probe_cpu1 - probe_cpu0) / wall,
               'probe_wakeups': probe.drain.wakeups, 'dds_missing': probe.dds_missing}
     raw = probe.arrays('imu/data_raw')
@@ -365,6 +398,9 @@ def print_result(result, argv):
     print(f'{"CPU (% of one core)":58s}')
     for name, pct in result['cpu_pct'].items():
         print(f'  {name:56s} {pct:7.1f}')
+        if name == 'imu_chain' and result.get('chain_compensator_cpu_pct') is not None:
+            print(f'    {"of which the compensator (its accept, thread time)":54s} '
+                  f'{result["chain_compensator_cpu_pct"]:7.1f}')
     print(f'  {"probe (this process, " + str(result["probe_wakeups"]) + " wake-ups)":56s} '
           f'{result["probe_cpu_pct"]:7.1f}')
 

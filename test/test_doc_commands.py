@@ -49,7 +49,9 @@ DOCS = [ROOT / 'README.md', *sorted((ROOT / 'docs').glob('*.md'))]
 SCRIPTS = dict(re.findall(r"'(\w+) = (gyro_noise_ros\.[\w.]+):main'",
                           (ROOT / 'setup.py').read_text()))
 NODES = {'lsm6dso32_driver', 'noise_analyzer', 'imu_compensator', 'gyro_noise_record',
-         'gyro_noise_monitor'}
+         'gyro_noise_monitor', 'imu_chain'}
+#: The nodes a program runs together: their parameter files (one per node otherwise).
+TOGETHER = {'imu_chain': ('lsm6dso32_driver', 'imu_compensator')}
 #: Files a documented command writes, so another may read them (--params-file).
 WRITTEN = {'cal/calibration.yaml': 'gyro_noise_calibrate ... --out cal/'}
 
@@ -181,10 +183,12 @@ def _tool(cmd):
 def _ros_args(cmd, node):
     """Check a node's ``--ros-args``: every ``-p`` a parameter of its file, every file there."""
     words = cmd.argv
-    yaml_file = ROOT / 'config' / f'{node}.yaml'
     # every ROS 2 node also has the parameter use_sim_time
-    params = {'use_sim_time'} | (set(yaml.safe_load(yaml_file.read_text())['/**']
-                                     ['ros__parameters']) if yaml_file.exists() else set())
+    params = {'use_sim_time'}
+    for name in TOGETHER.get(node, (node,)):
+        yaml_file = ROOT / 'config' / f'{name}.yaml'
+        if yaml_file.exists():
+            params |= set(yaml.safe_load(yaml_file.read_text())['/**']['ros__parameters'])
     own = words[1:words.index('--ros-args')] if '--ros-args' in words else words[1:]
     problems = []
     if node == 'gyro_noise_monitor':
@@ -192,7 +196,8 @@ def _ros_args(cmd, node):
 
         problems.append(_check_names(build_parser(), own) if cmd.synopsis
                         else _parse(build_parser(), own))
-    elif own and not (node == 'gyro_noise_record' and own[0] == 'repair'):
+    elif own and own not in (['--help'], ['-h']) and not (
+            node == 'gyro_noise_record' and own[0] == 'repair'):
         problems.append(f'{node} takes no own arguments, got {own}')
     rest = words[words.index('--ros-args') + 1:] if '--ros-args' in words else []
     for flag, value in zip(rest, rest[1:]):
@@ -258,6 +263,10 @@ def test_the_extraction_finds_the_commands():
     assert check(Command('x', '', ['gyro_noise_analyze', 'BAG', '[--lable', 'A]'], True))
     assert check(Command('x', '', ['noise_analyzer', '--ros-args', '-p', 'chunksize:=1'],
                          True))
+    # a program of two nodes takes either node's parameters, not a third's
+    assert check(Command('x', '', ['imu_chain', '--ros-args', '-p', 'port:=p', '-p',
+                                   'temperature_sync:=latest'], True)) is None
+    assert check(Command('x', '', ['imu_chain', '--ros-args', '-p', 'chunk_size:=1'], True))
 
 
 def test_every_documented_command_parses():

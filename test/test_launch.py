@@ -104,14 +104,15 @@ def test_executables_are_console_scripts(path):
 def test_live_launch_starts_driver_analyzer_and_optional_nodes():
     tree = ast.parse((ROOT / 'launch' / 'gyro_noise.launch.py').read_text())
     assert {'lsm6dso32_driver', 'noise_analyzer', 'gyro_noise_record', 'portenta_emulator',
-            'imu_compensator'} <= _executables(tree)
+            'imu_compensator', 'imu_chain'} <= _executables(tree)
     declared = {ast.literal_eval(c.args[0]) for c in _calls(tree, 'DeclareLaunchArgument')}
     assert {'namespace', 'port', 'params_file', 'use_sim_time', 'record', 'emulator',
-            'compensate'} <= declared
+            'compensate', 'in_process'} <= declared
     defaults = {ast.literal_eval(c.args[0]): ast.literal_eval(kw.value)
                 for c in _calls(tree, 'DeclareLaunchArgument') for kw in c.keywords
                 if kw.arg == 'default_value'}
     assert defaults['compensate'] == defaults['record'] == defaults['emulator'] == 'false'
+    assert defaults['in_process'] == 'false'
 
 
 @pytest.mark.parametrize('path', LAUNCH_FILES, ids=[p.name for p in LAUNCH_FILES])

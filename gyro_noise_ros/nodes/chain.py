@@ -31,6 +31,8 @@ Parameters: each node's own, as its executable takes them. ``-p NAME:=VALUE`` an
 file's ``/**`` section reach both nodes (each takes the names it has; a name neither has is
 refused); a section keyed by node name (``lsm6dso32_driver:``, ``imu_compensator:``) reaches that
 node only. ``config/lsm6dso32_driver.yaml`` and ``config/imu_compensator.yaml`` list them.
+``realtime_priority`` is the process's (every thread, the reader's included): give it once, with
+``-p``; where the two sections differ, the driver's non-zero value wins (it is set last).
 """
 
 from collections.abc import Sequence

@@ -20,6 +20,8 @@ What a lab's 12-hour acquisition runs, in a private ROS graph (:mod:`gyro_noise_
     portenta_emulator --tcp E  <->  fault proxy (this process, port P)  <->  lsm6dso32_driver
         -> noise_analyzer, imu_compensator (a poly3 model fitted first), gyro_noise_record
 
+(``--chain``: the driver and the compensator as one ``imu_chain`` process, the same checks.)
+
 Every consumer subscribes ``reliable:=true`` and the driver keeps 9 s of history
 (``qos_depth:=60000``): the loss-free lab configuration (docs/diagnostics.md, QoS). The emulator
 ramps the die temperature (20 degC/h) with a gyro sensitivity, so the compensator subtracts a
@@ -553,8 +555,8 @@ def run(args):
     print(f'soak: {args.minutes:g} min at {args.odr_hz:g} Hz; ROS_DOMAIN_ID={lease.domain_id} '
           f'(localhost only); output in {out}', flush=True)
     chain = Chain(out)
-    report = {'minutes': args.minutes, 'odr_hz': args.odr_hz, 'domain_id': lease.domain_id,
-              'faults': [],
+    report = {'minutes': args.minutes, 'odr_hz': args.odr_hz, 'chain': args.chain,
+              'domain_id': lease.domain_id, 'faults': [],
               'cores': os.cpu_count(), 'load_start': os.getloadavg()}
     diag = proxy = None
     try:
@@ -569,19 +571,27 @@ def run(args):
                 ['-p', f'max_temperature_wait_s:={float(args.max_temperature_wait_s)!r}'])
         if args.temperature_sync is not None:
             wait += ['-p', f'temperature_sync:={args.temperature_sync}']
-        chain.start('imu_compensator', ['-m', 'gyro_noise_ros.nodes.compensator', '--ros-args',
-                                        '-p', f'thermal_model_file:={model}', *reliable, *wait])
+        compensation = ['-p', f'thermal_model_file:={model}', *reliable, *wait]
+        link = ['-p', f'port:=socket://127.0.0.1:{proxy.port}', '-p',
+                f'qos_depth:={args.driver_qos_depth}', '-p', f'odr_hz:={float(args.odr_hz)!r}']
+        # --chain: one imu_chain process stands for both (started where the driver is)
+        driver_name, comp_name = (('imu_chain',) * 2 if args.chain
+                                  else ('lsm6dso32_driver', 'imu_compensator'))
+        if not args.chain:
+            chain.start(comp_name, ['-m', 'gyro_noise_ros.nodes.compensator', '--ros-args',
+                                    *compensation])
         bags = [out / 'bag_1', out / 'bag_2']
         for bag in bags:
             shutil.rmtree(bag, ignore_errors=True)
         chain.start('recorder_1', ['-m', 'gyro_noise_ros.nodes.recorder', '--ros-args', '-p',
                                    f'output:={bags[0]}', *reliable])
-        chain.start('lsm6dso32_driver', ['-m', 'gyro_noise_ros.nodes.driver', '--ros-args',
-                                         '-p', f'port:=socket://127.0.0.1:{proxy.port}', '-p',
-                                         f'qos_depth:={args.driver_qos_depth}', '-p',
-                                         f'odr_hz:={float(args.odr_hz)!r}'])
+        if args.chain:
+            chain.start(driver_name, ['-m', 'gyro_noise_ros.nodes.chain', '--ros-args', *link,
+                                      *compensation])
+        else:
+            chain.start(driver_name, ['-m', 'gyro_noise_ros.nodes.driver', '--ros-args', *link])
         chain.wait_for_log('noise_analyzer', r'analysing ', 180)
-        chain.wait_for_log('imu_compensator', r'compensating ', 180)
+        chain.wait_for_log(comp_name, r'compensating ', 180)
         chain.wait_for_log('recorder_1', r'recording ', 180)
         diag = Diagnostics()
         deadline = time.monotonic() + 120
@@ -598,7 +608,7 @@ def run(args):
             str(args.seed), '--accel-fs-g', '32', '--temp-c', '25', '--temp-drift-c-per-h',
             str(TEMP_RAMP_C_PER_H), '--temp-sensitivity-dps-per-c', SENSITIVITY_DPS_PER_C,
             '--stats-out', str(out / 'emulator_stats.json')], stdout=subprocess.DEVNULL)
-        chain.wait_for_log('lsm6dso32_driver', r'streaming from', 180)
+        chain.wait_for_log(driver_name, r'streaming from', 180)
         t0 = time.monotonic()
         duration = 60.0 * args.minutes
         print(f'soak: streaming; faults at {duration / 4:.0f}, {duration / 2:.0f} and '
@@ -667,7 +677,7 @@ def run(args):
                         if ln.startswith('gyro_noise_record: received')), '')
         report['recorder_2_exit'] = rc2
         report['recorder_2_summary'] = summary
-        for name in ('imu_compensator', 'noise_analyzer', 'lsm6dso32_driver'):
+        for name in dict.fromkeys((comp_name, 'noise_analyzer', driver_name)):
             chain.stop(name)
         report['load_end'] = os.getloadavg()
         report['logs'] = str(chain.logs)
@@ -1004,6 +1014,8 @@ def main(argv=None):
                         help="the compensator's max_temperature_wait_s (default: the node's)")
     parser.add_argument('--temperature-sync', choices=('latest', 'interpolate'),
                         help="the compensator's temperature_sync (default: the node's, latest)")
+    parser.add_argument('--chain', action='store_true',
+                        help='the driver and the compensator as one imu_chain process')
     parser.add_argument('--rss-slope-limit-mb-h', type=float, default=10.0,
                         help='largest RSS slope called flat (MB/h)')
     parser.add_argument('--domain-id', type=int, default=None,

@@ -52,6 +52,7 @@ import argparse
 import json
 import os
 import shlex
+import shutil
 import struct
 import subprocess
 import sys
@@ -323,6 +324,7 @@ def run(args):
             if name in procs:
                 stop(procs[name])
         probe.close()
+        shutil.rmtree(os.path.dirname(accept_file), ignore_errors=True)
     if 'slow reader' in procs:
         out = procs['slow reader'].stdout.read().split()
         slow_count = int(out[-1]) if out else None

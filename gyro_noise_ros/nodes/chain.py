@@ -24,8 +24,8 @@ compensator publishes ``imu/data_compensated`` from that thread: the same topics
 parameters and diagnostics as the two nodes' own executables, the same bytes on
 ``imu/data_compensated`` (the compensator's steps unchanged, with ``temperature_sync`` ``latest``
 or ``interpolate``). What differs: the compensator subscribes to nothing (another publisher on
-``imu/data_raw``, a bag being played, is not compensated), and a stalled compensator stalls the
-driver's next read (the board buffers it).
+``imu/data_raw``, a bag being played, is not compensated; its ``reliable`` and ``queue_depth``
+do not apply), and a stalled compensator stalls the driver's next read (the board buffers it).
 
 Parameters: each node's own, as its executable takes them. ``-p NAME:=VALUE`` and a parameter
 file's ``/**`` section reach both nodes (each takes the names it has; a name neither has is

@@ -30,7 +30,7 @@ Arguments (``ros2 launch gyro_noise_ros gyro_noise.launch.py --show-args``):
 - ``compensate`` (default false): also ``imu_compensator`` (``config/imu_compensator.yaml``);
 - ``in_process`` (default false): with ``compensate``, the driver and the compensator in one
   process (``imu_chain``): the driver hands each read to the compensator, no second trip through
-  DDS (a third of their CPU, the compensator's added latency p99 under 1 ms; docs/scale.md);
+  DDS (a third less CPU, the compensator's added latency p99 about 1 ms; docs/scale.md);
 - ``realtime_priority`` (default 0): ``SCHED_FIFO`` priority of the driver and the compensator,
   the stabilisation loop's path (their ``realtime_priority`` parameter; 0: the parameter files'
   value, normal scheduling by default; docs/scale.md).
